@@ -1,0 +1,39 @@
+# armguard — the two commands: `make run` and `make test`.
+SHELL  := bash
+.SHELLFLAGS := -o pipefail -c
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed-$(shell cat pyproject.toml | cksum | cut -d' ' -f1)
+
+.PHONY: run test bench install browser clean
+
+$(STAMP): pyproject.toml
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip 2>&1 | { grep -v "^WARNING: Location" || true; }
+	$(PY) -m pip install -q -e ".[test]" 2>&1 | { grep -v "^WARNING: Location" || true; }
+	rm -f $(VENV)/.installed-* && touch $(STAMP)
+
+install: $(STAMP)
+
+## run: set up .venv and run the main job on the built-in scene
+run: $(STAMP)
+	$(VENV)/bin/armguard demo
+
+## browser: Debian's chromium for the end-to-end console test (needs root or sudo)
+browser:
+	@if [ ! -x /usr/bin/chromium ]; then \
+	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq chromium >/dev/null; \
+	  elif command -v sudo >/dev/null; then sudo apt-get update -qq && sudo apt-get install -y -qq chromium >/dev/null; \
+	  else echo "chromium missing and no root: the browser test will be skipped (fails under CI)"; fi; fi
+
+## test: set up .venv with test extras and run every test
+test: $(STAMP) browser
+	$(PY) -m pytest -n 2 --dist loadfile -q
+
+## bench: run the benchmarks and rewrite docs/performance.md
+bench: $(STAMP)
+	$(PY) -m bench
+
+clean:
+	rm -rf $(VENV) build *.egg-info out

@@ -1,0 +1,1 @@
+"""armguard benchmarks (run by ``make bench``, never by the tests)."""

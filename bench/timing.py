@@ -1,0 +1,29 @@
+"""Small timing helpers shared by the benchmarks: medians of repeated runs."""
+
+from __future__ import annotations
+
+import statistics
+import time
+from typing import Callable
+
+
+def median_seconds(fn: Callable[[], object], *, repeat: int = 7, number: int = 1) -> float:
+    """Median over ``repeat`` runs of the time per call of ``fn`` (called ``number`` times per run)."""
+    fn()  # warm-up (JIT compilation, caches)
+    samples = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        for _ in range(number):
+            fn()
+        samples.append((time.perf_counter() - t0) / number)
+    return statistics.median(samples)
+
+
+def fmt_ns(seconds: float) -> str:
+    """Format a duration given in seconds as ns / µs / ms."""
+    ns = seconds * 1e9
+    if ns < 1e3:
+        return f"{ns:.0f} ns"
+    if ns < 1e6:
+        return f"{ns / 1e3:.2f} µs"
+    return f"{ns / 1e6:.2f} ms"

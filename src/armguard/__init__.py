@@ -1,0 +1,66 @@
+"""armguard: model-based collision and proximity detection for robot manipulators.
+
+The top-level names are imported lazily, so ``import armguard`` is fast and compiles no
+kernels until they are used.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+from ._errors import (
+    ArmguardError,
+    DetectionError,
+    GeometryError,
+    IKError,
+    KinematicsError,
+    SceneError,
+    SceneFileError,
+    TrajectoryError,
+    VerificationError,
+)
+from ._tolerance import DEFAULT_TOLERANCES, Tolerances
+
+__version__ = "0.1.0"
+
+# public name -> module that defines it (imported on first access)
+_LAZY = {
+    "load_scene": "armguard.scene",
+    "Scene": "armguard.scene",
+    "Robot": "armguard.kinematics",
+    "Trajectory": "armguard.kinematics",
+    "Detector": "armguard.detect",
+    "DetectionReport": "armguard.detect",
+    "Status": "armguard.detect",
+    "verify": "armguard.verify",
+    "verify_many": "armguard.verify",
+    "VerificationReport": "armguard.verify",
+}
+
+__all__ = [
+    "ArmguardError",
+    "GeometryError",
+    "KinematicsError",
+    "IKError",
+    "SceneError",
+    "SceneFileError",
+    "TrajectoryError",
+    "DetectionError",
+    "VerificationError",
+    "Tolerances",
+    "DEFAULT_TOLERANCES",
+    *_LAZY,
+]
+
+
+def __getattr__(name: str):
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'armguard' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

@@ -1,0 +1,39 @@
+"""The one tolerance dataclass.  Every numeric tolerance in armguard lives here, documented."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["Tolerances", "DEFAULT_TOLERANCES"]
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """Numeric tolerances, passed explicitly to the functions that need them.
+
+    Attributes
+    ----------
+    length : float, m
+        Two points closer than this are the same point; a segment shorter than this is a point.
+        Also the zero of signed distance used by ``intersects`` (touching counts as intersecting).
+    parallel : float, dimensionless
+        ``|sin(angle)|`` below which two directions are treated as parallel (segment-segment).
+    planarity : float, m
+        Largest distance of a polygon vertex from its best-fit plane.
+    coplanar_volume : float, m^3
+        A point set whose convex hull has less volume than this is flat (not a polyhedron).
+    gjk_epsilon : float, m
+        GJK stops when the lower and upper bounds on the distance differ by less than this.
+    gjk_max_iterations : int
+        Upper bound on GJK iterations; hitting it raises rather than returning a guess.
+    """
+
+    length: float = 1e-12
+    parallel: float = 1e-12
+    planarity: float = 1e-9
+    coplanar_volume: float = 1e-15
+    gjk_epsilon: float = 1e-12
+    gjk_max_iterations: int = 128
+
+
+DEFAULT_TOLERANCES = Tolerances()

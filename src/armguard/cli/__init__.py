@@ -1,0 +1,30 @@
+"""The ``armguard`` command line: entry points only, the logic lives in the library."""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from .._errors import ArmguardError
+
+
+class _Group(click.Group):
+    """A click group that turns ArmguardError into a one-line message and exit code 2."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except ArmguardError as exc:
+            click.secho(f"error: {exc}", fg="red", err=True)
+            sys.exit(2)
+
+
+@click.group(cls=_Group)
+@click.version_option(package_name="armguard")
+def main() -> None:
+    """armguard: collision and proximity detection for robot manipulators."""
+
+
+# Each command lives in its own module and registers itself on ``main``.
+from . import _distance  # noqa: E402,F401
