@@ -26,6 +26,20 @@ class Tolerances:
         GJK stops when the lower and upper bounds on the distance differ by less than this.
     gjk_max_iterations : int
         Upper bound on GJK iterations; hitting it raises rather than returning a guess.
+    joint_limit : float, rad or m
+        A joint value this far outside its [lower, upper] still counts as within limits
+        (absorbs round-off of IK and trajectory sampling at a limit).
+    ik_position : float, m
+        Inverse kinematics succeeds only when the reached position is within this of the target
+        (checked by forward kinematics, for plug-in and numerical solvers alike).
+    ik_orientation : float, rad
+        ... and the reached orientation is within this angle of the target.
+    ik_max_iterations : int
+        Damped-least-squares iterations per start of the numerical IK solver.
+    ik_restarts : int
+        Random restarts of the numerical IK solver after the seeded start fails.
+    ik_damping : float, m
+        Damping lambda of the damped-least-squares step ``J^T (J J^T + lambda^2 I)^-1 e``.
     """
 
     length: float = 1e-12
@@ -34,6 +48,12 @@ class Tolerances:
     coplanar_volume: float = 1e-15
     gjk_epsilon: float = 1e-12
     gjk_max_iterations: int = 128
+    joint_limit: float = 1e-9
+    ik_position: float = 1e-9
+    ik_orientation: float = 1e-9
+    ik_max_iterations: int = 200
+    ik_restarts: int = 16
+    ik_damping: float = 1e-4
 
 
 DEFAULT_TOLERANCES = Tolerances()
