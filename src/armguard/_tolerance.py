@@ -40,6 +40,16 @@ class Tolerances:
         Random restarts of the numerical IK solver after the seeded start fails.
     ik_damping : float, m
         Damping lambda of the damped-least-squares step ``J^T (J J^T + lambda^2 I)^-1 e``.
+    kinematic_probe : float, dimensionless
+        Relative round-off allowance when the trajectory verifier measures a chain's geometry
+        from forward kinematics (a joint moving less than this, relative to the robot's size,
+        drives nothing); its lever-arm bounds are inflated by this fraction.
+    verify_contact : float, m
+        Certified verification: a clearance within this of the stopping distance counts as a
+        collision (conservative advancement only approaches a contact, never lands on it).
+    verify_max_evaluations : int
+        Certified verification: the most clearance evaluations for one trajectory; a trajectory
+        not resolved within it is reported INCOMPLETE, never safe.
     """
 
     length: float = 1e-12
@@ -48,6 +58,9 @@ class Tolerances:
     coplanar_volume: float = 1e-15
     gjk_epsilon: float = 1e-12
     gjk_max_iterations: int = 128
+    kinematic_probe: float = 1e-9
+    verify_contact: float = 1e-6
+    verify_max_evaluations: int = 200_000
     joint_limit: float = 1e-9
     ik_position: float = 1e-9
     ik_orientation: float = 1e-9
