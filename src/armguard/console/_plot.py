@@ -1,0 +1,79 @@
+"""The clearance plot under the time line: minimum distance along a trajectory, the current time marked.
+
+Rendered once with matplotlib (Agg) into an RGB array; :meth:`ClearancePlot.image_at` then draws
+the current-time marker by writing one pixel column band into a copy, so the marker can follow
+the play head at the display rate without re-rendering the figure.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["ClearancePlot", "MARKER_RGB"]
+
+MARKER_RGB = (30, 90, 220)
+"""Colour of the current-time marker (RGB 0..255)."""
+
+
+class ClearancePlot:
+    """Clearance ``clearance`` (N,) m against ``times`` (N,) s, the threshold dashed, collisions shaded.
+
+    ``first_collision`` (s) or None is marked with a red dot.  ``image_at(t)`` -> (H, W, 3) uint8.
+    """
+
+    def __init__(self, times, clearance, *, threshold: float, first_collision: float | None = None,
+                 width_px: int = 480, height_px: int = 200) -> None:
+        import matplotlib
+
+        matplotlib.use("Agg", force=False)
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
+        t = np.asarray(times, dtype=np.float64)
+        c = np.asarray(clearance, dtype=np.float64)
+        self.t0 = float(t[0])
+        self.t1 = float(t[-1]) if t[-1] > t[0] else float(t[0]) + 1.0
+        dpi = 100
+        fig = Figure(figsize=(width_px / dpi, height_px / dpi), dpi=dpi)
+        canvas = FigureCanvasAgg(fig)
+        ax = fig.add_axes((0.12, 0.22, 0.85, 0.7))
+        shown = np.where(np.isfinite(c), c, np.nan) * 1000.0
+        ax.plot(t, shown, color="#2e9e44", lw=1.5)
+        ax.axhline(threshold * 1000.0, color="#f2a000", ls="--", lw=1)
+        ax.axhline(0.0, color="#d62828", lw=1)
+        bad = c <= 0.0
+        if np.any(bad):
+            ax.fill_between(t, 0, 1, where=bad, color="#d62828", alpha=0.25, transform=ax.get_xaxis_transform())
+        if first_collision is not None and math.isfinite(first_collision):
+            ax.plot([first_collision], [0.0], "o", color="#d62828")
+        ax.set_xlim(self.t0, self.t1)
+        ax.set_xlabel("t (s)", fontsize=8)
+        ax.set_ylabel("clearance (mm)", fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.grid(True, alpha=0.3)
+        canvas.draw()
+        self._base = np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
+        H = self._base.shape[0]
+        bbox = ax.get_window_extent()  # display pixels, origin bottom-left
+        self._x0, self._x1 = float(bbox.x0), float(bbox.x1)
+        self._y0 = int(round(H - bbox.y1))
+        self._y1 = int(round(H - bbox.y0))
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return self._base.shape
+
+    def column_of(self, t: float) -> int:
+        """Pixel column of time ``t`` (s), clamped to the axes."""
+        f = (min(max(float(t), self.t0), self.t1) - self.t0) / (self.t1 - self.t0)
+        return int(round(self._x0 + f * (self._x1 - self._x0)))
+
+    def image_at(self, t: float) -> np.ndarray:
+        """The plot with a 2-pixel vertical marker at time ``t`` (s): ``(H, W, 3) uint8``."""
+        img = self._base.copy()
+        x = self.column_of(t)
+        W = img.shape[1]
+        img[self._y0 : self._y1, max(0, x - 1) : min(W, x + 1)] = MARKER_RGB
+        return img

@@ -1,0 +1,183 @@
+"""What the operator reads: Ranger's distance panel (Bon & Seraji 1997, seed ``000`` section 6).
+
+"The background of the distance panel is green for no obstacle within the detection threshold
+distance, yellow for an obstacle within the threshold distance, and red if the arm has collided
+with the obstacle."  :func:`readout_from_report` turns a detector report into a frozen
+:class:`Readout` (panel colour, nearest distance / link / obstacle / points, one row per result
+category); :func:`panel_html` renders it.  Plain Python: tests drive it without a browser.
+"""
+
+from __future__ import annotations
+
+import enum
+import html
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "PanelStatus",
+    "PANEL_COLORS",
+    "LINE_COLORS",
+    "CategoryRow",
+    "Readout",
+    "readout_from_report",
+    "readout_off",
+    "panel_html",
+    "CATEGORIES",
+]
+
+CATEGORIES = ("arm", "environment", "workspace", "payload")
+"""Result categories, in the detector's order."""
+
+
+class PanelStatus(enum.Enum):
+    """Status shown by the panel: the detector's status, plus ``OFF`` when detection is off."""
+
+    CLEAR = "clear"
+    WARNING = "warning"
+    COLLISION = "collision"
+    INCOMPLETE = "incomplete"
+    OFF = "off"
+
+
+PANEL_COLORS = {
+    PanelStatus.CLEAR: "#2e9e44",  # green
+    PanelStatus.WARNING: "#f2c200",  # yellow
+    PanelStatus.COLLISION: "#d62828",  # red
+    PanelStatus.INCOMPLETE: "#8a5cf6",  # violet: never shown as clear
+    PanelStatus.OFF: "#7d7d7d",  # grey
+}
+"""Background colour of the distance panel per status (CSS hex)."""
+
+LINE_COLORS = {"far": (255, 210, 0), "within": (220, 30, 30)}
+"""Nearest-obstacle line: yellow beyond the threshold, red within it (RGB 0..255)."""
+
+
+@dataclass(frozen=True)
+class CategoryRow:
+    """One row of the per-category table: ``distance`` m (``inf`` where the category is empty)."""
+
+    category: str
+    distance: float
+    link: str
+    obstacle: str
+
+
+@dataclass(frozen=True)
+class Readout:
+    """The distance panel's content.
+
+    ``p_WA`` / ``p_WB`` : (3,) float64, m, or None -- the nearest points on the arm link and the
+    obstacle, in W.  ``within_threshold`` is True when the nearest distance is <= the threshold
+    (the link and the line turn red).  ``owner_a`` is the arm-side owner
+    (``"robot/link"`` or a payload name), the scene item to colour.
+    """
+
+    status: PanelStatus
+    distance: float
+    link: str
+    obstacle: str
+    owner_a: str
+    p_WA: np.ndarray | None
+    p_WB: np.ndarray | None
+    threshold: float
+    within_threshold: bool
+    rows: tuple[CategoryRow, ...]
+    elapsed_us: float
+
+    @property
+    def color(self) -> str:
+        """CSS background colour of the panel."""
+        return PANEL_COLORS[self.status]
+
+    @property
+    def line_color(self) -> tuple[int, int, int]:
+        """RGB of the nearest-obstacle line."""
+        return LINE_COLORS["within" if self.within_threshold else "far"]
+
+
+def _status_of(report) -> PanelStatus:
+    value = getattr(report.status, "value", report.status)
+    try:
+        return PanelStatus(str(value).lower())
+    except ValueError:
+        return PanelStatus.INCOMPLETE
+
+
+def readout_from_report(report) -> Readout:
+    """Build the panel from a ``DetectionReport`` (see ``armguard.detect``)."""
+    status = _status_of(report)
+    near = report.nearest
+    thr = float(report.threshold)
+    rows = []
+    by_cat = dict(report.by_category)
+    for cat in CATEGORIES:
+        if cat in by_cat:
+            pr = by_cat[cat]
+            rows.append(CategoryRow(cat, float(pr.distance), str(pr.link), str(pr.obstacle)))
+    for cat in sorted(set(by_cat) - set(CATEGORIES)):
+        pr = by_cat[cat]
+        rows.append(CategoryRow(str(cat), float(pr.distance), str(pr.link), str(pr.obstacle)))
+    if near is None:
+        return Readout(status, math.inf, "", "", "", None, None, thr, False, tuple(rows), float(report.elapsed_us))
+    d = float(near.distance)
+    return Readout(
+        status=status,
+        distance=d,
+        link=str(near.link),
+        obstacle=str(near.obstacle),
+        owner_a=str(near.a),
+        p_WA=np.array(near.p_WA, dtype=np.float64),
+        p_WB=np.array(near.p_WB, dtype=np.float64),
+        threshold=thr,
+        within_threshold=d <= thr,
+        rows=tuple(rows),
+        elapsed_us=float(report.elapsed_us),
+    )
+
+
+def readout_off(threshold: float) -> Readout:
+    """The panel when detection is switched off (grey, no nearest obstacle)."""
+    return Readout(PanelStatus.OFF, math.inf, "", "", "", None, None, float(threshold), False, (), 0.0)
+
+
+def _fmt_m(x: float) -> str:
+    return "—" if not math.isfinite(x) else f"{x * 1000.0:.1f} mm"
+
+
+def _fmt_p(p: np.ndarray | None) -> str:
+    return "—" if p is None else "(" + ", ".join(f"{v:+.3f}" for v in p) + ") m"
+
+
+def panel_html(r: Readout, message: str = "") -> str:
+    """The distance panel as HTML: a coloured status block and the per-category table.
+
+    The status block carries ``id="armguard-status"`` and ``data-status`` (the status value) so a
+    browser test can read it.
+    """
+    e = html.escape
+    fg = "#000" if r.status is PanelStatus.WARNING else "#fff"
+    head = (
+        f'<div id="armguard-status" data-status="{r.status.value}" '
+        f'style="background:{r.color};color:{fg};padding:8px;border-radius:6px;font-family:sans-serif">'
+        f'<div style="font-size:1.2em;font-weight:bold">{e(r.status.value.upper())} &nbsp; {e(_fmt_m(r.distance))}</div>'
+        f"<div>link: {e(r.link or '—')}</div><div>obstacle: {e(r.obstacle or '—')}</div>"
+        f"<div>arm point: {e(_fmt_p(r.p_WA))}</div><div>obstacle point: {e(_fmt_p(r.p_WB))}</div>"
+        f"<div>threshold: {e(_fmt_m(r.threshold))} &nbsp; cycle: {r.elapsed_us:.0f} µs</div></div>"
+    )
+    rows = "".join(
+        f"<tr><td>{e(c.category)}</td><td style='text-align:right'>{e(_fmt_m(c.distance))}</td>"
+        f"<td>{e(c.link)}</td><td>{e(c.obstacle)}</td></tr>"
+        for c in r.rows
+    )
+    table = (
+        '<table id="armguard-categories" style="width:100%;font-size:0.85em;font-family:sans-serif">'
+        "<tr><th>category</th><th>distance</th><th>link</th><th>obstacle</th></tr>"
+        f"{rows}</table>"
+    )
+    msg = ""
+    if message:
+        msg = f'<div id="armguard-message" style="color:#d62828;font-family:sans-serif;padding-top:4px">{e(message)}</div>'
+    return head + table + msg

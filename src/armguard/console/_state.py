@@ -1,0 +1,521 @@
+"""The console's state machine: everything the operator console does, without a browser.
+
+:class:`ConsoleState` holds the configuration of every arm, the active arm, the control mode,
+the detection settings (on/off, threshold, stopping distance, workspace box) and the player of a
+canned test run or a verified trajectory; each command checks its input first and raises
+:class:`~armguard.console.ConsoleInputError` without changing anything when it is bad.  The
+viser layer (:mod:`._app`) only binds widgets to these commands and draws what
+:meth:`ConsoleState.snapshot` returns.
+
+Ranger's GUI (Bon & Seraji 1997, seed ``000`` section 6) gives the controls: joint or Cartesian
+control of the active arm (end-effector position / orientation and the arm angle), detection
+on/off with a threshold, bounding-box limits, a stand-off distance, canned Setup / Test cases
+with trapezoidal motions.  WORKMATE (Smith 1986, seed ``004`` section 4) gives the time line.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._parse import ConsoleInputError, parse_number, parse_numbers
+from ._readout import Readout, readout_from_report, readout_off
+from ._timeline import Timeline
+
+__all__ = ["ConsoleState", "Snapshot", "Player", "MODES", "DEFAULT_THRESHOLD", "PROFILE_SAMPLES"]
+
+MODES = ("joint", "cartesian")
+DEFAULT_THRESHOLD = 0.05
+"""Detection threshold (m) when neither the caller nor a canned test sets one (the detector's default)."""
+PROFILE_SAMPLES = 200
+"""Samples of the clearance profile drawn on the time line (evenly spaced in time)."""
+MAX_DISTANCE_SETTING = 10.0
+"""Largest threshold / stopping distance the console accepts (m): larger is a typing error."""
+
+
+@dataclass(frozen=True)
+class Player:
+    """What the time line plays: a ``trajectory`` of ``robot`` for a canned ``run`` or a ``verified`` one.
+
+    ``times`` (N,) s and ``clearance`` (N,) m sample the minimum signed distance along it (empty for
+    canned runs); ``report`` is the verification report (verified only).
+    """
+
+    kind: str
+    name: str
+    robot: str
+    trajectory: object
+    timeline: Timeline
+    times: np.ndarray
+    clearance: np.ndarray
+    report: object = None
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """A consistent copy of what the console shows (taken under the state's lock).
+
+    ``q``: robot -> (n_joints,) float64 (rad or m); ``readout`` the distance panel; ``version``
+    increases with every change.
+    """
+
+    version: int
+    q: dict
+    active: str
+    mode: str
+    detection: bool
+    threshold: float
+    stopping_distance: float
+    workspace: tuple | None
+    readout: Readout
+    message: str
+    player: Player | None
+    arm_angle: float
+
+
+def _duration_of(trajectory) -> float:
+    for attr in ("duration", "t_end", "T"):
+        v = getattr(trajectory, attr, None)
+        if v is not None:
+            return float(v() if callable(v) else v)
+    raise ConsoleInputError("trajectory has no duration")
+
+
+class ConsoleState:
+    """The operator console's state and commands (thread-safe; no GUI).
+
+    Parameters
+    ----------
+    scene : armguard.scene.Scene
+        Copied: workspace changes made in the console do not touch the caller's scene.
+    threshold : float, m
+        Initial detection threshold.
+    stopping_distance : float, m
+        Ranger's stand-off distance: a canned run halts when the arm comes this close.
+    tol : Tolerances
+    """
+
+    def __init__(self, scene, *, threshold: float = DEFAULT_THRESHOLD, stopping_distance: float = 0.0,
+                 tol: Tolerances = DEFAULT_TOLERANCES) -> None:
+        if not scene.robots:
+            raise ConsoleInputError(f"scene {scene.name!r} has no robot to drive")
+        self._lock = threading.RLock()
+        self._scene = scene.copy()
+        self._tol = tol
+        self._q = {k: np.array(v, dtype=np.float64) for k, v in self._scene.default_q().items()}
+        self._active = next(iter(self._scene.robots))
+        self._mode = "joint"
+        self._detection = True
+        self._threshold = parse_number(threshold, "threshold", lo=0.0, hi=MAX_DISTANCE_SETTING, unit="m")
+        self._stopping = parse_number(stopping_distance, "stopping distance", lo=0.0, hi=MAX_DISTANCE_SETTING, unit="m")
+        self._message = ""
+        self._player: Player | None = None
+        self._arm_angle = 0.0
+        self._version = 0
+        self._detector = None
+        self._readout = readout_off(self._threshold)
+        self._rebuild_detector()
+        self._evaluate()
+
+    # ------------------------------------------------------------------ reading
+    @property
+    def scene(self):
+        """The console's own copy of the scene."""
+        return self._scene
+
+    @property
+    def robots(self) -> tuple[str, ...]:
+        return tuple(self._scene.robots)
+
+    @property
+    def detector(self):
+        return self._detector
+
+    @property
+    def version(self) -> int:
+        return self._version
+
+    def snapshot(self) -> Snapshot:
+        with self._lock:
+            ws = self._scene.workspace
+            return Snapshot(
+                version=self._version,
+                q={k: v.copy() for k, v in self._q.items()},
+                active=self._active,
+                mode=self._mode,
+                detection=self._detection,
+                threshold=self._threshold,
+                stopping_distance=self._stopping,
+                workspace=None if ws is None else (ws.lo.copy(), ws.hi.copy()),
+                readout=self._readout,
+                message=self._message,
+                player=self._player,
+                arm_angle=self._arm_angle,
+            )
+
+    def joint_limits(self, robot: str) -> tuple[np.ndarray, np.ndarray]:
+        """``(lower, upper)``, each (n_joints,) float64, rad or m."""
+        r = self._robot(robot)
+        return np.array(r.lower), np.array(r.upper)
+
+    def ee_pose(self, robot: str | None = None) -> np.ndarray:
+        """``X_WE`` (4, 4): pose of the robot's tool link at the current configuration."""
+        with self._lock:
+            name = self._active if robot is None else robot
+            return np.array(self._robot(name).link_pose(self._q[name]))
+
+    # ------------------------------------------------------------------ internals
+    def _robot(self, name: str):
+        try:
+            return self._scene.robots[name]
+        except KeyError:
+            raise ConsoleInputError(f"unknown arm {name!r}; arms are {list(self._scene.robots)}") from None
+
+    def _rebuild_detector(self) -> None:
+        from ..detect import Detector
+
+        self._detector = Detector(self._scene, self._threshold, stopping_distance=self._stopping,
+                                  active=self._active, tol=self._tol)
+
+    def _evaluate(self) -> None:
+        """Recompute the panel at the current configuration and bump the version (lock held)."""
+        if self._detection:
+            self._readout = readout_from_report(self._detector.check(self._q))
+        else:
+            self._readout = readout_off(self._threshold)
+        self._version += 1
+
+    def _changed(self, message: str = "") -> None:
+        self._message = message
+        self._evaluate()
+
+    def _checked_q(self, robot: str, values) -> np.ndarray:
+        r = self._robot(robot)
+        q = np.asarray(values, dtype=np.float64)
+        lo, hi = np.asarray(r.lower), np.asarray(r.upper)
+        for j in range(len(q)):
+            if not (lo[j] - self._tol.joint_limit <= q[j] <= hi[j] + self._tol.joint_limit):
+                raise ConsoleInputError(
+                    f"{robot}/{r.joint_names[j]}: {q[j]:.6g} is outside its limits [{lo[j]:.6g}, {hi[j]:.6g}]; "
+                    "value kept unchanged"
+                )
+        return np.clip(q, lo, hi)
+
+    def note_error(self, message: str) -> None:
+        """Show ``message`` (an input the GUI rejected before it reached a command)."""
+        with self._lock:
+            self._message = message
+            self._version += 1
+
+    # ------------------------------------------------------------------ settings
+    def set_active(self, robot: str) -> None:
+        """Select the active arm (the one driven and checked against everything)."""
+        with self._lock:
+            self._robot(robot)
+            self._active = robot
+            self._arm_angle = 0.0
+            self._detector.set_active(robot)
+            self._changed()
+
+    def set_mode(self, mode: str) -> None:
+        """``"joint"`` or ``"cartesian"`` control."""
+        if mode not in MODES:
+            raise ConsoleInputError(f"mode: expected one of {list(MODES)}, got {mode!r}")
+        with self._lock:
+            self._mode = mode
+            self._changed()
+
+    def set_detection(self, on: bool) -> None:
+        """Turn obstacle detection on or off (off: the panel is grey, never green)."""
+        with self._lock:
+            self._detection = bool(on)
+            self._changed()
+
+    def set_threshold(self, value) -> float:
+        """Detection threshold (m; a number or its text, 0..10)."""
+        x = parse_number(value, "threshold", lo=0.0, hi=MAX_DISTANCE_SETTING, unit="m")
+        with self._lock:
+            self._threshold = x
+            self._detector.set_threshold(x)
+            self._changed()
+            return x
+
+    def set_stopping_distance(self, value) -> float:
+        """Stand-off / stopping distance (m; 0..10): a canned run halts this close to an obstacle."""
+        x = parse_number(value, "stopping distance", lo=0.0, hi=MAX_DISTANCE_SETTING, unit="m")
+        with self._lock:
+            self._stopping = x
+            self._detector.set_stopping_distance(x)
+            self._changed()
+            return x
+
+    def set_workspace(self, lo, hi) -> None:
+        """Workspace bounding-box limits ``lo``, ``hi`` (3 numbers each, m; hi > lo on every axis)."""
+        lo_v = parse_numbers(lo, "workspace lower corner", 3, unit="m")
+        hi_v = parse_numbers(hi, "workspace upper corner", 3, unit="m")
+        if np.any(hi_v <= lo_v):
+            raise ConsoleInputError(
+                f"workspace: the upper corner must exceed the lower one on every axis, got lo={lo_v.tolist()} "
+                f"hi={hi_v.tolist()}; limits kept unchanged"
+            )
+        with self._lock:
+            old = self._scene.workspace
+            self._scene.set_workspace(lo_v, hi_v)
+            try:
+                self._rebuild_detector()
+            except Exception:
+                if old is None:
+                    self._scene.clear_workspace()
+                else:
+                    self._scene.set_workspace(old.lo, old.hi)
+                self._rebuild_detector()
+                raise
+            self._changed()
+
+    # ------------------------------------------------------------------ joint control
+    def set_joint(self, robot: str, index: int, value) -> float:
+        """Set one joint (rad or m; a number or its text); outside its limits raises."""
+        with self._lock:
+            r = self._robot(robot)
+            if not 0 <= int(index) < r.n_joints:
+                raise ConsoleInputError(f"{robot}: joint index {index} out of range 0..{r.n_joints - 1}")
+            x = parse_number(value, f"{robot}/{r.joint_names[int(index)]}")
+            q = self._q[robot].copy()
+            q[int(index)] = x
+            self._q[robot] = self._checked_q(robot, q)
+            self._changed()
+            return float(self._q[robot][int(index)])
+
+    def set_joints(self, robot: str, values, *, scale: float = 1.0) -> np.ndarray:
+        """Set every joint of ``robot`` from numbers or text (times ``scale``, e.g. pi/180 for degrees)."""
+        with self._lock:
+            r = self._robot(robot)
+            q = parse_numbers(values, f"{robot} joints", r.n_joints, scale=scale)
+            self._q[robot] = self._checked_q(robot, q)
+            self._changed()
+            return self._q[robot].copy()
+
+    def set_q(self, q) -> None:
+        """Set every arm at once (a mapping robot -> joints, or flat over ``scene.joint_names``)."""
+        parts = self._scene.split_q(q)
+        with self._lock:
+            new = {name: self._checked_q(name, v) for name, v in parts.items()}
+            self._q = new
+            self._changed()
+
+    # ------------------------------------------------------------------ Cartesian control
+    def move_ee(self, p_WE, rpy_WE=None) -> np.ndarray:
+        """Cartesian control: put the active arm's tool at ``p_WE`` (3, m) with roll-pitch-yaw ``rpy_WE`` (3, rad).
+
+        Solved by the arm's inverse kinematics seeded at the current configuration; no solution
+        raises ConsoleInputError and leaves the arm where it was.  Returns the new joints.
+        """
+        from ..kinematics._frames import pose_from_xyz_rpy, xyz_rpy_from_pose
+
+        p = parse_numbers(p_WE, "end-effector position", 3, unit="m")
+        with self._lock:
+            name = self._active
+            robot = self._robot(name)
+            if rpy_WE is None:
+                rpy = np.asarray(xyz_rpy_from_pose(robot.link_pose(self._q[name]))[1], dtype=np.float64)
+            else:
+                rpy = parse_numbers(rpy_WE, "end-effector orientation", 3, unit="rad")
+            X = pose_from_xyz_rpy(p, rpy)
+            q = self._solve_ik(robot, X, self._q[name])
+            self._q[name] = q
+            self._changed()
+            return q.copy()
+
+    def _solve_ik(self, robot, X_WE, q_seed) -> np.ndarray:
+        from .._errors import KinematicsError
+
+        try:
+            res = robot.inverse_kinematics(X_WE, q_seed=q_seed, rng=np.random.default_rng(0), tol=self._tol)
+        except KinematicsError as exc:
+            raise ConsoleInputError(f"Cartesian move: {exc}; arm kept where it was") from None
+        q = getattr(res, "q", None)
+        status = getattr(getattr(res, "status", None), "name", "")
+        if q is None or (status and status != "SUCCESS"):
+            raise ConsoleInputError(
+                f"Cartesian move: no inverse-kinematics solution within the joint limits ({status.lower() or 'failed'}); "
+                "arm kept where it was"
+            )
+        return self._checked_q(robot.name, q)
+
+    def set_arm_angle(self, value) -> float:
+        """Move the active 7-DOF arm's elbow by the self-motion ("arm angle", rad) keeping the tool pose.
+
+        The arm angle of Ranger's 7-DOF arms parametrises the self-motion that leaves the
+        end-effector pose fixed.  Here it is followed as a null-space motion: from the current
+        value to the new one in steps of at most ``ARM_ANGLE_STEP`` rad along the unit null-space
+        direction of the 6xN tool Jacobian (sign kept continuous between steps), each step
+        corrected back onto the tool pose by inverse kinematics.  For arms with fewer than seven
+        joints there is no self-motion and this raises.
+        """
+        psi = parse_number(value, "arm angle", lo=-math.pi, hi=math.pi, unit="rad")
+        with self._lock:
+            name = self._active
+            robot = self._robot(name)
+            if robot.n_joints < 7:
+                raise ConsoleInputError(f"arm angle: {name} has {robot.n_joints} joints; only 7-DOF arms have one")
+            q = self._q[name].copy()
+            X_target = robot.link_pose(q)
+            delta = psi - self._arm_angle
+            n_steps = max(1, int(math.ceil(abs(delta) / ARM_ANGLE_STEP)))
+            step = delta / n_steps
+            prev = None
+            for _ in range(n_steps):
+                J = np.asarray(robot.jacobian(q))
+                _, _, Vt = np.linalg.svd(J)
+                v = Vt[-1]
+                if prev is not None and float(v @ prev) < 0.0:
+                    v = -v
+                prev = v
+                q = q + step * v
+                q = self._solve_ik(robot, X_target, q)
+            self._q[name] = q
+            self._arm_angle = psi
+            self._changed()
+            return psi
+
+    # ------------------------------------------------------------------ canned tests
+    def canned_tests(self) -> tuple[str, ...]:
+        return tuple(self._scene.canned_tests)
+
+    def _test(self, name: str):
+        try:
+            return self._scene.canned_tests[name]
+        except KeyError:
+            raise ConsoleInputError(f"unknown canned test {name!r}; tests are {list(self._scene.canned_tests)}") from None
+
+    def setup(self, name: str) -> None:
+        """Ranger's Setup button: pose every arm, select the active arm, detection on at the test's threshold."""
+        test = self._test(name)
+        with self._lock:
+            self._stop_player()
+            self._q = {k: np.array(v, dtype=np.float64) for k, v in test.setup.items()}
+            self._active = test.robot
+            self._arm_angle = 0.0
+            self._threshold = float(test.threshold)
+            self._detection = True
+            self._detector.set_active(test.robot)
+            self._detector.set_threshold(self._threshold)
+            self._changed(f"setup {name}: {test.description}".rstrip(": "))
+
+    def run(self, name: str) -> Player:
+        """Ranger's Test button: Setup, then play the test's trapezoidal motion with detection live."""
+        test = self._test(name)
+        traj = test.trajectory(self._scene)
+        self.setup(name)
+        with self._lock:
+            tl = Timeline(_duration_of(traj))
+            self._player = Player("run", name, test.robot, traj, tl, np.zeros(0), np.zeros(0))
+            tl.play()
+            self._changed(f"running {name}")
+            return self._player
+
+    # ------------------------------------------------------------------ verified trajectories
+    def trajectories(self) -> tuple[str, ...]:
+        return tuple(self._scene.trajectories)
+
+    def load_trajectory(self, name: str, *, samples: int = PROFILE_SAMPLES) -> Player:
+        """Verify the scene's trajectory ``name`` and put it on the time line (paused at t = 0).
+
+        The clearance profile (minimum signed distance over the checked categories, m) is
+        sampled at ``samples`` evenly spaced times with the detector's batch check; the
+        verification report comes from :func:`armguard.verify.verify`.
+        """
+        from ..verify import verify
+
+        try:
+            traj = self._scene.trajectories[name]
+        except KeyError:
+            raise ConsoleInputError(f"unknown trajectory {name!r}; trajectories are {list(self._scene.trajectories)}") from None
+        robot = traj.robot_name
+        with self._lock:
+            report = verify(self._scene, traj, stopping_distance=self._stopping)
+            T = _duration_of(traj)
+            times = np.linspace(0.0, T, max(2, int(samples)))
+            base = {k: v.copy() for k, v in self._q.items()}
+            rows = []
+            for t in times:
+                base[robot] = np.asarray(traj.at(float(t)), dtype=np.float64)
+                rows.append(self._scene.flat_q(base))
+            det = type(self._detector)(self._scene, self._threshold, stopping_distance=self._stopping,
+                                       active=robot, tol=self._tol)
+            batch = det.check_many(np.array(rows))
+            clearance = np.min(np.asarray(batch.min_distance, dtype=np.float64), axis=1)
+            self._stop_player()
+            tl = Timeline(T)
+            self._player = Player("verified", name, robot, traj, tl, times, clearance, report)
+            self._active = robot
+            self._detector.set_active(robot)
+            self._apply_player_time(0.0)
+            safe = getattr(report, "safe", None)
+            self._changed(f"verified {name}: {'safe' if safe else 'NOT safe'}")
+            return self._player
+
+    # ------------------------------------------------------------------ time line
+    def _stop_player(self) -> None:
+        if self._player is not None:
+            self._player.timeline.pause()
+        self._player = None
+
+    def stop(self) -> None:
+        """Drop the current run or trajectory (the arms stay where they are)."""
+        with self._lock:
+            self._stop_player()
+            self._changed()
+
+    def _apply_player_time(self, t: float) -> None:
+        p = self._player
+        q = np.asarray(p.trajectory.at(float(t)), dtype=np.float64)
+        self._q[p.robot] = np.clip(q, *self.joint_limits(p.robot))
+
+    def timeline_command(self, command: str, value=None) -> None:
+        """Drive the time line: ``play``, ``pause``, ``toggle``, ``faster``, ``slower``, ``reverse``,
+        ``forward``, ``backward`` or ``seek`` (``value`` in s)."""
+        with self._lock:
+            p = self._player
+            if p is None:
+                raise ConsoleInputError("time line: nothing loaded (load a trajectory or run a canned test)")
+            tl = p.timeline
+            simple = {"play": tl.play, "pause": tl.pause, "toggle": tl.toggle, "faster": tl.faster,
+                      "slower": tl.slower, "reverse": tl.reverse,
+                      "forward": lambda: tl.set_direction(True), "backward": lambda: tl.set_direction(False)}
+            if command == "seek":
+                tl.seek(value)
+            elif command in simple:
+                simple[command]()
+            else:
+                raise ConsoleInputError(f"time line: unknown command {command!r}; expected seek or one of {list(simple)}")
+            self._apply_player_time(tl.t)
+            self._changed(self._message)
+
+    def tick(self, dt_wall: float) -> bool:
+        """Advance the player by ``dt_wall`` s of wall-clock time; returns whether anything changed.
+
+        During a canned run, a status of COLLISION or a distance within the stopping distance
+        halts the motion (Ranger's collision avoidance with a stand-off distance).
+        """
+        with self._lock:
+            p = self._player
+            if p is None or not p.timeline.playing:
+                return False
+            t = p.timeline.advance(dt_wall)
+            self._apply_player_time(t)
+            self._evaluate()
+            r = self._readout
+            if p.kind == "run" and self._detection and self._stopping > 0.0 and r.distance <= self._stopping:
+                p.timeline.pause()
+                self._message = (f"{p.name}: halted at t = {t:.2f} s, {r.link} within the stopping distance "
+                                 f"({r.distance * 1000:.1f} mm of {r.obstacle})")
+            return True
+
+
+ARM_ANGLE_STEP = 0.05
+"""Largest arm-angle increment (rad) of one null-space step in :meth:`ConsoleState.set_arm_angle`."""

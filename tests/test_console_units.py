@@ -1,0 +1,260 @@
+"""Unit tests of the console's pure parts: typed-value checks, the time line, the distance panel,
+display meshes and the clearance plot.  No browser, no scene."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from armguard import ArmguardError
+from armguard.console import (
+    PANEL_COLORS,
+    ClearancePlot,
+    ConsoleInputError,
+    PanelStatus,
+    Timeline,
+    panel_html,
+    parse_number,
+    parse_numbers,
+    readout_from_report,
+    readout_off,
+    view_pose,
+    VIEWS,
+)
+from armguard.console._meshes import mesh_of, quat_wxyz_from_matrix, rigid_motion
+from armguard.console._timeline import MAX_RATE, MIN_RATE
+from armguard.geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere
+
+
+# ---------------------------------------------------------------------------- parsing
+@pytest.mark.parametrize(
+    "value",
+    ["abc", "", "  ", "nan", "inf", "-inf", float("nan"), float("inf"), None, True, [1.0]],
+    ids=["word", "empty", "blank", "nan-text", "inf-text", "minus-inf-text", "nan", "inf", "none", "bool", "list"],
+)
+def test_parse_number_rejects_with_field_name(value):
+    with pytest.raises(ConsoleInputError, match="threshold"):
+        parse_number(value, "threshold", unit="m")
+
+
+def test_parse_number_range_and_scale():
+    assert parse_number(" 12.5 ", "x") == 12.5
+    assert parse_number("90", "q", scale=math.pi / 180) == pytest.approx(math.pi / 2)
+    with pytest.raises(ConsoleInputError, match=r"outside \[0, 10\] m"):
+        parse_number(-0.5, "threshold", lo=0.0, hi=10.0, unit="m")
+    assert issubclass(ConsoleInputError, ArmguardError) and issubclass(ConsoleInputError, ValueError)
+
+
+@pytest.mark.parametrize(
+    "text,expect",
+    [("1, 2, 3", [1, 2, 3]), ("1 2 3", [1, 2, 3]), ("1;2; 3", [1, 2, 3]), ((1, 2, 3), [1, 2, 3])],
+    ids=["commas", "spaces", "semicolons", "tuple"],
+)
+def test_parse_numbers_ok(text, expect):
+    np.testing.assert_array_equal(parse_numbers(text, "v", 3), expect)
+
+
+@pytest.mark.parametrize("text", ["1, 2", "1, 2, 3, 4", "1, x, 3", "1, nan, 3"], ids=["short", "long", "word", "nan"])
+def test_parse_numbers_bad(text):
+    with pytest.raises(ConsoleInputError, match="corner"):
+        parse_numbers(text, "corner", 3)
+
+
+# ---------------------------------------------------------------------------- time line
+def test_timeline_play_pause_and_stop_at_end():
+    tl = Timeline(2.0)
+    assert tl.advance(0.5) == 0.0  # paused: time does not move
+    tl.play()
+    assert tl.advance(0.5) == pytest.approx(0.5)
+    tl.pause()
+    assert tl.advance(1.0) == pytest.approx(0.5)
+    tl.play()
+    assert tl.advance(10.0) == 2.0 and not tl.playing  # the end is shown, then it stops
+    tl.play()  # from the end, play restarts at 0
+    assert tl.t == 0.0 and tl.playing
+
+
+def test_timeline_faster_slower_backwards():
+    tl = Timeline(10.0)
+    tl.seek(5.0)
+    assert tl.faster() == 2.0
+    tl.play()
+    assert tl.advance(1.0) == pytest.approx(7.0)  # 2x speed
+    assert tl.slower() == 1.0 and tl.slower() == 0.5
+    assert tl.reverse() == -0.5
+    assert tl.advance(2.0) == pytest.approx(6.0)  # backwards at half speed
+    assert tl.state.direction == "backward"
+    assert tl.advance(100.0) == 0.0 and not tl.playing  # stops at the start
+    tl.play()  # backwards from the start restarts from the end
+    assert tl.t == 10.0
+
+
+def test_timeline_rate_bounds():
+    tl = Timeline(1.0)
+    for _ in range(20):
+        tl.faster()
+    assert tl.rate == MAX_RATE
+    for _ in range(40):
+        tl.slower()
+    assert tl.rate == MIN_RATE
+
+
+@pytest.mark.parametrize("bad", ["x", float("nan"), float("inf"), ""], ids=["word", "nan", "inf", "empty"])
+def test_timeline_seek_rejects_and_keeps_time(bad):
+    tl = Timeline(3.0)
+    tl.seek(1.25)
+    with pytest.raises(ConsoleInputError):
+        tl.seek(bad)
+    assert tl.t == 1.25
+
+
+def test_timeline_seek_clamps():
+    tl = Timeline(3.0)
+    assert tl.seek(-1) == 0.0 and tl.seek(99) == 3.0 and tl.seek_fraction(0.5) == 1.5
+
+
+@settings(max_examples=60, derandomize=True, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(["play", "pause", "faster", "slower", "reverse", "seek", "advance"]),
+                          st.floats(0.0, 5.0)), max_size=30))
+def test_timeline_time_stays_in_range(ops):
+    tl = Timeline(4.0)
+    for op, x in ops:
+        if op == "seek":
+            tl.seek(x)
+        elif op == "advance":
+            tl.advance(x)
+        else:
+            getattr(tl, op)()
+        s = tl.state
+        assert 0.0 <= s.t <= 4.0
+        assert MIN_RATE <= abs(s.rate) <= MAX_RATE
+
+
+# ---------------------------------------------------------------------------- panel
+@dataclass
+class _Pair:
+    distance: float
+    link: str = "link4"
+    obstacle: str = "tail"
+    a: str = "left/link4"
+    p_WA: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    p_WB: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 0.1]))
+
+
+def _report(status, d, threshold=0.05, cats=("environment",)):
+    near = None if d is None else _Pair(d)
+    return SimpleNamespace(status=SimpleNamespace(value=status), nearest=near, threshold=threshold,
+                           by_category={c: _Pair(d if d is not None else 1.0) for c in cats}, elapsed_us=12.0)
+
+
+@pytest.mark.parametrize(
+    "status,d,color,within",
+    [("clear", 0.3, "#2e9e44", False), ("warning", 0.02, "#f2c200", True), ("collision", -0.01, "#d62828", True),
+     ("incomplete", 0.3, PANEL_COLORS[PanelStatus.INCOMPLETE], False)],
+    ids=["green", "yellow", "red", "incomplete-not-green"],
+)
+def test_panel_colour_follows_status(status, d, color, within):
+    r = readout_from_report(_report(status, d))
+    assert r.color == color and r.within_threshold is within
+    assert r.line_color == ((220, 30, 30) if within else (255, 210, 0))
+    html = panel_html(r)
+    assert f'data-status="{status}"' in html and color in html
+
+
+def test_panel_rows_in_category_order_and_escaped():
+    r = readout_from_report(_report("clear", 0.3, cats=("payload", "arm", "workspace")))
+    assert [row.category for row in r.rows] == ["arm", "workspace", "payload"]
+    html = panel_html(r, message="<bad> value")
+    assert "&lt;bad&gt; value" in html and "<bad>" not in html
+
+
+def test_panel_off_and_no_pairs():
+    off = readout_off(0.05)
+    assert off.status is PanelStatus.OFF and off.color == PANEL_COLORS[PanelStatus.OFF]
+    r = readout_from_report(_report("clear", None))
+    assert r.p_WA is None and math.isinf(r.distance) and "—" in panel_html(r)
+
+
+# ---------------------------------------------------------------------------- meshes
+_SHAPES = {
+    "sphere": Sphere([0.1, 0.2, 0.3], 0.2),
+    "capsule": Capsule([0, 0, 0], [0.3, 0.4, 0.0], 0.05),
+    "box": Box([1, 0, 0], [0.1, 0.2, 0.3], np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1.0]])),
+    "prism": Prism([0, 1, 0], np.eye(3), 0.2, 0.3, 8),
+    "polyhedron": ConvexPolyhedron([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]),
+    "polygon": Polygon([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]),
+}
+
+
+@pytest.mark.parametrize("name", list(_SHAPES), ids=list(_SHAPES))
+def test_mesh_matches_shape_bounds(name):
+    shape = _SHAPES[name]
+    v, f = mesh_of(shape)
+    lo, hi = shape.aabb()
+    # the mesh is inscribed in the shape: inside its box, and reaching it to within the tessellation
+    tol = 0.02 if name in ("sphere", "capsule") else 1e-9
+    assert np.all(v.min(axis=0) >= lo - 1e-9) and np.all(v.max(axis=0) <= hi + 1e-9)
+    np.testing.assert_allclose(v.min(axis=0), lo, atol=tol)
+    np.testing.assert_allclose(v.max(axis=0), hi, atol=tol)
+    assert f.ndim == 2 and f.shape[1] == 3 and f.max() < len(v)
+
+
+def _random_rotation(rng):
+    q = rng.normal(size=4)
+    q /= np.linalg.norm(q)
+    w, x, y, z = q
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]]), q
+
+
+def test_rigid_motion_recovers_a_known_motion():
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        R, q = _random_rotation(rng)
+        t = rng.normal(size=3)
+        P0 = rng.normal(size=(6, 3))
+        R_fit, t_fit = rigid_motion(P0, P0 @ R.T + t)
+        np.testing.assert_allclose(R_fit, R, atol=1e-9)
+        np.testing.assert_allclose(t_fit, t, atol=1e-9)
+        wxyz = quat_wxyz_from_matrix(R)
+        np.testing.assert_allclose(wxyz, q if q[0] >= 0 else -q, atol=1e-9)
+
+
+def test_rigid_motion_two_points_maps_the_segment():
+    rng = np.random.default_rng(1)
+    R, _ = _random_rotation(rng)
+    P0 = np.array([[0.0, 0, 0], [0.3, 0.4, 0.0]])
+    P = P0 @ R.T + [1, 2, 3]
+    R_fit, t_fit = rigid_motion(P0, P)
+    np.testing.assert_allclose(P0 @ R_fit.T + t_fit, P, atol=1e-9)
+
+
+# ---------------------------------------------------------------------------- plot, views
+def test_clearance_plot_marker_moves_with_time():
+    t = np.linspace(0, 4, 50)
+    plot = ClearancePlot(t, 0.2 - 0.1 * t, threshold=0.05, first_collision=2.0)
+    cols = [plot.column_of(x) for x in (0.0, 1.0, 2.0, 4.0)]
+    assert cols == sorted(cols) and cols[0] < cols[-1]
+    assert cols[2] - cols[0] == pytest.approx(2 * (cols[1] - cols[0]), abs=1)
+    img = plot.image_at(2.0)
+    assert img.dtype == np.uint8 and img.shape == plot.shape
+    mid_row = img.shape[0] // 2
+    assert tuple(img[mid_row, cols[2]]) == (30, 90, 220)
+    assert not np.array_equal(img, plot.image_at(3.0))
+
+
+@pytest.mark.parametrize("label", VIEWS, ids=list(VIEWS))
+def test_views_look_at_the_scene_from_outside(label):
+    c = np.array([1.0, 2.0, 0.5])
+    pos, look = view_pose(label, c, 2.0)
+    np.testing.assert_array_equal(look, c)
+    assert np.linalg.norm(pos - c) == pytest.approx(5.0, rel=1e-3)
+    if label == "top":
+        assert pos[2] - c[2] == pytest.approx(5.0, rel=1e-3)
