@@ -26,6 +26,14 @@ class Tolerances:
         GJK stops when the lower and upper bounds on the distance differ by less than this.
     gjk_max_iterations : int
         Upper bound on GJK iterations; hitting it raises rather than returning a guess.
+    penetration_witness_offset : float, m
+        To find witness points of penetrating shapes, one core is moved out along the
+        separating-axis normal by the penetration depth plus this offset and the closest points
+        of the (then separated) cores are computed.  Any positive value gives the same answer
+        in exact arithmetic; a millimetre keeps the closest-point solve well conditioned.
+    feature_distance : float, m
+        ``feature_at``: a point within this distance of a face plane (or a shape's surface) is
+        on it; a point on two face planes is on their edge, on three or more at a vertex.
     joint_limit : float, rad or m
         A joint value this far outside its [lower, upper] still counts as within limits
         (absorbs round-off of IK and trajectory sampling at a limit).
@@ -58,6 +66,8 @@ class Tolerances:
     coplanar_volume: float = 1e-15
     gjk_epsilon: float = 1e-12
     gjk_max_iterations: int = 128
+    penetration_witness_offset: float = 1e-3
+    feature_distance: float = 1e-7
     kinematic_probe: float = 1e-9
     verify_contact: float = 1e-6
     verify_max_evaluations: int = 200_000

@@ -1,5 +1,12 @@
-"""Shapes and exact pairwise proximity queries (signed distance, witness points, overlap)."""
+"""Shapes and exact pairwise proximity queries (signed distance, witness points, overlap).
 
+``distance(a, b)`` answers every pair of the six shapes through one dispatch table
+(``_dispatch``); ``armguard.geometry.batch`` has the batched kernels over arrays of pairs and
+``armguard.geometry.kernels`` the njit-callable per-pair kernels for other compiled code.
+"""
+
+from ._dispatch import distance, intersects, kernel_name
+from ._feature import Feature, FeatureKind, feature_at
 from ._proximity import Proximity
 from ._shapes import Box, Capsule, ConvexPolyhedron, CoreKind, Polygon, Prism, Shape, Sphere
 
@@ -13,4 +20,10 @@ __all__ = [
     "Polygon",
     "CoreKind",
     "Proximity",
+    "distance",
+    "intersects",
+    "kernel_name",
+    "Feature",
+    "FeatureKind",
+    "feature_at",
 ]

@@ -39,10 +39,17 @@ class Proximity:
     def _from_buffer(cls, distance: float, buf: np.ndarray) -> "Proximity":
         """Wrap a kernel's ``(9,)`` output ``[p_WA, p_WB, nhat_AB_W]`` without copying."""
         obj = cls.__new__(cls)
-        buf.flags.writeable = False
-        obj._d = float(distance)
-        obj._buf = buf
+        # made read-only on first access (see ``_view``): setting the flag costs as much as the
+        # whole single-call query, and nothing else holds a reference to ``buf``
+        object.__setattr__(obj, "_d", float(distance))
+        object.__setattr__(obj, "_buf", buf)
         return obj
+
+    def _view(self, lo: int, hi: int) -> np.ndarray:
+        buf = self._buf
+        if buf.flags.writeable:
+            buf.setflags(write=False)
+        return buf[lo:hi]
 
     @property
     def distance(self) -> float:
@@ -52,17 +59,17 @@ class Proximity:
     @property
     def p_WA(self) -> np.ndarray:
         """``(3,) float64, m``: witness point on A's surface, in W."""
-        return self._buf[0:3]
+        return self._view(0, 3)
 
     @property
     def p_WB(self) -> np.ndarray:
         """``(3,) float64, m``: witness point on B's surface, in W."""
-        return self._buf[3:6]
+        return self._view(3, 6)
 
     @property
     def nhat_AB_W(self) -> np.ndarray:
         """``(3,) float64``: unit normal with ``p_WB - p_WA == distance * nhat_AB_W``."""
-        return self._buf[6:9]
+        return self._view(6, 9)
 
     @property
     def penetration_depth(self) -> float:

@@ -28,6 +28,7 @@ import numpy as np
 
 from .._errors import GeometryError
 from .._tolerance import DEFAULT_TOLERANCES
+from ._pack import attach_packed
 from ._check import check_nonnegative, check_point, check_points, check_pose, check_rotation
 
 __all__ = ["Shape", "Sphere", "Capsule", "Box", "Prism", "ConvexPolyhedron", "Polygon", "CoreKind"]
@@ -113,6 +114,7 @@ class Sphere(Shape):
     def __post_init__(self) -> None:
         object.__setattr__(self, "center", check_point(self.center, "Sphere.center"))
         object.__setattr__(self, "radius", check_nonnegative(self.radius, "Sphere.radius"))
+        attach_packed(self)
 
     @property
     def core_points(self) -> np.ndarray:
@@ -149,6 +151,7 @@ class Capsule(Shape):
         object.__setattr__(self, "p0", check_point(self.p0, "Capsule.p0"))
         object.__setattr__(self, "p1", check_point(self.p1, "Capsule.p1"))
         object.__setattr__(self, "radius", check_nonnegative(self.radius, "Capsule.radius"))
+        attach_packed(self)
 
     @property
     def core_points(self) -> np.ndarray:
@@ -199,6 +202,7 @@ class Box(Shape):
             raise GeometryError(f"Box.half_extents: each must be > 0 (a box with volume), got {h.tolist()}")
         object.__setattr__(self, "half_extents", h)
         object.__setattr__(self, "rotation", check_rotation(self.rotation, "Box.rotation"))
+        attach_packed(self)
 
     @property
     def core_points(self) -> np.ndarray:
@@ -318,6 +322,7 @@ class ConvexPolyhedron(Shape):
         edges = _edges_of(faces)
         edges.flags.writeable = False
         object.__setattr__(self, "edges", edges)
+        attach_packed(self)
 
     @classmethod
     def _from_parts(cls, vertices, faces, planes) -> "ConvexPolyhedron":
@@ -402,6 +407,7 @@ class Polygon(Shape):
         object.__setattr__(self, "vertices", _readonly(pts))
         object.__setattr__(self, "normal", _readonly(n))
         object.__setattr__(self, "offset", float(n @ c))
+        attach_packed(self)
 
     @property
     def core_points(self) -> np.ndarray:
@@ -446,6 +452,7 @@ class Prism(Shape):
         object.__setattr__(self, "apothem", a)
         object.__setattr__(self, "half_length", h)
         object.__setattr__(self, "n_sides", int(self.n_sides))
+        attach_packed(self)
 
     @property
     def core_points(self) -> np.ndarray:

@@ -1,0 +1,143 @@
+"""The one dispatch table: (core kind of A, core kind of B) -> kernel, and ``distance``/``intersects``.
+
+As coal's ``collision_func_matrix.h``: adding a shape pair is one kernel file and one line in
+``_TABLE``.  A pair stored as (B, A) is answered by the (A, B) kernel with the result swapped.
+The per-type table ``_BY_TYPE`` is derived from ``_TABLE`` once, so a call costs one dict
+lookup and one compiled call on the shapes' packed buffers (see ``_pack``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .._errors import GeometryError
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._pair_box_box import box_box_overlap_packed
+from ._pair_gjk import GJK_NOT_CONVERGED, GJK_WORK_SIZE
+from ._pair_sat import convex_convex
+from ._pair_segment_box import capsule_box_packed
+from ._pair_segment_segment import capsule_capsule_packed
+from ._proximity import Proximity
+from ._shapes import Box, Capsule, ConvexPolyhedron, CoreKind, Polygon, Prism, Shape, Sphere
+
+__all__ = ["distance", "intersects", "kernel_name"]
+
+
+@njit(cache=True)
+def _swap_out(out):  # pragma: no cover - compiled
+    for k in range(3):
+        t = out[k]
+        out[k] = out[3 + k]
+        out[3 + k] = t
+        out[6 + k] = -out[6 + k]
+
+
+@njit(cache=True)
+def _box_capsule_packed(box, cap, out, eps_len, eps_par, offset):  # pragma: no cover - compiled
+    d = capsule_box_packed(cap, box, out, eps_len, eps_par, offset)
+    _swap_out(out)
+    return d
+
+
+def _rounded_segments(a, b, tol: Tolerances) -> Proximity:
+    out = np.empty(9)
+    d = capsule_capsule_packed(a._pk, b._pk, out, tol.length, tol.parallel)
+    return Proximity._from_buffer(d, out)
+
+
+def _segment_box(a, b, tol: Tolerances) -> Proximity:
+    out = np.empty(9)
+    d = capsule_box_packed(a._pk, b._pk, out, tol.length, tol.parallel, tol.penetration_witness_offset)
+    return Proximity._from_buffer(d, out)
+
+
+def _box_segment(a, b, tol: Tolerances) -> Proximity:
+    out = np.empty(9)
+    d = _box_capsule_packed(a._pk, b._pk, out, tol.length, tol.parallel, tol.penetration_witness_offset)
+    return Proximity._from_buffer(d, out)
+
+
+def _convex(a, b, tol: Tolerances) -> Proximity:
+    pa, fa, ea, ra = a._sat
+    pb, fb, eb, rb = b._sat
+    out = np.empty(9)
+    work = np.empty(GJK_WORK_SIZE)
+    d, status = convex_convex(
+        pa, fa, ea, ra, pb, fb, eb, rb, out, work, tol.length, tol.parallel, tol.gjk_epsilon,
+        tol.gjk_max_iterations, tol.penetration_witness_offset,
+    )
+    if status == GJK_NOT_CONVERGED:
+        raise GeometryError(
+            f"distance({type(a).__name__}, {type(b).__name__}): GJK did not converge in "
+            f"{tol.gjk_max_iterations} iterations (Tolerances.gjk_max_iterations)"
+        )
+    return Proximity._from_buffer(d, out)
+
+
+_P, _S, _B, _T = CoreKind.POINT, CoreKind.SEGMENT, CoreKind.BOX, CoreKind.POLYTOPE
+
+# (core kind A, core kind B) -> (kernel, kernel name)
+_TABLE = {
+    (_P, _P): (_rounded_segments, "capsule_capsule (segment-segment, Ranger §3)"),
+    (_P, _S): (_rounded_segments, "capsule_capsule (segment-segment, Ranger §3)"),
+    (_S, _P): (_rounded_segments, "capsule_capsule (segment-segment, Ranger §3)"),
+    (_S, _S): (_rounded_segments, "capsule_capsule (segment-segment, Ranger §3)"),
+    (_P, _B): (_segment_box, "capsule_box (piecewise-quadratic minimum; SAT)"),
+    (_S, _B): (_segment_box, "capsule_box (piecewise-quadratic minimum; SAT)"),
+    (_B, _P): (_box_segment, "capsule_box (piecewise-quadratic minimum; SAT), swapped"),
+    (_B, _S): (_box_segment, "capsule_box (piecewise-quadratic minimum; SAT), swapped"),
+    (_B, _B): (_convex, "convex_convex (GJK; SAT depth)"),
+    (_P, _T): (_convex, "convex_convex (GJK; SAT depth)"),
+    (_T, _P): (_convex, "convex_convex (GJK; SAT depth)"),
+    (_S, _T): (_convex, "convex_convex (GJK; SAT depth)"),
+    (_T, _S): (_convex, "convex_convex (GJK; SAT depth)"),
+    (_B, _T): (_convex, "convex_convex (GJK; SAT depth)"),
+    (_T, _B): (_convex, "convex_convex (GJK; SAT depth)"),
+    (_T, _T): (_convex, "convex_convex (GJK; SAT depth)"),
+}
+
+_SHAPES = (Sphere, Capsule, Box, Prism, ConvexPolyhedron, Polygon)
+_BY_TYPE = {(ta, tb): _TABLE[(ta.core_kind, tb.core_kind)][0] for ta in _SHAPES for tb in _SHAPES}
+
+
+def _lookup(a, b):
+    fn = _BY_TYPE.get((type(a), type(b)))
+    if fn is None:
+        for name, s in (("a", a), ("b", b)):
+            if not isinstance(s, Shape):
+                raise GeometryError(f"{name}: expected an armguard shape, got {type(s).__name__}")
+        fn = _TABLE[(a.core_kind, b.core_kind)][0]  # a subclass of a known shape
+    return fn
+
+
+def kernel_name(a: Shape, b: Shape) -> str:
+    """Which kernel answers ``distance(a, b)`` (for reports and the demo table)."""
+    for name, s in (("a", a), ("b", b)):
+        if not isinstance(s, Shape):
+            raise GeometryError(f"{name}: expected an armguard shape, got {type(s).__name__}")
+    return _TABLE[(a.core_kind, b.core_kind)][1]
+
+
+def distance(a: Shape, b: Shape, tol: Tolerances = DEFAULT_TOLERANCES) -> Proximity:
+    """Exact signed distance between two shapes, with witness points.
+
+    Returns a :class:`Proximity`: ``distance`` (m; > 0 apart, < 0 penetrating with magnitude the
+    penetration depth), ``p_WA``, ``p_WB`` ``(3,) float64, m`` on the surfaces of ``a`` and
+    ``b`` and ``nhat_AB_W`` with ``p_WB - p_WA == distance * nhat_AB_W``.  Any pair of Sphere,
+    Capsule, Box, Prism, ConvexPolyhedron and Polygon.  Raises GeometryError on a non-shape
+    argument or if GJK fails to converge within ``tol.gjk_max_iterations``.
+    """
+    fn = _BY_TYPE.get((type(a), type(b))) or _lookup(a, b)
+    return fn(a, b, tol)
+
+
+def intersects(a: Shape, b: Shape, tol: Tolerances = DEFAULT_TOLERANCES) -> bool:
+    """True when the shapes overlap or touch: ``distance(a, b, tol).distance <= tol.length``.
+
+    Two boxes are answered by the division-free JPL separating-axis test without computing
+    the distance.
+    """
+    if type(a) is Box and type(b) is Box:
+        return bool(box_box_overlap_packed(a._pk, b._pk, tol.parallel))
+    return distance(a, b, tol).distance <= tol.length

@@ -1,0 +1,88 @@
+"""Flat float64 views of a shape for the kernels, built once when the shape is constructed.
+
+Every shape carries (as private attributes set by its constructor):
+
+* ``_pk``: the closed-form kernels' parameter buffer -- Sphere ``[c, c, r]`` (a zero-length
+  capsule, 7 floats), Capsule ``[p0, p1, r]`` (7), Box ``[c, h, R_WB row-major]`` (15); empty
+  for the polytopes;
+* ``_sat``: ``(core_points (n, 3), face_normals (F, 3), edge_directions (E, 3), radius)`` for
+  GJK + SAT, with face normals and edge directions reduced to one per parallel class.
+
+Shapes are immutable, so this is computed once, explicitly, at construction.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._tolerance import DEFAULT_TOLERANCES
+
+__all__ = ["attach_packed", "unique_directions"]
+
+_EMPTY = np.zeros((0, 3), dtype=np.float64)
+
+
+def unique_directions(d: np.ndarray, parallel: float) -> np.ndarray:
+    """Unit directions of the non-zero rows of ``d (n, 3)``, one per parallel class (sign ignored)."""
+    out: list[np.ndarray] = []
+    for v in np.asarray(d, dtype=np.float64).reshape(-1, 3):
+        n = float(np.linalg.norm(v))
+        if n <= 0.0:
+            continue
+        u = v / n
+        if all(float(np.linalg.norm(np.cross(u, w))) > parallel for w in out):
+            out.append(u)
+    if not out:
+        return _EMPTY
+    return np.ascontiguousarray(np.array(out, dtype=np.float64))
+
+
+def _ro(a: np.ndarray) -> np.ndarray:
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    a.flags.writeable = False
+    return a
+
+
+def attach_packed(shape) -> None:
+    """Set ``shape._pk`` and ``shape._sat`` (see the module docstring)."""
+    from ._shapes import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere
+
+    par = 1e-9  # one class for directions closer than this sine: only affects duplicate axes
+    pts = _ro(shape.core_points)
+    if isinstance(shape, Sphere):
+        pk = np.concatenate([shape.center, shape.center, [shape.radius]])
+        faces, edges = _EMPTY, _EMPTY
+    elif isinstance(shape, Capsule):
+        pk = np.concatenate([shape.p0, shape.p1, [shape.radius]])
+        faces = _EMPTY
+        d = shape.p1 - shape.p0
+        edges = unique_directions(d, par) if np.linalg.norm(d) > DEFAULT_TOLERANCES.length else _EMPTY
+        if not len(edges):
+            pts = _ro(shape.p0.reshape(1, 3))
+    elif isinstance(shape, Box):
+        pk = np.concatenate([shape.center, shape.half_extents, shape.rotation.reshape(-1)])
+        faces = edges = _ro(shape.rotation.T)  # rows = box axes
+    elif isinstance(shape, (ConvexPolyhedron, Prism)):
+        pk = np.zeros(0)
+        poly = shape if isinstance(shape, ConvexPolyhedron) else None
+        if poly is None:
+            R = shape.rotation
+            n = shape.n_sides
+            ang = np.arange(n) * (2.0 * np.pi / n)
+            side = np.stack([np.cos(ang), np.sin(ang), np.zeros(n)], axis=1) @ R.T
+            faces = unique_directions(np.vstack([side, R[:, 2]]), par)
+            tang = np.stack([-np.sin(ang), np.cos(ang), np.zeros(n)], axis=1) @ R.T
+            edges = unique_directions(np.vstack([tang, R[:, 2]]), par)
+        else:
+            faces = unique_directions(poly.planes[:, :3], par)
+            v = poly.vertices
+            edges = unique_directions(v[poly.edges[:, 1]] - v[poly.edges[:, 0]], par)
+    elif isinstance(shape, Polygon):
+        pk = np.zeros(0)
+        faces = _ro(shape.normal.reshape(1, 3))
+        v = shape.vertices
+        edges = unique_directions(np.roll(v, -1, axis=0) - v, par)
+    else:  # pragma: no cover - every shape class is listed above
+        raise TypeError(f"unknown shape {type(shape).__name__}")
+    object.__setattr__(shape, "_pk", _ro(pk))
+    object.__setattr__(shape, "_sat", (pts, _ro(faces), _ro(edges), float(shape.core_radius)))
