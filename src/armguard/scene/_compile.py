@@ -1,0 +1,285 @@
+"""``compile_scene``: a Scene as flat structure-of-arrays for the numba kernels.
+
+Layout (all arrays C-contiguous; float64 in m, int64 indices; ``*_start`` arrays are CSR
+offsets of length ``count + 1``: the items of entry ``i`` are ``start[i]:start[i + 1]``):
+
+Owners (``n_owners``; order of :meth:`Scene.owners`: bodies, links, payloads)
+    ``owner_names`` tuple[str]; ``owner_kind`` (0 body, 1 link, 2 payload);
+    ``owner_robot`` robot id (-1 for bodies); ``owner_link`` link index in that robot's
+    ``link_names`` (for payloads: the holding link; -1 for bodies); ``owner_category``
+    (0 vehicle, 1 environment, -1 for links and payloads).
+
+Robots (``n_robots``; scene order)
+    ``robot_names``; ``robot_joint_start`` (n_robots + 1): a robot's joints in the flat q;
+    ``robot_n_links``.
+
+Elements: one per shape (``n_elem``), grouped by owner (``owner_elem_start``, n_owners + 1)
+    ``elem_owner``, ``elem_kind``, ``elem_robot``, ``elem_link`` (copies of their owner's);
+    ``elem_core`` (:class:`armguard.geometry.CoreKind`); ``elem_radius`` (m).
+    Geometry is in the element's *frame*: the world W for bodies, the link frame L for links
+    and payloads (a payload's ``X_LP`` is already applied), so a kernel moves it with X_WL.
+    ``elem_vert_start`` -> ``verts`` (nv, 3): the core points (sphere 1, capsule 2, box 8,
+    prism 2n, polyhedron V, polygon n).  ``elem_box_center`` (n_elem, 3), ``elem_box_axes``
+    (n_elem, 3, 3) with the box axes as columns (R_FB), ``elem_box_half`` (n_elem, 3): zeros
+    for non-boxes.  ``elem_sphere`` (n_elem, 4): a bounding sphere ``[centre, radius]``
+    (Hermes's pre-test).
+    ``elem_plane_start`` -> ``planes`` (np, 4): ``[n, d]`` with unit outward n, inside
+    ``n . x <= d`` (a polygon has one plane, its normal side).
+    ``elem_face_start`` -> faces; ``face_vert_start`` (n_faces + 1) -> ``face_verts``: global
+    indices into ``verts``, counter-clockwise seen from outside (face ``f`` of an element
+    has plane ``planes[elem_plane_start[e] + f - elem_face_start[e]]``).
+    ``elem_edge_start`` -> ``edges`` (ne, 2): global vertex indices (a capsule's segment is one
+    edge; a sphere has none).
+
+Pairs
+    ``pair_a``, ``pair_b`` (owner ids), ``pair_category`` (index into ``PAIR_CATEGORIES``):
+    :meth:`Scene.allowed_pairs`.  ``pair_elem_start`` (n_pairs + 1) -> ``elem_pair_a``,
+    ``elem_pair_b``: the element pairs of each owner pair.
+
+Workspace
+    ``has_workspace``; ``workspace_lo``, ``workspace_hi`` (3,) in W (zeros when absent).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from ..geometry import Box, Capsule, ConvexPolyhedron, CoreKind, Polygon, Prism, Sphere
+from ._scene import PairCategory, Scene
+
+__all__ = ["CompiledScene", "compile_scene", "PAIR_CATEGORIES", "OWNER_BODY", "OWNER_LINK", "OWNER_PAYLOAD"]
+
+OWNER_BODY, OWNER_LINK, OWNER_PAYLOAD = 0, 1, 2
+PAIR_CATEGORIES: tuple[PairCategory, ...] = tuple(PairCategory)
+_KIND_CODE = {"body": OWNER_BODY, "link": OWNER_LINK, "payload": OWNER_PAYLOAD}
+
+
+@dataclass(frozen=True, eq=False)
+class CompiledScene:
+    """A Scene as flat arrays; see the module docstring for the layout.  Read-only."""
+
+    owner_names: tuple
+    owner_kind: np.ndarray
+    owner_robot: np.ndarray
+    owner_link: np.ndarray
+    owner_category: np.ndarray
+    owner_elem_start: np.ndarray
+    robot_names: tuple
+    robot_joint_start: np.ndarray
+    robot_n_links: np.ndarray
+    elem_owner: np.ndarray
+    elem_kind: np.ndarray
+    elem_robot: np.ndarray
+    elem_link: np.ndarray
+    elem_core: np.ndarray
+    elem_radius: np.ndarray
+    elem_sphere: np.ndarray
+    elem_vert_start: np.ndarray
+    verts: np.ndarray
+    elem_box_center: np.ndarray
+    elem_box_axes: np.ndarray
+    elem_box_half: np.ndarray
+    elem_plane_start: np.ndarray
+    planes: np.ndarray
+    elem_face_start: np.ndarray
+    face_vert_start: np.ndarray
+    face_verts: np.ndarray
+    elem_edge_start: np.ndarray
+    edges: np.ndarray
+    pair_a: np.ndarray
+    pair_b: np.ndarray
+    pair_category: np.ndarray
+    pair_elem_start: np.ndarray
+    elem_pair_a: np.ndarray
+    elem_pair_b: np.ndarray
+    has_workspace: bool
+    workspace_lo: np.ndarray
+    workspace_hi: np.ndarray
+
+    @property
+    def n_elements(self) -> int:
+        """Number of shapes (elements)."""
+        return int(self.elem_owner.shape[0])
+
+    @property
+    def n_faces(self) -> int:
+        """Number of faces of all polytope elements (boxes, prisms, polyhedra, polygons)."""
+        return int(self.face_vert_start.shape[0] - 1)
+
+    @property
+    def nbytes(self) -> int:
+        """Size of the numeric arrays in bytes (the compiled database; names excluded)."""
+        return int(sum(getattr(self, f.name).nbytes for f in fields(self) if isinstance(getattr(self, f.name), np.ndarray)))
+
+
+def _ccw(verts: np.ndarray, idx, n: np.ndarray) -> list[int]:
+    """Order the vertex indices ``idx`` of a planar face counter-clockwise about the outward ``n``."""
+    pts = verts[list(idx)]
+    c = pts.mean(axis=0)
+    u = pts[0] - c
+    u = u - n * float(u @ n)
+    u /= np.linalg.norm(u)
+    v = np.cross(n, u)
+    ang = np.arctan2((pts - c) @ v, (pts - c) @ u)
+    return [int(list(idx)[k]) for k in np.argsort(ang)]
+
+
+def _box_topology(box: Box):
+    """Faces and planes of a box without a hull computation (6 faces of 4 corners)."""
+    V = box.vertices
+    faces, planes = [], []
+    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    for axis in range(3):
+        for s in (-1, 1):
+            idx = np.flatnonzero(signs[:, axis] == s)
+            n = s * box.rotation[:, axis]
+            faces.append(_ccw(V, idx, n))
+            planes.append([*n, float(n @ box.center) + box.half_extents[axis]])
+    return V, faces, np.array(planes)
+
+
+def _polytope(shape):
+    """``(verts, faces, planes, edges)`` of a polytope shape, edges as local index pairs."""
+    if isinstance(shape, Box):
+        V, faces, planes = _box_topology(shape)
+    elif isinstance(shape, Polygon):
+        V = shape.vertices
+        faces = [list(range(len(V)))]
+        planes = np.array([[*shape.normal, shape.offset]])
+    else:
+        poly = shape.as_polyhedron() if isinstance(shape, Prism) else shape
+        if not isinstance(poly, ConvexPolyhedron):  # pragma: no cover - every polytope is handled above
+            raise TypeError(type(shape).__name__)
+        V, faces, planes = poly.vertices, [list(map(int, f)) for f in poly.faces], poly.planes
+    edges = set()
+    for f in faces:
+        for i in range(len(f)):
+            a, b = f[i], f[(i + 1) % len(f)]
+            edges.add((min(a, b), max(a, b)))
+    return V, faces, np.asarray(planes, dtype=np.float64).reshape(-1, 4), sorted(edges)
+
+
+def _ro(a, dtype) -> np.ndarray:
+    a = np.ascontiguousarray(np.asarray(a, dtype=dtype))
+    a.flags.writeable = False
+    return a
+
+
+def compile_scene(scene: Scene) -> CompiledScene:
+    """Flatten ``scene`` into a :class:`CompiledScene` (explicit, repeatable; the scene is unchanged)."""
+    robot_names = tuple(scene.robots)
+    rid = {r: i for i, r in enumerate(robot_names)}
+    joint_start = [0]
+    for r in robot_names:
+        joint_start.append(joint_start[-1] + len(scene.robots[r].joint_names))
+    # owners and their shapes in the element frame
+    owners: list[tuple[str, int, int, int, int, tuple]] = []  # name, kind, robot, link, category, shapes
+    for b in scene.bodies.values():
+        owners.append((b.name, OWNER_BODY, -1, -1, 0 if b.category == "vehicle" else 1, b.shapes))
+    for r in robot_names:
+        robot = scene.robots[r]
+        for i, ln in enumerate(robot.link_names):
+            shapes = tuple(robot.link_shapes.get(ln, ()))
+            if shapes:
+                owners.append((f"{r}/{ln}", OWNER_LINK, rid[r], i, -1, shapes))
+    for p in scene.payloads.values():
+        robot = scene.robots[p.robot]
+        shapes = tuple(s.transformed(p.X_LP) for s in p.shapes)
+        owners.append((p.name, OWNER_PAYLOAD, rid[p.robot], robot.link_index(p.link), -1, shapes))
+    oid = {o[0]: i for i, o in enumerate(owners)}
+
+    owner_elem_start = [0]
+    e_owner, e_kind, e_robot, e_link, e_core, e_rad, e_sphere = [], [], [], [], [], [], []
+    vstart, verts = [0], []
+    bc, ba, bh = [], [], []
+    pstart, planes = [0], []
+    fstart, fvstart, fverts = [0], [0], []
+    estart, edges = [0], []
+    nv = 0
+    for k, (_, kind, r, ln, _, shapes) in enumerate(owners):
+        for s in shapes:
+            e_owner.append(k)
+            e_kind.append(kind)
+            e_robot.append(r)
+            e_link.append(ln)
+            e_core.append(int(s.core_kind))
+            e_rad.append(float(s.core_radius))
+            cs = s.circumscribed_sphere()
+            e_sphere.append([*cs.center, cs.radius])
+            if isinstance(s, Box):
+                bc.append(s.center), ba.append(s.rotation), bh.append(s.half_extents)
+            else:
+                bc.append(np.zeros(3)), ba.append(np.zeros((3, 3))), bh.append(np.zeros(3))
+            if isinstance(s, (Sphere, Capsule)):
+                V = s.core_points
+                local_edges = [(0, 1)] if isinstance(s, Capsule) else []
+                faces, pl = [], np.zeros((0, 4))
+            else:
+                V, faces, pl, local_edges = _polytope(s)
+            verts.append(np.asarray(V, dtype=np.float64))
+            planes.append(pl)
+            for f in faces:
+                fverts.extend(nv + i for i in f)
+                fvstart.append(len(fverts))
+            edges.extend((nv + a, nv + b) for a, b in local_edges)
+            nv += len(V)
+            vstart.append(nv)
+            pstart.append(pstart[-1] + len(pl))
+            fstart.append(fstart[-1] + len(faces))
+            estart.append(len(edges))
+        owner_elem_start.append(len(e_owner))
+
+    pairs = scene.allowed_pairs()
+    cat_code = {c: i for i, c in enumerate(PAIR_CATEGORIES)}
+    pa, pb, pc, pestart, epa, epb = [], [], [], [0], [], []
+    for p in pairs:
+        a, b = oid[p.a], oid[p.b]
+        pa.append(a), pb.append(b), pc.append(cat_code[p.category])
+        for i in range(owner_elem_start[a], owner_elem_start[a + 1]):
+            for j in range(owner_elem_start[b], owner_elem_start[b + 1]):
+                epa.append(i), epb.append(j)
+        pestart.append(len(epa))
+
+    ws = scene.workspace
+    i64, f64 = np.int64, np.float64
+    return CompiledScene(
+        owner_names=tuple(o[0] for o in owners),
+        owner_kind=_ro([o[1] for o in owners], i64),
+        owner_robot=_ro([o[2] for o in owners], i64),
+        owner_link=_ro([o[3] for o in owners], i64),
+        owner_category=_ro([o[4] if o[1] == OWNER_BODY else -1 for o in owners], i64),
+        owner_elem_start=_ro(owner_elem_start, i64),
+        robot_names=robot_names,
+        robot_joint_start=_ro(joint_start, i64),
+        robot_n_links=_ro([len(scene.robots[r].link_names) for r in robot_names], i64),
+        elem_owner=_ro(e_owner, i64),
+        elem_kind=_ro(e_kind, i64),
+        elem_robot=_ro(e_robot, i64),
+        elem_link=_ro(e_link, i64),
+        elem_core=_ro(e_core, i64),
+        elem_radius=_ro(e_rad, f64),
+        elem_sphere=_ro(np.reshape(e_sphere, (-1, 4)), f64),
+        elem_vert_start=_ro(vstart, i64),
+        verts=_ro(np.vstack(verts) if verts else np.zeros((0, 3)), f64),
+        elem_box_center=_ro(np.reshape(bc, (-1, 3)), f64),
+        elem_box_axes=_ro(np.reshape(ba, (-1, 3, 3)), f64),
+        elem_box_half=_ro(np.reshape(bh, (-1, 3)), f64),
+        elem_plane_start=_ro(pstart, i64),
+        planes=_ro(np.vstack(planes) if planes else np.zeros((0, 4)), f64),
+        elem_face_start=_ro(fstart, i64),
+        face_vert_start=_ro(fvstart, i64),
+        face_verts=_ro(fverts, i64),
+        elem_edge_start=_ro(estart, i64),
+        edges=_ro(np.reshape(edges, (-1, 2)), i64),
+        pair_a=_ro(pa, i64),
+        pair_b=_ro(pb, i64),
+        pair_category=_ro(pc, i64),
+        pair_elem_start=_ro(pestart, i64),
+        elem_pair_a=_ro(epa, i64),
+        elem_pair_b=_ro(epb, i64),
+        has_workspace=ws is not None,
+        workspace_lo=_ro(ws.lo if ws is not None else np.zeros(3), f64),
+        workspace_hi=_ro(ws.hi if ws is not None else np.zeros(3), f64),
+    )

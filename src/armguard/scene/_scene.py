@@ -1,0 +1,683 @@
+"""The scene model: robots, static bodies, payloads, workspace box, pair filters, canned tests.
+
+A :class:`Scene` is a mutable container of immutable parts.  Every mutating method checks
+all of its inputs before it changes anything, so a failed call leaves the scene as it was.
+
+Owners (the things a distance is measured between) are named:
+
+* a static body by its name (``"tail"``), kind ``"body"``, shapes in the world frame W;
+* a robot link by ``"robot/link"`` (``"hera/link3"``), kind ``"link"``, shapes in the link frame L;
+* a payload by its name, kind ``"payload"``, shapes in the payload frame P held at ``X_LP`` by a link.
+"""
+
+from __future__ import annotations
+
+import enum
+import types
+from dataclasses import dataclass
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from .._errors import SceneError
+from ..geometry import Shape
+
+__all__ = [
+    "Scene",
+    "Body",
+    "Payload",
+    "SceneItem",
+    "WorkspaceBox",
+    "CheckPair",
+    "PairCategory",
+    "CannedTest",
+    "BODY_CATEGORIES",
+]
+
+BODY_CATEGORIES = ("vehicle", "environment")
+
+
+class PairCategory(str, enum.Enum):
+    """What a checked pair is, in the seeds' terms (Ranger's three categories, Hermes's four checks)."""
+
+    ARM_ARM = "arm-arm"  # two links: of two robots, or non-adjacent links of one robot
+    ARM_VEHICLE = "arm-vehicle"  # a link and a body of category "vehicle"
+    ARM_ENVIRONMENT = "arm-environment"  # a link and a body of category "environment"
+    ARM_PAYLOAD = "arm-payload"  # a link and a payload (not the link that holds it)
+    PAYLOAD_VEHICLE = "payload-vehicle"
+    PAYLOAD_ENVIRONMENT = "payload-environment"
+    PAYLOAD_PAYLOAD = "payload-payload"
+
+
+@dataclass(frozen=True)
+class Body:
+    """A static body: ``shapes`` in the world frame W; ``category`` ``"vehicle"`` or ``"environment"``."""
+
+    name: str
+    shapes: tuple[Shape, ...]
+    category: str = "environment"
+
+
+@dataclass(frozen=True, eq=False)
+class Payload:
+    """Shapes held by a robot link: ``shapes`` in the payload frame P, ``X_LP`` (4, 4) P in link frame L."""
+
+    name: str
+    robot: str
+    link: str
+    shapes: tuple[Shape, ...]
+    X_LP: np.ndarray
+
+    @property
+    def owner_link(self) -> str:
+        """The ``"robot/link"`` owner name of the holding link."""
+        return f"{self.robot}/{self.link}"
+
+
+@dataclass(frozen=True, eq=False)
+class SceneItem:
+    """One shape of the scene at a configuration: ``shape`` in W, owned by ``owner`` of ``kind``.
+
+    ``kind`` is ``"body"``, ``"link"`` or ``"payload"``; ``robot`` / ``link`` name the robot and
+    link for links and payloads (the holding link), ``None`` for bodies; ``category`` is the
+    body category (``"vehicle"`` / ``"environment"``), ``None`` otherwise.
+    """
+
+    owner: str
+    kind: str
+    shape: Shape
+    robot: str | None = None
+    link: str | None = None
+    category: str | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class WorkspaceBox:
+    """Ranger's workspace bounding box: axis-aligned in W, ``lo`` and ``hi`` each (3,) float64, m."""
+
+    lo: np.ndarray
+    hi: np.ndarray
+
+    def __post_init__(self) -> None:
+        lo = _finite(self.lo, (3,), "workspace.lo")
+        hi = _finite(self.hi, (3,), "workspace.hi")
+        if np.any(hi <= lo):
+            raise SceneError(f"workspace: hi must exceed lo on every axis, got lo={lo.tolist()} hi={hi.tolist()}")
+        object.__setattr__(self, "lo", lo)
+        object.__setattr__(self, "hi", hi)
+
+    @property
+    def center(self) -> np.ndarray:
+        """``(3,) float64, m``: the box centre in W."""
+        return 0.5 * (self.lo + self.hi)
+
+
+@dataclass(frozen=True)
+class CheckPair:
+    """Two owners whose distance must be checked, and the category of the check."""
+
+    a: str
+    b: str
+    category: PairCategory
+
+
+@dataclass(frozen=True, eq=False)
+class CannedTest:
+    """A Ranger canned test: put every robot in ``setup``, then move ``robot`` to ``goal``.
+
+    ``setup`` maps robot name -> (n_joints,) float64 (rad or m); ``goal`` (n_joints,) of the
+    active ``robot``; ``threshold`` (m) is the detection threshold the test turns on.  The motion
+    is a trapezoidal velocity profile synchronised across joints (:meth:`trajectory`).
+    """
+
+    name: str
+    description: str
+    robot: str
+    threshold: float
+    setup: Mapping[str, np.ndarray]
+    goal: np.ndarray
+
+    def trajectory(self, scene: "Scene"):
+        """The test motion as a ``Trajectory`` (``Trajectory.trapezoidal`` from the setup to ``goal``)."""
+        from ..kinematics import Trajectory
+
+        robot = scene.robots[self.robot]
+        return Trajectory.trapezoidal(robot, self.setup[self.robot], self.goal)
+
+
+def _finite(value, shape, name: str) -> np.ndarray:
+    try:
+        arr = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise SceneError(f"{name}: expected numbers, got {value!r}") from exc
+    if shape is not None and arr.shape != shape:
+        raise SceneError(f"{name}: expected shape {shape}, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise SceneError(f"{name}: contains NaN or infinite values")
+    arr.flags.writeable = False
+    return arr
+
+
+def _check_name(name: str, what: str) -> str:
+    if not isinstance(name, str) or not name or "/" in name:
+        raise SceneError(f"{what}: expected a non-empty name without '/', got {name!r}")
+    return name
+
+
+def _check_shapes(shapes, what: str) -> tuple[Shape, ...]:
+    if isinstance(shapes, Shape):
+        shapes = (shapes,)
+    shapes = tuple(shapes)
+    if not shapes:
+        raise SceneError(f"{what}: expected at least one shape")
+    for i, s in enumerate(shapes):
+        if not isinstance(s, Shape):
+            raise SceneError(f"{what}[{i}]: expected an armguard.geometry shape, got {type(s).__name__}")
+    return shapes
+
+
+def _check_pose(X, what: str) -> np.ndarray:
+    from ..geometry._check import check_pose
+
+    try:
+        X = check_pose(X, what)
+    except Exception as exc:  # GeometryError -> SceneError naming the argument
+        raise SceneError(str(exc)) from exc
+    X = X.copy()
+    X.flags.writeable = False
+    return X
+
+
+class Scene:
+    """Robots among static bodies, with payloads, a workspace box, pair filters and canned tests.
+
+    Contract used by the detector, the verifier and external checks:
+
+    * ``robots[name]`` -> ``Robot``; ``joint_names`` -> every movable joint as ``"robot/joint"``,
+      in the order a flat ``q`` uses (robots in insertion order);
+    * ``add_body(name, shapes)`` adds a static body of shapes given in W;
+    * ``shapes_at(q)`` -> list of :class:`SceneItem` (bodies, then links, then payloads), in W;
+    * ``q`` is a mapping robot name -> (n_joints,) array, or a flat (n,) array over ``joint_names``.
+    """
+
+    def __init__(self, name: str = "scene", *, description: str = "") -> None:
+        self.name = str(name)
+        self.description = str(description)
+        self._robots: dict = {}
+        self._homes: dict[str, np.ndarray] = {}
+        self._self_pairs: dict[str, frozenset] = {}
+        self._bodies: dict[str, Body] = {}
+        self._payloads: dict[str, Payload] = {}
+        self._workspace: WorkspaceBox | None = None
+        self._exclude_adjacent = True
+        self._disabled: set[frozenset] = set()
+        self._trajectories: dict = {}
+        self._canned: dict[str, CannedTest] = {}
+        # How each robot was described (for save_scene): robot name -> dict in SI units.
+        self._robot_sources: dict[str, dict] = {}
+        # How each file trajectory was described (for save_scene): name -> dict in SI units.
+        self._trajectory_specs: dict[str, dict] = {}
+
+    # ---------------------------------------------------------------- read-only views
+    @property
+    def robots(self) -> Mapping:
+        """Robot name -> ``Robot`` (read-only view, insertion order)."""
+        return types.MappingProxyType(self._robots)
+
+    @property
+    def bodies(self) -> Mapping[str, Body]:
+        """Body name -> :class:`Body` (read-only view)."""
+        return types.MappingProxyType(self._bodies)
+
+    @property
+    def payloads(self) -> Mapping[str, Payload]:
+        """Payload name -> :class:`Payload` (read-only view)."""
+        return types.MappingProxyType(self._payloads)
+
+    @property
+    def workspace(self) -> WorkspaceBox | None:
+        """The workspace bounding box, or ``None``."""
+        return self._workspace
+
+    @property
+    def trajectories(self) -> Mapping:
+        """Name -> canned ``Trajectory`` for verification (read-only view)."""
+        return types.MappingProxyType(self._trajectories)
+
+    @property
+    def canned_tests(self) -> Mapping[str, CannedTest]:
+        """Name -> :class:`CannedTest` (Ranger's test setups; read-only view)."""
+        return types.MappingProxyType(self._canned)
+
+    @property
+    def exclude_adjacent(self) -> bool:
+        """Whether link pairs joined by one joint are left out of the checks (default True)."""
+        return self._exclude_adjacent
+
+    @exclude_adjacent.setter
+    def exclude_adjacent(self, value: bool) -> None:
+        self._exclude_adjacent = bool(value)
+
+    @property
+    def disabled_pairs(self) -> frozenset:
+        """The disabled owner pairs, each a ``frozenset`` of two owner names (or robot names)."""
+        return frozenset(self._disabled)
+
+    @property
+    def self_pairs(self) -> Mapping[str, frozenset]:
+        """Robot name -> its listed link pairs (Hermes-style: only these self pairs are checked)."""
+        return types.MappingProxyType(self._self_pairs)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Every independent movable joint of every robot as ``"robot/joint"``: the order of a flat q."""
+        return tuple(f"{r}/{j}" for r, robot in self._robots.items() for j in robot.joint_names)
+
+    def owners(self) -> tuple[str, ...]:
+        """Every owner with geometry: bodies, then ``robot/link`` owners, then payloads."""
+        out = list(self._bodies)
+        for r, robot in self._robots.items():
+            out.extend(f"{r}/{ln}" for ln in robot.link_names if robot.link_shapes.get(ln))
+        out.extend(self._payloads)
+        return tuple(out)
+
+    # ---------------------------------------------------------------- robots
+    def add_robot(self, robot, *, home=None, self_pairs=None, _source: dict | None = None) -> None:
+        """Add ``robot`` (a ``Robot``; its name must be new).
+
+        home : (n_joints,) float, rad or m; default: zeros clipped into the joint limits.
+        self_pairs : optional iterable of (link, link): only these own-link pairs are checked.
+        """
+        name = _check_name(getattr(robot, "name", None), "robot.name")
+        if name in self._robots or name in self._bodies or name in self._payloads:
+            raise SceneError(f"robot {name!r}: the name is already used in scene {self.name!r}")
+        if home is None:
+            q = np.clip(np.zeros(len(robot.joint_names)), robot.lower, robot.upper)
+        else:
+            q = robot.check_q(home)
+            if q.shape != (len(robot.joint_names),):
+                raise SceneError(f"robot {name!r}: home must be one configuration, got shape {q.shape}")
+            bad = np.flatnonzero((q < robot.lower) | (q > robot.upper))
+            if bad.size:
+                raise SceneError(
+                    f"robot {name!r}: home is outside the limits of joint {robot.joint_names[bad[0]]!r}"
+                )
+        q = np.array(q, dtype=np.float64)
+        q.flags.writeable = False
+        pairs = None
+        if self_pairs is not None:
+            pairs = frozenset(self._check_link_pair(robot, p) for p in self_pairs)
+        self._robots[name] = robot
+        self._homes[name] = q
+        if pairs is not None:
+            self._self_pairs[name] = pairs
+        if _source is not None:
+            self._robot_sources[name] = _source
+
+    @staticmethod
+    def _check_link_pair(robot, pair) -> tuple[str, str]:
+        a, b = pair
+        for ln in (a, b):
+            if ln not in robot.link_names:
+                raise SceneError(f"robot {robot.name!r}: unknown link {ln!r}; links are {list(robot.link_names)}")
+        if a == b:
+            raise SceneError(f"robot {robot.name!r}: a link pair needs two different links, got {a!r} twice")
+        return (a, b) if a < b else (b, a)
+
+    def home(self, robot: str) -> np.ndarray:
+        """``(n_joints,) float64``: the home configuration of ``robot``."""
+        self._robot(robot)
+        return self._homes[robot]
+
+    def _robot(self, name: str):
+        try:
+            return self._robots[name]
+        except KeyError:
+            raise SceneError(f"unknown robot {name!r}; robots are {list(self._robots)}") from None
+
+    # ---------------------------------------------------------------- bodies
+    def add_body(self, name: str, shapes: Sequence[Shape] | Shape, *, category: str = "environment") -> Body:
+        """Add a static body made of ``shapes`` given in the world frame W; returns it."""
+        _check_name(name, "body name")
+        if name in self._bodies or name in self._robots or name in self._payloads:
+            raise SceneError(f"body {name!r}: the name is already used in scene {self.name!r}")
+        if category not in BODY_CATEGORIES:
+            raise SceneError(f"body {name!r}: category must be one of {list(BODY_CATEGORIES)}, got {category!r}")
+        body = Body(name, _check_shapes(shapes, f"body {name!r} shapes"), category)
+        self._bodies[name] = body
+        return body
+
+    def remove_body(self, name: str) -> Body:
+        """Remove and return the body ``name``; disabled pairs naming it are dropped."""
+        if name not in self._bodies:
+            raise SceneError(f"unknown body {name!r}; bodies are {list(self._bodies)}")
+        self._disabled = {p for p in self._disabled if name not in p}
+        return self._bodies.pop(name)
+
+    # ---------------------------------------------------------------- payloads
+    def attach_payload(self, name: str, robot: str, link: str, shapes, X_LP=None) -> Payload:
+        """Attach a payload: ``shapes`` in its frame P, held at ``X_LP`` (4, 4; default identity) by ``robot``'s ``link``."""
+        _check_name(name, "payload name")
+        if name in self._bodies or name in self._robots or name in self._payloads:
+            raise SceneError(f"payload {name!r}: the name is already used in scene {self.name!r}")
+        r = self._robot(robot)
+        if link not in r.link_names:
+            raise SceneError(f"payload {name!r}: robot {robot!r} has no link {link!r}; links are {list(r.link_names)}")
+        X = _check_pose(np.eye(4) if X_LP is None else X_LP, f"payload {name!r} X_LP")
+        p = Payload(name, robot, link, _check_shapes(shapes, f"payload {name!r} shapes"), X)
+        self._payloads[name] = p
+        return p
+
+    def release_payload(self, name: str, q) -> Body:
+        """WORKMATE release: payload ``name`` becomes a static body where it is at configuration ``q``."""
+        if name not in self._payloads:
+            raise SceneError(f"unknown payload {name!r}; payloads are {list(self._payloads)}")
+        p = self._payloads[name]
+        X_WL = self.link_pose(q, p.robot, p.link)
+        X_WP = X_WL @ p.X_LP
+        shapes = tuple(s.transformed(X_WP) for s in p.shapes)
+        body = Body(name, shapes, "environment")
+        del self._payloads[name]
+        self._bodies[name] = body
+        return body
+
+    def grasp(self, body: str, robot: str, link: str, q) -> Payload:
+        """WORKMATE grasp: static ``body`` becomes a payload of ``robot``'s ``link``, held where it is at ``q``."""
+        if body not in self._bodies:
+            raise SceneError(f"unknown body {body!r}; bodies are {list(self._bodies)}")
+        r = self._robot(robot)
+        if link not in r.link_names:
+            raise SceneError(f"grasp: robot {robot!r} has no link {link!r}")
+        X_WL = self.link_pose(q, robot, link)
+        X_LW = np.eye(4)
+        X_LW[:3, :3] = X_WL[:3, :3].T
+        X_LW[:3, 3] = -X_WL[:3, :3].T @ X_WL[:3, 3]
+        shapes = tuple(s.transformed(X_LW) for s in self._bodies[body].shapes)
+        p = Payload(body, robot, link, shapes, _check_pose(np.eye(4), "X_LP"))
+        del self._bodies[body]
+        self._payloads[body] = p
+        return p
+
+    # ---------------------------------------------------------------- workspace, filters
+    def set_workspace(self, lo, hi) -> WorkspaceBox:
+        """Set the axis-aligned workspace box (``lo``, ``hi``: (3,) m in W)."""
+        self._workspace = WorkspaceBox(lo, hi)
+        return self._workspace
+
+    def clear_workspace(self) -> None:
+        """Remove the workspace box."""
+        self._workspace = None
+
+    def disable_pair(self, a: str, b: str) -> None:
+        """Never check owners ``a`` and ``b`` against each other (a robot name stands for all its links)."""
+        for n in (a, b):
+            self._check_owner_or_robot(n)
+        if a == b:
+            raise SceneError(f"disable_pair: needs two different owners, got {a!r} twice")
+        self._disabled.add(frozenset((a, b)))
+
+    def enable_pair(self, a: str, b: str) -> None:
+        """Undo :meth:`disable_pair` (no effect when the pair was not disabled)."""
+        self._disabled.discard(frozenset((a, b)))
+
+    def set_self_pairs(self, robot: str, pairs) -> None:
+        """Hermes-style: check only these own-link pairs of ``robot`` (``None``: all non-adjacent pairs)."""
+        r = self._robot(robot)
+        if pairs is None:
+            self._self_pairs.pop(robot, None)
+            return
+        self._self_pairs[robot] = frozenset(self._check_link_pair(r, p) for p in pairs)
+
+    def _check_owner_or_robot(self, n: str) -> None:
+        if n in self._robots or n in self._bodies or n in self._payloads:
+            return
+        if "/" in n:
+            r, ln = n.split("/", 1)
+            if r in self._robots and ln in self._robots[r].link_names:
+                return
+        raise SceneError(f"unknown owner {n!r}: expected a body, a payload, a robot or 'robot/link'")
+
+    # ---------------------------------------------------------------- trajectories, tests
+    def add_trajectory(self, name: str, trajectory) -> None:
+        """Add a named canned ``Trajectory`` (its ``robot_name`` must be a robot of the scene)."""
+        _check_name(name, "trajectory name")
+        self._robot(trajectory.robot_name)
+        if name in self._trajectories:
+            raise SceneError(f"trajectory {name!r}: the name is already used")
+        self._trajectories[name] = trajectory
+
+    def add_canned_test(self, test: CannedTest) -> None:
+        """Add a :class:`CannedTest`; its robots and configurations are checked."""
+        _check_name(test.name, "canned test name")
+        if test.name in self._canned:
+            raise SceneError(f"canned test {test.name!r}: the name is already used")
+        active = self._robot(test.robot)
+        setup = {}
+        for rname in self._robots:
+            if rname not in test.setup:
+                raise SceneError(f"canned test {test.name!r}: setup has no configuration for robot {rname!r}")
+        for rname, q in test.setup.items():
+            setup[rname] = self._check_in_limits(rname, q, f"canned test {test.name!r} setup.{rname}")
+        goal = self._check_in_limits(test.robot, test.goal, f"canned test {test.name!r} motion.goal")
+        del active
+        self._canned[test.name] = CannedTest(
+            test.name, test.description, test.robot, float(test.threshold), types.MappingProxyType(setup), goal
+        )
+
+    def _check_in_limits(self, rname: str, q, what: str) -> np.ndarray:
+        r = self._robot(rname)
+        q = r.check_q(q)
+        if q.shape != (len(r.joint_names),):
+            raise SceneError(f"{what}: expected {len(r.joint_names)} joint values, got shape {q.shape}")
+        bad = np.flatnonzero((q < r.lower) | (q > r.upper))
+        if bad.size:
+            j = int(bad[0])
+            raise SceneError(
+                f"{what}: joint {r.joint_names[j]!r} = {q[j]:.6g} is outside [{r.lower[j]:.6g}, {r.upper[j]:.6g}]"
+            )
+        q = np.array(q)
+        q.flags.writeable = False
+        return q
+
+    # ---------------------------------------------------------------- configurations
+    def split_q(self, q) -> dict[str, np.ndarray]:
+        """Robot name -> ``(..., n_joints)`` float64 from a mapping or a flat ``(..., n)`` array over ``joint_names``.
+
+        A mapping must name every robot of the scene and no other; NaN/inf raise (KinematicsError).
+        """
+        if isinstance(q, Mapping):
+            extra = [k for k in q if k not in self._robots]
+            if extra:
+                raise SceneError(f"q names unknown robots {extra}; robots are {list(self._robots)}")
+            missing = [k for k in self._robots if k not in q]
+            if missing:
+                raise SceneError(f"q has no configuration for robots {missing}")
+            return {name: self._robots[name].check_q(q[name]) for name in self._robots}
+        try:
+            arr = np.asarray(q, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise SceneError(f"q: expected a mapping robot -> joints or a flat array, got {q!r}") from exc
+        n = len(self.joint_names)
+        if arr.ndim == 0 or arr.shape[-1] != n:
+            raise SceneError(f"q: expected a flat array of {n} joint values (scene.joint_names), got shape {arr.shape}")
+        out, k = {}, 0
+        for name, robot in self._robots.items():
+            m = len(robot.joint_names)
+            out[name] = robot.check_q(arr[..., k : k + m])
+            k += m
+        return out
+
+    def flat_q(self, q) -> np.ndarray:
+        """``(..., n) float64``: ``q`` (mapping or flat) as one flat array over ``joint_names``."""
+        parts = self.split_q(q)
+        if not parts:
+            return np.zeros(0)
+        return np.concatenate([parts[n] for n in self._robots], axis=-1)
+
+    def default_q(self) -> dict[str, np.ndarray]:
+        """The home configuration of every robot: robot name -> (n_joints,) float64."""
+        return {name: self._homes[name].copy() for name in self._robots}
+
+    def link_poses(self, q) -> dict[str, np.ndarray]:
+        """Robot name -> ``(..., n_links, 4, 4)`` world poses X_WL in ``link_names`` order."""
+        parts = self.split_q(q)
+        return {name: self._robots[name].forward_kinematics(parts[name]) for name in self._robots}
+
+    def link_pose(self, q, robot: str, link: str) -> np.ndarray:
+        """``(4, 4)``: pose X_WL of one link at configuration ``q`` (a mapping, a flat array, or that robot's joints)."""
+        r = self._robot(robot)
+        if link not in r.link_names:
+            raise SceneError(f"robot {robot!r} has no link {link!r}")
+        if isinstance(q, Mapping):
+            qr = r.check_q(q[robot]) if robot in q else None
+            if qr is None:
+                raise SceneError(f"q has no configuration for robot {robot!r}")
+        else:
+            arr = np.asarray(q, dtype=np.float64)
+            qr = r.check_q(arr) if arr.shape == (len(r.joint_names),) else self.split_q(arr)[robot]
+        if qr.ndim != 1:
+            raise SceneError(f"q: expected one configuration, got shape {qr.shape}")
+        return r.forward_kinematics(qr)[r.link_index(link)]
+
+    def shapes_at(self, q=None) -> list[SceneItem]:
+        """The world-frame geometry at configuration ``q`` (default: every robot at home).
+
+        Returns a list of :class:`SceneItem`: bodies, then links (robots in order, links in
+        ``link_names`` order), then payloads.  ``q`` is one configuration (no batch axes).
+        """
+        parts = self.split_q(self.default_q() if q is None else q)
+        items: list[SceneItem] = []
+        for b in self._bodies.values():
+            items.extend(SceneItem(b.name, "body", s, category=b.category) for s in b.shapes)
+        poses = {}
+        for name, robot in self._robots.items():
+            if parts[name].ndim != 1:
+                raise SceneError(f"shapes_at: expected one configuration, got shape {parts[name].shape} for {name!r}")
+            X = robot.forward_kinematics(parts[name])
+            poses[name] = X
+            for i, ln in enumerate(robot.link_names):
+                for s in robot.link_shapes.get(ln, ()):
+                    items.append(SceneItem(f"{name}/{ln}", "link", s.transformed(X[i]), robot=name, link=ln))
+        for p in self._payloads.values():
+            robot = self._robots[p.robot]
+            X_WP = poses[p.robot][robot.link_index(p.link)] @ p.X_LP
+            items.extend(
+                SceneItem(p.name, "payload", s.transformed(X_WP), robot=p.robot, link=p.link) for s in p.shapes
+            )
+        return items
+
+    # ---------------------------------------------------------------- pairs
+    def allowed_pairs(self) -> tuple[CheckPair, ...]:
+        """Every owner pair that must be checked, with its :class:`PairCategory`.
+
+        * arm-arm: links of two different robots; own links of one robot that are not adjacent
+          (joined by one joint or through links without geometry; kept when
+          ``exclude_adjacent`` is False) or, where :meth:`set_self_pairs` listed pairs,
+          exactly those pairs (Hermes checks only 1-3, 1-4, 1-6, 2-4, 2-6, 3-6);
+        * arm-vehicle / arm-environment: a link and a body of that category;
+        * arm-payload: a link and a payload, except the link that holds it;
+        * payload-vehicle / payload-environment / payload-payload.
+
+        Only owners with shapes take part; disabled pairs are left out (a robot name in a
+        disabled pair stands for all its links).  Order: as listed above, then owner order.
+        """
+        links = []  # (robot, link, owner)
+        for r, robot in self._robots.items():
+            links.extend((r, ln, f"{r}/{ln}") for ln in robot.link_names if robot.link_shapes.get(ln))
+        out: list[CheckPair] = []
+
+        def disabled(a: str, b: str, ra: str | None, rb: str | None) -> bool:
+            for x in (a, ra):
+                for y in (b, rb):
+                    if x is not None and y is not None and frozenset((x, y)) in self._disabled:
+                        return True
+            return False
+
+        for i in range(len(links)):
+            ra, la, a = links[i]
+            for j in range(i + 1, len(links)):
+                rb, lb, b = links[j]
+                if ra == rb:
+                    key = (la, lb) if la < lb else (lb, la)
+                    listed = self._self_pairs.get(ra)
+                    if listed is not None:
+                        if key not in listed:
+                            continue
+                    elif self._exclude_adjacent and self._adjacent(ra, la, lb):
+                        continue
+                if not disabled(a, b, ra, rb):
+                    out.append(CheckPair(a, b, PairCategory.ARM_ARM))
+        for r, _, a in links:
+            for body in self._bodies.values():
+                cat = PairCategory.ARM_VEHICLE if body.category == "vehicle" else PairCategory.ARM_ENVIRONMENT
+                if not disabled(a, body.name, r, None):
+                    out.append(CheckPair(a, body.name, cat))
+        for r, _, a in links:
+            for p in self._payloads.values():
+                if p.owner_link != a and not disabled(a, p.name, r, None):
+                    out.append(CheckPair(a, p.name, PairCategory.ARM_PAYLOAD))
+        plist = list(self._payloads.values())
+        for p in plist:
+            for body in self._bodies.values():
+                cat = PairCategory.PAYLOAD_VEHICLE if body.category == "vehicle" else PairCategory.PAYLOAD_ENVIRONMENT
+                if not disabled(p.name, body.name, None, None):
+                    out.append(CheckPair(p.name, body.name, cat))
+        for i in range(len(plist)):
+            for j in range(i + 1, len(plist)):
+                if not disabled(plist[i].name, plist[j].name, None, None):
+                    out.append(CheckPair(plist[i].name, plist[j].name, PairCategory.PAYLOAD_PAYLOAD))
+        return tuple(out)
+
+    def _adjacent(self, robot: str, a: str, b: str) -> bool:
+        """Whether links ``a`` and ``b`` are joined by one joint, or by a chain of joints whose
+        intermediate links have no geometry (a zero-length link between two capsules, as in
+        Ranger's and HERA's wrists: their shapes always touch at the shared joint)."""
+        r = self._robots[robot]
+        key = (a, b) if a < b else (b, a)
+        if key in r.adjacent_pairs:
+            return True
+
+        def shaped_ancestor(ln: str) -> str | None:
+            p = r.parent_link(ln)
+            while p is not None and not r.link_shapes.get(p):
+                p = r.parent_link(p)
+            return p
+
+        return shaped_ancestor(a) == b or shaped_ancestor(b) == a
+
+    def allowed_pairs_by_category(self) -> dict[PairCategory, tuple[tuple[str, str], ...]]:
+        """:meth:`allowed_pairs` grouped: category -> tuple of (owner, owner)."""
+        out: dict[PairCategory, list] = {c: [] for c in PairCategory}
+        for p in self.allowed_pairs():
+            out[p.category].append((p.a, p.b))
+        return {c: tuple(v) for c, v in out.items()}
+
+    # ---------------------------------------------------------------- other
+    def compile(self):
+        """The scene as flat arrays for kernels (see :func:`armguard.scene.compile_scene`)."""
+        from ._compile import compile_scene
+
+        return compile_scene(self)
+
+    def copy(self) -> "Scene":
+        """A shallow copy (the parts are immutable, the containers are new)."""
+        s = Scene(self.name, description=self.description)
+        s._robots = dict(self._robots)
+        s._homes = dict(self._homes)
+        s._self_pairs = dict(self._self_pairs)
+        s._bodies = dict(self._bodies)
+        s._payloads = dict(self._payloads)
+        s._workspace = self._workspace
+        s._exclude_adjacent = self._exclude_adjacent
+        s._disabled = set(self._disabled)
+        s._trajectories = dict(self._trajectories)
+        s._canned = dict(self._canned)
+        s._robot_sources = dict(self._robot_sources)
+        s._trajectory_specs = dict(self._trajectory_specs)
+        return s
+
+    def __repr__(self) -> str:
+        return (
+            f"Scene({self.name!r}: {len(self._robots)} robots, {len(self._bodies)} bodies, "
+            f"{len(self._payloads)} payloads, {len(self.joint_names)} joints)"
+        )

@@ -1,0 +1,224 @@
+"""The scene file format, version 1, as pydantic v2 models (unknown keys are rejected).
+
+Every model forbids extra keys and non-finite numbers, so a typo or a ``.nan`` is an error
+that names its place in the file.  Numbers are in the file's ``units`` (``angle: deg | rad``,
+``length: m | mm``); :mod:`._load` converts them to m / rad.  ``docs/scene-format.md`` is the
+user-facing description of the same format.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal, Union
+
+from pydantic import BaseModel, ConfigDict, Field
+
+__all__ = [
+    "SCHEMA_VERSION",
+    "SHAPE_TYPES",
+    "SceneFile",
+    "ShapeSpec",
+    "JointSpec",
+    "RobotSpec",
+]
+
+SCHEMA_VERSION = 1
+
+Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
+Vec2 = Annotated[list[float], Field(min_length=2, max_length=2)]
+Name = Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_.\-]+$")]
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+
+
+class _Posed(_Model):
+    """A local pose: translate by ``xyz``, then rotate by rot(z, yaw) rot(y, pitch) rot(x, roll)."""
+
+    xyz: Vec3 = [0.0, 0.0, 0.0]
+    rpy: Vec3 = [0.0, 0.0, 0.0]
+
+
+class BoxSpec(_Posed):
+    type: Literal["box"]
+    size: Vec3  # full edge lengths along the box's own x, y, z
+
+
+class SphereSpec(_Posed):
+    type: Literal["sphere"]
+    radius: float = Field(ge=0.0)
+
+
+class CapsuleSpec(_Posed):
+    """Either ``p0`` + ``p1`` (end points in the owner's frame) or ``length`` along the local z axis."""
+
+    type: Literal["capsule"]
+    radius: float = Field(ge=0.0)
+    p0: Vec3 | None = None
+    p1: Vec3 | None = None
+    length: float | None = Field(default=None, ge=0.0)
+
+
+class LinkCapsuleSpec(_Model):
+    """Ranger's link: the segment from the parent link's origin to this link's origin, swept by ``radius``."""
+
+    type: Literal["link_capsule"]
+    radius: float = Field(ge=0.0)
+
+
+class PrismSpec(_Posed):
+    """A right prism over a regular ``n_sides``-gon; its axis is the local z axis."""
+
+    type: Literal["prism"]
+    n_sides: int = Field(ge=3)
+    apothem: float = Field(gt=0.0)
+    length: float = Field(gt=0.0)
+
+
+class PolyhedronSpec(_Posed):
+    type: Literal["polyhedron"]
+    vertices: Annotated[list[Vec3], Field(min_length=4)]
+
+
+class PolygonSpec(_Posed):
+    type: Literal["polygon"]
+    vertices: Annotated[list[Vec3], Field(min_length=3)]
+
+
+class MeshSpec(_Posed):
+    """A mesh file (STL, OBJ, ... read by trimesh), replaced by its convex hull."""
+
+    type: Literal["mesh"]
+    file: str
+    scale: Vec3 = [1.0, 1.0, 1.0]
+
+
+ShapeSpec = Annotated[
+    Union[BoxSpec, SphereSpec, CapsuleSpec, LinkCapsuleSpec, PrismSpec, PolyhedronSpec, PolygonSpec, MeshSpec],
+    Field(discriminator="type"),
+]
+SHAPE_TYPES = ("box", "sphere", "capsule", "link_capsule", "prism", "polyhedron", "polygon", "mesh")
+
+
+class FrameSpec(_Posed):
+    name: Name
+    parent: Name = "world"
+
+
+class BodySpec(_Posed):
+    """A static body: its shapes are given in its own frame (``xyz`` / ``rpy`` in ``frame``)."""
+
+    name: Name
+    category: Literal["vehicle", "environment"] = "environment"
+    frame: Name = "world"
+    shapes: Annotated[list[ShapeSpec], Field(min_length=1)]
+
+
+class JointSpec(_Model):
+    """One DH row plus its joint's limits (``[lower, upper]``; omitted: unlimited)."""
+
+    name: Name | None = None
+    type: Literal["revolute", "prismatic"] = "revolute"
+    a: float = 0.0
+    alpha: float = 0.0
+    d: float = 0.0
+    theta: float = 0.0
+    limits: Vec2 | None = None
+    max_velocity: float | None = Field(default=None, gt=0.0)
+    max_acceleration: float | None = Field(default=None, gt=0.0)
+
+
+class CouplingSpec(_Model):
+    """A dependent joint: ``offset + sum(coeff * q[independent])`` (GMF S-480 parallelogram)."""
+
+    joint: Name
+    terms: dict[Name, float]
+    offset: float = 0.0
+
+
+class MountSpec(_Posed):
+    frame: Name = "world"
+
+
+class RobotSpec(_Model):
+    """A robot from a DH table (``joints``) or a URDF file (``urdf``), mounted on a frame."""
+
+    name: Name
+    mount: MountSpec = MountSpec()
+    convention: Literal["standard", "modified"] = "standard"
+    joints: list[JointSpec] | None = None
+    links: list[Name] | None = None
+    couplings: list[CouplingSpec] = []
+    tool: _Posed | None = None
+    urdf: str | None = None
+    srdf: str | None = None
+    link_shapes: dict[Name, list[ShapeSpec]] = {}
+    home: list[float] | None = None
+    self_pairs: list[Annotated[list[Name], Field(min_length=2, max_length=2)]] | None = None
+
+
+class PayloadSpec(_Posed):
+    """Shapes held by ``robot``'s ``link``; ``xyz`` / ``rpy`` place the payload frame P in the link frame."""
+
+    name: Name
+    robot: Name
+    link: Name
+    shapes: Annotated[list[ShapeSpec], Field(min_length=1)]
+
+
+class WorkspaceSpec(_Model):
+    """Ranger's workspace bounding box: axis-aligned in the world frame."""
+
+    lo: Vec3
+    hi: Vec3
+
+
+class PairsSpec(_Model):
+    exclude_adjacent: bool = True
+    disable: list[Annotated[list[str], Field(min_length=2, max_length=2)]] = []
+
+
+class TrajectorySpec(_Model):
+    """Joint waypoints of one robot (``profile`` trapezoidal or linear; optional knot ``times`` in s)."""
+
+    name: Name
+    robot: Name
+    waypoints: Annotated[list[list[float]], Field(min_length=2)]
+    profile: Literal["trapezoidal", "linear"] = "trapezoidal"
+    times: list[float] | None = None
+    description: str = ""
+
+
+class MotionSpec(_Model):
+    """A canned test motion: a synchronised trapezoid of the active robot to ``goal`` (joint space)."""
+
+    goal: list[float]
+
+
+class CannedTestSpec(_Model):
+    name: Name
+    description: str = ""
+    robot: Name
+    threshold: float = Field(ge=0.0)
+    setup: dict[Name, list[float]]
+    motion: MotionSpec
+
+
+class UnitsSpec(_Model):
+    angle: Literal["deg", "rad"] = "rad"
+    length: Literal["m", "mm"] = "m"
+
+
+class SceneFile(_Model):
+    armguard_scene: Literal[1]
+    name: Name
+    description: str = ""
+    units: UnitsSpec = UnitsSpec()
+    frames: list[FrameSpec] = []
+    bodies: list[BodySpec] = []
+    robots: list[RobotSpec] = []
+    payloads: list[PayloadSpec] = []
+    workspace: WorkspaceSpec | None = None
+    pairs: PairsSpec = PairsSpec()
+    trajectories: list[TrajectorySpec] = []
+    canned_tests: list[CannedTestSpec] = []
