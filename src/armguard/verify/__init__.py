@@ -1,0 +1,45 @@
+"""Trajectory verification (Hermes made certain), the on-line guard, and batches on Dask.
+
+* :func:`verify` — one trajectory: sampled (Hermes, ``Ed = v / f``) or certified
+  (conservative advancement with lever-arm bounds: never misses a collision);
+* :func:`verify_many` — many trajectories, serially or on a Dask cluster;
+* :class:`Guard` — the on-line guard for a controller loop (SRI's collision prediction,
+  Hermes's automatic / operator-jog / single-joint modes);
+* :class:`StoppingDistance` — Hermes's stopping distance as a step function of speed and load.
+"""
+
+from ._guard import Guard, GuardDecision, GuardMode, GuardVerdict
+from ._many import verify_many
+from ._oracle import CATEGORIES, CHECKS, ClearanceModel
+from ._report import (
+    Clearance,
+    ClearanceProfile,
+    Collision,
+    MethodDetails,
+    VerificationReport,
+    VerificationStatus,
+)
+from ._stopping import StoppingDistance, discretisation_error
+from ._verify import DRAKE_JOINT_STEP, Verifier, verify
+
+__all__ = [
+    "verify",
+    "verify_many",
+    "Verifier",
+    "VerificationReport",
+    "VerificationStatus",
+    "Collision",
+    "Clearance",
+    "ClearanceProfile",
+    "MethodDetails",
+    "StoppingDistance",
+    "discretisation_error",
+    "ClearanceModel",
+    "CATEGORIES",
+    "CHECKS",
+    "DRAKE_JOINT_STEP",
+    "Guard",
+    "GuardDecision",
+    "GuardMode",
+    "GuardVerdict",
+]

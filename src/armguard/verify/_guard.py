@@ -1,0 +1,253 @@
+"""The on-line guard: collision prediction ahead of the arm inside a controller loop.
+
+SRI (``004_…``, "Application to Robot Controller Design") proposes running the collision
+check *ahead* of the arm in the controller, on the motion about to be commanded; Hermes
+(``001_…`` §2) runs its on-line check in automatic mode (pre-programmed trajectories),
+operator-controlled mode (a joystick) and single-joint mode (retracting one joint at a time),
+and obstacles are grown by the stopping distance "the distance required to stop the arm".
+
+:class:`Guard` does that every control cycle: from the current configuration and the
+commanded motion it predicts the joint-space straight path the arm will follow over the
+next ``horizon_s`` seconds and *certifies* it by conservative advancement (the same lever-arm
+bound as :func:`armguard.verify.verify`).  If some configuration of that path comes within
+the stopping distance of an obstacle, it answers STOP now — while the arm still has at least
+the stopping distance of clearance to brake in.  Choose ``horizon_s`` at least one control
+period plus the braking time.  A prediction that cannot be finished within its evaluation
+budget answers STOP too (never OK by omission).
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+import time as _time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._errors import VerificationError
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._oracle import ClearanceModel
+from ._stopping import StoppingDistance, check_stopping_distance
+
+__all__ = ["Guard", "GuardDecision", "GuardMode", "GuardVerdict"]
+
+_GUARD_EVALUATIONS = 256  # clearance evaluations one prediction may use before answering STOP
+
+
+class GuardMode(enum.Enum):
+    """Hermes's on-line modes: AUTOMATIC (a programmed trajectory), OPERATOR_JOG (velocity
+    commands from a joystick), SINGLE_JOINT (one joint at a time; a command moving more than
+    one joint is refused)."""
+
+    AUTOMATIC = "automatic"
+    OPERATOR_JOG = "operator-jog"
+    SINGLE_JOINT = "single-joint"
+
+
+class GuardVerdict(enum.Enum):
+    OK = "ok"
+    STOP = "stop"
+
+
+@dataclass(frozen=True)
+class GuardDecision:
+    """One cycle's answer.
+
+    ``verdict`` OK or STOP; ``reason`` in words; ``clearance`` (m) now (smallest pair);
+    ``predicted_clearance`` (m) a proven lower bound on the clearance along the predicted path
+    (up to where a collision was predicted, if one was); ``time_to_collision`` (s) until the
+    predicted path first comes within the stopping distance (``inf`` when it does not within the
+    horizon); ``pair`` the owners ``(a, b)`` that decide; ``stopping_distance`` (m) used;
+    ``evaluations`` clearance evaluations spent; ``elapsed_us`` wall time of the step.
+    """
+
+    verdict: GuardVerdict
+    reason: str
+    clearance: float
+    predicted_clearance: float
+    time_to_collision: float
+    pair: tuple[str, str] | None
+    stopping_distance: float
+    evaluations: int
+    elapsed_us: float
+
+    @property
+    def ok(self) -> bool:
+        return self.verdict is GuardVerdict.OK
+
+
+class Guard:
+    """Streaming collision prediction for one robot of ``scene``.
+
+    Parameters
+    ----------
+    scene : armguard.scene.Scene
+    stopping_distance : float (m) or StoppingDistance
+        The braking distance; with a :class:`StoppingDistance` it follows the commanded speed
+        (of the fastest point of the arm) and ``payload_mass`` (kg).
+    horizon_s : float, s
+        How far ahead the commanded motion is predicted (>= one control period + braking time).
+    period_s : float, s
+        Control period: a next setpoint ``q_cmd_next`` is reached in this time.
+    robot : str | None
+        The guarded robot (default: the scene's only robot); the others stand at ``q_others``.
+    mode : GuardMode
+    """
+
+    def __init__(self, scene, *, stopping_distance=0.0, horizon_s: float = 0.5, period_s: float = 0.01,
+                 robot: str | None = None, mode: GuardMode = GuardMode.AUTOMATIC, payload_mass: float = 0.0,
+                 q_others=None, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES) -> None:
+        self.scene = scene
+        self.tol = tol
+        self.stopping_distance = check_stopping_distance(stopping_distance)
+        for nm, v in (("horizon_s", horizon_s), ("period_s", period_s)):
+            if not math.isfinite(float(v)) or float(v) <= 0.0:
+                raise VerificationError(f"{nm}: expected a finite number > 0 (s), got {v}")
+        self.horizon_s = float(horizon_s)
+        self.period_s = float(period_s)
+        if self.horizon_s < self.period_s:
+            raise VerificationError("horizon_s must be at least one control period (period_s)")
+        self.mode = GuardMode(mode)
+        self.payload_mass = float(payload_mass)
+        names = list(scene.robots)
+        if robot is None:
+            if len(names) != 1:
+                raise VerificationError(f"the scene has robots {names}: name the guarded one (robot=...)")
+            robot = names[0]
+        if robot not in scene.robots:
+            raise VerificationError(f"robot {robot!r} is not in the scene; robots are {names}")
+        self.robot = robot
+        self.model = ClearanceModel(scene, source=source, tol=tol)
+        base = scene.default_q()
+        if q_others is not None:
+            base.update({k: np.asarray(v, dtype=np.float64) for k, v in dict(q_others).items()})
+        self._base = scene.flat_q(base)
+        k0 = 0
+        for name, rob in scene.robots.items():
+            if name == robot:
+                break
+            k0 += len(rob.joint_names)
+        self._k0, self._k1 = k0, k0 + len(scene.robots[robot].joint_names)
+
+    def _full(self, q_robot: np.ndarray) -> np.ndarray:
+        q = self._base.copy()
+        q[self._k0 : self._k1] = q_robot
+        return q
+
+    def _check(self, x, name: str) -> np.ndarray:
+        a = np.asarray(x, dtype=np.float64)
+        if a.shape != (self._k1 - self._k0,):
+            raise VerificationError(f"{name}: expected {self._k1 - self._k0} joint values, got shape {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise VerificationError(f"{name}: contains NaN or infinite values")
+        return a
+
+    def step(self, q, q_cmd_next=None, *, qdot=None, target=None) -> GuardDecision:
+        """One control cycle.
+
+        Parameters
+        ----------
+        q : (n_joints,) rad or m
+            The current configuration.
+        q_cmd_next : (n_joints,) | None
+            The next setpoint (reached in ``period_s``): the commanded joint velocity is
+            ``(q_cmd_next - q) / period_s``, extrapolated over the horizon.
+        qdot : (n_joints,) rad/s | None
+            Or a commanded joint velocity (operator jog), extrapolated over the horizon.
+        target : (n_joints,) | None
+            Or the end of the commanded segment (automatic mode): the predicted path is the
+            segment ``q -> target``, cut at the horizon when ``qdot`` gives its speed.
+
+        Exactly one of ``q_cmd_next`` / ``qdot`` / ``target`` (``target`` may come with ``qdot``).
+        """
+        t_start = _time.perf_counter()
+        q = self._check(q, "q")
+        if q_cmd_next is not None:
+            if qdot is not None or target is not None:
+                raise VerificationError("give q_cmd_next, or qdot (optionally with target), or target")
+            qd = (self._check(q_cmd_next, "q_cmd_next") - q) / self.period_s
+            q_end = q + qd * self.horizon_s
+        elif target is not None:
+            tgt = self._check(target, "target")
+            qd = None if qdot is None else self._check(qdot, "qdot")
+            q_end = tgt
+            if qd is not None:
+                # how long the segment takes at this speed; predict no further than the horizon
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    ratios = np.where(np.abs(qd) > 0.0, np.abs(tgt - q) / np.abs(qd), np.where(tgt == q, 0.0, np.inf))
+                t_seg = float(np.max(ratios)) if len(ratios) else 0.0
+                if t_seg > self.horizon_s:
+                    q_end = q + (tgt - q) * (self.horizon_s / t_seg)
+        elif qdot is not None:
+            qd = self._check(qdot, "qdot")
+            q_end = q + qd * self.horizon_s
+        else:
+            raise VerificationError("step: give the commanded motion (q_cmd_next, qdot or target)")
+        dq = q_end - q
+        # the predicted duration of the path q -> q_end (for the time to collision)
+        if qd is None:
+            T = math.inf
+        else:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                r = np.where(np.abs(qd) > 0.0, np.abs(dq) / np.abs(qd), 0.0)
+            T = float(np.max(r)) if len(r) else 0.0
+        model = self.model
+        full_dq = np.zeros(model.n_q)
+        full_dq[self._k0 : self._k1] = dq
+        if qd is not None:
+            full_qd = np.zeros(model.n_q)
+            full_qd[self._k0 : self._k1] = qd
+            speed = model.max_point_speed(full_qd)
+        else:
+            speed = 0.0
+        sd = self.stopping_distance
+        if isinstance(sd, StoppingDistance):
+            try:
+                m = sd.at(speed, self.payload_mass)
+            except VerificationError as exc:
+                return self._decide(GuardVerdict.STOP, f"commanded speed outside the stopping-distance table: {exc}",
+                                    math.nan, -math.inf, 0.0, None, sd.max_distance, 0, t_start)
+        else:
+            m = float(sd)
+        if self.mode is GuardMode.SINGLE_JOINT and int(np.count_nonzero(dq)) > 1:
+            moving = [self.scene.robots[self.robot].joint_names[i] for i in np.flatnonzero(dq)]
+            return self._decide(GuardVerdict.STOP, f"single-joint mode: joints {moving} commanded together",
+                                math.nan, -math.inf, math.inf, None, m, 0, t_start)
+        rates = model.pair_rates(full_dq)
+        pos = rates > 0.0
+        s = 0.0
+        d, _, _ = model.distances(self._full(q))
+        evals = 1
+        now = float(d.min())
+        lower = now
+        contact = self.tol.verify_contact
+        while True:
+            gap = d - m
+            i = int(np.argmin(gap))
+            if gap[i] <= contact:
+                pair = (model.owner_a[i], model.owner_b[i])
+                ttc = s * T
+                if s == 0.0:
+                    why = f"clearance {d[i] * 1e3:.1f} mm is within the stopping distance {m * 1e3:.1f} mm now"
+                else:
+                    why = f"predicted to come within the stopping distance {m * 1e3:.1f} mm in {ttc:.3f} s"
+                return self._decide(GuardVerdict.STOP, why + f" ({pair[0]} / {pair[1]})", now, min(lower, float(d[i])), ttc, pair, m, evals, t_start)
+            if s >= 1.0 or not np.any(pos):
+                break
+            step = float(np.min(gap[pos] / rates[pos]))
+            s_next = min(1.0, s + step)
+            if evals >= _GUARD_EVALUATIONS or not s_next > s:
+                return self._decide(GuardVerdict.STOP, "prediction not finished within its evaluation budget",
+                                    now, lower, s * T, (model.owner_a[i], model.owner_b[i]), m, evals, t_start)
+            d_next, _, _ = model.distances(self._full(q + s_next * dq))
+            evals += 1
+            L = s_next - s
+            lower = min(lower, float(np.min(np.minimum(np.minimum(d, d_next), 0.5 * (d + d_next - rates * L)))))
+            s, d = s_next, d_next
+        return self._decide(GuardVerdict.OK, "predicted path clear of the stopping distance", now, lower, math.inf, None, m, evals, t_start)
+
+    @staticmethod
+    def _decide(verdict, reason, now, lower, ttc, pair, m, evals, t_start) -> GuardDecision:
+        return GuardDecision(verdict, reason, float(now), float(lower), float(ttc), pair, float(m), int(evals),
+                             (_time.perf_counter() - t_start) * 1e6)

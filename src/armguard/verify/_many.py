@@ -1,0 +1,118 @@
+"""Many trajectories: serially, or on a Dask cluster (a LocalCluster of processes, or an existing scheduler)."""
+
+from __future__ import annotations
+
+import math
+import uuid
+from collections.abc import Callable, Mapping, Sequence
+
+from .._errors import VerificationError
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._report import VerificationReport
+from ._verify import Verifier
+
+__all__ = ["verify_many"]
+
+_WORKER_CACHE: dict = {}  # token -> Verifier, one per worker process (the scene is sent once)
+
+
+def _named(trajectories) -> list[tuple[str | None, object]]:
+    if isinstance(trajectories, Mapping):
+        return [(str(k), v) for k, v in trajectories.items()]
+    out = []
+    for item in trajectories:
+        if isinstance(item, tuple) and len(item) == 2 and isinstance(item[0], str):
+            out.append(item)
+        else:
+            out.append((None, item))
+    return out
+
+
+def _chunk_task(token: str, scene, ctor: dict, items: list, kwargs: dict) -> list:
+    v = _WORKER_CACHE.get(token)
+    if v is None:
+        _WORKER_CACHE.clear()
+        v = Verifier(scene, **ctor)
+        _WORKER_CACHE[token] = v
+    return [v.verify(traj, name=name, **kwargs) for name, traj in items]
+
+
+def verify_many(scene, trajectories, *, workers: int | None = None, scheduler: str | None = None,
+                chunk_size: int | None = None, progress: Callable[[int, int], None] | None = None,
+                stopping_distance=0.0, method: str = "certified", frequency: float | None = None,
+                joint_step: float | None = None, robot: str | None = None, threshold: float | None = None,
+                payload_mass: float = 0.0, q_others=None, source: str = "auto",
+                tol: Tolerances = DEFAULT_TOLERANCES) -> tuple[VerificationReport, ...]:
+    """Verify many trajectories of ``scene``; the reports come back in input order.
+
+    Parameters
+    ----------
+    trajectories : sequence of Trajectory, of ``(name, Trajectory)``, or a mapping name -> Trajectory
+    workers : int | None
+        Run on a fresh Dask ``distributed.LocalCluster`` with this many worker processes (one
+        thread each), closed afterwards.  ``None`` and no ``scheduler``: serially, here.
+    scheduler : str | None
+        Address of an existing Dask scheduler (``tcp://host:8786``) to run on instead.
+    chunk_size : int | None
+        Trajectories per task (default: about four tasks per worker).
+    progress : callable(done, total) | None
+        Called as results arrive.
+    The other parameters are those of :func:`verify`, applied to every trajectory.
+
+    Results are identical to the serial run's (but for ``elapsed_s``): each worker builds the
+    same :class:`Verifier` from the same scene.
+    """
+    items = _named(trajectories)
+    if workers is not None and scheduler is not None:
+        raise VerificationError("give workers (a new LocalCluster) or scheduler (an existing cluster), not both")
+    if workers is not None and (int(workers) != workers or workers < 1):
+        raise VerificationError(f"workers: expected an integer >= 1, got {workers!r}")
+    ctor = dict(robot=robot, q_others=q_others, source=source, tol=tol)
+    kwargs = dict(stopping_distance=stopping_distance, method=method, frequency=frequency, joint_step=joint_step,
+                  robot=robot, threshold=threshold, payload_mass=payload_mass)
+    total = len(items)
+    if workers is None and scheduler is None:
+        v = Verifier(scene, **ctor)
+        out = []
+        for i, (name, traj) in enumerate(items):
+            out.append(v.verify(traj, name=name, **kwargs))
+            if progress is not None:
+                progress(i + 1, total)
+        return tuple(out)
+    return _on_dask(scene, items, ctor, kwargs, workers, scheduler, chunk_size, progress)
+
+
+def _on_dask(scene, items, ctor, kwargs, workers, scheduler, chunk_size, progress):
+    try:
+        from distributed import Client, LocalCluster, as_completed
+    except ImportError as exc:  # pragma: no cover - a declared dependency
+        raise VerificationError("verify_many on Dask needs the 'distributed' package") from exc
+    cluster = None
+    if scheduler is None:
+        cluster = LocalCluster(n_workers=int(workers), processes=True, threads_per_worker=1, dashboard_address=None)
+        client = Client(cluster)
+    else:
+        try:
+            client = Client(scheduler, timeout="20s")
+        except (OSError, TimeoutError) as exc:
+            raise VerificationError(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}") from exc
+    try:
+        n_workers = max(1, len(client.scheduler_info().get("workers", {})) or int(workers or 1))
+        size = chunk_size or max(1, math.ceil(len(items) / (4 * n_workers)))
+        chunks = [items[i : i + size] for i in range(0, len(items), size)]
+        token = uuid.uuid4().hex
+        scene_f = client.scatter(scene, broadcast=True)
+        futures = {client.submit(_chunk_task, token, scene_f, ctor, chunk, kwargs, pure=False): k for k, chunk in enumerate(chunks)}
+        results: list = [None] * len(chunks)
+        done = 0
+        for fut in as_completed(list(futures)):
+            k = futures[fut]
+            results[k] = fut.result()
+            done += len(chunks[k])
+            if progress is not None:
+                progress(done, len(items))
+        return tuple(r for chunk in results for r in chunk)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

@@ -1,0 +1,182 @@
+"""Configuration-independent bounds on how far any point of a link can move (conservative advancement).
+
+For a joint-space straight line ``q(s) = q0 + s (q1 - q0)`` (every Trajectory segment), the
+velocity of a point ``p`` of link ``L`` is
+
+    dp/ds = sum_E  c_Ej dq_j ( w_E x (p - a_E) )   (revolute joint E, axis w_E through a_E)
+          + sum_E  c_Ej dq_j   u_E                  (prismatic joint E, direction u_E)
+
+over the physical joints ``E`` between the root and ``L`` and the independent joints ``j``
+driving them with coefficient ``c_Ej`` (1 for an ordinary joint; a coupling's coefficient
+for a dependent joint such as the GMF S-480 parallelogram).  Hence, for every configuration,
+
+    |dp/ds| <= sum_j |dq_j| * lever[j, L],
+    lever[j, L] = sum_{E driven by j} |c_Ej| * rho_E(L)      (revolute)   or  |c_Ej|  (prismatic)
+
+with ``rho_E(L)`` an upper bound, over *all* configurations, of the distance from the axis of
+``E`` to any point of ``L``.  We take (triangle inequality along the chain)
+
+    rho_E(L) <= dist(axis_E, o_child(E)) + sum_{edges K->M from child(E) to L} maxlen(K->M) + R_L
+
+where ``o_X`` is the origin of link frame X, ``R_L`` the radius of L's geometry about ``o_L``,
+and ``maxlen(K->M)`` bounds ``|o_M - o_K|`` over all configurations: ``|f - o_K| + rho_M`` for a
+revolute joint (``f`` the foot of ``o_M`` on the axis, fixed in K; ``rho_M`` the radius of the
+circle ``o_M`` runs on), ``|o_M - o_K|`` for a fixed joint, and ``|o_M - o_K|`` plus the joint's
+travel for a prismatic one.  These are the chain's *configuration-independent lever-arm bounds*
+(the bound Schwarzer, Saha & Latombe use for exact edge checking); they hold at every
+configuration, so the clearance of a pair can drop by at most ``rate * (s1 - s0)`` on
+``[s0, s1]``.
+
+The chain geometry (axes, circle radii, coupling coefficients) is measured from the Robot's
+own forward kinematics: ``X_PL(q)`` for every link and its parent at a reference
+configuration and with each joint moved by ``_PROBE`` — a rigid motion is identified exactly
+from two poses, so no assumption is made about DH versus URDF conventions.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._errors import VerificationError
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+
+__all__ = ["ChainBounds", "chain_bounds", "shape_radius_about"]
+
+_PROBE = 0.25  # rad (or m) a joint is moved by to identify the motion it drives; any value in (0, pi / max|c|) works
+
+
+def _inv(X: np.ndarray) -> np.ndarray:
+    R = X[:3, :3]
+    out = np.eye(4)
+    out[:3, :3] = R.T
+    out[:3, 3] = -R.T @ X[:3, 3]
+    return out
+
+
+def _rotation_angle_axis(R: np.ndarray) -> tuple[float, np.ndarray]:
+    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    s = 0.5 * float(np.linalg.norm(w))
+    c = 0.5 * (float(np.trace(R)) - 1.0)
+    ang = math.atan2(s, c)
+    if s > 0.0:
+        return ang, w / (2.0 * s)
+    return ang, np.array([0.0, 0.0, 1.0])
+
+
+@dataclass(frozen=True)
+class ChainBounds:
+    """Per-robot lever-arm bounds.
+
+    Attributes
+    ----------
+    robot_name : str
+    link_names : tuple[str, ...]
+    A : (n_joints, n_links) float64, m/rad
+        ``sum_E |c_Ej| rho_E(o_L)`` over revolute joints E driven by j: the bound for the link origin's
+        lever (``rho`` without the geometry radius).
+    W : (n_joints, n_links) float64, 1
+        ``sum_E |c_Ej|`` over revolute joints E driven by j: the bound on the link's angular rate per unit dq_j.
+    P : (n_joints, n_links) float64, 1
+        ``sum_E |c_Ej|`` over prismatic joints driven by j.
+    """
+
+    robot_name: str
+    link_names: tuple[str, ...]
+    A: np.ndarray
+    W: np.ndarray
+    P: np.ndarray
+
+    def lever(self, link: str, radius: float) -> np.ndarray:
+        """``(n_joints,) float64``: bound on ``|dp/dq_j|`` for every point within ``radius`` (m) of the link origin."""
+        k = self.link_names.index(link)
+        return self.A[:, k] + self.W[:, k] * radius + self.P[:, k]
+
+
+def chain_bounds(robot, tol: Tolerances = DEFAULT_TOLERANCES) -> ChainBounds:
+    """Measure the chain of ``robot`` (a :class:`armguard.kinematics.Robot`) and return its lever-arm bounds."""
+    names = tuple(robot.link_names)
+    n_links = len(names)
+    n_q = len(robot.joint_names)
+    lo = np.asarray(robot.lower, dtype=np.float64)
+    hi = np.asarray(robot.upper, dtype=np.float64)
+    q_ref = np.where(np.isfinite(lo) & np.isfinite(hi), 0.5 * (lo + hi), np.where(np.isfinite(lo), lo, np.where(np.isfinite(hi), hi, 0.0)))
+    Q = np.repeat(q_ref[None, :], n_q + 1, axis=0)
+    for j in range(n_q):
+        Q[j + 1, j] += _PROBE
+    X = np.asarray(robot.forward_kinematics(Q), dtype=np.float64)  # (n_q + 1, n_links, 4, 4)
+    if not np.all(np.isfinite(X)):
+        raise VerificationError(f"robot {robot.name!r}: forward kinematics is not finite at the reference configuration")
+    scale = max(1.0, float(np.max(np.abs(X[0, :, :3, 3]))))
+    eps_len = tol.kinematic_probe * scale
+    eps_ang = tol.kinematic_probe
+
+    parent = [None] * n_links
+    for k, nm in enumerate(names):
+        p = robot.parent_link(nm)
+        parent[k] = None if p is None else names.index(p)
+
+    # per edge (link k with its parent): drivers and geometry
+    rev_c = np.zeros((n_q, n_links))  # |c| of revolute drivers
+    pri_c = np.zeros((n_q, n_links))  # |c| of prismatic drivers
+    rho = np.zeros(n_links)  # distance of o_k from the (revolute) axis of its own joint
+    maxlen = np.zeros(n_links)  # bound on |o_k - o_parent| over all configurations
+    for k in range(n_links):
+        pk = parent[k]
+        if pk is None:
+            continue
+        X0 = _inv(X[0, pk]) @ X[0, k]  # X_PL at q_ref
+        t0 = X0[:3, 3]
+        axis_foot = None
+        travel = 0.0
+        for j in range(n_q):
+            X1 = _inv(X[j + 1, pk]) @ X[j + 1, k]
+            M = X1 @ _inv(X0)  # the rigid motion (in P) taking L's points at q_ref to q_ref + probe e_j
+            ang, u = _rotation_angle_axis(M[:3, :3])
+            t = M[:3, 3]
+            if ang > eps_ang:
+                rev_c[j, k] = ang / _PROBE
+                # fixed points of x -> R x + t: (I - R) a = t, a least-squares point on the axis
+                a = np.linalg.lstsq(np.eye(3) - M[:3, :3], t, rcond=None)[0]
+                f = a + u * float(np.dot(t0 - a, u))
+                rho[k] = max(rho[k], float(np.linalg.norm(t0 - f)))
+                axis_foot = f if axis_foot is None else axis_foot
+                if abs(float(np.dot(t, u))) > eps_len:
+                    raise VerificationError(f"robot {robot.name!r}: link {names[k]!r} moves on a screw, not a revolute or prismatic joint")
+            elif float(np.linalg.norm(t)) > eps_len:
+                c = float(np.linalg.norm(t)) / _PROBE
+                pri_c[j, k] = c
+                span = max(hi[j] - q_ref[j], q_ref[j] - lo[j])
+                travel += c * span
+        if axis_foot is not None:
+            maxlen[k] = float(np.linalg.norm(axis_foot)) + rho[k]
+        else:
+            maxlen[k] = float(np.linalg.norm(t0)) + travel  # inf for an unbounded prismatic joint
+
+    # accumulate along the chain (links are in topological order: parents first)
+    A = np.zeros((n_q, n_links))
+    Wm = np.zeros((n_q, n_links))
+    P = np.zeros((n_q, n_links))
+    for k in range(n_links):
+        pk = parent[k]
+        if pk is None:
+            continue
+        # every joint above the parent now acts on o_k through one more edge of length <= maxlen[k]
+        through = np.where(Wm[:, pk] > 0.0, Wm[:, pk] * maxlen[k] if math.isfinite(maxlen[k]) else math.inf, 0.0)
+        A[:, k] = A[:, pk] + through + rev_c[:, k] * rho[k]
+        Wm[:, k] = Wm[:, pk] + rev_c[:, k]
+        P[:, k] = P[:, pk] + pri_c[:, k]
+    # a relative safety margin for the round-off of the measurement
+    A = A * (1.0 + tol.kinematic_probe) + np.where(Wm > 0, eps_len, 0.0)
+    return ChainBounds(str(robot.name), names, A, Wm * (1.0 + tol.kinematic_probe), P * (1.0 + tol.kinematic_probe))
+
+
+def shape_radius_about(shapes, p_W: np.ndarray) -> float:
+    """Radius (m) of a ball about ``p_W`` ``(3,)`` containing every shape of ``shapes`` (world frame)."""
+    r = 0.0
+    for s in shapes:
+        pts = np.asarray(s.core_points)
+        r = max(r, float(np.max(np.linalg.norm(pts - p_W, axis=1))) + float(s.core_radius))
+    return r

@@ -1,0 +1,244 @@
+"""The verifier's view of a scene: every checked pair's clearance at a configuration, and how fast it can shrink.
+
+A :class:`ClearanceModel` is built once per (scene, moving robot).  It lists the pairs to
+check (Hermes's four checks: link-obstacle, link-link over the listed pairs, payload-obstacle,
+payload-link; plus the workspace walls and payload-payload where the scene has them), each
+with the moving parts on either side, and evaluates their signed distances at a
+configuration through one of two sources:
+
+* the Detector's ``pair_distances(q)`` (the fast path, when :mod:`armguard.detect` provides it);
+* the reference: ``scene.shapes_at(q)`` and :func:`armguard.geometry.distance` over
+  ``scene.allowed_pairs()`` (slow and obviously correct; the tests compare the two).
+
+Each moving part (a link with shapes, or a payload carried by a link) gets a lever-arm row
+``lever (n_q,)`` from :mod:`._motion`: any of its points moves at most ``|dq| . lever``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._errors import VerificationError
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._motion import chain_bounds, shape_radius_about
+
+__all__ = ["ClearanceModel", "CATEGORIES", "CHECKS"]
+
+#: Detector categories, in the order the clearance profile uses.
+CATEGORIES = ("arm", "environment", "workspace", "payload")
+#: Hermes's checks (plus the workspace walls and payload-payload).
+CHECKS = ("link-obstacle", "link-link", "payload-obstacle", "payload-link", "link-workspace", "payload-workspace", "payload-payload")
+
+_SCENE_CATEGORY = {  # scene PairCategory value -> (detector category, Hermes check)
+    "arm-arm": ("arm", "link-link"),
+    "arm-vehicle": ("environment", "link-obstacle"),
+    "arm-environment": ("environment", "link-obstacle"),
+    "arm-payload": ("payload", "payload-link"),
+    "payload-vehicle": ("payload", "payload-obstacle"),
+    "payload-environment": ("payload", "payload-obstacle"),
+    "payload-payload": ("payload", "payload-payload"),
+}
+WORKSPACE = "workspace"
+
+
+@dataclass(frozen=True)
+class _Part:
+    owner: str  # "robot/link" or payload name
+    kind: str  # "link" or "payload"
+    robot: str
+    link: str  # the carrying link
+
+
+class ClearanceModel:
+    """Pairs, moving parts and lever arms of ``scene``; evaluates clearances at flat configurations.
+
+    Parameters
+    ----------
+    scene : armguard.scene.Scene
+    source : "auto" | "detector" | "reference"
+        Where distances come from (see the module docstring); "auto" takes the detector when
+        it offers ``pair_distances`` and the reference otherwise.
+    """
+
+    def __init__(self, scene, *, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES) -> None:
+        if source not in ("auto", "detector", "reference"):
+            raise VerificationError(f"source: expected one of 'auto', 'detector', 'reference', got {source!r}")
+        self.scene = scene
+        self.tol = tol
+        self.joint_names = tuple(scene.joint_names)
+        self.n_q = len(self.joint_names)
+        q_home = scene.flat_q(scene.default_q())
+        items = scene.shapes_at(q_home)
+        # moving parts and their lever arms
+        parts: dict[str, _Part] = {}
+        shapes: dict[str, list] = {}
+        for it in items:
+            if it.kind in ("link", "payload"):
+                parts.setdefault(it.owner, _Part(it.owner, it.kind, it.robot, it.link))
+                shapes.setdefault(it.owner, []).append(it.shape)
+        self.parts = tuple(parts)
+        self._part_index = {o: i for i, o in enumerate(self.parts)}
+        offsets, k = {}, 0
+        for name, robot in scene.robots.items():
+            offsets[name] = k
+            k += len(robot.joint_names)
+        chains = {name: chain_bounds(robot, tol) for name, robot in scene.robots.items()}
+        poses = scene.link_poses(q_home)
+        lever = np.zeros((len(self.parts) + 1, self.n_q))  # last row: a static body (no motion)
+        for i, o in enumerate(self.parts):
+            p = parts[o]
+            robot = scene.robots[p.robot]
+            o_L = poses[p.robot][robot.link_index(p.link)][:3, 3]
+            R = shape_radius_about(shapes[o], o_L)
+            k0 = offsets[p.robot]
+            lever[i, k0 : k0 + len(robot.joint_names)] = chains[p.robot].lever(p.link, R)
+        self.lever = lever
+        self._part_kind = {o: parts[o].kind for o in self.parts}
+        # the pair list
+        pa, pb, cat, chk = [], [], [], []
+        for cp in scene.allowed_pairs():
+            c, h = _SCENE_CATEGORY[getattr(cp.category, "value", cp.category)]
+            pa.append(cp.a)
+            pb.append(cp.b)
+            cat.append(c)
+            chk.append(h)
+        if scene.workspace is not None:
+            for o in self.parts:
+                pa.append(o)
+                pb.append(WORKSPACE)
+                cat.append("workspace")
+                chk.append("link-workspace" if parts[o].kind == "link" else "payload-workspace")
+        if not pa:
+            raise VerificationError("the scene has no pair to check (no moving part with shapes, or every pair disabled)")
+        self.owner_a = tuple(pa)
+        self.owner_b = tuple(pb)
+        self.category = tuple(cat)
+        self.check = tuple(chk)
+        n_parts = len(self.parts)
+        self.index_a = np.array([self._part_index.get(a, n_parts) for a in pa], dtype=np.int64)
+        self.index_b = np.array([self._part_index.get(b, n_parts) for b in pb], dtype=np.int64)
+        self.category_code = np.array([CATEGORIES.index(c) for c in cat], dtype=np.int64)
+        self._pair_key = {(a, b): i for i, (a, b) in enumerate(zip(pa, pb))}
+        self.source = self._pick_source(source)
+        self.evaluations = 0
+
+    # ----------------------------------------------------------------- sources
+    def _pick_source(self, source: str) -> str:
+        if source == "reference":
+            return "reference"
+        try:
+            from ..detect import Detector  # noqa: F401
+        except ImportError:
+            if source == "detector":
+                raise VerificationError("source='detector': armguard.detect is not available") from None
+            return "reference"
+        try:
+            from ..detect import Detector
+
+            det = Detector(self.scene, threshold=0.0, tol=self.tol)
+            if not hasattr(det, "pair_distances"):
+                raise AttributeError("pair_distances")
+            res = det.pair_distances(self.scene.flat_q(self.scene.default_q()))
+            self._det = det
+            self._det_map = self._map_detector_pairs(res)
+        except (AttributeError, TypeError, VerificationError):
+            if source == "detector":
+                raise
+            return "reference"
+        return "detector"
+
+    def _map_detector_pairs(self, res) -> np.ndarray:
+        """Index of each detector pair in this model's pair list (verifies the detector checks the same pairs)."""
+        idx = np.empty(len(res.distance), dtype=np.int64)
+        for k, (a, b) in enumerate(zip(res.owner_a, res.owner_b)):
+            a, b = str(a), str(b)
+            i = self._pair_key.get((a, b), self._pair_key.get((b, a)))
+            if i is None:
+                raise VerificationError(f"detector pair ({a}, {b}) is not among the scene's allowed pairs")
+            idx[k] = i
+        if len(set(idx.tolist())) != len(self.owner_a):
+            raise VerificationError("the detector does not check every pair the scene lists")
+        return idx
+
+    def distances(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Clearance of every pair at the flat configuration ``q`` ``(n_q,)``.
+
+        Returns ``(distance (P,) m, p_WA (P, 3) m, p_WB (P, 3) m)`` in this model's pair order;
+        ``distance`` is the minimum over the shapes of the two owners (signed).
+        """
+        self.evaluations += 1
+        if self.source == "detector":
+            res = self._det.pair_distances(q)
+            P = len(self.owner_a)
+            d = np.full(P, np.inf)
+            pA = np.zeros((P, 3))
+            pB = np.zeros((P, 3))
+            dist = np.asarray(res.distance, dtype=np.float64)
+            for k, i in enumerate(self._det_map):  # several shape pairs may map to one owner pair
+                if dist[k] < d[i]:
+                    d[i] = dist[k]
+                    pA[i] = res.p_WA[k]
+                    pB[i] = res.p_WB[k]
+            return d, pA, pB
+        return self.reference_distances(q)
+
+    def reference_distances(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The slow, obviously-correct path: ``shapes_at`` + ``geometry.distance`` over every shape pair."""
+        from ..geometry import distance
+
+        items = self.scene.shapes_at(q)
+        by_owner: dict[str, list] = {}
+        for it in items:
+            by_owner.setdefault(it.owner, []).append(it.shape)
+        ws = self.scene.workspace
+        P = len(self.owner_a)
+        d = np.full(P, np.inf)
+        pA = np.zeros((P, 3))
+        pB = np.zeros((P, 3))
+        for i, (a, b) in enumerate(zip(self.owner_a, self.owner_b)):
+            for sa in by_owner.get(a, ()):
+                if b == WORKSPACE:
+                    di, wa, wb = _workspace_distance(sa, ws.lo, ws.hi)
+                    if di < d[i]:
+                        d[i], pA[i], pB[i] = di, wa, wb
+                    continue
+                for sb in by_owner.get(b, ()):
+                    r = distance(sa, sb, tol=self.tol)
+                    if r.distance < d[i]:
+                        d[i], pA[i], pB[i] = r.distance, r.p_WA, r.p_WB
+        return d, pA, pB
+
+    # ----------------------------------------------------------------- motion
+    def pair_rates(self, dq: np.ndarray) -> np.ndarray:
+        """``(P,) float64, m``: bound on how much each pair's clearance can shrink over the joint step ``dq`` ``(n_q,)``."""
+        part = self.lever @ np.abs(dq)
+        return part[self.index_a] + part[self.index_b]
+
+    def max_point_speed(self, qdot: np.ndarray) -> float:
+        """Bound (m/s) on the speed of the fastest point of any moving part at joint velocity ``qdot`` ``(n_q,)``."""
+        return float(np.max(self.lever[:-1] @ np.abs(qdot))) if len(self.parts) else 0.0
+
+    def payload_parts(self) -> tuple[str, ...]:
+        return tuple(o for o in self.parts if self._part_kind[o] == "payload")
+
+
+def _workspace_distance(shape, lo: np.ndarray, hi: np.ndarray):
+    """Signed distance (m) of a convex shape to the walls of the axis-aligned box [lo, hi]: > 0 inside,
+    clear of every wall; < 0 when it sticks out.  Exact: for a wall x = lo_k the distance is
+    ``min over the shape of x_k - lo_k``, the shape's support in -e_k."""
+    best = np.inf
+    pa = pb = None
+    for k in range(3):
+        for sign, wall in ((-1.0, lo[k]), (1.0, hi[k])):
+            e = np.zeros(3)
+            e[k] = sign
+            s = shape.support(e)  # the point farthest towards this wall
+            di = (wall - s[k]) * sign
+            if di < best:
+                best = di
+                pa = s
+                pb = s.copy()
+                pb[k] = wall
+    return best, pa, pb

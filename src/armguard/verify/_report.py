@@ -1,0 +1,297 @@
+"""The verification report: verdict, first collision, minimum clearance, clearance profile, outputs."""
+
+from __future__ import annotations
+
+import enum
+import json
+from dataclasses import dataclass, field, fields, is_dataclass
+from pathlib import Path
+
+import numpy as np
+
+__all__ = [
+    "VerificationStatus",
+    "Collision",
+    "Clearance",
+    "ClearanceProfile",
+    "MethodDetails",
+    "VerificationReport",
+]
+
+
+class VerificationStatus(enum.Enum):
+    """SAFE: proven (certified) or sampled clear; COLLISION: a collision was found; INCOMPLETE:
+    the check could not finish (evaluation budget spent) — never read as safe."""
+
+    SAFE = "safe"
+    COLLISION = "collision"
+    INCOMPLETE = "incomplete"
+
+
+@dataclass(frozen=True)
+class Collision:
+    """The first collision along a trajectory (Hermes's collision report).
+
+    Attributes
+    ----------
+    time : float, s
+        When it happens (the first instant the clearance reaches the stopping distance).
+    q : (n_joints,) float64, rad or m
+        The moving robot's configuration then.
+    distance : float, m
+        The pair's signed distance then (<= the stopping distance; < 0 penetrating).
+    link : str | None
+        The arm link involved (for payload-obstacle: ``None``; see ``payload``).
+    obstacle : str
+        The other object: a body, another link ``"robot/link"``, a payload, or ``"workspace"``.
+    payload : str | None
+        The payload involved, if any.
+    feature : armguard.geometry.Feature | None
+        The obstacle's face / edge / vertex at its witness point (``None`` where not defined).
+    p_W : (3,) float64, m
+        The collision point: the midpoint of the two witness points (the intersection point
+        when they touch).
+    p_WA, p_WB : (3,) float64, m
+        Witness points on the arm side (``a``) and on the obstacle (``b``).
+    a, b : str
+        Owner names of the two sides.
+    category : str
+        Detector category: "arm", "environment", "workspace" or "payload".
+    check : str
+        Hermes's check: "link-obstacle", "link-link", "payload-obstacle", "payload-link" (or
+        "link-workspace", "payload-workspace", "payload-payload").
+    objects : tuple[str, str]
+        The kinds of object involved, Hermes's "arm, obstacle, payload".
+    segment : int
+        Index of the trajectory segment.
+    """
+
+    time: float
+    q: np.ndarray
+    distance: float
+    link: str | None
+    obstacle: str
+    payload: str | None
+    feature: object
+    p_W: np.ndarray
+    p_WA: np.ndarray
+    p_WB: np.ndarray
+    a: str
+    b: str
+    category: str
+    check: str
+    objects: tuple[str, str]
+    segment: int
+
+
+@dataclass(frozen=True)
+class Clearance:
+    """A clearance value and where it happens: ``distance`` (m) at ``time`` (s) between owners ``a`` and ``b``."""
+
+    distance: float
+    time: float
+    a: str
+    b: str
+    category: str
+    q: np.ndarray
+
+
+@dataclass(frozen=True)
+class ClearanceProfile:
+    """Clearance along the trajectory at every evaluated configuration.
+
+    ``time`` (M,) s, increasing; ``by_category`` maps "arm" / "environment" / "workspace" /
+    "payload" (the categories the scene has) to ``(M,) float64, m``, the smallest signed
+    distance of that category at each time; ``overall`` (M,) m the smallest of all.
+    """
+
+    time: np.ndarray
+    overall: np.ndarray
+    by_category: dict
+
+
+@dataclass(frozen=True)
+class MethodDetails:
+    """How the verdict was reached.
+
+    ``method`` "certified" or "sampled"; ``samples_evaluated`` configurations whose clearances
+    were computed; ``intervals_certified`` joint-space intervals proven clear by the lever-arm
+    bound (certified); ``frequency`` (Hz) or ``joint_step`` (rad) of sampled mode;
+    ``max_speed`` (m/s) a bound on the speed of the fastest point of the arm;
+    ``discretisation_error`` (m) Hermes's ``Ed = v / f`` for sampled mode (for joint-step
+    sampling the largest lever-arm displacement between two samples), 0 when certified;
+    ``source`` "detector" or "reference"; ``lever_bound`` names the motion bound used.
+    """
+
+    method: str
+    samples_evaluated: int
+    intervals_certified: int
+    frequency: float | None
+    joint_step: float | None
+    max_speed: float
+    discretisation_error: float
+    source: str
+    lever_bound: str = "configuration-independent chain lever arms (sum of joint-to-link reach bounds)"
+
+
+def _jsonable(x):
+    if is_dataclass(x) and not isinstance(x, type):
+        return {f.name: _jsonable(getattr(x, f.name)) for f in fields(x)}
+    if isinstance(x, enum.Enum):
+        return x.value
+    if isinstance(x, np.ndarray):
+        return _jsonable(x.tolist())
+    if isinstance(x, (np.floating, float)):
+        v = float(x)
+        return v if np.isfinite(v) else ("inf" if v > 0 else "-inf") if not np.isnan(v) else None
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, dict):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if hasattr(x, "to_dict"):
+        return _jsonable(x.to_dict())
+    if x is None or isinstance(x, (str, int, bool)):
+        return x
+    return str(x)
+
+
+@dataclass(frozen=True)
+class VerificationReport:
+    """The result of :func:`armguard.verify.verify`.
+
+    Attributes
+    ----------
+    status : VerificationStatus
+    first_collision : Collision | None
+        ``None`` unless status is COLLISION.
+    min_clearance : float, m
+        The smallest clearance at any evaluated configuration (up to the first collision when
+        there is one): an upper bound on the true minimum along the path.
+    min_clearance_at : Clearance | None
+        Where it happens.
+    min_clearance_lower_bound : float, m
+        Certified mode: a proven lower bound on the clearance over the whole verified part of
+        the path (from the lever-arm bound between evaluations); ``-inf`` for sampled mode,
+        which proves nothing between samples.
+    profile : ClearanceProfile
+    details : MethodDetails
+    stopping_distance : float, m
+        The largest stopping distance used (a constant, or the step function's largest value
+        along the trajectory).
+    threshold : float, m
+        The warning threshold marked on the plot.
+    scene, robot, trajectory : str
+        Names (the trajectory's name when it has one, else "trajectory").
+    duration : float, s
+    elapsed_s : float, s
+        Wall time of the verification.
+    reason : str
+        Why the status is what it is, in words (e.g. the evaluation budget ran out at t = …).
+    """
+
+    status: VerificationStatus
+    first_collision: Collision | None
+    min_clearance: float
+    min_clearance_at: Clearance | None
+    min_clearance_lower_bound: float
+    profile: ClearanceProfile
+    details: MethodDetails
+    stopping_distance: float
+    threshold: float
+    scene: str
+    robot: str
+    trajectory: str
+    duration: float
+    elapsed_s: float
+    reason: str = ""
+    stopping_distance_function: object = field(default=None, repr=False)
+
+    @property
+    def safe(self) -> bool:
+        """True only for status SAFE (INCOMPLETE is not safe)."""
+        return self.status is VerificationStatus.SAFE
+
+    # ------------------------------------------------------------ outputs
+    def to_dict(self) -> dict:
+        """A JSON-ready dictionary (arrays as lists, enums as their values, inf as "inf")."""
+        d = _jsonable(self)
+        d["safe"] = self.safe
+        return d
+
+    def to_json(self, *, indent: int | None = 2) -> str:
+        """The report as JSON text."""
+        return json.dumps(self.to_dict(), indent=indent)
+
+    def save_json(self, path) -> Path:
+        """Write :meth:`to_json` to ``path``; returns the path."""
+        p = Path(path)
+        p.parent.mkdir(parents=True, exist_ok=True)
+        p.write_text(self.to_json(), encoding="utf-8")
+        return p
+
+    def summary(self) -> str:
+        """A readable multi-line summary."""
+        d = self.details
+        lines = [
+            f"scene {self.scene!r}, robot {self.robot!r}, trajectory {self.trajectory!r} ({self.duration:.3f} s)",
+            f"verdict: {self.status.value.upper()}" + (f" — {self.reason}" if self.reason else ""),
+            f"method: {d.method}"
+            + (f" at {d.frequency:g} Hz" if d.frequency else f" every {d.joint_step:g} rad" if d.joint_step else "")
+            + f"; {d.samples_evaluated} configurations evaluated"
+            + (f", {d.intervals_certified} intervals certified" if d.method == "certified" else "")
+            + f"; distances from the {d.source}",
+            f"stopping distance: {self.stopping_distance * 1e3:.1f} mm; fastest point ≤ {d.max_speed:.3f} m/s",
+        ]
+        if d.method == "sampled":
+            lines.append(f"discretisation error Ed = v/f: {d.discretisation_error * 1e3:.1f} mm (collisions shorter than this may be missed)")
+        c = self.first_collision
+        if c is not None:
+            where = f"link {c.link}" if c.link else f"payload {c.payload}"
+            feat = f", {c.feature}" if c.feature is not None else ""
+            lines.append(
+                f"first collision at t = {c.time:.4f} s (segment {c.segment}): {where} ({c.a}) with {c.obstacle}{feat} "
+                f"[{c.check}], distance {c.distance * 1e3:.2f} mm at p_W = ({c.p_W[0]:.4f}, {c.p_W[1]:.4f}, {c.p_W[2]:.4f}) m"
+            )
+            lines.append("q = [" + ", ".join(f"{x:.4f}" for x in c.q) + "]")
+        m = self.min_clearance_at
+        if m is not None:
+            lines.append(f"minimum clearance {m.distance * 1e3:.2f} mm at t = {m.time:.4f} s between {m.a} and {m.b} ({m.category})")
+        if np.isfinite(self.min_clearance_lower_bound):
+            lines.append(f"proven lower bound on the clearance over the verified path: {self.min_clearance_lower_bound * 1e3:.2f} mm")
+        lines.append(f"time taken: {self.elapsed_s * 1e3:.1f} ms")
+        return "\n".join(lines)
+
+    def plot(self, path, *, title: str | None = None) -> Path:
+        """Write a PNG of clearance against time per category, with the threshold and the stopping
+        distance marked and the first collision flagged.  Returns the path."""
+        import matplotlib
+
+        matplotlib.use("Agg", force=False)
+        import matplotlib.pyplot as plt
+
+        p = Path(path)
+        p.parent.mkdir(parents=True, exist_ok=True)
+        fig, ax = plt.subplots(figsize=(8, 4.2), dpi=100)
+        t = self.profile.time
+        for cat, y in self.profile.by_category.items():
+            finite = np.isfinite(y)
+            if np.any(finite):
+                ax.plot(t[finite], y[finite] * 1e3, lw=1.2, label=cat)
+        ax.axhline(self.threshold * 1e3, color="orange", ls="--", lw=1, label=f"threshold {self.threshold * 1e3:.0f} mm")
+        ax.axhline(self.stopping_distance * 1e3, color="red", ls=":", lw=1.2, label=f"stopping distance {self.stopping_distance * 1e3:.0f} mm")
+        ax.axhline(0.0, color="black", lw=0.6)
+        c = self.first_collision
+        if c is not None:
+            ax.axvline(c.time, color="red", lw=1)
+            ax.plot([c.time], [c.distance * 1e3], "rx", ms=10, mew=2, label=f"first collision t={c.time:.3f} s")
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("clearance (mm)")
+        ax.set_title(title or f"{self.scene} / {self.trajectory}: {self.status.value} ({self.details.method})")
+        ax.legend(loc="best", fontsize=8)
+        ax.grid(alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(p, format="png")
+        plt.close(fig)
+        return p

@@ -1,0 +1,475 @@
+"""Trajectory verification: sampled (Hermes) and certified (conservative advancement).
+
+Hermes (``001_…`` §2–4) checks "a set of joint coordinates representing different
+configurations of the arm during its movement along a planned trajectory" against obstacles
+grown by the stopping distance; between two checks the fastest point of the arm moves up to
+``Ed = v / f`` (eq. 4-2), so a thin obstacle can slip between samples.  The certified method
+closes that gap.  Every Trajectory segment moves on the straight joint-space line
+``q(s) = q0 + s (q1 - q0)``, ``s`` in [0, 1]; along it the clearance of pair ``p`` can shrink by
+at most ``rate_p * |s' - s|`` where ``rate_p = |q1 - q0| . (lever_a + lever_b)`` (see
+:mod:`._motion`).  From an evaluated point with clearances ``d_p``, conservative advancement
+steps to ``s + min_p (d_p - m) / rate_p`` — every configuration in between is proven at least
+``m`` (the stopping distance) from every obstacle — and evaluates there; it stops at a
+collision (``d_p - m <= verify_contact``), at the end of the segment, or when the evaluation
+budget is spent (INCOMPLETE).  It cannot step over an obstacle however thin: it never misses a
+collision (within ``verify_contact``), and the first collision it reports is the first one.
+"""
+
+from __future__ import annotations
+
+import math
+import time as _time
+
+import numpy as np
+
+from .._errors import VerificationError
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._oracle import CATEGORIES, WORKSPACE, ClearanceModel
+from ._report import (
+    Clearance,
+    ClearanceProfile,
+    Collision,
+    MethodDetails,
+    VerificationReport,
+    VerificationStatus,
+)
+from ._stopping import StoppingDistance, check_stopping_distance
+
+__all__ = ["Verifier", "verify", "DRAKE_JOINT_STEP"]
+
+#: Drake's suggested edge-checking step (rad), used by sampled mode when no frequency is given.
+DRAKE_JOINT_STEP = 0.05
+_SPEED_SAMPLES = 17  # time-law samples per segment used to find its peak speed (odd: includes the midpoint)
+_TIME_BISECTIONS = 60  # bisection steps inverting a segment's time law (2^-60 of the segment time)
+_OBJECTS = {
+    "link-obstacle": ("arm", "obstacle"),
+    "link-link": ("arm", "arm"),
+    "payload-obstacle": ("payload", "obstacle"),
+    "payload-link": ("arm", "payload"),
+    "link-workspace": ("arm", "workspace"),
+    "payload-workspace": ("payload", "workspace"),
+    "payload-payload": ("payload", "payload"),
+}
+
+
+def _finite_array(x, name: str) -> np.ndarray:
+    a = np.asarray(x, dtype=np.float64)
+    if not np.all(np.isfinite(a)):
+        raise VerificationError(f"{name}: contains NaN or infinite values")
+    return a
+
+
+class Verifier:
+    """Verifies trajectories of one robot of ``scene`` (the precomputation made explicit).
+
+    Parameters
+    ----------
+    scene : armguard.scene.Scene
+    robot : str | None
+        The moving robot (default: the trajectory's ``robot_name``, or the scene's only robot).
+    q_others : mapping robot -> (n_joints,) | None
+        Where the other robots stand (default: ``scene.default_q()``).
+    source : "auto" | "detector" | "reference"
+        Where clearances come from (:class:`ClearanceModel`).
+    tol : Tolerances
+    """
+
+    def __init__(self, scene, *, robot: str | None = None, q_others=None, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES) -> None:
+        self.scene = scene
+        self.tol = tol
+        self.model = ClearanceModel(scene, source=source, tol=tol)
+        self._robot = robot
+        base = scene.default_q()
+        if q_others is not None:
+            for k, v in dict(q_others).items():
+                if k not in base:
+                    raise VerificationError(f"q_others names unknown robot {k!r}; robots are {list(base)}")
+                base[k] = _finite_array(v, f"q_others[{k!r}]")
+        self._base = base
+
+    # ------------------------------------------------------------ helpers
+    def _robot_of(self, trajectory, robot: str | None) -> str:
+        names = list(self.scene.robots)
+        r = robot or self._robot or getattr(trajectory, "robot_name", None)
+        if r not in self.scene.robots:
+            if len(names) == 1 and robot is None and self._robot is None:
+                r = names[0]
+            else:
+                raise VerificationError(f"robot {r!r} is not in the scene; robots are {names}")
+        rob = self.scene.robots[r]
+        if tuple(trajectory.joint_names) != tuple(rob.joint_names):
+            raise VerificationError(
+                f"trajectory joints {list(trajectory.joint_names)} do not match robot {r!r} joints {list(rob.joint_names)}"
+            )
+        return r
+
+    def _flat(self, robot: str):
+        base = self.scene.flat_q(self._base)
+        k0 = 0
+        for name, rob in self.scene.robots.items():
+            if name == robot:
+                return base, k0, k0 + len(rob.joint_names)
+            k0 += len(rob.joint_names)
+        raise VerificationError(f"unknown robot {robot!r}")  # pragma: no cover - checked before
+
+    @staticmethod
+    def _segments(trajectory):
+        segs = []
+        for t0, t1, q0, q1 in trajectory.segments():
+            segs.append((float(t0), float(t1), _finite_array(q0, "trajectory knot"), _finite_array(q1, "trajectory knot")))
+        if not segs:
+            raise VerificationError("the trajectory has no segment")
+        return segs
+
+    def _segment_speeds(self, trajectory, segs, k0: int, k1: int) -> np.ndarray:
+        """Per segment, a bound (m/s) on the speed of the fastest point of the arm (peak of the time law)."""
+        n_q = self.model.n_q
+        out = np.zeros(len(segs))
+        u = (np.arange(_SPEED_SAMPLES) + 0.5) / _SPEED_SAMPLES
+        ts = np.concatenate([t0 + u * (t1 - t0) for t0, t1, _, _ in segs])
+        V = np.abs(_finite_array(trajectory.velocity(ts), "trajectory velocity")).reshape(len(segs), _SPEED_SAMPLES, -1)
+        qd = np.zeros(n_q)
+        for i in range(len(segs)):
+            qd[k0:k1] = V[i].max(axis=0)
+            out[i] = self.model.max_point_speed(qd)
+        return out
+
+    def _times(self, trajectory, segs, seg_idx: np.ndarray, s: np.ndarray, k0: int) -> np.ndarray:
+        """Invert the time laws: the time at which segment ``seg_idx[i]`` is at fraction ``s[i]`` (vectorised bisection)."""
+        seg_idx = np.asarray(seg_idx, dtype=np.int64)
+        s = np.asarray(s, dtype=np.float64)
+        if s.size == 0:
+            return np.zeros(0)
+        t0 = np.array([segs[i][0] for i in seg_idx])
+        t1 = np.array([segs[i][1] for i in seg_idx])
+        dq = np.array([segs[i][3] - segs[i][2] for i in seg_idx])
+        q0 = np.array([segs[i][2] for i in seg_idx])
+        k = np.argmax(np.abs(dq), axis=1)
+        rows = np.arange(len(s))
+        span = dq[rows, k]
+        moving = np.abs(span) > 0.0
+        lo, hi = t0.copy(), t1.copy()
+        done = (s <= 0.0) | (s >= 1.0) | ~moving
+        for _ in range(_TIME_BISECTIONS):
+            mid = 0.5 * (lo + hi)
+            qm = np.asarray(trajectory.at(mid))
+            frac = np.where(moving, (qm[rows, k] - q0[rows, k]) / np.where(moving, span, 1.0), 0.0)
+            below = frac < s
+            lo = np.where(below, mid, lo)
+            hi = np.where(below, hi, mid)
+        t = 0.5 * (lo + hi)
+        t = np.where(s <= 0.0, t0, np.where(s >= 1.0, t1, t))
+        return np.where(~moving & (s > 0.0) & (s < 1.0), t0 + s * (t1 - t0), t)
+
+    # ------------------------------------------------------------ the check
+    def verify(self, trajectory, *, stopping_distance=0.0, method: str = "certified", frequency: float | None = None,
+               joint_step: float | None = None, robot: str | None = None, threshold: float | None = None,
+               payload_mass: float = 0.0, name: str | None = None) -> VerificationReport:
+        """Verify ``trajectory``; see :func:`verify` for the parameters."""
+        t_start = _time.perf_counter()
+        if method not in ("certified", "sampled"):
+            raise VerificationError(f"method: expected 'certified' or 'sampled', got {method!r}")
+        sd = check_stopping_distance(stopping_distance)
+        if frequency is not None:
+            frequency = float(frequency)
+            if not math.isfinite(frequency) or frequency <= 0.0:
+                raise VerificationError(f"frequency: expected a finite number > 0 (Hz), got {frequency}")
+        if joint_step is not None:
+            joint_step = float(joint_step)
+            if not math.isfinite(joint_step) or joint_step <= 0.0:
+                raise VerificationError(f"joint_step: expected a finite number > 0 (rad), got {joint_step}")
+        if method == "sampled" and frequency is None and joint_step is None:
+            joint_step = DRAKE_JOINT_STEP
+        thr = 0.05 if threshold is None else float(threshold)
+        if not math.isfinite(thr) or thr < 0.0:
+            raise VerificationError(f"threshold: expected a finite number >= 0 (m), got {thr}")
+        mass = float(payload_mass)
+        if not math.isfinite(mass) or mass < 0.0:
+            raise VerificationError(f"payload_mass: expected a finite number >= 0 (kg), got {mass}")
+        rname = self._robot_of(trajectory, robot)
+        base, k0, k1 = self._flat(rname)
+        segs = self._segments(trajectory)
+        speeds = self._segment_speeds(trajectory, segs, k0, k1)
+        if isinstance(sd, StoppingDistance):
+            margins = np.array([sd.at(v, mass) for v in speeds])
+        else:
+            margins = np.full(len(segs), sd)
+        model = self.model
+        model.evaluations = 0
+        run = _Run(model, base, k0, k1)
+        if method == "certified":
+            status, reason, lower, intervals, where = self._certified(segs, margins, run)
+            ed = 0.0
+        else:
+            status, reason, lower, intervals, where, ed = self._sampled(trajectory, segs, margins, run, frequency, joint_step, speeds)
+        return self._report(trajectory, rname, segs, run, status, reason, lower, intervals, where, ed, speeds, margins, method,
+                            frequency, joint_step, thr, sd, name, t_start, k0)
+
+    def _certified(self, segs, margins, run):
+        """Conservative advancement along every segment; returns (status, reason, lower bound, intervals, where)."""
+        model, tol = self.model, self.tol
+        contact = tol.verify_contact
+        budget = tol.verify_max_evaluations
+        lower = math.inf
+        intervals = 0
+        prev_d, prev_q = None, None  # clearances at the end of the previous segment
+        for si, (t0, t1, q0, q1) in enumerate(segs):
+            m = margins[si]
+            dq = q1 - q0
+            rates = model.pair_rates(run.full_dq(dq))
+            if not np.all(np.isfinite(rates)):
+                raise VerificationError("the motion bound is infinite (an unbounded prismatic joint): certified mode cannot bound this motion")
+            pos = rates > 0.0
+            s = 0.0
+            if prev_d is not None and np.array_equal(prev_q, q0):
+                d = prev_d
+            else:
+                d = run.eval(si, 0.0, q0)
+            while True:
+                gap = d - m
+                g = float(gap.min())
+                if g <= contact:
+                    return VerificationStatus.COLLISION, "", lower, intervals, (si, s, int(np.argmin(gap)))
+                if s >= 1.0:
+                    break
+                step = float(np.min(gap[pos] / rates[pos])) if np.any(pos) else math.inf
+                s_next = min(1.0, s + step)
+                if not s_next > s:
+                    return VerificationStatus.INCOMPLETE, f"no progress in segment {si} (clearance {g:.3g} m)", lower, intervals, (si, s, None)
+                if model.evaluations >= budget:
+                    return VerificationStatus.INCOMPLETE, f"evaluation budget ({budget}) spent in segment {si}", lower, intervals, (si, s, None)
+                d_next = run.eval(si, s_next, q1 if s_next == 1.0 else q0 + s_next * dq)
+                L = s_next - s
+                lb = np.minimum(np.minimum(d, d_next), 0.5 * (d + d_next - rates * L))
+                lower = min(lower, float(lb.min()))
+                intervals += 1
+                s, d = s_next, d_next
+            prev_d, prev_q = d, q1
+        return VerificationStatus.SAFE, "", lower, intervals, None
+
+    def _sampled(self, trajectory, segs, margins, run, frequency, joint_step, speeds):
+        model = self.model
+        if frequency is not None:
+            ts, Q = trajectory.sample(frequency=frequency)
+            ts = _finite_array(ts, "sample times")
+            Q = _finite_array(Q, "samples")
+            starts = np.array([sg[0] for sg in segs])
+            seg_of = np.clip(np.searchsorted(starts, ts, side="right") - 1, 0, len(segs) - 1)
+            ed = float(np.max(speeds)) / frequency
+            points = []
+            for t, q, si in zip(ts, Q, seg_of):
+                t0, t1, q0, q1 = segs[si]
+                dq = q1 - q0
+                k = int(np.argmax(np.abs(dq)))
+                s = float((q[k] - q0[k]) / dq[k]) if dq[k] != 0.0 else (t - t0) / max(t1 - t0, 1e-300)
+                points.append((int(si), min(max(s, 0.0), 1.0), q, float(t)))
+        else:
+            ed = 0.0
+            points = []
+            for si, (t0, t1, q0, q1) in enumerate(segs):
+                dq = q1 - q0
+                n = max(1, int(math.ceil(float(np.max(np.abs(dq))) / joint_step)))
+                rate_max = float(np.max(model.pair_rates(run.full_dq(dq)))) if len(model.owner_a) else 0.0
+                ed = max(ed, rate_max / n)
+                first = 0 if si == 0 else 1
+                for k in range(first, n + 1):
+                    s = k / n
+                    points.append((si, s, q0 + s * dq, None))
+        for si, s, q, t in points:
+            d = run.eval(si, s, q, t)
+            gap = d - margins[si]
+            if float(gap.min()) <= 0.0:
+                return VerificationStatus.COLLISION, "", -math.inf, 0, (si, s, int(np.argmin(gap))), ed
+        return VerificationStatus.SAFE, "", -math.inf, 0, None, ed
+
+    # ------------------------------------------------------------ the report
+    def _report(self, trajectory, rname, segs, run, status, reason, lower, intervals, where, ed, speeds, margins, method,
+                frequency, joint_step, thr, sd, name, t_start, k0):
+        model = self.model
+        collision = None
+        if where is not None:
+            si, s_c, pair = where
+            if status is VerificationStatus.COLLISION:
+                t_c = float(run.t[-1]) if run.t[-1] is not None else float(self._times(trajectory, segs, [si], [s_c], k0)[0])
+                collision = self._collision(run, si, t_c, pair, rname)
+            else:
+                t_c = float(self._times(trajectory, segs, [si], [s_c], k0)[0])
+                reason = reason + f" (t = {t_c:.4f} s)"
+        # the profile
+        seg_idx = np.array(run.seg, dtype=np.int64)
+        s_arr = np.array(run.s)
+        t_known = np.array([np.nan if t is None else t for t in run.t], dtype=np.float64)
+        need = np.isnan(t_known)
+        if np.any(need):
+            t_known[need] = self._times(trajectory, segs, seg_idx[need], s_arr[need], k0)
+        D = np.array(run.d)  # (M, P)
+        order = np.argsort(t_known, kind="stable")
+        times = t_known[order]
+        D = D[order]
+        by_cat = {}
+        for c_i, c in enumerate(CATEGORIES):
+            cols = model.category_code == c_i
+            if np.any(cols):
+                by_cat[c] = D[:, cols].min(axis=1)
+        overall = D.min(axis=1)
+        i_min = int(np.argmin(overall))
+        p_min = int(np.argmin(D[i_min]))
+        q_min = np.array(run.q[order[i_min]][run.k0 : run.k1])
+        min_at = Clearance(float(overall[i_min]), float(times[i_min]), model.owner_a[p_min], model.owner_b[p_min], model.category[p_min], q_min)
+        profile = ClearanceProfile(times, overall, by_cat)
+        details = MethodDetails(
+            method=method,
+            samples_evaluated=int(model.evaluations),
+            intervals_certified=int(intervals) if method == "certified" else 0,
+            frequency=frequency,
+            joint_step=joint_step if method == "sampled" else None,
+            max_speed=float(np.max(speeds)),
+            discretisation_error=float(ed),
+            source=model.source,
+        )
+        return VerificationReport(
+            status=status,
+            first_collision=collision,
+            min_clearance=float(overall[i_min]),
+            min_clearance_at=min_at,
+            min_clearance_lower_bound=float(lower) if method == "certified" and np.isfinite(lower) else (float(overall[i_min]) if method == "certified" and lower == math.inf else -math.inf),
+            profile=profile,
+            details=details,
+            stopping_distance=float(np.max(margins)),
+            threshold=thr,
+            scene=str(getattr(self.scene, "name", "scene")),
+            robot=rname,
+            trajectory=name or str(getattr(trajectory, "name", None) or "trajectory"),
+            duration=float(segs[-1][1] - segs[0][0]),
+            elapsed_s=_time.perf_counter() - t_start,
+            reason=reason,
+            stopping_distance_function=sd if isinstance(sd, StoppingDistance) else None,
+        )
+
+    def _collision(self, run, si, t_c, pair, rname) -> Collision:
+        model = self.model
+        q_full = run.q[-1]
+        pA = np.array(run.last_pA[pair])
+        pB = np.array(run.last_pB[pair])
+        a, b = model.owner_a[pair], model.owner_b[pair]
+        check = model.check[pair]
+        link = a.split("/", 1)[1] if "/" in a else None
+        payload = a if check.startswith("payload-") else (b if check == "payload-link" else None)
+        feature = None
+        if b != WORKSPACE and "/" not in b:
+            feature = _feature_of(self.scene, q_full, b, pB, self.tol)
+        return Collision(
+            time=t_c,
+            q=np.array(q_full[run.k0 : run.k1]),
+            distance=float(run.d[-1][pair]),
+            link=link,
+            obstacle=b,
+            payload=payload,
+            feature=feature,
+            p_W=0.5 * (pA + pB),
+            p_WA=pA,
+            p_WB=pB,
+            a=a,
+            b=b,
+            category=model.category[pair],
+            check=check,
+            objects=_OBJECTS[check],
+            segment=int(si),
+        )
+
+
+def _feature_of(scene, q, owner: str, p_W: np.ndarray, tol):
+    """The face / edge / vertex of ``owner``'s shape nearest ``p_W`` (None when geometry offers no feature_at)."""
+    try:
+        from ..geometry import distance, feature_at
+        from ..geometry import Sphere
+    except ImportError:
+        return None
+    shapes = [it.shape for it in scene.shapes_at(q) if it.owner == owner]
+    if not shapes:
+        return None
+    probe = Sphere(p_W, 0.0)
+    best = min(shapes, key=lambda s: abs(distance(probe, s, tol=tol).distance))
+    try:
+        return feature_at(best, p_W, tol)
+    except Exception:  # noqa: BLE001 - a feature is a courtesy of the report, never part of the verdict
+        return None
+
+
+class _Run:
+    """Book-keeping of one verification: every evaluated configuration and its clearances."""
+
+    def __init__(self, model: ClearanceModel, base: np.ndarray, k0: int, k1: int) -> None:
+        self.model = model
+        self.base = base
+        self.k0, self.k1 = k0, k1
+        self.seg: list[int] = []
+        self.s: list[float] = []
+        self.t: list[float | None] = []
+        self.d: list[np.ndarray] = []
+        self.q: list[np.ndarray] = []
+        self.last_q_robot = None
+        self.last_pA = self.last_pB = None
+
+    def full_dq(self, dq_robot: np.ndarray) -> np.ndarray:
+        out = np.zeros(self.model.n_q)
+        out[self.k0 : self.k1] = dq_robot
+        return out
+
+    def eval(self, si: int, s: float, q_robot: np.ndarray, t: float | None = None) -> np.ndarray:
+        q = self.base.copy()
+        q[self.k0 : self.k1] = q_robot
+        d, pA, pB = self.model.distances(q)
+        self.record(si, s, d, pA, pB, q, t)
+        self.last_q_robot = np.array(q_robot)
+        return d
+
+    def record(self, si, s, d, pA, pB, q=None, t=None) -> None:
+        if q is None:
+            q = self.q[-1]
+        self.seg.append(si)
+        self.s.append(s)
+        self.t.append(t)
+        self.d.append(d)
+        self.q.append(q)
+        self.last_pA, self.last_pB = pA, pB
+
+
+def verify(scene, trajectory, *, stopping_distance=0.0, method: str = "certified", frequency: float | None = None,
+           joint_step: float | None = None, robot: str | None = None, threshold: float | None = None,
+           payload_mass: float = 0.0, q_others=None, source: str = "auto", name: str | None = None,
+           tol: Tolerances = DEFAULT_TOLERANCES) -> VerificationReport:
+    """Verify a trajectory of one robot of ``scene`` against every checked pair (Hermes's four checks).
+
+    Parameters
+    ----------
+    scene : armguard.scene.Scene
+    trajectory : armguard.kinematics.Trajectory
+        Every segment moves on the straight joint-space line between its knots.
+    stopping_distance : float (m) or StoppingDistance
+        Obstacles are grown by it (Hermes): a pair closer than this is a collision.  A
+        :class:`StoppingDistance` gives it per segment from the segment's peak speed (of the
+        fastest point of the arm) and ``payload_mass`` (kg).
+    method : "certified" | "sampled"
+        certified: conservative advancement, proven between evaluations (never misses a
+        collision); sampled: Hermes's discrete checks at ``frequency`` (Hz) along the time law,
+        or every ``joint_step`` (rad, default 0.05, Drake's suggestion) in joint space; it
+        reports Hermes's discretisation error ``Ed = v / f``.
+    robot : str | None
+        The moving robot (default: the trajectory's ``robot_name``); the others stand at
+        ``q_others`` (default: ``scene.default_q()``).
+    threshold : float | None, m
+        Warning threshold drawn on the plot (default 0.05).
+    source : "auto" | "detector" | "reference"
+        Where clearances come from (the Detector's pair distances, or shapes + exact distances).
+    name : str | None
+        The trajectory's name in the report.
+
+    Returns
+    -------
+    VerificationReport
+        SAFE, COLLISION (with the first collision) or INCOMPLETE (never read as safe).
+    """
+    v = Verifier(scene, robot=robot, q_others=q_others, source=source, tol=tol)
+    return v.verify(trajectory, stopping_distance=stopping_distance, method=method, frequency=frequency,
+                    joint_step=joint_step, robot=robot, threshold=threshold, payload_mass=payload_mass, name=name)
