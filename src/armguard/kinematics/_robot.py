@@ -75,9 +75,12 @@ class DHRow:
 class Coupling:
     """A dependent joint: value = ``offset + sum(coeff * q[independent])`` (rad or m).
 
-    E.g. the GMF S-480 parallelogram linkage, where the forearm's angle in the DH table
-    follows the upper arm's: ``Coupling("j3", {"j2": -1.0, "j3_drive": 1.0})``.  Dependent
-    joints are not commanded and are not in ``Robot.joint_names``.
+    A dependent joint is not commanded and is not in ``Robot.joint_names`` (URDF mimic joints:
+    ``Coupling("finger2", {"finger1": 1.0})``).  A *drive* coupling, whose terms name its own
+    joint, keeps the joint commanded but maps its command to the DH joint angle: the GMF S-480
+    parallelogram linkage (WORKMATE, seed ``004``), whose commanded forearm angle ``j3`` is
+    measured from the horizontal, so the DH elbow angle is ``j3 - j2``:
+    ``Coupling("j3", {"j3": 1.0, "j2": -1.0})``.
     """
 
     joint: str
@@ -220,7 +223,9 @@ class Robot:
 
     def _resolve_joints(self, joint_names) -> None:
         movable = [s for s in self._spec_of_link[1:] if s.joint_type is not JointType.FIXED]
-        independent = [s for s in movable if s.coupling is None]
+        # a coupling whose terms name its own joint keeps that joint commanded (a "drive" coupling:
+        # GMF S-480, where the commanded forearm angle q3 gives the DH elbow angle q3 - q2)
+        independent = [s for s in movable if s.coupling is None or s.name in s.coupling.terms]
         by_name = {s.name: s for s in movable}
         if joint_names is not None:
             names = tuple(str(n) for n in joint_names)
@@ -249,7 +254,10 @@ class Robot:
         self._vmax, self._amax = _readonly(vmax), _readonly(amax)
 
         # resolve couplings (possibly chained) to terms over independent joints
-        resolved: dict[str, tuple[dict[int, float], float]] = {n: ({k: 1.0}, 0.0) for n, k in jindex.items()}
+        resolved: dict[str, tuple[dict[int, float], float]] = {
+            n: ({k: 1.0}, 0.0) for n, k in jindex.items() if by_name[n].coupling is None
+        }
+        own = {n: ({k: 1.0}, 0.0) for n, k in jindex.items()}  # a drive coupling's own command
 
         def resolve(name: str, stack: tuple[str, ...]) -> tuple[dict[int, float], float]:
             if name in resolved:
@@ -262,7 +270,7 @@ class Robot:
             terms: dict[int, float] = {}
             off = s.coupling.offset
             for src, coeff in s.coupling.terms.items():
-                t, o = resolve(src, stack + (name,))
+                t, o = own[src] if src == name else resolve(src, stack + (name,))
                 off += coeff * o
                 for k, c in t.items():
                     terms[k] = terms.get(k, 0.0) + coeff * c
