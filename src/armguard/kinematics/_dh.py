@@ -91,7 +91,7 @@ def robot_from_dh(cls, name, rows, *, convention="standard", joint_names=None, l
     for c in couplings:
         if c.joint not in joint_names:
             raise KinematicsError(f"coupling: unknown joint {c.joint!r}; joints are {joint_names}")
-    indep_rows = [i for i, j in enumerate(joint_names) if j not in coupled]
+    indep_rows = [i for i, j in enumerate(joint_names) if j not in coupled or j in coupled[j].terms]
     lo = _per_joint(lower, n, indep_rows, -math.inf, "lower")
     hi = _per_joint(upper, n, indep_rows, math.inf, "upper")
     vm = _per_joint(max_velocity, n, indep_rows, math.inf, "max_velocity")
