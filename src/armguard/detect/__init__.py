@@ -1,0 +1,36 @@
+"""The Detector: Ranger's real-time virtual sensor (seed ``000``) for any scene.
+
+``Detector(scene, threshold=...)`` compiles the scene once (one kinematic tree, element
+arrays, conservative per-link obstacle lists, a BVH over static obstacles); ``check(q)`` is
+one numba call (FK, transforms, broad and narrow phase) and returns a
+:class:`DetectionReport` with the nearest pair per category, the pairs within the threshold
+and the status; ``check(q, budget_us=...)`` is the anytime mode; ``check_many`` /
+``collides_many`` run over many configurations in parallel.  :func:`check_reference` is the
+brute-force path the tests compare against.
+"""
+
+from ._detector import Detector
+from ._reference import check_reference
+from ._report import (
+    CATEGORIES,
+    BatchReport,
+    Category,
+    DetectionReport,
+    NotEvaluated,
+    PairDistances,
+    PairResult,
+    Status,
+)
+
+__all__ = [
+    "Detector",
+    "DetectionReport",
+    "Status",
+    "Category",
+    "CATEGORIES",
+    "PairResult",
+    "NotEvaluated",
+    "BatchReport",
+    "PairDistances",
+    "check_reference",
+]

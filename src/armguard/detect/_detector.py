@@ -1,0 +1,386 @@
+"""The Detector: Ranger's real-time virtual sensor for any scene (exact, anytime, batched)."""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from typing import Mapping
+
+import numpy as np
+
+from .._errors import DetectionError
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from . import _kernel as kn
+from ._layout import SUM_BEST, SUM_ERR, SUM_NEVAL, SUM_SIZE, SUM_STATUS, Layout
+from ._model import CAT_WORKSPACE, build_model, check_finite_margin
+from ._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, NotEvaluated, PairDistances, PairResult
+
+__all__ = ["Detector"]
+
+_DEFAULT_NS_PER_PAIR = 200.0  # first guess of the cost model, replaced by measurements
+
+
+def _check_length(value, name: str) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError) as exc:
+        raise DetectionError(f"{name}: expected a number of metres, got {value!r}") from exc
+    if not math.isfinite(x) or x < 0.0:
+        raise DetectionError(f"{name}: must be finite and >= 0, got {x}")
+    return x
+
+
+class _Raw:
+    """Copies of one check's kernel outputs; builds the report's views on demand."""
+
+    __slots__ = ("det", "f", "i", "n_evaluated", "model")
+
+    def __init__(self, det: "Detector", f: np.ndarray, i: np.ndarray, n_evaluated: int) -> None:
+        self.det, self.f, self.i, self.n_evaluated, self.model = det, f, i, n_evaluated, det._model
+
+    def _pd(self):
+        P = self.det._P
+        return self.f[:P], self.f[P:7 * P].reshape(P, 6), self.f[7 * P:8 * P]
+
+    def pair(self, p: int) -> PairResult:
+        pd, pw, _ = self._pd()
+        return self.det._pair_result(p, float(pd[p]), pw[p, 0:3].copy(), pw[p, 3:6].copy())
+
+    def by_category(self) -> dict[str, PairResult]:
+        P = self.det._P
+        summ = self.i[P:P + SUM_SIZE]
+        out = {}
+        for c in range(4):
+            p = int(summ[SUM_BEST + c])
+            if p >= 0:
+                out[CATEGORIES[c]] = self.pair(p)
+        return out
+
+    def within(self, threshold: float) -> tuple[PairResult, ...]:
+        P = self.det._P
+        pd, _, _ = self._pd()
+        flags = self.i[:P]
+        idx = np.flatnonzero((flags == 1) & (pd <= threshold))
+        idx = idx[np.argsort(pd[idx], kind="stable")]
+        return tuple(self.pair(int(p)) for p in idx)
+
+    def not_evaluated(self) -> tuple[NotEvaluated, ...]:
+        P = self.det._P
+        _, _, plb = self._pd()
+        flags = self.i[:P]
+        out = []
+        for p in np.flatnonzero(flags == 0):
+            a, b = self.det._pair_names(int(p))
+            out.append(NotEvaluated(a, b, CATEGORIES[int(self.model.pair_cat[p])], float(plb[p]), int(p)))
+        if self.det._last_mode == kn.MODE_LAZY:  # lazily skipped pairs: proved beyond the threshold
+            thr = max(self.det.threshold, self.det.stopping_distance)
+            for p in np.flatnonzero(flags == 2):
+                a, b = self.det._pair_names(int(p))
+                out.append(NotEvaluated(a, b, CATEGORIES[int(self.model.pair_cat[p])], max(float(plb[p]), thr), int(p)))
+        return tuple(out)
+
+
+class Detector:
+    """Ranger's virtual sensor for ``scene``: per category, the nearest pair and a status.
+
+    Parameters
+    ----------
+    scene : armguard.Scene
+    threshold : float, m
+        Detection threshold (Ranger's yellow): a pair within it gives WARNING.
+    stopping_distance : float, m
+        When > 0, a pair within it counts as COLLISION (Hermes's obstacle growing); 0: only
+        contact / penetration (distance <= 0) is a collision.
+    active : str or None
+        A robot name: check that arm against everything (Ranger's active arm); None: all arms.
+    tol : Tolerances
+    reach_margin : float, m
+        Obstacle lists keep every obstacle a link can come within this margin of anywhere in
+        its joint limits (conservative reach analysis, :mod:`armguard.detect._reach`); pairs
+        farther are dropped.  ``inf`` (default) keeps every pair, so per-category nearest
+        distances are exact at any range; a finite margin (at least the threshold and the
+        stopping distance, raised to it if smaller) keeps the status and the within-threshold
+        pairs exact and reports nearest pairs only among the listed ones.
+    """
+
+    def __init__(self, scene, threshold: float = 0.05, *, stopping_distance: float = 0.0, active: str | None = None,
+                 tol: Tolerances = DEFAULT_TOLERANCES, reach_margin: float = math.inf) -> None:
+        self.scene = scene
+        self._threshold = _check_length(threshold, "threshold")
+        self._stopping = _check_length(stopping_distance, "stopping_distance")
+        self._tol = tol
+        self._reach_margin = check_finite_margin(reach_margin)
+        self._active = active
+        self._ns_per_pair = _DEFAULT_NS_PER_PAIR
+        self._last_mode = kn.MODE_EXACT
+        self.prepare()
+
+    # ------------------------------------------------------------------ set-up
+    def prepare(self) -> "Detector":
+        """(Re)compile the scene: obstacle lists, BVH, buffers.  Call after changing the scene."""
+        margin = max(self._reach_margin, self._threshold, self._stopping)
+        m = build_model(self.scene, active=self._active, reach_margin=margin, tol=self._tol)
+        self._model = m
+        cs = m.compiled
+        t = m.tree
+        L = Layout()
+        nq = max(m.n_q, 1)
+        P = len(m.pair_a)
+        G = cs.n_elements
+        lever = np.zeros((len(m.mov_ids), nq))
+        lever[:, :m.n_q] = m.lever
+        L.add("MF", "X_pre", t.X_pre); L.add("MF", "axis", t.axis); L.add("MF", "X_post", t.X_post)
+        L.add("MF", "offset", t.offset); L.add("MF", "term_coeff", t.term_coeff); L.add("MF", "radius", cs.elem_radius)
+        L.add("MF", "verts_L", cs.verts.reshape(-1, 3)); L.add("MF", "box_L", m.box_local.reshape(-1, 15))
+        L.add("MF", "fn_L", m.fnrm_local.reshape(-1, 3)); L.add("MF", "ed_L", m.edir_local.reshape(-1, 3))
+        L.add("MF", "sph_L", cs.elem_sphere.reshape(-1, 4)); L.add("MF", "static_lo", m.static_lo.reshape(-1, 3))
+        L.add("MF", "static_hi", m.static_hi.reshape(-1, 3)); L.add("MF", "bvh_lo", m.bvh.lo.reshape(-1, 3))
+        L.add("MF", "bvh_hi", m.bvh.hi.reshape(-1, 3)); L.add("MF", "lever", lever)
+        L.add("MF", "ws", np.concatenate([m.ws_lo, m.ws_hi]))
+        for name, arr in (("parent", t.parent), ("jtype", t.jtype), ("has_post", t.has_post.astype(np.int64)),
+                          ("term_start", t.term_start), ("term_joint", t.term_joint), ("glink", m.elem_glink),
+                          ("core", cs.elem_core), ("vstart", cs.elem_vert_start), ("pstart", cs.elem_plane_start),
+                          ("estart", cs.elem_edge_start), ("mov_idx", m.mov_idx), ("st_idx", m.st_idx),
+                          ("bvh_left", m.bvh.left), ("bvh_right", m.bvh.right), ("bvh_start", m.bvh.start),
+                          ("bvh_count", m.bvh.count), ("bvh_items", m.bvh.items), ("pair_a", m.pair_a),
+                          ("pair_b", m.pair_b), ("pair_cat", m.pair_cat),
+                          ("pair_of", m.pair_of.reshape(len(m.mov_ids), max(len(m.st_ids), 1)) if len(m.st_ids) else
+                           np.full((len(m.mov_ids), 1), -1)),
+                          ("mov_ids", m.mov_ids)):
+            L.add("MI", name, arr)
+        # scratch: pd, pw, plb are adjacent (one copy per report), as are pflag and summary
+        stack_n = 2 * m.bvh.depth + 8
+        static_mask = m.elem_glink < 0
+        boxW0 = m.box_local.copy()
+        vW0 = np.array(cs.verts, dtype=np.float64).reshape(-1, 3)
+        sphW0 = np.array(cs.elem_sphere, dtype=np.float64).reshape(-1, 4)
+        fnW0 = m.fnrm_local.copy()
+        edW0 = m.edir_local.copy()
+        del static_mask  # static elements are already in W: the scratch starts as their copy
+        for name, arr in (("Xs", np.zeros((t.n_links, 4, 4))), ("vW", vW0), ("boxW", boxW0), ("fnW", fnW0),
+                          ("edW", edW0), ("sphW", sphW0), ("out9", np.zeros(9)), ("work", np.zeros(64)),
+                          ("gap", np.zeros(stack_n)), ("pd", np.zeros(P)), ("pw", np.zeros((P, 6))),
+                          ("plb", np.zeros(P)), ("last_d", np.zeros(P)), ("last_q", np.zeros((P, nq))),
+                          ("best", np.zeros(4))):
+            L.add("SF", name, arr)
+        for name, arr in (("pflag", np.zeros(P)), ("summary", np.zeros(SUM_SIZE)), ("stack", np.zeros(stack_n)),
+                          ("order", np.zeros(P)), ("has_last", np.zeros(P)), ("stamp", np.zeros(1 + G))):
+            L.add("SI", name, arr)
+        L.scalar("n_q", m.n_q); L.scalar("n_explicit", m.n_explicit); L.scalar("n_mov", len(m.mov_ids))
+        L.scalar("n_st", len(m.st_ids)); L.scalar("n_links", t.n_links)
+        self._layout = L
+        self._H, self._MF, self._MI, self._SF, self._SI = L.buffers()
+        self._P = P
+        off_pd = L._shape["pd"][1]
+        self._f_slice = slice(off_pd, off_pd + 8 * P)
+        self._i_slice = slice(0, P + SUM_SIZE)
+        self._summary = L.view(self._SI, "summary")
+        self._prm = np.array([self._threshold, self._stopping, self._tol.length, self._tol.parallel,
+                              self._tol.gjk_epsilon, self._tol.penetration_witness_offset])
+        self._iprm = np.array([kn.MODE_EXACT, 0, self._tol.gjk_max_iterations, 1, 0], dtype=np.int64)
+        self._q1 = np.zeros((1, m.n_q))
+        self._names_a = tuple(cs.owner_names[cs.elem_owner[a]] for a in m.pair_a)
+        self._names_b = tuple("workspace" if b < 0 else cs.owner_names[cs.elem_owner[b]] for b in m.pair_b)
+        self._links_a = tuple(m.link_names[m.elem_glink[a]] for a in m.pair_a)
+        self._static_shapes = self._static_shape_table()
+        self._margin_built = margin
+        return self
+
+    def _static_shape_table(self) -> dict[int, object]:
+        """Element number -> its shape (W) for static bodies, in compile_scene's order."""
+        out, g = {}, 0
+        for body in self.scene.bodies.values():
+            for s in body.shapes:
+                out[g] = s
+                g += 1
+        return out
+
+    # ------------------------------------------------------------------ settings
+    @property
+    def threshold(self) -> float:
+        """Detection threshold (m)."""
+        return self._threshold
+
+    @property
+    def stopping_distance(self) -> float:
+        """Stopping distance (m); 0 when unset."""
+        return self._stopping
+
+    @property
+    def active(self) -> str | None:
+        """The active robot's name, or None for all arms."""
+        return self._active
+
+    @property
+    def link_names(self) -> tuple[str, ...]:
+        """Global link names ``"robot/link"`` (the index space of ``PairDistances.link_a``)."""
+        return self._model.link_names
+
+    @property
+    def n_pairs(self) -> int:
+        """Number of candidate element pairs (after pair filters, active arm and obstacle lists)."""
+        return self._P
+
+    def set_threshold(self, threshold: float) -> None:
+        self._threshold = _check_length(threshold, "threshold")
+        self._prm[0] = self._threshold
+        if max(self._threshold, self._stopping) > self._margin_built:
+            self.prepare()
+
+    def set_stopping_distance(self, stopping_distance: float) -> None:
+        self._stopping = _check_length(stopping_distance, "stopping_distance")
+        self._prm[1] = self._stopping
+        if max(self._threshold, self._stopping) > self._margin_built:
+            self.prepare()
+
+    def set_active(self, name: str | None) -> None:
+        if name is not None and name not in self.scene.robots:
+            raise DetectionError(f"active: unknown robot {name!r}; robots are {list(self.scene.robots)}")
+        self._active = name
+        self.prepare()
+
+    def obstacle_list(self, link: str) -> tuple[str, ...]:
+        """Owner names in the obstacle list of ``link`` (``"robot/link"``), in pair order."""
+        out = []
+        for p in range(self._P):
+            if self._links_a[p] == link and self._names_b[p] not in out:
+                out.append(self._names_b[p])
+        return tuple(out)
+
+    # ------------------------------------------------------------------ queries
+    def _flat_q(self, q) -> np.ndarray:
+        if isinstance(q, np.ndarray) and q.dtype == np.float64 and q.shape == (self._model.n_q,):
+            self._q1[0] = q
+            return self._q1
+        if isinstance(q, Mapping):
+            flat = self.scene.flat_q(q)
+        else:
+            try:
+                flat = np.asarray(q, dtype=np.float64)
+            except (TypeError, ValueError) as exc:
+                raise DetectionError(f"q: expected numbers, got {q!r}") from exc
+        if flat.shape != (self._model.n_q,):
+            raise DetectionError(
+                f"q: expected one configuration of {self._model.n_q} joints (scene.joint_names), got shape {flat.shape}"
+            )
+        self._q1[0] = flat
+        return self._q1
+
+    def _run(self, q1, mode: int, allowance: int, lazy: bool) -> None:
+        self._iprm[0] = mode
+        self._iprm[1] = allowance
+        self._iprm[4] = 1 if lazy else 0
+        self._last_mode = mode
+        kn.detect_one(q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm, self._iprm)
+        err = int(self._summary[SUM_ERR])
+        if err == 1:
+            raise DetectionError(f"q contains NaN or infinite values: {q1[0].tolist()}")
+        if err != 0:
+            raise DetectionError("a convex distance kernel did not converge (GJK iteration limit); no verdict")
+
+    def check(self, q, *, budget_us: float | None = None, lazy: bool = False) -> DetectionReport:
+        """Check configuration ``q`` (mapping robot -> joints, or flat over ``scene.joint_names``).
+
+        ``budget_us``: time budget (µs) for the anytime mode; the budget is turned into a
+        number of pair evaluations by a cost model measured on this machine (updated after
+        every check), pairs are evaluated most likely first, and the report names the pairs
+        left with a lower bound on their distance.  ``lazy``: skip pairs whose lower bound
+        already exceeds the threshold (exact status; nearest per category exact within it).
+        """
+        t0 = time.perf_counter()
+        q1 = self._flat_q(q)
+        if budget_us is not None:
+            b = float(budget_us)
+            if not (b >= 0.0 and math.isfinite(b)):
+                raise DetectionError(f"budget_us: must be finite and >= 0, got {budget_us!r}")
+            allowance = int(max(0.0, b * 1e3) // self._ns_per_pair)
+            self._run(q1, kn.MODE_ANYTIME, allowance, lazy)
+        else:
+            self._run(q1, kn.MODE_LAZY if lazy else kn.MODE_EXACT, 0, False)
+        f = self._SF[self._f_slice].copy()
+        i = self._SI[self._i_slice].copy()
+        n_eval = int(self._summary[SUM_NEVAL])
+        elapsed = (time.perf_counter() - t0) * 1e6
+        if n_eval > 0:  # the cost model of the anytime mode: an exponential average of µs per pair
+            self._ns_per_pair = 0.8 * self._ns_per_pair + 0.2 * max(elapsed * 1e3 / n_eval, 1.0)
+        return DetectionReport(STATUS_CODES[int(self._summary[SUM_STATUS])], self._threshold, self._stopping, elapsed,
+                               _Raw(self, f, i, n_eval))
+
+    def pair_distances(self, q) -> PairDistances:
+        """Every candidate pair's signed distance at ``q`` (no pruning), with witness points."""
+        q1 = self._flat_q(q)
+        self._run(q1, kn.MODE_ALL, 0, False)
+        L, m = self._layout, self._model
+        pw = L.view(self._SF, "pw")
+        la = m.elem_glink[m.pair_a]
+        lb = np.where(m.pair_b >= 0, m.elem_glink[np.maximum(m.pair_b, 0)], -1)
+        return PairDistances(
+            distance=L.view(self._SF, "pd").copy(), p_WA=pw[:, 0:3].copy(), p_WB=pw[:, 3:6].copy(),
+            link_a=la.copy(), robot_a=m.link_robot[la].copy() if len(la) else la.copy(), link_b=lb,
+            category=m.pair_cat.copy(), owner_a=self._names_a, owner_b=self._names_b, link_names=m.link_names,
+        )
+
+    def _scratch_rows(self, n_chunks: int):
+        return np.tile(self._SF, (n_chunks, 1)), np.tile(self._SI, (n_chunks, 1))
+
+    def _many(self, Q, mode: int):
+        try:
+            Q = np.ascontiguousarray(np.asarray(Q, dtype=np.float64))
+        except (TypeError, ValueError) as exc:
+            raise DetectionError(f"Q: expected an (M, {self._model.n_q}) array of numbers") from exc
+        if Q.ndim != 2 or Q.shape[1] != self._model.n_q:
+            raise DetectionError(f"Q: expected shape (M, {self._model.n_q}), got {Q.shape}")
+        M = Q.shape[0]
+        n_chunks = max(1, min(M, 8 * (os.cpu_count() or 1)))
+        SF2, SI2 = self._scratch_rows(n_chunks)
+        iprm = self._iprm.copy()
+        iprm[0], iprm[3] = mode, 0
+        min_d = np.full((M, 4), np.inf)
+        status = np.zeros(M, dtype=np.int64)
+        err = kn.detect_many(Q, self._H, self._MF, self._MI, SF2, SI2, self._prm, iprm, min_d, status)
+        if err == 1:
+            bad = np.argwhere(~np.isfinite(Q))[0]
+            raise DetectionError(f"Q contains NaN or infinite values (first at {tuple(int(x) for x in bad)})")
+        if err != 0:
+            raise DetectionError("a convex distance kernel did not converge (GJK iteration limit); no verdict")
+        return min_d, status
+
+    def check_many(self, Q) -> BatchReport:
+        """Exact per-category nearest distances and status for each row of ``Q`` ``(M, n_q)``, in parallel."""
+        min_d, status = self._many(Q, kn.MODE_EXACT)
+        return BatchReport(min_d, status == kn.ST_COLLISION, status.astype(np.int8), self._threshold, self._stopping)
+
+    def collides_many(self, Q) -> np.ndarray:
+        """``(M,) bool``: collision (distance <= 0, or <= the stopping distance) per row, early exit."""
+        _, status = self._many(Q, kn.MODE_YESNO)
+        return status == kn.ST_COLLISION
+
+    # ------------------------------------------------------------------ reporting helpers
+    def _pair_names(self, p: int) -> tuple[str, str]:
+        return self._names_a[p], self._names_b[p]
+
+    def _pair_result(self, p: int, d: float, p_WA: np.ndarray, p_WB: np.ndarray) -> PairResult:
+        m = self._model
+        b = int(m.pair_b[p])
+        feature = None
+        shape = self._static_shapes.get(b) if b >= 0 else None
+        if shape is not None and m.compiled.elem_core[b] >= 2:
+            from ..geometry import feature_at
+
+            try:
+                feature = feature_at(shape, p_WB, self._tol)
+            except Exception:  # noqa: BLE001 - a feature is an annotation, never a verdict
+                feature = None
+        p_WA.flags.writeable = False
+        p_WB.flags.writeable = False
+        cat = CATEGORIES[int(m.pair_cat[p])]
+        return PairResult(d, p_WA, p_WB, self._names_a[p], self._names_b[p], cat, self._links_a[p], self._names_b[p],
+                          feature, p)
+
+    def __repr__(self) -> str:
+        return (f"Detector({self.scene.name!r}, threshold={self._threshold}, stopping_distance={self._stopping}, "
+                f"active={self._active!r}, {self._P} pairs)")
+
+
+del CAT_WORKSPACE

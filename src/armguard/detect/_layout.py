@@ -1,0 +1,102 @@
+"""Packing of the detector's arrays into a few flat buffers (one numba call per check).
+
+A numba call costs roughly 50-100 ns per array argument to unbox; the detector needs ~60
+arrays, which would cost more than the whole check.  So the model is packed into one float64
+and one int64 buffer, the per-call scratch and outputs into one float64 and one int64 buffer,
+and a small int64 header ``H`` records where each named segment starts and how many rows it
+has (``H[2 k]`` offset, ``H[2 k + 1]`` rows, ``k`` the segment's number below).  The kernel
+takes views with :func:`seg1` / :func:`seg2` / :func:`seg3`; Python keeps NumPy views of the
+same memory to read the outputs without copies.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["Layout", "seg1", "seg2", "seg3"]
+
+# model floats
+MF = ("X_pre", "axis", "X_post", "offset", "term_coeff", "radius", "verts_L", "box_L", "fn_L", "ed_L",
+      "sph_L", "static_lo", "static_hi", "bvh_lo", "bvh_hi", "lever", "ws")
+# model ints
+MI = ("parent", "jtype", "has_post", "term_start", "term_joint", "glink", "core", "vstart", "pstart",
+      "estart", "mov_idx", "st_idx", "bvh_left", "bvh_right", "bvh_start", "bvh_count", "bvh_items",
+      "pair_a", "pair_b", "pair_cat", "pair_of", "mov_ids")
+# scratch / state / output floats
+SFN = ("Xs", "vW", "boxW", "fnW", "edW", "sphW", "out9", "work", "gap", "pd", "pw", "plb", "last_d",
+       "last_q", "best")
+# scratch / state / output ints
+SIN = ("pflag", "summary", "stack", "order", "has_last", "stamp")
+# scalar slots after the segments
+SCALARS = ("n_q", "n_explicit", "n_mov", "n_st", "n_links", "stamp_now")
+
+_ALL = MF + MI + SFN + SIN
+K = {name: k for k, name in enumerate(_ALL)}
+S0 = 2 * len(_ALL)  # first scalar slot
+SC = {name: S0 + k for k, name in enumerate(SCALARS)}
+
+# summary slots (SI "summary" segment)
+SUM_BEST = 0  # 4 entries: best pair per category (-1 none)
+SUM_NEVAL = 4
+SUM_STATUS = 5
+SUM_ERR = 6
+SUM_SIZE = 7
+
+
+class Layout:
+    """Builds the header and the four buffers from named arrays (rows x flattened columns)."""
+
+    def __init__(self) -> None:
+        self.H = np.zeros(S0 + len(SCALARS), dtype=np.int64)
+        self._parts = {"MF": [], "MI": [], "SF": [], "SI": []}
+        self._size = {"MF": 0, "MI": 0, "SF": 0, "SI": 0}
+        self._shape: dict[str, tuple] = {}
+
+    def add(self, group: str, name: str, arr) -> None:
+        dtype = np.float64 if group in ("MF", "SF") else np.int64
+        a = np.ascontiguousarray(np.asarray(arr, dtype=dtype))
+        rows = a.shape[0] if a.ndim else 1
+        k = K[name]
+        self.H[2 * k] = self._size[group]
+        self.H[2 * k + 1] = rows
+        self._parts[group].append(a.ravel())
+        self._size[group] += a.size
+        self._shape[name] = (group, self._size[group] - a.size, a.shape)
+
+    def scalar(self, name: str, value: int) -> None:
+        self.H[SC[name]] = int(value)
+
+    def buffers(self):
+        out = []
+        for g, dt in (("MF", np.float64), ("MI", np.int64), ("SF", np.float64), ("SI", np.int64)):
+            parts = self._parts[g]
+            buf = np.concatenate(parts) if parts else np.zeros(0, dt)
+            out.append(np.ascontiguousarray(np.concatenate([buf, np.zeros(1, dt)])))  # never empty
+        return (self.H, *out)
+
+    def view(self, buf: np.ndarray, name: str) -> np.ndarray:
+        """NumPy view of segment ``name`` of ``buf`` (a buffer of the segment's group)."""
+        _, off, shape = self._shape[name]
+        n = int(np.prod(shape)) if shape else 1
+        return buf[off:off + n].reshape(shape)
+
+
+@njit(cache=True, inline="always")
+def seg1(buf, H, k):  # pragma: no cover - compiled
+    o = H[2 * k]
+    return buf[o:o + H[2 * k + 1]]
+
+
+@njit(cache=True, inline="always")
+def seg2(buf, H, k, w):  # pragma: no cover - compiled
+    o = H[2 * k]
+    n = H[2 * k + 1]
+    return buf[o:o + n * w].reshape((n, w))
+
+
+@njit(cache=True, inline="always")
+def seg3(buf, H, k, w1, w2):  # pragma: no cover - compiled
+    o = H[2 * k]
+    n = H[2 * k + 1]
+    return buf[o:o + n * w1 * w2].reshape((n, w1, w2))

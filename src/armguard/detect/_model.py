@@ -1,0 +1,227 @@
+"""Compile a scene for the detector: one kinematic tree, element arrays, pair lists, BVH.
+
+Built on :func:`armguard.scene.compile_scene` (elements in their own frames, owner pairs with
+their categories); this module adds what the detector needs on top of it:
+
+* one flattened kinematic tree over the links of *all* robots (global link index =
+  robot's offset + link index), so one FK call serves the scene;
+* element frames as link numbers (-1 for static bodies), edge directions and face normals
+  in the element frame, static elements' AABBs and a :class:`BVH` over them;
+* the candidate pairs: element pairs of :meth:`Scene.allowed_pairs` mapped to the four
+  categories, plus one workspace pair per moving element, filtered by the active arm and by
+  the conservative obstacle lists (:mod:`._reach`);
+* per moving element, lever arms for the anytime lower bounds.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._errors import DetectionError
+from ._bvh import build_bvh
+from ._reach import chain_bounds
+
+__all__ = ["DetectModel", "build_model", "CAT_ARM", "CAT_ENVIRONMENT", "CAT_WORKSPACE", "CAT_PAYLOAD"]
+
+CAT_ARM, CAT_ENVIRONMENT, CAT_WORKSPACE, CAT_PAYLOAD = 0, 1, 2, 3
+_SCENE_CAT = {
+    "arm-arm": CAT_ARM,
+    "arm-vehicle": CAT_ENVIRONMENT,
+    "arm-environment": CAT_ENVIRONMENT,
+    "arm-payload": CAT_PAYLOAD,
+    "payload-vehicle": CAT_PAYLOAD,
+    "payload-environment": CAT_PAYLOAD,
+    "payload-payload": CAT_PAYLOAD,
+}
+
+
+def _c(a, dtype=np.float64):
+    return np.ascontiguousarray(np.asarray(a, dtype=dtype))
+
+
+def _combined_tree(scene, robot_names):
+    """All robots' FlatTrees as one tree over global links (parents and joint terms shifted)."""
+    from ..kinematics._fk import FlatTree
+
+    parts = {k: [] for k in ("parent", "X_pre", "axis", "jtype", "X_post", "has_post", "offset", "term_joint", "term_coeff")}
+    term_start = [0]
+    link_off, joint_off = [], []
+    nl = nj = 0
+    for r in robot_names:
+        robot = scene.robots[r]
+        t = getattr(robot, "flat_tree", None) or robot._tree
+        link_off.append(nl)
+        joint_off.append(nj)
+        parts["parent"].append(np.where(t.parent >= 0, t.parent + nl, -1))
+        for k in ("X_pre", "axis", "jtype", "X_post", "has_post", "offset", "term_coeff"):
+            parts[k].append(np.asarray(getattr(t, k)))
+        parts["term_joint"].append(np.asarray(t.term_joint) + nj)
+        term_start.extend((np.asarray(t.term_start[1:]) + term_start[-1]).tolist())
+        nl += t.n_links
+        nj += len(robot.joint_names)
+    cat = lambda k, shape, dt: _c(np.concatenate(parts[k]) if parts[k] else np.zeros(shape), dt)  # noqa: E731
+    tree = FlatTree(
+        parent=cat("parent", (0,), np.int64),
+        X_pre=cat("X_pre", (0, 4, 4), np.float64),
+        axis=cat("axis", (0, 3), np.float64),
+        jtype=cat("jtype", (0,), np.int64),
+        X_post=cat("X_post", (0, 4, 4), np.float64),
+        has_post=cat("has_post", (0,), np.bool_),
+        offset=cat("offset", (0,), np.float64),
+        term_start=_c(term_start, np.int64),
+        term_joint=cat("term_joint", (0,), np.int64),
+        term_coeff=cat("term_coeff", (0,), np.float64),
+    )
+    return tree, np.asarray(link_off, dtype=np.int64), np.asarray(joint_off, dtype=np.int64)
+
+
+class DetectModel:
+    """The detector's compiled scene (read-only arrays; see the module docstring).
+
+    Element arrays are indexed like ``compiled.elem_*``; ``elem_glink`` ``(G,)`` is the global
+    link of a moving element (-1 static).  ``pair_a``, ``pair_b`` ``(P,) int64`` element numbers
+    (``pair_b = -1``: the workspace walls), ``pair_cat`` ``(P,)`` category codes; pairs are
+    ordered explicit first (moving-moving and workspace, ``n_explicit`` of them), then
+    moving-static.  ``pair_of`` ``(n_moving, n_static) int64`` maps a (moving, static) element
+    couple to its pair number (-1: not a candidate).
+    """
+
+
+def build_model(scene, *, active: str | None, reach_margin: float, tol) -> DetectModel:
+    """Compile ``scene`` for the detector (explicit, repeatable; the scene is unchanged)."""
+    from ..scene import compile_scene
+
+    cs = compile_scene(scene)
+    m = DetectModel()
+    m.compiled = cs
+    robot_names = tuple(cs.robot_names)
+    if active is not None and active not in robot_names:
+        raise DetectionError(f"active: unknown robot {active!r}; robots are {list(robot_names)}")
+    m.robot_names = robot_names
+    tree, link_off, joint_off = _combined_tree(scene, robot_names)
+    m.tree, m.link_off, m.joint_off = tree, link_off, joint_off
+    m.link_names = tuple(f"{r}/{ln}" for r in robot_names for ln in scene.robots[r].link_names)
+    m.link_robot = _c([i for i, r in enumerate(robot_names) for _ in scene.robots[r].link_names], np.int64)
+    m.n_q = int(sum(len(scene.robots[r].joint_names) for r in robot_names))
+    lower = np.concatenate([scene.robots[r].lower for r in robot_names]) if robot_names else np.zeros(0)
+    upper = np.concatenate([scene.robots[r].upper for r in robot_names]) if robot_names else np.zeros(0)
+    m.lower, m.upper = _c(lower), _c(upper)
+
+    G = cs.n_elements
+    moving = cs.elem_kind != 0  # links and payloads
+    glink = np.where(moving, link_off[np.maximum(cs.elem_robot, 0)] + cs.elem_link, -1) if G else np.zeros(0, np.int64)
+    m.elem_glink = _c(glink, np.int64)
+    m.elem_is_payload = _c(cs.elem_kind == 2, np.bool_)
+    mov_ids = np.flatnonzero(moving)
+    st_ids = np.flatnonzero(~moving)
+    m.mov_ids, m.st_ids = _c(mov_ids, np.int64), _c(st_ids, np.int64)
+    mov_idx = np.full(G, -1, np.int64)
+    mov_idx[mov_ids] = np.arange(len(mov_ids))
+    st_idx = np.full(G, -1, np.int64)
+    st_idx[st_ids] = np.arange(len(st_ids))
+    m.mov_idx, m.st_idx = mov_idx, st_idx
+
+    # element-frame data the kernel moves: face normals (from planes), edge directions
+    m.fnrm_local = _c(cs.planes[:, :3]) if len(cs.planes) else np.zeros((0, 3))
+    if len(cs.edges):
+        e = cs.verts[cs.edges[:, 1]] - cs.verts[cs.edges[:, 0]]
+        n = np.linalg.norm(e, axis=1)
+        e = np.where(n[:, None] > tol.length, e / np.where(n > 0, n, 1.0)[:, None], 0.0)
+        m.edir_local = _c(e)
+    else:
+        m.edir_local = np.zeros((0, 3))
+    box = np.zeros((G, 15))
+    box[:, 0:3] = cs.elem_box_center
+    box[:, 3:6] = cs.elem_box_half
+    box[:, 6:15] = np.asarray(cs.elem_box_axes).reshape(G, 9)
+    m.box_local = _c(box)
+
+    # static AABBs (W) and the BVH over them
+    slo = np.zeros((len(st_ids), 3))
+    shi = np.zeros((len(st_ids), 3))
+    for k, g in enumerate(st_ids):
+        V = cs.verts[cs.elem_vert_start[g]:cs.elem_vert_start[g + 1]]
+        r = cs.elem_radius[g]
+        slo[k] = V.min(axis=0) - r
+        shi[k] = V.max(axis=0) + r
+    m.static_lo, m.static_hi = _c(slo), _c(shi)
+    m.bvh = build_bvh(m.static_lo, m.static_hi)
+
+    # reach spheres and lever arms of the moving elements
+    q_ref = np.clip(np.zeros(m.n_q), m.lower, m.upper)
+    sph = cs.elem_sphere[mov_ids] if len(mov_ids) else np.zeros((0, 4))
+    cb = chain_bounds(tree, m.lower, m.upper, glink[mov_ids], sph, q_ref)
+    m.reach_center, m.reach_radius = cb.reach_center, cb.reach_radius
+    m.lever = _c(cb.lever)
+
+    # candidate pairs
+    owner_robot = cs.owner_robot
+    active_id = robot_names.index(active) if active is not None else -1
+    from ..scene._compile import PAIR_CATEGORIES
+
+    def in_reach_static(ma: int, s: int) -> bool:
+        c, rr = m.reach_center[ma], m.reach_radius[ma]
+        gap = float(np.linalg.norm(np.maximum(np.maximum(slo[s] - c, 0.0), c - shi[s]))) - rr
+        return not gap > reach_margin
+
+    def in_reach_moving(ma: int, mb: int) -> bool:
+        gap = float(np.linalg.norm(m.reach_center[ma] - m.reach_center[mb])) - m.reach_radius[ma] - m.reach_radius[mb]
+        return not gap > reach_margin
+
+    explicit, static_pairs, dropped = [], [], 0
+    for k in range(len(cs.pair_a)):
+        oa, ob = int(cs.pair_a[k]), int(cs.pair_b[k])
+        if active_id >= 0 and owner_robot[oa] != active_id and owner_robot[ob] != active_id:
+            continue
+        cat = _SCENE_CAT[PAIR_CATEGORIES[int(cs.pair_category[k])].value]
+        for e in range(cs.pair_elem_start[k], cs.pair_elem_start[k + 1]):
+            ga, gb = int(cs.elem_pair_a[e]), int(cs.elem_pair_b[e])
+            if mov_idx[ga] < 0:  # keep the moving element on side A
+                ga, gb = gb, ga
+            if mov_idx[gb] >= 0:
+                if in_reach_moving(mov_idx[ga], mov_idx[gb]):
+                    explicit.append((ga, gb, cat))
+                else:
+                    dropped += 1
+            elif in_reach_static(mov_idx[ga], st_idx[gb]):
+                static_pairs.append((ga, gb, cat))
+            else:
+                dropped += 1
+    m.has_workspace = bool(cs.has_workspace)
+    m.ws_lo, m.ws_hi = _c(cs.workspace_lo), _c(cs.workspace_hi)
+    if cs.has_workspace:
+        for g in mov_ids:
+            if active_id >= 0 and cs.elem_robot[g] != active_id:
+                continue
+            c, rr = m.reach_center[mov_idx[g]], m.reach_radius[mov_idx[g]]
+            gap = float(np.min(np.concatenate([m.ws_hi - c, c - m.ws_lo]))) - rr
+            if not gap > reach_margin:
+                explicit.append((int(g), -1, CAT_WORKSPACE))
+            else:
+                dropped += 1
+    pairs = explicit + static_pairs
+    m.n_explicit = len(explicit)
+    m.n_dropped = dropped
+    m.pair_a = _c([p[0] for p in pairs], np.int64)
+    m.pair_b = _c([p[1] for p in pairs], np.int64)
+    m.pair_cat = _c([p[2] for p in pairs], np.int64)
+    pair_of = np.full((len(mov_ids), len(st_ids)), -1, np.int64)
+    for k in range(m.n_explicit, len(pairs)):
+        pair_of[mov_idx[pairs[k][0]], st_idx[pairs[k][1]]] = k
+    m.pair_of = pair_of
+    m.has_category = tuple(bool(np.any(m.pair_cat == c)) for c in range(4))
+    m.reach_margin = reach_margin
+    return m
+
+
+def check_finite_margin(reach_margin) -> float:
+    """``reach_margin`` as a float >= 0 (``inf`` keeps every pair)."""
+    try:
+        x = float(reach_margin)
+    except (TypeError, ValueError) as exc:
+        raise DetectionError(f"reach_margin: expected a number of metres, got {reach_margin!r}") from exc
+    if math.isnan(x) or x < 0.0:
+        raise DetectionError(f"reach_margin: must be >= 0 (or inf), got {x}")
+    return x
