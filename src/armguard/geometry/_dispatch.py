@@ -79,22 +79,22 @@ _P, _S, _B, _T = CoreKind.POINT, CoreKind.SEGMENT, CoreKind.BOX, CoreKind.POLYTO
 
 # (core kind A, core kind B) -> (kernel, kernel name)
 _TABLE = {
-    (_P, _P): (_rounded_segments, "capsule_capsule (segment-segment, Ranger §3)"),
-    (_P, _S): (_rounded_segments, "capsule_capsule (segment-segment, Ranger §3)"),
-    (_S, _P): (_rounded_segments, "capsule_capsule (segment-segment, Ranger §3)"),
-    (_S, _S): (_rounded_segments, "capsule_capsule (segment-segment, Ranger §3)"),
-    (_P, _B): (_segment_box, "capsule_box (piecewise-quadratic minimum; SAT)"),
-    (_S, _B): (_segment_box, "capsule_box (piecewise-quadratic minimum; SAT)"),
-    (_B, _P): (_box_segment, "capsule_box (piecewise-quadratic minimum; SAT), swapped"),
-    (_B, _S): (_box_segment, "capsule_box (piecewise-quadratic minimum; SAT), swapped"),
-    (_B, _B): (_convex, "convex_convex (GJK; SAT depth)"),
-    (_P, _T): (_convex, "convex_convex (GJK; SAT depth)"),
-    (_T, _P): (_convex, "convex_convex (GJK; SAT depth)"),
-    (_S, _T): (_convex, "convex_convex (GJK; SAT depth)"),
-    (_T, _S): (_convex, "convex_convex (GJK; SAT depth)"),
-    (_B, _T): (_convex, "convex_convex (GJK; SAT depth)"),
-    (_T, _B): (_convex, "convex_convex (GJK; SAT depth)"),
-    (_T, _T): (_convex, "convex_convex (GJK; SAT depth)"),
+    (_P, _P): (_rounded_segments, "capsule_capsule"),
+    (_P, _S): (_rounded_segments, "capsule_capsule"),
+    (_S, _P): (_rounded_segments, "capsule_capsule"),
+    (_S, _S): (_rounded_segments, "capsule_capsule"),
+    (_P, _B): (_segment_box, "capsule_box"),
+    (_S, _B): (_segment_box, "capsule_box"),
+    (_B, _P): (_box_segment, "capsule_box (swapped)"),
+    (_B, _S): (_box_segment, "capsule_box (swapped)"),
+    (_B, _B): (_convex, "convex_convex (GJK + SAT)"),
+    (_P, _T): (_convex, "convex_convex (GJK + SAT)"),
+    (_T, _P): (_convex, "convex_convex (GJK + SAT)"),
+    (_S, _T): (_convex, "convex_convex (GJK + SAT)"),
+    (_T, _S): (_convex, "convex_convex (GJK + SAT)"),
+    (_B, _T): (_convex, "convex_convex (GJK + SAT)"),
+    (_T, _B): (_convex, "convex_convex (GJK + SAT)"),
+    (_T, _T): (_convex, "convex_convex (GJK + SAT)"),
 }
 
 _SHAPES = (Sphere, Capsule, Box, Prism, ConvexPolyhedron, Polygon)

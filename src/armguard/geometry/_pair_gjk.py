@@ -21,7 +21,7 @@ from numba import njit
 
 __all__ = ["GJK_WORK_SIZE", "GJK_SEPARATED", "GJK_INTERSECTING", "GJK_NOT_CONVERGED", "gjk_core"]
 
-GJK_WORK_SIZE = 48
+GJK_WORK_SIZE = 64
 """Length of the ``work`` array the GJK kernels need (float64)."""
 GJK_SEPARATED = 0
 """Status: the cores are disjoint; the distance and witnesses are exact to ``gjk_epsilon``."""
@@ -31,7 +31,8 @@ GJK_NOT_CONVERGED = 2
 """Status: ``max_iterations`` reached without meeting the stopping test."""
 
 # work layout: vertex k of the simplex occupies work[9k:9k+9] = [w, a, b]; support indices of
-# vertex k at work[36+k] (A) and work[40+k] (B).
+# vertex k at work[36+k] (A) and work[40+k] (B); work[48:64] is free for callers' scratch
+# (capsule_polytope keeps its segment there).
 
 
 @njit(cache=True, inline="always")
@@ -217,12 +218,41 @@ def gjk_core(pa, pb, ox, oy, oz, work, eps_len, gjk_eps, max_iter):  # pragma: n
     """
     na = pa.shape[0]
     nb = pb.shape[0]
-    ax = pa[0, 0]
-    ay = pa[0, 1]
-    az = pa[0, 2]
-    bx = pb[0, 0] + ox
-    by = pb[0, 1] + oy
-    bz = pb[0, 2] + oz
+    # start from the support points along the centroid difference (fewer iterations than an
+    # arbitrary vertex pair)
+    gx = gy = gz = 0.0
+    for i in range(na):
+        gx += pa[i, 0]
+        gy += pa[i, 1]
+        gz += pa[i, 2]
+    hx = hy = hz = 0.0
+    for i in range(nb):
+        hx += pb[i, 0]
+        hy += pb[i, 1]
+        hz += pb[i, 2]
+    dx = gx / na - hx / nb - ox
+    dy = gy / na - hy / nb - oy
+    dz = gz / na - hz / nb - oz
+    ia = 0
+    best = -math.inf
+    for i in range(na):
+        s = -(pa[i, 0] * dx + pa[i, 1] * dy + pa[i, 2] * dz)
+        if s > best:
+            best = s
+            ia = i
+    ib = 0
+    best = -math.inf
+    for i in range(nb):
+        s = pb[i, 0] * dx + pb[i, 1] * dy + pb[i, 2] * dz
+        if s > best:
+            best = s
+            ib = i
+    ax = pa[ia, 0]
+    ay = pa[ia, 1]
+    az = pa[ia, 2]
+    bx = pb[ib, 0] + ox
+    by = pb[ib, 1] + oy
+    bz = pb[ib, 2] + oz
     vx = ax - bx
     vy = ay - by
     vz = az - bz

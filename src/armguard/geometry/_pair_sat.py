@@ -21,7 +21,7 @@ from numba import njit
 from ._pair_gjk import GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, gjk_core
 from ._pair_segment_segment import write_rounded
 
-__all__ = ["sat_depth", "convex_convex", "gjk_distance"]
+__all__ = ["sat_depth", "convex_convex", "convex_convex_at", "gjk_distance"]
 
 
 @njit(cache=True, inline="always")
@@ -95,8 +95,8 @@ def gjk_distance(pa, ra, pb, rb, out, work, eps_len, gjk_eps, max_iter):  # prag
     """
     status, d, ax, ay, az, bx, by, bz = gjk_core(pa, pb, 0.0, 0.0, 0.0, work, eps_len, gjk_eps, max_iter)
     if status == GJK_INTERSECTING:
-        return write_rounded(ax, ay, az, ra, bx, by, bz, rb, 0.0, 0.0, 1.0, 0.0, out), status
-    return write_rounded(ax, ay, az, ra, bx, by, bz, rb, (bx - ax) / d, (by - ay) / d, (bz - az) / d, d, out), status
+        return write_rounded(ax, ay, az, ra, bx, by, bz, rb, 0.0, 0.0, 1.0, 0.0, out, 0), status
+    return write_rounded(ax, ay, az, ra, bx, by, bz, rb, (bx - ax) / d, (by - ay) / d, (bz - az) / d, d, out, 0), status
 
 
 @njit(cache=True)
@@ -110,9 +110,19 @@ def convex_convex(
     ``[p_WA, p_WB, nhat_AB_W]`` and returns ``(distance, status)`` (status from GJK; callers
     raise on ``GJK_NOT_CONVERGED``).  ``offset`` (m) is ``Tolerances.penetration_witness_offset``.
     """
+    return convex_convex_at(
+        pa, fa, ea, ra, pb, fb, eb, rb, out, 0, work, eps_len, eps_par, gjk_eps, max_iter, offset
+    )
+
+
+@njit(cache=True)
+def convex_convex_at(
+    pa, fa, ea, ra, pb, fb, eb, rb, out, base, work, eps_len, eps_par, gjk_eps, max_iter, offset
+):  # pragma: no cover - compiled
+    """:func:`convex_convex` writing ``out[base:base + 9]``."""
     status, d, ax, ay, az, bx, by, bz = gjk_core(pa, pb, 0.0, 0.0, 0.0, work, eps_len, gjk_eps, max_iter)
     if status == GJK_SEPARATED:
-        return write_rounded(ax, ay, az, ra, bx, by, bz, rb, (bx - ax) / d, (by - ay) / d, (bz - az) / d, d, out), status
+        return write_rounded(ax, ay, az, ra, bx, by, bz, rb, (bx - ax) / d, (by - ay) / d, (bz - az) / d, d, out, base), status
     if status == GJK_NOT_CONVERGED:
         return 0.0, status
     depth, nx, ny, nz = sat_depth(pa, fa, ea, pb, fb, eb, eps_par)
@@ -130,4 +140,4 @@ def convex_convex(
     bx -= shift * nx
     by -= shift * ny
     bz -= shift * nz
-    return write_rounded(ax, ay, az, ra, bx, by, bz, rb, nx, ny, nz, -depth, out), GJK_INTERSECTING
+    return write_rounded(ax, ay, az, ra, bx, by, bz, rb, nx, ny, nz, -depth, out, base), GJK_INTERSECTING

@@ -96,7 +96,7 @@ def _project_overlap(ux, uy, uz, ax, ay, az, dx, dy, dz, hx, hy, hz):  # pragma:
 @njit(cache=True)
 def capsule_box_scalar(
     p0x, p0y, p0z, p1x, p1y, p1z, r, cx, cy, cz, hx, hy, hz,
-    r00, r01, r02, r10, r11, r12, r20, r21, r22, out, eps_len, eps_par, offset,
+    r00, r01, r02, r10, r11, r12, r20, r21, r22, out, base, eps_len, eps_par, offset,
 ):  # pragma: no cover - compiled
     """Signed distance capsule A = ``(p0, p1, r)`` to box B = ``(c, h, R_WB)``; see :func:`capsule_box`."""
     # box frame: x_B = R^T (p_W - c)
@@ -190,7 +190,7 @@ def capsule_box_scalar(
     mx = r00 * nx + r01 * ny + r02 * nz
     my = r10 * nx + r11 * ny + r12 * nz
     mz = r20 * nx + r21 * ny + r22 * nz
-    return write_rounded(cax, cay, caz, r, cbx, cby, cbz, 0.0, mx, my, mz, -depth, out)
+    return write_rounded(cax, cay, caz, r, cbx, cby, cbz, 0.0, mx, my, mz, -depth, out, base)
 
 
 @njit(cache=True)
@@ -206,7 +206,7 @@ def capsule_box(p0, p1, r, center, half_extents, R_WB, out, eps_len, eps_par, of
         p0[0], p0[1], p0[2], p1[0], p1[1], p1[2], r, center[0], center[1], center[2],
         half_extents[0], half_extents[1], half_extents[2],
         R_WB[0, 0], R_WB[0, 1], R_WB[0, 2], R_WB[1, 0], R_WB[1, 1], R_WB[1, 2],
-        R_WB[2, 0], R_WB[2, 1], R_WB[2, 2], out, eps_len, eps_par, offset,
+        R_WB[2, 0], R_WB[2, 1], R_WB[2, 2], out, 0, eps_len, eps_par, offset,
     )
 
 
@@ -215,5 +215,5 @@ def capsule_box_packed(a, b, out, eps_len, eps_par, offset):  # pragma: no cover
     """Capsule ``[p0, p1, r]`` (7,) against box ``[c, h, R_WB row-major]`` (15,): the single-call path."""
     return capsule_box_scalar(
         a[0], a[1], a[2], a[3], a[4], a[5], a[6], b[0], b[1], b[2], b[3], b[4], b[5],
-        b[6], b[7], b[8], b[9], b[10], b[11], b[12], b[13], b[14], out, eps_len, eps_par, offset,
+        b[6], b[7], b[8], b[9], b[10], b[11], b[12], b[13], b[14], out, 0, eps_len, eps_par, offset,
     )

@@ -98,25 +98,25 @@ def perpendicular_unit(dx, dy, dz):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def write_rounded(cax, cay, caz, ra, cbx, cby, cbz, rb, nx, ny, nz, dcore, out):  # pragma: no cover
+def write_rounded(cax, cay, caz, ra, cbx, cby, cbz, rb, nx, ny, nz, dcore, out, base):  # pragma: no cover
     """Write witness points of two rounded cores with core witnesses ``ca``, ``cb`` and unit ``n``.
 
     ``p_WA = ca + ra n``; ``p_WB = p_WA + distance n`` with ``distance = dcore - ra - rb`` so the
-    witness relation holds to rounding.  Returns the signed distance.
+    witness relation holds to rounding.  Writes ``out[base:base + 9]``.  Returns the signed distance.
     """
     dist = dcore - ra - rb
     ax = cax + ra * nx
     ay = cay + ra * ny
     az = caz + ra * nz
-    out[0] = ax
-    out[1] = ay
-    out[2] = az
-    out[3] = cbx - rb * nx
-    out[4] = cby - rb * ny
-    out[5] = cbz - rb * nz
-    out[6] = nx
-    out[7] = ny
-    out[8] = nz
+    out[base + 0] = ax
+    out[base + 1] = ay
+    out[base + 2] = az
+    out[base + 3] = cbx - rb * nx
+    out[base + 4] = cby - rb * ny
+    out[base + 5] = cbz - rb * nz
+    out[base + 6] = nx
+    out[base + 7] = ny
+    out[base + 8] = nz
     return dist
 
 
@@ -148,7 +148,7 @@ def segment_segment(p0, p1, q0, q1, out, eps_len, eps_par):  # pragma: no cover 
 
 @njit(cache=True, inline="always")
 def capsule_capsule_scalar(
-    p0x, p0y, p0z, p1x, p1y, p1z, ra, q0x, q0y, q0z, q1x, q1y, q1z, rb, out, eps_len, eps_par
+    p0x, p0y, p0z, p1x, p1y, p1z, ra, q0x, q0y, q0z, q1x, q1y, q1z, rb, out, base, eps_len, eps_par
 ):  # pragma: no cover - compiled
     """Scalar-argument capsule-capsule (see :func:`capsule_capsule`)."""
     s, t = segment_segment_params(
@@ -171,7 +171,7 @@ def capsule_capsule_scalar(
     vz = bz - az
     dcore = math.sqrt(vx * vx + vy * vy + vz * vz)
     if dcore > eps_len:
-        return write_rounded(ax, ay, az, ra, bx, by, bz, rb, vx / dcore, vy / dcore, vz / dcore, dcore, out)
+        return write_rounded(ax, ay, az, ra, bx, by, bz, rb, vx / dcore, vy / dcore, vz / dcore, dcore, out, base)
     # Cores meet: the Minkowski difference of two segments is flat (a parallelogram), so the
     # shortest separating translation is along its normal d1 x d2, of length ra + rb.
     nx = d1y * d2z - d1z * d2y
@@ -188,7 +188,7 @@ def capsule_capsule_scalar(
         nx, ny, nz = perpendicular_unit(d1x, d1y, d1z)
     else:
         nx, ny, nz = perpendicular_unit(d2x, d2y, d2z)
-    return write_rounded(ax, ay, az, ra, bx, by, bz, rb, nx, ny, nz, 0.0, out)
+    return write_rounded(ax, ay, az, ra, bx, by, bz, rb, nx, ny, nz, 0.0, out, base)
 
 
 @njit(cache=True)
@@ -201,7 +201,7 @@ def capsule_capsule(p0, p1, ra, q0, q1, rb, out, eps_len, eps_par):  # pragma: n
     """
     return capsule_capsule_scalar(
         p0[0], p0[1], p0[2], p1[0], p1[1], p1[2], ra, q0[0], q0[1], q0[2], q1[0], q1[1], q1[2], rb,
-        out, eps_len, eps_par,
+        out, 0, eps_len, eps_par,
     )
 
 
@@ -210,5 +210,5 @@ def capsule_capsule_packed(a, b, out, eps_len, eps_par):  # pragma: no cover - c
     """Capsule-capsule on packed buffers ``[p0, p1, r]`` (7,) -- the single-call fast path."""
     return capsule_capsule_scalar(
         a[0], a[1], a[2], a[3], a[4], a[5], a[6], b[0], b[1], b[2], b[3], b[4], b[5], b[6],
-        out, eps_len, eps_par,
+        out, 0, eps_len, eps_par,
     )

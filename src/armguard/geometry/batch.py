@@ -1,0 +1,284 @@
+"""Batched pairwise queries over arrays of pairs, broadcasting over leading axes.
+
+Each function takes the parameters of shape A and shape B as arrays whose leading axes
+broadcast together (``(..., 3)`` points, ``(...)`` radii) and returns one result object with
+arrays of the broadcast shape.  The loops run in numba over the scalar kernels that
+``distance()`` uses, so batched and single answers agree bit for bit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from numba import njit
+
+from .._errors import GeometryError
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._pair_box_box import box_box_overlap_scalar
+from ._pair_gjk import GJK_NOT_CONVERGED, GJK_WORK_SIZE
+from ._pair_sat import convex_convex_at
+from ._pair_segment_box import capsule_box_scalar
+from ._pair_segment_segment import capsule_capsule_scalar
+from ._shapes import Box, ConvexPolyhedron, Polygon, Prism
+
+__all__ = [
+    "BatchProximity",
+    "sphere_sphere",
+    "capsule_capsule",
+    "capsule_box",
+    "capsule_convex",
+    "box_box_overlap",
+]
+
+
+@dataclass(frozen=True)
+class BatchProximity:
+    """Signed distances and witness points of a batch of pairs (invariants as :class:`Proximity`).
+
+    ``distance : (...) float64, m``; ``p_WA, p_WB : (..., 3) float64, m``;
+    ``nhat_AB_W : (..., 3) float64`` unit, with ``p_WB - p_WA == distance * nhat_AB_W``.
+    """
+
+    distance: np.ndarray
+    p_WA: np.ndarray
+    p_WB: np.ndarray
+    nhat_AB_W: np.ndarray
+
+
+def _arr(x, name: str, trailing: tuple, check: bool = True) -> np.ndarray:
+    try:
+        a = np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise GeometryError(f"{name}: expected numbers") from exc
+    if a.shape[a.ndim - len(trailing):] != trailing or a.ndim < len(trailing):
+        raise GeometryError(f"{name}: expected shape (..., {', '.join(map(str, trailing))}), got {a.shape}")
+    if check and not np.all(np.isfinite(a)):
+        raise GeometryError(f"{name}: contains NaN or infinite values")
+    return a
+
+
+def _radius(x, name: str) -> np.ndarray:
+    a = _arr(x, name, ())
+    if np.any(a < 0.0):
+        raise GeometryError(f"{name}: radii must be >= 0")
+    return a
+
+
+def _flat(arrays: list[tuple[np.ndarray, tuple]]):
+    """Broadcast leading axes; return the shape and C-contiguous (N, *trailing) copies."""
+    lead = np.broadcast_shapes(*[a.shape[: a.ndim - len(t)] for a, t in arrays])
+    n = int(np.prod(lead, dtype=np.int64))
+    out = [np.ascontiguousarray(np.broadcast_to(a, lead + t).reshape((n,) + t)) for a, t in arrays]
+    return lead, n, out
+
+
+def _raise_bad(bad: int, what: str) -> None:
+    if bad >= 0:
+        raise GeometryError(f"pair {bad}: {what}")
+
+
+def _result(lead, dist, out) -> BatchProximity:
+    o = out.reshape(lead + (9,))
+    return BatchProximity(dist.reshape(lead), o[..., 0:3], o[..., 3:6], o[..., 6:9])
+
+
+@njit(cache=True)
+def _capsule_capsule_loop(a0, a1, ra, b0, b1, rb, dist, out, eps_len, eps_par):  # pragma: no cover
+    """Returns the index of the first pair with a non-finite input or a negative radius, or -1."""
+    bad = -1
+    for i in range(dist.shape[0]):
+        p0x = a0[i, 0]
+        p0y = a0[i, 1]
+        p0z = a0[i, 2]
+        p1x = a1[i, 0]
+        p1y = a1[i, 1]
+        p1z = a1[i, 2]
+        q0x = b0[i, 0]
+        q0y = b0[i, 1]
+        q0z = b0[i, 2]
+        q1x = b1[i, 0]
+        q1y = b1[i, 1]
+        q1z = b1[i, 2]
+        r1 = ra[i]
+        r2 = rb[i]
+        acc = p0x + p0y + p0z + p1x + p1y + p1z + q0x + q0y + q0z + q1x + q1y + q1z + r1 + r2
+        if not (acc - acc == 0.0) or r1 < 0.0 or r2 < 0.0:
+            if bad < 0:
+                bad = i
+            continue
+        dist[i] = capsule_capsule_scalar(
+            p0x, p0y, p0z, p1x, p1y, p1z, r1, q0x, q0y, q0z, q1x, q1y, q1z, r2, out, 9 * i, eps_len, eps_par
+        )
+    return bad
+
+
+def capsule_capsule(p0_A, p1_A, r_A, p0_B, p1_B, r_B, tol: Tolerances = DEFAULT_TOLERANCES) -> BatchProximity:
+    """Capsule-capsule signed distances: ``p*_A, p*_B : (..., 3) m``, ``r_A, r_B : (...) m``."""
+    arrs = [
+        (_arr(p0_A, "p0_A", (3,), False), (3,)), (_arr(p1_A, "p1_A", (3,), False), (3,)), (_arr(r_A, "r_A", (), False), ()),
+        (_arr(p0_B, "p0_B", (3,), False), (3,)), (_arr(p1_B, "p1_B", (3,), False), (3,)), (_arr(r_B, "r_B", (), False), ()),
+    ]
+    lead, n, (a0, a1, ra, b0, b1, rb) = _flat(arrs)
+    dist = np.empty(n)
+    out = np.empty(9 * n)
+    bad = _capsule_capsule_loop(a0, a1, ra, b0, b1, rb, dist, out, tol.length, tol.parallel)
+    _raise_bad(bad, "NaN or infinite coordinate or radius, or a negative radius")
+    return _result(lead, dist, out)
+
+
+def sphere_sphere(c_A, r_A, c_B, r_B, tol: Tolerances = DEFAULT_TOLERANCES) -> BatchProximity:
+    """Sphere-sphere signed distances: ``c_A, c_B : (..., 3) m``, ``r_A, r_B : (...) m``."""
+    cA = _arr(c_A, "c_A", (3,))
+    cB = _arr(c_B, "c_B", (3,))
+    arrs = [(cA, (3,)), (_radius(r_A, "r_A"), ()), (cB, (3,)), (_radius(r_B, "r_B"), ())]
+    lead, n, (a, ra, b, rb) = _flat(arrs)
+    dist = np.empty(n)
+    out = np.empty(9 * n)
+    bad = _capsule_capsule_loop(a, a, ra, b, b, rb, dist, out, tol.length, tol.parallel)
+    _raise_bad(bad, "NaN or infinite coordinate or radius, or a negative radius")
+    return _result(lead, dist, out)
+
+
+@njit(cache=True)
+def _capsule_box_loop(a0, a1, ra, c, h, R, dist, out, eps_len, eps_par, offset):  # pragma: no cover
+    """Returns the index of the first pair with a non-finite input or a bad radius/extent, or -1."""
+    bad = -1
+    for i in range(dist.shape[0]):
+        acc = ra[i]
+        for q in range(3):
+            acc += a0[i, q] + a1[i, q] + c[i, q] + h[i, q] + R[i, q, 0] + R[i, q, 1] + R[i, q, 2]
+        if not (acc - acc == 0.0) or ra[i] < 0.0 or h[i, 0] <= 0.0 or h[i, 1] <= 0.0 or h[i, 2] <= 0.0:
+            if bad < 0:
+                bad = i
+            continue
+        dist[i] = capsule_box_scalar(
+            a0[i, 0], a0[i, 1], a0[i, 2], a1[i, 0], a1[i, 1], a1[i, 2], ra[i],
+            c[i, 0], c[i, 1], c[i, 2], h[i, 0], h[i, 1], h[i, 2],
+            R[i, 0, 0], R[i, 0, 1], R[i, 0, 2], R[i, 1, 0], R[i, 1, 1], R[i, 1, 2],
+            R[i, 2, 0], R[i, 2, 1], R[i, 2, 2], out, 9 * i, eps_len, eps_par, offset,
+        )
+    return bad
+
+
+def capsule_box(p0, p1, r, center, half_extents, rotation, tol: Tolerances = DEFAULT_TOLERANCES) -> BatchProximity:
+    """Capsule (A) - box (B) signed distances.
+
+    ``p0, p1 : (..., 3) m``; ``r : (...) m``; ``center, half_extents : (..., 3) m``;
+    ``rotation : (..., 3, 3)`` R_WB (columns are the box axes; trusted to be rotations).
+    """
+    arrs = [
+        (_arr(p0, "p0", (3,), False), (3,)), (_arr(p1, "p1", (3,), False), (3,)), (_arr(r, "r", (), False), ()),
+        (_arr(center, "center", (3,), False), (3,)), (_arr(half_extents, "half_extents", (3,), False), (3,)),
+        (_arr(rotation, "rotation", (3, 3), False), (3, 3)),
+    ]
+    lead, n, (a0, a1, ra, c, hh, R) = _flat(arrs)
+    dist = np.empty(n)
+    out = np.empty(9 * n)
+    bad = _capsule_box_loop(a0, a1, ra, c, hh, R, dist, out, tol.length, tol.parallel, tol.penetration_witness_offset)
+    _raise_bad(bad, "NaN or infinite input, a negative radius or a half extent <= 0")
+    return _result(lead, dist, out)
+
+
+@njit(cache=True)
+def _capsule_convex_loop(
+    a0, a1, ra, hull_of, pv, po, fv, fo, ev, eo, rb, dist, out, status, eps_len, eps_par, gjk_eps, max_iter, offset
+):  # pragma: no cover
+    work = np.empty(GJK_WORK_SIZE)
+    seg = np.empty((2, 3))
+    no_faces = np.zeros((0, 3))
+    edge = np.empty((1, 3))
+    for i in range(dist.shape[0]):
+        k = hull_of[i]
+        for q in range(3):
+            seg[0, q] = a0[i, q]
+            seg[1, q] = a1[i, q]
+        ex = a1[i, 0] - a0[i, 0]
+        ey = a1[i, 1] - a0[i, 1]
+        ez = a1[i, 2] - a0[i, 2]
+        le = np.sqrt(ex * ex + ey * ey + ez * ez)
+        if le > eps_len:
+            edge[0, 0] = ex / le
+            edge[0, 1] = ey / le
+            edge[0, 2] = ez / le
+            ea = edge
+            pa = seg
+        else:
+            ea = no_faces
+            pa = seg[0:1]
+        d, s = convex_convex_at(
+            pa, no_faces, ea, ra[i], pv[po[k]:po[k + 1]], fv[fo[k]:fo[k + 1]], ev[eo[k]:eo[k + 1]], rb[k],
+            out, 9 * i, work, eps_len, eps_par, gjk_eps, max_iter, offset,
+        )
+        dist[i] = d
+        if s == GJK_NOT_CONVERGED:
+            status[0] = s
+
+
+def capsule_convex(p0, p1, r, hulls, tol: Tolerances = DEFAULT_TOLERANCES) -> BatchProximity:
+    """Capsule (A) - convex polytope (B) signed distances (GJK; SAT for depth).
+
+    ``p0, p1 : (..., 3) m``; ``r : (...) m``.  ``hulls`` is one ConvexPolyhedron / Prism / Box /
+    Polygon (every capsule against it) or a sequence of ``H`` of them, in which case the
+    capsules' leading axes broadcast against ``(H,)``: pair ``i`` is capsule ``i`` with hull ``i``.
+    """
+    kinds = (ConvexPolyhedron, Prism, Box, Polygon)
+    many = not isinstance(hulls, kinds)
+    hs: Sequence = list(hulls) if many else [hulls]
+    for j, h in enumerate(hs):
+        if not isinstance(h, kinds):
+            raise GeometryError(f"hulls[{j}]: expected a ConvexPolyhedron, Prism, Box or Polygon, got {type(h).__name__}")
+    arrs = [(_arr(p0, "p0", (3,)), (3,)), (_arr(p1, "p1", (3,)), (3,)), (_radius(r, "r"), ())]
+    if many:
+        arrs.append((np.arange(len(hs), dtype=np.float64), ()))
+    lead, n, flat = _flat(arrs)
+    a0, a1, ra = flat[:3]
+    hull_of = flat[3].astype(np.int64) if many else np.zeros(n, dtype=np.int64)
+    pv = np.ascontiguousarray(np.concatenate([h._sat[0] for h in hs]))
+    fv = np.ascontiguousarray(np.concatenate([h._sat[1] for h in hs]))
+    ev = np.ascontiguousarray(np.concatenate([h._sat[2] for h in hs]))
+    po = np.concatenate([[0], np.cumsum([len(h._sat[0]) for h in hs])]).astype(np.int64)
+    fo = np.concatenate([[0], np.cumsum([len(h._sat[1]) for h in hs])]).astype(np.int64)
+    eo = np.concatenate([[0], np.cumsum([len(h._sat[2]) for h in hs])]).astype(np.int64)
+    rb = np.array([h._sat[3] for h in hs])
+    dist = np.empty(n)
+    out = np.empty(9 * n)
+    status = np.zeros(1, dtype=np.int64)
+    _capsule_convex_loop(
+        a0, a1, ra, hull_of, pv, po, fv, fo, ev, eo, rb, dist, out, status, tol.length, tol.parallel,
+        tol.gjk_epsilon, tol.gjk_max_iterations, tol.penetration_witness_offset,
+    )
+    if status[0] == GJK_NOT_CONVERGED:
+        raise GeometryError(f"capsule_convex: GJK did not converge in {tol.gjk_max_iterations} iterations")
+    return _result(lead, dist, out)
+
+
+@njit(cache=True)
+def _box_box_loop(ca, ha, Ra, cb, hb, Rb, res, eps_par):  # pragma: no cover
+    for i in range(res.shape[0]):
+        res[i] = box_box_overlap_scalar(
+            ca[i, 0], ca[i, 1], ca[i, 2], ha[i, 0], ha[i, 1], ha[i, 2],
+            Ra[i, 0, 0], Ra[i, 0, 1], Ra[i, 0, 2], Ra[i, 1, 0], Ra[i, 1, 1], Ra[i, 1, 2], Ra[i, 2, 0], Ra[i, 2, 1], Ra[i, 2, 2],
+            cb[i, 0], cb[i, 1], cb[i, 2], hb[i, 0], hb[i, 1], hb[i, 2],
+            Rb[i, 0, 0], Rb[i, 0, 1], Rb[i, 0, 2], Rb[i, 1, 0], Rb[i, 1, 1], Rb[i, 1, 2], Rb[i, 2, 0], Rb[i, 2, 1], Rb[i, 2, 2],
+            eps_par,
+        )
+
+
+def box_box_overlap(
+    center_A, half_extents_A, rotation_A, center_B, half_extents_B, rotation_B, tol: Tolerances = DEFAULT_TOLERANCES
+) -> np.ndarray:
+    """JPL division-free OBB overlap test: ``(...) bool``, True where the boxes overlap or touch.
+
+    ``center_*, half_extents_* : (..., 3) m``; ``rotation_* : (..., 3, 3)`` R_W* (columns are axes).
+    """
+    arrs = [
+        (_arr(center_A, "center_A", (3,)), (3,)), (_arr(half_extents_A, "half_extents_A", (3,)), (3,)),
+        (_arr(rotation_A, "rotation_A", (3, 3)), (3, 3)), (_arr(center_B, "center_B", (3,)), (3,)),
+        (_arr(half_extents_B, "half_extents_B", (3,)), (3,)), (_arr(rotation_B, "rotation_B", (3, 3)), (3, 3)),
+    ]
+    lead, n, (ca, ha, Ra, cb, hb, Rb) = _flat(arrs)
+    res = np.empty(n, dtype=np.bool_)
+    _box_box_loop(ca, ha, Ra, cb, hb, Rb, res, tol.parallel)
+    return res.reshape(lead)
