@@ -29,3 +29,5 @@ def main() -> None:
 # Each command lives in its own module and registers itself on ``main``.
 from . import _distance  # noqa: E402,F401
 from . import _console  # noqa: E402,F401
+from . import _info  # noqa: E402,F401
+from . import _fk  # noqa: E402,F401

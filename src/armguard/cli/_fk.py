@@ -1,0 +1,60 @@
+"""``armguard fk SCENE --q ...``: the world poses of a robot's links at a configuration."""
+
+from __future__ import annotations
+
+import click
+import numpy as np
+
+from .._errors import SceneError
+from . import main
+
+
+@main.command("fk")
+@click.argument("scene")
+@click.option("--q", "q_text", default=None,
+              help="Joint values, comma- or space-separated (default: home). Revolute in rad, or deg with --deg; prismatic in m.")
+@click.option("--robot", "robot_name", default=None, help="Robot of the scene (default: the only or first robot).")
+@click.option("--deg", is_flag=True, help="--q gives revolute joints in degrees; rpy is printed in degrees.")
+def fk_cmd(scene: str, q_text: str | None, robot_name: str | None, deg: bool) -> None:
+    """Print the world pose (xyz in m, rpy) of every link of a robot of SCENE at --q."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from ..kinematics import xyz_rpy_from_pose
+    from ..scene import load_scene
+
+    s = load_scene(scene)
+    if not s.robots:
+        raise SceneError(f"scene {s.name!r} has no robot")
+    name = robot_name or next(iter(s.robots))
+    if name not in s.robots:
+        raise SceneError(f"--robot: unknown robot {name!r}; robots are {list(s.robots)}")
+    robot = s.robots[name]
+    if q_text is None:
+        q = s.home(name)
+    else:
+        try:
+            vals = [float(x) for x in q_text.replace(",", " ").split()]
+        except ValueError:
+            raise SceneError(f"--q: expected numbers, got {q_text!r}") from None
+        if len(vals) != robot.n_joints:
+            raise SceneError(f"--q: robot {name!r} has {robot.n_joints} joints {list(robot.joint_names)}, got {len(vals)} values")
+        q = np.array(vals)
+        if deg:
+            rev = np.array([jt.value == "revolute" for jt in robot.joint_types])
+            q = np.where(rev, np.radians(q), q)
+    q = robot.check_q(q)
+    X = robot.forward_kinematics(q)
+    unit = "deg" if deg else "rad"
+    t = Table(title=f"{s.name}: robot {name}, link frames in W (xyz m, rpy {unit})")
+    for col in ("link", "x", "y", "z", "roll", "pitch", "yaw"):
+        t.add_column(col, justify="right" if col != "link" else "left")
+    for i, ln in enumerate(robot.link_names):
+        xyz, rpy = xyz_rpy_from_pose(X[i])
+        if deg:
+            rpy = np.degrees(rpy)
+        t.add_row(ln, *(f"{v: .6f}" for v in xyz), *(f"{v: .4f}" for v in rpy))
+    outside = [robot.joint_names[k] for k in range(robot.n_joints) if not (robot.lower[k] <= q[k] <= robot.upper[k])]
+    Console().print(t)
+    if outside:
+        click.secho(f"warning: joints outside their limits: {', '.join(outside)}", fg="yellow", err=True)

@@ -1,0 +1,110 @@
+"""``armguard info SCENE``: what a scene holds, and its compiled size beside Hermes's database."""
+
+from __future__ import annotations
+
+import math
+
+import click
+
+from . import main
+
+# Sciomachen & Magnani (seed 001): "The memory required for the database, in the case of the
+# Hermes model described above, is about 3 kbytes"; "the memory available on board is about 40 kbytes".
+HERMES_DATABASE_BYTES = 3 * 1024
+HERMES_MEMORY_BYTES = 40 * 1024
+
+
+def _shape_counts(shape) -> tuple[int, int]:
+    """(faces, vertices) of a shape, faces as merged planar polygons (0 faces for spheres and capsules)."""
+    from ..geometry import Box, ConvexPolyhedron, Polygon, Prism
+
+    if isinstance(shape, (Box, Prism)):
+        p = shape.as_polyhedron()
+        return len(p.faces), len(p.vertices)
+    if isinstance(shape, ConvexPolyhedron):
+        return len(shape.faces), len(shape.vertices)
+    if isinstance(shape, Polygon):
+        return 1, len(shape.vertices)
+    return 0, len(shape.core_points)
+
+
+def _limit(v: float, revolute: bool, deg: bool) -> str:
+    if math.isinf(v):
+        return "-inf" if v < 0 else "inf"
+    return f"{math.degrees(v):.1f}°" if revolute and deg else (f"{v:.4g} rad" if revolute else f"{v:.4g} m")
+
+
+@main.command("info")
+@click.argument("scene")
+@click.option("--rad", is_flag=True, help="Print revolute joint limits in radians (default: degrees).")
+def info_cmd(scene: str, rad: bool) -> None:
+    """Describe SCENE (a built-in name, a .yaml scene or a .urdf): bodies, robots, joints, pairs, size."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from ..scene import compile_scene, load_scene
+
+    s = load_scene(scene)
+    c = compile_scene(s)
+    con = Console()
+    con.print(f"[bold]{s.name}[/bold]: {s.description}" if s.description else f"[bold]{s.name}[/bold]")
+
+    t = Table(title="bodies")
+    for col in ("body", "category", "shapes", "faces", "vertices"):
+        t.add_column(col)
+    tot = [0, 0, 0]
+    for b in s.bodies.values():
+        f = v = 0
+        for sh in b.shapes:
+            ff, vv = _shape_counts(sh)
+            f, v = f + ff, v + vv
+        tot = [tot[0] + len(b.shapes), tot[1] + f, tot[2] + v]
+        t.add_row(b.name, b.category, str(len(b.shapes)), str(f), str(v))
+    t.add_row("[bold]total[/bold]", "", *(str(x) for x in tot))
+    con.print(t)
+
+    for rname, robot in s.robots.items():
+        t = Table(title=f"robot {rname}: {robot.n_joints} joints, {len(robot.link_names)} links")
+        for col in ("joint", "type", "lower", "upper", "max velocity", "home"):
+            t.add_column(col)
+        home = s.home(rname)
+        for k, j in enumerate(robot.joint_names):
+            rev = robot.joint_types[k].value == "revolute"
+            vel = robot.max_velocity[k]
+            vtxt = "inf" if math.isinf(vel) else (f"{math.degrees(vel):.1f}°/s" if rev and not rad else f"{vel:.4g}/s")
+            t.add_row(j, robot.joint_types[k].value, _limit(robot.lower[k], rev, not rad),
+                      _limit(robot.upper[k], rev, not rad), vtxt, _limit(home[k], rev, not rad))
+        for cp in robot.couplings:
+            terms = " ".join(f"{v:+g}·{k}" for k, v in cp.terms.items())
+            t.add_row(cp.joint, "coupled", f"= {cp.offset:+.4g} {terms}", "", "", "")
+        con.print(t)
+        shaped = [ln for ln in robot.link_names if robot.link_shapes.get(ln)]
+        con.print(f"  links with shapes: {', '.join(shaped) or 'none'}")
+
+    if s.payloads:
+        for p in s.payloads.values():
+            con.print(f"payload [bold]{p.name}[/bold]: {len(p.shapes)} shapes on {p.robot}/{p.link}")
+    if s.workspace is not None:
+        con.print(f"workspace box: lo {s.workspace.lo.tolist()} hi {s.workspace.hi.tolist()} m")
+
+    t = Table(title="pair filters and checked pairs")
+    t.add_column("what")
+    t.add_column("value")
+    t.add_row("adjacent links excluded", str(s.exclude_adjacent))
+    for rname, pairs in s.self_pairs.items():
+        t.add_row(f"listed link pairs of {rname}", ", ".join(f"{a}-{b}" for a, b in sorted(pairs)))
+    for p in sorted(sorted(x) for x in s.disabled_pairs):
+        t.add_row("disabled", " - ".join(p))
+    for cat, pairs in s.allowed_pairs_by_category().items():
+        if pairs:
+            t.add_row(f"checked {cat.value}", str(len(pairs)))
+    con.print(t)
+    if s.trajectories:
+        con.print("trajectories: " + ", ".join(f"{n} ({tr.duration:.2f} s)" for n, tr in s.trajectories.items()))
+    if s.canned_tests:
+        con.print(f"canned tests: {len(s.canned_tests)} ({', '.join(s.canned_tests)})")
+    con.print(
+        f"compiled size: {c.nbytes} bytes ({c.n_elements} elements, {c.n_faces} faces, {len(c.pair_a)} owner pairs, "
+        f"{len(c.elem_pair_a)} element pairs); Hermes's on-board database: ~{HERMES_DATABASE_BYTES} bytes "
+        f"in {HERMES_MEMORY_BYTES} bytes of memory"
+    )
