@@ -1,0 +1,198 @@
+"""The built-in seed systems: counts against their papers, loading, FK, limits, clearance at home.
+
+Golden numbers: Hermes 8 convex polyhedra / 54 faces / 76 vertices (Sciomachen & Magnani, seed
+001); Ranger's module make-up and ten canned tests (Bon & Seraji, seed 000); the PUMA 560
+standard DH table and limits (Corke's puma560, as cited in the file).  Clearance at home is
+measured with python-fcl, an independent library.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from armguard.geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere
+from armguard.models import builtin_names, builtin_path
+from armguard.scene import PairCategory, compile_scene, load_scene
+
+NAMES = builtin_names()
+
+
+@pytest.fixture(scope="module")
+def scenes():
+    return {n: load_scene(n) for n in NAMES}
+
+
+def _counts(shape):
+    p = shape.as_polyhedron() if isinstance(shape, (Box, Prism)) else shape
+    return len(p.faces), len(p.vertices)
+
+
+def test_hermes_is_8_polyhedra_54_faces_76_vertices(scenes):
+    s = scenes["hermes"]
+    shapes = [sh for b in s.bodies.values() for sh in b.shapes]
+    assert len(shapes) == 8
+    assert all(isinstance(sh, (Box, Prism, ConvexPolyhedron)) for sh in shapes)
+    faces = sum(_counts(sh)[0] for sh in shapes)
+    verts = sum(_counts(sh)[1] for sh in shapes)
+    assert (faces, verts) == (54, 76)
+    c = compile_scene(s)
+    assert c.n_faces == 54
+    per_body = {b.name: [_counts(sh) for sh in b.shapes] for b in s.bodies.values()}
+    assert per_body["tail"] == [(9, 14)]  # a prism with 7 base sides
+    assert per_body["cockpit"] == [(9, 14)]
+    assert per_body["cargo_bay"] == [(6, 8)] * 3  # three 4-sided prisms
+
+
+def test_hermes_arm_and_pairs(scenes):
+    s = scenes["hermes"]
+    hera = s.robots["hera"]
+    assert hera.n_joints == 6
+    X = hera.forward_kinematics(np.zeros(6))
+    # link 5 has zero length (seed 001) and no shape
+    assert np.linalg.norm(X[hera.link_index("link5"), :3, 3] - X[hera.link_index("link4"), :3, 3]) == pytest.approx(0.0, abs=1e-12)
+    assert not hera.link_shapes["link5"]
+    # about 10 m stretched out: sum of the segment lengths from the base to the tool
+    pts = X[:, :3, 3]
+    assert 9.5 <= float(np.sum(np.linalg.norm(np.diff(pts, axis=0), axis=1))) <= 11.0
+    arm_arm = s.allowed_pairs_by_category()[PairCategory.ARM_ARM]
+    listed = {tuple(sorted((a.split("/")[1], b.split("/")[1]))) for a, b in arm_arm}
+    assert listed == {("link1", "link3"), ("link1", "link4"), ("link1", "link6"), ("link2", "link4"),
+                      ("link2", "link6"), ("link3", "link6")}
+    assert "payload" in s.payloads
+    assert len(s.trajectories) >= 2
+
+
+def test_ranger_make_up(scenes):
+    s = scenes["ranger"]
+    assert set(s.robots) == {"left_arm", "right_arm", "camera_arm", "grapple_arm"}
+    assert s.robots["left_arm"].n_joints == 7 and s.robots["right_arm"].n_joints == 7
+    assert isinstance(s.bodies["manipulator_module"].shapes[0], Box)
+    he = s.bodies["manipulator_module"].shapes[0].half_extents
+    assert np.allclose(he, he[0])  # cubical
+    assert s.bodies["propulsion_module"].shapes[0].n_sides == 8  # octagonal
+    assert len(s.bodies["electronics_module"].shapes[0].faces) == 6  # tapered square section
+    assert all(isinstance(s.bodies[n].shapes[0], Polygon) for n in ("left_solar_array", "right_solar_array"))
+    for arm in ("left_arm", "right_arm"):
+        assert all(isinstance(sh, Capsule) for shs in s.robots[arm].link_shapes.values() for sh in shs)
+    assert all(b.category == "vehicle" for b in s.bodies.values())
+    assert s.workspace is not None
+    assert np.allclose(s.workspace.center[1:], 0.0)  # centred on the manipulator module in y and z
+    assert len(s.canned_tests) == 10
+
+
+def test_ranger_canned_tests_are_trapezoids_within_limits(scenes):
+    s = scenes["ranger"]
+    for ct in s.canned_tests.values():
+        assert set(ct.setup) == set(s.robots)
+        traj = ct.trajectory(s)
+        robot = s.robots[ct.robot]
+        _, q = traj.sample(frequency=20.0)
+        assert np.all(q >= robot.lower - 1e-12) and np.all(q <= robot.upper + 1e-12)
+        assert np.allclose(q[0], ct.setup[ct.robot]) and np.allclose(q[-1], ct.goal)
+        v = traj.velocity(np.array([0.0, 0.5 * traj.duration, traj.duration]))
+        assert np.allclose(v[0], 0.0) and np.allclose(v[-1], 0.0) and np.any(np.abs(v[1]) > 0)
+
+
+def test_puma560_published_dh_and_limits(scenes):
+    s = scenes["puma560"]
+    r = s.robots["puma560"]
+    conv, rows = r.dh
+    assert conv == "standard"
+    assert [row.a for row in rows] == [0.0, 0.4318, 0.0203, 0.0, 0.0, 0.0]
+    assert [row.d for row in rows] == [0.0, 0.0, 0.15005, 0.4318, 0.0, 0.0]
+    assert np.allclose(np.degrees([row.alpha for row in rows]), [90, 0, -90, 90, -90, 0])
+    assert np.allclose(np.degrees(r.lower), [-160, -45, -225, -110, -100, -266])
+    assert np.allclose(np.degrees(r.upper), [160, 225, 45, 170, 100, 266])
+    assert {"table", "block_a", "block_b", "cylinder_a", "cylinder_b"} <= set(s.bodies)
+
+
+def test_puma560_pick_and_place_reaches_the_cylinders(scenes):
+    s = scenes["puma560"]
+    r = s.robots["puma560"]
+    traj = s.trajectories["pick_and_place"]
+    X = r.forward_kinematics(traj.waypoints)[:, r.link_index("tool")]
+    a = s.bodies["cylinder_a"].shapes[0].center
+    b = s.bodies["cylinder_b"].shapes[0].center
+    grasp, place = X[2, :3, 3], X[5, :3, 3]
+    assert np.linalg.norm(grasp[:2] - a[:2]) < 2e-3  # above the centre of cylinder_a (rounded joint values)
+    assert np.linalg.norm(place[:2] - b[:2]) < 2e-3
+    assert np.allclose(X[2, :3, 2], [0, 0, -1], atol=1e-3)  # the hand points down
+
+
+def test_gmf_parallelogram_keeps_the_flange_level(scenes):
+    s = scenes["gmf_s480"]
+    r = s.robots["gmf_s480"]
+    assert r.joint_names == ("j1", "j2", "j3", "j5") and len(r.couplings) == 1
+    rng = np.random.default_rng(1)
+    q = rng.uniform(r.lower, r.upper, size=(50, 4))
+    z = r.forward_kinematics(q)[:, -1, :3, 2]
+    assert np.allclose(z, [0.0, 0.0, -1.0], atol=1e-12)
+
+
+def test_rover_make_up(scenes):
+    s = scenes["rover"]
+    assert s.robots["arm"].n_joints == 5
+    assert len(s.bodies["wheels"].shapes) == 6 and set(s.bodies) >= {"chassis", "mast"}
+
+
+@pytest.mark.parametrize("name", NAMES, ids=NAMES)
+def test_each_scene_loads_fk_runs_and_trajectories_within_limits(scenes, name):
+    s = scenes[name]
+    q = s.default_q()
+    items = s.shapes_at(q)
+    assert items and all(np.all(np.isfinite(it.shape.aabb()[0])) for it in items)
+    for rname, robot in s.robots.items():
+        X = robot.forward_kinematics(np.stack([q[rname]] * 3))
+        assert X.shape == (3, len(robot.link_names), 4, 4)
+    for tname, traj in s.trajectories.items():
+        robot = s.robots[traj.robot_name]
+        _, qs = traj.sample(frequency=10.0)
+        assert np.all(qs >= robot.lower - 1e-12) and np.all(qs <= robot.upper + 1e-12), tname
+    assert "assumed" in builtin_path(name).read_text()
+
+
+@pytest.mark.parametrize("name", NAMES, ids=NAMES)
+def test_home_is_clear_by_python_fcl(scenes, name):
+    fcl = pytest.importorskip("fcl")
+    s = scenes[name]
+    by = {}
+    for it in s.shapes_at():
+        by.setdefault(it.owner, []).append(_fcl_object(fcl, it.shape))
+    req = fcl.DistanceRequest(enable_signed_distance=True)
+    worst = math.inf
+    for p in s.allowed_pairs():
+        for a in by[p.a]:
+            for b in by[p.b]:
+                worst = min(worst, fcl.distance(a, b, req, fcl.DistanceResult()))
+    assert worst > 0.0
+
+
+def _fcl_object(fcl, shape):
+    if isinstance(shape, Sphere):
+        return fcl.CollisionObject(fcl.Sphere(shape.radius), fcl.Transform(shape.center))
+    if isinstance(shape, Capsule):
+        d = shape.p1 - shape.p0
+        L = float(np.linalg.norm(d))
+        z = d / L
+        x = np.cross(z, [1.0, 0.0, 0.0] if abs(z[0]) < 0.9 else [0.0, 1.0, 0.0])
+        x /= np.linalg.norm(x)
+        R = np.column_stack([x, np.cross(z, x), z])
+        return fcl.CollisionObject(fcl.Capsule(shape.radius, L), fcl.Transform(R, 0.5 * (shape.p0 + shape.p1)))
+    if isinstance(shape, Box):
+        return fcl.CollisionObject(fcl.Box(*(2 * shape.half_extents)), fcl.Transform(shape.rotation, shape.center))
+    if isinstance(shape, Polygon):
+        m = fcl.BVHModel()
+        v = np.asarray(shape.vertices)
+        tris = np.array([[0, i, i + 1] for i in range(1, len(v) - 1)])
+        m.beginModel(len(v), len(tris))
+        m.addSubModel(v, tris)
+        m.endModel()
+        return fcl.CollisionObject(m, fcl.Transform())
+    poly = shape.as_polyhedron() if isinstance(shape, Prism) else shape
+    faces = []
+    for f in poly.faces:
+        faces.extend([len(f), *map(int, f)])
+    return fcl.CollisionObject(fcl.Convex(np.asarray(poly.vertices), len(poly.faces), np.array(faces)), fcl.Transform())
