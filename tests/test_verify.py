@@ -1,0 +1,326 @@
+"""Trajectory verification: Hermes's numbers, the lever-arm bound, certified vs dense reference, outputs."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from armguard import DEFAULT_TOLERANCES, VerificationError
+from armguard.geometry import Box, Capsule, Sphere
+from armguard.kinematics import Trajectory
+from armguard.scene import Scene
+from armguard.verify import (
+    ClearanceModel,
+    StoppingDistance,
+    VerificationStatus,
+    discretisation_error,
+    verify,
+)
+from armguard.verify._motion import chain_bounds
+
+from _verify_fixtures import planar_arm, spatial_arm, thin_scene, thin_suite
+
+
+# --------------------------------------------------------------------------- Hermes's numbers
+@pytest.mark.parametrize(
+    ("speed_mm_s", "ed_mm"),
+    [(50, 29), (100, 59), (200, 118)],
+    ids=["50mm/s", "100mm/s", "200mm/s"],
+)
+def test_hermes_discretisation_error_table(speed_mm_s, ed_mm):
+    # Hermes (001_…, §4, eq. 4-2): Ed = v / f at the 1.7 Hz its 18 kFLOPS allowed.
+    ed = discretisation_error(speed_mm_s * 1e-3, 1.7)
+    assert round(float(ed) * 1e3) == ed_mm
+
+
+def test_hermes_stopping_distance_ten_ranges_up_to_100_mm():
+    sd = StoppingDistance.hermes(max_speed=0.2)  # 10 ranges, 100 mm at the top (Hermes §4)
+    assert len(sd.table) == 10 and sd.max_distance == pytest.approx(0.1)
+    speeds = np.linspace(0.0, 0.2, 2001)
+    values = np.array([sd.at(v) for v in speeds])
+    assert np.all(np.diff(values) >= 0)
+    # the step function never under-estimates the linear law it steps, and errs by at most 10 mm
+    linear = 0.1 * speeds / 0.2
+    assert np.all(values >= linear - 1e-12)
+    assert np.max(values - linear) <= 0.01 + 1e-12
+    assert sd.at(0.02) == pytest.approx(0.01) and sd.at(0.0201) == pytest.approx(0.02)
+    with pytest.raises(VerificationError):
+        sd.at(0.25)
+
+
+def test_stopping_distance_by_speed_and_mass():
+    sd = StoppingDistance((0.0, 0.1, 0.2), (0.0, 10.0, 100.0), ((0.02, 0.04), (0.05, 0.1)))
+    assert sd.at(0.05, 5.0) == 0.02 and sd.at(0.05, 50.0) == 0.04 and sd.at(0.15, 50.0) == 0.1
+    with pytest.raises(VerificationError):
+        StoppingDistance((0.0, 0.1, 0.2), (0.0, 1.0), ((0.05,), (0.02,)))  # decreasing with speed
+    with pytest.raises(VerificationError):
+        sd.at(float("nan"))
+
+
+# --------------------------------------------------------------------------- the lever-arm bound
+@pytest.mark.parametrize("convention", ["standard", "modified"], ids=["dh-standard", "dh-modified"])
+def test_lever_arm_bound_holds_along_random_joint_lines(convention):
+    """|p(s) - p(0)| <= s * |dq| . lever for every core point of every link (coupled and prismatic joints included)."""
+    robot = spatial_arm(convention)
+    sc = Scene("lever")
+    sc.add_robot(robot)
+    model = ClearanceModel(sc, source="reference")
+    rng = np.random.default_rng(7)
+    lo, hi = robot.lower, robot.upper
+    s = np.linspace(0.0, 1.0, 41)
+    worst = 0.0
+    for _ in range(25):
+        q0 = rng.uniform(lo, hi)
+        q1 = rng.uniform(lo, hi)
+        dq = q1 - q0
+        bound = model.lever[:-1] @ np.abs(dq)  # per part
+        pts0 = _core_points_by_owner(sc, q0)
+        for sk in s[1:]:
+            pts = _core_points_by_owner(sc, q0 + sk * dq)
+            for i, owner in enumerate(model.parts):
+                disp = float(np.max(np.linalg.norm(pts[owner] - pts0[owner], axis=1)))
+                assert disp <= sk * bound[i] + 1e-12, (owner, disp, sk * bound[i])
+                worst = max(worst, disp / (sk * bound[i]))
+    assert worst > 0.2  # the bound is not vacuous: it is within a small factor of real motion
+
+
+def _core_points_by_owner(sc, q):
+    out = {}
+    for it in sc.shapes_at(q):
+        out.setdefault(it.owner, []).append(np.asarray(it.shape.core_points))
+    return {k: np.vstack(v) for k, v in out.items()}
+
+
+def test_chain_bounds_of_planar_arm_closed_form():
+    """Planar 3R arm: joint j's lever for link k is the reach from joint j's axis to link k's far end."""
+    cb = chain_bounds(planar_arm())
+    a = (0.5, 0.4, 0.3)
+    for j in range(3):
+        for k in range(j, 3):
+            reach = sum(a[j : k + 1])  # the origin of link k+1 sits at the far end of link k
+            assert cb.A[j, k + 1] == pytest.approx(reach, rel=1e-6)
+    assert np.all(cb.P == 0.0)
+
+
+# --------------------------------------------------------------------------- certified never misses
+def _dense_first_collision(model, traj, n_per_segment=3000):
+    """Very dense reference: the first knot-to-knot sample with distance <= 0 (returns its s along the whole path)."""
+    segs = list(traj.segments())
+    for si, (_, _, q0, q1) in enumerate(segs):
+        for s in np.linspace(0.0, 1.0, n_per_segment + 1):
+            d, _, _ = model.reference_distances(q0 + s * (q1 - q0))
+            if d.min() <= 0.0:
+                return si + s
+    return None
+
+
+def test_certified_never_misses_what_a_dense_reference_finds_and_sampled_does_miss():
+    rng = np.random.default_rng(2024)
+    misses_sampled = 0
+    found_dense = 0
+    for sc, traj in thin_suite(rng, 45, n_obstacles=6):
+        model = ClearanceModel(sc, source="reference")
+        cert = verify(sc, traj, method="certified")
+        sampled = verify(sc, traj, method="sampled", joint_step=0.05)
+        dense = _dense_first_collision(model, traj, n_per_segment=800) if cert.status is not VerificationStatus.SAFE or not sampled.safe else None
+        if cert.safe:
+            # proven safe: the dense reference agrees and so does the sampled check
+            assert sampled.safe
+            assert cert.min_clearance_lower_bound > 0.0
+        else:
+            assert cert.status is VerificationStatus.COLLISION
+            c = cert.first_collision
+            assert c.distance <= DEFAULT_TOLERANCES.verify_contact
+            assert c.obstacle.startswith(("plate", "rod"))
+            d_real, _, _ = model.reference_distances(np.concatenate([c.q]))
+            assert d_real.min() <= DEFAULT_TOLERANCES.verify_contact + 1e-9  # a real contact, not a false alarm
+        if dense is not None:
+            found_dense += 1
+            assert cert.status is VerificationStatus.COLLISION, "certified mode missed a collision"
+            # the first collision is first: no later than the dense reference's first colliding sample
+            assert cert.first_collision.time <= dense * traj.duration + 1e-9
+            if sampled.safe:
+                misses_sampled += 1
+    assert found_dense >= 10
+    assert misses_sampled >= 1, "the suite should contain collisions a 0.05 rad sampled check misses"
+
+
+def test_certified_collision_is_real_and_first():
+    """A thin plate (2 mm) crossed by the tip between two 0.05 rad samples."""
+    sc = Scene("plate")
+    robot = planar_arm(radius=0.005)
+    sc.add_robot(robot)
+    # the tip sweeps a circle of radius 1.2 m; the plate stands across it at angle 0.525 rad
+    ang = 0.525
+    c = 1.2 * np.array([np.cos(ang), np.sin(ang), 0.0])
+    R = np.array([[np.cos(ang), -np.sin(ang), 0], [np.sin(ang), np.cos(ang), 0], [0, 0, 1.0]])
+    sc.add_body("plate", [Box(c, [0.01, 0.001, 0.1], R)])  # 2 mm thick along the tip's motion
+    traj = Trajectory.joint_interpolated(robot, [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]], profile="linear")
+    sampled = verify(sc, traj, method="sampled", joint_step=0.05)
+    assert sampled.safe  # the plate lies between the samples at 0.50 and 0.55 rad (24 mm clear of both)
+    cert = verify(sc, traj, method="certified")
+    assert cert.status is VerificationStatus.COLLISION
+    c = cert.first_collision
+    assert c.link == "link3" and c.obstacle == "plate" and c.check == "link-obstacle" and c.objects == ("arm", "obstacle")
+    # closed form: the tip capsule (radius 0.02) first touches the plate's near face
+    model = ClearanceModel(sc, source="reference")
+    d, _, _ = model.reference_distances(c.q)
+    assert abs(d.min()) <= 2e-6
+    assert c.q[0] < ang  # before the plate's centre line
+    assert c.feature is not None
+    assert c.time == pytest.approx(c.q[0], abs=1e-9)  # linear profile at 1 rad/s
+
+
+# --------------------------------------------------------------------------- the four checks
+def _hermes_like_scene():
+    sc = Scene("four")
+    robot = planar_arm()
+    sc.add_robot(robot, self_pairs=[("link1", "link3")])
+    sc.add_body("wall", [Box([0.0, -0.6, 0.0], [1.5, 0.01, 0.3])])
+    sc.attach_payload("cargo", "arm", "link3", [Capsule([0, 0, 0], [0.0, 0.0, 0.0], 0.05)])
+    return sc, robot
+
+
+def test_payload_obstacle_collision_reported_as_payload():
+    sc, robot = _hermes_like_scene()
+    traj = Trajectory.joint_interpolated(robot, [[0.0, 0.0, 0.0], [-1.2, 0.0, 0.0]], profile="linear")
+    r = verify(sc, traj)
+    assert r.status is VerificationStatus.COLLISION
+    c = r.first_collision
+    # the payload (5 cm ball at the tip) reaches the wall before the tip's 2 cm capsule
+    assert c.check == "payload-obstacle" and c.payload == "cargo" and c.obstacle == "wall"
+    assert c.objects == ("payload", "obstacle") and c.category == "payload"
+
+
+def test_link_link_only_listed_pairs_and_stopping_distance_growth():
+    sc, robot = _hermes_like_scene()
+    sc.remove_body("wall")
+    # fold link3 back onto link1 (listed pair 1-3)
+    traj = Trajectory.joint_interpolated(robot, [[0.0, 0.5, 0.0], [0.0, 2.6, 2.9]], profile="linear")
+    r = verify(sc, traj)
+    assert r.status is VerificationStatus.COLLISION
+    assert r.first_collision.check in ("link-link", "payload-link")
+    assert {r.first_collision.a, r.first_collision.b} & {"arm/link1", "arm/link3", "cargo"}
+
+
+@pytest.mark.parametrize(("sd", "safe"), [(0.03, True), (0.07, False)], ids=["sd30mm-safe", "sd70mm-collision"])
+def test_stopping_distance_grows_obstacles(sd, safe):
+    sc = Scene("pass")
+    robot = planar_arm()
+    sc.add_robot(robot)
+    # a rod 50 mm outside the tip's circle (tip capsule radius 0.02 m): clearance 50 mm
+    sc.add_body("rod", [Capsule([1.2 + 0.02 + 0.05 + 0.005, 0, -0.1], [1.275, 0, 0.1], 0.005)])
+    traj = Trajectory.joint_interpolated(robot, [[-0.5, 0.0, 0.0], [0.5, 0.0, 0.0]], profile="linear")
+    r = verify(sc, traj, stopping_distance=sd)
+    assert r.safe is safe
+    if safe:  # the true minimum (50 mm, at q = 0) lies between the proven lower bound and the sampled minimum
+        assert r.min_clearance_lower_bound - 1e-9 <= 0.05 <= r.min_clearance + 1e-9
+        assert r.min_clearance_lower_bound > sd
+    if not safe:
+        assert r.first_collision.distance <= sd + DEFAULT_TOLERANCES.verify_contact
+        assert r.stopping_distance == sd
+
+
+def test_step_function_stopping_distance_follows_speed():
+    sc = Scene("pass")
+    robot = planar_arm()
+    sc.add_robot(robot)
+    sc.add_body("rod", [Capsule([1.275, 0, -0.1], [1.275, 0, 0.1], 0.005)])  # 50 mm clearance
+    sd = StoppingDistance.hermes(max_speed=2.0, max_distance=0.1)
+    slow = Trajectory.joint_interpolated(robot, [[-0.5, 0, 0], [0.5, 0, 0]], profile="linear", times=[0.0, 10.0])
+    fast = Trajectory.joint_interpolated(robot, [[-0.5, 0, 0], [0.5, 0, 0]], profile="linear", times=[0.0, 1.0])
+    assert verify(sc, slow, stopping_distance=sd).safe
+    r = verify(sc, fast, stopping_distance=sd)
+    assert not r.safe and r.stopping_distance > 0.05
+
+
+# --------------------------------------------------------------------------- incomplete, errors
+def test_budget_exhausted_is_incomplete_never_safe():
+    rng = np.random.default_rng(3)
+    sc = thin_scene(rng)
+    robot = sc.robots["arm"]
+    traj = Trajectory.joint_interpolated(robot, [[0.0, 0.0, 0.0], [2.0, 1.0, 1.0]], profile="linear")
+    from dataclasses import replace
+
+    r = verify(sc, traj, tol=replace(DEFAULT_TOLERANCES, verify_max_evaluations=3))
+    assert r.status is VerificationStatus.INCOMPLETE and not r.safe
+    assert "budget" in r.reason and r.first_collision is None
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"stopping_distance": float("nan")},
+        {"stopping_distance": -0.1},
+        {"method": "exact"},
+        {"method": "sampled", "frequency": 0.0},
+        {"method": "sampled", "joint_step": float("inf")},
+        {"threshold": float("nan")},
+        {"robot": "nobody"},
+    ],
+    ids=["sd-nan", "sd-negative", "bad-method", "zero-frequency", "inf-step", "nan-threshold", "unknown-robot"],
+)
+def test_bad_arguments_raise(kwargs):
+    sc = Scene("x")
+    robot = planar_arm()
+    sc.add_robot(robot)
+    sc.add_body("ball", [Sphere([0.0, 2.0, 0.0], 0.1)])
+    traj = Trajectory.joint_interpolated(robot, [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]])
+    with pytest.raises(VerificationError):
+        verify(sc, traj, **kwargs)
+
+
+# --------------------------------------------------------------------------- outputs
+def test_report_outputs_json_summary_plot(tmp_path):
+    sc = Scene("out")
+    robot = planar_arm()
+    sc.add_robot(robot)
+    sc.add_body("ball", [Sphere([1.0, 0.5, 0.0], 0.1)])
+    traj = Trajectory.joint_interpolated(robot, [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    r = verify(sc, traj, stopping_distance=0.02, threshold=0.1, name="sweep")
+    assert r.status is VerificationStatus.COLLISION
+    d = json.loads(r.to_json())
+    assert d["status"] == "collision" and d["safe"] is False and d["trajectory"] == "sweep"
+    assert d["first_collision"]["obstacle"] == "ball" and len(d["first_collision"]["p_W"]) == 3
+    assert d["details"]["method"] == "certified"
+    p = r.save_json(tmp_path / "r.json")
+    assert json.loads(p.read_text())["first_collision"]["link"] == r.first_collision.link
+    text = r.summary()
+    assert "COLLISION" in text and "ball" in text and "first collision" in text
+    png = r.plot(tmp_path / "r.png")
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert set(r.profile.by_category) == {"arm", "environment"}
+    assert np.all(np.diff(r.profile.time) >= 0)
+
+
+def test_sampled_at_frequency_reports_ed():
+    sc = Scene("ed")
+    robot = planar_arm()
+    sc.add_robot(robot)
+    sc.add_body("ball", [Sphere([0.0, -2.0, 0.0], 0.1)])
+    traj = Trajectory.joint_interpolated(robot, [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]], profile="linear", times=[0.0, 2.0])
+    r = verify(sc, traj, method="sampled", frequency=1.7)
+    # fastest point: the bound is the chain's reach to link3's origin (1.2 m) plus link3's radius
+    # about that origin (0.3 m + 0.02 m capsule radius), at 0.5 rad/s; the true tip speed is 0.5 * 1.22
+    assert r.details.max_speed == pytest.approx(0.5 * 1.52, rel=1e-6)
+    assert r.details.max_speed >= 0.5 * 1.22
+    assert r.details.discretisation_error == pytest.approx(r.details.max_speed / 1.7)
+    assert r.safe and r.details.samples_evaluated >= 4
+    assert math.isinf(r.min_clearance_lower_bound) and r.min_clearance_lower_bound < 0
+
+
+def test_detector_and_reference_sources_agree():
+    rng = np.random.default_rng(11)
+    sc = thin_scene(rng, n_obstacles=4)
+    fast = ClearanceModel(sc, source="auto")
+    ref = ClearanceModel(sc, source="reference")
+    if fast.source != "detector":
+        pytest.skip("the detector offers no pair_distances")
+    for _ in range(200):
+        q = rng.uniform(-2.9, 2.9, 3)
+        d1, a1, b1 = fast.distances(q)
+        d2, a2, b2 = ref.distances(q)
+        np.testing.assert_allclose(d1, d2, atol=1e-9)
