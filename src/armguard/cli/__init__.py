@@ -31,3 +31,5 @@ from . import _distance  # noqa: E402,F401
 from . import _console  # noqa: E402,F401
 from . import _info  # noqa: E402,F401
 from . import _fk  # noqa: E402,F401
+from . import _verify  # noqa: E402,F401
+from . import _demo  # noqa: E402,F401

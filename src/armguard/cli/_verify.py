@@ -1,0 +1,97 @@
+"""``armguard verify SCENE TRAJECTORY...``: verify trajectories (certified or sampled) and write reports."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from . import main
+
+
+def resolve_trajectories(scene, specs):
+    """``(name, Trajectory)`` for each spec: a ``.yaml`` file, a canned trajectory or canned test of
+    the scene, or ``all`` (every canned trajectory of the scene)."""
+    from .._errors import VerificationError
+    from ..kinematics import Trajectory
+
+    out = []
+    for spec in specs:
+        p = Path(spec)
+        if spec == "all":
+            out.extend((n, t) for n, t in scene.trajectories.items())
+        elif p.suffix.lower() in (".yaml", ".yml") or p.exists():
+            out.append((p.stem, Trajectory.load_yaml(p)))
+        elif spec in scene.trajectories:
+            out.append((spec, scene.trajectories[spec]))
+        elif spec in scene.canned_tests:
+            out.append((spec, scene.canned_tests[spec].trajectory(scene)))
+        else:
+            names = sorted(scene.trajectories) + sorted(scene.canned_tests)
+            raise VerificationError(f"trajectory {spec!r}: not a .yaml file nor a canned trajectory of scene "
+                                    f"{scene.name!r} (it has: {', '.join(names) or 'none'}; or 'all')")
+    if not out:
+        raise VerificationError(f"scene {scene.name!r} has no canned trajectory")
+    return out
+
+
+@main.command("verify")
+@click.argument("scene")
+@click.argument("trajectories", nargs=-1, required=True)
+@click.option("--method", type=click.Choice(["certified", "sampled"]), default="certified", show_default=True,
+              help="certified: proven between samples (never misses); sampled: Hermes's discrete checks.")
+@click.option("--frequency", type=float, default=None, help="Sampled mode: checks per second along the time law (Hz).")
+@click.option("--joint-step", type=float, default=None, help="Sampled mode: joint-space step (rad; default 0.05).")
+@click.option("--stopping-distance", type=float, default=0.0, show_default=True, help="Obstacles grow by this (m).")
+@click.option("--threshold", type=float, default=None, help="Warning threshold drawn on the plot (m; default 0.05).")
+@click.option("--robot", default=None, help="The moving robot (default: the trajectory's).")
+@click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="Write the JSON report here.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None, help="Write a PNG of clearance vs time here.")
+@click.option("--workers", type=int, default=None, help="Run on a Dask LocalCluster with N worker processes.")
+@click.option("--scheduler", default=None, help="Run on an existing Dask cluster (scheduler address).")
+def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_distance, threshold, robot, report_path,
+               plot_path, workers, scheduler) -> None:
+    """Verify TRAJECTORIES (.yaml files, canned names of SCENE, or 'all') in SCENE.
+
+    Exit status: 0 when every trajectory is safe, 1 when one collides or could not be verified.
+    """
+    import json
+
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from ..scene import load_scene
+    from ..verify import verify_many
+
+    console = Console()
+    sc = load_scene(scene)
+    items = resolve_trajectories(sc, trajectories)
+    console.print("compiling kernels (first run only)…", style="dim")
+    kwargs = dict(stopping_distance=stopping_distance, method=method, frequency=frequency, joint_step=joint_step,
+                  robot=robot, threshold=threshold)
+    if len(items) > 1 or workers or scheduler:
+        with Progress(TextColumn("verifying"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                      console=console, transient=True) as bar:
+            task = bar.add_task("verify", total=len(items))
+            reports = verify_many(sc, items, workers=workers, scheduler=scheduler,
+                                  progress=lambda done, total: bar.update(task, completed=done), **kwargs)
+    else:
+        reports = verify_many(sc, items, **kwargs)
+    colours = {"safe": "green", "collision": "red", "incomplete": "yellow"}
+    for r in reports:
+        console.rule(f"[bold]{r.trajectory}[/] — [{colours[r.status.value]}]{r.status.value.upper()}[/]")
+        console.print(r.summary(), highlight=False)
+    if report_path:
+        p = Path(report_path)
+        p.parent.mkdir(parents=True, exist_ok=True)
+        doc = reports[0].to_dict() if len(reports) == 1 else [r.to_dict() for r in reports]
+        p.write_text(json.dumps(doc, indent=2), encoding="utf-8")
+        console.print(f"report: {p}")
+    if plot_path:
+        p = Path(plot_path)
+        for r in reports:
+            out = p if len(reports) == 1 else p.with_name(f"{p.stem}_{r.trajectory}{p.suffix or '.png'}")
+            r.plot(out)
+            console.print(f"plot: {out}")
+    sys.exit(0 if all(r.safe for r in reports) else 1)
