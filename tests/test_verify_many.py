@@ -1,0 +1,86 @@
+"""verify_many: serial equals one-by-one; a 2-worker Dask LocalCluster equals serial; the CLI."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from armguard.verify import verify, verify_many
+
+from _verify_fixtures import thin_suite
+
+
+def _strip(report):
+    """A report without its wall time (the only field that differs between runs)."""
+    d = report.to_dict()
+    d.pop("elapsed_s")
+    return json.dumps(d, sort_keys=True)
+
+
+def _cases(n):
+    rng = np.random.default_rng(99)
+    cases = thin_suite(rng, n, n_obstacles=4)
+    sc = cases[0][0]  # one scene, many trajectories of its arm
+    model_trajs = [(f"t{i}", c[1]) for i, c in enumerate(cases)]
+    return sc, model_trajs
+
+
+def test_verify_many_serial_equals_one_by_one():
+    sc, items = _cases(6)
+    seen = []
+    reports = verify_many(sc, items, progress=lambda d, t: seen.append((d, t)))
+    assert [r.trajectory for r in reports] == [n for n, _ in items]
+    for (name, traj), r in zip(items, reports):
+        assert _strip(r) == _strip(verify(sc, traj, name=name))
+    assert seen[-1] == (6, 6)
+
+
+def test_verify_many_on_local_cluster_equals_serial():
+    sc, items = _cases(8)
+    serial = verify_many(sc, items, method="certified", stopping_distance=0.01)
+    done = []
+    dask = verify_many(sc, items, workers=2, method="certified", stopping_distance=0.01, chunk_size=2,
+                       progress=lambda d, t: done.append(d))
+    assert [_strip(r) for r in dask] == [_strip(r) for r in serial]
+    assert done[-1] == len(items)
+
+
+def test_workers_and_scheduler_are_exclusive():
+    from armguard import VerificationError
+
+    sc, items = _cases(1)
+    with pytest.raises(VerificationError):
+        verify_many(sc, items, workers=2, scheduler="tcp://127.0.0.1:1")
+
+
+def test_cli_verify_builtin_scene(tmp_path):
+    out = subprocess.run(
+        [sys.executable, "-m", "armguard.cli", "verify", "puma560", "pick_and_place",
+         "--report", str(tmp_path / "r.json"), "--plot", str(tmp_path / "r.png")],
+        capture_output=True, text=True,
+    )
+    assert out.returncode in (0, 1), out.stderr
+    doc = json.loads((tmp_path / "r.json").read_text())
+    assert doc["status"] in ("safe", "collision") and (out.returncode == 0) == doc["safe"]
+    assert (tmp_path / "r.png").read_bytes()[:4] == b"\x89PNG"
+    assert "verdict" in out.stdout
+
+
+def test_cli_verify_yaml_trajectory_and_unknown_name(tmp_path):
+    import armguard
+
+    sc = armguard.load_scene("puma560")
+    traj = sc.trajectories["pick_and_place"]
+    path = tmp_path / "t.yaml"
+    traj.save_yaml(path)
+    out = subprocess.run([sys.executable, "-m", "armguard.cli", "verify", "puma560", str(path), "--method", "sampled",
+                          "--frequency", "20"], capture_output=True, text=True)
+    assert out.returncode in (0, 1), out.stderr
+    assert "sampled at 20 Hz" in out.stdout
+    bad = subprocess.run([sys.executable, "-m", "armguard.cli", "verify", "puma560", "no_such"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "pick_and_place" in bad.stderr
