@@ -28,7 +28,7 @@ def random_shape(kind: str, rng: np.random.Generator, spread: float = 1.0):
     if kind == "prism":
         return Prism(c, random_rotation(rng), rng.uniform(0.05, 0.4), rng.uniform(0.05, 0.4), int(rng.integers(3, 9)))
     if kind == "polyhedron":
-        v = rng.normal(size=(int(rng.integers(4, 21)), 3))
+        v = rng.normal(size=(int(rng.integers(4, 13)), 3))
         return ConvexPolyhedron(c + v * rng.uniform(0.1, 0.4))
     if kind == "polygon":
         n = int(rng.integers(3, 8))

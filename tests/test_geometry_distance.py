@@ -37,8 +37,9 @@ def _check_contract(a, b, r):
 
 @pytest.mark.parametrize("ka,kb", PAIRS, ids=[f"{a}-{b}" for a, b in PAIRS])
 def test_matches_reference_and_contract(ka, kb):
-    rng = np.random.default_rng(abs(hash((ka, kb))) % 2**32)
-    for _ in range(25):
+    rng = np.random.default_rng(KINDS.index(ka) * 10 + KINDS.index(kb))
+    # the reference enumerates every feature pair: fewer samples where both have many features
+    for _ in range(25 if {ka, kb} & {"sphere", "capsule"} else 8):
         a = random_shape(ka, rng)
         b = random_shape(kb, rng)
         r = distance(a, b)
@@ -53,7 +54,7 @@ def test_matches_reference_and_contract(ka, kb):
 
 @pytest.mark.parametrize("ka,kb", PAIRS, ids=[f"{a}-{b}" for a, b in PAIRS])
 def test_swap_and_rigid_motion(ka, kb):
-    rng = np.random.default_rng(7 + abs(hash((kb, ka))) % 2**31)
+    rng = np.random.default_rng(100 + KINDS.index(ka) * 10 + KINDS.index(kb))
     for _ in range(10):
         a = random_shape(ka, rng, spread=0.6)
         b = random_shape(kb, rng, spread=0.6)
@@ -149,7 +150,7 @@ def test_bounding_volumes(kind):
         outer = s.circumscribed_sphere()
         inner = s.inscribed_sphere()
         # directions: the support point of the shape lies inside the AABB and the outer sphere
-        for u in rng.normal(size=(50, 3)):
+        for u in rng.normal(size=(12, 3)):
             p = s.support(u)
             assert np.all(p >= lo - 1e-12) and np.all(p <= hi + 1e-12)
             assert np.linalg.norm(p - outer.center) <= outer.radius + 1e-9

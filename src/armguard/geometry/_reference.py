@@ -65,12 +65,15 @@ def segment_segment(a0, a1, b0, b1):
     """(distance, point on a, point on b): Hermes's interior solution or the end-point cases."""
     d1 = a1 - a0
     d2 = b1 - b0
-    M = np.array([[d1 @ d1, -(d1 @ d2)], [-(d1 @ d2), d2 @ d2]])
-    rhs = np.array([(b0 - a0) @ d1, -((b0 - a0) @ d2)])
-    det = np.linalg.det(M)
+    r = b0 - a0
+    # normal equations of min |a0 + s d1 - b0 - t d2|^2 (Cramer's rule on the 2x2 system)
+    m00, m01, m11 = float(d1 @ d1), -float(d1 @ d2), float(d2 @ d2)
+    r0, r1 = float(r @ d1), -float(r @ d2)
+    det = m00 * m11 - m01 * m01
     best = None
-    if abs(det) > 1e-14 * max(1.0, abs(M[0, 0] * M[1, 1])):
-        s, t = np.linalg.solve(M, rhs)
+    if abs(det) > 1e-14 * max(1.0, m00 * m11):
+        s = (r0 * m11 - m01 * r1) / det
+        t = (m00 * r1 - m01 * r0) / det
         if 0.0 <= s <= 1.0 and 0.0 <= t <= 1.0:
             pa, pb = a0 + s * d1, b0 + t * d2
             best = (float(np.linalg.norm(pa - pb)), pa, pb)

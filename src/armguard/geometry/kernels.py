@@ -73,5 +73,5 @@ def capsule_polytope(
         edge[0, 0] = ex / le
         edge[0, 1] = ey / le
         edge[0, 2] = ez / le
-        return convex_convex(seg, faces[0:0], edge, r, verts, faces, edges, out, work, eps_len, eps_par, gjk_eps, max_iter, offset)
-    return convex_convex(seg[0:1], faces[0:0], edge[0:0], r, verts, faces, edges, out, work, eps_len, eps_par, gjk_eps, max_iter, offset)
+        return convex_convex(seg, faces[0:0], edge, r, verts, faces, edges, 0.0, out, work, eps_len, eps_par, gjk_eps, max_iter, offset)
+    return convex_convex(seg[0:1], faces[0:0], edge[0:0], r, verts, faces, edges, 0.0, out, work, eps_len, eps_par, gjk_eps, max_iter, offset)
