@@ -160,6 +160,7 @@ class ClearanceModel:
             idx[k] = i
         if len(set(idx.tolist())) != len(self.owner_a):
             raise VerificationError("the detector does not check every pair the scene lists")
+        self._det_perm = len(idx) == len(self.owner_a)
         return idx
 
     def distances(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -171,16 +172,25 @@ class ClearanceModel:
         self.evaluations += 1
         if self.source == "detector":
             res = self._det.pair_distances(q)
+            dist = np.asarray(res.distance, dtype=np.float64)
+            if self._det_perm:
+                d = np.empty(len(self.owner_a))
+                d[self._det_map] = dist
+                pA = np.empty((len(d), 3))
+                pB = np.empty((len(d), 3))
+                pA[self._det_map] = res.p_WA
+                pB[self._det_map] = res.p_WB
+                return d, pA, pB
+            # several shape pairs per owner pair: keep the nearest of each
+            order = np.lexsort((dist, self._det_map))
+            first = order[np.r_[True, self._det_map[order][1:] != self._det_map[order][:-1]]]
             P = len(self.owner_a)
             d = np.full(P, np.inf)
             pA = np.zeros((P, 3))
             pB = np.zeros((P, 3))
-            dist = np.asarray(res.distance, dtype=np.float64)
-            for k, i in enumerate(self._det_map):  # several shape pairs may map to one owner pair
-                if dist[k] < d[i]:
-                    d[i] = dist[k]
-                    pA[i] = res.p_WA[k]
-                    pB[i] = res.p_WB[k]
+            d[self._det_map[first]] = dist[first]
+            pA[self._det_map[first]] = np.asarray(res.p_WA)[first]
+            pB[self._det_map[first]] = np.asarray(res.p_WB)[first]
             return d, pA, pB
         return self.reference_distances(q)
 
