@@ -324,3 +324,23 @@ def test_detector_and_reference_sources_agree():
         d1, a1, b1 = fast.distances(q)
         d2, a2, b2 = ref.distances(q)
         np.testing.assert_allclose(d1, d2, atol=1e-9)
+
+
+def test_top_level_verify_is_callable_even_after_the_subpackage_import():
+    import subprocess
+    import sys
+
+    code = (
+        "import armguard.verify, armguard, numpy as np\n"
+        "from armguard.geometry import Sphere\n"
+        "import sys; sys.path.insert(0, 'tests')\n"
+        "from _verify_fixtures import planar_arm\n"
+        "from armguard.scene import Scene\n"
+        "sc = Scene('x'); r = planar_arm(); sc.add_robot(r); sc.add_body('b', [Sphere([0, 2, 0], 0.1)])\n"
+        "t = armguard.Trajectory.joint_interpolated(r, [[0, 0, 0], [0.2, 0, 0]], max_velocity=[1, 1, 1])\n"
+        "rep = armguard.verify(sc, t, stopping_distance=0.0, method='certified')\n"
+        "print(rep.safe, rep.first_collision, rep.min_clearance > 0)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=str(__import__("pathlib").Path(__file__).parent.parent))
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["True", "None", "True"]

@@ -43,3 +43,18 @@ __all__ = [
     "GuardMode",
     "GuardVerdict",
 ]
+
+
+# ``armguard.verify`` is both this subpackage and the function: once the subpackage has been
+# imported, Python binds the name ``armguard.verify`` to the module, so the module itself is made
+# callable as :func:`verify` (the contract is ``armguard.verify(scene, trajectory, ...)``).
+import sys as _sys  # noqa: E402
+import types as _types  # noqa: E402
+
+
+class _CallableModule(_types.ModuleType):
+    def __call__(self, *args, **kwargs):
+        return verify(*args, **kwargs)
+
+
+_sys.modules[__name__].__class__ = _CallableModule
