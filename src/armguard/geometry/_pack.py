@@ -84,5 +84,9 @@ def attach_packed(shape) -> None:
         edges = unique_directions(np.roll(v, -1, axis=0) - v, par)
     else:  # pragma: no cover - every shape class is listed above
         raise TypeError(f"unknown shape {type(shape).__name__}")
-    object.__setattr__(shape, "_pk", _ro(pk))
-    object.__setattr__(shape, "_sat", (pts, _ro(faces), _ro(edges), float(shape.core_radius)))
+    # writable on purpose: numba's dispatcher types read-only arrays on a slow path (~5 µs a
+    # call); the buffer is private and never written after construction
+    object.__setattr__(shape, "_pk", np.ascontiguousarray(pk, dtype=np.float64))
+    object.__setattr__(
+        shape, "_sat", (np.array(pts), np.array(faces), np.array(edges), float(shape.core_radius))
+    )
