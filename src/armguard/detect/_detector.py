@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import os
 import time
+from concurrent.futures import ThreadPoolExecutor
 from typing import Mapping
 
 import numpy as np
@@ -332,13 +333,25 @@ class Detector:
         if Q.ndim != 2 or Q.shape[1] != self._model.n_q:
             raise DetectionError(f"Q: expected shape (M, {self._model.n_q}), got {Q.shape}")
         M = Q.shape[0]
-        n_chunks = max(1, min(M, 8 * (os.cpu_count() or 1)))
-        SF2, SI2 = self._scratch_rows(n_chunks)
+        n_threads = max(1, min(M, os.cpu_count() or 1))
+        SF2, SI2 = self._scratch_rows(n_threads)
         iprm = self._iprm.copy()
         iprm[0], iprm[3] = mode, 0
         min_d = np.full((M, 4), np.inf)
         status = np.zeros(M, dtype=np.int64)
-        err = kn.detect_many(Q, self._H, self._MF, self._MI, SF2, SI2, self._prm, iprm, min_d, status)
+        bounds = [(M * k) // n_threads for k in range(n_threads + 1)]
+        args = (self._H, self._MF, self._MI)
+
+        def work(k: int) -> int:  # the kernel releases the GIL: threads run in parallel
+            return int(kn.detect_chunk(Q, bounds[k], bounds[k + 1], *args, SF2[k], SI2[k], self._prm, iprm,
+                                       min_d, status))
+
+        if n_threads == 1:
+            errs = [work(0)]
+        else:
+            with ThreadPoolExecutor(n_threads) as ex:
+                errs = list(ex.map(work, range(n_threads)))
+        err = next((e for e in errs if e != 0), 0)
         if err == 1:
             bad = np.argwhere(~np.isfinite(Q))[0]
             raise DetectionError(f"Q contains NaN or infinite values (first at {tuple(int(x) for x in bad)})")

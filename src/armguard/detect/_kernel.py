@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from ..kinematics._fk import _fk_kernel
 from ._bvh import sphere_box_gap
@@ -463,34 +463,16 @@ def detect_one(q, H, MF, MI, SF, SI, prm, iprm):  # pragma: no cover - compiled
     summary[SUM_STATUS] = st
 
 
-@njit(cache=True, parallel=True)
-def detect_many(Q, H, MF, MI, SF2, SI2, prm, iprm, min_d, status):  # pragma: no cover - compiled
-    """``detect_one`` over the rows of ``Q`` ``(M, n_q)``, in parallel chunks (one scratch row each).
-
-    Writes ``min_d`` ``(M, 4)`` (per category, inf where none evaluated) and ``status`` ``(M,)``;
-    returns the first error code met (0 when none).
-    """
-    M = Q.shape[0]
-    n_chunks = SF2.shape[0]
-    errs = np.zeros(n_chunks, dtype=np.int64)
-    kbest = _K_best
-    ksum = _K_summary
-    for ch in prange(n_chunks):
-        SF = SF2[ch]
-        SI = SI2[ch]
-        lo = (M * ch) // n_chunks
-        hi = (M * (ch + 1)) // n_chunks
-        for m in range(lo, hi):
-            detect_one(Q[m:m + 1], H, MF, MI, SF, SI, prm, iprm)
-            summ = seg1(SI, H, ksum)
-            if summ[SUM_ERR] != 0:
-                errs[ch] = summ[SUM_ERR]
-                break
-            b = seg1(SF, H, kbest)
-            for c in range(4):
-                min_d[m, c] = b[c]
-            status[m] = summ[SUM_STATUS]
-    for ch in range(n_chunks):
-        if errs[ch] != 0:
-            return errs[ch]
+@njit(cache=True, nogil=True)
+def detect_chunk(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, min_d, status):  # pragma: no cover - compiled
+    """``detect_one`` over rows ``lo:hi`` of ``Q`` with one scratch row; returns an error code (0: none)."""
+    summ = seg1(SI, H, _K_summary)
+    b = seg1(SF, H, _K_best)
+    for m in range(lo, hi):
+        detect_one(Q[m:m + 1], H, MF, MI, SF, SI, prm, iprm)
+        if summ[SUM_ERR] != 0:
+            return summ[SUM_ERR]
+        for c in range(4):
+            min_d[m, c] = b[c]
+        status[m] = summ[SUM_STATUS]
     return 0
