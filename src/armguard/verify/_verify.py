@@ -40,7 +40,8 @@ __all__ = ["Verifier", "verify", "DRAKE_JOINT_STEP"]
 #: Drake's suggested edge-checking step (rad), used by sampled mode when no frequency is given.
 DRAKE_JOINT_STEP = 0.05
 _SPEED_SAMPLES = 17  # time-law samples per segment used to find its peak speed (odd: includes the midpoint)
-_TIME_BISECTIONS = 60  # bisection steps inverting a segment's time law (2^-60 of the segment time)
+_TIME_BISECTIONS = 60
+_PROFILE_TABLE = 65  # time-law samples per segment for the clearance profile's time axis  # bisection steps inverting a segment's time law (2^-60 of the segment time)
 _OBJECTS = {
     "link-obstacle": ("arm", "obstacle"),
     "link-link": ("arm", "arm"),
@@ -160,6 +161,28 @@ class Verifier:
         t = 0.5 * (lo + hi)
         t = np.where(s <= 0.0, t0, np.where(s >= 1.0, t1, t))
         return np.where(~moving & (s > 0.0) & (s < 1.0), t0 + s * (t1 - t0), t)
+
+    @staticmethod
+    def _profile_times(trajectory, segs, seg_idx: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """Times of the profile points: each segment's time law tabulated at ``_PROFILE_TABLE`` points
+        (one ``trajectory.at`` call) and inverted by monotone interpolation — for plotting; the
+        reported collision time is inverted exactly (:meth:`_times`)."""
+        used = np.unique(seg_idx)
+        u = np.linspace(0.0, 1.0, _PROFILE_TABLE)
+        T = np.concatenate([segs[i][0] + u * (segs[i][1] - segs[i][0]) for i in used])
+        Q = np.asarray(trajectory.at(T)).reshape(len(used), _PROFILE_TABLE, -1)
+        out = np.empty(len(s))
+        for row, i in enumerate(used):
+            t0, t1, q0, q1 = segs[i]
+            dq = q1 - q0
+            k = int(np.argmax(np.abs(dq)))
+            sel = seg_idx == i
+            if dq[k] == 0.0:
+                out[sel] = t0 + s[sel] * (t1 - t0)
+                continue
+            frac = np.maximum.accumulate((Q[row, :, k] - q0[k]) / dq[k])
+            out[sel] = np.interp(s[sel], frac, T[row * _PROFILE_TABLE : (row + 1) * _PROFILE_TABLE])
+        return out
 
     # ------------------------------------------------------------ the check
     def verify(self, trajectory, *, stopping_distance=0.0, method: str = "certified", frequency: float | None = None,
@@ -301,7 +324,7 @@ class Verifier:
         t_known = np.array([np.nan if t is None else t for t in run.t], dtype=np.float64)
         need = np.isnan(t_known)
         if np.any(need):
-            t_known[need] = self._times(trajectory, segs, seg_idx[need], s_arr[need], k0)
+            t_known[need] = self._profile_times(trajectory, segs, seg_idx[need], s_arr[need])
         D = np.array(run.d)  # (M, P)
         order = np.argsort(t_known, kind="stable")
         times = t_known[order]
