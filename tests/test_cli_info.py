@@ -1,0 +1,38 @@
+"""``armguard info`` and ``armguard fk``: output and one-line errors with exit code 2."""
+
+from __future__ import annotations
+
+import numpy as np
+from click.testing import CliRunner
+
+from armguard.cli import main
+from armguard.scene import compile_scene, load_scene
+
+
+def test_info_hermes_counts_and_size():
+    res = CliRunner().invoke(main, ["info", "hermes"], terminal_width=200)
+    assert res.exit_code == 0, res.output
+    total = [line for line in res.output.splitlines() if "total" in line][0]
+    cells = [c.strip() for c in total.split("│")]
+    assert cells[3:6] == ["8", "54", "76"]
+    assert f"compiled size: {compile_scene(load_scene('hermes')).nbytes} bytes" in res.output
+    assert "3072 bytes" in res.output and "link1-link3" in res.output
+    assert "360.0°" in res.output  # revolute limits in degrees
+
+
+def test_fk_prints_link_frames_in_degrees():
+    res = CliRunner().invoke(main, ["fk", "puma560", "--q", "0,45,-135,0,-45,0", "--deg"], terminal_width=200)
+    assert res.exit_code == 0, res.output
+    s = load_scene("puma560")
+    r = s.robots["puma560"]
+    X = r.forward_kinematics(np.radians([0, 45, -135, 0, -45, 0]))
+    tool = [line for line in res.output.splitlines() if line.startswith("│ tool")][0]
+    xyz = [float(v) for v in tool.split("│")[2:5]]
+    assert np.allclose(xyz, X[-1, :3, 3], atol=1e-6)
+
+
+def test_errors_are_one_line_exit_2():
+    for args in (["info", "no_such_scene"], ["fk", "hermes", "--q", "1,2"], ["fk", "hermes", "--robot", "x"]):
+        res = CliRunner().invoke(main, args)
+        assert res.exit_code == 2, (args, res.output)
+        assert res.output.strip().count("\n") == 0 and res.output.startswith("error:")
