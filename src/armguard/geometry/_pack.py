@@ -24,17 +24,20 @@ _EMPTY = np.zeros((0, 3), dtype=np.float64)
 
 def unique_directions(d: np.ndarray, parallel: float) -> np.ndarray:
     """Unit directions of the non-zero rows of ``d (n, 3)``, one per parallel class (sign ignored)."""
-    out: list[np.ndarray] = []
-    for v in np.asarray(d, dtype=np.float64).reshape(-1, 3):
+    rows = np.asarray(d, dtype=np.float64).reshape(-1, 3)
+    kept = np.empty_like(rows)  # the greedy pass below, with each test vectorised over the kept set
+    m = 0
+    for v in rows:
         n = float(np.linalg.norm(v))
         if n <= 0.0:
             continue
         u = v / n
-        if all(float(np.linalg.norm(np.cross(u, w))) > parallel for w in out):
-            out.append(u)
-    if not out:
+        if m == 0 or bool(np.all(np.linalg.norm(np.cross(kept[:m], u), axis=1) > parallel)):
+            kept[m] = u
+            m += 1
+    if m == 0:
         return _EMPTY
-    return np.ascontiguousarray(np.array(out, dtype=np.float64))
+    return np.ascontiguousarray(kept[:m])
 
 
 def _ro(a: np.ndarray) -> np.ndarray:
