@@ -71,9 +71,13 @@ class ConsoleApp:
         self.server = viser.ViserServer(host=self.host, port=self.port, verbose=False)
         self.server.gui.configure_theme(control_width="large", dark_mode=False, show_logo=False)
         self.server.scene.set_up_direction("+z")
+        # No shadows: they cost much and add nothing to judging clearances (and software
+        # WebGL, as in headless browsers, renders far faster without them).
+        self.server.scene.configure_default_lights(cast_shadow=False)
         self._build_scene()
         self._build_gui()
         self._redraw(force=True)
+        self.server.on_client_connect(lambda client: self._set_view(client, "vista 5"))
         self._thread = threading.Thread(target=self._loop, name="armguard-console", daemon=True)
         self._thread.start()
         return self
@@ -134,7 +138,8 @@ class ConsoleApp:
             lo, hi = np.minimum(lo, v.min(axis=0)), np.maximum(hi, v.max(axis=0))
             color = _COLORS.get(it.kind, _COLORS["body"])
             h = sc.add_mesh_simple(f"/scene/{k:03d}_{it.owner.replace('/', '.')}", v - c0, f, color=color,
-                                   side="double" if len(f) < 8 else "front", position=c0)
+                                   side="double" if len(f) < 8 else "front", position=c0,
+                                   cast_shadow=False, receive_shadow=False)
             self._items.append((it.owner, it.kind, P0, c0, h, color))
         if not np.all(np.isfinite(lo)):
             lo, hi = -np.ones(3), np.ones(3)
@@ -168,7 +173,7 @@ class ConsoleApp:
         # -- control: Ranger's main control panel ------------------------------------------
         with tabs.add_tab("Control"):
             self._w_active = gui.add_dropdown("active arm", st.robots, initial_value=snap.active)
-            self._w_mode = gui.add_button_group("mode", ("joint", "cartesian"))
+            self._w_mode = gui.add_dropdown("mode", ("joint", "cartesian"), initial_value=snap.mode)
             self._w_detect = gui.add_checkbox("detection", snap.detection)
             self._w_thr = gui.add_number("threshold (m)", snap.threshold, step=0.001)
             self._w_stop = gui.add_number("stopping distance (m)", snap.stopping_distance, step=0.001)
@@ -238,7 +243,7 @@ class ConsoleApp:
         self._w_stop.on_update(self._from_client(lambda v: st.set_stopping_distance(v)))
         self._w_psi.on_update(self._from_client(lambda v: st.set_arm_angle(math.radians(v))))
         self._w_time.on_update(self._from_client(lambda v: st.timeline_command("seek", v)))
-        self._w_transport.on_update(self._from_client(self._transport))
+        self._w_transport.on_click(self._from_client(self._transport))
         b_move.on_click(self._guard(lambda _e: st.move_ee(self._w_pos.value, np.radians(self._w_rpy.value))))
         b_read.on_click(lambda _e: self._read_tool_pose())
         b_ws.on_click(self._guard(lambda _e: st.set_workspace(self._w_ws_lo.value, self._w_ws_hi.value)))
@@ -340,7 +345,7 @@ class ConsoleApp:
             if key != self._ws_shown:
                 self._draw_workspace(snap.workspace)
                 self._ws_shown = key
-            self._panel.content = panel_html(r, snap.message)
+            self._panel.content = panel_html(r, snap.message, error=snap.message_is_error)
             self._sync_widgets()
             self._refresh_plot(snap, periodic=False)
 

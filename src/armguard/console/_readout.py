@@ -151,10 +151,10 @@ def _fmt_p(p: np.ndarray | None) -> str:
     return "—" if p is None else "(" + ", ".join(f"{v:+.3f}" for v in p) + ") m"
 
 
-def panel_html(r: Readout, message: str = "") -> str:
+def panel_html(r: Readout, message: str = "", *, error: bool = True) -> str:
     """The distance panel as HTML: a coloured status block and the per-category table.
 
-    The status block carries ``id="armguard-status"`` and ``data-status`` (the status value) so a
+    ``message`` is shown under the table, red when ``error`` else grey.  The status block carries ``id="armguard-status"`` and ``data-status`` (the status value) so a
     browser test can read it.
     """
     e = html.escape
@@ -179,5 +179,7 @@ def panel_html(r: Readout, message: str = "") -> str:
     )
     msg = ""
     if message:
-        msg = f'<div id="armguard-message" style="color:#d62828;font-family:sans-serif;padding-top:4px">{e(message)}</div>'
+        color = "#d62828" if error else "#555"
+        msg = (f'<div id="armguard-message" data-error="{str(error).lower()}" '
+               f'style="color:{color};font-family:sans-serif;padding-top:4px">{e(message)}</div>')
     return head + table + msg

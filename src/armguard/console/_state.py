@@ -73,16 +73,13 @@ class Snapshot:
     workspace: tuple | None
     readout: Readout
     message: str
+    message_is_error: bool
     player: Player | None
     arm_angle: float
 
 
 def _duration_of(trajectory) -> float:
-    for attr in ("duration", "t_end", "T"):
-        v = getattr(trajectory, attr, None)
-        if v is not None:
-            return float(v() if callable(v) else v)
-    raise ConsoleInputError("trajectory has no duration")
+    return float(trajectory.duration)
 
 
 class ConsoleState:
@@ -113,6 +110,7 @@ class ConsoleState:
         self._threshold = parse_number(threshold, "threshold", lo=0.0, hi=MAX_DISTANCE_SETTING, unit="m")
         self._stopping = parse_number(stopping_distance, "stopping distance", lo=0.0, hi=MAX_DISTANCE_SETTING, unit="m")
         self._message = ""
+        self._message_is_error = False
         self._player: Player | None = None
         self._arm_angle = 0.0
         self._version = 0
@@ -153,6 +151,7 @@ class ConsoleState:
                 workspace=None if ws is None else (ws.lo.copy(), ws.hi.copy()),
                 readout=self._readout,
                 message=self._message,
+                message_is_error=self._message_is_error,
                 player=self._player,
                 arm_angle=self._arm_angle,
             )
@@ -191,6 +190,7 @@ class ConsoleState:
 
     def _changed(self, message: str = "") -> None:
         self._message = message
+        self._message_is_error = False
         self._evaluate()
 
     def _checked_q(self, robot: str, values) -> np.ndarray:
@@ -209,6 +209,7 @@ class ConsoleState:
         """Show ``message`` (an input the GUI rejected before it reached a command)."""
         with self._lock:
             self._message = message
+            self._message_is_error = True
             self._version += 1
 
     # ------------------------------------------------------------------ settings
@@ -512,6 +513,7 @@ class ConsoleState:
             r = self._readout
             if p.kind == "run" and self._detection and self._stopping > 0.0 and r.distance <= self._stopping:
                 p.timeline.pause()
+                self._message_is_error = True
                 self._message = (f"{p.name}: halted at t = {t:.2f} s, {r.link} within the stopping distance "
                                  f"({r.distance * 1000:.1f} mm of {r.obstacle})")
             return True
