@@ -364,6 +364,17 @@ class Detector:
         min_d, status = self._many(Q, kn.MODE_EXACT)
         return BatchReport(min_d, status == kn.ST_COLLISION, status.astype(np.int8), self._threshold, self._stopping)
 
+    def check_many_bruteforce(self, Q) -> BatchReport:
+        """Like :meth:`check_many` but every candidate pair is evaluated (no bounds, no BVH).
+
+        The all-pairs path the tests compare the pruned one against (same narrow phase)."""
+        min_d, status = self._many(Q, kn.MODE_ALL)
+        level = max(0.0, self._stopping)
+        dmin = min_d.min(axis=1)
+        status = np.where(dmin <= level, kn.ST_COLLISION,
+                          np.where(dmin <= max(self._threshold, self._stopping), kn.ST_WARNING, kn.ST_CLEAR))
+        return BatchReport(min_d, status == kn.ST_COLLISION, status.astype(np.int8), self._threshold, self._stopping)
+
     def collides_many(self, Q) -> np.ndarray:
         """``(M,) bool``: collision (distance <= 0, or <= the stopping distance) per row, early exit."""
         _, status = self._many(Q, kn.MODE_YESNO)

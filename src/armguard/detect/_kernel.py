@@ -249,7 +249,12 @@ def detect_one(q, H, MF, MI, SF, SI, prm, iprm):  # pragma: no cover - compiled
     for p in range(P):
         pflag[p] = 2
         plb[p] = -math.inf
-    cut0 = math.inf if (mode == MODE_EXACT or mode == MODE_ALL) else (level if mode == MODE_YESNO else thr_eff)
+    if mode == MODE_ALL:
+        cut0 = math.inf
+    elif mode == MODE_YESNO:
+        cut0 = level
+    else:
+        cut0 = thr_eff  # exact mode: the cut-off of a category is max(cut0, its best so far)
     n_eval = 0
     collided = False
     ws_lo = ws[0:3]
