@@ -1,0 +1,58 @@
+"""Loading and compiling the built-in scenes (target: ``hermes`` in <= 50 ms, warm process)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+
+from bench.timing import fmt_ns, median_seconds
+
+TITLE = "Scene loading and compiling"
+
+_COLD = (
+    "import time; t0 = time.perf_counter(); "
+    "from armguard.scene import load_scene, compile_scene; "
+    "compile_scene(load_scene('hermes')); print(time.perf_counter() - t0)"
+)
+
+
+def run(quick: bool) -> str:
+    from armguard.models import builtin_names
+    from armguard.scene import compile_scene, load_scene
+
+    repeat = 3 if quick else 11
+    rows = []
+    for name in builtin_names():
+        t_load = median_seconds(lambda: load_scene(name), repeat=repeat)
+        s = load_scene(name)
+        t_comp = median_seconds(lambda: compile_scene(s), repeat=repeat)
+        t_both = median_seconds(lambda: compile_scene(load_scene(name)), repeat=repeat)
+        rows.append((name, t_load, t_comp, t_both, compile_scene(s).nbytes))
+    cold = []
+    for _ in range(1 if quick else 3):
+        out = subprocess.run([sys.executable, "-c", _COLD], capture_output=True, text=True, check=True)
+        cold.append(float(out.stdout.strip().splitlines()[-1]))
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-c", "import armguard.scene"], check=True)
+    t_import = time.perf_counter() - t0
+    lines = [
+        "| scene | load (median) | compile (median) | load + compile | compiled size |",
+        "|---|---:|---:|---:|---:|",
+    ]
+    for name, a, b, c, nb in rows:
+        lines.append(f"| {name} | {fmt_ns(a)} | {fmt_ns(b)} | {fmt_ns(c)} | {nb} B |")
+    hermes = next(r for r in rows if r[0] == "hermes")
+    lines += [
+        "",
+        f"`hermes` load + compile in a warm process: **{fmt_ns(hermes[3])}** (target <= 50 ms: "
+        f"{'met' if hermes[3] <= 0.050 else 'NOT met'}).  A cold process (imports included, FK kernel "
+        f"from numba's cache) takes {fmt_ns(min(cold))} for the same work (best of {len(cold)}); "
+        f"`python -c 'import armguard.scene'` alone takes {fmt_ns(t_import)}.",
+        "",
+        f"Compiled size of `hermes`: {hermes[4]} bytes of float64/int64 arrays, against the ~3 KB the Hermes "
+        "database took on board in 40 KB of memory (Sciomachen & Magnani): we store 8-byte numbers, "
+        "box axes, bounding spheres, faces, edges and element pair lists that the 1980s database did not.",
+        "No peer library loads these scene files, so there is no peer column; the table is a budget check.",
+    ]
+    return "\n".join(lines)
