@@ -318,3 +318,14 @@ def test_srdf_disable_collisions(tmp_path):
     srdf.write_text('<robot><disable_collisions link1="link1" link2="nope"/></robot>')
     err = _error(d)
     assert err.where == "robots[0].srdf" and "nope" in err.message
+
+
+def test_docs_example_loads(tmp_path):
+    doc = (Path(__file__).resolve().parent.parent / "docs" / "scene-format.md").read_text()
+    block = doc.split("```yaml\n", 1)[1].split("```", 1)[0]
+    p = tmp_path / "cell.yaml"
+    p.write_text(block)
+    s = load_scene(p)
+    assert s.joint_names == ("arm/j1", "arm/j2", "arm/j3")
+    assert [it.kind for it in s.shapes_at(s.default_q())] == ["body", "body", "link", "link", "payload"]
+    assert s.canned_tests["reach"].trajectory(s).duration > 0
