@@ -45,6 +45,8 @@ _DAMPING_MAX = 1e6
 """Damping (m) above which a start is abandoned as stuck."""
 _POLISH_ITERATIONS = 20
 """Newton polish iterations applied to plug-in candidates (closed forms lose digits near singularities)."""
+_POLISH_RADIUS = 1e-6
+"""Only a plug-in candidate already this close (m and rad) is polished: a wrong plug-in stays visible."""
 
 
 class IKStatus(str, enum.Enum):
@@ -205,7 +207,8 @@ def _solve_with_plugin(robot, plugin, solver: _Solver, X_WE, q_seed, q_ref, tol)
             raise IKError(f"the IK plug-in of {robot.name!r} returned {c!r}; expected {robot.n_joints} finite joint values")
         c = _wrap_to_limits(robot, c, q_ref)
         _, ep, ew = solver.error(c)
-        if not solver.converged(ep, ew) and bool(robot.within_limits(c, tol=tol)):
+        close = ep <= _POLISH_RADIUS and ew <= _POLISH_RADIUS
+        if not solver.converged(ep, ew) and close and bool(robot.within_limits(c, tol=tol)):
             # closed forms lose digits near singularities: polish with a few damped Newton steps
             c, ep, ew = solver.run(c, _POLISH_ITERATIONS)
         if ep + ew < sum(best):

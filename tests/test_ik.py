@@ -1,0 +1,169 @@
+"""Inverse kinematics: the closed-form PUMA 560 plug-in, the damped-least-squares default, the registry.
+
+Oracle: forward kinematics (a round trip FK(IK(X)) == X), and the independent count of PUMA
+solutions (8 for a generic reachable pose, all distinct)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from armguard import IKError, KinematicsError, Tolerances
+from armguard.kinematics import (
+    PUMA560_DH,
+    PUMA560_LOWER,
+    PUMA560_UPPER,
+    DHRow,
+    IKStatus,
+    Robot,
+    ik_plugin,
+    pose_from_xyz_rpy,
+    puma560_ik,
+    register_ik,
+    unregister_ik,
+)
+from armguard.kinematics._frames import trans
+
+SETTINGS = settings(max_examples=60, deadline=None, derandomize=True)
+
+
+def _puma(**kw) -> Robot:
+    return Robot.from_dh("puma560", PUMA560_DH, lower=PUMA560_LOWER, upper=PUMA560_UPPER, **kw)
+
+
+def _assert_reaches(robot, res, X, link=None, tol=Tolerances()):
+    assert res.status is IKStatus.SUCCESS and res.q is not None
+    X_got = robot.forward_kinematics(res.q)[robot.link_index(link or robot.tool_link)]
+    np.testing.assert_allclose(X_got[:3, 3], X[:3, 3], atol=tol.ik_position * 10)
+    np.testing.assert_allclose(X_got[:3, :3], X[:3, :3], atol=tol.ik_orientation * 10)
+    assert res.position_error <= tol.ik_position and res.orientation_error <= tol.ik_orientation
+    assert robot.within_limits(res.q)
+
+
+def test_puma_plugin_is_registered():
+    assert ik_plugin("puma560") is puma560_ik
+
+
+@SETTINGS
+@given(st.lists(st.floats(0.0, 1.0), min_size=6, max_size=6))
+def test_puma_round_trip_recovers_the_seeded_configuration(u):
+    robot = _puma()
+    q = np.asarray(PUMA560_LOWER) + np.asarray(u) * (np.asarray(PUMA560_UPPER) - np.asarray(PUMA560_LOWER))
+    X = robot.forward_kinematics(q)[-1]
+    res = robot.inverse_kinematics(X, q_seed=q)
+    _assert_reaches(robot, res, X)
+    assert res.iterations <= 20  # a closed form: at most a short polish near a singularity
+
+
+def test_puma_plugin_gives_eight_distinct_verified_solutions():
+    robot = _puma()
+    q = np.array([0.3, 0.4, -0.9, 0.5, 0.7, -0.2])
+    X_BE = robot.forward_kinematics(q)[-1]
+    sols = puma560_ik(robot, X_BE, None)
+    assert len(sols) == 8
+    wrapped = {tuple(np.round(np.mod(s + math.pi, 2 * math.pi) - math.pi, 6)) for s in sols}
+    assert len(wrapped) == 8
+    for s in sols:
+        np.testing.assert_allclose(robot.forward_kinematics(s)[-1], X_BE, atol=1e-12)
+
+
+def test_puma_with_base_tool_and_offsets():
+    """The plug-in works in the base frame, removes a fixed tool and honours DH angle offsets."""
+    rows = [DHRow(r.a, r.alpha, r.d, 0.1 * (i + 1)) for i, r in enumerate(PUMA560_DH)]
+    robot = Robot.from_dh("puma560", rows, X_LT=trans(0.0, 0.05, 0.12),
+                          X_WB=pose_from_xyz_rpy([0.4, -0.3, 0.8], [0.0, 0.1, 2.0]))
+    rng = np.random.default_rng(4)
+    for _ in range(10):
+        q = rng.uniform(-1.2, 1.2, 6)
+        X = robot.forward_kinematics(q)[-1]
+        _assert_reaches(robot, robot.inverse_kinematics(X, q_seed=q + 0.05), X)
+
+
+def test_puma_unreachable_and_out_of_limits():
+    robot = _puma()
+    far = trans(3.0, 0.0, 0.0)
+    res = robot.inverse_kinematics(far)
+    assert res.status is IKStatus.UNREACHABLE and res.q is None and not res.ok
+    tight = _puma().__class__.from_dh("puma560", PUMA560_DH, lower=[-0.1] * 6, upper=[0.1] * 6)
+    X = tight.forward_kinematics(np.array([1.5, 0.2, -0.5, 0.3, 0.4, 0.5]))[-1]
+    res = tight.inverse_kinematics(X)
+    assert res.status is IKStatus.OUT_OF_LIMITS and res.q is None and "limit" in res.message
+
+
+def test_puma_plugin_rejects_a_robot_of_another_structure():
+    rows = list(PUMA560_DH)
+    rows[1] = DHRow(0.4318, 0.3, 0.0)  # alpha_2 must be 0
+    robot = Robot.from_dh("puma560", rows)
+    with pytest.raises(IKError, match="PUMA 560 structure"):
+        robot.inverse_kinematics(np.eye(4))
+
+
+@pytest.fixture(scope="module")
+def seven_dof() -> Robot:
+    """A KUKA-iiwa-like 7-DOF chain (standard DH, its published link lengths), finite limits."""
+    rows = [DHRow(0, -math.pi / 2, 0.36), DHRow(0, math.pi / 2, 0), DHRow(0, math.pi / 2, 0.42),
+            DHRow(0, -math.pi / 2, 0), DHRow(0, -math.pi / 2, 0.4), DHRow(0, math.pi / 2, 0), DHRow(0, 0, 0.126)]
+    lim = np.radians([170, 120, 170, 120, 170, 120, 175])
+    return Robot.from_dh("iiwa-dh", rows, lower=-lim, upper=lim)
+
+
+def test_numerical_ik_round_trips_on_a_redundant_arm(seven_dof):
+    rng = np.random.default_rng(0)
+    ok = 0
+    for _ in range(12):
+        q = rng.uniform(seven_dof.lower, seven_dof.upper) * 0.8
+        X = seven_dof.forward_kinematics(q)[-1]
+        res = seven_dof.inverse_kinematics(X, rng=rng)
+        if res.ok:
+            ok += 1
+            _assert_reaches(seven_dof, res, X)
+        else:
+            assert res.q is None and res.message
+    assert ok >= 11  # DLS with restarts; never a wrong pose when it fails
+
+
+def test_numerical_ik_for_an_intermediate_link(seven_dof):
+    q = np.array([0.2, 0.5, -0.3, -1.0, 0.4, 0.8, 0.1])
+    X = seven_dof.forward_kinematics(q)[4]
+    res = seven_dof.inverse_kinematics(X, link="link4", q_seed=np.zeros(7))
+    _assert_reaches(seven_dof, res, X, link="link4")
+
+
+def test_numerical_ik_reports_no_convergence_for_unreachable_pose(seven_dof):
+    res = seven_dof.inverse_kinematics(trans(5.0, 0.0, 0.0), rng=np.random.default_rng(1),
+                                       tol=Tolerances(ik_restarts=2, ik_max_iterations=50))
+    assert res.status is IKStatus.NO_CONVERGENCE and res.q is None
+    assert res.position_error > 3.0 and "best" in res.message
+
+
+def test_wrong_plugin_never_yields_a_wrong_pose():
+    robot = Robot.from_dh("liar", PUMA560_DH)
+    register_ik("liar", lambda robot, X_BE, q_seed: [np.full(6, 0.3)])
+    try:
+        res = robot.inverse_kinematics(robot.forward_kinematics(np.full(6, 1.0))[-1])
+        assert res.status is IKStatus.NO_CONVERGENCE and res.q is None
+        register_ik("liar", lambda robot, X_BE, q_seed: [np.zeros(5)])
+        with pytest.raises(IKError, match="expected 6 finite joint values"):
+            robot.inverse_kinematics(np.eye(4))
+    finally:
+        unregister_ik("liar")
+    assert ik_plugin("liar") is None
+
+
+def test_ik_rejects_nan_target():
+    with pytest.raises(KinematicsError, match="X_WE"):
+        _puma().inverse_kinematics(np.full((4, 4), np.nan))
+
+
+def test_plugin_solution_wrapped_into_limits():
+    """Joint 6 of the PUMA turns +-266 deg: a seed beyond pi gets the 2 pi-shifted solution."""
+    robot = _puma()
+    q = np.array([0.1, 0.2, -0.3, 0.4, 0.5, 4.0])
+    X = robot.forward_kinematics(q)[-1]
+    res = robot.inverse_kinematics(X, q_seed=q)
+    _assert_reaches(robot, res, X)
+    assert abs(res.q[5] - 4.0) < 1e-6
