@@ -177,7 +177,7 @@ def test_console_in_a_browser(console_url):
             assert "setup in_post" in page.inner_text("#armguard-message")
 
             page.get_by_role("tab", name="Views").click()
-            page.get_by_role("button", name="vista 2").click()
+            page.get_by_role("button", name="top").click()
             page.wait_for_timeout(500)
             OUT.mkdir(exist_ok=True)
             shot = OUT / "console.png"

@@ -1,0 +1,189 @@
+"""The console's state machine without a browser, on ``tests/data/console_scene.yaml``.
+
+Geometry of that scene (closed forms): planar 3R arms, links 0.4 m, capsules r = 0.05 m; the
+left arm's base at (-0.8, 0, 0); the post a 0.2 m box centred at (-0.8, 0.8, 0).  With the left
+arm straight along +y (joint1 = +90 deg) link2 (y from 0.4 to 0.8) reaches into the post:
+penetration 0.15 m (capsule tip at y = 0.85, post face at y = 0.7).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from armguard.console import ConsoleInputError, ConsoleState, PanelStatus
+from armguard.scene import load_scene
+
+SCENE = Path(__file__).parent / "data" / "console_scene.yaml"
+DEG = math.pi / 180.0
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return load_scene(str(SCENE))
+
+
+@pytest.fixture()
+def state(scene):
+    return ConsoleState(scene, threshold=0.05)
+
+
+def test_home_is_clear_and_panel_names_the_nearest(state):
+    snap = state.snapshot()
+    assert snap.active == "left" and snap.mode == "joint" and snap.detection
+    r = snap.readout
+    assert r.status is PanelStatus.CLEAR and r.distance > 0.05
+    assert np.linalg.norm(r.p_WA - r.p_WB) == pytest.approx(abs(r.distance), abs=1e-9)
+    assert {row.category for row in r.rows} >= {"arm", "environment", "workspace"}
+    env = next(row for row in r.rows if row.category == "environment")
+    assert env.obstacle == "post" and env.distance == pytest.approx(0.65, abs=1e-9)  # base cap to post face
+
+
+def test_joint_into_post_is_red_and_link_named(state):
+    state.set_joint("left", 0, 90 * DEG)
+    r = state.snapshot().readout
+    assert r.status is PanelStatus.COLLISION and r.within_threshold
+    assert r.distance == pytest.approx(-0.15, abs=1e-6)
+    assert r.obstacle == "post" and r.owner_a == "left/link2"
+    assert r.color == "#d62828" and r.line_color == (220, 30, 30)
+
+
+def test_within_threshold_is_yellow(state):
+    # joint1 = 90 - a: the tip sweeps toward the post face; find a clear-but-close pose
+    state.set_threshold(0.5)
+    r = state.snapshot().readout
+    assert r.status is PanelStatus.WARNING and r.color == "#f2c200" and r.within_threshold
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda s: s.set_joint("left", 0, "abc"),
+        lambda s: s.set_joint("left", 0, float("nan")),
+        lambda s: s.set_joint("left", 0, 3.5),  # beyond the 170 deg limit
+        lambda s: s.set_joint("left", 7, 0.0),
+        lambda s: s.set_joint("nobody", 0, 0.0),
+        lambda s: s.set_joints("left", "1, 2"),
+        lambda s: s.set_threshold(-1),
+        lambda s: s.set_threshold("inf"),
+        lambda s: s.set_stopping_distance("x"),
+        lambda s: s.set_workspace("0 0 0", "1 1 -1"),
+        lambda s: s.set_workspace("0 0", "1 1 1"),
+        lambda s: s.set_mode("telepathy"),
+        lambda s: s.set_active("nobody"),
+        lambda s: s.setup("no_such_test"),
+        lambda s: s.timeline_command("play"),  # nothing loaded
+        lambda s: s.move_ee([50.0, 0.0, 0.0]),  # far out of reach
+    ],
+    ids=["word", "nan", "over-limit", "bad-index", "bad-arm", "short-list", "neg-threshold", "inf-threshold",
+         "word-stop", "inverted-box", "short-corner", "bad-mode", "bad-active", "bad-test", "no-timeline",
+         "unreachable"],
+)
+def test_bad_input_raises_and_keeps_state(state, call):
+    before = state.snapshot()
+    with pytest.raises(ConsoleInputError):
+        call(state)
+    after = state.snapshot()
+    for k in before.q:
+        np.testing.assert_array_equal(after.q[k], before.q[k])
+    assert (after.threshold, after.stopping_distance, after.active, after.mode) == (
+        before.threshold, before.stopping_distance, before.active, before.mode)
+    assert after.workspace[0].tolist() == before.workspace[0].tolist()
+    assert after.readout.status is before.readout.status
+
+
+def test_detection_off_is_grey_and_back_on(state):
+    state.set_joint("left", 0, 90 * DEG)
+    state.set_detection(False)
+    assert state.snapshot().readout.status is PanelStatus.OFF
+    state.set_detection(True)
+    assert state.snapshot().readout.status is PanelStatus.COLLISION
+
+
+def test_setup_poses_arms_selects_active_and_threshold(state):
+    state.set_active("right")
+    state.set_detection(False)
+    state.setup("in_post")
+    snap = state.snapshot()
+    assert snap.active == "left" and snap.detection and snap.threshold == pytest.approx(0.1)
+    np.testing.assert_allclose(snap.q["left"], [90 * DEG, 0, 0], atol=1e-12)
+    assert snap.readout.status is PanelStatus.COLLISION
+    state.setup("fold_right")
+    assert state.snapshot().active == "right" and state.snapshot().readout.status is PanelStatus.CLEAR
+
+
+def test_active_arm_changes_the_checked_arm(state):
+    state.set_joint("left", 0, 90 * DEG)  # left in the post
+    state.set_active("right")
+    r = state.snapshot().readout
+    assert r.owner_a.startswith("right/")
+    assert r.status is PanelStatus.CLEAR  # only the active arm is checked: the left arm's collision is not its own
+
+
+def test_run_plays_the_trapezoid_and_halts_at_the_stopping_distance(state):
+    player = state.run("hit_post")
+    assert player.kind == "run" and player.timeline.playing
+    np.testing.assert_allclose(state.snapshot().q["left"], [0, 0, 0], atol=1e-12)  # setup pose at t = 0
+    while state.tick(0.05):
+        pass
+    snap = state.snapshot()
+    assert snap.player.timeline.t == pytest.approx(player.timeline.duration)
+    np.testing.assert_allclose(snap.q["left"], [90 * DEG, 0, 0], atol=1e-9)  # the goal
+    assert snap.readout.status is PanelStatus.COLLISION  # no stand-off set: it drives into the post
+    state.set_stopping_distance(0.05)
+    state.run("hit_post")
+    while state.tick(0.05):
+        pass
+    snap = state.snapshot()
+    assert snap.player.timeline.t < player.timeline.duration and snap.message_is_error
+    assert 0.0 < snap.readout.distance <= 0.05 + 1e-9  # halted within the stand-off, before contact
+    assert "halted" in snap.message
+
+
+def test_verified_trajectory_time_line(state):
+    player = state.load_trajectory("sweep_through_post", samples=60)
+    assert player.kind == "verified" and not player.report.safe
+    assert player.clearance.shape == (60,) and player.clearance.min() == pytest.approx(-0.15, abs=1e-6)
+    fc = player.report.first_collision.time
+    # the sampled profile turns negative no earlier than the verifier's first collision
+    first_neg = player.times[np.argmax(player.clearance <= 0.0)]
+    assert first_neg >= fc - 1e-9
+    T = player.timeline.duration
+    state.timeline_command("seek", T / 2)
+    np.testing.assert_allclose(state.snapshot().q["left"], player.trajectory.at(T / 2))
+    state.timeline_command("faster")
+    state.timeline_command("play")
+    state.tick(0.1)
+    assert state.snapshot().player.timeline.t == pytest.approx(T / 2 + 0.2)
+    state.timeline_command("backward")
+    state.tick(0.1)
+    assert state.snapshot().player.timeline.t == pytest.approx(T / 2)
+    state.timeline_command("pause")
+    assert not state.tick(1.0)
+    with pytest.raises(ConsoleInputError):
+        state.timeline_command("seek", "soon")
+    assert state.snapshot().player.timeline.t == pytest.approx(T / 2)
+
+
+def test_cartesian_move_reaches_the_target(state):
+    state.set_joints("left", "-90, 30, 30", scale=DEG)
+    X = state.ee_pose()
+    state.set_joints("left", "-90, 0, 0", scale=DEG)
+    q = state.move_ee(X[:3, 3])
+    np.testing.assert_allclose(state.ee_pose()[:3, 3], X[:3, 3], atol=1e-6)
+    assert q.shape == (3,)
+
+
+def test_arm_angle_needs_seven_joints(state):
+    with pytest.raises(ConsoleInputError, match="7-DOF"):
+        state.set_arm_angle(0.2)
+
+
+def test_workspace_limits_change_the_workspace_distance(state):
+    d0 = next(r.distance for r in state.snapshot().readout.rows if r.category == "workspace")
+    state.set_workspace("-2.5 -1.5 -1", "2.5 2 1")  # the wall behind the arm tip moves 0.5 m closer
+    d1 = next(r.distance for r in state.snapshot().readout.rows if r.category == "workspace")
+    assert d1 == pytest.approx(d0 - 0.5, abs=1e-9)
