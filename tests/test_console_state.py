@@ -187,3 +187,28 @@ def test_workspace_limits_change_the_workspace_distance(state):
     state.set_workspace("-2.5 -1.5 -1", "2.5 2 1")  # the wall behind the arm tip moves 0.5 m closer
     d1 = next(r.distance for r in state.snapshot().readout.rows if r.category == "workspace")
     assert d1 == pytest.approx(d0 - 0.5, abs=1e-9)
+
+
+def test_arm_angle_moves_the_elbow_and_keeps_the_tool_pose():
+    """A 7-DOF S-R-S arm (shoulder, elbow, wrist spherical; made up for the test): the arm-angle
+    null-space motion keeps the tool pose (to the IK tolerance) while the elbow moves."""
+    from armguard.geometry import Box
+    from armguard.kinematics import Robot
+    from armguard.scene import Scene
+
+    h = math.pi / 2
+    rows = [(0, -h, 0.3, 0), (0, h, 0, 0), (0, -h, 0.4, 0), (0, h, 0, 0), (0, -h, 0.4, 0), (0, h, 0, 0), (0, 0, 0.1, 0)]
+    robot = Robot.from_dh("arm7", rows, lower=[-3.0] * 7, upper=[3.0] * 7)
+    sc = Scene("seven")
+    sc.add_robot(robot, home=[0.1, 0.5, 0.1, 1.0, 0.1, 0.5, 0.1])
+    sc.add_body("block", Box([1.0, 1.0, 0.0], [0.1, 0.1, 0.1]))
+    st = ConsoleState(sc)
+    X0 = st.ee_pose()
+    elbow0 = robot.link_pose(st.snapshot().q["arm7"], "link4")[:3, 3]
+    assert st.set_arm_angle(0.3) == pytest.approx(0.3)
+    q1 = st.snapshot().q["arm7"]
+    np.testing.assert_allclose(st.ee_pose()[:3, 3], X0[:3, 3], atol=1e-5)
+    np.testing.assert_allclose(st.ee_pose()[:3, :3], X0[:3, :3], atol=1e-4)
+    elbow1 = robot.link_pose(q1, "link4")[:3, 3]
+    assert np.linalg.norm(elbow1 - elbow0) > 0.01
+    assert st.snapshot().arm_angle == pytest.approx(0.3)
