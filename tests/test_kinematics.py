@@ -183,6 +183,14 @@ def test_jacobian_equals_finite_differences(which):
         np.testing.assert_allclose(J, _numeric_jacobian(robot, q, link, p_L), atol=1e-7)
 
 
+def test_jacobian_kernel_matches_reference():
+    robot = _tree_robot()
+    q = np.random.default_rng(9).uniform(-2, 2, (7, robot.n_joints))
+    for link in robot.link_names:
+        np.testing.assert_allclose(robot.jacobian(q, link, [0.1, -0.2, 0.3]),
+                                   robot.jacobian_reference(q, link, [0.1, -0.2, 0.3]), atol=1e-14)
+
+
 def test_jacobian_broadcasts_over_batches():
     robot = _tree_robot()
     q = np.random.default_rng(1).uniform(-1, 1, (4, 3, robot.n_joints))

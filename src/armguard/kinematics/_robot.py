@@ -452,6 +452,12 @@ class Robot:
 
         return jacobian(self, self.check_q(q), link, p_L)
 
+    def jacobian_reference(self, q, link: str | None = None, p_L=None) -> np.ndarray:
+        """Slow NumPy Jacobian (one joint column at a time); same contract as :meth:`jacobian`."""
+        from ._jacobian import jacobian_reference
+
+        return jacobian_reference(self, self.check_q(q), link, p_L)
+
     def inverse_kinematics(self, X_WE, *, q_seed=None, link: str | None = None, rng=None,
                            tol: Tolerances = DEFAULT_TOLERANCES):
         """Joint values placing ``link`` (default ``tool_link``) at ``X_WE`` (4, 4); returns an IKResult.
