@@ -52,7 +52,8 @@ def test_joint_into_post_is_red_and_link_named(state):
 
 
 def test_within_threshold_is_yellow(state):
-    # joint1 = 90 - a: the tip sweeps toward the post face; find a clear-but-close pose
+    # at home the nearest pair is 0.3 m apart (link1 to link3 of the straight arm): a 0.5 m
+    # threshold puts it within the threshold without contact
     state.set_threshold(0.5)
     r = state.snapshot().readout
     assert r.status is PanelStatus.WARNING and r.color == "#f2c200" and r.within_threshold
