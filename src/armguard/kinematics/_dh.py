@@ -16,7 +16,7 @@ one ``X_pre = rot(x, alpha) trans(x, a) rot(z, theta) trans(z, d)``, ``X_post = 
 from __future__ import annotations
 
 import math
-from typing import Mapping, Sequence
+from typing import Mapping
 
 import numpy as np
 

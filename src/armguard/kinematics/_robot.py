@@ -6,7 +6,7 @@ import enum
 import math
 import types
 from dataclasses import dataclass, field
-from typing import Callable, Mapping, Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
