@@ -155,6 +155,23 @@ def test_cartesian_line_is_straight_and_reaches_goal(puma):
     assert speed.max() <= 0.1 * (1 + 1e-6)
 
 
+def test_cartesian_line_with_trapezoidal_speed(puma):
+    """Ranger's canned tests: a trapezoidal motion of the end effector along a line."""
+    q0 = np.array([0.2, 0.5, -0.6, 0.3, 0.6, 0.1])
+    X0 = puma.forward_kinematics(q0)[-1]
+    goal = X0.copy()
+    goal[:3, 3] += [0.1, 0.0, -0.05]  # a pure translation of 0.1118 m
+    L = float(np.hypot(0.1, 0.05))
+    tr = Trajectory.cartesian_line(puma, q0, goal, speed=0.1, acceleration=0.2, frequency=200.0)
+    assert tr.duration == pytest.approx(L / 0.1 + 0.1 / 0.2, rel=1e-12)  # D/v + v/a
+    P = puma.forward_kinematics(tr.waypoints)[:, -1, :3, 3]
+    along = (P - X0[:3, 3]) @ (goal[:3, 3] - X0[:3, 3]) / L
+    v = np.diff(along) / np.diff(tr.times)
+    assert v.max() <= 0.1 * (1 + 1e-6) and v.max() > 0.099
+    assert v[0] < 0.01 and v[-1] < 0.01  # starts and ends (nearly) at rest
+    tr.check(puma)  # sampled (constant-speed) segments: joint speeds within limits
+
+
 def test_cartesian_line_relative_to_a_moving_base_frame(puma):
     """WORKMATE: the same relative motion, with the part frame F located at run time."""
     q0 = np.array([0.0, 0.6, -0.7, 0.0, 0.5, 0.0])

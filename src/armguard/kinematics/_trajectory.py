@@ -50,6 +50,14 @@ def _limits(robot, value, default: np.ndarray, name: str) -> np.ndarray:
     return np.minimum(arr, default)  # never faster than the robot allows
 
 
+def _peak_acc_of(traj: "Trajectory", mask: np.ndarray) -> np.ndarray:
+    """Peak joint accelerations over the segments selected by ``mask`` (n_segments,) bool."""
+    dt = np.diff(traj.times)[mask]
+    D = np.abs(np.diff(traj.waypoints, axis=0))[mask]
+    tb = traj.blend_times[mask]
+    return (D / ((dt - tb) * tb)[:, None]).max(axis=0)
+
+
 class Trajectory:
     """An immutable joint-space trajectory.
 
@@ -175,7 +183,9 @@ class Trajectory:
         """Raise TrajectoryError if the trajectory does not fit ``robot``: joint names, limits, max speeds.
 
         Joint limits are checked at the knots (segments are straight lines between them, so a box of
-        limits holds in between); speeds and accelerations at their peaks.
+        limits holds in between); speeds and accelerations at their peaks.  Constant-speed (linear)
+        segments change speed at their knots in a step — a sampled path such as
+        :meth:`cartesian_line` — and are checked for speed only.
         """
         from .._tolerance import DEFAULT_TOLERANCES
 
@@ -188,8 +198,13 @@ class Trajectory:
                 robot.check_limits(q, tol=tol)
             except KinematicsError as exc:
                 raise TrajectoryError(f"waypoints[{k}]: {exc}") from None
-        for name, peak, lim in (("velocity", self.peak_velocity(), robot.max_velocity),
-                                ("acceleration", self.peak_acceleration(), robot.max_acceleration)):
+        linear = self._blend == 0.0
+        if np.all(linear):  # constant-speed segments (dense samples): speeds only, see the docstring
+            checks = (("velocity", self.peak_velocity(), robot.max_velocity),)
+        else:
+            checks = (("velocity", self.peak_velocity(), robot.max_velocity),
+                      ("acceleration", _peak_acc_of(self, ~linear), robot.max_acceleration))
+        for name, peak, lim in checks:
             over = peak > lim * (1.0 + _TIME_SLACK)
             if np.any(over):
                 j = int(np.argmax(over))
@@ -258,22 +273,28 @@ class Trajectory:
 
     @classmethod
     def cartesian_line(cls, robot, q_start, X_WE_goal, *, speed: float = 0.1, angular_speed: float = 0.5,
+                       acceleration: float = math.inf, angular_acceleration: float = math.inf,
                        frequency: float = 50.0, X_WF=None, link: str | None = None, rng=None, tol=None) -> "Trajectory":
         """Straight line of ``link`` (default the tool link) from its pose at ``q_start`` to the goal.
 
         ``X_WE_goal`` (4, 4) is the goal pose relative to frame F, whose pose in W is ``X_WF`` (4, 4,
         default identity) — WORKMATE's variable base frame, e.g. a part located at run time.  The
-        position moves at ``speed`` (m/s), the orientation about a fixed axis at ``angular_speed``
-        (rad/s), whichever takes longer; poses are sampled at ``frequency`` (Hz) and solved by IK
-        (seeded by the previous sample).  Between samples the arm moves on joint-space lines.
+        position moves at up to ``speed`` (m/s), the orientation about a fixed axis at up to
+        ``angular_speed`` (rad/s), synchronised; with finite ``acceleration`` (m/s^2) /
+        ``angular_acceleration`` (rad/s^2) the motion along the line is a trapezoid (Ranger's canned
+        tests move the end effector so), else constant speed.  Poses are sampled at ``frequency`` (Hz)
+        and solved by IK (seeded by the previous sample); between samples the arm moves on
+        joint-space lines (constant speed within a sample interval).
         Raises TrajectoryError naming the sample where IK fails or a joint would exceed its speed.
         """
         from .._tolerance import DEFAULT_TOLERANCES
 
         tol = DEFAULT_TOLERANCES if tol is None else tol
-        for name, val in (("speed", speed), ("angular_speed", angular_speed), ("frequency", frequency)):
-            if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
-                raise TrajectoryError(f"{name}: expected a finite number > 0, got {val!r}")
+        for name, val in (("speed", speed), ("angular_speed", angular_speed), ("frequency", frequency),
+                          ("acceleration", acceleration), ("angular_acceleration", angular_acceleration)):
+            finite_required = name not in ("acceleration", "angular_acceleration")
+            if not (isinstance(val, (int, float)) and val > 0 and (math.isfinite(val) or not finite_required)):
+                raise TrajectoryError(f"{name}: expected a {'finite ' if finite_required else ''}number > 0, got {val!r}")
         try:
             q0 = robot.check_limits(q_start, tol=tol).reshape(robot.n_joints)
             X_WF = np.eye(4) if X_WF is None else _check_X(X_WF, "X_WF")
@@ -284,15 +305,18 @@ class Trajectory:
         dp = X_goal[:3, 3] - X_start[:3, 3]
         w = rotation_vector_from_matrix(X_goal[:3, :3] @ X_start[:3, :3].T)
         angle = float(np.linalg.norm(w))
-        duration = max(float(np.linalg.norm(dp)) / speed, angle / angular_speed)
+        duration, blend = min_time_trapezoid(np.array([float(np.linalg.norm(dp)), angle]),
+                                             np.array([speed, angular_speed], dtype=np.float64),
+                                             np.array([acceleration, angular_acceleration], dtype=np.float64))
         if duration == 0.0:
             raise TrajectoryError("cartesian_line: the goal equals the start pose")
         n = max(1, int(math.ceil(duration * frequency)))
         times = np.linspace(0.0, duration, n + 1)
+        s_path = path_s(times, duration, blend)
         axis = w / angle if angle > 0.0 else np.array([0.0, 0.0, 1.0])
         qs = [q0]
         for k in range(1, n + 1):
-            s = k / n
+            s = float(s_path[k])
             X = np.eye(4)
             X[:3, :3] = rotation_about_axis(axis, s * angle)[:3, :3] @ X_start[:3, :3]
             X[:3, 3] = X_start[:3, 3] + s * dp
