@@ -300,6 +300,17 @@ def test_check_limits_names_the_joint():
         robot.check_limits([0, 0, 0, 1.5, 0, 0])
 
 
+def test_robot_pickles_for_distributed_workers():
+    import pickle
+
+    robot = _tree_robot().with_link_shapes({"e": [Sphere([0, 0, 0.1], 0.05)]})
+    back = pickle.loads(pickle.dumps(robot))
+    q = np.array([0.3, 0.1, -0.2])
+    np.testing.assert_array_equal(back.forward_kinematics(q), robot.forward_kinematics(q))
+    assert back.joint_names == robot.joint_names and back.couplings == robot.couplings
+    assert back.link_shapes["e"][0].radius == 0.05
+
+
 def test_invert_pose_is_inverse():
     X = pose_from_xyz_rpy([1, 2, 3], [0.4, 0.5, 0.6])
     np.testing.assert_allclose(invert_pose(X) @ X, np.eye(4), atol=1e-15)

@@ -94,6 +94,9 @@ class Coupling:
         object.__setattr__(self, "terms", types.MappingProxyType(terms))
         object.__setattr__(self, "offset", _finite(self.offset, f"Coupling({self.joint}).offset"))
 
+    def __reduce__(self):  # mappingproxy does not pickle; rebuild from plain values (Dask workers)
+        return (Coupling, (self.joint, dict(self.terms), self.offset))
+
 
 @dataclass(frozen=True, eq=False)
 class JointSpec:
@@ -334,6 +337,11 @@ class Robot:
             merged[link] = shapes
         return types.MappingProxyType(merged)
 
+    def __reduce__(self):  # rebuild from the constructor's inputs (mappingproxy does not pickle)
+        return (_rebuild_robot, (self._name, self._root, self._specs, dict(
+            joint_names=self._joint_names, link_shapes=dict(self._link_shapes), X_WB=self._X_WB,
+            tool_link=self._tool_link, dh=self._dh)))
+
     def _copy(self, **changes) -> "Robot":
         kw = dict(
             joint_names=self._joint_names, link_shapes=dict(self._link_shapes), X_WB=self._X_WB,
@@ -508,3 +516,7 @@ class Robot:
         from ._urdf import robot_from_urdf
 
         return robot_from_urdf(cls, path, name=name, X_WB=X_WB, load_collision=load_collision, mesh_dir=mesh_dir)
+
+
+def _rebuild_robot(name, root, specs, kwargs) -> Robot:
+    return Robot(name, root, specs, **kwargs)
