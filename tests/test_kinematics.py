@@ -127,6 +127,36 @@ def test_batched_fk_matches_reference_for_any_batch_shape(lead_ndim, size):
     np.testing.assert_allclose(X, robot.forward_kinematics_reference(q), atol=1e-13)
 
 
+def _random_tree(seed: int) -> Robot:
+    """A random tree: parents, joint kinds, axes, origins, post transforms and mimic couplings."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 9))
+    specs, movable = [], []
+    for i in range(1, n + 1):
+        kind = [JointType.FIXED, JointType.REVOLUTE, JointType.PRISMATIC][int(rng.integers(0, 3))]
+        coupling = None
+        if kind is not JointType.FIXED and movable and rng.random() < 0.3:
+            src = movable[int(rng.integers(0, len(movable)))]
+            coupling = Coupling(f"j{i}", {src: float(rng.normal())}, float(rng.normal()))
+        post = pose_from_xyz_rpy(rng.normal(size=3), rng.normal(size=3)) if rng.random() < 0.5 else None
+        specs.append(JointSpec(f"j{i}", kind, f"l{int(rng.integers(0, i))}", f"l{i}",
+                               pose_from_xyz_rpy(rng.normal(size=3), rng.normal(size=3)),
+                               axis=rng.normal(size=3), X_post=post, coupling=coupling))
+        if kind is not JointType.FIXED and coupling is None:
+            movable.append(f"j{i}")
+    return Robot("random", "l0", specs, X_WB=pose_from_xyz_rpy(rng.normal(size=3), rng.normal(size=3)))
+
+
+@SETTINGS
+@given(st.integers(0, 10**6))
+def test_fk_kernel_matches_reference_on_random_trees(seed):
+    robot = _random_tree(seed)
+    q = np.random.default_rng(seed).uniform(-3, 3, (4, robot.n_joints))
+    np.testing.assert_allclose(robot.forward_kinematics(q), robot.forward_kinematics_reference(q), atol=1e-12)
+    np.testing.assert_allclose(robot.jacobian(q[0], robot.link_names[-1], [0.1, 0.2, 0.3]),
+                               robot.jacobian_reference(q[0], robot.link_names[-1], [0.1, 0.2, 0.3]), atol=1e-12)
+
+
 def test_tree_structure_and_coupling_values():
     robot = _tree_robot()
     assert robot.joint_names == ("ja", "jb", "je")

@@ -26,6 +26,7 @@ rot(x, alpha)``; couplings (GMF S-480 parallelogram) and URDF mimic joints are e
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -159,7 +160,7 @@ def _fk_kernel(q, parent, X_pre, axis, jtype, X_post, has_post, offset, term_sta
 def fk_kernel(tree: FlatTree, q: np.ndarray) -> np.ndarray:
     """Batched FK through the numba kernel: ``q`` (..., n) float64 (validated) -> (..., n_links, 4, 4)."""
     lead = q.shape[:-1]
-    q2 = np.ascontiguousarray(q.reshape(-1, q.shape[-1]))
+    q2 = np.ascontiguousarray(q.reshape((math.prod(lead), q.shape[-1])))  # explicit count: n_joints may be 0
     out = np.empty((q2.shape[0], tree.n_links, 4, 4))
     _fk_kernel(
         q2, tree.parent, tree.X_pre, tree.axis, tree.jtype, tree.X_post, tree.has_post,
@@ -198,6 +199,6 @@ def joint_frames_reference(tree: FlatTree, q: np.ndarray) -> tuple[np.ndarray, n
 def fk_reference(tree: FlatTree, q: np.ndarray) -> np.ndarray:
     """Slow reference FK: ``q`` (..., n) -> (..., n_links, 4, 4), one configuration at a time."""
     lead = q.shape[:-1]
-    q2 = q.reshape(-1, q.shape[-1])
+    q2 = q.reshape((math.prod(lead), q.shape[-1]))
     out = np.stack([joint_frames_reference(tree, qi)[0] for qi in q2]) if q2.shape[0] else np.empty((0, tree.n_links, 4, 4))
     return out.reshape(lead + (tree.n_links, 4, 4))

@@ -38,6 +38,10 @@ __all__ = [
 ]
 
 
+_GIMBAL_LOCK = 1e-12
+"""``cos(pitch)`` below which roll and yaw are not separable (only their sum/difference is)."""
+
+
 def _finite_vector(value, n: int, name: str) -> np.ndarray:
     try:
         arr = np.asarray(value, dtype=np.float64)
@@ -109,7 +113,7 @@ def xyz_rpy_from_pose(X) -> tuple[np.ndarray, np.ndarray]:
     sp = -R[2, 0]
     cp = math.hypot(R[0, 0], R[1, 0])
     pitch = math.atan2(sp, cp)
-    if cp > 1e-12:  # not at gimbal lock: cos(pitch) bounded away from 0 at machine precision
+    if cp > _GIMBAL_LOCK:
         roll = math.atan2(R[2, 1], R[2, 2])
         yaw = math.atan2(R[1, 0], R[0, 0])
     else:
@@ -151,13 +155,13 @@ def rotation_vector_from_matrix(R: np.ndarray) -> np.ndarray:
     s = 0.5 * float(np.linalg.norm(w))
     angle = math.atan2(s, c)
     if c > -0.5:  # angle < 2 pi / 3: the skew part is well conditioned
-        if s < 1e-300:
-            return 0.5 * w  # exactly or nearly zero rotation: first order
+        if s == 0.0:
+            return 0.5 * w  # exactly zero rotation (w = 0)
         return w * (angle / (2.0 * s))
     # near pi: axis from the largest diagonal of (R + I) / 2 = k k^T (1 - c)/... + c I
     B = 0.5 * (R + R.T) - c * np.eye(3)
     i = int(np.argmax(np.diag(B)))
-    k = B[:, i] / math.sqrt(max(B[i, i], 1e-300))
+    k = B[:, i] / math.sqrt(B[i, i])  # B[i, i] >= (1 - c) / 3 > 0 for the largest diagonal
     k /= np.linalg.norm(k)
     if float(np.dot(k, w)) < 0.0:
         k = -k

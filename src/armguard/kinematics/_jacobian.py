@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-import numpy as np
+import math
 
+import numpy as np
 from numba import njit
 
 from .._errors import KinematicsError
@@ -62,7 +63,7 @@ def jacobian(robot, q: np.ndarray, link: str | None, p_L) -> np.ndarray:
     i_link = robot.link_index(robot.tool_link if link is None else link)
     p_L = _check_p(p_L)
     lead = q.shape[:-1]
-    X_WL = fk_kernel(tree, q).reshape((-1, tree.n_links, 4, 4))
+    X_WL = fk_kernel(tree, q).reshape((math.prod(lead), tree.n_links, 4, 4))
     J = np.empty((X_WL.shape[0], 6, robot.n_joints))
     _jacobian_kernel(X_WL, i_link, p_L, tree.parent, tree.X_pre, tree.axis, tree.jtype, tree.term_start,
                      tree.term_joint, tree.term_coeff, J)
