@@ -140,6 +140,20 @@ def test_numerical_ik_reports_no_convergence_for_unreachable_pose(seven_dof):
     assert res.position_error > 3.0 and "best" in res.message
 
 
+def test_position_only_ik_for_a_five_joint_arm():
+    """A 5-DOF arm (the rover's instrument arm kind) reaches points, not arbitrary poses."""
+    rows = [DHRow(0.05, math.pi / 2, 0.2), DHRow(0.4, 0, 0), DHRow(0.35, 0, 0), DHRow(0, math.pi / 2, 0),
+            DHRow(0, 0, 0.1)]
+    arm = Robot.from_dh("arm5", rows, lower=[-3] * 5, upper=[3] * 5)
+    q = np.array([0.4, 0.6, -1.1, 0.7, 0.2])
+    target = arm.forward_kinematics(q)[-1] @ pose_from_xyz_rpy([0, 0, 0], [0.4, 0.3, 0.0])  # orientation off
+    full = arm.inverse_kinematics(target, tol=Tolerances(ik_restarts=2, ik_max_iterations=60))
+    assert full.status is IKStatus.NO_CONVERGENCE and full.q is None
+    pos = arm.inverse_kinematics(target, position_only=True)
+    assert pos.ok and pos.position_error <= 1e-9
+    np.testing.assert_allclose(arm.forward_kinematics(pos.q)[-1, :3, 3], target[:3, 3], atol=1e-9)
+
+
 def test_wrong_plugin_never_yields_a_wrong_pose():
     robot = Robot.from_dh("liar", PUMA560_DH)
     register_ik("liar", lambda robot, X_BE, q_seed: [np.full(6, 0.3)])

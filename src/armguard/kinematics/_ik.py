@@ -118,8 +118,11 @@ def _wrap_to_limits(robot, q: np.ndarray, q_ref: np.ndarray) -> np.ndarray:
 
 
 class _Solver:
-    def __init__(self, robot, i_link: int, link: str, X_target: np.ndarray, tol: Tolerances) -> None:
+    def __init__(self, robot, i_link: int, link: str, X_target: np.ndarray, tol: Tolerances,
+                 position_only: bool = False) -> None:
         self.robot, self.i, self.link, self.X, self.tol = robot, i_link, link, X_target, tol
+        self.rows = slice(0, 3) if position_only else slice(0, 6)
+        self.position_only = position_only
         self.lo = np.where(np.isfinite(robot.lower), robot.lower, -np.inf)
         self.hi = np.where(np.isfinite(robot.upper), robot.upper, np.inf)
         self.iterations = 0
@@ -128,23 +131,25 @@ class _Solver:
         return _pose_error(self.robot.forward_kinematics(q)[self.i], self.X)
 
     def converged(self, ep: float, ew: float) -> bool:
-        return ep <= self.tol.ik_position and ew <= self.tol.ik_orientation
+        return ep <= self.tol.ik_position and (self.position_only or ew <= self.tol.ik_orientation)
 
     def run(self, q: np.ndarray, max_iterations: int) -> tuple[np.ndarray, float, float]:
         """Damped least squares from ``q``, projected onto the limits; returns the best (q, e_p, e_w)."""
         q = np.clip(q, self.lo, self.hi)
         e, ep, ew = self.error(q)
+        e = e[self.rows]
         cost = float(e @ e)
         lam = self.tol.ik_damping
         for _ in range(max_iterations):
             if self.converged(ep, ew):
                 break
             self.iterations += 1
-            J = self.robot.jacobian(q, self.link)
-            A = J @ J.T + (lam * lam) * np.eye(6)
+            J = self.robot.jacobian(q, self.link)[self.rows]
+            A = J @ J.T + (lam * lam) * np.eye(J.shape[0])
             dq = J.T @ np.linalg.solve(A, e)
             q_new = np.clip(q + dq, self.lo, self.hi)
             e_new, ep_new, ew_new = self.error(q_new)
+            e_new = e_new[self.rows]
             cost_new = float(e_new @ e_new)
             if cost_new < cost:
                 q, e, ep, ew, cost = q_new, e_new, ep_new, ew_new, cost_new
@@ -167,7 +172,8 @@ def _random_q(robot, rng: np.random.Generator) -> np.ndarray:
     return rng.uniform(lo, hi)
 
 
-def solve_ik(robot, X_WE, *, q_seed=None, link=None, rng=None, tol: Tolerances = DEFAULT_TOLERANCES) -> IKResult:
+def solve_ik(robot, X_WE, *, q_seed=None, link=None, rng=None, tol: Tolerances = DEFAULT_TOLERANCES,
+             position_only: bool = False) -> IKResult:
     """See :meth:`Robot.inverse_kinematics`."""
     X_WE = _check_X(X_WE, "X_WE")
     link = robot.tool_link if link is None else link
@@ -175,8 +181,8 @@ def solve_ik(robot, X_WE, *, q_seed=None, link=None, rng=None, tol: Tolerances =
     q_ref = np.zeros(robot.n_joints) if q_seed is None else robot.check_q(q_seed).reshape(robot.n_joints)
     if rng is None:
         rng = np.random.default_rng(0)  # deterministic by default; pass rng to vary restarts
-    solver = _Solver(robot, i_link, link, X_WE, tol)
-    plugin = ik_plugin(robot.name) if link == robot.tool_link else None
+    solver = _Solver(robot, i_link, link, X_WE, tol, position_only)
+    plugin = ik_plugin(robot.name) if link == robot.tool_link and not position_only else None
     if plugin is not None:
         return _solve_with_plugin(robot, plugin, solver, X_WE, q_seed, q_ref, tol)
     best = (math.inf, math.inf)

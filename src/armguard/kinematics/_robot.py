@@ -467,16 +467,19 @@ class Robot:
         return jacobian_reference(self, self.check_q(q), link, p_L)
 
     def inverse_kinematics(self, X_WE, *, q_seed=None, link: str | None = None, rng=None,
-                           tol: Tolerances = DEFAULT_TOLERANCES):
+                           tol: Tolerances = DEFAULT_TOLERANCES, position_only: bool = False):
         """Joint values placing ``link`` (default ``tool_link``) at ``X_WE`` (4, 4); returns an IKResult.
 
         Uses the plug-in registered for this robot's name (:func:`register_ik`) when ``link`` is
-        the tool link, else damped least squares within limits with random restarts from ``rng``.
-        ``q`` is None unless the status is SUCCESS; a success is verified by forward kinematics.
+        the tool link, else damped least squares within limits, from ``q_seed`` (default zeros) and
+        ``tol.ik_restarts`` random starts drawn from ``rng`` (default ``default_rng(0)``: repeatable).
+        ``position_only`` reaches the position of ``X_WE`` with any orientation (arms with fewer
+        than six joints; numerical solver).  ``q`` is None unless the status is SUCCESS; a success
+        is verified by forward kinematics against ``tol.ik_position`` / ``tol.ik_orientation``.
         """
         from ._ik import solve_ik
 
-        return solve_ik(self, X_WE, q_seed=q_seed, link=link, rng=rng, tol=tol)
+        return solve_ik(self, X_WE, q_seed=q_seed, link=link, rng=rng, tol=tol, position_only=position_only)
 
     # ------------------------------------------------------------------ copies
     def with_base(self, X_WB) -> "Robot":
