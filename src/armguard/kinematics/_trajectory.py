@@ -171,7 +171,7 @@ class Trajectory:
         t = self._times[0] + step * np.arange(n + 1)
         if self._times[-1] - t[-1] > _TIME_SLACK * max(1.0, self.duration):
             t = np.append(t, self._times[-1])
-        t[-1] = min(t[-1], self._times[-1])
+        t[-1] = self._times[-1]  # the end exactly (a last step within round-off of it is snapped)
         return t, self.at(t)
 
     def segments(self) -> Iterator[tuple[float, float, np.ndarray, np.ndarray]]:
