@@ -16,7 +16,9 @@ from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._pair_box_box import box_box_overlap_packed
 from ._pair_gjk import GJK_NOT_CONVERGED, GJK_WORK_SIZE
 from ._pair_sat import convex_convex
+from ._pack import polytope_data
 from ._pair_segment_box import capsule_box_packed
+from ._pair_segment_polytope import capsule_polytope_packed
 from ._pair_segment_segment import capsule_capsule_packed
 from ._proximity import Proximity
 from ._shapes import Box, Capsule, ConvexPolyhedron, CoreKind, Polygon, Prism, Shape, Sphere
@@ -58,6 +60,38 @@ def _box_segment(a, b, tol: Tolerances) -> Proximity:
     return Proximity._from_buffer(d, out)
 
 
+def _not_converged(a, b, tol: Tolerances) -> GeometryError:
+    return GeometryError(
+        f"distance({type(a).__name__}, {type(b).__name__}): GJK did not converge in "
+        f"{tol.gjk_max_iterations} iterations (Tolerances.gjk_max_iterations)"
+    )
+
+
+def _segment_polytope(a, b, tol: Tolerances) -> Proximity:
+    v, pl, ed, bi, cen = polytope_data(b)
+    out = np.empty(9)
+    d, status = capsule_polytope_packed(
+        a._pk, v, pl, ed, bi, cen, b._sat[3], out, tol.length, tol.parallel, tol.gjk_epsilon,
+        tol.gjk_max_iterations, tol.penetration_witness_offset,
+    )
+    if status == GJK_NOT_CONVERGED:
+        raise _not_converged(a, b, tol)
+    return Proximity._from_buffer(d, out)
+
+
+def _polytope_segment(a, b, tol: Tolerances) -> Proximity:
+    v, pl, ed, bi, cen = polytope_data(a)
+    out = np.empty(9)
+    d, status = capsule_polytope_packed(
+        b._pk, v, pl, ed, bi, cen, a._sat[3], out, tol.length, tol.parallel, tol.gjk_epsilon,
+        tol.gjk_max_iterations, tol.penetration_witness_offset,
+    )
+    if status == GJK_NOT_CONVERGED:
+        raise _not_converged(a, b, tol)
+    _swap_out(out)
+    return Proximity._from_buffer(d, out)
+
+
 def _convex(a, b, tol: Tolerances) -> Proximity:
     pa, fa, ea, ra = a._sat
     pb, fb, eb, rb = b._sat
@@ -68,10 +102,7 @@ def _convex(a, b, tol: Tolerances) -> Proximity:
         tol.gjk_max_iterations, tol.penetration_witness_offset,
     )
     if status == GJK_NOT_CONVERGED:
-        raise GeometryError(
-            f"distance({type(a).__name__}, {type(b).__name__}): GJK did not converge in "
-            f"{tol.gjk_max_iterations} iterations (Tolerances.gjk_max_iterations)"
-        )
+        raise _not_converged(a, b, tol)
     return Proximity._from_buffer(d, out)
 
 
@@ -88,10 +119,10 @@ _TABLE = {
     (_B, _P): (_box_segment, "capsule_box (swapped)"),
     (_B, _S): (_box_segment, "capsule_box (swapped)"),
     (_B, _B): (_convex, "convex_convex (GJK + SAT)"),
-    (_P, _T): (_convex, "convex_convex (GJK + SAT)"),
-    (_T, _P): (_convex, "convex_convex (GJK + SAT)"),
-    (_S, _T): (_convex, "convex_convex (GJK + SAT)"),
-    (_T, _S): (_convex, "convex_convex (GJK + SAT)"),
+    (_P, _T): (_segment_polytope, "capsule_polytope (GJK + Minkowski facets)"),
+    (_T, _P): (_polytope_segment, "capsule_polytope (swapped)"),
+    (_S, _T): (_segment_polytope, "capsule_polytope (GJK + Minkowski facets)"),
+    (_T, _S): (_polytope_segment, "capsule_polytope (swapped)"),
     (_B, _T): (_convex, "convex_convex (GJK + SAT)"),
     (_T, _B): (_convex, "convex_convex (GJK + SAT)"),
     (_T, _T): (_convex, "convex_convex (GJK + SAT)"),

@@ -6,7 +6,9 @@ Every shape carries (as private attributes set by its constructor):
   capsule, 7 floats), Capsule ``[p0, p1, r]`` (7), Box ``[c, h, R_WB row-major]`` (15); empty
   for the polytopes;
 * ``_sat``: ``(core_points (n, 3), face_normals (F, 3), edge_directions (E, 3), radius)`` for
-  GJK + SAT, with face normals and edge directions reduced to one per parallel class.
+  GJK + SAT, with face normals and edge directions reduced to one per parallel class;
+* ``_poly`` (polytopes only): faces with offsets and edges with their two faces, for the
+  segment-polytope kernel (see :func:`polytope_data`).
 
 Shapes are immutable, so this is computed once, explicitly, at construction.
 """
@@ -17,7 +19,7 @@ import numpy as np
 
 from .._tolerance import DEFAULT_TOLERANCES
 
-__all__ = ["attach_packed", "unique_directions"]
+__all__ = ["attach_packed", "unique_directions", "polytope_data"]
 
 _EMPTY = np.zeros((0, 3), dtype=np.float64)
 
@@ -93,3 +95,60 @@ def attach_packed(shape) -> None:
     object.__setattr__(
         shape, "_sat", (np.array(pts), np.array(faces), np.array(edges), float(shape.core_radius))
     )
+    if isinstance(shape, (ConvexPolyhedron, Polygon)):
+        polytope_data(shape)
+
+
+def _build_polytope_data(shape):
+    """``(verts, planes, edges, bisectors, centroid)`` of a polytopal core (see polytope_data)."""
+    from ._shapes import Box, Polygon, Prism
+
+    if isinstance(shape, (Box, Prism)):
+        shape = shape.as_polyhedron()
+    if isinstance(shape, Polygon):
+        v = np.asarray(shape.vertices, dtype=np.float64)
+        n = np.asarray(shape.normal, dtype=np.float64)
+        planes = np.array([[*n, shape.offset], [*(-n), -shape.offset]], dtype=np.float64)
+        k = len(v)
+        idx = np.arange(k)
+        edges = np.stack([idx, (idx + 1) % k, np.zeros(k, np.int64), np.ones(k, np.int64)], axis=1)
+        t = v[(idx + 1) % k] - v
+        bis = np.cross(t, n)  # outward in-plane normal of a counter-clockwise polygon
+        bis /= np.linalg.norm(bis, axis=1)[:, None]
+    else:
+        v = np.asarray(shape.vertices, dtype=np.float64)
+        planes = np.asarray(shape.planes, dtype=np.float64)
+        faces_of: dict[tuple[int, int], list[int]] = {}
+        for f, idx in enumerate(shape.faces):
+            for i in range(len(idx)):
+                a, b = int(idx[i]), int(idx[(i + 1) % len(idx)])
+                faces_of.setdefault((min(a, b), max(a, b)), []).append(f)
+        rows = [(a, b, fs[0], fs[1]) for (a, b), fs in sorted(faces_of.items())]
+        edges = np.array(rows, dtype=np.int64).reshape(-1, 4)
+        bis = planes[edges[:, 2], :3] + planes[edges[:, 3], :3]
+    return (
+        np.ascontiguousarray(v),
+        np.ascontiguousarray(planes),
+        np.ascontiguousarray(edges, dtype=np.int64),
+        np.ascontiguousarray(bis, dtype=np.float64),
+        np.ascontiguousarray(v.mean(axis=0)),
+    )
+
+
+def polytope_data(shape):
+    """The H- and V-description of a polytopal core for the segment-polytope kernel.
+
+    Returns ``(verts (V, 3), planes (F, 4), edges (E, 4) int64, bisectors (E, 3), centroid (3,))``:
+    vertices (m); every face as ``[n, o]`` with unit outward ``n`` and ``n . x <= o`` inside (a
+    Polygon has two faces, ``+normal`` and ``-normal``); every edge as ``[v0, v1, f1, f2]``
+    (its vertices and the two faces meeting there) with a vector ``bisectors[e]`` inside the
+    arc of outward normals at the edge (``n_f1 + n_f2``, or a Polygon edge's outward in-plane
+    normal); the vertex centroid (m).  Built once per shape (at construction for
+    ConvexPolyhedron and Polygon, at first use for Box and Prism) and stored as ``_poly``.
+    """
+    try:
+        return shape._poly
+    except AttributeError:
+        data = _build_polytope_data(shape)
+        object.__setattr__(shape, "_poly", data)
+        return data

@@ -9,8 +9,11 @@ dot product, so on polytopes GJK terminates finitely; we stop when the duality g
 ``(|v|^2 - v.w) / |v|`` is below ``gjk_epsilon``, when a support pair repeats, or when ``|v|``
 stops decreasing.  Hitting ``max_iterations`` returns ``GJK_NOT_CONVERGED`` (callers raise).
 
-The simplex lives in a caller-supplied ``work`` array (``GJK_WORK_SIZE`` floats), so the kernel
-allocates nothing.  Core B may be translated by an offset ``o`` without copying its points.
+The simplex lives in local scalars (vertex ``k``: ``w_k`` and the support indices; the witness
+points are rebuilt from indices and weights only when GJK stops), so the kernel allocates
+nothing and touches no memory but the two point sets; the ``work`` argument of the public
+kernels is kept for their stable signatures (callers' scratch lives there).  Core B may be
+translated by an offset ``o`` without copying its points.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ import math
 
 from numba import njit
 
-__all__ = ["GJK_WORK_SIZE", "GJK_SEPARATED", "GJK_INTERSECTING", "GJK_NOT_CONVERGED", "gjk_core"]
+__all__ = ["GJK_WORK_SIZE", "GJK_SEPARATED", "GJK_INTERSECTING", "GJK_NOT_CONVERGED", "gjk_core", "gjk_dir"]
 
 GJK_WORK_SIZE = 64
 """Length of the ``work`` array the GJK kernels need (float64)."""
@@ -30,31 +33,14 @@ GJK_INTERSECTING = 1
 GJK_NOT_CONVERGED = 2
 """Status: ``max_iterations`` reached without meeting the stopping test."""
 
-# work layout: vertex k of the simplex occupies work[9k:9k+9] = [w, a, b]; support indices of
-# vertex k at work[36+k] (A) and work[40+k] (B); work[48:64] is free for callers' scratch
-# (capsule_polytope keeps its segment there).
-
 
 @njit(cache=True, inline="always")
-def _copy_vertex(work, src, dst):  # pragma: no cover - compiled
-    if src != dst:
-        for q in range(9):
-            work[9 * dst + q] = work[9 * src + q]
-        work[36 + dst] = work[36 + src]
-        work[40 + dst] = work[40 + src]
+def _closest_triangle(ax, ay, az, bx, by, bz, cx, cy, cz):  # pragma: no cover - compiled
+    """Ericson ``ClosestPtPointTriangle`` (§5.1.5) with the query point at the origin.
 
-
-@njit(cache=True, inline="always")
-def _w(work, k):  # pragma: no cover - compiled
-    return work[9 * k], work[9 * k + 1], work[9 * k + 2]
-
-
-@njit(cache=True)
-def _closest_triangle(work, ia, ib, ic):  # pragma: no cover - compiled
-    """Ericson ClosestPtPointTriangle with p = 0. Returns (count, i0, i1, i2, l0, l1, l2, vv)."""
-    ax, ay, az = _w(work, ia)
-    bx, by, bz = _w(work, ib)
-    cx, cy, cz = _w(work, ic)
+    Returns ``(mask, la, lb, lc, vv)``: the vertices with non-zero weight (bits 1 = a, 2 = b,
+    4 = c), their barycentric weights and the squared distance of the closest point.
+    """
     abx = bx - ax
     aby = by - ay
     abz = bz - az
@@ -64,52 +50,49 @@ def _closest_triangle(work, ia, ib, ic):  # pragma: no cover - compiled
     d1 = -(abx * ax + aby * ay + abz * az)
     d2 = -(acx * ax + acy * ay + acz * az)
     if d1 <= 0.0 and d2 <= 0.0:
-        return 1, ia, ia, ia, 1.0, 0.0, 0.0, ax * ax + ay * ay + az * az
+        return 1, 1.0, 0.0, 0.0, ax * ax + ay * ay + az * az
     d3 = -(abx * bx + aby * by + abz * bz)
     d4 = -(acx * bx + acy * by + acz * bz)
     if d3 >= 0.0 and d4 <= d3:
-        return 1, ib, ib, ib, 1.0, 0.0, 0.0, bx * bx + by * by + bz * bz
+        return 2, 0.0, 1.0, 0.0, bx * bx + by * by + bz * bz
     vc = d1 * d4 - d3 * d2
     if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
         v = d1 / (d1 - d3)
         px = ax + v * abx
         py = ay + v * aby
         pz = az + v * abz
-        return 2, ia, ib, ib, 1.0 - v, v, 0.0, px * px + py * py + pz * pz
+        return 3, 1.0 - v, v, 0.0, px * px + py * py + pz * pz
     d5 = -(abx * cx + aby * cy + abz * cz)
     d6 = -(acx * cx + acy * cy + acz * cz)
     if d6 >= 0.0 and d5 <= d6:
-        return 1, ic, ic, ic, 1.0, 0.0, 0.0, cx * cx + cy * cy + cz * cz
+        return 4, 0.0, 0.0, 1.0, cx * cx + cy * cy + cz * cz
     vb = d5 * d2 - d1 * d6
     if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
         w = d2 / (d2 - d6)
         px = ax + w * acx
         py = ay + w * acy
         pz = az + w * acz
-        return 2, ia, ic, ic, 1.0 - w, w, 0.0, px * px + py * py + pz * pz
+        return 5, 1.0 - w, 0.0, w, px * px + py * py + pz * pz
     va = d3 * d6 - d5 * d4
     if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
         w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
         px = bx + w * (cx - bx)
         py = by + w * (cy - by)
         pz = bz + w * (cz - bz)
-        return 2, ib, ic, ic, 1.0 - w, w, 0.0, px * px + py * py + pz * pz
+        return 6, 0.0, 1.0 - w, w, px * px + py * py + pz * pz
     denom = 1.0 / (va + vb + vc)
     v = vb * denom
     w = vc * denom
     px = ax + v * abx + w * acx
     py = ay + v * aby + w * acy
     pz = az + v * abz + w * acz
-    return 3, ia, ib, ic, 1.0 - v - w, v, w, px * px + py * py + pz * pz
+    return 7, 1.0 - v - w, v, w, px * px + py * py + pz * pz
 
 
 @njit(cache=True, inline="always")
-def _side(work, ia, ib, ic, idd):  # pragma: no cover - compiled
-    """(origin side, opposite vertex side) of the plane through a, b, c."""
-    ax, ay, az = _w(work, ia)
-    bx, by, bz = _w(work, ib)
-    cx, cy, cz = _w(work, ic)
-    dx, dy, dz = _w(work, idd)
+def _origin_outside(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):  # pragma: no cover
+    """True when the origin is not on ``d``'s side of the plane through ``a, b, c`` (Ericson
+    ``PointOutsideOfPlane``; a degenerate face, ``d`` on its plane, counts as outside)."""
     ux = bx - ax
     uy = by - ay
     uz = bz - az
@@ -121,118 +104,88 @@ def _side(work, ia, ib, ic, idd):  # pragma: no cover - compiled
     nz = ux * vy - uy * vx
     sp = -(nx * ax + ny * ay + nz * az)
     sd = nx * (dx - ax) + ny * (dy - ay) + nz * (dz - az)
-    return sp, sd
+    return sp * sd < 0.0 or sd == 0.0
 
 
-@njit(cache=True)
-def _reduce(work, n):  # pragma: no cover - compiled
-    """Closest point of the simplex work[0:n] to the origin; compacts the simplex.
+@njit(cache=True, inline="always")
+def _closest_simplex(n, x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3):  # pragma: no cover
+    """Johnson's sub-algorithm as Ericson's Voronoi-region tests, on the simplex ``w0 .. w(n-1)``.
 
-    Returns ``(n_new, vx, vy, vz, ax, ay, az, bx, by, bz)``; ``n_new == 4`` means the origin is
-    inside the tetrahedron.
+    Returns ``(mask, l0, l1, l2, l3)``: bit ``k`` of ``mask`` is set when ``w_k`` keeps a
+    non-zero weight ``l_k`` in the point of the simplex closest to the origin; ``mask == 15``
+    means the origin is inside the tetrahedron.
     """
     if n == 1:
-        c = 1
-        i0, i1, i2 = 0, 0, 0
-        l0, l1, l2 = 1.0, 0.0, 0.0
-    elif n == 2:
-        ax, ay, az = _w(work, 0)
-        bx, by, bz = _w(work, 1)
-        ex = bx - ax
-        ey = by - ay
-        ez = bz - az
+        return 1, 1.0, 0.0, 0.0, 0.0
+    if n == 2:
+        ex = x1 - x0
+        ey = y1 - y0
+        ez = z1 - z0
         ee = ex * ex + ey * ey + ez * ez
-        t = -(ax * ex + ay * ey + az * ez)
+        t = -(x0 * ex + y0 * ey + z0 * ez)
         if t <= 0.0 or ee == 0.0:
-            c, i0, i1, i2, l0, l1, l2 = 1, 0, 0, 0, 1.0, 0.0, 0.0
-        elif t >= ee:
-            c, i0, i1, i2, l0, l1, l2 = 1, 1, 1, 1, 1.0, 0.0, 0.0
-        else:
-            t = t / ee
-            c, i0, i1, i2, l0, l1, l2 = 2, 0, 1, 1, 1.0 - t, t, 0.0
-    elif n == 3:
-        c, i0, i1, i2, l0, l1, l2, _vv = _closest_triangle(work, 0, 1, 2)
-    else:
-        best = math.inf
-        c, i0, i1, i2, l0, l1, l2 = 4, 0, 0, 0, 0.0, 0.0, 0.0
-        for f in range(4):
-            if f == 0:
-                fa, fb, fc, fd = 0, 1, 2, 3
-            elif f == 1:
-                fa, fb, fc, fd = 0, 2, 3, 1
-            elif f == 2:
-                fa, fb, fc, fd = 0, 3, 1, 2
-            else:
-                fa, fb, fc, fd = 1, 3, 2, 0
-            sp, sd = _side(work, fa, fb, fc, fd)
-            if sp * sd < 0.0 or sd == 0.0:
-                cc, j0, j1, j2, m0, m1, m2, vv = _closest_triangle(work, fa, fb, fc)
-                if vv < best:
-                    best = vv
-                    c, i0, i1, i2, l0, l1, l2 = cc, j0, j1, j2, m0, m1, m2
-        if c == 4:
-            return 4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    # weight per original slot, then a stable compaction (destination <= source: safe in place)
-    w0 = w1 = w2 = w3 = 0.0
-    for k in range(c):
-        idx = i0 if k == 0 else (i1 if k == 1 else i2)
-        lam = l0 if k == 0 else (l1 if k == 1 else l2)
-        if idx == 0:
-            w0 = lam
-        elif idx == 1:
-            w1 = lam
-        elif idx == 2:
-            w2 = lam
-        else:
-            w3 = lam
-    vx = vy = vz = ax = ay = az = bx = by = bz = 0.0
-    m = 0
-    for j in range(n):
-        lam = w0 if j == 0 else (w1 if j == 1 else (w2 if j == 2 else w3))
-        member = (j == i0) or (c >= 2 and j == i1) or (c >= 3 and j == i2)
-        if not member:
-            continue
-        _copy_vertex(work, j, m)
-        vx += lam * work[9 * m]
-        vy += lam * work[9 * m + 1]
-        vz += lam * work[9 * m + 2]
-        ax += lam * work[9 * m + 3]
-        ay += lam * work[9 * m + 4]
-        az += lam * work[9 * m + 5]
-        bx += lam * work[9 * m + 6]
-        by += lam * work[9 * m + 7]
-        bz += lam * work[9 * m + 8]
-        m += 1
-    c = m
-    return c, vx, vy, vz, ax, ay, az, bx, by, bz
+            return 1, 1.0, 0.0, 0.0, 0.0
+        if t >= ee:
+            return 2, 0.0, 1.0, 0.0, 0.0
+        t = t / ee
+        return 3, 1.0 - t, t, 0.0, 0.0
+    if n == 3:
+        m, la, lb, lc, _vv = _closest_triangle(x0, y0, z0, x1, y1, z1, x2, y2, z2)
+        return m, la, lb, lc, 0.0
+    # tetrahedron (Ericson ClosestPtPointTetrahedron): the best face whose plane separates the
+    # origin from the opposite vertex; none means the origin is inside
+    best = math.inf
+    mask = 15
+    l0 = l1 = l2 = l3 = 0.0
+    if _origin_outside(x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3):
+        m, la, lb, lc, vv = _closest_triangle(x0, y0, z0, x1, y1, z1, x2, y2, z2)
+        if vv < best:
+            best = vv
+            mask = m
+            l0, l1, l2, l3 = la, lb, lc, 0.0
+    if _origin_outside(x0, y0, z0, x2, y2, z2, x3, y3, z3, x1, y1, z1):
+        m, la, lb, lc, vv = _closest_triangle(x0, y0, z0, x2, y2, z2, x3, y3, z3)
+        if vv < best:
+            best = vv
+            mask = (m & 1) | ((m & 2) << 1) | ((m & 4) << 1)
+            l0, l1, l2, l3 = la, 0.0, lb, lc
+    if _origin_outside(x0, y0, z0, x3, y3, z3, x1, y1, z1, x2, y2, z2):
+        m, la, lb, lc, vv = _closest_triangle(x0, y0, z0, x3, y3, z3, x1, y1, z1)
+        if vv < best:
+            best = vv
+            mask = (m & 1) | ((m & 2) << 2) | ((m & 4) >> 1)
+            l0, l1, l2, l3 = la, lc, 0.0, lb
+    if _origin_outside(x1, y1, z1, x3, y3, z3, x2, y2, z2, x0, y0, z0):
+        m, la, lb, lc, vv = _closest_triangle(x1, y1, z1, x3, y3, z3, x2, y2, z2)
+        if vv < best:
+            best = vv
+            mask = ((m & 1) << 1) | ((m & 2) << 2) | m & 4
+            l0, l1, l2, l3 = 0.0, la, lc, lb
+    return mask, l0, l1, l2, l3
+
+
+@njit(cache=True, inline="always")
+def _pick(k, a0, a1, a2, a3):  # pragma: no cover - compiled
+    if k == 0:
+        return a0
+    if k == 1:
+        return a1
+    if k == 2:
+        return a2
+    return a3
 
 
 @njit(cache=True)
-def gjk_core(pa, pb, ox, oy, oz, work, eps_len, gjk_eps, max_iter):  # pragma: no cover - compiled
-    """Closest points of hull(pa) and hull(pb) + o.
+def gjk_dir(pa, pb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter):  # pragma: no cover - compiled
+    """GJK from the initial direction ``d`` (m; pointing from B to A): see :func:`gjk_core`.
 
-    ``pa : (nA, 3)``, ``pb : (nB, 3) float64, m``; ``o`` (m) translates B.  Returns
-    ``(status, dist, ax, ay, az, bx, by, bz)``: core distance and the witness points (B's includes
-    the offset).  ``status`` is one of ``GJK_SEPARATED``, ``GJK_INTERSECTING``,
-    ``GJK_NOT_CONVERGED``.
+    The simplex lives in local scalars: vertex ``k`` is ``w_k = a_k - b_k`` (``x_k, y_k, z_k``)
+    with the support indices ``ia_k, ib_k`` and its weight ``l_k``; the witnesses are rebuilt
+    from the indices and weights only when GJK stops.  Allocation-free.
     """
     na = pa.shape[0]
     nb = pb.shape[0]
-    # start from the support points along the centroid difference (fewer iterations than an
-    # arbitrary vertex pair)
-    gx = gy = gz = 0.0
-    for i in range(na):
-        gx += pa[i, 0]
-        gy += pa[i, 1]
-        gz += pa[i, 2]
-    hx = hy = hz = 0.0
-    for i in range(nb):
-        hx += pb[i, 0]
-        hy += pb[i, 1]
-        hz += pb[i, 2]
-    dx = gx / na - hx / nb - ox
-    dy = gy / na - hy / nb - oy
-    dz = gz / na - hz / nb - oz
+    # the first vertex: supports along d
     ia = 0
     best = -math.inf
     for i in range(na):
@@ -247,21 +200,27 @@ def gjk_core(pa, pb, ox, oy, oz, work, eps_len, gjk_eps, max_iter):  # pragma: n
         if s > best:
             best = s
             ib = i
-    ax = pa[ia, 0]
-    ay = pa[ia, 1]
-    az = pa[ia, 2]
-    bx = pb[ib, 0] + ox
-    by = pb[ib, 1] + oy
-    bz = pb[ib, 2] + oz
-    vx = ax - bx
-    vy = ay - by
-    vz = az - bz
+    x0 = pa[ia, 0] - pb[ib, 0] - ox
+    y0 = pa[ia, 1] - pb[ib, 1] - oy
+    z0 = pa[ia, 2] - pb[ib, 2] - oz
+    ia0 = ia
+    ib0 = ib
+    x1 = y1 = z1 = x2 = y2 = z2 = x3 = y3 = z3 = 0.0
+    ia1 = ib1 = ia2 = ib2 = ia3 = ib3 = 0
+    l0 = 1.0
+    l1 = l2 = l3 = 0.0
+    n = 1
+    vx = x0
+    vy = y0
+    vz = z0
     vv = vx * vx + vy * vy + vz * vz
-    n = 0
     eps2 = eps_len * eps_len
+    status = GJK_NOT_CONVERGED
+    inside = False
     for _it in range(max_iter):
         if vv <= eps2:
-            return GJK_INTERSECTING, math.sqrt(vv), ax, ay, az, bx, by, bz
+            status = GJK_INTERSECTING
+            break
         # support of A along -v, of B along +v
         ia = 0
         best = -math.inf
@@ -277,45 +236,117 @@ def gjk_core(pa, pb, ox, oy, oz, work, eps_len, gjk_eps, max_iter):  # pragma: n
             if s > best:
                 best = s
                 ib = i
-        sax = pa[ia, 0]
-        say = pa[ia, 1]
-        saz = pa[ia, 2]
-        sbx = pb[ib, 0] + ox
-        sby = pb[ib, 1] + oy
-        sbz = pb[ib, 2] + oz
-        wx = sax - sbx
-        wy = say - sby
-        wz = saz - sbz
-        vw = vx * wx + vy * wy + vz * wz
-        if vv - vw <= gjk_eps * math.sqrt(vv):
-            return GJK_SEPARATED, math.sqrt(vv), ax, ay, az, bx, by, bz
-        repeated = False
-        for k in range(n):
-            if work[36 + k] == ia and work[40 + k] == ib:
-                repeated = True
-        if repeated:
-            return GJK_SEPARATED, math.sqrt(vv), ax, ay, az, bx, by, bz
-        base = 9 * n
-        work[base] = wx
-        work[base + 1] = wy
-        work[base + 2] = wz
-        work[base + 3] = sax
-        work[base + 4] = say
-        work[base + 5] = saz
-        work[base + 6] = sbx
-        work[base + 7] = sby
-        work[base + 8] = sbz
-        work[36 + n] = ia
-        work[40 + n] = ib
-        n += 1
-        c, nvx, nvy, nvz, nax, nay, naz, nbx, nby, nbz = _reduce(work, n)
-        if c == 4:
-            return GJK_INTERSECTING, 0.0, ax, ay, az, bx, by, bz
+        wx = pa[ia, 0] - pb[ib, 0] - ox
+        wy = pa[ia, 1] - pb[ib, 1] - oy
+        wz = pa[ia, 2] - pb[ib, 2] - oz
+        if vv - (vx * wx + vy * wy + vz * wz) <= gjk_eps * math.sqrt(vv):
+            status = GJK_SEPARATED
+            break
+        if (
+            (ia == ia0 and ib == ib0)
+            or (n > 1 and ia == ia1 and ib == ib1)
+            or (n > 2 and ia == ia2 and ib == ib2)
+        ):
+            status = GJK_SEPARATED  # a repeated support pair: no progress possible
+            break
+        if n == 1:
+            x1, y1, z1, ia1, ib1 = wx, wy, wz, ia, ib
+        elif n == 2:
+            x2, y2, z2, ia2, ib2 = wx, wy, wz, ia, ib
+        else:
+            x3, y3, z3, ia3, ib3 = wx, wy, wz, ia, ib
+        m, k0, k1, k2, k3 = _closest_simplex(n + 1, x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3)
+        if m == 15:
+            status = GJK_INTERSECTING  # the origin is inside the tetrahedron
+            inside = True
+            break
+        nvx = k0 * x0 + k1 * x1 + k2 * x2 + k3 * x3
+        nvy = k0 * y0 + k1 * y1 + k2 * y2 + k3 * y3
+        nvz = k0 * z0 + k1 * z1 + k2 * z2 + k3 * z3
         nvv = nvx * nvx + nvy * nvy + nvz * nvz
-        if nvv >= vv and n > 1:
-            # no progress (rounding): the previous simplex is the answer
-            return GJK_SEPARATED, math.sqrt(vv), ax, ay, az, bx, by, bz
+        if nvv >= vv:
+            status = GJK_SEPARATED  # no progress (rounding): the previous simplex is the answer
+            break
+        # compact the kept vertices into slots 0 .. c-1, in order
+        c = 0
+        j0 = j1 = j2 = 0
+        for j in range(4):
+            if (m >> j) & 1:
+                if c == 0:
+                    j0 = j
+                elif c == 1:
+                    j1 = j
+                else:
+                    j2 = j
+                c += 1
+        nx0 = _pick(j0, x0, x1, x2, x3)
+        ny0 = _pick(j0, y0, y1, y2, y3)
+        nz0 = _pick(j0, z0, z1, z2, z3)
+        na0 = _pick(j0, ia0, ia1, ia2, ia3)
+        nb0 = _pick(j0, ib0, ib1, ib2, ib3)
+        nl0 = _pick(j0, k0, k1, k2, k3)
+        nx1 = _pick(j1, x0, x1, x2, x3)
+        ny1 = _pick(j1, y0, y1, y2, y3)
+        nz1 = _pick(j1, z0, z1, z2, z3)
+        na1 = _pick(j1, ia0, ia1, ia2, ia3)
+        nb1 = _pick(j1, ib0, ib1, ib2, ib3)
+        nl1 = _pick(j1, k0, k1, k2, k3)
+        nx2 = _pick(j2, x0, x1, x2, x3)
+        ny2 = _pick(j2, y0, y1, y2, y3)
+        nz2 = _pick(j2, z0, z1, z2, z3)
+        na2 = _pick(j2, ia0, ia1, ia2, ia3)
+        nb2 = _pick(j2, ib0, ib1, ib2, ib3)
+        nl2 = _pick(j2, k0, k1, k2, k3)
+        x0, y0, z0, ia0, ib0, l0 = nx0, ny0, nz0, na0, nb0, nl0
+        x1, y1, z1, ia1, ib1, l1 = nx1, ny1, nz1, na1, nb1, nl1 if c > 1 else 0.0
+        x2, y2, z2, ia2, ib2, l2 = nx2, ny2, nz2, na2, nb2, nl2 if c > 2 else 0.0
+        l3 = 0.0
         n = c
         vx, vy, vz, vv = nvx, nvy, nvz, nvv
-        ax, ay, az, bx, by, bz = nax, nay, naz, nbx, nby, nbz
-    return GJK_NOT_CONVERGED, math.sqrt(vv), ax, ay, az, bx, by, bz
+    # witnesses of the current simplex
+    ax = ay = az = bx = by = bz = 0.0
+    for k in range(n):
+        lam = _pick(k, l0, l1, l2, l3)
+        i = _pick(k, ia0, ia1, ia2, ia3)
+        j = _pick(k, ib0, ib1, ib2, ib3)
+        ax += lam * pa[i, 0]
+        ay += lam * pa[i, 1]
+        az += lam * pa[i, 2]
+        bx += lam * pb[j, 0]
+        by += lam * pb[j, 1]
+        bz += lam * pb[j, 2]
+    bx += ox
+    by += oy
+    bz += oz
+    if inside:
+        return status, 0.0, ax, ay, az, bx, by, bz
+    return status, math.sqrt(vv), ax, ay, az, bx, by, bz
+
+
+@njit(cache=True)
+def gjk_core(pa, pb, ox, oy, oz, work, eps_len, gjk_eps, max_iter):  # pragma: no cover - compiled
+    """Closest points of hull(pa) and hull(pb) + o.
+
+    ``pa : (nA, 3)``, ``pb : (nB, 3) float64, m``; ``o`` (m) translates B; ``work`` is unused
+    (kept for the stable signature: the simplex lives in registers, see :func:`gjk_dir`).
+    Returns ``(status, dist, ax, ay, az, bx, by, bz)``: core distance and the witness points
+    (B's includes the offset).  ``status`` is one of ``GJK_SEPARATED``, ``GJK_INTERSECTING``,
+    ``GJK_NOT_CONVERGED``.  Starts from the supports along the centroid difference (fewer
+    iterations than an arbitrary vertex pair).
+    """
+    na = pa.shape[0]
+    nb = pb.shape[0]
+    gx = gy = gz = 0.0
+    for i in range(na):
+        gx += pa[i, 0]
+        gy += pa[i, 1]
+        gz += pa[i, 2]
+    hx = hy = hz = 0.0
+    for i in range(nb):
+        hx += pb[i, 0]
+        hy += pb[i, 1]
+        hz += pb[i, 2]
+    return gjk_dir(
+        pa, pb, ox, oy, oz, gx / na - hx / nb - ox, gy / na - hy / nb - oy, gz / na - hz / nb - oz,
+        eps_len, gjk_eps, max_iter,
+    )

@@ -17,8 +17,9 @@ from numba import njit
 from .._errors import GeometryError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._pair_box_box import box_box_overlap_scalar
-from ._pair_gjk import GJK_NOT_CONVERGED, GJK_WORK_SIZE
-from ._pair_sat import convex_convex_at
+from ._pair_gjk import GJK_NOT_CONVERGED
+from ._pack import polytope_data
+from ._pair_segment_polytope import capsule_polytope_at
 from ._pair_segment_box import capsule_box_scalar
 from ._pair_segment_segment import capsule_capsule_scalar
 from ._shapes import Box, ConvexPolyhedron, Polygon, Prism
@@ -183,33 +184,17 @@ def capsule_box(p0, p1, r, center, half_extents, rotation, tol: Tolerances = DEF
 
 @njit(cache=True)
 def _capsule_convex_loop(
-    a0, a1, ra, hull_of, pv, po, fv, fo, ev, eo, rb, dist, out, status, eps_len, eps_par, gjk_eps, max_iter, offset
+    a0, a1, ra, hull_of, pv, po, pl, fo, ed, eo, bis, cen, rb, dist, out, status, eps_len, eps_par, gjk_eps, max_iter, offset
 ):  # pragma: no cover
-    work = np.empty(GJK_WORK_SIZE)
-    seg = np.empty((2, 3))
-    no_faces = np.zeros((0, 3))
-    edge = np.empty((1, 3))
+    seg = np.empty((2, 3))  # the capsule's core, reused for every pair
     for i in range(dist.shape[0]):
         k = hull_of[i]
         for q in range(3):
             seg[0, q] = a0[i, q]
             seg[1, q] = a1[i, q]
-        ex = a1[i, 0] - a0[i, 0]
-        ey = a1[i, 1] - a0[i, 1]
-        ez = a1[i, 2] - a0[i, 2]
-        le = np.sqrt(ex * ex + ey * ey + ez * ez)
-        if le > eps_len:
-            edge[0, 0] = ex / le
-            edge[0, 1] = ey / le
-            edge[0, 2] = ez / le
-            ea = edge
-            pa = seg
-        else:
-            ea = no_faces
-            pa = seg[0:1]
-        d, s = convex_convex_at(
-            pa, no_faces, ea, ra[i], pv[po[k]:po[k + 1]], fv[fo[k]:fo[k + 1]], ev[eo[k]:eo[k + 1]], rb[k],
-            out, 9 * i, work, eps_len, eps_par, gjk_eps, max_iter, offset,
+        d, s = capsule_polytope_at(
+            seg, ra[i], pv[po[k]:po[k + 1]], pl[fo[k]:fo[k + 1]], ed[eo[k]:eo[k + 1]], bis[eo[k]:eo[k + 1]],
+            cen[k], rb[k], out, 9 * i, eps_len, eps_par, gjk_eps, max_iter, offset,
         )
         dist[i] = d
         if s == GJK_NOT_CONVERGED:
@@ -217,7 +202,7 @@ def _capsule_convex_loop(
 
 
 def capsule_convex(p0, p1, r, hulls, tol: Tolerances = DEFAULT_TOLERANCES) -> BatchProximity:
-    """Capsule (A) - convex polytope (B) signed distances (GJK; SAT for depth).
+    """Capsule (A) - convex polytope (B) signed distances (GJK; Minkowski-facet depth).
 
     ``p0, p1 : (..., 3) m``; ``r : (...) m``.  ``hulls`` is one ConvexPolyhedron / Prism / Box /
     Polygon (every capsule against it) or a sequence of ``H`` of them, in which case the
@@ -235,19 +220,22 @@ def capsule_convex(p0, p1, r, hulls, tol: Tolerances = DEFAULT_TOLERANCES) -> Ba
     lead, n, flat = _flat(arrs)
     a0, a1, ra = flat[:3]
     hull_of = flat[3].astype(np.int64) if many else np.zeros(n, dtype=np.int64)
-    pv = np.ascontiguousarray(np.concatenate([h._sat[0] for h in hs]))
-    fv = np.ascontiguousarray(np.concatenate([h._sat[1] for h in hs]))
-    ev = np.ascontiguousarray(np.concatenate([h._sat[2] for h in hs]))
-    po = np.concatenate([[0], np.cumsum([len(h._sat[0]) for h in hs])]).astype(np.int64)
-    fo = np.concatenate([[0], np.cumsum([len(h._sat[1]) for h in hs])]).astype(np.int64)
-    eo = np.concatenate([[0], np.cumsum([len(h._sat[2]) for h in hs])]).astype(np.int64)
+    data = [polytope_data(h) for h in hs]  # per hull, built once (see _pack.polytope_data)
+
+    def cat(j, dtype=np.float64):
+        return np.ascontiguousarray(np.concatenate([dd[j] for dd in data]), dtype=dtype)
+
+    def offsets(j):
+        return np.concatenate([[0], np.cumsum([len(dd[j]) for dd in data])]).astype(np.int64)
+
+    cen = np.ascontiguousarray(np.stack([dd[4] for dd in data]))
     rb = np.array([h._sat[3] for h in hs])
     dist = np.empty(n)
     out = np.empty(9 * n)
     status = np.zeros(1, dtype=np.int64)
     _capsule_convex_loop(
-        a0, a1, ra, hull_of, pv, po, fv, fo, ev, eo, rb, dist, out, status, tol.length, tol.parallel,
-        tol.gjk_epsilon, tol.gjk_max_iterations, tol.penetration_witness_offset,
+        a0, a1, ra, hull_of, cat(0), offsets(0), cat(1), offsets(1), cat(2, np.int64), offsets(2), cat(3), cen, rb,
+        dist, out, status, tol.length, tol.parallel, tol.gjk_epsilon, tol.gjk_max_iterations, tol.penetration_witness_offset,
     )
     if status[0] == GJK_NOT_CONVERGED:
         raise GeometryError(f"capsule_convex: GJK did not converge in {tol.gjk_max_iterations} iterations")
