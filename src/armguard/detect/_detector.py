@@ -340,11 +340,14 @@ class Detector:
         min_d = np.full((M, 4), np.inf)
         status = np.zeros(M, dtype=np.int64)
         bounds = [(M * k) // n_threads for k in range(n_threads + 1)]
-        args = (self._H, self._MF, self._MI)
+        # each thread gets its own copy of the (small) model buffers: shared arrays would make
+        # the threads contend on their reference counts and cache lines
+        per = [(self._H.copy(), self._MF.copy(), self._MI.copy(), self._prm.copy(), iprm.copy())
+               for _ in range(n_threads)]
 
         def work(k: int) -> int:  # the kernel releases the GIL: threads run in parallel
-            return int(kn.detect_chunk(Q, bounds[k], bounds[k + 1], *args, SF2[k], SI2[k], self._prm, iprm,
-                                       min_d, status))
+            H, MF, MI, prm, ip = per[k]
+            return int(kn.detect_chunk(Q, bounds[k], bounds[k + 1], H, MF, MI, SF2[k], SI2[k], prm, ip, min_d, status))
 
         if n_threads == 1:
             errs = [work(0)]

@@ -243,6 +243,10 @@ def detect_one(q, H, MF, MI, SF, SI, prm, iprm):  # pragma: no cover - compiled
         sphW[g, 1] = X[1, 0] * x + X[1, 1] * y + X[1, 2] * z + X[1, 3]
         sphW[g, 2] = X[2, 0] * x + X[2, 1] * y + X[2, 2] * z + X[2, 3]
         sphW[g, 3] = sph_L[g, 3]
+    s0 = summary[SUM_BEST + 0]
+    s1 = summary[SUM_BEST + 1]
+    s2 = summary[SUM_BEST + 2]
+    s3 = summary[SUM_BEST + 3]
     for c in range(4):
         best[c] = math.inf
         summary[SUM_BEST + c] = -1
@@ -326,10 +330,44 @@ def detect_one(q, H, MF, MI, SF, SI, prm, iprm):  # pragma: no cover - compiled
                 summary[SUM_BEST + c] = p
         # pairs beyond the threshold by their bound: flag 2 (proved), bound kept in plb
     else:
+        # ---- temporal coherence: last check's nearest pair of each category first, so the
+        # category cut-offs are tight from the start (exact mode, single checks only)
+        if mode == MODE_EXACT and use_state:
+            for c in range(4):
+                p = s0 if c == 0 else (s1 if c == 1 else (s2 if c == 2 else s3))
+                if p < 0 or p >= P or pflag[p] == 1:
+                    continue
+                a = pair_a[p]
+                b = pair_b[p]
+                if stamp[1 + a] != stamp_now:
+                    _move_elem(a, Xs, glink, core, vstart, verts_L, vW, box_L, boxW, pstart, fn_L, fnW, estart, ed_L, edW)
+                    stamp[1 + a] = stamp_now
+                if b < 0:
+                    d = wall_distance(a, radius, vW, vstart, ws_lo, ws_hi, out9)
+                else:
+                    if mov_idx[b] >= 0 and stamp[1 + b] != stamp_now:
+                        _move_elem(b, Xs, glink, core, vstart, verts_L, vW, box_L, boxW, pstart, fn_L, fnW, estart, ed_L, edW)
+                        stamp[1 + b] = stamp_now
+                    d, err = pair_distance(a, b, core, radius, vW, vstart, boxW, fnW, pstart, edW, estart, out9, work,
+                                           eps_len, eps_par, gjk_eps, max_iter, woff)
+                    if err != 0:
+                        summary[SUM_ERR] = err
+                        return
+                n_eval += 1
+                pflag[p] = 1
+                pd[p] = d
+                for i in range(6):
+                    pw[p, i] = out9[i]
+                cp = pair_cat[p]
+                if d < best[cp]:
+                    best[cp] = d
+                    summary[SUM_BEST + cp] = p
         # ---- explicit pairs: moving-moving and workspace walls
         for p in range(n_explicit):
             if collided and mode == MODE_YESNO:
                 break
+            if pflag[p] == 1:
+                continue
             a = pair_a[p]
             b = pair_b[p]
             c = pair_cat[p]
@@ -407,7 +445,7 @@ def detect_one(q, H, MF, MI, SF, SI, prm, iprm):  # pragma: no cover - compiled
                     for it in range(bvh_start[node], bvh_start[node] + bvh_count[node]):
                         s = bvh_items[it]
                         p = pair_of[ma, s]
-                        if p < 0:
+                        if p < 0 or pflag[p] == 1:
                             continue
                         c = pair_cat[p]
                         cutp = max(cut0, best[c]) if mode == MODE_EXACT else cut0
