@@ -180,6 +180,11 @@ class Detector:
         self._prm = np.array([self._threshold, self._stopping, self._tol.length, self._tol.parallel,
                               self._tol.gjk_epsilon, self._tol.penetration_witness_offset])
         self._iprm = np.array([kn.MODE_EXACT, 0, self._tol.gjk_max_iterations, 1, 0], dtype=np.int64)
+        self._iprm_by_mode = {}
+        for mode in (kn.MODE_EXACT, kn.MODE_LAZY, kn.MODE_ANYTIME, kn.MODE_YESNO, kn.MODE_ALL):
+            ip = self._iprm.copy()
+            ip[0] = mode
+            self._iprm_by_mode[mode] = ip
         self._q1 = np.zeros((1, m.n_q))
         self._names_a = tuple(cs.owner_names[cs.elem_owner[a]] for a in m.pair_a)
         self._names_b = tuple("workspace" if b < 0 else cs.owner_names[cs.elem_owner[b]] for b in m.pair_b)
@@ -268,17 +273,18 @@ class Detector:
         self._q1[0] = flat
         return self._q1
 
-    def _run(self, q1, mode: int, allowance: int, lazy: bool) -> None:
-        self._iprm[0] = mode
-        self._iprm[1] = allowance
-        self._iprm[4] = 1 if lazy else 0
+    def _run(self, q1, mode: int, allowance: int, lazy: bool) -> tuple[int, int]:
+        iprm = self._iprm_by_mode[mode]
+        if mode == kn.MODE_ANYTIME:
+            iprm[1] = allowance
+            iprm[4] = 1 if lazy else 0
         self._last_mode = mode
-        kn.detect_one(q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm, self._iprm)
-        err = int(self._summary[SUM_ERR])
-        if err == 1:
-            raise DetectionError(f"q contains NaN or infinite values: {q1[0].tolist()}")
-        if err != 0:
+        status, n_eval, err = kn.detect_entry(q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm, iprm)
+        if err:
+            if err == 1:
+                raise DetectionError(f"q contains NaN or infinite values: {q1[0].tolist()}")
             raise DetectionError("a convex distance kernel did not converge (GJK iteration limit); no verdict")
+        return status, n_eval
 
     def check(self, q, *, budget_us: float | None = None, lazy: bool = False) -> DetectionReport:
         """Check configuration ``q`` (mapping robot -> joints, or flat over ``scene.joint_names``).
@@ -296,17 +302,15 @@ class Detector:
             if not (b >= 0.0 and math.isfinite(b)):
                 raise DetectionError(f"budget_us: must be finite and >= 0, got {budget_us!r}")
             allowance = int(max(0.0, b * 1e3) // self._ns_per_pair)
-            self._run(q1, kn.MODE_ANYTIME, allowance, lazy)
+            status, n_eval = self._run(q1, kn.MODE_ANYTIME, allowance, lazy)
         else:
-            self._run(q1, kn.MODE_LAZY if lazy else kn.MODE_EXACT, 0, False)
+            status, n_eval = self._run(q1, kn.MODE_LAZY if lazy else kn.MODE_EXACT, 0, False)
         f = self._SF[self._f_slice].copy()
         i = self._SI[self._i_slice].copy()
-        n_eval = int(self._summary[SUM_NEVAL])
         elapsed = (time.perf_counter() - t0) * 1e6
-        if n_eval > 0:  # the cost model of the anytime mode: an exponential average of µs per pair
+        if n_eval > 0:  # the cost model of the anytime mode: an exponential average of ns per pair
             self._ns_per_pair = 0.8 * self._ns_per_pair + 0.2 * max(elapsed * 1e3 / n_eval, 1.0)
-        return DetectionReport(STATUS_CODES[int(self._summary[SUM_STATUS])], self._threshold, self._stopping, elapsed,
-                               _Raw(self, f, i, n_eval))
+        return DetectionReport(STATUS_CODES[status], self._threshold, self._stopping, elapsed, _Raw(self, f, i, n_eval))
 
     def pair_distances(self, q) -> PairDistances:
         """Every candidate pair's signed distance at ``q`` (no pruning), with witness points."""

@@ -519,3 +519,11 @@ def detect_chunk(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, min_d, status):  # pra
             min_d[m, c] = b[c]
         status[m] = summ[SUM_STATUS]
     return 0
+
+
+@njit(cache=True)
+def detect_entry(q, H, MF, MI, SF, SI, prm, iprm):  # pragma: no cover - compiled
+    """:func:`detect_one`, returning ``(status, n_evaluated, error)`` (saves reads from Python)."""
+    detect_one(q, H, MF, MI, SF, SI, prm, iprm)
+    summary = seg1(SI, H, _K_summary)
+    return summary[SUM_STATUS], summary[SUM_NEVAL], summary[SUM_ERR]
