@@ -42,40 +42,37 @@ from ._pair_segment_segment import write_rounded
 __all__ = ["segment_polytope_depth", "capsule_polytope_at", "capsule_polytope_packed"]
 
 
-@njit(cache=True)
-def segment_polytope_depth(
+@njit(cache=True, inline="always")
+def _depth_facets(
     p0x, p0y, p0z, p1x, p1y, p1z, verts, planes, edges, bis, eps_len, eps_par
 ):  # pragma: no cover - compiled
-    """Core penetration depth of segment ``p0-p1`` (m) in a polytope, by the facets of ``P - S``.
-
-    ``verts (V, 3)`` m, ``planes (F, 4)`` ``[n, o]``, ``edges (E, 4)`` ``[v0, v1, f1, f2]`` int64,
-    ``bis (E, 3)`` (see ``_pack.polytope_data``).  Returns ``(depth, qx, qy, qz)``: moving the
-    segment by ``depth * q`` makes the cores touch (``q`` the polytope's outward facet normal);
-    ``depth < 0`` when the segment is outside the facet's plane (then ``-depth`` is a lower
-    bound on the gap).
-    """
+    """Minimum over the facets of ``P - S``: ``(depth, qx, qy, qz, kind, index)`` with ``kind``
+    0 for face ``index`` of P and 1 for the facet of P's edge ``index`` and the segment."""
     dx = p1x - p0x
     dy = p1y - p0y
     dz = p1z - p0z
-    ld = math.sqrt(dx * dx + dy * dy + dz * dz)
+    dd = dx * dx + dy * dy + dz * dz
     depth = math.inf
     qx = 0.0
     qy = 0.0
     qz = 1.0
+    kind = 0
+    best = 0
     for f in range(planes.shape[0]):
         nx = planes[f, 0]
         ny = planes[f, 1]
         nz = planes[f, 2]
-        s = min(nx * p0x + ny * p0y + nz * p0z, nx * p1x + ny * p1y + nz * p1z)
-        g = planes[f, 3] - s
+        g = planes[f, 3] - min(nx * p0x + ny * p0y + nz * p0z, nx * p1x + ny * p1y + nz * p1z)
         if g < depth:
             depth = g
-            qx = nx
-            qy = ny
-            qz = nz
-    if ld <= eps_len:
-        return depth, qx, qy, qz  # a point core: the faces are all the facets
-    near_parallel = math.sqrt(eps_par)
+            best = f
+    qx = planes[best, 0]
+    qy = planes[best, 1]
+    qz = planes[best, 2]
+    if dd <= eps_len * eps_len:
+        return depth, qx, qy, qz, kind, best  # a point core: the faces are all the facets
+    par2 = eps_par * eps_par * dd
+    near2 = eps_par * dd  # (sqrt(eps_par))^2 |d|^2
     for k in range(edges.shape[0]):
         f1 = edges[k, 2]
         f2 = edges[k, 3]
@@ -91,32 +88,113 @@ def segment_polytope_depth(
         ex = verts[i1, 0] - vx
         ey = verts[i1, 1] - vy
         ez = verts[i1, 2] - vz
-        ux = dy * ez - dz * ey
-        uy = dz * ex - dx * ez
-        uz = dx * ey - dy * ex
-        un = math.sqrt(ux * ux + uy * uy + uz * uz)
-        le = math.sqrt(ex * ex + ey * ey + ez * ez)
-        if un <= eps_par * ld * le or un == 0.0:
+        wx = dy * ez - dz * ey
+        wy = dz * ex - dx * ez
+        wz = dx * ey - dy * ex
+        ww = wx * wx + wy * wy + wz * wz
+        ee = ex * ex + ey * ey + ez * ez
+        if ww <= par2 * ee or ww == 0.0:
             continue  # parallel: the facets are the adjacent faces, already counted
-        if ux * bis[k, 0] + uy * bis[k, 1] + uz * bis[k, 2] < 0.0:
-            un = -un
-        ux /= un
-        uy /= un
-        uz /= un
-        h = ux * vx + uy * vy + uz * vz
-        if un < near_parallel * ld * le and un > -near_parallel * ld * le:
+        if wx * bis[k, 0] + wy * bis[k, 1] + wz * bis[k, 2] < 0.0:
+            wx = -wx
+            wy = -wy
+            wz = -wz
+        # g = w . (v - p0) / |w|; decide g < depth without the root where possible
+        num = wx * (vx - p0x) + wy * (vy - p0y) + wz * (vz - p0z)
+        if ww < near2 * ee:
+            # near-parallel: rounding may take w out of the edge's arc; use the true support
+            h = -math.inf
             for i in range(verts.shape[0]):
-                h = max(h, ux * verts[i, 0] + uy * verts[i, 1] + uz * verts[i, 2])
-        g = h - (ux * p0x + uy * p0y + uz * p0z)
-        if g < depth:
-            depth = g
-            qx = ux
-            qy = uy
-            qz = uz
-    return depth, qx, qy, qz
+                h = max(h, wx * (verts[i, 0] - p0x) + wy * (verts[i, 1] - p0y) + wz * (verts[i, 2] - p0z))
+            num = h
+        if num >= depth * math.sqrt(ww):
+            continue
+        wn = math.sqrt(ww)
+        depth = num / wn
+        qx = wx / wn
+        qy = wy / wn
+        qz = wz / wn
+        kind = 1
+        best = k
+    return depth, qx, qy, qz, kind, best
 
 
 @njit(cache=True)
+def segment_polytope_depth(
+    p0x, p0y, p0z, p1x, p1y, p1z, verts, planes, edges, bis, eps_len, eps_par
+):  # pragma: no cover - compiled
+    """Core penetration depth of segment ``p0-p1`` (m) in a polytope, by the facets of ``P - S``.
+
+    ``verts (V, 3)`` m, ``planes (F, 4)`` ``[n, o]``, ``edges (E, 4)`` ``[v0, v1, f1, f2]`` int64,
+    ``bis (E, 3)`` (see ``_pack.polytope_data``).  Returns ``(depth, qx, qy, qz)``: moving the
+    segment by ``depth * q`` makes the cores touch (``q`` the polytope's outward facet normal);
+    ``depth < 0`` when the segment is outside the facet's plane (then ``-depth`` is a lower
+    bound on the gap).
+    """
+    depth, qx, qy, qz, _kind, _best = _depth_facets(
+        p0x, p0y, p0z, p1x, p1y, p1z, verts, planes, edges, bis, eps_len, eps_par
+    )
+    return depth, qx, qy, qz
+
+
+@njit(cache=True, inline="always")
+def _direct_witness(
+    p0x, p0y, p0z, p1x, p1y, p1z, verts, planes, edges, depth, qx, qy, qz, kind, best, eps_len
+):  # pragma: no cover - compiled
+    """Core witnesses ``(ok, ax, ay, az, bx, by, bz)`` read off the nearest facet of ``P - S``:
+    the segment point and the polytope point that touch after moving the segment by
+    ``depth * q``.  ``ok`` is False when rounding put the point off its facet by more than
+    ``eps_len`` (a near tie between almost parallel facets): the caller then solves for them."""
+    if kind == 0:
+        # face facet: the segment's lowest end point along q, pushed onto the face's plane
+        s0 = qx * p0x + qy * p0y + qz * p0z
+        s1 = qx * p1x + qy * p1y + qz * p1z
+        if s1 < s0:
+            ax, ay, az = p1x, p1y, p1z
+        else:
+            ax, ay, az = p0x, p0y, p0z
+        bx = ax + depth * qx
+        by = ay + depth * qy
+        bz = az + depth * qz
+        worst = -math.inf
+        for f in range(planes.shape[0]):
+            worst = max(worst, planes[f, 0] * bx + planes[f, 1] * by + planes[f, 2] * bz - planes[f, 3])
+        return worst <= eps_len, ax, ay, az, bx, by, bz
+    # edge facet: the points of the segment's and the edge's lines that face each other
+    # across q (Ericson §5.1.8 closest points of two lines)
+    vx = verts[edges[best, 0], 0]
+    vy = verts[edges[best, 0], 1]
+    vz = verts[edges[best, 0], 2]
+    ex = verts[edges[best, 1], 0] - vx
+    ey = verts[edges[best, 1], 1] - vy
+    ez = verts[edges[best, 1], 2] - vz
+    dx = p1x - p0x
+    dy = p1y - p0y
+    dz = p1z - p0z
+    rx = p0x - vx
+    ry = p0y - vy
+    rz = p0z - vz
+    a = dx * dx + dy * dy + dz * dz
+    b = dx * ex + dy * ey + dz * ez
+    c = ex * ex + ey * ey + ez * ez
+    f = ex * rx + ey * ry + ez * rz
+    g = dx * rx + dy * ry + dz * rz
+    den = a * c - b * b
+    s = min(1.0, max(0.0, (b * f - c * g) / den))
+    t = min(1.0, max(0.0, (a * f - b * g) / den))
+    ax = p0x + s * dx
+    ay = p0y + s * dy
+    az = p0z + s * dz
+    bx = vx + t * ex
+    by = vy + t * ey
+    bz = vz + t * ez
+    mx = bx - ax - depth * qx
+    my = by - ay - depth * qy
+    mz = bz - az - depth * qz
+    return mx * mx + my * my + mz * mz <= eps_len * eps_len, ax, ay, az, bx, by, bz
+
+
+@njit(cache=True, inline="always")
 def capsule_polytope_at(
     seg, ra, verts, planes, edges, bis, cen, rb, out, base, eps_len, eps_par, gjk_eps, max_iter, offset
 ):  # pragma: no cover - compiled
@@ -141,8 +219,13 @@ def capsule_polytope_at(
         return write_rounded(ax, ay, az, ra, bx, by, bz, rb, (bx - ax) / d, (by - ay) / d, (bz - az) / d, d, out, base), status
     if status == GJK_NOT_CONVERGED:
         return 0.0, status
-    depth, qx, qy, qz = segment_polytope_depth(p0x, p0y, p0z, p1x, p1y, p1z, verts, planes, edges, bis, eps_len, eps_par)
+    depth, qx, qy, qz, kind, best = _depth_facets(p0x, p0y, p0z, p1x, p1y, p1z, verts, planes, edges, bis, eps_len, eps_par)
     depth = max(depth, 0.0)
+    ok, ax, ay, az, bx, by, bz = _direct_witness(
+        p0x, p0y, p0z, p1x, p1y, p1z, verts, planes, edges, depth, qx, qy, qz, kind, best, eps_len
+    )
+    if ok:
+        return write_rounded(ax, ay, az, ra, bx, by, bz, rb, -qx, -qy, -qz, -depth, out, base), GJK_INTERSECTING
     # B moves along nhat = -q; the cores are then `offset` apart along q
     shift = depth + offset
     status2, _d2, ax, ay, az, bx, by, bz = gjk_dir(
