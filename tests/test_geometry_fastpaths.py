@@ -90,6 +90,14 @@ def test_segment_polytope_depth_closed_forms(p0, p1, depth):
     got, qx, qy, qz = segment_polytope_depth(*p0, *p1, v, pl, ed, bi, TOL.length, TOL.parallel)
     assert got == pytest.approx(depth, abs=1e-12)
     assert np.linalg.norm([qx, qy, qz]) == pytest.approx(1.0, abs=1e-12)
+    # the full kernel: witnesses read off the facet, or (a segment lying along a face, whose
+    # end point is off the face) solved by GJK after the move; either way on both surfaces
+    r = distance(Capsule(p0, p1, 0.0), cube)
+    assert r.distance == pytest.approx(-depth, abs=1e-12)
+    assert np.max(pl[:, :3] @ r.p_WB - pl[:, 3]) == pytest.approx(0.0, abs=1e-9)  # on the cube
+    seg = np.array(p1) - np.array(p0)
+    off = r.p_WA - np.array(p0)
+    assert np.linalg.norm(np.cross(off, seg)) <= 1e-9 * max(1.0, np.linalg.norm(seg))  # on the segment line
 
 
 def test_edge_facet_is_found():

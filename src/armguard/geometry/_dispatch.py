@@ -9,7 +9,7 @@ lookup and one compiled call on the shapes' packed buffers (see ``_pack``).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, types
 
 from .._errors import GeometryError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
@@ -20,7 +20,7 @@ from ._pack import polytope_data
 from ._pair_segment_box import capsule_box_packed
 from ._pair_segment_polytope import capsule_polytope_packed
 from ._pair_segment_segment import capsule_capsule_packed
-from ._proximity import Proximity
+from ._proximity import Proximity, proximity_from_buffer as _proximity
 from ._shapes import Box, Capsule, ConvexPolyhedron, CoreKind, Polygon, Prism, Shape, Sphere
 
 __all__ = ["distance", "intersects", "kernel_name"]
@@ -42,22 +42,44 @@ def _box_capsule_packed(box, cap, out, eps_len, eps_par, offset):  # pragma: no 
     return d
 
 
+# The closed-form kernels are called through their compiled entry points for one explicit
+# signature (C-contiguous float64 buffers, float64 tolerances): numba's dispatcher would type
+# every argument on every call, which costs more than the query itself.  Bound at first use
+# (``Dispatcher.compile`` loads the on-disk cache or compiles), so importing stays cheap.
+_BUF = types.float64[::1]
+_CC_SIG = (_BUF, _BUF, _BUF, types.float64, types.float64)
+_CB_SIG = (_BUF, _BUF, _BUF, types.float64, types.float64, types.float64)
+_cc_entry = None
+_cb_entry = None
+_bc_entry = None
+
+
+def _bind_entries():
+    global _cc_entry, _cb_entry, _bc_entry
+    _cc_entry = capsule_capsule_packed.compile(_CC_SIG)
+    _cb_entry = capsule_box_packed.compile(_CB_SIG)
+    _bc_entry = _box_capsule_packed.compile(_CB_SIG)
+
+
 def _rounded_segments(a, b, tol: Tolerances) -> Proximity:
+    if _cc_entry is None:
+        _bind_entries()
     out = np.empty(9)
-    d = capsule_capsule_packed(a._pk, b._pk, out, tol.length, tol.parallel)
-    return Proximity._from_buffer(d, out)
+    return _proximity(_cc_entry(a._pk, b._pk, out, tol.length, tol.parallel), out)
 
 
 def _segment_box(a, b, tol: Tolerances) -> Proximity:
+    if _cb_entry is None:
+        _bind_entries()
     out = np.empty(9)
-    d = capsule_box_packed(a._pk, b._pk, out, tol.length, tol.parallel, tol.penetration_witness_offset)
-    return Proximity._from_buffer(d, out)
+    return _proximity(_cb_entry(a._pk, b._pk, out, tol.length, tol.parallel, tol.penetration_witness_offset), out)
 
 
 def _box_segment(a, b, tol: Tolerances) -> Proximity:
+    if _bc_entry is None:
+        _bind_entries()
     out = np.empty(9)
-    d = _box_capsule_packed(a._pk, b._pk, out, tol.length, tol.parallel, tol.penetration_witness_offset)
-    return Proximity._from_buffer(d, out)
+    return _proximity(_bc_entry(a._pk, b._pk, out, tol.length, tol.parallel, tol.penetration_witness_offset), out)
 
 
 def _not_converged(a, b, tol: Tolerances) -> GeometryError:
@@ -76,7 +98,7 @@ def _segment_polytope(a, b, tol: Tolerances) -> Proximity:
     )
     if status == GJK_NOT_CONVERGED:
         raise _not_converged(a, b, tol)
-    return Proximity._from_buffer(d, out)
+    return _proximity(d, out)
 
 
 def _polytope_segment(a, b, tol: Tolerances) -> Proximity:
@@ -89,7 +111,7 @@ def _polytope_segment(a, b, tol: Tolerances) -> Proximity:
     if status == GJK_NOT_CONVERGED:
         raise _not_converged(a, b, tol)
     _swap_out(out)
-    return Proximity._from_buffer(d, out)
+    return _proximity(d, out)
 
 
 def _convex(a, b, tol: Tolerances) -> Proximity:
@@ -103,7 +125,7 @@ def _convex(a, b, tol: Tolerances) -> Proximity:
     )
     if status == GJK_NOT_CONVERGED:
         raise _not_converged(a, b, tol)
-    return Proximity._from_buffer(d, out)
+    return _proximity(d, out)
 
 
 _P, _S, _B, _T = CoreKind.POINT, CoreKind.SEGMENT, CoreKind.BOX, CoreKind.POLYTOPE

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["Proximity"]
+__all__ = ["Proximity", "proximity_from_buffer"]
 
 
 class Proximity:
@@ -38,12 +38,7 @@ class Proximity:
     @classmethod
     def _from_buffer(cls, distance: float, buf: np.ndarray) -> "Proximity":
         """Wrap a kernel's ``(9,)`` output ``[p_WA, p_WB, nhat_AB_W]`` without copying."""
-        obj = cls.__new__(cls)
-        # made read-only on first access (see ``_view``): setting the flag costs as much as the
-        # whole single-call query, and nothing else holds a reference to ``buf``
-        object.__setattr__(obj, "_d", float(distance))
-        object.__setattr__(obj, "_buf", buf)
-        return obj
+        return proximity_from_buffer(float(distance), buf)
 
     def _view(self, lo: int, hi: int) -> np.ndarray:
         buf = self._buf
@@ -89,3 +84,19 @@ class Proximity:
         a = np.array2string(self.p_WA, precision=6)
         b = np.array2string(self.p_WB, precision=6)
         return f"Proximity(distance={self._d:.9g}, p_WA={a}, p_WB={b})"
+
+
+_new = object.__new__
+_set_d = Proximity._d.__set__  # the slots' own setters: bypass the immutability guard once
+_set_buf = Proximity._buf.__set__
+
+
+def proximity_from_buffer(distance: float, buf: np.ndarray) -> Proximity:
+    """A :class:`Proximity` wrapping a kernel's ``(9,)`` output without copying (the single-call
+    fast path: ``distance`` is already a Python float from the compiled kernel).  ``buf`` is
+    made read-only on first access (see ``_view``): setting the flag costs as much as the whole
+    query, and nothing else holds a reference to it."""
+    obj = _new(Proximity)
+    _set_d(obj, distance)
+    _set_buf(obj, buf)
+    return obj
