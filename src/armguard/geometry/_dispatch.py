@@ -49,16 +49,23 @@ def _box_capsule_packed(box, cap, out, eps_len, eps_par, offset):  # pragma: no 
 _BUF = types.float64[::1]
 _CC_SIG = (_BUF, _BUF, _BUF, types.float64, types.float64)
 _CB_SIG = (_BUF, _BUF, _BUF, types.float64, types.float64, types.float64)
+_MAT = types.float64[:, ::1]
+_CP_SIG = (
+    _BUF, _MAT, _MAT, types.int64[:, ::1], _MAT, _BUF, types.float64, _BUF,
+    types.float64, types.float64, types.float64, types.int64, types.float64,
+)
 _cc_entry = None
 _cb_entry = None
 _bc_entry = None
+_cp_entry = None
 
 
 def _bind_entries():
-    global _cc_entry, _cb_entry, _bc_entry
+    global _cc_entry, _cb_entry, _bc_entry, _cp_entry
     _cc_entry = capsule_capsule_packed.compile(_CC_SIG)
     _cb_entry = capsule_box_packed.compile(_CB_SIG)
     _bc_entry = _box_capsule_packed.compile(_CB_SIG)
+    _cp_entry = capsule_polytope_packed.compile(_CP_SIG)
 
 
 def _rounded_segments(a, b, tol: Tolerances) -> Proximity:
@@ -90,9 +97,11 @@ def _not_converged(a, b, tol: Tolerances) -> GeometryError:
 
 
 def _segment_polytope(a, b, tol: Tolerances) -> Proximity:
+    if _cp_entry is None:
+        _bind_entries()
     v, pl, ed, bi, cen = polytope_data(b)
     out = np.empty(9)
-    d, status = capsule_polytope_packed(
+    d, status = _cp_entry(
         a._pk, v, pl, ed, bi, cen, b._sat[3], out, tol.length, tol.parallel, tol.gjk_epsilon,
         tol.gjk_max_iterations, tol.penetration_witness_offset,
     )
@@ -102,9 +111,11 @@ def _segment_polytope(a, b, tol: Tolerances) -> Proximity:
 
 
 def _polytope_segment(a, b, tol: Tolerances) -> Proximity:
+    if _cp_entry is None:
+        _bind_entries()
     v, pl, ed, bi, cen = polytope_data(a)
     out = np.empty(9)
-    d, status = capsule_polytope_packed(
+    d, status = _cp_entry(
         b._pk, v, pl, ed, bi, cen, a._sat[3], out, tol.length, tol.parallel, tol.gjk_epsilon,
         tol.gjk_max_iterations, tol.penetration_witness_offset,
     )

@@ -126,12 +126,13 @@ def _build_polytope_data(shape):
         rows = [(a, b, fs[0], fs[1]) for (a, b), fs in sorted(faces_of.items())]
         edges = np.array(rows, dtype=np.int64).reshape(-1, 4)
         bis = planes[edges[:, 2], :3] + planes[edges[:, 3], :3]
+    # private writable copies: numba types read-only arrays on a slow path (see attach_packed)
     return (
-        np.ascontiguousarray(v),
-        np.ascontiguousarray(planes),
-        np.ascontiguousarray(edges, dtype=np.int64),
-        np.ascontiguousarray(bis, dtype=np.float64),
-        np.ascontiguousarray(v.mean(axis=0)),
+        np.array(v, dtype=np.float64, order="C"),
+        np.array(planes, dtype=np.float64, order="C"),
+        np.array(edges, dtype=np.int64, order="C"),
+        np.array(bis, dtype=np.float64, order="C"),
+        np.array(v.mean(axis=0), dtype=np.float64, order="C"),
     )
 
 
