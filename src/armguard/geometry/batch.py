@@ -67,10 +67,19 @@ def _radius(x, name: str) -> np.ndarray:
     return a
 
 
-def _flat(arrays: list[tuple[np.ndarray, tuple]]):
-    """Broadcast leading axes; return the shape and C-contiguous (N, *trailing) copies."""
+def _flat(arrays: list[tuple[np.ndarray, tuple]], copy: bool = True):
+    """Broadcast leading axes; return the shape and (N, *trailing) arrays: C-contiguous copies, or
+    with ``copy=False`` views where the broadcast allows (a shared operand keeps stride 0, so a
+    box shared by a million capsules is not written out a million times)."""
     lead = np.broadcast_shapes(*[a.shape[: a.ndim - len(t)] for a, t in arrays])
     n = int(np.prod(lead, dtype=np.int64))
+    if not copy:
+        out = []
+        for a, t in arrays:
+            b = np.broadcast_to(a, lead + t)
+            v = b.reshape((n,) + t) if b.ndim == len(t) + 1 or b.ndim == len(t) else None
+            out.append(v if v is not None else np.ascontiguousarray(b).reshape((n,) + t))
+        return lead, n, out
     out = [np.ascontiguousarray(np.broadcast_to(a, lead + t).reshape((n,) + t)) for a, t in arrays]
     return lead, n, out
 
@@ -174,7 +183,7 @@ def capsule_box(p0, p1, r, center, half_extents, rotation, tol: Tolerances = DEF
         (_arr(center, "center", (3,), False), (3,)), (_arr(half_extents, "half_extents", (3,), False), (3,)),
         (_arr(rotation, "rotation", (3, 3), False), (3, 3)),
     ]
-    lead, n, (a0, a1, ra, c, hh, R) = _flat(arrs)
+    lead, n, (a0, a1, ra, c, hh, R) = _flat(arrs, copy=False)  # one box for many capsules: no copies
     dist = np.empty(n)
     out = np.empty(9 * n)
     bad = _capsule_box_loop(a0, a1, ra, c, hh, R, dist, out, tol.length, tol.parallel, tol.penetration_witness_offset)
