@@ -24,7 +24,7 @@ def _first_collision_text(r) -> str:
         kind = getattr(getattr(c.feature, "kind", None), "value", None)
         feat = f" {kind} {getattr(c.feature, 'index', '')}".rstrip() if kind else f" {c.feature}"
     p = c.p_W
-    return f"{who} / {c.obstacle}{feat} @ ({p[0]:.3f}, {p[1]:.3f}, {p[2]:.3f}) t={c.time:.2f}s"
+    return f"{who} / {c.obstacle}{feat} at ({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f}) m, t = {c.time:.2f} s"
 
 
 @main.command("demo")
@@ -47,11 +47,13 @@ def demo_cmd(out_dir, scenes, stopping_distances) -> None:
     from ..verify import Verifier
 
     console = Console()
+    if not console.is_terminal:  # piped or under make: don't fold the table into 80 columns
+        console = Console(width=160)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     table = Table(title="armguard: certified verification of the built-in scenes' canned trajectories")
     stopping_distances = stopping_distances or (0.0, HERMES_MAX_STOPPING_DISTANCE)
-    for col in ("scene", "trajectory", "stop dist", "verdict", "first collision: link / object / feature @ point (m)", "min clearance", "time"):
+    for col in ("scene", "trajectory", "stop dist", "verdict", "first collision: link / object feature at point, time", "min clearance", "time"):
         table.add_column(col, overflow="fold")
     colours = {"safe": "green", "collision": "red", "incomplete": "yellow"}
     console.print("compiling kernels (first run only)…", style="dim")

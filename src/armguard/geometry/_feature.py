@@ -50,6 +50,12 @@ class Feature:
     kind: FeatureKind
     index: int
 
+    def __str__(self) -> str:
+        """``"face 6"``, ``"edge 3"``, ``"vertex 0"``, or ``"surface"`` for curved surfaces."""
+        if self.kind is FeatureKind.SURFACE:
+            return "surface"
+        return f"{self.kind.value} {self.index}"
+
 
 BOX_EDGES = np.array(
     [(i, j) for i in range(8) for j in range(i + 1, 8) if np.sum(_BOX_SIGNS[i] != _BOX_SIGNS[j]) == 1],
