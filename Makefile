@@ -6,7 +6,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-$(shell cat pyproject.toml | cksum | cut -d' ' -f1)
 
-.PHONY: run test bench install browser clean
+.PHONY: run test bench install browser clean clean-cache
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -35,5 +35,10 @@ test: $(STAMP) browser
 bench: $(STAMP)
 	$(PY) -m bench
 
-clean:
+## clean-cache: drop numba's on-disk kernel cache (cache=True only notices edits to a kernel's
+## own file, not to the kernels it calls: run this after editing geometry kernels)
+clean-cache:
+	find src -name "*.nbi" -o -name "*.nbc" | xargs rm -f
+
+clean: clean-cache
 	rm -rf $(VENV) build *.egg-info out

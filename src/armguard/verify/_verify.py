@@ -185,6 +185,16 @@ class Verifier:
         return out
 
     # ------------------------------------------------------------ the check
+    def _trajectory_name(self, trajectory) -> str:
+        """The trajectory's own name, else its name among the scene's canned trajectories."""
+        own = getattr(trajectory, "name", None)
+        if own:
+            return str(own)
+        for key, canned in getattr(self.scene, "trajectories", {}).items():
+            if canned is trajectory:
+                return str(key)
+        return "trajectory"
+
     def verify(self, trajectory, *, stopping_distance=0.0, method: str = "certified", frequency: float | None = None,
                joint_step: float | None = None, robot: str | None = None, threshold: float | None = None,
                payload_mass: float = 0.0, name: str | None = None) -> VerificationReport:
@@ -362,7 +372,7 @@ class Verifier:
             threshold=thr,
             scene=str(getattr(self.scene, "name", "scene")),
             robot=rname,
-            trajectory=name or str(getattr(trajectory, "name", None) or "trajectory"),
+            trajectory=name or self._trajectory_name(trajectory),
             duration=float(segs[-1][1] - segs[0][0]),
             elapsed_s=_time.perf_counter() - t_start,
             reason=reason,
