@@ -75,8 +75,21 @@ class Scene:
         self._robot_sources: dict[str, dict] = {}
         # How each file trajectory was described (for save_scene): name -> dict in SI units.
         self._trajectory_specs: dict[str, dict] = {}
+        # Bumped by every change to what is checked (robots, bodies, payloads, workspace, pair
+        # filters), so that precomputed models (Verifier, Guard, Detector) can tell they are stale.
+        self._revision = 0
 
     # ---------------------------------------------------------------- read-only views
+    @property
+    def revision(self) -> int:
+        """A counter bumped by every change to the checked geometry or pair filters.
+
+        A model compiled from the scene (a Verifier's or Guard's clearance model, a Detector)
+        records it and compares it before each query, so a body added after compiling is never
+        silently left out.
+        """
+        return self._revision
+
     @property
     def robots(self) -> Mapping:
         """Robot name -> ``Robot`` (read-only view, insertion order)."""
@@ -115,6 +128,7 @@ class Scene:
     @exclude_adjacent.setter
     def exclude_adjacent(self, value: bool) -> None:
         self._exclude_adjacent = bool(value)
+        self._revision += 1
 
     @property
     def disabled_pairs(self) -> frozenset:
@@ -171,6 +185,7 @@ class Scene:
             self._self_pairs[name] = pairs
         if _source is not None:
             self._robot_sources[name] = _source
+        self._revision += 1
 
     @staticmethod
     def _check_link_pair(robot, pair) -> tuple[str, str]:
@@ -203,6 +218,7 @@ class Scene:
             raise SceneError(f"body {name!r}: category must be one of {list(BODY_CATEGORIES)}, got {category!r}")
         body = Body(name, _check_shapes(shapes, f"body {name!r} shapes"), category)
         self._bodies[name] = body
+        self._revision += 1
         return body
 
     def remove_body(self, name: str) -> Body:
@@ -210,6 +226,7 @@ class Scene:
         if name not in self._bodies:
             raise SceneError(f"unknown body {name!r}; bodies are {list(self._bodies)}")
         self._disabled = {p for p in self._disabled if name not in p}
+        self._revision += 1
         return self._bodies.pop(name)
 
     # ---------------------------------------------------------------- payloads
@@ -224,6 +241,7 @@ class Scene:
         X = _check_pose(np.eye(4) if X_LP is None else X_LP, f"payload {name!r} X_LP")
         p = Payload(name, robot, link, _check_shapes(shapes, f"payload {name!r} shapes"), X)
         self._payloads[name] = p
+        self._revision += 1
         return p
 
     def release_payload(self, name: str, q) -> Body:
@@ -237,6 +255,7 @@ class Scene:
         body = Body(name, shapes, "environment")
         del self._payloads[name]
         self._bodies[name] = body
+        self._revision += 1
         return body
 
     def grasp(self, body: str, robot: str, link: str, q) -> Payload:
@@ -254,17 +273,20 @@ class Scene:
         p = Payload(body, robot, link, shapes, _check_pose(np.eye(4), "X_LP"))
         del self._bodies[body]
         self._payloads[body] = p
+        self._revision += 1
         return p
 
     # ---------------------------------------------------------------- workspace, filters
     def set_workspace(self, lo, hi) -> WorkspaceBox:
         """Set the axis-aligned workspace box (``lo``, ``hi``: (3,) m in W)."""
         self._workspace = WorkspaceBox(lo, hi)
+        self._revision += 1
         return self._workspace
 
     def clear_workspace(self) -> None:
         """Remove the workspace box."""
         self._workspace = None
+        self._revision += 1
 
     def disable_pair(self, a: str, b: str) -> None:
         """Never check owners ``a`` and ``b`` against each other (a robot name stands for all its links)."""
@@ -273,18 +295,22 @@ class Scene:
         if a == b:
             raise SceneError(f"disable_pair: needs two different owners, got {a!r} twice")
         self._disabled.add(frozenset((a, b)))
+        self._revision += 1
 
     def enable_pair(self, a: str, b: str) -> None:
         """Undo :meth:`disable_pair` (no effect when the pair was not disabled)."""
         self._disabled.discard(frozenset((a, b)))
+        self._revision += 1
 
     def set_self_pairs(self, robot: str, pairs) -> None:
         """Hermes-style: check only these own-link pairs of ``robot`` (``None``: all non-adjacent pairs)."""
         r = self._robot(robot)
         if pairs is None:
             self._self_pairs.pop(robot, None)
+            self._revision += 1
             return
         self._self_pairs[robot] = frozenset(self._check_link_pair(r, p) for p in pairs)
+        self._revision += 1
 
     def _check_owner_or_robot(self, n: str) -> None:
         if n in self._robots or n in self._bodies or n in self._payloads:

@@ -118,17 +118,24 @@ class Guard:
         if robot not in scene.robots:
             raise VerificationError(f"robot {robot!r} is not in the scene; robots are {names}")
         self.robot = robot
-        self.model = ClearanceModel(scene, source=source, tol=tol)
+        self._source = source
+        self._q_others = None if q_others is None else dict(q_others)
+        self._prepare()
+
+    def _prepare(self) -> None:
+        """Build the clearance model and the other robots' configuration from the scene as it is now."""
+        scene = self.scene
+        self.model = ClearanceModel(scene, source=self._source, tol=self.tol)
         base = scene.default_q()
-        if q_others is not None:
-            base.update({k: np.asarray(v, dtype=np.float64) for k, v in dict(q_others).items()})
+        if self._q_others is not None:
+            base.update({k: np.asarray(v, dtype=np.float64) for k, v in self._q_others.items()})
         self._base = scene.flat_q(base)
         k0 = 0
         for name, rob in scene.robots.items():
-            if name == robot:
+            if name == self.robot:
                 break
             k0 += len(rob.joint_names)
-        self._k0, self._k1 = k0, k0 + len(scene.robots[robot].joint_names)
+        self._k0, self._k1 = k0, k0 + len(scene.robots[self.robot].joint_names)
 
     def _full(self, q_robot: np.ndarray) -> np.ndarray:
         q = self._base.copy()
@@ -162,6 +169,8 @@ class Guard:
         Exactly one of ``q_cmd_next`` / ``qdot`` / ``target`` (``target`` may come with ``qdot``).
         """
         t_start = _time.perf_counter()
+        if self.model.is_stale():  # the scene changed since the model was built: never guard with the old one
+            self._prepare()
         q = self._check(q, "q")
         if q_cmd_next is not None:
             if qdot is not None or target is not None:

@@ -67,6 +67,8 @@ class ClearanceModel:
             raise VerificationError(f"source: expected one of 'auto', 'detector', 'reference', got {source!r}")
         self.scene = scene
         self.tol = tol
+        #: the scene's revision this model was built from (see :meth:`is_stale`)
+        self.scene_revision = getattr(scene, "revision", None)
         self.joint_names = tuple(scene.joint_names)
         self.n_q = len(self.joint_names)
         q_home = scene.flat_q(scene.default_q())
@@ -123,6 +125,10 @@ class ClearanceModel:
         self._pair_key = {(a, b): i for i, (a, b) in enumerate(zip(pa, pb))}
         self.source = self._pick_source(source)
         self.evaluations = 0
+
+    def is_stale(self) -> bool:
+        """True when the scene changed (a body added, a pair disabled, ...) after this model was built."""
+        return getattr(self.scene, "revision", None) != self.scene_revision
 
     # ----------------------------------------------------------------- sources
     def _pick_source(self, source: str) -> str:

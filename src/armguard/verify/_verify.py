@@ -78,11 +78,17 @@ class Verifier:
     def __init__(self, scene, *, robot: str | None = None, q_others=None, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES) -> None:
         self.scene = scene
         self.tol = tol
-        self.model = ClearanceModel(scene, source=source, tol=tol)
+        self._source = source
         self._robot = robot
-        base = scene.default_q()
-        if q_others is not None:
-            for k, v in dict(q_others).items():
+        self._q_others = None if q_others is None else dict(q_others)
+        self._prepare()
+
+    def _prepare(self) -> None:
+        """Build the clearance model and the other robots' configuration from the scene as it is now."""
+        self.model = ClearanceModel(self.scene, source=self._source, tol=self.tol)
+        base = self.scene.default_q()
+        if self._q_others is not None:
+            for k, v in self._q_others.items():
                 if k not in base:
                     raise VerificationError(f"q_others names unknown robot {k!r}; robots are {list(base)}")
                 base[k] = _finite_array(v, f"q_others[{k!r}]")
@@ -219,6 +225,8 @@ class Verifier:
         mass = float(payload_mass)
         if not math.isfinite(mass) or mass < 0.0:
             raise VerificationError(f"payload_mass: expected a finite number >= 0 (kg), got {mass}")
+        if self.model.is_stale():  # the scene changed since the model was built: never verify against the old one
+            self._prepare()
         rname = self._robot_of(trajectory, robot)
         base, k0, k1 = self._flat(rname)
         segs = self._segments(trajectory)
