@@ -22,7 +22,7 @@ import time as _time
 
 import numpy as np
 
-from .._errors import VerificationError
+from .._errors import KinematicsError, VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._oracle import CATEGORIES, WORKSPACE, ClearanceModel
 from ._report import (
@@ -118,6 +118,17 @@ class Verifier:
                 return base, k0, k0 + len(rob.joint_names)
             k0 += len(rob.joint_names)
         raise VerificationError(f"unknown robot {robot!r}")  # pragma: no cover - checked before
+
+    def _check_knots_in_limits(self, segs, rname: str) -> None:
+        """A knot outside the joint limits is a motion the arm cannot make: no verdict (segments are
+        straight joint-space lines, so knots within the limits keep the whole path within them)."""
+        rob = self.scene.robots[rname]
+        knots = [segs[0][2]] + [sg[3] for sg in segs]
+        for k, q in enumerate(knots):
+            try:
+                rob.check_limits(q, tol=self.tol)
+            except KinematicsError as exc:
+                raise VerificationError(f"trajectory waypoints[{k}]: {exc}") from None
 
     @staticmethod
     def _segments(trajectory):
@@ -230,6 +241,7 @@ class Verifier:
         rname = self._robot_of(trajectory, robot)
         base, k0, k1 = self._flat(rname)
         segs = self._segments(trajectory)
+        self._check_knots_in_limits(segs, rname)
         speeds = self._segment_speeds(trajectory, segs, k0, k1)
         if isinstance(sd, StoppingDistance):
             margins = np.array([sd.at(v, mass) for v in speeds])
