@@ -40,3 +40,15 @@ def test_waypoints_at_the_limits_are_verified():
     arm = sc.robots["arm"]
     tr = Trajectory("arm", arm.joint_names, [0.0, 10.0], [[-3.0, 0.0, 0.0], [3.0, 0.0, 0.0]])
     assert armguard.verify(sc, tr).safe
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [{"threshold": "x"}, {"threshold": [1, 2]}, {"payload_mass": "heavy"}, {"payload_mass": None}],
+    ids=["threshold-text", "threshold-list", "mass-text", "mass-none"],
+)
+def test_non_numeric_arguments_raise_verification_error(kwargs):
+    sc = _scene()
+    tr = Trajectory.joint_interpolated(sc.robots["arm"], [[1.0, 0.0, 0.0], [2.0, 0.0, 0.0]])
+    with pytest.raises(VerificationError):
+        armguard.verify(sc, tr, **kwargs)

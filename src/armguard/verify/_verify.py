@@ -53,6 +53,14 @@ _OBJECTS = {
 }
 
 
+def _float(x, name: str) -> float:
+    """``x`` as a float, or a VerificationError naming the argument (range checks are the caller's)."""
+    try:
+        return float(x)
+    except (TypeError, ValueError):
+        raise VerificationError(f"{name}: expected a number, got {x!r}") from None
+
+
 def _finite_array(x, name: str) -> np.ndarray:
     a = np.asarray(x, dtype=np.float64)
     if not np.all(np.isfinite(a)):
@@ -221,19 +229,19 @@ class Verifier:
             raise VerificationError(f"method: expected 'certified' or 'sampled', got {method!r}")
         sd = check_stopping_distance(stopping_distance)
         if frequency is not None:
-            frequency = float(frequency)
+            frequency = _float(frequency, "frequency")
             if not math.isfinite(frequency) or frequency <= 0.0:
                 raise VerificationError(f"frequency: expected a finite number > 0 (Hz), got {frequency}")
         if joint_step is not None:
-            joint_step = float(joint_step)
+            joint_step = _float(joint_step, "joint_step")
             if not math.isfinite(joint_step) or joint_step <= 0.0:
                 raise VerificationError(f"joint_step: expected a finite number > 0 (rad), got {joint_step}")
         if method == "sampled" and frequency is None and joint_step is None:
             joint_step = DRAKE_JOINT_STEP
-        thr = 0.05 if threshold is None else float(threshold)
+        thr = 0.05 if threshold is None else _float(threshold, "threshold")
         if not math.isfinite(thr) or thr < 0.0:
             raise VerificationError(f"threshold: expected a finite number >= 0 (m), got {thr}")
-        mass = float(payload_mass)
+        mass = _float(payload_mass, "payload_mass")
         if not math.isfinite(mass) or mass < 0.0:
             raise VerificationError(f"payload_mass: expected a finite number >= 0 (kg), got {mass}")
         if self.model.is_stale():  # the scene changed since the model was built: never verify against the old one
