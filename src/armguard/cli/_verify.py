@@ -84,14 +84,26 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
         console.print(r.summary(), highlight=False)
     if report_path:
         p = Path(report_path)
-        p.parent.mkdir(parents=True, exist_ok=True)
         doc = reports[0].to_dict() if len(reports) == 1 else [r.to_dict() for r in reports]
-        p.write_text(json.dumps(doc, indent=2), encoding="utf-8")
+        try:
+            p.parent.mkdir(parents=True, exist_ok=True)
+            p.write_text(json.dumps(doc, indent=2), encoding="utf-8")
+        except OSError as exc:
+            _cannot_write("report", p, exc)
         console.print(f"report: {p}")
     if plot_path:
         p = Path(plot_path)
         for r in reports:
             out = p if len(reports) == 1 else p.with_name(f"{p.stem}_{r.trajectory}{p.suffix or '.png'}")
-            r.plot(out)
+            try:
+                r.plot(out)
+            except OSError as exc:
+                _cannot_write("plot", out, exc)
             console.print(f"plot: {out}")
     sys.exit(0 if all(r.safe for r in reports) else 1)
+
+
+def _cannot_write(what: str, path: Path, exc: OSError) -> None:
+    """One line and exit status 2 (the verdicts above are already printed)."""
+    click.secho(f"error: cannot write the {what} to {path}: {exc.strerror or exc}", fg="red", err=True)
+    sys.exit(2)
