@@ -44,7 +44,11 @@ def _array(value, name: str, ndim: int) -> np.ndarray:
 def _limits(robot, value, default: np.ndarray, name: str) -> np.ndarray:
     if value is None:
         return np.asarray(default, dtype=np.float64)
-    arr = np.broadcast_to(np.asarray(value, dtype=np.float64), (robot.n_joints,)).copy()
+    try:
+        arr = np.broadcast_to(np.asarray(value, dtype=np.float64), (robot.n_joints,)).copy()
+    except (TypeError, ValueError):
+        raise TrajectoryError(f"{name}: expected one number or {robot.n_joints} numbers (one per joint), "
+                              f"got {value!r}") from None
     if np.any(np.isnan(arr)) or np.any(arr <= 0.0):
         raise TrajectoryError(f"{name}: expected values > 0 (one per joint), got {arr.tolist()}")
     return np.minimum(arr, default)  # never faster than the robot allows

@@ -1,0 +1,34 @@
+"""Trajectory builders and files turn bad input into a TrajectoryError / SceneFileError, never a bare numpy error.
+
+Found in review: ``Trajectory.joint_interpolated(robot, W, max_velocity=[1, 2])`` on a 3-joint
+arm (and ``max_velocity="fast"``) raised numpy's ValueError about broadcasting.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from armguard import TrajectoryError
+from armguard.kinematics import Trajectory
+
+from _verify_fixtures import planar_arm
+
+W = [[1.0, 0.0, 0.0], [2.0, 0.5, 0.0]]
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [{"max_velocity": [1.0, 2.0]}, {"max_velocity": "fast"}, {"max_acceleration": [[1.0, 2.0, 3.0]] * 2},
+     {"max_acceleration": {"j1": 1.0}}],
+    ids=["velocity-count", "velocity-text", "acceleration-2d", "acceleration-mapping"],
+)
+def test_bad_limits_raise_trajectory_error(kwargs):
+    with pytest.raises(TrajectoryError, match="max_"):
+        Trajectory.joint_interpolated(planar_arm(), W, **kwargs)
+
+
+def test_scalar_and_per_joint_limits_still_work():
+    arm = planar_arm()  # max_velocity 1 rad/s, max_acceleration 2 rad/s^2 per joint
+    slow = Trajectory.joint_interpolated(arm, W, max_velocity=0.5)
+    same = Trajectory.joint_interpolated(arm, W, max_velocity=[0.5, 0.5, 0.5])
+    assert slow.duration == same.duration > Trajectory.joint_interpolated(arm, W).duration
