@@ -32,3 +32,19 @@ def test_scalar_and_per_joint_limits_still_work():
     slow = Trajectory.joint_interpolated(arm, W, max_velocity=0.5)
     same = Trajectory.joint_interpolated(arm, W, max_velocity=[0.5, 0.5, 0.5])
     assert slow.duration == same.duration > Trajectory.joint_interpolated(arm, W).duration
+
+
+def test_trajectory_file_with_an_integer_beyond_float_range_names_the_key(tmp_path):
+    # found in review: ``times: [0, 1000...0]`` (an integer YAML reads exactly, too big for a
+    # float) escaped as a bare OverflowError
+    path = tmp_path / "big.yaml"
+    path.write_text(
+        "format: armguard.trajectory\nversion: 1\nrobot: arm\njoint_names: [joint1, joint2, joint3]\n"
+        f"times: [0, 1{'0' * 400}]\nwaypoints: [[0, 0, 0], [1, 0, 0]]\n",
+        encoding="utf-8",
+    )
+    from armguard import SceneFileError
+
+    with pytest.raises(SceneFileError) as err:
+        Trajectory.load_yaml(path)
+    assert err.value.file == str(path) and err.value.where == "times"

@@ -49,7 +49,7 @@ def _numbers(d, key: str, ndim: int, file):
     value = d[key]
     try:
         arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):  # OverflowError: an integer beyond float range
         raise _fail(file, key, f"expected {'a list' if ndim == 1 else 'a list of lists'} of numbers") from None
     if arr.ndim != ndim:
         raise _fail(file, key, f"expected {'a list' if ndim == 1 else 'a list of equal-length lists'} of numbers, got shape {arr.shape}")
