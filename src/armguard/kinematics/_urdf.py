@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._errors import SceneFileError
+from .._errors import ArmguardError, SceneFileError
 from ..geometry import Box, Capsule, ConvexPolyhedron, Prism, Sphere
 from ._robot import Coupling, JointSpec, JointType
 
@@ -59,6 +59,20 @@ def _hull_polyhedron(path: Path, scale, X_LC: np.ndarray) -> ConvexPolyhedron:
     return ConvexPolyhedron(p)
 
 
+def _primitive(g, c: np.ndarray, R: np.ndarray):
+    """The shape of a URDF box / sphere / cylinder / capsule element (centre ``c``, rotation ``R`` in L), else None."""
+    if g.box is not None:
+        return Box(c, 0.5 * np.asarray(g.box.size, dtype=np.float64), R)
+    if g.sphere is not None:
+        return Sphere(c, g.sphere.radius)
+    if g.cylinder is not None:
+        return Prism(c, R, g.cylinder.radius, 0.5 * g.cylinder.length, CYLINDER_PRISM_SIDES)
+    if getattr(g, "capsule", None) is not None:
+        half = 0.5 * g.capsule.length * R[:, 2]
+        return Capsule(c - half, c + half, g.capsule.radius)
+    return None
+
+
 def _collision_shapes(urdf, file: str, urdf_dir: Path, mesh_dir) -> dict[str, tuple]:
     shapes: dict[str, list] = {}
     for link in urdf.robot.links:
@@ -68,15 +82,12 @@ def _collision_shapes(urdf, file: str, urdf_dir: Path, mesh_dir) -> dict[str, tu
             X = np.eye(4) if col.origin is None else np.asarray(col.origin, dtype=np.float64)
             g = col.geometry
             c, R = X[:3, 3], X[:3, :3]
-            if g.box is not None:
-                out.append(Box(c, 0.5 * np.asarray(g.box.size, dtype=np.float64), R))
-            elif g.sphere is not None:
-                out.append(Sphere(c, g.sphere.radius))
-            elif g.cylinder is not None:
-                out.append(Prism(c, R, g.cylinder.radius, 0.5 * g.cylinder.length, CYLINDER_PRISM_SIDES))
-            elif getattr(g, "capsule", None) is not None:
-                half = 0.5 * g.capsule.length * R[:, 2]
-                out.append(Capsule(c - half, c + half, g.capsule.radius))
+            try:
+                primitive = _primitive(g, c, R)
+            except ArmguardError as exc:  # a bad size, radius or origin: say which link and element
+                raise SceneFileError(file, where, str(exc)) from None
+            if primitive is not None:
+                out.append(primitive)
             elif g.mesh is not None:
                 path = _resolve_mesh(g.mesh.filename, urdf_dir, mesh_dir)
                 if path is None:
