@@ -58,7 +58,8 @@ class GuardDecision:
     ``predicted_clearance`` (m) a proven lower bound on the clearance along the predicted path
     (up to where a collision was predicted, if one was); ``time_to_collision`` (s) until the
     predicted path first comes within the stopping distance (``inf`` when it does not within the
-    horizon); ``pair`` the owners ``(a, b)`` that decide; ``stopping_distance`` (m) used;
+    horizon; ``0`` when the command gives no speed — a ``target`` alone — since the arm may get
+    there at once); ``pair`` the owners ``(a, b)`` that decide; ``stopping_distance`` (m) used;
     ``evaluations`` clearance evaluations spent; ``elapsed_us`` wall time of the step.
     """
 
@@ -75,6 +76,12 @@ class GuardDecision:
     @property
     def ok(self) -> bool:
         return self.verdict is GuardVerdict.OK
+
+
+def _time_to(s: float, T: float) -> float:
+    """Time (s) to reach fraction ``s`` of a predicted path that takes ``T`` s; 0 when ``s`` is 0 or the
+    duration is unknown (``T`` inf: no commanded speed), never NaN."""
+    return 0.0 if s == 0.0 or math.isinf(T) else s * T
 
 
 class Guard:
@@ -236,9 +243,12 @@ class Guard:
             i = int(np.argmin(gap))
             if gap[i] <= contact:
                 pair = (model.owner_a[i], model.owner_b[i])
-                ttc = s * T
+                ttc = _time_to(s, T)
                 if s == 0.0:
                     why = f"clearance {d[i] * 1e3:.1f} mm is within the stopping distance {m * 1e3:.1f} mm now"
+                elif math.isinf(T):
+                    why = (f"predicted to come within the stopping distance {m * 1e3:.1f} mm at {s:.3f} of the "
+                           "commanded segment (no speed given)")
                 else:
                     why = f"predicted to come within the stopping distance {m * 1e3:.1f} mm in {ttc:.3f} s"
                 return self._decide(GuardVerdict.STOP, why + f" ({pair[0]} / {pair[1]})", now, min(lower, float(d[i])), ttc, pair, m, evals, t_start)
@@ -248,7 +258,7 @@ class Guard:
             s_next = min(1.0, s + step)
             if evals >= _GUARD_EVALUATIONS or not s_next > s:
                 return self._decide(GuardVerdict.STOP, "prediction not finished within its evaluation budget",
-                                    now, lower, s * T, (model.owner_a[i], model.owner_b[i]), m, evals, t_start)
+                                    now, lower, _time_to(s, T), (model.owner_a[i], model.owner_b[i]), m, evals, t_start)
             d_next, _, _ = model.distances(self._full(q + s_next * dq))
             evals += 1
             L = s_next - s
