@@ -13,13 +13,49 @@ import numpy as np
 from .._errors import DetectionError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from . import _kernel as kn
-from ._layout import SUM_BEST, SUM_ERR, SUM_NEVAL, SUM_SIZE, SUM_STATUS, Layout
+from ._layout import EV_W, SUM_BSLOT, SUM_SIZE, Layout
 from ._model import CAT_WORKSPACE, build_model, check_finite_margin
 from ._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, NotEvaluated, PairDistances, PairResult
 
 __all__ = ["Detector"]
 
 _DEFAULT_NS_PER_PAIR = 200.0  # first guess of the cost model, replaced by measurements
+_MIN_ROWS_PER_THREAD = 256  # below this many configurations per thread, a thread costs more than it saves
+
+
+def _readonly(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
+
+
+def _static_polytopes(cs, static_shapes) -> dict:
+    """H/V descriptions (W) of the static polytope elements, concatenated for the kernel.
+
+    For each static element with a polytope core, :func:`armguard.geometry._pack.polytope_data`
+    of its shape (vertices, face planes, edges with their faces, edge bisectors, centroid);
+    ``poly_of (G,)`` maps an element to its polytope number (-1: none), ``pvs``, ``pps``, ``pes``
+    are CSR offsets into the vertex, plane and edge rows.  Built once per ``prepare``."""
+    from ..geometry._pack import polytope_data
+
+    G = cs.n_elements
+    poly_of = np.full(G, -1, np.int64)
+    pv, ppl, ped, pbis, pcen = [], [], [], [], []
+    pvs, pps, pes = [0], [0], [0]
+    for g, shape in static_shapes.items():
+        if g >= G or int(cs.elem_core[g]) != 3:
+            continue
+        try:
+            v, pl, ed, bi, cen = polytope_data(shape)
+        except Exception:  # noqa: BLE001 - no H/V description: the generic convex kernel serves it
+            continue
+        poly_of[g] = len(pcen)
+        pv.append(v); ppl.append(pl); ped.append(ed); pbis.append(bi); pcen.append(cen)
+        pvs.append(pvs[-1] + len(v)); pps.append(pps[-1] + len(pl)); pes.append(pes[-1] + len(ed))
+    cat = lambda parts, w, dt: np.concatenate(parts).astype(dt) if parts else np.zeros((0, w), dt)  # noqa: E731
+    return {"poly_of": poly_of, "pv": cat(pv, 3, np.float64), "ppl": cat(ppl, 4, np.float64),
+            "ped": cat(ped, 4, np.int64), "pbis": cat(pbis, 3, np.float64),
+            "pcen": np.array(pcen, dtype=np.float64).reshape(-1, 3), "pvs": np.array(pvs, np.int64),
+            "pps": np.array(pps, np.int64), "pes": np.array(pes, np.int64)}
 
 
 def _check_length(value, name: str) -> float:
@@ -33,52 +69,50 @@ def _check_length(value, name: str) -> float:
 
 
 class _Raw:
-    """Copies of one check's kernel outputs; builds the report's views on demand."""
+    """Copies of one check's compact kernel outputs; builds the report's views on demand.
 
-    __slots__ = ("det", "f", "i", "n_evaluated", "model")
+    ``f`` ``(n, 7)``: ``[distance, p_WA, p_WB]`` of the ``n`` evaluated pairs in evaluation order;
+    ``i``: the summary slots followed by the ``n`` pair numbers; ``flags`` / ``bounds`` ``(P,)``
+    only for the lazy and anytime modes (their reports name every skipped pair)."""
 
-    def __init__(self, det: "Detector", f: np.ndarray, i: np.ndarray, n_evaluated: int) -> None:
-        self.det, self.f, self.i, self.n_evaluated, self.model = det, f, i, n_evaluated, det._model
+    __slots__ = ("det", "f", "i", "n_evaluated", "flags", "bounds", "mode")
 
-    def _pd(self):
-        P = self.det._P
-        return self.f[:P], self.f[P:7 * P].reshape(P, 6), self.f[7 * P:8 * P]
+    def __init__(self, det: "Detector", f: np.ndarray, i: np.ndarray, n_evaluated: int, flags, bounds, mode) -> None:
+        self.det, self.f, self.i, self.n_evaluated = det, f, i, n_evaluated
+        self.flags, self.bounds, self.mode = flags, bounds, mode
 
-    def pair(self, p: int) -> PairResult:
-        pd, pw, _ = self._pd()
-        return self.det._pair_result(p, float(pd[p]), pw[p, 0:3].copy(), pw[p, 3:6].copy())
+    def row(self, k: int) -> PairResult:
+        r = self.f[k]
+        return self.det._pair_result(int(self.i[SUM_SIZE + k]), float(r[0]), r[1:4].copy(), r[4:7].copy())
 
     def by_category(self) -> dict[str, PairResult]:
-        P = self.det._P
-        summ = self.i[P:P + SUM_SIZE]
         out = {}
         for c in range(4):
-            p = int(summ[SUM_BEST + c])
-            if p >= 0:
-                out[CATEGORIES[c]] = self.pair(p)
+            k = int(self.i[SUM_BSLOT + c])
+            if k >= 0:
+                out[CATEGORIES[c]] = self.row(k)
         return out
 
     def within(self, threshold: float) -> tuple[PairResult, ...]:
-        P = self.det._P
-        pd, _, _ = self._pd()
-        flags = self.i[:P]
-        idx = np.flatnonzero((flags == 1) & (pd <= threshold))
-        idx = idx[np.argsort(pd[idx], kind="stable")]
-        return tuple(self.pair(int(p)) for p in idx)
+        d = self.f[:, 0]
+        idx = np.flatnonzero(d <= threshold)
+        idx = idx[np.lexsort((self.i[SUM_SIZE:][idx], d[idx]))]  # nearest first, ties by pair number
+        return tuple(self.row(int(k)) for k in idx)
 
     def not_evaluated(self) -> tuple[NotEvaluated, ...]:
-        P = self.det._P
-        _, _, plb = self._pd()
-        flags = self.i[:P]
+        if self.flags is None:  # exact: every skipped pair is beyond its category's cut-off
+            return ()
+        det, flags, plb = self.det, self.flags, self.bounds
+        cat = det._model.pair_cat
         out = []
         for p in np.flatnonzero(flags == 0):
-            a, b = self.det._pair_names(int(p))
-            out.append(NotEvaluated(a, b, CATEGORIES[int(self.model.pair_cat[p])], float(plb[p]), int(p)))
-        if self.det._last_mode == kn.MODE_LAZY:  # lazily skipped pairs: proved beyond the threshold
-            thr = max(self.det.threshold, self.det.stopping_distance)
+            a, b = det._pair_names(int(p))
+            out.append(NotEvaluated(a, b, CATEGORIES[int(cat[p])], float(plb[p]), int(p)))
+        if self.mode == kn.MODE_LAZY:  # lazily skipped pairs: proved beyond the threshold
+            thr = max(det.threshold, det.stopping_distance)
             for p in np.flatnonzero(flags == 2):
-                a, b = self.det._pair_names(int(p))
-                out.append(NotEvaluated(a, b, CATEGORIES[int(self.model.pair_cat[p])], max(float(plb[p]), thr), int(p)))
+                a, b = det._pair_names(int(p))
+                out.append(NotEvaluated(a, b, CATEGORIES[int(cat[p])], max(float(plb[p]), thr), int(p)))
         return tuple(out)
 
 
@@ -114,7 +148,6 @@ class Detector:
         self._reach_margin = check_finite_margin(reach_margin)
         self._active = active
         self._ns_per_pair = _DEFAULT_NS_PER_PAIR
-        self._last_mode = kn.MODE_EXACT
         self.prepare()
 
     # ------------------------------------------------------------------ set-up
@@ -139,6 +172,10 @@ class Detector:
         L.add("MF", "static_hi", m.static_hi.reshape(-1, 3)); L.add("MF", "bvh_lo", m.bvh.lo.reshape(-1, 3))
         L.add("MF", "bvh_hi", m.bvh.hi.reshape(-1, 3)); L.add("MF", "lever", lever)
         L.add("MF", "ws", np.concatenate([m.ws_lo, m.ws_hi]))
+        self._static_shapes = self._static_shape_table()
+        poly = _static_polytopes(cs, self._static_shapes)
+        L.add("MF", "pv", poly["pv"]); L.add("MF", "ppl", poly["ppl"]); L.add("MF", "pbis", poly["pbis"])
+        L.add("MF", "pcen", poly["pcen"])
         for name, arr in (("parent", t.parent), ("jtype", t.jtype), ("has_post", t.has_post.astype(np.int64)),
                           ("term_start", t.term_start), ("term_joint", t.term_joint), ("glink", m.elem_glink),
                           ("core", cs.elem_core), ("vstart", cs.elem_vert_start), ("pstart", cs.elem_plane_start),
@@ -148,9 +185,13 @@ class Detector:
                           ("pair_b", m.pair_b), ("pair_cat", m.pair_cat),
                           ("pair_of", m.pair_of.reshape(len(m.mov_ids), max(len(m.st_ids), 1)) if len(m.st_ids) else
                            np.full((len(m.mov_ids), 1), -1)),
-                          ("mov_ids", m.mov_ids)):
+                          ("mov_ids", m.mov_ids), ("ped", poly["ped"]), ("poly_of", poly["poly_of"]),
+                          ("pvs", poly["pvs"]), ("pps", poly["pps"]), ("pes", poly["pes"]),
+                          ("all_p", np.arange(P, dtype=np.int64)),
+                          ("st_mov", m.mov_ids[np.any(m.pair_of >= 0, axis=1)] if len(m.st_ids) else m.mov_ids[:0])):
             L.add("MI", name, arr)
-        # scratch: pd, pw, plb are adjacent (one copy per report), as are pflag and summary
+        # scratch: "ev" holds the evaluated pairs' rows (one copy per report), "summary" and "ev_p"
+        # are adjacent (one copy)
         stack_n = 2 * m.bvh.depth + 8
         static_mask = m.elem_glink < 0
         boxW0 = m.box_local.copy()
@@ -161,27 +202,32 @@ class Detector:
         del static_mask  # static elements are already in W: the scratch starts as their copy
         for name, arr in (("Xs", np.zeros((t.n_links, 4, 4))), ("vW", vW0), ("boxW", boxW0), ("fnW", fnW0),
                           ("edW", edW0), ("sphW", sphW0), ("out9", np.zeros(9)), ("work", np.zeros(64)),
-                          ("gap", np.zeros(stack_n)), ("pd", np.zeros(P)), ("pw", np.zeros((P, 6))),
+                          ("gap", np.zeros(stack_n)), ("ev", np.zeros((P, EV_W))),
                           ("plb", np.zeros(P)), ("last_d", np.zeros(P)), ("last_q", np.zeros((P, nq))),
-                          ("best", np.zeros(4))):
+                          ("best", np.zeros(4)), ("seg", np.zeros((2, 3)))):
             L.add("SF", name, arr)
-        for name, arr in (("pflag", np.zeros(P)), ("summary", np.zeros(SUM_SIZE)), ("stack", np.zeros(stack_n)),
-                          ("order", np.zeros(P)), ("has_last", np.zeros(P)), ("stamp", np.zeros(1 + G))):
+        for name, arr in (("summary", np.full(SUM_SIZE, -1)), ("ev_p", np.zeros(P)), ("pflag", np.zeros(P)),
+                          ("stack", np.zeros(stack_n)), ("order", np.zeros(P)), ("has_last", np.zeros(P)),
+                          ("stamp", np.zeros(1 + G)), ("pstamp", np.zeros(P))):
             L.add("SI", name, arr)
         L.scalar("n_q", m.n_q); L.scalar("n_explicit", m.n_explicit); L.scalar("n_mov", len(m.mov_ids))
         L.scalar("n_st", len(m.st_ids)); L.scalar("n_links", t.n_links)
         self._layout = L
         self._H, self._MF, self._MI, self._SF, self._SI = L.buffers()
         self._P = P
-        off_pd = L._shape["pd"][1]
-        self._f_slice = slice(off_pd, off_pd + 8 * P)
-        self._i_slice = slice(0, P + SUM_SIZE)
+        self._ev_off = L._shape["ev"][1]
+        self._sum_off = L._shape["summary"][1]  # "ev_p" follows it
         self._summary = L.view(self._SI, "summary")
+        self._ev = L.view(self._SF, "ev")
+        self._ev_p = L.view(self._SI, "ev_p")
+        self._all_p = L.view(self._MI, "all_p")
+        self._pflag = L.view(self._SI, "pflag")
+        self._plb = L.view(self._SF, "plb")
         self._prm = np.array([self._threshold, self._stopping, self._tol.length, self._tol.parallel,
                               self._tol.gjk_epsilon, self._tol.penetration_witness_offset])
         self._iprm = np.array([kn.MODE_EXACT, 0, self._tol.gjk_max_iterations, 1, 0], dtype=np.int64)
         self._iprm_by_mode = {}
-        for mode in (kn.MODE_EXACT, kn.MODE_LAZY, kn.MODE_ANYTIME, kn.MODE_YESNO, kn.MODE_ALL):
+        for mode in (kn.MODE_EXACT, kn.MODE_LAZY, kn.MODE_ANYTIME, kn.MODE_YESNO, kn.MODE_ALL, kn.MODE_MIN):
             ip = self._iprm.copy()
             ip[0] = mode
             self._iprm_by_mode[mode] = ip
@@ -189,8 +235,8 @@ class Detector:
         self._names_a = tuple(cs.owner_names[cs.elem_owner[a]] for a in m.pair_a)
         self._names_b = tuple("workspace" if b < 0 else cs.owner_names[cs.elem_owner[b]] for b in m.pair_b)
         self._links_a = tuple(m.link_names[m.elem_glink[a]] for a in m.pair_a)
-        self._static_shapes = self._static_shape_table()
         self._margin_built = margin
+        self._pd_cache = {}
         return self
 
     def _static_shape_table(self) -> dict[int, object]:
@@ -273,13 +319,13 @@ class Detector:
         self._q1[0] = flat
         return self._q1
 
-    def _run(self, q1, mode: int, allowance: int, lazy: bool) -> tuple[int, int]:
+    def _run(self, q1, mode: int, allowance: int, lazy: bool, sel=None) -> tuple[int, int]:
         iprm = self._iprm_by_mode[mode]
         if mode == kn.MODE_ANYTIME:
             iprm[1] = allowance
             iprm[4] = 1 if lazy else 0
-        self._last_mode = mode
-        status, n_eval, err = kn.detect_entry(q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm, iprm)
+        status, n_eval, err = kn.detect_entry(q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm, iprm,
+                                              self._all_p if sel is None else sel)
         if err:
             if err == 1:
                 raise DetectionError(f"q contains NaN or infinite values: {q1[0].tolist()}")
@@ -294,6 +340,9 @@ class Detector:
         every check), pairs are evaluated most likely first, and the report names the pairs
         left with a lower bound on their distance.  ``lazy``: skip pairs whose lower bound
         already exceeds the threshold (exact status; nearest per category exact within it).
+
+        Cost: one numba call and two small copies (the evaluated pairs' rows); the report's
+        ``PairResult`` objects are built on first access.
         """
         t0 = time.perf_counter()
         q1 = self._flat_q(q)
@@ -302,29 +351,67 @@ class Detector:
             if not (b >= 0.0 and math.isfinite(b)):
                 raise DetectionError(f"budget_us: must be finite and >= 0, got {budget_us!r}")
             allowance = int(max(0.0, b * 1e3) // self._ns_per_pair)
-            status, n_eval = self._run(q1, kn.MODE_ANYTIME, allowance, lazy)
+            mode = kn.MODE_ANYTIME
+            status, n_eval = self._run(q1, mode, allowance, lazy)
         else:
-            status, n_eval = self._run(q1, kn.MODE_LAZY if lazy else kn.MODE_EXACT, 0, False)
-        f = self._SF[self._f_slice].copy()
-        i = self._SI[self._i_slice].copy()
+            mode = kn.MODE_LAZY if lazy else kn.MODE_EXACT
+            status, n_eval = self._run(q1, mode, 0, False)
+        o = self._ev_off
+        f = self._SF[o:o + EV_W * n_eval].reshape(n_eval, EV_W).copy()
+        o = self._sum_off
+        i = self._SI[o:o + SUM_SIZE + n_eval].copy()
+        if mode == kn.MODE_EXACT:
+            flags = bounds = None
+        else:
+            flags, bounds = self._pflag.copy(), self._plb.copy()
         elapsed = (time.perf_counter() - t0) * 1e6
         if n_eval > 0:  # the cost model of the anytime mode: an exponential average of ns per pair
             self._ns_per_pair = 0.8 * self._ns_per_pair + 0.2 * max(elapsed * 1e3 / n_eval, 1.0)
-        return DetectionReport(STATUS_CODES[status], self._threshold, self._stopping, elapsed, _Raw(self, f, i, n_eval))
+        return DetectionReport(STATUS_CODES[status], self._threshold, self._stopping, elapsed,
+                               _Raw(self, f, i, n_eval, flags, bounds, mode))
 
-    def pair_distances(self, q) -> PairDistances:
-        """Every candidate pair's signed distance at ``q`` (no pruning), with witness points."""
+    def _selection(self, robot: str | None):
+        """Pair numbers checked by ``pair_distances(q, robot=robot)`` and their static columns (cached)."""
+        hit = self._pd_cache.get(robot)
+        if hit is not None:
+            return hit
+        m = self._model
+        if robot is None:
+            sel = np.arange(self._P, dtype=np.int64)
+        else:
+            if robot not in m.robot_names:
+                raise DetectionError(f"robot: unknown robot {robot!r}; robots are {list(m.robot_names)}")
+            r = m.robot_names.index(robot)
+            cs = m.compiled
+            on_a = cs.elem_robot[m.pair_a] == r
+            on_b = np.where(m.pair_b >= 0, cs.elem_robot[np.maximum(m.pair_b, 0)], -1) == r
+            sel = np.flatnonzero(on_a | on_b).astype(np.int64)
+        la = m.elem_glink[m.pair_a[sel]]
+        pb = m.pair_b[sel]
+        lb = np.where(pb >= 0, m.elem_glink[np.maximum(pb, 0)], -1)
+        ro = lambda a: _readonly(np.ascontiguousarray(a))  # noqa: E731
+        hit = (np.ascontiguousarray(sel), ro(la), ro(m.link_robot[la] if len(la) else la.copy()), ro(lb),
+               ro(m.pair_cat[sel]), tuple(self._names_a[p] for p in sel), tuple(self._names_b[p] for p in sel),
+               ro(sel.copy()))
+        self._pd_cache[robot] = hit
+        return hit
+
+    def pair_distances(self, q, *, robot: str | None = None) -> PairDistances:
+        """Every candidate pair's signed distance at ``q`` (no pruning), with witness points.
+
+        ``robot``: only the pairs with a side on that robot (the moving robot of a trajectory: the
+        other pairs do not change while it moves); None: every candidate pair.  ``pair_index``
+        ``(P,)`` gives each row's pair number (``Detector`` pair order, the index space of
+        ``NotEvaluated.pair_index``).  The arrays are fresh copies (a few hundred ns for ~100
+        pairs), so a result stays valid after the next call.
+        """
+        sel, la, ra, lb, cat, na, nb, pidx = self._selection(robot)
         q1 = self._flat_q(q)
-        self._run(q1, kn.MODE_ALL, 0, False)
-        L, m = self._layout, self._model
-        pw = L.view(self._SF, "pw")
-        la = m.elem_glink[m.pair_a]
-        lb = np.where(m.pair_b >= 0, m.elem_glink[np.maximum(m.pair_b, 0)], -1)
-        return PairDistances(
-            distance=L.view(self._SF, "pd").copy(), p_WA=pw[:, 0:3].copy(), p_WB=pw[:, 3:6].copy(),
-            link_a=la.copy(), robot_a=m.link_robot[la].copy() if len(la) else la.copy(), link_b=lb,
-            category=m.pair_cat.copy(), owner_a=self._names_a, owner_b=self._names_b, link_names=m.link_names,
-        )
+        n = len(sel)
+        self._run(q1, kn.MODE_ALL, 0, False, sel)
+        rows = self._ev[:n]
+        return PairDistances(rows[:, 0].copy(), rows[:, 1:4].copy(), rows[:, 4:7].copy(), la, ra, lb, cat, na, nb,
+                             self._model.link_names, pidx)
 
     def _scratch_rows(self, n_chunks: int):
         return np.tile(self._SF, (n_chunks, 1)), np.tile(self._SI, (n_chunks, 1))
@@ -337,7 +424,7 @@ class Detector:
         if Q.ndim != 2 or Q.shape[1] != self._model.n_q:
             raise DetectionError(f"Q: expected shape (M, {self._model.n_q}), got {Q.shape}")
         M = Q.shape[0]
-        n_threads = max(1, min(M, os.cpu_count() or 1))
+        n_threads = max(1, min(M, os.cpu_count() or 1, -(-M // _MIN_ROWS_PER_THREAD)))
         SF2, SI2 = self._scratch_rows(n_threads)
         iprm = self._iprm.copy()
         iprm[0], iprm[3] = mode, 0
@@ -346,12 +433,12 @@ class Detector:
         bounds = [(M * k) // n_threads for k in range(n_threads + 1)]
         # each thread gets its own copy of the (small) model buffers: shared arrays would make
         # the threads contend on their reference counts and cache lines
-        per = [(self._H.copy(), self._MF.copy(), self._MI.copy(), self._prm.copy(), iprm.copy())
+        per = [(self._H.copy(), self._MF.copy(), self._MI.copy(), self._prm.copy(), iprm.copy(), self._all_p.copy())
                for _ in range(n_threads)]
 
         def work(k: int) -> int:  # the kernel releases the GIL: threads run in parallel
-            H, MF, MI, prm, ip = per[k]
-            return int(kn.detect_chunk(Q, bounds[k], bounds[k + 1], H, MF, MI, SF2[k], SI2[k], prm, ip, min_d, status))
+            H, MF, MI, prm, ip, sel = per[k]
+            return int(kn.detect_rows(Q, bounds[k], bounds[k + 1], H, MF, MI, SF2[k], SI2[k], prm, ip, sel, min_d, status))
 
         if n_threads == 1:
             errs = [work(0)]
@@ -368,7 +455,7 @@ class Detector:
 
     def check_many(self, Q) -> BatchReport:
         """Exact per-category nearest distances and status for each row of ``Q`` ``(M, n_q)``, in parallel."""
-        min_d, status = self._many(Q, kn.MODE_EXACT)
+        min_d, status = self._many(Q, kn.MODE_MIN)
         return BatchReport(min_d, status == kn.ST_COLLISION, status.astype(np.int8), self._threshold, self._stopping)
 
     def check_many_bruteforce(self, Q) -> BatchReport:

@@ -18,16 +18,16 @@ __all__ = ["Layout", "seg1", "seg2", "seg3"]
 
 # model floats
 MF = ("X_pre", "axis", "X_post", "offset", "term_coeff", "radius", "verts_L", "box_L", "fn_L", "ed_L",
-      "sph_L", "static_lo", "static_hi", "bvh_lo", "bvh_hi", "lever", "ws")
+      "sph_L", "static_lo", "static_hi", "bvh_lo", "bvh_hi", "lever", "ws", "pv", "ppl", "pbis", "pcen")
 # model ints
 MI = ("parent", "jtype", "has_post", "term_start", "term_joint", "glink", "core", "vstart", "pstart",
       "estart", "mov_idx", "st_idx", "bvh_left", "bvh_right", "bvh_start", "bvh_count", "bvh_items",
-      "pair_a", "pair_b", "pair_cat", "pair_of", "mov_ids")
+      "pair_a", "pair_b", "pair_cat", "pair_of", "mov_ids", "ped", "poly_of", "pvs", "pps", "pes", "all_p", "st_mov")
 # scratch / state / output floats
-SFN = ("Xs", "vW", "boxW", "fnW", "edW", "sphW", "out9", "work", "gap", "pd", "pw", "plb", "last_d",
-       "last_q", "best")
+SFN = ("Xs", "vW", "boxW", "fnW", "edW", "sphW", "out9", "work", "gap", "ev", "plb", "last_d",
+       "last_q", "best", "seg")
 # scratch / state / output ints
-SIN = ("pflag", "summary", "stack", "order", "has_last", "stamp")
+SIN = ("summary", "ev_p", "pflag", "stack", "order", "has_last", "stamp", "pstamp")
 # scalar slots after the segments
 SCALARS = ("n_q", "n_explicit", "n_mov", "n_st", "n_links", "stamp_now")
 
@@ -36,12 +36,14 @@ K = {name: k for k, name in enumerate(_ALL)}
 S0 = 2 * len(_ALL)  # first scalar slot
 SC = {name: S0 + k for k, name in enumerate(SCALARS)}
 
-# summary slots (SI "summary" segment)
+# summary slots (SI "summary" segment, followed by "ev_p": one copy reads both)
 SUM_BEST = 0  # 4 entries: best pair per category (-1 none)
-SUM_NEVAL = 4
+SUM_NEVAL = 4  # number of evaluated pairs (rows of "ev" / entries of "ev_p")
 SUM_STATUS = 5
 SUM_ERR = 6
-SUM_SIZE = 7
+SUM_BSLOT = 7  # 4 entries: row of "ev" holding the best pair per category (-1 none)
+SUM_SIZE = 11
+EV_W = 7  # "ev" rows: [distance, p_WA (3), p_WB (3)] of the evaluated pairs, in evaluation order
 
 
 class Layout:

@@ -17,11 +17,23 @@ import math
 
 from numba import njit
 
-from ..geometry.kernels import capsule_box, capsule_capsule, convex_convex
+from ..geometry._pair_segment_box import capsule_box_scalar
+from ..geometry._pair_segment_polytope import capsule_polytope_at
+from ..geometry._pair_segment_segment import capsule_capsule_scalar
+from ..geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_capsule, convex_convex
 
-__all__ = ["pair_distance", "wall_distance", "ERR_GJK"]
+from ._layout import K, seg1, seg2
+
+__all__ = ["pair_distance", "narrow_flat", "narrow_other", "wall_distance", "wall_flat", "ERR_GJK", "NOT_SCALAR"]
+
+_K_core, _K_vstart, _K_radius, _K_vW, _K_boxW = K["core"], K["vstart"], K["radius"], K["vW"], K["boxW"]
+_K_poly_of, _K_seg, _K_pv, _K_ppl, _K_ped = K["poly_of"], K["seg"], K["pv"], K["ppl"], K["ped"]
+_K_pbis, _K_pcen, _K_pvs, _K_pps, _K_pes = K["pbis"], K["pcen"], K["pvs"], K["pps"], K["pes"]
+_K_fnW, _K_pstart, _K_edW, _K_estart, _K_work = K["fnW"], K["pstart"], K["edW"], K["estart"], K["work"]
+_K_ws, _K_out9 = K["ws"], K["out9"]
 
 ERR_GJK = 2  # the convex kernel did not converge: the caller raises, never a verdict
+NOT_SCALAR = -1  # narrow_flat: not a capsule-capsule / capsule-box pair, call narrow_other
 
 _POINT, _SEGMENT, _BOX = 0, 1, 2
 
@@ -71,6 +83,102 @@ def pair_distance(
 
 
 @njit(cache=True)
+def _capsule_polytope(seg, ra, k, pv, ppl, ped, pbis, pcen, pvs, pps, pes, rb, out, eps_len, eps_par, gjk_eps, max_iter,
+                      offset):  # pragma: no cover - compiled
+    """Capsule (core ``seg (2, 3)``, radius ``ra``) against static polytope number ``k`` of the packed
+    polytope data (``_pack.polytope_data`` of each static polytope, concatenated; ``p*s`` CSR offsets)."""
+    return capsule_polytope_at(seg, ra, pv[pvs[k]:pvs[k + 1]], ppl[pps[k]:pps[k + 1]], ped[pes[k]:pes[k + 1]],
+                               pbis[pes[k]:pes[k + 1]], pcen[k], rb, out, 0, eps_len, eps_par, gjk_eps, max_iter, offset)
+
+
+@njit(cache=True)
+def narrow_flat(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, offset):  # pragma: no cover
+    """:func:`pair_distance` on the detector's packed buffers (:mod:`._layout`), same outputs and errors.
+
+    The common pairs read their cores straight from the flat buffers into registers and call the
+    geometry core's scalar entry points (capsule-capsule, capsule-box: ~30 ns per pair, against
+    ~200 ns when a dozen array views are passed around).  Returns ``(distance, error)``, or
+    ``(0, NOT_SCALAR)`` for any other pair: the caller then calls :func:`narrow_other` (kept apart
+    so that this function creates no array view: views cost reference counting on every call).
+    """
+    oc = H[2 * _K_core]
+    ovs = H[2 * _K_vstart]
+    orad = H[2 * _K_radius]
+    ov = H[2 * _K_vW]
+    obox = H[2 * _K_boxW]
+    ka = MI[oc + ga]
+    kb = MI[oc + gb]
+    if ka <= _SEGMENT:
+        va = MI[ovs + ga]
+        ja = va if MI[ovs + ga + 1] - va == 1 else va + 1
+        a0 = ov + 3 * va
+        a1 = ov + 3 * ja
+        if kb <= _SEGMENT:
+            vb = MI[ovs + gb]
+            jb = vb if MI[ovs + gb + 1] - vb == 1 else vb + 1
+            b0 = ov + 3 * vb
+            b1 = ov + 3 * jb
+            return capsule_capsule_scalar(
+                SF[a0], SF[a0 + 1], SF[a0 + 2], SF[a1], SF[a1 + 1], SF[a1 + 2], MF[orad + ga],
+                SF[b0], SF[b0 + 1], SF[b0 + 2], SF[b1], SF[b1 + 1], SF[b1 + 2], MF[orad + gb],
+                out, 0, eps_len, eps_par), 0
+        if kb == _BOX:
+            o = obox + 15 * gb
+            return capsule_box_scalar(
+                SF[a0], SF[a0 + 1], SF[a0 + 2], SF[a1], SF[a1 + 1], SF[a1 + 2], MF[orad + ga],
+                SF[o], SF[o + 1], SF[o + 2], SF[o + 3], SF[o + 4], SF[o + 5], SF[o + 6], SF[o + 7], SF[o + 8],
+                SF[o + 9], SF[o + 10], SF[o + 11], SF[o + 12], SF[o + 13], SF[o + 14],
+                out, 0, eps_len, eps_par, offset), 0
+    elif ka == _BOX and kb <= _SEGMENT:
+        vb = MI[ovs + gb]
+        jb = vb if MI[ovs + gb + 1] - vb == 1 else vb + 1
+        b0 = ov + 3 * vb
+        b1 = ov + 3 * jb
+        o = obox + 15 * ga
+        d = capsule_box_scalar(
+            SF[b0], SF[b0 + 1], SF[b0 + 2], SF[b1], SF[b1 + 1], SF[b1 + 2], MF[orad + gb],
+            SF[o], SF[o + 1], SF[o + 2], SF[o + 3], SF[o + 4], SF[o + 5], SF[o + 6], SF[o + 7], SF[o + 8],
+            SF[o + 9], SF[o + 10], SF[o + 11], SF[o + 12], SF[o + 13], SF[o + 14],
+            out, 0, eps_len, eps_par, offset)
+        for i in range(3):  # swap the witnesses, negate the normal
+            t = out[i]
+            out[i] = out[3 + i]
+            out[3 + i] = t
+            out[6 + i] = -out[6 + i]
+        return d, 0
+    return 0.0, NOT_SCALAR
+
+
+@njit(cache=True)
+def narrow_other(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, offset):  # pragma: no cover
+    """The pairs :func:`narrow_flat` leaves (``NOT_SCALAR``): capsule against a static polytope through
+    the capsule-polytope kernel, everything else through :func:`pair_distance`."""
+    oc = H[2 * _K_core]
+    k = MI[H[2 * _K_poly_of] + gb]
+    if MI[oc + ga] <= _SEGMENT and k >= 0:
+        ovs = H[2 * _K_vstart]
+        orad = H[2 * _K_radius]
+        ov = H[2 * _K_vW]
+        va = MI[ovs + ga]
+        ja = va if MI[ovs + ga + 1] - va == 1 else va + 1
+        seg = seg2(SF, H, _K_seg, 3)
+        for i in range(3):
+            seg[0, i] = SF[ov + 3 * va + i]
+            seg[1, i] = SF[ov + 3 * ja + i]
+        d, status = _capsule_polytope(
+            seg, MF[orad + ga], k, seg2(MF, H, _K_pv, 3), seg2(MF, H, _K_ppl, 4), seg2(MI, H, _K_ped, 4),
+            seg2(MF, H, _K_pbis, 3), seg2(MF, H, _K_pcen, 3), seg1(MI, H, _K_pvs), seg1(MI, H, _K_pps),
+            seg1(MI, H, _K_pes), MF[orad + gb], out, eps_len, eps_par, gjk_eps, max_iter, offset)
+        if status == GJK_NOT_CONVERGED:
+            return d, ERR_GJK
+        return d, 0
+    return pair_distance(ga, gb, seg1(MI, H, _K_core), seg1(MF, H, _K_radius), seg2(SF, H, _K_vW, 3),
+                         seg1(MI, H, _K_vstart), seg2(SF, H, _K_boxW, 15), seg2(SF, H, _K_fnW, 3), seg1(MI, H, _K_pstart),
+                         seg2(SF, H, _K_edW, 3), seg1(MI, H, _K_estart), out, seg1(SF, H, _K_work),
+                         eps_len, eps_par, gjk_eps, max_iter, offset)
+
+
+@njit(cache=True)
 def wall_distance(g, radius, verts, vstart, lo, hi, out):  # pragma: no cover - compiled
     """Distance (m) from element ``g`` to the walls of the box ``[lo, hi]`` (W).
 
@@ -102,3 +210,11 @@ def wall_distance(g, radius, verts, vstart, lo, hi, out):  # pragma: no cover - 
     out[3 + baxis] = hi[baxis] if bsign > 0.0 else lo[baxis]
     out[6 + baxis] = bsign
     return best
+
+
+@njit(cache=True)
+def wall_flat(g, H, MF, MI, SF):  # pragma: no cover - compiled
+    """:func:`wall_distance` of element ``g`` on the detector's packed buffers (walls ``ws``, result in ``out9``)."""
+    ows = H[2 * _K_ws]
+    return wall_distance(g, seg1(MF, H, _K_radius), seg2(SF, H, _K_vW, 3), seg1(MI, H, _K_vstart),
+                         MF[ows:ows + 3], MF[ows + 3:ows + 6], seg1(SF, H, _K_out9))

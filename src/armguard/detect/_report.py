@@ -217,7 +217,9 @@ class PairDistances:
     ``(P,) int64`` its robot index; ``link_b`` ``(P,) int64`` global link index of side B, -1 when
     B is static (a body or the workspace walls); ``category`` ``(P,) int64`` code into
     ``CATEGORIES``; ``owner_a`` / ``owner_b`` ``(P,)`` owner names; ``link_names`` the global link
-    names ``"robot/link"``.
+    names ``"robot/link"``; ``pair_index`` ``(P,) int64`` each row's pair number in the detector
+    (rows follow it in increasing order; all pairs, or those of one robot).  The index arrays are
+    read-only and shared between calls; the distance and witness arrays are fresh per call.
     """
 
     distance: np.ndarray
@@ -230,3 +232,4 @@ class PairDistances:
     owner_a: tuple
     owner_b: tuple
     link_names: tuple
+    pair_index: np.ndarray | None = None
