@@ -123,6 +123,7 @@ class ClearanceModel:
         self.index_b = np.array([self._part_index.get(b, n_parts) for b in pb], dtype=np.int64)
         self.category_code = np.array([CATEGORIES.index(c) for c in cat], dtype=np.int64)
         self._pair_key = {(a, b): i for i, (a, b) in enumerate(zip(pa, pb))}
+        self._fixed: dict = {}  # robot -> (other robots' joints, full clearances there)
         self.source = self._pick_source(source)
         self.evaluations = 0
 
@@ -169,13 +170,18 @@ class ClearanceModel:
         self._det_perm = len(idx) == len(self.owner_a)
         return idx
 
-    def distances(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def distances(self, q: np.ndarray, robot: str | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Clearance of every pair at the flat configuration ``q`` ``(n_q,)``.
 
         Returns ``(distance (P,) m, p_WA (P, 3) m, p_WB (P, 3) m)`` in this model's pair order;
-        ``distance`` is the minimum over the shapes of the two owners (signed).
+        ``distance`` is the minimum over the shapes of the two owners (signed).  ``robot``: the
+        moving robot, when only its joints change between calls: the detector then evaluates only
+        the pairs with a side on it, and the others are taken from the last full evaluation at the
+        same joints of the other robots (they cannot have changed).
         """
         self.evaluations += 1
+        if self.source == "detector" and robot is not None and self._det_perm:
+            return self._moving_distances(q, robot)
         if self.source == "detector":
             res = self._det.pair_distances(q)
             dist = np.asarray(res.distance, dtype=np.float64)
@@ -199,6 +205,34 @@ class ClearanceModel:
             pB[self._det_map[first]] = np.asarray(res.p_WB)[first]
             return d, pA, pB
         return self.reference_distances(q)
+
+    def _moving_distances(self, q: np.ndarray, robot: str):
+        k0, k1 = self._joint_span(robot)
+        key = np.concatenate([q[:k0], q[k1:]]).tobytes()
+        fixed = self._fixed.get(robot)
+        if fixed is None or fixed[0] != key:
+            self.evaluations -= 1  # the full evaluation below counts once, as this call
+            d, pA, pB = self.distances(q)
+            fixed = (key, d, pA, pB)
+            self._fixed[robot] = fixed
+            return d.copy(), pA.copy(), pB.copy()
+        res = self._det.pair_distances(q, robot=robot)
+        idx = self._det_map[res.pair_index]
+        d = fixed[1].copy()
+        pA = fixed[2].copy()
+        pB = fixed[3].copy()
+        d[idx] = res.distance
+        pA[idx] = res.p_WA
+        pB[idx] = res.p_WB
+        return d, pA, pB
+
+    def _joint_span(self, robot: str) -> tuple[int, int]:
+        k0 = 0
+        for name, rob in self.scene.robots.items():
+            if name == robot:
+                return k0, k0 + len(rob.joint_names)
+            k0 += len(rob.joint_names)
+        raise VerificationError(f"unknown robot {robot!r}; robots are {list(self.scene.robots)}")
 
     def reference_distances(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The slow, obviously-correct path: ``shapes_at`` + ``geometry.distance`` over every shape pair."""

@@ -257,7 +257,7 @@ class Verifier:
             margins = np.full(len(segs), sd)
         model = self.model
         model.evaluations = 0
-        run = _Run(model, base, k0, k1)
+        run = _Run(model, base, k0, k1, rname)
         if method == "certified":
             status, reason, lower, intervals, where = self._certified(segs, margins, run)
             ed = 0.0
@@ -460,8 +460,9 @@ def _feature_of(scene, q, owner: str, p_W: np.ndarray, tol):
 class _Run:
     """Book-keeping of one verification: every evaluated configuration and its clearances."""
 
-    def __init__(self, model: ClearanceModel, base: np.ndarray, k0: int, k1: int) -> None:
+    def __init__(self, model: ClearanceModel, base: np.ndarray, k0: int, k1: int, robot: str | None = None) -> None:
         self.model = model
+        self.robot = robot  # the moving robot: only its pairs change between evaluations
         self.base = base
         self.k0, self.k1 = k0, k1
         self.seg: list[int] = []
@@ -480,7 +481,7 @@ class _Run:
     def eval(self, si: int, s: float, q_robot: np.ndarray, t: float | None = None) -> np.ndarray:
         q = self.base.copy()
         q[self.k0 : self.k1] = q_robot
-        d, pA, pB = self.model.distances(q)
+        d, pA, pB = self.model.distances(q, self.robot)
         self.record(si, s, d, pA, pB, q, t)
         self.last_q_robot = np.array(q_robot)
         return d
