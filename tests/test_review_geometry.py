@@ -65,8 +65,6 @@ def test_box_box_distance_sign_agrees_with_intersects():
     assert abs(d - _sat_gap(A, B)) <= 1e-10
 
 
-@pytest.mark.xfail(strict=True, reason="geometry/: _merge_hull_faces leaves edges with one face on the KUKA "
-                                       "link_0 hull; ConvexPolyhedron raises IndexError")
 def test_convex_polyhedron_of_a_real_mesh_hull():
     pybullet_data = pytest.importorskip("pybullet_data")
     trimesh = pytest.importorskip("trimesh")

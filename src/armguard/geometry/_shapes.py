@@ -229,7 +229,13 @@ class Box(Shape):
 
 
 def _merge_hull_faces(points: np.ndarray, tol: float):
-    """Group a scipy hull's triangles into planar polygon faces, CCW seen from outside.
+    """Merge a scipy hull's triangles into planar polygon faces, CCW seen from outside.
+
+    A face is a connected set of *adjacent* hull triangles lying in one plane (normals within
+    ``1e-9`` and every vertex within ``tol`` (scaled) of the first triangle's plane); its vertex
+    loop is walked along the boundary edges of its outward-oriented triangles, so every edge of
+    the hull's triangulation on a face boundary is shared by exactly two faces (a closed,
+    consistently oriented polyhedron even for nearly coplanar mesh hulls).
 
     Returns ``(vertex_index_map, faces, planes)``: faces index into the returned vertex set.
     """
@@ -246,37 +252,53 @@ def _merge_hull_faces(points: np.ndarray, tol: float):
     if hull.volume <= DEFAULT_TOLERANCES.coplanar_volume * scale**3:
         raise GeometryError("ConvexPolyhedron.vertices: the points are coplanar (hull volume 0)")
     eq = hull.equations  # n . x + c <= 0 inside; n unit outward
+    tris = []
+    for simplex, e in zip(hull.simplices, eq):
+        i, j, k = (int(v) for v in simplex)
+        if np.dot(np.cross(points[j] - points[i], points[k] - points[i]), e[:3]) < 0.0:
+            j, k = k, j  # orient counter-clockwise about the outward normal
+        tris.append((i, j, k))
+    n_tri = len(tris)
+    group = [-1] * n_tri
     groups: list[list[int]] = []
-    normals: list[np.ndarray] = []
-    offsets: list[float] = []
-    for k, (simplex, e) in enumerate(zip(hull.simplices, eq)):
-        n, c = e[:3], e[3]
-        for g, (gn, gc) in enumerate(zip(normals, offsets)):
-            if np.dot(gn, n) > 1.0 - 1e-9 and abs(gc - c) <= tol * scale:
-                groups[g].extend(int(i) for i in simplex)
-                break
-        else:
-            groups.append([int(i) for i in simplex])
-            normals.append(n.copy())
-            offsets.append(float(c))
+    for seed in range(n_tri):
+        if group[seed] >= 0:
+            continue
+        g = len(groups)
+        n0, c0 = eq[seed, :3], eq[seed, 3]
+        group[seed] = g
+        members, stack = [seed], [seed]
+        while stack:
+            t = stack.pop()
+            for nb in hull.neighbors[t]:
+                nb = int(nb)
+                if nb < 0 or group[nb] >= 0:
+                    continue
+                if np.dot(eq[nb, :3], n0) > 1.0 - 1e-9 and np.all(
+                    np.abs(points[list(tris[nb])] @ n0 + c0) <= tol * scale
+                ):
+                    group[nb] = g
+                    members.append(nb)
+                    stack.append(nb)
+        groups.append(members)
     used = sorted(set(int(i) for i in hull.vertices))
     remap = {old: new for new, old in enumerate(used)}
     faces: list[np.ndarray] = []
     planes = np.zeros((len(groups), 4))
-    for g, idx in enumerate(groups):
-        idx = sorted(set(i for i in idx if i in remap))
-        pts = points[idx]
-        c0 = pts.mean(axis=0)
-        n = normals[g]
-        u = pts[0] - c0
-        u -= n * np.dot(u, n)
-        u /= np.linalg.norm(u)
-        v = np.cross(n, u)
-        ang = np.arctan2((pts - c0) @ v, (pts - c0) @ u)
-        order = [idx[i] for i in np.argsort(ang)]  # CCW about the outward normal
-        faces.append(np.array([remap[i] for i in order], dtype=np.int64))
-        planes[g, :3] = n
-        planes[g, 3] = -offsets[g]
+    for g, members in enumerate(groups):
+        directed = {(a, b) for t in members for a, b in ((tris[t][0], tris[t][1]), (tris[t][1], tris[t][2]), (tris[t][2], tris[t][0]))}
+        nxt = {a: b for a, b in directed if (b, a) not in directed}  # boundary edges, CCW
+        start = min(nxt)
+        loop, v = [start], nxt[start]
+        while v != start and len(loop) <= len(nxt):
+            loop.append(v)
+            v = nxt[v]
+        if v != start or len(loop) != len(nxt):  # pragma: no cover - a planar convex face has one boundary loop
+            raise GeometryError("ConvexPolyhedron: could not build a face boundary from the hull (degenerate hull)")
+        faces.append(np.array([remap[i] for i in loop], dtype=np.int64))
+        t0 = members[0]
+        planes[g, :3] = eq[t0, :3]
+        planes[g, 3] = -eq[t0, 3]
     return np.asarray(used, dtype=np.int64), faces, planes
 
 
