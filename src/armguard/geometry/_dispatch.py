@@ -16,7 +16,7 @@ from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._pair_box_box import box_box_overlap_packed
 from ._pair_gjk import GJK_NOT_CONVERGED, GJK_WORK_SIZE
 from ._pair_sat import convex_convex
-from ._pack import polytope_data
+from ._pack import polytope_adjacency, polytope_data
 from ._pair_segment_box import capsule_box_packed
 from ._pair_segment_polytope import capsule_polytope_packed
 from ._pair_segment_segment import capsule_capsule_packed
@@ -51,7 +51,7 @@ _CC_SIG = (_BUF, _BUF, _BUF, types.float64, types.float64)
 _CB_SIG = (_BUF, _BUF, _BUF, types.float64, types.float64, types.float64)
 _MAT = types.float64[:, ::1]
 _CP_SIG = (
-    _BUF, _MAT, _MAT, types.int64[:, ::1], _MAT, _BUF, types.float64, _BUF,
+    _BUF, _MAT, _MAT, types.int64[:, ::1], _MAT, _BUF, types.int64[::1], types.float64, _BUF,
     types.float64, types.float64, types.float64, types.int64, types.float64,
 )
 _cc_entry = None
@@ -102,7 +102,7 @@ def _segment_polytope(a, b, tol: Tolerances) -> Proximity:
     v, pl, ed, bi, cen = polytope_data(b)
     out = np.empty(9)
     d, status = _cp_entry(
-        a._pk, v, pl, ed, bi, cen, b._sat[3], out, tol.length, tol.parallel, tol.gjk_epsilon,
+        a._pk, v, pl, ed, bi, cen, polytope_adjacency(b), b._sat[3], out, tol.length, tol.parallel, tol.gjk_epsilon,
         tol.gjk_max_iterations, tol.penetration_witness_offset,
     )
     if status == GJK_NOT_CONVERGED:
@@ -116,7 +116,7 @@ def _polytope_segment(a, b, tol: Tolerances) -> Proximity:
     v, pl, ed, bi, cen = polytope_data(a)
     out = np.empty(9)
     d, status = _cp_entry(
-        b._pk, v, pl, ed, bi, cen, a._sat[3], out, tol.length, tol.parallel, tol.gjk_epsilon,
+        b._pk, v, pl, ed, bi, cen, polytope_adjacency(a), a._sat[3], out, tol.length, tol.parallel, tol.gjk_epsilon,
         tol.gjk_max_iterations, tol.penetration_witness_offset,
     )
     if status == GJK_NOT_CONVERGED:

@@ -8,7 +8,9 @@ Every shape carries (as private attributes set by its constructor):
 * ``_sat``: ``(core_points (n, 3), face_normals (F, 3), edge_directions (E, 3), radius)`` for
   GJK + SAT, with face normals and edge directions reduced to one per parallel class;
 * ``_poly`` (polytopes only): faces with offsets and edges with their two faces, for the
-  segment-polytope kernel (see :func:`polytope_data`).
+  segment-polytope kernel (see :func:`polytope_data`);
+* ``_adj`` (polytopes only): the vertex graph for hill-climbing support queries (see
+  :func:`polytope_adjacency`).
 
 Shapes are immutable, so this is computed once, explicitly, at construction.
 """
@@ -19,7 +21,7 @@ import numpy as np
 
 from .._tolerance import DEFAULT_TOLERANCES
 
-__all__ = ["attach_packed", "unique_directions", "polytope_data"]
+__all__ = ["attach_packed", "unique_directions", "polytope_data", "polytope_adjacency"]
 
 _EMPTY = np.zeros((0, 3), dtype=np.float64)
 
@@ -97,6 +99,7 @@ def attach_packed(shape) -> None:
     )
     if isinstance(shape, (ConvexPolyhedron, Polygon)):
         polytope_data(shape)
+        polytope_adjacency(shape)
 
 
 def _build_polytope_data(shape):
@@ -153,3 +156,47 @@ def polytope_data(shape):
         data = _build_polytope_data(shape)
         object.__setattr__(shape, "_poly", data)
         return data
+
+
+def _build_adjacency(shape) -> np.ndarray:
+    from ._shapes import Polygon
+
+    v, _planes, edges, _bis, _cen = polytope_data(shape)
+    pairs = [edges[:, :2]]
+    if not isinstance(shape, Polygon):
+        # a triangulation of the surface as well: its graph alone already makes every local
+        # maximum of a linear function global, whatever the merged faces look like
+        from scipy.spatial import ConvexHull
+
+        tri = ConvexHull(v).simplices
+        pairs += [tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]
+    e = np.concatenate(pairs).astype(np.int64)
+    e = np.unique(np.sort(e, axis=1), axis=0)
+    e = e[e[:, 0] != e[:, 1]]
+    both = np.concatenate([e, e[:, ::-1]])
+    both = both[np.lexsort((both[:, 1], both[:, 0]))]
+    n = len(v)
+    deg = np.bincount(both[:, 0], minlength=n)
+    head = 6
+    start = head + n + 1 + np.concatenate([[0], np.cumsum(deg)])
+    ext = [int(np.argmax(s * v[:, k])) for k in range(3) for s in (1.0, -1.0)]
+    return np.ascontiguousarray(np.concatenate([ext, start, both[:, 1]]), dtype=np.int64)
+
+
+def polytope_adjacency(shape) -> np.ndarray:
+    """The vertex graph of a polytopal core, for hill-climbing support queries (``_pair_gjk``).
+
+    Returns ``adj (6 + V + 1 + 2 E') int64``: ``adj[0:6]`` the vertices extreme along ``+x, -x,
+    +y, -y, +z, -z`` (where a climb starts); ``adj[6 + i] : adj[7 + i]`` the positions in ``adj``
+    of vertex ``i``'s neighbours (indices into ``polytope_data(shape)[0]``).  The edges are the
+    polytope's edges plus those of a triangulation of its surface (a Polygon: its cycle), so a
+    vertex with no strictly better neighbour maximises any linear function.  Built once per
+    shape (at construction for ConvexPolyhedron and Polygon, at first use for Box and Prism)
+    and stored as ``_adj``.
+    """
+    try:
+        return shape._adj
+    except AttributeError:
+        adj = _build_adjacency(shape)
+        object.__setattr__(shape, "_adj", adj)
+        return adj

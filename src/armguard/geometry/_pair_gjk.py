@@ -14,6 +14,16 @@ points are rebuilt from indices and weights only when GJK stops), so the kernel 
 nothing and touches no memory but the two point sets; the ``work`` argument of the public
 kernels is kept for their stable signatures (callers' scratch lives there).  Core B may be
 translated by an offset ``o`` without copying its points.
+
+B's support points come from a scan of its points, or, for a polytope of at least
+``CLIMB_MIN_VERTICES`` vertices whose vertex graph is given (:func:`gjk_dir_adj`), from hill
+climbing on that graph warm-started at the previous support (Cameron, "Enhancing GJK",
+ICRA 1997).  The one body ``_gjk`` serves
+both: its ``adj is None`` branch is pruned at compile time.
+
+``_gjk`` is compiled without numba's reference counting (``_nrt=False``; it allocates nothing):
+with it, every call paid an atomic increment and decrement per array argument, measured at
+about 30% of a batched capsule-hull query.
 """
 
 from __future__ import annotations
@@ -22,7 +32,10 @@ import math
 
 from numba import njit
 
-__all__ = ["GJK_WORK_SIZE", "GJK_SEPARATED", "GJK_INTERSECTING", "GJK_NOT_CONVERGED", "gjk_core", "gjk_dir"]
+__all__ = [
+    "GJK_WORK_SIZE", "GJK_SEPARATED", "GJK_INTERSECTING", "GJK_NOT_CONVERGED", "ADJ_HEAD", "CLIMB_MIN_VERTICES",
+    "gjk_core", "gjk_dir", "gjk_dir_adj",
+]
 
 GJK_WORK_SIZE = 64
 """Length of the ``work`` array the GJK kernels need (float64)."""
@@ -32,6 +45,13 @@ GJK_INTERSECTING = 1
 """Status: the cores overlap or touch (core distance <= ``length``)."""
 GJK_NOT_CONVERGED = 2
 """Status: ``max_iterations`` reached without meeting the stopping test."""
+ADJ_HEAD = 6
+"""Entries before the CSR offsets in a vertex-graph array (the extreme vertices along +-x, +-y, +-z)."""
+CLIMB_MIN_VERTICES = 48
+"""Callers climb B's vertex graph only from this many vertices on: below it a scan is faster
+(a climb's unpredictable branches cost more than the dot products it saves; measured with
+``bench/pairwise.py``-style capsule-hull batches: 20 vertices scan 101 ns vs climb 117 ns per
+separated pair, 80 vertices 243 vs 145 ns, 160 vertices 459 vs 172 ns)."""
 
 
 @njit(cache=True, inline="always")
@@ -175,16 +195,60 @@ def _pick(k, a0, a1, a2, a3):  # pragma: no cover - compiled
     return a3
 
 
-@njit(cache=True)
-def gjk_dir(pa, pb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter):  # pragma: no cover - compiled
-    """GJK from the initial direction ``d`` (m; pointing from B to A): see :func:`gjk_core`.
+@njit(cache=True, inline="always")
+def _climb(pb, adj, i, dx, dy, dz):  # pragma: no cover - compiled
+    """Steepest-ascent hill climbing of ``p . d`` over B's vertex graph from vertex ``i``.
 
-    The simplex lives in local scalars: vertex ``k`` is ``w_k = a_k - b_k`` (``x_k, y_k, z_k``)
-    with the support indices ``ia_k, ib_k`` and its weight ``l_k``; the witnesses are rebuilt
-    from the indices and weights only when GJK stops.  Allocation-free.
+    On the vertex graph of a convex polytope (or of any triangulation of its surface) a vertex
+    with no strictly better neighbour maximises a linear function over the whole polytope (its
+    edges span a cone containing the polytope), so the climb returns a true support vertex; the
+    values strictly increase, so it terminates.  ``adj`` as :func:`armguard.geometry._pack.polytope_adjacency`.
     """
+    best = pb[i, 0] * dx + pb[i, 1] * dy + pb[i, 2] * dz
+    while True:
+        nxt = i
+        for k in range(adj[ADJ_HEAD + i], adj[ADJ_HEAD + i + 1]):
+            j = adj[k]
+            s = pb[j, 0] * dx + pb[j, 1] * dy + pb[j, 2] * dz
+            if s > best:
+                best = s
+                nxt = j
+        if nxt == i:
+            return i
+        i = nxt
+
+
+@njit(cache=True, inline="always")
+def _support(pb, adj, i, dx, dy, dz):  # pragma: no cover - compiled
+    """Index of a vertex of ``pb`` maximising ``p . d``: a scan without ``adj``, else a climb from
+    vertex ``i`` (``i < 0``: from the stored extreme vertex along d's dominant axis)."""
+    if adj is None:
+        ib = 0
+        best = -math.inf
+        for k in range(pb.shape[0]):
+            s = pb[k, 0] * dx + pb[k, 1] * dy + pb[k, 2] * dz
+            if s > best:
+                best = s
+                ib = k
+        return ib
+    if i < 0:
+        ux = abs(dx)
+        uy = abs(dy)
+        uz = abs(dz)
+        if ux >= uy and ux >= uz:
+            i = adj[0] if dx >= 0.0 else adj[1]
+        elif uy >= uz:
+            i = adj[2] if dy >= 0.0 else adj[3]
+        else:
+            i = adj[4] if dz >= 0.0 else adj[5]
+    return _climb(pb, adj, i, dx, dy, dz)
+
+
+@njit(cache=True, _nrt=False)
+def _gjk(pa, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter):  # pragma: no cover - compiled
+    """GJK from the initial direction ``d``; B's supports by a scan (``adj is None``, a branch
+    numba prunes at compile time) or by hill climbing on B's vertex graph (``adj``)."""
     na = pa.shape[0]
-    nb = pb.shape[0]
     # the first vertex: supports along d
     ia = 0
     best = -math.inf
@@ -193,13 +257,7 @@ def gjk_dir(pa, pb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter):  # prag
         if s > best:
             best = s
             ia = i
-    ib = 0
-    best = -math.inf
-    for i in range(nb):
-        s = pb[i, 0] * dx + pb[i, 1] * dy + pb[i, 2] * dz
-        if s > best:
-            best = s
-            ib = i
+    ib = _support(pb, adj, -1, dx, dy, dz)
     x0 = pa[ia, 0] - pb[ib, 0] - ox
     y0 = pa[ia, 1] - pb[ib, 1] - oy
     z0 = pa[ia, 2] - pb[ib, 2] - oz
@@ -229,13 +287,7 @@ def gjk_dir(pa, pb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter):  # prag
             if s > best:
                 best = s
                 ia = i
-        ib = 0
-        best = -math.inf
-        for i in range(nb):
-            s = pb[i, 0] * vx + pb[i, 1] * vy + pb[i, 2] * vz
-            if s > best:
-                best = s
-                ib = i
+        ib = _support(pb, adj, ib, vx, vy, vz)  # warm: from the last support
         wx = pa[ia, 0] - pb[ib, 0] - ox
         wy = pa[ia, 1] - pb[ib, 1] - oy
         wz = pa[ia, 2] - pb[ib, 2] - oz
@@ -321,6 +373,27 @@ def gjk_dir(pa, pb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter):  # prag
     if inside:
         return status, 0.0, ax, ay, az, bx, by, bz
     return status, math.sqrt(vv), ax, ay, az, bx, by, bz
+
+
+@njit(cache=True)
+def gjk_dir(pa, pb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter):  # pragma: no cover - compiled
+    """GJK from the initial direction ``d`` (m; pointing from B to A): see :func:`gjk_core`.
+
+    The simplex lives in local scalars: vertex ``k`` is ``w_k = a_k - b_k`` (``x_k, y_k, z_k``)
+    with the support indices ``ia_k, ib_k`` and its weight ``l_k``; the witnesses are rebuilt
+    from the indices and weights only when GJK stops.  Allocation-free.  B's supports scan its
+    points.
+    """
+    return _gjk(pa, pb, None, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter)
+
+
+@njit(cache=True)
+def gjk_dir_adj(pa, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter):  # pragma: no cover - compiled
+    """:func:`gjk_dir` for a polytope B with its vertex graph ``adj`` (int64, see
+    :func:`armguard.geometry._pack.polytope_adjacency`): B's supports climb the graph from the
+    previous support (a few neighbours instead of every vertex).  Same answer as :func:`gjk_dir`
+    up to ties between equally extreme vertices."""
+    return _gjk(pa, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter)
 
 
 @njit(cache=True)

@@ -36,10 +36,10 @@ import math
 
 from numba import njit
 
-from ._pair_gjk import GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, gjk_dir
+from ._pair_gjk import CLIMB_MIN_VERTICES, GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _gjk
 from ._pair_segment_segment import write_rounded
 
-__all__ = ["segment_polytope_depth", "capsule_polytope_at", "capsule_polytope_packed"]
+__all__ = ["segment_polytope_depth", "capsule_polytope_at", "capsule_polytope_adj_at", "capsule_polytope_packed"]
 
 
 @njit(cache=True, inline="always")
@@ -203,15 +203,41 @@ def capsule_polytope_at(
     vertex centroid ``cen (3,)``, radius ``rb``).  Writes ``out[base:base + 9]`` =
     ``[p_WA, p_WB, nhat_AB_W]``; returns ``(distance, status)`` (``GJK_*``; callers raise on
     ``GJK_NOT_CONVERGED``).  ``offset`` is ``Tolerances.penetration_witness_offset``.
+    B's GJK supports scan its vertices; :func:`capsule_polytope_adj_at` climbs its vertex graph.
     """
+    return _capsule_polytope(
+        seg, ra, verts, planes, edges, bis, cen, None, rb, out, base, eps_len, eps_par, gjk_eps, max_iter, offset
+    )
+
+
+@njit(cache=True, inline="always")
+def capsule_polytope_adj_at(
+    seg, ra, verts, planes, edges, bis, cen, adj, rb, out, base, eps_len, eps_par, gjk_eps, max_iter, offset
+):  # pragma: no cover - compiled
+    """:func:`capsule_polytope_at` with B's vertex graph ``adj`` (``_pack.polytope_adjacency``):
+    for a polytope of at least ``CLIMB_MIN_VERTICES`` vertices GJK's supports on B climb the
+    graph from the previous support instead of scanning every vertex."""
+    if verts.shape[0] < CLIMB_MIN_VERTICES:
+        return _capsule_polytope(
+            seg, ra, verts, planes, edges, bis, cen, None, rb, out, base, eps_len, eps_par, gjk_eps, max_iter, offset
+        )
+    return _capsule_polytope(
+        seg, ra, verts, planes, edges, bis, cen, adj, rb, out, base, eps_len, eps_par, gjk_eps, max_iter, offset
+    )
+
+
+@njit(cache=True, inline="always")
+def _capsule_polytope(
+    seg, ra, verts, planes, edges, bis, cen, adj, rb, out, base, eps_len, eps_par, gjk_eps, max_iter, offset
+):  # pragma: no cover - compiled
     p0x = seg[0, 0]
     p0y = seg[0, 1]
     p0z = seg[0, 2]
     p1x = seg[1, 0]
     p1y = seg[1, 1]
     p1z = seg[1, 2]
-    status, d, ax, ay, az, bx, by, bz = gjk_dir(
-        seg, verts, 0.0, 0.0, 0.0,
+    status, d, ax, ay, az, bx, by, bz = _gjk(
+        seg, verts, adj, 0.0, 0.0, 0.0,
         0.5 * (p0x + p1x) - cen[0], 0.5 * (p0y + p1y) - cen[1], 0.5 * (p0z + p1z) - cen[2],
         eps_len, gjk_eps, max_iter,
     )
@@ -228,8 +254,8 @@ def capsule_polytope_at(
         return write_rounded(ax, ay, az, ra, bx, by, bz, rb, -qx, -qy, -qz, -depth, out, base), GJK_INTERSECTING
     # B moves along nhat = -q; the cores are then `offset` apart along q
     shift = depth + offset
-    status2, _d2, ax, ay, az, bx, by, bz = gjk_dir(
-        seg, verts, -shift * qx, -shift * qy, -shift * qz, qx, qy, qz, eps_len, gjk_eps, max_iter
+    status2, _d2, ax, ay, az, bx, by, bz = _gjk(
+        seg, verts, adj, -shift * qx, -shift * qy, -shift * qz, qx, qy, qz, eps_len, gjk_eps, max_iter
     )
     if status2 == GJK_NOT_CONVERGED:
         return 0.0, status2
@@ -241,8 +267,11 @@ def capsule_polytope_at(
 
 @njit(cache=True)
 def capsule_polytope_packed(
-    a, verts, planes, edges, bis, cen, rb, out, eps_len, eps_par, gjk_eps, max_iter, offset
+    a, verts, planes, edges, bis, cen, adj, rb, out, eps_len, eps_par, gjk_eps, max_iter, offset
 ):  # pragma: no cover - compiled
     """Capsule ``[p0, p1, r]`` (7,) against a polytope: the single-call path (see
-    :func:`capsule_polytope_at`)."""
-    return capsule_polytope_at(a[0:6].reshape((2, 3)), a[6], verts, planes, edges, bis, cen, rb, out, 0, eps_len, eps_par, gjk_eps, max_iter, offset)
+    :func:`capsule_polytope_adj_at`)."""
+    return capsule_polytope_adj_at(
+        a[0:6].reshape((2, 3)), a[6], verts, planes, edges, bis, cen, adj, rb, out, 0, eps_len, eps_par, gjk_eps,
+        max_iter, offset,
+    )

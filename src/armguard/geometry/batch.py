@@ -18,8 +18,8 @@ from .._errors import GeometryError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._pair_box_box import box_box_overlap_scalar
 from ._pair_gjk import GJK_NOT_CONVERGED
-from ._pack import polytope_data
-from ._pair_segment_polytope import capsule_polytope_at
+from ._pack import polytope_adjacency, polytope_data
+from ._pair_segment_polytope import capsule_polytope_adj_at
 from ._pair_segment_box import capsule_box_scalar
 from ._pair_segment_segment import capsule_capsule_scalar
 from ._shapes import Box, ConvexPolyhedron, Polygon, Prism
@@ -191,19 +191,35 @@ def capsule_box(p0, p1, r, center, half_extents, rotation, tol: Tolerances = DEF
     return _result(lead, dist, out)
 
 
-@njit(cache=True)
+# compiled without reference counting (``_nrt=False``): nothing is allocated inside (``seg`` is
+# passed in), and the atomic increments numba emits for each array view handed to a kernel cost
+# ~40% of the loop's time with a 20-vertex hull
+@njit(cache=True, _nrt=False)
 def _capsule_convex_loop(
-    a0, a1, ra, hull_of, pv, po, pl, fo, ed, eo, bis, cen, rb, dist, out, status, eps_len, eps_par, gjk_eps, max_iter, offset
+    a0, a1, ra, hull_of, pv, po, pl, fo, ed, eo, bis, cen, aj, ao, rb, dist, out, status, seg, eps_len, eps_par, gjk_eps,
+    max_iter, offset,
 ):  # pragma: no cover
-    seg = np.empty((2, 3))  # the capsule's core, reused for every pair
+    k = 0  # views of the current hull, re-sliced only when the hull changes (slicing costs refcounts)
+    v = pv[po[0]:po[1]]
+    p = pl[fo[0]:fo[1]]
+    e = ed[eo[0]:eo[1]]
+    b = bis[eo[0]:eo[1]]
+    c = cen[0]
+    g = aj[ao[0]:ao[1]]
     for i in range(dist.shape[0]):
-        k = hull_of[i]
+        if hull_of[i] != k:
+            k = hull_of[i]
+            v = pv[po[k]:po[k + 1]]
+            p = pl[fo[k]:fo[k + 1]]
+            e = ed[eo[k]:eo[k + 1]]
+            b = bis[eo[k]:eo[k + 1]]
+            c = cen[k]
+            g = aj[ao[k]:ao[k + 1]]
         for q in range(3):
             seg[0, q] = a0[i, q]
             seg[1, q] = a1[i, q]
-        d, s = capsule_polytope_at(
-            seg, ra[i], pv[po[k]:po[k + 1]], pl[fo[k]:fo[k + 1]], ed[eo[k]:eo[k + 1]], bis[eo[k]:eo[k + 1]],
-            cen[k], rb[k], out, 9 * i, eps_len, eps_par, gjk_eps, max_iter, offset,
+        d, s = capsule_polytope_adj_at(
+            seg, ra[i], v, p, e, b, c, g, rb[k], out, 9 * i, eps_len, eps_par, gjk_eps, max_iter, offset,
         )
         dist[i] = d
         if s == GJK_NOT_CONVERGED:
@@ -238,13 +254,16 @@ def capsule_convex(p0, p1, r, hulls, tol: Tolerances = DEFAULT_TOLERANCES) -> Ba
         return np.concatenate([[0], np.cumsum([len(dd[j]) for dd in data])]).astype(np.int64)
 
     cen = np.ascontiguousarray(np.stack([dd[4] for dd in data]))
+    adj = [polytope_adjacency(h) for h in hs]  # each hull's vertex graph (offsets local to its slice)
+    adj_off = np.concatenate([[0], np.cumsum([len(a) for a in adj])]).astype(np.int64)
     rb = np.array([h._sat[3] for h in hs])
     dist = np.empty(n)
     out = np.empty(9 * n)
     status = np.zeros(1, dtype=np.int64)
     _capsule_convex_loop(
-        a0, a1, ra, hull_of, cat(0), offsets(0), cat(1), offsets(1), cat(2, np.int64), offsets(2), cat(3), cen, rb,
-        dist, out, status, tol.length, tol.parallel, tol.gjk_epsilon, tol.gjk_max_iterations, tol.penetration_witness_offset,
+        a0, a1, ra, hull_of, cat(0), offsets(0), cat(1), offsets(1), cat(2, np.int64), offsets(2), cat(3), cen,
+        np.concatenate(adj), adj_off, rb,
+        dist, out, status, np.empty((2, 3)), tol.length, tol.parallel, tol.gjk_epsilon, tol.gjk_max_iterations, tol.penetration_witness_offset,
     )
     if status[0] == GJK_NOT_CONVERGED:
         raise GeometryError(f"capsule_convex: GJK did not converge in {tol.gjk_max_iterations} iterations")
