@@ -1,7 +1,8 @@
 """The fast capsule-polytope path (GJK on registers + Minkowski-facet depth) agrees with the
 generic GJK + exhaustive-SAT kernel (itself checked against the feature-enumeration reference
 in test_geometry_distance.py), on separated, grazing and deeply penetrating pairs, for every
-polytope kind and for sphere cores; and the single-call fast path of ``distance()``."""
+polytope kind and for sphere cores; and the single-call fast path of ``distance()``.  Hill-climbing
+support queries on a polytope's vertex graph agree with a scan of its vertices."""
 
 from __future__ import annotations
 
@@ -11,8 +12,8 @@ import pytest
 from _geometry_strategies import random_rotation
 from armguard import DEFAULT_TOLERANCES as TOL
 from armguard.geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere, batch, distance
-from armguard.geometry._pack import polytope_data
-from armguard.geometry._pair_gjk import GJK_WORK_SIZE
+from armguard.geometry._pack import polytope_adjacency, polytope_data
+from armguard.geometry._pair_gjk import ADJ_HEAD, CLIMB_MIN_VERTICES, GJK_WORK_SIZE, _support
 from armguard.geometry._pair_sat import convex_convex
 from armguard.geometry._pair_segment_polytope import segment_polytope_depth
 
@@ -141,3 +142,77 @@ def test_single_call_fast_path_keeps_the_contract(kind):
         r.p_WA[0] = 1.0  # read-only
     with pytest.raises(AttributeError):
         r._d = 0.0  # immutable
+
+
+def _sphere_hull(n, seed):
+    v = np.random.default_rng(seed).normal(size=(n, 3))
+    return ConvexPolyhedron(0.5 * v / np.linalg.norm(v, axis=1)[:, None])
+
+
+def _large_hulls():
+    rng = np.random.default_rng(21)
+    # a mesh-like hull: a flattened cylinder sampled on rings, many nearly coplanar faces
+    t = np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False)
+    rings = [np.stack([0.3 * np.cos(t), 0.1 * np.sin(t), np.full_like(t, z)], axis=1) for z in (-0.4, 0.0, 0.4)]
+    mesh = np.vstack(rings + [[[0, 0, -0.45]], [[0, 0, 0.45]]]) + rng.normal(size=(74, 3)) * 1e-7
+    return {
+        "sphere-60": _sphere_hull(60, 22),
+        "sphere-200": _sphere_hull(200, 23),
+        "mesh-cylinder": ConvexPolyhedron(mesh),
+        "prism-32": Prism([0.1, 0, 0], random_rotation(rng), 0.3, 0.4, 32),
+        "box": HULLS["box"],
+        "polygon-6": Polygon(0.4 * np.stack([np.cos(t[::4]), np.sin(t[::4]), np.zeros(6)], axis=1)),
+    }
+
+
+LARGE = _large_hulls()
+
+
+@pytest.mark.parametrize("name", list(LARGE), ids=list(LARGE))
+def test_vertex_graph_climb_finds_the_support(name):
+    """Hill climbing on the vertex graph, cold (from the stored extreme vertex) and warm (from
+    a random vertex), reaches a vertex as extreme as a scan's along 2000 random directions."""
+    hull = LARGE[name]
+    v = polytope_data(hull)[0]
+    adj = polytope_adjacency(hull)
+    assert polytope_adjacency(hull) is adj  # built once
+    nv = len(v)
+    assert adj[ADJ_HEAD + nv] == len(adj)  # the offsets close the array
+    nbr = {i: set(adj[adj[ADJ_HEAD + i]:adj[ADJ_HEAD + i + 1]].tolist()) for i in range(nv)}
+    assert all(i in nbr[j] for i in nbr for j in nbr[i])  # symmetric
+    for a, b, _f1, _f2 in polytope_data(hull)[2]:  # every polytope edge is a graph edge
+        assert b in nbr[a]
+    axes = np.vstack([np.eye(3), -np.eye(3)])[[0, 3, 1, 4, 2, 5]]
+    np.testing.assert_array_equal((v @ axes.T)[adj[:ADJ_HEAD], np.arange(6)], np.max(v @ axes.T, axis=0))
+    rng = np.random.default_rng(24)
+    d = rng.normal(size=(2000, 3))
+    d[:20] = axes[rng.integers(0, 6, 20)]  # axis directions: ties between extreme vertices
+    start = rng.integers(-1, nv, 2000)
+    for k in range(len(d)):
+        scan = _support(v, None, -1, *d[k])
+        climb = _support(v, adj, int(start[k]), *d[k])
+        assert v[climb] @ d[k] == v[scan] @ d[k], (k, scan, climb)
+
+
+@pytest.mark.parametrize("name", ["sphere-60", "sphere-200", "mesh-cylinder", "prism-32"])
+def test_batch_capsule_convex_large_hull_matches_generic_sat(name):
+    """Hulls of at least CLIMB_MIN_VERTICES vertices take the climbing supports in the batch
+    and the single call: same distances as the generic scan-GJK + exhaustive SAT kernel."""
+    hull = LARGE[name]
+    assert len(polytope_data(hull)[0]) >= CLIMB_MIN_VERTICES
+    rng = np.random.default_rng(25)
+    n = 300
+    c = rng.uniform(-0.8, 0.8, (n, 3))
+    d = rng.normal(size=(n, 3)) * 0.3
+    d[:30] = 0.0  # sphere cores
+    a0, a1 = c - d, c + d
+    ra = rng.uniform(0.0, 0.1, n)
+    res = batch.capsule_convex(a0, a1, ra, hull)
+    want = np.array([_generic(Capsule(a0[i], a1[i], ra[i]), hull) for i in range(n)])
+    assert np.sum(want < -0.05) > 20 and np.sum(want > 0.05) > 20
+    np.testing.assert_allclose(res.distance, want, rtol=0, atol=1e-9)
+    gap = res.p_WB - res.p_WA
+    np.testing.assert_allclose(gap, res.distance[:, None] * res.nhat_AB_W, rtol=0, atol=1e-9)
+    for i in range(0, n, 29):
+        one = distance(Capsule(a0[i], a1[i], ra[i]), hull)
+        assert one.distance == res.distance[i]
