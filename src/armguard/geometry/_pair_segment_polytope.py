@@ -39,6 +39,9 @@ from numba import njit
 from ._pair_gjk import CLIMB_MIN_VERTICES, GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _gjk
 from ._pair_segment_segment import write_rounded
 
+_MASK_FACES = 64
+"""Polytopes with at most this many faces keep the signs of ``d . n_f`` in two int64 bit masks."""
+
 __all__ = ["segment_polytope_depth", "capsule_polytope_at", "capsule_polytope_adj_at", "capsule_polytope_packed"]
 
 
@@ -58,7 +61,13 @@ def _depth_facets(
     qz = 1.0
     kind = 0
     best = 0
-    for f in range(planes.shape[0]):
+    # signs of d . n_f per face as bit masks (faces 0..63), so that the edge loop below skips
+    # the edges off the silhouette (both faces on one side of d) with two bit tests
+    nf = planes.shape[0]
+    masked = nf <= _MASK_FACES
+    pos = 0
+    neg = 0
+    for f in range(nf):
         nx = planes[f, 0]
         ny = planes[f, 1]
         nz = planes[f, 2]
@@ -66,6 +75,10 @@ def _depth_facets(
         if g < depth:
             depth = g
             best = f
+        c = dx * nx + dy * ny + dz * nz
+        bit = 1 << f
+        pos |= bit if c > 0.0 else 0  # selects, not branches: the signs are unpredictable
+        neg |= bit if c < 0.0 else 0
     qx = planes[best, 0]
     qy = planes[best, 1]
     qz = planes[best, 2]
@@ -76,10 +89,14 @@ def _depth_facets(
     for k in range(edges.shape[0]):
         f1 = edges[k, 2]
         f2 = edges[k, 3]
-        c1 = dx * planes[f1, 0] + dy * planes[f1, 1] + dz * planes[f1, 2]
-        c2 = dx * planes[f2, 0] + dy * planes[f2, 1] + dz * planes[f2, 2]
-        if c1 * c2 > 0.0:
-            continue  # the circle d . u = 0 misses the edge's normal arc: no facet
+        if masked:
+            if ((pos >> f1) & (pos >> f2) & 1) | ((neg >> f1) & (neg >> f2) & 1):
+                continue  # the circle d . u = 0 misses the edge's normal arc: no facet
+        else:
+            c1 = dx * planes[f1, 0] + dy * planes[f1, 1] + dz * planes[f1, 2]
+            c2 = dx * planes[f2, 0] + dy * planes[f2, 1] + dz * planes[f2, 2]
+            if c1 * c2 > 0.0:
+                continue
         i0 = edges[k, 0]
         i1 = edges[k, 1]
         vx = verts[i0, 0]
