@@ -16,7 +16,7 @@ from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._pair_box_box import box_box_overlap_packed
 from ._pair_gjk import GJK_NOT_CONVERGED, GJK_WORK_SIZE
 from ._pair_sat import convex_convex
-from ._pack import polytope_adjacency, polytope_data
+from ._pack import polytope_buffers
 from ._pair_segment_box import capsule_box_packed
 from ._pair_segment_polytope import capsule_polytope_packed
 from ._pair_segment_segment import capsule_capsule_packed
@@ -49,11 +49,7 @@ def _box_capsule_packed(box, cap, out, eps_len, eps_par, offset):  # pragma: no 
 _BUF = types.float64[::1]
 _CC_SIG = (_BUF, _BUF, _BUF, types.float64, types.float64)
 _CB_SIG = (_BUF, _BUF, _BUF, types.float64, types.float64, types.float64)
-_MAT = types.float64[:, ::1]
-_CP_SIG = (
-    _BUF, _MAT, _MAT, types.int64[:, ::1], _MAT, _BUF, types.int64[::1], types.float64, _BUF,
-    types.float64, types.float64, types.float64, types.int64, types.float64,
-)
+_CP_SIG = (_BUF, _BUF, types.int64[::1], _BUF, types.float64, types.float64, types.float64, types.int64, types.float64)
 _cc_entry = None
 _cb_entry = None
 _bc_entry = None
@@ -99,11 +95,11 @@ def _not_converged(a, b, tol: Tolerances) -> GeometryError:
 def _segment_polytope(a, b, tol: Tolerances) -> Proximity:
     if _cp_entry is None:
         _bind_entries()
-    v, pl, ed, bi, cen = polytope_data(b)
+    fb, ib = polytope_buffers(b)
     out = np.empty(9)
     d, status = _cp_entry(
-        a._pk, v, pl, ed, bi, cen, polytope_adjacency(b), b._sat[3], out, tol.length, tol.parallel, tol.gjk_epsilon,
-        tol.gjk_max_iterations, tol.penetration_witness_offset,
+        a._pk, fb, ib, out, tol.length, tol.parallel, tol.gjk_epsilon, tol.gjk_max_iterations,
+        tol.penetration_witness_offset,
     )
     if status == GJK_NOT_CONVERGED:
         raise _not_converged(a, b, tol)
@@ -113,11 +109,11 @@ def _segment_polytope(a, b, tol: Tolerances) -> Proximity:
 def _polytope_segment(a, b, tol: Tolerances) -> Proximity:
     if _cp_entry is None:
         _bind_entries()
-    v, pl, ed, bi, cen = polytope_data(a)
+    fb, ib = polytope_buffers(a)
     out = np.empty(9)
     d, status = _cp_entry(
-        b._pk, v, pl, ed, bi, cen, polytope_adjacency(a), a._sat[3], out, tol.length, tol.parallel, tol.gjk_epsilon,
-        tol.gjk_max_iterations, tol.penetration_witness_offset,
+        b._pk, fb, ib, out, tol.length, tol.parallel, tol.gjk_epsilon, tol.gjk_max_iterations,
+        tol.penetration_witness_offset,
     )
     if status == GJK_NOT_CONVERGED:
         raise _not_converged(a, b, tol)

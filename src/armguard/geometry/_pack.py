@@ -10,7 +10,9 @@ Every shape carries (as private attributes set by its constructor):
 * ``_poly`` (polytopes only): faces with offsets and edges with their two faces, for the
   segment-polytope kernel (see :func:`polytope_data`);
 * ``_adj`` (polytopes only): the vertex graph for hill-climbing support queries (see
-  :func:`polytope_adjacency`).
+  :func:`polytope_adjacency`);
+* ``_pbuf`` (polytopes only): all of the above in one float and one int buffer, for the
+  single-call entry point (see :func:`polytope_buffers`).
 
 Shapes are immutable, so this is computed once, explicitly, at construction.
 """
@@ -21,7 +23,7 @@ import numpy as np
 
 from .._tolerance import DEFAULT_TOLERANCES
 
-__all__ = ["attach_packed", "unique_directions", "polytope_data", "polytope_adjacency"]
+__all__ = ["attach_packed", "unique_directions", "polytope_data", "polytope_adjacency", "polytope_buffers"]
 
 _EMPTY = np.zeros((0, 3), dtype=np.float64)
 
@@ -98,8 +100,7 @@ def attach_packed(shape) -> None:
         shape, "_sat", (np.array(pts), np.array(faces), np.array(edges), float(shape.core_radius))
     )
     if isinstance(shape, (ConvexPolyhedron, Polygon)):
-        polytope_data(shape)
-        polytope_adjacency(shape)
+        polytope_buffers(shape)
 
 
 def _build_polytope_data(shape):
@@ -200,3 +201,23 @@ def polytope_adjacency(shape) -> np.ndarray:
         adj = _build_adjacency(shape)
         object.__setattr__(shape, "_adj", adj)
         return adj
+
+
+def polytope_buffers(shape):
+    """:func:`polytope_data`, :func:`polytope_adjacency` and the core radius in two flat buffers.
+
+    Returns ``(fbuf, ibuf)``: ``fbuf`` float64 = ``[verts (3 V), planes (4 F), bisectors (3 E),
+    centroid (3), core radius]``, ``ibuf`` int64 = ``[V, F, E, edges (4 E), adj]``; the kernel
+    ``_pair_segment_polytope.capsule_polytope_packed`` takes views of them.  Built once per
+    shape and stored as ``_pbuf``.
+    """
+    try:
+        return shape._pbuf
+    except AttributeError:
+        v, planes, edges, bis, cen = polytope_data(shape)
+        adj = polytope_adjacency(shape)
+        fbuf = np.concatenate([v.ravel(), planes.ravel(), bis.ravel(), cen, [float(shape.core_radius)]])
+        ibuf = np.concatenate([[len(v), len(planes), len(edges)], edges.ravel(), adj]).astype(np.int64)
+        bufs = (np.ascontiguousarray(fbuf, dtype=np.float64), np.ascontiguousarray(ibuf, dtype=np.int64))
+        object.__setattr__(shape, "_pbuf", bufs)
+        return bufs

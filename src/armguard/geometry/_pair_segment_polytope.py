@@ -282,12 +282,26 @@ def _capsule_polytope(
     return write_rounded(ax, ay, az, ra, bx, by, bz, rb, -qx, -qy, -qz, -depth, out, base), GJK_INTERSECTING
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def capsule_polytope_packed(
-    a, verts, planes, edges, bis, cen, adj, rb, out, eps_len, eps_par, gjk_eps, max_iter, offset
+    a, fbuf, ibuf, out, eps_len, eps_par, gjk_eps, max_iter, offset
 ):  # pragma: no cover - compiled
-    """Capsule ``[p0, p1, r]`` (7,) against a polytope: the single-call path (see
-    :func:`capsule_polytope_adj_at`)."""
+    """Capsule ``[p0, p1, r]`` (7,) against a polytope given by its two packed buffers
+    (``_pack.polytope_buffers``): the single-call path, three arrays to unbox instead of eight
+    (see :func:`capsule_polytope_adj_at`).  No reference counting: it only takes views."""
+    nv = ibuf[0]
+    nf = ibuf[1]
+    ne = ibuf[2]
+    i = 3 * nv
+    verts = fbuf[0:i].reshape((nv, 3))
+    planes = fbuf[i:i + 4 * nf].reshape((nf, 4))
+    i += 4 * nf
+    bis = fbuf[i:i + 3 * ne].reshape((ne, 3))
+    i += 3 * ne
+    cen = fbuf[i:i + 3]
+    rb = fbuf[i + 3]
+    edges = ibuf[3:3 + 4 * ne].reshape((ne, 4))
+    adj = ibuf[3 + 4 * ne:]
     return capsule_polytope_adj_at(
         a[0:6].reshape((2, 3)), a[6], verts, planes, edges, bis, cen, adj, rb, out, 0, eps_len, eps_par, gjk_eps,
         max_iter, offset,
