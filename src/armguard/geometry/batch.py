@@ -94,7 +94,7 @@ def _result(lead, dist, out) -> BatchProximity:
     return BatchProximity(dist.reshape(lead), o[..., 0:3], o[..., 3:6], o[..., 6:9])
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _capsule_capsule_loop(a0, a1, ra, b0, b1, rb, dist, out, eps_len, eps_par):  # pragma: no cover
     """Returns the index of the first pair with a non-finite input or a negative radius, or -1."""
     bad = -1
@@ -151,7 +151,7 @@ def sphere_sphere(c_A, r_A, c_B, r_B, tol: Tolerances = DEFAULT_TOLERANCES) -> B
     return _result(lead, dist, out)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _capsule_box_loop(a0, a1, ra, c, h, R, dist, out, eps_len, eps_par, offset):  # pragma: no cover
     """Returns the index of the first pair with a non-finite input or a bad radius/extent, or -1."""
     bad = -1
@@ -270,7 +270,7 @@ def capsule_convex(p0, p1, r, hulls, tol: Tolerances = DEFAULT_TOLERANCES) -> Ba
     return _result(lead, dist, out)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _box_box_loop(ca, ha, Ra, cb, hb, Rb, res, eps_par):  # pragma: no cover
     for i in range(res.shape[0]):
         res[i] = box_box_overlap_scalar(
