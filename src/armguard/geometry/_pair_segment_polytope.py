@@ -28,6 +28,12 @@ That is ``F`` plus a handful of silhouette edges, each a few flops, instead of ~
 vertices (exact for whatever ``u`` was computed).  The witness points then come as in
 ``_pair_sat``: the segment is moved out along the facet normal by the depth plus
 ``penetration_witness_offset`` and GJK (started along that normal) finds the closest points.
+
+Cost: the face loop keeps the sign of ``d . n`` of each face (up to ``_MASK_FACES`` faces) in
+two bit masks, so an edge off the silhouette is rejected with two bit tests; a polytope with
+more faces recomputes the two dot products per edge.  :func:`capsule_polytope_adj_at` (the batch
+and single-call paths) also hands GJK the polytope's vertex graph for hill-climbing supports
+on hulls of ``CLIMB_MIN_VERTICES`` or more vertices.
 """
 
 from __future__ import annotations
