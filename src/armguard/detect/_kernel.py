@@ -507,7 +507,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                             node = stack[top]
                             gnode = gapst[top]
                             cut = max(cut0, max(best[1], best[3])) if by_best else cut0
-                            if gnode > cut:
+                            if gnode > 0.0 and gnode > cut:  # an overlapping node bounds nothing
                                 continue
                             left = bvh_left[node]
                             if left >= 0:
