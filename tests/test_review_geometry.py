@@ -1,4 +1,4 @@
-"""Geometry defects found in review (src/armguard/geometry is being reworked: recorded as strict xfails).
+"""Geometry defects found in review, kept as regression tests (both fixed).
 
 1. ``intersects`` disagrees with the sign of ``distance`` for two boxes 1e-9 m apart: the
    division-free SAT says apart (correct: python-fcl and an independent 15-axis SAT in float64
@@ -57,8 +57,6 @@ def test_the_boxes_are_one_nanometre_apart():
     assert not intersects(A, B)
 
 
-@pytest.mark.xfail(strict=True, reason="geometry/: box-box distance returns -0.0 for boxes 1e-9 m apart, "
-                                       "so its sign disagrees with intersects()")
 def test_box_box_distance_sign_agrees_with_intersects():
     d = distance(A, B).distance
     assert (d <= 1e-12) == intersects(A, B)

@@ -130,7 +130,21 @@ def convex_convex_at(
         # no axis at all: both cores are points (or collinear segments handled elsewhere);
         # the cores coincide, any direction separates by ra + rb
         depth = 0.0
-    depth = max(depth, 0.0)
+    if depth < 0.0:
+        # GJK stopped within its tolerance of touching, but the exhaustive SAT found an axis
+        # with a positive gap: the cores are disjoint (SAT is exact), separated by at least
+        # -depth and by at most GJK's tolerance more.  Report them apart, never as touching
+        # (the sign must agree with intersects()); witnesses from B pushed clear along n.
+        gap = -depth
+        status2, d2, ax, ay, az, bx, by, bz = gjk_core(
+            pa, pb, offset * nx, offset * ny, offset * nz, work, eps_len, gjk_eps, max_iter
+        )
+        if status2 == GJK_NOT_CONVERGED:
+            return 0.0, status2
+        bx -= offset * nx
+        by -= offset * ny
+        bz -= offset * nz
+        return write_rounded(ax, ay, az, ra, bx, by, bz, rb, nx, ny, nz, gap, out, base), GJK_SEPARATED
     shift = depth + offset
     status2, d2, ax, ay, az, bx, by, bz = gjk_core(
         pa, pb, shift * nx, shift * ny, shift * nz, work, eps_len, gjk_eps, max_iter
