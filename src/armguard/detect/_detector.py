@@ -23,6 +23,12 @@ _DEFAULT_NS_PER_PAIR = 200.0  # first guess of the cost model, replaced by measu
 _MIN_ROWS_PER_THREAD = 256  # below this many configurations per thread, a thread costs more than it saves
 
 
+def _single(cats: np.ndarray) -> int:
+    """The category shared by all of ``cats``, or -1 when they differ."""
+    u = np.unique(cats)
+    return int(u[0]) if len(u) == 1 else -1
+
+
 def _readonly(a: np.ndarray) -> np.ndarray:
     a.flags.writeable = False
     return a
@@ -164,6 +170,11 @@ class Detector:
         G = cs.n_elements
         lever = np.zeros((len(m.mov_ids), nq))
         lever[:, :m.n_q] = m.lever
+        # moving elements with static pairs, and the category of those pairs (-1: mixed), which
+        # sets the BVH walk's cut-off (a category without pairs keeps an infinite minimum)
+        with_static = np.any(m.pair_of >= 0, axis=1) if len(m.st_ids) else np.zeros(len(m.mov_ids), bool)
+        st_mov = m.mov_ids[with_static]
+        st_cat = np.array([_single(m.pair_cat[row[row >= 0]]) for row in m.pair_of[with_static]], dtype=np.int64)
         L.add("MF", "X_pre", t.X_pre); L.add("MF", "axis", t.axis); L.add("MF", "X_post", t.X_post)
         L.add("MF", "offset", t.offset); L.add("MF", "term_coeff", t.term_coeff); L.add("MF", "radius", cs.elem_radius)
         L.add("MF", "verts_L", cs.verts.reshape(-1, 3)); L.add("MF", "box_L", m.box_local.reshape(-1, 15))
@@ -188,7 +199,7 @@ class Detector:
                           ("mov_ids", m.mov_ids), ("ped", poly["ped"]), ("poly_of", poly["poly_of"]),
                           ("pvs", poly["pvs"]), ("pps", poly["pps"]), ("pes", poly["pes"]),
                           ("all_p", np.arange(P, dtype=np.int64)),
-                          ("st_mov", m.mov_ids[np.any(m.pair_of >= 0, axis=1)] if len(m.st_ids) else m.mov_ids[:0])):
+                          ("st_mov", st_mov), ("st_cat", st_cat)):
             L.add("MI", name, arr)
         # scratch: "ev" holds the evaluated pairs' rows (one copy per report), "summary" and "ev_p"
         # are adjacent (one copy)

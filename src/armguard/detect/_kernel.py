@@ -32,6 +32,8 @@ import numpy as np
 from numba import njit
 
 from ..kinematics._fk import _fk_kernel
+# The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
+# this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SC, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, SUM_STATUS, seg1, seg2, seg3
 from ._narrow import narrow_flat, narrow_other, wall_flat
 
@@ -115,6 +117,7 @@ _K_pps = K["pps"]
 _K_pes = K["pes"]
 _K_all_p = K["all_p"]
 _K_st_mov = K["st_mov"]
+_K_st_cat = K["st_cat"]
 _SC_n_explicit = SC["n_explicit"]
 _SC_n_links = SC["n_links"]
 _SC_n_q = SC["n_q"]
@@ -251,6 +254,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     pair_of = seg2(MI, H, _K_pair_of, max(n_st, 1))
     mov_ids = seg1(MI, H, _K_mov_ids)
     st_mov = seg1(MI, H, _K_st_mov)
+    st_cat = seg1(MI, H, _K_st_cat)
     Xs = seg3(SF, H, _K_Xs, 4, 4).reshape((1, n_links, 4, 4))
     sphW = seg2(SF, H, _K_sphW, 4)
     out9 = seg1(SF, H, _K_out9)
@@ -497,6 +501,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                         if err != 0 or (collided and mode == MODE_YESNO):
                             break
                         a = st_mov[i]
+                        sc_a = st_cat[i]
                         ma = mov_idx[a]
                         cx = sphW[a, 0]; cy = sphW[a, 1]; cz = sphW[a, 2]; cr = sphW[a, 3]
                         stack[0] = 0
@@ -506,7 +511,10 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                             top -= 1
                             node = stack[top]
                             gnode = gapst[top]
-                            cut = max(cut0, max(best[1], best[3])) if by_best else cut0
+                            if by_best:  # the category of this element's static pairs (both when mixed)
+                                cut = max(cut0, best[sc_a] if sc_a >= 0 else max(best[1], best[3]))
+                            else:
+                                cut = cut0
                             if gnode > 0.0 and gnode > cut:  # an overlapping node bounds nothing
                                 continue
                             left = bvh_left[node]

@@ -16,13 +16,15 @@ from numba import njit
 
 __all__ = ["Layout", "seg1", "seg2", "seg3"]
 
+# Segment numbers are compiled into _kernel.py and _narrow.py as constants and numba caches key on
+# the defining file only: a change to these tuples must come with an edit of those two files.
 # model floats
 MF = ("X_pre", "axis", "X_post", "offset", "term_coeff", "radius", "verts_L", "box_L", "fn_L", "ed_L",
       "sph_L", "static_lo", "static_hi", "bvh_lo", "bvh_hi", "lever", "ws", "pv", "ppl", "pbis", "pcen")
 # model ints
 MI = ("parent", "jtype", "has_post", "term_start", "term_joint", "glink", "core", "vstart", "pstart",
       "estart", "mov_idx", "st_idx", "bvh_left", "bvh_right", "bvh_start", "bvh_count", "bvh_items",
-      "pair_a", "pair_b", "pair_cat", "pair_of", "mov_ids", "ped", "poly_of", "pvs", "pps", "pes", "all_p", "st_mov")
+      "pair_a", "pair_b", "pair_cat", "pair_of", "mov_ids", "ped", "poly_of", "pvs", "pps", "pes", "all_p", "st_mov", "st_cat")
 # scratch / state / output floats
 SFN = ("Xs", "vW", "boxW", "fnW", "edW", "sphW", "out9", "work", "gap", "ev", "plb", "last_d",
        "last_q", "best", "seg")

@@ -22,6 +22,8 @@ from ..geometry._pair_segment_polytope import capsule_polytope_at
 from ..geometry._pair_segment_segment import capsule_capsule_scalar
 from ..geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_capsule, convex_convex
 
+# The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
+# this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import K, seg1, seg2
 
 __all__ = ["pair_distance", "narrow_flat", "narrow_other", "wall_distance", "wall_flat", "ERR_GJK", "NOT_SCALAR"]
