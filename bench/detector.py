@@ -366,6 +366,11 @@ def _pybullet_world20(Q) -> float | None:
         pb.disconnect(cid)
 
 
+def _rate(per_s: float) -> str:
+    """Configurations per second, in k above a thousand."""
+    return f"{per_s / 1e3:.0f} k" if per_s >= 1e3 else f"{per_s:.1f}"
+
+
 def _mujoco_world20(scene, Q) -> tuple[float, np.ndarray] | None:
     """MuJoCo on the capsule variant of ``scene`` (same capsules, same boxes): ``mj_kinematics`` +
     ``mj_collision`` per configuration, collision = ``ncon > 0``.  Returns (s / configuration, verdicts)."""
@@ -443,7 +448,7 @@ def _whole_arm(quick: bool) -> list[str]:
         t_yes = median_seconds(lambda: det.collides_many(Q), repeat=3 if capsules else 1)
         t_ex = median_seconds(lambda: det.check_many(Q), repeat=3 if capsules else 1)
         rows.append(f"| armguard, {'capsules r=0.07' if capsules else 'mesh hulls (ConvexPolyhedron, hull vertices on a 0.1 mm grid)'} "
-                    f"({det.n_pairs} pairs), 2 threads | {M / t_yes / 1e3:.0f} k | {M / t_ex / 1e3:.0f} k |")
+                    f"({det.n_pairs} pairs), 2 threads | {_rate(M / t_yes)} | {_rate(M / t_ex)} |")
         if capsules:
             mj = _mujoco_world20(scene, Q[:5000])
             if mj is not None:
