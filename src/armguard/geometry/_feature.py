@@ -72,6 +72,16 @@ def _point_segment(p, a, b) -> tuple[float, float]:
     return float(np.linalg.norm(p - (a + t * d))), t
 
 
+def _point_segments(p, a, b) -> np.ndarray:
+    """Distances ``(k,)`` from point ``p`` to the segments ``a[i]-b[i]`` (vectorised `_point_segment`)."""
+    d = b - a
+    dd = np.einsum("ij,ij->i", d, d)
+    t = np.einsum("ij,ij->i", p - a, d)
+    t = np.clip(np.divide(t, dd, out=np.zeros_like(t), where=dd > 0.0), 0.0, 1.0)
+    r = p - (a + t[:, None] * d)
+    return np.sqrt(np.einsum("ij,ij->i", r, r))
+
+
 def _polytope_parts(shape):
     """(vertices (V, 3), edges (E, 2), planes (F, 4) [n, d] with n . x <= d inside)."""
     if isinstance(shape, Box):
@@ -98,6 +108,31 @@ def _polytope_parts(shape):
     if isinstance(shape, ConvexPolyhedron):
         return shape.vertices, shape.edges, shape.planes
     raise TypeError  # pragma: no cover
+
+
+_BOX_EDGE_INDEX = {(int(i), int(j)): k for k, (i, j) in enumerate(BOX_EDGES)}
+
+
+def _box_feature(box: Box, p: np.ndarray, eps: float) -> Feature:
+    """Closed form in the box frame; same numbering as :func:`_polytope_parts` (faces ``2 i + (s > 0)``,
+    vertices as ``Box.vertices``, edges as ``BOX_EDGES``)."""
+    local = box.rotation.T @ (p - box.center)
+    excess = np.abs(local) - box.half_extents
+    off = float(excess.max())
+    if abs(off) > eps:
+        raise GeometryError(f"p_W: {off:.3g} m off the Box's surface")
+    on = np.abs(excess) <= eps  # axes on which the point is on a face plane
+    sign = local > 0.0
+    n_on = int(on.sum())
+    if n_on == 1:
+        i = int(np.argmax(on))
+        return Feature(FeatureKind.FACE, 2 * i + int(sign[i]))
+    bits = (4, 2, 1)  # Box.vertices order: x sign slowest, z fastest
+    if n_on == 3:
+        return Feature(FeatureKind.VERTEX, sum(b for b, sgn in zip(bits, sign) if sgn))
+    free = int(np.argmin(on))  # the edge runs along the one axis not on a face plane
+    base = sum(b for k, (b, sgn) in enumerate(zip(bits, sign)) if sgn and k != free)
+    return Feature(FeatureKind.EDGE, _BOX_EDGE_INDEX[(base, base + bits[free])])
 
 
 def feature_at(shape: Shape, p_W, tol: Tolerances = DEFAULT_TOLERANCES) -> Feature:
@@ -138,8 +173,8 @@ def feature_at(shape: Shape, p_W, tol: Tolerances = DEFAULT_TOLERANCES) -> Featu
         dv = np.linalg.norm(v - p, axis=1)
         if dv.min() <= eps:
             return Feature(FeatureKind.VERTEX, int(np.argmin(dv)))
-        de = [_point_segment(p, v[i], v[(i + 1) % len(v)])[0] for i in range(len(v))]
-        if min(de) <= eps:
+        de = _point_segments(p, v, np.roll(v, -1, axis=0))
+        if de.min() <= eps:
             return Feature(FeatureKind.EDGE, int(np.argmin(de)))
         q = p - (p @ shape.normal - shape.offset) * shape.normal
         inside = all(
@@ -148,13 +183,15 @@ def feature_at(shape: Shape, p_W, tol: Tolerances = DEFAULT_TOLERANCES) -> Featu
         if plane <= eps and inside:
             return Feature(FeatureKind.FACE, 0)
         raise GeometryError("p_W: not on the polygon")
-    if isinstance(shape, (Box, Prism, ConvexPolyhedron)):
+    if isinstance(shape, Box):
+        return _box_feature(shape, p, eps)
+    if isinstance(shape, (Prism, ConvexPolyhedron)):
         v, edges, planes = _polytope_parts(shape)
         dv = np.linalg.norm(v - p, axis=1)
         if dv.min() <= eps:
             return Feature(FeatureKind.VERTEX, int(np.argmin(dv)))
-        de = [_point_segment(p, v[i], v[j])[0] for i, j in edges]
-        if min(de) <= eps:
+        de = _point_segments(p, v[edges[:, 0]], v[edges[:, 1]])
+        if de.min() <= eps:
             return Feature(FeatureKind.EDGE, int(np.argmin(de)))
         s = planes[:, :3] @ p - planes[:, 3]
         if abs(float(s.max())) <= eps:
