@@ -9,7 +9,6 @@ new body; the Detector likewise says CLEAR.  Closed-form geometry: the planar ar
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 import armguard
 from armguard.geometry import Sphere
@@ -74,7 +73,6 @@ def test_guard_reused_after_add_body_stops():
     assert not d.ok and d.pair[1] == "post"
 
 
-@pytest.mark.xfail(strict=True, reason="detect/: Detector keeps its compiled model after scene.add_body (CLEAR by omission)")
 def test_detector_reused_after_add_body_sees_the_new_body():
     sc = _scene()
     det = armguard.Detector(sc, threshold=0.05)

@@ -160,6 +160,7 @@ class Detector:
     def prepare(self) -> "Detector":
         """(Re)compile the scene: obstacle lists, BVH, buffers.  Call after changing the scene."""
         margin = max(self._reach_margin, self._threshold, self._stopping)
+        self._revision = getattr(self.scene, "revision", None)  # read before compiling: a change during it is seen
         m = build_model(self.scene, active=self._active, reach_margin=margin, tol=self._tol)
         self._model = m
         cs = m.compiled
@@ -259,6 +260,14 @@ class Detector:
                 g += 1
         return out
 
+    def _fresh(self) -> None:
+        """Rebuild when the scene changed since :meth:`prepare` (a body added, a filter changed, ...).
+
+        A query on a stale model could say CLEAR while a new body encloses a link; every query
+        compares ``scene.revision`` (one attribute read) and recompiles when it moved."""
+        if getattr(self.scene, "revision", None) != self._revision:
+            self.prepare()
+
     # ------------------------------------------------------------------ settings
     @property
     def threshold(self) -> float:
@@ -305,6 +314,7 @@ class Detector:
 
     def obstacle_list(self, link: str) -> tuple[str, ...]:
         """Owner names in the obstacle list of ``link`` (``"robot/link"``), in pair order."""
+        self._fresh()
         out = []
         for p in range(self._P):
             if self._links_a[p] == link and self._names_b[p] not in out:
@@ -356,6 +366,8 @@ class Detector:
         ``PairResult`` objects are built on first access.
         """
         t0 = time.perf_counter()
+        if getattr(self.scene, "revision", None) != self._revision:  # stale model: rebuild (see _fresh)
+            self.prepare()
         q1 = self._flat_q(q)
         if budget_us is not None:
             b = float(budget_us)
@@ -416,6 +428,7 @@ class Detector:
         ``NotEvaluated.pair_index``).  The arrays are fresh copies (a few hundred ns for ~100
         pairs), so a result stays valid after the next call.
         """
+        self._fresh()
         sel, la, ra, lb, cat, na, nb, pidx = self._selection(robot)
         q1 = self._flat_q(q)
         n = len(sel)
@@ -428,6 +441,7 @@ class Detector:
         return np.tile(self._SF, (n_chunks, 1)), np.tile(self._SI, (n_chunks, 1))
 
     def _many(self, Q, mode: int):
+        self._fresh()
         try:
             Q = np.ascontiguousarray(np.asarray(Q, dtype=np.float64))
         except (TypeError, ValueError) as exc:
