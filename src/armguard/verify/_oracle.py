@@ -226,6 +226,27 @@ class ClearanceModel:
         pB[idx] = res.p_WB
         return d, pA, pB
 
+    def moving_fast_path(self, robot: str | None) -> bool:
+        """Whether :meth:`fixed_clearances` + the detector's ``pair_distances(q, robot=)`` serve ``robot``."""
+        return self.source == "detector" and robot is not None and self._det_perm
+
+    def fixed_clearances(self, q: np.ndarray, robot: str):
+        """The full evaluation at the other robots' joints of ``q`` (cached; not counted as an evaluation).
+
+        Returns ``(distance (P,) m, p_WA (P, 3) m, p_WB (P, 3) m)``, read only: the pairs without a side
+        on ``robot`` keep these values while ``robot`` moves.  Only for :meth:`moving_fast_path`.
+        """
+        k0, k1 = self._joint_span(robot)
+        key = np.concatenate([q[:k0], q[k1:]]).tobytes()
+        fixed = self._fixed.get(robot)
+        if fixed is None or fixed[0] != key:
+            n = self.evaluations
+            d, pA, pB = self.distances(q)
+            self.evaluations = n
+            fixed = (key, d, pA, pB)
+            self._fixed[robot] = fixed
+        return fixed[1], fixed[2], fixed[3]
+
     def _joint_span(self, robot: str) -> tuple[int, int]:
         k0 = 0
         for name, rob in self.scene.robots.items():

@@ -24,6 +24,7 @@ import numpy as np
 
 from .._errors import KinematicsError, VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._advance import advance_step
 from ._oracle import CATEGORIES, WORKSPACE, ClearanceModel
 from ._report import (
     Clearance,
@@ -132,6 +133,8 @@ class Verifier:
         straight joint-space lines, so knots within the limits keep the whole path within them)."""
         rob = self.scene.robots[rname]
         knots = [segs[0][2]] + [sg[3] for sg in segs]
+        if bool(np.all(rob.within_limits(np.stack(knots), tol=self.tol))):  # one batched test; the loop names the culprit
+            return
         for k, q in enumerate(knots):
             try:
                 rob.check_limits(q, tol=self.tol)
@@ -142,9 +145,10 @@ class Verifier:
     def _segments(trajectory):
         segs = []
         for t0, t1, q0, q1 in trajectory.segments():
-            segs.append((float(t0), float(t1), _finite_array(q0, "trajectory knot"), _finite_array(q1, "trajectory knot")))
+            segs.append((float(t0), float(t1), np.asarray(q0, dtype=np.float64), np.asarray(q1, dtype=np.float64)))
         if not segs:
             raise VerificationError("the trajectory has no segment")
+        _finite_array(np.stack([sg[2] for sg in segs] + [sg[3] for sg in segs]), "trajectory knot")
         return segs
 
     def _segment_speeds(self, trajectory, segs, k0: int, k1: int) -> np.ndarray:
@@ -154,11 +158,12 @@ class Verifier:
         u = (np.arange(_SPEED_SAMPLES) + 0.5) / _SPEED_SAMPLES
         ts = np.concatenate([t0 + u * (t1 - t0) for t0, t1, _, _ in segs])
         V = np.abs(_finite_array(trajectory.velocity(ts), "trajectory velocity")).reshape(len(segs), _SPEED_SAMPLES, -1)
-        qd = np.zeros(n_q)
-        for i in range(len(segs)):
-            qd[k0:k1] = V[i].max(axis=0)
-            out[i] = self.model.max_point_speed(qd)
-        return out
+        if not len(self.model.parts):
+            return out
+        qd = np.zeros((len(segs), n_q))
+        qd[:, k0:k1] = V.max(axis=1)
+        # max_point_speed of every segment's peak joint speeds at once: (segments, parts) -> max over parts
+        return np.max(qd @ self.model.lever[:-1].T, axis=1)
 
     def _times(self, trajectory, segs, seg_idx: np.ndarray, s: np.ndarray, k0: int) -> np.ndarray:
         """Invert the time laws: the time at which segment ``seg_idx[i]`` is at fraction ``s[i]`` (vectorised bisection)."""
@@ -257,7 +262,7 @@ class Verifier:
             margins = np.full(len(segs), sd)
         model = self.model
         model.evaluations = 0
-        run = _Run(model, base, k0, k1, rname)
+        run = _Run(model, base, k0, k1, rname, capacity=2 * len(segs) + 2)
         if method == "certified":
             status, reason, lower, intervals, where = self._certified(segs, margins, run)
             ed = 0.0
@@ -267,45 +272,57 @@ class Verifier:
                             frequency, joint_step, thr, sd, name, t_start, k0)
 
     def _certified(self, segs, margins, run):
-        """Conservative advancement along every segment; returns (status, reason, lower bound, intervals, where)."""
+        """Conservative advancement along every segment; returns (status, reason, lower bound, intervals, where).
+
+        The per-pair arithmetic after each evaluation (gap, next step, interval lower bound) is one
+        call of :func:`._advance.advance_step`; the pair rates of all segments are computed at once.
+        """
         model, tol = self.model, self.tol
         contact = tol.verify_contact
         budget = tol.verify_max_evaluations
         lower = math.inf
         intervals = 0
-        prev_d, prev_q = None, None  # clearances at the end of the previous segment
-        for si, (t0, t1, q0, q1) in enumerate(segs):
-            m = margins[si]
+        n_seg = len(segs)
+        Q0 = np.stack([sg[2] for sg in segs])
+        Q1 = np.stack([sg[3] for sg in segs])
+        dQ = np.zeros((n_seg, model.n_q))
+        dQ[:, run.k0 : run.k1] = Q1 - Q0
+        part = np.abs(dQ) @ model.lever.T  # (segments, parts + 1): pair_rates of every segment at once
+        rates_all = part[:, model.index_a] + part[:, model.index_b]
+        finite = np.all(np.isfinite(rates_all), axis=1)
+        same_knot = np.zeros(n_seg, dtype=bool)
+        same_knot[1:] = np.all(Q1[:-1] == Q0[1:], axis=1)
+        row = -1  # the evaluation at the end of the previous segment
+        for si in range(n_seg):
+            m = float(margins[si])
+            q0, q1 = Q0[si], Q1[si]
             dq = q1 - q0
-            rates = model.pair_rates(run.full_dq(dq))
-            if not np.all(np.isfinite(rates)):
+            rates = rates_all[si]
+            if not finite[si]:
                 raise VerificationError("the motion bound is infinite (an unbounded prismatic joint): certified mode cannot bound this motion")
-            pos = rates > 0.0
             s = 0.0
-            if prev_d is not None and np.array_equal(prev_q, q0):
-                d = prev_d
-            else:
-                d = run.eval(si, 0.0, q0)
+            if row < 0 or not same_knot[si]:
+                row = run.eval(si, 0.0, q0)
+            prev, L = row, 0.0
             while True:
-                gap = d - m
-                g = float(gap.min())
+                g, i_min, step, lb = advance_step(run.D[row], run.D[prev], rates, m, L, prev != row)
+                if g != g:
+                    raise VerificationError(f"a clearance in segment {si} is NaN: no verdict")
+                if prev != row:
+                    lower = min(lower, lb)
+                    intervals += 1
                 if g <= contact:
-                    return VerificationStatus.COLLISION, "", lower, intervals, (si, s, int(np.argmin(gap)))
+                    return VerificationStatus.COLLISION, "", lower, intervals, (si, s, int(i_min))
                 if s >= 1.0:
                     break
-                step = float(np.min(gap[pos] / rates[pos])) if np.any(pos) else math.inf
                 s_next = min(1.0, s + step)
                 if not s_next > s:
                     return VerificationStatus.INCOMPLETE, f"no progress in segment {si} (clearance {g:.3g} m)", lower, intervals, (si, s, None)
                 if model.evaluations >= budget:
                     return VerificationStatus.INCOMPLETE, f"evaluation budget ({budget}) spent in segment {si}", lower, intervals, (si, s, None)
-                d_next = run.eval(si, s_next, q1 if s_next == 1.0 else q0 + s_next * dq)
-                L = s_next - s
-                lb = np.minimum(np.minimum(d, d_next), 0.5 * (d + d_next - rates * L))
-                lower = min(lower, float(lb.min()))
-                intervals += 1
-                s, d = s_next, d_next
-            prev_d, prev_q = d, q1
+                prev, L = row, s_next - s
+                row = run.eval(si, s_next, q1 if s_next == 1.0 else q0 + s_next * dq)
+                s = s_next
         return VerificationStatus.SAFE, "", lower, intervals, None
 
     def _sampled(self, trajectory, segs, margins, run, frequency, joint_step, speeds):
@@ -337,7 +354,8 @@ class Verifier:
                     s = k / n
                     points.append((si, s, q0 + s * dq, None))
         for si, s, q, t in points:
-            d = run.eval(si, s, q, t)
+            row = run.eval(si, s, q, t)  # may grow run.D: index it after
+            d = run.D[row]
             gap = d - margins[si]
             if float(gap.min()) <= 0.0:
                 return VerificationStatus.COLLISION, "", -math.inf, 0, (si, s, int(np.argmin(gap))), ed
@@ -351,19 +369,29 @@ class Verifier:
         if where is not None:
             si, s_c, pair = where
             if status is VerificationStatus.COLLISION:
-                t_c = float(run.t[-1]) if run.t[-1] is not None else float(self._times(trajectory, segs, [si], [s_c], k0)[0])
+                t_last = float(run.t[run.n - 1])
+                t_c = t_last if t_last == t_last else float(self._times(trajectory, segs, [si], [s_c], k0)[0])
                 collision = self._collision(run, si, t_c, pair, rname)
             else:
                 t_c = float(self._times(trajectory, segs, [si], [s_c], k0)[0])
                 reason = reason + f" (t = {t_c:.4f} s)"
         # the profile
-        seg_idx = np.array(run.seg, dtype=np.int64)
-        s_arr = np.array(run.s)
-        t_known = np.array([np.nan if t is None else t for t in run.t], dtype=np.float64)
+        n = run.n
+        seg_idx = run.seg[:n]
+        s_arr = run.s[:n]
+        t_known = run.t[:n].copy()
         need = np.isnan(t_known)
-        if np.any(need):
-            t_known[need] = self._profile_times(trajectory, segs, seg_idx[need], s_arr[need])
-        D = np.array(run.d)  # (M, P)
+        if np.any(need):  # a segment's ends are its knot times; only points inside need the time law inverted
+            t_seg0 = np.array([sg[0] for sg in segs])
+            t_seg1 = np.array([sg[1] for sg in segs])
+            at0 = need & (s_arr <= 0.0)
+            at1 = need & (s_arr >= 1.0)
+            t_known[at0] = t_seg0[seg_idx[at0]]
+            t_known[at1] = t_seg1[seg_idx[at1]]
+            need &= ~(at0 | at1)
+            if np.any(need):
+                t_known[need] = self._profile_times(trajectory, segs, seg_idx[need], s_arr[need])
+        D = run.D[:n]  # (M, P)
         order = np.argsort(t_known, kind="stable")
         times = t_known[order]
         D = D[order]
@@ -375,7 +403,7 @@ class Verifier:
         overall = D.min(axis=1)
         i_min = int(np.argmin(overall))
         p_min = int(np.argmin(D[i_min]))
-        q_min = np.array(run.q[order[i_min]][run.k0 : run.k1])
+        q_min = run.Q[order[i_min]].copy()
         min_at = Clearance(float(overall[i_min]), float(times[i_min]), model.owner_a[p_min], model.owner_b[p_min], model.category[p_min], q_min)
         profile = ClearanceProfile(times, overall, by_cat)
         details = MethodDetails(
@@ -409,9 +437,10 @@ class Verifier:
 
     def _collision(self, run, si, t_c, pair, rname) -> Collision:
         model = self.model
-        q_full = run.q[-1]
-        pA = np.array(run.last_pA[pair])
-        pB = np.array(run.last_pB[pair])
+        q_full = run.full_q(run.n - 1)
+        pA, pB = run.last_witnesses()
+        pA = np.array(pA[pair])
+        pB = np.array(pB[pair])
         a, b = model.owner_a[pair], model.owner_b[pair]
         check = model.check[pair]
         link = a.split("/", 1)[1] if "/" in a else None
@@ -422,7 +451,7 @@ class Verifier:
         return Collision(
             time=t_c,
             q=np.array(q_full[run.k0 : run.k1]),
-            distance=float(run.d[-1][pair]),
+            distance=float(run.D[run.n - 1, pair]),
             link=link,
             obstacle=b,
             payload=payload,
@@ -458,43 +487,92 @@ def _feature_of(scene, q, owner: str, p_W: np.ndarray, tol):
 
 
 class _Run:
-    """Book-keeping of one verification: every evaluated configuration and its clearances."""
+    """Book-keeping of one verification: every evaluated configuration and its clearances, in
+    preallocated arrays that grow by doubling (row ``i`` is the ``i``-th evaluation, ``n`` rows used).
 
-    def __init__(self, model: ClearanceModel, base: np.ndarray, k0: int, k1: int, robot: str | None = None) -> None:
+    D : (capacity, P) float64, m — clearances;  Q : (capacity, k1 - k0) — the moving robot's joints;
+    seg : (capacity,) int64;  s : (capacity,) float64, 1;  t : (capacity,) float64, s (NaN: unknown).
+    Only the last evaluation's witness points are kept (the collision is the last evaluation).
+    """
+
+    def __init__(self, model: ClearanceModel, base: np.ndarray, k0: int, k1: int, robot: str | None = None,
+                 capacity: int = 64) -> None:
         self.model = model
         self.robot = robot  # the moving robot: only its pairs change between evaluations
         self.base = base
         self.k0, self.k1 = k0, k1
-        self.seg: list[int] = []
-        self.s: list[float] = []
-        self.t: list[float | None] = []
-        self.d: list[np.ndarray] = []
-        self.q: list[np.ndarray] = []
-        self.last_q_robot = None
-        self.last_pA = self.last_pB = None
+        P = len(model.owner_a)
+        cap = max(2, int(capacity))
+        self.n = 0
+        self.D = np.empty((cap, P))
+        self.Q = np.empty((cap, k1 - k0))
+        self.seg = np.empty(cap, dtype=np.int64)
+        self.s = np.empty(cap)
+        self.t = np.empty(cap)
+        self._q = base.copy()  # the flat configuration handed to the distance source
+        self._fast = model.moving_fast_path(robot)
+        if self._fast:
+            self._fixed = model.fixed_clearances(self._q, robot)
+            self._det = model._det
+            self._det_map = model._det_map
+        self._last = None  # the last evaluation's witnesses: a detector result, or (p_WA, p_WB)
 
     def full_dq(self, dq_robot: np.ndarray) -> np.ndarray:
+        """``(n_q,)``: the moving robot's joint step ``dq_robot`` in the flat joint vector (others 0)."""
         out = np.zeros(self.model.n_q)
         out[self.k0 : self.k1] = dq_robot
         return out
 
-    def eval(self, si: int, s: float, q_robot: np.ndarray, t: float | None = None) -> np.ndarray:
-        q = self.base.copy()
-        q[self.k0 : self.k1] = q_robot
-        d, pA, pB = self.model.distances(q, self.robot)
-        self.record(si, s, d, pA, pB, q, t)
-        self.last_q_robot = np.array(q_robot)
-        return d
+    def _grow(self) -> None:
+        cap = 2 * self.D.shape[0]
+        for name in ("D", "Q", "seg", "s", "t"):
+            old = getattr(self, name)
+            new = np.empty((cap,) + old.shape[1:], dtype=old.dtype)
+            new[: self.n] = old[: self.n]
+            setattr(self, name, new)
 
-    def record(self, si, s, d, pA, pB, q=None, t=None) -> None:
-        if q is None:
-            q = self.q[-1]
-        self.seg.append(si)
-        self.s.append(s)
-        self.t.append(t)
-        self.d.append(d)
-        self.q.append(q)
-        self.last_pA, self.last_pB = pA, pB
+    def eval(self, si: int, s: float, q_robot: np.ndarray, t: float | None = None) -> int:
+        """Evaluate the clearances with the moving robot at ``q_robot`` ``(k1 - k0,)``; returns the row."""
+        i = self.n
+        if i == self.D.shape[0]:
+            self._grow()
+        q = self._q
+        q[self.k0 : self.k1] = q_robot
+        row = self.D[i]
+        if self._fast:
+            res = self._det.pair_distances(q, robot=self.robot)
+            row[:] = self._fixed[0]
+            row[self._det_map[res.pair_index]] = res.distance
+            self._last = res
+            self.model.evaluations += 1
+        else:
+            d, pA, pB = self.model.distances(q.copy(), self.robot)
+            row[:] = d
+            self._last = (pA, pB)
+        self.Q[i] = q_robot
+        self.seg[i] = si
+        self.s[i] = s
+        self.t[i] = math.nan if t is None else t
+        self.n = i + 1
+        return i
+
+    def full_q(self, i: int) -> np.ndarray:
+        """``(n_q,)``: the flat configuration of evaluation ``i``."""
+        q = self.base.copy()
+        q[self.k0 : self.k1] = self.Q[i]
+        return q
+
+    def last_witnesses(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(p_WA (P, 3) m, p_WB (P, 3) m)`` of the last evaluation, in the model's pair order."""
+        if not self._fast:
+            return self._last
+        res = self._last
+        idx = self._det_map[res.pair_index]
+        pA = self._fixed[1].copy()
+        pB = self._fixed[2].copy()
+        pA[idx] = res.p_WA
+        pB[idx] = res.p_WB
+        return pA, pB
 
 
 def verify(scene, trajectory, *, stopping_distance=0.0, method: str = "certified", frequency: float | None = None,
