@@ -86,7 +86,8 @@ def advance_step_reference(d, d_prev, rates, margin, length, has_prev):
         return math.nan, -1, math.nan, math.nan
     gap = d - margin
     pos = rates > 0.0
-    step = float(np.min(gap[pos] / rates[pos])) if np.any(pos) else math.inf
+    with np.errstate(over="ignore"):  # a tiny rate gives an infinite step, as in the kernel
+        step = float(np.min(gap[pos] / rates[pos])) if np.any(pos) else math.inf
     lb = math.inf
     if has_prev:
         d_prev = np.asarray(d_prev, dtype=np.float64)

@@ -143,6 +143,13 @@ class Verifier:
 
     @staticmethod
     def _segments(trajectory):
+        from ..kinematics import Trajectory
+
+        if type(trajectory).segments is Trajectory.segments:  # the arrays behind Trajectory.segments, without the generator
+            T = np.asarray(trajectory.times, dtype=np.float64).tolist()
+            W = np.asarray(trajectory.waypoints, dtype=np.float64)
+            _finite_array(W, "trajectory knot")
+            return [(T[k], T[k + 1], W[k], W[k + 1]) for k in range(len(T) - 1)]
         segs = []
         for t0, t1, q0, q1 in trajectory.segments():
             segs.append((float(t0), float(t1), np.asarray(q0, dtype=np.float64), np.asarray(q1, dtype=np.float64)))
@@ -153,13 +160,24 @@ class Verifier:
 
     def _segment_speeds(self, trajectory, segs, k0: int, k1: int) -> np.ndarray:
         """Per segment, a bound (m/s) on the speed of the fastest point of the arm (peak of the time law)."""
+        from ..kinematics import Trajectory
+
         n_q = self.model.n_q
         out = np.zeros(len(segs))
+        if not len(self.model.parts):
+            return out
+        if type(trajectory).velocity is Trajectory.velocity:
+            # the trapezoid time law's peak path speed is its plateau (or triangle apex) 1 / (T - tb)
+            # (kinematics._profile.path_ds): the peak joint speeds in closed form, no sampling
+            dt = np.diff(np.asarray(trajectory.times, dtype=np.float64))
+            v = 1.0 / (dt - np.asarray(trajectory.blend_times, dtype=np.float64))
+            W = np.asarray(trajectory.waypoints, dtype=np.float64)
+            qd = np.zeros((len(segs), n_q))
+            qd[:, k0:k1] = np.abs(_finite_array(v[:, None] * (W[1:] - W[:-1]), "trajectory velocity"))
+            return np.max(qd @ self.model.lever[:-1].T, axis=1)
         u = (np.arange(_SPEED_SAMPLES) + 0.5) / _SPEED_SAMPLES
         ts = np.concatenate([t0 + u * (t1 - t0) for t0, t1, _, _ in segs])
         V = np.abs(_finite_array(trajectory.velocity(ts), "trajectory velocity")).reshape(len(segs), _SPEED_SAMPLES, -1)
-        if not len(self.model.parts):
-            return out
         qd = np.zeros((len(segs), n_q))
         qd[:, k0:k1] = V.max(axis=1)
         # max_point_speed of every segment's peak joint speeds at once: (segments, parts) -> max over parts

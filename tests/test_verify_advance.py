@@ -1,0 +1,118 @@
+"""The certified verifier's fast bookkeeping: the njit step kernel against its NumPy statement, and the
+preallocated, detector-direct evaluation record against the general ``ClearanceModel.distances`` path."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from _verify_fixtures import thin_scene
+from armguard.kinematics import Trajectory
+from armguard.verify import Verifier
+from armguard.verify._advance import advance_step, advance_step_reference
+
+_FLOATS = st.floats(min_value=-2.0, max_value=5.0, allow_nan=False, allow_infinity=False)
+
+
+@settings(max_examples=200, derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    data=st.lists(st.tuples(_FLOATS, _FLOATS, st.one_of(st.just(0.0), st.floats(0.0, 10.0))), min_size=1, max_size=40),
+    margin=st.floats(0.0, 0.5),
+    length=st.floats(0.0, 1.0),
+    has_prev=st.booleans(),
+)
+def test_advance_step_matches_numpy_reference_bit_for_bit(data, margin, length, has_prev):
+    d = np.array([x[0] for x in data])
+    d_prev = np.array([x[1] for x in data])
+    rates = np.array([x[2] for x in data])
+    fast = advance_step(d, d_prev, rates, margin, length, has_prev)
+    ref = advance_step_reference(d, d_prev, rates, margin, length, has_prev)
+    assert fast[1] == ref[1]
+    for a, b in zip((fast[0], fast[2], fast[3]), (ref[0], ref[2], ref[3])):
+        assert a == b or (math.isinf(a) and math.isinf(b) and a == b)
+
+
+@pytest.mark.parametrize("has_prev", [False, True], ids=["first", "interval"])
+def test_advance_step_nan_clearance_gives_no_gap(has_prev):
+    d = np.array([0.3, np.nan, 0.2])
+    g, pair, step, lb = advance_step(d, np.full(3, 0.3), np.full(3, 0.1), 0.0, 0.5, has_prev)
+    assert math.isnan(g) and pair == -1
+
+
+def test_advance_step_closed_form():
+    # two pairs; gaps 0.2 and 0.5 at margin 0.1; rates 1.0 and 0.25 -> steps 0.2 and 2.0
+    d = np.array([0.3, 0.6])
+    d_prev = np.array([0.4, 0.6])
+    rates = np.array([1.0, 0.25])
+    g, pair, step, lb = advance_step(d, d_prev, rates, 0.1, 0.2, True)
+    assert g == pytest.approx(0.2) and pair == 0 and step == pytest.approx(0.2)
+    # interval bound: pair 0 min(0.4, 0.3, (0.7 - 0.2) / 2 = 0.25) = 0.25; pair 1 min(0.6, 0.6, 0.575) = 0.575
+    assert lb == pytest.approx(0.25)
+    _, _, step0, lb0 = advance_step(d, d_prev, np.zeros(2), 0.1, 0.2, False)
+    assert math.isinf(step0) and math.isinf(lb0)
+
+
+def _cases(n_scenes=3, seed=11):
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(n_scenes):
+        sc = thin_scene(rng, n_obstacles=4)
+        v = Verifier(sc)
+        for _ in range(4):
+            q0 = rng.uniform(-2.5, 2.5, 3)
+            W = np.clip(q0 + np.cumsum(rng.uniform(-0.8, 0.8, (4, 3)), axis=0), -2.9, 2.9)
+            out.append((v, Trajectory.joint_interpolated(sc.robots["arm"], np.vstack([q0, W]), profile="linear")))
+    return out
+
+
+def _fingerprint(r):
+    fc = r.first_collision
+    return (r.status, r.min_clearance, r.min_clearance_lower_bound, r.details.samples_evaluated,
+            r.details.intervals_certified, tuple(r.profile.overall), tuple(np.round(r.profile.time, 12)),
+            None if fc is None else (fc.time, fc.a, fc.b, fc.distance, tuple(fc.p_WA), tuple(fc.p_WB)))
+
+
+@pytest.mark.parametrize("method", ["certified", "sampled"])
+def test_detector_direct_record_matches_general_path(method, monkeypatch):
+    cases = _cases()
+    assert cases[0][0].model.source == "detector"
+    fast = [_fingerprint(v.verify(t, method=method)) for v, t in cases]
+    for v, _ in cases:  # the general path: ClearanceModel.distances for every evaluation
+        monkeypatch.setattr(v.model, "moving_fast_path", lambda robot: False)
+    slow = [_fingerprint(v.verify(t, method=method)) for v, t in cases]
+    assert fast == slow
+    # the record grew beyond its first capacity (2 per segment + 2) somewhere: the growth path ran
+    assert max(f[3] for f in fast) > 2 * 4 + 2
+    assert {f[0].name for f in fast} >= {"SAFE", "COLLISION"} or method == "sampled"
+
+
+class _SampledVelocity(Trajectory):
+    """A Trajectory whose ``velocity`` is overridden: the verifier then samples the time law (the reference)."""
+
+    def velocity(self, t):
+        return super().velocity(t)
+
+
+@pytest.mark.parametrize("profile", ["linear", "trapezoidal"], ids=["linear", "trapezoid"])
+def test_closed_form_segment_speeds_match_sampled_time_law(profile):
+    import armguard
+
+    sc = armguard.load_scene("puma560")
+    rob = next(iter(sc.robots.values()))
+    rng = np.random.default_rng(5)
+    lo, hi = np.asarray(rob.lower), np.asarray(rob.upper)
+    W = 0.5 * (lo + hi) + rng.uniform(-0.3, 0.3, (6, len(lo)))
+    t = Trajectory.joint_interpolated(rob, W, profile=profile)
+    sampled = _SampledVelocity(t.robot_name, t.joint_names, t.times, t.waypoints, t.blend_times)
+    v = Verifier(sc, robot=rob.name)
+    segs = v._segments(t)
+    k0, k1 = v._flat(rob.name)[1:]
+    fast = v._segment_speeds(t, segs, k0, k1)
+    ref = v._segment_speeds(sampled, segs, k0, k1)
+    # the closed form is the true peak; the 17 samples include each segment's midpoint (on the plateau)
+    np.testing.assert_allclose(fast, ref, rtol=1e-12)
+    assert np.all(fast >= ref * (1.0 - 1e-12)) and np.all(fast > 0.0)
