@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from typing import Mapping
@@ -64,6 +65,69 @@ def _static_polytopes(cs, static_shapes) -> dict:
             "pps": np.array(pps, np.int64), "pes": np.array(pes, np.int64)}
 
 
+def _fk_blocks(parent: np.ndarray, link_robot: np.ndarray, n_joints: list[int]):
+    """FK blocks: ``rob_l (R + 1,)`` link offsets and ``rob_j (R + 1,)`` joint offsets of each robot,
+    and ``parent_loc (n_links,)`` each link's parent numbered within its block (-1: a root).
+
+    The kernel recomputes a block's link poses only when that robot's joint values changed since
+    the last check (an idle arm's links keep their poses).  When the robots' links are not
+    contiguous blocks with parents inside them, one block holds every link and joint."""
+    n = len(parent)
+    R = len(n_joints)
+    rob_l = np.searchsorted(link_robot, np.arange(R + 1)).astype(np.int64) if n else np.zeros(R + 1, np.int64)
+    rob_j = np.concatenate([[0], np.cumsum(n_joints)]).astype(np.int64)
+    ok = n == len(link_robot) and bool(np.all(np.diff(link_robot) >= 0)) and rob_l[-1] == n
+    parent_loc = np.array(parent, dtype=np.int64)
+    if ok:
+        for r in range(R):
+            for i in range(rob_l[r], rob_l[r + 1]):
+                p = parent[i]
+                if p >= 0:
+                    if not rob_l[r] <= p < i:
+                        ok = False
+                    parent_loc[i] = p - rob_l[r]
+    if not ok:
+        return (np.array([0, n], np.int64), np.array([0, int(sum(n_joints))], np.int64),
+                np.array(parent, dtype=np.int64))
+    return rob_l, rob_j, parent_loc
+
+
+def _entry_point(*args):
+    """The compiled ``detect_entry`` for these argument types, called without numba's dispatcher.
+
+    The dispatcher types all nine arguments on every call (~0.3 µs of a ~4 µs check); ``check``
+    always passes the same buffers (float64 / int64, C-contiguous, writeable), so after one
+    typed call the overload for that signature is the one that would be picked every time.
+    Falls back to the dispatcher when numba does not expose the overload."""
+    kn.detect_entry(*args)  # compiles (or loads from the cache) for exactly these types
+    try:
+        from numba import typeof
+
+        sig = tuple(typeof(a) for a in args)
+        return kn.detect_entry.overloads[sig].entry_point
+    except (KeyError, AttributeError):  # pragma: no cover - numba internals changed
+        return kn.detect_entry
+
+
+def _refcount(obj) -> int:
+    return sys.getrefcount(obj)
+
+
+def _unheld_count() -> int:
+    """What :func:`_refcount` says of an object held only by one local name of the caller, called
+    the way :meth:`Detector._release_last` calls it (measured, not assumed: interpreters differ in
+    whether a call's arguments hold references of their own)."""
+    last = _Probe()
+    return _refcount(last)
+
+
+class _Probe:
+    __slots__ = ()
+
+
+_UNHELD = _unheld_count()
+
+
 def _check_length(value, name: str) -> float:
     try:
         x = float(value)
@@ -75,17 +139,44 @@ def _check_length(value, name: str) -> float:
 
 
 class _Raw:
-    """Copies of one check's compact kernel outputs; builds the report's views on demand.
+    """One check's compact kernel outputs; builds the report's views on demand.
 
     ``f`` ``(n, 7)``: ``[distance, p_WA, p_WB]`` of the ``n`` evaluated pairs in evaluation order;
     ``i``: the summary slots followed by the ``n`` pair numbers; ``flags`` / ``bounds`` ``(P,)``
-    only for the lazy and anytime modes (their reports name every skipped pair)."""
+    only for the lazy and anytime modes (their reports name every skipped pair).
 
-    __slots__ = ("det", "f", "i", "n_evaluated", "flags", "bounds", "mode")
+    ``f`` and ``i`` are copied out of the detector's scratch buffers only when needed: on first
+    access, or when the detector is about to overwrite the buffers while this object is still
+    referenced (:meth:`Detector._release_last`).  A report dropped before the next check (a
+    control loop reading only ``status``) costs no copy."""
 
-    def __init__(self, det: "Detector", f: np.ndarray, i: np.ndarray, n_evaluated: int, flags, bounds, mode) -> None:
-        self.det, self.f, self.i, self.n_evaluated = det, f, i, n_evaluated
+    __slots__ = ("det", "_f", "_i", "_SF", "_SI", "_of", "_oi", "n_evaluated", "flags", "bounds", "mode")
+
+    def __init__(self, det: "Detector", SF: np.ndarray, SI: np.ndarray, of: int, oi: int, n_evaluated: int,
+                 flags, bounds, mode) -> None:
+        self.det, self._SF, self._SI, self._of, self._oi, self.n_evaluated = det, SF, SI, of, oi, n_evaluated
+        self._f = self._i = None
         self.flags, self.bounds, self.mode = flags, bounds, mode
+
+    def detach(self) -> None:
+        """Copy this check's rows out of the scratch buffers (idempotent)."""
+        if self._f is None:
+            n, o = self.n_evaluated, self._of
+            self._f = self._SF[o:o + EV_W * n].reshape(n, EV_W).copy()
+            self._i = self._SI[self._oi:self._oi + SUM_SIZE + n].copy()
+            self._SF = self._SI = None
+
+    @property
+    def f(self) -> np.ndarray:
+        if self._f is None:
+            self.detach()
+        return self._f
+
+    @property
+    def i(self) -> np.ndarray:
+        if self._f is None:
+            self.detach()
+        return self._i
 
     def row(self, k: int) -> PairResult:
         r = self.f[k]
@@ -188,6 +279,8 @@ class Detector:
         poly = _static_polytopes(cs, self._static_shapes)
         L.add("MF", "pv", poly["pv"]); L.add("MF", "ppl", poly["ppl"]); L.add("MF", "pbis", poly["pbis"])
         L.add("MF", "pcen", poly["pcen"])
+        rob_l, rob_j, parent_loc = _fk_blocks(t.parent, m.link_robot, [len(self.scene.robots[r].joint_names)
+                                                                        for r in m.robot_names])
         for name, arr in (("parent", t.parent), ("jtype", t.jtype), ("has_post", t.has_post.astype(np.int64)),
                           ("term_start", t.term_start), ("term_joint", t.term_joint), ("glink", m.elem_glink),
                           ("core", cs.elem_core), ("vstart", cs.elem_vert_start), ("pstart", cs.elem_plane_start),
@@ -200,7 +293,8 @@ class Detector:
                           ("mov_ids", m.mov_ids), ("ped", poly["ped"]), ("poly_of", poly["poly_of"]),
                           ("pvs", poly["pvs"]), ("pps", poly["pps"]), ("pes", poly["pes"]),
                           ("all_p", np.arange(P, dtype=np.int64)),
-                          ("st_mov", st_mov), ("st_cat", st_cat)):
+                          ("st_mov", st_mov), ("st_cat", st_cat), ("rob_l", rob_l), ("rob_j", rob_j),
+                          ("parent_loc", parent_loc)):
             L.add("MI", name, arr)
         # scratch: "ev" holds the evaluated pairs' rows (one copy per report), "summary" and "ev_p"
         # are adjacent (one copy)
@@ -216,11 +310,11 @@ class Detector:
                           ("edW", edW0), ("sphW", sphW0), ("out9", np.zeros(9)), ("work", np.zeros(64)),
                           ("gap", np.zeros(stack_n)), ("ev", np.zeros((P, EV_W))),
                           ("plb", np.zeros(P)), ("last_d", np.zeros(P)), ("last_q", np.zeros((P, nq))),
-                          ("best", np.zeros(4)), ("seg", np.zeros((2, 3)))):
+                          ("best", np.zeros(4)), ("seg", np.zeros((2, 3))), ("fk_q", np.zeros(max(m.n_q, 1)))):
             L.add("SF", name, arr)
         for name, arr in (("summary", np.full(SUM_SIZE, -1)), ("ev_p", np.zeros(P)), ("pflag", np.zeros(P)),
                           ("stack", np.zeros(stack_n)), ("order", np.zeros(P)), ("has_last", np.zeros(P)),
-                          ("stamp", np.zeros(1 + G)), ("pstamp", np.zeros(P))):
+                          ("stamp", np.zeros(1 + G)), ("pstamp", np.zeros(P)), ("fk_ok", np.zeros(len(rob_l) - 1))):
             L.add("SI", name, arr)
         L.scalar("n_q", m.n_q); L.scalar("n_explicit", m.n_explicit); L.scalar("n_mov", len(m.mov_ids))
         L.scalar("n_st", len(m.st_ids)); L.scalar("n_links", t.n_links)
@@ -244,6 +338,10 @@ class Detector:
             ip[0] = mode
             self._iprm_by_mode[mode] = ip
         self._q1 = np.zeros((1, m.n_q))
+        self._last_raw = None  # a report reading the old buffers keeps them alive: nothing to copy
+        self._iprm_exact = self._iprm_by_mode[kn.MODE_EXACT]
+        self._entry = _entry_point(self._q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm,
+                                   self._iprm_exact, self._all_p)
         self._names_a = tuple(cs.owner_names[cs.elem_owner[a]] for a in m.pair_a)
         self._names_b = tuple("workspace" if b < 0 else cs.owner_names[cs.elem_owner[b]] for b in m.pair_b)
         self._links_a = tuple(m.link_names[m.elem_glink[a]] for a in m.pair_a)
@@ -340,7 +438,21 @@ class Detector:
         self._q1[0] = flat
         return self._q1
 
+    def _keep(self, raw: _Raw) -> _Raw:
+        self._last_raw = raw
+        return raw
+
+    def _release_last(self) -> None:
+        """Before the scratch buffers are overwritten: let the last report copy its rows out if
+        anything still refers to it (a report nobody holds needs no copy)."""
+        last = self._last_raw
+        if last is not None:
+            self._last_raw = None
+            if _refcount(last) > _UNHELD:
+                last.detach()
+
     def _run(self, q1, mode: int, allowance: int, lazy: bool, sel=None) -> tuple[int, int]:
+        self._release_last()
         iprm = self._iprm_by_mode[mode]
         if mode == kn.MODE_ANYTIME:
             iprm[1] = allowance
@@ -348,10 +460,14 @@ class Detector:
         status, n_eval, err = kn.detect_entry(q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm, iprm,
                                               self._all_p if sel is None else sel)
         if err:
-            if err == 1:
-                raise DetectionError(f"q contains NaN or infinite values: {q1[0].tolist()}")
-            raise DetectionError("a convex distance kernel did not converge (GJK iteration limit); no verdict")
+            self._raise_kernel_error(err, q1)
         return status, n_eval
+
+    @staticmethod
+    def _raise_kernel_error(err: int, q1: np.ndarray) -> None:
+        if err == 1:
+            raise DetectionError(f"q contains NaN or infinite values: {q1[0].tolist()}")
+        raise DetectionError("a convex distance kernel did not converge (GJK iteration limit); no verdict")
 
     def check(self, q, *, budget_us: float | None = None, lazy: bool = False) -> DetectionReport:
         """Check configuration ``q`` (mapping robot -> joints, or flat over ``scene.joint_names``).
@@ -368,7 +484,28 @@ class Detector:
         t0 = time.perf_counter()
         if getattr(self.scene, "revision", None) != self._revision:  # stale model: rebuild (see _fresh)
             self.prepare()
-        q1 = self._flat_q(q)
+        q1 = self._q1
+        if type(q) is np.ndarray and q.dtype == np.float64 and q.shape == q1.shape[1:]:
+            q1[0] = q  # the common case, inline (validation of everything else in _flat_q)
+        else:
+            q1 = self._flat_q(q)
+        last = self._last_raw
+        if last is not None:  # _release_last, inline
+            self._last_raw = None
+            if _refcount(last) > _UNHELD:
+                last.detach()
+            del last
+        if budget_us is None and not lazy:
+            status, n_eval, err = self._entry(q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm,
+                                              self._iprm_exact, self._all_p)
+            if err:
+                self._raise_kernel_error(err, q1)
+            raw = _Raw(self, self._SF, self._SI, self._ev_off, self._sum_off, n_eval, None, None, kn.MODE_EXACT)
+            self._last_raw = raw
+            elapsed = (time.perf_counter() - t0) * 1e6
+            if n_eval > 0:
+                self._ns_per_pair = 0.8 * self._ns_per_pair + 0.2 * max(elapsed * 1e3 / n_eval, 1.0)
+            return DetectionReport._from_check(STATUS_CODES[status], self._threshold, self._stopping, elapsed, raw)
         if budget_us is not None:
             b = float(budget_us)
             if not (b >= 0.0 and math.isfinite(b)):
@@ -379,10 +516,7 @@ class Detector:
         else:
             mode = kn.MODE_LAZY if lazy else kn.MODE_EXACT
             status, n_eval = self._run(q1, mode, 0, False)
-        o = self._ev_off
-        f = self._SF[o:o + EV_W * n_eval].reshape(n_eval, EV_W).copy()
-        o = self._sum_off
-        i = self._SI[o:o + SUM_SIZE + n_eval].copy()
+        raw_buffers = (self._SF, self._SI, self._ev_off, self._sum_off)
         if mode == kn.MODE_EXACT:
             flags = bounds = None
         else:
@@ -391,7 +525,7 @@ class Detector:
         if n_eval > 0:  # the cost model of the anytime mode: an exponential average of ns per pair
             self._ns_per_pair = 0.8 * self._ns_per_pair + 0.2 * max(elapsed * 1e3 / n_eval, 1.0)
         return DetectionReport(STATUS_CODES[status], self._threshold, self._stopping, elapsed,
-                               _Raw(self, f, i, n_eval, flags, bounds, mode))
+                               self._keep(_Raw(self, *raw_buffers, n_eval, flags, bounds, mode)))
 
     def _selection(self, robot: str | None):
         """Pair numbers checked by ``pair_distances(q, robot=robot)`` and their static columns (cached)."""

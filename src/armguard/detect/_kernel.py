@@ -118,6 +118,11 @@ _K_pes = K["pes"]
 _K_all_p = K["all_p"]
 _K_st_mov = K["st_mov"]
 _K_st_cat = K["st_cat"]
+_K_rob_l = K["rob_l"]
+_K_rob_j = K["rob_j"]
+_K_parent_loc = K["parent_loc"]
+_K_fk_q = K["fk_q"]
+_K_fk_ok = K["fk_ok"]
 _SC_n_explicit = SC["n_explicit"]
 _SC_n_links = SC["n_links"]
 _SC_n_q = SC["n_q"]
@@ -210,7 +215,50 @@ def _move_flat(g, H, MF, MI, SF):  # pragma: no cover - compiled
             SF[oW + i + 2] = r20 * x + r21 * y + r22 * z
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, inline="always")
+def _before(key, i, j):  # pragma: no cover - compiled
+    """Order of :func:`_argsort_heap`: by key, ties by index (deterministic)."""
+    return key[i] < key[j] or (key[i] == key[j] and i < j)
+
+
+@njit(cache=True, _nrt=False)
+def _argsort_heap(key, order, n):  # pragma: no cover - compiled
+    """``order[:n]`` <- the indices ``0..n-1`` in increasing ``key`` (ties by index): heapsort in
+    place, nothing allocated (``detect_rows`` runs without reference counting)."""
+    for i in range(n):
+        order[i] = i
+    for start in range(n // 2 - 1, -1, -1):  # max-heap
+        root = start
+        while True:
+            child = 2 * root + 1
+            if child >= n:
+                break
+            if child + 1 < n and _before(key, order[child], order[child + 1]):
+                child += 1
+            if _before(key, order[root], order[child]):
+                t = order[root]; order[root] = order[child]; order[child] = t
+                root = child
+            else:
+                break
+    for end in range(n - 1, 0, -1):
+        t = order[0]; order[0] = order[end]; order[end] = t
+        root = 0
+        while True:
+            child = 2 * root + 1
+            if child >= end:
+                break
+            if child + 1 < end and _before(key, order[child], order[child + 1]):
+                child += 1
+            if _before(key, order[root], order[child]):
+                t = order[root]; order[root] = order[child]; order[child] = t
+                root = child
+            else:
+                break
+
+
+# compiled without numba's reference counting (``_nrt=False``): nothing is allocated inside, and
+# the ~45 segment views per call (and the callees' views) would otherwise each pay an incref/decref
+@njit(cache=True, nogil=True, _nrt=False)
 def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out):  # pragma: no cover - compiled
     """Checks of rows ``lo:hi`` of ``Q`` ``(M, n_q)``; per row the nearest distance per category goes to
     ``min_d[m]`` ``(4,)`` and the status code to ``status_out[m]``; the last row's pairs stay in the
@@ -234,7 +282,6 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     sph_L = seg2(MF, H, _K_sph_L, 4)
     lever = seg2(MF, H, _K_lever, max(n_q, 1))
     ws = seg1(MF, H, _K_ws)
-    parent = seg1(MI, H, _K_parent)
     jtype = seg1(MI, H, _K_jtype)
     has_post = seg1(MI, H, _K_has_post)
     term_start = seg1(MI, H, _K_term_start)
@@ -255,6 +302,12 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     mov_ids = seg1(MI, H, _K_mov_ids)
     st_mov = seg1(MI, H, _K_st_mov)
     st_cat = seg1(MI, H, _K_st_cat)
+    rob_l = seg1(MI, H, _K_rob_l)
+    rob_j = seg1(MI, H, _K_rob_j)
+    parent_loc = seg1(MI, H, _K_parent_loc)
+    fk_q = seg1(SF, H, _K_fk_q)
+    fk_ok = seg1(SI, H, _K_fk_ok)
+    o_Xs = H[2 * _K_Xs]
     Xs = seg3(SF, H, _K_Xs, 4, 4).reshape((1, n_links, 4, 4))
     sphW = seg2(SF, H, _K_sphW, 4)
     out9 = seg1(SF, H, _K_out9)
@@ -313,7 +366,27 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                 summary[SUM_ERR] = 1
                 return 1
         # ---- FK and bounding spheres of the moving elements
-        _fk_kernel(q, parent, X_pre, axis, jtype, X_post, has_post, offset, term_start, term_joint, term_coeff, Xs)
+        # FK per robot block, only for the robots whose joint values changed since the last check
+        # (exact equality: an unchanged block's poses are the ones FK would compute again)
+        for r in range(rob_l.shape[0] - 1):
+            j0 = rob_j[r]
+            j1 = rob_j[r + 1]
+            if fk_ok[r] != 0:
+                same = True
+                for j in range(j0, j1):
+                    if q[0, j] != fk_q[j]:
+                        same = False
+                        break
+                if same:
+                    continue
+            l0 = rob_l[r]
+            l1 = rob_l[r + 1]
+            Xb = SF[o_Xs + 16 * l0:o_Xs + 16 * l1].reshape((1, l1 - l0, 4, 4))
+            _fk_kernel(q, parent_loc[l0:l1], X_pre[l0:l1], axis[l0:l1], jtype[l0:l1], X_post[l0:l1],
+                       has_post[l0:l1], offset[l0:l1], term_start[l0:l1 + 1], term_joint, term_coeff, Xb)
+            for j in range(j0, j1):
+                fk_q[j] = q[0, j]
+            fk_ok[r] = 1
         stamp_now = stamp[0] + 1  # stamp[0] counts checks; stamp[1 + g] marks moved elements, pstamp evaluated pairs
         stamp[0] = stamp_now
         for i in range(mov_ids.shape[0]):
@@ -391,7 +464,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                             moved += dq * lv
                     lb = max(lb, last_d[p] - moved)
                 plb[p] = lb
-            order[:P] = np.argsort(plb[:P])
+            _argsort_heap(plb, order, P)
             for k in range(P):
                 p = order[k]
                 if lazy and plb[p] > thr_eff:
@@ -600,7 +673,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def detect_entry(q, H, MF, MI, SF, SI, prm, iprm, sel):  # pragma: no cover - compiled
     """One check at ``q`` ``(1, n_q)``, returning ``(status, n_evaluated, error)`` (saves reads from Python)."""
     summary = seg1(SI, H, _K_summary)

@@ -163,6 +163,16 @@ class DetectionReport:
     def not_evaluated(self) -> tuple[NotEvaluated, ...]:
         return self._raw.not_evaluated()
 
+    @classmethod
+    def _from_check(cls, status: Status, threshold: float, stopping_distance: float, elapsed_us: float,
+                    raw: Any) -> "DetectionReport":
+        """The report of one check without the frozen dataclass's ``__init__`` (five
+        ``object.__setattr__`` calls, ~0.5 µs of a ~4 µs check): the same fields, set once."""
+        r = object.__new__(cls)
+        r.__dict__.update(status=status, threshold=threshold, stopping_distance=stopping_distance,
+                          elapsed_us=elapsed_us, _raw=raw)
+        return r
+
     @property
     def n_evaluated(self) -> int:
         """How many narrow-phase pair distances this check computed."""

@@ -1,0 +1,84 @@
+"""The check fast path: FK per robot block, reports copied out only when still held, heapsort order.
+
+Oracles: the robot's own forward kinematics (``Robot.forward_kinematics``), the slow path of the
+same detector (a report built from copies taken right after the check), ``numpy.argsort``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from armguard.detect import Detector
+from armguard.detect._kernel import _argsort_heap
+from armguard.scene import load_scene
+
+
+@pytest.fixture(scope="module")
+def ranger():
+    return load_scene("ranger")
+
+
+def _limits(scene):
+    lo = np.concatenate([scene.robots[r].lower for r in scene.robots])
+    hi = np.concatenate([scene.robots[r].upper for r in scene.robots])
+    return np.where(np.isfinite(lo), lo, -np.pi), np.where(np.isfinite(hi), hi, np.pi)
+
+
+def test_block_fk_matches_robot_fk_when_only_one_arm_moves(ranger):
+    det = Detector(ranger, threshold=0.05, active="left_arm")
+    lo, hi = _limits(ranger)
+    rng = np.random.default_rng(7)
+    q = rng.uniform(lo, hi)
+    names = list(ranger.robots)
+    j0 = sum(ranger.robots[r].n_joints for r in names[:names.index("left_arm")])
+    n = ranger.robots["left_arm"].n_joints
+    Xs = det._layout.view(det._SF, "Xs")
+    for _ in range(5):  # only the left arm moves: the other blocks keep their cached poses
+        q[j0:j0 + n] = rng.uniform(lo[j0:j0 + n], hi[j0:j0 + n])
+        det.check(q)
+        want = np.concatenate([ranger.robots[r].forward_kinematics(qq) for r, qq in ranger.split_q(q).items()])
+        np.testing.assert_allclose(Xs, want, atol=1e-12)
+    q2 = rng.uniform(lo, hi)  # every arm moves
+    det.check(q2)
+    want = np.concatenate([ranger.robots[r].forward_kinematics(qq) for r, qq in ranger.split_q(q2).items()])
+    np.testing.assert_allclose(Xs, want, atol=1e-12)
+
+
+def test_held_report_survives_later_checks(ranger):
+    det = Detector(ranger, threshold=0.05, active="left_arm")
+    lo, hi = _limits(ranger)
+    Q = np.random.default_rng(3).uniform(lo, hi, size=(6, len(lo)))
+    held = det.check(Q[0])  # not read before the next checks
+    want = Detector(ranger, threshold=0.05, active="left_arm").check(Q[0])
+    for q in Q[1:]:
+        det.check(q)
+        det.pair_distances(q)
+    assert held.status == want.status
+    assert held.n_evaluated == want.n_evaluated
+    got = {k: (v.distance, v.a, v.b) for k, v in held.by_category.items()}
+    exp = {k: (v.distance, v.a, v.b) for k, v in want.by_category.items()}
+    assert got == exp
+
+
+def test_dropped_reports_cost_no_copy_and_stay_right(ranger):
+    det = Detector(ranger, threshold=0.05, active="left_arm")
+    lo, hi = _limits(ranger)
+    Q = np.random.default_rng(5).uniform(lo, hi, size=(4, len(lo)))
+    for q in Q:
+        det.check(q)
+    raw = det._last_raw
+    assert raw is not None and raw._f is None  # nothing held the earlier reports: never copied
+    last = det.check(Q[-1])
+    ref = Detector(ranger, threshold=0.05, active="left_arm").check(Q[-1])
+    assert [r.distance for r in last.within_threshold] == [r.distance for r in ref.within_threshold]
+
+
+@pytest.mark.parametrize("n", [0, 1, 2, 7, 74, 155], ids=lambda n: f"n{n}")
+def test_heapsort_order_matches_stable_argsort(n):
+    rng = np.random.default_rng(n)
+    key = np.round(rng.normal(size=n), 1)  # ties on purpose
+    key[: n // 4] = -np.inf
+    order = np.full(n, -1, dtype=np.int64)
+    _argsort_heap(key, order, n)
+    np.testing.assert_array_equal(order, np.argsort(key, kind="stable"))
