@@ -46,6 +46,7 @@ class _Run:
             self._fixed = model.fixed_clearances(self._q, robot)
             self._det = model._det
             self._det_map = model._det_map
+        self._pidx = self._idx = None  # see _index_of
         self._last = None  # the last evaluation's witnesses: a detector result, or (p_WA, p_WB)
 
     def full_dq(self, dq_robot: np.ndarray) -> np.ndarray:
@@ -73,7 +74,7 @@ class _Run:
         if self._fast:
             res = self._det.pair_distances(q, robot=self.robot)
             row[:] = self._fixed[0]
-            row[self._det_map[res.pair_index]] = res.distance
+            row[self._index_of(res)] = res.distance
             self._last = res
             self.model.evaluations += 1
         else:
@@ -87,6 +88,15 @@ class _Run:
         self.n = i + 1
         return i
 
+    def _index_of(self, res) -> np.ndarray:
+        """Rows of the detector result ``res`` in the model's pair order (cached while the detector
+        hands back the same ``pair_index`` array, i.e. the same pair selection)."""
+        pidx = res.pair_index
+        if pidx is not self._pidx:
+            self._pidx = pidx
+            self._idx = self._det_map[pidx]
+        return self._idx
+
     def full_q(self, i: int) -> np.ndarray:
         """``(n_q,)``: the flat configuration of evaluation ``i``."""
         q = self.base.copy()
@@ -98,7 +108,7 @@ class _Run:
         if not self._fast:
             return self._last
         res = self._last
-        idx = self._det_map[res.pair_index]
+        idx = self._index_of(res)
         pA = self._fixed[1].copy()
         pB = self._fixed[2].copy()
         pA[idx] = res.p_WA
