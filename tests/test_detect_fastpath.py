@@ -82,3 +82,32 @@ def test_heapsort_order_matches_stable_argsort(n):
     order = np.full(n, -1, dtype=np.int64)
     _argsort_heap(key, order, n)
     np.testing.assert_array_equal(order, np.argsort(key, kind="stable"))
+
+
+def test_yesno_box_cull_agrees_with_all_pairs_on_capsules_among_boxes():
+    """collides_many (sphere + segment-box culls, early exit) == the all-pairs brute force."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from _verify_fixtures import spatial_arm
+
+    from armguard.geometry import Box, Sphere
+    from armguard.scene import Scene
+
+    rng = np.random.default_rng(11)
+    sc = Scene("cull")
+    sc.add_robot(spatial_arm())
+    for k in range(12):
+        c = rng.uniform([-0.8, -0.8, -0.5], [0.8, 0.8, 0.8])
+        a = rng.uniform(-np.pi, np.pi)
+        R = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+        sc.add_body(f"box{k}", [Box(c, rng.uniform(0.02, 0.15, 3), R)])
+    sc.add_body("ball", [Sphere([0.3, 0.3, 0.3], 0.1)])
+    det = Detector(sc, threshold=0.05)
+    lo, hi = _limits(sc)
+    Q = rng.uniform(lo, hi, size=(3000, len(lo)))
+    got = det.collides_many(Q)
+    want = det.check_many_bruteforce(Q).collision
+    assert 0.05 < want.mean() < 0.95  # both verdicts occur
+    np.testing.assert_array_equal(got, want)

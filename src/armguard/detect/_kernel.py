@@ -155,6 +155,18 @@ def _sb_gap(cx, cy, cz, r, B, olo, ohi):  # pragma: no cover - compiled
     return math.sqrt(dx * dx + dy * dy + dz * dz) - r
 
 
+@njit(cache=True, inline="always")
+def _bb_gap(lx, ly, lz, hx, hy, hz, r, B, olo, ohi):  # pragma: no cover - compiled
+    """Distance (m) between the box ``[l, h]`` grown by ``r`` and the box ``[B[olo:olo + 3], B[ohi:ohi + 3]]``;
+    <= 0 if they overlap.  With ``[l, h]`` the W-aligned box of a capsule's segment and ``r`` its
+    radius, a lower bound on the capsule's distance to anything in the second box (both sets lie in
+    their boxes), much tighter than the bounding sphere for a long link."""
+    dx = max(B[olo] - hx, 0.0, lx - B[ohi])
+    dy = max(B[olo + 1] - hy, 0.0, ly - B[ohi + 1])
+    dz = max(B[olo + 2] - hz, 0.0, lz - B[ohi + 2])
+    return math.sqrt(dx * dx + dy * dy + dz * dz) - r
+
+
 @njit(cache=True)
 def _record_flat(p, c, d, n_eval, H, SF, SI, stamp_now):  # pragma: no cover - compiled
     """Store pair ``p``'s result (``d`` and the witnesses in ``out9``) in row ``n_eval`` of the compact
@@ -357,6 +369,9 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     o_blo = H[2 * _K_bvh_lo]
     o_bhi = H[2 * _K_bvh_hi]
     o_box = H[2 * _K_boxW]
+    o_vs = H[2 * _K_vstart]
+    o_vW = H[2 * _K_vW]
+    o_rad = H[2 * _K_radius]
 
     for m in range(lo, hi):
         q = Q[m:m + 1]
@@ -577,8 +592,27 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                         sc_a = st_cat[i]
                         ma = mov_idx[a]
                         cx = sphW[a, 0]; cy = sphW[a, 1]; cz = sphW[a, 2]; cr = sphW[a, 3]
+                        # yes/no: a sphere or capsule core also gets its segment's W-aligned box
+                        # (see _bb_gap), a tighter cull than the bounding sphere for long links
+                        v0 = MI[o_vs + a]
+                        use_bb = mode == MODE_YESNO and MI[o_vs + a + 1] - v0 <= 2 and core[a] <= 1
+                        bx0 = by0 = bz0 = bx1 = by1 = bz1 = br = 0.0
+                        if use_bb:
+                            if stamp[1 + a] != stamp_now:
+                                _move_flat(a, H, MF, MI, SF)
+                                stamp[1 + a] = stamp_now
+                            ov = o_vW + 3 * v0
+                            bx0 = bx1 = SF[ov]; by0 = by1 = SF[ov + 1]; bz0 = bz1 = SF[ov + 2]
+                            if MI[o_vs + a + 1] - v0 == 2:
+                                x = SF[ov + 3]; y = SF[ov + 4]; z = SF[ov + 5]
+                                bx0 = min(bx0, x); bx1 = max(bx1, x)
+                                by0 = min(by0, y); by1 = max(by1, y)
+                                bz0 = min(bz0, z); bz1 = max(bz1, z)
+                            br = MF[o_rad + a]
                         stack[0] = 0
                         gapst[0] = _sb_gap(cx, cy, cz, cr, MF, o_blo, o_bhi)
+                        if use_bb:
+                            gapst[0] = max(gapst[0], _bb_gap(bx0, by0, bz0, bx1, by1, bz1, br, MF, o_blo, o_bhi))
                         top = 1
                         while top > 0:
                             top -= 1
@@ -595,6 +629,11 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                 right = bvh_right[node]
                                 gl = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * left, o_bhi + 3 * left)
                                 gr = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * right, o_bhi + 3 * right)
+                                if use_bb:
+                                    gl = max(gl, _bb_gap(bx0, by0, bz0, bx1, by1, bz1, br, MF, o_blo + 3 * left,
+                                                         o_bhi + 3 * left))
+                                    gr = max(gr, _bb_gap(bx0, by0, bz0, bx1, by1, bz1, br, MF, o_blo + 3 * right,
+                                                         o_bhi + 3 * right))
                                 if gl <= gr:  # push the farther first: the nearer is popped first
                                     stack[top] = right; gapst[top] = gr; top += 1
                                     stack[top] = left; gapst[top] = gl; top += 1
@@ -611,6 +650,9 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                 cutp = max(cut0, best[c]) if by_best else cut0
                                 b = pair_b[p]
                                 lb = _sb_gap(cx, cy, cz, cr, MF, o_slo + 3 * s, o_shi + 3 * s)
+                                if use_bb:
+                                    lb = max(lb, _bb_gap(bx0, by0, bz0, bx1, by1, bz1, br, MF, o_slo + 3 * s,
+                                                         o_shi + 3 * s))
                                 if lb > 0.0 and core[b] == 2:  # a box: the exact sphere-OBB gap is tighter
                                     lb = max(lb, _obb_gap(cx, cy, cz, cr, SF, o_box + 15 * b))
                                 if not lb > 0.0:
