@@ -267,6 +267,12 @@ class Detector:
         with_static = np.any(m.pair_of >= 0, axis=1) if len(m.st_ids) else np.zeros(len(m.mov_ids), bool)
         st_mov = m.mov_ids[with_static]
         st_cat = np.array([_single(m.pair_cat[row[row >= 0]]) for row in m.pair_of[with_static]], dtype=np.int64)
+        # the yes/no batch walks them farthest-reaching first (largest summed lever arm: the links
+        # that sweep the most space meet obstacles most often), so it exits early on a likely hit;
+        # the distance modes keep the kinematic order (base first), which prunes better for them
+        by_reach = np.argsort(-lever.sum(axis=1)[with_static], kind="stable")
+        yn_mov = np.ascontiguousarray(st_mov[by_reach], dtype=np.int64)
+        yn_cat = np.ascontiguousarray(st_cat[by_reach], dtype=np.int64) if len(st_cat) else np.zeros(0, np.int64)
         L.add("MF", "X_pre", t.X_pre); L.add("MF", "axis", t.axis); L.add("MF", "X_post", t.X_post)
         L.add("MF", "offset", t.offset); L.add("MF", "term_coeff", t.term_coeff); L.add("MF", "radius", cs.elem_radius)
         L.add("MF", "verts_L", cs.verts.reshape(-1, 3)); L.add("MF", "box_L", m.box_local.reshape(-1, 15))
@@ -293,7 +299,8 @@ class Detector:
                           ("mov_ids", m.mov_ids), ("ped", poly["ped"]), ("poly_of", poly["poly_of"]),
                           ("pvs", poly["pvs"]), ("pps", poly["pps"]), ("pes", poly["pes"]),
                           ("all_p", np.arange(P, dtype=np.int64)),
-                          ("st_mov", st_mov), ("st_cat", st_cat), ("rob_l", rob_l), ("rob_j", rob_j),
+                          ("st_mov", st_mov), ("st_cat", st_cat), ("yn_mov", yn_mov), ("yn_cat", yn_cat),
+                          ("rob_l", rob_l), ("rob_j", rob_j),
                           ("parent_loc", parent_loc)):
             L.add("MI", name, arr)
         # scratch: "ev" holds the evaluated pairs' rows (one copy per report), "summary" and "ev_p"

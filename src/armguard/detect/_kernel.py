@@ -119,6 +119,8 @@ _K_all_p = K["all_p"]
 _K_st_mov = K["st_mov"]
 _K_st_cat = K["st_cat"]
 _K_rob_l = K["rob_l"]
+_K_yn_mov = K["yn_mov"]
+_K_yn_cat = K["yn_cat"]
 _K_rob_j = K["rob_j"]
 _K_parent_loc = K["parent_loc"]
 _K_fk_q = K["fk_q"]
@@ -312,8 +314,12 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     pair_cat = seg1(MI, H, _K_pair_cat)
     pair_of = seg2(MI, H, _K_pair_of, max(n_st, 1))
     mov_ids = seg1(MI, H, _K_mov_ids)
-    st_mov = seg1(MI, H, _K_st_mov)
-    st_cat = seg1(MI, H, _K_st_cat)
+    if iprm[I_MODE] == MODE_YESNO:  # the static walk's element order (see Detector.prepare)
+        st_mov = seg1(MI, H, _K_yn_mov)
+        st_cat = seg1(MI, H, _K_yn_cat)
+    else:
+        st_mov = seg1(MI, H, _K_st_mov)
+        st_cat = seg1(MI, H, _K_st_cat)
     rob_l = seg1(MI, H, _K_rob_l)
     rob_j = seg1(MI, H, _K_rob_j)
     parent_loc = seg1(MI, H, _K_parent_loc)

@@ -25,7 +25,7 @@ MF = ("X_pre", "axis", "X_post", "offset", "term_coeff", "radius", "verts_L", "b
 MI = ("parent", "jtype", "has_post", "term_start", "term_joint", "glink", "core", "vstart", "pstart",
       "estart", "mov_idx", "st_idx", "bvh_left", "bvh_right", "bvh_start", "bvh_count", "bvh_items",
       "pair_a", "pair_b", "pair_cat", "pair_of", "mov_ids", "ped", "poly_of", "pvs", "pps", "pes", "all_p", "st_mov", "st_cat",
-      "rob_l", "rob_j", "parent_loc")
+      "rob_l", "rob_j", "parent_loc", "yn_mov", "yn_cat")
 # scratch / state / output floats
 SFN = ("Xs", "vW", "boxW", "fnW", "edW", "sphW", "out9", "work", "gap", "ev", "plb", "last_d",
        "last_q", "best", "seg", "fk_q")
