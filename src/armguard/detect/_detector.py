@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from typing import Mapping
@@ -14,9 +13,10 @@ import numpy as np
 from .._errors import DetectionError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from . import _kernel as kn
-from ._layout import EV_W, SUM_BSLOT, SUM_SIZE, Layout
+from ._layout import EV_W, SUM_SIZE, Layout
 from ._model import CAT_WORKSPACE, build_model, check_finite_margin
-from ._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, NotEvaluated, PairDistances, PairResult
+from ._raw import _UNHELD, _Raw, _refcount
+from ._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, PairDistances, PairResult
 
 __all__ = ["Detector"]
 
@@ -109,25 +109,6 @@ def _entry_point(*args):
         return kn.detect_entry
 
 
-def _refcount(obj) -> int:
-    return sys.getrefcount(obj)
-
-
-def _unheld_count() -> int:
-    """What :func:`_refcount` says of an object held only by one local name of the caller, called
-    the way :meth:`Detector._release_last` calls it (measured, not assumed: interpreters differ in
-    whether a call's arguments hold references of their own)."""
-    last = _Probe()
-    return _refcount(last)
-
-
-class _Probe:
-    __slots__ = ()
-
-
-_UNHELD = _unheld_count()
-
-
 def _check_length(value, name: str) -> float:
     try:
         x = float(value)
@@ -136,81 +117,6 @@ def _check_length(value, name: str) -> float:
     if not math.isfinite(x) or x < 0.0:
         raise DetectionError(f"{name}: must be finite and >= 0, got {x}")
     return x
-
-
-class _Raw:
-    """One check's compact kernel outputs; builds the report's views on demand.
-
-    ``f`` ``(n, 7)``: ``[distance, p_WA, p_WB]`` of the ``n`` evaluated pairs in evaluation order;
-    ``i``: the summary slots followed by the ``n`` pair numbers; ``flags`` / ``bounds`` ``(P,)``
-    only for the lazy and anytime modes (their reports name every skipped pair).
-
-    ``f`` and ``i`` are copied out of the detector's scratch buffers only when needed: on first
-    access, or when the detector is about to overwrite the buffers while this object is still
-    referenced (:meth:`Detector._release_last`).  A report dropped before the next check (a
-    control loop reading only ``status``) costs no copy."""
-
-    __slots__ = ("det", "_f", "_i", "_SF", "_SI", "_of", "_oi", "n_evaluated", "flags", "bounds", "mode")
-
-    def __init__(self, det: "Detector", SF: np.ndarray, SI: np.ndarray, of: int, oi: int, n_evaluated: int,
-                 flags, bounds, mode) -> None:
-        self.det, self._SF, self._SI, self._of, self._oi, self.n_evaluated = det, SF, SI, of, oi, n_evaluated
-        self._f = self._i = None
-        self.flags, self.bounds, self.mode = flags, bounds, mode
-
-    def detach(self) -> None:
-        """Copy this check's rows out of the scratch buffers (idempotent)."""
-        if self._f is None:
-            n, o = self.n_evaluated, self._of
-            self._f = self._SF[o:o + EV_W * n].reshape(n, EV_W).copy()
-            self._i = self._SI[self._oi:self._oi + SUM_SIZE + n].copy()
-            self._SF = self._SI = None
-
-    @property
-    def f(self) -> np.ndarray:
-        if self._f is None:
-            self.detach()
-        return self._f
-
-    @property
-    def i(self) -> np.ndarray:
-        if self._f is None:
-            self.detach()
-        return self._i
-
-    def row(self, k: int) -> PairResult:
-        r = self.f[k]
-        return self.det._pair_result(int(self.i[SUM_SIZE + k]), float(r[0]), r[1:4].copy(), r[4:7].copy())
-
-    def by_category(self) -> dict[str, PairResult]:
-        out = {}
-        for c in range(4):
-            k = int(self.i[SUM_BSLOT + c])
-            if k >= 0:
-                out[CATEGORIES[c]] = self.row(k)
-        return out
-
-    def within(self, threshold: float) -> tuple[PairResult, ...]:
-        d = self.f[:, 0]
-        idx = np.flatnonzero(d <= threshold)
-        idx = idx[np.lexsort((self.i[SUM_SIZE:][idx], d[idx]))]  # nearest first, ties by pair number
-        return tuple(self.row(int(k)) for k in idx)
-
-    def not_evaluated(self) -> tuple[NotEvaluated, ...]:
-        if self.flags is None:  # exact: every skipped pair is beyond its category's cut-off
-            return ()
-        det, flags, plb = self.det, self.flags, self.bounds
-        cat = det._model.pair_cat
-        out = []
-        for p in np.flatnonzero(flags == 0):
-            a, b = det._pair_names(int(p))
-            out.append(NotEvaluated(a, b, CATEGORIES[int(cat[p])], float(plb[p]), int(p)))
-        if self.mode == kn.MODE_LAZY:  # lazily skipped pairs: proved beyond the threshold
-            thr = max(det.threshold, det.stopping_distance)
-            for p in np.flatnonzero(flags == 2):
-                a, b = det._pair_names(int(p))
-                out.append(NotEvaluated(a, b, CATEGORIES[int(cat[p])], max(float(plb[p]), thr), int(p)))
-        return tuple(out)
 
 
 class Detector:
