@@ -57,7 +57,7 @@ def _before(key, i, j):  # pragma: no cover - compiled
     return key[i] < key[j] or (key[i] == key[j] and i < j)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True)
 def _argsort_heap(key, order, n):  # pragma: no cover - compiled
     """``order[:n]`` <- the indices ``0..n-1`` in increasing ``key`` (ties by index): heapsort in
     place, nothing allocated (``detect_rows`` runs without reference counting)."""

@@ -191,9 +191,10 @@ def _move_flat(g, H, MF, MI, SF):  # pragma: no cover - compiled
             SF[oW + i + 2] = r20 * x + r21 * y + r22 * z
 
 
-# compiled without numba's reference counting (``_nrt=False``): nothing is allocated inside, and
-# the ~45 segment views per call (and the callees' views) would otherwise each pay an incref/decref
-@njit(cache=True, nogil=True, _nrt=False)
+# Compiled WITH numba's reference counting.  ``_nrt=False`` (numba's private option, which saves an
+# incref/decref on each of the ~45 segment views per call) made LLVM segfault while compiling this
+# kernel and ``detect_entry`` from a cold cache (numba 0.68, fresh clone); a warm cache hid it.
+@njit(cache=True, nogil=True)
 def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out):  # pragma: no cover - compiled
     """Checks of rows ``lo:hi`` of ``Q`` ``(M, n_q)``; per row the nearest distance per category goes to
     ``min_d[m]`` ``(4,)`` and the status code to ``status_out[m]``; the last row's pairs stay in the
@@ -642,7 +643,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     return 0
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True)
 def detect_entry(q, H, MF, MI, SF, SI, prm, iprm, sel):  # pragma: no cover - compiled
     """One check at ``q`` ``(1, n_q)``, returning ``(status, n_evaluated, error)`` (saves reads from Python)."""
     summary = seg1(SI, H, _K_summary)
