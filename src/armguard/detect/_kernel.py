@@ -35,7 +35,8 @@ from ..kinematics._fk import _fk_kernel
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SC, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, SUM_STATUS, seg1, seg2, seg3
 from ._cull import _argsort_heap, _bb_gap, _obb_gap, _sb_gap
-from ._narrow import narrow_flat, narrow_other, wall_flat
+from ._narrow import narrow_other
+from ._step import evaluate_pair, move_element, record_pair
 
 MODE_EXACT, MODE_LAZY, MODE_ANYTIME, MODE_YESNO, MODE_ALL, MODE_MIN = 0, 1, 2, 3, 4, 5
 ST_CLEAR, ST_WARNING, ST_COLLISION, ST_INCOMPLETE = 0, 1, 2, 3
@@ -50,7 +51,6 @@ _K_Xs = K["Xs"]
 _K_axis = K["axis"]
 _K_best = K["best"]
 _K_boxW = K["boxW"]
-_K_box_L = K["box_L"]
 _K_bvh_count = K["bvh_count"]
 _K_bvh_hi = K["bvh_hi"]
 _K_bvh_items = K["bvh_items"]
@@ -59,11 +59,6 @@ _K_bvh_lo = K["bvh_lo"]
 _K_bvh_right = K["bvh_right"]
 _K_bvh_start = K["bvh_start"]
 _K_core = K["core"]
-_K_edW = K["edW"]
-_K_ed_L = K["ed_L"]
-_K_estart = K["estart"]
-_K_fnW = K["fnW"]
-_K_fn_L = K["fn_L"]
 _K_gap = K["gap"]
 _K_glink = K["glink"]
 _K_has_last = K["has_last"]
@@ -81,10 +76,8 @@ _K_pair_a = K["pair_a"]
 _K_pair_b = K["pair_b"]
 _K_pair_cat = K["pair_cat"]
 _K_pair_of = K["pair_of"]
-_K_parent = K["parent"]
 _K_pflag = K["pflag"]
 _K_plb = K["plb"]
-_K_pstart = K["pstart"]
 _K_radius = K["radius"]
 _K_sphW = K["sphW"]
 _K_sph_L = K["sph_L"]
@@ -98,24 +91,11 @@ _K_term_coeff = K["term_coeff"]
 _K_term_joint = K["term_joint"]
 _K_term_start = K["term_start"]
 _K_vW = K["vW"]
-_K_verts_L = K["verts_L"]
 _K_vstart = K["vstart"]
-_K_work = K["work"]
 _K_ws = K["ws"]
 _K_ev = K["ev"]
 _K_ev_p = K["ev_p"]
 _K_pstamp = K["pstamp"]
-_K_seg = K["seg"]
-_K_pv = K["pv"]
-_K_ppl = K["ppl"]
-_K_pbis = K["pbis"]
-_K_pcen = K["pcen"]
-_K_ped = K["ped"]
-_K_poly_of = K["poly_of"]
-_K_pvs = K["pvs"]
-_K_pps = K["pps"]
-_K_pes = K["pes"]
-_K_all_p = K["all_p"]
 _K_st_mov = K["st_mov"]
 _K_st_cat = K["st_cat"]
 _K_rob_l = K["rob_l"]
@@ -129,66 +109,6 @@ _SC_n_explicit = SC["n_explicit"]
 _SC_n_links = SC["n_links"]
 _SC_n_q = SC["n_q"]
 _SC_n_st = SC["n_st"]
-
-
-@njit(cache=True)
-def _record_flat(p, c, d, n_eval, H, SF, SI, stamp_now):  # pragma: no cover - compiled
-    """Store pair ``p``'s result (``d`` and the witnesses in ``out9``) in row ``n_eval`` of the compact
-    outputs and update its category's best."""
-    o = H[2 * _K_ev] + EV_W * n_eval
-    o9 = H[2 * _K_out9]
-    SF[o] = d
-    for i in range(6):
-        SF[o + 1 + i] = SF[o9 + i]
-    SI[H[2 * _K_ev_p] + n_eval] = p
-    SI[H[2 * _K_pstamp] + p] = stamp_now
-    ob = H[2 * _K_best] + c
-    if d < SF[ob]:
-        SF[ob] = d
-        os = H[2 * _K_summary]
-        SI[os + SUM_BEST + c] = p
-        SI[os + SUM_BSLOT + c] = n_eval
-
-
-@njit(cache=True)
-def _move_flat(g, H, MF, MI, SF):  # pragma: no cover - compiled
-    """Move element ``g`` from its link frame to W (core points, box, face normals, edge directions)."""
-    oX = H[2 * _K_Xs] + 16 * MI[H[2 * _K_glink] + g]
-    r00 = SF[oX]; r01 = SF[oX + 1]; r02 = SF[oX + 2]; tx = SF[oX + 3]
-    r10 = SF[oX + 4]; r11 = SF[oX + 5]; r12 = SF[oX + 6]; ty = SF[oX + 7]
-    r20 = SF[oX + 8]; r21 = SF[oX + 9]; r22 = SF[oX + 10]; tz = SF[oX + 11]
-    ovs = H[2 * _K_vstart]
-    oL = H[2 * _K_verts_L]
-    oW = H[2 * _K_vW]
-    for k in range(MI[ovs + g], MI[ovs + g + 1]):
-        i = 3 * k
-        x = MF[oL + i]; y = MF[oL + i + 1]; z = MF[oL + i + 2]
-        SF[oW + i] = r00 * x + r01 * y + r02 * z + tx
-        SF[oW + i + 1] = r10 * x + r11 * y + r12 * z + ty
-        SF[oW + i + 2] = r20 * x + r21 * y + r22 * z + tz
-    if MI[H[2 * _K_core] + g] == 2:
-        b = H[2 * _K_box_L] + 15 * g
-        o = H[2 * _K_boxW] + 15 * g
-        x = MF[b]; y = MF[b + 1]; z = MF[b + 2]
-        SF[o] = r00 * x + r01 * y + r02 * z + tx
-        SF[o + 1] = r10 * x + r11 * y + r12 * z + ty
-        SF[o + 2] = r20 * x + r21 * y + r22 * z + tz
-        SF[o + 3] = MF[b + 3]; SF[o + 4] = MF[b + 4]; SF[o + 5] = MF[b + 5]
-        for j in range(3):  # R_WB = R_WL R_LB, row-major
-            a0 = MF[b + 6 + j]; a1 = MF[b + 9 + j]; a2 = MF[b + 12 + j]
-            SF[o + 6 + j] = r00 * a0 + r01 * a1 + r02 * a2
-            SF[o + 9 + j] = r10 * a0 + r11 * a1 + r12 * a2
-            SF[o + 12 + j] = r20 * a0 + r21 * a1 + r22 * a2
-    for kk in range(2):  # face normals, then edge directions: rotated only
-        os_ = H[2 * _K_pstart] if kk == 0 else H[2 * _K_estart]
-        oL = H[2 * _K_fn_L] if kk == 0 else H[2 * _K_ed_L]
-        oW = H[2 * _K_fnW] if kk == 0 else H[2 * _K_edW]
-        for k in range(MI[os_ + g], MI[os_ + g + 1]):
-            i = 3 * k
-            x = MF[oL + i]; y = MF[oL + i + 1]; z = MF[oL + i + 2]
-            SF[oW + i] = r00 * x + r01 * y + r02 * z
-            SF[oW + i + 1] = r10 * x + r11 * y + r12 * z
-            SF[oW + i + 2] = r20 * x + r21 * y + r22 * z
 
 
 # Compiled WITH numba's reference counting.  ``_nrt=False`` (numba's private option, which saves an
@@ -279,6 +199,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     lazy = iprm[I_LAZY] != 0
     thr_eff = max(thr, stop)
     level = max(0.0, stop)
+    lvl = level if mode == MODE_YESNO else -math.inf  # evaluate_pair: only d <= level matters
     P = pair_a.shape[0]
     track = mode == MODE_LAZY or mode == MODE_ANYTIME  # per-pair flags and bounds for the report
     ws_lo = ws[0:3]
@@ -361,21 +282,12 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                 p = sel[k]
                 a = pair_a[p]
                 b = pair_b[p]
-                if stamp[1 + a] != stamp_now:
-                    _move_flat(a, H, MF, MI, SF)
-                    stamp[1 + a] = stamp_now
-                if b < 0:
-                    d = wall_flat(a, H, MF, MI, SF)
-                else:
-                    if mov_idx[b] >= 0 and stamp[1 + b] != stamp_now:
-                        _move_flat(b, H, MF, MI, SF)
-                        stamp[1 + b] = stamp_now
-                    d, err = narrow_flat(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff)
-                    if err < 0:
-                        d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff)
-                    if err != 0:
-                        break
-                _record_flat(p, pair_cat[p], d, n_eval, H, SF, SI, stamp_now)
+                d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, woff, stamp_now)
+                if err < 0:
+                    d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl)
+                if err != 0:
+                    break
+                record_pair(p, pair_cat[p], d, n_eval, H, SF, SI, stamp_now)
                 n_eval += 1
         elif mode == MODE_ANYTIME:
             # lower bounds for every candidate pair, then evaluate in increasing bound
@@ -417,22 +329,13 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                     continue
                 a = pair_a[p]
                 b = pair_b[p]
-                if stamp[1 + a] != stamp_now:
-                    _move_flat(a, H, MF, MI, SF)
-                    stamp[1 + a] = stamp_now
-                if b < 0:
-                    d = wall_flat(a, H, MF, MI, SF)
-                else:
-                    if mov_idx[b] >= 0 and stamp[1 + b] != stamp_now:
-                        _move_flat(b, H, MF, MI, SF)
-                        stamp[1 + b] = stamp_now
-                    d, err = narrow_flat(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff)
-                    if err < 0:
-                        d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff)
-                    if err != 0:
-                        break
+                d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, woff, stamp_now)
+                if err < 0:
+                    d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl)
+                if err != 0:
+                    break
                 pflag[p] = 1
-                _record_flat(p, pair_cat[p], d, n_eval, H, SF, SI, stamp_now)
+                record_pair(p, pair_cat[p], d, n_eval, H, SF, SI, stamp_now)
                 n_eval += 1
             # pairs beyond the threshold by their bound: flag 2 (proved), bound kept in plb
         else:
@@ -445,23 +348,14 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                         continue
                     a = pair_a[p]
                     b = pair_b[p]
-                    if stamp[1 + a] != stamp_now:
-                        _move_flat(a, H, MF, MI, SF)
-                        stamp[1 + a] = stamp_now
-                    if b < 0:
-                        d = wall_flat(a, H, MF, MI, SF)
-                    else:
-                        if mov_idx[b] >= 0 and stamp[1 + b] != stamp_now:
-                            _move_flat(b, H, MF, MI, SF)
-                            stamp[1 + b] = stamp_now
-                        d, err = narrow_flat(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff)
-                        if err < 0:
-                            d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff)
-                        if err != 0:
-                            break
+                    d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, woff, stamp_now)
+                    if err < 0:
+                        d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl)
+                    if err != 0:
+                        break
                     if track:
                         pflag[p] = 1
-                    _record_flat(p, pair_cat[p], d, n_eval, H, SF, SI, stamp_now)
+                    record_pair(p, pair_cat[p], d, n_eval, H, SF, SI, stamp_now)
                     n_eval += 1
             # yes/no: the static obstacles first (self-collision pairs last); otherwise explicit pairs first
             for phase in range(2):
@@ -491,23 +385,14 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                             if track:
                                 plb[p] = lb
                             continue
-                        if stamp[1 + a] != stamp_now:
-                            _move_flat(a, H, MF, MI, SF)
-                            stamp[1 + a] = stamp_now
-                        if b < 0:
-                            d = wall_flat(a, H, MF, MI, SF)
-                        else:
-                            if stamp[1 + b] != stamp_now:
-                                _move_flat(b, H, MF, MI, SF)
-                                stamp[1 + b] = stamp_now
-                            d, err = narrow_flat(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff)
-                            if err < 0:
-                                d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff)
-                            if err != 0:
-                                break
+                        d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, woff, stamp_now)
+                        if err < 0:
+                            d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl)
+                        if err != 0:
+                            break
                         if track:
                             pflag[p] = 1
-                        _record_flat(p, c, d, n_eval, H, SF, SI, stamp_now)
+                        record_pair(p, c, d, n_eval, H, SF, SI, stamp_now)
                         n_eval += 1
                         if d <= level:
                             collided = True
@@ -527,7 +412,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                         bx0 = by0 = bz0 = bx1 = by1 = bz1 = br = 0.0
                         if use_bb:
                             if stamp[1 + a] != stamp_now:
-                                _move_flat(a, H, MF, MI, SF)
+                                move_element(a, H, MF, MI, SF)
                                 stamp[1 + a] = stamp_now
                             ov = o_vW + 3 * v0
                             bx0 = bx1 = SF[ov]; by0 = by1 = SF[ov + 1]; bz0 = bz1 = SF[ov + 2]
@@ -589,17 +474,14 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                     if track:
                                         plb[p] = lb
                                     continue
-                                if stamp[1 + a] != stamp_now:
-                                    _move_flat(a, H, MF, MI, SF)
-                                    stamp[1 + a] = stamp_now
-                                d, err = narrow_flat(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff)
+                                d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, woff, stamp_now)
                                 if err < 0:
-                                    d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff)
+                                    d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl)
                                 if err != 0:
                                     break
                                 if track:
                                     pflag[p] = 1
-                                _record_flat(p, c, d, n_eval, H, SF, SI, stamp_now)
+                                record_pair(p, c, d, n_eval, H, SF, SI, stamp_now)
                                 n_eval += 1
                                 if d <= level:
                                     collided = True

@@ -93,8 +93,8 @@ def _capsule_polytope(seg, ra, k, pv, ppl, ped, pbis, pcen, pvs, pps, pes, rb, o
                                pbis[pes[k]:pes[k + 1]], pcen[k], rb, out, 0, eps_len, eps_par, gjk_eps, max_iter, offset)
 
 
-@njit(cache=True)
-def narrow_flat(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, offset):  # pragma: no cover
+@njit(cache=True, _nrt=False)
+def narrow_flat(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, offset):  # pragma: no cover
     """:func:`pair_distance` on the detector's packed buffers (:mod:`._layout`), same outputs and errors.
 
     The common pairs read their cores straight from the flat buffers into registers and call the
@@ -152,9 +152,13 @@ def narrow_flat(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter,
 
 
 @njit(cache=True)
-def narrow_other(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, offset):  # pragma: no cover
+def narrow_other(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, offset, level):  # pragma: no cover
     """The pairs :func:`narrow_flat` leaves (``NOT_SCALAR``): capsule against a static polytope through
-    the capsule-polytope kernel, everything else through :func:`pair_distance`."""
+    the capsule-polytope kernel, everything else through :func:`pair_distance`.
+
+    ``level``: the caller only needs to know whether the distance is <= ``level`` (the yes/no
+    mode's collision level; ``-inf`` when the distance itself is reported), so for a pair within
+    it any value <= ``level`` may be returned (an intersection verdict without a depth)."""
     oc = H[2 * _K_core]
     k = MI[H[2 * _K_poly_of] + gb]
     if MI[oc + ga] <= _SEGMENT and k >= 0:
@@ -214,7 +218,7 @@ def wall_distance(g, radius, verts, vstart, lo, hi, out):  # pragma: no cover - 
     return best
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def wall_flat(g, H, MF, MI, SF):  # pragma: no cover - compiled
     """:func:`wall_distance` of element ``g`` on the detector's packed buffers (walls ``ws``, result in ``out9``)."""
     ows = H[2 * _K_ws]

@@ -1,0 +1,113 @@
+"""One pair evaluation of the detector kernel: move its elements into W, its distance, its record.
+
+The kernel (:mod:`._kernel`) reaches a pair from five places (the all-pairs path, the anytime
+order, last check's nearest pairs, the explicit pairs, the BVH leaves); each calls
+:func:`evaluate_pair` then :func:`record_pair`.  These run per pair, a few to a few hundred
+times per check, so they read the packed buffers (:mod:`._layout`) by offset and are compiled
+without numba's reference counting (``_nrt=False``, a private option): they allocate nothing and
+keep no reference, and with it each call of a function taking arrays costs two atomic
+increments and decrements per array argument (~40 ns for :func:`record_pair`, more than the
+capsule-capsule distance itself).  The kernel that calls them keeps reference counting, and so does
+everything that links the convex kernels (:func:`._narrow.narrow_other`): compiled with
+``_nrt=False``, those make LLVM's code generator crash from a cold cache (a segfault in
+``finalize_object`` on the default 8 MiB stack; on an unlimited stack it had not finished after
+ten minutes; numba 0.68).  A cold-cache test (``tests/test_detect_cold.py``) guards this.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+# The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
+# this file only, so a change of the segment tuples in ._layout must come with an edit here.
+from ._layout import EV_W, K, SUM_BEST, SUM_BSLOT
+from ._narrow import narrow_flat, wall_flat
+
+__all__ = ["evaluate_pair", "move_element", "record_pair"]
+
+_K_Xs, _K_glink, _K_vstart, _K_verts_L, _K_vW = K["Xs"], K["glink"], K["vstart"], K["verts_L"], K["vW"]
+_K_core, _K_box_L, _K_boxW, _K_pstart, _K_estart = K["core"], K["box_L"], K["boxW"], K["pstart"], K["estart"]
+_K_fn_L, _K_ed_L, _K_fnW, _K_edW = K["fn_L"], K["ed_L"], K["fnW"], K["edW"]
+_K_ev, _K_out9, _K_ev_p, _K_pstamp, _K_best, _K_summary = K["ev"], K["out9"], K["ev_p"], K["pstamp"], K["best"], K["summary"]
+_K_stamp, _K_mov_idx = K["stamp"], K["mov_idx"]
+
+
+@njit(cache=True, _nrt=False)
+def record_pair(p, c, d, n_eval, H, SF, SI, stamp_now):  # pragma: no cover - compiled
+    """Store pair ``p``'s result (``d`` and the witnesses in ``out9``) in row ``n_eval`` of the compact
+    outputs and update its category's best."""
+    o = H[2 * _K_ev] + EV_W * n_eval
+    o9 = H[2 * _K_out9]
+    SF[o] = d
+    for i in range(6):
+        SF[o + 1 + i] = SF[o9 + i]
+    SI[H[2 * _K_ev_p] + n_eval] = p
+    SI[H[2 * _K_pstamp] + p] = stamp_now
+    ob = H[2 * _K_best] + c
+    if d < SF[ob]:
+        SF[ob] = d
+        os = H[2 * _K_summary]
+        SI[os + SUM_BEST + c] = p
+        SI[os + SUM_BSLOT + c] = n_eval
+
+
+@njit(cache=True, _nrt=False)
+def move_element(g, H, MF, MI, SF):  # pragma: no cover - compiled
+    """Move element ``g`` from its link frame to W (core points, box, face normals, edge directions)."""
+    oX = H[2 * _K_Xs] + 16 * MI[H[2 * _K_glink] + g]
+    r00 = SF[oX]; r01 = SF[oX + 1]; r02 = SF[oX + 2]; tx = SF[oX + 3]
+    r10 = SF[oX + 4]; r11 = SF[oX + 5]; r12 = SF[oX + 6]; ty = SF[oX + 7]
+    r20 = SF[oX + 8]; r21 = SF[oX + 9]; r22 = SF[oX + 10]; tz = SF[oX + 11]
+    ovs = H[2 * _K_vstart]
+    oL = H[2 * _K_verts_L]
+    oW = H[2 * _K_vW]
+    for k in range(MI[ovs + g], MI[ovs + g + 1]):
+        i = 3 * k
+        x = MF[oL + i]; y = MF[oL + i + 1]; z = MF[oL + i + 2]
+        SF[oW + i] = r00 * x + r01 * y + r02 * z + tx
+        SF[oW + i + 1] = r10 * x + r11 * y + r12 * z + ty
+        SF[oW + i + 2] = r20 * x + r21 * y + r22 * z + tz
+    if MI[H[2 * _K_core] + g] == 2:
+        b = H[2 * _K_box_L] + 15 * g
+        o = H[2 * _K_boxW] + 15 * g
+        x = MF[b]; y = MF[b + 1]; z = MF[b + 2]
+        SF[o] = r00 * x + r01 * y + r02 * z + tx
+        SF[o + 1] = r10 * x + r11 * y + r12 * z + ty
+        SF[o + 2] = r20 * x + r21 * y + r22 * z + tz
+        SF[o + 3] = MF[b + 3]; SF[o + 4] = MF[b + 4]; SF[o + 5] = MF[b + 5]
+        for j in range(3):  # R_WB = R_WL R_LB, row-major
+            a0 = MF[b + 6 + j]; a1 = MF[b + 9 + j]; a2 = MF[b + 12 + j]
+            SF[o + 6 + j] = r00 * a0 + r01 * a1 + r02 * a2
+            SF[o + 9 + j] = r10 * a0 + r11 * a1 + r12 * a2
+            SF[o + 12 + j] = r20 * a0 + r21 * a1 + r22 * a2
+    for kk in range(2):  # face normals, then edge directions: rotated only
+        os_ = H[2 * _K_pstart] if kk == 0 else H[2 * _K_estart]
+        oL = H[2 * _K_fn_L] if kk == 0 else H[2 * _K_ed_L]
+        oW = H[2 * _K_fnW] if kk == 0 else H[2 * _K_edW]
+        for k in range(MI[os_ + g], MI[os_ + g + 1]):
+            i = 3 * k
+            x = MF[oL + i]; y = MF[oL + i + 1]; z = MF[oL + i + 2]
+            SF[oW + i] = r00 * x + r01 * y + r02 * z
+            SF[oW + i + 1] = r10 * x + r11 * y + r12 * z
+            SF[oW + i + 2] = r20 * x + r21 * y + r22 * z
+
+
+@njit(cache=True, _nrt=False)
+def evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp_now):  # pragma: no cover - compiled
+    """Signed distance of pair ``(a, b)`` (``b < 0``: the workspace walls), witnesses in ``out9``.
+
+    Moves ``a`` (and ``b`` when it is a link element) into W first unless this check already did
+    (``stamp[1 + g] == stamp_now``).  Returns ``(distance, 0)``, or ``(0, NOT_SCALAR)`` for a pair
+    that is neither workspace walls, capsule-capsule nor capsule-box: the caller then calls
+    :func:`._narrow.narrow_other` (not called from here: linking the convex kernels into a
+    function compiled with ``_nrt=False`` makes LLVM crash as described above)."""
+    ost = H[2 * _K_stamp] + 1
+    if SI[ost + a] != stamp_now:
+        move_element(a, H, MF, MI, SF)
+        SI[ost + a] = stamp_now
+    if b < 0:
+        return wall_flat(a, H, MF, MI, SF), 0
+    if MI[H[2 * _K_mov_idx] + b] >= 0 and SI[ost + b] != stamp_now:
+        move_element(b, H, MF, MI, SF)
+        SI[ost + b] = stamp_now
+    return narrow_flat(a, b, H, MF, MI, SF, out9, eps_len, eps_par, offset)
