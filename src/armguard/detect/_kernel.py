@@ -28,12 +28,12 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from numba import carray, njit
 
 from ..kinematics._fk import _fk_kernel
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
-from ._layout import EV_W, K, SC, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, SUM_STATUS, seg1, seg2, seg3
+from ._layout import EV_W, K, SC, at, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, SUM_STATUS, seg1, seg2, seg3
 from ._cull import _argsort_heap, _bb_gap, _obb_gap, _sb_gap
 from ._narrow import narrow_other
 from ._step import evaluate_pair, move_element, record_pair
@@ -168,7 +168,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     fk_q = seg1(SF, H, _K_fk_q)
     fk_ok = seg1(SI, H, _K_fk_ok)
     o_Xs = H[2 * _K_Xs]
-    Xs = seg3(SF, H, _K_Xs, 4, 4).reshape((1, n_links, 4, 4))
+    Xs = carray(at(SF, o_Xs), (1, n_links, 4, 4))
     sphW = seg2(SF, H, _K_sphW, 4)
     out9 = seg1(SF, H, _K_out9)
     gapst = seg1(SF, H, _K_gap)
@@ -245,7 +245,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                     continue
             l0 = rob_l[r]
             l1 = rob_l[r + 1]
-            Xb = SF[o_Xs + 16 * l0:o_Xs + 16 * l1].reshape((1, l1 - l0, 4, 4))
+            Xb = carray(at(SF, o_Xs + 16 * l0), (1, l1 - l0, 4, 4))
             _fk_kernel(q, parent_loc[l0:l1], X_pre[l0:l1], axis[l0:l1], jtype[l0:l1], X_post[l0:l1],
                        has_post[l0:l1], offset[l0:l1], term_start[l0:l1 + 1], term_joint, term_coeff, Xb)
             for j in range(j0, j1):
@@ -529,7 +529,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
 def detect_entry(q, H, MF, MI, SF, SI, prm, iprm, sel):  # pragma: no cover - compiled
     """One check at ``q`` ``(1, n_q)``, returning ``(status, n_evaluated, error)`` (saves reads from Python)."""
     summary = seg1(SI, H, _K_summary)
-    best = seg1(SF, H, _K_best).reshape((1, 4))
+    best = carray(at(SF, H[2 * _K_best]), (1, 4))
     st = summary[SUM_STATUS:SUM_STATUS + 1]
     err = detect_rows(q, 0, 1, H, MF, MI, SF, SI, prm, iprm, sel, best, st)
     return summary[SUM_STATUS], summary[SUM_NEVAL], err

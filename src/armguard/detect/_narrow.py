@@ -26,7 +26,7 @@ from ..geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_capsule, 
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import K, seg1, seg2
 
-__all__ = ["pair_distance", "narrow_flat", "narrow_other", "wall_distance", "wall_flat", "ERR_GJK", "NOT_SCALAR"]
+__all__ = ["pair_distance", "narrow_flat", "narrow_other", "wall_flat", "ERR_GJK", "NOT_SCALAR"]
 
 _K_core, _K_vstart, _K_radius, _K_vW, _K_boxW = K["core"], K["vstart"], K["radius"], K["vW"], K["boxW"]
 _K_poly_of, _K_seg, _K_pv, _K_ppl, _K_ped = K["poly_of"], K["seg"], K["pv"], K["ppl"], K["ped"]
@@ -184,43 +184,41 @@ def narrow_other(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter
                          eps_len, eps_par, gjk_eps, max_iter, offset)
 
 
-@njit(cache=True)
-def wall_distance(g, radius, verts, vstart, lo, hi, out):  # pragma: no cover - compiled
-    """Distance (m) from element ``g`` to the walls of the box ``[lo, hi]`` (W).
+@njit(cache=True, _nrt=False)
+def wall_flat(g, H, MF, MI, SF):  # pragma: no cover - compiled
+    """Distance (m) from element ``g`` to the walls of the workspace box ``ws = [lo, hi]`` (W).
 
     Ranger §2: for each of the six limits, the gap between the limit and the element's extreme
     point along that axis (core vertex plus radius); the least gap is the distance (> 0 inside,
-    < 0 when some point is beyond a wall).  ``p_WA`` is that extreme point, ``p_WB`` the same
-    point with the wall's coordinate; ``nhat_AB_W`` the outward wall normal.
+    < 0 when some point is beyond a wall).  ``out9``: ``p_WA`` is that extreme point, ``p_WB``
+    the same point with the wall's coordinate, ``nhat_AB_W`` the outward wall normal.  Reads the
+    packed buffers by offset (:mod:`._layout`); the slow reference is
+    :func:`armguard.detect._reference._wall_distance`.
     """
-    r = radius[g]
+    ows = H[2 * _K_ws]
+    ov = H[2 * _K_vW]
+    ovs = H[2 * _K_vstart]
+    r = MF[H[2 * _K_radius] + g]
     best = math.inf
-    bi = vstart[g]
+    bi = MI[ovs + g]
     baxis = 0
     bsign = 1.0
-    for k in range(vstart[g], vstart[g + 1]):
+    for k in range(MI[ovs + g], MI[ovs + g + 1]):
         for ax in range(3):
-            x = verts[k, ax]
-            gap = hi[ax] - (x + r)
+            x = SF[ov + 3 * k + ax]
+            gap = MF[ows + 3 + ax] - (x + r)
             if gap < best:
                 best, bi, baxis, bsign = gap, k, ax, 1.0
-            gap = (x - r) - lo[ax]
+            gap = (x - r) - MF[ows + ax]
             if gap < best:
                 best, bi, baxis, bsign = gap, k, ax, -1.0
+    o = H[2 * _K_out9]
     for ax in range(3):
-        out[ax] = verts[bi, ax]
-        out[6 + ax] = 0.0
-    out[baxis] += bsign * r
+        SF[o + ax] = SF[ov + 3 * bi + ax]
+        SF[o + 6 + ax] = 0.0
+    SF[o + baxis] += bsign * r
     for ax in range(3):
-        out[3 + ax] = out[ax]
-    out[3 + baxis] = hi[baxis] if bsign > 0.0 else lo[baxis]
-    out[6 + baxis] = bsign
+        SF[o + 3 + ax] = SF[o + ax]
+    SF[o + 3 + baxis] = MF[ows + 3 + baxis] if bsign > 0.0 else MF[ows + baxis]
+    SF[o + 6 + baxis] = bsign
     return best
-
-
-@njit(cache=True, _nrt=False)
-def wall_flat(g, H, MF, MI, SF):  # pragma: no cover - compiled
-    """:func:`wall_distance` of element ``g`` on the detector's packed buffers (walls ``ws``, result in ``out9``)."""
-    ows = H[2 * _K_ws]
-    return wall_distance(g, seg1(MF, H, _K_radius), seg2(SF, H, _K_vW, 3), seg1(MI, H, _K_vstart),
-                         MF[ows:ows + 3], MF[ows + 3:ows + 6], seg1(SF, H, _K_out9))
