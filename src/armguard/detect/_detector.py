@@ -24,6 +24,11 @@ _DEFAULT_NS_PER_PAIR = 200.0  # first guess of the cost model, replaced by measu
 _MIN_ROWS_PER_THREAD = 256  # below this many configurations per thread, a thread costs more than it saves
 
 
+_perf_counter = time.perf_counter
+_F64 = np.dtype(np.float64)
+_MODE_EXACT = kn.MODE_EXACT
+
+
 def _single(cats: np.ndarray) -> int:
     """The category shared by all of ``cats``, or -1 when they differ."""
     u = np.unique(cats)
@@ -253,8 +258,10 @@ class Detector:
         self._q1 = np.zeros((1, m.n_q))
         self._last_raw = None  # a report reading the old buffers keeps them alive: nothing to copy
         self._iprm_exact = self._iprm_by_mode[kn.MODE_EXACT]
-        self._entry = _entry_point(self._q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm,
-                                   self._iprm_exact, self._all_p)
+        self._entry_args = (self._q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm, self._iprm_exact,
+                            self._all_p)
+        self._entry = _entry_point(*self._entry_args)
+        self._q_shape = (m.n_q,)
         self._names_a = tuple(cs.owner_names[cs.elem_owner[a]] for a in m.pair_a)
         self._names_b = tuple("workspace" if b < 0 else cs.owner_names[cs.elem_owner[b]] for b in m.pair_b)
         self._links_a = tuple(m.link_names[m.elem_glink[a]] for a in m.pair_a)
@@ -394,11 +401,11 @@ class Detector:
         Cost: one numba call and two small copies (the evaluated pairs' rows); the report's
         ``PairResult`` objects are built on first access.
         """
-        t0 = time.perf_counter()
+        t0 = _perf_counter()
         if getattr(self.scene, "revision", None) != self._revision:  # stale model: rebuild (see _fresh)
             self.prepare()
         q1 = self._q1
-        if type(q) is np.ndarray and q.dtype == np.float64 and q.shape == q1.shape[1:]:
+        if type(q) is np.ndarray and q.dtype is _F64 and q.shape == self._q_shape:
             q1[0] = q  # the common case, inline (validation of everything else in _flat_q)
         else:
             q1 = self._flat_q(q)
@@ -409,13 +416,12 @@ class Detector:
                 last.detach()
             del last
         if budget_us is None and not lazy:
-            status, n_eval, err = self._entry(q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm,
-                                              self._iprm_exact, self._all_p)
+            status, n_eval, err = self._entry(*self._entry_args)  # q1 is the array in _entry_args
             if err:
                 self._raise_kernel_error(err, q1)
-            raw = _Raw(self, self._SF, self._SI, self._ev_off, self._sum_off, n_eval, None, None, kn.MODE_EXACT)
+            raw = _Raw(self, self._SF, self._SI, self._ev_off, self._sum_off, n_eval, None, None, _MODE_EXACT)
             self._last_raw = raw
-            elapsed = (time.perf_counter() - t0) * 1e6
+            elapsed = (_perf_counter() - t0) * 1e6
             if n_eval > 0:
                 self._ns_per_pair = 0.8 * self._ns_per_pair + 0.2 * max(elapsed * 1e3 / n_eval, 1.0)
             return DetectionReport._from_check(STATUS_CODES[status], self._threshold, self._stopping, elapsed, raw)

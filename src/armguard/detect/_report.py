@@ -58,6 +58,9 @@ CATEGORIES = ("arm", "environment", "workspace", "payload")
 """The category names in code order (0..3), the column order of ``BatchReport.min_distance``."""
 
 
+_new = object.__new__
+
+
 def _ro(a: np.ndarray) -> np.ndarray:
     a.flags.writeable = False
     return a
@@ -167,10 +170,15 @@ class DetectionReport:
     def _from_check(cls, status: Status, threshold: float, stopping_distance: float, elapsed_us: float,
                     raw: Any) -> "DetectionReport":
         """The report of one check without the frozen dataclass's ``__init__`` (five
-        ``object.__setattr__`` calls, ~0.5 µs of a ~4 µs check): the same fields, set once."""
-        r = object.__new__(cls)
-        r.__dict__.update(status=status, threshold=threshold, stopping_distance=stopping_distance,
-                          elapsed_us=elapsed_us, _raw=raw)
+        ``object.__setattr__`` calls, ~0.5 µs of a ~4 µs check): the same fields, set once
+        (item stores, ~0.15 µs cheaper than ``__dict__.update`` with keywords)."""
+        r = _new(cls)
+        d = r.__dict__
+        d["status"] = status
+        d["threshold"] = threshold
+        d["stopping_distance"] = stopping_distance
+        d["elapsed_us"] = elapsed_us
+        d["_raw"] = raw
         return r
 
     @property
