@@ -377,8 +377,12 @@ class Detector:
         if mode == kn.MODE_ANYTIME:
             iprm[1] = allowance
             iprm[4] = 1 if lazy else 0
-        status, n_eval, err = kn.detect_entry(q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm, iprm,
-                                              self._all_p if sel is None else sel)
+        if sel is None:  # the same argument types as check's: its bound overload, without the dispatcher
+            status, n_eval, err = self._entry(q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm, iprm,
+                                              self._all_p)
+        else:
+            status, n_eval, err = kn.detect_entry(q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm,
+                                                  iprm, sel)
         if err:
             self._raise_kernel_error(err, q1)
         return status, n_eval
@@ -440,11 +444,11 @@ class Detector:
             flags = bounds = None
         else:
             flags, bounds = self._pflag.copy(), self._plb.copy()
-        elapsed = (time.perf_counter() - t0) * 1e6
+        elapsed = (_perf_counter() - t0) * 1e6
         if n_eval > 0:  # the cost model of the anytime mode: an exponential average of ns per pair
             self._ns_per_pair = 0.8 * self._ns_per_pair + 0.2 * max(elapsed * 1e3 / n_eval, 1.0)
-        return DetectionReport(STATUS_CODES[status], self._threshold, self._stopping, elapsed,
-                               self._keep(_Raw(self, *raw_buffers, n_eval, flags, bounds, mode)))
+        return DetectionReport._from_check(STATUS_CODES[status], self._threshold, self._stopping, elapsed,
+                                           self._keep(_Raw(self, *raw_buffers, n_eval, flags, bounds, mode)))
 
     def _selection(self, robot: str | None):
         """Pair numbers checked by ``pair_distances(q, robot=robot)`` and their static columns (cached)."""
