@@ -1,4 +1,4 @@
-"""The README's Python examples run as written (the documentation is executable)."""
+"""The Python examples of the README and the guides run as written (the documentation is executable)."""
 
 from __future__ import annotations
 
@@ -7,8 +7,11 @@ from pathlib import Path
 
 import pytest
 
-README = Path(__file__).resolve().parent.parent / "README.md"
+ROOT = Path(__file__).resolve().parent.parent
+README = ROOT / "README.md"
+GUIDES = (ROOT / "docs" / "detector.md",)
 BLOCKS = re.findall(r"```python\n(.*?)```", README.read_text(encoding="utf-8"), re.S)
+GUIDE_BLOCKS = [(g, code) for g in GUIDES for code in re.findall(r"```python\n(.*?)```", g.read_text(encoding="utf-8"), re.S)]
 
 
 def test_readme_has_examples():
@@ -18,3 +21,13 @@ def test_readme_has_examples():
 @pytest.mark.parametrize("code", BLOCKS, ids=[f"block{i}" for i in range(len(BLOCKS))])
 def test_readme_block_runs(code):
     exec(compile(code, str(README), "exec"), {"__name__": "__readme__"})
+
+
+def test_guides_have_examples():
+    for guide in GUIDES:
+        assert any(g == guide for g, _ in GUIDE_BLOCKS), guide
+
+
+@pytest.mark.parametrize("guide,code", GUIDE_BLOCKS, ids=[f"{g.stem}{i}" for i, (g, _) in enumerate(GUIDE_BLOCKS)])
+def test_guide_block_runs(guide, code):
+    exec(compile(code, str(guide), "exec"), {"__name__": "__guide__"})
