@@ -111,9 +111,11 @@ _SC_n_q = SC["n_q"]
 _SC_n_st = SC["n_st"]
 
 
-# Compiled WITH numba's reference counting.  ``_nrt=False`` (numba's private option, which saves an
-# incref/decref on each of the ~45 segment views per call) made LLVM segfault while compiling this
-# kernel and ``detect_entry`` from a cold cache (numba 0.68, fresh clone); a warm cache hid it.
+# Compiled WITH numba's reference counting: with ``_nrt=False`` (numba's private option) LLVM's code
+# generator segfaults compiling this kernel from a cold cache (numba 0.68; on an unlimited stack it
+# had not finished after ten minutes); a warm cache hid it (tests/test_detect_cold.py guards it).
+# The segment views cost no reference counting anyway (numba.carray views, see ._layout), and the
+# per-pair helpers it calls are compiled without it (._step).
 @njit(cache=True, nogil=True)
 def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out):  # pragma: no cover - compiled
     """Checks of rows ``lo:hi`` of ``Q`` ``(M, n_q)``; per row the nearest distance per category goes to
