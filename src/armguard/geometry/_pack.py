@@ -23,7 +23,7 @@ import numpy as np
 
 from .._tolerance import DEFAULT_TOLERANCES
 
-__all__ = ["attach_packed", "unique_directions", "polytope_data", "polytope_adjacency", "polytope_buffers"]
+__all__ = ["attach_packed", "unique_directions", "polytope_data", "polytope_adjacency", "hull_graph", "polytope_buffers"]
 
 _EMPTY = np.zeros((0, 3), dtype=np.float64)
 
@@ -171,6 +171,27 @@ def _build_adjacency(shape) -> np.ndarray:
 
         tri = ConvexHull(v).simplices
         pairs += [tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]
+    return _graph(v, pairs)
+
+
+def hull_graph(points) -> tuple[np.ndarray, np.ndarray]:
+    """The vertex graph of the convex hull of ``points (n, 3)`` (m) and its triangles.
+
+    Returns ``(adj, tri)``: ``adj`` in the format of :func:`polytope_adjacency` (indices into
+    ``points``), the edges of a triangulation of the hull's surface, so a climb over it finds a
+    point maximising any linear function (points inside the hull, or inside a face, are left
+    without neighbours and are never visited); ``tri (T, 3) int64`` that triangulation (Qhull's),
+    whose normals are the hull's face normals and whose edges include the hull's edges (the SAT
+    fallback of ``_pair_epa`` takes its axes from them).  Raises on a flat point set."""
+    from scipy.spatial import ConvexHull
+
+    v = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    tri = np.ascontiguousarray(ConvexHull(v).simplices, dtype=np.int64)
+    return _graph(v, [tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), tri
+
+
+def _graph(v: np.ndarray, pairs: list) -> np.ndarray:
+    """CSR vertex graph (see :func:`polytope_adjacency`) of the undirected edges in ``pairs``."""
     e = np.concatenate(pairs).astype(np.int64)
     e = np.unique(np.sort(e, axis=1), axis=0)
     e = e[e[:, 0] != e[:, 1]]

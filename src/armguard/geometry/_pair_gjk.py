@@ -15,11 +15,11 @@ nothing and touches no memory but the two point sets; the ``work`` argument of t
 kernels is kept for their stable signatures (callers' scratch lives there).  Core B may be
 translated by an offset ``o`` without copying its points.
 
-B's support points come from a scan of its points, or, for a polytope of at least
-``CLIMB_MIN_VERTICES`` vertices whose vertex graph is given (:func:`gjk_dir_adj`), from hill
-climbing on that graph warm-started at the previous support (Cameron, "Enhancing GJK",
-ICRA 1997).  The one body ``_gjk`` serves
-both: its ``adj is None`` branch is pruned at compile time.
+Support points come from a scan of the points, or, for a polytope of at least
+``CLIMB_MIN_VERTICES`` vertices whose vertex graph is given (B's: :func:`gjk_dir_adj`; A's and
+B's: :func:`gjk_dir_adj2`), from hill climbing on that graph warm-started at the previous
+support (Cameron, "Enhancing GJK", ICRA 1997).  The one body ``_gjk`` serves all: a graph
+passed as ``None`` is a branch pruned at compile time, an empty one scans at run time.
 
 ``_gjk`` is compiled without numba's reference counting (``_nrt=False``; it allocates nothing):
 with it, every call paid an atomic increment and decrement per array argument, measured at
@@ -34,7 +34,7 @@ from numba import njit
 
 __all__ = [
     "GJK_WORK_SIZE", "GJK_SEPARATED", "GJK_INTERSECTING", "GJK_NOT_CONVERGED", "ADJ_HEAD", "CLIMB_MIN_VERTICES",
-    "gjk_core", "gjk_dir", "gjk_dir_adj",
+    "gjk_core", "gjk_dir", "gjk_dir_adj", "gjk_dir_adj2",
 ]
 
 GJK_WORK_SIZE = 64
@@ -220,17 +220,13 @@ def _climb(pb, adj, i, dx, dy, dz):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def _support(pb, adj, i, dx, dy, dz):  # pragma: no cover - compiled
-    """Index of a vertex of ``pb`` maximising ``p . d``: a scan without ``adj``, else a climb from
-    vertex ``i`` (``i < 0``: from the stored extreme vertex along d's dominant axis)."""
+    """Index of a vertex of ``pb`` maximising ``p . d``: a scan without ``adj`` (``None``, or an
+    empty graph), else a climb from vertex ``i`` (``i < 0``: from the stored extreme vertex along
+    d's dominant axis)."""
     if adj is None:
-        ib = 0
-        best = -math.inf
-        for k in range(pb.shape[0]):
-            s = pb[k, 0] * dx + pb[k, 1] * dy + pb[k, 2] * dz
-            if s > best:
-                best = s
-                ib = k
-        return ib
+        return _scan(pb, dx, dy, dz)
+    if adj.shape[0] == 0:
+        return _scan(pb, dx, dy, dz)
     if i < 0:
         ux = abs(dx)
         uy = abs(dy)
@@ -244,19 +240,29 @@ def _support(pb, adj, i, dx, dy, dz):  # pragma: no cover - compiled
     return _climb(pb, adj, i, dx, dy, dz)
 
 
-@njit(cache=True, _nrt=False)
-def _gjk(pa, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter):  # pragma: no cover - compiled
-    """GJK from the initial direction ``d``; B's supports by a scan (``adj is None``, a branch
-    numba prunes at compile time) or by hill climbing on B's vertex graph (``adj``)."""
-    na = pa.shape[0]
-    # the first vertex: supports along d
-    ia = 0
+@njit(cache=True, inline="always")
+def _scan(pb, dx, dy, dz):  # pragma: no cover - compiled
+    """Index of the first point of ``pb`` maximising ``p . d`` (a scan of every point)."""
+    ib = 0
     best = -math.inf
-    for i in range(na):
-        s = -(pa[i, 0] * dx + pa[i, 1] * dy + pa[i, 2] * dz)
+    for k in range(pb.shape[0]):
+        s = pb[k, 0] * dx + pb[k, 1] * dy + pb[k, 2] * dz
         if s > best:
             best = s
-            ia = i
+            ib = k
+    return ib
+
+
+@njit(cache=True, _nrt=False)
+def _gjk(pa, adja, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp):  # pragma: no cover
+    """GJK from the initial direction ``d``; A's and B's supports by a scan (``adja`` / ``adj``
+    ``None``, a branch numba prunes at compile time, or an empty graph) or by hill climbing on
+    their vertex graphs.  ``simp`` (``None``, or a float64 array of >= 9 entries) receives the
+    final simplex when the origin ends inside a tetrahedron: ``simp[0] = 1`` then, ``simp[1:5]``
+    A's and ``simp[5:9]`` B's support indices of its four vertices (else ``simp[0] = 0``); the
+    penetration-depth kernel (``_pair_epa``) starts from it."""
+    # the first vertex: supports along d
+    ia = _support(pa, adja, -1, -dx, -dy, -dz)
     ib = _support(pb, adj, -1, dx, dy, dz)
     x0 = pa[ia, 0] - pb[ib, 0] - ox
     y0 = pa[ia, 1] - pb[ib, 1] - oy
@@ -280,14 +286,8 @@ def _gjk(pa, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter):  # pr
             status = GJK_INTERSECTING
             break
         # support of A along -v, of B along +v
-        ia = 0
-        best = -math.inf
-        for i in range(na):
-            s = -(pa[i, 0] * vx + pa[i, 1] * vy + pa[i, 2] * vz)
-            if s > best:
-                best = s
-                ia = i
-        ib = _support(pb, adj, ib, vx, vy, vz)  # warm: from the last support
+        ia = _support(pa, adja, ia, -vx, -vy, -vz)  # warm: from the last support
+        ib = _support(pb, adj, ib, vx, vy, vz)
         wx = pa[ia, 0] - pb[ib, 0] - ox
         wy = pa[ia, 1] - pb[ib, 1] - oy
         wz = pa[ia, 2] - pb[ib, 2] - oz
@@ -370,6 +370,12 @@ def _gjk(pa, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter):  # pr
     bx += ox
     by += oy
     bz += oz
+    if simp is not None:
+        simp[0] = 1.0 if inside else 0.0
+        if inside:
+            for k in range(4):
+                simp[1 + k] = _pick(k, ia0, ia1, ia2, ia3)
+                simp[5 + k] = _pick(k, ib0, ib1, ib2, ib3)
     if inside:
         return status, 0.0, ax, ay, az, bx, by, bz
     return status, math.sqrt(vv), ax, ay, az, bx, by, bz
@@ -384,7 +390,7 @@ def gjk_dir(pa, pb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter):  # prag
     from the indices and weights only when GJK stops.  Allocation-free.  B's supports scan its
     points.
     """
-    return _gjk(pa, pb, None, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter)
+    return _gjk(pa, None, pb, None, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, None)
 
 
 @njit(cache=True)
@@ -393,7 +399,14 @@ def gjk_dir_adj(pa, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter)
     :func:`armguard.geometry._pack.polytope_adjacency`): B's supports climb the graph from the
     previous support (a few neighbours instead of every vertex).  Same answer as :func:`gjk_dir`
     up to ties between equally extreme vertices."""
-    return _gjk(pa, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter)
+    return _gjk(pa, None, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, None)
+
+
+@njit(cache=True)
+def gjk_dir_adj2(pa, adja, pb, adjb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp):  # pragma: no cover
+    """:func:`gjk_dir` climbing the vertex graphs of both A and B (either may be empty: a scan),
+    writing the final simplex to ``simp`` (see ``_gjk``)."""
+    return _gjk(pa, adja, pb, adjb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp)
 
 
 @njit(cache=True)

@@ -1,0 +1,438 @@
+"""Penetration depth of two polytopal cores by the Expanding Polytope Algorithm, and the
+convex-convex signed distance built on it (the fast path of the exhaustive SAT of ``_pair_sat``).
+
+EPA (van den Bergen, "Proximity Queries and Penetration Depth Computation on 3D Game
+Objects", GDC 2001; *Collision Detection in Interactive 3D Environments* §4.3.7): when GJK
+ends with the origin inside a tetrahedron of support points of the Minkowski difference
+``M = A - B``, that tetrahedron is a polytope ``P ⊂ M`` containing the origin.  Each iteration
+takes the face of ``P`` closest to the origin (distance ``d``, outward unit normal ``n``),
+queries the support point ``w`` of ``M`` along ``n`` (``h = n . w``) and, unless
+``h - d <= gjk_epsilon``, adds ``w`` to ``P`` (the faces seen from ``w`` are removed, their
+horizon edges are joined to ``w``).  Throughout, ``d <= depth(M) <= h``: ``P ⊂ M`` contains
+the origin (lower bound), and every direction's support value bounds the depth from above
+(``depth = min_n h_M(n)``).  On polytopes every iteration adds a new vertex of ``M``, so it
+terminates; the returned depth is the lower bound ``d``, within ``gjk_epsilon`` (m) of the
+exact depth (up to rounding).  Supports climb the vertex graphs (``_pair_gjk._support``), so
+an iteration costs a face scan and two short climbs instead of the SAT's
+``O(E_A E_B (V_A + V_B))`` projections.
+
+Every case EPA does not settle falls back to the exhaustive SAT (:func:`sat_depth_graph`: the
+reference :func:`._pair_sat.sat_depth` with the axes of a triangulated hull taken from its
+triangles and vertex graph, so that hulls need not carry face normals and edge directions): GJK stopped at touching (no tetrahedron), a degenerate face, a full
+buffer, no convergence within the buffer's vertices, a depth below ``length``.
+
+The kernel is allocation-free: the expanding polytope lives in the caller's ``work`` array
+(``EPA_WORK_SIZE`` float64; indices stored as floats, exact below 2^53).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from ._pair_gjk import GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _support, gjk_core, gjk_dir_adj2
+from ._pair_sat import _axis
+from ._pair_segment_segment import write_rounded
+
+__all__ = ["EPA_WORK_SIZE", "EPA_MAX_VERTICES", "epa_depth", "sat_depth_graph", "convex_convex_fast"]
+
+EPA_MAX_VERTICES = 256
+"""Vertices of the expanding polytope (EPA iterations are at most this minus 4)."""
+_NV = EPA_MAX_VERTICES
+_NF = 1024  # face slots (removed faces are compacted away when the slots run out)
+_NE = 256  # horizon edges of one iteration
+_V0 = 9  # work[0:9]: GJK's final simplex (see _pair_gjk._gjk)
+_F0 = _V0 + 5 * _NV  # vertex k: [w (3), ia, ib] at _V0 + 5 k
+_E0 = _F0 + 8 * _NF  # face f: [i0, i1, i2, n (3), d, alive] at _F0 + 8 f; horizon edges after
+EPA_WORK_SIZE = _E0 + 2 * _NE
+"""Length of the ``work`` array :func:`convex_convex_fast` needs for EPA (float64); with a shorter
+one it always takes the SAT path."""
+
+
+@njit(cache=True)
+def _put_vertex(w, k, pa, pb, ia, ib):  # pragma: no cover - compiled
+    o = _V0 + 5 * k
+    w[o] = pa[ia, 0] - pb[ib, 0]
+    w[o + 1] = pa[ia, 1] - pb[ib, 1]
+    w[o + 2] = pa[ia, 2] - pb[ib, 2]
+    w[o + 3] = ia
+    w[o + 4] = ib
+
+
+@njit(cache=True)
+def _put_face(w, f, i0, i1, i2):  # pragma: no cover - compiled
+    """Face ``f`` = triangle ``(i0, i1, i2)`` (counter-clockwise seen from outside).  Returns
+    False when it is degenerate (no normal) or its plane does not have the origin inside."""
+    o0 = _V0 + 5 * i0
+    o1 = _V0 + 5 * i1
+    o2 = _V0 + 5 * i2
+    ux = w[o1] - w[o0]
+    uy = w[o1 + 1] - w[o0 + 1]
+    uz = w[o1 + 2] - w[o0 + 2]
+    vx = w[o2] - w[o0]
+    vy = w[o2 + 1] - w[o0 + 1]
+    vz = w[o2 + 2] - w[o0 + 2]
+    nx = uy * vz - uz * vy
+    ny = uz * vx - ux * vz
+    nz = ux * vy - uy * vx
+    nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+    if not nn > 0.0:
+        return False
+    nx /= nn
+    ny /= nn
+    nz /= nn
+    d = nx * w[o0] + ny * w[o0 + 1] + nz * w[o0 + 2]
+    if d < 0.0:
+        return False
+    o = _F0 + 8 * f
+    w[o] = i0
+    w[o + 1] = i1
+    w[o + 2] = i2
+    w[o + 3] = nx
+    w[o + 4] = ny
+    w[o + 5] = nz
+    w[o + 6] = d
+    w[o + 7] = 1.0
+    return True
+
+
+@njit(cache=True)
+def _horizon_edge(w, ne, a, b):  # pragma: no cover - compiled
+    """Add the directed edge ``a -> b`` of a removed face to the horizon list, or cancel it against
+    ``b -> a`` (shared by two removed faces).  Returns the new count, ``-1`` when the list is full."""
+    for k in range(ne):
+        o = _E0 + 2 * k
+        if w[o] == b and w[o + 1] == a:
+            last = _E0 + 2 * (ne - 1)
+            w[o] = w[last]
+            w[o + 1] = w[last + 1]
+            return ne - 1
+    if ne == _NE:
+        return -1
+    o = _E0 + 2 * ne
+    w[o] = a
+    w[o + 1] = b
+    return ne + 1
+
+
+@njit(cache=True)
+def epa_depth(pa, adja, pb, adjb, work, eps):  # pragma: no cover - compiled
+    """EPA on ``M = hull(pa) - hull(pb)`` from the tetrahedron GJK left in ``work[0:9]``.
+
+    ``adja``, ``adjb``: vertex graphs (``_pack.polytope_adjacency`` format; empty: scan);
+    ``eps`` (m): stop when the support value along the closest face's normal exceeds the face's
+    distance by at most this.  Returns ``(ok, depth, nx, ny, nz, ax, ay, az, bx, by, bz)``:
+    moving B by ``depth * n`` makes the cores touch (``n`` the outward normal of ``M``'s facet);
+    ``a`` and ``b`` the witness points on the cores (``a - b = depth * n`` to rounding).
+    ``ok`` False: EPA did not settle it (see the module docstring), the rest is meaningless.
+    """
+    if work.shape[0] < EPA_WORK_SIZE or work[0] != 1.0:
+        return False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    for k in range(4):
+        _put_vertex(work, k, pa, pb, int(work[1 + k]), int(work[5 + k]))
+    # the tetrahedron's faces, each oriented away from the opposite vertex
+    nf = 0
+    for t in range(4):
+        i0 = (t + 1) % 4
+        i1 = (t + 2) % 4
+        i2 = (t + 3) % 4
+        o0 = _V0 + 5 * i0
+        o1 = _V0 + 5 * i1
+        o2 = _V0 + 5 * i2
+        ot = _V0 + 5 * t
+        ux = work[o1] - work[o0]
+        uy = work[o1 + 1] - work[o0 + 1]
+        uz = work[o1 + 2] - work[o0 + 2]
+        vx = work[o2] - work[o0]
+        vy = work[o2 + 1] - work[o0 + 1]
+        vz = work[o2 + 2] - work[o0 + 2]
+        s = ((uy * vz - uz * vy) * (work[ot] - work[o0]) + (uz * vx - ux * vz) * (work[ot + 1] - work[o0 + 1])
+             + (ux * vy - uy * vx) * (work[ot + 2] - work[o0 + 2]))
+        ok = _put_face(work, nf, i0, i2, i1) if s > 0.0 else _put_face(work, nf, i0, i1, i2)
+        if not ok:
+            return False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        nf += 1
+    nv = 4
+    while True:
+        # the face closest to the origin
+        fi = -1
+        dbest = math.inf
+        for f in range(nf):
+            o = _F0 + 8 * f
+            if work[o + 7] != 0.0 and work[o + 6] < dbest:
+                dbest = work[o + 6]
+                fi = f
+        if fi < 0:
+            break
+        of = _F0 + 8 * fi
+        nx = work[of + 3]
+        ny = work[of + 4]
+        nz = work[of + 5]
+        j0 = int(work[of])
+        j1 = int(work[of + 1])
+        j2 = int(work[of + 2])
+        ha = int(work[_V0 + 5 * j0 + 3])
+        hb = int(work[_V0 + 5 * j0 + 4])
+        ia = _support(pa, adja, ha, nx, ny, nz)
+        ib = _support(pb, adjb, hb, -nx, -ny, -nz)
+        wx = pa[ia, 0] - pb[ib, 0]
+        wy = pa[ia, 1] - pb[ib, 1]
+        wz = pa[ia, 2] - pb[ib, 2]
+        h = nx * wx + ny * wy + nz * wz
+        repeated = False
+        for j in (j0, j1, j2):
+            if work[_V0 + 5 * j + 3] == ia and work[_V0 + 5 * j + 4] == ib:
+                repeated = True
+        if h - dbest <= eps or repeated:
+            # witnesses: the origin's projection onto the face, in barycentric coordinates
+            o0 = _V0 + 5 * j0
+            o1 = _V0 + 5 * j1
+            o2 = _V0 + 5 * j2
+            e0x = work[o1] - work[o0]
+            e0y = work[o1 + 1] - work[o0 + 1]
+            e0z = work[o1 + 2] - work[o0 + 2]
+            e1x = work[o2] - work[o0]
+            e1y = work[o2 + 1] - work[o0 + 1]
+            e1z = work[o2 + 2] - work[o0 + 2]
+            px = dbest * nx - work[o0]
+            py = dbest * ny - work[o0 + 1]
+            pz = dbest * nz - work[o0 + 2]
+            d00 = e0x * e0x + e0y * e0y + e0z * e0z
+            d01 = e0x * e1x + e0y * e1y + e0z * e1z
+            d11 = e1x * e1x + e1y * e1y + e1z * e1z
+            d20 = px * e0x + py * e0y + pz * e0z
+            d21 = px * e1x + py * e1y + pz * e1z
+            den = d00 * d11 - d01 * d01
+            if not den > 0.0:
+                break
+            l1 = (d11 * d20 - d01 * d21) / den
+            l2 = (d00 * d21 - d01 * d20) / den
+            l0 = 1.0 - l1 - l2
+            ax = ay = az = bx = by = bz = 0.0
+            for k in range(3):
+                j = j0 if k == 0 else (j1 if k == 1 else j2)
+                lam = l0 if k == 0 else (l1 if k == 1 else l2)
+                ka = int(work[_V0 + 5 * j + 3])
+                kb = int(work[_V0 + 5 * j + 4])
+                ax += lam * pa[ka, 0]
+                ay += lam * pa[ka, 1]
+                az += lam * pa[ka, 2]
+                bx += lam * pb[kb, 0]
+                by += lam * pb[kb, 1]
+                bz += lam * pb[kb, 2]
+            return True, dbest, nx, ny, nz, ax, ay, az, bx, by, bz
+        if nv == _NV:
+            break
+        for k in range(nv):  # w beyond the face yet already a vertex: rounding has broken convexity
+            if work[_V0 + 5 * k + 3] == ia and work[_V0 + 5 * k + 4] == ib:
+                return False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        _put_vertex(work, nv, pa, pb, ia, ib)
+        # remove the faces seen from w; their unshared edges form the horizon
+        ne = 0
+        for f in range(nf):
+            o = _F0 + 8 * f
+            if work[o + 7] != 0.0 and work[o + 3] * wx + work[o + 4] * wy + work[o + 5] * wz - work[o + 6] > 0.0:
+                work[o + 7] = 0.0
+                a0 = work[o]
+                a1 = work[o + 1]
+                a2 = work[o + 2]
+                ne = _horizon_edge(work, ne, a0, a1)
+                if ne >= 0:
+                    ne = _horizon_edge(work, ne, a1, a2)
+                if ne >= 0:
+                    ne = _horizon_edge(work, ne, a2, a0)
+                if ne < 0:
+                    return False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        if ne < 3:
+            break
+        if nf + ne > _NF:  # compact: keep the live faces only
+            m = 0
+            for f in range(nf):
+                o = _F0 + 8 * f
+                if work[o + 7] != 0.0:
+                    om = _F0 + 8 * m
+                    for q in range(8):
+                        work[om + q] = work[o + q]
+                    m += 1
+            nf = m
+            if nf + ne > _NF:
+                break
+        for k in range(ne):
+            o = _E0 + 2 * k
+            if not _put_face(work, nf, int(work[o]), int(work[o + 1]), nv):
+                return False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+            nf += 1
+        nv += 1
+    return False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+
+
+@njit(cache=True)
+def _tri_axis(p, tri, t, pa, pb, depth, nx, ny, nz):  # pragma: no cover - compiled
+    """The SAT axis of triangle ``t`` of ``tri`` (points ``p``), skipped when degenerate."""
+    i0 = tri[t, 0]
+    i1 = tri[t, 1]
+    i2 = tri[t, 2]
+    ux = p[i1, 0] - p[i0, 0]
+    uy = p[i1, 1] - p[i0, 1]
+    uz = p[i1, 2] - p[i0, 2]
+    vx = p[i2, 0] - p[i0, 0]
+    vy = p[i2, 1] - p[i0, 1]
+    vz = p[i2, 2] - p[i0, 2]
+    cx = uy * vz - uz * vy
+    cy = uz * vx - ux * vz
+    cz = ux * vy - uy * vx
+    cn = math.sqrt(cx * cx + cy * cy + cz * cz)
+    if cn > 0.0:
+        return _axis(pa, pb, cx / cn, cy / cn, cz / cn, depth, nx, ny, nz)
+    return depth, nx, ny, nz
+
+
+@njit(cache=True)
+def _edge_axes(e1x, e1y, e1z, pb, eb, adjb, pa, depth, nx, ny, nz, eps_par):  # pragma: no cover - compiled
+    """The SAT axes ``e1 x e2`` for every edge direction ``e2`` of B: the rows of ``eb``, then the
+    edges ``i < j`` of its vertex graph ``adjb`` (unit ``e1``; near-parallel pairs skipped)."""
+    nb = pb.shape[0] if adjb.shape[0] > 0 else 0
+    for k in range(eb.shape[0] + nb):
+        if k < eb.shape[0]:
+            depth, nx, ny, nz = _cross_axis(e1x, e1y, e1z, eb[k, 0], eb[k, 1], eb[k, 2], pa, pb, depth, nx, ny, nz, eps_par)
+            continue
+        i = k - eb.shape[0]
+        for q in range(adjb[6 + i], adjb[7 + i]):
+            j = adjb[q]
+            if j <= i:
+                continue
+            ex = pb[j, 0] - pb[i, 0]
+            ey = pb[j, 1] - pb[i, 1]
+            ez = pb[j, 2] - pb[i, 2]
+            en = math.sqrt(ex * ex + ey * ey + ez * ez)
+            if en > 0.0:
+                depth, nx, ny, nz = _cross_axis(e1x, e1y, e1z, ex / en, ey / en, ez / en, pa, pb, depth, nx, ny, nz,
+                                                eps_par)
+    return depth, nx, ny, nz
+
+
+@njit(cache=True)
+def _cross_axis(e1x, e1y, e1z, e2x, e2y, e2z, pa, pb, depth, nx, ny, nz, eps_par):  # pragma: no cover
+    ux = e1y * e2z - e1z * e2y
+    uy = e1z * e2x - e1x * e2z
+    uz = e1x * e2y - e1y * e2x
+    un = math.sqrt(ux * ux + uy * uy + uz * uz)
+    if un <= eps_par:
+        return depth, nx, ny, nz
+    return _axis(pa, pb, ux / un, uy / un, uz / un, depth, nx, ny, nz)
+
+
+@njit(cache=True)
+def sat_depth_graph(pa, fa, ea, adja, tria, pb, fb, eb, adjb, trib, eps_par):  # pragma: no cover - compiled
+    """:func:`._pair_sat.sat_depth` (the exhaustive SAT, same outputs) over the face normals
+    ``fa`` and the normals of the triangles ``tria`` (indices into ``pa``) as A's faces, the edge
+    directions ``ea`` and the edges of the vertex graph ``adja`` as A's edges; likewise B.  A
+    triangulated hull's triangle normals are its face normals and its graph's edges include its
+    edges, so the axes include every facet normal of ``A - B``: the depth is exact (extra axes,
+    each a valid separating direction, cannot lower it)."""
+    depth = math.inf
+    nx = 0.0
+    ny = 0.0
+    nz = 1.0
+    for i in range(fa.shape[0]):
+        depth, nx, ny, nz = _axis(pa, pb, fa[i, 0], fa[i, 1], fa[i, 2], depth, nx, ny, nz)
+    for t in range(tria.shape[0]):
+        depth, nx, ny, nz = _tri_axis(pa, tria, t, pa, pb, depth, nx, ny, nz)
+    for i in range(fb.shape[0]):
+        depth, nx, ny, nz = _axis(pa, pb, fb[i, 0], fb[i, 1], fb[i, 2], depth, nx, ny, nz)
+    for t in range(trib.shape[0]):
+        depth, nx, ny, nz = _tri_axis(pb, trib, t, pa, pb, depth, nx, ny, nz)
+    for k in range(ea.shape[0]):
+        depth, nx, ny, nz = _edge_axes(ea[k, 0], ea[k, 1], ea[k, 2], pb, eb, adjb, pa, depth, nx, ny, nz, eps_par)
+    if adja.shape[0] > 0:
+        for i in range(pa.shape[0]):
+            for q in range(adja[6 + i], adja[7 + i]):
+                j = adja[q]
+                if j <= i:
+                    continue
+                ex = pa[j, 0] - pa[i, 0]
+                ey = pa[j, 1] - pa[i, 1]
+                ez = pa[j, 2] - pa[i, 2]
+                en = math.sqrt(ex * ex + ey * ey + ez * ez)
+                if en > 0.0:
+                    depth, nx, ny, nz = _edge_axes(ex / en, ey / en, ez / en, pb, eb, adjb, pa, depth, nx, ny, nz, eps_par)
+    return depth, nx, ny, nz
+
+
+@njit(cache=True)
+def _sat_path(pa, fa, ea, adja, tria, ra, pb, fb, eb, adjb, trib, rb, out, work, eps_len, eps_par, gjk_eps, max_iter,
+              offset):  # pragma: no cover - compiled
+    """The exhaustive-SAT path of :func:`._pair_sat.convex_convex_at` (after GJK found the cores
+    overlapping or touching) with :func:`sat_depth_graph`'s axes: depth, then witnesses from GJK on
+    the cores with B pushed out along the axis by the depth plus ``offset``."""
+    depth, nx, ny, nz = sat_depth_graph(pa, fa, ea, adja, tria, pb, fb, eb, adjb, trib, eps_par)
+    if not depth < math.inf:
+        depth = 0.0  # no axis at all: point cores that coincide
+    if depth < 0.0:
+        # GJK stopped within its tolerance of touching but an axis shows a positive gap: the
+        # cores are disjoint; report them apart (the sign agrees with intersects())
+        gap = -depth
+        status2, d2, ax, ay, az, bx, by, bz = gjk_core(
+            pa, pb, offset * nx, offset * ny, offset * nz, work, eps_len, gjk_eps, max_iter
+        )
+        if status2 == GJK_NOT_CONVERGED:
+            return 0.0, status2
+        return write_rounded(ax, ay, az, ra, bx - offset * nx, by - offset * ny, bz - offset * nz, rb, nx, ny, nz, gap,
+                             out, 0), GJK_SEPARATED
+    shift = depth + offset
+    status2, d2, ax, ay, az, bx, by, bz = gjk_core(
+        pa, pb, shift * nx, shift * ny, shift * nz, work, eps_len, gjk_eps, max_iter
+    )
+    if status2 == GJK_NOT_CONVERGED:
+        return 0.0, status2
+    return write_rounded(ax, ay, az, ra, bx - shift * nx, by - shift * ny, bz - shift * nz, rb, nx, ny, nz, -depth,
+                         out, 0), GJK_INTERSECTING
+
+
+@njit(cache=True)
+def convex_convex_fast(
+    pa, fa, ea, adja, tria, ra, pb, fb, eb, adjb, trib, rb, out, work, eps_len, eps_par, gjk_eps, max_iter, offset, level
+):  # pragma: no cover - compiled
+    """:func:`._pair_sat.convex_convex` (same outputs and statuses) with GJK climbing the vertex
+    graphs ``adja``, ``adjb`` (empty: scan), the penetration depth by EPA (:func:`epa_depth`,
+    within ``gjk_eps`` of the SAT's) when ``work`` holds ``EPA_WORK_SIZE`` floats, and the
+    exhaustive SAT (:func:`sat_depth_graph`) where EPA does not settle it.  Core A: points ``pa``,
+    face normals ``fa``, edge directions ``ea`` (see ``sat_depth``), graph ``adja`` and triangles
+    ``tria`` (``hull_graph``; a hull may give either or both), radius ``ra``; likewise B.
+
+    ``level`` (m): the caller only needs to know whether the distance is <= ``level`` (``-inf``:
+    the distance itself is wanted).  When GJK finds the cores overlapping (origin inside a
+    tetrahedron) and ``-(ra + rb) <= level``, it returns ``-(ra + rb)`` (an upper bound on the
+    signed distance) with a point of A's core as both core witnesses, without a depth.
+    """
+    na = pa.shape[0]
+    nb = pb.shape[0]
+    gx = gy = gz = 0.0
+    for i in range(na):
+        gx += pa[i, 0]
+        gy += pa[i, 1]
+        gz += pa[i, 2]
+    hx = hy = hz = 0.0
+    for i in range(nb):
+        hx += pb[i, 0]
+        hy += pb[i, 1]
+        hz += pb[i, 2]
+    simp = work[0:9]
+    status, d, ax, ay, az, bx, by, bz = gjk_dir_adj2(
+        pa, adja, pb, adjb, 0.0, 0.0, 0.0, gx / na - hx / nb, gy / na - hy / nb, gz / na - hz / nb,
+        eps_len, gjk_eps, max_iter, simp,
+    )
+    if status == GJK_SEPARATED:
+        return write_rounded(ax, ay, az, ra, bx, by, bz, rb, (bx - ax) / d, (by - ay) / d, (bz - az) / d, d, out, 0), status
+    if status == GJK_NOT_CONVERGED:
+        return 0.0, status
+    if simp[0] == 1.0:  # the origin is inside a tetrahedron of M: the cores overlap
+        if -(ra + rb) <= level:
+            # a point of A's core as both core witnesses (p_WB - p_WA = distance * nhat holds)
+            return write_rounded(ax, ay, az, ra, ax, ay, az, rb, 0.0, 0.0, 1.0, 0.0, out, 0), GJK_INTERSECTING
+        ok, depth, nx, ny, nz, ax, ay, az, bx, by, bz = epa_depth(pa, adja, pb, adjb, work, gjk_eps)
+        if ok and depth > eps_len:
+            return write_rounded(ax, ay, az, ra, bx, by, bz, rb, nx, ny, nz, -depth, out, 0), GJK_INTERSECTING
+    return _sat_path(pa, fa, ea, adja, tria, ra, pb, fb, eb, adjb, trib, rb, out, work, eps_len, eps_par, gjk_eps,
+                     max_iter, offset)
