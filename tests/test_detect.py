@@ -247,14 +247,16 @@ def test_pair_distances_of_one_robot_are_rows_of_all_pairs():
 
 @pytest.mark.parametrize("name", ["ranger", "hermes", "rover"], ids=["ranger", "hermes", "rover"])
 def test_fast_narrow_phase_matches_generic_pair_kernel(name):
-    """The scalar / capsule-polytope dispatch of the kernel against the generic per-pair kernel (GJK + SAT)."""
+    """The scalar / capsule-polytope dispatch of the kernel against the generic per-pair kernel (GJK + EPA / SAT)."""
     from armguard.detect._narrow import pair_distance
 
     scene = load_scene(name)
     det = Detector(scene, threshold=0.0)
     L, m, tol = det._layout, det._model, det._tol
     V = lambda buf, k: L.view(buf, k)  # noqa: E731
-    out, work = np.zeros(9), np.zeros(64)
+    from armguard.geometry._pair_epa import EPA_WORK_SIZE
+
+    out, work = np.zeros(9), np.zeros(EPA_WORK_SIZE)
     for q in _sample(scene, np.random.default_rng(11), 20):
         res = det.pair_distances(q)  # leaves every element in W
         for k, p in enumerate(res.pair_index):
@@ -263,8 +265,9 @@ def test_fast_narrow_phase_matches_generic_pair_kernel(name):
                 continue
             d, err = pair_distance(a, b, V(det._MI, "core"), V(det._MF, "radius"), V(det._SF, "vW"), V(det._MI, "vstart"),
                                    V(det._SF, "boxW"), V(det._SF, "fnW"), V(det._MI, "pstart"), V(det._SF, "edW"),
-                                   V(det._MI, "estart"), out, work, tol.length, tol.parallel, tol.gjk_epsilon,
-                                   tol.gjk_max_iterations, tol.penetration_witness_offset)
+                                   V(det._MI, "estart"), V(det._MI, "gadj"), V(det._MI, "gadjs"), V(det._MI, "gtri"),
+                                   V(det._MI, "gtris"), out, work, tol.length, tol.parallel, tol.gjk_epsilon,
+                                   tol.gjk_max_iterations, tol.penetration_witness_offset, -np.inf)
             assert err == 0
             assert abs(d - res.distance[k]) <= 1e-9
 

@@ -13,6 +13,8 @@ import numpy as np
 from .._errors import DetectionError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from . import _kernel as kn
+from ..geometry._pair_epa import EPA_WORK_SIZE
+from ._hulls import vertex_graphs
 from ._layout import EV_W, SUM_SIZE, Layout
 from ._model import CAT_WORKSPACE, build_model, check_finite_margin
 from ._raw import _UNHELD, _Raw, _refcount
@@ -187,7 +189,8 @@ class Detector:
         L.add("MF", "X_pre", t.X_pre); L.add("MF", "axis", t.axis); L.add("MF", "X_post", t.X_post)
         L.add("MF", "offset", t.offset); L.add("MF", "term_coeff", t.term_coeff); L.add("MF", "radius", cs.elem_radius)
         L.add("MF", "verts_L", cs.verts.reshape(-1, 3)); L.add("MF", "box_L", m.box_local.reshape(-1, 15))
-        L.add("MF", "fn_L", m.fnrm_local.reshape(-1, 3)); L.add("MF", "ed_L", m.edir_local.reshape(-1, 3))
+        vg = vertex_graphs(cs, m.fnrm_local, m.edir_local)  # the hulls' graphs; their normals dropped
+        L.add("MF", "fn_L", vg["fn_L"]); L.add("MF", "ed_L", vg["ed_L"])
         L.add("MF", "sph_L", cs.elem_sphere.reshape(-1, 4)); L.add("MF", "static_lo", m.static_lo.reshape(-1, 3))
         L.add("MF", "static_hi", m.static_hi.reshape(-1, 3)); L.add("MF", "bvh_lo", m.bvh.lo.reshape(-1, 3))
         L.add("MF", "bvh_hi", m.bvh.hi.reshape(-1, 3)); L.add("MF", "lever", lever)
@@ -196,12 +199,14 @@ class Detector:
         poly = _static_polytopes(cs, self._static_shapes)
         L.add("MF", "pv", poly["pv"]); L.add("MF", "ppl", poly["ppl"]); L.add("MF", "pbis", poly["pbis"])
         L.add("MF", "pcen", poly["pcen"])
+        for name in ("gadj", "gadjs", "gtri", "gtris"):
+            L.add("MI", name, vg[name])
         rob_l, rob_j, parent_loc = _fk_blocks(t.parent, m.link_robot, [len(self.scene.robots[r].joint_names)
                                                                         for r in m.robot_names])
         for name, arr in (("parent", t.parent), ("jtype", t.jtype), ("has_post", t.has_post.astype(np.int64)),
                           ("term_start", t.term_start), ("term_joint", t.term_joint), ("glink", m.elem_glink),
-                          ("core", cs.elem_core), ("vstart", cs.elem_vert_start), ("pstart", cs.elem_plane_start),
-                          ("estart", cs.elem_edge_start), ("mov_idx", m.mov_idx), ("st_idx", m.st_idx),
+                          ("core", cs.elem_core), ("vstart", cs.elem_vert_start), ("pstart", vg["pstart"]),
+                          ("estart", vg["estart"]), ("mov_idx", m.mov_idx), ("st_idx", m.st_idx),
                           ("bvh_left", m.bvh.left), ("bvh_right", m.bvh.right), ("bvh_start", m.bvh.start),
                           ("bvh_count", m.bvh.count), ("bvh_items", m.bvh.items), ("pair_a", m.pair_a),
                           ("pair_b", m.pair_b), ("pair_cat", m.pair_cat),
@@ -221,11 +226,12 @@ class Detector:
         boxW0 = m.box_local.copy()
         vW0 = np.array(cs.verts, dtype=np.float64).reshape(-1, 3)
         sphW0 = np.array(cs.elem_sphere, dtype=np.float64).reshape(-1, 4)
-        fnW0 = m.fnrm_local.copy()
-        edW0 = m.edir_local.copy()
+        fnW0 = vg["fn_L"].copy()
+        edW0 = vg["ed_L"].copy()
         del static_mask  # static elements are already in W: the scratch starts as their copy
+        n_work = EPA_WORK_SIZE if len(vg["gadj"]) else 64  # room for EPA where a hull has a vertex graph
         for name, arr in (("Xs", np.zeros((t.n_links, 4, 4))), ("vW", vW0), ("boxW", boxW0), ("fnW", fnW0),
-                          ("edW", edW0), ("sphW", sphW0), ("out9", np.zeros(9)), ("work", np.zeros(64)),
+                          ("edW", edW0), ("sphW", sphW0), ("out9", np.zeros(9)), ("work", np.zeros(n_work)),
                           ("gap", np.zeros(stack_n)), ("ev", np.zeros((P, EV_W))),
                           ("plb", np.zeros(P)), ("last_d", np.zeros(P)), ("last_q", np.zeros((P, nq))),
                           ("best", np.zeros(4)), ("seg", np.zeros((2, 3))), ("fk_q", np.zeros(max(m.n_q, 1)))):

@@ -36,10 +36,19 @@ SIN = ("summary", "ev_p", "pflag", "stack", "order", "has_last", "stamp", "pstam
 # scalar slots after the segments
 SCALARS = ("n_q", "n_explicit", "n_mov", "n_st", "n_links", "stamp_now")
 
+# model ints added later, whose header slots follow the scalar slots (so that the numbers above,
+# compiled into _kernel.py, stay put): the vertex graphs of the polytope elements (GJK and EPA
+# climb them) and their surface triangles, each with CSR offsets per element (an empty range:
+# no graph, supports scan)
+MI_LATE = ("gadj", "gadjs", "gtri", "gtris")
+
 _ALL = MF + MI + SFN + SIN
 K = {name: k for k, name in enumerate(_ALL)}
 S0 = 2 * len(_ALL)  # first scalar slot
 SC = {name: S0 + k for k, name in enumerate(SCALARS)}
+_LATE0 = (S0 + len(SCALARS) + 1) // 2
+K.update({name: _LATE0 + k for k, name in enumerate(MI_LATE)})
+H_SIZE = 2 * (_LATE0 + len(MI_LATE))
 
 # summary slots (SI "summary" segment, followed by "ev_p": one copy reads both)
 SUM_BEST = 0  # 4 entries: best pair per category (-1 none)
@@ -55,7 +64,7 @@ class Layout:
     """Builds the header and the four buffers from named arrays (rows x flattened columns)."""
 
     def __init__(self) -> None:
-        self.H = np.zeros(S0 + len(SCALARS), dtype=np.int64)
+        self.H = np.zeros(H_SIZE, dtype=np.int64)
         self._parts = {"MF": [], "MI": [], "SF": [], "SI": []}
         self._size = {"MF": 0, "MI": 0, "SF": 0, "SI": 0}
         self._shape: dict[str, tuple] = {}

@@ -20,7 +20,8 @@ from numba import njit
 from ..geometry._pair_segment_box import capsule_box_scalar
 from ..geometry._pair_segment_polytope import capsule_polytope_at
 from ..geometry._pair_segment_segment import capsule_capsule_scalar
-from ..geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_capsule, convex_convex
+from ..geometry._pair_epa import convex_convex_fast
+from ..geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_capsule
 
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
@@ -33,6 +34,7 @@ _K_poly_of, _K_seg, _K_pv, _K_ppl, _K_ped = K["poly_of"], K["seg"], K["pv"], K["
 _K_pbis, _K_pcen, _K_pvs, _K_pps, _K_pes = K["pbis"], K["pcen"], K["pvs"], K["pps"], K["pes"]
 _K_fnW, _K_pstart, _K_edW, _K_estart, _K_work = K["fnW"], K["pstart"], K["edW"], K["estart"], K["work"]
 _K_ws, _K_out9 = K["ws"], K["out9"]
+_K_gadj, _K_gadjs, _K_gtri, _K_gtris = K["gadj"], K["gadjs"], K["gtri"], K["gtris"]
 
 ERR_GJK = 2  # the convex kernel did not converge: the caller raises, never a verdict
 NOT_SCALAR = -1  # narrow_flat: not a capsule-capsule / capsule-box pair, call narrow_other
@@ -49,11 +51,18 @@ def _capsule_box(verts, vs, ve, ra, box, gb, out, eps_len, eps_par, offset):  # 
 
 @njit(cache=True)
 def pair_distance(
-    ga, gb, core, radius, verts, vstart, box, fnrm, fstart, edir, estart, out, work,
-    eps_len, eps_par, gjk_eps, max_iter, offset,
+    ga, gb, core, radius, verts, vstart, box, fnrm, fstart, edir, estart, adj, adjs, tri, tris, out, work,
+    eps_len, eps_par, gjk_eps, max_iter, offset, level,
 ):  # pragma: no cover - compiled
     """Signed distance (m) of elements ``ga`` (A) and ``gb`` (B); writes ``out[0:9]`` =
-    ``[p_WA, p_WB, nhat_AB_W]``.  Returns ``(distance, error)``; ``error`` is 0 or ``ERR_GJK``."""
+    ``[p_WA, p_WB, nhat_AB_W]``.  Returns ``(distance, error)``; ``error`` is 0 or ``ERR_GJK``.
+
+    Pairs other than capsule-capsule and capsule-box go to the convex kernel
+    (:func:`armguard.geometry._pair_epa.convex_convex_fast`: GJK climbing the vertex graphs
+    ``adj[adjs[g]:adjs[g + 1]]``, EPA depth, the exhaustive SAT where EPA does not settle it,
+    with axes from the face normals and edge directions, or from the triangles
+    ``tri[tris[g]:tris[g + 1]]`` and the graph of an element that has them instead);
+    ``level`` as in :func:`narrow_other`; ``work`` has ``EPA_WORK_SIZE`` floats."""
     ka = core[ga]
     kb = core[gb]
     ra = radius[ga]
@@ -74,10 +83,12 @@ def pair_distance(
             out[3 + i] = t
             out[6 + i] = -out[6 + i]
         return d, 0
-    d, status = convex_convex(
-        verts[vstart[ga]:vstart[ga + 1]], fnrm[fstart[ga]:fstart[ga + 1]], edir[estart[ga]:estart[ga + 1]], ra,
-        verts[vstart[gb]:vstart[gb + 1]], fnrm[fstart[gb]:fstart[gb + 1]], edir[estart[gb]:estart[gb + 1]], rb,
-        out, work, eps_len, eps_par, gjk_eps, max_iter, offset,
+    d, status = convex_convex_fast(
+        verts[vstart[ga]:vstart[ga + 1]], fnrm[fstart[ga]:fstart[ga + 1]], edir[estart[ga]:estart[ga + 1]],
+        adj[adjs[ga]:adjs[ga + 1]], tri[tris[ga]:tris[ga + 1]], ra,
+        verts[vstart[gb]:vstart[gb + 1]], fnrm[fstart[gb]:fstart[gb + 1]], edir[estart[gb]:estart[gb + 1]],
+        adj[adjs[gb]:adjs[gb + 1]], tri[tris[gb]:tris[gb + 1]], rb,
+        out, work, eps_len, eps_par, gjk_eps, max_iter, offset, level,
     )
     if status == 2:
         return d, ERR_GJK
@@ -180,8 +191,9 @@ def narrow_other(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter
         return d, 0
     return pair_distance(ga, gb, seg1(MI, H, _K_core), seg1(MF, H, _K_radius), seg2(SF, H, _K_vW, 3),
                          seg1(MI, H, _K_vstart), seg2(SF, H, _K_boxW, 15), seg2(SF, H, _K_fnW, 3), seg1(MI, H, _K_pstart),
-                         seg2(SF, H, _K_edW, 3), seg1(MI, H, _K_estart), out, seg1(SF, H, _K_work),
-                         eps_len, eps_par, gjk_eps, max_iter, offset)
+                         seg2(SF, H, _K_edW, 3), seg1(MI, H, _K_estart), seg1(MI, H, _K_gadj), seg1(MI, H, _K_gadjs),
+                         seg2(MI, H, _K_gtri, 3), seg1(MI, H, _K_gtris), out, seg1(SF, H, _K_work),
+                         eps_len, eps_par, gjk_eps, max_iter, offset, level)
 
 
 @njit(cache=True, _nrt=False)
