@@ -2,8 +2,9 @@
 
 No distance formula lives here: each branch calls the geometry core's per-pair kernel
 (:mod:`armguard.geometry`): capsule-capsule (Ranger §3 link-link and link-edge),
-capsule-box, and the exact convex-convex GJK + SAT kernel for every other pair (faces,
-polyhedra, mesh hulls).  The only formula of its own is the distance to the workspace
+capsule-box, capsule against a static polytope (GJK + Minkowski facets), and the exact
+convex-convex kernel for every other pair (faces, polyhedra, mesh hulls: GJK climbing the hulls'
+vertex graphs, EPA for the depth, the exhaustive SAT as fallback).  The only formula of its own is the distance to the workspace
 walls (Ranger §2, "link-to-bounding box distances"), which is not a shape pair.
 
 Element data are in W (the detector kernel moves link elements there once per check):
