@@ -109,3 +109,65 @@ def test_yes_no_and_pruned_batch_agree_with_all_pairs(hull_scene):
     assert 0.05 < brute.collision.mean() < 0.95  # both verdicts occur
     np.testing.assert_array_equal(exact.collision, brute.collision)
     np.testing.assert_array_equal(det.collides_many(Q), brute.collision)
+
+
+def test_link_boxes_contain_their_hulls(hull_scene):
+    """The yes/no cull's oriented boxes (``_hulls.link_obbs``) contain every core point of their
+    element, grown by its core radius, so a pair whose boxes are apart is apart."""
+    det = Detector(hull_scene, threshold=0.05)
+    cs = det._model.compiled
+    obb = det._layout.view(det._MF, "obb_L").reshape(-1, 16)
+    n = 0
+    for g in range(cs.n_elements):
+        if obb[g, 15] == 0.0:
+            continue
+        c, h, R = obb[g, 0:3], obb[g, 3:6], obb[g, 6:15].reshape(3, 3)
+        assert np.allclose(R.T @ R, np.eye(3), atol=1e-12) and np.linalg.det(R) > 0.0
+        p = np.asarray(cs.verts[cs.elem_vert_start[g]:cs.elem_vert_start[g + 1]])
+        assert np.all(np.abs((p - c) @ R) <= h - float(cs.elem_radius[g]))
+        n += 1
+    assert n == 5  # every moving hull has one
+
+
+def test_box_cull_never_drops_a_pair_within_the_level():
+    """``obb_apart_static`` says apart only when the element's true distance to the box exceeds the
+    level (oracle: ``armguard.geometry.distance`` on the moved hull), and it does cull."""
+    from armguard.detect._cull import obb_apart_static
+    from armguard.detect._hulls import link_obbs
+    from armguard.geometry import distance
+    from armguard.scene import compile_scene
+
+    rng = np.random.default_rng(11)
+    hull = _blob(rng, [0, 0, -0.25], [0, 0, 0.25], 0.06, 70)
+    sc = Scene("one")
+    sc.add_body("h", [hull])
+    cs = compile_scene(sc)
+    row = link_obbs(cs, np.zeros(cs.n_elements, np.int64), 1e-9)[0]
+    assert row[15] == 1.0
+    culled = 0
+    for _ in range(400):
+        X = np.eye(4)
+        a, b = rng.uniform(-np.pi, np.pi, 2)
+        ca, sa, cb, sb = np.cos(a), np.sin(a), np.cos(b), np.sin(b)
+        X[:3, :3] = np.array([[ca, -sa, 0], [sa, ca, 0], [0, 0, 1]]) @ np.array([[cb, 0, sb], [0, 1, 0], [-sb, 0, cb]])
+        X[:3, 3] = rng.uniform(-0.5, 0.5, 3)
+        yaw = rng.uniform(-np.pi, np.pi)
+        R_WB = np.array([[np.cos(yaw), -np.sin(yaw), 0.0], [np.sin(yaw), np.cos(yaw), 0.0], [0.0, 0.0, 1.0]])
+        box = Box(rng.uniform(-0.3, 0.3, 3), rng.uniform(0.02, 0.2, 3), R_WB)
+        level = float(rng.choice([0.0, 0.02]))
+        SF = np.concatenate([X.reshape(-1), box.center, box.half_extents, box.rotation.reshape(-1)])
+        apart = obb_apart_static(row, 0, 0, SF, 16, level, 1e-9)
+        d = distance(ConvexPolyhedron(hull.vertices @ X[:3, :3].T + X[:3, 3]), box).distance
+        if apart:
+            culled += 1
+            assert d > level
+    assert 50 < culled < 390
+
+
+def test_yes_no_with_a_stopping_distance_agrees_with_all_pairs(hull_scene):
+    det = Detector(hull_scene, threshold=0.05, stopping_distance=0.03)
+    lo, hi = _limits(hull_scene)
+    Q = np.random.default_rng(4).uniform(lo, hi, size=(1500, len(lo)))
+    brute = det.check_many_bruteforce(Q)
+    assert 0.05 < brute.collision.mean() < 0.95
+    np.testing.assert_array_equal(det.collides_many(Q), brute.collision)

@@ -4,7 +4,8 @@ Each ``*_gap`` is a lower bound on the distance between a moving element and any
 box: ``<= 0`` when the volumes overlap (then it bounds nothing).  Closed forms: the distance from
 a point to an axis-aligned box is the norm of the per-axis excess ``max(lo - x, 0, x - hi)``; to
 an oriented box, the same in the box's frame; between two axis-aligned boxes, the norm of the
-per-axis gaps.
+per-axis gaps.  The yes/no mode also has a boolean cull: two oriented boxes that do not overlap
+(JPL's division-free separating-axis test, :mod:`armguard.geometry._pair_box_box`).
 """
 
 from __future__ import annotations
@@ -12,6 +13,8 @@ from __future__ import annotations
 import math
 
 from numba import njit
+
+from ..geometry._pair_box_box import box_box_overlap_scalar
 
 @njit(cache=True, inline="always")
 def _obb_gap(cx, cy, cz, r, B, o):  # pragma: no cover - compiled
@@ -55,6 +58,47 @@ def _bb_gap(lx, ly, lz, hx, hy, hz, r, B, olo, ohi):  # pragma: no cover - compi
 def _before(key, i, j):  # pragma: no cover - compiled
     """Order of :func:`_argsort_heap`: by key, ties by index (deterministic)."""
     return key[i] < key[j] or (key[i] == key[j] and i < j)
+
+
+@njit(cache=True, inline="always")
+def _obb_w(MF, o, SF, oX, grow):  # pragma: no cover - compiled
+    """The box ``MF[o:o + 15]`` = ``[c_L, h, R_LB row-major]`` (a link frame) moved by the link pose
+    ``SF[oX:oX + 16]`` (``X_WL`` row-major), half extents grown by ``grow``: ``c_W``, ``h``, ``R_WB``
+    (row-major) as 15 scalars."""
+    r00 = SF[oX]; r01 = SF[oX + 1]; r02 = SF[oX + 2]; tx = SF[oX + 3]
+    r10 = SF[oX + 4]; r11 = SF[oX + 5]; r12 = SF[oX + 6]; ty = SF[oX + 7]
+    r20 = SF[oX + 8]; r21 = SF[oX + 9]; r22 = SF[oX + 10]; tz = SF[oX + 11]
+    x = MF[o]; y = MF[o + 1]; z = MF[o + 2]
+    b00 = MF[o + 6]; b01 = MF[o + 7]; b02 = MF[o + 8]
+    b10 = MF[o + 9]; b11 = MF[o + 10]; b12 = MF[o + 11]
+    b20 = MF[o + 12]; b21 = MF[o + 13]; b22 = MF[o + 14]
+    return (r00 * x + r01 * y + r02 * z + tx, r10 * x + r11 * y + r12 * z + ty, r20 * x + r21 * y + r22 * z + tz,
+            MF[o + 3] + grow, MF[o + 4] + grow, MF[o + 5] + grow,
+            r00 * b00 + r01 * b10 + r02 * b20, r00 * b01 + r01 * b11 + r02 * b21, r00 * b02 + r01 * b12 + r02 * b22,
+            r10 * b00 + r11 * b10 + r12 * b20, r10 * b01 + r11 * b11 + r12 * b21, r10 * b02 + r11 * b12 + r12 * b22,
+            r20 * b00 + r21 * b10 + r22 * b20, r20 * b01 + r21 * b11 + r22 * b21, r20 * b02 + r21 * b12 + r22 * b22)
+
+
+@njit(cache=True)
+def obb_apart_static(MF, oa, oXa, SF, ob, grow, eps_par):  # pragma: no cover - compiled
+    """True when the box of a moving element (``MF[oa:oa + 15]``, link pose ``SF[oXa:oXa + 16]``) grown
+    by ``grow`` and the box ``SF[ob:ob + 15]`` (W, ``[c, h, R_WB row-major]``) do not overlap."""
+    a = _obb_w(MF, oa, SF, oXa, grow)
+    return not box_box_overlap_scalar(
+        a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11], a[12], a[13], a[14],
+        SF[ob], SF[ob + 1], SF[ob + 2], SF[ob + 3], SF[ob + 4], SF[ob + 5], SF[ob + 6], SF[ob + 7], SF[ob + 8],
+        SF[ob + 9], SF[ob + 10], SF[ob + 11], SF[ob + 12], SF[ob + 13], SF[ob + 14], eps_par)
+
+
+@njit(cache=True)
+def obb_apart_moving(MF, oa, oXa, ob, oXb, SF, grow, eps_par):  # pragma: no cover - compiled
+    """True when the boxes of two moving elements (``MF[o:o + 15]`` each, link poses ``SF[oX:oX + 16]``),
+    the first grown by ``grow``, do not overlap."""
+    a = _obb_w(MF, oa, SF, oXa, grow)
+    b = _obb_w(MF, ob, SF, oXb, 0.0)
+    return not box_box_overlap_scalar(
+        a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11], a[12], a[13], a[14],
+        b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7], b[8], b[9], b[10], b[11], b[12], b[13], b[14], eps_par)
 
 
 @njit(cache=True)

@@ -14,7 +14,7 @@ from .._errors import DetectionError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from . import _kernel as kn
 from ..geometry._pair_epa import EPA_WORK_SIZE
-from ._hulls import vertex_graphs
+from ._hulls import link_obbs, vertex_graphs
 from ._layout import EV_W, SUM_SIZE, Layout
 from ._model import CAT_WORKSPACE, build_model, check_finite_margin
 from ._raw import _UNHELD, _Raw, _refcount
@@ -190,6 +190,7 @@ class Detector:
         L.add("MF", "offset", t.offset); L.add("MF", "term_coeff", t.term_coeff); L.add("MF", "radius", cs.elem_radius)
         L.add("MF", "verts_L", cs.verts.reshape(-1, 3)); L.add("MF", "box_L", m.box_local.reshape(-1, 15))
         vg = vertex_graphs(cs, m.fnrm_local, m.edir_local)  # the hulls' graphs; their normals dropped
+        L.add("MF", "obb_L", link_obbs(cs, m.elem_glink, self._tol.length))  # the yes/no cull
         L.add("MF", "fn_L", vg["fn_L"]); L.add("MF", "ed_L", vg["ed_L"])
         L.add("MF", "sph_L", cs.elem_sphere.reshape(-1, 4)); L.add("MF", "static_lo", m.static_lo.reshape(-1, 3))
         L.add("MF", "static_hi", m.static_hi.reshape(-1, 3)); L.add("MF", "bvh_lo", m.bvh.lo.reshape(-1, 3))

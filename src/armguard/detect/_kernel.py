@@ -34,7 +34,7 @@ from ..kinematics._fk import _fk_kernel
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SC, at, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, SUM_STATUS, seg1, seg2, seg3
-from ._cull import _argsort_heap, _bb_gap, _obb_gap, _sb_gap
+from ._cull import _argsort_heap, _bb_gap, _obb_gap, _sb_gap, obb_apart_moving, obb_apart_static
 from ._narrow import narrow_other
 from ._step import evaluate_pair, move_element, record_pair
 
@@ -105,6 +105,7 @@ _K_rob_j = K["rob_j"]
 _K_parent_loc = K["parent_loc"]
 _K_fk_q = K["fk_q"]
 _K_fk_ok = K["fk_ok"]
+_K_obb_L = K["obb_L"]
 _SC_n_explicit = SC["n_explicit"]
 _SC_n_links = SC["n_links"]
 _SC_n_q = SC["n_q"]
@@ -223,6 +224,8 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     o_vs = H[2 * _K_vstart]
     o_vW = H[2 * _K_vW]
     o_rad = H[2 * _K_radius]
+    o_obb = H[2 * _K_obb_L]  # the moving polytopes' boxes (flag in column 15): the yes/no cull
+    yesno = mode == MODE_YESNO
 
     for m in range(lo, hi):
         q = Q[m:m + 1]
@@ -387,6 +390,10 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                             if track:
                                 plb[p] = lb
                             continue
+                        if (yesno and b >= 0 and MF[o_obb + 16 * a + 15] != 0.0 and MF[o_obb + 16 * b + 15] != 0.0
+                                and obb_apart_moving(MF, o_obb + 16 * a, o_Xs + 16 * glink[a], o_obb + 16 * b,
+                                                     o_Xs + 16 * glink[b], SF, level, eps_par)):
+                            continue  # boxes containing both apart (grown by the collision level)
                         d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, woff, stamp_now)
                         if err < 0:
                             d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl)
@@ -424,6 +431,8 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                 by0 = min(by0, y); by1 = max(by1, y)
                                 bz0 = min(bz0, z); bz1 = max(bz1, z)
                             br = MF[o_rad + a]
+                        use_obb = yesno and MF[o_obb + 16 * a + 15] != 0.0
+                        o_Xa = o_Xs + 16 * glink[a]
                         stack[0] = 0
                         gapst[0] = _sb_gap(cx, cy, cz, cr, MF, o_blo, o_bhi)
                         if use_bb:
@@ -476,6 +485,9 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                     if track:
                                         plb[p] = lb
                                     continue
+                                if use_obb and core[b] == 2 and obb_apart_static(MF, o_obb + 16 * a, o_Xa, SF,
+                                                                                o_box + 15 * b, level, eps_par):
+                                    continue  # a's box (grown by the collision level) misses the obstacle box
                                 d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, woff, stamp_now)
                                 if err < 0:
                                     d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl)

@@ -36,11 +36,12 @@ SIN = ("summary", "ev_p", "pflag", "stack", "order", "has_last", "stamp", "pstam
 # scalar slots after the segments
 SCALARS = ("n_q", "n_explicit", "n_mov", "n_st", "n_links", "stamp_now")
 
-# model ints added later, whose header slots follow the scalar slots (so that the numbers above,
+# segments added later, whose header slots follow the scalar slots (so that the numbers above,
 # compiled into _kernel.py, stay put): the vertex graphs of the polytope elements (GJK and EPA
 # climb them) and their surface triangles, each with CSR offsets per element (an empty range:
-# no graph, supports scan)
-MI_LATE = ("gadj", "gadjs", "gtri", "gtris")
+# no graph, supports scan), model ints; "obb_L", model floats: the moving polytope elements'
+# oriented boxes in their link frames (the yes/no cull, see ._hulls.link_obbs)
+MI_LATE = ("gadj", "gadjs", "gtri", "gtris", "obb_L")
 
 _ALL = MF + MI + SFN + SIN
 K = {name: k for k, name in enumerate(_ALL)}
