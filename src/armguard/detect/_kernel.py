@@ -224,8 +224,11 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     o_vs = H[2 * _K_vstart]
     o_vW = H[2 * _K_vW]
     o_rad = H[2 * _K_radius]
-    o_obb = H[2 * _K_obb_L]  # the moving polytopes' boxes (flag in column 15): the yes/no cull
-    yesno = mode == MODE_YESNO
+    o_obb = H[2 * _K_obb_L]  # the moving polytopes' boxes (flag in column 15): a cull before GJK
+    # in yes/no mode (cut-off: the collision level).  Measured in the exact and min modes as well
+    # (cut-off: the category's best so far): no gain there (the bounding spheres already cull the
+    # pairs beyond a tight cut-off), so they skip the test.
+    box_cull = mode == MODE_YESNO
 
     for m in range(lo, hi):
         q = Q[m:m + 1]
@@ -390,10 +393,11 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                             if track:
                                 plb[p] = lb
                             continue
-                        if (yesno and b >= 0 and MF[o_obb + 16 * a + 15] != 0.0 and MF[o_obb + 16 * b + 15] != 0.0
+                        if (box_cull and b >= 0 and cut < math.inf and MF[o_obb + 16 * a + 15] != 0.0
+                                and MF[o_obb + 16 * b + 15] != 0.0
                                 and obb_apart_moving(MF, o_obb + 16 * a, o_Xs + 16 * glink[a], o_obb + 16 * b,
-                                                     o_Xs + 16 * glink[b], SF, level, eps_par)):
-                            continue  # boxes containing both apart (grown by the collision level)
+                                                     o_Xs + 16 * glink[b], SF, max(cut, 0.0), eps_par)):
+                            continue  # boxes containing both, one grown by the cut-off, apart: d > cut
                         d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, woff, stamp_now)
                         if err < 0:
                             d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl)
@@ -431,7 +435,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                 by0 = min(by0, y); by1 = max(by1, y)
                                 bz0 = min(bz0, z); bz1 = max(bz1, z)
                             br = MF[o_rad + a]
-                        use_obb = yesno and MF[o_obb + 16 * a + 15] != 0.0
+                        use_obb = box_cull and MF[o_obb + 16 * a + 15] != 0.0
                         o_Xa = o_Xs + 16 * glink[a]
                         stack[0] = 0
                         gapst[0] = _sb_gap(cx, cy, cz, cr, MF, o_blo, o_bhi)
@@ -485,9 +489,10 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                     if track:
                                         plb[p] = lb
                                     continue
-                                if use_obb and core[b] == 2 and obb_apart_static(MF, o_obb + 16 * a, o_Xa, SF,
-                                                                                o_box + 15 * b, level, eps_par):
-                                    continue  # a's box (grown by the collision level) misses the obstacle box
+                                if (use_obb and core[b] == 2 and cutp < math.inf
+                                        and obb_apart_static(MF, o_obb + 16 * a, o_Xa, SF, o_box + 15 * b,
+                                                             max(cutp, 0.0), eps_par)):
+                                    continue  # a's box grown by the cut-off misses the obstacle box: d > cut
                                 d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, woff, stamp_now)
                                 if err < 0:
                                     d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl)
