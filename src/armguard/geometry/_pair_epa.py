@@ -31,7 +31,8 @@ import math
 
 from numba import njit
 
-from ._pair_gjk import GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _support, gjk_core, gjk_dir_adj2
+from ._pair_gjk import (GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _support, centroid_difference, gjk_core,
+                        gjk_dir_adj2)
 from ._pair_sat import _axis
 from ._pair_segment_segment import write_rounded
 
@@ -406,21 +407,10 @@ def convex_convex_fast(
     tetrahedron) and ``-(ra + rb) <= level``, it returns ``-(ra + rb)`` (an upper bound on the
     signed distance) with a point of A's core as both core witnesses, without a depth.
     """
-    na = pa.shape[0]
-    nb = pb.shape[0]
-    gx = gy = gz = 0.0
-    for i in range(na):
-        gx += pa[i, 0]
-        gy += pa[i, 1]
-        gz += pa[i, 2]
-    hx = hy = hz = 0.0
-    for i in range(nb):
-        hx += pb[i, 0]
-        hy += pb[i, 1]
-        hz += pb[i, 2]
+    dx, dy, dz = centroid_difference(pa, pb)
     simp = work[0:9]
     status, d, ax, ay, az, bx, by, bz = gjk_dir_adj2(
-        pa, adja, pb, adjb, 0.0, 0.0, 0.0, gx / na - hx / nb, gy / na - hy / nb, gz / na - hz / nb,
+        pa, adja, pb, adjb, 0.0, 0.0, 0.0, dx, dy, dz,
         eps_len, gjk_eps, max_iter, simp,
     )
     if status == GJK_SEPARATED:

@@ -409,17 +409,10 @@ def gjk_dir_adj2(pa, adja, pb, adjb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, m
     return _gjk(pa, adja, pb, adjb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp)
 
 
-@njit(cache=True)
-def gjk_core(pa, pb, ox, oy, oz, work, eps_len, gjk_eps, max_iter):  # pragma: no cover - compiled
-    """Closest points of hull(pa) and hull(pb) + o.
-
-    ``pa : (nA, 3)``, ``pb : (nB, 3) float64, m``; ``o`` (m) translates B; ``work`` is unused
-    (kept for the stable signature: the simplex lives in registers, see :func:`gjk_dir`).
-    Returns ``(status, dist, ax, ay, az, bx, by, bz)``: core distance and the witness points
-    (B's includes the offset).  ``status`` is one of ``GJK_SEPARATED``, ``GJK_INTERSECTING``,
-    ``GJK_NOT_CONVERGED``.  Starts from the supports along the centroid difference (fewer
-    iterations than an arbitrary vertex pair).
-    """
+@njit(cache=True, inline="always")
+def centroid_difference(pa, pb):  # pragma: no cover - compiled
+    """Centroid of the points ``pa (nA, 3)`` minus that of ``pb (nB, 3)``: GJK's first search
+    direction (fewer iterations than an arbitrary vertex pair)."""
     na = pa.shape[0]
     nb = pb.shape[0]
     gx = gy = gz = 0.0
@@ -432,7 +425,22 @@ def gjk_core(pa, pb, ox, oy, oz, work, eps_len, gjk_eps, max_iter):  # pragma: n
         hx += pb[i, 0]
         hy += pb[i, 1]
         hz += pb[i, 2]
+    return gx / na - hx / nb, gy / na - hy / nb, gz / na - hz / nb
+
+
+@njit(cache=True)
+def gjk_core(pa, pb, ox, oy, oz, work, eps_len, gjk_eps, max_iter):  # pragma: no cover - compiled
+    """Closest points of hull(pa) and hull(pb) + o.
+
+    ``pa : (nA, 3)``, ``pb : (nB, 3) float64, m``; ``o`` (m) translates B; ``work`` is unused
+    (kept for the stable signature: the simplex lives in registers, see :func:`gjk_dir`).
+    Returns ``(status, dist, ax, ay, az, bx, by, bz)``: core distance and the witness points
+    (B's includes the offset).  ``status`` is one of ``GJK_SEPARATED``, ``GJK_INTERSECTING``,
+    ``GJK_NOT_CONVERGED``.  Starts from the supports along the centroid difference (fewer
+    iterations than an arbitrary vertex pair).
+    """
+    dx, dy, dz = centroid_difference(pa, pb)
     return gjk_dir(
-        pa, pb, ox, oy, oz, gx / na - hx / nb - ox, gy / na - hy / nb - oy, gz / na - hz / nb - oz,
+        pa, pb, ox, oy, oz, dx - ox, dy - oy, dz - oz,
         eps_len, gjk_eps, max_iter,
     )
