@@ -35,8 +35,7 @@ from ..kinematics._fk import _fk_kernel
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SC, at, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, SUM_STATUS, seg1, seg2, seg3
 from ._cull import _argsort_heap, _bb_gap, _obb_gap, _sb_gap, obb_apart_moving, obb_apart_static
-from ._narrow import narrow_other
-from ._step import evaluate_pair, move_element, record_pair
+from ._step import move_element, pair_step
 
 MODE_EXACT, MODE_LAZY, MODE_ANYTIME, MODE_YESNO, MODE_ALL, MODE_MIN = 0, 1, 2, 3, 4, 5
 ST_CLEAR, ST_WARNING, ST_COLLISION, ST_INCOMPLETE = 0, 1, 2, 3
@@ -299,12 +298,10 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                 p = sel[k]
                 a = pair_a[p]
                 b = pair_b[p]
-                d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, woff, stamp_now)
-                if err < 0:
-                    d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl)
+                d, err = pair_step(p, a, b, False, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
+                                   n_eval, stamp_now)
                 if err != 0:
                     break
-                record_pair(p, pair_cat[p], d, n_eval, H, SF, SI, stamp_now)
                 n_eval += 1
         elif mode == MODE_ANYTIME:
             # lower bounds for every candidate pair, then evaluate in increasing bound
@@ -346,13 +343,10 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                     continue
                 a = pair_a[p]
                 b = pair_b[p]
-                d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, woff, stamp_now)
-                if err < 0:
-                    d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl)
+                d, err = pair_step(p, a, b, True, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
+                                   n_eval, stamp_now)
                 if err != 0:
                     break
-                pflag[p] = 1
-                record_pair(p, pair_cat[p], d, n_eval, H, SF, SI, stamp_now)
                 n_eval += 1
             # pairs beyond the threshold by their bound: flag 2 (proved), bound kept in plb
         else:
@@ -365,14 +359,10 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                         continue
                     a = pair_a[p]
                     b = pair_b[p]
-                    d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, woff, stamp_now)
-                    if err < 0:
-                        d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl)
+                    d, err = pair_step(p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
+                                       n_eval, stamp_now)
                     if err != 0:
                         break
-                    if track:
-                        pflag[p] = 1
-                    record_pair(p, pair_cat[p], d, n_eval, H, SF, SI, stamp_now)
                     n_eval += 1
             # yes/no: the static obstacles first (self-collision pairs last); otherwise explicit pairs first
             for phase in range(2):
@@ -407,14 +397,10 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                 and obb_apart_moving(MF, o_obb + 16 * a, o_Xs + 16 * glink[a], o_obb + 16 * b,
                                                      o_Xs + 16 * glink[b], SF, max(cut, 0.0), eps_par)):
                             continue  # boxes containing both, one grown by the cut-off, apart: d > cut
-                        d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, woff, stamp_now)
-                        if err < 0:
-                            d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl)
+                        d, err = pair_step(p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
+                                           n_eval, stamp_now)
                         if err != 0:
                             break
-                        if track:
-                            pflag[p] = 1
-                        record_pair(p, c, d, n_eval, H, SF, SI, stamp_now)
                         n_eval += 1
                         if d <= level:
                             collided = True
@@ -502,14 +488,10 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                         and obb_apart_static(MF, o_obb + 16 * a, o_Xa, SF, o_box + 15 * b,
                                                              max(cutp, 0.0), eps_par)):
                                     continue  # a's box grown by the cut-off misses the obstacle box: d > cut
-                                d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, woff, stamp_now)
-                                if err < 0:
-                                    d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl)
+                                d, err = pair_step(p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
+                                                   n_eval, stamp_now)
                                 if err != 0:
                                     break
-                                if track:
-                                    pflag[p] = 1
-                                record_pair(p, c, d, n_eval, H, SF, SI, stamp_now)
                                 n_eval += 1
                                 if d <= level:
                                     collided = True

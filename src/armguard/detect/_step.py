@@ -2,7 +2,8 @@
 
 The kernel (:mod:`._kernel`) reaches a pair from five places (the all-pairs path, the anytime
 order, last check's nearest pairs, the explicit pairs, the BVH leaves); each calls
-:func:`evaluate_pair` then :func:`record_pair`.  These run per pair, a few to a few hundred
+:func:`pair_step`: :func:`evaluate_pair`, the convex kernels where it leaves the pair, then
+:func:`record_pair`.  These run per pair, a few to a few hundred
 times per check, so they read the packed buffers (:mod:`._layout`) by offset and are compiled
 without numba's reference counting (``_nrt=False``, a private option): they allocate nothing and
 keep no reference, and with it each call of a function taking arrays costs two atomic
@@ -21,15 +22,15 @@ from numba import njit
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SUM_BEST, SUM_BSLOT
-from ._narrow import narrow_flat, wall_flat
+from ._narrow import narrow_flat, narrow_other, wall_flat
 
-__all__ = ["evaluate_pair", "move_element", "record_pair"]
+__all__ = ["evaluate_pair", "move_element", "pair_step", "record_pair"]
 
 _K_Xs, _K_glink, _K_vstart, _K_verts_L, _K_vW = K["Xs"], K["glink"], K["vstart"], K["verts_L"], K["vW"]
 _K_core, _K_box_L, _K_boxW, _K_pstart, _K_estart = K["core"], K["box_L"], K["boxW"], K["pstart"], K["estart"]
 _K_fn_L, _K_ed_L, _K_fnW, _K_edW = K["fn_L"], K["ed_L"], K["fnW"], K["edW"]
 _K_ev, _K_out9, _K_ev_p, _K_pstamp, _K_best, _K_summary = K["ev"], K["out9"], K["ev_p"], K["pstamp"], K["best"], K["summary"]
-_K_stamp, _K_mov_idx = K["stamp"], K["mov_idx"]
+_K_stamp, _K_mov_idx, _K_pflag, _K_pair_cat = K["stamp"], K["mov_idx"], K["pflag"], K["pair_cat"]
 
 
 @njit(cache=True, _nrt=False)
@@ -111,3 +112,22 @@ def evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp
         move_element(b, H, MF, MI, SF)
         SI[ost + b] = stamp_now
     return narrow_flat(a, b, H, MF, MI, SF, out9, eps_len, eps_par, offset)
+
+
+@njit(cache=True)
+def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, offset, level, n_eval,
+              stamp_now):  # pragma: no cover - compiled
+    """One pair of the kernel: :func:`evaluate_pair`, :func:`._narrow.narrow_other` for the pairs it
+    leaves, then (no error) :func:`record_pair` as row ``n_eval`` and, when ``flag``, the pair's
+    report flag 1 (evaluated).  ``level`` as in ``narrow_other``.  Returns ``(distance, error)``.
+
+    Compiled with reference counting, as it links the convex kernels; the kernel passes it the
+    buffers as meminfo-free views, so that costs no atomic operation."""
+    d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp_now)
+    if err < 0:
+        d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, offset, level)
+    if err == 0:
+        if flag:
+            SI[H[2 * _K_pflag] + p] = 1
+        record_pair(p, MI[H[2 * _K_pair_cat] + p], d, n_eval, H, SF, SI, stamp_now)
+    return d, err
