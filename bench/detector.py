@@ -38,14 +38,16 @@ def _ranger_trajectory(scene):
     return ct, np.array(Q)
 
 
-def _fcl_geometry(fcl, cs, g):
-    """An fcl geometry and its pose in the element frame for compiled element ``g``."""
+def _primitive(lib, cs, g):
+    """For compiled element ``g`` with a point, segment or box core: ``lib``'s (python-fcl's or coal's,
+    whose constructors match) Sphere, Capsule or Box and its pose ``X`` (4, 4) in the element frame;
+    for a polytope core, ``(None, I)`` (each library builds those its own way)."""
     V = cs.verts[cs.elem_vert_start[g]:cs.elem_vert_start[g + 1]]
     core, r = int(cs.elem_core[g]), float(cs.elem_radius[g])
     X = np.eye(4)
     if core == 0:
         X[:3, 3] = V[0]
-        return fcl.Sphere(r), X
+        return lib.Sphere(r), X
     if core == 1:
         a, b = V[0], V[1]
         L = float(np.linalg.norm(b - a))
@@ -54,11 +56,20 @@ def _fcl_geometry(fcl, cs, g):
         x /= np.linalg.norm(x)
         X[:3, :3] = np.column_stack([x, np.cross(z, x), z])
         X[:3, 3] = 0.5 * (a + b)
-        return fcl.Capsule(r, L), X
+        return lib.Capsule(r, L), X
     if core == 2:
         X[:3, :3] = cs.elem_box_axes[g]
         X[:3, 3] = cs.elem_box_center[g]
-        return fcl.Box(*(2.0 * cs.elem_box_half[g])), X
+        return lib.Box(*(2.0 * cs.elem_box_half[g])), X
+    return None, X
+
+
+def _fcl_geometry(fcl, cs, g):
+    """An fcl geometry and its pose in the element frame for compiled element ``g``."""
+    geom, X = _primitive(fcl, cs, g)
+    if geom is not None:
+        return geom, X
+    V = cs.verts[cs.elem_vert_start[g]:cs.elem_vert_start[g + 1]]
     faces = []
     v0 = int(cs.elem_vert_start[g])
     fs, fe = int(cs.elem_face_start[g]), int(cs.elem_face_start[g + 1])
@@ -128,25 +139,10 @@ def _fcl_ranger(det, Q, number: int) -> tuple[float, float] | None:
 def _coal_geometry(coal, cs, g):
     """A coal geometry and its pose in the element frame for compiled element ``g`` (polytopes as
     triangle-mesh BVHs of their hulls: coal's Convex built from Python crashed on distance queries)."""
+    geom, X = _primitive(coal, cs, g)
+    if geom is not None:
+        return geom, X
     V = cs.verts[cs.elem_vert_start[g]:cs.elem_vert_start[g + 1]]
-    core, r = int(cs.elem_core[g]), float(cs.elem_radius[g])
-    X = np.eye(4)
-    if core == 0:
-        X[:3, 3] = V[0]
-        return coal.Sphere(r), X
-    if core == 1:
-        a, b = V[0], V[1]
-        L = float(np.linalg.norm(b - a))
-        z = (b - a) / L if L > 0 else np.array([0.0, 0.0, 1.0])
-        x = np.cross(z, [1.0, 0.0, 0.0] if abs(z[0]) < 0.9 else [0.0, 1.0, 0.0])
-        x /= np.linalg.norm(x)
-        X[:3, :3] = np.column_stack([x, np.cross(z, x), z])
-        X[:3, 3] = 0.5 * (a + b)
-        return coal.Capsule(r, L), X
-    if core == 2:
-        X[:3, :3] = cs.elem_box_axes[g]
-        X[:3, 3] = cs.elem_box_center[g]
-        return coal.Box(*(2.0 * cs.elem_box_half[g])), X
     m = coal.BVHModelOBBRSS()
     fs, fe = int(cs.elem_face_start[g]), int(cs.elem_face_start[g + 1])
     v0 = int(cs.elem_vert_start[g])

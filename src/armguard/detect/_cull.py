@@ -101,36 +101,29 @@ def obb_apart_moving(MF, oa, oXa, ob, oXb, SF, grow, eps_par):  # pragma: no cov
         b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7], b[8], b[9], b[10], b[11], b[12], b[13], b[14], eps_par)
 
 
+@njit(cache=True, inline="always")
+def _sift_down(key, order, root, end):  # pragma: no cover - compiled
+    """Restore the max-heap below ``root`` in ``order[:end]`` (ordered by :func:`_before`)."""
+    while True:
+        child = 2 * root + 1
+        if child >= end:
+            return
+        if child + 1 < end and _before(key, order[child], order[child + 1]):
+            child += 1
+        if not _before(key, order[root], order[child]):
+            return
+        t = order[root]; order[root] = order[child]; order[child] = t
+        root = child
+
+
 @njit(cache=True)
 def _argsort_heap(key, order, n):  # pragma: no cover - compiled
     """``order[:n]`` <- the indices ``0..n-1`` in increasing ``key`` (ties by index): heapsort in
-    place, nothing allocated (``detect_rows`` runs without reference counting)."""
+    place, nothing allocated (one pass of the anytime check sorts every pair's bound)."""
     for i in range(n):
         order[i] = i
     for start in range(n // 2 - 1, -1, -1):  # max-heap
-        root = start
-        while True:
-            child = 2 * root + 1
-            if child >= n:
-                break
-            if child + 1 < n and _before(key, order[child], order[child + 1]):
-                child += 1
-            if _before(key, order[root], order[child]):
-                t = order[root]; order[root] = order[child]; order[child] = t
-                root = child
-            else:
-                break
+        _sift_down(key, order, start, n)
     for end in range(n - 1, 0, -1):
         t = order[0]; order[0] = order[end]; order[end] = t
-        root = 0
-        while True:
-            child = 2 * root + 1
-            if child >= end:
-                break
-            if child + 1 < end and _before(key, order[child], order[child + 1]):
-                child += 1
-            if _before(key, order[root], order[child]):
-                t = order[root]; order[root] = order[child]; order[child] = t
-                root = child
-            else:
-                break
+        _sift_down(key, order, 0, end)

@@ -210,7 +210,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     lazy = iprm[I_LAZY] != 0
     thr_eff = max(thr, stop)
     level = max(0.0, stop)
-    lvl = level if mode == MODE_YESNO else -math.inf  # evaluate_pair: only d <= level matters
+    lvl = level if mode == MODE_YESNO else -math.inf  # pair_step / narrow_other: only d <= level matters
     P = pair_a.shape[0]
     track = mode == MODE_LAZY or mode == MODE_ANYTIME  # per-pair flags and bounds for the report
     ws_lo = ws[0:3]
