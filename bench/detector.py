@@ -82,6 +82,16 @@ def _fcl_geometry(fcl, cs, g):
     return fcl.Convex(np.ascontiguousarray(V), n_faces, np.array(faces, dtype=np.int64)), X
 
 
+def _peer_groups(m):
+    """Element groups of the Ranger pairs for the peers' collision managers (sorted lists): the active
+    arm's elements, the other arms' elements paired with them (arm category), the environment
+    elements (environment category), and every element that moves."""
+    active = {int(a) for a in m.pair_a}
+    arm_b = sorted({int(b) for b, c in zip(m.pair_b, m.pair_cat) if c == 0 and b >= 0} - active)
+    env_b = sorted({int(b) for b, c in zip(m.pair_b, m.pair_cat) if c == 1})
+    return sorted(active), arm_b, env_b, sorted(active | set(arm_b))
+
+
 def _fcl_ranger(det, Q, number: int) -> tuple[float, float] | None:
     """python-fcl DynamicAABBTreeCollisionManager on the same pairs (arm and environment categories)."""
     try:
@@ -90,14 +100,11 @@ def _fcl_ranger(det, Q, number: int) -> tuple[float, float] | None:
         return None
     m = det._model
     cs = m.compiled
-    active = set(int(a) for a in m.pair_a)
+    active, arm_b, env_b, moving = _peer_groups(m)
     objs = {}
     for g in range(cs.n_elements):
         geom, X_EG = _fcl_geometry(fcl, cs, g)
         objs[g] = (fcl.CollisionObject(geom, fcl.Transform()), X_EG)
-    arm_b = sorted({int(b) for b, c in zip(m.pair_b, m.pair_cat) if c == 0 and b >= 0} - active)
-    env_b = sorted({int(b) for b, c in zip(m.pair_b, m.pair_cat) if c == 1})
-    moving = sorted(active | set(arm_b))
     scene = det.scene
 
     def pose(q):
@@ -112,7 +119,7 @@ def _fcl_ranger(det, Q, number: int) -> tuple[float, float] | None:
         o.setTransform(fcl.Transform(X_EG[:3, :3], X_EG[:3, 3]))
     pose(Q[0])
     mgr_a = fcl.DynamicAABBTreeCollisionManager()
-    mgr_a.registerObjects([objs[g][0] for g in sorted(active)])
+    mgr_a.registerObjects([objs[g][0] for g in active])
     mgr_arm = fcl.DynamicAABBTreeCollisionManager()
     mgr_arm.registerObjects([objs[g][0] for g in arm_b])
     mgr_env = fcl.DynamicAABBTreeCollisionManager()
@@ -165,14 +172,11 @@ def _coal_ranger(det, Q, number: int) -> float | None:
         return None
     m = det._model
     cs = m.compiled
-    active = set(int(a) for a in m.pair_a)
+    active, arm_b, env_b, moving = _peer_groups(m)
     objs = {}
     for g in range(cs.n_elements):
         geom, X_EG = _coal_geometry(coal, cs, g)
         objs[g] = (coal.CollisionObject(geom, coal.Transform3s()), X_EG)
-    arm_b = sorted({int(b) for b, c in zip(m.pair_b, m.pair_cat) if c == 0 and b >= 0} - active)
-    env_b = sorted({int(b) for b, c in zip(m.pair_b, m.pair_cat) if c == 1})
-    moving = sorted(active | set(arm_b))
     scene = det.scene
 
     def put(o, X):
@@ -192,7 +196,7 @@ def _coal_ranger(det, Q, number: int) -> float | None:
         put(o, X_EG)
     pose(Q[0])
     mgrs = []
-    for group in (sorted(active), arm_b, env_b):
+    for group in (active, arm_b, env_b):
         mg = coal.DynamicAABBTreeCollisionManager()
         for g in group:
             mg.registerObject(objs[g][0])
