@@ -116,6 +116,8 @@ def test_anytime_bounds_are_lower_bounds_and_never_clear_by_omission():
     det = Detector(scene, threshold=0.05, active="left_arm")
     rng = np.random.default_rng(6)
     Q = _sample(scene, rng, 60)
+    lo = np.concatenate([r.lower for r in scene.robots.values()])
+    hi = np.concatenate([r.upper for r in scene.robots.values()])
     first = Detector(scene, threshold=0.05, active="left_arm").check(Q[0], budget_us=0.0)
     assert first.n_evaluated == 0
     assert first.status in (Status.INCOMPLETE, Status.CLEAR)
@@ -123,7 +125,7 @@ def test_anytime_bounds_are_lower_bounds_and_never_clear_by_omission():
         assert all(n.lower_bound > 0.05 for n in first.not_evaluated)
     for k in range(len(Q) - 1):
         det.check(Q[k])  # full check: every pair's distance is remembered
-        q1 = Q[k] + rng.normal(0.0, 0.02, Q.shape[1])
+        q1 = np.clip(Q[k] + rng.normal(0.0, 0.02, Q.shape[1]), lo, hi)  # configurations outside the limits are refused
         rep = det.check(q1, budget_us=0.0)
         truth = det.pair_distances(q1)
         for ne in rep.not_evaluated:

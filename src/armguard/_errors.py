@@ -7,6 +7,7 @@ __all__ = [
     "GeometryError",
     "KinematicsError",
     "IKError",
+    "JointLimitError",
     "SceneError",
     "SceneFileError",
     "TrajectoryError",
@@ -29,6 +30,23 @@ class KinematicsError(ArmguardError, ValueError):
 
 class IKError(KinematicsError):
     """Inverse kinematics found no solution within tolerance and joint limits."""
+
+
+class JointLimitError(KinematicsError):
+    """A configuration puts a joint outside its [lower, upper] limits (beyond ``Tolerances.joint_limit``).
+
+    Reach lists and lever-arm bounds hold only within the limits, so no verdict is given for such
+    a configuration.  ``joint`` names the joint (``"robot/joint"``), ``value`` its value, ``lower``
+    and ``upper`` its limits (rad or m), ``allowance`` the tolerance applied."""
+
+    def __init__(self, where: str, joint: str, value: float, lower: float, upper: float, allowance: float) -> None:
+        self.where, self.joint, self.value = where, joint, float(value)
+        self.lower, self.upper, self.allowance = float(lower), float(upper), float(allowance)
+        super().__init__(
+            f"{where}: joint {joint!r} = {self.value:.9g} is outside its limits [{self.lower:.9g}, {self.upper:.9g}] "
+            f"(allowance Tolerances.joint_limit = {self.allowance:.3g}); the detector's reach lists and motion "
+            "bounds hold only within the limits, so no verdict is given"
+        )
 
 
 class SceneError(ArmguardError, ValueError):

@@ -6,9 +6,11 @@ one numba call (FK, transforms, broad and narrow phase) and returns a
 :class:`DetectionReport` with the nearest pair per category, the pairs within the threshold
 and the status; ``check(q, budget_us=...)`` is the anytime mode; ``check_many`` /
 ``collides_many`` run over many configurations in parallel.  :func:`check_reference` is the
-brute-force path the tests compare against.
+brute-force path the tests compare against.  A configuration with a joint outside its limits
+is refused by every entry point with :class:`JointLimitError` (see :mod:`._limits`).
 """
 
+from .._errors import JointLimitError
 from ._detector import Detector
 from ._reference import check_reference
 from ._report import (
@@ -24,6 +26,7 @@ from ._report import (
 
 __all__ = [
     "Detector",
+    "JointLimitError",
     "DetectionReport",
     "Status",
     "Category",

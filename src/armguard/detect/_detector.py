@@ -16,6 +16,7 @@ from . import _kernel as kn
 from ..geometry._pair_epa import EPA_WORK_SIZE
 from ._hulls import link_obbs, vertex_graphs
 from ._layout import EV_W, SUM_SIZE, Layout
+from ._limits import limit_error, limit_rows
 from ._model import CAT_WORKSPACE, build_model, check_finite_margin
 from ._raw import _UNHELD, _Raw, _refcount
 from ._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, PairDistances, PairResult
@@ -196,6 +197,7 @@ class Detector:
         L.add("MF", "static_hi", m.static_hi.reshape(-1, 3)); L.add("MF", "bvh_lo", m.bvh.lo.reshape(-1, 3))
         L.add("MF", "bvh_hi", m.bvh.hi.reshape(-1, 3)); L.add("MF", "lever", lever)
         L.add("MF", "ws", np.concatenate([m.ws_lo, m.ws_hi]))
+        L.add("MF", "qlim", limit_rows(m.lower, m.upper, self._tol.joint_limit))  # refused outside (._limits)
         self._static_shapes = self._static_shape_table()
         poly = _static_polytopes(cs, self._static_shapes)
         L.add("MF", "pv", poly["pv"]); L.add("MF", "ppl", poly["ppl"]); L.add("MF", "pbis", poly["pbis"])
@@ -391,13 +393,21 @@ class Detector:
             status, n_eval, err = kn.detect_entry(q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm,
                                                   iprm, sel)
         if err:
-            self._raise_kernel_error(err, q1)
+            self._raise_kernel_error(err, q1, "Detector.check: q" if sel is None else "Detector.pair_distances: q")
         return status, n_eval
 
-    @staticmethod
-    def _raise_kernel_error(err: int, q1: np.ndarray) -> None:
+    def _raise_kernel_error(self, err: int, Q: np.ndarray, where: str = "Detector.check: q", batch: bool = False) -> None:
+        """The kernel's error code for ``Q`` ``(M, n_q)`` as an ArmguardError (1 non-finite, 3 outside the
+        joint limits: :mod:`._limits`, 2 GJK); ``batch``: name the row."""
         if err == 1:
-            raise DetectionError(f"q contains NaN or infinite values: {q1[0].tolist()}")
+            bad = np.argwhere(~np.isfinite(Q))[0]
+            raise DetectionError(f"{where} contains NaN or infinite values (first at {tuple(int(x) for x in bad)})")
+        if err == 3:
+            m = self._model
+            exc = limit_error(where, Q if batch else Q[0], self.scene.joint_names, m.lower, m.upper,
+                              self._tol.joint_limit)
+            if exc is not None:
+                raise exc
         raise DetectionError("a convex distance kernel did not converge (GJK iteration limit); no verdict")
 
     def check(self, q, *, budget_us: float | None = None, lazy: bool = False) -> DetectionReport:
@@ -535,11 +545,8 @@ class Detector:
             with ThreadPoolExecutor(n_threads) as ex:
                 errs = list(ex.map(work, range(n_threads)))
         err = next((e for e in errs if e != 0), 0)
-        if err == 1:
-            bad = np.argwhere(~np.isfinite(Q))[0]
-            raise DetectionError(f"Q contains NaN or infinite values (first at {tuple(int(x) for x in bad)})")
         if err != 0:
-            raise DetectionError("a convex distance kernel did not converge (GJK iteration limit); no verdict")
+            self._raise_kernel_error(err, Q, "Detector: Q", batch=True)
         return min_d, status
 
     def check_many(self, Q) -> BatchReport:

@@ -105,6 +105,7 @@ _K_parent_loc = K["parent_loc"]
 _K_fk_q = K["fk_q"]
 _K_fk_ok = K["fk_ok"]
 _K_obb_L = K["obb_L"]
+_K_qlim = K["qlim"]
 _SC_n_explicit = SC["n_explicit"]
 _SC_n_links = SC["n_links"]
 _SC_n_q = SC["n_q"]
@@ -121,7 +122,8 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     """Checks of rows ``lo:hi`` of ``Q`` ``(M, n_q)``; per row the nearest distance per category goes to
     ``min_d[m]`` ``(4,)`` and the status code to ``status_out[m]``; the last row's pairs stay in the
     compact outputs (``ev``, ``ev_p``, ``summary``).  ``sel``: the pairs ``MODE_ALL`` evaluates, in
-    that order.  Returns an error code (0 none, 1 non-finite q, 2 GJK did not converge).
+    that order.  Returns an error code (0 none, 1 non-finite q, 2 GJK did not converge, 3 a joint
+    outside its limits (``qlim``): the reach lists and lever-arm bounds hold only within them).
 
     Per check, only the pairs actually evaluated are touched (a per-pair stamp marks them), so the
     cost follows the BVH walk, not the number of candidate pairs; the anytime and lazy modes,
@@ -177,6 +179,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     rob_j = seg1(MI, H, _K_rob_j)
     parent_loc = seg1(MI, H, _K_parent_loc)
     fk_q = seg1(SF, H, _K_fk_q)
+    qlim = seg2(MF, H, _K_qlim, 2)
     fk_ok = seg1(SI, H, _K_fk_ok)
     o_Xs = H[2 * _K_Xs]
     Xs = carray(at(SF, o_Xs), (1, n_links, 4, 4))
@@ -242,9 +245,13 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
         q = Q[m:m + 1]
         summary[SUM_ERR] = 0
         for j in range(n_q):
-            if not math.isfinite(q[0, j]):
+            x = q[0, j]
+            if not math.isfinite(x):
                 summary[SUM_ERR] = 1
                 return 1
+            if x < qlim[j, 0] or x > qlim[j, 1]:
+                summary[SUM_ERR] = 3
+                return 3
         # ---- FK and bounding spheres of the moving elements
         # FK per robot block, only for the robots whose joint values changed since the last check
         # (exact equality: an unchanged block's poses are the ones FK would compute again)

@@ -40,8 +40,10 @@ SCALARS = ("n_q", "n_explicit", "n_mov", "n_st", "n_links", "stamp_now")
 # compiled into _kernel.py, stay put): the vertex graphs of the polytope elements (GJK and EPA
 # climb them) and their surface triangles, each with CSR offsets per element (an empty range:
 # no graph, supports scan), model ints; "obb_L", model floats: the moving polytope elements'
-# oriented boxes in their link frames (the yes/no cull, see ._hulls.link_obbs)
-MI_LATE = ("gadj", "gadjs", "gtri", "gtris", "obb_L")
+# oriented boxes in their link frames (the yes/no cull, see ._hulls.link_obbs); "qlim", model
+# floats ``(n_q, 2)``: each joint's [lower, upper] widened by Tolerances.joint_limit (a row outside
+# it is refused before any bound that assumes the limits is used)
+MI_LATE = ("gadj", "gadjs", "gtri", "gtris", "obb_L", "qlim")
 
 _ALL = MF + MI + SFN + SIN
 K = {name: k for k, name in enumerate(_ALL)}

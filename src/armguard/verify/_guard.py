@@ -14,6 +14,13 @@ the stopping distance of an obstacle, it answers STOP now — while the arm stil
 the stopping distance of clearance to brake in.  Choose ``horizon_s`` at least one control
 period plus the braking time.  A prediction that cannot be finished within its evaluation
 budget answers STOP too (never OK by omission).
+
+Joint limits: the lever-arm bounds hold only within them, so a current configuration ``q``, a
+setpoint ``q_cmd_next`` or a ``target`` outside ``[lower, upper]`` (beyond
+``Tolerances.joint_limit``) is refused with :class:`~armguard.JointLimitError`, the rule of every
+detector entry point (:mod:`armguard.detect._limits`).  A velocity extrapolated over the horizon
+may run past a limit; the arm stops there, so the predicted path saturates at the limits
+(``clip(q + s dq)``: each joint still moves at most ``|dq_i| ds``, so the same certificate holds).
 """
 
 from __future__ import annotations
@@ -27,6 +34,7 @@ import numpy as np
 
 from .._errors import VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ..detect._limits import limit_error
 from ._oracle import ClearanceModel
 from ._stopping import StoppingDistance, check_stopping_distance
 
@@ -143,6 +151,17 @@ class Guard:
                 break
             k0 += len(rob.joint_names)
         self._k0, self._k1 = k0, k0 + len(scene.robots[self.robot].joint_names)
+        rob = scene.robots[self.robot]
+        self._names = tuple(f"{self.robot}/{j}" for j in rob.joint_names)
+        self._lower, self._upper = np.asarray(rob.lower, dtype=np.float64), np.asarray(rob.upper, dtype=np.float64)
+        a = self.tol.joint_limit
+        self._lo_ok, self._hi_ok = self._lower - a, self._upper + a
+
+    def _in_limits(self, a: np.ndarray, name: str) -> np.ndarray:
+        exc = limit_error(f"Guard.step: {name}", a, self._names, self._lower, self._upper, self.tol.joint_limit)
+        if exc is not None:
+            raise exc
+        return a
 
     def _full(self, q_robot: np.ndarray) -> np.ndarray:
         q = self._base.copy()
@@ -178,14 +197,14 @@ class Guard:
         t_start = _time.perf_counter()
         if self.model.is_stale():  # the scene changed since the model was built: never guard with the old one
             self._prepare()
-        q = self._check(q, "q")
+        q = self._in_limits(self._check(q, "q"), "q")
         if q_cmd_next is not None:
             if qdot is not None or target is not None:
                 raise VerificationError("give q_cmd_next, or qdot (optionally with target), or target")
-            qd = (self._check(q_cmd_next, "q_cmd_next") - q) / self.period_s
+            qd = (self._in_limits(self._check(q_cmd_next, "q_cmd_next"), "q_cmd_next") - q) / self.period_s
             q_end = q + qd * self.horizon_s
         elif target is not None:
-            tgt = self._check(target, "target")
+            tgt = self._in_limits(self._check(target, "target"), "target")
             qd = None if qdot is None else self._check(qdot, "qdot")
             q_end = tgt
             if qd is not None:
@@ -259,7 +278,8 @@ class Guard:
             if evals >= _GUARD_EVALUATIONS or not s_next > s:
                 return self._decide(GuardVerdict.STOP, "prediction not finished within its evaluation budget",
                                     now, lower, _time_to(s, T), (model.owner_a[i], model.owner_b[i]), m, evals, t_start)
-            d_next, _, _ = model.distances(self._full(q + s_next * dq))
+            # saturated at the limits (see the module docstring); q itself is within them
+            d_next, _, _ = model.distances(self._full(np.clip(q + s_next * dq, self._lo_ok, self._hi_ok)))
             evals += 1
             L = s_next - s
             lower = min(lower, float(np.min(np.minimum(np.minimum(d, d_next), 0.5 * (d + d_next - rates * L)))))
