@@ -16,6 +16,7 @@ from ._errors import (
     KinematicsError,
     SceneError,
     SceneFileError,
+    TerrainError,
     TrajectoryError,
     VerificationError,
 )
@@ -47,6 +48,7 @@ __all__ = [
     "TrajectoryError",
     "DetectionError",
     "VerificationError",
+    "TerrainError",
     "Tolerances",
     "DEFAULT_TOLERANCES",
     *_LAZY,

@@ -13,6 +13,7 @@ __all__ = [
     "TrajectoryError",
     "DetectionError",
     "VerificationError",
+    "TerrainError",
 ]
 
 
@@ -74,3 +75,7 @@ class DetectionError(ArmguardError, ValueError):
 
 class VerificationError(ArmguardError, ValueError):
     """A trajectory verification request is invalid."""
+
+
+class TerrainError(ArmguardError, ValueError):
+    """A terrain map, point file or terrain query is invalid (bad cell size, empty cloud, unsupported link volume...)."""

@@ -58,6 +58,11 @@ class Tolerances:
     verify_max_evaluations : int
         Certified verification: the most clearance evaluations for one trajectory; a trajectory
         not resolved within it is reported INCOMPLETE, never safe.
+    terrain_margin : float, m
+        ``armguard.terrain``: each level of the terrain pyramid above the finest is grown by this
+        much more than the level below it, so that round-off can never make a parent box miss a
+        link that one of its children hits (coarse-to-fine verdicts equal the flat finest-level
+        test's; ample for maps within 10 km of W's origin).
     """
 
     length: float = 1e-12
@@ -77,6 +82,7 @@ class Tolerances:
     ik_max_iterations: int = 200
     ik_restarts: int = 16
     ik_damping: float = 1e-4
+    terrain_margin: float = 1e-9
 
 
 DEFAULT_TOLERANCES = Tolerances()

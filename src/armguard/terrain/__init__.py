@@ -1,0 +1,28 @@
+"""Terrain from sensed points, as a multi-resolution OBB pyramid checked coarse-to-fine.
+
+The JPL rover-arm method (Leger, NASA Tech Brief NPO-30356, seed ``002``): stereo points become an
+elevation map (:class:`ElevationMap`), the map a pyramid of OBBs (:class:`TerrainPyramid`) whose
+top box encloses all the data and each level below has twice the horizontal resolution; each
+link's low-resolution OBP (or OBB) is tested coarse-to-fine, descending only into boxes it hits,
+"without any divisions or transcendental functions".  Inputs are shapes posed in W and maps, so
+the module stands alone.  :mod:`armguard.terrain.generate` makes synthetic terrains and
+stereo-like point clouds.  Guide: ``docs/terrain.md``.
+"""
+
+from ._io import depth_to_points, read_points, write_points
+from ._map import ElevationMap, OutlierRule
+from ._pyramid import PyramidLevel, TerrainPyramid, TerrainResult, TerrainStatus
+from ._volumes import bounding_box
+
+__all__ = [
+    "ElevationMap",
+    "OutlierRule",
+    "TerrainPyramid",
+    "PyramidLevel",
+    "TerrainResult",
+    "TerrainStatus",
+    "bounding_box",
+    "read_points",
+    "write_points",
+    "depth_to_points",
+]

@@ -1,0 +1,138 @@
+"""Point clouds from files (PLY, PCD, NumPy) and from depth images (pinhole camera model).
+
+* PLY (ASCII or binary): read with trimesh (vertices of a point cloud or a mesh).
+* PCD (ASCII, binary, binary_compressed): read with ``pypcd4`` (pure Python plus the small
+  ``python-neo-lzf`` wheel for the compressed encoding).
+* ``.npy``: an ``(N, 3+)`` array; ``.npz``: the array named ``points`` (else the only array).
+
+Points are returned as ``(N, 3) float64, m`` in the file's frame; pass ``X_WS`` to express them
+in W.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .._errors import TerrainError
+
+__all__ = ["read_points", "write_points", "depth_to_points"]
+
+
+def _pose(X, name: str) -> np.ndarray:
+    X = np.asarray(X, dtype=np.float64)
+    if X.shape != (4, 4) or not np.all(np.isfinite(X)):
+        raise TerrainError(f"{name}: expected a finite (4, 4) pose, got shape {X.shape}")
+    return X
+
+
+def _as_points(a, where: str) -> np.ndarray:
+    p = np.asarray(a, dtype=np.float64)
+    if p.ndim != 2 or p.shape[1] < 3:
+        raise TerrainError(f"{where}: expected (N, 3) points, got shape {p.shape}")
+    return np.ascontiguousarray(p[:, :3])
+
+
+def read_points(path, X_WS=None) -> np.ndarray:
+    """``(N, 3) float64, m``: the points of a ``.ply``, ``.pcd``, ``.npy`` or ``.npz`` file, in the
+    sensor frame S of the file, or in W when ``X_WS (4, 4)`` is given.  Non-finite rows are kept
+    (:meth:`ElevationMap.from_points` drops and counts them)."""
+    path = Path(path)
+    if not path.is_file():
+        raise TerrainError(f"read_points: no file {path}")
+    ext = path.suffix.lower()
+    try:
+        if ext == ".npy":
+            p = _as_points(np.load(path, allow_pickle=False), str(path))
+        elif ext == ".npz":
+            with np.load(path, allow_pickle=False) as z:
+                names = list(z.files)
+                key = "points" if "points" in names else (names[0] if len(names) == 1 else None)
+                if key is None:
+                    raise TerrainError(f"{path}: an .npz needs an array named 'points' (has {names})")
+                p = _as_points(z[key], f"{path}:{key}")
+        elif ext == ".ply":
+            import trimesh
+
+            obj = trimesh.load(path, process=False)
+            if not hasattr(obj, "vertices"):
+                raise TerrainError(f"{path}: no vertices in this PLY")
+            p = _as_points(obj.vertices, str(path))
+        elif ext == ".pcd":
+            import pypcd4
+
+            pc = pypcd4.PointCloud.from_path(path)
+            missing = [f for f in ("x", "y", "z") if f not in pc.fields]
+            if missing:
+                raise TerrainError(f"{path}: PCD without field(s) {missing} (has {list(pc.fields)})")
+            p = _as_points(pc.numpy(("x", "y", "z")), str(path))
+        else:
+            raise TerrainError(f"read_points: unsupported file type {ext!r} ({path}); use .ply, .pcd, .npy or .npz")
+    except TerrainError:
+        raise
+    except Exception as e:  # noqa: BLE001 - a reader's own error, named with the file
+        raise TerrainError(f"{path}: cannot read points ({type(e).__name__}: {e})") from e
+    if X_WS is not None:
+        X = _pose(X_WS, "read_points: X_WS")
+        p = p @ X[:3, :3].T + X[:3, 3]
+    return p
+
+
+def write_points(path, points) -> Path:
+    """Write ``points (N, 3) m`` to ``.ply`` (binary, trimesh), ``.pcd`` (ASCII, pypcd4; float32),
+    ``.npy`` or ``.npz`` (array ``points``); returns the path."""
+    path = Path(path)
+    p = _as_points(points, "write_points")
+    ext = path.suffix.lower()
+    if ext == ".npy":
+        np.save(path, p)
+    elif ext == ".npz":
+        np.savez_compressed(path, points=p)
+    elif ext == ".ply":
+        import trimesh
+
+        trimesh.PointCloud(p).export(path)
+    elif ext == ".pcd":
+        import pypcd4
+
+        pypcd4.PointCloud.from_xyz_points(p.astype(np.float32)).save(path, encoding=pypcd4.Encoding.ASCII)
+    else:
+        raise TerrainError(f"write_points: unsupported file type {ext!r}")
+    return path
+
+
+def depth_to_points(depth, fx: float, fy: float, cx: float, cy: float, X_WC=None, *, max_range: float | None = None) -> np.ndarray:
+    """Back-project a depth image with the pinhole model.
+
+    Parameters
+    ----------
+    depth : (H, W) float, m
+        Depth along the optical axis (z of the camera frame C) per pixel; 0, negative or NaN: no data.
+    fx, fy : float, px
+        Focal lengths; ``cx, cy`` (px) the principal point.  Pixel ``(v, u)`` (row, column) at depth
+        ``z`` is ``p_C = ((u - cx) z / fx, (v - cy) z / fy, z)`` (C: x right, y down, z forward).
+    X_WC : (4, 4), optional
+        Camera pose in W; default: points are returned in C.
+    max_range : float, m, optional
+        Drop pixels deeper than this.
+
+    Returns
+    -------
+    (N, 3) float64, m: the valid pixels' points, row-major pixel order.
+    """
+    d = np.asarray(depth, dtype=np.float64)
+    if d.ndim != 2:
+        raise TerrainError(f"depth_to_points: expected an (H, W) depth image, got shape {d.shape}")
+    if not all(np.isfinite(v) for v in (fx, fy, cx, cy)) or fx <= 0.0 or fy <= 0.0:
+        raise TerrainError(f"depth_to_points: bad intrinsics fx={fx}, fy={fy}, cx={cx}, cy={cy}")
+    v, u = np.indices(d.shape, dtype=np.float64)
+    ok = np.isfinite(d) & (d > 0.0)
+    if max_range is not None:
+        ok &= d <= max_range
+    z = d[ok]
+    p = np.stack([(u[ok] - cx) * z / fx, (v[ok] - cy) * z / fy, z], axis=1)
+    if X_WC is not None:
+        X = _pose(X_WC, "depth_to_points: X_WC")
+        p = p @ X[:3, :3].T + X[:3, 3]
+    return p

@@ -1,0 +1,274 @@
+"""An elevation map from sensed points: per-cell maximum height, outliers rejected, holes filled.
+
+The JPL brief (seed ``002``) builds the terrain model "automatically from sensory data acquired
+during operation" (stereo cameras).  Stereo points are noisy, have holes (occlusion shadows,
+grazing angles, no texture) and a few outliers; for collision checking the map must be
+*conservative*:
+
+* a cell's height is the **maximum** of its surviving points (the terrain is at least that high);
+* an outlier rule (:class:`OutlierRule`) removes points that are inconsistent with their cell and
+  cells that stand alone above their neighbours on too little support;
+* a cell with no surviving point is **unknown** and never treated as free: it is filled with a
+  conservative height (``fill="neighbourhood"``: the highest known cell within ``fill_radius``
+  cells, else the ceiling; ``fill="ceiling"``: the ceiling), and the map reports which cells were
+  filled (:attr:`ElevationMap.filled`) so that a hit on one can be told apart.
+
+The grid is aligned with W's x and y axes (z up); cell ``(row, col)`` covers
+``x in [x0 + col * cell, x0 + (col + 1) * cell)``, ``y in [y0 + row * cell, y0 + (row + 1) * cell)``.
+Below each cell the terrain is solid down to :attr:`ElevationMap.floor`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import ndimage
+
+from .._errors import TerrainError
+
+__all__ = ["ElevationMap", "OutlierRule"]
+
+_MAD_TO_SIGMA = 1.4826  # MAD of a normal distribution times this is its standard deviation
+
+
+@dataclass(frozen=True)
+class OutlierRule:
+    """The outlier rule of :meth:`ElevationMap.from_points`, two stages.
+
+    1. **Per cell, robust z-score** (Iglewicz & Hoaglin's modified z-score): in a cell with at
+       least ``min_points`` points, a point is rejected when
+       ``|z - median| > k * max(1.4826 * MAD, sigma_min)`` (MAD: the median absolute deviation of
+       the cell's heights).  Cells with fewer points are kept whole (nothing to judge them by).
+    2. **Isolated spikes**: a cell whose height exceeds the highest of its known 8-neighbours by
+       more than ``spike`` (m) and that rests on fewer than ``spike_support`` points is cleared
+       (becomes unknown, and is then filled like any hole).  A real rock seen by stereo has flanks
+       (elevated neighbours) and many points; a floating mismatch has neither.
+
+    ``k = inf`` or ``spike = inf`` disables a stage.
+
+    Attributes
+    ----------
+    k : float, dimensionless
+        Robust z-score above which a point is an outlier (3.5, Iglewicz & Hoaglin).
+    min_points : int
+        Points a cell needs before stage 1 judges it.
+    sigma_min : float, m
+        Floor on the robust spread, so that a flat, noise-free cell does not reject its own
+        millimetre-level noise.
+    spike : float, m
+        Stage 2's height above every known neighbour.
+    spike_support : int
+        Stage 2 clears only cells with fewer points than this.
+    """
+
+    k: float = 3.5
+    min_points: int = 5
+    sigma_min: float = 0.01
+    spike: float = 0.15
+    spike_support: int = 3
+
+
+@dataclass(frozen=True, eq=False)
+class ElevationMap:
+    """A height grid in W (see the module docstring for the cell layout).
+
+    Attributes
+    ----------
+    heights : (ny, nx) float64, m
+        Terrain height of each cell (z in W): the max of its points, or the fill of an unknown cell.
+    origin : (2,) float64, m
+        ``(x0, y0)``: W coordinates of the corner of cell ``(0, 0)``.
+    cell : float, m
+        Side of a (square) cell.
+    known : (ny, nx) bool
+        Cells with at least one surviving point.
+    counts : (ny, nx) int64
+        Surviving points per cell.
+    floor : float, m
+        The terrain is solid from ``floor`` up to each cell's height.
+    rejected : int
+        Points removed by the outlier rule (stage 1 points plus the points of stage 2 cells).
+    invalid : int
+        Input points dropped as non-finite (NaN or inf: a depth image's holes).
+    """
+
+    heights: np.ndarray
+    origin: np.ndarray
+    cell: float
+    known: np.ndarray
+    counts: np.ndarray = field(repr=False)
+    floor: float
+    rejected: int = 0
+    invalid: int = 0
+
+    def __post_init__(self) -> None:
+        h = np.asarray(self.heights, dtype=np.float64)
+        if h.ndim != 2 or h.size == 0 or not np.all(np.isfinite(h)):
+            raise TerrainError(f"ElevationMap.heights: expected a finite (ny, nx) array, got shape {h.shape}")
+        if not (np.isfinite(self.cell) and self.cell > 0.0):
+            raise TerrainError(f"ElevationMap.cell: expected a side > 0 m, got {self.cell!r}")
+        if not np.isfinite(self.floor) or self.floor > float(h.min()):
+            raise TerrainError(f"ElevationMap.floor {self.floor!r} must be finite and <= the lowest height {h.min():.6g}")
+        for name, a in (("known", self.known), ("counts", self.counts)):
+            if np.shape(a) != h.shape:
+                raise TerrainError(f"ElevationMap.{name}: shape {np.shape(a)} != heights {h.shape}")
+        for name, a, dt in (("heights", h, np.float64), ("origin", self.origin, np.float64),
+                            ("known", self.known, bool), ("counts", self.counts, np.int64)):
+            a = np.array(a, dtype=dt)
+            a.flags.writeable = False
+            object.__setattr__(self, name, a)
+        object.__setattr__(self, "cell", float(self.cell))
+        object.__setattr__(self, "floor", float(self.floor))
+
+    # ----------------------------------------------------------------------------- properties
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(ny, nx)``: rows (y) and columns (x)."""
+        return self.heights.shape  # type: ignore[return-value]
+
+    @property
+    def filled(self) -> np.ndarray:
+        """``(ny, nx) bool``: the unknown cells, which hold a conservative fill height."""
+        return ~self.known
+
+    def cell_bounds(self, row: int, col: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(lo, hi)``, each ``(3,) m`` in W: the solid column of cell ``(row, col)``."""
+        x0, y0 = self.origin
+        lo = np.array([x0 + col * self.cell, y0 + row * self.cell, self.floor])
+        hi = np.array([lo[0] + self.cell, lo[1] + self.cell, self.heights[row, col]])
+        return lo, hi
+
+    def cell_of(self, xy_W) -> tuple[np.ndarray, np.ndarray]:
+        """Row and column indices ``(int64 arrays)`` of the cells holding points ``xy_W (N, 2+) m``
+        (clipped to the grid)."""
+        xy = np.asarray(xy_W, dtype=np.float64).reshape(-1, np.shape(xy_W)[-1])
+        ny, nx = self.shape
+        col = np.clip(np.floor((xy[:, 0] - self.origin[0]) / self.cell), 0, nx - 1).astype(np.int64)
+        row = np.clip(np.floor((xy[:, 1] - self.origin[1]) / self.cell), 0, ny - 1).astype(np.int64)
+        return row, col
+
+    # ----------------------------------------------------------------------------- constructors
+    @classmethod
+    def from_heights(cls, heights, cell: float, origin=(0.0, 0.0), *, floor: float | None = None,
+                     known=None) -> "ElevationMap":
+        """A map from a height grid ``heights (ny, nx) m`` (e.g. a generated terrain's ground truth),
+        every cell known unless ``known (ny, nx) bool`` says otherwise.  ``floor`` (m): default one
+        cell side below the lowest height."""
+        h = np.asarray(heights, dtype=np.float64)
+        if h.ndim != 2 or h.size == 0:
+            raise TerrainError(f"from_heights: expected a (ny, nx) array, got shape {h.shape}")
+        k = np.ones(h.shape, bool) if known is None else np.asarray(known, bool)
+        fl = float(h.min()) - float(cell) if floor is None else float(floor)
+        return cls(h, np.asarray(origin, np.float64), float(cell), k, k.astype(np.int64), fl)
+
+    @classmethod
+    def from_points(cls, points_W, cell: float, *, bounds=None, rule: OutlierRule = OutlierRule(),
+                    fill: str = "neighbourhood", fill_radius: int = 2, ceiling: float | None = None,
+                    floor: float | None = None) -> "ElevationMap":
+        """The conservative elevation map of a point cloud.
+
+        Parameters
+        ----------
+        points_W : (N, 3) float64, m
+            Sensed points in W (z up); rows with a NaN or inf are dropped (counted in ``invalid``).
+        cell : float, m
+            Cell side.
+        bounds : (4,) float, m, optional
+            ``(x_min, y_min, x_max, y_max)`` of the grid in W; points outside are dropped.  Default:
+            the points' extent.
+        rule : OutlierRule
+            The outlier rule (see :class:`OutlierRule`).
+        fill : {"neighbourhood", "ceiling"}
+            How unknown cells are filled: the highest known cell within ``fill_radius`` cells
+            (Chebyshev distance), falling back to the ceiling where none is; or the ceiling.
+        ceiling : float, m, optional
+            Fill height where no neighbour informs; default the highest known cell.
+        floor : float, m, optional
+            Bottom of the terrain columns; default one cell side below the lowest cell.
+        """
+        if not (np.isfinite(cell) and cell > 0.0):
+            raise TerrainError(f"from_points: cell must be > 0 m, got {cell!r}")
+        if fill not in ("neighbourhood", "ceiling"):
+            raise TerrainError(f"from_points: fill must be 'neighbourhood' or 'ceiling', got {fill!r}")
+        p = np.asarray(points_W, dtype=np.float64)
+        if p.ndim != 2 or p.shape[1] != 3:
+            raise TerrainError(f"from_points: points_W must be (N, 3), got shape {p.shape}")
+        finite = np.all(np.isfinite(p), axis=1)
+        invalid = int(np.count_nonzero(~finite))
+        p = p[finite]
+        if bounds is None:
+            if len(p) == 0:
+                raise TerrainError("from_points: no finite points and no bounds")
+            x_min, y_min = p[:, 0].min(), p[:, 1].min()
+            x_max, y_max = p[:, 0].max(), p[:, 1].max()
+        else:
+            x_min, y_min, x_max, y_max = (float(v) for v in bounds)
+            if not (x_max > x_min and y_max > y_min):
+                raise TerrainError(f"from_points: empty bounds {bounds!r}")
+        nx = max(1, int(np.ceil((x_max - x_min) / cell)))
+        ny = max(1, int(np.ceil((y_max - y_min) / cell)))
+        col = np.floor((p[:, 0] - x_min) / cell).astype(np.int64)
+        row = np.floor((p[:, 1] - y_min) / cell).astype(np.int64)
+        col = np.where(p[:, 0] == x_max, nx - 1, col)  # the far edge belongs to the last cell
+        row = np.where(p[:, 1] == y_max, ny - 1, row)
+        inside = (col >= 0) & (col < nx) & (row >= 0) & (row < ny)
+        cid, z = (row * nx + col)[inside], p[inside, 2]
+        keep = _robust_keep(cid, z, rule)
+        rejected = int(np.count_nonzero(~keep))
+        cid, z = cid[keep], z[keep]
+        counts = np.bincount(cid, minlength=nx * ny).reshape(ny, nx)
+        hmax = np.full(nx * ny, -np.inf)
+        np.maximum.at(hmax, cid, z)
+        hmax = hmax.reshape(ny, nx)
+        known = counts > 0
+        spikes = _spikes(hmax, known, counts, rule)
+        rejected += int(counts[spikes].sum())
+        known &= ~spikes
+        counts = np.where(known, counts, 0)
+        if not known.any():
+            if ceiling is None:
+                raise TerrainError("from_points: no cell has a surviving point; give a ceiling to fill the map")
+        top = float(hmax[known].max()) if known.any() else float(ceiling)
+        ceil_h = top if ceiling is None else float(ceiling)
+        heights = np.where(known, hmax, ceil_h)
+        if fill == "neighbourhood" and known.any() and fill_radius > 0:
+            win = 2 * int(fill_radius) + 1
+            neigh = ndimage.maximum_filter(np.where(known, hmax, -np.inf), size=win, mode="constant", cval=-np.inf)
+            heights = np.where(known, hmax, np.where(np.isfinite(neigh), neigh, ceil_h))
+        fl = float(heights.min()) - cell if floor is None else float(floor)
+        return cls(heights, np.array([x_min, y_min]), float(cell), known, counts, fl, rejected, invalid)
+
+
+def _robust_keep(cid: np.ndarray, z: np.ndarray, rule: OutlierRule) -> np.ndarray:
+    """Stage 1 of :class:`OutlierRule`: a keep mask over the points (vectorised per cell)."""
+    n = len(z)
+    keep = np.ones(n, bool)
+    if n == 0 or not np.isfinite(rule.k):
+        return keep
+    order = np.lexsort((z, cid))
+    c_s, z_s = cid[order], z[order]
+    starts = np.flatnonzero(np.r_[True, c_s[1:] != c_s[:-1]])
+    cnt = np.diff(np.r_[starts, n])
+    lo_mid, hi_mid = starts + (cnt - 1) // 2, starts + cnt // 2
+    med = 0.5 * (z_s[lo_mid] + z_s[hi_mid])
+    grp = np.repeat(np.arange(len(starts)), cnt)
+    dev = np.abs(z_s - med[grp])
+    order2 = np.lexsort((dev, grp))
+    dev_s = dev[order2]
+    mad = 0.5 * (dev_s[lo_mid] + dev_s[hi_mid])
+    scale = np.maximum(_MAD_TO_SIGMA * mad, rule.sigma_min)
+    judged = cnt[grp] >= rule.min_points
+    bad_sorted = judged & (dev > rule.k * scale[grp])
+    keep[order[bad_sorted]] = False
+    return keep
+
+
+def _spikes(hmax: np.ndarray, known: np.ndarray, counts: np.ndarray, rule: OutlierRule) -> np.ndarray:
+    """Stage 2 of :class:`OutlierRule`: the cells to clear."""
+    if not np.isfinite(rule.spike):
+        return np.zeros_like(known)
+    fp = np.ones((3, 3), bool)
+    fp[1, 1] = False
+    neigh = ndimage.maximum_filter(np.where(known, hmax, -np.inf), footprint=fp, mode="constant", cval=-np.inf)
+    return known & np.isfinite(neigh) & (hmax > neigh + rule.spike) & (counts < rule.spike_support)

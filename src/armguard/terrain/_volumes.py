@@ -1,0 +1,119 @@
+"""Link bounding volumes (OBBs and OBPs posed in W) packed into the terrain kernels' rows.
+
+A link is tested as one low-resolution volume (the JPL brief: "the model for each manipulator
+link is one low-resolution OBP"): an :class:`armguard.geometry.Box` (an OBB) or an
+:class:`armguard.geometry.Prism` (an OBP; with an even number of sides exactly the union of
+``n_sides / 2`` OBBs, :meth:`Prism.as_boxes`).  :func:`bounding_box` gives an OBB for any other
+shape.  The trigonometry of a prism's boxes and the row constants are computed here, once per
+query, outside the division-free kernels.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+
+from .._errors import TerrainError
+from ..geometry import Box, Prism, Shape
+from ._kernels import ROW
+
+__all__ = ["bounding_box", "grown", "volume_boxes", "pack_rows"]
+
+
+def bounding_box(shape: Shape, margin: float = 0.0) -> Box:
+    """An OBB in W containing ``shape`` grown by ``margin`` (m, >= 0).
+
+    A Box is returned as it is (grown); otherwise the axes are the principal axes of the shape's
+    core points (PCA, as :func:`armguard.detect._hulls.link_obbs` does for link hulls), the box
+    spans their extent along those axes, grown by the core radius and ``margin``.  The result
+    contains the shape exactly (a PCA fit only affects tightness)."""
+    if margin < 0.0 or not np.isfinite(margin):
+        raise TerrainError(f"bounding_box: margin must be finite and >= 0, got {margin!r}")
+    if isinstance(shape, Box):
+        return Box(shape.center, shape.half_extents + margin, shape.rotation)
+    p = np.asarray(shape.core_points, dtype=np.float64)
+    mean = p.mean(axis=0)
+    if len(p) >= 3:
+        _, R = np.linalg.eigh(np.cov((p - mean).T))
+    else:  # a point or a segment: the segment's direction and any two normals to it
+        d = p[-1] - p[0]
+        R = np.eye(3)
+        if float(d @ d) > 0.0:
+            u = d / np.linalg.norm(d)
+            a = np.eye(3)[int(np.argmin(np.abs(u)))]
+            v = np.cross(u, a)
+            v /= np.linalg.norm(v)
+            R = np.stack([u, v, np.cross(u, v)], axis=1)
+    if np.linalg.det(R) < 0.0:
+        R[:, 0] = -R[:, 0]
+    loc = (p - mean) @ R
+    lo, hi = loc.min(axis=0), loc.max(axis=0)
+    c = mean + R @ (0.5 * (lo + hi))
+    h = 0.5 * (hi - lo) + float(shape.core_radius) + margin
+    h = np.maximum(h, np.finfo(float).eps * (1.0 + float(np.max(np.abs(p)))))
+    return Box(c, h, R)
+
+
+def grown(volume: Shape, margin: float) -> Shape:
+    """``volume`` (Box or Prism) with every face pushed out by ``margin`` (m): it contains the set
+    of points within ``margin`` of the original volume."""
+    if margin == 0.0:
+        return volume
+    if isinstance(volume, Box):
+        return Box(volume.center, volume.half_extents + margin, volume.rotation)
+    if isinstance(volume, Prism):
+        return Prism(volume.center, volume.rotation, volume.apothem + margin, volume.half_length + margin, volume.n_sides)
+    raise TerrainError(f"grown: expected a Box or a Prism, got {type(volume).__name__}")
+
+
+def volume_boxes(volume: Shape) -> tuple[Box, ...]:
+    """The OBBs whose union a link volume is, as Boxes: a Box itself, an even Prism's
+    ``as_boxes()``, an odd Prism's bounding OBB (conservative).  Any other shape:
+    :class:`TerrainError` (pass :func:`bounding_box` of it)."""
+    return tuple(Box(c, h, R) for c, h, R in _obbs(volume, 0.0))
+
+
+def _obbs(volume: Shape, margin: float) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """``(center, half_extents, R)`` of the OBBs of ``volume`` grown by ``margin`` (m), computed
+    directly (no Box construction: this runs once per link per query)."""
+    if isinstance(volume, Box):
+        return [(volume.center, volume.half_extents + margin, volume.rotation)]
+    if isinstance(volume, Prism):
+        n = volume.n_sides
+        if n % 2:
+            b = bounding_box(volume, margin)
+            return [(b.center, b.half_extents, b.rotation)]
+        a = volume.apothem + margin
+        h = np.array([a, a * math.tan(math.pi / n), volume.half_length + margin])
+        out = []
+        for j in range(n // 2):
+            t = j * 2.0 * math.pi / n
+            ct, st = math.cos(t), math.sin(t)
+            Rz = np.array([[ct, -st, 0.0], [st, ct, 0.0], [0.0, 0.0, 1.0]])
+            out.append((volume.center, h, volume.rotation @ Rz))
+        return out
+    raise TerrainError(
+        f"a link volume must be an armguard.geometry.Box (OBB) or Prism (OBP), got {type(volume).__name__}; "
+        "use armguard.terrain.bounding_box(shape)"
+    )
+
+
+def pack_rows(volumes: Sequence[Shape], margin: float, eps_par: float) -> tuple[np.ndarray, np.ndarray]:
+    """Kernel rows for ``volumes`` grown by ``margin`` (m): ``rows (R, 36) float64`` (layout in
+    ``_kernels``) and ``rstart (K + 1,) int64`` (link ``k``'s rows are ``rstart[k]:rstart[k+1]``)."""
+    cs, hs, Rs, rstart = [], [], [], [0]
+    for v in volumes:
+        for c, h, R in _obbs(v, margin):
+            cs.append(c); hs.append(h); Rs.append(R)
+        rstart.append(len(cs))
+    c, h, R = np.array(cs, np.float64), np.array(hs, np.float64), np.array(Rs, np.float64).reshape(-1, 3, 3)
+    Q = np.abs(R) + eps_par
+    E = np.einsum("kij,kj->ki", Q, h)
+    C = np.empty((len(c), 3, 3))  # the link's radius along e_i x B_j
+    C[:, :, 0] = h[:, 1, None] * Q[:, :, 2] + h[:, 2, None] * Q[:, :, 1]
+    C[:, :, 1] = h[:, 0, None] * Q[:, :, 2] + h[:, 2, None] * Q[:, :, 0]
+    C[:, :, 2] = h[:, 0, None] * Q[:, :, 1] + h[:, 1, None] * Q[:, :, 0]
+    rows = np.concatenate([c, h, R.reshape(-1, 9), Q.reshape(-1, 9), E, C.reshape(-1, 9)], axis=1)
+    return np.ascontiguousarray(rows.reshape(-1, ROW)), np.array(rstart, dtype=np.int64)
