@@ -18,6 +18,7 @@ from ._errors import (
     SceneFileError,
     TerrainError,
     TrajectoryError,
+    UncertaintyError,
     VerificationError,
 )
 from ._tolerance import DEFAULT_TOLERANCES, Tolerances
@@ -48,6 +49,7 @@ __all__ = [
     "TrajectoryError",
     "DetectionError",
     "VerificationError",
+    "UncertaintyError",
     "TerrainError",
     "Tolerances",
     "DEFAULT_TOLERANCES",

@@ -14,6 +14,7 @@ __all__ = [
     "DetectionError",
     "VerificationError",
     "TerrainError",
+    "UncertaintyError",
 ]
 
 
@@ -79,3 +80,7 @@ class VerificationError(ArmguardError, ValueError):
 
 class TerrainError(ArmguardError, ValueError):
     """A terrain map, point file or terrain query is invalid (bad cell size, empty cloud, unsupported link volume...)."""
+
+
+class UncertaintyError(ArmguardError, ValueError):
+    """An uncertain relation is invalid (non-finite mean, covariance not symmetric PSD, irreducible network...)."""

@@ -63,6 +63,21 @@ class Tolerances:
         much more than the level below it, so that round-off can never make a parent box miss a
         link that one of its children hits (coarse-to-fine verdicts equal the flat finest-level
         test's; ample for maps within 10 km of W's origin).
+    covariance_relative : float, dimensionless
+        ``armguard.uncertainty``: a covariance ``C`` is accepted as symmetric positive
+        semi-definite when ``max|C - C^T|`` and ``-min(eigenvalues)`` are both at most this
+        times ``max|C|`` (round-off of products such as ``J C J^T``); an eigenvalue below this
+        times the largest counts as zero (a direction known exactly).
+    merge_conditioning : float, dimensionless
+        ``armguard.uncertainty``: merging two estimates needs ``C1 + C2`` invertible; the merge
+        raises when its smallest eigenvalue is below this times its largest (both estimates
+        claim exact knowledge along a common direction).
+    probability_quadrature : float, dimensionless (probability)
+        ``armguard.uncertainty``: absolute error target of each 1-D quadrature in
+        ``probability_inside`` (one per polygon edge).
+    rotation_orthonormality : float, dimensionless
+        ``armguard.uncertainty``: a (4, 4) pose is accepted when its rotation block ``R`` has
+        ``max|R^T R - I|`` at most this (round-off of chained products) and ``det R > 0``.
     """
 
     length: float = 1e-12
@@ -83,6 +98,10 @@ class Tolerances:
     ik_restarts: int = 16
     ik_damping: float = 1e-4
     terrain_margin: float = 1e-9
+    covariance_relative: float = 1e-9
+    merge_conditioning: float = 1e-12
+    probability_quadrature: float = 1e-10
+    rotation_orthonormality: float = 1e-9
 
 
 DEFAULT_TOLERANCES = Tolerances()

@@ -1,0 +1,48 @@
+"""Uncertain spatial relations after Smith & Cheeseman, *On the Representation and Estimation
+of Spatial Uncertainty* (SRI 1985; IJRR 5(4), 1986): compounding ⊕, reversal ⊖, merging,
+network reduction, confidence ellipses, polar sensors, Monte Carlo validation — in the plane
+(:class:`UncertainPose2`, (x, y, θ)) and on SE(3) (:class:`UncertainPose3`, exponential
+coordinates, no Euler-angle poles).  Guide: ``docs/uncertainty.md``.
+"""
+
+from __future__ import annotations
+
+from . import se2, se3
+from .confidence import Box2, Ellipse, Polygon2, confidence_for_k2, ellipse, k2_for_confidence, probability_inside
+from .montecarlo import (
+    Agreement,
+    MonteCarloResult,
+    agreement,
+    monte_carlo,
+    monte_carlo_chain,
+    monte_carlo_chain3,
+    path_length,
+)
+from .plot import plot_monte_carlo
+from .pose2 import UncertainPose2, reduce_network
+from .pose3 import UncertainPose3
+from .se2 import polar_to_cartesian
+
+__all__ = [
+    "UncertainPose2",
+    "UncertainPose3",
+    "reduce_network",
+    "polar_to_cartesian",
+    "k2_for_confidence",
+    "confidence_for_k2",
+    "Ellipse",
+    "ellipse",
+    "Box2",
+    "Polygon2",
+    "probability_inside",
+    "MonteCarloResult",
+    "Agreement",
+    "monte_carlo",
+    "monte_carlo_chain",
+    "monte_carlo_chain3",
+    "agreement",
+    "path_length",
+    "plot_monte_carlo",
+    "se2",
+    "se3",
+]

@@ -1,0 +1,81 @@
+"""Input checks at the public boundary of ``armguard.uncertainty``: finite arrays of the right
+shape, covariances symmetric positive semi-definite within ``Tolerances.covariance_relative``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._errors import UncertaintyError
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+
+__all__ = ["as_vector", "as_covariance", "as_transform", "symmetrize"]
+
+
+def as_vector(value, n: int, name: str) -> np.ndarray:
+    """``value`` as a finite (n,) float64 array, or raise :class:`UncertaintyError`."""
+    try:
+        a = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise UncertaintyError(f"{name}: not a numeric array ({exc})") from None
+    if a.shape != (n,):
+        raise UncertaintyError(f"{name}: expected shape ({n},), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise UncertaintyError(f"{name}: contains NaN or infinity: {a}")
+    return a
+
+
+def symmetrize(c: np.ndarray) -> np.ndarray:
+    """``(C + C^T) / 2``: removes the round-off asymmetry of products such as ``J C J^T``."""
+    return 0.5 * (c + c.T)
+
+
+def as_covariance(value, n: int, name: str, tol: Tolerances = DEFAULT_TOLERANCES) -> np.ndarray:
+    """``value`` as a finite, symmetric positive semi-definite (n, n) float64 array.
+
+    Accepted when ``max|C - C^T|`` and ``-min(eig C)`` are at most
+    ``tol.covariance_relative * max|C|``; the returned matrix is exactly symmetric.
+    Raises :class:`UncertaintyError` otherwise, naming the failed check.
+    """
+    try:
+        c = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise UncertaintyError(f"{name}: not a numeric array ({exc})") from None
+    if c.shape != (n, n):
+        raise UncertaintyError(f"{name}: expected shape ({n}, {n}), got {c.shape}")
+    if not np.all(np.isfinite(c)):
+        raise UncertaintyError(f"{name}: contains NaN or infinity")
+    scale = float(np.max(np.abs(c)))
+    allowance = tol.covariance_relative * scale
+    asym = float(np.max(np.abs(c - c.T)))
+    if asym > allowance:
+        raise UncertaintyError(f"{name}: not symmetric (max |C - C^T| = {asym:.3g} > {allowance:.3g})")
+    c = symmetrize(c)
+    lo = float(np.linalg.eigvalsh(c)[0])
+    if lo < -allowance:
+        raise UncertaintyError(
+            f"{name}: not positive semi-definite (smallest eigenvalue {lo:.3g} < -{allowance:.3g})"
+        )
+    return c
+
+
+def as_transform(value, name: str, tol: Tolerances = DEFAULT_TOLERANCES) -> np.ndarray:
+    """``value`` as a finite (4, 4) rigid transform (rotation block orthonormal, last row 0 0 0 1).
+
+    The rotation block must satisfy ``max|R^T R - I| <= tol.rotation_orthonormality`` and
+    ``det R > 0``.
+    """
+    try:
+        t = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise UncertaintyError(f"{name}: not a numeric array ({exc})") from None
+    if t.shape != (4, 4):
+        raise UncertaintyError(f"{name}: expected shape (4, 4), got {t.shape}")
+    if not np.all(np.isfinite(t)):
+        raise UncertaintyError(f"{name}: contains NaN or infinity")
+    r = t[:3, :3]
+    ortho = float(np.max(np.abs(r.T @ r - np.eye(3))))
+    if ortho > tol.rotation_orthonormality or np.linalg.det(r) <= 0.0:
+        raise UncertaintyError(f"{name}: rotation block is not a rotation (max |R^T R - I| = {ortho:.3g})")
+    if np.any(t[3] != (0.0, 0.0, 0.0, 1.0)):
+        raise UncertaintyError(f"{name}: last row must be 0 0 0 1, got {t[3]}")
+    return t

@@ -1,0 +1,258 @@
+"""``UncertainPose2``: a planar uncertain relation (Smith & Cheeseman's "uncertain
+transformation"), a frozen value delegating to the array functions of :mod:`.se2` and
+:mod:`.confidence`; and ``reduce_network``, the paper's serial/parallel reduction (Section 4.1)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Hashable, Iterable
+
+import numpy as np
+
+from .._errors import UncertaintyError
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from . import confidence as _conf
+from . import se2 as _se2
+from ._validate import as_covariance, as_vector
+
+__all__ = ["UncertainPose2", "reduce_network"]
+
+
+@dataclass(frozen=True, eq=False)
+class UncertainPose2:
+    """Frame B's uncertain relation to frame A in the plane.
+
+    Attributes
+    ----------
+    mean : (3,) float64, (m, m, rad)
+        ``(x, y, θ)``: B's origin in A's coordinates and the angle of B's x axis from A's.
+    cov : (3, 3) float64, m² / m·rad / rad²
+        Covariance of ``(x, y, θ)``; validated finite and symmetric positive semi-definite
+        (:attr:`Tolerances.covariance_relative`), stored exactly symmetric.
+
+    Construction validates and raises :class:`~armguard.UncertaintyError`; the results of the
+    operations are built from validated values and skip the checks.
+    """
+
+    mean: np.ndarray
+    cov: np.ndarray
+
+    def __post_init__(self) -> None:
+        m = as_vector(self.mean, 3, "UncertainPose2.mean")
+        c = as_covariance(self.cov, 3, "UncertainPose2.cov")
+        m.flags.writeable = False
+        c.flags.writeable = False
+        object.__setattr__(self, "mean", m)
+        object.__setattr__(self, "cov", c)
+
+    @classmethod
+    def _trusted(cls, mean: np.ndarray, cov: np.ndarray) -> "UncertainPose2":
+        obj = object.__new__(cls)
+        mean = np.array(mean, dtype=np.float64)
+        cov = np.array(cov, dtype=np.float64)
+        mean.flags.writeable = False
+        cov.flags.writeable = False
+        object.__setattr__(obj, "mean", mean)
+        object.__setattr__(obj, "cov", cov)
+        return obj
+
+    @classmethod
+    def identity(cls) -> "UncertainPose2":
+        """The exact identity relation: mean (0, 0, 0), zero covariance."""
+        return cls._trusted(np.zeros(3), np.zeros((3, 3)))
+
+    @classmethod
+    def from_polar(cls, polar, cov_polar, *, tol: Tolerances = DEFAULT_TOLERANCES) -> "UncertainPose2":
+        """From a range/bearing sensor estimate (Appendix B).
+
+        Parameters
+        ----------
+        polar : (3,) float64, (m, rad, rad) — range ``r >= 0``, bearing ``φ``, rotation ``θ``.
+        cov_polar : (3, 3) float64, m² / m·rad / rad² — covariance of ``(r, φ, θ)``.
+        """
+        x, c, _ = _se2.polar_to_cartesian(polar, cov_polar, tol=tol)
+        return cls._trusted(x, c)
+
+    # --- the paper's operations ---------------------------------------------------------
+
+    def compound(self, other: "UncertainPose2", cross_cov=None) -> "UncertainPose2":
+        """``self ⊕ other`` (Eqns. 1–3): ``self`` is A→B, ``other`` B→C; returns A→C.
+
+        ``cross_cov`` : (3, 3) float64, optional — ``E[Δself Δother^T]`` when the two are
+        dependent (the paper's "treat the dependent combination as a unit"); ``None``:
+        independent.
+        """
+        if cross_cov is None:
+            x3, c3, _, _ = _se2._compound(self.mean, self.cov, other.mean, other.cov)
+        else:
+            x3, c3, _, _ = _se2.compound(self.mean, self.cov, other.mean, other.cov, cross_cov)
+        return UncertainPose2._trusted(x3, c3)
+
+    def compound_jacobians(self, other: "UncertainPose2") -> tuple[np.ndarray, np.ndarray]:
+        """J⊕ = [J1 | J2] of ``self ⊕ other`` at the means, (3, 3) each (Eqn. 2)."""
+        x3 = _se2._compound_mean(self.mean, other.mean)
+        return _se2._compound_jacobians(self.mean, other.mean, x3)
+
+    def reverse(self) -> "UncertainPose2":
+        """``⊖self`` (Eqn. 4): the relation A→B reversed to B→A."""
+        xr, cr, _ = _se2._reverse(self.mean, self.cov)
+        return UncertainPose2._trusted(xr, cr)
+
+    def reverse_jacobian(self) -> np.ndarray:
+        """J⊖ (3, 3) of the reversal at the mean (Section 3.1)."""
+        return _se2._reverse_jacobian(self.mean, _se2._reverse_mean(self.mean))
+
+    def merge(self, other: "UncertainPose2", *, tol: Tolerances = DEFAULT_TOLERANCES) -> "UncertainPose2":
+        """Merge with an independent parallel estimate of the same relation (Eqns. 5–7)."""
+        x3, c3, _ = _se2._merge(self.mean, self.cov, other.mean, other.cov, tol)
+        return UncertainPose2._trusted(x3, c3)
+
+    @staticmethod
+    def reduce(network, source: Hashable, target: Hashable, *, tol: Tolerances = DEFAULT_TOLERANCES):
+        """Reduce a network of relations to one, source→target; see :func:`reduce_network`."""
+        return reduce_network(network, source, target, tol=tol)
+
+    @staticmethod
+    def chain(*poses: "UncertainPose2") -> "UncertainPose2":
+        """``poses[0] ⊕ poses[1] ⊕ …`` compounded left to right (Section 3.1's recursion)."""
+        if not poses:
+            return UncertainPose2.identity()
+        out = poses[0]
+        for p in poses[1:]:
+            out = out.compound(p)
+        return out
+
+    # --- decisions -----------------------------------------------------------------------
+
+    def ellipse(self, confidence: float = 0.9) -> _conf.Ellipse:
+        """The positional ``confidence`` ellipse (Appendix A; θ's row and column struck out)."""
+        return _conf.ellipse(self.mean[:2], self.cov[:2, :2], confidence)
+
+    def probability_inside(self, region, *, tol: Tolerances = DEFAULT_TOLERANCES) -> float:
+        """Probability that B's origin lies in ``region`` (:class:`Box2` or :class:`Polygon2`
+        in A's coordinates, m), from the Gaussian (x, y) marginal; see
+        :func:`~armguard.uncertainty.probability_inside`."""
+        return _conf.probability_inside(self.mean[:2], self.cov[:2, :2], region, tol=tol)
+
+    def mahalanobis2(self, x) -> float:
+        """Squared Mahalanobis distance of a relation ``x`` (3,), (m, m, rad), from this one,
+        angle difference wrapped; compare with :func:`k2_for_confidence` (..., dim=3) to
+        decide whether an observation is plausible (Section 5.2, step 2)."""
+        d = as_vector(x, 3, "x") - self.mean
+        d[2] = _se2.wrap_angle(d[2])
+        return float(d @ np.linalg.lstsq(self.cov, d, rcond=None)[0])
+
+    def sample(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        """(n, 3) float64, (m, m, rad): draws from N(mean, cov) with ``rng``."""
+        return rng.multivariate_normal(self.mean, self.cov, size=int(n), method="eigh")
+
+    def __repr__(self) -> str:
+        sd = np.sqrt(np.diag(self.cov))
+        return (f"UncertainPose2(mean=({self.mean[0]:.6g} m, {self.mean[1]:.6g} m, {self.mean[2]:.6g} rad), "
+                f"sd=({sd[0]:.3g} m, {sd[1]:.3g} m, {sd[2]:.3g} rad))")
+
+
+def reduce_network(network: Iterable, source: Hashable, target: Hashable, *,
+                   tol: Tolerances = DEFAULT_TOLERANCES) -> UncertainPose2:
+    """Reduce a network of uncertain relations to the one relation source→target (Section 4.1).
+
+    ``network`` is an iterable of ``(a, b, pose)``: ``pose`` (:class:`UncertainPose2`) is
+    frame ``b``'s relation to frame ``a``; frames are any hashable names.  Relations are
+    assumed independent (Sections 3.2 and 4.2).  Repeatedly, until one relation joins source
+    and target:
+
+    * parallel relations between the same two frames are merged (Eqns. 5–7), reversing
+      (Eqn. 4) those that point the other way (towards source→target when the pair is
+      source and target, else the first-listed relation's direction; reversal is
+      nonlinear, so the direction matters beyond first order);
+    * a frame other than source/target joined by exactly two relations is eliminated by
+      compounding them (Eqns. 1–3), reversing as needed;
+    * a frame other than source/target joined by one relation only is dropped with it (it
+      carries no information about source→target).
+
+    Networks that series/parallel steps cannot reduce (the paper's Wheatstone-bridge remark)
+    raise :class:`~armguard.UncertaintyError`, as do disconnected ones; the paper's remedy —
+    delete relations until the network reduces — is left to the caller.
+
+    Returns
+    -------
+    :class:`UncertainPose2` — target's relation to source.
+    """
+    edges: list[tuple] = []
+    for i, item in enumerate(network):
+        try:
+            a, b, pose = item
+        except (TypeError, ValueError):
+            raise UncertaintyError(f"network[{i}]: expected (a, b, UncertainPose2), got {item!r}") from None
+        if not isinstance(pose, UncertainPose2):
+            raise UncertaintyError(f"network[{i}]: relation must be an UncertainPose2, got {type(pose).__name__}")
+        if a != b:
+            edges.append((a, b, pose))
+    if source == target:
+        raise UncertaintyError("reduce_network: source and target are the same frame")
+    frames = {f for a, b, _ in edges for f in (a, b)}
+    for name, f in (("source", source), ("target", target)):
+        if f not in frames:
+            raise UncertaintyError(f"reduce_network: {name} frame {f!r} is not in the network")
+
+    def oriented(edge, a):  # the edge's relation as seen from frame a
+        ea, eb, p = edge
+        return p if ea == a else p.reverse()
+
+    while True:
+        # parallel: two relations between the same pair of frames
+        seen: dict[frozenset, int] = {}
+        hit = None
+        for i, (a, b, _) in enumerate(edges):
+            key = frozenset((a, b))
+            if key in seen:
+                hit = (seen[key], i)
+                break
+            seen[key] = i
+        if hit is not None:
+            i, j = hit
+            a, b, _ = edges[i]
+            if {a, b} == {source, target}:
+                a, b = source, target  # the paper's "pointing in the desired direction"
+            merged = oriented(edges[i], a).merge(oriented(edges[j], a), tol=tol)
+            edges = [e for k, e in enumerate(edges) if k not in hit] + [(a, b, merged)]
+            continue
+        degree: dict = {}
+        for a, b, _ in edges:
+            degree.setdefault(a, []).append((a, b))
+            degree.setdefault(b, []).append((a, b))
+        reduced = False
+        for node, inc in degree.items():
+            if node in (source, target) or len(inc) > 2:
+                continue
+            idx = [k for k, (a, b, _) in enumerate(edges) if node in (a, b)]
+            if len(idx) == 1:
+                edges.pop(idx[0])
+            else:
+                e1, e2 = edges[idx[0]], edges[idx[1]]
+                u = e1[0] if e1[1] == node else e1[1]
+                w = e2[0] if e2[1] == node else e2[1]
+                # u -> node is e1 seen from u; node -> w is e2 seen from node
+                joined = oriented(e1, u).compound(oriented(e2, node))
+                edges = [e for k, e in enumerate(edges) if k not in idx] + [(u, w, joined)]
+            reduced = True
+            break
+        if reduced:
+            continue
+        break
+    if len(edges) == 1 and {edges[0][0], edges[0][1]} == {source, target}:
+        return oriented(edges[0], source)
+    connected = {source}
+    grew = True
+    while grew:
+        grew = False
+        for a, b, _ in edges:
+            if (a in connected) != (b in connected):
+                connected |= {a, b}
+                grew = True
+    if target not in connected:
+        raise UncertaintyError(f"reduce_network: no chain of relations joins {source!r} to {target!r}")
+    raise UncertaintyError(
+        f"reduce_network: the network is not series-parallel reducible between {source!r} and {target!r} "
+        f"({len(edges)} relations remain, e.g. a Wheatstone bridge); delete relations until it is (Section 4.1)"
+    )
