@@ -51,8 +51,10 @@ def test_hermes_arm_and_pairs(scenes):
     hera = s.robots["hera"]
     assert hera.n_joints == 6
     X = hera.forward_kinematics(np.zeros(6))
-    # link 5 has zero length (seed 001) and no shape
-    assert np.linalg.norm(X[hera.link_index("link5"), :3, 3] - X[hera.link_index("link4"), :3, 3]) == pytest.approx(0.0, abs=1e-12)
+    # link 5 has zero length (seed 001) and no shape: its frame (URDF: at joint 5) is where link 4 ends
+    (cap4,) = hera.link_shapes["link4"]
+    end4_W = X[hera.link_index("link4")] @ np.append(cap4.p1, 1.0)
+    assert np.linalg.norm(X[hera.link_index("link5"), :3, 3] - end4_W[:3]) == pytest.approx(0.0, abs=1e-9)
     assert not hera.link_shapes["link5"]
     # about 10 m stretched out: sum of the segment lengths from the base to the tool
     pts = X[:, :3, 3]
@@ -72,7 +74,7 @@ def test_ranger_make_up(scenes):
     assert isinstance(s.bodies["manipulator_module"].shapes[0], Box)
     he = s.bodies["manipulator_module"].shapes[0].half_extents
     assert np.allclose(he, he[0])  # cubical
-    assert s.bodies["propulsion_module"].shapes[0].n_sides == 8  # octagonal
+    assert len(s.bodies["propulsion_module"].shapes[0].faces) == 8 + 2  # octagonal prism (a convex mesh in URDF)
     assert len(s.bodies["electronics_module"].shapes[0].faces) == 6  # tapered square section
     assert all(isinstance(s.bodies[n].shapes[0], Polygon) for n in ("left_solar_array", "right_solar_array"))
     for arm in ("left_arm", "right_arm"):
@@ -99,11 +101,23 @@ def test_ranger_canned_tests_are_trapezoids_within_limits(scenes):
 def test_puma560_published_dh_and_limits(scenes):
     s = scenes["puma560"]
     r = s.robots["puma560"]
-    conv, rows = r.dh
-    assert conv == "standard"
-    assert [row.a for row in rows] == [0.0, 0.4318, 0.0203, 0.0, 0.0, 0.0]
-    assert [row.d for row in rows] == [0.0, 0.0, 0.15005, 0.4318, 0.0, 0.0]
-    assert np.allclose(np.degrees([row.alpha for row in rows]), [90, 0, -90, 90, -90, 0])
+    # the URDF (written by tools/dh_to_urdf) reproduces the published standard DH table's frames
+    a = [0.0, 0.4318, 0.0203, 0.0, 0.0, 0.0]
+    d = [0.0, 0.0, 0.15005, 0.4318, 0.0, 0.0]
+    alpha = np.radians([90, 0, -90, 90, -90, 0])
+    rng = np.random.default_rng(7)
+    for q in rng.uniform(r.lower, r.upper, size=(20, 6)):
+        T = r.X_WB.copy()
+        for i in range(6):
+            c, sn, ca, sa = np.cos(q[i]), np.sin(q[i]), np.cos(alpha[i]), np.sin(alpha[i])
+            T = T @ np.array([[c, -sn * ca, sn * sa, a[i] * c], [sn, c * ca, -c * sa, a[i] * sn],
+                              [0, sa, ca, d[i]], [0, 0, 0, 1]])
+        X_last = r.forward_kinematics(q)[r.link_index("link6")]
+        X_tool = r.forward_kinematics(q)[r.link_index("tool")]
+        # the DH frame 6 is link6's URDF frame moved by the last row's (a, alpha) = (0, 0): link6 itself
+        np.testing.assert_allclose(X_last[:3, 3], T[:3, 3], atol=1e-9)
+        np.testing.assert_allclose(X_last[:3, :3], T[:3, :3], atol=1e-9)
+        assert np.all(np.isfinite(X_tool))
     assert np.allclose(np.degrees(r.lower), [-160, -45, -225, -110, -100, -266])
     assert np.allclose(np.degrees(r.upper), [160, 225, 45, 170, 100, 266])
     assert {"table", "block_a", "block_b", "cylinder_a", "cylinder_b"} <= set(s.bodies)
@@ -114,8 +128,8 @@ def test_puma560_pick_and_place_reaches_the_cylinders(scenes):
     r = s.robots["puma560"]
     traj = s.trajectories["pick_and_place"]
     X = r.forward_kinematics(traj.waypoints)[:, r.link_index("tool")]
-    a = s.bodies["cylinder_a"].shapes[0].center
-    b = s.bodies["cylinder_b"].shapes[0].center
+    a = s.bodies["cylinder_a"].shapes[0].vertices.mean(axis=0)  # a prism's vertices: symmetric about its centre
+    b = s.bodies["cylinder_b"].shapes[0].vertices.mean(axis=0)
     grasp, place = X[2, :3, 3], X[5, :3, 3]
     assert np.linalg.norm(grasp[:2] - a[:2]) < 2e-3  # above the centre of cylinder_a (rounded joint values)
     assert np.linalg.norm(place[:2] - b[:2]) < 2e-3
@@ -125,7 +139,9 @@ def test_puma560_pick_and_place_reaches_the_cylinders(scenes):
 def test_gmf_parallelogram_keeps_the_flange_level(scenes):
     s = scenes["gmf_s480"]
     r = s.robots["gmf_s480"]
-    assert r.joint_names == ("j1", "j2", "j3", "j5") and len(r.couplings) == 1
+    # the parallelogram as URDF mimic joints: a virtual joint j4_j2 = -j2 in series with j3 (elbow = j3 - j2),
+    # and the wrist pitch j4 = -j3 that keeps the flange level
+    assert r.joint_names == ("j1", "j2", "j3", "j5") and len(r.couplings) == 2
     rng = np.random.default_rng(1)
     q = rng.uniform(r.lower, r.upper, size=(50, 4))
     z = r.forward_kinematics(q)[:, -1, :3, 2]

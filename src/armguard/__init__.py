@@ -10,7 +10,10 @@ import importlib
 
 from ._errors import (
     ArmguardError,
+    ClipError,
+    BackendError,
     DetectionError,
+    ForbiddenMapError,
     GeometryError,
     IKError,
     KinematicsError,
@@ -28,6 +31,9 @@ __version__ = "0.1.0"
 # public name -> module that defines it (imported on first access)
 _LAZY = {
     "load_scene": "armguard.scene",
+    "load_model": "armguard.model",
+    "Model": "armguard.model",
+    "checker": "armguard.backends",
     "Scene": "armguard.scene",
     "Robot": "armguard.kinematics",
     "Trajectory": "armguard.kinematics",
@@ -41,6 +47,7 @@ _LAZY = {
 
 __all__ = [
     "ArmguardError",
+    "BackendError",
     "GeometryError",
     "KinematicsError",
     "IKError",
@@ -49,8 +56,10 @@ __all__ = [
     "TrajectoryError",
     "DetectionError",
     "VerificationError",
-    "UncertaintyError",
+    "ClipError",
+    "ForbiddenMapError",
     "TerrainError",
+    "UncertaintyError",
     "Tolerances",
     "DEFAULT_TOLERANCES",
     *_LAZY,

@@ -13,6 +13,8 @@ __all__ = [
     "TrajectoryError",
     "DetectionError",
     "VerificationError",
+    "ClipError",
+    "ForbiddenMapError",
     "TerrainError",
     "UncertaintyError",
 ]
@@ -78,9 +80,21 @@ class VerificationError(ArmguardError, ValueError):
     """A trajectory verification request is invalid."""
 
 
+class UncertaintyError(ArmguardError, ValueError):
+    """An uncertain relation is invalid (non-finite mean, covariance not symmetric PSD, irreducible network...)."""
+
+
 class TerrainError(ArmguardError, ValueError):
     """A terrain map, point file or terrain query is invalid (bad cell size, empty cloud, unsupported link volume...)."""
 
 
-class UncertaintyError(ArmguardError, ValueError):
-    """An uncertain relation is invalid (non-finite mean, covariance not symmetric PSD, irreducible network...)."""
+class BackendError(ArmguardError, ValueError):
+    """A backend is unknown, misconfigured, or was asked for something it does not answer."""
+
+
+class ForbiddenMapError(ArmguardError, ValueError):
+    """A forbidden-values map is invalid, was built for another model, or was asked outside its grid."""
+
+
+class ClipError(ArmguardError, ValueError):
+    """A clipping guard, obstacle or prediction request is invalid (a shape without volume, a curved obstacle...)."""

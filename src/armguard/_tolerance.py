@@ -57,12 +57,16 @@ class Tolerances:
         collision (conservative advancement only approaches a contact, never lands on it).
     verify_max_evaluations : int
         Certified verification: the most clearance evaluations for one trajectory; a trajectory
-        not resolved within it is reported INCOMPLETE, never safe.
-    terrain_margin : float, m
-        ``armguard.terrain``: each level of the terrain pyramid above the finest is grown by this
-        much more than the level below it, so that round-off can never make a parent box miss a
-        link that one of its children hits (coarse-to-fine verdicts equal the flat finest-level
-        test's; ample for maps within 10 km of W's origin).
+        not resolved within it is reported INCOMPLETE, never safe.  Sampled verification: the
+        most samples one request may ask for (``frequency`` x duration, or the joint-space steps
+        of ``joint_step``); a request for more is refused before any work.
+    max_magnitude : float, in the file's units
+        Scene files: the largest magnitude of any number (coordinates, sizes, limits, times...).
+        Beyond it, products of coordinates (hull volumes, squared distances) lose all precision
+        or overflow to infinity; a file number past it is refused at load, naming its place.
+    max_prism_sides : int
+        ``Prism.n_sides`` at most this (the hull of ``2 n_sides`` points is built per prism;
+        a million sides would take minutes to load).
     covariance_relative : float, dimensionless
         ``armguard.uncertainty``: a covariance ``C`` is accepted as symmetric positive
         semi-definite when ``max|C - C^T|`` and ``-min(eigenvalues)`` are both at most this
@@ -78,6 +82,25 @@ class Tolerances:
     rotation_orthonormality : float, dimensionless
         ``armguard.uncertainty``: a (4, 4) pose is accepted when its rotation block ``R`` has
         ``max|R^T R - I|`` at most this (round-off of chained products) and ``det R > 0``.
+    terrain_margin : float, m
+        ``armguard.terrain``: each level of the terrain pyramid above the finest is grown by this
+        much more than the level below it, so that round-off can never make a parent box miss a
+        link that one of its children hits (coarse-to-fine verdicts equal the flat finest-level
+        test's; ample for maps within 10 km of W's origin).
+    cspace_contact : float, m
+        ``armguard.cspace``: a joint-space box of a forbidden-values map is proven free only when
+        its certified clearance (clearance at the box centre minus the lever-arm bound of the
+        box) exceeds the stopping distance by more than this (absorbs the distance kernels'
+        round-off, as ``verify_contact`` does for trajectories).
+    cspace_max_depth : int
+        ``armguard.cspace``: how many times a box may be halved below one map step (a (joint 1,
+        joint 2) cell, or one joint-3 quantum) while its bound is inconclusive; a box still
+        unresolved at that depth is marked forbidden (conservative).
+    clip_plane : float, m
+        ``armguard.clip``: a point within this of a clipping plane's inside counts as inside
+        (touching counts as intersecting, as for ``intersects``); also the margin by which a
+        shell cell must clear the test object to be labelled OUTSIDE, and a vertex may stick
+        out of it and still be labelled INSIDE.
     """
 
     length: float = 1e-12
@@ -91,6 +114,8 @@ class Tolerances:
     kinematic_probe: float = 1e-9
     verify_contact: float = 1e-6
     verify_max_evaluations: int = 200_000
+    max_magnitude: float = 1e9
+    max_prism_sides: int = 1024
     joint_limit: float = 1e-9
     ik_position: float = 1e-9
     ik_orientation: float = 1e-9
@@ -101,7 +126,10 @@ class Tolerances:
     covariance_relative: float = 1e-9
     merge_conditioning: float = 1e-12
     probability_quadrature: float = 1e-10
+    clip_plane: float = 1e-9
     rotation_orthonormality: float = 1e-9
 
+    cspace_contact: float = 1e-6
+    cspace_max_depth: int = 6
 
 DEFAULT_TOLERANCES = Tolerances()

@@ -9,6 +9,7 @@ changes nothing already loaded.
 from __future__ import annotations
 
 import math
+import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -61,6 +62,12 @@ def _message(err: dict) -> str:
         return f"a shape needs a 'type': one of {', '.join(SHAPE_TYPES)}"
     if t == "finite_number":
         return "expected a finite number (NaN and infinity are not allowed)"
+    if t in ("float_type", "int_type", "float_parsing", "int_parsing", "int_from_float"):
+        kind = "an integer" if t.startswith("int") else "a number"
+        why = " (booleans and quoted strings are not numbers)" if isinstance(err.get("input"), (bool, str)) else ""
+        return f"expected {kind}, got {err.get('input')!r}{why}"
+    if t == "value_error":
+        return str(err.get("msg", "invalid value")).removeprefix("Value error, ")
     if t == "literal_error" and err.get("loc") == ("armguard_scene",):
         return f"unsupported format version {err.get('input')!r}; this armguard reads armguard_scene: 1"
     if t == "missing":
@@ -310,7 +317,20 @@ def read_srdf_disabled(path) -> list[tuple[str, str]]:
 
 
 def scene_from_dict(data, file: str = "<dict>", base: Path | None = None) -> Scene:
-    """Validate ``data`` (a parsed scene file) and build the Scene; errors name ``file``."""
+    """Validate ``data`` (a parsed scene file) and build the Scene; errors name ``file``.
+
+    A model sidecar (``model: {urdf: ...}``) is loaded through Pinocchio (:func:`armguard.load_model`).
+    """
+    sf = validate_scene_dict(data, file)
+    if sf.model is not None:
+        from ..model._load import model_from_scenefile
+
+        return model_from_scenefile(sf, file, base or Path.cwd()).scene
+    return scene_from_dict_validated(sf, file, base)
+
+
+def validate_scene_dict(data, file: str = "<dict>") -> SceneFile:
+    """``data`` (a parsed scene file) checked against the format; errors name ``file`` and the place."""
     if not isinstance(data, dict):
         raise SceneFileError(file, "", f"expected a mapping at the top level (armguard_scene: 1, ...), got {type(data).__name__}")
     try:
@@ -319,6 +339,11 @@ def scene_from_dict(data, file: str = "<dict>", base: Path | None = None) -> Sce
         err = exc.errors()[0]
         more = f" (and {exc.error_count() - 1} more problems)" if exc.error_count() > 1 else ""
         raise SceneFileError(file, where_of(err["loc"]), _message(err) + more) from None
+    return sf
+
+
+def scene_from_dict_validated(sf: SceneFile, file: str, base: Path | None = None) -> Scene:
+    """The Scene of a validated scene file without ``model:`` (DH or URDF robots, shape bodies)."""
     ctx = _Ctx(file, base or Path.cwd(), _MM if sf.units.length == "mm" else 1.0, _DEG if sf.units.angle == "deg" else 1.0)
     frames = _frames(sf, ctx)
     scene = Scene(sf.name, description=sf.description)
@@ -420,6 +445,12 @@ def _trajectory(scene: Scene, t, ctx: _Ctx, where: str) -> None:
 def load_scene_file(path) -> Scene:
     """Load a YAML scene file (``armguard_scene: 1``)."""
     path = Path(path)
+    return scene_from_dict(read_scene_yaml(path), str(path), path.parent)
+
+
+def read_scene_yaml(path):
+    """The parsed YAML of a scene file; a missing file or bad YAML is a :class:`SceneFileError`."""
+    path = Path(path)
     file = str(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -427,18 +458,84 @@ def load_scene_file(path) -> Scene:
         raise SceneFileError(file, "", "file not found") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise SceneFileError(file, "", f"cannot read the file: {exc}") from None
-    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
     try:
-        data = yaml.load(text, Loader=loader)
+        data = yaml.load(text, Loader=_SceneLoader)
+    except _DuplicateKey as exc:
+        raise SceneFileError(file, f"line {exc.line}", f"duplicate key {exc.key!r} (first given at line {exc.first}); "
+                             "a key may appear once per mapping") from None
+    except _Alias as exc:
+        raise SceneFileError(file, f"line {exc.line}", "a YAML anchor defined here is reused by an alias; anchors and aliases are not allowed in scene files "
+                             "(an alias can make a small file expand without bound)") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
         problem = getattr(exc, "problem", None) or str(exc)
         raise SceneFileError(file, where, f"YAML syntax error: {problem}") from None
-    return scene_from_dict(data, file, path.parent)
+    return data
+
+
+class _DuplicateKey(yaml.YAMLError):
+    def __init__(self, key, line: int, first: int) -> None:
+        super().__init__(f"duplicate key {key!r} at line {line} (first at line {first})")
+        self.key, self.line, self.first = key, line, first
+
+
+class _Alias(yaml.YAMLError):
+    def __init__(self, line: int) -> None:
+        super().__init__(f"alias at line {line}")
+        self.line = line
+
+
+class _SceneLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
+    """YAML's safe loader, stricter for scene files: a key repeated in one mapping is an error
+    (PyYAML keeps the last silently), anchors and aliases are refused, and floats are read as in
+    YAML 1.2 (``1e3``, ``1.5e-3`` are numbers, not strings, so strict number fields accept them)."""
+
+    def construct_document(self, node):
+        seen, stack = set(), [node]
+        while stack:  # an alias is a node reached twice
+            n = stack.pop()
+            if id(n) in seen:
+                raise _Alias(n.start_mark.line + 1)
+            seen.add(id(n))
+            if isinstance(n, yaml.MappingNode):
+                stack.extend(x for kv in n.value for x in kv)
+            elif isinstance(n, yaml.SequenceNode):
+                stack.extend(n.value)
+        return super().construct_document(node)
+
+    def construct_mapping(self, node, deep=False):
+        if isinstance(node, yaml.MappingNode):
+            first: dict = {}
+            for key_node, _ in node.value:
+                if key_node.tag == "tag:yaml.org,2002:merge":
+                    continue
+                key = self.construct_object(key_node, deep=True)
+                line = key_node.start_mark.line + 1
+                try:
+                    if key in first:
+                        raise _DuplicateKey(key, line, first[key])
+                    first[key] = line
+                except TypeError:  # an unhashable key: the base constructor reports it
+                    continue
+        return super().construct_mapping(node, deep=deep)
+
+
+_SceneLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
+    list("-+0123456789."),
+)
 
 
 def scene_from_urdf(path, *, srdf=None) -> Scene:
+    """The scene of a URDF file (and the SRDF beside it, or ``srdf``), loaded through Pinocchio."""
+    from ..model import load_model
+
+    return load_model(path, srdf=srdf).scene
+
+
+def _scene_from_urdf_own_parser(path, *, srdf=None) -> Scene:
     """A scene holding the one robot of a URDF file (named after it), no bodies; optional SRDF pair filters."""
     from ..kinematics import Robot
 
@@ -464,7 +561,7 @@ def scene_from_urdf(path, *, srdf=None) -> Scene:
 
 def load_scene(name_or_path) -> Scene:
     """A Scene from a built-in name (``"hermes"``), a ``.yaml`` / ``.yml`` scene file or a ``.urdf`` file."""
-    from ..models import builtin_path, builtin_names
+    from ..models import builtin_names
 
     s = str(name_or_path)
     p = Path(s)
@@ -473,8 +570,9 @@ def load_scene(name_or_path) -> Scene:
     if p.suffix.lower() == ".urdf":
         return scene_from_urdf(p)
     if p.suffix == "" and "/" not in s and "\\" not in s:
-        path = builtin_path(s)
-        if path is None:
+        if s not in builtin_names():
             raise SceneError(f"unknown built-in scene {s!r}; built-in scenes are {list(builtin_names())}, or give a .yaml or .urdf path")
-        return load_scene_file(path)
+        from ..model import load_model
+
+        return load_model(s).scene  # urdf/<name>/: the URDF, SRDF and sidecar, through Pinocchio
     raise SceneError(f"cannot load {s!r}: expected a built-in scene name {list(builtin_names())}, a .yaml scene or a .urdf file")

@@ -1,7 +1,9 @@
 """The scene file format, version 1, as pydantic v2 models (unknown keys are rejected).
 
 Every model forbids extra keys and non-finite numbers, so a typo or a ``.nan`` is an error
-that names its place in the file.  Numbers are in the file's ``units`` (``angle: deg | rad``,
+that names its place in the file.  Numbers are strict: a boolean or a string (``true``,
+``"1e3"``) is not a number, and no number's magnitude may exceed ``Tolerances.max_magnitude``
+(products of such coordinates would overflow or lose all precision).  Numbers are in the file's ``units`` (``angle: deg | rad``,
 ``length: m | mm``); :mod:`._load` converts them to m / rad.  ``docs/scene-format.md`` is the
 user-facing description of the same format.
 """
@@ -10,7 +12,9 @@ from __future__ import annotations
 
 from typing import Annotated, Literal, Union
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field
+
+from .._tolerance import DEFAULT_TOLERANCES
 
 __all__ = [
     "SCHEMA_VERSION",
@@ -23,13 +27,31 @@ __all__ = [
 
 SCHEMA_VERSION = 1
 
-Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
-Vec2 = Annotated[list[float], Field(min_length=2, max_length=2)]
+
+def _bounded(x: float) -> float:
+    """A file number within ``Tolerances.max_magnitude`` (the error names the bound)."""
+    big = DEFAULT_TOLERANCES.max_magnitude
+    if abs(x) > big:
+        raise ValueError(f"magnitude {x:.6g} is beyond {big:.3g} (Tolerances.max_magnitude): derived quantities "
+                         "(squares, volumes) would overflow or lose all precision")
+    return x
+
+
+def _exact_int(x):
+    """Booleans and floats are not format versions (``armguard_scene: true`` is not ``1``)."""
+    if type(x) is not int:
+        raise ValueError(f"expected the integer 1, got {x!r}")
+    return x
+
+
+Num = Annotated[float, AfterValidator(_bounded)]  # strict (the models' config): no bool, no string
+Vec3 = Annotated[list[Num], Field(min_length=3, max_length=3)]
+Vec2 = Annotated[list[Num], Field(min_length=2, max_length=2)]
 Name = Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_.\-]+$")]
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, strict=True)
 
 
 class _Posed(_Model):
@@ -46,33 +68,33 @@ class BoxSpec(_Posed):
 
 class SphereSpec(_Posed):
     type: Literal["sphere"]
-    radius: float = Field(ge=0.0)
+    radius: Num = Field(ge=0.0)
 
 
 class CapsuleSpec(_Posed):
     """Either ``p0`` + ``p1`` (end points in the owner's frame) or ``length`` along the local z axis."""
 
     type: Literal["capsule"]
-    radius: float = Field(ge=0.0)
+    radius: Num = Field(ge=0.0)
     p0: Vec3 | None = None
     p1: Vec3 | None = None
-    length: float | None = Field(default=None, ge=0.0)
+    length: Num | None = Field(default=None, ge=0.0)
 
 
 class LinkCapsuleSpec(_Model):
     """Ranger's link: the segment from the parent link's origin to this link's origin, swept by ``radius``."""
 
     type: Literal["link_capsule"]
-    radius: float = Field(ge=0.0)
+    radius: Num = Field(ge=0.0)
 
 
 class PrismSpec(_Posed):
     """A right prism over a regular ``n_sides``-gon; its axis is the local z axis."""
 
     type: Literal["prism"]
-    n_sides: int = Field(ge=3)
-    apothem: float = Field(gt=0.0)
-    length: float = Field(gt=0.0)
+    n_sides: int = Field(ge=3, le=DEFAULT_TOLERANCES.max_prism_sides)
+    apothem: Num = Field(gt=0.0)
+    length: Num = Field(gt=0.0)
 
 
 class PolyhedronSpec(_Posed):
@@ -119,21 +141,21 @@ class JointSpec(_Model):
 
     name: Name | None = None
     type: Literal["revolute", "prismatic"] = "revolute"
-    a: float = 0.0
-    alpha: float = 0.0
-    d: float = 0.0
-    theta: float = 0.0
+    a: Num = 0.0
+    alpha: Num = 0.0
+    d: Num = 0.0
+    theta: Num = 0.0
     limits: Vec2 | None = None
-    max_velocity: float | None = Field(default=None, gt=0.0)
-    max_acceleration: float | None = Field(default=None, gt=0.0)
+    max_velocity: Num | None = Field(default=None, gt=0.0)
+    max_acceleration: Num | None = Field(default=None, gt=0.0)
 
 
 class CouplingSpec(_Model):
     """A dependent joint: ``offset + sum(coeff * q[independent])`` (GMF S-480 parallelogram)."""
 
     joint: Name
-    terms: dict[Name, float]
-    offset: float = 0.0
+    terms: dict[Name, Num]
+    offset: Num = 0.0
 
 
 class MountSpec(_Posed):
@@ -153,7 +175,7 @@ class RobotSpec(_Model):
     urdf: str | None = None
     srdf: str | None = None
     link_shapes: dict[Name, list[ShapeSpec]] = {}
-    home: list[float] | None = None
+    home: list[Num] | None = None
     self_pairs: list[Annotated[list[Name], Field(min_length=2, max_length=2)]] | None = None
 
 
@@ -183,24 +205,24 @@ class TrajectorySpec(_Model):
 
     name: Name
     robot: Name
-    waypoints: Annotated[list[list[float]], Field(min_length=2)]
+    waypoints: Annotated[list[list[Num]], Field(min_length=2)]
     profile: Literal["trapezoidal", "linear"] = "trapezoidal"
-    times: list[float] | None = None
+    times: list[Num] | None = None
     description: str = ""
 
 
 class MotionSpec(_Model):
     """A canned test motion: a synchronised trapezoid of the active robot to ``goal`` (joint space)."""
 
-    goal: list[float]
+    goal: list[Num]
 
 
 class CannedTestSpec(_Model):
     name: Name
     description: str = ""
     robot: Name
-    threshold: float = Field(ge=0.0)
-    setup: dict[Name, list[float]]
+    threshold: Num = Field(ge=0.0)
+    setup: dict[Name, list[Num]]
     motion: MotionSpec
 
 
@@ -209,11 +231,26 @@ class UnitsSpec(_Model):
     length: Literal["m", "mm"] = "m"
 
 
+class ModelRefSpec(_Model):
+    """A model sidecar's robot system: a URDF (and its SRDF), paths relative to the sidecar."""
+
+    urdf: str
+    srdf: str | None = None
+
+
+class JointExtraSpec(_Model):
+    """What a URDF cannot say about a joint (its acceleration limit, for trapezoidal profiles)."""
+
+    max_acceleration: float | None = Field(default=None, gt=0.0)
+
+
 class SceneFile(_Model):
-    armguard_scene: Literal[1]
+    armguard_scene: Annotated[Literal[1], BeforeValidator(_exact_int)]
     name: Name
     description: str = ""
     units: UnitsSpec = UnitsSpec()
+    model: ModelRefSpec | None = None
+    joints: dict[str, JointExtraSpec] = {}
     frames: list[FrameSpec] = []
     bodies: list[BodySpec] = []
     robots: list[RobotSpec] = []

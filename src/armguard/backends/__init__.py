@@ -1,0 +1,95 @@
+"""Interchangeable checkers: backends found by entry point, picked by one precedence.
+
+``armguard.checker(model, backend=None, options=None)`` builds the Checker of a backend:
+the explicit argument, else ``$ARMGUARD_BACKEND``, else ``armguard.toml`` (``[backend] name =
+…`` and options, in the working directory or the file given by ``config=`` /
+``$ARMGUARD_CONFIG``), else ``"analytic"``.  Backends register under the entry-point group
+``armguard.backends`` (``importlib.metadata``): a third party adds one by installing a
+package.  ``available()`` lists the installed ones.
+"""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from importlib import metadata
+from pathlib import Path
+from typing import Mapping
+
+from .._errors import BackendError
+from ._interface import Backend, Capability, Checker, CheckerBase, NearestPair, PairDistances, check_Q, check_q
+
+__all__ = ["available", "get_backend", "checker", "resolve", "Backend", "Checker", "CheckerBase", "PairDistances",
+           "NearestPair", "Capability", "check_q", "check_Q", "GROUP", "DEFAULT", "ENV"]
+
+GROUP = "armguard.backends"
+DEFAULT = "analytic"
+ENV = "ARMGUARD_BACKEND"
+CONFIG_ENV = "ARMGUARD_CONFIG"
+CONFIG_FILE = "armguard.toml"
+
+
+def _entry_points() -> dict:
+    return {ep.name: ep for ep in metadata.entry_points(group=GROUP)}
+
+
+def available() -> tuple[str, ...]:
+    """The names of the installed backends (sorted)."""
+    return tuple(sorted(_entry_points()))
+
+
+def get_backend(name: str) -> Backend:
+    """The installed backend ``name``; an unknown name lists the installed ones."""
+    eps = _entry_points()
+    if name not in eps:
+        raise BackendError(f"unknown backend {name!r}; installed backends are {sorted(eps)}")
+    obj = eps[name].load()
+    return obj() if isinstance(obj, type) else obj
+
+
+def read_config(config=None) -> dict:
+    """The ``[backend]`` table of ``armguard.toml`` (``config``, ``$ARMGUARD_CONFIG`` or the working directory)."""
+    path = config or os.environ.get(CONFIG_ENV)
+    p = Path(path) if path else Path.cwd() / CONFIG_FILE
+    if not p.is_file():
+        if path:
+            raise BackendError(f"{p}: configuration file not found")
+        return {}
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise BackendError(f"{p}: not valid TOML: {exc}") from None
+    table = data.get("backend", {})
+    if not isinstance(table, dict):
+        raise BackendError(f"{p}: [backend] must be a table (name = ..., options)")
+    return {"file": str(p), **table}
+
+
+def resolve(backend: str | None = None, options: Mapping | None = None, *, config=None) -> tuple[str, dict]:
+    """``(name, options)`` by the precedence: argument > ``$ARMGUARD_BACKEND`` > ``armguard.toml`` > default."""
+    cfg = read_config(config)
+    if backend is not None:
+        name = str(backend)
+    elif os.environ.get(ENV):
+        name = os.environ[ENV]
+    elif "name" in cfg:
+        name = str(cfg["name"])
+    else:
+        name = DEFAULT
+    opts = {}
+    if cfg.get("name", name) == name:  # the file's options belong to the backend it names
+        opts.update({k: v for k, v in cfg.items() if k not in ("name", "file")})
+        opts.update(cfg.get(name, {}) if isinstance(cfg.get(name), dict) else {})
+    opts.pop(name, None)
+    opts.update(dict(options or {}))
+    return name, opts
+
+
+def checker(model, backend: str | None = None, options: Mapping | None = None, *, config=None) -> Checker:
+    """The Checker of ``backend`` (see :func:`resolve`) for ``model`` (a Model or anything ``load_model`` takes)."""
+    from ..model import Model, load_model
+
+    if not isinstance(model, Model):
+        model = load_model(model)
+    name, opts = resolve(backend, options, config=config)
+    return get_backend(name).build(model, opts)

@@ -1,0 +1,11 @@
+"""Models of record: URDF (+ SRDF) files loaded by Pinocchio, with armguard's scene extras.
+
+``load_model(name_or_path)`` -> :class:`Model` (``pin_model``, ``collision_model``, the active
+pairs with their categories, the scene the analytic backend compiles).  The file convention
+of ``urdf/<system>/`` is ``docs/models.md``.
+"""
+
+from ._load import builtin_model_names, load_model, models_dir
+from ._model import WORKSPACE, GeometryPairs, Model
+
+__all__ = ["load_model", "Model", "GeometryPairs", "WORKSPACE", "models_dir", "builtin_model_names"]

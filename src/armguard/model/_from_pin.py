@@ -1,0 +1,252 @@
+"""A Pinocchio model and GeometryModel as armguard's Scene: arms, static bodies, payloads.
+
+The URDF link tree is read off Pinocchio's frames (each BODY frame is a URDF link; the frame
+before it is its joint).  Arms are the SRDF's chain groups (``docs/models.md``): an arm ``R``
+is the subtree below its chain's base link, with the ``R_`` prefix stripped from its link
+and joint names.  Links fixed to the world outside every arm are static bodies; links in the
+SRDF group ``payload`` are payloads held by the arm link they are fixed to.  Each
+GeometryObject becomes one shape of its owner; ``geometry_names[(owner, i)]`` records which.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._errors import ArmguardError, SceneFileError
+from ._shapes import shape_from_coal
+
+__all__ = ["scene_parts_from_pin", "ScenePart"]
+
+_REVOLUTE = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0), "JointModelRZ": (0.0, 0.0, 1.0)}
+_CIRCULAR = {"JointModelRUBX": (1.0, 0.0, 0.0), "JointModelRUBY": (0.0, 1.0, 0.0), "JointModelRUBZ": (0.0, 0.0, 1.0)}
+_PRISMATIC = {"JointModelPX": (1.0, 0.0, 0.0), "JointModelPY": (0.0, 1.0, 0.0), "JointModelPZ": (0.0, 0.0, 1.0)}
+
+
+class ScenePart:
+    """What the converter found: robots (with pin q indices), bodies, payloads, geometry names, notes."""
+
+    def __init__(self) -> None:
+        self.robots: list = []  # (Robot, home (n,) or None, q_index (n,) int into pin q)
+        self.bodies: list = []  # (name, shapes in W, category)
+        self.payloads: list = []  # (name, robot, link, shapes in P, X_LP)
+        self.geometry_names: dict = {}  # (owner, i) -> GeometryObject name
+        self.notes: dict = {}  # GeometryObject name -> representation note
+        self.link_owner: dict = {}  # URDF link name -> owner name ("R/link", body or payload)
+        self.circular: list = []  # per robot: its joints (indices into joint_names) that are continuous
+
+
+def _se3(M) -> np.ndarray:
+    return np.asarray(M.homogeneous, dtype=np.float64)
+
+
+def _inv(X: np.ndarray) -> np.ndarray:
+    Y = np.eye(4)
+    Y[:3, :3] = X[:3, :3].T
+    Y[:3, 3] = -X[:3, :3].T @ X[:3, 3]
+    return Y
+
+
+def _identity(X: np.ndarray) -> bool:
+    return bool(np.allclose(X, np.eye(4), atol=1e-15, rtol=0.0))
+
+
+def _strip(name: str, prefix: str) -> str:
+    return name[len(prefix):] if prefix and name.startswith(prefix) else name
+
+
+def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=None) -> ScenePart:
+    """Convert (see the module docstring). ``accelerations``: URDF joint name -> rad/s² (or m/s²)."""
+    import pinocchio as pin
+
+    from ..kinematics import Coupling, JointSpec, JointType, Robot
+
+    f = info.file
+    frames = pin_model.frames
+    FT = pin.FrameType
+    body_ids = {fr.name: i for i, fr in enumerate(frames) if fr.type == FT.BODY}
+    if "universe" in body_ids:  # pinocchio's own root is never a URDF link we own
+        del body_ids["universe"]
+
+    def parent_body(i: int):
+        """The BODY frame above BODY frame ``i`` and the joint frame between them (None at the root)."""
+        jf = frames[i].parentFrame
+        if jf == 0 or jf == i:  # frame 0 is pinocchio's universe: i is the URDF's root link
+            return None, None
+        return frames[jf].parentFrame, jf
+
+    children: dict[int, list[int]] = {}
+    for name, i in body_ids.items():
+        p, _ = parent_body(i)
+        if p is not None:
+            children.setdefault(p, []).append(i)
+
+    def subtree(i: int, stop: set) -> list[int]:
+        out, stack = [], [i]
+        while stack:
+            k = stack.pop()
+            if k in stop and k != i:
+                continue
+            out.append(k)
+            stack.extend(sorted(children.get(k, []), reverse=True))
+        return out
+
+    payload_links = set(srdf.groups["payload"].links) if srdf is not None and "payload" in srdf.groups else set()
+    vehicle_links = set(srdf.groups["vehicle"].links) if srdf is not None and "vehicle" in srdf.groups else set()
+    for ln in payload_links | vehicle_links:
+        if ln not in body_ids:
+            raise SceneFileError(srdf.file, "group payload/vehicle", f"names link {ln!r}, which the URDF {f} does not have")
+    stop = {body_ids[ln] for ln in payload_links}
+
+    # the arms: SRDF chain groups, or the whole movable tree as one robot named after the URDF
+    arms = []
+    if srdf is not None and srdf.arm_groups:
+        for g in srdf.arm_groups:
+            base, tip = g.chains[0]
+            for ln in (base, tip):
+                if ln not in body_ids:
+                    raise SceneFileError(srdf.file, f"group {g.name!r} chain", f"names link {ln!r}, which the URDF {f} does not have")
+            arms.append((g.name, body_ids[base], f"{g.name}_"))
+    elif pin_model.njoints > 1:
+        first = pin_model.frames[pin_model.getFrameId(pin_model.names[1], FT.JOINT)]
+        root = first.parentFrame
+        while True:  # climb to the topmost link fixed to the world on joint 1's branch
+            p, _ = parent_body(root)
+            if p is None or frames[p].name == "world":
+                break
+            root = p
+        arms.append((info.robot_name, root, ""))
+
+    part = ScenePart()
+    in_arm: set[int] = set()
+    accelerations = accelerations or {}
+    # arms keep the SRDF's group order (the scene's flat q order); Model.q_index maps to pinocchio's
+    for rname, root, prefix in arms:
+        links = subtree(root, stop)
+        if frames[root].parentJoint != 0:
+            raise SceneFileError(f, f"link[{frames[root].name}]", f"arm {rname!r}: its base link must be fixed to the world")
+        in_arm.update(links)
+        specs, jnames, q_index, circular = [], [], [], []
+        for i in links[1:]:
+            p, jf = parent_body(i)
+            child, parent = _strip(frames[i].name, prefix), _strip(frames[p].name, prefix)
+            J = frames[jf]
+            Xp = _se3(frames[p].placement)
+            jname = J.name
+            if J.type == FT.JOINT:
+                jid = J.parentJoint
+                jm = pin_model.joints[jid]
+                short = jm.shortname()
+                X_pre = _inv(Xp) @ _se3(pin_model.jointPlacements[jid])
+                X_post = _se3(frames[i].placement)
+                coupling = None
+                if short == "JointModelMimic":
+                    if jname not in info.mimic:
+                        raise SceneFileError(f, f"joint[{jname}]", "Pinocchio made it a mimic joint but the URDF has no <mimic>")
+                    master, mult, off = info.mimic[jname]
+                    coupling = Coupling(_strip(jname, prefix), {_strip(master, prefix): mult}, off)
+                    axis = np.asarray(info.joint_axis.get(jname, (1.0, 0.0, 0.0)))
+                    jt = JointType.PRISMATIC if info.joint_type.get(jname) == "prismatic" else JointType.REVOLUTE
+                    lo = hi = None
+                elif short in _REVOLUTE or short == "JointModelRevoluteUnaligned":
+                    jt, axis = JointType.REVOLUTE, np.asarray(_REVOLUTE.get(short) or info.joint_axis[jname])
+                elif short in _PRISMATIC or short == "JointModelPrismaticUnaligned":
+                    jt, axis = JointType.PRISMATIC, np.asarray(_PRISMATIC.get(short) or info.joint_axis[jname])
+                elif short in _CIRCULAR or short == "JointModelRevoluteUnboundedUnaligned":
+                    # continuous: pinocchio's q holds (cos, sin); Model.scene_q turns it into an angle
+                    jt, axis = JointType.REVOLUTE, np.asarray(_CIRCULAR.get(short) or info.joint_axis[jname])
+                else:
+                    raise SceneFileError(f, f"joint[{jname}]", f"joint type {short} is not supported (revolute, prismatic, "
+                                         "continuous, fixed and mimic joints are)")
+                axis = axis / np.linalg.norm(axis)
+                if coupling is None:
+                    iq, iv = jm.idx_q, jm.idx_v
+                    lo, hi = float(pin_model.lowerPositionLimit[iq]), float(pin_model.upperPositionLimit[iq])
+                    if jm.nq == 2:
+                        lo, hi = -math.inf, math.inf
+                        circular.append(len(jnames))
+                    elif not (math.isfinite(lo) and math.isfinite(hi)) or lo > hi:
+                        raise SceneFileError(f, f"joint[{jname}]", f"limits [{lo}, {hi}]: expected finite lower <= upper")
+                    vmax = float(pin_model.velocityLimit[iv])
+                    jnames.append(_strip(jname, prefix))
+                    q_index.append(iq)
+                specs.append(JointSpec(
+                    name=_strip(jname, prefix), joint_type=jt, parent=parent, child=child, X_pre=X_pre, axis=axis,
+                    X_post=None if _identity(X_post) else X_post,
+                    lower=-math.inf if lo is None else lo, upper=math.inf if hi is None else hi,
+                    max_velocity=(vmax if coupling is None and vmax > 0 else math.inf),
+                    max_acceleration=float(accelerations.get(jname, math.inf)), coupling=coupling))
+            else:
+                X_pre = _inv(Xp) @ _se3(J.placement)
+                X_post = _inv(_se3(J.placement)) @ _se3(frames[i].placement)
+                specs.append(JointSpec(name=_strip(jname, prefix), joint_type=JointType.FIXED, parent=parent, child=child,
+                                       X_pre=X_pre @ X_post))
+        X_WB = _se3(frames[root].placement)
+        try:
+            robot = Robot(rname, _strip(frames[root].name, prefix), specs, joint_names=jnames, X_WB=X_WB)
+        except Exception as exc:  # noqa: BLE001 - reported against the file
+            raise SceneFileError(f, f"arm {rname!r}", str(exc)) from None
+        home = None
+        st = srdf.home(rname) if srdf is not None else None
+        if st is not None:
+            home = np.array([st.get(prefix + j, st.get(j, min(max(0.0, lo_), hi_)))
+                             for j, lo_, hi_ in zip(jnames, robot.lower, robot.upper)])
+        part.robots.append((robot, home, np.asarray(q_index, dtype=np.int64)))
+        part.circular.append(np.asarray(circular, dtype=np.int64))
+        for k in links:
+            part.link_owner[frames[k].name] = f"{rname}/{_strip(frames[k].name, prefix)}"
+    # payloads and static bodies
+    for ln in sorted(payload_links, key=lambda n: body_ids[n]):
+        i = body_ids[ln]
+        p, _ = parent_body(i)
+        if p is None or p not in in_arm:
+            raise SceneFileError(srdf.file, "group payload", f"payload link {ln!r} is not fixed to an arm link")
+        owner = part.link_owner[frames[p].name]
+        rname, link = owner.split("/", 1)
+        if frames[p].parentJoint != frames[i].parentJoint:
+            raise SceneFileError(f, f"link[{ln}]", "a payload link must be fixed (no joint between it and its arm link)")
+        X_LP = _inv(_se3(frames[p].placement)) @ _se3(frames[i].placement)
+        part.payloads.append([ln, rname, link, [], X_LP])
+        part.link_owner[ln] = ln
+    for ln, i in body_ids.items():
+        if i in in_arm or ln in payload_links:
+            continue
+        if frames[i].parentJoint != 0:
+            raise SceneFileError(f, f"link[{ln}]", "a link outside every arm (SRDF chain group) must be fixed to the world")
+        part.link_owner[ln] = ln
+    # shapes, in the owner's frame (W for bodies, the link frame for links, P for payloads)
+    body_shapes: dict[str, list] = {}
+    link_shapes: dict[str, dict[str, list]] = {r.name: {} for r, _, _ in part.robots}
+    pay = {p[0]: p for p in part.payloads}
+    for go in geom_model.geometryObjects:
+        fr = frames[go.parentFrame]
+        X_FG = _inv(_se3(fr.placement)) @ _se3(go.placement)
+        owner = part.link_owner.get(fr.name)
+        if owner is None:
+            raise SceneFileError(f, f"link[{fr.name}]", "collision geometry on a link armguard could not place")
+        k_local = sum(1 for g2 in geom_model.geometryObjects[:geom_model.getGeometryId(go.name)]
+                      if g2.parentFrame == go.parentFrame)
+        try:
+            if fr.name in pay:
+                shape, note = shape_from_coal(go.geometry, X_FG)
+                lst = pay[fr.name][3]
+            elif "/" in owner:
+                shape, note = shape_from_coal(go.geometry, X_FG)
+                r, ln = owner.split("/", 1)
+                lst = link_shapes[r].setdefault(ln, [])
+            else:
+                shape, note = shape_from_coal(go.geometry, _se3(fr.placement) @ X_FG)
+                lst = body_shapes.setdefault(owner, [])
+        except ArmguardError as exc:
+            raise SceneFileError(f, f"link[{fr.name}].collision[{k_local}]", str(exc)) from None
+        part.geometry_names[(owner, len(lst))] = go.name
+        if note:
+            part.notes[go.name] = note
+        lst.append(shape)
+    part.robots = [(r.with_link_shapes({k: tuple(v) for k, v in link_shapes[r.name].items()}), h, qi)
+                   for r, h, qi in part.robots]
+    for name, shapes in body_shapes.items():
+        part.bodies.append((name, shapes, "vehicle" if name in vehicle_links else "environment"))
+    part.payloads = [tuple(p) for p in part.payloads if p[3]]
+    return part

@@ -1,0 +1,241 @@
+"""``load_model``: a built-in name, a URDF (+ SRDF) or a YAML scene file into a :class:`Model`.
+
+* A ``.urdf``: Pinocchio builds the model and GeometryModel (checked, see ``_urdf``); the SRDF
+  beside it (same stem) or ``srdf=`` gives groups, disabled pairs and home states.
+* A model sidecar ``.yaml`` (``model: {urdf, srdf}``): the same, then the sidecar's workspace,
+  accelerations, extra bodies, pair filters, trajectories and canned tests.
+* A scene ``.yaml`` without ``model:`` (robots from DH tables, bodies as shapes): the scene as
+  it is, and its Pinocchio model and GeometryModel built from it by writing it as URDF.
+* A built-in name: ``urdf/<name>/<name>.yaml``.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .._errors import ArmguardError, SceneError, SceneFileError
+from ._model import Model
+from ._srdf import read_srdf
+
+__all__ = ["load_model", "models_dir", "builtin_model_names", "model_from_scenefile"]
+
+_BUILTINS = ("ranger", "hermes", "puma560", "gmf_s480", "rover")
+
+
+def models_dir() -> Path:
+    """The folder of the built-in models: ``$ARMGUARD_MODELS`` or the checkout's ``urdf/``."""
+    env = os.environ.get("ARMGUARD_MODELS")
+    return Path(env) if env else Path(__file__).resolve().parents[3] / "urdf"
+
+
+def builtin_model_names() -> tuple[str, ...]:
+    return _BUILTINS
+
+
+def builtin_model_path(name: str) -> Path | None:
+    """The sidecar of built-in ``name`` (None when it is not a built-in or its files are missing)."""
+    if name not in _BUILTINS:
+        return None
+    p = models_dir() / name / f"{name}.yaml"
+    return p if p.is_file() else None
+
+
+def load_model(name_or_path, *, srdf=None, package_dirs=()) -> Model:
+    """A :class:`Model` from a built-in name, a ``.urdf`` or a ``.yaml`` file (see the module docstring)."""
+    s = str(name_or_path)
+    p = Path(s)
+    suffix = p.suffix.lower()
+    if suffix == ".urdf":
+        return model_from_urdf(p, srdf=srdf, package_dirs=package_dirs)
+    if suffix in (".yaml", ".yml"):
+        return model_from_yaml(p)
+    if suffix == "" and "/" not in s and "\\" not in s:
+        path = builtin_model_path(s)
+        if path is None:
+            raise SceneError(f"unknown built-in model {s!r}; built-in models are {list(_BUILTINS)} "
+                             f"(in {models_dir()}), or give a .urdf or .yaml path")
+        return model_from_yaml(path)
+    raise SceneError(f"cannot load {s!r}: expected a built-in model name {list(_BUILTINS)}, a .urdf or a .yaml file")
+
+
+def _srdf_for(urdf: Path, srdf):
+    if srdf is not None:
+        return read_srdf(srdf)
+    beside = urdf.with_suffix(".srdf")
+    return read_srdf(beside) if beside.is_file() else None
+
+
+def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None):
+    """``(scene, pin_model, collision_model, parts)`` of a URDF: robots, bodies, payloads, SRDF pairs."""
+    from ..scene import Scene
+    from ._from_pin import scene_parts_from_pin
+    from ._urdf import load_pinocchio
+
+    pin_model, geom, info = load_pinocchio(urdf, [models_dir(), *package_dirs])
+    parts = scene_parts_from_pin(pin_model, geom, info, srdf_obj, accelerations=accelerations)
+    scene = Scene(name or info.robot_name)
+    try:
+        for bname, shapes, cat in parts.bodies:
+            scene.add_body(bname, shapes, category=cat)
+        for robot, home, _ in parts.robots:
+            scene.add_robot(robot, home=home, _source={"kind": "urdf", "urdf": str(urdf)})
+        for pname, rname, link, shapes, X_LP in parts.payloads:
+            scene.attach_payload(pname, rname, link, shapes, X_LP)
+    except ArmguardError as exc:
+        raise SceneFileError(str(urdf), "", str(exc)) from None
+    if srdf_obj is not None:
+        for k, (a, b, _) in enumerate(srdf_obj.disabled):
+            oa, ob = parts.link_owner.get(a), parts.link_owner.get(b)
+            if oa is None or ob is None:
+                missing = a if oa is None else b
+                raise srdf_obj.error(f"disable_collisions[{k}]", f"names link {missing!r}, which the URDF {urdf} does not have")
+            if oa == ob:
+                continue
+            try:
+                scene.disable_pair(oa, ob)
+            except SceneError as exc:
+                raise srdf_obj.error(f"disable_collisions[{k}]", str(exc)) from None
+    return scene, pin_model, geom, parts
+
+
+def _q_index(parts) -> np.ndarray:
+    return np.concatenate([qi for _, _, qi in parts.robots]) if parts.robots else np.zeros(0, np.int64)
+
+
+def _circular(parts) -> np.ndarray:
+    """Scene-q positions of continuous joints (pinocchio holds their (cos, sin))."""
+    out, base = [], 0
+    for (robot, _, qi), circ in zip(parts.robots, parts.circular):
+        out.extend(base + int(k) for k in circ)
+        base += len(qi)
+    return np.asarray(out, dtype=np.int64)
+
+
+def model_from_urdf(path, *, srdf=None, package_dirs=()) -> Model:
+    """A Model of one URDF file (and its SRDF)."""
+    path = Path(path).resolve()
+    if not path.is_file():
+        raise SceneFileError(str(path), "", "URDF file not found")
+    srdf_obj = _srdf_for(path, srdf)
+    scene, pin_model, geom, parts = _build(path, srdf_obj, package_dirs, {})
+    files = [path, *parts_files(parts, srdf_obj)]
+    return Model(scene.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), geometry_names=parts.geometry_names,
+                 notes=parts.notes, files=files)
+
+
+def parts_files(parts, srdf_obj) -> list:
+    return [Path(srdf_obj.file)] if srdf_obj is not None else []
+
+
+def model_from_yaml(path) -> Model:
+    """A Model of a sidecar or scene YAML file."""
+    from ..scene._load import read_scene_yaml, validate_scene_dict
+
+    path = Path(path)
+    data = read_scene_yaml(path)
+    sf = validate_scene_dict(data, str(path))
+    return model_from_scenefile(sf, str(path), path.parent)
+
+
+def model_from_scenefile(sf, file: str, base: Path) -> Model:
+    """The Model of a validated scene file ``sf`` read from ``file`` (paths relative to ``base``)."""
+    from ..scene._load import _DEG, _MM, _Ctx, _frames, _populate
+
+    ctx = _Ctx(file, base, _MM if sf.units.length == "mm" else 1.0, _DEG if sf.units.angle == "deg" else 1.0)
+    if sf.model is None:
+        return _model_from_plain_scene(sf, file, base, ctx)
+    if sf.robots or sf.payloads:
+        raise ctx.error("robots" if sf.robots else "payloads", "a model sidecar takes its arms and payloads from the "
+                        "URDF (model.urdf); add extra static bodies under 'bodies'")
+    urdf = ctx.path(sf.model.urdf)
+    if not urdf.is_file():
+        raise ctx.error("model.urdf", f"URDF file not found: {urdf}")
+    srdf_path = ctx.path(sf.model.srdf) if sf.model.srdf else None
+    srdf_obj = _srdf_for(urdf, srdf_path)
+    acc = {}
+    for jn, spec in sf.joints.items():
+        if spec.max_acceleration is not None:
+            acc[jn.replace("/", "_", 1)] = spec.max_acceleration * ctx.A  # "R/joint" -> URDF "R_joint"
+    scene, pin_model, geom, parts = _build(urdf, srdf_obj, (), acc, name=sf.name)
+    known = {jn.replace("/", "_", 1) for jn in scene.joint_names} | set(scene.joint_names)
+    for jn in sf.joints:
+        if jn not in known and jn.replace("/", "_", 1) not in known:
+            raise ctx.error(f"joints.{jn}", f"unknown joint; joints are {list(scene.joint_names)}")
+    scene.description = sf.description
+    frames = _frames(sf, ctx)
+    try:
+        _populate(scene, sf, ctx, frames)
+    except SceneFileError:
+        raise
+    except SceneError as exc:
+        raise ctx.error("", str(exc)) from None
+    geometry_names = dict(parts.geometry_names)
+    _add_extra_bodies(scene, geom, geometry_names, {b for b, _, _ in parts.bodies})
+    files = [Path(file), urdf, *parts_files(parts, srdf_obj)]
+    return Model(sf.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), geometry_names=geometry_names,
+                 notes=parts.notes, files=files)
+
+
+def _add_extra_bodies(scene, geom, geometry_names: dict, known: set) -> None:
+    """Bodies the YAML added beside the URDF's: into the GeometryModel too (fixed to the world)."""
+    import pinocchio as pin
+
+    from ._shapes import coal_from_shape
+
+    for name, body in scene.bodies.items():
+        if name in known:
+            continue
+        for i, shape in enumerate(body.shapes):
+            g, X = coal_from_shape(shape)
+            gname = f"{name}_{i}"
+            go = pin.GeometryObject(gname, 0, 0, pin.SE3(X[:3, :3], X[:3, 3]), g)
+            geom.addGeometryObject(go)
+            geometry_names[(name, i)] = gname
+
+
+def _model_from_plain_scene(sf, file: str, base: Path, ctx) -> Model:
+    """A scene file with DH/URDF robots and shape bodies: its Pinocchio side written as URDF first."""
+    from ..scene._load import scene_from_dict_validated
+    from .export import export_scene
+    from ._from_pin import scene_parts_from_pin
+    from ._urdf import load_pinocchio
+
+    scene = scene_from_dict_validated(sf, file, base)
+    with tempfile.TemporaryDirectory(prefix="armguard-model-") as tmp:
+        written = export_scene(scene, tmp, name=scene.name)
+        urdf = Path(written["urdf"])
+        pin_model, geom, info = load_pinocchio(urdf)
+        srdf_obj = read_srdf(written["srdf"]) if "srdf" in written else None
+        parts = scene_parts_from_pin(pin_model, geom, info, srdf_obj)
+    q_index = np.empty(len(scene.joint_names), np.int64)
+    pin_names = {}
+    for robot, _, qi in parts.robots:
+        for j, iq in zip(robot.joint_names, qi):
+            pin_names[f"{robot.name}/{j}"] = iq
+    for k, jn in enumerate(scene.joint_names):
+        if jn not in pin_names:
+            raise SceneFileError(file, "", f"joint {jn!r} did not survive the URDF export (a bug: please report)")
+        q_index[k] = pin_names[jn]
+    geometry_names = {}
+    for owner in scene.owners():
+        n = len(_owner_shapes(scene, owner))
+        for i in range(n):
+            if (owner, i) not in parts.geometry_names:
+                raise SceneFileError(file, "", f"shape {i} of {owner!r} did not survive the URDF export (a bug: please report)")
+            geometry_names[(owner, i)] = parts.geometry_names[(owner, i)]
+    return Model(scene.name, pin_model, geom, scene, q_index=q_index, circular=_circular(parts), geometry_names=geometry_names,
+                 notes=parts.notes, files=[Path(file)])
+
+
+def _owner_shapes(scene, owner: str):
+    if owner in scene.bodies:
+        return scene.bodies[owner].shapes
+    if owner in scene.payloads:
+        return scene.payloads[owner].shapes
+    r, ln = owner.split("/", 1)
+    return scene.robots[r].link_shapes.get(ln, ())
+

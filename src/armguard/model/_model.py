@@ -1,0 +1,175 @@
+"""The Model: Pinocchio's model and GeometryModel, the active pairs, and the scene extras."""
+
+from __future__ import annotations
+
+import hashlib
+import types
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._errors import DetectionError
+
+__all__ = ["Model", "GeometryPairs", "WORKSPACE", "file_sha256"]
+
+WORKSPACE = "workspace"
+"""The name of side B of a pair measured against the workspace box's walls (no GeometryObject)."""
+
+
+def file_sha256(path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+@dataclass(frozen=True)
+class GeometryPairs:
+    """The active pairs of a Model, in one fixed order every backend answers in.
+
+    ``a``, ``b`` ``(n,)`` GeometryObject names (``b`` is :data:`WORKSPACE` for the workspace box);
+    ``owner_a``, ``owner_b`` ``(n,)`` the scene owners (``"robot/link"``, body or payload names);
+    ``category`` ``(n,)`` category names (``arm_arm``, ``arm_vehicle``, ``arm_environment``,
+    ``arm_payload``, ``payload_*``, ``workspace``).
+    """
+
+    a: tuple
+    b: tuple
+    owner_a: tuple
+    owner_b: tuple
+    category: tuple
+
+    def __len__(self) -> int:
+        return len(self.a)
+
+    @property
+    def names(self) -> np.ndarray:
+        """``(n, 2)`` object array of GeometryObject names."""
+        out = np.empty((len(self.a), 2), dtype=object)
+        out[:, 0], out[:, 1] = self.a, self.b
+        return out
+
+
+class Model:
+    """A robot system as Pinocchio sees it, with what armguard adds.
+
+    Attributes
+    ----------
+    name : str
+    pin_model : pinocchio.Model        kinematics, joint limits, frames (the model of record)
+    collision_model : pinocchio.GeometryModel   every shape, as coal geometry (capsules, convex hulls)
+    scene : armguard.Scene             the same system as the analytic backend compiles it, with
+                                       the sidecar's workspace, trajectories and canned tests
+    pairs : GeometryPairs              the active pairs (SRDF and the papers' rules applied)
+    notes : Mapping[str, str]          GeometryObject name -> representation note (where a backend
+                                       cannot hold the exact shape)
+    files : tuple[Path, ...]           the files it was loaded from; ``sha256`` their hashes
+    """
+
+    def __init__(self, name, pin_model, collision_model, scene, *, q_index, geometry_names, notes, files,
+                 circular=()) -> None:
+        self.name = str(name)
+        self.pin_model = pin_model
+        self.collision_model = collision_model
+        self.scene = scene
+        q_index = np.asarray(q_index, dtype=np.int64)
+        q_index.flags.writeable = False
+        self._q_index = q_index
+        self._circular = np.asarray(circular, dtype=np.int64)  # scene positions of continuous joints
+        self._geom = dict(geometry_names)
+        self.notes = types.MappingProxyType(dict(notes))
+        self.files = tuple(Path(p).resolve() for p in files)
+        self.sha256 = types.MappingProxyType({str(p): file_sha256(p) for p in self.files})
+        self._pairs = None
+        self._revision = None
+        self._geom_index = {go.name: i for i, go in enumerate(collision_model.geometryObjects)}
+
+    def __repr__(self) -> str:
+        return (f"Model({self.name!r}, nq={self.pin_model.nq}, {self.collision_model.ngeoms} geometries, "
+                f"{len(self.pairs)} pairs)")
+
+    # ---------------------------------------------------------------- configurations
+    @property
+    def nq(self) -> int:
+        return int(self.pin_model.nq)
+
+    @property
+    def q_index(self) -> np.ndarray:
+        """``(n,) int64``: flat scene q[k] = pinocchio q[q_index[k]] (``scene.joint_names`` order)."""
+        return self._q_index
+
+    def scene_q(self, q) -> np.ndarray:
+        """Pinocchio-ordered ``q`` ``(..., nq)`` -> the scene's flat order ``(..., n)``."""
+        q = np.asarray(q, dtype=np.float64)
+        if q.shape[-1:] != (self.nq,):
+            raise DetectionError(f"q: expected {self.nq} values in pin_model's order {self.joint_names}, got shape {q.shape}")
+        out = q[..., self._q_index]
+        for k in self._circular:  # a continuous joint: pinocchio's (cos, sin) -> its angle
+            i = self._q_index[k]
+            out[..., k] = np.arctan2(q[..., i + 1], q[..., i])
+        return out
+
+    def pin_q(self, q_scene) -> np.ndarray:
+        """The scene's flat ``q`` ``(..., n)`` -> Pinocchio's order ``(..., nq)``."""
+        q_scene = np.asarray(q_scene, dtype=np.float64)
+        out = np.zeros(q_scene.shape[:-1] + (self.nq,))
+        out[..., self._q_index] = q_scene
+        for k in self._circular:
+            i = self._q_index[k]
+            out[..., i], out[..., i + 1] = np.cos(q_scene[..., k]), np.sin(q_scene[..., k])
+        return out
+
+    @property
+    def joint_names(self) -> tuple:
+        """Pinocchio's independent joint names, in q order."""
+        m = self.pin_model
+        return tuple(m.names[j] for j in range(1, m.njoints) if m.joints[j].nq > 0)
+
+    def neutral(self) -> np.ndarray:
+        """The scene's default configuration in Pinocchio's order (each arm's home)."""
+        return self.pin_q(self.scene.flat_q(self.scene.default_q()))
+
+    def random_q(self, n: int, rng=None) -> np.ndarray:
+        """``(n, nq)`` uniform in-limit configurations (Pinocchio's order)."""
+        rng = np.random.default_rng(rng)
+        robots = list(self.scene.robots.values())
+        lo = np.concatenate([r.lower for r in robots]) if robots else np.zeros(0)
+        hi = np.concatenate([r.upper for r in robots]) if robots else np.zeros(0)
+        lo, hi = np.where(np.isfinite(lo), lo, -np.pi), np.where(np.isfinite(hi), hi, np.pi)
+        return self.pin_q(lo + (hi - lo) * rng.random((int(n), len(lo))))
+
+    # ---------------------------------------------------------------- pairs
+    def geometry_name(self, owner: str, i: int) -> str:
+        """The GeometryObject name of shape ``i`` of scene owner ``owner``."""
+        return self._geom[(owner, i)]
+
+    def geometry_index(self, name: str) -> int:
+        return self._geom_index[name]
+
+    @property
+    def pairs(self) -> GeometryPairs:
+        """The active pairs (recomputed if the scene changed since)."""
+        if self._pairs is None or self._revision != self.scene.revision:
+            self._pairs = self._compute_pairs()
+            self._revision = self.scene.revision
+        return self._pairs
+
+    def _compute_pairs(self) -> GeometryPairs:
+        from ..scene import PAIR_CATEGORIES, compile_scene
+
+        cs = compile_scene(self.scene)
+        a, b, oa, ob, cat = [], [], [], [], []
+
+        def gname(e: int):
+            o = int(cs.elem_owner[e])
+            return self._geom[(cs.owner_names[o], e - int(cs.owner_elem_start[o]))], cs.owner_names[o]
+
+        for p in range(len(cs.pair_a)):
+            c = PAIR_CATEGORIES[int(cs.pair_category[p])].value
+            for k in range(int(cs.pair_elem_start[p]), int(cs.pair_elem_start[p + 1])):
+                (na, owa), (nb, owb) = gname(int(cs.elem_pair_a[k])), gname(int(cs.elem_pair_b[k]))
+                a.append(na), b.append(nb), oa.append(owa), ob.append(owb), cat.append(c)
+        if cs.has_workspace:
+            for e in range(cs.n_elements):
+                if int(cs.elem_robot[e]) >= 0:
+                    na, owa = gname(e)
+                    a.append(na), b.append(WORKSPACE), oa.append(owa), ob.append(WORKSPACE), cat.append("workspace")
+        return GeometryPairs(tuple(a), tuple(b), tuple(oa), tuple(ob), tuple(cat))

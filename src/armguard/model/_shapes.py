@@ -1,0 +1,114 @@
+"""coal geometries <-> armguard shapes, placed in a frame.
+
+``shape_from_coal(geometry, X_FG)`` gives the armguard shape of a coal geometry whose frame G
+is at ``X_FG`` in frame F, and a representation note when the two are not the same set of
+points (a cylinder is a circumscribed prism in the analytic kernels).  ``coal_from_shape``
+is the inverse, used for bodies a scene file adds.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._errors import SceneError
+from ..geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere
+
+__all__ = ["shape_from_coal", "coal_from_shape", "CYLINDER_PRISM_SIDES"]
+
+CYLINDER_PRISM_SIDES = 16
+"""Sides of the prism that circumscribes a cylinder in the analytic kernels (apothem = radius)."""
+
+
+def _flat_polygon(p: np.ndarray):
+    """``p`` (N, 3) coplanar points -> a Polygon of their 2-D hull, or None when not flat."""
+    c = p.mean(axis=0)
+    u, s, vt = np.linalg.svd(p - c)
+    ext = float(np.ptp(p, axis=0).max()) or 1.0
+    if s.size < 3 or s[2] > 1e-9 * ext * np.sqrt(len(p)):
+        return None
+    from scipy.spatial import ConvexHull
+
+    uv = (p - c) @ vt[:2].T
+    hull = ConvexHull(uv)
+    return Polygon(p[hull.vertices])
+
+
+def shape_from_coal(g, X_FG: np.ndarray):
+    """``(shape in F, note)`` for the coal geometry ``g`` at ``X_FG`` (4, 4); note "" if exact."""
+    import coal
+
+    R, t = X_FG[:3, :3], X_FG[:3, 3]
+    if isinstance(g, coal.Capsule):
+        h = float(g.halfLength)
+        return Capsule(t - h * R[:, 2], t + h * R[:, 2], float(g.radius)), ""
+    if isinstance(g, coal.Sphere):
+        return Sphere(t, float(g.radius)), ""
+    if isinstance(g, coal.Box):
+        return Box(t, np.asarray(g.halfSide, dtype=np.float64), R), ""
+    if isinstance(g, coal.Cylinder):
+        return (Prism(t, R, float(g.radius), float(g.halfLength), CYLINDER_PRISM_SIDES),
+                f"cylinder -> circumscribed {CYLINDER_PRISM_SIDES}-sided prism (up to "
+                f"{float(g.radius) * (1 / np.cos(np.pi / CYLINDER_PRISM_SIDES) - 1) * 1e3:.2f} mm larger)")
+    if isinstance(g, coal.ConvexBase):
+        v = np.asarray(g.points(), dtype=np.float64).reshape(-1, 3) if callable(g.points) else np.asarray(g.points)
+        p = v @ R.T + t
+        poly = _flat_polygon(p)
+        if poly is not None:
+            return poly, ""
+        return ConvexPolyhedron(p), ""
+    raise SceneError(f"coal geometry {type(g).__name__} has no armguard shape (expected capsule, sphere, box, "
+                     "cylinder or convex mesh)")
+
+
+def coal_from_shape(shape):
+    """``(coal geometry, X_SG (4, 4))``: the coal geometry of an armguard shape given in frame S."""
+    import coal
+
+    X = np.eye(4)
+    if isinstance(shape, Sphere):
+        X[:3, 3] = shape.center
+        return coal.Sphere(float(shape.radius)), X
+    if isinstance(shape, Capsule):
+        axis = shape.p1 - shape.p0
+        L = float(np.linalg.norm(axis))
+        X[:3, 3] = 0.5 * (shape.p0 + shape.p1)
+        if L > 0:
+            z = axis / L
+            a = np.array([1.0, 0, 0]) if abs(z[0]) < 0.9 else np.array([0, 1.0, 0])
+            x = np.cross(a, z)
+            x /= np.linalg.norm(x)
+            X[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+        return coal.Capsule(float(shape.radius), L), X
+    if isinstance(shape, Box):
+        X[:3, :3] = shape.rotation
+        X[:3, 3] = shape.center
+        return coal.Box(*(2.0 * np.asarray(shape.half_extents))), X
+    if isinstance(shape, (ConvexPolyhedron, Prism, Polygon)):
+        pts = np.asarray(shape.as_polyhedron().vertices if isinstance(shape, Prism) else shape.vertices, dtype=np.float64)
+        return _convex(pts), X
+    raise SceneError(f"shape {type(shape).__name__} has no coal geometry")
+
+
+def _convex(pts: np.ndarray):
+    """A coal.Convex of the points' hull (a flat polygon: two triangle fans, both sides)."""
+    import coal
+
+    poly = _flat_polygon(pts)
+    if poly is not None:
+        v = np.asarray(poly.vertices, dtype=np.float64)
+        n = len(v)
+        tris = [(0, i, i + 1) for i in range(1, n - 1)] + [(0, i + 1, i) for i in range(1, n - 1)]
+    else:
+        from scipy.spatial import ConvexHull
+
+        hull = ConvexHull(pts)
+        v = pts[hull.vertices]
+        remap = {int(k): i for i, k in enumerate(hull.vertices)}
+        tris = [tuple(remap[int(k)] for k in s) for s in hull.simplices]
+    m = coal.BVHModelOBBRSS()
+    m.beginModel(len(tris), len(v))
+    m.addVertices(np.ascontiguousarray(v))
+    m.addTriangles(np.ascontiguousarray(np.array(tris, dtype=np.int64)))
+    m.endModel()
+    m.buildConvexRepresentation(False)
+    return m.convex
