@@ -56,7 +56,7 @@ def plot_monte_carlo(path, samples, estimate: UncertainPose2, *, confidences: Se
         ax.plot(*np.vstack((pts, pts[:1])).T, color=colors[i % len(colors)], lw=1.5,
                 label=f"{p:.0%} ellipse (k² = {e.k2:.3f}): {inside:.1%} of samples inside")
     if chain:
-        means = np.array([[0.0, 0.0]] + [c.mean[:2] for c in chain])
+        means = np.array([[0.0, 0.0]] + [c.mean[:2] for c in chain] + [estimate.mean[:2]])
         ax.plot(means[:, 0], means[:, 1], "k.-", lw=0.8, label="chain means")
         for c in chain:
             pts = c.ellipse(max(confidences)).points(128)
