@@ -311,10 +311,13 @@ def _assumed_outside(system: str) -> int:
     return n
 
 
-def test_assumed_notes_reach_the_urdf():
-    _, path = _system("hermes")
-    text = path.read_text()
-    assert "a prism with 7 base sides (seed)" in text and text.count("# assumed") >= 8
+@pytest.mark.parametrize("system", SYSTEMS)
+def test_assumed_notes_reach_the_urdf_and_srdf(system):
+    _, path = _system(system)
+    text = path.read_text() + path.with_suffix(".srdf").read_text()
+    assert text.count("# assumed") >= _assumed_outside(system) > 0
+    header = builtin_path(system).read_text().split("armguard_scene:")[0]
+    assert header.splitlines()[0].lstrip("# ") in path.read_text()
 
 
 # ------------------------------------------------------------------ export_scene on a scene made here

@@ -262,7 +262,13 @@ def _obj(vertices, triangles, note: str) -> str:
 
 
 def _hull_triangles(poly: ConvexPolyhedron) -> list:
-    return [(f[0], f[k], f[k + 1]) for f in poly.faces for k in range(1, len(f) - 1)]
+    """Each face as a fan of counter-clockwise triangles, faces in a fixed order (qhull's varies)."""
+    faces = []
+    for f in poly.faces:
+        f = [int(v) for v in f]
+        k = f.index(min(f))
+        faces.append(f[k:] + f[:k])
+    return [(f[0], f[k], f[k + 1]) for f in sorted(faces) for k in range(1, len(f) - 1)]
 
 
 def _collision(shape, cname: str, meshes: dict) -> tuple[list[str], str | None]:
@@ -428,7 +434,7 @@ def _split_comment(line: str) -> tuple[str, str]:
         elif ch in "'\"":
             quote = ch
         elif ch == "#" and (k == 0 or line[k - 1] in " \t"):
-            return line[:k].rstrip(), line[k + 1:].strip()
+            return line[:k].rstrip(), line[k:].strip()  # the comment keeps its '#' (and its "# assumed")
     return line.rstrip(), ""
 
 
@@ -602,7 +608,9 @@ def export_scene(scene, out_dir, *, name: str | None = None, source=None) -> dic
         sections = _generated_sections(scene, deg=True)
     model = _build(scene, notes)
     meshes: dict[str, str] = {}
-    urdf_header = header + ("\n\n" if header else "") + (
+    frames = notes.get(("frames", "*"), "")
+    frames = f"\n\nThe scene file's frames (flattened into W here):\n{frames}" if frames else ""
+    urdf_header = header + frames + ("\n\n" if header or frames else "") + (
         f"The model of {name} (docs/models.md), written by tools/dh_to_urdf from the scene file "
         f"{Path(source).name if source else name}; edit this file from now on.  Link frames are DH joint frames.")
     urdf = _urdf_text(name, model, urdf_header, meshes)
