@@ -201,11 +201,13 @@ def test_every_collision_element_reaches_pinocchio(path):
             assert tag == "mesh"
 
 
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")  # trimesh's, inside yourdfpy
 @pytest.mark.parametrize("path", URDF_FILES, ids=lambda p: str(p.relative_to(URDF_DIR)))
 def test_yourdfpy_loads_every_file(path):
     yourdfpy = pytest.importorskip("yourdfpy")
-    u = yourdfpy.URDF.load(str(path), build_scene_graph=False, load_meshes=False)
-    assert u.validate()
+    u = yourdfpy.URDF.load(str(path), build_scene_graph=False, load_meshes=False,
+                           build_collision_scene_graph=True, load_collision_meshes=True)
+    assert u.validate() and u.collision_scene is not None
     n = sum(len(link.collisions) for link in u.robot.links)
     assert n == len(_collisions(path))
     for link in u.robot.links:

@@ -515,20 +515,7 @@ def _item_notes(section: str, body: list[str], notes: dict) -> None:
 
 
 # ------------------------------------------------------------------ the sidecar
-def _yaml_scalar(s: str) -> str:
-    import json
-
-    import yaml
-
-    try:
-        if yaml.safe_load(f"k: {s}") == {"k": s}:
-            return s
-    except yaml.YAMLError:
-        pass
-    return json.dumps(s)
-
-
-def _generated_sections(scene, deg: bool) -> dict:
+def _generated_sections(scene) -> dict:
     """The sidecar sections from the scene itself (no source file): angles in degrees."""
     import yaml
 
@@ -536,12 +523,9 @@ def _generated_sections(scene, deg: bool) -> dict:
 
     d = scene_to_dict(scene)
 
-    def scale(robot_name):
-        robot = scene.robots[robot_name]
-        return np.array([1.0 if jt is JointType.PRISMATIC or not deg else 180.0 / math.pi for jt in robot.joint_types])
-
-    def q(robot_name, values):
-        return [float(f"{x:.12g}") for x in np.asarray(values) * scale(robot_name)]
+    def q(robot, values):  # rad -> deg for revolute joints
+        f = [1.0 if jt is JointType.PRISMATIC else 180.0 / math.pi for jt in scene.robots[robot].joint_types]
+        return [float(f"{x:.12g}") for x in np.asarray(values) * f]
 
     for t in d.get("trajectories", []):
         t["waypoints"] = [q(t["robot"], w) for w in t["waypoints"]]
@@ -556,6 +540,8 @@ def _generated_sections(scene, deg: bool) -> dict:
 
 
 def _sidecar_text(name: str, scene, header: str, sections: dict, units: dict) -> str:
+    import yaml
+
     deg = units.get("angle", "rad") == "deg"
     mm = units.get("length", "m") == "mm"
     out = [f"# {ln}".rstrip() for ln in header.split("\n")] if header else []
@@ -565,7 +551,7 @@ def _sidecar_text(name: str, scene, header: str, sections: dict, units: dict) ->
             f"# limits and speeds are in {name}.urdf; groups, disabled pairs and homes in {name}.srdf.",
             "armguard_scene: 1", f"name: {name}"]
     if scene.description:
-        out.append(f"description: {_yaml_scalar(scene.description)}")
+        out.append(yaml.safe_dump({"description": scene.description}, width=10**6).rstrip())
     out += [f"units: {{angle: {'deg' if deg else 'rad'}, length: {'mm' if mm else 'm'}}}",
             f"model: {{urdf: {name}.urdf, srdf: {name}.srdf}}"]
     if "workspace" in sections:
@@ -605,7 +591,7 @@ def export_scene(scene, out_dir, *, name: str | None = None, source=None) -> dic
         units = {"angle": "rad", "length": "m", **(yaml.safe_load(text).get("units") or {})}
         sections = {k: v for k, v in sections.items() if k in SIDECAR_SECTIONS}
     else:
-        sections = _generated_sections(scene, deg=True)
+        sections = _generated_sections(scene)
     model = _build(scene, notes)
     meshes: dict[str, str] = {}
     frames = notes.get(("frames", "*"), "")
@@ -618,9 +604,8 @@ def export_scene(scene, out_dir, *, name: str | None = None, source=None) -> dic
     sidecar = _sidecar_text(name, scene, header, sections, units)
     (out / "meshes").mkdir(parents=True, exist_ok=True)
     paths = {"urdf": out / f"{name}.urdf", "srdf": out / f"{name}.srdf", "yaml": out / f"{name}.yaml", "meshes": []}
-    paths["urdf"].write_text(urdf, encoding="utf-8")
-    paths["srdf"].write_text(srdf, encoding="utf-8")
-    paths["yaml"].write_text(sidecar, encoding="utf-8")
+    for key, text in (("urdf", urdf), ("srdf", srdf), ("yaml", sidecar)):
+        paths[key].write_text(text, encoding="utf-8")
     for cname, obj in meshes.items():
         p = out / "meshes" / f"{cname}.obj"
         p.write_text(obj, encoding="utf-8")
