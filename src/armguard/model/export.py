@@ -417,7 +417,7 @@ def _srdf_text(name: str, scene, m: _Model, notes: dict) -> str:
             note = "\n".join(x for x in [note] + [notes.get(("self_pairs", r), "") for r in scene.self_pairs] if x)
             if scene.self_pairs:
                 note += ("\nOnly the listed link pairs of " + ", ".join(scene.self_pairs) +
-                         " are checked: every other pair of their links is disabled here.")
+                         " are checked: every other pair of their links is disabled (here, or above as Adjacent).")
         out += [""] + _comment(note, "  ")
         out += [f'  <disable_collisions link1="{a}" link2="{b}" reason="{reason}"/>' for a, b, _ in chosen]
     out.append("</robot>")
