@@ -50,22 +50,29 @@ def test_from_points_is_the_per_cell_max():
     assert np.all(m.heights <= h) and np.all(m.heights > h - 0.01)
 
 
-def test_outlier_rule_drops_a_stray_point_and_an_isolated_spike_but_keeps_a_rock():
+def test_outlier_rule_drops_stray_points_and_unsupported_spikes_but_keeps_a_rock():
     rng = np.random.default_rng(2)
     h = np.zeros((10, 10))
     h[6:9, 6:9] = 0.3  # a rock over 3 x 3 cells, well supported
     pts = _grid_points(rng, h, 0.1)
-    stray = [0.25, 0.25, 0.9]  # one bad match inside a dense flat cell (2, 2): stage 1
-    lone = [[0.75, 0.15, 0.8]]  # the only point of cell (1, 7): stage 2
-    cloud = np.vstack([pts[~((pts[:, 0] > 0.7) & (pts[:, 0] < 0.8) & (pts[:, 1] > 0.1) & (pts[:, 1] < 0.2))],
-                       [stray], lone])
+    in_cell = lambda r, c: (pts[:, 0] > c * 0.1) & (pts[:, 0] < c * 0.1 + 0.1) & (pts[:, 1] > r * 0.1) & (pts[:, 1] < r * 0.1 + 0.1)  # noqa: E731
+    sparse = in_cell(1, 7) | in_cell(4, 2)
+    two = pts[in_cell(4, 2)][:2]  # cell (4, 2): two ground points and a mismatch
+    stray = [0.25, 0.25, 0.9]  # a bad match inside a dense flat cell (2, 2): stage 1
+    lone = [0.75, 0.15, 0.8]  # the only point of cell (1, 7): stage 2
+    mismatch = [0.25, 0.45, 0.7]  # stage 2 drops it, cell (4, 2) keeps its ground points
+    cloud = np.vstack([pts[~sparse], two, [stray, lone, mismatch]])
     m = ElevationMap.from_points(cloud, 0.1, bounds=(0, 0, 1, 1))
     assert m.heights[2, 2] < 0.01  # the stray point is gone
     assert not m.known[1, 7] and m.heights[1, 7] < 0.01  # the spike cleared, then filled from its neighbours
-    assert m.rejected == 2
+    assert m.known[4, 2] and m.counts[4, 2] == 2 and m.heights[4, 2] < 0.01
+    assert m.rejected == 3
     assert m.known[6:9, 6:9].all() and np.all(m.heights[6:9, 6:9] > 0.29)  # the rock survives
     off = ElevationMap.from_points(cloud, 0.1, bounds=(0, 0, 1, 1), rule=OutlierRule(k=np.inf, spike=np.inf))
     assert off.heights[2, 2] == pytest.approx(0.9) and off.heights[1, 7] == pytest.approx(0.8)
+    assert off.rejected == 0
+    far = ElevationMap.from_points(np.vstack([cloud, [[5.05, 5.05, 3.0]]]), 0.1, bounds=(0, 0, 6, 6))
+    assert not far.known[50, 50] and far.rejected == 4  # nothing around it: unsupported
 
 
 def test_unknown_cells_are_filled_conservatively_and_reported():
@@ -96,7 +103,7 @@ def test_from_points_rejects_bad_input_and_counts_non_finite_rows():
     with pytest.raises(TerrainError):
         ElevationMap.from_points(np.full((3, 3), np.nan), 0.1)
     p = np.array([[0.05, 0.05, 0.1], [np.nan, 0, 0], [0.15, 0.05, 0.2]])
-    m = ElevationMap.from_points(p, 0.1, bounds=(0, 0, 0.2, 0.1))
+    m = ElevationMap.from_points(p, 0.1, bounds=(0, 0, 0.2, 0.1), rule=OutlierRule(spike=np.inf))
     assert m.invalid == 1 and m.known.all() and m.heights.tolist() == [[0.1, 0.2]]
 
 

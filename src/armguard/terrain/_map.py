@@ -40,10 +40,13 @@ class OutlierRule:
        least ``min_points`` points, a point is rejected when
        ``|z - median| > k * max(1.4826 * MAD, sigma_min)`` (MAD: the median absolute deviation of
        the cell's heights).  Cells with fewer points are kept whole (nothing to judge them by).
-    2. **Isolated spikes**: a cell whose height exceeds the highest of its known 8-neighbours by
-       more than ``spike`` (m) and that rests on fewer than ``spike_support`` points is cleared
-       (becomes unknown, and is then filled like any hole).  A real rock seen by stereo has flanks
-       (elevated neighbours) and many points; a floating mismatch has neither.
+    2. **Unsupported points**: a point at height ``z`` is dropped when fewer than
+       ``spike_support`` points (itself included) within ``spike_radius`` cells of its cell
+       (Chebyshev distance, its own cell included; points after stage 1) are at least as high as
+       ``z - spike``.  Ground has neighbours at its height, a real rock has flanks and many
+       points; a stereo mismatch floating above the ground (or a pair of them) has neither.  A cell
+       left without points becomes unknown (and is filled like any hole).  The price: a real spike
+       seen by one or two points only is dropped too (``spike = inf`` keeps it).
 
     ``k = inf`` or ``spike = inf`` disables a stage.
 
@@ -57,9 +60,12 @@ class OutlierRule:
         Floor on the robust spread, so that a flat, noise-free cell does not reject its own
         millimetre-level noise.
     spike : float, m
-        Stage 2's height above every known neighbour.
+        Stage 2: how far below a point its supporting points may be.
     spike_support : int
-        Stage 2 clears only cells with fewer points than this.
+        Stage 2: the supporting points a point needs (itself included).
+    spike_radius : int, cells
+        Stage 2's neighbourhood (2: the 5 x 5 cells around; sparse far-range data needs more than
+        the 8 adjacent cells to find its neighbours).
     """
 
     k: float = 3.5
@@ -67,6 +73,7 @@ class OutlierRule:
     sigma_min: float = 0.01
     spike: float = 0.15
     spike_support: int = 3
+    spike_radius: int = 2
 
 
 @dataclass(frozen=True, eq=False)
@@ -217,15 +224,14 @@ class ElevationMap:
         keep = _robust_keep(cid, z, rule)
         rejected = int(np.count_nonzero(~keep))
         cid, z = cid[keep], z[keep]
+        drop = _spikes(cid, z, nx, ny, rule)
+        rejected += int(np.count_nonzero(drop))
+        cid, z = cid[~drop], z[~drop]
         counts = np.bincount(cid, minlength=nx * ny).reshape(ny, nx)
         hmax = np.full(nx * ny, -np.inf)
         np.maximum.at(hmax, cid, z)
         hmax = hmax.reshape(ny, nx)
         known = counts > 0
-        spikes = _spikes(hmax, known, counts, rule)
-        rejected += int(counts[spikes].sum())
-        known &= ~spikes
-        counts = np.where(known, counts, 0)
         if not known.any():
             if ceiling is None:
                 raise TerrainError("from_points: no cell has a surviving point; give a ceiling to fill the map")
@@ -264,11 +270,25 @@ def _robust_keep(cid: np.ndarray, z: np.ndarray, rule: OutlierRule) -> np.ndarra
     return keep
 
 
-def _spikes(hmax: np.ndarray, known: np.ndarray, counts: np.ndarray, rule: OutlierRule) -> np.ndarray:
-    """Stage 2 of :class:`OutlierRule`: the cells to clear."""
-    if not np.isfinite(rule.spike):
-        return np.zeros_like(known)
-    fp = np.ones((3, 3), bool)
-    fp[1, 1] = False
-    neigh = ndimage.maximum_filter(np.where(known, hmax, -np.inf), footprint=fp, mode="constant", cval=-np.inf)
-    return known & np.isfinite(neigh) & (hmax > neigh + rule.spike) & (counts < rule.spike_support)
+def _spikes(cid: np.ndarray, z: np.ndarray, nx: int, ny: int, rule: OutlierRule) -> np.ndarray:
+    """Stage 2 of :class:`OutlierRule`: a drop mask over the points.  The points are sorted by the
+    key ``cell + (z - z_min) / span`` (``span`` > the height range, so each cell's heights map into
+    ``[cell, cell + 1)`` in order); the points of a cell at least as high as a threshold are then
+    a range of that sorted key, counted by two binary searches per neighbouring cell."""
+    n = len(z)
+    if not np.isfinite(rule.spike) or n == 0:
+        return np.zeros(n, bool)
+    z_min = float(z.min())
+    span = 2.0 * (float(z.max()) - z_min + rule.spike) + 1.0
+    key = np.sort(cid + (z - z_min) / span)
+    row, col = np.divmod(cid, nx)
+    lo_key = (np.maximum(z - rule.spike, z_min) - z_min) / span
+    support = np.zeros(n, np.int64)
+    rad = max(int(rule.spike_radius), 0)
+    for dy in range(-rad, rad + 1):
+        for dx in range(-rad, rad + 1):
+            r, c = row + dy, col + dx
+            ok = (r >= 0) & (r < ny) & (c >= 0) & (c < nx)
+            nb = (r * nx + c)[ok]
+            support[ok] += np.searchsorted(key, nb + 1.0, side="left") - np.searchsorted(key, nb + lo_key[ok], side="left")
+    return support < rule.spike_support

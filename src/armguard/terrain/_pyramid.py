@@ -254,15 +254,17 @@ class TerrainPyramid:
     # ----------------------------------------------------------------------------- assembly
     def _result(self, cells, masks, K, per_level, visited, deepest, truncated, exact, shapes, clearance):
         nx = self.map.shape[1]
-        cell = np.concatenate(cells) if cells else np.zeros(0, np.int64)
-        link_hits = np.concatenate(masks, axis=0) if masks else np.zeros((0, K), bool)
-        # one row per cell: the same cell may be hit in several link chunks
-        uniq, inv = np.unique(cell, return_inverse=True)
-        per_cell = np.zeros((len(uniq), K), bool)
-        np.logical_or.at(per_cell, inv, link_hits)
-        rc = np.stack([uniq // nx, uniq % nx], axis=1).astype(np.int64) if len(uniq) else np.zeros((0, 2), np.int64)
+        if len(cells) == 1:  # one chunk of links: the descent visits each finest cell at most once
+            uniq, per_cell = cells[0], masks[0]
+        else:  # a cell may be hit in several chunks
+            cell = np.concatenate(cells)
+            uniq, inv = np.unique(cell, return_inverse=True)
+            per_cell = np.zeros((len(uniq), K), bool)
+            np.logical_or.at(per_cell, inv, np.concatenate(masks, axis=0))
+        rc = np.empty((len(uniq), 2), np.int64)
+        rc[:, 0], rc[:, 1] = np.divmod(uniq, nx)
         links_hit = per_cell.any(axis=0)
-        hit_unknown = bool(len(uniq) and np.any(~self.map.known[rc[:, 0], rc[:, 1]]))
+        hit_unknown = bool(len(uniq)) and not bool(self.map.known.ravel()[uniq].all())
         last = self.n_levels - 1
         if not exact:
             status = TerrainStatus.HIT if len(uniq) else TerrainStatus.CLEAR
@@ -285,6 +287,6 @@ class TerrainPyramid:
 def _shift_masks(m: np.ndarray, lo: int, K: int) -> np.ndarray:
     """``(n, K) bool`` from the chunk's int64 bit masks (chunk links ``lo, lo + 1, ...``)."""
     out = np.zeros((len(m), K), bool)
-    for b in range(min(_MAX_LINKS, K - lo)):
-        out[:, lo + b] = (m >> np.int64(b)) & 1
+    nb = min(_MAX_LINKS, K - lo)
+    out[:, lo:lo + nb] = (m[:, None] >> np.arange(nb, dtype=np.int64)) & 1
     return out

@@ -103,17 +103,23 @@ def _obbs(volume: Shape, margin: float) -> list[tuple[np.ndarray, np.ndarray, np
 def pack_rows(volumes: Sequence[Shape], margin: float, eps_par: float) -> tuple[np.ndarray, np.ndarray]:
     """Kernel rows for ``volumes`` grown by ``margin`` (m): ``rows (R, 36) float64`` (layout in
     ``_kernels``) and ``rstart (K + 1,) int64`` (link ``k``'s rows are ``rstart[k]:rstart[k+1]``)."""
-    cs, hs, Rs, rstart = [], [], [], [0]
+    parts, rstart = [], [0]
     for v in volumes:
-        for c, h, R in _obbs(v, margin):
-            cs.append(c); hs.append(h); Rs.append(R)
-        rstart.append(len(cs))
-    c, h, R = np.array(cs, np.float64), np.array(hs, np.float64), np.array(Rs, np.float64).reshape(-1, 3, 3)
-    Q = np.abs(R) + eps_par
-    E = np.einsum("kij,kj->ki", Q, h)
-    C = np.empty((len(c), 3, 3))  # the link's radius along e_i x B_j
+        parts.extend(_obbs(v, margin))
+        rstart.append(len(parts))
+    n = len(parts)
+    rows = np.empty((n, ROW))
+    for i, (ci, hi, Ri) in enumerate(parts):
+        rows[i, 0:3] = ci
+        rows[i, 3:6] = hi
+        rows[i, 6:15] = Ri.ravel()
+    h = rows[:, 3:6]
+    Q = np.abs(rows[:, 6:15]) + eps_par
+    rows[:, 15:24] = Q
+    Q = Q.reshape(n, 3, 3)
+    rows[:, 24:27] = np.matmul(Q, h[:, :, None])[:, :, 0]  # E_i = sum_j h_j Q_ij
+    C = rows[:, 27:36].reshape(n, 3, 3)  # a view: the link's radius along e_i x B_j
     C[:, :, 0] = h[:, 1, None] * Q[:, :, 2] + h[:, 2, None] * Q[:, :, 1]
     C[:, :, 1] = h[:, 0, None] * Q[:, :, 2] + h[:, 2, None] * Q[:, :, 0]
     C[:, :, 2] = h[:, 0, None] * Q[:, :, 1] + h[:, 1, None] * Q[:, :, 0]
-    rows = np.concatenate([c, h, R.reshape(-1, 9), Q.reshape(-1, 9), E, C.reshape(-1, 9)], axis=1)
-    return np.ascontiguousarray(rows.reshape(-1, ROW)), np.array(rstart, dtype=np.int64)
+    return rows, np.array(rstart, dtype=np.int64)
