@@ -20,6 +20,7 @@ from ._cells import CellKind, CellTree
 from ._guard import DEFAULT_INNER_SCALE, DEFAULT_MAX_DEPTH, DEFAULT_RINGS, Guard
 from ._kernels import cyrus_beck, sutherland_hodgman
 from ._obstacle import DEFAULT_BOUNDS_MIN_VERTICES, Obstacle
+from ._predict import DEFAULT_MAX_HALVINGS, Prediction, Predictor, interpolate_pose, rotation_growth, swept_guard
 from ._procedure import STATUS_CODES, STEP_NAMES, ClipResult, ClipStatus, ListResult, check, check_list, check_many
 
 ANSWERS = "verdicts"
@@ -37,6 +38,12 @@ __all__ = [
     "check",
     "check_list",
     "check_many",
+    "Predictor",
+    "Prediction",
+    "swept_guard",
+    "rotation_growth",
+    "interpolate_pose",
+    "DEFAULT_MAX_HALVINGS",
     "cyrus_beck",
     "sutherland_hodgman",
     "STEP_NAMES",
