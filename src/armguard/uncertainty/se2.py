@@ -18,6 +18,8 @@ the underscore kernels skip the checks and are what the validated classes call.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .._errors import UncertaintyError
@@ -66,8 +68,14 @@ def _compound_jacobians(x1: np.ndarray, x2: np.ndarray, x3: np.ndarray) -> tuple
 
 
 def _compound(x1, c1, x2, c2, c12=None):
-    x3 = _compound_mean(x1, x2)
-    j1, j2 = _compound_jacobians(x1, x2, x3)
+    # one relation: scalar arithmetic (the vectorised _compound_mean is for sample batches)
+    a, b, t1 = float(x1[0]), float(x1[1]), float(x1[2])
+    c, s = math.cos(t1), math.sin(t1)
+    dx = float(x2[0]) * c - float(x2[1]) * s
+    dy = float(x2[0]) * s + float(x2[1]) * c
+    x3 = np.array((dx + a, dy + b, t1 + float(x2[2])))
+    j1 = np.array(((1.0, 0.0, -dy), (0.0, 1.0, dx), (0.0, 0.0, 1.0)))
+    j2 = np.array(((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0)))
     c3 = j1 @ c1 @ j1.T + j2 @ c2 @ j2.T
     if c12 is not None:
         cross = j1 @ c12 @ j2.T
@@ -88,8 +96,10 @@ def _reverse_jacobian(x: np.ndarray, xr: np.ndarray) -> np.ndarray:
 
 
 def _reverse(x, c):
-    xr = _reverse_mean(x)
-    j = _reverse_jacobian(x, xr)
+    a, b, t = float(x[0]), float(x[1]), float(x[2])
+    co, si = math.cos(t), math.sin(t)
+    xr = np.array((-a * co - b * si, a * si - b * co, -t))
+    j = np.array(((-co, -si, xr[1]), (si, -co, -xr[0]), (0.0, 0.0, -1.0)))
     return xr, symmetrize(j @ c @ j.T), j
 
 
