@@ -344,8 +344,29 @@ class Verifier:
                 s = s_next
         return VerificationStatus.SAFE, "", lower, intervals, None
 
+    def _sample_counts(self, segs, frequency, joint_step) -> np.ndarray | None:
+        """Per-segment joint-space steps of ``joint_step`` (None with ``frequency``); a request for more
+        samples than ``Tolerances.verify_max_evaluations`` is refused before any work or memory is spent."""
+        cap = self.tol.verify_max_evaluations
+        if frequency is not None:
+            duration = float(segs[-1][1] - segs[0][0])
+            n = duration * frequency + 2.0
+            if not n <= cap:
+                raise VerificationError(
+                    f"frequency: {frequency:g} Hz over the trajectory's {duration:g} s asks for {n:.3g} samples; at most "
+                    f"{cap} (Tolerances.verify_max_evaluations): lower the frequency or use method='certified'")
+            return None
+        widest = np.array([float(np.max(np.abs(sg[3] - sg[2]))) if len(sg[2]) else 0.0 for sg in segs])
+        steps = np.maximum(1.0, np.ceil(widest / joint_step))
+        if not float(np.sum(steps)) + 1.0 <= cap:
+            raise VerificationError(
+                f"joint_step: {joint_step:g} rad asks for {float(np.sum(steps)) + 1.0:.3g} samples; at most {cap} "
+                "(Tolerances.verify_max_evaluations): raise joint_step or use method='certified'")
+        return steps.astype(np.int64)
+
     def _sampled(self, trajectory, segs, margins, run, frequency, joint_step, speeds):
         model = self.model
+        steps = self._sample_counts(segs, frequency, joint_step)
         if frequency is not None:
             ts, Q = trajectory.sample(frequency=frequency)
             ts = _finite_array(ts, "sample times")
@@ -365,7 +386,7 @@ class Verifier:
             points = []
             for si, (t0, t1, q0, q1) in enumerate(segs):
                 dq = q1 - q0
-                n = max(1, int(math.ceil(float(np.max(np.abs(dq))) / joint_step)))
+                n = int(steps[si])
                 rate_max = float(np.max(model.pair_rates(run.full_dq(dq)))) if len(model.owner_a) else 0.0
                 ed = max(ed, rate_max / n)
                 first = 0 if si == 0 else 1
@@ -524,7 +545,9 @@ def verify(scene, trajectory, *, stopping_distance=0.0, method: str = "certified
         certified: conservative advancement, proven between evaluations (never misses a
         collision); sampled: Hermes's discrete checks at ``frequency`` (Hz) along the time law,
         or every ``joint_step`` (rad, default 0.05, Drake's suggestion) in joint space; it
-        reports Hermes's discretisation error ``Ed = v / f``.
+        reports Hermes's discretisation error ``Ed = v / f``.  A request for more samples than
+        ``Tolerances.verify_max_evaluations`` (200 000) is refused (VerificationError) before
+        any work; certified mode spends at most that many evaluations and reports INCOMPLETE.
     robot : str | None
         The moving robot (default: the trajectory's ``robot_name``); the others stand at
         ``q_others`` (default: ``scene.default_q()``).
