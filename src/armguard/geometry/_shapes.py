@@ -241,6 +241,11 @@ def _merge_hull_faces(points: np.ndarray, tol: float):
     """
     from scipy.spatial import ConvexHull, QhullError
 
+    # the hull is built about the points' own centre (a local frame): far from the origin the
+    # coordinates' round-off would otherwise swamp a small solid, and flatness is judged against
+    # the shape's own extent, not its distance from the origin
+    o_W = 0.5 * (points.min(axis=0) + points.max(axis=0))
+    points = points - o_W
     try:
         hull = ConvexHull(points)
     except (QhullError, ValueError) as exc:
@@ -298,7 +303,7 @@ def _merge_hull_faces(points: np.ndarray, tol: float):
         faces.append(np.array([remap[i] for i in loop], dtype=np.int64))
         t0 = members[0]
         planes[g, :3] = eq[t0, :3]
-        planes[g, 3] = -eq[t0, 3]
+        planes[g, 3] = -eq[t0, 3] + float(eq[t0, :3] @ o_W)  # the local plane offset, back in W
     return np.asarray(used, dtype=np.int64), faces, planes
 
 
@@ -411,7 +416,7 @@ class Polygon(Shape):
         n = n / nn
         c = pts.mean(axis=0)
         off = np.abs((pts - c) @ n)
-        if np.max(off) > tol.planarity * max(1.0, float(np.max(np.abs(pts)))):
+        if np.max(off) > tol.planarity * max(1.0, float(np.max(np.abs(pts - c)))):  # its own extent, not |p_W|
             raise GeometryError(
                 f"Polygon.vertices: not planar (vertex {int(np.argmax(off))} is {float(np.max(off)):.3g} m off the plane)"
             )
@@ -469,8 +474,11 @@ class Prism(Shape):
         h = check_nonnegative(self.half_length, "Prism.half_length")
         if a <= 0.0 or h <= 0.0:
             raise GeometryError("Prism: apothem and half_length must be > 0 (a prism with volume)")
-        if int(self.n_sides) != self.n_sides or self.n_sides < 3:
+        if isinstance(self.n_sides, bool) or int(self.n_sides) != self.n_sides or self.n_sides < 3:
             raise GeometryError(f"Prism.n_sides: expected an integer >= 3, got {self.n_sides!r}")
+        if self.n_sides > DEFAULT_TOLERANCES.max_prism_sides:
+            raise GeometryError(f"Prism.n_sides: at most {DEFAULT_TOLERANCES.max_prism_sides} "
+                                f"(Tolerances.max_prism_sides), got {self.n_sides}")
         object.__setattr__(self, "apothem", a)
         object.__setattr__(self, "half_length", h)
         object.__setattr__(self, "n_sides", int(self.n_sides))
