@@ -15,7 +15,9 @@ class Tolerances:
     ----------
     length : float, m
         Two points closer than this are the same point; a segment shorter than this is a point.
-        Also the zero of signed distance used by ``intersects`` (touching counts as intersecting).
+        Also the contact tolerance: a signed distance ``<= length`` is a contact, for
+        ``geometry.intersects`` and for the Detector's collision status alike (touching within
+        round-off counts as intersecting).
     parallel : float, dimensionless
         ``|sin(angle)|`` below which two directions are treated as parallel (segment-segment).
     planarity : float, m

@@ -559,7 +559,7 @@ class Detector:
 
         The all-pairs path the tests compare the pruned one against (same narrow phase)."""
         min_d, status = self._many(Q, kn.MODE_ALL)
-        level = max(0.0, self._stopping)
+        level = max(self._tol.length, self._stopping)  # the contact tolerance, as the kernel
         dmin = min_d.min(axis=1)
         status = np.where(dmin <= level, kn.ST_COLLISION,
                           np.where(dmin <= max(self._threshold, self._stopping), kn.ST_WARNING, kn.ST_CLEAR))

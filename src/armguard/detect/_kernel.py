@@ -20,7 +20,7 @@ Modes (``iprm[0]``):
   not the nearest of their category may be skipped, as the batch reports only the minima).
 
 ``threshold_eff = max(threshold, stopping_distance)``; the collision level is
-``max(0, stopping_distance)``.  Status codes: 0 clear, 1 warning, 2 collision, 3 incomplete.
+``max(Tolerances.length, stopping_distance)`` (the contact tolerance ``intersects`` uses).  Status codes: 0 clear, 1 warning, 2 collision, 3 incomplete.
 Pair flags: 0 not evaluated (budget), 1 evaluated, 2 proved beyond the cut-off by a bound.
 """
 
@@ -212,7 +212,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     use_state = iprm[I_STATE] != 0
     lazy = iprm[I_LAZY] != 0
     thr_eff = max(thr, stop)
-    level = max(0.0, stop)
+    level = max(eps_len, stop)  # Tolerances.length: the contact tolerance (a distance <= it is a contact, as intersects)
     lvl = level if mode == MODE_YESNO else -math.inf  # pair_step / narrow_other: only d <= level matters
     P = pair_a.shape[0]
     track = mode == MODE_LAZY or mode == MODE_ANYTIME  # per-pair flags and bounds for the report

@@ -79,6 +79,6 @@ def check_reference(scene, q, threshold: float, *, stopping_distance: float = 0.
             pairs.append((it.owner, "workspace", "workspace", d))
             mins[2] = min(mins[2], d)
     dmin = float(np.min(mins)) if len(pairs) else math.inf
-    level = max(0.0, stopping_distance)
+    level = max(tol.length, stopping_distance)  # the contact tolerance (geometry.intersects)
     status = 2 if dmin <= level else (1 if dmin <= max(threshold, stopping_distance) else 0)
     return ReferenceResult(mins, pairs, status)

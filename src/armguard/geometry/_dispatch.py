@@ -226,9 +226,11 @@ def distance(a: Shape, b: Shape, tol: Tolerances = DEFAULT_TOLERANCES) -> Proxim
 def intersects(a: Shape, b: Shape, tol: Tolerances = DEFAULT_TOLERANCES) -> bool:
     """True when the shapes overlap or touch: ``distance(a, b, tol).distance <= tol.length``.
 
-    Two boxes are answered by the division-free JPL separating-axis test without computing
-    the distance.
+    ``Tolerances.length`` is the one contact tolerance: the Detector's collision status uses the
+    same rule.  Two boxes first go through the division-free JPL separating-axis test, whose
+    ``tol.parallel`` slack only errs towards overlap: a separation it finds is final, an overlap
+    it reports is confirmed by the distance (so the answer is the same rule for every pair).
     """
-    if type(a) is Box and type(b) is Box:
-        return bool(box_box_overlap_packed(a._pk, b._pk, tol.parallel))
+    if type(a) is Box and type(b) is Box and not box_box_overlap_packed(a._pk, b._pk, tol.parallel):
+        return False
     return distance(a, b, tol).distance <= tol.length
