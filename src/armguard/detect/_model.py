@@ -111,7 +111,10 @@ def build_model(scene, *, active: str | None, reach_margin: float, tol) -> Detec
 
     G = cs.n_elements
     moving = cs.elem_kind != 0  # links and payloads
-    glink = np.where(moving, link_off[np.maximum(cs.elem_robot, 0)] + cs.elem_link, -1) if G else np.zeros(0, np.int64)
+    if G and len(link_off):
+        glink = np.where(moving, link_off[np.maximum(cs.elem_robot, 0)] + cs.elem_link, -1)
+    else:  # no element, or no robot (every element static: nothing moves, nothing to check)
+        glink = np.full(G, -1, np.int64)
     m.elem_glink = _c(glink, np.int64)
     m.elem_is_payload = _c(cs.elem_kind == 2, np.bool_)
     mov_ids = np.flatnonzero(moving)

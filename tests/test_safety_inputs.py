@@ -1,0 +1,230 @@
+"""Defects found by adversarial testing: unbounded work, solids far from the origin, a loader that
+took ``true`` as a radius, a scene without robots, and the contact tolerance of ``intersects``."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import armguard
+from armguard import DEFAULT_TOLERANCES, GeometryError, SceneFileError, VerificationError
+from armguard.geometry import Box, Capsule, ConvexPolyhedron, Prism, Sphere, distance, intersects
+from armguard.kinematics import Trajectory
+from armguard.scene import Scene, load_scene_file, scene_from_dict
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _geometry_strategies import KINDS, random_shape  # noqa: E402
+from _verify_fixtures import planar_arm  # noqa: E402
+
+# ---------------------------------------------------------------- unbounded work
+
+
+def _arm_scene():
+    sc = Scene("arm")
+    sc.add_robot(planar_arm(radius=0.005), self_pairs=[])
+    sc.add_body("rod", [Capsule([0.9, 0.5, -0.2], [0.9, 0.5, 0.2], 0.003)])
+    return sc
+
+
+def _motion(sc):
+    return Trajectory.joint_interpolated(sc.robots["arm"], np.array([[0.0, 0.0, 0.0], [1.0, 0.5, 0.0]]),
+                                         profile="linear", times=[0.0, 2.0])
+
+
+@pytest.mark.parametrize("kw", [{"joint_step": 1e-9}, {"joint_step": 1e-6}, {"frequency": 1e9}, {"frequency": 1e6}])
+def test_sampled_verification_refuses_an_unbounded_request_at_once(kw):
+    sc = _arm_scene()
+    t0 = time.perf_counter()
+    with pytest.raises(VerificationError) as info:
+        armguard.verify(sc, _motion(sc), method="sampled", **kw)
+    assert time.perf_counter() - t0 < 5.0
+    assert "verify_max_evaluations" in str(info.value) and next(iter(kw)) in str(info.value)
+
+
+def test_sampled_verification_within_the_bound_still_runs():
+    sc = _arm_scene()
+    for kw in ({"joint_step": 0.01}, {"frequency": 100.0}):
+        rep = armguard.verify(sc, _motion(sc), method="sampled", **kw)
+        assert rep.status.value in ("safe", "collision")
+
+
+def test_a_prism_with_too_many_sides_is_refused_by_the_shape_and_the_loader(tmp_path):
+    bound = DEFAULT_TOLERANCES.max_prism_sides
+    Prism([0, 0, 0], np.eye(3), 0.05, 0.1, bound)  # the bound itself is allowed
+    with pytest.raises(GeometryError, match="max_prism_sides"):
+        Prism([0, 0, 0], np.eye(3), 0.05, 0.1, bound + 1)
+    with pytest.raises(GeometryError):
+        Prism([0, 0, 0], np.eye(3), 0.05, 0.1, True)
+    t0 = time.perf_counter()
+    for n in (100_000, 1_000_000):
+        with pytest.raises(SceneFileError) as info:
+            scene_from_dict(_one_shape(f"{{type: prism, n_sides: {n}, apothem: 0.1, length: 0.2}}", tmp_path))
+        assert "bodies[0].shapes[0].n_sides" in str(info.value)
+    assert time.perf_counter() - t0 < 5.0
+
+
+# ---------------------------------------------------------------- far from the origin
+
+
+def _cube(o, h):
+    return ConvexPolyhedron(np.asarray(o) + h * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]))
+
+
+@pytest.mark.parametrize("big", [1e4, 1e5, 1e6])
+def test_valid_solids_far_from_the_origin_are_solids(big):
+    o = np.array([big] * 3)
+    cube = _cube(o, 0.01)  # a 2 cm cube
+    assert len(cube.faces) == 6
+    r = distance(Prism(o, np.eye(3), 0.05, 0.1, 8), Sphere(o + [1.0, 0.0, 0.0], 0.1))
+    assert r.distance == pytest.approx(0.85, abs=1e-6)
+    with pytest.raises(GeometryError, match="coplanar"):  # a flat set is still refused
+        ConvexPolyhedron(o + np.array([[0, 0, 0], [0.01, 0, 0], [0, 0.01, 0], [0.01, 0.01, 0]]))
+
+
+def test_a_scene_whose_site_is_20_km_away_loads_and_checks(tmp_path):
+    text = """armguard_scene: 1
+name: far
+frames: [{name: site, xyz: [20000.0, 0.0, 0.0]}]
+bodies:
+  - {name: post, frame: site, xyz: [0.5, 0, 0], shapes: [{type: prism, n_sides: 8, apothem: 0.01, length: 0.02},
+                                                     {type: polyhedron, vertices: [[0,0,0],[0.02,0,0],[0,0.02,0],[0,0,0.02]]}]}
+robots:
+  - name: arm
+    mount: {frame: site}
+    joints: [{a: 0.3, limits: [-3, 3]}, {a: 0.2, limits: [-3, 3]}]
+    link_shapes: {link2: [{type: capsule, p0: [-0.2, 0, 0], p1: [0, 0, 0], radius: 0.02}]}
+"""
+    p = tmp_path / "far.yaml"
+    p.write_text(text, encoding="utf-8")
+    sc = load_scene_file(p)
+    det = armguard.Detector(sc, threshold=0.05)
+    q = sc.flat_q(sc.default_q())
+    from armguard.detect import check_reference
+
+    ref = check_reference(sc, q, 0.05)
+    assert det.check(q).nearest.distance == pytest.approx(float(np.min(ref.min_distance)), abs=1e-9)
+    assert np.isfinite(ref.min_distance).any()
+
+
+def test_the_witness_relation_holds_to_the_documented_bound_far_from_the_origin():
+    """docs/notation.md: |p_WA - p_WB| == |distance| and p_WB - p_WA == distance * nhat to 1e-9 m + 4e-15 R."""
+    rng = np.random.default_rng(3)
+    for big in (1e3, 1e5, 1e6):
+        worst = 0.0
+        for k in range(72):
+            a, b = random_shape(KINDS[k % 6], rng), random_shape(KINDS[(k // 6) % 6], rng)
+            T = np.eye(4)
+            T[:3, 3] = big * rng.normal(size=3) / np.sqrt(3.0)
+            a, b = a.transformed(T), b.transformed(T)
+            R = max(float(np.max(np.abs(a.core_points))), float(np.max(np.abs(b.core_points))))
+            r = distance(a, b)
+            bound = 1e-9 + 4e-15 * R
+            assert abs(np.linalg.norm(r.p_WA - r.p_WB) - abs(r.distance)) <= bound
+            e = float(np.linalg.norm(r.p_WB - r.p_WA - r.distance * r.nhat_AB_W))
+            assert e <= bound
+            worst = max(worst, e)
+        assert worst > 0.0 or big < 1e4  # the test sees the round-off it bounds
+
+
+# ---------------------------------------------------------------- the loader's numbers and keys
+
+
+def _one_shape(shape: str, tmp_path) -> dict:
+    import yaml
+
+    from armguard.scene._load import _SceneLoader
+
+    text = f"armguard_scene: 1\nname: t\nbodies:\n  - name: b\n    shapes:\n      - {shape}\n"
+    return yaml.load(text, Loader=_SceneLoader)
+
+
+def _load(text: str, tmp_path):
+    p = tmp_path / "s.yaml"
+    p.write_text("armguard_scene: 1\nname: t\nbodies:\n  - name: b\n    shapes:\n" + text, encoding="utf-8")
+    return p, lambda: load_scene_file(p)
+
+
+@pytest.mark.parametrize("shape,where", [
+    ('{type: sphere, radius: true, xyz: [1, 0, 0]}', "bodies[0].shapes[0].radius"),
+    ('{type: sphere, radius: 0.1, xyz: ["1e3", 0, 0]}', "bodies[0].shapes[0].xyz[0]"),
+    ('{type: sphere, radius: 0.1, xyz: [1, false, 0]}', "bodies[0].shapes[0].xyz[1]"),
+    ('{type: sphere, radius: "1", xyz: [1, 0, 0]}', "bodies[0].shapes[0].radius"),
+    ('{type: prism, n_sides: 8.0, apothem: 0.1, length: 0.2}', "bodies[0].shapes[0].n_sides"),
+    ('{type: sphere, radius: 0.1, xyz: [1e300, 0, 0]}', "bodies[0].shapes[0].xyz[0]"),
+    ('{type: sphere, radius: 1.0e10}', "bodies[0].shapes[0].radius"),
+])
+def test_the_loader_refuses_non_numbers_and_huge_numbers_naming_the_place(shape, where, tmp_path):
+    p, load = _load(f"      - {shape}\n", tmp_path)
+    with pytest.raises(SceneFileError) as info:
+        load()
+    assert info.value.where == where and str(p) in str(info.value)
+
+
+def test_the_issue_example_is_refused_not_coerced(tmp_path):
+    _, load = _load('      - {type: sphere, radius: true, xyz: ["1e3", false, "0"]}\n', tmp_path)
+    with pytest.raises(SceneFileError, match="not numbers"):
+        load()
+
+
+def test_yaml_1_2_numbers_are_numbers(tmp_path):
+    _, load = _load("      - {type: sphere, radius: 1e-1, xyz: [1e3, 2.5E-1, -1.0e0]}\n", tmp_path)
+    s = load().bodies["b"].shapes[0]
+    assert s.radius == 0.1 and s.center.tolist() == [1000.0, 0.25, -1.0]
+
+
+def test_a_duplicate_key_is_an_error_naming_both_lines(tmp_path):
+    _, load = _load("      - type: sphere\n        radius: 0.1\n        xyz: [0, 0, 0]\n        radius: 0.2\n", tmp_path)
+    with pytest.raises(SceneFileError) as info:
+        load()
+    assert info.value.where == "line 9" and "'radius'" in str(info.value) and "line 7" in str(info.value)
+    p = tmp_path / "top.yaml"
+    p.write_text("armguard_scene: 1\nname: a\nname: b\n", encoding="utf-8")
+    with pytest.raises(SceneFileError, match="duplicate key 'name'"):
+        load_scene_file(p)
+
+
+def test_aliases_are_refused(tmp_path):
+    p = tmp_path / "alias.yaml"
+    p.write_text("armguard_scene: 1\nname: t\nbodies:\n  - name: b\n    shapes: &s [{type: sphere, radius: 0.1}]\n"
+                 "  - name: c\n    shapes: *s\n", encoding="utf-8")
+    with pytest.raises(SceneFileError, match="alias"):
+        load_scene_file(p)
+
+
+def test_the_format_version_must_be_the_integer_1(tmp_path):
+    p = tmp_path / "v.yaml"
+    p.write_text("armguard_scene: true\nname: t\n", encoding="utf-8")
+    with pytest.raises(SceneFileError) as info:
+        load_scene_file(p)
+    assert info.value.where == "armguard_scene"
+
+
+# ---------------------------------------------------------------- smaller ones
+
+
+def test_a_scene_without_robots_has_nothing_to_check():
+    sc = Scene("bodies only")
+    sc.add_body("b", [Sphere([0, 0, 0], 0.1)])
+    det = armguard.Detector(sc)
+    assert det.n_pairs == 0
+    r = det.check(np.zeros(0))
+    assert r.status.value == "clear" and r.n_evaluated == 0
+    assert det.collides_many(np.zeros((3, 0))).tolist() == [False] * 3
+
+
+def test_intersects_and_the_detector_share_one_contact_tolerance():
+    tol = DEFAULT_TOLERANCES.length
+    a = Sphere([0.0, 0.0, 0.0], 0.5)
+    for gap, expect in ((0.5 * tol, True), (0.0, True), (-1e-3, True), (1e-9, False)):
+        b = Box([1.0 + gap, 0.0, 0.0], [0.5, 0.5, 0.5])
+        assert intersects(a, b) is expect
+        assert (distance(a, b).distance <= tol) is expect
+    # two boxes: the JPL test's slack only errs towards overlap; the distance confirms it
+    for gap, expect in ((0.5 * tol, True), (1e-11, False), (1e-9, False), (-1e-6, True)):
+        A = Box([0.0, 0.0, 0.0], [50.0, 50.0, 50.0])
+        B = Box([100.0 + gap, 0.0, 0.0], [50.0, 50.0, 50.0])
+        assert intersects(A, B) is expect, gap
