@@ -13,7 +13,7 @@ import numpy as np
 from .._errors import SceneError
 from ..geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere
 
-__all__ = ["shape_from_coal", "coal_from_shape", "CYLINDER_PRISM_SIDES"]
+__all__ = ["shape_from_coal", "coal_from_shape", "convex_hull", "CYLINDER_PRISM_SIDES"]
 
 CYLINDER_PRISM_SIDES = 16
 """Sides of the prism that circumscribes a cylinder in the analytic kernels (apothem = radius)."""
@@ -85,11 +85,11 @@ def coal_from_shape(shape):
         return coal.Box(*(2.0 * np.asarray(shape.half_extents))), X
     if isinstance(shape, (ConvexPolyhedron, Prism, Polygon)):
         pts = np.asarray(shape.as_polyhedron().vertices if isinstance(shape, Prism) else shape.vertices, dtype=np.float64)
-        return _convex(pts), X
+        return convex_hull(pts), X
     raise SceneError(f"shape {type(shape).__name__} has no coal geometry")
 
 
-def _convex(pts: np.ndarray):
+def convex_hull(pts: np.ndarray):
     """A coal.Convex of the points' hull (a flat polygon: two triangle fans, both sides)."""
     import coal
 

@@ -1,0 +1,135 @@
+"""The python-fcl backend: a third checker in one package, on the same Model.
+
+Each GeometryObject of the Model's collision model becomes an ``fcl.CollisionObject`` of the
+same shape (capsule, sphere, box, cylinder; convex hulls as ``fcl.Convex``); Pinocchio places
+them (``updateGeometryPlacements``) and ``fcl.distance`` answers each active pair with signed
+distance and nearest points.  The workspace box is six large boxes just outside its walls
+(python-fcl's capsule–halfspace distance crashes the process).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Mapping
+
+import numpy as np
+
+from armguard._errors import BackendError
+from armguard.backends import Capability, CheckerBase, check_q, check_Q
+from armguard.model import WORKSPACE
+
+__all__ = ["FclBackend", "FclChecker"]
+
+
+def _fcl_geometry(g):
+    """The python-fcl geometry of a coal geometry."""
+    import coal
+    import fcl
+
+    if isinstance(g, coal.Capsule):
+        return fcl.Capsule(float(g.radius), 2.0 * float(g.halfLength))
+    if isinstance(g, coal.Sphere):
+        return fcl.Sphere(float(g.radius))
+    if isinstance(g, coal.Box):
+        return fcl.Box(*(2.0 * np.asarray(g.halfSide, dtype=np.float64)))
+    if isinstance(g, coal.Cylinder):
+        return fcl.Cylinder(float(g.radius), 2.0 * float(g.halfLength))
+    if isinstance(g, coal.ConvexBase):
+        from scipy.spatial import ConvexHull
+
+        v = np.asarray(g.points(), dtype=np.float64)
+        try:
+            hull = ConvexHull(v)
+            tris = hull.simplices
+            # orient each triangle outwards
+            c = v.mean(axis=0)
+            tris = np.array([t if np.dot(np.cross(v[t[1]] - v[t[0]], v[t[2]] - v[t[0]]), v[t[0]] - c) >= 0
+                             else t[[0, 2, 1]] for t in tris])
+        except Exception:  # noqa: BLE001 - a flat hull (a polygon): a triangle fan, both sides
+            n = len(v)
+            tris = np.array([(0, i, i + 1) for i in range(1, n - 1)] + [(0, i + 1, i) for i in range(1, n - 1)])
+        faces = np.hstack([np.full((len(tris), 1), 3), tris]).ravel().astype(np.int64)
+        return fcl.Convex(np.ascontiguousarray(v), len(tris), faces)
+    raise BackendError(f"fcl: no python-fcl geometry for {type(g).__name__}")
+
+
+class FclChecker(CheckerBase):
+    """A Checker over python-fcl (see the module docstring)."""
+
+    name = "fcl"
+    capabilities = frozenset({Capability.DISTANCES, Capability.VERDICTS})
+
+    def __init__(self, model, options: Mapping | None = None) -> None:
+        import fcl
+        import pinocchio as pin
+
+        super().__init__(model)
+        if options:
+            raise BackendError(f"fcl: unknown options {sorted(options)}; this backend takes none")
+        self.representation = {}
+        gm = model.collision_model
+        self._objs = [fcl.CollisionObject(_fcl_geometry(go.geometry), fcl.Transform()) for go in gm.geometryObjects]
+        walls = []
+        ws = model.scene.workspace
+        if ws is not None:
+            # each wall is a large box just outside it (python-fcl's capsule-halfspace distance crashes)
+            lo, hi = np.asarray(ws.lo, dtype=np.float64), np.asarray(ws.hi, dtype=np.float64)
+            big = 4.0 * float(np.max(hi - lo)) + 10.0
+            mid = 0.5 * (lo + hi)
+            for axis in range(3):
+                for sign, bound in ((1.0, hi), (-1.0, lo)):
+                    c = mid.copy()
+                    c[axis] = bound[axis] + sign * 0.5 * big
+                    walls.append(fcl.CollisionObject(fcl.Box(big, big, big), fcl.Transform(np.eye(3), c)))
+        self._walls = walls
+        pairs = model.pairs
+        self._ia = np.array([model.geometry_index(a) for a in pairs.a], dtype=np.int64)
+        self._ib = np.array([-1 if b == WORKSPACE else model.geometry_index(b) for b in pairs.b], dtype=np.int64)
+        self._data = model.pin_model.createData()
+        self._gdata = pin.GeometryData(gm)
+
+    def _place(self, q) -> None:
+        import fcl
+        import pinocchio as pin
+
+        pin.updateGeometryPlacements(self.model.pin_model, self._data, self.model.collision_model, self._gdata, q)
+        for o, M in zip(self._objs, self._gdata.oMg):
+            o.setTransform(fcl.Transform(np.asarray(M.rotation), np.asarray(M.translation)))
+
+    def pair_distances(self, q):
+        import fcl
+
+        q = check_q(self.model, q)
+        self._place(q)
+        n = len(self._ia)
+        d = np.empty(n)
+        p_WA = np.empty((n, 3))
+        p_WB = np.empty((n, 3))
+        req = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
+        for k in range(n):
+            others = self._walls if self._ib[k] < 0 else [self._objs[self._ib[k]]]
+            best = None
+            for ob in others:
+                res = fcl.DistanceResult()
+                dist = fcl.distance(self._objs[self._ia[k]], ob, req, res)
+                if best is None or dist < best[0]:
+                    best = (dist, np.asarray(res.nearest_points[0]), np.asarray(res.nearest_points[1]))
+            d[k], p_WA[k], p_WB[k] = best
+        if not np.all(np.isfinite(d)):
+            raise BackendError("fcl: a distance came back NaN or infinite; no verdict")
+        return self._result(d, p_WA, p_WB)
+
+    def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
+        Q = check_Q(self.model, Q)
+        if not (margin >= 0.0 and math.isfinite(margin)):
+            raise BackendError(f"margin: expected a finite length >= 0, got {margin!r}")
+        return np.array([bool(np.min(self.pair_distances(q).distance, initial=np.inf) <= margin) for q in Q])
+
+
+class FclBackend:
+    """Entry point ``fcl`` of the group ``armguard.backends``."""
+
+    name = "fcl"
+
+    def build(self, model, options: Mapping | None = None) -> FclChecker:
+        return FclChecker(model, options)
