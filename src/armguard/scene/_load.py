@@ -125,7 +125,9 @@ def _shape(spec, ctx: _Ctx, where: str, X_FO: np.ndarray):
                 p0, p1 = np.array([0.0, 0.0, -h]), np.array([0.0, 0.0, h])
             return Capsule(_apply(X, p0), _apply(X, p1), spec.radius * L)
         if t == "prism":
-            return Prism(X[:3, 3], X[:3, :3], spec.apothem * L, 0.5 * spec.length * L, spec.n_sides)
+            prism = Prism(X[:3, 3], X[:3, :3], spec.apothem * L, 0.5 * spec.length * L, spec.n_sides)
+            prism.as_polyhedron()  # the hull the detector builds: a degenerate one is refused here, named
+            return prism
         if t == "polyhedron":
             return ConvexPolyhedron(_apply(X, np.asarray(spec.vertices) * L))
         if t == "polygon":
