@@ -202,3 +202,35 @@ def test_errors_and_capability():
     with pytest.raises(armguard.ClipError):
         check(Guard.from_shape(Prism([0, 0, 0], np.eye(3), 0.1, 0.1)), Obstacle.segment([0, 0, 0], [1, 0, 0]), np.ones((4, 4)))
     assert issubclass(armguard.ClipError, ValueError)
+
+
+def test_clip_model_on_the_puma560_cell():
+    from armguard.clip import ClipModel
+
+    scene = armguard.load_scene("puma560")
+    model = ClipModel.from_scene(scene, "puma560", max_depth=1)
+    assert model.answers == "verdicts"
+    rng = np.random.default_rng(2)
+    r = scene.robots["puma560"]
+    for _ in range(10):
+        q = rng.uniform(r.lower, r.upper)
+        X = model.link_poses(q)
+        v = model.check(X)
+        assert len(v.pairs) == len(model.links) * len(model.statics)
+        k = 0
+        for (ln, lsh), Xl in zip(model.links, X):
+            for (on, osh) in model.statics:
+                d = distance(lsh.transformed(Xl), osh).distance
+                assert not _wrong(v.pairs[k].result.status, d)
+                k += 1
+
+
+def test_docs_example_runs():
+    import pathlib
+    import re
+
+    text = (pathlib.Path(__file__).resolve().parent.parent / "docs" / "clip.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
+    assert blocks
+    for code in blocks:
+        exec(compile(code, "docs/clip.md", "exec"), {})

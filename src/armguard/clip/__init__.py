@@ -11,6 +11,8 @@ ran it on the IRIS's clipping pipeline — here as numba kernels over flat array
   :class:`ClipStatus` INTERSECTED / CLEAR / MAYBE and the step that decided;
 * :class:`Predictor` — WORKMATE's collision prediction: the guard swept over the next control
   interval, checked before the arm gets there;
+* :class:`ClipModel` — guards from a list of link shapes, obstacles from static shapes, one
+  verdict per pair (what a backend wrapper builds on);
 * :func:`cyrus_beck`, :func:`sutherland_hodgman` — the clipping kernels.
 
 ``ANSWERS = "verdicts"``: this checker answers yes / no / maybe, never distances.
@@ -19,6 +21,7 @@ ran it on the IRIS's clipping pipeline — here as numba kernels over flat array
 from ._cells import CellKind, CellTree
 from ._guard import DEFAULT_INNER_SCALE, DEFAULT_MAX_DEPTH, DEFAULT_RINGS, Guard
 from ._kernels import cyrus_beck, sutherland_hodgman
+from ._model import ClipModel, ModelVerdict, PairVerdict
 from ._obstacle import DEFAULT_BOUNDS_MIN_VERTICES, Obstacle
 from ._predict import DEFAULT_MAX_HALVINGS, Prediction, Predictor, interpolate_pose, rotation_growth, swept_guard
 from ._procedure import STATUS_CODES, STEP_NAMES, ClipResult, ClipStatus, ListResult, check, check_list, check_many
@@ -29,6 +32,9 @@ ANSWERS = "verdicts"
 __all__ = [
     "ANSWERS",
     "Guard",
+    "ClipModel",
+    "ModelVerdict",
+    "PairVerdict",
     "Obstacle",
     "CellKind",
     "CellTree",
