@@ -34,3 +34,4 @@ from . import _fk  # noqa: E402,F401
 from . import _verify  # noqa: E402,F401
 from . import _demo  # noqa: E402,F401
 from . import _check  # noqa: E402,F401
+from . import _cspace  # noqa: E402,F401

@@ -1,0 +1,120 @@
+"""``armguard cspace build | info | plot``: Hermes's forbidden-values maps."""
+
+from __future__ import annotations
+
+import math
+
+import click
+
+from . import main
+
+
+def _angle(value: str) -> float:
+    from ..cspace import parse_angle
+
+    return parse_angle(value)
+
+
+def _angles(text: str | None):
+    """``"180,30,-20"`` (deg, unless each value carries its unit) -> (3,) rad."""
+    if text is None:
+        return None
+    from .._errors import ForbiddenMapError
+
+    parts = [p.strip() for p in text.split(",")]
+    if len(parts) != 3:
+        raise ForbiddenMapError(f"--q: expected three angles (joints 1-3), got {text!r}")
+    return [_angle(p) if p.endswith(("deg", "°", "rad")) else math.radians(float(p)) for p in parts]
+
+
+@main.group("cspace")
+def cspace() -> None:
+    """Forbidden-values maps (Hermes): certified joint-space maps of links 1-3 vs the obstacles."""
+
+
+@cspace.command("build")
+@click.argument("model")
+@click.option("--out", "out", type=click.Path(dir_okay=False), required=True, help="The .agmap file to write.")
+@click.option("--resolution", default="1deg", show_default=True, help="Cell width of joints 1, 2 ('1deg', '0.5°', rad).")
+@click.option("--j3-resolution", default=None, help="Joint-3 quantum (default: the resolution).")
+@click.option("--cell", default="10deg", show_default=True, help="Substructure extent over joints 1, 2.")
+@click.option("--stopping-distance", type=float, default=0.0, show_default=True, help="Worst-case stopping distance (m).")
+@click.option("--robot", default=None, help="The robot (default: the scene's only one).")
+@click.option("--max-depth", type=int, default=None, help="Halvings below one cell x bin box (default: Tolerances).")
+@click.option("--workers", type=int, default=None, help="Build on a Dask LocalCluster with N worker processes.")
+@click.option("--scheduler", default=None, help="Build on an existing Dask cluster (scheduler address).")
+@click.option("--no-resume", is_flag=True, help="Ignore a partial build at OUT.partial.")
+def build_cmd(model, out, resolution, j3_resolution, cell, stopping_distance, robot, max_depth, workers, scheduler,
+              no_resume) -> None:
+    """Build the map of MODEL (a built-in scene name or a .yaml / .urdf file) and write it to OUT."""
+    from rich.console import Console
+
+    from ..cspace import ForbiddenMap
+
+    console = Console()
+    c = _angle(cell)
+    fmap = ForbiddenMap.build(model, out=out, robot=robot, resolution=_angle(resolution),
+                              j3_resolution=None if j3_resolution is None else _angle(j3_resolution), cell=(c, c),
+                              stopping_distance=stopping_distance, workers=workers, scheduler=scheduler,
+                              max_depth=max_depth, resume=not no_resume, progress=True)
+    r = fmap.build_report
+    console.print(f"wrote {out}: {r.size_bytes} bytes, {fmap.grid.n_substructures} substructures "
+                  f"({r.computed} computed, {r.reused} resumed), {r.evaluations} clearance evaluations, "
+                  f"{r.elapsed_s:.1f} s" + (f" on {r.workers} workers" if r.workers else ""))
+
+
+@cspace.command("info")
+@click.argument("map_path", type=click.Path(exists=True, dir_okay=False))
+@click.option("--model", default=None, help="Check against these model files / this scene (default: the recorded files).")
+@click.option("--samples", type=int, default=10_000, show_default=True,
+              help="Random configurations compared with the exact check (0: skip).")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+def info_cmd(map_path, model, samples, as_json) -> None:
+    """Size, cells and conservativeness of the map at MAP_PATH."""
+    import dataclasses
+    import json
+
+    from ..cspace import ForbiddenMap, check_exactness
+
+    fmap = ForbiddenMap.load(map_path, model=model)
+    info = fmap.info()
+    g = fmap.grid
+    out = {"path": str(map_path), "robot": fmap.robot, "joints": list(fmap.joints), "links": list(fmap.links),
+           "resolution_deg": math.degrees(g.step[0]), "j3_resolution_deg": math.degrees(g.step[2]),
+           "stopping_distance_m": fmap.stopping_distance, **dataclasses.asdict(info)}
+    if samples > 0:
+        rep = check_exactness(fmap, model if model is not None else None, n=samples)
+        out["exactness"] = {k: (v.value if hasattr(v, "value") else v) for k, v in dataclasses.asdict(rep).items()}
+    if as_json:
+        click.echo(json.dumps(out, indent=2))
+        return
+    click.echo(f"{map_path}: {info.size_bytes} bytes ({info.size_bytes / 1024:.1f} KB), format {fmap.header['format_version']}")
+    click.echo(f"  {fmap.robot}: joints {', '.join(fmap.joints)}; links {', '.join(fmap.links)}; stopping distance "
+               f"{fmap.stopping_distance} m")
+    click.echo(f"  grid: {g.counts[0]} x {g.counts[1]} cells of {out['resolution_deg']:.4g} deg, {info.n_bins} joint-3 bins "
+               f"of {out['j3_resolution_deg']:.4g} deg; {info.n_substructures} substructures of {g.per_sub[0]} x {g.per_sub[1]} "
+               f"cells (largest {info.substructure_bytes_max} B, largest 3 x 3 block {info.neighbourhood_bytes_max} B)")
+    click.echo(f"  {info.n_intervals} forbidden intervals; forbidden share of the joint box {info.forbidden_fraction:.4f}; "
+               f"built with {info.evaluations} clearance evaluations, {info.unresolved} boxes unresolved (forbidden)")
+    if samples > 0:
+        e = out["exactness"]
+        click.echo(f"  {e['n']} random configurations vs the exact check: {e['allowed_but_colliding']} allowed but colliding "
+                   f"({e['status']}); truly colliding {e['colliding'] / e['n']:.4f}; false-forbidden share "
+                   f"{e['false_forbidden_share']:.4f} ({e['false_forbidden_of_free']:.4f} of the free ones)")
+
+
+@cspace.command("plot")
+@click.argument("map_path", type=click.Path(exists=True, dir_okay=False))
+@click.option("--q2", required=True, help="Joint 2 of the slice ('30deg', '30°', rad; a bare number is deg).")
+@click.option("--q", "q", default=None, help="Configuration to mark: joints 1-3 as 'a,b,c' (deg unless suffixed).")
+@click.option("--model", default=None, help="Check against these model files / this scene (default: the recorded files).")
+@click.option("--out", "out", type=click.Path(dir_okay=False), required=True, help="PNG to write.")
+def plot_cmd(map_path, q2, q, model, out) -> None:
+    """A joint-1 x joint-3 slice of MAP_PATH at joint 2 = Q2: forbidden bins red, the configuration Q marked."""
+    from ..cspace import ForbiddenMap, plot_slice
+
+    fmap = ForbiddenMap.load(map_path, model=model)
+    q2r = _angle(q2) if q2.strip().endswith(("deg", "°", "rad")) else math.radians(float(q2))
+    qq = _angles(q)
+    plot_slice(fmap, q2r, out, q=qq)
+    click.echo(f"wrote {out}")

@@ -1,0 +1,274 @@
+"""Building a forbidden-values map: serially or on a Dask cluster, resumable, with a progress bar.
+
+The substructures are independent (:func:`._certify.certify_substructure` reads only the grid,
+the clearance hook and the lever arms), so a build is a map over substructure numbers.  Each
+finished one is appended to the journal ``<out>.partial`` (:class:`._format.Journal`); a build
+interrupted and restarted with the same settings skips the substructures found there.  The file
+is written at the end from the substructures in order, so serial and distributed builds give
+the same bytes.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+import time
+import uuid
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._errors import ForbiddenMapError
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._certify import certify_substructure
+from ._clearance import DetectorClearance, map_links, resolve_scene
+from ._format import FORMAT_VERSION, Journal, write_map
+from ._grid import MapGrid
+from ._map import ForbiddenMap, model_file_hashes
+
+__all__ = ["build", "BuildReport", "BuildStatus", "model_files_of"]
+
+_TASKS_PER_WORKER = 8  # Dask: substructures are grouped in about this many tasks per worker
+_WORKER_CACHE: dict = {}  # token -> clearance hook, one per worker process
+
+
+class BuildStatus(enum.Enum):
+    BUILT = "built"  #: every substructure computed in this run
+    RESUMED = "resumed"  #: some substructures were read back from an interrupted build's journal
+
+
+@dataclass(frozen=True)
+class BuildReport:
+    """What a build did.
+
+    Attributes
+    ----------
+    status : BuildStatus
+    computed, reused : int
+        Substructures computed in this run / read back from the journal.
+    evaluations : int
+        Clearance evaluations of this run.
+    elapsed_s : float
+        Wall-clock time of this run.
+    workers : int
+        Dask workers (0: serial).
+    size_bytes : int
+        The map file's size.
+    """
+
+    status: BuildStatus
+    computed: int
+    reused: int
+    evaluations: int
+    elapsed_s: float
+    workers: int
+    size_bytes: int
+
+
+def model_files_of(model) -> list[str]:
+    """The source files of ``model``: a built-in scene name, a ``.yaml`` / ``.urdf`` path, or a list of paths."""
+    from ..models import builtin_path
+
+    if isinstance(model, (list, tuple)):
+        return [str(Path(p)) for p in model]
+    s = str(model)
+    p = builtin_path(s) if ("/" not in s and Path(s).suffix == "") else None
+    return [str(p if p is not None else Path(s))]
+
+
+def _task(token: str, source, robot, joints, links, tol, clearance, job: dict, subs: list) -> list:
+    """One Dask task: certify ``subs`` (the worker builds its clearance hook once per build)."""
+    hook = _WORKER_CACHE.get(token)
+    if hook is None:
+        _WORKER_CACHE.clear()
+        if clearance is None:
+            scene, _ = resolve_scene(source)
+            hook = DetectorClearance(scene, map_links(scene, robot, joints, links, tol), tol)
+        else:
+            hook = clearance
+        _WORKER_CACHE[token] = hook
+    grid = MapGrid.from_json(job["grid"])
+    out = []
+    for s in subs:
+        r = certify_substructure(grid, s, hook, np.asarray(job["lever"]), job["m"], job["contact"], job["depth"])
+        out.append((r.index, r.pointers, r.intervals, r.evaluations, r.unresolved))
+    return out
+
+
+def build(model, *, out, robot: str | None = None, joints=None, links=None, resolution: float = math.radians(1.0),
+          j3_resolution: float | None = None, cell=(math.radians(10.0), math.radians(10.0)),
+          stopping_distance: float = 0.0, workers: int | None = None, scheduler: str | None = None,
+          model_files=None, clearance=None, max_depth: int | None = None, resume: bool = True,
+          progress=False, tol: Tolerances = DEFAULT_TOLERANCES) -> ForbiddenMap:
+    """Build the certified forbidden-values map of ``model`` and write it to ``out``; returns it opened.
+
+    Parameters
+    ----------
+    model : str | Scene
+        A built-in scene name (``"hermes"``), a ``.yaml`` / ``.urdf`` path, or a Scene (then
+        ``model_files`` names its source files).
+    out : path
+        The ``.agmap`` file to write (``out.partial`` is the journal while building).
+    robot, joints, links :
+        The robot (default: the only one), joints 1–3 (default: its first three) and the mapped
+        links (default: those moved by joints 1–3 alone; :func:`._clearance.map_links`).
+    resolution : float, rad
+        Cell width of joints 1 and 2.
+    j3_resolution : float | None, rad
+        The joint-3 quantum (default: ``resolution``).
+    cell : (2,) float, rad
+        Substructure extent over joints 1, 2 (rounded to whole cells; Hermes: 10° × 10°).
+    stopping_distance : float, m
+        The worst-case stopping distance the obstacles grow by (the map is built off-line).
+    workers : int | None
+        Build on a new Dask ``LocalCluster`` with this many worker processes.
+    scheduler : str | None
+        Build on the Dask cluster at this address.
+    model_files : list of paths | None
+        The model's source files hashed into the header (default: ``model``'s own file).
+    clearance : callable (Q (M, 3) rad) -> (M,) m | None
+        The clearance hook (default: :class:`._clearance.DetectorClearance`); must be picklable
+        for a Dask build.
+    max_depth : int | None
+        Halvings below one cell × bin box (default ``tol.cspace_max_depth``).
+    resume : bool
+        Continue from ``out.partial`` when its settings match (else start afresh).
+    progress : bool | callable(done, total)
+        A rich progress bar (True), a callback, or nothing.
+    """
+    t0 = time.perf_counter()
+    if workers is not None and scheduler is not None:
+        raise ForbiddenMapError("give workers (a new LocalCluster) or scheduler (an existing cluster), not both")
+    if workers is not None and (int(workers) != workers or workers < 1):
+        raise ForbiddenMapError(f"workers: expected an integer >= 1, got {workers!r}")
+    m = float(stopping_distance)
+    if not (math.isfinite(m) and m >= 0.0):
+        raise ForbiddenMapError(f"stopping_distance: expected a finite number of metres >= 0, got {stopping_distance!r}")
+    depth = int(tol.cspace_max_depth if max_depth is None else max_depth)
+    if not 0 <= depth <= 20:
+        raise ForbiddenMapError(f"max_depth: expected 0..20, got {depth}")
+    scene, spec = resolve_scene(model)
+    if model_files is None:
+        if spec is None:
+            raise ForbiddenMapError("model is a Scene object: pass model_files= (its source files), so the map can "
+                                    "refuse another model")
+        model_files = model_files_of(spec)
+    else:
+        model_files = model_files_of(model_files)
+    ml = map_links(scene, robot, joints, links, tol)
+    rob = scene.robots[ml.robot]
+    lo = np.asarray(rob.lower, dtype=np.float64)[list(ml.joint_index)]
+    hi = np.asarray(rob.upper, dtype=np.float64)[list(ml.joint_index)]
+    grid = MapGrid.create(lo, hi, resolution, resolution if j3_resolution is None else j3_resolution, cell)
+    header = {
+        "format_version": FORMAT_VERSION,
+        "model": spec,
+        "model_files": model_file_hashes(model_files),
+        "robot": ml.robot,
+        "joints": list(ml.joints),
+        "joint_index": list(ml.joint_index),
+        "links": list(ml.links),
+        "lever": ml.lever.tolist(),
+        "grid": grid.to_json(),
+        "stopping_distance": m,
+        "max_depth": depth,
+        "contact": tol.cspace_contact,
+        "clearance": "detector" if clearance is None else getattr(clearance, "__qualname__", type(clearance).__qualname__),
+    }
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    journal = Journal(out.with_name(out.name + ".partial"), header, resume=resume)
+    reused = len(journal.done)
+    todo = [s for s in range(grid.n_substructures) if s not in journal.done]
+    job = {"grid": header["grid"], "lever": header["lever"], "m": m, "contact": tol.cspace_contact, "depth": depth}
+    evaluations = 0
+    n_workers = 0
+    bar = _Progress(progress, grid.n_substructures, reused)
+    try:
+        if workers is None and scheduler is None:
+            hook = clearance if clearance is not None else DetectorClearance(scene, ml, tol)
+            for s in todo:
+                r = certify_substructure(grid, s, hook, ml.lever, m, tol.cspace_contact, depth)
+                journal.append(r.index, r.pointers, r.intervals, r.evaluations, r.unresolved)
+                evaluations += r.evaluations
+                bar.advance(1)
+        else:
+            source = spec if spec is not None else scene
+            args = (source, ml.robot, ml.joints, ml.links, tol, clearance, job)
+            evaluations, n_workers = _on_dask(args, todo, journal, bar, workers, scheduler)
+    finally:
+        bar.close()
+        journal.close()
+    subs, ev_all, un_all = [], 0, 0
+    for s in range(grid.n_substructures):
+        ptr, iv, ev, un = journal.done[s]
+        subs.append((ptr, iv))
+        ev_all += ev
+        un_all += un
+    header["stats"] = {"evaluations": ev_all, "unresolved": un_all}
+    size = write_map(out, header, subs)
+    journal.close(remove=True)
+    fmap = ForbiddenMap.load(out, model=model_files)
+    fmap.build_report = BuildReport(BuildStatus.RESUMED if reused else BuildStatus.BUILT, len(todo), reused,
+                                    evaluations, time.perf_counter() - t0, n_workers, size)
+    return fmap
+
+
+def _on_dask(args, todo, journal, bar, workers, scheduler):
+    from distributed import Client, LocalCluster, as_completed
+
+    cluster = None
+    if scheduler is None:
+        cluster = LocalCluster(n_workers=int(workers), processes=True, threads_per_worker=1, dashboard_address=None)
+        client = Client(cluster)
+    else:
+        try:
+            client = Client(scheduler, timeout="20s")
+        except (OSError, TimeoutError) as exc:
+            raise ForbiddenMapError(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}") from exc
+    evaluations = 0
+    try:
+        n_workers = max(1, len(client.scheduler_info().get("workers", {})) or int(workers or 1))
+        size = max(1, math.ceil(len(todo) / (_TASKS_PER_WORKER * n_workers)))
+        chunks = [todo[i:i + size] for i in range(0, len(todo), size)]
+        token = uuid.uuid4().hex
+        futures = [client.submit(_task, token, *args, chunk, pure=False) for chunk in chunks]
+        for fut in as_completed(futures):
+            for s, ptr, iv, ev, un in fut.result():
+                journal.append(s, ptr, iv, ev, un)
+                evaluations += ev
+                bar.advance(1)
+        return evaluations, n_workers
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+class _Progress:
+    """A rich progress bar (``progress=True``), a ``callback(done, total)``, or nothing."""
+
+    def __init__(self, progress, total: int, done: int) -> None:
+        self.total, self.done = total, done
+        self._cb = progress if callable(progress) else None
+        self._bar = None
+        if progress is True:
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+            self._bar = Progress(TextColumn("substructures"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                                 TimeRemainingColumn(), transient=True)
+            self._bar.start()
+            self._task = self._bar.add_task("build", total=total, completed=done)
+
+    def advance(self, n: int) -> None:
+        self.done += n
+        if self._bar is not None:
+            self._bar.update(self._task, completed=self.done)
+        if self._cb is not None:
+            self._cb(self.done, self.total)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.stop()
+            self._bar = None

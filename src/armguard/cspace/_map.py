@@ -1,0 +1,376 @@
+"""A forbidden-values map read from its file: lookups, the 3 × 3 neighbourhood, facts about it.
+
+``ForbiddenMap.load(path)`` reads the header and the directory and memory-maps the data (nothing
+else is read); :meth:`ForbiddenMap.neighbourhood` copies only the 3 × 3 block of substructures
+around a configuration out of the memory map, as Hermes's loading strategy keeps 9 substructures
+in memory; :meth:`ForbiddenMap.prepare` (named, idempotent; run by the first whole-map lookup)
+gathers every substructure into two flat arrays for :meth:`allowed_many`.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numba import njit
+
+from .._errors import ForbiddenMapError
+from ._certify import decode_intervals
+from ._format import read_header, sha256_file
+from ._grid import MapGrid
+
+__all__ = ["ForbiddenMap", "Neighbourhood", "MapInfo", "Lookup", "model_file_hashes"]
+
+
+class Lookup(enum.IntEnum):
+    """Per-configuration answer codes of the lookup kernel."""
+
+    FORBIDDEN = 0  #: some configuration of its cell × bin box may collide
+    ALLOWED = 1  #: every configuration of its cell × bin box is proven clear
+    OUTSIDE_LIMITS = 2  #: outside the joint limits of joints 1–3 (or NaN): not allowed
+    OUTSIDE_BLOCK = 3  #: within the limits but outside the loaded block (a neighbourhood)
+
+
+@njit(cache=True, nogil=True)
+def _lookup(Q, cols, lo, hi, step, counts, r1a, r1b, r2a, r2b, cell_start, iv, out):
+    """``out (M,) int8`` :class:`Lookup` codes for ``Q (M, n) rad`` (columns ``cols`` are joints 1–3).
+
+    ``cell_start ((r1b - r1a) (r2b - r2a) + 1,) int64`` indexes ``iv (K, 2) uint16`` forbidden bin
+    intervals per cell of the loaded block ``[r1a, r1b) × [r2a, r2b)`` (row-major)."""
+    n2 = r2b - r2a
+    for m in range(Q.shape[0]):
+        code = 1
+        idx = np.empty(3, np.int64)
+        for k in range(3):
+            x = Q[m, cols[k]]
+            if not (x >= lo[k] and x <= hi[k]):
+                code = 2
+                break
+            i = int(math.floor((x - lo[k]) / step[k]))
+            if i >= counts[k]:
+                i = counts[k] - 1
+            idx[k] = i
+        if code == 1:
+            i1 = idx[0]
+            i2 = idx[1]
+            if i1 < r1a or i1 >= r1b or i2 < r2a or i2 >= r2b:
+                code = 3
+            else:
+                c = (i1 - r1a) * n2 + (i2 - r2a)
+                b = idx[2]
+                for t in range(cell_start[c], cell_start[c + 1]):
+                    if b < iv[t, 0]:
+                        break
+                    if b < iv[t, 1]:
+                        code = 0
+                        break
+        out[m] = code
+
+
+def model_file_hashes(files) -> list[dict]:
+    """``[{"name", "path", "sha256"}]`` of the model source files ``files`` (paths)."""
+    out = []
+    for f in files:
+        p = Path(f)
+        if not p.is_file():
+            raise ForbiddenMapError(f"model file {p} not found")
+        out.append({"name": p.name, "path": str(p.resolve()), "sha256": sha256_file(p)})
+    return out
+
+
+@dataclass(frozen=True)
+class MapInfo:
+    """Facts about a map (no sampling; see :func:`armguard.cspace.check_exactness` for that).
+
+    Attributes
+    ----------
+    size_bytes : int
+        File size.
+    n_cells, n_substructures, n_bins, n_intervals : int
+    substructure_bytes_max : int
+        The largest substructure's payload (the paper: about 1.5 KB at 1°, 10° × 10°).
+    neighbourhood_bytes_max : int
+        The largest 3 × 3 block's payload (the paper: 13.5 KB).
+    forbidden_fraction : float
+        Forbidden share of the joint-1 × joint-2 × joint-3 grid volume (clipped to the limits).
+    evaluations, unresolved : int
+        Build statistics: clearance evaluations; boxes marked forbidden at the depth limit.
+    """
+
+    size_bytes: int
+    n_cells: int
+    n_substructures: int
+    n_bins: int
+    n_intervals: int
+    substructure_bytes_max: int
+    neighbourhood_bytes_max: int
+    forbidden_fraction: float
+    evaluations: int
+    unresolved: int
+
+
+class _Block:
+    """Flat lookup arrays over a block of cells ``[r1a, r1b) × [r2a, r2b)``."""
+
+    def __init__(self, fmap: "ForbiddenMap", r1a: int, r1b: int, r2a: int, r2b: int) -> None:
+        g = fmap.grid
+        self.region = (r1a, r1b, r2a, r2b)
+        n1, n2 = r1b - r1a, r2b - r2a
+        counts = np.zeros(n1 * n2, dtype=np.int64)
+        pieces = {}
+        nbytes = 0
+        for k1 in range(r1a // g.per_sub[0], -(-r1b // g.per_sub[0])):
+            for k2 in range(r2a // g.per_sub[1], -(-r2b // g.per_sub[1])):
+                s = k1 * int(g.n_sub[1]) + k2
+                ptr, iv = fmap._raw_sub(s)
+                nbytes += ptr.nbytes + iv.nbytes
+                i1a, i1b, i2a, i2b = g.sub_cells(s)
+                c = np.diff(ptr.astype(np.int64)).reshape(i1b - i1a, i2b - i2a)
+                counts.reshape(n1, n2)[i1a - r1a:i1b - r1a, i2a - r2a:i2b - r2a] = c
+                pieces[s] = (ptr.astype(np.int64), iv)
+        self.cell_start = np.zeros(n1 * n2 + 1, dtype=np.int64)
+        np.cumsum(counts, out=self.cell_start[1:])
+        self.iv = np.zeros((int(self.cell_start[-1]), 2), dtype=np.uint16)
+        start2 = self.cell_start[:-1].reshape(n1, n2)
+        for s, (ptr, iv) in pieces.items():
+            i1a, i1b, i2a, i2b = g.sub_cells(s)
+            w = i2b - i2a
+            for r in range(i1b - i1a):  # one row of the substructure is contiguous in the block, too
+                dst = int(start2[i1a - r1a + r, i2a - r2a])
+                a, b = int(ptr[r * w]), int(ptr[(r + 1) * w])
+                self.iv[dst:dst + b - a] = iv[a:b]
+        self.nbytes = nbytes
+
+    def codes(self, fmap: "ForbiddenMap", Q) -> np.ndarray:
+        Q = fmap._as_rows(Q)
+        out = np.empty(len(Q), dtype=np.int8)
+        g = fmap.grid
+        _lookup(Q, fmap._cols_for(Q), g.lower, g.upper, g.step, g.counts, *self.region, self.cell_start, self.iv, out)
+        return out
+
+
+class ForbiddenMap:
+    """A certified forbidden-values map (see :mod:`armguard.cspace`); open one with :meth:`load`.
+
+    Attributes
+    ----------
+    path : Path
+    header : dict
+        The file's header (see :mod:`armguard.cspace._format`).
+    grid : MapGrid
+    robot : str
+    joints : (3,) tuple of str
+    links : tuple of str
+    stopping_distance : float, m
+    """
+
+    def __init__(self, path, header: dict, dir_off: int, data_off: int) -> None:
+        self.path = Path(path)
+        self.header = header
+        self.grid = MapGrid.from_json(header["grid"])
+        self.robot = header["robot"]
+        self.joints = tuple(header["joints"])
+        self.links = tuple(header["links"])
+        self.joint_index = tuple(header["joint_index"])
+        self.stopping_distance = float(header["stopping_distance"])
+        self.build_report = None  # set by ForbiddenMap.build
+        mm = np.memmap(self.path, dtype=np.uint8, mode="r")
+        n_sub = self.grid.n_substructures
+        self._dir = np.frombuffer(mm, dtype="<u8", count=n_sub + 1, offset=dir_off).astype(np.int64)
+        self._data = mm[data_off:]
+        if int(self._dir[-1]) != len(self._data):
+            raise ForbiddenMapError(f"{self.path}: the file is truncated or corrupt (data {len(self._data)} bytes, "
+                                    f"directory says {int(self._dir[-1])})")
+        self._full: _Block | None = None
+
+    # ------------------------------------------------------------------ opening
+    @classmethod
+    def load(cls, path, *, model=None) -> "ForbiddenMap":
+        """Open the map at ``path`` and check that it was built for the model.
+
+        ``model``: the model source files now (a path or a list of paths: the scene YAML, URDFs),
+        or a built-in scene name; None re-hashes the files recorded in the header.  A sha256 that
+        differs from the one recorded raises :class:`ForbiddenMapError` — the map was built for
+        another model file and answers nothing.
+        """
+        header, dir_off, data_off = read_header(path)
+        fmap = cls(path, header, dir_off, data_off)
+        fmap.check_model(model)
+        return fmap
+
+    def check_model(self, model=None) -> None:
+        """Raise :class:`ForbiddenMapError` unless the model files' sha256 equal the header's (see :meth:`load`)."""
+        from ._build import model_files_of
+
+        recorded = self.header.get("model_files") or []
+        if model is None:
+            files = [r["path"] for r in recorded]
+            missing = [f for f in files if not Path(f).is_file()]
+            if missing:
+                raise ForbiddenMapError(f"{self.path}: cannot check the model: {missing} not found; pass model=")
+        else:
+            files = model_files_of(model)
+        now = model_file_hashes(files)
+        if sorted(r["sha256"] for r in now) != sorted(r["sha256"] for r in recorded):
+            names = ", ".join(f"{r['name']} {r['sha256'][:12]}" for r in now)
+            built = ", ".join(f"{r['name']} {r['sha256'][:12]}" for r in recorded)
+            raise ForbiddenMapError(f"{self.path}: built for other model files (map: {built}; now: {names}); "
+                                    "rebuild the map for this model")
+
+    # ------------------------------------------------------------------ storage
+    def _raw_sub(self, s: int) -> tuple[np.ndarray, np.ndarray]:
+        i1a, i1b, i2a, i2b = self.grid.sub_cells(s)
+        n = (i1b - i1a) * (i2b - i2a) + 1
+        a, b = int(self._dir[s]), int(self._dir[s + 1])
+        words = np.frombuffer(self._data[a:b], dtype="<u2")
+        return words[:n], words[n:].reshape(-1, 2)
+
+    def substructure(self, s: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(pointers (n_cells + 1,) uint16, intervals (K, 2) uint16)`` of substructure ``s`` (copies)."""
+        if not 0 <= int(s) < self.grid.n_substructures:
+            raise ForbiddenMapError(f"substructure {s} is not in 0..{self.grid.n_substructures - 1}")
+        ptr, iv = self._raw_sub(int(s))
+        return ptr.copy(), iv.copy()
+
+    def substructure_mask(self, s: int) -> np.ndarray:
+        """``(c1, c2, n3) bool``: forbidden bins of every cell of substructure ``s``."""
+        i1a, i1b, i2a, i2b = self.grid.sub_cells(s)
+        ptr, iv = self._raw_sub(int(s))
+        return decode_intervals(ptr, iv, (i1b - i1a, i2b - i2a, int(self.grid.counts[2])))
+
+    def mask(self) -> np.ndarray:
+        """``(n1, n2, n3) bool``: the whole map's forbidden bins (for plots and tests; reads every substructure)."""
+        g = self.grid
+        out = np.zeros(tuple(int(c) for c in g.counts), dtype=bool)
+        for s in range(g.n_substructures):
+            i1a, i1b, i2a, i2b = g.sub_cells(s)
+            out[i1a:i1b, i2a:i2b] = self.substructure_mask(s)
+        return out
+
+    @property
+    def size_bytes(self) -> int:
+        return self.path.stat().st_size
+
+    # ------------------------------------------------------------------ lookups
+    def prepare(self) -> "ForbiddenMap":
+        """Gather every substructure into the flat lookup arrays (idempotent; the first :meth:`allowed_many` runs it)."""
+        if self._full is None:
+            g = self.grid
+            self._full = _Block(self, 0, int(g.counts[0]), 0, int(g.counts[1]))
+        return self
+
+    def _as_rows(self, Q) -> np.ndarray:
+        Q = np.asarray(Q, dtype=np.float64)
+        if Q.ndim == 1:
+            Q = Q[None, :]
+        if Q.ndim != 2 or Q.shape[1] < 3:
+            raise ForbiddenMapError(f"Q: expected (M, 3) joints 1-3 or (M, n) joint vectors of {self.robot!r}, got {Q.shape}")
+        return np.ascontiguousarray(Q)
+
+    def _cols_for(self, Q: np.ndarray) -> np.ndarray:
+        if Q.shape[1] == 3:
+            return np.arange(3, dtype=np.int64)
+        if Q.shape[1] <= max(self.joint_index):
+            raise ForbiddenMapError(f"Q: {Q.shape[1]} columns do not hold joints {self.joint_index} of {self.robot!r}")
+        return np.array(self.joint_index, dtype=np.int64)
+
+    def lookup_many(self, Q) -> np.ndarray:
+        """``(M,) int8`` :class:`Lookup` codes for ``Q`` (``(M, 3)`` joints 1–3, or ``(M, n)`` robot joint vectors; rad)."""
+        return self.prepare()._full.codes(self, Q)
+
+    def allowed_many(self, Q) -> np.ndarray:
+        """``(M,) bool``: True where the map proves links 1–3 clear of the obstacles by more than the stopping distance."""
+        return self.lookup_many(Q) == Lookup.ALLOWED
+
+    def allowed(self, q) -> bool:
+        """One configuration ``q`` (``(3,)`` or the robot's ``(n,)``, rad): see :meth:`allowed_many`."""
+        return bool(self.allowed_many(np.asarray(q, dtype=np.float64)[None, :])[0])
+
+    def neighbourhood(self, q) -> "Neighbourhood":
+        """The 3 × 3 block of substructures around ``q`` (fewer at the grid's edges), read from the file alone."""
+        q = np.asarray(q, dtype=np.float64).reshape(-1)
+        cols = self._cols_for(q[None, :])
+        cell = self.grid.cell_of(q[cols])
+        if cell is None:
+            raise ForbiddenMapError(f"q = {q[cols]} rad is outside the map's joint limits")
+        g = self.grid
+        k1, k2 = cell[0] // int(g.per_sub[0]), cell[1] // int(g.per_sub[1])
+        a1, b1 = max(0, k1 - 1), min(int(g.n_sub[0]), k1 + 2)
+        a2, b2 = max(0, k2 - 1), min(int(g.n_sub[1]), k2 + 2)
+        r = (a1 * int(g.per_sub[0]), min(b1 * int(g.per_sub[0]), int(g.counts[0])),
+             a2 * int(g.per_sub[1]), min(b2 * int(g.per_sub[1]), int(g.counts[1])))
+        return Neighbourhood(self, _Block(self, *r), ((a1, b1), (a2, b2)))
+
+    # ------------------------------------------------------------------ facts
+    def forbidden_intervals(self, i1: int, i2: int) -> np.ndarray:
+        """``(K, 2) float64, rad``: cell ``(i1, i2)``'s forbidden joint-3 intervals (bin edges, clipped to the limits)."""
+        g = self.grid
+        s = g.sub_of(i1, i2)
+        i1a, _, i2a, i2b = g.sub_cells(s)
+        ptr, iv = self._raw_sub(s)
+        c = (i1 - i1a) * (i2b - i2a) + (i2 - i2a)
+        e = g.bin_edges()
+        sel = iv[int(ptr[c]):int(ptr[c + 1])].astype(np.int64)
+        return np.stack([e[sel[:, 0]], e[sel[:, 1]]], axis=1) if len(sel) else np.zeros((0, 2))
+
+    def info(self) -> MapInfo:
+        g = self.grid
+        sizes = np.diff(self._dir)
+        grid_sizes = sizes.reshape(int(g.n_sub[0]), int(g.n_sub[1]))
+        pad = np.pad(grid_sizes, 1)
+        nb = sum(pad[i:i + grid_sizes.shape[0], j:j + grid_sizes.shape[1]] for i in range(3) for j in range(3))
+        widths = np.diff(g.bin_edges())
+        forb = 0.0
+        n_iv = 0
+        for s in range(g.n_substructures):
+            i1a, i1b, i2a, i2b = g.sub_cells(s)
+            m = self.substructure_mask(s)
+            w1 = np.minimum(g.lower[0] + g.step[0] * np.arange(i1a + 1, i1b + 1), g.upper[0]) - (g.lower[0] + g.step[0] * np.arange(i1a, i1b))
+            w2 = np.minimum(g.lower[1] + g.step[1] * np.arange(i2a + 1, i2b + 1), g.upper[1]) - (g.lower[1] + g.step[1] * np.arange(i2a, i2b))
+            forb += float(np.einsum("i,j,ijk,k->", w1, w2, m, widths))
+            n_iv += len(self._raw_sub(s)[1])
+        vol = float(np.prod(g.upper - g.lower))
+        st = self.header.get("stats", {})
+        return MapInfo(self.size_bytes, g.n_cells, g.n_substructures, int(g.counts[2]), n_iv, int(sizes.max()),
+                       int(nb.max()), forb / vol, int(st.get("evaluations", 0)), int(st.get("unresolved", 0)))
+
+    def __repr__(self) -> str:
+        g = self.grid
+        return (f"ForbiddenMap({str(self.path)!r}: {self.robot} {self.joints}, links {self.links}, "
+                f"{math.degrees(g.step[0]):.4g}° × {math.degrees(g.step[2]):.4g}°, {g.n_substructures} substructures, "
+                f"stopping distance {self.stopping_distance} m, {self.size_bytes} bytes)")
+
+
+class Neighbourhood:
+    """The 3 × 3 substructures around a configuration, loaded alone from the map file.
+
+    Attributes
+    ----------
+    substructures : ((k1a, k1b), (k2a, k2b))
+        The loaded substructure ranges (end exclusive).
+    nbytes : int
+        Bytes of the substructures read (the paper: 9 × 1.5 KB = 13.5 KB).
+    """
+
+    def __init__(self, fmap: ForbiddenMap, block: _Block, subs) -> None:
+        self._map = fmap
+        self._block = block
+        self.substructures = subs
+        self.nbytes = int(block.nbytes)
+
+    def lookup_many(self, Q) -> np.ndarray:
+        """``(M,) int8`` :class:`Lookup` codes; ``OUTSIDE_BLOCK`` where a row lies outside the loaded block."""
+        return self._block.codes(self._map, Q)
+
+    def allowed_many(self, Q) -> np.ndarray:
+        """``(M,) bool`` as :meth:`ForbiddenMap.allowed_many`; a row outside the block raises ForbiddenMapError."""
+        codes = self.lookup_many(Q)
+        if np.any(codes == Lookup.OUTSIDE_BLOCK):
+            raise ForbiddenMapError("a configuration lies outside the loaded neighbourhood; load the one around it")
+        return codes == Lookup.ALLOWED
+
+    def allowed(self, q) -> bool:
+        return bool(self.allowed_many(np.asarray(q, dtype=np.float64)[None, :])[0])

@@ -1,0 +1,55 @@
+"""A joint-1 × joint-3 slice of a map as an image (matplotlib, Agg)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._errors import ForbiddenMapError
+
+__all__ = ["plot_slice"]
+
+
+def plot_slice(fmap, q2: float, out, *, q=None, dpi: int = 120) -> None:
+    """Write a PNG of the cells at joint 2 = ``q2`` (rad): joint 1 across, joint 3 up, forbidden bins red.
+
+    ``q``: a configuration ``(3,)`` rad (joints 1–3) to mark, or None.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import ListedColormap
+
+    g = fmap.grid
+    cell = g.cell_of([g.lower[0], q2, g.lower[2]])
+    if cell is None:
+        raise ForbiddenMapError(f"q2 = {q2} rad is outside joint 2's limits [{g.lower[1]}, {g.upper[1]}]")
+    i2 = cell[1]
+    img = np.zeros((int(g.counts[2]), int(g.counts[0])), dtype=np.int8)
+    for k1 in range(int(g.n_sub[0])):
+        s = k1 * int(g.n_sub[1]) + i2 // int(g.per_sub[1])
+        i1a, i1b, i2a, _ = g.sub_cells(s)
+        img[:, i1a:i1b] = fmap.substructure_mask(s)[:, i2 - i2a, :].T
+    deg = math.degrees
+    x1 = min(g.lower[0] + g.counts[0] * g.step[0], g.upper[0])
+    x3 = min(g.lower[2] + g.counts[2] * g.step[2], g.upper[2])
+    fig, ax = plt.subplots(figsize=(8, 5))
+    ax.imshow(img, origin="lower", aspect="auto", interpolation="nearest", cmap=ListedColormap(["#f4f4f4", "#d62728"]),
+              vmin=0, vmax=1, extent=(deg(g.lower[0]), deg(x1), deg(g.lower[2]), deg(x3)))
+    if q is not None:
+        q = np.asarray(q, dtype=np.float64).reshape(-1)[:3]
+        ok = fmap.allowed(q)
+        ax.plot([deg(q[0])], [deg(q[2])], marker="x" if not ok else "o", color="k", markersize=9, mew=2,
+                label=f"q ({'allowed' if ok else 'forbidden'})")
+        ax.legend(loc="upper right")
+    lo2 = g.lower[1] + i2 * g.step[1]
+    ax.set_xlabel(f"{fmap.joints[0]} (deg)")
+    ax.set_ylabel(f"{fmap.joints[2]} (deg)")
+    ax.set_title(f"forbidden (red): {fmap.robot} links {', '.join(fmap.links)}; {fmap.joints[1]} in "
+                 f"[{deg(lo2):.3g}°, {deg(min(lo2 + g.step[1], g.upper[1])):.3g}°], stopping distance "
+                 f"{fmap.stopping_distance} m", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out, dpi=dpi)
+    plt.close(fig)

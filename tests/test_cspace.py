@@ -1,0 +1,238 @@
+"""Forbidden-values maps (armguard.cspace): certified, compact, lazily loaded, resumable, identical on Dask.
+
+The map is built once per module at a coarse resolution (6°, joint-3 quantum 6°) so the whole
+file runs in well under a minute; the certification argument does not depend on the resolution.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+import armguard
+from armguard import ForbiddenMapError
+from armguard.cspace import (
+    CombinedChecker,
+    CombinedStatus,
+    DetectorClearance,
+    ExactnessStatus,
+    ForbiddenMap,
+    Lookup,
+    MapGrid,
+    check_exactness,
+    map_links,
+    random_configurations,
+)
+from armguard.cspace._certify import certify_substructure, decode_intervals, encode_mask
+from armguard.cspace._clearance import link_obstacle_scene
+from armguard.models import builtin_path
+
+REF = yaml.safe_load((Path(__file__).resolve().parent.parent / "reference" / "seeds" / "hermes_forbidden_map.yaml").read_text())
+RES = math.radians(6.0)
+DEPTH = 3
+SD = REF["stopping_distance"]["worst_m"]  # the paper's worst stopping distance, 0.1 m
+KW = dict(resolution=RES, stopping_distance=SD, max_depth=DEPTH)
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return armguard.load_scene("hermes")
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cspace") / "hermes6.agmap"
+    fmap = ForbiddenMap.build("hermes", out=out, **KW)
+    return fmap
+
+
+def test_grid_matches_the_papers_substructures():
+    lo = np.radians([REF["joint_ranges_deg"]["joint1"][0], REF["joint_ranges_deg"]["joint2"][0], -160.0])
+    hi = np.radians([REF["joint_ranges_deg"]["joint1"][1], REF["joint_ranges_deg"]["joint2"][1], 160.0])
+    g = MapGrid.create(lo, hi, math.radians(REF["full_structure_1deg"]["resolution_deg"]), math.radians(1.0),
+                       np.radians(REF["substructures"]["extent_deg"]))
+    assert g.n_substructures == REF["substructures"]["count"]  # 864
+    assert tuple(g.per_sub) == (10, 10) and g.n_cells == 360 * 240
+
+
+def test_default_links_and_irrelevant_joints(scene):
+    ml = map_links(scene, "hera")
+    assert ml.links == ("link1", "link2", "link3")
+    assert ml.joints == ("shoulder_yaw", "shoulder_pitch", "elbow")
+    with pytest.raises(ForbiddenMapError, match="also moved by"):
+        map_links(scene, "hera", links=("link2", "link4"))
+    # joints 4-6 do not move links 1-3: the clearance is the same whatever they are
+    det = armguard.Detector(link_obstacle_scene(scene, "hera", ml.links), threshold=0.0)
+    rng = np.random.default_rng(1)
+    Q = random_configurations(None, scene, 2000, seed=2)
+    Q2 = Q.copy()
+    hera = scene.robots["hera"]
+    Q2[:, 3:6] = rng.uniform(hera.lower[3:6], hera.upper[3:6], size=(len(Q), 3))
+    d1 = det.check_many(Q).min_distance.min(axis=1)
+    d2 = det.check_many(Q2).min_distance.min(axis=1)
+    assert np.array_equal(d1, d2)
+    assert np.array_equal(d1, DetectorClearance(scene, ml)(Q[:, :3]))
+
+
+def test_no_allowed_configuration_collides(built, scene):
+    rep = check_exactness(built, scene, n=20_000, seed=3)
+    print(f"\n6° map: truly colliding {rep.colliding / rep.n:.3f}; false-forbidden share {rep.false_forbidden_share:.3f} "
+          f"({rep.false_forbidden_of_free:.3f} of the free configurations)")
+    assert rep.status is ExactnessStatus.CONSERVATIVE and rep.allowed_but_colliding == 0
+    assert rep.colliding > 0 and rep.n - rep.colliding - rep.false_forbidden > 0.2 * rep.n  # a useful map, not all forbidden
+
+
+def test_box_bound_beats_dense_sampling_of_each_allowed_box(built, scene):
+    """Stronger than random samples: every corner and the centre of allowed cell × bin boxes are clear."""
+    g = built.grid
+    mask = built.mask()
+    rng = np.random.default_rng(4)
+    idx = np.argwhere(~mask)
+    pick = idx[rng.choice(len(idx), size=400, replace=False)]
+    corners = np.array([[a, b, c] for a in (0, 1) for b in (0, 1) for c in (0, 1)] + [[0.5, 0.5, 0.5]])
+    Q = (g.lower + (pick[:, None, :] + corners[None, :, :]) * g.step).reshape(-1, 3)
+    Q = np.minimum(Q, g.upper)
+    d = DetectorClearance(scene, map_links(scene, "hera"))(Q)
+    assert np.all(d > SD)
+
+
+def test_round_trip_and_certify_agree(built, scene):
+    ml = map_links(scene, "hera")
+    hook = DetectorClearance(scene, ml)
+    g = built.grid
+    for s in (0, g.n_substructures // 2, g.n_substructures - 1):
+        r = certify_substructure(g, s, hook, ml.lever, SD, armguard.DEFAULT_TOLERANCES.cspace_contact, DEPTH)
+        ptr, iv = built.substructure(s)
+        assert np.array_equal(ptr, r.pointers) and np.array_equal(iv, r.intervals)
+    again = ForbiddenMap.load(built.path)
+    assert np.array_equal(again.mask(), built.mask())
+    assert again.header["grid"] == built.header["grid"] and again.stopping_distance == SD
+    rng = np.random.default_rng(5)
+    m = rng.random((4, 7, 50)) < 0.4
+    assert np.array_equal(decode_intervals(*encode_mask(m), m.shape), m)
+    info = built.info()
+    assert info.size_bytes == built.path.stat().st_size and info.n_substructures == g.n_substructures
+    assert 0.0 < info.forbidden_fraction < 1.0
+
+
+def test_lookups_match_the_mask_and_limits(built):
+    g = built.grid
+    mask = built.mask()
+    rng = np.random.default_rng(6)
+    Q = rng.uniform(g.lower, g.upper, size=(50_000, 3))
+    idx = np.minimum(np.floor((Q - g.lower) / g.step).astype(int), g.counts - 1)
+    expect = ~mask[idx[:, 0], idx[:, 1], idx[:, 2]]
+    assert np.array_equal(built.allowed_many(Q), expect)
+    full = np.zeros((len(Q), 6))
+    full[:, :3] = Q
+    assert np.array_equal(built.allowed_many(full), expect)  # robot joint vectors work too
+    out = np.array([[g.lower[0] - 0.01, 0.5, 0.0], [1.0, g.upper[1] + 0.01, 0.0], [np.nan, 0.5, 0.0]])
+    assert list(built.lookup_many(out)) == [Lookup.OUTSIDE_LIMITS] * 3 and not built.allowed(out[0])
+    assert built.allowed_many(np.array([g.upper])).shape == (1,)  # the upper limits are inside the last cell
+
+
+def test_neighbourhood_equals_full_loading(built):
+    g = built.grid
+    rng = np.random.default_rng(7)
+    sizes = np.diff(built._dir)
+    for q in rng.uniform(g.lower, g.upper, size=(6, 3)).tolist() + [list(g.lower), list(g.upper)]:
+        nb = built.neighbourhood(q)
+        (a1, b1), (a2, b2) = nb.substructures
+        assert (b1 - a1) <= 3 and (b2 - a2) <= 3
+        lo = g.lower + np.array([a1 * g.per_sub[0], a2 * g.per_sub[1], 0]) * g.step
+        hi = np.minimum(g.lower + np.array([b1 * g.per_sub[0], b2 * g.per_sub[1], g.counts[2]]) * g.step, g.upper)
+        Q = rng.uniform(lo, hi, size=(5000, 3))
+        assert np.array_equal(nb.allowed_many(Q), built.allowed_many(Q))
+        subs = [k1 * g.n_sub[1] + k2 for k1 in range(a1, b1) for k2 in range(a2, b2)]
+        assert nb.nbytes == int(sizes[subs].sum())
+    nb = built.neighbourhood([0.01, g.lower[1] + 0.01, 0.0])
+    with pytest.raises(ForbiddenMapError, match="outside the loaded neighbourhood"):
+        nb.allowed([g.upper[0] - 0.01, g.upper[1] - 0.01, 0.0])
+
+
+def test_another_model_file_is_refused(built, tmp_path):
+    with pytest.raises(ForbiddenMapError, match="built for other model files"):
+        ForbiddenMap.load(built.path, model="ranger")
+    ForbiddenMap.load(built.path, model="hermes")  # the same file: fine
+    # a map built from a copy of the scene file refuses once that file changes
+    src = tmp_path / "hermes_copy.yaml"
+    shutil.copy(builtin_path("hermes"), src)
+    fmap = ForbiddenMap.build(str(src), out=tmp_path / "c.agmap", resolution=math.radians(30), stopping_distance=SD,
+                              max_depth=0)
+    ForbiddenMap.load(fmap.path)
+    src.write_text(src.read_text() + "\n# edited\n")
+    with pytest.raises(ForbiddenMapError, match="built for other model files"):
+        ForbiddenMap.load(fmap.path)
+    with pytest.raises(ForbiddenMapError, match="built for other model files"):
+        CombinedChecker(ForbiddenMap.load(built.path), "ranger")
+
+
+class _Stop(Exception):
+    pass
+
+
+def test_interrupted_build_resumes(built, tmp_path):
+    out = tmp_path / "r.agmap"
+    k = 40
+
+    def stop_after(done, total):
+        if done >= k:
+            raise _Stop
+
+    with pytest.raises(_Stop):
+        ForbiddenMap.build("hermes", out=out, progress=stop_after, **KW)
+    assert not out.exists() and (tmp_path / "r.agmap.partial").exists()
+    fmap = ForbiddenMap.build("hermes", out=out, **KW)
+    r = fmap.build_report
+    assert r.status.value == "resumed" and r.reused == k and r.computed == built.grid.n_substructures - k
+    assert out.read_bytes() == built.path.read_bytes()
+    assert not (tmp_path / "r.agmap.partial").exists()
+
+
+def test_distributed_build_is_identical(built, tmp_path):
+    fmap = ForbiddenMap.build("hermes", out=tmp_path / "d.agmap", workers=2, **KW)
+    assert fmap.build_report.workers == 2
+    assert fmap.path.read_bytes() == built.path.read_bytes()
+
+
+def test_combined_check_never_misses_a_collision(built, scene):
+    comb = CombinedChecker(built, scene).prepare()
+    full = armguard.Detector(scene, threshold=0.0, stopping_distance=SD)
+    Q = random_configurations(built, scene, 10_000, seed=8)
+    batch = comb.check_many(Q)
+    truth = full.collides_many(Q)
+    assert not np.any(truth & ~batch.collision)
+    assert np.array_equal(comb.collides_many(Q), batch.collision)
+    assert np.any(batch.status == CombinedStatus.FREE) and np.any(batch.status == CombinedStatus.COLLISION)
+
+
+def test_lookup_is_fast(built):
+    g = built.grid
+    Q = np.random.default_rng(9).uniform(g.lower, g.upper, size=(1_000_000, 3))
+    built.allowed_many(Q[:10])
+    best = math.inf
+    for _ in range(5):
+        t = time.perf_counter()
+        built.allowed_many(Q)
+        best = min(best, time.perf_counter() - t)
+    ns = best / len(Q) * 1e9
+    print(f"\nallowed_many: {ns:.1f} ns per configuration")
+    assert ns <= 100.0
+
+
+def test_bad_requests(tmp_path):
+    with pytest.raises(ForbiddenMapError, match="workers"):
+        ForbiddenMap.build("hermes", out=tmp_path / "x.agmap", workers=0)
+    with pytest.raises(ForbiddenMapError, match="stopping_distance"):
+        ForbiddenMap.build("hermes", out=tmp_path / "x.agmap", stopping_distance=-1.0)
+    with pytest.raises(ForbiddenMapError, match="model_files"):
+        ForbiddenMap.build(armguard.load_scene("hermes"), out=tmp_path / "x.agmap")
+    (tmp_path / "bad.agmap").write_bytes(b"not a map")
+    with pytest.raises(ForbiddenMapError, match="not a forbidden-values map"):
+        ForbiddenMap.load(tmp_path / "bad.agmap")
