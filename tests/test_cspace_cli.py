@@ -1,0 +1,38 @@
+"""``armguard cspace build | info | plot`` on a coarse map."""
+
+from __future__ import annotations
+
+import json
+
+from click.testing import CliRunner
+
+from armguard.cli import main
+
+
+def test_build_info_plot(tmp_path):
+    out = tmp_path / "maps" / "hermes.agmap"
+    runner = CliRunner()
+    r = runner.invoke(main, ["cspace", "build", "hermes", "--resolution", "12deg", "--max-depth", "1",
+                             "--stopping-distance", "0.1", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    assert out.exists() and "bytes" in r.output
+    r = runner.invoke(main, ["cspace", "info", str(out), "--samples", "2000", "--json"])
+    assert r.exit_code == 0, r.output
+    info = json.loads(r.output)
+    assert info["size_bytes"] == out.stat().st_size and info["n_cells"] == 30 * 20
+    assert info["exactness"]["allowed_but_colliding"] == 0 and info["exactness"]["status"] == "conservative"
+    r = runner.invoke(main, ["cspace", "info", str(out), "--samples", "0"])
+    assert r.exit_code == 0 and "substructures" in r.output
+    png = tmp_path / "slice.png"
+    r = runner.invoke(main, ["cspace", "plot", str(out), "--q2", "30", "--q", "180,30,-20", "--out", str(png)])
+    assert r.exit_code == 0, r.output
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_other_model_is_refused(tmp_path):
+    out = tmp_path / "h.agmap"
+    runner = CliRunner()
+    assert runner.invoke(main, ["cspace", "build", "hermes", "--resolution", "30deg", "--max-depth", "0",
+                                "--out", str(out)]).exit_code == 0
+    r = runner.invoke(main, ["cspace", "info", str(out), "--model", "ranger", "--samples", "0"])
+    assert r.exit_code == 2 and "built for other model files" in r.output
