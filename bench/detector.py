@@ -16,7 +16,7 @@ import numpy as np
 from .timing import fmt_ns, median_seconds
 
 TITLE = "Detector: Ranger cycle, whole arm, scaling, exactness"
-WORLD20 = Path(__file__).resolve().parent.parent.parent / "shared" / "bench" / "world20.json"
+WORLD20 = Path(__file__).resolve().parent / "data" / "world20.json"  # vendored: see bench/data/README.md
 
 
 def _limits(scene):
@@ -472,7 +472,7 @@ def _whole_arm(quick: bool) -> list[str]:
     if t_pb is not None:
         rows.append(f"| pybullet (this run), KUKA meshes, contacts, one configuration at a time | "
                     f"{1.0 / t_pb / 1e3:.1f} k | contacts only |")
-    rows.append("| peers from `shared/bench/README.md` (same world, same machine class): MuJoCo capsules ~107 k, "
+    rows.append("| peers from `bench/data/README.md` (same world, same machine class): MuJoCo capsules ~107 k, "
                 "MuJoCo hulls ~70 k, pybullet ~13 k, VAMP ~451 k single / 2.7 M x8 | | |")
     return rows + [""] + notes
 

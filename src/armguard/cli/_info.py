@@ -93,6 +93,13 @@ def info_cmd(scene: str, rad: bool) -> None:
     t.add_row("adjacent links excluded", str(s.exclude_adjacent))
     for rname, pairs in s.self_pairs.items():
         t.add_row(f"listed link pairs of {rname}", ", ".join(f"{a}-{b}" for a, b in sorted(pairs)))
+    for rname in s.robots:  # own-link pairs left after the SRDF's rules (Hermes: only 1-3, 1-4, ...)
+        if rname in s.self_pairs:
+            continue
+        own = sorted(tuple(sorted((p.a.split("/", 1)[1], p.b.split("/", 1)[1]))) for p in s.allowed_pairs()
+                     if p.a.startswith(rname + "/") and p.b.startswith(rname + "/"))
+        if own:
+            t.add_row(f"checked link pairs of {rname}", ", ".join(f"{a}-{b}" for a, b in own))
     for p in sorted(sorted(x) for x in s.disabled_pairs):
         t.add_row("disabled", " - ".join(p))
     for cat, pairs in s.allowed_pairs_by_category().items():

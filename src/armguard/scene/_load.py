@@ -248,6 +248,8 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
             robot = Robot.from_urdf(path, name=spec.name, X_WB=X_WB)
         except ArmguardError as exc:
             raise ctx.error(f"{w}.urdf", str(exc)) from None
+        if spec.max_acceleration is not None:
+            robot = _with_accelerations(robot, spec.max_acceleration, ctx, f"{w}.max_acceleration")
         source = {"kind": "urdf", "urdf": str(path)}
     # link shapes, in each link's own frame
     if spec.link_shapes:
@@ -298,6 +300,23 @@ def _link_shape(spec, ctx: _Ctx, where: str, robot, link: str):
         return Capsule(pts[0], np.zeros(3), spec.radius * ctx.L)
     except ArmguardError as exc:
         raise ctx.error(where, str(exc)) from None
+
+
+def _with_accelerations(robot, values, ctx: _Ctx, where: str):
+    """``robot`` with its independent joints' acceleration limits set (file units)."""
+    import dataclasses
+
+    from ..kinematics import JointType, Robot
+
+    if len(values) != robot.n_joints:
+        raise ctx.error(where, f"expected {robot.n_joints} values {list(robot.joint_names)}, got {len(values)}")
+    if any(not v > 0 for v in values):
+        raise ctx.error(where, "every acceleration limit must be > 0")
+    scale = {j: (ctx.L if t is JointType.PRISMATIC else ctx.A) * v
+             for j, t, v in zip(robot.joint_names, robot.joint_types, values)}
+    specs = [dataclasses.replace(sp, max_acceleration=scale[sp.name]) if sp.name in scale else sp for sp in robot.joints]
+    return Robot(robot.name, robot.root_link, specs, joint_names=robot.joint_names, link_shapes=dict(robot.link_shapes),
+                 X_WB=robot.X_WB, tool_link=robot.tool_link)
 
 
 def read_srdf_disabled(path) -> list[tuple[str, str]]:

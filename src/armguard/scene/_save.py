@@ -102,6 +102,8 @@ def _robot_to_dict(scene: Scene, name: str) -> dict:
             out["link_shapes"] = shapes
     elif source.get("kind") == "urdf":
         out["urdf"] = source["urdf"]
+        if np.all(np.isfinite(robot.max_acceleration)):
+            out["max_acceleration"] = _l(robot.max_acceleration)
     else:
         raise SceneError(f"cannot save robot {name!r}: it has neither a DH table nor a URDF file")
     out["home"] = _l(scene.home(name))

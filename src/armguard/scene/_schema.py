@@ -174,6 +174,7 @@ class RobotSpec(_Model):
     tool: _Posed | None = None
     urdf: str | None = None
     srdf: str | None = None
+    max_acceleration: list[float] | None = None  # a URDF robot's, one per joint (URDF has no place for them)
     link_shapes: dict[Name, list[ShapeSpec]] = {}
     home: list[Num] | None = None
     self_pairs: list[Annotated[list[Name], Field(min_length=2, max_length=2)]] | None = None
