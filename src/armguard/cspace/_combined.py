@@ -44,7 +44,8 @@ class CombinedChecker:
     ----------
     fmap : ForbiddenMap
     scene : Scene | str | None
-        The scene the map was built for (default: the map's ``model`` record, a name or path).
+        The scene the map was built for (default: the map's ``model`` record, a name or path).  A
+        name or path is checked against the map's model sha256; a Scene object is taken as given.
     """
 
     def __init__(self, fmap, scene=None, *, tol: Tolerances = DEFAULT_TOLERANCES) -> None:

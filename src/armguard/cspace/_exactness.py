@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._errors import ForbiddenMapError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._clearance import link_obstacle_scene, resolve_scene
 
@@ -49,9 +50,10 @@ class ExactnessReport:
     false_forbidden_of_free: float
 
 
-def random_configurations(fmap, scene, n: int, seed: int = 0) -> np.ndarray:
-    """``(n, n_q)`` flat scene configurations: joints 1–3 uniform within the map's limits, every other joint
-    uniform within its own limits (they do not move the mapped links)."""
+def random_configurations(scene, n: int, seed: int = 0) -> np.ndarray:
+    """``(n, n_q)`` flat scene configurations (rad or m), every joint with finite limits uniform within them
+    (the others at ``scene.default_q()``).  A map's joints 1–3 span the robot's limits, so they are uniform
+    over the map's grid; the other joints do not move the mapped links."""
     rng = np.random.default_rng(seed)
     lo, hi = [], []
     for rob in scene.robots.values():
@@ -71,11 +73,15 @@ def check_exactness(fmap, scene=None, *, n: int = 10_000, seed: int = 0, Q=None,
     """Compare ``fmap`` with the exact check on ``n`` random configurations (or the rows of ``Q`` ``(M, n_q)`` rad)."""
     from ..detect import Detector
 
-    scene, _ = resolve_scene(fmap.header["model"] if scene is None else scene)
+    if scene is None:
+        if fmap.header.get("model") is None:
+            raise ForbiddenMapError("the map was built from a Scene object: pass scene=")
+        scene = fmap.header["model"]
+    scene, _ = resolve_scene(scene)
     det = Detector(link_obstacle_scene(scene, fmap.robot, fmap.links), threshold=0.0,
                    stopping_distance=fmap.stopping_distance, tol=tol)
     if Q is None:
-        Q = random_configurations(fmap, scene, int(n), seed)
+        Q = random_configurations(scene, int(n), seed)
     Q = np.asarray(Q, dtype=np.float64)
     k0 = 0
     for name, rob in scene.robots.items():
