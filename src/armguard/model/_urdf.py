@@ -142,8 +142,27 @@ def load_pinocchio(path, package_dirs=()):
                                  "Pinocchio's GeometryModel (an element it cannot read was dropped)")
     for go in geom.geometryObjects:
         g = go.geometry
-        if isinstance(g, coal.BVHModelBase):  # a mesh not marked <convex>: its hull (see module docstring)
-            # the hull of the mesh's vertices, rebuilt from scipy's hull triangles: coal's own
-            # buildConvexRepresentation of the UR5's meshes gave GJK answers up to 0.38 m too far
-            go.geometry = convex_hull(np.asarray(g.vertices(), dtype=np.float64))
+        if isinstance(g, (coal.BVHModelBase, coal.ConvexBase)) and go.meshPath:
+            # every mesh becomes the hull of its file's vertices in double precision (Pinocchio reads
+            # meshes in single precision: 0.7 m comes back as 0.69999999 m), rebuilt from scipy's
+            # hull triangles (coal's own buildConvexRepresentation of the UR5's meshes gave GJK
+            # answers up to 0.38 m too far)
+            go.geometry = convex_hull(_mesh_vertices(go, g))
     return pin_model, geom, info
+
+
+def _mesh_vertices(go, g) -> np.ndarray:
+    """``(N, 3) float64, m``: the mesh file's vertices, scaled; coal's (single precision) if unreadable."""
+    import coal
+
+    try:
+        import trimesh
+
+        mesh = trimesh.load(go.meshPath, force="mesh", process=False)
+        v = np.asarray(mesh.vertices, dtype=np.float64) * np.asarray(go.meshScale, dtype=np.float64)
+        if len(v) >= 3 and np.all(np.isfinite(v)):
+            return v
+    except Exception:  # noqa: BLE001 - a format trimesh cannot read: Pinocchio's copy serves
+        pass
+    pts = g.vertices() if isinstance(g, coal.BVHModelBase) else g.points()
+    return np.asarray(pts, dtype=np.float64)
