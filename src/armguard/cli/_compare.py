@@ -1,0 +1,120 @@
+"""``armguard compare MODEL`` (the backend harness) and ``armguard check-urdf PATH`` (the model linter)."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import click
+
+from . import main
+
+
+def _floats(text: str) -> list:
+    try:
+        return [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise click.BadParameter(f"expected comma-separated numbers, got {text!r}") from None
+
+
+@main.command("compare")
+@click.argument("model")
+@click.option("--backends", default="analytic,coal", show_default=True, help="Comma-separated backends to compare.")
+@click.option("--configs", "n_configs", type=int, default=1000, show_default=True, help="Seeded random in-limit configurations.")
+@click.option("--trajectory", "trajectories", multiple=True, default=("all",), show_default=True,
+              help="Canned trajectories whose samples are added: a name (repeatable), 'all' or 'none'.")
+@click.option("--frequency", type=float, default=1.0, show_default=True, help="Trajectory sampling rate (Hz).")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random configurations.")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None, help="Write compare.json and PNGs here.")
+@click.option("--backend-option", "backend_options", multiple=True, metavar="B.KEY=VALUE",
+              help="An option of one backend, e.g. analytic.fidelity=paper (repeatable).")
+@click.option("--workers", type=int, default=None, help="Spread the configurations over a Dask LocalCluster of N processes.")
+@click.option("--scheduler", default=None, help="... or over an existing Dask cluster (scheduler address).")
+@click.option("--no-plots", is_flag=True, help="Skip the PNGs.")
+@click.option("--worst", "n_worst", type=int, default=5, show_default=True, help="Worst configurations listed per backend pair.")
+@click.option("--q", "q_text", default=None, help="Answer at this one configuration (pin order, comma-separated) instead.")
+@click.option("--pair", "pair_text", default=None, help="With --q: only this pair (A,B GeometryObject names).")
+@click.option("--json", "as_json", is_flag=True, help="Print compare.json (or the --q answers) instead of tables.")
+def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_dir, backend_options, workers, scheduler,
+                no_plots, n_worst, q_text, pair_text, as_json) -> None:
+    """Compare BACKENDS on MODEL (a built-in, panda, ur5, iiwa, or a .urdf/.yaml path): verdicts, distances,
+    nearest points and timings on the same configurations.  Exit status 1 when a backend pair differs."""
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+    from ..harness import compare_at, parse_backend_options, run_compare, summary_table
+
+    console = Console()
+    names = tuple(b.strip() for b in backends.split(",") if b.strip())
+    options = parse_backend_options(backend_options)
+    if q_text is not None:
+        pair = tuple(p.strip() for p in pair_text.split(",")) if pair_text else None
+        rows = compare_at(model, names, _floats(q_text), options=options, pair=pair)
+        if as_json:
+            click.echo(json.dumps(rows, indent=1))
+            return
+        for r in rows:
+            console.print(f"[bold]{r['pair'][0]} / {r['pair'][1]}[/bold] ({r['category']})")
+            for b in names:
+                d, pa, pb = r[b]
+                console.print(f"  {b:10s} d = {d!r} m  p_WA = {pa}  p_WB = {pb}")
+        return
+    traj = list(trajectories)
+    traj = "all" if traj == ["all"] else (None if traj == ["none"] else traj)
+    with Progress(TextColumn("answering"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
+                  console=console, transient=True, disable=as_json) as bar:
+        task = bar.add_task("configs", total=None)
+        comp = run_compare(model, names, n_configs=n_configs, seed=seed, trajectories=traj, frequency=frequency,
+                           options=options, workers=workers, scheduler=scheduler, out_dir=out_dir, plots=not no_plots,
+                           n_worst=n_worst, progress=lambda done, total: bar.update(task, completed=done, total=total))
+    if as_json:
+        click.echo(json.dumps(comp.summary, indent=1, default=str))
+    else:
+        for t in summary_table(comp):
+            console.print(t)
+        for key, p in comp.summary["pairs"].items():
+            bad = [w for w in p["worst"] if w["why"] == "verdict"] + [w for w in p["worst"] if w["why"] == "distance"][:3]
+            if bad:
+                console.print(f"[bold]{key}: worst configurations[/bold]")
+            for w in bad:
+                a, b = p["a"], p["b"]
+                console.print(f"  {w['why']:8s} #{w['config']} ({w['source']}) {w['pair'][0]} / {w['pair'][1]}: "
+                              f"{a} {w[a]['distance']:.6e} m, {b} {w[b]['distance']:.6e} m")
+                console.print(f"    {w['reproduce']}", style="dim", soft_wrap=True)
+        tm = comp.summary["timing"]
+        console.print(f"{comp.summary['configs']['total']} configurations: answers {tm['answers_s']:.1f} s, "
+                      f"comparison {tm['compare_s']:.1f} s" + (f", outputs {tm['outputs_s']:.1f} s in {out_dir}" if out_dir else ""))
+    if any(p["status"] != "agree" for p in comp.summary["pairs"].values()):
+        sys.exit(1)
+
+
+@main.command("check-urdf")
+@click.argument("path")
+@click.option("--configs", "n_configs", type=int, default=200, show_default=True,
+              help="Random configurations for the permanent-collision check.")
+@click.option("--json", "as_json", is_flag=True, help="Print the findings as JSON.")
+def check_urdf_cmd(path, n_configs, as_json) -> None:
+    """Lint a model (a built-in name, .urdf or .yaml): dropped collision elements, non-convex meshes marked
+    convex, zero-length capsules, SRDF names that match nothing, pairs in permanent collision.
+    Exit status 1 when there is an error-level finding."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from ..harness import check_model_files
+
+    report = check_model_files(path, n_configs=n_configs)
+    if as_json:
+        click.echo(json.dumps(report.to_dict(), indent=1))
+    else:
+        console = Console()
+        if not report.findings:
+            console.print(f"[green]{report.target}: clean[/green] ({report.summary})")
+        else:
+            t = Table(title=f"{report.target}: {len(report.findings)} findings", title_justify="left")
+            for col in ("severity", "check", "where", "finding", "suggestion"):
+                t.add_column(col, overflow="fold")
+            for f in report.findings:
+                t.add_row(f.severity.value, f.check.value, f.where, f.message, f.suggestion or "")
+            console.print(t)
+    if report.status.value == "errors":
+        sys.exit(1)

@@ -1,0 +1,229 @@
+"""Backend against backend: verdicts, distance errors, nearest points and timings, per category.
+
+Definitions (every count is over (configuration, pair) entries unless it says configurations):
+
+* **reference** of a backend pair: ``coal`` when it is one of the two, else the second.
+* **verdict disagreement**: a configuration where the two ``collides(Q)`` answers differ and the
+  reference's least distance is outside the contact band (``|d| > contact_band``); those inside
+  it are counted apart (``in_band``).  Per category, the verdict is "the category's least
+  distance ``<= 0``" from ``pair_distances``.
+* **separated** entries: both distances ``> contact_band``; **penetrating**: both ``< -contact_band``;
+  **sign disagreements**: the rest whose reference distance is outside the band.
+* **unique nearest points** (as ``tests/test_backends.py`` defines them): both sides capsules or
+  spheres, the reference distance above ``unique_min_distance`` and, for two capsules,
+  ``|sin(angle between axes)| > parallel``.  There |Δp_WA|, |Δp_WB| are measured; elsewhere each
+  backend's points are checked against the witness contract on their own,
+  ``| |p_WA - p_WB| - |d| | <= tol`` (``tol`` the pair's distance tolerance: ``hull`` for a Convex side).
+"""
+
+from __future__ import annotations
+
+import enum
+import itertools
+import shlex
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._tolerances import DIFFERENTIAL, DifferentialTolerances, pair_distance_tolerance, pair_kinds
+
+__all__ = ["PairStatus", "Comparison", "compare_answers", "capsule_axes", "unique_witness_mask", "reference_of",
+           "reproduce_command"]
+
+
+class PairStatus(str, enum.Enum):
+    AGREE = "agree"  # no verdict disagreement outside the band, separated distances within tolerance
+    DIFFER = "differ"
+
+
+@dataclass
+class Comparison:
+    """The harness's result: ``summary`` is ``compare.json``; the arrays stay for the plots.
+
+    ``answers``: ``{backend: BackendAnswers}``; ``status``: ``{"a/b": PairStatus}``.
+    """
+
+    model: object
+    spec: str
+    configs: object
+    answers: dict
+    summary: dict
+    status: dict = field(default_factory=dict)
+
+    @property
+    def pair_keys(self) -> list:
+        return list(self.summary["pairs"])
+
+
+def reference_of(a: str, b: str) -> str:
+    return "coal" if "coal" in (a, b) else b
+
+
+def capsule_axes(model, Q) -> dict:
+    """``{geometry index: (M, 3) float64}``: each capsule's axis direction in W at every row of ``Q``."""
+    import pinocchio as pin
+
+    cm = model.collision_model
+    caps = [i for i, go in enumerate(cm.geometryObjects) if type(go.geometry).__name__ == "Capsule"]
+    if not caps:
+        return {}
+    data = model.pin_model.createData()
+    joints = sorted({int(cm.geometryObjects[i].parentJoint) for i in caps})
+    R = {j: np.empty((len(Q), 3, 3)) for j in joints}
+    for m, q in enumerate(Q):
+        pin.forwardKinematics(model.pin_model, data, q)
+        for j in joints:
+            R[j][m] = data.oMi[j].rotation
+    out = {}
+    for i in caps:
+        go = cm.geometryObjects[i]
+        out[i] = R[int(go.parentJoint)] @ go.placement.rotation[:, 2]
+    return out
+
+
+def unique_witness_mask(model, Q, d_ref, tol: DifferentialTolerances = DIFFERENTIAL, axes=None) -> np.ndarray:
+    """``(M, n) bool``: where the nearest points are unique (see the module docstring)."""
+    kinds = pair_kinds(model)
+    ok_kind = np.isin(kinds, ["Capsule", "Sphere"]).all(axis=1)
+    mask = ok_kind[None, :] & (d_ref > tol.unique_min_distance)
+    both_caps = np.flatnonzero(ok_kind & (kinds == "Capsule").all(axis=1))
+    if both_caps.size:
+        axes = capsule_axes(model, Q) if axes is None else axes
+        names = model.pairs.names
+        for k in both_caps:
+            ia, ib = model.geometry_index(names[k, 0]), model.geometry_index(names[k, 1])
+            s = np.linalg.norm(np.cross(axes[ia], axes[ib]), axis=1)
+            mask[:, k] &= s > tol.parallel
+    return mask
+
+
+def _quant(x: np.ndarray) -> dict:
+    if x.size == 0:
+        return {"n": 0, "max": None, "p99": None, "median": None}
+    return {"n": int(x.size), "max": float(x.max()), "p99": float(np.quantile(x, 0.99)), "median": float(np.median(x))}
+
+
+def reproduce_command(spec: str, backends, q, pair=None, options=None) -> str:
+    """One shell line that prints every backend's answer at ``q`` (pin order) for ``pair``."""
+    parts = ["armguard", "compare", spec, "--backends", ",".join(backends), "--q", ",".join(repr(float(v)) for v in q)]
+    if pair is not None:
+        parts += ["--pair", f"{pair[0]},{pair[1]}"]
+    for b, opts in (options or {}).items():
+        for k, v in opts.items():
+            parts += ["--backend-option", f"{b}.{k}={v}"]
+    return " ".join(shlex.quote(p) for p in parts)
+
+
+def _contract(ans, cols, nonunique, tol_pair) -> dict:
+    gap = np.linalg.norm(ans.p_WA[:, cols] - ans.p_WB[:, cols], axis=2)
+    viol = np.abs(gap - np.abs(ans.distance[:, cols]))
+    sel = nonunique[:, cols]
+    bad = sel & (viol > tol_pair[cols][None, :])
+    sep = ans.distance[:, cols] > 0
+    return {"checked": int(sel.sum()), "violations": int(bad.sum()), "violations_separated": int((bad & sep).sum()),
+            "max_violation": float(viol[sel].max()) if sel.any() else None}
+
+
+def _pair_summary(model, configs, A, B, R, a, b, cats, tol, tol_pair, unique, n_worst, spec, options) -> tuple:
+    band = tol.contact_band
+    err = np.abs(A.distance - B.distance)
+    out = {"a": a, "b": b, "reference": reference_of(a, b)}
+    dmin_ref = R.distance.min(axis=1) if R.distance.size else np.zeros(len(configs))
+    differ = A.verdict != B.verdict
+    out_band = differ & (np.abs(dmin_ref) > band)
+    out["verdict_disagreements"] = int(out_band.sum())
+    out["verdict_disagreements_in_band"] = int((differ & ~out_band).sum())
+    out["max_abs_distance_error"] = float(err.max()) if err.size else 0.0
+    groups = {"all": np.arange(len(model.pairs))}
+    groups.update({c: np.flatnonzero(cats == c) for c in dict.fromkeys(model.pairs.category)})
+    per = {}
+    sep_all = (A.distance > band) & (B.distance > band)
+    pen_all = (A.distance < -band) & (B.distance < -band)
+    for c, cols in groups.items():
+        da, db, dr = A.distance[:, cols], B.distance[:, cols], R.distance[:, cols]
+        e = err[:, cols]
+        sep, pen = sep_all[:, cols], pen_all[:, cols]
+        sign = ~sep & ~pen & (np.abs(dr) > band)
+        va, vb = da.min(axis=1) <= 0, db.min(axis=1) <= 0
+        cat_out = (va != vb) & (np.abs(dr.min(axis=1)) > band)
+        u = unique[:, cols]
+        dpa = np.linalg.norm(A.p_WA[:, cols] - B.p_WA[:, cols], axis=2)[u]
+        dpb = np.linalg.norm(A.p_WB[:, cols] - B.p_WB[:, cols], axis=2)[u]
+        per[c] = {
+            "pairs": int(len(cols)),
+            "verdict_disagreements": int(cat_out.sum()),
+            "sign_disagreements": int(sign.sum()),
+            "separated": _quant(e[sep]),
+            "penetrating": _quant(e[pen]),
+            "separated_over_tolerance": int((e > tol_pair[cols][None, :])[sep].sum()),
+            "unique_points": {"n": int(u.sum()), "p_WA": _quant(dpa), "p_WB": _quant(dpb),
+                              "over_tolerance": int(((dpa > tol.unique_point) | (dpb > tol.unique_point)).sum())},
+            "witness_contract": {x: _contract(X, cols, ~unique, tol_pair) for x, X in ((a, A), (b, B))},
+        }
+    out["categories"] = per
+    out["speed_ratio"] = {"distances": A.us_per_config and B.us_per_config / A.us_per_config,
+                          "yes_no": B.yes_no_per_s and A.yes_no_per_s / B.yes_no_per_s}
+    out["worst"] = _worst(model, configs, A, B, a, b, err, out_band, dmin_ref, n_worst, spec, options)
+    ok = out["verdict_disagreements"] == 0 and per["all"]["separated_over_tolerance"] == 0
+    return out, PairStatus.AGREE if ok else PairStatus.DIFFER
+
+
+def _entry(model, configs, A, B, a, b, i, k, spec, options, why):
+    q = configs.Q[i]
+    pair = tuple(model.pairs.names[k])
+    return {"why": why, "config": int(i), "source": str(configs.source[i]), "q": q.tolist(), "pair": list(pair),
+            "category": model.pairs.category[k],
+            a: {"distance": float(A.distance[i, k]), "p_WA": A.p_WA[i, k].tolist(), "p_WB": A.p_WB[i, k].tolist(),
+                "collides": bool(A.verdict[i])},
+            b: {"distance": float(B.distance[i, k]), "p_WA": B.p_WA[i, k].tolist(), "p_WB": B.p_WB[i, k].tolist(),
+                "collides": bool(B.verdict[i])},
+            "abs_distance_error": float(abs(A.distance[i, k] - B.distance[i, k])),
+            "reproduce": reproduce_command(spec, (a, b), q, pair, options)}
+
+
+def _worst(model, configs, A, B, a, b, err, out_band, dmin_ref, n_worst, spec, options) -> list:
+    rows = []
+    for i in np.flatnonzero(out_band)[:n_worst]:
+        k = int(np.argmin(np.minimum(A.distance[i], B.distance[i])))
+        rows.append(_entry(model, configs, A, B, a, b, i, k, spec, options, "verdict"))
+    if err.size:
+        flat = np.argsort(err, axis=None)[::-1][:n_worst]
+        for f in flat:
+            i, k = np.unravel_index(f, err.shape)
+            rows.append(_entry(model, configs, A, B, a, b, int(i), int(k), spec, options, "distance"))
+    return rows
+
+
+def compare_answers(model, configs, answers: dict, *, spec: str, options=None, tol: DifferentialTolerances = DIFFERENTIAL,
+                    n_worst: int = 5) -> Comparison:
+    """The :class:`Comparison` of every backend pair (in ``answers``' order) on ``configs``."""
+    backends = list(answers)
+    cats = np.asarray(model.pairs.category, dtype=object)
+    tol_pair = pair_distance_tolerance(model, tol)
+    axes = capsule_axes(model, configs.Q)
+    per_backend = {}
+    fastest = min(ans.us_per_config for ans in answers.values())
+    fastest_yn = max(ans.yes_no_per_s for ans in answers.values())
+    for b, ans in answers.items():
+        per_backend[b] = {"us_per_config": ans.us_per_config, "yes_no_configs_per_s": ans.yes_no_per_s,
+                          "distances_vs_fastest": ans.us_per_config / fastest if fastest else None,
+                          "yes_no_vs_fastest": fastest_yn / ans.yes_no_per_s if ans.yes_no_per_s else None,
+                          "options": dict((options or {}).get(b, {}))}
+    pairs, status = {}, {}
+    for a, b in itertools.combinations(backends, 2):
+        R = answers[reference_of(a, b)]
+        unique = unique_witness_mask(model, configs.Q, R.distance, tol, axes)
+        key = f"{a}/{b}"
+        pairs[key], status[key] = _pair_summary(model, configs, answers[a], answers[b], R, a, b, cats, tol, tol_pair,
+                                                unique, n_worst, spec, options)
+        pairs[key]["status"] = status[key].value
+    summary = {
+        "model": model.name, "spec": spec, "n_pairs": len(model.pairs),
+        "categories": list(dict.fromkeys(model.pairs.category)),
+        "configs": {"total": len(configs), "random": configs.n_random, "seed": configs.seed,
+                    "trajectories": dict(configs.trajectories)},
+        "tolerances": tol.to_dict(),
+        "backends": per_backend,
+        "pairs": pairs,
+    }
+    return Comparison(model, spec, configs, answers, summary, status)

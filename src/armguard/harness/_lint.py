@@ -1,0 +1,297 @@
+"""``check_model_files``: lint a model's URDF, SRDF and meshes the way an engineer needs it linted.
+
+Checks (each a :class:`Check`), on the files as written, then on the loaded model:
+
+* ``load``: the model does not load (``load_model`` raises; a collision element Pinocchio would
+  drop, a mesh not found, an SRDF name the URDF lacks): the error, as a finding;
+* ``unparsed``: a collision element Pinocchio would drop (a plain ``<capsule>`` or other tag,
+  an empty ``<geometry>``), a mesh file that cannot be found, a ``<collision_checking>`` entry
+  naming no collision element;
+* ``non-convex``: a mesh marked ``<convex>`` that is not convex — a solid whose volume is below
+  ``convex_volume_ratio`` of its hull's, a mesh with vertices inside its hull, or a flat mesh
+  (a polygon) with vertices inside its 2-D hull;
+* ``zero-length-capsule``: a ``<capsule>``-marked cylinder of length 0 (a sphere: say so), or a
+  ``<capsule>`` mark on something not a cylinder;
+* ``srdf-name``: an SRDF link, joint or group name that matches nothing in the URDF;
+* ``permanent-collision``: an active pair in collision (coal, ``d <= 0``) at the home pose, and
+  whether it is in collision at more than ``permanent_fraction`` of ``n_configs`` seeded random
+  configurations (then a ``<disable_collisions>`` line is suggested).
+"""
+
+from __future__ import annotations
+
+import enum
+import xml.etree.ElementTree as ET
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .._errors import ArmguardError
+
+__all__ = ["Check", "Severity", "LintStatus", "Finding", "LintReport", "check_model_files", "mesh_convexity"]
+
+
+class Check(str, enum.Enum):
+    LOAD = "load"
+    UNPARSED = "unparsed"
+    NON_CONVEX = "non-convex"
+    ZERO_LENGTH_CAPSULE = "zero-length-capsule"
+    SRDF_NAME = "srdf-name"
+    PERMANENT_COLLISION = "permanent-collision"
+
+
+class Severity(str, enum.Enum):
+    ERROR = "error"
+    WARNING = "warning"
+
+
+class LintStatus(str, enum.Enum):
+    CLEAN = "clean"
+    WARNINGS = "warnings"
+    ERRORS = "errors"
+
+
+@dataclass(frozen=True)
+class Finding:
+    check: Check
+    severity: Severity
+    where: str  # file and element, e.g. "hermes.urdf: link[hera_link3].collision[0]"
+    message: str
+    suggestion: str | None = None
+
+
+@dataclass
+class LintReport:
+    target: str
+    urdf: str | None
+    srdf: str | None
+    findings: list = field(default_factory=list)
+    summary: str = ""
+
+    @property
+    def status(self) -> LintStatus:
+        if any(f.severity is Severity.ERROR for f in self.findings):
+            return LintStatus.ERRORS
+        return LintStatus.WARNINGS if self.findings else LintStatus.CLEAN
+
+    def by_check(self, check: Check) -> list:
+        return [f for f in self.findings if f.check is Check(check)]
+
+    def to_dict(self) -> dict:
+        return {"target": self.target, "urdf": self.urdf, "srdf": self.srdf, "status": self.status.value,
+                "summary": self.summary,
+                "findings": [{**asdict(f), "check": f.check.value, "severity": f.severity.value} for f in self.findings]}
+
+
+def _sources(target) -> tuple:
+    """``(load_model argument, srdf=, urdf path, srdf path)`` of a name, .urdf or sidecar .yaml."""
+    import yaml
+
+    from ..model._load import builtin_model_path
+    from ._models import EXTRA_MODELS, model_sources
+
+    s = str(target)
+    if s in EXTRA_MODELS:
+        urdf, srdf = model_sources(s)
+        return urdf, srdf, urdf, srdf
+    p = Path(s)
+    if p.suffix == "" and builtin_model_path(s) is not None:
+        p = builtin_model_path(s)
+    if p.suffix.lower() in (".yaml", ".yml"):
+        try:
+            side = yaml.safe_load(p.read_text(encoding="utf-8")) or {}
+        except (OSError, yaml.YAMLError):
+            return p, None, None, None
+        m = side.get("model") if isinstance(side, dict) else None
+        if not isinstance(m, dict) or "urdf" not in m:
+            return p, None, None, None
+        urdf = (p.parent / m["urdf"]).resolve()
+        srdf = (p.parent / m["srdf"]).resolve() if m.get("srdf") else urdf.with_suffix(".srdf")
+        return p, None, urdf, srdf if srdf.is_file() else None
+    if p.suffix.lower() == ".urdf":
+        srdf = p.with_suffix(".srdf")
+        return p, None, p, srdf if srdf.is_file() else None
+    raise ArmguardError(f"check-urdf {s!r}: expected a built-in model name, panda/ur5/iiwa, a .urdf or a sidecar .yaml")
+
+
+def mesh_convexity(path, *, volume_ratio: float = 0.99) -> tuple[bool, str]:
+    """``(convex, how)`` of a mesh file: solids by volume against the hull's, flat meshes by their 2-D hull."""
+    import trimesh
+    from scipy.spatial import ConvexHull, QhullError
+
+    mesh = trimesh.load(str(path), force="mesh", process=False)
+    v = np.asarray(mesh.vertices, dtype=np.float64)
+    v = np.unique(v, axis=0)
+    c = v - v.mean(axis=0)
+    extent = float(np.abs(c).max()) or 1.0
+    _, sv, vt = np.linalg.svd(c, full_matrices=False)
+    if len(sv) < 3 or sv[2] <= 1e-9 * extent * np.sqrt(len(v)):  # flat: a polygon in its plane
+        uv = c @ vt[:2].T
+        try:
+            hull = ConvexHull(uv)
+        except QhullError:
+            return True, "degenerate (collinear)"
+        inside = len(v) - len(set(hull.vertices))
+        return inside == 0, f"flat: {inside} of {len(v)} vertices inside the polygon's hull"
+    hull = ConvexHull(v)
+    inside = len(v) - len(set(hull.vertices))
+    if mesh.is_watertight and mesh.volume > 0:
+        ratio = float(abs(mesh.volume) / hull.volume)
+        return ratio >= volume_ratio and inside == 0, f"volume {ratio:.4f} of its hull's, {inside} vertices inside the hull"
+    return inside == 0, f"not a closed solid; {inside} of {len(v)} vertices inside its hull"
+
+
+def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: dict, volume_ratio: float) -> None:
+    from ..model._urdf import resolve_mesh
+
+    f = urdf.name
+    try:
+        root = ET.parse(urdf).getroot()
+    except (ET.ParseError, OSError) as exc:
+        report.findings.append(Finding(Check.UNPARSED, Severity.ERROR, f, f"URDF does not parse: {exc}"))
+        return
+    links, joints = {ln.get("name") for ln in root.findall("link")}, {j.get("name") for j in root.findall("joint")}
+    dirs = [urdf.parent, *urdf.parents]
+    for link in root.findall("link"):
+        ln = link.get("name")
+        entries = {}
+        for k, c in enumerate(link.findall("collision")):
+            w = f"{f}: link[{ln}].collision[{k}]"
+            g = c.find("geometry")
+            kids = list(g) if g is not None else []
+            name = c.get("name", "")
+            if len(kids) != 1:
+                report.findings.append(Finding(Check.UNPARSED, Severity.ERROR, w, "expected one shape inside <geometry>"))
+                continue
+            el = kids[0]
+            entries[name] = (el, w)
+            if el.tag not in ("box", "sphere", "cylinder", "mesh"):
+                sug = ('<cylinder radius="…" length="…"/> plus <collision_checking><capsule name="'
+                       f'{name or "NAME"}"/></collision_checking>') if el.tag == "capsule" else "box, sphere, cylinder or mesh"
+                report.findings.append(Finding(Check.UNPARSED, Severity.ERROR, w,
+                                               f"<{el.tag}> is dropped by Pinocchio (no collision geometry)", sug))
+            elif el.tag == "mesh":
+                fn = el.get("filename", "")
+                mp = mesh_paths.get(name) or resolve_mesh(fn, urdf.parent, dirs)
+                if mp is None:
+                    report.findings.append(Finding(Check.UNPARSED, Severity.ERROR, w, f"mesh file not found: {fn!r}"))
+                else:
+                    entries[name] = (el, w, Path(mp))
+        for cc in link.findall("collision_checking"):
+            for mark in cc:
+                n = mark.get("name")
+                wm = f"{f}: link[{ln}].collision_checking.{mark.tag}[{n}]"
+                if n not in entries:
+                    report.findings.append(Finding(Check.UNPARSED, Severity.ERROR, wm,
+                                                   f"names no <collision> of link {ln!r} (it has {sorted(entries)})"))
+                    continue
+                el, w = entries[n][0], entries[n][1]
+                if mark.tag == "capsule":
+                    if el.tag != "cylinder":
+                        report.findings.append(Finding(Check.ZERO_LENGTH_CAPSULE, Severity.ERROR, w,
+                                                       f"<capsule> mark on a <{el.tag}>: only a cylinder becomes a capsule"))
+                    elif float(el.get("length", "0")) <= 1e-12:
+                        report.findings.append(Finding(
+                            Check.ZERO_LENGTH_CAPSULE, Severity.WARNING, w,
+                            f"zero-length capsule (radius {el.get('radius')}, length {el.get('length')})",
+                            f'<sphere radius="{el.get("radius")}"/>'))
+                elif mark.tag == "convex" and el.tag == "mesh" and len(entries[n]) == 3:
+                    ok, how = mesh_convexity(entries[n][2], volume_ratio=volume_ratio)
+                    if not ok:
+                        report.findings.append(Finding(
+                            Check.NON_CONVEX, Severity.ERROR, w, f"mesh {entries[n][2].name} is marked <convex> but is not "
+                            f"convex ({how})", "drop the <convex> mark (it is then checked as its hull) or split the mesh"))
+    if srdf is not None:
+        _srdf_checks(srdf, links, joints, report)
+
+
+def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport) -> None:
+    f = srdf.name
+    try:
+        root = ET.parse(srdf).getroot()
+    except (ET.ParseError, OSError) as exc:
+        report.findings.append(Finding(Check.UNPARSED, Severity.ERROR, f, f"SRDF does not parse: {exc}"))
+        return
+    groups = {g.get("name") for g in root.findall("group")}
+
+    def need(name, kind, where, pool):
+        if name not in pool:
+            report.findings.append(Finding(Check.SRDF_NAME, Severity.ERROR, f"{f}: {where}",
+                                           f"{kind} {name!r} matches nothing in the URDF"))
+
+    for k, g in enumerate(root.findall("group")):
+        w = f"group[{g.get('name')}]"
+        for ch in g.findall("chain"):
+            need(ch.get("base_link"), "link", f"{w}.chain.base_link", links)
+            need(ch.get("tip_link"), "link", f"{w}.chain.tip_link", links)
+        for ln in g.findall("link"):
+            need(ln.get("name"), "link", f"{w}.link", links)
+        for j in g.findall("joint"):
+            need(j.get("name"), "joint", f"{w}.joint", joints)
+        for sub in g.findall("group"):
+            need(sub.get("name"), "group", f"{w}.group", groups)
+    for k, el in enumerate(root.iter("disable_collisions")):
+        for side in ("link1", "link2"):
+            need(el.get(side), "link", f"disable_collisions[{k}].{side}", links)
+    for k, st in enumerate(root.iter("group_state")):
+        need(st.get("group"), "group", f"group_state[{st.get('name')}].group", groups)
+        for j in st.findall("joint"):
+            need(j.get("name"), "joint", f"group_state[{st.get('name')}].joint", joints)
+
+
+def _collision_checks(model, report: LintReport, n_configs: int, seed: int, fraction: float) -> None:
+    import armguard
+
+    c = armguard.checker(model, "coal", {"threads": 1})
+    names = model.pairs.names
+    home = c.pair_distances(model.neutral()).distance
+    Q = model.random_q(n_configs, seed)
+    hits = np.zeros(len(names))
+    for q in Q:
+        hits += c.pair_distances(q).distance <= 0.0
+    share = hits / max(1, len(Q))
+    pm, cm = model.pin_model, model.collision_model
+
+    def link(n):
+        return "workspace" if n == "workspace" else pm.frames[cm.geometryObjects[model.geometry_index(n)].parentFrame].name
+
+    for k in np.flatnonzero((home <= 0.0) | (share > fraction)):
+        a, b = names[k]
+        la, lb = link(a), link(b)
+        perm = share[k] > fraction
+        msg = (f"pair {a} / {b} ({model.pairs.category[k]}): {'in collision' if home[k] <= 0 else 'clear'} at the home "
+               f"pose (d = {home[k]:.4g} m), in collision at {share[k]:.0%} of {len(Q)} random configurations")
+        sug = None
+        if perm and "workspace" not in (la, lb):
+            sug = f'<disable_collisions link1="{la}" link2="{lb}" reason="Never"/>'
+        report.findings.append(Finding(Check.PERMANENT_COLLISION, Severity.ERROR if perm else Severity.WARNING,
+                                       f"pair[{a}, {b}]", msg, sug))
+
+
+def check_model_files(target, *, n_configs: int = 200, seed: int = 0, permanent_fraction: float = 0.95,
+                      convex_volume_ratio: float = 0.99) -> LintReport:
+    """Lint ``target`` (a built-in name, panda/ur5/iiwa, a .urdf or a sidecar .yaml); see the module docstring."""
+    from ..model import load_model
+
+    arg, srdf_arg, urdf, srdf = _sources(target)
+    report = LintReport(str(target), str(urdf) if urdf else None, str(srdf) if srdf else None)
+    model = None
+    try:
+        model = load_model(arg, srdf=srdf_arg) if srdf_arg is not None else load_model(arg)
+    except ArmguardError as exc:
+        report.findings.append(Finding(Check.LOAD, Severity.ERROR, getattr(exc, "file", "") or str(arg),
+                                       f"load_model fails: {exc}"))
+    mesh_paths = {}
+    if model is not None:
+        mesh_paths = {go.name: go.meshPath for go in model.collision_model.geometryObjects
+                      if go.meshPath and Path(go.meshPath).is_file()}
+    if urdf is not None:
+        _xml_checks(Path(urdf), Path(srdf) if srdf else None, report, mesh_paths, convex_volume_ratio)
+    if model is not None:
+        _collision_checks(model, report, n_configs, seed, permanent_fraction)
+        report.summary = (f"{model.collision_model.ngeoms} geometries, {len(model.pairs)} active pairs, "
+                          f"{n_configs} random configurations")
+    else:
+        report.summary = "the model does not load"
+    return report

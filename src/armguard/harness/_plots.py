@@ -1,0 +1,99 @@
+"""The harness's figures (matplotlib, Agg): scatter d_a vs d_b, |Δd| histogram, timing bars."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["write_plots"]
+
+_MAX_POINTS = 60_000  # scatter points drawn per backend pair (a seeded subsample, disagreements always kept)
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def write_plots(comparison, out_dir) -> list:
+    """Write ``scatter_<a>_<b>.png``, ``hist_<a>_<b>.png`` per backend pair and ``timing.png``; returns the paths."""
+    plt = _pyplot()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    band = comparison.summary["tolerances"]["contact_band"]
+    cats = np.asarray(comparison.model.pairs.category, dtype=object)
+    rng = np.random.default_rng(0)
+    for key, s in comparison.summary["pairs"].items():
+        a, b = s["a"], s["b"]
+        A, B = comparison.answers[a].distance, comparison.answers[b].distance
+        R = comparison.answers[s["reference"]].distance
+        fig, ax = plt.subplots(figsize=(6, 6))
+        flat_a, flat_b, flat_r = A.ravel(), B.ravel(), R.ravel()
+        flat_c = np.broadcast_to(cats, A.shape).ravel()
+        sign_bad = ((flat_a <= 0) != (flat_b <= 0)) & (np.abs(flat_r) > band)
+        keep = np.arange(flat_a.size)
+        if keep.size > _MAX_POINTS:
+            keep = np.union1d(rng.choice(keep, _MAX_POINTS, replace=False), np.flatnonzero(sign_bad))
+        for c in dict.fromkeys(cats):
+            sel = keep[flat_c[keep] == c]
+            ax.scatter(flat_b[sel], flat_a[sel], s=2, alpha=0.5, label=c, rasterized=True)
+        bad = np.flatnonzero(sign_bad)
+        if bad.size:
+            ax.scatter(flat_b[bad], flat_a[bad], s=14, facecolors="none", edgecolors="red",
+                       label=f"opposite verdicts outside band ({bad.size})")
+        lo = float(min(flat_a.min(initial=0), flat_b.min(initial=0)))
+        hi = float(max(flat_a.max(initial=1), flat_b.max(initial=1)))
+        ax.plot([lo, hi], [lo, hi], "k-", lw=0.5)
+        ax.axvspan(-band, band, color="orange", alpha=0.3, label=f"contact band |d| <= {band:g} m")
+        ax.axhspan(-band, band, color="orange", alpha=0.3)
+        ax.axhline(0, color="k", lw=0.3), ax.axvline(0, color="k", lw=0.3)
+        ax.set_xlabel(f"{b} distance (m)"), ax.set_ylabel(f"{a} distance (m)")
+        ax.set_title(f"{comparison.model.name}: {a} vs {b}, {A.shape[0]} configurations x {A.shape[1]} pairs")
+        ax.legend(fontsize=7, markerscale=3, loc="upper left")
+        p = out / f"scatter_{a}_{b}.png"
+        fig.savefig(p, dpi=110, bbox_inches="tight")
+        plt.close(fig)
+        written.append(p)
+
+        fig, ax = plt.subplots(figsize=(7, 4))
+        err = np.abs(A - B)
+        floor = 1e-17
+        bins = np.linspace(-17, 1, 73)
+        for c in dict.fromkeys(cats):
+            e = err[:, cats == c].ravel()
+            ax.hist(np.log10(np.maximum(e, floor)), bins=bins, histtype="step", label=c)
+        ax.set_yscale("log")
+        ax.set_xlabel("log10 |d_a - d_b| (m)  (0 plotted at -17)")
+        ax.set_ylabel("(configuration, pair) entries")
+        ax.set_title(f"{comparison.model.name}: |Δd| {a} vs {b}")
+        ax.legend(fontsize=7)
+        p = out / f"hist_{a}_{b}.png"
+        fig.savefig(p, dpi=110, bbox_inches="tight")
+        plt.close(fig)
+        written.append(p)
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.5))
+    names = list(comparison.summary["backends"])
+    us = [comparison.summary["backends"][n]["us_per_config"] for n in names]
+    yn = [comparison.summary["backends"][n]["yes_no_configs_per_s"] for n in names]
+    ax1.bar(names, us, color="tab:blue")
+    ax1.set_ylabel("µs per configuration"), ax1.set_title("distances + witness points")
+    ax1.set_yscale("log")
+    ax2.bar(names, yn, color="tab:green")
+    ax2.set_ylabel("configurations / s"), ax2.set_title("yes/no (collides batch)")
+    ax2.set_yscale("log")
+    for ax, vals in ((ax1, us), (ax2, yn)):
+        for i, v in enumerate(vals):
+            ax.annotate(f"{v:.3g}", (i, v), ha="center", va="bottom", fontsize=8)
+    fig.suptitle(f"{comparison.model.name}: {len(comparison.configs)} configurations")
+    p = out / "timing.png"
+    fig.savefig(p, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    written.append(p)
+    return written

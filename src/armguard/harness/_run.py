@@ -1,0 +1,160 @@
+"""``run_compare``: configurations -> every backend's answers -> the comparison -> compare.json, table, plots."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .._errors import ArmguardError
+from ._compare import Comparison, compare_answers, reference_of
+from ._configs import build_configs
+from ._evaluate import build_checkers, evaluate
+from ._models import resolve_model
+from ._tolerances import DIFFERENTIAL, DifferentialTolerances
+
+__all__ = ["run_compare", "write_outputs", "summary_table", "compare_at"]
+
+
+def run_compare(spec, backends=("analytic", "coal"), *, n_configs: int = 1000, seed: int = 0, trajectories="all",
+                frequency: float = 1.0, options=None, workers: int | None = None, scheduler: str | None = None,
+                out_dir=None, plots: bool = True, progress=None, tol: DifferentialTolerances = DIFFERENTIAL,
+                n_worst: int = 5, model=None) -> Comparison:
+    """Compare ``backends`` on model ``spec`` (a name, ``panda``/``ur5``/``iiwa`` or a file path).
+
+    Parameters
+    ----------
+    n_configs : int — seeded random in-limit configurations (``model.random_q(n_configs, seed)``)
+    trajectories : "all" | None | name | names — canned trajectories whose samples (``frequency`` Hz) are added
+    options : {backend: {key: value}} — each backend's options (``--backend-option b.key=value``)
+    workers, scheduler : a fresh Dask LocalCluster of N single-threaded workers, or an existing scheduler
+    out_dir : where ``compare.json`` and the PNGs go (None: nothing written)
+    progress : callable(done, total) — configurations answered so far
+    model : the loaded Model of ``spec`` (saves loading it again)
+
+    Returns the :class:`Comparison`; ``summary["timing"]`` holds the wall times of the stages (s).
+    """
+    backends = tuple(backends)
+    if len(backends) < 2:
+        raise ArmguardError(f"--backends: give at least two backends to compare, got {list(backends)}")
+    if len(set(backends)) != len(backends):
+        raise ArmguardError(f"--backends: each backend once, got {list(backends)}")
+    options = {b: dict(v) for b, v in (options or {}).items()}
+    for b in options:
+        if b not in backends:
+            raise ArmguardError(f"--backend-option for {b!r}, which is not among --backends {list(backends)}")
+    t0 = time.perf_counter()
+    model = model if model is not None else resolve_model(spec)
+    configs = build_configs(model, n_configs, seed, trajectories, frequency)
+    t1 = time.perf_counter()
+    answers = evaluate(model, configs.Q, backends, options, spec=str(spec), workers=workers, scheduler=scheduler,
+                       progress=progress)
+    t2 = time.perf_counter()
+    comp = compare_answers(model, configs, answers, spec=str(spec), options=options, tol=tol, n_worst=n_worst)
+    t3 = time.perf_counter()
+    comp.summary["timing"] = {"load_and_configs_s": t1 - t0, "answers_s": t2 - t1, "compare_s": t3 - t2,
+                              "workers": int(workers) if workers else None, "scheduler": scheduler}
+    if out_dir is not None:
+        write_outputs(comp, out_dir, plots=plots)
+        comp.summary["timing"]["outputs_s"] = time.perf_counter() - t3
+        _write_json(comp, Path(out_dir))
+    return comp
+
+
+def _write_json(comp, out: Path) -> Path:
+    p = out / "compare.json"
+    p.write_text(json.dumps(comp.summary, indent=1, allow_nan=False, default=_jsonable) + "\n", encoding="utf-8")
+    return p
+
+
+def _jsonable(x):
+    if isinstance(x, (np.floating, np.integer)):
+        return x.item()
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    raise TypeError(f"not JSON: {type(x)}")
+
+
+def write_outputs(comp: Comparison, out_dir, *, plots: bool = True) -> list:
+    """``compare.json`` and (``plots``) the PNGs into ``out_dir``; returns the paths."""
+    from ._plots import write_plots
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    for b in comp.summary["backends"].values():  # inf (an empty batch) is not JSON
+        for k, v in list(b.items()):
+            if isinstance(v, float) and not math.isfinite(v):
+                b[k] = None
+    paths = [_write_json(comp, out)]
+    if plots:
+        paths += write_plots(comp, out)
+    return paths
+
+
+def _fmt(x, unit=1.0) -> str:
+    return "—" if x is None else f"{x / unit:.2e}"
+
+
+def summary_table(comp: Comparison):
+    """Rich renderables: per backend pair and category, then per backend timings."""
+    from rich.table import Table
+
+    s = comp.summary
+    tables = []
+    for key, p in s["pairs"].items():
+        t = Table(title=f"{s['model']}: {p['a']} vs {p['b']} (reference {p['reference']}), {s['configs']['total']} "
+                        f"configurations — {p['status']}", title_justify="left")
+        for col in ("category", "pairs", "verdicts ≠", "sign ≠", "sep |Δd| max", "p99", "median", "pen |Δd| max",
+                    "p99", "median", "unique |Δp| max", f"contract ✗ {p['a']}", f"contract ✗ {p['b']}"):
+            t.add_column(col, justify="right" if col != "category" else "left")
+        for c, r in p["categories"].items():
+            up = r["unique_points"]
+            upmax = max((v for v in (up["p_WA"]["max"], up["p_WB"]["max"]) if v is not None), default=None)
+            wc = r["witness_contract"]
+            t.add_row(c, str(r["pairs"]), str(r["verdict_disagreements"]), str(r["sign_disagreements"]),
+                      _fmt(r["separated"]["max"]), _fmt(r["separated"]["p99"]), _fmt(r["separated"]["median"]),
+                      _fmt(r["penetrating"]["max"]), _fmt(r["penetrating"]["p99"]), _fmt(r["penetrating"]["median"]),
+                      _fmt(upmax), f"{wc[p['a']]['violations']}/{wc[p['a']]['checked']}",
+                      f"{wc[p['b']]['violations']}/{wc[p['b']]['checked']}")
+        t.caption = (f"yes/no verdict disagreements outside the contact band: {p['verdict_disagreements']} "
+                     f"(inside: {p['verdict_disagreements_in_band']}); max |Δd| {p['max_abs_distance_error']:.3e} m; "
+                     f"{p['b']}/{p['a']} time: distances {p['speed_ratio']['distances']:.2f}×, yes/no "
+                     f"{p['speed_ratio']['yes_no']:.2f}×")
+        tables.append(t)
+    t = Table(title="timings (one process)", title_justify="left")
+    for col in ("backend", "µs / configuration (distances)", "× fastest", "yes/no configurations/s", "× fastest"):
+        t.add_column(col, justify="right" if col != "backend" else "left")
+    for b, r in s["backends"].items():
+        yn = r["yes_no_configs_per_s"]
+        t.add_row(b, f"{r['us_per_config']:.1f}", f"{r['distances_vs_fastest']:.2f}",
+                  "—" if yn is None else f"{yn:,.0f}", "—" if r["yes_no_vs_fastest"] is None else f"{r['yes_no_vs_fastest']:.2f}")
+    tables.append(t)
+    return tables
+
+
+def compare_at(spec, backends, q, *, options=None, pair=None, model=None) -> list:
+    """Every backend's answer at one configuration ``q`` (pin order): rows ``{pair, category, backend: (d, p_WA, p_WB)}``
+    for ``pair`` (two GeometryObject names) or every pair."""
+    model = model if model is not None else resolve_model(spec)
+    q = np.asarray(q, dtype=np.float64)
+    checkers = build_checkers(model, backends, options)
+    res = {b: c.pair_distances(q) for b, c in checkers.items()}
+    names = model.pairs.names
+    rows = []
+    for k in range(len(names)):
+        if pair is not None and {names[k, 0], names[k, 1]} != set(pair):
+            continue
+        row = {"pair": (names[k, 0], names[k, 1]), "category": model.pairs.category[k]}
+        for b, r in res.items():
+            row[b] = (float(r.distance[k]), r.p_WA[k].tolist(), r.p_WB[k].tolist())
+        rows.append(row)
+    if pair is not None and not rows:
+        raise ArmguardError(f"pair {tuple(pair)} is not an active pair of model {model.name!r}")
+    return rows
+
+
+# re-exported for callers that want the reference rule
+reference_of = reference_of
