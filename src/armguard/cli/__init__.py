@@ -35,3 +35,4 @@ from . import _verify  # noqa: E402,F401
 from . import _demo  # noqa: E402,F401
 from . import _check  # noqa: E402,F401
 from . import _cspace  # noqa: E402,F401
+from . import _compare  # noqa: E402,F401
