@@ -36,16 +36,37 @@ import sysconfig
 
 # example-robot-data ships data only: its files lie in site-packages' cmeel prefix
 ROBOTS = Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
-MODELS = ["ranger", "hermes", "puma560", "gmf_s480", "rover", "panda", "ur5"]
+MODELS = ["ranger", "hermes", "puma560", "gmf_s480", "rover", "panda", "ur5", "iiwa_world20"]
+WORLD20 = Path(__file__).resolve().parents[1] / "bench" / "data" / "world20.json"
 
 
-def _load(name: str):
+def iiwa_world20_yaml(folder: Path) -> Path:
+    """A scene file: pybullet's KUKA iiwa (its URDF's mesh hulls) among the 20 boxes of bench/data/world20.json."""
+    import json
+
+    import pybullet_data
+    import yaml
+
+    urdf = Path(pybullet_data.getDataPath()) / "kuka_iiwa" / "model.urdf"
+    boxes = json.loads(WORLD20.read_text())["boxes"]
+    data = {"armguard_scene": 1, "name": "iiwa_world20", "robots": [{"name": "iiwa", "urdf": str(urdf)}],
+            "bodies": [{"name": f"box{i}", "shapes": [{"type": "box", "size": [2 * h for h in b["half_extents"]],
+                                                         "xyz": b["center"], "rpy": [0.0, 0.0, b["yaw"]]}]}
+                       for i, b in enumerate(boxes)]}
+    path = folder / "iiwa_world20.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def _load(name: str, tmp_factory=None):
     if name == "panda":
         return armguard.load_model(ROBOTS / "panda_description/urdf/panda.urdf",
                                    srdf=ROBOTS / "panda_description/srdf/panda.srdf")
     if name == "ur5":
         return armguard.load_model(ROBOTS / "ur_description/urdf/ur5_robot.urdf",
                                    srdf=ROBOTS / "ur_description/srdf/ur5.srdf")
+    if name == "iiwa_world20":  # a plain scene file: its Pinocchio side is written as URDF first
+        return armguard.load_model(iiwa_world20_yaml(tmp_factory.mktemp("iiwa")))
     return armguard.load_model(name)
 
 
@@ -68,12 +89,12 @@ def _axis(model, name: str, q):
 
 
 @pytest.fixture(scope="module")
-def checkers():
+def checkers(tmp_path_factory):
     cache = {}
 
     def get(name):
         if name not in cache:
-            m = _load(name)
+            m = _load(name, tmp_path_factory)
             cache[name] = (m, armguard.checker(m, "analytic"), armguard.checker(m, "coal"))
         return cache[name]
 
