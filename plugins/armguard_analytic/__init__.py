@@ -6,8 +6,10 @@ for Ranger's capsule links, point/segment–face for polytopes, GJK + EPA for hu
 Model's own batched forward kinematics compiled from ``pin_model`` (tested against
 ``pinocchio.forwardKinematics``), bounding-volume pruning and multi-threaded batches.
 
-Options: ``fidelity`` — ``"exact"`` (default).  Where this backend cannot hold a Model
-geometry exactly (a cylinder is a circumscribed prism), ``representation`` says so.
+Options: ``fidelity`` — ``"exact"`` (default), or ``"paper"``: the seeds' minimalist checkers as
+the papers state them (Ranger's distances, Hermes's link–obstacle verdicts; option ``verdicts``;
+see :mod:`._paper`).  Where this backend cannot hold a Model geometry exactly (a cylinder is a
+circumscribed prism), ``representation`` says so.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from armguard.backends import Capability, CheckerBase, check_q, check_Q
 
 __all__ = ["AnalyticBackend", "AnalyticChecker"]
 
-_FIDELITIES = ("exact",)
+_FIDELITIES = ("exact", "paper")
 
 
 class AnalyticChecker(CheckerBase):
@@ -37,6 +39,8 @@ class AnalyticChecker(CheckerBase):
         self.fidelity = str(opts.pop("fidelity", "exact"))
         if self.fidelity not in _FIDELITIES:
             raise BackendError(f"analytic: fidelity {self.fidelity!r} is not one of {list(_FIDELITIES)}")
+        if self.fidelity != "exact":
+            raise BackendError(f"analytic: fidelity {self.fidelity!r} is built by AnalyticBackend().build (armguard.checker)")
         if opts:
             raise BackendError(f"analytic: unknown options {sorted(opts)}; options are ['fidelity']")
         self.representation = dict(model.notes)
@@ -120,5 +124,9 @@ class AnalyticBackend:
 
     name = "analytic"
 
-    def build(self, model, options: Mapping | None = None) -> AnalyticChecker:
+    def build(self, model, options: Mapping | None = None):
+        if str(dict(options or {}).get("fidelity", "exact")) == "paper":
+            from ._paper import PaperChecker
+
+            return PaperChecker(model, options)
         return AnalyticChecker(model, options)
