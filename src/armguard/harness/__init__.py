@@ -12,7 +12,7 @@
 from ._compare import Comparison, PairStatus, compare_answers, reproduce_command, unique_witness_mask
 from ._configs import ConfigSet, build_configs, trajectory_q
 from ._evaluate import BackendAnswers, build_checkers, evaluate, parse_backend_options
-from ._models import EXTRA_MODELS, reference_dir, reference_model_names, repo_root, resolve_model
+from ._models import EXTRA_MODELS, reference_dir, reference_model_names, repo_root, resolve_model, seed_data
 from ._run import compare_at, run_compare, summary_table, write_outputs
 from ._lint import Check, Finding, LintReport, LintStatus, Severity, check_model_files, mesh_convexity
 from ._tolerances import DIFFERENTIAL, DifferentialTolerances, pair_distance_tolerance, pair_kinds
@@ -20,6 +20,6 @@ from ._tolerances import DIFFERENTIAL, DifferentialTolerances, pair_distance_tol
 __all__ = ["run_compare", "compare_at", "summary_table", "write_outputs", "Comparison", "PairStatus", "compare_answers",
            "reproduce_command", "unique_witness_mask", "ConfigSet", "build_configs", "trajectory_q", "BackendAnswers",
            "build_checkers", "evaluate", "parse_backend_options", "EXTRA_MODELS", "reference_dir",
-           "reference_model_names", "repo_root", "resolve_model", "DIFFERENTIAL", "DifferentialTolerances",
+           "reference_model_names", "repo_root", "resolve_model", "seed_data", "DIFFERENTIAL", "DifferentialTolerances",
            "pair_distance_tolerance", "pair_kinds", "check_model_files", "mesh_convexity", "Check", "Finding",
            "LintReport", "LintStatus", "Severity"]

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from .._errors import SceneError
 
-__all__ = ["resolve_model", "model_sources", "reference_model_names", "repo_root", "reference_dir", "file_label",
+__all__ = ["resolve_model", "seed_data", "model_sources", "reference_model_names", "repo_root", "reference_dir", "file_label",
            "robots_dir", "EXTRA_MODELS"]
 
 EXTRA_MODELS = ("panda", "ur5", "iiwa")
@@ -78,14 +78,25 @@ def reference_model_names() -> tuple[str, ...]:
 def file_label(path) -> str:
     """A machine-independent name for a model file: relative to the checkout, example-robot-data or pybullet_data."""
     p = Path(path).resolve()
-    roots = [("", repo_root()), ("example-robot-data:", robots_dir())]
+    roots = [("example-robot-data:", robots_dir())]
     try:
         roots.append(("pybullet_data:", _pybullet_data().resolve()))
     except ImportError:  # pragma: no cover - a test extra
         pass
+    roots.append(("", repo_root()))  # last: the virtual environment may lie inside the checkout
     for prefix, root in roots:
         try:
             return prefix + p.relative_to(root.resolve()).as_posix()
         except ValueError:
             continue
     return str(p)
+
+
+def seed_data(name: str) -> dict:
+    """``reference/seeds/<name>.yaml``: a seed paper's published numbers, each with its ``source:`` quote."""
+    import yaml
+
+    p = reference_dir() / "seeds" / f"{name}.yaml"
+    if not p.is_file():
+        raise SceneError(f"no seed data {name!r} in {p.parent}")
+    return yaml.safe_load(p.read_text(encoding="utf-8"))

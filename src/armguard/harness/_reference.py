@@ -1,0 +1,223 @@
+"""``reference/models/``: coal's answers at a fixed set of configurations, with where they came from.
+
+Per model two files: ``<name>.json`` (the header: source files and meshes with their sha256,
+the pin/coal versions, the configuration set, the pairs) and ``<name>.npz`` (the arrays:
+``q (K, nq)``, ``distance (K, n)``, ``p_WA``/``p_WB (K, n, 3)`` in m, ``verdict (K,)`` from
+``collides``).  The configurations: the neutral pose (each arm's home) then
+``model.random_q(REFERENCE_RANDOM, REFERENCE_SEED)``.  ``tools/make_reference.py NAME...``
+writes them; :func:`check_sources` says whether a model's files still hash as recorded and
+:func:`compare_to_reference` holds a live backend to the recorded answers.
+"""
+
+from __future__ import annotations
+
+import enum
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .._errors import ArmguardError
+from ._models import file_label, reference_dir, resolve_model
+from ._tolerances import DIFFERENTIAL, DifferentialTolerances, pair_distance_tolerance
+
+__all__ = ["REFERENCE_SEED", "REFERENCE_RANDOM", "FORMAT", "Reference", "SourceStatus", "SourceCheck", "DiffStatus",
+           "ReferenceDiff", "reference_configs", "make_reference", "load_reference", "check_sources",
+           "compare_to_reference", "regenerate_command", "source_hashes"]
+
+REFERENCE_SEED = 20240612
+REFERENCE_RANDOM = 64
+FORMAT = 1
+
+
+def regenerate_command(name: str) -> str:
+    return f".venv/bin/python tools/make_reference.py {name}"
+
+
+def reference_configs(model) -> np.ndarray:
+    """``(1 + REFERENCE_RANDOM, nq)``: the neutral pose, then the seeded random in-limit configurations."""
+    return np.concatenate([model.neutral()[None], model.random_q(REFERENCE_RANDOM, REFERENCE_SEED)])
+
+
+def source_hashes(model) -> tuple[dict, dict]:
+    """``({file label: sha256}, {mesh label: sha256})`` of a model's files (Model.sha256) and its mesh files."""
+    from ..model._model import file_sha256
+
+    files = {file_label(p): h for p, h in model.sha256.items()}
+    meshes = {}
+    for go in model.collision_model.geometryObjects:
+        if go.meshPath and Path(go.meshPath).is_file():
+            meshes[file_label(go.meshPath)] = file_sha256(go.meshPath)
+    return files, dict(sorted(meshes.items()))
+
+
+def _versions() -> dict:
+    import coal
+    import pinocchio as pin
+    from importlib.metadata import version
+
+    return {"pinocchio": pin.__version__, "coal": coal.__version__, "numpy": np.__version__, "armguard": version("armguard")}
+
+
+@dataclass
+class Reference:
+    """One model's recorded answers (see the module docstring); ``header`` is the JSON header as read."""
+
+    name: str
+    header: dict
+    q: np.ndarray
+    distance: np.ndarray
+    p_WA: np.ndarray
+    p_WB: np.ndarray
+    verdict: np.ndarray
+
+    @property
+    def pairs(self) -> np.ndarray:
+        return np.asarray([p[:2] for p in self.header["pairs"]], dtype=object).reshape(-1, 2)
+
+
+def make_reference(spec: str, out_dir=None, *, name: str | None = None) -> tuple[Path, Path]:
+    """Write ``<name>.json`` and ``<name>.npz`` for model ``spec`` (coal's answers); returns the two paths."""
+    import armguard
+
+    name = name or str(spec)
+    out = Path(out_dir) if out_dir is not None else reference_dir() / "models"
+    out.mkdir(parents=True, exist_ok=True)
+    model = resolve_model(spec)
+    c = armguard.checker(model, "coal")
+    Q = reference_configs(model)
+    n = len(model.pairs)
+    d = np.empty((len(Q), n))
+    pa = np.empty((len(Q), n, 3))
+    pb = np.empty((len(Q), n, 3))
+    for i, q in enumerate(Q):
+        r = c.pair_distances(q)
+        d[i], pa[i], pb[i] = r.distance, r.p_WA, r.p_WB
+    verdict = np.asarray(c.collides(Q), dtype=bool)
+    files, meshes = source_hashes(model)
+    header = {
+        "format": FORMAT, "model": name, "spec": str(spec), "backend": "coal",
+        "backend_options": {"gjk_tolerance": c.gjk_tolerance},
+        "configurations": {"neutral": 1, "random": REFERENCE_RANDOM, "seed": REFERENCE_SEED,
+                           "rule": "row 0 model.neutral(), rows 1.. model.random_q(random, seed) (pin order)"},
+        "files": files, "meshes": meshes, "versions": _versions(), "nq": model.nq, "n_pairs": n,
+        "regenerate": regenerate_command(name),
+        "pairs": [[a, b, cat] for (a, b), cat in zip(model.pairs.names.tolist(), model.pairs.category)],
+        "arrays": {"q": "(K, nq) rad/m", "distance": "(K, n) m", "p_WA": "(K, n, 3) m", "p_WB": "(K, n, 3) m",
+                   "verdict": "(K,) bool, collides(Q)"},
+    }
+    jp, npz = out / f"{name}.json", out / f"{name}.npz"
+    np.savez_compressed(npz, q=Q, distance=d, p_WA=pa, p_WB=pb, verdict=verdict)
+    jp.write_text(json.dumps(header, indent=1) + "\n", encoding="utf-8")
+    return jp, npz
+
+
+def load_reference(name: str, ref_dir=None) -> Reference:
+    d = Path(ref_dir) if ref_dir is not None else reference_dir() / "models"
+    jp, npz = d / f"{name}.json", d / f"{name}.npz"
+    if not jp.is_file() or not npz.is_file():
+        raise ArmguardError(f"no reference for {name!r} in {d}; write it with: {regenerate_command(name)}")
+    header = json.loads(jp.read_text(encoding="utf-8"))
+    with np.load(npz) as z:
+        return Reference(name, header, z["q"], z["distance"], z["p_WA"], z["p_WB"], z["verdict"])
+
+
+class SourceStatus(str, enum.Enum):
+    CURRENT = "current"  # every file and mesh hashes as recorded
+    STALE = "stale"  # a file changed, appeared or went: regenerate
+
+
+@dataclass
+class SourceCheck:
+    status: SourceStatus
+    changed: list = field(default_factory=list)  # labels whose sha256 differs, or that are new / gone
+    command: str = ""
+
+    @property
+    def message(self) -> str:
+        if self.status is SourceStatus.CURRENT:
+            return "reference is current"
+        return (f"the model's files changed since its reference was recorded ({', '.join(self.changed)}); "
+                f"regenerate it with: {self.command}")
+
+
+def check_sources(model, ref: Reference) -> SourceCheck:
+    """Whether ``model``'s files and meshes still hash as ``ref`` recorded."""
+    files, meshes = source_hashes(model)
+    changed = []
+    for now, then in ((files, ref.header["files"]), (meshes, ref.header["meshes"])):
+        for k in sorted(set(now) | set(then)):
+            if now.get(k) != then.get(k):
+                changed.append(k)
+    status = SourceStatus.STALE if changed else SourceStatus.CURRENT
+    return SourceCheck(status, changed, regenerate_command(ref.name))
+
+
+class DiffStatus(str, enum.Enum):
+    MATCH = "match"
+    DIFFERS = "differs"
+
+
+@dataclass
+class ReferenceDiff:
+    """A live backend against the recorded answers.
+
+    ``pairs_match``: same pair names in the same order; ``verdict_mismatches``: configurations whose
+    ``collides`` answer differs with the recorded least distance outside ``band``;
+    ``distance_over``: separated (both ``> band``) entries off by more than the pair's tolerance
+    (or ``distance_tol`` when given); ``max_separated_error``, ``max_point_error`` (m, unique points);
+    ``worst``: ``(config, pair, live d, recorded d)`` of the largest separated error.
+    """
+
+    status: DiffStatus
+    pairs_match: bool
+    verdict_mismatches: int
+    distance_over: int
+    max_separated_error: float
+    point_over: int
+    max_point_error: float
+    worst: tuple | None
+
+    @property
+    def message(self) -> str:
+        return (f"{self.status.value}: pairs match {self.pairs_match}, verdict mismatches {self.verdict_mismatches}, "
+                f"separated distances over tolerance {self.distance_over} (max error {self.max_separated_error:.3e} m), "
+                f"unique witness points over tolerance {self.point_over} (max {self.max_point_error:.3e} m); worst {self.worst}")
+
+
+def compare_to_reference(model, checker, ref: Reference, *, tol: DifferentialTolerances = DIFFERENTIAL,
+                         distance_tol: float | None = None, points: bool = True) -> ReferenceDiff:
+    """Hold ``checker`` (any backend's) to ``ref`` on ``model`` (see :class:`ReferenceDiff`)."""
+    from ._compare import unique_witness_mask
+
+    band = tol.contact_band
+    pairs_match = np.array_equal(model.pairs.names, ref.pairs)
+    if not pairs_match or ref.q.shape[1] != model.nq:
+        return ReferenceDiff(DiffStatus.DIFFERS, False, 0, 0, float("nan"), 0, float("nan"), None)
+    K, n = ref.distance.shape
+    d = np.empty((K, n))
+    pa = np.empty((K, n, 3))
+    pb = np.empty((K, n, 3))
+    for i, q in enumerate(ref.q):
+        r = checker.pair_distances(q)
+        d[i], pa[i], pb[i] = r.distance, r.p_WA, r.p_WB
+    v = np.asarray(checker.collides(ref.q), dtype=bool)
+    verdict_bad = int(((v != ref.verdict) & (np.abs(ref.distance.min(axis=1)) > band)).sum())
+    tol_pair = pair_distance_tolerance(model, tol) if distance_tol is None else np.full(n, float(distance_tol))
+    sep = (d > band) & (ref.distance > band)
+    err = np.where(sep, np.abs(d - ref.distance), 0.0)
+    over = int((err > tol_pair[None, :]).sum())
+    worst = None
+    if err.size and err.max() > 0:
+        i, k = np.unravel_index(int(np.argmax(err)), err.shape)
+        worst = (int(i), tuple(ref.pairs[k]), float(d[i, k]), float(ref.distance[i, k]))
+    point_over, max_point = 0, 0.0
+    if points:
+        u = unique_witness_mask(model, ref.q, ref.distance, tol)
+        dp = np.maximum(np.linalg.norm(pa - ref.p_WA, axis=2), np.linalg.norm(pb - ref.p_WB, axis=2))[u]
+        point_over = int((dp > tol.unique_point).sum())
+        max_point = float(dp.max()) if dp.size else 0.0
+    ok = verdict_bad == 0 and over == 0 and point_over == 0
+    return ReferenceDiff(DiffStatus.MATCH if ok else DiffStatus.DIFFERS, True, verdict_bad, over,
+                         float(err.max()) if err.size else 0.0, point_over, max_point, worst)
