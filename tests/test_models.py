@@ -14,10 +14,12 @@ import numpy as np
 import pytest
 
 from armguard.geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere
+from armguard.harness import seed_data
 from armguard.models import builtin_names, builtin_path
 from armguard.scene import PairCategory, compile_scene, load_scene
 
 NAMES = builtin_names()
+HERMES = seed_data("hermes")["model"]  # reference/seeds/hermes.yaml
 
 
 @pytest.fixture(scope="module")
@@ -33,13 +35,13 @@ def _counts(shape):
 def test_hermes_is_8_polyhedra_54_faces_76_vertices(scenes):
     s = scenes["hermes"]
     shapes = [sh for b in s.bodies.values() for sh in b.shapes]
-    assert len(shapes) == 8
+    assert len(shapes) == HERMES["polyhedra"]
     assert all(isinstance(sh, (Box, Prism, ConvexPolyhedron)) for sh in shapes)
     faces = sum(_counts(sh)[0] for sh in shapes)
     verts = sum(_counts(sh)[1] for sh in shapes)
-    assert (faces, verts) == (54, 76)
+    assert (faces, verts) == (HERMES["faces"], HERMES["vertices"])
     c = compile_scene(s)
-    assert c.n_faces == 54
+    assert c.n_faces == HERMES["faces"]
     per_body = {b.name: [_counts(sh) for sh in b.shapes] for b in s.bodies.values()}
     assert per_body["tail"] == [(9, 14)]  # a prism with 7 base sides
     assert per_body["cockpit"] == [(9, 14)]

@@ -19,6 +19,7 @@ coal = pytest.importorskip("coal")
 
 from armguard.geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere  # noqa: E402
 from armguard.kinematics import Coupling, DHRow, Robot  # noqa: E402
+from armguard.harness import seed_data  # noqa: E402
 from armguard.model.export import export_scene  # noqa: E402
 from armguard.models import builtin_path  # noqa: E402
 from armguard.scene import Scene, load_scene_file  # noqa: E402
@@ -277,9 +278,10 @@ def test_hermes_polyhedra_faces_and_vertices():
     _, placed = _placed(model, geom, pin.neutral(model))
     polys = [ConvexPolyhedron(_points(g, M)) for name, (g, M, _) in placed.items()
              if isinstance(g, (coal.Box, coal.Convex)) and not name.startswith(("hera_", "payload"))]
-    assert len(polys) == 8
-    assert sum(len(p.faces) for p in polys) == 54
-    assert sum(len(p.vertices) for p in polys) == 76
+    hermes = seed_data("hermes")["model"]  # reference/seeds/hermes.yaml
+    assert len(polys) == hermes["polyhedra"]
+    assert sum(len(p.faces) for p in polys) == hermes["faces"]
+    assert sum(len(p.vertices) for p in polys) == hermes["vertices"]
 
 
 @pytest.mark.parametrize("system", SYSTEMS)

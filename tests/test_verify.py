@@ -22,17 +22,20 @@ from armguard.verify import (
 from armguard.verify._motion import chain_bounds
 
 from _verify_fixtures import planar_arm, spatial_arm, thin_scene, thin_suite
+from armguard.harness import seed_data
+
+HERMES_ED = seed_data("hermes")["discretisation_error"]  # reference/seeds/hermes.yaml
 
 
 # --------------------------------------------------------------------------- Hermes's numbers
 @pytest.mark.parametrize(
     ("speed_mm_s", "ed_mm"),
-    [(50, 29), (100, 59), (200, 118)],
-    ids=["50mm/s", "100mm/s", "200mm/s"],
+    [(row["speed_mm_s"], row["ed_mm"]) for row in HERMES_ED["table"]],
+    ids=[f"{row['speed_mm_s']}mm/s" for row in HERMES_ED["table"]],
 )
 def test_hermes_discretisation_error_table(speed_mm_s, ed_mm):
     # Hermes (001_…, §4, eq. 4-2): Ed = v / f at the 1.7 Hz its 18 kFLOPS allowed.
-    ed = discretisation_error(speed_mm_s * 1e-3, 1.7)
+    ed = discretisation_error(speed_mm_s * 1e-3, HERMES_ED["frequency_hz"])
     assert round(float(ed) * 1e3) == ed_mm
 
 
