@@ -1,6 +1,7 @@
 """The backend plugins against each other: analytic vs the coal reference (and python-fcl) on every model.
 
-Tolerances, in one place:
+Tolerances, in one place: ``armguard.harness.DIFFERENTIAL`` (``src/armguard/harness/_tolerances.py``,
+shared with ``tests/test_reference.py`` and ``armguard compare``):
 
 * ``CONTACT_BAND``: a verdict may differ only where the reference distance is within this of 0;
 * ``DISTANCE_TOL``: separated distances agree within this (both backends exact up to round-off;
@@ -23,12 +24,13 @@ import pytest
 import armguard
 from armguard import BackendError, SceneFileError
 from armguard.backends import available, resolve
+from armguard.harness import DIFFERENTIAL as TOL
 
-CONTACT_BAND = 1e-6
-DISTANCE_TOL = 1e-6
-HULL_TOL = 1e-5
-WITNESS_TOL = 1e-9
-FCL_TOL = 6e-2
+CONTACT_BAND = TOL.contact_band
+DISTANCE_TOL = TOL.distance
+HULL_TOL = TOL.hull
+WITNESS_TOL = TOL.witness
+FCL_TOL = TOL.fcl
 N_DISTANCE = 1000
 N_VERDICT = 10_000
 
@@ -148,11 +150,11 @@ def test_analytic_matches_coal(checkers, name):
         # capsules with non-parallel axes, a sphere), both backends name the same points
         gap_c = np.linalg.norm(rc.p_WA - rc.p_WB, axis=1)
         assert np.all(np.abs(gap_c - np.abs(rc.distance))[sep] <= tol[sep])
-        for k in np.flatnonzero(unique_witness & (ra.distance > 1e-3)):
+        for k in np.flatnonzero(unique_witness & (ra.distance > TOL.unique_min_distance)):
             da, db = _axis(model, ra.pairs[k, 0], q), _axis(model, ra.pairs[k, 1], q)
-            if da is None or db is None or np.linalg.norm(np.cross(da, db)) > 1e-3:
-                np.testing.assert_allclose(ra.p_WA[k], rc.p_WA[k], atol=1e-6)
-                np.testing.assert_allclose(ra.p_WB[k], rc.p_WB[k], atol=1e-6)
+            if da is None or db is None or np.linalg.norm(np.cross(da, db)) > TOL.parallel:
+                np.testing.assert_allclose(ra.p_WA[k], rc.p_WA[k], atol=TOL.unique_point)
+                np.testing.assert_allclose(ra.p_WB[k], rc.p_WB[k], atol=TOL.unique_point)
     Qv = model.random_q(N_VERDICT, 12)
     va, vc = a.collides(Qv), c.collides(Qv)
     differ = np.flatnonzero(va != vc)
