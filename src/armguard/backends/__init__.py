@@ -10,6 +10,7 @@ package.  ``available()`` lists the installed ones.
 
 from __future__ import annotations
 
+import contextvars
 import os
 import tomllib
 from importlib import metadata
@@ -19,7 +20,7 @@ from typing import Mapping
 from .._errors import BackendError
 from ._interface import Backend, Capability, Checker, CheckerBase, NearestPair, PairDistances, check_Q, check_q
 
-__all__ = ["available", "get_backend", "checker", "resolve", "Backend", "Checker", "CheckerBase", "PairDistances",
+__all__ = ["available", "get_backend", "checker", "resolve", "command_line_choice", "Backend", "Checker", "CheckerBase", "PairDistances",
            "NearestPair", "Capability", "check_q", "check_Q", "GROUP", "DEFAULT", "ENV"]
 
 GROUP = "armguard.backends"
@@ -47,9 +48,19 @@ def get_backend(name: str) -> Backend:
     return obj() if isinstance(obj, type) else obj
 
 
+_CHOICE: contextvars.ContextVar = contextvars.ContextVar("armguard_backend_choice", default=(None, None))
+
+
+def command_line_choice(backend: str | None, config=None):
+    """Make ``backend`` (and ``config``) the explicit choice until the returned callable is called
+    (the command line's ``--backend`` / ``--config``)."""
+    token = _CHOICE.set((backend, config))
+    return lambda: _CHOICE.reset(token)
+
+
 def read_config(config=None) -> dict:
     """The ``[backend]`` table of ``armguard.toml`` (``config``, ``$ARMGUARD_CONFIG`` or the working directory)."""
-    path = config or os.environ.get(CONFIG_ENV)
+    path = config or _CHOICE.get()[1] or os.environ.get(CONFIG_ENV)
     p = Path(path) if path else Path.cwd() / CONFIG_FILE
     if not p.is_file():
         if path:
@@ -68,6 +79,8 @@ def read_config(config=None) -> dict:
 def resolve(backend: str | None = None, options: Mapping | None = None, *, config=None) -> tuple[str, dict]:
     """``(name, options)`` by the precedence: argument > ``$ARMGUARD_BACKEND`` > ``armguard.toml`` > default."""
     cfg = read_config(config)
+    if backend is None:
+        backend = _CHOICE.get()[0]  # the command line's --backend counts as the argument
     if backend is not None:
         name = str(backend)
     elif os.environ.get(ENV):

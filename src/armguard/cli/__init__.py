@@ -22,8 +22,21 @@ class _Group(click.Group):
 
 @click.group(cls=_Group)
 @click.version_option(package_name="armguard")
-def main() -> None:
+@click.option("--backend", default=None, metavar="NAME",
+              help="Backend for every check of this command (analytic, coal, fcl, ...; default: "
+                   "$ARMGUARD_BACKEND, else armguard.toml, else analytic).")
+@click.option("--config", "config", default=None, type=click.Path(dir_okay=False),
+              help="An armguard.toml to read the [backend] table from (default: the working directory's).")
+@click.pass_context
+def main(ctx, backend: str | None, config: str | None) -> None:
     """armguard: collision and proximity detection for robot manipulators."""
+    from ..backends import available, command_line_choice
+
+    if backend is not None and backend not in available():
+        raise click.BadParameter(f"unknown backend {backend!r}; installed backends are {list(available())}",
+                                 param_hint="--backend")
+    # --backend counts as the explicit argument of every check this command makes
+    ctx.call_on_close(command_line_choice(backend, config))
 
 
 # Each command lives in its own module and registers itself on ``main``.

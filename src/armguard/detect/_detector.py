@@ -19,6 +19,7 @@ from ._layout import EV_W, SUM_SIZE, Layout
 from ._limits import limit_error, limit_rows
 from ._model import CAT_WORKSPACE, build_model, check_finite_margin
 from ._raw import _UNHELD, _Raw, _refcount
+from ._prep import _fk_blocks, _static_polytopes
 from ._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, PairDistances, PairResult
 
 __all__ = ["Detector"]
@@ -41,63 +42,6 @@ def _single(cats: np.ndarray) -> int:
 def _readonly(a: np.ndarray) -> np.ndarray:
     a.flags.writeable = False
     return a
-
-
-def _static_polytopes(cs, static_shapes) -> dict:
-    """H/V descriptions (W) of the static polytope elements, concatenated for the kernel.
-
-    For each static element with a polytope core, :func:`armguard.geometry._pack.polytope_data`
-    of its shape (vertices, face planes, edges with their faces, edge bisectors, centroid);
-    ``poly_of (G,)`` maps an element to its polytope number (-1: none), ``pvs``, ``pps``, ``pes``
-    are CSR offsets into the vertex, plane and edge rows.  Built once per ``prepare``."""
-    from ..geometry._pack import polytope_data
-
-    G = cs.n_elements
-    poly_of = np.full(G, -1, np.int64)
-    pv, ppl, ped, pbis, pcen = [], [], [], [], []
-    pvs, pps, pes = [0], [0], [0]
-    for g, shape in static_shapes.items():
-        if g >= G or int(cs.elem_core[g]) != 3:
-            continue
-        try:
-            v, pl, ed, bi, cen = polytope_data(shape)
-        except Exception:  # noqa: BLE001 - no H/V description: the generic convex kernel serves it
-            continue
-        poly_of[g] = len(pcen)
-        pv.append(v); ppl.append(pl); ped.append(ed); pbis.append(bi); pcen.append(cen)
-        pvs.append(pvs[-1] + len(v)); pps.append(pps[-1] + len(pl)); pes.append(pes[-1] + len(ed))
-    cat = lambda parts, w, dt: np.concatenate(parts).astype(dt) if parts else np.zeros((0, w), dt)  # noqa: E731
-    return {"poly_of": poly_of, "pv": cat(pv, 3, np.float64), "ppl": cat(ppl, 4, np.float64),
-            "ped": cat(ped, 4, np.int64), "pbis": cat(pbis, 3, np.float64),
-            "pcen": np.array(pcen, dtype=np.float64).reshape(-1, 3), "pvs": np.array(pvs, np.int64),
-            "pps": np.array(pps, np.int64), "pes": np.array(pes, np.int64)}
-
-
-def _fk_blocks(parent: np.ndarray, link_robot: np.ndarray, n_joints: list[int]):
-    """FK blocks: ``rob_l (R + 1,)`` link offsets and ``rob_j (R + 1,)`` joint offsets of each robot,
-    and ``parent_loc (n_links,)`` each link's parent numbered within its block (-1: a root).
-
-    The kernel recomputes a block's link poses only when that robot's joint values changed since
-    the last check (an idle arm's links keep their poses).  When the robots' links are not
-    contiguous blocks with parents inside them, one block holds every link and joint."""
-    n = len(parent)
-    R = len(n_joints)
-    rob_l = np.searchsorted(link_robot, np.arange(R + 1)).astype(np.int64) if n else np.zeros(R + 1, np.int64)
-    rob_j = np.concatenate([[0], np.cumsum(n_joints)]).astype(np.int64)
-    ok = n == len(link_robot) and bool(np.all(np.diff(link_robot) >= 0)) and rob_l[-1] == n
-    parent_loc = np.array(parent, dtype=np.int64)
-    if ok:
-        for r in range(R):
-            for i in range(rob_l[r], rob_l[r + 1]):
-                p = parent[i]
-                if p >= 0:
-                    if not rob_l[r] <= p < i:
-                        ok = False
-                    parent_loc[i] = p - rob_l[r]
-    if not ok:
-        return (np.array([0, n], np.int64), np.array([0, int(sum(n_joints))], np.int64),
-                np.array(parent, dtype=np.int64))
-    return rob_l, rob_j, parent_loc
 
 
 def _entry_point(*args):
@@ -141,6 +85,10 @@ class Detector:
     active : str or None
         A robot name: check that arm against everything (Ranger's active arm); None: all arms.
     tol : Tolerances
+    backend, backend_options : str, mapping
+        The backend whose distances the detector reports (argument > ``$ARMGUARD_BACKEND`` >
+        ``armguard.toml`` > ``"analytic"``).  ``"analytic"`` is this class (the fused numba kernel);
+        any other gives a :class:`~armguard.detect._backend.CheckerDetector` with the same API.
     reach_margin : float, m
         Obstacle lists keep every obstacle a link can come within this margin of anywhere in
         its joint limits (conservative reach analysis, :mod:`armguard.detect._reach`); pairs
@@ -150,8 +98,19 @@ class Detector:
         pairs exact and reports nearest pairs only among the listed ones.
     """
 
+    def __new__(cls, scene=None, *args, backend: str | None = None, backend_options=None, **kwargs):
+        # another backend (argument > $ARMGUARD_BACKEND > armguard.toml): the same API over its Checker
+        from ._backend import other_backend
+
+        if cls is Detector and other_backend(backend, backend_options):
+            from ._backend import CheckerDetector
+
+            return CheckerDetector(scene, *args, backend=backend, backend_options=backend_options, **kwargs)
+        return super().__new__(cls)
+
     def __init__(self, scene, threshold: float = 0.05, *, stopping_distance: float = 0.0, active: str | None = None,
-                 tol: Tolerances = DEFAULT_TOLERANCES, reach_margin: float = math.inf) -> None:
+                 tol: Tolerances = DEFAULT_TOLERANCES, reach_margin: float = math.inf, backend: str | None = None,
+                 backend_options=None) -> None:
         self.scene = scene
         self._threshold = _check_length(threshold, "threshold")
         self._stopping = _check_length(stopping_distance, "stopping_distance")

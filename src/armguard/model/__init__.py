@@ -5,7 +5,7 @@ pairs with their categories, the scene the analytic backend compiles).  The file
 of ``urdf/<system>/`` is ``docs/models.md``.
 """
 
-from ._load import builtin_model_names, load_model, models_dir
+from ._load import builtin_model_names, load_model, model_from_scene, model_of, models_dir
 from ._model import WORKSPACE, GeometryPairs, Model
 
-__all__ = ["load_model", "Model", "GeometryPairs", "WORKSPACE", "models_dir", "builtin_model_names"]
+__all__ = ["load_model", "model_of", "model_from_scene", "Model", "GeometryPairs", "WORKSPACE", "models_dir", "builtin_model_names"]

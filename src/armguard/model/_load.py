@@ -21,7 +21,7 @@ from .._errors import ArmguardError, SceneError, SceneFileError
 from ._model import Model
 from ._srdf import read_srdf
 
-__all__ = ["load_model", "models_dir", "builtin_model_names", "model_from_scenefile"]
+__all__ = ["load_model", "models_dir", "builtin_model_names", "model_from_scenefile", "model_from_scene", "model_of"]
 
 _BUILTINS = ("ranger", "hermes", "puma560", "gmf_s480", "rover")
 
@@ -200,11 +200,37 @@ def _add_extra_bodies(scene, geom, geometry_names: dict, known: set) -> None:
 def _model_from_plain_scene(sf, file: str, base: Path, ctx) -> Model:
     """A scene file with DH/URDF robots and shape bodies: its Pinocchio side written as URDF first."""
     from ..scene._load import scene_from_dict_validated
+
+    return model_from_scene(scene_from_dict_validated(sf, file, base), file=file)
+
+
+def model_of(scene) -> Model:
+    """The Model of ``scene``: the one it was loaded as (when unchanged since), else one built from it."""
+    m = getattr(scene, "_model_of_record", None)
+    if m is not None and m.scene is scene and _covers(m, scene):
+        return m
+    return model_from_scene(scene)
+
+
+def _covers(model: Model, scene) -> bool:
+    try:
+        for owner in scene.owners():
+            for i in range(len(_owner_shapes(scene, owner))):
+                model.geometry_name(owner, i)
+    except KeyError:
+        return False
+    return True
+
+
+def model_from_scene(scene, *, file: str | None = None) -> Model:
+    """A Model of a Scene built in code or from a plain scene file: the scene is written as URDF
+    (:func:`armguard.model.export.export_scene`) and Pinocchio loads that; the Model keeps
+    ``scene`` itself as its scene (the analytic backend's input is unchanged)."""
     from .export import export_scene
     from ._from_pin import scene_parts_from_pin
     from ._urdf import load_pinocchio
 
-    scene = scene_from_dict_validated(sf, file, base)
+    file = file or f"<scene {scene.name}>"
     with tempfile.TemporaryDirectory(prefix="armguard-model-") as tmp:
         written = export_scene(scene, tmp, name=scene.name)
         urdf = Path(written["urdf"])
@@ -227,8 +253,9 @@ def _model_from_plain_scene(sf, file: str, base: Path, ctx) -> Model:
             if (owner, i) not in parts.geometry_names:
                 raise SceneFileError(file, "", f"shape {i} of {owner!r} did not survive the URDF export (a bug: please report)")
             geometry_names[(owner, i)] = parts.geometry_names[(owner, i)]
+    files = [Path(file)] if Path(file).is_file() else []
     return Model(scene.name, pin_model, geom, scene, q_index=q_index, circular=_circular(parts), geometry_names=geometry_names,
-                 notes=parts.notes, files=[Path(file)])
+                 notes=parts.notes, files=files)
 
 
 def _owner_shapes(scene, owner: str):

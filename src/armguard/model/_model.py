@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import DetectionError
+from .._tolerance import DEFAULT_TOLERANCES
 
 __all__ = ["Model", "GeometryPairs", "WORKSPACE", "file_sha256"]
 
@@ -81,6 +82,23 @@ class Model:
         self._pairs = None
         self._revision = None
         self._geom_index = {go.name: i for i, go in enumerate(collision_model.geometryObjects)}
+        scene._model_of_record = self  # model_of(scene) finds it (the scene it built is this model's)
+
+    tol = DEFAULT_TOLERANCES
+
+    def check_limits(self, q_scene, where: str = "q") -> None:
+        """Raise :class:`~armguard.JointLimitError` when the flat scene ``q`` ``(n,)`` leaves a joint's limits."""
+        from ..detect._limits import limit_error
+
+        robots = list(self.scene.robots.values())
+        if not robots:
+            return
+        lo = np.concatenate([r.lower for r in robots])
+        hi = np.concatenate([r.upper for r in robots])
+        err = limit_error(where, np.asarray(q_scene, dtype=np.float64), self.scene.joint_names, lo, hi,
+                          self.tol.joint_limit)
+        if err is not None:
+            raise err
 
     def __repr__(self) -> str:
         return (f"Model({self.name!r}, nq={self.pin_model.nq}, {self.collision_model.ngeoms} geometries, "

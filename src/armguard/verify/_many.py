@@ -42,7 +42,8 @@ def verify_many(scene, trajectories, *, workers: int | None = None, scheduler: s
                 stopping_distance=0.0, method: str = "certified", frequency: float | None = None,
                 joint_step: float | None = None, robot: str | None = None, threshold: float | None = None,
                 payload_mass: float = 0.0, q_others=None, source: str = "auto",
-                tol: Tolerances = DEFAULT_TOLERANCES) -> tuple[VerificationReport, ...]:
+                tol: Tolerances = DEFAULT_TOLERANCES, backend: str | None = None,
+                backend_options=None) -> tuple[VerificationReport, ...]:
     """Verify many trajectories of ``scene``; the reports come back in input order.
 
     Parameters
@@ -67,7 +68,7 @@ def verify_many(scene, trajectories, *, workers: int | None = None, scheduler: s
         raise VerificationError("give workers (a new LocalCluster) or scheduler (an existing cluster), not both")
     if workers is not None and (int(workers) != workers or workers < 1):
         raise VerificationError(f"workers: expected an integer >= 1, got {workers!r}")
-    ctor = dict(robot=robot, q_others=q_others, source=source, tol=tol)
+    ctor = dict(robot=robot, q_others=q_others, source=source, tol=tol, backend=backend, backend_options=backend_options)
     kwargs = dict(stopping_distance=stopping_distance, method=method, frequency=frequency, joint_step=joint_step,
                   robot=robot, threshold=threshold, payload_mass=payload_mass)
     total = len(items)

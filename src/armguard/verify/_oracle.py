@@ -60,9 +60,12 @@ class ClearanceModel:
     source : "auto" | "detector" | "reference"
         Where distances come from (see the module docstring); "auto" takes the detector when
         it offers ``pair_distances`` and the reference otherwise.
+    backend, backend_options : str, mapping
+        The detector's backend (``armguard.Detector(..., backend=)``): its distances, these bounds.
     """
 
-    def __init__(self, scene, *, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES) -> None:
+    def __init__(self, scene, *, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES, backend: str | None = None,
+                 backend_options=None) -> None:
         if source not in ("auto", "detector", "reference"):
             raise VerificationError(f"source: expected one of 'auto', 'detector', 'reference', got {source!r}")
         self.scene = scene
@@ -124,6 +127,7 @@ class ClearanceModel:
         self.category_code = np.array([CATEGORIES.index(c) for c in cat], dtype=np.int64)
         self._pair_key = {(a, b): i for i, (a, b) in enumerate(zip(pa, pb))}
         self._fixed: dict = {}  # robot -> (other robots' joints, full clearances there)
+        self._backend = (backend, backend_options)
         self.source = self._pick_source(source)
         self.evaluations = 0
 
@@ -144,7 +148,8 @@ class ClearanceModel:
         try:
             from ..detect import Detector
 
-            det = Detector(self.scene, threshold=0.0, tol=self.tol)
+            det = Detector(self.scene, threshold=0.0, tol=self.tol, backend=self._backend[0],
+                           backend_options=self._backend[1])
             if not hasattr(det, "pair_distances"):
                 raise AttributeError("pair_distances")
             res = det.pair_distances(self.scene.flat_q(self.scene.default_q()))

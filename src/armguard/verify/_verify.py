@@ -83,19 +83,25 @@ class Verifier:
     source : "auto" | "detector" | "reference"
         Where clearances come from (:class:`ClearanceModel`).
     tol : Tolerances
+    backend, backend_options : str, mapping
+        The backend the detector source takes its distances from (argument > ``$ARMGUARD_BACKEND``
+        > ``armguard.toml`` > ``"analytic"``); the motion bounds are the scene's, whatever the backend.
     """
 
-    def __init__(self, scene, *, robot: str | None = None, q_others=None, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES) -> None:
+    def __init__(self, scene, *, robot: str | None = None, q_others=None, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES,
+                 backend: str | None = None, backend_options=None) -> None:
         self.scene = scene
         self.tol = tol
         self._source = source
+        self._backend = (backend, backend_options)
         self._robot = robot
         self._q_others = None if q_others is None else dict(q_others)
         self._prepare()
 
     def _prepare(self) -> None:
         """Build the clearance model and the other robots' configuration from the scene as it is now."""
-        self.model = ClearanceModel(self.scene, source=self._source, tol=self.tol)
+        self.model = ClearanceModel(self.scene, source=self._source, tol=self.tol, backend=self._backend[0],
+                                    backend_options=self._backend[1])
         base = self.scene.default_q()
         if self._q_others is not None:
             for k, v in self._q_others.items():
@@ -529,7 +535,7 @@ def _feature_of(scene, q, owner: str, p_W: np.ndarray, tol):
 def verify(scene, trajectory, *, stopping_distance=0.0, method: str = "certified", frequency: float | None = None,
            joint_step: float | None = None, robot: str | None = None, threshold: float | None = None,
            payload_mass: float = 0.0, q_others=None, source: str = "auto", name: str | None = None,
-           tol: Tolerances = DEFAULT_TOLERANCES) -> VerificationReport:
+           tol: Tolerances = DEFAULT_TOLERANCES, backend: str | None = None, backend_options=None) -> VerificationReport:
     """Verify a trajectory of one robot of ``scene`` against every checked pair (Hermes's four checks).
 
     Parameters
@@ -557,12 +563,15 @@ def verify(scene, trajectory, *, stopping_distance=0.0, method: str = "certified
         Where clearances come from (the Detector's pair distances, or shapes + exact distances).
     name : str | None
         The trajectory's name in the report.
+    backend, backend_options : str, mapping
+        Whose distances the clearances are (see :class:`Verifier`).
 
     Returns
     -------
     VerificationReport
         SAFE, COLLISION (with the first collision) or INCOMPLETE (never read as safe).
     """
-    v = Verifier(scene, robot=robot, q_others=q_others, source=source, tol=tol)
+    v = Verifier(scene, robot=robot, q_others=q_others, source=source, tol=tol, backend=backend,
+                 backend_options=backend_options)
     return v.verify(trajectory, stopping_distance=stopping_distance, method=method, frequency=frequency,
                     joint_step=joint_step, robot=robot, threshold=threshold, payload_mass=payload_mass, name=name)
