@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import enum
 import json
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -40,16 +41,22 @@ def reference_configs(model) -> np.ndarray:
     return np.concatenate([model.neutral()[None], model.random_q(REFERENCE_RANDOM, REFERENCE_SEED)])
 
 
+def _model_files(model) -> tuple[Path, list, list]:
+    files = [Path(p).resolve() for p in model.sha256]
+    meshes = sorted({Path(go.meshPath).resolve() for go in model.collision_model.geometryObjects
+                     if go.meshPath and Path(go.meshPath).is_file()})
+    root = Path(os.path.commonpath([str(p.parent) for p in files + meshes]))
+    return root, files, meshes
+
+
 def source_hashes(model) -> tuple[dict, dict]:
-    """``({file label: sha256}, {mesh label: sha256})`` of a model's files (Model.sha256) and its mesh files."""
+    """``({file: sha256}, {mesh: sha256})`` of a model's files (Model.sha256) and its mesh files, each named
+    relative to the folder holding them all (so a copy of the folder hashes the same)."""
     from ..model._model import file_sha256
 
-    files = {file_label(p): h for p, h in model.sha256.items()}
-    meshes = {}
-    for go in model.collision_model.geometryObjects:
-        if go.meshPath and Path(go.meshPath).is_file():
-            meshes[file_label(go.meshPath)] = file_sha256(go.meshPath)
-    return files, dict(sorted(meshes.items()))
+    root, files, meshes = _model_files(model)
+    return ({p.relative_to(root).as_posix(): model.sha256[str(p)] for p in files},
+            {p.relative_to(root).as_posix(): file_sha256(p) for p in meshes})
 
 
 def _versions() -> dict:
@@ -101,7 +108,7 @@ def make_reference(spec: str, out_dir=None, *, name: str | None = None) -> tuple
         "backend_options": {"gjk_tolerance": c.gjk_tolerance},
         "configurations": {"neutral": 1, "random": REFERENCE_RANDOM, "seed": REFERENCE_SEED,
                            "rule": "row 0 model.neutral(), rows 1.. model.random_q(random, seed) (pin order)"},
-        "files": files, "meshes": meshes, "versions": _versions(), "nq": model.nq, "n_pairs": n,
+        "root": file_label(_model_files(model)[0]), "files": files, "meshes": meshes, "versions": _versions(), "nq": model.nq, "n_pairs": n,
         "regenerate": regenerate_command(name),
         "pairs": [[a, b, cat] for (a, b), cat in zip(model.pairs.names.tolist(), model.pairs.category)],
         "arrays": {"q": "(K, nq) rad/m", "distance": "(K, n) m", "p_WA": "(K, n, 3) m", "p_WB": "(K, n, 3) m",
