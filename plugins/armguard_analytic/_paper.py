@@ -25,8 +25,11 @@ Ranger (Bon & Seraji, seed ``000``) answers distances:
   yet the vertices are counter-clockwise from outside; with counter-clockwise vertices ``n`` is
   outward, the sign eq. 8 needs).  Plus **link–edge** (§2): every edge of the obstacle against
   the link axis (the §3 kernel) minus the link radius.  A pair's distance is the least of its
-  face and edge terms.  The distal end-point is the capsule end-point farther from the origin
-  of the parent link's frame at the scene's default configuration.
+  face and edge terms.  Each term is the distance from a point of the link axis to a point of
+  the obstacle less ``r``, so it is never below the exact signed distance (which is at most
+  ``-r`` once the axis meets the obstacle): the paper can only miss closer points.  The distal
+  end-point is the capsule end-point farther from the origin of the parent link's frame at the
+  scene's default configuration.
 * **link–bounding box** (§2): for both end-points of each link, the six subtractions against
   the box limits; the least is the distance (``> 0`` inside).  The paper subtracts the link
   radius for faces, edges and links but not here, and neither do we: this distance is the
@@ -72,7 +75,8 @@ from armguard.geometry._pair_segment_segment import perpendicular_unit
 from armguard.geometry.kernels import GJK_NOT_CONVERGED, GJK_WORK_SIZE, convex_convex
 from armguard.kinematics._fk import _fk_kernel
 
-__all__ = ["PaperChecker", "ranger_segment_segment", "METHODS", "VERDICTS"]
+__all__ = ["PaperChecker", "ranger_segment_segment", "paper_capsule_polytope", "hermes_link_obstacle", "METHODS",
+           "VERDICTS"]
 
 M_SEGSEG, M_FACE_EDGE, M_BOX, M_EXACT, M_EXACT_BOX = 0, 1, 2, 3, 4
 METHODS = ("ranger §3 segment-segment", "ranger §2/§4 distal end-point face + edges", "ranger §2 bounding box",
@@ -358,6 +362,41 @@ def _paper_rows(Q, T, E, R, mode, margin, hermes, want, out_d, out_p, out_hit, e
                     out_p[m, p, i] = out9[s + i]
                     out_p[m, p, 3 + i] = out9[3 - s + i]
     return -1
+
+
+# ---------------------------------------------------------------- one pair, from shapes in W
+def _one_body(polytope):
+    from armguard.scene import Scene, compile_scene
+
+    scene = Scene("paper")
+    scene.add_body("obstacle", polytope)
+    cs = compile_scene(scene)
+    F = len(cs.face_vert_start) - 1
+    fn, fd = np.zeros((F, 3)), np.zeros(F)
+    for f in range(F):
+        fn[f], fd[f] = _paper_face(cs.verts[cs.face_verts[cs.face_vert_start[f]:cs.face_vert_start[f + 1]]])
+    c = cs.verts.mean(axis=0)
+    sph = np.array([[*c, np.linalg.norm(cs.verts - c, axis=1).max()]])
+    return cs, fn, fd, sph
+
+
+def paper_capsule_polytope(capsule, polytope, tol=DEFAULT_TOLERANCES):
+    """Ranger §2/§4 for one link ``capsule`` (``p1`` its distal end) against one polytope (W):
+    ``(distance (m), p_WA (3,), p_WB (3,))``."""
+    cs, fn, fd, _ = _one_body(polytope)
+    out = np.zeros(9)
+    d = _face_edge(tuple(capsule.p0), tuple(capsule.p1), float(capsule.radius), 0, np.ascontiguousarray(cs.verts),
+                   cs.elem_face_start, cs.face_vert_start, cs.face_verts, fn, fd, cs.elem_edge_start,
+                   np.ascontiguousarray(cs.edges.reshape(-1, 2)), out, float(tol.length), float(tol.parallel))
+    return float(d), out[0:3].copy(), out[3:6].copy()
+
+
+def hermes_link_obstacle(capsule, polytope, margin: float = 0.0, tol=DEFAULT_TOLERANCES) -> bool:
+    """Hermes's link–obstacle module for one link ``capsule`` against one closed convex polytope (W)."""
+    cs, _, _, sph = _one_body(polytope)
+    return bool(_hermes_hit(tuple(capsule.p0), tuple(capsule.p1), float(capsule.radius) + float(margin), 0,
+                            np.ascontiguousarray(cs.planes.reshape(-1, 4)), cs.elem_plane_start, sph,
+                            float(tol.parallel)))
 
 
 # ---------------------------------------------------------------- the Checker
