@@ -141,7 +141,7 @@ def test_run_plays_the_trapezoid_and_halts_at_the_stopping_distance(state):
     snap = state.snapshot()
     assert snap.player.timeline.t < player.timeline.duration and snap.message_is_error
     assert 0.0 < snap.readout.distance <= 0.05 + 1e-9  # halted within the stand-off, before contact
-    assert "halted" in snap.message
+    assert "stopped by detection" in snap.message and snap.run_state == "stopped by detection"
 
 
 def test_verified_trajectory_time_line(state):

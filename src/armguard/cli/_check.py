@@ -1,8 +1,14 @@
-"""``armguard check SCENE --q ...``: one detector check, printed per category (or as JSON)."""
+"""``armguard check SCENE --q ...``: one detector check, printed per category (or as JSON).
+
+Exit status: 0 clear or warning, 1 collision (as ``armguard verify``), 2 bad input (a value
+outside the joint limits is refused with the joint, the value and the limits in the units typed).
+"""
 
 from __future__ import annotations
 
 import json
+import math
+import sys
 
 import click
 
@@ -15,49 +21,102 @@ def _fmt(p) -> str:
     return "[" + ", ".join(f"{float(x):.4f}" for x in p) + "]"
 
 
+def feature_dict(feature) -> dict | None:
+    """A feature as data: ``{"kind": "face" | "edge" | "vertex" | "surface", "index": int}`` (None stays None)."""
+    if feature is None:
+        return None
+    return {"kind": str(getattr(feature.kind, "value", feature.kind)), "index": int(feature.index)}
+
+
+def report_dict(rep) -> dict:
+    """``rep.to_dict()`` with every feature as :func:`feature_dict` data, not its Python repr."""
+    d = rep.to_dict()
+    if rep.nearest is not None and d.get("nearest") is not None:
+        d["nearest"]["feature"] = feature_dict(rep.nearest.feature)
+    for cat, r in rep.by_category.items():
+        if cat in d.get("by_category", {}):
+            d["by_category"][cat]["feature"] = feature_dict(r.feature)
+    return d
+
+
+def parse_q(sc, q_text: str, deg: bool):
+    """``q`` flat over ``sc.joint_names`` from text; with ``deg`` revolute joints are in degrees.
+
+    A value outside its joint's limits raises click.BadParameter naming the joint, the value
+    and the limits in the units typed.
+    """
+    import numpy as np
+
+    try:
+        q = np.array([float(x) for x in q_text.replace(" ", ",").split(",") if x], dtype=np.float64)
+    except ValueError as exc:
+        raise click.BadParameter(f"expected comma-separated numbers, got {q_text!r}", param_hint="--q") from exc
+    n = len(sc.joint_names)
+    if len(q) != n:
+        raise click.BadParameter(f"expected {n} values (over {', '.join(sc.joint_names)}), got {len(q)}",
+                                 param_hint="--q")
+    if not np.all(np.isfinite(q)):
+        raise click.BadParameter("every value must be finite", param_hint="--q")
+    k = 0
+    for rname, robot in sc.robots.items():
+        types = getattr(robot, "joint_types", None) or ("revolute",) * robot.n_joints
+        for j in range(robot.n_joints):
+            revolute = "prismatic" not in str(getattr(types[j], "value", types[j])).lower()
+            scale = math.pi / 180.0 if (deg and revolute) else 1.0
+            unit = "deg" if (deg and revolute) else ("rad" if revolute else "m")
+            lo, hi = float(robot.lower[j]), float(robot.upper[j])
+            x = q[k] * scale
+            slack = 1e-9
+            if not (lo - slack <= x <= hi + slack):
+                raise click.BadParameter(
+                    f"{rname}/{robot.joint_names[j]} = {q[k]:g} {unit} is outside its limits "
+                    f"[{lo / scale:.6g}, {hi / scale:.6g}] {unit}", param_hint="--q")
+            q[k] = x
+            k += 1
+    return q
+
+
 @main.command("check")
 @click.argument("scene")
 @click.option("--q", "q_text", default=None, help="Joint values over scene.joint_names, comma-separated (default: home).")
+@click.option("--deg", is_flag=True, help="--q gives revolute joints in degrees (prismatic stay in m).")
 @click.option("--threshold", type=float, default=0.05, show_default=True, help="Detection threshold (m).")
 @click.option("--stopping-distance", type=float, default=0.0, show_default=True, help="Stopping distance (m).")
 @click.option("--active", default=None, help="Check only this robot against everything (default: all arms).")
 @click.option("--budget-us", type=float, default=None, help="Anytime mode: time budget in microseconds.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
-def check_cmd(scene, q_text, threshold, stopping_distance, active, budget_us, as_json) -> None:
-    """Check SCENE (a built-in name or a scene file) at one configuration."""
-    import numpy as np
+def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_us, as_json) -> None:
+    """Check SCENE (a built-in name or a scene file) at one configuration.
+
+    Exit status: 0 clear / warning / incomplete, 1 collision, 2 bad input.
+    """
     from rich.console import Console
     from rich.table import Table
 
     from ..detect import Detector
     from ..scene import load_scene
+    from ._compile import warm_up
 
     sc = load_scene(scene)
-    if q_text is None:
-        q = sc.flat_q(sc.default_q())
-    else:
-        try:
-            q = np.array([float(x) for x in q_text.replace(" ", ",").split(",") if x], dtype=np.float64)
-        except ValueError as exc:
-            raise click.BadParameter(f"expected comma-separated numbers, got {q_text!r}", param_hint="--q") from exc
-    console = Console(stderr=True)
-    if not as_json:
-        console.print("[dim]compiling kernels (first run only)...[/dim]")
+    q = sc.flat_q(sc.default_q()) if q_text is None else parse_q(sc, q_text, deg)
+    warm_up()
     det = Detector(sc, threshold=threshold, stopping_distance=stopping_distance, active=active)
     rep = det.check(q, budget_us=budget_us)
+    collided = rep.status.value == "collision"
     if as_json:
-        click.echo(json.dumps(rep.to_dict(), indent=2))
-        return
+        click.echo(json.dumps(report_dict(rep), indent=2))
+        sys.exit(1 if collided else 0)
     out = Console()
     colour = _COLOUR[rep.status.value]
     out.print(f"[bold]{sc.name}[/bold]  status: [bold {colour}]{rep.status.value.upper()}[/bold {colour}]  "
               f"(threshold {threshold} m, {rep.elapsed_us:.1f} µs, {rep.n_evaluated} pairs evaluated)")
     table = Table("category", "distance (m)", "link", "object", "feature", "p_WA (m)", "p_WB (m)")
     for cat, r in rep.by_category.items():
-        feat = "" if r.feature is None else f"{getattr(r.feature.kind, 'value', r.feature.kind)} {r.feature.index}"
+        feat = "" if r.feature is None else str(r.feature)
         style = "red" if r.distance <= max(0.0, stopping_distance) else ("yellow" if r.distance <= threshold else "")
         table.add_row(cat, f"{r.distance:.6f}", r.link, r.obstacle, feat, _fmt(r.p_WA), _fmt(r.p_WB), style=style)
     out.print(table)
     if rep.not_evaluated:
         out.print(f"{len(rep.not_evaluated)} pairs not evaluated (budget); least lower bound "
                   f"{min(n.lower_bound for n in rep.not_evaluated):.4f} m")
+    sys.exit(1 if collided else 0)

@@ -17,26 +17,40 @@ import time
 import numpy as np
 
 from .._errors import ArmguardError
-from ._meshes import mesh_of, quat_wxyz_from_matrix, rigid_motion
+from ._draw import SceneDrawer
+from ._fields import COMMIT_ON_BLUR_HTML, TypedField
 from ._plot import ClearancePlot
 from ._readout import panel_html
 from ._state import ConsoleState
 
-__all__ = ["ConsoleApp", "FPS", "PLOT_PERIOD"]
+__all__ = ["ConsoleApp", "PortInUseError", "FPS", "PLOT_PERIOD"]
 
 FPS = 30.0
 """Rate of the draw / player loop (Hz)."""
 PLOT_PERIOD = 0.2
 """Seconds between clearance-plot marker refreshes while playing."""
-_COLORS = {"body": (150, 160, 175), "link": (235, 150, 60), "payload": (90, 180, 110), "hot": (220, 30, 30)}
 _VIEW_DISTANCE = 2.5
 """Camera distance for the standard views, in scene radii."""
 
 
-def _deg_scale(robot) -> np.ndarray:
-    """Per joint: display units per SI unit (180/pi for revolute, 1 for prismatic)."""
-    types = getattr(robot, "joint_types", None) or ("revolute",) * robot.n_joints
-    return np.array([1.0 if "prismatic" in str(getattr(t, "value", t)).lower() else 180.0 / math.pi for t in types])
+class PortInUseError(ArmguardError):
+    """The console's port is taken: it says so instead of moving to another port."""
+
+
+def _check_port_free(host: str, port: int) -> None:
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        try:
+            s.bind((host, port))
+        except OSError as exc:
+            raise PortInUseError(f"port {port} on {host} is in use ({exc.strerror or exc}); stop what holds it "
+                                 "or pass --port 0 for any free port") from None
+
+
+def _fmt(x: float) -> str:
+    """A value for a typed field: up to 6 significant digits, no trailing zeros."""
+    return f"{float(x):.6g}"
 
 
 class ConsoleApp:
@@ -44,6 +58,8 @@ class ConsoleApp:
 
     ``start()`` opens the server and the draw loop; ``stop()`` closes both.  ``host`` defaults to
     the loopback address: the console exposes arm control and must be opened wider on purpose.
+    A ``port`` already in use is an error (:class:`PortInUseError`), never a silent move to
+    another port; ``port=0`` asks for any free one.
     """
 
     def __init__(self, state: ConsoleState, *, host: str = "127.0.0.1", port: int = 8080) -> None:
@@ -57,7 +73,9 @@ class ConsoleApp:
         self._plot: ClearancePlot | None = None
         self._plot_player = None
         self._plot_last = 0.0
-        self._ws_shown = None
+        self._framed_active = None
+        self._model_generation = 0
+        self._built_generation = 0
 
     @property
     def url(self) -> str:
@@ -68,16 +86,24 @@ class ConsoleApp:
     def start(self) -> "ConsoleApp":
         import viser
 
+        if self.port != 0:
+            _check_port_free(self.host, self.port)
         self.server = viser.ViserServer(host=self.host, port=self.port, verbose=False)
+        if self.port != 0 and self.server.get_port() != self.port:
+            got = self.server.get_port()
+            self.server.stop()
+            raise PortInUseError(f"port {self.port} on {self.host} is in use (the server would have moved to {got}); "
+                                 "stop what holds it or pass --port 0 for any free port")
         self.server.gui.configure_theme(control_width="large", dark_mode=False, show_logo=False)
         self.server.scene.set_up_direction("+z")
         # No shadows: they cost much and add nothing to judging clearances (and software
         # WebGL, as in headless browsers, renders far faster without them).
         self.server.scene.configure_default_lights(cast_shadow=False)
-        self._build_scene()
+        self.drawer = SceneDrawer(self.server, self.state)
+        self.drawer.build()
         self._build_gui()
         self._redraw(force=True)
-        self.server.on_client_connect(lambda client: self._set_view(client, "vista 5"))
+        self.server.on_client_connect(self._on_connect)
         self._thread = threading.Thread(target=self._loop, name="armguard-console", daemon=True)
         self._thread.start()
         return self
@@ -98,12 +124,20 @@ class ConsoleApp:
         finally:
             self.stop()
 
+    def model_reloaded(self) -> None:
+        """Tell the view the state's model was replaced (``--watch``): rebuild the meshes on the next frame."""
+        self._model_generation += 1
+
     def _loop(self) -> None:
         last = time.perf_counter()
         period = 1.0 / FPS
         while not self._stop.is_set():
             now = time.perf_counter()
             try:
+                if self._built_generation != self._model_generation:
+                    self._built_generation = self._model_generation
+                    self.drawer.build()
+                    self._redraw(force=True)
                 self.state.tick(now - last)
                 self._redraw()
             except Exception as exc:  # keep serving; show what went wrong
@@ -123,84 +157,51 @@ class ConsoleApp:
             self._redraw(force=True)
             return None
 
-    # ------------------------------------------------------------------ scene
-    def _build_scene(self) -> None:
-        sc = self.server.scene
-        snap = self.state.snapshot()
-        items = self.state.scene.shapes_at(snap.q)
-        self._items = []
-        lo = np.full(3, np.inf)
-        hi = np.full(3, -np.inf)
-        for k, it in enumerate(items):
-            v, f = mesh_of(it.shape)
-            P0 = np.array(it.shape.core_points)
-            c0 = P0.mean(axis=0)
-            lo, hi = np.minimum(lo, v.min(axis=0)), np.maximum(hi, v.max(axis=0))
-            color = _COLORS.get(it.kind, _COLORS["body"])
-            h = sc.add_mesh_simple(f"/scene/{k:03d}_{it.owner.replace('/', '.')}", v - c0, f, color=color,
-                                   side="double" if len(f) < 8 else "front", position=c0,
-                                   cast_shadow=False, receive_shadow=False)
-            self._items.append((it.owner, it.kind, P0, c0, h, color))
-        if not np.all(np.isfinite(lo)):
-            lo, hi = -np.ones(3), np.ones(3)
-        self._center = 0.5 * (lo + hi)
-        self._radius = max(0.5, 0.5 * float(np.linalg.norm(hi - lo)))
-        sc.add_grid("/grid", width=4 * self._radius, height=4 * self._radius, position=(self._center[0], self._center[1], lo[2]))
-        seg = np.zeros((1, 2, 3), dtype=np.float32)
-        self._line = sc.add_line_segments("/nearest/line", seg, (255, 210, 0), thickness=0.006, visible=False)
-        self._dot_a = sc.add_icosphere("/nearest/a", radius=0.012, color=(255, 210, 0), visible=False)
-        self._dot_b = sc.add_icosphere("/nearest/b", radius=0.012, color=(255, 210, 0), visible=False)
-        self._ws = sc.add_line_segments("/workspace", seg, (60, 120, 220), thickness=0.004, visible=False)
-
-    def _draw_workspace(self, ws) -> None:
-        if ws is None:
-            self._ws.visible = False
-            return
-        lo, hi = ws
-        c = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-        edges = [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7)]
-        self._ws.points = np.array([[c[a], c[b]] for a, b in edges], dtype=np.float32)
-        self._ws.visible = True
-
     # ------------------------------------------------------------------ GUI
+    def _field(self, label: str, text: str, command, hint: str | None = None) -> TypedField:
+        """A typed field whose commit runs ``command(text)``; a refusal reverts the box."""
+        holder = {}
+
+        def commit(typed: str) -> None:
+            f = holder["f"]
+            ok = self._do(lambda: (command(typed), True)[1], on_error=f.revert)
+            if ok:
+                self._redraw(force=True)
+                f.revert()  # show the value in force, as the state formats it
+
+        holder["f"] = f = TypedField(self.server.gui, label, text, commit, hint=hint)
+        return f
+
     def _build_gui(self) -> None:
         gui = self.server.gui
         st = self.state
         snap = st.snapshot()
+        gui.add_html(COMMIT_ON_BLUR_HTML)
         self._panel = gui.add_html(panel_html(snap.readout))
         tabs = gui.add_tab_group()
+        self._fields: dict = {}
 
         # -- control: Ranger's main control panel ------------------------------------------
         with tabs.add_tab("Control"):
             self._w_active = gui.add_dropdown("active arm", st.robots, initial_value=snap.active)
             self._w_mode = gui.add_dropdown("mode", ("joint", "cartesian"), initial_value=snap.mode)
             self._w_detect = gui.add_checkbox("detection", snap.detection)
-            self._w_thr = gui.add_number("threshold (m)", snap.threshold, step=0.001)
-            self._w_stop = gui.add_number("stopping distance (m)", snap.stopping_distance, step=0.001)
+            self._w_backend = gui.add_dropdown("backend", st.backends, initial_value=snap.backend)
+            self._w_compare = gui.add_dropdown("compare with", ("off",) + st.backends, initial_value="off")
+            hint = "typed values apply on Enter or on leaving the field"
+            self._fields["thr"] = self._field("threshold (m)", _fmt(snap.threshold), st.set_threshold, hint)
+            self._fields["stop"] = self._field("stopping distance (m)", _fmt(snap.stopping_distance),
+                                               st.set_stopping_distance, hint)
             self._w_joint_folders = {}
             self._w_joints = {}
             for name in st.robots:
-                robot = st.scene.robots[name]
-                scale = _deg_scale(robot)
-                lo, hi = st.joint_limits(name)
-                with gui.add_folder(f"joints {name}", visible=name == snap.active) as folder:
-                    sliders = []
-                    for j, jn in enumerate(robot.joint_names):
-                        a = float(lo[j] * scale[j]) if math.isfinite(lo[j]) else -360.0
-                        b = float(hi[j] * scale[j]) if math.isfinite(hi[j]) else 360.0
-                        unit = "deg" if scale[j] != 1.0 else "m"
-                        v = float(np.clip(snap.q[name][j] * scale[j], a, b))
-                        s = gui.add_slider(f"{jn} ({unit})", min=a, max=b, step=0.1 if unit == "deg" else 0.001,
-                                           initial_value=v)
-                        s.on_update(self._on_joint(name, j, scale[j]))
-                        sliders.append(s)
-                self._w_joint_folders[name] = folder
-                self._w_joints[name] = (sliders, scale)
+                self._build_joint_panel(name, snap)
             with gui.add_folder("Cartesian", visible=False) as self._w_cart:
-                self._w_pos = gui.add_vector3("tool position (m)", (0.0, 0.0, 0.0), step=0.001)
-                self._w_rpy = gui.add_vector3("tool roll pitch yaw (deg)", (0.0, 0.0, 0.0), step=0.1)
+                self._w_pose_now = gui.add_markdown("")
+                self._w_pos = gui.add_vector3("target position (m)", (0.0, 0.0, 0.0), step=0.001)
+                self._w_rpy = gui.add_vector3("target roll pitch yaw (deg)", (0.0, 0.0, 0.0), step=0.1)
                 b_move = gui.add_button("move tool")
-                b_read = gui.add_button("read tool pose")
+                b_read = gui.add_button("target = tool pose now")
                 self._w_psi = gui.add_slider("arm angle (deg)", min=-180.0, max=180.0, step=0.5, initial_value=0.0)
             with gui.add_folder("workspace box", expand_by_default=False):
                 ws = snap.workspace
@@ -210,6 +211,7 @@ class ConsoleApp:
 
         # -- tests: Ranger's test panel ----------------------------------------------------
         with tabs.add_tab("Tests"):
+            self._w_run_state = gui.add_markdown("")
             if not st.canned_tests():
                 gui.add_markdown("This scene has no canned tests.")
             for name in st.canned_tests():
@@ -232,6 +234,14 @@ class ConsoleApp:
 
         # -- views ---------------------------------------------------------------------------
         with tabs.add_tab("Views"):
+            self._w_follow = gui.add_checkbox("follow the active arm", True,
+                                              hint="frame the active arm and its nearest obstacle; re-frame on a change of arm")
+            gui.add_button("frame the active arm").on_click(lambda e: self._frame(e.client))
+            self._w_shapes = gui.add_checkbox("checked shapes", True, hint="the shapes the distances are computed on")
+            has_urdf = self.drawer.urdf is not None
+            self._w_urdf_vis = gui.add_checkbox("URDF visual geometry", bool(has_urdf and self.drawer.has_visual),
+                                                disabled=not (has_urdf and self.drawer.has_visual))
+            self._w_urdf_col = gui.add_checkbox("URDF collision geometry", False, disabled=not has_urdf)
             for label in VIEWS:
                 gui.add_button(label).on_click(lambda e, lb=label: self._set_view(e.client, lb))
 
@@ -239,16 +249,47 @@ class ConsoleApp:
         self._w_active.on_update(self._from_client(lambda v: st.set_active(v)))
         self._w_mode.on_update(self._from_client(lambda v: st.set_mode(v)))
         self._w_detect.on_update(self._from_client(lambda v: st.set_detection(v)))
-        self._w_thr.on_update(self._from_client(lambda v: st.set_threshold(v)))
-        self._w_stop.on_update(self._from_client(lambda v: st.set_stopping_distance(v)))
+        self._w_backend.on_update(self._from_client(lambda v: st.set_backend(v)))
+        self._w_compare.on_update(self._from_client(lambda v: st.set_compare(None if v == "off" else v)))
         self._w_psi.on_update(self._from_client(lambda v: st.set_arm_angle(math.radians(v))))
         self._w_time.on_update(self._from_client(lambda v: st.timeline_command("seek", v)))
         self._w_transport.on_click(self._from_client(self._transport))
+        self._w_shapes.on_update(lambda e: self.drawer.set_shapes_visible(self._w_shapes.value))
+        for w in (self._w_urdf_vis, self._w_urdf_col):
+            w.on_update(lambda e: self.drawer.set_urdf(self._w_urdf_vis.value, self._w_urdf_col.value))
         b_move.on_click(self._guard(lambda _e: st.move_ee(self._w_pos.value, np.radians(self._w_rpy.value))))
         b_read.on_click(lambda _e: self._read_tool_pose())
         b_ws.on_click(self._guard(lambda _e: st.set_workspace(self._w_ws_lo.value, self._w_ws_hi.value)))
         b_load.on_click(self._guard(lambda _e: st.load_trajectory(self._w_traj.value)))
+        self._pose_shown = None
         self._read_tool_pose()
+
+    def _build_joint_panel(self, name: str, snap) -> None:
+        gui, st = self.server.gui, self.state
+        robot = st.scene.robots[name]
+        units = st.joint_units(name)
+        scale = np.array([180.0 / math.pi if u == "deg" else 1.0 for u in units])
+        lo, hi = st.joint_limits(name)
+        fields, sliders = [], []
+        with gui.add_folder(f"joints {name}", visible=name == snap.active) as folder:
+            for j, jn in enumerate(robot.joint_names):
+                a = float(lo[j] * scale[j]) if math.isfinite(lo[j]) else -360.0
+                b = float(hi[j] * scale[j]) if math.isfinite(hi[j]) else 360.0
+                fields.append(self._field(
+                    f"{jn} ({units[j]})", _fmt(snap.q[name][j] * scale[j]),
+                    lambda text, j=j: st.set_joint(name, j, text, deg=True),
+                    hint=f"{a:g} to {b:g} {units[j]}; applies on Enter or on leaving the field"))
+        with gui.add_folder(f"sliders {name}", visible=name == snap.active, expand_by_default=False) as sfolder:
+            for j, jn in enumerate(robot.joint_names):
+                a = float(lo[j] * scale[j]) if math.isfinite(lo[j]) else -360.0
+                b = float(hi[j] * scale[j]) if math.isfinite(hi[j]) else 360.0
+                v = float(np.clip(snap.q[name][j] * scale[j], a, b))
+                s = gui.add_slider(f"{jn} slider ({units[j]})", min=a, max=b,
+                                   step=0.1 if units[j] == "deg" else 0.001, initial_value=v)
+                s.on_update(self._from_client(lambda x, j=j, k=scale[j]: st.set_joint(name, j, float(x) / k)))
+                sliders.append(s)
+        self._w_joint_folders[name] = (folder, sfolder)
+        self._w_joints[name] = (fields, sliders, scale)
 
     def _guard(self, fn):
         def cb(event):
@@ -263,9 +304,6 @@ class ConsoleApp:
             self._do(fn, event.target.value, on_error=self._sync_widgets)
         return cb
 
-    def _on_joint(self, robot: str, j: int, scale: float):
-        return self._from_client(lambda v: self.state.set_joint(robot, j, float(v) / scale))
-
     def _transport(self, label: str) -> None:
         cmd = {"◀ back": "backward", "pause": "pause", "play ▶": "forward", "slower": "slower", "faster": "faster"}[label]
         self.state.timeline_command(cmd)
@@ -279,15 +317,29 @@ class ConsoleApp:
         self._w_pos.value = tuple(float(x) for x in xyz)
         self._w_rpy.value = tuple(float(math.degrees(x)) for x in rpy)
 
+    # ------------------------------------------------------------------ camera
+    def _on_connect(self, client) -> None:
+        self._frame(client)
+
+    def _frame(self, client) -> None:
+        if client is None:
+            return
+        pos, look = self.drawer.follow_pose(self.state.snapshot())
+        self._place(client, pos, look)
+
     def _set_view(self, client, label: str) -> None:
         if client is None:
             return
-        pos, look = view_pose(label, self._center, self._radius)
+        pos, look = view_pose(label, self.drawer.center, self.drawer.radius)
+        self._place(client, pos, look)
+
+    @staticmethod
+    def _place(client, pos, look) -> None:
         try:
             with client.atomic():
                 client.camera.up_direction = (0.0, 0.0, 1.0)
-                client.camera.position = pos
-                client.camera.look_at = look
+                client.camera.position = tuple(float(x) for x in pos)
+                client.camera.look_at = tuple(float(x) for x in look)
         except Exception:  # the tab closed meanwhile: nothing to do
             pass
 
@@ -297,19 +349,42 @@ class ConsoleApp:
         self._w_active.value = snap.active
         self._w_mode.value = snap.mode
         self._w_detect.value = snap.detection
-        self._w_thr.value = snap.threshold
-        self._w_stop.value = snap.stopping_distance
-        for name, (sliders, scale) in self._w_joints.items():
-            for j, s in enumerate(sliders):
+        self._w_backend.value = snap.backend
+        cmp = snap.compare
+        self._w_compare.value = "off" if cmp is None else cmp.other
+        self._fields["thr"].show(_fmt(snap.threshold))
+        self._fields["stop"].show(_fmt(snap.stopping_distance))
+        for name, (fields, sliders, scale) in self._w_joints.items():
+            for j, (f, s) in enumerate(zip(fields, sliders)):
+                f.show(_fmt(snap.q[name][j] * scale[j]))
                 v = float(np.clip(snap.q[name][j] * scale[j], s.min, s.max))
                 if abs(s.value - v) > 1e-9:
                     s.value = v
-            self._w_joint_folders[name].visible = name == snap.active and snap.mode == "joint"
+            for folder in self._w_joint_folders[name]:
+                folder.visible = name == snap.active and snap.mode == "joint"
         self._w_cart.visible = snap.mode == "cartesian"
+        self._sync_pose(snap)
+        run = snap.run_state
+        self._w_run_state.content = f"**test: {run}**" if run else "test: none running"
         p = snap.player
         if p is not None:
             self._w_time.max = max(p.timeline.duration, 1e-3)
             self._w_time.value = float(min(p.timeline.t, self._w_time.max))
+
+    def _sync_pose(self, snap) -> None:
+        """The Cartesian panel follows the arm: the pose now, and the target set to it when the arm moved."""
+        from ..kinematics._frames import xyz_rpy_from_pose
+
+        xyz, rpy = xyz_rpy_from_pose(snap.ee_pose)
+        key = (snap.active, tuple(np.round(xyz, 6)), tuple(np.round(rpy, 6)))
+        if key == self._pose_shown:
+            return
+        self._pose_shown = key
+        deg = [math.degrees(x) for x in rpy]
+        self._w_pose_now.content = (f"tool now ({snap.active}): x y z = {xyz[0]:+.3f} {xyz[1]:+.3f} {xyz[2]:+.3f} m; "
+                                    f"roll pitch yaw = {deg[0]:+.1f} {deg[1]:+.1f} {deg[2]:+.1f} deg")
+        self._w_pos.value = tuple(float(x) for x in xyz)
+        self._w_rpy.value = tuple(float(x) for x in deg)
 
     def _redraw(self, force: bool = False) -> None:
         snap = self.state.snapshot()
@@ -317,37 +392,18 @@ class ConsoleApp:
             self._refresh_plot(snap, periodic=True)
             return
         self._shown_version = snap.version
-        r = snap.readout
-        items = self.state.scene.shapes_at(snap.q)
         with self.server.atomic():
-            for it, (owner, kind, P0, c0, h, color) in zip(items, self._items):
-                hot = r.within_threshold and owner == r.owner_a
-                want = _COLORS["hot"] if hot else color
-                if tuple(h.color) != want:
-                    h.color = want
-                if kind == "body":
-                    continue
-                R, t = rigid_motion(P0, np.asarray(it.shape.core_points))
-                h.position = R @ c0 + t
-                h.wxyz = quat_wxyz_from_matrix(R)
-            if r.p_WA is not None:
-                col = r.line_color
-                self._line.points = np.array([[r.p_WA, r.p_WB]], dtype=np.float32)
-                self._line.colors = np.array([[col, col]], dtype=np.uint8)
-                self._dot_a.position, self._dot_b.position = r.p_WA, r.p_WB
-                self._dot_a.color = self._dot_b.color = col
-            for h in (self._line, self._dot_a, self._dot_b):
-                h.visible = r.p_WA is not None
-            if snap.workspace is not None:
-                key = tuple(np.concatenate(snap.workspace))
-            else:
-                key = None
-            if key != self._ws_shown:
-                self._draw_workspace(snap.workspace)
-                self._ws_shown = key
-            self._panel.content = panel_html(r, snap.message, error=snap.message_is_error)
+            self.drawer.draw(snap)
+            self._panel.content = panel_html(snap.readout, snap.message, error=snap.message_is_error,
+                                             compare=snap.compare, update_us=snap.update_us, changes=snap.changes)
             self._sync_widgets()
             self._refresh_plot(snap, periodic=False)
+        if snap.active != self._framed_active:
+            first = self._framed_active is None
+            self._framed_active = snap.active
+            if not first and self._w_follow.value:
+                for client in self.server.get_clients().values():
+                    self._frame(client)
 
     def _refresh_plot(self, snap, *, periodic: bool) -> None:
         p = snap.player

@@ -72,7 +72,10 @@ class Readout:
     ``p_WA`` / ``p_WB`` : (3,) float64, m, or None -- the nearest points on the arm link and the
     obstacle, in W.  ``within_threshold`` is True when the nearest distance is <= the threshold
     (the link and the line turn red).  ``owner_a`` is the arm-side owner
-    (``"robot/link"`` or a payload name), the scene item to colour.
+    (``"robot/link"`` or a payload name), the scene item to colour; ``owner_b`` the obstacle's
+    owner and ``feature`` its nearest feature (``armguard.geometry.Feature`` or None).
+    ``elapsed_us`` is the check alone (the detector's or the backend's own call), not the
+    console's whole update.  ``backend`` names who computed it.
     """
 
     status: PanelStatus
@@ -86,6 +89,9 @@ class Readout:
     within_threshold: bool
     rows: tuple[CategoryRow, ...]
     elapsed_us: float
+    backend: str = "analytic"
+    owner_b: str = ""
+    feature: object = None
 
     @property
     def color(self) -> str:
@@ -135,6 +141,8 @@ def readout_from_report(report) -> Readout:
         within_threshold=d <= thr,
         rows=tuple(rows),
         elapsed_us=float(report.elapsed_us),
+        owner_b=str(getattr(near, "b", "")),
+        feature=getattr(near, "feature", None),
     )
 
 
@@ -151,22 +159,50 @@ def _fmt_p(p: np.ndarray | None) -> str:
     return "—" if p is None else "(" + ", ".join(f"{v:+.3f}" for v in p) + ") m"
 
 
-def panel_html(r: Readout, message: str = "", *, error: bool = True) -> str:
+def _fmt_feature(f) -> str:
+    return "" if f is None else f" ({f})"
+
+
+def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=None, update_us: float | None = None,
+               changes: str = "") -> str:
     """The distance panel as HTML: a coloured status block and the per-category table.
 
-    ``message`` is shown under the table, red when ``error`` else grey.  The status block carries ``id="armguard-status"`` and ``data-status`` (the status value) so a
-    browser test can read it.
+    ``message`` is shown under the table, red when ``error`` else grey.  ``compare`` (a
+    ``Comparison`` of :mod:`._backends`) adds the second backend's nearest distance and Δd;
+    ``update_us`` the console's whole update (check, panel, comparison); ``changes`` the last
+    model reload's summary.  The status block carries ``id="armguard-status"``, ``data-status``
+    (the status value), ``data-backend`` and ``data-distance`` (m) so a browser test can read it;
+    the comparison ``id="armguard-compare"`` with ``data-delta`` (m).
     """
     e = html.escape
     fg = "#000" if r.status is PanelStatus.WARNING else "#fff"
+    dist = "" if not math.isfinite(r.distance) else f"{r.distance:.9g}"
+    cycle = f"check ({e(r.backend)}): {r.elapsed_us:.0f} µs"
+    if update_us is not None:
+        cycle += f" &nbsp; console update: {update_us / 1000.0:.1f} ms"
     head = (
-        f'<div id="armguard-status" data-status="{r.status.value}" '
+        f'<div id="armguard-status" data-status="{r.status.value}" data-backend="{e(r.backend)}" '
+        f'data-distance="{dist}" '
         f'style="background:{r.color};color:{fg};padding:8px;border-radius:6px;font-family:sans-serif">'
         f'<div style="font-size:1.2em;font-weight:bold">{e(r.status.value.upper())} &nbsp; {e(_fmt_m(r.distance))}</div>'
-        f"<div>link: {e(r.link or '—')}</div><div>obstacle: {e(r.obstacle or '—')}</div>"
+        f"<div>backend: {e(r.backend)}</div>"
+        f"<div>link: {e(r.link or '—')}</div><div>obstacle: {e(r.obstacle or '—')}{e(_fmt_feature(r.feature))}</div>"
         f"<div>arm point: {e(_fmt_p(r.p_WA))}</div><div>obstacle point: {e(_fmt_p(r.p_WB))}</div>"
-        f"<div>threshold: {e(_fmt_m(r.threshold))} &nbsp; cycle: {r.elapsed_us:.0f} µs</div></div>"
+        f"<div>threshold: {e(_fmt_m(r.threshold))}</div><div style='font-size:0.85em'>{cycle}</div></div>"
     )
+    cmp_html = ""
+    if compare is not None:
+        o = compare.readout
+        delta = "" if not math.isfinite(compare.delta) else f"{compare.delta:.9g}"
+        dd = "—" if not delta else f"{compare.delta * 1000.0:+.4f} mm"
+        cmp_html = (
+            f'<div id="armguard-compare" data-delta="{delta}" data-backend="{e(o.backend)}" '
+            'style="border:2px solid #0aa;border-radius:6px;padding:4px;margin-top:4px;font-family:sans-serif">'
+            f"<div><b>compare {e(o.backend)}</b> (cyan line): {e(_fmt_m(o.distance))} "
+            f"{e(o.link or '—')} / {e(o.obstacle or '—')}</div>"
+            f"<div>Δd = d({e(o.backend)}) − d({e(compare.primary)}) = <b>{e(dd)}</b></div>"
+            f"<div style='font-size:0.85em'>check ({e(o.backend)}): {o.elapsed_us:.0f} µs</div></div>"
+        )
     rows = "".join(
         f"<tr><td>{e(c.category)}</td><td style='text-align:right'>{e(_fmt_m(c.distance))}</td>"
         f"<td>{e(c.link)}</td><td>{e(c.obstacle)}</td></tr>"
@@ -182,4 +218,7 @@ def panel_html(r: Readout, message: str = "", *, error: bool = True) -> str:
         color = "#d62828" if error else "#555"
         msg = (f'<div id="armguard-message" data-error="{str(error).lower()}" '
                f'style="color:{color};font-family:sans-serif;padding-top:4px">{e(message)}</div>')
-    return head + table + msg
+    if changes:
+        msg += (f'<div id="armguard-changes" style="color:#046;font-family:sans-serif;padding-top:4px;'
+                f'font-size:0.85em">{e(changes)}</div>')
+    return head + cmp_html + table + msg

@@ -1,25 +1,100 @@
-"""Start the console on a scene: what ``armguard console SCENE`` runs."""
+"""Start the console on a scene: what ``armguard console SCENE`` runs, with ``--watch``."""
 
 from __future__ import annotations
+
+import threading
+from pathlib import Path
 
 from ._app import ConsoleApp
 from ._state import DEFAULT_THRESHOLD, ConsoleState
 
-__all__ = ["serve"]
+__all__ = ["serve", "load_for_console", "ModelWatcher"]
+
+
+def load_for_console(name):
+    """``(scene, model)`` for a built-in name or a file; ``model`` is None where no Model can be built."""
+    from ..model import load_model
+    from ..scene import load_scene
+
+    try:
+        model = load_model(name)
+    except Exception:
+        return load_scene(name), None
+    return model.scene, model
+
+
+def watched_files(name, model) -> list[Path]:
+    """The files whose change reloads the model: the model's own files, or the scene file."""
+    files = [Path(f) for f in getattr(model, "files", ())] if model is not None else []
+    if not files and Path(str(name)).exists():
+        files = [Path(str(name))]
+    out = []
+    for f in files:
+        out.append(f.resolve())
+        mesh_dir = f.parent / "meshes"
+        if f.suffix == ".urdf" and mesh_dir.is_dir():
+            out.append(mesh_dir.resolve())
+    return out
+
+
+class ModelWatcher:
+    """Reload the console's model when its files change (``watchfiles``); a file that stops parsing
+    leaves the last good model running, with the error in the panel."""
+
+    def __init__(self, app: ConsoleApp, name, files) -> None:
+        self.app = app
+        self.name = name
+        self.files = list(files)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="armguard-watch", daemon=True)
+
+    def start(self) -> "ModelWatcher":
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()
+
+    def reload_now(self) -> str | None:
+        """Load the files again and hand the result to the state; returns the change summary (None on error)."""
+        try:
+            scene, model = load_for_console(self.name)
+            changes = self.app.state.reload(scene, model)
+        except Exception as exc:
+            self.app.state.note_error(f"model not reloaded, the last good one keeps running: "
+                                      f"{type(exc).__name__}: {exc}")
+            return None
+        self.app.model_reloaded()
+        return changes
+
+    def _run(self) -> None:
+        from watchfiles import watch
+
+        paths = sorted({str(p if p.is_dir() else p.parent) for p in self.files})
+        wanted = {str(p) for p in self.files}
+
+        def relevant(_change, path: str) -> bool:
+            return path in wanted or any(path.startswith(w + "/") for w in wanted)
+
+        for _changes in watch(*paths, watch_filter=relevant, stop_event=self._stop, debounce=300):
+            self.reload_now()
 
 
 def serve(scene, *, host: str = "127.0.0.1", port: int = 8080, threshold: float = DEFAULT_THRESHOLD,
-          block: bool = True) -> ConsoleApp:
-    """Serve the console for ``scene`` (a Scene or a built-in / file name for ``load_scene``).
+          block: bool = True, watch: bool = False) -> ConsoleApp:
+    """Serve the console for ``scene`` (a Scene or a built-in / file name).
 
-    Binds ``host`` (loopback by default) on ``port`` (0: a free port).  With ``block`` it serves
-    until interrupted; otherwise it returns the started :class:`ConsoleApp` (call ``stop()``).
+    Binds ``host`` (loopback by default) on ``port`` (0: a free port; one in use raises
+    PortInUseError).  ``watch`` (names only) reloads the model when its files change.  With
+    ``block`` it serves until interrupted; otherwise it returns the started :class:`ConsoleApp`.
     """
-    if isinstance(scene, str):
-        from ..scene import load_scene
-
-        scene = load_scene(scene)
-    app = ConsoleApp(ConsoleState(scene, threshold=threshold), host=host, port=port).start()
+    model = None
+    name = scene
+    if isinstance(scene, (str, Path)):
+        scene, model = load_for_console(scene)
+    app = ConsoleApp(ConsoleState(scene, threshold=threshold, model=model), host=host, port=port).start()
+    if watch and isinstance(name, (str, Path)):
+        app.watcher = ModelWatcher(app, name, watched_files(name, model)).start()
     if block:
         app.serve_forever()
     return app

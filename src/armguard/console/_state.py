@@ -17,11 +17,14 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._backends import BackendView, compare_readouts
+from ._motion import MotionMixin
 from ._parse import ConsoleInputError, parse_number, parse_numbers
 from ._readout import Readout, readout_from_report, readout_off
 from ._timeline import Timeline
@@ -60,7 +63,12 @@ class Snapshot:
     """A consistent copy of what the console shows (taken under the state's lock).
 
     ``q``: robot -> (n_joints,) float64 (rad or m); ``readout`` the distance panel; ``version``
-    increases with every change.
+    increases with every change.  ``backend`` the panel's backend, ``compare`` a
+    ``Comparison`` with the second backend (or None); ``update_us`` the console's whole update
+    (the check, the panel, the comparison), beside ``readout.elapsed_us``, the check alone;
+    ``ee_pose`` (4, 4) the active arm's tool pose now; ``run_state`` of the canned test:
+    ``""``, ``"running"``, ``"done"``, ``"stopped"`` (by the operator) or ``"stopped by
+    detection"``; ``changes`` what the last model reload changed.
     """
 
     version: int
@@ -76,13 +84,19 @@ class Snapshot:
     message_is_error: bool
     player: Player | None
     arm_angle: float
+    backend: str = "analytic"
+    compare: object = None
+    update_us: float = 0.0
+    ee_pose: np.ndarray | None = None
+    run_state: str = ""
+    changes: str = ""
 
 
 def _duration_of(trajectory) -> float:
     return float(trajectory.duration)
 
 
-class ConsoleState:
+class ConsoleState(MotionMixin):
     """The operator console's state and commands (thread-safe; no GUI).
 
     Parameters
@@ -94,10 +108,13 @@ class ConsoleState:
     stopping_distance : float, m
         Ranger's stand-off distance: a canned run halts when the arm comes this close.
     tol : Tolerances
+    model : armguard.model.Model, optional
+        The scene's model: with it, every installed backend can compute the panel
+        (:meth:`set_backend`) and a second one be compared (:meth:`set_compare`).
     """
 
     def __init__(self, scene, *, threshold: float = DEFAULT_THRESHOLD, stopping_distance: float = 0.0,
-                 tol: Tolerances = DEFAULT_TOLERANCES) -> None:
+                 tol: Tolerances = DEFAULT_TOLERANCES, model=None) -> None:
         if not scene.robots:
             raise ConsoleInputError(f"scene {scene.name!r} has no robot to drive")
         self._lock = threading.RLock()
@@ -116,6 +133,14 @@ class ConsoleState:
         self._version = 0
         self._detector = None
         self._readout = readout_off(self._threshold)
+        self._model = model
+        self._views: dict = {}
+        self._backend = "analytic"
+        self._compare_with: str | None = None
+        self._comparison = None
+        self._update_us = 0.0
+        self._run_state = ""
+        self._changes = ""
         self._rebuild_detector()
         self._evaluate()
 
@@ -154,6 +179,12 @@ class ConsoleState:
                 message_is_error=self._message_is_error,
                 player=self._player,
                 arm_angle=self._arm_angle,
+                backend=self._backend,
+                compare=self._comparison,
+                update_us=self._update_us,
+                ee_pose=np.array(self._robot(self._active).link_pose(self._q[self._active])),
+                run_state=self._run_state,
+                changes=self._changes,
             )
 
     def joint_limits(self, robot: str) -> tuple[np.ndarray, np.ndarray]:
@@ -182,11 +213,108 @@ class ConsoleState:
 
     def _evaluate(self) -> None:
         """Recompute the panel at the current configuration and bump the version (lock held)."""
+        t0 = time.perf_counter()
+        self._comparison = None
         if self._detection:
-            self._readout = readout_from_report(self._detector.check(self._q))
+            self._readout = self._readout_of(self._backend)
+            if self._compare_with is not None:
+                self._comparison = compare_readouts(self._readout, self._readout_of(self._compare_with))
         else:
             self._readout = readout_off(self._threshold)
+        self._update_us = (time.perf_counter() - t0) * 1e6
         self._version += 1
+
+    def _readout_of(self, backend: str):
+        if backend == "analytic":
+            return readout_from_report(self._detector.check(self._q))
+        view = self._views.get(backend)
+        if view is None:
+            view = self._views[backend] = BackendView(self._model, backend)
+        return view.readout(self._scene, self._q, self._active, threshold=self._threshold,
+                            stopping_distance=self._stopping, contact=self._tol.length)
+
+    # ------------------------------------------------------------------ model updates
+    @property
+    def model(self):
+        return self._model
+
+    def reload(self, scene, model=None) -> str:
+        """Replace the scene (and model) by a new version, keeping the configuration; returns what changed.
+
+        Arms whose joints are unchanged keep their values (clipped into the new limits); the active
+        arm, settings and backends stay when they still exist.  Any failure leaves the old model
+        running and raises.
+        """
+        from ._reload import carry_q, describe_changes
+
+        if not scene.robots:
+            raise ConsoleInputError(f"scene {scene.name!r} has no robot to drive")
+        with self._lock:
+            old = (self._scene, self._model, self._q, self._active, self._detector, self._views, self._backend,
+                   self._compare_with)
+            new_scene = scene.copy()
+            new_q = carry_q(self._q, self._scene, new_scene)
+            try:
+                changes = describe_changes(self._scene, new_scene, self._q, new_q, self._model, model)
+                self._scene, self._model, self._q, self._views = new_scene, model, new_q, {}
+                if self._active not in new_scene.robots:
+                    self._active = next(iter(new_scene.robots))
+                if self._backend not in self.backends:
+                    self._backend = "analytic"
+                if self._compare_with not in self.backends:
+                    self._compare_with = None
+                self._stop_player()
+                self._rebuild_detector()
+                self._changes = f"model reloaded: {changes}"
+                self._changed(self._changes)
+            except Exception:
+                (self._scene, self._model, self._q, self._active, self._detector, self._views, self._backend,
+                 self._compare_with) = old
+                self._evaluate()
+                raise
+            return changes
+
+    # ------------------------------------------------------------------ backends
+    @property
+    def backends(self) -> tuple[str, ...]:
+        """The backends the panel can use: ``analytic`` (the detector) and, with a model, every installed one."""
+        if self._model is None:
+            return ("analytic",)
+        from ..backends import available
+
+        return ("analytic",) + tuple(b for b in available() if b != "analytic")
+
+    def _check_backend(self, name: str) -> str:
+        if name not in self.backends:
+            raise ConsoleInputError(f"backend: {name!r} is not installed here; backends are {list(self.backends)}")
+        return name
+
+    def set_backend(self, name: str) -> None:
+        """Compute the panel with backend ``name`` (the configuration and settings stay)."""
+        with self._lock:
+            self._check_backend(name)
+            old = self._backend
+            self._backend = name
+            try:
+                self._changed(f"backend: {name}")
+            except Exception:
+                self._backend = old
+                self._evaluate()
+                raise
+
+    def set_compare(self, name: str | None) -> None:
+        """Compare mode: also compute the nearest pair with backend ``name`` (None: off) and show Δd."""
+        with self._lock:
+            if name is not None:
+                self._check_backend(name)
+            old = self._compare_with
+            self._compare_with = name
+            try:
+                self._changed("" if name is None else f"comparing {self._backend} with {name}")
+            except Exception:
+                self._compare_with = old
+                self._evaluate()
+                raise
 
     def _changed(self, message: str = "") -> None:
         self._message = message
@@ -278,18 +406,35 @@ class ConsoleState:
             self._changed()
 
     # ------------------------------------------------------------------ joint control
-    def set_joint(self, robot: str, index: int, value) -> float:
-        """Set one joint (rad or m; a number or its text); outside its limits raises."""
+    def joint_units(self, robot: str) -> tuple[str, ...]:
+        """Per joint of ``robot``, the unit the operator types: ``"deg"`` (revolute) or ``"m"`` (prismatic)."""
+        r = self._robot(robot)
+        types = getattr(r, "joint_types", None) or ("revolute",) * r.n_joints
+        return tuple("m" if "prismatic" in str(getattr(t, "value", t)).lower() else "deg" for t in types)
+
+    def set_joint(self, robot: str, index: int, value, *, deg: bool = False) -> float:
+        """Set one joint (rad or m; a number or its text); outside its limits raises.
+
+        With ``deg`` a revolute joint's value is in degrees and a refusal names the limits in
+        degrees (the console's joint fields); prismatic joints stay in m.
+        """
         with self._lock:
             r = self._robot(robot)
             if not 0 <= int(index) < r.n_joints:
                 raise ConsoleInputError(f"{robot}: joint index {index} out of range 0..{r.n_joints - 1}")
-            x = parse_number(value, f"{robot}/{r.joint_names[int(index)]}")
+            j = int(index)
+            in_deg = deg and self.joint_units(robot)[j] == "deg"
+            unit = "deg" if in_deg else ("m" if self.joint_units(robot)[j] == "m" else "rad")
+            field = f"{robot}/{r.joint_names[j]}"
+            k = 180.0 / math.pi if in_deg else 1.0
+            lo, hi = float(r.lower[j]) * k, float(r.upper[j]) * k
+            slack = self._tol.joint_limit * k
+            x = parse_number(value, field, lo=lo - slack, hi=hi + slack, unit=unit)
             q = self._q[robot].copy()
-            q[int(index)] = x
+            q[j] = x / k
             self._q[robot] = self._checked_q(robot, q)
             self._changed()
-            return float(self._q[robot][int(index)])
+            return float(self._q[robot][j])
 
     def set_joints(self, robot: str, values, *, scale: float = 1.0) -> np.ndarray:
         """Set every joint of ``robot`` from numbers or text (times ``scale``, e.g. pi/180 for degrees)."""
@@ -307,81 +452,6 @@ class ConsoleState:
             new = {name: self._checked_q(name, v) for name, v in parts.items()}
             self._q = new
             self._changed()
-
-    # ------------------------------------------------------------------ Cartesian control
-    def move_ee(self, p_WE, rpy_WE=None) -> np.ndarray:
-        """Cartesian control: put the active arm's tool at ``p_WE`` (3, m) with roll-pitch-yaw ``rpy_WE`` (3, rad).
-
-        Solved by the arm's inverse kinematics seeded at the current configuration; no solution
-        raises ConsoleInputError and leaves the arm where it was.  Returns the new joints.
-        """
-        from ..kinematics._frames import pose_from_xyz_rpy, xyz_rpy_from_pose
-
-        p = parse_numbers(p_WE, "end-effector position", 3, unit="m")
-        with self._lock:
-            name = self._active
-            robot = self._robot(name)
-            if rpy_WE is None:
-                rpy = np.asarray(xyz_rpy_from_pose(robot.link_pose(self._q[name]))[1], dtype=np.float64)
-            else:
-                rpy = parse_numbers(rpy_WE, "end-effector orientation", 3, unit="rad")
-            X = pose_from_xyz_rpy(p, rpy)
-            q = self._solve_ik(robot, X, self._q[name])
-            self._q[name] = q
-            self._changed()
-            return q.copy()
-
-    def _solve_ik(self, robot, X_WE, q_seed) -> np.ndarray:
-        from .._errors import KinematicsError
-
-        try:
-            res = robot.inverse_kinematics(X_WE, q_seed=q_seed, rng=np.random.default_rng(0), tol=self._tol)
-        except KinematicsError as exc:
-            raise ConsoleInputError(f"Cartesian move: {exc}; arm kept where it was") from None
-        q = getattr(res, "q", None)
-        status = getattr(getattr(res, "status", None), "name", "")
-        if q is None or (status and status != "SUCCESS"):
-            raise ConsoleInputError(
-                f"Cartesian move: no inverse-kinematics solution within the joint limits ({status.lower() or 'failed'}); "
-                "arm kept where it was"
-            )
-        return self._checked_q(robot.name, q)
-
-    def set_arm_angle(self, value) -> float:
-        """Move the active 7-DOF arm's elbow by the self-motion ("arm angle", rad) keeping the tool pose.
-
-        The arm angle of Ranger's 7-DOF arms parametrises the self-motion that leaves the
-        end-effector pose fixed.  Here it is followed as a null-space motion: from the current
-        value to the new one in steps of at most ``ARM_ANGLE_STEP`` rad along the unit null-space
-        direction of the 6xN tool Jacobian (sign kept continuous between steps), each step
-        corrected back onto the tool pose by inverse kinematics.  For arms with fewer than seven
-        joints there is no self-motion and this raises.
-        """
-        psi = parse_number(value, "arm angle", lo=-math.pi, hi=math.pi, unit="rad")
-        with self._lock:
-            name = self._active
-            robot = self._robot(name)
-            if robot.n_joints < 7:
-                raise ConsoleInputError(f"arm angle: {name} has {robot.n_joints} joints; only 7-DOF arms have one")
-            q = self._q[name].copy()
-            X_target = robot.link_pose(q)
-            delta = psi - self._arm_angle
-            n_steps = max(1, int(math.ceil(abs(delta) / ARM_ANGLE_STEP)))
-            step = delta / n_steps
-            prev = None
-            for _ in range(n_steps):
-                J = np.asarray(robot.jacobian(q))
-                _, _, Vt = np.linalg.svd(J)
-                v = Vt[-1]
-                if prev is not None and float(v @ prev) < 0.0:
-                    v = -v
-                prev = v
-                q = q + step * v
-                q = self._solve_ik(robot, X_target, q)
-            self._q[name] = q
-            self._arm_angle = psi
-            self._changed()
-            return psi
 
     # ------------------------------------------------------------------ canned tests
     def canned_tests(self) -> tuple[str, ...]:
@@ -405,6 +475,7 @@ class ConsoleState:
             self._detection = True
             self._detector.set_active(test.robot)
             self._detector.set_threshold(self._threshold)
+            self._run_state = ""
             self._changed(f"setup {name}: {test.description}".rstrip(": "))
 
     def run(self, name: str) -> Player:
@@ -416,6 +487,7 @@ class ConsoleState:
             tl = Timeline(_duration_of(traj))
             self._player = Player("run", name, test.robot, traj, tl, np.zeros(0), np.zeros(0))
             tl.play()
+            self._run_state = "running"
             self._changed(f"running {name}")
             return self._player
 
@@ -469,8 +541,14 @@ class ConsoleState:
     def stop(self) -> None:
         """Drop the current run or trajectory (the arms stay where they are)."""
         with self._lock:
+            p = self._player
+            was_running = p is not None and p.kind == "run" and self._run_state == "running"
             self._stop_player()
-            self._changed()
+            if was_running:
+                self._run_state = "stopped"
+                self._changed(f"{p.name}: stopped by the operator")
+            else:
+                self._changed()
 
     def _apply_player_time(self, t: float) -> None:
         p = self._player
@@ -511,13 +589,18 @@ class ConsoleState:
             self._apply_player_time(t)
             self._evaluate()
             r = self._readout
-            if p.kind == "run" and self._detection and self._stopping > 0.0 and r.distance <= self._stopping:
+            if p.kind != "run":
+                return True
+            if self._detection and self._stopping > 0.0 and r.distance <= self._stopping:
                 p.timeline.pause()
+                self._run_state = "stopped by detection"
                 self._message_is_error = True
-                self._message = (f"{p.name}: halted at t = {t:.2f} s, {r.link} within the stopping distance "
-                                 f"({r.distance * 1000:.1f} mm of {r.obstacle})")
+                self._message = (f"{p.name}: stopped by detection at t = {t:.2f} s, {r.link} within the stopping "
+                                 f"distance {self._stopping * 1000:.0f} mm: {r.distance * 1000:.1f} mm of {r.obstacle}")
+            elif not p.timeline.playing or t >= p.timeline.duration:
+                p.timeline.pause()
+                self._run_state = "done"
+                self._message_is_error = False
+                self._message = f"{p.name}: done at t = {t:.2f} s"
             return True
 
-
-ARM_ANGLE_STEP = 0.05
-"""Largest arm-angle increment (rad) of one null-space step in :meth:`ConsoleState.set_arm_angle`."""

@@ -1,0 +1,236 @@
+"""The console's 3-D view on viser: shapes, the nearest-obstacle lines, the feature, the URDF robots.
+
+:class:`SceneDrawer` draws each checked shape once as a mesh and afterwards only moves and
+recolours it.  The nearest-obstacle line is drawn in screen-space pixels (:data:`LINE_PX`), so it
+keeps its width at every zoom, also in software WebGL, with a marker sphere at each nearest point
+scaled to the scene; a compared backend's line is cyan, drawn beside the first (shifted
+sideways by :data:`COMPARE_OFFSET` scene radii, so two equal answers stay two visible lines).
+The nearest link is red within the threshold; the obstacle's nearest face or edge is outlined
+in magenta.  Robots from a URDF are also drawn from it (viser's ``ViserUrdf`` over yourdfpy):
+its visual geometry where it has one, its collision geometry as a toggle.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ._meshes import mesh_of, quat_wxyz_from_matrix, rigid_motion
+from ._view import feature_segments, follow_view
+
+__all__ = ["SceneDrawer", "LINE_PX", "COMPARE_OFFSET", "COLORS", "COMPARE_COLOR", "FEATURE_COLOR"]
+
+COLORS = {"body": (150, 160, 175), "link": (235, 150, 60), "payload": (90, 180, 110), "hot": (230, 20, 20),
+          "active": (245, 120, 30)}
+COMPARE_COLOR = (0, 200, 220)
+FEATURE_COLOR = (230, 0, 230)
+LINE_PX = 5.0
+"""Width of the nearest-obstacle line (screen pixels)."""
+MARKER_FRACTION = 0.02
+"""Radius of the nearest-point markers, in scene radii."""
+COMPARE_OFFSET = 0.015
+"""Sideways shift of the compared backend's line, in scene radii."""
+
+
+def _strip_collision_checking(text: str) -> str:
+    import re
+
+    return re.sub(r"<collision_checking>.*?</collision_checking>", "", text, flags=re.S)
+
+
+class SceneDrawer:
+    """Draw a console state's scene on a viser server (call :meth:`build` once, :meth:`draw` per change)."""
+
+    def __init__(self, server, state) -> None:
+        self.server = server
+        self.state = state
+        self.urdf = None
+        self._urdf_index = None
+        self._handles = []
+
+    # ------------------------------------------------------------------ build
+    def build(self) -> None:
+        sc = self.server.scene
+        for h in self._handles:
+            try:
+                h.remove()
+            except Exception:
+                pass
+        self._handles = []
+        snap = self.state.snapshot()
+        items = self.state.scene.shapes_at(snap.q)
+        self.items = []
+        lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+        for k, it in enumerate(items):
+            v, f = mesh_of(it.shape)
+            P0 = np.array(it.shape.core_points)
+            c0 = P0.mean(axis=0)
+            lo, hi = np.minimum(lo, v.min(axis=0)), np.maximum(hi, v.max(axis=0))
+            color = COLORS.get(it.kind, COLORS["body"])
+            h = sc.add_mesh_simple(f"/shapes/{k:03d}_{it.owner.replace('/', '.')}", v - c0, f, color=color,
+                                   side="double" if len(f) < 8 else "front", position=c0,
+                                   cast_shadow=False, receive_shadow=False)
+            self._handles.append(h)
+            self.items.append([it.owner, it.kind, P0, c0, h, color, None])
+        if not np.all(np.isfinite(lo)):
+            lo, hi = -np.ones(3), np.ones(3)
+        self.center = 0.5 * (lo + hi)
+        self.radius = max(0.5, 0.5 * float(np.linalg.norm(hi - lo)))
+        self._handles.append(sc.add_grid("/grid", width=4 * self.radius, height=4 * self.radius,
+                                         position=(self.center[0], self.center[1], lo[2])))
+        seg = np.zeros((1, 2, 3), dtype=np.float32)
+        mr = MARKER_FRACTION * self.radius
+        self.lines = {}
+        for key, col in (("primary", (255, 210, 0)), ("compare", COMPARE_COLOR)):
+            line = sc.add_line_segments(f"/nearest/{key}/line", seg, col, thickness=LINE_PX,
+                                        thickness_units="screen", visible=False)
+            a = sc.add_icosphere(f"/nearest/{key}/a", radius=mr, color=col, visible=False)
+            b = sc.add_icosphere(f"/nearest/{key}/b", radius=mr, color=col, visible=False)
+            self.lines[key] = (line, a, b)
+            self._handles += [line, a, b]
+        self.feature = sc.add_line_segments("/nearest/feature", seg, FEATURE_COLOR, thickness=LINE_PX - 1.0,
+                                            thickness_units="screen", visible=False)
+        self.ws = sc.add_line_segments("/workspace", seg, (60, 120, 220), thickness=2.0, thickness_units="screen",
+                                       visible=False)
+        self._handles += [self.feature, self.ws]
+        self._ws_shown = None
+        self._build_urdf()
+
+    def _build_urdf(self) -> None:
+        """Load the model's URDF into viser (hidden until asked for); any failure leaves it out."""
+        if self.urdf is not None:
+            try:
+                self.urdf.remove()
+            except Exception:
+                pass
+        self.urdf = None
+        model = self.state.model
+        files = [Path(f) for f in getattr(model, "files", ()) if str(f).endswith(".urdf")]
+        if not files:
+            return
+        try:
+            import yourdfpy
+            from viser.extras import ViserUrdf
+
+            path = files[0]
+            text = _strip_collision_checking(path.read_text(encoding="utf-8"))
+            urdf = yourdfpy.URDF.load(io.BytesIO(text.encode("utf-8")), load_meshes=True,
+                                      build_collision_scene_graph=True, load_collision_meshes=True,
+                                      mesh_dir=str(path.parent))
+            self.urdf = ViserUrdf(self.server, urdf, root_node_name="/urdf", load_meshes=True,
+                                  load_collision_meshes=True, collision_mesh_color_override=(0.55, 0.6, 0.7, 0.6))
+            names = list(self.urdf.get_actuated_joint_names())
+            pin_names = list(model.joint_names)
+            self._urdf_index = [pin_names.index(n) if n in pin_names else -1 for n in names]
+            self.has_visual = any(link.visuals for link in urdf.robot.links)
+            self.set_urdf(False, False)
+        except Exception as exc:  # display only: the console runs without it
+            self.state.note_error(f"URDF display unavailable: {type(exc).__name__}: {exc}")
+            self.urdf = None
+
+    def set_urdf(self, visual: bool, collision: bool) -> None:
+        if self.urdf is None:
+            return
+        if self.has_visual:
+            self.urdf.show_visual = bool(visual)
+        self.urdf.show_collision = bool(collision)
+
+    def set_shapes_visible(self, on: bool) -> None:
+        for item in self.items:
+            item[4].visible = bool(on)
+
+    # ------------------------------------------------------------------ draw
+    def draw(self, snap) -> None:
+        r = snap.readout
+        items = self.state.scene.shapes_at(snap.q)
+        for it, item in zip(items, self.items):
+            owner, kind, P0, c0, h, color, _ = item
+            want = COLORS["hot"] if (r.within_threshold and owner == r.owner_a) else color
+            if item[6] != want:
+                h.color = want
+                item[6] = want
+            if kind == "body":
+                continue
+            R, t = rigid_motion(P0, np.asarray(it.shape.core_points))
+            h.position = R @ c0 + t
+            h.wxyz = quat_wxyz_from_matrix(R)
+        self._line("primary", r)
+        cmp = snap.compare
+        self._line("compare", None if cmp is None else cmp.readout, offset=True, primary=r)
+        self._draw_feature(r, items)
+        self._draw_workspace(snap.workspace)
+        if self.urdf is not None and self._urdf_index is not None:
+            qp = np.asarray(self.state.model.pin_q(self.state.scene.flat_q(snap.q)), dtype=np.float64)
+            cfg = np.array([qp[i] if i >= 0 else 0.0 for i in self._urdf_index])
+            self.urdf.update_cfg(cfg)
+
+    def _line(self, key: str, r, *, offset: bool = False, primary=None) -> None:
+        line, a, b = self.lines[key]
+        show = r is not None and r.p_WA is not None
+        if show:
+            pa, pb = np.asarray(r.p_WA, dtype=np.float64), np.asarray(r.p_WB, dtype=np.float64)
+            if offset:
+                pa, pb = pa + self._side(pa, pb), pb + self._side(pa, pb)
+            if key == "primary":
+                col = r.line_color
+                line.colors = np.array([[col, col]], dtype=np.uint8)
+                a.color = b.color = col
+            line.points = np.array([[pa, pb]], dtype=np.float32)
+            a.position, b.position = tuple(pa), tuple(pb)
+        for h in (line, a, b):
+            if h.visible != show:
+                h.visible = show
+
+    def _side(self, pa, pb) -> np.ndarray:
+        d = pb - pa
+        n = np.cross(d, [0.0, 0.0, 1.0])
+        if np.linalg.norm(n) < 1e-9 * max(1.0, np.linalg.norm(d)):
+            n = np.cross(d, [1.0, 0.0, 0.0])
+        if np.linalg.norm(n) < 1e-12:
+            n = np.array([1.0, 0.0, 0.0])
+        return COMPARE_OFFSET * self.radius * n / np.linalg.norm(n)
+
+    def _draw_feature(self, r, items) -> None:
+        seg = np.zeros((0, 2, 3))
+        if r.feature is not None and r.owner_b and r.p_WB is not None:
+            shapes = [it.shape for it in items if it.owner == r.owner_b]
+            if shapes:
+                shape = min(shapes, key=lambda s: float(np.min(np.linalg.norm(
+                    np.asarray(s.core_points) - r.p_WB, axis=1))))
+                seg = feature_segments(shape, r.feature)
+        if len(seg):
+            self.feature.points = seg.astype(np.float32)
+            self.feature.colors = np.tile(np.array(FEATURE_COLOR, dtype=np.uint8), (len(seg), 2, 1))
+        show = bool(len(seg))
+        if self.feature.visible != show:
+            self.feature.visible = show
+
+    def _draw_workspace(self, ws) -> None:
+        key = None if ws is None else tuple(np.concatenate(ws))
+        if key == self._ws_shown:
+            return
+        self._ws_shown = key
+        if ws is None:
+            self.ws.visible = False
+            return
+        lo, hi = ws
+        c = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+        edges = [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7)]
+        self.ws.points = np.array([[c[a], c[b]] for a, b in edges], dtype=np.float32)
+        self.ws.visible = True
+
+    # ------------------------------------------------------------------ camera
+    def follow_pose(self, snap, fov_rad: float = math.radians(75.0)):
+        """``(position, look_at)`` framing the active arm and its nearest obstacle point."""
+        pts = [np.asarray(it.shape.core_points) for it in self.state.scene.shapes_at(snap.q)
+               if it.robot == snap.active]
+        r = snap.readout
+        line = None
+        if r.p_WB is not None:
+            pts.append(np.asarray(r.p_WB).reshape(1, 3))
+            line = np.array([r.p_WA, r.p_WB])
+        P = np.concatenate(pts) if pts else self.center.reshape(1, 3)
+        return follow_view(P, self.center, line=line, fov_rad=fov_rad)

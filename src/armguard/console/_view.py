@@ -1,0 +1,135 @@
+"""What the 3-D view draws beyond the meshes: the obstacle's nearest feature, the camera framing.
+
+Plain NumPy, no viser: :func:`feature_segments` gives the edges of a face / an edge of a shape to
+highlight (a vertex or a curved surface gives none: the nearest-point marker shows it);
+:func:`follow_view` the camera that frames the active arm and what it is nearest to, looking
+from the arm's side of the scene so the arm is not hidden behind the vehicle.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..geometry import Box, ConvexPolyhedron, FeatureKind, Polygon, Prism
+
+__all__ = ["feature_segments", "follow_view", "FOLLOW_ELEVATION_DEG", "FOLLOW_MARGIN", "FOLLOW_SHIFT"]
+
+FOLLOW_ELEVATION_DEG = 30.0
+"""Camera elevation above the horizontal of the follow view."""
+FOLLOW_MARGIN = 2.0
+"""The follow view's camera distance, in multiples of the distance that just fits the framed points."""
+FOLLOW_SHIFT = 0.5
+"""How far the follow view's look-at point moves to the camera's right (framed-sphere radii)."""
+
+
+def _loop(ix) -> list[tuple[int, int]]:
+    ix = [int(i) for i in ix]
+    return [(ix[k], ix[(k + 1) % len(ix)]) for k in range(len(ix))]
+
+
+def _box_face(box: Box, k: int) -> list[tuple[int, int]]:
+    from ..geometry._feature import BOX_EDGES
+
+    V = np.asarray(box.vertices)
+    c, R = np.asarray(box.center), np.asarray(box.rotation)
+    s = (V - c) @ R  # local coordinates: each vertex's sign on each axis
+    axis, sign = k // 2, (1.0 if k % 2 else -1.0)
+    on = {i for i in range(8) if s[i, axis] * sign > 0.0}
+    return [(int(a), int(b)) for a, b in BOX_EDGES if a in on and b in on]
+
+
+def feature_segments(shape, feature) -> np.ndarray:
+    """``(k, 2, 3) float64`` m in W: the edges of ``feature`` of ``shape`` (a face's outline, an edge).
+
+    Indices follow :mod:`armguard.geometry._feature`.  Vertices and curved surfaces give ``(0, 2, 3)``.
+    """
+    empty = np.zeros((0, 2, 3))
+    if feature is None or feature.kind in (FeatureKind.VERTEX, FeatureKind.SURFACE):
+        return empty
+    k = int(feature.index)
+    pairs: list[tuple[int, int]] = []
+    if isinstance(shape, Box):
+        from ..geometry._feature import BOX_EDGES
+
+        V = np.asarray(shape.vertices)
+        if feature.kind is FeatureKind.EDGE and 0 <= k < len(BOX_EDGES):
+            pairs = [tuple(BOX_EDGES[k])]
+        elif feature.kind is FeatureKind.FACE and 0 <= k < 6:
+            pairs = _box_face(shape, k)
+    elif isinstance(shape, Prism):
+        V = np.asarray(shape.core_points)
+        n = len(V) // 2
+        if feature.kind is FeatureKind.FACE:
+            if k < n:
+                pairs = _loop([k, (k + 1) % n, n + (k + 1) % n, n + k])
+            elif k == n:
+                pairs = _loop(range(n))
+            elif k == n + 1:
+                pairs = _loop(range(n, 2 * n))
+        elif feature.kind is FeatureKind.EDGE:
+            if k < n:
+                pairs = [(k, (k + 1) % n)]
+            elif k < 2 * n:
+                pairs = [(k, n + (k - n + 1) % n)]
+            elif k < 3 * n:
+                pairs = [(k - 2 * n, k - n)]
+    elif isinstance(shape, ConvexPolyhedron):
+        V = np.asarray(shape.vertices)
+        if feature.kind is FeatureKind.FACE and 0 <= k < len(shape.faces):
+            pairs = _loop(shape.faces[k])
+        elif feature.kind is FeatureKind.EDGE and 0 <= k < len(shape.edges):
+            pairs = [tuple(shape.edges[k])]
+    elif isinstance(shape, Polygon):
+        V = np.asarray(shape.vertices)
+        n = len(V)
+        if feature.kind is FeatureKind.FACE:
+            pairs = _loop(range(n))
+        elif feature.kind is FeatureKind.EDGE and 0 <= k < n:
+            pairs = [(k, (k + 1) % n)]
+    else:
+        return empty
+    if not pairs:
+        return empty
+    return np.array([[V[a], V[b]] for a, b in pairs], dtype=np.float64)
+
+
+def follow_view(points, scene_center, *, line=None, fov_rad: float = math.radians(75.0),
+                shift: float = FOLLOW_SHIFT) -> tuple[np.ndarray, np.ndarray]:
+    """Camera ``(position, look_at)`` (3,) m framing ``points`` (n, 3) m.
+
+    Looks at the centre ``c`` of their bounding box horizontally from the arm's side of the scene
+    (the direction from ``scene_center`` to ``c``; -y when they coincide) -- turned, when
+    ``line`` (2, 3) (the nearest-obstacle line) is given, to the horizontal direction
+    perpendicular to it on that side, so the line is seen across, not end-on -- raised by
+    :data:`FOLLOW_ELEVATION_DEG`, far enough that a sphere around the box fits the vertical field of
+    view ``fov_rad``, times :data:`FOLLOW_MARGIN`.  The look-at point is moved ``shift`` sphere radii
+    to the camera's right, so the framed points sit left of the control panel.
+    """
+    P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    P = P[np.all(np.isfinite(P), axis=1)]
+    if len(P) == 0:
+        P = np.asarray(scene_center, dtype=np.float64).reshape(1, 3)
+    lo, hi = P.min(axis=0), P.max(axis=0)
+    c = 0.5 * (lo + hi)
+    r = max(0.25, 0.5 * float(np.linalg.norm(hi - lo)))
+    h = c - np.asarray(scene_center, dtype=np.float64)
+    h[2] = 0.0
+    n = float(np.linalg.norm(h))
+    h = h / n if n > 1e-6 else np.array([0.0, -1.0, 0.0])
+    if line is not None:
+        d = np.asarray(line, dtype=np.float64).reshape(2, 3)
+        d = d[1] - d[0]
+        perp = np.array([-d[1], d[0], 0.0])
+        m = float(np.linalg.norm(perp))
+        if m > 0.2 * float(np.linalg.norm(d)) and m > 1e-9:
+            perp /= m
+            h = perp if float(perp @ h) >= 0.0 else -perp
+    el = math.radians(FOLLOW_ELEVATION_DEG)
+    dist = FOLLOW_MARGIN * r / math.sin(0.5 * fov_rad)
+    direction = np.array([math.cos(el) * h[0], math.cos(el) * h[1], math.sin(el)])
+    right = np.cross(-direction, [0.0, 0.0, 1.0])
+    right /= max(float(np.linalg.norm(right)), 1e-12)
+    look = c + shift * r * right
+    return look + dist * direction, look
