@@ -357,10 +357,38 @@ def validate_scene_dict(data, file: str = "<dict>") -> SceneFile:
     try:
         sf = SceneFile.model_validate(data)
     except ValidationError as exc:
-        err = exc.errors()[0]
-        more = f" (and {exc.error_count() - 1} more problems)" if exc.error_count() > 1 else ""
-        raise SceneFileError(file, where_of(err["loc"]), _message(err) + more) from None
+        problems = schema_problems(exc.errors())
+        where, first = problems[0]
+        rest = "".join(f"\n  {w}: {m}" if w else f"\n  {m}" for w, m in problems[1:])
+        more = f"\n{len(problems) - 1} more problem{'s' if len(problems) > 2 else ''}:{rest}" if rest else ""
+        raise SceneFileError(file, where, first + more) from None
     return sf
+
+
+def schema_problems(errors) -> list[tuple[str, str]]:
+    """Every schema error as ``(place, message)``, in the file's order; a missing key with an unknown
+    key beside it that looks like its misspelling (``sise:`` for ``size:``) says so."""
+    import difflib
+
+    unknown: dict = {}
+    for err in errors:
+        loc = tuple(err["loc"])
+        if err.get("type") == "extra_forbidden" and loc:
+            unknown.setdefault(loc[:-1], []).append(str(loc[-1]))
+    out = []
+    seen = set()
+    for err in errors:
+        loc = tuple(err["loc"])
+        msg = _message(err)
+        if err.get("type") == "missing" and loc:
+            near = difflib.get_close_matches(str(loc[-1]), unknown.get(loc[:-1], []), n=1, cutoff=0.6)
+            if near:
+                msg += f" (the unknown key {near[0]!r} beside it looks like a misspelling of {str(loc[-1])!r})"
+        key = (where_of(loc), msg)
+        if key not in seen:
+            seen.add(key)
+            out.append(key)
+    return out
 
 
 def scene_from_dict_validated(sf: SceneFile, file: str, base: Path | None = None) -> Scene:
