@@ -50,24 +50,31 @@ class BackendAnswers:
         return len(self.verdict) / self.t_verdicts if self.t_verdicts > 0 else math.inf
 
 
+def _scalar(text: str):
+    """``"1"`` -> 1, ``"1e-9"`` -> 1e-9, ``"true"``/``"false"`` -> bool, anything else the string itself."""
+    low = text.strip().lower()
+    if low in ("true", "false"):
+        return low == "true"
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
+
+
 def parse_backend_options(items) -> dict:
     """``["analytic.fidelity=paper", "coal.threads=1"]`` -> ``{"analytic": {"fidelity": "paper"}, "coal": {"threads": 1}}``.
 
-    Values are read as YAML scalars (``1`` an int, ``1e-9`` a float, ``true`` a bool, else a string).
+    Values are numbers (int, then float), ``true``/``false``, or else strings.
     """
-    import yaml
-
     out: dict = {}
     for item in items or ():
         key, sep, value = str(item).partition("=")
         backend, dot, opt = key.partition(".")
         if not sep or not dot or not backend or not opt:
             raise ArmguardError(f"--backend-option {item!r}: expected BACKEND.KEY=VALUE (e.g. analytic.fidelity=paper)")
-        try:
-            v = yaml.safe_load(value)
-        except yaml.YAMLError:
-            v = value
-        out.setdefault(backend, {})[opt] = value if isinstance(v, (dict, list)) or v is None else v
+        out.setdefault(backend.strip(), {})[opt.strip()] = _scalar(value)
     return out
 
 

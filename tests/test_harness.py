@@ -1,0 +1,166 @@
+"""The backend harness (``armguard compare``): its numbers, outputs, Dask path, and models that follow their URDF."""
+
+from __future__ import annotations
+
+import json
+import shlex
+import shutil
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import armguard
+from armguard import BackendError
+from armguard.cli import main
+from armguard.harness import (
+    DIFFERENTIAL,
+    build_checkers,
+    build_configs,
+    compare_answers,
+    evaluate,
+    parse_backend_options,
+    repo_root,
+    resolve_model,
+    run_compare,
+)
+
+
+@pytest.fixture(scope="module")
+def hermes_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("compare")
+    comp = run_compare("hermes", ("analytic", "coal"), n_configs=200, seed=3, trajectories="unstow", frequency=0.5,
+                       out_dir=out)
+    return comp, out
+
+
+def test_small_run_writes_the_contract_and_the_plots(hermes_run):
+    comp, out = hermes_run
+    data = json.loads((out / "compare.json").read_text())
+    pair = data["pairs"]["analytic/coal"]
+    assert pair["verdict_disagreements"] == 0 and pair["status"] == "agree"
+    assert 0.0 <= pair["max_abs_distance_error"] <= DIFFERENTIAL.hull
+    assert data["backends"]["analytic"]["us_per_config"] > 0 and data["backends"]["coal"]["us_per_config"] > 0
+    assert data["configs"]["total"] == 200 + data["configs"]["trajectories"]["unstow"] == len(comp.configs)
+    assert set(pair["categories"]) == {"all", *comp.model.pairs.category}
+    assert pair["categories"]["all"]["unique_points"]["n"] > 0  # capsule-capsule pairs were compared point to point
+    for name in ("scatter_analytic_coal.png", "hist_analytic_coal.png", "timing.png"):
+        assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
+
+
+def test_the_worst_configuration_reproduces_in_one_line(hermes_run):
+    comp, _ = hermes_run
+    worst = comp.summary["pairs"]["analytic/coal"]["worst"][0]
+    argv = shlex.split(worst["reproduce"])
+    assert argv[:3] == ["armguard", "compare", "hermes"]
+    res = CliRunner().invoke(main, argv[1:] + ["--json"])
+    assert res.exit_code == 0, res.output
+    (row,) = json.loads(res.output)
+    assert row["pair"] == worst["pair"]
+    assert row["analytic"][0] == worst["analytic"]["distance"] and row["coal"][0] == worst["coal"]["distance"]
+
+
+def test_the_comparison_sees_a_wrong_answer(hermes_run):
+    comp, _ = hermes_run
+    model, answers = comp.model, comp.answers
+    bad = replace(answers["analytic"], distance=answers["analytic"].distance.copy(), verdict=answers["analytic"].verdict.copy())
+    dmin = answers["coal"].distance.min(axis=1)
+    i = int(np.argmax(dmin))  # the clearest configuration: flip its verdict, and push one pair 1 mm
+    bad.verdict[i] = not bad.verdict[i]
+    bad.distance[5, 0] += 1e-3
+    c = compare_answers(model, comp.configs, {"analytic": bad, "coal": answers["coal"]}, spec="hermes")
+    p = c.summary["pairs"]["analytic/coal"]
+    assert p["verdict_disagreements"] == 1 and p["worst"][0]["why"] == "verdict" and p["worst"][0]["config"] == i
+    assert p["max_abs_distance_error"] == pytest.approx(1e-3, rel=1e-9)
+    assert p["status"] == "differ"
+
+
+def test_backend_options_pass_through():
+    assert parse_backend_options(["analytic.fidelity=paper", "coal.threads=1", "coal.gjk_tolerance=1e-9"]) == {
+        "analytic": {"fidelity": "paper"}, "coal": {"threads": 1, "gjk_tolerance": 1e-9}}
+    with pytest.raises(armguard.ArmguardError, match="BACKEND.KEY=VALUE"):
+        parse_backend_options(["fidelity=paper"])
+    model = resolve_model("hermes")
+    cks = build_checkers(model, ("analytic", "coal"), {"coal": {"threads": 1}})
+    assert cks["coal"].threads == 1
+    with pytest.raises(BackendError, match="unknown options"):
+        build_checkers(model, ("coal",), {"coal": {"nonesuch": 1}})
+
+
+def test_dask_answers_equal_the_serial_ones():
+    model = resolve_model("hermes")
+    configs = build_configs(model, 24, seed=5, trajectories=None)
+    serial = evaluate(model, configs.Q, ("analytic", "coal"), {"coal": {"threads": 1}})
+    dask = evaluate(model, configs.Q, ("analytic", "coal"), {"coal": {"threads": 1}}, spec="hermes", workers=2,
+                    chunk_size=5)
+    for b in ("analytic", "coal"):
+        for field in ("distance", "p_WA", "p_WB", "verdict"):
+            np.testing.assert_array_equal(getattr(serial[b], field), getattr(dask[b], field), err_msg=f"{b}.{field}")
+
+
+def test_cli_compare_writes_compare_json(tmp_path):
+    res = CliRunner().invoke(main, ["compare", "gmf_s480", "--backends", "analytic,coal", "--configs", "40",
+                                    "--trajectory", "none", "--out", str(tmp_path), "--no-plots"], terminal_width=200)
+    assert res.exit_code == 0, res.output
+    data = json.loads((tmp_path / "compare.json").read_text())
+    assert data["pairs"]["analytic/coal"]["verdict_disagreements"] == 0 and data["configs"]["total"] == 40
+    assert "timings" in res.output
+    res = CliRunner().invoke(main, ["compare", "gmf_s480", "--backends", "coal"])
+    assert res.exit_code == 2 and "at least two backends" in res.output
+
+
+# ------------------------------------------------------------------ URDF-driven updates
+THICKER = 0.2  # hera_link3's capsule radius 0.15 -> 0.35 m
+RAISE = 0.5  # the cargo bay moved up by this (m)
+
+
+def _edited_hermes(folder: Path) -> Path:
+    shutil.copytree(repo_root() / "urdf" / "hermes", folder / "hermes")
+    urdf = folder / "hermes" / "hermes.urdf"
+    s = urdf.read_text()
+    bay = '<child link="cargo_bay"/>\n    <origin xyz="0 0 0" rpy="0 0 0"/>'
+    assert bay in s
+    s = s.replace(bay, f'<child link="cargo_bay"/>\n    <origin xyz="0 0 {RAISE}" rpy="0 0 0"/>')
+    i = s.index('<collision name="hera_link3_0">')
+    j = s.index('radius="0.15"', i)
+    s = s[:j] + f'radius="{0.15 + THICKER}"' + s[j + len('radius="0.15"'):]
+    urdf.write_text(s)
+    return folder / "hermes" / "hermes.yaml"
+
+
+def test_detector_verifier_and_harness_follow_an_edited_urdf(tmp_path):
+    path = _edited_hermes(tmp_path)
+    old, new = armguard.load_model("hermes"), armguard.load_model(path)
+    # the detector: link 3 is 0.2 m thicker, the bay 0.5 m higher
+    r0 = armguard.Detector(old.scene, threshold=0.05).check(old.scene.default_q())
+    r1 = armguard.Detector(new.scene, threshold=0.05).check(new.scene.default_q())
+    assert r0.by_category["arm"].link == r1.by_category["arm"].link == "hera/link3"
+    assert r1.by_category["arm"].distance == pytest.approx(r0.by_category["arm"].distance - THICKER, abs=1e-9)
+    assert r1.by_category["environment"].distance < r0.by_category["environment"].distance - THICKER
+    assert r0.status.value == "clear" and r1.status.value != "clear"
+    # the verifier: unstow was safe and now meets the raised bay; the misaligned stow hits the tail earlier
+    assert armguard.verify(old.scene, old.scene.trajectories["unstow"]).safe
+    hit = armguard.verify(new.scene, new.scene.trajectories["unstow"]).first_collision
+    assert hit is not None and hit.obstacle == "cargo_bay"
+    t0 = armguard.verify(old.scene, old.scene.trajectories["stow_misaligned"]).first_collision.time
+    t1 = armguard.verify(new.scene, new.scene.trajectories["stow_misaligned"]).first_collision.time
+    assert t1 < t0
+    # the harness: the same configurations, coal's link-3 capsule pairs exactly 0.2 m closer, analytic still agreeing
+    c0 = run_compare("hermes", ("analytic", "coal"), n_configs=40, seed=9, trajectories=None, plots=False)
+    c1 = run_compare(str(path), ("analytic", "coal"), n_configs=40, seed=9, trajectories=None, plots=False)
+    np.testing.assert_array_equal(c0.configs.Q, c1.configs.Q)
+    assert c1.summary["pairs"]["analytic/coal"]["status"] == "agree"
+    names = new.pairs.names
+    kinds = [type(new.collision_model.geometryObjects[new.geometry_index(n)].geometry).__name__ for n in names[:, 1]]
+    d0, d1 = c0.answers["coal"].distance, c1.answers["coal"].distance
+    link3_caps = np.array([(a == "hera_link3_0" or b == "hera_link3_0") and k == "Capsule" and
+                           type(new.collision_model.geometryObjects[new.geometry_index(a)].geometry).__name__ == "Capsule"
+                           for (a, b), k in zip(names, kinds)])
+    assert link3_caps.any()
+    np.testing.assert_allclose(d1[:, link3_caps], d0[:, link3_caps] - THICKER, atol=1e-9)
+    bay = np.array([b.startswith("cargo_bay") and a != "hera_link3_0" for a, b in names])
+    assert np.abs(d1[:, bay] - d0[:, bay]).max() > 0.1  # the bay moved
+    untouched = ~bay & ~np.array(["hera_link3_0" in p or p[1].startswith("cargo_bay") for p in map(tuple, names)])
+    np.testing.assert_array_equal(d1[:, untouched], d0[:, untouched])
