@@ -60,10 +60,11 @@ class AnalyticChecker(CheckerBase):
         return det
 
     def _order(self):
-        """Detector pair p -> row in the Model's pair order, and whether A and B are swapped."""
+        """For each Model pair row, its detector pair (a gather index), and the Model rows whose
+        detector pair has A and B the other way round."""
         det = self.detector()
         if self._map is not None and self._map[0] == det._revision:
-            return self._map[1], self._map[2]
+            return self._map[1:]
         m = det._model
         cs = m.compiled
         model = self.model
@@ -89,23 +90,20 @@ class AnalyticChecker(CheckerBase):
                 raise BackendError(f"analytic: the detector checks pair ({na}, {nb}) that the Model does not list")
         if P != len(pairs) or len(np.unique(dest)) != P:
             raise BackendError(f"analytic: the detector checks {P} pairs, the Model lists {len(pairs)}")
-        self._map = (det._revision, dest, swap)
-        return dest, swap
+        inv = np.empty(P, np.int64)
+        inv[dest] = np.arange(P)
+        self._map = (det._revision, inv, np.sort(dest[swap]))
+        return self._map[1:]
 
     # ---------------------------------------------------------------- the interface
     def pair_distances(self, q):
         q = check_q(self.model, q)
         det = self.detector()
         r = det.pair_distances(self.model.scene_q(q))
-        dest, swap = self._order()
-        n = len(dest)
-        d = np.empty(n)
-        p_WA = np.empty((n, 3))
-        p_WB = np.empty((n, 3))
-        d[dest] = r.distance
-        a = np.where(swap[:, None], r.p_WB, r.p_WA)
-        b = np.where(swap[:, None], r.p_WA, r.p_WB)
-        p_WA[dest], p_WB[dest] = a, b
+        inv, sw = self._order()
+        d, p_WA, p_WB = r.distance[inv], r.p_WA[inv], r.p_WB[inv]  # gathers into the Model's order
+        if sw.size:
+            p_WA[sw], p_WB[sw] = p_WB[sw], p_WA[sw].copy()
         return self._result(d, p_WA, p_WB)
 
     def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
