@@ -12,7 +12,10 @@ stereo-like point clouds.  Guide: ``docs/terrain.md``.
 from ._io import depth_to_points, read_points, write_points
 from ._map import ElevationMap, OutlierRule
 from ._pyramid import PyramidLevel, TerrainPyramid, TerrainResult, TerrainStatus
-from ._volumes import bounding_box
+from ._volumes import bounding_box, link_volume
+from ._guard import TERRAIN, TerrainGuard, TerrainReport
+from ._detect import TerrainDetectionReport, attach_terrain, check_with_terrain
+from ._sweep import TerrainCell, TerrainSweep, sweep_terrain, verify_with_terrain
 
 __all__ = [
     "ElevationMap",
@@ -22,7 +25,33 @@ __all__ = [
     "TerrainResult",
     "TerrainStatus",
     "bounding_box",
+    "link_volume",
+    "TERRAIN",
+    "TerrainGuard",
+    "TerrainReport",
+    "TerrainDetectionReport",
+    "attach_terrain",
+    "check_with_terrain",
+    "TerrainCell",
+    "TerrainSweep",
+    "sweep_terrain",
+    "verify_with_terrain",
     "read_points",
     "write_points",
     "depth_to_points",
 ]
+
+_COAL = ("coal_checker", "coal_heightfield", "dilated", "CoalTerrain", "HeightFieldCoalChecker")
+_BODY = ("BodyHierarchy", "BodyNode", "BodyResult")
+
+
+def __getattr__(name):  # coal's height field and the body hierarchy load on first use (coal, pinocchio)
+    if name in _COAL:
+        from . import _coal
+
+        return getattr(_coal, name)
+    if name in _BODY:
+        from . import _body
+
+        return getattr(_body, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -85,6 +85,14 @@ class TerrainResult:
         Exact mode: ``(link, row, col)`` of that minimum.
     truncated : bool
         ``first=True`` stopped at the first finest-level hit (``cells_hit`` holds only it).
+    link_known, link_unknown : (K,) float64 or None, m
+        Exact mode only: per link, the least exact distance to a candidate cell that is known
+        (seen) / unknown (filled), ``inf`` where the link has no such candidate.  A link's terrain
+        distance is the smaller of the two whenever that is at most ``clearance``.
+    cell_known, cell_unknown : (K, 2) int64 or None
+        Exact mode: ``(row, col)`` of those minima (``-1`` where none).
+    cell_links : (m, K) bool or None
+        Which links hit each cell of ``cells_hit`` (None from :meth:`TerrainPyramid.check_flat`).
     """
 
     status: TerrainStatus
@@ -98,6 +106,11 @@ class TerrainResult:
     min_distance: float | None = None
     nearest: tuple[int, int, int] | None = None
     truncated: bool = False
+    link_known: np.ndarray | None = field(default=None, repr=False)
+    link_unknown: np.ndarray | None = field(default=None, repr=False)
+    cell_known: np.ndarray | None = field(default=None, repr=False)
+    cell_unknown: np.ndarray | None = field(default=None, repr=False)
+    cell_links: np.ndarray | None = field(default=None, repr=False)
 
 
 class TerrainPyramid:
@@ -198,6 +211,19 @@ class TerrainPyramid:
         if shapes is not None and len(shapes) != K:
             raise TerrainError(f"check: {len(shapes)} shapes for {K} volumes")
         rows, rstart = pack_rows(vols, clearance, self.tol.parallel)
+        return self._result(*self._descend(rows, rstart, K, first), K, exact,
+                            vols if shapes is None else list(shapes), clearance)
+
+    def check_packed(self, rows: np.ndarray, rstart: np.ndarray, *, first: bool = False) -> TerrainResult:
+        """:meth:`check` (not exact) of volumes already packed into kernel rows: ``rows (R, 36)
+        float64`` and ``rstart (K + 1,) int64`` as :func:`armguard.terrain._volumes.pack_rows` makes
+        them (a caller that poses the same links at many configurations fills them itself)."""
+        K = len(rstart) - 1
+        if K <= 0:
+            raise TerrainError("check_packed: no link volumes")
+        return self._result(*self._descend(rows, rstart, K, first), K, False, None, 0.0)
+
+    def _descend(self, rows, rstart, K, first):
         per_level = np.zeros(self.n_levels, np.int64)
         cells, masks, visited, deepest, truncated = [], [], 0, 0, False
         for lo in range(0, K, _MAX_LINKS):
@@ -220,8 +246,7 @@ class TerrainPyramid:
             if first and n:
                 truncated = True
                 break
-        return self._result(cells, masks, K, per_level, visited, deepest, truncated, exact,
-                            vols if shapes is None else list(shapes), clearance)
+        return cells, masks, per_level, visited, deepest, truncated
 
     def check_flat(self, volumes: Sequence[Shape], *, clearance: float = 0.0) -> TerrainResult:
         """Brute-force reference: every finest-level box against every link volume (no pyramid)."""
@@ -247,12 +272,12 @@ class TerrainPyramid:
             masks.append(_shift_masks(om[:n], lo, K))
         per_level = np.zeros(self.n_levels, np.int64)
         per_level[-1] = tests
-        res = self._result(cells, masks, K, per_level, 0, self.n_levels - 1, False, False, vols, clearance)
+        res = self._result(cells, masks, per_level, 0, self.n_levels - 1, False, K, False, vols, clearance)
         return TerrainResult(res.status, self.n_levels - 1, hi_b - lo_b, tests, per_level, res.cells_hit,
                              res.links_hit, res.hit_unknown)
 
     # ----------------------------------------------------------------------------- assembly
-    def _result(self, cells, masks, K, per_level, visited, deepest, truncated, exact, shapes, clearance):
+    def _result(self, cells, masks, per_level, visited, deepest, truncated, K, exact, shapes, clearance):
         nx = self.map.shape[1]
         if len(cells) == 1:  # one chunk of links: the descent visits each finest cell at most once
             uniq, per_cell = cells[0], masks[0]
@@ -270,18 +295,25 @@ class TerrainPyramid:
             status = TerrainStatus.HIT if len(uniq) else TerrainStatus.CLEAR
             level = last if len(uniq) else deepest
             return TerrainResult(status, level, visited, int(per_level.sum()), per_level, rc, links_hit,
-                                 hit_unknown, truncated=truncated)
+                                 hit_unknown, truncated=truncated, cell_links=per_cell)
+        known = self.map.known.ravel()[uniq]
+        ld = np.full((2, K), np.inf)  # per link: least distance to a known (0) / an unknown (1) candidate
+        lcell = np.full((2, K, 2), -1, np.int64)
         best, nearest = np.inf, None
         for ci, (r, c) in enumerate(rc):
             box = self.cell_box(int(r), int(c))
+            u = 0 if known[ci] else 1
             for k in np.flatnonzero(per_cell[ci]):
                 d = distance(shapes[k], box).distance
+                if d < ld[u, k]:
+                    ld[u, k] = d
+                    lcell[u, k] = (r, c)
                 if d < best:
                     best, nearest = float(d), (int(k), int(r), int(c))
         status = TerrainStatus.HIT if best <= clearance else TerrainStatus.CLEAR
         level = last if len(uniq) else deepest
         return TerrainResult(status, level, visited, int(per_level.sum()), per_level, rc, links_hit, hit_unknown,
-                             best, nearest, truncated)
+                             best, nearest, truncated, ld[0], ld[1], lcell[0], lcell[1], per_cell)
 
 
 def _shift_masks(m: np.ndarray, lo: int, K: int) -> np.ndarray:

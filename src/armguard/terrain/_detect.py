@@ -1,0 +1,103 @@
+"""The terrain category merged into the Detector's report (composition: the fused kernel is untouched).
+
+``Detector(scene, terrain=...)`` (or :func:`attach_terrain` on an existing detector) makes its
+``check`` return a :class:`TerrainDetectionReport`: the detector's own report with a
+``"terrain"`` entry in ``by_category`` (the nearest link–terrain pair, from a
+:class:`TerrainGuard` at the detector's threshold and stopping distance) and the status of both.
+A detector without terrain is not touched: ``check`` stays the class's method, at no cost.
+Batches (``check_many``, ``collides_many``) stay the kernel's; :meth:`TerrainGuard.collides_many`
+answers for the terrain.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+from ..detect import DetectionReport, Status
+from ._guard import TERRAIN, TerrainGuard, TerrainReport
+
+__all__ = ["TerrainDetectionReport", "attach_terrain", "check_with_terrain", "merge_status"]
+
+_RANK = {Status.CLEAR: 0, Status.WARNING: 1, Status.INCOMPLETE: 2, Status.COLLISION: 3}
+
+
+def merge_status(a: Status, b: Status) -> Status:
+    """The verdict of two checks together: COLLISION over INCOMPLETE over WARNING over CLEAR
+    (INCOMPLETE: one of them could not prove the threshold holds — never CLEAR by omission)."""
+    return a if _RANK[a] >= _RANK[b] else b
+
+
+@dataclass(frozen=True)
+class TerrainDetectionReport(DetectionReport):
+    """A :class:`armguard.DetectionReport` with the terrain category.
+
+    ``status`` is the merged verdict (:func:`merge_status`) and ``detector_status`` the kernel's
+    own; ``by_category["terrain"]`` the nearest link–terrain pair (absent when every link is beyond
+    the guard's ``reach``); ``within_threshold`` includes it when it is within the threshold;
+    ``terrain`` the full :class:`TerrainReport`; ``elapsed_us`` both checks.
+    """
+
+    terrain: TerrainReport | None = None
+    detector_status: Status | None = None
+
+    @cached_property
+    def by_category(self) -> dict:
+        cats = dict(self._raw.by_category())
+        pair = None if self.terrain is None else self.terrain.pair()
+        if pair is not None:
+            cats[TERRAIN] = pair
+        return cats
+
+    @cached_property
+    def within_threshold(self) -> tuple:
+        own = tuple(self._raw.within(self.threshold))
+        pair = None if self.terrain is None else self.terrain.pair()
+        if pair is None or pair.distance > self.threshold:
+            return own
+        return tuple(sorted(own + (pair,), key=lambda r: r.distance))
+
+    def to_dict(self) -> dict:
+        d = super().to_dict()
+        d["detector_status"] = None if self.detector_status is None else self.detector_status.value
+        d["terrain"] = None if self.terrain is None else self.terrain.to_dict()
+        return d
+
+
+def _merged(detector, rep: DetectionReport, terrain: TerrainReport) -> TerrainDetectionReport:
+    r = TerrainDetectionReport._from_check(merge_status(rep.status, terrain.status), rep.threshold,
+                                           rep.stopping_distance, rep.elapsed_us + terrain.elapsed_us, rep._raw)
+    r.__dict__["terrain"] = terrain
+    r.__dict__["detector_status"] = rep.status
+    return r
+
+
+def check_with_terrain(detector, guard: TerrainGuard, q, **kwargs) -> TerrainDetectionReport:
+    """``detector.check(q, **kwargs)`` and ``guard.check(q)`` at the detector's threshold and stopping
+    distance, as one report; its ``terrain`` attribute is the guard's :class:`TerrainReport`.
+    Works with any Detector, terrain attached or not (the guard given here is the one used)."""
+    check = type(detector).check  # the kernel's check, whatever is attached
+    rep = check(detector, q, **kwargs)
+    ter = guard.check(q, threshold=detector.threshold, stopping_distance=detector.stopping_distance)
+    return _merged(detector, rep, ter)
+
+
+def attach_terrain(detector, terrain) -> TerrainGuard:
+    """Attach ``terrain`` (a :class:`TerrainGuard`, :class:`TerrainPyramid` or :class:`ElevationMap`)
+    to ``detector``: from now on ``detector.check(q)`` returns a :class:`TerrainDetectionReport`;
+    ``detector.terrain`` is the guard.  A pyramid or map gets a guard over the detector's active
+    robot (all robots when none).  ``None`` detaches.  Returns the guard."""
+    if terrain is None:
+        detector.__dict__.pop("check", None)
+        detector.terrain = None
+        return None
+    guard = terrain if isinstance(terrain, TerrainGuard) else TerrainGuard(detector.scene, terrain,
+                                                                            robot=detector.active)
+    detector.terrain = guard
+
+    def check(q, **kwargs):
+        return check_with_terrain(detector, guard, q, **kwargs)
+
+    check.__doc__ = type(detector).check.__doc__
+    detector.check = check
+    return guard
