@@ -17,6 +17,7 @@ import time
 import numpy as np
 
 from .._errors import DetectionError
+from ._detector import _check_length
 from ._report import CATEGORIES, BatchReport, DetectionReport, PairDistances, PairResult, Status
 
 __all__ = ["CheckerDetector", "other_backend"]
@@ -34,16 +35,6 @@ _CATEGORY = {  # Model pair category -> detector category
     "payload-vehicle": "payload", "payload-environment": "payload", "payload-payload": "payload",
     "workspace": "workspace",
 }
-
-
-def _length(value, name: str) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError) as exc:
-        raise DetectionError(f"{name}: expected a number of metres, got {value!r}") from exc
-    if not math.isfinite(x) or x < 0.0:
-        raise DetectionError(f"{name}: must be finite and >= 0, got {x}")
-    return x
 
 
 class _Raw:
@@ -84,8 +75,8 @@ class CheckerDetector:
         from ..model import model_of
 
         self.scene = scene
-        self._threshold = _length(threshold, "threshold")
-        self._stopping = _length(stopping_distance, "stopping_distance")
+        self._threshold = _check_length(threshold, "threshold")
+        self._stopping = _check_length(stopping_distance, "stopping_distance")
         self.model = model if model is not None else model_of(scene)
         self.checker = checker(self.model, backend, backend_options)
         self.backend = self.checker.name
@@ -106,10 +97,10 @@ class CheckerDetector:
         return tuple(f"{r}/{ln}" for r, robot in self.scene.robots.items() for ln in robot.link_names)
 
     def set_threshold(self, threshold: float) -> None:
-        self._threshold = _length(threshold, "threshold")
+        self._threshold = _check_length(threshold, "threshold")
 
     def set_stopping_distance(self, stopping_distance: float) -> None:
-        self._stopping = _length(stopping_distance, "stopping_distance")
+        self._stopping = _check_length(stopping_distance, "stopping_distance")
 
     def set_active(self, name: str | None) -> None:
         if name is not None and name not in self.scene.robots:
