@@ -126,19 +126,33 @@ def _on_segment(P, A, l, X):  # pragma: no cover - compiled
 @njit(cache=True)
 def ranger_segment_segment(P1, P1p, P2, P2p, eps_len, eps_par):  # pragma: no cover - compiled
     """Ranger §3: nearest points ``(M_1, M_2)`` of segments ``P1-P1p`` and ``P2-P2p`` (3-tuples, m, W)."""
-    v1 = _sub(P1p, P1)
-    v2 = _sub(P2p, P2)
-    l1 = math.sqrt(_dot(v1, v1))
-    l2 = math.sqrt(_dot(v2, v2))
+    A1, l1 = _direction(P1, P1p)
+    A2, l2 = _direction(P2, P2p)
+    return _ranger(P1, A1, l1, P2, A2, l2, eps_len, eps_par)
+
+
+@njit(cache=True, inline="always")
+def _direction(P, Pp):  # pragma: no cover - compiled
+    """Direction cosines and length of segment ``P-Pp`` (eq. 1); ``(0, 0, 0), 0`` for a point."""
+    v = _sub(Pp, P)
+    l = math.sqrt(_dot(v, v))
+    if l == 0.0:
+        return (0.0, 0.0, 0.0), 0.0
+    return (v[0] / l, v[1] / l, v[2] / l), l
+
+
+@njit(cache=True, inline="always")
+def _ranger(P1, A1, l1, P2, A2, l2, eps_len, eps_par):  # pragma: no cover - compiled
+    """:func:`ranger_segment_segment` from start points, unit directions and lengths (§2: the
+    "redundant data, computed at initialization time" of the static edges)."""
     if l1 <= eps_len:
         if l2 <= eps_len:
             return P1, P2
-        A2 = (v2[0] / l2, v2[1] / l2, v2[2] / l2)
         return P1, _on_segment(P2, A2, l2, P1)
-    A1 = (v1[0] / l1, v1[1] / l1, v1[2] / l1)  # direction cosines (eq. 1)
     if l2 <= eps_len:
         return _on_segment(P1, A1, l1, P2), P2
-    A2 = (v2[0] / l2, v2[1] / l2, v2[2] / l2)
+    P1p = _axpy(P1, l1, A1)
+    P2p = _axpy(P2, l2, A2)
     D12 = _sub(P2, P1)
     a = _dot(D12, A1)
     b = _dot(A1, A2)
@@ -200,12 +214,15 @@ def _rounded(M1, M2, ra, rb, ux, uy, uz, out):  # pragma: no cover - compiled
 
 # ---------------------------------------------------------------- per pair
 @njit(cache=True)
-def _face_edge(P0, P1, r, g, vW, fstart, fvs, fverts, fn, fd, estart, edges, out, eps_len, eps_par):  # pragma: no cover
-    """Ranger §2/§4: link axis ``P0``-``P1`` (``P1`` distal), radius ``r``, against static polytope ``g``."""
+def _face_edge(P0, P1, r, g, vW, fstart, fvs, fverts, fn, fd, estart, edges, eW, elen, out, eps_len, eps_par):  # pragma: no cover
+    """Ranger §2/§4: link axis ``P0``-``P1`` (``P1`` distal), radius ``r``, against static polytope ``g``.
+
+    ``eW`` ``(E, 3)``, ``elen`` ``(E,)``: unit direction and length of every edge (W, m).
+    """
     best = math.inf
     M1 = P1
     M2 = P1
-    ux, uy, uz = perpendicular_unit(P1[0] - P0[0], P1[1] - P0[1], P1[2] - P0[2])
+    ux, uy, uz = 0.0, 0.0, 0.0  # set by a face term; an edge term at distance 0 takes a perpendicular
     for f in range(fstart[g], fstart[g + 1]):
         n = _v(fn, f)
         d_f = _dot(n, P1) - fd[f]  # eq. 8 (fd is d_of, eq. 7)
@@ -224,12 +241,15 @@ def _face_edge(P0, P1, r, g, vW, fstart, fvs, fverts, fn, fd, estart, edges, out
             M1, M2 = P1, Q
             s = 1.0 if d_f < 0.0 else -1.0  # towards the plane when P is on it
             ux, uy, uz = s * n[0], s * n[1], s * n[2]
+    A1, l1 = _direction(P0, P1)
     for e in range(estart[g], estart[g + 1]):
-        A, B = ranger_segment_segment(P0, P1, _v(vW, edges[e, 0]), _v(vW, edges[e, 1]), eps_len, eps_par)
+        A, B = _ranger(P0, A1, l1, _v(vW, edges[e, 0]), _v(eW, e), elen[e], eps_len, eps_par)
         d = _dist(A, B) - r
         if d < best:
             best, M1, M2 = d, A, B
-            ux, uy, uz = perpendicular_unit(P1[0] - P0[0], P1[1] - P0[1], P1[2] - P0[2])
+            ux, uy, uz = 0.0, 0.0, 0.0
+    if ux == 0.0 and uy == 0.0 and uz == 0.0:
+        ux, uy, uz = perpendicular_unit(A1[0], A1[1], A1[2])
     return _rounded(M1, M2, r, 0.0, ux, uy, uz, out)
 
 
@@ -294,7 +314,7 @@ def _paper_rows(Q, T, E, R, mode, margin, hermes, want, out_d, out_p, out_hit, e
     as ``m * P + k``.
     """
     parent, X_pre, axis, jtype, X_post, has_post, offset, tstart, tjoint, tcoeff = T
-    glink, vstart, vL, vW, pstart, nL, nW, estart, edges, eL, eW, e_ok, rad, fstart, fvs, fverts, fn, fd, planes, sph, lo, hi = E
+    glink, vstart, vL, vW, pstart, nL, nW, estart, edges, eL, eW, elen, e_ok, rad, fstart, fvs, fverts, fn, fd, planes, sph, lo, hi = E
     ra, rb, meth, distal, swap = R
     eps_len, eps_par, gjk_eps, max_iter, off = eps
     Xs = np.empty((1, parent.shape[0], 4, 4))
@@ -323,11 +343,13 @@ def _paper_rows(Q, T, E, R, mode, margin, hermes, want, out_d, out_p, out_hit, e
             b = rb[p]
             mt = meth[p]
             if mt == M_SEGSEG:
-                A, B = ranger_segment_segment(_v(vW, vstart[a]), _v(vW, vstart[a] + 1), _v(vW, vstart[b]),
-                                              _v(vW, vstart[b] + 1), eps_len, eps_par)
-                ux, uy, uz = perpendicular_unit(vW[vstart[a] + 1, 0] - vW[vstart[a], 0],
-                                                vW[vstart[a] + 1, 1] - vW[vstart[a], 1],
-                                                vW[vstart[a] + 1, 2] - vW[vstart[a], 2])
+                ka = estart[a]
+                kb = estart[b]
+                A, B = _ranger(_v(vW, edges[ka, 0]), _v(eW, ka), elen[ka], _v(vW, edges[kb, 0]), _v(eW, kb), elen[kb],
+                               eps_len, eps_par)
+                ux, uy, uz = 0.0, 0.0, 0.0
+                if _dist(A, B) == 0.0:
+                    ux, uy, uz = perpendicular_unit(eW[ka, 0], eW[ka, 1], eW[ka, 2])
                 d = _rounded(A, B, rad[a], rad[b], ux, uy, uz, out9)
             elif mt == M_FACE_EDGE:
                 P0 = _v(vW, vstart[a] + 1 - distal[p])
@@ -337,7 +359,8 @@ def _paper_rows(Q, T, E, R, mode, margin, hermes, want, out_d, out_p, out_hit, e
                         out_hit[m] = True
                         break
                     continue
-                d = _face_edge(P0, P1, rad[a], b, vW, fstart, fvs, fverts, fn, fd, estart, edges, out9, eps_len, eps_par)
+                d = _face_edge(P0, P1, rad[a], b, vW, fstart, fvs, fverts, fn, fd, estart, edges, eW, elen, out9, eps_len,
+                               eps_par)
             elif mt == M_BOX:
                 d = _box_gap(vW, vstart[a], vstart[a] + 2, 0.0, lo, hi, out9)
             elif mt == M_EXACT_BOX:
@@ -385,9 +408,12 @@ def paper_capsule_polytope(capsule, polytope, tol=DEFAULT_TOLERANCES):
     ``(distance (m), p_WA (3,), p_WB (3,))``."""
     cs, fn, fd, _ = _one_body(polytope)
     out = np.zeros(9)
+    ev = cs.verts[cs.edges[:, 1]] - cs.verts[cs.edges[:, 0]]
+    eW, _ = _unit_rows(ev, tol.length)
     d = _face_edge(tuple(capsule.p0), tuple(capsule.p1), float(capsule.radius), 0, np.ascontiguousarray(cs.verts),
                    cs.elem_face_start, cs.face_vert_start, cs.face_verts, fn, fd, cs.elem_edge_start,
-                   np.ascontiguousarray(cs.edges.reshape(-1, 2)), out, float(tol.length), float(tol.parallel))
+                   np.ascontiguousarray(cs.edges.reshape(-1, 2)), np.ascontiguousarray(eW),
+                   np.linalg.norm(ev, axis=1), out, float(tol.length), float(tol.parallel))
     return float(d), out[0:3].copy(), out[3:6].copy()
 
 
@@ -537,8 +563,9 @@ class PaperChecker(CheckerBase):
 
         c = lambda x, dt=np.float64: np.ascontiguousarray(np.asarray(x, dtype=dt))  # noqa: E731
         i64 = np.int64
-        eL, eok = _unit_rows(cs.verts[cs.edges[:, 1]] - cs.verts[cs.edges[:, 0]], tol.length) if len(cs.edges) \
-            else (np.zeros((0, 3)), np.zeros(0, bool))
+        ev = cs.verts[cs.edges[:, 1]] - cs.verts[cs.edges[:, 0]] if len(cs.edges) else np.zeros((0, 3))
+        eL, eok = _unit_rows(ev, tol.length)
+        elen = np.linalg.norm(ev, axis=1)
         e_ok = np.array([bool(np.all(eok[cs.elem_edge_start[e]:cs.elem_edge_start[e + 1]])) and
                          cs.elem_edge_start[e + 1] > cs.elem_edge_start[e] for e in range(G)], dtype=np.bool_)
         F = len(cs.face_vert_start) - 1
@@ -555,7 +582,7 @@ class PaperChecker(CheckerBase):
                    c(tree.has_post, np.bool_), c(tree.offset), c(tree.term_start, i64), c(tree.term_joint, i64),
                    c(tree.term_coeff))
         self._E = (c(glink, i64), c(cs.elem_vert_start, i64), c(cs.verts), c(cs.verts).copy(), c(cs.elem_plane_start, i64),
-                   nL, nL.copy(), c(cs.elem_edge_start, i64), c(cs.edges.reshape(-1, 2), i64), c(eL), c(eL).copy(), e_ok,
+                   nL, nL.copy(), c(cs.elem_edge_start, i64), c(cs.edges.reshape(-1, 2), i64), c(eL), c(eL).copy(), c(elen), e_ok,
                    c(cs.elem_radius), c(cs.elem_face_start, i64), c(cs.face_vert_start, i64), c(cs.face_verts, i64),
                    c(fn), c(fd), c(cs.planes.reshape(-1, 4)), c(sph), c(cs.workspace_lo), c(cs.workspace_hi))
         self._R = (c(ra, i64), c(rb, i64), c(meth, i64), c(dist, i64), c(swap, np.bool_))
