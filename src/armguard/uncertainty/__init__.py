@@ -2,12 +2,24 @@
 of Spatial Uncertainty* (SRI 1985; IJRR 5(4), 1986): compounding ⊕, reversal ⊖, merging,
 network reduction, confidence ellipses, polar sensors, Monte Carlo validation — in the plane
 (:class:`UncertainPose2`, (x, y, θ)) and on SE(3) (:class:`UncertainPose3`, exponential
-coordinates, no Euler-angle poles).  Guide: ``docs/uncertainty.md``.
+coordinates, no Euler-angle poles) — and uncertain placements of obstacles and robot bases in
+the checks (:func:`clearance_sigmas`, :func:`verify_with_confidence`).  Guide: ``docs/uncertainty.md``.
 """
 
 from __future__ import annotations
 
 from . import se2, se3
+from ._checks import (
+    ClearanceStatus,
+    ConfidentVerification,
+    GroupSigma,
+    PairSigma,
+    SigmaReport,
+    UncertainPlacement,
+    clearance_sigmas,
+    verify_with_confidence,
+)
+from ._grow import grow_shape
 from .confidence import Box2, Ellipse, Polygon2, confidence_for_k2, ellipse, k2_for_confidence, probability_inside
 from .montecarlo import (
     Agreement,
@@ -45,4 +57,13 @@ __all__ = [
     "plot_monte_carlo",
     "se2",
     "se3",
+    "UncertainPlacement",
+    "clearance_sigmas",
+    "verify_with_confidence",
+    "grow_shape",
+    "ClearanceStatus",
+    "PairSigma",
+    "GroupSigma",
+    "SigmaReport",
+    "ConfidentVerification",
 ]

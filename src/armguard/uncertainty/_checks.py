@@ -1,0 +1,555 @@
+"""Uncertain placements in the checks: clearance in sigmas, collision probability, confident verification.
+
+An obstacle (a static body) or a robot's base is placed by an uncertain relation
+(:class:`UncertainPlacement`).  The scene holds the nominal geometry (the body's shapes, the
+robot's base at the relation's mean); the true geometry is the nominal moved by a random rigid
+displacement ``D``.
+
+**The displacement model.**  Write ``o`` (3,) for the placement's origin (the mean pose's
+translation, m) and ``(δo, φ)`` for the displacement of that origin (m) and the small rotation
+about it (rad).  A point ``x`` of the placed geometry moves by, to first order,
+
+    δx = δo + φ × (x − o) = J(x) (δo, φ),    J(x) = [I₃ | −[x − o]×]   (3 × 6),
+
+so its position covariance is ``Σ_x = J(x) Σ_o J(x)ᵀ`` with ``Σ_o`` the (6 × 6) covariance of
+``(δo, φ)`` — the rotational part enters through the lever arm ``x − o``.  From the relations:
+
+* ``UncertainPose3`` (left perturbation ``T = exp(ξ^) T̄``, ``ξ = (ρ, φ)``): the origin moves
+  by ``δo = ρ + φ × o``, so ``(δo, φ) = A ξ`` with ``A = [[I, −[o]×], [0, I]]`` and
+  ``Σ_o = A Σ Aᵀ`` (the same ``δx = ρ + φ × x`` written about ``o``); ``D = exp(ξ^)``.
+* ``UncertainPose2`` (x, y, θ) lifted to SE(3) (a rotation about z at height 0): ``δo =
+  (δx, δy, 0)``, ``φ = (0, 0, δθ)``; ``D = T(x, y, θ) T̄⁻¹`` (exactly additive at the origin).
+
+**Clearance in sigmas** (:func:`clearance_sigmas`).  A pair at signed distance ``d`` with
+witness points ``p_A``, ``p_B`` has ``n̂ = (p_A − p_B) / d`` (the direction that increases
+``d`` when ``A`` moves).  Moving side A by ``δp_A`` and B by ``δp_B`` changes the distance by
+``n̂ · (δp_A − δp_B)`` to first order, so its standard deviation is
+
+    σ = sqrt( Σ_k g_k Σ_o,k g_kᵀ ),   g_k = n̂ᵀ (s_A,k J_k(p_A) − s_B,k J_k(p_B)),
+
+summed over the independent placements ``k`` (``s = 1`` where the placement moves that side;
+a placement that moves both sides moves the pair rigidly and leaves ``d`` unchanged).
+``sigmas = d / σ``; ``p_linear = Φ(−d/σ)`` is the linearised one-sided estimate (not a bound).
+
+**The conservative bound.**  A collision after the displacement needs some point of a moved
+owner to move by at least ``d``: if ``D x ∈ B`` for ``x ∈ A`` then ``d ≤ |x − D x|``.  With
+``Σ_o = L Lᵀ`` and ``m = |L⁺ (δo, φ)|`` (the Mahalanobis radius, ``m² ~ χ²(r)``, ``r`` the
+rank of ``Σ_o``), every point of the owner moves by at most ``σ_max m``, where
+
+    σ_max = max over the owner's points x of ‖J(x) L‖₂  ≤  sqrt(λ_max(Σ_δo)) + max|x − o| sqrt(λ_max(Σ_φ))
+
+(the maximum of a norm of an affine function is at an extreme point: over the hull vertices,
+plus the radius times ``sqrt(λ_max(Σ_φ))`` for the rounded shapes).  Hence
+
+    P(collision) ≤ P(m ≥ d / σ_max) = 1 − χ²_r.cdf((d / σ_max)²),
+
+``r = 3`` for a planar placement or a translation-only one (the classic 3-D ellipsoid bound)
+and ``r = 6`` for a full SE(3) placement (a 3-D quantile would understate it).  Two placements
+on a pair combine by Cauchy–Schwarz: ``σ_max = sqrt(σ₁² + σ₂²)`` with ``r = r₁ + r₂``; a group
+(a category, the whole scene) uses its least ``d / σ_max`` and the rank of every placement in
+it.  The bound is exact for translation-only placements and first order in the rotation (the
+covariance's own linearisation: the chord ``(R − I)(x − o)`` is replaced by ``φ × (x − o)``)
+otherwise.
+
+**Monte Carlo** (``samples > 0``): seeded draws of every placement, the moved owners' shapes
+at ``q``, and the exact signed distance (``armguard.geometry.distance``; the workspace walls by
+support) for every affected pair — for reporting, beside the bound.
+
+**Confident verification** (:func:`verify_with_confidence`): ``k² = χ²_r.ppf(confidence)``
+with ``r`` the summed rank of all placements; with probability ``confidence`` every
+``m_k ≤ k``, so every point of a placed body lies within ``k σ_max`` of its nominal place.
+The verification runs on a scene copy whose placed bodies are grown by ``k σ_max`` (their own
+points' ``σ_max``: translation and the rotational sweep about ``o``); for a robot-base
+placement every body is grown by ``k σ_max`` of the base's displacement evaluated over that
+body's points (the body moving by ``D⁻¹`` relative to the arm is the same relative motion) and
+the workspace box shrunk by it.  Grown shapes contain the Minkowski sum
+(:func:`armguard.uncertainty._grow.grow_shape`), so ``safe`` holds with probability at least
+``confidence``.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import stats
+
+from .._errors import UncertaintyError
+from .._tolerance import DEFAULT_TOLERANCES
+from . import se3 as _se3
+from ._grow import grow_shape
+from .pose2 import UncertainPose2
+from .pose3 import UncertainPose3
+
+__all__ = ["UncertainPlacement", "ClearanceStatus", "PairSigma", "GroupSigma", "SigmaReport", "ConfidentVerification",
+           "clearance_sigmas", "verify_with_confidence", "grow_shape"]
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    """``[v]×`` for ``v (..., 3)``: ``(..., 3, 3)``."""
+    out = np.zeros(v.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
+    return out
+
+
+def _inv_many(X: np.ndarray) -> np.ndarray:
+    """Inverses of rigid transforms ``(n, 4, 4)``."""
+    out = np.zeros_like(X)
+    Rt = np.swapaxes(X[:, :3, :3], -1, -2)
+    out[:, :3, :3] = Rt
+    out[:, :3, 3] = -np.einsum("nij,nj->ni", Rt, X[:, :3, 3])
+    out[:, 3, 3] = 1.0
+    return out
+
+
+def _lift2(xyt: np.ndarray) -> np.ndarray:
+    """(x, y, θ) rows ``(n, 3)`` -> SE(3) ``(n, 4, 4)``: rotation about z, at height 0."""
+    xyt = np.atleast_2d(xyt)
+    T = np.tile(np.eye(4), (len(xyt), 1, 1))
+    c, s = np.cos(xyt[:, 2]), np.sin(xyt[:, 2])
+    T[:, 0, 0], T[:, 0, 1], T[:, 1, 0], T[:, 1, 1] = c, -s, s, c
+    T[:, 0, 3], T[:, 1, 3] = xyt[:, 0], xyt[:, 1]
+    return T
+
+
+@dataclass(frozen=True, eq=False)
+class UncertainPlacement:
+    """A body (``name`` a static body of the scene) or a robot base (``name`` a robot) placed by
+    an uncertain relation to W: ``pose`` an :class:`UncertainPose3` (W -> the placed frame) or an
+    :class:`UncertainPose2` (planar, lifted to SE(3): rotation about z at height 0).
+
+    The scene's geometry is the nominal (the relation's mean); :attr:`origin` ``(3,)`` m is the
+    mean's translation and :attr:`cov_origin` ``(6, 6)`` (m², m·rad, rad²) the covariance of the
+    origin's displacement and the rotation about it ``(δo, φ)`` (module docstring)."""
+
+    name: str
+    pose: object
+    origin: np.ndarray = field(init=False, repr=False)
+    cov_origin: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise UncertaintyError(f"UncertainPlacement.name: expected a body or robot name, got {self.name!r}")
+        if isinstance(self.pose, UncertainPose3):
+            o = np.array(self.pose.mean[:3, 3])
+            A = np.eye(6)
+            A[:3, 3:] = -_skew(o)
+            cov = A @ self.pose.cov @ A.T
+        elif isinstance(self.pose, UncertainPose2):
+            o = np.array([self.pose.mean[0], self.pose.mean[1], 0.0])
+            idx = [0, 1, 5]
+            cov = np.zeros((6, 6))
+            cov[np.ix_(idx, idx)] = self.pose.cov
+        else:
+            raise UncertaintyError(f"UncertainPlacement.pose: expected an UncertainPose3 or UncertainPose2, "
+                                   f"got {type(self.pose).__name__}")
+        cov = 0.5 * (cov + cov.T)
+        o.flags.writeable = False
+        cov.flags.writeable = False
+        object.__setattr__(self, "origin", o)
+        object.__setattr__(self, "cov_origin", cov)
+
+    @property
+    def rank(self) -> int:
+        """Degrees of freedom of the displacement: the rank of :attr:`cov_origin` (3 planar, 6 in
+        space; eigenvalues below ``Tolerances.covariance_relative`` times the largest are zero)."""
+        w = np.linalg.eigvalsh(self.cov_origin)
+        top = float(w.max())
+        return int(np.sum(w > top * DEFAULT_TOLERANCES.covariance_relative)) if top > 0.0 else 0
+
+    def jacobian(self, x) -> np.ndarray:
+        """``J(x) = [I | −[x − o]×]`` ``(..., 3, 6)`` for points ``x (..., 3)`` m in W."""
+        x = np.asarray(x, dtype=np.float64)
+        J = np.zeros(x.shape[:-1] + (3, 6))
+        J[..., :3, :3] = np.eye(3)
+        J[..., :, 3:] = -_skew(x - self.origin)
+        return J
+
+    def point_cov(self, x) -> np.ndarray:
+        """``Σ_x = J(x) Σ_o J(x)ᵀ`` ``(..., 3, 3)`` m²: the position covariance of a placed point."""
+        J = self.jacobian(x)
+        return J @ self.cov_origin @ np.swapaxes(J, -1, -2)
+
+    def sigma_max(self, shapes) -> float:
+        """``max ‖J(x) L‖₂`` over the points of ``shapes`` (in W, m): the largest standard
+        deviation of any point's displacement in any direction (module docstring)."""
+        w, V = np.linalg.eigh(self.cov_origin)
+        L = V * np.sqrt(np.clip(w, 0.0, None))
+        sd_rot = math.sqrt(max(float(np.linalg.eigvalsh(self.cov_origin[3:, 3:]).max()), 0.0))
+        best = 0.0
+        for s in shapes:
+            pts = np.atleast_2d(np.asarray(s.core_points, dtype=np.float64))
+            JL = self.jacobian(pts) @ L
+            best = max(best, float(np.max(np.linalg.norm(JL, ord=2, axis=(1, 2)))) + float(s.core_radius) * sd_rot)
+        return best
+
+    def sample_displacements(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        """``(n, 4, 4)`` rigid displacements ``D`` (true = ``D`` · nominal) drawn with ``rng``."""
+        if isinstance(self.pose, UncertainPose3):
+            xi = rng.multivariate_normal(np.zeros(6), self.pose.cov, size=int(n), method="eigh")
+            return _se3._exp(xi)
+        draws = self.pose.sample(int(n), rng)
+        return _lift2(draws) @ _se3._invert(_lift2(self.pose.mean)[0])
+
+
+class ClearanceStatus(enum.Enum):
+    """A pair's or a group's standing under the placements' uncertainty at one configuration."""
+
+    CONFIDENT = "confident"  # the bound on the collision probability is within 1 - confidence
+    AT_RISK = "at_risk"  # apart nominally, but the bound exceeds 1 - confidence
+    COLLIDING = "colliding"  # touching or penetrating at the nominal placement
+
+
+@dataclass(frozen=True)
+class PairSigma:
+    """One owner pair (its nearest element pair): ``distance`` m; ``sigma`` m, the linearised
+    standard deviation of the distance along the nearest direction; ``sigmas = distance / sigma``;
+    ``sigma_max`` m, the worst-direction extent that the bound uses; ``p_linear`` (Φ(−sigmas),
+    an estimate); ``p_bound`` (conservative); ``p_monte_carlo`` (``None`` without samples);
+    ``placements`` the placements that move it; witness points ``p_WA``, ``p_WB`` (W, m)."""
+
+    a: str
+    b: str
+    category: str
+    distance: float
+    sigma: float
+    sigmas: float
+    sigma_max: float
+    p_linear: float
+    p_bound: float
+    p_monte_carlo: float | None
+    status: ClearanceStatus
+    placements: tuple
+    p_WA: np.ndarray
+    p_WB: np.ndarray
+
+
+@dataclass(frozen=True)
+class GroupSigma:
+    """A category (or the whole scene): its least-sigmas pair and the group's own probabilities
+    (the bound over the group's least ``d / σ_max`` with the rank of all its placements; the
+    Monte Carlo share of draws with any of its pairs colliding)."""
+
+    nearest: PairSigma
+    p_bound: float
+    p_monte_carlo: float | None
+    status: ClearanceStatus
+
+
+@dataclass(frozen=True)
+class SigmaReport:
+    """:func:`clearance_sigmas`' answer: ``pairs`` (affected owner pairs, least sigmas first),
+    ``by_category`` (category -> :class:`GroupSigma`), ``overall`` (:class:`GroupSigma` or
+    ``None`` when no pair is affected), ``confidence``, ``samples``."""
+
+    pairs: tuple
+    by_category: dict
+    overall: GroupSigma | None
+    confidence: float
+    samples: int
+
+    @property
+    def status(self) -> ClearanceStatus:
+        return ClearanceStatus.CONFIDENT if self.overall is None else self.overall.status
+
+
+def _bound(ratio: float, dof: int) -> float:
+    """``1 − χ²_dof.cdf(ratio²)`` for ``ratio = d / σ_max`` (1 when touching or penetrating)."""
+    if not ratio > 0.0:
+        return 1.0
+    if math.isinf(ratio) or dof == 0:
+        return 0.0
+    return float(stats.chi2.sf(ratio * ratio, dof))
+
+
+def _status(d: float, p: float, confidence: float) -> ClearanceStatus:
+    if d <= 0.0:
+        return ClearanceStatus.COLLIDING
+    return ClearanceStatus.CONFIDENT if p <= 1.0 - confidence else ClearanceStatus.AT_RISK
+
+
+def _check_placements(scene, placements) -> tuple:
+    placements = (placements,) if isinstance(placements, UncertainPlacement) else tuple(placements)
+    seen = set()
+    for p in placements:
+        if not isinstance(p, UncertainPlacement):
+            raise UncertaintyError(f"placements: expected UncertainPlacement objects, got {type(p).__name__}")
+        if p.name not in scene.bodies and p.name not in scene.robots:
+            raise UncertaintyError(f"placement {p.name!r}: not a body or robot of scene {scene.name!r}; bodies are "
+                                   f"{list(scene.bodies)}, robots {list(scene.robots)}")
+        if p.name in seen:
+            raise UncertaintyError(f"placement {p.name!r}: given twice (merge the relations first)")
+        seen.add(p.name)
+    return placements
+
+
+def _moved_by(scene, placement: UncertainPlacement) -> set:
+    """The owners a placement moves: the body, or the robot's links and the payloads it holds."""
+    if placement.name in scene.bodies:
+        return {placement.name}
+    r = scene.robots[placement.name]
+    out = {f"{placement.name}/{ln}" for ln in r.link_names}
+    out.update(p.name for p in scene.payloads.values() if p.robot == placement.name)
+    return out
+
+
+def _pair_rows(source, q):
+    """``(scene, q_scene, rows)``: rows of ``(a, b, category, d, p_WA, p_WB)`` from a Checker
+    (``pair_distances``; ``q`` in pin_model's order) or a Detector (``q`` as it takes)."""
+    from ..detect import CATEGORIES
+
+    if hasattr(source, "capabilities") and hasattr(source, "model"):
+        model = source.model
+        r = source.pair_distances(q)
+        pairs = model.pairs
+        rows = zip(pairs.owner_a, pairs.owner_b, pairs.category, r.distance, r.p_WA, r.p_WB)
+        return model.scene, model.scene_q(q), list(rows)
+    if hasattr(source, "pair_distances") and hasattr(source, "scene"):
+        r = source.pair_distances(q)
+        cats = [CATEGORIES[int(c)] for c in r.category]
+        return source.scene, q, list(zip(r.owner_a, r.owner_b, cats, r.distance, r.p_WA, r.p_WB))
+    raise UncertaintyError(f"clearance_sigmas: expected a Detector or a backend Checker, got {type(source).__name__}")
+
+
+def _workspace_distance(shapes, ws) -> float:
+    """Signed distance of convex shapes inside the workspace box to its walls (solid outside):
+    the least ``wall − support`` over the six walls (negative when a shape sticks out)."""
+    best = math.inf
+    for s in shapes:
+        pts = np.atleast_2d(s.core_points)
+        r = float(s.core_radius)
+        best = min(best, float(np.min(ws.hi - (pts.max(axis=0) + r))), float(np.min((pts.min(axis=0) - r) - ws.lo)))
+    return best
+
+
+def clearance_sigmas(source, q, placements, *, confidence: float = 0.999, samples: int = 1000,
+                     seed: int = 0) -> SigmaReport:
+    """Clearance in sigmas and collision probabilities of every pair an uncertain placement moves.
+
+    Parameters
+    ----------
+    source : armguard.Detector or a backend Checker answering distances (``armguard.checker``)
+    q : one configuration (a Checker's: pin_model order ``(nq,)``; a Detector's: as it takes)
+    placements : UncertainPlacement or a sequence of them (independent)
+    confidence : float in (0, 1): the status threshold (``p_bound <= 1 − confidence`` is CONFIDENT)
+    samples : int >= 0, Monte Carlo draws for the reported estimate (0: none)
+    seed : the draws' ``numpy.random.default_rng`` seed
+
+    Returns
+    -------
+    SigmaReport (module docstring: linearised sigmas, the χ² bound, the Monte Carlo share)
+    """
+    if not 0.0 < float(confidence) < 1.0:
+        raise UncertaintyError(f"confidence must be in (0, 1), got {confidence!r}")
+    scene, q_scene, rows = _pair_rows(source, q)
+    placements = _check_placements(scene, placements)
+    moved = [_moved_by(scene, p) for p in placements]
+    items = scene.shapes_at(q_scene)
+    shapes: dict[str, list] = {}
+    for it in items:
+        shapes.setdefault(it.owner, []).append(it.shape)
+    smax_cache: dict = {}
+
+    def smax(k: int, owner: str) -> float:
+        if (k, owner) not in smax_cache:
+            smax_cache[(k, owner)] = placements[k].sigma_max(shapes.get(owner, ()))
+        return smax_cache[(k, owner)]
+
+    best: dict = {}  # owner pair -> (sigmas, PairSigma pieces)
+    for a, b, cat, d, pa, pb in rows:
+        d = float(d)
+        ks = [k for k, m in enumerate(moved) if (a in m) != (b in m)]
+        if not ks:
+            continue
+        n = (pa - pb) / d if abs(d) > 0.0 and np.linalg.norm(pa - pb) > 0.0 else None
+        var, s2max = 0.0, 0.0
+        for k in ks:
+            p = placements[k]
+            on_a = a in moved[k]
+            # the side that moves and its witness point; the sign makes g the change of d
+            x, sgn, owner = (pa, 1.0, a) if on_a else (pb, -1.0, b)
+            if n is not None:
+                g = sgn * (n @ p.jacobian(x))
+                var += float(g @ p.cov_origin @ g)
+            else:  # no direction (exact touching): the worst direction at the witness point
+                var += float(np.linalg.eigvalsh(p.point_cov(x)).max())
+            s2max += smax(k, owner) ** 2
+        sigma, sig_max = math.sqrt(max(var, 0.0)), math.sqrt(s2max)
+        sigmas = d / sigma if sigma > 0.0 else math.copysign(math.inf, d) if d != 0.0 else 0.0
+        key = (a, b)
+        if key not in best or sigmas < best[key][0]:
+            best[key] = (sigmas, cat, d, sigma, sig_max, tuple(ks), np.array(pa), np.array(pb))
+    mc = _monte_carlo(scene, shapes, placements, moved, list(best), samples, seed) if samples > 0 else None
+    pairs = []
+    for key, (sigmas, cat, d, sigma, sig_max, ks, pa, pb) in best.items():
+        dof = sum(placements[k].rank for k in ks)
+        ratio = d / sig_max if sig_max > 0.0 else (math.inf if d > 0.0 else 0.0)
+        pb_ = _bound(ratio, dof)
+        p_lin = float(stats.norm.sf(sigmas)) if math.isfinite(sigmas) else (0.0 if sigmas > 0 else 1.0)
+        p_mc = None if mc is None else float(np.mean(mc[key]))
+        pairs.append(PairSigma(key[0], key[1], cat, d, sigma, sigmas, sig_max, p_lin, pb_, p_mc,
+                               _status(d, pb_, confidence), tuple(placements[k].name for k in ks), pa, pb))
+    pairs.sort(key=lambda p: p.sigmas)
+
+    by_name = {p.name: p for p in placements}
+
+    def group(members) -> GroupSigma:
+        dof = sum(by_name[n].rank for n in sorted({n for m in members for n in m.placements}))
+        ratios = [m.distance / m.sigma_max if m.sigma_max > 0.0 else (math.inf if m.distance > 0 else 0.0) for m in members]
+        worst = min(ratios)
+        pg = _bound(worst, dof)
+        p_mc = None if mc is None else float(np.mean(np.any([mc[(m.a, m.b)] for m in members], axis=0)))
+        d = min(m.distance for m in members)
+        return GroupSigma(members[0], pg, p_mc, _status(d, pg, confidence))
+
+    by_cat: dict = {}
+    for p in pairs:
+        by_cat.setdefault(p.category, []).append(p)
+    return SigmaReport(tuple(pairs), {c: group(m) for c, m in by_cat.items()}, group(pairs) if pairs else None,
+                       float(confidence), int(samples))
+
+
+def _monte_carlo(scene, shapes, placements, moved, keys, samples: int, seed: int) -> dict:
+    """Owner pair -> ``(samples,) bool``: collides in each seeded draw (exact distances)."""
+    from ..geometry import distance
+
+    rng = np.random.default_rng(seed)
+    D = [p.sample_displacements(samples, rng) for p in placements]
+    eye = np.broadcast_to(np.eye(4), (samples, 4, 4))
+
+    def pose(owner: str) -> np.ndarray:  # (samples, 4, 4): the owner's displacement per draw
+        X = eye
+        for k, m in enumerate(moved):
+            if owner in m:
+                X = D[k] @ X
+        return X
+
+    out = {}
+    for a, b in keys:
+        Xa = pose(a)
+        if b == "workspace":
+            out[(a, b)] = np.array([_workspace_distance([sh.transformed(X) for sh in shapes.get(a, ())], scene.workspace)
+                                    <= 0.0 for X in Xa])
+            continue
+        # distances are invariant under a common rigid motion: re-pose one side only, by the
+        # relative displacement of A seen from B
+        X_rel = _inv_many(pose(b)) @ Xa
+        hit = np.zeros(samples, dtype=bool)
+        for sa in shapes.get(a, ()):
+            for sb in shapes.get(b, ()):
+                hit |= _moved_hits(sa, sb, X_rel)
+        out[(a, b)] = hit
+    return out
+
+
+def _moved_hits(sa, sb, X_rel: np.ndarray) -> np.ndarray:
+    """``(n,) bool``: does ``sa`` moved by each ``X_rel (n, 4, 4)`` touch or penetrate ``sb``?
+
+    A round side (Sphere, Capsule) is re-posed and measured by the batched exact kernels
+    (signed distance ``<= 0``); two polytopes are clipped (:mod:`armguard.clip`, whose polyhedral
+    guards settle every check at the second level), any MAYBE left measured by ``distance``."""
+    from ..clip import Guard, Obstacle, check_many
+    from ..geometry import Capsule, Polygon, Sphere, distance
+    from ..geometry import batch as gb
+
+    def ends(sh):
+        return (sh.center, sh.center) if isinstance(sh, Sphere) else (sh.p0, sh.p1)
+
+    round_a, round_b = isinstance(sa, (Sphere, Capsule)), isinstance(sb, (Sphere, Capsule))
+    if round_a or round_b:
+        mover, other, X = (sa, sb, X_rel) if round_a else (sb, sa, _inv_many(X_rel))
+        p0, p1 = (np.einsum("nij,j->ni", X[:, :3, :3], e) + X[:, :3, 3] for e in ends(mover))
+        if isinstance(other, (Sphere, Capsule)):
+            q0, q1 = ends(other)
+            return gb.capsule_capsule(p0, p1, mover.radius, q0, q1, other.radius).distance <= 0.0
+        return gb.capsule_convex(p0, p1, np.full(len(X), mover.radius), other).distance <= 0.0
+    if isinstance(sa, Polygon) and isinstance(sb, Polygon):
+        return np.array([distance(sa.transformed(X), sb).distance <= 0.0 for X in X_rel])
+    guard, ob, X = (sa, sb, X_rel) if not isinstance(sa, Polygon) else (sb, sa, _inv_many(X_rel))
+    status, _ = check_many(Guard.from_shape(guard), Obstacle.from_shape(ob), np.ascontiguousarray(X))
+    hit = status == 1
+    for i in np.flatnonzero(status == 2):
+        hit[i] = distance(guard.transformed(X[i]), ob).distance <= 0.0
+    return hit
+
+
+@dataclass(frozen=True)
+class ConfidentVerification:
+    """:func:`verify_with_confidence`'s answer: ``report`` (the verifier's, on the grown scene);
+    ``confidence``; ``k`` (the Mahalanobis radius, ``k² = χ²_dof.ppf(confidence)``); ``dof``;
+    ``growth`` (body -> m it was grown by); ``workspace_shrink`` (m); ``scene`` (the grown copy)."""
+
+    report: object
+    confidence: float
+    k: float
+    dof: int
+    growth: dict
+    workspace_shrink: float
+    scene: object
+
+    @property
+    def safe(self) -> bool:
+        """True only when the grown scene verifies SAFE: safe with probability >= ``confidence``."""
+        return bool(self.report.safe)
+
+    @property
+    def status(self):
+        """The verifier's :class:`armguard.verify.VerificationStatus` on the grown scene."""
+        return self.report.status
+
+
+def verify_with_confidence(scene, trajectory, placements, confidence: float = 0.999, **verify_options) -> ConfidentVerification:
+    """Verify ``trajectory`` so that SAFE holds with probability >= ``confidence`` under ``placements``.
+
+    The placed bodies (and, for a robot-base placement, every body) are grown by the confidence
+    ellipsoid's extent ``k σ_max`` (module docstring) on a copy of ``scene``, which
+    ``armguard.verify`` then checks with ``verify_options`` (``stopping_distance``, ``method``, …).
+    A robot-base placement needs a scene with one robot (another robot's links would have to
+    grow too): otherwise UncertaintyError.
+    """
+    from ..verify import verify
+
+    if not 0.0 < float(confidence) < 1.0:
+        raise UncertaintyError(f"confidence must be in (0, 1), got {confidence!r}")
+    placements = _check_placements(scene, placements)
+    dof = sum(p.rank for p in placements)
+    k = math.sqrt(float(stats.chi2.ppf(float(confidence), dof))) if dof > 0 else 0.0
+    growth = {b: 0.0 for b in scene.bodies}
+    shrink = 0.0
+    for p in placements:
+        if p.name in scene.bodies:
+            growth[p.name] += k * p.sigma_max(scene.bodies[p.name].shapes)
+            continue
+        if len(scene.robots) > 1:
+            raise UncertaintyError(f"placement {p.name!r}: a robot-base placement is supported in a scene with one "
+                                   f"robot; scene {scene.name!r} has {list(scene.robots)}")
+        for b, body in scene.bodies.items():
+            growth[b] += k * p.sigma_max(body.shapes)
+        ws = scene.workspace
+        if ws is not None:
+            from ..geometry import Box
+
+            box = Box(0.5 * (ws.lo + ws.hi), 0.5 * (ws.hi - ws.lo))
+            shrink += k * p.sigma_max([box])
+    grown = scene.copy()
+    for b, g in growth.items():
+        if g > 0.0:
+            body = scene.bodies[b]
+            disabled = [pair for pair in scene.disabled_pairs if b in pair]
+            grown.remove_body(b)
+            grown.add_body(b, [grow_shape(s, g) for s in body.shapes], category=body.category)
+            for pair in disabled:
+                grown.disable_pair(*sorted(pair))
+    if shrink > 0.0:
+        ws = scene.workspace
+        if np.any(ws.hi - ws.lo <= 2.0 * shrink):
+            raise UncertaintyError(f"verify_with_confidence: the workspace box shrinks by {shrink:.3g} m on each side "
+                                   "and vanishes; no trajectory can be verified at this confidence")
+        grown.set_workspace(ws.lo + shrink, ws.hi - shrink)
+    report = verify(grown, trajectory, **verify_options)
+    return ConfidentVerification(report, float(confidence), k, dof, {b: g for b, g in growth.items() if g > 0.0},
+                                 shrink, grown)
