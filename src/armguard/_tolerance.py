@@ -105,6 +105,10 @@ class Tolerances:
         (touching counts as intersecting, as for ``intersects``); also the margin by which a
         shell cell must clear the test object to be labelled OUTSIDE, and a vertex may stick
         out of it and still be labelled INSIDE.
+    paper_agreement : float, m
+        ``bench/paper_fidelity.py``: two checkers' distances closer than this agree (the paper
+        checker's nearest distance is "right"); coal holds meshes in float32 (up to 0.5 µm at
+        8 m, docs/models.md), so agreement cannot be asked to be tighter than about a micrometre.
     """
 
     length: float = 1e-12
@@ -134,6 +138,7 @@ class Tolerances:
     rotation_orthonormality: float = 1e-9
     cspace_contact: float = 1e-6
     cspace_max_depth: int = 2
+    paper_agreement: float = 1e-6
 
 
 DEFAULT_TOLERANCES = Tolerances()
