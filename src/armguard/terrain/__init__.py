@@ -13,9 +13,10 @@ from ._io import depth_to_points, read_points, write_points
 from ._map import ElevationMap, OutlierRule
 from ._pyramid import PyramidLevel, TerrainPyramid, TerrainResult, TerrainStatus
 from ._volumes import bounding_box, link_volume
-from ._guard import TERRAIN, TerrainGuard, TerrainReport
+from ._guard import TERRAIN, TerrainCell, TerrainGuard, TerrainReport
 from ._detect import TerrainDetectionReport, attach_terrain, check_with_terrain
-from ._sweep import TerrainCell, TerrainSweep, sweep_terrain, verify_with_terrain
+from ._sweep import TerrainSweep, sweep_terrain, verify_with_terrain
+from ._files import load_terrain, verify_items
 
 __all__ = [
     "ElevationMap",
@@ -36,6 +37,8 @@ __all__ = [
     "TerrainSweep",
     "sweep_terrain",
     "verify_with_terrain",
+    "load_terrain",
+    "verify_items",
     "read_points",
     "write_points",
     "depth_to_points",

@@ -32,7 +32,7 @@ from ._map import ElevationMap
 from ._pyramid import TerrainPyramid
 from ._volumes import link_volume, local_obbs, pack_obbs
 
-__all__ = ["TERRAIN", "TerrainGuard", "TerrainReport"]
+__all__ = ["TERRAIN", "TerrainCell", "TerrainGuard", "TerrainReport"]
 
 TERRAIN = "terrain"
 """The category name (``by_category`` key) and the obstacle name of the terrain."""
@@ -55,6 +55,28 @@ def _length(x, name: str) -> float:
     if not (math.isfinite(v) and v >= 0.0):
         raise TerrainError(f"{name}: must be finite and >= 0, got {v}")
     return v
+
+
+@dataclass(frozen=True)
+class TerrainCell:
+    """The terrain feature of a link–terrain pair: cell ``(row, col)`` of the map (``-1, -1``: the
+    ground beyond the map's edge), ``known`` whether it was seen; ``kind`` ("cell", "unseen cell" or
+    "off the map") and ``index`` (``row * nx + col``, -1 off the map) as for a polytope feature."""
+
+    row: int
+    col: int
+    known: bool
+    index: int = -1
+
+    @property
+    def kind(self) -> str:
+        return "off the map" if self.row < 0 else ("cell" if self.known else "unseen cell")
+
+    def __str__(self) -> str:
+        return self.kind if self.row < 0 else f"{self.kind} ({self.row}, {self.col})"
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind, "row": self.row, "col": self.col, "known": self.known, "index": self.index}
 
 
 @dataclass(frozen=True)
@@ -108,6 +130,7 @@ class TerrainReport:
     reach: float
     unknown_margin: float
     elapsed_us: float
+    nx: int = field(default=0, repr=False)
 
     def pair(self):
         """The nearest link–terrain pair as an :class:`armguard.PairResult` of category
@@ -116,7 +139,9 @@ class TerrainReport:
 
         if self.link is None or self.p_WA is None:
             return None
-        cell = None if self.cell is None else {"row": self.cell[0], "col": self.cell[1], "unknown": self.unknown}
+        nx = self.nx
+        cell = (TerrainCell(-1, -1, False) if self.cell is None else
+                TerrainCell(self.cell[0], self.cell[1], not self.unknown, self.cell[0] * nx + self.cell[1]))
         return PairResult(self.distance, self.p_WA, self.p_WB, self.link, TERRAIN, TERRAIN, self.link, TERRAIN, cell)
 
     def to_dict(self) -> dict:
@@ -383,7 +408,8 @@ class TerrainGuard:
             link, pA, pB = self.owners[k], wit[u, k, :3].copy(), wit[u, k, 3:].copy()
             pA.flags.writeable = pB.flags.writeable = False
         return TerrainReport(status, d, dk, du, link, cell, unk, pA, pB, per, res.level, res.boxes_tested, res.tests,
-                             thr, sd, rng, self.unknown_margin, (time.perf_counter() - t0) * 1e6)
+                             thr, sd, rng, self.unknown_margin, (time.perf_counter() - t0) * 1e6,
+                             self.pyramid.map.shape[1])
 
     def collides_many(self, Q) -> np.ndarray:
         """``(M,) bool``: some moving shape within the collision level of a known or filled column, per

@@ -41,29 +41,11 @@ import numpy as np
 from .._errors import TerrainError, VerificationError
 from ..verify import Clearance, ClearanceProfile, Collision, VerificationReport, VerificationStatus
 from ..verify._advance import advance_step
-from ._guard import TERRAIN, TerrainGuard
+from ._guard import TERRAIN, TerrainCell, TerrainGuard
 
-__all__ = ["TerrainCell", "TerrainSweep", "sweep_terrain", "verify_with_terrain"]
+__all__ = ["TerrainSweep", "sweep_terrain", "verify_with_terrain"]
 
 _BISECTIONS = 60
-
-
-@dataclass(frozen=True)
-class TerrainCell:
-    """The terrain feature of a contact: cell ``(row, col)`` of the map (``-1, -1``: off the map),
-    ``known`` whether it was seen."""
-
-    row: int
-    col: int
-    known: bool
-
-    def __str__(self) -> str:
-        if self.row < 0:
-            return "off the map"
-        return f"{'' if self.known else 'unseen '}cell ({self.row}, {self.col})"
-
-    def to_dict(self) -> dict:
-        return {"row": self.row, "col": self.col, "known": self.known}
 
 
 @dataclass(frozen=True)
@@ -146,7 +128,7 @@ def sweep_terrain(guard: TerrainGuard, trajectory, *, stopping_distance: float =
 
     ``stopping_distance`` (m): the terrain grows by it; ``q_others``: where the other robots stand
     (default: home); ``reach`` (m): the distance queries' reach (default
-    ``max(guard.reach, 0.15, m + unknown_margin)``: a larger reach takes longer steps far from the
+    ``max(guard.reach, 0.15, m + unknown_margin + 0.1)``: a larger reach takes longer steps far from the
     ground, each step costing more candidate columns)."""
     t_start = _time.perf_counter()
     scene, tol = guard.scene, guard.tol
@@ -154,7 +136,7 @@ def sweep_terrain(guard: TerrainGuard, trajectory, *, stopping_distance: float =
     if not (math.isfinite(m) and m >= 0.0):
         raise VerificationError(f"stopping_distance: expected a finite number >= 0 (m), got {stopping_distance!r}")
     mu = guard.unknown_margin
-    R = max(guard.reach, 0.15, m + mu) if reach is None else float(reach)
+    R = max(guard.reach, 0.15, m + mu + 0.1) if reach is None else float(reach)
     if not (math.isfinite(R) and R > m + mu):
         raise TerrainError(f"reach: must be finite and > stopping distance + unknown_margin ({m + mu:g} m), got {R!r}")
     rname = getattr(trajectory, "robot_name", None)
@@ -231,7 +213,8 @@ def sweep_terrain(guard: TerrainGuard, trajectory, *, stopping_distance: float =
                 rc = cell[0, k]
                 first = Collision(time=t, q=q_full[k0:k1].copy(), distance=float(known[k]),
                                   link=guard.owners[k].split("/", 1)[-1], obstacle=TERRAIN, payload=None,
-                                  feature=TerrainCell(int(rc[0]), int(rc[1]), True),
+                                  feature=TerrainCell(int(rc[0]), int(rc[1]), True,
+                                                      int(rc[0]) * guard.pyramid.map.shape[1] + int(rc[1])),
                                   p_W=0.5 * (wit[0, k, :3] + wit[0, k, 3:]), p_WA=wit[0, k, :3].copy(),
                                   p_WB=wit[0, k, 3:].copy(), a=guard.owners[k], b=TERRAIN, category=TERRAIN,
                                   check="link-terrain", objects=("arm", TERRAIN), segment=si)

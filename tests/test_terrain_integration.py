@@ -1,0 +1,297 @@
+"""The terrain integrated with the robot system: TerrainGuard, the Detector's terrain category, the
+certified terrain sweep, the rover's body hierarchy, coal's height field as the reference, the CLI."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import armguard
+from armguard.detect import DetectionReport, Status
+from armguard.geometry import ConvexPolyhedron, Prism, Sphere, distance
+from armguard.kinematics import Trajectory
+from armguard.terrain import (
+    BodyHierarchy,
+    ElevationMap,
+    TerrainGuard,
+    attach_terrain,
+    check_with_terrain,
+    coal_checker,
+    dilated,
+    link_volume,
+    load_terrain,
+    sweep_terrain,
+    verify_with_terrain,
+)
+from armguard.terrain.generate import make_terrain
+from armguard.verify import VerificationStatus
+
+ROCKY = "reference/terrain/rocky.npz"
+
+
+@pytest.fixture(scope="module")
+def model():
+    return armguard.load_model("rover")
+
+
+@pytest.fixture(scope="module")
+def truth(model):
+    """The rocky reference terrain's ground truth (fully known), centred under the arm's base."""
+    with np.load(ROCKY) as z:
+        h = np.asarray(z["heights"], dtype=np.float64)
+    return ElevationMap.from_heights(h, 0.05, origin=(0.5 - 1.6, -1.6))
+
+
+@pytest.fixture(scope="module")
+def guard(model, truth):
+    return TerrainGuard(model, truth)
+
+
+def _traj(q_deg, T=4.0):
+    W = np.deg2rad(np.asarray(q_deg, dtype=np.float64))
+    return Trajectory("arm", ["azimuth", "elevation", "elbow", "wrist", "turret"],
+                      np.linspace(0.0, T, len(W)), W)
+
+
+# ------------------------------------------------------------------------------------------ guard
+def test_rover_links_are_their_obps(model):
+    sc = model.scene
+    for it in sc.shapes_at(sc.flat_q(sc.default_q())):
+        v = link_volume(it.shape)
+        if isinstance(it.shape, ConvexPolyhedron):
+            assert isinstance(v, Prism) and v.n_sides in (8, 16)  # the URDF's OBPs, recognised
+            P = v.as_polyhedron()
+            assert max(distance(Sphere(p, 0.0), P).distance for p in it.shape.core_points) <= 0.0
+
+
+def test_guard_distances_equal_the_pyramid_exact_mode(model, guard):
+    """The compiled per-link distances agree with TerrainPyramid.check(exact=True) on shape objects."""
+    Q = model.scene_q(model.random_q(60, rng=4))
+    R = 0.1
+    seen = 0
+    for q in Q:
+        known, unknown, res, cell, wit = guard.distances(q, reach=R)
+        vols, shapes = guard.posed(q)
+        ref = guard.pyramid.check(vols, shapes=shapes, exact=True, clearance=R)
+        want = np.where(ref.link_known <= R, ref.link_known, np.inf)
+        np.testing.assert_allclose(known, want, atol=1e-9)
+        assert np.all(np.isinf(unknown) | (unknown <= R))  # only the off-map slabs: the map is fully known
+        seen += int(np.isfinite(known).sum())
+        for k in np.flatnonzero(np.isfinite(known)):  # witness points: |p_WA - p_WB| = |d|
+            assert abs(np.linalg.norm(wit[0, k, :3] - wit[0, k, 3:]) - abs(known[k])) < 1e-7
+    assert seen > 20
+
+
+def test_guard_status_rules(model, truth):
+    g = TerrainGuard(model, truth)
+    low = np.deg2rad([0, 30, 20, 30, 0])  # the turret in the ground in front of the wheels
+    r = g.check(low)
+    assert r.status is Status.COLLISION and r.distance < 0 and r.link == "arm/turret" and not r.unknown
+    home = model.scene.flat_q(model.scene.default_q())
+    assert g.check(home).status is Status.CLEAR
+    # the same ground unseen: never CLEAR by omission, INCOMPLETE (a known contact would still be COLLISION)
+    blind = ElevationMap(truth.heights, truth.origin, truth.cell, np.zeros(truth.shape, bool), truth.counts,
+                         truth.floor)
+    rb = TerrainGuard(model, blind).check(low)
+    assert rb.status is Status.INCOMPLETE and rb.unknown and math.isinf(rb.known_distance)
+    assert rb.pair().feature.kind == "unseen cell"
+
+
+def test_off_the_map_is_unknown(model):
+    """A small map in front of the rover: the arm reaching past its edge near the ground is INCOMPLETE."""
+    m = ElevationMap.from_heights(np.zeros((4, 4)), 0.05, origin=(3.0, 3.0))  # far away, flat at z = 0
+    g = TerrainGuard(model, m, unknown_margin=0.05)
+    r = g.check(np.deg2rad([0, 30, 20, 30, 0]))  # turret below z = 0, far from the map
+    assert r.status is Status.INCOMPLETE and r.cell is None and r.unknown
+
+
+def test_collides_many_agrees_with_check(model, guard):
+    Q = model.scene_q(model.random_q(80, rng=5))
+    got = guard.collides_many(Q)
+    want = np.array([guard.check(q).known_distance <= 1e-9 or guard.check(q).unknown_distance <= 1e-9 for q in Q])
+    assert got.any() and np.array_equal(got, want)
+
+
+# ------------------------------------------------------------------------------------------ detector
+def test_detector_terrain_category(model, truth, guard):
+    sc = model.scene
+    plain = armguard.Detector(sc, threshold=0.05)
+    assert plain.terrain is None and type(plain.check(sc.flat_q(sc.default_q()))) is DetectionReport
+    assert "check" not in plain.__dict__  # nothing attached: the class's check, untouched
+    det = armguard.Detector(sc, threshold=0.05, terrain=truth)
+    low = np.deg2rad([0, 30, 20, 30, 0])
+    rep = det.check(low)
+    assert rep.status is Status.COLLISION and rep.detector_status is not None
+    t = rep.by_category["terrain"]
+    assert t.category == "terrain" and t.b == "terrain" and t.distance == rep.terrain.distance
+    assert rep.nearest.distance <= t.distance and t in rep.within_threshold
+    for cat in plain.check(low).by_category:  # the kernel's categories are all still there
+        assert cat in rep.by_category
+    d = json.loads(json.dumps(rep.to_dict()))
+    assert d["terrain"]["status"] == "collision" and d["by_category"]["terrain"]["obstacle"] == "terrain"
+    again = check_with_terrain(plain, guard, low)
+    assert again.terrain.distance == pytest.approx(rep.terrain.distance, abs=1e-12)
+    attach_terrain(det, None)
+    assert type(det.check(low)) is DetectionReport
+
+
+# ------------------------------------------------------------------------------------------ sweep
+def _dense(guard, traj, n=300):
+    ts = np.linspace(0.0, traj.duration, n)
+    out = []
+    for t in ts:
+        known, unknown = guard.distances(np.asarray(traj.at(t)), reach=0.3)[:2]
+        out.append((float(known.min()), float(unknown.min())))
+    return ts, np.array(out)
+
+
+def test_sweep_finds_the_first_contact_dense_sampling_confirms(model, guard):
+    traj = model.scene.trajectories["place_instrument"]
+    sw = sweep_terrain(guard, traj)
+    assert sw.status is VerificationStatus.COLLISION
+    c = sw.first_contact
+    assert c.category == "terrain" and c.obstacle == "terrain" and c.feature.known
+    assert c.distance <= guard.tol.verify_contact + 1e-12
+    ts, d = _dense(guard, traj)
+    before = ts < c.time - 1e-9
+    assert np.all(d[before, 0] > -1e-9)  # no sample before the reported contact is inside the terrain
+    assert np.any(d[~before, 0] <= 1e-6)  # and the contact is real
+
+
+def test_sweep_safe_is_proven_dense_sampling_confirms(model, guard):
+    traj = _traj([[0, 0, 0, 0, 0], [40, -20, 10, 0, 45], [-40, 0, 0, 0, 0]])  # sweeping high over the ground
+    sw = sweep_terrain(guard, traj, stopping_distance=0.02)
+    assert sw.status is VerificationStatus.SAFE and sw.first_contact is None and sw.intervals >= 2
+    _, d = _dense(guard, traj)
+    assert np.all(d[:, 0] >= sw.lower_bound - 1e-9) and sw.lower_bound > 0.02
+    assert np.all(d[:, 1] > 0.02 + guard.unknown_margin)
+
+
+def test_sweep_over_unseen_terrain_is_incomplete(model, truth):
+    """Unseen cells under the arm's path: INCOMPLETE, never SAFE (and the time is reported)."""
+    traj = _traj([[0, 0, 0, 0, 0], [0, 15, 10, 10, 0]])  # down towards the ground, stopping above it
+    g = TerrainGuard(model, truth)
+    assert sweep_terrain(g, traj).status is VerificationStatus.SAFE
+    known = truth.known.copy()
+    known[:, 36:46] = False  # the ground under the arm's reach, unseen
+    blind = ElevationMap(truth.heights, truth.origin, truth.cell, known, truth.counts, truth.floor)
+    sw = sweep_terrain(TerrainGuard(model, blind, unknown_margin=0.2), traj)
+    assert sw.status is VerificationStatus.INCOMPLETE and sw.unknown_at is not None and "unseen" in sw.reason
+
+
+def test_verify_with_terrain_merges_reports(model, truth):
+    sc = model.scene
+    rep = verify_with_terrain(sc, sc.trajectories["place_instrument"], truth)
+    assert rep.status is VerificationStatus.COLLISION and rep.first_collision.category == "terrain"
+    assert "terrain" in rep.profile.by_category and len(rep.profile.time) == len(rep.profile.overall)
+    assert np.all(np.diff(rep.profile.time) >= 0)
+    json.loads(rep.to_json())
+    assert "terrain" in rep.summary()
+    safe = verify_with_terrain(sc, _traj([[0, 0, 0, 0, 0], [30, -10, 0, 0, 0]]), truth)
+    assert safe.status is VerificationStatus.SAFE and "proven" in safe.reason
+
+
+# ------------------------------------------------------------------------------------------ body
+def test_body_hierarchy_from_the_urdf(model):
+    h = BodyHierarchy.from_model(model)
+    names = [n.name for n in h.nodes]
+    assert h.nodes[0].name == "vehicle" and {"mast", "wheels", "chassis_0"} <= set(names)
+    mast = h.nodes[names.index("mast")]
+    assert sorted(h.nodes[c].name for c in mast.children) == ["mast_0", "mast_1"]  # the pole and the camera head
+    wheels = h.nodes[names.index("wheels")]
+    sides = [h.nodes[c] for c in wheels.children]
+    assert [s.name for s in sides] == ["wheels:y-", "wheels:y+"]  # the two suspension sides
+    assert len(h.shapes) == 9 and h.depth == 4
+
+
+def test_body_hierarchy_never_misses_what_the_flat_check_finds(model, guard):
+    h = BodyHierarchy.from_model(model)
+    rng = np.random.default_rng(8)
+    Q = model.scene_q(model.random_q(120, rng=9))
+    fewer = 0
+    for q in Q:
+        vols, shapes = guard.posed(q)
+        c = float(rng.uniform(0.0, 0.1))
+        for exact in (False, True):
+            r = h.check(vols, shapes=shapes, exact=exact, clearance=c)
+            f = h.check_flat(vols, shapes=shapes, exact=exact, clearance=c)
+            assert r.hits == f.hits
+            if exact and f.hits:
+                assert r.min_distance == pytest.approx(f.min_distance, abs=1e-12)
+        fewer += r.tests < f.tests
+    assert fewer > len(Q) // 2
+
+
+def test_body_hierarchy_distance_is_the_detectors(model, guard):
+    h = BodyHierarchy.from_model(model)
+    det = armguard.Detector(model.scene, threshold=0.05)
+    Q = model.scene_q(model.random_q(60, rng=10))
+    for q in Q:
+        vols, shapes = guard.posed(q)
+        r = h.check(vols, shapes=shapes, exact=True, clearance=0.05)
+        env = det.check(q).by_category["environment"].distance
+        assert r.hit == (env <= 0.05)
+        if r.hit:
+            assert r.min_distance == pytest.approx(env, abs=1e-7)
+
+
+def test_body_against_terrain_top_down(model, truth):
+    h = BodyHierarchy.from_model(model)
+    r = h.check_terrain(guard_pyramid(truth))
+    assert r.hit and all(name.startswith("wheels_") for _, name in r.hits)  # the wheels stand on the ground
+
+
+def guard_pyramid(m):
+    from armguard.terrain import TerrainPyramid
+
+    return TerrainPyramid(m)
+
+
+# ------------------------------------------------------------------------------------------ coal
+def test_coal_heightfield_sandwiches_the_pyramid(model):
+    m = make_terrain(n=48, cell=0.05, sigma=0.05, rocks=6, seed=12)
+    m = ElevationMap.from_heights(m.heights, m.cell, origin=(0.5 - 1.2, -1.2))
+    ck = coal_checker(model, m)
+    g, gd = TerrainGuard(model, m, unknown_margin=0.0), TerrainGuard(model, dilated(m), unknown_margin=0.0)
+    Qp = model.random_q(60, rng=11)
+    R, n_sep, n_hit = 0.1, 0, 0
+    base = armguard.checker(model, "coal")
+    for qp, q in zip(Qp, model.scene_q(Qp)):
+        np.testing.assert_allclose(ck.pair_distances(qp).distance, base.pair_distances(qp).distance)  # unchanged
+        dc = ck.terrain_distances(qp, reach=R, tol=1e-8)
+        dp = np.minimum(*g.distances(q, reach=R)[:2])
+        dd = np.minimum(*gd.distances(q, reach=R)[:2])
+        for lo, c, hi in zip(dd, dc, dp):
+            if hi > 0.0:  # separated from the columns: dilated <= coal <= columns
+                n_sep += math.isfinite(c)
+                assert lo <= c + 1e-7 and (c <= hi + 1e-7 or math.isinf(hi))
+            else:  # a pyramid contact is always a coal contact
+                n_hit += 1
+                assert c <= 1e-7
+    assert n_sep > 10 and n_hit > 5
+
+
+# ------------------------------------------------------------------------------------------ files, CLI
+def test_load_terrain_centres_the_sensed_map_under_the_arm(model):
+    m = load_terrain(ROCKY, model.scene, robot="arm")
+    centre = m.origin + 0.5 * m.cell * np.array(m.shape[::-1])
+    np.testing.assert_allclose(centre, [0.5, 0.0], atol=1e-12)
+    assert 0.3 < m.known.mean() < 0.7  # the stereo points: holes, filled conservatively
+
+
+def test_cli_check_and_verify_with_terrain():
+    from armguard.cli import main
+
+    run = CliRunner()
+    r = run.invoke(main, ["check", "rover", "--q", "0,30,20,30,0", "--deg", "--terrain", ROCKY, "--json"])
+    assert r.exit_code == 1, r.output
+    d = json.loads(r.output)
+    assert d["status"] == "collision" and d["terrain"]["status"] == "collision"
+    r = run.invoke(main, ["check", "rover", "--terrain", ROCKY])
+    assert r.exit_code == 0, r.output
+    r = run.invoke(main, ["verify", "rover", "place_instrument", "--terrain", ROCKY])
+    assert r.exit_code == 1 and "terrain" in r.output
