@@ -85,7 +85,9 @@ def parse_q(sc, q_text: str, deg: bool):
 @click.option("--active", default=None, help="Check only this robot against everything (default: all arms).")
 @click.option("--budget-us", type=float, default=None, help="Anytime mode: time budget in microseconds.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
-def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_us, as_json) -> None:
+@click.option("--terrain", "terrain_file", type=click.Path(dir_okay=False), default=None,
+              help="Add the terrain category: a sensed terrain file (armguard.terrain.load_terrain).")
+def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_us, as_json, terrain_file) -> None:
     """Check SCENE (a built-in name or a scene file) at one configuration.
 
     Exit status: 0 clear / warning / incomplete, 1 collision, 2 bad input.
@@ -101,6 +103,10 @@ def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_u
     q = sc.flat_q(sc.default_q()) if q_text is None else parse_q(sc, q_text, deg)
     warm_up()
     det = Detector(sc, threshold=threshold, stopping_distance=stopping_distance, active=active)
+    if terrain_file is not None:  # the terrain category (armguard.terrain), whatever the backend
+        from ..terrain import attach_terrain, load_terrain
+
+        attach_terrain(det, load_terrain(terrain_file, sc, robot=active))
     rep = det.check(q, budget_us=budget_us)
     collided = rep.status.value == "collision"
     if as_json:

@@ -50,8 +50,10 @@ def resolve_trajectories(scene, specs):
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None, help="Write a PNG of clearance vs time here.")
 @click.option("--workers", type=int, default=None, help="Run on a Dask LocalCluster with N worker processes.")
 @click.option("--scheduler", default=None, help="Run on an existing Dask cluster (scheduler address).")
+@click.option("--terrain", "terrain_file", type=click.Path(dir_okay=False), default=None,
+              help="Also verify against a sensed terrain file (certified; serial; armguard.terrain.load_terrain).")
 def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_distance, threshold, robot, report_path,
-               plot_path, workers, scheduler) -> None:
+               plot_path, workers, scheduler, terrain_file) -> None:
     """Verify TRAJECTORIES (.yaml files, canned names of SCENE, or 'all') in SCENE.
 
     Exit status: 0 when every trajectory is safe, 1 when one collides or could not be verified.
@@ -70,7 +72,11 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
     console.print("compiling kernels (first run only)…", style="dim")
     kwargs = dict(stopping_distance=stopping_distance, method=method, frequency=frequency, joint_step=joint_step,
                   robot=robot, threshold=threshold)
-    if len(items) > 1 or workers or scheduler:
+    if terrain_file is not None:  # the terrain category (armguard.terrain), trajectory by trajectory
+        from ..terrain import verify_items
+
+        reports = verify_items(sc, items, terrain_file, **kwargs)
+    elif len(items) > 1 or workers or scheduler:
         with Progress(TextColumn("verifying"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                       console=console, transient=True) as bar:
             task = bar.add_task("verify", total=len(items))

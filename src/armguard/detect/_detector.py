@@ -96,7 +96,12 @@ class Detector:
         distances are exact at any range; a finite margin (at least the threshold and the
         stopping distance, raised to it if smaller) keeps the status and the within-threshold
         pairs exact and reports nearest pairs only among the listed ones.
+    terrain : armguard.terrain.TerrainGuard, TerrainPyramid or ElevationMap, optional
+        Adds the ``"terrain"`` category to ``check`` (:func:`armguard.terrain.attach_terrain`;
+        composed outside the kernel, no cost without it).  ``detector.terrain`` is its guard.
     """
+
+    terrain = None  # the attached armguard.terrain.TerrainGuard, if any
 
     def __new__(cls, scene=None, *args, backend: str | None = None, backend_options=None, **kwargs):
         # another backend (argument > $ARMGUARD_BACKEND > armguard.toml): the same API over its Checker
@@ -110,7 +115,7 @@ class Detector:
 
     def __init__(self, scene, threshold: float = 0.05, *, stopping_distance: float = 0.0, active: str | None = None,
                  tol: Tolerances = DEFAULT_TOLERANCES, reach_margin: float = math.inf, backend: str | None = None,
-                 backend_options=None) -> None:
+                 backend_options=None, terrain=None) -> None:
         self.scene = scene
         self._threshold = _check_length(threshold, "threshold")
         self._stopping = _check_length(stopping_distance, "stopping_distance")
@@ -119,6 +124,10 @@ class Detector:
         self._active = active
         self._ns_per_pair = _DEFAULT_NS_PER_PAIR
         self.prepare()
+        if terrain is not None:  # the terrain category: check() returns armguard.terrain's merged report
+            from ..terrain import attach_terrain
+
+            attach_terrain(self, terrain)
 
     # ------------------------------------------------------------------ set-up
     def prepare(self) -> "Detector":
