@@ -60,16 +60,13 @@ def _reach(rng, m, k=6, link=0.15):
 
 def _coal_heightfield(m):
     """coal's HeightFieldOBBRSS on the map's cell corners (each at its highest adjacent cell) and
-    its placement in W."""
+    its placement in W (``armguard.terrain.coal_heightfield``)."""
     import coal
 
-    h = m.heights
-    ny, nx = h.shape
-    pad = np.pad(h, 1, constant_values=-np.inf)
-    corner = np.maximum.reduce([pad[:-1, :-1], pad[:-1, 1:], pad[1:, :-1], pad[1:, 1:]])  # (ny + 1, nx + 1)
-    hf = coal.HeightFieldOBBRSS(nx * m.cell, ny * m.cell, np.ascontiguousarray(corner[::-1]), m.floor)  # rows: +y first
-    T = coal.Transform3s(np.eye(3), np.array([m.origin[0] + nx * m.cell / 2, m.origin[1] + ny * m.cell / 2, 0.0]))
-    return hf, T
+    from armguard.terrain import coal_heightfield
+
+    hf, X = coal_heightfield(m)
+    return hf, coal.Transform3s(X[:3, :3], X[:3, 3])
 
 
 def _coal_links(vols):
@@ -215,7 +212,107 @@ def _scaling(quick: bool) -> str:
     return "\n".join(lines)
 
 
+def _rover(quick: bool) -> str:
+    """The rover's arm against a sensed terrain: the terrain category, certified sweeps, coal's height field."""
+    import armguard
+    from armguard.terrain import (BodyHierarchy, ElevationMap, TerrainGuard, coal_checker, dilated, load_terrain,
+                                  sweep_terrain)
+
+    model = armguard.load_model("rover")
+    sc = model.scene
+    sensed = load_terrain("reference/terrain/rocky.npz", sc)
+    with np.load("reference/terrain/rocky.npz") as z:
+        truth = ElevationMap.from_heights(z["heights"].astype(float), 0.05, origin=tuple(sensed.origin))
+    n = 100 if quick else 500
+    Qp = model.random_q(n, rng=3)
+    Q = model.scene_q(Qp)
+    g = TerrainGuard(model, sensed)
+    det = armguard.Detector(sc, threshold=0.05)
+    dt = armguard.Detector(sc, threshold=0.05, terrain=sensed)
+    rep = 1 if quick else 3
+    t_g = _cpu(lambda: [g.check(q) for q in Q], rep) / n
+    t_d = _cpu(lambda: [det.check(q) for q in Q], rep) / n
+    t_dt = _cpu(lambda: [dt.check(q) for q in Q], rep) / n
+    st = [g.check(q) for q in Q]
+    counts = {s: sum(r.status.value == s for r in st) for s in ("clear", "warning", "incomplete", "collision")}
+    boxes = statistics.mean(r.boxes_tested for r in st)
+    traj = sc.trajectories["place_instrument"]
+    gt = TerrainGuard(model, truth)
+    sweeps = []
+    for name, gg in (("sensed", g), ("ground truth", gt)):
+        t0 = time.thread_time()
+        sw = sweep_terrain(gg, traj)
+        sweeps.append((name, sw, time.thread_time() - t0))
+    # coal's height field on the ground truth: the sandwich dilated <= coal <= columns, verdicts
+    ck = coal_checker(model, truth)
+    g0, gd = TerrainGuard(model, truth, unknown_margin=0.0), TerrainGuard(model, dilated(truth), unknown_margin=0.0)
+    R, m_c = 0.1, (60 if quick else 300)
+    ok = sep = contact = agree_v = pairs = 0
+    gap = []
+    t_coal = t_ours = 0.0
+    for qp, q in zip(Qp[:m_c], Q[:m_c]):
+        t0 = time.thread_time()
+        dc = ck.terrain_distances(qp, reach=R, tol=1e-8)
+        t1 = time.thread_time()
+        dp = np.minimum(*g0.distances(q, reach=R)[:2])
+        t2 = time.thread_time()
+        t_coal += t1 - t0
+        t_ours += t2 - t1
+        dd = np.minimum(*gd.distances(q, reach=R)[:2])
+        for lo, c, hi in zip(dd, dc, dp):
+            pairs += 1
+            agree_v += (c <= 1e-7) == (hi <= 1e-7)
+            if hi > 0.0:
+                sep += 1
+                ok += (lo <= c + 1e-7) and (c <= hi + 1e-7 or np.isinf(hi))
+                if np.isfinite(hi) and np.isfinite(c):
+                    gap.append(hi - c)
+            else:
+                contact += 1
+                ok += c <= 1e-7
+    body = BodyHierarchy.from_model(model)
+    bt = bf = 0
+    for q in Q[:m_c]:
+        vols, shapes = g.posed(q)
+        bt += body.check(vols, clearance=0.05).tests
+        bf += body.check_flat(vols, clearance=0.05).tests
+    lines = [
+        "### The rover's arm against a sensed terrain",
+        "",
+        f"`reference/terrain/rocky.npz`'s stereo points as the map ({sensed.known.mean():.0%} of the 64² cells seen, "
+        f"centred under the arm's base), {n} random in-limit arm configurations (3 moving shapes: two octagonal OBPs "
+        "and the turret's box).",
+        "",
+        "| query | µs per configuration | notes |",
+        "|---|---|---|",
+        f"| `Detector.check` (no terrain) | {fmt_ns(t_d)} | the fused kernel |",
+        f"| `TerrainGuard.check` | {fmt_ns(t_g)} | {boxes:.0f} pyramid boxes visited on average; "
+        f"{counts['clear']} clear, {counts['warning']} warning, {counts['incomplete']} incomplete (unseen terrain "
+        f"within 10 cm), {counts['collision']} collision |",
+        f"| `Detector(..., terrain=map).check` | {fmt_ns(t_dt)} | both, one merged report |",
+        *[f"| `sweep_terrain` `place_instrument` on the {nm} map | {fmt_ns(tt)} per trajectory | "
+          f"{sw.status.value}, {sw.evaluations} evaluations"
+          + (f", first contact at t = {sw.first_contact.time:.3f} s ({sw.first_contact.a})" if sw.first_contact else "")
+          + (f", unseen terrain reached at t = {sw.unknown_at.time:.3f} s" if sw.unknown_at else "") + " |"
+          for nm, sw, tt in sweeps],
+        "",
+        f"coal's `HeightFieldOBBRSS` on the ground-truth map, {m_c} configurations × 3 moving geometries "
+        f"({pairs} link–terrain pairs, reach {R * 100:.0f} cm): coal computes no height-field distance, so its signed "
+        f"distance is the least `security_margin` at which it reports a collision (bisection to 10 nm); "
+        f"{fmt_ns(t_coal / m_c)} per configuration against {fmt_ns(t_ours / m_c)} for the guard's distances. "
+        f"The sandwich *dilated columns ≤ coal ≤ columns* holds on {ok} of {pairs} pairs ({sep} separated, {contact} "
+        f"in contact: every pyramid contact is a coal contact); verdicts agree on {agree_v} of {pairs}; where both are "
+        f"within reach and separated, coal is closer than the columns by a median {np.median(gap) * 1e3 if gap else 0:.1f} mm "
+        f"(max {max(gap) * 1e3 if gap else 0:.1f} mm): its surface runs through the cell corners at the highest adjacent cell.",
+        "",
+        f"The body hierarchy (vehicle → chassis, mast → pole / camera head, wheels → two sides → wheels; 16 nodes, 9 leaves) "
+        f"against the arm's volumes at 5 cm: {bt / m_c:.1f} OBB tests top-down per configuration against {bf / m_c:.1f} flat, "
+        "with the same hits (tests/test_terrain_integration.py).",
+    ]
+    return "\n".join(lines)
+
+
 def run(quick: bool) -> str:
     load = " / ".join(f"{v:.1f}" for v in __import__("os").getloadavg())
-    return "\n\n".join([_same_map(quick), _scaling(quick),
+    return "\n\n".join([_same_map(quick), _scaling(quick), _rover(quick),
                         f"Machine load while measuring (1/5/15-minute load average): {load}."])
