@@ -15,15 +15,17 @@ rows are zero: :func:`._clearance.map_links` refuses a link they move).
 
 * :meth:`ForbiddenMap.build` (:func:`._build.build`): serial or on Dask, resumable;
 * :class:`ForbiddenMap`: ``allowed(q)``, ``allowed_many(Q)``, ``neighbourhood(q)``, ``info()``;
-* :class:`CombinedChecker`: Fig. 14 (map + exact Detector for the rest);
+* :class:`CombinedChecker`: Fig. 14 (map + a geometric backend for the rest; the ``forbidden``
+  backend, ``armguard.checker(model, "forbidden", {"map": PATH})``, wraps it as a Checker);
+* :class:`CheckerClearance`: the build's clearances from any backend that answers distances;
 * :func:`check_exactness`: the map against the exact check on random configurations.
 """
 
 from __future__ import annotations
 
 from ._build import BuildReport, BuildStatus, build, model_files_of
-from ._clearance import DetectorClearance, MapLinks, map_links
-from ._combined import CombinedBatch, CombinedChecker, CombinedStatus
+from ._clearance import CheckerClearance, DetectorClearance, MapLinks, map_links
+from ._combined import CombinedBatch, CombinedChecker, CombinedStatus, map_model
 from ._exactness import ExactnessReport, ExactnessStatus, check_exactness, random_configurations
 from ._format import FORMAT_VERSION
 from ._grid import MapGrid, parse_angle
@@ -48,6 +50,8 @@ __all__ = [
     "check_exactness",
     "random_configurations",
     "DetectorClearance",
+    "CheckerClearance",
+    "map_model",
     "MapLinks",
     "map_links",
     "model_files_of",

@@ -22,7 +22,7 @@ import numpy as np
 from .._errors import ForbiddenMapError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._certify import certify_substructure
-from ._clearance import DetectorClearance, map_links, resolve_scene
+from ._clearance import CheckerClearance, map_links
 from ._format import FORMAT_VERSION, Journal, write_map
 from ._grid import MapGrid
 from ._map import ForbiddenMap, model_file_hashes
@@ -67,24 +67,39 @@ class BuildReport:
 
 
 def model_files_of(model) -> list[str]:
-    """The source files of ``model``: a built-in scene name, a ``.yaml`` / ``.urdf`` path, or a list of paths."""
-    from ..models import builtin_path
+    """The source files of ``model``: those of ``armguard.load_model(model)`` for a built-in name or a ``.yaml`` /
+    ``.urdf`` path (the sidecar, URDF and SRDF of ``urdf/<name>/``), a Model's ``files``, or a list of paths."""
+    from ..model import Model, load_model
 
+    if isinstance(model, Model):
+        return [str(p) for p in model.files]
     if isinstance(model, (list, tuple)):
         return [str(Path(p)) for p in model]
-    s = str(model)
-    p = builtin_path(s) if ("/" not in s and Path(s).suffix == "") else None
-    return [str(p if p is not None else Path(s))]
+    return [str(p) for p in load_model(str(model)).files]
 
 
-def _task(token: str, source, robot, joints, links, tol, clearance, job: dict, subs: list) -> list:
+def resolve_model(model):
+    """``(Model, spec)``: ``model`` (a built-in name, a ``.yaml`` / ``.urdf`` path, a Model or a Scene) as a Model, and
+    the string a worker or a later check can load it from (None when there is none: a Scene or Model built in code)."""
+    from ..model import Model, load_model, model_of
+    from ..scene import Scene
+
+    if isinstance(model, Model):
+        spec = str(model.files[0]) if model.files else None
+        return model, spec
+    if isinstance(model, Scene):
+        return model_of(model), None
+    return load_model(str(model)), str(model)
+
+
+def _task(token: str, source, robot, joints, links, tol, clearance, backend, job: dict, subs: list) -> list:
     """One Dask task: certify ``subs`` (the worker builds its clearance hook once per build)."""
     hook = _WORKER_CACHE.get(token)
     if hook is None:
         _WORKER_CACHE.clear()
         if clearance is None:
-            scene, _ = resolve_scene(source)
-            hook = DetectorClearance(scene, map_links(scene, robot, joints, links, tol), tol)
+            model, _ = resolve_model(source)
+            hook = CheckerClearance(model, map_links(model.scene, robot, joints, links, tol), *backend)
         else:
             hook = clearance
         _WORKER_CACHE[token] = hook
@@ -99,15 +114,17 @@ def _task(token: str, source, robot, joints, links, tol, clearance, job: dict, s
 def build(model, *, out, robot: str | None = None, joints=None, links=None, resolution: float = math.radians(1.0),
           j3_resolution: float | None = None, cell=(math.radians(10.0), math.radians(10.0)),
           stopping_distance: float = 0.0, workers: int | None = None, scheduler: str | None = None,
-          model_files=None, clearance=None, max_depth: int | None = None, resume: bool = True,
-          progress=False, tol: Tolerances = DEFAULT_TOLERANCES) -> ForbiddenMap:
+          model_files=None, clearance=None, backend: str | None = None, backend_options=None,
+          max_depth: int | None = None, resume: bool = True, progress=False,
+          tol: Tolerances = DEFAULT_TOLERANCES) -> ForbiddenMap:
     """Build the certified forbidden-values map of ``model`` and write it to ``out``; returns it opened.
 
     Parameters
     ----------
-    model : str | Scene
-        A built-in scene name (``"hermes"``), a ``.yaml`` / ``.urdf`` path, or a Scene (then
-        ``model_files`` names its source files).
+    model : str | Model | Scene
+        A built-in model name (``"hermes"``: ``urdf/hermes/``), a ``.yaml`` / ``.urdf`` path, a Model
+        (``armguard.load_model``), or a Scene (then ``model_files`` names its source files).  The
+        header records the sha256 of the model's files (a Model's ``files``).
     out : path
         The ``.agmap`` file to write (``out.partial`` is the journal while building).
     robot, joints, links :
@@ -126,10 +143,13 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
     scheduler : str | None
         Build on the Dask cluster at this address.
     model_files : list of paths | None
-        The model's source files hashed into the header (default: ``model``'s own file).
+        The model's source files hashed into the header (default: ``model``'s own files).
     clearance : callable (Q (M, 3) rad) -> (M,) m | None
-        The clearance hook (default: :class:`._clearance.DetectorClearance`); must be picklable
-        for a Dask build.
+        A clearance hook replacing the backend's (must be picklable for a Dask build).
+    backend, backend_options :
+        The backend whose signed distances give the clearances (:class:`._clearance.CheckerClearance`):
+        any installed one that answers distances; None: ``armguard.checker``'s precedence (argument,
+        ``$ARMGUARD_BACKEND``, ``armguard.toml``, ``"analytic"``).  The header records the name.
     max_depth : int | None
         Halvings below one cell × bin box (default ``tol.cspace_max_depth``).
     resume : bool
@@ -148,14 +168,19 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
     depth = int(tol.cspace_max_depth if max_depth is None else max_depth)
     if not 0 <= depth <= 20:
         raise ForbiddenMapError(f"max_depth: expected 0..20, got {depth}")
-    scene, spec = resolve_scene(model)
+    if clearance is not None and (backend is not None or backend_options):
+        raise ForbiddenMapError("give a clearance hook or a backend, not both")
+    from ..scene import Scene
+
+    mdl, spec = resolve_model(model)
+    scene = mdl.scene
     if model_files is None:
-        if spec is None:
-            raise ForbiddenMapError("model is a Scene object: pass model_files= (its source files), so the map can "
-                                    "refuse another model")
-        model_files = model_files_of(spec)
+        model_files = None if isinstance(model, Scene) else model_files_of(mdl)
+        if not model_files:
+            raise ForbiddenMapError("model is a Scene object (or a Model without source files): pass model_files= "
+                                    "(its source files), so the map can refuse another model")
     else:
-        model_files = model_files_of(model_files)
+        model_files = model_files_of(list(model_files) if not isinstance(model_files, (str, Path)) else [model_files])
     ml = map_links(scene, robot, joints, links, tol)
     rob = scene.robots[ml.robot]
     lo = np.asarray(rob.lower, dtype=np.float64)[list(ml.joint_index)]
@@ -174,8 +199,20 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
         "stopping_distance": m,
         "max_depth": depth,
         "contact": tol.cspace_contact,
-        "clearance": "detector" if clearance is None else getattr(clearance, "__qualname__", type(clearance).__qualname__),
     }
+    hook = None
+    if clearance is None:
+        from ..backends import resolve
+
+        name, opts = resolve(backend, backend_options)
+        if workers is None and scheduler is None:
+            hook = CheckerClearance(mdl, ml, name, opts)  # refuses a verdicts-only backend before any work
+        header["clearance"] = "backend"
+        header["backend"] = name
+        if opts:
+            header["backend_options"] = {k: opts[k] for k in sorted(opts)}
+    else:
+        header["clearance"] = getattr(clearance, "__qualname__", type(clearance).__qualname__)
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     journal = Journal(out.with_name(out.name + ".partial"), header, resume=resume)
@@ -187,7 +224,7 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
     bar = _Progress(progress, grid.n_substructures, reused)
     try:
         if workers is None and scheduler is None:
-            hook = clearance if clearance is not None else DetectorClearance(scene, ml, tol)
+            hook = clearance if clearance is not None else hook
             for s in todo:
                 r = certify_substructure(grid, s, hook, ml.lever, m, tol.cspace_contact, depth)
                 journal.append(r.index, r.pointers, r.intervals, r.evaluations, r.unresolved)
@@ -195,7 +232,8 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
                 bar.advance(1)
         else:
             source = spec if spec is not None else scene
-            args = (source, ml.robot, ml.joints, ml.links, tol, clearance, job)
+            chosen = None if clearance is not None else (header["backend"], header.get("backend_options"))
+            args = (source, ml.robot, ml.joints, ml.links, tol, clearance, chosen, job)
             evaluations, n_workers = _on_dask(args, todo, journal, bar, workers, scheduler)
     finally:
         bar.close()

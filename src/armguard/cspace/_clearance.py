@@ -10,10 +10,12 @@
   most ``sum_j |dq_j| lever_j`` for a joint-space step ``dq`` (the bound certified trajectory
   verification steps with), so on a box of half-widths ``h`` about ``c`` every clearance is at
   least ``d(c) - h . lever``.
-* :class:`DetectorClearance` is the default clearance hook: ``(Q (M, 3) rad) -> (M,) m``, the
+* :class:`CheckerClearance` is the default clearance hook: ``(Q (M, 3) rad) -> (M,) m``, the
   smallest signed distance between the mapped links and the static obstacles (the scene's
-  bodies), from the exact :class:`armguard.Detector` on a copy of the scene in which every other
-  pair is disabled.  Any callable with that signature can replace it (another backend).
+  bodies), from any backend's Checker (``armguard.checker``; the analytic one by default) over
+  a Model whose only active pairs are those (:func:`sub_model` of :func:`link_obstacle_scene`).
+  :class:`DetectorClearance` is the same from the analytic :class:`armguard.Detector` on a Scene
+  alone.  Any callable with that signature can replace them.
 """
 
 from __future__ import annotations
@@ -25,7 +27,8 @@ import numpy as np
 from .._errors import ForbiddenMapError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 
-__all__ = ["MapLinks", "map_links", "link_obstacle_scene", "rest_scene", "DetectorClearance", "resolve_scene"]
+__all__ = ["MapLinks", "map_links", "link_obstacle_scene", "rest_scene", "DetectorClearance", "CheckerClearance",
+           "resolve_scene", "sub_model", "checker_over"]
 
 
 def resolve_scene(model):
@@ -172,3 +175,78 @@ class DetectorClearance:
             return np.zeros(0)
         rep = self._detector.check_many(self.flat(Q3))
         return rep.min_distance.min(axis=1)
+
+
+def sub_model(model, scene):
+    """A Model over ``scene`` (a copy of ``model.scene`` with pairs disabled or the workspace cleared) that
+    shares ``model``'s Pinocchio model, GeometryModel, q order and files: its active pairs are ``scene``'s.
+
+    Every backend builds its Checker from ``model.pairs``, so a Checker of the sub-Model checks exactly
+    those pairs, on the very geometry of ``model`` (no re-export)."""
+    from ..model import Model
+
+    names = {}
+    for owner in scene.owners():
+        i = 0
+        while True:
+            try:
+                names[(owner, i)] = model.geometry_name(owner, i)
+            except KeyError:
+                break
+            i += 1
+    return Model(model.name, model.pin_model, model.collision_model, scene, q_index=model.q_index,
+                 circular=getattr(model, "_circular", ()), geometry_names=names, notes=model.notes, files=model.files)
+
+
+def checker_over(model, scene, backend, options=None, *, need_distances: bool = False):
+    """``armguard.checker`` of ``backend`` over :func:`sub_model` ``(model, scene)``; with ``need_distances``,
+    a backend that answers verdicts only is refused (:class:`ForbiddenMapError`)."""
+    from ..backends import Capability, checker
+
+    chk = checker(sub_model(model, scene), backend, options)
+    if need_distances and Capability.DISTANCES not in chk.capabilities:
+        raise ForbiddenMapError(f"backend {chk.name!r} answers verdicts only; a map's clearances need signed distances "
+                                "(use analytic, coal or another backend that answers distances)")
+    return chk
+
+
+class CheckerClearance:
+    """The clearance hook over a backend: ``(Q (M, 3) rad) -> (M,) float64 m``, mapped links vs static bodies.
+
+    The other joints stay at ``model.neutral()`` (they do not move the mapped links, :func:`map_links`).
+    The distances are the Checker's ``min_distance_many`` over a Model whose active pairs are (mapped
+    link, static body) only; a model without such pairs gets ``inf``.
+
+    Parameters
+    ----------
+    model : armguard.Model
+    links : MapLinks
+    backend : str | None
+        Any installed backend that answers distances (None: ``armguard.checker``'s precedence).
+    options : mapping | None
+        The backend's options.
+    """
+
+    def __init__(self, model, links: MapLinks, backend: str | None = "analytic", options=None) -> None:
+        self.links = links
+        self.model = model
+        scene = link_obstacle_scene(model.scene, links.robot, links.links)
+        self.checker = checker_over(model, scene, backend, options, need_distances=True)
+        self.backend = self.checker.name
+        self._empty = len(self.checker.model.pairs) == 0
+        self._base = np.asarray(model.neutral(), dtype=np.float64)
+        self._cols = np.asarray(model.q_index, dtype=np.int64)[list(links.flat_index)]
+
+    def pin(self, Q3: np.ndarray) -> np.ndarray:
+        """``(M, nq)`` configurations in ``pin_model``'s order for ``Q3`` ``(M, 3)`` rad."""
+        Q = np.repeat(self._base[None, :], len(Q3), axis=0)
+        Q[:, self._cols] = Q3
+        return Q
+
+    def __call__(self, Q3: np.ndarray) -> np.ndarray:
+        Q3 = np.asarray(Q3, dtype=np.float64).reshape(-1, 3)
+        if len(Q3) == 0:
+            return np.zeros(0)
+        if self._empty:
+            return np.full(len(Q3), np.inf)
+        return np.asarray(self.checker.min_distance_many(self.pin(Q3)), dtype=np.float64)

@@ -1,25 +1,31 @@
-"""Hermes's combined check (Fig. 14): the map for links 1–3 vs the obstacles, the geometric method for the rest."""
+"""Hermes's combined check (Fig. 14): the map for links 1–3 vs the obstacles, a geometric backend for the rest.
+
+:class:`CombinedChecker` is the one implementation: the ``forbidden`` backend
+(``plugins/armguard_forbidden``) wraps it as a Checker, and its own :meth:`CombinedChecker.check_many`
+answers over the scene's flat configurations.
+"""
 
 from __future__ import annotations
 
 import enum
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from .._errors import ForbiddenMapError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
-from ._clearance import resolve_scene, rest_scene
+from ._clearance import checker_over, rest_scene
 
-__all__ = ["CombinedChecker", "CombinedStatus", "CombinedBatch"]
+__all__ = ["CombinedChecker", "CombinedStatus", "CombinedBatch", "map_model"]
 
 
 class CombinedStatus(enum.IntEnum):
     """Per-configuration verdict of :meth:`CombinedChecker.check_many`."""
 
-    FREE = 0  #: the map allows links 1–3 and the exact check finds nothing else within the stopping distance
+    FREE = 0  #: the map allows links 1–3 and the geometric check finds nothing else within the margin
     MAP_FORBIDDEN = 1  #: the map forbids joints 1–3 here (links 1–3 may reach an obstacle): treated as a collision
-    COLLISION = 2  #: the exact check of the other pairs finds a collision (the map allowed links 1–3)
+    COLLISION = 2  #: the geometric check of the other pairs finds a collision (the map allowed links 1–3)
 
 
 @dataclass(frozen=True)
@@ -30,65 +36,110 @@ class CombinedBatch:
     collision: np.ndarray
 
 
+def map_model(fmap, model=None):
+    """The Model ``fmap`` answers for, checked against it.
+
+    ``model``: a Model (its ``files`` are checked against the map's sha256), a built-in name or a
+    ``.yaml`` / ``.urdf`` path (loaded, then checked), a Scene (taken as given: a scene built in code
+    has no files to check), or None (the map's own ``model`` record).  The map's robot must have
+    joints 1–3 where the map says.
+    """
+    from ..model import Model, load_model, model_of
+    from ..scene import Scene
+
+    if model is None:
+        if fmap.header.get("model") is None:
+            raise ForbiddenMapError("the map was built from a Scene object: pass the scene or model")
+        model = fmap.header["model"]
+    if isinstance(model, Scene):
+        mdl = model_of(model)
+    else:
+        mdl = model if isinstance(model, Model) else load_model(str(model))
+        if not mdl.files:
+            raise ForbiddenMapError(f"model {mdl.name!r} has no source files to check the map {fmap.path} against; "
+                                    "load it with armguard.load_model(name or path)")
+        fmap.check_model([str(p) for p in mdl.files])
+    scene = mdl.scene
+    if fmap.robot not in scene.robots or tuple(scene.robots[fmap.robot].joint_names[k] for k in fmap.joint_index) != fmap.joints:
+        raise ForbiddenMapError(f"the model has no robot {fmap.robot!r} with joints {fmap.joints} at {fmap.joint_index}")
+    return mdl
+
+
 class CombinedChecker:
-    """Fig. 14 as a checker: ``collides_many(Q)`` over the scene's flat configurations.
+    """Fig. 14 as a checker.
 
     A configuration collides when the map does not allow its joints 1–3 (a conservative answer
-    for the mapped links against the static bodies) or when the exact :class:`armguard.Detector`
-    finds a collision among every *other* pair of the scene (links beyond joint 3, the payload,
-    link-link pairs, other robots, the workspace walls), with the map's stopping distance.  It
-    never says free where the full exact check says collision: the map's "allowed" is proven for
-    the mapped pairs and the rest is exact.
+    for the mapped links against the static bodies, proven at the map's stopping distance) or
+    when the geometric backend finds a pair within the margin among every *other* pair of the
+    model (links beyond joint 3, the payload, link–link pairs, other robots, the workspace walls).
+    It never says free where the full geometric check at a margin up to the map's stopping
+    distance says collision: the map's "allowed" is proven for the mapped pairs, the rest is the
+    backend's own answer.
 
     Parameters
     ----------
     fmap : ForbiddenMap
-    scene : Scene | str | None
-        The scene the map was built for (default: the map's ``model`` record, a name or path).  A
-        name or path is checked against the map's model sha256; a Scene object is taken as given.
+    scene : Model | Scene | str | None
+        What the map was built for (see :func:`map_model`; default: the map's ``model`` record).
+    backend : str
+        The geometric backend for the other pairs (any installed one; default ``"analytic"``).
+    backend_options : mapping | None
+        Its options.
     """
 
-    def __init__(self, fmap, scene=None, *, tol: Tolerances = DEFAULT_TOLERANCES) -> None:
-        from ..detect import Detector
-
-        if scene is None:
-            if fmap.header.get("model") is None:
-                raise ForbiddenMapError("the map was built from a Scene object: pass scene=")
-            scene = fmap.header["model"]
-        if isinstance(scene, str):
-            fmap.check_model(scene)
-        scene, _ = resolve_scene(scene)
-        if fmap.robot not in scene.robots or tuple(scene.robots[fmap.robot].joint_names[k] for k in fmap.joint_index) != fmap.joints:
-            raise ForbiddenMapError(f"the scene has no robot {fmap.robot!r} with joints {fmap.joints} at {fmap.joint_index}")
+    def __init__(self, fmap, scene=None, *, backend: str = "analytic", backend_options=None,
+                 tol: Tolerances = DEFAULT_TOLERANCES) -> None:
+        model = map_model(fmap, scene)
         self.map = fmap
-        self.scene = scene
-        self._rest = Detector(rest_scene(scene, fmap.robot, fmap.links), threshold=0.0,
-                              stopping_distance=fmap.stopping_distance, tol=tol)
+        self.model = model
+        self.scene = model.scene
+        self.tol = tol
+        rest = rest_scene(self.scene, fmap.robot, fmap.links)
+        self.geometric = checker_over(model, rest, backend, backend_options)
         k0 = 0
-        for name, rob in scene.robots.items():
+        for name, rob in self.scene.robots.items():
             if name == fmap.robot:
                 break
             k0 += len(rob.joint_names)
         self._cols = np.array([k0 + k for k in fmap.joint_index], dtype=np.int64)
-        self.n_q = len(scene.joint_names)
+        self.n_q = len(self.scene.joint_names)
+
+    @property
+    def max_margin(self) -> float:
+        """The largest margin (m) the map's "allowed" is proven for: its stopping distance plus ``cspace_contact``."""
+        return self.map.stopping_distance + float(self.map.header.get("contact", self.tol.cspace_contact))
 
     def prepare(self) -> "CombinedChecker":
         """Load the map's lookup arrays (idempotent)."""
         self.map.prepare()
         return self
 
-    def check_many(self, Q) -> CombinedBatch:
-        """Verdicts for ``Q`` ``(M, n_q)`` rad (the scene's flat joint vectors)."""
+    def _check(self, Q_flat: np.ndarray, Q_pin: np.ndarray, margin: float) -> CombinedBatch:
+        if not (math.isfinite(margin) and 0.0 <= margin <= self.max_margin):
+            raise ForbiddenMapError(f"margin {margin!r} m: the map {self.map.path.name} proves links {self.map.links} clear "
+                                    f"by at most its stopping distance {self.map.stopping_distance} m; rebuild it with "
+                                    f"--stopping-distance {margin} for a larger margin")
+        allowed = self.map.allowed_many(Q_flat[:, self._cols])
+        status = np.where(allowed, CombinedStatus.FREE, CombinedStatus.MAP_FORBIDDEN).astype(np.int8)
+        if np.any(allowed):  # the geometric part only where the map lets the configuration through
+            hit = np.asarray(self.geometric.collides(Q_pin[allowed], margin=margin), dtype=bool)
+            status[np.flatnonzero(allowed)[hit]] = CombinedStatus.COLLISION
+        return CombinedBatch(status, status != CombinedStatus.FREE)
+
+    def check_many(self, Q, *, margin: float | None = None) -> CombinedBatch:
+        """Verdicts for ``Q`` ``(M, n_q)`` rad (the scene's flat joint vectors); ``margin`` (m) for the other
+        pairs, default the map's stopping distance."""
         Q = np.ascontiguousarray(np.asarray(Q, dtype=np.float64))
         if Q.ndim != 2 or Q.shape[1] != self.n_q:
             raise ForbiddenMapError(f"Q: expected shape (M, {self.n_q}), got {Q.shape}")
-        allowed = self.map.allowed_many(Q[:, self._cols])
-        status = np.where(allowed, CombinedStatus.FREE, CombinedStatus.MAP_FORBIDDEN).astype(np.int8)
-        if np.any(allowed):  # the geometric part only where the map lets the configuration through
-            hit = self._rest.collides_many(Q[allowed])
-            idx = np.flatnonzero(allowed)[hit]
-            status[idx] = CombinedStatus.COLLISION
-        return CombinedBatch(status, status != CombinedStatus.FREE)
+        m = self.map.stopping_distance if margin is None else float(margin)
+        return self._check(Q, self.model.pin_q(Q), m)
+
+    def check_many_pin(self, Q, *, margin: float = 0.0) -> CombinedBatch:
+        """Verdicts for ``Q`` ``(M, nq)`` in ``pin_model``'s order (the backend interface's), ``margin`` (m) for the
+        other pairs."""
+        Q = np.ascontiguousarray(np.asarray(Q, dtype=np.float64))
+        return self._check(np.ascontiguousarray(self.model.scene_q(Q)), Q, float(margin))
 
     def collides_many(self, Q) -> np.ndarray:
         """``(M,) bool``: collision (or not proven free) per row of ``Q`` ``(M, n_q)``."""
