@@ -94,7 +94,8 @@ def test_make_reference_round_trips(tmp_path):
     jp, npz = make_reference("gmf_s480", tmp_path)
     mine, kept = load_reference("gmf_s480", tmp_path), load_reference("gmf_s480")
     assert mine.header["files"] == kept.header["files"] and mine.header["pairs"] == kept.header["pairs"]
-    np.testing.assert_array_equal(mine.distance, kept.distance)
+    # coal's GJK on hulls answers to ~1e-10 m depending on the queries its shared Convex objects saw before
+    np.testing.assert_allclose(mine.distance, kept.distance, rtol=0, atol=1e-9)
     np.testing.assert_array_equal(mine.verdict, kept.verdict)
 
 
