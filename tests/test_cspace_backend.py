@@ -221,3 +221,14 @@ def test_coal_clearances_give_the_analytic_map(fmap, model, tmp_path):
         ForbiddenMap.build(model, out=tmp_path / "x.agmap", backend="clip", **kw)
     with pytest.raises(ForbiddenMapError, match="not both"):
         ForbiddenMap.build(model, out=tmp_path / "x.agmap", backend="coal", clearance=ha, **kw)
+
+
+def test_the_documented_example_runs():
+    """docs/cspace.md's example of the forbidden backend, executed as written."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parent.parent / "docs" / "cspace.md").read_text(encoding="utf-8")
+    blocks = [b for b in re.findall(r"```python\n(.*?)```", text, re.S) if '"forbidden"' in b]
+    assert len(blocks) == 1
+    exec(compile(blocks[0], "docs/cspace.md", "exec"), {"__name__": "docs_cspace"})
