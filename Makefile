@@ -4,20 +4,30 @@ SHELL  := bash
 PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
-STAMP  := $(VENV)/.installed-$(shell cat pyproject.toml | cksum | cut -d' ' -f1)
+HASH   := $(shell cat pyproject.toml | cksum | cut -d' ' -f1)
+STAMP_RUN  := $(VENV)/.installed-run-$(HASH)
+STAMP_TEST := $(VENV)/.installed-test-$(HASH)
+PIP_QUIET  := 2>&1 | { grep -v "^WARNING: Location" || true; }
 
 .PHONY: run test bench install browser clean clean-cache
 
-$(STAMP): pyproject.toml
+# run: armguard and what running needs (no test extras: no mujoco, pybullet, playwright)
+$(STAMP_RUN): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install -q --upgrade pip 2>&1 | { grep -v "^WARNING: Location" || true; }
-	$(PY) -m pip install -q -e ".[test]" 2>&1 | { grep -v "^WARNING: Location" || true; }
-	rm -f $(VENV)/.installed-* && touch $(STAMP)
+	$(PY) -m pip install -q -e . $(PIP_QUIET)
+	rm -f $(VENV)/.installed-run-* && touch $(STAMP_RUN)
 
-install: $(STAMP)
+# test: everything, test extras included (implies the run install)
+$(STAMP_TEST): pyproject.toml
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip $(PIP_QUIET)
+	$(PY) -m pip install -q -e ".[test]" $(PIP_QUIET)
+	rm -f $(VENV)/.installed-test-* $(VENV)/.installed-run-* && touch $(STAMP_TEST) $(STAMP_RUN)
 
-## run: set up .venv and run the main job on the built-in scene
-run: $(STAMP)
+install: $(STAMP_TEST)
+
+## run: set up .venv (run dependencies only) and run the main job on the built-in scenes
+run: $(STAMP_RUN)
 	$(VENV)/bin/armguard demo
 
 ## browser: Debian's chromium for the end-to-end console test (needs root or sudo)
@@ -28,11 +38,11 @@ browser:
 	  else echo "chromium missing and no root: the browser test will be skipped (fails under CI)"; fi; fi
 
 ## test: set up .venv with test extras and run every test
-test: $(STAMP) browser
+test: $(STAMP_TEST) browser
 	$(PY) -m pytest -n 2 --dist loadfile -q
 
 ## bench: run the benchmarks and rewrite docs/performance.md
-bench: $(STAMP)
+bench: $(STAMP_TEST)
 	$(PY) -m bench
 
 ## clean-cache: drop numba's on-disk kernel cache (cache=True only notices edits to a kernel's

@@ -97,6 +97,7 @@ class SceneDrawer:
                                        visible=False)
         self._handles += [self.feature, self.ws]
         self._ws_shown = None
+        self._line_colors = {}
         self._build_urdf()
 
     def _build_urdf(self) -> None:
@@ -174,10 +175,13 @@ class SceneDrawer:
             pa, pb = np.asarray(r.p_WA, dtype=np.float64), np.asarray(r.p_WB, dtype=np.float64)
             if offset:
                 pa, pb = pa + self._side(pa, pb), pb + self._side(pa, pb)
-            if key == "primary":
-                col = r.line_color
-                line.colors = np.array([[col, col]], dtype=np.uint8)
+            col = r.line_color if key == "primary" else COMPARE_COLOR
+            if self._line_colors.get(key) != col:
+                # one colour for the whole line (the uniform path: viser's per-vertex line colours
+                # came out grey in software WebGL)
+                line.colors = np.array(col, dtype=np.uint8)
                 a.color = b.color = col
+                self._line_colors[key] = col
             line.points = np.array([[pa, pb]], dtype=np.float32)
             a.position, b.position = tuple(pa), tuple(pb)
         for h in (line, a, b):
@@ -203,7 +207,7 @@ class SceneDrawer:
                 seg = feature_segments(shape, r.feature)
         if len(seg):
             self.feature.points = seg.astype(np.float32)
-            self.feature.colors = np.tile(np.array(FEATURE_COLOR, dtype=np.uint8), (len(seg), 2, 1))
+            self.feature.colors = np.array(FEATURE_COLOR, dtype=np.uint8)
         show = bool(len(seg))
         if self.feature.visible != show:
             self.feature.visible = show

@@ -12,14 +12,22 @@ typed values go through the fields.
 
 from __future__ import annotations
 
-__all__ = ["TypedField", "COMMIT_ON_BLUR_HTML"]
+import time
+
+__all__ = ["TypedField", "COMMIT_ON_BLUR_HTML", "SETTLE_S"]
+
+SETTLE_S = 0.3
+"""Seconds a submit waits for the field's last value update (runs in viser's callback thread)."""
 
 _JS = (
     "if(!window.__armguardBlur){window.__armguardBlur=1;"
-    "document.addEventListener('focusout',function(e){var t=e.target;"
-    "if(!t||t.tagName!=='INPUT'||!t.closest)return;"
-    "var f=t.closest('form');if(!f||!f.querySelector('input[data-armguard-field]'))return;"
-    "if(f.requestSubmit)f.requestSubmit();},true);"
+    "var field=function(t){if(!t||t.tagName!=='INPUT'||!t.closest||!t.dataset.armguardField)return null;"
+    "return t.closest('form');};"
+    # the submit goes after the last keystroke's value update has reached the server
+    "var later=function(f){setTimeout(function(){if(f.requestSubmit)f.requestSubmit();},250);};"
+    "document.addEventListener('keydown',function(e){if(e.key!=='Enter')return;var f=field(e.target);"
+    "if(!f)return;e.preventDefault();e.stopPropagation();later(f);},true);"
+    "document.addEventListener('focusout',function(e){var f=field(e.target);if(f&&e.relatedTarget)later(f);},true);"
     "var mark=function(){document.querySelectorAll('form input[type=text]').forEach(function(i){"
     "if(!i.dataset.armguardField)i.dataset.armguardField='1';});};"
     "new MutationObserver(mark).observe(document.body,{childList:true,subtree:true});mark();}"
@@ -50,6 +58,8 @@ class TypedField:
         def submit(event) -> None:
             if event.client is None:
                 return
+            # the browser may send the last keystroke's value just after the submit: let it land
+            time.sleep(SETTLE_S)
             typed = str(self.handle.value)
             if typed.strip() == self.shown.strip():
                 return  # Enter then blur, or a blur without an edit: nothing new

@@ -1,0 +1,237 @@
+"""The console's 3-D view in a real browser (Playwright + Debian's chromium, software WebGL).
+
+Runs :class:`armguard.console.ConsoleApp` in-process on a free loopback port so the test can
+read the state and each tab's camera: a typed joint value changes the pixels inside the active
+arm's projected box; the nearest-obstacle line's pixels are there, yellow, and turn red when the
+threshold is raised past the distance; a refused value leaves the state and the box as they were;
+a backend switch changes the panel's backend and keeps the configuration; compare mode draws a
+second (cyan) line and shows Δd.  Saves ``docs/img/console-ranger.png`` and
+``docs/img/console-hermes.png`` (each at a pose where the line is in view).
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from test_console_browser import CHROMIUM, CHROMIUM_ARGS, UI_TIMEOUT_MS, POLL_MS, _input_for, _need_chromium
+
+KEY_DELAY_MS = 120
+"""Between keystrokes: the text box is controlled by the server, whose echo of one keystroke
+must land before the next (typing faster can lose a key in viser's client)."""
+
+
+def _type(box, text: str) -> None:
+    box.click()
+    box.press("Control+a")
+    box.type(text, delay=KEY_DELAY_MS)
+    box.press("Enter")
+
+pytestmark = pytest.mark.browser
+
+SCENE = Path(__file__).parent / "data" / "console_scene.yaml"
+IMG = Path(__file__).resolve().parent.parent / "docs" / "img"
+VIEWPORT = {"width": 1100, "height": 700}
+PANEL_X = 690
+"""Pixels right of this are under the control panel."""
+YELLOW, RED, CYAN = "yellow", "red", "cyan"
+HIDE_NOTICES = ".mantine-Notification-root, .mantine-Notifications-root {display: none !important}"
+
+
+def _app(name_or_path):
+    from armguard.console._serve import serve
+
+    return serve(str(name_or_path), port=0, block=False)
+
+
+def _shot(page) -> np.ndarray:
+    from PIL import Image
+
+    page.wait_for_timeout(1500)  # let software WebGL draw the latest frame
+    return np.asarray(Image.open(io.BytesIO(page.screenshot())).convert("RGB")).astype(np.int32)
+
+
+def _count(img: np.ndarray, colour: str, x_max: int = PANEL_X) -> int:
+    """Pixels of ``colour`` ("yellow", "red", "cyan") left of the panel (shaded colours included)."""
+    r, g, b = (img[:, :x_max, k] for k in range(3))
+    mask = {"yellow": (r > 190) & (g > 0.85 * r) & (b < 0.55 * g),
+            "red": (r > 150) & (g < 90) & (b < 90),
+            "cyan": (r < 100) & (g > 140) & (b > 140)}[colour]
+    return int(np.count_nonzero(mask))
+
+
+def _open(browser, url):
+    page = browser.new_page(viewport=VIEWPORT)
+    page.goto(url)
+    page.wait_for_selector("#armguard-status", timeout=UI_TIMEOUT_MS)
+    page.add_style_tag(content=HIDE_NOTICES)
+    page.wait_for_timeout(2500)  # the tab reports the camera the console placed
+    return page
+
+
+def _client(app):
+    clients = list(app.server.get_clients().values())
+    assert clients, "no browser tab connected"
+    return clients[-1]
+
+
+def _project(app, points: np.ndarray, size=(VIEWPORT["width"], VIEWPORT["height"])) -> np.ndarray:
+    """Pixel coordinates (n, 2) of W points seen by the tab's camera (pinhole, vertical fov)."""
+    cam = _client(app).camera
+    eye, look = np.asarray(cam.position, dtype=float), np.asarray(cam.look_at, dtype=float)
+    f = look - eye
+    f /= np.linalg.norm(f)
+    r = np.cross(f, [0.0, 0.0, 1.0])
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    rel = np.asarray(points, dtype=float) - eye
+    z = rel @ f
+    t = math.tan(0.5 * float(cam.fov))
+    w, h = size
+    x = (rel @ r) / (z * t) * (h / 2.0) + w / 2.0
+    y = h / 2.0 - (rel @ u) / (z * t) * (h / 2.0)
+    return np.stack([x, y], axis=1)
+
+
+def _arm_box(app, robot: str, pad: int = 12):
+    st = app.state
+    snap = st.snapshot()
+    pts = np.concatenate([np.asarray(it.shape.core_points) for it in st.scene.shapes_at(snap.q) if it.robot == robot])
+    px = _project(app, pts)
+    lo, hi = np.floor(px.min(axis=0)) - pad, np.ceil(px.max(axis=0)) + pad
+    return int(max(lo[0], 0)), int(max(lo[1], 0)), int(min(hi[0], VIEWPORT["width"])), int(min(hi[1], VIEWPORT["height"]))
+
+
+def _wait(page, js: str, arg=None) -> None:
+    page.wait_for_function(js, arg=arg, timeout=UI_TIMEOUT_MS, polling=POLL_MS)
+
+
+def test_view_follows_typed_values_line_backends(tmp_path):
+    _need_chromium()
+    from playwright.sync_api import sync_playwright
+
+    app = _app(SCENE)
+    try:
+        with sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            try:
+                page = _open(browser, app.url)
+                st = app.state
+                assert st.snapshot().active == "left"
+                # the default camera frames the active arm: its projected box is in the free canvas
+                x0, y0, x1, y1 = _arm_box(app, "left", pad=0)
+                assert 0 <= x0 < x1 <= PANEL_X + 60 and 0 <= y0 <= y1 <= VIEWPORT["height"], (x0, y0, x1, y1, _client(app).camera.position)
+
+                # the nearest line is drawn (yellow: beyond the threshold)
+                # a pose whose nearest obstacle is the post (at home it is the arm's own link 3,
+                # with the line inside the arm), framed by the follow camera
+                st.set_joints("left", [60, 0, 0], scale=math.pi / 180.0)
+                assert st.snapshot().readout.obstacle == "post"
+                app._frame(_client(app))
+                page.wait_for_timeout(1500)
+                before = _shot(page)
+                assert st.snapshot().readout.distance > st.snapshot().threshold
+                n_yellow = _count(before, YELLOW)
+                assert n_yellow > 40, n_yellow
+
+                # type a joint value: the pixels inside the arm's projected box change
+                box = _arm_box(app, "left")
+                j1 = _input_for(page, "joint1 (deg)")
+                _type(j1, "70")
+                _wait(page, "() => document.querySelector('#armguard-categories') !== null")
+                deadline_q = math.radians(70.0)
+                for _ in range(100):
+                    if abs(st.snapshot().q["left"][0] - deadline_q) < 1e-9:
+                        break
+                    page.wait_for_timeout(100)
+                assert abs(st.snapshot().q["left"][0] - deadline_q) < 1e-9
+                after = _shot(page)
+                bx0, by0, bx1, by1 = box
+                changed = np.abs(after[by0:by1, bx0:bx1] - before[by0:by1, bx0:bx1]).max(axis=2) > 30
+                assert changed.sum() > 200, changed.sum()
+
+                # a refused value: state and box unchanged, the reason in the field's units
+                q_before = st.snapshot().q["left"].copy()
+                v_before = st.snapshot().version
+                _type(j1, "-300")
+                page.wait_for_selector("#armguard-message[data-error='true']", timeout=UI_TIMEOUT_MS)
+                msg = page.inner_text("#armguard-message")
+                assert "-300 deg" in msg and "[-170, 170] deg" in msg, msg
+                for _ in range(50):
+                    if j1.input_value() == "70":
+                        break
+                    page.wait_for_timeout(100)
+                assert j1.input_value() == "70"
+                assert np.array_equal(st.snapshot().q["left"], q_before)
+                thr = _input_for(page, "threshold (m)")
+                _type(thr, "1e309")
+                _wait(page, "() => document.querySelector('#armguard-message').innerText.includes('finite')")
+                assert st.snapshot().threshold == 0.05 and thr.input_value() == "0.05"
+                _type(thr, "abc")
+                _wait(page, "() => document.querySelector('#armguard-message').innerText.includes('abc')")
+                assert st.snapshot().threshold == 0.05 and thr.input_value() == "0.05"
+                assert st.snapshot().version > v_before
+
+                # the line changes colour at the threshold: raise it past the distance
+                d = st.snapshot().readout.distance
+                yellow_now = _count(_shot(page), YELLOW)
+                assert yellow_now > 40
+                _type(thr, f"{d + 0.01:.4f}")
+                _wait(page, "() => document.querySelector('#armguard-status').dataset.status == 'warning'")
+                img = _shot(page)
+                assert _count(img, YELLOW) < 0.2 * yellow_now
+                assert _count(img, RED) > 40
+
+                # backend switch: the panel's backend changes, the configuration stays
+                q_all = {k: v.copy() for k, v in st.snapshot().q.items()}
+                if "coal" in st.backends:
+                    page.locator("label", has_text="backend").first.click()
+                    st_before = page.get_attribute("#armguard-status", "data-distance")
+                    page.get_by_role("option", name="coal").click()  # the dropdown's option list
+                    _wait(page, "() => document.querySelector('#armguard-status').dataset.backend == 'coal'")
+                    assert all(np.array_equal(q_all[k], v) for k, v in st.snapshot().q.items())
+                    d_coal = float(page.get_attribute("#armguard-status", "data-distance"))
+                    assert abs(d_coal - float(st_before)) < 1e-6
+                # compare mode: a second (cyan) line and Δd in the panel
+                other = "analytic" if st.snapshot().backend != "analytic" else next(b for b in st.backends if b != "analytic")
+                st.set_compare(other)
+                _wait(page, "() => document.querySelector('#armguard-compare') !== null")
+                delta = float(page.get_attribute("#armguard-compare", "data-delta"))
+                assert abs(delta) < 1e-6
+                assert "Δd" in page.inner_text("#armguard-compare")
+                assert _count(_shot(page), CYAN) > 30
+            finally:
+                browser.close()
+    finally:
+        app.stop()
+
+
+@pytest.mark.parametrize("name, setup", [("ranger", None), ("hermes", None)])
+def test_screenshots_show_the_line(name, setup):
+    _need_chromium()
+    from playwright.sync_api import sync_playwright
+
+    app = _app(name)
+    try:
+        st = app.state
+        tests = st.canned_tests()
+        if tests:
+            st.setup(tests[0])
+        st.set_threshold(max(0.05, st.snapshot().readout.distance + 0.02))  # the line red, link red
+        with sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            try:
+                page = _open(browser, app.url)
+                app._frame(_client(app))
+                img = _shot(page)
+                assert _count(img, RED) > 30, f"{name}: the red nearest line / link is not in view"
+                IMG.mkdir(parents=True, exist_ok=True)
+                page.screenshot(path=str(IMG / f"console-{name}.png"))
+            finally:
+                browser.close()
+    finally:
+        app.stop()
