@@ -27,6 +27,58 @@ def median_seconds(fn, *, repeat: int = 7, number: int = 1) -> float:
     return statistics.median(samples)
 
 
+def _wall(fn, *, repeat: int) -> float:
+    """Median wall time of ``fn`` over ``repeat`` runs (after one warm-up run)."""
+    fn()
+    samples = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        samples.append(time.perf_counter() - t0)
+    return statistics.median(samples)
+
+
+def _checks_rows(quick: bool) -> list[str]:
+    """Uncertain placements in the checks: clearance_sigmas and verify_with_confidence on puma560."""
+    import math
+
+    import armguard
+    from armguard.uncertainty import UncertainPlacement, UncertainPose2, UncertainPose3, clearance_sigmas, verify_with_confidence
+
+    rep = 3 if quick else 5
+    scene = armguard.load_scene("puma560")
+    det = armguard.Detector(scene, threshold=0.0)
+    q = scene.flat_q(scene.default_q())
+    traj = scene.trajectories["pick_and_place"]
+    T = np.eye(4)
+    T[:3, 3] = [0.55, 0.15, 0.6]
+    body = UncertainPlacement("cylinder_a", UncertainPose3(T, np.diag([1e-4] * 3 + [math.radians(1) ** 2] * 3)))
+    base = UncertainPlacement("puma560", UncertainPose2([0.0, 0.0, 0.0], np.diag([1e-4, 1e-4, math.radians(0.5) ** 2])))
+    n_mc = 1000
+    rows = [
+        "**Uncertain placements in the checks** (puma560 cell at home; `clearance_sigmas` through the "
+        "Detector's pair distances, wall time per call):",
+        "",
+        "| call | placement | pairs moved | ms per call |",
+        "|---|---|---|---|",
+    ]
+    for label, pl in (("cylinder_a, SE(3), σ = 1 cm, 1°", body), ("robot base, planar, σ = 1 cm, 0.5°", base)):
+        n_pairs = len(clearance_sigmas(det, q, pl, samples=0).pairs)
+        t0 = _wall(lambda p=pl: clearance_sigmas(det, q, p, samples=0), repeat=rep)
+        t1 = _wall(lambda p=pl: clearance_sigmas(det, q, p, samples=n_mc), repeat=max(1, rep // 2))
+        rows.append(f"| `clearance_sigmas` (sigmas and the χ² bound) | {label} | {n_pairs} | {t0 * 1e3:.2f} |")
+        rows.append(f"| the same with a {n_mc}-draw Monte Carlo estimate | {label} | {n_pairs} | {t1 * 1e3:.1f} |")
+    t_nom = _wall(lambda: armguard.verify(scene, traj), repeat=rep)
+    t_conf = _wall(lambda: verify_with_confidence(scene, traj, [body]), repeat=rep)
+    t_base = _wall(lambda: verify_with_confidence(scene, traj, [base]), repeat=rep)
+    rows += [
+        f"| `armguard.verify` (nominal, certified) | — | — | {t_nom * 1e3:.1f} |",
+        f"| `verify_with_confidence` (99.9 %: grow, copy, verify) | {'cylinder_a, SE(3), σ = 1 cm, 1°'} | — | {t_conf * 1e3:.1f} |",
+        f"| `verify_with_confidence` (99.9 %) | robot base, planar, σ = 1 cm, 0.5° | — | {t_base * 1e3:.1f} |",
+    ]
+    return rows
+
+
 def run(quick: bool) -> str:
     from armguard.uncertainty import UncertainPose2, UncertainPose3, se2, se3
 
@@ -94,6 +146,7 @@ def run(quick: bool) -> str:
         cell = f"{us(p[0])} — {p[1]}" if p else "—"
         ratio = f"{p[0] / t_cls:.1f}×" if p else "—"
         lines.append(f"| {dim} | {op} | {us(t_cls)} | {us(t_fn)} | {cell} | {ratio} |")
+    lines += ["", *_checks_rows(quick)]
     load = os.getloadavg()
     lines += ["", note, "", f"Machine load while measuring (1/5/15-minute load average on {os.cpu_count()} cores): "
               f"{load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f}."]

@@ -315,6 +315,32 @@ def _pair_rows(source, q):
     raise UncertaintyError(f"clearance_sigmas: expected a Detector or a backend Checker, got {type(source).__name__}")
 
 
+@dataclass(frozen=True)
+class _Core:
+    """A shape's core in W: ``core_points (n, 3)`` m and ``core_radius`` m (what ``sigma_max`` reads)."""
+
+    core_points: np.ndarray
+    core_radius: float
+
+
+def _owner_cores(scene, q_scene) -> dict:
+    """Owner -> the cores of its shapes in W at ``q_scene`` (posed points only: no shapes rebuilt)."""
+    out: dict = {b: list(body.shapes) for b, body in scene.bodies.items()}
+    parts = scene.split_q(q_scene)
+    fk = {}
+    for rn, robot in scene.robots.items():
+        X = fk[rn] = robot.forward_kinematics(parts[rn])
+        for i, ln in enumerate(robot.link_names):
+            for sh in robot.link_shapes.get(ln, ()):
+                out.setdefault(f"{rn}/{ln}", []).append(
+                    _Core(np.atleast_2d(sh.core_points) @ X[i, :3, :3].T + X[i, :3, 3], float(sh.core_radius)))
+    for pn, p in scene.payloads.items():
+        robot = scene.robots[p.robot]
+        X = fk[p.robot][robot.link_index(p.link)] @ p.X_LP
+        out[pn] = [_Core(np.atleast_2d(sh.core_points) @ X[:3, :3].T + X[:3, 3], float(sh.core_radius)) for sh in p.shapes]
+    return out
+
+
 def _workspace_distance(shapes, ws) -> float:
     """Signed distance of convex shapes inside the workspace box to its walls (solid outside):
     the least ``wall − support`` over the six walls (negative when a shape sticks out)."""
@@ -348,15 +374,12 @@ def clearance_sigmas(source, q, placements, *, confidence: float = 0.999, sample
     scene, q_scene, rows = _pair_rows(source, q)
     placements = _check_placements(scene, placements)
     moved = [_moved_by(scene, p) for p in placements]
-    items = scene.shapes_at(q_scene)
-    shapes: dict[str, list] = {}
-    for it in items:
-        shapes.setdefault(it.owner, []).append(it.shape)
+    cores = _owner_cores(scene, q_scene)
     smax_cache: dict = {}
 
     def smax(k: int, owner: str) -> float:
         if (k, owner) not in smax_cache:
-            smax_cache[(k, owner)] = placements[k].sigma_max(shapes.get(owner, ()))
+            smax_cache[(k, owner)] = placements[k].sigma_max(cores.get(owner, ()))
         return smax_cache[(k, owner)]
 
     best: dict = {}  # owner pair -> (sigmas, PairSigma pieces)
@@ -383,6 +406,10 @@ def clearance_sigmas(source, q, placements, *, confidence: float = 0.999, sample
         key = (a, b)
         if key not in best or sigmas < best[key][0]:
             best[key] = (sigmas, cat, d, sigma, sig_max, tuple(ks), np.array(pa), np.array(pb))
+    shapes: dict[str, list] = {}
+    if samples > 0:
+        for it in scene.shapes_at(q_scene):
+            shapes.setdefault(it.owner, []).append(it.shape)
     mc = _monte_carlo(scene, shapes, placements, moved, list(best), samples, seed) if samples > 0 else None
     pairs = []
     for key, (sigmas, cat, d, sigma, sig_max, ks, pa, pb) in best.items():
