@@ -87,3 +87,12 @@ def test_the_cli_choice_does_not_outlive_the_command():
 
     CliRunner().invoke(main, ["--backend", "coal", "info", "hermes"])
     assert resolve()[0] == "analytic"
+
+
+def test_a_verdicts_only_backend_says_what_it_cannot_answer():
+    scene = armguard.load_scene("puma560")
+    det = armguard.Detector(scene, backend="clip")
+    Q = np.tile(scene.flat_q(scene.default_q()), (4, 1))
+    assert det.collides_many(Q).shape == (4,)
+    with pytest.raises(armguard.BackendError, match="verdicts only"):
+        det.check(scene.default_q())

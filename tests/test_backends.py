@@ -7,9 +7,9 @@ shared with ``tests/test_reference.py`` and ``armguard compare``):
 * ``DISTANCE_TOL``: separated distances agree within this (both backends exact up to round-off;
   coal's GJK on mesh hulls stops within ``HULL_TOL``, measured 3.6e-6 m on the Panda's hulls);
 * ``WITNESS_TOL``: the analytic backend's witness relation ``| |p_WA - p_WB| - |d| |``;
-* ``FCL_TOL``: python-fcl's distances were measured up to 5.3e-2 m off the exact ones (its
-  capsule and GJK paths); it is held to verdicts outside that band.  On Ranger it is off by
-  0.32 m on some pairs, so Ranger is not among its models here.
+* ``FCL_TOL``: python-fcl's separated distances run long (GJK stopped early: up to 0.39 m on
+  Hermes in 10^4 configurations, never short of the exact distance); it is held to that
+  one-sided bound and to verdicts outside this band.
 * coal's witness points are checked on separated pairs only: on penetrating mesh-hull pairs its
   points were seen not to keep ``|p_WA - p_WB| == |d|``.
 """
@@ -31,7 +31,7 @@ DISTANCE_TOL = TOL.distance
 HULL_TOL = TOL.hull
 WITNESS_TOL = TOL.witness
 FCL_TOL = TOL.fcl
-N_DISTANCE = 1000
+N_DISTANCE = 2000  # 10^4 per model: `armguard compare` (docs/backends.md)
 N_VERDICT = 10_000
 
 import sysconfig
@@ -163,14 +163,18 @@ def test_analytic_matches_coal(checkers, name):
         assert np.all(np.abs(dmin) <= CONTACT_BAND), (name, Qv[differ][0].tolist())
 
 
-@pytest.mark.parametrize("name", ["hermes", "puma560"], ids=["hermes", "puma560"])
-def test_fcl_verdicts_agree_outside_its_band(checkers, name):
+@pytest.mark.parametrize("name", ["hermes", "ranger", "puma560"], ids=["hermes", "ranger", "puma560"])
+def test_fcl_never_reports_less_than_the_exact_distance(checkers, name):
+    """python-fcl stops GJK early (its distances ran up to 0.39 m long on Hermes over 10^4
+    configurations): an early stop gives a feasible pair of points, so a separated distance is
+    never below the exact one, and verdicts agree outside its band."""
     model, a, _ = checkers(name)
     f = armguard.checker(model, "fcl")
-    for q in model.random_q(200, 13):
+    for q in model.random_q(300, 13):
         ra, rf = a.pair_distances(q), f.pair_distances(q)
         assert np.array_equal(ra.pairs, rf.pairs)
-        assert np.all(np.abs(ra.distance - rf.distance) <= FCL_TOL)
+        sep = (ra.distance > CONTACT_BAND) & (rf.distance > CONTACT_BAND)
+        assert np.all(rf.distance[sep] >= ra.distance[sep] - DISTANCE_TOL), name
         far = np.abs(ra.distance) > FCL_TOL
         assert np.array_equal(ra.distance[far] > 0, rf.distance[far] > 0)
 

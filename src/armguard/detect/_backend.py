@@ -70,7 +70,8 @@ class CheckerDetector:
     """A Detector whose distances come from a backend Checker (see the module docstring)."""
 
     def __init__(self, scene, threshold: float = 0.05, *, stopping_distance: float = 0.0, active: str | None = None,
-                 backend: str | None = None, backend_options=None, model=None, tol=None, reach_margin=None) -> None:
+                 backend: str | None = None, backend_options=None, model=None, tol=None, reach_margin=None,
+                 terrain=None) -> None:
         from ..backends import checker
         from ..model import model_of
 
@@ -80,8 +81,23 @@ class CheckerDetector:
         self.model = model if model is not None else model_of(scene)
         self.checker = checker(self.model, backend, backend_options)
         self.backend = self.checker.name
+        from ..backends import Capability
+
+        self._distances = Capability.DISTANCES in self.checker.capabilities
         self._active = None
+        self.terrain = None
         self.set_active(active)
+        if terrain is not None:  # the terrain category, composed outside the backend
+            from ..terrain import attach_terrain
+
+            attach_terrain(self, terrain)
+
+    def _require_distances(self, what: str) -> None:
+        if not self._distances:
+            from .._errors import BackendError
+
+            raise BackendError(f"backend {self.backend!r} answers verdicts only (no distances), so it has no {what}; "
+                               "use collides_many(Q) with it, or a backend that answers distances")
 
     # ------------------------------------------------------------------ settings
     threshold = property(lambda self: self._threshold, doc="Detection threshold (m).")
@@ -135,6 +151,7 @@ class CheckerDetector:
 
     # ------------------------------------------------------------------ checks
     def _eval(self, q_flat: np.ndarray):
+        self._require_distances("per-pair distances (check, pair_distances, check_many)")
         if getattr(self.scene, "revision", None) != self._revision:
             raise DetectionError("the scene changed after this detector was built; build a new one")
         self.model.check_limits(q_flat, "Detector.check")
@@ -228,7 +245,8 @@ class CheckerDetector:
         for i, q in enumerate(Q):
             self.model.check_limits(q, f"Detector.collides_many: Q[{i}]")
         if self._active is None and len(self._sel) == len(self.model.pairs):
-            return self.checker.collides(self.model.pin_q(Q), margin=max(self.model.tol.length, self._stopping))
+            return self.checker.collides(self.model.pin_q(Q), margin=self._stopping)
+        self._require_distances("active-arm batches (collides_many with active= checks the whole Model)")
         return self.check_many(Q).collision
 
     def __repr__(self) -> str:
