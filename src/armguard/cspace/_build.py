@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._dask import dask_client
 from .._errors import ForbiddenMapError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._certify import certify_substructure
@@ -254,20 +255,10 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
 
 
 def _on_dask(args, todo, journal, bar, workers, scheduler):
-    from distributed import Client, LocalCluster, as_completed
+    from distributed import as_completed
 
-    cluster = None
-    if scheduler is None:
-        cluster = LocalCluster(n_workers=int(workers), processes=True, threads_per_worker=1, dashboard_address=None)
-        client = Client(cluster)
-    else:
-        try:
-            client = Client(scheduler, timeout="20s")
-        except (OSError, TimeoutError) as exc:
-            raise ForbiddenMapError(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}") from exc
     evaluations = 0
-    try:
-        n_workers = max(1, len(client.scheduler_info().get("workers", {})) or int(workers or 1))
+    with dask_client(workers, scheduler, ForbiddenMapError) as (client, n_workers):
         size = max(1, math.ceil(len(todo) / (_TASKS_PER_WORKER * n_workers)))
         chunks = [todo[i:i + size] for i in range(0, len(todo), size)]
         token = uuid.uuid4().hex
@@ -278,10 +269,6 @@ def _on_dask(args, todo, journal, bar, workers, scheduler):
                 evaluations += ev
                 bar.advance(1)
         return evaluations, n_workers
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
 
 
 class _Progress:

@@ -6,6 +6,7 @@ import math
 import uuid
 from collections.abc import Callable, Mapping, Sequence
 
+from .._dask import dask_client
 from .._errors import VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._report import VerificationReport
@@ -84,21 +85,9 @@ def verify_many(scene, trajectories, *, workers: int | None = None, scheduler: s
 
 
 def _on_dask(scene, items, ctor, kwargs, workers, scheduler, chunk_size, progress):
-    try:
-        from distributed import Client, LocalCluster, as_completed
-    except ImportError as exc:  # pragma: no cover - a declared dependency
-        raise VerificationError("verify_many on Dask needs the 'distributed' package") from exc
-    cluster = None
-    if scheduler is None:
-        cluster = LocalCluster(n_workers=int(workers), processes=True, threads_per_worker=1, dashboard_address=None)
-        client = Client(cluster)
-    else:
-        try:
-            client = Client(scheduler, timeout="20s")
-        except (OSError, TimeoutError) as exc:
-            raise VerificationError(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}") from exc
-    try:
-        n_workers = max(1, len(client.scheduler_info().get("workers", {})) or int(workers or 1))
+    from distributed import as_completed
+
+    with dask_client(workers, scheduler, VerificationError) as (client, n_workers):
         size = chunk_size or max(1, math.ceil(len(items) / (4 * n_workers)))
         chunks = [items[i : i + size] for i in range(0, len(items), size)]
         token = uuid.uuid4().hex
@@ -113,7 +102,3 @@ def _on_dask(scene, items, ctor, kwargs, workers, scheduler, chunk_size, progres
             if progress is not None:
                 progress(done, len(items))
         return tuple(r for chunk in results for r in chunk)
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()

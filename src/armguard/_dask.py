@@ -1,0 +1,36 @@
+"""One way to get a Dask client: a fresh LocalCluster of worker processes, or a scheduler's address."""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+
+from ._errors import ArmguardError
+
+__all__ = ["dask_client"]
+
+
+@contextmanager
+def dask_client(workers: int | None, scheduler: str | None, error: type = ArmguardError):
+    """``(client, n_workers)`` for the block; the cluster (when made here) and client are closed after it.
+
+    ``scheduler`` None: a ``distributed.LocalCluster`` of ``workers`` single-threaded processes (no
+    dashboard); else a ``Client`` of the scheduler at that address (an unreachable one raises
+    ``error`` naming it).  ``n_workers`` is the cluster's worker count (at least 1).
+    """
+    from distributed import Client, LocalCluster
+
+    cluster = None
+    if scheduler is None:
+        cluster = LocalCluster(n_workers=int(workers), processes=True, threads_per_worker=1, dashboard_address=None)
+        client = Client(cluster)
+    else:
+        try:
+            client = Client(scheduler, timeout="20s")
+        except (OSError, TimeoutError) as exc:
+            raise error(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}") from exc
+    try:
+        yield client, max(1, len(client.scheduler_info().get("workers", {})) or int(workers or 1))
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
