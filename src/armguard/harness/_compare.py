@@ -14,6 +14,11 @@ Definitions (every count is over (configuration, pair) entries unless it says co
   ``|sin(angle between axes)| > parallel``.  There |Δp_WA|, |Δp_WB| are measured; elsewhere each
   backend's points are checked against the witness contract on their own,
   ``| |p_WA - p_WB| - |d| | <= tol`` (``tol`` the pair's distance tolerance: ``hull`` for a Convex side).
+
+A backend pair with a verdicts-only side (no ``Capability.DISTANCES``: ``clip``, ``forbidden``) has no
+distances or witness points to compare: :mod:`._verdicts` judges its verdicts against the distance
+side's (unsafe and conservative answers, undecided shares, false-forbidden), with
+``max_abs_distance_error`` None.
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._tolerances import DIFFERENTIAL, DifferentialTolerances, pair_distance_tolerance, pair_kinds
+from ._verdicts import verdict_backend_summary, verdict_pair_summary
 
 __all__ = ["PairStatus", "Comparison", "compare_answers", "capsule_axes", "unique_witness_mask", "reference_of",
            "reproduce_command"]
@@ -103,14 +109,17 @@ def _quant(x: np.ndarray) -> dict:
     return {"n": int(x.size), "max": float(x.max()), "p99": float(np.quantile(x, 0.99)), "median": float(np.median(x))}
 
 
-def reproduce_command(spec: str, backends, q, pair=None, options=None) -> str:
-    """One shell line that prints every backend's answer at ``q`` (pin order) for ``pair``."""
+def reproduce_command(spec: str, backends, q, pair=None, options=None, as_json: bool = False) -> str:
+    """One shell line that prints every backend's answer at ``q`` (pin order) for ``pair`` (``as_json``: as JSON,
+    the form that shows a verdicts-only backend's answers)."""
     parts = ["armguard", "compare", spec, "--backends", ",".join(backends), "--q", ",".join(repr(float(v)) for v in q)]
     if pair is not None:
         parts += ["--pair", f"{pair[0]},{pair[1]}"]
     for b, opts in (options or {}).items():
         for k, v in opts.items():
             parts += ["--backend-option", f"{b}.{k}={v}"]
+    if as_json:
+        parts.append("--json")
     return " ".join(shlex.quote(p) for p in parts)
 
 
@@ -202,20 +211,33 @@ def compare_answers(model, configs, answers: dict, *, spec: str, options=None, t
     tol_pair = pair_distance_tolerance(model, tol)
     axes = capsule_axes(model, configs.Q)
     per_backend = {}
-    fastest = min(ans.us_per_config for ans in answers.values())
+    dist = [ans for ans in answers.values() if not ans.verdicts_only]
+    fastest = min((ans.us_per_config for ans in dist), default=None)
     fastest_yn = max(ans.yes_no_per_s for ans in answers.values())
     for b, ans in answers.items():
-        per_backend[b] = {"us_per_config": ans.us_per_config, "yes_no_configs_per_s": ans.yes_no_per_s,
-                          "distances_vs_fastest": ans.us_per_config / fastest if fastest else None,
+        per_backend[b] = {"answers": "verdicts" if ans.verdicts_only else "distances",
+                          "us_per_config": ans.us_per_config,
+                          "us_per_config_of": "collides(Q)" if ans.verdicts_only else "pair_distances(q)",
+                          "yes_no_configs_per_s": ans.yes_no_per_s,
+                          "distances_vs_fastest": ans.us_per_config / fastest if fastest and not ans.verdicts_only else None,
                           "yes_no_vs_fastest": fastest_yn / ans.yes_no_per_s if ans.yes_no_per_s else None,
                           "options": dict((options or {}).get(b, {}))}
+        if ans.verdicts_only:
+            per_backend[b].update(verdict_backend_summary(ans))
+    groups = {"all": np.arange(len(model.pairs))}
+    groups.update({c: np.flatnonzero(cats == c) for c in dict.fromkeys(model.pairs.category)})
     pairs, status = {}, {}
     for a, b in itertools.combinations(backends, 2):
-        R = answers[reference_of(a, b)]
-        unique = unique_witness_mask(model, configs.Q, R.distance, tol, axes)
         key = f"{a}/{b}"
-        pairs[key], status[key] = _pair_summary(model, configs, answers[a], answers[b], R, a, b, cats, tol, tol_pair,
-                                                unique, n_worst, spec, options)
+        if answers[a].verdicts_only or answers[b].verdicts_only:
+            pairs[key], ok = verdict_pair_summary(model, configs, answers, a, b, groups, tol, n_worst, spec, options,
+                                                  reproduce_command)
+            status[key] = PairStatus.AGREE if ok else PairStatus.DIFFER
+        else:
+            R = answers[reference_of(a, b)]
+            unique = unique_witness_mask(model, configs.Q, R.distance, tol, axes)
+            pairs[key], status[key] = _pair_summary(model, configs, answers[a], answers[b], R, a, b, cats, tol, tol_pair,
+                                                    unique, n_worst, spec, options)
         pairs[key]["status"] = status[key].value
     summary = {
         "model": model.name, "spec": spec, "n_pairs": len(model.pairs),

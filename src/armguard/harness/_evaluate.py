@@ -17,7 +17,8 @@ import numpy as np
 
 from .._errors import ArmguardError
 
-__all__ = ["BackendAnswers", "evaluate", "build_checkers", "parse_backend_options"]
+__all__ = ["BackendAnswers", "evaluate", "build_checkers", "parse_backend_options", "answers_distances", "verdict_detail",
+           "combine_codes", "CLEAR", "COLLISION", "UNDECIDED"]
 
 _CACHE: dict = {}
 
@@ -26,28 +27,113 @@ _CACHE: dict = {}
 class BackendAnswers:
     """One backend's answers at every configuration of a ConfigSet.
 
-    distance : (M, n) float64, m — signed, every active pair (``model.pairs`` order)
-    p_WA, p_WB : (M, n, 3) float64, m — witness points in W
+    distance : (M, n) float64, m — signed, every active pair (``model.pairs`` order); None for a
+        verdicts-only backend (no ``Capability.DISTANCES``)
+    p_WA, p_WB : (M, n, 3) float64, m — witness points in W; None for a verdicts-only backend
     verdict : (M,) bool — ``collides(Q)`` (the backend's own yes/no batch path)
     t_distances, t_verdicts : float, s — time spent in ``pair_distances`` / ``collides``, summed over chunks
+    verdicts_only : bool — the backend answers verdicts only (the fields below describe them)
+    codes : (M,) int8 or None — the backend's three-valued verdict where it has one (:data:`CLEAR`,
+        :data:`COLLISION`, :data:`UNDECIDED`: clip's MAYBE, forbidden's MAP_FORBIDDEN)
+    codes_first : (M,) int8 or None — the same before a second level (clip: the 8 steps alone)
+    pair_codes, pair_codes_first : (M, n) int8 or None — per active pair (clip's ``check_pairs``)
+    map_forbidden : (M,) bool or None — forbidden: the map refused joints 1–3 (``MAP_FORBIDDEN``)
+    t_detail : float, s — time spent in the three-valued query (not part of the yes/no rate)
     """
 
-    distance: np.ndarray
-    p_WA: np.ndarray
-    p_WB: np.ndarray
+    distance: np.ndarray | None
+    p_WA: np.ndarray | None
+    p_WB: np.ndarray | None
     verdict: np.ndarray
     t_distances: float
     t_verdicts: float
+    verdicts_only: bool = False
+    codes: np.ndarray | None = None
+    codes_first: np.ndarray | None = None
+    pair_codes: np.ndarray | None = None
+    pair_codes_first: np.ndarray | None = None
+    map_forbidden: np.ndarray | None = None
+    t_detail: float = 0.0
 
     @property
     def us_per_config(self) -> float:
-        """µs per configuration for every pair's distance and witness points."""
-        return self.t_distances / max(1, len(self.verdict)) * 1e6
+        """µs per configuration for every pair's distance and witness points; for a verdicts-only
+        backend, of its ``collides(Q)`` batch (its only answer)."""
+        t = self.t_verdicts if self.verdicts_only else self.t_distances
+        return t / max(1, len(self.verdict)) * 1e6
 
     @property
     def yes_no_per_s(self) -> float:
         """Configurations per second of ``collides(Q)``."""
         return len(self.verdict) / self.t_verdicts if self.t_verdicts > 0 else math.inf
+
+
+CLEAR, COLLISION, UNDECIDED = 0, 1, 2
+"""Three-valued verdict codes: proven clear, definite collision, undecided (counted as a collision
+by ``collides``): clip's CLEAR / INTERSECTED / MAYBE, forbidden's FREE / COLLISION / MAP_FORBIDDEN."""
+
+_NAMES = {"CLEAR": CLEAR, "FREE": CLEAR, "INTERSECTED": COLLISION, "COLLISION": COLLISION, "MAYBE": UNDECIDED,
+          "MAP_FORBIDDEN": UNDECIDED}
+
+
+def answers_distances(checker) -> bool:
+    """Whether ``checker`` declares ``Capability.DISTANCES`` (a Checker without ``capabilities`` is taken to)."""
+    from ..backends import Capability
+
+    caps = getattr(checker, "capabilities", None)
+    return caps is None or Capability.DISTANCES in caps
+
+
+def _codes_of(values) -> np.ndarray:
+    """``(M,) int8`` codes from an array of enum members (by name: ClipStatus, CombinedStatus) or names."""
+    out = np.empty(len(values), dtype=np.int8)
+    for i, v in enumerate(values):
+        name = str(getattr(v, "name", v)).upper()
+        if name not in _NAMES:
+            raise ArmguardError(f"three-valued verdict {v!r}: expected one of {sorted(_NAMES)}")
+        out[i] = _NAMES[name]
+    return out
+
+
+def verdict_detail(checker, Q) -> dict:
+    """A verdicts-only backend's three-valued answers at ``Q`` ``(m, nq)``, where it exposes them.
+
+    ``check_pairs(Q, subdivide=True)`` (clip: per-pair codes after the 8 steps and with the second
+    level) or ``verdicts(Q)`` (forbidden: a batch with ``status`` codes; or an array of statuses);
+    ``{}`` for a backend with neither.  Keys: ``codes``, and ``codes_first``, ``pair_codes``,
+    ``pair_codes_first`` (``check_pairs``) or ``map_forbidden`` (a CombinedBatch); see :class:`BackendAnswers`.
+    """
+    if hasattr(checker, "check_pairs"):
+        try:
+            b = checker.check_pairs(Q, subdivide=True)
+        except TypeError:
+            b = checker.check_pairs(Q)
+        pc = np.asarray(b.pair_codes, dtype=np.int8)
+        first = np.asarray(getattr(b, "pair_codes_8", pc), dtype=np.int8)
+        return {"codes": combine_codes(pc, len(Q)), "codes_first": combine_codes(first, len(Q)), "pair_codes": pc,
+                "pair_codes_first": first}
+    if not hasattr(checker, "verdicts"):
+        return {}
+    v = checker.verdicts(Q)
+    status = getattr(v, "status", v)
+    if hasattr(v, "collision"):  # armguard.cspace.CombinedBatch: int codes of CombinedStatus
+        from ..cspace import CombinedStatus
+
+        status = [CombinedStatus(int(s)) for s in np.asarray(status)]
+    codes = _codes_of(np.asarray(status, dtype=object))
+    out = {"codes": codes}
+    if hasattr(v, "collision"):
+        out["map_forbidden"] = codes == UNDECIDED
+    return out
+
+
+def combine_codes(pair_codes: np.ndarray, m: int | None = None) -> np.ndarray:
+    """``(M, k) int8 -> (M,) int8``: COLLISION if any pair is, else UNDECIDED if any is, else CLEAR."""
+    if pair_codes.shape[1] == 0:
+        return np.zeros(len(pair_codes) if m is None else m, dtype=np.int8)
+    hit = np.any(pair_codes == COLLISION, axis=1)
+    und = np.any(pair_codes == UNDECIDED, axis=1)
+    return np.where(hit, COLLISION, np.where(und, UNDECIDED, CLEAR)).astype(np.int8)
 
 
 def _scalar(text: str):
@@ -87,7 +173,10 @@ def build_checkers(model, backends, options=None) -> dict:
     warm = np.concatenate([model.neutral()[None], model.random_q(64, 0)])
     for b in backends:
         c = armguard.checker(model, b, dict(options.get(b, {})))
-        c.pair_distances(warm[0])
+        if answers_distances(c):
+            c.pair_distances(warm[0])
+        else:
+            verdict_detail(c, warm)
         c.collides(warm)
         out[b] = c
     return out
@@ -105,23 +194,30 @@ def _cached(spec: str, backends: tuple, options_json: str):
 
 
 def _answer_chunk(model, checkers: dict, Q: np.ndarray) -> dict:
-    """``{backend: (d (m, n), p_WA (m, n, 3), p_WB, verdict (m,), t_distances, t_verdicts)}`` for rows ``Q``."""
+    """``{backend: {field: value}}`` for rows ``Q``: the :class:`BackendAnswers` fields of this chunk."""
     n = len(model.pairs)
     m = len(Q)
     out = {}
     for b, c in checkers.items():
-        d = np.empty((m, n))
-        pa = np.empty((m, n, 3))
-        pb = np.empty((m, n, 3))
-        pd = c.pair_distances
-        t0 = time.perf_counter()
-        for i in range(m):
-            r = pd(Q[i])
-            d[i], pa[i], pb[i] = r.distance, r.p_WA, r.p_WB
+        rec = {}
+        if answers_distances(c):
+            d = np.empty((m, n))
+            pa = np.empty((m, n, 3))
+            pb = np.empty((m, n, 3))
+            pd = c.pair_distances
+            t0 = time.perf_counter()
+            for i in range(m):
+                r = pd(Q[i])
+                d[i], pa[i], pb[i] = r.distance, r.p_WA, r.p_WB
+            rec.update(distance=d, p_WA=pa, p_WB=pb, t_distances=time.perf_counter() - t0)
+        else:
+            t0 = time.perf_counter()
+            rec.update(verdict_detail(c, Q), verdicts_only=True, t_distances=0.0)
+            rec["t_detail"] = time.perf_counter() - t0
         t1 = time.perf_counter()
-        v = np.asarray(c.collides(Q), dtype=bool)
-        t2 = time.perf_counter()
-        out[b] = (d, pa, pb, v, t1 - t0, t2 - t1)
+        rec["verdict"] = np.asarray(c.collides(Q), dtype=bool)
+        rec["t_verdicts"] = time.perf_counter() - t1
+        out[b] = rec
     return out
 
 
@@ -130,13 +226,18 @@ def _chunk_task(spec, backends, options_json, Q):
     return _answer_chunk(model, checkers, Q)
 
 
+_ARRAYS = ("distance", "p_WA", "p_WB", "verdict", "codes", "codes_first", "pair_codes", "pair_codes_first",
+           "map_forbidden")
+_TIMES = ("t_distances", "t_verdicts", "t_detail")
+
+
 def _merge(parts: list, backends) -> dict:
     out = {}
     for b in backends:
         rows = [p[b] for p in parts]
-        out[b] = BackendAnswers(np.concatenate([r[0] for r in rows]), np.concatenate([r[1] for r in rows]),
-                                np.concatenate([r[2] for r in rows]), np.concatenate([r[3] for r in rows]),
-                                float(sum(r[4] for r in rows)), float(sum(r[5] for r in rows)))
+        kw = {k: (np.concatenate([r[k] for r in rows]) if k in rows[0] else None) for k in _ARRAYS}
+        kw.update({k: float(sum(r.get(k, 0.0) for r in rows)) for k in _TIMES})
+        out[b] = BackendAnswers(verdicts_only=bool(rows[0].get("verdicts_only", False)), **kw)
     return out
 
 

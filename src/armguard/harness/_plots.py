@@ -1,4 +1,5 @@
-"""The harness's figures (matplotlib, Agg): scatter d_a vs d_b, |Δd| histogram, timing bars."""
+"""The harness's figures (matplotlib, Agg): scatter d_a vs d_b, |Δd| histogram, timing bars; for a pair with a
+verdicts-only backend (no distances to scatter) a verdict bar chart per category instead."""
 
 from __future__ import annotations
 
@@ -21,7 +22,8 @@ def _pyplot():
 
 
 def write_plots(comparison, out_dir) -> list:
-    """Write ``scatter_<a>_<b>.png``, ``hist_<a>_<b>.png`` per backend pair and ``timing.png``; returns the paths."""
+    """Write ``scatter_<a>_<b>.png``, ``hist_<a>_<b>.png`` per backend pair (``verdicts_<a>_<b>.png`` where a side
+    answers verdicts only) and ``timing.png``; returns the paths."""
     plt = _pyplot()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -31,6 +33,9 @@ def write_plots(comparison, out_dir) -> list:
     rng = np.random.default_rng(0)
     for key, s in comparison.summary["pairs"].items():
         a, b = s["a"], s["b"]
+        if s.get("answers") == "verdicts":
+            written.append(_verdict_bars(plt, comparison, s, out))
+            continue
         A, B = comparison.answers[a].distance, comparison.answers[b].distance
         R = comparison.answers[s["reference"]].distance
         fig, ax = plt.subplots(figsize=(6, 6))
@@ -79,11 +84,15 @@ def write_plots(comparison, out_dir) -> list:
         written.append(p)
 
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.5))
-    names = list(comparison.summary["backends"])
-    us = [comparison.summary["backends"][n]["us_per_config"] for n in names]
-    yn = [comparison.summary["backends"][n]["yes_no_configs_per_s"] for n in names]
-    ax1.bar(names, us, color="tab:blue")
-    ax1.set_ylabel("µs per configuration"), ax1.set_title("distances + witness points")
+    per = comparison.summary["backends"]
+    names = list(per)
+    dist = [n for n in names if per[n].get("answers") != "verdicts"]
+    us = [per[n]["us_per_config"] for n in dist]
+    yn = [per[n]["yes_no_configs_per_s"] for n in names]
+    ax1.bar(dist, us, color="tab:blue")
+    skipped = [n for n in names if n not in dist]
+    ax1.set_ylabel("µs per configuration")
+    ax1.set_title("distances + witness points" + (f"\n({', '.join(skipped)}: n/a, verdicts only)" if skipped else ""))
     ax1.set_yscale("log")
     ax2.bar(names, yn, color="tab:green")
     ax2.set_ylabel("configurations / s"), ax2.set_title("yes/no (collides batch)")
@@ -97,3 +106,44 @@ def write_plots(comparison, out_dir) -> list:
     plt.close(fig)
     written.append(p)
     return written
+
+
+def _verdict_bars(plt, comparison, s, out: Path) -> Path:
+    """``verdicts_<a>_<b>.png``: per category, the shares of configurations the verdicts-only side answers
+    wrongly clear (unsafe), wrongly as a definite collision, undecided (first level and final), and
+    conservatively (said collision, clear), with the counts annotated."""
+    a, b = s["a"], s["b"]
+    cats = {c: r for c, r in s["categories"].items() if "reference_collisions" in r}
+    M = max(1, len(comparison.configs))
+    und = "map-forbidden" if s.get("false_forbidden") else "MAYBE"
+    bars = [("said clear, collides (unsafe)", lambda r: r["clear_but_collides"] / M if r["clear_but_collides"] is not None else None, "tab:red"),
+            ("definite collision, clear", lambda r: r["collision_but_clear"] / M if r["collision_but_clear"] is not None else None, "tab:purple"),
+            (f"{und}, first level", lambda r: r["undecided_share_first_level"], "tab:orange"),
+            (und, lambda r: r["undecided_share"], "gold"),
+            ("said collision, clear (conservative)", lambda r: r["conservative_share"], "tab:blue")]
+    ff = s.get("false_forbidden")
+    fig, ax = plt.subplots(figsize=(max(6, 1.8 * len(cats) + 3), 4))
+    width = 0.8 / len(bars)
+    for j, (label, get, colour) in enumerate(bars):
+        xs, ys = [], []
+        for i, r in enumerate(cats.values()):
+            y = get(r)
+            if y is not None:
+                xs.append(i + (j - (len(bars) - 1) / 2) * width)
+                ys.append(100 * y)
+        if xs:
+            ax.bar(xs, ys, width=width, color=colour, label=label)
+            for x, y in zip(xs, ys):
+                ax.annotate(f"{y:.2f}", (x, y), ha="center", va="bottom", fontsize=6)
+    ax.set_xticks(range(len(cats)), list(cats))
+    ax.set_ylabel("% of configurations")
+    title = (f"{comparison.model.name}: {', '.join(s['verdicts_only'])} (verdicts only) vs {s['reference']}, "
+             f"{len(comparison.configs)} configurations; unsafe {s.get('unsafe_disagreements')}")
+    if ff:
+        title += f"; false-forbidden {100 * ff['share']:.2f} %"
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=7)
+    p = out / f"verdicts_{a}_{b}.png"
+    fig.savefig(p, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return p

@@ -12,9 +12,10 @@ import numpy as np
 from .._errors import ArmguardError
 from ._compare import Comparison, compare_answers, reference_of
 from ._configs import build_configs
-from ._evaluate import build_checkers, evaluate
+from ._evaluate import answers_distances, build_checkers, evaluate, verdict_detail
 from ._models import resolve_model
 from ._tolerances import DIFFERENTIAL, DifferentialTolerances
+from ._verdicts import NA, code_names, verdict_tables
 
 __all__ = ["run_compare", "write_outputs", "summary_table", "compare_at"]
 
@@ -105,6 +106,9 @@ def summary_table(comp: Comparison):
     s = comp.summary
     tables = []
     for key, p in s["pairs"].items():
+        if p.get("answers") == "verdicts":
+            tables += verdict_tables(s, p)
+            continue
         t = Table(title=f"{s['model']}: {p['a']} vs {p['b']} (reference {p['reference']}), {s['configs']['total']} "
                         f"configurations — {p['status']}", title_justify="left")
         for col in ("category", "pairs", "verdicts ≠", "sign ≠", "sep |Δd| max", "p99", "median", "pen |Δd| max",
@@ -129,19 +133,31 @@ def summary_table(comp: Comparison):
         t.add_column(col, justify="right" if col != "backend" else "left")
     for b, r in s["backends"].items():
         yn = r["yes_no_configs_per_s"]
-        t.add_row(b, f"{r['us_per_config']:.1f}", f"{r['distances_vs_fastest']:.2f}",
-                  "—" if yn is None else f"{yn:,.0f}", "—" if r["yes_no_vs_fastest"] is None else f"{r['yes_no_vs_fastest']:.2f}")
+        dist = (NA, "—") if r.get("answers") == "verdicts" else (f"{r['us_per_config']:.1f}", f"{r['distances_vs_fastest']:.2f}")
+        t.add_row(b, *dist, "—" if yn is None else f"{yn:,.0f}",
+                  "—" if r["yes_no_vs_fastest"] is None else f"{r['yes_no_vs_fastest']:.2f}")
     tables.append(t)
     return tables
 
 
 def compare_at(spec, backends, q, *, options=None, pair=None, model=None) -> list:
-    """Every backend's answer at one configuration ``q`` (pin order): rows ``{pair, category, backend: (d, p_WA, p_WB)}``
-    for ``pair`` (two GeometryObject names) or every pair."""
+    """Every backend's answer at one configuration ``q`` (pin order): rows ``{pair, category, backend: answer}``
+    for ``pair`` (two GeometryObject names) or every pair.
+
+    A distance backend's answer is ``(d, p_WA, p_WB)`` (m); a verdicts-only backend's is
+    ``{"collides": bool, "verdict": name or None, "pair_verdict": name or None}`` (its three-valued
+    answer for the configuration and for the row's pair, where it exposes them).
+    """
     model = model if model is not None else resolve_model(spec)
     q = np.asarray(q, dtype=np.float64)
     checkers = build_checkers(model, backends, options)
-    res = {b: c.pair_distances(q) for b, c in checkers.items()}
+    res = {}
+    for b, c in checkers.items():
+        if answers_distances(c):
+            res[b] = c.pair_distances(q)
+        else:
+            det = verdict_detail(c, q[None])
+            res[b] = (bool(np.asarray(c.collides(q[None]))[0]), det)
     names = model.pairs.names
     rows = []
     for k in range(len(names)):
@@ -149,7 +165,13 @@ def compare_at(spec, backends, q, *, options=None, pair=None, model=None) -> lis
             continue
         row = {"pair": (names[k, 0], names[k, 1]), "category": model.pairs.category[k]}
         for b, r in res.items():
-            row[b] = (float(r.distance[k]), r.p_WA[k].tolist(), r.p_WB[k].tolist())
+            if isinstance(r, tuple):
+                hit, det = r
+                labels = code_names("map_forbidden" in det)
+                row[b] = {"collides": hit, "verdict": labels[int(det["codes"][0])] if "codes" in det else None,
+                          "pair_verdict": labels[int(det["pair_codes"][0, k])] if "pair_codes" in det else None}
+            else:
+                row[b] = (float(r.distance[k]), r.p_WA[k].tolist(), r.p_WB[k].tolist())
         rows.append(row)
     if pair is not None and not rows:
         raise ArmguardError(f"pair {tuple(pair)} is not an active pair of model {model.name!r}")
