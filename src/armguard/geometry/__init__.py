@@ -1,10 +1,11 @@
 """Shapes and exact pairwise proximity queries (signed distance, witness points, overlap).
 
-``distance(a, b)`` answers every pair of the six shapes through one dispatch table
+``distance(a, b)`` answers every pair of the seven shapes through one dispatch table
 (``_dispatch``); ``armguard.geometry.batch`` has the batched kernels over arrays of pairs and
 ``armguard.geometry.kernels`` the njit-callable per-pair kernels for other compiled code.
 """
 
+from ._cylinder import Cylinder
 from ._dispatch import distance, intersects, kernel_name
 from ._feature import Feature, FeatureKind, feature_at
 from ._proximity import Proximity
@@ -18,6 +19,7 @@ __all__ = [
     "Prism",
     "ConvexPolyhedron",
     "Polygon",
+    "Cylinder",
     "CoreKind",
     "Proximity",
     "distance",

@@ -13,7 +13,9 @@ from numba import njit, types
 
 from .._errors import GeometryError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._cylinder import Cylinder
 from ._pair_box_box import box_box_overlap_packed
+from ._pair_cylinder import SUPPORT_WORK_SIZE, support_pair
 from ._pair_epa import EPA_WORK_SIZE, convex_convex_fast
 from ._pair_gjk import CLIMB_MIN_VERTICES, GJK_NOT_CONVERGED, GJK_WORK_SIZE
 from ._pair_sat import convex_convex
@@ -166,7 +168,31 @@ def _convex(a, b, tol: Tolerances) -> Proximity:
     return _proximity(d, out)
 
 
+_NO_CYL = np.zeros(0)
+
+
+def _support_core(s):
+    """``(points, cylinder buffer, radius)`` of a shape for ``_pair_cylinder`` (a Cylinder: its
+    15-float buffer; any other shape: its core points, an empty buffer and its core radius)."""
+    if isinstance(s, Cylinder):
+        return s._sat[0], s._pk, 0.0
+    return s._sat[0], _NO_CYL, s._sat[3]
+
+
+def _cylinder_pair(a, b, tol: Tolerances) -> Proximity:
+    """A Cylinder against any shape: GJK + EPA on support functions (``_pair_cylinder``)."""
+    pa, ca, ra = _support_core(a)
+    pb, cb, rb = _support_core(b)
+    out = np.empty(9)
+    d, status = support_pair(pa, ca, ra, pb, cb, rb, out, np.empty(SUPPORT_WORK_SIZE), tol.length, tol.gjk_epsilon,
+                             tol.gjk_max_iterations, -np.inf)
+    if status == GJK_NOT_CONVERGED:
+        raise _not_converged(a, b, tol)
+    return _proximity(d, out)
+
+
 _P, _S, _B, _T = CoreKind.POINT, CoreKind.SEGMENT, CoreKind.BOX, CoreKind.POLYTOPE
+_C = CoreKind.CYLINDER
 
 # (core kind A, core kind B) -> (kernel, kernel name)
 _TABLE = {
@@ -187,8 +213,10 @@ _TABLE = {
     (_T, _B): (_convex, "convex_convex (GJK + SAT; hulls of 48+ vertices: GJK on vertex graphs + EPA)"),
     (_T, _T): (_convex, "convex_convex (GJK + SAT; hulls of 48+ vertices: GJK on vertex graphs + EPA)"),
 }
+for _k in (_P, _S, _B, _T, _C):
+    _TABLE[(_C, _k)] = _TABLE[(_k, _C)] = (_cylinder_pair, "support_pair (GJK + EPA on support functions)")
 
-_SHAPES = (Sphere, Capsule, Box, Prism, ConvexPolyhedron, Polygon)
+_SHAPES = (Sphere, Capsule, Box, Prism, ConvexPolyhedron, Polygon, Cylinder)
 _BY_TYPE = {(ta, tb): _TABLE[(ta.core_kind, tb.core_kind)][0] for ta in _SHAPES for tb in _SHAPES}
 
 
@@ -216,7 +244,7 @@ def distance(a: Shape, b: Shape, tol: Tolerances = DEFAULT_TOLERANCES) -> Proxim
     Returns a :class:`Proximity`: ``distance`` (m; > 0 apart, < 0 penetrating with magnitude the
     penetration depth), ``p_WA``, ``p_WB`` ``(3,) float64, m`` on the surfaces of ``a`` and
     ``b`` and ``nhat_AB_W`` with ``p_WB - p_WA == distance * nhat_AB_W``.  Any pair of Sphere,
-    Capsule, Box, Prism, ConvexPolyhedron and Polygon.  Raises GeometryError on a non-shape
+    Capsule, Box, Prism, ConvexPolyhedron, Polygon and Cylinder.  Raises GeometryError on a non-shape
     argument or if GJK fails to converge within ``tol.gjk_max_iterations``.
     """
     fn = _BY_TYPE.get((type(a), type(b))) or _lookup(a, b)

@@ -14,6 +14,8 @@ Indices, per shape:
   ``(n+k, n+(k+1) % n)``, ``2n + k`` the vertical ``(k, n + k)``.
 * ``ConvexPolyhedron``: its own ``vertices``, ``edges`` and ``faces``.
 * ``Polygon``: vertex ``i``; edge ``i`` from vertex ``i`` to ``i + 1``; ``FACE 0`` the interior.
+* ``Cylinder``: ``SURFACE 0`` the curved side; ``FACE 0`` / ``1`` the caps at ``p0`` / ``p1``
+  (``-`` / ``+half_length`` along the axis); ``EDGE 0`` / ``1`` their rims (circles).
 
 A vertex wins over an edge, an edge over a face, when the point is within
 ``tol.feature_distance`` of several.
@@ -29,6 +31,7 @@ import numpy as np
 from .._errors import GeometryError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._check import check_point
+from ._cylinder import Cylinder
 from ._shapes import _BOX_SIGNS, Box, Capsule, ConvexPolyhedron, Polygon, Prism, Shape, Sphere
 
 __all__ = ["FeatureKind", "Feature", "feature_at", "BOX_EDGES"]
@@ -185,6 +188,20 @@ def feature_at(shape: Shape, p_W, tol: Tolerances = DEFAULT_TOLERANCES) -> Featu
         raise GeometryError("p_W: not on the polygon")
     if isinstance(shape, Box):
         return _box_feature(shape, p, eps)
+    if isinstance(shape, Cylinder):
+        loc = shape.rotation.T @ (p - shape.center)
+        rho = float(np.hypot(loc[0], loc[1]))
+        dr = rho - shape.radius
+        dz = abs(float(loc[2])) - shape.half_length
+        off = float(np.hypot(max(dr, 0.0), max(dz, 0.0))) + min(max(dr, dz), 0.0)
+        if abs(off) > eps:
+            raise GeometryError(f"p_W: {off:.3g} m off the Cylinder's surface")
+        end = int(loc[2] > 0.0)
+        if abs(dr) <= eps and abs(dz) <= eps:
+            return Feature(FeatureKind.EDGE, end)
+        if abs(dz) <= eps:
+            return Feature(FeatureKind.FACE, end)
+        return Feature(FeatureKind.SURFACE, 0)
     if isinstance(shape, (Prism, ConvexPolyhedron)):
         v, edges, planes = _polytope_parts(shape)
         dv = np.linalg.norm(v - p, axis=1)

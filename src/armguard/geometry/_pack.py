@@ -3,8 +3,9 @@
 Every shape carries (as private attributes set by its constructor):
 
 * ``_pk``: the closed-form kernels' parameter buffer -- Sphere ``[c, c, r]`` (a zero-length
-  capsule, 7 floats), Capsule ``[p0, p1, r]`` (7), Box ``[c, h, R_WB row-major]`` (15); empty
-  for the polytopes;
+  capsule, 7 floats), Capsule ``[p0, p1, r]`` (7), Box ``[c, h, R_WB row-major]`` (15), Cylinder
+  ``[c, r, r, h, R_WC row-major]`` (15: the box layout, the axis is ``R_WC[:, 2]``); empty for the
+  polytopes;
 * ``_sat``: ``(core_points (n, 3), face_normals (F, 3), edge_directions (E, 3), radius)`` for
   GJK + SAT, with face normals and edge directions reduced to one per parallel class;
 * ``_poly`` (polytopes only): faces with offsets and edges with their two faces, for the
@@ -54,6 +55,7 @@ def _ro(a: np.ndarray) -> np.ndarray:
 
 def attach_packed(shape) -> None:
     """Set ``shape._pk`` and ``shape._sat`` (see the module docstring)."""
+    from ._cylinder import Cylinder
     from ._shapes import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere
 
     par = 1e-9  # one class for directions closer than this sine: only affects duplicate axes
@@ -71,6 +73,10 @@ def attach_packed(shape) -> None:
     elif isinstance(shape, Box):
         pk = np.concatenate([shape.center, shape.half_extents, shape.rotation.reshape(-1)])
         faces = edges = _ro(shape.rotation.T)  # rows = box axes
+    elif isinstance(shape, Cylinder):
+        r, h = shape.radius, shape.half_length
+        pk = np.concatenate([shape.center, [r, r, h], shape.rotation.reshape(-1)])
+        faces = edges = _ro(shape.rotation[:, 2].reshape(1, 3))  # the caps' normal, the side's direction
     elif isinstance(shape, (ConvexPolyhedron, Prism)):
         pk = np.zeros(0)
         poly = shape if isinstance(shape, ConvexPolyhedron) else None

@@ -11,11 +11,13 @@ Box (OBB)          the box itself                0
 Prism (OBP)        its 2n vertices' hull         0
 ConvexPolyhedron   the hull of its vertices      0
 Polygon            the planar convex polygon     0
+Cylinder           the solid cylinder (curved)   0
 =================  ===========================  ======
 
 so one signed-distance engine (closed forms where they exist, GJK otherwise, SAT for
 penetration) serves every pair.  ``core_points`` lists the core's vertices, whose hull is
-the core.  Shapes are immutable; their arrays are read-only.
+the core (a Cylinder, whose core is curved, lists a circumscribed prism's and is reached through
+its exact support function: ``_cylinder``, ``_pair_cylinder``).  Shapes are immutable; their arrays are read-only.
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ class CoreKind:
     SEGMENT = 1
     BOX = 2
     POLYTOPE = 3
+    CYLINDER = 4
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
