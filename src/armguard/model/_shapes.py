@@ -2,8 +2,9 @@
 
 ``shape_from_coal(geometry, X_FG)`` gives the armguard shape of a coal geometry whose frame G
 is at ``X_FG`` in frame F, and a representation note when the two are not the same set of
-points (a cylinder is a circumscribed prism in the analytic kernels).  ``coal_from_shape``
-is the inverse, used for bodies a scene file adds.
+points (a cylinder is a circumscribed prism in the analytic kernels: the detector has no cylinder
+element yet, though :class:`armguard.geometry.Cylinder` is exact pairwise).  ``coal_from_shape``
+is the inverse, used for bodies a scene file adds (a Cylinder maps to ``coal.Cylinder``).
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._errors import SceneError
-from ..geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere
+from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
 
 __all__ = ["shape_from_coal", "coal_from_shape", "convex_hull", "CYLINDER_PRISM_SIDES"]
 
@@ -83,6 +84,10 @@ def coal_from_shape(shape):
         X[:3, :3] = shape.rotation
         X[:3, 3] = shape.center
         return coal.Box(*(2.0 * np.asarray(shape.half_extents))), X
+    if isinstance(shape, Cylinder):
+        X[:3, :3] = shape.rotation
+        X[:3, 3] = shape.center
+        return coal.Cylinder(float(shape.radius), 2.0 * float(shape.half_length)), X
     if isinstance(shape, (ConvexPolyhedron, Prism, Polygon)):
         pts = np.asarray(shape.as_polyhedron().vertices if isinstance(shape, Prism) else shape.vertices, dtype=np.float64)
         return convex_hull(pts), X

@@ -46,7 +46,8 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from ..geometry import Box, Capsule, ConvexPolyhedron, CoreKind, Polygon, Prism, Sphere
+from .._errors import SceneError
+from ..geometry import Box, Capsule, ConvexPolyhedron, CoreKind, Cylinder, Polygon, Prism, Sphere
 from ._scene import PairCategory, Scene
 
 __all__ = ["CompiledScene", "compile_scene", "PAIR_CATEGORIES", "OWNER_BODY", "OWNER_LINK", "OWNER_PAYLOAD"]
@@ -200,6 +201,9 @@ def compile_scene(scene: Scene) -> CompiledScene:
     nv = 0
     for k, (_, kind, r, ln, _, shapes) in enumerate(owners):
         for s in shapes:
+            if isinstance(s, Cylinder):  # exact pairwise (armguard.geometry.distance); no element kind yet
+                raise SceneError(f"{owners[k][0]}: a Cylinder shape has no detector element yet (use a Prism, "
+                                 "e.g. the circumscribed one armguard.model gives a URDF cylinder)")
             e_owner.append(k)
             e_kind.append(kind)
             e_robot.append(r)
