@@ -113,7 +113,10 @@ def _verdict_bars(plt, comparison, s, out: Path) -> Path:
     wrongly clear (unsafe), wrongly as a definite collision, undecided (first level and final), and
     conservatively (said collision, clear), with the counts annotated."""
     a, b = s["a"], s["b"]
-    cats = {c: r for c, r in s["categories"].items() if "reference_collisions" in r}
+    if "sides" in s:  # two verdicts-only backends: each against the reference
+        cats = {f"{side}: {c}": r for side, d in s["sides"].items() for c, r in d["categories"].items()}
+    else:
+        cats = {c: r for c, r in s["categories"].items() if "reference_collisions" in r}
     M = max(1, len(comparison.configs))
     und = "map-forbidden" if s.get("false_forbidden") else "MAYBE"
     bars = [("said clear, collides (unsafe)", lambda r: r["clear_but_collides"] / M if r["clear_but_collides"] is not None else None, "tab:red"),
