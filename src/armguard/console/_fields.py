@@ -2,9 +2,15 @@
 
 viser's number boxes send every keystroke, so typing ``-300`` applied ``-3`` and ``-30`` on the
 way, and a refused value had already changed the state.  A :class:`TypedField` is a text box in
-its own form: the server keeps what is typed as text and only acts on the form's submit, which
-the browser sends on Enter; :data:`COMMIT_ON_BLUR_HTML` (added once to the page) also submits a
-field's form when focus leaves it.  On a refusal the box is put back to the value in force.
+its own form; :data:`COMMIT_ON_BLUR_HTML` (added once to the page) keeps its keystrokes in the
+browser's box (the page's handlers, and so the server, never see an intermediate state), and on
+Enter or on leaving the field hands the box's whole text to the page once and submits the form;
+the server acts only on that submit.  While a box has focus and holds typed text, a value pushed
+by the server does not overwrite it.  On a refusal the box is put back to the value in force.
+
+Why not per keystroke: the page sends GUI messages through one 50 ms throttle that keeps only
+the latest message, so the form's "dirty" notice sent after a fast keystroke replaced that
+keystroke's value update (``70`` typed without delay arrived as ``7``).
 
 The same snippet hides the number boxes beside viser's sliders: sliders are for dragging,
 typed values go through the fields.
@@ -16,20 +22,30 @@ import time
 
 __all__ = ["TypedField", "COMMIT_ON_BLUR_HTML", "SETTLE_S"]
 
-SETTLE_S = 0.3
-"""Seconds a submit waits for the field's last value update (runs in viser's callback thread)."""
+SETTLE_S = 0.2
+"""Seconds a submit waits for the field's value update sent just before it (runs in viser's callback thread)."""
 
 _JS = (
-    "if(!window.__armguardBlur){window.__armguardBlur=1;"
-    "var field=function(t){if(!t||t.tagName!=='INPUT'||!t.closest||!t.dataset.armguardField)return null;"
-    "return t.closest('form');};"
-    # the submit goes after the last keystroke's value update has reached the server
-    "var later=function(f){setTimeout(function(){if(f.requestSubmit)f.requestSubmit();},250);};"
-    "document.addEventListener('keydown',function(e){if(e.key!=='Enter')return;var f=field(e.target);"
-    "if(!f)return;e.preventDefault();e.stopPropagation();later(f);},true);"
-    "document.addEventListener('focusout',function(e){var f=field(e.target);if(f&&e.relatedTarget)later(f);},true);"
-    "var mark=function(){document.querySelectorAll('form input[type=text]').forEach(function(i){"
-    "if(!i.dataset.armguardField)i.dataset.armguardField='1';});};"
+    "if(!window.__armguardBlur){window.__armguardBlur=1;var pass=false;"
+    "var isField=function(t){return !!(t&&t.tagName==='INPUT'&&t.dataset&&t.dataset.armguardField);};"
+    "var field=function(t){return isField(t)&&t.closest?t.closest('form'):null;};"
+    # keystrokes stay in the box: the page's own handlers (and so the server) never see them
+    "var hold=function(e){if(!pass&&isField(e.target)){e.target.__agTyped=true;e.stopImmediatePropagation();}};"
+    "document.addEventListener('input',hold,true);document.addEventListener('change',hold,true);"
+    # on Enter / blur: hand the box's whole text to the page once, then submit its form
+    "var proto=Object.getOwnPropertyDescriptor(HTMLInputElement.prototype,'value');"
+    "var commit=function(t){var f=field(t);if(!f)return;t.__agTyped=false;proto.set.call(t,t.value);pass=true;"
+    "try{t.dispatchEvent(new Event('input',{bubbles:true}));}finally{pass=false;}"
+    "setTimeout(function(){if(f.requestSubmit)f.requestSubmit();},150);};"
+    "document.addEventListener('keydown',function(e){if(e.key!=='Enter'||!isField(e.target))return;"
+    "e.preventDefault();e.stopPropagation();commit(e.target);},true);"
+    "document.addEventListener('focusout',function(e){if(isField(e.target))commit(e.target);},true);"
+    # a value pushed by the server never overwrites what is being typed in the focused box
+    "var guard=function(i){var d=Object.getOwnPropertyDescriptor(i,'value')||proto;"
+    "Object.defineProperty(i,'value',{configurable:true,get:function(){return d.get.call(i);},"
+    "set:function(v){if(i.__agTyped&&document.activeElement===i)return;d.set.call(i,v);}});};"
+    "var mark=function(){document.querySelectorAll('form input:not([type]),form input[type=text]').forEach(function(i){"
+    "if(!i.dataset.armguardField){i.dataset.armguardField='1';guard(i);}});};"
     "new MutationObserver(mark).observe(document.body,{childList:true,subtree:true});mark();}"
 )
 
