@@ -15,17 +15,27 @@ from . import main
               help="TCP port (0: any free port). A port in use is an error.")
 @click.option("--threshold", default=0.05, show_default=True, type=float, help="Initial detection threshold (m).")
 @click.option("--watch", is_flag=True, help="Reload the model when its files change, keeping the configuration.")
-def console_cmd(scene: str, host: str, port: int, threshold: float, watch: bool) -> None:
+@click.option("--terrain", "terrain_file", type=click.Path(dir_okay=False, exists=True), default=None,
+              help="Check against a sensed terrain file (as armguard check --terrain) and draw it with the "
+                   "pyramid boxes each check tests.")
+@click.option("--uncertain", multiple=True, metavar="BODY=SIGMA_M[,SIGMA_DEG]",
+              help="Place a body (or a robot's base) with an isotropic uncertainty (m, deg); repeatable. "
+                   "Draws its 90 % / 99.9 % ellipsoids; the panel shows the clearance in sigmas.")
+def console_cmd(scene: str, host: str, port: int, threshold: float, watch: bool, terrain_file, uncertain) -> None:
     """Serve the operator console for SCENE (a built-in scene name or a scene file)."""
-    from ..console import ConsoleApp, ConsoleState
-    from ..console._serve import ModelWatcher, load_for_console, watched_files
+    from .._errors import ArmguardError
+    from ..console import ConsoleApp
+    from ..console._serve import ModelWatcher, make_state, watched_files
     from ._compile import warm_up
 
     warm_up()
-    sc, model = load_for_console(scene)
-    app = ConsoleApp(ConsoleState(sc, threshold=threshold, model=model), host=host, port=port).start()
+    try:
+        state = make_state(scene, threshold=threshold, terrain=terrain_file, uncertain=uncertain)
+    except ArmguardError as exc:
+        raise click.UsageError(str(exc)) from None
+    app = ConsoleApp(state, host=host, port=port).start()
     if watch:
-        files = watched_files(scene, model)
+        files = watched_files(scene, state.model)
         ModelWatcher(app, scene, files).start()
         click.echo(f"watching for changes: {', '.join(str(f) for f in files)}", err=True)
     click.echo(f"armguard console: {app.url}  (Ctrl-C to stop)")

@@ -237,6 +237,7 @@ class ConsoleApp:
             self._w_follow = gui.add_checkbox("follow the active arm", True,
                                               hint="frame the active arm and its nearest obstacle; re-frame on a change of arm")
             gui.add_button("frame the active arm").on_click(lambda e: self._frame(e.client))
+            gui.add_button("frame the nearest pair").on_click(lambda e: self._frame(e.client, focus="pair"))
             self._w_shapes = gui.add_checkbox("checked shapes", True, hint="the shapes the distances are computed on")
             has_urdf = self.drawer.urdf is not None
             self._w_urdf_vis = gui.add_checkbox("URDF visual geometry", bool(has_urdf and self.drawer.has_visual),
@@ -321,10 +322,10 @@ class ConsoleApp:
     def _on_connect(self, client) -> None:
         self._frame(client)
 
-    def _frame(self, client) -> None:
+    def _frame(self, client, focus: str = "arm") -> None:
         if client is None:
             return
-        pos, look = self.drawer.follow_pose(self.state.snapshot())
+        pos, look = self.drawer.follow_pose(self.state.snapshot(), focus=focus)
         self._place(client, pos, look)
 
     def _set_view(self, client, label: str) -> None:
@@ -395,7 +396,8 @@ class ConsoleApp:
         with self.server.atomic():
             self.drawer.draw(snap)
             self._panel.content = panel_html(snap.readout, snap.message, error=snap.message_is_error,
-                                             compare=snap.compare, update_us=snap.update_us, changes=snap.changes)
+                                             compare=snap.compare, update_us=snap.update_us, changes=snap.changes,
+                                             terrain=snap.terrain, sigmas=snap.sigmas)
             self._sync_widgets()
             self._refresh_plot(snap, periodic=False)
         if snap.active != self._framed_active:

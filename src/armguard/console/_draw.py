@@ -3,7 +3,7 @@
 :class:`SceneDrawer` draws each checked shape once as a mesh and afterwards only moves and
 recolours it.  The nearest-obstacle line is drawn in screen-space pixels (:data:`LINE_PX`), so it
 keeps its width at every zoom, also in software WebGL, with a marker sphere at each nearest point
-scaled to the scene; a compared backend's line is cyan, drawn beside the first (shifted
+(sized to the line: :func:`~._view.marker_radius`) and the distance as a label at its middle; a compared backend's line is cyan, drawn beside the first (shifted
 sideways by :data:`COMPARE_OFFSET` scene radii, so two equal answers stay two visible lines).
 The nearest link is red within the threshold; the obstacle's nearest face or edge is outlined
 in magenta.  Robots from a URDF are also drawn from it (viser's ``ViserUrdf`` over yourdfpy):
@@ -18,8 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ._draw_overlays import OverlayDrawer
 from ._meshes import mesh_of, quat_wxyz_from_matrix, rigid_motion
-from ._view import feature_segments, follow_view
+from ._view import feature_segments, follow_view, marker_radius, pair_view
 
 __all__ = ["SceneDrawer", "LINE_PX", "COMPARE_OFFSET", "COLORS", "COMPARE_COLOR", "FEATURE_COLOR"]
 
@@ -29,10 +30,10 @@ COMPARE_COLOR = (0, 200, 220)
 FEATURE_COLOR = (230, 0, 230)
 LINE_PX = 5.0
 """Width of the nearest-obstacle line (screen pixels)."""
-MARKER_FRACTION = 0.02
-"""Radius of the nearest-point markers, in scene radii."""
 COMPARE_OFFSET = 0.015
 """Sideways shift of the compared backend's line, in scene radii."""
+LABEL_RISE = 0.3
+"""The distance label stands this many line lengths above the line's middle (not over the line)."""
 
 
 def _strip_collision_checking(text: str) -> str:
@@ -60,6 +61,7 @@ class SceneDrawer:
             except Exception:
                 pass
         self._handles = []
+        self._marker_r = {}
         snap = self.state.snapshot()
         items = self.state.scene.shapes_at(snap.q)
         self.items = []
@@ -82,15 +84,15 @@ class SceneDrawer:
         self._handles.append(sc.add_grid("/grid", width=4 * self.radius, height=4 * self.radius,
                                          position=(self.center[0], self.center[1], lo[2])))
         seg = np.zeros((1, 2, 3), dtype=np.float32)
-        mr = MARKER_FRACTION * self.radius
         self.lines = {}
+        self.labels = {}
         for key, col in (("primary", (255, 210, 0)), ("compare", COMPARE_COLOR)):
             line = sc.add_line_segments(f"/nearest/{key}/line", seg, col, thickness=LINE_PX,
                                         thickness_units="screen", visible=False)
-            a = sc.add_icosphere(f"/nearest/{key}/a", radius=mr, color=col, visible=False)
-            b = sc.add_icosphere(f"/nearest/{key}/b", radius=mr, color=col, visible=False)
-            self.lines[key] = (line, a, b)
-            self._handles += [line, a, b]
+            self.lines[key] = [line] + self._markers(key, col, 0.01)
+            self.labels[key] = sc.add_label(f"/nearest/{key}/label", "", visible=False, anchor="bottom-center",
+                                            font_screen_scale=1.2)
+            self._handles += [line, self.labels[key]]
         self.feature = sc.add_line_segments("/nearest/feature", seg, FEATURE_COLOR, thickness=LINE_PX - 1.0,
                                             thickness_units="screen", visible=False)
         self.ws = sc.add_line_segments("/workspace", seg, (60, 120, 220), thickness=2.0, thickness_units="screen",
@@ -98,7 +100,20 @@ class SceneDrawer:
         self._handles += [self.feature, self.ws]
         self._ws_shown = None
         self._line_colors = {}
+        if not hasattr(self, "overlays"):
+            self.overlays = OverlayDrawer(self.server)
+        self.overlays.build(self.state)
         self._build_urdf()
+
+    def _markers(self, key: str, col, radius: float) -> list:
+        """(Re)create the two nearest-point marker spheres of line ``key`` with ``radius`` (m)."""
+        sc = self.server.scene
+        old = self.lines.get(key)
+        if old is not None:
+            for h in old[1:]:
+                h.remove()
+        self._marker_r[key] = radius
+        return [sc.add_icosphere(f"/nearest/{key}/{end}", radius=radius, color=col, visible=False) for end in "ab"]
 
     def _build_urdf(self) -> None:
         """Load the model's URDF into viser (hidden until asked for); any failure leaves it out."""
@@ -163,6 +178,7 @@ class SceneDrawer:
         self._line("compare", None if cmp is None else cmp.readout, offset=True, primary=r)
         self._draw_feature(r, items)
         self._draw_workspace(snap.workspace)
+        self.overlays.draw(snap, self.state)
         if self.urdf is not None and self._urdf_index is not None:
             qp = np.asarray(self.state.model.pin_q(self.state.scene.flat_q(snap.q)), dtype=np.float64)
             cfg = np.array([qp[i] if i >= 0 else 0.0 for i in self._urdf_index])
@@ -170,12 +186,21 @@ class SceneDrawer:
 
     def _line(self, key: str, r, *, offset: bool = False, primary=None) -> None:
         line, a, b = self.lines[key]
+        label = self.labels[key]
         show = r is not None and r.p_WA is not None
         if show:
             pa, pb = np.asarray(r.p_WA, dtype=np.float64), np.asarray(r.p_WB, dtype=np.float64)
             if offset:
                 pa, pb = pa + self._side(pa, pb), pb + self._side(pa, pb)
             col = r.line_color if key == "primary" else COMPARE_COLOR
+            want = marker_radius(float(np.linalg.norm(pb - pa)), self.radius)
+            if not 0.8 < want / self._marker_r[key] < 1.25:
+                a, b = self.lines[key][1:] = self._markers(key, col, want)
+                self._line_colors.pop(key, None)
+            text = f"{r.distance * 1000.0:.1f} mm" + (f" ({r.backend})" if key == "compare" else "")
+            if label.text != text:
+                label.text = text
+            label.position = tuple(0.5 * (pa + pb) + np.array([0.0, 0.0, LABEL_RISE * float(np.linalg.norm(pb - pa))]))
             if self._line_colors.get(key) != col:
                 # one colour for the whole line (the uniform path: viser's per-vertex line colours
                 # came out grey in software WebGL)
@@ -184,7 +209,7 @@ class SceneDrawer:
                 self._line_colors[key] = col
             line.points = np.array([[pa, pb]], dtype=np.float32)
             a.position, b.position = tuple(pa), tuple(pb)
-        for h in (line, a, b):
+        for h in (line, a, b, label):
             if h.visible != show:
                 h.visible = show
 
@@ -227,14 +252,18 @@ class SceneDrawer:
         self.ws.visible = True
 
     # ------------------------------------------------------------------ camera
-    def follow_pose(self, snap, fov_rad: float = math.radians(75.0)):
-        """``(position, look_at)`` framing the active arm and its nearest obstacle point."""
+    def follow_pose(self, snap, fov_rad: float = math.radians(75.0), *, focus: str = "arm"):
+        """``(position, look_at)`` framing the active arm and its nearest obstacle point
+        (``focus="arm"``), or only the nearest pair (``focus="pair"``: :func:`~._view.pair_view`,
+        seen across the line past every shape)."""
+        r = snap.readout
+        line = None if r.p_WB is None else np.array([r.p_WA, r.p_WB], dtype=np.float64)
+        if focus == "pair" and line is not None:
+            shapes = [it.shape for it in self.state.scene.shapes_at(snap.q)]
+            return pair_view(line, shapes, fov_rad=fov_rad, min_radius=0.02 * self.radius)
         pts = [np.asarray(it.shape.core_points) for it in self.state.scene.shapes_at(snap.q)
                if it.robot == snap.active]
-        r = snap.readout
-        line = None
-        if r.p_WB is not None:
-            pts.append(np.asarray(r.p_WB).reshape(1, 3))
-            line = np.array([r.p_WA, r.p_WB])
+        if line is not None:
+            pts.append(line[1].reshape(1, 3))
         P = np.concatenate(pts) if pts else self.center.reshape(1, 3)
         return follow_view(P, self.center, line=line, fov_rad=fov_rad)

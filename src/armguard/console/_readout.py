@@ -163,14 +163,48 @@ def _fmt_feature(f) -> str:
     return "" if f is None else f" ({f})"
 
 
+def _terrain_html(tv) -> str:
+    rep = tv.report
+    if rep is None:
+        return ""
+    e = html.escape
+    where = "—" if rep.link is None else f"{rep.link}, {'unseen' if rep.unknown else 'seen'} cell {rep.cell or 'off the map'}"
+    return (f'<div id="armguard-terrain" data-status="{e(rep.status.value)}" data-boxes="{tv.visited}" '
+            'style="border:2px solid #8a6d3b;border-radius:6px;padding:4px;margin-top:4px;font-family:sans-serif;'
+            'font-size:0.9em">'
+            f"<div><b>terrain</b> {e(rep.status.value)}: {e(_fmt_m(rep.distance))} ({e(where)})</div>"
+            f"<div>pyramid: {tv.visited} boxes tested, decided at level {rep.level} of {tv.n_levels - 1}; "
+            f"{rep.elapsed_us:.0f} µs</div></div>")
+
+
+def _sigmas_html(rep) -> str:
+    e = html.escape
+    o = rep.overall
+    if o is None:
+        return ('<div id="armguard-sigmas" data-sigmas="" style="border:2px solid #7a3;border-radius:6px;'
+                'padding:4px;margin-top:4px;font-family:sans-serif;font-size:0.9em">uncertain placements: '
+                "no pair they move</div>")
+    p = o.nearest
+    sig = f"{p.sigmas:.3g}" if math.isfinite(p.sigmas) else "inf"
+    return (f'<div id="armguard-sigmas" data-sigmas="{sig}" data-bound="{o.p_bound:.6g}" data-status="{e(o.status.value)}" '
+            'style="border:2px solid #7a3;border-radius:6px;padding:4px;margin-top:4px;font-family:sans-serif;'
+            'font-size:0.9em">'
+            f"<div><b>uncertain</b> {e(p.a)} / {e(p.b)}: {e(_fmt_m(p.distance))} = <b>{e(sig)} σ</b> "
+            f"(σ = {p.sigma * 1000.0:.1f} mm)</div>"
+            f"<div>P(collision) ≤ {o.p_bound:.2e} ({e(o.status.value)} at {rep.confidence:.3g})</div></div>")
+
+
 def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=None, update_us: float | None = None,
-               changes: str = "") -> str:
+               changes: str = "", terrain=None, sigmas=None) -> str:
     """The distance panel as HTML: a coloured status block and the per-category table.
 
     ``message`` is shown under the table, red when ``error`` else grey.  ``compare`` (a
     ``Comparison`` of :mod:`._backends`) adds the second backend's nearest distance and Δd;
     ``update_us`` the console's whole update (check, panel, comparison); ``changes`` the last
-    model reload's summary.  The status block carries ``id="armguard-status"``, ``data-status``
+    model reload's summary; ``terrain`` a ``TerrainView`` (the terrain category: distance, the
+    pyramid's boxes tested and deciding level; ``id="armguard-terrain"``); ``sigmas`` a
+    ``SigmaReport`` (the least clearance in sigmas and the collision-probability bound;
+    ``id="armguard-sigmas"`` with ``data-sigmas``, ``data-bound``).  The status block carries ``id="armguard-status"``, ``data-status``
     (the status value), ``data-backend`` and ``data-distance`` (m) so a browser test can read it;
     the comparison ``id="armguard-compare"`` with ``data-delta`` (m).
     """
@@ -221,4 +255,5 @@ def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=Non
     if changes:
         msg += (f'<div id="armguard-changes" style="color:#046;font-family:sans-serif;padding-top:4px;'
                 f'font-size:0.85em">{e(changes)}</div>')
-    return head + cmp_html + table + msg
+    extra = ("" if terrain is None else _terrain_html(terrain)) + ("" if sigmas is None else _sigmas_html(sigmas))
+    return head + cmp_html + extra + table + msg

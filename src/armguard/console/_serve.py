@@ -8,7 +8,7 @@ from pathlib import Path
 from ._app import ConsoleApp
 from ._state import DEFAULT_THRESHOLD, ConsoleState
 
-__all__ = ["serve", "load_for_console", "ModelWatcher"]
+__all__ = ["serve", "make_state", "load_for_console", "ModelWatcher"]
 
 
 def load_for_console(name):
@@ -80,21 +80,41 @@ class ModelWatcher:
             self.reload_now()
 
 
+def make_state(scene, *, threshold: float = DEFAULT_THRESHOLD, terrain=None, uncertain=()) -> ConsoleState:
+    """The console state for ``scene`` (a Scene or a built-in / file name) with its model, a
+    terrain (an ElevationMap, or a file for :func:`armguard.terrain.load_terrain`) and uncertain
+    placements (UncertainPlacement objects or ``"BODY=SIGMA_M[,SIGMA_DEG]"`` texts)."""
+    from ._overlays import parse_uncertain
+
+    model = None
+    if isinstance(scene, (str, Path)):
+        scene, model = load_for_console(scene)
+    state = ConsoleState(scene, threshold=threshold, model=model)
+    if terrain is not None:
+        if isinstance(terrain, (str, Path)):
+            from ..terrain import load_terrain
+
+            terrain = load_terrain(terrain, state.scene)
+        state.set_terrain(terrain)
+    if uncertain:
+        state.set_placements([parse_uncertain(state.scene, u) if isinstance(u, str) else u for u in uncertain])
+    return state
+
+
 def serve(scene, *, host: str = "127.0.0.1", port: int = 8080, threshold: float = DEFAULT_THRESHOLD,
-          block: bool = True, watch: bool = False) -> ConsoleApp:
+          block: bool = True, watch: bool = False, terrain=None, uncertain=()) -> ConsoleApp:
     """Serve the console for ``scene`` (a Scene or a built-in / file name).
 
     Binds ``host`` (loopback by default) on ``port`` (0: a free port; one in use raises
-    PortInUseError).  ``watch`` (names only) reloads the model when its files change.  With
-    ``block`` it serves until interrupted; otherwise it returns the started :class:`ConsoleApp`.
+    PortInUseError).  ``watch`` (names only) reloads the model when its files change; ``terrain``
+    and ``uncertain`` as :func:`make_state`.  With ``block`` it serves until interrupted;
+    otherwise it returns the started :class:`ConsoleApp`.
     """
-    model = None
     name = scene
-    if isinstance(scene, (str, Path)):
-        scene, model = load_for_console(scene)
-    app = ConsoleApp(ConsoleState(scene, threshold=threshold, model=model), host=host, port=port).start()
+    app = ConsoleApp(make_state(scene, threshold=threshold, terrain=terrain, uncertain=uncertain),
+                     host=host, port=port).start()
     if watch and isinstance(name, (str, Path)):
-        app.watcher = ModelWatcher(app, name, watched_files(name, model)).start()
+        app.watcher = ModelWatcher(app, name, watched_files(name, app.state.model)).start()
     if block:
         app.serve_forever()
     return app

@@ -23,8 +23,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
-from ._backends import BackendView, compare_readouts
+from ._backends import compare_readouts
 from ._motion import MotionMixin
+from ._overlays import OverlayMixin
+from ._sources import SourcesMixin
 from ._parse import ConsoleInputError, parse_number, parse_numbers
 from ._readout import Readout, readout_from_report, readout_off
 from ._timeline import Timeline
@@ -68,7 +70,9 @@ class Snapshot:
     (the check, the panel, the comparison), beside ``readout.elapsed_us``, the check alone;
     ``ee_pose`` (4, 4) the active arm's tool pose now; ``run_state`` of the canned test:
     ``""``, ``"running"``, ``"done"``, ``"stopped"`` (by the operator) or ``"stopped by
-    detection"``; ``changes`` what the last model reload changed.
+    detection"``; ``changes`` what the last model reload changed; ``terrain`` a
+    :class:`~._overlays.TerrainView` (the pyramid boxes the last check tested) or None;
+    ``sigmas`` the :class:`armguard.uncertainty.SigmaReport` of the uncertain placements or None.
     """
 
     version: int
@@ -90,13 +94,15 @@ class Snapshot:
     ee_pose: np.ndarray | None = None
     run_state: str = ""
     changes: str = ""
+    terrain: object = None
+    sigmas: object = None
 
 
 def _duration_of(trajectory) -> float:
     return float(trajectory.duration)
 
 
-class ConsoleState(MotionMixin):
+class ConsoleState(MotionMixin, SourcesMixin, OverlayMixin):
     """The operator console's state and commands (thread-safe; no GUI).
 
     Parameters
@@ -185,6 +191,8 @@ class ConsoleState(MotionMixin):
                 ee_pose=np.array(self._robot(self._active).link_pose(self._q[self._active])),
                 run_state=self._run_state,
                 changes=self._changes,
+                terrain=self._terrain_view,
+                sigmas=self._sigmas,
             )
 
     def joint_limits(self, robot: str) -> tuple[np.ndarray, np.ndarray]:
@@ -210,6 +218,7 @@ class ConsoleState(MotionMixin):
 
         self._detector = Detector(self._scene, self._threshold, stopping_distance=self._stopping,
                                   active=self._active, tol=self._tol)
+        self._attach_overlays()
 
     def _evaluate(self) -> None:
         """Recompute the panel at the current configuration and bump the version (lock held)."""
@@ -221,100 +230,9 @@ class ConsoleState(MotionMixin):
                 self._comparison = compare_readouts(self._readout, self._readout_of(self._compare_with))
         else:
             self._readout = readout_off(self._threshold)
+        self._evaluate_overlays()
         self._update_us = (time.perf_counter() - t0) * 1e6
         self._version += 1
-
-    def _readout_of(self, backend: str):
-        if backend == "analytic":
-            return readout_from_report(self._detector.check(self._q))
-        view = self._views.get(backend)
-        if view is None:
-            view = self._views[backend] = BackendView(self._model, backend)
-        return view.readout(self._scene, self._q, self._active, threshold=self._threshold,
-                            stopping_distance=self._stopping, contact=self._tol.length)
-
-    # ------------------------------------------------------------------ model updates
-    @property
-    def model(self):
-        return self._model
-
-    def reload(self, scene, model=None) -> str:
-        """Replace the scene (and model) by a new version, keeping the configuration; returns what changed.
-
-        Arms whose joints are unchanged keep their values (clipped into the new limits); the active
-        arm, settings and backends stay when they still exist.  Any failure leaves the old model
-        running and raises.
-        """
-        from ._reload import carry_q, describe_changes
-
-        if not scene.robots:
-            raise ConsoleInputError(f"scene {scene.name!r} has no robot to drive")
-        with self._lock:
-            old = (self._scene, self._model, self._q, self._active, self._detector, self._views, self._backend,
-                   self._compare_with)
-            new_scene = scene.copy()
-            new_q = carry_q(self._q, self._scene, new_scene)
-            try:
-                changes = describe_changes(self._scene, new_scene, self._q, new_q, self._model, model)
-                self._scene, self._model, self._q, self._views = new_scene, model, new_q, {}
-                if self._active not in new_scene.robots:
-                    self._active = next(iter(new_scene.robots))
-                if self._backend not in self.backends:
-                    self._backend = "analytic"
-                if self._compare_with not in self.backends:
-                    self._compare_with = None
-                self._stop_player()
-                self._rebuild_detector()
-                self._changes = f"model reloaded: {changes}"
-                self._changed(self._changes)
-            except Exception:
-                (self._scene, self._model, self._q, self._active, self._detector, self._views, self._backend,
-                 self._compare_with) = old
-                self._evaluate()
-                raise
-            return changes
-
-    # ------------------------------------------------------------------ backends
-    @property
-    def backends(self) -> tuple[str, ...]:
-        """The backends the panel can use: ``analytic`` (the detector) and, with a model, every installed one."""
-        if self._model is None:
-            return ("analytic",)
-        from ..backends import available
-
-        return ("analytic",) + tuple(b for b in available() if b != "analytic")
-
-    def _check_backend(self, name: str) -> str:
-        if name not in self.backends:
-            raise ConsoleInputError(f"backend: {name!r} is not installed here; backends are {list(self.backends)}")
-        return name
-
-    def set_backend(self, name: str) -> None:
-        """Compute the panel with backend ``name`` (the configuration and settings stay)."""
-        with self._lock:
-            self._check_backend(name)
-            old = self._backend
-            self._backend = name
-            try:
-                self._changed(f"backend: {name}")
-            except Exception:
-                self._backend = old
-                self._evaluate()
-                raise
-
-    def set_compare(self, name: str | None) -> None:
-        """Compare mode: also compute the nearest pair with backend ``name`` (None: off) and show Δd."""
-        with self._lock:
-            if name is not None:
-                self._check_backend(name)
-            old = self._compare_with
-            self._compare_with = name
-            try:
-                self._changed("" if name is None else f"comparing {self._backend} with {name}")
-            except Exception:
-                self._compare_with = old
-                self._evaluate()
-                raise
 
     def _changed(self, message: str = "") -> None:
         self._message = message

@@ -14,7 +14,8 @@ import numpy as np
 
 from ..geometry import Box, ConvexPolyhedron, FeatureKind, Polygon, Prism
 
-__all__ = ["feature_segments", "follow_view", "FOLLOW_ELEVATION_DEG", "FOLLOW_MARGIN", "FOLLOW_SHIFT"]
+__all__ = ["feature_segments", "follow_view", "pair_view", "marker_radius", "PAIR_CONTEXT", "PAIR_SHIFT", "FOLLOW_ELEVATION_DEG", "FOLLOW_MARGIN",
+           "FOLLOW_SHIFT", "MARKER_LINE_FRACTION", "MARKER_SCENE_RANGE"]
 
 FOLLOW_ELEVATION_DEG = 30.0
 """Camera elevation above the horizontal of the follow view."""
@@ -22,6 +23,18 @@ FOLLOW_MARGIN = 2.0
 """The follow view's camera distance, in multiples of the distance that just fits the framed points."""
 FOLLOW_SHIFT = 0.5
 """How far the follow view's look-at point moves to the camera's right (framed-sphere radii)."""
+
+
+MARKER_LINE_FRACTION = 0.12
+"""Nearest-point marker radius, in line lengths ..."""
+MARKER_SCENE_RANGE = (0.003, 0.02)
+"""... kept within these fractions of the scene radius (a contact still shows its markers)."""
+
+
+def marker_radius(line_length: float, scene_radius: float) -> float:
+    """Radius (m) of the nearest-point markers for a line of ``line_length`` m in a scene of ``scene_radius`` m."""
+    lo, hi = MARKER_SCENE_RANGE
+    return float(np.clip(MARKER_LINE_FRACTION * abs(line_length), lo * scene_radius, hi * scene_radius))
 
 
 def _loop(ix) -> list[tuple[int, int]]:
@@ -96,7 +109,7 @@ def feature_segments(shape, feature) -> np.ndarray:
 
 
 def follow_view(points, scene_center, *, line=None, fov_rad: float = math.radians(75.0),
-                shift: float = FOLLOW_SHIFT) -> tuple[np.ndarray, np.ndarray]:
+                shift: float = FOLLOW_SHIFT, min_radius: float = 0.25) -> tuple[np.ndarray, np.ndarray]:
     """Camera ``(position, look_at)`` (3,) m framing ``points`` (n, 3) m.
 
     Looks at the centre ``c`` of their bounding box horizontally from the arm's side of the scene
@@ -105,7 +118,8 @@ def follow_view(points, scene_center, *, line=None, fov_rad: float = math.radian
     perpendicular to it on that side, so the line is seen across, not end-on -- raised by
     :data:`FOLLOW_ELEVATION_DEG`, far enough that a sphere around the box fits the vertical field of
     view ``fov_rad``, times :data:`FOLLOW_MARGIN`.  The look-at point is moved ``shift`` sphere radii
-    to the camera's right, so the framed points sit left of the control panel.
+    to the camera's right, so the framed points sit left of the control panel.  The framed
+    sphere's radius is at least ``min_radius`` m.
     """
     P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     P = P[np.all(np.isfinite(P), axis=1)]
@@ -113,7 +127,7 @@ def follow_view(points, scene_center, *, line=None, fov_rad: float = math.radian
         P = np.asarray(scene_center, dtype=np.float64).reshape(1, 3)
     lo, hi = P.min(axis=0), P.max(axis=0)
     c = 0.5 * (lo + hi)
-    r = max(0.25, 0.5 * float(np.linalg.norm(hi - lo)))
+    r = max(min_radius, 0.5 * float(np.linalg.norm(hi - lo)), 1e-3)
     h = c - np.asarray(scene_center, dtype=np.float64)
     h[2] = 0.0
     n = float(np.linalg.norm(h))
@@ -133,3 +147,62 @@ def follow_view(points, scene_center, *, line=None, fov_rad: float = math.radian
     right /= max(float(np.linalg.norm(right)), 1e-12)
     look = c + shift * r * right
     return look + dist * direction, look
+
+
+PAIR_CONTEXT = 3.5
+"""The pair view frames a sphere of this many half line lengths about the nearest line's middle ..."""
+PAIR_SHIFT = 1.4
+"""... its look-at point moved this many sphere radii to the camera's right (the line sits in the
+middle of the canvas left of the control panel) ..."""
+PAIR_MARGIN = 1.6
+"""... from this many times the distance that just fits the sphere."""
+_PAIR_ELEVATIONS = (30.0, 50.0, 15.0, 70.0)
+_PAIR_AZIMUTHS = (0.0, 180.0, 35.0, -35.0, 145.0, -145.0, 70.0, -70.0)
+
+
+def _pair_pose(mid, R, h, el_deg, fov_rad, shift):
+    el = math.radians(el_deg)
+    direction = np.array([math.cos(el) * h[0], math.cos(el) * h[1], math.sin(el)])
+    right = np.cross(-direction, [0.0, 0.0, 1.0])
+    right /= max(float(np.linalg.norm(right)), 1e-12)
+    look = mid + shift * R * right
+    dist = PAIR_MARGIN * R / math.sin(0.5 * fov_rad)
+    return look + dist * direction, look
+
+
+def pair_view(line, shapes=(), *, fov_rad: float = math.radians(75.0), min_radius: float = 0.02,
+              shift: float = PAIR_SHIFT) -> tuple[np.ndarray, np.ndarray]:
+    """Camera ``(position, look_at)`` (3,) m on the nearest-obstacle ``line`` (2, 3) m, seen across it.
+
+    Frames a sphere of :data:`PAIR_CONTEXT` half line lengths (at least ``min_radius`` m) about
+    the line's middle.  Candidate directions turn about the vertical from the horizontal
+    perpendicular to the line (both sides, then ±35°, ±70°, ±145°) at elevations 30°, 50°, 15°,
+    70°; those looking more along the line than across it (|cos| > 0.8) are skipped.  The first
+    whose camera sees the line's middle past every shape of ``shapes`` (the sight line, a thin
+    capsule, clear of them all) is taken; when none is, the first candidate.
+    """
+    from ..geometry import Capsule, distance
+
+    L = np.asarray(line, dtype=np.float64).reshape(2, 3)
+    mid = L.mean(axis=0)
+    d = L[1] - L[0]
+    n = float(np.linalg.norm(d))
+    R = max(PAIR_CONTEXT * 0.5 * n, float(min_radius), 1e-3)
+    d_hat = d / n if n > 1e-12 else np.array([0.0, 0.0, 1.0])
+    h0 = np.array([-d_hat[1], d_hat[0], 0.0])
+    h0 = h0 / np.linalg.norm(h0) if np.linalg.norm(h0) > 1e-6 else np.array([0.0, -1.0, 0.0])
+    first = None
+    for el in _PAIR_ELEVATIONS:
+        for az in _PAIR_AZIMUTHS:
+            c, s_ = math.cos(math.radians(az)), math.sin(math.radians(az))
+            h = np.array([c * h0[0] - s_ * h0[1], s_ * h0[0] + c * h0[1], 0.0])
+            eye, look = _pair_pose(mid, R, h, el, fov_rad, shift)
+            view = (mid - eye) / np.linalg.norm(mid - eye)
+            if abs(float(view @ d_hat)) > 0.8:
+                continue
+            if first is None:
+                first = (eye, look)
+            sight = Capsule(eye, mid - 0.3 * R * view, 0.05 * R)
+            if all(distance(sight, sh).distance > 0.0 for sh in shapes):
+                return eye, look
+    return first

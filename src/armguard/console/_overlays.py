@@ -1,0 +1,280 @@
+"""What the console adds to a scene's own checks: a sensed terrain and uncertain placements.
+
+Mixed into :class:`~._state.ConsoleState` (its lock, scene, detector and ``_changed``).
+
+**Terrain** (:meth:`OverlayMixin.set_terrain`): an :class:`armguard.terrain.ElevationMap` is
+attached to the console's detector (:func:`armguard.terrain.attach_terrain`, every robot's
+moving links), so the panel gets the ``terrain`` category; after each check
+:func:`tested_boxes` replays the pyramid's coarse-to-fine descent on the same link volumes and
+lists the boxes it visited (by level), which the view draws.
+
+**Uncertain placements** (:meth:`OverlayMixin.set_placements`): bodies or robot bases placed by
+an uncertain relation (:class:`armguard.uncertainty.UncertainPlacement`); each update runs
+:func:`armguard.uncertainty.clearance_sigmas` on the detector (linearised sigmas and the χ²
+bound, no Monte Carlo) and :func:`confidence_ellipsoids` gives each placed origin's position
+ellipsoid at :data:`ELLIPSOID_CONFIDENCES`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._parse import ConsoleInputError
+
+__all__ = ["OverlayMixin", "TerrainView", "Ellipsoid", "tested_boxes", "confidence_ellipsoids",
+           "isotropic_placement", "parse_uncertain", "MAX_TERRAIN_BOXES", "ELLIPSOID_CONFIDENCES"]
+
+MAX_TERRAIN_BOXES = 400
+"""At most this many tested pyramid boxes are drawn (the coarsest first, as the descent visits them)."""
+ELLIPSOID_CONFIDENCES = (0.9, 0.999)
+"""Confidence levels of the drawn position ellipsoids (3-D: ``k² = χ²₃.ppf(c)``)."""
+
+
+@dataclass(frozen=True)
+class TerrainView:
+    """The terrain as the last check saw it.
+
+    ``boxes (n, 6)`` m, rows ``[c_W, h]`` of the pyramid boxes the descent visited (at most
+    :data:`MAX_TERRAIN_BOXES`), ``levels (n,)`` their pyramid level (0 the coarsest), ``hit (n,)``
+    whether a link volume overlapped the box; ``visited`` every box the descent visited (the
+    pyramid's own ``boxes_tested``), ``report`` the :class:`armguard.terrain.TerrainReport`.
+    """
+
+    boxes: np.ndarray = field(repr=False)
+    levels: np.ndarray = field(repr=False)
+    hit: np.ndarray = field(repr=False)
+    visited: int
+    n_levels: int
+    report: object = None
+
+
+@dataclass(frozen=True)
+class Ellipsoid:
+    """A placed origin's position ellipsoid: ``center (3,)`` m, ``axes (3, 3)`` (columns: the
+    semi-axes, m), at ``confidence``."""
+
+    name: str
+    center: np.ndarray
+    axes: np.ndarray
+    confidence: float
+
+
+def tested_boxes(guard, q, threshold: float, stopping_distance: float, *, cap: int = MAX_TERRAIN_BOXES):
+    """Replay :meth:`TerrainGuard.check`'s descent at ``q`` and list the boxes it visits.
+
+    The same link rows (the guard's volumes grown by its reach) and the same box test
+    (:func:`armguard.terrain._kernels.aabb_obp_overlap`), visited in the kernel's depth-first
+    order.  Returns ``(boxes (n, 6), levels (n,), hit (n,), visited)``, the first ``cap`` boxes.
+    """
+    from ..terrain._kernels import aabb_obp_overlap
+
+    pyr = guard.pyramid
+    rng = guard._range(threshold, stopping_distance)
+    rows, _, _, _ = guard._posed_arrays(guard._poses(q), rng)
+    rstart = guard._rstart
+    K = len(rstart) - 1
+    L = pyr.n_levels
+    out_i, out_l, out_h = [], [], []
+    visited = 0
+    stack = [(0, 0, 0, (1 << K) - 1)]
+    while stack:
+        lvl, iy, ix, mask = stack.pop()
+        gi = int(pyr.offsets[lvl]) + iy * int(pyr.level_nx[lvl]) + ix
+        visited += 1
+        hit = 0
+        for k in range(K):
+            if mask >> k & 1 and aabb_obp_overlap(pyr.boxes, gi, rows, int(rstart[k]), int(rstart[k + 1])):
+                hit |= 1 << k
+        if len(out_i) < cap:
+            out_i.append(gi)
+            out_l.append(lvl)
+            out_h.append(bool(hit))
+        if hit == 0 or lvl == L - 1:
+            continue
+        ch, cw = int(pyr.level_ny[lvl + 1]), int(pyr.level_nx[lvl + 1])
+        for dy in (1, 0):
+            for dx in (1, 0):
+                cy, cx = 2 * iy + dy, 2 * ix + dx
+                if cy < ch and cx < cw:
+                    stack.append((lvl + 1, cy, cx, hit))
+    idx = np.array(out_i, dtype=np.int64)
+    return pyr.boxes[idx].copy(), np.array(out_l, dtype=np.int64), np.array(out_h, dtype=bool), visited
+
+
+def confidence_ellipsoids(placements, confidences=ELLIPSOID_CONFIDENCES) -> tuple[Ellipsoid, ...]:
+    """Each placement's origin position ellipsoid (``Σ_δo``, the translation block of its
+    ``cov_origin``) at each confidence: semi-axes ``sqrt(k² λ_i) v_i``, ``k² = χ²₃.ppf(c)``."""
+    from scipy import stats
+
+    out = []
+    for p in placements:
+        w, V = np.linalg.eigh(np.asarray(p.cov_origin)[:3, :3])
+        for c in confidences:
+            k2 = float(stats.chi2.ppf(float(c), 3))
+            out.append(Ellipsoid(p.name, np.array(p.origin, dtype=np.float64),
+                                 V * np.sqrt(np.clip(w, 0.0, None) * k2), float(c)))
+    return tuple(out)
+
+
+def _frame_of(scene, name: str) -> np.ndarray:
+    """``X_W`` (4, 4) of a placed thing: a robot's base link at home, a body's centroid (axes of W)."""
+    X = np.eye(4)
+    if name in scene.robots:
+        return np.array(scene.link_poses(scene.flat_q(scene.default_q()))[name][0], dtype=np.float64)
+    if name in scene.bodies:
+        pts = np.concatenate([np.atleast_2d(np.asarray(s.core_points)) for s in scene.bodies[name].shapes])
+        X[:3, 3] = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
+        return X
+    raise ConsoleInputError(f"uncertain placement {name!r}: not a body or robot of scene {scene.name!r}; "
+                            f"bodies are {list(scene.bodies)}, robots {list(scene.robots)}")
+
+
+def isotropic_placement(scene, name: str, sigma_m: float, sigma_deg: float = 0.0):
+    """An :class:`UncertainPlacement` of body or robot ``name`` with an isotropic spread about its
+    own frame (:func:`_frame_of`): ``sigma_m`` m along every axis, ``sigma_deg`` deg about every
+    axis (mapped to W's axes by the adjoint, as ``docs/uncertainty.md``'s ``surveyed``)."""
+    from ..uncertainty import UncertainPlacement, UncertainPose3, se3
+
+    for v, what in ((sigma_m, "SIGMA_M"), (sigma_deg, "SIGMA_DEG")):
+        if not (math.isfinite(v) and v >= 0.0):
+            raise ConsoleInputError(f"uncertain placement {name!r}: {what} must be finite and >= 0, got {v}")
+    if sigma_m == 0.0 and sigma_deg == 0.0:
+        raise ConsoleInputError(f"uncertain placement {name!r}: SIGMA_M and SIGMA_DEG are both 0 (nothing uncertain)")
+    T = _frame_of(scene, name)
+    Ad = se3.adjoint(T)
+    C = np.diag([sigma_m**2] * 3 + [math.radians(sigma_deg) ** 2] * 3)
+    return UncertainPlacement(name, UncertainPose3(T, Ad @ C @ Ad.T))
+
+
+def parse_uncertain(scene, text: str):
+    """``BODY=SIGMA_M[,SIGMA_DEG]`` (the CLI's ``--uncertain``) as :func:`isotropic_placement`."""
+    name, eq, spec = str(text).partition("=")
+    if not eq or not name.strip():
+        raise ConsoleInputError(f"--uncertain: expected BODY=SIGMA_M[,SIGMA_DEG], got {text!r}")
+    parts = [x.strip() for x in spec.split(",")]
+    if not 1 <= len(parts) <= 2:
+        raise ConsoleInputError(f"--uncertain {text!r}: expected SIGMA_M or SIGMA_M,SIGMA_DEG after '='")
+    try:
+        vals = [float(x) for x in parts]
+    except ValueError:
+        raise ConsoleInputError(f"--uncertain {text!r}: SIGMA_M and SIGMA_DEG must be numbers (m, deg)") from None
+    return isotropic_placement(scene, name.strip(), vals[0], vals[1] if len(vals) > 1 else 0.0)
+
+
+class OverlayMixin:
+    """Terrain and uncertain placements of the console state."""
+
+    _terrain_map = None
+    _terrain_view: TerrainView | None = None
+    _placements: tuple = ()
+    _sigmas = None
+
+    # ------------------------------------------------------------------ terrain
+    @property
+    def terrain(self):
+        """The attached :class:`armguard.terrain.ElevationMap` (None: no terrain)."""
+        return self._terrain_map
+
+    def set_terrain(self, elevation) -> None:
+        """Check every arm against ``elevation`` (an ElevationMap in W; None detaches)."""
+        from ..terrain import ElevationMap
+
+        if elevation is not None and not isinstance(elevation, ElevationMap):
+            raise ConsoleInputError(f"terrain: expected an ElevationMap, got {type(elevation).__name__}")
+        with self._lock:
+            old = self._terrain_map
+            self._terrain_map = elevation
+            try:
+                self._rebuild_detector()
+                self._changed("" if elevation is None else f"terrain: {elevation.shape[0]} x {elevation.shape[1]} "
+                              f"cells of {elevation.cell:g} m")
+            except Exception:
+                self._terrain_map = old
+                self._rebuild_detector()
+                self._evaluate()
+                raise
+
+    def _attach_overlays(self) -> None:
+        """Called after the detector is (re)built: attach the terrain to it."""
+        if self._terrain_map is None:
+            return
+        from ..terrain import TerrainGuard, attach_terrain
+
+        pyr = getattr(self, "_pyramid", None)
+        if pyr is None or pyr.map is not self._terrain_map:
+            from ..terrain import TerrainPyramid
+
+            pyr = self._pyramid = TerrainPyramid(self._terrain_map, tol=self._tol)
+        attach_terrain(self._detector, TerrainGuard(self._scene, pyr, tol=self._tol))
+
+    # ------------------------------------------------------------------ uncertain placements
+    @property
+    def placements(self) -> tuple:
+        return self._placements
+
+    def set_placements(self, placements) -> None:
+        """Uncertain placements of bodies or robot bases (UncertainPlacement objects; () clears)."""
+        from ..uncertainty import UncertainPlacement
+
+        ps = (placements,) if isinstance(placements, UncertainPlacement) else tuple(placements or ())
+        with self._lock:
+            old = self._placements
+            self._placements = ps
+            try:
+                self._changed("" if not ps else "uncertain: " + ", ".join(p.name for p in ps))
+            except Exception:
+                self._placements = old
+                self._evaluate()
+                raise
+
+    def add_uncertain(self, name: str, sigma_m: float, sigma_deg: float = 0.0) -> None:
+        """Add an isotropic placement of ``name`` (:func:`isotropic_placement`), replacing one of that name."""
+        p = isotropic_placement(self._scene, name, float(sigma_m), float(sigma_deg))
+        self.set_placements(tuple(x for x in self._placements if x.name != name) + (p,))
+
+    def ellipsoids(self) -> tuple[Ellipsoid, ...]:
+        """The placed origins' ellipsoids and, for the least-sigmas pair, those of its witness
+        point on each placed side (``point_cov``: the rotation's lever arm included), named
+        ``"NAME @ nearest"``."""
+        from ..uncertainty._checks import _moved_by
+
+        out = list(confidence_ellipsoids(self._placements))
+        rep = self._sigmas
+        if rep is not None and rep.overall is not None:
+            pair = rep.overall.nearest
+            for p in self._placements:
+                moved = _moved_by(self._scene, p)
+                for owner, x in ((pair.a, pair.p_WA), (pair.b, pair.p_WB)):
+                    if owner in moved and not ({pair.a, pair.b} <= moved):
+                        w, V = np.linalg.eigh(p.point_cov(np.asarray(x, dtype=np.float64)))
+                        for c in ELLIPSOID_CONFIDENCES:
+                            from scipy import stats
+
+                            k2 = float(stats.chi2.ppf(c, 3))
+                            out.append(Ellipsoid(f"{p.name} @ nearest", np.array(x, dtype=np.float64),
+                                                 V * np.sqrt(np.clip(w, 0.0, None) * k2), c))
+        return tuple(out)
+
+    # ------------------------------------------------------------------ per update
+    def _evaluate_overlays(self) -> None:
+        """After the panel's check (lock held): the terrain boxes and the sigmas, or None."""
+        self._terrain_view = None
+        self._sigmas = None
+        last, self._last_report = getattr(self, "_last_report", None), None
+        if not self._detection:
+            return
+        guard = getattr(self._detector, "terrain", None)
+        if guard is not None:
+            q = self._scene.flat_q(self._q)
+            boxes, levels, hit, visited = tested_boxes(guard, q, self._threshold, self._stopping)
+            rep = getattr(last, "terrain", None)
+            if rep is None or self._backend != "analytic":
+                rep = guard.check(q, threshold=self._threshold, stopping_distance=self._stopping)
+            self._terrain_view = TerrainView(boxes, levels, hit, visited, guard.pyramid.n_levels, rep)
+        if self._placements:
+            from ..uncertainty import clearance_sigmas
+
+            self._sigmas = clearance_sigmas(self._detector, self._scene.flat_q(self._q), self._placements, samples=0)
