@@ -20,9 +20,8 @@ import pytest
 
 from test_console_browser import CHROMIUM, CHROMIUM_ARGS, UI_TIMEOUT_MS, POLL_MS, _input_for, _need_chromium
 
-KEY_DELAY_MS = 120
-"""Between keystrokes: the text box is controlled by the server, whose echo of one keystroke
-must land before the next (typing faster can lose a key in viser's client)."""
+KEY_DELAY_MS = 0
+"""Between keystrokes: none (typed text stays in the box until Enter or blur)."""
 
 
 def _type(box, text: str) -> None:
@@ -210,27 +209,84 @@ def test_view_follows_typed_values_line_backends(tmp_path):
         app.stop()
 
 
-@pytest.mark.parametrize("name, setup", [("ranger", None), ("hermes", None)])
-def test_screenshots_show_the_line(name, setup):
+def _pose_ranger(st) -> None:
+    """Ranger's canned test 1 at its end: the left wrist 0.10 m from the electronics module."""
+    name = "test1_left_pitch_down"
+    test = st.scene.canned_tests[name]
+    traj = test.trajectory(st.scene)
+    st.setup(name)
+    q = st.snapshot().q
+    q[test.robot] = np.asarray(traj.at(traj.duration))
+    st.set_q(q)
+    assert st.snapshot().readout.obstacle == "electronics_module"
+
+
+def _pose_hermes(st) -> None:
+    """HERA along stow_misaligned 0.7 s before it strikes the tail: link 4 about 0.22 m from it."""
+    traj = st.scene.trajectories["stow_misaligned"]
+    q = st.snapshot().q
+    q["hera"] = np.asarray(traj.at(50.8))
+    st.set_q(q)
+    st.set_threshold(0.3)
+    assert st.snapshot().readout.obstacle == "tail"
+
+
+def _segment_mask(shape, a, b, *, width: float, lo: float = 0.0, hi: float = 1.0) -> np.ndarray:
+    """Pixels within ``width`` px of the part ``[lo, hi]`` of the segment ``a``-``b`` (pixel coordinates)."""
+    h, w = shape[:2]
+    yy, xx = np.mgrid[0:h, 0:w]
+    P = np.stack([xx, yy], -1).astype(float)
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    d = b - a
+    t = np.clip(((P - a) @ d) / max(float(d @ d), 1e-9), lo, hi)
+    return np.linalg.norm(P - (a + t[..., None] * d), axis=-1) <= width
+
+
+def _colour_mask(img: np.ndarray, rgb, tol: int = 40) -> np.ndarray:
+    return np.all(np.abs(img - np.asarray(rgb)[None, None, :]) <= tol, axis=-1)
+
+
+@pytest.mark.parametrize("name, pose", [("ranger", _pose_ranger), ("hermes", _pose_hermes)])
+def test_screenshots_show_the_line(name, pose):
+    """The nearest line in the open, framed: its own pixels (the line's colour near the projected
+    segment's middle, gone when the line is hidden), the obstacle end's marker and the distance label."""
     _need_chromium()
     from playwright.sync_api import sync_playwright
+
+    from armguard.console._readout import LINE_COLORS
 
     app = _app(name)
     try:
         st = app.state
-        tests = st.canned_tests()
-        if tests:
-            st.setup(tests[0])
-        st.set_threshold(max(0.05, st.snapshot().readout.distance + 0.02))  # the line red, link red
+        pose(st)
+        r = st.snapshot().readout
+        assert r.within_threshold and r.distance > 0.05  # red, and long enough to see
         with sync_playwright() as pw:
             browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
             try:
                 page = _open(browser, app.url)
-                app._frame(_client(app))
+                app._frame(_client(app), focus="pair")
                 img = _shot(page)
-                assert _count(img, RED) > 30, f"{name}: the red nearest line / link is not in view"
+                a, b = _project(app, np.array([r.p_WA, r.p_WB]))
+                assert np.all((a >= 0) & (a < [PANEL_X, VIEWPORT["height"]])), a
+                assert np.all((b >= 0) & (b < [PANEL_X, VIEWPORT["height"]])), b
+                length = float(np.linalg.norm(b - a))
+                assert length > 90, f"{name}: the line is only {length:.0f} px long"
+                red = _colour_mask(img, LINE_COLORS["within"])
+                middle = _segment_mask(img.shape, a, b, width=6, lo=0.3, hi=0.7)
+                on_line = int(np.count_nonzero(red & middle))
+                assert on_line > 0.4 * 0.4 * length * 3, (name, on_line, length)
+                # the obstacle end's marker, in the line's colour (the arm end's lies on the red link)
+                near_b = _segment_mask(img.shape, b, b, width=12)
+                assert np.count_nonzero(red & near_b) > 60, (name, b)
+                label = f"{r.distance * 1000.0:.1f} mm"
+                assert page.get_by_text(label, exact=True).count() >= 1, label  # the label at the line
                 IMG.mkdir(parents=True, exist_ok=True)
                 page.screenshot(path=str(IMG / f"console-{name}.png"))
+                # the same pixels without the line: they were the line's own
+                app.drawer.lines["primary"][0].visible = False
+                hidden = _shot(page)
+                assert np.count_nonzero(_colour_mask(hidden, LINE_COLORS["within"]) & middle) < 0.25 * on_line
             finally:
                 browser.close()
     finally:
