@@ -1,0 +1,105 @@
+"""``armguard check --deg`` and its exit codes, the scene schema's error listing, the warm-up message."""
+
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from armguard.cli import main
+
+SCENE = str(Path(__file__).parent / "data" / "console_scene.yaml")
+HOME_DEG = "-90,0,0,-90,0,0"
+
+
+def _check(*args):
+    return CliRunner().invoke(main, ["check", SCENE, *args])
+
+
+def test_check_deg_clear_warning_collision_exit_codes():
+    clear = _check("--q", HOME_DEG, "--deg", "--json")
+    assert clear.exit_code == 0, clear.output
+    assert json.loads(clear.stdout)["status"] == "clear"
+    warn = _check("--q", HOME_DEG, "--deg", "--json", "--threshold", "2.0")  # everything within 2 m
+    assert warn.exit_code == 0, warn.output
+    assert json.loads(warn.stdout)["status"] == "warning"
+    hit = _check("--q", "90,0,0,-90,0,0", "--deg", "--json")  # left link 2 through the post
+    assert hit.exit_code == 1, hit.output
+    data = json.loads(hit.stdout)
+    assert data["status"] == "collision" and data["nearest"]["obstacle"] == "post"
+    assert data["nearest"]["feature"] is None or set(data["nearest"]["feature"]) == {"kind", "index"}
+    table = _check("--q", "90,0,0,-90,0,0", "--deg")
+    assert table.exit_code == 1 and "COLLISION" in table.output
+
+
+def test_check_deg_is_degrees_not_radians():
+    # 90 (rad) is far outside joint 1's limits; 90 deg is in them
+    rad = _check("--q", "90,0,0,-90,0,0")
+    assert rad.exit_code == 2 and "left/joint1 = 90 rad" in rad.output
+    assert "[-2.96706, 2.96706] rad" in rad.output
+
+
+@pytest.mark.parametrize("q, words", [
+    ("-300,0,0,-90,0,0", ["left/joint1 = -300 deg", "[-170, 170] deg"]),
+    ("1,2", ["expected 6 values"]),
+    ("a,b,c,d,e,f", ["comma-separated numbers"]),
+    ("nan,0,0,0,0,0", ["finite"]),
+])
+def test_check_bad_input_exits_2(q, words):
+    res = _check("--q", q, "--deg")
+    assert res.exit_code == 2, res.output
+    for w in words:
+        assert w in res.output, res.output
+
+
+def test_schema_error_lists_every_problem_with_the_misspelling_hint(tmp_path):
+    text = Path(SCENE).read_text()
+    text = text.replace("size: [0.2, 0.2, 0.6]", "sise: [0.2, 0.2, 0.6]")  # a misspelt required key
+    text = text.replace("radius: 0.05}]\n      link2", "radius: -1}]\n      link2", 1)  # and a bad value
+    text = text.replace("units: {angle: deg, length: m}", "units: {angle: deg, length: m}\ncolour: red")
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(text)
+    from armguard._errors import ArmguardError
+    from armguard.scene import load_scene
+
+    with pytest.raises(ArmguardError) as exc:
+        load_scene(str(bad))
+    msg = str(exc.value)
+    assert "required key is missing" in msg
+    assert "'sise'" in msg and "misspelling of 'size'" in msg
+    assert "colour" in msg  # the unknown top-level key is listed too, not hidden behind "and 1 more"
+    assert "more problem" in msg
+    res = CliRunner().invoke(main, ["check", str(bad)])
+    assert res.exit_code != 0 and "sise" in res.output
+
+
+def _warm(stages):
+    from rich.console import Console
+
+    from armguard.cli._compile import warm_up
+
+    buf = io.StringIO()
+    compiled = warm_up(stages, console=Console(file=buf, force_terminal=False, width=120))
+    return compiled, buf.getvalue()
+
+
+def test_warm_up_message_only_when_compiling():
+    import time
+
+    import numba
+
+    def fresh():  # a kernel numba has never seen: a real compilation, then the stage goes on a while
+        f = numba.njit(cache=False)(lambda x: x * 2.0)
+        assert f(1.5) == 3.0
+        time.sleep(0.5)
+
+    def quiet():
+        time.sleep(0.5)
+
+    compiled, out = _warm((("test kernels", fresh),))
+    assert compiled and "compiling kernels (first run only)" in out
+    compiled, out = _warm((("nothing to compile", quiet),))
+    assert not compiled and out == ""
