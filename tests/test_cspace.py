@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import math
 import shutil
-import time
 from pathlib import Path
 
 import numpy as np
@@ -212,18 +211,15 @@ def test_combined_check_never_misses_a_collision(built, scene):
     assert np.any(batch.status == CombinedStatus.FREE) and np.any(batch.status == CombinedStatus.COLLISION)
 
 
-def test_lookup_is_fast(built):
+def test_batched_lookup_equals_one_at_a_time(built):
+    """``allowed_many`` (the batched numba lookup; its speed is measured in bench/cspace.py) answers
+    exactly what ``allowed`` answers configuration by configuration."""
     g = built.grid
-    Q = np.random.default_rng(9).uniform(g.lower, g.upper, size=(1_000_000, 3))
-    built.allowed_many(Q[:10])
-    best = math.inf
-    for _ in range(5):
-        t = time.perf_counter()
-        built.allowed_many(Q)
-        best = min(best, time.perf_counter() - t)
-    ns = best / len(Q) * 1e9
-    print(f"\nallowed_many: {ns:.1f} ns per configuration")
-    assert ns <= 100.0
+    Q = np.random.default_rng(9).uniform(g.lower, g.upper, size=(2000, 3))
+    many = built.allowed_many(Q)
+    assert many.dtype == bool and many.shape == (len(Q),)
+    assert np.array_equal(many, np.array([built.allowed(q) for q in Q]))
+    assert 0 < many.sum() < len(Q)  # the sample sees both allowed and forbidden configurations
 
 
 def test_bad_requests(tmp_path):

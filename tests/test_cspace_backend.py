@@ -152,7 +152,7 @@ def test_detector_over_the_forbidden_backend(fmap, forbidden, model):
     assert det.backend == "forbidden"
     Q = model.random_q(2000, 14)
     assert np.array_equal(det.collides_many(model.scene_q(Q)), forbidden.collides(Q, margin=SD))
-    with pytest.raises(BackendError, match="'forbidden' does not answer distances"):
+    with pytest.raises(BackendError, match="'forbidden' answers verdicts only"):
         det.check(model.scene.default_q())
     # a scene loaded alone is its model's (the same files); a copy made in code has no files to check the map against
     alone = armguard.Detector(armguard.load_scene("hermes"), threshold=0.0, stopping_distance=SD, backend="forbidden",

@@ -56,8 +56,12 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
         for r in rows:
             console.print(f"[bold]{r['pair'][0]} / {r['pair'][1]}[/bold] ({r['category']})")
             for b in names:
-                d, pa, pb = r[b]
-                console.print(f"  {b:10s} d = {d!r} m  p_WA = {pa}  p_WB = {pb}")
+                ans = r[b]
+                if isinstance(ans, dict):  # a verdicts-only backend answers a verdict, not a distance
+                    console.print(f"  {b:10s} " + "  ".join(f"{k} = {v}" for k, v in ans.items()), soft_wrap=True)
+                    continue
+                d, pa, pb = ans
+                console.print(f"  {b:10s} d = {d!r} m  p_WA = {pa}  p_WB = {pb}", soft_wrap=True)
         return
     traj = list(trajectories)
     traj = "all" if traj == ["all"] else (None if traj == ["none"] else traj)
