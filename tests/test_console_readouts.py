@@ -1,0 +1,159 @@
+"""Backend readouts and compare mode, the --watch reload diff, the camera framing, feature outlines."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from armguard.console import ConsoleInputError, ConsoleState
+from armguard.console._backends import compare_readouts
+from armguard.console._readout import readout_off
+from armguard.console._reload import describe_changes
+from armguard.console._serve import ModelWatcher, load_for_console
+from armguard.console._view import FOLLOW_ELEVATION_DEG, feature_segments, follow_view, pair_view
+from armguard.geometry import Box, ConvexPolyhedron, Feature, FeatureKind, distance
+from armguard.scene import load_scene
+
+SCENE = Path(__file__).parent / "data" / "console_scene.yaml"
+
+
+@pytest.fixture(scope="module")
+def ranger():
+    return load_for_console("ranger")
+
+
+def test_backend_readout_and_compare_delta(ranger):
+    scene, model = ranger
+    st = ConsoleState(scene, model=model)
+    assert "coal" in st.backends
+    q0 = {k: v.copy() for k, v in st.snapshot().q.items()}
+    d_analytic = st.snapshot().readout.distance
+    st.set_backend("coal")
+    snap = st.snapshot()
+    assert snap.readout.backend == "coal" and snap.backend == "coal"
+    assert all(np.array_equal(q0[k], v) for k, v in snap.q.items())
+    assert abs(snap.readout.distance - d_analytic) < 1e-6
+    assert snap.readout.link.startswith(snap.active)
+    st.set_compare("analytic")
+    cmp = st.snapshot().compare
+    assert (cmp.primary, cmp.other) == ("coal", "analytic")
+    assert cmp.delta == cmp.readout.distance - st.snapshot().readout.distance and abs(cmp.delta) < 1e-6
+    with pytest.raises(ConsoleInputError, match="not installed"):
+        st.set_compare("no-such-backend")
+    assert st.snapshot().compare.other == "analytic"  # refused: compare mode unchanged
+    st.set_compare(None)
+    assert st.snapshot().compare is None
+
+
+def test_compare_delta_is_nan_without_a_pair():
+    off = readout_off(0.05)
+    on = SimpleNamespace(distance=0.2, backend="coal")
+    assert math.isnan(compare_readouts(off, on).delta)
+
+
+def _moved_scene(tmp_path, dx: float):
+    text = SCENE.read_text().replace("xyz: [-0.8, 0.8, 0.0]", f"xyz: [{-0.8 + dx}, 0.8, 0.0]")
+    p = tmp_path / "scene.yaml"
+    p.write_text(text)
+    return p
+
+
+def test_reload_diff_shapes_moved_and_pairs(tmp_path):
+    old = load_scene(str(SCENE))
+    new = load_scene(str(_moved_scene(tmp_path, 0.1)))
+    q = old.default_q()
+    assert describe_changes(old, old, q, q) == "no change"
+    assert describe_changes(old, new, q, q) == "shapes moved: post"
+    pairs = lambda *ab: SimpleNamespace(pairs=SimpleNamespace(owner_a=[a for a, _ in ab], owner_b=[b for _, b in ab]))  # noqa: E731
+    m_old = pairs(("left/link1", "post"), ("left/link2", "post"))
+    m_new = pairs(("left/link2", "post"), ("left/link3", "post"))
+    text = describe_changes(old, old, q, q, m_old, m_new)
+    assert "pairs added: 1 (left/link3 / post)" in text and "pairs removed: 1 (left/link1 / post)" in text
+
+
+def test_watch_reload_and_a_broken_file_keeps_the_last_good_model(tmp_path):
+    path = _moved_scene(tmp_path, 0.0)
+    st = ConsoleState(load_scene(str(path)))
+    st.set_joint("left", 0, 60, deg=True)
+    app = SimpleNamespace(state=st, reloaded=0)
+    app.model_reloaded = lambda: setattr(app, "reloaded", app.reloaded + 1)
+    w = ModelWatcher(app, str(path), [path])
+    path.write_text(path.read_text().replace("xyz: [-0.8, 0.8, 0.0]", "xyz: [-0.7, 0.8, 0.0]"))
+    assert w.reload_now() == "shapes moved: post"
+    snap = st.snapshot()
+    assert app.reloaded == 1 and snap.changes == "model reloaded: shapes moved: post"
+    assert math.isclose(snap.q["left"][0], math.radians(60))  # the configuration kept
+    post = [it.shape for it in st.scene.shapes_at(snap.q) if it.owner == "post"][0]
+    path.write_text(path.read_text().replace("size: [0.2, 0.2, 0.6]", "sise: [0.2, 0.2, 0.6]"))
+    assert w.reload_now() is None and app.reloaded == 1
+    snap = st.snapshot()
+    assert snap.message_is_error and "last good one keeps running" in snap.message and "sise" in snap.message
+    again = [it.shape for it in st.scene.shapes_at(snap.q) if it.owner == "post"][0]
+    assert np.array_equal(np.asarray(again.center), np.asarray(post.center))
+
+
+def _project(eye, look, P, fov):
+    f = (look - eye) / np.linalg.norm(look - eye)
+    r = np.cross(f, [0, 0, 1.0])
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    rel = P - eye
+    z = rel @ f
+    return (rel @ r) / (z * math.tan(fov / 2)), (rel @ u) / (z * math.tan(fov / 2)), z
+
+
+def test_follow_view_frames_the_points_across_the_line():
+    fov = math.radians(75.0)
+    P = np.array([[1.0, 0.0, 0.0], [1.5, 0.3, 0.2], [1.2, -0.2, 0.5]])
+    eye, look = follow_view(P, np.zeros(3), fov_rad=fov)
+    x, y, z = _project(eye, look, P, fov)
+    assert np.all(z > 0) and np.all(np.abs(y) < 1.0) and np.all(np.abs(x) < 1.0 * 1100 / 700)
+    d = eye - look
+    assert math.degrees(math.atan2(d[2], np.linalg.norm(d[:2]))) == pytest.approx(FOLLOW_ELEVATION_DEG)
+    assert d[0] > 0  # from the points' side of the scene (+x of its centre)
+    line = np.array([[1.0, 0.0, 0.0], [1.0, 0.5, 0.0]])  # along y: seen from +-x
+    eye, look = follow_view(P, np.zeros(3), line=line, fov_rad=fov)
+    h = (eye - look)[:2] / np.linalg.norm((eye - look)[:2])
+    assert abs(h @ [0.0, 1.0]) < 1e-9 and h[0] > 0
+
+
+def test_pair_view_sees_the_line_past_a_blocking_wall():
+    fov = math.radians(75.0)
+    line = np.array([[0.0, 0.0, 0.0], [0.0, 0.2, 0.0]])
+    eye0, look0 = pair_view(line, fov_rad=fov)
+    mid = line.mean(axis=0)
+    x, y, z = _project(eye0, look0, line, fov)
+    assert np.all(z > 0) and np.all(np.abs(y) < 1.0)
+    view = (mid - eye0) / np.linalg.norm(mid - eye0)
+    assert abs(view @ [0, 1.0, 0]) <= 0.8  # across the line, not along it
+    # a wall between the first camera and the line: another direction, with a clear sight line
+    c = 0.5 * (eye0 + mid)
+    wall = Box(center=c, half_extents=[0.05, 0.3, 0.3], rotation=np.eye(3))
+    eye, _ = pair_view(line, [wall], fov_rad=fov)
+    assert not np.allclose(eye, eye0)
+    from armguard.geometry import Capsule
+
+    assert distance(Capsule(eye, mid, 1e-3), wall).distance > 0
+
+
+def test_feature_outlines():
+    box = Box(center=[0, 0, 0], half_extents=[1.0, 2.0, 3.0], rotation=np.eye(3))
+    for k in range(6):
+        seg = feature_segments(box, Feature(FeatureKind.FACE, k))
+        axis = k // 2
+        assert seg.shape == (4, 2, 3)
+        assert np.allclose(np.abs(seg[..., axis]), [1.0, 2.0, 3.0][axis])  # every edge on that face
+        assert len({float(v) for v in np.sign(seg[..., axis]).ravel()}) == 1
+    edge = feature_segments(box, Feature(FeatureKind.EDGE, 0))
+    assert edge.shape == (1, 2, 3)
+    assert np.linalg.norm(edge[0, 1] - edge[0, 0]) in (2.0, 4.0, 6.0)
+    tet = ConvexPolyhedron(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]]))
+    f0 = feature_segments(tet, Feature(FeatureKind.FACE, 0))
+    assert f0.shape == (len(tet.faces[0]), 2, 3)
+    assert np.allclose(f0[1:, 0], f0[:-1, 1]) and np.allclose(f0[0, 0], f0[-1, 1])  # a closed loop
+    assert feature_segments(box, Feature(FeatureKind.VERTEX, 0)).shape == (0, 2, 3)
+    assert feature_segments(box, None).shape == (0, 2, 3)
