@@ -271,19 +271,11 @@ def evaluate(model, Q, backends, options=None, *, spec: str | None = None, worke
 
 
 def _on_dask(spec, Q, backends, options, workers, scheduler, chunk_size, progress) -> dict:
-    from distributed import Client, LocalCluster, as_completed
+    from distributed import as_completed
 
-    cluster = None
-    if scheduler is None:
-        cluster = LocalCluster(n_workers=int(workers), processes=True, threads_per_worker=1, dashboard_address=None)
-        client = Client(cluster)
-    else:
-        try:
-            client = Client(scheduler, timeout="20s")
-        except (OSError, TimeoutError) as exc:
-            raise ArmguardError(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}") from exc
-    try:
-        n_workers = max(1, len(client.scheduler_info().get("workers", {})) or int(workers or 1))
+    from .._dask import dask_client
+
+    with dask_client(workers, scheduler) as (client, n_workers):
         M = len(Q)
         size = chunk_size or max(1, math.ceil(M / (4 * n_workers)))
         starts = list(range(0, M, size)) or [0]
@@ -299,7 +291,3 @@ def _on_dask(spec, Q, backends, options, workers, scheduler, chunk_size, progres
             if progress is not None:
                 progress(done, M)
         return _merge(parts, backends)
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
