@@ -442,8 +442,6 @@ def clearance_sigmas(source, q, placements, *, confidence: float = 0.999, sample
 
 def _monte_carlo(scene, shapes, placements, moved, keys, samples: int, seed: int) -> dict:
     """Owner pair -> ``(samples,) bool``: collides in each seeded draw (exact distances)."""
-    from ..geometry import distance
-
     rng = np.random.default_rng(seed)
     D = [p.sample_displacements(samples, rng) for p in placements]
     eye = np.broadcast_to(np.eye(4), (samples, 4, 4))

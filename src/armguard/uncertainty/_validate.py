@@ -8,7 +8,18 @@ import numpy as np
 from .._errors import UncertaintyError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 
-__all__ = ["as_vector", "as_covariance", "as_transform", "symmetrize"]
+__all__ = ["as_vector", "as_covariance", "as_transform", "symmetrize", "freeze_relation"]
+
+
+def freeze_relation(obj, mean: np.ndarray, cov: np.ndarray):
+    """Set ``obj.mean`` and ``obj.cov`` (a frozen dataclass's fields) to read-only float64 copies; returns ``obj``."""
+    mean = np.array(mean, dtype=np.float64)
+    cov = np.array(cov, dtype=np.float64)
+    mean.flags.writeable = False
+    cov.flags.writeable = False
+    object.__setattr__(obj, "mean", mean)
+    object.__setattr__(obj, "cov", cov)
+    return obj
 
 
 def as_vector(value, n: int, name: str) -> np.ndarray:

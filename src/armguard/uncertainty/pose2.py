@@ -13,7 +13,7 @@ from .._errors import UncertaintyError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from . import confidence as _conf
 from . import se2 as _se2
-from ._validate import as_covariance, as_vector
+from ._validate import as_covariance, freeze_relation, as_vector
 
 __all__ = ["UncertainPose2", "reduce_network"]
 
@@ -38,23 +38,11 @@ class UncertainPose2:
     cov: np.ndarray
 
     def __post_init__(self) -> None:
-        m = as_vector(self.mean, 3, "UncertainPose2.mean")
-        c = as_covariance(self.cov, 3, "UncertainPose2.cov")
-        m.flags.writeable = False
-        c.flags.writeable = False
-        object.__setattr__(self, "mean", m)
-        object.__setattr__(self, "cov", c)
+        freeze_relation(self, as_vector(self.mean, 3, "UncertainPose2.mean"), as_covariance(self.cov, 3, "UncertainPose2.cov"))
 
     @classmethod
     def _trusted(cls, mean: np.ndarray, cov: np.ndarray) -> "UncertainPose2":
-        obj = object.__new__(cls)
-        mean = np.array(mean, dtype=np.float64)
-        cov = np.array(cov, dtype=np.float64)
-        mean.flags.writeable = False
-        cov.flags.writeable = False
-        object.__setattr__(obj, "mean", mean)
-        object.__setattr__(obj, "cov", cov)
-        return obj
+        return freeze_relation(object.__new__(cls), mean, cov)
 
     @classmethod
     def identity(cls) -> "UncertainPose2":

@@ -9,7 +9,7 @@ import numpy as np
 
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from . import se3 as _se3
-from ._validate import as_covariance, as_transform, as_vector
+from ._validate import as_covariance, freeze_relation, as_transform, as_vector
 
 __all__ = ["UncertainPose3"]
 
@@ -31,23 +31,11 @@ class UncertainPose3:
     cov: np.ndarray
 
     def __post_init__(self) -> None:
-        t = as_transform(self.mean, "UncertainPose3.mean")
-        c = as_covariance(self.cov, 6, "UncertainPose3.cov")
-        t.flags.writeable = False
-        c.flags.writeable = False
-        object.__setattr__(self, "mean", t)
-        object.__setattr__(self, "cov", c)
+        freeze_relation(self, as_transform(self.mean, "UncertainPose3.mean"), as_covariance(self.cov, 6, "UncertainPose3.cov"))
 
     @classmethod
     def _trusted(cls, mean: np.ndarray, cov: np.ndarray) -> "UncertainPose3":
-        obj = object.__new__(cls)
-        mean = np.array(mean, dtype=np.float64)
-        cov = np.array(cov, dtype=np.float64)
-        mean.flags.writeable = False
-        cov.flags.writeable = False
-        object.__setattr__(obj, "mean", mean)
-        object.__setattr__(obj, "cov", cov)
-        return obj
+        return freeze_relation(object.__new__(cls), mean, cov)
 
     @classmethod
     def identity(cls) -> "UncertainPose3":
