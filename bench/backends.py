@@ -11,7 +11,6 @@ from __future__ import annotations
 import sysconfig
 from pathlib import Path
 
-import numpy as np
 
 from .timing import fmt_ns, median_seconds
 
