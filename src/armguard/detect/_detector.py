@@ -13,6 +13,7 @@ import numpy as np
 from .._errors import DetectionError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from . import _kernel as kn
+from ..geometry._pair_cylinder import SUPPORT_WORK_SIZE
 from ..geometry._pair_epa import EPA_WORK_SIZE
 from ._hulls import link_obbs, vertex_graphs
 from ._layout import EV_W, SUM_SIZE, Layout
@@ -24,6 +25,7 @@ from ._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, Pai
 
 __all__ = ["Detector"]
 
+_CYLINDER = 4  # armguard.geometry.CoreKind.CYLINDER
 _DEFAULT_NS_PER_PAIR = 200.0  # first guess of the cost model, replaced by measurements
 _MIN_ROWS_PER_THREAD = 256  # below this many configurations per thread, a thread costs more than it saves
 
@@ -200,7 +202,10 @@ class Detector:
         fnW0 = vg["fn_L"].copy()
         edW0 = vg["ed_L"].copy()
         del static_mask  # static elements are already in W: the scratch starts as their copy
-        n_work = EPA_WORK_SIZE if len(vg["gadj"]) else 64  # room for EPA where a hull has a vertex graph
+        # room for EPA where a hull has a vertex graph, and for GJK + EPA on support functions
+        # (armguard.geometry._pair_cylinder) where a cylinder is present
+        has_cyl = bool(np.any(cs.elem_core == _CYLINDER))
+        n_work = max(EPA_WORK_SIZE if len(vg["gadj"]) else 64, SUPPORT_WORK_SIZE if has_cyl else 64)
         for name, arr in (("Xs", np.zeros((t.n_links, 4, 4))), ("vW", vW0), ("boxW", boxW0), ("fnW", fnW0),
                           ("edW", edW0), ("sphW", sphW0), ("out9", np.zeros(9)), ("work", np.zeros(n_work)),
                           ("gap", np.zeros(stack_n)), ("ev", np.zeros((P, EV_W))),

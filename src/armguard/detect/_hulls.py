@@ -14,6 +14,8 @@ from ..geometry._pair_gjk import CLIMB_MIN_VERTICES
 
 __all__ = ["vertex_graphs", "link_obbs"]
 
+_CYLINDER = 4  # armguard.geometry.CoreKind.CYLINDER
+
 
 def vertex_graphs(cs, fn_L: np.ndarray, ed_L: np.ndarray) -> dict:
     """Vertex graphs and surface triangles of the polytope elements with at least
@@ -52,7 +54,8 @@ def vertex_graphs(cs, fn_L: np.ndarray, ed_L: np.ndarray) -> dict:
 def link_obbs(cs, elem_glink: np.ndarray, tol_length: float) -> np.ndarray:
     """Oriented bounding boxes of the moving polytope elements in their link frames, for the yes/no
     cull: ``(G, 16)`` rows ``[c_L (3), h (3), R_LB (9, row-major, columns the box axes), ok]``,
-    ``ok`` 1.0 where the row holds a box (a moving element with a polytope core), else 0.
+    ``ok`` 1.0 where the row holds a box (a moving element with a polytope or cylinder core), else 0.
+    A cylinder's box is its own (centre, axes, ``(r, r, h)``), grown as below.
 
     The axes are the principal axes of the element's core points (PCA, a fine fit for the long
     link hulls); the box spans the points' extent along them, grown by the core radius and by
@@ -64,6 +67,13 @@ def link_obbs(cs, elem_glink: np.ndarray, tol_length: float) -> np.ndarray:
     out = np.zeros((G, 16))
     for g in range(G):
         vs, ve = int(cs.elem_vert_start[g]), int(cs.elem_vert_start[g + 1])
+        if int(cs.elem_core[g]) == _CYLINDER and elem_glink[g] >= 0:
+            # a cylinder's own box: centre, axes R_LC, half extents (r, r, h), grown as below
+            c, R, h = cs.elem_box_center[g], cs.elem_box_axes[g], cs.elem_box_half[g]
+            size = float(np.max(np.abs(c))) + float(np.max(h)) + 1.0
+            out[g, 0:3], out[g, 3:6] = c, h + tol_length + 1e-12 * size
+            out[g, 6:15], out[g, 15] = np.asarray(R).reshape(-1), 1.0
+            continue
         if int(cs.elem_core[g]) != 3 or elem_glink[g] < 0 or ve - vs < 4:
             continue
         p = np.asarray(cs.verts[vs:ve], dtype=np.float64)

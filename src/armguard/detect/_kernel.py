@@ -483,7 +483,8 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                 if use_bb:
                                     lb = max(lb, _bb_gap(bx0, by0, bz0, bx1, by1, bz1, br, MF, o_slo + 3 * s,
                                                          o_shi + 3 * s))
-                                if lb > 0.0 and core[b] == 2:  # a box: the exact sphere-OBB gap is tighter
+                                kb = core[b]  # a box, or a cylinder (its own box in the same slots):
+                                if lb > 0.0 and (kb == 2 or kb == 4):  # the sphere-OBB gap is tighter
                                     lb = max(lb, _obb_gap(cx, cy, cz, cr, SF, o_box + 15 * b))
                                 if not lb > 0.0:
                                     lb = -math.inf
@@ -491,7 +492,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                     if track:
                                         plb[p] = lb
                                     continue
-                                if (use_obb and core[b] == 2 and cutp < math.inf
+                                if (use_obb and (kb == 2 or kb == 4) and cutp < math.inf
                                         and obb_apart_static(MF, o_obb + 16 * a, o_Xa, SF, o_box + 15 * b,
                                                              max(cutp, 0.0), eps_par)):
                                     continue  # a's box grown by the cut-off misses the obstacle box: d > cut

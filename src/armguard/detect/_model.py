@@ -6,7 +6,8 @@ their categories); this module adds what the detector needs on top of it:
 * one flattened kinematic tree over the links of *all* robots (global link index =
   robot's offset + link index), so one FK call serves the scene;
 * element frames as link numbers (-1 for static bodies), edge directions and face normals
-  in the element frame, static elements' AABBs and a :class:`BVH` over them;
+  in the element frame, static elements' AABBs (a cylinder's exact one, see
+  :func:`_cylinder_aabb`) and a :class:`BVH` over them;
 * the candidate pairs: element pairs of :meth:`Scene.allowed_pairs` mapped to the four
   categories, plus one workspace pair per moving element, filtered by the active arm and by
   the conservative obstacle lists (:mod:`._reach`);
@@ -37,8 +38,22 @@ _SCENE_CAT = {
 }
 
 
+_CYLINDER = 4  # armguard.geometry.CoreKind.CYLINDER
+
+
 def _c(a, dtype=np.float64):
     return np.ascontiguousarray(np.asarray(a, dtype=dtype))
+
+
+def _cylinder_aabb(c: np.ndarray, R: np.ndarray, half: np.ndarray):
+    """``(lo, hi)`` (3,) m: the axis-aligned box of the cylinder with centre ``c``, axes ``R`` (the axis
+    as third column) and ``half = (r, r, h)``: along axis ``k`` the extent is ``h |a_k| + r sqrt(1 -
+    a_k^2)`` (as :meth:`armguard.geometry.Cylinder.aabb`), grown by a rounding margin so it contains
+    the cylinder as the kernels evaluate it."""
+    a = R[:, 2]
+    e = half[2] * np.abs(a) + half[0] * np.sqrt(np.maximum(0.0, 1.0 - a * a))
+    e = e + 1e-12 * (float(np.max(np.abs(c))) + float(np.max(half)) + 1.0)
+    return c - e, c + e
 
 
 def _combined_tree(scene, robot_names):
@@ -145,6 +160,9 @@ def build_model(scene, *, active: str | None, reach_margin: float, tol) -> Detec
     slo = np.zeros((len(st_ids), 3))
     shi = np.zeros((len(st_ids), 3))
     for k, g in enumerate(st_ids):
+        if cs.elem_core[g] == _CYLINDER:  # the exact box of a cylinder (its core points are a larger prism)
+            slo[k], shi[k] = _cylinder_aabb(cs.elem_box_center[g], cs.elem_box_axes[g], cs.elem_box_half[g])
+            continue
         V = cs.verts[cs.elem_vert_start[g]:cs.elem_vert_start[g + 1]]
         r = cs.elem_radius[g]
         slo[k] = V.min(axis=0) - r

@@ -2,14 +2,18 @@
 
 No distance formula lives here: each branch calls the geometry core's per-pair kernel
 (:mod:`armguard.geometry`): capsule-capsule (Ranger §3 link-link and link-edge),
-capsule-box, capsule against a static polytope (GJK + Minkowski facets), and the exact
-convex-convex kernel for every other pair (faces, polyhedra, mesh hulls: GJK climbing the hulls'
-vertex graphs, EPA for the depth, the exhaustive SAT as fallback).  The only formula of its own is the distance to the workspace
-walls (Ranger §2, "link-to-bounding box distances"), which is not a shape pair.
+capsule-box, capsule against a static polytope (GJK + Minkowski facets), GJK and EPA on support
+functions for any pair with a cylinder side (:func:`armguard.geometry._pair_cylinder.support_pair`),
+and the exact convex-convex kernel for every other pair (faces, polyhedra, mesh hulls: GJK climbing
+the hulls' vertex graphs, EPA for the depth, the exhaustive SAT as fallback).  The only formula of
+its own is the distance to the workspace walls (Ranger §2, "link-to-bounding box distances"), which
+is not a shape pair (for a cylinder: its exact support along each wall's normal).
 
 Element data are in W (the detector kernel moves link elements there once per check):
-``verts (V, 3)`` core points; ``box (G, 15)`` ``[centre, half extents, R_WB row-major]``;
-``fnrm (F, 3)`` face normals; ``edir (E, 3)`` unit edge directions; ``*_start`` CSR offsets.
+``verts (V, 3)`` core points; ``box (G, 15)`` ``[centre, half extents, R_WB row-major]`` (a
+cylinder: ``[c, r, r, h, R_WC row-major]``, the axis the third column, ``_pair_cylinder``'s buffer;
+its core points are its circumscribed prism's corners, used for bounds only); ``fnrm (F, 3)``
+face normals; ``edir (E, 3)`` unit edge directions; ``*_start`` CSR offsets.
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ from numba import njit
 from ..geometry._pair_segment_box import capsule_box_scalar
 from ..geometry._pair_segment_polytope import capsule_polytope_at
 from ..geometry._pair_segment_segment import capsule_capsule_scalar
+from ..geometry._pair_cylinder import support_pair
 from ..geometry._pair_epa import convex_convex_fast
 from ..geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_capsule
 
@@ -40,7 +45,7 @@ _K_gadj, _K_gadjs, _K_gtri, _K_gtris = K["gadj"], K["gadjs"], K["gtri"], K["gtri
 ERR_GJK = 2  # the convex kernel did not converge: the caller raises, never a verdict
 NOT_SCALAR = -1  # narrow_flat: not a capsule-capsule / capsule-box pair, call narrow_other
 
-_POINT, _SEGMENT, _BOX = 0, 1, 2
+_POINT, _SEGMENT, _BOX, _CYLINDER = 0, 1, 2, 4  # armguard.geometry.CoreKind
 
 
 @njit(cache=True, inline="always")
@@ -63,7 +68,10 @@ def pair_distance(
     ``adj[adjs[g]:adjs[g + 1]]``, EPA depth, the exhaustive SAT where EPA does not settle it,
     with axes from the face normals and edge directions, or from the triangles
     ``tri[tris[g]:tris[g + 1]]`` and the graph of an element that has them instead);
-    ``level`` as in :func:`narrow_other`; ``work`` has ``EPA_WORK_SIZE`` floats."""
+    A pair with a cylinder side goes to :func:`armguard.geometry._pair_cylinder.support_pair` (GJK
+    and EPA on support functions; the cylinder's core is ``box[g]``, the other side's its points
+    and radius).  ``level`` as in :func:`narrow_other`; ``work`` has ``EPA_WORK_SIZE`` floats
+    (``SUPPORT_WORK_SIZE`` for the cylinder kernel, fewer)."""
     ka = core[ga]
     kb = core[gb]
     ra = radius[ga]
@@ -83,6 +91,14 @@ def pair_distance(
             out[i] = out[3 + i]
             out[3 + i] = t
             out[6 + i] = -out[6 + i]
+        return d, 0
+    if ka == _CYLINDER or kb == _CYLINDER:
+        ca = box[ga] if ka == _CYLINDER else box[ga, 0:0]  # an empty buffer: the hull of the points
+        cb = box[gb] if kb == _CYLINDER else box[gb, 0:0]
+        d, status = support_pair(verts[vstart[ga]:vstart[ga + 1]], ca, ra, verts[vstart[gb]:vstart[gb + 1]], cb, rb,
+                                 out, work, eps_len, gjk_eps, max_iter, level)
+        if status == GJK_NOT_CONVERGED:
+            return d, ERR_GJK
         return d, 0
     d, status = convex_convex_fast(
         verts[vstart[ga]:vstart[ga + 1]], fnrm[fstart[ga]:fstart[ga + 1]], edir[estart[ga]:estart[ga + 1]],
@@ -198,6 +214,54 @@ def narrow_other(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter
 
 
 @njit(cache=True, _nrt=False)
+def _wall_cylinder(g, H, MF, SF):  # pragma: no cover - compiled
+    """:func:`wall_flat` for cylinder element ``g`` (its W buffer ``[c, r, r, h, R_WC row-major]`` in
+    ``boxW``): along each wall's outward normal ``n = +-e_k`` the extreme point is the cylinder's
+    exact support ``s(n) = c + h sign(a . n) a + r (u x_C + v y_C) / hypot(u, v)``, ``u = x_C . n``,
+    ``v = y_C . n`` (see :mod:`armguard.geometry._cylinder`; the radial term dropped when ``n`` is
+    along the axis), and the gap is the wall's coordinate minus that point's.  Same outputs."""
+    ows = H[2 * _K_ws]
+    o = H[2 * _K_boxW] + 15 * g
+    rc = SF[o + 3]
+    h = SF[o + 5]
+    best = math.inf
+    bx = by = bz = 0.0
+    baxis = 0
+    bsign = 1.0
+    for ax in range(3):
+        u0 = SF[o + 6 + 3 * ax]  # row ax of R_WC: the k-th components of x_C, y_C and the axis
+        v0 = SF[o + 7 + 3 * ax]
+        s0 = SF[o + 8 + 3 * ax]
+        for side in range(2):
+            sg = 1.0 if side == 0 else -1.0
+            u = sg * u0
+            v = sg * v0
+            hh = h if sg * s0 >= 0.0 else -h
+            x = SF[o] + hh * SF[o + 8]
+            y = SF[o + 1] + hh * SF[o + 11]
+            z = SF[o + 2] + hh * SF[o + 14]
+            pn = math.sqrt(u * u + v * v)
+            if pn > 0.0:
+                u *= rc / pn
+                v *= rc / pn
+                x += u * SF[o + 6] + v * SF[o + 7]
+                y += u * SF[o + 9] + v * SF[o + 10]
+                z += u * SF[o + 12] + v * SF[o + 13]
+            c = x if ax == 0 else (y if ax == 1 else z)
+            gap = MF[ows + 3 + ax] - c if side == 0 else c - MF[ows + ax]
+            if gap < best:
+                best, bx, by, bz, baxis, bsign = gap, x, y, z, ax, sg
+    oo = H[2 * _K_out9]
+    SF[oo] = bx; SF[oo + 1] = by; SF[oo + 2] = bz
+    SF[oo + 3] = bx; SF[oo + 4] = by; SF[oo + 5] = bz
+    for ax in range(3):
+        SF[oo + 6 + ax] = 0.0
+    SF[oo + 3 + baxis] = MF[ows + 3 + baxis] if bsign > 0.0 else MF[ows + baxis]
+    SF[oo + 6 + baxis] = bsign
+    return best
+
+
+@njit(cache=True, _nrt=False)
 def wall_flat(g, H, MF, MI, SF):  # pragma: no cover - compiled
     """Distance (m) from element ``g`` to the walls of the workspace box ``ws = [lo, hi]`` (W).
 
@@ -206,8 +270,10 @@ def wall_flat(g, H, MF, MI, SF):  # pragma: no cover - compiled
     < 0 when some point is beyond a wall).  ``out9``: ``p_WA`` is that extreme point, ``p_WB``
     the same point with the wall's coordinate, ``nhat_AB_W`` the outward wall normal.  Reads the
     packed buffers by offset (:mod:`._layout`); the slow reference is
-    :func:`armguard.detect._reference._wall_distance`.
+    :func:`armguard.detect._reference._wall_distance`.  A cylinder: :func:`_wall_cylinder`.
     """
+    if MI[H[2 * _K_core] + g] == _CYLINDER:
+        return _wall_cylinder(g, H, MF, SF)
     ows = H[2 * _K_ws]
     ov = H[2 * _K_vW]
     ovs = H[2 * _K_vstart]

@@ -54,7 +54,8 @@ def record_pair(p, c, d, n_eval, H, SF, SI, stamp_now):  # pragma: no cover - co
 
 @njit(cache=True, _nrt=False)
 def move_element(g, H, MF, MI, SF):  # pragma: no cover - compiled
-    """Move element ``g`` from its link frame to W (core points, box, face normals, edge directions)."""
+    """Move element ``g`` from its link frame to W (core points, box or cylinder pose, face normals, edge
+    directions)."""
     oX = H[2 * _K_Xs] + 16 * MI[H[2 * _K_glink] + g]
     r00 = SF[oX]; r01 = SF[oX + 1]; r02 = SF[oX + 2]; tx = SF[oX + 3]
     r10 = SF[oX + 4]; r11 = SF[oX + 5]; r12 = SF[oX + 6]; ty = SF[oX + 7]
@@ -68,7 +69,8 @@ def move_element(g, H, MF, MI, SF):  # pragma: no cover - compiled
         SF[oW + i] = r00 * x + r01 * y + r02 * z + tx
         SF[oW + i + 1] = r10 * x + r11 * y + r12 * z + ty
         SF[oW + i + 2] = r20 * x + r21 * y + r22 * z + tz
-    if MI[H[2 * _K_core] + g] == 2:
+    kc = MI[H[2 * _K_core] + g]
+    if kc == 2 or kc == 4:  # a box, or a cylinder's [c, r, r, h, R] in the same slots
         b = H[2 * _K_box_L] + 15 * g
         o = H[2 * _K_boxW] + 15 * g
         x = MF[b]; y = MF[b + 1]; z = MF[b + 2]
@@ -99,7 +101,8 @@ def evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp
 
     Moves ``a`` (and ``b`` when it is a link element) into W first unless this check already did
     (``stamp[1 + g] == stamp_now``).  Returns ``(distance, 0)``, or ``(0, NOT_SCALAR)`` for a pair
-    that is neither workspace walls, capsule-capsule nor capsule-box: the caller then calls
+    that is neither workspace walls, capsule-capsule nor capsule-box (a cylinder side among
+    them): the caller then calls
     :func:`._narrow.narrow_other` (not called from here: linking the convex kernels into a
     function compiled with ``_nrt=False`` makes LLVM crash as described above)."""
     ost = H[2 * _K_stamp] + 1

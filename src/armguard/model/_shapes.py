@@ -2,9 +2,9 @@
 
 ``shape_from_coal(geometry, X_FG)`` gives the armguard shape of a coal geometry whose frame G
 is at ``X_FG`` in frame F, and a representation note when the two are not the same set of
-points (a cylinder is a circumscribed prism in the analytic kernels: the detector has no cylinder
-element yet, though :class:`armguard.geometry.Cylinder` is exact pairwise).  ``coal_from_shape``
-is the inverse, used for bodies a scene file adds (a Cylinder maps to ``coal.Cylinder``).
+points (none today: capsules, spheres, boxes, cylinders and convex meshes all map exactly; a
+cylinder is an exact :class:`armguard.geometry.Cylinder`).  ``coal_from_shape`` is the inverse,
+used for bodies a scene file adds (a Cylinder maps to ``coal.Cylinder``).
 """
 
 from __future__ import annotations
@@ -17,7 +17,9 @@ from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism,
 __all__ = ["shape_from_coal", "coal_from_shape", "convex_hull", "CYLINDER_PRISM_SIDES"]
 
 CYLINDER_PRISM_SIDES = 16
-"""Sides of the prism that circumscribes a cylinder in the analytic kernels (apothem = radius)."""
+"""Sides of the prism that circumscribes a cylinder where a caller wants a polytope for it
+(apothem = radius; :data:`armguard.geometry.CYLINDER_HULL_SIDES`): the shapes themselves are
+exact cylinders."""
 
 
 def _flat_polygon(p: np.ndarray):
@@ -47,9 +49,7 @@ def shape_from_coal(g, X_FG: np.ndarray):
     if isinstance(g, coal.Box):
         return Box(t, np.asarray(g.halfSide, dtype=np.float64), R), ""
     if isinstance(g, coal.Cylinder):
-        return (Prism(t, R, float(g.radius), float(g.halfLength), CYLINDER_PRISM_SIDES),
-                f"cylinder -> circumscribed {CYLINDER_PRISM_SIDES}-sided prism (up to "
-                f"{float(g.radius) * (1 / np.cos(np.pi / CYLINDER_PRISM_SIDES) - 1) * 1e3:.2f} mm larger)")
+        return Cylinder(t, R, float(g.radius), float(g.halfLength)), ""
     if isinstance(g, coal.ConvexBase):
         v = np.asarray(g.points(), dtype=np.float64).reshape(-1, 3) if callable(g.points) else np.asarray(g.points)
         p = v @ R.T + t

@@ -19,17 +19,20 @@ Elements: one per shape (``n_elem``), grouped by owner (``owner_elem_start``, n_
     Geometry is in the element's *frame*: the world W for bodies, the link frame L for links
     and payloads (a payload's ``X_LP`` is already applied), so a kernel moves it with X_WL.
     ``elem_vert_start`` -> ``verts`` (nv, 3): the core points (sphere 1, capsule 2, box 8,
-    prism 2n, polyhedron V, polygon n).  ``elem_box_center`` (n_elem, 3), ``elem_box_axes``
-    (n_elem, 3, 3) with the box axes as columns (R_FB), ``elem_box_half`` (n_elem, 3): zeros
-    for non-boxes.  ``elem_sphere`` (n_elem, 4): a bounding sphere ``[centre, radius]``
-    (Hermes's pre-test).
+    prism 2n, polyhedron V, polygon n; a cylinder: the 2 x 16 corners of its circumscribed prism,
+    a hull that contains it, for bounds only -- its kernels use the exact cylinder).
+    ``elem_box_center`` (n_elem, 3), ``elem_box_axes`` (n_elem, 3, 3) with the box axes as
+    columns (R_FB), ``elem_box_half`` (n_elem, 3): zeros for non-boxes; a cylinder stores its
+    centre, R_FC (the axis as third column) and ``(radius, radius, half_length)`` there (its
+    bounding box, and the 15-float buffer of ``armguard.geometry._pair_cylinder``).
+    ``elem_sphere`` (n_elem, 4): a bounding sphere ``[centre, radius]`` (Hermes's pre-test).
     ``elem_plane_start`` -> ``planes`` (np, 4): ``[n, d]`` with unit outward n, inside
     ``n . x <= d`` (a polygon has one plane, its normal side).
     ``elem_face_start`` -> faces; ``face_vert_start`` (n_faces + 1) -> ``face_verts``: global
     indices into ``verts``, counter-clockwise seen from outside (face ``f`` of an element
     has plane ``planes[elem_plane_start[e] + f - elem_face_start[e]]``).
     ``elem_edge_start`` -> ``edges`` (ne, 2): global vertex indices (a capsule's segment is one
-    edge; a sphere has none).
+    edge; a sphere and a cylinder have none, nor faces or planes).
 
 Pairs
     ``pair_a``, ``pair_b`` (owner ids), ``pair_category`` (index into ``PAIR_CATEGORIES``):
@@ -46,7 +49,6 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from .._errors import SceneError
 from ..geometry import Box, Capsule, ConvexPolyhedron, CoreKind, Cylinder, Polygon, Prism, Sphere
 from ._scene import PairCategory, Scene
 
@@ -201,9 +203,6 @@ def compile_scene(scene: Scene) -> CompiledScene:
     nv = 0
     for k, (_, kind, r, ln, _, shapes) in enumerate(owners):
         for s in shapes:
-            if isinstance(s, Cylinder):  # exact pairwise (armguard.geometry.distance); no element kind yet
-                raise SceneError(f"{owners[k][0]}: a Cylinder shape has no detector element yet (use a Prism, "
-                                 "e.g. the circumscribed one armguard.model gives a URDF cylinder)")
             e_owner.append(k)
             e_kind.append(kind)
             e_robot.append(r)
@@ -214,10 +213,12 @@ def compile_scene(scene: Scene) -> CompiledScene:
             e_sphere.append([*cs.center, cs.radius])
             if isinstance(s, Box):
                 bc.append(s.center), ba.append(s.rotation), bh.append(s.half_extents)
+            elif isinstance(s, Cylinder):  # its pose and size in the box slots: [c, (r, r, h), R_FC]
+                bc.append(s.center), ba.append(s.rotation), bh.append(np.array([s.radius, s.radius, s.half_length]))
             else:
                 bc.append(np.zeros(3)), ba.append(np.zeros((3, 3))), bh.append(np.zeros(3))
-            if isinstance(s, (Sphere, Capsule)):
-                V = s.core_points
+            if isinstance(s, (Sphere, Capsule, Cylinder)):
+                V = s.core_points  # a Cylinder: the circumscribed prism's corners, bounds only
                 local_edges = [(0, 1)] if isinstance(s, Capsule) else []
                 faces, pl = [], np.zeros((0, 4))
             else:

@@ -18,7 +18,7 @@ import yaml
 from pydantic import ValidationError
 
 from .._errors import ArmguardError, SceneError, SceneFileError
-from ..geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere
+from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
 from ._scene import CannedTest, Scene
 from ._schema import SHAPE_TYPES, SceneFile
 
@@ -128,6 +128,8 @@ def _shape(spec, ctx: _Ctx, where: str, X_FO: np.ndarray):
             prism = Prism(X[:3, 3], X[:3, :3], spec.apothem * L, 0.5 * spec.length * L, spec.n_sides)
             prism.as_polyhedron()  # the hull the detector builds: a degenerate one is refused here, named
             return prism
+        if t == "cylinder":
+            return Cylinder(X[:3, 3], X[:3, :3], spec.radius * L, 0.5 * spec.length * L)
         if t == "polyhedron":
             return ConvexPolyhedron(_apply(X, np.asarray(spec.vertices) * L))
         if t == "polygon":

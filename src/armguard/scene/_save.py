@@ -14,7 +14,7 @@ import numpy as np
 import yaml
 
 from .._errors import SceneError
-from ..geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere
+from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
 from ._scene import Scene
 from ._schema import SCHEMA_VERSION
 
@@ -52,6 +52,9 @@ def shape_to_dict(s) -> dict:
             "type": "prism", "n_sides": int(s.n_sides), "apothem": float(s.apothem),
             "length": 2.0 * float(s.half_length), **_R_pose(s.center, s.rotation),
         }
+    if isinstance(s, Cylinder):
+        return {"type": "cylinder", "radius": float(s.radius), "length": 2.0 * float(s.half_length),
+                **_R_pose(s.center, s.rotation)}
     if isinstance(s, ConvexPolyhedron):
         return {"type": "polyhedron", "vertices": [_l(v) for v in s.vertices]}
     if isinstance(s, Polygon):

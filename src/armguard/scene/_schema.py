@@ -97,6 +97,15 @@ class PrismSpec(_Posed):
     length: Num = Field(gt=0.0)
 
 
+class CylinderSpec(_Posed):
+    """A solid right circular cylinder (URDF's ``<cylinder>``, exact); its axis is the local z axis,
+    centred on the local origin."""
+
+    type: Literal["cylinder"]
+    radius: Num = Field(gt=0.0)
+    length: Num = Field(gt=0.0)  # full axial length
+
+
 class PolyhedronSpec(_Posed):
     type: Literal["polyhedron"]
     vertices: Annotated[list[Vec3], Field(min_length=4)]
@@ -116,10 +125,11 @@ class MeshSpec(_Posed):
 
 
 ShapeSpec = Annotated[
-    Union[BoxSpec, SphereSpec, CapsuleSpec, LinkCapsuleSpec, PrismSpec, PolyhedronSpec, PolygonSpec, MeshSpec],
+    Union[BoxSpec, SphereSpec, CapsuleSpec, LinkCapsuleSpec, PrismSpec, CylinderSpec, PolyhedronSpec, PolygonSpec,
+          MeshSpec],
     Field(discriminator="type"),
 ]
-SHAPE_TYPES = ("box", "sphere", "capsule", "link_capsule", "prism", "polyhedron", "polygon", "mesh")
+SHAPE_TYPES = ("box", "sphere", "capsule", "link_capsule", "prism", "cylinder", "polyhedron", "polygon", "mesh")
 
 
 class FrameSpec(_Posed):
