@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import threading
 
-__all__ = ["warm_up", "STAGES", "POLL_S"]
+__all__ = ["warm_up", "STAGES", "SIDE_STAGES", "POLL_S"]
 
 POLL_S = 0.1
 """How often the main thread looks whether a compilation has started (s)."""
@@ -69,13 +69,36 @@ def _verifier() -> None:
     Verifier(sc, robot=traj.robot_name).verify(traj, name=name)
 
 
-STAGES = (("geometry kernels", _geometry), ("detector kernels", _detector), ("verifier kernels", _verifier))
-"""The warm-up stages: (label, function)."""
+STAGES = (("detector kernels", _detector), ("verifier kernels", _verifier), ("geometry kernels", _geometry))
+"""The warm-up stages: (label, function); the detector's first, so that a compilation starts at once
+and the side stages (last here) are already compiling in their own process when they come up."""
+SIDE_STAGES = ("_geometry",)
+"""Stages compiled in a second process beside the others when compiling starts (names of this
+module's functions): :func:`armguard.geometry.distance`'s pair kernels share nothing with the
+detector's fused kernel, so on two cores both compile at once; each process writes numba's
+on-disk cache and the main one then loads the side stages' kernels from it."""
 
 
-def warm_up(stages=STAGES, *, console=None) -> bool:
+def _spawn_side(names):
+    """Start a process compiling the stages ``names`` (None when there are none or it cannot start)."""
+    import subprocess
+    import sys
+
+    if not names:
+        return None
+    code = "from armguard.cli import _compile as c\n" + "".join(f"c.{n}()\n" for n in names)
+    try:
+        return subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    except OSError:
+        return None
+
+
+def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES) -> bool:
     """Run ``stages``; while numba compiles, show a progress bar (on ``console``, stderr by default).
 
+    When a compilation starts, the stages named in ``side`` (:data:`SIDE_STAGES`) are compiled
+    in a second process at the same time and skipped here; the bar lasts until both end (a
+    side process that fails only costs its time: the kernels compile here when first called).
     Returns whether anything was compiled.  An exception in a stage is raised here.
     """
     from numba.core import event
@@ -85,9 +108,16 @@ def warm_up(stages=STAGES, *, console=None) -> bool:
     done, error, compiling = [], [], [False]
     label = [stages[0][0] if stages else ""]
 
+    side = tuple(side or ())
+    skip = {getattr(fn, "__name__", "") for _, fn in stages} & set(side)
+    child = []
+
     def work() -> None:
         try:
             for name, fn in stages:
+                if getattr(fn, "__name__", "") in skip and child and child[0] is not None:
+                    done.append(name)
+                    continue
                 label[0] = name
                 fn()
                 done.append(name)
@@ -102,13 +132,15 @@ def warm_up(stages=STAGES, *, console=None) -> bool:
         while th.is_alive() and not compiling[0]:
             th.join(POLL_S)
         if compiling[0] and th.is_alive():
+            child.append(_spawn_side(sorted(skip)))
+        if compiling[0] and (th.is_alive() or (child and child[0] is not None)):
             console = console or Console(stderr=True)
             with Progress(TextColumn("compiling kernels (first run only): {task.description}"), BarColumn(),
                           MofNCompleteColumn(), TimeElapsedColumn(), console=console) as bar:
                 task = bar.add_task(label[0], total=len(stages))
-                while th.is_alive():
+                while th.is_alive() or (child and child[0] is not None and child[0].poll() is None):
                     th.join(POLL_S)
-                    bar.update(task, completed=len(done), description=label[0])
+                    bar.update(task, completed=len(done), description=label[0] if th.is_alive() else "pair kernels")
                 bar.update(task, completed=len(done), description="done")
         th.join()
     finally:
