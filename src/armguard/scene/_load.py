@@ -9,18 +9,17 @@ changes nothing already loaded.
 from __future__ import annotations
 
 import math
-import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
-import yaml
 from pydantic import ValidationError
 
 from .._errors import ArmguardError, SceneError, SceneFileError
 from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
 from ._scene import CannedTest, Scene
 from ._schema import SHAPE_TYPES, SceneFile
+from ._yaml import read_scene_yaml  # noqa: F401  (part of this module's interface)
 
 __all__ = ["load_scene", "load_scene_file", "scene_from_dict", "scene_from_urdf", "read_srdf_disabled", "where_of"]
 
@@ -499,115 +498,11 @@ def load_scene_file(path) -> Scene:
     return scene_from_dict(read_scene_yaml(path), str(path), path.parent)
 
 
-def read_scene_yaml(path):
-    """The parsed YAML of a scene file; a missing file or bad YAML is a :class:`SceneFileError`."""
-    path = Path(path)
-    file = str(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SceneFileError(file, "", "file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SceneFileError(file, "", f"cannot read the file: {exc}") from None
-    try:
-        data = yaml.load(text, Loader=_SceneLoader)
-    except _DuplicateKey as exc:
-        raise SceneFileError(file, f"line {exc.line}", f"duplicate key {exc.key!r} (first given at line {exc.first}); "
-                             "a key may appear once per mapping") from None
-    except _Alias as exc:
-        raise SceneFileError(file, f"line {exc.line}", "a YAML anchor defined here is reused by an alias; anchors and aliases are not allowed in scene files "
-                             "(an alias can make a small file expand without bound)") from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-        problem = getattr(exc, "problem", None) or str(exc)
-        raise SceneFileError(file, where, f"YAML syntax error: {problem}") from None
-    return data
-
-
-class _DuplicateKey(yaml.YAMLError):
-    def __init__(self, key, line: int, first: int) -> None:
-        super().__init__(f"duplicate key {key!r} at line {line} (first at line {first})")
-        self.key, self.line, self.first = key, line, first
-
-
-class _Alias(yaml.YAMLError):
-    def __init__(self, line: int) -> None:
-        super().__init__(f"alias at line {line}")
-        self.line = line
-
-
-class _SceneLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
-    """YAML's safe loader, stricter for scene files: a key repeated in one mapping is an error
-    (PyYAML keeps the last silently), anchors and aliases are refused, and floats are read as in
-    YAML 1.2 (``1e3``, ``1.5e-3`` are numbers, not strings, so strict number fields accept them)."""
-
-    def construct_document(self, node):
-        seen, stack = set(), [node]
-        while stack:  # an alias is a node reached twice
-            n = stack.pop()
-            if id(n) in seen:
-                raise _Alias(n.start_mark.line + 1)
-            seen.add(id(n))
-            if isinstance(n, yaml.MappingNode):
-                stack.extend(x for kv in n.value for x in kv)
-            elif isinstance(n, yaml.SequenceNode):
-                stack.extend(n.value)
-        return super().construct_document(node)
-
-    def construct_mapping(self, node, deep=False):
-        if isinstance(node, yaml.MappingNode):
-            first: dict = {}
-            for key_node, _ in node.value:
-                if key_node.tag == "tag:yaml.org,2002:merge":
-                    continue
-                key = self.construct_object(key_node, deep=True)
-                line = key_node.start_mark.line + 1
-                try:
-                    if key in first:
-                        raise _DuplicateKey(key, line, first[key])
-                    first[key] = line
-                except TypeError:  # an unhashable key: the base constructor reports it
-                    continue
-        return super().construct_mapping(node, deep=deep)
-
-
-_SceneLoader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
-    list("-+0123456789."),
-)
-
-
 def scene_from_urdf(path, *, srdf=None) -> Scene:
     """The scene of a URDF file (and the SRDF beside it, or ``srdf``), loaded through Pinocchio."""
     from ..model import load_model
 
     return load_model(path, srdf=srdf).scene
-
-
-def _scene_from_urdf_own_parser(path, *, srdf=None) -> Scene:
-    """A scene holding the one robot of a URDF file (named after it), no bodies; optional SRDF pair filters."""
-    from ..kinematics import Robot
-
-    path = Path(path)
-    if not path.is_file():
-        raise SceneFileError(str(path), "", "URDF file not found")
-    try:
-        robot = Robot.from_urdf(path)
-    except SceneFileError:
-        raise
-    except ArmguardError as exc:
-        raise SceneFileError(str(path), "", str(exc)) from None
-    scene = Scene(robot.name)
-    scene.add_robot(robot, _source={"kind": "urdf", "urdf": str(path.resolve())})
-    if srdf is not None:
-        for a, b in read_srdf_disabled(srdf):
-            for ln in (a, b):
-                if ln not in robot.link_names:
-                    raise SceneFileError(str(srdf), "disable_collisions", f"unknown link {ln!r}")
-            scene.disable_pair(f"{robot.name}/{a}", f"{robot.name}/{b}")
-    return scene
 
 
 def load_scene(name_or_path) -> Scene:
