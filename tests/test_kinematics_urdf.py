@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from armguard import KinematicsError, SceneFileError
-from armguard.geometry import Box, ConvexPolyhedron, Prism, Sphere
+from armguard.geometry import Box, ConvexPolyhedron, Cylinder, Sphere
 from armguard.kinematics import Robot, pose_from_xyz_rpy
 
 yourdfpy = pytest.importorskip("yourdfpy")
@@ -140,12 +140,12 @@ def test_synthetic_tree_joint_kinds_and_shapes(synthetic):
     assert robot.joint_names == ("spin", "lift", "elbow_a")  # elbow_b mimics elbow_a
     assert math.isinf(robot.lower[0]) and math.isinf(robot.upper[0])  # continuous
     assert robot.max_velocity[1] == 0.3
-    (box,), (prism,), (sphere,) = robot.link_shapes["base"], robot.link_shapes["turret"], robot.link_shapes["arm_a"]
+    (box,), (cyl,), (sphere,) = robot.link_shapes["base"], robot.link_shapes["turret"], robot.link_shapes["arm_a"]
     assert isinstance(box, Box) and np.allclose(box.half_extents, [0.2, 0.15, 0.05])
-    assert isinstance(prism, Prism) and prism.n_sides == 16 and prism.apothem == 0.05 and prism.half_length == 0.2
+    # a URDF cylinder is an exact cylinder (as coal holds it), its axis the cylinder's (rot x 0.3 of z)
+    assert isinstance(cyl, Cylinder) and cyl.radius == 0.05 and cyl.half_length == 0.2
     assert isinstance(sphere, Sphere) and sphere.radius == 0.07
-    # the prism circumscribes the cylinder: its axis is the cylinder's (rot x 0.3 of z)
-    np.testing.assert_allclose(prism.rotation[:, 2], pose_from_xyz_rpy([0, 0, 0], [0.3, 0, 0])[:3, 2], atol=1e-15)
+    np.testing.assert_allclose(cyl.rotation[:, 2], pose_from_xyz_rpy([0, 0, 0], [0.3, 0, 0])[:3, 2], atol=1e-15)
     q = np.random.default_rng(0).uniform([-3, -0.2, -1.5], [3, 0.5, 1.5], (15, 3))
     expected = _yourdfpy_frames(synthetic, robot, q)
     np.testing.assert_allclose(robot.forward_kinematics(q), robot.X_WB @ expected, atol=1e-12)

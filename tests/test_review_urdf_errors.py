@@ -27,7 +27,7 @@ URDF = """<robot name="r2">
 @pytest.mark.parametrize(
     "geom, what",
     [('<sphere radius="-0.05"/>', "radius"), ('<box size="0 0.1 0.1"/>', "half_extents"),
-     ('<cylinder radius="0.0" length="0.4"/>', "apothem")],
+     ('<cylinder radius="0.0" length="0.4"/>', "radius and half_length must be > 0")],
     ids=["negative-radius", "zero-box", "zero-cylinder"],
 )
 def test_bad_collision_geometry_is_located(tmp_path, geom, what):
@@ -44,4 +44,4 @@ def test_valid_collision_geometry_loads(tmp_path):
     path = tmp_path / "r2.urdf"
     path.write_text(URDF.format(geom='<cylinder radius="0.05" length="0.4"/>'), encoding="utf-8")
     robot = armguard.load_scene(path).robots["r2"]
-    assert [type(s).__name__ for s in robot.link_shapes["l1"]] == ["Sphere", "Prism"]
+    assert [type(s).__name__ for s in robot.link_shapes["l1"]] == ["Sphere", "Cylinder"]

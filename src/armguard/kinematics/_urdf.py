@@ -4,8 +4,8 @@
 parses the URDF (mimic joints included) and builds its collision geometry; armguard's Robot
 keeps its own batched FK compiled from Pinocchio's joint placements.  See
 :mod:`armguard.model` for the checks (a file that does not parse, a missing mesh, a dropped
-collision element: an error naming the file and element) and for the shapes (a cylinder is a
-circumscribed prism, :data:`CYLINDER_PRISM_SIDES` sides).
+collision element: an error naming the file and element) and for the shapes (capsules, boxes,
+spheres, exact cylinders, and meshes as their convex hulls).
 """
 
 from __future__ import annotations
