@@ -28,6 +28,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from numba import carray, njit
 
 from ..kinematics._fk import _fk_kernel
@@ -216,6 +218,10 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     lvl = level if mode == MODE_YESNO else -math.inf  # pair_step / narrow_other: only d <= level matters
     P = pair_a.shape[0]
     track = mode == MODE_LAZY or mode == MODE_ANYTIME  # per-pair flags and bounds for the report
+    # pair_step's flag as runtime booleans: a literal True/False argument makes numba compile a
+    # separate specialisation of pair_step (and everything it inlines) for each, on a cold cache
+    flag_no = track != track
+    flag_yes = track == track
     ws_lo = ws[0:3]
     ws_hi = ws[3:6]
     if mode == MODE_ALL:
@@ -305,7 +311,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                 p = sel[k]
                 a = pair_a[p]
                 b = pair_b[p]
-                d, err = pair_step(p, a, b, False, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
+                d, err = pair_step(p, a, b, flag_no, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
                                    n_eval, stamp_now)
                 if err != 0:
                     break
@@ -350,7 +356,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                     continue
                 a = pair_a[p]
                 b = pair_b[p]
-                d, err = pair_step(p, a, b, True, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
+                d, err = pair_step(p, a, b, flag_yes, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
                                    n_eval, stamp_now)
                 if err != 0:
                     break
@@ -549,5 +555,7 @@ def detect_entry(q, H, MF, MI, SF, SI, prm, iprm, sel):  # pragma: no cover - co
     summary = seg1(SI, H, _K_summary)
     best = carray(at(SF, H[2 * _K_best]), (1, 4))
     st = summary[SUM_STATUS:SUM_STATUS + 1]
-    err = detect_rows(q, 0, 1, H, MF, MI, SF, SI, prm, iprm, sel, best, st)
+    # the row bounds as int64, not literals: the same compiled detect_rows the batches call (a literal
+    # 0 and 1 made numba compile a second, specialised copy of the whole kernel on a cold cache)
+    err = detect_rows(q, np.int64(0), np.int64(1), H, MF, MI, SF, SI, prm, iprm, sel, best, st)
     return summary[SUM_STATUS], summary[SUM_NEVAL], err
