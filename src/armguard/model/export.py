@@ -33,7 +33,6 @@ file's own text.
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -42,11 +41,9 @@ import numpy as np
 from .._errors import SceneError
 from ..geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere
 from ..kinematics import JointType, pose_from_xyz_rpy, xyz_rpy_from_pose
+from ._sidecar import SIDECAR_SECTIONS, generated_sections, sidecar_text, source_notes
 
 __all__ = ["export_scene", "owner_link_name", "SIDECAR_SECTIONS"]
-
-SIDECAR_SECTIONS = ("workspace", "trajectories", "canned_tests")
-"""Sections of a scene file the sidecar keeps (copied as written when the source file is given)."""
 
 
 @dataclass
@@ -425,153 +422,6 @@ def _srdf_text(name: str, scene, m: _Model, notes: dict) -> str:
 
 
 # ------------------------------------------------------------------ the source file's comments
-def _split_comment(line: str) -> tuple[str, str]:
-    """``(content, comment)`` of a YAML line (a ``#`` outside quotes, at the start or after a blank)."""
-    quote = None
-    for k, ch in enumerate(line):
-        if quote:
-            quote = None if ch == quote else quote
-        elif ch in "'\"":
-            quote = ch
-        elif ch == "#" and (k == 0 or line[k - 1] in " \t"):
-            return line[:k].rstrip(), line[k:].strip()  # the comment keeps its '#' (and its "# assumed")
-    return line.rstrip(), ""
-
-
-_TOP = re.compile(r"^([A-Za-z_]\w*):")
-_KEY = re.compile(r"^\s*(?:- )?\{?\s*([A-Za-z_]\w*):")
-_NAME = re.compile(r"\bname:\s*([A-Za-z0-9_.\-]+)")
-
-
-def _source_notes(text: str) -> tuple[str, dict, dict]:
-    """``(header, notes, sections)`` of a scene file's text.
-
-    ``header``: the leading comment block; ``notes[(section, item)]``: the comments of a listed
-    body, robot or payload (``(section, "*")``: all comments of a section, ``("home", robot)`` and
-    ``("self_pairs", robot)``: a robot's comments on those keys); ``sections[key]``: the text of
-    a top-level section with the comment lines just above it.
-    """
-    lines = text.splitlines()
-    k = 0
-    while k < len(lines) and (lines[k].startswith("#") or not lines[k].strip()):
-        k += 1
-    header = "\n".join(ln[2:] if ln.startswith("# ") else ln.lstrip("#") for ln in lines[:k]).strip("\n")
-    tops = [i for i, ln in enumerate(lines) if _TOP.match(ln)]
-    starts = []
-    for i in tops:  # a section begins with the comment lines just above its key
-        start = i
-        while start - 1 >= k and lines[start - 1].startswith("#"):
-            start -= 1
-        starts.append(start)
-    sections, notes = {}, {}
-    for n, i in enumerate(tops):
-        key = _TOP.match(lines[i]).group(1)
-        end = starts[n + 1] if n + 1 < len(tops) else len(lines)
-        while end > i + 1 and not lines[end - 1].strip():
-            end -= 1
-        block = lines[starts[n]:end]
-        sections[key] = "\n".join(block)
-        comments = [c for c in (_split_comment(ln)[1] for ln in block) if c]
-        notes[(key, "*")] = "\n".join(comments)
-        _item_notes(key, lines[i + 1:end], notes)
-    return header, notes, sections
-
-
-def _item_notes(section: str, body: list[str], notes: dict) -> None:
-    starts = [j for j, ln in enumerate(body) if ln.lstrip().startswith("- ")]
-    if not starts:
-        return
-    indent = min(len(body[j]) - len(body[j].lstrip()) for j in starts)
-    starts = [j for j in starts if len(body[j]) - len(body[j].lstrip()) == indent]
-    prev = 0
-    for n, j in enumerate(starts):
-        end = starts[n + 1] if n + 1 < len(starts) else len(body)
-        pre = [_split_comment(ln)[1] for ln in body[prev:j] if ln.strip().startswith("#")]
-        prev = j + 1
-        match = _NAME.search(body[j])
-        if match is None:
-            continue
-        item = match.group(1)
-        by_key: dict[str, list[str]] = {"name": list(pre)}
-        key, pending = "name", []
-        for ln in body[j:end]:
-            content, comment = _split_comment(ln)
-            if not content.strip():
-                if comment:
-                    pending.append(comment)
-                continue
-            km = _KEY.match(content)
-            if km and len(content) - len(content.lstrip()) in (indent, indent + 2):
-                key = km.group(1)
-            by_key.setdefault(key, []).extend(pending)
-            pending = []
-            if comment:
-                by_key[key].append(comment)
-        by_key.setdefault(key, []).extend(pending)
-        general = [c for kk, cs in by_key.items() if kk not in ("home", "self_pairs") for c in cs]
-        notes[(section, item)] = "\n".join(general)
-        notes[("home", item)] = "\n".join(by_key.get("home", []))
-        notes[("self_pairs", item)] = "\n".join(by_key.get("self_pairs", []))
-
-
-# ------------------------------------------------------------------ the sidecar
-def _generated_sections(scene) -> dict:
-    """The sidecar sections from the scene itself (no source file): angles in degrees."""
-    import yaml
-
-    from ..scene import scene_to_dict
-
-    d = scene_to_dict(scene)
-
-    def q(robot, values):  # rad -> deg for revolute joints
-        f = [1.0 if jt is JointType.PRISMATIC else 180.0 / math.pi for jt in scene.robots[robot].joint_types]
-        return [float(f"{x:.12g}") for x in np.asarray(values) * f]
-
-    for t in d.get("trajectories", []):
-        t["waypoints"] = [q(t["robot"], w) for w in t["waypoints"]]
-    for c in d.get("canned_tests", []):
-        c["setup"] = {r: q(r, v) for r, v in c["setup"].items()}
-        c["motion"]["goal"] = q(c["robot"], c["motion"]["goal"])
-    out = {}
-    for key in SIDECAR_SECTIONS:
-        if d.get(key):
-            out[key] = yaml.safe_dump({key: d[key]}, sort_keys=False, default_flow_style=None, width=120).rstrip()
-    return out
-
-
-def _sidecar_text(name: str, scene, header: str, sections: dict, units: dict) -> str:
-    import yaml
-
-    deg = units.get("angle", "rad") == "deg"
-    mm = units.get("length", "m") == "mm"
-    out = [f"# {ln}".rstrip() for ln in header.split("\n")] if header else []
-    if out:
-        out.append("#")
-    out += ["# The sidecar of the model: what URDF cannot say (docs/models.md).  Geometry, kinematics,",
-            f"# limits and speeds are in {name}.urdf; groups, disabled pairs and homes in {name}.srdf.",
-            "armguard_scene: 1", f"name: {name}"]
-    if scene.description:
-        out.append(yaml.safe_dump({"description": scene.description}, width=10**6).rstrip())
-    out += [f"units: {{angle: {'deg' if deg else 'rad'}, length: {'mm' if mm else 'm'}}}",
-            f"model: {{urdf: {name}.urdf, srdf: {name}.srdf}}"]
-    if "workspace" in sections:
-        out += ["", sections["workspace"]]
-    acc = []
-    for rname, robot in scene.robots.items():
-        for j, jt, a in zip(robot.joint_names, robot.joint_types, robot.max_acceleration):
-            if math.isfinite(a):
-                f = (1e3 if mm else 1.0) if jt is JointType.PRISMATIC else (180.0 / math.pi if deg else 1.0)
-                acc.append(f"  {rname}/{j}: {{max_acceleration: {float(a) * f:.12g}}}")
-    if acc:
-        unit = "deg/s^2" if deg else "rad/s^2"
-        out += ["", f"# Joint accelerations for trapezoidal profiles ({unit}; prismatic joints "
-                f"{'mm' if mm else 'm'}/s^2): URDF has no place for them.", "joints:", *acc]
-    for key in SIDECAR_SECTIONS[1:]:
-        if key in sections:
-            out += ["", sections[key]]
-    return "\n".join(out) + "\n"
-
-
 def export_scene(scene, out_dir, *, name: str | None = None, source=None) -> dict:
     """Write ``scene`` as ``<name>.urdf``, ``<name>.srdf``, ``<name>.yaml`` and ``meshes/*.obj`` in ``out_dir``.
 
@@ -587,11 +437,11 @@ def export_scene(scene, out_dir, *, name: str | None = None, source=None) -> dic
     header, notes, sections, units = "", {}, {}, {"angle": "deg", "length": "m"}
     if source is not None:
         text = Path(source).read_text(encoding="utf-8")
-        header, notes, sections = _source_notes(text)
+        header, notes, sections = source_notes(text)
         units = {"angle": "rad", "length": "m", **(yaml.safe_load(text).get("units") or {})}
         sections = {k: v for k, v in sections.items() if k in SIDECAR_SECTIONS}
     else:
-        sections = _generated_sections(scene)
+        sections = generated_sections(scene)
     model = _build(scene, notes)
     meshes: dict[str, str] = {}
     frames = notes.get(("frames", "*"), "")
@@ -601,7 +451,7 @@ def export_scene(scene, out_dir, *, name: str | None = None, source=None) -> dic
         f"{Path(source).name if source else name}; edit this file from now on.  Link frames are DH joint frames.")
     urdf = _urdf_text(name, model, urdf_header, meshes)
     srdf = _srdf_text(name, scene, model, notes)
-    sidecar = _sidecar_text(name, scene, header, sections, units)
+    sidecar = sidecar_text(name, scene, header, sections, units)
     (out / "meshes").mkdir(parents=True, exist_ok=True)
     paths = {"urdf": out / f"{name}.urdf", "srdf": out / f"{name}.srdf", "yaml": out / f"{name}.yaml", "meshes": []}
     for key, text in (("urdf", urdf), ("srdf", srdf), ("yaml", sidecar)):
