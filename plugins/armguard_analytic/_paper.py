@@ -387,44 +387,6 @@ def _paper_rows(Q, T, E, R, mode, margin, hermes, want, out_d, out_p, out_hit, e
     return -1
 
 
-# ---------------------------------------------------------------- one pair, from shapes in W
-def _one_body(polytope):
-    from armguard.scene import Scene, compile_scene
-
-    scene = Scene("paper")
-    scene.add_body("obstacle", polytope)
-    cs = compile_scene(scene)
-    F = len(cs.face_vert_start) - 1
-    fn, fd = np.zeros((F, 3)), np.zeros(F)
-    for f in range(F):
-        fn[f], fd[f] = _paper_face(cs.verts[cs.face_verts[cs.face_vert_start[f]:cs.face_vert_start[f + 1]]])
-    c = cs.verts.mean(axis=0)
-    sph = np.array([[*c, np.linalg.norm(cs.verts - c, axis=1).max()]])
-    return cs, fn, fd, sph
-
-
-def paper_capsule_polytope(capsule, polytope, tol=DEFAULT_TOLERANCES):
-    """Ranger §2/§4 for one link ``capsule`` (``p1`` its distal end) against one polytope (W):
-    ``(distance (m), p_WA (3,), p_WB (3,))``."""
-    cs, fn, fd, _ = _one_body(polytope)
-    out = np.zeros(9)
-    ev = cs.verts[cs.edges[:, 1]] - cs.verts[cs.edges[:, 0]]
-    eW, _ = _unit_rows(ev, tol.length)
-    d = _face_edge(tuple(capsule.p0), tuple(capsule.p1), float(capsule.radius), 0, np.ascontiguousarray(cs.verts),
-                   cs.elem_face_start, cs.face_vert_start, cs.face_verts, fn, fd, cs.elem_edge_start,
-                   np.ascontiguousarray(cs.edges.reshape(-1, 2)), np.ascontiguousarray(eW),
-                   np.linalg.norm(ev, axis=1), out, float(tol.length), float(tol.parallel))
-    return float(d), out[0:3].copy(), out[3:6].copy()
-
-
-def hermes_link_obstacle(capsule, polytope, margin: float = 0.0, tol=DEFAULT_TOLERANCES) -> bool:
-    """Hermes's link–obstacle module for one link ``capsule`` against one closed convex polytope (W)."""
-    cs, _, _, sph = _one_body(polytope)
-    return bool(_hermes_hit(tuple(capsule.p0), tuple(capsule.p1), float(capsule.radius) + float(margin), 0,
-                            np.ascontiguousarray(cs.planes.reshape(-1, 4)), cs.elem_plane_start, sph,
-                            float(tol.parallel)))
-
-
 # ---------------------------------------------------------------- the Checker
 def _unit_rows(v, eps):
     n = np.linalg.norm(v, axis=1)
@@ -626,3 +588,7 @@ class PaperChecker(CheckerBase):
 
     def min_distance_many(self, Q) -> np.ndarray:
         return self.pair_distances_many(Q).min(axis=1, initial=np.inf)
+
+
+# one pair, from shapes in W (their own module; part of this one's interface)
+from ._paper_pair import hermes_link_obstacle, paper_capsule_polytope  # noqa: E402
