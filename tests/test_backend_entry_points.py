@@ -96,3 +96,22 @@ def test_a_verdicts_only_backend_says_what_it_cannot_answer():
     assert det.collides_many(Q).shape == (4,)
     with pytest.raises(armguard.BackendError, match="verdicts only"):
         det.check(scene.default_q())
+
+
+def test_a_scene_with_an_exact_cylinder_exports_and_checks_on_coal():
+    from armguard.geometry import Cylinder
+
+    arm = Robot.from_dh("arm", [(0.5, 0.0, 0.0)], lower=[-3], upper=[3],
+                        link_shapes={"link1": [Capsule([-0.5, 0, 0], [0, 0, 0], 0.05)]})
+    scene = Scene("cell")
+    scene.add_robot(arm)
+    scene.add_body("post", [Cylinder([0.3, 0.4, 0.0], np.eye(3), 0.1, 0.5)])
+    det_a = armguard.Detector(scene, threshold=0.0)
+    det_c = armguard.Detector(scene, threshold=0.0, backend="coal")
+    assert not det_c.model.notes  # the cylinder reaches coal as a coal.Cylinder, no representation note
+    for q in np.linspace(-3, 3, 25)[:, None]:
+        a, c = det_a.check(q).nearest.distance, det_c.check(q).nearest.distance
+        if a > 1e-6:
+            assert c == pytest.approx(a, abs=1e-6)
+        else:
+            assert c <= 1e-6

@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import SceneError
-from ..geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere
+from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
 from ..kinematics import JointType, pose_from_xyz_rpy, xyz_rpy_from_pose
 from ._sidecar import SIDECAR_SECTIONS, generated_sections, sidecar_text, source_notes
 
@@ -280,6 +280,10 @@ def _collision(shape, cname: str, meshes: dict) -> tuple[list[str], str | None]:
         geom, mark = f'<cylinder radius="{_num(shape.radius)}" length="{_num(L)}"/>', "capsule"
     elif isinstance(shape, Box):
         X, geom, mark = _pose(shape.center, shape.rotation), f'<box size="{_vec(2.0 * shape.half_extents)}"/>', None
+    elif isinstance(shape, Cylinder):  # an exact cylinder (unmarked: Pinocchio gives coal.Cylinder)
+        X = _pose(shape.center, shape.rotation)
+        geom = f'<cylinder radius="{_num(shape.radius)}" length="{_num(2.0 * shape.half_length)}"/>'
+        mark = None
     elif isinstance(shape, Prism):
         local = Prism(np.zeros(3), np.eye(3), shape.apothem, shape.half_length, shape.n_sides).as_polyhedron()
         X, mark = _pose(shape.center, shape.rotation), "convex"
