@@ -36,6 +36,7 @@ import math
 
 from numba import njit
 
+from ._pair_epa import triangle_normal
 from ._pair_gjk import GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _closest_simplex, _scan
 from ._pair_segment_segment import write_rounded
 
@@ -277,23 +278,9 @@ def _complete(pa, ca, pb, cb, work, n, eps):  # pragma: no cover - compiled
         if n == 2:
             return False
     # a triangle: add the support along the normal on the origin's side (the other if flat there)
-    o1 = _S0 + 9
-    o2 = _S0 + 18
-    ux = work[o1] - work[_S0]
-    uy = work[o1 + 1] - work[_S0 + 1]
-    uz = work[o1 + 2] - work[_S0 + 2]
-    vx = work[o2] - work[_S0]
-    vy = work[o2 + 1] - work[_S0 + 1]
-    vz = work[o2 + 2] - work[_S0 + 2]
-    nx = uy * vz - uz * vy
-    ny = uz * vx - ux * vz
-    nz = ux * vy - uy * vx
-    nn = math.sqrt(nx * nx + ny * ny + nz * nz)
-    if not nn > 0.0:
+    nx, ny, nz, ok = triangle_normal(work, _S0, _S0 + 9, _S0 + 18)
+    if not ok:
         return False
-    nx /= nn
-    ny /= nn
-    nz /= nn
     side = -(nx * work[_S0] + ny * work[_S0 + 1] + nz * work[_S0 + 2])  # the origin's offset
     for attempt in range(2):
         sg = 1.0 if (side >= 0.0) == (attempt == 0) else -1.0
@@ -310,23 +297,9 @@ def _face(w, f, i0, i1, i2, tol):  # pragma: no cover - compiled
     """Face ``f`` = triangle ``(i0, i1, i2)`` (counter-clockwise seen from outside); False when it is
     degenerate or its plane has the origin outside (by more than ``tol``)."""
     o0 = _V0 + 9 * i0
-    o1 = _V0 + 9 * i1
-    o2 = _V0 + 9 * i2
-    ux = w[o1] - w[o0]
-    uy = w[o1 + 1] - w[o0 + 1]
-    uz = w[o1 + 2] - w[o0 + 2]
-    vx = w[o2] - w[o0]
-    vy = w[o2 + 1] - w[o0 + 1]
-    vz = w[o2 + 2] - w[o0 + 2]
-    nx = uy * vz - uz * vy
-    ny = uz * vx - ux * vz
-    nz = ux * vy - uy * vx
-    nn = math.sqrt(nx * nx + ny * ny + nz * nz)
-    if not nn > 0.0:
+    nx, ny, nz, ok = triangle_normal(w, o0, _V0 + 9 * i1, _V0 + 9 * i2)
+    if not ok:
         return False
-    nx /= nn
-    ny /= nn
-    nz /= nn
     d = nx * w[o0] + ny * w[o0 + 1] + nz * w[o0 + 2]
     if d < -tol:
         return False

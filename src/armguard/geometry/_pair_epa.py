@@ -61,13 +61,12 @@ def _put_vertex(w, k, pa, pb, ia, ib):  # pragma: no cover - compiled
     w[o + 4] = ib
 
 
-@njit(cache=True)
-def _put_face(w, f, i0, i1, i2):  # pragma: no cover - compiled
-    """Face ``f`` = triangle ``(i0, i1, i2)`` (counter-clockwise seen from outside).  Returns
-    False when it is degenerate (no normal) or its plane does not have the origin inside."""
-    o0 = _V0 + 5 * i0
-    o1 = _V0 + 5 * i1
-    o2 = _V0 + 5 * i2
+@njit(cache=True, inline="always")
+def triangle_normal(w, o0, o1, o2):  # pragma: no cover - compiled
+    """Unit normal ``(nx, ny, nz, ok)`` of the triangle whose corners are ``w[o0:o0+3]``,
+    ``w[o1:o1+3]``, ``w[o2:o2+3]`` (right-handed: ``(v1 - v0) x (v2 - v0)``); ``ok`` False when it
+    is degenerate.  Shared by both EPA variants (vertex graphs here, support functions in
+    ``_pair_cylinder``)."""
     ux = w[o1] - w[o0]
     uy = w[o1 + 1] - w[o0 + 1]
     uz = w[o1 + 2] - w[o0 + 2]
@@ -79,10 +78,18 @@ def _put_face(w, f, i0, i1, i2):  # pragma: no cover - compiled
     nz = ux * vy - uy * vx
     nn = math.sqrt(nx * nx + ny * ny + nz * nz)
     if not nn > 0.0:
+        return 0.0, 0.0, 0.0, False
+    return nx / nn, ny / nn, nz / nn, True
+
+
+@njit(cache=True)
+def _put_face(w, f, i0, i1, i2):  # pragma: no cover - compiled
+    """Face ``f`` = triangle ``(i0, i1, i2)`` (counter-clockwise seen from outside).  Returns
+    False when it is degenerate (no normal) or its plane does not have the origin inside."""
+    o0 = _V0 + 5 * i0
+    nx, ny, nz, ok = triangle_normal(w, o0, _V0 + 5 * i1, _V0 + 5 * i2)
+    if not ok:
         return False
-    nx /= nn
-    ny /= nn
-    nz /= nn
     d = nx * w[o0] + ny * w[o0 + 1] + nz * w[o0 + 2]
     if d < 0.0:
         return False
