@@ -6,6 +6,11 @@ cache even after an edit that makes LLVM crash when it compiles from scratch (se
 see :mod:`armguard.detect._step`).  This test compiles every detector entry point in a fresh
 process with a fresh, empty cache directory and checks the process exits normally and computes
 the same answers as this (possibly warm-cached) process.
+
+The process compiles the way a first run does (``armguard.cli._compile``): the leaf kernels first,
+with the signatures the warm-up plan gives them, then the detector's chain.  It records which
+kernels the chain still compiles: a planned leaf among them means its planned signature no
+longer matches the chain's call, and the first run's two processes would compile it twice.
 """
 
 from __future__ import annotations
@@ -18,6 +23,7 @@ import textwrap
 
 import numpy as np
 
+from armguard.cli._compile import LEAVES_MAIN, LEAVES_SIDE
 from armguard.detect import Detector
 from armguard.scene import load_scene
 
@@ -25,9 +31,24 @@ _SCRIPT = textwrap.dedent(
     """
     import json, sys
     import numpy as np
+    from numba.core import event
+    from armguard.cli import _compile as plan
     from armguard.detect import Detector
     from armguard.scene import load_scene
 
+    plan._leaves_main()
+    plan._leaves_side()
+    compiled = []
+
+    class Listener(event.Listener):
+        def on_start(self, ev):
+            d = ev.data["dispatcher"]
+            compiled.append((d.py_func.__module__, d.py_func.__name__))
+
+        def on_end(self, ev):
+            pass
+
+    event.register("numba:compile", Listener())
     scene = load_scene("ranger")
     det = Detector(scene, threshold=0.05, active="left_arm")
     q = np.asarray(json.loads(sys.argv[1]))
@@ -39,6 +60,7 @@ _SCRIPT = textwrap.dedent(
         "yesno": det.collides_many(q[None, :]).tolist(),
         "brute": det.check_many_bruteforce(q[None, :]).min_distance.tolist(),
         "pairs": det.pair_distances(q).distance.tolist(),
+        "compiled": compiled,
     }
     print(json.dumps(out))
     """
@@ -61,3 +83,7 @@ def test_detector_kernels_compile_from_an_empty_cache(tmp_path):
     assert got["yesno"] == det.collides_many(q[None, :]).tolist()
     assert got["brute"] == det.check_many_bruteforce(q[None, :]).min_distance.tolist()
     assert got["pairs"] == det.pair_distances(q).distance.tolist()
+    planned = {(m, n) for m, n, _ in LEAVES_MAIN + LEAVES_SIDE}
+    again = planned & {tuple(x) for x in got["compiled"]}
+    assert not again, f"the warm-up plan's signatures no longer match the detector's calls of {sorted(again)}"
+    assert ("armguard.detect._kernel", "detect_rows") in {tuple(x) for x in got["compiled"]}  # the listener saw the chain

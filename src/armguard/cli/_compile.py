@@ -69,37 +69,108 @@ def _verifier() -> None:
     Verifier(sc, robot=traj.robot_name).verify(traj, name=name)
 
 
-STAGES = (("detector kernels", _detector), ("verifier kernels", _verifier), ("geometry kernels", _geometry))
-"""The warm-up stages: (label, function); the detector's first, so that a compilation starts at once
-and the side stages (last here) are already compiling in their own process when they come up."""
-SIDE_STAGES = ("_geometry",)
+# ---- the detector's largest leaf kernels, compiled ahead of it in two processes at once
+#
+# The detector's fused kernel is one chain of compiled calls (detect_entry -> detect_rows ->
+# pair_step -> narrow_other -> pair_distance -> the pair kernels): on a cold cache numba compiles
+# it in one thread, ~80 s on this project's 2-core machines, three quarters of it in a few leaf
+# kernels that share nothing.  Compiled first with the signatures the chain calls them with (two
+# in a second process, three here), they are in numba's on-disk cache when the chain reaches them,
+# and it only loads them.  A signature that no longer matches the chain's call costs time, never
+# an answer: the chain then compiles that kernel itself (tests/test_compile_plan.py checks they
+# all match).  Codes: F1/F2 float64 C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64.
+LEAVES_SIDE = (
+    ("armguard.geometry._pair_cylinder", "support_pair", "F2 F1 f F2 F1 f F1 F1 f f i f"),
+    ("armguard.detect._narrow", "_capsule_polytope", "F2 f i F2 F2 I2 F2 F2 I1 I1 I1 f F1 f f f i f"),
+)
+"""Leaf kernels compiled in the second process: (module, function, signature codes)."""
+LEAVES_MAIN = (
+    ("armguard.geometry._pair_epa", "convex_convex_fast", "F2 F2 F2 I1 I2 f F2 F2 F2 I1 I2 f F1 F1 f f f i f f"),
+    ("armguard.detect._step", "evaluate_pair", "i i I1 F1 I1 F1 I1 F1 f f f i"),
+    ("armguard.detect._narrow", "narrow_flat", "i i I1 F1 I1 F1 F1 f f f"),
+)
+"""Leaf kernels compiled here while the second process compiles :data:`LEAVES_SIDE`."""
+
+
+def signature(codes: str) -> tuple:
+    """The numba argument types of a signature written in :data:`LEAVES_SIDE`'s codes."""
+    from numba import types
+
+    kinds = {"F1": types.float64[::1], "F2": types.float64[:, ::1], "I1": types.int64[::1],
+             "I2": types.int64[:, ::1], "f": types.float64, "i": types.int64}
+    try:
+        return tuple(kinds[c] for c in codes.split())
+    except KeyError as exc:
+        raise ValueError(f"unknown signature code {exc.args[0]!r} in {codes!r} (known: {sorted(kinds)})") from None
+
+
+def _compile_leaves(leaves) -> None:
+    import importlib
+
+    for module, name, codes in leaves:
+        getattr(importlib.import_module(module), name).compile(signature(codes))
+
+
+def _leaves_main() -> None:
+    _compile_leaves(LEAVES_MAIN)
+
+
+def _leaves_side() -> None:
+    _compile_leaves(LEAVES_SIDE)
+
+
+STAGES = (("pair kernels", _leaves_main), ("detector kernels", _detector), ("verifier kernels", _verifier),
+          ("geometry kernels", _geometry))
+"""The warm-up stages: (label, function), in order; a compilation starts at once in the first."""
+SIDE_STAGES = ("_leaves_side", "_geometry")
 """Stages compiled in a second process beside the others when compiling starts (names of this
-module's functions): :func:`armguard.geometry.distance`'s pair kernels share nothing with the
-detector's fused kernel, so on two cores both compile at once; each process writes numba's
-on-disk cache and the main one then loads the side stages' kernels from it."""
+module's functions, in order): on two cores both processes compile at once; each writes numba's
+on-disk cache and the other loads what it finds there.  The side process reports each stage's
+end on its stdout; a main stage listed in :data:`SIDE_WAITS` first waits for the side stage it
+needs, and a main stage of the same name as a side stage is skipped."""
+SIDE_WAITS = {"_detector": "_leaves_side"}
+"""Main stage -> the side stage it waits for (its kernels' callees), when a side process runs."""
+SIDE_WAIT_S = 600.0
+"""The longest a main stage waits for the side process (s); then it compiles what it needs itself."""
 
 
 def _spawn_side(names):
-    """Start a process compiling the stages ``names`` (None when there are none or it cannot start)."""
+    """Start a process compiling the stages ``names`` (None when there are none or it cannot start);
+    it prints each stage's name on its stdout when that stage ends."""
     import subprocess
     import sys
 
     if not names:
         return None
-    code = "from armguard.cli import _compile as c\n" + "".join(f"c.{n}()\n" for n in names)
+    code = "from armguard.cli import _compile as c\n" + "".join(f"c.{n}(); print({n!r}, flush=True)\n" for n in names)
     try:
-        return subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        return subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                                text=True)
     except OSError:
         return None
 
 
-def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES) -> bool:
+def _wait_for(child, name: str, seen: set, timeout_s: float) -> None:
+    """Block until the side process ``child`` reports stage ``name`` done (or ends, or ``timeout_s``)."""
+    import time
+
+    t_end = time.monotonic() + timeout_s
+    while name not in seen and time.monotonic() < t_end:
+        line = child.stdout.readline()
+        if not line:  # it ended (or failed): whatever it did not compile compiles here
+            return
+        seen.add(line.strip())
+
+
+def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES, waits=None) -> bool:
     """Run ``stages``; while numba compiles, show a progress bar (on ``console``, stderr by default).
 
-    When a compilation starts, the stages named in ``side`` (:data:`SIDE_STAGES`) are compiled
-    in a second process at the same time and skipped here; the bar lasts until both end (a
-    side process that fails only costs its time: the kernels compile here when first called).
-    Returns whether anything was compiled.  An exception in a stage is raised here.
+    When a compilation starts, the stages named in ``side`` (:data:`SIDE_STAGES`) are compiled in
+    a second process at the same time; a stage here of the same name is skipped, and one named in
+    ``waits`` (:data:`SIDE_WAITS`) first waits for the side stage it needs.  The bar lasts until
+    both processes end (a side process that fails only costs its time: the kernels compile here
+    when first called).  Returns whether anything was compiled.  An exception in a stage is
+    raised here.
     """
     from numba.core import event
     from rich.console import Console
@@ -107,17 +178,24 @@ def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES) -> bool:
 
     done, error, compiling = [], [], [False]
     label = [stages[0][0] if stages else ""]
-
     side = tuple(side or ())
-    skip = {getattr(fn, "__name__", "") for _, fn in stages} & set(side)
-    child = []
+    waits = dict(SIDE_WAITS if waits is None else waits)
+    names = {getattr(fn, "__name__", "") for _, fn in stages}
+    # a side process only when it has work that one of these stages would otherwise do
+    side = side if (names & set(side)) or (names & set(waits)) else ()
+    child, reported = [], set()
 
     def work() -> None:
         try:
             for name, fn in stages:
-                if getattr(fn, "__name__", "") in skip and child and child[0] is not None:
+                fname = getattr(fn, "__name__", "")
+                running = child and child[0] is not None
+                if running and fname in side:
                     done.append(name)
                     continue
+                if running and fname in waits:
+                    label[0] = f"{name} (waiting for the pair kernels)"
+                    _wait_for(child[0], waits[fname], reported, SIDE_WAIT_S)
                 label[0] = name
                 fn()
                 done.append(name)
@@ -132,7 +210,7 @@ def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES) -> bool:
         while th.is_alive() and not compiling[0]:
             th.join(POLL_S)
         if compiling[0] and th.is_alive():
-            child.append(_spawn_side(sorted(skip)))
+            child.append(_spawn_side(side))
         if compiling[0] and (th.is_alive() or (child and child[0] is not None)):
             console = console or Console(stderr=True)
             with Progress(TextColumn("compiling kernels (first run only): {task.description}"), BarColumn(),
@@ -140,11 +218,13 @@ def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES) -> bool:
                 task = bar.add_task(label[0], total=len(stages))
                 while th.is_alive() or (child and child[0] is not None and child[0].poll() is None):
                     th.join(POLL_S)
-                    bar.update(task, completed=len(done), description=label[0] if th.is_alive() else "pair kernels")
+                    bar.update(task, completed=len(done), description=label[0] if th.is_alive() else "geometry kernels")
                 bar.update(task, completed=len(done), description="done")
         th.join()
     finally:
         event.unregister("numba:compile", listener)
+        if child and child[0] is not None and child[0].stdout is not None:
+            child[0].stdout.close()
     if error:
         raise error[0]
     return compiling[0]
