@@ -33,47 +33,12 @@ CLEARANCE_SAMPLES = 400
 
 
 def hermes_table(max_speed: float, max_distance: float = HERMES_MAX_STOPPING_DISTANCE, n_ranges: int = HERMES_RANGES):
-    """Hermes's stepwise stopping distance up to ``max_speed`` (m/s), with 0 at rest.
-
-    Range ``k`` of ``n_ranges`` equal speed ranges gets ``max_distance (k + 1) / n_ranges``; speeds
-    up to :data:`AT_REST` get 0.
-    """
+    """Hermes's stepwise stopping distance up to ``max_speed`` (m/s), with 0 at rest (speeds up to
+    :data:`AT_REST`): :meth:`armguard.verify.StoppingDistance.hermes`."""
     from ..verify import StoppingDistance
 
-    vmax = max(float(max_speed), 2.0 * AT_REST)
-    edges = [0.0, AT_REST] + [vmax * k / n_ranges for k in range(1, n_ranges + 1)]
-    edges = sorted(set(e for e in edges if e == 0.0 or e >= AT_REST))
-    table = [0.0] + [max_distance * min(n_ranges, max(1, int(np.ceil(e * n_ranges / vmax - 1e-9)))) / n_ranges
-                     for e in edges[2:]]
-    return StoppingDistance(tuple(edges), (0.0, 1e300), tuple((d,) for d in table))
-
-
-class Subdivided:
-    """A trajectory seen as ``n`` pieces per segment (the same path and time law, finer intervals)."""
-
-    def __init__(self, trajectory, n: int = SUBDIVISIONS) -> None:
-        self._t = trajectory
-        self.n = int(n)
-        self.robot_name = trajectory.robot_name
-        self.joint_names = trajectory.joint_names
-        self.duration = trajectory.duration
-        self.name = getattr(trajectory, "name", None)
-
-    def at(self, t):
-        return self._t.at(t)
-
-    def velocity(self, t):
-        return self._t.velocity(t)
-
-    def sample(self, *args, **kwargs):
-        return self._t.sample(*args, **kwargs)
-
-    def segments(self):
-        for t0, t1, _q0, _q1 in self._t.segments():
-            ts = np.linspace(float(t0), float(t1), self.n + 1)
-            qs = np.asarray(self._t.at(ts), dtype=np.float64)
-            for k in range(self.n):
-                yield ts[k], ts[k + 1], qs[k], qs[k + 1]
+    vmax = max(float(max_speed), 2.0 * AT_REST * n_ranges)
+    return StoppingDistance.hermes(vmax, max_distance, n_ranges, at_rest=AT_REST)
 
 
 def moving_arm_clearance(scene, trajectory, samples: int = CLEARANCE_SAMPLES) -> float:
@@ -92,7 +57,7 @@ def moving_arm_clearance(scene, trajectory, samples: int = CLEARANCE_SAMPLES) ->
     return float(np.min(np.asarray(det.check_many(np.array(rows)).min_distance, dtype=np.float64)))
 
 
-def first_collision_text(r, contact: float) -> str:
+def first_collision_text(r) -> str:
     """The first collision, worded as a contact or as a stopping-distance violation."""
     c = r.first_collision
     if c is None:
@@ -100,10 +65,16 @@ def first_collision_text(r, contact: float) -> str:
     who = c.link or c.payload or c.a
     feat = f" {c.feature}" if c.feature is not None else ""
     p = c.p_W
-    where = f"{who} / {c.obstacle}{feat} at ({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f}) m, t = {c.time:.2f} s"
-    if c.distance > contact and r.stopping_distance > 0.0:
-        return f"within stopping distance {r.stopping_distance * 1e3:.0f} mm: {c.distance * 1e3:.1f} mm, {where}"
-    return f"contact (distance {c.distance * 1e3:.1f} mm): {where}"
+    return f"{c.describe()}, {who} / {c.obstacle}{feat} at ({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f}) m, t = {c.time:.2f} s"
+
+
+def verdict_text(r) -> str:
+    """The verdict column: SAFE, INCOMPLETE, COLLISION (a contact) or UNSAFE (stopping distance)."""
+    c = r.first_collision
+    if r.status.value == "collision" and c is not None and c.kind.value == "stopping distance":
+        return "[dark_orange]UNSAFE (stopping distance)[/]"
+    colour = {"safe": "green", "collision": "red", "incomplete": "yellow"}[r.status.value]
+    return f"[{colour}]{r.status.value.upper()}[/]"
 
 
 @main.command("demo")
@@ -121,10 +92,9 @@ def demo_cmd(out_dir, scenes, stopping_distances) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    from .._tolerance import DEFAULT_TOLERANCES
     from ..models import builtin_names
     from ..scene import load_scene
-    from ..verify import Verifier
+    from ..verify import Subdivided, Verifier
     from ._compile import warm_up
 
     console = Console()
@@ -138,9 +108,7 @@ def demo_cmd(out_dir, scenes, stopping_distances) -> None:
                 "first collision / stopping-distance violation: link / object feature at point, time",
                 "min clearance (moving arm)", "time"):
         table.add_column(col, overflow="fold")
-    colours = {"safe": "green", "collision": "red", "incomplete": "yellow"}
     warm_up(console=console)
-    contact = max(DEFAULT_TOLERANCES.length, DEFAULT_TOLERANCES.verify_contact)
     t_all = time.perf_counter()
     for name in scenes or builtin_names():
         sc = load_scene(name)
@@ -157,7 +125,7 @@ def demo_cmd(out_dir, scenes, stopping_distances) -> None:
                 if mode == "hermes":
                     plain = v.verify(traj, name=tname)
                     sdf = hermes_table(plain.details.max_speed, sd)
-                    r = v.verify(Subdivided(traj), stopping_distance=sdf, name=tname)
+                    r = v.verify(Subdivided(traj, SUBDIVISIONS), stopping_distance=sdf, name=tname)
                     label, stem_sd = f"Hermes ≤ {sd * 1e3:.0f} mm", f"hermes{sd * 1e3:.0f}mm"
                 else:
                     r = v.verify(traj, stopping_distance=sd, name=tname)
@@ -166,8 +134,7 @@ def demo_cmd(out_dir, scenes, stopping_distances) -> None:
                 stem = f"{name}__{tname}__{stem_sd}"
                 r.save_json(out / f"{stem}.json")
                 r.plot(out / f"{stem}.png")
-                s = r.status.value
-                table.add_row(name, tname, label, f"[{colours[s]}]{s.upper()}[/]", first_collision_text(r, contact),
+                table.add_row(name, tname, label, verdict_text(r), first_collision_text(r),
                               f"{clearance * 1e3:.1f} mm", f"{dt * 1e3:.0f} ms")
     console.print(table)
     console.print(f"reports and plots in {out}/ ({time.perf_counter() - t_all:.1f} s in all)")

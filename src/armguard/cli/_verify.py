@@ -44,6 +44,9 @@ def resolve_trajectories(scene, specs):
 @click.option("--frequency", type=float, default=None, help="Sampled mode: checks per second along the time law (Hz).")
 @click.option("--joint-step", type=float, default=None, help="Sampled mode: joint-space step (rad; default 0.05).")
 @click.option("--stopping-distance", type=float, default=0.0, show_default=True, help="Obstacles grow by this (m).")
+@click.option("--speed-dependent", is_flag=True,
+              help="Hermes's stepwise stopping distance instead of a constant one: 10 speed ranges reaching "
+                   "--stopping-distance at the trajectory's top speed, 0 at rest (each segment split in 8).")
 @click.option("--threshold", type=float, default=None, help="Warning threshold drawn on the plot (m; default 0.05).")
 @click.option("--robot", default=None, help="The moving robot (default: the trajectory's).")
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="Write the JSON report here.")
@@ -52,8 +55,8 @@ def resolve_trajectories(scene, specs):
 @click.option("--scheduler", default=None, help="Run on an existing Dask cluster (scheduler address).")
 @click.option("--terrain", "terrain_file", type=click.Path(dir_okay=False), default=None,
               help="Also verify against a sensed terrain file (certified; serial; armguard.terrain.load_terrain).")
-def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_distance, threshold, robot, report_path,
-               plot_path, workers, scheduler, terrain_file) -> None:
+def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_distance, speed_dependent, threshold, robot,
+               report_path, plot_path, workers, scheduler, terrain_file) -> None:
     """Verify TRAJECTORIES (.yaml files, canned names of SCENE, or 'all') in SCENE.
 
     Exit status: 0 when every trajectory is safe, 1 when one collides or could not be verified.
@@ -66,13 +69,22 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
     from ..scene import load_scene
     from ..verify import verify_many
 
+    from ._compile import warm_up
+    from ._demo import verdict_text
+
     console = Console()
     sc = load_scene(scene)
     items = resolve_trajectories(sc, trajectories)
-    console.print("compiling kernels (first run only)…", style="dim")
+    warm_up(console=console)
     kwargs = dict(stopping_distance=stopping_distance, method=method, frequency=frequency, joint_step=joint_step,
                   robot=robot, threshold=threshold)
-    if terrain_file is not None:  # the terrain category (armguard.terrain), trajectory by trajectory
+    if speed_dependent:
+        if terrain_file is not None or workers or scheduler:
+            raise click.UsageError("--speed-dependent runs here, serially: not with --terrain, --workers or --scheduler")
+        if stopping_distance <= 0.0:
+            raise click.UsageError("--speed-dependent needs --stopping-distance > 0 (m): the value at the top speed")
+        reports = _speed_dependent(sc, items, kwargs)
+    elif terrain_file is not None:  # the terrain category (armguard.terrain), trajectory by trajectory
         from ..terrain import verify_items
 
         reports = verify_items(sc, items, terrain_file, **kwargs)
@@ -84,10 +96,9 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
                                   progress=lambda done, total: bar.update(task, completed=done), **kwargs)
     else:
         reports = verify_many(sc, items, **kwargs)
-    colours = {"safe": "green", "collision": "red", "incomplete": "yellow"}
     for r in reports:
-        console.rule(f"[bold]{r.trajectory}[/] — [{colours[r.status.value]}]{r.status.value.upper()}[/]")
-        console.print(r.summary(), highlight=False)
+        console.rule(f"[bold]{r.trajectory}[/] — {verdict_text(r)}")
+        console.print(r.summary(), highlight=False, markup=False)
     if report_path:
         p = Path(report_path)
         doc = reports[0].to_dict() if len(reports) == 1 else [r.to_dict() for r in reports]
@@ -107,6 +118,23 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
                 _cannot_write("plot", out, exc)
             console.print(f"plot: {out}")
     sys.exit(0 if all(r.safe for r in reports) else 1)
+
+
+def _speed_dependent(sc, items, kwargs):
+    """Each trajectory verified with Hermes's stepwise stopping distance up to ``kwargs``'s at its
+    top speed (found by a plain verification first), on its segments split as ``armguard demo`` does."""
+    from ..verify import Verifier
+    from ..verify import Subdivided
+    from ._demo import SUBDIVISIONS, hermes_table
+
+    top = kwargs.pop("stopping_distance")
+    reports = []
+    for name, traj in items:
+        v = Verifier(sc, robot=kwargs.get("robot") or traj.robot_name)
+        plain = v.verify(traj, name=name, **kwargs)
+        reports.append(v.verify(Subdivided(traj, SUBDIVISIONS), stopping_distance=hermes_table(plain.details.max_speed, top), name=name,
+                                **kwargs))
+    return reports
 
 
 def _cannot_write(what: str, path: Path, exc: OSError) -> None:

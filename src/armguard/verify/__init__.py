@@ -15,11 +15,13 @@ from ._report import (
     Clearance,
     ClearanceProfile,
     Collision,
+    CollisionKind,
     MethodDetails,
     VerificationReport,
     VerificationStatus,
 )
 from ._stopping import StoppingDistance, discretisation_error
+from ._subdivide import Subdivided
 from ._verify import DRAKE_JOINT_STEP, Verifier, verify
 
 __all__ = [
@@ -29,10 +31,12 @@ __all__ = [
     "VerificationReport",
     "VerificationStatus",
     "Collision",
+    "CollisionKind",
     "Clearance",
     "ClearanceProfile",
     "MethodDetails",
     "StoppingDistance",
+    "Subdivided",
     "discretisation_error",
     "ClearanceModel",
     "CATEGORIES",

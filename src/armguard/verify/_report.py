@@ -28,6 +28,15 @@ class VerificationStatus(enum.Enum):
     INCOMPLETE = "incomplete"
 
 
+class CollisionKind(enum.Enum):
+    """What a reported collision is: CONTACT, the shapes touch or penetrate (signed distance within
+    the contact tolerance); STOPPING_DISTANCE, they are apart but closer than the stopping distance
+    in force then (Hermes's definition of a collision: the arm could not brake before touching)."""
+
+    CONTACT = "contact"
+    STOPPING_DISTANCE = "stopping distance"
+
+
 @dataclass(frozen=True)
 class Collision:
     """The first collision along a trajectory (Hermes's collision report).
@@ -64,6 +73,10 @@ class Collision:
         The kinds of object involved, Hermes's "arm, obstacle, payload".
     segment : int
         Index of the trajectory segment.
+    stopping_distance : float, m
+        The stopping distance in force then (the segment's, from its peak speed; 0 at rest).
+    kind : CollisionKind
+        A contact, or a violation of the stopping distance by shapes still apart.
     """
 
     time: float
@@ -82,6 +95,14 @@ class Collision:
     check: str
     objects: tuple[str, str]
     segment: int
+    stopping_distance: float = 0.0
+    kind: CollisionKind = CollisionKind.CONTACT
+
+    def describe(self) -> str:
+        """"contact (distance -3.1 mm)" or "within stopping distance 70 mm: 60.0 mm"."""
+        if self.kind is CollisionKind.STOPPING_DISTANCE:
+            return f"within stopping distance {self.stopping_distance * 1e3:.0f} mm: {self.distance * 1e3:.1f} mm"
+        return f"contact (distance {self.distance * 1e3:.1f} mm)"
 
 
 @dataclass(frozen=True)
@@ -231,18 +252,26 @@ class VerificationReport:
         p.write_text(self.to_json(), encoding="utf-8")
         return p
 
+    def _verdict_words(self) -> str:
+        c = self.first_collision
+        if self.status is VerificationStatus.COLLISION and c is not None and c.kind is CollisionKind.STOPPING_DISTANCE:
+            return ("COLLISION by Hermes's rule: within the stopping distance, no contact (the arm could not "
+                    "brake before touching)")
+        return self.status.value.upper()
+
     def summary(self) -> str:
         """A readable multi-line summary."""
         d = self.details
         lines = [
             f"scene {self.scene!r}, robot {self.robot!r}, trajectory {self.trajectory!r} ({self.duration:.3f} s)",
-            f"verdict: {self.status.value.upper()}" + (f" — {self.reason}" if self.reason else ""),
+            f"verdict: {self._verdict_words()}" + (f" — {self.reason}" if self.reason else ""),
             f"method: {d.method}"
             + (f" at {d.frequency:g} Hz" if d.frequency else f" every {d.joint_step:g} rad" if d.joint_step else "")
             + f"; {d.samples_evaluated} configurations evaluated"
             + (f", {d.intervals_certified} intervals certified" if d.method == "certified" else "")
             + f"; distances from the {d.source}",
-            f"stopping distance: {self.stopping_distance * 1e3:.1f} mm; fastest point ≤ {d.max_speed:.3f} m/s",
+            f"stopping distance: {'up to ' if self.stopping_distance_function is not None else ''}"
+            f"{self.stopping_distance * 1e3:.1f} mm; fastest point ≤ {d.max_speed:.3f} m/s",
         ]
         if d.method == "sampled":
             lines.append(f"discretisation error Ed = v/f: {d.discretisation_error * 1e3:.1f} mm (collisions shorter than this may be missed)")
@@ -250,9 +279,10 @@ class VerificationReport:
         if c is not None:
             where = f"link {c.link}" if c.link else f"payload {c.payload}"
             feat = f", {c.feature}" if c.feature is not None else ""
+            first = "first contact" if c.kind is CollisionKind.CONTACT else "first stopping-distance violation"
             lines.append(
-                f"first collision at t = {c.time:.4f} s (segment {c.segment}): {where} ({c.a}) with {c.obstacle}{feat} "
-                f"[{c.check}], distance {c.distance * 1e3:.2f} mm at p_W = ({c.p_W[0]:.4f}, {c.p_W[1]:.4f}, {c.p_W[2]:.4f}) m"
+                f"{first} at t = {c.time:.4f} s (segment {c.segment}): {where} ({c.a}) with {c.obstacle}{feat} "
+                f"[{c.check}], {c.describe()} at p_W = ({c.p_W[0]:.4f}, {c.p_W[1]:.4f}, {c.p_W[2]:.4f}) m"
             )
             lines.append("q = [" + ", ".join(f"{x:.4f}" for x in c.q) + "]")
         m = self.min_clearance_at

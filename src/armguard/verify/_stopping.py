@@ -70,20 +70,32 @@ class StoppingDistance:
         object.__setattr__(self, "table", tuple(tuple(float(x) for x in row) for row in tb))
 
     @classmethod
-    def hermes(cls, max_speed: float, max_distance: float = 0.1, n_ranges: int = 10, max_mass: float | None = None) -> "StoppingDistance":
+    def hermes(cls, max_speed: float, max_distance: float = 0.1, n_ranges: int = 10, max_mass: float | None = None,
+               at_rest: float = 0.0) -> "StoppingDistance":
         """Hermes's rule: ``n_ranges`` equal speed ranges up to ``max_speed`` (m/s), each given the
         stopping distance of its top, ``max_distance * (k + 1) / n_ranges`` (m): 10 ranges up to
         100 mm by default, so the step error is at most ``max_distance / n_ranges`` = 10 mm.
 
         ``max_mass`` (kg): one mass range ``[0, max_mass]`` (inf when not given: mass-independent).
+        ``at_rest`` (m/s): speeds up to it stop in no distance (a first range ``[0, at_rest]`` with
+        stopping distance 0; it must lie inside the first range): an arm at rest is not charged
+        the first range's distance.
         """
         vmax = _finite_nonneg(max_speed, "max_speed")
         dmax = _finite_nonneg(max_distance, "max_distance")
+        rest = _finite_nonneg(at_rest, "at_rest")
         if vmax <= 0.0 or int(n_ranges) != n_ranges or n_ranges < 1:
             raise VerificationError("StoppingDistance.hermes: need max_speed > 0 and an integer n_ranges >= 1")
+        if rest >= vmax / n_ranges:
+            raise VerificationError(f"StoppingDistance.hermes: at_rest {rest:.6g} m/s must be below the first range's "
+                                    f"top {vmax / n_ranges:.6g} m/s")
         edges = tuple(vmax * k / n_ranges for k in range(n_ranges + 1))
+        table = tuple((dmax * (k + 1) / n_ranges,) for k in range(n_ranges))
+        if rest > 0.0:
+            edges = (0.0, rest) + edges[1:]
+            table = ((0.0,),) + table
         m = 1e300 if max_mass is None else _finite_nonneg(max_mass, "max_mass")
-        return cls(edges, (0.0, m), tuple((dmax * (k + 1) / n_ranges,) for k in range(n_ranges)))
+        return cls(edges, (0.0, m), table)
 
     @staticmethod
     def _bin(edges: tuple[float, ...], x: float, name: str) -> int:

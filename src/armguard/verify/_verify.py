@@ -31,6 +31,7 @@ from ._report import (
     Clearance,
     ClearanceProfile,
     Collision,
+    CollisionKind,
     MethodDetails,
     VerificationReport,
     VerificationStatus,
@@ -205,7 +206,6 @@ class Verifier:
         span = dq[rows, k]
         moving = np.abs(span) > 0.0
         lo, hi = t0.copy(), t1.copy()
-        done = (s <= 0.0) | (s >= 1.0) | ~moving
         for _ in range(_TIME_BISECTIONS):
             mid = 0.5 * (lo + hi)
             qm = np.asarray(trajectory.at(mid))
@@ -417,7 +417,7 @@ class Verifier:
             if status is VerificationStatus.COLLISION:
                 t_last = float(run.t[run.n - 1])
                 t_c = t_last if t_last == t_last else float(self._times(trajectory, segs, [si], [s_c], k0)[0])
-                collision = self._collision(run, si, t_c, pair, rname)
+                collision = self._collision(run, si, t_c, pair, rname, float(margins[si]))
             else:
                 t_c = float(self._times(trajectory, segs, [si], [s_c], k0)[0])
                 reason = reason + f" (t = {t_c:.4f} s)"
@@ -481,7 +481,7 @@ class Verifier:
             stopping_distance_function=sd if isinstance(sd, StoppingDistance) else None,
         )
 
-    def _collision(self, run, si, t_c, pair, rname) -> Collision:
+    def _collision(self, run, si, t_c, pair, rname, margin: float) -> Collision:
         model = self.model
         q_full = run.full_q(run.n - 1)
         pA, pB = run.last_witnesses()
@@ -489,6 +489,8 @@ class Verifier:
         pB = np.array(pB[pair])
         a, b = model.owner_a[pair], model.owner_b[pair]
         check = model.check[pair]
+        d = float(run.D[run.n - 1, pair])
+        contact = max(self.tol.length, self.tol.verify_contact)  # apart beyond both: a stopping-distance violation
         link = a.split("/", 1)[1] if "/" in a else None
         payload = a if check.startswith("payload-") else (b if check == "payload-link" else None)
         feature = None
@@ -497,7 +499,7 @@ class Verifier:
         return Collision(
             time=t_c,
             q=np.array(q_full[run.k0 : run.k1]),
-            distance=float(run.D[run.n - 1, pair]),
+            distance=d,
             link=link,
             obstacle=b,
             payload=payload,
@@ -511,6 +513,8 @@ class Verifier:
             check=check,
             objects=_OBJECTS[check],
             segment=int(si),
+            stopping_distance=margin,
+            kind=CollisionKind.STOPPING_DISTANCE if d > contact and margin > 0.0 else CollisionKind.CONTACT,
         )
 
 

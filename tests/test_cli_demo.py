@@ -1,0 +1,95 @@
+"""``armguard demo`` (the job ``make run`` runs) and the words it reports verdicts in.
+
+A stopping distance depends on speed (Hermes ``001_…`` §4: a stepwise function of speed; zero at
+rest), so an arm starting from rest is not charged the top-speed distance at t = 0; a violation of
+the stopping distance by shapes still apart is reported as such, beside a real contact.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from armguard.cli import main
+from armguard.cli._demo import AT_REST, HERMES_MAX_STOPPING_DISTANCE, hermes_table
+from armguard.scene import load_scene
+from armguard.verify import CollisionKind, StoppingDistance, Subdivided, Verifier, VerificationStatus
+
+
+def test_hermes_table_is_zero_at_rest_and_steps_to_its_top():
+    sd = hermes_table(2.0)
+    assert sd.at(0.0) == 0.0 and sd.at(AT_REST) == 0.0
+    assert sd.at(2 * AT_REST) == pytest.approx(HERMES_MAX_STOPPING_DISTANCE / 10)
+    assert sd.at(2.0) == pytest.approx(HERMES_MAX_STOPPING_DISTANCE)
+    values = [sd.at(v) for v in np.linspace(0.0, 2.0, 401)]
+    assert np.all(np.diff(values) >= 0.0)
+    with pytest.raises(Exception, match="at_rest"):
+        StoppingDistance.hermes(1.0, 0.1, 10, at_rest=0.2)  # not inside the first range
+
+
+def _puma():
+    sc = load_scene("puma560")
+    traj = sc.trajectories["pick_and_place"]
+    v = Verifier(sc, robot=traj.robot_name)
+    return sc, traj, v
+
+
+def test_speed_dependent_stopping_distance_violation_is_worded_as_such():
+    sc, traj, v = _puma()
+    plain = v.verify(traj)
+    assert plain.status is VerificationStatus.SAFE  # as planned the arm never touches
+    r = v.verify(Subdivided(traj, 8), stopping_distance=hermes_table(plain.details.max_speed))
+    assert r.status is VerificationStatus.COLLISION  # Hermes's rule: closer than the stopping distance
+    c = r.first_collision
+    assert c.kind is CollisionKind.STOPPING_DISTANCE
+    assert c.time > 0.0  # at rest at t = 0: no stopping distance there
+    assert 0.0 < c.distance < c.stopping_distance <= HERMES_MAX_STOPPING_DISTANCE + 1e-12
+    assert c.describe() == f"within stopping distance {c.stopping_distance * 1e3:.0f} mm: {c.distance * 1e3:.1f} mm"
+    assert "within the stopping distance, no contact" in r.summary()
+    assert "first stopping-distance violation" in r.summary()
+    doc = json.loads(r.to_json())
+    assert doc["first_collision"]["kind"] == "stopping distance"
+    assert doc["first_collision"]["stopping_distance"] == pytest.approx(c.stopping_distance)
+
+
+def test_a_constant_stopping_distance_applies_from_t0_and_a_contact_is_a_contact():
+    sc, traj, v = _puma()
+    r = v.verify(traj, stopping_distance=0.1)
+    assert r.first_collision.kind is CollisionKind.STOPPING_DISTANCE and r.first_collision.time == 0.0
+    assert r.first_collision.stopping_distance == 0.1
+    hermes = load_scene("hermes")
+    t = hermes.trajectories["stow_misaligned"]
+    hit = Verifier(hermes, robot=t.robot_name).verify(t)
+    assert hit.first_collision.kind is CollisionKind.CONTACT
+    assert hit.first_collision.describe().startswith("contact (distance")
+    assert "first contact at" in hit.summary()
+
+
+def test_demo_reports_every_trajectory_with_its_words(tmp_path):
+    res = CliRunner().invoke(main, ["demo", "--scene", "puma560", "--scene", "hermes", "--out", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    rows = {}
+    for line in res.output.splitlines():
+        cells = [c.strip() for c in line.split("│")]
+        if len(cells) > 5 and cells[1] in ("puma560", "hermes"):
+            rows[(cells[2], cells[3])] = cells[4:6]
+    assert rows[("pick_and_place", "0 mm")][0] == "SAFE"
+    verdict, first = rows[("pick_and_place", "Hermes ≤ 100 mm")]
+    assert verdict == "UNSAFE (stopping distance)" and first.startswith("within stopping distance")
+    verdict, first = rows[("stow_misaligned", "0 mm")]
+    assert verdict == "COLLISION" and first.startswith("contact (distance")
+    reports = sorted(p.name for p in tmp_path.glob("*.json"))
+    assert "puma560__pick_and_place__hermes100mm.json" in reports and len(reports) == 8
+    doc = json.loads((tmp_path / "puma560__pick_and_place__hermes100mm.json").read_text())
+    assert doc["status"] == "collision" and doc["first_collision"]["kind"] == "stopping distance"
+
+
+def test_verify_cli_speed_dependent():
+    res = CliRunner().invoke(main, ["verify", "puma560", "pick_and_place", "--stopping-distance", "0.1", "--speed-dependent"])
+    assert res.exit_code == 1 and "UNSAFE (stopping distance)" in res.output
+    assert "[link-link]" in res.output  # the summary is printed as text, not as rich markup
+    bad = CliRunner().invoke(main, ["verify", "puma560", "pick_and_place", "--speed-dependent"])
+    assert bad.exit_code == 2 and "--stopping-distance > 0" in bad.output
