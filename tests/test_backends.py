@@ -1,6 +1,6 @@
 """The backend plugins against each other: analytic vs the coal reference (and python-fcl) on every model.
 
-Tolerances, in one place: ``armguard.harness.DIFFERENTIAL`` (``src/armguard/harness/_tolerances.py``,
+Tolerances, in one place: ``armguard.Tolerances``' ``differential_*`` fields (``src/armguard/harness/_tolerances.py``,
 shared with ``tests/test_reference.py`` and ``armguard compare``):
 
 * ``CONTACT_BAND``: a verdict may differ only where the reference distance is within this of 0;
@@ -24,13 +24,13 @@ import pytest
 import armguard
 from armguard import BackendError, SceneFileError
 from armguard.backends import available, resolve
-from armguard.harness import DIFFERENTIAL as TOL
+from armguard import DEFAULT_TOLERANCES as TOL
 
-CONTACT_BAND = TOL.contact_band
-DISTANCE_TOL = TOL.distance
-HULL_TOL = TOL.hull
-WITNESS_TOL = TOL.witness
-FCL_TOL = TOL.fcl
+CONTACT_BAND = TOL.differential_contact_band
+DISTANCE_TOL = TOL.differential_distance
+HULL_TOL = TOL.differential_hull
+WITNESS_TOL = TOL.differential_witness
+FCL_TOL = TOL.differential_fcl
 N_DISTANCE = 2000  # 10^4 per model: `armguard compare` (docs/backends.md)
 N_VERDICT = 10_000
 
@@ -150,11 +150,11 @@ def test_analytic_matches_coal(checkers, name):
         # capsules with non-parallel axes, a sphere), both backends name the same points
         gap_c = np.linalg.norm(rc.p_WA - rc.p_WB, axis=1)
         assert np.all(np.abs(gap_c - np.abs(rc.distance))[sep] <= tol[sep])
-        for k in np.flatnonzero(unique_witness & (ra.distance > TOL.unique_min_distance)):
+        for k in np.flatnonzero(unique_witness & (ra.distance > TOL.differential_unique_min_distance)):
             da, db = _axis(model, ra.pairs[k, 0], q), _axis(model, ra.pairs[k, 1], q)
-            if da is None or db is None or np.linalg.norm(np.cross(da, db)) > TOL.parallel:
-                np.testing.assert_allclose(ra.p_WA[k], rc.p_WA[k], atol=TOL.unique_point)
-                np.testing.assert_allclose(ra.p_WB[k], rc.p_WB[k], atol=TOL.unique_point)
+            if da is None or db is None or np.linalg.norm(np.cross(da, db)) > TOL.differential_parallel:
+                np.testing.assert_allclose(ra.p_WA[k], rc.p_WA[k], atol=TOL.differential_unique_point)
+                np.testing.assert_allclose(ra.p_WB[k], rc.p_WB[k], atol=TOL.differential_unique_point)
     Qv = model.random_q(N_VERDICT, 12)
     va, vc = a.collides(Qv), c.collides(Qv)
     differ = np.flatnonzero(va != vc)

@@ -18,7 +18,8 @@ from armguard import BackendError, ForbiddenMapError
 from armguard.backends import Capability, available
 from armguard.cspace import CheckerClearance, CombinedChecker, CombinedStatus, ForbiddenMap, map_links
 from armguard.cspace._certify import certify_substructure
-from armguard.harness import DIFFERENTIAL, build_configs
+from armguard import DEFAULT_TOLERANCES as TOL
+from armguard.harness import build_configs
 from armguard.model import models_dir
 
 RES = math.radians(6.0)
@@ -98,7 +99,7 @@ def test_any_geometric_backend(fmap, forbidden, model):
     differ = a.collision != c.collision
     if np.any(differ):
         d = forbidden.geometric.min_distance_many(Q[differ])
-        assert np.all(np.abs(d - SD) <= DIFFERENTIAL.hull)
+        assert np.all(np.abs(d - SD) <= TOL.differential_hull)
     full = armguard.checker(model, "coal").collides(Q, margin=SD)
     assert not np.any(full & ~c.collision)
 
@@ -178,11 +179,11 @@ def test_coal_clearances_give_the_analytic_map(fmap, model, tmp_path):
     """Maps built with coal's clearances equal the analytic ones up to the documented tolerance.
 
     Certification is monotone in the clearance (a smaller clearance never frees a box: it can only
-    mark more), so wherever two backends' clearances differ by at most ``DIFFERENTIAL.hull`` (the
+    mark more), so wherever two backends' clearances differ by at most ``TOL.differential_hull`` (the
     hulls' distance tolerance), the coal map lies between the analytic maps built with clearances
     lowered and raised by that much: ``mask(analytic - δ) ⊇ mask(coal) ⊇ mask(analytic + δ)``.
     """
-    delta = DIFFERENTIAL.hull
+    delta = TOL.differential_hull
     ml = map_links(model.scene, fmap.robot)
     ha = CheckerClearance(model, ml, "analytic")
     hc = CheckerClearance(model, ml, "coal")

@@ -13,10 +13,10 @@ import pytest
 from click.testing import CliRunner
 
 import armguard
+from armguard import DEFAULT_TOLERANCES as TOL
 from armguard import BackendError
 from armguard.cli import main
 from armguard.harness import (
-    DIFFERENTIAL,
     build_checkers,
     build_configs,
     compare_answers,
@@ -41,7 +41,7 @@ def test_small_run_writes_the_contract_and_the_plots(hermes_run):
     data = json.loads((out / "compare.json").read_text())
     pair = data["pairs"]["analytic/coal"]
     assert pair["verdict_disagreements"] == 0 and pair["status"] == "agree"
-    assert 0.0 <= pair["max_abs_distance_error"] <= DIFFERENTIAL.hull
+    assert 0.0 <= pair["max_abs_distance_error"] <= TOL.differential_hull
     assert data["backends"]["analytic"]["us_per_config"] > 0 and data["backends"]["coal"]["us_per_config"] > 0
     assert data["configs"]["total"] == 200 + data["configs"]["trajectories"]["unstow"] == len(comp.configs)
     assert set(pair["categories"]) == {"all", *comp.model.pairs.category}

@@ -19,9 +19,10 @@ import armguard.backends as backends_mod
 from armguard.backends import Capability, CheckerBase, check_Q
 from armguard.cli import main
 from armguard.cspace import CombinedStatus, ForbiddenMap
-from armguard.harness import DIFFERENTIAL, build_checkers, build_configs, compare_answers, evaluate, run_compare
+from armguard import DEFAULT_TOLERANCES as TOL
+from armguard.harness import build_checkers, build_configs, compare_answers, evaluate, run_compare
 
-BAND = DIFFERENTIAL.contact_band
+BAND = TOL.differential_contact_band
 
 
 def _coal_distances(model, Q):

@@ -2,7 +2,7 @@
 
 Live coal against its own recorded answers catches a coal or Pinocchio upgrade that changes
 them; analytic and python-fcl are held to the same records with the tolerances of
-``armguard.harness.DIFFERENTIAL`` (fcl within its band, and not on Ranger — see
+``armguard.Tolerances``' ``differential_*`` fields (fcl within its band, and not on Ranger — see
 ``tests/test_backends.py``).  A model whose files no longer hash as recorded fails with the one
 command that regenerates its reference.
 """
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import armguard
-from armguard.harness import DIFFERENTIAL as TOL
+from armguard import DEFAULT_TOLERANCES as TOL
 from armguard.harness import reference_dir, reference_model_names, repo_root, resolve_model, seed_data
 from armguard.harness._reference import (
     REFERENCE_RANDOM,
@@ -69,10 +69,10 @@ def test_backends_match_the_reference(loaded, name):
         assert diff.status is DiffStatus.MATCH, f"{name} {backend}: {diff.message}"
     if name not in FCL_OFF:
         fcl = armguard.checker(model, "fcl")
-        diff = compare_to_reference(model, fcl, ref, distance_tol=TOL.fcl, points=False)
+        diff = compare_to_reference(model, fcl, ref, distance_tol=TOL.differential_fcl, points=False)
         assert diff.pairs_match and diff.distance_over == 0, f"{name} fcl: {diff.message}"
         d = np.array([fcl.pair_distances(q).distance for q in ref.q])
-        far = np.abs(ref.distance) > TOL.fcl
+        far = np.abs(ref.distance) > TOL.differential_fcl
         assert np.array_equal((d > 0)[far], (ref.distance > 0)[far])
 
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 __all__ = ["Tolerances", "DEFAULT_TOLERANCES"]
 
@@ -109,6 +109,28 @@ class Tolerances:
         ``bench/paper_fidelity.py``: two checkers' distances closer than this agree (the paper
         checker's nearest distance is "right"); coal holds meshes in float32 (up to 0.5 µm at
         8 m, docs/models.md), so agreement cannot be asked to be tighter than about a micrometre.
+    differential_contact_band : float, m
+        Differential tests and ``armguard compare``: a verdict (collides or not) may differ
+        between two backends (or a backend and ``reference/``) only where the reference distance
+        is within this of 0.
+    differential_distance : float, m
+        ... separated distances agree within this (both backends exact up to round-off).
+    differential_hull : float, m
+        ... within this where a side is a ``coal.Convex`` hull (coal's GJK on mesh hulls stops
+        within it; measured 3.6e-6 m on the Panda's hulls).
+    differential_witness : float, m
+        ... the analytic backend's witness relation ``| |p_WA - p_WB| - |d| |`` holds within this.
+    differential_fcl : float, m
+        ... python-fcl's distances were measured up to 5.3e-2 m off the exact ones (its capsule
+        and GJK paths); it is held to verdicts outside this band (not on Ranger, where it is off
+        by 0.32 m on some pairs).
+    differential_unique_min_distance : float, m
+        ... witness points are compared between backends only on pairs where they are unique:
+        both sides capsules or spheres, the reference distance above this, ...
+    differential_parallel : float, dimensionless
+        ... and, for two capsules, ``|sin(angle between the axes)|`` above this.
+    differential_unique_point : float, m
+        ... unique witness points agree within this.
     """
 
     length: float = 1e-12
@@ -139,6 +161,19 @@ class Tolerances:
     cspace_contact: float = 1e-6
     cspace_max_depth: int = 2
     paper_agreement: float = 1e-6
+    differential_contact_band: float = 1e-6
+    differential_distance: float = 1e-6
+    differential_hull: float = 1e-5
+    differential_witness: float = 1e-9
+    differential_fcl: float = 6e-2
+    differential_unique_min_distance: float = 1e-3
+    differential_parallel: float = 1e-3
+    differential_unique_point: float = 1e-6
+
+    def differential(self) -> dict:
+        """The ``differential_*`` tolerances without their prefix (what a comparison report records)."""
+        return {f.name.removeprefix("differential_"): getattr(self, f.name) for f in fields(self)
+                if f.name.startswith("differential_")}
 
 
 DEFAULT_TOLERANCES = Tolerances()

@@ -7,7 +7,7 @@
 * :mod:`._reference` (``tools/make_reference.py``): coal's answers at a fixed set of
   configurations per model, with the source files' sha256, and the check against them.
 * :func:`check_model_files` (``armguard check-urdf``, ``tools/check_urdf.py``): lint a model.
-* :data:`DIFFERENTIAL`: the differential tolerances, in one place.
+* The differential tolerances are :class:`armguard.Tolerances`' ``differential_*`` fields.
 """
 
 from ._compare import Comparison, PairStatus, compare_answers, reproduce_command, unique_witness_mask
@@ -16,11 +16,11 @@ from ._evaluate import BackendAnswers, answers_distances, build_checkers, evalua
 from ._models import EXTRA_MODELS, reference_dir, reference_model_names, repo_root, resolve_model, seed_data
 from ._run import compare_at, run_compare, summary_table, write_outputs
 from ._lint import Check, Finding, LintReport, LintStatus, Severity, check_model_files, mesh_convexity
-from ._tolerances import DIFFERENTIAL, DifferentialTolerances, pair_distance_tolerance, pair_kinds
+from ._tolerances import pair_distance_tolerance, pair_kinds
 
 __all__ = ["run_compare", "compare_at", "summary_table", "write_outputs", "Comparison", "PairStatus", "compare_answers",
            "reproduce_command", "unique_witness_mask", "ConfigSet", "build_configs", "trajectory_q", "BackendAnswers",
            "build_checkers", "evaluate", "parse_backend_options", "answers_distances", "verdict_detail", "EXTRA_MODELS", "reference_dir",
-           "reference_model_names", "repo_root", "resolve_model", "seed_data", "DIFFERENTIAL", "DifferentialTolerances",
+           "reference_model_names", "repo_root", "resolve_model", "seed_data",
            "pair_distance_tolerance", "pair_kinds", "check_model_files", "mesh_convexity", "Check", "Finding",
            "LintReport", "LintStatus", "Severity"]

@@ -30,7 +30,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._tolerances import DIFFERENTIAL, DifferentialTolerances, pair_distance_tolerance, pair_kinds
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._tolerances import pair_distance_tolerance, pair_kinds
 from ._verdicts import verdict_backend_summary, verdict_pair_summary
 
 __all__ = ["PairStatus", "Comparison", "compare_answers", "capsule_axes", "unique_witness_mask", "reference_of",
@@ -87,11 +88,11 @@ def capsule_axes(model, Q) -> dict:
     return out
 
 
-def unique_witness_mask(model, Q, d_ref, tol: DifferentialTolerances = DIFFERENTIAL, axes=None) -> np.ndarray:
+def unique_witness_mask(model, Q, d_ref, tol: Tolerances = DEFAULT_TOLERANCES, axes=None) -> np.ndarray:
     """``(M, n) bool``: where the nearest points are unique (see the module docstring)."""
     kinds = pair_kinds(model)
     ok_kind = np.isin(kinds, ["Capsule", "Sphere"]).all(axis=1)
-    mask = ok_kind[None, :] & (d_ref > tol.unique_min_distance)
+    mask = ok_kind[None, :] & (d_ref > tol.differential_unique_min_distance)
     both_caps = np.flatnonzero(ok_kind & (kinds == "Capsule").all(axis=1))
     if both_caps.size:
         axes = capsule_axes(model, Q) if axes is None else axes
@@ -99,7 +100,7 @@ def unique_witness_mask(model, Q, d_ref, tol: DifferentialTolerances = DIFFERENT
         for k in both_caps:
             ia, ib = model.geometry_index(names[k, 0]), model.geometry_index(names[k, 1])
             s = np.linalg.norm(np.cross(axes[ia], axes[ib]), axis=1)
-            mask[:, k] &= s > tol.parallel
+            mask[:, k] &= s > tol.differential_parallel
     return mask
 
 
@@ -134,7 +135,7 @@ def _contract(ans, cols, nonunique, tol_pair) -> dict:
 
 
 def _pair_summary(model, configs, A, B, R, a, b, cats, tol, tol_pair, unique, n_worst, spec, options) -> tuple:
-    band = tol.contact_band
+    band = tol.differential_contact_band
     err = np.abs(A.distance - B.distance)
     out = {"a": a, "b": b, "reference": reference_of(a, b)}
     dmin_ref = R.distance.min(axis=1) if R.distance.size else np.zeros(len(configs))
@@ -166,7 +167,7 @@ def _pair_summary(model, configs, A, B, R, a, b, cats, tol, tol_pair, unique, n_
             "penetrating": _quant(e[pen]),
             "separated_over_tolerance": int((e > tol_pair[cols][None, :])[sep].sum()),
             "unique_points": {"n": int(u.sum()), "p_WA": _quant(dpa), "p_WB": _quant(dpb),
-                              "over_tolerance": int(((dpa > tol.unique_point) | (dpb > tol.unique_point)).sum())},
+                              "over_tolerance": int(((dpa > tol.differential_unique_point) | (dpb > tol.differential_unique_point)).sum())},
             "witness_contract": {x: _contract(X, cols, ~unique, tol_pair) for x, X in ((a, A), (b, B))},
         }
     out["categories"] = per
@@ -203,7 +204,7 @@ def _worst(model, configs, A, B, a, b, err, out_band, dmin_ref, n_worst, spec, o
     return rows
 
 
-def compare_answers(model, configs, answers: dict, *, spec: str, options=None, tol: DifferentialTolerances = DIFFERENTIAL,
+def compare_answers(model, configs, answers: dict, *, spec: str, options=None, tol: Tolerances = DEFAULT_TOLERANCES,
                     n_worst: int = 5) -> Comparison:
     """The :class:`Comparison` of every backend pair (in ``answers``' order) on ``configs``."""
     backends = list(answers)
@@ -244,7 +245,7 @@ def compare_answers(model, configs, answers: dict, *, spec: str, options=None, t
         "categories": list(dict.fromkeys(model.pairs.category)),
         "configs": {"total": len(configs), "random": configs.n_random, "seed": configs.seed,
                     "trajectories": dict(configs.trajectories)},
-        "tolerances": tol.to_dict(),
+        "tolerances": tol.differential(),
         "backends": per_backend,
         "pairs": pairs,
     }

@@ -21,7 +21,8 @@ import numpy as np
 
 from .._errors import ArmguardError
 from ._models import file_label, reference_dir, resolve_model
-from ._tolerances import DIFFERENTIAL, DifferentialTolerances, pair_distance_tolerance
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._tolerances import pair_distance_tolerance
 
 __all__ = ["REFERENCE_SEED", "REFERENCE_RANDOM", "FORMAT", "Reference", "SourceStatus", "SourceCheck", "DiffStatus",
            "ReferenceDiff", "reference_configs", "make_reference", "load_reference", "check_sources",
@@ -193,12 +194,12 @@ class ReferenceDiff:
                 f"unique witness points over tolerance {self.point_over} (max {self.max_point_error:.3e} m); worst {self.worst}")
 
 
-def compare_to_reference(model, checker, ref: Reference, *, tol: DifferentialTolerances = DIFFERENTIAL,
+def compare_to_reference(model, checker, ref: Reference, *, tol: Tolerances = DEFAULT_TOLERANCES,
                          distance_tol: float | None = None, points: bool = True) -> ReferenceDiff:
     """Hold ``checker`` (any backend's) to ``ref`` on ``model`` (see :class:`ReferenceDiff`)."""
     from ._compare import unique_witness_mask
 
-    band = tol.contact_band
+    band = tol.differential_contact_band
     pairs_match = np.array_equal(model.pairs.names, ref.pairs)
     if not pairs_match or ref.q.shape[1] != model.nq:
         return ReferenceDiff(DiffStatus.DIFFERS, False, 0, 0, float("nan"), 0, float("nan"), None)
@@ -223,7 +224,7 @@ def compare_to_reference(model, checker, ref: Reference, *, tol: DifferentialTol
     if points:
         u = unique_witness_mask(model, ref.q, ref.distance, tol)
         dp = np.maximum(np.linalg.norm(pa - ref.p_WA, axis=2), np.linalg.norm(pb - ref.p_WB, axis=2))[u]
-        point_over = int((dp > tol.unique_point).sum())
+        point_over = int((dp > tol.differential_unique_point).sum())
         max_point = float(dp.max()) if dp.size else 0.0
     ok = verdict_bad == 0 and over == 0 and point_over == 0
     return ReferenceDiff(DiffStatus.MATCH if ok else DiffStatus.DIFFERS, True, verdict_bad, over,

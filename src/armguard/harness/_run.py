@@ -14,7 +14,7 @@ from ._compare import Comparison, compare_answers, reference_of
 from ._configs import build_configs
 from ._evaluate import answers_distances, build_checkers, evaluate, verdict_detail
 from ._models import resolve_model
-from ._tolerances import DIFFERENTIAL, DifferentialTolerances
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._verdicts import NA, code_names, verdict_tables
 
 __all__ = ["run_compare", "write_outputs", "summary_table", "compare_at"]
@@ -22,7 +22,7 @@ __all__ = ["run_compare", "write_outputs", "summary_table", "compare_at"]
 
 def run_compare(spec, backends=("analytic", "coal"), *, n_configs: int = 1000, seed: int = 0, trajectories="all",
                 frequency: float = 1.0, options=None, workers: int | None = None, scheduler: str | None = None,
-                out_dir=None, plots: bool = True, progress=None, tol: DifferentialTolerances = DIFFERENTIAL,
+                out_dir=None, plots: bool = True, progress=None, tol: Tolerances = DEFAULT_TOLERANCES,
                 n_worst: int = 5, model=None) -> Comparison:
     """Compare ``backends`` on model ``spec`` (a name, ``panda``/``ur5``/``iiwa`` or a file path).
 

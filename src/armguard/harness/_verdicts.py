@@ -198,7 +198,7 @@ def _worst(model, configs, V, R, v, r, side, band, n_worst, spec, options, repro
 
 def verdict_pair_summary(model, configs, answers, a, b, groups, tol, n_worst, spec, options, reproduce_command) -> tuple:
     """``(summary dict, ok)`` of backend pair ``a/b`` where at least one side answers verdicts only."""
-    band = tol.contact_band
+    band = tol.differential_contact_band
     A, B = answers[a], answers[b]
     if A.verdicts_only != B.verdicts_only:
         sides = [a] if A.verdicts_only else [b]
