@@ -11,7 +11,7 @@ from scipy import stats
 
 import armguard
 from armguard._errors import UncertaintyError
-from armguard.geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere, distance
+from armguard.geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere, distance
 from armguard.uncertainty import (
     ClearanceStatus,
     UncertainPlacement,
@@ -151,12 +151,19 @@ def test_verify_with_confidence():
     ConvexPolyhedron(np.random.default_rng(0).normal(size=(20, 3))),
     Polygon([[0, 0, 0], [1, 0, 0], [0, 1, 0.2]]),
     Capsule([0, 0, 0], [0.3, 0, 0], 0.05),
+    Cylinder([0.1, 0, 0.2], np.array([[0, 0, 1.0], [0, 1.0, 0], [-1.0, 0, 0]]), 0.05, 0.2),
 ], ids=lambda s: type(s).__name__)
 def test_grown_shape_contains_the_minkowski_sum(shape):
     g = 0.07
     grown = grow_shape(shape, g)
     rng = np.random.default_rng(3)
-    pts = shape.core_points[rng.integers(len(shape.core_points), size=300)]
+    if isinstance(shape, Cylinder):  # its core points circumscribe it: take points on its surface
+        th = rng.uniform(0.0, 2 * np.pi, 300)
+        rho = np.where(rng.random(300) < 0.5, shape.radius, shape.radius * np.sqrt(rng.random(300)))
+        z = np.where(rho == shape.radius, rng.uniform(-1, 1, 300), rng.choice([-1.0, 1.0], 300)) * shape.half_length
+        pts = shape.center + np.column_stack([rho * np.cos(th), rho * np.sin(th), z]) @ shape.rotation.T
+    else:
+        pts = shape.core_points[rng.integers(len(shape.core_points), size=300)]
     u = rng.normal(size=(300, 3))
     far = pts + (shape.core_radius + g * 0.999) * u / np.linalg.norm(u, axis=1)[:, None]  # within g of the shape
     assert all(distance(Sphere(p, 0.0), grown).distance <= 1e-12 for p in far)

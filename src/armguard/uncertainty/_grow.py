@@ -8,6 +8,9 @@ Sphere, Capsule     radius ``+ g`` — exactly the Minkowski sum
 Box                 half extents ``+ g`` — every face plane pushed out by ``g`` (contains the
                     sum; exceeds it near edges and corners by up to ``(√3 − 1) g``)
 Prism               apothem and half length ``+ g`` — the same face offset
+Cylinder            radius and half length ``+ g`` — contains the sum (a point within ``g``
+                    of the cylinder is within ``g`` of its axis segment's slab and of its
+                    radius); exceeds it at the rims by up to ``(√2 − 1) g``
 ConvexPolyhedron    every face plane pushed out by ``g``, the vertices of the offset planes'
                     intersection (``scipy.spatial.HalfspaceIntersection``)
 Polygon             a flat slab: its plane pushed by ``± g`` and each edge by ``g`` in the plane
@@ -23,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._errors import UncertaintyError
-from ..geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere
+from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
 
 __all__ = ["grow_shape"]
 
@@ -51,6 +54,8 @@ def grow_shape(shape, g: float):
         return Capsule(shape.p0, shape.p1, shape.radius + g)
     if isinstance(shape, Box):
         return Box(shape.center, shape.half_extents + g, shape.rotation)
+    if isinstance(shape, Cylinder):
+        return Cylinder(shape.center, shape.rotation, shape.radius + g, shape.half_length + g)
     if isinstance(shape, Prism):
         return Prism(shape.center, shape.rotation, shape.apothem + g, shape.half_length + g, shape.n_sides)
     if isinstance(shape, ConvexPolyhedron):
