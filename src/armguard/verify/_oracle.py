@@ -101,6 +101,7 @@ class ClearanceModel:
             lever[i, k0 : k0 + len(robot.joint_names)] = chains[p.robot].lever(p.link, R)
         self.lever = lever
         self._part_kind = {o: parts[o].kind for o in self.parts}
+        self._part_robot = {o: parts[o].robot for o in self.parts}
         # the pair list
         pa, pb, cat, chk = [], [], [], []
         for cp in scene.allowed_pairs():
@@ -295,6 +296,12 @@ class ClearanceModel:
     def max_point_speed(self, qdot: np.ndarray) -> float:
         """Bound (m/s) on the speed of the fastest point of any moving part at joint velocity ``qdot`` ``(n_q,)``."""
         return float(np.max(self.lever[:-1] @ np.abs(qdot))) if len(self.parts) else 0.0
+
+    def moving_pairs(self, robot: str) -> np.ndarray:
+        """``(P,) bool``: the pairs with a side on ``robot`` (a link of it, or a payload it carries):
+        the only ones its motion can change, and the only ones a verification of it checks."""
+        on = np.array([self._part_robot[o] == robot for o in self.parts] + [False], dtype=bool)
+        return on[self.index_a] | on[self.index_b]
 
     def payload_parts(self) -> tuple[str, ...]:
         return tuple(o for o in self.parts if self._part_kind[o] == "payload")

@@ -21,7 +21,8 @@ class _Run:
     """Book-keeping of one verification: every evaluated configuration and its clearances, in
     preallocated arrays that grow by doubling (row ``i`` is the ``i``-th evaluation, ``n`` rows used).
 
-    D : (capacity, P) float64, m — clearances;  Q : (capacity, k1 - k0) — the moving robot's joints;
+    D : (capacity, P) float64, m — clearances (+inf for a pair without a side on the moving robot:
+    it cannot change, and is not checked);  Q : (capacity, k1 - k0) — the moving robot's joints;
     seg : (capacity,) int64;  s : (capacity,) float64, 1;  t : (capacity,) float64, s (NaN: unknown).
     Only the last evaluation's witness points are kept (the collision is the last evaluation).
     """
@@ -41,9 +42,14 @@ class _Run:
         self.s = np.empty(cap)
         self.t = np.empty(cap)
         self._q = base.copy()  # the flat configuration handed to the distance source
+        # the pairs without a side on the moving robot cannot change along its motion: they are
+        # recorded as +inf (apart), so that neither the verdict nor the clearances report them
+        self.moving = np.ones(P, dtype=bool) if robot is None else model.moving_pairs(robot)
         self._fast = model.moving_fast_path(robot)
         if self._fast:
-            self._fixed = model.fixed_clearances(self._q, robot)
+            fixed = model.fixed_clearances(self._q, robot)
+            row = np.where(self.moving, fixed[0], np.inf)
+            self._fixed = (row, fixed[1], fixed[2])
             self._det = model._det
             self._det_map = model._det_map
         self._pidx = self._idx = None  # see _index_of
@@ -79,7 +85,7 @@ class _Run:
             self.model.evaluations += 1
         else:
             d, pA, pB = self.model.distances(q.copy(), self.robot)
-            row[:] = d
+            row[:] = np.where(self.moving, d, np.inf)
             self._last = (pA, pB)
         self.Q[i] = q_robot
         self.seg[i] = si

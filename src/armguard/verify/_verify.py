@@ -115,11 +115,10 @@ class Verifier:
     def _robot_of(self, trajectory, robot: str | None) -> str:
         names = list(self.scene.robots)
         r = robot or self._robot or getattr(trajectory, "robot_name", None)
+        if not r and len(names) == 1:  # a trajectory that names no robot: the scene's only one
+            r = names[0]
         if r not in self.scene.robots:
-            if len(names) == 1 and robot is None and self._robot is None:
-                r = names[0]
-            else:
-                raise VerificationError(f"robot {r!r} is not in the scene; robots are {names}")
+            raise VerificationError(f"robot {r!r} is not in the scene; robots are {names}")
         rob = self.scene.robots[r]
         if tuple(trajectory.joint_names) != tuple(rob.joint_names):
             raise VerificationError(
@@ -288,6 +287,8 @@ class Verifier:
         model = self.model
         model.evaluations = 0
         run = _Run(model, base, k0, k1, rname, capacity=2 * len(segs) + 2)
+        if not run.moving.any():
+            raise VerificationError(f"robot {rname!r} has no pair to check (no shapes, or every pair with it disabled)")
         if method == "certified":
             status, reason, lower, intervals, where = self._certified(segs, margins, run)
             ed = 0.0
@@ -443,7 +444,7 @@ class Verifier:
         D = D[order]
         by_cat = {}
         for c_i, c in enumerate(CATEGORIES):
-            cols = model.category_code == c_i
+            cols = (model.category_code == c_i) & run.moving
             if np.any(cols):
                 by_cat[c] = D[:, cols].min(axis=1)
         overall = D.min(axis=1)
