@@ -48,7 +48,7 @@ def test_speed_dependent_stopping_distance_violation_is_worded_as_such():
     assert c.time > 0.0  # at rest at t = 0: no stopping distance there
     assert 0.0 < c.distance < c.stopping_distance <= HERMES_MAX_STOPPING_DISTANCE + 1e-12
     assert c.describe() == f"within stopping distance {c.stopping_distance * 1e3:.0f} mm: {c.distance * 1e3:.1f} mm"
-    assert "within the stopping distance, no contact" in r.summary()
+    assert "UNSAFE: within the stopping distance, no contact" in r.summary() and r.verdict() == "unsafe (stopping distance)"
     assert "first stopping-distance violation" in r.summary()
     doc = json.loads(r.to_json())
     assert doc["first_collision"]["kind"] == "stopping distance"

@@ -292,7 +292,7 @@ def test_report_outputs_json_summary_plot(tmp_path):
     p = r.save_json(tmp_path / "r.json")
     assert json.loads(p.read_text())["first_collision"]["link"] == r.first_collision.link
     text = r.summary()
-    assert "COLLISION" in text and "ball" in text and "first stopping-distance violation" in text  # 20 mm apart, 20 mm to brake
+    assert "Hermes's rule" in text and "ball" in text and "first stopping-distance violation" in text  # 20 mm apart, 20 mm to brake
     png = r.plot(tmp_path / "r.png")
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert set(r.profile.by_category) == {"arm", "environment"}

@@ -70,11 +70,9 @@ def first_collision_text(r) -> str:
 
 def verdict_text(r) -> str:
     """The verdict column: SAFE, INCOMPLETE, COLLISION (a contact) or UNSAFE (stopping distance)."""
-    c = r.first_collision
-    if r.status.value == "collision" and c is not None and c.kind.value == "stopping distance":
-        return "[dark_orange]UNSAFE (stopping distance)[/]"
-    colour = {"safe": "green", "collision": "red", "incomplete": "yellow"}[r.status.value]
-    return f"[{colour}]{r.status.value.upper()}[/]"
+    v = r.verdict()
+    colour = {"safe": "green", "collision": "red", "incomplete": "yellow"}.get(v, "dark_orange")
+    return f"[{colour}]{v.upper() if v in ('safe', 'collision', 'incomplete') else 'UNSAFE (stopping distance)'}[/]"
 
 
 @main.command("demo")

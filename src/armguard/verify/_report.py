@@ -210,6 +210,9 @@ class VerificationReport:
         Wall time of the verification.
     reason : str
         Why the status is what it is, in words (e.g. the evaluation budget ran out at t = …).
+    stopping_times, stopping_values : (S + 1,) float64 s, (S,) float64 m
+        The stopping distance in force on each segment ``[stopping_times[k], stopping_times[k + 1]]``
+        (a step function of the segment's peak speed, or the constant).
     """
 
     status: VerificationStatus
@@ -228,6 +231,16 @@ class VerificationReport:
     elapsed_s: float
     reason: str = ""
     stopping_distance_function: object = field(default=None, repr=False)
+    stopping_times: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    stopping_values: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    def verdict(self) -> str:
+        """The verdict in a few words: "safe", "incomplete", "collision" (a contact) or "unsafe
+        (stopping distance)" (shapes apart but closer than the stopping distance)."""
+        c = self.first_collision
+        if self.status is VerificationStatus.COLLISION and c is not None and c.kind is CollisionKind.STOPPING_DISTANCE:
+            return "unsafe (stopping distance)"
+        return self.status.value
 
     @property
     def safe(self) -> bool:
@@ -253,10 +266,9 @@ class VerificationReport:
         return p
 
     def _verdict_words(self) -> str:
-        c = self.first_collision
-        if self.status is VerificationStatus.COLLISION and c is not None and c.kind is CollisionKind.STOPPING_DISTANCE:
-            return ("COLLISION by Hermes's rule: within the stopping distance, no contact (the arm could not "
-                    "brake before touching)")
+        if self.verdict() == "unsafe (stopping distance)":
+            return ("UNSAFE: within the stopping distance, no contact (a collision by Hermes's rule: the arm "
+                    "could not brake before touching)")
         return self.status.value.upper()
 
     def summary(self) -> str:
@@ -310,15 +322,23 @@ class VerificationReport:
             if np.any(finite):
                 ax.plot(t[finite], y[finite] * 1e3, lw=1.2, label=cat)
         ax.axhline(self.threshold * 1e3, color="orange", ls="--", lw=1, label=f"threshold {self.threshold * 1e3:.0f} mm")
-        ax.axhline(self.stopping_distance * 1e3, color="red", ls=":", lw=1.2, label=f"stopping distance {self.stopping_distance * 1e3:.0f} mm")
+        sv = np.asarray(self.stopping_values, dtype=np.float64)
+        if len(sv) and float(np.ptp(sv)) > 0.0:  # speed-dependent: the step function over time
+            ax.stairs(sv * 1e3, np.asarray(self.stopping_times, dtype=np.float64), color="red", ls=":", lw=1.2,
+                      baseline=None, label=f"stopping distance (by speed, ≤ {self.stopping_distance * 1e3:.0f} mm)")
+        elif self.stopping_distance > 0.0:
+            ax.axhline(self.stopping_distance * 1e3, color="red", ls=":", lw=1.2,
+                       label=f"stopping distance {self.stopping_distance * 1e3:.0f} mm")
         ax.axhline(0.0, color="black", lw=0.6)
         c = self.first_collision
         if c is not None:
+            what = "first contact" if c.kind is CollisionKind.CONTACT else (
+                f"within stopping distance {c.stopping_distance * 1e3:.0f} mm")
             ax.axvline(c.time, color="red", lw=1)
-            ax.plot([c.time], [c.distance * 1e3], "rx", ms=10, mew=2, label=f"first collision t={c.time:.3f} s")
+            ax.plot([c.time], [c.distance * 1e3], "rx", ms=10, mew=2, label=f"{what}, t = {c.time:.3f} s")
         ax.set_xlabel("time (s)")
         ax.set_ylabel("clearance (mm)")
-        ax.set_title(title or f"{self.scene} / {self.trajectory}: {self.status.value} ({self.details.method})")
+        ax.set_title(title or f"{self.scene} / {self.trajectory}: {self.verdict()} ({self.details.method})")
         ax.legend(loc="best", fontsize=8)
         ax.grid(alpha=0.3)
         fig.tight_layout()

@@ -480,6 +480,8 @@ class Verifier:
             elapsed_s=_time.perf_counter() - t_start,
             reason=reason,
             stopping_distance_function=sd if isinstance(sd, StoppingDistance) else None,
+            stopping_times=np.array([sg[0] for sg in segs] + [segs[-1][1]], dtype=np.float64),
+            stopping_values=np.asarray(margins, dtype=np.float64).copy(),
         )
 
     def _collision(self, run, si, t_c, pair, rname, margin: float) -> Collision:
