@@ -43,6 +43,21 @@ def test_parse_number_rejects_with_field_name(value):
         parse_number(value, "threshold", unit="m")
 
 
+def test_parse_number_messages_name_the_unit_and_quote_the_entry():
+    with pytest.raises(ConsoleInputError) as e:
+        parse_number("abc", "left/joint1", unit="deg")
+    assert str(e.value) == "left/joint1: expected a number (deg), got 'abc'"
+    with pytest.raises(ConsoleInputError) as e:
+        parse_number(" 1e309 ", "threshold", unit="m")
+    assert str(e.value) == "threshold: expected a finite number (m), got '1e309'"  # what was typed, not inf
+    with pytest.raises(ConsoleInputError) as e:
+        parse_number("", "threshold", unit="m")
+    assert str(e.value) == "threshold: expected a number (m), got an empty entry"
+    with pytest.raises(ConsoleInputError) as e:
+        parse_number("x", "v")
+    assert str(e.value) == "v: expected a number, got 'x'"
+
+
 def test_parse_number_range_and_scale():
     assert parse_number(" 12.5 ", "x") == 12.5
     assert parse_number("90", "q", scale=math.pi / 180) == pytest.approx(math.pi / 2)

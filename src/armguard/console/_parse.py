@@ -38,23 +38,27 @@ def parse_number(
     Raises ConsoleInputError with the field's name and the accepted range.
     """
     suffix = f" {unit}" if unit else ""
+    what = f"a number ({unit})" if unit else "a number"
     if isinstance(value, bool):
-        raise ConsoleInputError(f"{field}: expected a number{suffix}, got {value!r}")
+        raise ConsoleInputError(f"{field}: expected {what}, got {value!r}")
     if isinstance(value, str):
         text = value.strip()
         if not text:
-            raise ConsoleInputError(f"{field}: expected a number{suffix}, got an empty entry")
+            raise ConsoleInputError(f"{field}: expected {what}, got an empty entry")
         try:
             x = float(text)
         except ValueError:
-            raise ConsoleInputError(f"{field}: expected a number{suffix}, got {text!r}") from None
+            raise ConsoleInputError(f"{field}: expected {what}, got {text!r}") from None
+        typed = repr(text)
     else:
         try:
             x = float(value)
         except (TypeError, ValueError):
-            raise ConsoleInputError(f"{field}: expected a number{suffix}, got {value!r}") from None
+            raise ConsoleInputError(f"{field}: expected {what}, got {value!r}") from None
+        typed = repr(x)
     if not math.isfinite(x):
-        raise ConsoleInputError(f"{field}: expected a finite number{suffix}, got {x!r}")
+        finite = f"a finite number ({unit})" if unit else "a finite number"
+        raise ConsoleInputError(f"{field}: expected {finite}, got {typed}")
     if x < lo or x > hi:
         raise ConsoleInputError(f"{field}: {x:g}{suffix} is outside [{lo:g}, {hi:g}]{suffix}; value kept unchanged")
     return x * scale
