@@ -142,6 +142,26 @@ def test_run_plays_the_trapezoid_and_halts_at_the_stopping_distance(state):
     assert snap.player.timeline.t < player.timeline.duration and snap.message_is_error
     assert 0.0 < snap.readout.distance <= 0.05 + 1e-9  # halted within the stand-off, before contact
     assert "stopped by detection" in snap.message and snap.run_state == "stopped by detection"
+    assert snap.run_detail.startswith(f"at t = {snap.player.timeline.t:.2f} s, left/")
+    assert "within the stopping distance 50 mm" in snap.run_detail and snap.run_detail in snap.message
+
+
+def test_test_line_says_when_a_run_ended(state):
+    from armguard.console._app import run_line
+
+    assert run_line(state.snapshot()) == "test: none running"
+    player = state.run("hit_post")
+    assert run_line(state.snapshot()) == "**test: running**"
+    while state.tick(0.05):
+        pass
+    snap = state.snapshot()
+    end = f"at t = {player.timeline.duration:.2f} s"
+    assert snap.run_state == "done" and snap.run_detail == end and snap.message == f"hit_post: done {end}"
+    assert run_line(snap) == f"**test: done {end}**"
+    state.run("hit_post")
+    state.tick(0.1)
+    state.stop()
+    assert run_line(state.snapshot()) == "**test: stopped at t = 0.10 s**"
 
 
 def test_verified_trajectory_time_line(state):

@@ -21,7 +21,7 @@ from ._draw import SceneDrawer
 from ._fields import COMMIT_ON_BLUR_HTML, TypedField
 from ._plot import ClearancePlot
 from ._readout import panel_html
-from ._state import ConsoleState
+from ._state import MAX_DISTANCE_SETTING, ConsoleState
 
 __all__ = ["ConsoleApp", "PortInUseError", "FPS", "PLOT_PERIOD"]
 
@@ -46,6 +46,13 @@ def _check_port_free(host: str, port: int) -> None:
         except OSError as exc:
             raise PortInUseError(f"port {port} on {host} is in use ({exc.strerror or exc}); stop what holds it "
                                  "or pass --port 0 for any free port") from None
+
+
+def run_line(snap) -> str:
+    """The Tests tab's line: the canned test's state and when (``**test: done at t = 5.00 s**``)."""
+    if not snap.run_state:
+        return "test: none running"
+    return f"**test: {' '.join(x for x in (snap.run_state, snap.run_detail) if x)}**"
 
 
 def _fmt(x: float) -> str:
@@ -188,7 +195,7 @@ class ConsoleApp:
             self._w_detect = gui.add_checkbox("detection", snap.detection)
             self._w_backend = gui.add_dropdown("backend", st.backends, initial_value=snap.backend)
             self._w_compare = gui.add_dropdown("compare with", ("off",) + st.backends, initial_value="off")
-            hint = "typed values apply on Enter or on leaving the field"
+            hint = f"0 to {MAX_DISTANCE_SETTING:g} m; applies on Enter or on leaving the field"
             self._fields["thr"] = self._field("threshold (m)", _fmt(snap.threshold), st.set_threshold, hint)
             self._fields["stop"] = self._field("stopping distance (m)", _fmt(snap.stopping_distance),
                                                st.set_stopping_distance, hint)
@@ -366,7 +373,7 @@ class ConsoleApp:
         self._w_cart.visible = snap.mode == "cartesian"
         self._sync_pose(snap)
         run = snap.run_state
-        self._w_run_state.content = f"**test: {run}**" if run else "test: none running"
+        self._w_run_state.content = run_line(snap)
         p = snap.player
         if p is not None:
             self._w_time.max = max(p.timeline.duration, 1e-3)

@@ -200,7 +200,7 @@ def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=Non
 
     ``message`` is shown under the table, red when ``error`` else grey.  ``compare`` (a
     ``Comparison`` of :mod:`._backends`) adds the second backend's nearest distance and Δd;
-    ``update_us`` the console's whole update (check, panel, comparison); ``changes`` the last
+    ``update_us`` the state's update (check, comparison, terrain, uncertainty; not this HTML nor the drawing); ``changes`` the last
     model reload's summary; ``terrain`` a ``TerrainView`` (the terrain category: distance, the
     pyramid's boxes tested and deciding level; ``id="armguard-terrain"``); ``sigmas`` a
     ``SigmaReport`` (the least clearance in sigmas and the collision-probability bound;

@@ -66,11 +66,13 @@ class Snapshot:
 
     ``q``: robot -> (n_joints,) float64 (rad or m); ``readout`` the distance panel; ``version``
     increases with every change.  ``backend`` the panel's backend, ``compare`` a
-    ``Comparison`` with the second backend (or None); ``update_us`` the console's whole update
-    (the check, the panel, the comparison), beside ``readout.elapsed_us``, the check alone;
+    ``Comparison`` with the second backend (or None); ``update_us`` the state's update after the
+    change (the check, the comparison, terrain and uncertainty; not the panel's HTML or the
+    drawing), beside ``readout.elapsed_us``, the check alone;
     ``ee_pose`` (4, 4) the active arm's tool pose now; ``run_state`` of the canned test:
     ``""``, ``"running"``, ``"done"``, ``"stopped"`` (by the operator) or ``"stopped by
-    detection"``; ``changes`` what the last model reload changed; ``terrain`` a
+    detection"``, with ``run_detail`` saying when (``"at t = 5.00 s"``) and, when detection
+    stopped it, the link, the obstacle and the distance; ``changes`` what the last model reload changed; ``terrain`` a
     :class:`~._overlays.TerrainView` (the pyramid boxes the last check tested) or None;
     ``sigmas`` the :class:`armguard.uncertainty.SigmaReport` of the uncertain placements or None.
     """
@@ -93,6 +95,7 @@ class Snapshot:
     update_us: float = 0.0
     ee_pose: np.ndarray | None = None
     run_state: str = ""
+    run_detail: str = ""
     changes: str = ""
     terrain: object = None
     sigmas: object = None
@@ -146,6 +149,7 @@ class ConsoleState(MotionMixin, SourcesMixin, OverlayMixin):
         self._comparison = None
         self._update_us = 0.0
         self._run_state = ""
+        self._run_detail = ""
         self._changes = ""
         self._rebuild_detector()
         self._evaluate()
@@ -190,6 +194,7 @@ class ConsoleState(MotionMixin, SourcesMixin, OverlayMixin):
                 update_us=self._update_us,
                 ee_pose=np.array(self._robot(self._active).link_pose(self._q[self._active])),
                 run_state=self._run_state,
+                run_detail=self._run_detail,
                 changes=self._changes,
                 terrain=self._terrain_view,
                 sigmas=self._sigmas,
@@ -394,6 +399,7 @@ class ConsoleState(MotionMixin, SourcesMixin, OverlayMixin):
             self._detector.set_active(test.robot)
             self._detector.set_threshold(self._threshold)
             self._run_state = ""
+            self._run_detail = ""
             self._changed(f"setup {name}: {test.description}".rstrip(": "))
 
     def run(self, name: str) -> Player:
@@ -406,6 +412,7 @@ class ConsoleState(MotionMixin, SourcesMixin, OverlayMixin):
             self._player = Player("run", name, test.robot, traj, tl, np.zeros(0), np.zeros(0))
             tl.play()
             self._run_state = "running"
+            self._run_detail = ""
             self._changed(f"running {name}")
             return self._player
 
@@ -464,6 +471,7 @@ class ConsoleState(MotionMixin, SourcesMixin, OverlayMixin):
             self._stop_player()
             if was_running:
                 self._run_state = "stopped"
+                self._run_detail = f"at t = {p.timeline.t:.2f} s"
                 self._changed(f"{p.name}: stopped by the operator")
             else:
                 self._changed()
@@ -496,8 +504,10 @@ class ConsoleState(MotionMixin, SourcesMixin, OverlayMixin):
     def tick(self, dt_wall: float) -> bool:
         """Advance the player by ``dt_wall`` s of wall-clock time; returns whether anything changed.
 
-        During a canned run, a status of COLLISION or a distance within the stopping distance
-        halts the motion (Ranger's collision avoidance with a stand-off distance).
+        During a canned run with detection on and a stopping distance set (> 0), a nearest
+        distance within the stopping distance halts the motion (Ranger's collision avoidance with
+        a stand-off distance); with no stopping distance the run plays to its end, through a
+        collision if its motion makes one.
         """
         with self._lock:
             p = self._player
@@ -512,13 +522,15 @@ class ConsoleState(MotionMixin, SourcesMixin, OverlayMixin):
             if self._detection and self._stopping > 0.0 and r.distance <= self._stopping:
                 p.timeline.pause()
                 self._run_state = "stopped by detection"
+                self._run_detail = (f"at t = {t:.2f} s, {r.link} within the stopping distance "
+                                    f"{self._stopping * 1000:.0f} mm: {r.distance * 1000:.1f} mm of {r.obstacle}")
                 self._message_is_error = True
-                self._message = (f"{p.name}: stopped by detection at t = {t:.2f} s, {r.link} within the stopping "
-                                 f"distance {self._stopping * 1000:.0f} mm: {r.distance * 1000:.1f} mm of {r.obstacle}")
+                self._message = f"{p.name}: stopped by detection {self._run_detail}"
             elif not p.timeline.playing or t >= p.timeline.duration:
                 p.timeline.pause()
                 self._run_state = "done"
+                self._run_detail = f"at t = {t:.2f} s"
                 self._message_is_error = False
-                self._message = f"{p.name}: done at t = {t:.2f} s"
+                self._message = f"{p.name}: done {self._run_detail}"
             return True
 
