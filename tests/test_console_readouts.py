@@ -49,6 +49,48 @@ def test_backend_readout_and_compare_delta(ranger):
     assert st.snapshot().compare is None
 
 
+def test_backends_listed_are_those_that_answer_distances(ranger, monkeypatch):
+    from armguard.backends import Capability, available, get_backend
+    from armguard.console import _sources
+
+    scene, model = ranger
+    st = ConsoleState(scene, model=model)
+    assert {"clip", "forbidden"} <= set(available())  # installed, but verdicts only
+    assert declared_capabilities_of("clip") == frozenset({Capability.VERDICTS})
+    assert "clip" not in st.backends and "forbidden" not in st.backends
+    assert st.backends[0] == "analytic" and {"coal", "fcl"} <= set(st.backends)
+    for name in st.backends[1:]:
+        assert Capability.DISTANCES in _sources.declared_capabilities(get_backend(name))
+    with pytest.raises(ConsoleInputError, match="does not answer distances"):
+        st.set_backend("clip")
+    # a backend listed because it declares nothing, whose checker then cannot be built (forbidden
+    # needs a map file): refused at once, the panel, backend and message as they were, and no
+    # longer offered; the next pick works
+    monkeypatch.setattr(_sources, "distance_backends", lambda: ("coal", "forbidden"))
+    st = ConsoleState(scene, model=model)
+    assert st.backends == ("analytic", "coal", "forbidden")
+    st.set_threshold(0.3)
+    before = st.snapshot()
+    with pytest.raises(ConsoleInputError, match="forbidden.*cannot compute the panel.*map"):
+        st.set_backend("forbidden")
+    after = st.snapshot()
+    assert after.backend == "analytic" and after.readout.backend == "analytic"
+    assert after.readout.distance == before.readout.distance and after.message == before.message
+    assert st.backends == ("analytic", "coal")
+    with pytest.raises(ConsoleInputError, match="cannot compute the panel"):
+        st.set_compare("forbidden")
+    assert st.snapshot().compare is None
+    st.set_backend("coal")
+    assert st.snapshot().readout.backend == "coal" and st.snapshot().message == "backend: coal"
+
+
+def declared_capabilities_of(name):
+    from armguard.backends import get_backend
+    from armguard.console._sources import declared_capabilities
+
+    return declared_capabilities(get_backend(name))
+
+
 def test_compare_delta_is_nan_without_a_pair():
     off = readout_off(0.05)
     on = SimpleNamespace(distance=0.2, backend="coal")
@@ -73,6 +115,54 @@ def test_reload_diff_shapes_moved_and_pairs(tmp_path):
     m_new = pairs(("left/link2", "post"), ("left/link3", "post"))
     text = describe_changes(old, old, q, q, m_old, m_new)
     assert "pairs added: 1 (left/link3 / post)" in text and "pairs removed: 1 (left/link1 / post)" in text
+
+
+def _edited_scene(tmp_path, old: str, new: str, name: str = "edited.yaml"):
+    """The test scene with the first ``old`` (the left arm's, where both arms have it) made ``new``."""
+    text = SCENE.read_text()
+    assert old in text, old
+    p = tmp_path / name
+    p.write_text(text.replace(old, new, 1))
+    return p
+
+
+def test_reload_diff_resized_is_not_moved(tmp_path):
+    old = load_scene(str(SCENE))
+    q = old.default_q()
+    bigger = load_scene(str(_edited_scene(tmp_path, "size: [0.2, 0.2, 0.6]", "size: [0.24, 0.2, 0.6]")))
+    assert describe_changes(old, bigger, q, q) == "shapes resized: post"
+    both = load_scene(str(_edited_scene(tmp_path, "size: [0.2, 0.2, 0.6], xyz: [-0.8, 0.8, 0.0]",
+                                        "size: [0.2, 0.2, 0.6], xyz: [-0.7, 0.8, 0.1]", "b.yaml")))
+    assert describe_changes(old, both, q, q) == "shapes moved: post"
+    fat = load_scene(str(_edited_scene(tmp_path, "link2: [{type: link_capsule, radius: 0.05}]",
+                                       "link2: [{type: link_capsule, radius: 0.07}]", "c.yaml")))
+    assert describe_changes(old, fat, q, q) == "shapes resized: left/link2"
+
+
+def test_reload_diff_joint_limits_clipped_configuration_and_workspace(tmp_path):
+    from armguard.console._reload import carry_q
+
+    old = load_scene(str(SCENE))
+    new = load_scene(str(_edited_scene(
+        tmp_path, "{a: 0.4, alpha: 0, d: 0, limits: [-150, 150], max_velocity: 90, max_acceleration: 180}\n    link_shapes",
+        "{a: 0.4, alpha: 0, d: 0, limits: [-20, 20], max_velocity: 90, max_acceleration: 180}\n    link_shapes")))
+    q = old.default_q()
+    q["left"] = np.radians([-90.0, 0.0, 30.0])
+    q_new = carry_q(q, old, new)
+    assert np.degrees(q_new["left"][2]) == pytest.approx(20.0)
+    text = describe_changes(old, new, q, q_new)
+    assert "joint limits changed: left/joint3 [-150, 150] → [-20, 20] deg" in text, text
+    assert "configuration clipped into the new limits: left/joint3 30 → 20 deg" in text, text
+    assert text != "no change" and "right/" not in text.split("shapes")[0]
+    # the limits narrowed around a value inside them: limits only, nothing clipped
+    q["left"] = np.radians([-90.0, 0.0, 10.0])
+    text = describe_changes(old, new, q, carry_q(q, old, new))
+    assert text == "joint limits changed: left/joint3 [-150, 150] → [-20, 20] deg", text
+    ws = load_scene(str(_edited_scene(tmp_path, "workspace: {lo: [-2.5, -2.0, -1.0], hi: [2.5, 2.0, 1.0]}",
+                                      "workspace: {lo: [-3, -2.0, -1.0], hi: [2.5, 2.0, 1.0]}", "w.yaml")))
+    q = old.default_q()
+    assert describe_changes(old, ws, q, q) == \
+        "workspace changed: [-2.5, -2, -1] to [2.5, 2, 1] m → [-3, -2, -1] to [2.5, 2, 1] m"
 
 
 def test_watch_reload_and_a_broken_file_keeps_the_last_good_model(tmp_path):

@@ -2,16 +2,55 @@
 
 Mixed into :class:`~._state.ConsoleState` (uses its lock, scene, model and ``_changed``):
 :meth:`SourcesMixin.set_backend` and :meth:`SourcesMixin.set_compare` pick the backends
-(``armguard.backends.available()``), :meth:`SourcesMixin.reload` replaces the model
+(the installed ones that answer distances: :func:`distance_backends`), :meth:`SourcesMixin.reload` replaces the model
 (``armguard console --watch``) keeping the configuration.
 """
 
 from __future__ import annotations
 
+import typing
+
 from ._backends import BackendView
 from ._parse import ConsoleInputError
 
-__all__ = ["SourcesMixin"]
+__all__ = ["SourcesMixin", "distance_backends", "declared_capabilities"]
+
+
+def declared_capabilities(backend) -> frozenset | None:
+    """What a backend plugin says its checkers answer, without building one (None: it does not say).
+
+    The backend's own ``capabilities``, else those of the checker class its ``build`` is declared
+    to return.
+    """
+    caps = getattr(backend, "capabilities", None)
+    if caps is None:
+        try:
+            hint = typing.get_type_hints(type(backend).build).get("return")
+        except Exception:  # noqa: BLE001 - an unresolvable annotation says nothing
+            hint = None
+        caps = getattr(hint, "capabilities", None)
+    return None if caps is None else frozenset(caps)
+
+
+def distance_backends() -> tuple[str, ...]:
+    """The installed backends besides ``analytic`` that answer distances (``Capability.DISTANCES``).
+
+    A backend that declares verdicts only (``clip``, ``forbidden``) is left out; one that declares
+    nothing is listed, and refused when its checker turns out not to answer distances.
+    """
+    from ..backends import Capability, available, get_backend
+
+    out = []
+    for name in available():
+        if name == "analytic":
+            continue
+        try:
+            caps = declared_capabilities(get_backend(name))
+        except Exception:  # noqa: BLE001 - a plugin that does not load is not offered
+            continue
+        if caps is None or Capability.DISTANCES in caps:
+            out.append(name)
+    return tuple(out)
 
 
 class SourcesMixin:
@@ -25,7 +64,7 @@ class SourcesMixin:
             return readout_from_report(self._last_report)
         view = self._views.get(backend)
         if view is None:
-            view = self._views[backend] = BackendView(self._model, backend)
+            view = self._views[backend] = self._view_of(backend)
         return view.readout(self._scene, self._q, self._active, threshold=self._threshold,
                             stopping_distance=self._stopping, contact=self._tol.length)
 
@@ -47,12 +86,13 @@ class SourcesMixin:
             raise ConsoleInputError(f"scene {scene.name!r} has no robot to drive")
         with self._lock:
             old = (self._scene, self._model, self._q, self._active, self._detector, self._views, self._backend,
-                   self._compare_with)
+                   self._compare_with, self._refused)
             new_scene = scene.copy()
             new_q = carry_q(self._q, self._scene, new_scene)
             try:
                 changes = describe_changes(self._scene, new_scene, self._q, new_q, self._model, model)
                 self._scene, self._model, self._q, self._views = new_scene, model, new_q, {}
+                self._refused = {}
                 if self._active not in new_scene.robots:
                     self._active = next(iter(new_scene.robots))
                 if self._backend not in self.backends:
@@ -65,7 +105,7 @@ class SourcesMixin:
                 self._changed(self._changes)
             except Exception:
                 (self._scene, self._model, self._q, self._active, self._detector, self._views, self._backend,
-                 self._compare_with) = old
+                 self._compare_with, self._refused) = old
                 self._evaluate()
                 raise
             return changes
@@ -73,42 +113,81 @@ class SourcesMixin:
     # ------------------------------------------------------------------ backends
     @property
     def backends(self) -> tuple[str, ...]:
-        """The backends the panel can use: ``analytic`` (the detector) and, with a model, every installed one."""
+        """The backends the panel can use: ``analytic`` (the detector) and, with a model, every
+        installed one that answers distances (:func:`distance_backends`), less any refused here."""
         if self._model is None:
             return ("analytic",)
-        from ..backends import available
-
-        return ("analytic",) + tuple(b for b in available() if b != "analytic")
+        if self._distance_backends is None:
+            self._distance_backends = distance_backends()
+        return ("analytic",) + tuple(b for b in self._distance_backends if b not in self._refused)
 
     def _check_backend(self, name: str) -> str:
+        if name in self._refused:
+            raise ConsoleInputError(f"backend: {self._refused[name]}; backends are {list(self.backends)}")
         if name not in self.backends:
-            raise ConsoleInputError(f"backend: {name!r} is not installed here; backends are {list(self.backends)}")
+            raise ConsoleInputError(f"backend: {name!r} is not installed here or does not answer distances; "
+                                    f"backends are {list(self.backends)}")
         return name
 
-    def set_backend(self, name: str) -> None:
-        """Compute the panel with backend ``name`` (the configuration and settings stay)."""
+    def _view_of(self, name: str) -> BackendView:
+        """Build backend ``name``'s checker on the model; a checker without distances, or one that
+        cannot be built, is refused (and left out of :attr:`backends` from then on)."""
+        from ..backends import Capability
+
+        try:
+            view = BackendView(self._model, name)
+            caps = getattr(view.checker, "capabilities", None)
+            if caps is not None and Capability.DISTANCES not in caps:
+                raise ConsoleInputError(f"{name!r} answers {sorted(str(getattr(c, 'value', c)) for c in caps)}, "
+                                        "not distances")
+        except Exception as exc:
+            self._refused[name] = f"{name!r} cannot compute the panel ({exc})"
+            raise ConsoleInputError(f"backend: {self._refused[name]}; kept {self._backend}; "
+                                    f"backends are {list(self.backends)}") from None
+        return view
+
+    def _prepare(self, name: str) -> None:
+        """Build ``name``'s checker before taking the lock (it may take seconds; other commands wait less)."""
+        if name == "analytic" or name in self._views:
+            return
+        model = self._model
+        view = self._view_of(name)
         with self._lock:
-            self._check_backend(name)
-            old = self._backend
+            if self._model is model:
+                self._views.setdefault(name, view)
+
+    def set_backend(self, name: str) -> None:
+        """Compute the panel with backend ``name`` (the configuration and settings stay).
+
+        A refusal (not a distance backend, or its checker cannot be built) leaves the backend,
+        the panel and its message as they were, and raises.
+        """
+        self._check_backend(name)
+        self._prepare(name)
+        with self._lock:
+            old, message = self._backend, (self._message, self._message_is_error)
             self._backend = name
             try:
                 self._changed(f"backend: {name}")
             except Exception:
                 self._backend = old
+                self._message, self._message_is_error = message
                 self._evaluate()
                 raise
 
     def set_compare(self, name: str | None) -> None:
         """Compare mode: also compute the nearest pair with backend ``name`` (None: off) and show Δd."""
+        if name is not None:
+            self._check_backend(name)
+            self._prepare(name)
         with self._lock:
-            if name is not None:
-                self._check_backend(name)
-            old = self._compare_with
+            old, message = self._compare_with, (self._message, self._message_is_error)
             self._compare_with = name
             try:
                 self._changed("" if name is None else f"comparing {self._backend} with {name}")
             except Exception:
                 self._compare_with = old
+                self._message, self._message_is_error = message
                 self._evaluate()
                 raise
 

@@ -144,6 +144,8 @@ class ConsoleState(MotionMixin, SourcesMixin, OverlayMixin):
         self._readout = readout_off(self._threshold)
         self._model = model
         self._views: dict = {}
+        self._refused: dict = {}
+        self._distance_backends: tuple | None = None
         self._backend = "analytic"
         self._compare_with: str | None = None
         self._comparison = None
