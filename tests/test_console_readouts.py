@@ -176,14 +176,24 @@ def test_watch_reload_and_a_broken_file_keeps_the_last_good_model(tmp_path):
     assert w.reload_now() == "shapes moved: post"
     snap = st.snapshot()
     assert app.reloaded == 1 and snap.changes == "model reloaded: shapes moved: post"
+    html = _panel(snap)
+    assert html.count("shapes moved: post") == 1 and 'data-reload="true"' in html  # one message
     assert math.isclose(snap.q["left"][0], math.radians(60))  # the configuration kept
     post = [it.shape for it in st.scene.shapes_at(snap.q) if it.owner == "post"][0]
     path.write_text(path.read_text().replace("size: [0.2, 0.2, 0.6]", "sise: [0.2, 0.2, 0.6]"))
     assert w.reload_now() is None and app.reloaded == 1
     snap = st.snapshot()
     assert snap.message_is_error and "last good one keeps running" in snap.message and "sise" in snap.message
+    html = _panel(snap)
+    assert "sise" in html and "model reloaded" not in html  # the current message only
     again = [it.shape for it in st.scene.shapes_at(snap.q) if it.owner == "post"][0]
     assert np.array_equal(np.asarray(again.center), np.asarray(post.center))
+
+
+def _panel(snap) -> str:
+    from armguard.console._readout import panel_html
+
+    return panel_html(snap.readout, snap.message, error=snap.message_is_error, changes=snap.changes)
 
 
 def _project(eye, look, P, fov):

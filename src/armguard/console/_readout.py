@@ -201,7 +201,8 @@ def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=Non
     ``message`` is shown under the table, red when ``error`` else grey.  ``compare`` (a
     ``Comparison`` of :mod:`._backends`) adds the second backend's nearest distance and Δd;
     ``update_us`` the state's update (check, comparison, terrain, uncertainty; not this HTML nor the drawing); ``changes`` the last
-    model reload's summary; ``terrain`` a ``TerrainView`` (the terrain category: distance, the
+    model reload's summary (the message is marked ``data-reload="true"`` while it is that summary;
+    a later message replaces it: the panel shows one message, the current one); ``terrain`` a ``TerrainView`` (the terrain category: distance, the
     pyramid's boxes tested and deciding level; ``id="armguard-terrain"``); ``sigmas`` a
     ``SigmaReport`` (the least clearance in sigmas and the collision-probability bound;
     ``id="armguard-sigmas"`` with ``data-sigmas``, ``data-bound``).  The status block carries ``id="armguard-status"``, ``data-status``
@@ -249,11 +250,10 @@ def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=Non
     )
     msg = ""
     if message:
-        color = "#d62828" if error else "#555"
-        msg = (f'<div id="armguard-message" data-error="{str(error).lower()}" '
+        # one message, the current one: a reload's summary only while it is that message
+        reload = bool(changes) and message == changes and not error
+        color = "#d62828" if error else ("#046" if reload else "#555")
+        msg = (f'<div id="armguard-message" data-error="{str(error).lower()}" data-reload="{str(reload).lower()}" '
                f'style="color:{color};font-family:sans-serif;padding-top:4px">{e(message)}</div>')
-    if changes:
-        msg += (f'<div id="armguard-changes" style="color:#046;font-family:sans-serif;padding-top:4px;'
-                f'font-size:0.85em">{e(changes)}</div>')
     extra = ("" if terrain is None else _terrain_html(terrain)) + ("" if sigmas is None else _sigmas_html(sigmas))
     return head + cmp_html + extra + table + msg
