@@ -190,6 +190,42 @@ def test_watch_reload_and_a_broken_file_keeps_the_last_good_model(tmp_path):
     assert np.array_equal(np.asarray(again.center), np.asarray(post.center))
 
 
+def test_watch_reload_refreshes_the_widgets(tmp_path):
+    """After a reload the joint fields and sliders show the new limits (and hints), the workspace
+    fields the new box: "apply limits" keeps the new workspace."""
+    import time
+
+    from armguard.console import ConsoleApp
+
+    path = _edited_scene(tmp_path, "armguard_scene: 1", "armguard_scene: 1")
+    app = ConsoleApp(ConsoleState(load_scene(str(path))), port=0).start()
+    try:
+        st = app.state
+        st.set_joint("left", 2, "30", deg=True)
+        fields, sliders, _ = app._w_joints["left"]
+        assert sliders[2].max == pytest.approx(150.0) and "-150 to 150 deg" in fields[2].handle.hint
+        text = path.read_text().replace("limits: [-150, 150]", "limits: [-20, 20]", 2)  # left joints 2 and 3
+        text = text.replace("workspace: {lo: [-2.5, -2.0, -1.0]", "workspace: {lo: [-3.0, -2.0, -1.0]")
+        path.write_text(text)
+        generation = app._built_generation
+        app.watcher = ModelWatcher(app, str(path), [path])
+        assert "joint limits changed" in app.watcher.reload_now()
+        for _ in range(100):
+            if app._built_generation != generation and app._shown_version == st.version:
+                break
+            time.sleep(0.05)
+        fields, sliders, _ = app._w_joints["left"]
+        assert (sliders[2].min, sliders[2].max) == (pytest.approx(-20.0), pytest.approx(20.0))
+        assert sliders[2].value == pytest.approx(20.0) and fields[2].shown == "20"  # clipped from 30
+        assert "-20 to 20 deg" in fields[2].handle.hint and "-170 to 170 deg" in fields[0].handle.hint
+        assert app._w_joints["right"][1][2].max == pytest.approx(150.0)  # the right arm's stay
+        assert tuple(app._w_ws_lo.value) == pytest.approx((-3.0, -2.0, -1.0))
+        st.set_workspace(app._w_ws_lo.value, app._w_ws_hi.value)  # what "apply limits" does
+        assert np.allclose(st.snapshot().workspace[0], [-3.0, -2.0, -1.0])
+    finally:
+        app.stop()
+
+
 def _panel(snap) -> str:
     from armguard.console._readout import panel_html
 

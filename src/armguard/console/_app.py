@@ -143,6 +143,7 @@ class ConsoleApp:
             try:
                 if self._built_generation != self._model_generation:
                     self._built_generation = self._model_generation
+                    self._refresh_model_widgets()
                     self.drawer.build()
                     self._redraw(force=True)
                 self.state.tick(now - last)
@@ -189,7 +190,7 @@ class ConsoleApp:
         self._fields: dict = {}
 
         # -- control: Ranger's main control panel ------------------------------------------
-        with tabs.add_tab("Control"):
+        with tabs.add_tab("Control") as self._tab_control:
             self._w_active = gui.add_dropdown("active arm", st.robots, initial_value=snap.active)
             self._w_mode = gui.add_dropdown("mode", ("joint", "cartesian"), initial_value=snap.mode)
             self._w_detect = gui.add_checkbox("detection", snap.detection)
@@ -201,22 +202,24 @@ class ConsoleApp:
                                                st.set_stopping_distance, hint)
             self._w_joint_folders = {}
             self._w_joints = {}
-            for name in st.robots:
-                self._build_joint_panel(name, snap)
-            with gui.add_folder("Cartesian", visible=False) as self._w_cart:
+            self._joints_order = self._fields["stop"].form.order
+            for k, name in enumerate(st.robots):
+                self._build_joint_panel(name, snap, self._joints_order + (k + 1) / (len(st.robots) + 1))
+            with gui.add_folder("Cartesian", visible=False, order=self._joints_order + 1.0) as self._w_cart:
                 self._w_pose_now = gui.add_markdown("")
                 self._w_pos = gui.add_vector3("target position (m)", (0.0, 0.0, 0.0), step=0.001)
                 self._w_rpy = gui.add_vector3("target roll pitch yaw (deg)", (0.0, 0.0, 0.0), step=0.1)
                 b_move = gui.add_button("move tool")
                 b_read = gui.add_button("target = tool pose now")
                 self._w_psi = gui.add_slider("arm angle (deg)", min=-180.0, max=180.0, step=0.5, initial_value=0.0)
-            with gui.add_folder("workspace box", expand_by_default=False):
+            with gui.add_folder("workspace box", expand_by_default=False, order=self._joints_order + 2.0):
                 ws = snap.workspace
                 self._w_ws_lo = gui.add_vector3("lower corner (m)", tuple(ws[0]) if ws else (-1.0, -1.0, -1.0), step=0.01)
                 self._w_ws_hi = gui.add_vector3("upper corner (m)", tuple(ws[1]) if ws else (1.0, 1.0, 1.0), step=0.01)
                 b_ws = gui.add_button("apply limits")
 
         # -- tests: Ranger's test panel ----------------------------------------------------
+        self._ws_widgets_shown = self._ws_key(snap.workspace)
         with tabs.add_tab("Tests"):
             self._w_run_state = gui.add_markdown("")
             if not st.canned_tests():
@@ -232,7 +235,7 @@ class ConsoleApp:
         with tabs.add_tab("Time line"):
             trajs = st.trajectories()
             self._w_traj = gui.add_dropdown("trajectory", trajs or ("(none)",))
-            b_load = gui.add_button("verify and load", disabled=not trajs)
+            self._b_load = b_load = gui.add_button("verify and load", disabled=not trajs)
             self._w_transport = gui.add_button_group("play", ("◀ back", "pause", "play ▶", "slower", "faster"))
             self._w_time = gui.add_slider("time (s)", min=0.0, max=1.0, step=0.01, initial_value=0.0)
             self._w_rate = gui.add_markdown("")
@@ -272,14 +275,15 @@ class ConsoleApp:
         self._pose_shown = None
         self._read_tool_pose()
 
-    def _build_joint_panel(self, name: str, snap) -> None:
+    def _build_joint_panel(self, name: str, snap, order: float) -> None:
         gui, st = self.server.gui, self.state
         robot = st.scene.robots[name]
         units = st.joint_units(name)
         scale = np.array([180.0 / math.pi if u == "deg" else 1.0 for u in units])
         lo, hi = st.joint_limits(name)
         fields, sliders = [], []
-        with gui.add_folder(f"joints {name}", visible=name == snap.active) as folder:
+        step = 0.5 / (len(st.robots) + 1)
+        with gui.add_folder(f"joints {name}", visible=name == snap.active, order=order) as folder:
             for j, jn in enumerate(robot.joint_names):
                 a = float(lo[j] * scale[j]) if math.isfinite(lo[j]) else -360.0
                 b = float(hi[j] * scale[j]) if math.isfinite(hi[j]) else 360.0
@@ -287,7 +291,8 @@ class ConsoleApp:
                     f"{jn} ({units[j]})", _fmt(snap.q[name][j] * scale[j]),
                     lambda text, j=j: st.set_joint(name, j, text, deg=True),
                     hint=f"{a:g} to {b:g} {units[j]}; applies on Enter or on leaving the field"))
-        with gui.add_folder(f"sliders {name}", visible=name == snap.active, expand_by_default=False) as sfolder:
+        with gui.add_folder(f"sliders {name}", visible=name == snap.active, expand_by_default=False,
+                            order=order + step) as sfolder:
             for j, jn in enumerate(robot.joint_names):
                 a = float(lo[j] * scale[j]) if math.isfinite(lo[j]) else -360.0
                 b = float(hi[j] * scale[j]) if math.isfinite(hi[j]) else 360.0
@@ -298,6 +303,27 @@ class ConsoleApp:
                 sliders.append(s)
         self._w_joint_folders[name] = (folder, sfolder)
         self._w_joints[name] = (fields, sliders, scale)
+
+    def _refresh_model_widgets(self) -> None:
+        """After a model reload: the widgets that show the model (arms, joint fields and sliders
+        with their limits and hints, backends, trajectories, the workspace box) show the new one."""
+        st, snap = self.state, self.state.snapshot()
+        for folders in self._w_joint_folders.values():
+            for folder in folders:
+                folder.remove()
+        self._w_joint_folders, self._w_joints = {}, {}
+        with self._tab_control:
+            for k, name in enumerate(st.robots):
+                self._build_joint_panel(name, snap, self._joints_order + (k + 1) / (len(st.robots) + 1))
+        self._w_active.options = st.robots
+        trajs = st.trajectories()
+        self._w_traj.options = trajs or ("(none)",)
+        self._b_load.disabled = not trajs
+        self._ws_widgets_shown = "stale"  # the workspace fields show the new model's box
+        self._pose_shown = None
+
+    def _ws_key(self, ws):
+        return None if ws is None else tuple(float(x) for x in np.concatenate(ws))
 
     def _guard(self, fn):
         def cb(event):
@@ -354,12 +380,21 @@ class ConsoleApp:
     # ------------------------------------------------------------------ drawing
     def _sync_widgets(self) -> None:
         snap = self.state.snapshot()
+        backends = self.state.backends
+        if tuple(self._w_backend.options) != backends:  # a backend refused here is no longer offered
+            self._w_backend.options = backends
+            self._w_compare.options = ("off",) + backends
         self._w_active.value = snap.active
         self._w_mode.value = snap.mode
         self._w_detect.value = snap.detection
         self._w_backend.value = snap.backend
         cmp = snap.compare
         self._w_compare.value = "off" if cmp is None else cmp.other
+        ws = self._ws_key(snap.workspace)
+        if ws != self._ws_widgets_shown:  # the box in force changed (a reload, another tab)
+            self._ws_widgets_shown = ws
+            lo, hi = (ws[:3], ws[3:]) if ws is not None else ((-1.0, -1.0, -1.0), (1.0, 1.0, 1.0))
+            self._w_ws_lo.value, self._w_ws_hi.value = tuple(lo), tuple(hi)
         self._fields["thr"].show(_fmt(snap.threshold))
         self._fields["stop"].show(_fmt(snap.stopping_distance))
         for name, (fields, sliders, scale) in self._w_joints.items():
