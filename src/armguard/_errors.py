@@ -60,11 +60,13 @@ class SceneError(ArmguardError, ValueError):
 class SceneFileError(SceneError):
     """A scene, robot or trajectory file could not be loaded; names the file, the place in it and what was expected."""
 
-    def __init__(self, file: str, where: str, message: str) -> None:
+    def __init__(self, file: str, where: str, message: str, line: int | None = None) -> None:
         self.file = str(file)
         self.where = where
         self.message = message
-        loc = f"{self.file}: {where}" if where else self.file
+        self.line = line  # 1-based line of ``where`` in the file, when known
+        at = f" (line {line})" if line is not None else ""
+        loc = f"{self.file}: {where}{at}" if where else self.file
         super().__init__(f"{loc}: {message}")
 
 

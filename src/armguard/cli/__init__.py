@@ -16,8 +16,21 @@ class _Group(click.Group):
         try:
             return super().invoke(ctx)
         except ArmguardError as exc:
-            click.secho(f"error: {exc}", fg="red", err=True)
+            click.secho(f"error: {_option_names(ctx, str(exc))}", fg="red", err=True)
             sys.exit(2)
+
+
+def _option_names(ctx, message: str) -> str:
+    """An API error about a parameter (``stopping_distance: expected ...``) in the command's own
+    terms (``--stopping-distance: expected ...``) when the message starts with one of its options."""
+    sub = ctx.invoked_subcommand and ctx.command.get_command(ctx, ctx.invoked_subcommand)
+    head, sep, rest = message.partition(":")
+    if not sep or sub is None:
+        return message
+    for param in sub.params:
+        if isinstance(param, click.Option) and param.name == head.strip() and param.opts:
+            return f"{max(param.opts, key=len)}:{rest}"
+    return message
 
 
 @click.group(cls=_Group)

@@ -21,22 +21,9 @@ def _fmt(p) -> str:
     return "[" + ", ".join(f"{float(x):.4f}" for x in p) + "]"
 
 
-def feature_dict(feature) -> dict | None:
-    """A feature as data: ``{"kind": "face" | "edge" | "vertex" | "surface", "index": int}`` (None stays None)."""
-    if feature is None:
-        return None
-    return {"kind": str(getattr(feature.kind, "value", feature.kind)), "index": int(feature.index)}
-
-
 def report_dict(rep) -> dict:
-    """``rep.to_dict()`` with every feature as :func:`feature_dict` data, not its Python repr."""
-    d = rep.to_dict()
-    if rep.nearest is not None and d.get("nearest") is not None:
-        d["nearest"]["feature"] = feature_dict(rep.nearest.feature)
-    for cat, r in rep.by_category.items():
-        if cat in d.get("by_category", {}):
-            d["by_category"][cat]["feature"] = feature_dict(r.feature)
-    return d
+    """``rep.to_dict()``: every feature as data (``Feature.to_dict``), not its Python repr."""
+    return rep.to_dict()
 
 
 def parse_q(sc, q_text: str, deg: bool):
@@ -55,8 +42,11 @@ def parse_q(sc, q_text: str, deg: bool):
     if len(q) != n:
         raise click.BadParameter(f"expected {n} values (over {', '.join(sc.joint_names)}), got {len(q)}",
                                  param_hint="--q")
-    if not np.all(np.isfinite(q)):
-        raise click.BadParameter("every value must be finite", param_hint="--q")
+    bad = np.flatnonzero(~np.isfinite(q))
+    if len(bad):
+        k = int(bad[0])
+        raise click.BadParameter(f"{sc.joint_names[k]} (value {k + 1} of {n}) = {float(q[k])}: every value must be finite",
+                                 param_hint="--q")
     k = 0
     for rname, robot in sc.robots.items():
         types = getattr(robot, "joint_types", None) or ("revolute",) * robot.n_joints
@@ -78,7 +68,9 @@ def parse_q(sc, q_text: str, deg: bool):
 
 @main.command("check")
 @click.argument("scene")
-@click.option("--q", "q_text", default=None, help="Joint values over scene.joint_names, comma-separated (default: home).")
+@click.option("--q", "q_text", default=None,
+              help="Joint values, comma-separated, in the scene's joint order (`armguard info SCENE` lists it; "
+                   "default: the home pose).")
 @click.option("--deg", is_flag=True, help="--q gives revolute joints in degrees (prismatic stay in m).")
 @click.option("--threshold", type=float, default=0.05, show_default=True, help="Detection threshold (m).")
 @click.option("--stopping-distance", type=float, default=0.0, show_default=True, help="Stopping distance (m).")
@@ -113,6 +105,8 @@ def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_u
         click.echo(json.dumps(report_dict(rep), indent=2))
         sys.exit(1 if collided else 0)
     out = Console()
+    if not out.is_terminal:  # piped: don't cut names to 80 columns
+        out = Console(width=200)
     colour = _COLOUR[rep.status.value]
     out.print(f"[bold]{sc.name}[/bold]  status: [bold {colour}]{rep.status.value.upper()}[/bold {colour}]  "
               f"(threshold {threshold} m, {rep.elapsed_us:.1f} µs, {rep.n_evaluated} pairs evaluated)")
@@ -123,6 +117,7 @@ def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_u
         table.add_row(cat, f"{r.distance:.6f}", r.link, r.obstacle, feat, _fmt(r.p_WA), _fmt(r.p_WB), style=style)
     out.print(table)
     if rep.not_evaluated:
-        out.print(f"{len(rep.not_evaluated)} pairs not evaluated (budget); least lower bound "
-                  f"{min(n.lower_bound for n in rep.not_evaluated):.4f} m")
+        lb = min(n.lower_bound for n in rep.not_evaluated)
+        bound = f"least lower bound {lb:.4f} m" if math.isfinite(lb) else "no lower bound on some of them yet"
+        out.print(f"{len(rep.not_evaluated)} pairs not evaluated within the budget; {bound}")
     sys.exit(1 if collided else 0)

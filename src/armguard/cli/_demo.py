@@ -11,6 +11,7 @@ involve the moving arm (the detector with that arm active, along the trajectory)
 
 from __future__ import annotations
 
+import sys
 import time
 from pathlib import Path
 
@@ -68,6 +69,13 @@ def first_collision_text(r) -> str:
     return f"{c.describe()}, {who} / {c.obstacle}{feat} at ({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f}) m, t = {c.time:.2f} s"
 
 
+def _file_stem(spec: str, scene) -> str:
+    """A file-name stem for scene ``spec`` (a built-in name, or a scene file's own stem): never a path."""
+    p = Path(spec)
+    stem = p.stem if p.suffix.lower() in (".yaml", ".yml", ".urdf") or p.exists() else str(spec)
+    return "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in stem) or str(getattr(scene, "name", "scene"))
+
+
 def verdict_text(r) -> str:
     """The verdict column: SAFE, INCOMPLETE, COLLISION (a contact) or UNSAFE (stopping distance)."""
     v = r.verdict()
@@ -99,7 +107,11 @@ def demo_cmd(out_dir, scenes, stopping_distances) -> None:
     if not console.is_terminal:  # piped or under make: don't fold the table into 80 columns
         console = Console(width=180)
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        click.secho(f"error: cannot create the output folder {out}: {exc.strerror or exc}", fg="red", err=True)
+        sys.exit(2)
     table = Table(title="armguard: certified verification of the built-in scenes' canned trajectories")
     modes = [("fixed", float(sd)) for sd in stopping_distances] or [("fixed", 0.0), ("hermes", HERMES_MAX_STOPPING_DISTANCE)]
     for col in ("scene", "trajectory", "stopping distance", "verdict",
@@ -129,9 +141,13 @@ def demo_cmd(out_dir, scenes, stopping_distances) -> None:
                     r = v.verify(traj, stopping_distance=sd, name=tname)
                     label, stem_sd = f"{sd * 1e3:.0f} mm", f"sd{sd * 1e3:.0f}mm"
                 dt = time.perf_counter() - t0
-                stem = f"{name}__{tname}__{stem_sd}"
-                r.save_json(out / f"{stem}.json")
-                r.plot(out / f"{stem}.png")
+                stem = f"{_file_stem(name, sc)}__{tname}__{stem_sd}"
+                try:
+                    r.save_json(out / f"{stem}.json")
+                    r.plot(out / f"{stem}.png")
+                except OSError as exc:
+                    click.secho(f"error: cannot write the reports to {out}: {exc.strerror or exc}", fg="red", err=True)
+                    sys.exit(2)
                 table.add_row(name, tname, label, verdict_text(r), first_collision_text(r),
                               f"{clearance * 1e3:.1f} mm", f"{dt * 1e3:.0f} ms")
     console.print(table)

@@ -22,7 +22,7 @@ def resolve_trajectories(scene, specs):
         if spec == "all":
             out.extend((n, t) for n, t in scene.trajectories.items())
         elif p.suffix.lower() in (".yaml", ".yml") or p.exists():
-            out.append((p.stem, Trajectory.load_yaml(p)))
+            out.append((p.stem, _checked_file(scene, p, Trajectory.load_yaml(p))))
         elif spec in scene.trajectories:
             out.append((spec, scene.trajectories[spec]))
         elif spec in scene.canned_tests:
@@ -34,6 +34,23 @@ def resolve_trajectories(scene, specs):
     if not out:
         raise VerificationError(f"scene {scene.name!r} has no canned trajectory")
     return out
+
+
+def _checked_file(scene, path: Path, traj):
+    """``traj`` (loaded from ``path``) after checking its robot and joints against ``scene``: a
+    mismatch is an error naming the file, the key and its line."""
+    from .._errors import SceneFileError
+    from ..scene._lines import lines_for
+
+    with lines_for(path):
+        if traj.robot_name not in scene.robots:
+            raise SceneFileError(str(path), "robot", f"robot {traj.robot_name!r} is not in scene {scene.name!r} "
+                                 f"(its robots: {', '.join(scene.robots)})")
+        want = list(scene.robots[traj.robot_name].joint_names)
+        if list(traj.joint_names) != want:
+            raise SceneFileError(str(path), "joint_names", f"expected robot {traj.robot_name!r}'s joints {want}, "
+                                 f"got {list(traj.joint_names)}")
+    return traj
 
 
 @main.command("verify")
@@ -59,7 +76,8 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
                report_path, plot_path, workers, scheduler, terrain_file) -> None:
     """Verify TRAJECTORIES (.yaml files, canned names of SCENE, or 'all') in SCENE.
 
-    Exit status: 0 when every trajectory is safe, 1 when one collides or could not be verified.
+    Exit status: 0 when every trajectory is safe, 1 when one collides or could not be verified
+    (incomplete), 2 for a usage error or a file that cannot be read or written.
     """
     import json
 

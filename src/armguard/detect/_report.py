@@ -90,12 +90,12 @@ class PairResult:
     pair_index: int = -1
 
     def to_dict(self) -> dict:
-        """JSON-ready dictionary (lists of floats, feature as its ``repr``/dict)."""
+        """JSON-ready dictionary (lists of floats, the feature as ``Feature.to_dict`` data)."""
         feat = self.feature
         if feat is not None and hasattr(feat, "to_dict"):
             feat = feat.to_dict()
         elif feat is not None:
-            feat = repr(feat)
+            feat = {"kind": str(getattr(feat.kind, "value", feat.kind)), "index": int(feat.index)}
         return {
             "distance": self.distance,
             "category": self.category,

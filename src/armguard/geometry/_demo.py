@@ -36,12 +36,15 @@ def print_table() -> None:
     from rich.console import Console
     from rich.table import Table
 
+    from ..cli._compile import warm_up
+
     console = Console()
-    console.print("[dim]compiling kernels (first run only)...[/dim]")
+    rows = example_pairs()
+    warm_up((("geometry kernels", lambda: [distance(a, b) for _, a, b in rows]),), console=console, side=())  # a bar only when compiling
     table = Table(title="armguard signed distance (m): > 0 apart, < 0 penetrating")
     for col in ("pair", "kernel", "distance", "p_WA", "p_WB", "feature of B"):
         table.add_column(col)
-    for label, a, b in example_pairs():
+    for label, a, b in rows:
         r = distance(a, b)
         try:
             f = feature_at(b, r.p_WB)

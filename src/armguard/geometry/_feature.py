@@ -59,6 +59,10 @@ class Feature:
             return "surface"
         return f"{self.kind.value} {self.index}"
 
+    def to_dict(self) -> dict:
+        """``{"kind": "face" | "edge" | "vertex" | "surface", "index": int}``: the feature as data."""
+        return {"kind": self.kind.value, "index": int(self.index)}
+
 
 BOX_EDGES = np.array(
     [(i, j) for i in range(8) for j in range(i + 1, 8) if np.sum(_BOX_SIGNS[i] != _BOX_SIGNS[j]) == 1],

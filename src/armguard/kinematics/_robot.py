@@ -411,8 +411,10 @@ class Robot:
                 f"({', '.join(self._joint_names)}), got shape {arr.shape}"
             )
         if not np.all(np.isfinite(arr)):
-            bad = np.argwhere(~np.isfinite(arr))[0]
-            raise KinematicsError(f"robot {self._name!r}: q contains NaN or infinite values (first at index {tuple(bad)})")
+            bad = tuple(int(i) for i in np.argwhere(~np.isfinite(arr))[0])
+            where = f"joint {self._joint_names[bad[-1]]!r}" + (f" of row {bad[:-1]}" if len(bad) > 1 else "")
+            raise KinematicsError(f"robot {self._name!r}: q contains NaN or infinite values (first: {where}, "
+                                  f"{float(arr[bad])})")
         return arr
 
     def within_limits(self, q, *, tol: Tolerances = DEFAULT_TOLERANCES) -> np.ndarray:

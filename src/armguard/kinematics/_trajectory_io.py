@@ -45,48 +45,80 @@ def _fail(file, where: str, message: str):
     return TrajectoryError(f"{where}: {message}")
 
 
-def _numbers(d, key: str, ndim: int, file):
+def _numbers(d, key: str, ndim: int, problems: list, width: int | None = None):
+    """``d[key]`` as a float64 array of ``ndim`` dimensions, or None with the problem noted."""
     value = d[key]
+    if ndim == 2 and isinstance(value, list):
+        for k, row in enumerate(value):
+            if not isinstance(row, list):
+                problems.append((f"{key}[{k}]", f"expected a list of {width or ''} numbers, got {type(row).__name__}".replace("  ", " ")))
+                return None
+            if width is not None and len(row) != width:
+                problems.append((f"{key}[{k}]", f"expected {width} joint values (one per joint_names entry), got {len(row)}"))
+                return None
     try:
         arr = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError, OverflowError):  # OverflowError: an integer beyond float range
-        raise _fail(file, key, f"expected {'a list' if ndim == 1 else 'a list of lists'} of numbers") from None
+        problems.append((key, f"expected {'a list' if ndim == 1 else 'a list of lists'} of numbers"))
+        return None
     if arr.ndim != ndim:
-        raise _fail(file, key, f"expected {'a list' if ndim == 1 else 'a list of equal-length lists'} of numbers, got shape {arr.shape}")
+        problems.append((key, f"expected {'a list' if ndim == 1 else 'a list of equal-length lists'} of numbers, got shape {arr.shape}"))
+        return None
     bad = ~np.isfinite(arr)
     if np.any(bad):
         idx = "".join(f"[{i}]" for i in np.argwhere(bad)[0])
-        raise _fail(file, f"{key}{idx}", "expected a finite number, got NaN or inf")
+        problems.append((f"{key}{idx}", "expected a finite number, got NaN or inf"))
+        return None
     return arr
 
 
+def _raise(problems, file):
+    where, first = problems[0]
+    rest = "".join(f"\n  {w}: {m}" if w else f"\n  {m}" for w, m in problems[1:])
+    more = f"\n{len(problems) - 1} more problem{'s' if len(problems) > 2 else ''}:{rest}" if rest else ""
+    raise _fail(file, where, first + more)
+
+
 def trajectory_from_dict(cls, d, *, file=None):
+    """A trajectory of ``cls`` from its YAML dictionary; every problem found is listed in one error
+    (a missing key with a misspelt one beside it says so)."""
+    import difflib
+
     if not isinstance(d, dict):
         raise _fail(file, "", f"expected a mapping with keys {list(_KEYS)}, got {type(d).__name__}")
-    unknown = sorted(set(d) - set(_KEYS))
-    if unknown:
-        raise _fail(file, unknown[0], f"unknown key; expected one of {list(_KEYS)}")
+    problems: list[tuple[str, str]] = []
+    unknown = sorted(str(k) for k in set(d) - set(_KEYS))
     for key in ("format", "version", "robot", "joint_names", "times", "waypoints"):
         if key not in d:
-            raise _fail(file, key, "missing required key")
-    if d["format"] != FORMAT:
-        raise _fail(file, "format", f"expected {FORMAT!r}, got {d['format']!r}")
-    if d["version"] != VERSION:
-        raise _fail(file, "version", f"unsupported version {d['version']!r}; this armguard reads version {VERSION}")
-    if not isinstance(d["robot"], str):
-        raise _fail(file, "robot", f"expected a robot name (string), got {d['robot']!r}")
-    names = d["joint_names"]
-    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
-        raise _fail(file, "joint_names", "expected a list of joint names (strings)")
-    times = _numbers(d, "times", 1, file)
-    wp = _numbers(d, "waypoints", 2, file)
-    blend = _numbers(d, "blend_times", 1, file) if "blend_times" in d else None
+            near = difflib.get_close_matches(key, unknown, n=1, cutoff=0.6)
+            hint = f" (the unknown key {near[0]!r} looks like a misspelling of {key!r})" if near else ""
+            problems.append((key, "missing required key" + hint))
+    for key in unknown:
+        problems.append((key, f"unknown key; expected one of {list(_KEYS)}"))
+    if "format" in d and d["format"] != FORMAT:
+        problems.append(("format", f"expected {FORMAT!r}, got {d['format']!r}"))
+    if "version" in d and d["version"] != VERSION:
+        problems.append(("version", f"unsupported version {d['version']!r}; this armguard reads version {VERSION}"))
+    if "robot" in d and not isinstance(d["robot"], str):
+        problems.append(("robot", f"expected a robot name (string), got {d['robot']!r}"))
+    names = d.get("joint_names")
+    if "joint_names" in d and (not isinstance(names, list) or not all(isinstance(n, str) for n in names)):
+        problems.append(("joint_names", "expected a list of joint names (strings)"))
+        names = None
+    times = _numbers(d, "times", 1, problems) if "times" in d else None
+    wp = _numbers(d, "waypoints", 2, problems, len(names) if names else None) if "waypoints" in d else None
+    blend = _numbers(d, "blend_times", 1, problems) if "blend_times" in d else None
+    if problems:
+        _raise(problems, file)
     try:
         return cls(d["robot"], names, times, wp, blend)
     except TrajectoryError as exc:
         msg = str(exc)
-        key = msg.split(":", 1)[0].split("[", 1)[0]
-        raise _fail(file, key if key in _KEYS else "", msg) from None
+        key = msg.split(":", 1)[0].split("[", 1)[0].strip()
+        if key in _KEYS:  # "times: must be ..." -> place "times", message "must be ..."
+            where, _, rest = msg.partition(":")
+            raise _fail(file, where.strip(), rest.strip()) from None
+        raise _fail(file, "", msg) from None
 
 
 def save_yaml(traj, path) -> None:
@@ -105,4 +137,7 @@ def load_yaml(cls, path):
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
         raise SceneFileError(file, where, f"not valid YAML: {getattr(exc, 'problem', exc)}") from None
-    return trajectory_from_dict(cls, d, file=file)
+    from ..scene._lines import lines_for
+
+    with lines_for(file):
+        return trajectory_from_dict(cls, d, file=file)

@@ -135,10 +135,13 @@ def model_from_yaml(path) -> Model:
     """A Model of a sidecar or scene YAML file."""
     from ..scene._load import read_scene_yaml, validate_scene_dict
 
+    from ..scene._lines import lines_for
+
     path = Path(path)
-    data = read_scene_yaml(path)
-    sf = validate_scene_dict(data, str(path))
-    return model_from_scenefile(sf, str(path), path.parent)
+    with lines_for(path):
+        data = read_scene_yaml(path)
+        sf = validate_scene_dict(data, str(path))
+        return model_from_scenefile(sf, str(path), path.parent)
 
 
 def model_from_scenefile(sf, file: str, base: Path) -> Model:

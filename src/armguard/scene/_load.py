@@ -494,8 +494,11 @@ def _trajectory(scene: Scene, t, ctx: _Ctx, where: str) -> None:
 
 def load_scene_file(path) -> Scene:
     """Load a YAML scene file (``armguard_scene: 1``)."""
+    from ._lines import lines_for
+
     path = Path(path)
-    return scene_from_dict(read_scene_yaml(path), str(path), path.parent)
+    with lines_for(path):
+        return scene_from_dict(read_scene_yaml(path), str(path), path.parent)
 
 
 def scene_from_urdf(path, *, srdf=None) -> Scene:

@@ -101,7 +101,10 @@ class Collision:
     def describe(self) -> str:
         """"contact (distance -3.1 mm)" or "within stopping distance 70 mm: 60.0 mm"."""
         if self.kind is CollisionKind.STOPPING_DISTANCE:
-            return f"within stopping distance {self.stopping_distance * 1e3:.0f} mm: {self.distance * 1e3:.1f} mm"
+            sd, d = self.stopping_distance * 1e3, self.distance * 1e3
+            if abs(d - sd) < 0.05:  # at the stopping distance to the verifier's resolution: say so, in full
+                return f"at the stopping distance {sd:.4f} mm: {d:.4f} mm"
+            return f"within stopping distance {sd:.0f} mm: {d:.1f} mm"
         return f"contact (distance {self.distance * 1e3:.1f} mm)"
 
 
@@ -279,8 +282,9 @@ class VerificationReport:
             f"verdict: {self._verdict_words()}" + (f" — {self.reason}" if self.reason else ""),
             f"method: {d.method}"
             + (f" at {d.frequency:g} Hz" if d.frequency else f" every {d.joint_step:g} rad" if d.joint_step else "")
-            + f"; {d.samples_evaluated} configurations evaluated"
-            + (f", {d.intervals_certified} intervals certified" if d.method == "certified" else "")
+            + f"; {d.samples_evaluated} configuration{'' if d.samples_evaluated == 1 else 's'} evaluated"
+            + (f", {d.intervals_certified} interval{'' if d.intervals_certified == 1 else 's'} certified"
+               if d.method == "certified" else "")
             + f"; distances from the {d.source}",
             f"stopping distance: {'up to ' if self.stopping_distance_function is not None else ''}"
             f"{self.stopping_distance * 1e3:.1f} mm; fastest point ≤ {d.max_speed:.3f} m/s",

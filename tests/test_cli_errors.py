@@ -1,0 +1,152 @@
+"""What a newcomer sees when a file or a value is wrong: every problem, with its file, place and line.
+
+Files with deliberate mistakes are written here (the scene and trajectory formats:
+docs/scene-format.md, docs/trajectory-format.md); the CLI runs in-process (click's CliRunner).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from armguard.cli import main
+from armguard.kinematics import Trajectory
+from armguard.scene import load_scene
+
+URDF = Path(__file__).resolve().parents[1] / "urdf"
+
+BAD_SCENE = """\
+armguard_scene: 1
+name: bad
+bodies:
+  - name: table
+    shapes:
+      - type: box
+        sise: [1, 1, 1]
+  - name: post
+    colour: red
+    shapes:
+      - type: sphere
+        radius: -1
+"""
+
+BAD_TRAJECTORY = """\
+format: armguard.trajectory
+version: 1
+robot: puma560
+joint_names: [j1, j2, j3, j4, j5, j6]
+tiems: [0.0, 1.0]
+waypoints:
+  - [0, 0, 0, 0, 0, 0]
+  - [0.1, 0, 0, 0, 0]
+"""
+
+GOOD_TRAJECTORY = """\
+format: armguard.trajectory
+version: 1
+robot: {robot}
+joint_names: [{joints}]
+times: [0.0, {t1}]
+waypoints:
+  - [0, 0, 0, 0, 0, 0]
+  - [0.1, 0, 0, 0, 0, 0]
+"""
+
+
+def _run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def test_a_scene_file_lists_every_schema_problem_with_its_line(tmp_path):
+    f = tmp_path / "bad.yaml"
+    f.write_text(BAD_SCENE)
+    res = _run("check", f)
+    assert res.exit_code == 2
+    out = res.output
+    assert "bodies[0].shapes[0].size (line 6): required key is missing" in out  # the mapping that lacks it
+    assert "misspelling of 'size'" in out
+    assert "bodies[0].shapes[0].sise (line 7): unknown key" in out
+    assert "bodies[1].colour (line 9): unknown key" in out
+    assert "bodies[1].shapes[0].radius (line 12)" in out
+    assert "3 more problems" in out
+
+
+def test_a_trajectory_file_lists_every_problem_with_its_line(tmp_path):
+    f = tmp_path / "t.yaml"
+    f.write_text(BAD_TRAJECTORY)
+    with pytest.raises(Exception) as exc:
+        Trajectory.load_yaml(f)
+    msg = str(exc.value)
+    assert msg.startswith(f"{f}: times: missing required key (the unknown key 'tiems' looks like a misspelling of 'times')")
+    assert "tiems (line 5): unknown key" in msg
+    assert "waypoints[1] (line 8): expected 6 joint values (one per joint_names entry), got 5" in msg
+    f.write_text(GOOD_TRAJECTORY.format(robot="puma560", joints="j1, j2, j3, j4, j5, j6", t1="0.0"))
+    with pytest.raises(Exception) as exc:
+        Trajectory.load_yaml(f)
+    assert "times (line 5): must be strictly increasing" in str(exc.value) and "times: times" not in str(exc.value)
+
+
+def test_verify_names_the_file_for_a_robot_or_joints_the_scene_lacks(tmp_path):
+    f = tmp_path / "t.yaml"
+    f.write_text(GOOD_TRAJECTORY.format(robot="pumaX", joints="j1, j2, j3, j4, j5, j6", t1="1.0"))
+    res = _run("verify", "puma560", f)
+    assert res.exit_code == 2 and f"{f}: robot (line 3): robot 'pumaX' is not in scene 'puma560'" in res.output
+    f.write_text(GOOD_TRAJECTORY.format(robot="puma560", joints="j1, j2, j3, j4, j5, jx", t1="1.0"))
+    res = _run("verify", "puma560", f)
+    assert res.exit_code == 2 and f"{f}: joint_names (line 4)" in res.output
+    f.write_text(GOOD_TRAJECTORY.format(robot="puma560", joints="j1, j2, j3, j4, j5, j6", t1="1.0"))
+    assert _run("verify", "puma560", f).exit_code == 0
+
+
+def test_option_errors_use_the_option_names():
+    res = _run("verify", "puma560", "pick_and_place", "--stopping-distance", "-1")
+    assert res.exit_code == 2 and "error: --stopping-distance: expected a finite number >= 0" in res.output
+
+
+def test_check_json_holds_every_feature_as_data():
+    res = _run("check", "hermes", "--q", "195,0,0,0,0,0", "--deg", "--json", "--threshold", "2.0")
+    doc = json.loads(res.output)
+    feats = [doc["nearest"]["feature"]] + [r["feature"] for r in doc["by_category"].values()] + \
+            [r["feature"] for r in doc["within_threshold"]]
+    assert doc["within_threshold"] and any(f is not None for f in feats)
+    for f in feats:
+        assert f is None or (set(f) == {"kind", "index"} and f["kind"] in ("face", "edge", "vertex", "surface"))
+
+
+def test_check_piped_keeps_whole_names():
+    res = _run("check", "ranger")
+    assert "manipulator_module" in res.output and "environm…" not in res.output
+
+
+def test_demo_output_folder_errors_and_scene_files(tmp_path):
+    res = _run("demo", "--scene", "puma560", "--out", "/proc/armguard-cannot")
+    assert res.exit_code == 2 and "cannot create the output folder /proc/armguard-cannot" in res.output
+    assert "Traceback" not in res.output
+    model = tmp_path / "model"
+    shutil.copytree(URDF / "puma560", model)
+    out = tmp_path / "out"
+    res = _run("demo", "--scene", model / "puma560.yaml", "--out", out)
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in out.iterdir()) == [f"puma560__pick_and_place__{m}.{x}" for m in ("hermes100mm", "sd0mm")
+                                                     for x in ("json", "png")]
+    assert not list(model.glob("*.json"))  # nothing written beside the scene file
+
+
+def test_verify_checks_only_the_moving_arm():
+    sc = load_scene("ranger")
+    from armguard.verify import Verifier
+
+    traj = sc.trajectories["left_arm_sweep"]
+    r = Verifier(sc, robot=traj.robot_name).verify(traj)
+    # the camera arm and the module never move here: their 140 mm is not the left arm's clearance
+    assert r.min_clearance_at.a.startswith("left_arm/") or r.min_clearance_at.b.startswith("left_arm/")
+    from armguard.detect import Detector
+
+    still = Detector(sc, threshold=0.0).pair_distances(sc.flat_q(sc.default_q()))
+    static = min(d for a, b, d in zip(still.owner_a, still.owner_b, still.distance)
+                 if not str(a).startswith("left_arm/") and not str(b).startswith("left_arm/"))
+    assert static < r.min_clearance  # a closer static pair exists, and is not what the report gives
