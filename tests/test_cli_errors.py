@@ -150,3 +150,9 @@ def test_verify_checks_only_the_moving_arm():
     static = min(d for a, b, d in zip(still.owner_a, still.owner_b, still.distance)
                  if not str(a).startswith("left_arm/") and not str(b).startswith("left_arm/"))
     assert static < r.min_clearance  # a closer static pair exists, and is not what the report gives
+
+
+def test_check_without_a_verdict_is_not_a_success():
+    spent = _run("check", "hermes", "--q", "195,0,0,0,0,0", "--deg", "--budget-us", "0")
+    assert "INCOMPLETE" in spent.output and spent.exit_code == 1
+    assert _run("check", "hermes").exit_code == 0

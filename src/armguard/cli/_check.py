@@ -1,6 +1,7 @@
 """``armguard check SCENE --q ...``: one detector check, printed per category (or as JSON).
 
-Exit status: 0 clear or warning, 1 collision (as ``armguard verify``), 2 bad input (a value
+Exit status: 0 clear or warning, 1 collision or incomplete (as ``armguard verify``: a check that
+could not finish is never read as clear), 2 bad input (a value
 outside the joint limits is refused with the joint, the value and the limits in the units typed).
 """
 
@@ -82,7 +83,7 @@ def parse_q(sc, q_text: str, deg: bool):
 def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_us, as_json, terrain_file) -> None:
     """Check SCENE (a built-in name or a scene file) at one configuration.
 
-    Exit status: 0 clear / warning / incomplete, 1 collision, 2 bad input.
+    Exit status: 0 clear / warning, 1 collision or incomplete (the budget ran out first), 2 bad input.
     """
     from rich.console import Console
     from rich.table import Table
@@ -100,7 +101,7 @@ def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_u
 
         attach_terrain(det, load_terrain(terrain_file, sc, robot=active))
     rep = det.check(q, budget_us=budget_us)
-    collided = rep.status.value == "collision"
+    collided = rep.status.value in ("collision", "incomplete")  # never a success exit without a verdict
     if as_json:
         click.echo(json.dumps(report_dict(rep), indent=2))
         sys.exit(1 if collided else 0)
