@@ -91,6 +91,8 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
     from ._demo import verdict_text
 
     console = Console()
+    if not console.is_terminal:  # piped: one summary line per line, not folded at 80 columns
+        console = Console(width=200)
     sc = load_scene(scene)
     items = resolve_trajectories(sc, trajectories)
     warm_up(console=console)
