@@ -156,3 +156,26 @@ def test_check_without_a_verdict_is_not_a_success():
     spent = _run("check", "hermes", "--q", "195,0,0,0,0,0", "--deg", "--budget-us", "0")
     assert "INCOMPLETE" in spent.output and spent.exit_code == 1
     assert _run("check", "hermes").exit_code == 0
+
+
+def _doc_example_scene() -> str:
+    """The runnable scene example of docs/scene-format.md."""
+    text = (Path(__file__).resolve().parents[1] / "docs" / "scene-format.md").read_text()
+    block = text.split("## Example (runnable)", 1)[1].split("```yaml", 1)[1].split("```", 1)[0]
+    return block.lstrip("\n")
+
+
+def test_independent_scene_problems_are_listed_together(tmp_path):
+    good = _doc_example_scene()
+    wave = "  - {name: wave, robot: arm, profile: trapezoidal, waypoints: [[0, 30, -60], [45, 10, -30], [0, 30, -60]]}"
+    assert wave in good
+    bad = good.replace(wave, wave.replace("robot: arm", "robot: armX") + "\n"
+                       + "  - {name: wave2, robot: arm, profile: trapezoidal, waypoints: [[0, 30, -60], [45, 10], [0, 30, -60]]}")
+    f = tmp_path / "cell.yaml"
+    f.write_text(bad)
+    res = _run("check", f)
+    assert res.exit_code == 2
+    assert "trajectories[0].robot (line" in res.output and "unknown robot 'armX'" in res.output
+    assert "1 more problem:" in res.output and "trajectories[1].waypoints[1] (line" in res.output
+    f.write_text(good)
+    assert _run("check", f).exit_code in (0, 1)  # the example itself loads

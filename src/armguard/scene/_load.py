@@ -447,22 +447,37 @@ def _populate(scene: Scene, sf: SceneFile, ctx: _Ctx, frames: dict) -> None:
             scene.disable_pair(a, b)
         except SceneError as exc:
             raise ctx.error(f"pairs.disable[{k}]", str(exc)) from None
+    problems: list[SceneFileError] = []  # trajectories and canned tests are independent: report them all
     for i, t in enumerate(sf.trajectories):
-        _trajectory(scene, t, ctx, f"trajectories[{i}]")
-    for i, c in enumerate(sf.canned_tests):
-        w = f"canned_tests[{i}]"
-        if c.robot not in scene.robots:
-            raise ctx.error(f"{w}.robot", f"unknown robot {c.robot!r}; robots are {list(scene.robots)}")
-        setup = {}
-        for rname, q in c.setup.items():
-            if rname not in scene.robots:
-                raise ctx.error(f"{w}.setup.{rname}", f"unknown robot {rname!r}")
-            setup[rname] = _joint_values(scene.robots[rname], q, ctx, f"{w}.setup.{rname}")
-        goal = _joint_values(scene.robots[c.robot], c.motion.goal, ctx, f"{w}.motion.goal")
         try:
-            scene.add_canned_test(CannedTest(c.name, c.description, c.robot, c.threshold * ctx.L, setup, goal))
-        except ArmguardError as exc:
-            raise ctx.error(w, str(exc)) from None
+            _trajectory(scene, t, ctx, f"trajectories[{i}]")
+        except SceneFileError as exc:
+            problems.append(exc)
+    for i, c in enumerate(sf.canned_tests):
+        try:
+            _canned_test(scene, c, ctx, f"canned_tests[{i}]")
+        except SceneFileError as exc:
+            problems.append(exc)
+    if problems:
+        first, rest = problems[0], problems[1:]
+        more = "".join(f"\n  {e.where}: {e.message}" for e in rest)
+        tail = f"\n{len(rest)} more problem{'s' if len(rest) > 1 else ''}:{more}" if rest else ""
+        raise SceneFileError(first.file, first.where, first.message + tail)
+
+
+def _canned_test(scene: Scene, c, ctx: _Ctx, w: str) -> None:
+    if c.robot not in scene.robots:
+        raise ctx.error(f"{w}.robot", f"unknown robot {c.robot!r}; robots are {list(scene.robots)}")
+    setup = {}
+    for rname, q in c.setup.items():
+        if rname not in scene.robots:
+            raise ctx.error(f"{w}.setup.{rname}", f"unknown robot {rname!r}")
+        setup[rname] = _joint_values(scene.robots[rname], q, ctx, f"{w}.setup.{rname}")
+    goal = _joint_values(scene.robots[c.robot], c.motion.goal, ctx, f"{w}.motion.goal")
+    try:
+        scene.add_canned_test(CannedTest(c.name, c.description, c.robot, c.threshold * ctx.L, setup, goal))
+    except ArmguardError as exc:
+        raise ctx.error(w, str(exc)) from None
 
 
 def _joint_values(robot, q, ctx: _Ctx, where: str) -> np.ndarray:
