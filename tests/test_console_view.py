@@ -291,3 +291,99 @@ def test_screenshots_show_the_line(name, pose):
                 browser.close()
     finally:
         app.stop()
+
+
+def _line_own_pixels(app, page, readout) -> tuple[int, float]:
+    """``(pixels, length)``: pixels near the middle of the projected nearest line (30 % to 70 %)
+    that are the line's own -- they change towards the line's colour when it is drawn, against
+    the same view with the line hidden -- and the projected line's length (px)."""
+    a, b = _project(app, np.array([readout.p_WA, readout.p_WB]))
+    for p in (a, b):
+        assert 0 <= p[0] < PANEL_X and 0 <= p[1] < VIEWPORT["height"], (a, b)
+    shown = _shot(page)
+    line = app.drawer.lines["primary"][0]
+    line.visible = False
+    try:
+        hidden = _shot(page)
+    finally:
+        line.visible = True
+    col = np.asarray(readout.line_color)[None, None, :]
+    middle = _segment_mask(shown.shape, a, b, width=4, lo=0.3, hi=0.7)
+    changed = np.abs(shown - hidden).max(axis=-1) > 25
+    towards = np.abs(shown - col).sum(axis=-1) + 30 < np.abs(hidden - col).sum(axis=-1)
+    return int(np.count_nonzero(middle & changed & towards)), float(np.linalg.norm(b - a))
+
+
+@pytest.mark.parametrize("name", ["ranger", "hermes"])
+def test_line_at_home_is_seen_through_the_link_around_it(name):
+    """At home the nearest line runs inside a link that is not part of its pair (Ranger: left_arm/link1
+    around link3 -> the manipulator module; Hermes: hera/link4 around link3 -> link6): that link is drawn
+    translucent, and the line's own pixels show at the default camera and after "frame the nearest pair"."""
+    _need_chromium()
+    from playwright.sync_api import sync_playwright
+
+    from armguard.console._draw import SEE_THROUGH_OPACITY
+
+    app = _app(name)
+    try:
+        st = app.state
+        snap = st.snapshot()
+        r = snap.readout
+        wrapped = [st.scene.shapes_at(snap.q)[k].owner for k in app.drawer.see_through(snap)]
+        assert wrapped == {"ranger": ["left_arm/link1"], "hermes": ["hera/link4"]}[name], wrapped
+        k = next(i for i, item in enumerate(app.drawer.items) if item[0] == wrapped[0])
+        assert app.drawer.items[k][4].opacity == SEE_THROUGH_OPACITY
+        assert all(item[4].opacity is None for i, item in enumerate(app.drawer.items) if item[0] not in wrapped)
+        with sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            try:
+                page = _open(browser, app.url)  # the console framed the active arm on connect
+                own, length = _line_own_pixels(app, page, r)
+                # (Hermes frames the whole 15 m arm: its 0.33 m line is short at that camera)
+                assert own >= max(5.0, 0.2 * length), (name, "default camera", own, length)
+                app._frame(_client(app), focus="pair")
+                own, length = _line_own_pixels(app, page, r)
+                assert length > 90 and own > 0.2 * length, (name, "pair framing", own, length)
+            finally:
+                browser.close()
+    finally:
+        app.stop()
+
+
+def test_frame_the_active_arm_in_a_collision_shows_the_red_link():
+    """Ranger's left arm 20 mm into the electronics module (j2 = -90 deg, j4 = -10 deg): "frame the
+    active arm" looks from a side where the module does not hide the red link."""
+    _need_chromium()
+    from playwright.sync_api import sync_playwright
+
+    app = _app("ranger")
+    try:
+        st = app.state
+        q = st.snapshot().q["left_arm"].copy()
+        q[1], q[3] = math.radians(-90.0), math.radians(-10.0)
+        st.set_joints("left_arm", q)
+        r = st.snapshot().readout
+        assert r.status.value == "collision" and r.obstacle == "electronics_module" and r.distance < -0.015
+        with sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            try:
+                page = _open(browser, app.url)
+                app._frame(_client(app), focus="arm")
+                img = _shot(page)
+                # the red link's projected area (its axis's length x its diameter, plus the caps)
+                link = next(it.shape for it in st.scene.shapes_at(st.snapshot().q) if it.owner == r.owner_a)
+                ends = np.asarray(link.core_points)
+                a, b = _project(app, ends)
+                cam = _client(app).camera
+                depth = float(np.linalg.norm(ends.mean(axis=0) - np.asarray(cam.position)))
+                diameter = 2.0 * link.radius * (VIEWPORT["height"] / 2.0) / (depth * math.tan(0.5 * float(cam.fov)))
+                area = float(np.linalg.norm(b - a)) * diameter + math.pi * diameter ** 2 / 4.0
+                assert np.linalg.norm(b - a) > 1.2 * diameter, "the red link (0.2 m long, 0.1 m thick) is seen end-on"
+                red = (img[..., 0] > 150) & (img[..., 1] < 90) & (img[..., 2] < 90)  # shaded red too
+                box = _segment_mask(img.shape, a, b, width=diameter)
+                seen = int(np.count_nonzero(red & box))
+                assert seen > 0.4 * area, (seen, area, cam.position)  # (hidden behind the module: < 100)
+            finally:
+                browser.close()
+    finally:
+        app.stop()

@@ -6,7 +6,9 @@ keeps its width at every zoom, also in software WebGL, with a marker sphere at e
 (sized to the line: :func:`~._view.marker_radius`) and the distance as a label at its middle; a compared backend's line is cyan, drawn beside the first (shifted
 sideways by :data:`COMPARE_OFFSET` scene radii, so two equal answers stay two visible lines).
 The nearest link is red within the threshold; the obstacle's nearest face or edge is outlined
-in magenta.  Robots from a URDF are also drawn from it (viser's ``ViserUrdf`` over yourdfpy):
+in magenta.  A shape the nearest line runs through (a link wrapped around it, say: no camera sees
+past it) is drawn translucent (:data:`SEE_THROUGH_OPACITY`), so the line stays in sight; viser
+offers no depth-test switch for line segments.  Robots from a URDF are also drawn from it (viser's ``ViserUrdf`` over yourdfpy):
 its visual geometry where it has one, its collision geometry as a toggle.
 """
 
@@ -20,9 +22,9 @@ import numpy as np
 
 from ._draw_overlays import OverlayDrawer
 from ._meshes import mesh_of, quat_wxyz_from_matrix, rigid_motion
-from ._view import feature_segments, follow_view, marker_radius, pair_view
+from ._view import feature_segments, follow_view, marker_radius, pair_view, see_through
 
-__all__ = ["SceneDrawer", "LINE_PX", "COMPARE_OFFSET", "COLORS", "COMPARE_COLOR", "FEATURE_COLOR"]
+__all__ = ["SceneDrawer", "LINE_PX", "COMPARE_OFFSET", "COLORS", "COMPARE_COLOR", "FEATURE_COLOR", "SEE_THROUGH_OPACITY"]
 
 COLORS = {"body": (150, 160, 175), "link": (235, 150, 60), "payload": (90, 180, 110), "hot": (230, 20, 20),
           "active": (245, 120, 30)}
@@ -32,6 +34,8 @@ LINE_PX = 5.0
 """Width of the nearest-obstacle line (screen pixels)."""
 COMPARE_OFFSET = 0.015
 """Sideways shift of the compared backend's line, in scene radii."""
+SEE_THROUGH_OPACITY = 0.3
+"""Opacity of a shape the nearest line runs through (the others are opaque)."""
 LABEL_RISE = 0.3
 """The distance label stands this many line lengths above the line's middle (not over the line)."""
 
@@ -40,6 +44,12 @@ def _strip_collision_checking(text: str) -> str:
     import re
 
     return re.sub(r"<collision_checking>.*?</collision_checking>", "", text, flags=re.S)
+
+
+def _inside(p, shape) -> bool:
+    from ..geometry import Sphere, distance
+
+    return distance(Sphere(p, 1e-6), shape).distance < 0.0
 
 
 class SceneDrawer:
@@ -76,7 +86,7 @@ class SceneDrawer:
                                    side="double" if len(f) < 8 else "front", position=c0,
                                    cast_shadow=False, receive_shadow=False)
             self._handles.append(h)
-            self.items.append([it.owner, it.kind, P0, c0, h, color, None])
+            self.items.append([it.owner, it.kind, P0, c0, h, color, None, None])
         if not np.all(np.isfinite(lo)):
             lo, hi = -np.ones(3), np.ones(3)
         self.center = 0.5 * (lo + hi)
@@ -159,15 +169,32 @@ class SceneDrawer:
             item[4].visible = bool(on)
 
     # ------------------------------------------------------------------ draw
+    def see_through(self, snap, items=None) -> set[int]:
+        """Indices (into the scene's shapes) of the shapes the nearest line runs through, other
+        than the pair's own (in a contact the line lies inside both: they stay opaque)."""
+        r = snap.readout
+        if r.p_WA is None or r.p_WB is None:
+            return set()
+        items = self.state.scene.shapes_at(snap.q) if items is None else items
+        own = {r.owner_a, r.owner_b}
+        idx = [k for k, it in enumerate(items) if it.owner not in own]
+        hit = see_through(np.array([r.p_WA, r.p_WB], dtype=np.float64), [items[k].shape for k in idx])
+        return {idx[k] for k in hit}
+
     def draw(self, snap) -> None:
         r = snap.readout
         items = self.state.scene.shapes_at(snap.q)
-        for it, item in zip(items, self.items):
-            owner, kind, P0, c0, h, color, _ = item
+        clear = self.see_through(snap, items)
+        for k, (it, item) in enumerate(zip(items, self.items)):
+            owner, kind, P0, c0, h, color, _, _ = item
             want = COLORS["hot"] if (r.within_threshold and owner == r.owner_a) else color
             if item[6] != want:
                 h.color = want
                 item[6] = want
+            opacity = SEE_THROUGH_OPACITY if k in clear else None
+            if item[7] != opacity:
+                h.opacity = opacity
+                item[7] = opacity
             if kind == "body":
                 continue
             R, t = rigid_motion(P0, np.asarray(it.shape.core_points))
@@ -257,13 +284,31 @@ class SceneDrawer:
         (``focus="arm"``), or only the nearest pair (``focus="pair"``: :func:`~._view.pair_view`,
         seen across the line past every shape)."""
         r = snap.readout
+        items = self.state.scene.shapes_at(snap.q)
         line = None if r.p_WB is None else np.array([r.p_WA, r.p_WB], dtype=np.float64)
         if focus == "pair" and line is not None:
-            shapes = [it.shape for it in self.state.scene.shapes_at(snap.q)]
-            return pair_view(line, shapes, fov_rad=fov_rad, min_radius=0.02 * self.radius)
-        pts = [np.asarray(it.shape.core_points) for it in self.state.scene.shapes_at(snap.q)
-               if it.robot == snap.active]
+            return pair_view(line, [it.shape for it in items], fov_rad=fov_rad, min_radius=0.02 * self.radius)
+        arm = [it for it in items if it.robot == snap.active]
+        pts = [np.asarray(it.shape.core_points) for it in arm]
         if line is not None:
             pts.append(line[1].reshape(1, 3))
         P = np.concatenate(pts) if pts else self.center.reshape(1, 3)
-        return follow_view(P, self.center, line=line, fov_rad=fov_rad)
+        # the arm's points to keep in sight (its nearest link's count most), past the other
+        # robots' and bodies' opaque shapes
+        clear = self.see_through(snap, items)
+        obstacles = [it.shape for k, it in enumerate(items) if it.robot != snap.active and k not in clear]
+        targets, weights, radii, axis = [], [], [], None
+        for it in arm:
+            core = np.asarray(it.shape.core_points, dtype=np.float64)
+            hot = it.owner == r.owner_a
+            if hot and len(core) == 2:  # the nearest link: points along its axis
+                axis = core[1] - core[0]
+                core = core[0] + np.linspace(0.0, 1.0, 5)[:, None] * axis
+            for p in (core if hot else core.mean(axis=0, keepdims=True)):
+                if hot and any(_inside(p, sh) for sh in obstacles):
+                    continue  # inside an obstacle: no camera sees it
+                targets.append(p)
+                weights.append(4.0 if hot else 1.0)
+                radii.append(0.8 * float(getattr(it.shape, "radius", 0.0)))
+        return follow_view(P, self.center, line=line, fov_rad=fov_rad, targets=np.array(targets).reshape(-1, 3),
+                           weights=weights, target_radii=radii, obstacles=obstacles, axis=axis)

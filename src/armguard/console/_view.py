@@ -3,7 +3,10 @@
 Plain NumPy, no viser: :func:`feature_segments` gives the edges of a face / an edge of a shape to
 highlight (a vertex or a curved surface gives none: the nearest-point marker shows it);
 :func:`follow_view` the camera that frames the active arm and what it is nearest to, looking
-from the arm's side of the scene so the arm is not hidden behind the vehicle.
+from the arm's side of the scene -- or, when obstacles hide the arm from there, from the first
+direction around it that sees the most of it; :func:`pair_view` the camera on the nearest line,
+from a direction that sees the line past every shape; :func:`see_through` the shapes the line
+runs through, which no camera can see past (the view draws them translucent).
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ import numpy as np
 
 from ..geometry import Box, ConvexPolyhedron, FeatureKind, Polygon, Prism
 
-__all__ = ["feature_segments", "follow_view", "pair_view", "marker_radius", "PAIR_CONTEXT", "PAIR_SHIFT", "FOLLOW_ELEVATION_DEG", "FOLLOW_MARGIN",
+__all__ = ["feature_segments", "follow_view", "pair_view", "see_through", "visible_count", "marker_radius", "PAIR_CONTEXT", "PAIR_SHIFT", "FOLLOW_ELEVATION_DEG", "FOLLOW_MARGIN",
            "FOLLOW_SHIFT", "MARKER_LINE_FRACTION", "MARKER_SCENE_RANGE"]
 
 FOLLOW_ELEVATION_DEG = 30.0
@@ -23,6 +26,55 @@ FOLLOW_MARGIN = 2.0
 """The follow view's camera distance, in multiples of the distance that just fits the framed points."""
 FOLLOW_SHIFT = 0.5
 """How far the follow view's look-at point moves to the camera's right (framed-sphere radii)."""
+
+
+SEE_THROUGH_TRIM = 0.05
+""":func:`see_through` ignores this fraction of the line at each end (where it meets its own pair)."""
+_AZIMUTHS = (0.0, 180.0, 35.0, -35.0, 145.0, -145.0, 70.0, -70.0, 110.0, -110.0)
+_ELEVATIONS = (30.0, 50.0, 15.0, 70.0)
+
+
+def see_through(line, shapes) -> list[int]:
+    """Indices of ``shapes`` that the nearest ``line`` (2, 3) m runs through (past its end trims).
+
+    A shape the line passes inside hides it from every direction: no camera placement shows it,
+    so the view draws such shapes translucent.
+    """
+    from ..geometry import Capsule, distance
+
+    L = np.asarray(line, dtype=np.float64).reshape(2, 3)
+    d = L[1] - L[0]
+    if float(np.linalg.norm(d)) < 1e-9:
+        return []
+    seg = Capsule(L[0] + SEE_THROUGH_TRIM * d, L[1] - SEE_THROUGH_TRIM * d, 1e-9)
+    return [k for k, sh in enumerate(shapes) if distance(seg, sh).distance < 0.0]
+
+
+def visible_count(eye, targets, shapes, radius) -> int:
+    """How many ``targets`` (n, 3) m the camera at ``eye`` sees past ``shapes``: the sight line to
+    each (a capsule of ``radius`` m -- one for all, or (n,) -- ending ``2 radius`` short of it)
+    clear of every shape."""
+    from ..geometry import Capsule, distance
+
+    eye = np.asarray(eye, dtype=np.float64)
+    T = np.asarray(targets, dtype=np.float64).reshape(-1, 3)
+    radii = np.broadcast_to(np.asarray(radius, dtype=np.float64), (len(T),))
+    n = 0
+    for p, radius in zip(T, radii):
+        v = p - eye
+        L = float(np.linalg.norm(v))
+        if L <= 3.0 * radius:
+            n += 1
+            continue
+        sight = Capsule(eye, p - 2.0 * radius * v / L, radius)
+        if all(distance(sight, sh).distance > 0.0 for sh in shapes):
+            n += 1
+    return n
+
+
+def _turned(h, az_deg: float) -> np.ndarray:
+    c, s_ = math.cos(math.radians(az_deg)), math.sin(math.radians(az_deg))
+    return np.array([c * h[0] - s_ * h[1], s_ * h[0] + c * h[1], 0.0])
 
 
 MARKER_LINE_FRACTION = 0.12
@@ -109,7 +161,8 @@ def feature_segments(shape, feature) -> np.ndarray:
 
 
 def follow_view(points, scene_center, *, line=None, fov_rad: float = math.radians(75.0),
-                shift: float = FOLLOW_SHIFT, min_radius: float = 0.25) -> tuple[np.ndarray, np.ndarray]:
+                shift: float = FOLLOW_SHIFT, min_radius: float = 0.25, targets=None, obstacles=(),
+                weights=None, target_radii=None, axis=None) -> tuple[np.ndarray, np.ndarray]:
     """Camera ``(position, look_at)`` (3,) m framing ``points`` (n, 3) m.
 
     Looks at the centre ``c`` of their bounding box horizontally from the arm's side of the scene
@@ -120,6 +173,15 @@ def follow_view(points, scene_center, *, line=None, fov_rad: float = math.radian
     view ``fov_rad``, times :data:`FOLLOW_MARGIN`.  The look-at point is moved ``shift`` sphere radii
     to the camera's right, so the framed points sit left of the control panel.  The framed
     sphere's radius is at least ``min_radius`` m.
+
+    With ``targets`` (n, 3) m (points of the arm) and ``obstacles`` (shapes that may hide them),
+    the direction is the first, turning about the vertical from that one (then ±35°, ±70°,
+    ±110°, ±145°, 180°, at elevations 30°, 50°, 15°, 70°), that sees the largest weighted number
+    of targets past the obstacles (:func:`visible_count` with sight lines as wide as
+    ``target_radii`` (n,) m, default 1 % of the framed sphere, so a link's whole cross-section is
+    seen, not only its axis; ``weights`` (n,), default 1 each), times the sine of the angle
+    between the view and ``axis`` (3,) (the nearest link's axis, seen across rather than end-on):
+    the first direction that sees them all at least 45° off the axis.
     """
     P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     P = P[np.all(np.isfinite(P), axis=1)]
@@ -140,13 +202,41 @@ def follow_view(points, scene_center, *, line=None, fov_rad: float = math.radian
         if m > 0.2 * float(np.linalg.norm(d)) and m > 1e-9:
             perp /= m
             h = perp if float(perp @ h) >= 0.0 else -perp
-    el = math.radians(FOLLOW_ELEVATION_DEG)
     dist = FOLLOW_MARGIN * r / math.sin(0.5 * fov_rad)
-    direction = np.array([math.cos(el) * h[0], math.cos(el) * h[1], math.sin(el)])
-    right = np.cross(-direction, [0.0, 0.0, 1.0])
-    right /= max(float(np.linalg.norm(right)), 1e-12)
-    look = c + shift * r * right
-    return look + dist * direction, look
+
+    def pose(hh, el_deg):
+        el = math.radians(el_deg)
+        direction = np.array([math.cos(el) * hh[0], math.cos(el) * hh[1], math.sin(el)])
+        right = np.cross(-direction, [0.0, 0.0, 1.0])
+        right /= max(float(np.linalg.norm(right)), 1e-12)
+        look = c + shift * r * right
+        return look + dist * direction, look
+
+    first = pose(h, FOLLOW_ELEVATION_DEG)
+    T = None if targets is None else np.asarray(targets, dtype=np.float64).reshape(-1, 3)
+    if T is None or len(T) == 0 or not obstacles:
+        return first
+    w = np.ones(len(T)) if weights is None else np.asarray(weights, dtype=np.float64)
+    full = float(w.sum())
+    best, best_score = first, -1.0
+    sight_r = np.full(len(T), 0.01 * r) if target_radii is None else np.maximum(
+        np.asarray(target_radii, dtype=np.float64), 0.01 * r)
+    a_hat = None
+    if axis is not None and float(np.linalg.norm(axis)) > 1e-9:
+        a_hat = np.asarray(axis, dtype=np.float64) / float(np.linalg.norm(axis))
+    for el in (FOLLOW_ELEVATION_DEG,) + tuple(e for e in _ELEVATIONS if e != FOLLOW_ELEVATION_DEG):
+        for az in _AZIMUTHS:
+            eye, look = pose(_turned(h, az), el)
+            across = 1.0
+            if a_hat is not None:
+                view = (c - eye) / max(float(np.linalg.norm(c - eye)), 1e-12)
+                across = math.sqrt(max(0.0, 1.0 - float(view @ a_hat) ** 2))
+            seen = float(sum(wk for p, wk, rk in zip(T, w, sight_r) if visible_count(eye, p, obstacles, rk)))
+            if seen * across > best_score:
+                best, best_score = (eye, look), seen * across
+            if seen >= full and across >= math.sqrt(0.5):
+                return eye, look
+    return best
 
 
 PAIR_CONTEXT = 3.5
@@ -178,11 +268,11 @@ def pair_view(line, shapes=(), *, fov_rad: float = math.radians(75.0), min_radiu
     the line's middle.  Candidate directions turn about the vertical from the horizontal
     perpendicular to the line (both sides, then ±35°, ±70°, ±145°) at elevations 30°, 50°, 15°,
     70°; those looking more along the line than across it (|cos| > 0.8) are skipped.  The first
-    whose camera sees the line's middle past every shape of ``shapes`` (the sight line, a thin
-    capsule, clear of them all) is taken; when none is, the first candidate.
+    whose camera sees the line at 30 %, 50 % and 70 % of its length past every shape of
+    ``shapes`` (:func:`visible_count`: each sight line, a thin capsule, clear of them all, up to
+    the point itself) is taken; when none is, the first that sees the most of them.  Shapes the
+    line runs through (:func:`see_through`; drawn translucent) do not count as hiding it.
     """
-    from ..geometry import Capsule, distance
-
     L = np.asarray(line, dtype=np.float64).reshape(2, 3)
     mid = L.mean(axis=0)
     d = L[1] - L[0]
@@ -191,18 +281,21 @@ def pair_view(line, shapes=(), *, fov_rad: float = math.radians(75.0), min_radiu
     d_hat = d / n if n > 1e-12 else np.array([0.0, 0.0, 1.0])
     h0 = np.array([-d_hat[1], d_hat[0], 0.0])
     h0 = h0 / np.linalg.norm(h0) if np.linalg.norm(h0) > 1e-6 else np.array([0.0, -1.0, 0.0])
-    first = None
+    shapes = list(shapes)
+    wrapped = set(see_through(L, shapes)) if n > 1e-9 else set()
+    blockers = [sh for k, sh in enumerate(shapes) if k not in wrapped]
+    targets = L[0] + np.array([0.3, 0.5, 0.7])[:, None] * d
+    sight_r = min(0.02 * R, 0.1 * n) if n > 1e-9 else 0.02 * R
+    best, best_seen = None, -1
     for el in _PAIR_ELEVATIONS:
         for az in _PAIR_AZIMUTHS:
-            c, s_ = math.cos(math.radians(az)), math.sin(math.radians(az))
-            h = np.array([c * h0[0] - s_ * h0[1], s_ * h0[0] + c * h0[1], 0.0])
-            eye, look = _pair_pose(mid, R, h, el, fov_rad, shift)
+            eye, look = _pair_pose(mid, R, _turned(h0, az), el, fov_rad, shift)
             view = (mid - eye) / np.linalg.norm(mid - eye)
             if abs(float(view @ d_hat)) > 0.8:
                 continue
-            if first is None:
-                first = (eye, look)
-            sight = Capsule(eye, mid - 0.3 * R * view, 0.05 * R)
-            if all(distance(sight, sh).distance > 0.0 for sh in shapes):
+            seen = visible_count(eye, targets, blockers, sight_r) if blockers else len(targets)
+            if seen > best_seen:
+                best, best_seen = (eye, look), seen
+            if seen == len(targets):
                 return eye, look
-    return first
+    return best
