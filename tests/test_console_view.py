@@ -5,7 +5,9 @@ read the state and each tab's camera: a typed joint value changes the pixels ins
 arm's projected box; the nearest-obstacle line's pixels are there, yellow, and turn red when the
 threshold is raised past the distance; a refused value leaves the state and the box as they were;
 a backend switch changes the panel's backend and keeps the configuration; compare mode draws a
-second (cyan) line and shows Δd.  Saves ``docs/img/console-ranger.png`` and
+second (cyan) line and shows Δd; at Ranger's and Hermes's home the line, inside a link of
+neither side of its pair, shows through that (translucent) link; "frame the active arm" in a
+collision shows the red link.  Saves ``docs/img/console-ranger.png`` and
 ``docs/img/console-hermes.png`` (each at a pose where the line is in view).
 """
 
