@@ -54,10 +54,7 @@ CLIMB_MIN_VERTICES = 48
 separated pair, 80 vertices 243 vs 145 ns, 160 vertices 459 vs 172 ns)."""
 
 
-# a plain call, not inlined into numba's IR: _closest_simplex calls it five times, and inlining
-# them all made every GJK specialisation take ~7.5 s to compile instead of ~3.4 s (LLVM still
-# inlines where it pays; measured no slower: iiwa hull yes/no, hull and cylinder exact, Hermes)
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _closest_triangle(ax, ay, az, bx, by, bz, cx, cy, cz):  # pragma: no cover - compiled
     """Ericson ``ClosestPtPointTriangle`` (§5.1.5) with the query point at the origin.
 
@@ -130,31 +127,10 @@ def _origin_outside(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):  # pragma: 
     return sp * sd < 0.0 or sd == 0.0
 
 
-@njit(cache=True, inline="always")
-def _closest_simplex(n, x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3):  # pragma: no cover
-    """Johnson's sub-algorithm as Ericson's Voronoi-region tests, on the simplex ``w0 .. w(n-1)``.
-
-    Returns ``(mask, l0, l1, l2, l3)``: bit ``k`` of ``mask`` is set when ``w_k`` keeps a
-    non-zero weight ``l_k`` in the point of the simplex closest to the origin; ``mask == 15``
-    means the origin is inside the tetrahedron.
-    """
-    if n == 1:
-        return 1, 1.0, 0.0, 0.0, 0.0
-    if n == 2:
-        ex = x1 - x0
-        ey = y1 - y0
-        ez = z1 - z0
-        ee = ex * ex + ey * ey + ez * ez
-        t = -(x0 * ex + y0 * ey + z0 * ez)
-        if t <= 0.0 or ee == 0.0:
-            return 1, 1.0, 0.0, 0.0, 0.0
-        if t >= ee:
-            return 2, 0.0, 1.0, 0.0, 0.0
-        t = t / ee
-        return 3, 1.0 - t, t, 0.0, 0.0
-    if n == 3:
-        m, la, lb, lc, _vv = _closest_triangle(x0, y0, z0, x1, y1, z1, x2, y2, z2)
-        return m, la, lb, lc, 0.0
+@njit(cache=True)
+def _closest_tetra(x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3):  # pragma: no cover - compiled
+    """:func:`_closest_simplex` of a tetrahedron: a plain compiled call (its four inlined triangle
+    tests are most of GJK's code; GJK reaches four vertices only near contact)."""
     # tetrahedron (Ericson ClosestPtPointTetrahedron): the best face whose plane separates the
     # origin from the opposite vertex; none means the origin is inside
     best = math.inf
@@ -185,6 +161,34 @@ def _closest_simplex(n, x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3):  # prag
             mask = ((m & 1) << 1) | ((m & 2) << 2) | m & 4
             l0, l1, l2, l3 = 0.0, la, lc, lb
     return mask, l0, l1, l2, l3
+
+
+@njit(cache=True, inline="always")
+def _closest_simplex(n, x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3):  # pragma: no cover
+    """Johnson's sub-algorithm as Ericson's Voronoi-region tests, on the simplex ``w0 .. w(n-1)``.
+
+    Returns ``(mask, l0, l1, l2, l3)``: bit ``k`` of ``mask`` is set when ``w_k`` keeps a
+    non-zero weight ``l_k`` in the point of the simplex closest to the origin; ``mask == 15``
+    means the origin is inside the tetrahedron.
+    """
+    if n == 1:
+        return 1, 1.0, 0.0, 0.0, 0.0
+    if n == 2:
+        ex = x1 - x0
+        ey = y1 - y0
+        ez = z1 - z0
+        ee = ex * ex + ey * ey + ez * ez
+        t = -(x0 * ex + y0 * ey + z0 * ez)
+        if t <= 0.0 or ee == 0.0:
+            return 1, 1.0, 0.0, 0.0, 0.0
+        if t >= ee:
+            return 2, 0.0, 1.0, 0.0, 0.0
+        t = t / ee
+        return 3, 1.0 - t, t, 0.0, 0.0
+    if n == 3:
+        m, la, lb, lc, _vv = _closest_triangle(x0, y0, z0, x1, y1, z1, x2, y2, z2)
+        return m, la, lb, lc, 0.0
+    return _closest_tetra(x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3)
 
 
 @njit(cache=True, inline="always")
