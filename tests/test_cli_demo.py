@@ -46,6 +46,9 @@ def test_speed_dependent_stopping_distance_violation_is_worded_as_such():
     c = r.first_collision
     assert c.kind is CollisionKind.STOPPING_DISTANCE
     assert c.time > 0.0  # at rest at t = 0: no stopping distance there
+    lever = v.model.lever  # the named link is the one that moves; the still base is the obstacle
+    assert lever[v.model._part_index[c.a]].any() and not lever[v.model._part_index[c.b]].any()
+    assert c.link == c.a.split("/", 1)[1] and c.obstacle == c.b
     assert 0.0 < c.distance < c.stopping_distance <= HERMES_MAX_STOPPING_DISTANCE + 1e-12
     assert c.describe() == f"within stopping distance {c.stopping_distance * 1e3:.0f} mm: {c.distance * 1e3:.1f} mm"
     assert "UNSAFE: within the stopping distance, no contact" in r.summary() and r.verdict() == "unsafe (stopping distance)"

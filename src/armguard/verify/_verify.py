@@ -484,6 +484,11 @@ class Verifier:
             stopping_values=np.asarray(margins, dtype=np.float64).copy(),
         )
 
+    def _moves(self, owner: str, run) -> bool:
+        """Whether the moving robot's joints move any point of ``owner`` (a part with a lever arm)."""
+        i = self.model._part_index.get(owner)
+        return i is not None and bool(np.any(self.model.lever[i, run.k0 : run.k1] > 0.0))
+
     def _collision(self, run, si, t_c, pair, rname, margin: float) -> Collision:
         model = self.model
         q_full = run.full_q(run.n - 1)
@@ -492,6 +497,8 @@ class Verifier:
         pB = np.array(pB[pair])
         a, b = model.owner_a[pair], model.owner_b[pair]
         check = model.check[pair]
+        if check == "link-link" and self._moves(b, run) and not self._moves(a, run):
+            a, b, pA, pB = b, a, pB, pA  # name the moving link as the link, the still one as the obstacle
         d = float(run.D[run.n - 1, pair])
         contact = max(self.tol.length, self.tol.verify_contact)  # apart beyond both: a stopping-distance violation
         link = a.split("/", 1)[1] if "/" in a else None
