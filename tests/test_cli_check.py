@@ -103,3 +103,29 @@ def test_warm_up_message_only_when_compiling():
     assert compiled and "compiling kernels (first run only)" in out
     compiled, out = _warm((("nothing to compile", quiet),))
     assert not compiled and out == ""
+
+
+def test_waiting_for_the_side_process_ends_on_its_report_its_exit_or_the_timeout():
+    import subprocess
+    import sys
+    import time
+
+    from armguard.cli._compile import _wait_for
+
+    def child(code):
+        return subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+
+    seen = set()
+    p = child("import time; print('other', flush=True); print('_leaves_side', flush=True); time.sleep(30)")
+    t0 = time.monotonic()
+    _wait_for(p, "_leaves_side", seen, 20.0)
+    assert seen == {"other", "_leaves_side"} and time.monotonic() - t0 < 10.0
+    p.kill()
+    p = child("import time; time.sleep(30)")  # silent: the timeout ends the wait
+    t0 = time.monotonic()
+    _wait_for(p, "_leaves_side", set(), 0.5)
+    assert 0.4 < time.monotonic() - t0 < 5.0
+    p.kill()
+    p = child("pass")  # ends without a word
+    _wait_for(p, "_leaves_side", set(), 20.0)
+    assert p.wait(5) == 0

@@ -77,7 +77,7 @@ def _verifier() -> None:
 # kernels that share nothing.  Compiled first with the signatures the chain calls them with (two
 # in a second process, three here), they are in numba's on-disk cache when the chain reaches them,
 # and it only loads them.  A signature that no longer matches the chain's call costs time, never
-# an answer: the chain then compiles that kernel itself (tests/test_compile_plan.py checks they
+# an answer: the chain then compiles that kernel itself (tests/test_detect_cold.py checks they
 # all match).  Codes: F1/F2 float64 C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64.
 LEAVES_SIDE = (
     ("armguard.geometry._pair_cylinder", "support_pair", "F2 F1 f F2 F1 f F1 F1 f f i f"),
@@ -152,10 +152,20 @@ def _spawn_side(names):
 
 def _wait_for(child, name: str, seen: set, timeout_s: float) -> None:
     """Block until the side process ``child`` reports stage ``name`` done (or ends, or ``timeout_s``)."""
+    import select
     import time
 
     t_end = time.monotonic() + timeout_s
-    while name not in seen and time.monotonic() < t_end:
+    while name not in seen:
+        left = t_end - time.monotonic()
+        if left <= 0.0:
+            return  # it takes too long: whatever it has not compiled compiles here
+        try:
+            ready, _, _ = select.select([child.stdout], [], [], left)
+        except (OSError, ValueError):  # no select on this pipe: a blocking read
+            ready = [child.stdout]
+        if not ready:
+            return
         line = child.stdout.readline()
         if not line:  # it ended (or failed): whatever it did not compile compiles here
             return
