@@ -113,7 +113,7 @@ def test_waiting_for_the_side_process_ends_on_its_report_its_exit_or_the_timeout
     from armguard.cli._compile import _wait_for
 
     def child(code):
-        return subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+        return subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE)
 
     seen = set()
     p = child("import time; print('other', flush=True); print('_leaves_side', flush=True); time.sleep(30)")

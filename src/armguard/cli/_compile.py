@@ -144,32 +144,40 @@ def _spawn_side(names):
         return None
     code = "from armguard.cli import _compile as c\n" + "".join(f"c.{n}(); print({n!r}, flush=True)\n" for n in names)
     try:
-        return subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                                text=True)
+        return subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
     except OSError:
         return None
 
 
 def _wait_for(child, name: str, seen: set, timeout_s: float) -> None:
-    """Block until the side process ``child`` reports stage ``name`` done (or ends, or ``timeout_s``)."""
+    """Block until the side process ``child`` reports stage ``name`` done (or ends, or ``timeout_s``).
+
+    Its stdout is read unbuffered (``os.read`` on the pipe once ``select`` says it has data), so a
+    report already written is never left in a buffer while the wait goes on."""
+    import os
     import select
     import time
 
+    fd = child.stdout.fileno()
+    pending = getattr(child, "_armguard_pending", "")
     t_end = time.monotonic() + timeout_s
     while name not in seen:
         left = t_end - time.monotonic()
         if left <= 0.0:
-            return  # it takes too long: whatever it has not compiled compiles here
+            break  # it takes too long: whatever it has not compiled compiles here
         try:
-            ready, _, _ = select.select([child.stdout], [], [], left)
+            ready, _, _ = select.select([fd], [], [], left)
         except (OSError, ValueError):  # no select on this pipe: a blocking read
-            ready = [child.stdout]
+            ready = [fd]
         if not ready:
-            return
-        line = child.stdout.readline()
-        if not line:  # it ended (or failed): whatever it did not compile compiles here
-            return
-        seen.add(line.strip())
+            break
+        chunk = os.read(fd, 4096)
+        if not chunk:  # it ended (or failed): whatever it did not compile compiles here
+            break
+        pending += chunk.decode("utf-8", "replace")
+        *lines, pending = pending.split("\n")
+        seen.update(ln.strip() for ln in lines)
+    child._armguard_pending = pending
 
 
 def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES, waits=None) -> bool:
