@@ -206,6 +206,8 @@ def test_watch_reload_refreshes_the_widgets(tmp_path):
         assert sliders[2].max == pytest.approx(150.0) and "-150 to 150 deg" in fields[2].handle.hint
         text = path.read_text().replace("limits: [-150, 150]", "limits: [-20, 20]", 2)  # left joints 2 and 3
         text = text.replace("workspace: {lo: [-2.5, -2.0, -1.0]", "workspace: {lo: [-3.0, -2.0, -1.0]")
+        assert "Run hit_post" in [b.label for b in app._w_test_buttons]
+        text = text.replace("name: hit_post", "name: swing_into_post")
         path.write_text(text)
         generation = app._built_generation
         app.watcher = ModelWatcher(app, str(path), [path])
@@ -220,6 +222,8 @@ def test_watch_reload_refreshes_the_widgets(tmp_path):
         assert "-20 to 20 deg" in fields[2].handle.hint and "-170 to 170 deg" in fields[0].handle.hint
         assert app._w_joints["right"][1][2].max == pytest.approx(150.0)  # the right arm's stay
         assert tuple(app._w_ws_lo.value) == pytest.approx((-3.0, -2.0, -1.0))
+        labels = [b.label for b in app._w_test_buttons]  # the canned tests' buttons are the new model's
+        assert "Run swing_into_post" in labels and "Setup swing_into_post" in labels and "Run hit_post" not in labels
         st.set_workspace(app._w_ws_lo.value, app._w_ws_hi.value)  # what "apply limits" does
         assert np.allclose(st.snapshot().workspace[0], [-3.0, -2.0, -1.0])
     finally:

@@ -220,15 +220,9 @@ class ConsoleApp:
 
         # -- tests: Ranger's test panel ----------------------------------------------------
         self._ws_widgets_shown = self._ws_key(snap.workspace)
-        with tabs.add_tab("Tests"):
+        with tabs.add_tab("Tests") as self._tab_tests:
             self._w_run_state = gui.add_markdown("")
-            if not st.canned_tests():
-                gui.add_markdown("This scene has no canned tests.")
-            for name in st.canned_tests():
-                test = st.scene.canned_tests[name]
-                gui.add_markdown(f"**{name}** — {test.description or test.robot}")
-                gui.add_button(f"Setup {name}").on_click(self._guard(lambda _e, n=name: st.setup(n)))
-                gui.add_button(f"Run {name}").on_click(self._guard(lambda _e, n=name: st.run(n)))
+            self._build_tests_panel(self._w_run_state.order + 0.5)
             gui.add_button("Stop").on_click(self._guard(lambda _e: st.stop()))
 
         # -- time line: WORKMATE's emulation -------------------------------------------------
@@ -304,9 +298,25 @@ class ConsoleApp:
         self._w_joint_folders[name] = (folder, sfolder)
         self._w_joints[name] = (fields, sliders, scale)
 
+    def _build_tests_panel(self, order: float) -> None:
+        """The canned tests' Setup / Run buttons, in one folder (rebuilt when the model is reloaded)."""
+        gui, st = self.server.gui, self.state
+        self._w_test_buttons = []
+        with gui.add_folder("canned tests", order=order) as self._w_tests:
+            if not st.canned_tests():
+                gui.add_markdown("This scene has no canned tests.")
+            for name in st.canned_tests():
+                test = st.scene.canned_tests[name]
+                gui.add_markdown(f"**{name}** — {test.description or test.robot}")
+                for label, act in (("Setup", st.setup), ("Run", st.run)):
+                    b = gui.add_button(f"{label} {name}")
+                    b.on_click(self._guard(lambda _e, n=name, act=act: act(n)))
+                    self._w_test_buttons.append(b)
+
     def _refresh_model_widgets(self) -> None:
         """After a model reload: the widgets that show the model (arms, joint fields and sliders
-        with their limits and hints, backends, trajectories, the workspace box) show the new one."""
+        with their limits and hints, backends, canned tests, trajectories, the workspace box) show
+        the new one."""
         st, snap = self.state, self.state.snapshot()
         for folders in self._w_joint_folders.values():
             for folder in folders:
@@ -316,6 +326,10 @@ class ConsoleApp:
             for k, name in enumerate(st.robots):
                 self._build_joint_panel(name, snap, self._joints_order + (k + 1) / (len(st.robots) + 1))
         self._w_active.options = st.robots
+        order = self._w_tests.order
+        self._w_tests.remove()
+        with self._tab_tests:
+            self._build_tests_panel(order)
         trajs = st.trajectories()
         self._w_traj.options = trajs or ("(none)",)
         self._b_load.disabled = not trajs
