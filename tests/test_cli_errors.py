@@ -179,3 +179,17 @@ def test_independent_scene_problems_are_listed_together(tmp_path):
     assert "1 more problem:" in res.output and "trajectories[1].waypoints[1] (line" in res.output
     f.write_text(good)
     assert _run("check", f).exit_code in (0, 1)  # the example itself loads
+
+
+def test_body_and_robot_problems_are_listed_together(tmp_path):
+    good = _doc_example_scene()
+    bad = good.replace("limits: [-90, 90]", "limits: [90, -90]").replace(
+        "shapes: [{type: prism, n_sides: 16, apothem: 0.03, length: 0.1}]",
+        "shapes: [{type: polyhedron, vertices: [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]}]")
+    assert bad.count("\n") == good.count("\n") and bad != good
+    f = tmp_path / "cell.yaml"
+    f.write_text(bad)
+    res = _run("check", f)
+    assert res.exit_code == 2
+    assert "bodies[1].shapes[0] (line" in res.output and "no volume" in res.output
+    assert "1 more problem:" in res.output and "robots[0].joints[1].limits (line" in res.output

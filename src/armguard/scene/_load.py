@@ -406,25 +406,49 @@ def scene_from_dict_validated(sf: SceneFile, file: str, base: Path | None = None
     return scene
 
 
+def _combined(problems: list) -> SceneFileError:
+    """One error listing ``problems`` (SceneFileErrors of one file): the first, then "N more problems"."""
+    first, rest = problems[0], problems[1:]
+    more = "".join(f"\n  {e.where}: {e.message}" for e in rest)
+    tail = f"\n{len(rest)} more problem{'s' if len(rest) > 1 else ''}:{more}" if rest else ""
+    return SceneFileError(first.file, first.where, first.message + tail)
+
+
+def _body(scene: Scene, b, i: int, ctx: _Ctx, X) -> None:
+    shapes = [_shape(s, ctx, f"bodies[{i}].shapes[{k}]", X) for k, s in enumerate(b.shapes)]
+    try:
+        scene.add_body(b.name, shapes, category=b.category)
+    except SceneError as exc:
+        raise ctx.error(f"bodies[{i}]", str(exc)) from None
+
+
+def _add_robot(scene: Scene, r, i: int, ctx: _Ctx, frames: dict) -> list:
+    robot, home, pairs, source = _robot(r, i, ctx, frames)
+    self_pairs = None
+    if r.self_pairs is not None:
+        self_pairs = [tuple(p) for p in r.self_pairs]
+    try:
+        scene.add_robot(robot, home=home, self_pairs=self_pairs, _source={**source, "spec": r})
+    except ArmguardError as exc:
+        raise ctx.error(f"robots[{i}]", str(exc)) from None
+    return [(f"{r.name}/{a}", f"{r.name}/{b}") for a, b in pairs]
+
+
 def _populate(scene: Scene, sf: SceneFile, ctx: _Ctx, frames: dict) -> None:
+    problems: list[SceneFileError] = []  # bodies and robots are independent: report them all
     for i, b in enumerate(sf.bodies):
-        X = frames[b.name]
-        shapes = [_shape(s, ctx, f"bodies[{i}].shapes[{k}]", X) for k, s in enumerate(b.shapes)]
         try:
-            scene.add_body(b.name, shapes, category=b.category)
-        except SceneError as exc:
-            raise ctx.error(f"bodies[{i}]", str(exc)) from None
+            _body(scene, b, i, ctx, frames[b.name])
+        except SceneFileError as exc:
+            problems.append(exc)
     srdf = []
     for i, r in enumerate(sf.robots):
-        robot, home, pairs, source = _robot(r, i, ctx, frames)
-        self_pairs = None
-        if r.self_pairs is not None:
-            self_pairs = [tuple(p) for p in r.self_pairs]
         try:
-            scene.add_robot(robot, home=home, self_pairs=self_pairs, _source={**source, "spec": r})
-        except ArmguardError as exc:
-            raise ctx.error(f"robots[{i}]", str(exc)) from None
-        srdf.extend((f"{r.name}/{a}", f"{r.name}/{b}") for a, b in pairs)
+            srdf.extend(_add_robot(scene, r, i, ctx, frames))
+        except SceneFileError as exc:
+            problems.append(exc)
+    if problems:  # what follows refers to the bodies and robots: stop here
+        raise _combined(problems)
     for i, p in enumerate(sf.payloads):
         w = f"payloads[{i}]"
         if p.robot not in scene.robots:
@@ -447,7 +471,7 @@ def _populate(scene: Scene, sf: SceneFile, ctx: _Ctx, frames: dict) -> None:
             scene.disable_pair(a, b)
         except SceneError as exc:
             raise ctx.error(f"pairs.disable[{k}]", str(exc)) from None
-    problems: list[SceneFileError] = []  # trajectories and canned tests are independent: report them all
+    # trajectories and canned tests are independent: report them all
     for i, t in enumerate(sf.trajectories):
         try:
             _trajectory(scene, t, ctx, f"trajectories[{i}]")
@@ -459,10 +483,7 @@ def _populate(scene: Scene, sf: SceneFile, ctx: _Ctx, frames: dict) -> None:
         except SceneFileError as exc:
             problems.append(exc)
     if problems:
-        first, rest = problems[0], problems[1:]
-        more = "".join(f"\n  {e.where}: {e.message}" for e in rest)
-        tail = f"\n{len(rest)} more problem{'s' if len(rest) > 1 else ''}:{more}" if rest else ""
-        raise SceneFileError(first.file, first.where, first.message + tail)
+        raise _combined(problems)
 
 
 def _canned_test(scene: Scene, c, ctx: _Ctx, w: str) -> None:
