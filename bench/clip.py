@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 
-from bench.pairwise import median_seconds
+from bench.timing import median_thread_seconds
 from bench.timing import fmt_ns
 
 TITLE = "Clipping checker (Smith's yes / no / maybe)"
@@ -44,10 +44,10 @@ def _cost_rows(quick: bool) -> list[str]:
     rep = 3 if quick else 7
     for label, ob in (("100-vertex polyhedron, faces only", plain), ("the same with PO(OB) / PI(OB)", bounded)):
         for sub in (False, True):
-            per = median_seconds(lambda o=ob, s=sub: check_many(guard, o, X, subdivide=s), repeat=rep) / n
+            per = median_thread_seconds(lambda o=ob, s=sub: check_many(guard, o, X, subdivide=s), repeat=rep) / n
             status, step = check_many(guard, ob, X, subdivide=sub)
             hist = ", ".join(f"{k}: {np.mean(step == k):.0%}" for k in range(3, 10) if np.any(step == k))
-            one = median_seconds(lambda o=ob, s=sub: check(guard, o, X[0], subdivide=s), repeat=rep, number=200)
+            one = median_thread_seconds(lambda o=ob, s=sub: check(guard, o, X[0], subdivide=s), repeat=rep, number=200)
             rows.append(
                 f"| {label}{' + second level' if sub else ''} | {fmt_ns(per)} | {fmt_ns(one)} | "
                 f"{np.mean(status == 2):.1%} | {hist} |"

@@ -7,24 +7,10 @@ wall-clock time also counts the time this thread waits for a core, CPU time does
 from __future__ import annotations
 
 import os
-import statistics
-import time
 
 import numpy as np
 
-from bench.timing import fmt_ns
-
-
-def median_seconds(fn, *, repeat: int = 7, number: int = 1) -> float:
-    """Median over ``repeat`` runs of the thread CPU time per call of ``fn`` (``number`` calls a run)."""
-    fn()  # warm-up (JIT compilation, caches)
-    samples = []
-    for _ in range(repeat):
-        t0 = time.thread_time()
-        for _ in range(number):
-            fn()
-        samples.append((time.thread_time() - t0) / number)
-    return statistics.median(samples)
+from bench.timing import fmt_ns, median_thread_seconds
 
 TITLE = "Pairwise distance queries (ns per pair)"
 
@@ -40,7 +26,6 @@ def run(quick: bool) -> str:
     rng = np.random.default_rng(0)
     n = 20_000 if quick else 200_000
     rep = 3 if quick else 7
-    rows = []
 
     # --- single calls from Python -------------------------------------------------------
     ca = Capsule([0, 0, 0], [1, 0, 0], 0.1)
@@ -49,9 +34,9 @@ def run(quick: bool) -> str:
     hull = ConvexPolyhedron(_hull20(rng) + [0.5, 1.5, 0.0])
     num = 5_000 if quick else 50_000
     single = {
-        "capsule-capsule": median_seconds(lambda: distance(ca, cb), repeat=rep, number=num),
-        "capsule-box": median_seconds(lambda: distance(ca, box), repeat=rep, number=num),
-        "capsule-convex (20 vertices)": median_seconds(lambda: distance(ca, hull), repeat=rep, number=num),
+        "capsule-capsule": median_thread_seconds(lambda: distance(ca, cb), repeat=rep, number=num),
+        "capsule-box": median_thread_seconds(lambda: distance(ca, box), repeat=rep, number=num),
+        "capsule-convex (20 vertices)": median_thread_seconds(lambda: distance(ca, hull), repeat=rep, number=num),
     }
     peers: dict[str, dict[str, float]] = {k: {} for k in single}
     try:
@@ -74,7 +59,7 @@ def run(quick: bool) -> str:
         fh = fobj(m)
         req = fcl.DistanceRequest(enable_nearest_points=True)
         for key, other in (("capsule-capsule", fb), ("capsule-box", fbox), ("capsule-convex (20 vertices)", fh)):
-            peers[key]["python-fcl"] = median_seconds(
+            peers[key]["python-fcl"] = median_thread_seconds(
                 lambda o=other: fcl.distance(fa, o, req, fcl.DistanceResult()), repeat=rep, number=num // 5
             )
     except ImportError:  # pragma: no cover - optional peer
@@ -108,14 +93,14 @@ def run(quick: bool) -> str:
         T2.setTranslation(np.array([0.5, 1, 0]))
         cases = [("capsule-capsule", fn_cc, cap2, T2), ("capsule-box", coal.ComputeDistance(cap, cbox), cbox, T3)]
         for key, fn, geom, T in cases:
-            peers[key]["coal"] = median_seconds(lambda f=fn, t=T: f(T1, t, req, res), repeat=rep, number=num // 5)
+            peers[key]["coal"] = median_thread_seconds(lambda f=fn, t=T: f(T1, t, req, res), repeat=rep, number=num // 5)
 
             def fresh(g=geom, t=T):
                 r = coal.DistanceResult()
                 coal.distance(cap, T1, g, t, req, r)
                 return r.min_distance
 
-            peers[key]["coal.distance"] = median_seconds(fresh, repeat=rep, number=num // 5)
+            peers[key]["coal.distance"] = median_thread_seconds(fresh, repeat=rep, number=num // 5)
     except (ImportError, AttributeError, TypeError):  # pragma: no cover - optional peer / API drift
         pass
     try:
@@ -136,7 +121,7 @@ def run(quick: bool) -> str:
             got = mujoco.mj_geomDistance(mm, md, 0, g, 10.0, fromto)
             if abs(got - want) > 1e-6:  # pragma: no cover - the model must match ours
                 raise RuntimeError(f"MuJoCo {key}: {got} != {want}")
-            peers[key]["MuJoCo"] = median_seconds(
+            peers[key]["MuJoCo"] = median_thread_seconds(
                 lambda g=g: mujoco.mj_geomDistance(mm, md, 0, g, 10.0, fromto), repeat=rep, number=num // 5
             )
     except (ImportError, AttributeError):  # pragma: no cover - optional peer
@@ -182,7 +167,6 @@ def run(quick: bool) -> str:
     bc, bh, bR = np.zeros(3), np.array([0.4, 0.3, 0.2]), np.eye(3)
     h20 = ConvexPolyhedron(_hull20(rng))
     h100 = ConvexPolyhedron(_hull20(np.random.default_rng(1), 100))  # a mesh-sized hull: hill-climbing supports
-    rc = [3, 0.5]
     batched = [
         ("capsule-capsule", lambda: batch.capsule_capsule(a0, a1, r, b0, b1, r), 40),
         ("sphere-sphere", lambda: batch.sphere_sphere(a0, r, b0, r), None),
@@ -203,7 +187,7 @@ def run(quick: bool) -> str:
     peer_key = {"capsule-capsule": "capsule-capsule", "capsule-box, separated": "capsule-box",
                 "capsule-convex 20 v, separated": "capsule-convex (20 vertices)"}
     for key, fn, target in batched:
-        t = median_seconds(fn, repeat=rep) / n
+        t = median_thread_seconds(fn, repeat=rep) / n
         pk = peers.get(peer_key.get(key, ""), {})
         f, co, mj = pk.get("python-fcl"), pk.get("coal"), pk.get("MuJoCo")
         lines.append(f"| {key} | {t * 1e9:.0f} | {'≤ %d' % target if target else '—'} | "

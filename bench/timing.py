@@ -19,6 +19,19 @@ def median_seconds(fn: Callable[[], object], *, repeat: int = 7, number: int = 1
     return statistics.median(samples)
 
 
+def median_thread_seconds(fn: Callable[[], object], *, repeat: int = 7, number: int = 1) -> float:
+    """Median over ``repeat`` runs of the thread CPU time (``time.thread_time``) per call of ``fn``
+    (``number`` calls a run): what one core spends, less sensitive to a shared machine's load."""
+    fn()  # warm-up (JIT compilation, caches)
+    samples = []
+    for _ in range(repeat):
+        t0 = time.thread_time()
+        for _ in range(number):
+            fn()
+        samples.append((time.thread_time() - t0) / number)
+    return statistics.median(samples)
+
+
 def fmt_ns(seconds: float) -> str:
     """Format a duration given in seconds as ns / µs / ms."""
     ns = seconds * 1e9

@@ -12,19 +12,9 @@ import time
 
 import numpy as np
 
+from bench.timing import median_thread_seconds
+
 TITLE = "Uncertain relations: compound and merge (µs per call)"
-
-
-def median_seconds(fn, *, repeat: int = 7, number: int = 1) -> float:
-    """Median over ``repeat`` runs of the thread CPU time per call of ``fn`` (``number`` calls a run)."""
-    fn()
-    samples = []
-    for _ in range(repeat):
-        t0 = time.thread_time()
-        for _ in range(number):
-            fn()
-        samples.append((time.thread_time() - t0) / number)
-    return statistics.median(samples)
 
 
 def _wall(fn, *, repeat: int) -> float:
@@ -92,18 +82,18 @@ def run(quick: bool) -> str:
     b3 = UncertainPose3.from_exp_coords(rng.normal(size=6), c3 * 2)
     b3m = UncertainPose3(se3.exp(rng.normal(size=6) * 1e-2) @ a3.mean, c3 * 2)
     ours = {
-        ("2-D", "compound"): (median_seconds(lambda: a2.compound(b2), repeat=rep, number=num),
-                              median_seconds(lambda: se2.compound(a2.mean, a2.cov, b2.mean, b2.cov), repeat=rep, number=num)),
-        ("2-D", "merge"): (median_seconds(lambda: a2.merge(b2), repeat=rep, number=num),
-                           median_seconds(lambda: se2.merge(a2.mean, a2.cov, b2.mean, b2.cov), repeat=rep, number=num)),
-        ("2-D", "reverse"): (median_seconds(lambda: a2.reverse(), repeat=rep, number=num),
-                             median_seconds(lambda: se2.reverse(a2.mean, a2.cov), repeat=rep, number=num)),
-        ("3-D", "compound"): (median_seconds(lambda: a3.compound(b3), repeat=rep, number=num),
-                              median_seconds(lambda: se3.compound(a3.mean, a3.cov, b3.mean, b3.cov), repeat=rep, number=num)),
-        ("3-D", "merge"): (median_seconds(lambda: a3.merge(b3m), repeat=rep, number=num // 4),
-                           median_seconds(lambda: se3.merge(a3.mean, a3.cov, b3m.mean, b3m.cov), repeat=rep, number=num // 4)),
-        ("3-D", "inverse"): (median_seconds(lambda: a3.inverse(), repeat=rep, number=num),
-                             median_seconds(lambda: se3.inverse(a3.mean, a3.cov), repeat=rep, number=num)),
+        ("2-D", "compound"): (median_thread_seconds(lambda: a2.compound(b2), repeat=rep, number=num),
+                              median_thread_seconds(lambda: se2.compound(a2.mean, a2.cov, b2.mean, b2.cov), repeat=rep, number=num)),
+        ("2-D", "merge"): (median_thread_seconds(lambda: a2.merge(b2), repeat=rep, number=num),
+                           median_thread_seconds(lambda: se2.merge(a2.mean, a2.cov, b2.mean, b2.cov), repeat=rep, number=num)),
+        ("2-D", "reverse"): (median_thread_seconds(lambda: a2.reverse(), repeat=rep, number=num),
+                             median_thread_seconds(lambda: se2.reverse(a2.mean, a2.cov), repeat=rep, number=num)),
+        ("3-D", "compound"): (median_thread_seconds(lambda: a3.compound(b3), repeat=rep, number=num),
+                              median_thread_seconds(lambda: se3.compound(a3.mean, a3.cov, b3.mean, b3.cov), repeat=rep, number=num)),
+        ("3-D", "merge"): (median_thread_seconds(lambda: a3.merge(b3m), repeat=rep, number=num // 4),
+                           median_thread_seconds(lambda: se3.merge(a3.mean, a3.cov, b3m.mean, b3m.cov), repeat=rep, number=num // 4)),
+        ("3-D", "inverse"): (median_thread_seconds(lambda: a3.inverse(), repeat=rep, number=num),
+                             median_thread_seconds(lambda: se3.inverse(a3.mean, a3.cov), repeat=rep, number=num)),
     }
     peer: dict = {}
     note = "pytransform3d not installed: no peer column."
@@ -116,11 +106,11 @@ def run(quick: bool) -> str:
         tbm, cbm = b3m.to_pytransform3d()
         concat = getattr(pu, "compound_poses", None) or pu.concat_globally_uncertain_transforms
         name = concat.__name__
-        peer[("3-D", "compound")] = (median_seconds(lambda: concat(tb, cb, ta, ca), repeat=rep, number=num // 4),
+        peer[("3-D", "compound")] = (median_thread_seconds(lambda: concat(tb, cb, ta, ca), repeat=rep, number=num // 4),
                                      f"`{name}` (with its 4th-order terms)")
-        peer[("3-D", "merge")] = (median_seconds(lambda: pu.pose_fusion([ta, tbm], [ca, cbm]), repeat=rep, number=max(20, num // 200)),
+        peer[("3-D", "merge")] = (median_thread_seconds(lambda: pu.pose_fusion([ta, tbm], [ca, cbm]), repeat=rep, number=max(20, num // 200)),
                                   "`pose_fusion` (20 Gauss-Newton iterations)")
-        peer[("3-D", "inverse")] = (median_seconds(lambda: pu.invert_uncertain_transform(ta, ca), repeat=rep, number=num // 4),
+        peer[("3-D", "inverse")] = (median_thread_seconds(lambda: pu.invert_uncertain_transform(ta, ca), repeat=rep, number=num // 4),
                                     "`invert_uncertain_transform`")
         note = (f"pytransform3d {pytransform3d.__version__}: it has no 2-D uncertainty functions. Its "
                 "`concat_globally_uncertain_transforms` (formerly `compound_poses`) uses the same left "
