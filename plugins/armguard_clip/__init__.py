@@ -56,6 +56,7 @@ from armguard.backends import Capability, CheckerBase, check_Q
 from armguard.clip import DEFAULT_INNER_SCALE, DEFAULT_MAX_DEPTH, DEFAULT_RINGS, ClipStatus, Guard, Obstacle
 from armguard.clip._kernels import procedure_many
 from armguard.geometry import Capsule, Polygon, Sphere
+from armguard.kinematics import invert_pose
 from armguard.model import WORKSPACE
 
 __all__ = ["ClipBackend", "ClipChecker", "ClipBatch", "BRACKET_RINGS", "CODES", "STATUS"]
@@ -118,16 +119,6 @@ def _combine(pair_codes: np.ndarray) -> np.ndarray:
     hit = np.any(pair_codes == _HIT, axis=1)
     maybe = np.any(pair_codes == _MAYBE, axis=1)
     return np.where(hit, _HIT, np.where(maybe, _MAYBE, _CLEAR)).astype(np.int8)
-
-
-def _inv(X: np.ndarray) -> np.ndarray:
-    """Inverse of rigid transforms ``(..., 4, 4)``."""
-    out = np.zeros_like(X)
-    Rt = np.swapaxes(X[..., :3, :3], -1, -2)
-    out[..., :3, :3] = Rt
-    out[..., :3, 3] = -np.einsum("...ij,...j->...i", Rt, X[..., :3, 3])
-    out[..., 3, 3] = 1.0
-    return out
 
 
 def _curved(shape) -> bool:
@@ -275,7 +266,7 @@ class ClipChecker(CheckerBase):
         sub = self.subdivide if subdivide is None else bool(subdivide)
         M, P = len(Q), len(self._plans)
         X = self._frame_poses(Q) if self._frames else np.empty((0, M, 4, 4))
-        X_inv = _inv(X) if len(X) else X
+        X_inv = invert_pose(X) if len(X) else X
         codes8 = np.empty((M, P), dtype=np.int8)
         steps = np.zeros((M, P), dtype=np.int8)
         eye = np.broadcast_to(np.eye(4), (M, 4, 4))
