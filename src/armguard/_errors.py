@@ -70,6 +70,15 @@ class SceneFileError(SceneError):
         super().__init__(f"{loc}: {message}")
 
 
+def list_problems(problems) -> tuple[str, str]:
+    """``(where, message)`` of one error listing ``problems`` (``(where, message)`` pairs, at least
+    one): the first problem's place, its message, then "N more problems:" and one line each."""
+    where, first = problems[0]
+    rest = "".join(f"\n  {w}: {m}" if w else f"\n  {m}" for w, m in problems[1:])
+    n = len(problems) - 1
+    return where, first + (f"\n{n} more problem{'s' if n > 1 else ''}:{rest}" if n else "")
+
+
 class TrajectoryError(ArmguardError, ValueError):
     """A trajectory is invalid (non-monotone times, wrong joint count, limits exceeded)."""
 

@@ -22,11 +22,6 @@ def _fmt(p) -> str:
     return "[" + ", ".join(f"{float(x):.4f}" for x in p) + "]"
 
 
-def report_dict(rep) -> dict:
-    """``rep.to_dict()``: every feature as data (``Feature.to_dict``), not its Python repr."""
-    return rep.to_dict()
-
-
 def parse_q(sc, q_text: str, deg: bool):
     """``q`` flat over ``sc.joint_names`` from text; with ``deg`` revolute joints are in degrees.
 
@@ -103,7 +98,7 @@ def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_u
     rep = det.check(q, budget_us=budget_us)
     collided = rep.status.value in ("collision", "incomplete")  # never a success exit without a verdict
     if as_json:
-        click.echo(json.dumps(report_dict(rep), indent=2))
+        click.echo(json.dumps(rep.to_dict(), indent=2))  # features as data (Feature.to_dict)
         sys.exit(1 if collided else 0)
     out = Console()
     if not out.is_terminal:  # piped: don't cut names to 80 columns

@@ -80,7 +80,8 @@ def verdict_text(r) -> str:
     """The verdict column: SAFE, INCOMPLETE, COLLISION (a contact) or UNSAFE (stopping distance)."""
     v = r.verdict()
     colour = {"safe": "green", "collision": "red", "incomplete": "yellow"}.get(v, "dark_orange")
-    return f"[{colour}]{v.upper() if v in ('safe', 'collision', 'incomplete') else 'UNSAFE (stopping distance)'}[/]"
+    head, _, tail = v.partition(" (")  # "unsafe (stopping distance)": the kind stays in lower case
+    return f"[{colour}]{head.upper()}{' (' + tail if tail else ''}[/]"
 
 
 @main.command("demo")

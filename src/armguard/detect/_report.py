@@ -91,11 +91,7 @@ class PairResult:
 
     def to_dict(self) -> dict:
         """JSON-ready dictionary (lists of floats, the feature as ``Feature.to_dict`` data)."""
-        feat = self.feature
-        if feat is not None and hasattr(feat, "to_dict"):
-            feat = feat.to_dict()
-        elif feat is not None:
-            feat = {"kind": str(getattr(feat.kind, "value", feat.kind)), "index": int(feat.index)}
+        feat = None if self.feature is None else self.feature.to_dict()
         return {
             "distance": self.distance,
             "category": self.category,

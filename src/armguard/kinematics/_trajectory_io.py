@@ -18,7 +18,7 @@ import os
 import numpy as np
 import yaml
 
-from .._errors import SceneFileError, TrajectoryError
+from .._errors import SceneFileError, TrajectoryError, list_problems
 
 __all__ = ["trajectory_to_dict", "trajectory_from_dict", "save_yaml", "load_yaml", "FORMAT", "VERSION"]
 
@@ -72,13 +72,6 @@ def _numbers(d, key: str, ndim: int, problems: list, width: int | None = None):
     return arr
 
 
-def _raise(problems, file):
-    where, first = problems[0]
-    rest = "".join(f"\n  {w}: {m}" if w else f"\n  {m}" for w, m in problems[1:])
-    more = f"\n{len(problems) - 1} more problem{'s' if len(problems) > 2 else ''}:{rest}" if rest else ""
-    raise _fail(file, where, first + more)
-
-
 def trajectory_from_dict(cls, d, *, file=None):
     """A trajectory of ``cls`` from its YAML dictionary; every problem found is listed in one error
     (a missing key with a misspelt one beside it says so)."""
@@ -109,7 +102,7 @@ def trajectory_from_dict(cls, d, *, file=None):
     wp = _numbers(d, "waypoints", 2, problems, len(names) if names else None) if "waypoints" in d else None
     blend = _numbers(d, "blend_times", 1, problems) if "blend_times" in d else None
     if problems:
-        _raise(problems, file)
+        raise _fail(file, *list_problems(problems))
     try:
         return cls(d["robot"], names, times, wp, blend)
     except TrajectoryError as exc:

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 from pydantic import ValidationError
 
-from .._errors import ArmguardError, SceneError, SceneFileError
+from .._errors import ArmguardError, SceneError, SceneFileError, list_problems
 from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
 from ._scene import CannedTest, Scene
 from ._schema import SHAPE_TYPES, SceneFile
@@ -358,11 +358,7 @@ def validate_scene_dict(data, file: str = "<dict>") -> SceneFile:
     try:
         sf = SceneFile.model_validate(data)
     except ValidationError as exc:
-        problems = schema_problems(exc.errors())
-        where, first = problems[0]
-        rest = "".join(f"\n  {w}: {m}" if w else f"\n  {m}" for w, m in problems[1:])
-        more = f"\n{len(problems) - 1} more problem{'s' if len(problems) > 2 else ''}:{rest}" if rest else ""
-        raise SceneFileError(file, where, first + more) from None
+        raise SceneFileError(file, *list_problems(schema_problems(exc.errors()))) from None
     return sf
 
 
@@ -408,10 +404,7 @@ def scene_from_dict_validated(sf: SceneFile, file: str, base: Path | None = None
 
 def _combined(problems: list) -> SceneFileError:
     """One error listing ``problems`` (SceneFileErrors of one file): the first, then "N more problems"."""
-    first, rest = problems[0], problems[1:]
-    more = "".join(f"\n  {e.where}: {e.message}" for e in rest)
-    tail = f"\n{len(rest)} more problem{'s' if len(rest) > 1 else ''}:{more}" if rest else ""
-    return SceneFileError(first.file, first.where, first.message + tail)
+    return SceneFileError(problems[0].file, *list_problems([(e.where, e.message) for e in problems]))
 
 
 def _body(scene: Scene, b, i: int, ctx: _Ctx, X) -> None:
