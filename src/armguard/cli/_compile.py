@@ -73,7 +73,7 @@ def _verifier() -> None:
 #
 # The detector's fused kernel is one chain of compiled calls (detect_entry -> detect_rows ->
 # pair_step -> narrow_other -> pair_distance -> the pair kernels): on a cold cache numba compiles
-# it in one thread, ~80 s on this project's 2-core machines, three quarters of it in a few leaf
+# it in one thread, over a minute on a 2-core machine, more than half of it in a few leaf
 # kernels that share nothing.  Compiled first with the signatures the chain calls them with (two
 # in a second process, three here), they are in numba's on-disk cache when the chain reaches them,
 # and it only loads them.  A signature that no longer matches the chain's call costs time, never
