@@ -1,14 +1,12 @@
-"""The ``armguard distance`` demo: signed distance and witness points for a few shape pairs."""
+"""The shape pairs of the ``armguard distance`` demo (the table is printed by :mod:`armguard.cli._distance`)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ._dispatch import distance, kernel_name
-from ._feature import feature_at
 from ._shapes import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere
 
-__all__ = ["example_pairs", "print_table"]
+__all__ = ["example_pairs"]
 
 
 def example_pairs():
@@ -25,31 +23,3 @@ def example_pairs():
         ("link / polyhedron", link, ConvexPolyhedron([[1, 0, 0], [1.2, 0, 0], [1, 0.2, 0], [1, 0, 0.2]])),
         ("link / face (Ranger)", link, Polygon([[0.0, -0.2, 0.2], [0.6, -0.2, 0.2], [0.6, 0.2, 0.2], [0.0, 0.2, 0.2]])),
     ]
-
-
-def _fmt(p) -> str:
-    return "(" + ", ".join(f"{x:+.4f}" for x in p) + ")"
-
-
-def print_table() -> None:
-    """Print a rich table: pair, kernel, signed distance, witness points and the B feature."""
-    from rich.console import Console
-    from rich.table import Table
-
-    from ..cli._compile import warm_up
-
-    console = Console()
-    rows = example_pairs()
-    warm_up((("geometry kernels", lambda: [distance(a, b) for _, a, b in rows]),), console=console, side=())  # a bar only when compiling
-    table = Table(title="armguard signed distance (m): > 0 apart, < 0 penetrating")
-    for col in ("pair", "kernel", "distance", "p_WA", "p_WB", "feature of B"):
-        table.add_column(col)
-    for label, a, b in rows:
-        r = distance(a, b)
-        try:
-            f = feature_at(b, r.p_WB)
-            feat = f"{f.kind.value} {f.index}"
-        except Exception:  # noqa: BLE001 - the table must print even if a point is off tolerance
-            feat = "?"
-        table.add_row(label, kernel_name(a, b), f"{r.distance:+.6f}", _fmt(r.p_WA), _fmt(r.p_WB), feat)
-    console.print(table)
