@@ -7,7 +7,7 @@ one numba call (FK, transforms, broad and narrow phase) and returns a
 and the status; ``check(q, budget_us=...)`` is the anytime mode; ``check_many`` /
 ``collides_many`` run over many configurations in parallel.  :func:`check_reference` is the
 brute-force path the tests compare against.  A configuration with a joint outside its limits
-is refused by every entry point with :class:`JointLimitError` (see :mod:`._limits`).
+is refused by every entry point with :class:`JointLimitError` (see :mod:`armguard.kinematics._limits`).
 """
 
 from .._errors import JointLimitError

@@ -18,6 +18,7 @@ import numpy as np
 
 from .._errors import DetectionError
 from ._detector import _check_length
+from ._extras import attach_extra
 from ._report import CATEGORIES, BatchReport, DetectionReport, PairDistances, PairResult, Status
 
 __all__ = ["CheckerDetector", "other_backend"]
@@ -88,9 +89,7 @@ class CheckerDetector:
         self.terrain = None
         self.set_active(active)
         if terrain is not None:  # the terrain category, composed outside the backend
-            from ..terrain import attach_terrain
-
-            attach_terrain(self, terrain)
+            attach_extra(self, "terrain", terrain)
 
     def _require_distances(self, what: str) -> None:
         if not self._distances:

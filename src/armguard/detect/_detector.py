@@ -15,9 +15,10 @@ from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from . import _kernel as kn
 from ..geometry._pair_cylinder import SUPPORT_WORK_SIZE
 from ..geometry._pair_epa import EPA_WORK_SIZE
+from ..kinematics._limits import limit_error, limit_rows
+from ._extras import attach_extra
 from ._hulls import link_obbs, vertex_graphs
 from ._layout import EV_W, SUM_SIZE, Layout
-from ._limits import limit_error, limit_rows
 from ._model import CAT_WORKSPACE, build_model, check_finite_margin
 from ._raw import _UNHELD, _Raw, _refcount
 from ._prep import _fk_blocks, _static_polytopes
@@ -127,9 +128,7 @@ class Detector:
         self._ns_per_pair = _DEFAULT_NS_PER_PAIR
         self.prepare()
         if terrain is not None:  # the terrain category: check() returns armguard.terrain's merged report
-            from ..terrain import attach_terrain
-
-            attach_terrain(self, terrain)
+            attach_extra(self, "terrain", terrain)
 
     # ------------------------------------------------------------------ set-up
     def prepare(self) -> "Detector":
@@ -167,7 +166,7 @@ class Detector:
         L.add("MF", "static_hi", m.static_hi.reshape(-1, 3)); L.add("MF", "bvh_lo", m.bvh.lo.reshape(-1, 3))
         L.add("MF", "bvh_hi", m.bvh.hi.reshape(-1, 3)); L.add("MF", "lever", lever)
         L.add("MF", "ws", np.concatenate([m.ws_lo, m.ws_hi]))
-        L.add("MF", "qlim", limit_rows(m.lower, m.upper, self._tol.joint_limit))  # refused outside (._limits)
+        L.add("MF", "qlim", limit_rows(m.lower, m.upper, self._tol.joint_limit))  # refused outside (kinematics._limits)
         self._static_shapes = self._static_shape_table()
         poly = _static_polytopes(cs, self._static_shapes)
         L.add("MF", "pv", poly["pv"]); L.add("MF", "ppl", poly["ppl"]); L.add("MF", "pbis", poly["pbis"])
@@ -371,7 +370,7 @@ class Detector:
 
     def _raise_kernel_error(self, err: int, Q: np.ndarray, where: str = "Detector.check: q", batch: bool = False) -> None:
         """The kernel's error code for ``Q`` ``(M, n_q)`` as an ArmguardError (1 non-finite, 3 outside the
-        joint limits: :mod:`._limits`, 2 GJK); ``batch``: name the row."""
+        joint limits: :mod:`armguard.kinematics._limits`, 2 GJK); ``batch``: name the row."""
         if err == 1:
             bad = np.argwhere(~np.isfinite(Q))[0]
             raise DetectionError(f"{where} contains NaN or infinite values (first at {tuple(int(x) for x in bad)})")

@@ -88,7 +88,7 @@ class Model:
 
     def check_limits(self, q_scene, where: str = "q") -> None:
         """Raise :class:`~armguard.JointLimitError` when the flat scene ``q`` ``(n,)`` leaves a joint's limits."""
-        from ..detect._limits import limit_error
+        from ..kinematics._limits import limit_error
 
         robots = list(self.scene.robots.values())
         if not robots:

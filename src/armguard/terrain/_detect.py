@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 from ..detect import DetectionReport, Status
+from ..detect._extras import register_extra
 from ._guard import TERRAIN, TerrainGuard, TerrainReport
 
 __all__ = ["TerrainDetectionReport", "attach_terrain", "check_with_terrain", "merge_status"]
@@ -101,3 +102,6 @@ def attach_terrain(detector, terrain) -> TerrainGuard:
     check.__doc__ = type(detector).check.__doc__
     detector.check = check
     return guard
+
+
+register_extra("terrain", attach_terrain)  # Detector(..., terrain=...) attaches through it

@@ -18,7 +18,7 @@ budget answers STOP too (never OK by omission).
 Joint limits: the lever-arm bounds hold only within them, so a current configuration ``q``, a
 setpoint ``q_cmd_next`` or a ``target`` outside ``[lower, upper]`` (beyond
 ``Tolerances.joint_limit``) is refused with :class:`~armguard.JointLimitError`, the rule of every
-detector entry point (:mod:`armguard.detect._limits`).  A velocity extrapolated over the horizon
+detector entry point (:mod:`armguard.kinematics._limits`).  A velocity extrapolated over the horizon
 may run past a limit; the arm stops there, so the predicted path saturates at the limits
 (``clip(q + s dq)``: each joint still moves at most ``|dq_i| ds``, so the same certificate holds).
 """
@@ -34,7 +34,7 @@ import numpy as np
 
 from .._errors import VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
-from ..detect._limits import limit_error
+from ..kinematics._limits import limit_error
 from ._oracle import ClearanceModel
 from ._stopping import StoppingDistance, check_stopping_distance
 

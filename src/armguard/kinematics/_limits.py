@@ -1,13 +1,15 @@
-"""Joint limits on the detector's entry points: the one rule for a configuration outside them.
+"""Joint limits on the entry points of the detector, the guard and the Model: the one rule for a
+configuration outside them.
 
-Every bound the detector prunes with (the obstacle lists of :mod:`._reach`, the lever arms of the
-anytime lower bounds, the verifier's motion bounds) holds for configurations *within* the joint
-limits.  A configuration with a joint outside ``[lower - tol.joint_limit, upper + tol.joint_limit]``
-is therefore refused by every entry point -- ``Detector.check`` (plain, lazy, budget),
-``pair_distances``, ``check_many``, ``collides_many``, ``check_many_bruteforce`` and
-``Guard.step`` -- with a :class:`~armguard.JointLimitError` naming the joint, its value and its
-limits.  The test itself runs inside the compiled kernel (two comparisons per joint, before
-forward kinematics); this module only builds the limit rows and the error.
+Every bound the detector prunes with (the obstacle lists of :mod:`armguard.detect._reach`, the
+lever arms of the anytime lower bounds, the verifier's motion bounds) holds for configurations
+*within* the joint limits.  A configuration with a joint outside
+``[lower - tol.joint_limit, upper + tol.joint_limit]`` is therefore refused by every entry point
+-- ``Detector.check`` (plain, lazy, budget), ``pair_distances``, ``check_many``,
+``collides_many``, ``check_many_bruteforce``, ``Guard.step`` and ``Model.check_limits`` -- with
+a :class:`~armguard.JointLimitError` naming the joint, its value and its limits.  The test itself
+runs inside the compiled kernel (two comparisons per joint, before forward kinematics); this
+module only builds the limit rows and the error.
 """
 
 from __future__ import annotations
