@@ -40,7 +40,7 @@ def _checked_file(scene, path: Path, traj):
     """``traj`` (loaded from ``path``) after checking its robot and joints against ``scene``: a
     mismatch is an error naming the file, the key and its line."""
     from .._errors import SceneFileError
-    from ..scene._lines import lines_for
+    from .._lines import lines_for
 
     with lines_for(path):
         if traj.robot_name not in scene.robots:

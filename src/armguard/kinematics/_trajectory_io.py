@@ -130,7 +130,7 @@ def load_yaml(cls, path):
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
         raise SceneFileError(file, where, f"not valid YAML: {getattr(exc, 'problem', exc)}") from None
-    from ..scene._lines import lines_for
+    from .._lines import lines_for
 
     with lines_for(file):
         return trajectory_from_dict(cls, d, file=file)

@@ -135,7 +135,7 @@ def model_from_yaml(path) -> Model:
     """A Model of a sidecar or scene YAML file."""
     from ..scene._load import read_scene_yaml, validate_scene_dict
 
-    from ..scene._lines import lines_for
+    from .._lines import lines_for
 
     path = Path(path)
     with lines_for(path):

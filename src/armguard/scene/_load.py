@@ -523,7 +523,7 @@ def _trajectory(scene: Scene, t, ctx: _Ctx, where: str) -> None:
 
 def load_scene_file(path) -> Scene:
     """Load a YAML scene file (``armguard_scene: 1``)."""
-    from ._lines import lines_for
+    from .._lines import lines_for
 
     path = Path(path)
     with lines_for(path):

@@ -11,7 +11,7 @@ import re
 
 import yaml
 
-from .._errors import SceneFileError
+from ._errors import SceneFileError
 
 __all__ = ["line_map", "line_of", "with_lines", "lines_for"]
 
