@@ -180,7 +180,7 @@ def build_model(scene, *, active: str | None, reach_margin: float, tol) -> Detec
     # candidate pairs
     owner_robot = cs.owner_robot
     active_id = robot_names.index(active) if active is not None else -1
-    from ..scene._compile import PAIR_CATEGORIES
+    from ..scene import PAIR_CATEGORIES
 
     def in_reach_static(ma: int, s: int) -> bool:
         c, rr = m.reach_center[ma], m.reach_radius[ma]

@@ -71,7 +71,7 @@ def _srdf_for(urdf: Path, srdf):
 
 def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None):
     """``(scene, pin_model, collision_model, parts)`` of a URDF: robots, bodies, payloads, SRDF pairs."""
-    from ..scene import Scene
+    from ._scene import Scene
     from ._from_pin import scene_parts_from_pin
     from ._urdf import load_pinocchio
 
@@ -133,7 +133,7 @@ def parts_files(parts, srdf_obj) -> list:
 
 def model_from_yaml(path) -> Model:
     """A Model of a sidecar or scene YAML file."""
-    from ..scene._load import read_scene_yaml, validate_scene_dict
+    from ._scenefile import read_scene_yaml, validate_scene_dict
 
     from .._lines import lines_for
 
@@ -146,7 +146,7 @@ def model_from_yaml(path) -> Model:
 
 def model_from_scenefile(sf, file: str, base: Path) -> Model:
     """The Model of a validated scene file ``sf`` read from ``file`` (paths relative to ``base``)."""
-    from ..scene._load import _DEG, _MM, _Ctx, _frames, _populate
+    from ._scenefile import _DEG, _MM, _Ctx, _frames, _populate
 
     ctx = _Ctx(file, base, _MM if sf.units.length == "mm" else 1.0, _DEG if sf.units.angle == "deg" else 1.0)
     if sf.model is None:
@@ -202,7 +202,7 @@ def _add_extra_bodies(scene, geom, geometry_names: dict, known: set) -> None:
 
 def _model_from_plain_scene(sf, file: str, base: Path, ctx) -> Model:
     """A scene file with DH/URDF robots and shape bodies: its Pinocchio side written as URDF first."""
-    from ..scene._load import scene_from_dict_validated
+    from ._scenefile import scene_from_dict_validated
 
     return model_from_scene(scene_from_dict_validated(sf, file, base), file=file)
 

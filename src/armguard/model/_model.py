@@ -171,7 +171,7 @@ class Model:
         return self._pairs
 
     def _compute_pairs(self) -> GeometryPairs:
-        from ..scene import PAIR_CATEGORIES, compile_scene
+        from ._compile import PAIR_CATEGORIES, compile_scene
 
         cs = compile_scene(self.scene)
         a, b, oa, ob, cat = [], [], [], [], []

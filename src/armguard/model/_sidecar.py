@@ -112,7 +112,7 @@ def generated_sections(scene) -> dict:
     """The sidecar sections from the scene itself (no source file): angles in degrees."""
     import yaml
 
-    from ..scene import scene_to_dict
+    from ._save import scene_to_dict
 
     d = scene_to_dict(scene)
 

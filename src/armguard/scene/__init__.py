@@ -3,12 +3,15 @@
 Load one with :func:`load_scene` (a built-in name, a ``.yaml`` scene file or a ``.urdf``),
 build one in Python with :class:`Scene`, save it with :func:`save_scene`, and flatten it for
 the kernels with :func:`compile_scene`.  ``docs/scene-format.md`` describes the file format.
+
+The Scene and its parts, its YAML front end and ``compile_scene`` live in :mod:`armguard.model`
+(the Model holds its Scene); this package hands them on and adds the loaders, which build a
+Model (``docs/architecture.md``).
 """
 
-from ._compile import PAIR_CATEGORIES, CompiledScene, compile_scene
-from ._load import load_scene, load_scene_file, read_srdf_disabled, scene_from_dict, scene_from_urdf
-from ._save import save_scene, scene_to_dict
-from ._scene import (
+from ..model._compile import PAIR_CATEGORIES, CompiledScene, compile_scene
+from ..model._save import save_scene, scene_to_dict
+from ..model._scene import (
     BODY_CATEGORIES,
     Body,
     CannedTest,
@@ -19,6 +22,8 @@ from ._scene import (
     SceneItem,
     WorkspaceBox,
 )
+from ..model._scenefile import read_srdf_disabled
+from ._load import load_scene, load_scene_file, scene_from_dict, scene_from_urdf
 
 __all__ = [
     "Scene",
