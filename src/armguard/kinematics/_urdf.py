@@ -6,6 +6,11 @@ keeps its own batched FK compiled from Pinocchio's joint placements.  See
 :mod:`armguard.model` for the checks (a file that does not parse, a missing mesh, a dropped
 collision element: an error naming the file and element) and for the shapes (capsules, boxes,
 spheres, exact cylinders, and meshes as their convex hulls).
+
+The one import in :mod:`armguard.kinematics` that runs up the layers (to :mod:`armguard.model`,
+which builds Robots from Pinocchio's models): allowed by name in the import-linter contract
+(``pyproject.toml``) until the Model is the only model type and ``Robot`` retires
+(``docs/architecture.md``).
 """
 
 from __future__ import annotations
@@ -13,9 +18,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from .._errors import SceneFileError
-from ..model._shapes import CYLINDER_PRISM_SIDES
 
-__all__ = ["robot_from_urdf", "CYLINDER_PRISM_SIDES"]
+__all__ = ["robot_from_urdf"]
 
 
 def robot_from_urdf(cls, path, *, name=None, X_WB=None, load_collision=True, mesh_dir=None):
