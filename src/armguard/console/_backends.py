@@ -40,11 +40,11 @@ class BackendView:
     """A checker of ``backend`` on ``model``, with the owners of its pairs for the active-arm filter."""
 
     def __init__(self, model, backend: str) -> None:
-        import armguard
+        from ..backends import checker
 
         self.model = model
         self.backend = backend
-        self.checker = armguard.checker(model, backend)
+        self.checker = checker(model, backend)
         pairs = model.pairs
         self._owner_a = np.array(pairs.owner_a, dtype=object)
         self._owner_b = np.array(pairs.owner_b, dtype=object)

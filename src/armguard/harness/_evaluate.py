@@ -166,13 +166,13 @@ def parse_backend_options(items) -> dict:
 
 def build_checkers(model, backends, options=None) -> dict:
     """``{backend: Checker}``, each warmed up (kernels compiled, batch pools built) so that timings are steady."""
-    import armguard
+    from ..backends import checker
 
     options = options or {}
     out = {}
     warm = np.concatenate([model.neutral()[None], model.random_q(64, 0)])
     for b in backends:
-        c = armguard.checker(model, b, dict(options.get(b, {})))
+        c = checker(model, b, dict(options.get(b, {})))
         if answers_distances(c):
             c.pair_distances(warm[0])
         else:

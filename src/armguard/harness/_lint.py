@@ -241,9 +241,9 @@ def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport) -> Non
 
 
 def _collision_checks(model, report: LintReport, n_configs: int, seed: int, fraction: float) -> None:
-    import armguard
+    from ..backends import checker
 
-    c = armguard.checker(model, "coal", {"threads": 1})
+    c = checker(model, "coal", {"threads": 1})
     names = model.pairs.names
     home = c.pair_distances(model.neutral()).distance
     Q = model.random_q(n_configs, seed)

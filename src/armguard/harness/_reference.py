@@ -87,13 +87,13 @@ class Reference:
 
 def make_reference(spec: str, out_dir=None, *, name: str | None = None) -> tuple[Path, Path]:
     """Write ``<name>.json`` and ``<name>.npz`` for model ``spec`` (coal's answers); returns the two paths."""
-    import armguard
+    from ..backends import checker
 
     name = name or str(spec)
     out = Path(out_dir) if out_dir is not None else reference_dir() / "models"
     out.mkdir(parents=True, exist_ok=True)
     model = resolve_model(spec)
-    c = armguard.checker(model, "coal")
+    c = checker(model, "coal")
     Q = reference_configs(model)
     n = len(model.pairs)
     d = np.empty((len(Q), n))
