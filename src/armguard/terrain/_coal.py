@@ -153,24 +153,25 @@ class CoalTerrain:
         return out
 
 
-def _checker_base():
-    try:
-        from armguard_coal import CoalChecker
-    except ImportError as exc:  # pragma: no cover - the plugin ships with armguard
-        raise TerrainError("the coal backend (armguard_coal) is not installed") from exc
-    return CoalChecker
-
-
-class HeightFieldCoalChecker(_checker_base()):
+class HeightFieldCoalChecker:
     """The coal checker (``armguard.checker(model, "coal")``) with coal's height field of ``elevation``
-    as an option: ``pair_distances`` / ``collides`` unchanged; the terrain through
-    :meth:`terrain_distances` and :meth:`terrain_collides` (see the module docstring)."""
+    as an option: ``pair_distances`` / ``collides`` (every attribute of the coal checker) unchanged;
+    the terrain through :meth:`terrain_distances` and :meth:`terrain_collides` (see the module
+    docstring).  The coal checker is found by its entry point like any backend: the framework does
+    not import the plugin."""
 
     name = "coal"
 
     def __init__(self, model, elevation: ElevationMap, options=None) -> None:
-        super().__init__(model, options)
+        from ..backends import checker
+
+        self.checker = checker(model, "coal", options)
         self.terrain = CoalTerrain(model, elevation)
+
+    def __getattr__(self, name: str):  # the coal checker's own interface, unchanged
+        if name == "checker":  # not set yet (an error in __init__): no recursion
+            raise AttributeError(name)
+        return getattr(self.checker, name)
 
     def terrain_distances(self, q, *, reach: float = 0.1, tol: float = 1e-7) -> np.ndarray:
         """:meth:`CoalTerrain.distances` (``q`` in Pinocchio's order, one row per ``terrain.names``)."""
