@@ -46,8 +46,10 @@ browser:
 	  elif command -v sudo >/dev/null; then sudo apt-get update -qq && sudo apt-get install -y -qq chromium >/dev/null; \
 	  else echo "chromium missing and no root: the browser test will be skipped (fails under CI)"; fi; fi
 
-## test: set up .venv with test extras and run every test
+## test: set up .venv with test extras, check the layers (import-linter's contracts in
+## pyproject.toml, docs/architecture.md) and run every test
 test: $(STAMP_TEST) browser
+	$(VENV)/bin/lint-imports
 	$(PY) -m pytest -n 2 --dist loadfile -q
 
 ## bench: run the benchmarks and rewrite docs/performance.md
