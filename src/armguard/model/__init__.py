@@ -3,6 +3,11 @@
 ``load_model(name_or_path)`` -> :class:`Model` (``pin_model``, ``collision_model``, the active
 pairs with their categories, the scene the analytic backend compiles).  The file convention
 of ``urdf/<system>/`` is ``docs/models.md``.
+
+The front ends that build a Model live here too: URDF/SRDF through Pinocchio (``_urdf``,
+``_srdf``, ``_from_pin``), YAML scene files (``_scenefile``, ``_schema``, ``_yaml``) and the
+Scene the Model holds (``_scene``, ``_items``, ``_compile``, ``_save``; :mod:`armguard.scene`
+hands these on, one layer up, with its loaders).  See ``docs/architecture.md``.
 """
 
 from ._load import builtin_model_names, load_model, model_from_scene, model_of, models_dir
