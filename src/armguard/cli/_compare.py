@@ -37,8 +37,9 @@ def _floats(text: str) -> list:
 @click.option("--json", "as_json", is_flag=True, help="Print compare.json (or the --q answers) instead of tables.")
 def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_dir, backend_options, workers, scheduler,
                 no_plots, n_worst, q_text, pair_text, as_json) -> None:
-    """Compare BACKENDS on MODEL (a built-in, panda, ur5, iiwa, or a .urdf/.yaml path): verdicts, distances,
-    nearest points and timings on the same configurations.  Exit status 1 when a backend pair differs."""
+    """Compare BACKENDS on MODEL (a built-in or public robot name -- `armguard info` lists them -- or a
+    .urdf/.yaml path): verdicts, distances, nearest points and timings on the same configurations.
+    Exit status 1 when a backend pair differs."""
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 

@@ -1,4 +1,5 @@
-"""``armguard info SCENE``: what a scene holds, and its compiled size beside Hermes's database."""
+"""``armguard info SCENE``: what a scene holds, and its compiled size beside Hermes's database; ``armguard info``:
+the model names armguard knows."""
 
 from __future__ import annotations
 
@@ -34,16 +35,38 @@ def _limit(v: float, revolute: bool, deg: bool) -> str:
     return f"{math.degrees(v):.1f}°" if revolute and deg else (f"{v:.4g} rad" if revolute else f"{v:.4g} m")
 
 
+def _print_known_models() -> None:
+    """The names ``load_model`` takes: built-in and public robots, whether each is installed, its file."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from ..model._public import known_models
+
+    con = Console() if Console().is_terminal else Console(width=200)
+    t = Table(title="known models (armguard info NAME describes one; any .urdf or .yaml path loads too)",
+              title_justify="left")
+    for col in ("name", "source", "available", "file"):
+        t.add_column(col, overflow="fold")
+    for m in known_models():
+        name = m.name + (f" ({', '.join(m.aliases)})" if m.aliases else "")
+        t.add_row(name, m.source, "yes" if m.available else "no", str(m.path) if m.available else m.reason)
+    con.print(t)
+
+
 @main.command("info")
-@click.argument("scene")
+@click.argument("scene", required=False)
 @click.option("--rad", is_flag=True, help="Print revolute joint limits in radians (default: degrees).")
-def info_cmd(scene: str, rad: bool) -> None:
-    """Describe SCENE (a built-in name, a .yaml scene or a .urdf): bodies, robots, joints, pairs, size."""
+def info_cmd(scene: str | None, rad: bool) -> None:
+    """Describe SCENE (a built-in or public robot name, a .yaml scene or a .urdf): bodies, robots, joints,
+    pairs, size.  Without SCENE: list the model names armguard knows, and whether each is installed."""
     from rich.console import Console
     from rich.table import Table
 
     from ..scene import compile_scene, load_scene
 
+    if scene is None:
+        _print_known_models()
+        return
     s = load_scene(scene)
     c = compile_scene(s)
     con = Console()

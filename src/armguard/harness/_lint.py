@@ -89,11 +89,11 @@ def _sources(target) -> tuple:
     import yaml
 
     from ..model._load import builtin_model_path
-    from ._models import EXTRA_MODELS, model_sources
+    from ..model._public import public_robot, public_robot_files
 
     s = str(target)
-    if s in EXTRA_MODELS:
-        urdf, srdf = model_sources(s)
+    if builtin_model_path(s) is None and public_robot(s) is not None:
+        urdf, srdf = public_robot_files(s)
         return urdf, srdf, urdf, srdf
     p = Path(s)
     if p.suffix == "" and builtin_model_path(s) is not None:
@@ -112,7 +112,7 @@ def _sources(target) -> tuple:
     if p.suffix.lower() == ".urdf":
         srdf = p.with_suffix(".srdf")
         return p, None, p, srdf if srdf.is_file() else None
-    raise ArmguardError(f"check-urdf {s!r}: expected a built-in model name, panda/ur5/iiwa, a .urdf or a sidecar .yaml")
+    raise ArmguardError(f"check-urdf {s!r}: expected a built-in model name, a public robot's name (armguard info lists them), a .urdf or a sidecar .yaml")
 
 
 def mesh_convexity(path, *, volume_ratio: float = 0.99) -> tuple[bool, str]:
@@ -271,7 +271,7 @@ def _collision_checks(model, report: LintReport, n_configs: int, seed: int, frac
 
 def check_model_files(target, *, n_configs: int = 200, seed: int = 0, permanent_fraction: float = 0.95,
                       convex_volume_ratio: float = 0.99) -> LintReport:
-    """Lint ``target`` (a built-in name, panda/ur5/iiwa, a .urdf or a sidecar .yaml); see the module docstring."""
+    """Lint ``target`` (a built-in or public robot name, a .urdf or a sidecar .yaml); see the module docstring."""
     from ..model import load_model
 
     arg, srdf_arg, urdf, srdf = _sources(target)

@@ -1,56 +1,47 @@
-"""Named models for the harness and ``reference/``: the built-ins plus three public arms.
+"""Named models for the harness and ``reference/``: the built-ins plus the public robots.
 
-``resolve_model(spec)`` takes what ``armguard.load_model`` takes, plus ``panda`` and ``ur5``
-(example-robot-data, with their SRDFs) and ``iiwa`` (pybullet_data's KUKA iiwa, no SRDF).
-A spec is a plain string, so it travels to Dask workers and into reproduce commands.
+``resolve_model(spec)`` takes what ``armguard.load_model`` takes: a built-in, a public robot's
+name (``panda``, ``ur10``, ``iiwa``..., the registry ``armguard.model._public``), a path.
+``reference/models/`` records the built-ins and :data:`EXTRA_MODELS`, three public arms.  A spec
+is a plain string, so it travels to Dask workers and into reproduce commands.
 """
 
 from __future__ import annotations
 
-import os
-import sysconfig
 from pathlib import Path
 
 from .._errors import SceneError
+from .._resources import checkout_root, data_dir, data_roots
 
 __all__ = ["resolve_model", "seed_data", "model_sources", "reference_model_names", "repo_root", "reference_dir", "file_label",
            "robots_dir", "EXTRA_MODELS"]
 
 EXTRA_MODELS = ("panda", "ur5", "iiwa")
+"""The public robots ``reference/models/`` records (example-robot-data's Panda and UR5, pybullet_data's iiwa)."""
 
 
 def repo_root() -> Path:
-    return Path(__file__).resolve().parents[3]
+    """The checkout's root (the folder above ``src/``)."""
+    return checkout_root()
 
 
 def reference_dir() -> Path:
-    """``$ARMGUARD_REFERENCE`` or the checkout's ``reference/``."""
-    env = os.environ.get("ARMGUARD_REFERENCE")
-    return Path(env) if env else repo_root() / "reference"
+    """``$ARMGUARD_REFERENCE``, the installed package data or the checkout's ``reference/``."""
+    return data_dir("reference")
 
 
-def robots_dir() -> Path:
+def robots_dir() -> Path | None:
     """example-robot-data's ``robots/`` folder (it ships data only, in site-packages' cmeel prefix)."""
-    return Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
+    from ..model._public import EXAMPLE_ROBOT_DATA, package_root
 
-
-def _pybullet_data() -> Path:
-    import pybullet_data
-
-    return Path(pybullet_data.getDataPath())
+    return package_root(EXAMPLE_ROBOT_DATA)
 
 
 def model_sources(spec: str) -> tuple[Path, Path | None]:
-    """``(urdf_or_yaml, srdf or None)`` of an extra model name; SceneError for other names."""
-    if spec == "panda":
-        r = robots_dir() / "panda_description"
-        return r / "urdf/panda.urdf", r / "srdf/panda.srdf"
-    if spec == "ur5":
-        r = robots_dir() / "ur_description"
-        return r / "urdf/ur5_robot.urdf", r / "srdf/ur5.srdf"
-    if spec == "iiwa":
-        return _pybullet_data() / "kuka_iiwa/model.urdf", None
-    raise SceneError(f"{spec!r} is not one of the extra models {list(EXTRA_MODELS)}")
+    """``(urdf, srdf or None)`` of a public robot's name; SceneError for other names."""
+    from ..model._public import public_robot_files
+
+    return public_robot_files(spec)
 
 
 def resolve_model(spec):
@@ -59,11 +50,7 @@ def resolve_model(spec):
 
     if isinstance(spec, Model):
         return spec
-    s = str(spec)
-    if s in EXTRA_MODELS:
-        urdf, srdf = model_sources(s)
-        return load_model(urdf, srdf=srdf)
-    return load_model(s)
+    return load_model(str(spec))
 
 
 def reference_model_names() -> tuple[str, ...]:
@@ -77,14 +64,15 @@ def reference_model_names() -> tuple[str, ...]:
 
 def file_label(path) -> str:
     """A machine-independent name for a model file: relative to the checkout, example-robot-data or pybullet_data."""
+    from ..model._public import EXAMPLE_ROBOT_DATA, PYBULLET_DATA, package_root
+
     p = Path(path).resolve()
-    roots = [("example-robot-data:", robots_dir())]
-    try:
-        roots.append(("pybullet_data:", _pybullet_data().resolve()))
-    except ImportError:  # pragma: no cover - a test extra
-        pass
-    roots.append(("", repo_root()))  # last: the virtual environment may lie inside the checkout
+    roots = [(f"{pkg}:", package_root(pkg)) for pkg in (EXAMPLE_ROBOT_DATA, PYBULLET_DATA)]
+    # last: the virtual environment may lie inside the checkout
+    roots += [("", root) for root in data_roots()]
     for prefix, root in roots:
+        if root is None:
+            continue
         try:
             return prefix + p.relative_to(root.resolve()).as_posix()
         except ValueError:

@@ -24,7 +24,8 @@ def run_compare(spec, backends=("analytic", "coal"), *, n_configs: int = 1000, s
                 frequency: float = 1.0, options=None, workers: int | None = None, scheduler: str | None = None,
                 out_dir=None, plots: bool = True, progress=None, tol: Tolerances = DEFAULT_TOLERANCES,
                 n_worst: int = 5, model=None) -> Comparison:
-    """Compare ``backends`` on model ``spec`` (a name, ``panda``/``ur5``/``iiwa`` or a file path).
+    """Compare ``backends`` on model ``spec`` (a built-in or public robot name -- ``panda``, ``ur10``,
+    ``iiwa``... -- or a file path).
 
     Parameters
     ----------

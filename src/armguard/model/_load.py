@@ -7,11 +7,12 @@
 * A scene ``.yaml`` without ``model:`` (robots from DH tables, bodies as shapes): the scene as
   it is, and its Pinocchio model and GeometryModel built from it by writing it as URDF.
 * A built-in name: ``urdf/<name>/<name>.yaml``.
+* A public robot's name (``ur10``, ``xarm7``, ``kuka_iiwa``...): its URDF and SRDF where
+  example-robot-data or pybullet_data installed them (``armguard.model._public``).
 """
 
 from __future__ import annotations
 
-import os
 import tempfile
 from pathlib import Path
 
@@ -27,9 +28,11 @@ _BUILTINS = ("ranger", "hermes", "puma560", "gmf_s480", "rover")
 
 
 def models_dir() -> Path:
-    """The folder of the built-in models: ``$ARMGUARD_MODELS`` or the checkout's ``urdf/``."""
-    env = os.environ.get("ARMGUARD_MODELS")
-    return Path(env) if env else Path(__file__).resolve().parents[3] / "urdf"
+    """The folder of the built-in models: ``$ARMGUARD_MODELS``, the installed package data or the checkout's
+    ``urdf/`` (:func:`armguard._resources.data_dir`)."""
+    from .._resources import data_dir
+
+    return data_dir("urdf")
 
 
 def builtin_model_names() -> tuple[str, ...]:
@@ -45,7 +48,8 @@ def builtin_model_path(name: str) -> Path | None:
 
 
 def load_model(name_or_path, *, srdf=None, package_dirs=()) -> Model:
-    """A :class:`Model` from a built-in name, a ``.urdf`` or a ``.yaml`` file (see the module docstring)."""
+    """A :class:`Model` from a built-in or public robot name, a ``.urdf`` or a ``.yaml`` file (see the module
+    docstring); ``srdf=`` replaces the SRDF a public robot or URDF would have."""
     s = str(name_or_path)
     p = Path(s)
     suffix = p.suffix.lower()
@@ -54,12 +58,30 @@ def load_model(name_or_path, *, srdf=None, package_dirs=()) -> Model:
     if suffix in (".yaml", ".yml"):
         return model_from_yaml(p)
     if suffix == "" and "/" not in s and "\\" not in s:
-        path = builtin_model_path(s)
-        if path is None:
-            raise SceneError(f"unknown built-in model {s!r}; built-in models are {list(_BUILTINS)} "
-                             f"(in {models_dir()}), or give a .urdf or .yaml path")
+        return _model_by_name(s, srdf=srdf, package_dirs=package_dirs)
+    raise SceneError(f"cannot load {s!r}: expected a model name ({_known_names_text()}), a .urdf or a .yaml file")
+
+
+def _model_by_name(name: str, *, srdf=None, package_dirs=()) -> Model:
+    """A built-in model (``urdf/<name>/<name>.yaml``), else a public robot (``armguard.model._public``)."""
+    from ._public import public_robot, public_robot_files
+
+    path = builtin_model_path(name)
+    if path is not None:
         return model_from_yaml(path)
-    raise SceneError(f"cannot load {s!r}: expected a built-in model name {list(_BUILTINS)}, a .urdf or a .yaml file")
+    if public_robot(name) is not None:
+        urdf, known_srdf = public_robot_files(name)
+        return model_from_urdf(urdf, srdf=srdf if srdf is not None else known_srdf, package_dirs=package_dirs)
+    if name in _BUILTINS:
+        raise SceneError(f"built-in model {name!r} is missing: no {name}/{name}.yaml in {models_dir()}")
+    raise SceneError(f"unknown model {name!r}; known models are {_known_names_text()} "
+                     "(`armguard info` lists them), or give a .urdf or .yaml path")
+
+
+def _known_names_text() -> str:
+    from ._public import public_robot_names
+
+    return f"built-in {list(_BUILTINS)}, public {list(public_robot_names(aliases=True))}"
 
 
 def _srdf_for(urdf: Path, srdf):

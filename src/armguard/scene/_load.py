@@ -45,7 +45,8 @@ def scene_from_urdf(path, *, srdf=None) -> Scene:
 
 
 def load_scene(name_or_path) -> Scene:
-    """A Scene from a built-in name (``"hermes"``), a ``.yaml`` / ``.yml`` scene file or a ``.urdf`` file."""
+    """A Scene from a built-in name (``"hermes"``), a public robot's name (``"ur10"``, see
+    :func:`armguard.model.load_model`), a ``.yaml`` / ``.yml`` scene file or a ``.urdf`` file."""
     s = str(name_or_path)
     p = Path(s)
     if p.suffix.lower() in (".yaml", ".yml"):
@@ -53,7 +54,8 @@ def load_scene(name_or_path) -> Scene:
     if p.suffix.lower() == ".urdf":
         return scene_from_urdf(p)
     if p.suffix == "" and "/" not in s and "\\" not in s:
-        if s not in builtin_names():
-            raise SceneError(f"unknown built-in scene {s!r}; built-in scenes are {list(builtin_names())}, or give a .yaml or .urdf path")
-        return load_model(s).scene  # urdf/<name>/: the URDF, SRDF and sidecar, through Pinocchio
-    raise SceneError(f"cannot load {s!r}: expected a built-in scene name {list(builtin_names())}, a .yaml scene or a .urdf file")
+        # a built-in (urdf/<name>/: the URDF, SRDF and sidecar) or a public robot, through Pinocchio;
+        # an unknown name: load_model's error lists the known ones
+        return load_model(s).scene
+    raise SceneError(f"cannot load {s!r}: expected a built-in scene name {list(builtin_names())}, a public robot's name, "
+                     "a .yaml scene or a .urdf file")
