@@ -9,7 +9,7 @@ STAMP_RUN  := $(VENV)/.installed-run-$(HASH)
 STAMP_TEST := $(VENV)/.installed-test-$(HASH)
 PIP_QUIET  := 2>&1 | { grep -v "^WARNING: Location" || true; }
 
-.PHONY: run test bench install browser clean clean-cache
+.PHONY: run test bench install browser clean clean-cache smoke-wheel
 
 # Installing: uv (a resolver and installer that runs the same install in ~8 s instead of pip's
 # ~40 s: most of `make run`'s first minute) when it can be had, else pip; both install what
@@ -47,10 +47,17 @@ browser:
 	  else echo "chromium missing and no root: the browser test will be skipped (fails under CI)"; fi; fi
 
 ## test: set up .venv with test extras, check the layers (import-linter's contracts in
-## pyproject.toml, docs/architecture.md) and run every test
+## pyproject.toml, docs/architecture.md), run every test, then the installed-wheel smoke check
 test: $(STAMP_TEST) browser
 	$(VENV)/bin/lint-imports
 	$(PY) -m pytest -n 2 --dist loadfile -q
+	$(PY) tools/smoke_wheel.py
+
+## smoke-wheel: build the sdist and wheel, install the wheel in a fresh venv in a temp folder, run
+## `armguard check ranger` and load_model("hermes") from another folder (tools/smoke_wheel.py;
+## it reuses the checkout's compiled kernels, so after the tests it compiles nothing)
+smoke-wheel: $(STAMP_TEST)
+	$(PY) tools/smoke_wheel.py
 
 ## bench: run the benchmarks and rewrite docs/performance.md
 bench: $(STAMP_TEST)

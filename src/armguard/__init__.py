@@ -26,6 +26,9 @@ from ._errors import (
     VerificationError,
 )
 from ._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._numba_cache import ensure_numba_cache as _ensure_numba_cache
+
+_ensure_numba_cache()  # before any kernel is defined: a read-only install still caches them somewhere
 
 __version__ = "0.1.0"
 

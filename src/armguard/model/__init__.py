@@ -2,7 +2,8 @@
 
 ``load_model(name_or_path)`` -> :class:`Model` (``pin_model``, ``collision_model``, the active
 pairs with their categories, the scene the analytic backend compiles).  The file convention
-of ``urdf/<system>/`` is ``docs/models.md``.
+of ``urdf/<system>/`` is ``docs/models.md``; the public robots loadable by name (example-robot-data,
+pybullet_data) are ``known_models()``.
 
 The front ends that build a Model live here too: URDF/SRDF through Pinocchio (``_urdf``,
 ``_srdf``, ``_from_pin``), YAML scene files (``_scenefile``, ``_schema``, ``_yaml``) and the
@@ -12,5 +13,7 @@ hands these on, one layer up, with its loaders).  See ``docs/architecture.md``.
 
 from ._load import builtin_model_names, load_model, model_from_scene, model_of, models_dir
 from ._model import WORKSPACE, GeometryPairs, Model
+from ._public import known_models, public_robot_files, public_robot_names
 
-__all__ = ["load_model", "model_of", "model_from_scene", "Model", "GeometryPairs", "WORKSPACE", "models_dir", "builtin_model_names"]
+__all__ = ["load_model", "model_of", "model_from_scene", "Model", "GeometryPairs", "WORKSPACE", "models_dir", "builtin_model_names",
+           "known_models", "public_robot_names", "public_robot_files"]

@@ -1,0 +1,58 @@
+"""Where numba may cache armguard's kernels, when the installed package is read-only.
+
+numba caches a ``@njit(cache=True)`` kernel in ``__pycache__`` beside its source, else in the
+user's cache folder (``~/.cache/numba``), else it refuses to define the kernel ("no locator
+available"), and armguard would not import.  :func:`ensure_numba_cache` runs first on
+``import armguard``: when ``$NUMBA_CACHE_DIR`` is unset and neither of numba's two folders is
+writable (a read-only site-packages and no writable home, as in some containers), it points
+numba at ``<temp dir>/armguard-numba-<user>`` instead.  Otherwise it changes nothing (and does not
+import numba).
+"""
+
+from __future__ import annotations
+
+import getpass
+import os
+import tempfile
+from pathlib import Path
+
+__all__ = ["ensure_numba_cache", "writable"]
+
+
+def writable(folder: Path) -> bool:
+    """Whether ``folder`` could be created (when missing) and written to."""
+    p = Path(folder)
+    while not p.exists():
+        if p.parent == p:
+            return False
+        p = p.parent
+    return p.is_dir() and os.access(p, os.W_OK | os.X_OK)
+
+
+def _user_cache_dir() -> Path:
+    from numba.misc.appdirs import AppDirs
+
+    return Path(AppDirs(appname="numba", appauthor=False).user_cache_dir)
+
+
+def _user() -> str:
+    try:
+        return getpass.getuser()
+    except (KeyError, OSError):  # no name for this uid (a container)
+        return str(os.getuid()) if hasattr(os, "getuid") else "user"
+
+
+def ensure_numba_cache(package_dir: Path | None = None) -> Path | None:
+    """Point numba at a temp folder when it could cache armguard's kernels nowhere (see the module
+    docstring); returns that folder, or None when numba's own choice stands."""
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return None
+    package_dir = Path(package_dir) if package_dir is not None else Path(__file__).resolve().parent
+    if writable(package_dir / "__pycache__") or writable(_user_cache_dir()):
+        return None
+    folder = Path(tempfile.gettempdir()) / f"armguard-numba-{_user()}"
+    os.environ["NUMBA_CACHE_DIR"] = str(folder)
+    from numba.core import config
+
+    config.CACHE_DIR = str(folder)  # numba read the environment when it was imported above
+    return folder
