@@ -3,8 +3,10 @@
 ``load_model("ur10")`` (and every command that takes a model) looks a name up here after the
 built-in models.  Each entry names the package, its URDF (relative to the package's robot
 folder) and the SRDF that package pairs with it (the file example-robot-data's own loader
-reads, None when it reads none).  The files are never copied: they are found where the package
-installed them, so a robot is *available* only when its package is installed.
+reads), given to ``load_model`` as ``srdf=``; None when there is none, or when the SRDF is one
+that :func:`armguard.model.load_model`'s SRDF search should find and read leniently (kinova's,
+talos's).  The files are never copied: they are found where the package installed them, so a
+robot is *available* only when its package is installed.
 
 * example-robot-data ships data only (no Python module): its files lie under the installing
   environment's ``cmeel.prefix/share/example-robot-data/robots/``, found through the
@@ -52,7 +54,8 @@ PUBLIC_ROBOTS: tuple[PublicRobot, ...] = (
     PublicRobot("ur10", EXAMPLE_ROBOT_DATA, "ur_description/urdf/ur10_robot.urdf"),
     PublicRobot("ur5_gripper", EXAMPLE_ROBOT_DATA, "ur_description/urdf/ur5_gripper.urdf",
                 "ur_description/srdf/ur5_gripper.srdf"),
-    PublicRobot("kinova", EXAMPLE_ROBOT_DATA, "kinova_description/robots/kinova.urdf", "kinova_description/srdf/kinova.srdf"),
+    # kinova.srdf (a group_state without a group) is left to the SRDF search, which reads it leniently
+    PublicRobot("kinova", EXAMPLE_ROBOT_DATA, "kinova_description/robots/kinova.urdf"),
     PublicRobot("xarm7", EXAMPLE_ROBOT_DATA, "xarm_description/urdf/xarm7.urdf", "xarm_description/srdf/xarm7.srdf"),
     PublicRobot("z1", EXAMPLE_ROBOT_DATA, "z1_description/urdf/z1.urdf", "z1_description/srdf/z1.srdf"),
     PublicRobot("so100", EXAMPLE_ROBOT_DATA, "so_arm_description/urdf/so100.urdf"),
