@@ -567,9 +567,9 @@ class PaperChecker(CheckerBase):
                                f"(configuration {m}); raise Tolerances.gjk_max_iterations")
         return out_d, out_p, out_hit
 
-    def pair_distances_many(self, Q, *, points: bool = False):
+    def paper_distances_many(self, Q, *, points: bool = False):
         """``(M, n)`` every pair's paper distance at each row of ``Q`` (M, nq); with ``points`` also
-        ``(M, n, 6)`` ``[p_WA, p_WB]``."""
+        ``(M, n, 6)`` ``[p_WA, p_WB]`` (plain arrays; :meth:`pair_distances_many` is the interface's)."""
         Q = check_Q(self.model, Q)
         d, p, _ = self._run(self.model.scene_q(Q), 0, 0.0, points)
         return (d, p) if points else d
@@ -587,7 +587,7 @@ class PaperChecker(CheckerBase):
         return self._run(self.model.scene_q(Q), 1, margin, False)[2]
 
     def min_distance_many(self, Q) -> np.ndarray:
-        return self.pair_distances_many(Q).min(axis=1, initial=np.inf)
+        return self.paper_distances_many(Q).min(axis=1, initial=np.inf)
 
 
 # one pair, from shapes in W (their own module; part of this one's interface)
