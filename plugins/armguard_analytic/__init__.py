@@ -36,14 +36,17 @@ __all__ = ["AnalyticBackend", "AnalyticChecker"]
 _FIDELITIES = ("exact", "paper")
 _F64 = np.dtype(np.float64)
 _ND = np.ndarray
+_new_result = PairDistances._unchecked
 _MIN_ROWS_PER_THREAD = 256  # pair_distances_many: below this many rows per thread, a thread costs more than it saves
 
 
 class _Fast:
-    """What one ``pair_distances`` call needs, prepared once per scene revision."""
+    """What one ``pair_distances`` call needs, prepared once per scene revision: the detector's
+    buffers of that revision (held here, so a later rebuild of the detector cannot mix with them),
+    the gather map, the compiled entry point, and per-thread scratch copied from the pristine one."""
 
     __slots__ = ("revision", "det", "head", "sel", "swap", "gmap", "n", "names", "category", "q_shape", "entry",
-                 "args")
+                 "args", "SF0", "SI0", "n_q", "tls")
 
     def __init__(self, checker: "AnalyticChecker") -> None:
         from armguard.detect import _kernel as kn
@@ -68,15 +71,15 @@ class _Fast:
         self.names, self.category = pairs.names, pairs.category
         self.q_shape = (model.nq,)
         self.args = (det._H, det._MF, det._MI, det._prm, det._iprm_by_mode[kn.MODE_ALL])
+        self.SF0, self.SI0, self.n_q = det._SF0, det._SI0, det._model.n_q
+        self.tls = threading.local()
         # the compiled overload for exactly these argument types, called without the dispatcher
         # (see armguard.detect._detector._entry_point); built on a scratch of its own
-        from armguard.detect._detector import _Scratch
-
-        s = _Scratch(det)
+        SF, SI, q1 = self.new_scratch()
         q = np.ascontiguousarray(model.neutral(), dtype=np.float64)
         H, MF, MI, prm, iprm = self.args
         out = (np.empty(n), np.empty((n, 3)), np.empty((n, 3)))
-        call = (q, 0, 1, self.gmap, H, MF, MI, s.SF, s.SI, prm, iprm, s.q1, *out)
+        call = (q, 0, 1, self.gmap, H, MF, MI, SF, SI, prm, iprm, q1, *out)
         kn.pair_rows(*call)
         try:
             from numba import typeof
@@ -84,6 +87,18 @@ class _Fast:
             self.entry = kn.pair_rows.overloads[tuple(typeof(a) for a in call)].entry_point
         except (KeyError, AttributeError):  # pragma: no cover - numba internals changed
             self.entry = kn.pair_rows
+
+    def new_scratch(self) -> tuple:
+        """``(SF, SI, q1)``: scratch for one thread or one worker, from the pristine buffers."""
+        return self.SF0.copy(), self.SI0.copy(), np.zeros((1, self.n_q))
+
+    def scratch(self) -> tuple:
+        """The calling thread's scratch (made on its first call)."""
+        try:
+            return self.tls.s
+        except AttributeError:
+            s = self.tls.s = self.new_scratch()
+            return s
 
     def subset(self, idx: np.ndarray) -> np.ndarray:
         """The kernel's ``gmap`` for the Model rows ``idx``."""
@@ -204,25 +219,21 @@ class AnalyticChecker(CheckerBase):
                 return self.pair_distances(q).take(idx)
             n, gmap = len(idx), f.subset(idx)
             names, cat = self._subset(idx)
-        det = f.det
-        try:  # this thread's scratch
-            s = det._tls.s
+        try:  # this thread's scratch (f.scratch, inline)
+            SF, SI, q1 = f.tls.s
         except AttributeError:
-            s = det._scratch()
-        if s.last_raw is not None:  # a report of this thread's last check still reads the scratch
-            det._release_last(s)
+            SF, SI, q1 = f.scratch()
         d, p_WA, p_WB = np.empty(n), np.empty((n, 3)), np.empty((n, 3))
         H, MF, MI, prm, iprm = f.args
-        err = f.entry(q, 0, 1, gmap, H, MF, MI, s.SF, s.SI, prm, iprm, s.q1, d, p_WA, p_WB)
+        err = f.entry(q, 0, 1, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d, p_WA, p_WB)
         if err:
             self._kernel_error(f, err, q[None], False)
-        return PairDistances(names, d, p_WA, p_WB, cat)
+        return _new_result(names, d, p_WA, p_WB, cat)
 
     def pair_distances_many(self, Q, *, pairs=None) -> PairDistancesMany:
         """Every pair (or the Model rows ``pairs``) at each row of ``Q`` ``(M, nq)``; rows split over
         threads (one numba call each, the GIL released) when there are many."""
         from armguard.detect import _kernel as kn
-        from armguard.detect._detector import _Scratch
 
         f = self._plan()
         Q = check_Q(self.model, Q)
@@ -247,8 +258,8 @@ class AnalyticChecker(CheckerBase):
         entry = f.entry if M else kn.pair_rows
 
         def work(k: int) -> int:
-            s = _Scratch(f.det)  # each worker its own scratch
-            return int(entry(Qf, bounds[k], bounds[k + 1], gmap, H, MF, MI, s.SF, s.SI, prm, iprm, s.q1, df, pAf, pBf))
+            SF, SI, q1 = f.scratch() if n_threads == 1 else f.new_scratch()  # each worker its own
+            return int(entry(Qf, bounds[k], bounds[k + 1], gmap, H, MF, MI, SF, SI, prm, iprm, q1, df, pAf, pBf))
 
         if M == 0:
             errs = [0]

@@ -70,6 +70,15 @@ class PairDistances:
                                  self.p_WB[k].copy(), k)
         return out
 
+    @staticmethod
+    def _unchecked(pairs, distance, p_WA, p_WB, category, _new=object.__new__) -> "PairDistances":
+        """The same object as ``PairDistances(...)``, built without the frozen dataclass's
+        ``__init__`` (one ``object.__setattr__`` per field): a fast backend's per-call path."""
+        o = _new(PairDistances)
+        d = o.__dict__
+        d["pairs"], d["distance"], d["p_WA"], d["p_WB"], d["category"] = pairs, distance, p_WA, p_WB, category
+        return o
+
     def take(self, rows: np.ndarray) -> "PairDistances":
         """The rows ``rows`` (int indices) of this result, in that order (fresh arrays)."""
         cat = self.category
