@@ -4,15 +4,23 @@ Per model: µs per configuration for every pair's signed distance and witness po
 (``checker.pair_distances(q)``), and yes/no configurations per second (``checker.collides(Q)``,
 each backend's own batch path: the analytic one multi-threaded numba, coal's
 ``computeCollisionsInParallel`` over a GeometryPool, fcl one configuration at a time).
+
+A second table: the analytic interface's cost around its kernel -- one ``pair_distances(q)``
+against the bare compiled call it makes (the difference is the Python per call),
+``pair_distances_many(Q)`` per row, the same calls from two threads sharing one checker (the
+kernel releases the GIL), and yes/no per thread against coal with one thread.
 """
 
 from __future__ import annotations
 
 import sysconfig
+import threading
+import time
 from pathlib import Path
 
+import numpy as np
 
-from .timing import fmt_ns, median_seconds
+from .timing import fmt_ns, median_seconds, median_thread_seconds
 
 TITLE = "Backends: analytic vs coal vs python-fcl on the same Model"
 
@@ -56,4 +64,88 @@ def run(quick: bool) -> str:
             f"median of 5 runs), every active pair with witness points, from Python. Yes/no: `collides(Q)` "
             f"on {n_yn} configurations (fcl on a fiftieth of them). coal's reference runs GJK without guesses "
             "carried between configurations (see `plugins/armguard_coal`).")
-    return "\n".join(rows) + note
+    return "\n".join(rows) + note + "\n\n" + interface_rows(quick)
+
+
+def _hull_robots():
+    """Robots with convex-hull collision geometry (pybullet's KUKA iiwa, example-robot-data's Panda)."""
+    import armguard
+
+    out = []
+    try:
+        import pybullet_data
+
+        iiwa = Path(pybullet_data.getDataPath()) / "kuka_iiwa" / "model.urdf"
+        if iiwa.is_file():
+            out.append(("kuka_iiwa (hulls)", lambda: armguard.load_model(iiwa)))
+    except ImportError:  # pragma: no cover - pybullet is a test extra
+        pass
+    panda = _ROBOTS / "panda_description"
+    if panda.is_dir():
+        out.append(("panda (hulls)", lambda: armguard.load_model(panda / "urdf/panda.urdf", srdf=panda / "srdf/panda.srdf")))
+    return out
+
+
+def _two_threads(fn, n: int) -> float:
+    """Wall seconds for ``n`` calls ``fn(i)`` split over two threads sharing everything."""
+    barrier = threading.Barrier(3)
+
+    def run(lo: int, hi: int) -> None:
+        barrier.wait()
+        for i in range(lo, hi):
+            fn(i)
+
+    ts = [threading.Thread(target=run, args=(0, n // 2)), threading.Thread(target=run, args=(n // 2, n))]
+    for t in ts:
+        t.start()
+    barrier.wait()
+    t0 = time.perf_counter()
+    for t in ts:
+        t.join()
+    return time.perf_counter() - t0
+
+
+def interface_rows(quick: bool) -> str:
+    """The analytic interface around its kernel (see the module docstring)."""
+    import armguard
+
+    n_q = 40 if quick else 200
+    rows = ["| model | pairs | analytic `pair_distances` | bare kernel call | Python per call | `pair_distances_many` "
+            "per row | coal `pair_distances` | coal / analytic | 2 threads, one checker (speed-up) |",
+            "|---|---|---|---|---|---|---|---|---|"]
+    for name, load in _models():
+        m = load()
+        Q = m.random_q(n_q, 3)
+        a, c = armguard.checker(m, "analytic"), armguard.checker(m, "coal")
+        f = a._plan()  # the call plan: the compiled entry and its arguments (private, for this figure only)
+        SF, SI, q1 = f.scratch()
+        H, MF, MI, prm, iprm = f.args
+        out = (np.empty(f.n), np.empty((f.n, 3)), np.empty((f.n, 3)))
+        it = iter(range(10**9))
+        t_full = median_thread_seconds(lambda: a.pair_distances(Q[next(it) % n_q]), repeat=7, number=n_q)
+        t_bare = median_thread_seconds(lambda: f.entry(Q[next(it) % n_q], 0, 1, f.gmap, H, MF, MI, SF, SI, prm,
+                                                       iprm, q1, *out), repeat=7, number=n_q)
+        t_many = median_thread_seconds(lambda: a.pair_distances_many(Q[:100]), repeat=5) / min(100, n_q)
+        t_coal = median_thread_seconds(lambda: c.pair_distances(Q[next(it) % n_q]), repeat=5, number=max(10, n_q // 5))
+        n2 = 20 * n_q
+        one = median_seconds(lambda: [a.pair_distances(Q[i % n_q]) for i in range(n2)], repeat=3)
+        two = float(np.median([_two_threads(lambda i: a.pair_distances(Q[i % n_q]), n2) for _ in range(3)]))
+        rows.append(f"| {name} | {len(m.pairs)} | {fmt_ns(t_full)} | {fmt_ns(t_bare)} | {fmt_ns(max(t_full - t_bare, 0.0))} "
+                    f"| {fmt_ns(t_many)} | {fmt_ns(t_coal)} | {t_coal / t_full:.1f}× | {one / two:.2f}× |")
+    yn = ["| hull robot | pairs | analytic yes/no per thread | coal yes/no, 1 thread | analytic / coal |", "|---|---|---|---|---|"]
+    n_yn = 200 if quick else 2000
+    for name, load in _hull_robots():
+        m = load()
+        Q = m.random_q(n_yn, 4)
+        a, c = armguard.checker(m, "analytic"), armguard.checker(m, "coal", {"threads": 1})
+        blocks = [Q[k:k + 200] for k in range(0, n_yn, 200)]  # 200 rows: the analytic batch stays on one thread
+        t_a = median_thread_seconds(lambda: [a.collides(b) for b in blocks], repeat=3) / n_yn
+        t_c = median_thread_seconds(lambda: [c.collides(b) for b in blocks], repeat=3) / n_yn
+        yn.append(f"| {name} | {len(m.pairs)} | {1 / t_a / 1e3:.0f} k/s | {1 / t_c / 1e3:.1f} k/s | {t_c / t_a:.1f}× |")
+    note = ("\n\nThread CPU time (`time.thread_time`, medians) for the per-call figures; the bare kernel call is "
+            "`pair_rows` through its compiled entry point with preallocated outputs, so the Python per call is "
+            "validation, the plan and scratch lookups, three output arrays and the result. Two threads: wall time of "
+            f"{20 * n_q} calls on one thread over the same calls split between two threads sharing one checker "
+            "(2.0× is perfect scaling; a shared machine's load lowers it). Yes/no per thread: `collides` on blocks "
+            "of 200 configurations (one analytic worker thread; coal built with `threads=1`).")
+    return "\n".join(rows) + "\n\n" + "\n".join(yn) + note

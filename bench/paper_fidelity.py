@@ -49,7 +49,7 @@ def _measure(name: str, n: int, tol):
     exact = armguard.checker(m, "analytic")
     seed = SEEDS[name]
     Q = m.random_q(n, seed)
-    Dp = paper.pair_distances_many(Q)
+    Dp = paper.paper_distances_many(Q)
     Dc = np.array([coal.pair_distances(q).distance for q in Q])
     cat = np.asarray(m.pairs.category)
     meth = np.asarray(paper.methods)
@@ -81,7 +81,7 @@ def _measure(name: str, n: int, tol):
     it = iter(range(10**9))
     one = lambda c: (lambda: c.pair_distances(Qt[next(it) % len(Qt)]))  # noqa: E731
     cost = {
-        "paper batch": median_seconds(lambda: paper.pair_distances_many(Qt), repeat=5) / len(Qt),
+        "paper batch": median_seconds(lambda: paper.paper_distances_many(Qt), repeat=5) / len(Qt),
         "paper yes/no": median_seconds(lambda: paper.collides(Qt), repeat=5) / len(Qt),
         "paper q": median_seconds(one(paper), repeat=5, number=200),
         "exact q": median_seconds(one(exact), repeat=5, number=200),

@@ -198,7 +198,7 @@ def test_option_plumbing_and_capabilities(pair, tmp_path, monkeypatch):
 def test_model_rows_exact_where_the_paper_is_and_never_below(pair):
     m, p, e = pair
     Q = m.random_q(150, 7)
-    D, W = p.pair_distances_many(Q, points=True)
+    D, W = p.paper_distances_many(Q, points=True)
     E = np.array([e.pair_distances(q).distance for q in Q])
     meth = np.array(p.methods)
     seg = meth == paper.METHODS[paper.M_SEGSEG]
@@ -221,7 +221,7 @@ def test_model_rows_exact_where_the_paper_is_and_never_below(pair):
 def test_verdicts(pair):
     m, p, e = pair
     Q = m.random_q(300, 9)
-    D = p.pair_distances_many(Q)
+    D = p.paper_distances_many(Q)
     if p.verdicts == "ranger":
         for margin in (0.0, 0.15):
             assert np.array_equal(p.collides(Q, margin=margin), D.min(axis=1) <= margin)

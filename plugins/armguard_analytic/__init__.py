@@ -10,21 +10,101 @@ Options: ``fidelity`` — ``"exact"`` (default), or ``"paper"``: the seeds' mini
 the papers state them (Ranger's distances, Hermes's link–obstacle verdicts; option ``verdicts``;
 see :mod:`._paper`).  Where this backend cannot hold a Model geometry exactly (a cylinder is a
 circumscribed prism), ``representation`` says so.
+
+``pair_distances(q, pairs=None)`` and ``pair_distances_many(Q, pairs=None)`` are one numba call
+(:func:`armguard.detect._kernel.pair_rows`) that reorders the joints, checks every selected pair
+and writes the rows straight in the Model's pair order (sides exchanged where the detector holds
+a pair the other way round); the call releases the GIL and each thread has its own scratch, so
+threads sharing a checker run in parallel with single-threaded answers.
 """
 
 from __future__ import annotations
 
 import math
+import os
+import threading
+from concurrent.futures import ThreadPoolExecutor
 from typing import Mapping
 
 import numpy as np
 
 from armguard._errors import BackendError
-from armguard.backends import Capability, CheckerBase, check_q, check_Q
+from armguard.backends import Capability, CheckerBase, PairDistances, PairDistancesMany, check_pairs, check_q, check_Q
 
 __all__ = ["AnalyticBackend", "AnalyticChecker"]
 
 _FIDELITIES = ("exact", "paper")
+_F64 = np.dtype(np.float64)
+_ND = np.ndarray
+_new_result = PairDistances._unchecked
+_MIN_ROWS_PER_THREAD = 256  # pair_distances_many: below this many rows per thread, a thread costs more than it saves
+
+
+class _Fast:
+    """What one ``pair_distances`` call needs, prepared once per scene revision: the detector's
+    buffers of that revision (held here, so a later rebuild of the detector cannot mix with them),
+    the gather map, the compiled entry point, and per-thread scratch copied from the pristine one."""
+
+    __slots__ = ("revision", "det", "head", "sel", "swap", "gmap", "n", "names", "category", "q_shape", "entry",
+                 "args", "SF0", "SI0", "n_q", "tls")
+
+    def __init__(self, checker: "AnalyticChecker") -> None:
+        from armguard.detect import _kernel as kn
+
+        model = checker.model
+        det = checker.detector()
+        det._fresh()
+        self.revision = det._revision
+        self.det = det
+        inv, swap_rows = checker._order()
+        n = len(inv)
+        swap = np.zeros(n, np.int64)
+        swap[swap_rows] = 1
+        qidx = np.asarray(model.q_index, dtype=np.int64)
+        circ = np.asarray(model._circular, dtype=np.int64)
+        # gmap (kernel pair_rows): [nq, n_q, n_circ, n_sel, qidx, circ, sel, swap]
+        self.head = np.concatenate([[model.nq, len(qidx), len(circ), n], qidx, circ]).astype(np.int64)
+        self.sel, self.swap = inv.astype(np.int64), swap
+        self.gmap = np.ascontiguousarray(np.concatenate([self.head, self.sel, self.swap]))
+        self.n = n
+        pairs = model.pairs
+        self.names, self.category = pairs.names, pairs.category
+        self.q_shape = (model.nq,)
+        self.args = (det._H, det._MF, det._MI, det._prm, det._iprm_by_mode[kn.MODE_ALL])
+        self.SF0, self.SI0, self.n_q = det._SF0, det._SI0, det._model.n_q
+        self.tls = threading.local()
+        # the compiled overload for exactly these argument types, called without the dispatcher
+        # (see armguard.detect._detector._entry_point); built on a scratch of its own
+        SF, SI, q1 = self.new_scratch()
+        q = np.ascontiguousarray(model.neutral(), dtype=np.float64)
+        H, MF, MI, prm, iprm = self.args
+        out = (np.empty(n), np.empty((n, 3)), np.empty((n, 3)))
+        call = (q, 0, 1, self.gmap, H, MF, MI, SF, SI, prm, iprm, q1, *out)
+        kn.pair_rows(*call)
+        try:
+            from numba import typeof
+
+            self.entry = kn.pair_rows.overloads[tuple(typeof(a) for a in call)].entry_point
+        except (KeyError, AttributeError):  # pragma: no cover - numba internals changed
+            self.entry = kn.pair_rows
+
+    def new_scratch(self) -> tuple:
+        """``(SF, SI, q1)``: scratch for one thread or one worker, from the pristine buffers."""
+        return self.SF0.copy(), self.SI0.copy(), np.zeros((1, self.n_q))
+
+    def scratch(self) -> tuple:
+        """The calling thread's scratch (made on its first call)."""
+        try:
+            return self.tls.s
+        except AttributeError:
+            s = self.tls.s = self.new_scratch()
+            return s
+
+    def subset(self, idx: np.ndarray) -> np.ndarray:
+        """The kernel's ``gmap`` for the Model rows ``idx``."""
+        head = self.head.copy()
+        head[3] = len(idx)
+        return np.concatenate([head, self.sel[idx], self.swap[idx]])
 
 
 class AnalyticChecker(CheckerBase):
@@ -46,6 +126,8 @@ class AnalyticChecker(CheckerBase):
         self.representation = dict(model.notes)
         self._detectors: dict = {}
         self._map = None
+        self._fast = None
+        self._lock = threading.RLock()  # building a detector or the call plan: once, whichever thread asks
 
     # ---------------------------------------------------------------- detectors
     def detector(self, stopping_distance: float = 0.0):
@@ -55,8 +137,11 @@ class AnalyticChecker(CheckerBase):
         key = float(stopping_distance)
         det = self._detectors.get(key)
         if det is None:
-            det = self._detectors[key] = Detector(self.model.scene, threshold=0.0, stopping_distance=key,
-                                                  reach_margin=math.inf)
+            with self._lock:
+                det = self._detectors.get(key)
+                if det is None:
+                    det = self._detectors[key] = Detector(self.model.scene, threshold=0.0, stopping_distance=key,
+                                                          reach_margin=math.inf)
         return det
 
     def _order(self):
@@ -96,15 +181,97 @@ class AnalyticChecker(CheckerBase):
         return self._map[1:]
 
     # ---------------------------------------------------------------- the interface
-    def pair_distances(self, q):
-        q = check_q(self.model, q)
-        det = self.detector()
-        r = det.pair_distances(self.model.scene_q(q))
-        inv, sw = self._order()
-        d, p_WA, p_WB = r.distance[inv], r.p_WA[inv], r.p_WB[inv]  # gathers into the Model's order
-        if sw.size:
-            p_WA[sw], p_WB[sw] = p_WB[sw], p_WA[sw].copy()
-        return self._result(d, p_WA, p_WB)
+    def _plan(self) -> _Fast:
+        """The call plan for the scene's current revision (rebuilt, once, when it moved)."""
+        f = self._fast
+        if f is not None and f.revision == self.model.scene.revision:
+            return f
+        with self._lock:
+            f = self._fast
+            if f is None or f.revision != self.model.scene.revision:
+                f = self._fast = _Fast(self)
+                self._pairs, self._category = f.names, f.category
+        return f
+
+    def _q(self, q) -> np.ndarray:
+        """``q`` checked, as a fresh writeable C-contiguous float64 array (the kernel's argument type)."""
+        return np.array(check_q(self.model, q), dtype=np.float64, order="C")
+
+    def _kernel_error(self, f: _Fast, err: int, Q: np.ndarray, batch: bool):
+        e, m = err % 4, err // 4
+        if e == 1:
+            if batch:
+                check_Q(self.model, Q)
+            check_q(self.model, Q[m])
+        f.det._raise_kernel_error(e, self.model.scene_q(Q[m:m + 1]), "Detector.pair_distances: q")
+
+    def pair_distances(self, q, *, pairs=None):
+        f = self._fast
+        if f is None or f.revision != self.model.scene.revision:
+            f = self._plan()
+        if type(q) is not _ND or q.dtype is not _F64 or q.shape != f.q_shape or not q.flags.carray:
+            q = self._q(q)
+        if pairs is None:
+            n, gmap, names, cat = f.n, f.gmap, f.names, f.category
+        else:
+            idx = check_pairs(self.model, pairs)
+            if len(idx) > f.n:  # more rows than the scratch holds (repeated rows): the full result's rows
+                return self.pair_distances(q).take(idx)
+            n, gmap = len(idx), f.subset(idx)
+            names, cat = self._subset(idx)
+        try:  # this thread's scratch (f.scratch, inline)
+            SF, SI, q1 = f.tls.s
+        except AttributeError:
+            SF, SI, q1 = f.scratch()
+        d, p_WA, p_WB = np.empty(n), np.empty((n, 3)), np.empty((n, 3))
+        H, MF, MI, prm, iprm = f.args
+        err = f.entry(q, 0, 1, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d, p_WA, p_WB)
+        if err:
+            self._kernel_error(f, err, q[None], False)
+        return _new_result(names, d, p_WA, p_WB, cat)
+
+    def pair_distances_many(self, Q, *, pairs=None) -> PairDistancesMany:
+        """Every pair (or the Model rows ``pairs``) at each row of ``Q`` ``(M, nq)``; rows split over
+        threads (one numba call each, the GIL released) when there are many."""
+        from armguard.detect import _kernel as kn
+
+        f = self._plan()
+        Q = check_Q(self.model, Q)
+        if not Q.flags.writeable:
+            Q = Q.copy()
+        if pairs is None:
+            n, gmap, (names, cat) = f.n, f.gmap, (f.names, f.category)
+        else:
+            idx = check_pairs(self.model, pairs)
+            if len(idx) > f.n:  # more rows than the scratch holds (repeated rows): the unique rows, then theirs
+                u, back = np.unique(idx, return_inverse=True)
+                r = self.pair_distances_many(Q, pairs=u)
+                return PairDistancesMany(r.pairs[back], r.distance[:, back], r.p_WA[:, back], r.p_WB[:, back],
+                                         tuple(r.category[int(k)] for k in back))
+            n, gmap, (names, cat) = len(idx), f.subset(idx), self._subset(idx)
+        M = len(Q)
+        d, p_WA, p_WB = np.empty((M, n)), np.empty((M, n, 3)), np.empty((M, n, 3))
+        Qf, df, pAf, pBf = Q.reshape(-1), d.reshape(-1), p_WA.reshape(-1, 3), p_WB.reshape(-1, 3)
+        H, MF, MI, prm, iprm = f.args
+        n_threads = max(1, min(M, os.cpu_count() or 1, -(-M // _MIN_ROWS_PER_THREAD)))
+        bounds = [(M * k) // n_threads for k in range(n_threads + 1)]
+        entry = f.entry if M else kn.pair_rows
+
+        def work(k: int) -> int:
+            SF, SI, q1 = f.scratch() if n_threads == 1 else f.new_scratch()  # each worker its own
+            return int(entry(Qf, bounds[k], bounds[k + 1], gmap, H, MF, MI, SF, SI, prm, iprm, q1, df, pAf, pBf))
+
+        if M == 0:
+            errs = [0]
+        elif n_threads == 1:
+            errs = [work(0)]
+        else:
+            with ThreadPoolExecutor(n_threads) as ex:
+                errs = list(ex.map(work, range(n_threads)))
+        bad = [e for e in errs if e]
+        if bad:
+            self._kernel_error(f, min(bad, key=lambda e: e // 4), Q, True)
+        return PairDistancesMany(names, d, p_WA, p_WB, cat)
 
     def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
         Q = check_Q(self.model, Q)

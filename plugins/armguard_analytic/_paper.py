@@ -62,6 +62,7 @@ Every pair is evaluated on every call (the papers' static obstacle lists; no pru
 from __future__ import annotations
 
 import math
+import threading
 from typing import Mapping
 
 import numpy as np
@@ -304,7 +305,7 @@ def _box_gap(vW, v0, v1, r, lo, hi, out):  # pragma: no cover - compiled
     return best
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _paper_rows(Q, T, E, R, mode, margin, hermes, want, out_d, out_p, out_hit, eps, work):  # pragma: no cover
     """Every pair of every configuration ``Q`` (M, n) (see :class:`PaperChecker` for the packed tuples).
 
@@ -552,6 +553,18 @@ class PaperChecker(CheckerBase):
         self._eps = (float(tol.length), float(tol.parallel), float(tol.gjk_epsilon), int(tol.gjk_max_iterations),
                      float(tol.penetration_witness_offset))
         self._work = np.zeros(GJK_WORK_SIZE)
+        self._tls = threading.local()  # per thread: the W-frame copies in _E and the GJK work array
+
+    def _scratch(self) -> tuple:
+        """The calling thread's ``(E, work)``: ``_E`` with its own W-frame arrays (vW, nW, eW) and work."""
+        try:
+            return self._tls.s
+        except AttributeError:
+            E = list(self._E)
+            for k in (3, 6, 10):  # vW, nW, eW: written per configuration
+                E[k] = E[k].copy()
+            s = self._tls.s = (tuple(E), np.zeros_like(self._work))
+            return s
 
     # ---------------------------------------------------------------- kernels
     def _run(self, Qs, mode: int, margin: float, want: bool):
@@ -559,17 +572,18 @@ class PaperChecker(CheckerBase):
         out_d = np.empty((M if mode == 0 else 0, P))
         out_p = np.empty((M if want else 0, P, 6))
         out_hit = np.zeros(M if mode == 1 else 0, dtype=np.bool_)
-        bad = _paper_rows(np.ascontiguousarray(Qs, dtype=np.float64), self._T, self._E, self._R, mode, float(margin),
-                          self._hermes, want, out_d, out_p, out_hit, self._eps, self._work)
+        E, work = self._scratch()
+        bad = _paper_rows(np.ascontiguousarray(Qs, dtype=np.float64), self._T, E, self._R, mode, float(margin),
+                          self._hermes, want, out_d, out_p, out_hit, self._eps, work)
         if bad >= 0:
             m, p = divmod(int(bad), P)
             raise BackendError(f"analytic (paper): GJK did not converge on pair {tuple(self._pairs[p])} "
                                f"(configuration {m}); raise Tolerances.gjk_max_iterations")
         return out_d, out_p, out_hit
 
-    def pair_distances_many(self, Q, *, points: bool = False):
+    def paper_distances_many(self, Q, *, points: bool = False):
         """``(M, n)`` every pair's paper distance at each row of ``Q`` (M, nq); with ``points`` also
-        ``(M, n, 6)`` ``[p_WA, p_WB]``."""
+        ``(M, n, 6)`` ``[p_WA, p_WB]`` (plain arrays; :meth:`pair_distances_many` is the interface's)."""
         Q = check_Q(self.model, Q)
         d, p, _ = self._run(self.model.scene_q(Q), 0, 0.0, points)
         return (d, p) if points else d
@@ -587,7 +601,7 @@ class PaperChecker(CheckerBase):
         return self._run(self.model.scene_q(Q), 1, margin, False)[2]
 
     def min_distance_many(self, Q) -> np.ndarray:
-        return self.pair_distances_many(Q).min(axis=1, initial=np.inf)
+        return self.paper_distances_many(Q).min(axis=1, initial=np.inf)
 
 
 # one pair, from shapes in W (their own module; part of this one's interface)

@@ -8,6 +8,9 @@ points (``getNearestPoint1/2``), ``pinocchio.computeCollisions`` the verdicts, a
 ``coal.Halfspace`` walls (solid outside the box); a pair's workspace distance is the least over
 the six.  Budgets and per-category nearest pairs come from the framework defaults.
 
+Thread safety: each calling thread gets its own ``pinocchio.Data`` / ``GeometryData`` (their
+placements and requests are per-call state), and the batch pool is used by one call at a time.
+
 Options: ``threads`` (batches; default: all cores), ``gjk_tolerance`` (m, default 1e-9: coal's
 own default of 1e-6 stops GJK up to ~1e-5 m above the distance on curved hulls; a reference
 has to be tighter than the 1e-6 m the differential tests hold the backends to).
@@ -17,13 +20,14 @@ from __future__ import annotations
 
 import math
 import os
+import threading
 import warnings
 from typing import Mapping
 
 import numpy as np
 
 from armguard._errors import BackendError
-from armguard.backends import Capability, CheckerBase, check_q, check_Q
+from armguard.backends import Capability, CheckerBase, PairDistances, PairDistancesMany, check_pairs, check_q, check_Q
 from armguard.model import WORKSPACE
 
 __all__ = ["CoalBackend", "CoalChecker"]
@@ -97,46 +101,81 @@ class CoalChecker(CheckerBase):
                 swapped.append(cp.first != ia)
         self._rows = np.asarray(rows, dtype=np.int64)
         self._swapped = np.asarray(swapped, dtype=bool)
+        # per Model row, its collision pairs (a workspace row has six)
+        self._row_pairs = [[] for _ in range(len(pairs))]
+        for i, k in enumerate(rows):
+            self._row_pairs[k].append(i)
         self.geometry_model = geom
-        self._data = model.pin_model.createData()
-        self._gdata = pin.GeometryData(geom)
-        _reference_requests(self._gdata)
-        for req in self._gdata.distanceRequests:
-            req.gjk_tolerance = req.epa_tolerance = self.gjk_tolerance
-            req.gjk_max_iterations = req.epa_max_iterations = 1000
+        self._tls = threading.local()
         self._pool = None
+        self._pool_lock = threading.Lock()
 
-    def pair_distances(self, q):
+    def _thread_data(self):
+        """The calling thread's ``(pinocchio.Data, GeometryData)`` (made on its first call)."""
+        try:
+            return self._tls.dg
+        except AttributeError:
+            import pinocchio as pin
+
+            gdata = pin.GeometryData(self.geometry_model)
+            _reference_requests(gdata)
+            for req in gdata.distanceRequests:
+                req.gjk_tolerance = req.epa_tolerance = self.gjk_tolerance
+                req.gjk_max_iterations = req.epa_max_iterations = 1000
+            dg = self._tls.dg = (self.model.pin_model.createData(), gdata)
+            return dg
+
+    def _distances_into(self, q, d, p_WA, p_WB, idx) -> None:
+        """Rows ``idx`` (None: every Model row) at ``q`` (checked) into ``d`` / ``p_WA`` / ``p_WB``."""
         import pinocchio as pin
 
-        q = check_q(self.model, q)
-        pin.computeDistances(self.model.pin_model, self._data, self.geometry_model, self._gdata, q)
-        res = self._gdata.distanceResults
-        n_cp = len(res)
-        dist = np.empty(n_cp)
-        p1 = np.empty((n_cp, 3))
-        p2 = np.empty((n_cp, 3))
-        for i in range(n_cp):
-            r = res[i]
-            dist[i] = r.min_distance
-            p1[i] = r.getNearestPoint1()
-            p2[i] = r.getNearestPoint2()
-        a = np.where(self._swapped[:, None], p2, p1)
-        b = np.where(self._swapped[:, None], p1, p2)
-        n = len(self._category)
-        d = np.full(n, np.inf)
-        p_WA = np.zeros((n, 3))
-        p_WB = np.zeros((n, 3))
-        for i in np.argsort(-dist, kind="stable"):  # the least distance of a row's collision pairs wins
-            k = self._rows[i]
-            d[k], p_WA[k], p_WB[k] = dist[i], a[i], b[i]
+        data, gdata = self._thread_data()
+        if idx is None:
+            pin.computeDistances(self.model.pin_model, data, self.geometry_model, gdata, q)
+            res = gdata.distanceResults
+            cps = range(len(res))
+            rows = self._rows
+            results = [res[i] for i in cps]
+        else:  # only the collision pairs of the rows asked for
+            pin.updateGeometryPlacements(self.model.pin_model, data, self.geometry_model, gdata, q)
+            cps, rows = [], []
+            for j, k in enumerate(idx):
+                for i in self._row_pairs[k]:
+                    cps.append(i)
+                    rows.append(j)
+            results = [pin.computeDistance(self.geometry_model, gdata, i) for i in cps]
+        d.fill(np.inf)
+        for r, i, j in zip(results, cps, rows):  # the least distance of a row's collision pairs wins
+            dist = r.min_distance
+            if dist <= d[j]:
+                d[j] = dist
+                p1, p2 = r.getNearestPoint1(), r.getNearestPoint2()
+                if self._swapped[i]:
+                    p1, p2 = p2, p1
+                p_WA[j] = p1
+                p_WB[j] = p2
         if not np.all(np.isfinite(d)):
             raise BackendError("coal: a distance came back NaN or infinite; no verdict")
-        return self._result(d, p_WA, p_WB)
 
-    def _set_margin(self, margin: float) -> None:
-        for req in self._gdata.collisionRequests:
-            req.security_margin = margin
+    def pair_distances(self, q, *, pairs=None):
+        q = check_q(self.model, q)
+        idx = None if pairs is None else check_pairs(self.model, pairs)
+        n = len(self._category) if idx is None else len(idx)
+        d, p_WA, p_WB = np.empty(n), np.zeros((n, 3)), np.zeros((n, 3))
+        self._distances_into(q, d, p_WA, p_WB, idx)
+        names, cat = self._subset(idx)
+        return PairDistances(names, d, p_WA, p_WB, cat)
+
+    def pair_distances_many(self, Q, *, pairs=None) -> PairDistancesMany:
+        Q = check_Q(self.model, Q)
+        idx = None if pairs is None else check_pairs(self.model, pairs)
+        n = len(self._category) if idx is None else len(idx)
+        M = len(Q)
+        d, p_WA, p_WB = np.empty((M, n)), np.zeros((M, n, 3)), np.zeros((M, n, 3))
+        for m in range(M):
+            self._distances_into(Q[m], d[m], p_WA[m], p_WB[m], idx)
+        names, cat = self._subset(idx)
+        return PairDistancesMany(names, d, p_WA, p_WB, cat)
 
     def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
         import pinocchio as pin
@@ -145,17 +184,20 @@ class CoalChecker(CheckerBase):
         if not (margin >= 0.0 and math.isfinite(margin)):
             raise BackendError(f"margin: expected a finite length >= 0, got {margin!r}")
         if self.threads > 1 and len(Q) >= 64:
-            if self._pool is None:
-                self._pool = pin.GeometryPool(self.model.pin_model, self.geometry_model, self.threads)
+            with self._pool_lock:  # one batch at a time on the pool (its datas hold the margin)
+                if self._pool is None:
+                    self._pool = pin.GeometryPool(self.model.pin_model, self.geometry_model, self.threads)
+                    for gd in self._pool.getGeometryDatas():
+                        _reference_requests(gd)
                 for gd in self._pool.getGeometryDatas():
-                    _reference_requests(gd)
-            for gd in self._pool.getGeometryDatas():
-                for req in gd.collisionRequests:
-                    req.security_margin = margin
-            out = pin.computeCollisionsInParallel(self.threads, self._pool, np.asfortranarray(Q.T), True)
+                    for req in gd.collisionRequests:
+                        req.security_margin = margin
+                out = pin.computeCollisionsInParallel(self.threads, self._pool, np.asfortranarray(Q.T), True)
             return np.asarray(out, dtype=bool)
-        self._set_margin(margin)
-        m, d, g, gd = self.model.pin_model, self._data, self.geometry_model, self._gdata
+        d, gd = self._thread_data()
+        for req in gd.collisionRequests:
+            req.security_margin = margin
+        m, g = self.model.pin_model, self.geometry_model
         return np.array([bool(pin.computeCollisions(m, d, g, gd, q, True)) for q in Q], dtype=bool)
 
 

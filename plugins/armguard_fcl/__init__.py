@@ -4,12 +4,15 @@ Each GeometryObject of the Model's collision model becomes an ``fcl.CollisionObj
 same shape (capsule, sphere, box, cylinder; convex hulls as ``fcl.Convex``); Pinocchio places
 them (``updateGeometryPlacements``) and ``fcl.distance`` answers each active pair with signed
 distance and nearest points.  The workspace box is six large boxes just outside its walls
-(python-fcl's capsule–halfspace distance crashes the process).
+(python-fcl's capsule–halfspace distance crashes the process).  The collision objects hold the
+poses of one configuration: one call places and queries them at a time (a lock), so several
+threads may share a checker.  ``pairs=`` is the framework's default (the full result's rows).
 """
 
 from __future__ import annotations
 
 import math
+import threading
 from typing import Mapping
 
 import numpy as np
@@ -87,6 +90,7 @@ class FclChecker(CheckerBase):
         self._ib = np.array([-1 if b == WORKSPACE else model.geometry_index(b) for b in pairs.b], dtype=np.int64)
         self._data = model.pin_model.createData()
         self._gdata = pin.GeometryData(gm)
+        self._lock = threading.Lock()  # the objects' poses and the GeometryData are one call's state
 
     def _place(self, q) -> None:
         import fcl
@@ -97,9 +101,13 @@ class FclChecker(CheckerBase):
             o.setTransform(fcl.Transform(np.asarray(M.rotation), np.asarray(M.translation)))
 
     def pair_distances(self, q):
+        q = check_q(self.model, q)
+        with self._lock:
+            return self._distances(q)
+
+    def _distances(self, q):
         import fcl
 
-        q = check_q(self.model, q)
         self._place(q)
         n = len(self._ia)
         d = np.empty(n)

@@ -18,10 +18,11 @@ from pathlib import Path
 from typing import Mapping
 
 from .._errors import BackendError
-from ._interface import Backend, Capability, Checker, CheckerBase, NearestPair, PairDistances, check_Q, check_q
+from ._interface import (Backend, Capability, Checker, CheckerBase, NearestPair, PairDistances, PairDistancesMany, check_pairs,
+                         check_Q, check_q)
 
 __all__ = ["available", "get_backend", "checker", "resolve", "command_line_choice", "Backend", "Checker", "CheckerBase", "PairDistances",
-           "NearestPair", "Capability", "check_q", "check_Q", "GROUP", "DEFAULT", "ENV"]
+           "PairDistancesMany", "NearestPair", "check_pairs", "Capability", "check_q", "check_Q", "GROUP", "DEFAULT", "ENV"]
 
 GROUP = "armguard.backends"
 DEFAULT = "analytic"

@@ -10,14 +10,22 @@ A **Checker** answers two required queries for the Model's active pairs
   penetrating, ``distance <= 0``) at each row of ``Q`` ``(M, nq)``.
 
 Optional fast paths have framework defaults built from those two (:class:`CheckerBase`):
-``nearest(q)`` (per category, the nearest pair) and ``min_distance_many(Q)``.  A backend that
-answers verdicts only (no distances) declares it in ``capabilities`` and the framework checks
-it before asking for distances.
+``nearest(q)`` (per category, the nearest pair), ``min_distance_many(Q)``, a subset of the pairs
+(``pair_distances(q, pairs=rows)``: the Model pair rows ``rows``, in that order) and a batch
+(``pair_distances_many(Q, pairs=None) -> PairDistancesMany``, ``(M, n)`` distances and
+``(M, n, 3)`` witness points).  A backend whose ``pair_distances`` takes no ``pairs`` gets the
+default (the full result's rows).  A backend that answers verdicts only (no distances) declares
+it in ``capabilities`` and the framework checks it before asking for distances.
+
+Every Checker may be called from several threads at once, with the answers of single-threaded
+calls: a backend keeps per-call or per-thread scratch (or a lock where state is unavoidable).
 """
 
 from __future__ import annotations
 
 import enum
+import functools
+import inspect
 from dataclasses import dataclass
 from typing import Mapping, Protocol, runtime_checkable
 
@@ -25,7 +33,8 @@ import numpy as np
 
 from .._errors import BackendError
 
-__all__ = ["Backend", "Checker", "CheckerBase", "PairDistances", "NearestPair", "Capability", "check_q", "check_Q"]
+__all__ = ["Backend", "Checker", "CheckerBase", "PairDistances", "PairDistancesMany", "NearestPair", "Capability",
+           "check_q", "check_Q", "check_pairs"]
 
 
 class Capability(str, enum.Enum):
@@ -60,6 +69,44 @@ class PairDistances:
             out[c] = NearestPair(c, self.pairs[k, 0], self.pairs[k, 1], float(self.distance[k]), self.p_WA[k].copy(),
                                  self.p_WB[k].copy(), k)
         return out
+
+    @staticmethod
+    def _unchecked(pairs, distance, p_WA, p_WB, category, _new=object.__new__) -> "PairDistances":
+        """The same object as ``PairDistances(...)``, built without the frozen dataclass's
+        ``__init__`` (one ``object.__setattr__`` per field): a fast backend's per-call path."""
+        o = _new(PairDistances)
+        d = o.__dict__
+        d["pairs"], d["distance"], d["p_WA"], d["p_WB"], d["category"] = pairs, distance, p_WA, p_WB, category
+        return o
+
+    def take(self, rows: np.ndarray) -> "PairDistances":
+        """The rows ``rows`` (int indices) of this result, in that order (fresh arrays)."""
+        cat = self.category
+        return PairDistances(self.pairs[rows], self.distance[rows], self.p_WA[rows], self.p_WB[rows],
+                             tuple(cat[int(k)] for k in rows))
+
+
+@dataclass(frozen=True)
+class PairDistancesMany:
+    """Pairs at ``M`` configurations: :class:`PairDistances` batched.
+
+    ``pairs`` ``(n, 2)`` object, ``category`` ``(n,)`` names as in :class:`PairDistances`;
+    ``distance`` ``(M, n) float64, m`` signed; ``p_WA``, ``p_WB`` ``(M, n, 3) float64, m`` the
+    witness points in W.  Row ``m`` equals ``pair_distances(Q[m], pairs=...)``.
+    """
+
+    pairs: np.ndarray
+    distance: np.ndarray
+    p_WA: np.ndarray
+    p_WB: np.ndarray
+    category: tuple
+
+    def __len__(self) -> int:
+        return self.distance.shape[0]
+
+    def row(self, m: int) -> PairDistances:
+        """Configuration ``m`` as a :class:`PairDistances` (views)."""
+        return PairDistances(self.pairs, self.distance[m], self.p_WA[m], self.p_WB[m], self.category)
 
 
 @dataclass(frozen=True)
@@ -102,6 +149,26 @@ def check_Q(model, Q) -> np.ndarray:
     return Q
 
 
+def check_pairs(model, pairs) -> np.ndarray:
+    """``pairs`` as a 1-D int64 array of Model pair rows (each in ``[0, n)``), else a BackendError."""
+    n = len(model.pairs)
+    if isinstance(pairs, np.ndarray) and pairs.dtype == np.int64 and pairs.ndim == 1:
+        idx = pairs
+    else:
+        try:
+            arr = np.asarray(pairs)
+        except (TypeError, ValueError) as exc:
+            raise BackendError(f"pairs: expected an array of Model pair rows, got {pairs!r}") from exc
+        if arr.dtype == bool or arr.ndim != 1 or (arr.size and not np.issubdtype(arr.dtype, np.integer)):
+            raise BackendError(f"pairs: expected a 1-D array of integer Model pair rows, got dtype {arr.dtype}, "
+                               f"shape {arr.shape}")
+        idx = arr.astype(np.int64)
+    if idx.size and (idx.min() < 0 or idx.max() >= n):
+        bad = int(idx[(idx < 0) | (idx >= n)][0])
+        raise BackendError(f"pairs: row {bad} is not a Model pair row (the Model lists {n} pairs, rows 0..{n - 1})")
+    return np.ascontiguousarray(idx)
+
+
 @runtime_checkable
 class Checker(Protocol):
     """What every backend's checker answers (see the module docstring)."""
@@ -110,7 +177,9 @@ class Checker(Protocol):
     model: object
     capabilities: frozenset
 
-    def pair_distances(self, q) -> PairDistances: ...
+    def pair_distances(self, q, *, pairs=None) -> PairDistances: ...
+
+    def pair_distances_many(self, Q, *, pairs=None) -> PairDistancesMany: ...
 
     def collides(self, Q, *, margin: float = 0.0) -> np.ndarray: ...
 
@@ -136,6 +205,12 @@ class CheckerBase:
     capabilities: frozenset = frozenset({Capability.DISTANCES, Capability.VERDICTS})
     representation: Mapping = {}
 
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        own = cls.__dict__.get("pair_distances")
+        if own is not None and "pairs" not in inspect.signature(own).parameters:
+            cls.pair_distances = _with_pairs(own)
+
     def __init__(self, model) -> None:
         self.model = model
         pairs = model.pairs
@@ -147,8 +222,33 @@ class CheckerBase:
             raise BackendError(f"backend {self.name!r} does not answer {cap.value} (it answers "
                                f"{sorted(c.value for c in self.capabilities)})")
 
-    def pair_distances(self, q) -> PairDistances:  # pragma: no cover - required of subclasses
-        raise NotImplementedError
+    def pair_distances(self, q, *, pairs=None) -> PairDistances:
+        """Required of a backend answering distances; here: refuse (no distances)."""
+        self._require(Capability.DISTANCES)
+        raise NotImplementedError(f"{type(self).__name__} declares distances but does not implement pair_distances")
+
+    def pair_distances_many(self, Q, *, pairs=None) -> PairDistancesMany:
+        """Default: :meth:`pair_distances` row by row, stacked (``pairs``: Model pair rows, as there)."""
+        self._require(Capability.DISTANCES)
+        Q = check_Q(self.model, Q)
+        idx = None if pairs is None else check_pairs(self.model, pairs)
+        n = len(self._category) if idx is None else len(idx)
+        M = len(Q)
+        d = np.empty((M, n))
+        p_WA = np.empty((M, n, 3))
+        p_WB = np.empty((M, n, 3))
+        names, cat = self._subset(idx)
+        for m in range(M):
+            r = self.pair_distances(Q[m], pairs=idx)
+            d[m], p_WA[m], p_WB[m] = r.distance, r.p_WA, r.p_WB
+        return PairDistancesMany(names, d, p_WA, p_WB, cat)
+
+    def _subset(self, idx) -> tuple:
+        """The ``(pairs, category)`` fields of a result holding Model rows ``idx`` (None: all)."""
+        if idx is None:
+            return self._pairs, self._category
+        cat = self._category
+        return self._pairs[idx], tuple(cat[int(k)] for k in idx)
 
     def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
         """Default: ``min(pair_distances(q).distance) <= margin`` row by row."""
@@ -172,3 +272,17 @@ class CheckerBase:
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.model.name!r}, {len(self._category)} pairs)"
+
+
+def _with_pairs(full):
+    """``pair_distances(q)`` of a backend given the framework's ``pairs=`` (the full result's rows)."""
+
+    @functools.wraps(full)
+    def pair_distances(self, q, *, pairs=None) -> PairDistances:
+        if pairs is None:
+            return full(self, q)
+        self._require(Capability.DISTANCES)
+        idx = check_pairs(self.model, pairs)  # refused before any work
+        return full(self, q).take(idx)
+
+    return pair_distances

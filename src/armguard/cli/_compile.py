@@ -59,6 +59,14 @@ def _detector() -> None:
     q = sc.flat_q(sc.default_q())
     det.check(q)
     det.check_many(np.tile(q, (4, 1)))
+    # the analytic backend's pair_distances(_many): pair_rows, with the argument types it is given
+    from ..detect import _kernel as kn
+    from ..detect._detector import _Scratch
+
+    s, n, nq = _Scratch(det), det.n_pairs, len(q)
+    gmap = np.concatenate([[nq, nq, 0, n], np.arange(nq), np.arange(n), np.zeros(n)]).astype(np.int64)
+    kn.pair_rows(np.ascontiguousarray(q, dtype=np.float64), 0, 1, gmap, det._H, det._MF, det._MI, s.SF, s.SI, det._prm,
+                 det._iprm_by_mode[kn.MODE_ALL], s.q1, np.empty(n), np.empty((n, 3)), np.empty((n, 3)))
 
 
 def _verifier() -> None:

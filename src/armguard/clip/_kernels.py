@@ -314,7 +314,7 @@ def procedure(guard, X_W_VOL, ob, X_W_OB, eps, subdivide):
     return status, STEP_SECOND_LEVEL
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def procedure_many(guard, X_W_VOL, ob, X_W_OB, eps, subdivide, status, step):
     """:func:`procedure` for ``M`` guard poses ``X_W_VOL (M, 4, 4)`` against one posed obstacle;
     writes ``status (M,) int8`` and ``step (M,) int8``."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import os
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from typing import Mapping
@@ -64,6 +65,30 @@ def _entry_point(*args):
         return kn.detect_entry
 
 
+class _Scratch:
+    """One thread's scratch and outputs of a :class:`Detector`.
+
+    Every thread calling a Detector gets its own (``threading.local``), copied from the pristine
+    buffers of :meth:`Detector.prepare`, so threads never share a buffer the kernel writes; the
+    model buffers (``H``, ``MF``, ``MI``) are read-only in the kernel and shared.  The state the
+    anytime mode keeps between checks (last distances, time since checked) is per thread too."""
+
+    __slots__ = ("SF", "SI", "q1", "ev", "pflag", "plb", "iprm_by_mode", "entry_args", "last_raw")
+
+    def __init__(self, det: "Detector") -> None:
+        L = det._layout
+        self.SF = det._SF0.copy()
+        self.SI = det._SI0.copy()
+        self.q1 = np.zeros((1, det._model.n_q))
+        self.ev = L.view(self.SF, "ev")
+        self.pflag = L.view(self.SI, "pflag")
+        self.plb = L.view(self.SF, "plb")
+        self.iprm_by_mode = {mode: ip.copy() for mode, ip in det._iprm_by_mode.items()}
+        self.entry_args = (self.q1, det._H, det._MF, det._MI, self.SF, self.SI, det._prm,
+                           self.iprm_by_mode[kn.MODE_EXACT], det._all_p)
+        self.last_raw = None  # this thread's last report, still reading SF / SI
+
+
 def _check_length(value, name: str) -> float:
     try:
         x = float(value)
@@ -102,6 +127,11 @@ class Detector:
     terrain : armguard.terrain.TerrainGuard, TerrainPyramid or ElevationMap, optional
         Adds the ``"terrain"`` category to ``check`` (:func:`armguard.terrain.attach_terrain`;
         composed outside the kernel, no cost without it).  ``detector.terrain`` is its guard.
+
+    Thread safety: several threads may call one Detector at once (each gets its own scratch
+    buffers; the numba kernels release the GIL, so the checks run in parallel) with the answers
+    of single-threaded calls.  Changing the scene or the settings while other threads check is
+    not synchronised.
     """
 
     terrain = None  # the attached armguard.terrain.TerrainGuard, if any
@@ -126,6 +156,7 @@ class Detector:
         self._reach_margin = check_finite_margin(reach_margin)
         self._active = active
         self._ns_per_pair = _DEFAULT_NS_PER_PAIR
+        self._prepare_lock = threading.RLock()
         self.prepare()
         if terrain is not None:  # the terrain category: check() returns armguard.terrain's merged report
             attach_extra(self, "terrain", terrain)
@@ -218,16 +249,12 @@ class Detector:
         L.scalar("n_q", m.n_q); L.scalar("n_explicit", m.n_explicit); L.scalar("n_mov", len(m.mov_ids))
         L.scalar("n_st", len(m.st_ids)); L.scalar("n_links", t.n_links)
         self._layout = L
-        self._H, self._MF, self._MI, self._SF, self._SI = L.buffers()
+        # SF0 / SI0: the pristine scratch every thread's own copy starts from (never passed to a kernel)
+        self._H, self._MF, self._MI, self._SF0, self._SI0 = L.buffers()
         self._P = P
         self._ev_off = L._shape["ev"][1]
         self._sum_off = L._shape["summary"][1]  # "ev_p" follows it
-        self._summary = L.view(self._SI, "summary")
-        self._ev = L.view(self._SF, "ev")
-        self._ev_p = L.view(self._SI, "ev_p")
         self._all_p = L.view(self._MI, "all_p")
-        self._pflag = L.view(self._SI, "pflag")
-        self._plb = L.view(self._SF, "plb")
         self._prm = np.array([self._threshold, self._stopping, self._tol.length, self._tol.parallel,
                               self._tol.gjk_epsilon, self._tol.penetration_witness_offset])
         self._iprm = np.array([kn.MODE_EXACT, 0, self._tol.gjk_max_iterations, 1, 0], dtype=np.int64)
@@ -236,12 +263,9 @@ class Detector:
             ip = self._iprm.copy()
             ip[0] = mode
             self._iprm_by_mode[mode] = ip
-        self._q1 = np.zeros((1, m.n_q))
-        self._last_raw = None  # a report reading the old buffers keeps them alive: nothing to copy
-        self._iprm_exact = self._iprm_by_mode[kn.MODE_EXACT]
-        self._entry_args = (self._q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm, self._iprm_exact,
-                            self._all_p)
-        self._entry = _entry_point(*self._entry_args)
+        # per-thread scratch (a report reading the old buffers keeps them alive: nothing to copy)
+        self._tls = threading.local()
+        self._entry = _entry_point(*self._scratch().entry_args)
         self._q_shape = (m.n_q,)
         self._names_a = tuple(cs.owner_names[cs.elem_owner[a]] for a in m.pair_a)
         self._names_b = tuple("workspace" if b < 0 else cs.owner_names[cs.elem_owner[b]] for b in m.pair_b)
@@ -263,9 +287,27 @@ class Detector:
         """Rebuild when the scene changed since :meth:`prepare` (a body added, a filter changed, ...).
 
         A query on a stale model could say CLEAR while a new body encloses a link; every query
-        compares ``scene.revision`` (one attribute read) and recompiles when it moved."""
+        compares ``scene.revision`` (one attribute read) and recompiles when it moved (once, when
+        several threads see it)."""
         if getattr(self.scene, "revision", None) != self._revision:
-            self.prepare()
+            with self._prepare_lock:
+                if getattr(self.scene, "revision", None) != self._revision:
+                    self.prepare()
+
+    def _scratch(self) -> _Scratch:
+        """The calling thread's scratch (made on its first call)."""
+        try:
+            return self._tls.s
+        except AttributeError:
+            s = self._tls.s = _Scratch(self)
+            return s
+
+    # the calling thread's buffers, by their former names (tests and tools read them)
+    _SF = property(lambda self: self._scratch().SF)
+    _SI = property(lambda self: self._scratch().SI)
+    _q1 = property(lambda self: self._scratch().q1)
+    _ev = property(lambda self: self._scratch().ev)
+    _last_raw = property(lambda self: self._scratch().last_raw)
 
     # ------------------------------------------------------------------ settings
     @property
@@ -321,10 +363,11 @@ class Detector:
         return tuple(out)
 
     # ------------------------------------------------------------------ queries
-    def _flat_q(self, q) -> np.ndarray:
+    def _flat_q(self, q, q1: np.ndarray) -> np.ndarray:
+        """``q`` (array or mapping) written into ``q1`` ``(1, n_q)`` (a thread's scratch), checked."""
         if isinstance(q, np.ndarray) and q.dtype == np.float64 and q.shape == (self._model.n_q,):
-            self._q1[0] = q
-            return self._q1
+            q1[0] = q
+            return q1
         if isinstance(q, Mapping):
             flat = self.scene.flat_q(q)
         else:
@@ -336,33 +379,31 @@ class Detector:
             raise DetectionError(
                 f"q: expected one configuration of {self._model.n_q} joints (scene.joint_names), got shape {flat.shape}"
             )
-        self._q1[0] = flat
-        return self._q1
+        q1[0] = flat
+        return q1
 
-    def _keep(self, raw: _Raw) -> _Raw:
-        self._last_raw = raw
-        return raw
-
-    def _release_last(self) -> None:
-        """Before the scratch buffers are overwritten: let the last report copy its rows out if
-        anything still refers to it (a report nobody holds needs no copy)."""
-        last = self._last_raw
+    @staticmethod
+    def _release_last(s: _Scratch) -> None:
+        """Before a thread's scratch buffers are overwritten: let its last report copy its rows out
+        if anything still refers to it (a report nobody holds needs no copy)."""
+        last = s.last_raw
         if last is not None:
-            self._last_raw = None
+            s.last_raw = None
             if _refcount(last) > _UNHELD:
                 last.detach()
 
-    def _run(self, q1, mode: int, allowance: int, lazy: bool, sel=None) -> tuple[int, int]:
-        self._release_last()
-        iprm = self._iprm_by_mode[mode]
+    def _run(self, s: _Scratch, mode: int, allowance: int, lazy: bool, sel=None) -> tuple[int, int]:
+        self._release_last(s)
+        q1 = s.q1
+        iprm = s.iprm_by_mode[mode]
         if mode == kn.MODE_ANYTIME:
             iprm[1] = allowance
             iprm[4] = 1 if lazy else 0
         if sel is None:  # the same argument types as check's: its bound overload, without the dispatcher
-            status, n_eval, err = self._entry(q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm, iprm,
+            status, n_eval, err = self._entry(q1, self._H, self._MF, self._MI, s.SF, s.SI, self._prm, iprm,
                                               self._all_p)
         else:
-            status, n_eval, err = kn.detect_entry(q1, self._H, self._MF, self._MI, self._SF, self._SI, self._prm,
+            status, n_eval, err = kn.detect_entry(q1, self._H, self._MF, self._MI, s.SF, s.SI, self._prm,
                                                   iprm, sel)
         if err:
             self._raise_kernel_error(err, q1, "Detector.check: q" if sel is None else "Detector.pair_distances: q")
@@ -396,24 +437,28 @@ class Detector:
         """
         t0 = _perf_counter()
         if getattr(self.scene, "revision", None) != self._revision:  # stale model: rebuild (see _fresh)
-            self.prepare()
-        q1 = self._q1
+            self._fresh()
+        try:  # this thread's scratch (_scratch, inline)
+            s = self._tls.s
+        except AttributeError:
+            s = self._scratch()
+        q1 = s.q1
         if type(q) is np.ndarray and q.dtype is _F64 and q.shape == self._q_shape:
             q1[0] = q  # the common case, inline (validation of everything else in _flat_q)
         else:
-            q1 = self._flat_q(q)
-        last = self._last_raw
+            self._flat_q(q, q1)
+        last = s.last_raw
         if last is not None:  # _release_last, inline
-            self._last_raw = None
+            s.last_raw = None
             if _refcount(last) > _UNHELD:
                 last.detach()
             del last
         if budget_us is None and not lazy:
-            status, n_eval, err = self._entry(*self._entry_args)  # q1 is the array in _entry_args
+            status, n_eval, err = self._entry(*s.entry_args)  # q1 is the array in entry_args
             if err:
                 self._raise_kernel_error(err, q1)
-            raw = _Raw(self, self._SF, self._SI, self._ev_off, self._sum_off, n_eval, None, None, _MODE_EXACT)
-            self._last_raw = raw
+            raw = _Raw(self, s.SF, s.SI, self._ev_off, self._sum_off, n_eval, None, None, _MODE_EXACT)
+            s.last_raw = raw
             elapsed = (_perf_counter() - t0) * 1e6
             if n_eval > 0:
                 self._ns_per_pair = 0.8 * self._ns_per_pair + 0.2 * max(elapsed * 1e3 / n_eval, 1.0)
@@ -424,20 +469,20 @@ class Detector:
                 raise DetectionError(f"budget_us: must be finite and >= 0, got {budget_us!r}")
             allowance = int(max(0.0, b * 1e3) // self._ns_per_pair)
             mode = kn.MODE_ANYTIME
-            status, n_eval = self._run(q1, mode, allowance, lazy)
+            status, n_eval = self._run(s, mode, allowance, lazy)
         else:
             mode = kn.MODE_LAZY if lazy else kn.MODE_EXACT
-            status, n_eval = self._run(q1, mode, 0, False)
-        raw_buffers = (self._SF, self._SI, self._ev_off, self._sum_off)
+            status, n_eval = self._run(s, mode, 0, False)
+        raw_buffers = (s.SF, s.SI, self._ev_off, self._sum_off)
         if mode == kn.MODE_EXACT:
             flags = bounds = None
         else:
-            flags, bounds = self._pflag.copy(), self._plb.copy()
+            flags, bounds = s.pflag.copy(), s.plb.copy()
         elapsed = (_perf_counter() - t0) * 1e6
         if n_eval > 0:  # the cost model of the anytime mode: an exponential average of ns per pair
             self._ns_per_pair = 0.8 * self._ns_per_pair + 0.2 * max(elapsed * 1e3 / n_eval, 1.0)
-        return DetectionReport._from_check(STATUS_CODES[status], self._threshold, self._stopping, elapsed,
-                                           self._keep(_Raw(self, *raw_buffers, n_eval, flags, bounds, mode)))
+        raw = s.last_raw = _Raw(self, *raw_buffers, n_eval, flags, bounds, mode)
+        return DetectionReport._from_check(STATUS_CODES[status], self._threshold, self._stopping, elapsed, raw)
 
     def _selection(self, robot: str | None):
         """Pair numbers checked by ``pair_distances(q, robot=robot)`` and their static columns (cached)."""
@@ -476,15 +521,16 @@ class Detector:
         """
         self._fresh()
         sel, la, ra, lb, cat, na, nb, pidx = self._selection(robot)
-        q1 = self._flat_q(q)
+        s = self._scratch()
+        self._flat_q(q, s.q1)
         n = len(sel)
-        self._run(q1, kn.MODE_ALL, 0, False, sel)
-        rows = self._ev[:n]
+        self._run(s, kn.MODE_ALL, 0, False, sel)
+        rows = s.ev[:n]
         return PairDistances(rows[:, 0].copy(), rows[:, 1:4].copy(), rows[:, 4:7].copy(), la, ra, lb, cat, na, nb,
                              self._model.link_names, pidx)
 
     def _scratch_rows(self, n_chunks: int):
-        return np.tile(self._SF, (n_chunks, 1)), np.tile(self._SI, (n_chunks, 1))
+        return np.tile(self._SF0, (n_chunks, 1)), np.tile(self._SI0, (n_chunks, 1))
 
     def _many(self, Q, mode: int):
         self._fresh()
