@@ -131,7 +131,7 @@ class FclChecker(CheckerBase):
         Q = check_Q(self.model, Q)
         if not (margin >= 0.0 and math.isfinite(margin)):
             raise BackendError(f"margin: expected a finite length >= 0, got {margin!r}")
-        return np.array([bool(np.min(self.pair_distances(q).distance, initial=np.inf) <= margin) for q in Q])
+        return np.array([bool(np.min(self.pair_distances(q).distance, initial=np.inf) <= margin) for q in Q], dtype=bool)
 
 
 class FclBackend:

@@ -254,7 +254,7 @@ class CheckerBase:
         """Default: ``min(pair_distances(q).distance) <= margin`` row by row."""
         self._require(Capability.DISTANCES)
         Q = check_Q(self.model, Q)
-        return np.array([bool(np.min(self.pair_distances(q).distance, initial=np.inf) <= margin) for q in Q])
+        return np.array([bool(np.min(self.pair_distances(q).distance, initial=np.inf) <= margin) for q in Q], dtype=bool)
 
     def nearest(self, q) -> dict:
         """Category -> :class:`NearestPair` at ``q`` (default: from :meth:`pair_distances`)."""
@@ -265,7 +265,7 @@ class CheckerBase:
         """``(M,)`` the smallest signed distance over all pairs at each row (default: row by row)."""
         self._require(Capability.DISTANCES)
         Q = check_Q(self.model, Q)
-        return np.array([float(np.min(self.pair_distances(q).distance, initial=np.inf)) for q in Q])
+        return np.array([float(np.min(self.pair_distances(q).distance, initial=np.inf)) for q in Q], dtype=np.float64)
 
     def _result(self, d, p_WA, p_WB) -> PairDistances:
         return PairDistances(self._pairs, d, p_WA, p_WB, self._category)

@@ -1,0 +1,61 @@
+"""A conformance suite for backend authors: the Checker contract and a differential suite against coal.
+
+Like scikit-learn's ``check_estimator``: one call runs every check on a backend, and each check is
+also an object pytest can parametrize over.
+
+>>> from armguard.testing import check_backend
+>>> report = check_backend("analytic", models=["puma560"], n_configs=4)  # doctest: +SKIP
+>>> print(report)  # doctest: +SKIP
+backend 'analytic': 16 passed, 2 not applicable, ...
+
+From the command line (the ``armguard`` pytest plugin, registered under ``pytest11``)::
+
+    pytest --pyargs armguard.testing --backend NAME [--backend-option KEY=VALUE ...]
+           [--conformance-models ranger,panda] [--conformance-configs 8]
+
+What is checked, per model (:data:`DEFAULT_MODELS`: the five built-in models and
+example-robot-data's Panda and UR5) and on the neutral pose plus seeded random in-limit
+configurations:
+
+* the Backend/Checker protocol: ``name``, ``model``, ``capabilities``; ``build`` refuses an unknown
+  option with BackendError listing the accepted ones;
+* ``pair_distances(q)``: pairs in ``model.pairs`` order, shapes and dtypes, finite values; the
+  witness relation ``|p_WA - p_WB| == |distance|`` to 1e-9 m; witness points on the shapes'
+  surfaces; the sign convention;
+* NaN, infinite, wrongly shaped ``q`` / ``Q`` and bad margins refused with BackendError, never a verdict;
+* ``collides(Q, margin)`` consistent with the distances at the margin; batches as rows; determinism;
+* capabilities declared vs behaviour: a verdicts-only backend refuses distances with BackendError;
+* agreement with coal (distances within 1e-6 m, 1e-5 m on hulls; verdicts outside the contact
+  band; a verdicts-only backend never says clear where coal says collision);
+* where the Checker has them: ``pair_distances(q, pairs=idx)`` equals rows of the full answer,
+  ``pair_distances_many(Q)`` equals row by row; ``nearest`` and ``min_distance_many`` agree;
+* thread safety: 4 threads on one Checker give the single-threaded answers.
+
+A Checker may declare checks it is known to fail, with the reason, in a ``conformance_xfail``
+mapping (``{"check": reason}`` or ``{"check[model]": reason}``): pytest reports them as xfail (and
+XPASS once they pass), :func:`check_backend` lists them in its report.  The tolerances are
+:data:`armguard.DEFAULT_TOLERANCES`' ``differential_*`` fields.
+"""
+
+from __future__ import annotations
+
+from ._suite import (
+    DEFAULT_MODELS,
+    Check,
+    ConformanceError,
+    ConformanceReport,
+    NotApplicable,
+    check_backend,
+    checks,
+    load_conformance_model,
+)
+
+__all__ = ["check_backend", "checks", "Check", "ConformanceError", "ConformanceReport", "NotApplicable",
+           "DEFAULT_MODELS", "load_conformance_model", "check_names"]
+
+
+def check_names() -> tuple[str, ...]:
+    """Every check's name, backend-wide ones first."""
+    from ._checks import BACKEND_CHECKS, MODEL_CHECKS
+
+    return tuple(f.__name__.removeprefix("check_") for f in (*BACKEND_CHECKS, *MODEL_CHECKS))

@@ -1,0 +1,487 @@
+"""The checks of the conformance suite: the interface contract (:mod:`armguard.backends`) and the
+differential comparison against coal.
+
+Each ``check_<name>(ctx, model)`` fails through :func:`~._suite.expect` / :func:`~._suite.fail`
+(never a bare ``assert``) and raises :class:`~._suite.NotApplicable` where the backend does not
+claim what the check is about.  Tolerances are :data:`armguard.DEFAULT_TOLERANCES`'
+``differential_*`` fields, shared with ``armguard compare`` and the repository's differential tests.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+import sys
+import threading
+
+import numpy as np
+
+from .._errors import BackendError
+from .._tolerance import DEFAULT_TOLERANCES as TOL
+from ..backends import Backend, Capability, Checker
+from ._suite import REFERENCE, NotApplicable, expect, fail
+from ._surface import surface_residuals
+
+__all__ = ["BACKEND_CHECKS", "MODEL_CHECKS"]
+
+BAND = TOL.differential_contact_band  # m: verdicts may differ only where the reference's distance is this close to 0
+WITNESS = TOL.differential_witness  # m: | |p_WA - p_WB| - |d| |
+UNKNOWN_OPTION = "conformance_no_such_option"
+MARGIN = 0.05  # m: a margin every distances backend answers
+EDGE = 5e-4  # m: margins this far either side of a least distance
+
+
+def _distances(checker) -> bool:
+    return Capability.DISTANCES in checker.capabilities
+
+
+def _require_distances(checker) -> None:
+    if not _distances(checker):
+        raise NotApplicable(f"backend {checker.name!r} declares no distances (capabilities "
+                            f"{sorted(c.value for c in checker.capabilities)})")
+
+
+def _raises_backend_error(call, what: str) -> BackendError:
+    """``call()`` must raise BackendError (never answer, never another exception)."""
+    try:
+        out = call()
+    except BackendError as exc:
+        return exc
+    except Exception as exc:  # noqa: BLE001 - the wrong kind of refusal
+        fail(f"{what}: raised {type(exc).__name__}: {exc} (expected armguard.BackendError)")
+    fail(f"{what}: answered {type(out).__name__} instead of raising armguard.BackendError")
+
+
+def _has_pairs_argument(checker) -> bool:
+    try:
+        return "pairs" in inspect.signature(checker.pair_distances).parameters
+    except (TypeError, ValueError):
+        return False
+
+
+# ================================================================ backend-wide
+def check_backend_protocol(ctx, model):
+    """The Backend has ``name`` and ``build``; given by name, the entry point gives it and its name
+    is the entry point's."""
+    b = ctx.backend_impl()
+    what = f"get_backend({ctx.backend!r})" if ctx.backend_object is None else "the Backend given"
+    expect(isinstance(b, Backend), f"{what} is a {type(b).__name__}, which lacks name / build")
+    expect(b.name == ctx.backend, f"Backend.name is {b.name!r}, the entry point is {ctx.backend!r}")
+
+
+def check_unknown_option_refused(ctx, model):
+    """``build(model, options + {unknown: 1})`` raises BackendError naming the unknown option and
+    listing the accepted ones (``options are [...]``, or that it takes none)."""
+    exc = _raises_backend_error(lambda: ctx.build(model, {**ctx.options, UNKNOWN_OPTION: 1}),
+                                f"build with option {UNKNOWN_OPTION!r}")
+    msg = str(exc)
+    expect(UNKNOWN_OPTION in msg, f"the refusal does not name the unknown option: {msg!r}")
+    expect("options are" in msg or "takes none" in msg or "no options" in msg,
+           f"the refusal does not list the accepted options ('options are [...]' or 'takes none'): {msg!r}")
+
+
+# ================================================================ per model: the interface
+def check_checker_protocol(ctx, model):
+    """The Checker has ``name`` (the backend's), ``model`` (the one given), ``capabilities`` (a
+    non-empty frozenset of :class:`~armguard.backends.Capability`), ``pair_distances`` and ``collides``."""
+    c = ctx.checker(model)
+    expect(isinstance(c, Checker), f"{type(c).__name__} lacks part of the Checker protocol "
+                                   "(name, model, capabilities, pair_distances, collides)")
+    expect(c.name == ctx.backend, f"Checker.name is {c.name!r}, the backend is {ctx.backend!r}")
+    expect(c.model is ctx.model(model), "Checker.model is not the Model it was built for")
+    caps = c.capabilities
+    expect(isinstance(caps, frozenset) and caps and all(isinstance(x, Capability) for x in caps),
+           f"capabilities must be a non-empty frozenset of Capability, got {caps!r}")
+
+
+def check_pair_distances_shapes(ctx, model):
+    """``pair_distances(q)``: pairs equal to ``model.pairs.names`` (that order), ``distance (n,)``,
+    ``p_WA``/``p_WB (n, 3)`` float64, finite, ``category`` the Model's, at every configuration."""
+    c = ctx.checker(model)
+    _require_distances(c)
+    m = ctx.model(model)
+    names, cats = m.pairs.names, tuple(m.pairs.category)
+    n = len(names)
+    for i, q in enumerate(ctx.configs(model)):
+        r = c.pair_distances(q)
+        where = f"configuration {i}"
+        expect(np.array_equal(np.asarray(r.pairs), names), f"{where}: pairs differ from model.pairs.names (order too)")
+        expect(tuple(r.category) == cats, f"{where}: category differs from model.pairs.category")
+        for key, shape in (("distance", (n,)), ("p_WA", (n, 3)), ("p_WB", (n, 3))):
+            a = getattr(r, key)
+            expect(isinstance(a, np.ndarray) and a.shape == shape and a.dtype == np.float64,
+                   lambda: f"{where}: {key} must be a float64 array of shape {shape}, got "
+                           f"{getattr(a, 'dtype', type(a))} {getattr(a, 'shape', '')}")
+            expect(np.all(np.isfinite(a)), f"{where}: {key} holds NaN or infinite values")
+
+
+def check_witness_relation(ctx, model):
+    """``| |p_WA - p_WB| - |distance| | <= Tolerances.differential_witness`` (1e-9 m) on every pair
+    and configuration."""
+    c = ctx.checker(model)
+    _require_distances(c)
+    for i, q in enumerate(ctx.configs(model)):
+        r = c.pair_distances(q)
+        gap = np.linalg.norm(r.p_WA - r.p_WB, axis=1)
+        err = np.abs(gap - np.abs(r.distance))
+        k = int(np.argmax(err)) if err.size else 0
+        expect(not err.size or err[k] <= WITNESS,
+               lambda: f"configuration {i}, pair {tuple(r.pairs[k])}: |p_WA - p_WB| = {gap[k]:.12g} m but "
+                       f"distance = {r.distance[k]:.12g} m (|difference| {err[k]:.3g} > {WITNESS:g} m)")
+
+
+def _residuals(ctx, model, c):
+    """Per configuration: the answer and each witness point's residual against both shapes of its
+    pair (:func:`surface_residuals`), with the shapes the backend does not hold exactly masked out."""
+    m = ctx.model(model)
+    skip = list(getattr(c, "representation", {}) or {})
+    for i, q in enumerate(ctx.configs(model)):
+        r = c.pair_distances(q)
+        keep = ~(np.isin(r.pairs[:, 0], skip) | np.isin(r.pairs[:, 1], skip))
+        on_a = surface_residuals(m, q, r.pairs[:, 0], r.p_WA)  # p_WA against A, ...
+        on_b = surface_residuals(m, q, r.pairs[:, 1], r.p_WB)
+        a_in_b = surface_residuals(m, q, r.pairs[:, 1], r.p_WA)  # ... p_WA against B
+        b_in_a = surface_residuals(m, q, r.pairs[:, 0], r.p_WB)
+        yield i, r, keep, on_a, on_b, a_in_b, b_in_a
+
+
+def check_witness_on_surfaces(ctx, model):
+    """On separated pairs, ``p_WA`` lies on A's surface and ``p_WB`` on B's within 1e-6 m (1e-5 m on a
+    convex hull), the shapes posed by Pinocchio (sphere, capsule, box, cylinder, convex hull, a
+    workspace wall); shapes the backend declares it does not hold exactly (``representation``) and
+    shapes this check cannot evaluate are left out."""
+    c = ctx.checker(model)
+    _require_distances(c)
+    checked = 0
+    for i, r, keep, on_a, on_b, _, _ in _residuals(ctx, model, c):
+        sep = keep & (r.distance > BAND)
+        for side, (res, tol, _) in enumerate((on_a, on_b)):
+            if side == 1:  # a workspace witness lies on one wall
+                res = np.where(r.pairs[:, 1] == "workspace", np.abs(res), res)
+            ok = sep & np.isfinite(res)
+            checked += int(ok.sum())
+            bad = np.flatnonzero(ok & (np.abs(res) > tol))
+            expect(not bad.size, lambda: f"configuration {i}, pair {tuple(r.pairs[bad[0]])}: p_W{'AB'[side]} = "
+                                         f"{getattr(r, 'p_W' + 'AB'[side])[bad[0]].tolist()} is {res[bad[0]]:.3g} m off "
+                                         f"{r.pairs[bad[0], side]}'s surface (tolerance {tol[bad[0]]:g} m), "
+                                         f"distance {r.distance[bad[0]]:.9g} m")
+    if not checked:
+        raise NotApplicable("no separated pair with a shape whose surface this check can evaluate")
+
+
+def check_sign_convention(ctx, model):
+    """``distance > 0`` means apart: each witness point of a separated pair lies outside the other
+    shape, at the pair's distance from it where that shape's distance is exact (not a hull);
+    ``distance < 0`` means penetrating: a witness point lies inside (or on) the other shape."""
+    c = ctx.checker(model)
+    _require_distances(c)
+    checked = 0
+    for i, r, keep, _, _, a_in_b, b_in_a in _residuals(ctx, model, c):
+        d = r.distance
+        for name, (res, tol, exact) in (("p_WA against B", a_in_b), ("p_WB against A", b_in_a)):
+            sep = keep & (d > BAND) & np.isfinite(res)
+            checked += int(sep.sum())
+            bad = np.flatnonzero(sep & (res < -tol))
+            expect(not bad.size, lambda: f"configuration {i}, pair {tuple(r.pairs[bad[0]])}: distance "
+                                         f"{d[bad[0]]:.9g} m > 0 but {name} is {-res[bad[0]]:.3g} m inside it")
+            bad = np.flatnonzero(sep & exact & (np.abs(res - d) > tol))
+            expect(not bad.size, lambda: f"configuration {i}, pair {tuple(r.pairs[bad[0]])}: distance "
+                                         f"{d[bad[0]]:.12g} m but {name} is {res[bad[0]]:.12g} m from it")
+        pen = keep & (d < -BAND) & np.isfinite(a_in_b[0]) & np.isfinite(b_in_a[0])
+        checked += int(pen.sum())
+        inside = np.minimum(a_in_b[0] - a_in_b[1], b_in_a[0] - b_in_a[1]) <= 0.0
+        bad = np.flatnonzero(pen & ~inside)
+        expect(not bad.size, lambda: f"configuration {i}, pair {tuple(r.pairs[bad[0]])}: distance "
+                                     f"{d[bad[0]]:.9g} m < 0 but neither witness point is inside the other shape")
+    if not checked:
+        raise NotApplicable("no pair with a shape this check can evaluate")
+
+
+def check_bad_q_refused(ctx, model):
+    """NaN, infinite, wrongly shaped and non-numeric ``q`` / ``Q`` raise BackendError from
+    ``pair_distances`` and ``collides`` (and the optional batch paths): never a verdict."""
+    c = ctx.checker(model)
+    m = ctx.model(model)
+    q = ctx.configs(model)[0]
+    nan, inf = q.copy(), q.copy()
+    nan[-1], inf[0] = np.nan, np.inf
+    bad_q = {"NaN": nan, "inf": inf, "one value short": q[:-1], "one value extra": np.append(q, 0.0),
+             "2-D": q[None], "text": ["a"] * m.nq}
+    if _distances(c):
+        for what, bq in bad_q.items():
+            _raises_backend_error(lambda: c.pair_distances(bq), f"pair_distances(q {what})")
+    Q = ctx.configs(model)[:3].copy()
+    Qn = Q.copy()
+    Qn[1, 0] = np.nan
+    Qi = Q.copy()
+    Qi[2, -1] = -np.inf
+    bad_Q = {"a NaN row": Qn, "an infinite row": Qi, "one column short": Q[:, :-1], "1-D": Q[0], "3-D": Q[None]}
+    for what, bQ in bad_Q.items():
+        _raises_backend_error(lambda: c.collides(bQ), f"collides(Q with {what})")
+        if _distances(c) and hasattr(c, "pair_distances_many"):
+            _raises_backend_error(lambda: c.pair_distances_many(bQ), f"pair_distances_many(Q with {what})")
+    for margin in (math.nan, -0.01, math.inf):
+        _raises_backend_error(lambda: c.collides(Q, margin=margin), f"collides(Q, margin={margin})")
+
+
+def check_capabilities_honoured(ctx, model):
+    """What ``capabilities`` lacks is refused with BackendError (``pair_distances``, ``nearest``,
+    ``min_distance_many``, ``pair_distances_many``), never faked or left as NotImplementedError;
+    ``collides`` answers ``(M,) bool`` whatever the capabilities, for any ``M`` (0 too)."""
+    c = ctx.checker(model)
+    Q = ctx.configs(model)
+    for rows in (Q, Q[:1], Q[:0]):
+        v = c.collides(rows)
+        expect(isinstance(v, np.ndarray) and v.dtype == bool and v.shape == (len(rows),),
+               lambda: f"collides(Q of {len(rows)} rows) gave {getattr(v, 'dtype', type(v))} "
+                       f"{getattr(v, 'shape', '')}, expected ({len(rows)},) bool")
+    if _distances(c):
+        return
+    for meth, arg in (("pair_distances", Q[0]), ("nearest", Q[0]), ("min_distance_many", Q),
+                      ("pair_distances_many", Q)):
+        if hasattr(c, meth):
+            _raises_backend_error(lambda: getattr(c, meth)(arg), f"{meth} of a backend without distances")
+
+
+def check_collides_matches_distances(ctx, model):
+    """``collides(Q, margin)`` is ``min(pair_distances(q).distance) <= margin`` row by row (margins 0
+    and 0.05 m, and 0.5 mm either side of the clearest configurations' least distance), except
+    within the contact band of the margin; a batch answers as its rows alone."""
+    c = ctx.checker(model)
+    _require_distances(c)
+    Q = ctx.configs(model)
+    dmin = np.array([float(np.min(c.pair_distances(q).distance, initial=np.inf)) for q in Q])
+    for margin in (0.0, MARGIN):
+        v = c.collides(Q, margin=margin)
+        clear = np.abs(dmin - margin) > BAND
+        bad = np.flatnonzero(clear & (v != (dmin <= margin)))
+        expect(not bad.size, lambda: f"margin {margin} m, configuration {bad[0]}: collides says {bool(v[bad[0]])} "
+                                     f"but the least distance is {dmin[bad[0]]:.9g} m")
+        one = np.array([bool(c.collides(q[None], margin=margin)[0]) for q in Q])
+        bad = np.flatnonzero(clear & (one != v))
+        expect(not bad.size, lambda: f"margin {margin} m, configuration {bad[0]}: the batch says {bool(v[bad[0]])}, "
+                                     f"the row alone {bool(one[bad[0]])}")
+    # a margin just above / below a separated configuration's least distance turns its verdict
+    for i in np.argsort(-dmin)[:2]:
+        if dmin[i] > 2 * EDGE:
+            for margin, want in ((dmin[i] + EDGE, True), (dmin[i] - EDGE, False)):
+                got = bool(c.collides(Q[i][None], margin=float(margin))[0])
+                expect(got == want, f"configuration {i}, least distance {dmin[i]:.9g} m: collides at margin "
+                                    f"{margin:.9g} m says {got}")
+
+
+def check_optional_fast_paths(ctx, model):
+    """``nearest(q)`` equals ``pair_distances(q).nearest()`` and ``min_distance_many(Q)`` the rows'
+    least distances (where the Checker has them)."""
+    c = ctx.checker(model)
+    _require_distances(c)
+    if not (hasattr(c, "nearest") or hasattr(c, "min_distance_many")):
+        raise NotApplicable("no nearest / min_distance_many")
+    Q = ctx.configs(model)
+    full = [c.pair_distances(q) for q in Q]
+    if hasattr(c, "nearest"):
+        for i, q in enumerate(Q):
+            got, want = c.nearest(q), full[i].nearest()
+            expect(set(got) == set(want), f"configuration {i}: nearest has categories {sorted(got)}, expected {sorted(want)}")
+            for cat, w in want.items():
+                g = got[cat]
+                expect((g.a, g.b) == (w.a, w.b) or abs(g.distance - w.distance) <= TOL.differential_distance,
+                       f"configuration {i}, {cat}: nearest names {(g.a, g.b)}, pair_distances {(w.a, w.b)}")
+                expect(abs(g.distance - w.distance) <= TOL.differential_distance,
+                       f"configuration {i}, {cat}: nearest distance {g.distance} vs {w.distance} m")
+    if hasattr(c, "min_distance_many"):
+        got = np.asarray(c.min_distance_many(Q), dtype=np.float64)
+        want = np.array([r.distance.min(initial=np.inf) for r in full])
+        expect(got.shape == want.shape, f"min_distance_many gave shape {got.shape}, expected {want.shape}")
+        expect(np.allclose(got, want, rtol=0, atol=TOL.differential_distance),
+               f"min_distance_many differs from the rows' least distance by up to {np.max(np.abs(got - want)):.3g} m")
+
+
+def check_deterministic(ctx, model):
+    """The same ``q`` gives the same answer whatever was asked before: the configurations forwards,
+    backwards and again give identical distances, witness points and verdicts."""
+    c = ctx.checker(model)
+    Q = ctx.configs(model)
+    if _distances(c):
+        fwd = [c.pair_distances(q) for q in Q]
+        back = [c.pair_distances(q) for q in Q[::-1]][::-1]
+        for i, (a, b) in enumerate(zip(fwd, back)):
+            for key in ("distance", "p_WA", "p_WB"):
+                x, y = getattr(a, key), getattr(b, key)
+                expect(np.array_equal(x, y), lambda: f"configuration {i}: {key} differs between two calls "
+                                                     f"(by up to {np.max(np.abs(x - y)):.3g} m) after other configurations")
+    v1, v2 = c.collides(Q), c.collides(Q[::-1])[::-1]
+    expect(np.array_equal(v1, v2), f"collides differs for configurations {np.flatnonzero(v1 != v2).tolist()} "
+                                   "when the batch is reversed")
+
+
+# ================================================================ per model: against coal
+def _vs_reference(ctx, model):
+    if ctx.backend == REFERENCE:
+        raise NotApplicable(f"the backend is the reference ({REFERENCE}) itself")
+    return ctx.reference(model)
+
+
+def check_coal_distances(ctx, model):
+    """Signed distances equal coal's within 1e-6 m (1e-5 m where a side is a convex hull: coal's GJK
+    stops within that) on separated and on penetrating pairs, and no sign differs outside the
+    contact band; a pair with a shape the backend holds only conservatively (``representation``)
+    may be nearer, never farther."""
+    c = ctx.checker(model)
+    _require_distances(c)
+    _, ref, _ = _vs_reference(ctx, model)
+    m = ctx.model(model)
+    cm = m.collision_model
+    names = m.pairs.names
+    hull = np.array([any(n != "workspace" and "Convex" in type(cm.geometryObjects[m.geometry_index(n)].geometry).__name__
+                         for n in pair) for pair in names])
+    tol = np.where(hull, TOL.differential_hull, TOL.differential_distance)
+    rep = set(getattr(c, "representation", {}) or {})
+    approx = np.array([a in rep or b in rep for a, b in names])
+    for i, q in enumerate(ctx.configs(model)):
+        r, rr = c.pair_distances(q), ref[i]
+        d, dr = r.distance, rr.distance
+        far = np.abs(dr) > BAND
+        bad = np.flatnonzero(far & (np.sign(d) != np.sign(dr)) & ~approx)
+        expect(not bad.size, lambda: f"configuration {i}, pair {tuple(names[bad[0]])}: distance {d[bad[0]]:.9g} m, "
+                                     f"coal {dr[bad[0]]:.9g} m (opposite signs); q = {q.tolist()}")
+        both = (np.abs(d) > BAND) & far
+        err = np.where(approx, np.maximum(d - dr, 0.0), np.abs(d - dr))
+        bad = np.flatnonzero(both & (err > tol))
+        expect(not bad.size, lambda: f"configuration {i}, pair {tuple(names[bad[0]])}: distance {d[bad[0]]:.12g} m, "
+                                     f"coal {dr[bad[0]]:.12g} m (|difference| {err[bad[0]]:.3g} > {tol[bad[0]]:g} m); "
+                                     f"q = {q.tolist()}")
+
+
+def check_coal_verdicts(ctx, model):
+    """``collides(Q)`` agrees with coal's least distance outside the contact band; a verdicts-only
+    backend may be conservative (say collision where coal is clear) but never says clear where
+    coal's least distance is within the band or below; with distances, margin 0.05 m too."""
+    c = ctx.checker(model)
+    _, _, dmin = _vs_reference(ctx, model)
+    Q = ctx.configs(model)
+    v = c.collides(Q)
+    unsafe = np.flatnonzero(~v & (dmin <= BAND))
+    expect(not unsafe.size, lambda: f"configuration {unsafe[0]}: said clear, coal's least distance is "
+                                    f"{dmin[unsafe[0]]:.9g} m; q = {Q[unsafe[0]].tolist()}")
+    if not _distances(c):
+        return
+    for margin in (0.0, MARGIN):
+        v = c.collides(Q, margin=margin)
+        bad = np.flatnonzero((np.abs(dmin - margin) > BAND) & (v != (dmin <= margin)))
+        expect(not bad.size, lambda: f"margin {margin} m, configuration {bad[0]}: collides {bool(v[bad[0]])}, coal's "
+                                     f"least distance {dmin[bad[0]]:.9g} m; q = {Q[bad[0]].tolist()}")
+
+
+# ================================================================ optional methods
+def _same_rows(got, want, idx, where: str) -> None:
+    expect(np.array_equal(np.asarray(got.pairs), np.asarray(want.pairs)[idx]), f"{where}: pairs are not the rows asked for")
+    expect(tuple(got.category) == tuple(np.asarray(want.category, dtype=object)[idx]), f"{where}: category differs")
+    for key in ("distance", "p_WA", "p_WB"):
+        x, y = np.asarray(getattr(got, key)), getattr(want, key)[idx]
+        expect(x.shape == y.shape, f"{where}: {key} has shape {x.shape}, expected {y.shape}")
+        expect(np.allclose(x, y, rtol=0, atol=1e-12),
+               lambda: f"{where}: {key} differs from the full result's rows by up to {np.max(np.abs(x - y)):.3g} m")
+
+
+def check_pair_subset(ctx, model):
+    """``pair_distances(q, pairs=idx)`` (where the Checker takes ``pairs``) equals rows ``idx`` of
+    ``pair_distances(q)`` (within 1e-12 m) for sorted, unsorted, single and empty index arrays, and
+    an index out of range raises BackendError."""
+    c = ctx.checker(model)
+    _require_distances(c)
+    if not _has_pairs_argument(c):
+        raise NotApplicable("pair_distances takes no pairs= argument")
+    n = len(ctx.model(model).pairs)
+    rng = np.random.default_rng(ctx.seed)
+    subsets = {"all": np.arange(n), "single": np.array([n - 1]), "empty": np.zeros(0, np.int64),
+               "sorted": np.sort(rng.choice(n, size=max(1, n // 3), replace=False)),
+               "unsorted": rng.permutation(n)[: max(1, n // 2)]}
+    for i, q in enumerate(ctx.configs(model)[:3]):
+        full = c.pair_distances(q)
+        for what, idx in subsets.items():
+            _same_rows(c.pair_distances(q, pairs=idx), full, idx, f"configuration {i}, pairs={what}")
+    q = ctx.configs(model)[0]
+    for what, idx in (("out of range", np.array([n])), ("negative", np.array([-n - 1])), ("2-D", np.zeros((1, 1), np.int64))):
+        _raises_backend_error(lambda: c.pair_distances(q, pairs=idx), f"pair_distances(q, pairs {what})")
+
+
+def check_pair_distances_many(ctx, model):
+    """``pair_distances_many(Q)`` (where the Checker has it) equals ``pair_distances`` row by row
+    (within 1e-12 m): ``distance (M, n)``, ``p_WA``/``p_WB (M, n, 3)``; ``M = 0`` too."""
+    c = ctx.checker(model)
+    _require_distances(c)
+    if not hasattr(c, "pair_distances_many"):
+        raise NotApplicable("no pair_distances_many")
+    Q = ctx.configs(model)
+    n = len(ctx.model(model).pairs)
+    many = c.pair_distances_many(Q)
+    for key, shape in (("distance", (len(Q), n)), ("p_WA", (len(Q), n, 3)), ("p_WB", (len(Q), n, 3))):
+        a = np.asarray(getattr(many, key))
+        expect(a.shape == shape, f"{key} has shape {a.shape}, expected {shape}")
+    for i, q in enumerate(Q):
+        r = c.pair_distances(q)
+        for key in ("distance", "p_WA", "p_WB"):
+            x, y = np.asarray(getattr(many, key))[i], getattr(r, key)
+            expect(np.allclose(x, y, rtol=0, atol=1e-12),
+                   lambda: f"row {i}: {key} differs from pair_distances(Q[{i}]) by up to {np.max(np.abs(x - y)):.3g} m")
+    empty = c.pair_distances_many(Q[:0])
+    expect(np.asarray(empty.distance).shape == (0, n), f"M = 0: distance has shape {np.asarray(empty.distance).shape}")
+
+
+# ================================================================ threads
+THREADS = 4
+
+
+def check_thread_safety(ctx, model):
+    """One Checker called from 4 threads at once (``pair_distances`` on different configurations,
+    ``collides`` on different batches; thread switches forced often) gives exactly the answers of
+    single-threaded calls."""
+    c = ctx.checker(model)
+    Q = ctx.configs(model)
+    dist = _distances(c)
+    want_d = [c.pair_distances(q).distance for q in Q] if dist else None
+    batches = [np.roll(Q, k, axis=0)[:3] for k in range(THREADS)]
+    want_v = [c.collides(b) for b in batches]
+    rounds = 2
+    barrier = threading.Barrier(THREADS)
+    problems: list[str] = []
+
+    def work(t: int) -> None:
+        try:
+            barrier.wait()
+            for _ in range(rounds):
+                if dist:
+                    for k in range(len(Q)):
+                        i = (k + t) % len(Q)
+                        got = c.pair_distances(Q[i]).distance
+                        if not np.array_equal(got, want_d[i]):
+                            problems.append(f"thread {t}: pair_distances(configuration {i}) differs from the "
+                                            f"single-threaded answer by up to {np.max(np.abs(got - want_d[i])):.3g} m")
+                            return
+                got = c.collides(batches[t])
+                if not np.array_equal(got, want_v[t]):
+                    problems.append(f"thread {t}: collides differs from the single-threaded answer in rows "
+                                    f"{np.flatnonzero(got != want_v[t]).tolist()}")
+                    return
+        except Exception as exc:  # noqa: BLE001 - a crash under threads is the finding
+            problems.append(f"thread {t} raised {type(exc).__name__}: {exc}")
+
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(1e-5)  # switch threads as often as the interpreter will, so shared state shows
+    try:
+        threads = [threading.Thread(target=work, args=(t,)) for t in range(THREADS)]
+        for th in threads:
+            th.start()
+        for th in threads:
+            th.join()
+    finally:
+        sys.setswitchinterval(old)
+    expect(not problems, lambda: f"{len(problems)} of {THREADS} threads saw wrong answers; first: {problems[0]}")
+
+
+BACKEND_CHECKS = (check_backend_protocol, check_unknown_option_refused)
+MODEL_CHECKS = (check_checker_protocol, check_pair_distances_shapes, check_witness_relation, check_witness_on_surfaces, check_sign_convention,
+                check_bad_q_refused, check_capabilities_honoured, check_collides_matches_distances,
+                check_optional_fast_paths, check_deterministic, check_coal_distances, check_coal_verdicts,
+                check_pair_subset, check_pair_distances_many, check_thread_safety)

@@ -1,0 +1,202 @@
+"""The conformance suite (``armguard.testing``) on every bundled backend, and the suite itself.
+
+* Every bundled backend (the ``armguard.backends`` entry points of ``pyproject.toml``) runs every
+  check on the built-in models and example-robot-data's Panda and UR5 (``forbidden`` on Hermes
+  only: its map is built for one model), on the neutral pose and :data:`N_CONFIGS` seeded random
+  configurations per model; the checks a backend declares it fails (its Checker's
+  ``conformance_xfail``, each with the reason) show as xfail.  Bounded: a few configurations per
+  model, coal's answers made once per model for all backends.
+* The suite catches what it claims to: a backend broken in one way fails the check named for it.
+* The example third-party package (``examples/armguard_pairwise_backend``) is found through its
+  entry point and passes; ``pytest --pyargs armguard.testing --backend NAME`` runs.
+"""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import armguard
+from armguard import BackendError
+from armguard.backends import available
+from armguard.testing import DEFAULT_MODELS, ConformanceError, check_backend, check_names, checks
+from armguard.testing._plugin import run_check
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "examples" / "armguard_pairwise_backend"
+N_CONFIGS = 3
+BUNDLED = ("analytic", "coal", "fcl", "clip", "forbidden")
+MODELS = {name: DEFAULT_MODELS for name in BUNDLED}
+MODELS["forbidden"] = ("hermes",)
+
+
+def _bundled_checks():
+    out = []
+    for name in BUNDLED:
+        out += checks(name, models=MODELS[name], n_configs=N_CONFIGS)
+    return out
+
+
+CHECKS = _bundled_checks()
+
+
+@pytest.fixture(scope="module")
+def hermes_map(tmp_path_factory):
+    """A coarse forbidden-values map of Hermes (12°, depth 2): the forbidden backend's option ``map``."""
+    from armguard.cspace import ForbiddenMap
+
+    fmap = ForbiddenMap.build(armguard.load_model("hermes"), out=tmp_path_factory.mktemp("fb") / "hermes12.agmap",
+                              resolution=math.radians(12.0), stopping_distance=0.1, max_depth=2)
+    return str(fmap.path)
+
+
+def test_every_bundled_backend_is_covered():
+    entry_points = set(available()) - {"pairwise"}  # the example package, when a test has put it on the path
+    assert entry_points == set(BUNDLED), "a backend was added or removed: list it in BUNDLED"
+
+
+@pytest.mark.parametrize("check", CHECKS, ids=[f"{c.context.backend}-{c.id}" for c in CHECKS])
+def test_bundled_backend_conforms(check, request):
+    if check.context.backend == "forbidden" and "map" not in check.context.options:
+        check.context.options["map"] = request.getfixturevalue("hermes_map")
+    run_check(check, request)
+
+
+# ---------------------------------------------------------------- the suite catches what it claims to
+class _Wrapped(armguard.backends.CheckerBase):
+    """coal behind a lock (so: thread-safe), answering as coal does, except for one ``mutation``."""
+
+    name = "mutant"
+
+    def __init__(self, model, mutation: str) -> None:
+        import threading
+
+        super().__init__(model)
+        self.inner = armguard.checker(model, "coal", {"threads": 1})
+        self.mutation = mutation
+        self.capabilities = self.inner.capabilities
+        if mutation == "distances faked by a verdicts-only backend":
+            self.capabilities = frozenset({armguard.backends.Capability.VERDICTS})
+        self._lock = threading.Lock()
+        self._last = None
+        self._buf = None
+
+    def pair_distances(self, q, pairs=None):
+        mut = self.mutation
+        if mut == "NaN answered":
+            q = np.nan_to_num(np.asarray(q, dtype=np.float64))
+        with self._lock:
+            r = self.inner.pair_distances(q)
+        d, p_WA, p_WB = r.distance.copy(), r.p_WA.copy(), r.p_WB.copy()
+        if mut == "pair order reversed":
+            return armguard.backends.PairDistances(r.pairs[::-1], d[::-1], p_WA[::-1], p_WB[::-1], r.category[::-1])
+        if mut == "distance 1 mm long":
+            d = d + 1e-3
+        if mut == "sign flipped":
+            d = -d
+        if mut == "witness points moved together":
+            p_WA, p_WB = p_WA + 0.01, p_WB + 0.01
+        if mut == "answers one call behind":
+            self._last, out = (d, p_WA, p_WB), self._last or (d, p_WA, p_WB)
+            d, p_WA, p_WB = out
+        if mut == "shared scratch buffer":
+            self._buf = d
+            import time
+
+            time.sleep(1e-4)
+            d = self._buf.copy()
+        if pairs is not None:
+            idx = np.asarray(pairs)
+            if idx.ndim != 1 or (idx.size and (idx.max() >= len(d) or idx.min() < -len(d))):
+                raise BackendError("pairs: out of range")
+            if mut == "subset rows shifted":
+                idx = np.roll(idx, 1)
+            return armguard.backends.PairDistances(r.pairs[idx], d[idx], p_WA[idx], p_WB[idx],
+                                                   tuple(np.asarray(r.category, dtype=object)[idx]))
+        return self._result(d, p_WA, p_WB)
+
+    def pair_distances_many(self, Q):
+        from types import SimpleNamespace
+
+        Q = armguard.backends.check_Q(self.model, Q)
+        rows = [self.pair_distances(q) for q in Q]
+        n = len(self.model.pairs)
+        out = SimpleNamespace(distance=np.array([r.distance for r in rows]).reshape(len(Q), n),
+                              p_WA=np.array([r.p_WA for r in rows]).reshape(len(Q), n, 3),
+                              p_WB=np.array([r.p_WB for r in rows]).reshape(len(Q), n, 3))
+        if self.mutation == "batch rows shifted":
+            out.distance = np.roll(out.distance, 1, axis=0)
+        return out
+
+    def collides(self, Q, *, margin: float = 0.0):
+        Q = armguard.backends.check_Q(self.model, Q)
+        if self.mutation == "always clear":
+            return np.zeros(len(Q), dtype=bool)
+        if not (margin >= 0.0 and math.isfinite(margin)):
+            raise BackendError(f"margin: expected a finite length >= 0, got {margin!r}")
+        with self._lock:
+            return self.inner.collides(Q, margin=0.0 if self.mutation == "margin ignored" else margin)
+
+
+class _Mutant:
+    def __init__(self, mutation: str) -> None:
+        self.name, self.mutation = "mutant", mutation
+
+    def build(self, model, options=None):
+        if options and self.mutation != "unknown option accepted":
+            raise BackendError(f"mutant: unknown options {sorted(options)}; this backend takes none")
+        return _Wrapped(model, self.mutation)
+
+
+MUTATIONS = {
+    "unknown option accepted": "unknown_option_refused",
+    "pair order reversed": "pair_distances_shapes",
+    "distance 1 mm long": "coal_distances",
+    "sign flipped": "sign_convention",
+    "witness points moved together": "witness_on_surfaces",
+    "NaN answered": "bad_q_refused",
+    "distances faked by a verdicts-only backend": "capabilities_honoured",
+    "margin ignored": "collides_matches_distances",
+    "answers one call behind": "deterministic",
+    "always clear": "coal_verdicts",
+    "subset rows shifted": "pair_subset",
+    "batch rows shifted": "pair_distances_many",
+    "shared scratch buffer": "thread_safety",
+}
+
+
+def test_an_honest_wrapper_passes_every_check():
+    report = check_backend(_Mutant("none"), models=["puma560"], n_configs=N_CONFIGS)
+    assert set(report.passed) >= {f"{c}[puma560]" for c in MUTATIONS.values()}
+    assert not report.xfailed and not report.xpassed
+
+
+@pytest.mark.parametrize("mutation", list(MUTATIONS), ids=[m.replace(" ", "_") for m in MUTATIONS])
+def test_a_broken_backend_fails_the_check_named_for_it(mutation):
+    check = MUTATIONS[mutation]
+    with pytest.raises(ConformanceError) as info:
+        check_backend(_Mutant(mutation), models=["puma560"], n_configs=N_CONFIGS, only=[check])
+    err = info.value
+    assert (err.backend, err.check, err.model) == ("mutant", check, "puma560")
+    assert f"fails check {check!r} on model 'puma560'" in str(err)
+
+
+def test_a_declared_failure_is_reported_not_raised():
+    report = check_backend(_Mutant("sign flipped"), models=["puma560"], n_configs=N_CONFIGS,
+                           only=["sign_convention", "witness_relation"], xfail={"sign_convention": "known: flips signs"})
+    assert report.passed == ["witness_relation[puma560]"]
+    assert list(report.xfailed) == ["sign_convention[puma560]"] and "known: flips signs" in str(report)
+
+
+def test_check_names_are_known_and_listed():
+    assert set(MUTATIONS.values()) <= set(check_names())
+    with pytest.raises(ValueError, match="unknown check names"):
+        checks("coal", only=["no_such_check"])
+    found = checks("coal", models=["hermes", "puma560"])  # nothing loads until a check runs
+    assert [c.id for c in found[:2]] == ["backend_protocol[hermes]", "unknown_option_refused[hermes]"]
+    assert len(found) == 2 + 2 * (len(check_names()) - 2)
