@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -32,13 +33,20 @@ EXAMPLE = ROOT / "examples" / "armguard_pairwise_backend"
 N_CONFIGS = 3
 BUNDLED = ("analytic", "coal", "fcl", "clip", "forbidden")
 MODELS = {name: DEFAULT_MODELS for name in BUNDLED}
-MODELS["forbidden"] = ("hermes",)
+MODELS["forbidden"] = ("hermes",)  # its map is built for one model
+MODELS["clip"] = ("puma560", "rover")  # its guards take a minute per model to build (ranger: 5)
+# Until the backends keep no shared scratch (issue 21, item 5: safe across threads), 4 threads on
+# one Checker see other threads' answers; the check runs and shows as xfail (XPASS where the race
+# did not show this time).  Remove an entry when its backend is safe across threads.
+NOT_YET_THREAD_SAFE = "shared scratch buffers: not yet safe across threads (issue 21, item 5)"
+XFAIL = {"analytic": {"thread_safety": NOT_YET_THREAD_SAFE}, "coal": {"thread_safety": NOT_YET_THREAD_SAFE},
+         "fcl": {"thread_safety": NOT_YET_THREAD_SAFE}, "forbidden": {"thread_safety": NOT_YET_THREAD_SAFE}}
 
 
 def _bundled_checks():
     out = []
     for name in BUNDLED:
-        out += checks(name, models=MODELS[name], n_configs=N_CONFIGS)
+        out += checks(name, models=MODELS[name], n_configs=N_CONFIGS, xfail=XFAIL.get(name))
     return out
 
 
@@ -47,11 +55,12 @@ CHECKS = _bundled_checks()
 
 @pytest.fixture(scope="module")
 def hermes_map(tmp_path_factory):
-    """A coarse forbidden-values map of Hermes (12°, depth 2): the forbidden backend's option ``map``."""
+    """A coarse forbidden-values map of Hermes (30°, depth 1: what the checks claim holds at any
+    resolution): the forbidden backend's option ``map``."""
     from armguard.cspace import ForbiddenMap
 
-    fmap = ForbiddenMap.build(armguard.load_model("hermes"), out=tmp_path_factory.mktemp("fb") / "hermes12.agmap",
-                              resolution=math.radians(12.0), stopping_distance=0.1, max_depth=2)
+    fmap = ForbiddenMap.build(armguard.load_model("hermes"), out=tmp_path_factory.mktemp("fb") / "hermes30.agmap",
+                              resolution=math.radians(30.0), stopping_distance=0.1, max_depth=1)
     return str(fmap.path)
 
 
@@ -112,20 +121,20 @@ class _Wrapped(armguard.backends.CheckerBase):
             d = self._buf.copy()
         if pairs is not None:
             idx = np.asarray(pairs)
-            if idx.ndim != 1 or (idx.size and (idx.max() >= len(d) or idx.min() < -len(d))):
-                raise BackendError("pairs: out of range")
+            if idx.ndim != 1 or idx.dtype.kind not in "iu" or (idx.size and (idx.max() >= len(d) or idx.min() < 0)):
+                raise BackendError(f"pairs: expected 1-D integer rows in [0, {len(d)}), got {idx!r}")
             if mut == "subset rows shifted":
                 idx = np.roll(idx, 1)
             return armguard.backends.PairDistances(r.pairs[idx], d[idx], p_WA[idx], p_WB[idx],
                                                    tuple(np.asarray(r.category, dtype=object)[idx]))
         return self._result(d, p_WA, p_WB)
 
-    def pair_distances_many(self, Q):
+    def pair_distances_many(self, Q, pairs=None):
         from types import SimpleNamespace
 
         Q = armguard.backends.check_Q(self.model, Q)
-        rows = [self.pair_distances(q) for q in Q]
-        n = len(self.model.pairs)
+        rows = [self.pair_distances(q, pairs=pairs) for q in Q]
+        n = len(self.model.pairs) if pairs is None else len(pairs)
         out = SimpleNamespace(distance=np.array([r.distance for r in rows]).reshape(len(Q), n),
                               p_WA=np.array([r.p_WA for r in rows]).reshape(len(Q), n, 3),
                               p_WB=np.array([r.p_WB for r in rows]).reshape(len(Q), n, 3))
@@ -200,3 +209,39 @@ def test_check_names_are_known_and_listed():
     found = checks("coal", models=["hermes", "puma560"])  # nothing loads until a check runs
     assert [c.id for c in found[:2]] == ["backend_protocol[hermes]", "unknown_option_refused[hermes]"]
     assert len(found) == 2 + 2 * (len(check_names()) - 2)
+
+
+# ---------------------------------------------------------------- a third-party package; the pytest entry
+def test_the_example_package_is_found_by_its_entry_point_and_conforms(tmp_path, monkeypatch):
+    """examples/armguard_pairwise_backend as if installed: its folder on the path and a dist-info
+    holding the entry point its pyproject.toml declares (what pip would write)."""
+    eps = tomllib.loads((EXAMPLE / "pyproject.toml").read_text())["project"]["entry-points"]["armguard.backends"]
+    info = tmp_path / "armguard_pairwise-0.1.0.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: armguard-pairwise\nVersion: 0.1.0\n")
+    (info / "entry_points.txt").write_text("[armguard.backends]\n" + "".join(f"{k} = {v}\n" for k, v in eps.items()))
+    monkeypatch.syspath_prepend(str(EXAMPLE))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert "pairwise" in available()
+    report = check_backend("pairwise", models=["hermes", "puma560"], n_configs=2)
+    assert not report.xfailed and not report.xpassed
+    for check in ("coal_distances", "witness_on_surfaces", "sign_convention", "thread_safety", "bad_q_refused"):
+        assert f"{check}[hermes]" in report.passed and f"{check}[puma560]" in report.passed
+
+
+def test_the_pytest_entry_runs_the_suite(tmp_path):
+    """``pytest --pyargs armguard.testing --backend coal`` (the pytest11 plugin), from another folder."""
+    cmd = [sys.executable, "-m", "pytest", "--pyargs", "armguard.testing", "--backend", "coal", "--conformance-models",
+           "gmf_s480", "--conformance-configs", "2", "-k", "not thread_safety", "-v", "-rs", "-p", "no:cacheprovider",
+           "-p", "no:randomly"]
+    out = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stdout + out.stderr
+    lines = out.stdout.splitlines()
+    for check in check_names():  # one test per check (thread_safety deselected), each passed or not applicable
+        line = next((ln for ln in lines if f"test_conformance[{check}[gmf_s480]]" in ln), "")
+        assert ("PASSED" in line or "SKIPPED" in line) == (check != "thread_safety"), (check, out.stdout)
+    for check in ("witness_relation", "sign_convention", "bad_q_refused", "deterministic"):
+        assert any(f"test_conformance[{check}[gmf_s480]] PASSED" in ln for ln in lines), (check, out.stdout)
+    assert "not applicable: the backend is the reference (coal) itself" in out.stdout
+    bad = subprocess.run([*cmd[:5], "nonesuch", *cmd[6:]], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert bad.returncode != 0 and "installed backends are" in bad.stdout + bad.stderr

@@ -61,6 +61,13 @@ class FclChecker(CheckerBase):
 
     name = "fcl"
     capabilities = frozenset({Capability.DISTANCES, Capability.VERDICTS})
+    conformance_xfail = {  # armguard.testing: what python-fcl is known not to meet, and why
+        "coal_distances": "python-fcl's GJK stops early: separated distances run long (up to 0.39 m on Hermes in "
+                          "10^4 configurations, docs/backends.md), never short of the exact distance "
+                          "(tests/test_backends.py holds it to that bound)",
+        "witness_on_surfaces": "python-fcl's GJK stops early: its witness points lie up to tens of micrometres off "
+                               "the surfaces, and away from the nearest points where its distance runs long",
+    }
 
     def __init__(self, model, options: Mapping | None = None) -> None:
         import fcl

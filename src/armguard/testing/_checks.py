@@ -148,12 +148,18 @@ def _residuals(ctx, model, c):
 def check_witness_on_surfaces(ctx, model):
     """On separated pairs, ``p_WA`` lies on A's surface and ``p_WB`` on B's within 1e-6 m (1e-5 m on a
     convex hull), the shapes posed by Pinocchio (sphere, capsule, box, cylinder, convex hull, a
-    workspace wall); shapes the backend declares it does not hold exactly (``representation``) and
-    shapes this check cannot evaluate are left out."""
+    workspace wall), and each is the pair's distance from the other shape where that shape's
+    distance is exact (not a hull): they are the nearest points.  Shapes the backend declares it
+    does not hold exactly (``representation``) and shapes this check cannot evaluate are left out."""
     c = ctx.checker(model)
     _require_distances(c)
     checked = 0
-    for i, r, keep, on_a, on_b, _, _ in _residuals(ctx, model, c):
+    for i, r, keep, on_a, on_b, a_in_b, b_in_a in _residuals(ctx, model, c):
+        d = r.distance
+        for name, (res, tol, exact) in (("p_WA against B", a_in_b), ("p_WB against A", b_in_a)):
+            bad = np.flatnonzero(keep & (d > BAND) & np.isfinite(res) & exact & (np.abs(res - d) > tol))
+            expect(not bad.size, lambda: f"configuration {i}, pair {tuple(r.pairs[bad[0]])}: distance "
+                                         f"{d[bad[0]]:.12g} m but {name} is {res[bad[0]]:.12g} m from it")
         sep = keep & (r.distance > BAND)
         for side, (res, tol, _) in enumerate((on_a, on_b)):
             if side == 1:  # a workspace witness lies on one wall
@@ -171,22 +177,18 @@ def check_witness_on_surfaces(ctx, model):
 
 def check_sign_convention(ctx, model):
     """``distance > 0`` means apart: each witness point of a separated pair lies outside the other
-    shape, at the pair's distance from it where that shape's distance is exact (not a hull);
-    ``distance < 0`` means penetrating: a witness point lies inside (or on) the other shape."""
+    shape; ``distance < 0`` means penetrating: a witness point lies inside (or on) the other shape."""
     c = ctx.checker(model)
     _require_distances(c)
     checked = 0
     for i, r, keep, _, _, a_in_b, b_in_a in _residuals(ctx, model, c):
         d = r.distance
-        for name, (res, tol, exact) in (("p_WA against B", a_in_b), ("p_WB against A", b_in_a)):
+        for name, (res, tol, _) in (("p_WA against B", a_in_b), ("p_WB against A", b_in_a)):
             sep = keep & (d > BAND) & np.isfinite(res)
             checked += int(sep.sum())
             bad = np.flatnonzero(sep & (res < -tol))
             expect(not bad.size, lambda: f"configuration {i}, pair {tuple(r.pairs[bad[0]])}: distance "
                                          f"{d[bad[0]]:.9g} m > 0 but {name} is {-res[bad[0]]:.3g} m inside it")
-            bad = np.flatnonzero(sep & exact & (np.abs(res - d) > tol))
-            expect(not bad.size, lambda: f"configuration {i}, pair {tuple(r.pairs[bad[0]])}: distance "
-                                         f"{d[bad[0]]:.12g} m but {name} is {res[bad[0]]:.12g} m from it")
         pen = keep & (d < -BAND) & np.isfinite(a_in_b[0]) & np.isfinite(b_in_a[0])
         checked += int(pen.sum())
         inside = np.minimum(a_in_b[0] - a_in_b[1], b_in_a[0] - b_in_a[1]) <= 0.0
@@ -385,9 +387,9 @@ def _same_rows(got, want, idx, where: str) -> None:
 
 
 def check_pair_subset(ctx, model):
-    """``pair_distances(q, pairs=idx)`` (where the Checker takes ``pairs``) equals rows ``idx`` of
-    ``pair_distances(q)`` (within 1e-12 m) for sorted, unsorted, single and empty index arrays, and
-    an index out of range raises BackendError."""
+    """``pair_distances(q, pairs=rows)`` (where the Checker takes ``pairs``) equals rows ``rows`` of
+    ``pair_distances(q)``, in that order (within 1e-12 m), for sorted, unsorted, single and empty
+    row arrays; a row outside ``[0, n)``, a 2-D array, a boolean mask or floats raise BackendError."""
     c = ctx.checker(model)
     _require_distances(c)
     if not _has_pairs_argument(c):
@@ -402,29 +404,43 @@ def check_pair_subset(ctx, model):
         for what, idx in subsets.items():
             _same_rows(c.pair_distances(q, pairs=idx), full, idx, f"configuration {i}, pairs={what}")
     q = ctx.configs(model)[0]
-    for what, idx in (("out of range", np.array([n])), ("negative", np.array([-n - 1])), ("2-D", np.zeros((1, 1), np.int64))):
+    for what, idx in (("out of range", np.array([n])), ("negative", np.array([-1])), ("2-D", np.zeros((1, 1), np.int64)),
+                      ("a boolean mask", np.ones(n, dtype=bool)), ("floats", np.array([0.5]))):
         _raises_backend_error(lambda: c.pair_distances(q, pairs=idx), f"pair_distances(q, pairs {what})")
 
 
 def check_pair_distances_many(ctx, model):
     """``pair_distances_many(Q)`` (where the Checker has it) equals ``pair_distances`` row by row
-    (within 1e-12 m): ``distance (M, n)``, ``p_WA``/``p_WB (M, n, 3)``; ``M = 0`` too."""
+    (within 1e-12 m): ``pairs``/``category`` the Model's, ``distance (M, n)``, ``p_WA``/``p_WB
+    (M, n, 3)`` float64; ``M = 0`` too; with ``pairs=rows`` (where it takes them), those rows."""
     c = ctx.checker(model)
     _require_distances(c)
     if not hasattr(c, "pair_distances_many"):
         raise NotApplicable("no pair_distances_many")
     Q = ctx.configs(model)
-    n = len(ctx.model(model).pairs)
-    many = c.pair_distances_many(Q)
-    for key, shape in (("distance", (len(Q), n)), ("p_WA", (len(Q), n, 3)), ("p_WB", (len(Q), n, 3))):
-        a = np.asarray(getattr(many, key))
-        expect(a.shape == shape, f"{key} has shape {a.shape}, expected {shape}")
-    for i, q in enumerate(Q):
-        r = c.pair_distances(q)
-        for key in ("distance", "p_WA", "p_WB"):
-            x, y = np.asarray(getattr(many, key))[i], getattr(r, key)
-            expect(np.allclose(x, y, rtol=0, atol=1e-12),
-                   lambda: f"row {i}: {key} differs from pair_distances(Q[{i}]) by up to {np.max(np.abs(x - y)):.3g} m")
+    m = ctx.model(model)
+    n = len(m.pairs)
+    full = [c.pair_distances(q) for q in Q]
+    rows = np.random.default_rng(ctx.seed).permutation(n)[: max(1, n // 3)]
+    takes_pairs = _has_pairs_argument(c) and "pairs" in inspect.signature(c.pair_distances_many).parameters
+    for subset in ((None, rows) if takes_pairs else (None,)):
+        many = c.pair_distances_many(Q) if subset is None else c.pair_distances_many(Q, pairs=subset)
+        idx = np.arange(n) if subset is None else subset
+        what = "pair_distances_many(Q)" if subset is None else "pair_distances_many(Q, pairs=rows)"
+        if hasattr(many, "pairs"):
+            expect(np.array_equal(np.asarray(many.pairs), m.pairs.names[idx]), f"{what}: pairs are not the rows asked for")
+        if hasattr(many, "category"):
+            expect(tuple(many.category) == tuple(np.asarray(m.pairs.category, dtype=object)[idx]),
+                   f"{what}: category differs")
+        for key, shape in (("distance", (len(Q), len(idx))), ("p_WA", (len(Q), len(idx), 3)),
+                           ("p_WB", (len(Q), len(idx), 3))):
+            a = np.asarray(getattr(many, key))
+            expect(a.shape == shape and a.dtype == np.float64, f"{what}: {key} is {a.dtype} {a.shape}, expected float64 {shape}")
+            for i, r in enumerate(full):
+                x, y = a[i], getattr(r, key)[idx]
+                expect(np.allclose(x, y, rtol=0, atol=1e-12),
+                       lambda: f"{what}, row {i}: {key} differs from pair_distances(Q[{i}]) by up to "
+                               f"{np.max(np.abs(x - y)):.3g} m")
     empty = c.pair_distances_many(Q[:0])
     expect(np.asarray(empty.distance).shape == (0, n), f"M = 0: distance has shape {np.asarray(empty.distance).shape}")
 

@@ -74,6 +74,10 @@ def options_from_config(config) -> dict:
             raise pytest.UsageError(f"--backend-option {item!r}: expected KEY=VALUE (e.g. fidelity=exact)")
         opts[key.strip()] = _scalar(value)
     name, opts = resolve(name, opts)
+    from ..backends import available
+
+    if name not in available():
+        raise pytest.UsageError(f"--backend {name!r}: unknown backend; installed backends are {list(available())}")
     models = config.getoption("armguard_models")
     kw = {"options": opts, "n_configs": config.getoption("armguard_configs"), "seed": config.getoption("armguard_seed")}
     if models:
