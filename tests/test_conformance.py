@@ -243,5 +243,5 @@ def test_the_pytest_entry_runs_the_suite(tmp_path):
     for check in ("witness_relation", "sign_convention", "bad_q_refused", "deterministic"):
         assert any(f"test_conformance[{check}[gmf_s480]] PASSED" in ln for ln in lines), (check, out.stdout)
     assert "not applicable: the backend is the reference (coal) itself" in out.stdout
-    bad = subprocess.run([*cmd[:5], "nonesuch", *cmd[6:]], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    bad = subprocess.run([*cmd[:6], "nonesuch", *cmd[7:]], cwd=tmp_path, capture_output=True, text=True, timeout=600)
     assert bad.returncode != 0 and "installed backends are" in bad.stdout + bad.stderr
