@@ -8,8 +8,10 @@ without loading anything).
 
 from __future__ import annotations
 
+import sysconfig
 import threading
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
@@ -60,17 +62,31 @@ _MODELS: dict = {}
 _REFERENCE: dict = {}
 
 
+PUBLIC_ROBOTS = {  # example-robot-data's files (URDF, SRDF) under its robots/ folder
+    "panda": ("panda_description/urdf/panda.urdf", "panda_description/srdf/panda.srdf"),
+    "ur5": ("ur_description/urdf/ur5_robot.urdf", "ur_description/srdf/ur5.srdf"),
+}
+
+
+def _robots_dir() -> Path:
+    """example-robot-data's ``robots/`` folder (it ships data only, in site-packages' cmeel prefix)."""
+    return Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
+
+
 def load_conformance_model(spec):
     """The Model of ``spec``: a Model as it is, ``"panda"`` / ``"ur5"`` (example-robot-data with its
     SRDF) or anything :func:`armguard.load_model` takes.  Loaded once per process."""
-    from ..harness._models import resolve_model
-    from ..model import Model
+    from ..model import Model, load_model
 
     if isinstance(spec, Model):
         return spec
     with _LOCK:
         if spec not in _MODELS:
-            _MODELS[spec] = resolve_model(spec)
+            if spec in PUBLIC_ROBOTS:
+                urdf, srdf = PUBLIC_ROBOTS[spec]
+                _MODELS[spec] = load_model(_robots_dir() / urdf, srdf=_robots_dir() / srdf)
+            else:
+                _MODELS[spec] = load_model(spec)
         return _MODELS[spec]
 
 
