@@ -35,12 +35,7 @@ BUNDLED = ("analytic", "coal", "fcl", "clip", "forbidden")
 MODELS = {name: DEFAULT_MODELS for name in BUNDLED}
 MODELS["forbidden"] = ("hermes",)  # its map is built for one model
 MODELS["clip"] = ("puma560", "rover")  # its guards take a minute per model to build (ranger: 5)
-# Until the backends keep no shared scratch (issue 21, item 5: safe across threads), 4 threads on
-# one Checker see other threads' answers; the check runs and shows as xfail (XPASS where the race
-# did not show this time).  Remove an entry when its backend is safe across threads.
-NOT_YET_THREAD_SAFE = "shared scratch buffers: not yet safe across threads (issue 21, item 5)"
-XFAIL = {"analytic": {"thread_safety": NOT_YET_THREAD_SAFE}, "coal": {"thread_safety": NOT_YET_THREAD_SAFE},
-         "fcl": {"thread_safety": NOT_YET_THREAD_SAFE}, "forbidden": {"thread_safety": NOT_YET_THREAD_SAFE}}
+XFAIL: dict = {}  # {backend: {check: reason}}: expected failures beyond the Checkers' own conformance_xfail
 
 
 def _bundled_checks():
