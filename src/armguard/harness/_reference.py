@@ -43,9 +43,9 @@ def reference_configs(model) -> np.ndarray:
 
 
 def _model_files(model) -> tuple[Path, list, list]:
-    files = [Path(p).resolve() for p in model.sha256]
     meshes = sorted({Path(go.meshPath).resolve() for go in model.collision_model.geometryObjects
                      if go.meshPath and Path(go.meshPath).is_file()})
+    files = [Path(p).resolve() for p in model.sha256 if Path(p).resolve() not in set(meshes)]  # Model.files lists meshes too
     root = Path(os.path.commonpath([str(p.parent) for p in files + meshes]))
     return root, files, meshes
 
