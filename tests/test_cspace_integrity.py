@@ -90,12 +90,17 @@ def test_an_edited_mesh_refuses_the_map(tmp_path):
         armguard.checker(edited, "forbidden", {"map": str(out)})
 
 
-def test_the_kernel_and_format_versions_are_recorded(clean):
-    from armguard.cspace._format import KERNEL_VERSION
+def test_the_kernel_and_format_versions_are_recorded(clean, tmp_path):
+    from armguard.cspace._format import KERNEL_VERSION, write_map
 
     h = clean.header
     assert h["format_version"] == FORMAT_VERSION >= 2 and h["kernel_version"] == KERNEL_VERSION
     assert "armguard" in h
+    subs = [clean.substructure(s) for s in range(clean.grid.n_substructures)]
+    p = tmp_path / "other_kernel.agmap"
+    write_map(p, {**h, "kernel_version": KERNEL_VERSION + 1}, subs)  # well checksummed, another kernel
+    with pytest.raises(ForbiddenMapFileError, match=f"kernel version {KERNEL_VERSION + 1}.*rebuild the map"):
+        ForbiddenMap.load(p)
 
 
 # ---------------------------------------------------------------------------- item 3: checksums
