@@ -17,7 +17,7 @@ def test_srdf_a_directory_is_a_located_error(tmp_path):
 
 
 def test_a_scene_srdf_that_is_a_directory_is_a_located_error(tmp_path):
-    from armguard.scene._load import read_srdf_disabled
+    from armguard.model._scenefile import read_srdf_disabled
 
     with pytest.raises(SceneFileError, match="is a directory") as e:
         read_srdf_disabled(tmp_path)
