@@ -219,3 +219,55 @@ def test_a_journal_cut_short_resumes_and_a_damaged_fingerprint_is_refused(clean,
         ForbiddenMap.build("hermes", out=out, clearance=wavy_clearance, **KW)
     fmap = ForbiddenMap.build("hermes", out=out, clearance=wavy_clearance, resume=False, **KW)
     assert out.read_bytes() == clean.path.read_bytes()
+
+
+def _slow_valid(words, n_cells: int, n_bins: int) -> bool:
+    """The decoding rules of one substructure, one loop at a time (the reference for the vectorised check)."""
+    w = [int(x) for x in words]
+    n = n_cells + 1
+    if len(w) < n or (len(w) - n) % 2:
+        return False
+    ptr, flat = w[:n], w[n:]
+    iv = [(flat[2 * t], flat[2 * t + 1]) for t in range(len(flat) // 2)]
+    if ptr[0] != 0 or ptr[-1] != len(iv) or any(ptr[c + 1] < ptr[c] for c in range(n_cells)):
+        return False
+    for c in range(n_cells):
+        cell = iv[ptr[c]:ptr[c + 1]]
+        if any(not (a < b <= n_bins) for a, b in cell):
+            return False
+        if any(cell[t + 1][0] < cell[t][1] for t in range(len(cell) - 1)):
+            return False
+    return True
+
+
+def test_the_vectorised_substructure_check_equals_the_loop():
+    """check_substructures over many substructures at once refuses exactly what the loop refuses, and names the
+    first bad one, on encoded random masks with seeded single-word damage."""
+    from armguard.cspace._certify import encode_mask
+    from armguard.cspace._format import check_substructures
+
+    rng = np.random.default_rng(41)
+    n_bins = 9
+    refused = 0
+    for trial in range(300):
+        shapes = [(int(rng.integers(1, 3)), int(rng.integers(1, 3))) for _ in range(int(rng.integers(1, 4)))]
+        subs = []
+        for c1, c2 in shapes:
+            ptr, iv = encode_mask(rng.random((c1, c2, n_bins)) < 0.4)
+            subs.append(np.concatenate([ptr, iv.reshape(-1)]).astype(np.uint16))
+        k = int(rng.integers(0, len(subs)))
+        if trial % 4 and len(subs[k]):
+            i = int(rng.integers(0, len(subs[k])))
+            subs[k] = subs[k].copy()
+            subs[k][i] = int(rng.integers(0, n_bins + 2))
+        cells = np.array([c1 * c2 for c1, c2 in shapes])
+        bounds = np.concatenate([[0], np.cumsum([len(s) for s in subs])])
+        slow = [_slow_valid(s, int(c), n_bins) for s, c in zip(subs, cells)]
+        if all(slow):
+            check_substructures("x", np.concatenate(subs), bounds, cells, n_bins)
+        else:
+            refused += 1
+            with pytest.raises(ForbiddenMapFileError) as e:
+                check_substructures("x", np.concatenate(subs), bounds, cells, n_bins)
+            assert e.value.section == f"data, substructure {slow.index(False)}"
+    assert 50 < refused < 250  # both kinds were exercised

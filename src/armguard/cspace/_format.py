@@ -46,7 +46,7 @@ import numpy as np
 from .._errors import ForbiddenMapError, ForbiddenMapFileError
 
 __all__ = ["FORMAT_VERSION", "KERNEL_VERSION", "sha256_file", "write_map", "read_header", "check_data",
-           "check_substructure", "Journal"]
+           "check_substructure", "check_substructures", "Journal"]
 
 FORMAT_VERSION = 2
 #: the version of what decides a map's bits (certification, clearance hooks, the lookup's meaning); a map
@@ -166,31 +166,68 @@ def read_header(path) -> tuple[dict, np.ndarray, np.ndarray, int]:
 def check_substructure(file, section: str, words: np.ndarray, n_cells: int, n_bins: int) -> tuple[np.ndarray, np.ndarray]:
     """``(pointers, intervals)`` decoded from one substructure's ``words`` (uint16), or ForbiddenMapFileError
     naming ``file`` and ``section`` unless they form a valid substructure of ``n_cells`` cells over ``n_bins``
-    joint-3 bins: ``pointers[0] = 0``, non-decreasing, ending at the interval count; every interval
-    ``start < end <= n_bins``, and a cell's intervals sorted and disjoint."""
+    joint-3 bins (see :func:`check_substructures`)."""
+    words = np.asarray(words, dtype=np.uint16)
+    check_substructures(file, words, np.array([0, len(words)]), np.array([n_cells]), n_bins, sections=[section])
     n = n_cells + 1
-    if len(words) < n or (len(words) - n) % 2:
-        raise ForbiddenMapFileError(file, section, f"{len(words)} words do not hold {n} pointers and whole intervals")
-    ptr, iv = words[:n], words[n:].reshape(-1, 2)
-    p = ptr.astype(np.int64)
-    if p[0] != 0 or np.any(np.diff(p) < 0) or p[-1] != len(iv):
-        raise ForbiddenMapFileError(file, section, f"pointers are not 0 .. {len(iv)} non-decreasing")
-    a, b = iv[:, 0].astype(np.int64), iv[:, 1].astype(np.int64)
-    if np.any(a >= b) or np.any(b > n_bins):
-        raise ForbiddenMapFileError(file, section, f"an interval is empty or beyond the {n_bins} joint-3 bins")
+    return words[:n], words[n:].reshape(-1, 2)
+
+
+def check_substructures(file, words: np.ndarray, bounds: np.ndarray, n_cells: np.ndarray, n_bins: int, *,
+                        sections=None) -> None:
+    """Raise ForbiddenMapFileError (naming ``file`` and the first bad substructure) unless every substructure
+    ``s`` — ``words[bounds[s]:bounds[s + 1]]`` (uint16; ``bounds`` from 0 to ``len(words)``) — holds ``n_cells[s] + 1`` pointers then whole
+    intervals: ``pointers[0] = 0``, non-decreasing, ending at the interval count; every interval
+    ``start < end <= n_bins``; a cell's intervals sorted and disjoint.  One vectorised pass over all."""
+    bounds = np.asarray(bounds, dtype=np.int64)
+    n_ptr = np.asarray(n_cells, dtype=np.int64) + 1
+    start, length = bounds[:-1], np.diff(bounds)
+    name = (lambda s: sections[s]) if sections is not None else (lambda s: f"data, substructure {s}")
+    bad = np.flatnonzero((length < n_ptr) | ((length - n_ptr) % 2 != 0))
+    if len(bad):
+        s = int(bad[0])
+        raise ForbiddenMapFileError(file, name(s), f"{int(length[s])} words do not hold {int(n_ptr[s])} pointers "
+                                    "and whole intervals")
+    n_iv = (length - n_ptr) // 2
+    sub_of_ptr = np.repeat(np.arange(len(n_ptr)), n_ptr)
+    first_ptr = np.concatenate([[0], np.cumsum(n_ptr)[:-1]])
+    pidx = start[sub_of_ptr] + (np.arange(int(n_ptr.sum())) - first_ptr[sub_of_ptr])
+    ptr = words[pidx].astype(np.int64)
+    last = first_ptr + n_ptr - 1
+    step_ok = np.ones(len(ptr), dtype=bool)
+    step_ok[1:] = ptr[1:] >= ptr[:-1]
+    step_ok[first_ptr] = True
+    bad = (ptr[first_ptr] != 0) | (ptr[last] != n_iv) | ~np.logical_and.reduceat(step_ok, first_ptr)
+    if np.any(bad):
+        s = int(np.flatnonzero(bad)[0])
+        raise ForbiddenMapFileError(file, name(s), f"pointers are not 0 .. {int(n_iv[s])} non-decreasing")
+    is_ptr = np.zeros(len(words), dtype=bool)
+    is_ptr[pidx] = True
+    iv = words[~is_ptr].astype(np.int64).reshape(-1, 2)  # the substructures tile ``words``: their intervals, in order
+    a, b = iv[:, 0], iv[:, 1]
+    sub_of_iv = np.repeat(np.arange(len(n_iv)), n_iv)
+    bad = (a >= b) | (b > n_bins)
+    if np.any(bad):
+        s = int(sub_of_iv[np.flatnonzero(bad)[0]])
+        raise ForbiddenMapFileError(file, name(s), f"an interval is empty or beyond the {n_bins} joint-3 bins")
     if len(iv) > 1:
+        base = np.concatenate([[0], np.cumsum(n_iv)[:-1]])
+        cell_start = ptr + base[sub_of_ptr]  # global interval index where each cell (and each substructure) starts
         same_cell = np.ones(len(iv) - 1, dtype=bool)
-        same_cell[p[1:-1][(p[1:-1] > 0) & (p[1:-1] < len(iv))] - 1] = False  # pairs (t, t + 1) split by a cell start
-        if np.any(same_cell & (a[1:] < b[:-1])):
-            raise ForbiddenMapFileError(file, section, "a cell's intervals are not sorted and disjoint")
-    return ptr, iv
+        cs = cell_start[(cell_start > 0) & (cell_start < len(iv))]
+        same_cell[cs - 1] = False  # pairs (t, t + 1) split by a cell start
+        bad = same_cell & (a[1:] < b[:-1])
+        if np.any(bad):
+            s = int(sub_of_iv[np.flatnonzero(bad)[0]])
+            raise ForbiddenMapFileError(file, name(s), "a cell's intervals are not sorted and disjoint")
 
 
-def check_data(path, data: np.ndarray, offsets: np.ndarray, crcs: np.ndarray) -> None:
+def check_data(path, data, offsets: np.ndarray, crcs: np.ndarray) -> None:
     """Raise :class:`ForbiddenMapFileError` unless every substructure's bytes match their CRC-32 (the data section)."""
-    for s in range(len(crcs)):
-        a, b = int(offsets[s]), int(offsets[s + 1])
-        if _crc(data[a:b]) != int(crcs[s]):
+    view = memoryview(data)
+    o = np.asarray(offsets).tolist()
+    for s, c in enumerate(np.asarray(crcs).tolist()):
+        if zlib.crc32(view[o[s]:o[s + 1]]) != c:
             raise ForbiddenMapFileError(path, f"data, substructure {s}", "checksum mismatch (damaged); rebuild the map")
 
 

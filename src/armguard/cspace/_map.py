@@ -20,7 +20,7 @@ from numba import njit
 
 from .._errors import ForbiddenMapError, ForbiddenMapFileError
 from ._certify import decode_intervals
-from ._format import KERNEL_VERSION, check_data, check_substructure, read_header, sha256_file
+from ._format import KERNEL_VERSION, check_data, check_substructures, read_header, sha256_file
 from ._grid import MapGrid
 
 __all__ = ["ForbiddenMap", "Neighbourhood", "MapInfo", "Lookup", "model_file_hashes"]
@@ -191,15 +191,16 @@ class ForbiddenMap:
         mm = np.memmap(self.path, dtype=np.uint8, mode="r")
         self._dir = np.asarray(offsets, dtype=np.int64)
         self._data = mm[data_off:]
-        check_data(self.path, self._data, self._dir, crcs)
-        n3 = int(self.grid.counts[2])
-        for s in range(self.grid.n_substructures):  # every substructure decodes (pointers, bins) before any lookup
-            i1a, i1b, i2a, i2b = self.grid.sub_cells(s)
-            a, b = int(self._dir[s]), int(self._dir[s + 1])
-            if (b - a) % 2:
-                raise ForbiddenMapFileError(self.path, f"data, substructure {s}", "an odd number of bytes")
-            check_substructure(self.path, f"data, substructure {s}", np.frombuffer(self._data[a:b], dtype="<u2"),
-                               (i1b - i1a) * (i2b - i2a), n3)
+        raw = self._data.tobytes()  # one read: every section is checked before any lookup
+        check_data(self.path, raw, self._dir, crcs)
+        odd = np.flatnonzero(self._dir % 2)
+        if len(odd):
+            raise ForbiddenMapFileError(self.path, f"data, substructure {max(0, int(odd[0]) - 1)}", "an odd number of bytes")
+        g = self.grid
+        w = [np.minimum((np.arange(int(g.n_sub[k])) + 1) * g.per_sub[k], g.counts[k]) - np.arange(int(g.n_sub[k])) * g.per_sub[k]
+             for k in (0, 1)]
+        cells = np.outer(w[0], w[1]).ravel().astype(np.int64)  # cells of each substructure (row-major, as sub_cells)
+        check_substructures(self.path, np.frombuffer(raw, dtype="<u2"), self._dir // 2, cells, int(self.grid.counts[2]))
         self._full: _Block | None = None
 
     # ------------------------------------------------------------------ opening
