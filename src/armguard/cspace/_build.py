@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from .._dask import dask_client
-from .._errors import ForbiddenMapError
+from .._errors import ForbiddenMapError, ForbiddenMapFileError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._certify import certify_substructure
 from ._clearance import CheckerClearance, map_links
@@ -110,8 +110,6 @@ def _journal_check(grid: MapGrid):
     n3 = int(grid.counts[2])
 
     def check(s: int, ptr, iv) -> None:
-        from .._errors import ForbiddenMapFileError
-
         if not 0 <= s < grid.n_substructures:
             raise ForbiddenMapFileError("journal", "record", f"substructure {s} is not in 0..{grid.n_substructures - 1}")
         i1a, i1b, i2a, i2b = grid.sub_cells(s)
