@@ -15,7 +15,10 @@ __all__ = [
     "VerificationError",
     "ClipError",
     "ForbiddenMapError",
+    "ForbiddenMapFileError",
     "TerrainError",
+    "TerrainFileError",
+    "ReferenceFileError",
     "UncertaintyError",
 ]
 
@@ -99,12 +102,43 @@ class TerrainError(ArmguardError, ValueError):
     """A terrain map, point file or terrain query is invalid (bad cell size, empty cloud, unsupported link volume...)."""
 
 
+class TerrainFileError(TerrainError):
+    """A terrain or point file could not be read: ``file``, ``where`` in it (an array, a header line) and ``message``."""
+
+    def __init__(self, file, where: str, message: str) -> None:
+        self.file, self.where, self.message = str(file), where, message
+        super().__init__(_located(self.file, where, message))
+
+
+class ReferenceFileError(ArmguardError, ValueError):
+    """A golden reference file (``reference/models/<name>.json`` / ``.npz``) is missing, truncated, holds a
+    non-finite value or fewer rows than its header says: ``file``, ``where`` (an array, a key) and ``message``."""
+
+    def __init__(self, file, where: str, message: str) -> None:
+        self.file, self.where, self.message = str(file), where, message
+        super().__init__(_located(self.file, where, message))
+
+
 class BackendError(ArmguardError, ValueError):
     """A backend is unknown, misconfigured, or was asked for something it does not answer."""
 
 
 class ForbiddenMapError(ArmguardError, ValueError):
     """A forbidden-values map is invalid, was built for another model, or was asked outside its grid."""
+
+
+def _located(file, where: str, message: str) -> str:
+    return f"{file}: {where}: {message}" if where else f"{file}: {message}"
+
+
+class ForbiddenMapFileError(ForbiddenMapError):
+    """A map file (``.agmap``) or build journal (``.partial``) is damaged, truncated or of another format version;
+    ``file`` names it, ``section`` the part that failed (``preamble``, ``header``, ``directory``, ``data``,
+    ``substructure 17``, ``record 3``), ``message`` what was expected."""
+
+    def __init__(self, file, section: str, message: str) -> None:
+        self.file, self.section, self.message = str(file), section, message
+        super().__init__(_located(self.file, section, message))
 
 
 class ClipError(ArmguardError, ValueError):

@@ -20,11 +20,11 @@ from pathlib import Path
 import numpy as np
 
 from .._dask import dask_client
-from .._errors import ForbiddenMapError
+from .._errors import ForbiddenMapError, ForbiddenMapFileError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._certify import certify_substructure
 from ._clearance import CheckerClearance, map_links
-from ._format import FORMAT_VERSION, Journal, write_map
+from ._format import FORMAT_VERSION, KERNEL_VERSION, Journal, check_substructure, write_map
 from ._grid import MapGrid
 from ._map import ForbiddenMap, model_file_hashes
 
@@ -56,6 +56,8 @@ class BuildReport:
         Dask workers (0: serial).
     size_bytes : int
         The map file's size.
+    discarded : str
+        Why a damaged tail of the journal was discarded and recomputed ("" when none was).
     """
 
     status: BuildStatus
@@ -65,6 +67,7 @@ class BuildReport:
     elapsed_s: float
     workers: int
     size_bytes: int
+    discarded: str = ""
 
 
 def model_files_of(model) -> list[str]:
@@ -91,6 +94,29 @@ def resolve_model(model):
     if isinstance(model, Scene):
         return model_of(model), None
     return load_model(str(model)), str(model)
+
+
+def _armguard_version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("armguard")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+def _journal_check(grid: MapGrid):
+    """``(s, pointers, intervals) -> None``: raises ForbiddenMapFileError unless a journal record is a valid substructure ``s``."""
+    n3 = int(grid.counts[2])
+
+    def check(s: int, ptr, iv) -> None:
+        if not 0 <= s < grid.n_substructures:
+            raise ForbiddenMapFileError("journal", "record", f"substructure {s} is not in 0..{grid.n_substructures - 1}")
+        i1a, i1b, i2a, i2b = grid.sub_cells(s)
+        words = np.concatenate([np.asarray(ptr, dtype=np.uint16), np.asarray(iv, dtype=np.uint16).reshape(-1)])
+        check_substructure("journal", f"substructure {s}", words, (i1b - i1a) * (i2b - i2a), n3)
+
+    return check
 
 
 def _task(token: str, source, robot, joints, links, tol, clearance, backend, job: dict, subs: list) -> list:
@@ -189,6 +215,8 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
     grid = MapGrid.create(lo, hi, resolution, resolution if j3_resolution is None else j3_resolution, cell)
     header = {
         "format_version": FORMAT_VERSION,
+        "kernel_version": KERNEL_VERSION,
+        "armguard": _armguard_version(),
         "model": spec,
         "model_files": model_file_hashes(model_files),
         "robot": ml.robot,
@@ -216,7 +244,7 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
         header["clearance"] = getattr(clearance, "__qualname__", type(clearance).__qualname__)
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    journal = Journal(out.with_name(out.name + ".partial"), header, resume=resume)
+    journal = Journal(out.with_name(out.name + ".partial"), header, resume=resume, check=_journal_check(grid))
     reused = len(journal.done)
     todo = [s for s in range(grid.n_substructures) if s not in journal.done]
     job = {"grid": header["grid"], "lever": header["lever"], "m": m, "contact": tol.cspace_contact, "depth": depth}
@@ -250,7 +278,7 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
     journal.close(remove=True)
     fmap = ForbiddenMap.load(out, model=model_files)
     fmap.build_report = BuildReport(BuildStatus.RESUMED if reused else BuildStatus.BUILT, len(todo), reused,
-                                    evaluations, time.perf_counter() - t0, n_workers, size)
+                                    evaluations, time.perf_counter() - t0, n_workers, size, journal.discarded)
     return fmap
 
 

@@ -1,8 +1,9 @@
 """A forbidden-values map read from its file: lookups, the 3 × 3 neighbourhood, facts about it.
 
-``ForbiddenMap.load(path)`` reads the header and the directory and memory-maps the data (nothing
-else is read); :meth:`ForbiddenMap.neighbourhood` copies only the 3 × 3 block of substructures
-around a configuration out of the memory map, as Hermes's loading strategy keeps 9 substructures
+``ForbiddenMap.load(path)`` reads the header and the directory, memory-maps the data and checks
+every section once (CRC-32s, the substructures' pointers and bins; a damaged file raises
+:class:`ForbiddenMapFileError` naming the section); :meth:`ForbiddenMap.neighbourhood` copies only
+the 3 × 3 block of substructures around a configuration out of the memory map, as Hermes's loading strategy keeps 9 substructures
 in memory; :meth:`ForbiddenMap.prepare` (named, idempotent; run by the first whole-map lookup)
 gathers every substructure into two flat arrays for :meth:`allowed_many`.
 """
@@ -17,9 +18,9 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from .._errors import ForbiddenMapError
+from .._errors import ForbiddenMapError, ForbiddenMapFileError
 from ._certify import decode_intervals
-from ._format import read_header, sha256_file
+from ._format import KERNEL_VERSION, check_data, check_substructures, read_header, sha256_file
 from ._grid import MapGrid
 
 __all__ = ["ForbiddenMap", "Neighbourhood", "MapInfo", "Lookup", "model_file_hashes"]
@@ -167,23 +168,39 @@ class ForbiddenMap:
     stopping_distance : float, m
     """
 
-    def __init__(self, path, header: dict, dir_off: int, data_off: int) -> None:
+    def __init__(self, path, header: dict, offsets: np.ndarray, crcs: np.ndarray, data_off: int) -> None:
         self.path = Path(path)
         self.header = header
-        self.grid = MapGrid.from_json(header["grid"])
-        self.robot = header["robot"]
-        self.joints = tuple(header["joints"])
-        self.links = tuple(header["links"])
-        self.joint_index = tuple(header["joint_index"])
-        self.stopping_distance = float(header["stopping_distance"])
+        kernel = header.get("kernel_version")
+        if kernel != KERNEL_VERSION:
+            raise ForbiddenMapFileError(self.path, "header", f"built by map kernel version {kernel}; this armguard's is "
+                                        f"{KERNEL_VERSION}: rebuild the map")
+        try:
+            self.grid = MapGrid.from_json(header["grid"])
+            self.robot = header["robot"]
+            self.joints = tuple(header["joints"])
+            self.links = tuple(header["links"])
+            self.joint_index = tuple(header["joint_index"])
+            self.stopping_distance = float(header["stopping_distance"])
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ForbiddenMapFileError(self.path, "header", f"a field is missing or invalid: {exc!r}") from None
         self.build_report = None  # set by ForbiddenMap.build
+        if len(crcs) != self.grid.n_substructures:
+            raise ForbiddenMapFileError(self.path, "directory", f"{len(crcs)} substructures; the grid has "
+                                        f"{self.grid.n_substructures}")
         mm = np.memmap(self.path, dtype=np.uint8, mode="r")
-        n_sub = self.grid.n_substructures
-        self._dir = np.frombuffer(mm, dtype="<u8", count=n_sub + 1, offset=dir_off).astype(np.int64)
+        self._dir = np.asarray(offsets, dtype=np.int64)
         self._data = mm[data_off:]
-        if int(self._dir[-1]) != len(self._data):
-            raise ForbiddenMapError(f"{self.path}: the file is truncated or corrupt (data {len(self._data)} bytes, "
-                                    f"directory says {int(self._dir[-1])})")
+        raw = self._data.tobytes()  # one read: every section is checked before any lookup
+        check_data(self.path, raw, self._dir, crcs)
+        odd = np.flatnonzero(self._dir % 2)
+        if len(odd):
+            raise ForbiddenMapFileError(self.path, f"data, substructure {max(0, int(odd[0]) - 1)}", "an odd number of bytes")
+        g = self.grid
+        w = [np.minimum((np.arange(int(g.n_sub[k])) + 1) * g.per_sub[k], g.counts[k]) - np.arange(int(g.n_sub[k])) * g.per_sub[k]
+             for k in (0, 1)]
+        cells = np.outer(w[0], w[1]).ravel().astype(np.int64)  # cells of each substructure (row-major, as sub_cells)
+        check_substructures(self.path, np.frombuffer(raw, dtype="<u2"), self._dir // 2, cells, int(self.grid.counts[2]))
         self._full: _Block | None = None
 
     # ------------------------------------------------------------------ opening
@@ -196,8 +213,7 @@ class ForbiddenMap:
         differs from the one recorded raises :class:`ForbiddenMapError` — the map was built for
         another model file and answers nothing.
         """
-        header, dir_off, data_off = read_header(path)
-        fmap = cls(path, header, dir_off, data_off)
+        fmap = cls(path, *read_header(path))
         fmap.check_model(model)
         return fmap
 

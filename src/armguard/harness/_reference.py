@@ -19,14 +19,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .._errors import ArmguardError
+from .._errors import ArmguardError, ReferenceFileError
 from ._models import file_label, reference_dir, resolve_model
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._tolerances import pair_distance_tolerance
 
 __all__ = ["REFERENCE_SEED", "REFERENCE_RANDOM", "FORMAT", "Reference", "SourceStatus", "SourceCheck", "DiffStatus",
            "ReferenceDiff", "reference_configs", "make_reference", "load_reference", "check_sources",
-           "compare_to_reference", "regenerate_command", "source_hashes"]
+           "compare_to_reference", "regenerate_command", "source_hashes", "check_reference"]
 
 REFERENCE_SEED = 20240612
 REFERENCE_RANDOM = 64
@@ -43,9 +43,9 @@ def reference_configs(model) -> np.ndarray:
 
 
 def _model_files(model) -> tuple[Path, list, list]:
-    files = [Path(p).resolve() for p in model.sha256]
     meshes = sorted({Path(go.meshPath).resolve() for go in model.collision_model.geometryObjects
                      if go.meshPath and Path(go.meshPath).is_file()})
+    files = [Path(p).resolve() for p in model.sha256 if Path(p).resolve() not in set(meshes)]  # Model.files lists meshes too
     root = Path(os.path.commonpath([str(p.parent) for p in files + meshes]))
     return root, files, meshes
 
@@ -121,14 +121,66 @@ def make_reference(spec: str, out_dir=None, *, name: str | None = None) -> tuple
     return jp, npz
 
 
+_ARRAYS = ("q", "distance", "p_WA", "p_WB", "verdict")
+
+
 def load_reference(name: str, ref_dir=None) -> Reference:
+    """The recorded answers ``<name>.json`` + ``<name>.npz``; a file that is truncated, lacks an array, a key or
+    rows its header promises, or holds a non-finite value raises :class:`ReferenceFileError` naming it."""
     d = Path(ref_dir) if ref_dir is not None else reference_dir() / "models"
     jp, npz = d / f"{name}.json", d / f"{name}.npz"
     if not jp.is_file() or not npz.is_file():
         raise ArmguardError(f"no reference for {name!r} in {d}; write it with: {regenerate_command(name)}")
-    header = json.loads(jp.read_text(encoding="utf-8"))
-    with np.load(npz) as z:
-        return Reference(name, header, z["q"], z["distance"], z["p_WA"], z["p_WB"], z["verdict"])
+    try:
+        header = json.loads(jp.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ReferenceFileError(jp, "", f"not valid JSON ({exc}); regenerate it with: {regenerate_command(name)}") from None
+    if not isinstance(header, dict):
+        raise ReferenceFileError(jp, "", f"expected a JSON object, got {type(header).__name__}")
+    try:
+        with np.load(npz, allow_pickle=False) as z:
+            missing = [k for k in _ARRAYS if k not in z.files]
+            if missing:
+                raise ReferenceFileError(npz, missing[0], f"array missing (has {sorted(z.files)}); regenerate it with: "
+                                         f"{regenerate_command(name)}")
+            arrays = {k: z[k] for k in _ARRAYS}
+    except ReferenceFileError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - zipfile, zlib, EOF and format errors of a damaged .npz
+        raise ReferenceFileError(npz, "", f"cannot read ({type(exc).__name__}: {exc}); regenerate it with: "
+                                 f"{regenerate_command(name)}") from None
+    ref = Reference(name, header, *(arrays[k] for k in _ARRAYS))
+    check_reference(ref, jp, npz)
+    return ref
+
+
+def check_reference(ref: Reference, json_file=None, npz_file=None) -> None:
+    """Raise :class:`ReferenceFileError` unless ``ref`` holds every row and pair its header promises
+    (``configurations``: neutral + random rows; ``n_pairs`` and ``pairs``; ``nq``), with finite
+    configurations, distances and witness points and boolean verdicts."""
+    jf = json_file if json_file is not None else f"reference {ref.name!r} (json)"
+    nf = npz_file if npz_file is not None else f"reference {ref.name!r} (npz)"
+    h = ref.header
+    try:
+        K = int(h["configurations"]["neutral"]) + int(h["configurations"]["random"])
+        n, nq, pairs = int(h["n_pairs"]), int(h["nq"]), h["pairs"]
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ReferenceFileError(jf, "", f"a key is missing or invalid: {exc!r}") from None
+    if len(pairs) != n:
+        raise ReferenceFileError(jf, "pairs", f"{len(pairs)} pairs, n_pairs says {n}")
+    expect = {"q": (K, nq), "distance": (K, n), "p_WA": (K, n, 3), "p_WB": (K, n, 3), "verdict": (K,)}
+    for k, shape in expect.items():
+        a = np.asarray(getattr(ref, k))
+        if a.shape != shape:
+            raise ReferenceFileError(nf, k, f"shape {a.shape}; the header promises {shape} ({K} configurations, "
+                                     f"{n} pairs, nq {nq})")
+        if k == "verdict":
+            if a.dtype != np.bool_:
+                raise ReferenceFileError(nf, k, f"expected booleans, got {a.dtype}")
+        elif not np.all(np.isfinite(a)):
+            bad = np.argwhere(~np.isfinite(a))[0]
+            raise ReferenceFileError(nf, k, f"{int(np.count_nonzero(~np.isfinite(a)))} non-finite values "
+                                     f"(first at {tuple(int(i) for i in bad)}); a golden file must hold numbers")
 
 
 class SourceStatus(str, enum.Enum):
@@ -175,7 +227,8 @@ class ReferenceDiff:
     ``collides`` answer differs with the recorded least distance outside ``band``;
     ``distance_over``: separated (both ``> band``) entries off by more than the pair's tolerance
     (or ``distance_tol`` when given); ``max_separated_error``, ``max_point_error`` (m, unique points);
-    ``worst``: ``(config, pair, live d, recorded d)`` of the largest separated error.
+    ``worst``: ``(config, pair, live d, recorded d)`` of the largest separated error;
+    ``nonfinite``: live distances or witness points that are NaN or infinite (any makes it DIFFERS).
     """
 
     status: DiffStatus
@@ -186,19 +239,23 @@ class ReferenceDiff:
     point_over: int
     max_point_error: float
     worst: tuple | None
+    nonfinite: int = 0
 
     @property
     def message(self) -> str:
         return (f"{self.status.value}: pairs match {self.pairs_match}, verdict mismatches {self.verdict_mismatches}, "
                 f"separated distances over tolerance {self.distance_over} (max error {self.max_separated_error:.3e} m), "
-                f"unique witness points over tolerance {self.point_over} (max {self.max_point_error:.3e} m); worst {self.worst}")
+                f"unique witness points over tolerance {self.point_over} (max {self.max_point_error:.3e} m), "
+                f"non-finite live answers {self.nonfinite}; worst {self.worst}")
 
 
 def compare_to_reference(model, checker, ref: Reference, *, tol: Tolerances = DEFAULT_TOLERANCES,
                          distance_tol: float | None = None, points: bool = True) -> ReferenceDiff:
-    """Hold ``checker`` (any backend's) to ``ref`` on ``model`` (see :class:`ReferenceDiff`)."""
+    """Hold ``checker`` (any backend's) to ``ref`` on ``model`` (see :class:`ReferenceDiff`).  ``ref`` must hold
+    every row its header promises, all finite (:func:`check_reference`; else ReferenceFileError)."""
     from ._compare import unique_witness_mask
 
+    check_reference(ref)
     band = tol.differential_contact_band
     pairs_match = np.array_equal(model.pairs.names, ref.pairs)
     if not pairs_match or ref.q.shape[1] != model.nq:
@@ -211,6 +268,7 @@ def compare_to_reference(model, checker, ref: Reference, *, tol: Tolerances = DE
         r = checker.pair_distances(q)
         d[i], pa[i], pb[i] = r.distance, r.p_WA, r.p_WB
     v = np.asarray(checker.collides(ref.q), dtype=bool)
+    nonfinite = int(np.count_nonzero(~np.isfinite(d)) + np.count_nonzero(~np.isfinite(pa)) + np.count_nonzero(~np.isfinite(pb)))
     verdict_bad = int(((v != ref.verdict) & (np.abs(ref.distance.min(axis=1)) > band)).sum())
     tol_pair = pair_distance_tolerance(model, tol) if distance_tol is None else np.full(n, float(distance_tol))
     sep = (d > band) & (ref.distance > band)
@@ -226,6 +284,6 @@ def compare_to_reference(model, checker, ref: Reference, *, tol: Tolerances = DE
         dp = np.maximum(np.linalg.norm(pa - ref.p_WA, axis=2), np.linalg.norm(pb - ref.p_WB, axis=2))[u]
         point_over = int((dp > tol.differential_unique_point).sum())
         max_point = float(dp.max()) if dp.size else 0.0
-    ok = verdict_bad == 0 and over == 0 and point_over == 0
+    ok = verdict_bad == 0 and over == 0 and point_over == 0 and nonfinite == 0
     return ReferenceDiff(DiffStatus.MATCH if ok else DiffStatus.DIFFERS, True, verdict_bad, over,
-                         float(err.max()) if err.size else 0.0, point_over, max_point, worst)
+                         float(err.max()) if err.size else 0.0, point_over, max_point, worst, nonfinite)

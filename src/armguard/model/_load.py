@@ -200,7 +200,7 @@ def model_from_scenefile(sf, file: str, base: Path) -> Model:
         raise ctx.error("", str(exc)) from None
     geometry_names = dict(parts.geometry_names)
     _add_extra_bodies(scene, geom, geometry_names, {b for b, _, _ in parts.bodies})
-    files = [Path(file), urdf, *parts_files(parts, srdf_obj)]
+    files = [Path(file), urdf, *parts_files(parts, srdf_obj), *ctx.read]
     return Model(sf.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), geometry_names=geometry_names,
                  notes=parts.notes, files=files)
 
@@ -279,6 +279,8 @@ def model_from_scene(scene, *, file: str | None = None) -> Model:
                 raise SceneFileError(file, "", f"shape {i} of {owner!r} did not survive the URDF export (a bug: please report)")
             geometry_names[(owner, i)] = parts.geometry_names[(owner, i)]
     files = [Path(file)] if Path(file).is_file() else []
+    if files:  # the meshes, URDFs and SRDFs the scene file named (not for a scene built in code)
+        files += [p for p in getattr(scene, "_source_files", ()) if Path(p).is_file()]
     return Model(scene.name, pin_model, geom, scene, q_index=q_index, circular=_circular(parts), geometry_names=geometry_names,
                  notes=parts.notes, files=files)
 

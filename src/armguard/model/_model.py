@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+import os
 import types
 from dataclasses import dataclass
 from pathlib import Path
@@ -49,6 +50,14 @@ class GeometryPairs:
         return out
 
 
+def _with_meshes(files, collision_model) -> tuple:
+    """``files`` (resolved) then the mesh files the GeometryModel's objects were read from, each once."""
+    out = [Path(p).resolve() for p in files]
+    meshes = sorted({Path(go.meshPath).resolve() for go in collision_model.geometryObjects
+                     if go.meshPath and os.path.isabs(go.meshPath) and Path(go.meshPath).is_file()})
+    return tuple(dict.fromkeys([*out, *meshes]))
+
+
 class Model:
     """A robot system as Pinocchio sees it, with what armguard adds.
 
@@ -62,7 +71,8 @@ class Model:
     pairs : GeometryPairs              the active pairs (SRDF and the papers' rules applied)
     notes : Mapping[str, str]          GeometryObject name -> representation note (where a backend
                                        cannot hold the exact shape)
-    files : tuple[Path, ...]           the files it was loaded from; ``sha256`` their hashes
+    files : tuple[Path, ...]           the files it was loaded from (sidecar, URDF, SRDF, then every
+                                       mesh file its geometry was read from); ``sha256`` their hashes
     """
 
     def __init__(self, name, pin_model, collision_model, scene, *, q_index, geometry_names, notes, files,
@@ -77,7 +87,7 @@ class Model:
         self._circular = np.asarray(circular, dtype=np.int64)  # scene positions of continuous joints
         self._geom = dict(geometry_names)
         self.notes = types.MappingProxyType(dict(notes))
-        self.files = tuple(Path(p).resolve() for p in files)
+        self.files = _with_meshes(files, collision_model)
         self.sha256 = types.MappingProxyType({str(p): file_sha256(p) for p in self.files})
         self._pairs = None
         self._revision = None

@@ -80,6 +80,7 @@ class _Ctx:
 
     def __init__(self, file: str, base: Path, length: float, angle: float) -> None:
         self.file, self.base, self.L, self.A = file, base, length, angle
+        self.read: list[Path] = []  # the files the scene's geometry was read from (meshes, URDFs, SRDFs)
 
     def error(self, where: str, message: str) -> SceneFileError:
         return SceneFileError(self.file, where, message)
@@ -149,6 +150,7 @@ def _mesh(spec, ctx: _Ctx, where: str, X: np.ndarray):
     path = ctx.path(spec.file)
     if not path.is_file():
         raise ctx.error(f"{where}.file", f"mesh file not found: {path}")
+    ctx.read.append(path)
     try:
         mesh = trimesh.load(str(path), force="mesh")
     except Exception as exc:  # trimesh raises many kinds; report which file failed
@@ -246,6 +248,7 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
         path = ctx.path(spec.urdf)
         if not path.is_file():
             raise ctx.error(f"{w}.urdf", f"URDF file not found: {path}")
+        ctx.read.append(path)
         try:
             robot = Robot.from_urdf(path, name=spec.name, X_WB=X_WB)
         except ArmguardError as exc:
@@ -271,6 +274,7 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
     srdf_pairs = []
     if spec.srdf is not None:
         path = ctx.path(spec.srdf)
+        ctx.read.append(path)
         try:
             srdf_pairs = read_srdf_disabled(path)
         except SceneFileError as exc:
@@ -328,6 +332,8 @@ def read_srdf_disabled(path) -> list[tuple[str, str]]:
         root = ET.parse(path).getroot()
     except FileNotFoundError:
         raise SceneFileError(str(path), "", "SRDF file not found") from None
+    except IsADirectoryError:
+        raise SceneFileError(str(path), "", "is a directory; expected an SRDF file") from None
     except ET.ParseError as exc:
         raise SceneFileError(str(path), f"line {exc.position[0]}", f"not well-formed XML: {exc}") from None
     out = []
@@ -387,6 +393,7 @@ def scene_from_dict_validated(sf: SceneFile, file: str, base: Path | None = None
         raise
     except SceneError as exc:  # a semantic error the scene found: report it against the file
         raise ctx.error("", str(exc)) from None
+    scene._source_files = tuple(ctx.read)  # model_from_scene: the Model's files
     return scene
 
 

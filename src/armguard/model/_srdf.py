@@ -75,6 +75,10 @@ def read_srdf(path) -> Srdf:
         root = ET.parse(path).getroot()
     except FileNotFoundError:
         raise SceneFileError(f, "", "SRDF file not found") from None
+    except IsADirectoryError:
+        raise SceneFileError(f, "", "is a directory; expected an SRDF file") from None
+    except PermissionError as exc:
+        raise SceneFileError(f, "", f"cannot read the SRDF file ({exc.strerror})") from None
     except ET.ParseError as exc:
         raise SceneFileError(f, f"line {exc.position[0]}", f"not well-formed XML: {exc}") from None
     if root.tag != "robot":

@@ -16,7 +16,7 @@ from ._volumes import bounding_box, link_volume
 from ._guard import TERRAIN, TerrainCell, TerrainGuard, TerrainReport
 from ._detect import TerrainDetectionReport, attach_terrain, check_with_terrain
 from ._sweep import TerrainSweep, sweep_terrain, verify_with_terrain
-from ._files import load_terrain, verify_items
+from ._files import TerrainPointsDropped, load_terrain, verify_items
 
 __all__ = [
     "ElevationMap",
@@ -39,6 +39,7 @@ __all__ = [
     "verify_with_terrain",
     "load_terrain",
     "verify_items",
+    "TerrainPointsDropped",
     "read_points",
     "write_points",
     "depth_to_points",

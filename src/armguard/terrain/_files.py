@@ -15,15 +15,20 @@ z unchanged): a terrain sensed from the rover's mast is stored in its own frame.
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
 
-from .._errors import TerrainError
+from .._errors import TerrainError, TerrainFileError
 from ._io import read_points
 from ._map import ElevationMap
 
-__all__ = ["load_terrain", "verify_items"]
+__all__ = ["load_terrain", "verify_items", "TerrainPointsDropped"]
+
+
+class TerrainPointsDropped(UserWarning):
+    """A terrain file's point rows holding a NaN or inf were dropped (the message says how many)."""
 
 
 def _base_xy(scene, robot: str | None) -> np.ndarray:
@@ -39,32 +44,40 @@ def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | No
     """The ElevationMap of the terrain file ``path`` in ``scene``'s frame W (module docstring).
 
     ``robot``: whose base the map is centred under (default: the scene's first robot); without a
-    scene (or with an ``origin`` in the file) the map stays where the file puts it."""
+    scene (or with an ``origin`` in the file) the map stays where the file puts it.
+
+    Point rows holding a NaN or inf are dropped (a :class:`TerrainPointsDropped` warning says how
+    many; the map's ``invalid`` counts them); a file with no finite point, a truncated PLY, a
+    damaged ``.npz``, an array of the wrong shape, NaN heights or a NaN or non-positive cell raise
+    :class:`~armguard._errors.TerrainFileError` naming the file and the array."""
     p = Path(path)
     if not p.exists():
         raise TerrainError(f"terrain file {str(p)!r} does not exist")
     origin = None
     heights = None
     if p.suffix.lower() == ".npz":
-        with np.load(p) as z:
-            keys = set(z.files)
-            if "points_W" not in keys and "heights" not in keys:
-                raise TerrainError(f"{p}: a terrain .npz holds 'points_W' or 'heights' (it has {sorted(keys)})")
-            c = float(z["cell"]) if "cell" in keys else (cell or 0.05)
-            pts = np.asarray(z["points_W"], dtype=np.float64) if "points_W" in keys else None
-            heights = np.asarray(z["heights"], dtype=np.float64) if "heights" in keys else None
-            if "origin" in keys:
-                origin = np.asarray(z["origin"], dtype=np.float64).reshape(2)
+        c, pts, heights, origin = _read_npz(p, cell)
     else:
         c = 0.05 if cell is None else float(cell)
         pts = read_points(p)
+    if not (np.isfinite(c) and c > 0.0):
+        raise TerrainFileError(p, "cell", f"expected a cell side > 0 m, got {c!r}")
+    if pts is not None:
+        if len(pts) == 0:
+            raise TerrainFileError(p, "points", "no points: an empty cloud is no terrain")
+        finite = np.all(np.isfinite(pts), axis=1)
+        if not finite.any():
+            raise TerrainFileError(p, "points", f"none of the {len(pts)} points is finite (every row holds a NaN or inf)")
+        if not finite.all():  # dropped as documented; ElevationMap.from_points counts them in ``invalid``
+            warnings.warn(f"{p}: {int(np.count_nonzero(~finite))} of {len(pts)} point rows hold a NaN or inf "
+                          "and were dropped", TerrainPointsDropped, stacklevel=2)
     shift = np.zeros(3)
     if heights is not None:
         ny, nx = heights.shape
         extent = np.array([nx * c, ny * c])
         lo = np.zeros(2) if origin is None else origin
     else:
-        lo, extent = pts[:, :2].min(axis=0), np.ptp(pts[:, :2], axis=0) + c
+        lo, extent = pts[finite, :2].min(axis=0), np.ptp(pts[finite, :2], axis=0) + c
     if origin is None and scene is not None:
         shift[:2] = _base_xy(scene, robot) - (lo + 0.5 * extent)
     x0, y0 = lo + shift[:2]
@@ -73,6 +86,42 @@ def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | No
     else:
         m = ElevationMap.from_points(pts + shift, c, bounds=(x0, y0, x0 + extent[0], y0 + extent[1]))
     return m
+
+
+def _read_npz(p: Path, cell):
+    """``(cell, points_W or None, heights or None, origin or None)`` of a terrain ``.npz``, each checked."""
+    try:
+        with np.load(p, allow_pickle=False) as z:
+            keys = set(z.files)
+            if "points_W" not in keys and "heights" not in keys:
+                raise TerrainFileError(p, "", f"a terrain .npz holds 'points_W' or 'heights' (it has {sorted(keys)})")
+            arrays = {k: np.asarray(z[k]) for k in ("cell", "points_W", "heights", "origin") if k in keys}
+    except TerrainFileError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - zipfile, zlib, EOF and format errors of a damaged .npz
+        raise TerrainFileError(p, "", f"cannot read this .npz ({type(exc).__name__}: {exc})") from None
+    try:
+        c = float(arrays["cell"]) if "cell" in arrays else (cell or 0.05)
+    except (TypeError, ValueError):
+        raise TerrainFileError(p, "cell", f"expected one number (m), got shape {arrays['cell'].shape}") from None
+    pts = heights = origin = None
+    if "points_W" in arrays:
+        pts = np.asarray(arrays["points_W"], dtype=np.float64)
+        if pts.ndim != 2 or pts.shape[1] != 3:
+            raise TerrainFileError(p, "points_W", f"expected (N, 3) points (m, W), got shape {pts.shape}")
+    if "heights" in arrays:
+        heights = np.asarray(arrays["heights"], dtype=np.float64)
+        if heights.ndim != 2 or heights.size == 0:
+            raise TerrainFileError(p, "heights", f"expected a (ny, nx) grid of heights (m), got shape {heights.shape}")
+        if pts is None and not np.all(np.isfinite(heights)):
+            bad = np.argwhere(~np.isfinite(heights))[0]
+            raise TerrainFileError(p, "heights", f"{int(np.count_nonzero(~np.isfinite(heights)))} non-finite heights "
+                                   f"(first at row {bad[0]}, column {bad[1]}); a height map must hold numbers")
+    if "origin" in arrays:
+        origin = np.asarray(arrays["origin"], dtype=np.float64)
+        if origin.shape != (2,) or not np.all(np.isfinite(origin)):
+            raise TerrainFileError(p, "origin", f"expected (x0, y0) finite (m, W), got {origin.tolist()}")
+    return c, pts, heights, origin
 
 
 def verify_items(scene, items, terrain_file, *, robot=None, **kwargs) -> list:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._errors import TerrainError
+from .._errors import TerrainError, TerrainFileError
 
 __all__ = ["read_points", "write_points", "depth_to_points"]
 
@@ -32,6 +32,21 @@ def _as_points(a, where: str) -> np.ndarray:
     if p.ndim != 2 or p.shape[1] < 3:
         raise TerrainError(f"{where}: expected (N, 3) points, got shape {p.shape}")
     return np.ascontiguousarray(p[:, :3])
+
+
+def _ply_vertex_count(path: Path) -> int | None:
+    """The vertex count ``element vertex N`` of a PLY header (None when the header has none)."""
+    with open(path, "rb") as f:
+        head = f.read(1 << 16)
+    end = head.find(b"end_header")
+    for line in head[:end if end >= 0 else len(head)].decode("ascii", "replace").splitlines():
+        words = line.split()
+        if len(words) == 3 and words[0] == "element" and words[1] == "vertex":
+            try:
+                return int(words[2])
+            except ValueError:
+                raise TerrainFileError(path, "header", f"'element vertex {words[2]}' is not a count") from None
+    return None
 
 
 def read_points(path, X_WS=None) -> np.ndarray:
@@ -59,6 +74,10 @@ def read_points(path, X_WS=None) -> np.ndarray:
             if not hasattr(obj, "vertices"):
                 raise TerrainError(f"{path}: no vertices in this PLY")
             p = _as_points(obj.vertices, str(path))
+            n = _ply_vertex_count(path)
+            if n is not None and n != len(p):  # trimesh reads a cut ASCII body without a word
+                raise TerrainFileError(path, "element vertex", f"the header says {n} vertices, the file holds "
+                                       f"{len(p)} (truncated?)")
         elif ext == ".pcd":
             import pypcd4
 

@@ -1,0 +1,110 @@
+"""Terrain files that do not hold what they say are refused, naming the file and the array;
+NaN point rows are dropped as documented (and counted), never turned into a NaN map."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from armguard._errors import TerrainError, TerrainFileError
+from armguard.terrain import TerrainPointsDropped, load_terrain, read_points
+from armguard.terrain.generate import make_terrain
+
+
+def _cloud(n=3404, seed=11):
+    rng = np.random.default_rng(seed)
+    xy = rng.uniform(0.0, 2.0, size=(n, 2))
+    return np.column_stack([xy, 0.1 * np.sin(3 * xy[:, 0]) + rng.normal(0, 0.005, n)])
+
+
+def _ascii_ply(path, pts, keep: int | None = None):
+    trimesh.PointCloud(pts).export(path, encoding="ascii")
+    lines = path.read_text().splitlines(True)
+    end = next(i for i, ln in enumerate(lines) if ln.strip() == "end_header")
+    if keep is not None:
+        path.write_text("".join(lines[:end + 1 + keep]))
+    return path
+
+
+def test_a_truncated_ascii_ply_is_refused_with_the_count(tmp_path):
+    full = _ascii_ply(tmp_path / "full.ply", _cloud())
+    assert read_points(full).shape == (3404, 3)
+    cut = _ascii_ply(tmp_path / "cut.ply", _cloud(), keep=10)
+    with pytest.raises(TerrainFileError, match=r"cut\.ply: element vertex: the header says 3404 vertices, the file holds 10"):
+        read_points(cut)
+    with pytest.raises(TerrainFileError, match="3404"):
+        load_terrain(cut)
+
+
+def test_nan_point_rows_are_dropped_and_counted(tmp_path):
+    pts = _cloud(2000, seed=12).astype(np.float32).astype(np.float64)  # what a (float32) PLY holds
+    bad = np.random.default_rng(13).choice(len(pts), size=37, replace=False)
+    with_nan = pts.copy()
+    with_nan[bad[:20], 2] = np.nan
+    with_nan[bad[20:], 0] = np.inf
+    clean_file = tmp_path / "clean.npy"
+    np.save(clean_file, pts[np.setdiff1d(np.arange(len(pts)), bad)])
+    for ext in (".npy", ".ply"):
+        f = tmp_path / f"holes{ext}"
+        np.save(f, with_nan) if ext == ".npy" else trimesh.PointCloud(with_nan).export(f)
+        with pytest.warns(TerrainPointsDropped, match="37 of 2000 point rows"):
+            m = load_terrain(f, cell=0.1)
+        ref = load_terrain(clean_file, cell=0.1)
+        assert m.invalid == 37 and np.all(np.isfinite(m.heights))
+        np.testing.assert_array_equal(m.heights, ref.heights)  # the same map as without the rows
+        np.testing.assert_array_equal(m.origin, ref.origin)
+    all_nan = tmp_path / "all_nan.npy"
+    np.save(all_nan, np.full((5, 3), np.nan))
+    with pytest.raises(TerrainFileError, match="none of the 5 points is finite"):
+        load_terrain(all_nan)
+
+
+def _npz(path, **arrays):
+    np.savez(path, **arrays)
+    return path
+
+
+@pytest.mark.parametrize("case, where", [
+    ("empty_cloud", "points"), ("two_columns", "points_W"), ("heights_1d", "heights"), ("origin_3", "origin"),
+    ("nan_heights", "heights"), ("nan_cell", "cell"), ("zero_cell", "cell"), ("truncated", ""), ("zero_bytes", ""),
+    ("no_arrays", ""),
+])
+def test_bad_terrain_npz_names_the_file_and_array(tmp_path, case, where):
+    truth = make_terrain(n=8, cell=0.1, seed=3)
+    h = np.array(truth.heights)
+    p = tmp_path / f"{case}.npz"
+    if case == "empty_cloud":
+        _npz(p, points_W=np.zeros((0, 3)), cell=0.1)
+    elif case == "two_columns":
+        _npz(p, points_W=np.ones((10, 2)), cell=0.1)
+    elif case == "heights_1d":
+        _npz(p, heights=h.ravel(), cell=0.1)
+    elif case == "origin_3":
+        _npz(p, heights=h, cell=0.1, origin=np.zeros(3))
+    elif case == "nan_heights":
+        h[2, 3] = np.nan
+        _npz(p, heights=h, cell=0.1)
+    elif case == "nan_cell":
+        _npz(p, heights=h, cell=np.nan)
+    elif case == "zero_cell":
+        _npz(p, heights=h, cell=0.0)
+    elif case == "truncated":
+        raw = _npz(tmp_path / "whole.npz", heights=h, cell=0.1).read_bytes()
+        p.write_bytes(raw[: len(raw) // 2])
+    elif case == "zero_bytes":
+        p.write_bytes(b"")
+    elif case == "no_arrays":
+        _npz(p, other=np.zeros(3))
+    with pytest.raises(TerrainFileError) as e:
+        load_terrain(p)
+    assert e.value.file == str(p) and e.value.where == where, str(e.value)
+    assert isinstance(e.value, TerrainError) and str(p) in str(e.value)
+
+
+def test_a_good_heights_file_still_loads(tmp_path):
+    truth = make_terrain(n=8, cell=0.1, seed=3)
+    p = _npz(tmp_path / "ok.npz", heights=np.array(truth.heights), cell=0.1, origin=np.array([1.0, -2.0]))
+    m = load_terrain(p)
+    np.testing.assert_array_equal(m.heights, truth.heights)
+    np.testing.assert_array_equal(m.origin, [1.0, -2.0])
