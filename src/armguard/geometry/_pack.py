@@ -24,7 +24,7 @@ import numpy as np
 
 from .._tolerance import DEFAULT_TOLERANCES
 
-__all__ = ["attach_packed", "unique_directions", "face_edges", "polytope_data", "polytope_adjacency", "hull_graph", "polytope_buffers"]
+__all__ = ["attach_packed", "unique_directions", "face_edges", "unique_pairs", "polytope_data", "polytope_adjacency", "hull_graph", "polytope_buffers"]
 
 _EMPTY = np.zeros((0, 3), dtype=np.float64)
 
@@ -56,12 +56,22 @@ def face_edges(faces) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if not len(faces):
         z = np.zeros(0, dtype=np.int64)
         return z, z, z
-    lens = np.fromiter((len(f) for f in faces), dtype=np.int64, count=len(faces))
+    lens = np.array(list(map(len, faces)), dtype=np.int64)
     a = np.concatenate([np.asarray(f, dtype=np.int64) for f in faces])
     first = np.cumsum(lens) - lens
     nxt = np.arange(1, len(a) + 1, dtype=np.int64)
     nxt[first + lens - 1] = first  # each face's last vertex closes the loop to its first
     return a, a[nxt], np.repeat(np.arange(len(faces), dtype=np.int64), lens)
+
+
+def unique_pairs(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The distinct rows of ``[a, b]`` (non-negative int64 columns), sorted by ``a`` then ``b``:
+    ``np.unique(..., axis=0)`` through one int64 key (a 1-D sort, not a row-wise one)."""
+    if not len(a):
+        return np.zeros((0, 2), dtype=np.int64)
+    n = int(b.max()) + 1
+    key = np.unique(a.astype(np.int64) * n + b)
+    return np.stack([key // n, key % n], axis=1)
 
 
 def _ro(a: np.ndarray) -> np.ndarray:
@@ -217,7 +227,7 @@ def hull_graph(points) -> tuple[np.ndarray, np.ndarray]:
 def _graph(v: np.ndarray, pairs: list) -> np.ndarray:
     """CSR vertex graph (see :func:`polytope_adjacency`) of the undirected edges in ``pairs``."""
     e = np.concatenate(pairs).astype(np.int64)
-    e = np.unique(np.sort(e, axis=1), axis=0)
+    e = unique_pairs(np.minimum(e[:, 0], e[:, 1]), np.maximum(e[:, 0], e[:, 1]))
     e = e[e[:, 0] != e[:, 1]]
     both = np.concatenate([e, e[:, ::-1]])
     both = both[np.lexsort((both[:, 1], both[:, 0]))]

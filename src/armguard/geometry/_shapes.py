@@ -30,7 +30,7 @@ import numpy as np
 
 from .._errors import GeometryError
 from .._tolerance import DEFAULT_TOLERANCES
-from ._pack import attach_packed, face_edges
+from ._pack import attach_packed, face_edges, unique_pairs
 from ._check import check_nonnegative, check_point, check_points, check_pose, check_rotation
 
 __all__ = ["Shape", "Sphere", "Capsule", "Box", "Prism", "ConvexPolyhedron", "Polygon", "CoreKind"]
@@ -329,8 +329,7 @@ def _merge_hull_faces(points: np.ndarray, tol: float):
 
 def _edges_of(faces) -> np.ndarray:
     a, b, _ = face_edges(faces)
-    e = np.stack([np.minimum(a, b), np.maximum(a, b)], axis=1)
-    return np.ascontiguousarray(np.unique(e, axis=0), dtype=np.int64).reshape(-1, 2)
+    return np.ascontiguousarray(unique_pairs(np.minimum(a, b), np.maximum(a, b)), dtype=np.int64).reshape(-1, 2)
 
 
 @dataclass(frozen=True, eq=False, init=False)
