@@ -201,9 +201,11 @@ def _build_adjacency(shape) -> np.ndarray:
     if not isinstance(shape, Polygon):
         # a triangulation of the surface as well: its graph alone already makes every local
         # maximum of a linear function global, whatever the merged faces look like
-        from scipy.spatial import ConvexHull
+        tri = getattr(shape, "_hull_tri", None)  # Qhull's, kept by the constructor
+        if tri is None:
+            from scipy.spatial import ConvexHull
 
-        tri = ConvexHull(v).simplices
+            tri = ConvexHull(v).simplices
         pairs += [tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]
     return _graph(v, pairs)
 

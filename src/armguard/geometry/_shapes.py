@@ -240,7 +240,8 @@ def _merge_hull_faces(points: np.ndarray, tol: float):
     the hull's triangulation on a face boundary is shared by exactly two faces (a closed,
     consistently oriented polyhedron even for nearly coplanar mesh hulls).
 
-    Returns ``(vertex_index_map, faces, planes)``: faces index into the returned vertex set.
+    Returns ``(vertex_index_map, faces, planes, triangles)``: faces and the hull's (oriented)
+    triangles index into the returned vertex set.
     """
     from scipy.spatial import ConvexHull, QhullError
 
@@ -324,7 +325,7 @@ def _merge_hull_faces(points: np.ndarray, tol: float):
         if v != start or len(loop) != len(nxt):  # pragma: no cover - a planar convex face has one boundary loop
             raise GeometryError("ConvexPolyhedron: could not build a face boundary from the hull (degenerate hull)")
         faces.append(remap[loop])
-    return used, faces, planes
+    return used, faces, planes, remap[tri]
 
 
 def _edges_of(faces) -> np.ndarray:
@@ -353,7 +354,8 @@ class ConvexPolyhedron(Shape):
 
     def __init__(self, vertices) -> None:
         pts = check_points(vertices, "ConvexPolyhedron.vertices", min_count=4)
-        used, faces, planes = _merge_hull_faces(pts, DEFAULT_TOLERANCES.planarity)
+        used, faces, planes, tri = _merge_hull_faces(pts, DEFAULT_TOLERANCES.planarity)
+        object.__setattr__(self, "_hull_tri", tri)  # the vertex graph's triangulation (_pack._build_adjacency)
         self._set(pts[used], tuple(faces), planes)
 
     def _set(self, vertices, faces, planes) -> None:

@@ -80,9 +80,12 @@ def _qhull(points: np.ndarray, what: str):
         raise GeometryError(f"Qhull could not build the {what} hull of the vertices ({first})") from None
 
 
-def mesh_hull(points) -> MeshHull:
+def mesh_hull(points, *, solid: bool = True) -> MeshHull:
     """The convex hull of ``points (N, 3)`` m (see the module docstring); raises GeometryError
-    for non-finite points, fewer than three distinct points, or points on a line."""
+    for non-finite points, fewer than three distinct points, or points on a line.
+
+    ``solid=False``: points that are not flat come back as they are (the distinct ones, no
+    triangles), for a caller that builds the 3-D hull itself (``ConvexPolyhedron``)."""
     tol = DEFAULT_TOLERANCES
     p = np.asarray(points, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != 3:
@@ -104,6 +107,8 @@ def mesh_hull(points) -> MeshHull:
     _, _s, vt = np.linalg.svd(np.linalg.qr(A, mode="r"))
     flat_tol = tol.planarity * max(1.0, ext)
     if float(np.max(np.abs(A @ vt[2]))) > flat_tol:
+        if not solid:
+            return MeshHull(p, np.zeros((0, 3), dtype=np.int64), False)
         h = _qhull(A, "3-D")
         idx = np.asarray(h.vertices, dtype=np.int64)
         remap = np.full(len(p), -1, dtype=np.int64)

@@ -39,7 +39,7 @@ def shape_from_coal(g, X_FG: np.ndarray):
         return Cylinder(t, R, float(g.radius), float(g.halfLength)), ""
     if isinstance(g, coal.ConvexBase):
         v = np.asarray(g.points(), dtype=np.float64).reshape(-1, 3) if callable(g.points) else np.asarray(g.points)
-        hull = mesh_hull(v @ R.T + t)
+        hull = mesh_hull(v @ R.T + t, solid=False)  # ConvexPolyhedron builds the 3-D hull
         return (Polygon(hull.vertices) if hull.flat else ConvexPolyhedron(hull.vertices)), ""
     raise SceneError(f"coal geometry {type(g).__name__} has no armguard shape (expected capsule, sphere, box, "
                      "cylinder or convex mesh)")

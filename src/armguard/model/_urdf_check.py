@@ -7,7 +7,8 @@ misread, each as ``(where, message)`` naming the element and the attribute:
 
 * a second ``<link>`` or ``<joint>`` of one name;
 * a number that is not a finite number: ``origin`` ``xyz``/``rpy``, ``axis``, ``limit``,
-  ``mimic``, ``dynamics``, and the collision shapes' sizes;
+  ``mimic``, ``dynamics``, ``calibration``, ``safety_controller``, and the collision shapes'
+  sizes; a ``<limit>`` without ``effort`` or ``velocity`` (urdfdom requires both);
 * a collision shape without size: a box edge, a sphere or cylinder radius, a cylinder length
   that is not > 0; a capsule (a cylinder named by ``<collision_checking><capsule>``) of negative
   length (length 0 is a sphere); a mesh scale factor of 0 (a negative factor is allowed: a
@@ -160,14 +161,19 @@ def urdf_problems(root: ET.Element, lines: dict) -> list[tuple[str, str, int | N
             if jt in ("revolute", "prismatic"):
                 add(w, f"a {jt} joint needs <limit lower=... upper=... velocity=... effort=...>", j)
         else:
-            got = {a: check(f"{w}.limit", lim, a, 1, "0") for a in ("lower", "upper", "velocity", "effort")}
+            # urdfdom defaults lower and upper to 0 and requires effort and velocity
+            got = {a: check(f"{w}.limit", lim, a, 1, None if a in ("velocity", "effort") else "0")
+                   for a in ("lower", "upper", "velocity", "effort")}
             lo, hi = got["lower"], got["upper"]
             if jt in ("revolute", "prismatic") and lo is not None and hi is not None and lo[0] > hi[0]:
                 add(f"{w}.limit", f"lower={lim.get('lower')!r} > upper={lim.get('upper')!r}", lim)
-        dyn = j.find("dynamics")
-        if dyn is not None:
-            for a in ("damping", "friction"):
-                check(f"{w}.dynamics", dyn, a, 1, "0")
+        for tag, attrs in (("dynamics", ("damping", "friction")), ("calibration", ("rising", "falling")),
+                           ("safety_controller", ("soft_lower_limit", "soft_upper_limit", "k_position", "k_velocity"))):
+            el = j.find(tag)
+            if el is not None:
+                for a in attrs:
+                    if el.get(a) is not None:
+                        check(f"{w}.{tag}", el, a, 1)
     for jn, j in joints.items():
         m = j.find("mimic")
         if m is None:
