@@ -53,6 +53,8 @@ def _soup(n_inside: int, seed: int = 1):
 
 
 def test_a_200k_vertex_mesh_loads_in_linear_memory(tmp_path):
+    import trimesh
+
     mesh, ball = _soup(200_000)
     mesh.export(tmp_path / "dense.stl")  # STL repeats each vertex per triangle: ~200 k vertices in the file
     (tmp_path / "r.urdf").write_text(
@@ -69,7 +71,7 @@ def test_a_200k_vertex_mesh_loads_in_linear_memory(tmp_path):
     # the vertices are 200 k x 24 B = 4.8 MB; an N x N factor would be 320 GB
     assert peak < 120e6, f"peak {peak / 1e6:.0f} MB"
     (poly,) = model.scene.robots["r"].link_shapes["l1"]
-    raw = np.asarray(__import__("trimesh").load(tmp_path / "dense.stl", process=False).vertices, dtype=np.float64)
+    raw = np.asarray(trimesh.load(tmp_path / "dense.stl", process=False).vertices, dtype=np.float64)
     assert len(raw) >= 199_998
     _same_hull(np.asarray(poly.vertices), raw)
     assert len(poly.vertices) == len(ball.vertices)  # the sphere's vertices: nothing inside is a corner

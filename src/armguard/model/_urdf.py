@@ -19,12 +19,11 @@ with a NaN vertex, on a line or on a point is an error naming the link and the m
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from xml.parsers import expat
 
 import numpy as np
-
-from xml.parsers import expat
 
 from .._errors import ArmguardError, GeometryError, SceneFileError, list_problems
 from ._shapes import convex_hull
@@ -44,7 +43,7 @@ class UrdfInfo:
     joint_axis: dict  # joint name -> (3,) axis as written
     joint_type: dict  # joint name -> URDF type ("revolute", "prismatic", ...)
     mesh_files: tuple  # resolved mesh paths
-    meshes: dict = None  # (link, k) -> (resolved path, (3,) scale) of collision[k] of link when a mesh
+    meshes: dict = field(default_factory=dict)  # (link, k) -> (resolved path, (3,) scale) of collision[k] of link when a mesh
     collision_xml: bytes = b""  # the URDF with every collision <mesh> as a placeholder <box> (see load_pinocchio)
 
 
