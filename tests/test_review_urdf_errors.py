@@ -26,8 +26,8 @@ URDF = """<robot name="r2">
 
 @pytest.mark.parametrize(
     "geom, what",
-    [('<sphere radius="-0.05"/>', "radius"), ('<box size="0 0.1 0.1"/>', "half_extents"),
-     ('<cylinder radius="0.0" length="0.4"/>', "radius and half_length must be > 0")],
+    [('<sphere radius="-0.05"/>', "radius"), ('<box size="0 0.1 0.1"/>', "<box size='0 0.1 0.1'>: each edge must be > 0"),
+     ('<cylinder radius="0.0" length="0.4"/>', "<cylinder radius='0.0'>: the radius must be > 0")],
     ids=["negative-radius", "zero-box", "zero-cylinder"],
 )
 def test_bad_collision_geometry_is_located(tmp_path, geom, what):

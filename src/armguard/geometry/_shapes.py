@@ -30,7 +30,7 @@ import numpy as np
 
 from .._errors import GeometryError
 from .._tolerance import DEFAULT_TOLERANCES
-from ._pack import attach_packed
+from ._pack import attach_packed, face_edges, unique_pairs
 from ._check import check_nonnegative, check_point, check_points, check_pose, check_rotation
 
 __all__ = ["Shape", "Sphere", "Capsule", "Box", "Prism", "ConvexPolyhedron", "Polygon", "CoreKind"]
@@ -240,7 +240,8 @@ def _merge_hull_faces(points: np.ndarray, tol: float):
     the hull's triangulation on a face boundary is shared by exactly two faces (a closed,
     consistently oriented polyhedron even for nearly coplanar mesh hulls).
 
-    Returns ``(vertex_index_map, faces, planes)``: faces index into the returned vertex set.
+    Returns ``(vertex_index_map, faces, planes, triangles)``: faces and the hull's (oriented)
+    triangles index into the returned vertex set.
     """
     from scipy.spatial import ConvexHull, QhullError
 
@@ -260,40 +261,60 @@ def _merge_hull_faces(points: np.ndarray, tol: float):
     if hull.volume <= DEFAULT_TOLERANCES.coplanar_volume * scale**3:
         raise GeometryError("ConvexPolyhedron.vertices: the points are coplanar (hull volume 0)")
     eq = hull.equations  # n . x + c <= 0 inside; n unit outward
-    tris = []
-    for simplex, e in zip(hull.simplices, eq):
-        i, j, k = (int(v) for v in simplex)
-        if np.dot(np.cross(points[j] - points[i], points[k] - points[i]), e[:3]) < 0.0:
-            j, k = k, j  # orient counter-clockwise about the outward normal
-        tris.append((i, j, k))
+    tri = np.array(hull.simplices, dtype=np.int64)
+    p0 = points[tri[:, 0]]
+    flip = np.einsum("ij,ij->i", np.cross(points[tri[:, 1]] - p0, points[tri[:, 2]] - p0), eq[:, :3]) < 0.0
+    tri[flip, 1], tri[flip, 2] = tri[flip, 2], tri[flip, 1].copy()  # counter-clockwise about the outward normal
+    tris = [tuple(t) for t in tri.tolist()]
     n_tri = len(tris)
+    nbrs = hull.neighbors.tolist()
+    # a seed none of whose neighbours has its normal within 1e-9 is a face of its own (the first
+    # test of the search below, done for every triangle at once)
+    alone = np.all(np.einsum("ij,ikj->ik", eq[:, :3], eq[hull.neighbors, :3]) <= 1.0 - 1e-9, axis=1).tolist()
     group = [-1] * n_tri
     groups: list[list[int]] = []
+    normals, offsets = eq[:, :3].tolist(), eq[:, 3].tolist()
+    corners = points[tri].tolist()  # (T, 3, 3): plain floats, the search below is scalar Python
+    lim, cos_min = tol * scale, 1.0 - 1e-9
     for seed in range(n_tri):
         if group[seed] >= 0:
             continue
         g = len(groups)
-        n0, c0 = eq[seed, :3], eq[seed, 3]
         group[seed] = g
+        if alone[seed]:
+            groups.append([seed])
+            continue
+        x0, y0, z0 = normals[seed]
+        c0 = offsets[seed]
         members, stack = [seed], [seed]
         while stack:
             t = stack.pop()
-            for nb in hull.neighbors[t]:
-                nb = int(nb)
+            for nb in nbrs[t]:
                 if nb < 0 or group[nb] >= 0:
                     continue
-                if np.dot(eq[nb, :3], n0) > 1.0 - 1e-9 and np.all(
-                    np.abs(points[list(tris[nb])] @ n0 + c0) <= tol * scale
-                ):
+                # the same face: the normal within 1e-9 of the seed's and every vertex on its plane
+                a, b, c = normals[nb]
+                if a * x0 + b * y0 + c * z0 > cos_min and all(
+                        abs(px * x0 + py * y0 + pz * z0 + c0) <= lim for px, py, pz in corners[nb]):
                     group[nb] = g
                     members.append(nb)
                     stack.append(nb)
         groups.append(members)
-    used = sorted(set(int(i) for i in hull.vertices))
-    remap = {old: new for new, old in enumerate(used)}
+    used = np.unique(np.asarray(hull.vertices, dtype=np.int64))
+    remap = np.full(len(points), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    first = np.array([members[0] for members in groups], dtype=np.int64)
+    planes = np.empty((len(groups), 4))
+    planes[:, :3] = eq[first, :3]
+    planes[:, 3] = -eq[first, 3] + eq[first, :3] @ o_W  # the local plane offsets, back in W
+    # a face of one triangle: its loop from its smallest vertex (all at once)
+    single = remap[tri[first]]
+    single = np.take_along_axis(single, (np.argmin(single, axis=1)[:, None] + np.arange(3)) % 3, axis=1)
     faces: list[np.ndarray] = []
-    planes = np.zeros((len(groups), 4))
     for g, members in enumerate(groups):
+        if len(members) == 1:
+            faces.append(single[g])
+            continue
         directed = {(a, b) for t in members for a, b in ((tris[t][0], tris[t][1]), (tris[t][1], tris[t][2]), (tris[t][2], tris[t][0]))}
         nxt = {a: b for a, b in directed if (b, a) not in directed}  # boundary edges, CCW
         start = min(nxt)
@@ -303,20 +324,13 @@ def _merge_hull_faces(points: np.ndarray, tol: float):
             v = nxt[v]
         if v != start or len(loop) != len(nxt):  # pragma: no cover - a planar convex face has one boundary loop
             raise GeometryError("ConvexPolyhedron: could not build a face boundary from the hull (degenerate hull)")
-        faces.append(np.array([remap[i] for i in loop], dtype=np.int64))
-        t0 = members[0]
-        planes[g, :3] = eq[t0, :3]
-        planes[g, 3] = -eq[t0, 3] + float(eq[t0, :3] @ o_W)  # the local plane offset, back in W
-    return np.asarray(used, dtype=np.int64), faces, planes
+        faces.append(remap[loop])
+    return used, faces, planes, remap[tri]
 
 
 def _edges_of(faces) -> np.ndarray:
-    edges = set()
-    for f in faces:
-        for i in range(len(f)):
-            a, b = int(f[i]), int(f[(i + 1) % len(f)])
-            edges.add((min(a, b), max(a, b)))
-    return np.array(sorted(edges), dtype=np.int64).reshape(-1, 2)
+    a, b, _ = face_edges(faces)
+    return np.ascontiguousarray(unique_pairs(np.minimum(a, b), np.maximum(a, b)), dtype=np.int64).reshape(-1, 2)
 
 
 @dataclass(frozen=True, eq=False, init=False)
@@ -340,7 +354,8 @@ class ConvexPolyhedron(Shape):
 
     def __init__(self, vertices) -> None:
         pts = check_points(vertices, "ConvexPolyhedron.vertices", min_count=4)
-        used, faces, planes = _merge_hull_faces(pts, DEFAULT_TOLERANCES.planarity)
+        used, faces, planes, tri = _merge_hull_faces(pts, DEFAULT_TOLERANCES.planarity)
+        object.__setattr__(self, "_hull_tri", tri)  # the vertex graph's triangulation (_pack._build_adjacency)
         self._set(pts[used], tuple(faces), planes)
 
     def _set(self, vertices, faces, planes) -> None:

@@ -13,6 +13,7 @@ import numpy as np
 
 from .._errors import SceneError
 from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
+from ._hull import mesh_hull
 
 __all__ = ["shape_from_coal", "coal_from_shape", "convex_hull", "CYLINDER_PRISM_SIDES"]
 
@@ -20,20 +21,6 @@ CYLINDER_PRISM_SIDES = 16
 """Sides of the prism that circumscribes a cylinder where a caller wants a polytope for it
 (apothem = radius; :data:`armguard.geometry.CYLINDER_HULL_SIDES`): the shapes themselves are
 exact cylinders."""
-
-
-def _flat_polygon(p: np.ndarray):
-    """``p`` (N, 3) coplanar points -> a Polygon of their 2-D hull, or None when not flat."""
-    c = p.mean(axis=0)
-    u, s, vt = np.linalg.svd(p - c)
-    ext = float(np.ptp(p, axis=0).max()) or 1.0
-    if s.size < 3 or s[2] > 1e-9 * ext * np.sqrt(len(p)):
-        return None
-    from scipy.spatial import ConvexHull
-
-    uv = (p - c) @ vt[:2].T
-    hull = ConvexHull(uv)
-    return Polygon(p[hull.vertices])
 
 
 def shape_from_coal(g, X_FG: np.ndarray):
@@ -52,11 +39,8 @@ def shape_from_coal(g, X_FG: np.ndarray):
         return Cylinder(t, R, float(g.radius), float(g.halfLength)), ""
     if isinstance(g, coal.ConvexBase):
         v = np.asarray(g.points(), dtype=np.float64).reshape(-1, 3) if callable(g.points) else np.asarray(g.points)
-        p = v @ R.T + t
-        poly = _flat_polygon(p)
-        if poly is not None:
-            return poly, ""
-        return ConvexPolyhedron(p), ""
+        hull = mesh_hull(v @ R.T + t, solid=False)  # ConvexPolyhedron builds the 3-D hull
+        return (Polygon(hull.vertices) if hull.flat else ConvexPolyhedron(hull.vertices)), ""
     raise SceneError(f"coal geometry {type(g).__name__} has no armguard shape (expected capsule, sphere, box, "
                      "cylinder or convex mesh)")
 
@@ -95,25 +79,22 @@ def coal_from_shape(shape):
 
 
 def convex_hull(pts: np.ndarray):
-    """A coal.Convex of the points' hull (a flat polygon: two triangle fans, both sides)."""
+    """A coal.Convex of the points' hull (:func:`~armguard.model._hull.mesh_hull`: O(N log N)
+    time, O(N) memory); a flat polygon becomes two triangle fans, both sides."""
     import coal
 
-    poly = _flat_polygon(pts)
-    if poly is not None:
-        v = np.asarray(poly.vertices, dtype=np.float64)
-        n = len(v)
-        tris = [(0, i, i + 1) for i in range(1, n - 1)] + [(0, i + 1, i) for i in range(1, n - 1)]
+    hull = mesh_hull(pts)
+    v = hull.vertices
+    if hull.flat:
+        k = np.arange(1, len(v) - 1, dtype=np.int64)
+        zero = np.zeros_like(k)
+        tris = np.concatenate([np.stack([zero, k, k + 1], axis=1), np.stack([zero, k + 1, k], axis=1)])
     else:
-        from scipy.spatial import ConvexHull
-
-        hull = ConvexHull(pts)
-        v = pts[hull.vertices]
-        remap = {int(k): i for i, k in enumerate(hull.vertices)}
-        tris = [tuple(remap[int(k)] for k in s) for s in hull.simplices]
+        tris = hull.triangles
     m = coal.BVHModelOBBRSS()
     m.beginModel(len(tris), len(v))
     m.addVertices(np.ascontiguousarray(v))
-    m.addTriangles(np.ascontiguousarray(np.array(tris, dtype=np.int64)))
+    m.addTriangles(np.ascontiguousarray(tris, dtype=np.int64))
     m.endModel()
     m.buildConvexRepresentation(False)
     return m.convex

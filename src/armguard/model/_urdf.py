@@ -1,26 +1,33 @@
 """URDF files into Pinocchio, checked: nothing is dropped silently.
 
 Pinocchio parses the URDF (``buildModelFromUrdf(..., mimic=True)``) and builds the collision
-``GeometryModel`` (``buildGeomFromUrdf``).  Before and after, this module checks what
-Pinocchio would let pass: malformed XML (with its line), a mesh that cannot be found, a
-collision element that did not reach the GeometryModel (a plain ``<capsule>`` tag, an unknown
-geometry), a ``<collision_checking>`` entry naming no collision element.  Each is a
-:class:`~armguard.SceneFileError` naming the file and the element; never a model with fewer
-pairs.  Meshes that are not marked ``<convex>`` are replaced by their convex hull
-(``coal.Convex``): distances on raw BVH meshes are far slower, and the analytic backend sees
-the same hull.
+``GeometryModel`` (``buildGeomFromUrdfString``).  Before and after, this module checks what
+Pinocchio would let pass or refuse without saying where: malformed XML (with its line), the
+problems :mod:`._urdf_check` lists (duplicate names, non-finite numbers, sizes that are not
+> 0, missing limits, a mimic of no joint), a mesh that cannot be found, a collision element
+that did not reach the GeometryModel (a plain ``<capsule>`` tag, an unknown geometry), a
+``<collision_checking>`` entry naming no collision element.  Each is a
+:class:`~armguard.SceneFileError` naming the file, the element and (where it applies) the line;
+never a model with fewer pairs.
+
+Every collision mesh is replaced by its convex hull (``coal.Convex``; distances on raw BVH
+meshes are far slower, and the analytic backend sees the same hull), computed by
+:func:`._hull.mesh_hull` from the file's vertices in O(N log N) time and O(N) memory; a mesh
+with a NaN vertex, on a line or on a point is an error naming the link and the mesh file.
 """
 
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from xml.parsers import expat
 
 import numpy as np
 
-from .._errors import SceneFileError
+from .._errors import ArmguardError, GeometryError, SceneFileError, list_problems
 from ._shapes import convex_hull
+from ._urdf_check import parse_with_lines, urdf_problems
 
 __all__ = ["UrdfInfo", "load_pinocchio", "resolve_mesh"]
 
@@ -36,6 +43,8 @@ class UrdfInfo:
     joint_axis: dict  # joint name -> (3,) axis as written
     joint_type: dict  # joint name -> URDF type ("revolute", "prismatic", ...)
     mesh_files: tuple  # resolved mesh paths
+    meshes: dict = field(default_factory=dict)  # (link, k) -> (resolved path, (3,) scale) of collision[k] of link when a mesh
+    collision_xml: bytes = b""  # the URDF with every collision <mesh> as a placeholder <box> (see load_pinocchio)
 
 
 def resolve_mesh(filename: str, urdf_dir: Path, package_dirs) -> Path | None:
@@ -59,18 +68,23 @@ def resolve_mesh(filename: str, urdf_dir: Path, package_dirs) -> Path | None:
 def _read_xml(path: Path, package_dirs) -> UrdfInfo:
     f = str(path)
     try:
-        root = ET.parse(path).getroot()
+        root, lines = parse_with_lines(path.read_bytes())
     except FileNotFoundError:
         raise SceneFileError(f, "", "URDF file not found") from None
-    except ET.ParseError as exc:
-        raise SceneFileError(f, f"line {exc.position[0]}", f"not well-formed XML: {exc}") from None
+    except expat.ExpatError as exc:
+        raise SceneFileError(f, f"line {exc.lineno}", f"not well-formed XML: {exc}", line=exc.lineno) from None
     if root.tag != "robot":
         raise SceneFileError(f, root.tag, "expected a <robot> root element (a URDF file)")
     links = root.findall("link")
     if not links:
         raise SceneFileError(f, "robot", "a URDF needs at least one <link>")
+    problems = urdf_problems(root, lines)
+    if problems:
+        where, message = list_problems([(w, m) for w, m, _ in problems])
+        raise SceneFileError(f, where, message, line=problems[0][2])
     collisions: dict = {}
     meshes = []
+    mesh_at: dict = {}
     for link in links:
         ln = link.get("name")
         if not ln:
@@ -93,6 +107,8 @@ def _read_xml(path: Path, package_dirs) -> UrdfInfo:
                 if mp is None:
                     raise SceneFileError(f, w, f"mesh file not found: {fn!r} (relative to {path.parent} or package_dirs)")
                 meshes.append(mp)
+                mesh_at[(ln, k)] = (mp, tuple(float(x) for x in kids[0].get("scale", "1 1 1").split()))
+                kids[0].tag, kids[0].attrib = "box", {"size": "1 1 1"}  # only in collision_xml: read below, not by Pinocchio
             entries.append((c.get("name", ""), tag))
         names = {n for n, _ in entries if n}
         for cc in link.findall("collision_checking"):
@@ -111,12 +127,12 @@ def _read_xml(path: Path, package_dirs) -> UrdfInfo:
         m = j.find("mimic")
         if m is not None:
             mimic[jn] = (m.get("joint", ""), float(m.get("multiplier", "1")), float(m.get("offset", "0")))
-    return UrdfInfo(f, root.get("name", path.stem), collisions, mimic, axes, types_, tuple(meshes))
+    return UrdfInfo(f, root.get("name", path.stem), collisions, mimic, axes, types_, tuple(meshes), mesh_at,
+                    ET.tostring(root))
 
 
 def load_pinocchio(path, package_dirs=()):
     """``(pin_model, collision_model, info)`` of a URDF file, checked (see the module docstring)."""
-    import coal
     import pinocchio as pin
 
     path = Path(path).resolve()
@@ -129,7 +145,11 @@ def load_pinocchio(path, package_dirs=()):
     except (RuntimeError, ValueError) as exc:
         raise SceneFileError(f, "", f"Pinocchio could not build the model: {exc}") from None
     try:
-        geom = pin.buildGeomFromUrdf(pin_model, f, pin.COLLISION, package_dirs=dirs)
+        # the collision meshes are read here (trimesh, in double precision), not by Pinocchio: its
+        # loader builds a BVH of every mesh (seconds for so101's 1.2 M vertices) only for it to be
+        # replaced by the hull; Pinocchio places a unit box where each mesh is, then the box's
+        # geometry becomes the mesh's hull and meshPath / meshScale are the mesh's
+        geom = pin.buildGeomFromUrdfString(pin_model, info.collision_xml.decode(), pin.COLLISION, package_dirs=dirs)
     except (RuntimeError, ValueError) as exc:
         raise SceneFileError(f, "", f"Pinocchio could not build the collision model: {exc}") from None
     per_link: dict = {}
@@ -140,29 +160,38 @@ def load_pinocchio(path, package_dirs=()):
         if got != len(entries):
             raise SceneFileError(f, f"link[{ln}]", f"{len(entries)} <collision> elements but {got} reached "
                                  "Pinocchio's GeometryModel (an element it cannot read was dropped)")
-    for go in geom.geometryObjects:
-        g = go.geometry
-        if isinstance(g, (coal.BVHModelBase, coal.ConvexBase)) and go.meshPath:
-            # every mesh becomes the hull of its file's vertices in double precision (Pinocchio reads
-            # meshes in single precision: 0.7 m comes back as 0.69999999 m), rebuilt from scipy's
-            # hull triangles (coal's own buildConvexRepresentation of the UR5's meshes gave GJK
-            # answers up to 0.38 m too far)
-            go.geometry = convex_hull(_mesh_vertices(go, g))
+    for (ln, k), (mesh_path, scale) in info.meshes.items():
+        go = per_link[ln][k]
+        go.meshPath, go.meshScale = str(mesh_path), np.asarray(scale, dtype=np.float64)
+        # every mesh becomes the hull of its file's vertices in double precision (Pinocchio reads
+        # meshes in single precision: 0.7 m comes back as 0.69999999 m), rebuilt from scipy's
+        # hull triangles (coal's own buildConvexRepresentation of the UR5's meshes gave GJK
+        # answers up to 0.38 m too far)
+        try:
+            go.geometry = convex_hull(_mesh_vertices(mesh_path, scale))
+        except ArmguardError as exc:
+            raise SceneFileError(f, f"link[{ln}].collision[{k}]", f"mesh {mesh_path}: {exc}") from None
     return pin_model, geom, info
 
 
-def _mesh_vertices(go, g) -> np.ndarray:
-    """``(N, 3) float64, m``: the mesh file's vertices, scaled; coal's (single precision) if unreadable."""
+def _mesh_vertices(mesh_path, scale) -> np.ndarray:
+    """``(N, 3) float64, m``: the mesh file's vertices, scaled (trimesh; coal's loader, in single
+    precision, for a format trimesh cannot read)."""
     import coal
 
+    scale = np.asarray(scale, dtype=np.float64)
     try:
         import trimesh
 
-        mesh = trimesh.load(go.meshPath, force="mesh", process=False)
-        v = np.asarray(mesh.vertices, dtype=np.float64) * np.asarray(go.meshScale, dtype=np.float64)
-        if len(v) >= 3 and np.all(np.isfinite(v)):
-            return v
-    except Exception:  # noqa: BLE001 - a format trimesh cannot read: Pinocchio's copy serves
+        mesh = trimesh.load(str(mesh_path), force="mesh", process=False)
+        v = np.asarray(mesh.vertices, dtype=np.float64) * scale
+        if len(v):
+            return v  # checked by mesh_hull: a NaN vertex is an error, not a reason to read it again
+    except Exception:  # noqa: BLE001 - a format trimesh cannot read: coal's loader serves
         pass
-    pts = g.vertices() if isinstance(g, coal.BVHModelBase) else g.points()
-    return np.asarray(pts, dtype=np.float64)
+    try:
+        bvh = coal.MeshLoader().load(str(mesh_path), scale)
+    except (RuntimeError, ValueError) as exc:
+        first = str(exc).strip().splitlines()
+        raise GeometryError(f"neither trimesh nor coal's loader could read it ({first[-1] if first else exc})") from None
+    return np.asarray(bvh.vertices(), dtype=np.float64)

@@ -1,0 +1,152 @@
+"""A URDF armguard refuses names the file, the element and the attribute; nothing that would give a
+wrong shape loads.
+
+Pinocchio's parser refuses a duplicate link, a NaN limit or a revolute joint without limits with
+"the file does not contain a valid URDF model" (no place); a capsule with a negative length loaded
+with its ends swapped (analytic and coal then disagreed by 77 mm); a mesh with a NaN vertex gave a
+raw ``LinAlgError``, a collinear or zero-scale mesh a raw ``QhullError``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import armguard
+from armguard import ArmguardError, SceneFileError
+from armguard.geometry import Polygon
+
+LINK1 = '<link name="l1"><collision{cname}><origin xyz="0 0 0.2"/><geometry>{geom}</geometry></collision>{extra}</link>'
+CAPSULE = '<collision_checking><capsule name="c"/></collision_checking>'
+JOINT1 = ('<joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.1"/>'
+          '<axis xyz="0 0 1"/><limit lower="-1" upper="1" velocity="1" effort="1"/></joint>')
+
+
+def _urdf(geom='<sphere radius="0.05"/>', extra="", joint=JOINT1, more=""):
+    """Line 1 <robot>, 2 link base, 3 link l1 (a capsule named "c" when ``extra`` is CAPSULE), 4 joint j1, 5 ``more``."""
+    cname = ' name="c"' if extra == CAPSULE else ""
+    return (f'<robot name="r">\n<link name="base"><collision><geometry><box size="0.1 0.1 0.1"/></geometry>'
+            f'</collision></link>\n{LINK1.format(geom=geom, extra=extra, cname=cname)}\n{joint}\n{more}\n</robot>\n')
+
+
+def _refused(tmp_path, text: str) -> SceneFileError:
+    path = tmp_path / "r.urdf"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(SceneFileError) as err:
+        armguard.load_model(path)
+    assert err.value.file == str(path)
+    return err.value
+
+
+def _joint(**kw) -> str:
+    return JOINT1.replace('type="revolute"', f'type="{kw.get("type", "revolute")}"').replace(
+        '<limit lower="-1" upper="1" velocity="1" effort="1"/>', kw.get("limit", '<limit lower="-1" upper="1" velocity="1" effort="1"/>')
+    ).replace('<origin xyz="0 0 0.1"/>', kw.get("origin", '<origin xyz="0 0 0.1"/>'))
+
+
+CASES = {
+    "duplicate-link": (_urdf(more='<link name="l1"/>'), "link[l1]", "a second <link> named 'l1'"),
+    "duplicate-joint": (_urdf(more='<link name="l2"/>' + JOINT1.replace('<child link="l1"/>', '<child link="l2"/>')),
+                        "joint[j1]", "a second <joint> named 'j1'"),
+    "nan-joint-origin": (_urdf(joint=_joint(origin='<origin xyz="0 nan 0.1"/>')), "joint[j1].origin", "xyz='0 nan 0.1'"),
+    "inf-collision-origin": (_urdf().replace('<origin xyz="0 0 0.2"/>', '<origin xyz="0 0 0.2" rpy="0 inf 0"/>'),
+                             "link[l1].collision[0].origin", "rpy='0 inf 0'"),
+    "nan-limit": (_urdf(joint=_joint(limit='<limit lower="nan" upper="1" velocity="1" effort="1"/>')),
+                  "joint[j1].limit", "lower='nan'"),
+    "reversed-limit": (_urdf(joint=_joint(limit='<limit lower="1" upper="-1" velocity="1" effort="1"/>')),
+                       "joint[j1].limit", "lower='1' > upper='-1'"),
+    "limit-without-effort": (_urdf(joint=_joint(limit='<limit lower="-1" upper="1" velocity="1"/>')), "joint[j1].limit",
+                             "expected attribute 'effort'"),
+    "nan-calibration": (_urdf(joint=JOINT1.replace("</joint>", '<calibration rising="nan"/></joint>')), "joint[j1].calibration",
+                        "rising='nan': every number must be finite"),
+    "revolute-without-limit": (_urdf(joint=_joint(limit="")), "joint[j1]", "a revolute joint needs <limit"),
+    "prismatic-without-limit": (_urdf(joint=_joint(type="prismatic", limit="")), "joint[j1]", "a prismatic joint needs <limit"),
+    "zero-axis": (_urdf(joint=JOINT1.replace('<axis xyz="0 0 1"/>', '<axis xyz="0 0 0"/>')), "joint[j1].axis", "length 0"),
+    "missing-child": (_urdf(joint=JOINT1.replace('<child link="l1"/>', '<child link="l9"/>')), "joint[j1].child",
+                      "link='l9': no <link>"),
+    "mimic-missing-joint": (_urdf(more='<link name="l2"/><joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>'
+                                  '<limit lower="-1" upper="1" velocity="1" effort="1"/><mimic joint="j7"/></joint>'),
+                            "joint[j2].mimic", "joint='j7': no joint of that name"),
+    "zero-box": (_urdf('<box size="0 0.1 0.1"/>'), "link[l1].collision[0]", "<box size='0 0.1 0.1'>: each edge must be > 0"),
+    "negative-sphere": (_urdf('<sphere radius="-0.05"/>'), "link[l1].collision[0]", "<sphere radius='-0.05'>: the radius must be > 0"),
+    "zero-sphere": (_urdf('<sphere radius="0"/>'), "link[l1].collision[0]", "radius must be > 0"),
+    "nan-sphere": (_urdf('<sphere radius="nan"/>'), "link[l1].collision[0]", "radius='nan': every number must be finite"),
+    "zero-cylinder-radius": (_urdf('<cylinder radius="0" length="0.3"/>'), "link[l1].collision[0]", "<cylinder radius='0'>"),
+    "zero-cylinder-length": (_urdf('<cylinder radius="0.05" length="0"/>'), "link[l1].collision[0]", "<cylinder length='0'>"),
+    "negative-capsule-length": (_urdf('<cylinder radius="0.05" length="-0.3"/>', extra=CAPSULE), "link[l1].collision[0]",
+                                "a capsule's length must be >= 0"),
+    "zero-mesh-scale": (_urdf('<mesh filename="cube.stl" scale="0.1 0 0.1"/>'), "link[l1].collision[0]",
+                        "<mesh scale='0.1 0 0.1'>: a zero scale"),
+    "malformed-number": (_urdf('<box size="0.1 0.1 abc"/>'), "link[l1].collision[0]", "size='0.1 0.1 abc': expected 3 numbers"),
+}
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_a_refused_urdf_names_the_element_and_attribute(tmp_path, case):
+    import trimesh
+
+    trimesh.creation.box(extents=(1, 1, 1)).export(tmp_path / "cube.stl")
+    text, where, what = CASES[case]
+    err = _refused(tmp_path, text)
+    assert err.where == where, err
+    assert what in err.message, err
+    line = 5 if case in ("duplicate-link", "duplicate-joint", "mimic-missing-joint") else 3 if where.startswith("link[l1]") else 4
+    assert err.line == line, err  # the line of the element named
+
+
+def test_several_problems_are_listed_together(tmp_path):
+    err = _refused(tmp_path, _urdf('<sphere radius="-1"/>', joint=_joint(limit='<limit lower="nan" upper="1" velocity="1" effort="1"/>')))
+    assert err.where == "link[l1].collision[0]"
+    assert "1 more problem" in err.message and "joint[j1].limit: lower='nan'" in err.message
+
+
+def test_a_zero_length_capsule_is_a_sphere_and_loads(tmp_path):
+    path = tmp_path / "r.urdf"
+    path.write_text(_urdf('<cylinder radius="0.05" length="0"/>', extra=CAPSULE), encoding="utf-8")
+    (cap,) = armguard.load_model(path).scene.robots["r"].link_shapes["l1"]
+    assert cap.length == 0.0 and cap.radius == 0.05
+
+
+def _mesh_urdf(tmp_path, vertices, faces, scale="1 1 1"):
+    import trimesh
+
+    trimesh.Trimesh(np.asarray(vertices, dtype=np.float64), np.asarray(faces), process=False).export(tmp_path / "m.stl")
+    path = tmp_path / "r.urdf"
+    path.write_text(_urdf(f'<mesh filename="m.stl" scale="{scale}"/>'), encoding="utf-8")
+    return path
+
+
+_TET = [[0, 0, 0], [0.1, 0, 0], [0, 0.1, 0], [0, 0, 0.1]]
+_TET_F = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+
+
+@pytest.mark.parametrize(
+    "vertices, what",
+    [([[0, 0, 0], [0.1, 0, 0], [np.nan, 0.1, 0], [0, 0, 0.1]], "not finite (NaN or inf), the first is vertex"),
+     ([[0, 0, 0], [0.1, 0, 0], [0.2, 0, 0], [0.3, 0, 0]], "the vertices lie on a line"),
+     ([[0.1, 0.1, 0.1]] * 4, "no area and no volume")],
+    ids=["nan-vertex", "collinear", "one-point"],
+)
+def test_a_bad_mesh_names_the_file_link_and_mesh(tmp_path, vertices, what):
+    path = _mesh_urdf(tmp_path, vertices, _TET_F)
+    with pytest.raises(ArmguardError) as err:
+        armguard.load_model(path)
+    assert isinstance(err.value, SceneFileError) and err.value.file == str(path)
+    assert err.value.where == "link[l1].collision[0]"
+    assert str(tmp_path / "m.stl") in err.value.message and what in err.value.message, err.value
+
+
+def test_a_flat_mesh_is_a_polygon(tmp_path):
+    square = [[0, 0, 0], [0.1, 0, 0], [0.1, 0.1, 0], [0, 0.1, 0], [0.05, 0.05, 0]]
+    path = _mesh_urdf(tmp_path, square, [[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]])
+    (poly,) = armguard.load_model(path).scene.robots["r"].link_shapes["l1"]
+    assert isinstance(poly, Polygon) and len(poly.vertices) == 4  # the centre point is not a corner
+    assert np.allclose(sorted(map(tuple, poly.vertices - [0, 0, 0.2])), sorted(map(tuple, np.array(square[:4], float))))
+
+
+def test_a_mirrored_mesh_is_the_mirrored_hull(tmp_path):
+    path = _mesh_urdf(tmp_path, _TET, _TET_F, scale="-2 1 1")
+    (poly,) = armguard.load_model(path).scene.robots["r"].link_shapes["l1"]
+    want = np.array(_TET) * [-2, 1, 1] + [0, 0, 0.2]
+    got = poly.vertices[np.lexsort(poly.vertices.T)]
+    assert np.allclose(got, want[np.lexsort(want.T)], rtol=0, atol=1e-7)  # STL keeps single precision
