@@ -78,7 +78,9 @@ def test_panda_loads_by_name_with_its_srdf():
     urdf, srdf = public_robot_files("panda")
     m = armguard.load_model("panda")
     assert m.name == "panda" and m.nq == 8
-    assert [Path(f) for f in m.files] == [urdf.resolve(), srdf]
+    files = [Path(f) for f in m.files]
+    assert files[:2] == [urdf.resolve(), srdf]  # then the meshes the geometry came from
+    assert files[2:] and all(f.suffix.lower() in (".stl", ".dae", ".obj") and f.is_file() for f in files[2:])
     disabled = {frozenset((el.get("link1"), el.get("link2"))) for el in ET.parse(srdf).getroot().iter("disable_collisions")}
     checked = {frozenset(o.split("/", 1)[1] for o in pair) for pair in zip(m.pairs.owner_a, m.pairs.owner_b)}
     assert checked and not checked & disabled  # the SRDF was applied: none of its disabled pairs is checked
