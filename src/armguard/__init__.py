@@ -10,6 +10,7 @@ import importlib
 
 from ._errors import (
     ArmguardError,
+    ArmguardWarning,
     ClipError,
     BackendError,
     DetectionError,
@@ -48,6 +49,7 @@ _LAZY = {
 
 __all__ = [
     "ArmguardError",
+    "ArmguardWarning",
     "BackendError",
     "GeometryError",
     "KinematicsError",

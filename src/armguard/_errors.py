@@ -17,11 +17,16 @@ __all__ = [
     "ForbiddenMapError",
     "TerrainError",
     "UncertaintyError",
+    "ArmguardWarning",
 ]
 
 
 class ArmguardError(Exception):
     """Base class of every error armguard raises on purpose."""
+
+
+class ArmguardWarning(UserWarning):
+    """A lenient reading of an input armguard accepted (the message names the file and the element)."""
 
 
 class GeometryError(ArmguardError, ValueError):

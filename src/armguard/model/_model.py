@@ -63,10 +63,12 @@ class Model:
     notes : Mapping[str, str]          GeometryObject name -> representation note (where a backend
                                        cannot hold the exact shape)
     files : tuple[Path, ...]           the files it was loaded from; ``sha256`` their hashes
+    srdf : Srdf or None                the SRDF it was loaded with: ``srdf.file``, ``srdf.found`` (how it
+                                       was found, ``docs/models.md``) and ``srdf.warnings``
     """
 
     def __init__(self, name, pin_model, collision_model, scene, *, q_index, geometry_names, notes, files,
-                 circular=()) -> None:
+                 circular=(), srdf=None) -> None:
         self.name = str(name)
         self.pin_model = pin_model
         self.collision_model = collision_model
@@ -78,6 +80,7 @@ class Model:
         self._geom = dict(geometry_names)
         self.notes = types.MappingProxyType(dict(notes))
         self.files = tuple(Path(p).resolve() for p in files)
+        self.srdf = srdf
         self.sha256 = types.MappingProxyType({str(p): file_sha256(p) for p in self.files})
         self._pairs = None
         self._revision = None
