@@ -263,3 +263,20 @@ def test_public_robot_is_clear_at_its_srdf_home(name):
     d = c.pair_distances(q)
     near = d.nearest()
     assert d.distance.min() > 0.0, f"{name} at home: {[(n.a, n.b, n.distance) for n in near.values()]}"
+
+
+def test_info_says_which_srdf_was_used(tmp_path):
+    urdf = package(tmp_path)
+    found = urdf.parent.parent / "srdf" / "arm.srdf"
+    found.write_text(srdf_text('<group_state name="up"><joint name="j2" value="0.5"/></group_state>'))
+    out = CliRunner().invoke(main, ["info", str(urdf)])
+    assert out.exit_code == 0, out.output
+    assert f"SRDF: {found.resolve()} (in ../srdf/, under the URDF's name)" in out.output
+    assert "warning: group_state[0] (up): no attribute 'group'" in out.output
+    given = tmp_path / "given.srdf"
+    given.write_text(srdf_text())
+    out = CliRunner().invoke(main, ["info", str(urdf), "--srdf", str(given)])
+    assert out.exit_code == 0 and f"SRDF: {given} (given (srdf=))" in out.output, out.output
+    found.unlink()
+    out = CliRunner().invoke(main, ["info", str(urdf)])
+    assert out.exit_code == 0 and "SRDF: none found" in out.output, out.output

@@ -34,20 +34,46 @@ def _limit(v: float, revolute: bool, deg: bool) -> str:
     return f"{math.degrees(v):.1f}°" if revolute and deg else (f"{v:.4g} rad" if revolute else f"{v:.4g} m")
 
 
+def _print_srdf(con, scene, given: str) -> None:
+    """Which SRDF the model was loaded with, how it was found, and its lenient readings."""
+    model = getattr(scene, "_model_of_record", None)
+    if model is None:
+        return
+    if model.srdf is not None:
+        con.print(f"SRDF: {model.srdf.file} ({model.srdf.found})", markup=False, highlight=False, soft_wrap=True)
+        for w in model.srdf.warnings:
+            con.print(f"  warning: {w}", markup=False, highlight=False, soft_wrap=True)
+    elif given.lower().endswith(".urdf"):
+        con.print("SRDF: none found (looked beside the URDF, in ../srdf/ and under the robot's name; "
+                  "every pair but adjacent links is checked)", markup=False, highlight=False, soft_wrap=True)
+
+
 @main.command("info")
 @click.argument("scene")
 @click.option("--rad", is_flag=True, help="Print revolute joint limits in radians (default: degrees).")
-def info_cmd(scene: str, rad: bool) -> None:
-    """Describe SCENE (a built-in name, a .yaml scene or a .urdf): bodies, robots, joints, pairs, size."""
+@click.option("--srdf", type=click.Path(dir_okay=False), default=None,
+              help="The SRDF of a .urdf SCENE (default: found beside it, in ../srdf/ or under the robot's name; "
+                   "docs/models.md).")
+def info_cmd(scene: str, rad: bool, srdf: str | None) -> None:
+    """Describe SCENE (a built-in name, a .yaml scene or a .urdf): bodies, robots, joints, pairs, size,
+    and the SRDF used."""
     from rich.console import Console
     from rich.table import Table
 
     from ..scene import compile_scene, load_scene
 
-    s = load_scene(scene)
+    if srdf is not None:
+        if not scene.lower().endswith(".urdf"):
+            raise click.UsageError("--srdf goes with a .urdf SCENE")
+        from ..model import load_model
+
+        s = load_model(scene, srdf=srdf).scene
+    else:
+        s = load_scene(scene)
     c = compile_scene(s)
     con = Console()
     con.print(f"[bold]{s.name}[/bold]: {s.description}" if s.description else f"[bold]{s.name}[/bold]")
+    _print_srdf(con, s, scene)
 
     t = Table(title="bodies")
     for col in ("body", "category", "shapes", "faces", "vertices"):
