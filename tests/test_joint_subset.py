@@ -7,7 +7,7 @@ import pytest
 from click.testing import CliRunner
 
 import armguard
-from armguard import TrajectoryError, VerificationError
+from armguard import SceneError, TrajectoryError, VerificationError
 from armguard.cli import main
 from armguard.kinematics import Trajectory
 from armguard.verify import Subdivided
@@ -15,7 +15,9 @@ from armguard.verify import Subdivided
 from test_backends import ROBOTS
 from test_srdf import package, srdf_text
 
-HOME = '<group_state name="home" group="arm"><joint name="j2" value="0.4"/><joint name="j3" value="-0.8"/></group_state>'
+HOME = ('<group_state name="home" group="arm"><joint name="j2" value="0.4"/><joint name="j3" value="-0.8"/></group_state>'
+        '<group name="upper"><joint name="j2"/><joint name="j1"/><joint name="fix"/></group>'
+        '<group name="both"><group name="upper"/><joint name="j3"/></group>')
 
 
 @pytest.fixture()
@@ -64,6 +66,17 @@ def test_a_held_joint_can_make_the_collision(arm):
     assert (a.status, a.min_clearance) != (b.status, b.min_clearance)
 
 
+def test_srdf_groups_name_joint_subsets(arm, tmp_path):
+    assert arm.group_joints("upper") == ("j1", "j2")  # the robot's order; fixed joints are not moved
+    assert arm.group_joints("both") == ("j1", "j2", "j3")
+    with pytest.raises(SceneError, match="unknown SRDF group 'legs'"):
+        arm.group_joints("legs")
+    urdf = package(tmp_path / "chain")
+    urdf.with_suffix(".srdf").write_text(srdf_text('<group name="reach"><chain base_link="base" tip_link="l2"/></group>'))
+    chained = armguard.load_model(urdf)
+    assert list(chained.scene.robots) == ["reach"] and chained.group_joints("reach") == ("j1", "j2")
+
+
 def test_cli_verifies_a_file_over_a_subset(arm, tmp_path):
     traj = tmp_path / "sub.yaml"
     traj.write_text("format: armguard.trajectory\nversion: 1\nrobot: arm\njoint_names: [j2, j1]\n"
@@ -71,7 +84,13 @@ def test_cli_verifies_a_file_over_a_subset(arm, tmp_path):
     urdf = arm.files[0]
     out = CliRunner().invoke(main, ["verify", str(urdf), str(traj)])
     assert out.exit_code in (0, 1) and "held at home (not in the trajectory): j3 = -0.8" in out.output, out.output
-    traj.write_text(traj.read_text().replace("[j2, j1]", "[j2, j7]"))
+    traj.write_text(traj.read_text().replace("[j2, j1]", "upper"))  # an SRDF group: its joints j1, j2 in that order
+    out = CliRunner().invoke(main, ["verify", str(urdf), str(traj)])
+    assert out.exit_code in (0, 1) and "held at home (not in the trajectory): j3 = -0.8" in out.output, out.output
+    traj.write_text(traj.read_text().replace("upper", "legs"))
+    bad = CliRunner().invoke(main, ["verify", str(urdf), str(traj)])
+    assert bad.exit_code == 2 and "joint_names" in bad.output and "unknown SRDF group 'legs'" in bad.output, bad.output
+    traj.write_text(traj.read_text().replace("legs", "[j2, j7]"))
     bad = CliRunner().invoke(main, ["verify", str(urdf), str(traj)])
     assert bad.exit_code == 2 and "joint_names" in bad.output and "'j7'" in bad.output, bad.output
 
@@ -80,6 +99,7 @@ def test_panda_trajectory_over_its_seven_arm_joints():
     """A planner's Panda trajectory names the 7 arm joints; the finger is held at the SRDF's default."""
     m = armguard.load_model(ROBOTS / "panda_description/urdf/panda.urdf")
     arm = [f"panda_joint{k}" for k in range(1, 8)]
+    assert m.group_joints("arm") == tuple(arm) and m.group_joints("arm_and_hand") == (*arm, "panda_finger_joint1")
     home = m.scene.home("panda")
     q0 = home[:7]
     traj = Trajectory("panda", arm, [0.0, 2.0], [q0, q0 + np.r_[0.3, 0.2, 0.0, 0.2, 0.0, -0.2, 0.0]])

@@ -22,7 +22,9 @@ def resolve_trajectories(scene, specs):
         if spec == "all":
             out.extend((n, t) for n, t in scene.trajectories.items())
         elif p.suffix.lower() in (".yaml", ".yml") or p.exists():
-            out.append((p.stem, _checked_file(scene, p, Trajectory.load_yaml(p))))
+            model = getattr(scene, "_model_of_record", None)  # its SRDF groups name joints too
+            groups = model.group_joints if model is not None and model.srdf is not None else None
+            out.append((p.stem, _checked_file(scene, p, Trajectory.load_yaml(p, groups=groups))))
         elif spec in scene.trajectories:
             out.append((spec, scene.trajectories[spec]))
         elif spec in scene.canned_tests:

@@ -444,8 +444,9 @@ class Trajectory:
         save_yaml(self, path)
 
     @classmethod
-    def load_yaml(cls, path) -> "Trajectory":
-        """Read a trajectory written by :meth:`save_yaml`; SceneFileError names the file and the key."""
+    def load_yaml(cls, path, *, groups=None) -> "Trajectory":
+        """Read a trajectory written by :meth:`save_yaml`; SceneFileError names the file and the key.
+        ``groups`` (e.g. ``model.group_joints``) resolves a ``joint_names`` that names an SRDF group."""
         from ._trajectory_io import load_yaml
 
-        return load_yaml(cls, path)
+        return load_yaml(cls, path, groups)

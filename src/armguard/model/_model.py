@@ -157,6 +157,43 @@ class Model:
         lo, hi = np.where(np.isfinite(lo), lo, -np.pi), np.where(np.isfinite(hi), hi, np.pi)
         return self.pin_q(lo + (hi - lo) * rng.random((int(n), len(lo))))
 
+    def group_joints(self, group: str) -> tuple[str, ...]:
+        """The movable joints of SRDF group ``group`` (its ``<joint>`` members, the joints of its
+        ``<chain>`` and of the groups it names), as its robot calls them, in the robot's order; a
+        :class:`~armguard.SceneError` for an unknown group or one spanning several robots."""
+        from .._errors import SceneError
+
+        groups = self.srdf.groups if self.srdf is not None else {}
+        if group not in groups:
+            raise SceneError(f"unknown SRDF group {group!r}; the model's groups are {sorted(groups)}")
+        m = self.pin_model
+        by_iq = {m.joints[j].idx_q: m.names[j] for j in range(1, m.njoints) if m.joints[j].nq > 0}
+        scene_of = {by_iq.get(int(iq)): sn for iq, sn in zip(self._q_index, self.scene.joint_names)}
+        urdf: set = set()
+        todo, seen = [group], set()
+        while todo:
+            g = groups.get(todo.pop())
+            if g is None or g.name in seen:
+                continue
+            seen.add(g.name)
+            urdf.update(g.joints)
+            todo.extend(g.subgroups)
+            for base, tip in g.chains:  # the joints on the path from tip up to base
+                fid = m.getFrameId(tip) if m.existFrame(tip) else None
+                while fid is not None and m.frames[fid].name != base and fid != 0:
+                    fr = m.frames[fid]
+                    if fr.type.name == "JOINT":
+                        urdf.add(fr.name)
+                    fid = fr.parentFrame if fr.parentFrame != fid else None
+        flat = [scene_of[j] for j in urdf if j in scene_of]
+        robots = {sn.split("/", 1)[0] for sn in flat}
+        if len(robots) != 1:
+            raise SceneError(f"SRDF group {group!r} moves {'no joint' if not robots else f'joints of robots {sorted(robots)}'}: "
+                             "a trajectory moves the joints of one robot")
+        (r,) = robots
+        mine = {sn.split("/", 1)[1] for sn in flat}
+        return tuple(j for j in self.scene.robots[r].joint_names if j in mine)
+
     # ---------------------------------------------------------------- pairs
     def geometry_name(self, owner: str, i: int) -> str:
         """The GeometryObject name of shape ``i`` of scene owner ``owner``."""

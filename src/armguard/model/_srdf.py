@@ -32,6 +32,8 @@ class SrdfGroup:
     chains: tuple[tuple[str, str], ...] = ()
     links: tuple[str, ...] = ()
     where: str = ""
+    joints: tuple[str, ...] = ()  # <joint name> members
+    subgroups: tuple[str, ...] = ()  # <group name> references
 
 
 @dataclass(frozen=True)
@@ -145,9 +147,11 @@ def read_srdf(path, *, found: str = "given", partial: bool = False) -> Srdf:
         chains = tuple((_attr(c, "base_link", f, f"{w} ({name}).chain"), _attr(c, "tip_link", f, f"{w} ({name}).chain"))
                        for c in g.findall("chain"))
         links = tuple(_attr(ln, "name", f, f"{w} ({name}).link") for ln in g.findall("link"))
+        joints = tuple(_attr(j, "name", f, f"{w} ({name}).joint") for j in g.findall("joint"))
+        subs = tuple(_attr(sg, "name", f, f"{w} ({name}).group") for sg in g.findall("group"))
         if name in groups:
             raise SceneFileError(f, w, f"group {name!r} is defined twice")
-        groups[name] = SrdfGroup(name, chains, links, f"{w} ({name})")
+        groups[name] = SrdfGroup(name, chains, links, f"{w} ({name})", joints, subs)
     disabled = []
     for k, el in enumerate(root.iter("disable_collisions")):
         w = f"disable_collisions[{k}]"
