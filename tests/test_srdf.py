@@ -152,8 +152,24 @@ def test_a_bad_home_is_an_error_naming_the_srdf_element(tmp_path, joint, value, 
     assert Path(exc.value.file) == srdf.resolve() and exc.value.where == where and words in exc.value.message
 
 
+def test_a_home_a_whole_turn_out_is_that_angle(tmp_path):
+    urdf = package(tmp_path)
+    urdf.with_suffix(".srdf").write_text(srdf_text('<group_state name="home" group="arm">'
+                                                   '<joint name="j3" value="5.78318530718"/></group_state>'))
+    with pytest.warns(ArmguardWarning, match=r"group_state\[0\] \(home\).joint\[0\] \(j3\): value 5.78319 is outside"):
+        m = armguard.load_model(urdf)
+    np.testing.assert_allclose(m.scene.home("arm"), [0.0, 0.0, -0.5], atol=1e-10)
+
+
+def test_a_chain_naming_a_missing_link_is_not_an_arm_with_a_warning(tmp_path):
+    urdf = package(tmp_path)
+    urdf.with_suffix(".srdf").write_text(srdf_text('<group name="ee"><chain base_link="base0" tip_link="tool"/></group>'))
+    with pytest.warns(ArmguardWarning, match=r"group\[0\] \(ee\).chain: names link 'base0'"):
+        m = armguard.load_model(urdf)
+    assert list(m.scene.robots) == ["arm"] and m.scene.robots["arm"].joint_names == ("j1", "j2", "j3")
+
+
 @pytest.mark.parametrize("chain, words", [
-    ('base_link="base" tip_link="l7"', "names link 'l7'"),
     ('base_link="l2" tip_link="l1"', "is not below base link"),
     ('base_link="l1" tip_link="tool"', "a joint moves it"),
 ])

@@ -266,22 +266,21 @@ def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str) -> list:
     base link, so a group whose base is another group's base or lies below it (MoveIt's
     ``panda_arm`` link0->link8 beside ``panda_arm_hand`` link0->hand, or a ``hand`` group) is part of
     that arm, not a second robot: the first group in file order of each outermost base names the arm.
-    A chain naming a link the URDF lacks is an error naming the SRDF's element (skipped, with a
-    warning, when the SRDF is ``partial``: one of a larger robot)."""
-    cand, skipped = [], []
+    A chain naming a link the URDF lacks is skipped with a warning naming the SRDF's element, as
+    Pinocchio ignores it (z1.srdf's chain starts at a link ``base`` z1.urdf does not have): the
+    shapes still move with their joints, as the remaining arms or the whole tree; a tip not below
+    its base is an error naming the element."""
+    cand = []
     for g in srdf.arm_groups:
         base, tip = g.chains[0]
         missing = [ln for ln in (base, tip) if ln not in body_ids]
         if missing:
-            if srdf.partial:
-                skipped.append(g.name)
-                continue
-            raise srdf.error(f"{g.where}.chain", f"names link {missing[0]!r}, which the URDF {f} does not have")
+            srdf.warn(f"{g.where}.chain: names link {missing[0]!r}, which the URDF {f} does not have; "
+                      "the group is not an arm")
+            continue
         if not _descends(body_ids[tip], body_ids[base], parent_body):
             raise srdf.error(f"{g.where}.chain", f"tip link {tip!r} is not below base link {base!r} in the URDF {f}")
         cand.append((g, body_ids[base]))
-    if skipped:
-        srdf.warn(f"chain groups {skipped} name links the URDF {f} does not have and were skipped")
     arms, bases = [], set()
     for g, b in cand:
         if b in bases or any(b2 != b and _descends(b, b2, parent_body) for _, b2 in cand):
@@ -294,7 +293,11 @@ def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str) -> list:
 def _home(srdf, st, robot, prefix: str, movable: set, f: str) -> np.ndarray:
     """The home of ``robot`` from SRDF state ``st``; a joint the URDF lacks (unless the SRDF is
     ``partial``), a multi-value for a one-value joint, or a value outside the joint's limits is an
-    error naming the state's ``<joint>`` element in the SRDF."""
+    error naming the state's ``<joint>`` element in the SRDF.  A revolute joint's value that lies
+    in the limits after a whole turn (kinova.srdf: -1.5707 for a joint limited to [0.33, 5.95])
+    is that angle, the same pose, with a warning."""
+    from ..kinematics import JointType
+
     unknown = [jn for jn in st.values if jn not in movable]
     if unknown and not srdf.partial:
         jn = unknown[0]
@@ -303,7 +306,7 @@ def _home(srdf, st, robot, prefix: str, movable: set, f: str) -> np.ndarray:
     if unknown:  # an SRDF of a larger robot (Srdf.warn says it once)
         srdf.warn(f"{st.where}: {len(unknown)} joints the URDF {f} does not have were skipped (first: {unknown[0]!r})")
     out = []
-    for j, lo, hi in zip(robot.joint_names, robot.lower, robot.upper):
+    for j, jt, lo, hi in zip(robot.joint_names, robot.joint_types, robot.lower, robot.upper):
         key = prefix + j if prefix + j in st.values else j
         if key not in st.values:
             out.append(min(max(0.0, lo), hi))
@@ -311,6 +314,12 @@ def _home(srdf, st, robot, prefix: str, movable: set, f: str) -> np.ndarray:
         v, where = st.values[key], st.joint_where[key]
         if isinstance(v, tuple):
             raise srdf.error(where, f"expected one value for joint {key!r}, got {len(v)}")
+        if not (lo - 1e-9 <= v <= hi + 1e-9) and jt is JointType.REVOLUTE:
+            turned = v + 2.0 * math.pi * math.ceil((lo - 1e-9 - v) / (2.0 * math.pi))  # the first turn >= lo
+            if lo - 1e-9 <= turned <= hi + 1e-9:
+                srdf.warn(f"{where}: value {v:g} is outside the limits [{lo:g}, {hi:g}] of joint {key!r}; "
+                          f"read as {turned:.6g} (the same angle a whole turn away)")
+                v = turned
         if not (lo - 1e-9 <= v <= hi + 1e-9):
             raise srdf.error(where, f"value {v:g} is outside the limits [{lo:g}, {hi:g}] of joint {key!r} in the URDF {f}")
         out.append(min(max(v, lo), hi))
