@@ -97,7 +97,7 @@ def test_cli_verifies_a_file_over_a_subset(arm, tmp_path):
 
 def test_panda_trajectory_over_its_seven_arm_joints():
     """A planner's Panda trajectory names the 7 arm joints; the finger is held at the SRDF's default."""
-    m = armguard.load_model(ROBOTS / "panda_description/urdf/panda.urdf")
+    m = armguard.load_model(ROBOTS / "panda_description/urdf/panda_collision.urdf")  # the Panda in capsules: fast
     arm = [f"panda_joint{k}" for k in range(1, 8)]
     assert m.group_joints("arm") == tuple(arm) and m.group_joints("arm_and_hand") == (*arm, "panda_finger_joint1")
     home = m.scene.home("panda")
