@@ -10,6 +10,7 @@ import importlib
 
 from ._errors import (
     ArmguardError,
+    ArmguardWarning,
     ClipError,
     BackendError,
     DetectionError,
@@ -51,6 +52,7 @@ _LAZY = {
 
 __all__ = [
     "ArmguardError",
+    "ArmguardWarning",
     "BackendError",
     "GeometryError",
     "KinematicsError",

@@ -20,11 +20,16 @@ __all__ = [
     "TerrainFileError",
     "ReferenceFileError",
     "UncertaintyError",
+    "ArmguardWarning",
 ]
 
 
 class ArmguardError(Exception):
     """Base class of every error armguard raises on purpose."""
+
+
+class ArmguardWarning(UserWarning):
+    """A lenient reading of an input armguard accepted (the message names the file and the element)."""
 
 
 class GeometryError(ArmguardError, ValueError):

@@ -17,7 +17,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Mapping
 
-from .._errors import BackendError
+from .._errors import BackendError, DetectionError
 from ._interface import (Backend, Capability, Checker, CheckerBase, NearestPair, PairDistances, PairDistancesMany, check_pairs,
                          check_Q, check_q)
 
@@ -99,11 +99,22 @@ def resolve(backend: str | None = None, options: Mapping | None = None, *, confi
     return name, opts
 
 
+def require_pairs(model) -> None:
+    """A :class:`~armguard.DetectionError` when ``model`` has no active pair: a check of it could only
+    say "clear" without having looked at anything (an SRDF that disables every pair, a robot alone)."""
+    if len(model.pairs) == 0:
+        srdf = getattr(model, "srdf", None)
+        why = f" (its SRDF {srdf.file} disables {len(srdf.disabled)} pairs)" if srdf is not None and srdf.disabled else ""
+        raise DetectionError(f"model {model.name!r} has no pair to check{why}: no verdict can be given; "
+                             "enable a pair, add a body or a workspace box")
+
+
 def checker(model, backend: str | None = None, options: Mapping | None = None, *, config=None) -> Checker:
     """The Checker of ``backend`` (see :func:`resolve`) for ``model`` (a Model or anything ``load_model`` takes)."""
     from ..model import Model, load_model
 
     if not isinstance(model, Model):
         model = load_model(model)
+    require_pairs(model)
     name, opts = resolve(backend, options, config=config)
     return get_backend(name).build(model, opts)

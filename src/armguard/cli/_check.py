@@ -90,11 +90,12 @@ def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_u
     sc = load_scene(scene)
     q = sc.flat_q(sc.default_q()) if q_text is None else parse_q(sc, q_text, deg)
     warm_up()
-    det = Detector(sc, threshold=threshold, stopping_distance=stopping_distance, active=active)
+    terrain = None
     if terrain_file is not None:  # the terrain category (armguard.terrain), whatever the backend
-        from ..terrain import attach_terrain, load_terrain
+        from ..terrain import load_terrain
 
-        attach_terrain(det, load_terrain(terrain_file, sc, robot=active))
+        terrain = load_terrain(terrain_file, sc, robot=active)
+    det = Detector(sc, threshold=threshold, stopping_distance=stopping_distance, active=active, terrain=terrain)
     rep = det.check(q, budget_us=budget_us)
     collided = rep.status.value in ("collision", "incomplete")  # never a success exit without a verdict
     if as_json:

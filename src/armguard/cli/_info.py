@@ -53,24 +53,52 @@ def _print_known_models() -> None:
     con.print(t)
 
 
+def _print_srdf(con, scene, given: str) -> None:
+    """Which SRDF the model was loaded with, how it was found, and its lenient readings."""
+    model = getattr(scene, "_model_of_record", None)
+    if model is None:
+        return
+    if model.srdf is not None:
+        con.print(f"SRDF: {model.srdf.file} ({model.srdf.found})", markup=False, highlight=False, soft_wrap=True)
+        for w in model.srdf.warnings:
+            con.print(f"  warning: {w}", markup=False, highlight=False, soft_wrap=True)
+    elif given.lower().endswith(".urdf"):
+        con.print("SRDF: none found (looked beside the URDF, in ../srdf/ and under the robot's name; "
+                  "every pair but adjacent links is checked)", markup=False, highlight=False, soft_wrap=True)
+
+
 @main.command("info")
 @click.argument("scene", required=False)
 @click.option("--rad", is_flag=True, help="Print revolute joint limits in radians (default: degrees).")
-def info_cmd(scene: str | None, rad: bool) -> None:
+@click.option("--srdf", type=click.Path(dir_okay=False), default=None,
+              help="The SRDF of a .urdf SCENE (default: found beside it, in ../srdf/ or under the robot's name; "
+                   "docs/models.md).")
+def info_cmd(scene: str | None, rad: bool, srdf: str | None) -> None:
     """Describe SCENE (a built-in or public robot name, a .yaml scene or a .urdf): bodies, robots, joints,
-    pairs, size.  Without SCENE: list the model names armguard knows, and whether each is installed."""
+    pairs, size, and the SRDF used.  Without SCENE: list the model names armguard knows, and whether each
+    is installed."""
     from rich.console import Console
     from rich.table import Table
 
     from ..scene import compile_scene, load_scene
 
     if scene is None:
+        if srdf is not None:
+            raise click.UsageError("--srdf goes with a .urdf SCENE")
         _print_known_models()
         return
-    s = load_scene(scene)
+    if srdf is not None:
+        if not scene.lower().endswith(".urdf"):
+            raise click.UsageError("--srdf goes with a .urdf SCENE")
+        from ..model import load_model
+
+        s = load_model(scene, srdf=srdf).scene
+    else:
+        s = load_scene(scene)
     c = compile_scene(s)
     con = Console()
     con.print(f"[bold]{s.name}[/bold]: {s.description}" if s.description else f"[bold]{s.name}[/bold]")
+    _print_srdf(con, s, scene)
 
     t = Table(title="bodies")
     for col in ("body", "category", "shapes", "faces", "vertices"):

@@ -99,6 +99,22 @@ def _check_length(value, name: str) -> float:
     return x
 
 
+def _require_pairs(scene, cs, active, with_terrain: bool) -> None:
+    """A DetectionError when nothing would be checked (no pair, or none on the ``active`` arm):
+    the detector would otherwise say CLEAR without having looked at anything."""
+    if with_terrain:
+        return
+    pa, pb = np.asarray(cs.pair_a, np.int64), np.asarray(cs.pair_b, np.int64)
+    n = len(pa)
+    if active is not None and n:
+        r = list(cs.robot_names).index(active) if active in cs.robot_names else -1
+        n = int(np.count_nonzero((cs.owner_robot[pa] == r) | (cs.owner_robot[pb] == r)))
+    if n == 0 and not cs.has_workspace:
+        on = f" on arm {active!r}" if active is not None else ""
+        raise DetectionError(f"scene {scene.name!r} has no pair to check{on} (every pair is disabled or excluded): "
+                             "no verdict can be given; enable a pair, add a body or a workspace box")
+
+
 class Detector:
     """Ranger's virtual sensor for ``scene``: per category, the nearest pair and a status.
 
@@ -157,6 +173,7 @@ class Detector:
         self._active = active
         self._ns_per_pair = _DEFAULT_NS_PER_PAIR
         self._prepare_lock = threading.RLock()
+        self._with_terrain = terrain is not None  # terrain alone is something to check
         self.prepare()
         if terrain is not None:  # the terrain category: check() returns armguard.terrain's merged report
             attach_extra(self, "terrain", terrain)
@@ -169,6 +186,7 @@ class Detector:
         m = build_model(self.scene, active=self._active, reach_margin=margin, tol=self._tol)
         self._model = m
         cs = m.compiled
+        _require_pairs(self.scene, cs, self._active, self._with_terrain or self.terrain is not None)
         t = m.tree
         L = Layout()
         nq = max(m.n_q, 1)

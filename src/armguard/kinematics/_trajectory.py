@@ -114,6 +114,34 @@ class Trajectory:
     def __repr__(self) -> str:
         return f"Trajectory({self._robot_name!r}, {self._times.shape[0]} knots, {self.duration:.3f} s)"
 
+    def over_joints(self, joint_names: Sequence[str], hold) -> tuple["Trajectory", dict]:
+        """This trajectory over all of ``joint_names`` (a robot's joints, in its order), when it names a
+        subset of them (in any order): its own joints keep their values, every other joint is held
+        at ``hold[k]`` (``(len(joint_names),)``, e.g. the robot's home) at every knot.
+
+        Returns ``(trajectory, held)``, ``held`` the held joints ``{name: value}`` in ``joint_names``'s
+        order (empty, and ``self``, when it already names exactly ``joint_names``).  A joint named
+        twice or not in ``joint_names`` is a :class:`~armguard.TrajectoryError`."""
+        names = tuple(str(j) for j in joint_names)
+        if self._joint_names == names:
+            return self, {}
+        seen = set()
+        for j in self._joint_names:
+            if j in seen:
+                raise TrajectoryError(f"joint_names: {j!r} is named twice")
+            if j not in names:
+                raise TrajectoryError(f"joint_names: {j!r} is not a joint of robot {self._robot_name!r}; its joints are {list(names)}")
+            seen.add(j)
+        h = np.asarray(hold, dtype=np.float64)
+        if h.shape != (len(names),) or not np.all(np.isfinite(h)):
+            raise TrajectoryError(f"hold: expected {len(names)} finite values (one per joint {list(names)}), got {h.tolist()}")
+        W = np.repeat(h[None, :], self._times.shape[0], axis=0)
+        col = {j: k for k, j in enumerate(names)}
+        for i, j in enumerate(self._joint_names):
+            W[:, col[j]] = self._waypoints[:, i]
+        held = {j: float(h[k]) for k, j in enumerate(names) if j not in seen}
+        return Trajectory(self._robot_name, names, self._times, W, self._blend), held
+
     # ------------------------------------------------------------------ evaluation
     def _locate(self, t) -> tuple[np.ndarray, np.ndarray]:
         try:
@@ -416,8 +444,9 @@ class Trajectory:
         save_yaml(self, path)
 
     @classmethod
-    def load_yaml(cls, path) -> "Trajectory":
-        """Read a trajectory written by :meth:`save_yaml`; SceneFileError names the file and the key."""
+    def load_yaml(cls, path, *, groups=None) -> "Trajectory":
+        """Read a trajectory written by :meth:`save_yaml`; SceneFileError names the file and the key.
+        ``groups`` (e.g. ``model.group_joints``) resolves a ``joint_names`` that names an SRDF group."""
         from ._trajectory_io import load_yaml
 
-        return load_yaml(cls, path)
+        return load_yaml(cls, path, groups)

@@ -18,7 +18,7 @@ import os
 import numpy as np
 import yaml
 
-from .._errors import SceneFileError, TrajectoryError, list_problems
+from .._errors import ArmguardError, SceneFileError, TrajectoryError, list_problems
 
 __all__ = ["trajectory_to_dict", "trajectory_from_dict", "save_yaml", "load_yaml", "FORMAT", "VERSION"]
 
@@ -72,9 +72,11 @@ def _numbers(d, key: str, ndim: int, problems: list, width: int | None = None):
     return arr
 
 
-def trajectory_from_dict(cls, d, *, file=None):
+def trajectory_from_dict(cls, d, *, file=None, groups=None):
     """A trajectory of ``cls`` from its YAML dictionary; every problem found is listed in one error
-    (a missing key with a misspelt one beside it says so)."""
+    (a missing key with a misspelt one beside it says so).  ``joint_names`` may be a group's name
+    (a string) when ``groups`` (a callable: group name -> its joint names, e.g.
+    :meth:`armguard.model.Model.group_joints`) resolves it."""
     import difflib
 
     if not isinstance(d, dict):
@@ -95,7 +97,15 @@ def trajectory_from_dict(cls, d, *, file=None):
     if "robot" in d and not isinstance(d["robot"], str):
         problems.append(("robot", f"expected a robot name (string), got {d['robot']!r}"))
     names = d.get("joint_names")
-    if "joint_names" in d and (not isinstance(names, list) or not all(isinstance(n, str) for n in names)):
+    if isinstance(names, str):  # an SRDF group of the robot
+        try:
+            if groups is None:
+                raise TrajectoryError("no model with SRDF groups to resolve it")
+            names = list(groups(names))
+        except ArmguardError as exc:
+            problems.append(("joint_names", f"{names!r} is not a list of joint names nor a group of the model: {exc}"))
+            names = None
+    elif "joint_names" in d and (not isinstance(names, list) or not all(isinstance(n, str) for n in names)):
         problems.append(("joint_names", "expected a list of joint names (strings)"))
         names = None
     times = _numbers(d, "times", 1, problems) if "times" in d else None
@@ -119,7 +129,7 @@ def save_yaml(traj, path) -> None:
         yaml.safe_dump(trajectory_to_dict(traj), fh, sort_keys=False, default_flow_style=None)
 
 
-def load_yaml(cls, path):
+def load_yaml(cls, path, groups=None):
     file = os.fspath(path)
     try:
         with open(file, encoding="utf-8") as fh:
@@ -133,4 +143,4 @@ def load_yaml(cls, path):
     from .._lines import lines_for
 
     with lines_for(file):
-        return trajectory_from_dict(cls, d, file=file)
+        return trajectory_from_dict(cls, d, file=file, groups=groups)

@@ -102,13 +102,8 @@ def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=Non
     # the arms: SRDF chain groups, or the whole movable tree as one robot named after the URDF
     arms = []
     if srdf is not None and srdf.arm_groups:
-        for g in srdf.arm_groups:
-            base, tip = g.chains[0]
-            for ln in (base, tip):
-                if ln not in body_ids:
-                    raise SceneFileError(srdf.file, f"group {g.name!r} chain", f"names link {ln!r}, which the URDF {f} does not have")
-            arms.append((g.name, body_ids[base], f"{g.name}_"))
-    elif pin_model.njoints > 1:
+        arms = _arms_of_groups(srdf, body_ids, parent_body, f)
+    if not arms and pin_model.njoints > 1:
         first = pin_model.frames[pin_model.getFrameId(pin_model.names[1], FT.JOINT)]
         root = first.parentFrame
         while True:  # climb to the topmost link fixed to the world on joint 1's branch
@@ -117,6 +112,7 @@ def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=Non
                 break
             root = p
         arms.append((info.robot_name, root, ""))
+    movable = {pin_model.names[j] for j in range(1, pin_model.njoints)} | set(info.mimic)
 
     part = ScenePart()
     in_arm: set[int] = set()
@@ -125,6 +121,9 @@ def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=Non
     for rname, root, prefix in arms:
         links = subtree(root, stop)
         if frames[root].parentJoint != 0:
+            if prefix:  # an SRDF chain group: the SRDF's element is at fault
+                raise srdf.error(srdf.groups[rname].where + ".chain", f"base link {frames[root].name!r} must be fixed to "
+                                 f"the world in the URDF {f} (a joint moves it)")
             raise SceneFileError(f, f"link[{frames[root].name}]", f"arm {rname!r}: its base link must be fixed to the world")
         in_arm.update(links)
         specs, jnames, q_index, circular = [], [], [], []
@@ -188,10 +187,9 @@ def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=Non
         except Exception as exc:  # noqa: BLE001 - reported against the file
             raise SceneFileError(f, f"arm {rname!r}", str(exc)) from None
         home = None
-        st = srdf.home(rname) if srdf is not None else None
+        st = srdf.home_state(rname) if srdf is not None else None
         if st is not None:
-            home = np.array([st.get(prefix + j, st.get(j, min(max(0.0, lo_), hi_)))
-                             for j, lo_, hi_ in zip(jnames, robot.lower, robot.upper)])
+            home = _home(srdf, st, robot, prefix, movable, f)
         part.robots.append((robot, home, np.asarray(q_index, dtype=np.int64)))
         part.circular.append(np.asarray(circular, dtype=np.int64))
         for k in links:
@@ -250,3 +248,79 @@ def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=Non
         part.bodies.append((name, shapes, "vehicle" if name in vehicle_links else "environment"))
     part.payloads = [tuple(p) for p in part.payloads if p[3]]
     return part
+
+
+def _descends(i: int, ancestor: int, parent_body) -> bool:
+    """Whether BODY frame ``i`` is ``ancestor`` or below it."""
+    while i is not None:
+        if i == ancestor:
+            return True
+        i, _ = parent_body(i)
+    return False
+
+
+def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str) -> list:
+    """``(name, base frame, prefix)`` of the arms of the SRDF's chain groups.
+
+    Groups describe the robot; they never split it.  An arm is the whole subtree below its chain's
+    base link, so a group whose base is another group's base or lies below it (MoveIt's
+    ``panda_arm`` link0->link8 beside ``panda_arm_hand`` link0->hand, or a ``hand`` group) is part of
+    that arm, not a second robot: the first group in file order of each outermost base names the arm.
+    A chain naming a link the URDF lacks is skipped with a warning naming the SRDF's element, as
+    Pinocchio ignores it (z1.srdf's chain starts at a link ``base`` z1.urdf does not have): the
+    shapes still move with their joints, as the remaining arms or the whole tree; a tip not below
+    its base is an error naming the element."""
+    cand = []
+    for g in srdf.arm_groups:
+        base, tip = g.chains[0]
+        missing = [ln for ln in (base, tip) if ln not in body_ids]
+        if missing:
+            srdf.warn(f"{g.where}.chain: names link {missing[0]!r}, which the URDF {f} does not have; "
+                      "the group is not an arm")
+            continue
+        if not _descends(body_ids[tip], body_ids[base], parent_body):
+            raise srdf.error(f"{g.where}.chain", f"tip link {tip!r} is not below base link {base!r} in the URDF {f}")
+        cand.append((g, body_ids[base]))
+    arms, bases = [], set()
+    for g, b in cand:
+        if b in bases or any(b2 != b and _descends(b, b2, parent_body) for _, b2 in cand):
+            continue  # inside an arm another group already names
+        bases.add(b)
+        arms.append((g.name, b, f"{g.name}_"))
+    return arms
+
+
+def _home(srdf, st, robot, prefix: str, movable: set, f: str) -> np.ndarray:
+    """The home of ``robot`` from SRDF state ``st``; a joint the URDF lacks (unless the SRDF is
+    ``partial``), a multi-value for a one-value joint, or a value outside the joint's limits is an
+    error naming the state's ``<joint>`` element in the SRDF.  A revolute joint's value that lies
+    in the limits after a whole turn (kinova.srdf: -1.5707 for a joint limited to [0.33, 5.95])
+    is that angle, the same pose, with a warning."""
+    from ..kinematics import JointType
+
+    unknown = [jn for jn in st.values if jn not in movable]
+    if unknown and not srdf.partial:
+        jn = unknown[0]
+        raise srdf.error(st.joint_where[jn], f"names joint {jn!r}, which is not a movable joint of the URDF {f} "
+                         f"(its movable joints are {sorted(movable)})")
+    if unknown:  # an SRDF of a larger robot (Srdf.warn says it once)
+        srdf.warn(f"{st.where}: {len(unknown)} joints the URDF {f} does not have were skipped (first: {unknown[0]!r})")
+    out = []
+    for j, jt, lo, hi in zip(robot.joint_names, robot.joint_types, robot.lower, robot.upper):
+        key = prefix + j if prefix + j in st.values else j
+        if key not in st.values:
+            out.append(min(max(0.0, lo), hi))
+            continue
+        v, where = st.values[key], st.joint_where[key]
+        if isinstance(v, tuple):
+            raise srdf.error(where, f"expected one value for joint {key!r}, got {len(v)}")
+        if not (lo - 1e-9 <= v <= hi + 1e-9) and jt is JointType.REVOLUTE:
+            turned = v + 2.0 * math.pi * math.ceil((lo - 1e-9 - v) / (2.0 * math.pi))  # the first turn >= lo
+            if lo - 1e-9 <= turned <= hi + 1e-9:
+                srdf.warn(f"{where}: value {v:g} is outside the limits [{lo:g}, {hi:g}] of joint {key!r}; "
+                          f"read as {turned:.6g} (the same angle a whole turn away)")
+                v = turned
+        if not (lo - 1e-9 <= v <= hi + 1e-9):
+            raise srdf.error(where, f"value {v:g} is outside the limits [{lo:g}, {hi:g}] of joint {key!r} in the URDF {f}")
+        out.append(min(max(v, lo), hi))
+    return np.asarray(out, dtype=np.float64)

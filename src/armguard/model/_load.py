@@ -1,7 +1,8 @@
 """``load_model``: a built-in name, a URDF (+ SRDF) or a YAML scene file into a :class:`Model`.
 
-* A ``.urdf``: Pinocchio builds the model and GeometryModel (checked, see ``_urdf``); the SRDF
-  beside it (same stem) or ``srdf=`` gives groups, disabled pairs and home states.
+* A ``.urdf``: Pinocchio builds the model and GeometryModel (checked, see ``_urdf``); its SRDF
+  (``srdf=``, else found by :func:`srdf_candidates`; ``srdf=False``: none) gives groups, disabled
+  pairs and home states.
 * A model sidecar ``.yaml`` (``model: {urdf, srdf}``): the same, then the sidecar's workspace,
   accelerations, extra bodies, pair filters, trajectories and canned tests.
 * A scene ``.yaml`` without ``model:`` (robots from DH tables, bodies as shapes): the scene as
@@ -84,11 +85,51 @@ def _known_names_text() -> str:
     return f"built-in {list(_BUILTINS)}, public {list(public_robot_names(aliases=True))}"
 
 
+def srdf_candidates(urdf: Path) -> list[tuple[Path, str, bool]]:
+    """Where :func:`load_model` looks for the SRDF of ``urdf``, in order: ``(path, how, partial)``.
+
+    Under the URDF's file name ``<stem>``: ``<dir>/<stem>.srdf``, then ``<dir>/../srdf/<stem>.srdf``
+    (example-robot-data's ``X_description/{urdf,srdf}/``); then under the robot's name ``<name>``
+    (the URDF's ``<robot name>``, when it differs from the stem): ``<dir>/<name>.srdf``, then
+    ``<dir>/../srdf/<name>.srdf`` -- ``panda_collision.urdf`` finds ``panda.srdf``, ``ur5_robot.urdf``
+    ``ur5.srdf``, ``talos_left_arm.urdf`` ``talos.srdf``.  An SRDF found under the robot's name may
+    describe a larger robot (``partial``): names the URDF lacks are then skipped with a warning."""
+    urdf = Path(urdf)
+    names = [(urdf.stem, False)]
+    robot = _urdf_robot_name(urdf)
+    if robot and robot != urdf.stem and "/" not in robot and "\\" not in robot:
+        names.append((robot, True))
+    out = []
+    for name, partial in names:
+        under = f"the robot's name {name!r}" if partial else "the URDF's name"
+        out.append((urdf.parent / f"{name}.srdf", f"beside the URDF, under {under}", partial))
+        out.append((urdf.parent.parent / "srdf" / f"{name}.srdf", f"in ../srdf/, under {under}", partial))
+    return out
+
+
+def _urdf_robot_name(urdf: Path) -> str | None:
+    """The ``name`` of the URDF's ``<robot>`` element (None when the file does not say)."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        for _, el in ET.iterparse(urdf, events=("start",)):
+            return el.get("name") if el.tag == "robot" else None
+    except (ET.ParseError, OSError):
+        return None  # the URDF's own reading reports it
+    return None
+
+
 def _srdf_for(urdf: Path, srdf):
+    """The SRDF of ``urdf``: ``srdf`` when given (it wins), else the first of :func:`srdf_candidates`
+    that exists; None when there is none (or ``srdf`` is False)."""
+    if srdf is False:
+        return None
     if srdf is not None:
-        return read_srdf(srdf)
-    beside = urdf.with_suffix(".srdf")
-    return read_srdf(beside) if beside.is_file() else None
+        return read_srdf(srdf, found="given (srdf=)")
+    for path, how, partial in srdf_candidates(urdf):
+        if path.is_file():
+            return read_srdf(path.resolve(), found=how, partial=partial)
+    return None
 
 
 def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None):
@@ -110,10 +151,14 @@ def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None):
     except ArmguardError as exc:
         raise SceneFileError(str(urdf), "", str(exc)) from None
     if srdf_obj is not None:
+        skipped: list[str] = []
         for k, (a, b, _) in enumerate(srdf_obj.disabled):
             oa, ob = parts.link_owner.get(a), parts.link_owner.get(b)
             if oa is None or ob is None:
                 missing = a if oa is None else b
+                if srdf_obj.partial:  # an SRDF of a larger robot: its pairs of links this URDF lacks do not apply
+                    skipped.append(f"disable_collisions[{k}] ({missing})")
+                    continue
                 raise srdf_obj.error(f"disable_collisions[{k}]", f"names link {missing!r}, which the URDF {urdf} does not have")
             if oa == ob:
                 continue
@@ -121,6 +166,9 @@ def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None):
                 scene.disable_pair(oa, ob)
             except SceneError as exc:
                 raise srdf_obj.error(f"disable_collisions[{k}]", str(exc)) from None
+        if skipped:
+            srdf_obj.warn(f"{len(skipped)} disabled pairs name links {urdf.name} does not have and were skipped "
+                          f"(first: {', '.join(skipped[:3])})")
     return scene, pin_model, geom, parts
 
 
@@ -146,7 +194,7 @@ def model_from_urdf(path, *, srdf=None, package_dirs=()) -> Model:
     scene, pin_model, geom, parts = _build(path, srdf_obj, package_dirs, {})
     files = [path, *parts_files(parts, srdf_obj)]
     return Model(scene.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), geometry_names=parts.geometry_names,
-                 notes=parts.notes, files=files)
+                 notes=parts.notes, files=files, srdf=srdf_obj)
 
 
 def parts_files(parts, srdf_obj) -> list:
@@ -202,7 +250,7 @@ def model_from_scenefile(sf, file: str, base: Path) -> Model:
     _add_extra_bodies(scene, geom, geometry_names, {b for b, _, _ in parts.bodies})
     files = [Path(file), urdf, *parts_files(parts, srdf_obj), *ctx.read]
     return Model(sf.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), geometry_names=geometry_names,
-                 notes=parts.notes, files=files)
+                 notes=parts.notes, files=files, srdf=srdf_obj)
 
 
 def _add_extra_bodies(scene, geom, geometry_names: dict, known: set) -> None:

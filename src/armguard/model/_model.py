@@ -73,10 +73,12 @@ class Model:
                                        cannot hold the exact shape)
     files : tuple[Path, ...]           the files it was loaded from (sidecar, URDF, SRDF, then every
                                        mesh file its geometry was read from); ``sha256`` their hashes
+    srdf : Srdf or None                the SRDF it was loaded with: ``srdf.file``, ``srdf.found`` (how it
+                                       was found, ``docs/models.md``) and ``srdf.warnings``
     """
 
     def __init__(self, name, pin_model, collision_model, scene, *, q_index, geometry_names, notes, files,
-                 circular=()) -> None:
+                 circular=(), srdf=None) -> None:
         self.name = str(name)
         self.pin_model = pin_model
         self.collision_model = collision_model
@@ -88,6 +90,7 @@ class Model:
         self._geom = dict(geometry_names)
         self.notes = types.MappingProxyType(dict(notes))
         self.files = _with_meshes(files, collision_model)
+        self.srdf = srdf
         self.sha256 = types.MappingProxyType({str(p): file_sha256(p) for p in self.files})
         self._pairs = None
         self._revision = None
@@ -163,6 +166,43 @@ class Model:
         hi = np.concatenate([r.upper for r in robots]) if robots else np.zeros(0)
         lo, hi = np.where(np.isfinite(lo), lo, -np.pi), np.where(np.isfinite(hi), hi, np.pi)
         return self.pin_q(lo + (hi - lo) * rng.random((int(n), len(lo))))
+
+    def group_joints(self, group: str) -> tuple[str, ...]:
+        """The movable joints of SRDF group ``group`` (its ``<joint>`` members, the joints of its
+        ``<chain>`` and of the groups it names), as its robot calls them, in the robot's order; a
+        :class:`~armguard.SceneError` for an unknown group or one spanning several robots."""
+        from .._errors import SceneError
+
+        groups = self.srdf.groups if self.srdf is not None else {}
+        if group not in groups:
+            raise SceneError(f"unknown SRDF group {group!r}; the model's groups are {sorted(groups)}")
+        m = self.pin_model
+        by_iq = {m.joints[j].idx_q: m.names[j] for j in range(1, m.njoints) if m.joints[j].nq > 0}
+        scene_of = {by_iq.get(int(iq)): sn for iq, sn in zip(self._q_index, self.scene.joint_names)}
+        urdf: set = set()
+        todo, seen = [group], set()
+        while todo:
+            g = groups.get(todo.pop())
+            if g is None or g.name in seen:
+                continue
+            seen.add(g.name)
+            urdf.update(g.joints)
+            todo.extend(g.subgroups)
+            for base, tip in g.chains:  # the joints on the path from tip up to base
+                fid = m.getFrameId(tip) if m.existFrame(tip) else None
+                while fid is not None and m.frames[fid].name != base and fid != 0:
+                    fr = m.frames[fid]
+                    if fr.type.name == "JOINT":
+                        urdf.add(fr.name)
+                    fid = fr.parentFrame if fr.parentFrame != fid else None
+        flat = [scene_of[j] for j in urdf if j in scene_of]
+        robots = {sn.split("/", 1)[0] for sn in flat}
+        if len(robots) != 1:
+            raise SceneError(f"SRDF group {group!r} moves {'no joint' if not robots else f'joints of robots {sorted(robots)}'}: "
+                             "a trajectory moves the joints of one robot")
+        (r,) = robots
+        mine = {sn.split("/", 1)[1] for sn in flat}
+        return tuple(j for j in self.scene.robots[r].joint_names if j in mine)
 
     # ---------------------------------------------------------------- pairs
     def geometry_name(self, owner: str, i: int) -> str:

@@ -2,23 +2,26 @@
 
 Only what armguard uses is read: ``<group>`` (with ``<chain base_link tip_link>`` or
 ``<link name>`` members), ``<disable_collisions link1 link2 reason>`` and
-``<group_state name group>`` with ``<joint name value>``.  Every problem raises a
-:class:`~armguard.SceneFileError` naming the file and the element.
+``<group_state name group>`` with ``<joint name value>``.  A file that does not parse, or an
+element without a name armguard needs, raises a :class:`~armguard.SceneFileError` naming the
+file and the element.  Where Pinocchio reads an SRDF leniently, so does armguard, with a
+warning naming the element: a ``group_state`` without ``group`` (a state of the whole robot).
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .._errors import SceneFileError
+from .._errors import ArmguardWarning, SceneFileError
 
 __all__ = ["Srdf", "SrdfGroup", "read_srdf", "HOME_STATES"]
 
 HOME_STATES = ("home", "default", "ready")
-"""Names of the SRDF group state taken as an arm's home, in order of preference."""
+"""Names of the SRDF group state taken as an arm's home, in order of preference (else the first state)."""
 
 
 @dataclass(frozen=True)
@@ -28,36 +31,77 @@ class SrdfGroup:
     name: str
     chains: tuple[tuple[str, str], ...] = ()
     links: tuple[str, ...] = ()
+    where: str = ""
+    joints: tuple[str, ...] = ()  # <joint name> members
+    subgroups: tuple[str, ...] = ()  # <group name> references
 
 
 @dataclass(frozen=True)
+class SrdfState:
+    """One ``<group_state>``: ``values`` joint -> its value(s) (one float, or a tuple for a
+    multi-value joint such as a floating base); ``where`` names the element, ``joint_where``
+    each ``<joint>`` element."""
+
+    name: str
+    group: str  # "" when the element has no group attribute (a state of the whole robot)
+    values: dict
+    where: str
+    joint_where: dict
+
+
+@dataclass
 class Srdf:
-    """The parts of an SRDF armguard uses; ``file`` names it in error messages."""
+    """The parts of an SRDF armguard uses; ``file`` names it in error messages.
+
+    ``found`` says how the file was chosen (``docs/models.md``, "Finding the SRDF"); ``partial``
+    is True when it was found under the robot's name rather than the URDF's file name, so it may
+    describe a larger robot than the URDF (links and joints it names that the URDF lacks are then
+    skipped with a warning instead of refused); ``warnings`` the lenient readings."""
 
     file: str
     groups: dict[str, SrdfGroup] = field(default_factory=dict)
     disabled: tuple[tuple[str, str, str], ...] = ()  # (link1, link2, reason)
-    states: dict[tuple[str, str], dict[str, float]] = field(default_factory=dict)  # (state, group) -> joint -> value
+    states: tuple[SrdfState, ...] = ()
+    found: str = "given"
+    partial: bool = False
+    warnings: tuple[str, ...] = ()
 
     @property
     def arm_groups(self) -> tuple[SrdfGroup, ...]:
-        """The groups with a chain: each is one arm (a robot of the scene)."""
+        """The groups with a chain (in file order); ``_from_pin`` makes the outermost of them arms."""
         return tuple(g for g in self.groups.values() if g.chains)
 
-    def home(self, group: str) -> dict[str, float] | None:
-        """The joint values of ``group``'s home: the state named home, default or ready (in that order) of
-        that group, else of any group (a state of a group that contains the arm)."""
+    def home_state(self, group: str) -> SrdfState | None:
+        """``group``'s home: its state named home, default or ready (in that order), else such a
+        state of any group (a group that contains the arm, or a state without a group), else the
+        group's first state, else the file's first state; None when the file has no state."""
         for name in HOME_STATES:
-            if (name, group) in self.states:
-                return self.states[(name, group)]
+            for st in self.states:
+                if st.name == name and st.group == group:
+                    return st
         for name in HOME_STATES:
-            for (state, _), values in self.states.items():
-                if state == name:
-                    return values
-        return None
+            for st in self.states:
+                if st.name == name:
+                    return st
+        for st in self.states:
+            if st.group == group:
+                return st
+        return self.states[0] if self.states else None
+
+    def home(self, group: str) -> dict | None:
+        """The joint values of :meth:`home_state` (None when the file has no state)."""
+        st = self.home_state(group)
+        return None if st is None else st.values
 
     def error(self, where: str, message: str) -> SceneFileError:
         return SceneFileError(self.file, where, message)
+
+    def warn(self, message: str) -> None:
+        """Record (``warnings``) and emit one lenient reading, naming the file (once per message)."""
+        if message in self.warnings:
+            return
+        self.warnings = (*self.warnings, message)
+        warnings.warn(f"{self.file}: {message}", ArmguardWarning, stacklevel=3)
 
 
 def _attr(el, key: str, srdf_file: str, where: str) -> str:
@@ -67,10 +111,26 @@ def _attr(el, key: str, srdf_file: str, where: str) -> str:
     return v
 
 
-def read_srdf(path) -> Srdf:
+def _value(text: str, f: str, where: str):
+    """One float, or a tuple of floats for a multi-value joint (``"0 0 1 0 0 0 1"``)."""
+    try:
+        xs = tuple(float(t) for t in text.split())
+    except ValueError:
+        raise SceneFileError(f, where, f"value: expected a number, got {text!r}") from None
+    if not xs:
+        raise SceneFileError(f, where, "value: expected a number, got nothing")
+    bad = [x for x in xs if not math.isfinite(x)]
+    if bad:
+        raise SceneFileError(f, where, f"value: must be finite, got {bad[0]}")
+    return xs[0] if len(xs) == 1 else xs
+
+
+def read_srdf(path, *, found: str = "given", partial: bool = False) -> Srdf:
     """Parse ``path``; a missing file or malformed XML is a :class:`SceneFileError`."""
     path = Path(path)
     f = str(path)
+    if path.is_dir():
+        raise SceneFileError(f, "", "expected an SRDF file, got a directory")
     try:
         root = ET.parse(path).getroot()
     except FileNotFoundError:
@@ -83,6 +143,7 @@ def read_srdf(path) -> Srdf:
         raise SceneFileError(f, f"line {exc.position[0]}", f"not well-formed XML: {exc}") from None
     if root.tag != "robot":
         raise SceneFileError(f, root.tag, "expected a <robot> root element (an SRDF file)")
+    out = Srdf(f, found=found, partial=partial)
     groups: dict[str, SrdfGroup] = {}
     for k, g in enumerate(root.findall("group")):  # top level: nested <group name/> are references
         w = f"group[{k}]"
@@ -90,26 +151,32 @@ def read_srdf(path) -> Srdf:
         chains = tuple((_attr(c, "base_link", f, f"{w} ({name}).chain"), _attr(c, "tip_link", f, f"{w} ({name}).chain"))
                        for c in g.findall("chain"))
         links = tuple(_attr(ln, "name", f, f"{w} ({name}).link") for ln in g.findall("link"))
+        joints = tuple(_attr(j, "name", f, f"{w} ({name}).joint") for j in g.findall("joint"))
+        subs = tuple(_attr(sg, "name", f, f"{w} ({name}).group") for sg in g.findall("group"))
         if name in groups:
             raise SceneFileError(f, w, f"group {name!r} is defined twice")
-        groups[name] = SrdfGroup(name, chains, links)
+        groups[name] = SrdfGroup(name, chains, links, f"{w} ({name})", joints, subs)
     disabled = []
     for k, el in enumerate(root.iter("disable_collisions")):
         w = f"disable_collisions[{k}]"
         disabled.append((_attr(el, "link1", f, w), _attr(el, "link2", f, w), el.get("reason", "")))
-    states: dict[tuple[str, str], dict[str, float]] = {}
+    states: list[SrdfState] = []
     for k, st in enumerate(root.iter("group_state")):
-        w = f"group_state[{k}]"
-        key = (_attr(st, "name", f, w), _attr(st, "group", f, w))
-        values = {}
+        name = _attr(st, "name", f, f"group_state[{k}]")
+        w = f"group_state[{k}] ({name})"
+        group = st.get("group") or ""
+        if not group:
+            out.warn(f"{w}: no attribute 'group'; read as a state of the whole robot (as Pinocchio does)")
+        values, jw = {}, {}
         for i, j in enumerate(st.findall("joint")):
             jn = _attr(j, "name", f, f"{w}.joint[{i}]")
-            try:
-                x = float(_attr(j, "value", f, f"{w}.joint[{i}]"))
-            except ValueError:
-                raise SceneFileError(f, f"{w}.joint[{i}] ({jn})", f"value: expected a number, got {j.get('value')!r}") from None
-            if not math.isfinite(x):
-                raise SceneFileError(f, f"{w}.joint[{i}] ({jn})", f"value: must be finite, got {x}")
-            values[jn] = x
-        states[key] = values
-    return Srdf(f, groups, tuple(disabled), states)
+            where = f"{w}.joint[{i}] ({jn})"
+            if jn in values:
+                raise SceneFileError(f, where, f"joint {jn!r} is given twice in this state")
+            values[jn] = _value(_attr(j, "value", f, f"{w}.joint[{i}]"), f, where)
+            jw[jn] = where
+        if any(s.name == name and s.group == group for s in states):
+            raise SceneFileError(f, w, f"state {name!r} of group {group!r} is defined twice")
+        states.append(SrdfState(name, group, values, w, jw))
+    out.groups, out.disabled, out.states = groups, tuple(disabled), tuple(states)
+    return out

@@ -216,6 +216,9 @@ class VerificationReport:
     stopping_times, stopping_values : (S + 1,) float64 s, (S,) float64 m
         The stopping distance in force on each segment ``[stopping_times[k], stopping_times[k + 1]]``
         (a step function of the segment's peak speed, or the constant).
+    held_joints : dict[str, float]
+        The robot's joints the trajectory does not name, each held at this value (the robot's
+        home, rad or m) for the whole motion; empty when it names them all.
     """
 
     status: VerificationStatus
@@ -236,6 +239,7 @@ class VerificationReport:
     stopping_distance_function: object = field(default=None, repr=False)
     stopping_times: np.ndarray = field(default_factory=lambda: np.zeros(0))
     stopping_values: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    held_joints: dict = field(default_factory=dict)
 
     def verdict(self) -> str:
         """The verdict in a few words: "safe", "incomplete", "collision" (a contact) or "unsafe
@@ -289,6 +293,8 @@ class VerificationReport:
             f"stopping distance: {'up to ' if self.stopping_distance_function is not None else ''}"
             f"{self.stopping_distance * 1e3:.1f} mm; fastest point ≤ {d.max_speed:.3f} m/s",
         ]
+        if self.held_joints:
+            lines.append("held at home (not in the trajectory): " + ", ".join(f"{j} = {v:.6g}" for j, v in self.held_joints.items()))
         if d.method == "sampled":
             lines.append(f"discretisation error Ed = v/f: {d.discretisation_error * 1e3:.1f} mm (collisions shorter than this may be missed)")
         c = self.first_collision

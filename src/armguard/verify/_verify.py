@@ -17,12 +17,13 @@ collision (within ``verify_contact``), and the first collision it reports is the
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time as _time
 
 import numpy as np
 
-from .._errors import KinematicsError, VerificationError
+from .._errors import KinematicsError, TrajectoryError, VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._advance import advance_step
 from ._oracle import CATEGORIES, WORKSPACE, ClearanceModel
@@ -119,12 +120,28 @@ class Verifier:
             r = names[0]
         if r not in self.scene.robots:
             raise VerificationError(f"robot {r!r} is not in the scene; robots are {names}")
-        rob = self.scene.robots[r]
-        if tuple(trajectory.joint_names) != tuple(rob.joint_names):
-            raise VerificationError(
-                f"trajectory joints {list(trajectory.joint_names)} do not match robot {r!r} joints {list(rob.joint_names)}"
-            )
         return r
+
+    def _over_robot(self, trajectory, r: str):
+        """``(trajectory, held)``: a trajectory naming a subset of robot ``r``'s joints (any order)
+        over all of them, the others held where the verifier holds the robot (its home, or
+        ``q_others[r]``); ``held`` those joints and values."""
+        from ..kinematics import Trajectory
+
+        from ._subdivide import Subdivided
+
+        rob = self.scene.robots[r]
+        if tuple(trajectory.joint_names) == tuple(rob.joint_names):
+            return trajectory, {}
+        inner = trajectory._t if isinstance(trajectory, Subdivided) else trajectory
+        if not isinstance(inner, Trajectory):
+            raise VerificationError(
+                f"trajectory joints {list(trajectory.joint_names)} do not match robot {r!r} joints {list(rob.joint_names)}")
+        try:
+            full, held = inner.over_joints(rob.joint_names, self._base[r])
+        except TrajectoryError as exc:
+            raise VerificationError(f"robot {r!r}: {exc}") from None
+        return (Subdivided(full, trajectory.n) if inner is not trajectory else full), held
 
     def _flat(self, robot: str):
         base = self.scene.flat_q(self._base)
@@ -276,6 +293,8 @@ class Verifier:
         if self.model.is_stale():  # the scene changed since the model was built: never verify against the old one
             self._prepare()
         rname = self._robot_of(trajectory, robot)
+        named = self._trajectory_name(trajectory) if name is None else name
+        trajectory, held = self._over_robot(trajectory, rname)
         base, k0, k1 = self._flat(rname)
         segs = self._segments(trajectory)
         self._check_knots_in_limits(segs, rname)
@@ -294,8 +313,9 @@ class Verifier:
             ed = 0.0
         else:
             status, reason, lower, intervals, where, ed = self._sampled(trajectory, segs, margins, run, frequency, joint_step, speeds)
-        return self._report(trajectory, rname, segs, run, status, reason, lower, intervals, where, ed, speeds, margins, method,
-                            frequency, joint_step, thr, sd, name, t_start, k0)
+        rep = self._report(trajectory, rname, segs, run, status, reason, lower, intervals, where, ed, speeds, margins, method,
+                           frequency, joint_step, thr, sd, named, t_start, k0)
+        return dataclasses.replace(rep, held_joints=held) if held else rep
 
     def _certified(self, segs, margins, run):
         """Conservative advancement along every segment; returns (status, reason, lower bound, intervals, where).
