@@ -373,14 +373,15 @@ def _area(ux, uy, uz, vx, vy, vz, nx, ny, nz):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _settle(work, fi, dbest, nx, ny, nz, h):  # pragma: no cover - compiled
+def _settle(work, fi, dbest, nx, ny, nz, h, best):  # pragma: no cover - compiled
     """EPA's answer from face ``fi`` when the polytope cannot grow (rounding on a curved core): its
-    distance ``dbest`` when the support value ``h`` along its normal is within ``SUPPORT_GAP``."""
+    distance ``dbest`` when the support value ``h`` along its normal is within ``SUPPORT_GAP``,
+    else ``best`` (the tightest such bracket seen before, or not settled)."""
     if h - dbest <= SUPPORT_GAP * (1.0 + dbest):
         ok, ax, ay, az, bx, by, bz = _witness(work, fi, dbest, nx, ny, nz)
         if ok:
             return True, dbest, nx, ny, nz, ax, ay, az, bx, by, bz
-    return False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    return best
 
 
 @njit(cache=True)
@@ -393,8 +394,18 @@ def epa_support(pa, ca, pb, cb, work, eps, tol, vis):  # pragma: no cover - comp
     must be for the face to be seen from it (the closest face always is).  A cap or a polytope's
     face gives many coplanar support points: without the margin, rounding removes some of the
     coplanar faces and keeps others, and the horizon is no longer one loop.  Returns ``(ok, depth, nx, ny, nz, ax, ay, az, bx, by, bz)``
-    as ``_pair_epa.epa_depth``: ``a - b = depth n`` on the cores; ``ok`` False: not settled."""
+    as ``_pair_epa.epa_depth``: ``a - b = depth n`` on the cores; ``ok`` False: not settled.
+
+    On a curved core the faces near the optimum become slivers, and rounding can break the
+    polytope after the depth has already been bracketed (a face's distance is a lower bound on the
+    depth while the polytope is convex, the support value along its normal an upper bound
+    always): the closest face's distance of a growing polytope never decreases, so a drop marks a
+    broken polytope.  The iteration with the tightest bracket is kept, and when the polytope breaks
+    (or cannot grow) it is the answer if its bracket is within ``SUPPORT_GAP`` -- else not settled."""
     fail = (False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    best = fail  # the tightest bracket within SUPPORT_GAP seen so far (its face's answer)
+    best_gap = math.inf
+    last = 0.0  # the closest face's distance at the previous iteration
     for k in range(4):
         for q in range(9):
             work[_V0 + 9 * k + q] = work[_S0 + 9 * k + q]
@@ -429,7 +440,10 @@ def epa_support(pa, ca, pb, cb, work, eps, tol, vis):  # pragma: no cover - comp
                 dbest = work[o + 6]
                 fi = f
         if fi < 0:
-            return fail
+            return best
+        if dbest < last - tol:
+            return best  # the polytope shrank: rounding broke it; the bracket kept before that stands
+        last = dbest
         of = _F0 + 8 * fi
         nx = work[of + 3]
         ny = work[of + 4]
@@ -451,10 +465,15 @@ def epa_support(pa, ca, pb, cb, work, eps, tol, vis):  # pragma: no cover - comp
         if h - dbest <= eps or ((repeated or nv == _NV) and h - dbest <= SUPPORT_GAP * (1.0 + dbest)):
             ok, ax, ay, az, bx, by, bz = _witness(work, fi, dbest, nx, ny, nz)
             if not ok:
-                return fail
+                return best
             return True, dbest, nx, ny, nz, ax, ay, az, bx, by, bz
+        if h - dbest < best_gap and h - dbest <= SUPPORT_GAP * (1.0 + dbest):
+            ok, cax, cay, caz, cbx, cby, cbz = _witness(work, fi, dbest, nx, ny, nz)
+            if ok:
+                best_gap = h - dbest
+                best = (True, dbest, nx, ny, nz, cax, cay, caz, cbx, cby, cbz)
         if repeated or nv == _NV:
-            return fail
+            return best
         _put(work, _V0 + 9 * nv, ax, ay, az, bx, by, bz)
         ne = 0  # remove the faces seen from w; their unshared edges form the horizon
         for f in range(nf):
@@ -471,9 +490,9 @@ def epa_support(pa, ca, pb, cb, work, eps, tol, vis):  # pragma: no cover - comp
                 if ne >= 0:
                     ne = _horizon(work, ne, a2, a0)
                 if ne < 0:
-                    return _settle(work, fi, dbest, nx, ny, nz, h)
+                    return _settle(work, fi, dbest, nx, ny, nz, h, best)
         if ne < 3:
-            return _settle(work, fi, dbest, nx, ny, nz, h)
+            return _settle(work, fi, dbest, nx, ny, nz, h, best)
         if nf + ne > _NF:  # compact: keep the live faces only
             m = 0
             for f in range(nf):
@@ -485,11 +504,11 @@ def epa_support(pa, ca, pb, cb, work, eps, tol, vis):  # pragma: no cover - comp
                     m += 1
             nf = m
             if nf + ne > _NF:
-                return _settle(work, fi, dbest, nx, ny, nz, h)
+                return _settle(work, fi, dbest, nx, ny, nz, h, best)
         for k in range(ne):
             o = _E0 + 2 * k
             if not _face(work, nf, int(work[o]), int(work[o + 1]), nv, tol):
-                return _settle(work, fi, dbest, nx, ny, nz, h)
+                return _settle(work, fi, dbest, nx, ny, nz, h, best)
             nf += 1
         nv += 1
 
@@ -501,11 +520,13 @@ def support_pair(pa, ca, ra, pb, cb, rb, out, work, eps_len, gjk_eps, max_iter, 
     ``(distance, status)``, ``status`` as ``_pair_gjk`` (``GJK_NOT_CONVERGED``: the caller raises).
 
     ``level`` (m) as in ``_pair_epa.convex_convex_fast``: when the cores overlap and
-    ``-(ra + rb) <= level`` it returns ``-(ra + rb)`` (an upper bound) without a depth.  When EPA
-    cannot settle a depth under any of its visibility margins (about 1 in 300 random penetrating
-    pairs with a flat or segment core against the cylinder), the cores are reported touching at
-    GJK's witness: ``-(ra + rb)``, the right verdict (overlap), an upper bound on the signed
-    distance, not the depth."""
+    ``-(ra + rb) <= level`` it returns ``-(ra + rb)`` (an upper bound) without a depth.  EPA's
+    polytope can break by rounding near a curved optimum (about 1 in 300 random penetrating pairs
+    with a flat core against the cylinder did, and were once reported touching); the depth
+    bracketed before that is the answer (:func:`epa_support`).  Only when EPA cannot settle a
+    depth under any of its visibility margins (not seen in 9,000 random penetrating pairs) are the
+    cores reported touching at GJK's witness: ``-(ra + rb)``, the right verdict (overlap), an upper
+    bound on the signed distance, not the depth."""
     gx, gy, gz = _centre(pa, ca)
     hx, hy, hz = _centre(pb, cb)
     status, d, n, ax, ay, az, bx, by, bz = gjk_support(pa, ca, pb, cb, gx - hx, gy - hy, gz - hz, eps_len, gjk_eps,
