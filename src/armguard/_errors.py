@@ -21,6 +21,7 @@ __all__ = [
     "ReferenceFileError",
     "UncertaintyError",
     "ArmguardWarning",
+    "OutputError",
 ]
 
 
@@ -148,3 +149,7 @@ class ForbiddenMapFileError(ForbiddenMapError):
 
 class ClipError(ArmguardError, ValueError):
     """A clipping guard, obstacle or prediction request is invalid (a shape without volume, a curved obstacle...)."""
+
+
+class OutputError(ArmguardError, OSError):
+    """An output file or folder could not be written (names the path and the reason); nothing half-written is left."""

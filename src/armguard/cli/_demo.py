@@ -11,7 +11,6 @@ involve the moving arm (the detector with that arm active, along the trajectory)
 
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 
@@ -99,6 +98,7 @@ def demo_cmd(out_dir, scenes, stopping_distances) -> None:
     from rich.console import Console
     from rich.table import Table
 
+    from .._io import make_folder
     from ..models import builtin_names
     from ..scene import load_scene
     from ..verify import Subdivided, Verifier
@@ -107,12 +107,7 @@ def demo_cmd(out_dir, scenes, stopping_distances) -> None:
     console = Console()
     if not console.is_terminal:  # piped or under make: don't fold the table into 80 columns
         console = Console(width=180)
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        click.secho(f"error: cannot create the output folder {out}: {exc.strerror or exc}", fg="red", err=True)
-        sys.exit(2)
+    out = make_folder(out_dir)  # OutputError (exit status 3) when it cannot be made
     table = Table(title="armguard: certified verification of the built-in scenes' canned trajectories")
     modes = [("fixed", float(sd)) for sd in stopping_distances] or [("fixed", 0.0), ("hermes", HERMES_MAX_STOPPING_DISTANCE)]
     for col in ("scene", "trajectory", "stopping distance", "verdict",
@@ -143,12 +138,8 @@ def demo_cmd(out_dir, scenes, stopping_distances) -> None:
                     label, stem_sd = f"{sd * 1e3:.0f} mm", f"sd{sd * 1e3:.0f}mm"
                 dt = time.perf_counter() - t0
                 stem = f"{_file_stem(name, sc)}__{tname}__{stem_sd}"
-                try:
-                    r.save_json(out / f"{stem}.json")
-                    r.plot(out / f"{stem}.png")
-                except OSError as exc:
-                    click.secho(f"error: cannot write the reports to {out}: {exc.strerror or exc}", fg="red", err=True)
-                    sys.exit(2)
+                r.save_json(out / f"{stem}.json")  # each all or nothing (armguard._io.atomic_write)
+                r.plot(out / f"{stem}.png")
                 table.add_row(name, tname, label, verdict_text(r), first_collision_text(r),
                               f"{clearance * 1e3:.1f} mm", f"{dt * 1e3:.0f} ms")
     console.print(table)

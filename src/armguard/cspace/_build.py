@@ -21,6 +21,7 @@ import numpy as np
 
 from .._dask import dask_client
 from .._errors import ForbiddenMapError, ForbiddenMapFileError
+from .._io import check_target, make_folder
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._certify import certify_substructure
 from ._clearance import CheckerClearance, map_links
@@ -243,7 +244,8 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
     else:
         header["clearance"] = getattr(clearance, "__qualname__", type(clearance).__qualname__)
     out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    make_folder(out.parent)
+    check_target(out)  # a FIFO, device or folder at OUT is refused before the build, not replaced after it
     journal = Journal(out.with_name(out.name + ".partial"), header, resume=resume, check=_journal_check(grid))
     reused = len(journal.done)
     todo = [s for s in range(grid.n_substructures) if s not in journal.done]

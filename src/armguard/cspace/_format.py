@@ -44,6 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import ForbiddenMapError, ForbiddenMapFileError
+from .._io import atomic_write
 
 __all__ = ["FORMAT_VERSION", "KERNEL_VERSION", "sha256_file", "write_map", "read_header", "check_data",
            "check_substructure", "check_substructures", "Journal"]
@@ -101,15 +102,9 @@ def write_map(path, header: dict, subs: list) -> int:
     offsets[1:] = np.cumsum([len(b) for b in blobs], dtype=np.uint64)
     crcs = np.array([_crc(b) for b in blobs], dtype="<u4")
     db = _directory_bytes(offsets, crcs)
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as f:
-        f.write(_PRE.pack(MAGIC, FORMAT_VERSION, len(hb), _crc(hb), _crc(db)))
-        f.write(hb)
-        f.write(db)
-        for b in blobs:
-            f.write(b)
-    os.replace(tmp, path)
-    return path.stat().st_size
+    blob = b"".join([_PRE.pack(MAGIC, FORMAT_VERSION, len(hb), _crc(hb), _crc(db)), hb, db, *blobs])
+    atomic_write(path, blob)  # a temporary file beside it, every write checked, fsync, rename
+    return len(blob)
 
 
 def read_header(path) -> tuple[dict, np.ndarray, np.ndarray, int]:

@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from .._errors import ForbiddenMapError
+from .._io import atomic_write
 
 __all__ = ["plot_slice"]
 
@@ -51,5 +52,7 @@ def plot_slice(fmap, q2: float, out, *, q=None, dpi: int = 120) -> None:
                  f"[{deg(lo2):.3g}°, {deg(min(lo2 + g.step[1], g.upper[1])):.3g}°], stopping distance "
                  f"{fmap.stopping_distance} m", fontsize=9)
     fig.tight_layout()
-    fig.savefig(out, dpi=dpi)
-    plt.close(fig)
+    try:
+        atomic_write(out, lambda f: fig.savefig(f, format="png", dpi=dpi))
+    finally:
+        plt.close(fig)

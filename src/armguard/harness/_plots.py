@@ -21,12 +21,20 @@ def _pyplot():
     return plt
 
 
+def _save(fig, p: Path) -> None:
+    """The figure as a PNG at ``p``, all or nothing (``armguard._io.atomic_write``)."""
+    from .._io import atomic_write
+
+    atomic_write(p, lambda f: fig.savefig(f, format="png", dpi=110, bbox_inches="tight"))
+
+
 def write_plots(comparison, out_dir) -> list:
     """Write ``scatter_<a>_<b>.png``, ``hist_<a>_<b>.png`` per backend pair (``verdicts_<a>_<b>.png`` where a side
     answers verdicts only) and ``timing.png``; returns the paths."""
     plt = _pyplot()
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    from .._io import make_folder
+
+    out = make_folder(out_dir)
     written = []
     band = comparison.summary["tolerances"]["contact_band"]
     cats = np.asarray(comparison.model.pairs.category, dtype=object)
@@ -62,7 +70,7 @@ def write_plots(comparison, out_dir) -> list:
         ax.set_title(f"{comparison.model.name}: {a} vs {b}, {A.shape[0]} configurations x {A.shape[1]} pairs")
         ax.legend(fontsize=7, markerscale=3, loc="upper left")
         p = out / f"scatter_{a}_{b}.png"
-        fig.savefig(p, dpi=110, bbox_inches="tight")
+        _save(fig, p)
         plt.close(fig)
         written.append(p)
 
@@ -79,7 +87,7 @@ def write_plots(comparison, out_dir) -> list:
         ax.set_title(f"{comparison.model.name}: |Δd| {a} vs {b}")
         ax.legend(fontsize=7)
         p = out / f"hist_{a}_{b}.png"
-        fig.savefig(p, dpi=110, bbox_inches="tight")
+        _save(fig, p)
         plt.close(fig)
         written.append(p)
 
@@ -102,7 +110,7 @@ def write_plots(comparison, out_dir) -> list:
             ax.annotate(f"{v:.3g}", (i, v), ha="center", va="bottom", fontsize=8)
     fig.suptitle(f"{comparison.model.name}: {len(comparison.configs)} configurations")
     p = out / "timing.png"
-    fig.savefig(p, dpi=110, bbox_inches="tight")
+    _save(fig, p)
     plt.close(fig)
     written.append(p)
     return written
@@ -147,6 +155,6 @@ def _verdict_bars(plt, comparison, s, out: Path) -> Path:
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7)
     p = out / f"verdicts_{a}_{b}.png"
-    fig.savefig(p, dpi=110, bbox_inches="tight")
+    _save(fig, p)
     plt.close(fig)
     return p

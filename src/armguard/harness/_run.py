@@ -60,16 +60,8 @@ def run_compare(spec, backends=("analytic", "coal"), *, n_configs: int = 1000, s
     comp.summary["timing"] = {"load_and_configs_s": t1 - t0, "answers_s": t2 - t1, "compare_s": t3 - t2,
                               "workers": int(workers) if workers else None, "scheduler": scheduler}
     if out_dir is not None:
-        write_outputs(comp, out_dir, plots=plots)
-        comp.summary["timing"]["outputs_s"] = time.perf_counter() - t3
-        _write_json(comp, Path(out_dir))
+        _write_set(comp, out_dir, plots=plots, t_start=t3)
     return comp
-
-
-def _write_json(comp, out: Path) -> Path:
-    p = out / "compare.json"
-    p.write_text(json.dumps(comp.summary, indent=1, allow_nan=False, default=_jsonable) + "\n", encoding="utf-8")
-    return p
 
 
 def _jsonable(x):
@@ -81,19 +73,42 @@ def _jsonable(x):
 
 
 def write_outputs(comp: Comparison, out_dir, *, plots: bool = True) -> list:
-    """``compare.json`` and (``plots``) the PNGs into ``out_dir``; returns the paths."""
+    """``compare.json`` and (``plots``) the PNGs into ``out_dir``, as one set; returns the paths.
+
+    All are written into a staging folder first and then renamed into place
+    (:func:`armguard._io.output_set`): an interrupted or failed write leaves the previous run's
+    set as it was, never a new ``compare.json`` beside old plots; the files of the previous set
+    (its ``compare.json``'s ``outputs``) that this one lacks are removed.  OutputError names the
+    path and the reason when the folder cannot be written."""
+    return _write_set(comp, out_dir, plots=plots)
+
+
+def _previous_outputs(out: Path) -> tuple:
+    """The file names the ``compare.json`` in ``out`` lists as its set (none when it cannot be read)."""
+    try:
+        names = json.loads((out / "compare.json").read_text(encoding="utf-8")).get("outputs", [])
+    except (OSError, ValueError, AttributeError):
+        return ()
+    return tuple(n for n in names if isinstance(n, str)) if isinstance(names, list) else ()
+
+
+def _write_set(comp: Comparison, out_dir, *, plots: bool, t_start: float | None = None) -> list:
+    from .._io import atomic_write, output_set
     from ._plots import write_plots
 
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     for b in comp.summary["backends"].values():  # inf (an empty batch) is not JSON
         for k, v in list(b.items()):
             if isinstance(v, float) and not math.isfinite(v):
                 b[k] = None
-    paths = [_write_json(comp, out)]
-    if plots:
-        paths += write_plots(comp, out)
-    return paths
+    with output_set(out, stale=_previous_outputs(out)) as staging:
+        names = [p.name for p in write_plots(comp, staging)] if plots else []
+        comp.summary["outputs"] = ["compare.json", *names]
+        if t_start is not None:
+            comp.summary["timing"]["outputs_s"] = time.perf_counter() - t_start
+        text = json.dumps(comp.summary, indent=1, allow_nan=False, default=_jsonable) + "\n"
+        atomic_write(staging / "compare.json", text)
+    return [out / n for n in comp.summary["outputs"]]
 
 
 def _fmt(x, unit=1.0) -> str:

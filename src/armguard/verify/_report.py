@@ -266,11 +266,10 @@ class VerificationReport:
         return json.dumps(self.to_dict(), indent=indent)
 
     def save_json(self, path) -> Path:
-        """Write :meth:`to_json` to ``path``; returns the path."""
-        p = Path(path)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        p.write_text(self.to_json(), encoding="utf-8")
-        return p
+        """Write :meth:`to_json` to ``path`` (all or nothing: ``armguard._io.atomic_write``); returns the path."""
+        from .._io import atomic_write
+
+        return atomic_write(Path(path), self.to_json(), parents=True)
 
     def _verdict_words(self) -> str:
         if self.verdict() == "unsafe (stopping distance)":
@@ -323,8 +322,9 @@ class VerificationReport:
         matplotlib.use("Agg", force=False)
         import matplotlib.pyplot as plt
 
+        from .._io import atomic_write
+
         p = Path(path)
-        p.parent.mkdir(parents=True, exist_ok=True)
         fig, ax = plt.subplots(figsize=(8, 4.2), dpi=100)
         t = self.profile.time
         for cat, y in self.profile.by_category.items():
@@ -352,6 +352,8 @@ class VerificationReport:
         ax.legend(loc="best", fontsize=8)
         ax.grid(alpha=0.3)
         fig.tight_layout()
-        fig.savefig(p, format="png")
-        plt.close(fig)
+        try:
+            atomic_write(p, lambda f: fig.savefig(f, format="png"), parents=True)
+        finally:
+            plt.close(fig)
         return p

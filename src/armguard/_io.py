@@ -1,0 +1,202 @@
+"""Writing output files so that a crash, an interruption or a full disk cannot leave a lie.
+
+One file (:func:`atomic_write`): the bytes go to a temporary file beside the target, every write's
+count is checked, the file is flushed to the disk (``fsync``) and renamed over the target, so the
+target is either the old file or the whole new one (pip's ``adjacent_tmp_file`` then ``replace``).
+A set of files (:func:`output_set`): all are written into a temporary folder inside the target
+folder, then moved into place one rename each with Ctrl-C held back, so an interrupted run leaves
+the previous run's set whole, never a new file beside old ones.
+
+A target that exists and is not a regular file (a folder, a FIFO, a device) is refused, as is a
+folder that cannot be made; every failure is an :class:`~armguard._errors.OutputError` naming the
+path and the reason.  ``os.write`` is the only writer here (tests simulate a full disk through it).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import shutil
+import signal
+import stat
+import tempfile
+import threading
+from pathlib import Path
+
+from ._errors import OutputError
+
+__all__ = ["atomic_write", "make_folder", "output_set", "check_target"]
+
+
+def _reason(exc: OSError) -> str:
+    return exc.strerror or str(exc)
+
+
+def make_folder(folder) -> Path:
+    """``folder`` (made with its parents when missing); OutputError when it cannot be (a path under a
+    regular file, no permission, a read-only or full file system) or is not a folder."""
+    folder = Path(folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise OutputError(f"cannot write into {folder}: it exists and is not a folder") from None
+    except OSError as exc:
+        raise OutputError(f"cannot create the folder {folder}: {_reason(exc)}") from None
+    if not folder.is_dir():
+        raise OutputError(f"cannot write into {folder}: it is not a folder")
+    return folder
+
+
+def check_target(path) -> Path:
+    """``path`` as the file to replace: a symbolic link is followed (the file it names is written);
+    OutputError when the target exists and is not a regular file (a folder, FIFO, device, socket)."""
+    path = Path(path)
+    if path.is_symlink():
+        path = Path(os.path.realpath(path))
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        return path
+    except OSError as exc:
+        raise OutputError(f"cannot write {path}: {_reason(exc)}") from None
+    if not stat.S_ISREG(mode):
+        kind = ("a folder" if stat.S_ISDIR(mode) else "a FIFO" if stat.S_ISFIFO(mode) else
+                "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else "a socket" if stat.S_ISSOCK(mode)
+                else "not a regular file")
+        raise OutputError(f"cannot write {path}: it exists and is {kind}, not a regular file (not replaced)")
+    return path
+
+
+def _data_bytes(data) -> bytes:
+    if callable(data):  # a writer (matplotlib's savefig, np.save): into memory, then written here
+        buf = io.BytesIO()
+        data(buf)
+        return buf.getvalue()
+    if isinstance(data, str):
+        return data.encode("utf-8")
+    return bytes(data)
+
+
+def _write_all(fd: int, blob: bytes) -> None:
+    """Every byte of ``blob`` to ``fd``: a short write is continued, a write of 0 bytes is an error."""
+    view = memoryview(blob)
+    while len(view):
+        n = os.write(fd, view)
+        if n <= 0:
+            raise OSError(0, "the file system accepted no bytes")
+        view = view[n:]
+
+
+def _fsync_folder(folder: Path) -> None:
+    """Make a rename in ``folder`` durable (best effort: some file systems cannot open a folder)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def _mode() -> int:
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
+def _write_file(path: Path, blob: bytes) -> None:
+    """``blob`` into a new temporary file beside ``path``, synced, then renamed over ``path``."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        try:
+            _write_all(fd, blob)
+            os.fchmod(fd, _mode())  # mkstemp makes it 0600: the permissions of a plainly opened file
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+def atomic_write(path, data, *, parents: bool = False) -> Path:
+    """Write ``data`` to the file ``path`` all at once or not at all; returns ``path``.
+
+    ``data``: bytes, text (UTF-8), or a callable given a binary file object to write into (e.g.
+    ``lambda f: fig.savefig(f, format="png")``; it writes into memory first).  The folder must
+    exist (:func:`make_folder`).  OutputError names the path and the reason when the folder or
+    the file cannot be written (full disk, no permission, the target a FIFO or a folder); the
+    previous file, if any, is then left as it was.  ``parents``: make the missing folders first."""
+    if parents:
+        try:
+            make_folder(Path(path).parent)
+        except OutputError as exc:
+            raise OutputError(f"cannot write {path}: {exc}") from None
+    path = check_target(path)
+    blob = _data_bytes(data)
+    if not path.parent.is_dir():
+        raise OutputError(f"cannot write {path}: {path.parent} is not a folder")
+    try:
+        _write_file(path, blob)
+    except OSError as exc:
+        raise OutputError(f"cannot write {path}: {_reason(exc)}") from None
+    _fsync_folder(path.parent)
+    return path
+
+
+@contextlib.contextmanager
+def _sigint_held():
+    """Ctrl-C waits until the block ends (then raises KeyboardInterrupt); only in the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    got = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: got.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if got:
+        raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def output_set(folder, *, stale=()):
+    """A staging folder to write a set of output files into; on leaving the block without an
+    exception they replace their namesakes in ``folder`` (made when missing), and the files of
+    ``folder`` named in ``stale`` (a previous run's set) that the new set lacks are removed.
+
+    Any exception in the block (Ctrl-C included) removes the staging folder and leaves
+    ``folder`` as it was.  The moves run with Ctrl-C held back; each is a rename within one
+    file system.  Write the staged files with :func:`atomic_write` (checked, synced).
+    """
+    folder = make_folder(folder)
+    try:
+        staging = Path(tempfile.mkdtemp(prefix=".armguard-", suffix=".partial", dir=folder))
+    except OSError as exc:
+        raise OutputError(f"cannot write into {folder}: {_reason(exc)}") from None
+    try:
+        yield staging
+        names = sorted(p.name for p in staging.iterdir())
+        targets = [check_target(folder / n) for n in names]  # refuse before anything moves
+        with _sigint_held():
+            for name, target in zip(names, targets):
+                os.replace(staging / name, target)
+            for name in stale:
+                if name not in names and "/" not in name and name not in ("", ".", ".."):
+                    old = folder / name
+                    if old.is_file() and not old.is_symlink():
+                        old.unlink()
+            _fsync_folder(folder)
+    except OutputError:
+        raise
+    except OSError as exc:
+        raise OutputError(f"cannot write into {folder}: {_reason(exc)}") from None
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)

@@ -1,0 +1,279 @@
+"""Outputs are written whole or not at all (armguard._io), and the commands that write them say so
+in one line with exit status 3 (or 130 when interrupted), never a traceback, never "written".
+
+Unwritable targets: a path under a regular file, a FIFO (os.mkfifo), a folder, /proc, and a full
+disk simulated by making ``os.write`` raise ENOSPC (the only writer in armguard._io) -- no disk is
+ever filled.
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import sys
+
+import pytest
+from click.testing import CliRunner
+
+from armguard import OutputError
+from armguard import _io
+from armguard._io import atomic_write, output_set
+from armguard.cli import ExitCode, main
+
+fifo_only = pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs here")
+
+
+def _full_disk(monkeypatch, after: int = 0):
+    """``os.write`` accepts ``after`` calls, then fails as a full file system does."""
+    real = os.write
+    calls = [0]
+
+    def write(fd, data):
+        calls[0] += 1
+        if calls[0] > after:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real(fd, data)
+
+    monkeypatch.setattr(_io.os, "write", write)
+
+
+def _leftovers(folder):
+    return sorted(p.name for p in folder.iterdir() if p.name.startswith("."))
+
+
+# ------------------------------------------------------------------ one file
+
+def test_atomic_write_replaces_whole(tmp_path):
+    p = tmp_path / "a.json"
+    atomic_write(p, "old")
+    assert atomic_write(p, b"new bytes") == p and p.read_bytes() == b"new bytes"
+    atomic_write(p, lambda f: f.write(b"from a writer"))
+    assert p.read_bytes() == b"from a writer" and _leftovers(tmp_path) == []
+    assert oct(p.stat().st_mode & 0o777) == oct(0o666 & ~_umask())
+
+
+def _umask():
+    m = os.umask(0)
+    os.umask(m)
+    return m
+
+
+def test_short_writes_are_continued(tmp_path, monkeypatch):
+    real = os.write
+    monkeypatch.setattr(_io.os, "write", lambda fd, data: real(fd, bytes(data[:3])))
+    p = tmp_path / "x.bin"
+    blob = bytes(range(256)) * 5
+    atomic_write(p, blob)
+    assert p.read_bytes() == blob
+
+
+def test_full_disk_leaves_the_old_file(tmp_path, monkeypatch):
+    p = tmp_path / "map.agmap"
+    p.write_bytes(b"previous")
+    _full_disk(monkeypatch)
+    with pytest.raises(OutputError) as exc:
+        atomic_write(p, b"x" * 100_000)
+    assert str(exc.value) == f"cannot write {p}: {os.strerror(errno.ENOSPC)}"
+    assert p.read_bytes() == b"previous" and _leftovers(tmp_path) == []
+
+
+def test_under_a_regular_file(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    with pytest.raises(OutputError, match=f"cannot write {blocker / 'out.png'}"):
+        atomic_write(blocker / "out.png", b"png")
+    with pytest.raises(OutputError, match=f"cannot write {blocker / 'sub' / 'out.png'}"):
+        atomic_write(blocker / "sub" / "out.png", b"png", parents=True)
+    assert blocker.read_text() == "x"
+
+
+@fifo_only
+def test_a_fifo_or_folder_is_refused_not_replaced(tmp_path):
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    with pytest.raises(OutputError, match="it exists and is a FIFO, not a regular file"):
+        atomic_write(fifo, b"data")
+    assert fifo.is_fifo()
+    (tmp_path / "dir").mkdir()
+    with pytest.raises(OutputError, match="is a folder"):
+        atomic_write(tmp_path / "dir", b"data")
+
+
+def test_a_device_is_refused():
+    if not os.path.exists("/dev/null"):
+        pytest.skip("no /dev/null")
+    with pytest.raises(OutputError, match="is a device"):
+        atomic_write("/dev/null", b"data")
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc is Linux's")
+def test_proc_is_refused():
+    with pytest.raises(OutputError, match="cannot"):
+        atomic_write("/proc/armguard-cannot/x.json", b"{}", parents=True)
+
+
+def test_symlink_writes_its_target(tmp_path):
+    real = tmp_path / "real.json"
+    real.write_text("old")
+    link = tmp_path / "link.json"
+    link.symlink_to(real)
+    atomic_write(link, "new")
+    assert link.is_symlink() and real.read_text() == "new"
+
+
+# ------------------------------------------------------------------ a set of files
+
+def _previous_set(folder):
+    folder.mkdir()
+    (folder / "compare.json").write_text("old json")
+    (folder / "scatter.png").write_text("old plot")
+    (folder / "mine.txt").write_text("not an output")
+
+
+def test_set_interrupted_leaves_the_previous_set(tmp_path):
+    out = tmp_path / "out"
+    _previous_set(out)
+    with pytest.raises(KeyboardInterrupt):
+        with output_set(out) as staging:
+            atomic_write(staging / "compare.json", "new json")
+            raise KeyboardInterrupt  # before the plots
+    assert (out / "compare.json").read_text() == "old json" and (out / "scatter.png").read_text() == "old plot"
+    assert _leftovers(out) == []
+
+
+def test_set_replaces_all_and_removes_the_stale_ones(tmp_path):
+    out = tmp_path / "out"
+    _previous_set(out)
+    with output_set(out, stale=("compare.json", "scatter.png", "../mine.txt")) as staging:
+        atomic_write(staging / "compare.json", "new json")
+        atomic_write(staging / "timing.png", "new plot")
+    assert sorted(p.name for p in out.iterdir()) == ["compare.json", "mine.txt", "timing.png"]
+    assert (out / "compare.json").read_text() == "new json"
+
+
+@fifo_only
+def test_set_with_a_fifo_target_moves_nothing(tmp_path):
+    out = tmp_path / "out"
+    _previous_set(out)
+    os.mkfifo(out / "timing.png")
+    with pytest.raises(OutputError, match="FIFO"):
+        with output_set(out) as staging:
+            atomic_write(staging / "compare.json", "new json")
+            atomic_write(staging / "timing.png", "new plot")
+    assert (out / "compare.json").read_text() == "old json" and (out / "timing.png").is_fifo()
+    assert _leftovers(out) == []
+
+
+def test_set_under_a_regular_file(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    with pytest.raises(OutputError, match=f"cannot create the folder {blocker / 'out'}: "):
+        with output_set(blocker / "out"):
+            pass
+
+
+# ------------------------------------------------------------------ the commands
+
+def _one_line_error(res, *words):
+    assert res.exit_code == ExitCode.INPUT, res.output
+    assert "Traceback" not in res.output and "wrote" not in res.output
+    last = [ln for ln in res.output.splitlines() if ln.strip()][-1]
+    assert last.startswith("error: ")
+    for w in words:
+        assert w in last, (w, last)
+
+
+@pytest.fixture(scope="module")
+def small_map(tmp_path_factory):
+    out = tmp_path_factory.mktemp("map") / "hermes.agmap"
+    r = CliRunner().invoke(main, ["cspace", "build", "hermes", "--resolution", "30deg", "--max-depth", "0",
+                                  "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    return out
+
+
+@fifo_only
+def test_cspace_build_refuses_a_fifo_before_building(tmp_path):
+    fifo = tmp_path / "map.agmap"
+    os.mkfifo(fifo)
+    r = CliRunner().invoke(main, ["cspace", "build", "hermes", "--resolution", "30deg", "--max-depth", "0",
+                                  "--out", str(fifo)])
+    _one_line_error(r, str(fifo), "FIFO")
+    assert fifo.is_fifo() and not (tmp_path / "map.agmap.partial").exists()
+
+
+def test_cspace_build_under_a_file_and_on_a_full_disk(tmp_path, monkeypatch):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    args = ["cspace", "build", "hermes", "--resolution", "30deg", "--max-depth", "0", "--out"]
+    _one_line_error(CliRunner().invoke(main, args + [str(blocker / "m.agmap")]), str(blocker))
+    out = tmp_path / "m.agmap"
+    _full_disk(monkeypatch)
+    r = CliRunner().invoke(main, args + [str(out)])
+    _one_line_error(r, str(out), os.strerror(errno.ENOSPC))
+    assert not out.exists()  # not reported written, and not there
+
+
+def test_cspace_plot_outputs(small_map, tmp_path, monkeypatch):
+    args = ["cspace", "plot", str(small_map), "--q2", "30", "--out"]
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    _one_line_error(CliRunner().invoke(main, args + [str(blocker / "s.png")]), str(blocker / "s.png"))
+    if hasattr(os, "mkfifo"):
+        os.mkfifo(tmp_path / "pipe.png")
+        _one_line_error(CliRunner().invoke(main, args + [str(tmp_path / "pipe.png")]), "FIFO")
+        assert (tmp_path / "pipe.png").is_fifo()
+    png = tmp_path / "s.png"
+    png.write_bytes(b"previous")
+    with monkeypatch.context() as m:
+        _full_disk(m)
+        _one_line_error(CliRunner().invoke(main, args + [str(png)]), str(png), os.strerror(errno.ENOSPC))
+    assert png.read_bytes() == b"previous"
+    r = CliRunner().invoke(main, args + [str(png)])
+    assert r.exit_code == 0 and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+_COMPARE = ["compare", "gmf_s480", "--backends", "analytic,coal", "--configs", "8", "--trajectory", "none"]
+
+
+def test_compare_writes_its_outputs_as_a_set(tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    r = CliRunner().invoke(main, _COMPARE + ["--out", str(out)], terminal_width=200)
+    assert r.exit_code == 0, r.output
+    first = json.loads((out / "compare.json").read_text())
+    assert sorted(first["outputs"]) == sorted(p.name for p in out.iterdir())
+    assert any(n.endswith(".png") for n in first["outputs"])
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+
+    import armguard.harness._plots as plots
+
+    real = plots.write_plots
+
+    def interrupted(comp, folder):  # the first plots written, then Ctrl-C
+        real(comp, folder)
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as m:
+        m.setattr(plots, "write_plots", interrupted)
+        r = CliRunner().invoke(main, _COMPARE + ["--seed", "1", "--out", str(out)], terminal_width=200)
+    assert r.exit_code == ExitCode.INTERRUPTED, r.output
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # the previous set, whole
+
+    with monkeypatch.context() as m:
+        _full_disk(m)
+        r = CliRunner().invoke(main, _COMPARE + ["--seed", "1", "--out", str(out)], terminal_width=200)
+    _one_line_error(r, str(out), os.strerror(errno.ENOSPC))
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+    r = CliRunner().invoke(main, _COMPARE + ["--seed", "1", "--no-plots", "--out", str(out)], terminal_width=200)
+    assert r.exit_code == 0, r.output
+    assert sorted(p.name for p in out.iterdir()) == ["compare.json"]  # the previous run's plots went with it
+    assert json.loads((out / "compare.json").read_text())["outputs"] == ["compare.json"]
+
+
+def test_compare_out_under_a_file(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    r = CliRunner().invoke(main, _COMPARE + ["--no-plots", "--out", str(blocker / "out")], terminal_width=200)
+    _one_line_error(r, str(blocker / "out"))
