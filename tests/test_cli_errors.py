@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from armguard.cli import main
+from armguard.cli import ExitCode, main
 from armguard.kinematics import Trajectory
 from armguard.scene import load_scene
 
@@ -65,7 +65,7 @@ def test_a_scene_file_lists_every_schema_problem_with_its_line(tmp_path):
     f = tmp_path / "bad.yaml"
     f.write_text(BAD_SCENE)
     res = _run("check", f)
-    assert res.exit_code == 2
+    assert res.exit_code == ExitCode.INPUT
     out = res.output
     assert "bodies[0].shapes[0].size (line 6): required key is missing" in out  # the mapping that lacks it
     assert "misspelling of 'size'" in out
@@ -94,17 +94,17 @@ def test_verify_names_the_file_for_a_robot_or_joints_the_scene_lacks(tmp_path):
     f = tmp_path / "t.yaml"
     f.write_text(GOOD_TRAJECTORY.format(robot="pumaX", joints="j1, j2, j3, j4, j5, j6", t1="1.0"))
     res = _run("verify", "puma560", f)
-    assert res.exit_code == 2 and f"{f}: robot (line 3): robot 'pumaX' is not in scene 'puma560'" in res.output
+    assert res.exit_code == ExitCode.INPUT and f"{f}: robot (line 3): robot 'pumaX' is not in scene 'puma560'" in res.output
     f.write_text(GOOD_TRAJECTORY.format(robot="puma560", joints="j1, j2, j3, j4, j5, jx", t1="1.0"))
     res = _run("verify", "puma560", f)
-    assert res.exit_code == 2 and f"{f}: joint_names (line 4)" in res.output
+    assert res.exit_code == ExitCode.INPUT and f"{f}: joint_names (line 4)" in res.output
     f.write_text(GOOD_TRAJECTORY.format(robot="puma560", joints="j1, j2, j3, j4, j5, j6", t1="1.0"))
     assert _run("verify", "puma560", f).exit_code == 0
 
 
 def test_option_errors_use_the_option_names():
     res = _run("verify", "puma560", "pick_and_place", "--stopping-distance", "-1")
-    assert res.exit_code == 2 and "error: --stopping-distance: expected a finite number >= 0" in res.output
+    assert res.exit_code == ExitCode.INPUT and "error: --stopping-distance: expected a finite number >= 0" in res.output
 
 
 def test_check_json_holds_every_feature_as_data():
@@ -124,7 +124,7 @@ def test_check_piped_keeps_whole_names():
 
 def test_demo_output_folder_errors_and_scene_files(tmp_path):
     res = _run("demo", "--scene", "puma560", "--out", "/proc/armguard-cannot")
-    assert res.exit_code == 2 and "cannot create the output folder /proc/armguard-cannot" in res.output
+    assert res.exit_code == ExitCode.INPUT and "cannot create the folder /proc/armguard-cannot" in res.output
     assert "Traceback" not in res.output
     model = tmp_path / "model"
     shutil.copytree(URDF / "puma560", model)
@@ -154,7 +154,7 @@ def test_verify_checks_only_the_moving_arm():
 
 def test_check_without_a_verdict_is_not_a_success():
     spent = _run("check", "hermes", "--q", "195,0,0,0,0,0", "--deg", "--budget-us", "0")
-    assert "INCOMPLETE" in spent.output and spent.exit_code == 1
+    assert "INCOMPLETE" in spent.output and spent.exit_code == ExitCode.INCOMPLETE
     assert _run("check", "hermes").exit_code == 0
 
 
@@ -174,7 +174,7 @@ def test_independent_scene_problems_are_listed_together(tmp_path):
     f = tmp_path / "cell.yaml"
     f.write_text(bad)
     res = _run("check", f)
-    assert res.exit_code == 2
+    assert res.exit_code == ExitCode.INPUT
     assert "trajectories[0].robot (line" in res.output and "unknown robot 'armX'" in res.output
     assert "1 more problem:" in res.output and "trajectories[1].waypoints[1] (line" in res.output
     f.write_text(good)
@@ -190,6 +190,6 @@ def test_body_and_robot_problems_are_listed_together(tmp_path):
     f = tmp_path / "cell.yaml"
     f.write_text(bad)
     res = _run("check", f)
-    assert res.exit_code == 2
+    assert res.exit_code == ExitCode.INPUT
     assert "bodies[1].shapes[0] (line" in res.output and "no volume" in res.output
     assert "1 more problem:" in res.output and "robots[0].joints[1].limits (line" in res.output

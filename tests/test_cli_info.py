@@ -33,8 +33,8 @@ def test_fk_prints_link_frames_in_degrees():
     assert np.allclose(xyz, X[-1, :3, 3], atol=1e-6)
 
 
-def test_errors_are_one_line_exit_2():
+def test_errors_are_one_line_exit_3():
     for args in (["info", "no_such_scene"], ["fk", "hermes", "--q", "1,2"], ["fk", "hermes", "--robot", "x"]):
         res = CliRunner().invoke(main, args)
-        assert res.exit_code == 2, (args, res.output)
+        assert res.exit_code == 3, (args, res.output)  # ExitCode.INPUT: a value refused
         assert res.output.strip().count("\n") == 0 and res.output.startswith("error:")

@@ -35,4 +35,4 @@ def test_other_model_is_refused(tmp_path):
     assert runner.invoke(main, ["cspace", "build", "hermes", "--resolution", "30deg", "--max-depth", "0",
                                 "--out", str(out)]).exit_code == 0
     r = runner.invoke(main, ["cspace", "info", str(out), "--model", "ranger", "--samples", "0"])
-    assert r.exit_code == 2 and "built for other model files" in r.output
+    assert r.exit_code == 3 and "built for other model files" in r.output  # ExitCode.INPUT

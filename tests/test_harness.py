@@ -108,7 +108,7 @@ def test_cli_compare_writes_compare_json(tmp_path):
     assert data["pairs"]["analytic/coal"]["verdict_disagreements"] == 0 and data["configs"]["total"] == 40
     assert "timings" in res.output
     res = CliRunner().invoke(main, ["compare", "gmf_s480", "--backends", "coal"])
-    assert res.exit_code == 2 and "at least two backends" in res.output
+    assert res.exit_code == 3 and "at least two backends" in res.output  # ExitCode.INPUT
 
 
 # ------------------------------------------------------------------ URDF-driven updates

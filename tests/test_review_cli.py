@@ -1,4 +1,4 @@
-"""CLI failures are one clear line and exit status 2, never a traceback.
+"""CLI failures are one clear line and exit status 3 (ExitCode.INPUT), never a traceback.
 
 Found in review: ``armguard verify ... --report PATH`` / ``--plot PATH`` where PATH cannot be
 written (its parent is a file) ended in a Python traceback after the verification had run.
@@ -13,12 +13,12 @@ from armguard.cli import main
 
 
 @pytest.mark.parametrize("option", ["--report", "--plot"], ids=["report", "plot"])
-def test_verify_unwritable_output_is_one_line_exit_2(tmp_path, option):
+def test_verify_unwritable_output_is_one_line_exit_3(tmp_path, option):
     blocker = tmp_path / "not_a_dir"
     blocker.write_text("a file where a folder is expected", encoding="utf-8")
     target = blocker / ("out.json" if option == "--report" else "out.png")
     res = CliRunner().invoke(main, ["verify", "puma560", "pick_and_place", option, str(target)])
-    assert res.exit_code == 2, res.output
+    assert res.exit_code == 3, res.output  # ExitCode.INPUT
     assert res.exception is None or isinstance(res.exception, SystemExit)
     assert "Traceback" not in res.output
     last = [ln for ln in res.output.splitlines() if ln.strip()][-1]

@@ -83,4 +83,4 @@ def test_cli_verify_yaml_trajectory_and_unknown_name(tmp_path):
     assert out.returncode in (0, 1), out.stderr
     assert "sampled at 20 Hz" in out.stdout
     bad = subprocess.run([sys.executable, "-m", "armguard.cli", "verify", "puma560", "no_such"], capture_output=True, text=True)
-    assert bad.returncode == 2 and "pick_and_place" in bad.stderr
+    assert bad.returncode == 3 and "pick_and_place" in bad.stderr  # ExitCode.INPUT

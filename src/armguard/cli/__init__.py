@@ -2,22 +2,17 @@
 
 from __future__ import annotations
 
-import sys
-
 import click
 
-from .._errors import ArmguardError
+from ._exit import DEBUG_ENV, ExitCode, exit_epilog, run_guarded
 
 
 class _Group(click.Group):
-    """A click group that turns ArmguardError into a one-line message and exit code 2."""
+    """A click group whose commands exit with :class:`ExitCode`: an ArmguardError is a one-line
+    message and 3, any other exception one line and 4, Ctrl-C 130 (``_exit.run_guarded``)."""
 
     def invoke(self, ctx):
-        try:
-            return super().invoke(ctx)
-        except ArmguardError as exc:
-            click.secho(f"error: {_option_names(ctx, str(exc))}", fg="red", err=True)
-            sys.exit(2)
+        return run_guarded(ctx, lambda: super(_Group, self).invoke(ctx), lambda message: _option_names(ctx, message))
 
 
 def _option_names(ctx, message: str) -> str:
@@ -33,15 +28,21 @@ def _option_names(ctx, message: str) -> str:
     return message
 
 
-@click.group(cls=_Group)
+@click.group(cls=_Group, epilog=exit_epilog(
+    ok="done: clear, safe, the backends agree, the output written",
+    unsafe="unsafe: a collision or stopping-distance violation (check, verify), backends that differ (compare), "
+           "an error-level finding (check-urdf)",
+    incomplete="incomplete: a check or verification that could not finish (check, verify)"))
 @click.version_option(package_name="armguard")
 @click.option("--backend", default=None, metavar="NAME",
               help="Backend for every check of this command (analytic, coal, fcl, ...; default: "
                    "$ARMGUARD_BACKEND, else armguard.toml, else analytic).")
 @click.option("--config", "config", default=None, type=click.Path(dir_okay=False),
               help="An armguard.toml to read the [backend] table from (default: the working directory's).")
+@click.option("--traceback", "traceback", is_flag=True,
+              help=f"Print the traceback of an internal error (exit status 4); also {DEBUG_ENV}=1.")
 @click.pass_context
-def main(ctx, backend: str | None, config: str | None) -> None:
+def main(ctx, backend: str | None, config: str | None, traceback: bool) -> None:
     """armguard: collision and proximity detection for robot manipulators."""
     from ..backends import available, command_line_choice
 
@@ -62,3 +63,16 @@ from . import _demo  # noqa: E402,F401
 from . import _check  # noqa: E402,F401
 from . import _cspace  # noqa: E402,F401
 from . import _compare  # noqa: E402,F401
+
+
+def _document_exit_codes(group: click.Group) -> None:
+    """Every command without its own exit-status table gets the generic one (0: done)."""
+    for cmd in group.commands.values():
+        if cmd.epilog is None:
+            cmd.epilog = exit_epilog()
+        if isinstance(cmd, click.Group):
+            _document_exit_codes(cmd)
+
+
+_document_exit_codes(main)
+__all__ = ["main", "ExitCode"]

@@ -1,8 +1,9 @@
 """``armguard check SCENE --q ...``: one detector check, printed per category (or as JSON).
 
-Exit status: 0 clear or warning, 1 collision or incomplete (as ``armguard verify``: a check that
-could not finish is never read as clear), 2 bad input (a value
-outside the joint limits is refused with the joint, the value and the limits in the units typed).
+Exit status (:class:`armguard.cli.ExitCode`): 0 clear or warning, 1 collision, 5 incomplete (as
+``armguard verify``: a check that could not finish is never read as clear, nor as a collision),
+2 bad input (a value outside the joint limits is refused with the joint, the value and the
+limits in the units typed), 3 a file refused.
 """
 
 from __future__ import annotations
@@ -14,7 +15,10 @@ import sys
 import click
 
 from . import main
+from ._exit import ExitCode, exit_epilog
 
+_STATUS_EXIT = {"clear": ExitCode.OK, "warning": ExitCode.OK, "collision": ExitCode.UNSAFE,
+                "incomplete": ExitCode.INCOMPLETE}
 _COLOUR = {"clear": "green", "warning": "yellow", "collision": "red", "incomplete": "magenta"}
 
 
@@ -62,7 +66,8 @@ def parse_q(sc, q_text: str, deg: bool):
     return q
 
 
-@main.command("check")
+@main.command("check", epilog=exit_epilog(ok="clear or warning", unsafe="collision",
+                                           incomplete="incomplete: the budget ran out before a verdict"))
 @click.argument("scene")
 @click.option("--q", "q_text", default=None,
               help="Joint values, comma-separated, in the scene's joint order (`armguard info SCENE` lists it; "
@@ -76,10 +81,7 @@ def parse_q(sc, q_text: str, deg: bool):
 @click.option("--terrain", "terrain_file", type=click.Path(dir_okay=False), default=None,
               help="Add the terrain category: a sensed terrain file (armguard.terrain.load_terrain).")
 def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_us, as_json, terrain_file) -> None:
-    """Check SCENE (a built-in name or a scene file) at one configuration.
-
-    Exit status: 0 clear / warning, 1 collision or incomplete (the budget ran out first), 2 bad input.
-    """
+    """Check SCENE (a built-in name or a scene file) at one configuration."""
     from rich.console import Console
     from rich.table import Table
 
@@ -97,10 +99,10 @@ def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_u
         terrain = load_terrain(terrain_file, sc, robot=active)
     det = Detector(sc, threshold=threshold, stopping_distance=stopping_distance, active=active, terrain=terrain)
     rep = det.check(q, budget_us=budget_us)
-    collided = rep.status.value in ("collision", "incomplete")  # never a success exit without a verdict
+    code = _STATUS_EXIT.get(rep.status.value, ExitCode.INCOMPLETE)  # never a success exit without a verdict
     if as_json:
         click.echo(json.dumps(rep.to_dict(), indent=2))  # features as data (Feature.to_dict)
-        sys.exit(1 if collided else 0)
+        sys.exit(int(code))
     out = Console()
     if not out.is_terminal:  # piped: don't cut names to 80 columns
         out = Console(width=200)
@@ -117,4 +119,4 @@ def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_u
         lb = min(n.lower_bound for n in rep.not_evaluated)
         bound = f"least lower bound {lb:.4f} m" if math.isfinite(lb) else "no lower bound on some of them yet"
         out.print(f"{len(rep.not_evaluated)} pairs not evaluated within the budget; {bound}")
-    sys.exit(1 if collided else 0)
+    sys.exit(int(code))

@@ -8,6 +8,7 @@ import sys
 import click
 
 from . import main
+from ._exit import ExitCode, exit_epilog
 
 
 def _floats(text: str) -> list:
@@ -17,7 +18,7 @@ def _floats(text: str) -> list:
         raise click.BadParameter(f"expected comma-separated numbers, got {text!r}") from None
 
 
-@main.command("compare")
+@main.command("compare", epilog=exit_epilog(ok="the backends agree (--q: answered)", unsafe="a backend pair differs"))
 @click.argument("model")
 @click.option("--backends", default="analytic,coal", show_default=True, help="Comma-separated backends to compare.")
 @click.option("--configs", "n_configs", type=int, default=1000, show_default=True, help="Seeded random in-limit configurations.")
@@ -39,7 +40,8 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
                 no_plots, n_worst, q_text, pair_text, as_json) -> None:
     """Compare BACKENDS on MODEL (a built-in or public robot name -- `armguard info` lists them -- or a
     .urdf/.yaml path): verdicts, distances, nearest points and timings on the same configurations.
-    Exit status 1 when a backend pair differs."""
+    With --out, compare.json and the PNGs are written as one set: an interrupted or failed run leaves
+    the previous run's set as it was."""
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
@@ -90,18 +92,17 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
         console.print(f"{comp.summary['configs']['total']} configurations: answers {tm['answers_s']:.1f} s, "
                       f"comparison {tm['compare_s']:.1f} s" + (f", outputs {tm['outputs_s']:.1f} s in {out_dir}" if out_dir else ""))
     if any(p["status"] != "agree" for p in comp.summary["pairs"].values()):
-        sys.exit(1)
+        sys.exit(int(ExitCode.UNSAFE))
 
 
-@main.command("check-urdf")
+@main.command("check-urdf", epilog=exit_epilog(ok="no error-level finding", unsafe="an error-level finding"))
 @click.argument("path")
 @click.option("--configs", "n_configs", type=int, default=200, show_default=True,
               help="Random configurations for the permanent-collision check.")
 @click.option("--json", "as_json", is_flag=True, help="Print the findings as JSON.")
 def check_urdf_cmd(path, n_configs, as_json) -> None:
     """Lint a model (a built-in name, .urdf or .yaml): dropped collision elements, non-convex meshes marked
-    convex, zero-length capsules, SRDF names that match nothing, pairs in permanent collision.
-    Exit status 1 when there is an error-level finding."""
+    convex, zero-length capsules, SRDF names that match nothing, pairs in permanent collision."""
     from rich.console import Console
     from rich.table import Table
 
@@ -122,4 +123,4 @@ def check_urdf_cmd(path, n_configs, as_json) -> None:
                 t.add_row(f.severity.value, f.check.value, f.where, f.message, f.suggestion or "")
             console.print(t)
     if report.status.value == "errors":
-        sys.exit(1)
+        sys.exit(int(ExitCode.UNSAFE))

@@ -7,6 +7,7 @@ import math
 import click
 
 from . import main
+from ._exit import exit_epilog
 
 
 def _angle(value: str) -> float:
@@ -32,7 +33,7 @@ def cspace() -> None:
     """Forbidden-values maps (Hermes): certified joint-space maps of links 1-3 vs the obstacles."""
 
 
-@cspace.command("build")
+@cspace.command("build", epilog=exit_epilog(ok="the map written (whole: a temporary file, fsync, rename)"))
 @click.argument("model")
 @click.option("--out", "out", type=click.Path(dir_okay=False), required=True, help="The .agmap file to write.")
 @click.option("--resolution", default="1deg", show_default=True, help="Cell width of joints 1, 2 ('1deg', '0.5°', rad).")
@@ -103,7 +104,7 @@ def info_cmd(map_path, model, samples, as_json) -> None:
                    f"{e['false_forbidden_share']:.4f} ({e['false_forbidden_of_free']:.4f} of the free ones)")
 
 
-@cspace.command("plot")
+@cspace.command("plot", epilog=exit_epilog(ok="the PNG written (whole, or the previous file left as it was)"))
 @click.argument("map_path", type=click.Path(exists=True, dir_okay=False))
 @click.option("--q2", required=True, help="Joint 2 of the slice ('30deg', '30°', rad; a bare number is deg).")
 @click.option("--q", "q", default=None, help="Configuration to mark: joints 1-3 as 'a,b,c' (deg unless suffixed).")

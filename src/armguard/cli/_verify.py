@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from . import main
+from ._exit import ExitCode, exit_epilog
 
 
 def resolve_trajectories(scene, specs):
@@ -57,7 +58,9 @@ def _checked_file(scene, path: Path, traj):
     return traj
 
 
-@main.command("verify")
+@main.command("verify", epilog=exit_epilog(
+    ok="every trajectory safe", unsafe="a trajectory collides or violates the stopping distance",
+    incomplete="none collides, but one could not be verified (incomplete)"))
 @click.argument("scene")
 @click.argument("trajectories", nargs=-1, required=True)
 @click.option("--method", type=click.Choice(["certified", "sampled"]), default="certified", show_default=True,
@@ -78,16 +81,13 @@ def _checked_file(scene, path: Path, traj):
               help="Also verify against a sensed terrain file (certified; serial; armguard.terrain.load_terrain).")
 def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_distance, speed_dependent, threshold, robot,
                report_path, plot_path, workers, scheduler, terrain_file) -> None:
-    """Verify TRAJECTORIES (.yaml files, canned names of SCENE, or 'all') in SCENE.
-
-    Exit status: 0 when every trajectory is safe, 1 when one collides or could not be verified
-    (incomplete), 2 for a usage error or a file that cannot be read or written.
-    """
+    """Verify TRAJECTORIES (.yaml files, canned names of SCENE, or 'all') in SCENE."""
     import json
 
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+    from .._io import atomic_write
     from ..scene import load_scene
     from ..verify import verify_many
 
@@ -123,25 +123,30 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
     for r in reports:
         console.rule(f"[bold]{r.trajectory}[/] — {verdict_text(r)}")
         console.print(r.summary(), highlight=False, markup=False)
-    if report_path:
+    if report_path:  # an output that cannot be written: OutputError, one line, exit status 3
         p = Path(report_path)
         doc = reports[0].to_dict() if len(reports) == 1 else [r.to_dict() for r in reports]
-        try:
-            p.parent.mkdir(parents=True, exist_ok=True)
-            p.write_text(json.dumps(doc, indent=2), encoding="utf-8")
-        except OSError as exc:
-            _cannot_write("report", p, exc)
+        atomic_write(p, json.dumps(doc, indent=2), parents=True)
         console.print(f"report: {p}")
     if plot_path:
         p = Path(plot_path)
         for r in reports:
             out = p if len(reports) == 1 else p.with_name(f"{p.stem}_{r.trajectory}{p.suffix or '.png'}")
-            try:
-                r.plot(out)
-            except OSError as exc:
-                _cannot_write("plot", out, exc)
+            r.plot(out)
             console.print(f"plot: {out}")
-    sys.exit(0 if all(r.safe for r in reports) else 1)
+    sys.exit(int(verify_exit_code(reports)))
+
+
+def verify_exit_code(reports) -> ExitCode:
+    """OK when every report is safe, UNSAFE when one found a collision (a stopping-distance violation
+    included), else INCOMPLETE (one could not finish): a known collision outranks a missing verdict."""
+    from ..verify import VerificationStatus
+
+    if all(r.safe for r in reports):
+        return ExitCode.OK
+    if any(r.status is VerificationStatus.COLLISION for r in reports):
+        return ExitCode.UNSAFE
+    return ExitCode.INCOMPLETE
 
 
 def _speed_dependent(sc, items, kwargs):
@@ -160,8 +165,3 @@ def _speed_dependent(sc, items, kwargs):
                                 **kwargs))
     return reports
 
-
-def _cannot_write(what: str, path: Path, exc: OSError) -> None:
-    """One line and exit status 2 (the verdicts above are already printed)."""
-    click.secho(f"error: cannot write the {what} to {path}: {exc.strerror or exc}", fg="red", err=True)
-    sys.exit(2)

@@ -1,0 +1,150 @@
+"""Every ``armguard`` exit status means one thing (armguard.cli.ExitCode), and every command's
+``--help`` says which: 0 done / clear, 1 unsafe, 2 usage, 3 a file or value refused, 4 internal
+error, 5 incomplete, 130 interrupted.  In-process with click's CliRunner, and one real SIGINT in
+a subprocess."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+from types import SimpleNamespace
+
+import click
+import pytest
+from click.testing import CliRunner
+
+import armguard.scene
+from armguard.cli import ExitCode, main
+from armguard.cli._verify import verify_exit_code
+from armguard.verify import VerificationStatus
+
+
+def _run(*args, env=None):
+    return CliRunner().invoke(main, [str(a) for a in args], env=env)
+
+
+def test_codes_are_distinct_and_fixed():
+    """Scripts rely on the numbers: they are part of the interface."""
+    assert [int(c) for c in ExitCode] == [0, 1, 2, 3, 4, 5, 130]
+    assert click.UsageError("x").exit_code == ExitCode.USAGE
+
+
+def test_usage_error_is_2():
+    res = _run("check", "hermes", "--no-such-option")
+    assert res.exit_code == ExitCode.USAGE and "No such option" in res.output
+
+
+def test_refused_input_is_3_and_one_line():
+    res = _run("check", "no_such_scene")
+    assert res.exit_code == ExitCode.INPUT, res.output
+    assert res.output.startswith("error:") and res.output.strip().count("\n") == 0
+    assert "no_such_scene" in res.output
+
+
+def test_os_error_reading_input_is_3(monkeypatch, tmp_path):
+    def unreadable(spec, *a, **k):
+        raise PermissionError(13, "Permission denied", str(tmp_path / "scene.yaml"))
+
+    monkeypatch.setattr(armguard.scene, "load_scene", unreadable)
+    res = _run("check", tmp_path / "scene.yaml")
+    assert res.exit_code == ExitCode.INPUT, res.output
+    assert f"error: {tmp_path / 'scene.yaml'}: Permission denied" in res.output
+
+
+def _boom(*a, **k):
+    raise RuntimeError("boom: an unexpected state\nsecond line")
+
+
+def test_unexpected_exception_is_4_with_a_hint(monkeypatch):
+    monkeypatch.setattr(armguard.scene, "load_scene", _boom)
+    res = _run("check", "hermes", env={"ARMGUARD_DEBUG": ""})
+    assert res.exit_code == ExitCode.INTERNAL, res.output
+    assert "Traceback" not in res.output and "second line" not in res.output
+    line = res.output.strip()
+    assert line.count("\n") == 0 and line.startswith("error: internal error: RuntimeError: boom: an unexpected state")
+    assert "--traceback" in line and "ARMGUARD_DEBUG=1" in line
+
+
+@pytest.mark.parametrize("how", ["option", "env"])
+def test_traceback_on_request(monkeypatch, how):
+    monkeypatch.setattr(armguard.scene, "load_scene", _boom)
+    if how == "option":
+        res = CliRunner().invoke(main, ["--traceback", "check", "hermes"], env={"ARMGUARD_DEBUG": ""})
+    else:
+        res = _run("check", "hermes", env={"ARMGUARD_DEBUG": "1"})
+    assert res.exit_code == ExitCode.INTERNAL, res.output
+    assert "Traceback (most recent call last)" in res.output and "_boom" in res.output
+
+
+def test_ctrl_c_is_130_not_a_collision(monkeypatch):
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(armguard.scene, "load_scene", interrupted)
+    res = _run("check", "hermes")
+    assert res.exit_code == ExitCode.INTERRUPTED and "interrupted" in res.output
+
+
+def test_real_sigint_is_130():
+    """A real SIGINT to a running command (a command added for the test that waits)."""
+    code = ("import time, click\nfrom armguard.cli import main\n"
+            "@main.command('nap')\ndef nap():\n    print('ready', flush=True)\n    time.sleep(60)\n"
+            "main(['nap'])\n")
+    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout.readline().strip() == "ready"
+        child.send_signal(signal.SIGINT)
+        _, err = child.communicate(timeout=30)
+    finally:
+        if child.poll() is None:
+            child.kill()
+    assert child.returncode == ExitCode.INTERRUPTED and "interrupted" in err and "Traceback" not in err
+
+
+def test_check_verdicts_map_to_their_codes():
+    assert _run("check", "hermes").exit_code == ExitCode.OK
+    hit = _run("check", "hermes", "--q", "195,0,0,0,0,0", "--deg")
+    assert hit.exit_code == ExitCode.UNSAFE and "COLLISION" in hit.output
+    spent = _run("check", "hermes", "--q", "195,0,0,0,0,0", "--deg", "--budget-us", "0")
+    assert spent.exit_code == ExitCode.INCOMPLETE and "INCOMPLETE" in spent.output
+
+
+@pytest.mark.parametrize("statuses, code", [
+    (["safe", "safe"], ExitCode.OK),
+    (["safe", "collision"], ExitCode.UNSAFE),
+    (["incomplete", "safe"], ExitCode.INCOMPLETE),
+    (["incomplete", "collision"], ExitCode.UNSAFE),  # a collision found outranks a missing verdict
+], ids=["all-safe", "one-collides", "one-incomplete", "incomplete-and-collision"])
+def test_verify_exit_code(statuses, code):
+    reports = [SimpleNamespace(status=VerificationStatus(s), safe=s == "safe") for s in statuses]
+    assert verify_exit_code(reports) == code
+
+
+def _commands(group, prefix=()):
+    for name, cmd in group.commands.items():
+        yield (*prefix, name), cmd
+        if isinstance(cmd, click.Group):
+            yield from _commands(cmd, (*prefix, name))
+
+
+@pytest.mark.parametrize("path", [p for p, _ in _commands(main)] + [()], ids=lambda p: " ".join(p) or "armguard")
+def test_every_help_lists_the_exit_codes(path):
+    res = _run(*path, "--help")
+    assert res.exit_code == 0, res.output
+    text = res.output.split("Exit status:", 1)[1]
+    rows = {int(line.split()[0]) for line in text.splitlines() if line.strip()[:1].isdigit()}
+    assert {0, 2, 3, 4, 130} <= rows and rows <= {int(c) for c in ExitCode}
+    if path in (("check",), ("verify",)):
+        assert {1, 5} <= rows
+    if path in (("compare",), ("check-urdf",)):
+        assert 1 in rows and 5 not in rows
+
+
+def test_readme_documents_the_codes():
+    readme = (os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + "/README.md")
+    text = open(readme, encoding="utf-8").read()
+    section = text.split("### Exit status", 1)[1].split("\n## ", 1)[0]
+    for c in ExitCode:
+        assert f"| {int(c)} " in section, c
