@@ -13,7 +13,11 @@ cores, and the witnesses are the barycentric combinations of those.  The algorit
   ``gjk_epsilon``, when a support point repeats, or when ``|v|`` stops decreasing (as
   ``_pair_gjk``: the simplex is then the answer; on two curved cores it stalls so with ``|v|``
   within ~1e-11 m of the distance while the gap, whose lower bound sees the supports jump across
-  a rim, may still be ~1e-5 m).  On a curved core GJK converges without terminating finitely;
+  a rim, may still be ~1e-5 m).  Once a support plane has separated the origin from ``M``
+  (``v . w > 0``: a proof that the cores are apart) no later step may call them intersecting: near
+  a rim the supports jump between nearly equal points, and rounding can then flatten the simplex
+  into a tetrahedron that seems to hold the origin (1 in 1,000 random cylinder-box pairs 18-28 mm
+  apart were once reported touching).  On a curved core GJK converges without terminating finitely;
   with ``max_iterations`` spent it is accepted when the gap is below ``SUPPORT_GAP``, else
   reported as ``GJK_NOT_CONVERGED`` (callers raise).
 * EPA (van den Bergen, GDC 2001, §4.3.7) on ``M = A - B`` from GJK's final tetrahedron; when GJK
@@ -141,6 +145,7 @@ def gjk_support(pa, ca, pb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, work):  
     vv = vx * vx + vy * vy + vz * vz
     status = GJK_NOT_CONVERGED
     gap = math.inf
+    apart = False
     for _it in range(max_iter):
         if vv <= eps2:
             status = GJK_INTERSECTING
@@ -149,7 +154,11 @@ def gjk_support(pa, ca, pb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, work):  
         wx = ax - bx
         wy = ay - by
         wz = az - bz
-        gap = (vv - (vx * wx + vy * wy + vz * wz)) / math.sqrt(vv)
+        vw = vx * wx + vy * wy + vz * wz
+        # w is M's point least along v: vw > 0 proves the origin outside M (w's plane separates
+        # them), whatever later supports do near a rim (they jump between nearly equal points)
+        apart = apart or vw > 0.0
+        gap = (vv - vw) / math.sqrt(vv)
         if gap <= gjk_eps:
             status = GJK_SEPARATED
             break
@@ -162,8 +171,8 @@ def gjk_support(pa, ca, pb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, work):  
             if ex * ex + ey * ey + ez * ez <= eps2:
                 dup = True
         if dup:
-            # a repeated support point: no progress possible; apart when w's plane separates
-            status = GJK_SEPARATED if vx * wx + vy * wy + vz * wz > 0.0 else GJK_INTERSECTING
+            # a repeated support point: no progress possible; apart when a support plane separated
+            status = GJK_SEPARATED if apart else GJK_INTERSECTING
             break
         _put(work, _S0 + 9 * n, ax, ay, az, bx, by, bz)
         o1 = _S0 + 9
@@ -173,6 +182,11 @@ def gjk_support(pa, ca, pb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, work):  
             n + 1, work[_S0], work[_S0 + 1], work[_S0 + 2], work[o1], work[o1 + 1], work[o1 + 2],
             work[o2], work[o2 + 1], work[o2 + 2], work[o3], work[o3 + 1], work[o3 + 2])
         if m == 15:
+            if apart:
+                # a support plane separated the origin from M (a proof): the "inside" verdict came
+                # from the Voronoi tests on a tetrahedron that rounding has made flat; the simplex stands
+                status = GJK_SEPARATED
+                break
             status = GJK_INTERSECTING
             n = 4
             break
@@ -185,8 +199,8 @@ def gjk_support(pa, ca, pb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, work):  
             nvz += lam * work[o + 2]
         nvv = nvx * nvx + nvy * nvy + nvz * nvz
         if nvv >= vv:
-            # no progress (rounding): the previous simplex is the answer (apart when w's plane separates)
-            status = GJK_SEPARATED if vx * wx + vy * wy + vz * wz > 0.0 else GJK_INTERSECTING
+            # no progress (rounding): the previous simplex is the answer (apart when a support plane separated)
+            status = GJK_SEPARATED if apart else GJK_INTERSECTING
             break
         c = 0
         for j in range(n + 1):  # compact the kept vertices into slots 0 .. c-1, in order
