@@ -125,8 +125,9 @@ def trajectory_from_dict(cls, d, *, file=None, groups=None):
 
 
 def save_yaml(traj, path) -> None:
-    with open(os.fspath(path), "w", encoding="utf-8") as fh:
-        yaml.safe_dump(trajectory_to_dict(traj), fh, sort_keys=False, default_flow_style=None)
+    from .._io import atomic_write
+
+    atomic_write(os.fspath(path), yaml.safe_dump(trajectory_to_dict(traj), sort_keys=False, default_flow_style=None))
 
 
 def load_yaml(cls, path, groups=None):

@@ -165,5 +165,6 @@ def save_scene(scene: Scene, path) -> Path:
     """Write ``scene`` as a YAML scene file at ``path``; returns the path.  Loads back with ``load_scene``."""
     path = Path(path)
     text = yaml.safe_dump(scene_to_dict(scene), sort_keys=False, default_flow_style=None, width=120)
-    path.write_text(f"# armguard scene file, written by save_scene (SI units)\n{text}", encoding="utf-8")
-    return path
+    from .._io import atomic_write
+
+    return atomic_write(path, f"# armguard scene file, written by save_scene (SI units)\n{text}")  # whole or not at all

@@ -458,10 +458,12 @@ def export_scene(scene, out_dir, *, name: str | None = None, source=None) -> dic
     sidecar = sidecar_text(name, scene, header, sections, units)
     (out / "meshes").mkdir(parents=True, exist_ok=True)
     paths = {"urdf": out / f"{name}.urdf", "srdf": out / f"{name}.srdf", "yaml": out / f"{name}.yaml", "meshes": []}
+    from .._io import atomic_write
+
     for key, text in (("urdf", urdf), ("srdf", srdf), ("yaml", sidecar)):
-        paths[key].write_text(text, encoding="utf-8")
+        atomic_write(paths[key], text)  # each file whole or not at all
     for cname, obj in meshes.items():
         p = out / "meshes" / f"{cname}.obj"
-        p.write_text(obj, encoding="utf-8")
+        atomic_write(p, obj)
         paths["meshes"].append(p)
     return paths

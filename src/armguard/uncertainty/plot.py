@@ -68,7 +68,6 @@ def plot_monte_carlo(path, samples, estimate: UncertainPose2, *, confidences: Se
     if title:
         ax.set_title(title)
     ax.legend(loc="best", fontsize=7)
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, format="png")
-    return out
+    from .._io import atomic_write
+
+    return atomic_write(Path(path), lambda f: fig.savefig(f, format="png"), parents=True)  # whole or not at all
