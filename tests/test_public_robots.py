@@ -94,7 +94,7 @@ def test_unknown_name_lists_the_known_ones():
     with pytest.raises(SceneError, match="'z1'"):
         armguard.load_scene("ur11")
     res = CliRunner().invoke(main, ["check", "ur11"])
-    assert res.exit_code == 2 and res.output.startswith("error:") and "'xarm7'" in res.output, res.output
+    assert res.exit_code == 3 and res.output.startswith("error:") and "'xarm7'" in res.output, res.output
     assert res.output.strip().count("\n") == 0
 
 
