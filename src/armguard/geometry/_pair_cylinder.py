@@ -538,8 +538,8 @@ def support_pair(pa, ca, ra, pb, cb, rb, out, work, eps_len, gjk_eps, max_iter, 
     polytope can break by rounding near a curved optimum (about 1 in 300 random penetrating pairs
     with a flat core against the cylinder did, and were once reported touching); the depth
     bracketed before that is the answer (:func:`epa_support`).  Only when EPA cannot settle a
-    depth under any of its visibility margins (none of 6,000 seeded random cylinder-box and
-    cylinder-polygon pairs, 4,530 of them penetrating, came to this) are the cores reported touching at GJK's witness: ``-(ra + rb)``, the right verdict (overlap), an upper
+    depth under any of its visibility margins (none of 9,000 seeded random pairs of a cylinder
+    and a box, polygon or polyhedron, 6,736 of them penetrating, came to this) are the cores reported touching at GJK's witness: ``-(ra + rb)``, the right verdict (overlap), an upper
     bound on the signed distance, not the depth."""
     gx, gy, gz = _centre(pa, ca)
     hx, hy, hz = _centre(pb, cb)
