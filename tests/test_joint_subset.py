@@ -89,10 +89,10 @@ def test_cli_verifies_a_file_over_a_subset(arm, tmp_path):
     assert out.exit_code in (0, 1) and "held at home (not in the trajectory): j3 = -0.8" in out.output, out.output
     traj.write_text(traj.read_text().replace("upper", "legs"))
     bad = CliRunner().invoke(main, ["verify", str(urdf), str(traj)])
-    assert bad.exit_code == 2 and "joint_names" in bad.output and "unknown SRDF group 'legs'" in bad.output, bad.output
+    assert bad.exit_code == 3 and "joint_names" in bad.output and "unknown SRDF group 'legs'" in bad.output, bad.output
     traj.write_text(traj.read_text().replace("legs", "[j2, j7]"))
     bad = CliRunner().invoke(main, ["verify", str(urdf), str(traj)])
-    assert bad.exit_code == 2 and "joint_names" in bad.output and "'j7'" in bad.output, bad.output
+    assert bad.exit_code == 3 and "joint_names" in bad.output and "'j7'" in bad.output, bad.output
 
 
 def test_panda_trajectory_over_its_seven_arm_joints():

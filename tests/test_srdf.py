@@ -252,7 +252,7 @@ def test_a_model_with_no_pair_is_refused_not_clear(tmp_path):
     with pytest.raises(DetectionError, match="no pair to check"):
         Detector(m.scene)
     run = CliRunner().invoke(main, ["check", str(urdf), "--q", "0,0,0"])
-    assert run.exit_code == 2 and "no pair to check" in run.output, run.output
+    assert run.exit_code == 3 and "no pair to check" in run.output, run.output
     # one pair left: a verdict again
     urdf.with_suffix(".srdf").write_text(srdf_text(disabled=[p for p in every if p != ("l3", "post")]))
     m = armguard.load_model(urdf)
