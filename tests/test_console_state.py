@@ -213,13 +213,15 @@ def test_workspace_limits_change_the_workspace_distance(state):
 def test_arm_angle_moves_the_elbow_and_keeps_the_tool_pose():
     """A 7-DOF S-R-S arm (shoulder, elbow, wrist spherical; made up for the test): the arm-angle
     null-space motion keeps the tool pose (to the IK tolerance) while the elbow moves."""
-    from armguard.geometry import Box
+    from armguard.geometry import Box, Sphere
     from armguard.kinematics import Robot
     from armguard.scene import Scene
 
     h = math.pi / 2
     rows = [(0, -h, 0.3, 0), (0, h, 0, 0), (0, -h, 0.4, 0), (0, h, 0, 0), (0, -h, 0.4, 0), (0, h, 0, 0), (0, 0, 0.1, 0)]
-    robot = Robot.from_dh("arm7", rows, lower=[-3.0] * 7, upper=[3.0] * 7)
+    # a tool ball, so that the console's detector has a pair to check (a scene with none is refused)
+    robot = Robot.from_dh("arm7", rows, lower=[-3.0] * 7, upper=[3.0] * 7,
+                          link_shapes={"link7": [Sphere([0.0, 0.0, 0.0], 0.02)]})
     sc = Scene("seven")
     sc.add_robot(robot, home=[0.1, 0.5, 0.1, 1.0, 0.1, 0.5, 0.1])
     sc.add_body("block", Box([1.0, 1.0, 0.0], [0.1, 0.1, 0.1]))

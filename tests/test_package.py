@@ -28,9 +28,17 @@ def test_unknown_attribute_raises():
         armguard.no_such_thing  # noqa: B018
 
 
-@pytest.mark.parametrize("cls", [c for c in vars(_errors).values() if isinstance(c, type) and issubclass(c, Exception)], ids=lambda c: c.__name__)
+@pytest.mark.parametrize("cls", [c for c in vars(_errors).values() if isinstance(c, type) and issubclass(c, Exception)
+                                 and not issubclass(c, Warning)], ids=lambda c: c.__name__)
 def test_every_error_is_an_armguard_error_with_a_docstring(cls):
     assert issubclass(cls, armguard.ArmguardError)
+    assert cls.__doc__ and cls.__doc__.strip()
+
+
+@pytest.mark.parametrize("cls", [c for c in vars(_errors).values() if isinstance(c, type) and issubclass(c, Warning)],
+                         ids=lambda c: c.__name__)
+def test_every_warning_is_an_armguard_warning_with_a_docstring(cls):
+    assert issubclass(cls, _errors.ArmguardWarning) and issubclass(cls, UserWarning)
     assert cls.__doc__ and cls.__doc__.strip()
 
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import armguard
-from armguard import DEFAULT_TOLERANCES, GeometryError, SceneFileError, VerificationError
+from armguard import DEFAULT_TOLERANCES, DetectionError, GeometryError, SceneFileError, VerificationError
 from armguard.geometry import Box, Capsule, ConvexPolyhedron, Prism, Sphere, distance, intersects
 from armguard.kinematics import Trajectory
 from armguard.scene import Scene, load_scene_file, scene_from_dict
@@ -209,11 +209,9 @@ def test_the_format_version_must_be_the_integer_1(tmp_path):
 def test_a_scene_without_robots_has_nothing_to_check():
     sc = Scene("bodies only")
     sc.add_body("b", [Sphere([0, 0, 0], 0.1)])
-    det = armguard.Detector(sc)
-    assert det.n_pairs == 0
-    r = det.check(np.zeros(0))
-    assert r.status.value == "clear" and r.n_evaluated == 0
-    assert det.collides_many(np.zeros((3, 0))).tolist() == [False] * 3
+    # nothing to check is never CLEAR: the Detector refuses the scene and says why
+    with pytest.raises(DetectionError, match="has no pair to check"):
+        armguard.Detector(sc)
 
 
 def test_intersects_and_the_detector_share_one_contact_tolerance():

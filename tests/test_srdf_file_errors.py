@@ -11,7 +11,7 @@ from armguard.harness import repo_root
 
 def test_srdf_a_directory_is_a_located_error(tmp_path):
     urdf = repo_root() / "urdf" / "hermes" / "hermes.urdf"
-    with pytest.raises(SceneFileError, match="is a directory; expected an SRDF file") as e:
+    with pytest.raises(SceneFileError, match="expected an SRDF file, got a directory") as e:
         armguard.load_model(str(urdf), srdf=tmp_path)
     assert e.value.file == str(tmp_path)
 
