@@ -29,7 +29,9 @@ CHROMIUM_ARGS = [
 ]
 SCENE = Path(__file__).parent / "data" / "console_scene.yaml"
 OUT = Path(__file__).resolve().parent.parent / "out"
-START_TIMEOUT_S = 60.0
+START_TIMEOUT_S = 600.0
+"""A console on a fresh checkout compiles its kernels first (minutes on a loaded 2-core machine);
+how long that takes is measured by make run and the bench, not here."""
 UI_TIMEOUT_MS = 30000
 SMALL_VIEWPORT = {"width": 640, "height": 480}
 """The second tab: small, since each tab renders the 3-D view in software."""
