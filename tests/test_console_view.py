@@ -211,6 +211,43 @@ def test_view_follows_typed_values_line_backends(tmp_path):
         app.stop()
 
 
+
+def test_typed_values_in_quick_succession_all_land():
+    """A joint typed, then within 0-300 ms a refused threshold: every joint value is applied and
+    every refusal shown.  The page's 50 ms message throttle once dropped one value in four of these
+    (a value update replaced by the form's dirty notice), and the server applied commits in the
+    order their threads ran rather than the order they were typed."""
+    _need_chromium()
+    from playwright.sync_api import sync_playwright
+
+    app = _app(SCENE)
+    try:
+        with sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            try:
+                page = _open(browser, app.url)
+                st = app.state
+                j1 = _input_for(page, "joint1 (deg)")
+                thr = _input_for(page, "threshold (m)")
+                for k, gap_ms in enumerate((0, 40, 60, 80, 120, 160, 200, 300)):
+                    deg = 10 + k
+                    _type(j1, str(deg))
+                    page.wait_for_timeout(gap_ms)
+                    _type(thr, "-5")
+                    page.wait_for_selector("#armguard-message[data-error='true']", timeout=UI_TIMEOUT_MS)
+                    assert "-5" in page.inner_text("#armguard-message")
+                    assert abs(st.snapshot().q["left"][0] - math.radians(deg)) < 1e-9, (gap_ms, st.snapshot().q["left"])
+                    threshold = round(0.1 + 0.01 * k, 2)
+                    _type(thr, str(threshold))  # a valid value clears the message
+                    _wait(page, "() => document.querySelector('#armguard-message') === null "
+                                "|| document.querySelector('#armguard-message').dataset.error !== 'true'")
+                    assert st.snapshot().threshold == threshold
+            finally:
+                browser.close()
+    finally:
+        app.stop()
+
+
 def _pose_ranger(st) -> None:
     """Ranger's canned test 1 at its end: the left wrist 0.10 m from the electronics module."""
     name = "test1_left_pitch_down"
