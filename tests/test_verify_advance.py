@@ -14,6 +14,7 @@ from _verify_fixtures import thin_scene
 from armguard.kinematics import Trajectory
 from armguard.verify import Verifier
 from armguard.verify._advance import advance_step, advance_step_reference
+from armguard.verify._timelaw import segments_of
 
 _FLOATS = st.floats(min_value=-2.0, max_value=5.0, allow_nan=False, allow_infinity=False)
 
@@ -109,7 +110,7 @@ def test_closed_form_segment_speeds_match_sampled_time_law(profile):
     t = Trajectory.joint_interpolated(rob, W, profile=profile)
     sampled = _SampledVelocity(t.robot_name, t.joint_names, t.times, t.waypoints, t.blend_times)
     v = Verifier(sc, robot=rob.name)
-    segs = v._segments(t)
+    segs = segments_of(t)
     k0, k1 = v._flat(rob.name)[1:]
     fast = v._segment_speeds(t, segs, k0, k1)
     ref = v._segment_speeds(sampled, segs, k0, k1)

@@ -41,11 +41,10 @@ import numpy as np
 from .._errors import TerrainError, VerificationError
 from ..verify import Clearance, ClearanceProfile, Collision, VerificationReport, VerificationStatus
 from ..verify._advance import advance_step
+from ..verify._timelaw import segment_times
 from ._guard import TERRAIN, TerrainCell, TerrainGuard
 
 __all__ = ["TerrainSweep", "sweep_terrain", "verify_with_terrain"]
-
-_BISECTIONS = 60
 
 
 @dataclass(frozen=True)
@@ -101,25 +100,6 @@ def _segments(trajectory):
     if not np.all(np.isfinite(W)):
         raise VerificationError("trajectory knot: contains NaN or infinite values")
     return T, W
-
-
-def _times(trajectory, T, W, seg, s) -> float:
-    """The time at which segment ``seg`` is at fraction ``s`` (bisection on its time law)."""
-    t0, t1 = float(T[seg]), float(T[seg + 1])
-    if s <= 0.0:
-        return t0
-    if s >= 1.0:
-        return t1
-    dq = W[seg + 1] - W[seg]
-    k = int(np.argmax(np.abs(dq)))
-    if dq[k] == 0.0:
-        return t0 + s * (t1 - t0)
-    lo, hi = t0, t1
-    for _ in range(_BISECTIONS):
-        mid = 0.5 * (lo + hi)
-        frac = (float(np.asarray(trajectory.at(mid))[k]) - W[seg, k]) / dq[k]
-        lo, hi = (mid, hi) if frac < s else (lo, mid)
-    return 0.5 * (lo + hi)
 
 
 def sweep_terrain(guard: TerrainGuard, trajectory, *, stopping_distance: float = 0.0, q_others=None,
@@ -192,7 +172,7 @@ def sweep_terrain(guard: TerrainGuard, trajectory, *, stopping_distance: float =
                 lower = min(lower, lb)
                 intervals += 1
             prev = both
-            t = _times(trajectory, T, W, si, s)
+            t = float(segment_times(trajectory, [(T[si], T[si + 1], W[si], W[si + 1])], [0], [s])[0])
             rec_t.append(t)
             rec_d.append(float(both.min()))
             rec_o.append(guard.owners[int(np.argmin(both))])

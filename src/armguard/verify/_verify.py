@@ -38,14 +38,14 @@ from ._report import (
     VerificationStatus,
 )
 from ._stopping import StoppingDistance, check_stopping_distance
+from ._timelaw import finite_array as _finite_array
+from ._timelaw import profile_times, segment_times, segments_of
 
 __all__ = ["Verifier", "verify", "DRAKE_JOINT_STEP"]
 
 #: Drake's suggested edge-checking step (rad), used by sampled mode when no frequency is given.
 DRAKE_JOINT_STEP = 0.05
 _SPEED_SAMPLES = 17  # time-law samples per segment used to find its peak speed (odd: includes the midpoint)
-_TIME_BISECTIONS = 60
-_PROFILE_TABLE = 65  # time-law samples per segment for the clearance profile's time axis  # bisection steps inverting a segment's time law (2^-60 of the segment time)
 _OBJECTS = {
     "link-obstacle": ("arm", "obstacle"),
     "link-link": ("arm", "arm"),
@@ -63,13 +63,6 @@ def _float(x, name: str) -> float:
         return float(x)
     except (TypeError, ValueError):
         raise VerificationError(f"{name}: expected a number, got {x!r}") from None
-
-
-def _finite_array(x, name: str) -> np.ndarray:
-    a = np.asarray(x, dtype=np.float64)
-    if not np.all(np.isfinite(a)):
-        raise VerificationError(f"{name}: contains NaN or infinite values")
-    return a
 
 
 class Verifier:
@@ -165,23 +158,6 @@ class Verifier:
             except KinematicsError as exc:
                 raise VerificationError(f"trajectory waypoints[{k}]: {exc}") from None
 
-    @staticmethod
-    def _segments(trajectory):
-        from ..kinematics import Trajectory
-
-        if type(trajectory).segments is Trajectory.segments:  # the arrays behind Trajectory.segments, without the generator
-            T = np.asarray(trajectory.times, dtype=np.float64).tolist()
-            W = np.asarray(trajectory.waypoints, dtype=np.float64)
-            _finite_array(W, "trajectory knot")
-            return [(T[k], T[k + 1], W[k], W[k + 1]) for k in range(len(T) - 1)]
-        segs = []
-        for t0, t1, q0, q1 in trajectory.segments():
-            segs.append((float(t0), float(t1), np.asarray(q0, dtype=np.float64), np.asarray(q1, dtype=np.float64)))
-        if not segs:
-            raise VerificationError("the trajectory has no segment")
-        _finite_array(np.stack([sg[2] for sg in segs] + [sg[3] for sg in segs]), "trajectory knot")
-        return segs
-
     def _segment_speeds(self, trajectory, segs, k0: int, k1: int) -> np.ndarray:
         """Per segment, a bound (m/s) on the speed of the fastest point of the arm (peak of the time law)."""
         from ..kinematics import Trajectory
@@ -206,54 +182,6 @@ class Verifier:
         qd[:, k0:k1] = V.max(axis=1)
         # max_point_speed of every segment's peak joint speeds at once: (segments, parts) -> max over parts
         return np.max(qd @ self.model.lever[:-1].T, axis=1)
-
-    def _times(self, trajectory, segs, seg_idx: np.ndarray, s: np.ndarray, k0: int) -> np.ndarray:
-        """Invert the time laws: the time at which segment ``seg_idx[i]`` is at fraction ``s[i]`` (vectorised bisection)."""
-        seg_idx = np.asarray(seg_idx, dtype=np.int64)
-        s = np.asarray(s, dtype=np.float64)
-        if s.size == 0:
-            return np.zeros(0)
-        t0 = np.array([segs[i][0] for i in seg_idx])
-        t1 = np.array([segs[i][1] for i in seg_idx])
-        dq = np.array([segs[i][3] - segs[i][2] for i in seg_idx])
-        q0 = np.array([segs[i][2] for i in seg_idx])
-        k = np.argmax(np.abs(dq), axis=1)
-        rows = np.arange(len(s))
-        span = dq[rows, k]
-        moving = np.abs(span) > 0.0
-        lo, hi = t0.copy(), t1.copy()
-        for _ in range(_TIME_BISECTIONS):
-            mid = 0.5 * (lo + hi)
-            qm = np.asarray(trajectory.at(mid))
-            frac = np.where(moving, (qm[rows, k] - q0[rows, k]) / np.where(moving, span, 1.0), 0.0)
-            below = frac < s
-            lo = np.where(below, mid, lo)
-            hi = np.where(below, hi, mid)
-        t = 0.5 * (lo + hi)
-        t = np.where(s <= 0.0, t0, np.where(s >= 1.0, t1, t))
-        return np.where(~moving & (s > 0.0) & (s < 1.0), t0 + s * (t1 - t0), t)
-
-    @staticmethod
-    def _profile_times(trajectory, segs, seg_idx: np.ndarray, s: np.ndarray) -> np.ndarray:
-        """Times of the profile points: each segment's time law tabulated at ``_PROFILE_TABLE`` points
-        (one ``trajectory.at`` call) and inverted by monotone interpolation — for plotting; the
-        reported collision time is inverted exactly (:meth:`_times`)."""
-        used = np.unique(seg_idx)
-        u = np.linspace(0.0, 1.0, _PROFILE_TABLE)
-        T = np.concatenate([segs[i][0] + u * (segs[i][1] - segs[i][0]) for i in used])
-        Q = np.asarray(trajectory.at(T)).reshape(len(used), _PROFILE_TABLE, -1)
-        out = np.empty(len(s))
-        for row, i in enumerate(used):
-            t0, t1, q0, q1 = segs[i]
-            dq = q1 - q0
-            k = int(np.argmax(np.abs(dq)))
-            sel = seg_idx == i
-            if dq[k] == 0.0:
-                out[sel] = t0 + s[sel] * (t1 - t0)
-                continue
-            frac = np.maximum.accumulate((Q[row, :, k] - q0[k]) / dq[k])
-            out[sel] = np.interp(s[sel], frac, T[row * _PROFILE_TABLE : (row + 1) * _PROFILE_TABLE])
-        return out
 
     # ------------------------------------------------------------ the check
     def _trajectory_name(self, trajectory) -> str:
@@ -296,7 +224,7 @@ class Verifier:
         named = self._trajectory_name(trajectory) if name is None else name
         trajectory, held = self._over_robot(trajectory, rname)
         base, k0, k1 = self._flat(rname)
-        segs = self._segments(trajectory)
+        segs = segments_of(trajectory)
         self._check_knots_in_limits(segs, rname)
         speeds = self._segment_speeds(trajectory, segs, k0, k1)
         if isinstance(sd, StoppingDistance):
@@ -437,10 +365,10 @@ class Verifier:
             si, s_c, pair = where
             if status is VerificationStatus.COLLISION:
                 t_last = float(run.t[run.n - 1])
-                t_c = t_last if t_last == t_last else float(self._times(trajectory, segs, [si], [s_c], k0)[0])
+                t_c = t_last if t_last == t_last else float(segment_times(trajectory, segs, [si], [s_c])[0])
                 collision = self._collision(run, si, t_c, pair, rname, float(margins[si]))
             else:
-                t_c = float(self._times(trajectory, segs, [si], [s_c], k0)[0])
+                t_c = float(segment_times(trajectory, segs, [si], [s_c])[0])
                 reason = reason + f" (t = {t_c:.4f} s)"
         # the profile
         n = run.n
@@ -457,7 +385,7 @@ class Verifier:
             t_known[at1] = t_seg1[seg_idx[at1]]
             need &= ~(at0 | at1)
             if np.any(need):
-                t_known[need] = self._profile_times(trajectory, segs, seg_idx[need], s_arr[need])
+                t_known[need] = profile_times(trajectory, segs, seg_idx[need], s_arr[need])
         D = run.D[:n]  # (M, P)
         order = np.argsort(t_known, kind="stable")
         times = t_known[order]
