@@ -181,3 +181,36 @@ def test_plugin_solution_wrapped_into_limits():
     res = robot.inverse_kinematics(X, q_seed=q)
     _assert_reaches(robot, res, X)
     assert abs(res.q[5] - 4.0) < 1e-6
+
+
+def test_the_builtin_puma560_from_urdf_uses_the_closed_form():
+    """The built-in puma560 comes from URDF (no DH table): the plug-in identifies its kinematics
+    with PUMA560_DH and solves in closed form; a Cartesian line works on it."""
+    import armguard
+    from armguard.kinematics import Trajectory, ik_plugin
+
+    robot = next(iter(armguard.load_model("puma560").scene.robots.values()))
+    assert robot.dh is None and ik_plugin(robot.name) is not None
+    rng = np.random.default_rng(5)
+    for q in rng.uniform(-0.8, 0.8, size=(10, 6)):
+        X_WE = robot.link_pose(q, robot.tool_link)
+        cands = ik_plugin(robot.name)(robot, np.linalg.inv(robot.link_pose(q, robot.link_names[0])) @ X_WE, None)
+        assert cands, q
+        assert min(np.abs(robot.link_pose(c, robot.tool_link) - X_WE).max() for c in cands) < 1e-9
+        res = robot.inverse_kinematics(X_WE)
+        assert res.status.value == "success" and np.abs(robot.link_pose(res.q, robot.tool_link) - X_WE).max() < 1e-9
+    q0 = np.array([0.1, -0.3, 0.2, 0.1, 0.4, 0.0])
+    goal = robot.link_pose(q0, robot.tool_link).copy()
+    goal[:3, 3] += [0.05, 0.0, -0.05]
+    traj = Trajectory.cartesian_line(robot, q0, goal, speed=0.2)
+    assert np.abs(robot.link_pose(traj.waypoints[-1], robot.tool_link) - goal).max() < 1e-6
+
+
+def test_the_puma_plugin_refuses_a_robot_that_is_not_a_puma():
+    import armguard
+    from armguard._errors import IKError
+    from armguard.kinematics._puma import puma560_ik
+
+    robot = next(iter(armguard.load_model("ur5").scene.robots.values()))
+    with pytest.raises(IKError, match="does not move its link 6 as the PUMA 560"):
+        puma560_ik(robot, np.eye(4), None)

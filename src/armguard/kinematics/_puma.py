@@ -67,11 +67,37 @@ _WRIST_SINGULAR = 1e-12
 """``|sin(t5)|`` below which the wrist is singular and t4 is taken from the seed."""
 
 
+_IDENTIFY_SAMPLES = 8
+"""Seeded configurations at which a robot without a DH table must move link 6 as PUMA560_DH does."""
+
+
+def _identified_rows(robot) -> tuple[DHRow, ...]:
+    """PUMA560_DH, when ``robot`` (built from URDF: no DH table) moves its link 6 exactly as that
+    table does, relative to its root link, at :data:`_IDENTIFY_SAMPLES` seeded configurations."""
+    why = (f"puma560 plug-in: robot {robot.name!r} has no DH table and does not move its link 6 as the "
+           "PUMA 560's standard DH table does (see PUMA560_DH)")
+    if robot.n_joints != 6 or len(robot.link_names) < 7:
+        raise IKError(why)
+    rng = np.random.default_rng(0)
+    root, six = robot.link_names[0], robot.link_names[6]
+    for q in rng.uniform(PUMA560_LOWER, PUMA560_UPPER, size=(_IDENTIFY_SAMPLES, 6)):
+        X_06 = invert_pose(robot.link_pose(q, root)) @ robot.link_pose(q, six)
+        D = np.eye(4)
+        for row, t in zip(PUMA560_DH, q):
+            D = D @ dh_standard(row.a, row.alpha, row.d, t + row.theta)
+        if not np.abs(X_06 - D).max() <= 1e-9:
+            raise IKError(why)
+    return PUMA560_DH
+
+
 def _check_structure(robot) -> tuple[DHRow, ...]:
     dh = robot.dh
-    if dh is None or dh[0] != "standard" or len(dh[1]) != 6:
+    if dh is None:
+        rows = _identified_rows(robot)  # the built-in puma560 comes from URDF
+    elif dh[0] != "standard" or len(dh[1]) != 6:
         raise IKError(f"puma560 plug-in: robot {robot.name!r} must be built from a 6-row standard DH table")
-    rows = dh[1]
+    else:
+        rows = dh[1]
     z = _STRUCTURE_TOL
     ok = (
         all(r.joint_type == "revolute" for r in rows) and robot.n_joints == 6 and not robot.couplings
