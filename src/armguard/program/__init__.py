@@ -1,0 +1,37 @@
+"""Off-line task programs after WORKMATE (Smith 1986, seed 004, §III.D): tasks pasted from a menu
+(FIND, PICKUP, PLACE, MOVE) with object-relative approach / grasp / depart motions, frames bound
+at execution time by a simulated camera, every expanded motion verified (certified) before it is
+emulated, and the program exported as Python that reproduces the same motions.
+
+* :func:`load_program` / :func:`run_program` / :func:`export_program` — the task-program file
+  (``armguard_program: 1``) and what is done with it;
+* :class:`Cell` / :func:`load_cell` — the emulated cell: nominal model, real object poses, camera;
+* :class:`Workcell` — the runtime primitives a program expands into.
+
+Guide: ``docs/program.md``.
+"""
+
+from ._cell import Camera, Cell, load_cell, object_frame
+from ._program import Program, Step, export_program, load_program, program_text, run_program, workcell_main
+from ._workcell import CONTACT_TOLERANCE, FindRecord, MotionRecord, ProgramRun, ProgramStopped, Workcell, pose
+
+__all__ = [
+    "Program",
+    "Step",
+    "load_program",
+    "run_program",
+    "export_program",
+    "program_text",
+    "workcell_main",
+    "Cell",
+    "Camera",
+    "load_cell",
+    "object_frame",
+    "Workcell",
+    "ProgramRun",
+    "ProgramStopped",
+    "MotionRecord",
+    "FindRecord",
+    "pose",
+    "CONTACT_TOLERANCE",
+]

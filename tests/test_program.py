@@ -1,0 +1,255 @@
+"""WORKMATE's task programs: the file format (errors located), the camera's noise (against its stated
+covariance), the expansion through IK (the tool reaches bound frame @ taught pose), the run on the
+emulated cell (every motion verified, a colliding one stops the program), and the exported program
+(run as a separate process, it reproduces the same motions exactly)."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from armguard import SceneFileError
+from armguard.program import Camera, load_program, pose
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLE = ROOT / "examples" / "workmate"
+
+PROGRAM = """\
+armguard_program: 1
+name: p
+cell: {cell}
+units: {{angle: deg, length: m}}
+tasks:
+{tasks}
+"""
+PICK = """\
+  - pickup: cylinder_a
+    approach: {xyz: [0, 0, 0.12], rpy: [180, 0, 0]}
+    grasp: {xyz: [0, 0, 0.02], rpy: [180, 0, 0]}
+    depart: {xyz: [0, 0, 0.15], rpy: [180, 0, 0]}
+"""
+
+
+def _write(tmp_path, tasks: str, cell: str = "puma560", name: str = "p.yaml") -> Path:
+    p = tmp_path / name
+    p.write_text(PROGRAM.format(cell=cell, tasks=tasks), encoding="utf-8")
+    return p
+
+
+# ------------------------------------------------------------------ the format
+def test_the_example_program_expands_into_the_primitives_in_order():
+    prog = load_program(EXAMPLE / "stack.yaml")
+    ops = [s.op for s in prog.steps()]
+    assert ops == ["find", "find", "frame", "move", "move", "grasp", "move", "frame", "move", "move", "release", "move", "home"]
+    moves = [s for s in prog.steps() if s.op == "move"]
+    assert [m.args[2] for m in moves] == ["joint", "line", "line", "joint", "line", "line"]  # the documented defaults
+    assert moves[4].args[3] == ("cylinder_b",)  # PLACE's release may touch the target
+    np.testing.assert_allclose(pose(*moves[1].args[:2]), pose([0, 0, 0.02], [math.pi, 0, 0]), atol=1e-15)
+
+
+def test_a_misspelt_key_is_located_with_its_line(tmp_path):
+    p = _write(tmp_path, PICK.replace("grasp:", "grsp:"))
+    with pytest.raises(SceneFileError) as ei:
+        load_program(p)
+    msg = str(ei.value)
+    assert str(p) in msg and "tasks[0].grasp" in msg and "required key is missing" in msg
+    assert "tasks[0].grsp (line 8): unknown key (not part of the armguard_program format" in msg
+
+
+def test_a_task_with_two_kinds_or_none_is_refused(tmp_path):
+    p = _write(tmp_path, "  - {find: cylinder_a, move: home}\n  - {goto: x}\n")
+    with pytest.raises(SceneFileError) as ei:
+        load_program(p)
+    msg = str(ei.value)
+    assert "tasks[0] (line 6)" in msg and "exactly one of the keys" in msg and "tasks[1]" in msg
+
+
+def test_a_non_finite_number_and_a_bad_mode_are_refused(tmp_path):
+    bad = PICK.replace("[0, 0, 0.12]", "[0, .nan, 0.12]").replace("rpy: [180, 0, 0]}\n    grasp", "rpy: [180, 0, 0], mode: curve}\n    grasp")
+    with pytest.raises(SceneFileError) as ei:
+        load_program(_write(tmp_path, bad))
+    msg = str(ei.value)
+    assert "tasks[0].approach.xyz[1]" in msg and "finite" in msg and "tasks[0].approach.mode" in msg
+
+
+def test_an_object_not_in_the_cell_is_located(tmp_path):
+    from armguard.program import load_cell
+
+    prog = load_program(_write(tmp_path, "  - find: cylinder_c\n  - {move: pose, frame: nowhere, xyz: [0.5, 0, 1]}\n"))
+    with pytest.raises(SceneFileError) as ei:
+        prog.check(load_cell("puma560"))
+    msg = str(ei.value)
+    assert "tasks[0].find" in msg and "'cylinder_c'" in msg and "tasks[1].frame" in msg
+
+
+def test_a_cell_file_error_names_the_cell_file(tmp_path):
+    from armguard.program import load_cell
+
+    c = tmp_path / "c.yaml"
+    c.write_text("armguard_cell: 1\nmodel: puma560\ncamera: {fov: 200}\n", encoding="utf-8")
+    with pytest.raises(SceneFileError, match=r"c\.yaml: camera\.fov \(line 3\)"):
+        load_cell(c)
+    c.write_text("armguard_cell: 1\nmodel: puma560\nreal: {cylinder_z: {xyz: [0, 0, 0]}}\n", encoding="utf-8")
+    with pytest.raises(SceneFileError, match="cylinder_z"):
+        load_cell(c)
+
+
+# ------------------------------------------------------------------ the camera
+def _camera(sig) -> Camera:
+    X = pose([0.5, 0.0, 1.5], [math.pi, 0.0, 0.0])
+    return Camera(X, math.radians(60.0), np.diag(np.asarray(sig, dtype=float) ** 2))
+
+
+def test_find_noise_has_the_stated_covariance():
+    """δp and δφ of many measurements (recovered from the poses) have the stated covariance."""
+    from scipy.spatial.transform import Rotation
+
+    cam = _camera([0.002, 0.001, 0.0005, 0.01, 0.0, 0.02])
+    X_true = pose([0.55, 0.1, 0.6], [0.0, 0.0, 0.4])
+    rng = np.random.default_rng(1)
+    xs = []
+    for _ in range(4000):
+        X = cam.measure(X_true, rng)
+        dphi = Rotation.from_matrix(X[:3, :3] @ X_true[:3, :3].T).as_rotvec()
+        xs.append(np.concatenate([X[:3, 3] - X_true[:3, 3], dphi]))
+    cov = np.cov(np.array(xs).T)
+    sd = np.sqrt(np.diag(cam.cov_origin))
+    np.testing.assert_allclose(np.sqrt(np.diag(cov)), sd, rtol=0.06, atol=1e-9)
+    assert abs(np.mean(xs, axis=0)).max() < 0.1 * sd.max()
+
+
+def test_the_bound_frame_is_the_left_perturbation_of_the_measurements():
+    """UncertainPose3 of a FIND: log(X_found X_mean^-1) of measurements has its covariance."""
+    from armguard.uncertainty import se3
+
+    cam = _camera([0.002, 0.002, 0.001, 0.0, 0.0, 0.03])
+    X = pose([0.6, -0.2, 0.6], [0.0, 0.0, 0.3])
+    rng = np.random.default_rng(2)
+    xi = np.array([se3.log(cam.measure(X, rng) @ np.linalg.inv(X)) for _ in range(4000)])
+    want = cam.uncertain(X).cov
+    np.testing.assert_allclose(np.cov(xi.T), want, atol=0.08 * np.abs(want).max())
+
+
+def test_the_field_of_view_is_a_cone_about_the_optical_axis():
+    cam = _camera([0.0] * 6)
+    rng = np.random.default_rng(3)
+    for p in rng.uniform([-1, -1, -0.5], [2, 1, 2.5], size=(300, 3)):
+        d = p - cam.X_WC[:3, 3]
+        angle = math.degrees(math.acos(np.clip(d @ cam.X_WC[:3, 2] / np.linalg.norm(d), -1, 1)))
+        if abs(angle - 30.0) > 1e-6:
+            assert cam.sees(p) == (angle < 30.0)
+
+
+# ------------------------------------------------------------------ running on the emulated cell
+@pytest.fixture(scope="module")
+def stack_run():
+    from armguard.program import run_program
+
+    return run_program(EXAMPLE / "stack.yaml", seed=0)
+
+
+def test_the_stacking_program_verifies_and_runs(stack_run):
+    run = stack_run
+    assert run.ok, run.stopped
+    assert [m.status for m in run.motions] == ["ran"] * 7
+    for m in run.motions:  # certified SAFE on the believed cell (grown by k sigma while frames are bound)
+        assert m.report.safe and m.report.details.method == "certified" and m.real_report.safe
+    assert all(m.k > 3.0 for m in run.motions[:2])  # chi2(6 dof, 0.999): k = 4.8
+    # FIND: found near the true pose, and the true pose differs from the nominal one
+    for f in run.finds:
+        assert np.linalg.norm(f.found[:3, 3] - f.true[:3, 3]) < 0.01
+        assert np.linalg.norm(f.true[:3, 3] - f.nominal[:3, 3]) > 0.01
+
+
+def test_each_motion_ends_at_its_bound_frame_times_the_taught_pose(stack_run):
+    from armguard.program import load_cell
+
+    cell = load_cell(EXAMPLE / "cell.yaml")
+    arm = cell.model.scene.robots["puma560"]
+    prog = load_program(EXAMPLE / "stack.yaml")
+    found = {f.object: f.found for f in stack_run.finds}
+    moves = [s for s in prog.steps() if s.op == "move"]
+    frames = ["cylinder_a"] * 3 + ["cylinder_b"] * 3
+    for rec, step, fr in zip(stack_run.motions, moves, frames):
+        X_goal = found[fr] @ pose(*step.args[:2])
+        X_got = arm.link_pose(rec.trajectory.waypoints[-1], arm.tool_link)
+        np.testing.assert_allclose(X_got, X_goal, atol=1e-6)
+
+
+def test_the_placed_cylinder_lands_on_the_other_within_the_find_noise(stack_run):
+    """Real axis offset after stacking: a few FIND sigmas (1.5 mm per axis), far below the
+    real cell's displacement of the two cylinders (about 27 mm) that a blind program would carry."""
+    off = stack_run.axis_offset("cylinder_a", "cylinder_b")
+    assert off < 0.008
+    a, b = stack_run.real["cylinder_a"], stack_run.real["cylinder_b"]
+    assert abs((a[2, 3] - 0.05) - (b[2, 3] + 0.04)) < 0.004  # a's base on b's top (z noise 0.5 mm per FIND)
+
+
+def test_a_motion_that_would_collide_stops_the_program(tmp_path):
+    from armguard.program import run_program
+
+    p = _write(tmp_path, "  - {move: pose, frame: world, xyz: [0.65, 0.0, 0.52], rpy: [180, 0, 0]}\n  - move: home\n")
+    run = run_program(p, seed=0)
+    assert not run.ok and len(run.motions) == 1
+    rec = run.motions[0]
+    assert rec.status.startswith("refused") and rec.report.status.value == "collision"
+    assert rec.report.first_collision is not None and "refused" in run.stopped
+
+
+def test_the_emulated_real_cell_catches_what_the_nominal_model_misses(tmp_path):
+    """Without FIND the program moves to the nominal cylinder; in the real cell it stands 6 cm
+    higher, into the hand: the believed cell verifies the grasp SAFE, the emulation stops it."""
+    from armguard.program import run_program
+
+    cell = tmp_path / "cell.yaml"
+    cell.write_text("armguard_cell: 1\nmodel: puma560\nreal: {cylinder_a: {xyz: [0, 0, 0.06]}}\n"
+                    "camera: {xyz: [0.55, 0, 1.5], rpy: [3.141592653589793, 0, 0]}\n", encoding="utf-8")
+    run = run_program(_write(tmp_path, PICK, cell="cell.yaml"), seed=0)
+    assert not run.ok
+    last = run.motions[-1]
+    assert last.report.safe and not last.real_report.safe and "real cell" in last.status
+    run2 = run_program(_write(tmp_path, "  - find: cylinder_a\n" + PICK, cell="cell.yaml", name="q.yaml"), seed=0)
+    assert run2.ok, run2.stopped  # with vision the same task follows the real cylinder
+
+
+# ------------------------------------------------------------------ export and the command line
+def test_the_exported_program_reproduces_the_same_motions(tmp_path, stack_run):
+    from armguard.program import export_program
+
+    out = export_program(EXAMPLE / "stack.yaml", tmp_path / "stack_program.py")
+    text = out.read_text(encoding="utf-8")
+    assert "wc.find('cylinder_a')" in text and "F = wc.frame('cylinder_b')" in text
+    save = tmp_path / "run.json"
+    r = subprocess.run([sys.executable, str(out), "--seed", "0", "--save", str(save)], capture_output=True, text=True,
+                       timeout=600)
+    assert r.returncode == 0, r.stdout + r.stderr
+    got = json.loads(save.read_text(encoding="utf-8"))
+    want = stack_run.to_dict()
+    assert [m["label"] for m in got["motions"]] == [m["label"] for m in want["motions"]]
+    for g, w in zip(got["motions"], want["motions"]):
+        assert g["waypoints"] == w["waypoints"] and g["times"] == w["times"]  # the same floats
+    assert got["finds"] == want["finds"]
+
+
+def test_the_command_line_exit_status(tmp_path):
+    from click.testing import CliRunner
+
+    from armguard.cli import main
+
+    runner = CliRunner()
+    bad = _write(tmp_path, "  - {move: pose, frame: world, xyz: [0.65, 0.0, 0.52], rpy: [180, 0, 0]}\n")
+    r = runner.invoke(main, ["program", "run", str(bad)])
+    assert r.exit_code == 1 and "STOPPED" in r.output, r.output
+    good = _write(tmp_path, "  - {move: pose, frame: tool, xyz: [0, 0, -0.05], mode: line}\n", name="g.yaml")
+    r = runner.invoke(main, ["program", "run", str(good), "--seed", "3"])
+    assert r.exit_code == 0 and "every motion verified and ran" in r.output, r.output
+    r = runner.invoke(main, ["program", "run", str(tmp_path / "missing.yaml")])
+    assert r.exit_code == 3 and "file not found" in r.output
+    r = runner.invoke(main, ["program", "export", str(good), "--out", str(tmp_path / "g.py")])
+    assert r.exit_code == 0 and "wc.move(F @ pose(" in (tmp_path / "g.py").read_text(encoding="utf-8")
