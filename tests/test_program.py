@@ -114,7 +114,7 @@ def test_find_noise_has_the_stated_covariance():
     X_true = pose([0.55, 0.1, 0.6], [0.0, 0.0, 0.4])
     rng = np.random.default_rng(1)
     xs = []
-    for _ in range(4000):
+    for _ in range(2000):
         X = cam.measure(X_true, rng)
         dphi = Rotation.from_matrix(X[:3, :3] @ X_true[:3, :3].T).as_rotvec()
         xs.append(np.concatenate([X[:3, 3] - X_true[:3, 3], dphi]))
@@ -131,7 +131,7 @@ def test_the_bound_frame_is_the_left_perturbation_of_the_measurements():
     cam = _camera([0.002, 0.002, 0.001, 0.0, 0.0, 0.03])
     X = pose([0.6, -0.2, 0.6], [0.0, 0.0, 0.3])
     rng = np.random.default_rng(2)
-    xi = np.array([se3.log(cam.measure(X, rng) @ np.linalg.inv(X)) for _ in range(4000)])
+    xi = np.array([se3.log(cam.measure(X, rng) @ np.linalg.inv(X)) for _ in range(2000)])
     want = cam.uncertain(X).cov
     np.testing.assert_allclose(np.cov(xi.T), want, atol=0.08 * np.abs(want).max())
 
@@ -160,7 +160,7 @@ def test_the_stacking_program_verifies_and_runs(stack_run):
     assert [m.status for m in run.motions] == ["ran"] * 7
     for m in run.motions:  # certified SAFE on the believed cell (grown by k sigma while frames are bound)
         assert m.report.safe and m.report.details.method == "certified" and m.real_report.safe
-    assert all(m.k > 3.0 for m in run.motions[:2])  # chi2(6 dof, 0.999): k = 4.8
+    assert all(m.k > 3.0 for m in run.motions[:2])  # chi2(8 dof: x, y, z, yaw of two frames; 0.999): k = 5.1
     # FIND: found near the true pose, and the true pose differs from the nominal one
     for f in run.finds:
         assert np.linalg.norm(f.found[:3, 3] - f.true[:3, 3]) < 0.01
@@ -194,7 +194,7 @@ def test_the_placed_cylinder_lands_on_the_other_within_the_find_noise(stack_run)
 def test_a_motion_that_would_collide_stops_the_program(tmp_path):
     from armguard.program import run_program
 
-    p = _write(tmp_path, "  - {move: pose, frame: world, xyz: [0.65, 0.0, 0.52], rpy: [180, 0, 0]}\n  - move: home\n")
+    p = _write(tmp_path, "  - {move: pose, frame: world, xyz: [0.65, 0.0, 0.45], rpy: [180, 0, 0]}\n  - move: home\n")
     run = run_program(p, seed=0)
     assert not run.ok and len(run.motions) == 1
     rec = run.motions[0]
@@ -243,7 +243,7 @@ def test_the_command_line_exit_status(tmp_path):
     from armguard.cli import main
 
     runner = CliRunner()
-    bad = _write(tmp_path, "  - {move: pose, frame: world, xyz: [0.65, 0.0, 0.52], rpy: [180, 0, 0]}\n")
+    bad = _write(tmp_path, "  - {move: pose, frame: world, xyz: [0.65, 0.0, 0.45], rpy: [180, 0, 0]}\n")
     r = runner.invoke(main, ["program", "run", str(bad)])
     assert r.exit_code == 1 and "STOPPED" in r.output, r.output
     good = _write(tmp_path, "  - {move: pose, frame: tool, xyz: [0, 0, -0.05], mode: line}\n", name="g.yaml")
