@@ -6,11 +6,14 @@ emulated, and the program exported as Python that reproduces the same motions.
 * :func:`load_program` / :func:`run_program` / :func:`export_program` — the task-program file
   (``armguard_program: 1``) and what is done with it;
 * :class:`Cell` / :func:`load_cell` — the emulated cell: nominal model, real object poses, camera;
-* :class:`Workcell` — the runtime primitives a program expands into.
+* :class:`Workcell` — the runtime primitives a program expands into;
+* :func:`fit_rigid_transform` — robot–camera calibration's closed-form estimator (Horn / Umeyama)
+  with its covariance.
 
 Guide: ``docs/program.md``.
 """
 
+from ._calibrate import RigidFit, fit_rigid_transform
 from ._cell import Camera, Cell, load_cell, object_frame
 from ._program import Program, Step, export_program, load_program, program_text, run_program, workcell_main
 from ._workcell import CONTACT_TOLERANCE, FindRecord, MotionRecord, ProgramRun, ProgramStopped, Workcell, pose
@@ -34,4 +37,6 @@ __all__ = [
     "FindRecord",
     "pose",
     "CONTACT_TOLERANCE",
+    "fit_rigid_transform",
+    "RigidFit",
 ]

@@ -1,0 +1,80 @@
+"""Robot–camera calibration's estimator: the least-squares rigid transform between two point sets,
+in closed form, with its first-order covariance.
+
+Horn, "Closed-form solution of absolute orientation using unit quaternions" (JOSA A 4(4), 1987)
+and Umeyama, "Least-squares estimation of transformation parameters between two point patterns"
+(IEEE PAMI 13(4), 1991), without scale: the rotation comes from scipy's
+``Rotation.align_vectors`` (the same SVD / quaternion solution) on the centred points, the
+translation from the centroids.  The covariance is Smith & Cheeseman's first-order one: with the
+pose's left perturbation ``ξ = (ρ, φ)`` in A's axes (:class:`~armguard.uncertainty.UncertainPose3`),
+each point's prediction moves by ``J_i ξ``, ``J_i = [I | −[p_i]×]``, and ``Σ = σ² (Σ J_iᵀ J_i)⁻¹``
+for isotropic point noise of variance σ² per axis.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._errors import UncertaintyError
+
+__all__ = ["RigidFit", "fit_rigid_transform"]
+
+
+@dataclass(frozen=True)
+class RigidFit:
+    """``pose`` (UncertainPose3: X_AB with its covariance), ``rms`` (m, the residuals' root mean
+    square), ``sigma`` (m, the per-axis noise used for the covariance), ``n`` (points)."""
+
+    pose: object
+    rms: float
+    sigma: float
+    n: int
+
+    @property
+    def X_AB(self) -> np.ndarray:
+        return np.array(self.pose.mean)
+
+
+def _skew(v) -> np.ndarray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def fit_rigid_transform(p_A, p_B, sigma: float | None = None) -> RigidFit:
+    """``X_AB`` minimising ``Σ |p_A[i] − X_AB p_B[i]|²`` for ``p_A``, ``p_B`` (N, 3) the same points in
+    frames A and B (N >= 3, not collinear).  ``sigma`` (m): the per-axis noise of the point
+    differences (default: estimated from the residuals, ``rms² · 3N / (3N − 6)``, which needs N >= 3)."""
+    from scipy.spatial.transform import Rotation
+
+    from ..uncertainty import UncertainPose3
+
+    A = np.asarray(p_A, dtype=np.float64)
+    B = np.asarray(p_B, dtype=np.float64)
+    if A.ndim != 2 or A.shape[1] != 3 or A.shape != B.shape or A.shape[0] < 3:
+        raise UncertaintyError(f"fit_rigid_transform: expected two (N, 3) arrays with N >= 3, got {A.shape} and {B.shape}")
+    if not (np.all(np.isfinite(A)) and np.all(np.isfinite(B))):
+        raise UncertaintyError("fit_rigid_transform: the points must be finite")
+    a0, b0 = A.mean(axis=0), B.mean(axis=0)
+    s = np.linalg.svd(B - b0, compute_uv=False)
+    if s[1] <= 1e-9 * max(s[0], 1e-300):
+        raise UncertaintyError("fit_rigid_transform: the points are collinear (or coincide); the rotation is undetermined")
+    rot, _ = Rotation.align_vectors(A - a0, B - b0)
+    R = rot.as_matrix()
+    X = np.eye(4)
+    X[:3, :3] = R
+    X[:3, 3] = a0 - R @ b0
+    pred = B @ R.T + X[:3, 3]
+    res = A - pred
+    n = A.shape[0]
+    rms = float(np.sqrt(np.mean(np.sum(res ** 2, axis=1))))
+    if sigma is None:
+        sigma = float(np.sqrt(np.sum(res ** 2) / (3 * n - 6))) if n > 2 else 0.0
+    elif not (np.isfinite(sigma) and sigma >= 0.0):
+        raise UncertaintyError(f"fit_rigid_transform: sigma must be a finite number >= 0, got {sigma!r}")
+    JtJ = np.zeros((6, 6))
+    for p in pred:
+        J = np.hstack([np.eye(3), -_skew(p)])
+        JtJ += J.T @ J
+    cov = float(sigma) ** 2 * np.linalg.inv(JtJ)
+    return RigidFit(UncertainPose3(X, 0.5 * (cov + cov.T)), rms, float(sigma), n)
