@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._model import _SCENE_CAT, CAT_WORKSPACE, _combined_tree
+from ._model import _CYLINDER, _SCENE_CAT, CAT_WORKSPACE, _combined_tree, _cylinder_aabb
 from ._reach import chain_bounds
 
 __all__ = ["PairBounds", "pair_bounds"]
@@ -86,10 +86,13 @@ def pair_bounds(model, *, active: str | None, reach_margin: float) -> PairBounds
     radius = np.zeros(G)
     lever[mov_ids] = cb.lever
     centre[mov_ids], radius[mov_ids] = cb.reach_center, cb.reach_radius
-    static = np.setdiff1d(np.arange(G), mov_ids)
-    if len(static):
-        sph = np.asarray(cs.elem_sphere).reshape(-1, 4)[static]
-        centre[static], radius[static] = sph[:, :3], sph[:, 3]
+    lo, hi = np.zeros((G, 3)), np.zeros((G, 3))  # a static element's box in W (as the analytic Detector's)
+    for g in np.setdiff1d(np.arange(G), mov_ids):
+        if cs.elem_core[g] == _CYLINDER:
+            lo[g], hi[g] = _cylinder_aabb(cs.elem_box_center[g], cs.elem_box_axes[g], cs.elem_box_half[g])
+        else:
+            V = cs.verts[cs.elem_vert_start[g]:cs.elem_vert_start[g + 1]]
+            lo[g], hi[g] = V.min(axis=0) - cs.elem_radius[g], V.max(axis=0) + cs.elem_radius[g]
     active_id = robot_names.index(active) if active is not None else -1
     owner_robot = np.asarray(cs.owner_robot)
     elem_owner = np.asarray(cs.elem_owner)
@@ -100,15 +103,21 @@ def pair_bounds(model, *, active: str | None, reach_margin: float) -> PairBounds
         rb = int(owner_robot[elem_owner[b]]) if b >= 0 else -1
         if active_id >= 0 and ra != active_id and rb != active_id:
             continue
+        ma, mb = bool(moving[a]), b >= 0 and bool(moving[b])
+        elem_swapped = b >= 0 and not ma
+        if elem_swapped:  # the moving side on A
+            a, b, ma, mb = b, a, mb, ma
         if b < 0:  # the workspace walls: the reach sphere's least clearance to them
             gap = float(np.min(np.concatenate([cs.workspace_hi - centre[a], centre[a] - cs.workspace_lo]))) - radius[a]
-        else:
+        elif mb:  # two reach spheres
             gap = float(np.linalg.norm(centre[a] - centre[b])) - radius[a] - radius[b]
+        else:  # a reach sphere and a static box
+            gap = float(np.linalg.norm(np.maximum(np.maximum(lo[b] - centre[a], 0.0), centre[a] - hi[b]))) - radius[a]
         if gap > reach_margin:
             dropped += 1
             continue
         rows.append(r)
-        swap.append(b >= 0 and not moving[a] and bool(moving[b]))
+        swap.append(bool(elem_swapped))
         cat.append(c)
         lev.append(lever[a] + (lever[b] if b >= 0 else 0.0))
     return PairBounds(np.asarray(rows, dtype=np.int64), np.asarray(swap, dtype=bool), np.asarray(cat, dtype=np.int64),
