@@ -215,3 +215,21 @@ def test_each_thread_bounds_from_its_own_checks():
         for k, got in enumerate(out[t]):
             d = _truth(det, Q[(k + t) % len(Q)])
             assert got == {p: d[p] for p in range(det.n_pairs)}
+
+
+def test_outside_the_limits_is_refused_and_the_memory_kept():
+    model = _model("hermes")
+    det = armguard.Detector(model.scene, threshold=THRESHOLD, backend="coal")
+    q = _configs(model, 1, 11)[1]
+    det.check(q)
+    hi = np.concatenate([r.upper for r in model.scene.robots.values()])
+    j = int(np.flatnonzero(np.isfinite(hi))[0])
+    bad = q.copy()
+    bad[j] = hi[j] + 1e-3
+    with pytest.raises(armguard.JointLimitError):
+        det.check(bad, budget_us=0.0)
+    with pytest.raises(armguard.ArmguardError):
+        det.check(np.full_like(q, np.nan))
+    d = _truth(det, q)
+    again = det.check(q, budget_us=0.0)
+    assert {n.pair_index: n.lower_bound for n in again.not_evaluated} == {p: d[p] for p in range(det.n_pairs)}

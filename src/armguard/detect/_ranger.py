@@ -205,6 +205,10 @@ class RangerDetector:
         self._cat = tuple(CATEGORIES[c] for c in b.category)
         self._cat_masks = tuple(b.category == c for c in range(len(CATEGORIES)))
         self._margin_built = margin
+        robots = list(self.scene.robots.values())
+        slack = self._tol.joint_limit
+        self._limits = ((np.concatenate([r.lower for r in robots]) - slack, np.concatenate([r.upper for r in robots]) + slack)
+                        if robots else (np.zeros(0), np.zeros(0)))
         self._revision = getattr(self.scene, "revision", None)
         self._generation += 1
         return self
@@ -251,7 +255,9 @@ class RangerDetector:
         q = np.asarray(q, dtype=np.float64)
         if not np.all(np.isfinite(q)):
             raise DetectionError(f"q: contains NaN or infinite values: {q.tolist()}")
-        self.model.check_limits(q, "Detector.check")
+        lo, hi = self._limits
+        if q.shape != lo.shape or not (np.all(q >= lo) and np.all(q <= hi)):  # the Model's error, naming the joint
+            self.model.check_limits(q, "Detector.check")
         return q
 
     def _levels(self) -> tuple[float, float]:
