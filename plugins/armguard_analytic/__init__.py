@@ -289,6 +289,16 @@ class AnalyticBackend:
 
     name = "analytic"
 
+    def ranger_detector(self, options: Mapping | None = None):
+        """The declared fast path of ``armguard.Detector``: Ranger's cycle as one fused numba call
+        (:class:`armguard.detect.Detector`) in the exact fidelity; None (Ranger's algorithm over
+        this backend's Checker) in the paper fidelity."""
+        if str(dict(options or {}).get("fidelity", "exact")) != "exact":
+            return None
+        from armguard.detect import Detector
+
+        return Detector
+
     def build(self, model, options: Mapping | None = None):
         if str(dict(options or {}).get("fidelity", "exact")) == "paper":
             from ._paper import PaperChecker

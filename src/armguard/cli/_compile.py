@@ -61,7 +61,7 @@ def _detector() -> None:
     det.check_many(np.tile(q, (4, 1)))
     # the analytic backend's pair_distances(_many): pair_rows, with the argument types it is given
     from ..detect import _kernel as kn
-    from ..detect._detector import _Scratch
+    from ..detect._scratch import _Scratch
 
     s, n, nq = _Scratch(det), det.n_pairs, len(q)
     gmap = np.concatenate([[nq, nq, 0, n], np.arange(nq), np.arange(n), np.zeros(n)]).astype(np.int64)

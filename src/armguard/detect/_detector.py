@@ -17,11 +17,13 @@ from . import _kernel as kn
 from ..geometry._pair_cylinder import SUPPORT_WORK_SIZE
 from ..geometry._pair_epa import EPA_WORK_SIZE
 from ..kinematics._limits import limit_error, limit_rows
+from ._common import check_length as _check_length, require_pairs as _require_pairs
 from ._extras import attach_extra
 from ._hulls import link_obbs, vertex_graphs
 from ._layout import EV_W, SUM_SIZE, Layout
 from ._model import CAT_WORKSPACE, build_model, check_finite_margin
 from ._raw import _UNHELD, _Raw, _refcount
+from ._scratch import _entry_point, _Scratch
 from ._prep import _fk_blocks, _static_polytopes
 from ._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, PairDistances, PairResult
 
@@ -48,73 +50,6 @@ def _readonly(a: np.ndarray) -> np.ndarray:
     return a
 
 
-def _entry_point(*args):
-    """The compiled ``detect_entry`` for these argument types, called without numba's dispatcher.
-
-    The dispatcher types all nine arguments on every call (~0.3 µs of a ~4 µs check); ``check``
-    always passes the same buffers (float64 / int64, C-contiguous, writeable), so after one
-    typed call the overload for that signature is the one that would be picked every time.
-    Falls back to the dispatcher when numba does not expose the overload."""
-    kn.detect_entry(*args)  # compiles (or loads from the cache) for exactly these types
-    try:
-        from numba import typeof
-
-        sig = tuple(typeof(a) for a in args)
-        return kn.detect_entry.overloads[sig].entry_point
-    except (KeyError, AttributeError):  # pragma: no cover - numba internals changed
-        return kn.detect_entry
-
-
-class _Scratch:
-    """One thread's scratch and outputs of a :class:`Detector`.
-
-    Every thread calling a Detector gets its own (``threading.local``), copied from the pristine
-    buffers of :meth:`Detector.prepare`, so threads never share a buffer the kernel writes; the
-    model buffers (``H``, ``MF``, ``MI``) are read-only in the kernel and shared.  The state the
-    anytime mode keeps between checks (last distances, time since checked) is per thread too."""
-
-    __slots__ = ("SF", "SI", "q1", "ev", "pflag", "plb", "iprm_by_mode", "entry_args", "last_raw")
-
-    def __init__(self, det: "Detector") -> None:
-        L = det._layout
-        self.SF = det._SF0.copy()
-        self.SI = det._SI0.copy()
-        self.q1 = np.zeros((1, det._model.n_q))
-        self.ev = L.view(self.SF, "ev")
-        self.pflag = L.view(self.SI, "pflag")
-        self.plb = L.view(self.SF, "plb")
-        self.iprm_by_mode = {mode: ip.copy() for mode, ip in det._iprm_by_mode.items()}
-        self.entry_args = (self.q1, det._H, det._MF, det._MI, self.SF, self.SI, det._prm,
-                           self.iprm_by_mode[kn.MODE_EXACT], det._all_p)
-        self.last_raw = None  # this thread's last report, still reading SF / SI
-
-
-def _check_length(value, name: str) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError) as exc:
-        raise DetectionError(f"{name}: expected a number of metres, got {value!r}") from exc
-    if not math.isfinite(x) or x < 0.0:
-        raise DetectionError(f"{name}: must be finite and >= 0, got {x}")
-    return x
-
-
-def _require_pairs(scene, cs, active, with_terrain: bool) -> None:
-    """A DetectionError when nothing would be checked (no pair, or none on the ``active`` arm):
-    the detector would otherwise say CLEAR without having looked at anything."""
-    if with_terrain:
-        return
-    pa, pb = np.asarray(cs.pair_a, np.int64), np.asarray(cs.pair_b, np.int64)
-    n = len(pa)
-    if active is not None and n:
-        r = list(cs.robot_names).index(active) if active in cs.robot_names else -1
-        n = int(np.count_nonzero((cs.owner_robot[pa] == r) | (cs.owner_robot[pb] == r)))
-    if n == 0 and not cs.has_workspace:
-        on = f" on arm {active!r}" if active is not None else ""
-        raise DetectionError(f"scene {scene.name!r} has no pair to check{on} (every pair is disabled or excluded): "
-                             "no verdict can be given; enable a pair, add a body or a workspace box")
-
-
 class Detector:
     """Ranger's virtual sensor for ``scene``: per category, the nearest pair and a status.
 
@@ -131,8 +66,10 @@ class Detector:
     tol : Tolerances
     backend, backend_options : str, mapping
         The backend whose distances the detector reports (argument > ``$ARMGUARD_BACKEND`` >
-        ``armguard.toml`` > ``"analytic"``).  ``"analytic"`` is this class (the fused numba kernel);
-        any other gives a :class:`~armguard.detect._backend.CheckerDetector` with the same API.
+        ``armguard.toml`` > ``"analytic"``).  A backend that declares a Ranger cycle of its own
+        (``Backend.ranger_detector``) gets it: ``"analytic"``'s is this class (the fused numba
+        kernel); any other gives a :class:`~armguard.detect._ranger.RangerDetector`, Ranger's
+        algorithm over the backend's Checker, with the same API.
     reach_margin : float, m
         Obstacle lists keep every obstacle a link can come within this margin of anywhere in
         its joint limits (conservative reach analysis, :mod:`armguard.detect._reach`); pairs
@@ -153,13 +90,17 @@ class Detector:
     terrain = None  # the attached armguard.terrain.TerrainGuard, if any
 
     def __new__(cls, scene=None, *args, backend: str | None = None, backend_options=None, **kwargs):
-        # another backend (argument > $ARMGUARD_BACKEND > armguard.toml): the same API over its Checker
-        from ._backend import other_backend
+        # the backend (argument > $ARMGUARD_BACKEND > armguard.toml) declares its own Ranger cycle
+        # (Backend.ranger_detector: the analytic backend's is this class), else Ranger's algorithm
+        # over its Checker (armguard.detect._ranger)
+        if cls is Detector:
+            from ._ranger import RangerDetector, fast_path
 
-        if cls is Detector and other_backend(backend, backend_options):
-            from ._backend import CheckerDetector
-
-            return CheckerDetector(scene, *args, backend=backend, backend_options=backend_options, **kwargs)
+            fast = fast_path(backend, backend_options)
+            if fast is None:
+                return RangerDetector(scene, *args, backend=backend, backend_options=backend_options, **kwargs)
+            if fast is not Detector:
+                return fast(scene, *args, backend=backend, backend_options=backend_options, **kwargs)
         return super().__new__(cls)
 
     def __init__(self, scene, threshold: float = 0.05, *, stopping_distance: float = 0.0, active: str | None = None,

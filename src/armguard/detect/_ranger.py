@@ -1,0 +1,403 @@
+"""Ranger's Detector over any backend: obstacle lists, priorities, the anytime budget, categories.
+
+``Detector(scene, ..., backend="coal")`` (or ``$ARMGUARD_BACKEND`` / ``armguard.toml``) builds a
+:class:`RangerDetector` unless the backend declares a fast path of its own
+(``Backend.ranger_detector(options)``, :func:`fast_path`; the analytic backend's is the fused
+numba kernel, :class:`armguard.detect.Detector`).  Ranger's algorithm (seed ``000``, §2-§4) is
+framework code here, over the Checker interface only:
+
+* **obstacle lists**: the Model pair rows whose sides can come within the reach margin somewhere
+  inside the joint limits (:mod:`._bounds`, :mod:`._reach`); the others are never asked for;
+* **lower bounds**: a pair evaluated at ``q0`` with distance ``d0`` is at least
+  ``d0 - sum_j |q_j - q0_j| lever[p, j]`` away at ``q`` (signed distance is 1-Lipschitz in the
+  motion of its shapes); a pair never evaluated (in this thread) bounds nothing (``-inf``);
+* **priority**: pairs are evaluated in increasing lower bound (near last time, or moved much
+  since), ties broken by the time since they were last evaluated (oldest first);
+* **the anytime budget**: ``check(q, budget_us=...)`` turns the budget into a number of pairs by
+  a cost model measured on this machine (µs per check plus µs per evaluated pair, exponential
+  averages updated after every check, one outlier moving them at most 4x) and asks the Checker for those pairs in one
+  ``pair_distances(q, pairs=rows)`` call; the report names every pair it skipped with its
+  lower bound, and the status is INCOMPLETE, never CLEAR, while a skipped pair's bound does not
+  prove the threshold (the analytic kernel's rule, :mod:`._kernel`);
+* **lazy**: pairs whose lower bound proves them beyond the threshold are skipped (exact status);
+* **categories and threshold status**: the nearest evaluated pair per category, the pairs
+  within the threshold, CLEAR / WARNING / COLLISION / INCOMPLETE.
+
+Per-thread state (last distances, where they were taken, when) lives in a ``threading.local``:
+several threads may call one detector with the answers of single-threaded calls, provided the
+Checker is itself safe across threads (every bundled one is, ``docs/backends.md``).
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+
+import numpy as np
+
+from .._errors import DetectionError
+from ._bounds import pair_bounds
+from ._common import check_length, status_code
+from ._extras import attach_extra
+from ._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, NotEvaluated, PairDistances, PairResult
+
+__all__ = ["RangerDetector", "fast_path"]
+
+_FIRST_US_PER_PAIR = 5.0  # first guesses of the cost model, replaced by measurements
+_FIRST_US_PER_CHECK = 50.0
+_FLAG_SKIPPED, _FLAG_EVALUATED, _FLAG_PROVED = 0, 1, 2
+
+
+def fast_path(backend, backend_options):
+    """The Detector class the chosen backend declares for Ranger's cycle (``ranger_detector``), or None.
+
+    ``backend``, ``backend_options`` as ``Detector`` takes them (argument > ``$ARMGUARD_BACKEND`` >
+    ``armguard.toml`` > ``"analytic"``)."""
+    from ..backends import get_backend, resolve
+
+    name, opts = resolve(backend, backend_options)
+    declare = getattr(get_backend(name), "ranger_detector", None)
+    return None if declare is None else declare(opts)
+
+
+class _State:
+    """One thread's memory of the pairs it evaluated (for the lower bounds and the priorities)."""
+
+    __slots__ = ("generation", "last_d", "last_q", "has_last", "stamp", "tick")
+
+    def __init__(self, generation: int, n_pairs: int, n_q: int) -> None:
+        self.generation = generation
+        self.last_d = np.zeros(n_pairs)
+        self.last_q = np.zeros((n_pairs, n_q))
+        self.has_last = np.zeros(n_pairs, dtype=bool)
+        self.stamp = np.zeros(n_pairs, dtype=np.int64)
+        self.tick = 0
+
+
+class _Raw:
+    """What a DetectionReport reads: the evaluated pairs (detector pair numbers ``idx``, in
+    evaluation order) and, for the lazy and anytime modes, every pair's flag and lower bound."""
+
+    __slots__ = ("det", "d", "p_WA", "p_WB", "idx", "flags", "bounds", "lazy", "n_evaluated")
+
+    def __init__(self, det, d, p_WA, p_WB, idx, flags, bounds, lazy) -> None:
+        self.det, self.d, self.p_WA, self.p_WB, self.idx = det, d, p_WA, p_WB, idx
+        self.flags, self.bounds, self.lazy = flags, bounds, lazy
+        self.n_evaluated = len(d)
+
+    def _result(self, k: int) -> PairResult:
+        det = self.det
+        p = int(self.idx[k])
+        pA, pB = self.p_WA[k].copy(), self.p_WB[k].copy()
+        pA.flags.writeable = pB.flags.writeable = False
+        a, b = det._a[p], det._b[p]
+        return PairResult(float(self.d[k]), pA, pB, a, b, CATEGORIES[det._cat_code[p]], a, b, None, p)
+
+    def by_category(self) -> dict:
+        out = {}
+        cat = self.det._cat_code[self.idx]
+        for c, name in enumerate(CATEGORIES):
+            ks = np.flatnonzero(cat == c)
+            if ks.size:
+                out[name] = self._result(int(ks[np.lexsort((self.idx[ks], self.d[ks]))[0]]))
+        return out
+
+    def within(self, threshold: float) -> tuple:
+        ks = np.flatnonzero(self.d <= threshold)
+        ks = ks[np.lexsort((self.idx[ks], self.d[ks]))]  # nearest first, ties by pair number
+        return tuple(self._result(int(k)) for k in ks)
+
+    def not_evaluated(self) -> tuple:
+        if self.flags is None:
+            return ()
+        det = self.det
+        out = [NotEvaluated(det._a[p], det._b[p], CATEGORIES[det._cat_code[p]], float(self.bounds[p]), int(p))
+               for p in np.flatnonzero(self.flags == _FLAG_SKIPPED)]
+        if self.lazy:  # proved beyond the threshold by their bounds
+            thr = max(det.threshold, det.stopping_distance)
+            out += [NotEvaluated(det._a[p], det._b[p], CATEGORIES[det._cat_code[p]], max(float(self.bounds[p]), thr),
+                                 int(p)) for p in np.flatnonzero(self.flags == _FLAG_PROVED)]
+        return tuple(out)
+
+
+class RangerDetector:
+    """Ranger's Detector over a backend's Checker (see the module docstring); the API of
+    :class:`armguard.detect.Detector`.  ``reach_margin`` (m, default ``inf``: every pair) as there."""
+
+    def __init__(self, scene, threshold: float = 0.05, *, stopping_distance: float = 0.0, active: str | None = None,
+                 backend: str | None = None, backend_options=None, model=None, tol=None,
+                 reach_margin: float | None = None, terrain=None) -> None:
+        from ..backends import Capability, checker
+        from ..model import model_of
+        from ._model import check_finite_margin
+
+        self.scene = scene
+        self._threshold = check_length(threshold, "threshold")
+        self._stopping = check_length(stopping_distance, "stopping_distance")
+        self._reach_margin = check_finite_margin(math.inf if reach_margin is None else reach_margin)
+        self.model = model if model is not None else model_of(scene)
+        self._tol = tol if tol is not None else self.model.tol
+        self.checker = checker(self.model, backend, backend_options)
+        self.backend = self.checker.name
+        self._distances = Capability.DISTANCES in self.checker.capabilities
+        self._us_per_pair = _FIRST_US_PER_PAIR
+        self._us_per_check = _FIRST_US_PER_CHECK
+        self._tls = threading.local()
+        self._generation = 0
+        self._active = None
+        self.terrain = None
+        self.set_active(active)
+        if terrain is not None:  # the terrain category, composed outside the backend
+            attach_extra(self, "terrain", terrain)
+
+    def _require_distances(self, what: str) -> None:
+        if not self._distances:
+            from .._errors import BackendError
+
+            raise BackendError(f"backend {self.backend!r} answers verdicts only (no distances), so it has no {what}; "
+                               "use collides_many(Q) with it, or a backend that answers distances")
+
+    # ------------------------------------------------------------------ settings
+    threshold = property(lambda self: self._threshold, doc="Detection threshold (m).")
+    stopping_distance = property(lambda self: self._stopping, doc="Stopping distance (m); 0 when unset.")
+    active = property(lambda self: self._active, doc="The active robot's name, or None for all arms.")
+
+    @property
+    def n_pairs(self) -> int:
+        """Number of candidate pairs (after pair filters, active arm and obstacle lists)."""
+        return len(self._sel)
+
+    @property
+    def link_names(self) -> tuple:
+        return tuple(f"{r}/{ln}" for r, robot in self.scene.robots.items() for ln in robot.link_names)
+
+    def set_threshold(self, threshold: float) -> None:
+        self._threshold = check_length(threshold, "threshold")
+        if max(self._threshold, self._stopping) > self._margin_built:
+            self.prepare()
+
+    def set_stopping_distance(self, stopping_distance: float) -> None:
+        self._stopping = check_length(stopping_distance, "stopping_distance")
+        if max(self._threshold, self._stopping) > self._margin_built:
+            self.prepare()
+
+    def set_active(self, name: str | None) -> None:
+        if name is not None and name not in self.scene.robots:
+            raise DetectionError(f"active: unknown robot {name!r}; robots are {list(self.scene.robots)}")
+        self._active = name
+        self.prepare()
+
+    def prepare(self) -> "RangerDetector":
+        """(Re)build the obstacle lists and bounds; forget every thread's last distances."""
+        margin = max(self._reach_margin, self._threshold, self._stopping)
+        b = pair_bounds(self.model, active=self._active, reach_margin=margin)
+        pairs = self.model.pairs
+        self._bounds = b
+        self._sel = b.rows
+        self._all_rows = len(b.rows) == len(pairs)  # every Model row, in order: ask without pairs=
+        self._swap = b.swap
+        self._lever = b.lever
+        oa, ob = pairs.owner_a, pairs.owner_b
+        self._a = tuple(ob[k] if s else oa[k] for k, s in zip(b.rows, b.swap))
+        self._b = tuple(oa[k] if s else ob[k] for k, s in zip(b.rows, b.swap))
+        self._cat_code = b.category
+        self._cat = tuple(CATEGORIES[c] for c in b.category)
+        self._cat_masks = tuple(b.category == c for c in range(len(CATEGORIES)))
+        self._margin_built = margin
+        robots = list(self.scene.robots.values())
+        slack = self._tol.joint_limit
+        self._limits = ((np.concatenate([r.lower for r in robots]) - slack, np.concatenate([r.upper for r in robots]) + slack)
+                        if robots else (np.zeros(0), np.zeros(0)))
+        self._revision = getattr(self.scene, "revision", None)
+        self._generation += 1
+        return self
+
+    def obstacle_list(self, link: str) -> tuple[str, ...]:
+        """Owner names in the obstacle list of ``link`` (``"robot/link"``), in pair order."""
+        return tuple(dict.fromkeys(b for a, b in zip(self._a, self._b) if a == link))
+
+    def _payload_of(self, owner: str):
+        p = self.scene.payloads.get(owner)
+        return None if p is None else p.robot
+
+    # ------------------------------------------------------------------ evaluation
+    def _state(self) -> _State:
+        s = getattr(self._tls, "s", None)
+        if s is None or s.generation != self._generation:
+            s = self._tls.s = _State(self._generation, len(self._sel), len(self.scene.joint_names))
+        return s
+
+    def _query(self, q_flat: np.ndarray, which: np.ndarray | None):
+        """Distances and witness points (moving side on A) of detector pairs ``which`` (None: all)."""
+        self._require_distances("per-pair distances (check, pair_distances, check_many)")
+        if getattr(self.scene, "revision", None) != self._revision:
+            raise DetectionError("the scene changed after this detector was built; build a new one")
+        q_pin = self.model.pin_q(q_flat)
+        if which is None and self._all_rows:
+            r = self.checker.pair_distances(q_pin)
+            swap = self._swap
+        else:
+            rows = self._sel if which is None else self._sel[which]
+            swap = self._swap if which is None else self._swap[which]
+            r = self.checker.pair_distances(q_pin, pairs=rows)
+        d = np.asarray(r.distance, dtype=np.float64)
+        if np.isnan(d).any():  # never a verdict from a NaN
+            raise DetectionError(f"backend {self.backend!r} answered a NaN distance; no verdict")
+        sw = swap[:, None]
+        return d, np.where(sw, r.p_WB, r.p_WA), np.where(sw, r.p_WA, r.p_WB)
+
+    def _flat(self, q) -> np.ndarray:
+        try:
+            q = self.scene.flat_q(q)
+        except Exception as exc:  # noqa: BLE001 - one error type at the boundary
+            raise DetectionError(f"q: {exc}") from None
+        q = np.asarray(q, dtype=np.float64)
+        if not np.all(np.isfinite(q)):
+            raise DetectionError(f"q: contains NaN or infinite values: {q.tolist()}")
+        lo, hi = self._limits
+        if q.shape != lo.shape or not (np.all(q >= lo) and np.all(q <= hi)):  # the Model's error, naming the joint
+            self.model.check_limits(q, "Detector.check")
+        return q
+
+    def _levels(self) -> tuple[float, float]:
+        """(collision level, effective threshold), as the analytic kernel's."""
+        return max(self._tol.length, self._stopping), max(self._threshold, self._stopping)
+
+    def lower_bounds(self, q) -> np.ndarray:
+        """``(P,)`` this thread's lower bound on every pair's distance at ``q`` (m; ``-inf``: never evaluated)."""
+        return self._lower_bounds(self._state(), self._flat(q))
+
+    def _lower_bounds(self, s: _State, q: np.ndarray) -> np.ndarray:
+        dq = np.abs(q[None, :] - s.last_q)
+        moved = np.where(dq > 0.0, dq * self._lever, 0.0).sum(axis=1)  # 0 * inf lever: no motion
+        return np.where(s.has_last, s.last_d - moved, -math.inf)
+
+    def check(self, q, *, budget_us: float | None = None, lazy: bool = False) -> DetectionReport:
+        """Check ``q`` (mapping robot -> joints, or flat over ``scene.joint_names``): see the module
+        docstring for ``budget_us`` (µs) and ``lazy``."""
+        t0 = time.perf_counter()
+        if budget_us is not None:
+            b = float(budget_us)
+            if not (b >= 0.0 and math.isfinite(b)):
+                raise DetectionError(f"budget_us: must be finite and >= 0, got {budget_us!r}")
+        q = self._flat(q)
+        s = self._state()
+        level, thr = self._levels()
+        P = len(self._sel)
+        if budget_us is None and not lazy:  # exact: every listed pair
+            which = np.arange(P)
+            d, pA, pB = self._query(q, None)
+            flags = bounds = None
+            lbmin = math.inf
+        else:
+            bounds = self._lower_bounds(s, q)
+            order = np.lexsort((s.stamp, bounds))  # increasing bound, then longest unevaluated first
+            flags = np.full(P, _FLAG_SKIPPED, dtype=np.int8)
+            if lazy:
+                proved = bounds > thr
+                flags[proved] = _FLAG_PROVED
+                order = order[~proved[order]]
+            if budget_us is not None:
+                order = order[:self._allowance(float(budget_us))]
+            which = np.sort(order)  # the Checker answers in Model order
+            flags[which] = _FLAG_EVALUATED
+            d, pA, pB = self._query(q, which) if len(which) else (np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)))
+            skipped = bounds[flags == _FLAG_SKIPPED]
+            lbmin = float(skipped.min()) if skipped.size else math.inf
+        s.tick += 1
+        s.last_d[which], s.last_q[which], s.has_last[which], s.stamp[which] = d, q, True, s.tick
+        status = STATUS_CODES[status_code(float(d.min(initial=math.inf)), lbmin, level, thr)]
+        elapsed = (time.perf_counter() - t0) * 1e6
+        self._learn(elapsed, len(d))
+        raw = _Raw(self, d, pA, pB, which, flags, bounds, lazy)
+        return DetectionReport._from_check(status, self._threshold, self._stopping, elapsed, raw)
+
+    def _allowance(self, budget_us: float) -> int:
+        """How many pairs the cost model says fit in ``budget_us`` besides the check's own cost."""
+        return int(max(0.0, budget_us - self._us_per_check) // self._us_per_pair)
+
+    def _learn(self, elapsed_us: float, n: int) -> None:
+        """Update the cost model ``elapsed = per_check + n per_pair`` with one check (benign races:
+        threads share it, each update is two float stores)."""
+        clamp = lambda x, ref: min(max(x, 0.25 * ref), 4.0 * ref)  # noqa: E731 - one outlier moves it at most 4x
+        if n >= 4:
+            per_pair = (elapsed_us - self._us_per_check) / n
+            self._us_per_pair = 0.8 * self._us_per_pair + 0.2 * clamp(max(per_pair, 1e-3), self._us_per_pair)
+        fixed = elapsed_us - n * self._us_per_pair
+        self._us_per_check = 0.8 * self._us_per_check + 0.2 * clamp(max(fixed, 1e-3), self._us_per_check)
+
+    def pair_distances(self, q, *, robot: str | None = None) -> PairDistances:
+        """Every checked pair's signed distance (rows: one per shape pair), as the analytic detector's."""
+        d, pA, pB = self._query(self._flat(q), None)
+        names = self.link_names
+        li = {n: i for i, n in enumerate(names)}
+        rid = {r: i for i, r in enumerate(self.scene.robots)}
+        link_a = np.array([li.get(a, li.get(self._carrier(a), -1)) for a in self._a], dtype=np.int64)
+        robot_a = np.array([rid.get(a.split("/", 1)[0], rid.get(self._payload_of(a), -1)) for a in self._a], dtype=np.int64)
+        link_b = np.array([li.get(b, li.get(self._carrier(b), -1)) for b in self._b], dtype=np.int64)
+        idx = np.arange(len(d), dtype=np.int64)
+        if robot is not None:
+            if robot not in rid:
+                raise DetectionError(f"robot: unknown robot {robot!r}; robots are {list(rid)}")
+            on = robot_a == rid[robot]
+            on |= np.array([rid.get(b.split("/", 1)[0], rid.get(self._payload_of(b), -2)) == rid[robot] for b in self._b])
+            idx = np.flatnonzero(on)
+        ro = np.ascontiguousarray
+        return PairDistances(d[idx].copy(), pA[idx].copy(), pB[idx].copy(), ro(link_a[idx]), ro(robot_a[idx]),
+                             ro(link_b[idx]), ro(self._cat_code[idx]), tuple(self._a[i] for i in idx),
+                             tuple(self._b[i] for i in idx), names, ro(idx))
+
+    def _carrier(self, owner: str):
+        p = self.scene.payloads.get(owner)
+        return None if p is None else f"{p.robot}/{p.link}"
+
+    def _rows(self, Q) -> np.ndarray:
+        try:
+            Q = np.asarray(Q, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise DetectionError(f"Q: expected an (M, {len(self.scene.joint_names)}) array of numbers") from exc
+        n = len(self.scene.joint_names)
+        if Q.ndim != 2 or Q.shape[1] != n:
+            raise DetectionError(f"Q: expected shape (M, {n}), got {Q.shape}")
+        if not np.all(np.isfinite(Q)):
+            raise DetectionError("Q contains NaN or infinite values")
+        for i, q in enumerate(Q):
+            self.model.check_limits(q, f"Detector: Q[{i}]")
+        return Q
+
+    def check_many(self, Q) -> BatchReport:
+        """Per-category nearest distances and status for each row of ``Q`` ``(M, n_q)`` (the
+        Checker's ``pair_distances_many`` over the listed pairs)."""
+        self._require_distances("per-pair distances (check_many)")
+        Q = self._rows(Q)
+        M = len(Q)
+        min_d = np.full((M, len(CATEGORIES)), np.inf)
+        if M and len(self._sel):
+            Q_pin = self.model.pin_q(Q)
+            many = (self.checker.pair_distances_many(Q_pin) if self._all_rows
+                    else self.checker.pair_distances_many(Q_pin, pairs=self._sel))
+            D = np.asarray(many.distance, dtype=np.float64).reshape(M, len(self._sel))
+            if np.isnan(D).any():
+                raise DetectionError(f"backend {self.backend!r} answered a NaN distance; no verdict")
+            for c, mask in enumerate(self._cat_masks):
+                if mask.any():
+                    min_d[:, c] = D[:, mask].min(axis=1)
+        level, thr = self._levels()
+        dmin = min_d.min(axis=1)
+        status = np.where(dmin <= level, 2, np.where(dmin <= thr, 1, 0)).astype(np.int8)
+        return BatchReport(min_d, status == 2, status, self._threshold, self._stopping)
+
+    check_many_bruteforce = check_many
+
+    def collides_many(self, Q) -> np.ndarray:
+        """``(M,) bool``: collision (distance <= 0, or <= the stopping distance) per row (the backend's batch)."""
+        Q = self._rows(Q)
+        if self._active is None and self._all_rows:
+            return self.checker.collides(self.model.pin_q(Q), margin=self._stopping)
+        self._require_distances("active-arm batches (collides_many with active= checks the whole Model)")
+        return self.check_many(Q).collision
+
+    def __repr__(self) -> str:
+        return (f"Detector({self.scene.name!r}, backend={self.backend!r}, threshold={self._threshold}, "
+                f"stopping_distance={self._stopping}, active={self._active!r}, {len(self._sel)} pairs)")
