@@ -64,3 +64,12 @@ def test_the_hermes_seed_is_not_dated():
     for doc in ("docs/paper-fidelity.md", "docs/performance.md", "docs/cspace.md"):
         text = (ROOT / doc).read_text(encoding="utf-8")
         assert "1990" not in text, doc
+
+
+def test_payload_is_checked_against_the_first_four_links():
+    """Seed 001's payload-link module examines "the first four links"; its remark on "the last three
+    links" would drop link 4.  The conservative reading: links 1-4 are checked, link 6 (holding it) is not."""
+    P = armguard.load_model("hermes").pairs
+    against = {a if b == "payload" else b for a, b in zip(P.owner_a, P.owner_b) if "payload" in (a, b)}
+    links = {o for o in against if o.startswith("hera/")}
+    assert links == {"hera/link1", "hera/link2", "hera/link3", "hera/link4"}
