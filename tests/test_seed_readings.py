@@ -73,3 +73,15 @@ def test_payload_is_checked_against_the_first_four_links():
     against = {a if b == "payload" else b for a, b in zip(P.owner_a, P.owner_b) if "payload" in (a, b)}
     links = {o for o in against if o.startswith("hera/")}
     assert links == {"hera/link1", "hera/link2", "hera/link3", "hera/link4"}
+
+
+def test_the_stored_timing_figures_are_compared():
+    """Ranger §5's and the clipping paper's figures stand in performance.md beside armguard's, with the command."""
+    text = (ROOT / "docs/performance.md").read_text(encoding="utf-8")
+    section = text.split("<!-- bench:seeds -->")[1].split("<!-- /bench:seeds -->")[0]
+    assert "`.venv/bin/python -m bench seeds`" in section
+    ranger = yaml.safe_load((ROOT / "reference" / "seeds" / "ranger.yaml").read_text(encoding="utf-8"))
+    for key, unit in (("segment_segment", "µs"), ("detection_cycle", "ms"), ("flight_estimate", "ms")):
+        assert f"| {ranger[key]['value']:g} {unit} |" in section, key
+    for figure in ("16 µs (65,000 per second)", "| 7 ms |", "(~6 per second)"):
+        assert figure in section, figure
