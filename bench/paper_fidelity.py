@@ -19,7 +19,7 @@ import numpy as np
 
 from .timing import fmt_ns, median_seconds
 
-TITLE = "Paper fidelity: the 1997/1990 minimalist checkers against coal"
+TITLE = "Paper fidelity: the Ranger (1997) and Hermes minimalist checkers against coal"
 PAGE = Path(__file__).resolve().parent.parent / "docs" / "paper-fidelity.md"
 _MARK = re.compile(r"<!-- paper_fidelity:tables -->.*?<!-- /paper_fidelity:tables -->", re.S)
 SEEDS = {"ranger": 1, "hermes": 2}

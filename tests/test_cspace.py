@@ -232,3 +232,15 @@ def test_bad_requests(tmp_path):
     (tmp_path / "bad.agmap").write_bytes(b"not a map")
     with pytest.raises(ForbiddenMapError, match="not a forbidden-values map"):
         ForbiddenMap.load(tmp_path / "bad.agmap")
+
+
+def test_largest_neighbourhood_is_what_loading_holds(built):
+    """``MapInfo.neighbourhood_bytes_max`` (the figure bench/cspace.py sets beside Hermes's central-memory
+    table) is the largest block ``neighbourhood(q)`` actually loads, over a q at the centre of every substructure."""
+    g = built.grid
+    loaded = []
+    for s in range(int(g.n_substructures)):
+        i1a, i1b, i2a, i2b = g.sub_cells(s)
+        q = g.lower + np.array([(i1a + i1b) / 2 * g.step[0], (i2a + i2b) / 2 * g.step[1], 0.0])
+        loaded.append(built.neighbourhood(np.minimum(q, g.upper)).nbytes)
+    assert built.info().neighbourhood_bytes_max == max(loaded)

@@ -83,8 +83,41 @@ def test_ranger_make_up(scenes):
         assert all(isinstance(sh, Capsule) for shs in s.robots[arm].link_shapes.values() for sh in shs)
     assert all(b.category == "vehicle" for b in s.bodies.values())
     assert s.workspace is not None
-    assert np.allclose(s.workspace.center[1:], 0.0)  # centred on the manipulator module in y and z
+    # seed 000 section 2: "centered on the Ranger manipulator module" (the manipulator frame's origin)
+    assert np.allclose(s.workspace.center, 0.0)
     assert len(s.canned_tests) == 10
+
+
+def _box_clearance(scene, test) -> float:
+    """The active arm's clearance to the workspace box at the end of a canned test, by the seed's own
+    end-point rule (seed 000 section 3: each capsule end-point against each box limit, minus the radius)."""
+    traj = test.trajectory(scene)
+    rob = scene.robots[test.robot]
+    X_WL = rob.forward_kinematics(np.asarray(traj.at(traj.duration)))
+    lo, hi = scene.workspace.lo, scene.workspace.hi
+    d = math.inf
+    for ln, shapes in rob.link_shapes.items():
+        X = X_WL[rob.link_names.index(ln)]
+        for sh in shapes:
+            for p_L in (sh.p0, sh.p1):
+                p_W = X[:3, :3] @ p_L + X[:3, 3]
+                d = min(d, float(np.min(hi - p_W)) - sh.radius, float(np.min(p_W - lo)) - sh.radius)
+    return d
+
+
+def test_ranger_box_clearances_in_the_descriptions(scenes):
+    """The canned tests that name a distance to the centred workspace box end at that distance."""
+    s = scenes["ranger"]
+    named = {}
+    for name, ct in s.canned_tests.items():
+        words = ct.description.replace(";", " ").split()
+        for i, w in enumerate(words[:-5]):
+            if words[i + 1:i + 5] == ["m", "from", "the", "workspace"]:
+                named[name] = float(w)
+    assert set(named) == {"test1_left_pitch_down", "test2_left_pitch_up", "test5_right_pitch",
+                          "test7_left_towards_workspace_box"}
+    for name, d in named.items():
+        assert _box_clearance(s, s.canned_tests[name]) == pytest.approx(d, abs=0.005), name
 
 
 def test_ranger_canned_tests_are_trapezoids_within_limits(scenes):

@@ -18,13 +18,15 @@ rows are zero: :func:`._clearance.map_links` refuses a link they move).
 * :class:`CombinedChecker`: Fig. 14 (map + a geometric backend for the rest; the ``forbidden``
   backend, ``armguard.checker(model, "forbidden", {"map": PATH})``, wraps it as a Checker);
 * :class:`CheckerClearance`: the build's clearances from any backend that answers distances;
-* :func:`check_exactness`: the map against the exact check on random configurations.
+* :func:`check_exactness`: the map against the exact check on random configurations;
+* :func:`ed_constant`: eq. (4-5)'s ``Ed / n`` from the model's link lengths (the paper's 11.4 cm/deg is its arm's).
 """
 
 from __future__ import annotations
 
 from ._build import BuildReport, BuildStatus, build, model_files_of
 from ._clearance import CheckerClearance, DetectorClearance, MapLinks, map_links
+from ._ed import PAPER_CM_PER_DEGREE, EdConstant, ed_constant
 from ._combined import CombinedBatch, CombinedChecker, CombinedStatus, map_model
 from ._exactness import ExactnessReport, ExactnessStatus, check_exactness, random_configurations
 from ._format import FORMAT_VERSION
@@ -58,4 +60,7 @@ __all__ = [
     "parse_angle",
     "plot_slice",
     "FORMAT_VERSION",
+    "EdConstant",
+    "ed_constant",
+    "PAPER_CM_PER_DEGREE",
 ]
