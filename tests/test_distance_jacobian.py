@@ -152,7 +152,7 @@ def test_support_faces_of_a_box():
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(st.lists(st.floats(0.0, 1.0), min_size=6, max_size=6))
+@given(st.lists(st.floats(0.001, 0.999), min_size=6, max_size=6))  # central differences: inside the limits
 def test_hermes_jacobian_property(models, u):
     """Hypothesis: at any in-limit Hermes configuration, smooth rows match central differences."""
     m = models("hermes")

@@ -14,11 +14,12 @@ envelope theorem applied to the closest-point problem (Faverjon & Tournassoud, I
 the distance is not zero; elsewhere it is one of the one-sided derivatives, and ``smooth`` is
 False.
 
-With Pinocchio's world-frame joint Jacobian ``J`` ``(6, nv)`` (``computeJointJacobians``:
-linear velocity of the point at W's origin, then angular velocity) and the support mask of a
-link's joint (the columns of its ancestors), the row of one side is the wrench
-``w = [nhat, p x nhat]`` applied to ``J``: ``nhat^T J_W(p) = w^T J`` over the link's columns.
-Every pair is one ``(n, 6) @ (6, nv)`` product: no per-pair Python.
+With Pinocchio's world-frame Jacobian ``J_j`` ``(6, nv)`` of the link's joint ``j``
+(``computeJointJacobians`` then ``getJointJacobian(..., WORLD)``: linear velocity of the point at
+W's origin, then angular velocity; zero outside the joint's ancestors; mimic joints folded onto
+their leaders), the row of one side is the wrench ``w = [nhat, p x nhat]`` applied to it:
+``nhat^T J_W(p) = w^T J_j``.  One Pinocchio call per joint, then one ``einsum`` over all pairs:
+no per-pair Python.
 
 **Smoothness.**  ``smooth`` is False where
 
@@ -138,14 +139,6 @@ class WitnessJacobian:
         self.tol = tol
         pm = model.pin_model
         self.nv = int(pm.nv)
-        # support[j]: the velocity columns moving joint j's frame
-        support = np.zeros((pm.njoints, self.nv), dtype=bool)
-        for j in range(1, pm.njoints):
-            for s in pm.supports[j]:
-                if s > 0:
-                    jm = pm.joints[s]
-                    support[j, jm.idx_v:jm.idx_v + jm.nv] = True
-        self.support = support
         geoms = model.collision_model.geometryObjects
         verts, axes, radii, starts = [], [], [], [0]
         self._joint = np.empty(len(geoms), np.int64)
@@ -212,7 +205,12 @@ class WitnessJacobian:
         data = self._data()
         pm = self.model.pin_model
         pin.computeJointJacobians(pm, data, q)
-        J = data.J  # (6, nv): world frame, linear velocity at W's origin then angular velocity
+        # per joint of a pair side, (6, nv): world frame, linear velocity at W's origin then angular
+        # velocity, zero outside the joint's ancestors (mimic joints folded onto their leaders)
+        Jj = np.zeros((pm.njoints, 6, self.nv))
+        for j in np.unique(np.concatenate([ja, jb])):
+            if j > 0:
+                Jj[j] = pin.getJointJacobian(pm, data, int(j), pin.ReferenceFrame.WORLD)
         p_WA, p_WB, d = result.p_WA, result.p_WB, result.distance
         n = len(d)
         tol = self.tol
@@ -221,7 +219,7 @@ class WitnessJacobian:
         nhat[apart] = (p_WB[apart] - p_WA[apart]) / d[apart, None]
         wA = np.concatenate([nhat, np.cross(p_WA, nhat)], axis=1)
         wB = np.concatenate([nhat, np.cross(p_WB, nhat)], axis=1)
-        jac = (wB @ J) * self.support[jb] - (wA @ J) * self.support[ja]
+        jac = np.einsum("ni,nik->nk", wB, Jj[jb]) - np.einsum("ni,nik->nk", wA, Jj[ja])
         smooth = apart & self._unique(data, nhat, ga, gb, ja, jb)
         touching = np.flatnonzero(~apart)
         if len(touching) and refine is not None:
@@ -252,23 +250,38 @@ class WitnessJacobian:
 def finite_difference_rows(checker, q, idx, *, step: float, one_sided: bool = False) -> tuple:
     """``(rows (n, nv), kink (n,) bool)``: central differences of ``checker``'s distances of the
     Model rows ``idx`` (None: every row) along each velocity direction (``pinocchio.integrate``,
-    so continuous joints move on their circle); ``one_sided``: forward differences.  ``kink``:
+    so continuous joints move on their circle); ``one_sided``: forward differences.  A step past a
+joint limit is not taken: that column is the other side's one-sided difference.  ``kink``:
     the forward and backward differences differ by more than ``Tolerances.jacobian_kink``."""
     import pinocchio as pin
+
+    from .._errors import JointLimitError
 
     pm = checker.model.pin_model
     tol = getattr(checker.model, "tol", DEFAULT_TOLERANCES)
     d0 = checker.pair_distances(q, pairs=idx).distance
     rows = np.empty((len(d0), pm.nv))
     kink = np.zeros(len(d0), bool)
+
+    def at(dq):
+        try:
+            return checker.pair_distances(pin.integrate(pm, q, dq), pairs=idx).distance
+        except JointLimitError:  # a step past a joint limit: the other side's difference only
+            return None
+
     for k in range(pm.nv):
         e = np.zeros(pm.nv)
         e[k] = step
-        dp = checker.pair_distances(pin.integrate(pm, q, e), pairs=idx).distance
+        dp = at(e)
+        dm = None if one_sided and dp is not None else at(-e)
+        if dp is None and dm is None:
+            raise JointLimitError(f"finite differences: joint column {k} cannot move {step} either way within its limits")
+        if dp is None or dm is None:
+            rows[:, k] = (dp - d0) / step if dm is None else (d0 - dm) / step
+            continue
         if one_sided:
             rows[:, k] = (dp - d0) / step
             continue
-        dm = checker.pair_distances(pin.integrate(pm, q, -e), pairs=idx).distance
         rows[:, k] = (dp - dm) / (2.0 * step)
         kink |= np.abs((dp - d0) - (d0 - dm)) / step > tol.jacobian_kink
     return rows, kink
