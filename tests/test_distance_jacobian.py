@@ -37,10 +37,18 @@ def models():
 
 
 def _relative_errors(checker, q, idx=None):
+    """``(result, relative error, kink)``: the Jacobian against central differences at
+    ``jacobian_step``.  Rows where central differences at that step and ten times it disagree by
+    more than REL are marked ``kink`` too: the reference has not converged there (a switch of
+    features at a stationary point makes the central difference first-order: seen on Hermes at
+    the middle of every joint's range, exact Jacobian 0, differences 2.25 h)."""
     r = checker.pair_distances(q, pairs=idx, jacobian=True)
     fd, kink = finite_difference_rows(checker, q, idx, step=TOL.jacobian_step)
-    err = np.linalg.norm(r.jacobian - fd, axis=1) / np.maximum(np.linalg.norm(fd, axis=1), FLOOR)
-    return r, err, kink
+    fd10, kink10 = finite_difference_rows(checker, q, idx, step=10 * TOL.jacobian_step)
+    scale = np.maximum(np.linalg.norm(fd, axis=1), FLOOR)
+    unconverged = np.linalg.norm(fd - fd10, axis=1) / scale > REL
+    err = np.linalg.norm(r.jacobian - fd, axis=1) / scale
+    return r, err, kink | kink10 | unconverged
 
 
 @pytest.mark.parametrize("name", MODELS)
@@ -55,8 +63,9 @@ def test_analytic_jacobian_matches_central_differences(models, name):
         ok = r.smooth & ~kink
         n_smooth += int(ok.sum())
         assert np.all(err[ok] < REL), (name, r.pairs[ok][err[ok] >= REL], err[ok][err[ok] >= REL])
-        assert not np.any(r.smooth & kink), ("a kink called smooth", r.pairs[r.smooth & kink])
-    assert n_smooth > 0
+        _, fd_kink = finite_difference_rows(c, q, None, step=TOL.jacobian_step)
+        assert not np.any(r.smooth & fd_kink), ("a kink called smooth", r.pairs[r.smooth & fd_kink])
+    assert n_smooth > len(m.pairs)  # most rows of 3 configurations are checked
 
 
 @pytest.mark.parametrize("name", ["ranger", "hermes", "puma560", "gmf_s480", "panda"])
@@ -132,7 +141,8 @@ def test_parallel_capsules_are_not_smooth(models):
     m = models("ranger")
     c = armguard.checker(m, "analytic")
     q = m.neutral()
-    r, err, kink = _relative_errors(c, q)
+    r = c.pair_distances(q, jacobian=True)
+    _, kink = finite_difference_rows(c, q, None, step=TOL.jacobian_step)
     assert not np.any(r.smooth & kink)
     assert np.any(~r.smooth)
 
@@ -162,5 +172,7 @@ def test_hermes_jacobian_property(models, u):
     q = m.pin_q(lo + (hi - lo) * np.asarray(u))
     r, err, kink = _relative_errors(c, q)
     ok = r.smooth & ~kink
+    assert ok.sum() >= len(ok) // 2
     assert np.all(err[ok] < REL)
-    assert not np.any(r.smooth & kink)
+    _, fd_kink = finite_difference_rows(c, q, None, step=TOL.jacobian_step)
+    assert not np.any(r.smooth & fd_kink)

@@ -176,20 +176,22 @@ def _result(v, v_cmd, rows, b, A, dmin, note, tol) -> Avoidance:
     return Avoidance(v, v_cmd, status, rows, b, A @ v, dmin, note)
 
 
-def avoid_step(checker, q, v_cmd, damper: Damper, *, tol: Tolerances = DEFAULT_TOLERANCES) -> Avoidance:
-    """:func:`avoid` at configuration ``q`` with ``checker``'s distances: every pair's distance,
-    then the Jacobians of the pairs within ``damper.influence`` only."""
-    from ..backends import check_q
+def avoid_step(checker, q, v_cmd, damper: Damper, *, pairs=None, tol: Tolerances = DEFAULT_TOLERANCES) -> Avoidance:
+    """:func:`avoid` at configuration ``q`` with ``checker``'s distances: every pair's distance
+    (or the Model rows ``pairs``: one arm's, say), then the Jacobians of the pairs within
+    ``damper.influence`` only.  ``rows`` of the result are Model pair rows."""
+    from ..backends import check_pairs, check_q
 
     q = check_q(checker.model, q)
-    r = checker.pair_distances(q)
-    near = np.flatnonzero(r.distance < damper.influence)
+    idx = np.arange(len(checker.model.pairs)) if pairs is None else check_pairs(checker.model, pairs)
+    r = checker.pair_distances(q, pairs=None if pairs is None else idx)
+    near = idx[r.distance < damper.influence]
     if len(near) == 0:
         nv = int(checker.model.pin_model.nv)
-        sub = r.take(near).with_jacobian(np.zeros((0, nv)), np.zeros(0, bool))
+        sub = r.take(np.zeros(0, np.int64)).with_jacobian(np.zeros((0, nv)), np.zeros(0, bool))
     else:
-        sub = r.take(near)
+        sub = r.take(np.flatnonzero(r.distance < damper.influence))
         sub = sub.with_jacobian(*checker.distance_jacobian(q, sub, near))
     out = avoid(v_cmd, sub, damper, tol=tol)
     return Avoidance(out.velocity, out.commanded, out.status, near[out.rows], out.rate, out.closing,
-                     float(r.distance.min()), out.solver)
+                     float(r.distance.min(initial=np.inf)), out.solver)

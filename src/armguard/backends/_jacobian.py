@@ -85,7 +85,9 @@ def _face_spans(R, u, g, vstart, V, disk_axis, disk_r, tol_face, tol_par, dims, 
         if gi < 0:
             dims[i] = 2
             continue
-        uL = R[i].T @ u[i]
+        uL = np.empty(3)
+        for r in range(3):
+            uL[r] = R[i, 0, r] * u[i, 0] + R[i, 1, r] * u[i, 1] + R[i, 2, r] * u[i, 2]
         s, e = vstart[gi], vstart[gi + 1]
         if disk_r[gi] > 0.0:
             c = abs(uL[0] * disk_axis[gi, 0] + uL[1] * disk_axis[gi, 1] + uL[2] * disk_axis[gi, 2])
@@ -112,19 +114,85 @@ def _face_spans(R, u, g, vstart, V, disk_axis, disk_r, tol_face, tol_par, dims, 
         if far <= tol_face * tol_face:
             dims[i] = 0
             continue
-        a = (V[k1] - V[k0]) / np.sqrt(far)
+        inv = 1.0 / np.sqrt(far)
+        a0, a1, a2 = (V[k1, 0] - V[k0, 0]) * inv, (V[k1, 1] - V[k0, 1]) * inv, (V[k1, 2] - V[k0, 2]) * inv
         dim = 1
         for k in range(s, e):
             if uL[0] * V[k, 0] + uL[1] * V[k, 1] + uL[2] * V[k, 2] >= hmax - tol_face:
-                w = V[k] - V[k0]
-                t = w[0] * a[0] + w[1] * a[1] + w[2] * a[2]
-                off = w[0] * w[0] + w[1] * w[1] + w[2] * w[2] - t * t
+                w0, w1, w2 = V[k, 0] - V[k0, 0], V[k, 1] - V[k0, 1], V[k, 2] - V[k0, 2]
+                t = w0 * a0 + w1 * a1 + w2 * a2
+                off = w0 * w0 + w1 * w1 + w2 * w2 - t * t
                 if off > tol_face * tol_face:
                     dim = 2
                     break
         dims[i] = dim
         if dim == 1:
-            dirs[i] = R[i] @ a
+            for r in range(3):
+                dirs[i, r] = R[i, r, 0] * a0 + R[i, r, 1] * a1 + R[i, r, 2] * a2
+
+
+@njit(cache=True)
+def _witness_rows(p_WA, p_WB, d, ja, jb, ga, gb, Jj, R_WJ, R_JG, vstart, V, disk_axis, disk_r, described,
+                  eps_len, tol_face, tol_par, jac, smooth):  # pragma: no cover - numba
+    """Equation (1) and the uniqueness test for every pair: ``jac`` ``(n, nv)``, ``smooth`` ``(n,)``
+    (False also where touching); ``Jj`` ``(njoints, 6, nv)`` per joint, ``R_WJ`` ``(njoints, 3, 3)``."""
+    n, nv = jac.shape
+    R = np.zeros((2, 3, 3))
+    u = np.empty((2, 3))
+    nh = np.empty(3)
+    cA = np.empty(3)
+    cB = np.empty(3)
+    g = np.empty(2, np.int64)
+    dims = np.zeros(2, np.int64)
+    dirs = np.zeros((2, 3))
+    for i in range(n):
+        di = d[i]
+        if abs(di) <= eps_len:
+            for k in range(nv):
+                jac[i, k] = 0.0
+            smooth[i] = False
+            continue
+        for r in range(3):
+            nh[r] = (p_WB[i, r] - p_WA[i, r]) / di
+        for r in range(3):  # p x nhat
+            r1, r2 = (r + 1) % 3, (r + 2) % 3
+            cA[r] = p_WA[i, r1] * nh[r2] - p_WA[i, r2] * nh[r1]
+            cB[r] = p_WB[i, r1] * nh[r2] - p_WB[i, r2] * nh[r1]
+        a, b = ja[i], jb[i]
+        for k in range(nv):
+            s = 0.0
+            if b > 0:
+                s += nh[0] * Jj[b, 0, k] + nh[1] * Jj[b, 1, k] + nh[2] * Jj[b, 2, k] \
+                    + cB[0] * Jj[b, 3, k] + cB[1] * Jj[b, 4, k] + cB[2] * Jj[b, 5, k]
+            if a > 0:
+                s -= nh[0] * Jj[a, 0, k] + nh[1] * Jj[a, 1, k] + nh[2] * Jj[a, 2, k] \
+                    + cA[0] * Jj[a, 3, k] + cA[1] * Jj[a, 4, k] + cA[2] * Jj[a, 5, k]
+            jac[i, k] = s
+        ok = True
+        g[0], g[1] = ga[i], gb[i]
+        for side in range(2):
+            if g[side] >= 0:
+                ok = ok and described[g[side]]
+                jo = a if side == 0 else b
+                for r in range(3):
+                    for c in range(3):
+                        R[side, r, c] = R_WJ[jo, r, 0] * R_JG[g[side], 0, c] + R_WJ[jo, r, 1] * R_JG[g[side], 1, c] \
+                            + R_WJ[jo, r, 2] * R_JG[g[side], 2, c]
+        for r in range(3):
+            u[0, r] = nh[r]
+            u[1, r] = -nh[r]
+        dirs[:] = 0.0
+        _face_spans(R, u, g, vstart, V, disk_axis, disk_r, tol_face, tol_par, dims, dirs)
+        if dims[0] >= 1 and dims[1] >= 1:
+            if dims[0] + dims[1] >= 3:
+                ok = False
+            else:
+                x0 = dirs[0, 1] * dirs[1, 2] - dirs[0, 2] * dirs[1, 1]
+                x1 = dirs[0, 2] * dirs[1, 0] - dirs[0, 0] * dirs[1, 2]
+                x2 = dirs[0, 0] * dirs[1, 1] - dirs[0, 1] * dirs[1, 0]
+                if np.sqrt(x0 * x0 + x1 * x1 + x2 * x2) <= tol_par:
+                    ok = False
+        smooth[i] = ok
 
 
 class WitnessJacobian:
@@ -142,7 +210,7 @@ class WitnessJacobian:
         geoms = model.collision_model.geometryObjects
         verts, axes, radii, starts = [], [], [], [0]
         self._joint = np.empty(len(geoms), np.int64)
-        self._R_JG = np.empty((len(geoms), 3, 3))
+        self._R_JG = np.empty((len(geoms), 3, 3))  # geometry in its joint's frame
         self._described = np.ones(len(geoms), bool)
         for i, go in enumerate(geoms):
             self._joint[i] = go.parentJoint
@@ -187,6 +255,13 @@ class WitnessJacobian:
         self._pairs_key = key
         return self._side_arrays
 
+    def _joints_used(self, ja, jb) -> list:
+        key = (ja.tobytes(), jb.tobytes())
+        hit = self.__dict__.get("_used")
+        if hit is None or hit[0] != key:
+            hit = self._used = (key, sorted(j for j in set(ja.tolist()) | set(jb.tolist()) if j > 0))
+        return hit[1]
+
     def _data(self):
         try:
             return self._tls.data
@@ -208,43 +283,23 @@ class WitnessJacobian:
         # per joint of a pair side, (6, nv): world frame, linear velocity at W's origin then angular
         # velocity, zero outside the joint's ancestors (mimic joints folded onto their leaders)
         Jj = np.zeros((pm.njoints, 6, self.nv))
-        for j in np.unique(np.concatenate([ja, jb])):
-            if j > 0:
-                Jj[j] = pin.getJointJacobian(pm, data, int(j), pin.ReferenceFrame.WORLD)
-        p_WA, p_WB, d = result.p_WA, result.p_WB, result.distance
-        n = len(d)
+        R_WJ = np.zeros((pm.njoints, 3, 3))
+        for j in self._joints_used(ja, jb):
+                Jj[j] = pin.getJointJacobian(pm, data, j, pin.ReferenceFrame.WORLD)
+                R_WJ[j] = data.oMi[j].rotation
+        R_WJ[0] = np.eye(3)
+        n = len(result.distance)
+        jac = np.empty((n, self.nv))
+        smooth = np.empty(n, bool)
         tol = self.tol
-        apart = np.abs(d) > tol.length
-        nhat = np.zeros((n, 3))
-        nhat[apart] = (p_WB[apart] - p_WA[apart]) / d[apart, None]
-        wA = np.concatenate([nhat, np.cross(p_WA, nhat)], axis=1)
-        wB = np.concatenate([nhat, np.cross(p_WB, nhat)], axis=1)
-        jac = np.einsum("ni,nik->nk", wB, Jj[jb]) - np.einsum("ni,nik->nk", wA, Jj[ja])
-        smooth = apart & self._unique(data, nhat, ga, gb, ja, jb)
-        touching = np.flatnonzero(~apart)
+        d = np.ascontiguousarray(result.distance, dtype=np.float64)
+        _witness_rows(np.ascontiguousarray(result.p_WA), np.ascontiguousarray(result.p_WB), d, ja, jb, ga, gb, Jj,
+                      R_WJ, self._R_JG, self._vstart, self._V, self._disk_axis, self._disk_r, self._described,
+                      tol.length, tol.jacobian_face, tol.jacobian_parallel, jac, smooth)
+        touching = np.flatnonzero(np.abs(d) <= tol.length)
         if len(touching) and refine is not None:
             jac[touching] = refine(touching)
         return jac, smooth
-
-    def _unique(self, data, nhat, ga, gb, ja, jb) -> np.ndarray:
-        """Whether the witness points are unique (see the module docstring), per pair."""
-        n = len(ga)
-        R_WJ = np.array([data.oMi[j].rotation for j in range(len(data.oMi))])
-        g = np.concatenate([ga, gb])
-        j = np.concatenate([ja, jb])
-        R = np.ascontiguousarray(R_WJ[j] @ self._R_JG[np.maximum(g, 0)])
-        u = np.ascontiguousarray(np.concatenate([nhat, -nhat]))  # A's face towards B, B's towards A
-        dims = np.zeros(2 * n, np.int64)
-        dirs = np.zeros((2 * n, 3))
-        tol = self.tol
-        _face_spans(R, u, g, self._vstart, self._V, self._disk_axis, self._disk_r, tol.jacobian_face,
-                    tol.jacobian_parallel, dims, dirs)
-        dA, dB = dims[:n], dims[n:]
-        parallel = np.linalg.norm(np.cross(dirs[:n], dirs[n:]), axis=1) <= tol.jacobian_parallel
-        shared = ((dA >= 1) & (dB >= 1) & ((dA + dB >= 3) | parallel))
-        described = np.where(ga >= 0, self._described[np.maximum(ga, 0)], True) & \
-            np.where(gb >= 0, self._described[np.maximum(gb, 0)], True)
-        return ~shared & described
 
 
 def finite_difference_rows(checker, q, idx, *, step: float, one_sided: bool = False) -> tuple:
