@@ -205,7 +205,14 @@ class AnalyticChecker(CheckerBase):
             check_q(self.model, Q[m])
         f.det._raise_kernel_error(e, self.model.scene_q(Q[m:m + 1]), "Detector.pair_distances: q")
 
-    def pair_distances(self, q, *, pairs=None):
+    distance_jacobian = CheckerBase.witness_jacobian  # the kernel's witness points, Pinocchio's joint Jacobians
+
+    def pair_distances(self, q, *, pairs=None, jacobian: bool = False):
+        if jacobian:
+            q = self._q(q)
+            idx = None if pairs is None else check_pairs(self.model, pairs)
+            r = self.pair_distances(q, pairs=idx)
+            return r.with_jacobian(*self.distance_jacobian(q, r, idx))
         f = self._fast
         if f is None or f.revision != self.model.scene.revision:
             f = self._plan()

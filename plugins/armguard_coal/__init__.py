@@ -157,14 +157,17 @@ class CoalChecker(CheckerBase):
         if not np.all(np.isfinite(d)):
             raise BackendError("coal: a distance came back NaN or infinite; no verdict")
 
-    def pair_distances(self, q, *, pairs=None):
+    distance_jacobian = CheckerBase.witness_jacobian  # Pinocchio's frame Jacobians at coal's witness points
+
+    def pair_distances(self, q, *, pairs=None, jacobian: bool = False):
         q = check_q(self.model, q)
         idx = None if pairs is None else check_pairs(self.model, pairs)
         n = len(self._category) if idx is None else len(idx)
         d, p_WA, p_WB = np.empty(n), np.zeros((n, 3)), np.zeros((n, 3))
         self._distances_into(q, d, p_WA, p_WB, idx)
         names, cat = self._subset(idx)
-        return PairDistances(names, d, p_WA, p_WB, cat)
+        r = PairDistances(names, d, p_WA, p_WB, cat)
+        return r.with_jacobian(*self.distance_jacobian(q, r, idx)) if jacobian else r
 
     def pair_distances_many(self, Q, *, pairs=None) -> PairDistancesMany:
         Q = check_Q(self.model, Q)

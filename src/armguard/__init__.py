@@ -11,6 +11,7 @@ import importlib
 from ._errors import (
     ArmguardError,
     ArmguardWarning,
+    AvoidanceError,
     ClipError,
     BackendError,
     DetectionError,
@@ -48,12 +49,14 @@ _LAZY = {
     "Status": "armguard.detect",
     "verify": "armguard.verify",
     "verify_many": "armguard.verify",
+    "avoid": "armguard.avoidance",
     "VerificationReport": "armguard.verify",
 }
 
 __all__ = [
     "ArmguardError",
     "ArmguardWarning",
+    "AvoidanceError",
     "BackendError",
     "GeometryError",
     "KinematicsError",

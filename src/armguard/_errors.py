@@ -22,6 +22,7 @@ __all__ = [
     "UncertaintyError",
     "ArmguardWarning",
     "OutputError",
+    "AvoidanceError",
 ]
 
 
@@ -123,6 +124,10 @@ class ReferenceFileError(ArmguardError, ValueError):
     def __init__(self, file, where: str, message: str) -> None:
         self.file, self.where, self.message = str(file), where, message
         super().__init__(_located(self.file, where, message))
+
+
+class AvoidanceError(ArmguardError, ValueError):
+    """Collision avoidance was given invalid settings, commands or distances (NaN, no Jacobian...)."""
 
 
 class BackendError(ArmguardError, ValueError):

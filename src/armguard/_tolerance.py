@@ -109,6 +109,24 @@ class Tolerances:
         ``bench/paper_fidelity.py``: two checkers' distances closer than this agree (the paper
         checker's nearest distance is "right"); coal holds meshes in float32 (up to 0.5 µm at
         8 m, docs/models.md), so agreement cannot be asked to be tighter than about a micrometre.
+    jacobian_step : float, rad or m
+        Distance Jacobians by finite differences (the framework default for a backend without
+        witness Jacobians, and the tests' reference): the step along each velocity direction.
+    jacobian_kink : float, m/rad or m/m
+        ... a pair whose forward and backward differences differ by more than this is not smooth
+        there (a smooth distance's differ by ``jacobian_step`` times its second derivative).
+    jacobian_face : float, m
+        Witness Jacobians: a shape's vertices within this of its support plane form the support
+        face that decides whether witness points are unique (``smooth``).
+    jacobian_parallel : float, dimensionless
+        ... ``|sin(angle)|`` below which two witness edges are parallel, or a normal lies along
+        a cylinder's axis (a flat face).
+    avoid_still : float, rad/s or m/s
+        ``armguard.avoid``: a filtered velocity whose every component is at most this is a stop
+        (status STOPPED); one within this of the command is the command (status FREE).
+    avoid_feasibility : float, m/s or rad/s
+        ``armguard.avoid``: the solver's answer may break a damper constraint or a velocity limit
+        by at most this (round-off), else the answer is to stop.
     differential_contact_band : float, m
         Differential tests and ``armguard compare``: a verdict (collides or not) may differ
         between two backends (or a backend and ``reference/``) only where the reference distance
@@ -161,6 +179,12 @@ class Tolerances:
     cspace_contact: float = 1e-6
     cspace_max_depth: int = 2
     paper_agreement: float = 1e-6
+    jacobian_step: float = 1e-6
+    jacobian_kink: float = 1e-2
+    jacobian_face: float = 1e-9
+    jacobian_parallel: float = 1e-9
+    avoid_still: float = 1e-9
+    avoid_feasibility: float = 1e-9
     differential_contact_band: float = 1e-6
     differential_distance: float = 1e-6
     differential_hull: float = 1e-5

@@ -5,7 +5,9 @@ A **Checker** answers two required queries for the Model's active pairs
 
 * ``pair_distances(q) -> PairDistances``: signed distance (``> 0`` apart, ``< 0``
   penetrating) and world witness points of every pair at one configuration ``q`` in
-  ``pin_model``'s order ``(nq,)``;
+  ``pin_model``'s order ``(nq,)``; with ``jacobian=True`` also ``d(distance)/dq`` per pair
+  (``.jacobian`` ``(n, nv)``, ``.smooth`` ``(n,)``; default: central differences, see
+  :meth:`CheckerBase.distance_jacobian`);
 * ``collides(Q) -> (M,) bool``: whether any pair is within ``margin`` (default: touching or
   penetrating, ``distance <= 0``) at each row of ``Q`` ``(M, nq)``.
 
@@ -51,6 +53,13 @@ class PairDistances:
     ``pairs`` ``(n, 2)`` object: GeometryObject names (side B ``"workspace"`` for the workspace
     walls); ``distance`` ``(n,) float64, m`` signed; ``p_WA``, ``p_WB`` ``(n, 3) float64, m`` the
     witness points in W on A and B, ``|p_WA - p_WB| == |distance|``; ``category`` ``(n,)`` names.
+
+    With ``pair_distances(q, jacobian=True)``: ``jacobian`` ``(n, nv) float64, m/rad or m/m`` the
+    derivative of each pair's signed distance with respect to the joint velocities (``pin_model``'s
+    ``nv`` columns; a continuous joint is one column), and ``smooth`` ``(n,) bool``: whether the
+    distance is differentiable there (False: touching, non-unique witness points, a switch
+    between features; the row is then one of the one-sided derivatives).  Otherwise both None.
+    Sign conventions: ``docs/notation.md``.
     """
 
     pairs: np.ndarray
@@ -58,6 +67,8 @@ class PairDistances:
     p_WA: np.ndarray
     p_WB: np.ndarray
     category: tuple
+    jacobian: np.ndarray | None = None
+    smooth: np.ndarray | None = None
 
     def nearest(self) -> dict:
         """Category -> :class:`NearestPair` of the smallest distance (categories with pairs only)."""
@@ -82,8 +93,14 @@ class PairDistances:
     def take(self, rows: np.ndarray) -> "PairDistances":
         """The rows ``rows`` (int indices) of this result, in that order (fresh arrays)."""
         cat = self.category
+        jac = None if self.jacobian is None else self.jacobian[rows]
+        smooth = None if self.smooth is None else self.smooth[rows]
         return PairDistances(self.pairs[rows], self.distance[rows], self.p_WA[rows], self.p_WB[rows],
-                             tuple(cat[int(k)] for k in rows))
+                             tuple(cat[int(k)] for k in rows), jac, smooth)
+
+    def with_jacobian(self, jacobian: np.ndarray, smooth: np.ndarray) -> "PairDistances":
+        """This result with ``jacobian`` and ``smooth`` set (the arrays shared, not copied)."""
+        return PairDistances(self.pairs, self.distance, self.p_WA, self.p_WB, self.category, jacobian, smooth)
 
 
 @dataclass(frozen=True)
@@ -177,7 +194,7 @@ class Checker(Protocol):
     model: object
     capabilities: frozenset
 
-    def pair_distances(self, q, *, pairs=None) -> PairDistances: ...
+    def pair_distances(self, q, *, pairs=None, jacobian: bool = False) -> PairDistances: ...
 
     def pair_distances_many(self, Q, *, pairs=None) -> PairDistancesMany: ...
 
@@ -209,7 +226,9 @@ class CheckerBase:
         super().__init_subclass__(**kwargs)
         own = cls.__dict__.get("pair_distances")
         if own is not None and "pairs" not in inspect.signature(own).parameters:
-            cls.pair_distances = _with_pairs(own)
+            own = cls.pair_distances = _with_pairs(own)
+        if own is not None and "jacobian" not in inspect.signature(own).parameters:
+            cls.pair_distances = _with_jacobian(own)
 
     def __init__(self, model) -> None:
         self.model = model
@@ -222,7 +241,7 @@ class CheckerBase:
             raise BackendError(f"backend {self.name!r} does not answer {cap.value} (it answers "
                                f"{sorted(c.value for c in self.capabilities)})")
 
-    def pair_distances(self, q, *, pairs=None) -> PairDistances:
+    def pair_distances(self, q, *, pairs=None, jacobian: bool = False) -> PairDistances:
         """Required of a backend answering distances; here: refuse (no distances)."""
         self._require(Capability.DISTANCES)
         raise NotImplementedError(f"{type(self).__name__} declares distances but does not implement pair_distances")
@@ -267,11 +286,62 @@ class CheckerBase:
         Q = check_Q(self.model, Q)
         return np.array([float(np.min(self.pair_distances(q).distance, initial=np.inf)) for q in Q], dtype=np.float64)
 
+    def distance_jacobian(self, q, result: PairDistances, idx=None) -> tuple:
+        """``(jacobian (n, nv), smooth (n,) bool)`` of ``result`` (this checker's distances of the
+        Model rows ``idx`` at the checked ``q``).  Default: central differences of
+        :meth:`pair_distances` along each velocity direction (``Tolerances.jacobian_step``;
+        ``2 nv`` more queries); ``smooth`` is False where the forward and backward differences
+        disagree (``Tolerances.jacobian_kink``) or the pair touches, and there the row is the
+        forward difference (a one-sided derivative).  A backend with witness points overrides it."""
+        from ._jacobian import finite_difference_rows
+
+        tol = self.model.tol
+        rows, kink = finite_difference_rows(self, q, idx, step=tol.jacobian_step)
+        smooth = ~kink & (np.abs(result.distance) > tol.length)
+        if not np.all(smooth):
+            fwd, _ = finite_difference_rows(self, q, idx, step=tol.jacobian_step, one_sided=True)
+            rows[~smooth] = fwd[~smooth]
+        return rows, smooth
+
+    def witness_jacobian(self, q, result: PairDistances, idx=None) -> tuple:
+        """:meth:`distance_jacobian` from the witness points (equation (1) of
+        :mod:`armguard.backends._jacobian`: Pinocchio's joint Jacobians, one product for all
+        pairs; touching pairs by forward differences), for a backend whose witness points are
+        exact and whose links move as ``pin_model`` says: set ``distance_jacobian = witness_jacobian``."""
+        from ._jacobian import WitnessJacobian, finite_difference_rows
+
+        wj = self.__dict__.get("_witness")
+        if wj is None:
+            wj = self._witness = WitnessJacobian(self.model, self.model.tol)
+        tol = self.model.tol
+
+        def refine(rows):
+            sub = rows if idx is None else idx[rows]
+            return finite_difference_rows(self, q, sub, step=tol.jacobian_step, one_sided=True)[0]
+
+        return wj.rows(q, result, idx, refine=refine)
+
     def _result(self, d, p_WA, p_WB) -> PairDistances:
         return PairDistances(self._pairs, d, p_WA, p_WB, self._category)
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.model.name!r}, {len(self._category)} pairs)"
+
+
+def _with_jacobian(own):
+    """A backend's ``pair_distances(q, pairs=...)`` given the framework's ``jacobian=``
+    (:meth:`CheckerBase.distance_jacobian`)."""
+
+    @functools.wraps(own)
+    def pair_distances(self, q, *, pairs=None, jacobian: bool = False) -> PairDistances:
+        r = own(self, q, pairs=pairs)
+        if not jacobian:
+            return r
+        q = check_q(self.model, q)
+        idx = None if pairs is None else check_pairs(self.model, pairs)
+        return r.with_jacobian(*self.distance_jacobian(q, r, idx))
+
+    return pair_distances
 
 
 def _with_pairs(full):

@@ -1,0 +1,197 @@
+"""Collision avoidance: the closest safe joint velocity to a command (velocity dampers).
+
+Ranger's detector fed collision avoidance; this is that step, on the distance Jacobians of
+:meth:`armguard.backends.Checker.pair_distances` (``jacobian=True``).  Every pair closer than the
+influence distance ``d_i`` may not close faster than the velocity damper of Faverjon &
+Tournassoud ("A local based approach for path planning of manipulators with a high number of
+degrees of freedom", ICRA 1987) allows:
+
+    d'(q) v >= -xi (d - d_s) / (d_i - d_s)                                      (1)
+
+with ``d_s`` the stand-off distance and ``xi`` (m/s) the approach speed allowed at ``d_i``; the
+filtered velocity ``v`` is the solution of the small QP
+
+    minimise 1/2 |v - v_cmd|^2   subject to (1) for every such pair,  -v_max <= v <= v_max.
+
+Two changes keep it safe in discrete time and always feasible:
+
+* the damper's rate ``xi / (d_i - d_s)`` is capped at ``1 / period``, so that one control period
+  at the allowed rate cannot carry a pair past ``d_s`` (to first order);
+* a pair already inside the stand-off distance (``d < d_s``) may not close at all (``d' v >= 0``)
+  instead of being pushed out: ``v = 0`` satisfies every constraint, so the QP is never
+  infeasible and stopping is always an answer.
+
+The QP is solved by DAQP (Arnström, Bemporad & Axehill, "A dual active-set solver for embedded
+quadratic programming using recursive LDLᵀ updates", IEEE TAC 2022): an active-set method, so
+the answer satisfies the constraints to round-off (an ADMM solver's would hold them to its
+tolerance only), and the fastest of the dense solvers measured here for tens of constraints
+(``docs/avoidance.md``).  Where DAQP reports anything but an optimum, or its answer breaks a
+constraint by more than ``Tolerances.avoid_feasibility``, the answer is to stop.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._errors import AvoidanceError
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+
+__all__ = ["avoid", "avoid_step", "Damper", "Avoidance", "AvoidanceStatus"]
+
+
+class AvoidanceStatus(str, enum.Enum):
+    """What the filter did to the command."""
+
+    FREE = "free"  # the command passes unchanged
+    SLOWED = "slowed"  # the command was changed (slowed, deflected or clipped to the limits); the arm still moves
+    STOPPED = "stopped"  # the closest safe velocity is zero (or the solver failed): stop
+
+
+@dataclass(frozen=True)
+class Damper:
+    """The velocity damper's settings.
+
+    ``stand_off`` (m) the distance ``d_s`` no pair may close below; ``influence`` (m) the distance
+    ``d_i > d_s`` within which a pair is constrained; ``approach_speed`` (m/s) ``xi``, the closing
+    speed allowed at ``d_i``; ``period`` (s) the control period; ``velocity_limit`` (rad/s or m/s)
+    a number or ``(nv,)`` per velocity column, ``|v| <= velocity_limit``.
+    """
+
+    stand_off: float
+    influence: float
+    approach_speed: float
+    period: float
+    velocity_limit: float | tuple = math.inf
+
+    def __post_init__(self) -> None:
+        for name in ("stand_off", "influence", "approach_speed", "period"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v)):
+                raise AvoidanceError(f"Damper.{name}: expected a finite number, got {v!r}")
+        if self.stand_off < 0.0:
+            raise AvoidanceError(f"Damper.stand_off: expected >= 0 m, got {self.stand_off}")
+        if not self.influence > self.stand_off:
+            raise AvoidanceError(f"Damper.influence: expected more than stand_off ({self.stand_off} m), got {self.influence}")
+        if not self.approach_speed > 0.0:
+            raise AvoidanceError(f"Damper.approach_speed: expected > 0 m/s, got {self.approach_speed}")
+        if not self.period > 0.0:
+            raise AvoidanceError(f"Damper.period: expected > 0 s, got {self.period}")
+        lim = np.asarray(self.velocity_limit, dtype=np.float64)
+        if np.any(np.isnan(lim)) or np.any(lim < 0.0):
+            raise AvoidanceError(f"Damper.velocity_limit: expected numbers >= 0 (inf: none), got {self.velocity_limit!r}")
+
+    def rate(self) -> float:
+        """The damper's rate ``xi / (d_i - d_s)`` (1/s), capped at ``1 / period``."""
+        return min(self.approach_speed / (self.influence - self.stand_off), 1.0 / self.period)
+
+    def bound(self, distance: np.ndarray) -> np.ndarray:
+        """The least allowed ``d'`` (m/s) of pairs at ``distance`` ``(k,)`` (m): the right side of (1)."""
+        return -self.rate() * np.maximum(np.asarray(distance, dtype=np.float64) - self.stand_off, 0.0)
+
+
+@dataclass(frozen=True)
+class Avoidance:
+    """One avoidance step.
+
+    ``velocity`` ``(nv,)`` the filtered joint velocity; ``commanded`` ``(nv,)`` the command;
+    ``status`` an :class:`AvoidanceStatus`; ``rows`` ``(k,) int`` the rows (of the distances given)
+    that were constrained (closer than ``influence``); ``rate`` ``(k,)`` their allowed least
+    ``d'`` (m/s) and ``closing`` ``(k,)`` their ``d'`` at ``velocity`` (``closing >= rate``);
+    ``min_distance`` (m) the least distance given; ``solver`` a note (``"daqp: optimal"``,
+    ``"none: no pair within influence"``, or why it stopped).
+    """
+
+    velocity: np.ndarray
+    commanded: np.ndarray
+    status: AvoidanceStatus
+    rows: np.ndarray
+    rate: np.ndarray
+    closing: np.ndarray
+    min_distance: float
+    solver: str
+
+
+def _check_command(v_cmd, nv: int) -> np.ndarray:
+    try:
+        v = np.asarray(v_cmd, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise AvoidanceError(f"v_cmd: expected {nv} numbers, got {v_cmd!r}") from exc
+    if v.shape != (nv,):
+        raise AvoidanceError(f"v_cmd: expected shape ({nv},) (pin_model's velocity columns), got {v.shape}")
+    if not np.all(np.isfinite(v)):
+        raise AvoidanceError(f"v_cmd: contains NaN or infinite values: {v.tolist()}")
+    return v
+
+
+def avoid(v_cmd, distances, damper: Damper, *, tol: Tolerances = DEFAULT_TOLERANCES) -> Avoidance:
+    """The closest joint velocity to ``v_cmd`` ``(nv,)`` that keeps every pair of ``distances``
+    (a :class:`~armguard.backends.PairDistances` with ``jacobian``) within its velocity damper
+    (see the module docstring).  Never infeasible: at worst the answer is to stop."""
+    jac = getattr(distances, "jacobian", None)
+    if jac is None:
+        raise AvoidanceError("avoid: the distances carry no Jacobian; ask pair_distances(q, jacobian=True)")
+    jac = np.asarray(jac, dtype=np.float64)
+    d = np.asarray(distances.distance, dtype=np.float64)
+    if jac.ndim != 2 or jac.shape[0] != len(d):
+        raise AvoidanceError(f"avoid: {len(d)} distances but a Jacobian of shape {jac.shape}")
+    nv = jac.shape[1]
+    v_cmd = _check_command(v_cmd, nv)
+    if not (np.all(np.isfinite(d)) and np.all(np.isfinite(jac))):
+        raise AvoidanceError("avoid: a distance or a Jacobian entry is NaN or infinite; no velocity can be given")
+    lim = np.broadcast_to(np.asarray(damper.velocity_limit, dtype=np.float64), (nv,))
+    rows = np.flatnonzero((d < damper.influence) & np.any(jac != 0.0, axis=1))
+    A = np.ascontiguousarray(jac[rows])
+    b = damper.bound(d[rows])
+    dmin = float(d.min()) if len(d) else math.inf
+    clipped = np.clip(v_cmd, -lim, lim)
+    if len(rows) == 0 or np.all(A @ clipped >= b):
+        return _result(clipped, v_cmd, rows, b, A, dmin, "none: no constraint binds" if len(rows) else
+                       "none: no pair within influence", tol)
+    import daqp
+
+    big = 1e30  # DAQP's "no bound"
+    upper = np.concatenate([np.minimum(lim, big), np.full(len(rows), big)])
+    lower = np.concatenate([-np.minimum(lim, big), b])
+    x, _, flag, _ = daqp.solve(np.eye(nv), -v_cmd, A, upper, lower, np.zeros(nv + len(rows), dtype=np.intc))
+    x = np.asarray(x, dtype=np.float64)
+    if flag != 1 or not np.all(np.isfinite(x)):
+        return _result(np.zeros(nv), v_cmd, rows, b, A, dmin, f"daqp: exit flag {flag}; stopped", tol)
+    worst = max(float(np.max(b - A @ x, initial=0.0)), float(np.max(np.abs(x) - lim, initial=0.0)))
+    if worst > tol.avoid_feasibility:
+        return _result(np.zeros(nv), v_cmd, rows, b, A, dmin, f"daqp: a constraint broken by {worst:.3g}; stopped", tol)
+    return _result(x, v_cmd, rows, b, A, dmin, "daqp: optimal", tol)
+
+
+def _result(v, v_cmd, rows, b, A, dmin, note, tol) -> Avoidance:
+    if np.max(np.abs(v), initial=0.0) <= tol.avoid_still and np.max(np.abs(v_cmd), initial=0.0) > tol.avoid_still:
+        status = AvoidanceStatus.STOPPED
+    elif np.max(np.abs(v - v_cmd), initial=0.0) <= tol.avoid_still:
+        status = AvoidanceStatus.FREE
+    else:
+        status = AvoidanceStatus.SLOWED
+    return Avoidance(v, v_cmd, status, rows, b, A @ v, dmin, note)
+
+
+def avoid_step(checker, q, v_cmd, damper: Damper, *, pairs=None, tol: Tolerances = DEFAULT_TOLERANCES) -> Avoidance:
+    """:func:`avoid` at configuration ``q`` with ``checker``'s distances: every pair's distance
+    (or the Model rows ``pairs``: one arm's, say), then the Jacobians of the pairs within
+    ``damper.influence`` only.  ``rows`` of the result are Model pair rows."""
+    from ..backends import check_pairs, check_q
+
+    q = check_q(checker.model, q)
+    idx = np.arange(len(checker.model.pairs)) if pairs is None else check_pairs(checker.model, pairs)
+    r = checker.pair_distances(q, pairs=None if pairs is None else idx)
+    near = idx[r.distance < damper.influence]
+    if len(near) == 0:
+        nv = int(checker.model.pin_model.nv)
+        sub = r.take(np.zeros(0, np.int64)).with_jacobian(np.zeros((0, nv)), np.zeros(0, bool))
+    else:
+        sub = r.take(np.flatnonzero(r.distance < damper.influence))
+        sub = sub.with_jacobian(*checker.distance_jacobian(q, sub, near))
+    out = avoid(v_cmd, sub, damper, tol=tol)
+    return Avoidance(out.velocity, out.commanded, out.status, near[out.rows], out.rate, out.closing,
+                     float(r.distance.min(initial=np.inf)), out.solver)

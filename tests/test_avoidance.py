@@ -1,0 +1,142 @@
+"""``armguard.avoid``: velocity dampers (Faverjon & Tournassoud) as a small QP, never infeasible.
+
+The QP's answer is checked against its constraints and against a slow reference (scipy's SLSQP
+on the same problem); stopping must be the answer where nothing else is allowed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.optimize import minimize
+
+import armguard
+from armguard import AvoidanceError
+from armguard.avoidance import Avoidance, AvoidanceStatus, Damper, avoid, avoid_step
+from armguard.backends import PairDistances
+
+DAMPER = Damper(stand_off=0.02, influence=0.2, approach_speed=0.5, period=0.01, velocity_limit=1.0)
+
+
+def _distances(d, J, nv=None) -> PairDistances:
+    n = len(d)
+    J = np.asarray(J, float).reshape(n, nv if nv is not None else -1)
+    pairs = np.array([[f"a{k}", f"b{k}"] for k in range(n)], dtype=object).reshape(n, 2)
+    return PairDistances(pairs, np.asarray(d, float), np.zeros((n, 3)), np.zeros((n, 3)), ("robot",) * n,
+                         J, np.ones(n, bool))
+
+
+def _reference(v_cmd, d, J, damper):
+    """The same QP by SLSQP (slow, general)."""
+    near = d < damper.influence
+    A, b = J[near], damper.bound(d[near])
+    lim = np.broadcast_to(damper.velocity_limit, v_cmd.shape)
+    res = minimize(lambda v: 0.5 * np.sum((v - v_cmd) ** 2), np.zeros_like(v_cmd), jac=lambda v: v - v_cmd,
+                   constraints=[{"type": "ineq", "fun": lambda v: A @ v - b, "jac": lambda v: A}] if len(b) else [],
+                   bounds=list(zip(-lim, lim)), method="SLSQP", options={"ftol": 1e-14, "maxiter": 500})
+    return res.x
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 10_000), st.integers(1, 8), st.integers(0, 12))
+def test_damper_holds_and_matches_reference(seed, nv, n):
+    rng = np.random.default_rng(seed)
+    d = rng.uniform(-0.01, 0.3, n)
+    J = rng.normal(size=(n, nv))
+    v_cmd = rng.normal(size=nv) * 2.0
+    out = avoid(v_cmd, _distances(d, J, nv), DAMPER)
+    assert isinstance(out, Avoidance)
+    v = out.velocity
+    assert np.all(np.abs(v) <= 1.0 + 1e-9)
+    near = d < DAMPER.influence
+    assert np.all(J[near] @ v >= DAMPER.bound(d[near]) - 1e-9)  # (1): every pair within its damper
+    np.testing.assert_allclose(out.closing, J[out.rows] @ v)
+    assert set(out.rows.tolist()) <= set(np.flatnonzero(near).tolist())
+    if out.status is not AvoidanceStatus.STOPPED or out.solver == "daqp: optimal":
+        ref = _reference(v_cmd, d, J, DAMPER)
+        cost = lambda x: np.sum((x - v_cmd) ** 2)  # noqa: E731
+        assert cost(v) <= cost(ref) + 1e-7
+
+
+def test_pushing_into_an_obstacle_at_stand_off_stops():
+    J = np.array([[1.0, 0.0]])
+    out = avoid([-0.5, 0.0], _distances([DAMPER.stand_off], J), DAMPER)
+    assert out.status is AvoidanceStatus.STOPPED
+    np.testing.assert_allclose(out.velocity, 0.0, atol=1e-12)
+
+
+def test_inside_stand_off_no_further_closing_and_stop_is_feasible():
+    J = np.array([[1.0, 0.0], [0.0, 1.0]])
+    d = [0.5 * DAMPER.stand_off, -0.01]  # inside the stand-off, one penetrating
+    out = avoid([-1.0, -1.0], _distances(d, J), DAMPER)
+    assert out.status is AvoidanceStatus.STOPPED
+    out = avoid([-1.0, 0.3], _distances(d, J), DAMPER)  # moving away is allowed
+    assert out.status is AvoidanceStatus.SLOWED
+    np.testing.assert_allclose(out.velocity, [0.0, 0.3], atol=1e-9)
+
+
+def test_slides_along_a_wall():
+    """Closing at an angle on a wall is deflected: the tangential part passes, the normal part is damped."""
+    J = np.array([[1.0, 0.0]])
+    d = 0.1
+    out = avoid([-1.0, 0.5], _distances([d], J), DAMPER)
+    assert out.status is AvoidanceStatus.SLOWED
+    np.testing.assert_allclose(out.velocity, [DAMPER.bound([d])[0], 0.5], atol=1e-9)
+
+
+def test_free_far_away_and_clipped_to_limits():
+    out = avoid([0.3, -0.2], _distances([0.5], [[1.0, 0.0]]), DAMPER)
+    assert out.status is AvoidanceStatus.FREE and len(out.rows) == 0
+    out = avoid([3.0, 0.0], _distances([0.5], [[1.0, 0.0]]), DAMPER)
+    assert out.status is AvoidanceStatus.SLOWED
+    np.testing.assert_allclose(out.velocity, [1.0, 0.0])
+
+
+def test_period_caps_the_rate():
+    """One period at the allowed rate cannot carry a pair past the stand-off (first order)."""
+    fast = Damper(stand_off=0.02, influence=0.03, approach_speed=10.0, period=0.01)
+    assert fast.rate() == pytest.approx(100.0)
+    d = 0.025
+    assert d + fast.period * fast.bound([d])[0] >= fast.stand_off - 1e-15
+
+
+@pytest.mark.parametrize("bad", [dict(stand_off=-1.0), dict(influence=0.01), dict(approach_speed=0.0),
+                                 dict(period=float("nan")), dict(velocity_limit=-1.0)], ids=str)
+def test_bad_settings_are_refused(bad):
+    kw = dict(stand_off=0.02, influence=0.2, approach_speed=0.5, period=0.01)
+    kw.update(bad)
+    with pytest.raises(AvoidanceError):
+        Damper(**kw)
+
+
+def test_nan_inputs_are_refused():
+    with pytest.raises(AvoidanceError):
+        avoid([np.nan, 0.0], _distances([0.1], [[1.0, 0.0]]), DAMPER)
+    with pytest.raises(AvoidanceError):
+        avoid([0.0, 0.0], _distances([np.nan], [[1.0, 0.0]]), DAMPER)
+    r = _distances([0.1], [[1.0, 0.0]])
+    with pytest.raises(AvoidanceError, match="jacobian=True"):
+        avoid([0.0, 0.0], PairDistances(r.pairs, r.distance, r.p_WA, r.p_WB, r.category), DAMPER)
+
+
+def test_ranger_arm_driven_into_the_scene_keeps_stand_off():
+    """Closed loop on Ranger: a constant command that would collide is filtered; the least
+    distance over the run stays above the stand-off less 1 mm and no step is infeasible."""
+    import pinocchio as pin
+
+    m = armguard.load_model("ranger")
+    c = armguard.checker(m, "analytic")
+    q = m.neutral()
+    damper = Damper(stand_off=0.03, influence=0.15, approach_speed=0.3, period=0.01, velocity_limit=1.0)
+    rng = np.random.default_rng(2)
+    v_cmd = rng.normal(size=m.pin_model.nv)
+    seen = []
+    for _ in range(60):
+        out = avoid_step(c, q, v_cmd, damper)
+        seen.append(out.status)
+        q = pin.integrate(m.pin_model, q, out.velocity * damper.period)
+        dmin = float(c.pair_distances(q).distance.min())
+        assert dmin >= min(damper.stand_off, out.min_distance) - 1e-3
+    assert AvoidanceStatus.FREE in seen or AvoidanceStatus.SLOWED in seen
