@@ -64,6 +64,7 @@ from . import _check  # noqa: E402,F401
 from . import _cspace  # noqa: E402,F401
 from . import _compare  # noqa: E402,F401
 from . import _program  # noqa: E402,F401
+from . import _srdf  # noqa: E402,F401
 
 
 def _document_exit_codes(group: click.Group) -> None:

@@ -1,0 +1,98 @@
+"""``armguard srdf ROBOT --out FILE.srdf`` and ``armguard check-srdf ROBOT SRDF``: certified collision matrices.
+
+``srdf`` writes MoveIt's ``disable_collisions`` entries (Adjacent, Default, Never, Always) with
+*Never* proven by branch and bound (or sampled as MoveIt does, ``--method sampled``); the pairs
+it keeps are listed with a configuration where they collide, or as undecided.  ``check-srdf``
+lints an existing SRDF (``armguard.srdfgen``, ``docs/srdf.md``).
+"""
+
+from __future__ import annotations
+
+import json
+
+import click
+
+from . import main
+from ._exit import ExitCode, exit_epilog
+
+
+def _q(q) -> str:
+    return "[" + ", ".join(f"{x:.4f}" for x in q) + "]"
+
+
+@main.command("srdf", epilog=exit_epilog(ok="the SRDF written"))
+@click.argument("robot")
+@click.option("--out", "out", type=click.Path(dir_okay=False), required=True, help="The .srdf file to write.")
+@click.option("--margin", type=float, default=0.0, show_default=True,
+              help="Never means never within this distance (m) anywhere within the joint limits.")
+@click.option("--method", type=click.Choice(["certified", "sampled"]), default="certified", show_default=True,
+              help="certified: Never proven by branch and bound; sampled: MoveIt Setup Assistant's rules.")
+@click.option("--samples", type=int, default=10_000, show_default=True, help="Random configurations of --method sampled.")
+@click.option("--workers", type=int, default=None, help="Threads over the pairs (default: one).")
+@click.option("--max-evaluations", type=int, default=200_000, show_default=True,
+              help="Per pair, distance evaluations before it is left undecided (certified).")
+@click.option("--evaluator", default="analytic", show_default=True,
+              help="The backend whose distances are evaluated at cell centres (analytic, coal, ...).")
+@click.option("--json", "as_json", is_flag=True, help="Print the matrix as JSON.")
+def srdf_cmd(robot, out, margin, method, samples, workers, max_evaluations, evaluator, as_json) -> None:
+    """Write the collision matrix of ROBOT (a built-in name, a public robot's name, or a .urdf) as an SRDF."""
+    from ..model import load_model
+    from ..srdfgen import collision_matrix
+
+    model = load_model(robot, srdf=False)
+    cm = collision_matrix(model, margin=margin, method=method, samples=samples, workers=workers,
+                          max_evaluations=max_evaluations, backend=evaluator, progress=not as_json)
+    cm.write_srdf(out)
+    c = cm.counts()
+    if as_json:
+        click.echo(json.dumps({"model": cm.model, "method": cm.method, "margin": cm.margin, "out": str(out),
+                               "elapsed_s": cm.elapsed_s, "counts": c, "joint_names": list(cm.joint_names),
+                               "pairs": [{"link1": e.link1, "link2": e.link2, "reason": e.reason, "status": e.status,
+                                          "q": None if e.q is None else list(e.q), "distance": e.distance, "how": e.how}
+                                         for e in cm.entries]}, default=float))
+        return
+    click.echo(f"wrote {out}: {len(cm.disabled)} of {c['pairs']} pairs disabled (Adjacent {c['Adjacent']}, "
+               f"Default {c['Default']}, Never {c['Never']}, Always {c['Always']}); checked: {c['witnessed']} witnessed, "
+               f"{c['undecided']} undecided; {cm.method}, {cm.elapsed_s:.1f} s")
+    for e in cm.entries:
+        if e.status == "witnessed":
+            click.echo(f"  checked {e.link1} - {e.link2}: distance {e.distance:.4f} m at q = {_q(e.q)}")
+        elif e.status == "undecided":
+            click.echo(f"  checked {e.link1} - {e.link2}: undecided ({e.how})")
+
+
+@main.command("check-srdf", epilog=exit_epilog(
+    ok="linted (findings, if any, are printed)",
+    unsafe="with --strict: a disabled pair other than Adjacent or Default can collide"))
+@click.argument("robot")
+@click.argument("srdf", type=click.Path(dir_okay=False))
+@click.option("--margin", type=float, default=0.0, show_default=True, help="Collide means within this distance (m).")
+@click.option("--workers", type=int, default=None, help="Threads over the pairs (default: one).")
+@click.option("--max-evaluations", type=int, default=200_000, show_default=True,
+              help="Per pair, distance evaluations before it is left undecided.")
+@click.option("--evaluator", default="analytic", show_default=True, help="The backend whose distances are evaluated.")
+@click.option("--strict", is_flag=True, help="Exit 1 when a pair disabled for a reason other than Adjacent or Default can collide.")
+@click.option("--json", "as_json", is_flag=True,
+              help="Print a JSON object: can_collide [{link1, link2, reason, q (pin_model order), distance}], never_checked, ...")
+def check_srdf_cmd(robot, srdf, margin, workers, max_evaluations, evaluator, strict, as_json) -> None:
+    """Lint SRDF for ROBOT: disabled pairs that can collide (with a witness), checked pairs proven never to."""
+    from ..model import load_model
+    from ..srdfgen import check_srdf
+
+    model = load_model(robot, srdf=False)
+    lint = check_srdf(model, srdf, margin=margin, workers=workers, max_evaluations=max_evaluations, backend=evaluator,
+                      progress=not as_json)
+    if as_json:
+        click.echo(json.dumps(lint.to_dict()))
+    else:
+        click.echo(f"{srdf}: {len(lint.can_collide)} disabled pairs can collide, {len(lint.proven_disabled)} proven never, "
+                   f"{len(lint.never_checked)} checked pairs proven never, {len(lint.undecided)} undecided "
+                   f"({lint.elapsed_s:.1f} s; q over {', '.join(lint.joint_names)})")
+        for d in lint.can_collide:
+            click.echo(f"  disabled ({d['reason']}) {d['link1']} - {d['link2']}: distance {d['distance']:.4f} m at q = {_q(d['q'])}")
+        for d in lint.never_checked:
+            click.echo(f"  checked {d['link1']} - {d['link2']}: proven never (clearance >= {d['clearance_lower_bound']:.4f} m)")
+        for d in lint.undecided:
+            click.echo(f"  undecided {d['link1']} - {d['link2']} ({'disabled' if d['disabled'] else 'checked'})")
+    if strict and any(d["reason"] not in ("Adjacent", "Default") for d in lint.can_collide):
+        raise SystemExit(int(ExitCode.UNSAFE))

@@ -1,0 +1,131 @@
+"""Linting an SRDF against the certified search: disabled pairs that can collide, checked pairs that never do.
+
+For every pair the SRDF disables (other than links joined by a joint, or through links without
+geometry, which touch at their joint by construction) the certified search of :mod:`._prove`
+either finds a configuration where it comes within the margin -- the SRDF hides a collision
+there -- or proves it cannot.  For every pair the SRDF checks, a proof of *never* means the check
+is wasted work.  Witness configurations are in ``pin_model``'s order.
+"""
+
+from __future__ import annotations
+
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._matrix import PairEvaluator, _progress
+from ._pairs import pair_setup
+from ._prove import PairVerdict, prove_pair
+
+__all__ = ["SrdfLint", "check_srdf"]
+
+
+@dataclass(frozen=True)
+class SrdfLint:
+    """The findings of :func:`check_srdf`.
+
+    ``can_collide``: dicts ``{link1, link2, reason, q, distance}`` -- a pair the SRDF disables
+    (``reason`` as it says) that comes within the margin at ``q`` (``pin_model`` order), signed
+    ``distance`` m there (``< 0``: the penetration depth).  ``never_checked``: ``{link1, link2}``
+    pairs the SRDF checks that are proven never within the margin.  ``undecided``: pairs neither
+    proven nor witnessed (``disabled`` says which side of the SRDF they are on).  ``adjacent``:
+    disabled pairs joined by a joint (not searched); ``skipped``: disabled pairs naming a link
+    without geometry or one the URDF lacks.
+    """
+
+    model: str
+    srdf: str
+    margin: float
+    joint_names: tuple
+    can_collide: tuple
+    never_checked: tuple
+    undecided: tuple
+    proven_disabled: tuple
+    adjacent: tuple
+    skipped: tuple
+    elapsed_s: float
+
+    def to_dict(self) -> dict:
+        return {"model": self.model, "srdf": self.srdf, "margin": self.margin, "joint_names": list(self.joint_names),
+                "can_collide": [dict(d) for d in self.can_collide], "never_checked": [dict(d) for d in self.never_checked],
+                "undecided": [dict(d) for d in self.undecided], "proven_disabled": [dict(d) for d in self.proven_disabled],
+                "adjacent": [dict(d) for d in self.adjacent], "skipped": [dict(d) for d in self.skipped],
+                "elapsed_s": self.elapsed_s}
+
+
+def check_srdf(model, srdf, *, margin: float = 0.0, backend: str | None = "analytic", options=None,
+               workers: int | None = None, min_width: float = 1e-3, max_evaluations: int = 200_000, progress=False,
+               seed: int = 0, tol: Tolerances = DEFAULT_TOLERANCES) -> SrdfLint:
+    """Lint the SRDF file ``srdf`` for ``model`` (a Model or a name / path, loaded without an SRDF)."""
+    from .._errors import VerificationError
+    from ..model._srdf import read_srdf
+
+    if not (np.isfinite(margin) and margin >= 0.0):
+        raise VerificationError(f"margin: expected a finite length >= 0 (m), got {margin!r}")
+    if not hasattr(model, "pin_model"):
+        from ..model import load_model
+
+        model = load_model(model, srdf=False)
+    sr = read_srdf(srdf)
+    t0 = time.perf_counter()
+    setup = pair_setup(model, tol)
+    ev = PairEvaluator(model, setup, backend, options)
+    index = {frozenset((p.link1, p.link2)): k for k, p in enumerate(setup.pairs)}
+    disabled: dict = {}
+    skipped = []
+    for a, b, reason in sr.disabled:
+        k = index.get(frozenset((a, b)))
+        if k is None:
+            if a != b:
+                skipped.append({"link1": a, "link2": b, "reason": reason})
+            continue
+        disabled.setdefault(k, reason)
+    adjacent = [{"link1": setup.pairs[k].link1, "link2": setup.pairs[k].link2, "reason": disabled[k]}
+                for k in disabled if setup.pairs[k].adjacent]
+    todo = [k for k in range(len(setup.pairs)) if not setup.pairs[k].adjacent]
+    advance, close = _progress(progress, len(todo), f"{model.name}: linting {_file_name(srdf)}")
+
+    def one(k: int):
+        p = setup.pairs[k]
+        r = prove_pair(lambda Q: ev(k, Q), setup.home, p.joints, setup.lower, setup.upper, p.weight, margin=margin,
+                       contact=tol.verify_contact, min_width=min_width, max_evaluations=max_evaluations,
+                       rng=np.random.default_rng(seed + k))
+        advance()
+        return r
+
+    try:
+        if workers and int(workers) > 1:
+            with ThreadPoolExecutor(int(workers)) as ex:
+                results = list(ex.map(one, todo))
+        else:
+            results = [one(k) for k in todo]
+    finally:
+        close()
+    can, never, und, proven = [], [], [], []
+    for k, r in zip(todo, results):
+        p = setup.pairs[k]
+        base = {"link1": p.link1, "link2": p.link2}
+        if k in disabled:
+            if r.verdict is PairVerdict.WITNESSED:
+                q = [float(x) for x in ev.pin(r.witness[None, :])[0]]
+                can.append({**base, "reason": disabled[k], "q": q, "distance": float(r.distance)})
+            elif r.verdict is PairVerdict.NEVER:
+                proven.append({**base, "reason": disabled[k]})
+            else:
+                und.append({**base, "disabled": True})
+        else:
+            if r.verdict is PairVerdict.NEVER:
+                never.append({**base, "clearance_lower_bound": float(r.lower_bound)})
+            elif r.verdict is PairVerdict.UNDECIDED:
+                und.append({**base, "disabled": False})
+    return SrdfLint(model.name, str(srdf), float(margin), tuple(model.joint_names), tuple(can), tuple(never), tuple(und),
+                    tuple(proven), tuple(adjacent), tuple(skipped), time.perf_counter() - t0)
+
+
+def _file_name(p) -> str:
+    from pathlib import Path
+
+    return Path(str(p)).name

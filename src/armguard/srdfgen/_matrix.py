@@ -1,0 +1,287 @@
+"""The collision matrix of a robot: which link pairs a checker may skip, and why.
+
+Reasons are MoveIt's (its Setup Assistant's ``disable_collisions`` entries):
+
+* **Adjacent** -- the links are joined by one joint, or through links without geometry;
+* **Default** -- the pair is in contact (signed distance <= 0) at the home configuration;
+* **Never** -- ``method="certified"``: *proven* never to come within ``margin`` anywhere within the
+  joint limits, by branch and bound over the pair's joints with the certified verifier's lever-arm
+  bounds (:mod:`._prove`); ``method="sampled"``: not seen within ``margin`` in ``samples`` random
+  configurations (MoveIt's rule, 10^4 by default);
+* **Always** -- ``method="sampled"`` only: in contact in more than 95 % of 200 random configurations
+  (MoveIt's rule).  The certified method gives none: a pair in contact everywhere is in contact at
+  home, hence *Default* first.
+
+Every other pair stays checked: *witnessed* (with a configuration where it comes within the margin)
+or *undecided* (the search reached its box-width or evaluation limit; reported, never disabled).
+
+The distances come from any backend that answers them (``backend``: analytic by default, coal
+as the reference), over a Model whose active pairs are the robot's own link pairs
+(:func:`armguard.cspace._clearance.checker_over`).
+"""
+
+from __future__ import annotations
+
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._errors import VerificationError
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._pairs import pair_setup
+from ._prove import PairVerdict, prove_pair
+
+__all__ = ["MatrixEntry", "CollisionMatrix", "collision_matrix", "PairEvaluator", "REASONS", "METHODS"]
+
+REASONS = ("Adjacent", "Default", "Never", "Always")
+METHODS = ("certified", "sampled")
+ALWAYS_SAMPLES = 200
+ALWAYS_FRACTION = 0.95
+
+
+@dataclass(frozen=True)
+class MatrixEntry:
+    """One link pair: ``reason`` (one of :data:`REASONS`) when it is disabled, else None (checked).
+
+    ``status``: ``"disabled"``, ``"witnessed"`` (checked: ``q`` is a configuration, in ``pin_model``'s
+    order, where it comes within the margin, ``distance`` m there) or ``"undecided"`` (checked).
+    ``how`` says how the verdict was established; ``evaluations`` the distance evaluations spent.
+    """
+
+    link1: str
+    link2: str
+    reason: str | None
+    status: str
+    q: tuple | None = None
+    distance: float = float("nan")
+    how: str = ""
+    evaluations: int = 0
+
+
+@dataclass(frozen=True)
+class CollisionMatrix:
+    """The collision matrix of one model (see the module docstring)."""
+
+    model: str
+    method: str
+    margin: float
+    entries: tuple
+    elapsed_s: float
+    samples: int = 0
+    joint_names: tuple = field(default=())
+
+    @property
+    def disabled(self) -> tuple:
+        """``(link1, link2, reason)`` of every disabled pair."""
+        return tuple((e.link1, e.link2, e.reason) for e in self.entries if e.reason is not None)
+
+    def count(self, key: str) -> int:
+        """Entries whose reason or status is ``key`` (``"Never"``, ``"witnessed"``, ...)."""
+        return sum(1 for e in self.entries if e.reason == key or e.status == key)
+
+    def counts(self) -> dict:
+        out = {r: self.count(r) for r in REASONS}
+        out.update(witnessed=self.count("witnessed"), undecided=self.count("undecided"), pairs=len(self.entries))
+        return out
+
+    def write_srdf(self, path) -> None:
+        """Write the matrix as an SRDF (:func:`armguard.srdfgen.write_srdf`)."""
+        from ._io import write_srdf
+
+        write_srdf(self, path)
+
+
+class PairEvaluator:
+    """Signed distance of each link pair of a :class:`~._pairs.PairSetup` at flat scene configurations.
+
+    ``__call__(k, Q (M, n_q)) -> (M,)``: the least distance over the geometry pairs of link pair ``k``;
+    ``all(Q) -> (M, n_pairs)`` every link pair at once.
+    """
+
+    def __init__(self, model, setup, backend: str | None = "analytic", options=None) -> None:
+        from ..cspace._clearance import checker_over
+
+        self.model = model
+        self.setup = setup
+        self.checker = checker_over(model, setup.scene, backend, options, need_distances=True)
+        self.backend = self.checker.name
+        gp = self.checker.model.pairs
+        where: dict = {}
+        for row, (a, b) in enumerate(zip(gp.owner_a, gp.owner_b)):
+            where.setdefault(frozenset((a, b)), []).append(row)
+        self.rows = [np.asarray(where.get(frozenset((p.owner1, p.owner2)), []), dtype=np.int64) for p in setup.pairs]
+        missing = [(p.link1, p.link2) for p, r in zip(setup.pairs, self.rows) if not len(r)]
+        if missing:
+            raise VerificationError(f"backend {self.backend!r} checks no geometry of link pairs {missing[:3]}")
+        self._all = np.concatenate(self.rows)
+        self._owner = np.concatenate([np.full(len(r), k) for k, r in enumerate(self.rows)])
+
+    def pin(self, Q: np.ndarray) -> np.ndarray:
+        return self.checker.model.pin_q(Q)
+
+    def __call__(self, k: int, Q: np.ndarray) -> np.ndarray:
+        res = self.checker.pair_distances_many(self.pin(Q), pairs=self.rows[k])
+        return np.min(res.distance, axis=1)
+
+    def all(self, Q: np.ndarray, chunk: int = 2000) -> np.ndarray:
+        out = np.empty((len(Q), len(self.rows)))
+        for s in range(0, len(Q), chunk):
+            d = self.checker.pair_distances_many(self.pin(Q[s:s + chunk]), pairs=self._all).distance
+            block = np.full((len(d), len(self.rows)), np.inf)
+            np.minimum.at(block.T, self._owner, d.T)
+            out[s:s + chunk] = block
+        return out
+
+
+def _progress(progress, total: int, label: str):
+    """``(advance(), close())`` of a rich progress bar (``progress=True``), a callback, or nothing."""
+    if progress is True:
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+        bar = Progress(TextColumn(label), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), transient=False)
+        bar.start()
+        task = bar.add_task(label, total=total)
+        return (lambda: bar.advance(task)), bar.stop
+    if callable(progress):
+        done = [0]
+
+        def advance():
+            done[0] += 1
+            progress(done[0], total)
+
+        return advance, (lambda: None)
+    return (lambda: None), (lambda: None)
+
+
+def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", backend: str | None = "analytic",
+                     options=None, workers: int | None = None, samples: int = 10_000, min_width: float = 1e-3,
+                     max_evaluations: int = 200_000, progress=False, seed: int = 0,
+                     tol: Tolerances = DEFAULT_TOLERANCES) -> CollisionMatrix:
+    """The collision matrix of ``model`` (an :class:`armguard.Model`, or a name / path for
+    :func:`armguard.load_model`, loaded without its SRDF).  See the module docstring.
+
+    Parameters
+    ----------
+    margin : m, >= 0; a pair is *Never* only when proven (or seen) farther apart than this everywhere.
+    method : "certified" | "sampled"
+    workers : threads over the pairs (certified; None: one).
+    samples : random configurations of ``method="sampled"`` (MoveIt: 10^4 by default).
+    min_width, max_evaluations : per pair, the certified search's limits (rad; distance evaluations).
+    progress : True for a rich progress bar, or a ``callback(done, total)``.
+    """
+    if method not in METHODS:
+        raise VerificationError(f"method: expected one of {list(METHODS)}, got {method!r}")
+    if not (np.isfinite(margin) and margin >= 0.0):
+        raise VerificationError(f"margin: expected a finite length >= 0 (m), got {margin!r}")
+    if workers is not None and int(workers) < 1:
+        raise VerificationError(f"workers: expected a positive number, got {workers!r}")
+    if method == "sampled" and int(samples) < 1:
+        raise VerificationError(f"samples: expected a positive number, got {samples!r}")
+    if not hasattr(model, "pin_model"):
+        from ..model import load_model
+
+        model = load_model(model, srdf=False)
+    t0 = time.perf_counter()
+    setup = pair_setup(model, tol)
+    ev = PairEvaluator(model, setup, backend, options)
+    P = len(setup.pairs)
+    d_home = ev.all(setup.home[None, :])[0]
+    if not np.all(np.isfinite(d_home)):
+        raise VerificationError("a distance at the home configuration is not finite: no verdict")
+    home_pin = tuple(float(x) for x in ev.pin(setup.home[None, :])[0])
+    entries: list = [None] * P
+    todo = []
+    for k, p in enumerate(setup.pairs):
+        if p.adjacent:
+            entries[k] = MatrixEntry(p.link1, p.link2, "Adjacent", "disabled", how="joined by a joint or through links without geometry")
+        elif d_home[k] <= 0.0:
+            entries[k] = MatrixEntry(p.link1, p.link2, "Default", "disabled", home_pin, float(d_home[k]), "in contact at home")
+        else:
+            todo.append(k)
+    advance, close = _progress(progress, len(todo), f"{model.name}: {method} collision matrix")
+    try:
+        if method == "certified":
+            def one(k: int) -> MatrixEntry:
+                p = setup.pairs[k]
+                r = prove_pair(lambda Q: ev(k, Q), setup.home, p.joints, setup.lower, setup.upper, p.weight, margin=margin,
+                               contact=tol.verify_contact, min_width=min_width, max_evaluations=max_evaluations,
+                               rng=np.random.default_rng(seed + k))
+                advance()
+                if r.verdict is PairVerdict.NEVER:
+                    return MatrixEntry(p.link1, p.link2, "Never", "disabled", None, r.lower_bound,
+                                       f"proven: {r.boxes} boxes over {len(p.joints)} joints, certified clearance >= "
+                                       f"{r.lower_bound:.4g} m", r.evaluations)
+                if r.verdict is PairVerdict.WITNESSED:
+                    q = tuple(float(x) for x in ev.pin(r.witness[None, :])[0])
+                    return MatrixEntry(p.link1, p.link2, None, "witnessed", q, r.distance, "a configuration within the margin",
+                                       r.evaluations)
+                return MatrixEntry(p.link1, p.link2, None, "undecided", None, float("nan"),
+                                   f"undecided after {r.evaluations} evaluations (boxes down to {r.smallest_width:.2g} rad)",
+                                   r.evaluations)
+
+            if workers and int(workers) > 1:
+                with ThreadPoolExecutor(int(workers)) as ex:
+                    for k, e in zip(todo, ex.map(one, todo)):
+                        entries[k] = e
+            else:
+                for k in todo:
+                    entries[k] = one(k)
+        else:
+            _sampled(ev, setup, todo, entries, margin, int(samples), seed, home_pin, advance)
+    finally:
+        close()
+    return CollisionMatrix(model.name, method, float(margin), tuple(entries), time.perf_counter() - t0,
+                           int(samples) if method == "sampled" else 0, tuple(model.joint_names))
+
+
+def _random(setup, n: int, rng) -> np.ndarray:
+    Q = np.repeat(setup.home[None, :], n, axis=0)
+    Q[:] = setup.lower + (setup.upper - setup.lower) * rng.random((n, len(setup.home)))
+    return Q
+
+
+def _sampled(ev, setup, todo, entries, margin, samples, seed, home_pin, advance) -> None:
+    """MoveIt's rules (module docstring) for the pairs ``todo``."""
+    rng = np.random.default_rng(seed)
+    cols = np.asarray(todo, dtype=np.int64)
+    D = ev.all(_random(setup, ALWAYS_SAMPLES, rng))[:, cols]
+    frac = np.mean(D <= 0.0, axis=0)
+    left = []
+    for i, k in enumerate(todo):
+        p = setup.pairs[k]
+        if frac[i] > ALWAYS_FRACTION:
+            entries[k] = MatrixEntry(p.link1, p.link2, "Always", "disabled", None, float(np.min(D[:, i])),
+                                     f"in contact in {frac[i]:.0%} of {ALWAYS_SAMPLES} random configurations", ALWAYS_SAMPLES)
+            advance()
+        else:
+            left.append(k)
+    cols = np.asarray(left, dtype=np.int64)
+    first = np.full(len(left), -1)
+    first_d = np.full(len(left), np.nan)
+    first_q = np.zeros((len(left), len(setup.home)))
+    done = 0
+    while done < samples and len(cols):
+        n = min(2000, samples - done)
+        Q = _random(setup, n, rng)
+        D = ev.all(Q)[:, cols]
+        if not np.all(np.isfinite(D)):
+            raise VerificationError("a sampled distance is not finite: no verdict")
+        for i in np.flatnonzero(first < 0):
+            hit = np.flatnonzero(D[:, i] <= margin)
+            if len(hit):
+                first[i] = done + hit[0]
+                first_d[i] = D[hit[0], i]
+                first_q[i] = Q[hit[0]]
+        done += n
+    for i, k in enumerate(left):
+        p = setup.pairs[k]
+        if first[i] < 0:
+            entries[k] = MatrixEntry(p.link1, p.link2, "Never", "disabled", None, float("nan"),
+                                     f"not within the margin in {samples} random configurations", samples)
+        else:
+            q = tuple(float(x) for x in ev.pin(first_q[i][None, :])[0])
+            entries[k] = MatrixEntry(p.link1, p.link2, None, "witnessed", q, float(first_d[i]),
+                                     f"within the margin at random configuration {first[i]}", int(first[i]) + 1)
+        advance()
