@@ -1,0 +1,193 @@
+"""Certified collision matrices (armguard.srdfgen, ``armguard srdf`` / ``check-srdf``).
+
+Proven-Never pairs are checked against coal on dense random samples; witnesses are re-evaluated
+on a fresh checker of the whole model; the SRDF written is loaded back to exactly the pairs kept.
+"""
+
+from __future__ import annotations
+
+import json
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import armguard
+from armguard.srdfgen import PairVerdict, collision_matrix, matrix_scene, pair_setup, prove_pair
+
+
+# --------------------------------------------------------------------------- the search on known functions
+def _bump(centre, radius, depth):
+    """A 1-Lipschitz "distance" (per unit of each joint, summed) that dips to ``-depth`` in a ball of ``radius``."""
+    centre = np.asarray(centre, dtype=float)
+
+    def f(Q):
+        return np.abs(Q - centre).sum(axis=1) - radius + 0.0 * depth
+
+    return f
+
+
+@pytest.mark.parametrize("radius", [0.05, 0.004])
+def test_prove_pair_finds_a_thin_colliding_region(radius):
+    """A region far thinner than random sampling resolves (volume ~1e-7 of the box) is still found."""
+    f = _bump([0.3, -1.1, 2.0], radius, 0.0)
+    lo, hi = np.full(3, -3.0), np.full(3, 3.0)
+    r = prove_pair(f, np.zeros(3), [0, 1, 2], lo, hi, np.ones(3), presample=0, min_width=1e-4, max_evaluations=400_000)
+    assert r.verdict is PairVerdict.WITNESSED
+    assert f(r.witness[None])[0] <= 0.0  # the witness really is in the region
+
+
+def test_prove_pair_proves_a_clear_function_and_never_lies():
+    """Clear everywhere by 0.01: proven, and the proven lower bound is below the true minimum (dense grid)."""
+    f = _bump([0.3, -1.1], -0.01, 0.0)  # |q - c|_1 + 0.01 > 0
+    lo, hi = np.full(2, -3.0), np.full(2, 3.0)
+    r = prove_pair(f, np.zeros(2), [0, 1], lo, hi, np.ones(2), presample=0)
+    assert r.verdict is PairVerdict.NEVER
+    g = np.stack(np.meshgrid(np.linspace(-3, 3, 301), np.linspace(-3, 3, 301)), -1).reshape(-1, 2)
+    assert r.lower_bound <= f(g).min() + 1e-12
+
+
+def test_prove_pair_undecided_on_a_tangent_function_and_nan_is_not_clear():
+    f = _bump([0.3, -1.1], 0.0, 0.0)  # touches 0 at one point only: neither provable nor (exactly) witnessed
+    r = prove_pair(lambda Q: f(Q) + 1e-9, np.zeros(2), [0, 1], np.full(2, -3.0), np.full(2, 3.0), np.ones(2),
+                   presample=0, max_evaluations=20_000)
+    assert r.verdict is PairVerdict.UNDECIDED
+    r = prove_pair(lambda Q: np.full(len(Q), np.nan), np.zeros(1), [0], np.full(1, -1.0), np.full(1, 1.0), np.ones(1),
+                   presample=0, max_evaluations=2_000)
+    assert r.verdict is PairVerdict.UNDECIDED
+
+
+# --------------------------------------------------------------------------- a robot
+@pytest.fixture(scope="module")
+def puma():
+    model = armguard.load_model("puma560", srdf=False)
+    return model, collision_matrix(model, workers=2, max_evaluations=30_000)
+
+
+def _coal_pair_distance(model, links, Q_pin):
+    """Coal's distance of link pair ``links`` at ``Q_pin`` (M, nq): a checker of only that pair."""
+    from armguard.cspace._clearance import checker_over
+
+    scene = matrix_scene(model.scene)
+    r = next(iter(scene.robots))
+    owners = {f"{r}/{ln}" for ln in links}
+    for cp in scene.allowed_pairs():
+        if {cp.a, cp.b} != owners:
+            scene.disable_pair(cp.a, cp.b)
+    chk = checker_over(model, scene, "coal", need_distances=True)
+    return chk.min_distance_many(Q_pin)
+
+
+def test_matrix_classifies_every_pair_once(puma):
+    model, cm = puma
+    setup = pair_setup(model)
+    assert len(cm.entries) == len(setup.pairs)
+    assert {frozenset((e.link1, e.link2)) for e in cm.entries} == {frozenset((p.link1, p.link2)) for p in setup.pairs}
+    for e, p in zip(cm.entries, setup.pairs):
+        assert (e.reason == "Adjacent") == p.adjacent
+    c = cm.counts()
+    assert c["Never"] >= 1 and c["witnessed"] >= 1
+
+
+def test_proven_never_pairs_have_no_contact_on_dense_samples_with_coal(puma):
+    """10^4 random configurations, plus a dense grid over the pair's joints, find no contact (coal)."""
+    model, cm = puma
+    setup = pair_setup(model)
+    rng = np.random.default_rng(1)
+    never = [(e, p) for e, p in zip(cm.entries, setup.pairs) if e.reason == "Never"]
+    assert never
+    for e, p in never:
+        Q = setup.lower + (setup.upper - setup.lower) * rng.random((10_000, len(setup.home)))
+        grid = np.stack(np.meshgrid(*[np.linspace(setup.lower[j], setup.upper[j], 12) for j in p.joints]), -1)
+        G = np.repeat(setup.home[None], grid.size // len(p.joints), axis=0)
+        G[:, list(p.joints)] = grid.reshape(-1, len(p.joints))
+        d = _coal_pair_distance(model, (e.link1, e.link2), model.pin_q(np.concatenate([Q, G])))
+        assert np.all(np.isfinite(d))
+        assert d.min() > 0.0, (e.link1, e.link2, d.min())
+
+
+def test_witnessed_pairs_collide_at_their_witness(puma):
+    model, cm = puma
+    for e in cm.entries:
+        if e.status == "witnessed":
+            d = _coal_pair_distance(model, (e.link1, e.link2), np.asarray([e.q]))
+            assert d[0] <= 1e-6, (e.link1, e.link2, d[0])
+
+
+def test_sampled_method_disables_a_superset_of_the_proven_pairs(puma):
+    """MoveIt's rules: every proven-Never pair is also sampled Never (a collision there would be a bug)."""
+    model, cm = puma
+    sm = collision_matrix(model, method="sampled", samples=2000)
+    proven = {frozenset((e.link1, e.link2)) for e in cm.entries if e.reason == "Never"}
+    sampled = {frozenset((e.link1, e.link2)) for e in sm.entries if e.reason == "Never"}
+    assert proven <= sampled
+    for e in sm.entries:
+        if e.status == "witnessed":
+            assert e.distance <= 0.0
+
+
+def test_bad_arguments_are_refused(puma):
+    model, _ = puma
+    with pytest.raises(armguard.ArmguardError, match="margin"):
+        collision_matrix(model, margin=float("nan"))
+    with pytest.raises(armguard.ArmguardError, match="method"):
+        collision_matrix(model, method="guess")
+
+
+# --------------------------------------------------------------------------- SRDF round trip and lint (a URDF)
+@pytest.fixture(scope="module")
+def ur5():
+    from armguard.model._public import public_robot_files
+
+    urdf, shipped = public_robot_files("ur5")
+    return urdf, shipped
+
+
+def test_srdf_command_writes_an_srdf_that_loads_back_to_the_pairs_kept(ur5, tmp_path):
+    from armguard.cli import main
+
+    urdf, _ = ur5
+    out = tmp_path / "ur5.srdf"
+    res = CliRunner().invoke(main, ["srdf", str(urdf), "--out", str(out), "--method", "sampled", "--samples", "300"])
+    assert res.exit_code == 0, res.output
+    root = ET.parse(out).getroot()
+    dis = [(el.get("link1"), el.get("link2"), el.get("reason")) for el in root.findall("disable_collisions")]
+    assert dis and all(r in ("Adjacent", "Default", "Never", "Always") for _, _, r in dis)
+    full = armguard.load_model(str(urdf), srdf=False)
+    loaded = armguard.load_model(str(urdf), srdf=str(out))
+    setup = pair_setup(full)
+    disabled = {frozenset((a, b)) for a, b, _ in dis}
+    expected = {frozenset((p.owner1, p.owner2)) for p in setup.pairs if frozenset((p.link1, p.link2)) not in disabled}
+    got = {frozenset((a, b)) for a, b, c in zip(loaded.pairs.owner_a, loaded.pairs.owner_b, loaded.pairs.category)
+           if c == "arm_arm" or c == "arm-arm"}
+    assert got == expected
+    # Pinocchio reads it too
+    import pinocchio as pin
+
+    geom = full.collision_model.copy()
+    geom.addAllCollisionPairs()
+    n_all = len(geom.collisionPairs)
+    pin.removeCollisionPairs(full.pin_model, geom, str(out))
+    assert len(geom.collisionPairs) < n_all
+
+
+def test_check_srdf_reports_a_disabled_pair_that_collides(tmp_path):
+    """puma560's base and link2 collide (witnessed): an SRDF that disables them is flagged, with a q that collides."""
+    from armguard.cli import main
+
+    srdf = tmp_path / "bad.srdf"
+    srdf.write_text('<robot name="puma560"><disable_collisions link1="base" link2="link2" reason="Never"/>'
+                    '<disable_collisions link1="link1" link2="link3" reason="Never"/></robot>')
+    res = CliRunner().invoke(main, ["check-srdf", "puma560", str(srdf), "--json", "--max-evaluations", "30000"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.output)
+    pairs = {frozenset((d["link1"], d["link2"])): d for d in out["can_collide"]}
+    assert set(pairs) == {frozenset(("base", "link2"))}
+    model = armguard.load_model("puma560", srdf=False)
+    q = np.asarray([pairs[frozenset(("base", "link2"))]["q"]])
+    assert q.shape == (1, model.nq)
+    assert _coal_pair_distance(model, ("base", "link2"), q)[0] <= 1e-6
+    assert {frozenset((d["link1"], d["link2"])) for d in out["proven_disabled"]} == {frozenset(("link1", "link3"))}
+    strict = CliRunner().invoke(main, ["check-srdf", "puma560", str(srdf), "--json", "--strict", "--max-evaluations", "30000"])
+    assert strict.exit_code == 1
