@@ -12,7 +12,8 @@ README = ROOT / "README.md"
 GUIDES = (ROOT / "docs" / "detector.md", ROOT / "docs" / "uncertainty.md", ROOT / "docs" / "terrain.md",
           ROOT / "docs" / "models.md", ROOT / "docs" / "clip.md", ROOT / "docs" / "trajectory-format.md",
           ROOT / "docs" / "program.md",
-          ROOT / "docs" / "avoidance.md")
+          ROOT / "docs" / "avoidance.md",
+          ROOT / "docs" / "srdf.md")
 BLOCKS = re.findall(r"```python\n(.*?)```", README.read_text(encoding="utf-8"), re.S)
 GUIDE_BLOCKS = [(g, code) for g in GUIDES for code in re.findall(r"```python\n(.*?)```", g.read_text(encoding="utf-8"), re.S)]
 

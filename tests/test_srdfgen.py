@@ -187,6 +187,7 @@ def test_check_srdf_reports_a_disabled_pair_that_collides(tmp_path):
     model = armguard.load_model("puma560", srdf=False)
     q = np.asarray([pairs[frozenset(("base", "link2"))]["q"]])
     assert q.shape == (1, model.nq)
+    assert pairs[frozenset(("base", "link2"))]["coal_distance"] <= 1e-6
     assert _coal_pair_distance(model, ("base", "link2"), q)[0] <= 1e-6
     assert {frozenset((d["link1"], d["link2"])) for d in out["proven_disabled"]} == {frozenset(("link1", "link3"))}
     strict = CliRunner().invoke(main, ["check-srdf", "puma560", str(srdf), "--json", "--strict", "--max-evaluations", "30000"])

@@ -89,7 +89,8 @@ def check_srdf_cmd(robot, srdf, margin, workers, max_evaluations, evaluator, str
                    f"{len(lint.never_checked)} checked pairs proven never, {len(lint.undecided)} undecided "
                    f"({lint.elapsed_s:.1f} s; q over {', '.join(lint.joint_names)})")
         for d in lint.can_collide:
-            click.echo(f"  disabled ({d['reason']}) {d['link1']} - {d['link2']}: distance {d['distance']:.4f} m at q = {_q(d['q'])}")
+            coal = "" if d.get("coal_distance") is None else f" (coal: {d['coal_distance']:.4f} m)"
+            click.echo(f"  disabled ({d['reason']}) {d['link1']} - {d['link2']}: distance {d['distance']:.4f} m{coal} at q = {_q(d['q'])}")
         for d in lint.never_checked:
             click.echo(f"  checked {d['link1']} - {d['link2']}: proven never (clearance >= {d['clearance_lower_bound']:.4f} m)")
         for d in lint.undecided:

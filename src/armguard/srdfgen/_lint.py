@@ -29,7 +29,8 @@ class SrdfLint:
 
     ``can_collide``: dicts ``{link1, link2, reason, q, distance}`` -- a pair the SRDF disables
     (``reason`` as it says) that comes within the margin at ``q`` (``pin_model`` order), signed
-    ``distance`` m there (``< 0``: the penetration depth).  ``never_checked``: ``{link1, link2}``
+    ``distance`` m there (``< 0``: the penetration depth; ``coal_distance`` the reference's, where the evaluator is
+    another backend).  ``never_checked``: ``{link1, link2}``
     pairs the SRDF checks that are proven never within the margin.  ``undecided``: pairs neither
     proven nor witnessed (``disabled`` says which side of the SRDF they are on).  ``adjacent``:
     disabled pairs joined by a joint (not searched); ``skipped``: disabled pairs naming a link
@@ -121,6 +122,8 @@ def check_srdf(model, srdf, *, margin: float = 0.0, backend: str | None = "analy
                 never.append({**base, "clearance_lower_bound": float(r.lower_bound)})
             elif r.verdict is PairVerdict.UNDECIDED:
                 und.append({**base, "disabled": False})
+    _confirm(model, setup, ev, can, [k for k, r in zip(todo, results) if r.verdict is PairVerdict.WITNESSED and k in disabled],
+             [r for k, r in zip(todo, results) if r.verdict is PairVerdict.WITNESSED and k in disabled], options)
     return SrdfLint(model.name, str(srdf), float(margin), tuple(model.joint_names), tuple(can), tuple(never), tuple(und),
                     tuple(proven), tuple(adjacent), tuple(skipped), time.perf_counter() - t0)
 
@@ -129,3 +132,23 @@ def _file_name(p) -> str:
     from pathlib import Path
 
     return Path(str(p)).name
+
+
+def _confirm(model, setup, ev, can: list, ks: list, proofs: list, options) -> None:
+    """Add ``coal_distance`` to each witness: the reference's distance at ``q`` (None where coal is not installed
+    or is the evaluator already)."""
+    from .._errors import ArmguardError
+
+    if not can:
+        return
+    ref = None
+    if ev.backend != "coal":
+        try:
+            ref = PairEvaluator(model, setup, "coal")
+        except ArmguardError:
+            ref = None
+    for d, k, r in zip(can, ks, proofs):
+        if ref is None:
+            d["coal_distance"] = d["distance"] if ev.backend == "coal" else None
+        else:
+            d["coal_distance"] = float(ref(k, r.witness[None, :])[0])
