@@ -192,3 +192,15 @@ def test_check_srdf_reports_a_disabled_pair_that_collides(tmp_path):
     assert {frozenset((d["link1"], d["link2"])) for d in out["proven_disabled"]} == {frozenset(("link1", "link3"))}
     strict = CliRunner().invoke(main, ["check-srdf", "puma560", str(srdf), "--json", "--strict", "--max-evaluations", "30000"])
     assert strict.exit_code == 1
+
+
+def test_srdf_to_a_missing_folder_is_an_output_error(puma, tmp_path):
+    from armguard._errors import OutputError
+
+    _, cm = puma
+    with pytest.raises(OutputError, match="cannot write"):
+        cm.write_srdf(tmp_path / "no" / "such" / "x.srdf")
+    out = tmp_path / "puma.srdf"
+    cm.write_srdf(out)
+    root = ET.parse(out).getroot()
+    assert len(root.findall("disable_collisions")) == len(cm.disabled)

@@ -34,10 +34,13 @@ def write_srdf(matrix, path) -> None:
     """Write :func:`srdf_text` to ``path`` whole (a temporary file beside it, then a rename)."""
     path = Path(path)
     text = srdf_text(matrix)
+    tmp = None
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent if str(path.parent) else ".")
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write(text)
         os.replace(tmp, path)
     except OSError as exc:
+        if tmp is not None and os.path.exists(tmp):
+            os.unlink(tmp)
         raise OutputError(f"{path}: cannot write the SRDF ({exc.strerror or exc})") from None
