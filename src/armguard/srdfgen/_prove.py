@@ -14,8 +14,8 @@ search stops); any other box is split in two along the joint of largest ``h_j we
 that would have to be split below ``min_width`` rad, or a search that runs out of
 ``max_evaluations``, leaves the pair *undecided*.  A NaN distance is never read as clear.
 
-Before the search, ``presample`` random configurations look for an easy witness (a pair that
-collides somewhere usually does so in a large region).
+Before the search, ``home`` and ``presample`` random configurations look for an easy witness (a
+pair that collides somewhere usually does so in a large region).
 """
 
 from __future__ import annotations
@@ -100,8 +100,8 @@ def prove_pair(evaluate, home: np.ndarray, joints, lower: np.ndarray, upper: np.
         ok = np.isfinite(d[0]) and d[0] > margin + contact
         return PairProof(PairVerdict.NEVER if ok else PairVerdict.UNDECIDED, None, float(d[0]), evaluations, int(ok), 0.0,
                          float(d[0]))
-    if presample:
-        Qs = lo0 + rng.random((presample, len(joints))) * (hi0 - lo0)
+    if presample:  # home, then random configurations
+        Qs = np.concatenate([home[joints][None, :], lo0 + rng.random((presample, len(joints))) * (hi0 - lo0)])
         d = run(Qs)
         hit = np.flatnonzero(np.isfinite(d) & (d <= margin))
         if len(hit):
