@@ -56,8 +56,8 @@ def face_edges(faces) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if not len(faces):
         z = np.zeros(0, dtype=np.int64)
         return z, z, z
-    lens = np.array(list(map(len, faces)), dtype=np.int64)
-    a = np.concatenate([np.asarray(f, dtype=np.int64) for f in faces])
+    lens = np.fromiter(map(len, faces), dtype=np.int64, count=len(faces))
+    a = np.concatenate(faces, dtype=np.int64, casting="unsafe")  # as np.asarray(f, dtype=np.int64) of each
     first = np.cumsum(lens) - lens
     nxt = np.arange(1, len(a) + 1, dtype=np.int64)
     nxt[first + lens - 1] = first  # each face's last vertex closes the loop to its first

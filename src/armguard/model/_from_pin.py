@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from .._errors import ArmguardError, SceneFileError
-from ._shapes import shape_from_coal
+from ._shapes import shape_from_coal, shape_of_polytope
 
 __all__ = ["scene_parts_from_pin", "ScenePart"]
 
@@ -217,7 +217,13 @@ def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=Non
     body_shapes: dict[str, list] = {}
     link_shapes: dict[str, dict[str, list]] = {r.name: {} for r, _, _ in part.robots}
     pay = {p[0]: p for p in part.payloads}
-    for go in geom_model.geometryObjects:
+    hulls = getattr(info, "hulls", {})
+
+    def shape_of(go_index, go, X):
+        mp = hulls.get(go_index)  # a mesh's hull, merged once by load_pinocchio: moved, not rebuilt
+        return (shape_of_polytope(mp, X), "") if mp is not None else shape_from_coal(go.geometry, X)
+
+    for gi, go in enumerate(geom_model.geometryObjects):
         fr = frames[go.parentFrame]
         X_FG = _inv(_se3(fr.placement)) @ _se3(go.placement)
         owner = part.link_owner.get(fr.name)
@@ -227,14 +233,14 @@ def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=Non
                       if g2.parentFrame == go.parentFrame)
         try:
             if fr.name in pay:
-                shape, note = shape_from_coal(go.geometry, X_FG)
+                shape, note = shape_of(gi, go, X_FG)
                 lst = pay[fr.name][3]
             elif "/" in owner:
-                shape, note = shape_from_coal(go.geometry, X_FG)
+                shape, note = shape_of(gi, go, X_FG)
                 r, ln = owner.split("/", 1)
                 lst = link_shapes[r].setdefault(ln, [])
             else:
-                shape, note = shape_from_coal(go.geometry, _se3(fr.placement) @ X_FG)
+                shape, note = shape_of(gi, go, _se3(fr.placement) @ X_FG)
                 lst = body_shapes.setdefault(owner, [])
         except ArmguardError as exc:
             raise SceneFileError(f, f"link[{fr.name}].collision[{k_local}]", str(exc)) from None

@@ -17,6 +17,10 @@ vertices and returns the hull, never allocating more than a few (N, 3) arrays:
 5. otherwise the 3-D hull (Qhull, Barber, Dobkin & Huhdanpaa 1996, "The Quickhull algorithm
    for convex hulls", ACM TOMS 22(4)) of the points gives vertices and triangles.
 
+:func:`mesh_polytope` goes one step further for a URDF's meshes: the 3-D hull's triangles are
+merged into planar faces (as :class:`~armguard.geometry.ConvexPolyhedron` merges them), so the
+one Qhull run gives both coal's ``Convex`` and armguard's polyhedron, the same vertices for both.
+
 Qhull's own failures come back as :class:`~armguard.GeometryError`, never as ``QhullError``.
 """
 
@@ -29,7 +33,7 @@ import numpy as np
 from .._errors import GeometryError
 from .._tolerance import DEFAULT_TOLERANCES
 
-__all__ = ["MeshHull", "mesh_hull", "unique_rows"]
+__all__ = ["MeshHull", "MeshPolytope", "mesh_hull", "mesh_polytope", "unique_rows"]
 
 
 @dataclass(frozen=True)
@@ -86,6 +90,57 @@ def mesh_hull(points, *, solid: bool = True) -> MeshHull:
 
     ``solid=False``: points that are not flat come back as they are (the distinct ones, no
     triangles), for a caller that builds the 3-D hull itself (``ConvexPolyhedron``)."""
+    hull, _ = _mesh_qhull(points, solid)
+    return hull
+
+
+@dataclass(frozen=True)
+class MeshPolytope:
+    """A mesh's hull as the shape armguard and coal both use, in the mesh's frame G.
+
+    ``vertices (V, 3) float64, m``; ``flat``: a polygon (``vertices`` counter-clockwise around
+    it, no faces); else a polyhedron with ``faces`` (tuple of ``int64`` loops into ``vertices``,
+    counter-clockwise seen from outside), ``planes (F, 4)`` (``[n, d]``, inside ``n . x <= d``)
+    and ``triangles (T, 3) int64`` (Qhull's triangulation, counter-clockwise about the outward
+    normals), as :class:`~armguard.geometry.ConvexPolyhedron` keeps them."""
+
+    vertices: np.ndarray
+    faces: tuple
+    planes: np.ndarray
+    triangles: np.ndarray
+    flat: bool
+
+
+def mesh_polytope(points) -> MeshPolytope:
+    """The hull of ``points (N, 3)`` m with its faces merged, from one Qhull run on the points:
+    :func:`mesh_hull`'s hull, merged into planar faces as ``ConvexPolyhedron`` merges them
+    (:func:`armguard.geometry._hull_faces.hull_faces`); the same errors as :func:`mesh_hull`, and
+    a solid with no volume is an error as for ``ConvexPolyhedron``."""
+    from ..geometry._hull_faces import hull_faces
+
+    hull, qh = _mesh_qhull(points, True)
+    if hull.flat:
+        return _readonly_polytope(hull.vertices, (), np.zeros((0, 4)), np.zeros((0, 3), dtype=np.int64), True)
+    h, p, A, c = qh
+    scale = max(1.0, float(np.max(np.abs(A))))
+    if h.volume <= DEFAULT_TOLERANCES.coplanar_volume * scale**3:
+        raise GeometryError("the vertices are coplanar (hull volume 0)")
+    used, faces, planes, tri = hull_faces(A, c, h.simplices, h.equations, h.neighbors, h.vertices,
+                                          DEFAULT_TOLERANCES.planarity)
+    return _readonly_polytope(p[used], tuple(faces), planes, tri, False)
+
+
+def _readonly_polytope(vertices, faces, planes, tri, flat: bool) -> MeshPolytope:
+    arrays = [np.ascontiguousarray(vertices, dtype=np.float64), *[np.ascontiguousarray(f, dtype=np.int64) for f in faces],
+              np.ascontiguousarray(planes, dtype=np.float64), np.ascontiguousarray(tri, dtype=np.int64)]
+    for a in arrays:
+        a.flags.writeable = False
+    return MeshPolytope(arrays[0], tuple(arrays[1:-2]), arrays[-2], arrays[-1], flat)
+
+
+def _mesh_qhull(points, solid: bool):
+    """``(MeshHull, (qhull, p, A, c) or None)``: :func:`mesh_hull`, and when it built a 3-D hull,
+    Qhull's hull of the distinct points ``p``, given to it as ``A = p - c``."""
     tol = DEFAULT_TOLERANCES
     p = np.asarray(points, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != 3:
@@ -108,14 +163,14 @@ def mesh_hull(points, *, solid: bool = True) -> MeshHull:
     flat_tol = tol.planarity * max(1.0, ext)
     if float(np.max(np.abs(A @ vt[2]))) > flat_tol:
         if not solid:
-            return MeshHull(p, np.zeros((0, 3), dtype=np.int64), False)
+            return MeshHull(p, np.zeros((0, 3), dtype=np.int64), False), None
         h = _qhull(A, "3-D")
         idx = np.asarray(h.vertices, dtype=np.int64)
         remap = np.full(len(p), -1, dtype=np.int64)
         remap[idx] = np.arange(len(idx))
-        return MeshHull(p[idx], remap[np.asarray(h.simplices, dtype=np.int64)], False)
+        return MeshHull(p[idx], remap[np.asarray(h.simplices, dtype=np.int64)], False), (h, p, A, c)
     along = A @ vt[0]
     if float(np.max(np.linalg.norm(A - along[:, None] * vt[0], axis=1))) <= flat_tol:
         raise GeometryError(f"the vertices lie on a line ({ext:.3g} m long): no area and no volume")
     h = _qhull(A @ vt[:2].T, "2-D")
-    return MeshHull(p[np.asarray(h.vertices, dtype=np.int64)], np.zeros((0, 3), dtype=np.int64), True)
+    return MeshHull(p[np.asarray(h.vertices, dtype=np.int64)], np.zeros((0, 3), dtype=np.int64), True), None

@@ -13,9 +13,10 @@ import numpy as np
 
 from .._errors import SceneError
 from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
-from ._hull import mesh_hull
+from ._hull import MeshPolytope, mesh_hull
 
-__all__ = ["shape_from_coal", "coal_from_shape", "convex_hull", "CYLINDER_PRISM_SIDES"]
+__all__ = ["shape_from_coal", "coal_from_shape", "convex_hull", "convex_of_polytope", "shape_of_polytope",
+           "CYLINDER_PRISM_SIDES"]
 
 CYLINDER_PRISM_SIDES = 16
 """Sides of the prism that circumscribes a cylinder where a caller wants a polytope for it
@@ -81,20 +82,40 @@ def coal_from_shape(shape):
 def convex_hull(pts: np.ndarray):
     """A coal.Convex of the points' hull (:func:`~armguard.model._hull.mesh_hull`: O(N log N)
     time, O(N) memory); a flat polygon becomes two triangle fans, both sides."""
+    hull = mesh_hull(pts)
+    return _coal_convex(hull.vertices, hull.triangles, hull.flat)
+
+
+def convex_of_polytope(mp: MeshPolytope):
+    """The coal.Convex of a mesh's hull (:func:`~armguard.model._hull.mesh_polytope`), in its frame:
+    the same vertices and triangles as the armguard shape of :func:`shape_of_polytope`."""
+    return _coal_convex(mp.vertices, mp.triangles, mp.flat)
+
+
+def shape_of_polytope(mp: MeshPolytope, X_FG: np.ndarray):
+    """The armguard shape (in F) of a mesh's hull given in its frame G at ``X_FG (4, 4)``: a
+    Polygon, or a ConvexPolyhedron of the hull's merged faces moved, not built again."""
+    R, t = X_FG[:3, :3], X_FG[:3, 3]
+    v = mp.vertices @ R.T + t
+    if mp.flat:
+        return Polygon(v)
+    n = mp.planes[:, :3] @ R.T
+    d = mp.planes[:, 3] + n @ t
+    return ConvexPolyhedron._from_parts(v, mp.faces, np.hstack([n, d[:, None]]), mp.triangles)
+
+
+def _coal_convex(v: np.ndarray, tris: np.ndarray, flat: bool):
     import coal
 
-    hull = mesh_hull(pts)
-    v = hull.vertices
-    if hull.flat:
+    if flat:
         k = np.arange(1, len(v) - 1, dtype=np.int64)
         zero = np.zeros_like(k)
         tris = np.concatenate([np.stack([zero, k, k + 1], axis=1), np.stack([zero, k + 1, k], axis=1)])
-    else:
-        tris = hull.triangles
     m = coal.BVHModelOBBRSS()
     m.beginModel(len(tris), len(v))
-    m.addVertices(np.ascontiguousarray(v))
+    m.addVertices(np.ascontiguousarray(v, dtype=np.float64))
     m.addTriangles(np.ascontiguousarray(tris, dtype=np.int64))
-    m.endModel()
+    # no endModel(): it builds the model's bounding-volume tree (80% of this function's time for a
+    # 5 000-vertex hull), which nothing uses; the Convex is a copy of the vertices and triangles
     m.buildConvexRepresentation(False)
     return m.convex

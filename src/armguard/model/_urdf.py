@@ -26,7 +26,8 @@ from xml.parsers import expat
 import numpy as np
 
 from .._errors import ArmguardError, GeometryError, SceneFileError, list_problems
-from ._shapes import convex_hull
+from ._hull import mesh_polytope
+from ._shapes import convex_of_polytope
 from ._urdf_check import parse_with_lines, urdf_problems
 
 __all__ = ["UrdfInfo", "load_pinocchio", "resolve_mesh"]
@@ -45,6 +46,7 @@ class UrdfInfo:
     mesh_files: tuple  # resolved mesh paths
     meshes: dict = field(default_factory=dict)  # (link, k) -> (resolved path, (3,) scale) of collision[k] of link when a mesh
     collision_xml: bytes = b""  # the URDF with every collision <mesh> as a placeholder <box> (see load_pinocchio)
+    hulls: dict = field(default_factory=dict)  # geometry object index -> MeshPolytope of its mesh (load_pinocchio)
 
 
 def resolve_mesh(filename: str, urdf_dir: Path, package_dirs) -> Path | None:
@@ -153,24 +155,29 @@ def load_pinocchio(path, package_dirs=()):
     except (RuntimeError, ValueError) as exc:
         raise SceneFileError(f, "", f"Pinocchio could not build the collision model: {exc}") from None
     per_link: dict = {}
-    for go in geom.geometryObjects:
-        per_link.setdefault(pin_model.frames[go.parentFrame].name, []).append(go)
+    for i, go in enumerate(geom.geometryObjects):
+        per_link.setdefault(pin_model.frames[go.parentFrame].name, []).append((i, go))
     for ln, entries in info.collisions.items():
         got = len(per_link.get(ln, []))
         if got != len(entries):
             raise SceneFileError(f, f"link[{ln}]", f"{len(entries)} <collision> elements but {got} reached "
                                  "Pinocchio's GeometryModel (an element it cannot read was dropped)")
+    hulls: dict = {}  # (mesh file, scale) -> its hull: a file a URDF uses twice is read and hulled once
     for (ln, k), (mesh_path, scale) in info.meshes.items():
-        go = per_link[ln][k]
+        i, go = per_link[ln][k]
         go.meshPath, go.meshScale = str(mesh_path), np.asarray(scale, dtype=np.float64)
         # every mesh becomes the hull of its file's vertices in double precision (Pinocchio reads
         # meshes in single precision: 0.7 m comes back as 0.69999999 m), rebuilt from scipy's
         # hull triangles (coal's own buildConvexRepresentation of the UR5's meshes gave GJK
-        # answers up to 0.38 m too far)
+        # answers up to 0.38 m too far); armguard's shape is the same hull, its faces merged once
+        key = (str(mesh_path), tuple(float(x) for x in np.asarray(scale, dtype=np.float64).reshape(-1)))
         try:
-            go.geometry = convex_hull(_mesh_vertices(mesh_path, scale))
+            if key not in hulls:
+                hulls[key] = mesh_polytope(_mesh_vertices(mesh_path, scale))
+            go.geometry = convex_of_polytope(hulls[key])
         except ArmguardError as exc:
             raise SceneFileError(f, f"link[{ln}].collision[{k}]", f"mesh {mesh_path}: {exc}") from None
+        info.hulls[i] = hulls[key]
     return pin_model, geom, info
 
 
