@@ -65,6 +65,12 @@ def _print_srdf(con, scene, given: str) -> None:
     elif given.lower().endswith(".urdf"):
         con.print("SRDF: none found (looked beside the URDF, in ../srdf/ and under the robot's name; "
                   "every pair but adjacent links is checked)", markup=False, highlight=False, soft_wrap=True)
+    hc = getattr(model, "hull_cache", None)
+    if hc:
+        n_hit, n_new = hc.get("hits", 0), hc.get("computed", 0)
+        where = (f"hull cache {hc['folder']}: {n_hit} read, {n_new} computed and stored" if hc.get("folder")
+                 else f"{n_new} computed (hull cache off: ARMGUARD_HULL_CACHE=0)")
+        con.print(f"Mesh hulls: {where}", markup=False, highlight=False, soft_wrap=True)
 
 
 @main.command("info")

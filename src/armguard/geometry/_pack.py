@@ -46,7 +46,11 @@ def unique_directions(d: np.ndarray, parallel: float) -> np.ndarray:
     u = rows[nz] / n[nz, None]
     sign = np.where(u[np.arange(len(u)), np.argmax(np.abs(u), axis=1)] < 0.0, -1.0, 1.0)
     key = np.round(u * sign[:, None] / (0.5 * parallel)).astype(np.int64)
-    _, first = np.unique(key, axis=0, return_index=True)
+    # the first row of each distinct key (np.unique(key, axis=0, return_index=True), by a stable
+    # lexsort of the three columns instead of a sort of structured rows)
+    o = np.lexsort((key[:, 2], key[:, 1], key[:, 0]))
+    ks = key[o]
+    first = o[np.r_[True, np.any(ks[1:] != ks[:-1], axis=1)]]
     return np.ascontiguousarray(u[np.sort(first)])
 
 

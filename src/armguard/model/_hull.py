@@ -131,11 +131,12 @@ def mesh_polytope(points) -> MeshPolytope:
 
 
 def _readonly_polytope(vertices, faces, planes, tri, flat: bool) -> MeshPolytope:
-    arrays = [np.ascontiguousarray(vertices, dtype=np.float64), *[np.ascontiguousarray(f, dtype=np.int64) for f in faces],
-              np.ascontiguousarray(planes, dtype=np.float64), np.ascontiguousarray(tri, dtype=np.int64)]
+    faces = tuple(f if isinstance(f, np.ndarray) and f.dtype == np.int64 else np.asarray(f, dtype=np.int64) for f in faces)
+    arrays = [np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(planes, dtype=np.float64),
+              np.ascontiguousarray(tri, dtype=np.int64), *faces]
     for a in arrays:
         a.flags.writeable = False
-    return MeshPolytope(arrays[0], tuple(arrays[1:-2]), arrays[-2], arrays[-1], flat)
+    return MeshPolytope(arrays[0], faces, arrays[1], arrays[2], flat)
 
 
 def _mesh_qhull(points, solid: bool):

@@ -140,6 +140,7 @@ def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None):
 
     pin_model, geom, info = load_pinocchio(urdf, [models_dir(), *package_dirs])
     parts = scene_parts_from_pin(pin_model, geom, info, srdf_obj, accelerations=accelerations)
+    parts.hull_cache = dict(info.hull_cache)
     scene = Scene(name or info.robot_name)
     try:
         for bname, shapes, cat in parts.bodies:
@@ -193,7 +194,8 @@ def model_from_urdf(path, *, srdf=None, package_dirs=()) -> Model:
     srdf_obj = _srdf_for(path, srdf)
     scene, pin_model, geom, parts = _build(path, srdf_obj, package_dirs, {})
     files = [path, *parts_files(parts, srdf_obj)]
-    return Model(scene.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), geometry_names=parts.geometry_names,
+    return Model(scene.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), hull_cache=parts.hull_cache,
+                 geometry_names=parts.geometry_names,
                  notes=parts.notes, files=files, srdf=srdf_obj)
 
 
@@ -249,7 +251,8 @@ def model_from_scenefile(sf, file: str, base: Path) -> Model:
     geometry_names = dict(parts.geometry_names)
     _add_extra_bodies(scene, geom, geometry_names, {b for b, _, _ in parts.bodies})
     files = [Path(file), urdf, *parts_files(parts, srdf_obj), *ctx.read]
-    return Model(sf.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), geometry_names=geometry_names,
+    return Model(sf.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), hull_cache=parts.hull_cache,
+                 geometry_names=geometry_names,
                  notes=parts.notes, files=files, srdf=srdf_obj)
 
 

@@ -75,10 +75,13 @@ class Model:
                                        mesh file its geometry was read from); ``sha256`` their hashes
     srdf : Srdf or None                the SRDF it was loaded with: ``srdf.file``, ``srdf.found`` (how it
                                        was found, ``docs/models.md``) and ``srdf.warnings``
+    hull_cache : Mapping or None       where the mesh hulls came from: ``folder`` (the hull cache,
+                                       None when off), ``hits`` (read from it), ``computed``; None
+                                       when the model has no mesh
     """
 
     def __init__(self, name, pin_model, collision_model, scene, *, q_index, geometry_names, notes, files,
-                 circular=(), srdf=None) -> None:
+                 circular=(), srdf=None, hull_cache=None) -> None:
         self.name = str(name)
         self.pin_model = pin_model
         self.collision_model = collision_model
@@ -91,7 +94,10 @@ class Model:
         self.notes = types.MappingProxyType(dict(notes))
         self.files = _with_meshes(files, collision_model)
         self.srdf = srdf
-        self.sha256 = types.MappingProxyType({str(p): file_sha256(p) for p in self.files})
+        self.hull_cache = (types.MappingProxyType({k: v for k, v in hull_cache.items() if k != "sha256"})
+                           if hull_cache else None)
+        known = dict(hull_cache.get("sha256", {})) if hull_cache else {}  # mesh files the hull cache hashed
+        self.sha256 = types.MappingProxyType({str(p): known.get(str(p)) or file_sha256(p) for p in self.files})
         self._pairs = None
         self._revision = None
         self._geom_index = {go.name: i for i, go in enumerate(collision_model.geometryObjects)}

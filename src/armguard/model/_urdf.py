@@ -12,8 +12,9 @@ never a model with fewer pairs.
 
 Every collision mesh is replaced by its convex hull (``coal.Convex``; distances on raw BVH
 meshes are far slower, and the analytic backend sees the same hull), computed by
-:func:`._hull.mesh_hull` from the file's vertices in O(N log N) time and O(N) memory; a mesh
-with a NaN vertex, on a line or on a point is an error naming the link and the mesh file.
+:func:`._hull.mesh_polytope` from the file's vertices in O(N log N) time and O(N) memory (or
+read from the hull cache, :mod:`._hull_cache`); a mesh with a NaN vertex, on a line or on a
+point is an error naming the link and the mesh file.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ import numpy as np
 
 from .._errors import ArmguardError, GeometryError, SceneFileError, list_problems
 from ._hull import mesh_polytope
+from ._hull_cache import cached_polytope
 from ._shapes import convex_of_polytope
 from ._urdf_check import parse_with_lines, urdf_problems
 
@@ -47,6 +49,7 @@ class UrdfInfo:
     meshes: dict = field(default_factory=dict)  # (link, k) -> (resolved path, (3,) scale) of collision[k] of link when a mesh
     collision_xml: bytes = b""  # the URDF with every collision <mesh> as a placeholder <box> (see load_pinocchio)
     hulls: dict = field(default_factory=dict)  # geometry object index -> MeshPolytope of its mesh (load_pinocchio)
+    hull_cache: dict = field(default_factory=dict)  # "folder", "hits", "computed" (._hull_cache.cached_polytope)
 
 
 def resolve_mesh(filename: str, urdf_dir: Path, package_dirs) -> Path | None:
@@ -173,7 +176,8 @@ def load_pinocchio(path, package_dirs=()):
         key = (str(mesh_path), tuple(float(x) for x in np.asarray(scale, dtype=np.float64).reshape(-1)))
         try:
             if key not in hulls:
-                hulls[key] = mesh_polytope(_mesh_vertices(mesh_path, scale))
+                hulls[key] = cached_polytope(mesh_path, scale, lambda: mesh_polytope(_mesh_vertices(mesh_path, scale)),
+                                             info.hull_cache)
             go.geometry = convex_of_polytope(hulls[key])
         except ArmguardError as exc:
             raise SceneFileError(f, f"link[{ln}].collision[{k}]", f"mesh {mesh_path}: {exc}") from None
