@@ -4,8 +4,10 @@ Each robot is measured in a fresh process (``python -m bench.robots NAME [N]`` p
 line), after one earlier process loaded it (so Python's bytecode and numba's kernel caches are on
 disk, as after a user's first run); load times and peak memory are those of a user's next session:
 
-* **load cold / warm**: ``armguard.load_model(name)`` the first time in the process (URDF parse,
-  meshes read and hulled, SRDF read; numba's kernel cache already on disk) and a second time;
+* **load first**: ``armguard.load_model(name)`` in the earlier process, the first load ever (an
+  empty hull cache: every mesh read and hulled, and the hulls stored);
+* **load cold / warm**: ``armguard.load_model(name)`` the first time in the measured process (URDF
+  parse, hulls read from the hull cache, SRDF read; numba's kernel cache on disk) and a second time;
 * **peak RSS**: the process's peak resident memory after loading, building both checkers and
   checking (everything imported);
 * **pairs**: active pairs with the SRDF found for it, and without any SRDF (``srdf=False``);
@@ -69,49 +71,71 @@ def measure(name: str, n: int) -> dict:
     }
 
 
-def _env() -> dict:
+def _env(cache: str) -> dict:
     """The environment of a user's process: Python writes its bytecode caches (a shell that sets
-    PYTHONDONTWRITEBYTECODE would make every first import compile its sources, seconds per process)."""
+    PYTHONDONTWRITEBYTECODE would make every first import compile its sources, seconds per process);
+    the hull cache in ``cache`` (the bench's own folder, empty at its start: never the user's)."""
     env = dict(os.environ)
     env.pop("PYTHONDONTWRITEBYTECODE", None)
+    env.pop("ARMGUARD_HULL_CACHE", None)
+    env["ARMGUARD_CACHE_DIR"] = cache
     return env
 
 
-def _run_one(name: str, n: int) -> dict:
+_FIRST = ("import time, armguard; t = time.perf_counter(); armguard.load_model({name!r}); "
+          "print('first', time.perf_counter() - t)")
+
+
+def _run_one(name: str, n: int, cache: str) -> dict:
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    # a first process writes the bytecode and kernel caches a user's earlier runs would have written
-    subprocess.run([sys.executable, "-c", f"import armguard; armguard.load_model({name!r})"], capture_output=True,
-                   timeout=900, cwd=root, env=_env())
+    # a first process writes the bytecode, kernel and hull caches a user's earlier runs would have
+    # written; its load is the first ever (every mesh hulled)
+    first = subprocess.run([sys.executable, "-c", _FIRST.format(name=name)], capture_output=True, text=True,
+                           timeout=900, cwd=root, env=_env(cache))
+    t_first = [float(ln.split()[1]) for ln in first.stdout.splitlines() if ln.startswith("first ")]
     proc = subprocess.run([sys.executable, "-m", "bench.robots", name, str(n)], capture_output=True, text=True,
-                          timeout=900, cwd=root, env=_env())
+                          timeout=900, cwd=root, env=_env(cache))
     lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
     if proc.returncode != 0 or not lines:
         tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
         return {"name": name, "error": tail[:120]}
-    return json.loads(lines[-1])
+    return {**json.loads(lines[-1]), "first_s": t_first[-1] if t_first else float("nan")}
 
 
 def run(quick: bool) -> str:
+    import shutil
+    import tempfile
+
     n = 50 if quick else 300
-    rows = ["| robot | nq | load cold | load warm | peak RSS | SRDF | pairs (no SRDF) | colliding / disagree "
-            "(of N) | max \\|Δd\\| | analytic | coal | coal / analytic |",
-            "|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    for name in _names():
-        r = _run_one(name, n)
-        print(f"  {name}: {r}", file=sys.stderr, flush=True)
+    rows = ["| robot | nq | load first | load cold | load warm | peak RSS | SRDF | pairs (no SRDF) | colliding / "
+            "disagree (of N) | max \\|Δd\\| | analytic | coal | coal / analytic |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    cache = tempfile.mkdtemp(prefix="armguard-bench-cache-")
+    try:
+        results = []
+        for name in _names():
+            results.append(_run_one(name, n, cache))
+            print(f"  {name}: {results[-1]}", file=sys.stderr, flush=True)
+    finally:
+        shutil.rmtree(cache, ignore_errors=True)
+    for r in results:
+        name = r["name"]
         if "error" in r:
-            rows.append(f"| {name} | — | error: {r['error']} |||||||||")
+            rows.append(f"| {name} | — | error: {r['error']} ||||||||||")
             continue
         rows.append(
-            f"| {name} | {r['nq']} | {r['cold_s']:.2f} s | {r['warm_s']:.2f} s | {r['rss_peak_mb']:.0f} MB "
+            f"| {name} | {r['nq']} | {r['first_s']:.2f} s | {r['cold_s']:.2f} s | {r['warm_s']:.2f} s "
+            f"| {r['rss_peak_mb']:.0f} MB "
             f"| {r['srdf'] or '—'} | {r['pairs']} ({r['pairs_no_srdf']}) | {r['colliding']} / {r['disagree']} "
             f"| {r['max_dd']:.1e} m | {r['us_analytic']:.1f} µs | {r['us_coal']:.1f} µs "
             f"| {r['us_coal'] / r['us_analytic']:.1f}× |")
     note = (f"\n\nN = {n} random in-limit configurations per robot (seeded). Each robot runs in its own process "
-            "with numba's kernel cache already compiled (`make run` or one earlier bench), so *load cold* is a "
-            "user's first `load_model` in a new process and *peak RSS* includes Python, numpy, Pinocchio, coal "
-            "and the compiled kernels. *colliding*: configurations coal finds in contact; *disagree*: "
-            "configurations where the analytic verdict differs from coal's.")
+            "with numba's kernel cache already compiled (`make run` or one earlier bench). *load first* is the very "
+            "first `load_model` of the robot (an empty hull cache: every mesh read and hulled, in an earlier "
+            "process); *load cold* is a user's next first `load_model` in a new process (hulls read from the hull "
+            "cache, `docs/models.md`), *load warm* a second one in the same process; *peak RSS* includes Python, "
+            "numpy, Pinocchio, coal and the compiled kernels. *colliding*: configurations coal finds in contact; "
+            "*disagree*: configurations where the analytic verdict differs from coal's.")
     return "\n".join(rows) + note
 
 
