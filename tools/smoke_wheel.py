@@ -116,6 +116,7 @@ def main(argv=None) -> int:
         elsewhere.mkdir()
         env = {k: v for k, v in os.environ.items() if k not in ("ARMGUARD_MODELS", "ARMGUARD_REFERENCE", "PYTHONPATH")}
         env["NUMBA_CACHE_DIR"] = str(cache)
+        env["ARMGUARD_CACHE_DIR"] = str(work / "armguard-cache")  # the hull cache: never the user's own
         t = time.perf_counter()
         out = run([venv / "bin" / "python", "-c", CHECK_PY], cwd=elsewhere, env=env, capture_output=True, text=True)
         times["load_model('hermes'), backends"] = time.perf_counter() - t
