@@ -221,10 +221,10 @@ def test_watch_reload_refreshes_the_widgets(tmp_path):
         assert sliders[2].value == pytest.approx(20.0) and fields[2].shown == "20"  # clipped from 30
         assert "-20 to 20 deg" in fields[2].handle.hint and "-170 to 170 deg" in fields[0].handle.hint
         assert app._w_joints["right"][1][2].max == pytest.approx(150.0)  # the right arm's stay
-        assert tuple(app._w_ws_lo.value) == pytest.approx((-3.0, -2.0, -1.0))
+        assert app._fields["ws_lo"].shown == "-3, -2, -1"
         labels = [b.label for b in app._w_test_buttons]  # the canned tests' buttons are the new model's
         assert "Run swing_into_post" in labels and "Setup swing_into_post" in labels and "Run hit_post" not in labels
-        st.set_workspace(app._w_ws_lo.value, app._w_ws_hi.value)  # what "apply limits" does
+        st.apply_workspace()  # what "apply limits" does
         assert np.allclose(st.snapshot().workspace[0], [-3.0, -2.0, -1.0])
     finally:
         app.stop()

@@ -57,7 +57,9 @@ class SourcesMixin:
     """Backends and model updates of the console state."""
 
     def _readout_of(self, backend: str):
-        from ._readout import readout_from_report
+        """The panel from ``backend``; the terrain, which only the detector checks, is added to
+        every other backend's answer (its row, and the headline the worst of both)."""
+        from ._readout import readout_from_report, with_terrain
 
         if backend == "analytic":
             self._last_report = self._detector.check(self._q)
@@ -65,8 +67,15 @@ class SourcesMixin:
         view = self._views.get(backend)
         if view is None:
             view = self._views[backend] = self._view_of(backend)
-        return view.readout(self._scene, self._q, self._active, threshold=self._threshold,
-                            stopping_distance=self._stopping, contact=self._tol.length)
+        r = view.readout(self._scene, self._q, self._active, threshold=self._threshold,
+                         stopping_distance=self._stopping, contact=self._tol.length)
+        guard = getattr(self._detector, "terrain", None)
+        if guard is None:
+            return r
+        rep = guard.check(self._scene.flat_q(self._q), threshold=self._threshold, stopping_distance=self._stopping)
+        if backend == self._backend:
+            self._backend_terrain = rep
+        return with_terrain(r, rep)
 
     # ------------------------------------------------------------------ model updates
     @property
@@ -93,6 +102,7 @@ class SourcesMixin:
                 changes = describe_changes(self._scene, new_scene, self._q, new_q, self._model, model)
                 self._scene, self._model, self._q, self._views = new_scene, model, new_q, {}
                 self._refused = {}
+                self._ws_draft = (None, None)
                 if self._active not in new_scene.robots:
                     self._active = next(iter(new_scene.robots))
                 if self._backend not in self.backends:
