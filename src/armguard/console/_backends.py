@@ -64,7 +64,7 @@ class BackendView:
         rows = []
         if not np.any(keep):
             return Readout(PanelStatus.CLEAR, math.inf, "", "", "", None, None, threshold, False, (), elapsed_us,
-                           backend=self.backend)
+                           backend=self.backend, stopping_distance=stopping_distance)
         d = np.asarray(pd.distance, dtype=np.float64)
         idx = np.flatnonzero(keep)
         cats = np.array(pd.category, dtype=object)
@@ -86,7 +86,7 @@ class BackendView:
         else:
             status = PanelStatus.CLEAR
         return Readout(status, dist, a, b, a, pa, pb, threshold, dist <= threshold, tuple(rows), elapsed_us,
-                       backend=self.backend)
+                       backend=self.backend, stopping_distance=stopping_distance)
 
     def _sides(self, k: int, swap: bool) -> tuple[str, str]:
         a, b = str(self._owner_a[k]), str(self._owner_b[k])
