@@ -237,7 +237,8 @@ class ConsoleApp:
         with tabs.add_tab("Tests") as self._tab_tests:
             self._w_run_state = gui.add_markdown("")
             self._build_tests_panel(self._w_run_state.order + 0.5)
-            gui.add_button("Stop").on_click(self._guard(lambda _e: st.stop()))
+            self._b_stop = gui.add_button("Stop", visible=bool(st.canned_tests()))  # no tests: nothing to stop
+            self._b_stop.on_click(self._guard(lambda _e: st.stop()))
 
         # -- time line: WORKMATE's emulation -------------------------------------------------
         with tabs.add_tab("Time line"):
@@ -344,6 +345,7 @@ class ConsoleApp:
         self._w_tests.remove()
         with self._tab_tests:
             self._build_tests_panel(order)
+        self._b_stop.visible = bool(st.canned_tests())
         trajs = st.trajectories()
         self._w_traj.options = trajs or ("(none)",)
         self._b_load.disabled = not trajs
@@ -421,6 +423,7 @@ class ConsoleApp:
             for folder in self._w_joint_folders[name]:
                 folder.visible = name == snap.active and snap.mode == "joint"
         self._w_cart.visible = snap.mode == "cartesian"
+        self._w_psi.visible = self.state.scene.robots[snap.active].n_joints >= 7  # only 7-DOF arms have one
         self._sync_pose(snap)
         run = snap.run_state
         self._w_run_state.content = run_line(snap)

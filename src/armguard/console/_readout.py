@@ -281,7 +281,7 @@ def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=Non
     if compare is not None:
         o = compare.readout
         delta = "" if not math.isfinite(compare.delta) else f"{compare.delta:.9g}"
-        dd = "—" if not delta else f"{compare.delta * 1000.0:+.4f} mm"
+        dd = "—" if not delta else f"{compare.delta * 1000.0:+.4f} mm".replace("-0.0000 ", "0.0000 ").replace("+0.0000 ", "0.0000 ")
         cmp_html = (
             f'<div id="armguard-compare" data-delta="{delta}" data-backend="{e(o.backend)}" '
             'style="border:2px solid #0aa;border-radius:6px;padding:4px;margin-top:4px;font-family:sans-serif">'

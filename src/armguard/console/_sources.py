@@ -13,7 +13,11 @@ import typing
 from ._backends import BackendView
 from ._parse import ConsoleInputError
 
-__all__ = ["SourcesMixin", "distance_backends", "declared_capabilities"]
+__all__ = ["SourcesMixin", "BackendFailed", "distance_backends", "declared_capabilities"]
+
+
+class BackendFailed(ConsoleInputError):
+    """A backend plugin raised while computing the panel: it is no longer offered until the model is reloaded."""
 
 
 def declared_capabilities(backend) -> frozenset | None:
@@ -67,8 +71,13 @@ class SourcesMixin:
         view = self._views.get(backend)
         if view is None:
             view = self._views[backend] = self._view_of(backend)
-        r = view.readout(self._scene, self._q, self._active, threshold=self._threshold,
-                         stopping_distance=self._stopping, contact=self._tol.length)
+        try:
+            r = view.readout(self._scene, self._q, self._active, threshold=self._threshold,
+                             stopping_distance=self._stopping, contact=self._tol.length)
+        except Exception as exc:  # noqa: BLE001 - a plugin's failure is said, never a traceback in a log
+            self._views.pop(backend, None)
+            self._refused[backend] = f"{backend!r} failed ({type(exc).__name__}: {exc}) and is no longer offered"
+            raise BackendFailed(f"backend: {self._refused[backend]} until the model is reloaded") from None
         guard = getattr(self._detector, "terrain", None)
         if guard is None:
             return r
@@ -175,12 +184,15 @@ class SourcesMixin:
         self._check_backend(name)
         self._prepare(name)
         with self._lock:
-            old, message = self._backend, (self._message, self._message_is_error)
+            old, message = (self._backend, self._compare_with), (self._message, self._message_is_error)
             self._backend = name
+            note = ""
+            if self._compare_with == name:  # never compared with itself
+                self._compare_with, note = None, "; comparison off"
             try:
-                self._changed(f"backend: {name}")
+                self._changed(f"backend: {name}{note}")
             except Exception:
-                self._backend = old
+                self._backend, self._compare_with = old
                 self._message, self._message_is_error = message
                 self._evaluate()
                 raise
@@ -189,6 +201,9 @@ class SourcesMixin:
         """Compare mode: also compute the nearest pair with backend ``name`` (None: off) and show Δd."""
         if name is not None:
             self._check_backend(name)
+            if name == self._backend:
+                raise ConsoleInputError(f"compare with: {name!r} is the panel's backend; a backend is not compared "
+                                        "with itself (pick another)")
             self._prepare(name)
         with self._lock:
             old, message = self._compare_with, (self._message, self._message_is_error)

@@ -26,7 +26,7 @@ from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._backends import compare_readouts
 from ._motion import MotionMixin
 from ._overlays import OverlayMixin
-from ._sources import SourcesMixin
+from ._sources import BackendFailed, SourcesMixin
 from ._targets import TargetsMixin
 from ._parse import ConsoleInputError, parse_number, parse_numbers
 from ._readout import Readout, readout_from_report, readout_off
@@ -239,9 +239,21 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin):
         t0 = time.perf_counter()
         self._comparison = None
         if self._detection:
-            self._readout = self._readout_of(self._backend)
+            failed = []  # said in the panel; the detector answers from now on
+            try:
+                self._readout = self._readout_of(self._backend)
+            except BackendFailed as exc:
+                self._backend = "analytic"
+                failed.append(f"{exc}; the panel is back on analytic")
+                self._readout = self._readout_of("analytic")
             if self._compare_with is not None:
-                self._comparison = compare_readouts(self._readout, self._readout_of(self._compare_with))
+                try:
+                    self._comparison = compare_readouts(self._readout, self._readout_of(self._compare_with))
+                except BackendFailed as exc:
+                    self._compare_with = None
+                    failed.append(f"{exc}; comparison off")
+            if failed:
+                self._message, self._message_is_error = "; ".join(failed), True
         else:
             self._readout = readout_off(self._threshold)
         self._evaluate_overlays()
