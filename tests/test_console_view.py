@@ -439,7 +439,8 @@ def _until(page, fn, what: str) -> None:
 def test_typed_target_and_workspace_corners_keep_sign_and_refuse_garbage():
     """Negative numbers, exponents and garbage typed over the selected Cartesian target and
     workspace corner: kept exactly or refused with the field's message, the box back to the state
-    (viser's vector boxes dropped the minus and mangled exponents: "-0.342" became 0.342)."""
+    (viser's vector boxes dropped the minus and mangled exponents: "-0.342" became 0.342).  And
+    the status panel stays in sight with the controls scrolled to their end."""
     _need_chromium()
     from playwright.sync_api import sync_playwright
 
@@ -451,6 +452,8 @@ def test_typed_target_and_workspace_corners_keep_sign_and_refuse_garbage():
                 st = app.state
                 st.set_mode("cartesian")
                 page = _open(browser, app.url)
+                # the whole control panel is built (slow on a loaded machine: software WebGL)
+                page.wait_for_selector("label:has-text('upper corner (m)')", state="attached", timeout=4 * UI_TIMEOUT_MS)
                 pos = _input_for(page, "target position (m)")
                 pos.wait_for(state="visible", timeout=UI_TIMEOUT_MS)
                 for text, want in (("0.3, -0.25, -0.342", (0.3, -0.25, -0.342)), ("1e-3, -0.05, 0", (1e-3, -0.05, 0.0))):
@@ -481,6 +484,15 @@ def test_typed_target_and_workspace_corners_keep_sign_and_refuse_garbage():
                 _until(page, lambda: st.snapshot().workspace_corners[0].tolist() == [-3.0, -2.0, -0.1], "the corner")
                 page.get_by_role("button", name="apply limits").click()
                 _until(page, lambda: st.snapshot().workspace[0].tolist() == [-3.0, -2.0, -0.1], "the box applied")
+                # the status stays in sight with the controls scrolled to their end
+                page.evaluate("() => document.querySelectorAll('.mantine-ScrollArea-viewport')"
+                              ".forEach(v => { v.scrollTop = v.scrollHeight; })")
+                page.wait_for_timeout(300)
+                top, scrolled = page.evaluate(
+                    "() => { const s = document.querySelector('#armguard-status').getBoundingClientRect();"
+                    " const v = document.querySelector('#armguard-status').closest('.mantine-ScrollArea-viewport');"
+                    " return [s.top - v.getBoundingClientRect().top, v.scrollTop]; }")
+                assert scrolled > 0 and 0 <= top < 20, (top, scrolled)
             finally:
                 browser.close()
     finally:
