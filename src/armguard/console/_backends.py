@@ -68,7 +68,7 @@ class BackendView:
                            backend=self.backend, stopping_distance=stopping_distance)
         d = np.asarray(pd.distance, dtype=np.float64)
         idx = np.flatnonzero(keep)
-        from ..detect._backend import _CATEGORY  # the pair categories in the detector's words
+        from ..detect._reference import _CAT as _CATEGORY  # the pair categories in the detector's words
 
         cats = np.array([_CATEGORY.get(str(c), str(c)) for c in pd.category], dtype=object)
         order = {c: k for k, c in enumerate(CATEGORIES)}
