@@ -153,3 +153,25 @@ def test_console_cli_refuses_bad_uncertain():
 
     res = CliRunner().invoke(main, ["console", "rover", "--port", "0", "--uncertain", "nope=0.1"])
     assert res.exit_code == 2 and "not a body or robot" in res.output
+
+
+def test_terrain_collision_is_the_headline_with_every_backend(rover):
+    """The terrain is checked by the detector only: with another backend the panel still shows
+    its row, and the headline is the worst of every category (red, the terrain's depth)."""
+    st = _terrain_state(rover)
+    st.set_joints("arm", LOW)
+    ref = st.snapshot().terrain.report
+    assert ref.status.value == "collision" and ref.distance < 0
+    others = [b for b in st.backends if b in ("coal", "fcl")]
+    assert others, "coal is a dependency: the rover must offer it"
+    for backend in ["analytic"] + others:
+        st.set_backend(backend)
+        r = st.snapshot().readout
+        rows = {row.category: row for row in r.rows}
+        assert r.backend == backend and r.status.value == "collision", backend
+        assert rows["terrain"].distance == pytest.approx(ref.distance, abs=1e-9), backend
+        assert r.distance <= min(row.distance for row in r.rows) + 1e-12, backend  # the nearest of all
+        assert r.alarm and r.reason == "contact"
+    st.set_joints("arm", np.deg2rad([0, -20, 10, 0, 45]))  # high: the terrain row stays, clear
+    r = st.snapshot().readout
+    assert "terrain" in {row.category for row in r.rows} and r.status.value != "collision"

@@ -32,9 +32,15 @@ def test_backend_readout_and_compare_delta(ranger):
     assert "coal" in st.backends
     q0 = {k: v.copy() for k, v in st.snapshot().q.items()}
     d_analytic = st.snapshot().readout.distance
+    rows_analytic = {r.category: r.distance for r in st.snapshot().readout.rows}
     st.set_backend("coal")
     snap = st.snapshot()
     assert snap.readout.backend == "coal" and snap.backend == "coal"
+    rows_coal = {r.category: r.distance for r in snap.readout.rows}  # one vocabulary of categories
+    assert set(rows_coal) <= set(rows_analytic) and "arm" in rows_coal
+    assert all(abs(rows_coal[c] - rows_analytic[c]) < 1e-6 for c in rows_coal)
+    with pytest.raises(ConsoleInputError, match="with itself"):
+        st.set_compare("coal")
     assert all(np.array_equal(q0[k], v) for k, v in snap.q.items())
     assert abs(snap.readout.distance - d_analytic) < 1e-6
     assert snap.readout.link.startswith(snap.active)
@@ -221,10 +227,10 @@ def test_watch_reload_refreshes_the_widgets(tmp_path):
         assert sliders[2].value == pytest.approx(20.0) and fields[2].shown == "20"  # clipped from 30
         assert "-20 to 20 deg" in fields[2].handle.hint and "-170 to 170 deg" in fields[0].handle.hint
         assert app._w_joints["right"][1][2].max == pytest.approx(150.0)  # the right arm's stay
-        assert tuple(app._w_ws_lo.value) == pytest.approx((-3.0, -2.0, -1.0))
+        assert app._fields["ws_lo"].shown == "-3, -2, -1"
         labels = [b.label for b in app._w_test_buttons]  # the canned tests' buttons are the new model's
         assert "Run swing_into_post" in labels and "Setup swing_into_post" in labels and "Run hit_post" not in labels
-        st.set_workspace(app._w_ws_lo.value, app._w_ws_hi.value)  # what "apply limits" does
+        st.apply_workspace()  # what "apply limits" does
         assert np.allclose(st.snapshot().workspace[0], [-3.0, -2.0, -1.0])
     finally:
         app.stop()
@@ -297,3 +303,63 @@ def test_feature_outlines():
     assert np.allclose(f0[1:, 0], f0[:-1, 1]) and np.allclose(f0[0, 0], f0[-1, 1])  # a closed loop
     assert feature_segments(box, Feature(FeatureKind.VERTEX, 0)).shape == (0, 2, 3)
     assert feature_segments(box, None).shape == (0, 2, 3)
+
+
+def test_a_backend_that_fails_is_said_and_no_longer_offered(ranger, monkeypatch):
+    from armguard.console import _backends
+
+    scene, model = ranger
+    st = ConsoleState(scene, model=model)
+    st.set_backend("coal")
+    st.set_compare("fcl")
+
+    def boom(self, *args, **kwargs):
+        raise RuntimeError("plugin bug")
+
+    monkeypatch.setattr(_backends.BackendView, "readout", boom)
+    st.set_joints(st.snapshot().active, st.snapshot().q[st.snapshot().active])  # the next update fails
+    snap = st.snapshot()
+    assert snap.backend == "analytic" and snap.readout.backend == "analytic" and snap.compare is None
+    assert snap.message_is_error and "'coal' failed (RuntimeError: plugin bug)" in snap.message
+    assert "'fcl' failed (RuntimeError: plugin bug)" in snap.message and "comparison off" in snap.message
+    assert "coal" not in st.backends and "fcl" not in st.backends
+    with pytest.raises(ConsoleInputError, match="plugin bug"):
+        st.set_backend("coal")
+    assert st.snapshot().backend == "analytic"
+
+
+def test_delta_below_the_shown_digits_has_no_sign():
+    from dataclasses import replace
+
+    from armguard.console import panel_html
+
+    r = replace(readout_off(0.05), backend="analytic", distance=0.2)
+    for d in (0.2 - 1e-9, 0.2 + 1e-9):
+        html = panel_html(r, compare=compare_readouts(r, replace(r, backend="coal", distance=d)))
+        assert "<b>0.0000 mm</b>" in html and "-0.0000" not in html and "+0.0000" not in html
+    html = panel_html(r, compare=compare_readouts(r, replace(r, backend="coal", distance=0.2 - 2e-7)))
+    assert "<b>-0.0002 mm</b>" in html
+
+
+def test_widgets_offer_only_what_the_scene_has():
+    """3-joint arms: no arm-angle slider; canned tests: a Stop button; the corner and target
+    fields show the state's box and the tool pose, and the corners empty once the box is removed."""
+    import time
+
+    from armguard.console._app import ConsoleApp
+
+    app = ConsoleApp(ConsoleState(load_scene(str(SCENE))), port=0).start()
+    try:
+        st = app.state
+        assert app._w_psi.visible is False and app._b_stop.visible is True
+        assert app._fields["ws_lo"].shown == "-2.5, -2, -1" and app._fields["ws_hi"].shown == "2.5, 2, 1"
+        p = st.ee_pose()[:3, 3]
+        assert app._fields["pos"].shown == ", ".join(f"{0.0 if v == 0 else v:.6g}" for v in p)
+        st.remove_workspace()
+        for _ in range(200):
+            if app._fields["ws_hi"].shown == "":
+                break
+            time.sleep(0.05)
+        assert app._fields["ws_lo"].shown == "" and app._fields["ws_hi"].shown == ""
+    finally:
+        app.stop()

@@ -235,3 +235,112 @@ def test_arm_angle_moves_the_elbow_and_keeps_the_tool_pose():
     elbow1 = robot.link_pose(q1, "link4")[:3, 3]
     assert np.linalg.norm(elbow1 - elbow0) > 0.01
     assert st.snapshot().arm_angle == pytest.approx(0.3)
+
+
+# ---------------------------------------------------------------------- typed targets and corners
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        ("", "expected 3 numbers (m) (x, y, z), got an empty entry"),
+        ("0.1, 0.2", "expected 3 numbers (m) (x, y, z), got 2"),
+        ("0.1, 0.2, -0.5.2", "target position z: expected a number (m), got '-0.5.2'"),
+        ("-1e309, 0, 0", "target position x: expected a finite number (m), got '-1e309'"),
+        ("0, nan, 0", "target position y: expected a finite number (m)"),
+        ("0, 0, -1000", "target position z: -1000 m is outside [-100, 100] m"),
+        ("0, 0, abc", "target position z: expected a number (m), got 'abc'"),
+    ],
+)
+def test_typed_target_refused_with_the_axis_and_kept(state, text, words):
+    before = state.target()
+    with pytest.raises(ConsoleInputError) as exc:
+        state.set_target_position(text)
+    assert words in str(exc.value)
+    after = state.target()
+    np.testing.assert_array_equal(after[0], before[0])
+    assert after[2] is False  # still the tool pose now: nothing typed was kept
+
+
+def test_typed_target_keeps_its_sign_and_exponent_and_move_tool_goes_there(state):
+    state.set_joints("left", "-90, 30, 30", scale=DEG)
+    X = state.ee_pose()
+    state.set_joints("left", "-90, 0, 0", scale=DEG)
+    p0, rpy0, typed = state.target()
+    np.testing.assert_allclose(p0, state.ee_pose()[:3, 3], atol=1e-12)
+    assert not typed
+    x, y, z = (float(v) for v in X[:3, 3])
+    text = f"{x!r}, {y!r}, {z + 1e-3:.6e}"  # an exponent, and a negative y
+    assert y < 0
+    p = state.set_target_position(text)
+    assert p[1] == y and p[2] == pytest.approx(z + 1e-3, abs=1e-9)
+    np.testing.assert_array_equal(state.snapshot().q["left"], np.radians([-90, 0, 0]))  # nothing moved yet
+    snap = state.snapshot()
+    np.testing.assert_array_equal(snap.target[0], p)
+    assert snap.target[2] and "move tool" in snap.message
+    state.set_target_position(f"{x!r}, {y!r}, {z!r}")
+    state.move_to_target()
+    np.testing.assert_allclose(state.ee_pose()[:3, 3], X[:3, 3], atol=1e-6)
+    assert not state.target()[2]  # the arm moved: the target follows the tool again
+
+
+def test_typed_orientation_in_degrees_checked(state):
+    rpy = state.set_target_rpy("-10, 1e-3, 170")
+    np.testing.assert_allclose(rpy, np.radians([-10, 1e-3, 170]))
+    with pytest.raises(ConsoleInputError, match="target roll pitch yaw yaw: 190 deg is outside"):
+        state.set_target_rpy("0, 0, 190")
+    np.testing.assert_allclose(state.target()[1], np.radians([-10, 1e-3, 170]))
+
+
+def test_workspace_corners_typed_then_applied_refusal_restores(state):
+    lo0, hi0 = (c.copy() for c in state.snapshot().workspace)
+    with pytest.raises(ConsoleInputError, match="workspace lower corner x: expected a finite number"):
+        state.set_workspace_corner("lower", "-1e309, 0, 0")
+    with pytest.raises(ConsoleInputError, match=r"outside \[-100, 100\] m"):
+        state.set_workspace_corner("lower", "-1309, 0, 0")
+    np.testing.assert_array_equal(state.workspace_corners()[0], lo0)
+    state.set_workspace_corner("lower", "-2.5, -1.5, -1")
+    np.testing.assert_array_equal(state.snapshot().workspace[0], lo0)  # typed, not applied
+    np.testing.assert_array_equal(state.snapshot().workspace_corners[0], [-2.5, -1.5, -1])
+    state.apply_workspace()
+    np.testing.assert_array_equal(state.snapshot().workspace[0], [-2.5, -1.5, -1])
+    state.set_workspace_corner("upper", "-3, 0, 0")  # below the lower corner in x
+    with pytest.raises(ConsoleInputError, match="upper corner must exceed the lower one"):
+        state.apply_workspace()
+    snap = state.snapshot()
+    np.testing.assert_array_equal(snap.workspace[1], hi0)  # the box in force
+    np.testing.assert_array_equal(snap.workspace_corners[1], hi0)  # the refused corner is gone from the field
+
+
+def test_workspace_removed_and_none_shown_until_both_corners_typed(state):
+    state.remove_workspace()
+    snap = state.snapshot()
+    assert snap.workspace is None and snap.workspace_corners == (None, None)
+    assert "workspace" not in {r.category for r in snap.readout.rows} and snap.message == "workspace box removed"
+    with pytest.raises(ConsoleInputError, match="no box to remove"):
+        state.remove_workspace()
+    state.set_workspace_corner("upper", "2, 2, 2")
+    with pytest.raises(ConsoleInputError, match="type the lower corner first"):
+        state.apply_workspace()
+    assert state.snapshot().workspace is None and state.snapshot().workspace_corners == (None, None)
+    state.set_workspace_corner("lower", "-2, -2, -2")
+    state.set_workspace_corner("upper", "2, 2, 2")
+    state.apply_workspace()
+    assert "workspace" in {r.category for r in state.snapshot().readout.rows}
+
+
+def test_collision_inside_the_stopping_distance_says_why_and_is_red_in_the_view(state):
+    from armguard.console import panel_html
+
+    # at home the nearest pair is 0.3 m apart: threshold 0.2, stopping distance 0.35
+    state.set_threshold(0.2)
+    state.set_stopping_distance(0.35)
+    r = state.snapshot().readout
+    assert r.status is PanelStatus.COLLISION and r.distance > r.threshold and not r.within_threshold
+    assert r.reason == "within the stopping distance 350.0 mm"
+    assert r.alarm and r.line_color == (220, 30, 30)  # the line and the link red, as the headline
+    html = panel_html(r)
+    assert 'data-reason="within the stopping distance 350.0 mm"' in html and "stopping distance: 350.0 mm" in html
+    state.set_stopping_distance(0.0)
+    r = state.snapshot().readout
+    assert r.status is PanelStatus.CLEAR and not r.alarm and r.reason == "nothing within the threshold 200.0 mm"
+    state.set_joint("left", 0, 90 * DEG)
+    assert state.snapshot().readout.reason == "contact"

@@ -273,3 +273,10 @@ def test_views_look_at_the_scene_from_outside(label):
     assert np.linalg.norm(pos - c) == pytest.approx(5.0, rel=1e-3)
     if label == "top":
         assert pos[2] - c[2] == pytest.approx(5.0, rel=1e-3)
+
+
+def test_field_text_never_negative_zero():
+    from armguard.console._app import _fmt, _vec
+
+    assert _fmt(-0.0) == "0" and _fmt(-47.03291234) == "-47.0329" and _fmt(1e-3) == "0.001"
+    assert _vec((-0.0, -0.392, 2.5)) == "0, -0.392, 2.5" and _vec(None) == ""

@@ -426,3 +426,74 @@ def test_frame_the_active_arm_in_a_collision_shows_the_red_link():
                 browser.close()
     finally:
         app.stop()
+
+
+def _until(page, fn, what: str) -> None:
+    for _ in range(UI_TIMEOUT_MS // POLL_MS):
+        if fn():
+            return
+        page.wait_for_timeout(POLL_MS)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+def test_typed_target_and_workspace_corners_keep_sign_and_refuse_garbage():
+    """Negative numbers, exponents and garbage typed over the selected Cartesian target and
+    workspace corner: kept exactly or refused with the field's message, the box back to the state
+    (viser's vector boxes dropped the minus and mangled exponents: "-0.342" became 0.342).  And
+    the status panel stays in sight with the controls scrolled to their end."""
+    _need_chromium()
+    from playwright.sync_api import sync_playwright
+
+    app = _app(SCENE)
+    try:
+        with sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            try:
+                st = app.state
+                st.set_mode("cartesian")
+                page = _open(browser, app.url)
+                # the whole control panel is built (slow on a loaded machine: software WebGL)
+                page.wait_for_selector("label:has-text('upper corner (m)')", state="attached", timeout=4 * UI_TIMEOUT_MS)
+                pos = _input_for(page, "target position (m)")
+                pos.wait_for(state="visible", timeout=UI_TIMEOUT_MS)
+                for text, want in (("0.3, -0.25, -0.342", (0.3, -0.25, -0.342)), ("1e-3, -0.05, 0", (1e-3, -0.05, 0.0))):
+                    _type(pos, text)
+                    _until(page, lambda: st.target()[2] and st.target()[0].tolist() == list(want), f"target {want}")
+                for text, words in (("-0.5.2, 0, 0", "x: expected a number (m), got '-0.5.2'"),
+                                    ("", "got an empty entry"), ("-1e309, 0, 0", "x: expected a finite number")):
+                    if text:
+                        _type(pos, text)
+                    else:  # the selected text deleted, then Enter
+                        pos.click()
+                        pos.press("Control+a")
+                        pos.press("Backspace")
+                        pos.press("Enter")
+                    _wait(page, "w => { const m = document.querySelector('#armguard-message');"
+                                " return m && m.dataset.error === 'true' && m.textContent.includes(w); }", words)
+                    assert st.target()[0].tolist() == [1e-3, -0.05, 0.0]
+                    _until(page, lambda: pos.input_value() == "0.001, -0.05, 0", "the box back to the target")
+                page.get_by_text("workspace box").first.click()
+                lo = _input_for(page, "lower corner (m)")
+                lo.wait_for(state="visible", timeout=UI_TIMEOUT_MS)
+                assert lo.input_value() == "-2.5, -2, -1"  # the scene's box
+                _type(lo, "-1e309,0,0")
+                _wait(page, "() => { const m = document.querySelector('#armguard-message');"
+                            " return m && m.textContent.includes('workspace lower corner x: expected a finite'); }")
+                _until(page, lambda: lo.input_value() == "-2.5, -2, -1", "the corner back to the box")
+                _type(lo, "-3, -2, -1e-1")
+                _until(page, lambda: st.snapshot().workspace_corners[0].tolist() == [-3.0, -2.0, -0.1], "the corner")
+                page.get_by_role("button", name="apply limits").click()
+                _until(page, lambda: st.snapshot().workspace[0].tolist() == [-3.0, -2.0, -0.1], "the box applied")
+                # the status stays in sight with the controls scrolled to their end
+                page.evaluate("() => document.querySelectorAll('.mantine-ScrollArea-viewport')"
+                              ".forEach(v => { v.scrollTop = v.scrollHeight; })")
+                page.wait_for_timeout(300)
+                top, scrolled = page.evaluate(
+                    "() => { const s = document.querySelector('#armguard-status').getBoundingClientRect();"
+                    " const v = document.querySelector('#armguard-status').closest('.mantine-ScrollArea-viewport');"
+                    " return [s.top - v.getBoundingClientRect().top, v.scrollTop]; }")
+                assert scrolled > 0 and 0 <= top < 20, (top, scrolled)
+            finally:
+                browser.close()
+    finally:
+        app.stop()

@@ -22,6 +22,7 @@ from ._fields import COMMIT_ON_BLUR_HTML, TypedField
 from ._plot import ClearancePlot
 from ._readout import panel_html
 from ._state import MAX_DISTANCE_SETTING, ConsoleState
+from ._targets import MAX_ANGLE_DEG, MAX_COORDINATE
 
 __all__ = ["ConsoleApp", "PortInUseError", "FPS", "PLOT_PERIOD"]
 
@@ -56,8 +57,14 @@ def run_line(snap) -> str:
 
 
 def _fmt(x: float) -> str:
-    """A value for a typed field: up to 6 significant digits, no trailing zeros."""
-    return f"{float(x):.6g}"
+    """A value for a typed field: up to 6 significant digits, no trailing zeros, never ``-0``."""
+    x = float(x)
+    return f"{0.0 if x == 0.0 else x:.6g}"
+
+
+def _vec(v) -> str:
+    """Three values for a typed field (``"0.3, -0.392, 0.5"``); empty for None (no box)."""
+    return "" if v is None else ", ".join(_fmt(x) for x in v)
 
 
 class ConsoleApp:
@@ -207,23 +214,31 @@ class ConsoleApp:
                 self._build_joint_panel(name, snap, self._joints_order + (k + 1) / (len(st.robots) + 1))
             with gui.add_folder("Cartesian", visible=False, order=self._joints_order + 1.0) as self._w_cart:
                 self._w_pose_now = gui.add_markdown("")
-                self._w_pos = gui.add_vector3("target position (m)", (0.0, 0.0, 0.0), step=0.001)
-                self._w_rpy = gui.add_vector3("target roll pitch yaw (deg)", (0.0, 0.0, 0.0), step=0.1)
+                p, rpy, _ = snap.target
+                self._fields["pos"] = self._field("target position (m)", _vec(p), st.set_target_position,
+                                                  f"x, y, z within ±{MAX_COORDINATE:g} m; move tool to go there")
+                self._fields["rpy"] = self._field("target roll pitch yaw (deg)", _vec(np.degrees(rpy)),
+                                                  st.set_target_rpy,
+                                                  f"roll, pitch, yaw within ±{MAX_ANGLE_DEG:g} deg")
                 b_move = gui.add_button("move tool")
                 b_read = gui.add_button("target = tool pose now")
                 self._w_psi = gui.add_slider("arm angle (deg)", min=-180.0, max=180.0, step=0.5, initial_value=0.0)
             with gui.add_folder("workspace box", expand_by_default=False, order=self._joints_order + 2.0):
-                ws = snap.workspace
-                self._w_ws_lo = gui.add_vector3("lower corner (m)", tuple(ws[0]) if ws else (-1.0, -1.0, -1.0), step=0.01)
-                self._w_ws_hi = gui.add_vector3("upper corner (m)", tuple(ws[1]) if ws else (1.0, 1.0, 1.0), step=0.01)
+                lo, hi = snap.workspace_corners
+                hint = f"x, y, z within ±{MAX_COORDINATE:g} m; apply limits to use"
+                self._fields["ws_lo"] = self._field("lower corner (m)", _vec(lo),
+                                                    lambda t: st.set_workspace_corner("lower", t), hint)
+                self._fields["ws_hi"] = self._field("upper corner (m)", _vec(hi),
+                                                    lambda t: st.set_workspace_corner("upper", t), hint)
                 b_ws = gui.add_button("apply limits")
+                b_ws_off = gui.add_button("remove box")
 
         # -- tests: Ranger's test panel ----------------------------------------------------
-        self._ws_widgets_shown = self._ws_key(snap.workspace)
         with tabs.add_tab("Tests") as self._tab_tests:
             self._w_run_state = gui.add_markdown("")
             self._build_tests_panel(self._w_run_state.order + 0.5)
-            gui.add_button("Stop").on_click(self._guard(lambda _e: st.stop()))
+            self._b_stop = gui.add_button("Stop", visible=bool(st.canned_tests()))  # no tests: nothing to stop
+            self._b_stop.on_click(self._guard(lambda _e: st.stop()))
 
         # -- time line: WORKMATE's emulation -------------------------------------------------
         with tabs.add_tab("Time line"):
@@ -262,12 +277,12 @@ class ConsoleApp:
         self._w_shapes.on_update(lambda e: self.drawer.set_shapes_visible(self._w_shapes.value))
         for w in (self._w_urdf_vis, self._w_urdf_col):
             w.on_update(lambda e: self.drawer.set_urdf(self._w_urdf_vis.value, self._w_urdf_col.value))
-        b_move.on_click(self._guard(lambda _e: st.move_ee(self._w_pos.value, np.radians(self._w_rpy.value))))
-        b_read.on_click(lambda _e: self._read_tool_pose())
-        b_ws.on_click(self._guard(lambda _e: st.set_workspace(self._w_ws_lo.value, self._w_ws_hi.value)))
+        b_move.on_click(self._guard(lambda _e: st.move_to_target()))
+        b_read.on_click(self._guard(lambda _e: st.reset_target()))
+        b_ws.on_click(self._guard(lambda _e: st.apply_workspace()))
+        b_ws_off.on_click(self._guard(lambda _e: st.remove_workspace()))
         b_load.on_click(self._guard(lambda _e: st.load_trajectory(self._w_traj.value)))
         self._pose_shown = None
-        self._read_tool_pose()
 
     def _build_joint_panel(self, name: str, snap, order: float) -> None:
         gui, st = self.server.gui, self.state
@@ -330,14 +345,11 @@ class ConsoleApp:
         self._w_tests.remove()
         with self._tab_tests:
             self._build_tests_panel(order)
+        self._b_stop.visible = bool(st.canned_tests())
         trajs = st.trajectories()
         self._w_traj.options = trajs or ("(none)",)
         self._b_load.disabled = not trajs
-        self._ws_widgets_shown = "stale"  # the workspace fields show the new model's box
         self._pose_shown = None
-
-    def _ws_key(self, ws):
-        return None if ws is None else tuple(float(x) for x in np.concatenate(ws))
 
     def _guard(self, fn):
         def cb(event):
@@ -357,13 +369,6 @@ class ConsoleApp:
         self.state.timeline_command(cmd)
         if cmd in ("backward", "forward"):
             self.state.timeline_command("play")
-
-    def _read_tool_pose(self) -> None:
-        from ..kinematics._frames import xyz_rpy_from_pose
-
-        xyz, rpy = xyz_rpy_from_pose(self.state.ee_pose())
-        self._w_pos.value = tuple(float(x) for x in xyz)
-        self._w_rpy.value = tuple(float(math.degrees(x)) for x in rpy)
 
     # ------------------------------------------------------------------ camera
     def _on_connect(self, client) -> None:
@@ -404,11 +409,9 @@ class ConsoleApp:
         self._w_backend.value = snap.backend
         cmp = snap.compare
         self._w_compare.value = "off" if cmp is None else cmp.other
-        ws = self._ws_key(snap.workspace)
-        if ws != self._ws_widgets_shown:  # the box in force changed (a reload, another tab)
-            self._ws_widgets_shown = ws
-            lo, hi = (ws[:3], ws[3:]) if ws is not None else ((-1.0, -1.0, -1.0), (1.0, 1.0, 1.0))
-            self._w_ws_lo.value, self._w_ws_hi.value = tuple(lo), tuple(hi)
+        lo, hi = snap.workspace_corners
+        self._fields["ws_lo"].show(_vec(lo))
+        self._fields["ws_hi"].show(_vec(hi))
         self._fields["thr"].show(_fmt(snap.threshold))
         self._fields["stop"].show(_fmt(snap.stopping_distance))
         for name, (fields, sliders, scale) in self._w_joints.items():
@@ -420,6 +423,7 @@ class ConsoleApp:
             for folder in self._w_joint_folders[name]:
                 folder.visible = name == snap.active and snap.mode == "joint"
         self._w_cart.visible = snap.mode == "cartesian"
+        self._w_psi.visible = self.state.scene.robots[snap.active].n_joints >= 7  # only 7-DOF arms have one
         self._sync_pose(snap)
         run = snap.run_state
         self._w_run_state.content = run_line(snap)
@@ -429,9 +433,12 @@ class ConsoleApp:
             self._w_time.value = float(min(p.timeline.t, self._w_time.max))
 
     def _sync_pose(self, snap) -> None:
-        """The Cartesian panel follows the arm: the pose now, and the target set to it when the arm moved."""
+        """The Cartesian panel: the tool pose now, and the target the state holds (the pose now until typed)."""
         from ..kinematics._frames import xyz_rpy_from_pose
 
+        p, rpy, _ = snap.target
+        self._fields["pos"].show(_vec(p))
+        self._fields["rpy"].show(_vec(np.degrees(rpy)))
         xyz, rpy = xyz_rpy_from_pose(snap.ee_pose)
         key = (snap.active, tuple(np.round(xyz, 6)), tuple(np.round(rpy, 6)))
         if key == self._pose_shown:
@@ -440,8 +447,6 @@ class ConsoleApp:
         deg = [math.degrees(x) for x in rpy]
         self._w_pose_now.content = (f"tool now ({snap.active}): x y z = {xyz[0]:+.3f} {xyz[1]:+.3f} {xyz[2]:+.3f} m; "
                                     f"roll pitch yaw = {deg[0]:+.1f} {deg[1]:+.1f} {deg[2]:+.1f} deg")
-        self._w_pos.value = tuple(float(x) for x in xyz)
-        self._w_rpy.value = tuple(float(x) for x in deg)
 
     def _redraw(self, force: bool = False) -> None:
         snap = self.state.snapshot()

@@ -5,7 +5,8 @@ features, the anytime budget).  Any other installed backend (``armguard.backends
 answers through its checker: :func:`readout_from_checker` takes every active pair of the model
 (``model.pairs``, the order every backend answers in), keeps those with a side on the active arm,
 puts that side first, and builds the same :class:`~._readout.Readout` from the smallest signed
-distance.  :func:`compare_readouts` is the harness's Δd between two of them, live.
+distance, its rows in the detector's categories (``arm``, ``environment``, ``workspace``,
+``payload``) whatever the backend's own pair categories.  :func:`compare_readouts` is the harness's Δd between two of them, live.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._readout import CategoryRow, PanelStatus, Readout
+from ._readout import CATEGORIES, CategoryRow, PanelStatus, Readout
 
 __all__ = ["BackendView", "Comparison", "compare_readouts", "robot_of"]
 
@@ -64,11 +65,14 @@ class BackendView:
         rows = []
         if not np.any(keep):
             return Readout(PanelStatus.CLEAR, math.inf, "", "", "", None, None, threshold, False, (), elapsed_us,
-                           backend=self.backend)
+                           backend=self.backend, stopping_distance=stopping_distance)
         d = np.asarray(pd.distance, dtype=np.float64)
         idx = np.flatnonzero(keep)
-        cats = np.array(pd.category, dtype=object)
-        for cat in dict.fromkeys(cats[idx]):
+        from ..detect._reference import _CAT as _CATEGORY  # the pair categories in the detector's words
+
+        cats = np.array([_CATEGORY.get(str(c), str(c)) for c in pd.category], dtype=object)
+        order = {c: k for k, c in enumerate(CATEGORIES)}
+        for cat in sorted(dict.fromkeys(cats[idx]), key=lambda c: (order.get(c, len(order)), c)):
             sel = idx[cats[idx] == cat]
             k = int(sel[np.argmin(d[sel])])
             a, b = self._sides(k, on_b[k])
@@ -86,7 +90,7 @@ class BackendView:
         else:
             status = PanelStatus.CLEAR
         return Readout(status, dist, a, b, a, pa, pb, threshold, dist <= threshold, tuple(rows), elapsed_us,
-                       backend=self.backend)
+                       backend=self.backend, stopping_distance=stopping_distance)
 
     def _sides(self, k: int, swap: bool) -> tuple[str, str]:
         a, b = str(self._owner_a[k]), str(self._owner_b[k])

@@ -187,7 +187,7 @@ class SceneDrawer:
         clear = self.see_through(snap, items)
         for k, (it, item) in enumerate(zip(items, self.items)):
             owner, kind, P0, c0, h, color, _, _ = item
-            want = COLORS["hot"] if (r.within_threshold and owner == r.owner_a) else color
+            want = COLORS["hot"] if (r.alarm and owner == r.owner_a) else color
             if item[6] != want:
                 h.color = want
                 item[6] = want

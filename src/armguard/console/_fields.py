@@ -13,8 +13,9 @@ Why not per keystroke: the page sends GUI messages through one 50 ms throttle th
 the latest message, so the form's "dirty" notice sent after a fast keystroke replaced that
 keystroke's value update (``70`` typed without delay arrived as ``7``).
 
-The same snippet hides the number boxes beside viser's sliders: sliders are for dragging,
-typed values go through the fields.
+The same snippet hides the number boxes beside viser's sliders (sliders are for dragging,
+typed values go through the fields) and keeps the status panel in sight: its block is sticky at
+the top of the scrolling control panel, the controls scroll beneath it.
 """
 
 from __future__ import annotations
@@ -74,10 +75,15 @@ _JS = (
 )
 
 COMMIT_ON_BLUR_HTML = (
-    "<style>.mantine-Slider-root + .mantine-NumberInput-root{display:none !important}</style>"
+    "<style>.mantine-Slider-root + .mantine-NumberInput-root{display:none !important}"
+    # the status panel stays in sight: the controls scroll beneath it
+    # (sticky needs every box between it and the scrolling one to let it overflow)
+    ".mantine-ScrollArea-content div:has(#armguard-status){overflow:visible !important}"
+    "div:has(> #armguard-status){position:sticky;top:0;z-index:3;background:#fff;padding-bottom:2px}</style>"
     f'<img src="data:," alt="" style="display:none" onerror="{_JS}">'
 )
-"""HTML for ``gui.add_html``: submits a typed field's form on blur; hides sliders' number boxes."""
+"""HTML for ``gui.add_html``: submits a typed field's form on blur; hides sliders' number boxes;
+keeps the status panel on top while the controls scroll."""
 
 
 class TypedField:

@@ -264,14 +264,15 @@ class OverlayMixin:
         self._terrain_view = None
         self._sigmas = None
         last, self._last_report = getattr(self, "_last_report", None), None
+        backend_terrain, self._backend_terrain = getattr(self, "_backend_terrain", None), None
         if not self._detection:
             return
         guard = getattr(self._detector, "terrain", None)
         if guard is not None:
             q = self._scene.flat_q(self._q)
             boxes, levels, hit, visited = tested_boxes(guard, q, self._threshold, self._stopping)
-            rep = getattr(last, "terrain", None)
-            if rep is None or self._backend != "analytic":
+            rep = getattr(last, "terrain", None) if self._backend == "analytic" else backend_terrain
+            if rep is None:
                 rep = guard.check(q, threshold=self._threshold, stopping_distance=self._stopping)
             self._terrain_view = TerrainView(boxes, levels, hit, visited, guard.pyramid.n_levels, rep)
         if self._placements:

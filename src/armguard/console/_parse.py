@@ -64,10 +64,11 @@ def parse_number(
     return x * scale
 
 
-def parse_numbers(value, field: str, count: int, *, unit: str = "", scale: float = 1.0) -> np.ndarray:
+def parse_numbers(value, field: str, count: int, *, unit: str = "", scale: float = 1.0, names=None) -> np.ndarray:
     """Return ``count`` finite numbers (text separated by commas/spaces, or a sequence) times ``scale``.
 
     Returns ``(count,) float64``.  Ranges are checked by the caller, which knows each entry's limits.
+    ``names`` (``count`` strings, e.g. ``("x", "y", "z")``) name the entries in messages, else ``[i]``.
     """
     if isinstance(value, str):
         parts = [p for p in _SPLIT.split(value.strip()) if p]
@@ -77,7 +78,11 @@ def parse_numbers(value, field: str, count: int, *, unit: str = "", scale: float
         except TypeError:
             raise ConsoleInputError(f"{field}: expected {count} numbers, got {value!r}") from None
     if len(parts) != count:
-        raise ConsoleInputError(f"{field}: expected {count} numbers, got {len(parts)}")
+        what = f"{count} numbers ({unit})" if unit else f"{count} numbers"
+        sep = f" ({', '.join(names)})" if names else ""
+        got = "an empty entry" if not parts else f"{len(parts)}"
+        raise ConsoleInputError(f"{field}: expected {what}{sep}, got {got}; value kept unchanged")
+    label = (lambda i: f"{field} {names[i]}") if names else (lambda i: f"{field}[{i}]")
     return np.array(
-        [parse_number(p, f"{field}[{i}]", unit=unit, scale=scale) for i, p in enumerate(parts)], dtype=np.float64
+        [parse_number(p, label(i), unit=unit, scale=scale) for i, p in enumerate(parts)], dtype=np.float64
     )

@@ -26,6 +26,7 @@ __all__ = [
     "readout_off",
     "panel_html",
     "CATEGORIES",
+    "with_terrain",
 ]
 
 CATEGORIES = ("arm", "environment", "workspace", "payload")
@@ -92,6 +93,7 @@ class Readout:
     backend: str = "analytic"
     owner_b: str = ""
     feature: object = None
+    stopping_distance: float = 0.0
 
     @property
     def color(self) -> str:
@@ -99,9 +101,31 @@ class Readout:
         return PANEL_COLORS[self.status]
 
     @property
+    def alarm(self) -> bool:
+        """The link and the line are drawn red: within the threshold, or a red (COLLISION) headline
+        (inside the stopping distance beyond the threshold is red too)."""
+        return self.within_threshold or self.status is PanelStatus.COLLISION
+
+    @property
     def line_color(self) -> tuple[int, int, int]:
-        """RGB of the nearest-obstacle line."""
-        return LINE_COLORS["within" if self.within_threshold else "far"]
+        """RGB of the nearest-obstacle line: red whenever :attr:`alarm`."""
+        return LINE_COLORS["within" if self.alarm else "far"]
+
+    @property
+    def reason(self) -> str:
+        """Why the headline has its colour, in words (``"within the stopping distance 300.0 mm"``)."""
+        d, s = self.distance, self.stopping_distance
+        if self.status is PanelStatus.OFF:
+            return "detection off"
+        if self.status is PanelStatus.INCOMPLETE:
+            return "not every pair could be decided: never shown as clear"
+        if self.status is PanelStatus.COLLISION:
+            if s > 0.0 and math.isfinite(d) and 0.0 < d <= s:
+                return f"within the stopping distance {_fmt_m(s)}"
+            return "contact"
+        if self.status is PanelStatus.WARNING:
+            return f"within the threshold {_fmt_m(self.threshold)}"
+        return f"nothing within the threshold {_fmt_m(self.threshold)}"
 
 
 def _status_of(report) -> PanelStatus:
@@ -126,8 +150,10 @@ def readout_from_report(report) -> Readout:
     for cat in sorted(set(by_cat) - set(CATEGORIES)):
         pr = by_cat[cat]
         rows.append(CategoryRow(str(cat), float(pr.distance), str(pr.link), str(pr.obstacle)))
+    stop = float(getattr(report, "stopping_distance", 0.0) or 0.0)
     if near is None:
-        return Readout(status, math.inf, "", "", "", None, None, thr, False, tuple(rows), float(report.elapsed_us))
+        return Readout(status, math.inf, "", "", "", None, None, thr, False, tuple(rows), float(report.elapsed_us),
+                       stopping_distance=stop)
     d = float(near.distance)
     return Readout(
         status=status,
@@ -143,7 +169,31 @@ def readout_from_report(report) -> Readout:
         elapsed_us=float(report.elapsed_us),
         owner_b=str(getattr(near, "b", "")),
         feature=getattr(near, "feature", None),
+        stopping_distance=stop,
     )
+
+
+_SEVERITY = {PanelStatus.OFF: -1, PanelStatus.CLEAR: 0, PanelStatus.WARNING: 1, PanelStatus.INCOMPLETE: 2,
+             PanelStatus.COLLISION: 3}
+"""Order of the statuses for the headline: the worst over every category wins."""
+
+
+def with_terrain(r: Readout, rep) -> Readout:
+    """``r`` (a backend's readout without the terrain) with the terrain category of ``rep`` (a
+    :class:`armguard.terrain.TerrainReport`): a ``terrain`` row, and the headline the worst of
+    both -- the worse status, and the terrain's nearest pair when it is the nearer."""
+    from dataclasses import replace
+
+    status = _status_of(rep)
+    d = float(rep.distance)
+    link = "" if rep.link is None else str(rep.link)
+    rows = tuple(x for x in r.rows if x.category != "terrain") + (CategoryRow("terrain", d, link, "terrain"),)
+    worst = status if _SEVERITY[status] > _SEVERITY[r.status] else r.status
+    if d < r.distance and rep.p_WA is not None:
+        return replace(r, status=worst, distance=d, link=link, obstacle="terrain", owner_a=link,
+                       p_WA=np.array(rep.p_WA, dtype=np.float64), p_WB=np.array(rep.p_WB, dtype=np.float64),
+                       within_threshold=d <= r.threshold, rows=rows, owner_b="terrain", feature=None)
+    return replace(r, status=worst, rows=rows)
 
 
 def readout_off(threshold: float) -> Readout:
@@ -220,16 +270,18 @@ def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=Non
         f'data-distance="{dist}" '
         f'style="background:{r.color};color:{fg};padding:8px;border-radius:6px;font-family:sans-serif">'
         f'<div style="font-size:1.2em;font-weight:bold">{e(r.status.value.upper())} &nbsp; {e(_fmt_m(r.distance))}</div>'
+        f'<div id="armguard-reason" data-reason="{e(r.reason)}"><b>{e(r.reason)}</b></div>'
         f"<div>backend: {e(r.backend)}</div>"
         f"<div>link: {e(r.link or '—')}</div><div>obstacle: {e(r.obstacle or '—')}{e(_fmt_feature(r.feature))}</div>"
         f"<div>arm point: {e(_fmt_p(r.p_WA))}</div><div>obstacle point: {e(_fmt_p(r.p_WB))}</div>"
-        f"<div>threshold: {e(_fmt_m(r.threshold))}</div><div style='font-size:0.85em'>{cycle}</div></div>"
+        f"<div>threshold: {e(_fmt_m(r.threshold))} &nbsp; stopping distance: {e(_fmt_m(r.stopping_distance))}</div>"
+        f"<div style='font-size:0.85em'>{cycle}</div></div>"
     )
     cmp_html = ""
     if compare is not None:
         o = compare.readout
         delta = "" if not math.isfinite(compare.delta) else f"{compare.delta:.9g}"
-        dd = "—" if not delta else f"{compare.delta * 1000.0:+.4f} mm"
+        dd = "—" if not delta else f"{compare.delta * 1000.0:+.4f} mm".replace("-0.0000 ", "0.0000 ").replace("+0.0000 ", "0.0000 ")
         cmp_html = (
             f'<div id="armguard-compare" data-delta="{delta}" data-backend="{e(o.backend)}" '
             'style="border:2px solid #0aa;border-radius:6px;padding:4px;margin-top:4px;font-family:sans-serif">'

@@ -13,7 +13,11 @@ import typing
 from ._backends import BackendView
 from ._parse import ConsoleInputError
 
-__all__ = ["SourcesMixin", "distance_backends", "declared_capabilities"]
+__all__ = ["SourcesMixin", "BackendFailed", "distance_backends", "declared_capabilities"]
+
+
+class BackendFailed(ConsoleInputError):
+    """A backend plugin raised while computing the panel: it is no longer offered until the model is reloaded."""
 
 
 def declared_capabilities(backend) -> frozenset | None:
@@ -57,7 +61,9 @@ class SourcesMixin:
     """Backends and model updates of the console state."""
 
     def _readout_of(self, backend: str):
-        from ._readout import readout_from_report
+        """The panel from ``backend``; the terrain, which only the detector checks, is added to
+        every other backend's answer (its row, and the headline the worst of both)."""
+        from ._readout import readout_from_report, with_terrain
 
         if backend == "analytic":
             self._last_report = self._detector.check(self._q)
@@ -65,8 +71,20 @@ class SourcesMixin:
         view = self._views.get(backend)
         if view is None:
             view = self._views[backend] = self._view_of(backend)
-        return view.readout(self._scene, self._q, self._active, threshold=self._threshold,
-                            stopping_distance=self._stopping, contact=self._tol.length)
+        try:
+            r = view.readout(self._scene, self._q, self._active, threshold=self._threshold,
+                             stopping_distance=self._stopping, contact=self._tol.length)
+        except Exception as exc:  # noqa: BLE001 - a plugin's failure is said, never a traceback in a log
+            self._views.pop(backend, None)
+            self._refused[backend] = f"{backend!r} failed ({type(exc).__name__}: {exc}) and is no longer offered"
+            raise BackendFailed(f"backend: {self._refused[backend]} until the model is reloaded") from None
+        guard = getattr(self._detector, "terrain", None)
+        if guard is None:
+            return r
+        rep = guard.check(self._scene.flat_q(self._q), threshold=self._threshold, stopping_distance=self._stopping)
+        if backend == self._backend:
+            self._backend_terrain = rep
+        return with_terrain(r, rep)
 
     # ------------------------------------------------------------------ model updates
     @property
@@ -93,6 +111,7 @@ class SourcesMixin:
                 changes = describe_changes(self._scene, new_scene, self._q, new_q, self._model, model)
                 self._scene, self._model, self._q, self._views = new_scene, model, new_q, {}
                 self._refused = {}
+                self._ws_draft = (None, None)
                 if self._active not in new_scene.robots:
                     self._active = next(iter(new_scene.robots))
                 if self._backend not in self.backends:
@@ -165,12 +184,15 @@ class SourcesMixin:
         self._check_backend(name)
         self._prepare(name)
         with self._lock:
-            old, message = self._backend, (self._message, self._message_is_error)
+            old, message = (self._backend, self._compare_with), (self._message, self._message_is_error)
             self._backend = name
+            note = ""
+            if self._compare_with == name:  # never compared with itself
+                self._compare_with, note = None, "; comparison off"
             try:
-                self._changed(f"backend: {name}")
+                self._changed(f"backend: {name}{note}")
             except Exception:
-                self._backend = old
+                self._backend, self._compare_with = old
                 self._message, self._message_is_error = message
                 self._evaluate()
                 raise
@@ -179,6 +201,9 @@ class SourcesMixin:
         """Compare mode: also compute the nearest pair with backend ``name`` (None: off) and show Δd."""
         if name is not None:
             self._check_backend(name)
+            if name == self._backend:
+                raise ConsoleInputError(f"compare with: {name!r} is the panel's backend; a backend is not compared "
+                                        "with itself (pick another)")
             self._prepare(name)
         with self._lock:
             old, message = self._compare_with, (self._message, self._message_is_error)

@@ -26,7 +26,8 @@ from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._backends import compare_readouts
 from ._motion import MotionMixin
 from ._overlays import OverlayMixin
-from ._sources import SourcesMixin
+from ._sources import BackendFailed, SourcesMixin
+from ._targets import TargetsMixin
 from ._parse import ConsoleInputError, parse_number, parse_numbers
 from ._readout import Readout, readout_from_report, readout_off
 from ._timeline import Timeline
@@ -74,7 +75,9 @@ class Snapshot:
     detection"``, with ``run_detail`` saying when (``"at t = 5.00 s"``) and, when detection
     stopped it, the link, the obstacle and the distance; ``changes`` what the last model reload changed; ``terrain`` a
     :class:`~._overlays.TerrainView` (the pyramid boxes the last check tested) or None;
-    ``sigmas`` the :class:`armguard.uncertainty.SigmaReport` of the uncertain placements or None.
+    ``sigmas`` the :class:`armguard.uncertainty.SigmaReport` of the uncertain placements or None;
+    ``target`` ``(p_WE (3,) m, rpy (3,) rad, typed)`` the Cartesian target (:meth:`ConsoleState.target`);
+    ``workspace_corners`` ``(lower, upper)`` the corner fields' values ((3,) m or None each).
     """
 
     version: int
@@ -99,13 +102,15 @@ class Snapshot:
     changes: str = ""
     terrain: object = None
     sigmas: object = None
+    target: tuple | None = None
+    workspace_corners: tuple = (None, None)
 
 
 def _duration_of(trajectory) -> float:
     return float(trajectory.duration)
 
 
-class ConsoleState(MotionMixin, SourcesMixin, OverlayMixin):
+class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin):
     """The operator console's state and commands (thread-safe; no GUI).
 
     Parameters
@@ -200,6 +205,8 @@ class ConsoleState(MotionMixin, SourcesMixin, OverlayMixin):
                 changes=self._changes,
                 terrain=self._terrain_view,
                 sigmas=self._sigmas,
+                target=self._target_now(),
+                workspace_corners=self.workspace_corners(),
             )
 
     def joint_limits(self, robot: str) -> tuple[np.ndarray, np.ndarray]:
@@ -232,9 +239,21 @@ class ConsoleState(MotionMixin, SourcesMixin, OverlayMixin):
         t0 = time.perf_counter()
         self._comparison = None
         if self._detection:
-            self._readout = self._readout_of(self._backend)
+            failed = []  # said in the panel; the detector answers from now on
+            try:
+                self._readout = self._readout_of(self._backend)
+            except BackendFailed as exc:
+                self._backend = "analytic"
+                failed.append(f"{exc}; the panel is back on analytic")
+                self._readout = self._readout_of("analytic")
             if self._compare_with is not None:
-                self._comparison = compare_readouts(self._readout, self._readout_of(self._compare_with))
+                try:
+                    self._comparison = compare_readouts(self._readout, self._readout_of(self._compare_with))
+                except BackendFailed as exc:
+                    self._compare_with = None
+                    failed.append(f"{exc}; comparison off")
+            if failed:
+                self._message, self._message_is_error = "; ".join(failed), True
         else:
             self._readout = readout_off(self._threshold)
         self._evaluate_overlays()
@@ -306,29 +325,6 @@ class ConsoleState(MotionMixin, SourcesMixin, OverlayMixin):
             self._detector.set_stopping_distance(x)
             self._changed()
             return x
-
-    def set_workspace(self, lo, hi) -> None:
-        """Workspace bounding-box limits ``lo``, ``hi`` (3 numbers each, m; hi > lo on every axis)."""
-        lo_v = parse_numbers(lo, "workspace lower corner", 3, unit="m")
-        hi_v = parse_numbers(hi, "workspace upper corner", 3, unit="m")
-        if np.any(hi_v <= lo_v):
-            raise ConsoleInputError(
-                f"workspace: the upper corner must exceed the lower one on every axis, got lo={lo_v.tolist()} "
-                f"hi={hi_v.tolist()}; limits kept unchanged"
-            )
-        with self._lock:
-            old = self._scene.workspace
-            self._scene.set_workspace(lo_v, hi_v)
-            try:
-                self._rebuild_detector()
-            except Exception:
-                if old is None:
-                    self._scene.clear_workspace()
-                else:
-                    self._scene.set_workspace(old.lo, old.hi)
-                self._rebuild_detector()
-                raise
-            self._changed()
 
     # ------------------------------------------------------------------ joint control
     def joint_units(self, robot: str) -> tuple[str, ...]:
