@@ -89,14 +89,17 @@ def test_ctrl_c_is_130_not_a_collision(monkeypatch):
 
 def test_real_sigint_is_130():
     """A real SIGINT to a running command (a command added for the test that waits)."""
-    code = ("import time, click\nfrom armguard.cli import main\n"
+    # the child restores Python's SIGINT handler: a test runner's worker may start it with SIGINT
+    # ignored, and an ignored disposition is inherited (Python then installs no handler)
+    code = ("import signal, time, click\nsignal.signal(signal.SIGINT, signal.default_int_handler)\n"
+            "from armguard.cli import main\n"
             "@main.command('nap')\ndef nap():\n    print('ready', flush=True)\n    time.sleep(60)\n"
             "main(['nap'])\n")
     child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         assert child.stdout.readline().strip() == "ready"
         child.send_signal(signal.SIGINT)
-        _, err = child.communicate(timeout=30)
+        _, err = child.communicate(timeout=120)
     finally:
         if child.poll() is None:
             child.kill()

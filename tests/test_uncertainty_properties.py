@@ -3,8 +3,10 @@ symmetry of merging, and covariances that stay symmetric positive semi-definite.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from armguard.uncertainty import UncertainPose2, UncertainPose3, se2
@@ -57,6 +59,9 @@ def test_reverse_is_an_involution_and_an_inverse(a):
 @SETTINGS
 @given(poses(), poses())
 def test_merge_is_symmetric(a, b):
+    # headings about pi apart: the wrapped innovation flips sign between a.merge(b) and b.merge(a)
+    # (the linearised merge has no symmetric answer there), so the property holds away from it
+    assume(abs(se2.wrap_angle(a.mean[2] - b.mean[2])) < math.pi - 0.2)
     b = UncertainPose2(b.mean, b.cov + 1e-3 * np.eye(3))  # C1 + C2 invertible
     m1, m2 = a.merge(b), b.merge(a)
     same_relation(m1.mean, m2.mean)
