@@ -3,6 +3,8 @@ checked against coal's signed distances as the truth."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -136,8 +138,19 @@ def test_guards_are_reposed_not_rebuilt(puma, monkeypatch):
     assert clip.verdicts(model.random_q(50, 2)).shape == (50,)
 
 
-def test_workspace_walls_are_definite_and_agree_with_coal():
-    model = armguard.load_model("ranger")
+def test_workspace_walls_are_definite_and_agree_with_coal(tmp_path):
+    # Ranger with its box's x faces at +-1.5 m (the scene's own are at +-2.5 m, beyond every arm's
+    # random reach): random configurations then both touch and clear the walls
+    import shutil
+
+    src = Path(armguard.__file__).resolve().parents[2] / "urdf" / "ranger"
+    shutil.copytree(src, tmp_path / "ranger")
+    sidecar = tmp_path / "ranger" / "ranger.yaml"
+    text = sidecar.read_text()
+    box = "workspace: {lo: [-2.5, -3.0, -2.5], hi: [2.5, 3.0, 2.5]}"
+    assert box in text
+    sidecar.write_text(text.replace(box, "workspace: {lo: [-1.5, -3.0, -2.5], hi: [1.5, 3.0, 2.5]}"))
+    model = armguard.load_model(sidecar)
     clip, ref = armguard.checker(model, "clip"), armguard.checker(model, "coal")
     ws = np.array([k == "workspace" for k, _, _ in clip.plans])
     assert ws.sum() == 16
