@@ -27,7 +27,7 @@ import numpy as np
 from .._errors import ForbiddenMapError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 
-__all__ = ["MapLinks", "map_links", "link_obstacle_scene", "rest_scene", "DetectorClearance", "CheckerClearance",
+__all__ = ["MapLinks", "map_links", "pick_robot", "link_obstacle_scene", "rest_scene", "DetectorClearance", "CheckerClearance",
            "resolve_scene", "sub_model", "checker_over"]
 
 
@@ -68,16 +68,22 @@ class MapLinks:
     lever: np.ndarray
 
 
-def map_links(scene, robot: str | None, joints=None, links=None, tol: Tolerances = DEFAULT_TOLERANCES) -> MapLinks:
-    """Pick and check the mapped links of ``robot`` (see the module docstring)."""
-    from ..verify._oracle import ClearanceModel
-
+def pick_robot(scene, robot: str | None) -> str:
+    """``robot``, checked to be in ``scene``; None names the scene's only robot."""
     if robot is None:
         if len(scene.robots) != 1:
             raise ForbiddenMapError(f"robot: the scene has robots {list(scene.robots)}; name one")
         robot = next(iter(scene.robots))
     if robot not in scene.robots:
         raise ForbiddenMapError(f"robot {robot!r} is not in the scene; robots are {list(scene.robots)}")
+    return robot
+
+
+def map_links(scene, robot: str | None, joints=None, links=None, tol: Tolerances = DEFAULT_TOLERANCES) -> MapLinks:
+    """Pick and check the mapped links of ``robot`` (see the module docstring)."""
+    from ..verify._oracle import ClearanceModel
+
+    robot = pick_robot(scene, robot)
     rob = scene.robots[robot]
     names = tuple(rob.joint_names)
     joints = tuple(names[:3]) if joints is None else tuple(joints)

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._errors import ForbiddenMapError
+from ._clearance import pick_robot
 
 __all__ = ["EdConstant", "ed_constant", "PAPER_CM_PER_DEGREE"]
 
@@ -58,12 +59,7 @@ class EdConstant:
 
 def ed_constant(scene, robot: str | None = None) -> EdConstant:
     """Hermes eq. (4-5)'s constant for ``robot`` of ``scene`` (see the module docstring)."""
-    if robot is None:
-        if len(scene.robots) != 1:
-            raise ForbiddenMapError(f"robot: the scene has robots {list(scene.robots)}; name one")
-        robot = next(iter(scene.robots))
-    if robot not in scene.robots:
-        raise ForbiddenMapError(f"robot {robot!r} is not in the scene; robots are {list(scene.robots)}")
+    robot = pick_robot(scene, robot)
     rob = scene.robots[robot]
     moving = [j for j in rob.joints if j.joint_type.value != "fixed"]
     if len(moving) < 3:
