@@ -38,6 +38,20 @@ SMALL_VIEWPORT = {"width": 640, "height": 480}
 POLL_MS = 100
 """Poll the page on a timer, not on animation frames (software WebGL makes frames slow)."""
 VIEWPORT = {"width": 960, "height": 640}
+SHOT_TIMEOUT_MS = 120000
+"""A screenshot waits for a new frame; software WebGL on a loaded 2-core machine has been seen
+to take over 30 s for one (three browser tests timed out at Playwright's default)."""
+
+
+def screenshot(page, **kwargs) -> bytes:
+    """``page.screenshot`` with a generous timeout, tried twice: on a loaded machine a software-WebGL
+    frame can be slow to come, which says nothing about the console."""
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
+    try:
+        return page.screenshot(timeout=SHOT_TIMEOUT_MS, **kwargs)
+    except PlaywrightTimeout:
+        return page.screenshot(timeout=SHOT_TIMEOUT_MS, **kwargs)
 
 
 def _need_chromium() -> None:
@@ -183,7 +197,7 @@ def test_console_in_a_browser(console_url):
             page.wait_for_timeout(500)
             OUT.mkdir(exist_ok=True)
             shot = OUT / "console.png"
-            page.screenshot(path=str(shot))
+            screenshot(page, path=str(shot))
             assert shot.stat().st_size > 10_000
         finally:
             browser.close()

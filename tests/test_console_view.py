@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from test_console_browser import CHROMIUM, CHROMIUM_ARGS, UI_TIMEOUT_MS, POLL_MS, _input_for, _need_chromium
+from test_console_browser import CHROMIUM, CHROMIUM_ARGS, UI_TIMEOUT_MS, POLL_MS, _input_for, _need_chromium, screenshot
 
 KEY_DELAY_MS = 0
 """Between keystrokes: none (typed text stays in the box until Enter or blur)."""
@@ -53,7 +53,7 @@ def _shot(page) -> np.ndarray:
     from PIL import Image
 
     page.wait_for_timeout(1500)  # let software WebGL draw the latest frame
-    return np.asarray(Image.open(io.BytesIO(page.screenshot())).convert("RGB")).astype(np.int32)
+    return np.asarray(Image.open(io.BytesIO(screenshot(page))).convert("RGB")).astype(np.int32)
 
 
 def _count(img: np.ndarray, colour: str, x_max: int = PANEL_X) -> int:
@@ -321,7 +321,7 @@ def test_screenshots_show_the_line(name, pose):
                 label = f"{r.distance * 1000.0:.1f} mm"
                 assert page.get_by_text(label, exact=True).count() >= 1, label  # the label at the line
                 IMG.mkdir(parents=True, exist_ok=True)
-                page.screenshot(path=str(IMG / f"console-{name}.png"))
+                screenshot(page, path=str(IMG / f"console-{name}.png"))
                 # the same pixels without the line: they were the line's own
                 app.drawer.lines["primary"][0].visible = False
                 hidden = _shot(page)
