@@ -65,13 +65,13 @@ def puma():
     return model, collision_matrix(model, workers=2, max_evaluations=30_000)
 
 
-def _coal_pair_distance(model, links, Q_pin):
-    """Coal's distance of link pair ``links`` at ``Q_pin`` (M, nq): a checker of only that pair."""
+def _coal_pair_distance(model, pair, Q_pin):
+    """Coal's distance of link pair ``pair`` (a :class:`~armguard.srdfgen.LinkPair`) at ``Q_pin`` (M, nq):
+    a checker of only that pair."""
     from armguard.cspace._clearance import checker_over
 
     scene = matrix_scene(model.scene)
-    r = next(iter(scene.robots))
-    owners = {f"{r}/{ln}" for ln in links}
+    owners = {pair.owner1, pair.owner2}
     for cp in scene.allowed_pairs():
         if {cp.a, cp.b} != owners:
             scene.disable_pair(cp.a, cp.b)
@@ -102,16 +102,16 @@ def test_proven_never_pairs_have_no_contact_on_dense_samples_with_coal(puma):
         grid = np.stack(np.meshgrid(*[np.linspace(setup.lower[j], setup.upper[j], 12) for j in p.joints]), -1)
         G = np.repeat(setup.home[None], grid.size // len(p.joints), axis=0)
         G[:, list(p.joints)] = grid.reshape(-1, len(p.joints))
-        d = _coal_pair_distance(model, (e.link1, e.link2), model.pin_q(np.concatenate([Q, G])))
+        d = _coal_pair_distance(model, p, model.pin_q(np.concatenate([Q, G])))
         assert np.all(np.isfinite(d))
         assert d.min() > 0.0, (e.link1, e.link2, d.min())
 
 
 def test_witnessed_pairs_collide_at_their_witness(puma):
     model, cm = puma
-    for e in cm.entries:
+    for e, p in zip(cm.entries, pair_setup(model).pairs):
         if e.status == "witnessed":
-            d = _coal_pair_distance(model, (e.link1, e.link2), np.asarray([e.q]))
+            d = _coal_pair_distance(model, p, np.asarray([e.q]))
             assert d[0] <= 1e-6, (e.link1, e.link2, d[0])
 
 
@@ -173,23 +173,26 @@ def test_srdf_command_writes_an_srdf_that_loads_back_to_the_pairs_kept(ur5, tmp_
 
 
 def test_check_srdf_reports_a_disabled_pair_that_collides(tmp_path):
-    """puma560's base and link2 collide (witnessed): an SRDF that disables them is flagged, with a q that collides."""
+    """puma560's base and link2 collide (witnessed): an SRDF that disables them is flagged, with a q that collides.
+    The SRDF names the URDF's links (``puma560_base``), as every SRDF does."""
     from armguard.cli import main
 
+    BASE_LINK2 = frozenset(("puma560_base", "puma560_link2"))
     srdf = tmp_path / "bad.srdf"
-    srdf.write_text('<robot name="puma560"><disable_collisions link1="base" link2="link2" reason="Never"/>'
-                    '<disable_collisions link1="link1" link2="link3" reason="Never"/></robot>')
+    srdf.write_text('<robot name="puma560"><disable_collisions link1="puma560_base" link2="puma560_link2" reason="Never"/>'
+                    '<disable_collisions link1="puma560_link1" link2="puma560_link3" reason="Never"/></robot>')
     res = CliRunner().invoke(main, ["check-srdf", "puma560", str(srdf), "--json", "--max-evaluations", "30000"])
     assert res.exit_code == 0, res.output
     out = json.loads(res.output)
     pairs = {frozenset((d["link1"], d["link2"])): d for d in out["can_collide"]}
-    assert set(pairs) == {frozenset(("base", "link2"))}
+    assert set(pairs) == {BASE_LINK2}
     model = armguard.load_model("puma560", srdf=False)
-    q = np.asarray([pairs[frozenset(("base", "link2"))]["q"]])
+    q = np.asarray([pairs[BASE_LINK2]["q"]])
     assert q.shape == (1, model.nq)
-    assert pairs[frozenset(("base", "link2"))]["coal_distance"] <= 1e-6
-    assert _coal_pair_distance(model, ("base", "link2"), q)[0] <= 1e-6
-    assert {frozenset((d["link1"], d["link2"])) for d in out["proven_disabled"]} == {frozenset(("link1", "link3"))}
+    assert pairs[BASE_LINK2]["coal_distance"] <= 1e-6
+    pair = next(p for p in pair_setup(model).pairs if frozenset((p.link1, p.link2)) == BASE_LINK2)
+    assert _coal_pair_distance(model, pair, q)[0] <= 1e-6
+    assert {frozenset((d["link1"], d["link2"])) for d in out["proven_disabled"]} == {frozenset(("puma560_link1", "puma560_link3"))}
     strict = CliRunner().invoke(main, ["check-srdf", "puma560", str(srdf), "--json", "--strict", "--max-evaluations", "30000"])
     assert strict.exit_code == 1
 

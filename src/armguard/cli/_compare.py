@@ -102,7 +102,8 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
 @click.option("--json", "as_json", is_flag=True, help="Print the findings as JSON.")
 def check_urdf_cmd(path, n_configs, as_json) -> None:
     """Lint a model (a built-in name, .urdf or .yaml): dropped collision elements, non-convex meshes marked
-    convex, zero-length capsules, SRDF names that match nothing, pairs in permanent collision."""
+    convex, zero-length capsules, SRDF names that match nothing, disabled pairs whose certificate (armguard srdf)
+    an edit broke -- searched again, with the configuration where they now collide -- and pairs in permanent collision."""
     from rich.console import Console
     from rich.table import Table
 

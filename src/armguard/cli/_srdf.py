@@ -33,20 +33,39 @@ def _q(q) -> str:
               help="Per pair, distance evaluations before it is left undecided (certified).")
 @click.option("--evaluator", default="analytic", show_default=True,
               help="The backend whose distances are evaluated at cell centres (analytic, coal, ...).")
+@click.option("--update", is_flag=True,
+              help="--out is an SRDF written before: keep every pair whose certificate (its links' shapes, the joints "
+                   "between them, margin and method) is unchanged, search the rest again.")
 @click.option("--json", "as_json", is_flag=True, help="Print the matrix as JSON.")
-def srdf_cmd(robot, out, margin, method, samples, workers, max_evaluations, evaluator, as_json) -> None:
+def srdf_cmd(robot, out, margin, method, samples, workers, max_evaluations, evaluator, update, as_json) -> None:
     """Write the collision matrix of ROBOT (a built-in name, a public robot's name, or a .urdf) as an SRDF."""
+    from pathlib import Path
+
     from ..model import load_model
     from ..srdfgen import collision_matrix
 
+    if update and not Path(out).is_file():
+        raise click.BadParameter(f"{out} is not a file: --update rewrites an SRDF written before", param_hint="--out")
     model = load_model(robot, srdf=False)
+    before = {}
+    if update:
+        from ..srdfgen._io import read_previous
+
+        before = read_previous(out)
     cm = collision_matrix(model, margin=margin, method=method, samples=samples, workers=workers,
-                          max_evaluations=max_evaluations, backend=evaluator, progress=not as_json)
+                          max_evaluations=max_evaluations, backend=evaluator, progress=not as_json,
+                          previous=out if update else None)
+    changed = [(before[frozenset((e.link1, e.link2))], e) for e in cm.entries if frozenset((e.link1, e.link2)) in before
+               and (before[frozenset((e.link1, e.link2))].reason, before[frozenset((e.link1, e.link2))].status)
+               != (e.reason, e.status)]
     cm.write_srdf(out)
     c = cm.counts()
     if as_json:
         click.echo(json.dumps({"model": cm.model, "method": cm.method, "margin": cm.margin, "out": str(out),
                                "elapsed_s": cm.elapsed_s, "counts": c, "joint_names": list(cm.joint_names),
+                               "kept": [list(p) for p in cm.kept],
+                               "changed": [{"link1": e.link1, "link2": e.link2, "was": o.reason or o.status,
+                                            "now": e.reason or e.status} for o, e in changed],
                                "pairs": [{"link1": e.link1, "link2": e.link2, "reason": e.reason, "status": e.status,
                                           "q": None if e.q is None else list(e.q), "distance": e.distance, "how": e.how}
                                          for e in cm.entries]}, default=float))
@@ -54,6 +73,11 @@ def srdf_cmd(robot, out, margin, method, samples, workers, max_evaluations, eval
     click.echo(f"wrote {out}: {len(cm.disabled)} of {c['pairs']} pairs disabled (Adjacent {c['Adjacent']}, "
                f"Default {c['Default']}, Never {c['Never']}, Always {c['Always']}); checked: {c['witnessed']} witnessed, "
                f"{c['undecided']} undecided; {cm.method}, {cm.elapsed_s:.1f} s")
+    if update:
+        click.echo(f"  --update: {len(cm.kept)} pairs kept (certificate unchanged), "
+                   f"{c['pairs'] - c['Adjacent'] - c['Default'] - len(cm.kept)} searched again")
+        for o, e in changed:
+            click.echo(f"  changed {e.link1} - {e.link2}: {o.reason or o.status} -> {e.reason or e.status}")
     for e in cm.entries:
         if e.status == "witnessed":
             click.echo(f"  checked {e.link1} - {e.link2}: distance {e.distance:.4f} m at q = {_q(e.q)}")

@@ -13,6 +13,11 @@ Checks (each a :class:`Check`), on the files as written, then on the loaded mode
 * ``zero-length-capsule``: a ``<capsule>``-marked cylinder of length 0 (a sphere: say so), or a
   ``<capsule>`` mark on something not a cylinder;
 * ``srdf-name``: an SRDF link, joint or group name that matches nothing in the URDF;
+* ``srdf-certificate``: a pair the SRDF disables with a certificate (``armguard srdf``) that the
+  URDF no longer matches -- a shape of either link or a joint between them edited -- is searched
+  again (:func:`armguard.srdfgen.check_srdf`): an error with the configuration where it now
+  collides, else a warning (still proven: refresh the SRDF with ``armguard srdf --update``; or
+  undecided);
 * ``permanent-collision``: an active pair in collision (coal, ``d <= 0``) at the home pose, and
   whether it is in collision at more than ``permanent_fraction`` of ``n_configs`` seeded random
   configurations (then a ``<disable_collisions>`` line is suggested).
@@ -39,6 +44,7 @@ class Check(str, enum.Enum):
     ZERO_LENGTH_CAPSULE = "zero-length-capsule"
     SRDF_NAME = "srdf-name"
     PERMANENT_COLLISION = "permanent-collision"
+    SRDF_CERTIFICATE = "srdf-certificate"
 
 
 class Severity(str, enum.Enum):
@@ -240,6 +246,47 @@ def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport) -> Non
             need(j.get("name"), "joint", f"group_state[{st.get('name')}].joint", joints)
 
 
+def _certificate_checks(model, report: LintReport) -> None:
+    """Search again every disabled pair whose certificate the URDF no longer matches (module docstring)."""
+    from ..model._certificate import stale_certificates
+    from ..srdfgen import check_srdf
+
+    srdf = Path(model.srdf.file)
+    stale = stale_certificates(model.pin_model, model.collision_model, srdf)
+    if not stale:
+        return
+    where = {frozenset((s.link1, s.link2)): s for s in stale}
+    margins = sorted({c.margin for c in _certs(srdf) if frozenset((c.link1, c.link2)) in where})
+    for margin in margins or [0.0]:
+        lint = check_srdf(model, srdf, margin=margin, pairs=[(s.link1, s.link2) for s in stale])
+        for d in lint.can_collide:
+            s = where[frozenset((d["link1"], d["link2"]))]
+            q = ", ".join(f"{x:.4f}" for x in d["q"])
+            report.findings.append(Finding(
+                Check.SRDF_CERTIFICATE, Severity.ERROR, f"{srdf.name}: {s.where}",
+                f"disables {d['link1']} - {d['link2']} ({d['reason']}), certified for another geometry or kinematics; "
+                f"the URDF as it is now brings them within {margin:g} m: distance {d['distance']:.4f} m at q = [{q}] "
+                f"({', '.join(lint.joint_names)})", "armguard srdf --update (the pair is then checked)"))
+        for d in lint.proven_disabled:
+            s = where[frozenset((d["link1"], d["link2"]))]
+            report.findings.append(Finding(
+                Check.SRDF_CERTIFICATE, Severity.WARNING, f"{srdf.name}: {s.where}",
+                f"disables {d['link1']} - {d['link2']} ({d['reason']}) with a certificate for another URDF; proven again: "
+                "it still never collides", "armguard srdf --update (records the new certificate)"))
+        for d in lint.undecided:
+            if d["disabled"]:
+                report.findings.append(Finding(
+                    Check.SRDF_CERTIFICATE, Severity.WARNING, f"{srdf.name}: {where[frozenset((d['link1'], d['link2']))].where}",
+                    f"disables {d['link1']} - {d['link2']} with a certificate for another URDF; neither proven nor "
+                    "witnessed again", "armguard srdf --update (the pair is then checked)"))
+
+
+def _certs(srdf):
+    from ..model._certificate import read_certificates
+
+    return read_certificates(srdf)
+
+
 def _collision_checks(model, report: LintReport, n_configs: int, seed: int, fraction: float) -> None:
     from ..backends import checker
 
@@ -289,6 +336,8 @@ def check_model_files(target, *, n_configs: int = 200, seed: int = 0, permanent_
     if urdf is not None:
         _xml_checks(Path(urdf), Path(srdf) if srdf else None, report, mesh_paths, convex_volume_ratio)
     if model is not None:
+        if model.srdf is not None:
+            _certificate_checks(model, report)
         _collision_checks(model, report, n_configs, seed, permanent_fraction)
         report.summary = (f"{model.collision_model.ngeoms} geometries, {len(model.pairs)} active pairs, "
                           f"{n_configs} random configurations")

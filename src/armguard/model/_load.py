@@ -57,7 +57,7 @@ def load_model(name_or_path, *, srdf=None, package_dirs=()) -> Model:
     if suffix == ".urdf":
         return model_from_urdf(p, srdf=srdf, package_dirs=package_dirs)
     if suffix in (".yaml", ".yml"):
-        return model_from_yaml(p)
+        return model_from_yaml(p, srdf=srdf)
     if suffix == "" and "/" not in s and "\\" not in s:
         return _model_by_name(s, srdf=srdf, package_dirs=package_dirs)
     raise SceneError(f"cannot load {s!r}: expected a model name ({_known_names_text()}), a .urdf or a .yaml file")
@@ -69,7 +69,7 @@ def _model_by_name(name: str, *, srdf=None, package_dirs=()) -> Model:
 
     path = builtin_model_path(name)
     if path is not None:
-        return model_from_yaml(path)
+        return model_from_yaml(path, srdf=srdf)
     if public_robot(name) is not None:
         urdf, known_srdf = public_robot_files(name)
         return model_from_urdf(urdf, srdf=srdf if srdf is not None else known_srdf, package_dirs=package_dirs)
@@ -170,7 +170,20 @@ def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None):
         if skipped:
             srdf_obj.warn(f"{len(skipped)} disabled pairs name links {urdf.name} does not have and were skipped "
                           f"(first: {', '.join(skipped[:3])})")
+        _warn_stale(srdf_obj, pin_model, geom)
     return scene, pin_model, geom, parts
+
+
+def _warn_stale(srdf_obj, pin_model, geom) -> None:
+    """Warn when the SRDF disables pairs certified for another geometry or kinematics (``_certificate``)."""
+    from ._certificate import stale_certificates
+
+    stale = stale_certificates(pin_model, geom, srdf_obj.file)
+    if stale:
+        names = ", ".join(f"{s.link1}-{s.link2} ({s.reason})" for s in stale[:4]) + (" ..." if len(stale) > 4 else "")
+        srdf_obj.warn(f"{len(stale)} disabled pairs were certified for another geometry or kinematics than this URDF "
+                      f"gives and may now collide: {names}; `armguard check-urdf` proves them again, "
+                      "`armguard srdf --update` rewrites them")
 
 
 def _q_index(parts) -> np.ndarray:
@@ -203,8 +216,8 @@ def parts_files(parts, srdf_obj) -> list:
     return [Path(srdf_obj.file)] if srdf_obj is not None else []
 
 
-def model_from_yaml(path) -> Model:
-    """A Model of a sidecar or scene YAML file."""
+def model_from_yaml(path, *, srdf=None) -> Model:
+    """A Model of a sidecar or scene YAML file; ``srdf=`` (a path, or False for none) replaces the sidecar's."""
     from ._scenefile import read_scene_yaml, validate_scene_dict
 
     from .._lines import lines_for
@@ -213,15 +226,18 @@ def model_from_yaml(path) -> Model:
     with lines_for(path):
         data = read_scene_yaml(path)
         sf = validate_scene_dict(data, str(path))
-        return model_from_scenefile(sf, str(path), path.parent)
+        return model_from_scenefile(sf, str(path), path.parent, srdf=srdf)
 
 
-def model_from_scenefile(sf, file: str, base: Path) -> Model:
-    """The Model of a validated scene file ``sf`` read from ``file`` (paths relative to ``base``)."""
+def model_from_scenefile(sf, file: str, base: Path, *, srdf=None) -> Model:
+    """The Model of a validated scene file ``sf`` read from ``file`` (paths relative to ``base``);
+    ``srdf=`` (a path, or False for none) replaces the sidecar's ``model.srdf``."""
     from ._scenefile import _DEG, _MM, _Ctx, _frames, _populate
 
     ctx = _Ctx(file, base, _MM if sf.units.length == "mm" else 1.0, _DEG if sf.units.angle == "deg" else 1.0)
     if sf.model is None:
+        if srdf not in (None, False):
+            raise SceneFileError(file, "", f"srdf={srdf!s}: a scene file without a URDF (no 'model:') has no SRDF to replace")
         return _model_from_plain_scene(sf, file, base, ctx)
     if sf.robots or sf.payloads:
         raise ctx.error("robots" if sf.robots else "payloads", "a model sidecar takes its arms and payloads from the "
@@ -229,8 +245,9 @@ def model_from_scenefile(sf, file: str, base: Path) -> Model:
     urdf = ctx.path(sf.model.urdf)
     if not urdf.is_file():
         raise ctx.error("model.urdf", f"URDF file not found: {urdf}")
-    srdf_path = ctx.path(sf.model.srdf) if sf.model.srdf else None
-    srdf_obj = _srdf_for(urdf, srdf_path)
+    srdf_obj = _srdf_for(urdf, ctx.path(sf.model.srdf) if sf.model.srdf else None)
+    if srdf is not None:
+        srdf_obj = _replace_pairs(srdf_obj, srdf)
     acc = {}
     for jn, spec in sf.joints.items():
         if spec.max_acceleration is not None:
@@ -254,6 +271,21 @@ def model_from_scenefile(sf, file: str, base: Path) -> Model:
     return Model(sf.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), hull_cache=parts.hull_cache,
                  geometry_names=geometry_names,
                  notes=parts.notes, files=files, srdf=srdf_obj)
+
+
+def _replace_pairs(sidecar_srdf, srdf):
+    """A sidecar's SRDF with the caller's disabled pairs: none (``srdf=False``), or those of the file
+    ``srdf`` -- with that file's groups and states where it has them, else the sidecar's (which name the
+    arms and their home: an SRDF ``armguard srdf`` wrote has only pairs)."""
+    import dataclasses
+
+    if srdf is False:
+        return None if sidecar_srdf is None else dataclasses.replace(sidecar_srdf, disabled=())
+    given = read_srdf(srdf, found="given (srdf=)")
+    if sidecar_srdf is None:
+        return given
+    return dataclasses.replace(given, groups=given.groups or sidecar_srdf.groups,
+                               states=given.states or sidecar_srdf.states)
 
 
 def _add_extra_bodies(scene, geom, geometry_names: dict, known: set) -> None:

@@ -1,31 +1,44 @@
-"""Writing a collision matrix as an SRDF (MoveIt's format, read by Pinocchio's ``removeCollisionPairs``)."""
+"""Writing a collision matrix as an SRDF (MoveIt's format, read by Pinocchio's ``removeCollisionPairs``),
+and reading back the one written before (``armguard srdf --update``).
+
+Each ``<disable_collisions>`` carries its pair's certificate (``armguard_fingerprint``, see
+:mod:`armguard.model._certificate`), the ``<robot>`` element the margin and method; each checked
+pair is a comment ending in its fingerprint, its witness configuration written to 17 digits.
+"""
 
 from __future__ import annotations
 
 import os
+import re
 import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from .._errors import OutputError
+from .._errors import OutputError, SceneFileError
+from ..model._certificate import FINGERPRINT_ATTR, MARGIN_ATTR, METHOD_ATTR
 
-__all__ = ["write_srdf", "srdf_text"]
+__all__ = ["write_srdf", "srdf_text", "read_previous"]
+
+_CHECKED = re.compile(r"^ checked: (?P<a>\S+) - (?P<b>\S+): (?P<what>.*) \[" + FINGERPRINT_ATTR + r"=(?P<fp>[0-9a-f]+)\] $")
+_WITNESS = re.compile(r"^witnessed at q = \[(?P<q>[^\]]*)\] \(distance (?P<d>\S+) m\)$")
 
 
 def srdf_text(matrix) -> str:
     """The SRDF of ``matrix``: one ``<disable_collisions link1 link2 reason/>`` per disabled pair, and
     a comment per checked pair (witnessed, with its configuration, or undecided)."""
-    root = ET.Element("robot", name=str(matrix.model))
+    root = ET.Element("robot", name=str(matrix.model), **{MARGIN_ATTR: repr(float(matrix.margin)), METHOD_ATTR: matrix.method})
     root.append(ET.Comment(f" collision matrix by armguard srdf: method {matrix.method}, margin {matrix.margin:g} m, "
                            f"{len(matrix.disabled)} of {len(matrix.entries)} link pairs disabled "))
     for e in matrix.entries:
         if e.reason is not None:
-            ET.SubElement(root, "disable_collisions", link1=e.link1, link2=e.link2, reason=e.reason)
+            extra = {FINGERPRINT_ATTR: e.fingerprint} if e.fingerprint else {}
+            ET.SubElement(root, "disable_collisions", link1=e.link1, link2=e.link2, reason=e.reason, **extra)
     for e in matrix.entries:
         if e.reason is None:
-            what = (f"witnessed at q = [{', '.join(f'{x:.6g}' for x in e.q)}] (distance {e.distance:.3g} m)"
+            what = (f"witnessed at q = [{', '.join(f'{x:.17g}' for x in e.q)}] (distance {e.distance:.6g} m)"
                     if e.status == "witnessed" else e.how)
-            root.append(ET.Comment(f" checked: {e.link1} - {e.link2}: {what} "))
+            tail = f" [{FINGERPRINT_ATTR}={e.fingerprint}]" if e.fingerprint else ""
+            root.append(ET.Comment(f" checked: {e.link1} - {e.link2}: {what}{tail} "))
     ET.indent(root, "  ")
     return '<?xml version="1.0" ?>\n' + ET.tostring(root, encoding="unicode") + "\n"
 
@@ -44,3 +57,35 @@ def write_srdf(matrix, path) -> None:
         if tmp is not None and os.path.exists(tmp):
             os.unlink(tmp)
         raise OutputError(f"{path}: cannot write the SRDF ({exc.strerror or exc})") from None
+
+
+def read_previous(path) -> dict:
+    """``frozenset((link1, link2)) -> MatrixEntry`` of every pair of an SRDF :func:`srdf_text` wrote that
+    carries a fingerprint (disabled pairs from their elements, checked pairs from their comments); an
+    SRDF made otherwise gives none.  A file that does not parse is a located error."""
+    from ._matrix import MatrixEntry
+
+    parser = ET.XMLParser(target=ET.TreeBuilder(insert_comments=True))
+    try:
+        root = ET.parse(str(path), parser=parser).getroot()
+    except ET.ParseError as exc:
+        line, col = exc.position
+        raise SceneFileError(str(path), f"line {line}, column {col + 1}", f"not well-formed XML: {exc.msg}") from None
+    except OSError as exc:
+        raise SceneFileError(str(path), "", f"cannot read the previous SRDF ({exc.strerror or exc})") from None
+    out = {}
+    for el in root:
+        if el.tag == "disable_collisions" and el.get(FINGERPRINT_ATTR):
+            a, b = el.get("link1", ""), el.get("link2", "")
+            out[frozenset((a, b))] = MatrixEntry(a, b, el.get("reason", ""), "disabled", how=f"kept from {path}: "
+                                                 "its certificate holds", fingerprint=el.get(FINGERPRINT_ATTR))
+        elif el.tag is ET.Comment and (m := _CHECKED.match(el.text or "")):
+            a, b, what, fp = m["a"], m["b"], m["what"], m["fp"]
+            w = _WITNESS.match(what)
+            if w:
+                q = tuple(float(x) for x in w["q"].split(","))
+                out[frozenset((a, b))] = MatrixEntry(a, b, None, "witnessed", q, float(w["d"]), f"kept from {path}",
+                                                     fingerprint=fp)
+            else:
+                out[frozenset((a, b))] = MatrixEntry(a, b, None, "undecided", None, float("nan"), what, fingerprint=fp)
+    return out

@@ -59,8 +59,9 @@ class SrdfLint:
 
 def check_srdf(model, srdf, *, margin: float = 0.0, backend: str | None = "analytic", options=None,
                workers: int | None = None, min_width: float = 1e-3, max_evaluations: int = 200_000, progress=False,
-               seed: int = 0, tol: Tolerances = DEFAULT_TOLERANCES) -> SrdfLint:
-    """Lint the SRDF file ``srdf`` for ``model`` (a Model or a name / path, loaded without an SRDF)."""
+               seed: int = 0, tol: Tolerances = DEFAULT_TOLERANCES, pairs=None) -> SrdfLint:
+    """Lint the SRDF file ``srdf`` for ``model`` (a Model or a name / path, loaded without an SRDF);
+    ``pairs``: only these ``(link1, link2)`` (``armguard check-urdf`` searches the pairs whose certificate broke)."""
     from .._errors import VerificationError
     from ..model._srdf import read_srdf
 
@@ -86,7 +87,9 @@ def check_srdf(model, srdf, *, margin: float = 0.0, backend: str | None = "analy
         disabled.setdefault(k, reason)
     adjacent = [{"link1": setup.pairs[k].link1, "link2": setup.pairs[k].link2, "reason": disabled[k]}
                 for k in disabled if setup.pairs[k].adjacent]
-    todo = [k for k in range(len(setup.pairs)) if not setup.pairs[k].adjacent]
+    only = None if pairs is None else {frozenset(p) for p in pairs}
+    todo = [k for k in range(len(setup.pairs)) if not setup.pairs[k].adjacent
+            and (only is None or frozenset((setup.pairs[k].link1, setup.pairs[k].link2)) in only)]
     advance, close = _progress(progress, len(todo), f"{model.name}: linting {_file_name(srdf)}")
 
     def one(k: int):

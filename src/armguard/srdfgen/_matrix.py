@@ -24,12 +24,14 @@ from __future__ import annotations
 
 import time
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from .._errors import VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ..model._certificate import pair_fingerprint
+from ._io import read_previous
 from ._pairs import pair_setup
 from ._prove import PairVerdict, prove_pair
 
@@ -58,6 +60,7 @@ class MatrixEntry:
     distance: float = float("nan")
     how: str = ""
     evaluations: int = 0
+    fingerprint: str = ""  # what the verdict depends on, hashed (armguard.model._certificate)
 
 
 @dataclass(frozen=True)
@@ -71,6 +74,7 @@ class CollisionMatrix:
     elapsed_s: float
     samples: int = 0
     joint_names: tuple = field(default=())
+    kept: tuple = field(default=())  # (link1, link2) taken unchanged from ``previous`` (their certificate held)
 
     @property
     def disabled(self) -> tuple:
@@ -158,7 +162,7 @@ def _progress(progress, total: int, label: str):
 def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", backend: str | None = "analytic",
                      options=None, workers: int | None = None, samples: int = 10_000, min_width: float = 1e-3,
                      max_evaluations: int = 200_000, progress=False, seed: int = 0,
-                     tol: Tolerances = DEFAULT_TOLERANCES) -> CollisionMatrix:
+                     tol: Tolerances = DEFAULT_TOLERANCES, previous=None) -> CollisionMatrix:
     """The collision matrix of ``model`` (an :class:`armguard.Model`, or a name / path for
     :func:`armguard.load_model`, loaded without its SRDF).  See the module docstring.
 
@@ -170,6 +174,9 @@ def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", b
     samples : random configurations of ``method="sampled"`` (MoveIt: 10^4 by default).
     min_width, max_evaluations : per pair, the certified search's limits (rad; distance evaluations).
     progress : True for a rich progress bar, or a ``callback(done, total)``.
+    previous : an SRDF this command wrote before (``armguard srdf --update``): a pair whose fingerprint
+        (:func:`armguard.model._certificate.pair_fingerprint`: its links' shapes, the joints between
+        them, the margin and method) is the one recorded there keeps its verdict without a search.
     """
     if method not in METHODS:
         raise VerificationError(f"method: expected one of {list(METHODS)}, got {method!r}")
@@ -191,13 +198,21 @@ def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", b
     if not np.all(np.isfinite(d_home)):
         raise VerificationError("a distance at the home configuration is not finite: no verdict")
     home_pin = tuple(float(x) for x in ev.pin(setup.home[None, :])[0])
+    prints = [pair_fingerprint(model.pin_model, model.collision_model, p.link1, p.link2, margin=float(margin),
+                               method=method) or "" for p in setup.pairs]
+    before = read_previous(previous) if previous is not None else {}
     entries: list = [None] * P
     todo = []
+    kept = []
     for k, p in enumerate(setup.pairs):
         if p.adjacent:
             entries[k] = MatrixEntry(p.link1, p.link2, "Adjacent", "disabled", how="joined by a joint or through links without geometry")
         elif d_home[k] <= 0.0:
             entries[k] = MatrixEntry(p.link1, p.link2, "Default", "disabled", home_pin, float(d_home[k]), "in contact at home")
+        elif (old := before.get(frozenset((p.link1, p.link2)))) is not None and old.fingerprint == prints[k] \
+                and old.reason not in ("Adjacent", "Default"):
+            entries[k] = old
+            kept.append((p.link1, p.link2))
         else:
             todo.append(k)
     advance, close = _progress(progress, len(todo), f"{model.name}: {method} collision matrix")
@@ -232,8 +247,9 @@ def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", b
             _sampled(ev, setup, todo, entries, margin, int(samples), seed, home_pin, advance)
     finally:
         close()
+    entries = [replace(e, fingerprint=f) for e, f in zip(entries, prints)]
     return CollisionMatrix(model.name, method, float(margin), tuple(entries), time.perf_counter() - t0,
-                           int(samples) if method == "sampled" else 0, tuple(model.joint_names))
+                           int(samples) if method == "sampled" else 0, tuple(model.joint_names), tuple(kept))
 
 
 def _random(setup, n: int, rng) -> np.ndarray:

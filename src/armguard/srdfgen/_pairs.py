@@ -32,7 +32,7 @@ __all__ = ["LinkPair", "PairSetup", "pair_setup", "matrix_scene"]
 
 @dataclass(frozen=True)
 class LinkPair:
-    """One link pair: names, scene owners, adjacency, its joints (flat scene indices) and lever weights."""
+    """One link pair: URDF link names (as an SRDF names them), scene owners, adjacency, its joints (flat scene indices) and lever weights."""
 
     robot: str
     link1: str
@@ -95,6 +95,13 @@ def _ancestors(robot, link: str) -> list:
     return out
 
 
+def _urdf_link(model, owner: str) -> str:
+    """The URDF link (Pinocchio frame) of scene owner ``owner`` -- the name an SRDF uses (a built-in
+    model's links carry its robot's prefix, ``puma560_link1``, where the scene says ``puma560/link1``)."""
+    go = model.collision_model.geometryObjects[model.geometry_index(model.geometry_name(owner, 0))]
+    return model.pin_model.frames[go.parentFrame].name
+
+
 def pair_setup(model, tol: Tolerances = DEFAULT_TOLERANCES) -> PairSetup:
     """Every own-link pair of ``model``'s robots with geometry (see the module docstring)."""
     from ..verify._motion import chain_bounds
@@ -130,7 +137,8 @@ def pair_setup(model, tol: Tolerances = DEFAULT_TOLERANCES) -> PairSetup:
         flat = tuple(offsets[r] + j for j in keep)
         w = lever[cp.a][list(flat)] + lever[cp.b][list(flat)]
         adjacent = work._adjacent(r, la, lb)
-        pairs.append(LinkPair(r, la, lb, cp.a, cp.b, bool(adjacent), flat, np.ascontiguousarray(w)))
+        pairs.append(LinkPair(r, _urdf_link(model, cp.a), _urdf_link(model, cp.b), cp.a, cp.b, bool(adjacent), flat,
+                              np.ascontiguousarray(w)))
     lo, hi = _limits(work)
     home = np.asarray(work.flat_q(work.default_q()), dtype=np.float64)
     return PairSetup(work, tuple(pairs), home, lo, hi)

@@ -1,0 +1,158 @@
+"""Certificates of an SRDF's disabled pairs: what a verdict on a link pair depends on, hashed.
+
+A collision matrix's verdict on a pair of links A, B (:mod:`armguard.srdfgen`: *Never* proven,
+*Default*, *Adjacent*) holds for the geometry and the kinematics it was made for.  It depends on
+
+* the shapes of A and of B, each in its joint's frame (type, size, placement; a mesh by the
+  vertices of the hull that is checked);
+* every joint that changes the pair's relative pose: the joints that support one link and not the
+  other (Pinocchio's ``model.supports``), each with its type, placement in its parent, position
+  limits and ``q`` slot (a mimic joint's coupling included);
+* the margin and the method the matrix was made with.
+
+:func:`pair_fingerprint` hashes exactly these (SHA-256, the first 16 hex digits), so an edit of
+anything else in the URDF -- another link's mesh, a joint below both links, inertias -- keeps the
+certificate, and an edit of anything the verdict depends on voids it.  ``armguard srdf`` writes
+the fingerprint as an ``armguard_fingerprint`` attribute of ``<disable_collisions>`` (MoveIt's
+and Pinocchio's readers ignore attributes they do not know); :func:`stale_certificates` lists the
+disabled pairs whose certificate no longer matches the model (``load_model`` warns of them,
+``armguard check-urdf`` proves them again, ``armguard srdf --update`` rewrites them).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .._errors import SceneFileError
+
+__all__ = ["FINGERPRINT_ATTR", "MARGIN_ATTR", "METHOD_ATTR", "pair_fingerprint", "read_certificates", "Certificate",
+           "StaleCertificate", "stale_certificates"]
+
+FINGERPRINT_ATTR = "armguard_fingerprint"
+MARGIN_ATTR = "armguard_margin"
+METHOD_ATTR = "armguard_method"
+_VERSION = b"armguard-pair-certificate-1"
+_SHAPE_ATTRS = ("radius", "halfLength", "halfSide", "radii", "n", "d")
+
+
+def _floats(h, x) -> None:
+    """Hash numbers to 12 decimals (m, rad), so a file re-saved with the same values keeps its print."""
+    a = np.round(np.asarray(x, dtype=np.float64).ravel(), 12) + 0.0  # +0.0: no negative zero
+    h.update(a.tobytes())
+
+
+def _shape(h, geometry) -> None:
+    h.update(type(geometry).__name__.encode())
+    for name in _SHAPE_ATTRS:
+        if hasattr(geometry, name):
+            v = getattr(geometry, name)
+            if not callable(v):
+                h.update(name.encode())
+                _floats(h, v)
+    if hasattr(geometry, "points") and callable(geometry.points):  # a convex hull: its vertices, in order
+        _floats(h, geometry.points())
+
+
+def pair_fingerprint(pin_model, collision_model, link1: str, link2: str, *, margin: float, method: str) -> str | None:
+    """The fingerprint (16 hex digits) of the verdict on ``link1``-``link2`` (see the module docstring);
+    None when either name is not a frame of ``pin_model``."""
+    ids = []
+    for name in sorted((link1, link2)):  # the pair's print does not depend on its order
+        if not pin_model.existFrame(name, pin.BODY):
+            return None
+        ids.append((name, pin_model.getFrameId(name, pin.BODY)))
+    h = hashlib.sha256(_VERSION)
+    h.update(f"{method} {float(margin)!r}".encode())
+    joints = set()
+    for name, fid in ids:
+        j = int(pin_model.frames[fid].parentJoint)
+        joints.symmetric_difference_update(int(x) for x in pin_model.supports[j])
+        h.update(b"link " + name.encode())
+        for go in collision_model.geometryObjects:
+            if int(go.parentFrame) == fid:
+                h.update(b"shape")
+                _floats(h, go.placement.homogeneous)
+                _shape(h, go.geometry)
+    lo, hi = pin_model.lowerPositionLimit, pin_model.upperPositionLimit
+    for j in sorted(joints):
+        jm = pin_model.joints[j]
+        h.update(b"joint " + pin_model.names[j].encode() + b" " + jm.shortname().encode())
+        _floats(h, pin_model.jointPlacements[j].homogeneous)
+        q = slice(int(jm.idx_q), int(jm.idx_q) + int(jm.nq))
+        h.update(f"q {q.start} {q.stop} parent {pin_model.names[pin_model.parents[j]]}".encode())
+        _floats(h, lo[q])
+        _floats(h, hi[q])
+        for attr in ("axis", "scaling", "offset"):  # unaligned axes, a mimic joint's coupling
+            if hasattr(jm, attr):
+                _floats(h, getattr(jm, attr))
+    return h.hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """One ``<disable_collisions>`` with a fingerprint: the pair, its reason, the print, the element."""
+
+    link1: str
+    link2: str
+    reason: str
+    fingerprint: str
+    margin: float
+    method: str
+    where: str
+
+
+def read_certificates(srdf_file) -> tuple[Certificate, ...]:
+    """The disabled pairs of ``srdf_file`` that carry an ``armguard_fingerprint`` (written by
+    ``armguard srdf``); none for an SRDF made otherwise.  A file that does not parse is a located error."""
+    try:
+        root = ET.parse(str(srdf_file)).getroot()
+    except ET.ParseError as exc:
+        line, col = exc.position
+        raise SceneFileError(str(srdf_file), f"line {line}, column {col + 1}", f"not well-formed XML: {exc.msg}") from None
+    except OSError as exc:
+        raise SceneFileError(str(srdf_file), "", f"cannot read the SRDF ({exc.strerror or exc})") from None
+    default_margin = root.get(MARGIN_ATTR, "0")
+    default_method = root.get(METHOD_ATTR, "certified")
+    out = []
+    for k, el in enumerate(root.iter("disable_collisions")):
+        fp = el.get(FINGERPRINT_ATTR)
+        if not fp:
+            continue
+        where = f"disable_collisions[{k}]"
+        try:
+            margin = float(el.get(MARGIN_ATTR, default_margin))
+        except ValueError:
+            raise SceneFileError(str(srdf_file), where, f"{MARGIN_ATTR}: expected a length (m)") from None
+        out.append(Certificate(el.get("link1", ""), el.get("link2", ""), el.get("reason", ""), fp, margin,
+                               el.get(METHOD_ATTR, default_method), where))
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class StaleCertificate:
+    """A disabled pair whose certificate does not match the model: ``recorded`` vs ``now`` (None: a link is gone)."""
+
+    link1: str
+    link2: str
+    reason: str
+    recorded: str
+    now: str | None
+    where: str
+
+
+def stale_certificates(pin_model, collision_model, srdf_file) -> tuple[StaleCertificate, ...]:
+    """The certified disabled pairs of ``srdf_file`` whose fingerprint the model no longer gives (an
+    *Adjacent* pair is disabled whatever its shapes, as MoveIt does, and is not listed)."""
+    out = []
+    for c in read_certificates(srdf_file):
+        if c.reason == "Adjacent":  # joined by a joint: disabled whatever their shapes (MoveIt's rule)
+            continue
+        now = pair_fingerprint(pin_model, collision_model, c.link1, c.link2, margin=c.margin, method=c.method)
+        if now != c.fingerprint:
+            out.append(StaleCertificate(c.link1, c.link2, c.reason, c.fingerprint, now, c.where))
+    return tuple(out)

@@ -1,0 +1,169 @@
+"""URDF-driven updates of a certified SRDF: certificates, ``load_model``'s warning, ``check-urdf``, ``srdf --update``.
+
+A copy of the built-in PUMA 560's URDF gets its certified SRDF (``armguard srdf``); then one edit
+grows the sphere at the end of link 3 from 6 cm to 35 cm, which makes the proven-*Never* pair
+``link1``-``link3`` collide.  The certificate of that pair breaks and no other of link 1's does;
+loading warns, ``check-urdf`` finds the collision (confirmed by coal at its witness), and
+``armguard srdf --update`` searches only the pairs whose certificate broke.
+"""
+
+from __future__ import annotations
+
+import shutil
+import warnings
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import armguard
+from armguard._errors import ArmguardWarning
+from armguard.cli import main
+from armguard.model import models_dir
+from armguard.model._certificate import FINGERPRINT_ATTR, pair_fingerprint, stale_certificates
+from armguard.srdfgen import collision_matrix
+
+MAX_EVALUATIONS = 5_000
+SPHERE = '<geometry><sphere radius="0.06"/></geometry>'
+NEVER = ("puma560_link1", "puma560_link3")
+
+
+@pytest.fixture(scope="module")
+def certified(tmp_path_factory):
+    """``(folder, urdf, text of the certified SRDF)``: the PUMA 560's URDF and its certified SRDF beside it."""
+    folder = tmp_path_factory.mktemp("puma")
+    shutil.copytree(models_dir() / "puma560", folder / "puma560")
+    urdf = folder / "puma560" / "puma560.urdf"
+    cm = collision_matrix(armguard.load_model(urdf, srdf=False), max_evaluations=MAX_EVALUATIONS)
+    assert any((e.link1, e.link2) == NEVER and e.reason == "Never" for e in cm.entries), cm.entries
+    cm.write_srdf(urdf.with_suffix(".srdf"))
+    return folder, urdf, urdf.with_suffix(".srdf").read_text()
+
+
+def _fresh(certified, tmp_path, *, grow: bool) -> Path:
+    folder, urdf, srdf_text = certified
+    shutil.copytree(folder / "puma560", tmp_path / "puma560")
+    new = tmp_path / "puma560" / "puma560.urdf"
+    new.with_suffix(".srdf").write_text(srdf_text)
+    if grow:
+        text = new.read_text()
+        assert text.count(SPHERE) == 1
+        new.write_text(text.replace(SPHERE, '<geometry><sphere radius="0.35"/></geometry>'))
+    return new
+
+
+def test_every_written_pair_carries_a_certificate_that_the_model_reproduces(certified):
+    _, urdf, text = certified
+    root = ET.fromstring(text)
+    pairs = root.findall("disable_collisions")
+    assert pairs and all(p.get(FINGERPRINT_ATTR) for p in pairs)
+    model = armguard.load_model(urdf)
+    for p in pairs:
+        fp = pair_fingerprint(model.pin_model, model.collision_model, p.get("link1"), p.get("link2"),
+                              margin=0.0, method="certified")
+        assert fp == p.get(FINGERPRINT_ATTR)
+        # the same pair named the other way round has the same certificate
+        assert fp == pair_fingerprint(model.pin_model, model.collision_model, p.get("link2"), p.get("link1"),
+                                      margin=0.0, method="certified")
+        # another margin or method is another certificate
+        assert fp != pair_fingerprint(model.pin_model, model.collision_model, p.get("link1"), p.get("link2"),
+                                      margin=0.01, method="certified")
+    assert stale_certificates(model.pin_model, model.collision_model, urdf.with_suffix(".srdf")) == ()
+
+
+def test_certificates_follow_only_what_a_verdict_depends_on(certified, tmp_path):
+    """Growing link 3's sphere breaks every pair with link 3 and none without it; a joint limit below both
+    links of a pair breaks that pair, one above their common ancestor does not."""
+    new = _fresh(certified, tmp_path, grow=True)
+    base = armguard.load_model(certified[1], srdf=False)
+    grown = armguard.load_model(new, srdf=False)
+
+    def fp(m, a, b):
+        return pair_fingerprint(m.pin_model, m.collision_model, a, b, margin=0.0, method="certified")
+
+    links = ["puma560_base", "puma560_link1", "puma560_link2", "puma560_link3", "puma560_tool"]
+    for i, a in enumerate(links):
+        for b in links[i + 1:]:
+            assert (fp(base, a, b) != fp(grown, a, b)) == ("puma560_link3" in (a, b)), (a, b)
+    # joint 1 (base -> link1) drives link1-link3's common ancestor only; joint 3 (link2 -> link3) lies between them
+    for joint, between in (("puma560_j1", False), ("puma560_j3", True)):
+        m = armguard.load_model(certified[1], srdf=False)
+        j = m.pin_model.getJointId(joint)
+        m.pin_model.upperPositionLimit[m.pin_model.joints[j].idx_q] -= 0.1
+        assert (fp(m, *NEVER) != fp(base, *NEVER)) is between, joint
+
+
+def test_loading_an_edited_urdf_warns_of_the_pairs_it_may_now_collide(certified, tmp_path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ArmguardWarning)
+        armguard.load_model(_fresh(certified, tmp_path / "same", grow=False))  # unedited: no warning
+    with pytest.warns(ArmguardWarning, match=r"certified for another geometry.*puma560_link1-puma560_link3 \(Never\)"):
+        model = armguard.load_model(_fresh(certified, tmp_path / "grown", grow=True))
+    assert any("certified for another geometry" in w for w in model.srdf.warnings)
+
+
+def test_check_urdf_finds_the_collision_the_edit_made_and_coal_confirms_it(certified, tmp_path):
+    from armguard.harness import check_model_files
+
+    new = _fresh(certified, tmp_path, grow=True)
+    with pytest.warns(ArmguardWarning):
+        report = check_model_files(new, n_configs=5)
+    found = [f for f in report.findings if f.check.value == "srdf-certificate"]
+    errors = [f for f in found if f.severity.value == "error"]
+    assert len(errors) == 1 and "puma560_link1 - puma560_link3" in errors[0].message, found
+    assert report.status.value == "errors"
+    # the witness is a real collision of the edited model (coal, all pairs of the two links)
+    q = np.array([float(x) for x in errors[0].message.split("q = [")[1].split("]")[0].split(",")])
+    model = armguard.load_model(new, srdf=False)
+    res = armguard.checker(model, "coal").pair_distances(q)
+
+    def link(g):
+        return model.pin_model.frames[model.collision_model.geometryObjects[model.geometry_index(g)].parentFrame].name
+
+    rows = [k for k, (a, b) in enumerate(res.pairs) if {link(a), link(b)} == set(NEVER)]
+    assert rows
+    assert float(np.min(res.distance[rows])) < 0.0  # in contact (the message gives q to 4 decimals)
+
+
+def test_srdf_update_searches_only_what_changed(certified, tmp_path):
+    runner = CliRunner()
+    same = _fresh(certified, tmp_path / "same", grow=False)
+    srdf = same.with_suffix(".srdf")
+    r = runner.invoke(main, ["srdf", str(same), "--out", str(srdf), "--update", "--max-evaluations", str(MAX_EVALUATIONS)])
+    assert r.exit_code == 0, r.output
+    assert "searched again" in r.output and " 0 searched again" in r.output, r.output
+    assert srdf.read_text() == certified[2]  # nothing changed: the same file
+
+    grown = _fresh(certified, tmp_path / "grown", grow=True)
+    srdf = grown.with_suffix(".srdf")
+    r = runner.invoke(main, ["srdf", str(grown), "--out", str(srdf), "--update", "--max-evaluations", str(MAX_EVALUATIONS)])
+    assert r.exit_code == 0, r.output
+    assert "changed puma560_link1 - puma560_link3: Never -> witnessed" in r.output, r.output
+    kept = int(r.output.split("--update: ")[1].split(" pairs kept")[0])
+    assert kept >= 1
+    disabled = {frozenset((e.get("link1"), e.get("link2"))) for e in ET.parse(srdf).getroot().findall("disable_collisions")}
+    assert frozenset(NEVER) not in disabled
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ArmguardWarning)
+        armguard.load_model(grown)  # the updated SRDF's certificates all hold
+
+
+def test_srdf_update_needs_an_existing_file(tmp_path):
+    r = CliRunner().invoke(main, ["srdf", "puma560", "--out", str(tmp_path / "none.srdf"), "--update"])
+    assert r.exit_code == 2 and "--update rewrites an SRDF written before" in r.output
+
+
+def test_a_built_in_model_takes_the_srdf_it_is_given(certified):
+    """``srdf=`` replaces a built-in model's pairs (it used to be ignored for a sidecar): the certified SRDF
+    disables link1-link3, which the shipped one checks; ``srdf=False`` disables none of the file's pairs."""
+    _, urdf, _ = certified
+    shipped = armguard.load_model("puma560")
+    given = armguard.load_model("puma560", srdf=urdf.with_suffix(".srdf"))
+    assert Path(given.srdf.file) == urdf.with_suffix(".srdf")
+    assert given.scene.joint_names == shipped.scene.joint_names  # the arm keeps its name and home
+    own = {frozenset(p) for p in zip(shipped.pairs.owner_a, shipped.pairs.owner_b)}
+    assert frozenset(("puma560/link1", "puma560/link3")) in own
+    assert frozenset(("puma560/link1", "puma560/link3")) not in {frozenset(p) for p in zip(given.pairs.owner_a, given.pairs.owner_b)}
+    assert armguard.load_model("puma560", srdf=False).srdf.disabled == ()
