@@ -28,7 +28,10 @@ def _q(q) -> str:
 @click.option("--method", type=click.Choice(["certified", "sampled"]), default="certified", show_default=True,
               help="certified: Never proven by branch and bound; sampled: MoveIt Setup Assistant's rules.")
 @click.option("--samples", type=int, default=10_000, show_default=True, help="Random configurations of --method sampled.")
-@click.option("--workers", type=int, default=None, help="Threads over the pairs (default: one).")
+@click.option("--workers", type=int, default=None, help="Threads over the pairs (default: one); with --scheduler local, "
+              "the Dask worker processes.")
+@click.option("--scheduler", default=None, help="Search the pairs on Dask: 'local' (a LocalCluster of --workers "
+              "processes) or a scheduler's address (tcp://host:8786); each worker loads ROBOT from its file.")
 @click.option("--max-evaluations", type=int, default=200_000, show_default=True,
               help="Per pair, distance evaluations before it is left undecided (certified).")
 @click.option("--evaluator", default="analytic", show_default=True,
@@ -37,7 +40,7 @@ def _q(q) -> str:
               help="--out is an SRDF written before: keep every pair whose certificate (its links' shapes, the joints "
                    "between them, margin and method) is unchanged, search the rest again.")
 @click.option("--json", "as_json", is_flag=True, help="Print the matrix as JSON.")
-def srdf_cmd(robot, out, margin, method, samples, workers, max_evaluations, evaluator, update, as_json) -> None:
+def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evaluations, evaluator, update, as_json) -> None:
     """Write the collision matrix of ROBOT (a built-in name, a public robot's name, or a .urdf) as an SRDF."""
     from pathlib import Path
 
@@ -54,7 +57,7 @@ def srdf_cmd(robot, out, margin, method, samples, workers, max_evaluations, eval
         before = read_previous(out)
     cm = collision_matrix(model, margin=margin, method=method, samples=samples, workers=workers,
                           max_evaluations=max_evaluations, backend=evaluator, progress=not as_json,
-                          previous=out if update else None)
+                          previous=out if update else None, scheduler=scheduler)
     changed = [(before[frozenset((e.link1, e.link2))], e) for e in cm.entries if frozenset((e.link1, e.link2)) in before
                and (before[frozenset((e.link1, e.link2))].reason, before[frozenset((e.link1, e.link2))].status)
                != (e.reason, e.status)]

@@ -162,7 +162,7 @@ def _progress(progress, total: int, label: str):
 def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", backend: str | None = "analytic",
                      options=None, workers: int | None = None, samples: int = 10_000, min_width: float = 1e-3,
                      max_evaluations: int = 200_000, progress=False, seed: int = 0,
-                     tol: Tolerances = DEFAULT_TOLERANCES, previous=None) -> CollisionMatrix:
+                     tol: Tolerances = DEFAULT_TOLERANCES, previous=None, scheduler: str | None = None) -> CollisionMatrix:
     """The collision matrix of ``model`` (an :class:`armguard.Model`, or a name / path for
     :func:`armguard.load_model`, loaded without its SRDF).  See the module docstring.
 
@@ -170,7 +170,11 @@ def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", b
     ----------
     margin : m, >= 0; a pair is *Never* only when proven (or seen) farther apart than this everywhere.
     method : "certified" | "sampled"
-    workers : threads over the pairs (certified; None: one).
+    workers : threads over the pairs (certified; None: one); with ``scheduler="local"`` the worker
+        processes of a fresh Dask LocalCluster.
+    scheduler : None (this process), ``"local"`` (a Dask LocalCluster of ``workers`` processes), or a
+        Dask scheduler's address (``tcp://host:8786``): each worker loads the model from its file once
+        and searches the pairs it is given (:mod:`._distributed`); the verdicts are the same.
     samples : random configurations of ``method="sampled"`` (MoveIt: 10^4 by default).
     min_width, max_evaluations : per pair, the certified search's limits (rad; distance evaluations).
     progress : True for a rich progress bar, or a ``callback(done, total)``.
@@ -218,31 +222,27 @@ def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", b
     advance, close = _progress(progress, len(todo), f"{model.name}: {method} collision matrix")
     try:
         if method == "certified":
-            def one(k: int) -> MatrixEntry:
-                p = setup.pairs[k]
-                r = prove_pair(lambda Q: ev(k, Q), setup.home, p.joints, setup.lower, setup.upper, p.weight, margin=margin,
-                               contact=tol.verify_contact, min_width=min_width, max_evaluations=max_evaluations,
-                               rng=np.random.default_rng(seed + k))
-                advance()
-                if r.verdict is PairVerdict.NEVER:
-                    return MatrixEntry(p.link1, p.link2, "Never", "disabled", None, r.lower_bound,
-                                       f"proven: {r.boxes} boxes over {len(p.joints)} joints, certified clearance >= "
-                                       f"{r.lower_bound:.4g} m", r.evaluations)
-                if r.verdict is PairVerdict.WITNESSED:
-                    q = tuple(float(x) for x in ev.pin(r.witness[None, :])[0])
-                    return MatrixEntry(p.link1, p.link2, None, "witnessed", q, r.distance, "a configuration within the margin",
-                                       r.evaluations)
-                return MatrixEntry(p.link1, p.link2, None, "undecided", None, float("nan"),
-                                   f"undecided after {r.evaluations} evaluations (boxes down to {r.smallest_width:.2g} rad)",
-                                   r.evaluations)
+            limits = dict(margin=float(margin), contact=tol.verify_contact, min_width=min_width,
+                          max_evaluations=max_evaluations, seed=seed)
+            if scheduler is not None:
+                from ._distributed import prove_on_dask
 
-            if workers and int(workers) > 1:
-                with ThreadPoolExecutor(int(workers)) as ex:
-                    for k, e in zip(todo, ex.map(one, todo)):
-                        entries[k] = e
-            else:
+                proofs = prove_on_dask(model, todo, limits, backend, workers, scheduler, advance)
                 for k in todo:
-                    entries[k] = one(k)
+                    entries[k] = _entry(setup.pairs[k], proofs[k], ev)
+            else:
+                def one(k: int) -> MatrixEntry:
+                    r = prove_one(setup, ev, k, limits)
+                    advance()
+                    return _entry(setup.pairs[k], r, ev)
+
+                if workers and int(workers) > 1:
+                    with ThreadPoolExecutor(int(workers)) as ex:
+                        for k, e in zip(todo, ex.map(one, todo)):
+                            entries[k] = e
+                else:
+                    for k in todo:
+                        entries[k] = one(k)
         else:
             _sampled(ev, setup, todo, entries, margin, int(samples), seed, home_pin, advance)
     finally:
@@ -250,6 +250,30 @@ def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", b
     entries = [replace(e, fingerprint=f) for e, f in zip(entries, prints)]
     return CollisionMatrix(model.name, method, float(margin), tuple(entries), time.perf_counter() - t0,
                            int(samples) if method == "sampled" else 0, tuple(model.joint_names), tuple(kept))
+
+
+def prove_one(setup, ev, k: int, limits: dict):
+    """The certified search of link pair ``k`` of ``setup`` (:func:`~._prove.prove_pair`) with ``limits``
+    (margin, contact, min_width, max_evaluations, seed)."""
+    p = setup.pairs[k]
+    return prove_pair(lambda Q: ev(k, Q), setup.home, p.joints, setup.lower, setup.upper, p.weight,
+                      margin=limits["margin"], contact=limits["contact"], min_width=limits["min_width"],
+                      max_evaluations=limits["max_evaluations"], rng=np.random.default_rng(limits["seed"] + k))
+
+
+def _entry(p, r, ev) -> MatrixEntry:
+    """The matrix entry of link pair ``p`` from its search ``r``."""
+    if r.verdict is PairVerdict.NEVER:
+        return MatrixEntry(p.link1, p.link2, "Never", "disabled", None, r.lower_bound,
+                           f"proven: {r.boxes} boxes over {len(p.joints)} joints, certified clearance >= "
+                           f"{r.lower_bound:.4g} m", r.evaluations)
+    if r.verdict is PairVerdict.WITNESSED:
+        q = tuple(float(x) for x in ev.pin(r.witness[None, :])[0])
+        return MatrixEntry(p.link1, p.link2, None, "witnessed", q, r.distance, "a configuration within the margin",
+                           r.evaluations)
+    return MatrixEntry(p.link1, p.link2, None, "undecided", None, float("nan"),
+                       f"undecided after {r.evaluations} evaluations (boxes down to {r.smallest_width:.2g} rad)",
+                       r.evaluations)
 
 
 def _random(setup, n: int, rng) -> np.ndarray:

@@ -1,0 +1,64 @@
+"""The certified search of a collision matrix on a Dask cluster (``armguard srdf --scheduler``).
+
+Each worker process loads the model from the file it was loaded from (without its SRDF), makes
+the same pair setup and evaluator once (kept per process), and searches the pairs it is given
+with the same limits and seeds as :func:`~._matrix.collision_matrix` does here, so the verdicts
+are the same as a run in one process.  The pairs go out one task each; results come back as
+:class:`~._prove.PairProof` (plain data).
+"""
+
+from __future__ import annotations
+
+from .._dask import dask_client
+from .._errors import VerificationError
+
+__all__ = ["prove_on_dask"]
+
+_WORKER: dict = {}  # (source, backend) -> (setup, evaluator), one per worker process
+
+
+def _source(model) -> str:
+    """The file ``model`` was loaded from (a URDF or a sidecar / scene YAML)."""
+    if not model.files:
+        raise VerificationError(f"model {model.name!r} was not loaded from a file: a Dask worker cannot load it")
+    return str(model.files[0])
+
+
+def _prove_task(source: str, backend, names: tuple, k: int, limits: dict):
+    from ..model import load_model
+    from ._matrix import PairEvaluator, prove_one
+    from ._pairs import pair_setup
+
+    key = (source, backend)
+    if key not in _WORKER:
+        _WORKER.clear()
+        model = load_model(source, srdf=False)
+        setup = pair_setup(model)
+        _WORKER[key] = (setup, PairEvaluator(model, setup, backend))
+    setup, ev = _WORKER[key]
+    p = setup.pairs[k]
+    if (p.link1, p.link2) != names:  # the worker's model is not the one the caller has
+        raise VerificationError(f"{source}: a worker's pair {k} is {p.link1}-{p.link2}, the caller's {names[0]}-{names[1]}"
+                                " (the file changed since it was loaded?)")
+    return prove_one(setup, ev, k, limits)
+
+
+def prove_on_dask(model, todo, limits: dict, backend, workers, scheduler: str, advance) -> dict:
+    """``{k: PairProof}`` for the link pairs ``todo`` of ``model``'s pair setup, searched on a Dask
+    cluster: ``scheduler="local"`` a fresh LocalCluster of ``workers`` processes, else the scheduler
+    at that address."""
+    from distributed import as_completed
+
+    from ._pairs import pair_setup
+
+    source = _source(model)
+    setup = pair_setup(model)
+    local = scheduler == "local"
+    with dask_client(int(workers or 2) if local else None, None if local else scheduler, VerificationError) as (client, _):
+        futures = {client.submit(_prove_task, source, backend, (setup.pairs[k].link1, setup.pairs[k].link2), k, limits,
+                                 pure=False): k for k in todo}
+        out = {}
+        for fut in as_completed(futures):
+            out[futures[fut]] = fut.result()
+            advance()
+    return out
