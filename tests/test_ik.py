@@ -214,3 +214,89 @@ def test_the_puma_plugin_refuses_a_robot_that_is_not_a_puma():
     robot = next(iter(armguard.load_model("ur5").scene.robots.values()))
     with pytest.raises(IKError, match="does not move its link 6 as the PUMA 560"):
         puma560_ik(robot, np.eye(4), None)
+
+
+# ---------------------------------------------------------------- the routine the model file names (ik:)
+def _closed_form_calls(monkeypatch):
+    """Count calls of the registered PUMA 560 routine."""
+    from armguard.kinematics import _ik
+
+    calls = []
+    original = _ik._PLUGINS["puma560"]
+
+    def counted(robot, X_BE, q_seed):
+        calls.append(robot.name)
+        return original(robot, X_BE, q_seed)
+
+    monkeypatch.setitem(_ik._PLUGINS, "puma560", counted)
+    return calls
+
+
+def test_the_builtin_puma560_names_its_closed_form_in_the_model_file(monkeypatch):
+    import armguard
+
+    robot = armguard.load_model("puma560").scene.robots["puma560"]
+    assert robot.ik == "puma560"
+    calls = _closed_form_calls(monkeypatch)
+    res = robot.inverse_kinematics(robot.link_pose(np.array([0.1, 0.5, -1.0, 0.2, -0.5, 0.3]), robot.tool_link))
+    assert res.status.value == "success" and calls == ["puma560"]
+    # the routine follows the file, not the name: a robot renamed still uses it
+    renamed = robot.with_name("arm_a")
+    assert renamed.ik == "puma560"
+    renamed.inverse_kinematics(renamed.link_pose(np.zeros(6), renamed.tool_link))
+    assert calls == ["puma560", "arm_a"]
+
+
+def _scene_with_ik(tmp_path, ik_line: str):
+    import armguard
+    from armguard.model import models_dir
+
+    text = (models_dir() / "puma560" / "puma560.yaml").read_text().replace("ik: {puma560: puma560}", ik_line)
+    (tmp_path / "puma560").mkdir(exist_ok=True)
+    for f in (models_dir() / "puma560").iterdir():
+        if f.suffix != ".yaml":
+            target = tmp_path / "puma560" / f.name
+            if not target.exists():
+                target.symlink_to(f)
+    path = tmp_path / "puma560" / "cell.yaml"
+    path.write_text(text)
+    return armguard.load_model(path)
+
+
+def test_a_model_file_may_name_the_numeric_solver_or_a_module_function(tmp_path, monkeypatch):
+    calls = _closed_form_calls(monkeypatch)
+    robot = _scene_with_ik(tmp_path, "ik: {puma560: numeric}").scene.robots["puma560"]
+    X = robot.link_pose(np.array([0.1, 0.5, -1.0, 0.2, -0.5, 0.3]), robot.tool_link)
+    assert robot.inverse_kinematics(X).status.value == "success" and calls == []  # damped least squares
+    robot = _scene_with_ik(tmp_path, "ik: {puma560: 'armguard.kinematics._puma:puma560_ik'}").scene.robots["puma560"]
+    res = robot.inverse_kinematics(X)
+    assert res.status.value == "success" and res.iterations == 0  # closed form: no iteration
+
+
+@pytest.mark.parametrize("line, match", [
+    ("ik: {puma560: nonesuch}", r"ik\.puma560.*unknown IK routine 'nonesuch'"),
+    ("ik: {puma560: 'no_such_module:f'}", r"ik\.puma560.*cannot import"),
+    ("ik: {arm9: numeric}", r"ik\.arm9.*unknown robot"),
+])
+def test_an_unknown_ik_routine_is_a_located_error(tmp_path, line, match):
+    from armguard._errors import SceneFileError
+
+    with pytest.raises(SceneFileError, match=match):
+        _scene_with_ik(tmp_path, line)
+
+
+def test_a_robot_without_a_routine_warns_once_when_a_command_needs_ik():
+    from armguard._errors import ArmguardWarning
+    from armguard.kinematics import _ik
+
+    robot = Robot.from_dh("no_routine_arm", [(0.0, 0.0, 0.3, 0.0), (0.0, 0.0, 0.3, 0.0)])
+    _ik._WARNED.discard(robot.name)
+    X = robot.link_pose(np.array([0.3, 0.2]), robot.tool_link)
+    with pytest.warns(ArmguardWarning, match="names no IK routine"):
+        robot.inverse_kinematics(X, position_only=False)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ArmguardWarning)
+        robot.inverse_kinematics(X)  # once per robot
+        robot.with_ik("numeric").with_name("named_numeric").inverse_kinematics(X)  # named: no warning

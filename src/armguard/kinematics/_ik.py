@@ -15,12 +15,13 @@ from __future__ import annotations
 
 import enum
 import math
+import warnings
 from dataclasses import dataclass
 from typing import Callable, Iterable
 
 import numpy as np
 
-from .._errors import IKError, KinematicsError
+from .._errors import ArmguardWarning, IKError, KinematicsError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._frames import invert_pose, rotation_vector_from_matrix
 from ._robot import JointType, _check_X
@@ -94,6 +95,51 @@ def unregister_ik(name: str) -> None:
 def ik_plugin(name: str) -> IKPlugin | None:
     """The plug-in registered for ``name``, or None."""
     return _PLUGINS.get(str(name))
+
+
+NUMERIC = "numeric"
+"""The routine name of the damped-least-squares solver (the default)."""
+
+_WARNED: set = set()
+
+
+def resolve_ik(routine: str) -> IKPlugin | None:
+    """The IK routine a model file names: ``"numeric"`` (None: damped least squares), a name registered
+    with :func:`register_ik`, or ``"module:function"`` (imported now -- the seed's "pointer to this routine
+    saved when the model file is parsed").  Anything else raises :class:`KinematicsError`."""
+    routine = str(routine)
+    if routine == NUMERIC:
+        return None
+    if routine in _PLUGINS:
+        return _PLUGINS[routine]
+    if ":" in routine:
+        import importlib
+
+        module, _, attr = routine.partition(":")
+        try:
+            fn = getattr(importlib.import_module(module), attr)
+        except (ImportError, AttributeError) as exc:
+            raise KinematicsError(f"IK routine {routine!r}: cannot import it ({exc})") from None
+        if not callable(fn):
+            raise KinematicsError(f"IK routine {routine!r} is not callable")
+        return fn
+    raise KinematicsError(f"unknown IK routine {routine!r}: expected {NUMERIC!r}, a registered name "
+                          f"({sorted(_PLUGINS)}) or 'module:function'")
+
+
+def _plugin_for(robot) -> IKPlugin | None:
+    """The routine of ``robot`` (its model's ``ik``, else the one registered for its name, else None: numeric,
+    with a warning once per robot name when the model names no routine)."""
+    routine = getattr(robot, "ik", None)
+    if routine is not None:
+        return resolve_ik(routine)
+    plugin = ik_plugin(robot.name)
+    if plugin is None and robot.name not in _WARNED:
+        _WARNED.add(robot.name)
+        warnings.warn(f"robot {robot.name!r}: its model names no IK routine (ik:) and none is registered for its "
+                      "name; using the numeric solver (damped least squares). Name one, or 'numeric', in the "
+                      "model file (docs/models.md)", ArmguardWarning, stacklevel=4)
+    return plugin
 
 
 def _pose_error(X: np.ndarray, X_target: np.ndarray) -> tuple[np.ndarray, float, float]:
@@ -182,7 +228,7 @@ def solve_ik(robot, X_WE, *, q_seed=None, link=None, rng=None, tol: Tolerances =
     if rng is None:
         rng = np.random.default_rng(0)  # deterministic by default; pass rng to vary restarts
     solver = _Solver(robot, i_link, link, X_WE, tol, position_only)
-    plugin = ik_plugin(robot.name) if link == robot.tool_link and not position_only else None
+    plugin = _plugin_for(robot) if link == robot.tool_link and not position_only else None
     if plugin is not None:
         return _solve_with_plugin(robot, plugin, solver, X_WE, q_seed, q_ref, tol)
     best = (math.inf, math.inf)

@@ -159,6 +159,9 @@ class Robot:
     link_shapes : Mapping[str, tuple[Shape, ...]]   collision shapes in each link's own frame L
     adjacent_pairs : frozenset[tuple[str, str]]     link pairs joined by one joint (names sorted)
     tool_link : str                    end-effector link used by IK by default (the last link)
+    ik : str or None                   the IK routine the model file names (``ik:``): a registered name
+                                       (:func:`register_ik`), ``"module:function"`` or ``"numeric"``;
+                                       None: the routine registered for ``name``, else numeric
     """
 
     def __init__(
@@ -172,10 +175,12 @@ class Robot:
         X_WB=None,
         tool_link: str | None = None,
         dh: tuple | None = None,
+        ik: str | None = None,
     ) -> None:
         if not isinstance(name, str) or not name:
             raise KinematicsError(f"Robot.name: expected a non-empty string, got {name!r}")
         self._name = name
+        self._ik = None if ik is None else str(ik)
         self._root = str(root_link)
         self._specs = tuple(joints)
         self._dh = dh
@@ -340,12 +345,12 @@ class Robot:
     def __reduce__(self):  # rebuild from the constructor's inputs (mappingproxy does not pickle)
         return (_rebuild_robot, (self._name, self._root, self._specs, dict(
             joint_names=self._joint_names, link_shapes=dict(self._link_shapes), X_WB=self._X_WB,
-            tool_link=self._tool_link, dh=self._dh)))
+            tool_link=self._tool_link, dh=self._dh, ik=self._ik)))
 
     def _copy(self, **changes) -> "Robot":
         kw = dict(
             joint_names=self._joint_names, link_shapes=dict(self._link_shapes), X_WB=self._X_WB,
-            tool_link=self._tool_link, dh=self._dh,
+            tool_link=self._tool_link, dh=self._dh, ik=self._ik,
         )
         kw.update(changes)
         name = kw.pop("name", self._name)
@@ -362,6 +367,7 @@ class Robot:
     X_WB = property(lambda self: self._X_WB)
     link_shapes = property(lambda self: self._link_shapes)
     tool_link = property(lambda self: self._tool_link)
+    ik = property(lambda self: self._ik)
     joint_types = property(lambda self: self._joint_types, doc="JointType of each joint in ``joint_names``.")
     couplings = property(lambda self: self._couplings, doc="The couplings (dependent joints) of the model.")
     dh = property(lambda self: self._dh, doc="``(convention, rows)`` when built from a DH table, else None.")
@@ -472,8 +478,9 @@ class Robot:
                            tol: Tolerances = DEFAULT_TOLERANCES, position_only: bool = False):
         """Joint values placing ``link`` (default ``tool_link``) at ``X_WE`` (4, 4); returns an IKResult.
 
-        Uses the plug-in registered for this robot's name (:func:`register_ik`) when ``link`` is
-        the tool link, else damped least squares within limits, from ``q_seed`` (default zeros) and
+        Uses the routine the model file names (``ik``, :meth:`with_ik`), else the plug-in registered
+        for this robot's name (:func:`register_ik`), when ``link`` is the tool link; else damped least
+        squares (with an ``ArmguardWarning``, once per robot, when the model names no routine) within limits, from ``q_seed`` (default zeros) and
         ``tol.ik_restarts`` random starts drawn from ``rng`` (default ``default_rng(0)``: repeatable).
         ``position_only`` reaches the position of ``X_WE`` with any orientation (arms with fewer
         than six joints; numerical solver).  ``q`` is None unless the status is SUCCESS; a success
@@ -495,6 +502,15 @@ class Robot:
     def with_name(self, name: str) -> "Robot":
         """A copy named ``name`` (the IK plug-in registry is keyed by name)."""
         return self._copy(name=name)
+
+    def with_ik(self, routine: str | None) -> "Robot":
+        """A copy whose inverse kinematics is ``routine`` (a registered name, ``"module:function"``, or
+        ``"numeric"``; checked now: an unknown routine raises :class:`~armguard.KinematicsError`)."""
+        if routine is not None:
+            from ._ik import resolve_ik
+
+            resolve_ik(routine)
+        return self._copy(ik=routine)
 
     def with_tool_link(self, link: str) -> "Robot":
         """A copy whose IK end-effector is ``link``."""

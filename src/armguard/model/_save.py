@@ -126,6 +126,9 @@ def scene_to_dict(scene: Scene) -> dict:
         for b in scene.bodies.values()
     ]
     d["robots"] = [_robot_to_dict(scene, r) for r in scene.robots]
+    ik = {name: r.ik for name, r in scene.robots.items() if getattr(r, "ik", None) is not None}
+    if ik:
+        d["ik"] = ik
     d["payloads"] = [
         {"name": p.name, "robot": p.robot, "link": p.link, **_pose(p.X_LP), "shapes": [shape_to_dict(s) for s in p.shapes]}
         for p in scene.payloads.values()

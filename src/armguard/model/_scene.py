@@ -197,6 +197,13 @@ class Scene:
             raise SceneError(f"robot {robot.name!r}: a link pair needs two different links, got {a!r} twice")
         return (a, b) if a < b else (b, a)
 
+    def set_robot_ik(self, robot: str, routine: str | None) -> None:
+        """Robot ``robot``'s inverse kinematics: ``routine`` (see :meth:`armguard.kinematics.Robot.with_ik`;
+        checked first, so an unknown routine leaves the scene as it was).  Changes no geometry."""
+        if robot not in self._robots:
+            raise SceneError(f"unknown robot {robot!r}; robots are {list(self._robots)}")
+        self._robots[robot] = self._robots[robot].with_ik(routine)
+
     def home(self, robot: str) -> np.ndarray:
         """``(n_joints,) float64``: the home configuration of ``robot``."""
         self._robot(robot)

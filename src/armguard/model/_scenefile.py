@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 from pydantic import ValidationError
 
-from .._errors import ArmguardError, SceneError, SceneFileError, list_problems
+from .._errors import ArmguardError, KinematicsError, SceneError, SceneFileError, list_problems
 from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
 from ._scene import CannedTest, Scene
 from ._schema import SHAPE_TYPES, SceneFile
@@ -422,6 +422,17 @@ def _add_robot(scene: Scene, r, i: int, ctx: _Ctx, frames: dict) -> list:
     return [(f"{r.name}/{a}", f"{r.name}/{b}") for a, b in pairs]
 
 
+def _set_ik(scene: Scene, sf: SceneFile, ctx: _Ctx) -> None:
+    """``ik: {robot: routine}``: each robot's IK routine, resolved now (a located error when unknown)."""
+    for rname, routine in sf.ik.items():
+        if rname not in scene.robots:
+            raise ctx.error(f"ik.{rname}", f"unknown robot; robots are {list(scene.robots)}")
+        try:
+            scene.set_robot_ik(rname, routine)
+        except (KinematicsError, SceneError) as exc:
+            raise ctx.error(f"ik.{rname}", str(exc)) from None
+
+
 def _populate(scene: Scene, sf: SceneFile, ctx: _Ctx, frames: dict) -> None:
     problems: list[SceneFileError] = []  # bodies and robots are independent: report them all
     for i, b in enumerate(sf.bodies):
@@ -437,6 +448,7 @@ def _populate(scene: Scene, sf: SceneFile, ctx: _Ctx, frames: dict) -> None:
             problems.append(exc)
     if problems:  # what follows refers to the bodies and robots: stop here
         raise _combined(problems)
+    _set_ik(scene, sf, ctx)
     for i, p in enumerate(sf.payloads):
         w = f"payloads[{i}]"
         if p.robot not in scene.robots:

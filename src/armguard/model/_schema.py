@@ -262,6 +262,7 @@ class SceneFile(_Model):
     units: UnitsSpec = UnitsSpec()
     model: ModelRefSpec | None = None
     joints: dict[str, JointExtraSpec] = {}
+    ik: dict[str, str] = {}  # robot -> its IK routine (a registered name, "module:function" or "numeric")
     frames: list[FrameSpec] = []
     bodies: list[BodySpec] = []
     robots: list[RobotSpec] = []
