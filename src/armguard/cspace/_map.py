@@ -240,9 +240,10 @@ class ForbiddenMap:
         """Open the map at ``path`` and check that it was built for the model.
 
         ``model``: the model source files now (a path or a list of paths: the scene YAML, URDFs),
-        or a built-in scene name; None re-hashes the files recorded in the header.  A sha256 that
-        differs from the one recorded raises :class:`ForbiddenMapError` — the map was built for
-        another model file and answers nothing.
+        or a built-in scene name; None re-hashes the files recorded in the header.  Files that differ
+        from those recorded (by name and sha256: :func:`model_file_changes`) raise
+        :class:`ForbiddenMapError` saying what changed — the map was built for other model files and
+        answers nothing; so does a map that records no model files.
         """
         fmap = cls(path, *read_header(path))
         fmap.check_model(model)
