@@ -81,13 +81,89 @@ def test_an_edited_mesh_refuses_the_map(tmp_path):
     assert {r["name"] for r in ForbiddenMap.load(out).header["model_files"]} >= {p.name for p in meshes}
     armguard.checker(model, "forbidden", {"map": str(out)})  # accepted while nothing changed
     _grow_obj(src / "meshes" / "left_wing_0.obj", 1.6)
-    with pytest.raises(ForbiddenMapError, match="built for other model files"):
+    said = r"built for other model files \(changed: left_wing_0\.obj \(sha256 \w{12} in the map, \w{12} now\)\)"
+    with pytest.raises(ForbiddenMapError, match=said):
         ForbiddenMap.load(out)
     edited = armguard.load_model(str(src / "hermes.yaml"))
-    with pytest.raises(ForbiddenMapError, match="built for other model files"):
+    with pytest.raises(ForbiddenMapError, match=said):
         ForbiddenMap.load(out, model=edited)
-    with pytest.raises(BackendError, match="built for other model files"):
+    with pytest.raises(BackendError, match=said):
         armguard.checker(edited, "forbidden", {"map": str(out)})
+
+
+def _mesh_boxes(model) -> set:
+    """The world-frame boxes of the model's mesh shapes, names dropped: where the obstacles are, not what they are called."""
+    out = set()
+    for go in model.collision_model.geometryObjects:
+        if str(go.meshPath).endswith(".obj"):
+            go.geometry.computeLocalAABB()
+            lo, hi = go.geometry.aabb_local.min_, go.geometry.aabb_local.max_
+            R, p = go.placement.rotation, go.placement.translation
+            corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]) @ R.T + p
+            out.add(tuple(np.round(np.concatenate([corners.min(axis=0), corners.max(axis=0)]), 9)))
+    return out
+
+
+def test_meshes_that_exchange_contents_refuse_the_map(tmp_path):
+    """Two mesh files that swap their contents keep the set of sha256 the header held, yet move the obstacles."""
+    src = tmp_path / "hermes"
+    shutil.copytree(repo_root() / "urdf" / "hermes", src)
+    urdf = src / "hermes.urdf"
+    text = urdf.read_text()
+    placed = '<collision name="left_wing_0">\n      <origin xyz="0 0 0" rpy="0 0 0"/>'
+    assert text.count(placed) == 1
+    urdf.write_text(text.replace(placed, placed.replace('xyz="0 0 0"', 'xyz="0 0 0.5"')))  # the left wing 0.5 m up
+    model = armguard.load_model(str(src / "hermes.yaml"))
+    out = tmp_path / "h.agmap"
+    ForbiddenMap.build(model, out=out, clearance=wavy_clearance, **KW)
+    armguard.checker(model, "forbidden", {"map": str(out)})  # accepted while nothing changed
+    left, right = src / "meshes" / "left_wing_0.obj", src / "meshes" / "right_wing_0.obj"
+    a, b = left.read_bytes(), right.read_bytes()
+    left.write_bytes(b)
+    right.write_bytes(a)
+    swapped = armguard.load_model(str(src / "hermes.yaml"))
+    assert sorted(swapped.sha256.values()) == sorted(model.sha256.values())  # the same hashes ...
+    assert _mesh_boxes(swapped) != _mesh_boxes(model)  # ... and other obstacles (the right wing's shape 0.5 m up)
+    said = (r"changed: left_wing_0\.obj \(sha256 \w{12} in the map, \w{12} now\), "
+            r"right_wing_0\.obj \(sha256 \w{12} in the map, \w{12} now\)")
+    with pytest.raises(ForbiddenMapError, match=said):
+        ForbiddenMap.load(out)
+    with pytest.raises(ForbiddenMapError, match=said):
+        ForbiddenMap.load(out, model=swapped)
+    with pytest.raises(BackendError, match=said):
+        armguard.checker(swapped, "forbidden", {"map": str(out)})
+
+
+def test_model_file_changes_names_what_differs():
+    from armguard.cspace._map import model_file_changes
+
+    def rec(name, digit, folder="/a"):
+        return {"name": name, "path": f"{folder}/{name}", "sha256": digit * 64}
+
+    base = [rec("m.yaml", "1"), rec("m.urdf", "2"), rec("x.obj", "3"), rec("y.obj", "4")]
+    assert model_file_changes(base, [rec(r["name"], r["sha256"][0], "/b") for r in reversed(base)]) == ""  # moved, reordered
+    swapped = [rec("m.yaml", "1"), rec("m.urdf", "2"), rec("x.obj", "4"), rec("y.obj", "3")]
+    assert model_file_changes(base, swapped) == ("changed: x.obj (sha256 333333333333 in the map, 444444444444 now), "
+                                                 "y.obj (sha256 444444444444 in the map, 333333333333 now)")
+    assert model_file_changes(base, base[:3] + [rec("z.obj", "4")]) == "in the map only: y.obj 444444444444; new: z.obj 444444444444"
+    many = [rec(f"k{i:02d}.obj", "5") for i in range(11)]
+    assert model_file_changes(base, base + many).endswith("k07.obj 555555555555 and 3 more")
+    twice = [rec("m.yaml", "1"), rec("m.yaml", "1")]  # a name twice (two folders): counted, not merged
+    assert model_file_changes(twice, twice[:1]) == "in the map only: m.yaml 111111111111"
+
+
+def test_a_map_that_records_no_model_files_is_refused(clean, tmp_path):
+    from armguard.cspace._format import write_map
+
+    with pytest.raises(ForbiddenMapError, match="model_files: empty"):
+        ForbiddenMap.build("hermes", out=tmp_path / "e.agmap", clearance=wavy_clearance, model_files=[], **KW)
+    assert not (tmp_path / "e.agmap").exists()
+    p = tmp_path / "no_files.agmap"
+    write_map(p, {**clean.header, "model_files": []}, [clean.substructure(s) for s in range(clean.grid.n_substructures)])
+    with pytest.raises(ForbiddenMapError, match="records no model files"):  # it would answer for any model
+        ForbiddenMap.load(p)
+    with pytest.raises(ForbiddenMapError, match="records no model files"):
+        ForbiddenMap.load(p, model="hermes")
 
 
 def test_the_kernel_and_format_versions_are_recorded(clean, tmp_path):
@@ -141,6 +217,26 @@ def test_a_truncated_map_is_refused_naming_the_section(clean, tmp_path, where):
     with pytest.raises(ForbiddenMapFileError) as e:
         ForbiddenMap.load(p)
     assert e.value.section == ("preamble" if where == "empty" else where) and str(p) in str(e.value)
+
+
+def test_every_truncation_is_a_located_error(clean, tmp_path):
+    """Seeded cuts anywhere (and at every section boundary, where a reader that trusts a length breaks: the
+    directory cut gave ``ValueError: buffer is smaller than requested size``) raise ForbiddenMapFileError."""
+    from armguard.cspace._format import read_header
+
+    raw, head_end = _sections(clean.path)
+    data_off = read_header(clean.path)[3]
+    rng = np.random.default_rng(27)
+    edges = [0, 8, 12, 24, head_end, data_off, len(raw)]
+    cuts = sorted({int(c) for e in edges for c in (e - 1, e, e + 1) if 0 <= c < len(raw)}
+                  | {int(c) for c in rng.integers(0, len(raw), 150)})
+    p = tmp_path / "cut.agmap"
+    for cut in cuts:
+        p.write_bytes(raw[:cut])
+        with pytest.raises(ForbiddenMapFileError) as e:
+            ForbiddenMap.load(p)
+        want = ("preamble" if cut < 24 else "header" if cut < head_end else "directory" if cut < data_off else "data")
+        assert e.value.section == want, cut
 
 
 def test_a_version_1_map_is_refused_with_a_rebuild_message(clean, tmp_path):
@@ -219,6 +315,46 @@ def test_a_journal_cut_short_resumes_and_a_damaged_fingerprint_is_refused(clean,
         ForbiddenMap.build("hermes", out=out, clearance=wavy_clearance, **KW)
     fmap = ForbiddenMap.build("hermes", out=out, clearance=wavy_clearance, resume=False, **KW)
     assert out.read_bytes() == clean.path.read_bytes()
+
+
+def test_a_journal_never_yields_a_record_it_was_not_given(clean, tmp_path):
+    """Seeded single-bit flips and cuts anywhere in a journal: reading it back either refuses it
+    (ForbiddenMapFileError) or yields a prefix of the records written, each exactly as written."""
+    from armguard.cspace._build import _journal_check
+    from armguard.cspace._format import Journal
+
+    fingerprint = {k: v for k, v in clean.header.items() if k != "stats"}
+    check = _journal_check(clean.grid)
+    path = tmp_path / "j.partial"
+    j = Journal(path, fingerprint, resume=False, check=check)
+    written = {s: clean.substructure(s) for s in range(clean.grid.n_substructures)}
+    for s, (ptr, iv) in written.items():
+        j.append(s, ptr, iv, 10 + s, s % 3)
+    j.close()
+    good = path.read_bytes()
+    rng = np.random.default_rng(3)
+    refused = kept = 0
+    for pos in rng.integers(0, len(good), 60):
+        for damage in ("flip", "cut"):
+            raw = bytearray(good)
+            if damage == "flip":
+                raw[pos] ^= 1 << int(rng.integers(0, 8))
+            else:
+                del raw[pos:]
+            path.write_bytes(bytes(raw))
+            try:
+                j = Journal(path, fingerprint, check=check)
+            except ForbiddenMapFileError:
+                refused += 1
+                continue
+            j.close()
+            assert sorted(j.done) == list(range(len(j.done)))  # a prefix
+            assert len(j.done) < len(written) and (j.discarded or damage == "cut")  # the damaged record was not kept
+            for s, (ptr, iv, ev, un) in j.done.items():
+                assert np.array_equal(ptr, written[s][0]) and np.array_equal(iv, written[s][1])
+                assert (ev, un) == (10 + s, s % 3)
+            kept += len(j.done)
+    assert refused and kept  # damage in the fingerprint and in the records were both exercised
 
 
 def _slow_valid(words, n_cells: int, n_bins: int) -> bool:

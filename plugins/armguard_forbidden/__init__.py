@@ -22,9 +22,9 @@ interface's ``pair_distances`` promises signed distances with witness points for
 a lower bound without witness points would not honour.  ``pair_distances``, ``nearest`` and
 ``min_distance_many`` raise BackendError.
 
-**The model check.**  The map's header records the sha256 of the model files it was built from
-(sidecar, URDF, SRDF and every mesh); they must equal ``model.files``'s, else BackendError naming
-both (rebuild the map).  A damaged map (a checksum or a decoding check fails) is a BackendError too.  A missing map
+**The model check.**  The map's header records the name and sha256 of the model files it was built
+from (sidecar, URDF, SRDF and every mesh); they must equal ``model.files``'s, else BackendError
+saying what changed (rebuild the map).  A damaged map (a checksum or a decoding check fails) is a BackendError too.  A missing map
 is a BackendError with the command that builds it.
 
 Options: ``map`` (path, required), ``geometric`` (backend name, default ``"analytic"``),

@@ -209,6 +209,9 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
                                     "(its source files), so the map can refuse another model")
     else:
         model_files = model_files_of(list(model_files) if not isinstance(model_files, (str, Path)) else [model_files])
+        if not model_files:
+            raise ForbiddenMapError("model_files: empty; name the model's source files, so the map can refuse "
+                                    "another model")
     ml = map_links(scene, robot, joints, links, tol)
     rob = scene.robots[ml.robot]
     lo = np.asarray(rob.lower, dtype=np.float64)[list(ml.joint_index)]

@@ -23,7 +23,7 @@ from ._certify import decode_intervals
 from ._format import KERNEL_VERSION, check_data, check_substructures, read_header, sha256_file
 from ._grid import MapGrid
 
-__all__ = ["ForbiddenMap", "Neighbourhood", "MapInfo", "Lookup", "model_file_hashes"]
+__all__ = ["ForbiddenMap", "Neighbourhood", "MapInfo", "Lookup", "model_file_hashes", "model_file_changes"]
 
 
 class Lookup(enum.IntEnum):
@@ -80,6 +80,37 @@ def model_file_hashes(files) -> list[dict]:
             raise ForbiddenMapError(f"model file {p} not found")
         out.append({"name": p.name, "path": str(p.resolve()), "sha256": sha256_file(p)})
     return out
+
+
+def model_file_changes(recorded, now, *, limit: int = 8) -> str:
+    """What differs between the model files a map ``recorded`` and those ``now`` (both as
+    :func:`model_file_hashes` gives them), in words; "" when they are the same.
+
+    Files are matched by name and content (a multiset of ``(name, sha256)``): an edited file, a
+    missing or new one, and two files that exchanged their contents (which a bare set of hashes
+    would not see) all differ.  The paths do not count, so a model copied elsewhere still matches."""
+    from collections import Counter
+
+    key = Counter((r["name"], r["sha256"]) for r in recorded)
+    key_now = Counter((r["name"], r["sha256"]) for r in now)
+    gone, new = sorted((key - key_now).elements()), sorted((key_now - key).elements())
+    new_by_name: dict[str, list[str]] = {}
+    for name, sha in new:
+        new_by_name.setdefault(name, []).append(sha)
+    changed, missing = [], []
+    for name, sha in gone:
+        if new_by_name.get(name):
+            changed.append(f"{name} (sha256 {sha[:12]} in the map, {new_by_name[name].pop(0)[:12]} now)")
+        else:
+            missing.append(f"{name} {sha[:12]}")
+    added = [f"{name} {sha[:12]}" for name, shas in new_by_name.items() for sha in shas]
+
+    def words(label: str, items: list[str]) -> str:
+        more = f" and {len(items) - limit} more" if len(items) > limit else ""
+        return f"{label}: {', '.join(items[:limit])}{more}"
+
+    return "; ".join(words(label, items) for label, items in
+                     (("changed", changed), ("in the map only", missing), ("new", added)) if items)
 
 
 @dataclass(frozen=True)
@@ -209,9 +240,10 @@ class ForbiddenMap:
         """Open the map at ``path`` and check that it was built for the model.
 
         ``model``: the model source files now (a path or a list of paths: the scene YAML, URDFs),
-        or a built-in scene name; None re-hashes the files recorded in the header.  A sha256 that
-        differs from the one recorded raises :class:`ForbiddenMapError` — the map was built for
-        another model file and answers nothing.
+        or a built-in scene name; None re-hashes the files recorded in the header.  Files that differ
+        from those recorded (by name and sha256: :func:`model_file_changes`) raise
+        :class:`ForbiddenMapError` saying what changed — the map was built for other model files and
+        answers nothing; so does a map that records no model files.
         """
         fmap = cls(path, *read_header(path))
         fmap.check_model(model)
@@ -222,6 +254,9 @@ class ForbiddenMap:
         from ._build import model_files_of
 
         recorded = self.header.get("model_files") or []
+        if not recorded:
+            raise ForbiddenMapError(f"{self.path}: the map records no model files, so it cannot be checked against "
+                                    "any model; rebuild the map")
         if model is None:
             files = [r["path"] for r in recorded]
             missing = [f for f in files if not Path(f).is_file()]
@@ -229,12 +264,10 @@ class ForbiddenMap:
                 raise ForbiddenMapError(f"{self.path}: cannot check the model: {missing} not found; pass model=")
         else:
             files = model_files_of(model)
-        now = model_file_hashes(files)
-        if sorted(r["sha256"] for r in now) != sorted(r["sha256"] for r in recorded):
-            names = ", ".join(f"{r['name']} {r['sha256'][:12]}" for r in now)
-            built = ", ".join(f"{r['name']} {r['sha256'][:12]}" for r in recorded)
-            raise ForbiddenMapError(f"{self.path}: built for other model files (map: {built}; now: {names}); "
-                                    "rebuild the map for this model")
+        changes = model_file_changes(recorded, model_file_hashes(files))
+        if changes:
+            raise ForbiddenMapError(f"{self.path}: built for other model files ({changes}); rebuild the map for "
+                                    "this model")
 
     # ------------------------------------------------------------------ storage
     def _raw_sub(self, s: int) -> tuple[np.ndarray, np.ndarray]:
