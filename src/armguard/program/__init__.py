@@ -8,12 +8,15 @@ emulated, and the program exported as Python that reproduces the same motions.
 * :class:`Cell` / :func:`load_cell` — the emulated cell: nominal model, real object poses, camera;
 * :class:`Workcell` — the runtime primitives a program expands into;
 * :func:`fit_rigid_transform` — robot–camera calibration's closed-form estimator (Horn / Umeyama)
-  with its covariance.
+  with its covariance;
+* :func:`weigh` / :func:`grasp_orientation` — the grasp error from a wrist force/torque sensor
+  (§III.C): where the held object sits and how it is turned.
 
 Guide: ``docs/program.md``.
 """
 
 from ._calibrate import RigidFit, fit_rigid_transform
+from ._grasp import GraspOrientation, Weighing, grasp_orientation, object_wrench, weigh
 from ._cell import Camera, Cell, load_cell, object_frame
 from ._program import Program, Step, export_program, load_program, program_text, run_program, workcell_main
 from ._workcell import CONTACT_TOLERANCE, FindRecord, MotionRecord, ProgramRun, ProgramStopped, Workcell, pose
@@ -38,5 +41,10 @@ __all__ = [
     "pose",
     "CONTACT_TOLERANCE",
     "fit_rigid_transform",
+    "weigh",
+    "Weighing",
+    "grasp_orientation",
+    "GraspOrientation",
+    "object_wrench",
     "RigidFit",
 ]
