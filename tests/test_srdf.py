@@ -189,6 +189,38 @@ def test_srdf_that_is_a_directory_is_an_error_naming_it(tmp_path):
         armguard.load_model(urdf, srdf=tmp_path)
 
 
+def two_arm_urdf() -> str:
+    """Two 1-joint arms, each on its own mount fixed to the world: ``<side>_mount -<s>j(z)- <side>``."""
+    def arm(side: str, y: float) -> str:
+        return (f'<link name="{side}_mount"><collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>'
+                f'<joint name="{side}_fix" type="fixed"><parent link="world"/><child link="{side}_mount"/>'
+                f'<origin xyz="0 {y} 0"/></joint>'
+                f'<link name="{side}"><collision><origin xyz="0.15 0 0"/><geometry><box size="0.3 0.05 0.05"/>'
+                f'</geometry></collision></link><joint name="{side[0]}j" type="revolute"><parent link="{side}_mount"/>'
+                f'<child link="{side}"/><origin xyz="0 0 0.1"/><axis xyz="0 0 1"/>'
+                '<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>')
+    return '<robot name="duo"><link name="world"/>' + arm("left", 0.3) + arm("right", -0.3) + "</robot>"
+
+
+def test_a_movable_link_no_chain_group_reaches_is_an_error_naming_the_srdf(tmp_path):
+    """A dual-arm SRDF naming only the left arm: the right arm's link lies in no arm.  The SRDF's
+    groups are at fault, so the error names the SRDF file and its chain group, not the URDF."""
+    urdf = tmp_path / "duo.urdf"
+    urdf.write_text(two_arm_urdf())
+    srdf = tmp_path / "duo.srdf"
+    srdf.write_text('<robot name="duo"><group name="left_arm"><chain base_link="left_mount" tip_link="left"/></group>'
+                    '<group name="right_arm"><chain base_link="nowhere" tip_link="right"/></group></robot>')
+    with pytest.warns(ArmguardWarning, match="nowhere"), pytest.raises(SceneFileError) as exc:
+        armguard.load_model(urdf)
+    assert Path(exc.value.file) == srdf.resolve() and exc.value.where == "group[0] (left_arm).chain"
+    assert "'right' is moved by joint 'rj'" in exc.value.message and "['left_arm']" in exc.value.message
+    # both chain groups: two arms, each link moving with its own joint
+    srdf.write_text(srdf.read_text().replace("nowhere", "right_mount"))
+    m = armguard.load_model(urdf)
+    assert m.scene.joint_names == ("left_arm/lj", "right_arm/rj")
+    assert m.scene.moves("left_arm/left") and m.scene.moves("right_arm/right") and not m.scene.moves("right_arm/right_mount")
+
+
 # ------------------------------------------------------------------------------ overlapping groups
 def _agree_with_coal(model, Q):
     """Analytic and coal: the same signed distance on every pair at every row of ``Q``."""
@@ -257,6 +289,44 @@ def test_a_model_with_no_pair_is_refused_not_clear(tmp_path):
     urdf.with_suffix(".srdf").write_text(srdf_text(disabled=[p for p in every if p != ("l3", "post")]))
     m = armguard.load_model(urdf)
     assert len(m.pairs) == 1 and Detector(m.scene).check(m.scene_q(m.neutral())) is not None
+
+
+def test_a_model_whose_pairs_never_move_is_refused_not_clear(tmp_path):
+    """Every pair disabled but one between two fixed shapes (the arm's base and the post): the
+    check would give the same verdict at every configuration without looking at the arm."""
+    urdf = package(tmp_path)
+    links = ["base", "l1", "l2", "l3", "tool", "post"]
+    every = [(x, y) for i, x in enumerate(links) for y in links[i + 1:]]
+    urdf.with_suffix(".srdf").write_text(srdf_text(disabled=[p for p in every if p != ("base", "post")]))
+    m = armguard.load_model(urdf)
+    assert set(zip(m.pairs.owner_a, m.pairs.owner_b)) in ({("post", "arm/base")}, {("arm/base", "post")})
+    for backend in ("analytic", "coal"):
+        with pytest.raises(DetectionError, match="no pair to check with a shape the configuration moves"):
+            armguard.checker(m, backend)
+    with pytest.raises(DetectionError, match="no pair to check with a shape the configuration moves"):
+        Detector(m.scene)
+    run = CliRunner().invoke(main, ["check", str(urdf), "--q", "0,0,0"])
+    assert run.exit_code == 3 and "no pair to check" in run.output and "CLEAR" not in run.output, run.output
+    # why: neither owner moves, and the pair's distance (coal on pinocchio's placements, the
+    # ground truth) is the same at every configuration
+    import coal
+    import pinocchio as pin
+
+    assert not m.scene.moves("arm/base") and not m.scene.moves("post")
+    assert m.scene.moves("arm/l1") and m.scene.moves("arm/tool")  # below j1 (tool through a fixed joint)
+    ia, ib = (m.geometry_index(n) for n in (m.pairs.a[0], m.pairs.b[0]))
+    gos, gd, dist = m.collision_model.geometryObjects, pin.GeometryData(m.collision_model), []
+    for q in m.random_q(5, 11):
+        pin.updateGeometryPlacements(m.pin_model, m.pin_model.createData(), m.collision_model, gd, q)
+        res = coal.DistanceResult()
+        X = [coal.Transform3s(gd.oMg[i].rotation, gd.oMg[i].translation) for i in (ia, ib)]
+        coal.distance(gos[ia].geometry, X[0], gos[ib].geometry, X[1], coal.DistanceRequest(), res)
+        dist.append(res.min_distance)
+    assert dist[0] > 0.0 and np.ptp(dist) < 1e-12
+    # one moving pair added: a verdict again
+    urdf.with_suffix(".srdf").write_text(srdf_text(disabled=[p for p in every if p not in (("base", "post"), ("l3", "post"))]))
+    m = armguard.load_model(urdf)
+    assert len(m.pairs) == 2 and Detector(m.scene).check(m.scene_q(m.neutral())) is not None
 
 
 # ------------------------------------------------------------------------------ public robots at home

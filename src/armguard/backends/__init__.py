@@ -100,12 +100,18 @@ def resolve(backend: str | None = None, options: Mapping | None = None, *, confi
 
 
 def require_pairs(model) -> None:
-    """A :class:`~armguard.DetectionError` when ``model`` has no active pair: a check of it could only
-    say "clear" without having looked at anything (an SRDF that disables every pair, a robot alone)."""
-    if len(model.pairs) == 0:
+    """A :class:`~armguard.DetectionError` when ``model`` has no active pair, or none with a shape the
+    configuration moves: a check of it could only say "clear" (or the same verdict at every
+    configuration) without having looked at the arm (an SRDF that disables every pair, or every pair
+    but one between two fixed links; a robot alone)."""
+    pairs, scene = model.pairs, model.scene
+    moving = sum(1 for oa, ob in zip(pairs.owner_a, pairs.owner_b) if scene.moves(oa) or scene.moves(ob))
+    if moving == 0:
         srdf = getattr(model, "srdf", None)
         why = f" (its SRDF {srdf.file} disables {len(srdf.disabled)} pairs)" if srdf is not None and srdf.disabled else ""
-        raise DetectionError(f"model {model.name!r} has no pair to check{why}: no verdict can be given; "
+        what = "no pair to check" if len(pairs) == 0 else \
+            f"no pair to check with a shape the configuration moves ({len(pairs)} pairs, all between fixed shapes)"
+        raise DetectionError(f"model {model.name!r} has {what}{why}: no verdict can be given; "
                              "enable a pair, add a body or a workspace box")
 
 

@@ -40,16 +40,24 @@ def status_code(dmin: float, lbmin: float, level: float, thr_eff: float) -> int:
 
 
 def require_pairs(scene, cs, active, with_terrain: bool) -> None:
-    """A DetectionError when nothing would be checked (no pair, or none on the ``active`` arm):
-    the detector would otherwise say CLEAR without having looked at anything."""
+    """A DetectionError when nothing would be checked (no pair, or none on the ``active`` arm), or
+    nothing the configuration moves (every pair between two fixed shapes, and no workspace box
+    around a moving one): the detector would otherwise say CLEAR, the same at every configuration,
+    without having looked at the arm."""
     if with_terrain:
         return
     pa, pb = np.asarray(cs.pair_a, np.int64), np.asarray(cs.pair_b, np.int64)
-    n = len(pa)
-    if active is not None and n:
+    keep = np.ones(len(pa), bool)
+    if active is not None and len(pa):
         r = list(cs.robot_names).index(active) if active in cs.robot_names else -1
-        n = int(np.count_nonzero((cs.owner_robot[pa] == r) | (cs.owner_robot[pb] == r)))
-    if n == 0 and not cs.has_workspace:
+        keep = (cs.owner_robot[pa] == r) | (cs.owner_robot[pb] == r)
+    moves = np.array([scene.moves(o) for o in cs.owner_names], bool)
+    n_all = int(np.count_nonzero(keep))
+    n_moving = int(np.count_nonzero(keep & (moves[pa] | moves[pb]))) if len(pa) else 0
+    box = bool(cs.has_workspace) and bool(moves.any())  # the box holds every moving robot shape
+    if n_moving == 0 and not box:
         on = f" on arm {active!r}" if active is not None else ""
-        raise DetectionError(f"scene {scene.name!r} has no pair to check{on} (every pair is disabled or excluded): "
+        what = (" (every pair is disabled or excluded)" if n_all == 0 else
+                f" with a shape the configuration moves ({n_all} pairs, all between fixed shapes)")
+        raise DetectionError(f"scene {scene.name!r} has no pair to check{on}{what}: "
                              "no verdict can be given; enable a pair, add a body or a workspace box")

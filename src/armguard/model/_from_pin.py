@@ -211,6 +211,12 @@ def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=Non
         if i in in_arm or ln in payload_links:
             continue
         if frames[i].parentJoint != 0:
+            if any(prefix for _, _, prefix in arms):  # the SRDF's chain groups left it out: its element is at fault
+                named = [srdf.groups[r] for r, _, p in arms if p]
+                raise srdf.error(", ".join(f"{g.where}.chain" for g in named),
+                                 f"link {ln!r} is moved by joint {pin_model.names[frames[i].parentJoint]!r} of the URDF "
+                                 f"{f} but lies in no arm: the chain groups {[g.name for g in named]} do not reach it; "
+                                 "add a chain group from a link fixed to the world above it")
             raise SceneFileError(f, f"link[{ln}]", "a link outside every arm (SRDF chain group) must be fixed to the world")
         part.link_owner[ln] = ln
     # shapes, in the owner's frame (W for bodies, the link frame for links, P for payloads)

@@ -153,6 +153,26 @@ class Scene:
         out.extend(self._payloads)
         return tuple(out)
 
+    def moves(self, owner: str) -> bool:
+        """Whether ``owner``'s pose depends on the configuration: a link (or a payload held by a
+        link) with a revolute or prismatic joint between it and its robot's base.  A pair of two
+        owners that do not move has the same distance at every configuration."""
+        from ..kinematics import JointType
+
+        if owner in self._payloads:
+            r, link = self._payloads[owner].robot, self._payloads[owner].link
+        elif "/" in owner and owner.split("/", 1)[0] in self._robots:
+            r, link = owner.split("/", 1)
+        else:
+            return False  # a static body
+        robot = self._robots[r]
+        while link is not None:
+            spec = robot.joint_of_link(link)
+            if spec is not None and spec.joint_type is not JointType.FIXED:
+                return True
+            link = robot.parent_link(link)
+        return False
+
     # ---------------------------------------------------------------- robots
     def add_robot(self, robot, *, home=None, self_pairs=None, _source: dict | None = None) -> None:
         """Add ``robot`` (a ``Robot``; its name must be new).
