@@ -108,3 +108,88 @@ def test_a_good_heights_file_still_loads(tmp_path):
     m = load_terrain(p)
     np.testing.assert_array_equal(m.heights, truth.heights)
     np.testing.assert_array_equal(m.origin, [1.0, -2.0])
+
+
+def _ascii_pcd(path, pts, keep: int | None = None, extra: int = 0):
+    import pypcd4
+
+    pypcd4.PointCloud.from_xyz_points(pts.astype(np.float32)).save(path, encoding=pypcd4.Encoding.ASCII)
+    lines = path.read_text().splitlines(True)
+    end = next(i for i, ln in enumerate(lines) if ln.startswith("DATA"))
+    body = lines[end + 1:] if keep is None else lines[end + 1:end + 1 + keep]
+    path.write_text("".join(lines[:end + 1] + body) + "0.5 0.5 0.0\n" * extra)
+    return path
+
+
+def test_a_truncated_pcd_is_refused_with_the_count(tmp_path):
+    """The PCD reader, like trimesh on PLY, reads a body cut short without a word: the header's POINTS is held to it."""
+    import pypcd4
+
+    pts = _cloud()
+    assert read_points(_ascii_pcd(tmp_path / "full.pcd", pts)).shape == (3404, 3)
+    for keep in (10, 1700):
+        cut = _ascii_pcd(tmp_path / f"cut{keep}.pcd", pts, keep=keep)
+        with pytest.raises(TerrainFileError, match=rf"cut{keep}\.pcd: POINTS: the header says 3404 points, the file holds {keep}"):
+            load_terrain(cut)
+    with pytest.raises(TerrainFileError, match="the header says 3404 points, the file holds 3407"):
+        read_points(_ascii_pcd(tmp_path / "more.pcd", pts, extra=3))
+    binary = tmp_path / "binary.pcd"
+    pypcd4.PointCloud.from_xyz_points(pts.astype(np.float32)).save(binary, encoding=pypcd4.Encoding.BINARY)
+    raw = binary.read_bytes()
+    body = raw.index(b"DATA binary\n") + len(b"DATA binary\n")
+    for n, cut in ((1700, raw[:body + 12 * 1700]), (None, raw[:body + 12 * 1700 + 5])):  # at a record's end, inside one
+        binary.write_bytes(cut)
+        with pytest.raises(TerrainFileError) as e:
+            read_points(binary)
+        assert e.value.file == str(binary) and (n is None or "the file holds 1700" in str(e.value)), str(e.value)
+
+
+@pytest.mark.parametrize("case, where", [
+    ("points_text", "points_W"), ("heights_text", "heights"), ("origin_text", "origin"), ("cell_text", "cell"),
+    ("cell_two", "cell"), ("tiny_cell", "cell"), ("far_point", "cell"),
+])
+def test_terrain_npz_of_non_numbers_or_a_runaway_grid_is_refused(tmp_path, monkeypatch, case, where):
+    """Strings where numbers belong, and a cell that would make billions of cells (a tiny cell, a point
+    kilometres away), name the file and the array instead of numpy's error or a memory blow-up."""
+    h = np.array(make_terrain(n=8, cell=0.1, seed=3).heights)
+    pts = _cloud(200, seed=14)
+    arrays = {
+        "points_text": dict(points_W=np.array([["0", "0", "x"]]), cell=0.1),
+        "heights_text": dict(heights=np.full((3, 3), "0.1"), cell=0.1),
+        "origin_text": dict(heights=h, cell=0.1, origin=np.array(["0", "0"])),
+        "cell_text": dict(points_W=pts, cell=np.array("0.1")),
+        "cell_two": dict(points_W=pts, cell=np.array([0.1, 0.1])),
+        "tiny_cell": dict(points_W=pts, cell=1e-9),
+        "far_point": dict(points_W=np.vstack([pts, [[4e4, 0.0, 0.0]]]), cell=0.05),
+    }[case]
+    p = _npz(tmp_path / f"{case}.npz", **arrays)
+    with pytest.raises(TerrainFileError) as e:
+        load_terrain(p)
+    assert e.value.file == str(p) and e.value.where == where, str(e.value)
+    from armguard.terrain import MAX_CELLS
+
+    if case in ("tiny_cell", "far_point"):
+        assert f"more than MAX_CELLS = {MAX_CELLS}" in str(e.value)
+        # the limit itself: a grid of exactly MAX_CELLS cells loads, one column more is refused
+        import armguard.terrain._files as files
+
+        monkeypatch.setattr(files, "MAX_CELLS", 20 * 20)
+        square = np.array([[x, y, 0.0] for x in np.linspace(0, 1.9, 20) for y in np.linspace(0, 1.9, 20)])
+        assert load_terrain(_npz(tmp_path / "at.npz", points_W=square, cell=0.1)).shape == (20, 20)
+        wider = np.vstack([square, square[-20:] + [0.1, 0.0, 0.0]])
+        with pytest.raises(TerrainFileError, match="makes 21 x 20 cells, more than MAX_CELLS = 400"):
+            load_terrain(_npz(tmp_path / "over.npz", points_W=wider, cell=0.1))
+
+
+@pytest.mark.parametrize("content, where", [(np.ones((10, 2)), "array"), (np.ones(10), "array"),
+                                            (np.array([["a", "b", "c"]]), "array")])
+def test_bad_point_files_name_the_file(tmp_path, content, where):
+    p = tmp_path / "points.npy"
+    np.save(p, content)
+    with pytest.raises(TerrainFileError) as e:
+        load_terrain(p)
+    assert e.value.file == str(p) and e.value.where == where, str(e.value)
+    z = tmp_path / "empty.ply"
+    z.write_bytes(b"")
+    with pytest.raises(TerrainFileError, match="empty.ply: cannot read points"):
+        read_points(z)

@@ -16,7 +16,7 @@ from ._volumes import bounding_box, link_volume
 from ._guard import TERRAIN, TerrainCell, TerrainGuard, TerrainReport
 from ._detect import TerrainDetectionReport, attach_terrain, check_with_terrain
 from ._sweep import TerrainSweep, sweep_terrain, verify_with_terrain
-from ._files import TerrainPointsDropped, load_terrain, verify_items
+from ._files import MAX_CELLS, TerrainPointsDropped, load_terrain, verify_items
 
 __all__ = [
     "ElevationMap",
@@ -40,6 +40,7 @@ __all__ = [
     "load_terrain",
     "verify_items",
     "TerrainPointsDropped",
+    "MAX_CELLS",
     "read_points",
     "write_points",
     "depth_to_points",

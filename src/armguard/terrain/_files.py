@@ -24,7 +24,12 @@ from .._errors import TerrainError, TerrainFileError
 from ._io import read_points
 from ._map import ElevationMap
 
-__all__ = ["load_terrain", "verify_items", "TerrainPointsDropped"]
+__all__ = ["load_terrain", "verify_items", "TerrainPointsDropped", "MAX_CELLS"]
+
+
+MAX_CELLS = 1 << 24
+"""The most cells (4096 x 4096) :func:`load_terrain` builds from a point file: a tiny cell or a
+point kilometres away would otherwise ask for gigabytes."""
 
 
 class TerrainPointsDropped(UserWarning):
@@ -48,7 +53,8 @@ def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | No
 
     Point rows holding a NaN or inf are dropped (a :class:`TerrainPointsDropped` warning says how
     many; the map's ``invalid`` counts them); a file with no finite point, a truncated PLY, a
-    damaged ``.npz``, an array of the wrong shape, NaN heights or a NaN or non-positive cell raise
+    damaged ``.npz``, an array of the wrong shape or of non-numbers, NaN heights, a NaN or non-positive
+    cell, or a cell that would make more than :data:`MAX_CELLS` cells of the points' extent raise
     :class:`~armguard._errors.TerrainFileError` naming the file and the array."""
     p = Path(path)
     if not p.exists():
@@ -78,6 +84,11 @@ def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | No
         lo = np.zeros(2) if origin is None else origin
     else:
         lo, extent = pts[finite, :2].min(axis=0), np.ptp(pts[finite, :2], axis=0) + c
+        nx, ny = (int(min(np.ceil(e / c), 2.0**62)) for e in extent)
+        if nx * ny > MAX_CELLS:
+            raise TerrainFileError(p, "cell", f"a {c:.6g} m cell over the points' {extent[0] - c:.6g} m x {extent[1] - c:.6g} m "
+                                   f"extent makes {nx} x {ny} cells, more than MAX_CELLS = {MAX_CELLS} (a larger "
+                                   "cell, or a cloud cropped to the workspace)")
     if origin is None and scene is not None:
         shift[:2] = _base_xy(scene, robot) - (lo + 0.5 * extent)
     x0, y0 = lo + shift[:2]
@@ -100,17 +111,20 @@ def _read_npz(p: Path, cell):
         raise
     except Exception as exc:  # noqa: BLE001 - zipfile, zlib, EOF and format errors of a damaged .npz
         raise TerrainFileError(p, "", f"cannot read this .npz ({type(exc).__name__}: {exc})") from None
-    try:
-        c = float(arrays["cell"]) if "cell" in arrays else (cell or 0.05)
-    except (TypeError, ValueError):
-        raise TerrainFileError(p, "cell", f"expected one number (m), got shape {arrays['cell'].shape}") from None
+    if "cell" in arrays:
+        a = _numbers(p, "cell", arrays["cell"])
+        if a.size != 1:
+            raise TerrainFileError(p, "cell", f"expected one number (m), got shape {a.shape}")
+        c = float(a.reshape(()))
+    else:
+        c = cell or 0.05
     pts = heights = origin = None
     if "points_W" in arrays:
-        pts = np.asarray(arrays["points_W"], dtype=np.float64)
+        pts = _numbers(p, "points_W", arrays["points_W"])
         if pts.ndim != 2 or pts.shape[1] != 3:
             raise TerrainFileError(p, "points_W", f"expected (N, 3) points (m, W), got shape {pts.shape}")
     if "heights" in arrays:
-        heights = np.asarray(arrays["heights"], dtype=np.float64)
+        heights = _numbers(p, "heights", arrays["heights"])
         if heights.ndim != 2 or heights.size == 0:
             raise TerrainFileError(p, "heights", f"expected a (ny, nx) grid of heights (m), got shape {heights.shape}")
         if pts is None and not np.all(np.isfinite(heights)):
@@ -118,10 +132,17 @@ def _read_npz(p: Path, cell):
             raise TerrainFileError(p, "heights", f"{int(np.count_nonzero(~np.isfinite(heights)))} non-finite heights "
                                    f"(first at row {bad[0]}, column {bad[1]}); a height map must hold numbers")
     if "origin" in arrays:
-        origin = np.asarray(arrays["origin"], dtype=np.float64)
+        origin = _numbers(p, "origin", arrays["origin"])
         if origin.shape != (2,) or not np.all(np.isfinite(origin)):
             raise TerrainFileError(p, "origin", f"expected (x0, y0) finite (m, W), got {origin.tolist()}")
     return c, pts, heights, origin
+
+
+def _numbers(p: Path, name: str, a: np.ndarray) -> np.ndarray:
+    """``a`` as float64; an array of strings or other non-numbers is refused naming the file and the array."""
+    if a.dtype.kind not in "biuf":
+        raise TerrainFileError(p, name, f"expected numbers (m), got {a.dtype} values")
+    return np.asarray(a, dtype=np.float64)
 
 
 def verify_items(scene, items, terrain_file, *, robot=None, **kwargs) -> list:

@@ -27,10 +27,18 @@ def _pose(X, name: str) -> np.ndarray:
     return X
 
 
-def _as_points(a, where: str) -> np.ndarray:
-    p = np.asarray(a, dtype=np.float64)
+def _as_points(a, where: str, file=None) -> np.ndarray:
+    """``(N, 3) float64`` of ``a`` (its first three columns); ``file``: the file it came from (the
+    error is then a :class:`TerrainFileError` naming it, ``where`` the array in it)."""
+    def bad(message):
+        return TerrainFileError(file, where, message) if file is not None else TerrainError(f"{where}: {message}")
+
+    try:
+        p = np.asarray(a, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise bad(f"expected (N, 3) numbers (m), got {np.asarray(a).dtype} values") from None
     if p.ndim != 2 or p.shape[1] < 3:
-        raise TerrainError(f"{where}: expected (N, 3) points, got shape {p.shape}")
+        raise bad(f"expected (N, 3) points, got shape {p.shape}")
     return np.ascontiguousarray(p[:, :3])
 
 
@@ -52,28 +60,33 @@ def _ply_vertex_count(path: Path) -> int | None:
 def read_points(path, X_WS=None) -> np.ndarray:
     """``(N, 3) float64, m``: the points of a ``.ply``, ``.pcd``, ``.npy`` or ``.npz`` file, in the
     sensor frame S of the file, or in W when ``X_WS (4, 4)`` is given.  Non-finite rows are kept
-    (:meth:`ElevationMap.from_points` drops and counts them)."""
+    (:meth:`ElevationMap.from_points` drops and counts them).
+
+    A file that cannot be read, holds no ``(N, 3)`` numbers, or whose body holds another number of
+    points than its header says (a PLY's ``element vertex N``, a PCD's ``POINTS N``: a file cut
+    short) raises :class:`~armguard._errors.TerrainFileError` naming the file, the place in it
+    and both counts."""
     path = Path(path)
     if not path.is_file():
         raise TerrainError(f"read_points: no file {path}")
     ext = path.suffix.lower()
     try:
         if ext == ".npy":
-            p = _as_points(np.load(path, allow_pickle=False), str(path))
+            p = _as_points(np.load(path, allow_pickle=False), "array", path)
         elif ext == ".npz":
             with np.load(path, allow_pickle=False) as z:
                 names = list(z.files)
                 key = "points" if "points" in names else (names[0] if len(names) == 1 else None)
                 if key is None:
-                    raise TerrainError(f"{path}: an .npz needs an array named 'points' (has {names})")
-                p = _as_points(z[key], f"{path}:{key}")
+                    raise TerrainFileError(path, "", f"an .npz needs an array named 'points' (has {names})")
+                p = _as_points(z[key], key, path)
         elif ext == ".ply":
             import trimesh
 
             obj = trimesh.load(path, process=False)
             if not hasattr(obj, "vertices"):
-                raise TerrainError(f"{path}: no vertices in this PLY")
-            p = _as_points(obj.vertices, str(path))
+                raise TerrainFileError(path, "", "no vertices in this PLY")
+            p = _as_points(obj.vertices, "vertex", path)
             n = _ply_vertex_count(path)
             if n is not None and n != len(p):  # trimesh reads a cut ASCII body without a word
                 raise TerrainFileError(path, "element vertex", f"the header says {n} vertices, the file holds "
@@ -84,14 +97,19 @@ def read_points(path, X_WS=None) -> np.ndarray:
             pc = pypcd4.PointCloud.from_path(path)
             missing = [f for f in ("x", "y", "z") if f not in pc.fields]
             if missing:
-                raise TerrainError(f"{path}: PCD without field(s) {missing} (has {list(pc.fields)})")
-            p = _as_points(pc.numpy(("x", "y", "z")), str(path))
+                raise TerrainFileError(path, "FIELDS", f"expected fields x, y and z; {missing} missing (has {list(pc.fields)})")
+            p = _as_points(pc.numpy(("x", "y", "z")), "DATA", path)
+            n = int(pc.metadata.points)
+            if n != len(p):  # pypcd4 reads a cut ASCII or binary body without a word
+                raise TerrainFileError(path, "POINTS", f"the header says {n} points, the file holds {len(p)} "
+                                       f"({'truncated?' if len(p) < n else 'rows beyond the header'})")
         else:
             raise TerrainError(f"read_points: unsupported file type {ext!r} ({path}); use .ply, .pcd, .npy or .npz")
     except TerrainError:
         raise
     except Exception as e:  # noqa: BLE001 - a reader's own error, named with the file
-        raise TerrainError(f"{path}: cannot read points ({type(e).__name__}: {e})") from e
+        first = (str(e).splitlines() or [""])[0]  # pydantic's and numpy's messages run over lines
+        raise TerrainFileError(path, "", f"cannot read points ({type(e).__name__}: {first})") from e
     if X_WS is not None:
         X = _pose(X_WS, "read_points: X_WS")
         p = p @ X[:3, :3].T + X[:3, 3]
