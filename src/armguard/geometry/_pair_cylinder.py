@@ -63,6 +63,7 @@ _V0 = _L0 + 4
 _F0 = _V0 + 9 * _NV  # face f: [i0, i1, i2, n (3), d, alive] at _F0 + 8 f
 _E0 = _F0 + 8 * _NF
 SUPPORT_WORK_SIZE = _E0 + 2 * _NE
+_INSIDE = 1e-9  # a barycentric weight this far below 0 still holds the projection (rounding)
 _VIS = (4e-14, 1e-15, 1e-12, 1e-13, 1e-11)  # EPA's visibility margins, relative to the coordinates' size
 """Length of the ``work`` array the kernels here need (float64)."""
 
@@ -348,17 +349,17 @@ def _horizon(w, ne, a, b):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _witness(w, fi, dbest, nx, ny, nz):  # pragma: no cover - compiled
-    """The origin's projection ``p = dbest n`` onto face ``fi`` in barycentric coordinates, applied to
-    the vertices' A and B points.  Returns ``(ok, ax, ay, az, bx, by, bz)``.
+def _witness(w, i0, i1, i2, dbest, nx, ny, nz):  # pragma: no cover - compiled
+    """The origin's projection ``p = dbest n`` onto the triangle of vertices ``i0, i1, i2`` in
+    barycentric coordinates, applied to the vertices' A and B points.  Returns ``(ok, lmin, ax, ay, az, bx, by, bz)``, ``lmin`` the least
+    weight (negative: ``p`` lies outside the triangle, and the points off the cores).
 
     The weights are ratios of signed areas along the face normal (Ericson §3.4, the triple
     products), not the Gram-matrix solution: on a curved core EPA's faces near the optimum are
     slivers, whose Gram determinant loses the weights to cancellation."""
-    of = _F0 + 8 * fi
-    o0 = _V0 + 9 * int(w[of])
-    o1 = _V0 + 9 * int(w[of + 1])
-    o2 = _V0 + 9 * int(w[of + 2])
+    o0 = _V0 + 9 * i0
+    o1 = _V0 + 9 * i1
+    o2 = _V0 + 9 * i2
     px = dbest * nx
     py = dbest * ny
     pz = dbest * nz
@@ -367,7 +368,7 @@ def _witness(w, fi, dbest, nx, ny, nz):  # pragma: no cover - compiled
     l2 = _area(w[o0] - px, w[o0 + 1] - py, w[o0 + 2] - pz, w[o1] - px, w[o1 + 1] - py, w[o1 + 2] - pz, nx, ny, nz)
     t = l0 + l1 + l2
     if not t > 0.0:
-        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        return False, -math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     l0 /= t
     l1 /= t
     l2 /= t
@@ -377,7 +378,34 @@ def _witness(w, fi, dbest, nx, ny, nz):  # pragma: no cover - compiled
     bx = l0 * w[o0 + 6] + l1 * w[o1 + 6] + l2 * w[o2 + 6]
     by = l0 * w[o0 + 7] + l1 * w[o1 + 7] + l2 * w[o2 + 7]
     bz = l0 * w[o0 + 8] + l1 * w[o1 + 8] + l2 * w[o2 + 8]
-    return True, ax, ay, az, bx, by, bz
+    return True, min(l0, l1, l2), ax, ay, az, bx, by, bz
+
+
+@njit(cache=True)
+def _answer(w, nf, i0, i1, i2, dbest, nx, ny, nz, tol):  # pragma: no cover - compiled
+    """EPA's answer ``(ok, depth, nx, ny, nz, ax, ay, az, bx, by, bz)`` at the closest face (vertices
+    ``i0, i1, i2``; passed by vertex, as the face's slot may be reused once it is removed).
+
+    The origin's projection onto the closest face's plane lies on the polytope (every other face's
+    plane is at least as far), but not always in that face: a cap against a parallel box face makes
+    a flat region of ``M``, coplanar triangles at one distance, and the one picked may not hold it
+    (negative weights: witnesses off the cores, 0.50 m off a cylinder in a seeded search, the depth
+    right).  Then the face within ``tol`` of ``dbest`` holding it answers, with its distance and normal."""
+    ok, lmin, ax, ay, az, bx, by, bz = _witness(w, i0, i1, i2, dbest, nx, ny, nz)
+    if ok and lmin >= -_INSIDE:
+        return True, dbest, nx, ny, nz, ax, ay, az, bx, by, bz
+    found = (ok, dbest, nx, ny, nz, ax, ay, az, bx, by, bz)
+    top = lmin if ok else -math.inf
+    for f in range(nf):
+        o = _F0 + 8 * f
+        if w[o + 7] == 0.0 or w[o + 6] > dbest + tol:
+            continue
+        ok, lmin, ax, ay, az, bx, by, bz = _witness(w, int(w[o]), int(w[o + 1]), int(w[o + 2]), w[o + 6], w[o + 3],
+                                                     w[o + 4], w[o + 5])
+        if ok and lmin > top:
+            top = lmin
+            found = (True, w[o + 6], w[o + 3], w[o + 4], w[o + 5], ax, ay, az, bx, by, bz)
+    return found
 
 
 @njit(cache=True, inline="always")
@@ -387,14 +415,14 @@ def _area(ux, uy, uz, vx, vy, vz, nx, ny, nz):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _settle(work, fi, dbest, nx, ny, nz, h, best):  # pragma: no cover - compiled
-    """EPA's answer from face ``fi`` when the polytope cannot grow (rounding on a curved core): its
+def _settle(work, nf, fv, dbest, nx, ny, nz, h, best, tol):  # pragma: no cover - compiled
+    """EPA's answer from the closest face (vertices ``fv``) when the polytope cannot grow (rounding on a curved core): its
     distance ``dbest`` when the support value ``h`` along its normal is within ``SUPPORT_GAP``,
     else ``best`` (the tightest such bracket seen before, or not settled)."""
     if h - dbest <= SUPPORT_GAP * (1.0 + dbest):
-        ok, ax, ay, az, bx, by, bz = _witness(work, fi, dbest, nx, ny, nz)
-        if ok:
-            return True, dbest, nx, ny, nz, ax, ay, az, bx, by, bz
+        res = _answer(work, nf, fv[0], fv[1], fv[2], dbest, nx, ny, nz, tol)
+        if res[0]:
+            return res
     return best
 
 
@@ -462,6 +490,7 @@ def epa_support(pa, ca, pb, cb, work, eps, tol, vis):  # pragma: no cover - comp
         nx = work[of + 3]
         ny = work[of + 4]
         nz = work[of + 5]
+        fv = (int(work[of]), int(work[of + 1]), int(work[of + 2]))
         ax, ay, az, bx, by, bz = _pair_support(pa, ca, pb, cb, nx, ny, nz)
         wx = ax - bx
         wy = ay - by
@@ -477,15 +506,13 @@ def epa_support(pa, ca, pb, cb, work, eps, tol, vis):  # pragma: no cover - comp
                 repeated = True
                 break
         if h - dbest <= eps or ((repeated or nv == _NV) and h - dbest <= SUPPORT_GAP * (1.0 + dbest)):
-            ok, ax, ay, az, bx, by, bz = _witness(work, fi, dbest, nx, ny, nz)
-            if not ok:
-                return best
-            return True, dbest, nx, ny, nz, ax, ay, az, bx, by, bz
+            res = _answer(work, nf, fv[0], fv[1], fv[2], dbest, nx, ny, nz, tol)
+            return res if res[0] else best
         if h - dbest < best_gap and h - dbest <= SUPPORT_GAP * (1.0 + dbest):
-            ok, cax, cay, caz, cbx, cby, cbz = _witness(work, fi, dbest, nx, ny, nz)
-            if ok:
+            res = _answer(work, nf, fv[0], fv[1], fv[2], dbest, nx, ny, nz, tol)
+            if res[0]:
                 best_gap = h - dbest
-                best = (True, dbest, nx, ny, nz, cax, cay, caz, cbx, cby, cbz)
+                best = res
         if repeated or nv == _NV:
             return best
         _put(work, _V0 + 9 * nv, ax, ay, az, bx, by, bz)
@@ -504,9 +531,9 @@ def epa_support(pa, ca, pb, cb, work, eps, tol, vis):  # pragma: no cover - comp
                 if ne >= 0:
                     ne = _horizon(work, ne, a2, a0)
                 if ne < 0:
-                    return _settle(work, fi, dbest, nx, ny, nz, h, best)
+                    return _settle(work, nf, fv, dbest, nx, ny, nz, h, best, tol)
         if ne < 3:
-            return _settle(work, fi, dbest, nx, ny, nz, h, best)
+            return _settle(work, nf, fv, dbest, nx, ny, nz, h, best, tol)
         if nf + ne > _NF:  # compact: keep the live faces only
             m = 0
             for f in range(nf):
@@ -518,11 +545,11 @@ def epa_support(pa, ca, pb, cb, work, eps, tol, vis):  # pragma: no cover - comp
                     m += 1
             nf = m
             if nf + ne > _NF:
-                return _settle(work, fi, dbest, nx, ny, nz, h, best)
+                return _settle(work, nf, fv, dbest, nx, ny, nz, h, best, tol)
         for k in range(ne):
             o = _E0 + 2 * k
             if not _face(work, nf, int(work[o]), int(work[o + 1]), nv, tol):
-                return _settle(work, fi, dbest, nx, ny, nz, h, best)
+                return _settle(work, nf, fv, dbest, nx, ny, nz, h, best, tol)
             nf += 1
         nv += 1
 
