@@ -131,3 +131,40 @@ def test_truncated_reference_files_name_the_file(copy, which):
     with pytest.raises(ReferenceFileError) as e:
         load_reference(NAME, copy)
     assert e.value.file == str(p), str(e.value)
+
+
+NUMBERS = {
+    "distances as text": (lambda a: a.__setitem__("distance", a["distance"].astype(str)), "distance", "expected real numbers"),
+    "configurations as text": (lambda a: a.__setitem__("q", a["q"].astype(str)), "q", "expected real numbers"),
+    "complex witness points": (lambda a: a.__setitem__("p_WA", a["p_WA"].astype(complex)), "p_WA", "expected real numbers"),
+}
+HEADER = {
+    "a negative count": (lambda h: h["configurations"].__setitem__("random", -1), "random", "an integer >= 0"),
+    "a fractional count": (lambda h: h.__setitem__("n_pairs", h["n_pairs"] + 0.7), "n_pairs", "an integer >= 0"),
+    "pairs not a list": (lambda h: h.__setitem__("pairs", 5), "pairs", "expected a list"),
+    "a pair of one link": (lambda h: h["pairs"].__setitem__(3, h["pairs"][3][:1]), "pairs[3]", "three strings"),
+    "no file hashes": (lambda h: h.pop("files"), "files", "file: sha256"),
+}
+
+
+@pytest.mark.parametrize("case", list(NUMBERS) + list(HEADER))
+def test_text_where_numbers_belong_and_malformed_headers_are_refused(copy, case):
+    """Arrays of strings or complex numbers, counts that are not integers >= 0, pairs that are not
+    three strings and a header without its file hashes name the file and the place (they raised
+    numpy's TypeError, or loaded: 15.7 pairs read as 15, a one-link pair, complex witnesses)."""
+    if case in NUMBERS:
+        change, where, match = NUMBERS[case]
+        with np.load(copy / f"{NAME}.npz") as z:
+            arrays = {k: z[k] for k in z.files}
+        change(arrays)
+        np.savez_compressed(copy / f"{NAME}.npz", **arrays)
+        p = copy / f"{NAME}.npz"
+    else:
+        change, where, match = HEADER[case]
+        p = copy / f"{NAME}.json"
+        h = json.loads(p.read_text())
+        change(h)
+        p.write_text(json.dumps(h))
+    with pytest.raises(ReferenceFileError, match=match) as e:
+        load_reference(NAME, copy)
+    assert e.value.file == str(p) and e.value.where == where, str(e.value)

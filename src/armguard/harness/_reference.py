@@ -156,18 +156,32 @@ def load_reference(name: str, ref_dir=None) -> Reference:
 
 def check_reference(ref: Reference, json_file=None, npz_file=None) -> None:
     """Raise :class:`ReferenceFileError` unless ``ref`` holds every row and pair its header promises
-    (``configurations``: neutral + random rows; ``n_pairs`` and ``pairs``; ``nq``), with finite
+    (``configurations``: neutral + random rows; ``n_pairs`` and ``pairs`` of three strings; ``nq``;
+    counts that are integers >= 0; ``files`` and ``meshes`` objects of strings), with finite float
     configurations, distances and witness points and boolean verdicts."""
     jf = json_file if json_file is not None else f"reference {ref.name!r} (json)"
     nf = npz_file if npz_file is not None else f"reference {ref.name!r} (npz)"
     h = ref.header
     try:
-        K = int(h["configurations"]["neutral"]) + int(h["configurations"]["random"])
-        n, nq, pairs = int(h["n_pairs"]), int(h["nq"]), h["pairs"]
-    except (KeyError, TypeError, ValueError) as exc:
+        counts = {k: h["configurations"][k] for k in ("neutral", "random")} | {k: h[k] for k in ("n_pairs", "nq")}
+        pairs = h["pairs"]
+    except (KeyError, TypeError) as exc:
         raise ReferenceFileError(jf, "", f"a key is missing or invalid: {exc!r}") from None
+    for k, v in counts.items():
+        if not (isinstance(v, int) and not isinstance(v, bool) and v >= 0):
+            raise ReferenceFileError(jf, k, f"expected a count (an integer >= 0), got {v!r}")
+    K, n, nq = counts["neutral"] + counts["random"], counts["n_pairs"], counts["nq"]
+    if not isinstance(pairs, list):
+        raise ReferenceFileError(jf, "pairs", f"expected a list of [link, link, category], got {type(pairs).__name__}")
+    for i, pr in enumerate(pairs):
+        if not (isinstance(pr, list) and len(pr) == 3 and all(isinstance(x, str) for x in pr)):
+            raise ReferenceFileError(jf, f"pairs[{i}]", f"expected [link, link, category] (three strings), got {pr!r}")
     if len(pairs) != n:
         raise ReferenceFileError(jf, "pairs", f"{len(pairs)} pairs, n_pairs says {n}")
+    for k in ("files", "meshes"):
+        v = h.get(k)
+        if not (isinstance(v, dict) and all(isinstance(x, str) for kv in v.items() for x in kv)):
+            raise ReferenceFileError(jf, k, f"expected an object of file: sha256 strings, got {type(v).__name__}")
     expect = {"q": (K, nq), "distance": (K, n), "p_WA": (K, n, 3), "p_WB": (K, n, 3), "verdict": (K,)}
     for k, shape in expect.items():
         a = np.asarray(getattr(ref, k))
@@ -177,6 +191,8 @@ def check_reference(ref: Reference, json_file=None, npz_file=None) -> None:
         if k == "verdict":
             if a.dtype != np.bool_:
                 raise ReferenceFileError(nf, k, f"expected booleans, got {a.dtype}")
+        elif a.dtype.kind != "f":
+            raise ReferenceFileError(nf, k, f"expected real numbers (float), got {a.dtype}")
         elif not np.all(np.isfinite(a)):
             bad = np.argwhere(~np.isfinite(a))[0]
             raise ReferenceFileError(nf, k, f"{int(np.count_nonzero(~np.isfinite(a)))} non-finite values "
