@@ -20,6 +20,7 @@ box case 2228, where armguard and the reference agree to 1e-15 m) but is no orac
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 import pytest
@@ -112,7 +113,10 @@ def test_found_cases_have_their_distance(kind):
         assert abs(d - ref) <= 1e-9, (kind, i, d, ref)
         assert abs(np.linalg.norm(out[3:6] - out[0:3]) - abs(d)) <= 1e-9
         if ref > 0.0:  # coal's GJK on a cylinder: 8.4e-7 m short on box case 2228, else within 1e-9 m
-            assert abs(d - _coal_pair(a, b)[0]) <= 1e-6
+            d_coal = _coal_pair(a, b)[0]
+            # -DBL_MAX is coal's failure value, not a distance: after tests/test_reference_integrity.py in
+            # the same process coal returned it for box case 2228 (not reproduced in a script)
+            assert abs(d - d_coal) <= 1e-6 or d_coal == -sys.float_info.max, (kind, i, d, d_coal)
 
 
 def test_reference_is_the_slow_one():
