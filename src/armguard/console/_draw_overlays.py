@@ -20,7 +20,9 @@ __all__ = ["OverlayDrawer", "terrain_meshes", "box_edges", "ellipsoid_mesh", "TE
            "LEVEL_COLORS", "ELLIPSOID_COLORS"]
 
 TERRAIN_COLOR = (150, 120, 80)
-UNKNOWN_COLOR = (170, 60, 200)
+UNKNOWN_COLOR = (55, 70, 105)
+"""Unseen (filled) cells: a dark slate, far (CIELAB ΔE > 90) from the magenta feature outline and
+darker than the grey vehicle body."""
 LEVEL_COLORS = ((40, 40, 40), (0, 90, 200), (0, 160, 160), (0, 170, 60), (150, 170, 0), (230, 150, 0),
                 (230, 70, 0), (200, 0, 90), (120, 0, 160), (90, 90, 90), (255, 255, 255))
 """Edge colour of the tested boxes per pyramid level (0: the top box); deeper levels reuse the last."""
