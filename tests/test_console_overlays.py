@@ -263,3 +263,46 @@ def test_terrain_depth_is_true_or_said_to_be_a_lower_bound(rover):
         assert f"≤ {deep.report.distance * 1000:.1f} mm" in html and "deeper not resolved" in html
         depths.append(deep.report.distance)
     assert depths[0] == pytest.approx(depths[1], abs=1e-9)  # one column's depth does not grow
+
+
+def test_line_buried_in_the_terrain():
+    """A segment through a column's top is buried; one above the surface, under the floor or off
+    the map is not; the ends (trimmed) do not count."""
+    from types import SimpleNamespace
+
+    from armguard.console._draw_overlays import line_buried
+
+    h = np.zeros((4, 4))
+    h[1, 2] = 0.3  # one rock at x in [0.2, 0.3), y in [0.1, 0.2)
+    m = SimpleNamespace(heights=h, origin=np.array([0.0, 0.0]), cell=0.1, floor=-0.1)
+    assert line_buried(m, [[0.25, 0.15, 0.5], [0.25, 0.15, 0.1]])  # down into the rock
+    assert line_buried(m, [[0.05, 0.15, 0.2], [0.38, 0.15, 0.2]])  # sideways through it
+    assert not line_buried(m, [[0.05, 0.15, 0.4], [0.38, 0.15, 0.4]])  # over it
+    assert not line_buried(m, [[0.05, 0.05, 0.05], [0.35, 0.05, 0.05]])  # over the flat ground
+    assert not line_buried(m, [[0.05, 0.05, -0.5], [0.35, 0.05, -0.5]])  # under the floor
+    assert not line_buried(m, [[1.5, 1.5, -0.05], [2.5, 1.5, -0.05]])  # off the map
+    assert not line_buried(m, [[0.25, 0.15, 0.31], [0.25, 0.15, 0.5]])  # ends on the top face
+    assert not line_buried(m, [[0.25, 0.15, np.nan], [0.25, 0.15, 0.1]])
+
+
+def test_terrain_is_seen_through_while_the_line_is_buried(rover):
+    """The rover's turret in the ground: its nearest line lies in a column, so the drawer makes the
+    terrain translucent; high above, opaque again."""
+    from types import SimpleNamespace
+
+    from armguard.console._draw_overlays import TERRAIN_SEE_THROUGH_OPACITY, OverlayDrawer, line_buried
+
+    st = _terrain_state(rover)
+    drawer = OverlayDrawer(server=None)
+    drawer.terrain_handles = {True: SimpleNamespace(opacity=None), False: SimpleNamespace(opacity=None)}
+    st.set_joints("arm", LOW)
+    snap = st.snapshot()
+    r = snap.readout
+    assert r.obstacle == "terrain" and line_buried(st.terrain, [r.p_WA, r.p_WB])
+    drawer._see_through_terrain(snap, st)
+    assert all(h.opacity == TERRAIN_SEE_THROUGH_OPACITY for h in drawer.terrain_handles.values())
+    st.set_joints("arm", np.deg2rad([0, -20, 10, 0, 45]))
+    snap = st.snapshot()
+    assert not line_buried(st.terrain, [snap.readout.p_WA, snap.readout.p_WB])
+    drawer._see_through_terrain(snap, st)
+    assert all(h.opacity is None for h in drawer.terrain_handles.values())
