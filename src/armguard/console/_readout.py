@@ -228,7 +228,8 @@ def _terrain_html(tv) -> str:
         where = "—" if link is None else f"{link}, {'unseen' if rep.unknown else 'seen'} cell {rep.cell or 'off the map'}"
         text = _fmt_m(d)
         if d < 0.0 and not getattr(tv, "depth_resolved", True):
-            text, note = f"≤ {text}", "; deeper not resolved: one column's depth, a lower bound on the depth into the terrain"
+            text = f"≤ {text}"
+            note = "; deeper not resolved: one column's depth, a lower bound on the depth into the terrain"
     return (f'<div id="armguard-terrain" data-status="{e(rep.status.value)}" data-boxes="{tv.visited}" '
             f'data-distance="{d:.6g}" data-resolved="{int(getattr(tv, "depth_resolved", True))}" '
             'style="border:2px solid #8a6d3b;border-radius:6px;padding:4px;margin-top:4px;font-family:sans-serif;'
