@@ -175,3 +175,134 @@ def test_terrain_collision_is_the_headline_with_every_backend(rover):
     st.set_joints("arm", np.deg2rad([0, -20, 10, 0, 45]))  # high: the terrain row stays, clear
     r = st.snapshot().readout
     assert "terrain" in {row.category for row in r.rows} and r.status.value != "collision"
+
+
+def _srgb_to_lab(rgb) -> np.ndarray:
+    """CIELAB (D65) of an 8-bit sRGB colour: the textbook formulas, written out."""
+    c = np.asarray(rgb, dtype=np.float64) / 255.0
+    c = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    M = np.array([[0.4124564, 0.3575761, 0.1804375], [0.2126729, 0.7151522, 0.0721750],
+                  [0.0193339, 0.1191920, 0.9503041]])
+    xyz = M @ c / np.array([0.95047, 1.0, 1.08883])
+    f = np.where(xyz > (6 / 29) ** 3, np.cbrt(xyz), xyz / (3 * (6 / 29) ** 2) + 4 / 29)
+    return np.array([116 * f[1] - 16, 500 * (f[0] - f[1]), 200 * (f[1] - f[2])])
+
+
+def test_unseen_cells_cannot_be_confused_with_the_feature_outline():
+    """Unseen terrain is far (CIELAB ΔE76) from the magenta nearest-feature outline, and from
+    every other colour of the view's shapes and lines."""
+    from armguard.console._draw import COLORS, COMPARE_COLOR, FEATURE_COLOR
+    from armguard.console._draw_overlays import TERRAIN_COLOR, UNKNOWN_COLOR
+
+    de = lambda a, b: float(np.linalg.norm(_srgb_to_lab(a) - _srgb_to_lab(b)))  # noqa: E731
+    assert de((255, 255, 255), (0, 0, 0)) == pytest.approx(100.0, abs=0.01)  # the reference itself
+    assert de(UNKNOWN_COLOR, FEATURE_COLOR) >= 60.0
+    for other in (*COLORS.values(), COMPARE_COLOR, TERRAIN_COLOR):
+        assert de(UNKNOWN_COLOR, other) >= 30.0, other
+
+
+def test_terrain_block_gives_the_distance_when_clear(rover):
+    """Clear beyond the check's reach, the terrain block still gives the least distance and the
+    link: the same as the least exact distance over every column (a plain loop)."""
+    from armguard.geometry import distance
+
+    st = _terrain_state(rover)
+    st.set_joints("arm", np.deg2rad([0, -20, 10, 0, 45]))
+    tv = st.snapshot().terrain
+    assert tv.report.status.value == "clear" and math.isinf(tv.report.distance)
+    d, link, limit = tv.far
+    assert math.isfinite(d) and tv.report.reach < d <= limit
+    guard = st.detector.terrain
+    _, shapes = guard.posed(st.scene.flat_q(st._q))
+    m = guard.pyramid.map
+    best = (math.inf, None)
+    for k, s in enumerate(shapes):
+        for r in range(m.shape[0]):
+            for c in range(m.shape[1]):
+                x = distance(s, guard.pyramid.cell_box(r, c)).distance
+                if x < best[0]:
+                    best = (x, guard.owners[k])
+    assert d == pytest.approx(best[0], abs=1e-6) and link == best[1]
+    html = panel_html(st.snapshot().readout, terrain=tv)
+    assert f"clear: {d * 1000:.1f} mm ({link};" in html and "— (—)" not in html
+
+
+def test_terrain_depth_is_true_or_said_to_be_a_lower_bound(rover):
+    """A shallow contact's depth is the link's true depth (moving it out by the depth frees it);
+    deeper, the column depth stays put while the link sinks, and the block says it is a bound."""
+    from armguard.geometry import distance
+
+    st = _terrain_state(rover)
+    guard = st.detector.terrain
+
+    def moved_out(tv):  # the nearest link moved out by the depth (+2 mm) along the witness: least distance
+        rep = tv.report
+        n = (rep.p_WB - rep.p_WA) / np.linalg.norm(rep.p_WB - rep.p_WA)
+        X = np.eye(4)
+        X[:3, 3] = n * (-rep.distance + 2e-3)
+        _, shapes = guard.posed(st.scene.flat_q(st._q))
+        mine = [s.transformed(X) for s, o in zip(shapes, guard.owners) if o == rep.link]
+        m = guard.pyramid.map
+        return min(distance(s, guard.pyramid.cell_box(r, c)).distance
+                   for s in mine for r in range(m.shape[0]) for c in range(m.shape[1]))
+
+    st.set_joints("arm", np.deg2rad([0, 18, 8, 0, 0]))
+    shallow = st.snapshot().terrain
+    assert -0.03 < shallow.report.distance < 0 and shallow.depth_resolved
+    assert moved_out(shallow) > 0
+    html = panel_html(st.snapshot().readout, terrain=shallow)
+    assert f": {shallow.report.distance * 1000:.1f} mm (" in html and "≤" not in html
+
+    depths = []
+    for wrist in (30, 50):
+        st.set_joints("arm", np.deg2rad([0, 30, 20, wrist, 0]))
+        deep = st.snapshot().terrain
+        assert deep.report.distance < 0 and not deep.depth_resolved
+        assert moved_out(deep) < 0  # still in the ground: the true depth is larger
+        html = panel_html(st.snapshot().readout, terrain=deep)
+        assert f"≤ {deep.report.distance * 1000:.1f} mm" in html and "deeper not resolved" in html
+        depths.append(deep.report.distance)
+    assert depths[0] == pytest.approx(depths[1], abs=1e-9)  # one column's depth does not grow
+
+
+def test_line_buried_in_the_terrain():
+    """A segment through a column's top is buried; one above the surface, under the floor or off
+    the map is not; the ends (trimmed) do not count."""
+    from types import SimpleNamespace
+
+    from armguard.console._draw_overlays import line_buried
+
+    h = np.zeros((4, 4))
+    h[1, 2] = 0.3  # one rock at x in [0.2, 0.3), y in [0.1, 0.2)
+    m = SimpleNamespace(heights=h, origin=np.array([0.0, 0.0]), cell=0.1, floor=-0.1)
+    assert line_buried(m, [[0.25, 0.15, 0.5], [0.25, 0.15, 0.1]])  # down into the rock
+    assert line_buried(m, [[0.05, 0.15, 0.2], [0.38, 0.15, 0.2]])  # sideways through it
+    assert not line_buried(m, [[0.05, 0.15, 0.4], [0.38, 0.15, 0.4]])  # over it
+    assert not line_buried(m, [[0.05, 0.05, 0.05], [0.35, 0.05, 0.05]])  # over the flat ground
+    assert not line_buried(m, [[0.05, 0.05, -0.5], [0.35, 0.05, -0.5]])  # under the floor
+    assert not line_buried(m, [[1.5, 1.5, -0.05], [2.5, 1.5, -0.05]])  # off the map
+    assert not line_buried(m, [[0.25, 0.15, 0.31], [0.25, 0.15, 0.5]])  # ends on the top face
+    assert not line_buried(m, [[0.25, 0.15, np.nan], [0.25, 0.15, 0.1]])
+
+
+def test_terrain_is_seen_through_while_the_line_is_buried(rover):
+    """The rover's turret in the ground: its nearest line lies in a column, so the drawer makes the
+    terrain translucent; high above, opaque again."""
+    from types import SimpleNamespace
+
+    from armguard.console._draw_overlays import TERRAIN_SEE_THROUGH_OPACITY, OverlayDrawer, line_buried
+
+    st = _terrain_state(rover)
+    drawer = OverlayDrawer(server=None)
+    drawer.terrain_handles = {True: SimpleNamespace(opacity=None), False: SimpleNamespace(opacity=None)}
+    st.set_joints("arm", LOW)
+    snap = st.snapshot()
+    r = snap.readout
+    assert r.obstacle == "terrain" and line_buried(st.terrain, [r.p_WA, r.p_WB])
+    drawer._see_through_terrain(snap, st)
+    assert all(h.opacity == TERRAIN_SEE_THROUGH_OPACITY for h in drawer.terrain_handles.values())
+    st.set_joints("arm", np.deg2rad([0, -20, 10, 0, 45]))
+    snap = st.snapshot()
+    assert not line_buried(st.terrain, [snap.readout.p_WA, snap.readout.p_WB])
+    drawer._see_through_terrain(snap, st)
+    assert all(h.opacity is None for h in drawer.terrain_handles.values())

@@ -6,6 +6,10 @@ testable without a browser) and :class:`OverlayDrawer`, which puts them on a vis
 * **Terrain**: the map as the checker sees it — each cell a column from the floor to its height
   (top faces, and the walls between neighbouring cells of different heights); seen cells in
   :data:`TERRAIN_COLOR`, unseen (filled) cells in :data:`UNKNOWN_COLOR`.
+  While the nearest line runs under the terrain's surface (:func:`line_buried`: inside a column,
+  as in a link's contact with the ground, or through a rock between its ends), the terrain is
+  drawn translucent (:data:`TERRAIN_SEE_THROUGH_OPACITY`) so the line and its markers stay in
+  sight; viser draws line segments with the depth test on.
 * **Tested boxes**: the pyramid boxes the last check visited, as edges, one colour per level
   (:data:`LEVEL_COLORS`, coarse to fine); boxes a link volume hit are drawn thicker.
 * **Ellipsoids**: each uncertain placement's origin position ellipsoid at 90 % and 99.9 %,
@@ -17,16 +21,44 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["OverlayDrawer", "terrain_meshes", "box_edges", "ellipsoid_mesh", "TERRAIN_COLOR", "UNKNOWN_COLOR",
-           "LEVEL_COLORS", "ELLIPSOID_COLORS"]
+           "LEVEL_COLORS", "ELLIPSOID_COLORS", "TERRAIN_SEE_THROUGH_OPACITY", "line_buried"]
 
 TERRAIN_COLOR = (150, 120, 80)
-UNKNOWN_COLOR = (170, 60, 200)
+UNKNOWN_COLOR = (55, 70, 105)
+"""Unseen (filled) cells: a dark slate, far (CIELAB ΔE > 90) from the magenta feature outline and
+darker than the grey vehicle body."""
+TERRAIN_SEE_THROUGH_OPACITY = 0.3
+"""Opacity of the terrain while the nearest line runs under its surface (opaque otherwise)."""
+LINE_SAMPLES = 33
+""":func:`line_buried` tests the line at this many evenly spaced points (ends trimmed)."""
 LEVEL_COLORS = ((40, 40, 40), (0, 90, 200), (0, 160, 160), (0, 170, 60), (150, 170, 0), (230, 150, 0),
                 (230, 70, 0), (200, 0, 90), (120, 0, 160), (90, 90, 90), (255, 255, 255))
 """Edge colour of the tested boxes per pyramid level (0: the top box); deeper levels reuse the last."""
 ELLIPSOID_COLORS = {0.9: ((60, 200, 60), 0.45), 0.999: ((60, 140, 230), 0.2)}
 """(colour, opacity) per confidence; other confidences use the last."""
 _BOX_EDGES = ((0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7))
+
+
+def line_buried(elevation, line, *, trim: float = 0.05) -> bool:
+    """Whether the segment ``line (2, 3)`` m runs under the surface of ``elevation`` (an
+    :class:`armguard.terrain.ElevationMap`): some of :data:`LINE_SAMPLES` points along it, past
+    ``trim`` of its length at each end (where it meets its own pair), lies inside a cell's column
+    (above the floor, below the cell's height).  Off the map: not buried."""
+    L = np.asarray(line, dtype=np.float64).reshape(2, 3)
+    if not np.all(np.isfinite(L)):
+        return False
+    t = np.linspace(trim, 1.0 - trim, LINE_SAMPLES)[:, None]
+    P = L[0] + t * (L[1] - L[0])
+    c = float(elevation.cell)
+    col = np.floor((P[:, 0] - float(elevation.origin[0])) / c).astype(np.int64)
+    row = np.floor((P[:, 1] - float(elevation.origin[1])) / c).astype(np.int64)
+    ny, nx = np.asarray(elevation.heights).shape
+    on = (row >= 0) & (row < ny) & (col >= 0) & (col < nx)
+    if not np.any(on):
+        return False
+    h = np.asarray(elevation.heights, dtype=np.float64)[row[on], col[on]]
+    z = P[on, 2]
+    return bool(np.any((z < h) & (z > float(elevation.floor))))
 
 
 def terrain_meshes(elevation) -> dict[bool, tuple[np.ndarray, np.ndarray]]:
@@ -135,8 +167,19 @@ class OverlayDrawer:
                 self.terrain_handles[k] = h
 
     def draw(self, snap, state) -> None:
+        self._see_through_terrain(snap, state)
         self._draw_boxes(snap.terrain)
         self._draw_ellipsoids(state)
+
+    def _see_through_terrain(self, snap, state) -> None:
+        """The terrain translucent while the nearest line runs under its surface, opaque otherwise."""
+        m = getattr(state, "terrain", None)
+        r = snap.readout
+        buried = m is not None and r.p_WA is not None and r.p_WB is not None and line_buried(m, [r.p_WA, r.p_WB])
+        want = TERRAIN_SEE_THROUGH_OPACITY if buried else None
+        for h in self.terrain_handles.values():
+            if h.opacity != want:
+                h.opacity = want
 
     def _draw_boxes(self, tv) -> None:
         sc = self.server.scene

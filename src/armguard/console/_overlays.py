@@ -25,8 +25,11 @@ import numpy as np
 from ._parse import ConsoleInputError
 
 __all__ = ["OverlayMixin", "TerrainView", "Ellipsoid", "tested_boxes", "confidence_ellipsoids",
-           "isotropic_placement", "parse_uncertain", "MAX_TERRAIN_BOXES", "ELLIPSOID_CONFIDENCES"]
+           "isotropic_placement", "parse_uncertain", "least_terrain_distance", "depth_is_resolved", "FAR_REACH",
+           "MAX_TERRAIN_BOXES", "ELLIPSOID_CONFIDENCES"]
 
+FAR_REACH = 3.0
+"""m: how far :func:`least_terrain_distance` looks for the terrain when the check is clear beyond its reach."""
 MAX_TERRAIN_BOXES = 400
 """At most this many tested pyramid boxes are drawn (the coarsest first, as the descent visits them)."""
 ELLIPSOID_CONFIDENCES = (0.9, 0.999)
@@ -41,6 +44,12 @@ class TerrainView:
     :data:`MAX_TERRAIN_BOXES`), ``levels (n,)`` their pyramid level (0 the coarsest), ``hit (n,)``
     whether a link volume overlapped the box; ``visited`` every box the descent visited (the
     pyramid's own ``boxes_tested``), ``report`` the :class:`armguard.terrain.TerrainReport`.
+
+    ``far`` ``(distance m, link, limit m)``: when the report is clear beyond its reach (distance ``inf``),
+    the least distance of any moving link to the terrain found by :func:`least_terrain_distance`
+    (``(inf, None, limit)``: farther than ``limit``, :data:`FAR_REACH`); None otherwise.  ``depth_resolved``: in
+    contact, whether the report's depth is the link's true depth into the terrain (the union of
+    columns; :func:`depth_is_resolved`) -- False: only a lower bound on it.
     """
 
     boxes: np.ndarray = field(repr=False)
@@ -49,6 +58,8 @@ class TerrainView:
     visited: int
     n_levels: int
     report: object = None
+    far: tuple | None = None
+    depth_resolved: bool = True
 
 
 @dataclass(frozen=True)
@@ -60,6 +71,50 @@ class Ellipsoid:
     center: np.ndarray
     axes: np.ndarray
     confidence: float
+
+
+def least_terrain_distance(guard, q, rep, *, limit: float = FAR_REACH) -> tuple[float, str | None]:
+    """``(distance m, owner)``: the least exact distance of a moving link to a terrain column (seen,
+    unseen or off the map) at ``q``, for a report ``rep`` that is clear beyond its ``reach``: the
+    guard's own :meth:`~armguard.terrain.TerrainGuard.distances` with the reach doubled until some
+    column is within it, up to ``limit`` (then ``(inf, None)``: farther than ``limit``)."""
+    r = max(float(rep.reach), 1e-3)
+    while r < limit:
+        r = min(2.0 * r, limit)
+        known, unknown = guard.distances(q, reach=r)[:2]
+        both = np.minimum(known, unknown)
+        k = int(np.argmin(both))
+        if math.isfinite(both[k]):
+            return float(both[k]), guard.owners[k]
+    return math.inf, None
+
+
+def depth_is_resolved(guard, q, rep, *, slack: float = 2e-3) -> bool:
+    """Whether a penetrating report's depth ``-rep.distance`` is the nearest link's true depth into
+    the terrain (the least translation that frees it from every column), to within ``slack`` m.
+
+    The report's distance is the deepest single column's signed distance (the separating-axis
+    depth, :mod:`armguard.terrain._exact`); freeing the link from the union of columns takes at
+    least that much, and it is exactly that when moving the link by it (plus ``slack``) along the
+    witness direction clears every column -- checked here with the pyramid's exact mode.  A link
+    driven deeper into the ground escapes one column sideways but not the terrain, so the depth
+    is then only a lower bound (False).  Not in contact: True.  Off the map: False (the slabs
+    around the map are not in the pyramid)."""
+    if not (rep.distance < 0.0 and rep.p_WA is not None and rep.link is not None):
+        return True
+    if rep.cell is None:
+        return False
+    n = np.asarray(rep.p_WB, dtype=np.float64) - np.asarray(rep.p_WA, dtype=np.float64)
+    norm = float(np.linalg.norm(n))
+    if norm == 0.0:
+        return False
+    X = np.eye(4)
+    X[:3, 3] = n / norm * (-float(rep.distance) + slack)
+    vols, shapes = guard.posed(q)
+    sel = [k for k, o in enumerate(guard.owners) if o == rep.link]
+    res = guard.pyramid.check([vols[k].transformed(X) for k in sel], shapes=[shapes[k].transformed(X) for k in sel],
+                              exact=True)
+    return res.status.value == "clear"
 
 
 def tested_boxes(guard, q, threshold: float, stopping_distance: float, *, cap: int = MAX_TERRAIN_BOXES):
@@ -274,7 +329,11 @@ class OverlayMixin:
             rep = getattr(last, "terrain", None) if self._backend == "analytic" else backend_terrain
             if rep is None:
                 rep = guard.check(q, threshold=self._threshold, stopping_distance=self._stopping)
-            self._terrain_view = TerrainView(boxes, levels, hit, visited, guard.pyramid.n_levels, rep)
+            far = None
+            if rep is not None and math.isinf(rep.distance):
+                far = (*least_terrain_distance(guard, q, rep), FAR_REACH)
+            resolved = depth_is_resolved(guard, q, rep) if rep is not None else True
+            self._terrain_view = TerrainView(boxes, levels, hit, visited, guard.pyramid.n_levels, rep, far, resolved)
         if self._placements:
             from ..uncertainty import clearance_sigmas
 

@@ -218,11 +218,23 @@ def _terrain_html(tv) -> str:
     if rep is None:
         return ""
     e = html.escape
-    where = "—" if rep.link is None else f"{rep.link}, {'unseen' if rep.unknown else 'seen'} cell {rep.cell or 'off the map'}"
+    d, link, note = float(rep.distance), rep.link, ""
+    if math.isinf(d) and getattr(tv, "far", None) is not None:  # clear beyond the check's reach
+        d, link, limit = tv.far
+        note = f"; past the check's reach {_fmt_m(rep.reach)}"
+        where = f"none within {_fmt_m(limit)}" if link is None else str(link)
+        text = "—" if link is None else _fmt_m(d)
+    else:
+        where = "—" if link is None else f"{link}, {'unseen' if rep.unknown else 'seen'} cell {rep.cell or 'off the map'}"
+        text = _fmt_m(d)
+        if d < 0.0 and not getattr(tv, "depth_resolved", True):
+            text = f"≤ {text}"
+            note = "; deeper not resolved: one column's depth, a lower bound on the depth into the terrain"
     return (f'<div id="armguard-terrain" data-status="{e(rep.status.value)}" data-boxes="{tv.visited}" '
+            f'data-distance="{d:.6g}" data-resolved="{int(getattr(tv, "depth_resolved", True))}" '
             'style="border:2px solid #8a6d3b;border-radius:6px;padding:4px;margin-top:4px;font-family:sans-serif;'
             'font-size:0.9em">'
-            f"<div><b>terrain</b> {e(rep.status.value)}: {e(_fmt_m(rep.distance))} ({e(where)})</div>"
+            f"<div><b>terrain</b> {e(rep.status.value)}: {e(text)} ({e(where)}{e(note)})</div>"
             f"<div>pyramid: {tv.visited} boxes tested, decided at level {rep.level} of {tv.n_levels - 1}; "
             f"{rep.elapsed_us:.0f} µs</div></div>")
 
