@@ -148,11 +148,14 @@ class ConsoleApp:
         while not self._stop.is_set():
             now = time.perf_counter()
             try:
-                if self._built_generation != self._model_generation:
-                    self._built_generation = self._model_generation
-                    self._refresh_model_widgets()
-                    self.drawer.build()
-                    self._redraw(force=True)
+                generation = self._model_generation
+                if self._built_generation != generation:
+                    try:
+                        self._refresh_model_widgets()
+                        self.drawer.build()
+                        self._redraw(force=True)
+                    finally:  # built (or failed, said in the panel): the widgets are the new model's from here
+                        self._built_generation = generation
                 self.state.tick(now - last)
                 self._redraw()
             except Exception as exc:  # keep serving; show what went wrong
