@@ -151,3 +151,100 @@ def test_readme_documents_the_codes():
     section = text.split("### Exit status", 1)[1].split("\n## ", 1)[0]
     for c in ExitCode:
         assert f"| {int(c)} " in section, c
+
+
+# ------------------------------------------------------------------ every command: 3, 4, 130
+
+_BAD = {
+    "yaml": "armguard_scene: 1\nbodies: [unclosed\n",  # not YAML
+    "urdf": "<robot name='x'><link name='a'>\n",  # not well-formed XML
+    "srdf": "<robot name='x'><group\n",
+    "agmap": "not a forbidden-values map\n",
+    "npz": "not a terrain file\n",
+}
+
+
+def _bad_files(tmp_path):
+    files = {}
+    for ext, text in _BAD.items():  # each in its own folder (a URDF's SRDF is found beside it, or in ../srdf/)
+        (tmp_path / f"in_{ext}").mkdir(exist_ok=True)
+        files[ext] = tmp_path / f"in_{ext}" / f"bad.{ext}"
+        files[ext].write_text(text)
+    return files
+
+
+def _file_cases(f, tmp_path):
+    """Each command given one file it must refuse (``f[ext]``): (command path, argv, the file named)."""
+    return [
+        (("check",), ["check", f["yaml"]], f["yaml"]),
+        (("check",), ["check", "rover", "--terrain", f["npz"]], f["npz"]),
+        (("check-srdf",), ["check-srdf", "hermes", f["srdf"]], f["srdf"]),
+        (("compare",), ["compare", f["urdf"], "--configs", "2", "--trajectory", "none"], f["urdf"]),
+        (("console",), ["console", f["yaml"], "--port", "0"], f["yaml"]),
+        (("demo",), ["demo", "--scene", f["yaml"], "--out", tmp_path / "demo"], f["yaml"]),
+        (("fk",), ["fk", f["yaml"]], f["yaml"]),
+        (("info",), ["info", f["yaml"]], f["yaml"]),
+        (("srdf",), ["srdf", f["urdf"], "--out", tmp_path / "x.srdf"], f["urdf"]),
+        (("verify",), ["verify", f["yaml"], "all"], f["yaml"]),
+        (("verify",), ["verify", "hermes", f["yaml"]], f["yaml"]),
+        (("cspace", "build"), ["cspace", "build", f["yaml"], "--out", tmp_path / "m.agmap"], f["yaml"]),
+        (("cspace", "info"), ["cspace", "info", f["agmap"]], f["agmap"]),
+        (("cspace", "plot"), ["cspace", "plot", f["agmap"], "--q2", "30", "--out", tmp_path / "s.png"], f["agmap"]),
+        (("program", "run"), ["program", "run", f["yaml"]], f["yaml"]),
+        (("program", "export"), ["program", "export", f["yaml"], "--out", tmp_path / "p.py"], f["yaml"]),
+    ]
+
+
+_NO_FILE_INPUT = {("distance",)}  # commands that read no file
+_LINTERS = {("check-urdf",)}  # "the model does not load" is its error-level finding (1), tested below
+
+
+def _leaves():
+    return [p for p, cmd in _commands(main) if not isinstance(cmd, click.Group)]
+
+
+def test_every_command_refuses_a_bad_file_with_3(tmp_path):
+    """A file that does not parse is one line naming it and exit status 3 -- never 1 (unsafe), never
+    a traceback -- for every command that reads one."""
+    cases = _file_cases(_bad_files(tmp_path), tmp_path)
+    assert {c[0] for c in cases} | _NO_FILE_INPUT | _LINTERS == set(_leaves())  # a new command joins the table
+    for _, argv, named in cases:
+        res = _run(*argv)
+        assert res.exit_code == ExitCode.INPUT, (argv, res.output)
+        assert "Traceback" not in res.output and str(named) in res.output, (argv, res.output)
+        errors = [ln for ln in res.output.splitlines() if ln.startswith("error:")]
+        assert len(errors) == 1, (argv, res.output)
+    assert not (tmp_path / "m.agmap").exists() and not (tmp_path / "s.png").exists()
+
+
+@pytest.mark.parametrize("raised, code", [(KeyboardInterrupt, ExitCode.INTERRUPTED),
+                                          (RuntimeError, ExitCode.INTERNAL),
+                                          (lambda: armguard.SceneFileError("f.yaml", "line 3", "bad"), ExitCode.INPUT)],
+                         ids=["ctrl-c", "internal", "refused"])
+def test_every_command_maps_what_it_raises_to_one_code(tmp_path, monkeypatch, raised, code):
+    """Whatever a command's body raises reaches the same mapping (130 / 4 / 3), for every command."""
+    argv = {c[0]: c[1] for c in reversed(_file_cases(_bad_files(tmp_path), tmp_path))}
+    argv[("distance",)] = ["distance"]
+    argv[("check-urdf",)] = ["check-urdf", tmp_path / "in_urdf" / "bad.urdf"]
+
+    def body(*a, **k):
+        raise raised()
+
+    for path in _leaves():
+        cmd = main
+        for name in path:
+            cmd = cmd.commands[name]
+        with monkeypatch.context() as m:
+            m.setattr(cmd, "callback", body)
+            res = _run(*argv[path], env={"ARMGUARD_DEBUG": ""})
+        assert res.exit_code == code, (path, res.output)
+        assert "Traceback" not in res.output
+
+
+def test_check_urdf_reports_a_model_that_does_not_load_as_its_finding(tmp_path):
+    f = _bad_files(tmp_path)["urdf"]
+    res = _run("check-urdf", f, "--json")
+    assert res.exit_code == ExitCode.UNSAFE, res.output
+    doc = __import__("json").loads(res.output)
+    assert doc["status"] == "errors" and any(x["check"] == "load" and str(f) in x["message"] for x in doc["findings"])
+    assert _run("check-urdf", tmp_path / "missing.urdf").exit_code == ExitCode.INPUT

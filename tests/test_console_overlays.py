@@ -152,7 +152,7 @@ def test_console_cli_refuses_bad_uncertain():
     from armguard.cli import main
 
     res = CliRunner().invoke(main, ["console", "rover", "--port", "0", "--uncertain", "nope=0.1"])
-    assert res.exit_code == 2 and "not a body or robot" in res.output
+    assert res.exit_code == 3 and "not a body or robot" in res.output  # a value refused (armguard.cli.ExitCode)
 
 
 def test_terrain_collision_is_the_headline_with_every_backend(rover):

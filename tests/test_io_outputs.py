@@ -277,3 +277,198 @@ def test_compare_out_under_a_file(tmp_path):
     blocker.write_text("x")
     r = CliRunner().invoke(main, _COMPARE + ["--no-plots", "--out", str(blocker / "out")], terminal_width=200)
     _one_line_error(r, str(blocker / "out"))
+
+
+# ------------------------------------------------------------------ devices, /proc, the build journal
+
+_BUILD = ["cspace", "build", "hermes", "--resolution", "30deg", "--max-depth", "0", "--out"]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc and /dev/full are Linux's")
+@pytest.mark.parametrize("target", ["/dev/null", "/dev/full", "/proc/armguard-cannot/x"])
+def test_outputs_to_a_device_or_proc_are_refused(small_map, target):
+    if target.startswith("/dev") and not os.path.exists(target):
+        pytest.skip(f"no {target}")
+    _one_line_error(CliRunner().invoke(main, _BUILD + [target]), target.rsplit("/", 1)[0] if "proc" in target else target)
+    _one_line_error(CliRunner().invoke(main, ["cspace", "plot", str(small_map), "--q2", "30", "--out", target]),
+                    target.rsplit("/", 1)[0] if "proc" in target else target)
+    _one_line_error(CliRunner().invoke(main, _COMPARE + ["--no-plots", "--out", target], terminal_width=200), target)
+    if target.startswith("/dev"):
+        assert not stat_is_regular(target)  # still the device
+
+
+def stat_is_regular(path) -> bool:
+    import stat
+
+    return stat.S_ISREG(os.stat(path).st_mode)
+
+
+class _FullFile:
+    """A journal file on a full disk: ``room`` writes are accepted, then ENOSPC (what a real file
+    object raises at write or flush time)."""
+
+    def __init__(self, f, room):
+        self._f, self._room = f, [room]
+
+    def write(self, data):
+        if self._room[0] <= 0:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        self._room[0] -= 1
+        return self._f.write(data)
+
+    def __getattr__(self, name):
+        return getattr(self._f, name)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self._f.close()
+
+
+def _journal_disk(monkeypatch, room):
+    """The build journal's files (opened for writing in armguard.cspace._format) accept ``room`` writes in all."""
+    import builtins
+
+    import armguard.cspace._format as fmt
+
+    left = [room]
+
+    def fake_open(path, mode="r", *a, **k):
+        f = builtins.open(path, mode, *a, **k)
+        if "w" in mode or "a" in mode:
+            ff = _FullFile(f, left[0])
+            ff._room = left  # shared by every file of the journal
+            return ff
+        return f
+
+    monkeypatch.setattr(fmt, "open", fake_open, raising=False)
+
+
+@pytest.mark.parametrize("room", [0, 3], ids=["journal-header", "journal-record"])
+def test_cspace_build_journal_on_a_full_disk(tmp_path, monkeypatch, room):
+    """The journal is written before the map: a full disk there is the journal's one-line error, no
+    map, and (when not even its header fits) no empty journal that a later build would refuse."""
+    out = tmp_path / "m.agmap"
+    with monkeypatch.context() as m:
+        _journal_disk(m, room)
+        r = CliRunner().invoke(main, _BUILD + [str(out)])
+    _one_line_error(r, f"cannot write the build journal {out}.partial", os.strerror(errno.ENOSPC))
+    assert not out.exists()
+    assert (tmp_path / "m.agmap.partial").exists() == (room > 0)
+    r = CliRunner().invoke(main, _BUILD + [str(out)])  # space again: built (resumed past a cut record)
+    assert r.exit_code == 0 and "wrote" in r.output and out.exists(), r.output
+    assert not (tmp_path / "m.agmap.partial").exists()
+
+
+def test_a_set_file_that_cannot_be_written_is_named_as_its_output(tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    _previous_set(out)
+    _full_disk(monkeypatch)
+    with pytest.raises(OutputError) as exc:
+        with output_set(out) as staging:
+            atomic_write(staging / "compare.json", "new json")
+    assert str(exc.value) == f"cannot write {out / 'compare.json'}: {os.strerror(errno.ENOSPC)}"
+    assert (out / "compare.json").read_text() == "old json" and _leftovers(out) == []
+
+
+def test_ctrl_c_while_the_set_moves_in_waits_for_the_whole_set(tmp_path, monkeypatch):
+    """A real SIGINT during the renames: every file of the new set is moved in, then KeyboardInterrupt."""
+    import signal
+
+    if not hasattr(signal, "SIGINT") or not hasattr(os, "kill"):
+        pytest.skip("no SIGINT")
+    out = tmp_path / "out"
+    _previous_set(out)
+    real = os.replace
+    calls = []
+
+    def replace(src, dst):
+        if os.path.dirname(dst) != str(out):
+            return real(src, dst)  # a staged file's own rename (atomic_write)
+        calls.append(dst)
+        if len(calls) == 1:
+            os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C after the first rename has begun
+        return real(src, dst)
+
+    monkeypatch.setattr(_io.os, "replace", replace)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with output_set(out, stale=("compare.json", "scatter.png")) as staging:
+                atomic_write(staging / "compare.json", "new json")
+                atomic_write(staging / "timing.png", "new plot")
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert len(calls) >= 2  # the second rename ran after the signal arrived
+    assert sorted(p.name for p in out.iterdir()) == ["compare.json", "mine.txt", "timing.png"]
+    assert (out / "compare.json").read_text() == "new json" and (out / "timing.png").read_text() == "new plot"
+
+
+@fifo_only
+def test_compare_refuses_a_fifo_among_its_outputs(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    os.mkfifo(out / "compare.json")
+    (out / "scatter_analytic_coal.png").write_bytes(b"previous")
+    r = CliRunner().invoke(main, _COMPARE + ["--no-plots", "--out", str(out)], terminal_width=200)  # never blocks on it
+    _one_line_error(r, str(out / "compare.json"), "FIFO")
+    assert (out / "compare.json").is_fifo() and (out / "scatter_analytic_coal.png").read_bytes() == b"previous"
+    assert _leftovers(out) == []
+
+
+def _tmpfs_namespace() -> bool:
+    """A private mount namespace where a small tmpfs can be mounted (unshare -rm; Linux, no root needed
+    where unprivileged user namespaces are allowed)."""
+    import shutil as sh
+    import subprocess
+
+    if not sys.platform.startswith("linux") or sh.which("unshare") is None or sh.which("mount") is None:
+        return False
+    probe = subprocess.run(["unshare", "--user", "--map-root-user", "--mount", "sh", "-c",
+                            "d=$(mktemp -d) && mount -t tmpfs -o size=64k tmpfs $d && umount $d && rmdir $d"],
+                           capture_output=True, timeout=30)
+    return probe.returncode == 0
+
+
+_ON_A_FULL_DISK = r"""
+import json, os, sys
+from click.testing import CliRunner
+from armguard.cli import main
+full, small_map = sys.argv[1], sys.argv[2]
+runs = {
+    "build": ["cspace", "build", "hermes", "--resolution", "30deg", "--max-depth", "0", "--out", full + "/m.agmap"],
+    "plot": ["cspace", "plot", small_map, "--q2", "30", "--out", full + "/s.png"],
+    "compare": ["compare", "gmf_s480", "--backends", "analytic,coal", "--configs", "8", "--trajectory", "none",
+                "--out", full + "/cmp"],
+}
+res = {k: (lambda r: [r.exit_code, r.output])(CliRunner().invoke(main, a, terminal_width=200)) for k, a in runs.items()}
+res["left"] = sorted(os.path.relpath(os.path.join(d, f), full) for d, _, fs in os.walk(full) for f in fs)
+print(json.dumps(res))
+"""
+
+
+@pytest.mark.skipif(not _tmpfs_namespace(), reason="no private tmpfs (unshare --user --mount) here")
+def test_a_real_full_disk(small_map, tmp_path):
+    """A 64 KiB tmpfs filled to the last byte in a private mount namespace: every command that writes
+    says which file it could not write (exit 3) and leaves nothing but the filler."""
+    import subprocess
+
+    full = tmp_path / "full"
+    full.mkdir()
+    script = tmp_path / "run.py"
+    script.write_text(_ON_A_FULL_DISK)
+    shell = (f'mount -t tmpfs -o size=64k tmpfs "{full}" && (dd if=/dev/zero of="{full}/filler" bs=4k 2>/dev/null; '
+             f'exec "{sys.executable}" "{script}" "{full}" "{small_map}")')
+    p = subprocess.run(["unshare", "--user", "--map-root-user", "--mount", "sh", "-c", shell],
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr[-2000:]
+    res = json.loads(p.stdout.strip().splitlines()[-1])
+    enospc = os.strerror(errno.ENOSPC)
+    for name, what in [("build", f"cannot write the build journal {full}/m.agmap.partial"),
+                       ("plot", f"cannot write {full}/s.png"), ("compare", f"cannot write {full}/cmp/")]:
+        code, output = res[name]
+        last = output.strip().splitlines()[-1]
+        assert code == ExitCode.INPUT and last.startswith(f"error: {what}") and enospc in last, (name, output)
+        assert "wrote" not in output and "Traceback" not in output
+    assert res["left"] == ["filler"]  # no map, PNG, compare.json, journal or temporary file

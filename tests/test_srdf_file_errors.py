@@ -22,3 +22,23 @@ def test_a_scene_srdf_that_is_a_directory_is_a_located_error(tmp_path):
     with pytest.raises(SceneFileError, match="is a directory") as e:
         read_srdf_disabled(tmp_path)
     assert e.value.file == str(tmp_path)
+
+
+def test_cli_srdf_a_directory_is_refused_in_one_line(tmp_path):
+    """``--srdf DIR`` (click refuses it: a bad option value, 2) and a scene file whose robot's
+    ``srdf:`` is a folder (the scene file's error: its place and the folder, 3) -- never a traceback."""
+    from click.testing import CliRunner
+
+    from armguard.cli import ExitCode, main
+
+    urdf = repo_root() / "urdf" / "hermes" / "hermes.urdf"
+    res = CliRunner().invoke(main, ["info", str(urdf), "--srdf", str(tmp_path)])
+    assert res.exit_code == ExitCode.USAGE and "--srdf" in res.output and str(tmp_path) in res.output
+    assert "Traceback" not in res.output and "IsADirectoryError" not in res.output
+    (tmp_path / "srdf_dir").mkdir()
+    scene = tmp_path / "cell.yaml"
+    scene.write_text(f"armguard_scene: 1\nname: cell\nrobots:\n  - name: arm\n    urdf: {urdf}\n    srdf: srdf_dir\n")
+    res = CliRunner().invoke(main, ["check", str(scene)])
+    assert res.exit_code == ExitCode.INPUT, res.output
+    assert "Traceback" not in res.output and "IsADirectoryError" not in res.output
+    assert str(scene) in res.output and "robots[0].srdf" in res.output and "is a directory" in res.output

@@ -194,8 +194,11 @@ def output_set(folder, *, stale=()):
                     if old.is_file() and not old.is_symlink():
                         old.unlink()
             _fsync_folder(folder)
-    except OutputError:
-        raise
+    except OutputError as exc:
+        if str(staging) not in str(exc):
+            raise
+        # a file that could not be staged, named as the output it was to be (the staging folder is gone)
+        raise OutputError(str(exc).replace(str(staging), str(folder))) from None
     except OSError as exc:
         raise OutputError(f"cannot write into {folder}: {_reason(exc)}") from None
     finally:

@@ -107,8 +107,14 @@ def check_urdf_cmd(path, n_configs, as_json) -> None:
     from rich.console import Console
     from rich.table import Table
 
+    from pathlib import Path
+
+    from .._errors import SceneFileError
     from ..harness import check_model_files
 
+    if (Path(path).suffix or "/" in path) and not Path(path).exists():
+        # nothing to lint is "could not check" (3), not an error-level finding (1)
+        raise SceneFileError(str(path), "", "file not found")
     report = check_model_files(path, n_configs=n_configs)
     if as_json:
         click.echo(json.dumps(report.to_dict(), indent=1))

@@ -23,16 +23,13 @@ from . import main
                    "Draws its 90 % / 99.9 % ellipsoids; the panel shows the clearance in sigmas.")
 def console_cmd(scene: str, host: str, port: int, threshold: float, watch: bool, terrain_file, uncertain) -> None:
     """Serve the operator console for SCENE (a built-in scene name or a scene file)."""
-    from .._errors import ArmguardError
     from ..console import ConsoleApp
     from ..console._serve import ModelWatcher, make_state, watched_files
     from ._compile import warm_up
 
     warm_up()
-    try:
-        state = make_state(scene, threshold=threshold, terrain=terrain_file, uncertain=uncertain)
-    except ArmguardError as exc:
-        raise click.UsageError(str(exc)) from None
+    # a scene, terrain or --uncertain value refused: one line, exit status 3 (as every command)
+    state = make_state(scene, threshold=threshold, terrain=terrain_file, uncertain=uncertain)
     app = ConsoleApp(state, host=host, port=port).start()
     if watch:
         files = watched_files(scene, state.model)

@@ -37,13 +37,14 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import contextlib
 import struct
 import zlib
 from pathlib import Path
 
 import numpy as np
 
-from .._errors import ForbiddenMapError, ForbiddenMapFileError
+from .._errors import ForbiddenMapError, ForbiddenMapFileError, OutputError
 from .._io import atomic_write
 
 __all__ = ["FORMAT_VERSION", "KERNEL_VERSION", "sha256_file", "write_map", "read_header", "check_data",
@@ -226,6 +227,21 @@ def check_data(path, data, offsets: np.ndarray, crcs: np.ndarray) -> None:
             raise ForbiddenMapFileError(path, f"data, substructure {s}", "checksum mismatch (damaged); rebuild the map")
 
 
+@contextlib.contextmanager
+def _journal_writes(path: Path, *, remove: bool = False):
+    """An OSError while writing the journal (a full disk, no permission) as an OutputError naming it;
+    ``remove``: the journal is removed then."""
+    try:
+        yield
+    except OSError as exc:
+        if remove:
+            with contextlib.suppress(OSError):
+                path.unlink()
+        if isinstance(exc, OutputError):
+            raise
+        raise OutputError(f"cannot write the build journal {path}: {exc.strerror or exc}") from None
+
+
 class Journal:
     """The append-only record of finished substructures of one build (``<out>.partial``).
 
@@ -246,9 +262,11 @@ class Journal:
         if resume and self.path.exists():
             self._read(head)
         else:
-            with open(self.path, "wb") as f:
-                f.write(head)
-        self._f = open(self.path, "ab")
+            with _journal_writes(self.path, remove=True):  # none left behind that a resume would refuse
+                with open(self.path, "wb") as f:
+                    f.write(head)
+        with _journal_writes(self.path):
+            self._f = open(self.path, "ab")
 
     def _read(self, head: bytes) -> None:
         data = self.path.read_bytes()
@@ -298,11 +316,13 @@ class Journal:
     def append(self, s: int, ptr: np.ndarray, iv: np.ndarray, evaluations: int, unresolved: int) -> None:
         rec = (_REC.pack(int(s), len(ptr), len(iv), int(evaluations), int(unresolved))
                + np.ascontiguousarray(ptr, dtype="<u2").tobytes() + np.ascontiguousarray(iv, dtype="<u2").tobytes())
-        self._f.write(rec + _CRC.pack(_crc(rec)))
-        self._f.flush()
+        with _journal_writes(self.path):  # a record cut short by a full disk is recomputed on resume
+            self._f.write(rec + _CRC.pack(_crc(rec)))
+            self._f.flush()
         self.done[int(s)] = (ptr, iv, int(evaluations), int(unresolved))
 
     def close(self, *, remove: bool = False) -> None:
-        self._f.close()
+        with _journal_writes(self.path):
+            self._f.close()
         if remove:
             self.path.unlink(missing_ok=True)

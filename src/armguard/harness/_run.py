@@ -84,8 +84,11 @@ def write_outputs(comp: Comparison, out_dir, *, plots: bool = True) -> list:
 
 
 def _previous_outputs(out: Path) -> tuple:
-    """The file names the ``compare.json`` in ``out`` lists as its set (none when it cannot be read)."""
+    """The file names the ``compare.json`` in ``out`` lists as its set (none when it cannot be read,
+    or is not a regular file: a FIFO there would block the read; output_set refuses it)."""
     try:
+        if not (out / "compare.json").is_file():
+            return ()
         names = json.loads((out / "compare.json").read_text(encoding="utf-8")).get("outputs", [])
     except (OSError, ValueError, AttributeError):
         return ()
