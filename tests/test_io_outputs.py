@@ -12,6 +12,7 @@ import errno
 import json
 import os
 import sys
+from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
@@ -472,3 +473,28 @@ def test_a_real_full_disk(small_map, tmp_path):
         assert code == ExitCode.INPUT and last.startswith(f"error: {what}") and enospc in last, (name, output)
         assert "wrote" not in output and "Traceback" not in output
     assert res["left"] == ["filler"]  # no map, PNG, compare.json, journal or temporary file
+
+
+def test_program_and_srdf_outputs_refuse_a_fifo_and_write_whole(tmp_path):
+    """``program run --save``, ``program export --out`` and ``srdf --out`` write through atomic_write: a FIFO
+    at the target is refused (exit 3) and left a FIFO; a regular target is replaced whole."""
+    import os
+    import stat
+
+    from click.testing import CliRunner
+
+    from armguard.cli import main
+
+    fifo = tmp_path / "out.fifo"
+    os.mkfifo(fifo)
+    prog = Path(__file__).resolve().parent.parent / "examples" / "workmate" / "stack.yaml"
+    runs = [["program", "export", str(prog), "--out", str(fifo)],
+            ["srdf", "puma560", "--out", str(fifo), "--max-evaluations", "200"]]
+    for args in runs:
+        r = CliRunner().invoke(main, args)
+        assert r.exit_code == 3, (args, r.output)
+        assert stat.S_ISFIFO(os.stat(fifo).st_mode), args
+    out = tmp_path / "stack.py"
+    r = CliRunner().invoke(main, ["program", "export", str(prog), "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "armguard" in out.read_text() and not [p for p in tmp_path.iterdir() if p.name.startswith(".")]

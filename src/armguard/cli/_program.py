@@ -32,14 +32,9 @@ def run_cmd(file: str, cell: str | None, seed: int, save: str | None) -> None:
     run = run_program(file, cell, seed=seed)
     click.echo(run.summary())
     if save:
-        from pathlib import Path
+        from .._io import atomic_write
 
-        from .._errors import OutputError
-
-        try:
-            Path(save).write_text(json.dumps(run.to_dict()), encoding="utf-8")
-        except OSError as exc:
-            raise OutputError(f"{save}: cannot write the run: {exc}") from None
+        atomic_write(save, json.dumps(run.to_dict()))  # whole or not at all; a FIFO or a full disk: exit 3
     sys.exit(int(ExitCode.OK if run.ok else ExitCode.UNSAFE))
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._errors import OutputError, SceneError, SceneFileError
+from .._errors import SceneError, SceneFileError
 from ._cell import Cell, load_cell
 from ._format import ProgramFile, read_program
 from ._workcell import ProgramRun, ProgramStopped, Workcell
@@ -239,9 +239,6 @@ def program_text(program: Program, *, cell: str | None = None) -> str:
 
 def export_program(program: Program | str | Path, out, *, cell: str | None = None) -> Path:
     """Write ``program`` as a Python program to ``out`` (see :func:`program_text`); returns the path."""
-    import os
-    import tempfile
-
     if not isinstance(program, Program):
         program = load_program(program)
     if cell is not None:
@@ -249,15 +246,9 @@ def export_program(program: Program | str | Path, out, *, cell: str | None = Non
     elif program.cell is not None and Path(program.cell).exists():
         cell = str(Path(program.cell).resolve())
     text = program_text(program, cell=cell)
-    out = Path(out)
-    try:
-        fd, tmp = tempfile.mkstemp(dir=out.parent if str(out.parent) else ".", prefix=f".{out.name}.")
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, out)
-    except OSError as exc:
-        raise OutputError(f"{out}: cannot write the program: {exc}") from None
-    return out
+    from .._io import atomic_write
+
+    return atomic_write(Path(out), text)  # whole or not at all; a FIFO or a full disk is an OutputError
 
 
 def workcell_main(program, *, cell: str | None, name: str = "program", speed: float = 0.1,
@@ -282,5 +273,7 @@ def workcell_main(program, *, cell: str | None, name: str = "program", speed: fl
     run = wc.finish()
     print(run.summary())
     if a.save:
-        Path(a.save).write_text(json.dumps(run.to_dict()), encoding="utf-8")
+        from .._io import atomic_write
+
+        atomic_write(Path(a.save), json.dumps(run.to_dict()))
     return 0 if run.ok else 1

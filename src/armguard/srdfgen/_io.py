@@ -8,13 +8,11 @@ pair is a comment ending in its fingerprint, its witness configuration written t
 
 from __future__ import annotations
 
-import os
 import re
-import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from .._errors import OutputError, SceneFileError
+from .._errors import SceneFileError
 from ..model._certificate import FINGERPRINT_ATTR, MARGIN_ATTR, METHOD_ATTR
 
 __all__ = ["write_srdf", "srdf_text", "read_previous"]
@@ -44,19 +42,11 @@ def srdf_text(matrix) -> str:
 
 
 def write_srdf(matrix, path) -> None:
-    """Write :func:`srdf_text` to ``path`` whole (a temporary file beside it, then a rename)."""
-    path = Path(path)
-    text = srdf_text(matrix)
-    tmp = None
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent if str(path.parent) else ".")
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except OSError as exc:
-        if tmp is not None and os.path.exists(tmp):
-            os.unlink(tmp)
-        raise OutputError(f"{path}: cannot write the SRDF ({exc.strerror or exc})") from None
+    """Write :func:`srdf_text` to ``path`` whole (:func:`armguard._io.atomic_write`: a temporary file beside
+    it, flushed, then renamed; a FIFO, a folder or a full disk is an OutputError naming the path)."""
+    from .._io import atomic_write
+
+    atomic_write(Path(path), srdf_text(matrix))
 
 
 def read_previous(path) -> dict:
