@@ -8,7 +8,8 @@ each backend's own batch path: the analytic one multi-threaded numba, coal's
 A second table: the analytic interface's cost around its kernel -- one ``pair_distances(q)``
 against the bare compiled call it makes (the difference is the Python per call),
 ``pair_distances_many(Q)`` per row, the same calls from two threads sharing one checker (the
-kernel releases the GIL), and yes/no per thread against coal with one thread.
+kernel releases the GIL), and yes/no per thread against coal with one thread; the built-in
+models, the Panda and, where example-robot-data is installed, z1 and xarm7.
 """
 
 from __future__ import annotations
@@ -86,6 +87,16 @@ def _hull_robots():
     return out
 
 
+def _public_robots():
+    """Public robots of the interface table (example-robot-data's z1: cylinders against dense gripper
+    hulls; xarm7: dense meshes), where installed."""
+    import armguard
+    from armguard.model import known_models
+
+    have = {m.name for m in known_models() if m.available}
+    return [(n, lambda n=n: armguard.load_model(n)) for n in ("z1", "xarm7") if n in have]
+
+
 def _two_threads(fn, n: int) -> float:
     """Wall seconds for ``n`` calls ``fn(i)`` split over two threads sharing everything."""
     barrier = threading.Barrier(3)
@@ -113,7 +124,7 @@ def interface_rows(quick: bool) -> str:
     rows = ["| model | pairs | analytic `pair_distances` | bare kernel call | Python per call | `pair_distances_many` "
             "per row | coal `pair_distances` | coal / analytic | 2 threads, one checker (speed-up) |",
             "|---|---|---|---|---|---|---|---|---|"]
-    for name, load in _models():
+    for name, load in _models() + _public_robots():
         m = load()
         Q = m.random_q(n_q, 3)
         a, c = armguard.checker(m, "analytic"), armguard.checker(m, "coal")

@@ -88,7 +88,7 @@ def _verifier() -> None:
 # an answer: the chain then compiles that kernel itself (tests/test_detect_cold.py checks they
 # all match).  Codes: F1/F2 float64 C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64.
 LEAVES_SIDE = (
-    ("armguard.geometry._pair_cylinder", "support_pair", "F2 F1 f F2 F1 f F1 F1 f f i f"),
+    ("armguard.geometry._pair_cylinder", "support_pair_graph", "F2 I1 F1 f F2 I1 F1 f F1 F1 f f i f"),
     ("armguard.detect._narrow", "_capsule_polytope", "F2 f i F2 F2 I2 F2 F2 I1 I1 I1 f F1 f f f i f"),
 )
 """Leaf kernels compiled in the second process: (module, function, signature codes)."""

@@ -3,7 +3,7 @@
 No distance formula lives here: each branch calls the geometry core's per-pair kernel
 (:mod:`armguard.geometry`): capsule-capsule (Ranger §3 link-link and link-edge),
 capsule-box, capsule against a static polytope (GJK + Minkowski facets), GJK and EPA on support
-functions for any pair with a cylinder side (:func:`armguard.geometry._pair_cylinder.support_pair`),
+functions for any pair with a cylinder side (:func:`armguard.geometry._pair_cylinder.support_pair_graph`),
 and the exact convex-convex kernel for every other pair (faces, polyhedra, mesh hulls: GJK climbing
 the hulls' vertex graphs, EPA for the depth, the exhaustive SAT as fallback).  The only formula of
 its own is the distance to the workspace walls (Ranger §2, "link-to-bounding box distances"), which
@@ -25,7 +25,7 @@ from numba import njit
 from ..geometry._pair_segment_box import capsule_box_scalar
 from ..geometry._pair_segment_polytope import capsule_polytope_at
 from ..geometry._pair_segment_segment import capsule_capsule_scalar
-from ..geometry._pair_cylinder import support_pair
+from ..geometry._pair_cylinder import support_pair_graph
 from ..geometry._pair_epa import convex_convex_fast
 from ..geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_capsule
 
@@ -68,9 +68,9 @@ def pair_distance(
     ``adj[adjs[g]:adjs[g + 1]]``, EPA depth, the exhaustive SAT where EPA does not settle it,
     with axes from the face normals and edge directions, or from the triangles
     ``tri[tris[g]:tris[g + 1]]`` and the graph of an element that has them instead);
-    A pair with a cylinder side goes to :func:`armguard.geometry._pair_cylinder.support_pair` (GJK
-    and EPA on support functions; the cylinder's core is ``box[g]``, the other side's its points
-    and radius).  ``level`` as in :func:`narrow_other`; ``work`` has ``EPA_WORK_SIZE`` floats
+    A pair with a cylinder side goes to :func:`armguard.geometry._pair_cylinder.support_pair_graph`
+    (GJK and EPA on support functions; the cylinder's core is ``box[g]``, the other side's its
+    points, climbed over its vertex graph when it has one, and radius).  ``level`` as in :func:`narrow_other`; ``work`` has ``EPA_WORK_SIZE`` floats
     (``SUPPORT_WORK_SIZE`` for the cylinder kernel, fewer)."""
     ka = core[ga]
     kb = core[gb]
@@ -95,8 +95,9 @@ def pair_distance(
     if ka == _CYLINDER or kb == _CYLINDER:
         ca = box[ga] if ka == _CYLINDER else box[ga, 0:0]  # an empty buffer: the hull of the points
         cb = box[gb] if kb == _CYLINDER else box[gb, 0:0]
-        d, status = support_pair(verts[vstart[ga]:vstart[ga + 1]], ca, ra, verts[vstart[gb]:vstart[gb + 1]], cb, rb,
-                                 out, work, eps_len, gjk_eps, max_iter, level)
+        d, status = support_pair_graph(verts[vstart[ga]:vstart[ga + 1]], adj[adjs[ga]:adjs[ga + 1]], ca, ra,
+                                       verts[vstart[gb]:vstart[gb + 1]], adj[adjs[gb]:adjs[gb + 1]], cb, rb,
+                                       out, work, eps_len, gjk_eps, max_iter, level)
         if status == GJK_NOT_CONVERGED:
             return d, ERR_GJK
         return d, 0

@@ -29,7 +29,8 @@ cores, and the witnesses are the barycentric combinations of those.  The algorit
   buffer's vertices spent (or a support repeating) it accepts a gap below ``SUPPORT_GAP``.
 
 A core is ``(p, cyl, r)``: ``cyl`` a Cylinder's 15-float buffer ``[c, r, r, h, R_WC row-major]``
-(``_pack``), or empty, and then the core is the hull of the points ``p (n, 3)`` (scanned), swept
+(``_pack``), or empty, and then the core is the hull of the points ``p (n, 3)`` (scanned, or climbed
+over their vertex graph when one is given: :func:`support_pair_graph`), swept
 by the radius ``r`` (spheres, capsules; 0 for polytopes).  Allocation-free: GJK's simplex and
 EPA's polytope live in the caller's ``work`` (``SUPPORT_WORK_SIZE`` float64).
 """
@@ -38,14 +39,15 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from ._pair_epa import triangle_normal
-from ._pair_gjk import GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _closest_simplex, _scan
+from ._pair_gjk import GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _closest_simplex, _support
 from ._pair_segment_segment import write_rounded
 
 __all__ = ["CYL_W", "SUPPORT_WORK_SIZE", "SUPPORT_GAP", "support_point", "gjk_support", "epa_support",
-           "support_pair"]
+           "support_pair", "support_pair_graph"]
 
 CYL_W = 15
 """Floats of a cylinder's buffer: ``[c (3), r, r, h, R_WC (9, row-major)]`` (the box layout)."""
@@ -69,8 +71,11 @@ _VIS = (4e-14, 1e-15, 1e-12, 1e-13, 1e-11)  # EPA's visibility margins, relative
 
 
 @njit(cache=True, inline="always")
-def support_point(p, cyl, dx, dy, dz):  # pragma: no cover - compiled
-    """A point of the core ``(p, cyl)`` farthest along ``d`` (the cylinder's ``s(d)``, or a scan)."""
+def support_point(p, adj, cyl, dx, dy, dz):  # pragma: no cover - compiled
+    """A point of the core ``(p, cyl)`` farthest along ``d``: the cylinder's ``s(d)``, else a climb
+    over the points' vertex graph ``adj`` (``_pair_gjk._support``: a true support vertex of the
+    hull, found in a few dozen dot products where a scan of a mesh hull takes thousands), or a
+    scan of the points when ``adj`` is empty."""
     if cyl.shape[0] >= CYL_W:
         # d in the cylinder's frame (columns of R_WC): the radial part u R0 + v R1 is orthogonal
         # to the axis by construction (d - (a . d) a loses that to cancellation near the axis)
@@ -89,14 +94,23 @@ def support_point(p, cyl, dx, dy, dz):  # pragma: no cover - compiled
             y += u * cyl[9] + v * cyl[10]
             z += u * cyl[12] + v * cyl[13]
         return x, y, z
-    i = _scan(p, dx, dy, dz)
+    i = _support(p, adj, -1, dx, dy, dz)
     return p[i, 0], p[i, 1], p[i, 2]
 
 
 @njit(cache=True, inline="always")
-def _centre(p, cyl):  # pragma: no cover - compiled
+def _centre(p, adj, cyl):  # pragma: no cover - compiled
+    """A point inside the core (GJK's first direction joins two of these): the cylinder's centre,
+    the mean of the six extreme vertices a vertex graph stores, or the points' centroid."""
     if cyl.shape[0] >= CYL_W:
         return cyl[0], cyl[1], cyl[2]
+    if adj.shape[0] > 0:
+        gx = gy = gz = 0.0
+        for k in range(6):
+            gx += p[adj[k], 0]
+            gy += p[adj[k], 1]
+            gz += p[adj[k], 2]
+        return gx / 6.0, gy / 6.0, gz / 6.0
     gx = gy = gz = 0.0
     for i in range(p.shape[0]):
         gx += p[i, 0]
@@ -121,22 +135,22 @@ def _put(w, o, ax, ay, az, bx, by, bz):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _pair_support(pa, ca, pb, cb, dx, dy, dz):  # pragma: no cover - compiled
+def _pair_support(pa, ga, ca, pb, gb, cb, dx, dy, dz):  # pragma: no cover - compiled
     """Support of ``M = A - B`` along ``d``: A's along ``d``, B's along ``-d``."""
-    ax, ay, az = support_point(pa, ca, dx, dy, dz)
-    bx, by, bz = support_point(pb, cb, -dx, -dy, -dz)
+    ax, ay, az = support_point(pa, ga, ca, dx, dy, dz)
+    bx, by, bz = support_point(pb, gb, cb, -dx, -dy, -dz)
     return ax, ay, az, bx, by, bz
 
 
 @njit(cache=True)
-def gjk_support(pa, ca, pb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, work):  # pragma: no cover - compiled
+def gjk_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, work):  # pragma: no cover - compiled
     """GJK on the cores ``(pa, ca)`` and ``(pb, cb)`` from the initial direction ``d`` (B to A).
 
     Returns ``(status, dist, n, ax, ay, az, bx, by, bz)``: the core distance, the number of simplex
     vertices left in ``work`` (4: the origin is inside their tetrahedron) and the witnesses on the
     cores.  ``status`` as ``_pair_gjk``."""
     eps2 = eps_len * eps_len
-    ax, ay, az, bx, by, bz = _pair_support(pa, ca, pb, cb, -dx, -dy, -dz)
+    ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, -dx, -dy, -dz)
     _put(work, _S0, ax, ay, az, bx, by, bz)
     work[_L0] = 1.0
     n = 1
@@ -151,7 +165,7 @@ def gjk_support(pa, ca, pb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, work):  
         if vv <= eps2:
             status = GJK_INTERSECTING
             break
-        ax, ay, az, bx, by, bz = _pair_support(pa, ca, pb, cb, -vx, -vy, -vz)
+        ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, -vx, -vy, -vz)
         wx = ax - bx
         wy = ay - by
         wz = az - bz
@@ -231,7 +245,7 @@ def gjk_support(pa, ca, pb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, work):  
 
 
 @njit(cache=True)
-def _complete(pa, ca, pb, cb, work, n, eps):  # pragma: no cover - compiled
+def _complete(pa, ga, ca, pb, gb, cb, work, n, eps):  # pragma: no cover - compiled
     """Complete GJK's simplex (``n < 4`` vertices, the origin within ``eps`` of it) to a tetrahedron
     of support points of ``M`` containing the origin: add supports along directions off the
     simplex's span (the axes for a point, six directions about a segment, the two normals of a
@@ -241,7 +255,7 @@ def _complete(pa, ca, pb, cb, work, n, eps):  # pragma: no cover - compiled
             dx = 1.0 if k == 0 else (-1.0 if k == 1 else 0.0)
             dy = 1.0 if k == 2 else (-1.0 if k == 3 else 0.0)
             dz = 1.0 if k == 4 else (-1.0 if k == 5 else 0.0)
-            ax, ay, az, bx, by, bz = _pair_support(pa, ca, pb, cb, dx, dy, dz)
+            ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, dx, dy, dz)
             ex = ax - bx - work[_S0]
             ey = ay - by - work[_S0 + 1]
             ez = az - bz - work[_S0 + 2]
@@ -278,7 +292,7 @@ def _complete(pa, ca, pb, cb, work, n, eps):  # pragma: no cover - compiled
             dx = math.cos(t) * ux + math.sin(t) * wx
             dy = math.cos(t) * uy + math.sin(t) * wy
             dz = math.cos(t) * uz + math.sin(t) * wz
-            ax, ay, az, bx, by, bz = _pair_support(pa, ca, pb, cb, dx, dy, dz)
+            ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, dx, dy, dz)
             rx = ax - bx - work[_S0]
             ry = ay - by - work[_S0 + 1]
             rz = az - bz - work[_S0 + 2]
@@ -299,7 +313,7 @@ def _complete(pa, ca, pb, cb, work, n, eps):  # pragma: no cover - compiled
     side = -(nx * work[_S0] + ny * work[_S0 + 1] + nz * work[_S0 + 2])  # the origin's offset
     for attempt in range(2):
         sg = 1.0 if (side >= 0.0) == (attempt == 0) else -1.0
-        ax, ay, az, bx, by, bz = _pair_support(pa, ca, pb, cb, sg * nx, sg * ny, sg * nz)
+        ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, sg * nx, sg * ny, sg * nz)
         off = sg * (nx * (ax - bx - work[_S0]) + ny * (ay - by - work[_S0 + 1]) + nz * (az - bz - work[_S0 + 2]))
         if off > eps:
             _put(work, _S0 + 27, ax, ay, az, bx, by, bz)
@@ -427,7 +441,7 @@ def _settle(work, nf, fv, dbest, nx, ny, nz, h, best, tol):  # pragma: no cover 
 
 
 @njit(cache=True)
-def epa_support(pa, ca, pb, cb, work, eps, tol, vis):  # pragma: no cover - compiled
+def epa_support(pa, ga, ca, pb, gb, cb, work, eps, tol, vis):  # pragma: no cover - compiled
     """EPA on ``M = A - B`` from the tetrahedron in ``work`` (GJK's, or :func:`_complete`'s).
 
     ``eps`` (m): stop when the support value along the closest face's normal exceeds the face's
@@ -491,7 +505,7 @@ def epa_support(pa, ca, pb, cb, work, eps, tol, vis):  # pragma: no cover - comp
         ny = work[of + 4]
         nz = work[of + 5]
         fv = (int(work[of]), int(work[of + 1]), int(work[of + 2]))
-        ax, ay, az, bx, by, bz = _pair_support(pa, ca, pb, cb, nx, ny, nz)
+        ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, nx, ny, nz)
         wx = ax - bx
         wy = ay - by
         wz = az - bz
@@ -556,6 +570,13 @@ def epa_support(pa, ca, pb, cb, work, eps, tol, vis):  # pragma: no cover - comp
 
 @njit(cache=True)
 def support_pair(pa, ca, ra, pb, cb, rb, out, work, eps_len, gjk_eps, max_iter, level):  # pragma: no cover
+    """:func:`support_pair_graph` without vertex graphs (point cores are scanned)."""
+    none = np.zeros(0, np.int64)
+    return support_pair_graph(pa, none, ca, ra, pb, none, cb, rb, out, work, eps_len, gjk_eps, max_iter, level)
+
+
+@njit(cache=True)
+def support_pair_graph(pa, ga, ca, ra, pb, gb, cb, rb, out, work, eps_len, gjk_eps, max_iter, level):  # pragma: no cover
     """Signed distance (m) of the sphere-swept cores ``(pa, ca, ra)`` (A) and ``(pb, cb, rb)`` (B)
     (see the module docstring); writes ``out[0:9] = [p_WA, p_WB, nhat_AB_W]``.  Returns
     ``(distance, status)``, ``status`` as ``_pair_gjk`` (``GJK_NOT_CONVERGED``: the caller raises).
@@ -567,10 +588,13 @@ def support_pair(pa, ca, ra, pb, cb, rb, out, work, eps_len, gjk_eps, max_iter, 
     bracketed before that is the answer (:func:`epa_support`).  Only when EPA cannot settle a
     depth under any of its visibility margins (none of 9,000 seeded random pairs of a cylinder
     and a box, polygon or polyhedron, 6,736 of them penetrating, came to this) are the cores reported touching at GJK's witness: ``-(ra + rb)``, the right verdict (overlap), an upper
-    bound on the signed distance, not the depth."""
-    gx, gy, gz = _centre(pa, ca)
-    hx, hy, hz = _centre(pb, cb)
-    status, d, n, ax, ay, az, bx, by, bz = gjk_support(pa, ca, pb, cb, gx - hx, gy - hy, gz - hz, eps_len, gjk_eps,
+    bound on the signed distance, not the depth.
+
+    ``ga``, ``gb``: the vertex graphs of the point cores (``_pack.hull_graph`` format, indices into
+    ``pa`` / ``pb``; empty: the points are scanned); a cylinder side ignores its own."""
+    gx, gy, gz = _centre(pa, ga, ca)
+    hx, hy, hz = _centre(pb, gb, cb)
+    status, d, n, ax, ay, az, bx, by, bz = gjk_support(pa, ga, ca, pb, gb, cb, gx - hx, gy - hy, gz - hz, eps_len, gjk_eps,
                                                        max_iter, work)
     if status == GJK_NOT_CONVERGED:
         return 0.0, status
@@ -589,13 +613,13 @@ def support_pair(pa, ca, ra, pb, cb, rb, out, work, eps_len, gjk_eps, max_iter, 
         for q in range(3):
             scale = max(scale, abs(work[_S0 + 9 * k + 3 + q]), abs(work[_S0 + 9 * k + 6 + q]))
     tol = 4e-15 * scale + eps_len
-    ok = n == 4 or _complete(pa, ca, pb, cb, work, n, tol)
+    ok = n == 4 or _complete(pa, ga, ca, pb, gb, cb, work, n, tol)
     if ok:
         # a face's plane may pass the origin by rounding of the sliver faces near a curved optimum;
         # the visibility margin decides how coplanar supports (caps, flat faces) are merged, and a
         # polytope that rounding has broken under one margin is usually whole under another
         for k in range(len(_VIS)):
-            ok, depth, nx, ny, nz, cax, cay, caz, cbx, cby, cbz = epa_support(pa, ca, pb, cb, work, gjk_eps, 1e-9 * scale,
+            ok, depth, nx, ny, nz, cax, cay, caz, cbx, cby, cbz = epa_support(pa, ga, ca, pb, gb, cb, work, gjk_eps, 1e-9 * scale,
                                                                                _VIS[k] * scale)
             if ok:
                 return write_rounded(cax, cay, caz, ra, cbx, cby, cbz, rb, nx, ny, nz, -depth, out, 0), GJK_INTERSECTING

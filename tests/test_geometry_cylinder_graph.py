@@ -1,0 +1,86 @@
+"""A cylinder against a mesh hull: supports climbed over the hull's vertex graph equal a scan.
+
+The detector's narrow phase gives the support-function kernel (``_pair_cylinder``) a hull's
+vertex graph (``_pack.hull_graph``) so that each support point is a climb of a few dozen dot
+products instead of a scan of every vertex (the z1 gripper hulls have 3,193 and 6,877).  The
+climb finds a true support vertex, so the distance must be the scan's; the slow reference here
+is the same kernel with no graph (every point scanned), and a brute-force support-function
+minimum for a few pairs.  The point sets hold points inside the hull too (the graph leaves them
+without neighbours: a climb never visits them).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from _geometry_strategies import random_rotation
+from armguard._tolerance import DEFAULT_TOLERANCES as TOL
+from armguard.geometry import Cylinder
+from armguard.geometry._dispatch import _support_core
+from armguard.geometry._pack import hull_graph
+from armguard.geometry._pair_cylinder import SUPPORT_WORK_SIZE, support_pair, support_pair_graph
+from test_geometry_cylinder_depth import reference_signed_distance
+
+
+def _cloud(rng, n: int) -> np.ndarray:
+    """``n`` points on a random ellipsoid (all hull vertices) and ``n // 4`` inside it, shuffled."""
+    u = rng.normal(size=(n, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    inner = rng.normal(size=(n // 4, 3)) * 0.2
+    p = np.concatenate([u, inner]) * rng.uniform(0.05, 0.3, 3)
+    p = p @ random_rotation(rng).T + rng.uniform(-0.2, 0.2, 3)
+    return np.ascontiguousarray(p[rng.permutation(len(p))])
+
+
+def _both(p, adj, cyl_core, graph_first: bool):
+    """The distance and witnesses with the hull as side A (``graph_first``) or B, with and without its graph."""
+    pc, cc, rc = cyl_core
+    none = np.zeros(0, np.int64)
+    args = dict(eps_len=TOL.length, gjk_eps=TOL.gjk_epsilon, max_iter=TOL.gjk_max_iterations, level=-np.inf)
+    out_g, out_s = np.empty(9), np.empty(9)
+    if graph_first:
+        dg, sg = support_pair_graph(p, adj, np.zeros(0), 0.0, pc, none, cc, rc, out_g, np.empty(SUPPORT_WORK_SIZE),
+                                    *args.values())
+        ds, ss = support_pair(p, np.zeros(0), 0.0, pc, cc, rc, out_s, np.empty(SUPPORT_WORK_SIZE), *args.values())
+    else:
+        dg, sg = support_pair_graph(pc, none, cc, rc, p, adj, np.zeros(0), 0.0, out_g, np.empty(SUPPORT_WORK_SIZE),
+                                    *args.values())
+        ds, ss = support_pair(pc, cc, rc, p, np.zeros(0), 0.0, out_s, np.empty(SUPPORT_WORK_SIZE), *args.values())
+    return (dg, sg, out_g), (ds, ss, out_s)
+
+
+@pytest.mark.parametrize("graph_first", [True, False])
+def test_climbed_supports_give_the_scans_distance(graph_first):
+    rng = np.random.default_rng(7)
+    n_sep = n_pen = 0
+    for _ in range(150):
+        p = _cloud(rng, int(rng.integers(60, 600)))
+        adj, _tri = hull_graph(p)
+        cyl = Cylinder(rng.uniform(-0.3, 0.3, 3), random_rotation(rng), rng.uniform(0.02, 0.2), rng.uniform(0.02, 0.3))
+        (dg, sg, og), (ds, ss, os_) = _both(p, adj, _support_core(cyl), graph_first)
+        assert sg == ss
+        assert abs(dg - ds) <= 1e-9, (dg, ds)
+        # the contract: |p_WB - p_WA| = |d|, the witnesses within the scan's by the same tolerance
+        assert abs(np.linalg.norm(og[3:6] - og[0:3]) - abs(dg)) <= 1e-9
+        n_sep += ds > 0.0
+        n_pen += ds < 0.0
+    assert n_sep >= 20 and n_pen >= 20  # both regimes covered (separated: GJK; penetrating: EPA)
+
+
+def test_climbed_supports_match_the_support_function_minimum():
+    rng = np.random.default_rng(11)
+    for _ in range(6):
+        p = _cloud(rng, 300)
+        adj, _tri = hull_graph(p)
+        cyl = Cylinder(rng.uniform(-0.3, 0.3, 3), random_rotation(rng), rng.uniform(0.02, 0.2), rng.uniform(0.02, 0.3))
+        (dg, _, _), _ = _both(p, adj, _support_core(cyl), True)
+        ref = reference_signed_distance(_Points(p), cyl)
+        assert abs(dg - ref) <= 1e-7, (dg, ref)
+
+
+class _Points:
+    """The hull of a point set as the reference reads a shape (``core_points``, ``core_radius``)."""
+
+    def __init__(self, p):
+        self.core_points, self.core_radius = p, 0.0
