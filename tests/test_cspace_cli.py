@@ -36,3 +36,29 @@ def test_other_model_is_refused(tmp_path):
                                 "--out", str(out)]).exit_code == 0
     r = runner.invoke(main, ["cspace", "info", str(out), "--model", "ranger", "--samples", "0"])
     assert r.exit_code == 3 and "built for other model files" in r.output  # ExitCode.INPUT
+
+
+def test_info_exits_1_when_the_map_allows_a_colliding_configuration(tmp_path, monkeypatch):
+    """``cspace info`` says "unsafe" (exit 1) when its own sampled check finds configurations the map allows
+    that collide -- a map that is not conservative is not a success (it exited 0 before)."""
+    import dataclasses
+
+    import armguard.cspace as cspace
+
+    out = tmp_path / "h.agmap"
+    runner = CliRunner()
+    assert runner.invoke(main, ["cspace", "build", "hermes", "--resolution", "30deg", "--max-depth", "0",
+                                "--out", str(out)]).exit_code == 0
+    real = cspace.check_exactness
+
+    def leaky(fmap, model=None, n=10_000):  # the real check, then three configurations it let through
+        rep = real(fmap, model, n=n)
+        return dataclasses.replace(rep, allowed_but_colliding=3)
+
+    monkeypatch.setattr(cspace, "check_exactness", leaky)
+    for extra in ([], ["--json"]):
+        r = runner.invoke(main, ["cspace", "info", str(out), "--samples", "200", *extra])
+        assert r.exit_code == 1, (extra, r.output)
+        assert ("3 allowed but colliding" in r.output) if not extra else json.loads(r.output)["exactness"]["allowed_but_colliding"] == 3
+    r = runner.invoke(main, ["cspace", "info", str(out), "--samples", "0"])
+    assert r.exit_code == 0

@@ -7,7 +7,7 @@ import math
 import click
 
 from . import main
-from ._exit import exit_epilog
+from ._exit import ExitCode, exit_epilog
 
 
 def _angle(value: str) -> float:
@@ -64,7 +64,9 @@ def build_cmd(model, out, resolution, j3_resolution, cell, stopping_distance, ro
                   f"{r.elapsed_s:.1f} s" + (f" on {r.workers} workers" if r.workers else ""))
 
 
-@cspace.command("info")
+@cspace.command("info", epilog=exit_epilog(
+    ok="read (and, with --samples, no sampled configuration the map allows collides)",
+    unsafe="with --samples: a configuration the map allows collides (the map is not conservative there)"))
 @click.argument("map_path", type=click.Path(exists=True, dir_okay=False))
 @click.option("--model", default=None, help="Check against these model files / this scene (default: the recorded files).")
 @click.option("--samples", type=int, default=10_000, show_default=True,
@@ -86,8 +88,11 @@ def info_cmd(map_path, model, samples, as_json) -> None:
     if samples > 0:
         rep = check_exactness(fmap, model if model is not None else None, n=samples)
         out["exactness"] = {k: (v.value if hasattr(v, "value") else v) for k, v in dataclasses.asdict(rep).items()}
+    unsafe = samples > 0 and out["exactness"]["allowed_but_colliding"] > 0
     if as_json:
         click.echo(json.dumps(out, indent=2))
+        if unsafe:
+            raise SystemExit(int(ExitCode.UNSAFE))
         return
     click.echo(f"{map_path}: {info.size_bytes} bytes ({info.size_bytes / 1024:.1f} KB), format {fmap.header['format_version']}")
     click.echo(f"  {fmap.robot}: joints {', '.join(fmap.joints)}; links {', '.join(fmap.links)}; stopping distance "
@@ -102,6 +107,8 @@ def info_cmd(map_path, model, samples, as_json) -> None:
         click.echo(f"  {e['n']} random configurations vs the exact check: {e['allowed_but_colliding']} allowed but colliding "
                    f"({e['status']}); truly colliding {e['colliding'] / e['n']:.4f}; false-forbidden share "
                    f"{e['false_forbidden_share']:.4f} ({e['false_forbidden_of_free']:.4f} of the free ones)")
+    if unsafe:
+        raise SystemExit(int(ExitCode.UNSAFE))
 
 
 @cspace.command("plot", epilog=exit_epilog(ok="the PNG written (whole, or the previous file left as it was)"))
