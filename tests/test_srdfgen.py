@@ -211,9 +211,11 @@ def test_srdf_to_a_missing_folder_is_an_output_error(puma, tmp_path):
 
 def test_a_dask_cluster_gives_the_same_matrix(puma):
     """``scheduler="local"``: two worker processes load the model from its file and search the pairs; every
-    verdict, witness and bound is the one the threads found here (same limits, same seeds)."""
-    model, cm = puma
-    dm = collision_matrix(model, scheduler="local", workers=2, max_evaluations=30_000)
+    verdict, witness and bound is the one a search in this process finds (same limits, same seeds; a small
+    evaluation budget keeps the test short -- some pairs stay undecided, which must agree too)."""
+    model, _ = puma
+    cm = collision_matrix(model, max_evaluations=3_000)
+    dm = collision_matrix(model, scheduler="local", workers=2, max_evaluations=3_000)
     assert [(e.link1, e.link2, e.reason, e.status, e.q, e.fingerprint) for e in dm.entries] == \
         [(e.link1, e.link2, e.reason, e.status, e.q, e.fingerprint) for e in cm.entries]
     np.testing.assert_array_equal([e.distance for e in dm.entries], [e.distance for e in cm.entries])
