@@ -70,7 +70,7 @@ def test_load_model_by_name_loads_the_registry_files(name, monkeypatch):
 
 def test_builtins_come_before_public_robots(monkeypatch):
     monkeypatch.setattr(_load, "model_from_urdf", lambda *a, **kw: pytest.fail("a built-in name loaded as a URDF"))
-    monkeypatch.setattr(_load, "model_from_yaml", lambda path: path)
+    monkeypatch.setattr(_load, "model_from_yaml", lambda path, srdf=None: path)
     assert armguard.load_model("hermes") == _load.builtin_model_path("hermes")
 
 
