@@ -26,6 +26,7 @@ from armguard.console import (
     readout_off,
     view_pose,
     VIEWS,
+    VISTA_POINTS,
 )
 from armguard.console._meshes import mesh_of, quat_wxyz_from_matrix, rigid_motion
 from armguard.console._timeline import MAX_RATE, MIN_RATE
@@ -273,6 +274,40 @@ def test_views_look_at_the_scene_from_outside(label):
     assert np.linalg.norm(pos - c) == pytest.approx(5.0, rel=1e-3)
     if label == "top":
         assert pos[2] - c[2] == pytest.approx(5.0, rel=1e-3)
+
+
+def test_ranger_has_its_ten_vista_points_each_clear_of_the_scene():
+    """Seed 000 section 6: "select from ten vista points for viewing the simulation".  Each vista
+    point, framed as the console frames Ranger (the bounding box of every shape), is outside every
+    shape at every canned test's setup, looking at the scene; together they see each arm's tool
+    past the vehicle and the other arms (at the first test's setup)."""
+    from armguard.console._view import visible_count
+    from armguard.geometry import Sphere, distance
+    from armguard.scene import load_scene
+
+    vistas = [v for v in VIEWS if v.startswith("vista ")]
+    assert len(vistas) == len(VISTA_POINTS) == 10
+    s = load_scene("ranger")
+    for k, ct in enumerate(s.canned_tests.values()):
+        items = s.shapes_at(ct.setup)
+        V = np.concatenate([mesh_of(it.shape)[0] for it in items])
+        lo, hi = V.min(axis=0), V.max(axis=0)
+        c, r = 0.5 * (lo + hi), max(0.5, 0.5 * float(np.linalg.norm(hi - lo)))
+        eyes = []
+        for v in vistas:
+            eye, look = view_pose(v, c, r)
+            np.testing.assert_array_equal(look, c)
+            assert all(distance(Sphere(eye, 0.05), it.shape).distance > 0.0 for it in items), (ct.name, v)
+            eyes.append(eye)
+        if k == 0:
+            D = np.array([(e - c) / np.linalg.norm(e - c) for e in eyes])
+            cos = D @ D.T - 2.0 * np.eye(10)
+            assert cos.max() < math.cos(math.radians(30.0))  # ten distinct directions, 30 deg apart at least
+            assert (D[:, 2] > 0).sum() == 6 and (D[:, 2] < 0).sum() == 4  # six from above, four from below
+            for rn in s.robots:
+                tool = s.robots[rn].link_pose(ct.setup[rn])[:3, 3]
+                others = [it.shape for it in items if not it.owner.startswith(rn + "/")]
+                assert any(visible_count(e, [tool], others, 0.01) == 1 for e in eyes), rn
 
 
 def test_field_text_never_negative_zero():

@@ -249,15 +249,15 @@ def test_typed_values_in_quick_succession_all_land():
 
 
 def _pose_ranger(st) -> None:
-    """Ranger's canned test 1 at its end: the left wrist 0.10 m from the electronics module."""
-    name = "test1_left_pitch_down"
+    """Ranger's canned test 1 at its end: the left forearm 0.08 m from the manipulator module."""
+    name = "test1_left_inward"
     test = st.scene.canned_tests[name]
     traj = test.trajectory(st.scene)
     st.setup(name)
     q = st.snapshot().q
     q[test.robot] = np.asarray(traj.at(traj.duration))
     st.set_q(q)
-    assert st.snapshot().readout.obstacle == "electronics_module"
+    assert st.snapshot().readout.obstacle == "manipulator_module"
 
 
 def _pose_hermes(st) -> None:

@@ -15,6 +15,7 @@ import pytest
 
 from armguard.geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere
 from armguard.harness import seed_data
+from armguard.kinematics import task_coordinates
 from armguard.models import builtin_names, builtin_path
 from armguard.scene import PairCategory, compile_scene, load_scene
 
@@ -114,23 +115,30 @@ def test_ranger_box_clearances_in_the_descriptions(scenes):
         for i, w in enumerate(words[:-5]):
             if words[i + 1:i + 5] == ["m", "from", "the", "workspace"]:
                 named[name] = float(w)
-    assert set(named) == {"test1_left_pitch_down", "test2_left_pitch_up", "test5_right_pitch",
-                          "test7_left_towards_workspace_box"}
+    assert set(named) == {"test3_left_forward_up", "test4_left_down"}
     for name, d in named.items():
         assert _box_clearance(s, s.canned_tests[name]) == pytest.approx(d, abs=0.005), name
 
 
 def test_ranger_canned_tests_are_trapezoids_within_limits(scenes):
+    """Seed 000 section 6: every Test button moves the active arm "in one or more of the six
+    end-effector coordinates or the arm angle", from rest to rest, within the joint limits."""
     s = scenes["ranger"]
+    modes = [ct.mode for ct in s.canned_tests.values()]
+    assert "joint" not in modes and modes.count("arm_angle") == 3 and modes.count("end_effector") == 7
     for ct in s.canned_tests.values():
         assert set(ct.setup) == set(s.robots)
         traj = ct.trajectory(s)
         robot = s.robots[ct.robot]
-        _, q = traj.sample(frequency=20.0)
+        q = traj.waypoints
         assert np.all(q >= robot.lower - 1e-12) and np.all(q <= robot.upper + 1e-12)
-        assert np.allclose(q[0], ct.setup[ct.robot]) and np.allclose(q[-1], ct.goal)
-        v = traj.velocity(np.array([0.0, 0.5 * traj.duration, traj.duration]))
-        assert np.allclose(v[0], 0.0) and np.allclose(v[-1], 0.0) and np.any(np.abs(v[1]) > 0)
+        assert np.all(traj.peak_velocity() <= robot.max_velocity)
+        assert np.array_equal(q[0], ct.setup[ct.robot])
+        x0, x1 = task_coordinates(robot, q[0]), task_coordinates(robot, q[-1])
+        delta = np.append(ct.end_effector, 0.0) if ct.mode == "end_effector" else np.r_[np.zeros(6), ct.arm_angle]
+        np.testing.assert_allclose(x1 - x0, delta, atol=1e-9, err_msg=ct.name)
+        speed = np.max(np.abs(np.diff(q, axis=0)) / np.diff(traj.times)[:, None], axis=1)
+        assert speed[0] < 0.1 * speed.max() and speed[-1] < 0.1 * speed.max(), ct.name  # from rest to rest
 
 
 def test_puma560_published_dh_and_limits(scenes):

@@ -4,7 +4,7 @@
 :class:`ConsoleApp` binds it to viser widgets and a 3-D view; :func:`serve` does both.
 """
 
-from ._app import VIEWS, ConsoleApp, view_pose
+from ._app import VIEWS, VISTA_POINTS, ConsoleApp, view_pose
 from ._parse import ConsoleInputError, parse_number, parse_numbers
 from ._plot import ClearancePlot
 from ._readout import PANEL_COLORS, CategoryRow, PanelStatus, Readout, panel_html, readout_from_report, readout_off
@@ -32,5 +32,6 @@ __all__ = [
     "parse_number",
     "parse_numbers",
     "VIEWS",
+    "VISTA_POINTS",
     "view_pose",
 ]

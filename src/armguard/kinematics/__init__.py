@@ -1,4 +1,5 @@
-"""Kinematics: DH and URDF joint trees, coupled/mimic joints, batched FK, Jacobians, IK, trajectories.
+"""Kinematics: DH and URDF joint trees, coupled/mimic joints, batched FK, Jacobians, IK, trajectories,
+Ranger's canned motions in the end-effector coordinates and the arm angle.
 
 The closed-form PUMA 560 inverse (:func:`puma560_ik`) is registered for robots named ``"puma560"``.
 """
@@ -7,6 +8,7 @@ from ._frames import dh_modified, dh_standard, invert_pose, pose_from_xyz_rpy, x
 from ._ik import IKPlugin, IKResult, IKStatus, ik_plugin, register_ik, unregister_ik
 from ._puma import PUMA560_DH, PUMA560_LOWER, PUMA560_UPPER, puma560_ik
 from ._robot import Coupling, DHRow, JointSpec, JointType, Robot
+from ._task_motion import CANNED_LIMITS, arm_angle, arm_points, task_coordinates, task_trapezoid
 from ._trajectory import PROFILES, Trajectory
 
 register_ik("puma560", puma560_ik)
@@ -19,6 +21,11 @@ __all__ = [
     "JointSpec",
     "Trajectory",
     "PROFILES",
+    "task_trapezoid",
+    "task_coordinates",
+    "arm_angle",
+    "arm_points",
+    "CANNED_LIMITS",
     "IKResult",
     "IKStatus",
     "IKPlugin",

@@ -4,7 +4,7 @@ checked pairs, canned tests — and the input checks the scene's methods share."
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Mapping
 
 import numpy as np
@@ -115,11 +115,19 @@ class CheckPair:
 
 @dataclass(frozen=True, eq=False)
 class CannedTest:
-    """A Ranger canned test: put every robot in ``setup``, then move ``robot`` to ``goal``.
+    """A Ranger canned test: put every robot in ``setup``, then move ``robot`` by a trapezoid.
 
-    ``setup`` maps robot name -> (n_joints,) float64 (rad or m); ``goal`` (n_joints,) of the
-    active ``robot``; ``threshold`` (m) is the detection threshold the test turns on.  The motion
-    is a trapezoidal velocity profile synchronised across joints (:meth:`trajectory`).
+    Seed 000 section 6: "Each Setup button puts the dexterous arms into the starting pose ...,
+    selects the active arm for the case, ... and turns obstacle detection on with an appropriate
+    threshold.  Each Test or Demo button commands the active arm to execute a trapezoidal
+    trajectory in one or more of the six end-effector coordinates or the arm angle."
+
+    ``setup`` maps robot name -> (n_joints,) float64 (rad or m); ``threshold`` (m) is the detection
+    threshold the test turns on.  The motion (:attr:`mode`) is exactly one of
+    ``end_effector`` (6,) — the change ``(dx, dy, dz, droll, dpitch, dyaw)`` (m, rad, W) of the
+    tool's coordinates —, ``arm_angle`` — the change (rad) of a 7-joint arm's arm angle with the
+    tool pose held — (both :func:`armguard.kinematics.task_trapezoid`), or ``goal`` (n_joints,) —
+    joint values reached by a trapezoid synchronised across joints (``Trajectory.trapezoidal``).
     """
 
     name: str
@@ -127,14 +135,57 @@ class CannedTest:
     robot: str
     threshold: float
     setup: Mapping[str, np.ndarray]
-    goal: np.ndarray
+    goal: np.ndarray | None = None
+    end_effector: np.ndarray | None = None
+    arm_angle: float | None = None
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def mode(self) -> str:
+        """``"end_effector"``, ``"arm_angle"`` or ``"joint"`` (the motion given)."""
+        if self.end_effector is not None:
+            return "end_effector"
+        return "arm_angle" if self.arm_angle is not None else "joint"
 
     def trajectory(self, scene: "Scene"):
-        """The test motion as a ``Trajectory`` (``Trajectory.trapezoidal`` from the setup to ``goal``)."""
-        from ..kinematics import Trajectory
+        """The test motion as a ``Trajectory`` from the setup (computed once per robot model)."""
+        from ..kinematics import Trajectory, task_trapezoid
 
         robot = scene.robots[self.robot]
-        return Trajectory.trapezoidal(robot, self.setup[self.robot], self.goal)
+        hit = self._cache.get("trajectory")
+        if hit is not None and hit[0] is robot:
+            return hit[1]
+        q0 = self.setup[self.robot]
+        if self.mode == "joint":
+            traj = Trajectory.trapezoidal(robot, q0, self.goal)
+        elif self.mode == "end_effector":
+            traj = task_trapezoid(robot, q0, self.end_effector, frequency=CANNED_FREQUENCY)
+        else:
+            traj = task_trapezoid(robot, q0, [0.0] * 6 + [float(self.arm_angle)], frequency=CANNED_FREQUENCY)
+        self._cache["trajectory"] = (robot, traj)  # one assignment: a racing thread computes the same
+        return traj
+
+
+CANNED_FREQUENCY = 20.0
+"""Hz: samples of a canned end-effector or arm-angle motion (each solved exactly; joint-space lines
+between them)."""
+
+
+def _canned_motion(test: CannedTest, active, check_in_limits):
+    """``(goal, end_effector, arm_angle)`` of ``test`` checked for the active robot (exactly one not None)."""
+    given = [k for k in ("end_effector", "arm_angle", "goal") if getattr(test, k) is not None]
+    if len(given) != 1:
+        raise SceneError(f"canned test {test.name!r}: expected exactly one motion (end_effector, arm_angle "
+                         f"or goal), got {given or 'none'}")
+    if test.goal is not None:
+        return check_in_limits(test.robot, test.goal, f"canned test {test.name!r} motion.goal"), None, None
+    if test.end_effector is not None:
+        return None, _finite(test.end_effector, (6,), f"canned test {test.name!r} motion.end_effector"), None
+    psi = float(_finite(test.arm_angle, (), f"canned test {test.name!r} motion.arm_angle"))
+    if active.n_joints != 7:
+        raise SceneError(f"canned test {test.name!r}: motion.arm_angle needs a 7-joint arm; "
+                         f"{test.robot!r} has {active.n_joints} joints")
+    return None, None, psi
 
 
 def _finite(value, shape, name: str) -> np.ndarray:

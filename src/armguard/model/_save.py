@@ -157,11 +157,20 @@ def scene_to_dict(scene: Scene) -> dict:
     d["canned_tests"] = [
         {
             "name": c.name, "description": c.description, "robot": c.robot, "threshold": float(c.threshold),
-            "setup": {r: _l(q) for r, q in c.setup.items()}, "motion": {"goal": _l(c.goal)},
+            "setup": {r: _l(q) for r, q in c.setup.items()}, "motion": _motion(c),
         }
         for c in scene.canned_tests.values()
     ]
     return d
+
+
+def _motion(c) -> dict:
+    """A canned test's motion as written (m, rad)."""
+    if c.mode == "end_effector":
+        return {"end_effector": _l(c.end_effector)}
+    if c.mode == "arm_angle":
+        return {"arm_angle": float(c.arm_angle)}
+    return {"goal": _l(c.goal)}
 
 
 def save_scene(scene: Scene, path) -> Path:

@@ -28,6 +28,7 @@ from ._items import (  # noqa: F401  (re-exported: the scene's parts live in _it
     Payload,
     SceneItem,
     WorkspaceBox,
+    _canned_motion,
     _check_name,
     _check_pose,
     _check_shapes,
@@ -369,10 +370,10 @@ class Scene:
                 raise SceneError(f"canned test {test.name!r}: setup has no configuration for robot {rname!r}")
         for rname, q in test.setup.items():
             setup[rname] = self._check_in_limits(rname, q, f"canned test {test.name!r} setup.{rname}")
-        goal = self._check_in_limits(test.robot, test.goal, f"canned test {test.name!r} motion.goal")
-        del active
+        goal, ee, psi = _canned_motion(test, active, self._check_in_limits)
         self._canned[test.name] = CannedTest(
-            test.name, test.description, test.robot, float(test.threshold), types.MappingProxyType(setup), goal
+            test.name, test.description, test.robot, float(test.threshold), types.MappingProxyType(setup), goal,
+            ee, psi,
         )
 
     def _check_in_limits(self, rname: str, q, what: str) -> np.ndarray:

@@ -494,9 +494,12 @@ def _canned_test(scene: Scene, c, ctx: _Ctx, w: str) -> None:
         if rname not in scene.robots:
             raise ctx.error(f"{w}.setup.{rname}", f"unknown robot {rname!r}")
         setup[rname] = _joint_values(scene.robots[rname], q, ctx, f"{w}.setup.{rname}")
-    goal = _joint_values(scene.robots[c.robot], c.motion.goal, ctx, f"{w}.motion.goal")
+    m = c.motion
+    goal = None if m.goal is None else _joint_values(scene.robots[c.robot], m.goal, ctx, f"{w}.motion.goal")
+    ee = None if m.end_effector is None else np.asarray(m.end_effector, dtype=np.float64) * ([ctx.L] * 3 + [ctx.A] * 3)
+    psi = None if m.arm_angle is None else m.arm_angle * ctx.A
     try:
-        scene.add_canned_test(CannedTest(c.name, c.description, c.robot, c.threshold * ctx.L, setup, goal))
+        scene.add_canned_test(CannedTest(c.name, c.description, c.robot, c.threshold * ctx.L, setup, goal, ee, psi))
     except ArmguardError as exc:
         raise ctx.error(w, str(exc)) from None
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal, Union
 
-from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
 from .._tolerance import DEFAULT_TOLERANCES
 
@@ -223,9 +223,22 @@ class TrajectorySpec(_Model):
 
 
 class MotionSpec(_Model):
-    """A canned test motion: a synchronised trapezoid of the active robot to ``goal`` (joint space)."""
+    """A canned test motion, exactly one of: ``end_effector`` — the change of the tool's six
+    coordinates ``[dx, dy, dz, droll, dpitch, dyaw]`` (length, angle units; W); ``arm_angle`` — the
+    change of a 7-joint arm's arm angle (angle units), the tool pose held; ``goal`` — joint values
+    reached by a synchronised joint-space trapezoid.  Seed 000 section 6: "a trapezoidal trajectory
+    in one or more of the six end-effector coordinates or the arm angle"."""
 
-    goal: list[Num]
+    goal: list[Num] | None = None
+    end_effector: Annotated[list[Num], Field(min_length=6, max_length=6)] | None = None
+    arm_angle: Num | None = None
+
+    @model_validator(mode="after")
+    def _exactly_one(self):
+        given = [k for k in ("end_effector", "arm_angle", "goal") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(f"expected exactly one of end_effector, arm_angle, goal; got {given or 'none'}")
+        return self
 
 
 class CannedTestSpec(_Model):

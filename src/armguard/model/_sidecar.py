@@ -124,7 +124,14 @@ def generated_sections(scene) -> dict:
         t["waypoints"] = [q(t["robot"], w) for w in t["waypoints"]]
     for c in d.get("canned_tests", []):
         c["setup"] = {r: q(r, v) for r, v in c["setup"].items()}
-        c["motion"]["goal"] = q(c["robot"], c["motion"]["goal"])
+        mo = c["motion"]
+        if "goal" in mo:
+            mo["goal"] = q(c["robot"], mo["goal"])
+        elif "end_effector" in mo:
+            scale = np.array([1.0, 1.0, 1.0] + [180.0 / math.pi] * 3)  # m stay m; rad -> deg
+            mo["end_effector"] = [float(f"{x:.12g}") for x in np.asarray(mo["end_effector"]) * scale]
+        else:
+            mo["arm_angle"] = float(f"{mo['arm_angle'] * 180.0 / math.pi:.12g}")
     out = {}
     for key in SIDECAR_SECTIONS:
         if d.get(key):
