@@ -4,7 +4,7 @@ Every segment moves all joints along the straight line between its two knots; th
 (:mod:`._profile`: trapezoidal, triangular or linear) only sets the speed along it.  The
 trajectory verifier relies on this.  Builders: joint-interpolated through waypoints (WORKMATE's
 "generalized joint-interpolated motion ... through a series of saved poses"), synchronised
-trapezoids (Ranger's canned tests, seed ``000`` section 6), Cartesian straight lines through IK
+trapezoids (joint mode; Ranger's canned tests move in task space, :mod:`._task_motion`), Cartesian straight lines through IK
 and tool poses relative to a variable base frame (WORKMATE, seed ``004`` "Training").
 """
 
@@ -299,7 +299,7 @@ class Trajectory:
 
     @classmethod
     def trapezoidal(cls, robot, q_start, q_goal, *, max_velocity=None, max_acceleration=None) -> "Trajectory":
-        """Shortest synchronised trapezoidal-velocity move ``q_start -> q_goal`` (Ranger's canned tests)."""
+        """Shortest synchronised trapezoidal-velocity move ``q_start -> q_goal`` (a canned test's ``goal`` motion)."""
         W = np.stack([np.asarray(q_start, dtype=np.float64), np.asarray(q_goal, dtype=np.float64)])
         return cls.joint_interpolated(robot, W, max_velocity=max_velocity, max_acceleration=max_acceleration)
 
