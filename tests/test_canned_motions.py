@@ -9,6 +9,7 @@ gradient by central differences.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -211,3 +212,32 @@ def test_arm_angle_motion_of_a_six_joint_arm_is_refused(tmp_path):
     with pytest.raises(SceneFileError) as err:
         load_scene(p)
     assert "canned_tests[8]" in str(err.value) and "7-joint arm" in str(err.value)
+
+
+_small = st.floats(-0.15, 0.15, allow_nan=False)
+
+
+@functools.lru_cache(maxsize=1)
+def _ranger_left_arm():
+    return load_scene("ranger").robots["left_arm"]
+
+
+@settings(max_examples=6, deadline=None)
+@given(st.tuples(_small, _small, _small), st.floats(-0.3, 0.3, allow_nan=False))
+def test_any_small_task_motion_follows_its_trapezoid(dp, dpsi):
+    """Invariant: from a pose with the elbow at 90 deg (the shoulder-wrist line 0.74 m of the arm's
+    1.05 m, so 0.26 m of motion cannot stretch it), every sample of a motion in the position and the
+    arm angle is at ``x0 + s(t) delta`` (one shared trapezoid), orientation held, within the limits."""
+    robot = _ranger_left_arm()
+    q0 = np.radians([0, 30, 0, 90, 0, 40, 0])
+    delta = np.array([*dp, 0.0, 0.0, 0.0, dpsi])
+    if np.linalg.norm(delta) < 1e-3:
+        return
+    tr = task_trapezoid(robot, q0, delta)
+    x = np.array([task_coordinates(robot, q) for q in tr.waypoints])
+    k = int(np.argmax(np.abs(delta)))
+    s = (x[:, k] - x[0, k]) / delta[k]  # the shared path parameter, read off the largest coordinate
+    assert s[0] == 0.0 and s[-1] == pytest.approx(1.0, abs=1e-9) and np.all(np.diff(s) >= -1e-9)
+    np.testing.assert_allclose(x - x[0], np.outer(s, delta), atol=1e-9)
+    assert np.all(tr.waypoints >= robot.lower) and np.all(tr.waypoints <= robot.upper)
+    assert np.all(tr.peak_velocity() <= robot.max_velocity)
