@@ -10,6 +10,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from armguard import UncertaintyError
 from armguard.uncertainty import (
@@ -217,3 +219,20 @@ def test_reduce_network_arguments_and_disconnected_networks():
     singular = UncertainPose2([1, 0, 0], np.diag([1e-3, 1e-3, 0.0]))
     with pytest.raises(UncertaintyError, match=r"network\[0\].*singular"):
         joint_estimate([("s", "t", singular), ("s", "t", e)], "s", "t")
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.floats(0.2, 20.0), min_size=5, max_size=5))
+def test_property_deletion_never_claims_less_than_the_joint_on_linear_bridges(scale):
+    """Any bridge of linear relations: the joint variance is the effective resistance, and the
+    paper's deletion is the best single deletion, never below it (it discards information)."""
+    r = [1e-4 * k for k in scale]
+    net = linear_bridge(r)
+    joint = joint_estimate(net, "s", "t")
+    rep = reduce_network_report(net, "s", "t")
+    r_eq = effective_resistance(BRIDGE, r)
+    best = min(effective_resistance(BRIDGE[:k] + BRIDGE[k + 1:], r[:k] + r[k + 1:]) for k in range(5))
+    assert joint.cov[0, 0] == pytest.approx(r_eq, rel=1e-6)
+    assert rep.pose.cov[0, 0] == pytest.approx(best, rel=1e-6)
+    assert rep.pose.cov[0, 0] >= joint.cov[0, 0] * (1 - 1e-6)
+    assert np.all(np.linalg.eigvalsh(rep.pose.cov[:2, :2] - joint.cov[:2, :2]) >= -1e-6 * r_eq)
