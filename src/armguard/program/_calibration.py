@@ -113,8 +113,8 @@ def _angle(R: np.ndarray) -> float:
 def calibration_poses(cell: Cell, n: int = 12, *, height: float = 0.15, radius: float = 0.12,
                       depth: float = 0.1) -> list:
     """A trained trajectory: ``n`` tool poses (X_WE, hand pointing down) in the believed camera's view
-    — a golden-angle spiral of radius ``radius`` (m) about the point ``height`` above the highest
-    body under the camera's axis, alternately ``depth`` apart in height."""
+    — a golden-angle spiral of radius ``radius`` (m) about the believed camera's axis, ``height``
+    above the cell's highest body and alternately ``depth`` higher."""
     cam = cell.camera.X_WC
     axis, o = cam[:3, 2], cam[:3, 3]
     top = max(float(np.asarray(s.aabb()).reshape(2, 3)[1, 2]) for b in cell.model.scene.bodies.values() for s in b.shapes)
