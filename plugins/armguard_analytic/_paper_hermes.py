@@ -44,7 +44,8 @@ exit it took (``B_*``), so the benches can count them.
   face plane of the closed polytope), and ``D1 <= R`` with ``P1`` in the face, ``D2 <= R`` with
   ``P2`` in the face, or the end-points on opposite sides with both projections in the face is a
   collision (Fig. 8b); else every edge of the face against the payload axis (the link-link
-  distance) within ``R`` is a collision.  Every hit is a true contact of the capsule payload; it
+  distance) within ``R`` is a collision.  Every hit is a true contact of the capsule payload (but
+  for an edge exactly parallel to the axis, where the link-link distance is the lines'); it
   misses a payload crossing a face whose projections are not both in it and far from its edges,
   a payload wholly inside an obstacle, and (the pre-test) contacts at a payload end.
 * :func:`_hermes_hit` -- **link–obstacle** (Fig. 5; :mod:`._paper` states it).
@@ -98,7 +99,7 @@ def _hermes_segments(P1, P1p, P2, P2p, eps_len, eps_par):  # pragma: no cover - 
         if a <= ll and c <= ll:
             return _dist(P1, P2), P1, P2, B_POINT
         if a <= ll:
-            t = min(max(-_dot(v, w) / c, 0.0), 1.0)
+            t = min(max(_dot(v, w) / c, 0.0), 1.0)
             M2 = _axpy(P2, t, v)
             return _dist(P1, M2), P1, M2, B_POINT
         s = min(max(-_dot(u, w) / a, 0.0), 1.0)
