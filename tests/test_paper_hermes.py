@@ -117,7 +117,8 @@ def test_payload_obstacle_documented_answers():
         "spheres apart": (([9, 9, 9], [9, 9, 11], 0.5), (False, "spheres apart")),
         "end-point over the top face": (([0.2, 0, 1.3], [0.2, 0, 3], 0.5), (True, "end-point over a face")),
         "clear of the top face": (([0.2, 0, 1.6], [0.2, 0, 3], 0.5), (False, "no face")),
-        "crossing, both projections in": (([0.2, 0.1, 0.2], [-0.3, 0.2, 2.5], 0.05), (True, "crossing, projections in")),
+        "crossing, both projections in": (([0.2, 0.1, 0.2], [-0.3, 0.2, 2.5], 0.05),
+                                          (True, "crossing, projections in")),
         "beside an edge": (([1.2, 1.2, -0.5], [1.2, 1.2 + 1e-3, 0.5], 0.3), (True, "edge")),
     }
     for name, ((p0, p1, r), (hit, exit_)) in cases.items():

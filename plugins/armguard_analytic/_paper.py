@@ -85,9 +85,8 @@ from ._paper_kernels import (  # noqa: F401  (M_*, ranger_segment_segment and th
     M_BOX, M_EXACT, M_EXACT_BOX, M_FACE_EDGE, M_SEGSEG, _face_edge, _hermes_hit, _paper_rows, ranger_segment_segment,
 )
 
-__all__ = ["PaperChecker", "ranger_segment_segment", "paper_capsule_polytope", "hermes_link_obstacle", "hermes_link_link",
-           "hermes_payload_link", "hermes_payload_obstacle", "METHODS",
-           "VERDICTS"]
+__all__ = ["PaperChecker", "ranger_segment_segment", "paper_capsule_polytope", "hermes_link_obstacle",
+           "hermes_link_link", "hermes_payload_link", "hermes_payload_obstacle", "METHODS", "VERDICTS"]
 
 METHODS = ("ranger §3 segment-segment", "ranger §2/§4 distal end-point face + edges", "ranger §2 bounding box",
            "exact (no paper method)", "exact workspace (no paper method)")

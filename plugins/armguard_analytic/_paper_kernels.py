@@ -214,8 +214,8 @@ def _paper_rows(Q, T, E, R, mode, margin, H, want, out_d, out_p, out_hit, out_mo
             out_hit[m] = False
         for p in range(P):
             if mode >= 1 and hcode[p] != H_NONE:
-                hit, dh, br = _hermes_pair(hcode[p], ha[p], hb[p], margin, vW, vstart, rad, prho, planes, pstart, fstart,
-                                           fvs, fverts, sph, eps_len, eps_par)
+                hit, dh, br = _hermes_pair(hcode[p], ha[p], hb[p], margin, vW, vstart, rad, prho, planes, pstart,
+                                           fstart, fvs, fverts, sph, eps_len, eps_par)
                 if mode == 1:
                     if hit:
                         out_hit[m] = True
