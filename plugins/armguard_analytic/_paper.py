@@ -1,4 +1,4 @@
-"""``fidelity = "paper"``: the seeds' minimalist checkers, as the 1997 and 1990 papers state them.
+"""``fidelity = "paper"``: the seeds' minimalist checkers, as the Ranger (1997) and Hermes (undated) papers state them.
 
 Ranger (Bon & Seraji, seed ``000``) answers distances:
 
