@@ -52,7 +52,8 @@ def run(quick: bool = False) -> str:
     rows = np.array([k for k, (a, b) in enumerate(zip(p.owner_a, p.owner_b))
                      if a.startswith("left_arm/") or b.startswith("left_arm/")])
     pm = m.pin_model
-    cols = [pm.joints[j].idx_v for j in range(1, pm.njoints) if pm.names[j].startswith("left_arm/")]
+    cols = [pm.joints[j].idx_v for j in range(1, pm.njoints) if pm.names[j].startswith("left_arm_")]
+    assert len(cols) == 7, cols
     damper = Damper(stand_off=0.05, influence=0.3, approach_speed=0.5, period=0.01, velocity_limit=1.0)
     rng = np.random.default_rng(3)
     cases = []
@@ -60,8 +61,23 @@ def run(quick: bool = False) -> str:
         v = np.zeros(pm.nv)
         v[cols] = rng.normal(size=len(cols))
         cases.append((q, v))
+    # and 40 where the damper binds: a configuration with a pair between the stand-off and the
+    # influence distance, commanded at the velocity limits straight towards that pair
+    near = 0
+    for q in m.random_q(4000, rng=rng):
+        if near == 40:
+            break
+        r = c.pair_distances(q, pairs=rows, jacobian=True)
+        k = int(np.argmin(r.distance))
+        if not damper.stand_off + 0.01 < r.distance[k] < damper.stand_off + 0.1:
+            continue
+        v = np.zeros(pm.nv)
+        v[cols] = -np.sign(r.jacobian[k, cols]) * damper.velocity_limit
+        cases.append((q, v))
+        near += 1
     avoid_step(c, *cases[0], damper, pairs=rows)
     t_step = _median_us(lambda a: avoid_step(c, a[0], a[1], damper, pairs=rows), cases, reps)
+    t_bind = _median_us(lambda a: avoid_step(c, a[0], a[1], damper, pairs=rows), cases[40:], reps) if near else float("nan")
     outs = [avoid_step(c, q, v, damper, pairs=rows) for q, v in cases]
     subs = []
     for (q, v), o in zip(cases, outs):
@@ -73,9 +89,11 @@ def run(quick: bool = False) -> str:
     body = "\n".join(lines)
     body += (
         "\n\nOne avoidance step, Ranger's left arm (7 joints, "
-        f"{len(rows)} pairs; stand-off {damper.stand_off} m, influence {damper.influence} m, 40 random configurations "
-        f"with random commands on the arm's joints): **{t_step:.0f} µs median** for the whole step "
+        f"{len(rows)} pairs; stand-off {damper.stand_off} m, influence {damper.influence} m; 40 random configurations "
+        f"with random commands on the arm's joints, and {near} with a pair 1-10 cm beyond the stand-off commanded at the "
+        f"velocity limits straight towards it): **{t_step:.0f} µs median** for the whole step "
         f"(distances, Jacobians of the {int(np.median(n_con))} (median; max {n_con.max()}) pairs within influence, "
-        f"the QP), of which the QP (`avoid`) **{t_qp:.0f} µs**; statuses {status}.\n"
+        f"the QP), of which the QP (`avoid`) **{t_qp:.0f} µs**; the commands towards a pair alone: {t_bind:.0f} µs median; "
+        f"statuses {status}.\n"
     )
     return body

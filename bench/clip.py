@@ -1,5 +1,6 @@
 """Smith's clipping checker (``armguard.clip``): cost per 100-vertex obstacle, MAYBE share on the
-puma560 cell with and without the second level, wrong definite answers against coal.
+puma560 cell with and without the second level, wrong definite answers against coal; a Cylinder
+obstacle (Smith §IV: a circumscribed prism) at two chord tolerances, with its false alarms.
 
 Times are medians of per-thread CPU time (``time.thread_time``), as in ``bench.pairwise``.
 """
@@ -52,6 +53,45 @@ def _cost_rows(quick: bool) -> list[str]:
                 f"| {label}{' + second level' if sub else ''} | {fmt_ns(per)} | {fmt_ns(one)} | "
                 f"{np.mean(status == 2):.1%} | {hist} |"
             )
+    return rows + cylinder_rows(quick, guard, X)
+
+
+def cylinder_rows(quick: bool, guard=None, X=None) -> list[str]:
+    """Rows of the same table for a Cylinder obstacle (r = h = 0.15 m, the 100-vertex
+    polyhedron's size) clipped as its circumscribed prism (Smith §IV, ``Obstacle.from_shape``)
+    at two chord tolerances, with the false alarms against the exact distance to the cylinder."""
+    from armguard.clip import Guard, Obstacle, check, check_many
+    from armguard.geometry import Capsule, Cylinder, distance
+
+    rng = np.random.default_rng(1)
+    if guard is None:
+        guard = Guard.from_shape(Capsule([-0.15, 0, 0], [0.15, 0, 0], 0.05))
+        n = 2_000 if quick else 20_000
+        X = _random_poses(rng, n, 0.0)
+        dirs = rng.normal(size=(n, 3))
+        X[:, :3, 3] = dirs / np.linalg.norm(dirs, axis=1)[:, None] * rng.uniform(0.1, 0.3, (n, 1))
+    n = len(X)
+    cyl = Cylinder([0.0, 0.0, 0.0], np.eye(3), 0.15, 0.15)
+    rep = 3 if quick else 7
+    n_exact = min(n, 2_000)  # the exact distance is a Python call per pose
+    d = np.array([distance(guard.shape.transformed(Xm), cyl).distance for Xm in X[:n_exact]])
+    rows = []
+    for tol in (1e-3, 1e-2):
+        ob = Obstacle.from_shape(cyl, chord_tol=tol)
+        per = median_thread_seconds(lambda o=ob: check_many(guard, o, X, subdivide=True), repeat=rep) / n
+        one = median_thread_seconds(lambda o=ob: check(guard, o, X[0]), repeat=rep, number=200)
+        status, step = check_many(guard, ob, X, subdivide=True)
+        s = status[:n_exact]
+        miss = int(np.sum((s == 0) & (d <= 0.0)))
+        false = s == 1
+        false &= d > 1e-6
+        worst = f", farthest {d[false].max() * 1e3:.2f} mm" if false.any() else ""
+        hist = ", ".join(f"{k}: {np.mean(step == k):.0%}" for k in range(3, 10) if np.any(step == k))
+        rows.append(
+            f"| cylinder r = h = 0.15 m as a {ob.n_vertices // 2}-gon prism (chord_tol {tol * 1e3:g} mm, band "
+            f"{ob.band * 1e3:.2f} mm) + second level; of {n_exact:,} against the exact distance: {miss} missed, "
+            f"{int(false.sum())} false alarms{worst} | {fmt_ns(per)} | {fmt_ns(one)} | {np.mean(status == 2):.1%} | {hist} |"
+        )
     return rows
 
 

@@ -9,12 +9,21 @@ any contact found there would be a bug.
 
 from __future__ import annotations
 
+import sys
 import time
 
 import numpy as np
 
 TITLE = "Certified collision matrices (armguard srdf)"
-ROBOTS = ["panda", "puma560", "ur5"]
+QUICK_ROBOTS = ["panda"]
+
+
+def _names() -> list[str]:
+    """Every built-in model, then every public robot found installed (the public-robot table's set)."""
+    from armguard.model import known_models
+
+    ms = [m for m in known_models() if m.available]
+    return [m.name for m in ms if m.source == "built-in"] + [m.name for m in ms if m.source != "built-in"]
 
 
 def _coal_check(model, setup, pairs, n: int, seed: int = 7) -> float:
@@ -46,7 +55,8 @@ def run(quick: bool = False) -> str:
     n_check = 10_000 if quick else 100_000
     rows = []
     notes = []
-    for name in (ROBOTS[:1] if quick else ROBOTS):
+    for name in (QUICK_ROBOTS if quick else _names()):
+        print(f"bench srdf: {name} ...", file=sys.stderr, flush=True)
         model = armguard.load_model(name, srdf=False)
         t = time.perf_counter()
         cm = collision_matrix(model, workers=2)

@@ -176,3 +176,27 @@ def test_hermes_jacobian_property(models, u):
     assert np.all(err[ok] < REL)
     _, fd_kink = finite_difference_rows(c, q, None, step=TOL.jacobian_step)
     assert not np.any(r.smooth & fd_kink)
+
+
+@pytest.mark.parametrize("name", ["ranger", "puma560", "ur5", "kinova", "panda"])
+def test_joint_jacobians_equal_pinocchio_per_joint(models, name):
+    """The one masked copy of ``data.J`` (no mimic joints; kinova's continuous joints included), or
+    the per-joint path (the Panda's mimic finger), equals ``getJointJacobian`` joint by joint."""
+    import pinocchio as pin
+
+    from armguard.backends._jacobian import WitnessJacobian
+
+    m = models(name)
+    pm = m.pin_model
+    wj = WitnessJacobian(m)
+    assert wj._mimic == (name == "panda")
+    data = pm.createData()
+    joints = list(range(1, pm.njoints))
+    for _ in range(5):
+        q = pin.randomConfiguration(pm, np.maximum(pm.lowerPositionLimit, -3.0), np.minimum(pm.upperPositionLimit, 3.0))
+        Jj, R_WJ = wj.joint_jacobians(q, joints)
+        pin.computeJointJacobians(pm, data, q)
+        for j in joints:
+            np.testing.assert_allclose(Jj[j], pin.getJointJacobian(pm, data, j, pin.ReferenceFrame.WORLD), atol=1e-12)
+            np.testing.assert_allclose(R_WJ[j], data.oMi[j].rotation, atol=1e-15)
+        assert not Jj[0].any() and np.array_equal(R_WJ[0], np.eye(3))

@@ -148,10 +148,21 @@ def test_the_field_of_view_is_a_cone_about_the_optical_axis():
 
 # ------------------------------------------------------------------ running on the emulated cell
 @pytest.fixture(scope="module")
-def stack_run():
+def exact_calibration(tmp_path_factory):
+    """A calibration file putting the example cell's camera where it really stands (an exact
+    calibration): FIND's error is then its noise alone.  The cell's own calibration file is the
+    nominal layout, whose camera is 27 mm off (tests/test_program_calibration.py)."""
+    from armguard.program import Calibration, load_cell, write_calibration
+
+    cell = load_cell(EXAMPLE / "cell.yaml")
+    return write_calibration(Calibration(X_camera=cell.camera.X_WC_real), tmp_path_factory.mktemp("cal") / "exact.yaml")
+
+
+@pytest.fixture(scope="module")
+def stack_run(exact_calibration):
     from armguard.program import run_program
 
-    return run_program(EXAMPLE / "stack.yaml", seed=0)
+    return run_program(EXAMPLE / "stack.yaml", seed=0, calibration=exact_calibration)
 
 
 def test_the_stacking_program_verifies_and_runs(stack_run):
@@ -219,15 +230,15 @@ def test_the_emulated_real_cell_catches_what_the_nominal_model_misses(tmp_path):
 
 
 # ------------------------------------------------------------------ export and the command line
-def test_the_exported_program_reproduces_the_same_motions(tmp_path, stack_run):
+def test_the_exported_program_reproduces_the_same_motions(tmp_path, stack_run, exact_calibration):
     from armguard.program import export_program
 
     out = export_program(EXAMPLE / "stack.yaml", tmp_path / "stack_program.py")
     text = out.read_text(encoding="utf-8")
     assert "wc.find('cylinder_a')" in text and "F = wc.frame('cylinder_b')" in text
     save = tmp_path / "run.json"
-    r = subprocess.run([sys.executable, str(out), "--seed", "0", "--save", str(save)], capture_output=True, text=True,
-                       timeout=600)
+    r = subprocess.run([sys.executable, str(out), "--seed", "0", "--calibration", str(exact_calibration),
+                        "--save", str(save)], capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stdout + r.stderr
     got = json.loads(save.read_text(encoding="utf-8"))
     want = stack_run.to_dict()

@@ -35,6 +35,7 @@ __all__ = ["AnalyticBackend", "AnalyticChecker"]
 
 _FIDELITIES = ("exact", "paper")
 _F64 = np.dtype(np.float64)
+_I64 = np.dtype(np.int64)
 _ND = np.ndarray
 _new_result = PairDistances._unchecked
 _MIN_ROWS_PER_THREAD = 256  # pair_distances_many: below this many rows per thread, a thread costs more than it saves
@@ -46,7 +47,7 @@ class _Fast:
     the gather map, the compiled entry point, and per-thread scratch copied from the pristine one."""
 
     __slots__ = ("revision", "det", "head", "sel", "swap", "gmap", "n", "names", "category", "q_shape", "entry",
-                 "args", "SF0", "SI0", "n_q", "tls")
+                 "args", "SF0", "SI0", "n_q", "tls", "subsets")
 
     def __init__(self, checker: "AnalyticChecker") -> None:
         from armguard.detect import _kernel as kn
@@ -73,6 +74,7 @@ class _Fast:
         self.args = (det._H, det._MF, det._MI, det._prm, det._iprm_by_mode[kn.MODE_ALL])
         self.SF0, self.SI0, self.n_q = det._SF0, det._SI0, det._model.n_q
         self.tls = threading.local()
+        self.subsets: dict = {}  # idx.tobytes() -> (n, gmap, names, category): a repeated subset is planned once
         # the compiled overload for exactly these argument types, called without the dispatcher
         # (see armguard.detect._detector._entry_point); built on a scratch of its own
         SF, SI, q1 = self.new_scratch()
@@ -105,6 +107,19 @@ class _Fast:
         head = self.head.copy()
         head[3] = len(idx)
         return np.concatenate([head, self.sel[idx], self.swap[idx]])
+
+    def subset_plan(self, idx: np.ndarray) -> tuple:
+        """``(n, gmap, names, category)`` for the checked Model rows ``idx`` (at most ``n`` of
+        them), kept for the next call with the same rows (at most 256 subsets are kept)."""
+        key = idx.tobytes()
+        plan = self.subsets.get(key)
+        if plan is None:
+            cat = self.category
+            plan = (len(idx), self.subset(idx), self.names[idx], tuple(cat[int(k)] for k in idx))
+            if len(self.subsets) >= 256:
+                self.subsets.clear()
+            self.subsets[key] = plan
+        return plan
 
 
 class AnalyticChecker(CheckerBase):
@@ -221,11 +236,13 @@ class AnalyticChecker(CheckerBase):
         if pairs is None:
             n, gmap, names, cat = f.n, f.gmap, f.names, f.category
         else:
-            idx = check_pairs(self.model, pairs)
-            if len(idx) > f.n:  # more rows than the scratch holds (repeated rows): the full result's rows
-                return self.pair_distances(q).take(idx)
-            n, gmap = len(idx), f.subset(idx)
-            names, cat = self._subset(idx)
+            plan = f.subsets.get(pairs.tobytes()) if type(pairs) is _ND and pairs.dtype is _I64 and pairs.ndim == 1 else None
+            if plan is None:  # a subset not seen before (checked, then planned once)
+                idx = check_pairs(self.model, pairs)
+                if len(idx) > f.n:  # more rows than the scratch holds (repeated rows): the full result's rows
+                    return self.pair_distances(q).take(idx)
+                plan = f.subset_plan(idx)
+            n, gmap, names, cat = plan
         try:  # this thread's scratch (f.scratch, inline)
             SF, SI, q1 = f.tls.s
         except AttributeError:

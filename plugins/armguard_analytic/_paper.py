@@ -1,4 +1,4 @@
-"""``fidelity = "paper"``: the seeds' minimalist checkers, as the 1997 and 1990 papers state them.
+"""``fidelity = "paper"``: the seeds' minimalist checkers, as the Ranger (1997) and Hermes (undated) papers state them.
 
 Ranger (Bon & Seraji, seed ``000``) answers distances:
 
@@ -36,19 +36,25 @@ Ranger (Bon & Seraji, seed ``000``) answers distances:
   link *axis*'s, larger than the exact one by the radius, and its link witness point is the
   end-point itself.
 
-Hermes (Sciomachen & Magnani, seed ``001``) answers yes/no; its **link–obstacle module** is
-``collides`` for a link against a closed convex polyhedron (``verdicts = "hermes"``): the obstacle
-is grown by the link radius plus the margin (the stopping distance) by moving its face planes
-out (the text's "obstacle growing", 325 FLOP for 54 faces: plane offsets, no new vertices); a
-pre-test intersects the link segment with the obstacle's circumscribing sphere (centre the
-vertex barycentre, radius to the farthest vertex) grown the same way; then, face by face, the
-link's line meets the grown face plane at ``t`` in [0, 1] and the point is tested against the
-other grown planes ("on the face").  A segment parallel to a face plane is not considered, so
-a link wholly inside the grown obstacle is not a collision; plane growing covers more than the
-capsule's true reach near edges and vertices (false alarms).  Link–link (and payload–link) is
-the §3 distance minus the radii in both papers.
+Hermes (Sciomachen & Magnani, seed ``001``) answers yes/no; with ``verdicts = "hermes"``,
+``collides`` runs its four modules (:mod:`._paper_hermes`, §3, Figs. 5-11) on the pairs they
+cover, and :attr:`PaperChecker.hermes_modules` names each pair's: the **link–obstacle module**
+for a link against a closed convex polyhedron: the obstacle is grown by the link radius plus the
+margin (the stopping distance) by moving its face planes out (the text's "obstacle growing",
+325 FLOP for 54 faces: plane offsets, no new vertices); a pre-test intersects the link segment
+with the obstacle's circumscribing sphere (centre the vertex barycentre, radius to the farthest
+vertex) grown the same way; then, face by face, the link's line meets the grown face plane at
+``t`` in [0, 1] and the point is tested against the other grown planes ("on the face").  A
+segment parallel to a face plane is not considered, so a link wholly inside the grown obstacle is
+not a collision; plane growing covers more than the capsule's true reach near edges and vertices
+(false alarms).  The **link–link module** (the determinant, its eight cases, the parallel and
+coincident branches), the **payload–link module** (the line–sphere discriminant, then the axes'
+distance) and the **payload–obstacle module** (the spheres, ``D1``/``D2`` against ``R``, the
+projections, the edges) are stated in :mod:`._paper_hermes`.  Distances (``pair_distances``)
+stay Ranger's §3 for link–link and payload–link pairs in both papers (the Hermes link–link module
+computes the same distance except for parallel axes).
 
-**Fallback to exact**: a pair the papers have no method for (a payload against an obstacle, a
+**Fallback to exact**: a pair the papers have no distance method for (a payload against an obstacle, a
 non-capsule link such as Ranger's camera box, spheres, moving polytopes) is answered by the
 exact kernels (``convex_convex``, GJK + SAT); :attr:`PaperChecker.methods` names each pair's
 method and :attr:`PaperChecker.representation` the geometries answered exactly.
@@ -74,12 +80,13 @@ from armguard.geometry import Box, Capsule, ConvexPolyhedron, Prism
 from armguard.geometry.kernels import GJK_WORK_SIZE
 from armguard.kinematics._fk import _fk_kernel
 
+from ._paper_hermes import H_LINK_LINK, H_LINK_OBSTACLE, H_NONE, H_PAYLOAD_LINK, H_PAYLOAD_OBSTACLE, MODULES
 from ._paper_kernels import (  # noqa: F401  (M_*, ranger_segment_segment and the pair kernels are read from here)
     M_BOX, M_EXACT, M_EXACT_BOX, M_FACE_EDGE, M_SEGSEG, _face_edge, _hermes_hit, _paper_rows, ranger_segment_segment,
 )
 
-__all__ = ["PaperChecker", "ranger_segment_segment", "paper_capsule_polytope", "hermes_link_obstacle", "METHODS",
-           "VERDICTS"]
+__all__ = ["PaperChecker", "ranger_segment_segment", "paper_capsule_polytope", "hermes_link_obstacle",
+           "hermes_link_link", "hermes_payload_link", "hermes_payload_obstacle", "METHODS", "VERDICTS"]
 
 METHODS = ("ranger §3 segment-segment", "ranger §2/§4 distal end-point face + edges", "ranger §2 bounding box",
            "exact (no paper method)", "exact workspace (no paper method)")
@@ -178,9 +185,29 @@ class PaperChecker(CheckerBase):
         from armguard.geometry import Polygon
 
         ra, rb, meth, dist, swap, herm, methods, rep = [], [], [], [], [], [], [], dict(model.notes)
+        hcode, ha, hb = [], [], []
+        kind = cs.elem_kind
         for na, nb in zip(model.pairs.a, model.pairs.b):
             a = index[na]
             sa = shapes[a]
+            hc, hx, hy = H_NONE, 0, 0
+            if verdicts == "hermes" and nb != WORKSPACE:  # Hermes's four modules (seed 001 §3)
+                ib, sb_ = index[nb], shapes[index[nb]]
+                cap = {e: isinstance(s_, Capsule) for e, s_ in ((a, sa), (ib, sb_))}
+                closed = {e: isinstance(s_, polytope) and kind[e] == 0 and cs.elem_radius[e] == 0.0
+                          for e, s_ in ((a, sa), (ib, sb_))}
+                for x, y in ((a, ib), (ib, a)):
+                    if cap[x] and kind[x] == 1 and closed[y]:
+                        hc, hx, hy = H_LINK_OBSTACLE, x, y
+                    elif cap[x] and cap[y] and kind[x] == 1 and kind[y] == 1:
+                        hc, hx, hy = H_LINK_LINK, x, y
+                    elif cap[x] and cap[y] and kind[x] == 1 and kind[y] == 2:
+                        hc, hx, hy = H_PAYLOAD_LINK, x, y
+                    elif cap[x] and kind[x] == 2 and closed[y]:
+                        hc, hx, hy = H_PAYLOAD_OBSTACLE, x, y
+                    if hc != H_NONE:
+                        break
+            hcode.append(hc), ha.append(hx), hb.append(hy)
             if nb == WORKSPACE:
                 cap = isinstance(sa, Capsule) and cs.elem_kind[a] == 1
                 b, mt, sw, h, d = a, (M_BOX if cap else M_EXACT_BOX), False, False, 0
@@ -217,7 +244,7 @@ class PaperChecker(CheckerBase):
                             rep.setdefault(nb, f"{type(sb).__name__}: no paper method against {type(sa).__name__}; "
                                                "exact kernels")
             ra.append(a), rb.append(b), meth.append(mt), dist.append(d), swap.append(sw), herm.append(h)
-            methods.append(METHODS[mt] + (" (verdict: hermes link-obstacle module)" if h else ""))
+            methods.append(METHODS[mt] + (f" (verdict: hermes {MODULES[hc]} module)" if hc != H_NONE else ""))
         self.methods = tuple(methods)
         self.representation = rep
         self._n = len(ra)
@@ -247,7 +274,13 @@ class PaperChecker(CheckerBase):
                    c(cs.elem_radius), c(cs.elem_face_start, i64), c(cs.face_vert_start, i64), c(cs.face_verts, i64),
                    c(fn), c(fd), c(cs.planes.reshape(-1, 4)), c(sph), c(cs.workspace_lo), c(cs.workspace_hi))
         self._R = (c(ra, i64), c(rb, i64), c(meth, i64), c(dist, i64), c(swap, np.bool_))
-        self._hermes = c(herm, np.bool_)
+        prho = np.zeros(G)  # a capsule payload's cylinder: its circumscribing sphere's radius (Hermes)
+        for e in range(G):
+            if kind[e] == 2 and isinstance(shapes[e], Capsule):
+                h = 0.5 * np.linalg.norm(cs.verts[cs.elem_vert_start[e] + 1] - cs.verts[cs.elem_vert_start[e]])
+                prho[e] = math.sqrt(h * h + cs.elem_radius[e] ** 2)
+        self.hermes_modules = tuple(MODULES[k] for k in hcode)
+        self._H = (c(hcode, i64), c(ha, i64), c(hb, i64), c(prho))
         self._eps = (float(tol.length), float(tol.parallel), float(tol.gjk_epsilon), int(tol.gjk_max_iterations),
                      float(tol.penetration_witness_offset))
         self._work = np.zeros(GJK_WORK_SIZE)
@@ -267,29 +300,42 @@ class PaperChecker(CheckerBase):
     # ---------------------------------------------------------------- kernels
     def _run(self, Qs, mode: int, margin: float, want: bool):
         M, P = Qs.shape[0], self._n
-        out_d = np.empty((M if mode == 0 else 0, P))
+        out_d = np.empty((M if mode != 1 else 0, P))
         out_p = np.empty((M if want else 0, P, 6))
         out_hit = np.zeros(M if mode == 1 else 0, dtype=np.bool_)
+        out_mod = np.zeros((M if mode == 2 else 0, P, 2), dtype=np.int64)
         E, work = self._scratch()
         bad = _paper_rows(np.ascontiguousarray(Qs, dtype=np.float64), self._T, E, self._R, mode, float(margin),
-                          self._hermes, want, out_d, out_p, out_hit, self._eps, work)
+                          self._H, want, out_d, out_p, out_hit, out_mod, self._eps, work)
         if bad >= 0:
             m, p = divmod(int(bad), P)
             raise BackendError(f"analytic (paper): GJK did not converge on pair {tuple(self._pairs[p])} "
                                f"(configuration {m}); raise Tolerances.gjk_max_iterations")
-        return out_d, out_p, out_hit
+        return out_d, out_p, out_hit, out_mod
 
     def paper_distances_many(self, Q, *, points: bool = False):
         """``(M, n)`` every pair's paper distance at each row of ``Q`` (M, nq); with ``points`` also
         ``(M, n, 6)`` ``[p_WA, p_WB]`` (plain arrays; :meth:`pair_distances_many` is the interface's)."""
         Q = check_Q(self.model, Q)
-        d, p, _ = self._run(self.model.scene_q(Q), 0, 0.0, points)
+        d, p, _, _ = self._run(self.model.scene_q(Q), 0, 0.0, points)
         return (d, p) if points else d
+
+    def pair_verdicts_many(self, Q, *, margin: float = 0.0):
+        """Every pair's yes/no at each row of ``Q`` (M, nq), the rule :meth:`collides` uses (Hermes's
+        module where :attr:`hermes_modules` names one, else paper distance ``<= margin``), without
+        stopping at the first: ``(hit (M, n) bool, d (M, n) m, branch (M, n) int)``; ``d`` the module's
+        distance (``inf`` where the module computes none), ``branch`` the module's exit
+        (:data:`armguard_analytic._paper_hermes.BRANCHES`) or -1 for the distance rule."""
+        Q = check_Q(self.model, Q)
+        if not (margin >= 0.0 and math.isfinite(margin)):
+            raise BackendError(f"margin: expected a finite length >= 0, got {margin!r}")
+        d, _, _, mod = self._run(self.model.scene_q(Q), 2, margin, False)
+        return mod[..., 0].astype(bool), d, mod[..., 1]
 
     # ---------------------------------------------------------------- the interface
     def pair_distances(self, q):
         q = check_q(self.model, q)
-        d, p, _ = self._run(self.model.scene_q(q)[None], 0, 0.0, True)
+        d, p, _, _ = self._run(self.model.scene_q(q)[None], 0, 0.0, True)
         return self._result(d[0], p[0, :, :3].copy(), p[0, :, 3:].copy())
 
     def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
@@ -303,4 +349,6 @@ class PaperChecker(CheckerBase):
 
 
 # one pair, from shapes in W (their own module; part of this one's interface)
-from ._paper_pair import hermes_link_obstacle, paper_capsule_polytope  # noqa: E402
+from ._paper_pair import (  # noqa: E402
+    hermes_link_link, hermes_link_obstacle, hermes_payload_link, hermes_payload_obstacle, paper_capsule_polytope,
+)

@@ -1,8 +1,8 @@
 """The compiled kernels of ``fidelity = "paper"`` (:mod:`armguard_analytic._paper` states the methods):
 Ranger's §3 segment-segment closest points (Bon & Seraji 1997, eqs. 1-6 and §3.2's correction), its
 §2/§4 distal end-point face test (eqs. 7-10) with the link-edge terms, its §2 bounding-box
-subtractions, and Hermes's link-obstacle module (Sciomachen & Magnani 1990: grown face planes and
-the circumscribing-sphere pre-test); ``_paper_rows`` runs them over configurations.
+subtractions; ``_paper_rows`` runs them, and Hermes's four modules (:mod:`._paper_hermes`), over
+configurations.
 """
 
 from __future__ import annotations
@@ -16,45 +16,10 @@ from armguard.geometry._pair_segment_segment import perpendicular_unit
 from armguard.geometry.kernels import GJK_NOT_CONVERGED, GJK_WORK_SIZE, convex_convex
 from armguard.kinematics._fk import _fk_kernel
 
+from ._paper_hermes import H_NONE, _hermes_hit, _hermes_pair  # noqa: F401  (_hermes_hit is read from here)
+from ._paper_vec import _axpy, _cross, _dist, _dot, _on_segment, _sub, _v  # noqa: F401
+
 M_SEGSEG, M_FACE_EDGE, M_BOX, M_EXACT, M_EXACT_BOX = 0, 1, 2, 3, 4
-
-
-# ---------------------------------------------------------------- 3-vectors as tuples
-@njit(cache=True, inline="always")
-def _v(a, i):  # pragma: no cover - compiled
-    return (a[i, 0], a[i, 1], a[i, 2])
-
-
-@njit(cache=True, inline="always")
-def _sub(a, b):  # pragma: no cover - compiled
-    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
-
-
-@njit(cache=True, inline="always")
-def _dot(a, b):  # pragma: no cover - compiled
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-@njit(cache=True, inline="always")
-def _axpy(p, t, a):  # pragma: no cover - compiled
-    return (p[0] + t * a[0], p[1] + t * a[1], p[2] + t * a[2])
-
-
-@njit(cache=True, inline="always")
-def _cross(a, b):  # pragma: no cover - compiled
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-@njit(cache=True, inline="always")
-def _dist(a, b):  # pragma: no cover - compiled
-    d = _sub(b, a)
-    return math.sqrt(_dot(d, d))
-
-
-@njit(cache=True, inline="always")
-def _on_segment(P, A, l, X):  # pragma: no cover - compiled
-    """The point of segment ``P + t A``, ``t`` in [0, l] (A unit), nearest to ``X``."""
-    return _axpy(P, min(max(_dot(_sub(X, P), A), 0.0), l), A)
 
 
 # ---------------------------------------------------------------- Ranger §3
@@ -189,35 +154,6 @@ def _face_edge(P0, P1, r, g, vW, fstart, fvs, fverts, fn, fd, estart, edges, eW,
 
 
 @njit(cache=True)
-def _hermes_hit(P0, P1, grow, g, planes, pstart, sphere, eps_par):  # pragma: no cover - compiled
-    """Hermes link–obstacle module: does segment ``P0``-``P1`` meet a face of polytope ``g`` grown by ``grow``?"""
-    c = _v(sphere, g)
-    v = _sub(P1, P0)
-    ll = _dot(v, v)
-    t = min(max(_dot(_sub(c, P0), v) / ll, 0.0), 1.0) if ll > 0.0 else 0.0
-    if _dist(_axpy(P0, t, v), c) > sphere[g, 3] + grow:  # sphere pre-test
-        return False
-    lv = math.sqrt(ll)
-    for f in range(pstart[g], pstart[g + 1]):
-        n = _v(planes, f)
-        nd = _dot(n, v)
-        if not abs(nd) > eps_par * lv:  # parallel to the face plane: not considered
-            continue
-        t = (planes[f, 3] + grow - _dot(n, P0)) / nd
-        if t < 0.0 or t > 1.0:
-            continue
-        x = _axpy(P0, t, v)
-        on_face = True
-        for h in range(pstart[g], pstart[g + 1]):
-            if h != f and _dot(_v(planes, h), x) > planes[h, 3] + grow:
-                on_face = False
-                break
-        if on_face:
-            return True
-    return False
-
-
-@njit(cache=True)
 def _box_gap(vW, v0, v1, r, lo, hi, out):  # pragma: no cover - compiled
     """Least end-point-to-limit subtraction over vertices ``v0:v1`` (Ranger §2), less ``r``; witnesses in ``out``."""
     best = math.inf
@@ -240,17 +176,20 @@ def _box_gap(vW, v0, v1, r, lo, hi, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _paper_rows(Q, T, E, R, mode, margin, hermes, want, out_d, out_p, out_hit, eps, work):  # pragma: no cover
+def _paper_rows(Q, T, E, R, mode, margin, H, want, out_d, out_p, out_hit, out_mod, eps, work):  # pragma: no cover
     """Every pair of every configuration ``Q`` (M, n) (see :class:`PaperChecker` for the packed tuples).
 
     ``mode`` 0 distances (``out_d`` (M, P), ``out_p`` (M, P, 6) when ``want``), 1 verdicts
-    (``out_hit`` (M,): a pair within ``margin``, Hermes's module on the rows ``hermes`` marks,
-    stopping at the first).  Returns -1, or the first (config, pair) whose fallback GJK failed
-    as ``m * P + k``.
+    (``out_hit`` (M,): a pair within ``margin``, Hermes's module ``H[0][p]`` (``H_*``) on the pairs
+    that have one, stopping at the first), 2 every pair's verdict (``out_mod`` (M, P, 2): hit, the
+    module's exit ``B_*`` or -1 for a distance rule; ``out_d`` the module's distance, ``inf`` where
+    it computes none).  Returns -1, or the first (config, pair) whose fallback GJK failed as
+    ``m * P + k``.
     """
     parent, X_pre, axis, jtype, X_post, has_post, offset, tstart, tjoint, tcoeff = T
     glink, vstart, vL, vW, pstart, nL, nW, estart, edges, eL, eW, elen, e_ok, rad, fstart, fvs, fverts, fn, fd, planes, sph, lo, hi = E
     ra, rb, meth, distal, swap = R
+    hcode, ha, hb, prho = H
     eps_len, eps_par, gjk_eps, max_iter, off = eps
     Xs = np.empty((1, parent.shape[0], 4, 4))
     out9 = np.empty(9)
@@ -274,6 +213,18 @@ def _paper_rows(Q, T, E, R, mode, margin, hermes, want, out_d, out_p, out_hit, e
         if mode == 1:
             out_hit[m] = False
         for p in range(P):
+            if mode >= 1 and hcode[p] != H_NONE:
+                hit, dh, br = _hermes_pair(hcode[p], ha[p], hb[p], margin, vW, vstart, rad, prho, planes, pstart,
+                                           fstart, fvs, fverts, sph, eps_len, eps_par)
+                if mode == 1:
+                    if hit:
+                        out_hit[m] = True
+                        break
+                    continue
+                out_d[m, p] = dh
+                out_mod[m, p, 0] = 1 if hit else 0
+                out_mod[m, p, 1] = br
+                continue
             a = ra[p]
             b = rb[p]
             mt = meth[p]
@@ -289,11 +240,6 @@ def _paper_rows(Q, T, E, R, mode, margin, hermes, want, out_d, out_p, out_hit, e
             elif mt == M_FACE_EDGE:
                 P0 = _v(vW, vstart[a] + 1 - distal[p])
                 P1 = _v(vW, vstart[a] + distal[p])
-                if mode == 1 and hermes[p]:
-                    if _hermes_hit(P0, P1, rad[a] + margin, b, planes, pstart, sph, eps_par):
-                        out_hit[m] = True
-                        break
-                    continue
                 d = _face_edge(P0, P1, rad[a], b, vW, fstart, fvs, fverts, fn, fd, estart, edges, eW, elen, out9, eps_len,
                                eps_par)
             elif mt == M_BOX:
@@ -314,6 +260,10 @@ def _paper_rows(Q, T, E, R, mode, margin, hermes, want, out_d, out_p, out_hit, e
                     break
                 continue
             out_d[m, p] = d
+            if mode == 2:
+                out_mod[m, p, 0] = 1 if d <= margin else 0
+                out_mod[m, p, 1] = -1
+                continue
             if want:
                 s = 3 if swap[p] else 0
                 for i in range(3):

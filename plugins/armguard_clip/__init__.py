@@ -13,7 +13,10 @@ obstacle ``OB`` clipped against the guard's planes.
    over a static body;
 3. side A of the Model's pair (the link of an arm–arm or arm–payload pair).
 
-A shape without volume (a Polygon) is never the guard.  So a capsule link against a box table
+A shape without volume (a Polygon) is never the guard, and a Cylinder only when the other side
+cannot be one (a cylinder against a cylinder or a polygon): its guard's outer prism reaches
+``Tolerances.clip_chord`` beyond it, so its shell has corners the second level leaves MAYBE,
+where bracketing it as an obstacle settles more.  So a capsule link against a box table
 guards the capsule; a box tool against a capsule link (moving–moving) guards the capsule; two
 capsule links guard side A.  The obstacle is built once in its own frame (W for a static body,
 its link frame for a link, the holding link's frame for a payload) and each configuration poses
@@ -21,9 +24,13 @@ the guard relative to it, ``X_OB_VOL = X_W_OB⁻¹ X_W_VOL`` (the procedure depe
 relation — Smith's step 1, ``REL``).  Guards are built once per link shape, in the link frame,
 and re-posed per configuration.
 
-**A curved obstacle** (both sides curved: capsule against capsule) is bracketed by its own
-guard's polytopes ``PI ⊂ shape ⊂ PO`` (:data:`BRACKET_RINGS` surface sampling): CLEAR against
-``PO`` proves CLEAR, INTERSECTED against ``PI`` proves INTERSECTED, anything else is MAYBE.
+**A curved obstacle** (both sides curved: capsule against capsule; or a cylinder) is bracketed by
+polytopes ``PI ⊂ shape ⊂ PO``: a sphere's or capsule's own guard polytopes
+(:data:`BRACKET_RINGS` surface sampling), a cylinder's inscribed and circumscribed ``n``-gon
+prisms (Smith §IV's segments and ruled strips, ``n`` from ``Tolerances.clip_chord``:
+:func:`armguard.clip.curved_polytopes`).  CLEAR against ``PO`` proves CLEAR, INTERSECTED against
+``PI`` proves INTERSECTED, anything else is MAYBE — so the chord tolerance costs MAYBE answers
+in a band about the shape, never a wrong one.
 
 **The workspace box** (solid outside the box, as coal's six half-spaces) is a clipping volume of
 six planes: a convex shape stays inside exactly when its support along each wall's outward
@@ -53,9 +60,9 @@ import numpy as np
 from armguard._errors import BackendError, ClipError
 from armguard._tolerance import DEFAULT_TOLERANCES
 from armguard.backends import Capability, CheckerBase, check_Q
-from armguard.clip import DEFAULT_INNER_SCALE, DEFAULT_MAX_DEPTH, DEFAULT_RINGS, ClipStatus, Guard, Obstacle
+from armguard.clip import DEFAULT_INNER_SCALE, DEFAULT_MAX_DEPTH, DEFAULT_RINGS, ClipStatus, Guard, Obstacle, curved_polytopes
 from armguard.clip._kernels import procedure_many
-from armguard.geometry import Capsule, Polygon, Sphere
+from armguard.geometry import Capsule, Cylinder, Polygon, Sphere
 from armguard.kinematics import invert_pose
 from armguard.model import WORKSPACE
 
@@ -122,7 +129,7 @@ def _combine(pair_codes: np.ndarray) -> np.ndarray:
 
 
 def _curved(shape) -> bool:
-    return isinstance(shape, (Sphere, Capsule))
+    return isinstance(shape, (Sphere, Capsule, Cylinder))
 
 
 @dataclass(frozen=True)
@@ -205,8 +212,12 @@ class ClipChecker(CheckerBase):
                     self._guards[plan.guard.name] = self._guard(plan.guard.shape, **self._guard_opts)
                 ob = plan.obstacle
                 if plan.kind == "bracket" and ob.name not in self._brackets:
-                    g = self._guard(ob.shape, rings=self._bracket_rings, max_depth=0)  # no cells: only PO and PI
-                    self._brackets[ob.name] = (Obstacle.from_shape(g.outer, name=ob.name), Obstacle.from_shape(g.inner, name=ob.name))
+                    if isinstance(ob.shape, Cylinder):
+                        outer, inner, _ = curved_polytopes(ob.shape, self.tol.clip_chord, max_sides=self.tol.max_prism_sides)
+                    else:
+                        g = self._guard(ob.shape, rings=self._bracket_rings, max_depth=0)  # no cells: only PO and PI
+                        outer, inner = g.outer, g.inner
+                    self._brackets[ob.name] = (Obstacle.from_shape(outer, name=ob.name), Obstacle.from_shape(inner, name=ob.name))
                 elif plan.kind == "clip" and ob.name not in self._obstacles:
                     self._obstacles[ob.name] = Obstacle.from_shape(ob.shape, name=ob.name)
             except ClipError as exc:
@@ -227,7 +238,8 @@ class ClipChecker(CheckerBase):
         def rank(g: _Geom):  # higher is the better guard (the module docstring's order)
             return (_curved(g.shape), g.frame >= 0, g.side_a)
 
-        cands = [g for g in (ga, gb) if not isinstance(g.shape, Polygon)]
+        cands = [g for g in (ga, gb) if not isinstance(g.shape, (Polygon, Cylinder))]
+        cands = cands or [g for g in (ga, gb) if not isinstance(g.shape, Polygon)]
         if not cands:
             raise BackendError(f"clip: pair ({ga.name}, {gb.name}): two shapes without volume (Polygons); no guard")
         guard = max(cands, key=rank)

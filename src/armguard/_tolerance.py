@@ -105,6 +105,12 @@ class Tolerances:
         (touching counts as intersecting, as for ``intersects``); also the margin by which a
         shell cell must clear the test object to be labelled OUTSIDE, and a vertex may stick
         out of it and still be labelled INSIDE.
+    clip_chord : float, m
+        ``armguard.clip``: a curved obstacle (Cylinder, Sphere, Capsule) is clipped as a
+        circumscribed polytope of short segments and ruled strips (Smith §IV) whose every point
+        is within this of the shape: it never misses a contact, and an INTERSECTED answer can be a
+        false alarm only where the shape is within this of the guard.  A cylinder of radius ``r``
+        gets the fewest sides ``n`` with ``r (sec(π/n) - 1)`` at most this (23 at 0.1 m).
     paper_agreement : float, m
         ``bench/paper_fidelity.py``: two checkers' distances closer than this agree (the paper
         checker's nearest distance is "right"); coal holds meshes in float32 (up to 0.5 µm at
@@ -175,6 +181,7 @@ class Tolerances:
     merge_conditioning: float = 1e-12
     probability_quadrature: float = 1e-10
     clip_plane: float = 1e-9
+    clip_chord: float = 1e-3
     rotation_orthonormality: float = 1e-9
     cspace_contact: float = 1e-6
     cspace_max_depth: int = 2

@@ -32,6 +32,7 @@ constraint by more than ``Tolerances.avoid_feasibility``, the answer is to stop.
 from __future__ import annotations
 
 import enum
+import functools
 import math
 from dataclasses import dataclass
 
@@ -84,6 +85,24 @@ class Damper:
         if np.any(np.isnan(lim)) or np.any(lim < 0.0):
             raise AvoidanceError(f"Damper.velocity_limit: expected numbers >= 0 (inf: none), got {self.velocity_limit!r}")
 
+    @functools.cached_property
+    def _limits(self) -> dict:
+        """nv -> ``(nv,)`` velocity limits, made once per column count (the dataclass is frozen)."""
+        return {}
+
+    def limits(self, nv: int) -> np.ndarray:
+        """``(nv,)`` read-only: the velocity limit of each column."""
+        lim = self._limits.get(nv)
+        if lim is None:
+            try:
+                lim = np.array(np.broadcast_to(np.asarray(self.velocity_limit, dtype=np.float64), (nv,)))
+            except ValueError as exc:
+                raise AvoidanceError(f"Damper.velocity_limit: expected a number or {nv} numbers, got "
+                                     f"{self.velocity_limit!r}") from exc
+            lim.flags.writeable = False
+            self._limits[nv] = lim
+        return lim
+
     def rate(self) -> float:
         """The damper's rate ``xi / (d_i - d_s)`` (1/s), capped at ``1 / period``."""
         return min(self.approach_speed / (self.influence - self.stand_off), 1.0 / self.period)
@@ -115,6 +134,23 @@ class Avoidance:
     solver: str
 
 
+def _all_finite(*arrays) -> bool:
+    """Every entry of every array finite: one sum each first (finite in the common case); only a
+    sum that is not (an overflow, or a NaN or infinity) looks entry by entry."""
+    for a in arrays:
+        if not math.isfinite(float(a.sum())) and not np.isfinite(a).all():
+            return False
+    return True
+
+
+@dataclass(frozen=True)
+class _NoPairs:
+    """No pair within influence: what :func:`avoid` reads of a result (``distance``, ``jacobian``)."""
+
+    distance: np.ndarray
+    jacobian: np.ndarray
+
+
 def _check_command(v_cmd, nv: int) -> np.ndarray:
     try:
         v = np.asarray(v_cmd, dtype=np.float64)
@@ -122,7 +158,7 @@ def _check_command(v_cmd, nv: int) -> np.ndarray:
         raise AvoidanceError(f"v_cmd: expected {nv} numbers, got {v_cmd!r}") from exc
     if v.shape != (nv,):
         raise AvoidanceError(f"v_cmd: expected shape ({nv},) (pin_model's velocity columns), got {v.shape}")
-    if not np.all(np.isfinite(v)):
+    if not _all_finite(v):
         raise AvoidanceError(f"v_cmd: contains NaN or infinite values: {v.tolist()}")
     return v
 
@@ -140,14 +176,14 @@ def avoid(v_cmd, distances, damper: Damper, *, tol: Tolerances = DEFAULT_TOLERAN
         raise AvoidanceError(f"avoid: {len(d)} distances but a Jacobian of shape {jac.shape}")
     nv = jac.shape[1]
     v_cmd = _check_command(v_cmd, nv)
-    if not (np.all(np.isfinite(d)) and np.all(np.isfinite(jac))):
+    if not _all_finite(d, jac):
         raise AvoidanceError("avoid: a distance or a Jacobian entry is NaN or infinite; no velocity can be given")
-    lim = np.broadcast_to(np.asarray(damper.velocity_limit, dtype=np.float64), (nv,))
+    lim = damper.limits(nv)
     rows = np.flatnonzero((d < damper.influence) & np.any(jac != 0.0, axis=1))
     A = np.ascontiguousarray(jac[rows])
     b = damper.bound(d[rows])
     dmin = float(d.min()) if len(d) else math.inf
-    clipped = np.clip(v_cmd, -lim, lim)
+    clipped = np.minimum(np.maximum(v_cmd, -lim), lim)
     if len(rows) == 0 or np.all(A @ clipped >= b):
         return _result(clipped, v_cmd, rows, b, A, dmin, "none: no constraint binds" if len(rows) else
                        "none: no pair within influence", tol)
@@ -167,9 +203,10 @@ def avoid(v_cmd, distances, damper: Damper, *, tol: Tolerances = DEFAULT_TOLERAN
 
 
 def _result(v, v_cmd, rows, b, A, dmin, note, tol) -> Avoidance:
-    if np.max(np.abs(v), initial=0.0) <= tol.avoid_still and np.max(np.abs(v_cmd), initial=0.0) > tol.avoid_still:
+    still = tol.avoid_still
+    if len(v) and float(np.abs(v).max()) <= still and float(np.abs(v_cmd).max()) > still:
         status = AvoidanceStatus.STOPPED
-    elif np.max(np.abs(v - v_cmd), initial=0.0) <= tol.avoid_still:
+    elif not len(v) or float(np.abs(v - v_cmd).max()) <= still:
         status = AvoidanceStatus.FREE
     else:
         status = AvoidanceStatus.SLOWED
@@ -185,12 +222,13 @@ def avoid_step(checker, q, v_cmd, damper: Damper, *, pairs=None, tol: Tolerances
     q = check_q(checker.model, q)
     idx = np.arange(len(checker.model.pairs)) if pairs is None else check_pairs(checker.model, pairs)
     r = checker.pair_distances(q, pairs=None if pairs is None else idx)
-    near = idx[r.distance < damper.influence]
+    k = np.flatnonzero(r.distance < damper.influence)
+    near = idx[k]
+    nv = int(checker.model.pin_model.nv)
     if len(near) == 0:
-        nv = int(checker.model.pin_model.nv)
-        sub = r.take(np.zeros(0, np.int64)).with_jacobian(np.zeros((0, nv)), np.zeros(0, bool))
+        sub = _NoPairs(np.zeros(0), np.zeros((0, nv)))
     else:
-        sub = r.take(np.flatnonzero(r.distance < damper.influence))
+        sub = r.take(k)
         sub = sub.with_jacobian(*checker.distance_jacobian(q, sub, near))
     out = avoid(v_cmd, sub, damper, tol=tol)
     return Avoidance(out.velocity, out.commanded, out.status, near[out.rows], out.rate, out.closing,

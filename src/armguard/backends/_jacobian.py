@@ -94,17 +94,12 @@ def _face_spans(R, u, g, vstart, V, disk_axis, disk_r, tol_face, tol_par, dims, 
             if 1.0 - c <= tol_par:  # the disk faces u: a flat face
                 dims[i] = 2
                 continue
-        hmax = -np.inf
+        hmax, k0 = -np.inf, s
         for k in range(s, e):
             h = uL[0] * V[k, 0] + uL[1] * V[k, 1] + uL[2] * V[k, 2]
             if h > hmax:
-                hmax = h
-        # the face: vertices within tol_face of the support plane; its extent from the first one
-        k0 = -1
-        for k in range(s, e):
-            if uL[0] * V[k, 0] + uL[1] * V[k, 1] + uL[2] * V[k, 2] >= hmax - tol_face:
-                k0 = k
-                break
+                hmax, k0 = h, k
+        # the face: vertices within tol_face of the support plane; its extent from the highest one (k0)
         far, k1 = 0.0, -1
         for k in range(s, e):
             if uL[0] * V[k, 0] + uL[1] * V[k, 1] + uL[2] * V[k, 2] >= hmax - tol_face:
@@ -133,9 +128,10 @@ def _face_spans(R, u, g, vstart, V, disk_axis, disk_r, tol_face, tol_par, dims, 
 
 @njit(cache=True)
 def _witness_rows(p_WA, p_WB, d, ja, jb, ga, gb, Jj, R_WJ, R_JG, vstart, V, disk_axis, disk_r, described,
-                  eps_len, tol_face, tol_par, jac, smooth):  # pragma: no cover - numba
+                  cstart, cols, eps_len, tol_face, tol_par, jac, smooth):  # pragma: no cover - numba
     """Equation (1) and the uniqueness test for every pair: ``jac`` ``(n, nv)``, ``smooth`` ``(n,)``
-    (False also where touching); ``Jj`` ``(njoints, 6, nv)`` per joint, ``R_WJ`` ``(njoints, 3, 3)``."""
+    (False also where touching); ``Jj`` ``(njoints, 6, nv)`` per joint, ``R_WJ`` ``(njoints, 3, 3)``;
+    joint ``j``'s Jacobian is zero outside its columns ``cols[cstart[j]:cstart[j + 1]]``."""
     n, nv = jac.shape
     R = np.zeros((2, 3, 3))
     u = np.empty((2, 3))
@@ -160,14 +156,17 @@ def _witness_rows(p_WA, p_WB, d, ja, jb, ga, gb, Jj, R_WJ, R_JG, vstart, V, disk
             cB[r] = p_WB[i, r1] * nh[r2] - p_WB[i, r2] * nh[r1]
         a, b = ja[i], jb[i]
         for k in range(nv):
-            s = 0.0
-            if b > 0:
-                s += nh[0] * Jj[b, 0, k] + nh[1] * Jj[b, 1, k] + nh[2] * Jj[b, 2, k] \
+            jac[i, k] = 0.0
+        if b > 0:
+            for c in range(cstart[b], cstart[b + 1]):
+                k = cols[c]
+                jac[i, k] += nh[0] * Jj[b, 0, k] + nh[1] * Jj[b, 1, k] + nh[2] * Jj[b, 2, k] \
                     + cB[0] * Jj[b, 3, k] + cB[1] * Jj[b, 4, k] + cB[2] * Jj[b, 5, k]
-            if a > 0:
-                s -= nh[0] * Jj[a, 0, k] + nh[1] * Jj[a, 1, k] + nh[2] * Jj[a, 2, k] \
+        if a > 0:
+            for c in range(cstart[a], cstart[a + 1]):
+                k = cols[c]
+                jac[i, k] -= nh[0] * Jj[a, 0, k] + nh[1] * Jj[a, 1, k] + nh[2] * Jj[a, 2, k] \
                     + cA[0] * Jj[a, 3, k] + cA[1] * Jj[a, 4, k] + cA[2] * Jj[a, 5, k]
-            jac[i, k] = s
         ok = True
         g[0], g[1] = ga[i], gb[i]
         for side in range(2):
@@ -230,6 +229,23 @@ class WitnessJacobian:
         self._pin = pin
         self._tls = threading.local()
         self._pairs_key = None
+        # Without mimic joints, joint j's world Jacobian is data.J's columns of the joints that
+        # support j (pin_model.supports), the rest zero: one masked copy of data.J replaces a
+        # getJointJacobian call per joint.  Mimic joints fold a follower onto its leader's column,
+        # which data.J alone does not tell apart: those models keep getJointJacobian.
+        self._mimic = any("Mimic" in j.shortname() for j in pm.joints)
+        mask = np.zeros((pm.njoints, 1, self.nv))
+        for j in range(1, pm.njoints):
+            for s in pm.supports[j]:
+                js = pm.joints[s]
+                if s > 0 and js.nv > 0:
+                    mask[j, 0, js.idx_v:js.idx_v + js.nv] = 1.0
+        self._support_mask = mask
+        # each joint's nonzero columns (with mimic joints: every column, as a follower's motion lands
+        # in its leader's column, which need not support it)
+        cols = [np.arange(self.nv) if self._mimic else np.flatnonzero(mask[j, 0]) for j in range(pm.njoints)]
+        self._cstart = np.concatenate([[0], np.cumsum([len(c) for c in cols])]).astype(np.int64)
+        self._cols = np.concatenate(cols).astype(np.int64)
 
     def _sides(self) -> tuple:
         """Per Model pair row: geometry index and joint of A and of B (-1 / 0 for the workspace)."""
@@ -263,31 +279,46 @@ class WitnessJacobian:
         return hit[1]
 
     def _data(self):
+        """This thread's ``(pinocchio.Data, Jj (njoints, 6, nv) buffer)``."""
         try:
             return self._tls.data
         except AttributeError:
-            d = self._tls.data = self.model.pin_model.createData()
+            pm = self.model.pin_model
+            d = self._tls.data = (pm.createData(), np.zeros((pm.njoints, 6, self.nv)))
             return d
+
+    def joint_jacobians(self, q, joints) -> tuple:
+        """``(Jj (njoints, 6, nv), R_WJ (njoints, 3, 3))`` at ``q``: the world-frame Jacobian of each
+        joint in ``joints`` (linear velocity of the point at W's origin, then angular velocity;
+        zero outside the joint's supports, mimic joints folded onto their leaders) and its rotation;
+        joint 0 (the world) has a zero Jacobian and the identity.  Rows of other joints are
+        unspecified.  The arrays are this thread's buffers, valid until its next call."""
+        pin = self._pin
+        pm = self.model.pin_model
+        data, Jj = self._data()
+        pin.computeJointJacobians(pm, data, q)
+        R_WJ = np.empty((pm.njoints, 3, 3))
+        R_WJ[0] = np.eye(3)
+        oMi = data.oMi
+        if self._mimic:
+            for j in joints:
+                Jj[j] = pin.getJointJacobian(pm, data, j, pin.ReferenceFrame.WORLD)
+                R_WJ[j] = oMi[j].rotation
+        else:
+            np.multiply(data.J[None], self._support_mask, out=Jj)
+            for j in joints:
+                R_WJ[j] = oMi[j].rotation
+        Jj[0] = 0.0
+        return Jj, R_WJ
 
     def rows(self, q, result, idx=None, *, refine=None) -> tuple:
         """``(jacobian (n, nv) float64, smooth (n,) bool)`` for ``result`` (a PairDistances at
         ``q``, checked, of the Model rows ``idx``; None: every row).  ``refine(k_rows)`` gives
         the one-sided rows of the touching pairs (the checker's forward differences)."""
-        pin = self._pin
         ga, gb, ja, jb = self._sides()
         if idx is not None:
             ga, gb, ja, jb = ga[idx], gb[idx], ja[idx], jb[idx]
-        data = self._data()
-        pm = self.model.pin_model
-        pin.computeJointJacobians(pm, data, q)
-        # per joint of a pair side, (6, nv): world frame, linear velocity at W's origin then angular
-        # velocity, zero outside the joint's ancestors (mimic joints folded onto their leaders)
-        Jj = np.zeros((pm.njoints, 6, self.nv))
-        R_WJ = np.zeros((pm.njoints, 3, 3))
-        for j in self._joints_used(ja, jb):
-                Jj[j] = pin.getJointJacobian(pm, data, j, pin.ReferenceFrame.WORLD)
-                R_WJ[j] = data.oMi[j].rotation
-        R_WJ[0] = np.eye(3)
+        Jj, R_WJ = self.joint_jacobians(q, self._joints_used(ja, jb))
         n = len(result.distance)
         jac = np.empty((n, self.nv))
         smooth = np.empty(n, bool)
@@ -295,7 +326,7 @@ class WitnessJacobian:
         d = np.ascontiguousarray(result.distance, dtype=np.float64)
         _witness_rows(np.ascontiguousarray(result.p_WA), np.ascontiguousarray(result.p_WB), d, ja, jb, ga, gb, Jj,
                       R_WJ, self._R_JG, self._vstart, self._V, self._disk_axis, self._disk_r, self._described,
-                      tol.length, tol.jacobian_face, tol.jacobian_parallel, jac, smooth)
+                      self._cstart, self._cols, tol.length, tol.jacobian_face, tol.jacobian_parallel, jac, smooth)
         touching = np.flatnonzero(np.abs(d) <= tol.length)
         if len(touching) and refine is not None:
             jac[touching] = refine(touching)

@@ -75,6 +75,18 @@ def _file_stem(spec: str, scene) -> str:
     return "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in stem) or str(getattr(scene, "name", "scene"))
 
 
+EXAMPLES = (
+    ("python examples/workmate_demo.py",
+     "WORKMATE's demonstration on the PUMA 560 cell: calibrate the camera to the robot, write the calibration "
+     "file, stack a cylinder on another found by vision (every motion verified), generate the program; the "
+     "placed cylinder's axis offset with and without calibration (docs/program.md)"),
+    ("python examples/online_guard.py", "the on-line guard: a control loop that stops a 3-link arm before a thin rod, then lets a jog away through"),
+    ("python examples/grasp_error.py",
+     "the grasp error from a wrist force/torque sensor against noise and orientations (docs/program.md)"),
+)
+"""The demonstrations beside ``armguard demo`` (``armguard demo --list``): command, what it shows."""
+
+
 def verdict_text(r) -> str:
     """The verdict column: SAFE, INCOMPLETE, COLLISION (a contact) or UNSAFE (stopping distance)."""
     v = r.verdict()
@@ -89,12 +101,19 @@ def verdict_text(r) -> str:
 @click.option("--scene", "scenes", multiple=True, help="Only these built-in scenes (default: all).")
 @click.option("--stopping-distance", "stopping_distances", type=float, multiple=True,
               help="Constant stopping distances to verify with (m); default: 0 and Hermes's speed-dependent table.")
-def demo_cmd(out_dir, scenes, stopping_distances) -> None:
+@click.option("--list", "list_only", is_flag=True, help="List the demonstrations (this one and the examples) and exit.")
+def demo_cmd(out_dir, scenes, stopping_distances, list_only) -> None:
     """Verify each built-in scene's canned trajectories (certified) and print a table.
 
     Each trajectory is verified as planned (stopping distance 0) and with Hermes's stopping
     distance, a stepwise function of speed up to 100 mm at the trajectory's top speed (0 at rest).
+    ``--list`` names the other demonstrations (run from the source checkout).
     """
+    if list_only:
+        click.echo("armguard demo: certified verification of every built-in scene's canned trajectories")
+        for cmd, what in EXAMPLES:
+            click.echo(f"{cmd}: {what}")
+        return
     from rich.console import Console
     from rich.table import Table
 
@@ -143,4 +162,5 @@ def demo_cmd(out_dir, scenes, stopping_distances) -> None:
                 table.add_row(name, tname, label, verdict_text(r), first_collision_text(r),
                               f"{clearance * 1e3:.1f} mm", f"{dt * 1e3:.0f} ms")
     console.print(table)
-    console.print(f"reports and plots in {out}/ ({time.perf_counter() - t_all:.1f} s in all)")
+    console.print(f"reports and plots in {out}/ ({time.perf_counter() - t_all:.1f} s in all); "
+                  "more demonstrations: armguard demo --list")

@@ -1,4 +1,4 @@
-"""``armguard program run|export``: WORKMATE's off-line task programs (docs/program.md)."""
+"""``armguard program run|export|calibrate``: WORKMATE's off-line task programs (docs/program.md)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from ._exit import ExitCode, exit_epilog
 
 @main.group("program")
 def program() -> None:
-    """Task programs (FIND, PICKUP, PLACE, MOVE): run them on an emulated cell, export them."""
+    """Task programs (FIND, PICKUP, PLACE, MOVE): run them on an emulated cell, export them; calibrate the cell."""
 
 
 @program.command("run", epilog=exit_epilog(
@@ -22,14 +22,16 @@ def program() -> None:
 @click.argument("file", type=click.Path(dir_okay=False))
 @click.option("--cell", default=None, metavar="CELL",
               help="A cell file (armguard_cell: 1), a model name or a scene file (default: the program's cell:).")
+@click.option("--calibration", default=None, type=click.Path(dir_okay=False),
+              help="A calibration file (armguard_calibration: 1) to regenerate the cell from (default: the cell's).")
 @click.option("--seed", default=0, show_default=True, type=int, help="Seed of the camera's FIND noise.")
 @click.option("--save", default=None, type=click.Path(dir_okay=False),
               help="Write the run (each motion's times and waypoints, each FIND's frames) as JSON.")
-def run_cmd(file: str, cell: str | None, seed: int, save: str | None) -> None:
+def run_cmd(file: str, cell: str | None, calibration: str | None, seed: int, save: str | None) -> None:
     """Run the task program FILE: expand each task through IK, verify every motion, emulate it."""
     from ..program import run_program
 
-    run = run_program(file, cell, seed=seed)
+    run = run_program(file, cell, seed=seed, calibration=calibration)
     click.echo(run.summary())
     if save:
         from .._io import atomic_write
@@ -43,9 +45,43 @@ def run_cmd(file: str, cell: str | None, seed: int, save: str | None) -> None:
 @click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
               help="The program to write (Python that calls armguard's workcell primitives).")
 @click.option("--cell", default=None, metavar="CELL", help="The cell the exported program runs on by default.")
-def export_cmd(file: str, out: str, cell: str | None) -> None:
+@click.option("--calibration", default=None, type=click.Path(dir_okay=False),
+              help="The calibration file the exported program regenerates its cell from by default.")
+def export_cmd(file: str, out: str, cell: str | None, calibration: str | None) -> None:
     """Export the task program FILE as a workcell program (Python) that reproduces its motions."""
     from ..program import export_program
 
-    path = export_program(file, out, cell=cell)
+    path = export_program(file, out, cell=cell, calibration=calibration)
     click.echo(f"wrote {path}")
+
+
+@program.command("calibrate", epilog=exit_epilog(
+    ok="calibrated: every motion verified and ran, the camera saw every point, the calibration file written",
+    unsafe="a motion was refused or the camera did not see the calibration object: nothing written"))
+@click.argument("cell", type=click.Path(dir_okay=False))
+@click.option("--out", "out", default=None, type=click.Path(dir_okay=False),
+              help="The calibration file to write (default: the one the cell file names, updated in place).")
+@click.option("--calibration", default=None, type=click.Path(dir_okay=False),
+              help="The calibration file to start from (default: the cell's; the nominal layout without one).")
+@click.option("--points", default=12, show_default=True, type=click.IntRange(3, 200),
+              help="Points of the trained trajectory in the camera's view.")
+@click.option("--seed", default=0, show_default=True, type=int, help="Seed of the camera's FIND noise.")
+def calibrate_cmd(cell: str, out: str | None, calibration: str | None, points: int, seed: int) -> None:
+    """Calibrate the camera of the emulated cell CELL to its robot and write the calibration file.
+
+    The arm takes the calibration object (the tool point) to POINTS poses in the camera's view,
+    each motion verified before it runs; the camera FINDs it at each; the least-squares transform
+    (Horn / Umeyama) with its covariance becomes the camera's relationship to the robot's base."""
+    from ..program import calibrate_camera, load_cell, write_calibration
+
+    c = load_cell(cell, calibration)
+    target = out or (c.calibration.file if c.calibration is not None else None)
+    if target is None:
+        raise click.UsageError("the cell names no calibration file: give --out FILE")
+    result = calibrate_camera(c, n=points, seed=seed)
+    click.echo(result.summary())
+    if not result.ok:
+        sys.exit(int(ExitCode.UNSAFE))
+    path = write_calibration(result.calibration(), target)  # whole or not at all: a FIFO or a full disk is exit 3
+    click.echo(f"wrote {path}")
+    sys.exit(int(ExitCode.OK))

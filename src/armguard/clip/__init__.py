@@ -6,7 +6,9 @@ ran it on the IRIS's clipping pipeline — here as numba kernels over flat array
 * :class:`Guard` — a guarded test object ``VOL``: outer and inner convex polyhedra ``PO`` / ``PI``,
   outer and inner spheres ``RO`` / ``RI`` about ``CS``, and the labelled convex cells of the shell
   between ``PO`` and ``PI`` for the second-level tests SRI did not build;
-* :class:`Obstacle` — an obstacle ``OB`` as segments and convex polygons (a solid as its faces);
+* :class:`Obstacle` — an obstacle ``OB`` as segments and convex polygons (a solid as its faces;
+  a curved solid — Cylinder, Sphere, Capsule — as its circumscribed polytope of short segments
+  and ruled strips within the chord tolerance, §IV: :func:`curved_polytopes`);
 * :func:`check` / :func:`check_list` / :func:`check_many` — Appendix A's 8 steps, answering
   :class:`ClipStatus` INTERSECTED / CLEAR / MAYBE and the step that decided;
 * :class:`Predictor` — WORKMATE's collision prediction: the guard swept over the next control
@@ -19,6 +21,7 @@ ran it on the IRIS's clipping pipeline — here as numba kernels over flat array
 """
 
 from ._cells import CellKind, CellTree
+from ._curved import chord_sides, circumscribed_band, curved_polytopes
 from ._guard import DEFAULT_INNER_SCALE, DEFAULT_MAX_DEPTH, DEFAULT_RINGS, Guard
 from ._kernels import cyrus_beck, sutherland_hodgman
 from ._model import ClipModel, ModelVerdict, PairVerdict
@@ -51,6 +54,9 @@ __all__ = [
     "interpolate_pose",
     "DEFAULT_MAX_HALVINGS",
     "cyrus_beck",
+    "chord_sides",
+    "circumscribed_band",
+    "curved_polytopes",
     "sutherland_hodgman",
     "STEP_NAMES",
     "STATUS_CODES",

@@ -15,6 +15,9 @@ Sphere, Capsule   ``PI`` scaled about ``CS`` by ``1 / s``, with the hull of poin
                   ``s`` the largest factor whose every face     surface (latitude rings on each
                   plane still supports the shape (checked      cap; convexity puts their hull
                   face by face against the shape's support)    inside the shape)
+Cylinder          the circumscribed ``n``-gon prism (apothem   ``PO`` shrunk about the centre by
+                  ``r``; ``n`` from ``Tolerances.clip_chord``,  ``cos(π/n)``: the inscribed
+                  :func:`._curved.chord_sides`)                 ``n``-gon, ``h cos(π/n)`` long
 ================  ==========================================  ===================================
 
 ``PI`` is always ``PO`` shrunk about ``CS`` (homothetic), so the shell between them splits into
@@ -32,7 +35,7 @@ import numpy as np
 
 from .._errors import ClipError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
-from ..geometry import Box, Capsule, ConvexPolyhedron, Prism, Sphere
+from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Prism, Sphere
 from ._cells import CellKind, CellTree, build_cells
 
 __all__ = ["Guard", "DEFAULT_INNER_SCALE", "DEFAULT_MAX_DEPTH", "DEFAULT_RINGS"]
@@ -64,7 +67,10 @@ class _Body:
 
     def __init__(self, shape) -> None:
         self.shape = shape
-        if isinstance(shape, Sphere):
+        if isinstance(shape, Cylinder):
+            self.kind, self.p0, self.p1, self.r = "cylinder", shape.center, shape.center, shape.radius
+            self.R, self.h = shape.rotation, shape.half_length
+        elif isinstance(shape, Sphere):
             self.kind, self.p0, self.p1, self.r = "round", shape.center, shape.center, shape.radius
         elif isinstance(shape, Capsule):
             self.kind, self.p0, self.p1, self.r = "round", shape.p0, shape.p1, shape.radius
@@ -78,6 +84,9 @@ class _Body:
         p = np.atleast_2d(p)
         if self.kind == "round":
             return np.linalg.norm(p - _closest_on_segment(p, self.p0, self.p1), axis=-1) - self.r
+        if self.kind == "cylinder":  # the larger of the radial and axial excesses
+            loc = (p - self.p0) @ self.R
+            return np.maximum(np.hypot(loc[:, 0], loc[:, 1]) - self.r, np.abs(loc[:, 2]) - self.h)
         P = self.poly.planes
         return np.max(p @ P[:, :3].T - P[:, 3], axis=1)
 
@@ -85,11 +94,13 @@ class _Body:
         """``max_{x in shape} n . x`` (m) for unit ``n``."""
         if self.kind == "round":
             return max(float(n @ self.p0), float(n @ self.p1)) + self.r
+        if self.kind == "cylinder":
+            return float(n @ self.shape.support(n))
         return float(np.max(self.poly.vertices @ n))
 
     def normal_toward(self, u: np.ndarray) -> np.ndarray:
         """Outward unit normal where the ray from the centre along unit ``u`` leaves the shape."""
-        c = 0.5 * (self.p0 + self.p1) if self.kind == "round" else self.poly.vertices.mean(axis=0)
+        c = 0.5 * (self.p0 + self.p1) if self.kind != "poly" else self.poly.vertices.mean(axis=0)
         lo, hi = 0.0, 1.0
         while self.outside(c + hi * u)[0] <= 0.0:
             hi *= 2.0
@@ -99,6 +110,10 @@ class _Body:
         q = c + hi * u
         if self.kind == "round":
             g = q - _closest_on_segment(q[None], self.p0, self.p1)[0]
+        elif self.kind == "cylinder":
+            x, y, z = (q - self.p0) @ self.R
+            rad = math.hypot(x, y)
+            g = self.R @ ([x / rad, y / rad, 0.0] if rad - self.r >= abs(z) - self.h else [0.0, 0.0, math.copysign(1.0, z)])
         else:
             P = self.poly.planes
             g = P[int(np.argmax(q @ P[:, :3].T - P[:, 3])), :3].copy()
@@ -213,6 +228,16 @@ class Guard:
             outer = ConvexPolyhedron(cs + (inner0.vertices - cs) / s)
             ri = body.r
             ro = 0.5 * float(np.linalg.norm(body.p1 - body.p0)) + body.r
+        elif isinstance(shape, Cylinder):
+            from ._curved import chord_sides  # (_curved imports this module's surface sampling)
+
+            body = _Body(shape)
+            n = chord_sides(shape.radius, tol.clip_chord, tol.max_prism_sides)
+            outer = Prism(shape.center, shape.rotation, shape.radius, shape.half_length, n).as_polyhedron()
+            cs = np.asarray(shape.center, float)
+            s = math.cos(math.pi / n)  # PO's vertices, at r / cos(pi/n), come in onto the circle
+            ri = min(shape.radius, shape.half_length)
+            ro = math.hypot(shape.radius, shape.half_length)
         elif isinstance(shape, (Box, Prism, ConvexPolyhedron)):
             body = _Body(shape)
             outer = body.poly
@@ -222,7 +247,7 @@ class Guard:
             ro = float(np.max(np.linalg.norm(outer.vertices - cs, axis=1)))
         else:
             raise ClipError(
-                f"Guard.from_shape: expected a Sphere, Capsule, Box, Prism or ConvexPolyhedron, got {type(shape).__name__}"
+                f"Guard.from_shape: expected a Sphere, Capsule, Cylinder, Box, Prism or ConvexPolyhedron, got {type(shape).__name__}"
             )
         P = outer.planes
         inner_planes = np.hstack([P[:, :3], (P[:, :3] @ cs + s * (P[:, 3] - P[:, :3] @ cs))[:, None]])

@@ -49,7 +49,7 @@ class ClipModel:
         self.links = [(str(n), s) for n, s in links]
         self.statics = [(str(n), s) for n, s in statics]
         self.guards = [Guard.from_shape(s, tol=tol, **guard_options) for _, s in self.links]
-        self.obstacles = [Obstacle.from_shape(s, name=n) for n, s in self.statics]
+        self.obstacles = [Obstacle.from_shape(s, name=n, tol=tol) for n, s in self.statics]
         self.tol = tol
 
     def check(self, X_W_links, *, subdivide: bool = True) -> ModelVerdict:

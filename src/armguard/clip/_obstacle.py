@@ -4,8 +4,12 @@
 interference with the clipping polyhedron" (Smith, §IV).  A convex solid (Box, Prism,
 ConvexPolyhedron) is its faces as polygons — its edges are the polygons' boundaries, so clipping
 them as segments would add nothing — plus its planes, which let ``COLLIDE`` see a clipping volume
-wholly inside the solid.  A curved obstacle (Sphere, Capsule) is refused: approximating it by
-segments or polygons would make the answers about the approximation, not the obstacle.
+wholly inside the solid.  A curved obstacle (Cylinder, Sphere, Capsule) is, as §IV says, short
+segments along its curves and the ruled strips between them: a *circumscribed* polytope within
+the chord tolerance ``Tolerances.clip_chord`` of the shape (:mod:`._curved`).  Clipping it never
+misses a contact with the shape (CLEAR is a proof about the shape); INTERSECTED proves contact
+with the polytope, so about the shape it proves only that it comes within ``Obstacle.band`` of
+the guard.  A curve (a wire, a path) is :meth:`Obstacle.polyline`.
 
 Bounding volumes, all in the obstacle's frame ``F(OB)`` (m):
 
@@ -27,8 +31,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._errors import ClipError, GeometryError
-from .._tolerance import DEFAULT_TOLERANCES
-from ..geometry import Box, ConvexPolyhedron, Polygon, Prism
+from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ..geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sphere
+from ._curved import CURVED, curved_polytopes
 
 __all__ = ["Obstacle", "DEFAULT_BOUNDS_MIN_VERTICES"]
 
@@ -65,7 +70,10 @@ class Obstacle:
     ``geom``: the kernel tuple ``(verts (V, 3), segs (S, 2), poly_off (P + 1,), poly_idx,
     solid (F, 4))`` of :mod:`._kernels`; ``po`` / ``pi``: the same for ``PO(OB)`` / ``PI(OB)``
     (``V == 0``: undefined); ``cs (3,)``, ``ro``, ``ri`` (-1: undefined) the spheres; ``shape``
-    the geometry shape it came from (the oracle's operand), ``name`` a label.
+    the geometry shape it came from (the oracle's operand), ``name`` a label; ``band`` (m) the
+    largest distance of a point of the clipped primitives from ``shape`` — 0 for exact
+    primitives, at most the chord tolerance for a curved shape's circumscribed polytope (an
+    INTERSECTED answer may then be a false alarm where the shape is within ``band`` of the guard).
     """
 
     geom: tuple
@@ -76,6 +84,7 @@ class Obstacle:
     ri: float
     shape: object = None
     name: str = ""
+    band: float = 0.0
     _pack: tuple | None = field(default=None, repr=False)
 
     @property
@@ -108,6 +117,20 @@ class Obstacle:
         return cls(_geom(v, [(0, 1)]), _EMPTY_GEOM, _EMPTY_GEOM, cs, ro, -1.0, None, name)
 
     @classmethod
+    def polyline(cls, points, *, closed: bool = False, name: str = "") -> "Obstacle":
+        """A curve as short segments (§IV): ``points (n, 3)`` m in ``F(OB)``, joined in order
+        (and the last to the first when ``closed``).  The segments are the obstacle: sample a
+        curved wire finely enough for its purpose (a chord of angle ``θ`` on radius ``r`` is off
+        the arc by its sagitta ``r (1 - cos(θ/2))``)."""
+        v = np.array(points, dtype=np.float64)
+        if v.ndim != 2 or v.shape[1] != 3 or len(v) < 2 or not np.all(np.isfinite(v)):
+            raise ClipError(f"Obstacle.polyline: expected (n >= 2, 3) finite points, got shape {v.shape}")
+        n = len(v)
+        segs = [(i, i + 1) for i in range(n - 1)] + ([(n - 1, 0)] if closed and n > 2 else [])
+        cs, ro, _ = cls._spheres(v, None)
+        return cls(_geom(v, segs), _EMPTY_GEOM, _EMPTY_GEOM, cs, ro, -1.0, None, name)
+
+    @classmethod
     def polygon(cls, vertices, *, name: str = "") -> "Obstacle":
         """A planar convex polygon (``(n, 3)`` m in ``F(OB)``, in order; checked by
         ``armguard.geometry.Polygon``)."""
@@ -119,26 +142,47 @@ class Obstacle:
         return cls(_geom(poly.vertices, (), [np.arange(len(poly.vertices))]), _EMPTY_GEOM, _EMPTY_GEOM, cs, ro, -1.0, poly, name)
 
     @classmethod
-    def from_shape(cls, shape, *, name: str = "", bounds_min_vertices: int = DEFAULT_BOUNDS_MIN_VERTICES) -> "Obstacle":
+    def from_shape(
+        cls,
+        shape,
+        *,
+        name: str = "",
+        bounds_min_vertices: int = DEFAULT_BOUNDS_MIN_VERTICES,
+        chord_tol: float | None = None,
+        tol: Tolerances = DEFAULT_TOLERANCES,
+    ) -> "Obstacle":
         """An obstacle from an ``armguard.geometry`` shape in ``F(OB)``: Polygon (one polygon);
         Box, Prism, ConvexPolyhedron (a solid: its faces and planes, with ``PO`` / ``PI`` when it
-        has more than ``bounds_min_vertices`` vertices).  Raises ClipError for curved shapes."""
+        has more than ``bounds_min_vertices`` vertices); Cylinder, Sphere, Capsule (the
+        circumscribed polytope within ``chord_tol`` m of the shape, default
+        ``tol.clip_chord``, as a solid; ``band`` says how far it reaches; a radius-0 capsule
+        is its segment).  Raises ClipError for anything else."""
+        band = 0.0
         if isinstance(shape, Polygon):
             return cls.polygon(shape.vertices, name=name)
+        if isinstance(shape, Capsule) and shape.radius == 0.0:
+            ob = cls.segment(shape.p0, shape.p1, name=name)
+            return cls(ob.geom, ob.po, ob.pi, ob.cs, ob.ro, ob.ri, shape, name)
+        if isinstance(shape, Sphere) and shape.radius == 0.0:
+            ob = cls.segment(shape.center, shape.center, name=name)
+            return cls(ob.geom, ob.po, ob.pi, ob.cs, ob.ro, ob.ri, shape, name)
         if isinstance(shape, (Box, Prism)):
             poly = shape.as_polyhedron()
         elif isinstance(shape, ConvexPolyhedron):
             poly = shape
+        elif isinstance(shape, CURVED):
+            poly, _, band = curved_polytopes(shape, tol.clip_chord if chord_tol is None else chord_tol,
+                                             max_sides=tol.max_prism_sides)
         else:
             raise ClipError(
-                f"Obstacle.from_shape: clipping tests segments and polygons; a {type(shape).__name__} is curved "
-                "(give a Box, Prism, ConvexPolyhedron or Polygon)"
+                f"Obstacle.from_shape: clipping tests segments and polygons; a {type(shape).__name__} is not one "
+                "(give a Box, Prism, ConvexPolyhedron, Polygon, Cylinder, Sphere or Capsule)"
             )
         cs, ro, ri = cls._spheres(poly.vertices, poly.planes)
         po = pi = _EMPTY_GEOM
         if len(poly.vertices) > bounds_min_vertices:
             po, pi = _bounds(poly)
-        return cls(_solid_geom(poly), po, pi, cs, ro, ri, shape, name)
+        return cls(_solid_geom(poly), po, pi, cs, ro, ri, shape, name, float(band))
 
     @classmethod
     def polyhedron(cls, vertices, *, name: str = "", bounds_min_vertices: int = DEFAULT_BOUNDS_MIN_VERTICES) -> "Obstacle":

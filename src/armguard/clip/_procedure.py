@@ -19,7 +19,9 @@ against the labelled convex cells of the shell between ``PO(VOL)`` and ``PI(VOL)
 
 Every definite answer is a proof about the test object (the guard's shape) given its bounding
 volumes' guarantees (``PI ⊂ shape ⊂ PO``, ``RI`` ball ⊂ shape ⊂ ``RO`` ball, the same for the
-obstacle), up to ``Tolerances.clip_plane``: touching counts as intersecting.
+obstacle), up to ``Tolerances.clip_plane``: touching counts as intersecting.  A curved obstacle
+is clipped as its circumscribed polytope (:mod:`._curved`): CLEAR stays a proof about the curved
+shape, INTERSECTED proves only that it comes within ``Obstacle.band`` of the test object.
 """
 
 from __future__ import annotations

@@ -225,6 +225,11 @@ class Scene:
             raise SceneError(f"unknown robot {robot!r}; robots are {list(self._robots)}")
         self._robots[robot] = self._robots[robot].with_ik(routine)
 
+    def set_robot_base(self, robot: str, X_WB) -> None:
+        """Mount robot ``robot`` at ``X_WB`` (4, 4; its links and payloads move with it)."""
+        self._robots[robot] = self._robot(robot).with_base(X_WB)
+        self._revision += 1
+
     def home(self, robot: str) -> np.ndarray:
         """``(n_joints,) float64``: the home configuration of ``robot``."""
         self._robot(robot)

@@ -8,7 +8,10 @@ emulated, and the program exported as Python that reproduces the same motions.
 * :class:`Cell` / :func:`load_cell` — the emulated cell: nominal model, real object poses, camera;
 * :class:`Workcell` — the runtime primitives a program expands into;
 * :func:`fit_rigid_transform` — robot–camera calibration's closed-form estimator (Horn / Umeyama)
-  with its covariance;
+  with its covariance; :func:`calibrate_camera` — the calibration program (a trained trajectory,
+  FIND of the calibration object in the hand at each stop, the fit);
+* :class:`Calibration` / :func:`read_calibration` / :func:`write_calibration` — calibration files
+  (``armguard_calibration: 1``): the cell's relationships, nominal until a calibration updates them;
 * :func:`weigh` / :func:`grasp_orientation` — the grasp error from a wrist force/torque sensor
   (§III.C): where the held object sits and how it is turned.
 
@@ -16,6 +19,8 @@ Guide: ``docs/program.md``.
 """
 
 from ._calibrate import RigidFit, fit_rigid_transform
+from ._calibfile import Calibration, calibration_text, read_calibration, write_calibration
+from ._calibration import CalibrationStatus, CameraCalibration, calibrate_camera, calibration_poses, fit_camera
 from ._grasp import GraspOrientation, Weighing, grasp_orientation, object_wrench, weigh
 from ._cell import Camera, Cell, load_cell, object_frame
 from ._program import Program, Step, export_program, load_program, program_text, run_program, workcell_main
@@ -47,4 +52,13 @@ __all__ = [
     "GraspOrientation",
     "object_wrench",
     "RigidFit",
+    "Calibration",
+    "read_calibration",
+    "write_calibration",
+    "calibration_text",
+    "calibrate_camera",
+    "calibration_poses",
+    "fit_camera",
+    "CameraCalibration",
+    "CalibrationStatus",
 ]

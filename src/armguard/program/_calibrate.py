@@ -8,7 +8,10 @@ and Umeyama, "Least-squares estimation of transformation parameters between two 
 translation from the centroids.  The covariance is Smith & Cheeseman's first-order one: with the
 pose's left perturbation ``ξ = (ρ, φ)`` in A's axes (:class:`~armguard.uncertainty.UncertainPose3`),
 each point's prediction moves by ``J_i ξ``, ``J_i = [I | −[p_i]×]``, and ``Σ = σ² (Σ J_iᵀ J_i)⁻¹``
-for isotropic point noise of variance σ² per axis.
+for isotropic point noise of variance σ² per axis.  For anisotropic noise of covariance ``C`` (3, 3)
+per point (a camera measures depth better or worse than across the image) the estimator is the
+same (Horn's closed form weighs every axis alike) and its covariance the sandwich
+``H⁻¹ (Σ J_iᵀ C J_i) H⁻¹``, ``H = Σ J_iᵀ J_i``.
 """
 
 from __future__ import annotations
@@ -25,7 +28,8 @@ __all__ = ["RigidFit", "fit_rigid_transform"]
 @dataclass(frozen=True)
 class RigidFit:
     """``pose`` (UncertainPose3: X_AB with its covariance), ``rms`` (m, the residuals' root mean
-    square), ``sigma`` (m, the per-axis noise used for the covariance), ``n`` (points)."""
+    square), ``sigma`` (m, the per-axis noise used for the covariance: with ``cov`` given, the root
+    of its largest eigenvalue), ``n`` (points)."""
 
     pose: object
     rms: float
@@ -41,10 +45,11 @@ def _skew(v) -> np.ndarray:
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
-def fit_rigid_transform(p_A, p_B, sigma: float | None = None) -> RigidFit:
+def fit_rigid_transform(p_A, p_B, sigma: float | None = None, *, cov=None) -> RigidFit:
     """``X_AB`` minimising ``Σ |p_A[i] − X_AB p_B[i]|²`` for ``p_A``, ``p_B`` (N, 3) the same points in
     frames A and B (N >= 3, not collinear).  ``sigma`` (m): the per-axis noise of the point
-    differences (default: estimated from the residuals, ``rms² · 3N / (3N − 6)``, which needs N >= 3)."""
+    differences (default: estimated from the residuals, ``rms² · 3N / (3N − 6)``, which needs N >= 3);
+    or ``cov`` (3, 3, m²): their covariance in A's axes, the same for every point (not with ``sigma``)."""
     from scipy.spatial.transform import Rotation
 
     from ..uncertainty import UncertainPose3
@@ -68,13 +73,27 @@ def fit_rigid_transform(p_A, p_B, sigma: float | None = None) -> RigidFit:
     res = A - pred
     n = A.shape[0]
     rms = float(np.sqrt(np.mean(np.sum(res ** 2, axis=1))))
-    if sigma is None:
+    if cov is not None:
+        if sigma is not None:
+            raise UncertaintyError("fit_rigid_transform: give sigma or cov, not both")
+        C = np.asarray(cov, dtype=np.float64)
+        if C.shape != (3, 3) or not np.all(np.isfinite(C)) or not np.allclose(C, C.T, rtol=1e-9, atol=1e-300) \
+                or np.linalg.eigvalsh(0.5 * (C + C.T))[0] < -1e-12 * max(float(np.abs(C).max()), 1e-300):
+            raise UncertaintyError(f"fit_rigid_transform: cov must be a finite symmetric positive semi-definite (3, 3) "
+                                   f"matrix, got {np.array2string(C, precision=3)}")
+        C = 0.5 * (C + C.T)
+        sigma = float(np.sqrt(max(np.linalg.eigvalsh(C)[-1], 0.0)))
+    elif sigma is None:
         sigma = float(np.sqrt(np.sum(res ** 2) / (3 * n - 6))) if n > 2 else 0.0
     elif not (np.isfinite(sigma) and sigma >= 0.0):
         raise UncertaintyError(f"fit_rigid_transform: sigma must be a finite number >= 0, got {sigma!r}")
-    JtJ = np.zeros((6, 6))
+    if cov is None:
+        C = float(sigma) ** 2 * np.eye(3)
+    H, M = np.zeros((6, 6)), np.zeros((6, 6))
     for p in pred:
         J = np.hstack([np.eye(3), -_skew(p)])
-        JtJ += J.T @ J
-    cov = float(sigma) ** 2 * np.linalg.inv(JtJ)
-    return RigidFit(UncertainPose3(X, 0.5 * (cov + cov.T)), rms, float(sigma), n)
+        H += J.T @ J
+        M += J.T @ C @ J
+    Hi = np.linalg.inv(H)
+    out = Hi @ M @ Hi  # sigma² H⁻¹ for isotropic noise
+    return RigidFit(UncertainPose3(X, 0.5 * (out + out.T)), rms, float(sigma), n)

@@ -91,6 +91,7 @@ class _Posed(_Model):
 
 
 class _Camera(_Posed):
+    real: _Posed | None = None  # the real camera's offset from this (nominal) pose: the emulated truth
     fov: Annotated[Num, Field(gt=0.0, lt=180.0)] = 60.0  # full cone angle, always degrees
     sigma_xyz: Vec3 = [0.001, 0.001, 0.001]
     sigma_rpy: Vec3 = [0.0, 0.0, 0.0]
@@ -106,6 +107,7 @@ class CellFile(_Model):
     objects: dict[Name, _Posed] = {}
     real: dict[Name, _Posed] = {}
     camera: _Camera = _Camera(xyz=[0.0, 0.0, 2.0], rpy=[math.pi, 0.0, 0.0])
+    calibration: str | None = None
 
 
 # ------------------------------------------------------------------ parsed forms (SI units)
@@ -251,7 +253,9 @@ def read_program(path) -> ProgramFile:
 class CellSpec:
     """A parsed cell file in SI units: ``model`` (resolved path or built-in name), ``robot``,
     ``objects`` / ``real`` (name -> X, 4x4), ``X_WC`` the camera, ``fov`` (rad, full cone),
-    ``cov_origin`` (6, 6) FIND's noise covariance of (δp, δφ) about the object's origin in W axes."""
+    ``cov_origin`` (6, 6) FIND's noise covariance of (δp, δφ) about the object's origin in the
+    camera's axes, ``camera_real`` (4, 4) the real camera's offset from ``X_WC`` (None: none),
+    ``calibration`` (the calibration file's resolved path, or None)."""
 
     name: str
     model: str
@@ -262,6 +266,8 @@ class CellSpec:
     fov: float
     cov_origin: np.ndarray
     file: str
+    camera_real: np.ndarray | None = None
+    calibration: str | None = None
 
 
 def read_cell(path) -> CellSpec:
@@ -282,10 +288,19 @@ def read_cell(path) -> CellSpec:
         real = {k: _pose(v, L, A, file, f"real.{k}") for k, v in head.real.items()}
         cam = head.camera
         X_WC = _pose(cam, L, A, file, "camera")
+        cam_real = None if cam.real is None else _pose(cam.real, L, A, file, "camera.real")
         sig = np.concatenate([np.asarray(cam.sigma_xyz) * L, np.asarray(cam.sigma_rpy) * A])
         if np.any(sig < 0.0):
             raise SceneFileError(file, "camera", "sigma_xyz and sigma_rpy must be >= 0")
-    return CellSpec(head.name, model, head.robot, objects, real, X_WC, math.radians(cam.fov), np.diag(sig ** 2), file)
+        calibration = head.calibration
+        if calibration is not None:
+            c = Path(calibration)
+            c = c if c.is_absolute() else path.parent / c
+            if not c.is_file():
+                raise SceneFileError(file, "calibration", f"expected a calibration file (armguard_calibration: 1); no such file: {c}")
+            calibration = str(c)
+    return CellSpec(head.name, model, head.robot, objects, real, X_WC, math.radians(cam.fov), np.diag(sig ** 2), file,
+                    cam_real, calibration)
 
 
 def _is_builtin(name: str) -> bool:

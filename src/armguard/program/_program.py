@@ -9,6 +9,7 @@ interprets it; :func:`export_program` writes it as Python — so both run the sa
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -150,13 +151,14 @@ def execute(wc: Workcell, steps) -> None:
 
 
 def run_program(program: Program | str | Path, cell: Cell | str | None = None, *, seed: int = 0,
-                method: str = "certified") -> ProgramRun:
+                method: str = "certified", calibration=None) -> ProgramRun:
     """Run ``program`` on the emulated ``cell`` (a Cell, a cell file, a model name; default the one
-    the program names): every motion verified, then emulated.  Returns the :class:`ProgramRun`;
+    the program names): every motion verified, then emulated.  ``calibration`` (a calibration file
+    or Calibration) regenerates the cell from it first.  Returns the :class:`ProgramRun`;
     ``run.ok`` is False when a motion was refused (the run stops there)."""
     if not isinstance(program, Program):
         program = load_program(program)
-    cell = _cell_of(program, cell)
+    cell = _cell_of(program, cell, calibration)
     program.check(cell)
     wc = Workcell(cell, seed=seed, speed=program.speed, confidence=program.confidence, method=method, name=program.name)
     try:
@@ -171,13 +173,16 @@ def run_program(program: Program | str | Path, cell: Cell | str | None = None, *
     return wc.finish()
 
 
-def _cell_of(program: Program, cell) -> Cell:
+def _cell_of(program: Program, cell, calibration=None) -> Cell:
     if isinstance(cell, Cell):
+        if calibration is not None:
+            cell = copy.copy(cell)
+            cell.calibrate(calibration)
         return cell
     name = cell if cell is not None else program.cell
     if name is None:
         raise SceneFileError(program.file, "cell", "the program names no cell: give 'cell:' in the file or --cell")
-    return load_cell(name)
+    return load_cell(name, calibration)
 
 
 def _py(v) -> str:
@@ -189,7 +194,7 @@ def _py(v) -> str:
     return repr(v)
 
 
-def program_text(program: Program, *, cell: str | None = None) -> str:
+def program_text(program: Program, *, cell: str | None = None, calibration: str | None = None) -> str:
     """The program as Python that calls armguard's workcell primitives (docs/program.md, "Exported programs")."""
     cell = cell if cell is not None else program.cell
     lines = [
@@ -201,7 +206,7 @@ def program_text(program: Program, *, cell: str | None = None) -> str:
         "pose(xyz, rpy) a relation in m and rad (rot(z, yaw) rot(y, pitch) rot(x, roll)).  Each motion",
         "is verified before it runs; a refused one stops the program (exit status 1).",
         "",
-        "Run: python THIS.py [--cell CELL] [--seed N] [--save RUN.json]",
+        "Run: python THIS.py [--cell CELL] [--calibration FILE] [--seed N] [--save RUN.json]",
         '"""',
         "from armguard.program import pose, workcell_main",
         "",
@@ -231,28 +236,35 @@ def program_text(program: Program, *, cell: str | None = None) -> str:
         "",
         'if __name__ == "__main__":',
         f"    raise SystemExit(workcell_main(program, cell={cell!r}, name={program.name!r}, "
-        f"speed={program.speed!r}, confidence={program.confidence!r}))",
+        f"speed={program.speed!r}, confidence={program.confidence!r}"
+        + (f", calibration={calibration!r}" if calibration is not None else "") + "))",
         "",
     ]
     return "\n".join(lines)
 
 
-def export_program(program: Program | str | Path, out, *, cell: str | None = None) -> Path:
-    """Write ``program`` as a Python program to ``out`` (see :func:`program_text`); returns the path."""
+def export_program(program: Program | str | Path, out, *, cell: str | None = None, calibration=None) -> Path:
+    """Write ``program`` as a Python program to ``out`` (see :func:`program_text`); returns the path.
+    ``calibration``: the calibration file the exported program regenerates its cell from by default."""
     if not isinstance(program, Program):
         program = load_program(program)
     if cell is not None:
-        cell = str(Path(cell).resolve()) if Path(cell).exists() else cell
+        cell = str(Path(cell).resolve()) if Path(cell).exists() else str(cell)
     elif program.cell is not None and Path(program.cell).exists():
         cell = str(Path(program.cell).resolve())
-    text = program_text(program, cell=cell)
+    if calibration is not None:
+        from ._calibfile import read_calibration
+
+        read_calibration(calibration)  # a bad file is refused now, not when the exported program runs
+        calibration = str(Path(calibration).resolve())
+    text = program_text(program, cell=cell, calibration=calibration)
     from .._io import atomic_write
 
     return atomic_write(Path(out), text)  # whole or not at all; a FIFO or a full disk is an OutputError
 
 
 def workcell_main(program, *, cell: str | None, name: str = "program", speed: float = 0.1,
-                  confidence: float = 0.999, argv=None) -> int:
+                  confidence: float = 0.999, calibration: str | None = None, argv=None) -> int:
     """Entry point of an exported program: ``program(wc)`` on the emulated cell; prints the run's
     summary, writes ``--save`` (JSON), returns 0 when every motion verified and ran, 1 otherwise."""
     import argparse
@@ -260,12 +272,13 @@ def workcell_main(program, *, cell: str | None, name: str = "program", speed: fl
 
     ap = argparse.ArgumentParser(description=f"workcell program {name} (exported by armguard)")
     ap.add_argument("--cell", default=cell)
+    ap.add_argument("--calibration", default=calibration)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--save", default=None)
     a = ap.parse_args(argv)
     if a.cell is None:
         ap.error("no cell: give --cell")
-    wc = Workcell(load_cell(a.cell), seed=a.seed, speed=speed, confidence=confidence, name=name)
+    wc = Workcell(load_cell(a.cell, a.calibration), seed=a.seed, speed=speed, confidence=confidence, name=name)
     try:
         program(wc)
     except ProgramStopped:

@@ -1,6 +1,8 @@
 """Uncertain spatial relations after Smith & Cheeseman, *On the Representation and Estimation
 of Spatial Uncertainty* (SRI 1985; IJRR 5(4), 1986): compounding ⊕, reversal ⊖, merging,
-network reduction, confidence ellipses, polar sensors, Monte Carlo validation — in the plane
+network reduction (a Wheatstone bridge by the paper's link deletion, or the joint
+least-squares estimate), the sensing procedure's glitch test, confidence ellipses, polar
+sensors, Monte Carlo validation — in the plane
 (:class:`UncertainPose2`, (x, y, θ)) and on SE(3) (:class:`UncertainPose3`, exponential
 coordinates, no Euler-angle poles) — and uncertain placements of obstacles and robot bases in
 the checks (:func:`clearance_sigmas`, :func:`verify_with_confidence`).  Guide: ``docs/uncertainty.md``.
@@ -31,14 +33,25 @@ from .montecarlo import (
     path_length,
 )
 from .plot import plot_monte_carlo
-from .pose2 import UncertainPose2, reduce_network
+from .network import NetworkReduction, ReductionStatus, joint_estimate, reduce_network, reduce_network_report
+from .pose2 import UncertainPose2
 from .pose3 import UncertainPose3
 from .se2 import polar_to_cartesian
+from .sensing import GlitchStatus, GlitchTest, Sensing, glitch_test, sense
 
 __all__ = [
     "UncertainPose2",
     "UncertainPose3",
     "reduce_network",
+    "reduce_network_report",
+    "joint_estimate",
+    "NetworkReduction",
+    "ReductionStatus",
+    "glitch_test",
+    "sense",
+    "GlitchStatus",
+    "GlitchTest",
+    "Sensing",
     "polar_to_cartesian",
     "k2_for_confidence",
     "confidence_for_k2",

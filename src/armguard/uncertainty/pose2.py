@@ -1,21 +1,20 @@
 """``UncertainPose2``: a planar uncertain relation (Smith & Cheeseman's "uncertain
 transformation"), a frozen value delegating to the array functions of :mod:`.se2` and
-:mod:`.confidence`; and ``reduce_network``, the paper's serial/parallel reduction (Section 4.1)."""
+:mod:`.confidence`.  Networks of them are reduced in :mod:`.network`."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Hashable, Iterable
+from typing import Hashable
 
 import numpy as np
 
-from .._errors import UncertaintyError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from . import confidence as _conf
 from . import se2 as _se2
 from ._validate import as_covariance, freeze_relation, as_vector
 
-__all__ = ["UncertainPose2", "reduce_network"]
+__all__ = ["UncertainPose2"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -97,7 +96,10 @@ class UncertainPose2:
 
     @staticmethod
     def reduce(network, source: Hashable, target: Hashable, *, tol: Tolerances = DEFAULT_TOLERANCES):
-        """Reduce a network of relations to one, source→target; see :func:`reduce_network`."""
+        """Reduce a network of relations to one, source→target; see
+        :func:`~armguard.uncertainty.network.reduce_network`."""
+        from .network import reduce_network  # network builds on this module
+
         return reduce_network(network, source, target, tol=tol)
 
     @staticmethod
@@ -138,109 +140,3 @@ class UncertainPose2:
         sd = np.sqrt(np.diag(self.cov))
         return (f"UncertainPose2(mean=({self.mean[0]:.6g} m, {self.mean[1]:.6g} m, {self.mean[2]:.6g} rad), "
                 f"sd=({sd[0]:.3g} m, {sd[1]:.3g} m, {sd[2]:.3g} rad))")
-
-
-def reduce_network(network: Iterable, source: Hashable, target: Hashable, *,
-                   tol: Tolerances = DEFAULT_TOLERANCES) -> UncertainPose2:
-    """Reduce a network of uncertain relations to the one relation source→target (Section 4.1).
-
-    ``network`` is an iterable of ``(a, b, pose)``: ``pose`` (:class:`UncertainPose2`) is
-    frame ``b``'s relation to frame ``a``; frames are any hashable names.  Relations are
-    assumed independent (Sections 3.2 and 4.2).  Repeatedly, until one relation joins source
-    and target:
-
-    * parallel relations between the same two frames are merged (Eqns. 5–7), reversing
-      (Eqn. 4) those that point the other way (towards source→target when the pair is
-      source and target, else the first-listed relation's direction; reversal is
-      nonlinear, so the direction matters beyond first order);
-    * a frame other than source/target joined by exactly two relations is eliminated by
-      compounding them (Eqns. 1–3), reversing as needed;
-    * a frame other than source/target joined by one relation only is dropped with it (it
-      carries no information about source→target).
-
-    Networks that series/parallel steps cannot reduce (the paper's Wheatstone-bridge remark)
-    raise :class:`~armguard.UncertaintyError`, as do disconnected ones; the paper's remedy —
-    delete relations until the network reduces — is left to the caller.
-
-    Returns
-    -------
-    :class:`UncertainPose2` — target's relation to source.
-    """
-    edges: list[tuple] = []
-    for i, item in enumerate(network):
-        try:
-            a, b, pose = item
-        except (TypeError, ValueError):
-            raise UncertaintyError(f"network[{i}]: expected (a, b, UncertainPose2), got {item!r}") from None
-        if not isinstance(pose, UncertainPose2):
-            raise UncertaintyError(f"network[{i}]: relation must be an UncertainPose2, got {type(pose).__name__}")
-        if a != b:
-            edges.append((a, b, pose))
-    if source == target:
-        raise UncertaintyError("reduce_network: source and target are the same frame")
-    frames = {f for a, b, _ in edges for f in (a, b)}
-    for name, f in (("source", source), ("target", target)):
-        if f not in frames:
-            raise UncertaintyError(f"reduce_network: {name} frame {f!r} is not in the network")
-
-    def oriented(edge, a):  # the edge's relation as seen from frame a
-        ea, eb, p = edge
-        return p if ea == a else p.reverse()
-
-    while True:
-        # parallel: two relations between the same pair of frames
-        seen: dict[frozenset, int] = {}
-        hit = None
-        for i, (a, b, _) in enumerate(edges):
-            key = frozenset((a, b))
-            if key in seen:
-                hit = (seen[key], i)
-                break
-            seen[key] = i
-        if hit is not None:
-            i, j = hit
-            a, b, _ = edges[i]
-            if {a, b} == {source, target}:
-                a, b = source, target  # the paper's "pointing in the desired direction"
-            merged = oriented(edges[i], a).merge(oriented(edges[j], a), tol=tol)
-            edges = [e for k, e in enumerate(edges) if k not in hit] + [(a, b, merged)]
-            continue
-        degree: dict = {}
-        for a, b, _ in edges:
-            degree.setdefault(a, []).append((a, b))
-            degree.setdefault(b, []).append((a, b))
-        reduced = False
-        for node, inc in degree.items():
-            if node in (source, target) or len(inc) > 2:
-                continue
-            idx = [k for k, (a, b, _) in enumerate(edges) if node in (a, b)]
-            if len(idx) == 1:
-                edges.pop(idx[0])
-            else:
-                e1, e2 = edges[idx[0]], edges[idx[1]]
-                u = e1[0] if e1[1] == node else e1[1]
-                w = e2[0] if e2[1] == node else e2[1]
-                # u -> node is e1 seen from u; node -> w is e2 seen from node
-                joined = oriented(e1, u).compound(oriented(e2, node))
-                edges = [e for k, e in enumerate(edges) if k not in idx] + [(u, w, joined)]
-            reduced = True
-            break
-        if reduced:
-            continue
-        break
-    if len(edges) == 1 and {edges[0][0], edges[0][1]} == {source, target}:
-        return oriented(edges[0], source)
-    connected = {source}
-    grew = True
-    while grew:
-        grew = False
-        for a, b, _ in edges:
-            if (a in connected) != (b in connected):
-                connected |= {a, b}
-                grew = True
-    if target not in connected:
-        raise UncertaintyError(f"reduce_network: no chain of relations joins {source!r} to {target!r}")
-    raise UncertaintyError(
-        f"reduce_network: the network is not series-parallel reducible between {source!r} and {target!r} "
-        f"({len(edges)} relations remain, e.g. a Wheatstone bridge); delete relations until it is (Section 4.1)"
-    )
