@@ -72,7 +72,7 @@ class CategoryJacobians:
         m = self._model
         q = m.pin_q(np.asarray(q_scene, dtype=np.float64))
         tie = m.tol.length
-        out = {}
+        cats, cands = [], []
         for cat, res in nearest.items():
             if cat not in ("arm", "environment", "workspace", "payload"):  # an attached extra (terrain)
                 continue
@@ -81,14 +81,27 @@ class CategoryJacobians:
                     else by_owners.get(frozenset((res.a, res.b))))
             if cand is None or not len(cand):
                 raise DetectionError(f"jacobian: no Model pair between {res.a!r} and {res.b!r} (category {cat})")
-            r = checker.pair_distances(q, pairs=cand)
-            d = np.asarray(r.distance, dtype=np.float64)
-            k = int(np.argmin(d))
-            if not np.isfinite(d[k]):
+            cats.append(cat)
+            cands.append(cand)
+        if not cats:
+            return {}
+        # one distance call for every Model row (a fixed query the Checker plans once; a subset that
+        # changes from call to call would be planned anew each time), one Jacobian call for the chosen rows
+        r = checker.pair_distances(q)
+        d_all = np.asarray(r.distance, dtype=np.float64)
+        picks, tied = [], []
+        for cand in cands:
+            d = d_all[cand]
+            if not np.all(np.isfinite(d)):
                 raise DetectionError(f"jacobian: backend {checker.name!r} answered a non-finite distance; no Jacobian")
-            J, smooth = checker.distance_jacobian(q, r.take(np.array([k])), cand[[k]])
-            row = np.array(J[0], dtype=np.float64)
+            k = int(np.argmin(d))
+            picks.append(int(cand[k]))
+            tied.append(int(np.sum(d <= d[k] + tie)) > 1)
+        chosen = np.array(picks, dtype=np.int64)
+        J, smooth = checker.distance_jacobian(q, r.take(chosen), chosen)
+        out = {}
+        for i, cat in enumerate(cats):
+            row = np.array(J[i], dtype=np.float64)
             row.flags.writeable = False
-            tied = int(np.sum(d <= d[k] + tie)) > 1
-            out[cat] = CategoryJacobian(row, bool(smooth[0]) and not tied, int(cand[k]), float(d[k]))
+            out[cat] = CategoryJacobian(row, bool(smooth[i]) and not tied[i], int(chosen[i]), float(d_all[chosen[i]]))
         return out
