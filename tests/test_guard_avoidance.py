@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import armguard
 from armguard import VerificationError
@@ -105,3 +107,28 @@ def test_avoidance_needs_a_velocity_and_a_damper(ranger):
     with pytest.raises(VerificationError, match="velocity_limit"):
         Guard(s, robot=ROBOT, avoidance=Damper(stand_off=0.03, influence=0.15, approach_speed=0.3, period=0.01,
                                                 velocity_limit=(1.0, 1.0)))
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(seed=st.integers(0, 2**31 - 1), speed=st.floats(0.05, 3.0))
+def test_filtered_velocity_keeps_every_damper_and_moves_only_the_robot(ranger, seed, speed):
+    """Any command at any in-limit configuration: the Guard's velocity is within the limits, leaves
+    the other robots' columns at zero and holds every constrained pair's damper (d' >= bound)."""
+    m, s, q_start, lo, hi, v, _ = ranger
+    rng = np.random.default_rng(seed)
+    q = lo + (hi - lo) * rng.random(len(lo))
+    cmd = speed * rng.normal(size=len(lo))
+    g = _GUARDS.setdefault("g", Guard(s, stopping_distance=0.0, period_s=PERIOD, robot=ROBOT, avoidance=DAMPER))
+    d = g.step(q, qdot=cmd)
+    av = d.avoidance
+    assert np.all(np.abs(av.velocity) <= 1.0 + 1e-9)
+    other = np.setdiff1d(np.arange(m.pin_model.nv), g._v_index)
+    assert not np.any(av.velocity[other])
+    assert np.all(av.closing >= av.rate - 1e-9)
+    if d.ok:
+        np.testing.assert_array_equal(d.velocity, av.velocity[g._v_index])
+    else:
+        assert not np.any(d.velocity)
+
+
+_GUARDS: dict = {}
