@@ -4,7 +4,9 @@
   (median µs per call over random in-limit configurations);
 * one avoidance step (``armguard.avoidance.avoid_step``: the arm's distances, the Jacobians of the
   pairs within the influence distance, the DAQP solve) for Ranger's left arm (74 pairs), and the
-  QP alone.
+  QP alone;
+* every Ranger canned test run with avoidance on (``armguard.avoidance.run_canned_all``), at a
+  5 cm and a 20 cm stand-off: contact, least distance, how far each got (``canned_table``).
 """
 
 from __future__ import annotations
@@ -96,4 +98,24 @@ def run(quick: bool = False) -> str:
         f"the QP), of which the QP (`avoid`) **{t_qp:.0f} µs**; the commands towards a pair alone: {t_bind:.0f} µs median; "
         f"statuses {status}.\n"
     )
-    return body
+    return body + "\n" + canned_table()
+
+
+def canned_table() -> str:
+    """Every Ranger canned test with avoidance on, at two stand-off distances (100 Hz, 1 rad/s)."""
+    import armguard
+    from armguard.avoidance import Damper, run_canned_all
+
+    m = armguard.load_model("ranger")
+    lines = ["| canned test | stand-off (m) | start d (m) | least d (m) | contact | holds | progress | free / slowed / stopped |",
+             "|---|---|---|---|---|---|---|---|"]
+    for so in (0.05, 0.2):
+        damper = Damper(stand_off=so, influence=so + 0.15, approach_speed=0.3, period=0.01, velocity_limit=1.0)
+        for r in run_canned_all(m, damper):
+            st = r.statuses
+            lines.append(f"| {r.name} | {so} | {r.start_distance:.3f} | {r.min_distance:.3f} | {'yes' if r.contact else 'no'} "
+                         f"| {'yes' if r.holds(so) else 'NO'} | {100 * r.progress:.1f} % "
+                         f"| {st['free']} / {st['slowed']} / {st['stopped']} |")
+    return ("Ranger's canned tests with avoidance on (influence = stand-off + 0.15 m, approach speed 0.3 m/s, "
+            "1 rad/s, 100 Hz; 'holds': no contact and least distance >= min(stand-off, start) - 1 mm; "
+            "progress: fraction of the joint-space way to the goal):\n\n" + "\n".join(lines) + "\n")

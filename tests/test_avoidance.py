@@ -140,3 +140,30 @@ def test_ranger_arm_driven_into_the_scene_keeps_stand_off():
         dmin = float(c.pair_distances(q).distance.min())
         assert dmin >= min(damper.stand_off, out.min_distance) - 1e-3
     assert AvoidanceStatus.FREE in seen or AvoidanceStatus.SLOWED in seen
+
+
+def test_canned_tests_with_avoidance_keep_stand_off_and_progress():
+    """Three of Ranger's canned tests with a 0.2 m stand-off (it binds on test 1 and test 4): no
+    contact, least distance >= stand-off - 1 mm, and the arm gets (nearly) to its goal.  The end
+    distance is recomputed with coal from the returned configuration (an independent backend)."""
+    from armguard.avoidance import run_canned
+
+    m = armguard.load_model("ranger")
+    damper = Damper(stand_off=0.2, influence=0.35, approach_speed=0.3, period=0.01, velocity_limit=1.0)
+    coal = armguard.checker(m, "coal")
+    s = m.scene
+    for name in ("test1_left_pitch_down", "test4_left_reach_around", "test3_left_elbow_fold"):
+        r = run_canned(m, name, damper)
+        t = s.canned_tests[name]
+        assert r.holds(damper.stand_off) and not r.contact, r
+        assert r.min_distance >= damper.stand_off - 1e-3
+        assert r.progress > 0.9, r
+        full = s.flat_q({k: np.asarray(v) for k, v in t.setup.items()})
+        full[[n.startswith(t.robot + "/") for n in s.joint_names]] = r.q_end
+        d = coal.pair_distances(m.pin_q(full)).distance
+        mine = np.array([a.startswith(t.robot + "/") or b.startswith(t.robot + "/")
+                         for a, b in zip(m.pairs.owner_a, m.pairs.owner_b)])
+        assert abs(float(d[mine].min()) - r.end_distance) < 1e-6
+        way = np.linalg.norm(t.goal - t.setup[t.robot])
+        assert r.progress == pytest.approx(1.0 - np.linalg.norm(t.goal - r.q_end) / way)
+    assert r.statuses["free"] == r.steps  # test 3 never comes near: the command passes unchanged

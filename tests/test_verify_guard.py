@@ -111,3 +111,6 @@ def test_example_control_loop_runs():
     log = mod.main()
     assert log["stopped_at"] is not None and log["clearance_at_stop"] > mod.STOPPING_DISTANCE
     assert log["retract"] == "ok" and log["two_joints"] == "stop"
+    # with avoidance the same sweep is slowed short of the rod, never below the 80 mm stand-off less 1 mm
+    assert log["avoidance"]["slowed"] > 0 and log["avoidance"]["free"] > 0
+    assert log["avoidance_min_clearance"] >= 0.08 - 1e-3

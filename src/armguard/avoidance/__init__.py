@@ -233,3 +233,8 @@ def avoid_step(checker, q, v_cmd, damper: Damper, *, pairs=None, tol: Tolerances
     out = avoid(v_cmd, sub, damper, tol=tol)
     return Avoidance(out.velocity, out.commanded, out.status, near[out.rows], out.rate, out.closing,
                      float(r.distance.min(initial=np.inf)), out.solver)
+
+
+from ._canned import CannedRun, run_canned, run_canned_all  # noqa: E402 - uses avoid_step above
+
+__all__ += ["CannedRun", "run_canned", "run_canned_all"]

@@ -382,7 +382,8 @@ class Detector:
                 raise exc
         raise DetectionError("a convex distance kernel did not converge (GJK iteration limit); no verdict")
 
-    def check(self, q, *, budget_us: float | None = None, lazy: bool = False) -> DetectionReport:
+    def check(self, q, *, budget_us: float | None = None, lazy: bool = False,
+              jacobian: bool = False) -> DetectionReport:
         """Check configuration ``q`` (mapping robot -> joints, or flat over ``scene.joint_names``).
 
         ``budget_us``: time budget (µs) for the anytime mode; the budget is turned into a
@@ -392,8 +393,13 @@ class Detector:
         already exceeds the threshold (exact status; nearest per category exact within it).
 
         Cost: one numba call and two small copies (the evaluated pairs' rows); the report's
-        ``PairResult`` objects are built on first access.
+        ``PairResult`` objects are built on first access.  ``jacobian=True``: the report's
+        ``jacobian`` holds each category's nearest pair's ``d(distance)/dq`` ``(pin_model.nv,)``
+        and ``smooth`` flag (:mod:`._category_jacobian`; the Model's analytic Checker, one pair row
+        each); nothing of it is computed otherwise.
         """
+        if jacobian:
+            return self._check_with_jacobian(q, budget_us, lazy)
         t0 = _perf_counter()
         if getattr(self.scene, "revision", None) != self._revision:  # stale model: rebuild (see _fresh)
             self._fresh()
@@ -442,6 +448,18 @@ class Detector:
             self._ns_per_pair = 0.8 * self._ns_per_pair + 0.2 * max(elapsed * 1e3 / n_eval, 1.0)
         raw = s.last_raw = _Raw(self, *raw_buffers, n_eval, flags, bounds, mode)
         return DetectionReport._from_check(STATUS_CODES[status], self._threshold, self._stopping, elapsed, raw)
+
+    def _check_with_jacobian(self, q, budget_us, lazy) -> DetectionReport:
+        report = self.check(q, budget_us=budget_us, lazy=lazy)
+        q_flat = self._tls.s.q1[0].copy()  # what check() read, in scene order
+        with self._prepare_lock:
+            hit = getattr(self, "_category_jac", None)
+            if hit is None or hit[0] != self._revision:
+                from ..model import model_of
+                from ._category_jacobian import CategoryJacobians
+
+                hit = self._category_jac = (self._revision, CategoryJacobians(model_of(self.scene), "analytic"))
+        return report._with_jacobian(hit[1].of(q_flat, report.by_category))
 
     def _selection(self, robot: str | None):
         """Pair numbers checked by ``pair_distances(q, robot=robot)`` and their static columns (cached)."""

@@ -273,9 +273,19 @@ class RangerDetector:
         moved = np.where(dq > 0.0, dq * self._lever, 0.0).sum(axis=1)  # 0 * inf lever: no motion
         return np.where(s.has_last, s.last_d - moved, -math.inf)
 
-    def check(self, q, *, budget_us: float | None = None, lazy: bool = False) -> DetectionReport:
+    def check(self, q, *, budget_us: float | None = None, lazy: bool = False,
+              jacobian: bool = False) -> DetectionReport:
         """Check ``q`` (mapping robot -> joints, or flat over ``scene.joint_names``): see the module
-        docstring for ``budget_us`` (µs) and ``lazy``."""
+        docstring for ``budget_us`` (µs) and ``lazy``; ``jacobian=True`` as the analytic Detector's
+        (:mod:`._category_jacobian`, this detector's Checker, the nearest pair's Model row)."""
+        if jacobian:
+            report = self.check(q, budget_us=budget_us, lazy=lazy)
+            rows = {c: int(self._sel[r.pair_index]) for c, r in report.by_category.items() if r.pair_index >= 0}
+            if getattr(self, "_category_jac", None) is None:
+                from ._category_jacobian import CategoryJacobians
+
+                self._category_jac = CategoryJacobians(self.model, checker=self.checker)
+            return report._with_jacobian(self._category_jac.of(self._flat(q), report.by_category, rows))
         t0 = time.perf_counter()
         if budget_us is not None:
             b = float(budget_us)

@@ -134,7 +134,10 @@ class DetectionReport:
     ``"arm", "environment", "workspace", "payload"``);
     ``within_threshold``: every evaluated pair with distance <= threshold, nearest first;
     ``not_evaluated``: pairs skipped by the budget or by the lazy mode, with lower bounds;
-    ``elapsed_us``: wall time of the check (µs); ``threshold``, ``stopping_distance`` (m).
+    ``elapsed_us``: wall time of the check (µs); ``threshold``, ``stopping_distance`` (m);
+    ``jacobian``: None unless ``check(q, jacobian=True)`` asked for it, then ``{category:
+    CategoryJacobian}`` (:mod:`._category_jacobian`): the nearest pair's ``d(distance)/dq`` ``(nv,)``
+    per category (Pinocchio's velocity order) and its ``smooth`` flag.
     """
 
     status: Status
@@ -142,6 +145,7 @@ class DetectionReport:
     stopping_distance: float
     elapsed_us: float
     _raw: Any = field(repr=False, compare=False)
+    jacobian: Any = field(default=None, repr=False, compare=False)
 
     @cached_property
     def by_category(self) -> dict[str, PairResult]:
@@ -182,8 +186,20 @@ class DetectionReport:
         """How many narrow-phase pair distances this check computed."""
         return self._raw.n_evaluated
 
+    def _with_jacobian(self, jacobian: dict) -> "DetectionReport":
+        """This report with ``jacobian`` set (set once, before the report is handed out)."""
+        self.__dict__["jacobian"] = jacobian
+        return self
+
     def to_dict(self) -> dict:
-        """JSON-ready dictionary of the whole report."""
+        """JSON-ready dictionary of the whole report (``jacobian`` only when it was asked for)."""
+        out = self._to_dict()
+        if self.jacobian is not None:
+            out["jacobian"] = {k: {"jacobian": [float(x) for x in v.jacobian], "smooth": v.smooth, "row": v.row}
+                               for k, v in self.jacobian.items()}
+        return out
+
+    def _to_dict(self) -> dict:
         return {
             "status": self.status.value,
             "threshold": self.threshold,

@@ -21,6 +21,15 @@ setpoint ``q_cmd_next`` or a ``target`` outside ``[lower, upper]`` (beyond
 detector entry point (:mod:`armguard.kinematics._limits`).  A velocity extrapolated over the horizon
 may run past a limit; the arm stops there, so the predicted path saturates at the limits
 (``clip(q + s dq)``: each joint still moves at most ``|dq_i| ds``, so the same certificate holds).
+
+Avoidance instead of stopping: ``Guard(..., avoidance=Damper(...))`` filters every commanded
+joint velocity through :func:`armguard.avoidance.avoid_step` (the velocity damper of Faverjon &
+Tournassoud on the Model's analytic distance Jacobians; only the guarded robot's joints may move)
+before predicting.  The decision then carries the filtered velocity to send (``velocity``) and what
+the filter did (``motion``: free / slowed / stopped; ``avoidance``).  Since the filter runs again
+next cycle, the motion certified is the filtered velocity over one control period, not extrapolated
+over the horizon; the certificate against the stopping distance still decides STOP.  The verdict
+is STOP where the filter stopped the arm.  Avoidance needs a velocity: ``q_cmd_next`` or ``qdot``.
 """
 
 from __future__ import annotations
@@ -28,7 +37,7 @@ from __future__ import annotations
 import enum
 import math
 import time as _time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -69,6 +78,9 @@ class GuardDecision:
     horizon; ``0`` when the command gives no speed — a ``target`` alone — since the arm may get
     there at once); ``pair`` the owners ``(a, b)`` that decide; ``stopping_distance`` (m) used;
     ``evaluations`` clearance evaluations spent; ``elapsed_us`` wall time of the step.
+    With ``Guard(avoidance=...)``: ``velocity`` ``(n_joints,)`` rad/s or m/s the filtered joint
+    velocity to command (zeros on STOP), ``avoidance`` the filter's
+    :class:`~armguard.avoidance.Avoidance` (pin velocity order); both None otherwise.
     """
 
     verdict: GuardVerdict
@@ -80,10 +92,20 @@ class GuardDecision:
     stopping_distance: float
     evaluations: int
     elapsed_us: float
+    velocity: np.ndarray | None = None
+    avoidance: object = None
 
     @property
     def ok(self) -> bool:
         return self.verdict is GuardVerdict.OK
+
+    @property
+    def motion(self) -> str | None:
+        """With avoidance: ``"free"`` (the command passes), ``"slowed"`` (changed, still moving) or
+        ``"stopped"`` (the filter or the certificate stopped the arm); None without avoidance."""
+        if self.avoidance is None:
+            return None
+        return "stopped" if not self.ok else self.avoidance.status.value
 
 
 def _time_to(s: float, T: float) -> float:
@@ -108,12 +130,17 @@ class Guard:
     robot : str | None
         The guarded robot (default: the scene's only robot); the others stand at ``q_others``.
     mode : GuardMode
+    avoidance : armguard.avoidance.Damper | None
+        Filter the commanded velocity instead of only stopping (see the module docstring); its
+        ``velocity_limit`` is a number or one per joint of the guarded robot; its ``period`` is
+        the control period of the filter (``period_s`` is used for ``q_cmd_next``).
     """
 
     def __init__(self, scene, *, stopping_distance=0.0, horizon_s: float = 0.5, period_s: float = 0.01,
                  robot: str | None = None, mode: GuardMode = GuardMode.AUTOMATIC, payload_mass: float = 0.0,
-                 q_others=None, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES) -> None:
+                 q_others=None, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES, avoidance=None) -> None:
         self.scene = scene
+        self.avoidance = avoidance
         self.tol = tol
         self.stopping_distance = check_stopping_distance(stopping_distance)
         for nm, v in (("horizon_s", horizon_s), ("period_s", period_s)):
@@ -156,6 +183,35 @@ class Guard:
         self._lower, self._upper = np.asarray(rob.lower, dtype=np.float64), np.asarray(rob.upper, dtype=np.float64)
         a = self.tol.joint_limit
         self._lo_ok, self._hi_ok = self._lower - a, self._upper + a
+        if self.avoidance is not None:
+            self._prepare_avoidance(self.avoidance)
+
+    def _prepare_avoidance(self, damper) -> None:
+        """The Model's analytic Checker, the guarded joints' velocity columns, and a damper whose
+        velocity limits are zero on every other column (only this robot moves)."""
+        from ..avoidance import Damper
+        from ..backends import checker
+        from ..model import model_of
+
+        if not isinstance(damper, Damper):
+            raise VerificationError(f"avoidance: expected an armguard.avoidance.Damper, got {type(damper).__name__}")
+        mdl = model_of(self.scene)
+        pm = mdl.pin_model
+        v_of_q = {int(pm.joints[j].idx_q): int(pm.joints[j].idx_v) for j in range(1, pm.njoints) if pm.joints[j].nq > 0}
+        self._v_index = np.array([v_of_q[int(i)] for i in mdl.q_index[self._k0 : self._k1]], dtype=np.int64)
+        n, nv = self._k1 - self._k0, int(pm.nv)
+        lim = np.asarray(damper.velocity_limit, dtype=np.float64)
+        if lim.ndim == 1 and lim.shape == (nv,) and n != nv:
+            lim = lim[self._v_index]
+        try:
+            lim = np.broadcast_to(lim, (n,))
+        except ValueError:
+            raise VerificationError(f"avoidance.velocity_limit: expected a number or {n} numbers (the joints of "
+                                    f"{self.robot!r}), got {damper.velocity_limit!r}") from None
+        full = np.zeros(nv)
+        full[self._v_index] = lim
+        self._damper = replace(damper, velocity_limit=tuple(float(x) for x in full))
+        self._pin_model, self._checker, self._nv = mdl, checker(mdl, "analytic"), nv
 
     def _in_limits(self, a: np.ndarray, name: str) -> np.ndarray:
         exc = limit_error(f"Guard.step: {name}", a, self._names, self._lower, self._upper, self.tol.joint_limit)
@@ -193,16 +249,46 @@ class Guard:
             segment ``q -> target``, cut at the horizon when ``qdot`` gives its speed.
 
         Exactly one of ``q_cmd_next`` / ``qdot`` / ``target`` (``target`` may come with ``qdot``).
+        With ``avoidance``: ``q_cmd_next`` or ``qdot`` only; the decision's ``velocity`` is the one to send.
         """
+        if self.avoidance is None:
+            return self._step(q, q_cmd_next, qdot, target, self.horizon_s)
         t_start = _time.perf_counter()
-        if self.model.is_stale():  # the scene changed since the model was built: never guard with the old one
+        if self.model.is_stale():
             self._prepare()
         q = self._in_limits(self._check(q, "q"), "q")
+        if target is not None or (q_cmd_next is None) == (qdot is None):
+            raise VerificationError("step with avoidance: give the commanded velocity, q_cmd_next or qdot (no target)")
+        if q_cmd_next is not None:
+            qd = (self._in_limits(self._check(q_cmd_next, "q_cmd_next"), "q_cmd_next") - q) / self.period_s
+        else:
+            qd = self._check(qdot, "qdot")
+        from ..avoidance import AvoidanceStatus, avoid_step
+
+        v_cmd = np.zeros(self._nv)
+        v_cmd[self._v_index] = qd
+        av = avoid_step(self._checker, self._pin_model.pin_q(self._full(q)), v_cmd, self._damper, tol=self.tol)
+        v = np.array(av.velocity[self._v_index])
+        dec = self._step(q, None, v, None, self._damper.period, checked=True)
+        if av.status is AvoidanceStatus.STOPPED and dec.ok:
+            dec = replace(dec, verdict=GuardVerdict.STOP, reason=f"avoidance stopped the arm ({av.solver})")
+        if not dec.ok:
+            v = np.zeros_like(v)
+        v.flags.writeable = False
+        return replace(dec, velocity=v, avoidance=av, elapsed_us=(_time.perf_counter() - t_start) * 1e6)
+
+    def _step(self, q, q_cmd_next, qdot, target, horizon_s: float, checked: bool = False) -> GuardDecision:
+        """The prediction and its certificate over ``horizon_s`` (``checked``: ``q`` is checked already)."""
+        t_start = _time.perf_counter()
+        if not checked:
+            if self.model.is_stale():  # the scene changed since the model was built: never guard with the old one
+                self._prepare()
+            q = self._in_limits(self._check(q, "q"), "q")
         if q_cmd_next is not None:
             if qdot is not None or target is not None:
                 raise VerificationError("give q_cmd_next, or qdot (optionally with target), or target")
             qd = (self._in_limits(self._check(q_cmd_next, "q_cmd_next"), "q_cmd_next") - q) / self.period_s
-            q_end = q + qd * self.horizon_s
+            q_end = q + qd * horizon_s
         elif target is not None:
             tgt = self._in_limits(self._check(target, "target"), "target")
             qd = None if qdot is None else self._check(qdot, "qdot")
@@ -212,11 +298,11 @@ class Guard:
                 with np.errstate(divide="ignore", invalid="ignore"):
                     ratios = np.where(np.abs(qd) > 0.0, np.abs(tgt - q) / np.abs(qd), np.where(tgt == q, 0.0, np.inf))
                 t_seg = float(np.max(ratios)) if len(ratios) else 0.0
-                if t_seg > self.horizon_s:
-                    q_end = q + (tgt - q) * (self.horizon_s / t_seg)
+                if t_seg > horizon_s:
+                    q_end = q + (tgt - q) * (horizon_s / t_seg)
         elif qdot is not None:
             qd = self._check(qdot, "qdot")
-            q_end = q + qd * self.horizon_s
+            q_end = q + qd * horizon_s
         else:
             raise VerificationError("step: give the commanded motion (q_cmd_next, qdot or target)")
         dq = q_end - q
