@@ -129,12 +129,23 @@ class PairEvaluator:
         res = self.checker.pair_distances_many(self.pin(Q), pairs=self.rows[k])
         return np.min(res.distance, axis=1)
 
-    def all(self, Q: np.ndarray, chunk: int = 2000) -> np.ndarray:
-        out = np.empty((len(Q), len(self.rows)))
+    def all(self, Q: np.ndarray, chunk: int = 2000, pairs=None) -> np.ndarray:
+        """``(M, n_pairs)``, or ``(M, len(pairs))`` for the link pairs ``pairs`` only (their geometry
+        alone is evaluated: an adjacent pair's overlapping meshes cost deep-penetration searches)."""
+        if pairs is None:
+            rows, owner, n = self._all, self._owner, len(self.rows)
+        else:
+            pairs = [int(k) for k in pairs]
+            rows = np.concatenate([self.rows[k] for k in pairs]) if pairs else np.zeros(0, np.int64)
+            owner = np.concatenate([np.full(len(self.rows[k]), i) for i, k in enumerate(pairs)]) if pairs else rows
+            n = len(pairs)
+        out = np.empty((len(Q), n))
+        if n == 0:
+            return out
         for s in range(0, len(Q), chunk):
-            d = self.checker.pair_distances_many(self.pin(Q[s:s + chunk]), pairs=self._all).distance
-            block = np.full((len(d), len(self.rows)), np.inf)
-            np.minimum.at(block.T, self._owner, d.T)
+            d = self.checker.pair_distances_many(self.pin(Q[s:s + chunk]), pairs=rows).distance
+            block = np.full((len(d), n), np.inf)
+            np.minimum.at(block.T, owner, d.T)
             out[s:s + chunk] = block
         return out
 
@@ -286,7 +297,7 @@ def _sampled(ev, setup, todo, entries, margin, samples, seed, home_pin, advance)
     """MoveIt's rules (module docstring) for the pairs ``todo``."""
     rng = np.random.default_rng(seed)
     cols = np.asarray(todo, dtype=np.int64)
-    D = ev.all(_random(setup, ALWAYS_SAMPLES, rng))[:, cols]
+    D = ev.all(_random(setup, ALWAYS_SAMPLES, rng), pairs=cols)
     frac = np.mean(D <= 0.0, axis=0)
     left = []
     for i, k in enumerate(todo):
@@ -305,7 +316,7 @@ def _sampled(ev, setup, todo, entries, margin, samples, seed, home_pin, advance)
     while done < samples and len(cols):
         n = min(2000, samples - done)
         Q = _random(setup, n, rng)
-        D = ev.all(Q)[:, cols]
+        D = ev.all(Q, pairs=cols)
         if not np.all(np.isfinite(D)):
             raise VerificationError("a sampled distance is not finite: no verdict")
         for i in np.flatnonzero(first < 0):
