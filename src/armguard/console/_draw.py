@@ -4,7 +4,8 @@
 recolours it.  The nearest-obstacle line is drawn in screen-space pixels (:data:`LINE_PX`), so it
 keeps its width at every zoom, also in software WebGL, with a marker sphere at each nearest point
 (sized to the line: :func:`~._view.marker_radius`) and the distance as a label at its middle; a compared backend's line is cyan, drawn beside the first (shifted
-sideways by :data:`COMPARE_OFFSET` scene radii, so two equal answers stay two visible lines).
+sideways by :data:`COMPARE_OFFSET` scene radii, so two equal answers stay two visible lines; its
+label below the line, the first one's above: :func:`label_place`).
 The nearest link is red within the threshold; the obstacle's nearest face or edge is outlined
 in magenta.  A shape the nearest line runs through (a link wrapped around it, say: no camera sees
 past it) is drawn translucent (:data:`SEE_THROUGH_OPACITY`), so the line stays in sight; viser
