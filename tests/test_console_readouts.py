@@ -427,3 +427,45 @@ def test_no_negative_zero_anywhere_in_the_panel():
     html = panel_html(r, compare=compare_readouts(r, replace(r, backend="coal", distance=-1e-6 + 1e-11)))
     assert "-0.0" not in html and "−0.0" not in html
     assert "0.0 mm" in html and "(+0.000, +0.100, -0.000)" not in html and "(+0.000, +0.100, +0.000) m" in html
+
+
+def _wait(cond, seconds: float = 20.0) -> bool:
+    import time
+
+    t_end = time.monotonic() + seconds
+    while time.monotonic() < t_end:
+        if cond():
+            return True
+        time.sleep(0.05)
+    return cond()
+
+
+def test_widgets_of_a_six_joint_scene_without_tests_and_a_seven_joint_arm(ranger):
+    """Puma (6 joints, no canned tests): no arm-angle slider, no Stop, compare never offers the
+    panel's backend.  Ranger's 7-joint left arm: the slider, its value in its label, following
+    the state."""
+    from armguard.console._app import ConsoleApp
+    from armguard.console._serve import make_state
+
+    app = ConsoleApp(make_state("puma560"), port=0).start()
+    try:
+        assert app._w_psi.visible is False and app._b_stop.visible is False
+        assert "analytic" not in app._w_compare.options and "coal" in app._w_compare.options
+        app.state.set_backend("coal")
+        assert _wait(lambda: "coal" not in app._w_compare.options and "analytic" in app._w_compare.options)
+    finally:
+        app.stop()
+    scene, model = ranger
+    st = ConsoleState(scene, model=model)
+    st.set_active("left_arm")
+    st.set_mode("cartesian")
+    app = ConsoleApp(st, port=0).start()
+    try:
+        assert _wait(lambda: app._w_psi.visible is True) and app._b_stop.visible is True
+        st.set_arm_angle(0.2)
+        assert _wait(lambda: app._w_psi.label == "arm angle +11.5 deg")
+        assert abs(app._w_psi.value - math.degrees(0.2)) < 1e-9
+        st.set_active("grapple_arm")  # 6 joints: no slider
+        assert _wait(lambda: app._w_psi.visible is False)
+    finally:
+        app.stop()
