@@ -364,3 +364,108 @@ def test_widgets_offer_only_what_the_scene_has():
         assert app._fields["ws_lo"].shown == "" and app._fields["ws_hi"].shown == ""
     finally:
         app.stop()
+
+
+def test_a_static_arm_body_is_the_obstacle_not_the_link():
+    """Puma's pedestal (its base link, moved by no joint) is a static body: at home its nearest pair
+    with link2 names link2 the link (the one coloured red) and the pedestal the obstacle, points
+    swapped with them, for every backend; a moving link's rows keep their sides."""
+    from armguard.console._serve import make_state
+
+    st = make_state("puma560")
+    assert st._is_static("puma560/base") and not st._is_static("puma560/link1") and not st._is_static("table")
+    for backend in ("analytic", "coal"):
+        st.set_backend(backend)
+        r = st.snapshot().readout
+        assert {r.link, r.obstacle} == {"puma560/base", "puma560/link2"}  # the pair this test is about
+        assert r.link == r.owner_a == "puma560/link2" and r.obstacle == "puma560/base"
+        arm = {c.category: c for c in r.rows}["arm"]
+        assert arm.link == "puma560/link2" and arm.obstacle == "puma560/base"
+        # the arm point lies on link2's side: farther from the pedestal's axis (x = y = 0) than the pedestal's
+        assert np.hypot(*r.p_WA[:2]) >= np.hypot(*r.p_WB[:2]) - 1e-9
+        assert abs(np.linalg.norm(r.p_WB - r.p_WA) - r.distance) < 1e-6
+
+
+def test_moving_link_first_swaps_only_a_static_arm_side():
+    from dataclasses import replace
+
+    from armguard.console._readout import CategoryRow, moving_link_first
+
+    static = {"r/base"}.__contains__
+    pa, pb = np.array([0.0, 0.0, 0.1]), np.array([0.2, 0.0, 0.1])
+    r = replace(readout_off(0.05), distance=0.2, link="r/base", obstacle="r/link2", owner_a="r/base",
+                owner_b="r/link2", p_WA=pa, p_WB=pb,
+                rows=(CategoryRow("arm", 0.2, "r/base", "r/link2"), CategoryRow("environment", 0.3, "r/link1", "table")))
+    s = moving_link_first(r, static)
+    assert (s.link, s.obstacle, s.owner_a, s.owner_b) == ("r/link2", "r/base", "r/link2", "r/base")
+    assert np.array_equal(s.p_WA, pb) and np.array_equal(s.p_WB, pa) and s.distance == r.distance
+    assert s.rows == (CategoryRow("arm", 0.2, "r/link2", "r/base"), r.rows[1])
+    t = replace(r, link="r/link1", owner_a="r/link1", owner_b="table", obstacle="table", rows=r.rows[1:])
+    u = moving_link_first(t, static)  # a moving link first already: unchanged
+    assert (u.link, u.obstacle, u.owner_a, u.owner_b, u.rows) == (t.link, t.obstacle, t.owner_a, t.owner_b, t.rows)
+    assert u.p_WA is t.p_WA and u.p_WB is t.p_WB
+
+
+def test_compare_labels_stand_on_opposite_sides_of_the_line():
+    from armguard.console._draw import label_place
+
+    pa, pb = np.array([0.0, 0.0, 0.0]), np.array([0.1, 0.0, 0.0])
+    (p1, a1), (p2, a2) = label_place("primary", pa, pb), label_place("compare", pa, pb)
+    assert a1 == "bottom-center" and a2 == "top-center"  # one rests above its point, the other hangs below
+    assert p1[2] > 0.0 > p2[2] and np.allclose(p1[:2], p2[:2])
+    (q1, _), (q2, _) = label_place("primary", pa, pa), label_place("compare", pa, pa)
+    assert q1 == q2  # a zero-length line: still apart, by the anchors
+
+
+def test_no_negative_zero_anywhere_in_the_panel():
+    from dataclasses import replace
+
+    from armguard.console import panel_html
+
+    r = replace(readout_off(0.05), backend="analytic", distance=-1e-6, p_WA=np.array([-1e-5, 0.1, -2e-4]),
+                p_WB=np.array([0.0, -1e-6, 0.2]))
+    html = panel_html(r, compare=compare_readouts(r, replace(r, backend="coal", distance=-1e-6 + 1e-11)))
+    assert "-0.0" not in html and "−0.0" not in html
+    assert "0.0 mm" in html and "(+0.000, +0.100, -0.000)" not in html and "(+0.000, +0.100, +0.000) m" in html
+
+
+def _wait(cond, seconds: float = 20.0) -> bool:
+    import time
+
+    t_end = time.monotonic() + seconds
+    while time.monotonic() < t_end:
+        if cond():
+            return True
+        time.sleep(0.05)
+    return cond()
+
+
+def test_widgets_of_a_six_joint_scene_without_tests_and_a_seven_joint_arm(ranger):
+    """Puma (6 joints, no canned tests): no arm-angle slider, no Stop, compare never offers the
+    panel's backend.  Ranger's 7-joint left arm: the slider, its value in its label, following
+    the state."""
+    from armguard.console._app import ConsoleApp
+    from armguard.console._serve import make_state
+
+    app = ConsoleApp(make_state("puma560"), port=0).start()
+    try:
+        assert app._w_psi.visible is False and app._b_stop.visible is False
+        assert "analytic" not in app._w_compare.options and "coal" in app._w_compare.options
+        app.state.set_backend("coal")
+        assert _wait(lambda: "coal" not in app._w_compare.options and "analytic" in app._w_compare.options)
+    finally:
+        app.stop()
+    scene, model = ranger
+    st = ConsoleState(scene, model=model)
+    st.set_active("left_arm")
+    st.set_mode("cartesian")
+    app = ConsoleApp(st, port=0).start()
+    try:
+        assert _wait(lambda: app._w_psi.visible is True) and app._b_stop.visible is True
+        st.set_arm_angle(0.2)
+        assert _wait(lambda: app._w_psi.label == "arm angle +11.5 deg")
+        assert abs(app._w_psi.value - math.degrees(0.2)) < 1e-9
+        st.set_active("grapple_arm")  # 6 joints: no slider
+        assert _wait(lambda: app._w_psi.visible is False)
+    finally:
+        app.stop()

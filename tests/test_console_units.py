@@ -315,3 +315,31 @@ def test_field_text_never_negative_zero():
 
     assert _fmt(-0.0) == "0" and _fmt(-47.03291234) == "-47.0329" and _fmt(1e-3) == "0.001"
     assert _vec((-0.0, -0.392, 2.5)) == "0, -0.392, 2.5" and _vec(None) == ""
+
+
+def test_joint_fields_and_pose_line_round_and_never_show_negative_zero():
+    from armguard.console._app import joint_text, pose_line
+
+    assert joint_text(-47.03291234, "deg") == "-47.03" and joint_text(45.0, "deg") == "45"
+    assert joint_text(-0.001, "deg") == "0" and joint_text(-0.0, "deg") == "0"
+    assert joint_text(0.123456, "m") == "0.1235" and joint_text(-4e-5, "m") == "0"
+    for x in np.linspace(-180.0, 180.0, 721) + 1e-7:  # what is shown parses back within half a step
+        assert abs(float(joint_text(x, "deg")) - x) <= 0.005 + 1e-12
+    line = pose_line("arm", (-1e-5, 0.3, -0.39249), (-1e-4, 0.0, math.pi / 2))
+    assert line == "tool now (arm): x y z = +0.000 +0.300 -0.392 m; roll pitch yaw = +0.0 +0.0 +90.0 deg"
+
+
+def test_arm_angle_only_for_seven_joints_with_its_value_and_no_self_compare():
+    from armguard.console._app import arm_angle_label, compare_options, has_arm_angle
+
+    assert [has_arm_angle(SimpleNamespace(n_joints=n)) for n in (3, 6, 7, 8)] == [False, False, True, False]
+    assert arm_angle_label(0.2) == "arm angle +11.5 deg" and arm_angle_label(-1e-4) == "arm angle +0.0 deg"
+    assert compare_options(("analytic", "coal", "fcl"), "coal") == ("off", "analytic", "fcl")
+    assert compare_options(("analytic",), "analytic") == ("off",)
+
+
+def test_the_verification_report_wraps_in_the_panel():
+    from armguard.console._app import report_html
+
+    h = report_html("a" * 300 + " <b>")
+    assert "white-space:pre-wrap" in h and "overflow-wrap:anywhere" in h and "&lt;b&gt;" in h and "```" not in h

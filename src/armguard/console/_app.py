@@ -62,9 +62,59 @@ def _fmt(x: float) -> str:
     return f"{0.0 if x == 0.0 else x:.6g}"
 
 
+JOINT_DECIMALS = {"deg": 2, "m": 4}
+"""Decimals a joint field shows: 0.01 deg, 0.1 mm (finer than the sliders' steps); the state keeps
+the exact value (an inverse-kinematics answer is not moved by showing it)."""
+
+
+def joint_text(x: float, unit: str) -> str:
+    """A joint value for its field, rounded to :data:`JOINT_DECIMALS` and never ``-0``: ``-47.0329`` deg
+    shows ``"-47.03"``, ``45.0`` shows ``"45"``, ``-0.001`` deg shows ``"0"``."""
+    v = round(float(x), JOINT_DECIMALS.get(unit, 4))
+    return _fmt(v)
+
+
+def signed(x: float, decimals: int) -> str:
+    """``x`` with a sign and ``decimals`` places, never ``-0.0`` (``"+0.0"`` for a value that rounds to 0)."""
+    v = round(float(x), decimals)
+    return f"{0.0 if v == 0.0 else v:+.{decimals}f}"
+
+
+def pose_line(arm: str, xyz, rpy) -> str:
+    """The Cartesian panel's line for the tool pose now (m, and rad shown in deg), never ``-0.000``."""
+    x, y, z = (signed(v, 3) for v in xyz)
+    r, p, w = (signed(math.degrees(v), 1) for v in rpy)
+    return f"tool now ({arm}): x y z = {x} {y} {z} m; roll pitch yaw = {r} {p} {w} deg"
+
+
+def report_html(summary: str) -> str:
+    """The verification report in the panel's width: monospace, long lines wrapped (a code block
+    ran past the panel's right edge and was cut off)."""
+    import html
+
+    return ('<pre id="armguard-report" style="white-space:pre-wrap;overflow-wrap:anywhere;max-width:100%;'
+            f'font-size:0.75em;margin:0">{html.escape(summary)}</pre>')
+
+
 def _vec(v) -> str:
     """Three values for a typed field (``"0.3, -0.392, 0.5"``); empty for None (no box)."""
     return "" if v is None else ", ".join(_fmt(x) for x in v)
+
+
+def compare_options(backends, backend: str) -> tuple[str, ...]:
+    """The "compare with" choices: off and every backend but the panel's own (never compared with itself)."""
+    return ("off",) + tuple(b for b in backends if b != backend)
+
+
+def has_arm_angle(robot) -> bool:
+    """Only a 7-DOF arm has an arm angle: one self-motion (a 6-DOF arm has none, more joints more than one)."""
+    return robot.n_joints == 7
+
+
+def arm_angle_label(psi: float) -> str:
+    """The arm-angle slider's label with its value (the slider's number box is hidden): ``"arm angle +12.5 deg"``."""
+    deg = round(math.degrees(float(psi)), 1)
+    return f"arm angle {0.0 if deg == 0.0 else deg:+.1f} deg"
 
 
 class ConsoleApp:
@@ -205,7 +255,8 @@ class ConsoleApp:
             self._w_mode = gui.add_dropdown("mode", ("joint", "cartesian"), initial_value=snap.mode)
             self._w_detect = gui.add_checkbox("detection", snap.detection)
             self._w_backend = gui.add_dropdown("backend", st.backends, initial_value=snap.backend)
-            self._w_compare = gui.add_dropdown("compare with", ("off",) + st.backends, initial_value="off")
+            self._w_compare = gui.add_dropdown("compare with", compare_options(st.backends, snap.backend),
+                                               initial_value="off")
             hint = f"0 to {MAX_DISTANCE_SETTING:g} m; applies on Enter or on leaving the field"
             self._fields["thr"] = self._field("threshold (m)", _fmt(snap.threshold), st.set_threshold, hint)
             self._fields["stop"] = self._field("stopping distance (m)", _fmt(snap.stopping_distance),
@@ -225,7 +276,9 @@ class ConsoleApp:
                                                   f"roll, pitch, yaw within ±{MAX_ANGLE_DEG:g} deg")
                 b_move = gui.add_button("move tool")
                 b_read = gui.add_button("target = tool pose now")
-                self._w_psi = gui.add_slider("arm angle (deg)", min=-180.0, max=180.0, step=0.5, initial_value=0.0)
+                self._w_psi = gui.add_slider(arm_angle_label(snap.arm_angle), min=-180.0, max=180.0, step=0.5,
+                                             initial_value=math.degrees(snap.arm_angle),
+                                             visible=has_arm_angle(st.scene.robots[snap.active]))
             with gui.add_folder("workspace box", expand_by_default=False, order=self._joints_order + 2.0):
                 lo, hi = snap.workspace_corners
                 hint = f"x, y, z within ±{MAX_COORDINATE:g} m; apply limits to use"
@@ -252,7 +305,7 @@ class ConsoleApp:
             self._w_time = gui.add_slider("time (s)", min=0.0, max=1.0, step=0.01, initial_value=0.0)
             self._w_rate = gui.add_markdown("")
             self._w_plot = gui.add_image(np.full((20, 40, 3), 255, dtype=np.uint8), format="png", visible=False)
-            self._w_report = gui.add_markdown("")
+            self._w_report = gui.add_html("")
 
         # -- views ---------------------------------------------------------------------------
         with tabs.add_tab("Views"):
@@ -300,7 +353,7 @@ class ConsoleApp:
                 a = float(lo[j] * scale[j]) if math.isfinite(lo[j]) else -360.0
                 b = float(hi[j] * scale[j]) if math.isfinite(hi[j]) else 360.0
                 fields.append(self._field(
-                    f"{jn} ({units[j]})", _fmt(snap.q[name][j] * scale[j]),
+                    f"{jn} ({units[j]})", joint_text(snap.q[name][j] * scale[j], units[j]),
                     lambda text, j=j: st.set_joint(name, j, text, deg=True),
                     hint=f"{a:g} to {b:g} {units[j]}; applies on Enter or on leaving the field"))
         with gui.add_folder(f"sliders {name}", visible=name == snap.active, expand_by_default=False,
@@ -405,7 +458,8 @@ class ConsoleApp:
         backends = self.state.backends
         if tuple(self._w_backend.options) != backends:  # a backend refused here is no longer offered
             self._w_backend.options = backends
-            self._w_compare.options = ("off",) + backends
+        if tuple(self._w_compare.options) != compare_options(backends, snap.backend):
+            self._w_compare.options = compare_options(backends, snap.backend)
         self._w_active.value = snap.active
         self._w_mode.value = snap.mode
         self._w_detect.value = snap.detection
@@ -418,15 +472,21 @@ class ConsoleApp:
         self._fields["thr"].show(_fmt(snap.threshold))
         self._fields["stop"].show(_fmt(snap.stopping_distance))
         for name, (fields, sliders, scale) in self._w_joints.items():
+            units = self.state.joint_units(name)
             for j, (f, s) in enumerate(zip(fields, sliders)):
-                f.show(_fmt(snap.q[name][j] * scale[j]))
+                f.show(joint_text(snap.q[name][j] * scale[j], units[j]))
                 v = float(np.clip(snap.q[name][j] * scale[j], s.min, s.max))
                 if abs(s.value - v) > 1e-9:
                     s.value = v
             for folder in self._w_joint_folders[name]:
                 folder.visible = name == snap.active and snap.mode == "joint"
         self._w_cart.visible = snap.mode == "cartesian"
-        self._w_psi.visible = self.state.scene.robots[snap.active].n_joints >= 7  # only 7-DOF arms have one
+        self._w_psi.visible = has_arm_angle(self.state.scene.robots[snap.active])
+        psi_deg = math.degrees(snap.arm_angle)
+        if abs(self._w_psi.value - psi_deg) > 1e-9:  # reset to 0 by a move, a reload, another arm
+            self._w_psi.value = psi_deg
+        if self._w_psi.label != arm_angle_label(snap.arm_angle):
+            self._w_psi.label = arm_angle_label(snap.arm_angle)
         self._sync_pose(snap)
         run = snap.run_state
         self._w_run_state.content = run_line(snap)
@@ -447,9 +507,7 @@ class ConsoleApp:
         if key == self._pose_shown:
             return
         self._pose_shown = key
-        deg = [math.degrees(x) for x in rpy]
-        self._w_pose_now.content = (f"tool now ({snap.active}): x y z = {xyz[0]:+.3f} {xyz[1]:+.3f} {xyz[2]:+.3f} m; "
-                                    f"roll pitch yaw = {deg[0]:+.1f} {deg[1]:+.1f} {deg[2]:+.1f} deg")
+        self._w_pose_now.content = pose_line(snap.active, xyz, rpy)
 
     def _redraw(self, force: bool = False) -> None:
         snap = self.state.snapshot()
@@ -486,7 +544,7 @@ class ConsoleApp:
                                        first_collision=None if fc is None else float(fc.time))
             self._plot_player = p
             summary = rep.summary() if hasattr(rep, "summary") else str(rep)
-            self._w_report.content = f"```\n{summary}\n```"
+            self._w_report.content = report_html(summary)
             self._w_plot.visible = True
             periodic = False
         now = time.perf_counter()

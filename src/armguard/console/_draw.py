@@ -4,7 +4,8 @@
 recolours it.  The nearest-obstacle line is drawn in screen-space pixels (:data:`LINE_PX`), so it
 keeps its width at every zoom, also in software WebGL, with a marker sphere at each nearest point
 (sized to the line: :func:`~._view.marker_radius`) and the distance as a label at its middle; a compared backend's line is cyan, drawn beside the first (shifted
-sideways by :data:`COMPARE_OFFSET` scene radii, so two equal answers stay two visible lines).
+sideways by :data:`COMPARE_OFFSET` scene radii, so two equal answers stay two visible lines; its
+label below the line, the first one's above: :func:`label_place`).
 The nearest link is red within the threshold; the obstacle's nearest face or edge is outlined
 in magenta.  A shape the nearest line runs through (a link wrapped around it, say: no camera sees
 past it) is drawn translucent (:data:`SEE_THROUGH_OPACITY`), so the line stays in sight; viser
@@ -22,6 +23,7 @@ import numpy as np
 
 from ._draw_overlays import OverlayDrawer
 from ._meshes import mesh_of, quat_wxyz_from_matrix, rigid_motion
+from ._readout import no_negative_zero
 from ._view import feature_segments, follow_view, marker_radius, pair_view, see_through
 
 __all__ = ["SceneDrawer", "LINE_PX", "COMPARE_OFFSET", "COLORS", "COMPARE_COLOR", "FEATURE_COLOR", "SEE_THROUGH_OPACITY"]
@@ -38,6 +40,17 @@ SEE_THROUGH_OPACITY = 0.3
 """Opacity of a shape the nearest line runs through (the others are opaque)."""
 LABEL_RISE = 0.3
 """The distance label stands this many line lengths above the line's middle (not over the line)."""
+
+
+def label_place(key: str, pa, pb) -> tuple[tuple[float, float, float], str]:
+    """Where a nearest line's distance label stands, and its anchor: the first backend's
+    (``"primary"``) :data:`LABEL_RISE` line lengths above the line's middle, resting on that
+    point; a compared backend's (``"compare"``) as far below it, hanging from it -- the two never
+    stack over one another, however short the line."""
+    pa, pb = np.asarray(pa, dtype=np.float64), np.asarray(pb, dtype=np.float64)
+    up = 1.0 if key == "primary" else -1.0
+    p = 0.5 * (pa + pb) + np.array([0.0, 0.0, up * LABEL_RISE * float(np.linalg.norm(pb - pa))])
+    return tuple(float(x) for x in p), ("bottom-center" if up > 0 else "top-center")
 
 
 def _strip_collision_checking(text: str) -> str:
@@ -100,8 +113,8 @@ class SceneDrawer:
             line = sc.add_line_segments(f"/nearest/{key}/line", seg, col, thickness=LINE_PX,
                                         thickness_units="screen", visible=False)
             self.lines[key] = [line] + self._markers(key, col, 0.01)
-            self.labels[key] = sc.add_label(f"/nearest/{key}/label", "", visible=False, anchor="bottom-center",
-                                            font_screen_scale=1.2)
+            self.labels[key] = sc.add_label(f"/nearest/{key}/label", "", visible=False,
+                                            anchor=label_place(key, np.zeros(3), np.zeros(3))[1], font_screen_scale=1.2)
             self._handles += [line, self.labels[key]]
         self.feature = sc.add_line_segments("/nearest/feature", seg, FEATURE_COLOR, thickness=LINE_PX - 1.0,
                                             thickness_units="screen", visible=False)
@@ -224,10 +237,10 @@ class SceneDrawer:
             if not 0.8 < want / self._marker_r[key] < 1.25:
                 a, b = self.lines[key][1:] = self._markers(key, col, want)
                 self._line_colors.pop(key, None)
-            text = f"{r.distance * 1000.0:.1f} mm" + (f" ({r.backend})" if key == "compare" else "")
+            text = f"{no_negative_zero(r.distance * 1000.0, 1):.1f} mm" + (f" ({r.backend})" if key == "compare" else "")
             if label.text != text:
                 label.text = text
-            label.position = tuple(0.5 * (pa + pb) + np.array([0.0, 0.0, LABEL_RISE * float(np.linalg.norm(pb - pa))]))
+            label.position = label_place(key, pa, pb)[0]
             if self._line_colors.get(key) != col:
                 # one colour for the whole line (the uniform path: viser's per-vertex line colours
                 # came out grey in software WebGL)

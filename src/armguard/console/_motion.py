@@ -60,15 +60,16 @@ class MotionMixin:
         end-effector pose fixed.  Here it is followed as a null-space motion: from the current
         value to the new one in steps of at most ``ARM_ANGLE_STEP`` rad along the unit null-space
         direction of the 6xN tool Jacobian (sign kept continuous between steps), each step
-        corrected back onto the tool pose by inverse kinematics.  For arms with fewer than seven
-        joints there is no self-motion and this raises.
+        corrected back onto the tool pose by inverse kinematics.  For arms with other than seven
+        joints (none, or more than one self-motion) this raises.
         """
         psi = parse_number(value, "arm angle", lo=-math.pi, hi=math.pi, unit="rad")
         with self._lock:
             name = self._active
             robot = self._robot(name)
-            if robot.n_joints < 7:
-                raise ConsoleInputError(f"arm angle: {name} has {robot.n_joints} joints; only 7-DOF arms have one")
+            if robot.n_joints != 7:
+                raise ConsoleInputError(f"arm angle: {name} has {robot.n_joints} joints; only 7-DOF arms have one "
+                                        "(one self-motion)")
             q = self._q[name].copy()
             X_target = robot.link_pose(q)
             delta = psi - self._arm_angle

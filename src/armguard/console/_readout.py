@@ -27,6 +27,7 @@ __all__ = [
     "panel_html",
     "CATEGORIES",
     "with_terrain",
+    "moving_link_first",
 ]
 
 CATEGORIES = ("arm", "environment", "workspace", "payload")
@@ -196,17 +197,42 @@ def with_terrain(r: Readout, rep) -> Readout:
     return replace(r, status=worst, rows=rows)
 
 
+def moving_link_first(r: Readout, is_static) -> Readout:
+    """``r`` with its nearest pair and rows named moving link first: where the arm side
+    (``owner_a`` / a row's link) is a static body of an arm (``is_static(owner)``, e.g. Puma's
+    pedestal) and the other side is not, the sides swap -- the moving link is the "link" the view
+    colours, the pedestal the "obstacle" (points swapped with them, the distance unchanged)."""
+    from dataclasses import replace
+
+    def swap(a: str, b: str) -> bool:
+        return bool(a) and bool(b) and is_static(a) and not is_static(b)
+
+    rows = tuple(CategoryRow(c.category, c.distance, c.obstacle, c.link) if swap(c.link, c.obstacle) else c
+                 for c in r.rows)
+    if not swap(r.owner_a, r.owner_b or r.obstacle):
+        return replace(r, rows=rows)
+    b = r.owner_b or r.obstacle
+    return replace(r, link=r.obstacle, obstacle=r.link, owner_a=b, owner_b=r.owner_a, p_WA=r.p_WB, p_WB=r.p_WA,
+                   feature=None, rows=rows)
+
+
 def readout_off(threshold: float) -> Readout:
     """The panel when detection is switched off (grey, no nearest obstacle)."""
     return Readout(PanelStatus.OFF, math.inf, "", "", "", None, None, float(threshold), False, (), 0.0)
 
 
+def no_negative_zero(x: float, decimals: int) -> float:
+    """``x`` rounded to ``decimals`` places, a value that rounds to zero as ``+0.0`` (never shown ``-0.0``)."""
+    v = round(float(x), decimals)
+    return 0.0 if v == 0.0 else v
+
+
 def _fmt_m(x: float) -> str:
-    return "—" if not math.isfinite(x) else f"{x * 1000.0:.1f} mm"
+    return "—" if not math.isfinite(x) else f"{no_negative_zero(x * 1000.0, 1):.1f} mm"
 
 
 def _fmt_p(p: np.ndarray | None) -> str:
-    return "—" if p is None else "(" + ", ".join(f"{v:+.3f}" for v in p) + ") m"
+    return "—" if p is None else "(" + ", ".join(f"{no_negative_zero(v, 3):+.3f}" for v in p) + ") m"
 
 
 def _fmt_feature(f) -> str:
@@ -293,7 +319,8 @@ def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=Non
     if compare is not None:
         o = compare.readout
         delta = "" if not math.isfinite(compare.delta) else f"{compare.delta:.9g}"
-        dd = "—" if not delta else f"{compare.delta * 1000.0:+.4f} mm".replace("-0.0000 ", "0.0000 ").replace("+0.0000 ", "0.0000 ")
+        dd_mm = no_negative_zero(compare.delta * 1000.0, 4)
+        dd = "—" if not delta else (f"{dd_mm:+.4f} mm" if dd_mm != 0.0 else "0.0000 mm")
         cmp_html = (
             f'<div id="armguard-compare" data-delta="{delta}" data-backend="{e(o.backend)}" '
             'style="border:2px solid #0aa;border-radius:6px;padding:4px;margin-top:4px;font-family:sans-serif">'

@@ -61,6 +61,25 @@ class SourcesMixin:
     """Backends and model updates of the console state."""
 
     def _readout_of(self, backend: str):
+        """The panel from ``backend``, its nearest pair named moving link first (:func:`moving_link_first`)."""
+        from ._readout import moving_link_first
+
+        return moving_link_first(self._backend_readout(backend), self._is_static)
+
+    def _is_static(self, owner: str) -> bool:
+        """True for an arm link no joint moves (a pedestal, a base plate): a static body, not a link."""
+        robot_name, _, link = owner.partition("/")
+        robot = self._scene.robots.get(robot_name) if link else None
+        if robot is None or link not in robot.link_names:
+            return False
+        while link is not None:
+            spec = robot.joint_of_link(link)
+            if spec is not None and spec.joint_type.value != "fixed":
+                return False
+            link = robot.parent_link(link)
+        return True
+
+    def _backend_readout(self, backend: str):
         """The panel from ``backend``; the terrain, which only the detector checks, is added to
         every other backend's answer (its row, and the headline the worst of both)."""
         from ._readout import readout_from_report, with_terrain
