@@ -102,7 +102,9 @@ def chain_bounds(robot, tol: Tolerances = DEFAULT_TOLERANCES) -> ChainBounds:
     n_q = len(robot.joint_names)
     lo = np.asarray(robot.lower, dtype=np.float64)
     hi = np.asarray(robot.upper, dtype=np.float64)
-    q_ref = np.where(np.isfinite(lo) & np.isfinite(hi), 0.5 * (lo + hi), np.where(np.isfinite(lo), lo, np.where(np.isfinite(hi), hi, 0.0)))
+    both = np.isfinite(lo) & np.isfinite(hi)  # unlimited (continuous) joints: no midpoint, no inf - inf
+    mid = 0.5 * (np.where(both, lo, 0.0) + np.where(both, hi, 0.0))
+    q_ref = np.where(both, mid, np.where(np.isfinite(lo), lo, np.where(np.isfinite(hi), hi, 0.0)))
     Q = np.repeat(q_ref[None, :], n_q + 1, axis=0)
     for j in range(n_q):
         Q[j + 1, j] += _PROBE
