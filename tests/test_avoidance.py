@@ -143,27 +143,32 @@ def test_ranger_arm_driven_into_the_scene_keeps_stand_off():
 
 
 def test_canned_tests_with_avoidance_keep_stand_off_and_progress():
-    """Three of Ranger's canned tests with a 0.2 m stand-off (it binds on test 1 and test 4): no
-    contact, least distance >= stand-off - 1 mm, and the arm gets (nearly) to its goal.  The end
-    distance is recomputed with coal from the returned configuration (an independent backend)."""
+    """Three of Ranger's canned tests with a 0.2 m stand-off (it binds on tests 1 and 2, which stop
+    short of the module at 87 % and 96 % of the way; test 3 never comes near): no contact, least
+    distance >= stand-off - 1 mm, and the arm gets most of the way.  The end distance is recomputed
+    with coal from the returned configuration (an independent backend)."""
     from armguard.avoidance import run_canned
 
     m = armguard.load_model("ranger")
     damper = Damper(stand_off=0.2, influence=0.35, approach_speed=0.3, period=0.01, velocity_limit=1.0)
     coal = armguard.checker(m, "coal")
     s = m.scene
-    for name in ("test1_left_pitch_down", "test4_left_reach_around", "test3_left_elbow_fold"):
+    for name in ("test1_left_inward", "test2_left_up_and_back", "test3_left_forward_up"):
         r = run_canned(m, name, damper)
         t = s.canned_tests[name]
         assert r.holds(damper.stand_off) and not r.contact, r
         assert r.min_distance >= damper.stand_off - 1e-3
-        assert r.progress > 0.9, r
+        assert r.progress > 0.8, r
+        if name != "test3_left_forward_up":
+            assert r.statuses["slowed"] > 0 and r.min_distance < damper.stand_off + 1e-3, r  # the damper bound
         full = s.flat_q({k: np.asarray(v) for k, v in t.setup.items()})
         full[[n.startswith(t.robot + "/") for n in s.joint_names]] = r.q_end
         d = coal.pair_distances(m.pin_q(full)).distance
         mine = np.array([a.startswith(t.robot + "/") or b.startswith(t.robot + "/")
                          for a, b in zip(m.pairs.owner_a, m.pairs.owner_b)])
         assert abs(float(d[mine].min()) - r.end_distance) < 1e-6
-        way = np.linalg.norm(t.goal - t.setup[t.robot])
-        assert r.progress == pytest.approx(1.0 - np.linalg.norm(t.goal - r.q_end) / way)
+        traj = t.trajectory(s)
+        goal = traj.at(traj.duration)
+        way = np.linalg.norm(goal - t.setup[t.robot])
+        assert r.progress == pytest.approx(1.0 - np.linalg.norm(goal - r.q_end) / way)
     assert r.statuses["free"] == r.steps  # test 3 never comes near: the command passes unchanged

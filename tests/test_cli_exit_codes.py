@@ -192,6 +192,7 @@ def _file_cases(f, tmp_path):
         (("cspace", "plot"), ["cspace", "plot", f["agmap"], "--q2", "30", "--out", tmp_path / "s.png"], f["agmap"]),
         (("program", "run"), ["program", "run", f["yaml"]], f["yaml"]),
         (("program", "export"), ["program", "export", f["yaml"], "--out", tmp_path / "p.py"], f["yaml"]),
+        (("program", "calibrate"), ["program", "calibrate", f["yaml"], "--out", tmp_path / "c.yaml"], f["yaml"]),
     ]
 
 

@@ -1,7 +1,8 @@
 """Ranger's canned tests run with collision avoidance on.
 
 Each canned test (:class:`armguard.model.CannedTest`: every robot at ``setup``, then ``robot`` moves
-to ``goal`` on a trapezoidal profile) is played as a control loop at ``damper.period``: the command
+on a trapezoidal profile in its end-effector coordinates, its arm angle or its joints; the goal is the
+profile's last configuration) is played as a control loop at ``damper.period``: the command
 is the profile's velocity plus a proportional pull back to the profile (``gain`` 1/s), filtered by
 :func:`~armguard.avoidance.avoid_step` over the moving robot's pairs (only its joints may move),
 then integrated.  The loop runs for the profile's duration plus ``settle_s``.  The result says
@@ -105,8 +106,9 @@ def run_canned(model, test, damper, *, gain: float = 5.0, settle_s: float = 2.0,
         d = least(q)
         dmin = min(dmin, d)
         contact |= d <= 0.0
-    way = float(np.linalg.norm(test.goal - q_start))
-    progress = 1.0 if way == 0.0 else max(0.0, 1.0 - float(np.linalg.norm(test.goal - q)) / way)
+    goal = np.asarray(traj.at(traj.duration), dtype=np.float64)  # a joint goal, or the task motion's end through IK
+    way = float(np.linalg.norm(goal - q_start))
+    progress = 1.0 if way == 0.0 else max(0.0, 1.0 - float(np.linalg.norm(goal - q)) / way)
     return CannedRun(test.name, test.robot, n, d0, dmin, least(q), bool(contact), progress,
                      {k: seen.get(k, 0) for k in ("free", "slowed", "stopped")}, q)
 
