@@ -19,10 +19,14 @@ QUICK_ROBOTS = ["panda"]
 
 
 def _names() -> list[str]:
-    """Every built-in model, then every public robot found installed (the public-robot table's set)."""
+    """Every built-in model, then every public robot found installed (the public-robot table's set);
+    ``ARMGUARD_BENCH_ROBOTS=a,b`` (environment) for a subset, in the same order."""
+    import os
+
     from armguard.model import known_models
 
-    ms = [m for m in known_models() if m.available]
+    only = [n for n in os.environ.get("ARMGUARD_BENCH_ROBOTS", "").split(",") if n]
+    ms = [m for m in known_models() if m.available and (not only or m.name in only)]
     return [m.name for m in ms if m.source == "built-in"] + [m.name for m in ms if m.source != "built-in"]
 
 
