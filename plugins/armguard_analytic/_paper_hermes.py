@@ -14,7 +14,9 @@ exit it took (``B_*``), so the benches can count them.
   the derivatives, with respect to the two links equations parameters, of the distance equation":
   ``X1 = P1 + s u``, ``X2 = P2 + t v``, ``w = P1 - P2``, ``a = u.u``, ``b = u.v``, ``c = v.v``,
   ``d = u.w``, ``e = v.w``; the system ``a s - b t = -d``, ``b s - c t = -e`` has determinant
-  ``a c - b^2`` (up to sign).  Not zero (``> Tolerances.parallel^2 a c``): ``s = (b e - c d) /
+  ``a c - b^2`` (up to sign; where it cancels, below ``1e-15 a c``, armguard recomputes it as
+  ``|u x v|^2``, the same number by Lagrange's identity, so that exactly parallel axes are not
+  taken for skew ones by rounding).  Not zero (``> Tolerances.parallel^2 a c``): ``s = (b e - c d) /
   det``, ``t = (a e - b d) / det``; both in [0, 1] is the answer, else "eight different cases":
   each end-point against the point of the other link at its foot (when the foot is inside that
   link) and each end-point against each end-point of the other link; the least distance wins
@@ -57,7 +59,7 @@ import math
 
 from numba import njit
 
-from ._paper_vec import _axpy, _dist, _dot, _sub, _v
+from ._paper_vec import _axpy, _cross, _dist, _dot, _sub, _v
 
 H_NONE, H_LINK_OBSTACLE, H_LINK_LINK, H_PAYLOAD_LINK, H_PAYLOAD_OBSTACLE = 0, 1, 2, 3, 4
 MODULES = ("", "link-obstacle", "link-link", "payload-link", "payload-obstacle")
@@ -108,8 +110,12 @@ def _hermes_segments(P1, P1p, P2, P2p, eps_len, eps_par):  # pragma: no cover - 
     b = _dot(u, v)
     d = _dot(u, w)
     e = _dot(v, w)
-    det = a * c - b * b
-    if det > eps_par * eps_par * a * c:
+    ac = a * c
+    det = ac - b * b
+    if det <= 1e-15 * ac:  # a c - b^2 cancels near parallel: Lagrange's identity |u x v|^2 instead
+        uxv = _cross(u, v)
+        det = _dot(uxv, uxv)
+    if det > eps_par * eps_par * ac:
         s = (b * e - c * d) / det
         t = (a * e - b * d) / det
         if 0.0 <= s <= 1.0 and 0.0 <= t <= 1.0:
