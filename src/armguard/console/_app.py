@@ -140,6 +140,7 @@ class ConsoleApp:
         self._framed_active = None
         self._model_generation = 0
         self._built_generation = 0
+        self._draw_lock = threading.RLock()
 
     @property
     def url(self) -> str:
@@ -318,6 +319,7 @@ class ConsoleApp:
             self._w_urdf_vis = gui.add_checkbox("URDF visual geometry", bool(has_urdf and self.drawer.has_visual),
                                                 disabled=not (has_urdf and self.drawer.has_visual))
             self._w_urdf_col = gui.add_checkbox("URDF collision geometry", False, disabled=not has_urdf)
+            self.drawer.add_view_controls(gui)
             for label in VIEWS:
                 gui.add_button(label).on_click(lambda e, lb=label: self._set_view(e.client, lb))
 
@@ -510,18 +512,20 @@ class ConsoleApp:
         self._w_pose_now.content = pose_line(snap.active, xyz, rpy)
 
     def _redraw(self, force: bool = False) -> None:
-        snap = self.state.snapshot()
-        if snap.version == self._shown_version and not force:
-            self._refresh_plot(snap, periodic=True)
-            return
-        self._shown_version = snap.version
-        with self.server.atomic():
+        with self._draw_lock:  # the draw loop and a typed field's commit never draw at once
+            snap = self.state.snapshot()
+            if snap.version == self._shown_version and not force:
+                self._refresh_plot(snap, periodic=True)
+                return
+            self._shown_version = snap.version
+            with self.server.atomic():  # the panel first, alone: shown at once, not at the next WebGL frame
+                self._panel.content = panel_html(snap.readout, snap.message, error=snap.message_is_error,
+                                                 compare=snap.compare, update_us=snap.update_us, changes=snap.changes,
+                                                 terrain=snap.terrain, sigmas=snap.sigmas, draw_ms=self.drawer.draw_ms)
+                self._sync_widgets()
+                self._refresh_plot(snap, periodic=False)
+            self.server.flush()
             self.drawer.draw(snap)
-            self._panel.content = panel_html(snap.readout, snap.message, error=snap.message_is_error,
-                                             compare=snap.compare, update_us=snap.update_us, changes=snap.changes,
-                                             terrain=snap.terrain, sigmas=snap.sigmas)
-            self._sync_widgets()
-            self._refresh_plot(snap, periodic=False)
         if snap.active != self._framed_active:
             first = self._framed_active is None
             self._framed_active = snap.active

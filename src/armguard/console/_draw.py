@@ -8,8 +8,9 @@ sideways by :data:`COMPARE_OFFSET` scene radii, so two equal answers stay two vi
 label below the line, the first one's above: :func:`label_place`).
 The nearest link is red within the threshold; the obstacle's nearest face or edge is outlined
 in magenta.  A shape the nearest line runs through (a link wrapped around it, say: no camera sees
-past it) is drawn translucent (:data:`SEE_THROUGH_OPACITY`), so the line stays in sight; viser
-offers no depth-test switch for line segments.  Robots from a URDF are also drawn from it (viser's ``ViserUrdf`` over yourdfpy):
+past it), or that stands between a browser tab's camera and the line (:mod:`._sight`), is drawn
+translucent (:data:`SEE_THROUGH_OPACITY`), so the line stays in sight; viser offers no
+depth-test switch for line segments.  Robots from a URDF are also drawn from it (viser's ``ViserUrdf`` over yourdfpy):
 its visual geometry where it has one, its collision geometry as a toggle.
 """
 
@@ -17,16 +18,20 @@ from __future__ import annotations
 
 import io
 import math
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
 
 from ._draw_overlays import OverlayDrawer
-from ._meshes import mesh_of, quat_wxyz_from_matrix, rigid_motion
+from ._meshes import item_frames, mesh_of, quat_wxyz_from_matrix
+from ._nodes import PosedItems, ShapeNode
 from ._readout import no_negative_zero
+from ._sight import SIGHT_PERIOD, hidden_from
 from ._view import feature_segments, follow_view, marker_radius, pair_view, see_through
 
-__all__ = ["SceneDrawer", "LINE_PX", "COMPARE_OFFSET", "COLORS", "COMPARE_COLOR", "FEATURE_COLOR", "SEE_THROUGH_OPACITY"]
+__all__ = ["SceneDrawer", "grid_segments", "grid_step", "GRID_COLOR", "LINE_PX", "COMPARE_OFFSET", "COLORS", "COMPARE_COLOR", "FEATURE_COLOR", "SEE_THROUGH_OPACITY"]
 
 COLORS = {"body": (150, 160, 175), "link": (235, 150, 60), "payload": (90, 180, 110), "hot": (230, 20, 20),
           "active": (245, 120, 30)}
@@ -53,6 +58,31 @@ def label_place(key: str, pa, pb) -> tuple[tuple[float, float, float], str]:
     return tuple(float(x) for x in p), ("bottom-center" if up > 0 else "top-center")
 
 
+GRID_COLOR = (185, 185, 190)
+"""The floor grid's lines (thin screen-space lines: viser's shaded grid plane cost more than half of
+a software-WebGL frame)."""
+
+
+def grid_step(half: float) -> float:
+    """The floor grid's spacing (m) for a grid ``half`` m wide each way: 1, 2 or 5 times a power
+    of ten, about a tenth of ``half``."""
+    raw = max(float(half), 1e-6) / 10.0
+    p = 10.0 ** math.floor(math.log10(raw))
+    return min((m * p for m in (1.0, 2.0, 5.0, 10.0) if m * p >= raw), default=10.0 * p)
+
+
+def grid_segments(center, half: float, z: float) -> np.ndarray:
+    """``(n, 2, 3) float32``: the floor grid's lines at height ``z``, ``half`` m each way of
+    ``center``'s x, y (rounded to the spacing :func:`grid_step`)."""
+    step = grid_step(half)
+    cx, cy = (round(float(c) / step) * step for c in np.asarray(center, dtype=np.float64)[:2])
+    k = int(math.ceil(half / step))
+    ticks = np.arange(-k, k + 1) * step
+    x0, x1, y0, y1 = cx - k * step, cx + k * step, cy - k * step, cy + k * step
+    segs = [[[cx + t, y0, z], [cx + t, y1, z]] for t in ticks] + [[[x0, cy + t, z], [x1, cy + t, z]] for t in ticks]
+    return np.array(segs, dtype=np.float32)
+
+
 def _strip_collision_checking(text: str) -> str:
     import re
 
@@ -66,18 +96,51 @@ def _inside(p, shape) -> bool:
 
 
 class SceneDrawer:
-    """Draw a console state's scene on a viser server (call :meth:`build` once, :meth:`draw` per change)."""
+    """Draw a console state's scene on a viser server (call :meth:`build` once, :meth:`draw` per change).
+
+    Each shape is one mesh, added once by :meth:`build`; :meth:`draw` then only moves the meshes
+    that moved (a pose from forward kinematics, :class:`~._nodes.PosedItems`) and sends a colour,
+    an opacity or a line only when it changed.  The lighting is the default lights and a
+    hemisphere light, without the environment map (image-based lighting made each frame in
+    software WebGL several times slower).
+    """
 
     def __init__(self, server, state) -> None:
         self.server = server
         self.state = state
         self.urdf = None
         self._urdf_index = None
+        self._urdf_shown = False
         self._handles = []
+        self._lock = threading.RLock()
+        self._eyes: dict = {}
+        self._sight_timer = None
+        self._last_snap = None
+        self._last_posed = None
+        self.hidden = set()
+        self.draw_ms: float | None = None
+        try:
+            server.on_client_connect(self._watch_camera)
+            server.on_client_disconnect(self._forget_camera)
+        except AttributeError:  # a stand-in server (tests): no tabs to watch
+            pass
 
     # ------------------------------------------------------------------ build
-    def build(self) -> None:
+    def configure_look(self) -> None:
+        """Lights without the environment map (a software-WebGL frame costs several times more with it)."""
         sc = self.server.scene
+        sc.configure_environment_map(None)
+        self._hemi = sc.add_light_hemisphere("/lights/hemisphere", sky_color=(255, 255, 255),
+                                             ground_color=(120, 120, 130), intensity=1.2, position=(0.0, 0.0, 1.0))
+
+    def build(self) -> None:
+        with self._lock:
+            self._build()
+
+    def _build(self) -> None:
+        sc = self.server.scene
+        if not hasattr(self, "_hemi"):
+            self.configure_look()
         for h in self._handles:
             try:
                 h.remove()
@@ -86,26 +149,29 @@ class SceneDrawer:
         self._handles = []
         self._marker_r = {}
         snap = self.state.snapshot()
-        items = self.state.scene.shapes_at(snap.q)
-        self.items = []
+        scene = self.state.scene
+        items = scene.shapes_at(snap.q)
+        frames = item_frames(scene, snap.q)
+        self.items: list[ShapeNode] = []
         lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
-        for k, it in enumerate(items):
+        for k, (it, X0) in enumerate(zip(items, frames)):
             v, f = mesh_of(it.shape)
-            P0 = np.array(it.shape.core_points)
-            c0 = P0.mean(axis=0)
+            c0 = np.array(it.shape.core_points).mean(axis=0)
             lo, hi = np.minimum(lo, v.min(axis=0)), np.maximum(hi, v.max(axis=0))
             color = COLORS.get(it.kind, COLORS["body"])
             h = sc.add_mesh_simple(f"/shapes/{k:03d}_{it.owner.replace('/', '.')}", v - c0, f, color=color,
                                    side="double" if len(f) < 8 else "front", position=c0,
                                    cast_shadow=False, receive_shadow=False)
             self._handles.append(h)
-            self.items.append([it.owner, it.kind, P0, c0, h, color, None, None])
+            bound = float(np.max(np.linalg.norm(v - c0, axis=1))) if len(v) else 0.0
+            self.items.append(ShapeNode(it.owner, it.kind, it.robot, it.shape, c0, bound, np.linalg.inv(X0), h, color,
+                                        shown_color=color))
         if not np.all(np.isfinite(lo)):
             lo, hi = -np.ones(3), np.ones(3)
         self.center = 0.5 * (lo + hi)
         self.radius = max(0.5, 0.5 * float(np.linalg.norm(hi - lo)))
-        self._handles.append(sc.add_grid("/grid", width=4 * self.radius, height=4 * self.radius,
-                                         position=(self.center[0], self.center[1], lo[2])))
+        self._handles.append(sc.add_line_segments("/grid", grid_segments(self.center, 2.0 * self.radius, lo[2]),
+                                                  GRID_COLOR, thickness=1.0, thickness_units="screen"))
         seg = np.zeros((1, 2, 3), dtype=np.float32)
         self.lines = {}
         self.labels = {}
@@ -115,14 +181,17 @@ class SceneDrawer:
             self.lines[key] = [line] + self._markers(key, col, 0.01)
             self.labels[key] = sc.add_label(f"/nearest/{key}/label", "", visible=False,
                                             anchor=label_place(key, np.zeros(3), np.zeros(3))[1], font_screen_scale=1.2)
-            self._handles += [line, self.labels[key]]
+            self._handles += [line, self.labels[key]] + self.lines[key][1:]
         self.feature = sc.add_line_segments("/nearest/feature", seg, FEATURE_COLOR, thickness=LINE_PX - 1.0,
                                             thickness_units="screen", visible=False)
         self.ws = sc.add_line_segments("/workspace", seg, (60, 120, 220), thickness=2.0, thickness_units="screen",
                                        visible=False)
         self._handles += [self.feature, self.ws]
         self._ws_shown = None
+        self._feature_shown = None
         self._line_colors = {}
+        self._last_snap = self._last_posed = None
+        self.hidden = set()
         if not hasattr(self, "overlays"):
             self.overlays = OverlayDrawer(self.server)
         self.overlays.build(self.state)
@@ -173,13 +242,68 @@ class SceneDrawer:
     def set_urdf(self, visual: bool, collision: bool) -> None:
         if self.urdf is None:
             return
-        if self.has_visual:
-            self.urdf.show_visual = bool(visual)
-        self.urdf.show_collision = bool(collision)
+        with self._lock:
+            if self.has_visual:
+                self.urdf.show_visual = bool(visual)
+            self.urdf.show_collision = bool(collision)
+            self._urdf_shown = bool(visual and self.has_visual) or bool(collision)
+            if self._urdf_shown and self._last_snap is not None:
+                self._pose_urdf(self._last_snap)
 
     def set_shapes_visible(self, on: bool) -> None:
         for item in self.items:
-            item[4].visible = bool(on)
+            item.handle.visible = bool(on)
+
+    def set_boxes_visible(self, on: bool) -> None:
+        """Show (or hide) the terrain pyramid boxes the last check tested (hidden by default)."""
+        with self._lock:
+            self.overlays.set_boxes_visible(on)
+
+    def add_view_controls(self, gui) -> None:
+        """The view's own checkboxes (in the caller's GUI container): the tested pyramid boxes, with a terrain."""
+        self._w_boxes = None
+        if getattr(self.state, "terrain", None) is None:
+            return
+        self._w_boxes = gui.add_checkbox("terrain: tested pyramid boxes", False,
+                                         hint="the boxes each check visited, by level (slow to draw without a GPU)")
+        self._w_boxes.on_update(lambda _e: self.set_boxes_visible(self._w_boxes.value))
+
+    # ------------------------------------------------------------------ cameras
+    def _watch_camera(self, client) -> None:
+        client.camera.on_update(lambda cam, c=client: self._camera_moved(c))
+
+    def _forget_camera(self, client) -> None:
+        with self._lock:
+            self._eyes.pop(client.client_id, None)
+
+    def _camera_moved(self, client) -> None:
+        try:
+            eye = np.array(client.camera.position, dtype=np.float64)
+        except Exception:  # the tab closed meanwhile
+            return
+        with self._lock:
+            self._eyes[client.client_id] = eye
+            if self._sight_timer is not None:
+                return
+            self._sight_timer = threading.Timer(SIGHT_PERIOD, self._refresh_sight)
+            self._sight_timer.daemon = True
+            self._sight_timer.start()
+
+    def _refresh_sight(self) -> None:
+        """A camera moved: draw translucent what now hides the nearest line, opaque what no longer does."""
+        try:
+            with self._lock:
+                self._sight_timer = None
+                if self._last_snap is not None and self._last_posed is not None:
+                    with self.server.atomic():
+                        self._apply_opacity(self._last_snap, self._last_posed)
+                        self.overlays._see_through_terrain(self._last_snap, self.state, self.eyes())
+        except Exception as exc:  # display only
+            self.state.note_error(f"display error: {type(exc).__name__}: {exc}")
+
+    def eyes(self) -> list[np.ndarray]:
+        """The browser tabs' camera positions (m, W) the view knows."""
+        return list(self._eyes.values())
 
     # ------------------------------------------------------------------ draw
     def see_through(self, snap, items=None) -> set[int]:
@@ -188,41 +312,75 @@ class SceneDrawer:
         r = snap.readout
         if r.p_WA is None or r.p_WB is None:
             return set()
-        items = self.state.scene.shapes_at(snap.q) if items is None else items
+        posed = PosedItems(self.items, self.state.scene, snap.q) if items is None else items
         own = {r.owner_a, r.owner_b}
-        idx = [k for k, it in enumerate(items) if it.owner not in own]
-        hit = see_through(np.array([r.p_WA, r.p_WB], dtype=np.float64), [items[k].shape for k in idx])
+        L = np.array([r.p_WA, r.p_WB], dtype=np.float64)
+        idx = [k for k in posed.near(L[0], L[1]) if self.items[k].owner not in own]
+        hit = see_through(L, [posed.shape(k) for k in idx])
         return {idx[k] for k in hit}
 
-    def draw(self, snap) -> None:
+    def line_hidden(self, snap, posed=None) -> set[int]:
+        """Indices of the shapes standing between a tab's camera and the nearest line
+        (:func:`~._sight.hidden_from`; in a contact the pair's own shapes are not counted)."""
         r = snap.readout
-        items = self.state.scene.shapes_at(snap.q)
-        clear = self.see_through(snap, items)
-        for k, (it, item) in enumerate(zip(items, self.items)):
-            owner, kind, P0, c0, h, color, _, _ = item
-            want = COLORS["hot"] if (r.alarm and owner == r.owner_a) else color
-            if item[6] != want:
-                h.color = want
-                item[6] = want
+        if r.p_WA is None or r.p_WB is None or not self._eyes:
+            return set()
+        posed = PosedItems(self.items, self.state.scene, snap.q) if posed is None else posed
+        skip = set()
+        if not r.distance > 0.0:
+            skip = {k for k, n in enumerate(self.items) if n.owner in (r.owner_a, r.owner_b)}
+        line = np.array([r.p_WA, r.p_WB], dtype=np.float64)
+        out: set[int] = set()
+        for eye in self.eyes():
+            out |= hidden_from(eye, line, posed, skip=skip | out)
+        return out
+
+    def _apply_opacity(self, snap, posed) -> None:
+        clear = self.see_through(snap, posed) | self.line_hidden(snap, posed)
+        self.hidden = clear
+        for k, node in enumerate(self.items):
             opacity = SEE_THROUGH_OPACITY if k in clear else None
-            if item[7] != opacity:
-                h.opacity = opacity
-                item[7] = opacity
-            if kind == "body":
+            if node.shown_opacity != opacity:
+                node.handle.opacity = opacity
+                node.shown_opacity = opacity
+
+    def draw(self, snap) -> None:
+        """Show ``snap`` (one batch of scene messages); :attr:`draw_ms` is how long it took."""
+        t0 = time.perf_counter()
+        with self._lock, self.server.atomic():
+            self._draw(snap)
+        self.draw_ms = (time.perf_counter() - t0) * 1e3
+
+    def _draw(self, snap) -> None:
+        r = snap.readout
+        posed = PosedItems(self.items, self.state.scene, snap.q)
+        for node, T in zip(self.items, posed.T):
+            want = COLORS["hot"] if (r.alarm and node.owner == r.owner_a) else node.color
+            if node.shown_color != want:
+                node.handle.color = want
+                node.shown_color = want
+            if node.kind == "body":
                 continue
-            R, t = rigid_motion(P0, np.asarray(it.shape.core_points))
-            h.position = R @ c0 + t
-            h.wxyz = quat_wxyz_from_matrix(R)
+            R = T[:3, :3]
+            node.handle.position = R @ node.c0 + T[:3, 3]  # viser sends only a changed pose
+            node.handle.wxyz = quat_wxyz_from_matrix(R)
+        self._apply_opacity(snap, posed)
         self._line("primary", r)
         cmp = snap.compare
         self._line("compare", None if cmp is None else cmp.readout, offset=True, primary=r)
-        self._draw_feature(r, items)
+        self._draw_feature(r, posed)
         self._draw_workspace(snap.workspace)
-        self.overlays.draw(snap, self.state)
-        if self.urdf is not None and self._urdf_index is not None:
-            qp = np.asarray(self.state.model.pin_q(self.state.scene.flat_q(snap.q)), dtype=np.float64)
-            cfg = np.array([qp[i] if i >= 0 else 0.0 for i in self._urdf_index])
-            self.urdf.update_cfg(cfg)
+        self.overlays.draw(snap, self.state, self.eyes())
+        self._last_snap, self._last_posed = snap, posed
+        if self._urdf_shown:
+            self._pose_urdf(snap)
+
+    def _pose_urdf(self, snap) -> None:
+        if self.urdf is None or self._urdf_index is None:
+            return
+        qp = np.asarray(self.state.model.pin_q(self.state.scene.flat_q(snap.q)), dtype=np.float64)
+        cfg = np.array([qp[i] if i >= 0 else 0.0 for i in self._urdf_index])
+        self.urdf.update_cfg(cfg)
 
     def _line(self, key: str, r, *, offset: bool = False, primary=None) -> None:
         line, a, b = self.lines[key]
@@ -235,8 +393,8 @@ class SceneDrawer:
             col = r.line_color if key == "primary" else COMPARE_COLOR
             want = marker_radius(float(np.linalg.norm(pb - pa)), self.radius)
             if not 0.8 < want / self._marker_r[key] < 1.25:
-                a, b = self.lines[key][1:] = self._markers(key, col, want)
-                self._line_colors.pop(key, None)
+                a.radius = b.radius = want  # the same spheres, resized
+                self._marker_r[key] = want
             text = f"{no_negative_zero(r.distance * 1000.0, 1):.1f} mm" + (f" ({r.backend})" if key == "compare" else "")
             if label.text != text:
                 label.text = text
@@ -247,7 +405,7 @@ class SceneDrawer:
                 line.colors = np.array(col, dtype=np.uint8)
                 a.color = b.color = col
                 self._line_colors[key] = col
-            line.points = np.array([[pa, pb]], dtype=np.float32)
+            line.points = np.array([[pa, pb]], dtype=np.float32)  # viser sends only changed points
             a.position, b.position = tuple(pa), tuple(pb)
         for h in (line, a, b, label):
             if h.visible != show:
@@ -262,14 +420,18 @@ class SceneDrawer:
             n = np.array([1.0, 0.0, 0.0])
         return COMPARE_OFFSET * self.radius * n / np.linalg.norm(n)
 
-    def _draw_feature(self, r, items) -> None:
+    def _draw_feature(self, r, posed) -> None:
         seg = np.zeros((0, 2, 3))
         if r.feature is not None and r.owner_b and r.p_WB is not None:
-            shapes = [it.shape for it in items if it.owner == r.owner_b]
-            if shapes:
-                shape = min(shapes, key=lambda s: float(np.min(np.linalg.norm(
-                    np.asarray(s.core_points) - r.p_WB, axis=1))))
-                seg = feature_segments(shape, r.feature)
+            ks = [k for k, n in enumerate(self.items) if n.owner == r.owner_b]
+            if ks:
+                k = min(ks, key=lambda k: float(np.min(np.linalg.norm(
+                    np.asarray(posed.shape(k).core_points) - r.p_WB, axis=1))))
+                seg = feature_segments(posed.shape(k), r.feature)
+        key = None if not len(seg) else seg.round(9).tobytes()
+        if key == self._feature_shown:
+            return
+        self._feature_shown = key
         if len(seg):
             self.feature.points = seg.astype(np.float32)
             self.feature.colors = np.array(FEATURE_COLOR, dtype=np.uint8)
@@ -308,7 +470,7 @@ class SceneDrawer:
         P = np.concatenate(pts) if pts else self.center.reshape(1, 3)
         # the arm's points to keep in sight (its nearest link's count most), past the other
         # robots' and bodies' opaque shapes
-        clear = self.see_through(snap, items)
+        clear = self.see_through(snap)
         obstacles = [it.shape for k, it in enumerate(items) if it.robot != snap.active and k not in clear]
         targets, weights, radii, axis = [], [], [], None
         for it in arm:

@@ -10,7 +10,11 @@ testable without a browser) and :class:`OverlayDrawer`, which puts them on a vis
   as in a link's contact with the ground, or through a rock between its ends), the terrain is
   drawn translucent (:data:`TERRAIN_SEE_THROUGH_OPACITY`) so the line and its markers stay in
   sight; viser draws line segments with the depth test on.
-* **Tested boxes**: the pyramid boxes the last check visited, as edges, one colour per level
+  The same when a browser tab's camera sees the line through the terrain
+  (:func:`~._sight.sight_buried`).
+* **Tested boxes** (only on request: :meth:`OverlayDrawer.set_boxes_visible`, the Views tab's
+  checkbox; up to :data:`~._overlays.MAX_TERRAIN_BOXES` edge sets cost a software-WebGL frame
+  seconds): the pyramid boxes the last check visited, as edges, one colour per level
   (:data:`LEVEL_COLORS`, coarse to fine); boxes a link volume hit are drawn thicker.
 * **Ellipsoids**: each uncertain placement's origin position ellipsoid at 90 % and 99.9 %,
   translucent (:data:`ELLIPSOID_COLORS`).
@@ -39,15 +43,15 @@ ELLIPSOID_COLORS = {0.9: ((60, 200, 60), 0.45), 0.999: ((60, 140, 230), 0.2)}
 _BOX_EDGES = ((0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7))
 
 
-def line_buried(elevation, line, *, trim: float = 0.05) -> bool:
+def line_buried(elevation, line, *, trim: float = 0.05, samples: int = LINE_SAMPLES) -> bool:
     """Whether the segment ``line (2, 3)`` m runs under the surface of ``elevation`` (an
-    :class:`armguard.terrain.ElevationMap`): some of :data:`LINE_SAMPLES` points along it, past
+    :class:`armguard.terrain.ElevationMap`): some of ``samples`` points along it, past
     ``trim`` of its length at each end (where it meets its own pair), lies inside a cell's column
     (above the floor, below the cell's height).  Off the map: not buried."""
     L = np.asarray(line, dtype=np.float64).reshape(2, 3)
     if not np.all(np.isfinite(L)):
         return False
-    t = np.linspace(trim, 1.0 - trim, LINE_SAMPLES)[:, None]
+    t = np.linspace(trim, 1.0 - trim, int(samples))[:, None]
     P = L[0] + t * (L[1] - L[0])
     c = float(elevation.cell)
     col = np.floor((P[:, 0] - float(elevation.origin[0])) / c).astype(np.int64)
@@ -141,6 +145,8 @@ class OverlayDrawer:
         self._ellipsoid_key = None
         self._ellipsoids: list = []
         self.terrain_handles: dict = {}
+        self.show_boxes = False
+        self._last_tv = None
 
     def clear(self) -> None:
         for h in self._handles + self._ellipsoids + [h for pair in self._levels.values() for h in pair]:
@@ -166,16 +172,26 @@ class OverlayDrawer:
                 self._handles.append(h)
                 self.terrain_handles[k] = h
 
-    def draw(self, snap, state) -> None:
-        self._see_through_terrain(snap, state)
-        self._draw_boxes(snap.terrain)
+    def draw(self, snap, state, eyes=()) -> None:
+        self._see_through_terrain(snap, state, eyes)
+        self._last_tv = snap.terrain
+        self._draw_boxes(snap.terrain if self.show_boxes else None)
         self._draw_ellipsoids(state)
 
-    def _see_through_terrain(self, snap, state) -> None:
-        """The terrain translucent while the nearest line runs under its surface, opaque otherwise."""
+    def set_boxes_visible(self, on: bool) -> None:
+        """Show (or hide) the pyramid boxes the last check tested."""
+        self.show_boxes = bool(on)
+        self._draw_boxes(self._last_tv if self.show_boxes else None)
+
+    def _see_through_terrain(self, snap, state, eyes=()) -> None:
+        """The terrain translucent while the nearest line runs under its surface, or a tab's
+        camera at one of ``eyes`` sees it through the terrain; opaque otherwise."""
+        from ._sight import sight_buried
+
         m = getattr(state, "terrain", None)
         r = snap.readout
-        buried = m is not None and r.p_WA is not None and r.p_WB is not None and line_buried(m, [r.p_WA, r.p_WB])
+        line = None if m is None or r.p_WA is None or r.p_WB is None else [r.p_WA, r.p_WB]
+        buried = line is not None and (line_buried(m, line) or any(sight_buried(m, e, line) for e in eyes))
         want = TERRAIN_SEE_THROUGH_OPACITY if buried else None
         for h in self.terrain_handles.values():
             if h.opacity != want:

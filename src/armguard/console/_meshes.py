@@ -3,7 +3,8 @@
 The console draws each shape once as a mesh (built with trimesh at the home configuration) and
 afterwards only moves it: :func:`rigid_motion` recovers the rotation and translation that carry
 a shape's core points at home to its core points now (Kabsch's least-squares fit via SVD, exact
-for a rigid motion).  Display only: nothing here feeds a distance.
+for a rigid motion), or :func:`item_frames` gives each shape's frame from forward kinematics
+alone.  Display only: nothing here feeds a distance.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import numpy as np
 
 from ..geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Shape, Sphere
 
-__all__ = ["mesh_of", "rigid_motion", "quat_wxyz_from_matrix", "SPHERE_SUBDIVISIONS", "CAPSULE_SECTIONS"]
+__all__ = ["mesh_of", "rigid_motion", "item_frames", "quat_wxyz_from_matrix", "SPHERE_SUBDIVISIONS", "CAPSULE_SECTIONS"]
 
 SPHERE_SUBDIVISIONS = 2
 """Icosphere subdivisions for spheres (320 faces)."""
@@ -108,3 +109,29 @@ def quat_wxyz_from_matrix(R: np.ndarray) -> np.ndarray:
     q = np.array(q)
     q /= np.linalg.norm(q)
     return q if q[0] >= 0.0 else -q
+
+
+def item_frames(scene, q) -> list[np.ndarray]:
+    """``X_W`` (4, 4) of each item of ``scene.shapes_at(q)``, in its order: the identity for a body
+    (drawn where it is), the link's pose ``X_WL`` for a link's shape, ``X_WP`` for a payload's.
+
+    Only forward kinematics, no shape transformed: the view moves each mesh by
+    ``X(q) X(q_built)⁻¹`` (a ConvexPolyhedron's ``transformed`` rebuilds its packed directions,
+    milliseconds a shape).
+    """
+    parts = scene.split_q(q)
+    eye = np.eye(4)
+    out: list[np.ndarray] = []
+    for b in scene.bodies.values():
+        out.extend(eye for _ in b.shapes)
+    poses = {}
+    for name, robot in scene.robots.items():
+        X = np.asarray(robot.forward_kinematics(parts[name]), dtype=np.float64)
+        poses[name] = X
+        for i, ln in enumerate(robot.link_names):
+            out.extend(X[i] for _ in robot.link_shapes.get(ln, ()))
+    for p in scene.payloads.values():
+        robot = scene.robots[p.robot]
+        X_WP = poses[p.robot][robot.link_index(p.link)] @ np.asarray(p.X_LP, dtype=np.float64)
+        out.extend(X_WP for _ in p.shapes)
+    return out

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = [
+    "timing_line",
     "PanelStatus",
     "PANEL_COLORS",
     "LINE_COLORS",
@@ -282,13 +283,27 @@ def _sigmas_html(rep) -> str:
             f"<div>P(collision) ≤ {o.p_bound:.2e} ({e(o.status.value)} at {rep.confidence:.3g})</div></div>")
 
 
+def timing_line(r: Readout, update_us: float | None = None, draw_ms: float | None = None) -> str:
+    """What the operator waits for after a change, in order: the **check** (the backend's call
+    alone, µs), the console's **update** (the check, a comparison, the terrain, the sigmas; ms) and
+    the **draw** (the last change's scene and panel messages prepared and sent, ms; the browser
+    renders them after)."""
+    parts = [f"check ({r.backend}) {r.elapsed_us:.0f} µs"]
+    if update_us is not None:
+        parts.append(f"update {update_us / 1000.0:.1f} ms")
+    if draw_ms is not None:
+        parts.append(f"draw {draw_ms:.1f} ms")
+    return "waits: " + " · ".join(parts)
+
+
 def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=None, update_us: float | None = None,
-               changes: str = "", terrain=None, sigmas=None) -> str:
+               changes: str = "", terrain=None, sigmas=None, draw_ms: float | None = None) -> str:
     """The distance panel as HTML: a coloured status block and the per-category table.
 
     ``message`` is shown under the table, red when ``error`` else grey.  ``compare`` (a
     ``Comparison`` of :mod:`._backends`) adds the second backend's nearest distance and Δd;
-    ``update_us`` the state's update (check, comparison, terrain, uncertainty; not this HTML nor the drawing); ``changes`` the last
+    ``update_us`` the state's update (check, comparison, terrain, uncertainty) and ``draw_ms`` the
+    last drawing (:func:`timing_line`, ``id="armguard-timing"``); ``changes`` the last
     model reload's summary (the message is marked ``data-reload="true"`` while it is that summary;
     a later message replaces it: the panel shows one message, the current one); ``terrain`` a ``TerrainView`` (the terrain category: distance, the
     pyramid's boxes tested and deciding level; ``id="armguard-terrain"``); ``sigmas`` a
@@ -300,9 +315,7 @@ def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=Non
     e = html.escape
     fg = "#000" if r.status is PanelStatus.WARNING else "#fff"
     dist = "" if not math.isfinite(r.distance) else f"{r.distance:.9g}"
-    cycle = f"check ({e(r.backend)}): {r.elapsed_us:.0f} µs"
-    if update_us is not None:
-        cycle += f" &nbsp; console update: {update_us / 1000.0:.1f} ms"
+    cycle = e(timing_line(r, update_us, draw_ms))
     head = (
         f'<div id="armguard-status" data-status="{r.status.value}" data-backend="{e(r.backend)}" '
         f'data-distance="{dist}" '
@@ -313,7 +326,7 @@ def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=Non
         f"<div>link: {e(r.link or '—')}</div><div>obstacle: {e(r.obstacle or '—')}{e(_fmt_feature(r.feature))}</div>"
         f"<div>arm point: {e(_fmt_p(r.p_WA))}</div><div>obstacle point: {e(_fmt_p(r.p_WB))}</div>"
         f"<div>threshold: {e(_fmt_m(r.threshold))} &nbsp; stopping distance: {e(_fmt_m(r.stopping_distance))}</div>"
-        f"<div style='font-size:0.85em'>{cycle}</div></div>"
+        f"<div id='armguard-timing' style='font-size:0.85em'>{cycle}</div></div>"
     )
     cmp_html = ""
     if compare is not None:
