@@ -14,10 +14,14 @@ clock (``performance.now()``):
 Per scene:
 
 * **Enter → panel**: a value typed into the active arm's first joint field (its home value
-  ±10 deg in turn, within the limits), from the Enter key to the status panel showing the new
-  check;
-* **joint change drawn**: from the same Enter to the last frame the change caused (the page idle
-  again: no frame for :data:`IDLE_MS`);
+  ±10 deg in turn, within the limits; on the rover its elevation, 30 deg -- into the ground with
+  the terrain -- and 0 deg in turn: :data:`TYPED`), from the Enter key to the status panel
+  showing the new check;
+* **joint change drawn**: from the same Enter until the frame that drew the viewer's last render
+  request for it (none for :data:`IDLE_MS` after it) was handed on: the frame during which the
+  request was made (the viewer applies the server's scene messages at the start of a frame and
+  asks for frames from there), else the next one; the viewer's 1 s heartbeat frames and its
+  250 ms "settle" frames after a change redraw the same scene and do not count;
 * **canned run**: a canned test's Setup, then Run: status-panel updates per second and WebGL
   frames per second while it runs (scenes with canned tests only).
 
@@ -44,9 +48,12 @@ SCENES = (("ranger", None), ("hermes", None), ("puma560", None), ("rover", None)
           ("rover", "reference/terrain/rocky.npz"))
 """Built-in scenes (name, terrain file or None)."""
 IDLE_MS = 1500
-"""The page is idle when no WebGL frame has started for this long."""
+"""A change is drawn once the viewer has asked for no frame for this long after its last request."""
 STEP_DEG = 10.0
-"""The typed joint values: the first joint's home value ± this."""
+"""The typed joint values: the first joint's home value ± this ..."""
+TYPED = {"rover": (1, (30.0, 0.0))}
+"""... except on the rover: its elevation (joint 1) at 30 deg (the arm in the ground: 213 pyramid
+boxes tested, a collision) and back at 0 deg, in turn."""
 TIMEOUT_MS = 120000
 
 PROBE_JS = r"""
@@ -100,7 +107,8 @@ DRAWN_JS = """([since, idle]) => {
   if (!ag.panel.some(t => t >= since)) return null;
   const last = rq.length ? rq[rq.length - 1] : since;
   if (now - last < idle) return null;
-  const f = ag.frames.find(f => f[0] >= last);
+  // the frame that drained the messages asked for it (the request made inside it), else the next one
+  const f = ag.frames.find(f => f[0] <= last && last <= f[1]) || ag.frames.find(f => f[0] >= last);
   return (f && f[2] !== null) ? f[2] : null;
 }"""
 
@@ -132,13 +140,16 @@ def _joint_changes(page, app, n: int) -> tuple[list[float], list[float]]:
     robot = st.scene.robots[name]
     units = st.joint_units(name)
     lo, hi = st.joint_limits(name)
-    k = 180.0 / math.pi if units[0] == "deg" else 1.0
-    step = STEP_DEG if units[0] == "deg" else 0.05
-    home = float(snap.q[name][0]) * k
-    box = _input_for(page, f"{robot.joint_names[0]} ({units[0]})")
+    j, values = TYPED.get(st.scene.name, (0, None))
+    k = 180.0 / math.pi if units[j] == "deg" else 1.0
+    step = STEP_DEG if units[j] == "deg" else 0.05
+    home = float(snap.q[name][j]) * k
+    if values is None:
+        values = (home + step, home - step)
+    box = _input_for(page, f"{robot.joint_names[j]} ({units[j]})")
     panel, drawn = [], []
     for i in range(n):
-        v = min(max(home + (step if i % 2 == 0 else -step), lo[0] * k), hi[0] * k)
+        v = min(max(values[i % 2], lo[j] * k), hi[j] * k)
         box.click()
         box.press("Control+a")
         box.type(f"{v:.2f}", delay=0)
@@ -241,7 +252,8 @@ def run(quick: bool) -> str:
     rows = measure(reps=3 if quick else 7)
     return (
         "Headless Debian chromium (`--disable-gpu`: software WebGL), 1600×1000, the console served "
-        "in-process.  *Enter → panel*: a value typed into the active arm's first joint field (home ±10 deg), "
+        "in-process.  *Enter → panel*: a value typed into the active arm's first joint field (home ±10 deg; "
+        "the rover: elevation 30 deg, into the ground with the terrain, and 0 deg in turn), "
         "from the Enter key to the status panel changed; *joint change drawn*: from the same Enter to the "
         "last WebGL frame it caused, handed on (the next animation frame); medians (max) over the typed "
         "values.  *Canned run*: the scene's first canned test, status-panel updates and WebGL frames per "

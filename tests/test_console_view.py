@@ -370,9 +370,10 @@ def test_line_at_home_is_seen_through_the_link_around_it(name):
         r = snap.readout
         wrapped = [st.scene.shapes_at(snap.q)[k].owner for k in app.drawer.see_through(snap)]
         assert wrapped == {"ranger": ["left_arm/link1"], "hermes": ["hera/link4"]}[name], wrapped
-        k = next(i for i, item in enumerate(app.drawer.items) if item[0] == wrapped[0])
-        assert app.drawer.items[k][4].opacity == SEE_THROUGH_OPACITY
-        assert all(item[4].opacity is None for i, item in enumerate(app.drawer.items) if item[0] not in wrapped)
+        k = next(i for i, node in enumerate(app.drawer.items) if node.owner == wrapped[0])
+        assert app.drawer.items[k].handle.opacity == SEE_THROUGH_OPACITY
+        # no tab yet, so no camera for anything else to hide the line from
+        assert all(node.handle.opacity is None for node in app.drawer.items if node.owner not in wrapped)
         with sync_playwright() as pw:
             browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
             try:
