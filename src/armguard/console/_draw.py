@@ -353,7 +353,10 @@ class SceneDrawer:
 
     def _draw(self, snap) -> None:
         r = snap.readout
-        posed = PosedItems(self.items, self.state.scene, snap.q)
+        try:
+            posed = PosedItems(self.items, self.state.scene, snap.q)
+        except ValueError:  # the model was reloaded and the view not yet rebuilt (the draw loop's next frame)
+            return
         for node, T in zip(self.items, posed.T):
             want = COLORS["hot"] if (r.alarm and node.owner == r.owner_a) else node.color
             if node.shown_color != want:
