@@ -235,14 +235,20 @@ def test_typed_joint_moves_the_existing_meshes_and_boxes_come_on_request():
 
 
 @pytest.mark.browser
-def test_a_shape_between_the_camera_and_the_line_turns_translucent():
+@pytest.mark.parametrize("name", ["ranger", "hermes", "puma560", "rover"])
+def test_a_shape_between_the_camera_and_the_line_turns_translucent(name):
+    """In every built-in scene: a camera placed beyond a shape, looking at the nearest line through
+    it, makes that shape translucent (the line itself drawn); after "frame the nearest pair" the
+    translucent shapes are exactly those the line runs through or that still hide it.  On the rover
+    with its terrain, a camera under the ground makes the terrain translucent."""
     _need_chromium()
     from playwright.sync_api import sync_playwright
 
     from armguard.console._draw import SEE_THROUGH_OPACITY
+    from armguard.console._draw_overlays import TERRAIN_SEE_THROUGH_OPACITY
     from armguard.console._nodes import PosedItems
 
-    app = _app("ranger")
+    app = _app(name, **({"terrain": TERRAIN} if name == "rover" else {}))
     try:
         st = app.state
         snap = st.snapshot()
@@ -250,10 +256,9 @@ def test_a_shape_between_the_camera_and_the_line_turns_translucent():
         line = np.array([r.p_WA, r.p_WB])
         mid = line.mean(axis=0)
         posed = PosedItems(app.drawer.items, st.scene, snap.q)
-        # a body away from the pair, and a camera beyond it looking at the line through it
-        k = next(i for i, n in enumerate(app.drawer.items)
-                 if n.kind == "body" and n.owner not in (r.owner_a, r.owner_b)
-                 and np.linalg.norm(posed.centers[i] - mid) > 0.3)
+        # a shape away from the line (a body if one is), and a camera beyond it looking at the line through it
+        far = [i for i, n in enumerate(app.drawer.items) if np.linalg.norm(posed.centers[i] - mid) > posed.bounds[i] + 0.05]
+        k = min(far, key=lambda i: (app.drawer.items[i].kind != "body", -posed.bounds[i]))
         c = posed.centers[k]
         eye = c + 2.0 * (c - mid)
         with sync_playwright() as pw:
@@ -265,13 +270,18 @@ def test_a_shape_between_the_camera_and_the_line_turns_translucent():
                 _until(lambda: app.drawer.items[k].handle.opacity == SEE_THROUGH_OPACITY,
                        f"{app.drawer.items[k].owner} translucent in front of the line")
                 assert app.drawer.lines["primary"][0].visible  # the line itself is drawn
-                # from the pair framing nothing but the shapes the line runs through stays translucent
                 app._frame(client, focus="pair")
-                _until(lambda: app.drawer.items[k].handle.opacity is None, "the body opaque again")
-                wrapped = app.drawer.see_through(st.snapshot())
-                cam = np.asarray(client.camera.position)
-                hidden = app.drawer.line_hidden(st.snapshot())
-                assert {i for i, n in enumerate(app.drawer.items) if n.handle.opacity is not None} == wrapped | hidden, cam
+                time.sleep(1.0)
+                _until(lambda: {i for i, n in enumerate(app.drawer.items) if n.handle.opacity is not None}
+                       == app.drawer.see_through(st.snapshot()) | app.drawer.line_hidden(st.snapshot()),
+                       "only the shapes hiding the line translucent")
+                if st.terrain is not None:
+                    handles = list(app.drawer.overlays.terrain_handles.values())
+                    _until(lambda: all(h.opacity is None for h in handles), "the terrain opaque from the pair framing")
+                    under = np.array([mid[0] + 0.5, mid[1] + 0.5, st.terrain.floor + 0.01])
+                    app._place(client, under, mid)
+                    _until(lambda: all(h.opacity == TERRAIN_SEE_THROUGH_OPACITY for h in handles),
+                           "the terrain translucent seen from under the ground")
             finally:
                 browser.close()
     finally:
