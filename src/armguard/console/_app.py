@@ -23,6 +23,8 @@ from ._plot import ClearancePlot
 from ._readout import panel_html
 from ._state import MAX_DISTANCE_SETTING, ConsoleState
 from ._targets import MAX_ANGLE_DEG, MAX_COORDINATE
+from ._tasks_panel import JogPanel, TasksPanel
+from ._views import TrainingViews
 
 __all__ = ["ConsoleApp", "PortInUseError", "FPS", "PLOT_PERIOD"]
 
@@ -320,6 +322,11 @@ class ConsoleApp:
             self._w_urdf_col = gui.add_checkbox("URDF collision geometry", False, disabled=not has_urdf)
             for label in VIEWS:
                 gui.add_button(label).on_click(lambda e, lb=label: self._set_view(e.client, lb))
+            self._training = TrainingViews(self)  # WORKMATE's training views (top, front, side at once; the hand)
+        with tabs.add_tab("Tasks"):  # WORKMATE's task menu
+            self._tasks = TasksPanel(self)
+        with self._tab_control:
+            self._jog = JogPanel(self, self._tasks.cell, order=self._joints_order + 1.5)
 
         # -- callbacks -----------------------------------------------------------------------
         self._w_active.on_update(self._from_client(lambda v: st.set_active(v)))
@@ -522,6 +529,8 @@ class ConsoleApp:
                                              terrain=snap.terrain, sigmas=snap.sigmas)
             self._sync_widgets()
             self._refresh_plot(snap, periodic=False)
+            for extra in (self._tasks, self._jog, self._training):
+                extra.on_redraw(snap)
         if snap.active != self._framed_active:
             first = self._framed_active is None
             self._framed_active = snap.active

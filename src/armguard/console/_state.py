@@ -445,14 +445,25 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin):
                                        active=robot, tol=self._tol)
             batch = det.check_many(np.array(rows))
             clearance = np.min(np.asarray(batch.min_distance, dtype=np.float64), axis=1)
+            safe = getattr(report, "safe", None)
+            return self.show_verified(name, traj, times, clearance, report,
+                                      f"verified {name}: {'safe' if safe else 'NOT safe'}")
+
+    def show_verified(self, name: str, traj, times, clearance, report, message: str = "") -> Player:
+        """Put an already verified trajectory on the time line (paused at t = 0): ``times`` (N,) s and
+        ``clearance`` (N,) m its clearance profile, ``report`` what the Time line tab shows (its
+        ``summary()``)."""
+        with self._lock:
+            robot = traj.robot_name
+            self._robot(robot)
             self._stop_player()
-            tl = Timeline(T)
-            self._player = Player("verified", name, robot, traj, tl, times, clearance, report)
+            tl = Timeline(_duration_of(traj))
+            self._player = Player("verified", name, robot, traj, tl, np.asarray(times, dtype=np.float64),
+                                  np.asarray(clearance, dtype=np.float64), report)
             self._active = robot
             self._detector.set_active(robot)
             self._apply_player_time(0.0)
-            safe = getattr(report, "safe", None)
-            self._changed(f"verified {name}: {'safe' if safe else 'NOT safe'}")
+            self._changed(message)
             return self._player
 
     # ------------------------------------------------------------------ time line
