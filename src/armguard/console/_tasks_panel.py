@@ -67,7 +67,7 @@ class TasksPanel:
             gui.add_markdown(why)
             return
         objs = self.composer.objects or ("(none)",)
-        self.w_kind = gui.add_dropdown("task", TASK_KINDS, initial_value="PICKUP")
+        self.w_kind = gui.add_dropdown("task", TASK_KINDS, initial_value=TASK_KINDS[0])
         self.w_prompt = gui.add_markdown("")
         self.w_object = gui.add_dropdown("object", objs)
         self.w_onto = gui.add_dropdown("onto", objs, visible=False)
@@ -205,7 +205,7 @@ class TasksPanel:
         finally:
             self._running.release()
         self.run_result = run
-        self.w_report.content = report_html(run.summary())
+        self.w_report.content = report_html(run.summary()).replace('id="armguard-report"', 'id="armguard-program-report"')
         self._draw_frames(run)
         tl = program_timeline(run)
         head = f"program {run.name}: " + ("every motion verified and ran" if run.ok else "STOPPED: " + run.stopped)
@@ -248,7 +248,7 @@ class JogPanel:
         gui = app.server.gui
         self.step, self.turn = 0.01, np.radians(5.0)
         with gui.add_folder("jog the tool", order=order) as self.folder:
-            self.w_frame = gui.add_dropdown("jog in", jog_frames(app.state, cell), initial_value="tool",
+            self.w_frame = gui.add_dropdown("jog in", jog_frames(app.state, cell), initial_value="world",
                                             hint="the axes of: world, the arm's base, the tool (its own axes), an object")
             self.f_step = app._field("jog step (mm)", "10", self._set_step, "more than 0, up to 500 mm")
             self.f_turn = app._field("jog turn (deg)", "5", self._set_turn, "more than 0, up to 90 deg")
