@@ -22,7 +22,7 @@ from scipy.spatial.transform import Rotation
 from armguard.console import ConsoleInputError
 from armguard.console._jog import frame_pose, jog, jogged_pose, parse_step_mm, parse_turn_deg
 from armguard.console._serve import make_state
-from armguard.console._tasks import TaskComposer, program_timeline
+from armguard.console._tasks import TaskComposer, carried, held_intervals, program_timeline
 from armguard.console._views import camera_wxyz, eye_in_hand, inset_camera
 from armguard.program import load_cell, load_program
 
@@ -206,3 +206,26 @@ def test_training_view_cameras():
         assert np.allclose(R[:, 2], ahead, atol=2e-3), label  # looking at the centre along the preset
         assert np.allclose(pos + R[:, 2] * np.linalg.norm(pos - c), c, atol=1e-9)  # its axis through the centre
         assert np.linalg.norm(pos - c) * math.sin(fov / 2) == pytest.approx(1.0)  # the scene's sphere fills it
+
+
+def test_carried_objects_follow_the_hand_to_where_the_workcell_put_them():
+    """The display's carry (the tool's motion since the grasp) puts the object where the emulation's
+    own bookkeeping (ProgramRun.believed) has it: lifted by the depart, then set on the target."""
+    cell = load_cell("puma560")
+    tc = TaskComposer(cell, cell_ref="puma560")
+    tc.add("PICKUP", object="cylinder_a")
+    tc.add("PLACE", object="cylinder_a", onto="cylinder_b")
+    run = tc.run()
+    assert run.ok, run.summary()
+    d = [m.trajectory.duration for m in run.motions]
+    iv = held_intervals(run)
+    assert iv == [("cylinder_a", pytest.approx(d[0] + d[1]), pytest.approx(sum(d[:5])))]
+    traj = program_timeline(run)[0]
+    arm = cell.model.scene.robots[cell.robot]
+    at = lambda t: arm.link_pose(traj.at(t))  # noqa: E731
+    X0 = cell.objects["cylinder_a"]
+    D = carried(iv, at, d[0] + d[1] + d[2])  # after the depart: lifted straight up by the lift
+    assert np.allclose(D["cylinder_a"][:3, 3], [0.0, 0.0, 0.10], atol=1e-6) and np.allclose(D["cylinder_a"][:3, :3], np.eye(3), atol=1e-6)
+    assert np.allclose(carried(iv, at, 0.5 * d[0])["cylinder_a"], np.eye(4))  # not yet grasped
+    D = carried(iv, at, traj.duration)
+    assert np.allclose(D["cylinder_a"] @ X0, run.believed["cylinder_a"], atol=1e-9)

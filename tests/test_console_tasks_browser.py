@@ -119,11 +119,12 @@ def test_pickup_composed_by_the_menu_runs_on_the_time_line(app, browser, tmp_pat
         assert p is not None and p.name == "console_program"
         assert p.timeline.duration == pytest.approx(sum(m.trajectory.duration for m in run.motions))
 
-        # the picture: the hand at the grasp, the program and its report in the Tasks tab
-        t_grasp = sum(m.trajectory.duration for m in run.motions[:2])
-        st.timeline_command("seek", t_grasp)
+        # the picture: the cylinder lifted in the hand, the program and its report in the Tasks tab
+        st.timeline_command("seek", p.timeline.duration)
+        page.wait_for_function("() => document.querySelector('#armguard-message').innerText.includes('every motion verified')",
+                               timeout=UI_TIMEOUT_MS, polling=POLL_MS)
         page.locator("#armguard-program-report").scroll_into_view_if_needed()
-        page.wait_for_timeout(2000)
+        page.wait_for_timeout(4000)  # software WebGL on a loaded machine: let it draw the arm there
         IMG.mkdir(parents=True, exist_ok=True)
         screenshot(page, path=str(IMG / "console-tasks.png"))
 
@@ -141,6 +142,11 @@ def test_pickup_composed_by_the_menu_runs_on_the_time_line(app, browser, tmp_pat
         _until(page, lambda: p.timeline.t >= p.timeline.duration, "the time line's end", 120.0)
         q_end = run.motions[-1].trajectory.waypoints[-1]
         _until(page, lambda: np.allclose(st.snapshot().q["puma560"], q_end, atol=1e-12), "the arm at the depart")
+        # the cylinder went with the hand: its mesh 0.1 m (the lift) above where it stood
+        meshes = [(it[3], it[4]) for it in app.drawer.items if it[0] == "cylinder_a"]
+        assert meshes
+        for c0, h in meshes:
+            _until(page, lambda: np.allclose(h.position, c0 + [0.0, 0.0, 0.10], atol=1e-6), "the carried cylinder")
     finally:
         page.close()
 
@@ -153,6 +159,8 @@ def _look(cam) -> np.ndarray:
 def test_view_buttons_set_the_camera_and_the_training_views_render(app, browser):
     from armguard.console import view_pose
 
+    app.state.stop()  # no program on the time line, the arm at home (the hand looks at the table's corner)
+    app.state.set_q(app.state.scene.default_q())
     page = _open(browser, app)
     try:
         page.get_by_role("tab", name="Views").click()

@@ -26,7 +26,7 @@ import numpy as np
 from ._parse import ConsoleInputError, parse_number
 
 __all__ = ["TASK_KINDS", "PROMPTS", "TaskComposer", "DEFAULT_GRASP", "DEFAULT_LIFT", "DOWN_RPY_DEG",
-           "program_timeline"]
+           "program_timeline", "held_intervals", "carried"]
 
 TASK_KINDS = ("FIND", "PICKUP", "PLACE", "MOVE")
 PROMPTS = {"FIND": ("object",), "PICKUP": ("object",), "PLACE": ("object", "onto"), "MOVE": ("frame",)}
@@ -249,3 +249,33 @@ def program_timeline(run):
     if times:
         return traj, np.concatenate(times), np.concatenate(clear)
     return traj, np.array([0.0, traj.duration]), np.full(2, np.nan)
+
+
+def held_intervals(run) -> list[tuple[str, float, float]]:
+    """``(object, t_grasp, t_release)`` s on the program's time line (:func:`program_timeline`): the
+    object is in the hand from the end of its PICKUP's grasp motion to the end of its PLACE's
+    release motion (``inf``: still held at the end)."""
+    t, held, out = 0.0, {}, []
+    for m in run.motions:
+        if m.trajectory is None:
+            continue
+        t += float(m.trajectory.duration)
+        words = m.label.split()  # "tasks[2] PICKUP cylinder_a grasp" (Program.steps)
+        if m.status != "ran" or len(words) < 4:
+            continue
+        if words[1] == "PICKUP" and words[-1] == "grasp":
+            held[words[2]] = t
+        elif words[1] == "PLACE" and words[-1] == "release" and words[2] in held:
+            out.append((words[2], held.pop(words[2]), t))
+    return out + [(o, tg, math.inf) for o, tg in held.items()]
+
+
+def carried(intervals, tool_pose_at, t: float) -> dict:
+    """object -> ``D_W`` (4, 4): how far each object the program picks up has been carried at time
+    ``t`` (applied in W to where it stood): ``X_WE(t) X_WE(t_grasp)^-1`` while held, frozen at the
+    release after it, the identity before the grasp.  ``tool_pose_at(t)`` is ``X_WE`` at ``t``."""
+    out = {}
+    for obj, tg, tr in intervals:
+        D = np.eye(4) if t < tg else tool_pose_at(min(t, tr)) @ np.linalg.inv(tool_pose_at(tg))
+        out[obj] = D @ out.get(obj, np.eye(4))  # picked up again: after the earlier carry
+    return out

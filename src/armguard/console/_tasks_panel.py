@@ -17,7 +17,8 @@ import numpy as np
 
 from .._errors import ArmguardError
 from ._parse import ConsoleInputError, parse_number
-from ._tasks import DEFAULT_GRASP, DEFAULT_LIFT, PROMPTS, TASK_KINDS, TaskComposer, program_timeline
+from ._tasks import (DEFAULT_GRASP, DEFAULT_LIFT, PROMPTS, TASK_KINDS, TaskComposer, carried, held_intervals,
+                     program_timeline)
 
 __all__ = ["TasksPanel", "JogPanel", "make_cell", "FRAME_AXES"]
 
@@ -63,6 +64,8 @@ class TasksPanel:
         self._bound_items = None
         self._frames: list = []
         self._asking = 0
+        self._track = None  # (the program's player, its held intervals)
+        self._moved: set = set()
         if self.composer is None:
             gui.add_markdown(why)
             return
@@ -213,7 +216,8 @@ class TasksPanel:
             self.app.state.note_error(head) if not run.ok else _note(self.app.state, head)
             return run
         traj, times, clearance = tl
-        self.app.state.show_verified(run.name, traj, times, clearance, run, head)
+        player = self.app.state.show_verified(run.name, traj, times, clearance, run, head)
+        self._track = (player, held_intervals(run))
         if not run.ok:
             self.app.state.note_error(head)
         return run
@@ -233,8 +237,28 @@ class TasksPanel:
                                                  axes_radius=r * scale))
 
     def on_redraw(self, snap) -> None:
-        if self.composer is not None:
-            self.bind_clicks()
+        if self.composer is None:
+            return
+        self.bind_clicks()
+        p = snap.player
+        if self._track is not None and p is self._track[0]:
+            robot = self.app.state.scene.robots[p.robot]
+            self._carry(carried(self._track[1], lambda t: robot.link_pose(p.trajectory.at(t)), p.timeline.t))
+        elif self._moved:
+            self._carry({})
+
+    def _carry(self, moves: dict) -> None:
+        """Draw each object the program carries where the hand has taken it (``moves``: object -> D_W);
+        the others where they stand.  Display only: the console's checks keep the scene as it is."""
+        from ._meshes import quat_wxyz_from_matrix
+
+        for owner, kind, _P0, c0, h, *_ in self.app.drawer.items:
+            if kind != "body" or (owner not in moves and owner not in self._moved):
+                continue
+            D = moves.get(owner, np.eye(4))
+            h.position = D[:3, :3] @ c0 + D[:3, 3]
+            h.wxyz = quat_wxyz_from_matrix(D[:3, :3])
+        self._moved = set(moves)
 
 
 class JogPanel:
