@@ -229,3 +229,42 @@ def test_carried_objects_follow_the_hand_to_where_the_workcell_put_them():
     assert np.allclose(carried(iv, at, 0.5 * d[0])["cylinder_a"], np.eye(4))  # not yet grasped
     D = carried(iv, at, traj.duration)
     assert np.allclose(D["cylinder_a"] @ X0, run.believed["cylinder_a"], atol=1e-9)
+
+
+def test_tasks_panel_in_process_draws_bound_frames_and_stops_on_a_collision():
+    """The panel's commands without a browser: prompts answered in turn by picks, a FIND's bound
+    frame drawn beside its nominal one, a refused motion's report in the panel with the run stopped."""
+    from armguard.console._serve import serve
+
+    app = serve(str(CELL), port=0, block=False)
+    try:
+        panel, st = app._tasks, app.state
+        panel.w_kind.value = "PLACE"
+        panel._kind_changed()
+        assert panel.picked("cylinder_a") == "object" and panel.picked("cylinder_b") == "onto"
+        assert (panel.w_object.value, panel.w_onto.value) == ("cylinder_a", "cylinder_b")
+        with pytest.raises(ConsoleInputError, match="not an object"):
+            panel.picked("puma560/link2")
+        panel._do(panel._add)  # PLACE with nothing held: refused, said in the panel
+        assert panel.composer.entries == [] and "does not hold" in st.snapshot().message
+        panel.w_kind.value = "FIND"
+        panel._kind_changed()
+        panel.picked("cylinder_a")
+        panel._add()
+        run = panel.run()
+        assert run.ok and len(run.finds) == 1 and len(panel._frames) == 2
+        f = run.finds[0]
+        nominal, found = panel._frames
+        assert np.allclose(nominal.position, f.nominal[:3, 3]) and np.allclose(found.position, f.found[:3, 3])
+        assert not np.allclose(f.found[:3, 3], f.nominal[:3, 3], atol=1e-3)  # the real cell differs: two frames
+        # a motion into the table: refused by verification; the program stops there, the report says so
+        panel.composer.clear()
+        panel.composer.add("MOVE", frame="table", xyz=(-0.1, 0.0, 0.2), rpy_deg=(180.0, 0.0, 0.0))
+        panel.composer.add("MOVE", home=True)
+        run = panel.run()
+        assert not run.ok and len(run.motions) == 1
+        assert "STOPPED" in panel.w_report.content and st.snapshot().message_is_error
+        p = st.snapshot().player
+        assert p is not None and p.report is run and "refused" in p.report.summary()
+    finally:
+        app.stop()
