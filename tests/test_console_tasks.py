@@ -22,7 +22,7 @@ from scipy.spatial.transform import Rotation
 from armguard.console import ConsoleInputError
 from armguard.console._jog import frame_pose, jog, jogged_pose, parse_step_mm, parse_turn_deg
 from armguard.console._serve import make_state
-from armguard.console._tasks import TaskComposer, carried, held_intervals, program_timeline
+from armguard.console._tasks import TaskComposer, carried, held_intervals, program_timeline, task_ends
 from armguard.console._views import camera_wxyz, eye_in_hand, inset_camera
 from armguard.program import load_cell, load_program
 
@@ -229,6 +229,8 @@ def test_carried_objects_follow_the_hand_to_where_the_workcell_put_them():
     assert np.allclose(carried(iv, at, 0.5 * d[0])["cylinder_a"], np.eye(4))  # not yet grasped
     D = carried(iv, at, traj.duration)
     assert np.allclose(D["cylinder_a"] @ X0, run.believed["cylinder_a"], atol=1e-9)
+    ends = task_ends(run)
+    assert [k for _, k in ends] == [0, 0, 0, 1, 1, 1] and ends[-1][0] == pytest.approx(traj.duration)
 
 
 def test_tasks_panel_in_process_draws_bound_frames_and_stops_on_a_collision():

@@ -142,6 +142,7 @@ def test_pickup_composed_by_the_menu_runs_on_the_time_line(app, browser, tmp_pat
         _until(page, lambda: p.timeline.t >= p.timeline.duration, "the time line's end", 120.0)
         q_end = run.motions[-1].trajectory.waypoints[-1]
         _until(page, lambda: np.allclose(st.snapshot().q["puma560"], q_end, atol=1e-12), "the arm at the depart")
+        assert "1. PICKUP cylinder_a ▶" in panel.w_list.content  # the task the time line is in
         # the cylinder went with the hand: its mesh 0.1 m (the lift) above where it stood
         meshes = [(it[3], it[4]) for it in app.drawer.items if it[0] == "cylinder_a"]
         assert meshes

@@ -87,7 +87,8 @@ class ModelWatcher:
 
 
 def make_state(scene, *, threshold: float = DEFAULT_THRESHOLD, terrain=None, uncertain=()) -> ConsoleState:
-    """The console state for ``scene`` (a Scene or a built-in / file name) with its model, a
+    """The console state for ``scene`` (a Scene or a built-in / file name; a cell file: its model, and
+    the cell as ``state.cell`` for the Tasks tab) with its model, a
     terrain (an ElevationMap, or a file for :func:`armguard.terrain.load_terrain`) and uncertain
     placements (UncertainPlacement objects or ``"BODY=SIGMA_M[,SIGMA_DEG]"`` texts)."""
     from ._overlays import parse_uncertain
@@ -96,12 +97,11 @@ def make_state(scene, *, threshold: float = DEFAULT_THRESHOLD, terrain=None, unc
     if isinstance(scene, (str, Path)):
         from ..program._format import is_cell_file
 
-        source = str(scene)
+        source = str(Path(scene).resolve()) if Path(str(scene)).exists() else str(scene)  # a saved program names it
         if is_cell_file(scene):  # the task menu programs this cell (its camera, its real layout)
             from ..program import load_cell
 
             cell = load_cell(scene)
-            source = str(Path(scene).resolve())
             scene, model = cell.model.scene, cell.model
         else:
             scene, model = load_for_console(scene)

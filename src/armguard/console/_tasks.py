@@ -26,7 +26,7 @@ import numpy as np
 from ._parse import ConsoleInputError, parse_number
 
 __all__ = ["TASK_KINDS", "PROMPTS", "TaskComposer", "DEFAULT_GRASP", "DEFAULT_LIFT", "DOWN_RPY_DEG",
-           "program_timeline", "held_intervals", "carried"]
+           "program_timeline", "held_intervals", "carried", "task_ends"]
 
 TASK_KINDS = ("FIND", "PICKUP", "PLACE", "MOVE")
 PROMPTS = {"FIND": ("object",), "PICKUP": ("object",), "PLACE": ("object", "onto"), "MOVE": ("frame",)}
@@ -278,4 +278,16 @@ def carried(intervals, tool_pose_at, t: float) -> dict:
     for obj, tg, tr in intervals:
         D = np.eye(4) if t < tg else tool_pose_at(min(t, tr)) @ np.linalg.inv(tool_pose_at(tg))
         out[obj] = D @ out.get(obj, np.eye(4))  # picked up again: after the earlier carry
+    return out
+
+
+def task_ends(run) -> list[tuple[float, int]]:
+    """``(t_end, task index)`` s of each motion on the program's time line, in order: which task
+    (``tasks[k]`` of the program) the time line is in at a time."""
+    t, out = 0.0, []
+    for m in run.motions:
+        if m.trajectory is None:
+            continue
+        t += float(m.trajectory.duration)
+        out.append((t, int(m.label.split("]", 1)[0].split("[", 1)[1])))
     return out

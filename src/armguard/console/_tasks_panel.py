@@ -18,7 +18,7 @@ import numpy as np
 from .._errors import ArmguardError
 from ._parse import ConsoleInputError, parse_number
 from ._tasks import (DEFAULT_GRASP, DEFAULT_LIFT, PROMPTS, TASK_KINDS, TaskComposer, carried, held_intervals,
-                     program_timeline)
+                     program_timeline, task_ends)
 
 __all__ = ["TasksPanel", "JogPanel", "make_cell", "FRAME_AXES"]
 
@@ -112,9 +112,12 @@ class TasksPanel:
     def _set_lift(self, text) -> None:
         self.lift = parse_number(text, "approach lift", lo=0.0, hi=2.0, unit="m")
 
-    def _show_list(self) -> None:
-        lines = self.composer.lines()
-        self.w_list.content = "**program**\n\n" + ("\n".join(f"{x}  " for x in lines) if lines else "(no tasks yet)")
+    def _show_list(self, playing: int | None = None) -> None:
+        """The program list; the task the time line is in now marked ▶ (``playing``: its index)."""
+        lines = [f"{x} ▶" if k == playing else x for k, x in enumerate(self.composer.lines())]
+        text = "**program**\n\n" + ("\n".join(f"{x}  " for x in lines) if lines else "(no tasks yet)")
+        if self.w_list.content != text:
+            self.w_list.content = text
 
     def prompts(self) -> tuple[str, ...]:
         return PROMPTS[self.w_kind.value]
@@ -217,7 +220,7 @@ class TasksPanel:
             return run
         traj, times, clearance = tl
         player = self.app.state.show_verified(run.name, traj, times, clearance, run, head)
-        self._track = (player, held_intervals(run))
+        self._track = (player, held_intervals(run), task_ends(run), self.composer.lines())
         if not run.ok:
             self.app.state.note_error(head)
         return run
@@ -244,8 +247,11 @@ class TasksPanel:
         if self._track is not None and p is self._track[0]:
             robot = self.app.state.scene.robots[p.robot]
             self._carry(carried(self._track[1], lambda t: robot.link_pose(p.trajectory.at(t)), p.timeline.t))
+            if self._track[3] == self.composer.lines():  # the list is the program that ran
+                self._show_list(playing=next((k for t_end, k in self._track[2] if p.timeline.t <= t_end), None))
         elif self._moved:
             self._carry({})
+            self._show_list()
 
     def _carry(self, moves: dict) -> None:
         """Draw each object the program carries where the hand has taken it (``moves``: object -> D_W);
@@ -271,7 +277,7 @@ class JogPanel:
         self.cell = cell
         gui = app.server.gui
         self.step, self.turn = 0.01, np.radians(5.0)
-        with gui.add_folder("jog the tool", order=order) as self.folder:
+        with gui.add_folder("jog the tool", order=order, visible=False) as self.folder:
             self.w_frame = gui.add_dropdown("jog in", jog_frames(app.state, cell), initial_value="world",
                                             hint="the axes of: world, the arm's base, the tool (its own axes), an object")
             self.f_step = app._field("jog step (mm)", "10", self._set_step, "more than 0, up to 500 mm")
@@ -300,4 +306,6 @@ class JogPanel:
         return jog(self.app.state, self.w_frame.value, label[1], cell=self.cell, **kw)
 
     def on_redraw(self, snap) -> None:
-        pass
+        want = snap.mode == "cartesian"  # beside the Cartesian panel
+        if self.folder.visible != want:
+            self.folder.visible = want
