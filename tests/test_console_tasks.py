@@ -241,6 +241,11 @@ def test_tasks_panel_in_process_draws_bound_frames_and_stops_on_a_collision():
     app = serve(str(CELL), port=0, block=False)
     try:
         panel, st = app._tasks, app.state
+        app._jog._set_step("25")  # a typed step: in force and shown (a refusal puts the box back to it)
+        assert app._jog.step == pytest.approx(0.025) and app._jog.f_step.shown == "25"
+        with pytest.raises(ConsoleInputError):
+            app._jog._set_step("-1")
+        assert app._jog.step == pytest.approx(0.025) and app._jog.f_step.shown == "25"
         panel.w_kind.value = "PLACE"
         panel._kind_changed()
         assert panel.picked("cylinder_a") == "object" and panel.picked("cylinder_b") == "onto"

@@ -184,7 +184,7 @@ def test_view_buttons_set_the_camera_and_the_training_views_render(app, browser)
 
         # top, front, side and the hand at once: four insets, each a picture, all different
         app._training.images = {}
-        _button(page, "show top, front, side and hand").click()
+        _button(page, "render the training views").click()
         _until(page, lambda: len(app._training.images) == 4, "the four insets", 180.0)
         imgs = app._training.images
         for label, img in imgs.items():
@@ -213,9 +213,12 @@ def test_jog_plus_x_in_tool_coordinates_moves_along_the_tool_x(app, browser):
         _until(page, lambda: app._jog.w_frame.value == "tool", "the tool frame")
         _type(_input_for(page, "jog step (mm)"), "20")
         _until(page, lambda: app._jog.step == pytest.approx(0.02), "the 20 mm step")
-        _type(_input_for(page, "jog step (mm)"), "0")  # refused: the step stays
+        box = _input_for(page, "jog step (mm)")
+        _until(page, lambda: box.input_value() == "20", "the box showing the step in force")
+        _type(box, "0")  # refused: the step and the box stay
         page.wait_for_selector("#armguard-message[data-error='true']", timeout=UI_TIMEOUT_MS)
         assert app._jog.step == pytest.approx(0.02) and np.array_equal(st.ee_pose(), X0)
+        _until(page, lambda: box.input_value() == "20", "the box back at the step in force")
         page.locator("xpath=//label[normalize-space()='move along']/ancestor::div[.//button][1]//button",
                      has_text="+x").first.click()
         _until(page, lambda: not np.array_equal(st.ee_pose(), X0), "the jog")

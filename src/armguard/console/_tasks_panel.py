@@ -57,8 +57,8 @@ class TasksPanel:
         self.app = app
         st = app.state
         gui = app.server.gui
-        self.cell, why = make_cell(st)
-        self.composer = None if self.cell is None else TaskComposer(self.cell, cell_ref=why)
+        self.cell, ref = make_cell(st)  # ref: how a saved program names the cell, or why there is none
+        self.composer = None if self.cell is None else TaskComposer(self.cell, cell_ref=ref)
         self.run_result = None
         self._running = threading.Lock()
         self._bound_items = None
@@ -67,7 +67,7 @@ class TasksPanel:
         self._track = None  # (the program's player, its held intervals)
         self._moved: set = set()
         if self.composer is None:
-            gui.add_markdown(why)
+            gui.add_markdown(ref)
             return
         objs = self.composer.objects or ("(none)",)
         self.w_kind = gui.add_dropdown("task", TASK_KINDS, initial_value=TASK_KINDS[0])
@@ -108,9 +108,11 @@ class TasksPanel:
 
     def _set_grasp(self, text) -> None:
         self.grasp = parse_number(text, "grasp height", lo=-2.0, hi=2.0, unit="m")
+        self.f_grasp.show(f"{self.grasp:g}")  # the box shows the value in force
 
     def _set_lift(self, text) -> None:
         self.lift = parse_number(text, "approach lift", lo=0.0, hi=2.0, unit="m")
+        self.f_lift.show(f"{self.lift:g}")
 
     def _show_list(self, playing: int | None = None) -> None:
         """The program list; the task the time line is in now marked ▶ (``playing``: its index)."""
@@ -291,11 +293,13 @@ class JogPanel:
         from ._jog import parse_step_mm
 
         self.step = parse_step_mm(text)
+        self.f_step.show(f"{self.step * 1e3:g}")  # the box shows the value in force
 
     def _set_turn(self, text) -> None:
         from ._jog import parse_turn_deg
 
         self.turn = parse_turn_deg(text)
+        self.f_turn.show(f"{np.degrees(self.turn):g}")
 
     def press(self, what: str, label: str):
         """One jog: ``what`` "move" or "turn", ``label`` like ``"+x"``; returns the new joints."""

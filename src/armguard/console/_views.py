@@ -87,7 +87,7 @@ class TrainingViews:
                              "scene from those cameras.")
             self.w_eye = gui.add_checkbox("main view: eye in the hand", False,
                                           hint="the main camera rides on the active arm's tool, looking along its z axis")
-            self.b_show = gui.add_button("show top, front, side and hand")
+            self.b_show = gui.add_button("render the training views")
             self.w_keep = gui.add_checkbox("keep the insets current", False,
                                            hint=f"re-render after a change, at most every {REFRESH_S:g} s")
             self.w_images = {}
