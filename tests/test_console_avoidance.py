@@ -156,9 +156,11 @@ def test_plot_marks_time_across_both_axes(ranger_state):
 def test_avoidance_in_a_browser():
     """Toggle avoidance and type stand-offs in chromium (bad ones refused, the box put back); Run
     canned test 1 with avoidance: no COLLISION headline, ends stopped short with the least distance
-    at the stand-off and the plot shown; without avoidance the same Run stops by detection."""
+    at the stand-off and the plot shown (saved as ``docs/img/console-avoidance.png``); without
+    avoidance the same Run stops by detection."""
     from test_console_browser import CHROMIUM, CHROMIUM_ARGS, POLL_MS, UI_TIMEOUT_MS, _input_for, _need_chromium
-    from test_console_view import _app, _open, _type, _wait
+    from test_console_browser import screenshot
+    from test_console_view import IMG, _app, _open, _type, _wait
 
     _need_chromium()
     from playwright.sync_api import sync_playwright
@@ -181,7 +183,7 @@ def test_avoidance_in_a_browser():
                     _type(field, bad)
                     _wait(page, "() => document.querySelector('#armguard-message[data-error=\"true\"]') && "
                                 "document.querySelector('#armguard-message').innerText.includes('stand-off')")
-                    _until(lambda: float(field.input_value() or "nan") == before, "the box put back")
+                    _until(lambda: _num(field.input_value()) == before, "the box put back")
                     assert st.avoidance_settings()[1] == before
                     _type(field, "0.05")  # a good value clears the message before the next bad one
                     _until(lambda: st.avoidance_settings()[1] == 0.05, "stand-off 0.05")
@@ -204,6 +206,11 @@ def test_avoidance_in_a_browser():
                 assert "100.0 mm" in page.inner_text("body")
                 page.get_by_role("tab", name="Time line").click()
                 _wait(page, "() => Array.from(document.querySelectorAll('img')).some(i => i.naturalWidth >= 400)")
+                page.set_viewport_size({"width": 1100, "height": 1150})  # the panel and the plot below it
+                page.evaluate("() => Array.from(document.querySelectorAll('img')).find(i => i.naturalWidth >= 400)"
+                              ".scrollIntoView({block: 'end'})")
+                page.wait_for_timeout(1500)  # let software WebGL draw the latest frame
+                screenshot(page, path=str(IMG / "console-avoidance.png"))
 
                 page.get_by_role("tab", name="Control").click()
                 box.click()
@@ -229,6 +236,13 @@ def _wait_run(page, state: str) -> None:
             return
         page.wait_for_timeout(200)
     raise AssertionError(f"the run did not end {state!r}: {page.inner_text('body')[:2000]}")
+
+
+def _num(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        return float("nan")
 
 
 def _until(fn, what: str, timeout_s: float = 30.0) -> None:
