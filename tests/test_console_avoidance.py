@@ -12,6 +12,8 @@ import time
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as hst
 
 from armguard.console import ConsoleInputError
 
@@ -94,6 +96,46 @@ def test_recorded_run_is_run_canned_with_every_step(ranger_state):
     assert np.allclose(run.at(run.times[k]), run.q[k])
     mid = run.at(0.5 * (run.times[k] + run.times[k + 1]))
     assert np.allclose(mid, 0.5 * (run.q[k] + run.q[k + 1]))
+
+
+@pytest.fixture(scope="module")
+def ranger_checker(ranger_state):
+    from armguard.backends import checker
+
+    return checker(ranger_state.model, "analytic")
+
+
+@pytest.mark.parametrize("stand_off, outcome, words", [
+    (0.05, "free", "reached the goal, the filter never acting"),  # test 1 comes to 80.6 mm: never within reach
+    (0.08, "slid", "reached the goal sliding along the obstacle"),
+    (0.1, "stopped short", "stopped short at 97.8 % of the way"),
+])
+def test_outcome_says_what_the_filter_did(ranger_state, ranger_checker, stand_off, outcome, words):
+    from armguard.console._avoid import GOAL_REACHED, avoid_canned
+
+    run = avoid_canned(ranger_state.model, TEST, stand_off, ranger_checker)
+    assert run.outcome == outcome and words in run.summary()
+    assert (run.acted == 0) == (outcome == "free")
+    assert (run.progress >= GOAL_REACHED) == (outcome != "stopped short")
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(stand_off=hst.floats(0.0, 0.22), test=hst.sampled_from(["test1_left_inward", "test2_left_up_and_back",
+                                                               "test7_right_inward"]))
+def test_every_step_keeps_the_stand_off(ranger_state, ranger_checker, stand_off, test):
+    """Ranger's tests that approach the module: at every control step the filtered least distance
+    is at least min(stand-off, start) - 1 mm, the arm stays within its limits, and the commanded
+    configuration is the test's profile."""
+    from armguard.console._avoid import avoid_canned
+
+    model = ranger_state.model
+    run = avoid_canned(model, test, stand_off, ranger_checker)
+    assert np.all(run.distance >= min(stand_off, run.distance[0]) - SLACK), run.distance.min()
+    robot = model.scene.robots[run.robot]
+    assert np.all(run.q >= np.asarray(robot.lower) - 1e-12) and np.all(run.q <= np.asarray(robot.upper) + 1e-12)
+    traj = model.scene.canned_tests[test].trajectory(model.scene)
+    assert np.allclose(run.q_cmd[-1], traj.at(traj.duration)) and np.allclose(run.q_cmd[0], traj.at(0.0))
+    assert sum(run.statuses.values()) == run.steps
 
 
 def test_canned_run_with_avoidance_keeps_the_stand_off_and_without_stops_by_detection(ranger_state):
