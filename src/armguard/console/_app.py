@@ -265,7 +265,7 @@ class ConsoleApp:
             self._w_joint_folders = {}
             self._w_joints = {}
             self._joints_order = self._fields["stop"].form.order
-            self._avoid = AvoidPanel(self).build_control(self._joints_order + 0.01)
+            self._avoid = AvoidPanel(self).build_control(self._joints_order + 3.0)  # below the workspace box
             for k, name in enumerate(st.robots):
                 self._build_joint_panel(name, snap, self._joints_order + (k + 1) / (len(st.robots) + 1))
             with gui.add_folder("Cartesian", visible=False, order=self._joints_order + 1.0) as self._w_cart:
