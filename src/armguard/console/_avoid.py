@@ -281,7 +281,7 @@ class AvoidMixin:
         p.timeline.pause()
         run = p.report
         self._run_state = "stopped short by avoidance" if run.outcome == "stopped short" else "done"
-        self._run_detail = f"at t = {t:.2f} s with avoidance: {run.summary()}"
+        self._run_detail = f"at t = {t:.2f} s: {run.summary()}"
         self._message_is_error = run.contact
         self._message = f"{p.name}: {self._run_state} {self._run_detail}"
         return True
