@@ -17,14 +17,14 @@ import time
 import numpy as np
 
 from .._errors import ArmguardError
+from ._avoid_panel import AvoidPanel
 from ._draw import SceneDrawer
 from ._fields import COMMIT_ON_BLUR_HTML, TypedField
 from ._plot import ClearancePlot
 from ._readout import panel_html
 from ._state import MAX_DISTANCE_SETTING, ConsoleState
 from ._targets import MAX_ANGLE_DEG, MAX_COORDINATE
-from ._tasks_panel import JogPanel, TasksPanel
-from ._views import TrainingViews
+from ._tasks_panel import TasksPanel, TrainingViews
 
 __all__ = ["ConsoleApp", "PortInUseError", "FPS", "PLOT_PERIOD"]
 
@@ -266,6 +266,7 @@ class ConsoleApp:
             self._w_joint_folders = {}
             self._w_joints = {}
             self._joints_order = self._fields["stop"].form.order
+            self._avoid = AvoidPanel(self).build_control(self._joints_order + 3.0)  # below the workspace box
             for k, name in enumerate(st.robots):
                 self._build_joint_panel(name, snap, self._joints_order + (k + 1) / (len(st.robots) + 1))
             with gui.add_folder("Cartesian", visible=False, order=self._joints_order + 1.0) as self._w_cart:
@@ -308,6 +309,7 @@ class ConsoleApp:
             self._w_rate = gui.add_markdown("")
             self._w_plot = gui.add_image(np.full((20, 40, 3), 255, dtype=np.uint8), format="png", visible=False)
             self._w_report = gui.add_html("")
+            self._avoid.build_timeline()
 
         # -- views ---------------------------------------------------------------------------
         with tabs.add_tab("Views"):
@@ -323,10 +325,7 @@ class ConsoleApp:
             for label in VIEWS:
                 gui.add_button(label).on_click(lambda e, lb=label: self._set_view(e.client, lb))
             self._training = TrainingViews(self)  # WORKMATE's training views (top, front, side at once; the hand)
-        with tabs.add_tab("Tasks"):  # WORKMATE's task menu
-            self._tasks = TasksPanel(self)
-        with self._tab_control:
-            self._jog = JogPanel(self, self._tasks.cell, order=self._joints_order + 1.5)
+        self._tasks, self._jog = TasksPanel.build(self, tabs)  # WORKMATE's task menu (a tab), jog (Control tab)
 
         # -- callbacks -----------------------------------------------------------------------
         self._w_active.on_update(self._from_client(lambda v: st.set_active(v)))
@@ -478,6 +477,7 @@ class ConsoleApp:
         self._fields["ws_hi"].show(_vec(hi))
         self._fields["thr"].show(_fmt(snap.threshold))
         self._fields["stop"].show(_fmt(snap.stopping_distance))
+        self._avoid.sync()
         for name, (fields, sliders, scale) in self._w_joints.items():
             units = self.state.joint_units(name)
             for j, (f, s) in enumerate(zip(fields, sliders)):
@@ -539,6 +539,7 @@ class ConsoleApp:
                     self._frame(client)
 
     def _refresh_plot(self, snap, *, periodic: bool) -> None:
+        self._avoid.refresh(snap, periodic=periodic)
         p = snap.player
         if p is None or p.kind != "verified":
             if self._plot_player is not None:

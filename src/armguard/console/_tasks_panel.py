@@ -19,8 +19,9 @@ from .._errors import ArmguardError
 from ._parse import ConsoleInputError, parse_number
 from ._tasks import (DEFAULT_GRASP, DEFAULT_LIFT, PROMPTS, TASK_KINDS, TaskComposer, carried, held_intervals,
                      program_timeline, task_ends)
+from ._views import TrainingViews  # noqa: F401  (the app imports the WORKMATE widgets from here)
 
-__all__ = ["TasksPanel", "JogPanel", "make_cell", "FRAME_AXES"]
+__all__ = ["TasksPanel", "JogPanel", "TrainingViews", "make_cell", "FRAME_AXES"]
 
 FRAME_AXES = (0.08, 0.004)
 """Drawn frames: axis length and radius (m) of a FIND's bound frame (its nominal frame: half)."""
@@ -52,6 +53,15 @@ def make_cell(state):
 
 class TasksPanel:
     """The Tasks tab of a :class:`~._app.ConsoleApp` (build inside the tab)."""
+
+    @classmethod
+    def build(cls, app, tabs) -> tuple["TasksPanel", "JogPanel"]:
+        """The Tasks tab and the jog folder (in the Control tab, after the Cartesian panel)."""
+        with tabs.add_tab("Tasks"):
+            panel = cls(app)
+        with app._tab_control:
+            jog = JogPanel(app, panel.cell, order=app._joints_order + 1.5)
+        return panel, jog
 
     def __init__(self, app) -> None:
         self.app = app
