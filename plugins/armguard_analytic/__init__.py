@@ -133,6 +133,7 @@ class AnalyticChecker(CheckerBase):
 
     name = "analytic"
     capabilities = frozenset({Capability.DISTANCES, Capability.VERDICTS})
+    jacobian_with_distances = True  # the Jacobian kernel runs right after the distances
 
     def __init__(self, model, options: Mapping | None = None) -> None:
         super().__init__(model)

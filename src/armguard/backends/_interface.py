@@ -223,6 +223,10 @@ class CheckerBase:
     name = "base"
     capabilities: frozenset = frozenset({Capability.DISTANCES, Capability.VERDICTS})
     representation: Mapping = {}
+    # True where pair_distances(q, jacobian=True) differentiates every row in the distance pass, at
+    # a cost near the distances' (the analytic backend's kernel): a caller wanting the Jacobians of
+    # a few rows then asks for all of them; otherwise it asks distance_jacobian for those rows only
+    jacobian_with_distances: bool = False
 
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)
