@@ -264,14 +264,7 @@ class AnalyticChecker(CheckerBase):
         witness points are ``d``, ``p_WA``, ``p_WB``, with the link poses the kernel left in ``SF``
         (this thread's scratch, checked at ``q`` last): the Jacobian kernel, then forward
         differences for the touching pairs (as :meth:`CheckerBase.witness_jacobian`)."""
-        jp = f.jac
-        if jp is None:
-            with self._lock:
-                jp = f.jac
-                if jp is None:
-                    from ._jacobian import JacobianPlan
-
-                    jp = f.jac = JacobianPlan(self, f)
+        jp = f.jac or self._jacobian_plan(f)
         n = len(d)
         jac, smooth = np.empty((n, jp.nv)), np.empty(n, np.bool_)
         H, MF, MI = f.args[:3]
@@ -282,6 +275,15 @@ class AnalyticChecker(CheckerBase):
             sub = touching if idx is None else idx[touching]
             jac[touching] = finite_difference_rows(self, q, sub, step=self.model.tol.jacobian_step, one_sided=True)[0]
         return jac, smooth
+
+    def _jacobian_plan(self, f: _Fast):
+        """The Jacobian kernel's arrays for the call plan ``f`` (made once, whichever thread asks)."""
+        with self._lock:
+            if f.jac is None:
+                from ._jacobian import JacobianPlan
+
+                f.jac = JacobianPlan(self, f)
+        return f.jac
 
     def distance_jacobian(self, q, result: PairDistances, idx=None) -> tuple:
         """``(jacobian (n, nv), smooth (n,))`` of ``result`` (this checker's distances of the Model
@@ -297,11 +299,10 @@ class AnalyticChecker(CheckerBase):
             SF, SI, q1 = f.tls.s
         except AttributeError:
             SF, SI, q1 = f.scratch()
-        if f.jac is None:
-            self._jacobian_rows(f, q, None, SF, np.ones(0), np.zeros((0, 3)), np.zeros((0, 3)))  # builds the plan
+        jp = f.jac or self._jacobian_plan(f)
         H, MF, MI, prm, iprm = f.args
         e = np.empty(0)
-        err = f.entry(q, 0, 1, f.jac.zero_gmap, H, MF, MI, SF, SI, prm, iprm, q1, e, e.reshape(0, 3), e.reshape(0, 3))
+        err = f.entry(q, 0, 1, jp.zero_gmap, H, MF, MI, SF, SI, prm, iprm, q1, e, e.reshape(0, 3), e.reshape(0, 3))
         if err:
             self._kernel_error(f, err, q[None], False)
         c = np.ascontiguousarray
