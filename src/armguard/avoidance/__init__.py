@@ -41,7 +41,7 @@ import numpy as np
 from .._errors import AvoidanceError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 
-__all__ = ["avoid", "avoid_step", "Damper", "Avoidance", "AvoidanceStatus"]
+__all__ = ["avoid", "avoid_step", "Damper", "Avoidance", "AvoidanceStatus", "robot_rows_and_columns"]
 
 
 class AvoidanceStatus(str, enum.Enum):
@@ -262,6 +262,6 @@ def _new_avoidance(velocity, commanded, status, rows, rate, closing, min_distanc
     return o
 
 
-from ._canned import CannedRun, run_canned, run_canned_all  # noqa: E402 - uses avoid_step above
+from ._canned import CannedRun, robot_rows_and_columns, run_canned, run_canned_all  # noqa: E402 - uses avoid_step above
 
 __all__ += ["CannedRun", "run_canned", "run_canned_all"]
