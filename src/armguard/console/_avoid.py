@@ -137,34 +137,15 @@ class AvoidedRun:
         return f"reached the goal, the filter never acting; {least}"
 
 
-def _robot_rows_and_columns(model, robot: str):
-    """The Model pair rows with ``robot`` (or its payload) on a side, its flat joint indices, and
-    their Pinocchio velocity columns."""
-    pairs = model.pairs
-    pre = robot + "/"
-    payloads = {n for n, p in model.scene.payloads.items() if p.robot == robot}
-
-    def mine(o: str) -> bool:
-        return o.startswith(pre) or o in payloads
-
-    rows = np.array([k for k, (a, b) in enumerate(zip(pairs.owner_a, pairs.owner_b)) if mine(a) or mine(b)],
-                    dtype=np.int64)
-    pm = model.pin_model
-    v_of_q = {int(pm.joints[j].idx_q): int(pm.joints[j].idx_v) for j in range(1, pm.njoints) if pm.joints[j].nq > 0}
-    ks = [k for k, n in enumerate(model.scene.joint_names) if n.startswith(pre)]
-    cols = np.array([v_of_q[int(model.q_index[k])] for k in ks], dtype=np.int64)
-    return rows, np.array(ks, dtype=np.int64), cols
-
-
 def avoid_canned(model, name: str, stand_off: float, checker) -> AvoidedRun:
     """Run the canned test ``name`` of ``model.scene`` with avoidance at ``stand_off`` (m), keeping
     every step (the loop of :func:`armguard.avoidance.run_canned` with the console's damper)."""
-    from ..avoidance import avoid_step
+    from ..avoidance import avoid_step, robot_rows_and_columns
 
     scene = model.scene
     test = scene.canned_tests[name]
     damper = console_damper(stand_off)
-    rows, ks, cols = _robot_rows_and_columns(model, test.robot)
+    rows, ks, cols = robot_rows_and_columns(model, test.robot)
     nv = int(model.pin_model.nv)
     lim = np.zeros(nv)
     lim[cols] = AVOID_VELOCITY_LIMIT  # only the test's robot moves
