@@ -1,16 +1,18 @@
 """Distance Jacobians and collision avoidance: what ``jacobian=True`` adds, and one damper step.
 
 * Jacobians for every pair vs distances alone, analytic and coal(+Pinocchio) in the same run
-  (median µs per call over random in-limit configurations);
-* one avoidance step (``armguard.avoidance.avoid_step``: the arm's distances, the Jacobians of the
-  pairs within the influence distance, the DAQP solve) for Ranger's left arm (74 pairs), and the
-  QP alone;
+  (median thread-CPU µs per call over random in-limit configurations);
+* one avoidance step (``armguard.avoidance.avoid_step``: the arm's distances and Jacobians, the
+  damper rows of the pairs within the influence distance, the DAQP solve) for Ranger's left arm
+  (74 pairs), thread CPU and wall clock, and its parts: the distance call, the compiled filter
+  and its NumPy reference (``avoid``);
 * every Ranger canned test run with avoidance on (``armguard.avoidance.run_canned_all``), at a
   5 cm and a 20 cm stand-off: contact, least distance, how far each got (``canned_table``).
 """
 
 from __future__ import annotations
 
+import os
 import time
 
 import numpy as np
@@ -19,21 +21,29 @@ TITLE = "Distance Jacobians and collision avoidance"
 MODELS = ["ranger", "hermes", "puma560", "panda"]
 
 
-def _median_us(fn, args_list, reps: int) -> float:
+def _median_us(fn, args_list, reps: int, clock=time.thread_time) -> float:
+    """Median µs per call of ``fn(a)`` over ``args_list`` (``reps`` rounds): thread CPU time by
+    default (what one core spends; less sensitive to the shared machine's load), or wall clock."""
     times = []
     for _ in range(reps):
         for a in args_list:
-            t = time.perf_counter()
+            t = clock()
             fn(a)
-            times.append(time.perf_counter() - t)
+            times.append(clock() - t)
     return 1e6 * float(np.median(times))
+
+
+def _load() -> str:
+    return "/".join(f"{x:.1f}" for x in os.getloadavg())
 
 
 def run(quick: bool = False) -> str:
     import armguard
     from armguard.avoidance import Damper, avoid, avoid_step
+    from armguard.avoidance._fast import filter_velocity
 
     reps = 3 if quick else 20
+    load0 = _load()
     lines = ["| model | pairs | nv | analytic d (µs) | analytic d+J (µs) | ratio | coal d (µs) | coal d+J (µs) | ratio |",
              "|---|---|---|---|---|---|---|---|---|"]
     for name in MODELS:
@@ -45,7 +55,7 @@ def run(quick: bool = False) -> str:
             c.pair_distances(Q[0], jacobian=True)  # warm
             t0 = _median_us(lambda q: c.pair_distances(q), Q, reps)
             t1 = _median_us(lambda q: c.pair_distances(q, jacobian=True), Q, reps)
-            row += [f"{t0:.0f}", f"{t1:.0f}", f"{t1 / t0:.2f}"]
+            row += [f"{t0:.1f}", f"{t1:.1f}", f"{t1 / t0:.2f}"]
         lines.append("| " + " | ".join(row) + " |")
 
     m = armguard.load_model("ranger")
@@ -78,24 +88,32 @@ def run(quick: bool = False) -> str:
         cases.append((q, v))
         near += 1
     avoid_step(c, *cases[0], damper, pairs=rows)
-    t_step = _median_us(lambda a: avoid_step(c, a[0], a[1], damper, pairs=rows), cases, reps)
-    t_bind = _median_us(lambda a: avoid_step(c, a[0], a[1], damper, pairs=rows), cases[40:], reps) if near else float("nan")
+    step = lambda a: avoid_step(c, a[0], a[1], damper, pairs=rows)  # noqa: E731
+    t_step = _median_us(step, cases, reps)
+    t_wall = _median_us(step, cases, reps, clock=time.perf_counter)
+    t_bind = _median_us(step, cases[40:], reps) if near else float("nan")
+    t_dj = _median_us(lambda a: c.pair_distances(a[0], pairs=rows, jacobian=True), cases, reps)
     outs = [avoid_step(c, q, v, damper, pairs=rows) for q, v in cases]
     subs = []
     for (q, v), o in zip(cases, outs):
         r = c.pair_distances(q, pairs=rows[np.isin(rows, o.rows)] if len(o.rows) else rows[:0], jacobian=True)
         subs.append((v, r))
     t_qp = _median_us(lambda a: avoid(a[0], a[1], damper), subs, reps)
+    tol, lim = m.tol, damper.limits(pm.nv)
+    t_fast = _median_us(lambda a: filter_velocity(a[0], a[1].distance, a[1].jacobian, lim, damper, tol), subs, reps)
     n_con = np.array([len(o.rows) for o in outs])
     status = {s: sum(o.status.value == s for o in outs) for s in ("free", "slowed", "stopped")}
-    body = "\n".join(lines)
+    body = (f"Thread CPU time medians (`time.thread_time`; load average {load0} at the start, {_load()} at the "
+            "end of this part).\n\n" + "\n".join(lines))
     body += (
         "\n\nOne avoidance step, Ranger's left arm (7 joints, "
         f"{len(rows)} pairs; stand-off {damper.stand_off} m, influence {damper.influence} m; 40 random configurations "
         f"with random commands on the arm's joints, and {near} with a pair 1-10 cm beyond the stand-off commanded at the "
-        f"velocity limits straight towards it): **{t_step:.0f} µs median** for the whole step "
-        f"(distances, Jacobians of the {int(np.median(n_con))} (median; max {n_con.max()}) pairs within influence, "
-        f"the QP), of which the QP (`avoid`) **{t_qp:.0f} µs**; the commands towards a pair alone: {t_bind:.0f} µs median; "
+        f"velocity limits straight towards it): **{t_step:.0f} µs median** thread time for the whole step "
+        f"({t_wall:.0f} µs wall clock): the distances and Jacobians of the {len(rows)} pairs in one call "
+        f"({t_dj:.0f} µs), the {int(np.median(n_con))} (median; max {n_con.max()}) pairs within influence as damper rows, "
+        f"the QP; the compiled rows-QP-checks alone (`avoidance._fast.filter_velocity`) {t_fast:.0f} µs, its NumPy "
+        f"reference (`avoid`) {t_qp:.0f} µs; the commands towards a pair alone: {t_bind:.0f} µs median; "
         f"statuses {status}.\n"
     )
     return body + "\n" + canned_table()

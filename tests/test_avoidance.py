@@ -172,3 +172,88 @@ def test_canned_tests_with_avoidance_keep_stand_off_and_progress():
         way = np.linalg.norm(goal - t.setup[t.robot])
         assert r.progress == pytest.approx(1.0 - np.linalg.norm(goal - r.q_end) / way)
     assert r.statuses["free"] == r.steps  # test 3 never comes near: the command passes unchanged
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 10_000), st.integers(1, 8), st.integers(0, 12))
+def test_compiled_filter_equals_avoid(seed, nv, n):
+    """The compiled step (:func:`armguard.avoidance._fast.filter_velocity`) gives :func:`avoid`'s
+    answer on the same rows: velocity, constrained rows, bounds, closing speeds, status, note."""
+    from armguard.avoidance._fast import filter_velocity
+
+    rng = np.random.default_rng(seed)
+    d = rng.uniform(-0.01, 0.3, n)
+    J = rng.normal(size=(n, nv))
+    J[rng.random(n) < 0.2] = 0.0  # rows no joint moves are not constraints
+    v_cmd = rng.normal(size=nv) * 2.0
+    ref = avoid(v_cmd, _distances(d, J, nv), DAMPER)
+    v, rows, rate, closing, status, note = filter_velocity(v_cmd, d, np.ascontiguousarray(J), DAMPER.limits(nv),
+                                                           DAMPER, armguard.DEFAULT_TOLERANCES)
+    np.testing.assert_array_equal(v, ref.velocity)
+    np.testing.assert_array_equal(rows, ref.rows)
+    np.testing.assert_array_equal(rate, ref.rate)
+    np.testing.assert_allclose(closing, ref.closing, rtol=0, atol=1e-14)
+    assert (status, note) == (ref.status, ref.solver)
+
+
+def _ranger_left_arm():
+    m = armguard.load_model("ranger")
+    p = m.pairs
+    rows = np.array([k for k, (a, b) in enumerate(zip(p.owner_a, p.owner_b))
+                     if a.startswith("left_arm/") or b.startswith("left_arm/")])
+    cols = [m.pin_model.joints[j].idx_v for j in range(1, m.pin_model.njoints)
+            if m.pin_model.names[j].startswith("left_arm_")]
+    return m, rows, cols
+
+
+def test_avoid_step_equals_the_reference_path():
+    """``avoid_step`` on the analytic checker (every row's Jacobian from the kernel, the compiled
+    filter) against the slow path: the distances, Pinocchio's Jacobians of the rows within
+    influence only (``witness_jacobian``), :func:`avoid`; and the checker's other path (Jacobians
+    of the near rows only), which must give the identical answer."""
+    m, rows, cols = _ranger_left_arm()
+    c = armguard.checker(m, "analytic")
+    slow = armguard.checker(m, "analytic")
+    slow.jacobian_with_distances = False
+    damper = Damper(stand_off=0.05, influence=0.3, approach_speed=0.5, period=0.01, velocity_limit=1.0)
+    rng = np.random.default_rng(4)
+    seen = set()
+    for q in m.random_q(60, rng=rng):
+        v = np.zeros(m.pin_model.nv)
+        v[cols] = rng.normal(size=len(cols))
+        out = avoid_step(c, q, v, damper, pairs=rows)
+        r = c.pair_distances(q, pairs=rows)
+        k = np.flatnonzero(r.distance < damper.influence)
+        sub = r.take(k)
+        pin_ref = avoid(v, sub.with_jacobian(*c.witness_jacobian(q, sub, rows[k])), damper)
+        np.testing.assert_allclose(out.velocity, pin_ref.velocity, rtol=0, atol=1e-9)
+        assert out.status == pin_ref.status
+        # on the kernel's rows (the same numbers) the answer is the reference's to the bit; with
+        # Pinocchio's (1e-16 apart) a command exactly on a damper's bound may be called binding or not
+        ref = avoid(v, sub.with_jacobian(*c.distance_jacobian(q, sub, rows[k])), damper)
+        np.testing.assert_array_equal(out.velocity, ref.velocity)
+        np.testing.assert_array_equal(out.rows, rows[k][ref.rows])
+        assert (out.status, out.solver) == (ref.status, ref.solver)
+        assert out.min_distance == float(r.distance.min())
+        other = avoid_step(slow, q, v, damper, pairs=list(rows))
+        np.testing.assert_array_equal(other.velocity, out.velocity)
+        np.testing.assert_array_equal(other.rows, out.rows)
+        seen.add(out.status)
+    assert AvoidanceStatus.SLOWED in seen and AvoidanceStatus.FREE in seen
+
+
+def test_avoid_step_refuses_nan():
+    m, rows, cols = _ranger_left_arm()
+    c = armguard.checker(m, "analytic")
+    damper = Damper(stand_off=0.05, influence=0.3, approach_speed=0.5, period=0.01, velocity_limit=1.0)
+    q = m.neutral()
+    v = np.zeros(m.pin_model.nv)
+    v[cols[0]] = np.nan
+    with pytest.raises(AvoidanceError, match="v_cmd"):
+        avoid_step(c, q, v, damper, pairs=rows)
+    with pytest.raises(AvoidanceError, match="v_cmd"):
+        avoid_step(c, q, [0.0] * 3, damper, pairs=rows)
+    bad = q.copy()
+    bad[0] = np.nan
+    with pytest.raises(armguard.BackendError):
+        avoid_step(c, bad, np.zeros(m.pin_model.nv), damper, pairs=rows)

@@ -16,6 +16,11 @@ circumscribed prism), ``representation`` says so.
 and writes the rows straight in the Model's pair order (sides exchanged where the detector holds
 a pair the other way round); the call releases the GIL and each thread has its own scratch, so
 threads sharing a checker run in parallel with single-threaded answers.
+
+``pair_distances(q, jacobian=True)`` differentiates every selected pair right after, in a second
+numba call on the link poses the first left in the thread's scratch (:mod:`._jacobian`,
+:mod:`armguard.detect._pair_jacobian`); ``witness_jacobian`` (Pinocchio's joint Jacobians at the
+same witness points) is kept as the slow reference.
 """
 
 from __future__ import annotations
@@ -47,7 +52,7 @@ class _Fast:
     the gather map, the compiled entry point, and per-thread scratch copied from the pristine one."""
 
     __slots__ = ("revision", "det", "head", "sel", "swap", "gmap", "n", "names", "category", "q_shape", "entry",
-                 "args", "SF0", "SI0", "n_q", "tls", "subsets")
+                 "args", "SF0", "SI0", "n_q", "tls", "subsets", "jac")
 
     def __init__(self, checker: "AnalyticChecker") -> None:
         from armguard.detect import _kernel as kn
@@ -75,6 +80,7 @@ class _Fast:
         self.SF0, self.SI0, self.n_q = det._SF0, det._SI0, det._model.n_q
         self.tls = threading.local()
         self.subsets: dict = {}  # idx.tobytes() -> (n, gmap, names, category): a repeated subset is planned once
+        self.jac = None  # the Jacobian kernel's arrays (._jacobian.JacobianPlan), made on the first jacobian=True
         # the compiled overload for exactly these argument types, called without the dispatcher
         # (see armguard.detect._detector._entry_point); built on a scratch of its own
         SF, SI, q1 = self.new_scratch()
@@ -127,6 +133,7 @@ class AnalyticChecker(CheckerBase):
 
     name = "analytic"
     capabilities = frozenset({Capability.DISTANCES, Capability.VERDICTS})
+    jacobian_with_distances = True  # the Jacobian kernel runs right after the distances
 
     def __init__(self, model, options: Mapping | None = None) -> None:
         super().__init__(model)
@@ -220,14 +227,7 @@ class AnalyticChecker(CheckerBase):
             check_q(self.model, Q[m])
         f.det._raise_kernel_error(e, self.model.scene_q(Q[m:m + 1]), "Detector.pair_distances: q")
 
-    distance_jacobian = CheckerBase.witness_jacobian  # the kernel's witness points, Pinocchio's joint Jacobians
-
     def pair_distances(self, q, *, pairs=None, jacobian: bool = False):
-        if jacobian:
-            q = self._q(q)
-            idx = None if pairs is None else check_pairs(self.model, pairs)
-            r = self.pair_distances(q, pairs=idx)
-            return r.with_jacobian(*self.distance_jacobian(q, r, idx))
         f = self._fast
         if f is None or f.revision != self.model.scene.revision:
             f = self._plan()
@@ -235,13 +235,16 @@ class AnalyticChecker(CheckerBase):
             q = self._q(q)
         if pairs is None:
             n, gmap, names, cat = f.n, f.gmap, f.names, f.category
+            idx = None
         else:
             plan = f.subsets.get(pairs.tobytes()) if type(pairs) is _ND and pairs.dtype is _I64 and pairs.ndim == 1 else None
             if plan is None:  # a subset not seen before (checked, then planned once)
                 idx = check_pairs(self.model, pairs)
                 if len(idx) > f.n:  # more rows than the scratch holds (repeated rows): the full result's rows
-                    return self.pair_distances(q).take(idx)
+                    return self.pair_distances(q, jacobian=jacobian).take(idx)
                 plan = f.subset_plan(idx)
+            else:
+                idx = pairs
             n, gmap, names, cat = plan
         try:  # this thread's scratch (f.scratch, inline)
             SF, SI, q1 = f.tls.s
@@ -252,7 +255,61 @@ class AnalyticChecker(CheckerBase):
         err = f.entry(q, 0, 1, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d, p_WA, p_WB)
         if err:
             self._kernel_error(f, err, q[None], False)
-        return _new_result(names, d, p_WA, p_WB, cat)
+        if not jacobian:
+            return _new_result(names, d, p_WA, p_WB, cat)
+        return _new_result(names, d, p_WA, p_WB, cat, *self._jacobian_rows(f, q, idx, SF, d, p_WA, p_WB))
+
+    def _jacobian_rows(self, f: _Fast, q, idx, SF, d, p_WA, p_WB) -> tuple:
+        """``(jacobian, smooth)`` of the Model rows ``idx`` (None: all) at ``q``, whose distances and
+        witness points are ``d``, ``p_WA``, ``p_WB``, with the link poses the kernel left in ``SF``
+        (this thread's scratch, checked at ``q`` last): the Jacobian kernel, then forward
+        differences for the touching pairs (as :meth:`CheckerBase.witness_jacobian`)."""
+        jp = f.jac or self._jacobian_plan(f)
+        n = len(d)
+        jac, smooth = np.empty((n, jp.nv)), np.empty(n, np.bool_)
+        H, MF, MI = f.args[:3]
+        if jp.entry(H, MF, MI, SF, jp.rows_of(idx), jp.vcol, jp.gF, jp.gI, jp.V, jp.tol, d, p_WA, p_WB, jac, smooth):
+            from armguard.backends._jacobian import finite_difference_rows
+
+            touching = np.flatnonzero(np.abs(d) <= jp.tol_length)
+            sub = touching if idx is None else idx[touching]
+            jac[touching] = finite_difference_rows(self, q, sub, step=self.model.tol.jacobian_step, one_sided=True)[0]
+        return jac, smooth
+
+    def _jacobian_plan(self, f: _Fast):
+        """The Jacobian kernel's arrays for the call plan ``f`` (made once, whichever thread asks)."""
+        with self._lock:
+            if f.jac is None:
+                from ._jacobian import JacobianPlan
+
+                f.jac = JacobianPlan(self, f)
+        return f.jac
+
+    def distance_jacobian(self, q, result: PairDistances, idx=None) -> tuple:
+        """``(jacobian (n, nv), smooth (n,))`` of ``result`` (this checker's distances of the Model
+        rows ``idx`` at ``q``): the link poses at ``q`` (the kernel's forward kinematics alone), then
+        the Jacobian kernel on ``result``'s witness points."""
+        f = self._plan()
+        q = self._q(q)
+        idx = None if idx is None else check_pairs(self.model, idx)
+        n = f.n if idx is None else len(idx)
+        if len(result.distance) != n:
+            raise BackendError(f"distance_jacobian: {len(result.distance)} distances for {n} Model rows")
+        try:
+            SF, SI, q1 = f.tls.s
+        except AttributeError:
+            SF, SI, q1 = f.scratch()
+        jp = f.jac or self._jacobian_plan(f)
+        H, MF, MI, prm, iprm = f.args
+        e = np.empty(0)
+        err = f.entry(q, 0, 1, jp.zero_gmap, H, MF, MI, SF, SI, prm, iprm, q1, e, e.reshape(0, 3), e.reshape(0, 3))
+        if err:
+            self._kernel_error(f, err, q[None], False)
+        c = np.ascontiguousarray
+        return self._jacobian_rows(f, q, idx, SF, c(result.distance, dtype=np.float64), c(result.p_WA, dtype=np.float64),
+                                   c(result.p_WB, dtype=np.float64))
+
+    witness_jacobian = CheckerBase.witness_jacobian  # the slow reference: Pinocchio's joint Jacobians at the same witnesses
 
     def pair_distances_many(self, Q, *, pairs=None) -> PairDistancesMany:
         """Every pair (or the Model rows ``pairs``) at each row of ``Q`` ``(M, nq)``; rows split over

@@ -41,7 +41,7 @@ import numpy as np
 from .._errors import AvoidanceError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 
-__all__ = ["avoid", "avoid_step", "Damper", "Avoidance", "AvoidanceStatus"]
+__all__ = ["avoid", "avoid_step", "Damper", "Avoidance", "AvoidanceStatus", "robot_rows_and_columns"]
 
 
 class AvoidanceStatus(str, enum.Enum):
@@ -215,26 +215,53 @@ def _result(v, v_cmd, rows, b, A, dmin, note, tol) -> Avoidance:
 
 def avoid_step(checker, q, v_cmd, damper: Damper, *, pairs=None, tol: Tolerances = DEFAULT_TOLERANCES) -> Avoidance:
     """:func:`avoid` at configuration ``q`` with ``checker``'s distances: every pair's distance
-    (or the Model rows ``pairs``: one arm's, say), then the Jacobians of the pairs within
-    ``damper.influence`` only.  ``rows`` of the result are Model pair rows."""
+    (or the Model rows ``pairs``: one arm's, say) and the Jacobians of the pairs within
+    ``damper.influence`` -- all rows in one call where the checker computes Jacobians with its
+    distances (``jacobian_with_distances``, the analytic backend), else those rows only.
+    ``rows`` of the result are Model pair rows.  The arithmetic around the QP is compiled
+    (:mod:`._fast`); :func:`avoid` is its reference."""
     from ..backends import check_pairs, check_q
+    from ._fast import filter_velocity
 
-    q = check_q(checker.model, q)
-    idx = np.arange(len(checker.model.pairs)) if pairs is None else check_pairs(checker.model, pairs)
-    r = checker.pair_distances(q, pairs=None if pairs is None else idx)
-    k = np.flatnonzero(r.distance < damper.influence)
-    near = idx[k]
-    nv = int(checker.model.pin_model.nv)
-    if len(near) == 0:
-        sub = _NoPairs(np.zeros(0), np.zeros((0, nv)))
+    model = checker.model
+    if pairs is None:
+        idx = None
+    elif type(pairs) is np.ndarray and pairs.dtype == np.int64 and pairs.ndim == 1 and pairs.flags.c_contiguous:
+        idx = pairs  # the checker refuses rows outside the Model's
     else:
+        idx = check_pairs(model, pairs)
+    if type(q) is not np.ndarray or q.dtype != np.float64:
+        q = check_q(model, q)
+    if getattr(checker, "jacobian_with_distances", False):
+        r = checker.pair_distances(q, pairs=idx, jacobian=True)
+        d, J, near = r.distance, r.jacobian, idx
+    else:
+        r = checker.pair_distances(q, pairs=idx)
+        k = np.flatnonzero(r.distance < damper.influence)
+        near = k if idx is None else idx[k]
         sub = r.take(k)
-        sub = sub.with_jacobian(*checker.distance_jacobian(q, sub, near))
-    out = avoid(v_cmd, sub, damper, tol=tol)
-    return Avoidance(out.velocity, out.commanded, out.status, near[out.rows], out.rate, out.closing,
-                     float(r.distance.min(initial=np.inf)), out.solver)
+        d, J = sub.distance, checker.distance_jacobian(q, sub, near)[0]
+    nv = J.shape[1]
+    if type(v_cmd) is not np.ndarray or v_cmd.dtype != np.float64 or v_cmd.shape != (nv,):
+        v_cmd = _check_command(v_cmd, nv)
+    d = np.ascontiguousarray(d, dtype=np.float64)
+    J = np.ascontiguousarray(J, dtype=np.float64)
+    v, rows, rate, closing, status, note = filter_velocity(v_cmd, d, J, damper.limits(nv), damper, tol)
+    if near is not None:
+        rows = near[rows]
+    dist = r.distance
+    dmin = float(dist.min()) if len(dist) else math.inf
+    return _new_avoidance(v, v_cmd, status, rows, rate, closing, dmin, note)
 
 
-from ._canned import CannedRun, run_canned, run_canned_all  # noqa: E402 - uses avoid_step above
+def _new_avoidance(velocity, commanded, status, rows, rate, closing, min_distance, solver, _new=object.__new__):
+    """``Avoidance(...)`` without the frozen dataclass's ``__init__`` (one step's hot path)."""
+    o = _new(Avoidance)
+    o.__dict__.update(velocity=velocity, commanded=commanded, status=status, rows=rows, rate=rate, closing=closing,
+                      min_distance=min_distance, solver=solver)
+    return o
+
+
+from ._canned import CannedRun, robot_rows_and_columns, run_canned, run_canned_all  # noqa: E402 - uses avoid_step above
 
 __all__ += ["CannedRun", "run_canned", "run_canned_all"]

@@ -48,7 +48,9 @@ class CannedRun:
         return not self.contact and self.min_distance >= min(stand_off, self.start_distance) - slack
 
 
-def _robot_rows_and_columns(model, robot: str):
+def robot_rows_and_columns(model, robot: str):
+    """The Model pair rows with ``robot`` (or its payload) on a side, its flat joint indices, and
+    their Pinocchio velocity columns: what one avoidance step for ``robot`` filters."""
     pairs = model.pairs
     pre = robot + "/"
     payloads = {n for n, p in model.scene.payloads.items() if p.robot == robot}
@@ -72,7 +74,7 @@ def run_canned(model, test, damper, *, gain: float = 5.0, settle_s: float = 2.0,
     if isinstance(test, str):
         test = scene.canned_tests[test]
     c = checker if checker is not None else make_checker(model, "analytic")
-    rows, ks, cols = _robot_rows_and_columns(model, test.robot)
+    rows, ks, cols = robot_rows_and_columns(model, test.robot)
     nv = int(model.pin_model.nv)
     lim = np.zeros(nv)
     lim[cols] = np.broadcast_to(np.asarray(damper.velocity_limit, dtype=np.float64), (len(cols),))

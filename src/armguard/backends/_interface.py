@@ -82,12 +82,14 @@ class PairDistances:
         return out
 
     @staticmethod
-    def _unchecked(pairs, distance, p_WA, p_WB, category, _new=object.__new__) -> "PairDistances":
+    def _unchecked(pairs, distance, p_WA, p_WB, category, jacobian=None, smooth=None,
+                   _new=object.__new__) -> "PairDistances":
         """The same object as ``PairDistances(...)``, built without the frozen dataclass's
         ``__init__`` (one ``object.__setattr__`` per field): a fast backend's per-call path."""
         o = _new(PairDistances)
         d = o.__dict__
         d["pairs"], d["distance"], d["p_WA"], d["p_WB"], d["category"] = pairs, distance, p_WA, p_WB, category
+        d["jacobian"], d["smooth"] = jacobian, smooth
         return o
 
     def take(self, rows: np.ndarray) -> "PairDistances":
@@ -221,6 +223,10 @@ class CheckerBase:
     name = "base"
     capabilities: frozenset = frozenset({Capability.DISTANCES, Capability.VERDICTS})
     representation: Mapping = {}
+    # True where pair_distances(q, jacobian=True) differentiates every row in the distance pass, at
+    # a cost near the distances' (the analytic backend's kernel): a caller wanting the Jacobians of
+    # a few rows then asks for all of them; otherwise it asks distance_jacobian for those rows only
+    jacobian_with_distances: bool = False
 
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)

@@ -19,7 +19,9 @@ With Pinocchio's world-frame Jacobian ``J_j`` ``(6, nv)`` of the link's joint ``
 W's origin, then angular velocity; zero outside the joint's ancestors; mimic joints folded onto
 their leaders), the row of one side is the wrench ``w = [nhat, p x nhat]`` applied to it:
 ``nhat^T J_W(p) = w^T J_j``.  One Pinocchio call per joint, then one ``einsum`` over all pairs:
-no per-pair Python.
+no per-pair Python.  This is the framework's witness-point path (coal) and the slow
+reference of the analytic backend, which computes the same rows inside its kernel from its own
+forward kinematics (:mod:`armguard.detect._pair_jacobian`).
 
 **Smoothness.**  ``smooth`` is False where
 
@@ -75,55 +77,82 @@ def _shape_vertices(geom) -> tuple:
     return None
 
 
+@njit(cache=True, nogil=True, inline="always")
+def face_span(R, u, s, e, V, disk_axis, disk_r, tol_face, tol_par, dir_out, hbuf, fbuf):  # pragma: no cover - numba
+    """The dimension (0, 1, 2) of the support face, in the world direction ``u`` ``(3,)``, of the
+    shape whose rotation in W is ``R`` ``(3, 3)`` and whose vertices in its own frame are
+    ``V[s:e]`` (a disk of radius ``disk_r > 0`` about ``disk_axis``: a cylinder's end); for a 1-D
+    face its direction in W goes to ``dir_out`` ``(3,)``.  ``hbuf`` (float) and ``fbuf`` (int),
+    ``(>= e - s,)``: scratch (each vertex's height along ``u``, the face's vertices)."""
+    u0, u1, u2 = u[0], u[1], u[2]
+    uL0 = R[0, 0] * u0 + R[1, 0] * u1 + R[2, 0] * u2
+    uL1 = R[0, 1] * u0 + R[1, 1] * u1 + R[2, 1] * u2
+    uL2 = R[0, 2] * u0 + R[1, 2] * u1 + R[2, 2] * u2
+    if disk_r > 0.0:
+        c = abs(uL0 * disk_axis[0] + uL1 * disk_axis[1] + uL2 * disk_axis[2])
+        if 1.0 - c <= tol_par:  # the disk faces u: a flat face
+            return 2
+    hmax, k0 = -np.inf, s
+    for k in range(s, e):
+        h = uL0 * V[k, 0] + uL1 * V[k, 1] + uL2 * V[k, 2]
+        hbuf[k - s] = h
+        if h > hmax:
+            hmax, k0 = h, k
+    # the face: vertices within tol_face of the support plane; its extent from the highest one (k0)
+    low = hmax - tol_face
+    far, k1, nf = 0.0, -1, 0
+    for k in range(s, e):
+        if hbuf[k - s] >= low:
+            fbuf[nf] = k
+            nf += 1
+            dd = (V[k, 0] - V[k0, 0]) ** 2 + (V[k, 1] - V[k0, 1]) ** 2 + (V[k, 2] - V[k0, 2]) ** 2
+            if dd > far:
+                far, k1 = dd, k
+    if far <= tol_face * tol_face:
+        return 0
+    inv = 1.0 / np.sqrt(far)
+    a0, a1, a2 = (V[k1, 0] - V[k0, 0]) * inv, (V[k1, 1] - V[k0, 1]) * inv, (V[k1, 2] - V[k0, 2]) * inv
+    for f in range(nf):  # a face vertex off the line k0-k1: a 2-D face
+        k = fbuf[f]
+        w0, w1, w2 = V[k, 0] - V[k0, 0], V[k, 1] - V[k0, 1], V[k, 2] - V[k0, 2]
+        t = w0 * a0 + w1 * a1 + w2 * a2
+        off = w0 * w0 + w1 * w1 + w2 * w2 - t * t
+        if off > tol_face * tol_face:
+            return 2
+    for r in range(3):
+        dir_out[r] = R[r, 0] * a0 + R[r, 1] * a1 + R[r, 2] * a2
+    return 1
+
+
+@njit(cache=True, nogil=True)
+def unique_witness(dims, dirs, tol_par):  # pragma: no cover - numba
+    """Whether two support faces of dimensions ``dims`` ``(2,)`` (1-D faces along ``dirs[side]``)
+    touch at one point only: not a face against a face or an edge, nor two parallel edges."""
+    if dims[0] >= 1 and dims[1] >= 1:
+        if dims[0] + dims[1] >= 3:
+            return False
+        x0 = dirs[0, 1] * dirs[1, 2] - dirs[0, 2] * dirs[1, 1]
+        x1 = dirs[0, 2] * dirs[1, 0] - dirs[0, 0] * dirs[1, 2]
+        x2 = dirs[0, 0] * dirs[1, 1] - dirs[0, 1] * dirs[1, 0]
+        if np.sqrt(x0 * x0 + x1 * x1 + x2 * x2) <= tol_par:
+            return False
+    return True
+
+
 @njit(cache=True)
 def _face_spans(R, u, g, vstart, V, disk_axis, disk_r, tol_face, tol_par, dims, dirs):  # pragma: no cover - numba
     """For each query ``i``: the dimension (0, 1, 2) of shape ``g[i]``'s support face in the
     world direction ``u[i]`` (the shape's rotation in W is ``R[i]``), and for a 1-D face its
     direction in W (``dirs[i]``).  ``g[i] == -1``: a plane (dimension 2)."""
+    hbuf = np.empty(max(V.shape[0], 1))
+    fbuf = np.empty(max(V.shape[0], 1), np.int64)
     for i in range(len(g)):
         gi = g[i]
         if gi < 0:
             dims[i] = 2
             continue
-        uL = np.empty(3)
-        for r in range(3):
-            uL[r] = R[i, 0, r] * u[i, 0] + R[i, 1, r] * u[i, 1] + R[i, 2, r] * u[i, 2]
-        s, e = vstart[gi], vstart[gi + 1]
-        if disk_r[gi] > 0.0:
-            c = abs(uL[0] * disk_axis[gi, 0] + uL[1] * disk_axis[gi, 1] + uL[2] * disk_axis[gi, 2])
-            if 1.0 - c <= tol_par:  # the disk faces u: a flat face
-                dims[i] = 2
-                continue
-        hmax, k0 = -np.inf, s
-        for k in range(s, e):
-            h = uL[0] * V[k, 0] + uL[1] * V[k, 1] + uL[2] * V[k, 2]
-            if h > hmax:
-                hmax, k0 = h, k
-        # the face: vertices within tol_face of the support plane; its extent from the highest one (k0)
-        far, k1 = 0.0, -1
-        for k in range(s, e):
-            if uL[0] * V[k, 0] + uL[1] * V[k, 1] + uL[2] * V[k, 2] >= hmax - tol_face:
-                dd = (V[k, 0] - V[k0, 0]) ** 2 + (V[k, 1] - V[k0, 1]) ** 2 + (V[k, 2] - V[k0, 2]) ** 2
-                if dd > far:
-                    far, k1 = dd, k
-        if far <= tol_face * tol_face:
-            dims[i] = 0
-            continue
-        inv = 1.0 / np.sqrt(far)
-        a0, a1, a2 = (V[k1, 0] - V[k0, 0]) * inv, (V[k1, 1] - V[k0, 1]) * inv, (V[k1, 2] - V[k0, 2]) * inv
-        dim = 1
-        for k in range(s, e):
-            if uL[0] * V[k, 0] + uL[1] * V[k, 1] + uL[2] * V[k, 2] >= hmax - tol_face:
-                w0, w1, w2 = V[k, 0] - V[k0, 0], V[k, 1] - V[k0, 1], V[k, 2] - V[k0, 2]
-                t = w0 * a0 + w1 * a1 + w2 * a2
-                off = w0 * w0 + w1 * w1 + w2 * w2 - t * t
-                if off > tol_face * tol_face:
-                    dim = 2
-                    break
-        dims[i] = dim
-        if dim == 1:
-            for r in range(3):
-                dirs[i, r] = R[i, r, 0] * a0 + R[i, r, 1] * a1 + R[i, r, 2] * a2
+        dims[i] = face_span(R[i], u[i], vstart[gi], vstart[gi + 1], V, disk_axis[gi], disk_r[gi], tol_face, tol_par,
+                            dirs[i], hbuf, fbuf)
 
 
 @njit(cache=True)
@@ -182,15 +211,7 @@ def _witness_rows(p_WA, p_WB, d, ja, jb, ga, gb, Jj, R_WJ, R_JG, vstart, V, disk
             u[1, r] = -nh[r]
         dirs[:] = 0.0
         _face_spans(R, u, g, vstart, V, disk_axis, disk_r, tol_face, tol_par, dims, dirs)
-        if dims[0] >= 1 and dims[1] >= 1:
-            if dims[0] + dims[1] >= 3:
-                ok = False
-            else:
-                x0 = dirs[0, 1] * dirs[1, 2] - dirs[0, 2] * dirs[1, 1]
-                x1 = dirs[0, 2] * dirs[1, 0] - dirs[0, 0] * dirs[1, 2]
-                x2 = dirs[0, 0] * dirs[1, 1] - dirs[0, 1] * dirs[1, 0]
-                if np.sqrt(x0 * x0 + x1 * x1 + x2 * x2) <= tol_par:
-                    ok = False
+        ok = ok and unique_witness(dims, dirs, tol_par)
         smooth[i] = ok
 
 

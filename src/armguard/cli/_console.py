@@ -22,7 +22,8 @@ from . import main
               help="Place a body (or a robot's base) with an isotropic uncertainty (m, deg); repeatable. "
                    "Draws its 90 % / 99.9 % ellipsoids; the panel shows the clearance in sigmas.")
 def console_cmd(scene: str, host: str, port: int, threshold: float, watch: bool, terrain_file, uncertain) -> None:
-    """Serve the operator console for SCENE (a built-in scene name or a scene file)."""
+    """Serve the operator console for SCENE (a built-in scene name, a scene file, or a cell file for the
+    Tasks tab: armguard_cell: 1)."""
     from ..console import ConsoleApp
     from ..console._serve import ModelWatcher, make_state, watched_files
     from ._compile import warm_up

@@ -10,6 +10,7 @@ from ._plot import ClearancePlot
 from ._readout import PANEL_COLORS, CategoryRow, PanelStatus, Readout, panel_html, readout_from_report, readout_off
 from ._serve import serve
 from ._state import ConsoleState, Player, Snapshot
+from ._tasks import TaskComposer
 from ._timeline import Timeline, TimelineState
 
 __all__ = [
@@ -34,4 +35,5 @@ __all__ = [
     "VIEWS",
     "VISTA_POINTS",
     "view_pose",
+    "TaskComposer",
 ]

@@ -17,12 +17,14 @@ import time
 import numpy as np
 
 from .._errors import ArmguardError
+from ._avoid_panel import AvoidPanel
 from ._draw import SceneDrawer
 from ._fields import COMMIT_ON_BLUR_HTML, TypedField
 from ._plot import ClearancePlot
 from ._readout import panel_html
 from ._state import MAX_DISTANCE_SETTING, ConsoleState
 from ._targets import MAX_ANGLE_DEG, MAX_COORDINATE
+from ._tasks_panel import TasksPanel, TrainingViews
 
 __all__ = ["ConsoleApp", "PortInUseError", "FPS", "PLOT_PERIOD"]
 
@@ -265,6 +267,7 @@ class ConsoleApp:
             self._w_joint_folders = {}
             self._w_joints = {}
             self._joints_order = self._fields["stop"].form.order
+            self._avoid = AvoidPanel(self).build_control(self._joints_order + 3.0)  # below the workspace box
             for k, name in enumerate(st.robots):
                 self._build_joint_panel(name, snap, self._joints_order + (k + 1) / (len(st.robots) + 1))
             with gui.add_folder("Cartesian", visible=False, order=self._joints_order + 1.0) as self._w_cart:
@@ -307,6 +310,7 @@ class ConsoleApp:
             self._w_rate = gui.add_markdown("")
             self._w_plot = gui.add_image(np.full((20, 40, 3), 255, dtype=np.uint8), format="png", visible=False)
             self._w_report = gui.add_html("")
+            self._avoid.build_timeline()
 
         # -- views ---------------------------------------------------------------------------
         with tabs.add_tab("Views"):
@@ -322,6 +326,8 @@ class ConsoleApp:
             self.drawer.add_view_controls(gui)
             for label in VIEWS:
                 gui.add_button(label).on_click(lambda e, lb=label: self._set_view(e.client, lb))
+            self._training = TrainingViews(self)  # WORKMATE's training views (top, front, side at once; the hand)
+        self._tasks, self._jog = TasksPanel.build(self, tabs)  # WORKMATE's task menu (a tab), jog (Control tab)
 
         # -- callbacks -----------------------------------------------------------------------
         self._w_active.on_update(self._from_client(lambda v: st.set_active(v)))
@@ -473,6 +479,7 @@ class ConsoleApp:
         self._fields["ws_hi"].show(_vec(hi))
         self._fields["thr"].show(_fmt(snap.threshold))
         self._fields["stop"].show(_fmt(snap.stopping_distance))
+        self._avoid.sync()
         for name, (fields, sliders, scale) in self._w_joints.items():
             units = self.state.joint_units(name)
             for j, (f, s) in enumerate(zip(fields, sliders)):
@@ -526,6 +533,8 @@ class ConsoleApp:
                 self._refresh_plot(snap, periodic=False)
             self.server.flush()
             self.drawer.draw(snap)
+            for extra in (self._tasks, self._jog, self._training):
+                extra.on_redraw(snap)
         if snap.active != self._framed_active:
             first = self._framed_active is None
             self._framed_active = snap.active
@@ -534,6 +543,7 @@ class ConsoleApp:
                     self._frame(client)
 
     def _refresh_plot(self, snap, *, periodic: bool) -> None:
+        self._avoid.refresh(snap, periodic=periodic)
         p = snap.player
         if p is None or p.kind != "verified":
             if self._plot_player is not None:

@@ -39,6 +39,17 @@ class ShapeNode:
     shown_color: tuple | None = None
     shown_opacity: float | None = field(default=None)
 
+    def _fields(self) -> tuple:
+        return (self.owner, self.kind, np.asarray(self.shape0.core_points), self.c0, self.handle, self.color,
+                self.shown_color, self.shown_opacity)
+
+    def __iter__(self):
+        """Also read as ``(owner, kind, P0, c0, handle, color, shown_color, shown_opacity)``."""
+        return iter(self._fields())
+
+    def __getitem__(self, i):
+        return self._fields()[i]
+
 
 def segment_point_distance(a, b, P) -> np.ndarray:
     """Distance (m) of each point of ``P`` (n, 3) to the segment ``a``-``b``."""

@@ -14,8 +14,14 @@ __all__ = ["serve", "make_state", "load_for_console", "ModelWatcher"]
 def load_for_console(name):
     """``(scene, model)`` for a built-in name or a file; ``model`` is None where no Model can be built."""
     from ..model import load_model
+    from ..program._format import is_cell_file
     from ..scene import load_scene
 
+    if is_cell_file(name):  # a cell file (armguard_cell: 1): its model
+        from ..program import load_cell
+
+        model = load_cell(name).model
+        return model.scene, model
     try:
         model = load_model(name)
     except Exception:
@@ -81,15 +87,26 @@ class ModelWatcher:
 
 
 def make_state(scene, *, threshold: float = DEFAULT_THRESHOLD, terrain=None, uncertain=()) -> ConsoleState:
-    """The console state for ``scene`` (a Scene or a built-in / file name) with its model, a
+    """The console state for ``scene`` (a Scene or a built-in / file name; a cell file: its model, and
+    the cell as ``state.cell`` for the Tasks tab) with its model, a
     terrain (an ElevationMap, or a file for :func:`armguard.terrain.load_terrain`) and uncertain
     placements (UncertainPlacement objects or ``"BODY=SIGMA_M[,SIGMA_DEG]"`` texts)."""
     from ._overlays import parse_uncertain
 
-    model = None
+    model, cell, source = None, None, None
     if isinstance(scene, (str, Path)):
-        scene, model = load_for_console(scene)
+        from ..program._format import is_cell_file
+
+        source = str(Path(scene).resolve()) if Path(str(scene)).exists() else str(scene)  # a saved program names it
+        if is_cell_file(scene):  # the task menu programs this cell (its camera, its real layout)
+            from ..program import load_cell
+
+            cell = load_cell(scene)
+            scene, model = cell.model.scene, cell.model
+        else:
+            scene, model = load_for_console(scene)
     state = ConsoleState(scene, threshold=threshold, model=model)
+    state.cell, state.cell_source = cell, source  # read by the Tasks tab (._tasks_panel.make_cell)
     if terrain is not None:
         if isinstance(terrain, (str, Path)):
             from ..terrain import load_terrain

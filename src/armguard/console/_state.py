@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._avoid import AvoidMixin
 from ._backends import compare_readouts
 from ._motion import MotionMixin
 from ._overlays import OverlayMixin
@@ -45,7 +46,9 @@ MAX_DISTANCE_SETTING = 10.0
 
 @dataclass(frozen=True)
 class Player:
-    """What the time line plays: a ``trajectory`` of ``robot`` for a canned ``run`` or a ``verified`` one.
+    """What the time line plays: a ``trajectory`` of ``robot`` for a canned ``run`` or a ``verified`` one,
+    or a canned run with avoidance on (``avoid``: ``trajectory`` and ``report`` are its
+    :class:`~._avoid.AvoidedRun`, ``clearance`` the filtered least distance).
 
     ``times`` (N,) s and ``clearance`` (N,) m sample the minimum signed distance along it (empty for
     canned runs); ``report`` is the verification report (verified only).
@@ -71,9 +74,10 @@ class Snapshot:
     change (the check, the comparison, terrain and uncertainty; not the panel's HTML or the
     drawing), beside ``readout.elapsed_us``, the check alone;
     ``ee_pose`` (4, 4) the active arm's tool pose now; ``run_state`` of the canned test:
-    ``""``, ``"running"``, ``"done"``, ``"stopped"`` (by the operator) or ``"stopped by
-    detection"``, with ``run_detail`` saying when (``"at t = 5.00 s"``) and, when detection
-    stopped it, the link, the obstacle and the distance; ``changes`` what the last model reload changed; ``terrain`` a
+    ``""``, ``"running"``, ``"done"``, ``"stopped"`` (by the operator), ``"stopped by
+    detection"``, or with avoidance on ``"filtering"`` and ``"stopped short by avoidance"``,
+    with ``run_detail`` saying when (``"at t = 5.00 s"``) and, when detection stopped it (or
+    the avoidance filter finished), the link, the obstacle and the distance; ``changes`` what the last model reload changed; ``terrain`` a
     :class:`~._overlays.TerrainView` (the pyramid boxes the last check tested) or None;
     ``sigmas`` the :class:`armguard.uncertainty.SigmaReport` of the uncertain placements or None;
     ``target`` ``(p_WE (3,) m, rpy (3,) rad, typed)`` the Cartesian target (:meth:`ConsoleState.target`);
@@ -110,7 +114,7 @@ def _duration_of(trajectory) -> float:
     return float(trajectory.duration)
 
 
-class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin):
+class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidMixin):
     """The operator console's state and commands (thread-safe; no GUI).
 
     Parameters
@@ -401,7 +405,10 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin):
             self._changed(f"setup {name}: {test.description}".rstrip(": "))
 
     def run(self, name: str) -> Player:
-        """Ranger's Test button: Setup, then play the test's trapezoidal motion with detection live."""
+        """Ranger's Test button: Setup, then play the test's trapezoidal motion with detection live
+        (with avoidance on, the filtered motion instead: :meth:`AvoidMixin._run_avoiding`)."""
+        if self._avoidance:
+            return self._run_avoiding(name)
         test = self._test(name)
         traj = test.trajectory(self._scene)
         self.setup(name)
@@ -445,14 +452,25 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin):
                                        active=robot, tol=self._tol)
             batch = det.check_many(np.array(rows))
             clearance = np.min(np.asarray(batch.min_distance, dtype=np.float64), axis=1)
+            safe = getattr(report, "safe", None)
+            return self.show_verified(name, traj, times, clearance, report,
+                                      f"verified {name}: {'safe' if safe else 'NOT safe'}")
+
+    def show_verified(self, name: str, traj, times, clearance, report, message: str = "") -> Player:
+        """Put an already verified trajectory on the time line (paused at t = 0): ``times`` (N,) s and
+        ``clearance`` (N,) m its clearance profile, ``report`` what the Time line tab shows (its
+        ``summary()``)."""
+        with self._lock:
+            robot = traj.robot_name
+            self._robot(robot)
             self._stop_player()
-            tl = Timeline(T)
-            self._player = Player("verified", name, robot, traj, tl, times, clearance, report)
+            tl = Timeline(_duration_of(traj))
+            self._player = Player("verified", name, robot, traj, tl, np.asarray(times, dtype=np.float64),
+                                  np.asarray(clearance, dtype=np.float64), report)
             self._active = robot
             self._detector.set_active(robot)
             self._apply_player_time(0.0)
-            safe = getattr(report, "safe", None)
-            self._changed(f"verified {name}: {'safe' if safe else 'NOT safe'}")
+            self._changed(message)
             return self._player
 
     # ------------------------------------------------------------------ time line
@@ -465,7 +483,7 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin):
         """Drop the current run or trajectory (the arms stay where they are)."""
         with self._lock:
             p = self._player
-            was_running = p is not None and p.kind == "run" and self._run_state == "running"
+            was_running = p is not None and p.kind in ("run", "avoid") and self._run_state == "running"
             self._stop_player()
             if was_running:
                 self._run_state = "stopped"
@@ -515,6 +533,8 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin):
             self._apply_player_time(t)
             self._evaluate()
             r = self._readout
+            if p.kind == "avoid":  # the filter keeps the stand-off: no stop by detection
+                return self._tick_avoid(p, t)
             if p.kind != "run":
                 return True
             if self._detection and self._stopping > 0.0 and r.distance <= self._stopping:

@@ -18,8 +18,8 @@ from numba.extending import intrinsic
 
 __all__ = ["Layout", "at", "seg1", "seg2", "seg3"]
 
-# Segment numbers are compiled into _kernel.py and _narrow.py as constants and numba caches key on
-# the defining file only: a change to these tuples must come with an edit of those two files.
+# Segment numbers are compiled into _kernel.py, _narrow.py and _pair_jacobian.py as constants and numba
+# caches key on the defining file only: a change to these tuples must come with an edit of those files.
 # model floats
 MF = ("X_pre", "axis", "X_post", "offset", "term_coeff", "radius", "verts_L", "box_L", "fn_L", "ed_L",
       "sph_L", "static_lo", "static_hi", "bvh_lo", "bvh_hi", "lever", "ws", "pv", "ppl", "pbis", "pcen")

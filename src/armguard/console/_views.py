@@ -1,0 +1,162 @@
+"""WORKMATE's training views in the console (Smith 1986, seed 004: motions were trained with "top,
+front and side views at once" and an "eye in the hand").
+
+viser gives each browser tab one 3-D view with one camera, so the views shown *at once* are
+insets: small pictures the tab renders from other cameras (``ClientHandle.get_render`` with a
+camera pose), shown in the *Views* tab beside each other — top, front, side (the cameras of
+:func:`armguard.console.view_pose`) and the eye in the hand.  The *eye in the hand* camera sits
+at the active arm's tool origin looking along the tool's z axis (its approach direction), the
+tool's y axis pointing down in the picture; *main view: eye in the hand* makes the tab's own
+camera follow it as the arm moves.  The top / front / side buttons above put the main camera
+at those views.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+
+import numpy as np
+
+__all__ = ["TrainingViews", "INSET_VIEWS", "INSET_SIZE", "camera_wxyz", "eye_in_hand", "inset_camera",
+           "INSET_FOV_DEG", "EYE_FOV_DEG", "REFRESH_S"]
+
+INSET_VIEWS = ("top", "front", "side", "eye in the hand")
+INSET_SIZE = (180, 240)
+"""Inset pictures: (height, width) pixels."""
+INSET_FOV_DEG = 40.0
+"""Vertical field of view of the top / front / side insets (deg)."""
+EYE_FOV_DEG = 70.0
+"""Vertical field of view of the eye in the hand (deg): wide, as a wrist camera's."""
+REFRESH_S = 2.0
+"""With *keep the insets current*, at most one refresh this often (s): each is four renders in the tab."""
+_RENDER_TIMEOUT_S = 60.0
+
+
+def camera_wxyz(position, look_at, up) -> np.ndarray:
+    """The quaternion (w, x, y, z) of a camera at ``position`` looking at ``look_at``, ``up`` up in
+    the picture: viser's (OpenCV's) camera axes — x right, y down, z forward — as columns of R_WC."""
+    from ._meshes import quat_wxyz_from_matrix
+
+    z = np.asarray(look_at, dtype=np.float64) - np.asarray(position, dtype=np.float64)
+    z /= np.linalg.norm(z)
+    up = np.asarray(up, dtype=np.float64)
+    x = np.cross(z, up)
+    if np.linalg.norm(x) < 1e-9:  # looking along up: any right will do
+        x = np.cross(z, [0.0, 1.0, 0.0] if abs(z[1]) < 0.9 else [1.0, 0.0, 0.0])
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    return np.asarray(quat_wxyz_from_matrix(np.stack([x, y, z], axis=1)), dtype=np.float64)
+
+
+def eye_in_hand(X_WE) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(position, look_at, up)`` of the eye in the hand for tool pose ``X_WE``: at the tool origin,
+    looking 0.5 m along the tool's z axis, the tool's -y up (its y down in the picture)."""
+    X = np.asarray(X_WE, dtype=np.float64)
+    p = X[:3, 3]
+    return p.copy(), p + 0.5 * X[:3, 2], -X[:3, 1]
+
+
+def inset_camera(label: str, center, radius: float, X_WE=None) -> tuple[np.ndarray, np.ndarray, float]:
+    """``(position, wxyz, fov rad)`` of an inset of :data:`INSET_VIEWS`."""
+    if label == "eye in the hand":
+        p, look, up = eye_in_hand(X_WE)
+        return p, camera_wxyz(p, look, up), math.radians(EYE_FOV_DEG)
+    from ._app import view_pose
+
+    p, look = view_pose(label, center, radius)
+    d = p - look  # the preset's direction, at the distance where the scene's sphere fills the inset
+    p = look + d / np.linalg.norm(d) * radius / math.sin(math.radians(0.5 * INSET_FOV_DEG))
+    return p, camera_wxyz(p, look, (0.0, 0.0, 1.0) if label != "top" else (0.0, 1.0, 0.0)), math.radians(INSET_FOV_DEG)
+
+
+class TrainingViews:
+    """The Views tab's training views for a :class:`~._app.ConsoleApp` (build inside its tab)."""
+
+    def __init__(self, app) -> None:
+        self.app = app
+        gui = app.server.gui
+        self.images: dict = {}
+        self.rendered_version = -1
+        self._busy = threading.Lock()
+        self._last = 0.0
+        self._eye_pose = None
+        with gui.add_folder("training views (WORKMATE)"):
+            gui.add_markdown("Top, front and side at once, and the eye in the hand: pictures of this tab's "
+                             "scene from those cameras.")
+            self.w_eye = gui.add_checkbox("main view: eye in the hand", False,
+                                          hint="the main camera rides on the active arm's tool, looking along its z axis")
+            self.b_show = gui.add_button("render the training views")
+            self.w_keep = gui.add_checkbox("keep the insets current", False,
+                                           hint=f"re-render after a change, at most every {REFRESH_S:g} s")
+            self.w_images = {}
+            blank = np.full((INSET_SIZE[0], INSET_SIZE[1], 3), 235, dtype=np.uint8)
+            for label in INSET_VIEWS:
+                gui.add_markdown(f"*{label}*")
+                self.w_images[label] = gui.add_image(blank, format="jpeg")
+        self.b_show.on_click(lambda e: self._render_async(e.client))
+        self.w_eye.on_update(lambda e: self._follow_eye(force=True))
+
+    # ------------------------------------------------------------------ the eye in the hand
+    def _follow_eye(self, force: bool = False) -> None:
+        if not self.w_eye.value:
+            self._eye_pose = None
+            return
+        X = self.app.state.ee_pose()
+        if not force and self._eye_pose is not None and np.array_equal(X, self._eye_pose):
+            return
+        self._eye_pose = X
+        p, look, up = eye_in_hand(X)
+        for client in self.app.server.get_clients().values():
+            try:
+                with client.atomic():
+                    client.camera.up_direction = tuple(float(v) for v in up)
+                    client.camera.position = tuple(float(v) for v in p)
+                    client.camera.look_at = tuple(float(v) for v in look)
+                    client.camera.fov = math.radians(EYE_FOV_DEG)
+            except Exception:  # the tab closed meanwhile
+                pass
+
+    # ------------------------------------------------------------------ insets
+    def render(self, client) -> dict:
+        """Render the four insets in ``client`` (blocking); returns label -> (H, W, 3) uint8."""
+        snap = self.app.state.snapshot()
+        d = self.app.drawer
+        out = {}
+        for label in INSET_VIEWS:
+            p, wxyz, fov = inset_camera(label, d.center, d.radius, snap.ee_pose)
+            img = client.get_render(INSET_SIZE[0], INSET_SIZE[1], wxyz=wxyz, position=p, fov=fov,
+                                    transport_format="jpeg", timeout=_RENDER_TIMEOUT_S)
+            out[label] = np.asarray(img)[..., :3]
+            self.w_images[label].image = out[label]
+        self.images = out
+        self.rendered_version = snap.version
+        return out
+
+    def _render_async(self, client) -> None:
+        if client is None:
+            clients = list(self.app.server.get_clients().values())
+            if not clients:
+                return
+            client = clients[0]
+        if not self._busy.acquire(blocking=False):
+            return
+
+        def work():
+            try:
+                self.render(client)
+            except Exception as exc:  # the tab closed, or it timed out: say so, keep serving
+                self.app.state.note_error(f"training views: not rendered ({type(exc).__name__}: {exc})")
+            finally:
+                self._last = time.monotonic()
+                self._busy.release()
+
+        threading.Thread(target=work, name="armguard-insets", daemon=True).start()
+
+    def on_redraw(self, snap) -> None:
+        """After each change: move the eye-in-hand camera; refresh the insets when asked to."""
+        self._follow_eye()
+        if (self.w_keep.value and snap.version != self.rendered_version
+                and time.monotonic() - self._last >= REFRESH_S):
+            self._render_async(None)
