@@ -2,8 +2,9 @@
 canned run with avoidance that keeps the stand-off where the same run without it stops by detection,
 and the time line's plot of the commanded against the filtered motion.
 
-The console's recorded run is checked against :func:`armguard.avoidance.run_canned` (the same loop,
-which keeps only the end); the browser test drives the widgets in chromium.
+The console's recorded run (:func:`armguard.avoidance.run_canned` with ``record=True``) is checked
+against the same run unrecorded and against the canned profile; the browser test drives the widgets
+in chromium.
 """
 
 from __future__ import annotations
@@ -68,7 +69,7 @@ def test_avoidance_needs_a_model():
 
 def test_recorded_run_is_run_canned_with_every_step(ranger_state):
     """The console's loop ends where run_canned's does (same damper), and its record is consistent."""
-    from armguard.avoidance import run_canned
+    from armguard.avoidance import robot_rows_and_columns, run_canned
     from armguard.backends import checker
     from armguard.console._avoid import AVOID_PERIOD, avoid_canned, console_damper
 
@@ -91,6 +92,11 @@ def test_recorded_run_is_run_canned_with_every_step(ranger_state):
     assert np.allclose(run.q_cmd[k], traj.at(min(run.times[k], traj.duration)))
     assert np.allclose(run.q_cmd[-1], traj.at(traj.duration))
     assert np.allclose(run.q[0], test.setup[test.robot])
+    # the recorded distances are the robot's least pair distance at each filtered step
+    rows, ks, _ = robot_rows_and_columns(model, test.robot)
+    full = model.scene.flat_q({r: np.asarray(v) for r, v in test.setup.items()})
+    full[ks] = run.q[k]
+    assert run.distance[k] == pytest.approx(c.pair_distances(model.pin_q(full)).distance[rows].min(), abs=1e-12)
     assert np.allclose(np.diff(run.times), AVOID_PERIOD)
     # the time line's interpolation hits the steps and lies between them
     assert np.allclose(run.at(run.times[k]), run.q[k])

@@ -29,7 +29,10 @@ class CannedRun:
     ``end_distance`` (m) the least distance over the robot's pairs at the start, over the run and at
     the end; ``contact``: some pair at distance <= 0 at some step; ``progress`` (0..1) the fraction of
     the joint-space way to the goal covered; ``statuses`` ``{"free": n, "slowed": n, "stopped": n}``;
-    ``q_end`` ``(n_joints,)`` the robot's configuration at the end (rad or m).
+    ``q_end`` ``(n_joints,)`` the robot's configuration at the end (rad or m).  With ``record=True``
+    every step is kept: ``q_cmd_path`` / ``q_path`` ``(steps + 1, n_joints)`` the commanded (the
+    profile, held at its end) and the filtered configurations, ``distance_path`` ``(steps + 1,)`` the
+    least distance at each filtered one (m); otherwise ``None``.
     """
 
     name: str
@@ -42,6 +45,9 @@ class CannedRun:
     progress: float
     statuses: dict
     q_end: np.ndarray
+    q_cmd_path: np.ndarray | None = None
+    q_path: np.ndarray | None = None
+    distance_path: np.ndarray | None = None
 
     def holds(self, stand_off: float, slack: float = 1e-3) -> bool:
         """No contact, and the least distance at least ``min(stand_off, start_distance) - slack``."""
@@ -64,9 +70,10 @@ def robot_rows_and_columns(model, robot: str):
     return rows, np.array(ks, dtype=np.int64), cols
 
 
-def run_canned(model, test, damper, *, gain: float = 5.0, settle_s: float = 2.0, checker=None) -> CannedRun:
+def run_canned(model, test, damper, *, gain: float = 5.0, settle_s: float = 2.0, checker=None,
+               record: bool = False) -> CannedRun:
     """Play canned test ``test`` (a :class:`~armguard.model.CannedTest` of ``model.scene``, or its
-    name) with avoidance ``damper`` (see the module docstring)."""
+    name) with avoidance ``damper`` (see the module docstring); ``record`` keeps every step."""
     from ..backends import checker as make_checker
     from . import avoid_step
 
@@ -95,11 +102,15 @@ def run_canned(model, test, damper, *, gain: float = 5.0, settle_s: float = 2.0,
     dmin, contact, seen = d0, d0 <= 0.0, Counter()
     dt = damper.period
     n = int(math.ceil((traj.duration + settle_s) / dt))
+    q_cmds, qs, ds = [], [q.copy()], [d0]
     for i in range(n):
         t = min(i * dt, traj.duration)
+        ref_q = np.asarray(traj.at(t), dtype=np.float64)
+        if record:
+            q_cmds.append(ref_q)
         ref_v = traj.velocity(t) if i * dt < traj.duration else np.zeros_like(q)
         v_cmd = np.zeros(nv)
-        v_cmd[cols] = ref_v + gain * (traj.at(t) - q)
+        v_cmd[cols] = ref_v + gain * (ref_q - q)
         full = q_full.copy()
         full[ks] = q
         out = avoid_step(c, model.pin_q(full), v_cmd, d_robot, pairs=rows)
@@ -108,11 +119,15 @@ def run_canned(model, test, damper, *, gain: float = 5.0, settle_s: float = 2.0,
         d = least(q)
         dmin = min(dmin, d)
         contact |= d <= 0.0
+        if record:
+            qs.append(q.copy())
+            ds.append(d)
     goal = np.asarray(traj.at(traj.duration), dtype=np.float64)  # a joint goal, or the task motion's end through IK
     way = float(np.linalg.norm(goal - q_start))
     progress = 1.0 if way == 0.0 else max(0.0, 1.0 - float(np.linalg.norm(goal - q)) / way)
+    paths = (np.array(q_cmds + [goal]), np.array(qs), np.array(ds)) if record else (None, None, None)
     return CannedRun(test.name, test.robot, n, d0, dmin, least(q), bool(contact), progress,
-                     {k: seen.get(k, 0) for k in ("free", "slowed", "stopped")}, q)
+                     {k: seen.get(k, 0) for k in ("free", "slowed", "stopped")}, q, *paths)
 
 
 def run_canned_all(model, damper, **kwargs) -> list:

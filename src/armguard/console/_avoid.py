@@ -14,8 +14,7 @@ along, the least distance, the stand-off).
 from __future__ import annotations
 
 import math
-from collections import Counter
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -139,53 +138,23 @@ class AvoidedRun:
 
 def avoid_canned(model, name: str, stand_off: float, checker) -> AvoidedRun:
     """Run the canned test ``name`` of ``model.scene`` with avoidance at ``stand_off`` (m), keeping
-    every step (the loop of :func:`armguard.avoidance.run_canned` with the console's damper)."""
-    from ..avoidance import avoid_step, robot_rows_and_columns
+    every step (:func:`armguard.avoidance.run_canned` with the console's damper, recorded)."""
+    from ..avoidance import robot_rows_and_columns, run_canned
 
-    scene = model.scene
-    test = scene.canned_tests[name]
-    damper = console_damper(stand_off)
-    rows, ks, cols = robot_rows_and_columns(model, test.robot)
-    nv = int(model.pin_model.nv)
-    lim = np.zeros(nv)
-    lim[cols] = AVOID_VELOCITY_LIMIT  # only the test's robot moves
-    damper = replace(damper, velocity_limit=tuple(float(x) for x in lim))
-    robot = scene.robots[test.robot]
-    lo, hi = np.asarray(robot.lower, dtype=np.float64), np.asarray(robot.upper, dtype=np.float64)
-    traj = test.trajectory(scene)
-    q_full = scene.flat_q({r: np.asarray(v) for r, v in test.setup.items()})
-    q = q_full[ks].copy()
-    q_start = q.copy()
+    run = run_canned(model, name, console_damper(stand_off), gain=AVOID_GAIN, settle_s=AVOID_SETTLE_S,
+                     checker=checker, record=True)
+    rows, ks, _ = robot_rows_and_columns(model, run.robot)
+    q_full = model.scene.flat_q({r: np.asarray(v) for r, v in model.scene.canned_tests[name].setup.items()})
 
     def least(qr) -> float:
         full = q_full.copy()
         full[ks] = qr
         return float(checker.pair_distances(model.pin_q(full), pairs=rows).distance.min(initial=math.inf))
 
-    dt = AVOID_PERIOD
-    n = int(math.ceil((traj.duration + AVOID_SETTLE_S) / dt))
-    qs, q_cmds, seen = [q.copy()], [], Counter()
-    for i in range(n):
-        t = min(i * dt, traj.duration)
-        ref_q = np.asarray(traj.at(t), dtype=np.float64)
-        q_cmds.append(ref_q)
-        ref_v = traj.velocity(t) if i * dt < traj.duration else np.zeros_like(q)
-        v_cmd = np.zeros(nv)
-        v_cmd[cols] = ref_v + AVOID_GAIN * (ref_q - q)
-        full = q_full.copy()
-        full[ks] = q
-        out = avoid_step(checker, model.pin_q(full), v_cmd, damper, pairs=rows)
-        seen[out.status.value] += 1
-        q = np.clip(q + out.velocity[cols] * dt, lo, hi)
-        qs.append(q.copy())
-    q_cmds.append(np.asarray(traj.at(traj.duration), dtype=np.float64))
-    goal = q_cmds[-1]
-    way = float(np.linalg.norm(goal - q_start))
-    progress = 1.0 if way == 0.0 else max(0.0, 1.0 - float(np.linalg.norm(goal - q)) / way)
-    q_arr, q_cmd_arr = np.array(qs), np.array(q_cmds)
-    return AvoidedRun(name, test.robot, float(stand_off), dt * np.arange(n + 1), q_cmd_arr, q_arr,
-                      np.array([least(x) for x in q_cmd_arr]), np.array([least(x) for x in q_arr]),
-                      {k: seen.get(k, 0) for k in ("free", "slowed", "stopped")}, progress)
+    times = AVOID_PERIOD * np.arange(run.steps + 1)
+    return AvoidedRun(name, run.robot, float(stand_off), times, run.q_cmd_path, run.q_path,
+                      np.array([least(x) for x in run.q_cmd_path]), run.distance_path, dict(run.statuses),
+                      run.progress)
 
 
 class AvoidMixin:

@@ -14,7 +14,7 @@ import time
 import numpy as np
 
 from ._avoid import MAX_STAND_OFF
-from ._plot import MARKER_RGB
+from ._plot import MarkedPlot
 
 __all__ = ["AvoidPanel", "AvoidPlot"]
 
@@ -27,7 +27,7 @@ def _fmt(x: float) -> str:
     return f"{0.0 if x == 0.0 else x:.6g}"
 
 
-class AvoidPlot:
+class AvoidPlot(MarkedPlot):
     """A canned run with avoidance (an :class:`~._avoid.AvoidedRun`) against time: above, the least
     distance (mm) of the commanded motion (dashed) and of the filtered one (solid) with the
     stand-off; below, each joint commanded (dashed) and filtered (solid), deg for revolute joints
@@ -71,21 +71,6 @@ class AvoidPlot:
         self._x0, self._x1 = float(bottom.x0), float(bottom.x1)
         self._y0, self._y1 = int(round(H - top.y1)), int(round(H - bottom.y0))
 
-    @property
-    def shape(self) -> tuple[int, int, int]:
-        return self._base.shape
-
-    def column_of(self, t: float) -> int:
-        """Pixel column of time ``t`` (s), clamped to the axes."""
-        f = (min(max(float(t), self.t0), self.t1) - self.t0) / (self.t1 - self.t0)
-        return int(round(self._x0 + f * (self._x1 - self._x0)))
-
-    def image_at(self, t: float) -> np.ndarray:
-        """The plot with a 2-pixel vertical marker at ``t`` (s) through both axes: ``(H, W, 3) uint8``."""
-        img = self._base.copy()
-        x = self.column_of(t)
-        img[self._y0 : self._y1, max(0, x - 1) : min(img.shape[1], x + 1)] = MARKER_RGB
-        return img
 
 
 class AvoidPanel:

@@ -17,7 +17,36 @@ MARKER_RGB = (30, 90, 220)
 """Colour of the current-time marker (RGB 0..255)."""
 
 
-class ClearancePlot:
+class MarkedPlot:
+    """A rendered time plot (``_base``, ``(H, W, 3) uint8``) whose axes span pixel columns
+    ``_x0``..``_x1`` and rows ``_y0``..``_y1`` for times ``t0``..``t1``; a marker shows the time now."""
+
+    t0: float
+    t1: float
+    _base: np.ndarray
+    _x0: float
+    _x1: float
+    _y0: int
+    _y1: int
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return self._base.shape
+
+    def column_of(self, t: float) -> int:
+        """Pixel column of time ``t`` (s), clamped to the axes."""
+        f = (min(max(float(t), self.t0), self.t1) - self.t0) / (self.t1 - self.t0)
+        return int(round(self._x0 + f * (self._x1 - self._x0)))
+
+    def image_at(self, t: float) -> np.ndarray:
+        """The plot with a 2-pixel vertical marker at time ``t`` (s) through the axes: ``(H, W, 3) uint8``."""
+        img = self._base.copy()
+        x = self.column_of(t)
+        img[self._y0 : self._y1, max(0, x - 1) : min(img.shape[1], x + 1)] = MARKER_RGB
+        return img
+
+
+class ClearancePlot(MarkedPlot):
     """Clearance ``clearance`` (N,) m against ``times`` (N,) s, the threshold dashed, collisions shaded.
 
     ``first_collision`` (s) or None is marked with a red dot.  ``image_at(t)`` -> (H, W, 3) uint8.
@@ -61,19 +90,3 @@ class ClearancePlot:
         self._y0 = int(round(H - bbox.y1))
         self._y1 = int(round(H - bbox.y0))
 
-    @property
-    def shape(self) -> tuple[int, int, int]:
-        return self._base.shape
-
-    def column_of(self, t: float) -> int:
-        """Pixel column of time ``t`` (s), clamped to the axes."""
-        f = (min(max(float(t), self.t0), self.t1) - self.t0) / (self.t1 - self.t0)
-        return int(round(self._x0 + f * (self._x1 - self._x0)))
-
-    def image_at(self, t: float) -> np.ndarray:
-        """The plot with a 2-pixel vertical marker at time ``t`` (s): ``(H, W, 3) uint8``."""
-        img = self._base.copy()
-        x = self.column_of(t)
-        W = img.shape[1]
-        img[self._y0 : self._y1, max(0, x - 1) : min(W, x + 1)] = MARKER_RGB
-        return img
