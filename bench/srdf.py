@@ -102,6 +102,12 @@ def run(quick: bool = False) -> str:
             if bad:
                 notes.append(f"{name}: the shipped SRDF disables {', '.join(f'{a}-{b}' for a, b in bad)}, "
                              "which the search witnesses colliding")
+            at_home = sorted(tuple(sorted((e.link1, e.link2))) for e in cm.entries
+                             if e.reason == "Default" and frozenset((e.link1, e.link2)) in dis)
+            if at_home:
+                notes.append(f"{name}: the shipped SRDF also disables {len(at_home)} pairs in contact at this table's home "
+                             f"(the zero configuration clipped into the limits; not counted above): "
+                             f"{', '.join(f'{a}-{b}' for a, b in at_home)}")
         setup = pair_setup(model)
         never_pairs = [p for p, e in zip(setup.pairs, cm.entries) if e.reason == "Never"]
         dmin = _coal_check(model, setup, never_pairs, n_check) if never_pairs else float("nan")
@@ -129,7 +135,7 @@ def _previous() -> tuple[dict, dict]:
         if line.startswith("| ") and not line.startswith("| robot |"):
             rows[line.split("|")[1].strip()] = line
         elif line.startswith("- ") and ": the shipped SRDF" in line:
-            notes.setdefault(line[2:].split(":", 1)[0], line[2:])
+            notes.setdefault(line[2:].split(":", 1)[0], []).append(line[2:])
     return rows, notes
 
 
@@ -163,7 +169,7 @@ def _section(rows: dict, notes: list, n_check: int, subset: bool) -> str:
         order = _all_names()
         merged = {**{n: old_rows[n] for n in kept}, **rows}
         rows = {n: merged[n] for n in sorted(merged, key=lambda n: (order.index(n) if n in order else len(order), n))}
-        notes = [old_notes[n] for n in old_notes if n in kept] + notes
+        notes = [x for n in old_notes if n in kept for x in old_notes[n]] + notes
     rows_l = list(rows.values())
     proofs_held = all(not (float(r.split("|")[-2].split(":")[1]) <= 0.0) for r in rows_l)
     text = ("Certified: `collision_matrix(model, workers=2)` (analytic distances at box centres, at most 2*10^5 "

@@ -13,7 +13,7 @@ def _row(name, shipped="-", s10="2 (0)", s100="2 (0)", coal="1e+05: 0.0100"):
 
 def test_a_subset_run_replaces_its_rows_and_keeps_the_others(monkeypatch):
     old = {"a": _row("a"), "b": _row("b", shipped="1 of 5"), "c": _row("c", s10="3 (1)")}
-    monkeypatch.setattr(srdf_bench, "_previous", lambda: (old, {"b": "b: the shipped SRDF disables x-y, which ..."}))
+    monkeypatch.setattr(srdf_bench, "_previous", lambda: (old, {"b": ["b: the shipped SRDF disables x-y, which ..."]}))
     monkeypatch.setattr(srdf_bench, "_all_names", lambda: ["a", "b", "c", "d"])
     text = srdf_bench._section({"d": _row("d"), "b": _row("b", shipped="0 of 5")}, [], 100_000, subset=True)
     rows = [ln for ln in text.splitlines() if ln.startswith("| ") and not ln.startswith("| robot")]
