@@ -43,8 +43,9 @@ class PairVerdicts:
     ``Checker.collides(margin=margin)`` of ``backend`` over a Model whose only active pairs are link
     pair ``k``'s geometry (one Checker per pair, built at its first use).  A backend's contact level
     may be a tolerance above ``margin`` (the analytic kernel's ``Tolerances.length``): a True is a
-    candidate that :func:`sampled` confirms with the exact distance; a False is final (no backend
-    says clear where its distance is within the margin)."""
+    candidate that :func:`sampled` confirms with the exact distance; a False is final: a backend's
+    ``collides`` must not say clear where its distance is within the margin (checked on the analytic
+    backend by ``tests/test_srdf_sampled.py``)."""
 
     def __init__(self, model, setup, backend: str | None = "analytic", options=None, margin: float = 0.0) -> None:
         self.model, self.setup, self.backend, self.options, self.margin = model, setup, backend, options, float(margin)
