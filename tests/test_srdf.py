@@ -124,6 +124,22 @@ def test_public_robots_find_their_srdf(urdf, srdf):
     assert (found and Path(found.file)) == (srdf and (ROBOTS / srdf).resolve())
 
 
+@pytest.mark.parametrize("name, srdf, partial", [
+    ("panda_collision", "panda_description/srdf/panda.srdf", False),  # the table's
+    ("kinova", "kinova_description/srdf/kinova.srdf", False),  # found by the search (read leniently)
+    ("talos_left_arm", "talos_data/srdf/talos.srdf", True),  # the humanoid's, under the robot's name
+    ("ur10", None, None),
+])
+def test_public_robot_srdf_is_the_one_load_model_reads(name, srdf, partial):
+    from armguard.model._public import public_robot_files, public_robot_srdf
+
+    found = public_robot_srdf(name)
+    assert (found and (found[0], found[1])) == (srdf and ((ROBOTS / srdf).resolve(), partial))
+    urdf, table = public_robot_files(name)
+    chosen = _srdf_for(urdf.resolve(), table)
+    assert (chosen and (Path(chosen.file).resolve(), chosen.partial)) == found
+
+
 # ------------------------------------------------------------------------------ lenient reading, homes
 def test_group_state_without_group_is_a_warning_and_the_first_state_is_home(tmp_path):
     urdf = package(tmp_path)

@@ -26,7 +26,7 @@ from pathlib import Path
 from .._errors import SceneError
 
 __all__ = ["PublicRobot", "KnownModel", "PUBLIC_ROBOTS", "public_robot", "public_robot_names", "public_robot_files",
-           "package_root", "known_models"]
+           "public_robot_srdf", "package_root", "known_models"]
 
 EXAMPLE_ROBOT_DATA = "example-robot-data"
 PYBULLET_DATA = "pybullet_data"
@@ -137,6 +137,23 @@ def public_robot_files(name: str) -> tuple[Path, Path | None]:
             raise SceneError(f"public robot {name!r}: {p} is missing from the installed {robot.package}")
     return urdf, srdf
 
+
+
+def public_robot_srdf(name: str) -> tuple[Path, bool] | None:
+    """``(srdf, partial)``: the SRDF :func:`armguard.model.load_model` reads for public robot ``name`` --
+    the table's, else the first that its SRDF search finds beside the URDF
+    (:func:`armguard.model._load.srdf_candidates`: ``talos_left_arm`` finds ``talos_data/srdf/talos.srdf``
+    under its robot name ``talos``, ``kinova`` ``kinova.srdf``); ``partial`` when that file may describe a
+    larger robot (its pairs naming links the URDF lacks do not apply).  None when there is none."""
+    from ._load import srdf_candidates
+
+    urdf, srdf = public_robot_files(name)
+    if srdf is not None:
+        return srdf, False
+    for path, _how, partial in srdf_candidates(urdf):
+        if path.is_file():
+            return path.resolve(), partial
+    return None
 
 @dataclass(frozen=True)
 class KnownModel:

@@ -7,7 +7,7 @@ Reasons are MoveIt's (its Setup Assistant's ``disable_collisions`` entries):
 * **Never** -- ``method="certified"``: *proven* never to come within ``margin`` anywhere within the
   joint limits, by branch and bound over the pair's joints with the certified verifier's lever-arm
   bounds (:mod:`._prove`); ``method="sampled"``: not seen within ``margin`` in ``samples`` random
-  configurations (MoveIt's rule, 10^4 by default);
+  configurations (MoveIt's rule, 10^4 by default; :mod:`._sampled`);
 * **Always** -- ``method="sampled"`` only: in contact in more than 95 % of 200 random configurations
   (MoveIt's rule).  The certified method gives none: a pair in contact everywhere is in contact at
   home, hence *Default* first.
@@ -39,8 +39,6 @@ __all__ = ["MatrixEntry", "CollisionMatrix", "collision_matrix", "PairEvaluator"
 
 REASONS = ("Adjacent", "Default", "Never", "Always")
 METHODS = ("certified", "sampled")
-ALWAYS_SAMPLES = 200
-ALWAYS_FRACTION = 0.95
 
 
 @dataclass(frozen=True)
@@ -255,7 +253,10 @@ def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", b
                     for k in todo:
                         entries[k] = one(k)
         else:
-            _sampled(ev, setup, todo, entries, margin, int(samples), seed, home_pin, advance)
+            from ._sampled import PairVerdicts, sampled
+
+            sampled(ev, PairVerdicts(model, setup, backend, options, float(margin)), setup, todo, entries, float(margin),
+                    int(samples), seed, advance)
     finally:
         close()
     entries = [replace(e, fingerprint=f) for e, f in zip(entries, prints)]
@@ -285,54 +286,3 @@ def _entry(p, r, ev) -> MatrixEntry:
     return MatrixEntry(p.link1, p.link2, None, "undecided", None, float("nan"),
                        f"undecided after {r.evaluations} evaluations (boxes down to {r.smallest_width:.2g} rad)",
                        r.evaluations)
-
-
-def _random(setup, n: int, rng) -> np.ndarray:
-    Q = np.repeat(setup.home[None, :], n, axis=0)
-    Q[:] = setup.lower + (setup.upper - setup.lower) * rng.random((n, len(setup.home)))
-    return Q
-
-
-def _sampled(ev, setup, todo, entries, margin, samples, seed, home_pin, advance) -> None:
-    """MoveIt's rules (module docstring) for the pairs ``todo``."""
-    rng = np.random.default_rng(seed)
-    cols = np.asarray(todo, dtype=np.int64)
-    D = ev.all(_random(setup, ALWAYS_SAMPLES, rng), pairs=cols)
-    frac = np.mean(D <= 0.0, axis=0)
-    left = []
-    for i, k in enumerate(todo):
-        p = setup.pairs[k]
-        if frac[i] > ALWAYS_FRACTION:
-            entries[k] = MatrixEntry(p.link1, p.link2, "Always", "disabled", None, float(np.min(D[:, i])),
-                                     f"in contact in {frac[i]:.0%} of {ALWAYS_SAMPLES} random configurations", ALWAYS_SAMPLES)
-            advance()
-        else:
-            left.append(k)
-    cols = np.asarray(left, dtype=np.int64)
-    first = np.full(len(left), -1)
-    first_d = np.full(len(left), np.nan)
-    first_q = np.zeros((len(left), len(setup.home)))
-    done = 0
-    while done < samples and len(cols):
-        n = min(2000, samples - done)
-        Q = _random(setup, n, rng)
-        D = ev.all(Q, pairs=cols)
-        if not np.all(np.isfinite(D)):
-            raise VerificationError("a sampled distance is not finite: no verdict")
-        for i in np.flatnonzero(first < 0):
-            hit = np.flatnonzero(D[:, i] <= margin)
-            if len(hit):
-                first[i] = done + hit[0]
-                first_d[i] = D[hit[0], i]
-                first_q[i] = Q[hit[0]]
-        done += n
-    for i, k in enumerate(left):
-        p = setup.pairs[k]
-        if first[i] < 0:
-            entries[k] = MatrixEntry(p.link1, p.link2, "Never", "disabled", None, float("nan"),
-                                     f"not within the margin in {samples} random configurations", samples)
-        else:
-            q = tuple(float(x) for x in ev.pin(first_q[i][None, :])[0])
-            entries[k] = MatrixEntry(p.link1, p.link2, None, "witnessed", q, float(first_d[i]),
-                                     f"within the margin at random configuration {first[i]}", int(first[i]) + 1)
-        advance()
