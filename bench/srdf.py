@@ -17,9 +17,8 @@ import numpy as np
 TITLE = "Certified collision matrices (armguard srdf)"
 QUICK_ROBOTS = ["panda"]
 # robots whose certified search takes its distances from coal (the reference backend) instead of the
-# analytic kernel: so101's convex hulls have 800-4,900 vertices, where the kernel's penetration depth
-# gives up EPA for the exhaustive SAT (O(E_A E_B (V_A + V_B))), which does not return in minutes
-CERTIFIED_BACKEND = {"so101": "coal"}
+# analytic kernel (none: so101 was one until its EPA stopped falling back to the exhaustive SAT)
+CERTIFIED_BACKEND: dict[str, str] = {}
 
 
 def _only() -> list[str]:
