@@ -4,7 +4,7 @@
 :class:`ConsoleApp` binds it to viser widgets and a 3-D view; :func:`serve` does both.
 """
 
-from ._app import VIEWS, VISTA_POINTS, ConsoleApp, view_pose
+from ._app import ConsoleApp
 from ._parse import ConsoleInputError, parse_number, parse_numbers
 from ._plot import ClearancePlot
 from ._readout import PANEL_COLORS, CategoryRow, PanelStatus, Readout, panel_html, readout_from_report, readout_off
@@ -12,6 +12,7 @@ from ._serve import serve
 from ._state import ConsoleState, Player, Snapshot
 from ._tasks import TaskComposer
 from ._timeline import Timeline, TimelineState
+from ._views import VIEWS, VISTA_POINTS, view_pose
 
 __all__ = [
     "ConsoleState",

@@ -25,6 +25,7 @@ from ._readout import panel_html
 from ._state import MAX_DISTANCE_SETTING, ConsoleState
 from ._targets import MAX_ANGLE_DEG, MAX_COORDINATE
 from ._tasks_panel import TasksPanel, TrainingViews
+from ._views import VIEWS, view_pose
 
 __all__ = ["ConsoleApp", "PortInUseError", "FPS", "PLOT_PERIOD"]
 
@@ -32,8 +33,6 @@ FPS = 30.0
 """Rate of the draw / player loop (Hz)."""
 PLOT_PERIOD = 0.2
 """Seconds between clearance-plot marker refreshes while playing."""
-_VIEW_DISTANCE = 2.5
-"""Camera distance for the standard views, in scene radii."""
 
 
 class PortInUseError(ArmguardError):
@@ -569,35 +568,3 @@ class ConsoleApp:
         self._w_plot.image = self._plot.image_at(tl.t)
         state = "playing" if tl.playing else "paused"
         self._w_rate.content = f"t = {tl.t:.2f} / {tl.duration:.2f} s · {state} {tl.direction} · speed ×{abs(tl.rate):g}"
-
-
-VISTA_POINTS = tuple((60.0 * k - 30.0, 30.0) for k in range(1, 7)) + tuple((90.0 * k, -30.0) for k in range(4))
-"""Ranger's ten vista points (seed 000 section 6: "buttons that allow the user to select from ten
-vista points for viewing the simulation"), as ``(azimuth, elevation)`` degrees about the scene
-centre.  The seed gives no directions; these are chosen: six from above (elevation 30 deg, every
-60 deg of azimuth from 30 deg) and four from below (elevation -30 deg, azimuths 0, 90, 180,
-270 deg), where the grapple arm and the underside of the vehicle show."""
-
-VIEWS = ("top", "front", "side") + tuple(f"vista {k}" for k in range(1, len(VISTA_POINTS) + 1))
-"""The camera presets offered: three orthogonal views and the ten vista points."""
-
-
-def view_pose(label: str, center: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
-    """Camera ``(position, look_at)``, each (3,) m in W, for a preset of :data:`VIEWS`.
-
-    top: looking down -z; front: looking along -x from +x; side: looking along +y from -y;
-    vista k: the k-th ``(azimuth, elevation)`` of :data:`VISTA_POINTS`.  All at
-    ``_VIEW_DISTANCE`` radii from ``center``, looking at it.
-    """
-    d = _VIEW_DISTANCE * radius
-    c = np.asarray(center, dtype=np.float64)
-    if label == "top":
-        return c + np.array([0.0, -1e-3 * d, d]), c
-    if label == "front":
-        return c + np.array([d, 0.0, 0.0]), c
-    if label == "side":
-        return c + np.array([0.0, -d, 0.0]), c
-    if label in VIEWS and label.startswith("vista "):
-        az, el = (math.radians(a) for a in VISTA_POINTS[int(label.split()[1]) - 1])
-        return c + d * np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)]), c
-    raise ValueError(f"unknown view {label!r}; views are {list(VIEWS)}")

@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-__all__ = ["TrainingViews", "INSET_VIEWS", "INSET_SIZE", "camera_wxyz", "eye_in_hand", "inset_camera",
+__all__ = ["TrainingViews", "VIEWS", "VISTA_POINTS", "view_pose", "INSET_VIEWS", "INSET_SIZE", "camera_wxyz", "eye_in_hand", "inset_camera",
            "INSET_FOV_DEG", "EYE_FOV_DEG", "REFRESH_S"]
 
 INSET_VIEWS = ("top", "front", "side", "eye in the hand")
@@ -32,6 +32,39 @@ EYE_FOV_DEG = 70.0
 REFRESH_S = 2.0
 """With *keep the insets current*, at most one refresh this often (s): each is four renders in the tab."""
 _RENDER_TIMEOUT_S = 60.0
+_VIEW_DISTANCE = 2.5
+"""Camera distance for the standard views, in scene radii."""
+
+VISTA_POINTS = tuple((60.0 * k - 30.0, 30.0) for k in range(1, 7)) + tuple((90.0 * k, -30.0) for k in range(4))
+"""Ranger's ten vista points (seed 000 section 6: "buttons that allow the user to select from ten
+vista points for viewing the simulation"), as ``(azimuth, elevation)`` degrees about the scene
+centre.  The seed gives no directions; these are chosen: six from above (elevation 30 deg, every
+60 deg of azimuth from 30 deg) and four from below (elevation -30 deg, azimuths 0, 90, 180,
+270 deg), where the grapple arm and the underside of the vehicle show."""
+
+VIEWS = ("top", "front", "side") + tuple(f"vista {k}" for k in range(1, len(VISTA_POINTS) + 1))
+"""The camera presets offered: three orthogonal views and the ten vista points."""
+
+
+def view_pose(label: str, center: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """Camera ``(position, look_at)``, each (3,) m in W, for a preset of :data:`VIEWS`.
+
+    top: looking down -z; front: looking along -x from +x; side: looking along +y from -y;
+    vista k: the k-th ``(azimuth, elevation)`` of :data:`VISTA_POINTS`.  All at
+    ``_VIEW_DISTANCE`` radii from ``center``, looking at it.
+    """
+    d = _VIEW_DISTANCE * radius
+    c = np.asarray(center, dtype=np.float64)
+    if label == "top":
+        return c + np.array([0.0, -1e-3 * d, d]), c
+    if label == "front":
+        return c + np.array([d, 0.0, 0.0]), c
+    if label == "side":
+        return c + np.array([0.0, -d, 0.0]), c
+    if label in VIEWS and label.startswith("vista "):
+        az, el = (math.radians(a) for a in VISTA_POINTS[int(label.split()[1]) - 1])
+        return c + d * np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)]), c
+    raise ValueError(f"unknown view {label!r}; views are {list(VIEWS)}")
 
 
 def camera_wxyz(position, look_at, up) -> np.ndarray:
@@ -63,8 +96,6 @@ def inset_camera(label: str, center, radius: float, X_WE=None) -> tuple[np.ndarr
     if label == "eye in the hand":
         p, look, up = eye_in_hand(X_WE)
         return p, camera_wxyz(p, look, up), math.radians(EYE_FOV_DEG)
-    from ._app import view_pose
-
     p, look = view_pose(label, center, radius)
     d = p - look  # the preset's direction, at the distance where the scene's sphere fills the inset
     p = look + d / np.linalg.norm(d) * radius / math.sin(math.radians(0.5 * INSET_FOV_DEG))
