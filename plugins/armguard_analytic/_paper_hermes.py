@@ -14,9 +14,11 @@ exit it took (``B_*``), so the benches can count them.
   the derivatives, with respect to the two links equations parameters, of the distance equation":
   ``X1 = P1 + s u``, ``X2 = P2 + t v``, ``w = P1 - P2``, ``a = u.u``, ``b = u.v``, ``c = v.v``,
   ``d = u.w``, ``e = v.w``; the system ``a s - b t = -d``, ``b s - c t = -e`` has determinant
-  ``a c - b^2`` (up to sign; where it cancels, below ``1e-15 a c``, armguard recomputes it as
-  ``|u x v|^2``, the same number by Lagrange's identity, so that exactly parallel axes are not
-  taken for skew ones by rounding).  Not zero (``> Tolerances.parallel^2 a c``): ``s = (b e - c d) /
+  ``a c - b^2`` (up to sign; near parallel, below ``1e-4 a c`` (angle below 0.01 rad), where it and ``b e - c d``
+  cancel, armguard computes the same numbers without cancellation: ``det = |n|^2``, ``s = -((w x
+  v) . n) / det``, ``t = -((w x u) . n) / det`` with ``n = u x v``, so that parallel axes are not
+  taken for skew ones, nor near-parallel ones solved with rounding noise; there ``t`` is then
+  re-solved for ``s``, the foot of ``M1`` on link 2).  Not zero (``> Tolerances.parallel^2 a c``): ``s = (b e - c d) /
   det``, ``t = (a e - b d) / det``; both in [0, 1] is the answer, else "eight different cases":
   each end-point against the point of the other link at its foot (when the foot is inside that
   link) and each end-point against each end-point of the other link; the least distance wins
@@ -112,13 +114,21 @@ def _hermes_segments(P1, P1p, P2, P2p, eps_len, eps_par):  # pragma: no cover - 
     e = _dot(v, w)
     ac = a * c
     det = ac - b * b
-    if det <= 1e-15 * ac:  # a c - b^2 cancels near parallel: Lagrange's identity |u x v|^2 instead
-        uxv = _cross(u, v)
-        det = _dot(uxv, uxv)
+    ill = det <= 1e-4 * ac  # near parallel (sin <= 0.01): a c - b^2 and b e - c d cancel
+    n = u
+    if ill:  # Lagrange's identity |u x v|^2, and s, t from cross products (the same numbers, exactly)
+        n = _cross(u, v)
+        det = _dot(n, n)
     if det > eps_par * eps_par * ac:
-        s = (b * e - c * d) / det
-        t = (a * e - b * d) / det
+        if ill:
+            s = -_dot(_cross(w, v), n) / det
+            t = -_dot(_cross(w, u), n) / det
+        else:
+            s = (b * e - c * d) / det
+            t = (a * e - b * d) / det
         if 0.0 <= s <= 1.0 and 0.0 <= t <= 1.0:
+            if ill:  # near parallel, s is known to ~1e-16 / sin: t re-solved for it (M1's foot on link 2)
+                t = min(max((b * s + e) / c, 0.0), 1.0)
             M1 = _axpy(P1, s, u)
             M2 = _axpy(P2, t, v)
             return _dist(M1, M2), M1, M2, B_INTERIOR

@@ -34,6 +34,11 @@ def ref_segments(p0, p1, q0, q1) -> float:
         s, t = np.linalg.solve(M, [-(u @ (p0 - q0)), -(v @ (p0 - q0))])
         if 0 <= s <= 1 and 0 <= t <= 1:
             cands.append(float(np.linalg.norm(p0 + s * u - q0 - t * v)))
+            # near parallel the solve is ill-conditioned: the foot of each solved point on the other
+            # segment too (every candidate is a distance between points of the segments)
+            t2 = min(max(float(v @ (p0 + s * u - q0)) / float(v @ v), 0.0), 1.0)
+            s2 = min(max(float(u @ (q0 + t * v - p0)) / float(u @ u), 0.0), 1.0)
+            cands += [float(np.linalg.norm(p0 + s * u - q0 - t2 * v)), float(np.linalg.norm(p0 + s2 * u - q0 - t * v))]
     return min(cands)
 
 
