@@ -48,12 +48,7 @@ def hidden_from(eye, line, posed, *, skip=()) -> set[int]:
         return set()
     skip = set(skip)
     out: set[int] = set()
-    for p in _targets(line):
-        v = p - eye
-        n = float(np.linalg.norm(v))
-        if n < 1e-9:
-            continue
-        end = p - min(1e-3, 0.01 * n) * v / n  # stop short of the point itself
+    for end, _ in _sight_ends(eye, line):
         sight = None
         for k in posed.near(eye, end, pad=_SIGHT_RADIUS):
             if k in skip or k in out:
@@ -63,6 +58,16 @@ def hidden_from(eye, line, posed, *, skip=()) -> set[int]:
             if distance(sight, posed.shape(k)).distance < 0.0:
                 out.add(k)
     return out
+
+
+def _sight_ends(eye, line):
+    """``(end, length)`` of each sight line from ``eye`` towards a point of :data:`SIGHT_FRACTIONS`
+    of ``line``, stopping just short of the point itself (points at the eye are skipped)."""
+    for p in _targets(line):
+        v = p - eye
+        n = float(np.linalg.norm(v))
+        if n >= 1e-9:
+            yield p - min(1e-3, 0.01 * n) * v / n, n
 
 
 def sight_buried(elevation, eye, line) -> bool:
@@ -75,12 +80,7 @@ def sight_buried(elevation, eye, line) -> bool:
     if not np.all(np.isfinite(eye)):
         return False
     cell = max(float(elevation.cell), 1e-6)
-    for p in _targets(line):
-        v = p - eye
-        n = float(np.linalg.norm(v))
-        if n < 1e-9:
-            continue
-        end = p - min(1e-3, 0.01 * n) * v / n  # stop short of the point itself
+    for end, n in _sight_ends(eye, line):
         samples = int(min(4000, max(33, math.ceil(2.0 * n / cell))))
         if line_buried(elevation, [eye, end], trim=0.0, samples=samples):
             return True
