@@ -3,7 +3,7 @@
 numba's on-disk cache hides compilation failures: a kernel that once compiled loads from the
 cache even after an edit that makes LLVM crash when it compiles from scratch (seen with numba's
 ``_nrt=False`` on functions that link the convex kernels: a segfault in LLVM's code generator,
-see :mod:`armguard.detect._step`).  This test compiles every detector entry point in a fresh
+see :mod:`armguard_analytic._engine._step`).  This test compiles every detector entry point in a fresh
 process with a fresh, empty cache directory and checks the process exits normally and computes
 the same answers as this (possibly warm-cached) process.
 
@@ -86,4 +86,4 @@ def test_detector_kernels_compile_from_an_empty_cache(tmp_path):
     planned = {(m, n) for m, n, _ in LEAVES_MAIN + LEAVES_SIDE}
     again = planned & {tuple(x) for x in got["compiled"]}
     assert not again, f"the warm-up plan's signatures no longer match the detector's calls of {sorted(again)}"
-    assert ("armguard.detect._kernel", "detect_rows") in {tuple(x) for x in got["compiled"]}  # the listener saw the chain
+    assert ("armguard_analytic._engine._kernel", "detect_rows") in {tuple(x) for x in got["compiled"]}  # the listener saw the chain

@@ -55,7 +55,7 @@ class _Fast:
                  "args", "SF0", "SI0", "n_q", "tls", "subsets", "jac")
 
     def __init__(self, checker: "AnalyticChecker") -> None:
-        from armguard.detect import _kernel as kn
+        from ._engine import _kernel as kn
 
         model = checker.model
         det = checker.detector()
@@ -314,7 +314,7 @@ class AnalyticChecker(CheckerBase):
     def pair_distances_many(self, Q, *, pairs=None) -> PairDistancesMany:
         """Every pair (or the Model rows ``pairs``) at each row of ``Q`` ``(M, nq)``; rows split over
         threads (one numba call each, the GIL released) when there are many."""
-        from armguard.detect import _kernel as kn
+        from ._engine import _kernel as kn
 
         f = self._plan()
         Q = check_Q(self.model, Q)

@@ -32,8 +32,8 @@ class JacobianPlan:
         import pinocchio as pin
 
         from armguard.backends._jacobian import WitnessJacobian
-        from armguard.detect import _kernel as kn
-        from armguard.detect import _pair_jacobian as pj
+        from ._engine import _kernel as kn
+        from ._engine import _pair_jacobian as pj
 
         model = checker.model
         pm = model.pin_model

@@ -60,8 +60,8 @@ def _detector() -> None:
     det.check(q)
     det.check_many(np.tile(q, (4, 1)))
     # the analytic backend's pair_distances(_many): pair_rows, with the argument types it is given
-    from ..detect import _kernel as kn
-    from ..detect._scratch import _Scratch
+    from armguard_analytic._engine import _kernel as kn
+    from armguard_analytic._engine._scratch import _Scratch
 
     s, n, nq = _Scratch(det), det.n_pairs, len(q)
     gmap = np.concatenate([[nq, nq, 0, n], np.arange(nq), np.arange(n), np.zeros(n)]).astype(np.int64)
@@ -89,13 +89,13 @@ def _verifier() -> None:
 # all match).  Codes: F1/F2 float64 C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64.
 LEAVES_SIDE = (
     ("armguard.geometry._pair_cylinder", "support_pair_graph", "F2 I1 F1 f F2 I1 F1 f F1 F1 f f i f"),
-    ("armguard.detect._narrow", "_capsule_polytope", "F2 f i F2 F2 I2 F2 F2 I1 I1 I1 f F1 f f f i f"),
+    ("armguard_analytic._engine._narrow", "_capsule_polytope", "F2 f i F2 F2 I2 F2 F2 I1 I1 I1 f F1 f f f i f"),
 )
 """Leaf kernels compiled in the second process: (module, function, signature codes)."""
 LEAVES_MAIN = (
     ("armguard.geometry._pair_epa", "convex_convex_fast", "F2 F2 F2 I1 I2 f F2 F2 F2 I1 I2 f F1 F1 f f f i f f"),
-    ("armguard.detect._step", "evaluate_pair", "i i I1 F1 I1 F1 I1 F1 f f f i"),
-    ("armguard.detect._narrow", "narrow_flat", "i i I1 F1 I1 F1 F1 f f f"),
+    ("armguard_analytic._engine._step", "evaluate_pair", "i i I1 F1 I1 F1 I1 F1 f f f i"),
+    ("armguard_analytic._engine._narrow", "narrow_flat", "i i I1 F1 I1 F1 F1 f f f"),
 )
 """Leaf kernels compiled here while the second process compiles :data:`LEAVES_SIDE`."""
 

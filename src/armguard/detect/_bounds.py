@@ -22,7 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._model import _CYLINDER, _SCENE_CAT, CAT_WORKSPACE, _combined_tree, _cylinder_aabb
+from ._common import CAT_WORKSPACE, CYLINDER as _CYLINDER, SCENE_CATEGORY as _SCENE_CAT, combined_tree as _combined_tree
+from ._common import cylinder_aabb as _cylinder_aabb
 from ._reach import chain_bounds
 
 __all__ = ["PairBounds", "pair_bounds"]

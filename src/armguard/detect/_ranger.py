@@ -38,7 +38,7 @@ import numpy as np
 
 from .._errors import DetectionError
 from ._bounds import pair_bounds
-from ._common import check_length, status_code
+from ._common import check_finite_margin, check_length, status_code
 from ._extras import attach_extra
 from ._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, NotEvaluated, PairDistances, PairResult
 
@@ -130,7 +130,6 @@ class RangerDetector:
                  reach_margin: float | None = None, terrain=None) -> None:
         from ..backends import Capability, checker
         from ..model import model_of
-        from ._model import check_finite_margin
 
         self.scene = scene
         self._threshold = check_length(threshold, "threshold")

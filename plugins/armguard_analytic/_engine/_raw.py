@@ -9,7 +9,7 @@ import numpy as np
 
 from . import _kernel as kn
 from ._layout import EV_W, SUM_BSLOT, SUM_SIZE
-from ._report import CATEGORIES, NotEvaluated, PairResult
+from armguard.detect._report import CATEGORIES, NotEvaluated, PairResult
 
 if TYPE_CHECKING:
     from ._detector import Detector

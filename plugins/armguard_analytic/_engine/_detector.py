@@ -11,21 +11,22 @@ from typing import Mapping
 
 import numpy as np
 
-from .._errors import DetectionError
-from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from armguard._errors import DetectionError
+from armguard._tolerance import DEFAULT_TOLERANCES, Tolerances
 from . import _kernel as kn
-from ..geometry._pair_cylinder import SUPPORT_WORK_SIZE
-from ..geometry._pair_epa import EPA_WORK_SIZE
-from ..kinematics._limits import limit_error, limit_rows
-from ._common import check_length as _check_length, require_pairs as _require_pairs
-from ._extras import attach_extra
+from armguard.geometry._pair_cylinder import SUPPORT_WORK_SIZE
+from armguard.geometry._pair_epa import EPA_WORK_SIZE
+from armguard.kinematics._limits import limit_error, limit_rows
+from armguard.detect._common import check_length as _check_length, require_pairs as _require_pairs
+from armguard.detect._extras import attach_extra
 from ._hulls import link_obbs, vertex_graphs
 from ._layout import EV_W, SUM_SIZE, Layout
-from ._model import CAT_WORKSPACE, build_model, check_finite_margin
+from ._model import CAT_WORKSPACE, build_model
+from armguard.detect._common import check_finite_margin
 from ._raw import _UNHELD, _Raw, _refcount
 from ._scratch import _entry_point, _Scratch
 from ._prep import _fk_blocks, _static_polytopes
-from ._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, PairDistances, PairResult
+from armguard.detect._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, PairDistances, PairResult
 
 __all__ = ["Detector"]
 
@@ -94,7 +95,7 @@ class Detector:
         # (Backend.ranger_detector: the analytic backend's is this class), else Ranger's algorithm
         # over its Checker (armguard.detect._ranger)
         if cls is Detector:
-            from ._ranger import RangerDetector, fast_path
+            from armguard.detect._ranger import RangerDetector, fast_path
 
             fast = fast_path(backend, backend_options)
             if fast is None:
@@ -455,8 +456,8 @@ class Detector:
         with self._prepare_lock:
             hit = getattr(self, "_category_jac", None)
             if hit is None or hit[0] != self._revision:
-                from ..model import model_of
-                from ._category_jacobian import CategoryJacobians
+                from armguard.model import model_of
+                from armguard.detect._category_jacobian import CategoryJacobians
 
                 hit = self._category_jac = (self._revision, CategoryJacobians(model_of(self.scene), "analytic"))
         return report._with_jacobian(hit[1].of(q_flat, report.by_category))
@@ -575,7 +576,7 @@ class Detector:
         feature = None
         shape = self._static_shapes.get(b) if b >= 0 else None
         if shape is not None and m.compiled.elem_core[b] >= 2:
-            from ..geometry import feature_at
+            from armguard.geometry import feature_at
 
             try:
                 feature = feature_at(shape, p_WB, self._tol)

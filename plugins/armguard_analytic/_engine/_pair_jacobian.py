@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 from numba import carray, njit
 
-from ..backends._jacobian import face_span, unique_witness
+from armguard.backends._jacobian import face_span, unique_witness
 # segment numbers compiled in as constants (see ._layout: a change there comes with an edit here)
 from ._layout import K, SC, at, seg1, seg2, seg3
 
