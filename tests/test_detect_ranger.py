@@ -52,12 +52,13 @@ def _truth(det, q) -> np.ndarray:
 
 def test_the_backend_declares_the_fast_path():
     scene = _model("hermes").scene
-    assert get_backend("analytic").ranger_detector({}) is Detector
+    fused = get_backend("analytic").ranger_detector({})
+    assert issubclass(fused, Detector) and fused is not Detector and fused.__module__.startswith("armguard_analytic.")
     assert get_backend("analytic").ranger_detector({"fidelity": "paper"}) is None
     assert getattr(get_backend("coal"), "ranger_detector", None) is None
-    assert type(armguard.Detector(scene)) is Detector
+    assert type(armguard.Detector(scene)) is fused and isinstance(armguard.Detector(scene), Detector)
     coal = armguard.Detector(scene, backend="coal")
-    assert isinstance(coal, RangerDetector) and CheckerDetector is RangerDetector
+    assert isinstance(coal, RangerDetector) and CheckerDetector is RangerDetector and isinstance(coal, Detector)
     assert coal.n_pairs == armguard.Detector(scene).n_pairs == len(_model("hermes").pairs)
 
 

@@ -153,8 +153,8 @@ class AnalyticChecker(CheckerBase):
 
     # ---------------------------------------------------------------- detectors
     def detector(self, stopping_distance: float = 0.0):
-        """The armguard Detector of the Model's scene (every pair kept), one per stopping distance."""
-        from armguard.detect import Detector
+        """The fused Detector of the Model's scene (every pair kept), one per stopping distance."""
+        from ._engine._detector import FusedDetector
 
         key = float(stopping_distance)
         det = self._detectors.get(key)
@@ -162,8 +162,8 @@ class AnalyticChecker(CheckerBase):
             with self._lock:
                 det = self._detectors.get(key)
                 if det is None:
-                    det = self._detectors[key] = Detector(self.model.scene, threshold=0.0, stopping_distance=key,
-                                                          reach_margin=math.inf)
+                    det = self._detectors[key] = FusedDetector(self.model.scene, threshold=0.0, stopping_distance=key,
+                                                               reach_margin=math.inf)
         return det
 
     def _order(self):
@@ -372,13 +372,28 @@ class AnalyticBackend:
 
     def ranger_detector(self, options: Mapping | None = None):
         """The declared fast path of ``armguard.Detector``: Ranger's cycle as one fused numba call
-        (:class:`armguard.detect.Detector`) in the exact fidelity; None (Ranger's algorithm over
-        this backend's Checker) in the paper fidelity."""
+        (:class:`._engine._detector.FusedDetector`, a subclass of :class:`armguard.detect.Detector`)
+        in the exact fidelity; None (Ranger's algorithm over this backend's Checker) in the paper
+        fidelity."""
         if str(dict(options or {}).get("fidelity", "exact")) != "exact":
             return None
-        from armguard.detect import Detector
+        from ._engine._detector import FusedDetector
 
-        return Detector
+        return FusedDetector
+
+    def warm_up(self, scene) -> None:
+        """Compile (or load from numba's cache) the fused Detector's and the Checker's kernels on
+        ``scene`` (the framework's first-run warm-up, :mod:`armguard.cli._compile`)."""
+        from ._engine._warm import warm_up
+
+        warm_up(scene)
+
+    def warm_up_leaves(self) -> tuple:
+        """``(main, side)``: the fused kernel's leaf kernels to compile ahead, in two processes
+        (:mod:`._engine._warm`)."""
+        from ._engine._warm import LEAVES_MAIN, LEAVES_SIDE
+
+        return LEAVES_MAIN, LEAVES_SIDE
 
     def build(self, model, options: Mapping | None = None):
         if str(dict(options or {}).get("fidelity", "exact")) == "paper":

@@ -1,4 +1,5 @@
-"""The Detector: Ranger's real-time virtual sensor for any scene (exact, anytime, batched)."""
+"""The analytic backend's Detector: Ranger's real-time virtual sensor as one fused numba call per
+check (exact, anytime, batched), a subclass of the framework's :class:`armguard.detect.Detector`."""
 
 from __future__ import annotations
 
@@ -13,22 +14,23 @@ import numpy as np
 
 from armguard._errors import DetectionError
 from armguard._tolerance import DEFAULT_TOLERANCES, Tolerances
-from . import _kernel as kn
+from armguard.detect._common import check_finite_margin, check_length as _check_length, require_pairs as _require_pairs
+from armguard.detect._detector import Detector
+from armguard.detect._extras import attach_extra
+from armguard.detect._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, PairDistances, PairResult
 from armguard.geometry._pair_cylinder import SUPPORT_WORK_SIZE
 from armguard.geometry._pair_epa import EPA_WORK_SIZE
 from armguard.kinematics._limits import limit_error, limit_rows
-from armguard.detect._common import check_length as _check_length, require_pairs as _require_pairs
-from armguard.detect._extras import attach_extra
+
+from . import _kernel as kn
 from ._hulls import link_obbs, vertex_graphs
 from ._layout import EV_W, SUM_SIZE, Layout
 from ._model import CAT_WORKSPACE, build_model
-from armguard.detect._common import check_finite_margin
+from ._prep import _fk_blocks, _static_polytopes
 from ._raw import _UNHELD, _Raw, _refcount
 from ._scratch import _entry_point, _Scratch
-from ._prep import _fk_blocks, _static_polytopes
-from armguard.detect._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, PairDistances, PairResult
 
-__all__ = ["Detector"]
+__all__ = ["FusedDetector"]
 
 _CYLINDER = 4  # armguard.geometry.CoreKind.CYLINDER
 _DEFAULT_NS_PER_PAIR = 200.0  # first guess of the cost model, replaced by measurements
@@ -51,58 +53,18 @@ def _readonly(a: np.ndarray) -> np.ndarray:
     return a
 
 
-class Detector:
-    """Ranger's virtual sensor for ``scene``: per category, the nearest pair and a status.
+class FusedDetector(Detector):
+    """Ranger's virtual sensor as one fused numba call per check: the analytic backend's
+    ``ranger_detector`` (:class:`armguard.detect.Detector` builds it for ``backend="analytic"``;
+    the parameters and the API are documented there).
 
-    Parameters
-    ----------
-    scene : armguard.Scene
-    threshold : float, m
-        Detection threshold (Ranger's yellow): a pair within it gives WARNING.
-    stopping_distance : float, m
-        When > 0, a pair within it counts as COLLISION (Hermes's obstacle growing); 0: only
-        contact / penetration (distance <= 0) is a collision.
-    active : str or None
-        A robot name: check that arm against everything (Ranger's active arm); None: all arms.
-    tol : Tolerances
-    backend, backend_options : str, mapping
-        The backend whose distances the detector reports (argument > ``$ARMGUARD_BACKEND`` >
-        ``armguard.toml`` > ``"analytic"``).  A backend that declares a Ranger cycle of its own
-        (``Backend.ranger_detector``) gets it: ``"analytic"``'s is this class (the fused numba
-        kernel); any other gives a :class:`~armguard.detect._ranger.RangerDetector`, Ranger's
-        algorithm over the backend's Checker, with the same API.
-    reach_margin : float, m
-        Obstacle lists keep every obstacle a link can come within this margin of anywhere in
-        its joint limits (conservative reach analysis, :mod:`armguard.detect._reach`); pairs
-        farther are dropped.  ``inf`` (default) keeps every pair, so per-category nearest
-        distances are exact at any range; a finite margin (at least the threshold and the
-        stopping distance, raised to it if smaller) keeps the status and the within-threshold
-        pairs exact and reports nearest pairs only among the listed ones.
-    terrain : armguard.terrain.TerrainGuard, TerrainPyramid or ElevationMap, optional
-        Adds the ``"terrain"`` category to ``check`` (:func:`armguard.terrain.attach_terrain`;
-        composed outside the kernel, no cost without it).  ``detector.terrain`` is its guard.
+    ``prepare`` compiles the scene once (one kinematic tree, element arrays, conservative
+    per-link obstacle lists, a BVH over static obstacles, :mod:`._model`, :mod:`._layout`);
+    ``check(q)`` is one numba call (:mod:`._kernel`: FK, transforms, broad and narrow phase).
 
-    Thread safety: several threads may call one Detector at once (each gets its own scratch
-    buffers; the numba kernels release the GIL, so the checks run in parallel) with the answers
-    of single-threaded calls.  Changing the scene or the settings while other threads check is
-    not synchronised.
+    Thread safety: each thread gets its own scratch buffers (:mod:`._scratch`); the numba
+    kernels release the GIL, so the checks of several threads run in parallel.
     """
-
-    terrain = None  # the attached armguard.terrain.TerrainGuard, if any
-
-    def __new__(cls, scene=None, *args, backend: str | None = None, backend_options=None, **kwargs):
-        # the backend (argument > $ARMGUARD_BACKEND > armguard.toml) declares its own Ranger cycle
-        # (Backend.ranger_detector: the analytic backend's is this class), else Ranger's algorithm
-        # over its Checker (armguard.detect._ranger)
-        if cls is Detector:
-            from armguard.detect._ranger import RangerDetector, fast_path
-
-            fast = fast_path(backend, backend_options)
-            if fast is None:
-                return RangerDetector(scene, *args, backend=backend, backend_options=backend_options, **kwargs)
-            if fast is not Detector:
-                return fast(scene, *args, backend=backend, backend_options=backend_options, **kwargs)
-        return super().__new__(cls)
 
     def __init__(self, scene, threshold: float = 0.05, *, stopping_distance: float = 0.0, active: str | None = None,
                  tol: Tolerances = DEFAULT_TOLERANCES, reach_margin: float = math.inf, backend: str | None = None,
@@ -121,7 +83,7 @@ class Detector:
             attach_extra(self, "terrain", terrain)
 
     # ------------------------------------------------------------------ set-up
-    def prepare(self) -> "Detector":
+    def prepare(self) -> "FusedDetector":
         """(Re)compile the scene: obstacle lists, BVH, buffers.  Call after changing the scene."""
         margin = max(self._reach_margin, self._threshold, self._stopping)
         self._revision = getattr(self.scene, "revision", None)  # read before compiling: a change during it is seen

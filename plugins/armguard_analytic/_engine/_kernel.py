@@ -171,7 +171,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     pair_cat = seg1(MI, H, _K_pair_cat)
     pair_of = seg2(MI, H, _K_pair_of, max(n_st, 1))
     mov_ids = seg1(MI, H, _K_mov_ids)
-    if iprm[I_MODE] == MODE_YESNO:  # the static walk's element order (see Detector.prepare)
+    if iprm[I_MODE] == MODE_YESNO:  # the static walk's element order (see FusedDetector.prepare)
         st_mov = seg1(MI, H, _K_yn_mov)
         st_cat = seg1(MI, H, _K_yn_cat)
     else:

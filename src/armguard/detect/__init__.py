@@ -13,7 +13,7 @@ is refused by every entry point with :class:`JointLimitError` (see :mod:`armguar
 """
 
 from .._errors import JointLimitError
-from armguard_analytic._engine._detector import Detector  # (moved; the seam follows)
+from ._detector import Detector
 from ._ranger import RangerDetector
 from ._reference import check_reference
 from ._report import (

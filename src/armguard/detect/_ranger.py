@@ -39,6 +39,7 @@ import numpy as np
 from .._errors import DetectionError
 from ._bounds import pair_bounds
 from ._common import check_finite_margin, check_length, status_code
+from ._detector import Detector
 from ._extras import attach_extra
 from ._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, NotEvaluated, PairDistances, PairResult
 
@@ -121,9 +122,9 @@ class _Raw:
         return tuple(out)
 
 
-class RangerDetector:
-    """Ranger's Detector over a backend's Checker (see the module docstring); the API of
-    :class:`armguard.detect.Detector`.  ``reach_margin`` (m, default ``inf``: every pair) as there."""
+class RangerDetector(Detector):
+    """Ranger's Detector over a backend's Checker (see the module docstring); a subclass of
+    :class:`armguard.detect.Detector` with its API.  ``reach_margin`` (m, default ``inf``: every pair) as there."""
 
     def __init__(self, scene, threshold: float = 0.05, *, stopping_distance: float = 0.0, active: str | None = None,
                  backend: str | None = None, backend_options=None, model=None, tol=None,

@@ -1,0 +1,77 @@
+"""``armguard.detect.Detector``: the public name, dispatching to the chosen backend's Detector.
+
+``Detector(scene_or_model, threshold=..., active=..., backend=...)`` is what users construct.
+The class here holds no algorithm: its ``__new__`` asks the backend (argument >
+``$ARMGUARD_BACKEND`` > ``armguard.toml`` > ``"analytic"``) for the Detector class it declares
+(``Backend.ranger_detector(options)``, the *fast path*, :func:`._ranger.fast_path`) and builds
+that, else :class:`._ranger.RangerDetector` (Ranger's algorithm over the backend's Checker).
+Both are subclasses, so ``isinstance(Detector(scene), Detector)`` holds whichever backend answers:
+
+* ``"analytic"`` declares its fused numba Detector (``armguard_analytic._engine._detector.FusedDetector``,
+  the plugin's own engine: one numba call per check), reached only through the backend registry,
+  so the framework never imports the plugin;
+* every other bundled backend gets :class:`~armguard.detect.RangerDetector`.
+
+A declared class that is a subclass of this one is allocated here and initialised once by
+Python with the caller's arguments; one that is not is called with them and returned as it is.
+"""
+
+from __future__ import annotations
+
+__all__ = ["Detector"]
+
+
+class Detector:
+    """Ranger's virtual sensor for ``scene``: per category, the nearest pair and a status.
+
+    Parameters
+    ----------
+    scene : armguard.Scene or armguard.Model
+    threshold : float, m
+        Detection threshold (Ranger's yellow): a pair within it gives WARNING.
+    stopping_distance : float, m
+        When > 0, a pair within it counts as COLLISION (Hermes's obstacle growing); 0: only
+        contact / penetration (distance <= 0) is a collision.
+    active : str or None
+        A robot name: check that arm against everything (Ranger's active arm); None: all arms.
+    tol : Tolerances
+    backend, backend_options : str, mapping
+        The backend whose distances the detector reports (argument > ``$ARMGUARD_BACKEND`` >
+        ``armguard.toml`` > ``"analytic"``).  A backend that declares a Ranger cycle of its own
+        (``Backend.ranger_detector``) gets it: ``"analytic"``'s is its fused numba kernel
+        (``armguard_analytic._engine``); any other gives a
+        :class:`~armguard.detect._ranger.RangerDetector`, Ranger's algorithm over the backend's
+        Checker, with the same API.  Both are subclasses of this class.
+    reach_margin : float, m
+        Obstacle lists keep every obstacle a link can come within this margin of anywhere in
+        its joint limits (conservative reach analysis, :mod:`armguard.detect._reach`); pairs
+        farther are dropped.  ``inf`` (default) keeps every pair, so per-category nearest
+        distances are exact at any range; a finite margin (at least the threshold and the
+        stopping distance, raised to it if smaller) keeps the status and the within-threshold
+        pairs exact and reports nearest pairs only among the listed ones.
+    terrain : armguard.terrain.TerrainGuard, TerrainPyramid or ElevationMap, optional
+        Adds the ``"terrain"`` category to ``check`` (:func:`armguard.terrain.attach_terrain`;
+        composed outside the kernel, no cost without it).  ``detector.terrain`` is its guard.
+
+    The API every subclass provides: ``check(q, budget_us=, lazy=, jacobian=)``,
+    ``check_many(Q)``, ``collides_many(Q)``, ``pair_distances(q, robot=)``, ``prepare()``,
+    ``obstacle_list(link)``, ``set_threshold`` / ``set_stopping_distance`` / ``set_active``,
+    ``threshold``, ``stopping_distance``, ``active``, ``n_pairs``, ``link_names``.
+
+    Thread safety: several threads may call one Detector at once with the answers of
+    single-threaded calls (the analytic one gives each thread its own scratch buffers and its
+    kernels release the GIL; Ranger's over a Checker keeps per-thread state).  Changing the scene
+    or the settings while other threads check is not synchronised.
+    """
+
+    terrain = None  # the attached armguard.terrain.TerrainGuard, if any
+
+    def __new__(cls, scene=None, *args, backend: str | None = None, backend_options=None, **kwargs):
+        if cls is not Detector:  # a concrete Detector, built directly
+            return super().__new__(cls)
+        from ._ranger import RangerDetector, fast_path
+
+        chosen = fast_path(backend, backend_options) or RangerDetector
+        if isinstance(chosen, type) and issubclass(chosen, Detector):
+            return super().__new__(chosen)  # Python then runs chosen.__init__ with the same arguments
+        return chosen(scene, *args, backend=backend, backend_options=backend_options, **kwargs)
