@@ -358,8 +358,8 @@ class FusedDetector(Detector):
         Cost: one numba call and two small copies (the evaluated pairs' rows); the report's
         ``PairResult`` objects are built on first access.  ``jacobian=True``: the report's
         ``jacobian`` holds each category's nearest pair's ``d(distance)/dq`` ``(pin_model.nv,)``
-        and ``smooth`` flag (:mod:`._category_jacobian`; the Model's analytic Checker, one pair row
-        each); nothing of it is computed otherwise.
+        and ``smooth`` flag (:mod:`armguard.detect._category_jacobian`; the Model's analytic
+        Checker, one pair row each); nothing of it is computed otherwise.
         """
         if jacobian:
             return self._check_with_jacobian(q, budget_us, lazy)

@@ -1,5 +1,5 @@
 """Distance Jacobians inside the kernel: ``d(distance)/dq`` of every checked pair from the
-detector's own forward kinematics, right after :func:`armguard.detect._kernel.pair_rows`.
+detector's own forward kinematics, right after :func:`._pair_rows.pair_rows`.
 
 Equation (1) of :mod:`armguard.backends._jacobian` (Faverjon & Tournassoud, ICRA 1987; the
 envelope theorem on the closest-point problem),

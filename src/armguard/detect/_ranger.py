@@ -18,7 +18,7 @@ framework code here, over the Checker interface only:
   averages updated after every check, one outlier moving them at most 4x) and asks the Checker for those pairs in one
   ``pair_distances(q, pairs=rows)`` call; the report names every pair it skipped with its
   lower bound, and the status is INCOMPLETE, never CLEAR, while a skipped pair's bound does not
-  prove the threshold (the analytic kernel's rule, :mod:`._kernel`);
+  prove the threshold (the analytic kernel's rule, ``armguard_analytic._engine._kernel``);
 * **lazy**: pairs whose lower bound proves them beyond the threshold are skipped (exact status);
 * **categories and threshold status**: the nearest evaluated pair per category, the pairs
   within the threshold, CLEAR / WARNING / COLLISION / INCOMPLETE.
