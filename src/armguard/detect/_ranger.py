@@ -2,8 +2,9 @@
 
 ``Detector(scene, ..., backend="coal")`` (or ``$ARMGUARD_BACKEND`` / ``armguard.toml``) builds a
 :class:`RangerDetector` unless the backend declares a fast path of its own
-(``Backend.ranger_detector(options)``, :func:`fast_path`; the analytic backend's is the fused
-numba kernel, :class:`armguard.detect.Detector`).  Ranger's algorithm (seed ``000``, §2-§4) is
+(``Backend.ranger_detector(options)``, :func:`fast_path`; the analytic backend's is its fused
+numba kernel, ``armguard_analytic._engine._detector.FusedDetector``, a subclass of
+:class:`armguard.detect.Detector`).  Ranger's algorithm (seed ``000``, §2-§4) is
 framework code here, over the Checker interface only:
 
 * **obstacle lists**: the Model pair rows whose sides can come within the reach margin somewhere
