@@ -52,7 +52,8 @@ def _scene():
 
 
 def _backend():
-    """The default backend (``$ARMGUARD_BACKEND`` > ``armguard.toml`` > ``"analytic"``), as ``Detector(scene)`` picks it."""
+    """The default backend (``$ARMGUARD_BACKEND`` > ``armguard.toml`` > ``"analytic"``), as
+    ``Detector(scene)`` picks it."""
     from ..backends import get_backend, resolve
 
     return get_backend(resolve(None, None)[0])
@@ -107,10 +108,10 @@ def signature(codes: str) -> tuple:
         raise ValueError(f"unknown signature code {exc.args[0]!r} in {codes!r} (known: {sorted(kinds)})") from None
 
 
-def _compile_leaves(leaves) -> None:
+def _compile_leaves(plan) -> None:
     import importlib
 
-    for module, name, codes in leaves:
+    for module, name, codes in plan:
         getattr(importlib.import_module(module), name).compile(signature(codes))
 
 

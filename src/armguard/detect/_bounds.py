@@ -22,7 +22,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._common import CAT_WORKSPACE, CYLINDER as _CYLINDER, SCENE_CATEGORY as _SCENE_CAT, combined_tree as _combined_tree
+from ._common import CAT_WORKSPACE
+from ._common import CYLINDER as _CYLINDER
+from ._common import SCENE_CATEGORY as _SCENE_CAT
+from ._common import combined_tree as _combined_tree
 from ._common import cylinder_aabb as _cylinder_aabb
 from ._reach import chain_bounds
 
