@@ -66,7 +66,7 @@ bench: $(STAMP_TEST)
 ## clean-cache: drop numba's on-disk kernel cache (cache=True only notices edits to a kernel's
 ## own file, not to the kernels it calls: run this after editing geometry kernels)
 clean-cache:
-	find src -name "*.nbi" -o -name "*.nbc" | xargs rm -f
+	find src plugins -name "*.nbi" -o -name "*.nbc" | xargs rm -f
 
 clean: clean-cache
 	rm -rf $(VENV) build *.egg-info out

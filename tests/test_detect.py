@@ -250,7 +250,7 @@ def test_pair_distances_of_one_robot_are_rows_of_all_pairs():
 @pytest.mark.parametrize("name", ["ranger", "hermes", "rover"], ids=["ranger", "hermes", "rover"])
 def test_fast_narrow_phase_matches_generic_pair_kernel(name):
     """The scalar / capsule-polytope dispatch of the kernel against the generic per-pair kernel (GJK + EPA / SAT)."""
-    from armguard.detect._narrow import pair_distance
+    from armguard_analytic._engine._narrow import pair_distance
 
     scene = load_scene(name)
     det = Detector(scene, threshold=0.0)

@@ -3,12 +3,12 @@
 numba's on-disk cache hides compilation failures: a kernel that once compiled loads from the
 cache even after an edit that makes LLVM crash when it compiles from scratch (seen with numba's
 ``_nrt=False`` on functions that link the convex kernels: a segfault in LLVM's code generator,
-see :mod:`armguard.detect._step`).  This test compiles every detector entry point in a fresh
+see :mod:`armguard_analytic._engine._step`).  This test compiles every detector entry point in a fresh
 process with a fresh, empty cache directory and checks the process exits normally and computes
 the same answers as this (possibly warm-cached) process.
 
 The process compiles the way a first run does (``armguard.cli._compile``): the leaf kernels first,
-with the signatures the warm-up plan gives them, then the detector's chain.  It records which
+with the signatures the analytic backend's warm-up plan gives them (``warm_up_leaves``), then the detector's chain.  It records which
 kernels the chain still compiles: a planned leaf among them means its planned signature no
 longer matches the chain's call, and the first run's two processes would compile it twice.
 """
@@ -23,7 +23,7 @@ import textwrap
 
 import numpy as np
 
-from armguard.cli._compile import LEAVES_MAIN, LEAVES_SIDE
+from armguard.backends import get_backend
 from armguard.detect import Detector
 from armguard.scene import load_scene
 
@@ -83,7 +83,9 @@ def test_detector_kernels_compile_from_an_empty_cache(tmp_path):
     assert got["yesno"] == det.collides_many(q[None, :]).tolist()
     assert got["brute"] == det.check_many_bruteforce(q[None, :]).min_distance.tolist()
     assert got["pairs"] == det.pair_distances(q).distance.tolist()
-    planned = {(m, n) for m, n, _ in LEAVES_MAIN + LEAVES_SIDE}
+    main, side = get_backend("analytic").warm_up_leaves()  # what the subprocess compiled first (the default backend)
+    planned = {(m, n) for m, n, _ in main + side}
+    assert planned
     again = planned & {tuple(x) for x in got["compiled"]}
     assert not again, f"the warm-up plan's signatures no longer match the detector's calls of {sorted(again)}"
-    assert ("armguard.detect._kernel", "detect_rows") in {tuple(x) for x in got["compiled"]}  # the listener saw the chain
+    assert ("armguard_analytic._engine._kernel", "detect_rows") in {tuple(x) for x in got["compiled"]}  # the listener saw the chain

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from armguard.detect import Detector
-from armguard.detect._cull import _argsort_heap
+from armguard_analytic._engine._cull import _argsort_heap
 from armguard.scene import load_scene
 
 

@@ -132,8 +132,8 @@ def test_link_boxes_contain_their_hulls(hull_scene):
 def test_box_cull_never_drops_a_pair_within_the_level():
     """``obb_apart_static`` says apart only when the element's true distance to the box exceeds the
     level (oracle: ``armguard.geometry.distance`` on the moved hull), and it does cull."""
-    from armguard.detect._cull import obb_apart_static
-    from armguard.detect._hulls import link_obbs
+    from armguard_analytic._engine._cull import obb_apart_static
+    from armguard_analytic._engine._hulls import link_obbs
     from armguard.geometry import distance
     from armguard.scene import compile_scene
 

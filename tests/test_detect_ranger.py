@@ -52,13 +52,45 @@ def _truth(det, q) -> np.ndarray:
 
 def test_the_backend_declares_the_fast_path():
     scene = _model("hermes").scene
-    assert get_backend("analytic").ranger_detector({}) is Detector
+    fused = get_backend("analytic").ranger_detector({})
+    assert issubclass(fused, Detector) and fused is not Detector and fused.__module__.startswith("armguard_analytic.")
     assert get_backend("analytic").ranger_detector({"fidelity": "paper"}) is None
     assert getattr(get_backend("coal"), "ranger_detector", None) is None
-    assert type(armguard.Detector(scene)) is Detector
+    assert type(armguard.Detector(scene)) is fused and isinstance(armguard.Detector(scene), Detector)
     coal = armguard.Detector(scene, backend="coal")
-    assert isinstance(coal, RangerDetector) and CheckerDetector is RangerDetector
+    assert isinstance(coal, RangerDetector) and CheckerDetector is RangerDetector and isinstance(coal, Detector)
     assert coal.n_pairs == armguard.Detector(scene).n_pairs == len(_model("hermes").pairs)
+
+
+def test_detector_builds_the_declared_class_once_and_hands_on_anything_else(monkeypatch):
+    """``armguard.detect.Detector.__new__``: a declared subclass is initialised exactly once with the
+    caller's arguments (not built, then initialised again); a declared class that is not a
+    subclass is called and its object returned as it is; None gives a RangerDetector."""
+    import armguard.detect._ranger as ranger
+
+    scene = _model("hermes").scene
+    fused = get_backend("analytic").ranger_detector({})
+    calls = []
+
+    class Counted(fused):
+        def __init__(self, *args, **kwargs):
+            calls.append((args, kwargs))
+            super().__init__(*args, **kwargs)
+
+    class Other:
+        def __init__(self, scene, *args, **kwargs):
+            self.scene, self.args, self.kwargs = scene, args, kwargs
+
+    declared = {"counted": Counted, "other": Other, "coal": None}
+    monkeypatch.setattr(ranger, "fast_path", lambda backend, options: declared[backend])
+    det = Detector(scene, 0.07, active=None, backend="counted")
+    assert type(det) is Counted and det.threshold == 0.07
+    assert calls == [((scene, 0.07), {"active": None, "backend": "counted"})]  # the caller's arguments, once
+    other = Detector(scene, 0.07, backend="other", backend_options={"x": 1})
+    assert type(other) is Other and other.args == (0.07,)
+    assert other.kwargs == {"backend": "other", "backend_options": {"x": 1}}
+    generic = Detector(scene, 0.07, backend="coal")
+    assert type(generic) is RangerDetector and generic.threshold == 0.07 and generic.backend == "coal"
 
 
 @pytest.mark.parametrize("name", MODELS)

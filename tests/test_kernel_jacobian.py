@@ -2,7 +2,7 @@
 
 ``armguard.checker(model, "analytic").pair_distances(q, jacobian=True)`` differentiates every pair
 inside a numba kernel from the kernel's own forward kinematics
-(:mod:`armguard.detect._pair_jacobian`); the reference is the same formula with Pinocchio's joint
+(:mod:`armguard_analytic._engine._pair_jacobian`); the reference is the same formula with Pinocchio's joint
 Jacobians at the same witness points (:meth:`CheckerBase.witness_jacobian`).  They agree to 1e-10
 (m/rad) on every built-in model and on public robots with continuous joints (kinova), prismatic
 mimic fingers (Panda), a parallelogram coupling (GMF S-480, a mimic of coefficient -1), several

@@ -6,7 +6,7 @@ checkout, makes the installed package read-only, and from another folder: loads 
 lists the bundled backends, reads the reference data and runs ``armguard check ranger``.
 
 numba kernels: a fresh install has no compiled kernels, and compiling them all takes minutes on a
-busy machine.  The checkout's own kernel cache (``src/**/__pycache__/*.nbi|nbc``, written by the
+busy machine.  The checkout's own kernel cache (``src/**`` and ``plugins/**/__pycache__/*.nbi|nbc``, written by the
 test run before) is valid for the installed copy of each file when the bytes are the same: the
 installed file is given its checkout twin's mtime (numba's cache is keyed by the source's
 (mtime, size) and each kernel's bytecode) and the cache files are copied where

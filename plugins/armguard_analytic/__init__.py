@@ -1,10 +1,22 @@
 """The analytic backend: the papers' exact checker, armguard's numba kernels.
 
 The Model's scene is compiled into flat arrays and checked by the fused detector kernel
-(:class:`armguard.Detector`): exact signed distances for every shape pair (segment–segment
+(:class:`._engine._detector.FusedDetector`, which ``armguard.Detector`` builds for this backend
+through ``ranger_detector``): exact signed distances for every shape pair (segment–segment
 for Ranger's capsule links, point/segment–face for polytopes, GJK + EPA for hulls), the
 Model's own batched forward kinematics compiled from ``pin_model`` (tested against
 ``pinocchio.forwardKinematics``), bounding-volume pruning and multi-threaded batches.
+
+The engine is this package's own (:mod:`._engine`): the fused Detector (``_detector``,
+``_scratch``, ``_raw``, ``_prep``), its compiled scene (``_model``, ``_bvh``, ``_hulls``), the
+packed buffers (``_layout``), the kernel (``_kernel``: FK, broad phase, the modes), the Checker's
+entry point (``_pair_rows``), culling (``_cull``), the narrow-phase dispatch over
+:mod:`armguard.geometry`'s pair kernels (``_narrow``, ``_step``), the Jacobian kernel
+(``_pair_jacobian``) and the first-run warm-up (``_warm``).  The framework reaches it only
+through the entry point (``AnalyticBackend.ranger_detector``, ``warm_up``, ``warm_up_leaves``,
+``build``); it imports from armguard the public geometry, the Detector's framework parts
+(``armguard.detect``: the base class, the result types, the reach analysis and shared checks) and
+a few kernels and helpers of ``geometry``, ``kinematics`` and ``backends``.
 
 Options: ``fidelity`` — ``"exact"`` (default), or ``"paper"``: the seeds' minimalist checkers as
 the papers state them (Ranger's distances, Hermes's link–obstacle verdicts; option ``verdicts``;
@@ -12,14 +24,14 @@ see :mod:`._paper`).  Where this backend cannot hold a Model geometry exactly (a
 circumscribed prism), ``representation`` says so.
 
 ``pair_distances(q, pairs=None)`` and ``pair_distances_many(Q, pairs=None)`` are one numba call
-(:func:`armguard.detect._kernel.pair_rows`) that reorders the joints, checks every selected pair
+(:func:`._engine._pair_rows.pair_rows`) that reorders the joints, checks every selected pair
 and writes the rows straight in the Model's pair order (sides exchanged where the detector holds
 a pair the other way round); the call releases the GIL and each thread has its own scratch, so
 threads sharing a checker run in parallel with single-threaded answers.
 
 ``pair_distances(q, jacobian=True)`` differentiates every selected pair right after, in a second
 numba call on the link poses the first left in the thread's scratch (:mod:`._jacobian`,
-:mod:`armguard.detect._pair_jacobian`); ``witness_jacobian`` (Pinocchio's joint Jacobians at the
+:mod:`._engine._pair_jacobian`); ``witness_jacobian`` (Pinocchio's joint Jacobians at the
 same witness points) is kept as the slow reference.
 """
 
@@ -55,7 +67,8 @@ class _Fast:
                  "args", "SF0", "SI0", "n_q", "tls", "subsets", "jac")
 
     def __init__(self, checker: "AnalyticChecker") -> None:
-        from armguard.detect import _kernel as kn
+        from ._engine import _kernel as kn
+        from ._engine._pair_rows import pair_rows
 
         model = checker.model
         det = checker.detector()
@@ -82,19 +95,19 @@ class _Fast:
         self.subsets: dict = {}  # idx.tobytes() -> (n, gmap, names, category): a repeated subset is planned once
         self.jac = None  # the Jacobian kernel's arrays (._jacobian.JacobianPlan), made on the first jacobian=True
         # the compiled overload for exactly these argument types, called without the dispatcher
-        # (see armguard.detect._detector._entry_point); built on a scratch of its own
+        # (see ._engine._scratch._entry_point); built on a scratch of its own
         SF, SI, q1 = self.new_scratch()
         q = np.ascontiguousarray(model.neutral(), dtype=np.float64)
         H, MF, MI, prm, iprm = self.args
         out = (np.empty(n), np.empty((n, 3)), np.empty((n, 3)))
         call = (q, 0, 1, self.gmap, H, MF, MI, SF, SI, prm, iprm, q1, *out)
-        kn.pair_rows(*call)
+        pair_rows(*call)
         try:
             from numba import typeof
 
-            self.entry = kn.pair_rows.overloads[tuple(typeof(a) for a in call)].entry_point
+            self.entry = pair_rows.overloads[tuple(typeof(a) for a in call)].entry_point
         except (KeyError, AttributeError):  # pragma: no cover - numba internals changed
-            self.entry = kn.pair_rows
+            self.entry = pair_rows
 
     def new_scratch(self) -> tuple:
         """``(SF, SI, q1)``: scratch for one thread or one worker, from the pristine buffers."""
@@ -153,8 +166,8 @@ class AnalyticChecker(CheckerBase):
 
     # ---------------------------------------------------------------- detectors
     def detector(self, stopping_distance: float = 0.0):
-        """The armguard Detector of the Model's scene (every pair kept), one per stopping distance."""
-        from armguard.detect import Detector
+        """The fused Detector of the Model's scene (every pair kept), one per stopping distance."""
+        from ._engine._detector import FusedDetector
 
         key = float(stopping_distance)
         det = self._detectors.get(key)
@@ -162,8 +175,8 @@ class AnalyticChecker(CheckerBase):
             with self._lock:
                 det = self._detectors.get(key)
                 if det is None:
-                    det = self._detectors[key] = Detector(self.model.scene, threshold=0.0, stopping_distance=key,
-                                                          reach_margin=math.inf)
+                    det = self._detectors[key] = FusedDetector(self.model.scene, threshold=0.0, stopping_distance=key,
+                                                               reach_margin=math.inf)
         return det
 
     def _order(self):
@@ -314,7 +327,7 @@ class AnalyticChecker(CheckerBase):
     def pair_distances_many(self, Q, *, pairs=None) -> PairDistancesMany:
         """Every pair (or the Model rows ``pairs``) at each row of ``Q`` ``(M, nq)``; rows split over
         threads (one numba call each, the GIL released) when there are many."""
-        from armguard.detect import _kernel as kn
+        from ._engine._pair_rows import pair_rows
 
         f = self._plan()
         Q = check_Q(self.model, Q)
@@ -336,7 +349,7 @@ class AnalyticChecker(CheckerBase):
         H, MF, MI, prm, iprm = f.args
         n_threads = max(1, min(M, os.cpu_count() or 1, -(-M // _MIN_ROWS_PER_THREAD)))
         bounds = [(M * k) // n_threads for k in range(n_threads + 1)]
-        entry = f.entry if M else kn.pair_rows
+        entry = f.entry if M else pair_rows
 
         def work(k: int) -> int:
             SF, SI, q1 = f.scratch() if n_threads == 1 else f.new_scratch()  # each worker its own
@@ -372,13 +385,28 @@ class AnalyticBackend:
 
     def ranger_detector(self, options: Mapping | None = None):
         """The declared fast path of ``armguard.Detector``: Ranger's cycle as one fused numba call
-        (:class:`armguard.detect.Detector`) in the exact fidelity; None (Ranger's algorithm over
-        this backend's Checker) in the paper fidelity."""
+        (:class:`._engine._detector.FusedDetector`, a subclass of :class:`armguard.detect.Detector`)
+        in the exact fidelity; None (Ranger's algorithm over this backend's Checker) in the paper
+        fidelity."""
         if str(dict(options or {}).get("fidelity", "exact")) != "exact":
             return None
-        from armguard.detect import Detector
+        from ._engine._detector import FusedDetector
 
-        return Detector
+        return FusedDetector
+
+    def warm_up(self, scene) -> None:
+        """Compile (or load from numba's cache) the fused Detector's and the Checker's kernels on
+        ``scene`` (the framework's first-run warm-up, :mod:`armguard.cli._compile`)."""
+        from ._engine._warm import warm_up
+
+        warm_up(scene)
+
+    def warm_up_leaves(self) -> tuple:
+        """``(main, side)``: the fused kernel's leaf kernels to compile ahead, in two processes
+        (:mod:`._engine._warm`)."""
+        from ._engine._warm import LEAVES_MAIN, LEAVES_SIDE
+
+        return LEAVES_MAIN, LEAVES_SIDE
 
     def build(self, model, options: Mapping | None = None):
         if str(dict(options or {}).get("fidelity", "exact")) == "paper":

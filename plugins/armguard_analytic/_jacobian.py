@@ -1,6 +1,6 @@
 """The analytic checker's distance Jacobians: the kernel's own, right after its distances.
 
-:func:`armguard.detect._pair_jacobian.jacobian_rows` differentiates every checked pair from the
+:func:`armguard_analytic._engine._pair_jacobian.jacobian_rows` differentiates every checked pair from the
 link poses the distance kernel has just computed (joint world axes and origins; revolute,
 prismatic, continuous and coupled joints; Pinocchio's ``nv`` columns), with the reference's
 smoothness test on the Model's ``collision_model`` shapes.  The reference is
@@ -23,7 +23,7 @@ __all__ = ["JacobianPlan"]
 
 
 class JacobianPlan:
-    """The per-revision arrays of :func:`~armguard.detect._pair_jacobian.jacobian_rows` for one
+    """The per-revision arrays of :func:`~armguard_analytic._engine._pair_jacobian.jacobian_rows` for one
     analytic checker's call plan ``fast`` (see the module docstring)."""
 
     __slots__ = ("nv", "rows", "vcol", "gF", "gI", "V", "tol", "entry", "zero_gmap", "subsets", "tol_length")
@@ -32,8 +32,9 @@ class JacobianPlan:
         import pinocchio as pin
 
         from armguard.backends._jacobian import WitnessJacobian
-        from armguard.detect import _kernel as kn
-        from armguard.detect import _pair_jacobian as pj
+
+        from ._engine import _pair_jacobian as pj
+        from ._engine._pair_rows import pair_rows
 
         model = checker.model
         pm = model.pin_model
@@ -49,7 +50,7 @@ class JacobianPlan:
         q0 = np.ascontiguousarray(model.neutral(), dtype=np.float64)
         n = fast.n
         H, MF, MI, prm, iprm = fast.args
-        err = kn.pair_rows(q0, 0, 1, fast.gmap, H, MF, MI, SF, SI, prm, iprm, q1, np.empty(n), np.empty((n, 3)),
+        err = pair_rows(q0, 0, 1, fast.gmap, H, MF, MI, SF, SI, prm, iprm, q1, np.empty(n), np.empty((n, 3)),
                            np.empty((n, 3)))
         if err:
             checker._kernel_error(fast, int(err), q0[None], False)

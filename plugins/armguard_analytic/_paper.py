@@ -137,7 +137,7 @@ class PaperChecker(CheckerBase):
 
     # ---------------------------------------------------------------- compile
     def _build(self, verdicts: str) -> None:
-        from armguard.detect._model import _combined_tree
+        from armguard.detect._common import combined_tree as _combined_tree
         from armguard.model import WORKSPACE
         from armguard.scene import compile_scene
 

@@ -205,7 +205,18 @@ class Checker(Protocol):
 
 @runtime_checkable
 class Backend(Protocol):
-    """A plugin: ``name`` and ``build(model, options) -> Checker``."""
+    """A plugin: ``name`` and ``build(model, options) -> Checker``.
+
+    Optional methods the framework looks for (``getattr``; a backend without them loses nothing):
+
+    * ``ranger_detector(options)``: the Detector class for Ranger's cycle with this backend, or None
+      (the declared fast path, :func:`armguard.detect._ranger.fast_path`);
+    * ``warm_up(scene)``: compile (or load from numba's cache) the backend's kernels on ``scene``
+      before a command's real work (:mod:`armguard.cli._compile`, for the default backend);
+    * ``warm_up_leaves()``: ``(main, side)``, tuples of ``(module, function, signature codes)``:
+      leaf kernels worth compiling ahead of ``warm_up``, ``side`` in a second process at once
+      (codes as :func:`armguard.cli._compile.signature` reads them).
+    """
 
     name: str
 

@@ -21,7 +21,7 @@ their leaders), the row of one side is the wrench ``w = [nhat, p x nhat]`` appli
 ``nhat^T J_W(p) = w^T J_j``.  One Pinocchio call per joint, then one ``einsum`` over all pairs:
 no per-pair Python.  This is the framework's witness-point path (coal) and the slow
 reference of the analytic backend, which computes the same rows inside its kernel from its own
-forward kinematics (:mod:`armguard.detect._pair_jacobian`).
+forward kinematics (:mod:`armguard_analytic._engine._pair_jacobian`).
 
 **Smoothness.**  ``smooth`` is False where
 

@@ -5,14 +5,16 @@ checkout spends its first seconds compiling and later runs only load the cache.
 :func:`warm_up` calls each group of kernels once on a small built-in model, in stages, in a
 worker thread, and listens to numba's ``numba:compile`` event (sent for a compilation, never for
 a cache load): only when one starts does a rich progress bar say "compiling kernels (first run
-only)", until the stages end.
+only)", until the stages end.  The detector stage is the default backend's own (its optional
+``warm_up(scene)`` and ``warm_up_leaves()``, see :class:`armguard.backends.Backend`): the
+framework names no backend's kernels.
 """
 
 from __future__ import annotations
 
 import threading
 
-__all__ = ["warm_up", "STAGES", "SIDE_STAGES", "POLL_S"]
+__all__ = ["warm_up", "leaves", "STAGES", "SIDE_STAGES", "POLL_S"]
 
 POLL_S = 0.1
 """How often the main thread looks whether a compilation has started (s)."""
@@ -49,24 +51,28 @@ def _scene():
     return load_scene("puma560")
 
 
+def _backend():
+    """The default backend (``$ARMGUARD_BACKEND`` > ``armguard.toml`` > ``"analytic"``), as
+    ``Detector(scene)`` picks it."""
+    from ..backends import get_backend, resolve
+
+    return get_backend(resolve(None, None)[0])
+
+
 def _detector() -> None:
+    sc = _scene()
+    warm = getattr(_backend(), "warm_up", None)
+    if warm is not None:  # the backend compiles its own kernels (the analytic one: its fused Detector and Checker)
+        warm(sc)
+        return
     import numpy as np
 
     from ..detect import Detector
 
-    sc = _scene()
     det = Detector(sc, threshold=0.05)
     q = sc.flat_q(sc.default_q())
     det.check(q)
     det.check_many(np.tile(q, (4, 1)))
-    # the analytic backend's pair_distances(_many): pair_rows, with the argument types it is given
-    from ..detect import _kernel as kn
-    from ..detect._scratch import _Scratch
-
-    s, n, nq = _Scratch(det), det.n_pairs, len(q)
-    gmap = np.concatenate([[nq, nq, 0, n], np.arange(nq), np.arange(n), np.zeros(n)]).astype(np.int64)
-    kn.pair_rows(np.ascontiguousarray(q, dtype=np.float64), 0, 1, gmap, det._H, det._MF, det._MI, s.SF, s.SI, det._prm,
-                 det._iprm_by_mode[kn.MODE_ALL], s.q1, np.empty(n), np.empty((n, 3)), np.empty((n, 3)))
 
 
 def _verifier() -> None:
@@ -77,31 +83,21 @@ def _verifier() -> None:
     Verifier(sc, robot=traj.robot_name).verify(traj, name=name)
 
 
-# ---- the detector's largest leaf kernels, compiled ahead of it in two processes at once
+# ---- the backend's largest leaf kernels, compiled ahead of its chain in two processes at once
 #
-# The detector's fused kernel is one chain of compiled calls (detect_entry -> detect_rows ->
-# pair_step -> narrow_other -> pair_distance -> the pair kernels): on a cold cache numba compiles
-# it in one thread, over a minute on a 2-core machine, more than half of it in a few leaf
-# kernels that share nothing.  Compiled first with the signatures the chain calls them with (two
-# in a second process, three here), they are in numba's on-disk cache when the chain reaches them,
-# and it only loads them.  A signature that no longer matches the chain's call costs time, never
-# an answer: the chain then compiles that kernel itself (tests/test_detect_cold.py checks they
-# all match).  Codes: F1/F2 float64 C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64.
-LEAVES_SIDE = (
-    ("armguard.geometry._pair_cylinder", "support_pair_graph", "F2 I1 F1 f F2 I1 F1 f F1 F1 f f i f"),
-    ("armguard.detect._narrow", "_capsule_polytope", "F2 f i F2 F2 I2 F2 F2 I1 I1 I1 f F1 f f f i f"),
-)
-"""Leaf kernels compiled in the second process: (module, function, signature codes)."""
-LEAVES_MAIN = (
-    ("armguard.geometry._pair_epa", "convex_convex_fast", "F2 F2 F2 I1 I2 f F2 F2 F2 I1 I2 f F1 F1 f f f i f f"),
-    ("armguard.detect._step", "evaluate_pair", "i i I1 F1 I1 F1 I1 F1 f f f i"),
-    ("armguard.detect._narrow", "narrow_flat", "i i I1 F1 I1 F1 F1 f f f"),
-)
-"""Leaf kernels compiled here while the second process compiles :data:`LEAVES_SIDE`."""
+# A backend may name leaf kernels that its first call would otherwise compile one after another
+# (``Backend.warm_up_leaves()``: ``(main, side)``, tuples of ``(module, function, signature
+# codes)``; the analytic backend's: ``armguard_analytic._engine._warm``).  Compiled first, with
+# the signatures its chain calls them with, they are in numba's on-disk cache when the chain
+# reaches them.  Codes: F1/F2 float64 C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64.
+def leaves() -> tuple:
+    """``(main, side)``: the default backend's leaf kernels (``warm_up_leaves``), else ``((), ())``."""
+    plan = getattr(_backend(), "warm_up_leaves", None)
+    return tuple(plan()) if plan is not None else ((), ())
 
 
 def signature(codes: str) -> tuple:
-    """The numba argument types of a signature written in :data:`LEAVES_SIDE`'s codes."""
+    """The numba argument types of a signature written in :func:`leaves`'s codes."""
     from numba import types
 
     kinds = {"F1": types.float64[::1], "F2": types.float64[:, ::1], "I1": types.int64[::1],
@@ -112,19 +108,19 @@ def signature(codes: str) -> tuple:
         raise ValueError(f"unknown signature code {exc.args[0]!r} in {codes!r} (known: {sorted(kinds)})") from None
 
 
-def _compile_leaves(leaves) -> None:
+def _compile_leaves(plan) -> None:
     import importlib
 
-    for module, name, codes in leaves:
+    for module, name, codes in plan:
         getattr(importlib.import_module(module), name).compile(signature(codes))
 
 
 def _leaves_main() -> None:
-    _compile_leaves(LEAVES_MAIN)
+    _compile_leaves(leaves()[0])
 
 
 def _leaves_side() -> None:
-    _compile_leaves(LEAVES_SIDE)
+    _compile_leaves(leaves()[1])
 
 
 STAGES = (("pair kernels", _leaves_main), ("detector kernels", _detector), ("verifier kernels", _verifier),

@@ -22,7 +22,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._model import _CYLINDER, _SCENE_CAT, CAT_WORKSPACE, _combined_tree, _cylinder_aabb
+from ._common import CAT_WORKSPACE
+from ._common import CYLINDER as _CYLINDER
+from ._common import SCENE_CATEGORY as _SCENE_CAT
+from ._common import combined_tree as _combined_tree
+from ._common import cylinder_aabb as _cylinder_aabb
 from ._reach import chain_bounds
 
 __all__ = ["PairBounds", "pair_bounds"]

@@ -1,4 +1,6 @@
-"""What both Detectors share: argument checks and Ranger's status rule."""
+"""What both Detectors share: argument checks, Ranger's status rule, the category codes, and the
+combined kinematic tree and static boxes both compile from the scene (the analytic backend's fused
+Detector, :mod:`armguard_analytic._engine`, and Ranger's bounds over any backend, :mod:`._bounds`)."""
 
 from __future__ import annotations
 
@@ -8,9 +10,22 @@ import numpy as np
 
 from .._errors import DetectionError
 
-__all__ = ["check_length", "require_pairs", "status_code"]
+__all__ = ["check_length", "check_finite_margin", "require_pairs", "status_code", "combined_tree", "cylinder_aabb",
+           "CAT_ARM", "CAT_ENVIRONMENT", "CAT_WORKSPACE", "CAT_PAYLOAD", "SCENE_CATEGORY", "CYLINDER"]
 
-ST_CLEAR, ST_WARNING, ST_COLLISION, ST_INCOMPLETE = 0, 1, 2, 3  # as armguard.detect._kernel
+ST_CLEAR, ST_WARNING, ST_COLLISION, ST_INCOMPLETE = 0, 1, 2, 3  # as the analytic kernel (armguard_analytic._engine._kernel)
+CAT_ARM, CAT_ENVIRONMENT, CAT_WORKSPACE, CAT_PAYLOAD = 0, 1, 2, 3
+SCENE_CATEGORY = {
+    "arm-arm": CAT_ARM,
+    "arm-vehicle": CAT_ENVIRONMENT,
+    "arm-environment": CAT_ENVIRONMENT,
+    "arm-payload": CAT_PAYLOAD,
+    "payload-vehicle": CAT_PAYLOAD,
+    "payload-environment": CAT_PAYLOAD,
+    "payload-payload": CAT_PAYLOAD,
+}
+"""A compiled scene's pair category (``PairCategory.value``) -> the Detector's category code."""
+CYLINDER = 4  # armguard.geometry.CoreKind.CYLINDER
 
 
 def check_length(value, name: str) -> float:
@@ -61,3 +76,65 @@ def require_pairs(scene, cs, active, with_terrain: bool) -> None:
                 f" with a shape the configuration moves ({n_all} pairs, all between fixed shapes)")
         raise DetectionError(f"scene {scene.name!r} has no pair to check{on}{what}: "
                              "no verdict can be given; enable a pair, add a body or a workspace box")
+
+
+def _c(a, dtype=np.float64):
+    return np.ascontiguousarray(np.asarray(a, dtype=dtype))
+
+
+def cylinder_aabb(c: np.ndarray, R: np.ndarray, half: np.ndarray):
+    """``(lo, hi)`` (3,) m: the axis-aligned box of the cylinder with centre ``c``, axes ``R`` (the axis
+    as third column) and ``half = (r, r, h)``: along axis ``k`` the extent is ``h |a_k| + r sqrt(1 -
+    a_k^2)`` (as :meth:`armguard.geometry.Cylinder.aabb`), grown by a rounding margin so it contains
+    the cylinder as the kernels evaluate it."""
+    a = R[:, 2]
+    e = half[2] * np.abs(a) + half[0] * np.sqrt(np.maximum(0.0, 1.0 - a * a))
+    e = e + 1e-12 * (float(np.max(np.abs(c))) + float(np.max(half)) + 1.0)
+    return c - e, c + e
+
+
+def combined_tree(scene, robot_names):
+    """All robots' FlatTrees as one tree over global links (parents and joint terms shifted)."""
+    from ..kinematics._fk import FlatTree
+
+    parts = {k: [] for k in ("parent", "X_pre", "axis", "jtype", "X_post", "has_post", "offset", "term_joint", "term_coeff")}
+    term_start = [0]
+    link_off, joint_off = [], []
+    nl = nj = 0
+    for r in robot_names:
+        robot = scene.robots[r]
+        t = getattr(robot, "flat_tree", None) or robot._tree
+        link_off.append(nl)
+        joint_off.append(nj)
+        parts["parent"].append(np.where(t.parent >= 0, t.parent + nl, -1))
+        for k in ("X_pre", "axis", "jtype", "X_post", "has_post", "offset", "term_coeff"):
+            parts[k].append(np.asarray(getattr(t, k)))
+        parts["term_joint"].append(np.asarray(t.term_joint) + nj)
+        term_start.extend((np.asarray(t.term_start[1:]) + term_start[-1]).tolist())
+        nl += t.n_links
+        nj += len(robot.joint_names)
+    cat = lambda k, shape, dt: _c(np.concatenate(parts[k]) if parts[k] else np.zeros(shape), dt)  # noqa: E731
+    tree = FlatTree(
+        parent=cat("parent", (0,), np.int64),
+        X_pre=cat("X_pre", (0, 4, 4), np.float64),
+        axis=cat("axis", (0, 3), np.float64),
+        jtype=cat("jtype", (0,), np.int64),
+        X_post=cat("X_post", (0, 4, 4), np.float64),
+        has_post=cat("has_post", (0,), np.bool_),
+        offset=cat("offset", (0,), np.float64),
+        term_start=_c(term_start, np.int64),
+        term_joint=cat("term_joint", (0,), np.int64),
+        term_coeff=cat("term_coeff", (0,), np.float64),
+    )
+    return tree, np.asarray(link_off, dtype=np.int64), np.asarray(joint_off, dtype=np.int64)
+
+
+def check_finite_margin(reach_margin) -> float:
+    """``reach_margin`` as a float >= 0 (``inf`` keeps every pair)."""
+    try:
+        x = float(reach_margin)
+    except (TypeError, ValueError) as exc:
+        raise DetectionError(f"reach_margin: expected a number of metres, got {reach_margin!r}") from exc
+    if math.isnan(x) or x < 0.0:
+        raise DetectionError(f"reach_margin: must be >= 0 (or inf), got {x}")
+    return x

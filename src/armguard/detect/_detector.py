@@ -1,53 +1,24 @@
-"""The Detector: Ranger's real-time virtual sensor for any scene (exact, anytime, batched)."""
+"""``armguard.detect.Detector``: the public name, dispatching to the chosen backend's Detector.
+
+``Detector(scene_or_model, threshold=..., active=..., backend=...)`` is what users construct.
+The class here holds no algorithm: its ``__new__`` asks the backend (argument >
+``$ARMGUARD_BACKEND`` > ``armguard.toml`` > ``"analytic"``) for the Detector class it declares
+(``Backend.ranger_detector(options)``, the *fast path*, :func:`._ranger.fast_path`) and builds
+that, else :class:`._ranger.RangerDetector` (Ranger's algorithm over the backend's Checker).
+Both are subclasses, so ``isinstance(Detector(scene), Detector)`` holds whichever backend answers:
+
+* ``"analytic"`` declares its fused numba Detector (``armguard_analytic._engine._detector.FusedDetector``,
+  the plugin's own engine: one numba call per check), reached only through the backend registry,
+  so the framework never imports the plugin;
+* every other bundled backend gets :class:`~armguard.detect.RangerDetector`.
+
+A declared class that is a subclass of this one is allocated here and initialised once by
+Python with the caller's arguments; one that is not is called with them and returned as it is.
+"""
 
 from __future__ import annotations
 
-import math
-import os
-import threading
-import time
-from concurrent.futures import ThreadPoolExecutor
-from typing import Mapping
-
-import numpy as np
-
-from .._errors import DetectionError
-from .._tolerance import DEFAULT_TOLERANCES, Tolerances
-from . import _kernel as kn
-from ..geometry._pair_cylinder import SUPPORT_WORK_SIZE
-from ..geometry._pair_epa import EPA_WORK_SIZE
-from ..kinematics._limits import limit_error, limit_rows
-from ._common import check_length as _check_length, require_pairs as _require_pairs
-from ._extras import attach_extra
-from ._hulls import link_obbs, vertex_graphs
-from ._layout import EV_W, SUM_SIZE, Layout
-from ._model import CAT_WORKSPACE, build_model, check_finite_margin
-from ._raw import _UNHELD, _Raw, _refcount
-from ._scratch import _entry_point, _Scratch
-from ._prep import _fk_blocks, _static_polytopes
-from ._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, PairDistances, PairResult
-
 __all__ = ["Detector"]
-
-_CYLINDER = 4  # armguard.geometry.CoreKind.CYLINDER
-_DEFAULT_NS_PER_PAIR = 200.0  # first guess of the cost model, replaced by measurements
-_MIN_ROWS_PER_THREAD = 256  # below this many configurations per thread, a thread costs more than it saves
-
-
-_perf_counter = time.perf_counter
-_F64 = np.dtype(np.float64)
-_MODE_EXACT = kn.MODE_EXACT
-
-
-def _single(cats: np.ndarray) -> int:
-    """The category shared by all of ``cats``, or -1 when they differ."""
-    u = np.unique(cats)
-    return int(u[0]) if len(u) == 1 else -1
-
-
-def _readonly(a: np.ndarray) -> np.ndarray:
-    a.flags.writeable = False
-    return a
 
 
 class Detector:
@@ -55,7 +26,7 @@ class Detector:
 
     Parameters
     ----------
-    scene : armguard.Scene
+    scene : armguard.Scene or armguard.Model
     threshold : float, m
         Detection threshold (Ranger's yellow): a pair within it gives WARNING.
     stopping_distance : float, m
@@ -67,9 +38,10 @@ class Detector:
     backend, backend_options : str, mapping
         The backend whose distances the detector reports (argument > ``$ARMGUARD_BACKEND`` >
         ``armguard.toml`` > ``"analytic"``).  A backend that declares a Ranger cycle of its own
-        (``Backend.ranger_detector``) gets it: ``"analytic"``'s is this class (the fused numba
-        kernel); any other gives a :class:`~armguard.detect._ranger.RangerDetector`, Ranger's
-        algorithm over the backend's Checker, with the same API.
+        (``Backend.ranger_detector``) gets it: ``"analytic"``'s is its fused numba kernel
+        (``armguard_analytic._engine``); any other gives a
+        :class:`~armguard.detect._ranger.RangerDetector`, Ranger's algorithm over the backend's
+        Checker, with the same API.  Both are subclasses of this class.
     reach_margin : float, m
         Obstacle lists keep every obstacle a link can come within this margin of anywhere in
         its joint limits (conservative reach analysis, :mod:`armguard.detect._reach`); pairs
@@ -81,515 +53,25 @@ class Detector:
         Adds the ``"terrain"`` category to ``check`` (:func:`armguard.terrain.attach_terrain`;
         composed outside the kernel, no cost without it).  ``detector.terrain`` is its guard.
 
-    Thread safety: several threads may call one Detector at once (each gets its own scratch
-    buffers; the numba kernels release the GIL, so the checks run in parallel) with the answers
-    of single-threaded calls.  Changing the scene or the settings while other threads check is
-    not synchronised.
+    The API every subclass provides: ``check(q, budget_us=, lazy=, jacobian=)``,
+    ``check_many(Q)``, ``collides_many(Q)``, ``pair_distances(q, robot=)``, ``prepare()``,
+    ``obstacle_list(link)``, ``set_threshold`` / ``set_stopping_distance`` / ``set_active``,
+    ``threshold``, ``stopping_distance``, ``active``, ``n_pairs``, ``link_names``.
+
+    Thread safety: several threads may call one Detector at once with the answers of
+    single-threaded calls (the analytic one gives each thread its own scratch buffers and its
+    kernels release the GIL; Ranger's over a Checker keeps per-thread state).  Changing the scene
+    or the settings while other threads check is not synchronised.
     """
 
     terrain = None  # the attached armguard.terrain.TerrainGuard, if any
 
     def __new__(cls, scene=None, *args, backend: str | None = None, backend_options=None, **kwargs):
-        # the backend (argument > $ARMGUARD_BACKEND > armguard.toml) declares its own Ranger cycle
-        # (Backend.ranger_detector: the analytic backend's is this class), else Ranger's algorithm
-        # over its Checker (armguard.detect._ranger)
-        if cls is Detector:
-            from ._ranger import RangerDetector, fast_path
+        if cls is not Detector:  # a concrete Detector, built directly
+            return super().__new__(cls)
+        from ._ranger import RangerDetector, fast_path
 
-            fast = fast_path(backend, backend_options)
-            if fast is None:
-                return RangerDetector(scene, *args, backend=backend, backend_options=backend_options, **kwargs)
-            if fast is not Detector:
-                return fast(scene, *args, backend=backend, backend_options=backend_options, **kwargs)
-        return super().__new__(cls)
-
-    def __init__(self, scene, threshold: float = 0.05, *, stopping_distance: float = 0.0, active: str | None = None,
-                 tol: Tolerances = DEFAULT_TOLERANCES, reach_margin: float = math.inf, backend: str | None = None,
-                 backend_options=None, terrain=None) -> None:
-        self.scene = scene
-        self._threshold = _check_length(threshold, "threshold")
-        self._stopping = _check_length(stopping_distance, "stopping_distance")
-        self._tol = tol
-        self._reach_margin = check_finite_margin(reach_margin)
-        self._active = active
-        self._ns_per_pair = _DEFAULT_NS_PER_PAIR
-        self._prepare_lock = threading.RLock()
-        self._with_terrain = terrain is not None  # terrain alone is something to check
-        self.prepare()
-        if terrain is not None:  # the terrain category: check() returns armguard.terrain's merged report
-            attach_extra(self, "terrain", terrain)
-
-    # ------------------------------------------------------------------ set-up
-    def prepare(self) -> "Detector":
-        """(Re)compile the scene: obstacle lists, BVH, buffers.  Call after changing the scene."""
-        margin = max(self._reach_margin, self._threshold, self._stopping)
-        self._revision = getattr(self.scene, "revision", None)  # read before compiling: a change during it is seen
-        m = build_model(self.scene, active=self._active, reach_margin=margin, tol=self._tol)
-        self._model = m
-        cs = m.compiled
-        _require_pairs(self.scene, cs, self._active, self._with_terrain or self.terrain is not None)
-        t = m.tree
-        L = Layout()
-        nq = max(m.n_q, 1)
-        P = len(m.pair_a)
-        G = cs.n_elements
-        lever = np.zeros((len(m.mov_ids), nq))
-        lever[:, :m.n_q] = m.lever
-        # moving elements with static pairs, and the category of those pairs (-1: mixed), which
-        # sets the BVH walk's cut-off (a category without pairs keeps an infinite minimum)
-        with_static = np.any(m.pair_of >= 0, axis=1) if len(m.st_ids) else np.zeros(len(m.mov_ids), bool)
-        st_mov = m.mov_ids[with_static]
-        st_cat = np.array([_single(m.pair_cat[row[row >= 0]]) for row in m.pair_of[with_static]], dtype=np.int64)
-        # the yes/no batch walks them farthest-reaching first (largest summed lever arm: the links
-        # that sweep the most space meet obstacles most often), so it exits early on a likely hit;
-        # the distance modes keep the kinematic order (base first), which prunes better for them
-        by_reach = np.argsort(-lever.sum(axis=1)[with_static], kind="stable")
-        yn_mov = np.ascontiguousarray(st_mov[by_reach], dtype=np.int64)
-        yn_cat = np.ascontiguousarray(st_cat[by_reach], dtype=np.int64) if len(st_cat) else np.zeros(0, np.int64)
-        L.add("MF", "X_pre", t.X_pre); L.add("MF", "axis", t.axis); L.add("MF", "X_post", t.X_post)
-        L.add("MF", "offset", t.offset); L.add("MF", "term_coeff", t.term_coeff); L.add("MF", "radius", cs.elem_radius)
-        L.add("MF", "verts_L", cs.verts.reshape(-1, 3)); L.add("MF", "box_L", m.box_local.reshape(-1, 15))
-        vg = vertex_graphs(cs, m.fnrm_local, m.edir_local)  # the hulls' graphs; their normals dropped
-        L.add("MF", "obb_L", link_obbs(cs, m.elem_glink, self._tol.length))  # the yes/no cull
-        L.add("MF", "fn_L", vg["fn_L"]); L.add("MF", "ed_L", vg["ed_L"])
-        L.add("MF", "sph_L", cs.elem_sphere.reshape(-1, 4)); L.add("MF", "static_lo", m.static_lo.reshape(-1, 3))
-        L.add("MF", "static_hi", m.static_hi.reshape(-1, 3)); L.add("MF", "bvh_lo", m.bvh.lo.reshape(-1, 3))
-        L.add("MF", "bvh_hi", m.bvh.hi.reshape(-1, 3)); L.add("MF", "lever", lever)
-        L.add("MF", "ws", np.concatenate([m.ws_lo, m.ws_hi]))
-        L.add("MF", "qlim", limit_rows(m.lower, m.upper, self._tol.joint_limit))  # refused outside (kinematics._limits)
-        self._static_shapes = self._static_shape_table()
-        poly = _static_polytopes(cs, self._static_shapes)
-        L.add("MF", "pv", poly["pv"]); L.add("MF", "ppl", poly["ppl"]); L.add("MF", "pbis", poly["pbis"])
-        L.add("MF", "pcen", poly["pcen"])
-        for name in ("gadj", "gadjs", "gtri", "gtris"):
-            L.add("MI", name, vg[name])
-        rob_l, rob_j, parent_loc = _fk_blocks(t.parent, m.link_robot, [len(self.scene.robots[r].joint_names)
-                                                                        for r in m.robot_names])
-        for name, arr in (("parent", t.parent), ("jtype", t.jtype), ("has_post", t.has_post.astype(np.int64)),
-                          ("term_start", t.term_start), ("term_joint", t.term_joint), ("glink", m.elem_glink),
-                          ("core", cs.elem_core), ("vstart", cs.elem_vert_start), ("pstart", vg["pstart"]),
-                          ("estart", vg["estart"]), ("mov_idx", m.mov_idx), ("st_idx", m.st_idx),
-                          ("bvh_left", m.bvh.left), ("bvh_right", m.bvh.right), ("bvh_start", m.bvh.start),
-                          ("bvh_count", m.bvh.count), ("bvh_items", m.bvh.items), ("pair_a", m.pair_a),
-                          ("pair_b", m.pair_b), ("pair_cat", m.pair_cat),
-                          ("pair_of", m.pair_of.reshape(len(m.mov_ids), max(len(m.st_ids), 1)) if len(m.st_ids) else
-                           np.full((len(m.mov_ids), 1), -1)),
-                          ("mov_ids", m.mov_ids), ("ped", poly["ped"]), ("poly_of", poly["poly_of"]),
-                          ("pvs", poly["pvs"]), ("pps", poly["pps"]), ("pes", poly["pes"]),
-                          ("all_p", np.arange(P, dtype=np.int64)),
-                          ("st_mov", st_mov), ("st_cat", st_cat), ("yn_mov", yn_mov), ("yn_cat", yn_cat),
-                          ("rob_l", rob_l), ("rob_j", rob_j),
-                          ("parent_loc", parent_loc)):
-            L.add("MI", name, arr)
-        # scratch: "ev" holds the evaluated pairs' rows (one copy per report), "summary" and "ev_p"
-        # are adjacent (one copy)
-        stack_n = 2 * m.bvh.depth + 8
-        static_mask = m.elem_glink < 0
-        boxW0 = m.box_local.copy()
-        vW0 = np.array(cs.verts, dtype=np.float64).reshape(-1, 3)
-        sphW0 = np.array(cs.elem_sphere, dtype=np.float64).reshape(-1, 4)
-        fnW0 = vg["fn_L"].copy()
-        edW0 = vg["ed_L"].copy()
-        del static_mask  # static elements are already in W: the scratch starts as their copy
-        # room for EPA where a hull has a vertex graph, and for GJK + EPA on support functions
-        # (armguard.geometry._pair_cylinder) where a cylinder is present
-        has_cyl = bool(np.any(cs.elem_core == _CYLINDER))
-        n_work = max(EPA_WORK_SIZE if len(vg["gadj"]) else 64, SUPPORT_WORK_SIZE if has_cyl else 64)
-        for name, arr in (("Xs", np.zeros((t.n_links, 4, 4))), ("vW", vW0), ("boxW", boxW0), ("fnW", fnW0),
-                          ("edW", edW0), ("sphW", sphW0), ("out9", np.zeros(9)), ("work", np.zeros(n_work)),
-                          ("gap", np.zeros(stack_n)), ("ev", np.zeros((P, EV_W))),
-                          ("plb", np.zeros(P)), ("last_d", np.zeros(P)), ("last_q", np.zeros((P, nq))),
-                          ("best", np.zeros(4)), ("seg", np.zeros((2, 3))), ("fk_q", np.zeros(max(m.n_q, 1)))):
-            L.add("SF", name, arr)
-        for name, arr in (("summary", np.full(SUM_SIZE, -1)), ("ev_p", np.zeros(P)), ("pflag", np.zeros(P)),
-                          ("stack", np.zeros(stack_n)), ("order", np.zeros(P)), ("has_last", np.zeros(P)),
-                          ("stamp", np.zeros(1 + G)), ("pstamp", np.zeros(P)), ("fk_ok", np.zeros(len(rob_l) - 1))):
-            L.add("SI", name, arr)
-        L.scalar("n_q", m.n_q); L.scalar("n_explicit", m.n_explicit); L.scalar("n_mov", len(m.mov_ids))
-        L.scalar("n_st", len(m.st_ids)); L.scalar("n_links", t.n_links)
-        self._layout = L
-        # SF0 / SI0: the pristine scratch every thread's own copy starts from (never passed to a kernel)
-        self._H, self._MF, self._MI, self._SF0, self._SI0 = L.buffers()
-        self._P = P
-        self._ev_off = L._shape["ev"][1]
-        self._sum_off = L._shape["summary"][1]  # "ev_p" follows it
-        self._all_p = L.view(self._MI, "all_p")
-        self._prm = np.array([self._threshold, self._stopping, self._tol.length, self._tol.parallel,
-                              self._tol.gjk_epsilon, self._tol.penetration_witness_offset])
-        self._iprm = np.array([kn.MODE_EXACT, 0, self._tol.gjk_max_iterations, 1, 0], dtype=np.int64)
-        self._iprm_by_mode = {}
-        for mode in (kn.MODE_EXACT, kn.MODE_LAZY, kn.MODE_ANYTIME, kn.MODE_YESNO, kn.MODE_ALL, kn.MODE_MIN):
-            ip = self._iprm.copy()
-            ip[0] = mode
-            self._iprm_by_mode[mode] = ip
-        # per-thread scratch (a report reading the old buffers keeps them alive: nothing to copy)
-        self._tls = threading.local()
-        self._entry = _entry_point(*self._scratch().entry_args)
-        self._q_shape = (m.n_q,)
-        self._names_a = tuple(cs.owner_names[cs.elem_owner[a]] for a in m.pair_a)
-        self._names_b = tuple("workspace" if b < 0 else cs.owner_names[cs.elem_owner[b]] for b in m.pair_b)
-        self._links_a = tuple(m.link_names[m.elem_glink[a]] for a in m.pair_a)
-        self._margin_built = margin
-        self._pd_cache = {}
-        return self
-
-    def _static_shape_table(self) -> dict[int, object]:
-        """Element number -> its shape (W) for static bodies, in compile_scene's order."""
-        out, g = {}, 0
-        for body in self.scene.bodies.values():
-            for s in body.shapes:
-                out[g] = s
-                g += 1
-        return out
-
-    def _fresh(self) -> None:
-        """Rebuild when the scene changed since :meth:`prepare` (a body added, a filter changed, ...).
-
-        A query on a stale model could say CLEAR while a new body encloses a link; every query
-        compares ``scene.revision`` (one attribute read) and recompiles when it moved (once, when
-        several threads see it)."""
-        if getattr(self.scene, "revision", None) != self._revision:
-            with self._prepare_lock:
-                if getattr(self.scene, "revision", None) != self._revision:
-                    self.prepare()
-
-    def _scratch(self) -> _Scratch:
-        """The calling thread's scratch (made on its first call)."""
-        try:
-            return self._tls.s
-        except AttributeError:
-            s = self._tls.s = _Scratch(self)
-            return s
-
-    # the calling thread's buffers, by their former names (tests and tools read them)
-    _SF = property(lambda self: self._scratch().SF)
-    _SI = property(lambda self: self._scratch().SI)
-    _q1 = property(lambda self: self._scratch().q1)
-    _ev = property(lambda self: self._scratch().ev)
-    _last_raw = property(lambda self: self._scratch().last_raw)
-
-    # ------------------------------------------------------------------ settings
-    @property
-    def threshold(self) -> float:
-        """Detection threshold (m)."""
-        return self._threshold
-
-    @property
-    def stopping_distance(self) -> float:
-        """Stopping distance (m); 0 when unset."""
-        return self._stopping
-
-    @property
-    def active(self) -> str | None:
-        """The active robot's name, or None for all arms."""
-        return self._active
-
-    @property
-    def link_names(self) -> tuple[str, ...]:
-        """Global link names ``"robot/link"`` (the index space of ``PairDistances.link_a``)."""
-        return self._model.link_names
-
-    @property
-    def n_pairs(self) -> int:
-        """Number of candidate element pairs (after pair filters, active arm and obstacle lists)."""
-        return self._P
-
-    def set_threshold(self, threshold: float) -> None:
-        self._threshold = _check_length(threshold, "threshold")
-        self._prm[0] = self._threshold
-        if max(self._threshold, self._stopping) > self._margin_built:
-            self.prepare()
-
-    def set_stopping_distance(self, stopping_distance: float) -> None:
-        self._stopping = _check_length(stopping_distance, "stopping_distance")
-        self._prm[1] = self._stopping
-        if max(self._threshold, self._stopping) > self._margin_built:
-            self.prepare()
-
-    def set_active(self, name: str | None) -> None:
-        if name is not None and name not in self.scene.robots:
-            raise DetectionError(f"active: unknown robot {name!r}; robots are {list(self.scene.robots)}")
-        self._active = name
-        self.prepare()
-
-    def obstacle_list(self, link: str) -> tuple[str, ...]:
-        """Owner names in the obstacle list of ``link`` (``"robot/link"``), in pair order."""
-        self._fresh()
-        out = []
-        for p in range(self._P):
-            if self._links_a[p] == link and self._names_b[p] not in out:
-                out.append(self._names_b[p])
-        return tuple(out)
-
-    # ------------------------------------------------------------------ queries
-    def _flat_q(self, q, q1: np.ndarray) -> np.ndarray:
-        """``q`` (array or mapping) written into ``q1`` ``(1, n_q)`` (a thread's scratch), checked."""
-        if isinstance(q, np.ndarray) and q.dtype == np.float64 and q.shape == (self._model.n_q,):
-            q1[0] = q
-            return q1
-        if isinstance(q, Mapping):
-            flat = self.scene.flat_q(q)
-        else:
-            try:
-                flat = np.asarray(q, dtype=np.float64)
-            except (TypeError, ValueError) as exc:
-                raise DetectionError(f"q: expected numbers, got {q!r}") from exc
-        if flat.shape != (self._model.n_q,):
-            raise DetectionError(
-                f"q: expected one configuration of {self._model.n_q} joints (scene.joint_names), got shape {flat.shape}"
-            )
-        q1[0] = flat
-        return q1
-
-    @staticmethod
-    def _release_last(s: _Scratch) -> None:
-        """Before a thread's scratch buffers are overwritten: let its last report copy its rows out
-        if anything still refers to it (a report nobody holds needs no copy)."""
-        last = s.last_raw
-        if last is not None:
-            s.last_raw = None
-            if _refcount(last) > _UNHELD:
-                last.detach()
-
-    def _run(self, s: _Scratch, mode: int, allowance: int, lazy: bool, sel=None) -> tuple[int, int]:
-        self._release_last(s)
-        q1 = s.q1
-        iprm = s.iprm_by_mode[mode]
-        if mode == kn.MODE_ANYTIME:
-            iprm[1] = allowance
-            iprm[4] = 1 if lazy else 0
-        if sel is None:  # the same argument types as check's: its bound overload, without the dispatcher
-            status, n_eval, err = self._entry(q1, self._H, self._MF, self._MI, s.SF, s.SI, self._prm, iprm,
-                                              self._all_p)
-        else:
-            status, n_eval, err = kn.detect_entry(q1, self._H, self._MF, self._MI, s.SF, s.SI, self._prm,
-                                                  iprm, sel)
-        if err:
-            self._raise_kernel_error(err, q1, "Detector.check: q" if sel is None else "Detector.pair_distances: q")
-        return status, n_eval
-
-    def _raise_kernel_error(self, err: int, Q: np.ndarray, where: str = "Detector.check: q", batch: bool = False) -> None:
-        """The kernel's error code for ``Q`` ``(M, n_q)`` as an ArmguardError (1 non-finite, 3 outside the
-        joint limits: :mod:`armguard.kinematics._limits`, 2 GJK); ``batch``: name the row."""
-        if err == 1:
-            bad = np.argwhere(~np.isfinite(Q))[0]
-            raise DetectionError(f"{where} contains NaN or infinite values (first at {tuple(int(x) for x in bad)})")
-        if err == 3:
-            m = self._model
-            exc = limit_error(where, Q if batch else Q[0], self.scene.joint_names, m.lower, m.upper,
-                              self._tol.joint_limit)
-            if exc is not None:
-                raise exc
-        raise DetectionError("a convex distance kernel did not converge (GJK iteration limit); no verdict")
-
-    def check(self, q, *, budget_us: float | None = None, lazy: bool = False,
-              jacobian: bool = False) -> DetectionReport:
-        """Check configuration ``q`` (mapping robot -> joints, or flat over ``scene.joint_names``).
-
-        ``budget_us``: time budget (µs) for the anytime mode; the budget is turned into a
-        number of pair evaluations by a cost model measured on this machine (updated after
-        every check), pairs are evaluated most likely first, and the report names the pairs
-        left with a lower bound on their distance.  ``lazy``: skip pairs whose lower bound
-        already exceeds the threshold (exact status; nearest per category exact within it).
-
-        Cost: one numba call and two small copies (the evaluated pairs' rows); the report's
-        ``PairResult`` objects are built on first access.  ``jacobian=True``: the report's
-        ``jacobian`` holds each category's nearest pair's ``d(distance)/dq`` ``(pin_model.nv,)``
-        and ``smooth`` flag (:mod:`._category_jacobian`; the Model's analytic Checker, one pair row
-        each); nothing of it is computed otherwise.
-        """
-        if jacobian:
-            return self._check_with_jacobian(q, budget_us, lazy)
-        t0 = _perf_counter()
-        if getattr(self.scene, "revision", None) != self._revision:  # stale model: rebuild (see _fresh)
-            self._fresh()
-        try:  # this thread's scratch (_scratch, inline)
-            s = self._tls.s
-        except AttributeError:
-            s = self._scratch()
-        q1 = s.q1
-        if type(q) is np.ndarray and q.dtype is _F64 and q.shape == self._q_shape:
-            q1[0] = q  # the common case, inline (validation of everything else in _flat_q)
-        else:
-            self._flat_q(q, q1)
-        last = s.last_raw
-        if last is not None:  # _release_last, inline
-            s.last_raw = None
-            if _refcount(last) > _UNHELD:
-                last.detach()
-            del last
-        if budget_us is None and not lazy:
-            status, n_eval, err = self._entry(*s.entry_args)  # q1 is the array in entry_args
-            if err:
-                self._raise_kernel_error(err, q1)
-            raw = _Raw(self, s.SF, s.SI, self._ev_off, self._sum_off, n_eval, None, None, _MODE_EXACT)
-            s.last_raw = raw
-            elapsed = (_perf_counter() - t0) * 1e6
-            if n_eval > 0:
-                self._ns_per_pair = 0.8 * self._ns_per_pair + 0.2 * max(elapsed * 1e3 / n_eval, 1.0)
-            return DetectionReport._from_check(STATUS_CODES[status], self._threshold, self._stopping, elapsed, raw)
-        if budget_us is not None:
-            b = float(budget_us)
-            if not (b >= 0.0 and math.isfinite(b)):
-                raise DetectionError(f"budget_us: must be finite and >= 0, got {budget_us!r}")
-            allowance = int(max(0.0, b * 1e3) // self._ns_per_pair)
-            mode = kn.MODE_ANYTIME
-            status, n_eval = self._run(s, mode, allowance, lazy)
-        else:
-            mode = kn.MODE_LAZY if lazy else kn.MODE_EXACT
-            status, n_eval = self._run(s, mode, 0, False)
-        raw_buffers = (s.SF, s.SI, self._ev_off, self._sum_off)
-        if mode == kn.MODE_EXACT:
-            flags = bounds = None
-        else:
-            flags, bounds = s.pflag.copy(), s.plb.copy()
-        elapsed = (_perf_counter() - t0) * 1e6
-        if n_eval > 0:  # the cost model of the anytime mode: an exponential average of ns per pair
-            self._ns_per_pair = 0.8 * self._ns_per_pair + 0.2 * max(elapsed * 1e3 / n_eval, 1.0)
-        raw = s.last_raw = _Raw(self, *raw_buffers, n_eval, flags, bounds, mode)
-        return DetectionReport._from_check(STATUS_CODES[status], self._threshold, self._stopping, elapsed, raw)
-
-    def _check_with_jacobian(self, q, budget_us, lazy) -> DetectionReport:
-        report = self.check(q, budget_us=budget_us, lazy=lazy)
-        q_flat = self._tls.s.q1[0].copy()  # what check() read, in scene order
-        with self._prepare_lock:
-            hit = getattr(self, "_category_jac", None)
-            if hit is None or hit[0] != self._revision:
-                from ..model import model_of
-                from ._category_jacobian import CategoryJacobians
-
-                hit = self._category_jac = (self._revision, CategoryJacobians(model_of(self.scene), "analytic"))
-        return report._with_jacobian(hit[1].of(q_flat, report.by_category))
-
-    def _selection(self, robot: str | None):
-        """Pair numbers checked by ``pair_distances(q, robot=robot)`` and their static columns (cached)."""
-        hit = self._pd_cache.get(robot)
-        if hit is not None:
-            return hit
-        m = self._model
-        if robot is None:
-            sel = np.arange(self._P, dtype=np.int64)
-        else:
-            if robot not in m.robot_names:
-                raise DetectionError(f"robot: unknown robot {robot!r}; robots are {list(m.robot_names)}")
-            r = m.robot_names.index(robot)
-            cs = m.compiled
-            on_a = cs.elem_robot[m.pair_a] == r
-            on_b = np.where(m.pair_b >= 0, cs.elem_robot[np.maximum(m.pair_b, 0)], -1) == r
-            sel = np.flatnonzero(on_a | on_b).astype(np.int64)
-        la = m.elem_glink[m.pair_a[sel]]
-        pb = m.pair_b[sel]
-        lb = np.where(pb >= 0, m.elem_glink[np.maximum(pb, 0)], -1)
-        ro = lambda a: _readonly(np.ascontiguousarray(a))  # noqa: E731
-        hit = (np.ascontiguousarray(sel), ro(la), ro(m.link_robot[la] if len(la) else la.copy()), ro(lb),
-               ro(m.pair_cat[sel]), tuple(self._names_a[p] for p in sel), tuple(self._names_b[p] for p in sel),
-               ro(sel.copy()))
-        self._pd_cache[robot] = hit
-        return hit
-
-    def pair_distances(self, q, *, robot: str | None = None) -> PairDistances:
-        """Every candidate pair's signed distance at ``q`` (no pruning), with witness points.
-
-        ``robot``: only the pairs with a side on that robot (the moving robot of a trajectory: the
-        other pairs do not change while it moves); None: every candidate pair.  ``pair_index``
-        ``(P,)`` gives each row's pair number (``Detector`` pair order, the index space of
-        ``NotEvaluated.pair_index``).  The arrays are fresh copies (a few hundred ns for ~100
-        pairs), so a result stays valid after the next call.
-        """
-        self._fresh()
-        sel, la, ra, lb, cat, na, nb, pidx = self._selection(robot)
-        s = self._scratch()
-        self._flat_q(q, s.q1)
-        n = len(sel)
-        self._run(s, kn.MODE_ALL, 0, False, sel)
-        rows = s.ev[:n]
-        return PairDistances(rows[:, 0].copy(), rows[:, 1:4].copy(), rows[:, 4:7].copy(), la, ra, lb, cat, na, nb,
-                             self._model.link_names, pidx)
-
-    def _scratch_rows(self, n_chunks: int):
-        return np.tile(self._SF0, (n_chunks, 1)), np.tile(self._SI0, (n_chunks, 1))
-
-    def _many(self, Q, mode: int):
-        self._fresh()
-        try:
-            Q = np.ascontiguousarray(np.asarray(Q, dtype=np.float64))
-        except (TypeError, ValueError) as exc:
-            raise DetectionError(f"Q: expected an (M, {self._model.n_q}) array of numbers") from exc
-        if Q.ndim != 2 or Q.shape[1] != self._model.n_q:
-            raise DetectionError(f"Q: expected shape (M, {self._model.n_q}), got {Q.shape}")
-        M = Q.shape[0]
-        n_threads = max(1, min(M, os.cpu_count() or 1, -(-M // _MIN_ROWS_PER_THREAD)))
-        SF2, SI2 = self._scratch_rows(n_threads)
-        iprm = self._iprm.copy()
-        iprm[0], iprm[3] = mode, 0
-        min_d = np.full((M, 4), np.inf)
-        status = np.zeros(M, dtype=np.int64)
-        bounds = [(M * k) // n_threads for k in range(n_threads + 1)]
-        # each thread gets its own copy of the (small) model buffers: shared arrays would make
-        # the threads contend on their reference counts and cache lines
-        per = [(self._H.copy(), self._MF.copy(), self._MI.copy(), self._prm.copy(), iprm.copy(), self._all_p.copy())
-               for _ in range(n_threads)]
-
-        def work(k: int) -> int:  # the kernel releases the GIL: threads run in parallel
-            H, MF, MI, prm, ip, sel = per[k]
-            return int(kn.detect_rows(Q, bounds[k], bounds[k + 1], H, MF, MI, SF2[k], SI2[k], prm, ip, sel, min_d, status))
-
-        if n_threads == 1:
-            errs = [work(0)]
-        else:
-            with ThreadPoolExecutor(n_threads) as ex:
-                errs = list(ex.map(work, range(n_threads)))
-        err = next((e for e in errs if e != 0), 0)
-        if err != 0:
-            self._raise_kernel_error(err, Q, "Detector: Q", batch=True)
-        return min_d, status
-
-    def check_many(self, Q) -> BatchReport:
-        """Exact per-category nearest distances and status for each row of ``Q`` ``(M, n_q)``, in parallel."""
-        min_d, status = self._many(Q, kn.MODE_MIN)
-        return BatchReport(min_d, status == kn.ST_COLLISION, status.astype(np.int8), self._threshold, self._stopping)
-
-    def check_many_bruteforce(self, Q) -> BatchReport:
-        """Like :meth:`check_many` but every candidate pair is evaluated (no bounds, no BVH).
-
-        The all-pairs path the tests compare the pruned one against (same narrow phase)."""
-        min_d, status = self._many(Q, kn.MODE_ALL)
-        level = max(self._tol.length, self._stopping)  # the contact tolerance, as the kernel
-        dmin = min_d.min(axis=1)
-        status = np.where(dmin <= level, kn.ST_COLLISION,
-                          np.where(dmin <= max(self._threshold, self._stopping), kn.ST_WARNING, kn.ST_CLEAR))
-        return BatchReport(min_d, status == kn.ST_COLLISION, status.astype(np.int8), self._threshold, self._stopping)
-
-    def collides_many(self, Q) -> np.ndarray:
-        """``(M,) bool``: collision (distance <= 0, or <= the stopping distance) per row, early exit."""
-        _, status = self._many(Q, kn.MODE_YESNO)
-        return status == kn.ST_COLLISION
-
-    # ------------------------------------------------------------------ reporting helpers
-    def _pair_names(self, p: int) -> tuple[str, str]:
-        return self._names_a[p], self._names_b[p]
-
-    def _pair_result(self, p: int, d: float, p_WA: np.ndarray, p_WB: np.ndarray) -> PairResult:
-        m = self._model
-        b = int(m.pair_b[p])
-        feature = None
-        shape = self._static_shapes.get(b) if b >= 0 else None
-        if shape is not None and m.compiled.elem_core[b] >= 2:
-            from ..geometry import feature_at
-
-            try:
-                feature = feature_at(shape, p_WB, self._tol)
-            except Exception:  # noqa: BLE001 - a feature is an annotation, never a verdict
-                feature = None
-        p_WA.flags.writeable = False
-        p_WB.flags.writeable = False
-        cat = CATEGORIES[int(m.pair_cat[p])]
-        return PairResult(d, p_WA, p_WB, self._names_a[p], self._names_b[p], cat, self._links_a[p], self._names_b[p],
-                          feature, p)
-
-    def __repr__(self) -> str:
-        return (f"Detector({self.scene.name!r}, threshold={self._threshold}, stopping_distance={self._stopping}, "
-                f"active={self._active!r}, {self._P} pairs)")
-
-
-del CAT_WORKSPACE
+        chosen = fast_path(backend, backend_options) or RangerDetector
+        if isinstance(chosen, type) and issubclass(chosen, Detector):
+            return super().__new__(chosen)  # Python then runs chosen.__init__ with the same arguments
+        return chosen(scene, *args, backend=backend, backend_options=backend_options, **kwargs)

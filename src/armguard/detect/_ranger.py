@@ -2,8 +2,9 @@
 
 ``Detector(scene, ..., backend="coal")`` (or ``$ARMGUARD_BACKEND`` / ``armguard.toml``) builds a
 :class:`RangerDetector` unless the backend declares a fast path of its own
-(``Backend.ranger_detector(options)``, :func:`fast_path`; the analytic backend's is the fused
-numba kernel, :class:`armguard.detect.Detector`).  Ranger's algorithm (seed ``000``, §2-§4) is
+(``Backend.ranger_detector(options)``, :func:`fast_path`; the analytic backend's is its fused
+numba kernel, ``armguard_analytic._engine._detector.FusedDetector``, a subclass of
+:class:`armguard.detect.Detector`).  Ranger's algorithm (seed ``000``, §2-§4) is
 framework code here, over the Checker interface only:
 
 * **obstacle lists**: the Model pair rows whose sides can come within the reach margin somewhere
@@ -18,7 +19,7 @@ framework code here, over the Checker interface only:
   averages updated after every check, one outlier moving them at most 4x) and asks the Checker for those pairs in one
   ``pair_distances(q, pairs=rows)`` call; the report names every pair it skipped with its
   lower bound, and the status is INCOMPLETE, never CLEAR, while a skipped pair's bound does not
-  prove the threshold (the analytic kernel's rule, :mod:`._kernel`);
+  prove the threshold (the analytic kernel's rule, ``armguard_analytic._engine._kernel``);
 * **lazy**: pairs whose lower bound proves them beyond the threshold are skipped (exact status);
 * **categories and threshold status**: the nearest evaluated pair per category, the pairs
   within the threshold, CLEAR / WARNING / COLLISION / INCOMPLETE.
@@ -38,7 +39,8 @@ import numpy as np
 
 from .._errors import DetectionError
 from ._bounds import pair_bounds
-from ._common import check_length, status_code
+from ._common import check_finite_margin, check_length, status_code
+from ._detector import Detector
 from ._extras import attach_extra
 from ._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, NotEvaluated, PairDistances, PairResult
 
@@ -121,16 +123,15 @@ class _Raw:
         return tuple(out)
 
 
-class RangerDetector:
-    """Ranger's Detector over a backend's Checker (see the module docstring); the API of
-    :class:`armguard.detect.Detector`.  ``reach_margin`` (m, default ``inf``: every pair) as there."""
+class RangerDetector(Detector):
+    """Ranger's Detector over a backend's Checker (see the module docstring); a subclass of
+    :class:`armguard.detect.Detector` with its API.  ``reach_margin`` (m, default ``inf``: every pair) as there."""
 
     def __init__(self, scene, threshold: float = 0.05, *, stopping_distance: float = 0.0, active: str | None = None,
                  backend: str | None = None, backend_options=None, model=None, tol=None,
                  reach_margin: float | None = None, terrain=None) -> None:
         from ..backends import Capability, checker
         from ..model import model_of
-        from ._model import check_finite_margin
 
         self.scene = scene
         self._threshold = check_length(threshold, "threshold")

@@ -26,7 +26,7 @@ def bounding_box(shape: Shape, margin: float = 0.0) -> Box:
     """An OBB in W containing ``shape`` grown by ``margin`` (m, >= 0).
 
     A Box is returned as it is (grown); otherwise the axes are the principal axes of the shape's
-    core points (PCA, as :func:`armguard.detect._hulls.link_obbs` does for link hulls), the box
+    core points (PCA, as :func:`armguard_analytic._engine._hulls.link_obbs` does for link hulls), the box
     spans their extent along those axes, grown by the core radius and ``margin``.  The result
     contains the shape exactly (a PCA fit only affects tightness)."""
     if margin < 0.0 or not np.isfinite(margin):

@@ -12,7 +12,7 @@ def _static_polytopes(cs, static_shapes) -> dict:
     of its shape (vertices, face planes, edges with their faces, edge bisectors, centroid);
     ``poly_of (G,)`` maps an element to its polytope number (-1: none), ``pvs``, ``pps``, ``pes``
     are CSR offsets into the vertex, plane and edge rows.  Built once per ``prepare``."""
-    from ..geometry._pack import polytope_data
+    from armguard.geometry._pack import polytope_data
 
     G = cs.n_elements
     poly_of = np.full(G, -1, np.int64)

@@ -14,7 +14,7 @@ import math
 
 from numba import njit
 
-from ..geometry._pair_box_box import box_box_overlap_scalar
+from armguard.geometry._pair_box_box import box_box_overlap_scalar
 
 @njit(cache=True, inline="always")
 def _obb_gap(cx, cy, cz, r, B, o):  # pragma: no cover - compiled

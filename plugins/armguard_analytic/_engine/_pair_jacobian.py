@@ -1,5 +1,5 @@
 """Distance Jacobians inside the kernel: ``d(distance)/dq`` of every checked pair from the
-detector's own forward kinematics, right after :func:`armguard.detect._kernel.pair_rows`.
+detector's own forward kinematics, right after :func:`._pair_rows.pair_rows`.
 
 Equation (1) of :mod:`armguard.backends._jacobian` (Faverjon & Tournassoud, ICRA 1987; the
 envelope theorem on the closest-point problem),
@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 from numba import carray, njit
 
-from ..backends._jacobian import face_span, unique_witness
+from armguard.backends._jacobian import face_span, unique_witness
 # segment numbers compiled in as constants (see ._layout: a change there comes with an edit here)
 from ._layout import K, SC, at, seg1, seg2, seg3
 

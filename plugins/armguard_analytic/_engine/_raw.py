@@ -7,12 +7,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from armguard.detect._report import CATEGORIES, NotEvaluated, PairResult
+
 from . import _kernel as kn
 from ._layout import EV_W, SUM_BSLOT, SUM_SIZE
-from ._report import CATEGORIES, NotEvaluated, PairResult
 
 if TYPE_CHECKING:
-    from ._detector import Detector
+    from ._detector import FusedDetector
 
 
 def _refcount(obj) -> int:
@@ -21,7 +22,7 @@ def _refcount(obj) -> int:
 
 def _unheld_count() -> int:
     """What :func:`_refcount` says of an object held only by one local name of the caller, called
-    the way :meth:`Detector._release_last` calls it (measured, not assumed: interpreters differ in
+    the way :meth:`FusedDetector._release_last` calls it (measured, not assumed: interpreters differ in
     whether a call's arguments hold references of their own)."""
     last = _Probe()
     return _refcount(last)
@@ -43,12 +44,12 @@ class _Raw:
 
     ``f`` and ``i`` are copied out of the detector's scratch buffers only when needed: on first
     access, or when the detector is about to overwrite the buffers while this object is still
-    referenced (:meth:`Detector._release_last`).  A report dropped before the next check (a
+    referenced (:meth:`FusedDetector._release_last`).  A report dropped before the next check (a
     control loop reading only ``status``) costs no copy."""
 
     __slots__ = ("det", "_f", "_i", "_SF", "_SI", "_of", "_oi", "n_evaluated", "flags", "bounds", "mode")
 
-    def __init__(self, det: "Detector", SF: np.ndarray, SI: np.ndarray, of: int, oi: int, n_evaluated: int,
+    def __init__(self, det: "FusedDetector", SF: np.ndarray, SI: np.ndarray, of: int, oi: int, n_evaluated: int,
                  flags, bounds, mode) -> None:
         self.det, self._SF, self._SI, self._of, self._oi, self.n_evaluated = det, SF, SI, of, oi, n_evaluated
         self._f = self._i = None

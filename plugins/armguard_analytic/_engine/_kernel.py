@@ -9,7 +9,7 @@ Modes (``iprm[0]``):
 * ``MODE_LAZY``: the cut-off is ``threshold_eff`` alone: pairs proved beyond it are skipped
   (status and within-threshold pairs stay exact; nearest per category only when within it).
 * ``MODE_ANYTIME``: every candidate pair gets a lower bound, the larger of its bounding-volume
-  gap and ``last distance - motion bound`` (:mod:`._reach`); pairs are evaluated in increasing
+  gap and ``last distance - motion bound`` (:mod:`armguard.detect._reach`); pairs are evaluated in increasing
   lower bound (most likely obstacles first: near last time, or moved much since) until
   ``allowance`` evaluations are spent; the rest are reported with their bounds.
 * ``MODE_ALL``: no pruning: every candidate pair is evaluated (``pair_distances``).
@@ -32,7 +32,7 @@ import numpy as np
 
 from numba import carray, njit
 
-from ..kinematics._fk import _fk_kernel
+from armguard.kinematics._fk import _fk_kernel
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SC, at, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, SUM_STATUS, seg1, seg2, seg3
@@ -171,7 +171,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     pair_cat = seg1(MI, H, _K_pair_cat)
     pair_of = seg2(MI, H, _K_pair_of, max(n_st, 1))
     mov_ids = seg1(MI, H, _K_mov_ids)
-    if iprm[I_MODE] == MODE_YESNO:  # the static walk's element order (see Detector.prepare)
+    if iprm[I_MODE] == MODE_YESNO:  # the static walk's element order (see FusedDetector.prepare)
         st_mov = seg1(MI, H, _K_yn_mov)
         st_cat = seg1(MI, H, _K_yn_cat)
     else:
@@ -559,57 +559,3 @@ def detect_entry(q, H, MF, MI, SF, SI, prm, iprm, sel):  # pragma: no cover - co
     # 0 and 1 made numba compile a second, specialised copy of the whole kernel on a cold cache)
     err = detect_rows(q, np.int64(0), np.int64(1), H, MF, MI, SF, SI, prm, iprm, sel, best, st)
     return summary[SUM_STATUS], summary[SUM_NEVAL], err
-
-
-@njit(cache=True, nogil=True)
-def pair_rows(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out):  # pragma: no cover - compiled
-    """Every pair of a selection at rows ``lo:hi`` of ``Q`` (Pinocchio's joint order, flattened:
-    row ``m`` is ``Q[m * nq:(m + 1) * nq]``), written straight into the caller's order.
-
-    ``gmap`` (int64): ``[nq, n_q, n_circ, n_sel, qidx (n_q), circ (n_circ), sel (n_sel), swap (n_sel)]``
-    -- the scene's joint ``k`` is ``Q[qidx[k]]`` (a continuous joint ``k`` in ``circ``: the angle of
-    Pinocchio's ``(cos, sin)`` at ``qidx[k]``), output row ``j`` is the detector's pair ``sel[j]``,
-    with sides A and B exchanged where ``swap[j]``.  Row ``m``'s pairs go to rows ``m * n_sel + j``
-    of ``d_out`` ``(., )`` and ``pA_out`` / ``pB_out`` ``(., 3)``.  ``q1`` ``(1, n_q)``: scratch.
-    Returns 0, else ``err + 4 * m`` for the first failing row ``m`` (``err`` as :func:`detect_rows`).
-    Releases the GIL: callers on several threads, each with its own ``SF`` / ``SI`` / ``q1``, run in
-    parallel."""
-    nq = gmap[0]
-    n_q = gmap[1]
-    n_circ = gmap[2]
-    n_sel = gmap[3]
-    o_circ = 4 + n_q
-    o_sel = o_circ + n_circ
-    sel = gmap[o_sel:o_sel + n_sel]
-    o_sw = o_sel + n_sel
-    summary = seg1(SI, H, _K_summary)
-    best = carray(at(SF, H[2 * _K_best]), (1, 4))
-    st = summary[SUM_STATUS:SUM_STATUS + 1]
-    ev = seg2(SF, H, _K_ev, EV_W)
-    for m in range(lo, hi):
-        b = m * nq
-        for i in range(nq):
-            if not np.isfinite(Q[b + i]):
-                return 1 + 4 * m
-        for k in range(n_q):
-            q1[0, k] = Q[b + gmap[4 + k]]
-        for c in range(n_circ):
-            k = gmap[o_circ + c]
-            i = b + gmap[4 + k]
-            q1[0, k] = math.atan2(Q[i + 1], Q[i])
-        err = detect_rows(q1, np.int64(0), np.int64(1), H, MF, MI, SF, SI, prm, iprm, sel, best, st)
-        if err != 0:
-            return err + 4 * m
-        o = m * n_sel
-        for j in range(n_sel):
-            r = o + j
-            d_out[r] = ev[j, 0]
-            if gmap[o_sw + j] != 0:
-                for x in range(3):
-                    pA_out[r, x] = ev[j, 4 + x]
-                    pB_out[r, x] = ev[j, 1 + x]
-            else:
-                for x in range(3):
-                    pA_out[r, x] = ev[j, 1 + x]
-                    pB_out[r, x] = ev[j, 4 + x]
-    return 0

@@ -9,7 +9,7 @@ import numpy as np
 from . import _kernel as kn
 
 if TYPE_CHECKING:
-    from ._detector import Detector
+    from ._detector import FusedDetector
 
 __all__ = ["_Scratch", "_entry_point"]
 
@@ -32,16 +32,16 @@ def _entry_point(*args):
 
 
 class _Scratch:
-    """One thread's scratch and outputs of a :class:`Detector`.
+    """One thread's scratch and outputs of a :class:`FusedDetector`.
 
     Every thread calling a Detector gets its own (``threading.local``), copied from the pristine
-    buffers of :meth:`Detector.prepare`, so threads never share a buffer the kernel writes; the
+    buffers of :meth:`FusedDetector.prepare`, so threads never share a buffer the kernel writes; the
     model buffers (``H``, ``MF``, ``MI``) are read-only in the kernel and shared.  The state the
     anytime mode keeps between checks (last distances, time since checked) is per thread too."""
 
     __slots__ = ("SF", "SI", "q1", "ev", "pflag", "plb", "iprm_by_mode", "entry_args", "last_raw")
 
-    def __init__(self, det: "Detector") -> None:
+    def __init__(self, det: "FusedDetector") -> None:
         L = det._layout
         self.SF = det._SF0.copy()
         self.SI = det._SI0.copy()

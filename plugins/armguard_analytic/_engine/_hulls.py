@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..geometry._pack import hull_graph
-from ..geometry._pair_gjk import CLIMB_MIN_VERTICES
+from armguard.geometry._pack import hull_graph
+from armguard.geometry._pair_gjk import CLIMB_MIN_VERTICES
 
 __all__ = ["vertex_graphs", "link_obbs"]
 

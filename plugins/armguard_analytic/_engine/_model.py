@@ -1,95 +1,37 @@
-"""Compile a scene for the detector: one kinematic tree, element arrays, pair lists, BVH.
+"""Compile a scene for the fused detector: one kinematic tree, element arrays, pair lists, BVH.
 
 Built on :func:`armguard.scene.compile_scene` (elements in their own frames, owner pairs with
 their categories); this module adds what the detector needs on top of it:
 
 * one flattened kinematic tree over the links of *all* robots (global link index =
-  robot's offset + link index), so one FK call serves the scene;
+  robot's offset + link index), so one FK call serves the scene
+  (:func:`armguard.detect._common.combined_tree`, shared with Ranger's bounds over any backend);
 * element frames as link numbers (-1 for static bodies), edge directions and face normals
   in the element frame, static elements' AABBs (a cylinder's exact one, see
-  :func:`_cylinder_aabb`) and a :class:`BVH` over them;
+  :func:`armguard.detect._common.cylinder_aabb`) and a :class:`BVH` over them;
 * the candidate pairs: element pairs of :meth:`Scene.allowed_pairs` mapped to the four
   categories, plus one workspace pair per moving element, filtered by the active arm and by
-  the conservative obstacle lists (:mod:`._reach`);
+  the conservative obstacle lists (:mod:`armguard.detect._reach`);
 * per moving element, lever arms for the anytime lower bounds.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from .._errors import DetectionError
+from armguard._errors import DetectionError
+from armguard.detect._common import (CAT_ARM, CAT_ENVIRONMENT, CAT_PAYLOAD, CAT_WORKSPACE, CYLINDER as _CYLINDER,
+                                     SCENE_CATEGORY as _SCENE_CAT, combined_tree as _combined_tree,
+                                     cylinder_aabb as _cylinder_aabb)
+from armguard.detect._reach import chain_bounds
+
 from ._bvh import build_bvh
-from ._reach import chain_bounds
 
 __all__ = ["DetectModel", "build_model", "CAT_ARM", "CAT_ENVIRONMENT", "CAT_WORKSPACE", "CAT_PAYLOAD"]
-
-CAT_ARM, CAT_ENVIRONMENT, CAT_WORKSPACE, CAT_PAYLOAD = 0, 1, 2, 3
-_SCENE_CAT = {
-    "arm-arm": CAT_ARM,
-    "arm-vehicle": CAT_ENVIRONMENT,
-    "arm-environment": CAT_ENVIRONMENT,
-    "arm-payload": CAT_PAYLOAD,
-    "payload-vehicle": CAT_PAYLOAD,
-    "payload-environment": CAT_PAYLOAD,
-    "payload-payload": CAT_PAYLOAD,
-}
-
-
-_CYLINDER = 4  # armguard.geometry.CoreKind.CYLINDER
 
 
 def _c(a, dtype=np.float64):
     return np.ascontiguousarray(np.asarray(a, dtype=dtype))
-
-
-def _cylinder_aabb(c: np.ndarray, R: np.ndarray, half: np.ndarray):
-    """``(lo, hi)`` (3,) m: the axis-aligned box of the cylinder with centre ``c``, axes ``R`` (the axis
-    as third column) and ``half = (r, r, h)``: along axis ``k`` the extent is ``h |a_k| + r sqrt(1 -
-    a_k^2)`` (as :meth:`armguard.geometry.Cylinder.aabb`), grown by a rounding margin so it contains
-    the cylinder as the kernels evaluate it."""
-    a = R[:, 2]
-    e = half[2] * np.abs(a) + half[0] * np.sqrt(np.maximum(0.0, 1.0 - a * a))
-    e = e + 1e-12 * (float(np.max(np.abs(c))) + float(np.max(half)) + 1.0)
-    return c - e, c + e
-
-
-def _combined_tree(scene, robot_names):
-    """All robots' FlatTrees as one tree over global links (parents and joint terms shifted)."""
-    from ..kinematics._fk import FlatTree
-
-    parts = {k: [] for k in ("parent", "X_pre", "axis", "jtype", "X_post", "has_post", "offset", "term_joint", "term_coeff")}
-    term_start = [0]
-    link_off, joint_off = [], []
-    nl = nj = 0
-    for r in robot_names:
-        robot = scene.robots[r]
-        t = getattr(robot, "flat_tree", None) or robot._tree
-        link_off.append(nl)
-        joint_off.append(nj)
-        parts["parent"].append(np.where(t.parent >= 0, t.parent + nl, -1))
-        for k in ("X_pre", "axis", "jtype", "X_post", "has_post", "offset", "term_coeff"):
-            parts[k].append(np.asarray(getattr(t, k)))
-        parts["term_joint"].append(np.asarray(t.term_joint) + nj)
-        term_start.extend((np.asarray(t.term_start[1:]) + term_start[-1]).tolist())
-        nl += t.n_links
-        nj += len(robot.joint_names)
-    cat = lambda k, shape, dt: _c(np.concatenate(parts[k]) if parts[k] else np.zeros(shape), dt)  # noqa: E731
-    tree = FlatTree(
-        parent=cat("parent", (0,), np.int64),
-        X_pre=cat("X_pre", (0, 4, 4), np.float64),
-        axis=cat("axis", (0, 3), np.float64),
-        jtype=cat("jtype", (0,), np.int64),
-        X_post=cat("X_post", (0, 4, 4), np.float64),
-        has_post=cat("has_post", (0,), np.bool_),
-        offset=cat("offset", (0,), np.float64),
-        term_start=_c(term_start, np.int64),
-        term_joint=cat("term_joint", (0,), np.int64),
-        term_coeff=cat("term_coeff", (0,), np.float64),
-    )
-    return tree, np.asarray(link_off, dtype=np.int64), np.asarray(joint_off, dtype=np.int64)
 
 
 class DetectModel:
@@ -106,7 +48,7 @@ class DetectModel:
 
 def build_model(scene, *, active: str | None, reach_margin: float, tol) -> DetectModel:
     """Compile ``scene`` for the detector (explicit, repeatable; the scene is unchanged)."""
-    from ..scene import compile_scene
+    from armguard.scene import compile_scene
 
     cs = compile_scene(scene)
     m = DetectModel()
@@ -180,7 +122,7 @@ def build_model(scene, *, active: str | None, reach_margin: float, tol) -> Detec
     # candidate pairs
     owner_robot = cs.owner_robot
     active_id = robot_names.index(active) if active is not None else -1
-    from ..scene import PAIR_CATEGORIES
+    from armguard.scene import PAIR_CATEGORIES
 
     def in_reach_static(ma: int, s: int) -> bool:
         c, rr = m.reach_center[ma], m.reach_radius[ma]
@@ -235,14 +177,3 @@ def build_model(scene, *, active: str | None, reach_margin: float, tol) -> Detec
     m.has_category = tuple(bool(np.any(m.pair_cat == c)) for c in range(4))
     m.reach_margin = reach_margin
     return m
-
-
-def check_finite_margin(reach_margin) -> float:
-    """``reach_margin`` as a float >= 0 (``inf`` keeps every pair)."""
-    try:
-        x = float(reach_margin)
-    except (TypeError, ValueError) as exc:
-        raise DetectionError(f"reach_margin: expected a number of metres, got {reach_margin!r}") from exc
-    if math.isnan(x) or x < 0.0:
-        raise DetectionError(f"reach_margin: must be >= 0 (or inf), got {x}")
-    return x

@@ -22,12 +22,12 @@ import math
 
 from numba import njit
 
-from ..geometry._pair_segment_box import capsule_box_scalar
-from ..geometry._pair_segment_polytope import capsule_polytope_at
-from ..geometry._pair_segment_segment import capsule_capsule_scalar
-from ..geometry._pair_cylinder import support_pair_graph
-from ..geometry._pair_epa import convex_convex_fast
-from ..geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_capsule
+from armguard.geometry._pair_segment_box import capsule_box_scalar
+from armguard.geometry._pair_segment_polytope import capsule_polytope_at
+from armguard.geometry._pair_segment_segment import capsule_capsule_scalar
+from armguard.geometry._pair_cylinder import support_pair_graph
+from armguard.geometry._pair_epa import convex_convex_fast
+from armguard.geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_capsule
 
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.

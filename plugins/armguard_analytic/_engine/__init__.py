@@ -1,0 +1,10 @@
+"""The analytic backend's engine: Ranger's cycle as one fused numba call.
+
+:class:`._detector.FusedDetector` (a subclass of :class:`armguard.detect.Detector`, declared by
+``AnalyticBackend.ranger_detector``) compiles the scene (:mod:`._model`, :mod:`._bvh`,
+:mod:`._hulls`, :mod:`._prep`) into packed buffers (:mod:`._layout`) and checks it with one numba
+call (:mod:`._kernel`; the narrow phase :mod:`._step`, :mod:`._narrow`; culling :mod:`._cull`);
+:mod:`._pair_rows` is the analytic Checker's entry point, :mod:`._pair_jacobian` its distance
+Jacobians, :mod:`._warm` the first-run warm-up.  Moved here from ``armguard.detect``, which keeps
+the framework: the public ``Detector``, Ranger's algorithm over any Checker, the result types.
+"""

@@ -1,0 +1,81 @@
+"""The analytic Checker's entry point: every pair of a selection, in the Model's joint and pair order.
+
+``AnalyticChecker.pair_distances(_many)`` (:mod:`armguard_analytic`) is one call of
+:func:`pair_rows`: it reorders Pinocchio's joints into the scene's, runs the fused kernel's
+all-pairs mode (:func:`._kernel.detect_rows`, ``MODE_ALL``) and writes each selected pair's row
+straight into the caller's arrays, sides exchanged where the Model holds the pair the other way
+round.  Split from :mod:`._kernel` (it calls that kernel and reads the same packed buffers).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from numba import carray, njit
+
+# The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
+# this file only, so a change of the segment tuples in ._layout must come with an edit here.
+from ._layout import EV_W, K, SUM_STATUS, at, seg1, seg2
+from ._kernel import detect_rows
+
+__all__ = ["pair_rows"]
+
+_K_best = K["best"]
+_K_ev = K["ev"]
+_K_summary = K["summary"]
+
+
+@njit(cache=True, nogil=True)
+def pair_rows(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out):  # pragma: no cover - compiled
+    """Every pair of a selection at rows ``lo:hi`` of ``Q`` (Pinocchio's joint order, flattened:
+    row ``m`` is ``Q[m * nq:(m + 1) * nq]``), written straight into the caller's order.
+
+    ``gmap`` (int64): ``[nq, n_q, n_circ, n_sel, qidx (n_q), circ (n_circ), sel (n_sel), swap (n_sel)]``
+    -- the scene's joint ``k`` is ``Q[qidx[k]]`` (a continuous joint ``k`` in ``circ``: the angle of
+    Pinocchio's ``(cos, sin)`` at ``qidx[k]``), output row ``j`` is the detector's pair ``sel[j]``,
+    with sides A and B exchanged where ``swap[j]``.  Row ``m``'s pairs go to rows ``m * n_sel + j``
+    of ``d_out`` ``(., )`` and ``pA_out`` / ``pB_out`` ``(., 3)``.  ``q1`` ``(1, n_q)``: scratch.
+    Returns 0, else ``err + 4 * m`` for the first failing row ``m`` (``err`` as :func:`detect_rows`).
+    Releases the GIL: callers on several threads, each with its own ``SF`` / ``SI`` / ``q1``, run in
+    parallel."""
+    nq = gmap[0]
+    n_q = gmap[1]
+    n_circ = gmap[2]
+    n_sel = gmap[3]
+    o_circ = 4 + n_q
+    o_sel = o_circ + n_circ
+    sel = gmap[o_sel:o_sel + n_sel]
+    o_sw = o_sel + n_sel
+    summary = seg1(SI, H, _K_summary)
+    best = carray(at(SF, H[2 * _K_best]), (1, 4))
+    st = summary[SUM_STATUS:SUM_STATUS + 1]
+    ev = seg2(SF, H, _K_ev, EV_W)
+    for m in range(lo, hi):
+        b = m * nq
+        for i in range(nq):
+            if not np.isfinite(Q[b + i]):
+                return 1 + 4 * m
+        for k in range(n_q):
+            q1[0, k] = Q[b + gmap[4 + k]]
+        for c in range(n_circ):
+            k = gmap[o_circ + c]
+            i = b + gmap[4 + k]
+            q1[0, k] = math.atan2(Q[i + 1], Q[i])
+        err = detect_rows(q1, np.int64(0), np.int64(1), H, MF, MI, SF, SI, prm, iprm, sel, best, st)
+        if err != 0:
+            return err + 4 * m
+        o = m * n_sel
+        for j in range(n_sel):
+            r = o + j
+            d_out[r] = ev[j, 0]
+            if gmap[o_sw + j] != 0:
+                for x in range(3):
+                    pA_out[r, x] = ev[j, 4 + x]
+                    pB_out[r, x] = ev[j, 1 + x]
+            else:
+                for x in range(3):
+                    pA_out[r, x] = ev[j, 1 + x]
+                    pB_out[r, x] = ev[j, 4 + x]
+    return 0

@@ -1,0 +1,49 @@
+"""The analytic backend's first-run warm-up: what ``AnalyticBackend.warm_up`` and
+``warm_up_leaves`` give the framework's :mod:`armguard.cli._compile`.
+
+The fused kernel is one chain of compiled calls (``detect_entry -> detect_rows -> pair_step ->
+narrow_other -> pair_distance ->`` the pair kernels): on a cold cache numba compiles it in one
+thread, over a minute on a 2-core machine, more than half of it in a few leaf kernels that share
+nothing.  Compiled first with the signatures the chain calls them with (two in a second process,
+three in the first), they are in numba's on-disk cache when the chain reaches them, and it only
+loads them.  A signature that no longer matches the chain's call costs time, never an answer: the
+chain then compiles that kernel itself (tests/test_detect_cold.py checks they all match).  Codes:
+F1/F2 float64 C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["LEAVES_MAIN", "LEAVES_SIDE", "warm_up"]
+
+LEAVES_SIDE = (
+    ("armguard.geometry._pair_cylinder", "support_pair_graph", "F2 I1 F1 f F2 I1 F1 f F1 F1 f f i f"),
+    ("armguard_analytic._engine._narrow", "_capsule_polytope", "F2 f i F2 F2 I2 F2 F2 I1 I1 I1 f F1 f f f i f"),
+)
+"""Leaf kernels compiled in the second process: (module, function, signature codes)."""
+LEAVES_MAIN = (
+    ("armguard.geometry._pair_epa", "convex_convex_fast", "F2 F2 F2 I1 I2 f F2 F2 F2 I1 I2 f F1 F1 f f f i f f"),
+    ("armguard_analytic._engine._step", "evaluate_pair", "i i I1 F1 I1 F1 I1 F1 f f f i"),
+    ("armguard_analytic._engine._narrow", "narrow_flat", "i i I1 F1 I1 F1 F1 f f f"),
+)
+"""Leaf kernels compiled in the first process while the second compiles :data:`LEAVES_SIDE`."""
+
+
+def warm_up(scene) -> None:
+    """Compile (or load) the fused Detector's entry points and the Checker's ``pair_rows`` on
+    ``scene``, with the argument types their callers pass."""
+    from . import _kernel as kn
+    from ._detector import FusedDetector
+    from ._pair_rows import pair_rows
+    from ._scratch import _Scratch
+
+    det = FusedDetector(scene, threshold=0.05)
+    q = scene.flat_q(scene.default_q())
+    det.check(q)
+    det.check_many(np.tile(q, (4, 1)))
+    # the Checker's pair_distances(_many): pair_rows, with the argument types it is given
+    s, n, nq = _Scratch(det), det.n_pairs, len(q)
+    gmap = np.concatenate([[nq, nq, 0, n], np.arange(nq), np.arange(n), np.zeros(n)]).astype(np.int64)
+    pair_rows(np.ascontiguousarray(q, dtype=np.float64), 0, 1, gmap, det._H, det._MF, det._MI, s.SF, s.SI, det._prm,
+              det._iprm_by_mode[kn.MODE_ALL], s.q1, np.empty(n), np.empty((n, 3)), np.empty((n, 3)))
