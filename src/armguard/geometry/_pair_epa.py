@@ -32,8 +32,8 @@ import math
 
 from numba import njit
 
-from ._pair_gjk import (GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _support, centroid_difference, gjk_core,
-                        gjk_dir_adj2)
+from ._pair_gjk import (GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _support, gjk_core, gjk_dir_adj2,
+                        inner_difference)
 from ._pair_sat import _axis
 from ._pair_segment_segment import write_rounded
 
@@ -454,7 +454,7 @@ def convex_convex_fast(
     tetrahedron) and ``-(ra + rb) <= level``, it returns ``-(ra + rb)`` (an upper bound on the
     signed distance) with a point of A's core as both core witnesses, without a depth.
     """
-    dx, dy, dz = centroid_difference(pa, pb)
+    dx, dy, dz = inner_difference(pa, adja, pb, adjb)
     simp = work[0:9]
     status, d, ax, ay, az, bx, by, bz = gjk_dir_adj2(
         pa, adja, pb, adjb, 0.0, 0.0, 0.0, dx, dy, dz,

@@ -34,7 +34,7 @@ from numba import njit
 
 __all__ = [
     "GJK_WORK_SIZE", "GJK_SEPARATED", "GJK_INTERSECTING", "GJK_NOT_CONVERGED", "ADJ_HEAD", "CLIMB_MIN_VERTICES",
-    "gjk_core", "gjk_dir", "gjk_dir_adj", "gjk_dir_adj2",
+    "gjk_core", "gjk_dir", "gjk_dir_adj", "gjk_dir_adj2", "inner_difference",
 ]
 
 GJK_WORK_SIZE = 64
@@ -442,6 +442,38 @@ def centroid_difference(pa, pb):  # pragma: no cover - compiled
         hy += pb[i, 1]
         hz += pb[i, 2]
     return gx / na - hx / nb, gy / na - hy / nb, gz / na - hz / nb
+
+
+@njit(cache=True, inline="always")
+def _inner_point(p, adj):  # pragma: no cover - compiled
+    """A point inside the hull of ``p``: the mean of the six extreme vertices a vertex graph stores
+    (six reads), else the points' centroid (a scan)."""
+    if adj.shape[0] == 0:
+        gx = gy = gz = 0.0
+        for i in range(p.shape[0]):
+            gx += p[i, 0]
+            gy += p[i, 1]
+            gz += p[i, 2]
+        n = p.shape[0]
+        return gx / n, gy / n, gz / n
+    gx = gy = gz = 0.0
+    for k in range(6):
+        gx += p[adj[k], 0]
+        gy += p[adj[k], 1]
+        gz += p[adj[k], 2]
+    return gx / 6.0, gy / 6.0, gz / 6.0
+
+
+@njit(cache=True, inline="always")
+def inner_difference(pa, adja, pb, adjb):  # pragma: no cover - compiled
+    """GJK's first search direction for two cores with vertex graphs (either may be empty): a point
+    inside A's hull minus one inside B's (:func:`_inner_point`).  Any direction is correct; one
+    between the hulls saves iterations, and where a graph is given this costs six reads, not the
+    scan of thousands of vertices :func:`centroid_difference` makes (on so101's hulls of 2,100 to
+    4,900 vertices, more than GJK itself)."""
+    gx, gy, gz = _inner_point(pa, adja)
+    hx, hy, hz = _inner_point(pb, adjb)
+    return gx - hx, gy - hy, gz - hz
 
 
 @njit(cache=True)
