@@ -270,13 +270,18 @@ def _scan(pb, dx, dy, dz):  # pragma: no cover - compiled
 
 
 @njit(cache=True, _nrt=False)
-def _gjk(pa, adja, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp):  # pragma: no cover
+def _gjk(pa, adja, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep=math.inf):  # pragma: no cover
     """GJK from the initial direction ``d``; A's and B's supports by a scan (``adja`` / ``adj``
     ``None``, a branch numba prunes at compile time, or an empty graph) or by hill climbing on
     their vertex graphs.  ``simp`` (``None``, or a float64 array of >= 9 entries) receives the
     final simplex when the origin ends inside a tetrahedron: ``simp[0] = 1`` then, ``simp[1:5]``
     A's and ``simp[5:9]`` B's support indices of its four vertices (else ``simp[0] = 0``); the
-    penetration-depth kernel (``_pair_epa``) starts from it."""
+    penetration-depth kernel (``_pair_epa``) starts from it.
+
+    ``sep`` (m; ``inf``: off): stop, ``GJK_SEPARATED``, as soon as a support plane proves the core
+    distance above it (``v . w > sep |v|``: ``v . w / |v|`` is a lower bound on the distance); the
+    distance returned is then ``|v|``, an upper bound, > ``sep``, not the distance (a yes/no caller
+    needs only the side of ``sep``; van den Bergen §4.3.5's separating-axis early out)."""
     # the first vertex: supports along d
     ia = _support(pa, adja, -1, -dx, -dy, -dz)
     ib = _support(pb, adj, -1, dx, dy, dz)
@@ -307,8 +312,12 @@ def _gjk(pa, adja, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, 
         wx = pa[ia, 0] - pb[ib, 0] - ox
         wy = pa[ia, 1] - pb[ib, 1] - oy
         wz = pa[ia, 2] - pb[ib, 2] - oz
-        if vv - (vx * wx + vy * wy + vz * wz) <= gjk_eps * math.sqrt(vv):
+        vw = vx * wx + vy * wy + vz * wz
+        if vv - vw <= gjk_eps * math.sqrt(vv):
             status = GJK_SEPARATED
+            break
+        if vw > 0.0 and vw * vw > sep * sep * vv and sep >= 0.0:
+            status = GJK_SEPARATED  # proved apart by more than sep (the yes/no early out)
             break
         if (
             (ia == ia0 and ib == ib0)
@@ -419,10 +428,11 @@ def gjk_dir_adj(pa, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter)
 
 
 @njit(cache=True)
-def gjk_dir_adj2(pa, adja, pb, adjb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp):  # pragma: no cover
+def gjk_dir_adj2(pa, adja, pb, adjb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep):  # pragma: no cover
     """:func:`gjk_dir` climbing the vertex graphs of both A and B (either may be empty: a scan),
-    writing the final simplex to ``simp`` (see ``_gjk``)."""
-    return _gjk(pa, adja, pb, adjb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp)
+    writing the final simplex to ``simp``, stopping once the distance is proved above ``sep``
+    (``inf``: never; see ``_gjk``)."""
+    return _gjk(pa, adja, pb, adjb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep)
 
 
 @njit(cache=True, inline="always")
