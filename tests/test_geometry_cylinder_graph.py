@@ -13,13 +13,17 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from _geometry_strategies import random_rotation
 from armguard._tolerance import DEFAULT_TOLERANCES as TOL
 from armguard.geometry import Cylinder
 from armguard.geometry._dispatch import _support_core
 from armguard.geometry._pack import hull_graph
-from armguard.geometry._pair_cylinder import SUPPORT_WORK_SIZE, support_pair, support_pair_graph
+from armguard.geometry._pair_gjk import ADJ_HEAD
+from armguard.geometry._pair_cylinder import SUPPORT_WORK_SIZE, support_pair, support_pair_graph, support_point
+from armguard.geometry._pair_cylinder_support import _WA, _warm_point
 from test_geometry_cylinder_depth import reference_signed_distance
 
 
@@ -84,3 +88,31 @@ class _Points:
 
     def __init__(self, p):
         self.core_points, self.core_radius = p, 0.0
+
+
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(st.integers(0, 2**31 - 1), st.integers(48, 900), st.floats(0.01, 1.0))
+def test_warm_climbs_return_true_support_vertices(seed, n, step):
+    """GJK and EPA climb a hull from the previous support vertex (``work[_WA]`` / ``work[_WB]``) and,
+    cold, from the stored extreme vertex farthest along ``d``.  The detector builds a hull's graph
+    in its link frame and moves the points to W, so the stored extremes are not W's: the points
+    here are rotated after the graph is built.  Along a random walk of directions (GJK's are
+    close, EPA's jump) every climb reaches a vertex as extreme as a scan's, whatever the slot held
+    before: a hull vertex (a climb only ever leaves one there), -1 (cold), or an index past the points (a buffer never reset)."""
+    rng = np.random.default_rng(seed)
+    p = _cloud(rng, n)
+    adj, _tri = hull_graph(p)
+    p = np.ascontiguousarray(p @ random_rotation(rng).T + rng.uniform(-1.0, 1.0, 3))
+    work = np.empty(SUPPORT_WORK_SIZE)
+    on_hull = np.flatnonzero(np.diff(adj[ADJ_HEAD:ADJ_HEAD + len(p) + 1]) > 0)  # inner points have no neighbours
+    work[_WA] = rng.choice([-1.0, float(rng.choice(on_hull)), float(len(p) + rng.integers(0, 10**6))])
+    d = rng.normal(size=3)
+    for _ in range(30):
+        d = d + step * rng.normal(size=3)
+        x, y, z = _warm_point(p, adj, np.zeros(0), d[0], d[1], d[2], work, _WA)
+        i = int(work[_WA])
+        s = p[:, 0] * d[0] + p[:, 1] * d[1] + p[:, 2] * d[2]  # the kernels' dot products, rounded alike
+        assert 0 <= i < len(p) and (x, y, z) == tuple(p[i])
+        assert s[i] == s.max()  # the scan's value: a true support vertex
+        x, y, z = support_point(p, adj, np.zeros(0), *d)  # the cold climb, from the best stored extreme
+        assert x * d[0] + y * d[1] + z * d[2] == s.max()

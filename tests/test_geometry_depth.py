@@ -129,7 +129,9 @@ def test_graph_axes_are_the_sat_axes(seed, na, nb, off):
 
 @pytest.mark.parametrize("ra, rb", [(0.0, 0.0), (0.05, 0.1)])
 def test_yes_no_level_and_radii(ra, rb):
-    """With a level, an overlap returns a value <= the level (no depth); apart, the exact distance."""
+    """With a level, an overlap returns a value <= the level (no depth); apart, a value above the
+    level and no less than the exact distance (GJK stops once a support plane proves it apart;
+    test_geometry_hull_distance holds the verdicts at levels on both sides of the distance)."""
     rng = np.random.default_rng(5)
     n_over = 0
     for k in range(40):
@@ -142,7 +144,7 @@ def test_yes_no_level_and_radii(ra, rb):
             assert d1 <= 0.0 and d1 >= d0 - 1e-12
             n_over += 1
         else:
-            assert s1 == s0 and abs(d1 - d0) <= TOL
+            assert s1 == s0 and d1 > 0.0 and d1 >= d0 - TOL
         d2, _, _ = _fast(A, B, ra, rb)  # no level: exact again
         assert abs(d2 - d0) <= TOL * _size(A, B)
     assert 5 <= n_over <= 35  # both branches exercised

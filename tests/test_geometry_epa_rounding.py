@@ -66,7 +66,7 @@ def test_epa_settles_every_rotation_of_a_dense_penetrating_pair(so101, case, oth
             work = np.zeros(EPA_WORK_SIZE)
             dx, dy, dz = centroid_difference(pa, pb)
             gjk_dir_adj2(pa, ga, pb, gb, 0.0, 0.0, 0.0, dx, dy, dz, T.length, T.gjk_epsilon, T.gjk_max_iterations,
-                         work[0:9])
+                         work[0:9], np.inf)
             if work[0] != 1.0:  # the cores do not overlap: no EPA
                 break
             ok, depth, nx, ny, nz, ax, ay, az, bx, by, bz = epa_depth(pa, ga, pb, gb, work, T.gjk_epsilon)

@@ -216,3 +216,27 @@ def test_batch_capsule_convex_large_hull_matches_generic_sat(name):
     for i in range(0, n, 29):
         one = distance(Capsule(a0[i], a1[i], ra[i]), hull)
         assert one.distance == res.distance[i]
+
+
+@pytest.mark.parametrize("name", ["sphere-60", "sphere-200", "mesh-cylinder", "prism-32"])
+def test_gjk_start_points_lie_inside_the_hulls(name):
+    """convex_convex_fast starts GJK along a point inside A minus one inside B: with a vertex graph,
+    the mean of its six stored extreme vertices (six reads instead of a scan), rotated and moved as
+    the detector moves a hull after building its graph in the link frame; without one, the centroid."""
+    from scipy.spatial import Delaunay
+
+    from armguard.geometry._pair_gjk import inner_difference
+
+    hull = LARGE[name]
+    v = polytope_data(hull)[0]
+    adj = polytope_adjacency(hull)
+    rng = np.random.default_rng(26)
+    for _ in range(20):
+        p = np.ascontiguousarray(v @ random_rotation(rng).T + rng.uniform(-1.0, 1.0, 3))
+        tess = Delaunay(p)
+        zero = np.zeros((1, 3))
+        for graph in (adj, np.zeros(0, np.int64)):
+            g = np.array(inner_difference(p, graph, zero, np.zeros(0, np.int64)))
+            assert tess.find_simplex(g) >= 0, g
+        np.testing.assert_allclose(inner_difference(p, np.zeros(0, np.int64), zero, np.zeros(0, np.int64)), p.mean(axis=0),
+                                   atol=1e-15)

@@ -187,7 +187,8 @@ def narrow_other(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter
 
     ``level``: the caller only needs to know whether the distance is <= ``level`` (the yes/no
     mode's collision level; ``-inf`` when the distance itself is reported), so for a pair within
-    it any value <= ``level`` may be returned (an intersection verdict without a depth)."""
+    it any value <= ``level`` may be returned (an intersection verdict without a depth), and for a
+    pair proved beyond it any value > ``level`` (convex_convex_fast's GJK stops at that proof)."""
     oc = H[2 * _K_core]
     k = MI[H[2 * _K_poly_of] + gb]
     if MI[oc + ga] <= _SEGMENT and k >= 0:

@@ -43,7 +43,7 @@ from numba import njit
 
 from ._pair_cylinder_epa import _complete, epa_support
 from ._pair_cylinder_support import (  # noqa: F401  (CYL_W, support_point: part of this module's interface)
-    _L0, _S0, _VIS, CYL_W, SUPPORT_GAP, SUPPORT_WORK_SIZE, _centre, _pair_support, _put, support_point,
+    _L0, _S0, _VIS, _WA, _WB, CYL_W, SUPPORT_GAP, SUPPORT_WORK_SIZE, _centre, _pair_support, _put, support_point,
 )
 from ._pair_gjk import GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _closest_simplex
 from ._pair_segment_segment import write_rounded
@@ -60,7 +60,9 @@ def gjk_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, 
     vertices left in ``work`` (4: the origin is inside their tetrahedron) and the witnesses on the
     cores.  ``status`` as ``_pair_gjk``."""
     eps2 = eps_len * eps_len
-    ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, -dx, -dy, -dz)
+    work[_WA] = -1.0  # the point cores' climbs start cold (from their stored extremes)
+    work[_WB] = -1.0
+    ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, -dx, -dy, -dz, work)
     _put(work, _S0, ax, ay, az, bx, by, bz)
     work[_L0] = 1.0
     n = 1
@@ -75,7 +77,7 @@ def gjk_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, 
         if vv <= eps2:
             status = GJK_INTERSECTING
             break
-        ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, -vx, -vy, -vz)
+        ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, -vx, -vy, -vz, work)
         wx = ax - bx
         wy = ay - by
         wz = az - bz

@@ -26,7 +26,7 @@ def _complete(pa, ga, ca, pb, gb, cb, work, n, eps):  # pragma: no cover - compi
             dx = 1.0 if k == 0 else (-1.0 if k == 1 else 0.0)
             dy = 1.0 if k == 2 else (-1.0 if k == 3 else 0.0)
             dz = 1.0 if k == 4 else (-1.0 if k == 5 else 0.0)
-            ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, dx, dy, dz)
+            ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, work)
             ex = ax - bx - work[_S0]
             ey = ay - by - work[_S0 + 1]
             ez = az - bz - work[_S0 + 2]
@@ -63,7 +63,7 @@ def _complete(pa, ga, ca, pb, gb, cb, work, n, eps):  # pragma: no cover - compi
             dx = math.cos(t) * ux + math.sin(t) * wx
             dy = math.cos(t) * uy + math.sin(t) * wy
             dz = math.cos(t) * uz + math.sin(t) * wz
-            ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, dx, dy, dz)
+            ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, work)
             rx = ax - bx - work[_S0]
             ry = ay - by - work[_S0 + 1]
             rz = az - bz - work[_S0 + 2]
@@ -84,7 +84,7 @@ def _complete(pa, ga, ca, pb, gb, cb, work, n, eps):  # pragma: no cover - compi
     side = -(nx * work[_S0] + ny * work[_S0 + 1] + nz * work[_S0 + 2])  # the origin's offset
     for attempt in range(2):
         sg = 1.0 if (side >= 0.0) == (attempt == 0) else -1.0
-        ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, sg * nx, sg * ny, sg * nz)
+        ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, sg * nx, sg * ny, sg * nz, work)
         off = sg * (nx * (ax - bx - work[_S0]) + ny * (ay - by - work[_S0 + 1]) + nz * (az - bz - work[_S0 + 2]))
         if off > eps:
             _put(work, _S0 + 27, ax, ay, az, bx, by, bz)
@@ -276,7 +276,7 @@ def epa_support(pa, ga, ca, pb, gb, cb, work, eps, tol, vis):  # pragma: no cove
         ny = work[of + 4]
         nz = work[of + 5]
         fv = (int(work[of]), int(work[of + 1]), int(work[of + 2]))
-        ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, nx, ny, nz)
+        ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, nx, ny, nz, work)
         wx = ax - bx
         wy = ay - by
         wz = az - bz

@@ -32,8 +32,8 @@ import math
 
 from numba import njit
 
-from ._pair_gjk import (GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _support, centroid_difference, gjk_core,
-                        gjk_dir_adj2)
+from ._pair_gjk import (GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _support, gjk_core, gjk_dir_adj2,
+                        inner_difference)
 from ._pair_sat import _axis
 from ._pair_segment_segment import write_rounded
 
@@ -450,15 +450,19 @@ def convex_convex_fast(
     ``tria`` (``hull_graph``; a hull may give either or both), radius ``ra``; likewise B.
 
     ``level`` (m): the caller only needs to know whether the distance is <= ``level`` (``-inf``:
-    the distance itself is wanted).  When GJK finds the cores overlapping (origin inside a
+    the distance itself is wanted).  When GJK proves the cores farther apart than
+    ``level + ra + rb`` it stops there and returns an upper bound on the distance (> ``level``).  When GJK finds the cores overlapping (origin inside a
     tetrahedron) and ``-(ra + rb) <= level``, it returns ``-(ra + rb)`` (an upper bound on the
     signed distance) with a point of A's core as both core witnesses, without a depth.
     """
-    dx, dy, dz = centroid_difference(pa, pb)
+    dx, dy, dz = inner_difference(pa, adja, pb, adjb)
     simp = work[0:9]
+    # yes/no (level > -inf): GJK may stop once the core distance is proved above level + ra + rb
+    # (the signed distance, core distance - ra - rb, then exceeds level)
+    sep = level + (ra + rb) if level > -math.inf else math.inf
     status, d, ax, ay, az, bx, by, bz = gjk_dir_adj2(
         pa, adja, pb, adjb, 0.0, 0.0, 0.0, dx, dy, dz,
-        eps_len, gjk_eps, max_iter, simp,
+        eps_len, gjk_eps, max_iter, simp, max(sep, 0.0),
     )
     if status == GJK_SEPARATED:
         return write_rounded(ax, ay, az, ra, bx, by, bz, rb, (bx - ax) / d, (by - ay) / d, (bz - az) / d, d, out, 0), status

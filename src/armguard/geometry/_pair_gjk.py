@@ -34,7 +34,7 @@ from numba import njit
 
 __all__ = [
     "GJK_WORK_SIZE", "GJK_SEPARATED", "GJK_INTERSECTING", "GJK_NOT_CONVERGED", "ADJ_HEAD", "CLIMB_MIN_VERTICES",
-    "gjk_core", "gjk_dir", "gjk_dir_adj", "gjk_dir_adj2",
+    "gjk_core", "gjk_dir", "gjk_dir_adj", "gjk_dir_adj2", "inner_difference",
 ]
 
 GJK_WORK_SIZE = 64
@@ -228,23 +228,32 @@ def _climb(pb, adj, i, dx, dy, dz):  # pragma: no cover - compiled
 @njit(cache=True, inline="always")
 def _support(pb, adj, i, dx, dy, dz):  # pragma: no cover - compiled
     """Index of a vertex of ``pb`` maximising ``p . d``: a scan without ``adj`` (``None``, or an
-    empty graph), else a climb from vertex ``i`` (``i < 0``: from the stored extreme vertex along
-    d's dominant axis)."""
+    empty graph), else a climb from vertex ``i`` (``i < 0``: from the stored extreme vertex farthest
+    along ``d``, :func:`_seed`)."""
     if adj is None:
         return _scan(pb, dx, dy, dz)
     if adj.shape[0] == 0:
         return _scan(pb, dx, dy, dz)
     if i < 0:
-        ux = abs(dx)
-        uy = abs(dy)
-        uz = abs(dz)
-        if ux >= uy and ux >= uz:
-            i = adj[0] if dx >= 0.0 else adj[1]
-        elif uy >= uz:
-            i = adj[2] if dy >= 0.0 else adj[3]
-        else:
-            i = adj[4] if dz >= 0.0 else adj[5]
+        i = _seed(pb, adj, dx, dy, dz)
     return _climb(pb, adj, i, dx, dy, dz)
+
+
+@njit(cache=True, inline="always")
+def _seed(pb, adj, dx, dy, dz):  # pragma: no cover - compiled
+    """Where a cold climb starts: of the ``ADJ_HEAD`` stored extreme vertices, the one farthest
+    along ``d`` (six dot products).  The graph of a detector element is built in its link frame,
+    so its stored extremes are along the link's axes, not W's: picking by ``d``'s dominant W axis
+    started climbs anywhere on the hull (~50 steps on a 6,877-vertex gripper hull)."""
+    i = adj[0]
+    best = pb[i, 0] * dx + pb[i, 1] * dy + pb[i, 2] * dz
+    for k in range(1, ADJ_HEAD):
+        j = adj[k]
+        s = pb[j, 0] * dx + pb[j, 1] * dy + pb[j, 2] * dz
+        if s > best:
+            best = s
+            i = j
+    return i
 
 
 @njit(cache=True, inline="always")
@@ -261,13 +270,18 @@ def _scan(pb, dx, dy, dz):  # pragma: no cover - compiled
 
 
 @njit(cache=True, _nrt=False)
-def _gjk(pa, adja, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp):  # pragma: no cover
+def _gjk(pa, adja, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep=math.inf):  # pragma: no cover
     """GJK from the initial direction ``d``; A's and B's supports by a scan (``adja`` / ``adj``
     ``None``, a branch numba prunes at compile time, or an empty graph) or by hill climbing on
     their vertex graphs.  ``simp`` (``None``, or a float64 array of >= 9 entries) receives the
     final simplex when the origin ends inside a tetrahedron: ``simp[0] = 1`` then, ``simp[1:5]``
     A's and ``simp[5:9]`` B's support indices of its four vertices (else ``simp[0] = 0``); the
-    penetration-depth kernel (``_pair_epa``) starts from it."""
+    penetration-depth kernel (``_pair_epa``) starts from it.
+
+    ``sep`` (m; ``inf``: off): stop, ``GJK_SEPARATED``, as soon as a support plane proves the core
+    distance above it (``v . w > sep |v|``: ``v . w / |v|`` is a lower bound on the distance); the
+    distance returned is then ``|v|``, an upper bound, > ``sep``, not the distance (a yes/no caller
+    needs only the side of ``sep``; van den Bergen §4.3.5's separating-axis early out)."""
     # the first vertex: supports along d
     ia = _support(pa, adja, -1, -dx, -dy, -dz)
     ib = _support(pb, adj, -1, dx, dy, dz)
@@ -298,8 +312,12 @@ def _gjk(pa, adja, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, 
         wx = pa[ia, 0] - pb[ib, 0] - ox
         wy = pa[ia, 1] - pb[ib, 1] - oy
         wz = pa[ia, 2] - pb[ib, 2] - oz
-        if vv - (vx * wx + vy * wy + vz * wz) <= gjk_eps * math.sqrt(vv):
+        vw = vx * wx + vy * wy + vz * wz
+        if vv - vw <= gjk_eps * math.sqrt(vv):
             status = GJK_SEPARATED
+            break
+        if vw > 0.0 and vw * vw > sep * sep * vv and sep >= 0.0:
+            status = GJK_SEPARATED  # proved apart by more than sep (the yes/no early out)
             break
         if (
             (ia == ia0 and ib == ib0)
@@ -410,10 +428,11 @@ def gjk_dir_adj(pa, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter)
 
 
 @njit(cache=True)
-def gjk_dir_adj2(pa, adja, pb, adjb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp):  # pragma: no cover
+def gjk_dir_adj2(pa, adja, pb, adjb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep):  # pragma: no cover
     """:func:`gjk_dir` climbing the vertex graphs of both A and B (either may be empty: a scan),
-    writing the final simplex to ``simp`` (see ``_gjk``)."""
-    return _gjk(pa, adja, pb, adjb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp)
+    writing the final simplex to ``simp``, stopping once the distance is proved above ``sep``
+    (``inf``: never; see ``_gjk``)."""
+    return _gjk(pa, adja, pb, adjb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep)
 
 
 @njit(cache=True, inline="always")
@@ -433,6 +452,38 @@ def centroid_difference(pa, pb):  # pragma: no cover - compiled
         hy += pb[i, 1]
         hz += pb[i, 2]
     return gx / na - hx / nb, gy / na - hy / nb, gz / na - hz / nb
+
+
+@njit(cache=True, inline="always")
+def _inner_point(p, adj):  # pragma: no cover - compiled
+    """A point inside the hull of ``p``: the mean of the six extreme vertices a vertex graph stores
+    (six reads), else the points' centroid (a scan)."""
+    if adj.shape[0] == 0:
+        gx = gy = gz = 0.0
+        for i in range(p.shape[0]):
+            gx += p[i, 0]
+            gy += p[i, 1]
+            gz += p[i, 2]
+        n = p.shape[0]
+        return gx / n, gy / n, gz / n
+    gx = gy = gz = 0.0
+    for k in range(6):
+        gx += p[adj[k], 0]
+        gy += p[adj[k], 1]
+        gz += p[adj[k], 2]
+    return gx / 6.0, gy / 6.0, gz / 6.0
+
+
+@njit(cache=True, inline="always")
+def inner_difference(pa, adja, pb, adjb):  # pragma: no cover - compiled
+    """GJK's first search direction for two cores with vertex graphs (either may be empty): a point
+    inside A's hull minus one inside B's (:func:`_inner_point`).  Any direction is correct; one
+    between the hulls saves iterations, and where a graph is given this costs six reads, not the
+    scan of thousands of vertices :func:`centroid_difference` makes (on so101's hulls of 2,100 to
+    4,900 vertices, more than GJK itself)."""
+    gx, gy, gz = _inner_point(pa, adja)
+    hx, hy, hz = _inner_point(pb, adjb)
+    return gx - hx, gy - hy, gz - hz
 
 
 @njit(cache=True)
