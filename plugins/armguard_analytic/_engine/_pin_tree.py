@@ -57,15 +57,17 @@ def _inv(X: np.ndarray) -> np.ndarray:
     return Y
 
 
+_I4 = np.eye(4)
+_I4.flags.writeable = False
+
+
 def _is_identity(X: np.ndarray) -> bool:
-    return bool(np.array_equal(X, np.eye(4)))
+    return bool((X == _I4).all())
 
 
-def _joint_motion(pm, pdata, j: int, scene_k: dict, where: str):
-    """``(jtype, unit axis, offset, [(scene k, coeff)])`` of Pinocchio joint ``j``."""
-    jm = pm.joints[j]
+def _joint_motion(name: str, jm, pdata, j: int, scene_k: dict, where: str):
+    """``(jtype, unit axis, offset, [(scene k, coeff)])`` of Pinocchio joint ``j`` (``jm``, named ``name``)."""
     short = jm.shortname()
-    name = pm.names[j]
     if short == "JointModelMimic":
         mim = jm.extract()
         scaling, offset = float(mim.scaling), float(mim.offset)
@@ -119,7 +121,11 @@ def pin_tree(model, robot_names) -> tuple[FlatTree, np.ndarray, np.ndarray]:
     circular = set(int(k) for k in model._circular)
     for k, iq in enumerate(model.q_index):
         scene_k[int(iq)] = (k, k in circular)
-    frames = pm.frames
+    frames = list(pm.frames)  # one read of each vector (an element read through the bindings is slow)
+    parents = [int(x) for x in pm.parents]
+    joints = list(pm.joints)
+    names = list(pm.names)
+    placements = [_se3(x) for x in pm.jointPlacements]
     try:
         links_of_all = {int(model.link_frames[f"{r}/{ln}"]) for r, rb in scene.robots.items() for ln in rb.link_names}
     except KeyError as exc:
@@ -135,6 +141,8 @@ def pin_tree(model, robot_names) -> tuple[FlatTree, np.ndarray, np.ndarray]:
         joint_off.append(nj)
         fid = [int(model.link_frames[f"{r}/{ln}"]) for ln in robot.link_names]
         mine = {f: nl + i for i, f in enumerate(fid)}
+        # each link in its BODY frame's joint frame: F = placement[f] X_FL
+        F = [_se3(frames[f].placement) @ model.link_placement(f"{r}/{ln}") for f, ln in zip(fid, robot.link_names)]
         for i, f in enumerate(fid):
             wl = f"{where}, link {r}/{robot.link_names[i]}"
             # the parent link: up Pinocchio's frame tree (BODY -> its joint frame -> the BODY above)
@@ -151,29 +159,27 @@ def pin_tree(model, robot_names) -> tuple[FlatTree, np.ndarray, np.ndarray]:
                     raise DetectionError(f"{wl}: its parent {frames[g].name!r} is a link of another robot")
             if p >= nl + i:
                 raise DetectionError(f"{wl}: its parent comes after it in the scene's link order")
-            F_P = np.eye(4) if p < 0 else (_se3(frames[fid[p - nl]].placement)
-                                           @ model.link_placement(f"{r}/{robot.link_names[p - nl]}"))
+            F_P = _I4 if p < 0 else F[p - nl]
             j_P = 0 if p < 0 else int(frames[fid[p - nl]].parentJoint)
-            F_L = _se3(frames[f].placement) @ model.link_placement(f"{r}/{robot.link_names[i]}")
+            F_L = F[i]
             chain, j = [], int(frames[f].parentJoint)
             while j != j_P:
                 if j == 0:
                     raise DetectionError(f"{wl}: its joint chain does not pass its parent link's joint")
                 chain.append(j)
-                j = int(pm.parents[j])
+                j = parents[j]
             chain.reverse()
             iP = _inv(F_P)
             offset, terms = 0.0, []
             if not chain:
-                X_pre, jt, axis, X_post = iP @ F_L, JT_FIXED, np.array([1.0, 0.0, 0.0]), np.eye(4)
+                X_pre, jt, axis, X_post = iP @ F_L, JT_FIXED, _E["X"], _I4
             else:
-                X_pre, X_post = iP @ _se3(pm.jointPlacements[chain[0]]), F_L
+                X_pre, X_post = iP @ placements[chain[0]], F_L
                 jt = axis = None
                 for j in chain:
-                    t, a, off, tm = _joint_motion(pm, pdata, j, scene_k, wl)
-                    if jt is not None and (t != jt or not np.array_equal(a, axis)
-                                           or not _is_identity(_se3(pm.jointPlacements[j]))):
-                        raise DetectionError(f"{wl}: joints {[pm.names[c] for c in chain]} move it as a chain that is not "
+                    t, a, off, tm = _joint_motion(names[j], joints[j], pdata, j, scene_k, wl)
+                    if jt is not None and (t != jt or not np.array_equal(a, axis) or not _is_identity(placements[j])):
+                        raise DetectionError(f"{wl}: joints {[names[c] for c in chain]} move it as a chain that is not "
                                              "one motion (placements between them, or different axes or types)")
                     jt, axis = t, a
                     offset += off
