@@ -183,6 +183,66 @@ def test_a_copy_and_a_new_body_keep_the_kinematic_model():
     assert model_of(scene, geometry=False) is m
 
 
+_ODD_URDF = """<?xml version="1.0"?>
+<robot name="odd">
+  <link name="world"/>
+  <link name="base"><collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <joint name="mount" type="fixed"><parent link="world"/><child link="base"/><origin xyz="0.1 0.2 0.3" rpy="0.1 0.2 0.3"/></joint>
+  <link name="l1"><collision><geometry><sphere radius="0.05"/></geometry></collision></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.2" rpy="0.3 0 0"/>
+    <axis xyz="0.6 0 0.8"/><limit lower="-2" upper="2" effort="1" velocity="1"/></joint>
+  <link name="l2"><collision><geometry><sphere radius="0.05"/></geometry></collision></link>
+  <joint name="j2" type="continuous"><parent link="l1"/><child link="l2"/><origin xyz="0.3 0 0" rpy="0 0.4 0"/>
+    <axis xyz="0 0.6 -0.8"/><limit effort="1" velocity="1"/></joint>
+  <link name="l3"><collision><geometry><sphere radius="0.05"/></geometry></collision></link>
+  <joint name="j3" type="prismatic"><parent link="l2"/><child link="l3"/><origin xyz="0.1 0.1 0" rpy="0 0 0.5"/>
+    <axis xyz="0.48 0.6 0.64"/><limit lower="-0.2" upper="0.3" effort="1" velocity="1"/></joint>
+  <link name="l4"><collision><geometry><sphere radius="0.05"/></geometry></collision></link>
+  <joint name="j4" type="revolute"><parent link="l3"/><child link="l4"/><origin xyz="0 0.2 0" rpy="0 0 0"/>
+    <axis xyz="0 0 -1"/><limit lower="-3" upper="3" effort="1" velocity="1"/>
+    <mimic joint="j1" multiplier="2.0" offset="0.3"/></joint>
+  <link name="l5"><collision><geometry><sphere radius="0.05"/></geometry></collision></link>
+  <joint name="j5" type="fixed"><parent link="l4"/><child link="l5"/><origin xyz="0.05 0 0.1" rpy="0 0.2 0"/></joint>
+  <link name="l6"><collision><geometry><sphere radius="0.05"/></geometry></collision></link>
+  <joint name="j6" type="prismatic"><parent link="l5"/><child link="l6"/><origin xyz="0 0 0.1" rpy="0 0 0"/>
+    <axis xyz="0.6 0.8 0"/><limit lower="-0.1" upper="0.1" effort="1" velocity="1"/>
+    <mimic joint="j3" multiplier="-0.5" offset="0.02"/></joint>
+</robot>
+"""
+
+
+@pytest.fixture(scope="module")
+def odd_model(tmp_path_factory):
+    """Every one-DoF joint kind off the axes: revolute, continuous and prismatic about unaligned axes,
+    a revolute mimic about -z (multiplier 2, offset 0.3), a prismatic mimic (multiplier -0.5, offset
+    0.02), a fixed joint between them."""
+    path = tmp_path_factory.mktemp("odd") / "odd.urdf"
+    path.write_text(_ODD_URDF)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return load_model(path)
+
+
+def test_the_odd_model_holds_the_joint_kinds(odd_model):
+    pm = odd_model.pin_model
+    assert [pm.joints[j].shortname() for j in range(1, pm.njoints)] == [
+        "JointModelRevoluteUnaligned", "JointModelRevoluteUnboundedUnaligned", "JointModelPrismaticUnaligned",
+        "JointModelMimic", "JointModelMimic"]
+    assert [(pm.joints[j].extract().scaling, pm.joints[j].extract().offset) for j in (4, 5)] == [(2.0, 0.3), (-0.5, 0.02)]
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(u=_U)
+def test_unaligned_continuous_and_offset_mimic_joints(odd_model, u):
+    scene = odd_model.scene
+    rn = tuple(scene.robots)
+    tree, _, _ = pin_tree(odd_model, rn)
+    q = _q(scene, u)
+    X_pin = _pin_poses(odd_model, q)
+    assert np.max(np.abs(fk_kernel(tree, q[None])[0] - X_pin)) <= 1e-12
+    assert np.max(np.abs(fk_reference(combined_tree(scene, rn)[0], q[None])[0] - X_pin)) <= 1e-12
+
+
 # ---------------------------------------------------------------- what the engine cannot express
 def _fake(pm, links, n_q):
     robot = types.SimpleNamespace(link_names=tuple(links), joint_names=tuple(f"j{k}" for k in range(n_q)))

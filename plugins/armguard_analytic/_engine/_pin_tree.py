@@ -85,7 +85,14 @@ def _joint_motion(name: str, jm, pdata, j: int, scene_k: dict, where: str):
                                  "joint of the scene (a continuous joint's angle cannot be scaled)")
         terms = [(k[0], scaling)]
     elif short in _ALIGNED or short in _UNALIGNED:
-        jt, axis = _ALIGNED[short] if short in _ALIGNED else (_UNALIGNED[short], np.asarray(jm.extract().axis))
+        if short in _ALIGNED:
+            jt, axis = _ALIGNED[short]
+        else:  # the axis as the motion subspace holds it (RevoluteUnboundedUnaligned does not expose .axis)
+            S = np.asarray(pdata.joints[j].S, dtype=np.float64).ravel()
+            jt = _UNALIGNED[short]
+            axis, other = (S[3:], S[:3]) if jt == JT_REVOLUTE else (S[:3], S[3:])
+            if np.any(other):
+                raise DetectionError(f"{where}: joint {name!r} ({short}) has motion subspace {S.tolist()}, not a pure axis")
         k = scene_k.get(int(jm.idx_q))
         if k is None:
             raise DetectionError(f"{where}: joint {name!r} (pin q[{jm.idx_q}]) is no joint of the scene's flat q")
