@@ -31,7 +31,7 @@ from armguard.scene import Scene
 from armguard_analytic._engine import _model as engine_model
 from armguard_analytic._engine._pin_tree import pin_tree
 
-from _verify_fixtures import planar_arm, spatial_arm
+from _verify_fixtures import planar_arm
 
 MODELS = list(builtin_model_names()) + [k.name for k in known_models() if k.source != "built-in"]
 _AVAILABLE = {k.name: k.available for k in known_models()}

@@ -21,9 +21,14 @@ in its joint's frame),
 
 * same parent joint: ``X_pre = F_P^-1 F_L``, fixed;
 * the joints ``j_1 .. j_n`` between them (``j_1`` below ``P``'s joint): ``X_pre =
-  F_P^-1 jointPlacements[j_1]``, the motion of ``j_1 .. j_n`` as one, ``X_post = F_L``.  ``n > 1`` (a coupled joint written as a chain of mimic joints, as
-  :mod:`armguard.model.export` does) is one motion only when the lower joints' placements are the
-  identity and every joint moves about (along) the same axis: then the values add, as terms.
+  F_P^-1 jointPlacements[j_1]``, the motion of ``j_1 .. j_n`` as one, ``X_post = F_L``.
+  ``n > 1`` (a coupled joint written as a chain of mimic joints, as :mod:`armguard.model.export`
+  does) is one motion only when the lower joints' placements are the identity and every joint
+  moves about (along) the same axis: then the values add, as terms.
+
+Joint axes: the table above for the aligned kinds; the motion subspace ``S`` Pinocchio computes
+for the unaligned kinds and for a mimic (``S = scaling * S_own``: the axis is ``S / scaling``;
+its own joint model is not exposed to Python).
 
 Anything else (a multi-DoF joint, a chain that does not collapse, a link below another robot)
 raises :class:`armguard.DetectionError` naming the joint: the engine never approximates.
@@ -38,7 +43,7 @@ from armguard.kinematics._fk import JT_FIXED, JT_PRISMATIC, JT_REVOLUTE, FlatTre
 
 __all__ = ["pin_tree"]
 
-_E = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
+_E = {a: np.array(e) for a, e in (("X", (1.0, 0.0, 0.0)), ("Y", (0.0, 1.0, 0.0)), ("Z", (0.0, 0.0, 1.0)))}
 _ALIGNED = {**{f"JointModelR{a}": (JT_REVOLUTE, e) for a, e in _E.items()},
             **{f"JointModelRUB{a}": (JT_REVOLUTE, e) for a, e in _E.items()},
             **{f"JointModelP{a}": (JT_PRISMATIC, e) for a, e in _E.items()}}
@@ -48,13 +53,6 @@ _UNALIGNED = {"JointModelRevoluteUnaligned": JT_REVOLUTE, "JointModelRevoluteUnb
 
 def _se3(M) -> np.ndarray:
     return np.array(M.homogeneous, dtype=np.float64)
-
-
-def _inv(X: np.ndarray) -> np.ndarray:
-    Y = np.eye(4)
-    Y[:3, :3] = X[:3, :3].T
-    Y[:3, 3] = -X[:3, :3].T @ X[:3, 3]
-    return Y
 
 
 _I4 = np.eye(4)
@@ -87,6 +85,10 @@ def _joint_motion(name: str, jm, pdata, j: int, scene_k: dict, where: str):
     elif short in _ALIGNED or short in _UNALIGNED:
         if short in _ALIGNED:
             jt, axis = _ALIGNED[short]
+            k = scene_k.get(int(jm.idx_q))
+            if k is None:
+                raise DetectionError(f"{where}: joint {name!r} (pin q[{jm.idx_q}]) is no joint of the scene's flat q")
+            return jt, axis, 0.0, [(k[0], 1.0)]
         else:  # the axis as the motion subspace holds it (RevoluteUnboundedUnaligned does not expose .axis)
             S = np.asarray(pdata.joints[j].S, dtype=np.float64).ravel()
             jt = _UNALIGNED[short]
@@ -137,8 +139,8 @@ def pin_tree(model, robot_names) -> tuple[FlatTree, np.ndarray, np.ndarray]:
         links_of_all = {int(model.link_frames[f"{r}/{ln}"]) for r, rb in scene.robots.items() for ln in rb.link_names}
     except KeyError as exc:
         raise DetectionError(f"{where}: scene link {exc.args[0]!r} has no frame in pin_model (Model.link_frames)") from None
-    rows = {k: [] for k in ("parent", "X_pre", "axis", "jtype", "X_post", "has_post", "offset", "term_start", "term_joint",
-                            "term_coeff")}
+    rows = {k: [] for k in ("parent", "axis", "jtype", "offset", "term_start", "term_joint", "term_coeff")}
+    F, first = [], []  # F[i]: link i in its joint's frame; first[i]: the first joint below its parent (-1: none)
     rows["term_start"].append(0)
     link_off, joint_off = [], []
     nl = nj = 0
@@ -149,7 +151,7 @@ def pin_tree(model, robot_names) -> tuple[FlatTree, np.ndarray, np.ndarray]:
         fid = [int(model.link_frames[f"{r}/{ln}"]) for ln in robot.link_names]
         mine = {f: nl + i for i, f in enumerate(fid)}
         # each link in its BODY frame's joint frame: F = placement[f] X_FL
-        F = [_se3(frames[f].placement) @ model.link_placement(f"{r}/{ln}") for f, ln in zip(fid, robot.link_names)]
+        F += [_se3(frames[f].placement) @ model.link_placement(f"{r}/{ln}") for f, ln in zip(fid, robot.link_names)]
         for i, f in enumerate(fid):
             wl = f"{where}, link {r}/{robot.link_names[i]}"
             # the parent link: up Pinocchio's frame tree (BODY -> its joint frame -> the BODY above)
@@ -166,9 +168,7 @@ def pin_tree(model, robot_names) -> tuple[FlatTree, np.ndarray, np.ndarray]:
                     raise DetectionError(f"{wl}: its parent {frames[g].name!r} is a link of another robot")
             if p >= nl + i:
                 raise DetectionError(f"{wl}: its parent comes after it in the scene's link order")
-            F_P = _I4 if p < 0 else F[p - nl]
             j_P = 0 if p < 0 else int(frames[fid[p - nl]].parentJoint)
-            F_L = F[i]
             chain, j = [], int(frames[f].parentJoint)
             while j != j_P:
                 if j == 0:
@@ -176,12 +176,10 @@ def pin_tree(model, robot_names) -> tuple[FlatTree, np.ndarray, np.ndarray]:
                 chain.append(j)
                 j = parents[j]
             chain.reverse()
-            iP = _inv(F_P)
             offset, terms = 0.0, []
             if not chain:
-                X_pre, jt, axis, X_post = iP @ F_L, JT_FIXED, _E["X"], _I4
+                jt, axis = JT_FIXED, _E["X"]
             else:
-                X_pre, X_post = iP @ placements[chain[0]], F_L
                 jt = axis = None
                 for j in chain:
                     t, a, off, tm = _joint_motion(names[j], joints[j], pdata, j, scene_k, wl)
@@ -191,12 +189,10 @@ def pin_tree(model, robot_names) -> tuple[FlatTree, np.ndarray, np.ndarray]:
                     jt, axis = t, a
                     offset += off
                     terms += tm
+            first.append(chain[0] if chain else -1)
             rows["parent"].append(p)
-            rows["X_pre"].append(X_pre)
             rows["axis"].append(axis)
             rows["jtype"].append(jt)
-            rows["X_post"].append(X_post)
-            rows["has_post"].append(not _is_identity(X_post))
             rows["offset"].append(offset)
             rows["term_joint"] += [k for k, _ in terms]
             rows["term_coeff"] += [c for _, c in terms]
@@ -208,9 +204,23 @@ def pin_tree(model, robot_names) -> tuple[FlatTree, np.ndarray, np.ndarray]:
         return np.ascontiguousarray(np.asarray(rows[k], dtype=dt).reshape(shape))
 
     n = nl
-    tree = FlatTree(parent=arr("parent", (n,), np.int64), X_pre=arr("X_pre", (n, 4, 4), np.float64),
+    # the matrices, all links at once: F_P^-1 (identity for a root), then X_pre and X_post (module docstring)
+    F = np.asarray(F, dtype=np.float64).reshape(n, 4, 4)
+    parent = arr("parent", (n,), np.int64)
+    first = np.asarray(first, dtype=np.int64)
+    F_P = np.where((parent >= 0)[:, None, None], F[np.maximum(parent, 0)], _I4)
+    iP = np.zeros((n, 4, 4))
+    iP[:, :3, :3] = np.swapaxes(F_P[:, :3, :3], 1, 2)
+    iP[:, :3, 3] = -np.einsum("nji,nj->ni", F_P[:, :3, :3], F_P[:, :3, 3])
+    iP[:, 3, 3] = 1.0
+    moves = (first >= 0)[:, None, None]
+    J1 = np.asarray(placements, dtype=np.float64)[np.maximum(first, 0)] if n else np.zeros((0, 4, 4))
+    X_pre = iP @ np.where(moves, J1, F)
+    X_post = np.where(moves, F, _I4)
+    has_post = ~np.all(X_post == _I4, axis=(1, 2))
+    tree = FlatTree(parent=parent, X_pre=np.ascontiguousarray(X_pre),
                     axis=arr("axis", (n, 3), np.float64), jtype=arr("jtype", (n,), np.int64),
-                    X_post=arr("X_post", (n, 4, 4), np.float64), has_post=arr("has_post", (n,), np.bool_),
+                    X_post=np.ascontiguousarray(X_post), has_post=np.ascontiguousarray(has_post),
                     offset=arr("offset", (n,), np.float64), term_start=arr("term_start", (n + 1,), np.int64),
                     term_joint=arr("term_joint", (-1,), np.int64), term_coeff=arr("term_coeff", (-1,), np.float64))
     return tree, np.asarray(link_off, dtype=np.int64), np.asarray(joint_off, dtype=np.int64)
