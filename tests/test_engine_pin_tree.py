@@ -49,13 +49,21 @@ def _model(name):
 @functools.lru_cache(maxsize=None)
 def _coupled_scene() -> Scene:
     """A scene built in code: a DH arm (``X_post`` on every row) whose joint 5 is a two-term
-    coupling with an offset, and a planar arm mounted off the origin."""
+    coupling with an offset, a planar arm mounted off the origin, and a robot of JointSpecs (no DH
+    table, no URDF) with unaligned axes and an ``X_post``."""
     from test_detect_cylinder import cylinder_scene
 
     sc = cylinder_scene()
     X = np.eye(4)
     X[:3, 3] = [0.3, -0.2, 0.1]
     sc.add_robot(planar_arm("planar").with_base(X), self_pairs=[])
+    from armguard.kinematics import JointSpec, JointType, Robot, pose_from_xyz_rpy
+
+    specs = [JointSpec("turn", JointType.REVOLUTE, "base", "l1", pose_from_xyz_rpy([0.1, 0, 0.2], [0.3, 0, 0]),
+                       np.array([0.6, 0.0, 0.8]), lower=-2.0, upper=2.0, X_post=pose_from_xyz_rpy([0, 0.1, 0], [0, 0.2, 0])),
+             JointSpec("reach", JointType.PRISMATIC, "l1", "l2", pose_from_xyz_rpy([0.2, 0, 0], [0, 0, 0.5]),
+                       np.array([0.48, 0.6, 0.64]), lower=0.0, upper=0.3)]
+    sc.add_robot(Robot("specs", "base", specs, link_shapes={"l2": (Sphere([0.0, 0.0, 0.0], 0.05),)}), self_pairs=[])
     return sc
 
 

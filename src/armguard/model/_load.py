@@ -356,7 +356,7 @@ def model_from_scene(scene, *, file: str | None = None) -> Model:
 
     file = file or f"<scene {scene.name}>"
     with tempfile.TemporaryDirectory(prefix="armguard-model-") as tmp:
-        written = export_scene(scene, tmp, name=scene.name)
+        written = export_scene(scene, tmp, name=scene.name, sidecar=False)
         urdf = Path(written["urdf"])
         pin_model, geom, info = load_pinocchio(urdf)
         srdf_obj = read_srdf(written["srdf"]) if "srdf" in written else None
