@@ -80,6 +80,7 @@ from armguard.geometry import Box, Capsule, ConvexPolyhedron, Prism
 from armguard.geometry.kernels import GJK_WORK_SIZE
 from armguard.kinematics._fk import _fk_kernel
 
+from ._engine._model import engine_tree
 from ._paper_hermes import H_LINK_LINK, H_LINK_OBSTACLE, H_NONE, H_PAYLOAD_LINK, H_PAYLOAD_OBSTACLE, MODULES
 from ._paper_kernels import (  # noqa: F401  (M_*, ranger_segment_segment and the pair kernels are read from here)
     M_BOX, M_EXACT, M_EXACT_BOX, M_FACE_EDGE, M_SEGSEG, _face_edge, _hermes_hit, _paper_rows, ranger_segment_segment,
@@ -137,14 +138,13 @@ class PaperChecker(CheckerBase):
 
     # ---------------------------------------------------------------- compile
     def _build(self, verdicts: str) -> None:
-        from armguard.detect._common import combined_tree as _combined_tree
         from armguard.model import WORKSPACE
         from armguard.scene import compile_scene
 
         model, scene, tol = self.model, self.model.scene, self.tol
         cs = compile_scene(scene)
         robots = tuple(cs.robot_names)
-        tree, link_off, _ = _combined_tree(scene, robots)
+        tree, link_off, _ = engine_tree(scene, robots, model=model)  # from the Model's pin_model (_engine._pin_tree)
         G = cs.n_elements
         moving = cs.elem_kind != 0
         glink = np.where(moving, link_off[np.maximum(cs.elem_robot, 0)] + cs.elem_link, -1) if len(link_off) else \

@@ -4,8 +4,11 @@ Built on :func:`armguard.scene.compile_scene` (elements in their own frames, own
 their categories); this module adds what the detector needs on top of it:
 
 * one flattened kinematic tree over the links of *all* robots (global link index =
-  robot's offset + link index), so one FK call serves the scene
-  (:func:`armguard.detect._common.combined_tree`, shared with Ranger's bounds over any backend);
+  robot's offset + link index), so one FK call serves the scene, compiled from the scene's
+  Model (:func:`armguard.model.model_of` with ``geometry=False``: its Pinocchio joint tree,
+  placements and mimic couplings, :mod:`._pin_tree`); the Robots' own trees
+  (:func:`armguard.detect._common.combined_tree`) stay the framework's, for Ranger's bounds over
+  the other backends, and the slow reference the tests hold this tree to;
 * element frames as link numbers (-1 for static bodies), edge directions and face normals
   in the element frame, static elements' AABBs (a cylinder's exact one, see
   :func:`armguard.detect._common.cylinder_aabb`) and a :class:`BVH` over them;
@@ -21,13 +24,13 @@ import numpy as np
 
 from armguard._errors import DetectionError
 from armguard.detect._common import (CAT_ARM, CAT_ENVIRONMENT, CAT_PAYLOAD, CAT_WORKSPACE, CYLINDER as _CYLINDER,
-                                     SCENE_CATEGORY as _SCENE_CAT, combined_tree as _combined_tree,
-                                     cylinder_aabb as _cylinder_aabb)
+                                     SCENE_CATEGORY as _SCENE_CAT, cylinder_aabb as _cylinder_aabb)
 from armguard.detect._reach import chain_bounds
 
 from ._bvh import build_bvh
+from ._pin_tree import pin_tree
 
-__all__ = ["DetectModel", "build_model", "CAT_ARM", "CAT_ENVIRONMENT", "CAT_WORKSPACE", "CAT_PAYLOAD"]
+__all__ = ["DetectModel", "build_model", "engine_tree", "CAT_ARM", "CAT_ENVIRONMENT", "CAT_WORKSPACE", "CAT_PAYLOAD"]
 
 
 def _c(a, dtype=np.float64):
@@ -46,6 +49,23 @@ class DetectModel:
     """
 
 
+def engine_tree(scene, robot_names, *, model=None):
+    """``(tree, link_off, joint_off)``: the kinematic tree of the scene's Model (:mod:`._pin_tree`;
+    ``model`` when it moves the scene's robots, else ``model_of(scene, geometry=False)``),
+    compiled once per Model and robot set (a Model's kinematics do not change)."""
+    from armguard.model import model_of
+
+    if not robot_names:  # nothing moves: no Model needed
+        return pin_tree(None, ())
+    if model is None or not model.moves_robots_of(scene):
+        model = model_of(scene, geometry=False)
+    cache = model.__dict__.setdefault("_engine_trees", {})
+    key = tuple(robot_names)
+    if key not in cache:
+        cache[key] = pin_tree(model, key)
+    return cache[key]
+
+
 def build_model(scene, *, active: str | None, reach_margin: float, tol) -> DetectModel:
     """Compile ``scene`` for the detector (explicit, repeatable; the scene is unchanged)."""
     from armguard.scene import compile_scene
@@ -57,7 +77,7 @@ def build_model(scene, *, active: str | None, reach_margin: float, tol) -> Detec
     if active is not None and active not in robot_names:
         raise DetectionError(f"active: unknown robot {active!r}; robots are {list(robot_names)}")
     m.robot_names = robot_names
-    tree, link_off, joint_off = _combined_tree(scene, robot_names)
+    tree, link_off, joint_off = engine_tree(scene, robot_names)
     m.tree, m.link_off, m.joint_off = tree, link_off, joint_off
     m.link_names = tuple(f"{r}/{ln}" for r in robot_names for ln in scene.robots[r].link_names)
     m.link_robot = _c([i for i, r in enumerate(robot_names) for _ in scene.robots[r].link_names], np.int64)

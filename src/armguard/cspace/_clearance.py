@@ -201,7 +201,8 @@ def sub_model(model, scene):
                 break
             i += 1
     return Model(model.name, model.pin_model, model.collision_model, scene, q_index=model.q_index,
-                 circular=getattr(model, "_circular", ()), geometry_names=names, notes=model.notes, files=model.files)
+                 circular=getattr(model, "_circular", ()), geometry_names=names, notes=model.notes, files=model.files,
+                 link_frames=model.link_frames, link_placements={k: model.link_placement(k) for k in model.link_frames})
 
 
 def checker_over(model, scene, backend, options=None, *, need_distances: bool = False):

@@ -94,7 +94,12 @@ def cylinder_aabb(c: np.ndarray, R: np.ndarray, half: np.ndarray):
 
 
 def combined_tree(scene, robot_names):
-    """All robots' FlatTrees as one tree over global links (parents and joint terms shifted)."""
+    """All robots' FlatTrees as one tree over global links (parents and joint terms shifted).
+
+    Built from the Robots (``robot.flat_tree``): what Ranger's bounds over any backend
+    (:mod:`._bounds`) use.  The analytic backend's engine compiles the same layout from the
+    scene's Model instead (``armguard_analytic._engine._pin_tree``) and is tested against this.
+    """
     from ..kinematics._fk import FlatTree
 
     parts = {k: [] for k in ("parent", "X_pre", "axis", "jtype", "X_post", "has_post", "offset", "term_joint", "term_coeff")}

@@ -186,6 +186,14 @@ def _warn_stale(srdf_obj, pin_model, geom) -> None:
                       "`armguard srdf --update` rewrites them")
 
 
+def _link_frames(parts, pin_model) -> dict:
+    """Scene link ``"robot/link"`` -> its BODY frame in ``pin_model`` (from the converter's URDF link owners)."""
+    import pinocchio as pin
+
+    return {owner: int(pin_model.getFrameId(ln, pin.FrameType.BODY))
+            for ln, owner in parts.link_owner.items() if "/" in owner}
+
+
 def _q_index(parts) -> np.ndarray:
     return np.concatenate([qi for _, _, qi in parts.robots]) if parts.robots else np.zeros(0, np.int64)
 
@@ -208,6 +216,7 @@ def model_from_urdf(path, *, srdf=None, package_dirs=()) -> Model:
     scene, pin_model, geom, parts = _build(path, srdf_obj, package_dirs, {})
     files = [path, *parts_files(parts, srdf_obj)]
     return Model(scene.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), hull_cache=parts.hull_cache,
+                 link_frames=_link_frames(parts, pin_model),
                  geometry_names=parts.geometry_names,
                  notes=parts.notes, files=files, srdf=srdf_obj)
 
@@ -269,6 +278,7 @@ def model_from_scenefile(sf, file: str, base: Path, *, srdf=None) -> Model:
     _add_extra_bodies(scene, geom, geometry_names, {b for b, _, _ in parts.bodies})
     files = [Path(file), urdf, *parts_files(parts, srdf_obj), *ctx.read]
     return Model(sf.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), hull_cache=parts.hull_cache,
+                 link_frames=_link_frames(parts, pin_model),
                  geometry_names=geometry_names,
                  notes=parts.notes, files=files, srdf=srdf_obj)
 
@@ -312,10 +322,16 @@ def _model_from_plain_scene(sf, file: str, base: Path, ctx) -> Model:
     return model_from_scene(scene_from_dict_validated(sf, file, base), file=file)
 
 
-def model_of(scene) -> Model:
-    """The Model of ``scene``: the one it was loaded as (when unchanged since), else one built from it."""
+def model_of(scene, *, geometry: bool = True) -> Model:
+    """The Model of ``scene``: the one it was loaded as (when unchanged since), else one built from it.
+
+    Unchanged: the scene holds the robots the Model was built with (:meth:`Model.moves_robots_of`:
+    ``set_robot_base`` or ``add_robot`` make a new one) and, with ``geometry`` (the default), the
+    Model is this scene's and names every shape of it.  ``geometry=False`` asks only for the
+    kinematics (``pin_model``, ``q_index``, ``link_frames``): the Model of record also serves after
+    bodies, payloads or pairs changed, and a :meth:`Scene.copy` with the same robots."""
     m = getattr(scene, "_model_of_record", None)
-    if m is not None and m.scene is scene and _covers(m, scene):
+    if m is not None and m.moves_robots_of(scene) and (not geometry or (m.scene is scene and _covers(m, scene))):
         return m
     return model_from_scene(scene)
 
@@ -340,7 +356,7 @@ def model_from_scene(scene, *, file: str | None = None) -> Model:
 
     file = file or f"<scene {scene.name}>"
     with tempfile.TemporaryDirectory(prefix="armguard-model-") as tmp:
-        written = export_scene(scene, tmp, name=scene.name)
+        written = export_scene(scene, tmp, name=scene.name, sidecar=False)
         urdf = Path(written["urdf"])
         pin_model, geom, info = load_pinocchio(urdf)
         srdf_obj = read_srdf(written["srdf"]) if "srdf" in written else None
@@ -364,8 +380,20 @@ def model_from_scene(scene, *, file: str | None = None) -> Model:
     files = [Path(file)] if Path(file).is_file() else []
     if files:  # the meshes, URDFs and SRDFs the scene file named (not for a scene built in code)
         files += [p for p in getattr(scene, "_source_files", ()) if Path(p).is_file()]
+    all_frames, link_frames = _link_frames(parts, pin_model), {}
+    for owner in (f"{r}/{ln}" for r, robot in scene.robots.items() for ln in robot.link_names):
+        if owner not in all_frames:
+            raise SceneFileError(file, "", f"link {owner!r} did not survive the URDF export (a bug: please report)")
+        link_frames[owner] = all_frames[owner]  # not the export's zero-length links of a coupled joint's chain
+    placements = {}  # the export's URDF link is the joint frame: the scene link sits at its X_post in it
+    for r, robot in scene.robots.items():
+        for ln in robot.link_names:
+            spec = robot.joint_of_link(ln)
+            if spec is not None and spec.X_post is not None:
+                placements[f"{r}/{ln}"] = np.asarray(spec.X_post, dtype=np.float64)
     return Model(scene.name, pin_model, geom, scene, q_index=q_index, circular=_circular(parts), geometry_names=geometry_names,
-                 notes=parts.notes, files=files)
+                 notes=parts.notes, files=files, link_frames=link_frames,
+                 link_placements=placements)
 
 
 def _owner_shapes(scene, owner: str):

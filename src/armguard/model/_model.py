@@ -78,10 +78,12 @@ class Model:
     hull_cache : Mapping or None       where the mesh hulls came from: ``folder`` (the hull cache,
                                        None when off), ``hits`` (read from it), ``computed``; None
                                        when the model has no mesh
+    link_frames : Mapping[str, int]    scene link ``"robot/link"`` -> the ``pin_model`` BODY frame F it is
+                                       fixed to: its pose ``X_WL = oMf[F] @ link_placement(link)``
     """
 
     def __init__(self, name, pin_model, collision_model, scene, *, q_index, geometry_names, notes, files,
-                 circular=(), srdf=None, hull_cache=None) -> None:
+                 circular=(), srdf=None, hull_cache=None, link_frames=None, link_placements=None) -> None:
         self.name = str(name)
         self.pin_model = pin_model
         self.collision_model = collision_model
@@ -101,9 +103,27 @@ class Model:
         self._pairs = None
         self._revision = None
         self._geom_index = {go.name: i for i, go in enumerate(collision_model.geometryObjects)}
+        self.link_frames = types.MappingProxyType(dict(link_frames or {}))
+        self._link_placements = {k: np.array(v, dtype=np.float64) for k, v in (link_placements or {}).items()}
+        self._robots = tuple(scene.robots.items())  # the Robots pin_model moves (immutable objects)
         scene._model_of_record = self  # model_of(scene) finds it (the scene it built is this model's)
 
     tol = DEFAULT_TOLERANCES
+
+    def link_placement(self, link: str) -> np.ndarray:
+        """``X_FL`` (4, 4): scene link ``link``'s frame in its BODY frame ``link_frames[link]``: the
+        identity for a URDF's link; a DH link's ``X_post`` where the scene was written as URDF (the URDF
+        link is the joint frame there, :mod:`armguard.model.export`).  A fresh copy."""
+        X = self._link_placements.get(link)
+        return np.eye(4) if X is None else X.copy()
+
+    def moves_robots_of(self, scene) -> bool:
+        """Whether ``pin_model`` is the kinematics of ``scene``'s robots: the scene holds the very
+        Robot objects (same names, same order) this Model was built with.  ``set_robot_base``,
+        ``add_robot`` (or a copy's own robots) make it False; bodies, payloads and pairs do not."""
+        robots = scene.robots
+        return len(robots) == len(self._robots) and all(
+            a == n and r is self_r for (a, r), (n, self_r) in zip(robots.items(), self._robots))
 
     def check_limits(self, q_scene, where: str = "q") -> None:
         """Raise :class:`~armguard.JointLimitError` when the flat scene ``q`` ``(n,)`` leaves a joint's limits."""

@@ -591,6 +591,7 @@ class Scene:
         s._canned = dict(self._canned)
         s._robot_sources = dict(self._robot_sources)
         s._trajectory_specs = dict(self._trajectory_specs)
+        s.__dict__.update({k: v for k, v in self.__dict__.items() if k == "_model_of_record"})  # model_of(geometry=False)
         return s
 
     def __repr__(self) -> str:

@@ -426,13 +426,15 @@ def _srdf_text(name: str, scene, m: _Model, notes: dict) -> str:
 
 
 # ------------------------------------------------------------------ the source file's comments
-def export_scene(scene, out_dir, *, name: str | None = None, source=None) -> dict:
+def export_scene(scene, out_dir, *, name: str | None = None, source=None, sidecar: bool = True) -> dict:
     """Write ``scene`` as ``<name>.urdf``, ``<name>.srdf``, ``<name>.yaml`` and ``meshes/*.obj`` in ``out_dir``.
 
     ``name`` defaults to ``scene.name``; ``source`` is the scene file the scene was loaded from
     (optional): its comments are carried over and the sidecar keeps its workspace, trajectories
     and canned tests as written.  Returns ``{"urdf": Path, "srdf": Path, "yaml": Path,
-    "meshes": [Path, ...]}``.
+    "meshes": [Path, ...]}``.  ``sidecar=False``: no ``<name>.yaml`` (no ``"yaml"`` key): what
+    :func:`armguard.model.model_from_scene` needs, for any scene (the sidecar saves each robot's DH
+    table or URDF file, which a robot built from JointSpecs in code has not).
     """
     import yaml
 
@@ -444,7 +446,7 @@ def export_scene(scene, out_dir, *, name: str | None = None, source=None) -> dic
         header, notes, sections = source_notes(text)
         units = {"angle": "rad", "length": "m", **(yaml.safe_load(text).get("units") or {})}
         sections = {k: v for k, v in sections.items() if k in SIDECAR_SECTIONS}
-    else:
+    elif sidecar:
         sections = generated_sections(scene)
     model = _build(scene, notes)
     meshes: dict[str, str] = {}
@@ -455,13 +457,16 @@ def export_scene(scene, out_dir, *, name: str | None = None, source=None) -> dic
         f"{Path(source).name if source else name}; edit this file from now on.  Link frames are DH joint frames.")
     urdf = _urdf_text(name, model, urdf_header, meshes)
     srdf = _srdf_text(name, scene, model, notes)
-    sidecar = sidecar_text(name, scene, header, sections, units)
+    sidecar = sidecar_text(name, scene, header, sections, units) if sidecar else None
     (out / "meshes").mkdir(parents=True, exist_ok=True)
     paths = {"urdf": out / f"{name}.urdf", "srdf": out / f"{name}.srdf", "yaml": out / f"{name}.yaml", "meshes": []}
     from .._io import atomic_write
 
+    if sidecar is None:
+        del paths["yaml"]
     for key, text in (("urdf", urdf), ("srdf", srdf), ("yaml", sidecar)):
-        atomic_write(paths[key], text)  # each file whole or not at all
+        if text is not None:
+            atomic_write(paths[key], text)  # each file whole or not at all
     for cname, obj in meshes.items():
         p = out / "meshes" / f"{cname}.obj"
         atomic_write(p, obj)
