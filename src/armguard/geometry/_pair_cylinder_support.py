@@ -7,7 +7,7 @@ import math
 
 from numba import njit
 
-from ._pair_gjk import _support
+from ._pair_gjk import _inner_point, _support
 
 __all__ = ["CYL_W", "SUPPORT_WORK_SIZE", "SUPPORT_GAP", "support_point"]
 
@@ -68,20 +68,7 @@ def _centre(p, adj, cyl):  # pragma: no cover - compiled
     the mean of the six extreme vertices a vertex graph stores, or the points' centroid."""
     if cyl.shape[0] >= CYL_W:
         return cyl[0], cyl[1], cyl[2]
-    if adj.shape[0] > 0:
-        gx = gy = gz = 0.0
-        for k in range(6):
-            gx += p[adj[k], 0]
-            gy += p[adj[k], 1]
-            gz += p[adj[k], 2]
-        return gx / 6.0, gy / 6.0, gz / 6.0
-    gx = gy = gz = 0.0
-    for i in range(p.shape[0]):
-        gx += p[i, 0]
-        gy += p[i, 1]
-        gz += p[i, 2]
-    n = p.shape[0]
-    return gx / n, gy / n, gz / n
+    return _inner_point(p, adj)
 
 
 @njit(cache=True, inline="always")

@@ -34,17 +34,8 @@ from ._items import (  # noqa: F401  (re-exported: the scene's parts live in _it
     _check_shapes,
 )
 
-__all__ = [
-    "Scene",
-    "Body",
-    "Payload",
-    "SceneItem",
-    "WorkspaceBox",
-    "CheckPair",
-    "PairCategory",
-    "CannedTest",
-    "BODY_CATEGORIES",
-]
+__all__ = ["Scene", "Body", "Payload", "SceneItem", "WorkspaceBox", "CheckPair", "PairCategory", "CannedTest",
+           "BODY_CATEGORIES"]
 
 
 class Scene:
@@ -591,7 +582,7 @@ class Scene:
         s._canned = dict(self._canned)
         s._robot_sources = dict(self._robot_sources)
         s._trajectory_specs = dict(self._trajectory_specs)
-        s.__dict__.update({k: v for k, v in self.__dict__.items() if k == "_model_of_record"})  # model_of(geometry=False)
+        s._model_of_record = getattr(self, "_model_of_record", None)  # model_of(s, geometry=False) reuses its kinematics
         return s
 
     def __repr__(self) -> str:
