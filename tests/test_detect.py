@@ -247,6 +247,19 @@ def test_pair_distances_of_one_robot_are_rows_of_all_pairs():
         det.pair_distances(q, robot="no_such_arm")
 
 
+def _move_all(ids, H, MF, MI, SF):
+    from numba import njit
+
+    from armguard_analytic._engine._step import move_element
+
+    @njit
+    def run(ids, H, MF, MI, SF):
+        for g in ids:
+            move_element(g, H, MF, MI, SF)
+
+    run(ids, H, MF, MI, SF)
+
+
 @pytest.mark.parametrize("name", ["ranger", "hermes", "rover"], ids=["ranger", "hermes", "rover"])
 def test_fast_narrow_phase_matches_generic_pair_kernel(name):
     """The scalar / capsule-polytope dispatch of the kernel against the generic per-pair kernel (GJK + EPA / SAT)."""
@@ -260,7 +273,8 @@ def test_fast_narrow_phase_matches_generic_pair_kernel(name):
 
     out, work = np.zeros(9), np.zeros(EPA_WORK_SIZE)
     for q in _sample(scene, np.random.default_rng(11), 20):
-        res = det.pair_distances(q)  # leaves every element in W
+        res = det.pair_distances(q)  # leaves the link poses; polytope pairs are checked in their link frames
+        _move_all(m.mov_ids, det._H, det._MF, det._MI, det._SF)  # so every element is moved to W here
         for k, p in enumerate(res.pair_index):
             a, b = int(m.pair_a[p]), int(m.pair_b[p])
             if b < 0:
@@ -300,3 +314,20 @@ def test_batch_minimum_with_deep_penetration():
     fin = np.isfinite(fast.min_distance)
     assert np.array_equal(fin, np.isfinite(brute.min_distance))
     assert np.max(np.abs(fast.min_distance[fin] - brute.min_distance[fin])) <= 1e-9
+
+
+@pytest.mark.parametrize("backend", [None, "coal"])
+def test_detector_accepts_a_model(backend):
+    """``armguard.Detector(model)`` (the contract's ``scene_or_model``) is the Detector of the Model's
+    scene: same class, same distances per category (it failed on ``Model.robots`` before)."""
+    import armguard
+
+    model = armguard.load_model("panda")
+    a = armguard.Detector(model, threshold=0.05, backend=backend)
+    b = armguard.Detector(model.scene, threshold=0.05, backend=backend)
+    assert type(a) is type(b) and a.scene is model.scene
+    for q in model.random_q(5, 3):
+        qs = model.scene_q(q)
+        ra, rb = a.check(qs), b.check(qs)
+        assert ra.status == rb.status
+        assert {k: v.distance for k, v in ra.by_category.items()} == {k: v.distance for k, v in rb.by_category.items()}

@@ -14,7 +14,8 @@ import numpy as np
 
 from armguard._errors import DetectionError
 from armguard._tolerance import DEFAULT_TOLERANCES, Tolerances
-from armguard.detect._common import check_finite_margin, check_length as _check_length, require_pairs as _require_pairs
+from armguard.detect._common import (check_finite_margin, check_length as _check_length, require_pairs as _require_pairs,
+                                     scene_and_model)
 from armguard.detect._detector import Detector
 from armguard.detect._extras import attach_extra
 from armguard.detect._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, PairDistances, PairResult
@@ -26,6 +27,7 @@ from . import _kernel as kn
 from ._hulls import link_obbs, vertex_graphs
 from ._layout import EV_W, SUM_SIZE, Layout
 from ._model import CAT_WORKSPACE, build_model
+from ._narrow import WORK_TAIL
 from ._prep import _fk_blocks, _static_polytopes
 from ._raw import _UNHELD, _Raw, _refcount
 from ._scratch import _entry_point, _Scratch
@@ -69,7 +71,7 @@ class FusedDetector(Detector):
     def __init__(self, scene, threshold: float = 0.05, *, stopping_distance: float = 0.0, active: str | None = None,
                  tol: Tolerances = DEFAULT_TOLERANCES, reach_margin: float = math.inf, backend: str | None = None,
                  backend_options=None, terrain=None) -> None:
-        self.scene = scene
+        self.scene, _ = scene_and_model(scene)  # a Model: its scene (the Model is the scene's model of record)
         self._threshold = _check_length(threshold, "threshold")
         self._stopping = _check_length(stopping_distance, "stopping_distance")
         self._tol = tol
@@ -124,7 +126,7 @@ class FusedDetector(Detector):
         poly = _static_polytopes(cs, self._static_shapes)
         L.add("MF", "pv", poly["pv"]); L.add("MF", "ppl", poly["ppl"]); L.add("MF", "pbis", poly["pbis"])
         L.add("MF", "pcen", poly["pcen"])
-        for name in ("gadj", "gadjs", "gtri", "gtris"):
+        for name in ("gadj", "gadjs", "gtri", "gtris", "gdir", "gdirs"):
             L.add("MI", name, vg[name])
         rob_l, rob_j, parent_loc = _fk_blocks(t.parent, m.link_robot, [len(self.scene.robots[r].joint_names)
                                                                         for r in m.robot_names])
@@ -157,7 +159,7 @@ class FusedDetector(Detector):
         # room for EPA where a hull has a vertex graph, and for GJK + EPA on support functions
         # (armguard.geometry._pair_cylinder) where a cylinder is present
         has_cyl = bool(np.any(cs.elem_core == _CYLINDER))
-        n_work = max(EPA_WORK_SIZE if len(vg["gadj"]) else 64, SUPPORT_WORK_SIZE if has_cyl else 64)
+        n_work = max(EPA_WORK_SIZE if len(vg["gadj"]) else 64, SUPPORT_WORK_SIZE if has_cyl else 64) + WORK_TAIL
         for name, arr in (("Xs", np.zeros((t.n_links, 4, 4))), ("vW", vW0), ("boxW", boxW0), ("fnW", fnW0),
                           ("edW", edW0), ("sphW", sphW0), ("out9", np.zeros(9)), ("work", np.zeros(n_work)),
                           ("gap", np.zeros(stack_n)), ("ev", np.zeros((P, EV_W))),

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from armguard.geometry._pack import hull_graph
+from armguard.geometry._pack import hull_graph, support_table
 from armguard.geometry._pair_gjk import CLIMB_MIN_VERTICES
 
 __all__ = ["vertex_graphs", "link_obbs"]
@@ -18,7 +18,8 @@ _CYLINDER = 4  # armguard.geometry.CoreKind.CYLINDER
 
 
 def vertex_graphs(cs, fn_L: np.ndarray, ed_L: np.ndarray) -> dict:
-    """Vertex graphs and surface triangles of the polytope elements with at least
+    """Vertex graphs, surface triangles and support tables (``gdir``, ``gdirs``:
+    :func:`armguard.geometry._pack.support_table`) of the polytope elements with at least
     ``CLIMB_MIN_VERTICES`` core points (:func:`armguard.geometry._pack.hull_graph` of the element's
     points; indices local to the element, so they serve the moved points as well), each
     concatenated with CSR offsets ``(G + 1,)`` (an empty range: none, GJK and EPA scan the points).
@@ -26,7 +27,7 @@ def vertex_graphs(cs, fn_L: np.ndarray, ed_L: np.ndarray) -> dict:
     Those elements' face normals and edge directions are dropped from ``fn_L``, ``ed_L`` and their
     offsets (``pstart``, ``estart``): the convex kernel's SAT fallback takes their axes from the
     triangles and the graph, and the kernel then no longer moves thousands of normals per check."""
-    adj, tri, adjs, tris, fkeep, ekeep = [], [], [0], [0], [], []
+    adj, tri, adjs, tris, fkeep, ekeep, tab, tabs = [], [], [0], [0], [], [], [], [0]
     pstart, estart = [0], [0]
     for g in range(cs.n_elements):
         vs, ve = int(cs.elem_vert_start[g]), int(cs.elem_vert_start[g + 1])
@@ -37,6 +38,7 @@ def vertex_graphs(cs, fn_L: np.ndarray, ed_L: np.ndarray) -> dict:
             except Exception:  # noqa: BLE001 - a flat point set has no hull graph: scan it
                 a, t = np.zeros(0, np.int64), np.zeros((0, 3), np.int64)
         adj.append(a); tri.append(t); adjs.append(adjs[-1] + len(a)); tris.append(tris[-1] + len(t))
+        tab.append(support_table(cs.verts[vs:ve]) if len(a) else np.zeros(0, np.int64)); tabs.append(tabs[-1] + len(tab[-1]))
         f = np.arange(cs.elem_plane_start[g], cs.elem_plane_start[g + 1])
         e = np.arange(cs.elem_edge_start[g], cs.elem_edge_start[g + 1])
         if len(a):
@@ -47,6 +49,7 @@ def vertex_graphs(cs, fn_L: np.ndarray, ed_L: np.ndarray) -> dict:
     fk, ek = cat(fkeep, np.int64), cat(ekeep, np.int64)
     return {"gadj": cat(adj, np.int64), "gadjs": np.array(adjs, np.int64),
             "gtri": cat(tri, np.int64).reshape(-1, 3), "gtris": np.array(tris, np.int64),
+            "gdir": cat(tab, np.int64), "gdirs": np.array(tabs, np.int64),
             "fn_L": np.ascontiguousarray(fn_L.reshape(-1, 3)[fk]), "ed_L": np.ascontiguousarray(ed_L.reshape(-1, 3)[ek]),
             "pstart": np.array(pstart, np.int64), "estart": np.array(estart, np.int64)}
 

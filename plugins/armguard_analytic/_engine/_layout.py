@@ -42,8 +42,10 @@ SCALARS = ("n_q", "n_explicit", "n_mov", "n_st", "n_links", "stamp_now")
 # no graph, supports scan), model ints; "obb_L", model floats: the moving polytope elements'
 # oriented boxes in their link frames (the yes/no cull, see ._hulls.link_obbs); "qlim", model
 # floats ``(n_q, 2)``: each joint's [lower, upper] widened by Tolerances.joint_limit (a row outside
-# it is refused before any bound that assumes the limits is used)
-MI_LATE = ("gadj", "gadjs", "gtri", "gtris", "obb_L", "qlim")
+# it is refused before any bound that assumes the limits is used); "gdir", model ints, with CSR
+# offsets "gdirs": each graph element's support table (armguard.geometry._pack.support_table: where
+# a cold climb along a direction starts; ._narrow.narrow_rel)
+MI_LATE = ("gadj", "gadjs", "gtri", "gtris", "obb_L", "qlim", "gdir", "gdirs")
 
 _ALL = MF + MI + SFN + SIN
 K = {name: k for k, name in enumerate(_ALL)}

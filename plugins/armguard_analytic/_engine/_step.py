@@ -22,9 +22,9 @@ from numba import njit
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SUM_BEST, SUM_BSLOT
-from ._narrow import narrow_flat, narrow_other, wall_flat
+from ._narrow import LINK_FRAME, narrow_flat, narrow_other, narrow_rel, wall_flat
 
-__all__ = ["evaluate_pair", "move_element", "pair_step", "record_pair"]
+__all__ = ["evaluate_pair", "move_element", "move_pair", "pair_step", "record_pair"]
 
 _K_Xs, _K_glink, _K_vstart, _K_verts_L, _K_vW = K["Xs"], K["glink"], K["vstart"], K["verts_L"], K["vW"]
 _K_core, _K_box_L, _K_boxW, _K_pstart, _K_estart = K["core"], K["box_L"], K["boxW"], K["pstart"], K["estart"]
@@ -100,21 +100,34 @@ def evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp
     """Signed distance of pair ``(a, b)`` (``b < 0``: the workspace walls), witnesses in ``out9``.
 
     Moves ``a`` (and ``b`` when it is a link element) into W first unless this check already did
-    (``stamp[1 + g] == stamp_now``).  Returns ``(distance, 0)``, or ``(0, NOT_SCALAR)`` for a pair
+    (``stamp[1 + g] == stamp_now``), except for two polytope cores: those return ``(0, LINK_FRAME)``
+    unmoved (the caller calls :func:`._narrow.narrow_rel`).  Returns ``(distance, 0)``, or ``(0, NOT_SCALAR)`` for a pair
     that is neither workspace walls, capsule-capsule nor capsule-box (a cylinder side among
     them): the caller then calls
     :func:`._narrow.narrow_other` (not called from here: linking the convex kernels into a
     function compiled with ``_nrt=False`` makes LLVM crash as described above)."""
+    if b >= 0:
+        oc = H[2 * _K_core]
+        ka = MI[oc + a]
+        kb = MI[oc + b]
+        if ((ka == 2 or ka == 3) and (kb == 2 or kb == 3)) or (ka == 4 and kb == 3) or (ka == 3 and kb == 4):
+            return 0.0, LINK_FRAME  # polytope cores, or a cylinder and a hull: narrow_rel, in their own frames
+    move_pair(a, b, H, MF, MI, SF, SI, stamp_now)
+    if b < 0:
+        return wall_flat(a, H, MF, MI, SF), 0
+    return narrow_flat(a, b, H, MF, MI, SF, out9, eps_len, eps_par, offset)
+
+
+@njit(cache=True, _nrt=False)
+def move_pair(a, b, H, MF, MI, SF, SI, stamp_now):  # pragma: no cover - compiled
+    """Move ``a`` and (a link element) ``b`` into W unless this check already did (``stamp[1 + g]``)."""
     ost = H[2 * _K_stamp] + 1
     if SI[ost + a] != stamp_now:
         move_element(a, H, MF, MI, SF)
         SI[ost + a] = stamp_now
-    if b < 0:
-        return wall_flat(a, H, MF, MI, SF), 0
-    if MI[H[2 * _K_mov_idx] + b] >= 0 and SI[ost + b] != stamp_now:
+    if b >= 0 and MI[H[2 * _K_mov_idx] + b] >= 0 and SI[ost + b] != stamp_now:
         move_element(b, H, MF, MI, SF)
         SI[ost + b] = stamp_now
-    return narrow_flat(a, b, H, MF, MI, SF, out9, eps_len, eps_par, offset)
 
 
 @njit(cache=True)
@@ -127,6 +140,10 @@ def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
     Compiled with reference counting, as it links the convex kernels; the kernel passes it the
     buffers as meminfo-free views, so that costs no atomic operation."""
     d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp_now)
+    if err == LINK_FRAME:
+        d, err = narrow_rel(a, b, H, MF, MI, SF, out9, eps_len, gjk_eps, max_iter, level)
+        if err < 0:  # overlapping cores with a depth wanted (or GJK unsettled): EPA / SAT on W points
+            move_pair(a, b, H, MF, MI, SF, SI, stamp_now)
     if err < 0:
         d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, offset, level)
     if err == 0:

@@ -39,7 +39,7 @@ import numpy as np
 
 from .._errors import DetectionError
 from ._bounds import pair_bounds
-from ._common import check_finite_margin, check_length, status_code
+from ._common import check_finite_margin, check_length, scene_and_model, status_code
 from ._detector import Detector
 from ._extras import attach_extra
 from ._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, NotEvaluated, PairDistances, PairResult
@@ -133,6 +133,7 @@ class RangerDetector(Detector):
         from ..backends import Capability, checker
         from ..model import model_of
 
+        scene, model = scene_and_model(scene, model)
         self.scene = scene
         self._threshold = check_length(threshold, "threshold")
         self._stopping = check_length(stopping_distance, "stopping_distance")

@@ -34,7 +34,7 @@ from numba import njit
 
 __all__ = [
     "GJK_WORK_SIZE", "GJK_SEPARATED", "GJK_INTERSECTING", "GJK_NOT_CONVERGED", "ADJ_HEAD", "CLIMB_MIN_VERTICES",
-    "gjk_core", "gjk_dir", "gjk_dir_adj", "gjk_dir_adj2", "inner_difference",
+    "gjk_core", "gjk_dir", "gjk_dir_adj", "gjk_dir_adj2", "gjk_dir_rel", "inner_difference",
 ]
 
 GJK_WORK_SIZE = 64
@@ -269,11 +269,36 @@ def _scan(pb, dx, dy, dz):  # pragma: no cover - compiled
     return ib
 
 
+@njit(cache=True, inline="always")
+def _b_dir(rot, dx, dy, dz):  # pragma: no cover - compiled
+    """``R_AB^T d``: a direction in A's frame as B's points see it (``rot`` ``None``: ``d``)."""
+    if rot is None:
+        return dx, dy, dz
+    return (rot[0] * dx + rot[3] * dy + rot[6] * dz, rot[1] * dx + rot[4] * dy + rot[7] * dz,
+            rot[2] * dx + rot[5] * dy + rot[8] * dz)
+
+
+@njit(cache=True, inline="always")
+def _b_point(pb, rot, i):  # pragma: no cover - compiled
+    """``R_AB pb[i]``: B's point ``i`` in A's axes (``rot`` ``None``: as stored)."""
+    x = pb[i, 0]
+    y = pb[i, 1]
+    z = pb[i, 2]
+    if rot is None:
+        return x, y, z
+    return (rot[0] * x + rot[1] * y + rot[2] * z, rot[3] * x + rot[4] * y + rot[5] * z,
+            rot[6] * x + rot[7] * y + rot[8] * z)
+
+
 @njit(cache=True, _nrt=False)
-def _gjk(pa, adja, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep=math.inf):  # pragma: no cover
+def _gjk(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep=math.inf, sa=-1,
+         sb=-1):  # pragma: no cover
     """GJK from the initial direction ``d``; A's and B's supports by a scan (``adja`` / ``adj``
     ``None``, a branch numba prunes at compile time, or an empty graph) or by hill climbing on
-    their vertex graphs.  ``simp`` (``None``, or a float64 array of >= 9 entries) receives the
+    their vertex graphs.  ``rot`` (``None``: the identity, a branch pruned at compile time; else 9
+    floats, ``R_AB`` row-major) rotates B: B's points are ``R_AB p + o``, so A's and B's points may
+    stay in their own frames (A's frame is the one GJK works in; B's supports climb B's graph along
+    ``R_AB^T d`` and only the support points are mapped).  ``simp`` (``None``, or a float64 array of >= 9 entries) receives the
     final simplex when the origin ends inside a tetrahedron: ``simp[0] = 1`` then, ``simp[1:5]``
     A's and ``simp[5:9]`` B's support indices of its four vertices (else ``simp[0] = 0``); the
     penetration-depth kernel (``_pair_epa``) starts from it.
@@ -281,13 +306,19 @@ def _gjk(pa, adja, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, 
     ``sep`` (m; ``inf``: off): stop, ``GJK_SEPARATED``, as soon as a support plane proves the core
     distance above it (``v . w > sep |v|``: ``v . w / |v|`` is a lower bound on the distance); the
     distance returned is then ``|v|``, an upper bound, > ``sep``, not the distance (a yes/no caller
-    needs only the side of ``sep``; van den Bergen §4.3.5's separating-axis early out)."""
+    needs only the side of ``sep``; van den Bergen §4.3.5's separating-axis early out).
+
+    ``sa``, ``sb``: where A's and B's first climbs start (-1: the stored extreme vertex farthest along
+    the direction, ``_seed``; a caller with a :func:`armguard.geometry._pack.support_table` passes its
+    entry, :func:`table_start`)."""
     # the first vertex: supports along d
-    ia = _support(pa, adja, -1, -dx, -dy, -dz)
-    ib = _support(pb, adj, -1, dx, dy, dz)
-    x0 = pa[ia, 0] - pb[ib, 0] - ox
-    y0 = pa[ia, 1] - pb[ib, 1] - oy
-    z0 = pa[ia, 2] - pb[ib, 2] - oz
+    ia = _support(pa, adja, sa, -dx, -dy, -dz)
+    ex, ey, ez = _b_dir(rot, dx, dy, dz)
+    ib = _support(pb, adj, sb, ex, ey, ez)
+    qx, qy, qz = _b_point(pb, rot, ib)
+    x0 = pa[ia, 0] - qx - ox
+    y0 = pa[ia, 1] - qy - oy
+    z0 = pa[ia, 2] - qz - oz
     ia0 = ia
     ib0 = ib
     x1 = y1 = z1 = x2 = y2 = z2 = x3 = y3 = z3 = 0.0
@@ -308,10 +339,12 @@ def _gjk(pa, adja, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, 
             break
         # support of A along -v, of B along +v
         ia = _support(pa, adja, ia, -vx, -vy, -vz)  # warm: from the last support
-        ib = _support(pb, adj, ib, vx, vy, vz)
-        wx = pa[ia, 0] - pb[ib, 0] - ox
-        wy = pa[ia, 1] - pb[ib, 1] - oy
-        wz = pa[ia, 2] - pb[ib, 2] - oz
+        ex, ey, ez = _b_dir(rot, vx, vy, vz)
+        ib = _support(pb, adj, ib, ex, ey, ez)
+        qx, qy, qz = _b_point(pb, rot, ib)
+        wx = pa[ia, 0] - qx - ox
+        wy = pa[ia, 1] - qy - oy
+        wz = pa[ia, 2] - qz - oz
         vw = vx * wx + vy * wy + vz * wz
         if vv - vw <= gjk_eps * math.sqrt(vv):
             status = GJK_SEPARATED
@@ -389,9 +422,10 @@ def _gjk(pa, adja, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, 
         ax += lam * pa[i, 0]
         ay += lam * pa[i, 1]
         az += lam * pa[i, 2]
-        bx += lam * pb[j, 0]
-        by += lam * pb[j, 1]
-        bz += lam * pb[j, 2]
+        qx, qy, qz = _b_point(pb, rot, j)
+        bx += lam * qx
+        by += lam * qy
+        bz += lam * qz
     bx += ox
     by += oy
     bz += oz
@@ -415,7 +449,7 @@ def gjk_dir(pa, pb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter):  # prag
     from the indices and weights only when GJK stops.  Allocation-free.  B's supports scan its
     points.
     """
-    return _gjk(pa, None, pb, None, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, None)
+    return _gjk(pa, None, pb, None, None, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, None)
 
 
 @njit(cache=True)
@@ -424,7 +458,7 @@ def gjk_dir_adj(pa, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter)
     :func:`armguard.geometry._pack.polytope_adjacency`): B's supports climb the graph from the
     previous support (a few neighbours instead of every vertex).  Same answer as :func:`gjk_dir`
     up to ties between equally extreme vertices."""
-    return _gjk(pa, None, pb, adj, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, None)
+    return _gjk(pa, None, pb, adj, None, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, None)
 
 
 @njit(cache=True)
@@ -432,7 +466,55 @@ def gjk_dir_adj2(pa, adja, pb, adjb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, m
     """:func:`gjk_dir` climbing the vertex graphs of both A and B (either may be empty: a scan),
     writing the final simplex to ``simp``, stopping once the distance is proved above ``sep``
     (``inf``: never; see ``_gjk``)."""
-    return _gjk(pa, adja, pb, adjb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep)
+    return _gjk(pa, adja, pb, adjb, None, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep)
+
+
+@njit(cache=True)
+def gjk_dir_rel(pa, adja, taba, pb, adjb, tabb, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp,
+                sep):  # pragma: no cover
+    """:func:`gjk_dir_adj2` with B's points in a frame of their own: hull(pa) against
+    ``R_AB hull(pb) + o`` (``rot``: ``R_AB`` row-major, 9 floats), everything returned in A's frame.
+    A caller holding both hulls in their link frames passes ``X_AB = X_WA^-1 X_WB`` and moves no
+    vertex (only the support points GJK visits are rotated).  ``taba``, ``tabb``: each hull's
+    :func:`armguard.geometry._pack.support_table` (empty: start from the stored extremes)."""
+    ex, ey, ez = _b_dir(rot, dx, dy, dz)
+    sa = table_start(taba, -dx, -dy, -dz)
+    sb = table_start(tabb, ex, ey, ez)
+    return _gjk(pa, adja, pb, adjb, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep, sa, sb)
+
+
+@njit(cache=True, inline="always")
+def table_cell(dx, dy, dz, n):  # pragma: no cover - compiled
+    """The cube-map cell of direction ``d`` (see :func:`armguard.geometry._pack.support_table`), or -1
+    for the zero vector."""
+    x = abs(dx)
+    y = abs(dy)
+    z = abs(dz)
+    if x >= y and x >= z:
+        f = 0 if dx >= 0.0 else 1
+        m, u, v = x, dy, dz
+    elif y >= z:
+        f = 2 if dy >= 0.0 else 3
+        m, u, v = y, dx, dz
+    else:
+        f = 4 if dz >= 0.0 else 5
+        m, u, v = z, dx, dy
+    if not m > 0.0:
+        return -1
+    iu = min(max(int((u / m + 1.0) * 0.5 * n), 0), n - 1)
+    iv = min(max(int((v / m + 1.0) * 0.5 * n), 0), n - 1)
+    return (f * n + iu) * n + iv
+
+
+@njit(cache=True, inline="always")
+def table_start(tab, dx, dy, dz):  # pragma: no cover - compiled
+    """Where a cold climb along ``d`` starts: ``tab``'s entry for ``d`` (-1, the stored extremes,
+    when ``tab`` is empty or ``d`` zero).  ``tab`` has ``6 n n`` entries."""
+    if tab.shape[0] == 0:
+        return -1
+    n = int(math.sqrt(tab.shape[0] / 6.0) + 0.5)
+    k = table_cell(dx, dy, dz, n)
+    return tab[k] if k >= 0 else -1
 
 
 @njit(cache=True, inline="always")

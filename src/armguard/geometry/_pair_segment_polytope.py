@@ -260,7 +260,7 @@ def _capsule_polytope(
     p1y = seg[1, 1]
     p1z = seg[1, 2]
     status, d, ax, ay, az, bx, by, bz = _gjk(
-        seg, None, verts, adj, 0.0, 0.0, 0.0,
+        seg, None, verts, adj, None, 0.0, 0.0, 0.0,
         0.5 * (p0x + p1x) - cen[0], 0.5 * (p0y + p1y) - cen[1], 0.5 * (p0z + p1z) - cen[2],
         eps_len, gjk_eps, max_iter, None,
     )
@@ -278,7 +278,7 @@ def _capsule_polytope(
     # B moves along nhat = -q; the cores are then `offset` apart along q
     shift = depth + offset
     status2, _d2, ax, ay, az, bx, by, bz = _gjk(
-        seg, None, verts, adj, -shift * qx, -shift * qy, -shift * qz, qx, qy, qz, eps_len, gjk_eps, max_iter, None
+        seg, None, verts, adj, None, -shift * qx, -shift * qy, -shift * qz, qx, qy, qz, eps_len, gjk_eps, max_iter, None
     )
     if status2 == GJK_NOT_CONVERGED:
         return 0.0, status2
