@@ -91,7 +91,8 @@ def test_lazy_mode_keeps_status_and_within_threshold(scene):
         lazy = det.check(q, lazy=True)
         assert lazy.status is exact.status
         assert [r.distance for r in lazy.within_threshold] == [r.distance for r in exact.within_threshold]
-        assert lazy.n_evaluated <= exact.n_evaluated
+        # (no n_evaluated comparison: an exact check proves pairs beyond its cut-off with GJK's bound,
+        # counted as culled, where the lazy mode computes the distances of every pair it visits)
         for ne in lazy.not_evaluated:
             assert ne.lower_bound >= 0.1
 

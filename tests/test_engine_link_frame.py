@@ -151,3 +151,33 @@ def test_link_frame_pairs_equal_the_world_frame_kernel(name):
         ref = coal.pair_distances(q)
         assert ((ref.distance <= 0).any()) == ((res.distance <= 0).any())
     assert n_rel > 0  # the link-frame path was exercised
+
+
+@pytest.mark.parametrize("threshold", [0.0, 0.05, 0.3])
+def test_exact_checks_with_gjk_cut_offs_match_the_brute_force_reference(threshold):
+    """The exact mode stops GJK on a link-frame pair once it is proved beyond the category's cut-off
+    (``_step.pair_step``'s ``beyond``): the per-category nearest distances and the pairs within the
+    threshold still equal the brute-force reference's (the built-in panda: mesh hulls and boxes,
+    with an obstacle box added so every category has pairs)."""
+    from armguard.detect import CATEGORIES, Detector, Status, check_reference
+
+    STATUS_OF_CODE = {0: Status.CLEAR, 1: Status.WARNING, 2: Status.COLLISION}
+    from armguard.geometry import Box
+    from armguard.scene import load_scene
+
+    scene = load_scene("panda")
+    scene.add_body("crate", [Box([0.55, 0.0, 0.35], [0.12, 0.2, 0.1])])
+    det = Detector(scene, threshold=threshold)
+    robot = next(iter(scene.robots.values()))
+    rng = np.random.default_rng(8)
+    lo, hi = robot.lower, robot.upper
+    for q in rng.uniform(lo, hi, size=(30, len(lo))):
+        rep = det.check(q)
+        ref = check_reference(scene, q, threshold)
+        got = np.array([rep.by_category[c].distance if c in rep.by_category else np.inf for c in CATEGORIES])
+        assert np.array_equal(np.isfinite(got), np.isfinite(ref.min_distance))
+        fin = np.isfinite(got)
+        assert np.allclose(got[fin], ref.min_distance[fin], atol=1e-9)
+        all_d = det.pair_distances(q).distance
+        assert len(rep.within_threshold) == int(np.sum(all_d <= threshold))
+        assert STATUS_OF_CODE[ref.status] is rep.status

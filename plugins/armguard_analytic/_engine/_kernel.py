@@ -37,6 +37,7 @@ from armguard.kinematics._fk import _fk_kernel
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SC, at, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, SUM_STATUS, seg1, seg2, seg3
 from ._cull import _argsort_heap, _bb_gap, _obb_gap, _sb_gap, obb_apart_moving, obb_apart_static
+from ._narrow import BOUNDED
 from ._step import move_element, pair_step
 
 MODE_EXACT, MODE_LAZY, MODE_ANYTIME, MODE_YESNO, MODE_ALL, MODE_MIN = 0, 1, 2, 3, 4, 5
@@ -312,7 +313,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                 a = pair_a[p]
                 b = pair_b[p]
                 d, err = pair_step(p, a, b, flag_no, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
-                                   n_eval, stamp_now)
+                                   math.inf, n_eval, stamp_now)
                 if err != 0:
                     break
                 n_eval += 1
@@ -357,7 +358,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                 a = pair_a[p]
                 b = pair_b[p]
                 d, err = pair_step(p, a, b, flag_yes, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
-                                   n_eval, stamp_now)
+                                   math.inf, n_eval, stamp_now)
                 if err != 0:
                     break
                 n_eval += 1
@@ -373,7 +374,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                     a = pair_a[p]
                     b = pair_b[p]
                     d, err = pair_step(p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
-                                       n_eval, stamp_now)
+                                       math.inf, n_eval, stamp_now)
                     if err != 0:
                         break
                     n_eval += 1
@@ -411,7 +412,10 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                                      o_Xs + 16 * glink[b], SF, max(cut, 0.0), eps_par)):
                             continue  # boxes containing both, one grown by the cut-off, apart: d > cut
                         d, err = pair_step(p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
-                                           n_eval, stamp_now)
+                                           cut if by_best else math.inf, n_eval, stamp_now)
+                        if err == BOUNDED:
+                            err = 0
+                            continue
                         if err != 0:
                             break
                         n_eval += 1
@@ -503,7 +507,10 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                                              max(cutp, 0.0), eps_par)):
                                     continue  # a's box grown by the cut-off misses the obstacle box: d > cut
                                 d, err = pair_step(p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
-                                                   n_eval, stamp_now)
+                                                   cutp if by_best else math.inf, n_eval, stamp_now)
+                                if err == BOUNDED:
+                                    err = 0
+                                    continue
                                 if err != 0:
                                     break
                                 n_eval += 1

@@ -36,7 +36,7 @@ from armguard.geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_ca
 from ._layout import K, seg1, seg2
 
 __all__ = ["pair_distance", "narrow_flat", "narrow_other", "narrow_rel", "wall_flat", "ERR_GJK", "NOT_SCALAR",
-           "LINK_FRAME", "WORK_TAIL"]
+           "LINK_FRAME", "BOUNDED", "WORK_TAIL"]
 
 _K_core, _K_vstart, _K_radius, _K_vW, _K_boxW = K["core"], K["vstart"], K["radius"], K["vW"], K["boxW"]
 _K_poly_of, _K_seg, _K_pv, _K_ppl, _K_ped = K["poly_of"], K["seg"], K["pv"], K["ppl"], K["ped"]
@@ -50,6 +50,7 @@ _K_verts_L, _K_Xs, _K_glink, _K_gdir, _K_gdirs = K["verts_L"], K["Xs"], K["glink
 ERR_GJK = 2  # the convex kernel did not converge: the caller raises, never a verdict
 NOT_SCALAR = -1  # narrow_flat: not a capsule-capsule / capsule-box pair, call narrow_other
 LINK_FRAME = -2  # polytope cores (boxes, hulls), or one and a cylinder: narrow_rel in their own frames, none moved
+BOUNDED = -3  # _step.pair_step: the pair is proved beyond the caller's cut-off (no row)
 WORK_TAIL = 24  # the last floats of the "work" scratch: narrow_rel's X_AB and a cylinder's buffer in a hull's frame
 
 _POINT, _SEGMENT, _BOX, _CYLINDER = 0, 1, 2, 4  # armguard.geometry.CoreKind
@@ -319,7 +320,7 @@ def _cylinder_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level)
 
 
 @njit(cache=True)
-def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level):  # pragma: no cover - compiled
+def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, beyond):  # pragma: no cover - compiled
     """Two polytope cores (boxes, hulls) whose points stay in their element frames: GJK in A's frame
     on hull(A) and ``X_AB hull(B)``, ``X_AB = X_WA^-1 X_WB`` (:func:`armguard.geometry._pair_gjk.gjk_dir_rel`),
     supports climbing each hull's vertex graph (cold climbs from its support table); only the support
@@ -330,7 +331,9 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level):  
     ``gjk_eps`` like the W path's), or when they overlap and ``level`` is at least ``-(ra + rb)`` (as
     :func:`armguard.geometry._pair_epa.convex_convex_fast`: an upper bound without a depth); else
     ``(0, NOT_SCALAR)``: the caller moves both elements and calls :func:`narrow_other` (EPA and the
-    exhaustive SAT work on W points).  ``level`` as in :func:`narrow_other`.  A cylinder against a
+    exhaustive SAT work on W points).  ``level`` as in :func:`narrow_other`; ``beyond`` (m, ``inf``:
+    off): GJK may stop once the distance is proved above it, returning an upper bound > ``beyond``
+    (not a distance: ``_step.pair_step`` keeps no row of it).  A cylinder against a
     polytope: :func:`_cylinder_rel` (the whole pair in the polytope's frame, depth included)."""
     oc = H[2 * _K_core]
     if MI[oc + ga] == _CYLINDER or MI[oc + gb] == _CYLINDER:
@@ -362,7 +365,8 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level):  
     sx = rot[0] * hx + rot[1] * hy + rot[2] * hz + tx
     sy = rot[3] * hx + rot[4] * hy + rot[5] * hz + ty
     sz = rot[6] * hx + rot[7] * hy + rot[8] * hz + tz
-    sep = level + (ra + rb) if level > -math.inf else math.inf
+    lim = level if beyond == math.inf else max(level, beyond)
+    sep = lim + (ra + rb) if lim > -math.inf else math.inf
     status, d, ax, ay, az, bx, by, bz = gjk_dir_rel(pa, adja, taba, pb, adjb, tabb, rot, tx, ty, tz, gx - sx, gy - sy, gz - sz,
                                                     eps_len, gjk_eps, max_iter, simp, max(sep, 0.0))
     inside = status != GJK_SEPARATED and status != GJK_NOT_CONVERGED and simp[0] == 1.0

@@ -22,7 +22,7 @@ from numba import njit
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SUM_BEST, SUM_BSLOT
-from ._narrow import LINK_FRAME, narrow_flat, narrow_other, narrow_rel, wall_flat
+from ._narrow import BOUNDED, LINK_FRAME, narrow_flat, narrow_other, narrow_rel, wall_flat
 
 __all__ = ["evaluate_pair", "move_element", "move_pair", "pair_step", "record_pair"]
 
@@ -131,17 +131,25 @@ def move_pair(a, b, H, MF, MI, SF, SI, stamp_now):  # pragma: no cover - compile
 
 
 @njit(cache=True)
-def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, offset, level, n_eval,
+def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, offset, level, beyond, n_eval,
               stamp_now):  # pragma: no cover - compiled
     """One pair of the kernel: :func:`evaluate_pair`, :func:`._narrow.narrow_other` for the pairs it
     leaves, then (no error) :func:`record_pair` as row ``n_eval`` and, when ``flag``, the pair's
     report flag 1 (evaluated).  ``level`` as in ``narrow_other``.  Returns ``(distance, error)``.
 
+    ``beyond`` (m; ``inf``: off): the caller's cut-off (the exact and min modes: a category's best so
+    far, or the threshold).  A pair checked in its link frames (:func:`._narrow.narrow_rel`) whose GJK
+    proves it farther than that stops there and returns ``(upper bound, BOUNDED)`` without a row:
+    like a pair its bounding volumes cull, it can be neither its category's nearest nor within the
+    threshold, and its bound is kept nowhere (the anytime state would read it as a distance).
+
     Compiled with reference counting, as it links the convex kernels; the kernel passes it the
     buffers as meminfo-free views, so that costs no atomic operation."""
     d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp_now)
     if err == LINK_FRAME:
-        d, err = narrow_rel(a, b, H, MF, MI, SF, out9, eps_len, gjk_eps, max_iter, level)
+        d, err = narrow_rel(a, b, H, MF, MI, SF, out9, eps_len, gjk_eps, max_iter, level, beyond)
+        if err == 0 and d > beyond:
+            return d, BOUNDED  # proved beyond the caller's cut-off: not a row of this check
         if err < 0:  # overlapping cores with a depth wanted (or GJK unsettled): EPA / SAT on W points
             move_pair(a, b, H, MF, MI, SF, SI, stamp_now)
     if err < 0:
