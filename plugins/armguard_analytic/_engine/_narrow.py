@@ -268,7 +268,7 @@ def _cylinder_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level)
     """:func:`narrow_rel` for a cylinder against a polytope core: the cylinder's 15-float buffer is
     mapped into the polytope's element frame F (``X_FC = X_WF^-1 X_WL X_LC``), GJK and EPA on support
     functions run there (:func:`armguard.geometry._pair_cylinder.support_pair_graph`, the polytope's
-    points as stored), and ``out`` is mapped back to W.  Same outputs and errors as :func:`pair_distance`."""
+    points as stored, its first climb from its support table), and ``out`` is mapped back to W.  Same outputs and errors as :func:`pair_distance`."""
     cyl_a = MI[H[2 * _K_core] + ga] == _CYLINDER
     h = gb if cyl_a else ga
     c = ga if cyl_a else gb
@@ -302,15 +302,17 @@ def _cylinder_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level)
     pc = vL[MI[ovs + c]:MI[ovs + c + 1]]  # the cylinder's own points: not read (its buffer is its core)
     gh = gadj[MI[ogs + h]:MI[ogs + h + 1]]
     gc = gadj[0:0]
+    ots = H[2 * _K_gdirs]
+    th = seg1(MI, H, _K_gdir)[MI[ots + h]:MI[ots + h + 1]]
     none = cyl[0:0]
     ra = MF[H[2 * _K_radius] + ga]
     rb = MF[H[2 * _K_radius] + gb]
     if cyl_a:
         d, status = support_pair_graph(pc, gc, cyl, ra, ph, gh, none, rb, out, work[0:nw], eps_len, gjk_eps, max_iter,
-                                       level)
+                                       level, None, th)
     else:
         d, status = support_pair_graph(ph, gh, none, ra, pc, gc, cyl, rb, out, work[0:nw], eps_len, gjk_eps, max_iter,
-                                       level)
+                                       level, th, None)
     if status == GJK_NOT_CONVERGED:
         return d, ERR_GJK
     out[0], out[1], out[2] = _to_world(SF, oF, out[0], out[1], out[2], 1.0)

@@ -45,7 +45,7 @@ from ._pair_cylinder_epa import _complete, epa_support
 from ._pair_cylinder_support import (  # noqa: F401  (CYL_W, support_point: part of this module's interface)
     _L0, _S0, _VIS, _WA, _WB, CYL_W, SUPPORT_GAP, SUPPORT_WORK_SIZE, _centre, _pair_support, _put, support_point,
 )
-from ._pair_gjk import GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _closest_simplex
+from ._pair_gjk import GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _closest_simplex, table_start
 from ._pair_segment_segment import write_rounded
 
 __all__ = ["CYL_W", "SUPPORT_WORK_SIZE", "SUPPORT_GAP", "support_point", "gjk_support", "epa_support",
@@ -53,15 +53,17 @@ __all__ = ["CYL_W", "SUPPORT_WORK_SIZE", "SUPPORT_GAP", "support_point", "gjk_su
 
 
 @njit(cache=True)
-def gjk_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, work):  # pragma: no cover - compiled
+def gjk_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, work, sa=-1, sb=-1):  # pragma: no cover
     """GJK on the cores ``(pa, ca)`` and ``(pb, cb)`` from the initial direction ``d`` (B to A).
 
     Returns ``(status, dist, n, ax, ay, az, bx, by, bz)``: the core distance, the number of simplex
     vertices left in ``work`` (4: the origin is inside their tetrahedron) and the witnesses on the
-    cores.  ``status`` as ``_pair_gjk``."""
+    cores.  ``status`` as ``_pair_gjk``.  ``sa``, ``sb``: where the point cores' first climbs start
+    (-1: from their stored extremes; a caller with a support table passes its entries, see
+    ``_pair_gjk.table_start``)."""
     eps2 = eps_len * eps_len
-    work[_WA] = -1.0  # the point cores' climbs start cold (from their stored extremes)
-    work[_WB] = -1.0
+    work[_WA] = float(sa)  # the point cores' first climbs (-1: cold, from their stored extremes)
+    work[_WB] = float(sb)
     ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, -dx, -dy, -dz, work)
     _put(work, _S0, ax, ay, az, bx, by, bz)
     work[_L0] = 1.0
@@ -164,7 +166,8 @@ def support_pair(pa, ca, ra, pb, cb, rb, out, work, eps_len, gjk_eps, max_iter, 
 
 
 @njit(cache=True)
-def support_pair_graph(pa, ga, ca, ra, pb, gb, cb, rb, out, work, eps_len, gjk_eps, max_iter, level):  # pragma: no cover
+def support_pair_graph(pa, ga, ca, ra, pb, gb, cb, rb, out, work, eps_len, gjk_eps, max_iter, level, ta=None,
+                       tb=None):  # pragma: no cover
     """Signed distance (m) of the sphere-swept cores ``(pa, ca, ra)`` (A) and ``(pb, cb, rb)`` (B)
     (see the module docstring); writes ``out[0:9] = [p_WA, p_WB, nhat_AB_W]``.  Returns
     ``(distance, status)``, ``status`` as ``_pair_gjk`` (``GJK_NOT_CONVERGED``: the caller raises).
@@ -179,11 +182,17 @@ def support_pair_graph(pa, ga, ca, ra, pb, gb, cb, rb, out, work, eps_len, gjk_e
     bound on the signed distance, not the depth.
 
     ``ga``, ``gb``: the vertex graphs of the point cores (``_pack.hull_graph`` format, indices into
-    ``pa`` / ``pb``; empty: the points are scanned); a cylinder side ignores its own."""
+    ``pa`` / ``pb``; empty: the points are scanned); a cylinder side ignores its own.  ``ta``, ``tb``
+    (None, or a point core's ``_pack.support_table``): where its first climb starts."""
     gx, gy, gz = _centre(pa, ga, ca)
     hx, hy, hz = _centre(pb, gb, cb)
+    sa = sb = -1
+    if ta is not None:  # the first supports: A's along -d, B's along +d (d from B's centre to A's)
+        sa = table_start(ta, hx - gx, hy - gy, hz - gz)
+    if tb is not None:
+        sb = table_start(tb, gx - hx, gy - hy, gz - hz)
     status, d, n, ax, ay, az, bx, by, bz = gjk_support(pa, ga, ca, pb, gb, cb, gx - hx, gy - hy, gz - hz, eps_len, gjk_eps,
-                                                       max_iter, work)
+                                                       max_iter, work, sa, sb)
     if status == GJK_NOT_CONVERGED:
         return 0.0, status
     if status == GJK_SEPARATED and d > 0.0:
