@@ -110,8 +110,11 @@ def evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp
         oc = H[2 * _K_core]
         ka = MI[oc + a]
         kb = MI[oc + b]
-        if ((ka == 2 or ka == 3) and (kb == 2 or kb == 3)) or (ka == 4 and kb == 3) or (ka == 3 and kb == 4):
-            return 0.0, LINK_FRAME  # polytope cores, or a cylinder and a hull: narrow_rel, in their own frames
+        if (((ka == 2 or ka == 3) and (kb == 2 or kb == 3)) or (ka == 4 and kb == 3) or (ka == 3 and kb == 4)
+                or (ka == 3 and kb <= 1) or (ka <= 1 and kb == 3 and MI[H[2 * _K_mov_idx] + b] >= 0)):
+            # polytope cores, a cylinder and a polytope, a point or segment and a moving polytope (one
+            # against a static polytope has the capsule-polytope kernel): narrow_rel, in their own frames
+            return 0.0, LINK_FRAME
     move_pair(a, b, H, MF, MI, SF, SI, stamp_now)
     if b < 0:
         return wall_flat(a, H, MF, MI, SF), 0
