@@ -52,7 +52,7 @@ import numpy as np
 from ..geometry import Box, Capsule, ConvexPolyhedron, CoreKind, Cylinder, Polygon, Prism, Sphere
 from ._scene import PairCategory, Scene
 
-__all__ = ["CompiledScene", "compile_scene", "PAIR_CATEGORIES", "OWNER_BODY", "OWNER_LINK", "OWNER_PAYLOAD"]
+__all__ = ["CompiledScene", "compile_scene", "compile_owners", "scene_robots", "PAIR_CATEGORIES", "OWNER_BODY", "OWNER_LINK", "OWNER_PAYLOAD"]
 
 OWNER_BODY, OWNER_LINK, OWNER_PAYLOAD = 0, 1, 2
 PAIR_CATEGORIES: tuple[PairCategory, ...] = tuple(PairCategory)
@@ -174,9 +174,6 @@ def compile_scene(scene: Scene) -> CompiledScene:
     """Flatten ``scene`` into a :class:`CompiledScene` (explicit, repeatable; the scene is unchanged)."""
     robot_names = tuple(scene.robots)
     rid = {r: i for i, r in enumerate(robot_names)}
-    joint_start = [0]
-    for r in robot_names:
-        joint_start.append(joint_start[-1] + len(scene.robots[r].joint_names))
     # owners and their shapes in the element frame
     owners: list[tuple[str, int, int, int, int, tuple]] = []  # name, kind, robot, link, category, shapes
     for b in scene.bodies.values():
@@ -192,7 +189,33 @@ def compile_scene(scene: Scene) -> CompiledScene:
         shapes = tuple(s.transformed(p.X_LP) for s in p.shapes)
         owners.append((p.name, OWNER_PAYLOAD, rid[p.robot], robot.link_index(p.link), -1, shapes))
     oid = {o[0]: i for i, o in enumerate(owners)}
+    cat_code = {c: i for i, c in enumerate(PAIR_CATEGORIES)}
+    pairs = []
+    for p in scene.allowed_pairs():
+        a, b = oid[p.a], oid[p.b]
+        pairs.append((a, b, cat_code[p.category], [(i, j) for i in range(len(owners[a][5])) for j in range(len(owners[b][5]))]))
+    return compile_owners(scene_robots(scene), owners, pairs, scene.workspace)
 
+
+def scene_robots(scene: Scene) -> tuple:
+    """``(robot_names, joint_start, n_links)`` of ``scene``'s robots, as :func:`compile_owners` takes them."""
+    robot_names = tuple(scene.robots)
+    joint_start = [0]
+    for r in robot_names:
+        joint_start.append(joint_start[-1] + len(scene.robots[r].joint_names))
+    return robot_names, joint_start, [len(scene.robots[r].link_names) for r in robot_names]
+
+
+def compile_owners(robots: tuple, owners: list, pairs: list, workspace) -> CompiledScene:
+    """The :class:`CompiledScene` of owners and pairs given as lists (the layout's one definition,
+    shared by :func:`compile_scene` and the analytic engine's ``compile_model``).
+
+    ``robots``: ``(robot_names, joint_start, n_links)`` (:func:`scene_robots`); ``owners``: one
+    ``(name, kind, robot, link, category, shapes)`` per owner, shapes in the element frame (W for
+    bodies, the link frame for links and payloads); ``pairs``: one ``(owner a, owner b, category
+    code, [(shape i of a, shape j of b), ...])`` per owner pair; ``workspace``: a
+    :class:`~armguard.scene.WorkspaceBox` or None."""
+    robot_names, joint_start, n_links = robots
     owner_elem_start = [0]
     e_owner, e_kind, e_robot, e_link, e_core, e_rad, e_sphere = [], [], [], [], [], [], []
     vstart, verts = [0], []
@@ -236,18 +259,15 @@ def compile_scene(scene: Scene) -> CompiledScene:
             estart.append(len(edges))
         owner_elem_start.append(len(e_owner))
 
-    pairs = scene.allowed_pairs()
-    cat_code = {c: i for i, c in enumerate(PAIR_CATEGORIES)}
     pa, pb, pc, pestart, epa, epb = [], [], [], [0], [], []
-    for p in pairs:
-        a, b = oid[p.a], oid[p.b]
-        pa.append(a), pb.append(b), pc.append(cat_code[p.category])
-        for i in range(owner_elem_start[a], owner_elem_start[a + 1]):
-            for j in range(owner_elem_start[b], owner_elem_start[b + 1]):
-                epa.append(i), epb.append(j)
+    for a, b, c, shape_pairs in pairs:
+        pa.append(a), pb.append(b), pc.append(c)
+        ea, eb = owner_elem_start[a], owner_elem_start[b]
+        for i, j in shape_pairs:
+            epa.append(ea + i), epb.append(eb + j)
         pestart.append(len(epa))
 
-    ws = scene.workspace
+    ws = workspace
     i64, f64 = np.int64, np.float64
     return CompiledScene(
         owner_names=tuple(o[0] for o in owners),
@@ -256,9 +276,9 @@ def compile_scene(scene: Scene) -> CompiledScene:
         owner_link=_ro([o[3] for o in owners], i64),
         owner_category=_ro([o[4] if o[1] == OWNER_BODY else -1 for o in owners], i64),
         owner_elem_start=_ro(owner_elem_start, i64),
-        robot_names=robot_names,
+        robot_names=tuple(robot_names),
         robot_joint_start=_ro(joint_start, i64),
-        robot_n_links=_ro([len(scene.robots[r].link_names) for r in robot_names], i64),
+        robot_n_links=_ro(n_links, i64),
         elem_owner=_ro(e_owner, i64),
         elem_kind=_ro(e_kind, i64),
         elem_robot=_ro(e_robot, i64),
