@@ -28,6 +28,9 @@ which owners are static bodies, links or payloads, a body's category (``vehicle`
 ``environment``, an SRDF group the Scene read), the link that holds a payload, and the workspace
 box (an axis-aligned box in W whose walls are no GeometryObject).
 
+The shapes are made once per Model (as its kinematic tree is, ``_model.engine_tree``: a Model's
+GeometryModel and frames do not change; the owner pairs and the workspace box are read each time).
+
 ``_model.build_model`` uses it when the Model's GeometryModel holds exactly the scene's shapes
 (:meth:`armguard.model.Model.geometry_is_of`); after ``add_body``, ``attach_payload`` and the
 like it compiles the Scene (``compile_scene``, also the slow reference the tests hold this to).
@@ -77,8 +80,16 @@ def compile_model_parts(model) -> tuple:
         lst[i] = gname
     hulls = model.hulls
 
+    cache = model.__dict__.setdefault("_engine_shapes", {})  # owner -> its shapes: once per Model
+
     def shapes_in(owner: str, frame: str | None, joint: int, X_inv: np.ndarray | None) -> tuple:
         """The owner's objects as shapes in the element frame (W when ``X_inv`` is None)."""
+        hit = cache.get((owner, frame))
+        if hit is None:
+            hit = cache[(owner, frame)] = _shapes_in(owner, frame, joint, X_inv)
+        return hit
+
+    def _shapes_in(owner: str, frame: str | None, joint: int, X_inv: np.ndarray | None) -> tuple:
         out = []
         for gname in names.get(owner, ()):
             if gname is None:

@@ -144,7 +144,9 @@ def _box_topology(box: Box):
 
 
 def _polytope(shape):
-    """``(verts, faces, planes, edges)`` of a polytope shape, edges as local index pairs."""
+    """``(verts, faces, planes, edges)`` of a polytope shape: faces as ``(flat local vertex
+    indices, per-face lengths)`` int64 arrays, edges ``(ne, 2)`` local index pairs ``a < b``,
+    sorted, each once."""
     if isinstance(shape, Box):
         V, faces, planes = _box_topology(shape)
     elif isinstance(shape, Polygon):
@@ -155,13 +157,21 @@ def _polytope(shape):
         poly = shape.as_polyhedron() if isinstance(shape, Prism) else shape
         if not isinstance(poly, ConvexPolyhedron):  # pragma: no cover - every polytope is handled above
             raise TypeError(type(shape).__name__)
-        V, faces, planes = poly.vertices, [list(map(int, f)) for f in poly.faces], poly.planes
-    edges = set()
-    for f in faces:
-        for i in range(len(f)):
-            a, b = f[i], f[(i + 1) % len(f)]
-            edges.add((min(a, b), max(a, b)))
-    return V, faces, np.asarray(planes, dtype=np.float64).reshape(-1, 4), sorted(edges)
+        V, faces, planes = poly.vertices, poly.faces, poly.planes
+    lens = np.fromiter((len(f) for f in faces), dtype=np.int64, count=len(faces))
+    flat = np.concatenate([np.asarray(f, dtype=np.int64) for f in faces]) if len(faces) else np.zeros(0, np.int64)
+    # each face's edges (f[i], f[i + 1 mod n]): the next index is one on, the last wraps to the first
+    start = np.repeat(np.cumsum(lens) - lens, lens)
+    pos = np.arange(len(flat)) - start
+    nxt = flat[start + (pos + 1) % np.repeat(lens, lens)]
+    e = np.stack([np.minimum(flat, nxt), np.maximum(flat, nxt)], axis=1)
+    edges = np.unique(e, axis=0) if len(e) else np.zeros((0, 2), np.int64)
+    return V, (flat, lens), np.asarray(planes, dtype=np.float64).reshape(-1, 4), edges
+
+
+_SEGMENT_EDGE = np.array([[0, 1]], dtype=np.int64)  # a capsule's segment
+_NO_EDGE = np.zeros((0, 2), dtype=np.int64)
+_NO_FACE = np.zeros(0, dtype=np.int64)
 
 
 def _ro(a, dtype) -> np.ndarray:
@@ -221,9 +231,9 @@ def compile_owners(robots: tuple, owners: list, pairs: list, workspace) -> Compi
     vstart, verts = [0], []
     bc, ba, bh = [], [], []
     pstart, planes = [0], []
-    fstart, fvstart, fverts = [0], [0], []
+    fstart, fvstart, fverts = [0], [np.zeros(1, np.int64)], []
     estart, edges = [0], []
-    nv = 0
+    nv = n_fv = n_e = 0
     for k, (_, kind, r, ln, _, shapes) in enumerate(owners):
         for s in shapes:
             e_owner.append(k)
@@ -242,21 +252,22 @@ def compile_owners(robots: tuple, owners: list, pairs: list, workspace) -> Compi
                 bc.append(np.zeros(3)), ba.append(np.zeros((3, 3))), bh.append(np.zeros(3))
             if isinstance(s, (Sphere, Capsule, Cylinder)):
                 V = s.core_points  # a Cylinder: the circumscribed prism's corners, bounds only
-                local_edges = [(0, 1)] if isinstance(s, Capsule) else []
-                faces, pl = [], np.zeros((0, 4))
+                local_edges = _SEGMENT_EDGE if isinstance(s, Capsule) else _NO_EDGE
+                flat, lens, pl = _NO_FACE, _NO_FACE, np.zeros((0, 4))
             else:
-                V, faces, pl, local_edges = _polytope(s)
+                V, (flat, lens), pl, local_edges = _polytope(s)
             verts.append(np.asarray(V, dtype=np.float64))
             planes.append(pl)
-            for f in faces:
-                fverts.extend(nv + i for i in f)
-                fvstart.append(len(fverts))
-            edges.extend((nv + a, nv + b) for a, b in local_edges)
+            fverts.append(flat + nv)
+            fvstart.append(n_fv + np.cumsum(lens))
+            n_fv += len(flat)
+            edges.append(local_edges + nv)
+            n_e += len(local_edges)
             nv += len(V)
             vstart.append(nv)
             pstart.append(pstart[-1] + len(pl))
-            fstart.append(fstart[-1] + len(faces))
-            estart.append(len(edges))
+            fstart.append(fstart[-1] + len(lens))
+            estart.append(n_e)
         owner_elem_start.append(len(e_owner))
 
     pa, pb, pc, pestart, epa, epb = [], [], [], [0], [], []
@@ -294,10 +305,10 @@ def compile_owners(robots: tuple, owners: list, pairs: list, workspace) -> Compi
         elem_plane_start=_ro(pstart, i64),
         planes=_ro(np.vstack(planes) if planes else np.zeros((0, 4)), f64),
         elem_face_start=_ro(fstart, i64),
-        face_vert_start=_ro(fvstart, i64),
-        face_verts=_ro(fverts, i64),
+        face_vert_start=_ro(np.concatenate(fvstart), i64),
+        face_verts=_ro(np.concatenate(fverts) if fverts else np.zeros(0), i64),
         elem_edge_start=_ro(estart, i64),
-        edges=_ro(np.reshape(edges, (-1, 2)), i64),
+        edges=_ro(np.concatenate(edges) if edges else np.zeros((0, 2)), i64),
         pair_a=_ro(pa, i64),
         pair_b=_ro(pb, i64),
         pair_category=_ro(pc, i64),
