@@ -66,7 +66,7 @@ class Model:
     name : str
     pin_model : pinocchio.Model        kinematics, joint limits, frames (the model of record)
     collision_model : pinocchio.GeometryModel   every shape, as coal geometry (capsules, convex hulls)
-    scene : armguard.Scene             the same system as the analytic backend compiles it, with
+    scene : armguard.Scene             the same system as armguard's Scene (robots, bodies, payloads), with
                                        the sidecar's workspace, trajectories and canned tests
     pairs : GeometryPairs              the active pairs (SRDF and the papers' rules applied)
     notes : Mapping[str, str]          GeometryObject name -> representation note (where a backend
