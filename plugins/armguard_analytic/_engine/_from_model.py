@@ -70,51 +70,16 @@ def compile_model_parts(model) -> tuple:
     """``(compiled, static_shapes)``: :func:`compile_model`'s arrays and, per static element number,
     its shape in W (the detector's static polytopes and feature annotations use the shape objects)."""
     scene = model.scene
-    where = f"model {model.name!r}"
-    frames = list(model.pin_model.frames)  # one read of the vector (an element read through the bindings is slow)
-    objs = model.collision_model.geometryObjects
-    names: dict[str, list] = {}
-    for (owner, i), gname in model._geom.items():
-        lst = names.setdefault(owner, [])
-        lst.extend([None] * (i + 1 - len(lst)))
-        lst[i] = gname
-    hulls = model.hulls
+    cache = model.__dict__.get("_engine_shapes")  # made once per Model: its GeometryModel does not change
+    if cache is None:
+        cache = model.__dict__.setdefault("_engine_shapes", {"owners": _owner_objects(model)})
+    names = cache["owners"]
 
-    cache = model.__dict__.setdefault("_engine_shapes", {})  # owner -> its shapes: once per Model
-
-    def shapes_in(owner: str, frame: str | None, joint: int, X_inv: np.ndarray | None) -> tuple:
-        """The owner's objects as shapes in the element frame (W when ``X_inv`` is None)."""
-        hit = cache.get((owner, frame))
+    def shapes_in(owner: str, link: str | None) -> tuple:
+        """``owner``'s objects as shapes in scene link ``link``'s frame (None: in W), made once per Model."""
+        hit = cache.get((owner, link))
         if hit is None:
-            hit = cache[(owner, frame)] = _shapes_in(owner, frame, joint, X_inv)
-        return hit
-
-    def _shapes_in(owner: str, frame: str | None, joint: int, X_inv: np.ndarray | None) -> tuple:
-        out = []
-        for gname in names.get(owner, ()):
-            if gname is None:
-                raise DetectionError(f"{where}: owner {owner!r} has a shape with no GeometryObject")
-            go = objs[model.geometry_index(gname)]
-            if int(go.parentJoint) != joint:
-                on = "the universe (a static body)" if frame is None else f"the joint of link {frame!r}"
-                raise DetectionError(f"{where}: GeometryObject {gname!r} of {owner!r} moves with Pinocchio joint "
-                                     f"{int(go.parentJoint)}, not with {on}")
-            X = _se3(go.placement) if X_inv is None else X_inv @ _se3(go.placement)
-            mp = hulls.get(gname)
-            out.append(shape_of_polytope(mp, X) if mp is not None else shape_from_coal(go.geometry, X)[0])
-        return tuple(out)
-
-    link_inv: dict[str, tuple] = {}
-
-    def link_frame(owner: str) -> tuple:
-        """``(parent joint, F_L^-1)`` of scene link ``owner``: L in its joint's frame, inverted."""
-        hit = link_inv.get(owner)
-        if hit is None:
-            try:
-                fr = frames[int(model.link_frames[owner])]
-            except KeyError:
-                raise DetectionError(f"{where}: scene link {owner!r} has no frame in pin_model (Model.link_frames)") from None
-            hit = link_inv[owner] = (int(fr.parentJoint), _inv(_se3(fr.placement) @ model.link_placement(owner)))
+            hit = cache[(owner, link)] = _shapes_in(model, names.get(owner, ()), owner, link)
         return hit
 
     robots = scene_robots(scene)
@@ -122,7 +87,7 @@ def compile_model_parts(model) -> tuple:
     owners = []  # name, kind, robot, link, category, shapes: compile_owners' input, compile_scene's order
     static_shapes, g = {}, 0
     for b in scene.bodies.values():
-        shapes = shapes_in(b.name, None, 0, None)
+        shapes = shapes_in(b.name, None)
         owners.append((b.name, OWNER_BODY, -1, -1, 0 if b.category == "vehicle" else 1, shapes))
         for s in shapes:
             static_shapes[g] = s
@@ -131,16 +96,16 @@ def compile_model_parts(model) -> tuple:
         for i, ln in enumerate(robot.link_names):
             owner = f"{r}/{ln}"
             if owner in names:
-                joint, X_inv = link_frame(owner)
-                owners.append((owner, OWNER_LINK, rid[r], i, -1, shapes_in(owner, owner, joint, X_inv)))
+                owners.append((owner, OWNER_LINK, rid[r], i, -1, shapes_in(owner, owner)))
     for p in scene.payloads.values():
-        joint, X_inv = link_frame(p.owner_link)
         owners.append((p.name, OWNER_PAYLOAD, rid[p.robot], scene.robots[p.robot].link_index(p.link), -1,
-                       shapes_in(p.name, p.owner_link, joint, X_inv)))
+                       shapes_in(p.name, p.owner_link)))
 
     # the pairs: Model.pairs' rows, consecutive rows of one owner pair as one owner pair
     oid = {o[0]: k for k, o in enumerate(owners)}
-    local = {gname: i for lst in names.values() for i, gname in enumerate(lst)}
+    local = cache.get("local")
+    if local is None:
+        local = cache["local"] = {gname: i for lst in names.values() for i, gname in enumerate(lst)}
     pairs: list = []
     P = model.pairs
     key = None
@@ -152,3 +117,44 @@ def compile_model_parts(model) -> tuple:
             pairs.append((oid[oa], oid[ob], _CAT_CODE[cat], []))
         pairs[-1][3].append((local[a], local[b]))
     return compile_owners(robots, owners, pairs, scene.workspace), static_shapes
+
+
+def _owner_objects(model) -> dict:
+    """Scene owner -> its GeometryObject names, in shape order (``Model.geometry_name``'s map)."""
+    names: dict[str, list] = {}
+    for (owner, i), gname in model._geom.items():
+        lst = names.setdefault(owner, [])
+        lst.extend([None] * (i + 1 - len(lst)))
+        lst[i] = gname
+    for owner, lst in names.items():
+        if None in lst:
+            raise DetectionError(f"model {model.name!r}: owner {owner!r} has a shape with no GeometryObject "
+                                 f"(shape {lst.index(None)})")
+    return names
+
+
+def _shapes_in(model, gnames, owner: str, link: str | None) -> tuple:
+    """The GeometryObjects ``gnames`` of ``owner`` as shapes in scene link ``link``'s frame L
+    (``X_LG = F_L^-1 placement``, F_L: L in its parent joint's frame), or in W for ``link`` None
+    (``X_WG = placement``: the object is on the universe)."""
+    where = f"model {model.name!r}"
+    if link is None:
+        joint, X_inv = 0, None
+    else:
+        try:
+            fr = model.pin_model.frames[int(model.link_frames[link])]
+        except KeyError:
+            raise DetectionError(f"{where}: scene link {link!r} has no frame in pin_model (Model.link_frames)") from None
+        joint, X_inv = int(fr.parentJoint), _inv(_se3(fr.placement) @ model.link_placement(link))
+    objs = model.collision_model.geometryObjects
+    out = []
+    for gname in gnames:
+        go = objs[model.geometry_index(gname)]
+        if int(go.parentJoint) != joint:
+            on = "the universe (a static body)" if link is None else f"the joint of link {link!r}"
+            raise DetectionError(f"{where}: GeometryObject {gname!r} of {owner!r} moves with Pinocchio joint "
+                                 f"{int(go.parentJoint)}, not with {on}")
+        X = _se3(go.placement) if X_inv is None else X_inv @ _se3(go.placement)
+        mp = model.hulls.get(gname)
+        out.append(shape_of_polytope(mp, X) if mp is not None else shape_from_coal(go.geometry, X)[0])
+    return tuple(out)
