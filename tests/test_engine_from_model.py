@@ -292,6 +292,15 @@ def test_a_scene_changed_after_loading_compiles_the_scene():
     assert m.source == "scene" and "crate" in m.compiled.owner_names
     det = armguard.Detector(scene, threshold=0.05, backend="analytic")
     assert det._model.source == "scene" and any(n == "crate" for n in det._names_b)
+    scene.remove_body("crate")  # the Model's bodies again: its GeometryModel serves once more
+    assert engine_model.build_model(scene, active=None, reach_margin=np.inf, tol=model.tol).source == "model"
+    other = scene.copy()  # the same robots and shapes, but not the Model's scene (its pairs are the copy's own)
+    assert engine_model.build_model(other, active=None, reach_margin=np.inf, tol=model.tol).source == "scene"
+    robot = next(iter(scene.robots))
+    link = scene.robots[robot].link_names[-1]
+    scene.attach_payload("tool", robot, link, [Sphere([0.0, 0.0, 0.1], 0.05)])
+    m = engine_model.build_model(scene, active=None, reach_margin=np.inf, tol=model.tol)
+    assert m.source == "scene" and "tool" in m.compiled.owner_names
 
 
 def test_model_pairs_are_compile_scenes_element_pairs(case):
