@@ -1,6 +1,8 @@
 """The analytic backend: the papers' exact checker, armguard's numba kernels.
 
-The Model's scene is compiled into flat arrays and checked by the fused detector kernel
+The Model is compiled into flat arrays (its GeometryModel's shapes and ``Model.pairs``,
+:mod:`._engine._from_model`; Pinocchio's joint tree, :mod:`._engine._pin_tree`) and checked by
+the fused detector kernel
 (:class:`._engine._detector.FusedDetector`, which ``armguard.Detector`` builds for this backend
 through ``ranger_detector``): exact signed distances for every shape pair (segment–segment
 for Ranger's capsule links, point/segment–face for polytopes, GJK + EPA for hulls), the
@@ -8,7 +10,8 @@ Model's own batched forward kinematics compiled from ``pin_model`` (tested again
 ``pinocchio.forwardKinematics``), bounding-volume pruning and multi-threaded batches.
 
 The engine is this package's own (:mod:`._engine`): the fused Detector (``_detector``,
-``_scratch``, ``_raw``, ``_prep``), its compiled scene (``_model``, ``_bvh``, ``_hulls``), the
+``_scratch``, ``_raw``, ``_prep``), its compiled model (``_model``, ``_from_model``,
+``_pin_tree``, ``_bvh``, ``_hulls``), the
 packed buffers (``_layout``), the kernel (``_kernel``: FK, broad phase, the modes), the Checker's
 entry point (``_pair_rows``), culling (``_cull``), the narrow-phase dispatch over
 :mod:`armguard.geometry`'s pair kernels (``_narrow``, ``_step``), the Jacobian kernel

@@ -1,8 +1,9 @@
 """The analytic backend's engine: Ranger's cycle as one fused numba call.
 
 :class:`._detector.FusedDetector` (a subclass of :class:`armguard.detect.Detector`, declared by
-``AnalyticBackend.ranger_detector``) compiles the scene (:mod:`._model`; its kinematic tree from
-the scene's Model's Pinocchio model, :mod:`._pin_tree`; :mod:`._bvh`,
+``AnalyticBackend.ranger_detector``) compiles the scene's Model (:mod:`._model`; its kinematic tree from
+the Pinocchio model, :mod:`._pin_tree`; its element arrays and pairs from the GeometryModel and
+``Model.pairs``, :mod:`._from_model`; :mod:`._bvh`,
 :mod:`._hulls`, :mod:`._prep`) into packed buffers (:mod:`._layout`) and checks it with one numba
 call (:mod:`._kernel`; the narrow phase :mod:`._step`, :mod:`._narrow`; culling :mod:`._cull`);
 :mod:`._pair_rows` is the analytic Checker's entry point, :mod:`._pair_jacobian` its distance

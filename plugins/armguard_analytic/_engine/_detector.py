@@ -199,13 +199,9 @@ class FusedDetector(Detector):
         return self
 
     def _static_shape_table(self) -> dict[int, object]:
-        """Element number -> its shape (W) for static bodies, in compile_scene's order."""
-        out, g = {}, 0
-        for body in self.scene.bodies.values():
-            for s in body.shapes:
-                out[g] = s
-                g += 1
-        return out
+        """Element number -> its shape (W) for static bodies, as the compiled arrays hold them
+        (the Model's GeometryObjects, or the Scene's bodies: ``_model.compile_for_engine``)."""
+        return dict(self._model.static_shapes)
 
     def _fresh(self) -> None:
         """Rebuild when the scene changed since :meth:`prepare` (a body added, a filter changed, ...).

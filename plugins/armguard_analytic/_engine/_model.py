@@ -28,9 +28,10 @@ from armguard.detect._common import (CAT_ARM, CAT_ENVIRONMENT, CAT_PAYLOAD, CAT_
 from armguard.detect._reach import chain_bounds
 
 from ._bvh import build_bvh
+from ._from_model import compile_model_parts
 from ._pin_tree import pin_tree
 
-__all__ = ["DetectModel", "build_model", "engine_tree", "CAT_ARM", "CAT_ENVIRONMENT", "CAT_WORKSPACE", "CAT_PAYLOAD"]
+__all__ = ["DetectModel", "build_model", "compile_for_engine", "engine_tree", "CAT_ARM", "CAT_ENVIRONMENT", "CAT_WORKSPACE", "CAT_PAYLOAD"]
 
 
 def _c(a, dtype=np.float64):
@@ -45,8 +46,33 @@ class DetectModel:
     (``pair_b = -1``: the workspace walls), ``pair_cat`` ``(P,)`` category codes; pairs are
     ordered explicit first (moving-moving and workspace, ``n_explicit`` of them), then
     moving-static.  ``pair_of`` ``(n_moving, n_static) int64`` maps a (moving, static) element
-    couple to its pair number (-1: not a candidate).
+    couple to its pair number (-1: not a candidate).  ``static_shapes``: static element number ->
+    its shape in W; ``source``: ``"model"`` (:func:`._from_model.compile_model`) or ``"scene"``
+    (:func:`armguard.scene.compile_scene`).
     """
+
+
+def _model_of_geometry(scene):
+    """The scene's Model when its GeometryModel holds exactly the scene's shapes, else None (see
+    the module docstring); a scene with robots gets one (``model_of(scene, geometry=False)``, as
+    :func:`engine_tree`), a scene without keeps the one it has, if any."""
+    from armguard.model import model_of
+
+    model = model_of(scene, geometry=False) if scene.robots else getattr(scene, "_model_of_record", None)
+    return model if model is not None and model.geometry_is_of(scene) else None
+
+
+def compile_for_engine(scene) -> tuple:
+    """``(compiled, static_shapes, source)``: the scene's element arrays and pairs, from its Model
+    (``source == "model"``) or, where the Model does not hold the scene's shapes, from the Scene."""
+    model = _model_of_geometry(scene)
+    if model is not None:
+        cs, static_shapes = compile_model_parts(model)
+        return cs, static_shapes, "model"
+    from armguard.scene import compile_scene
+
+    static_shapes = dict(enumerate(s for body in scene.bodies.values() for s in body.shapes))
+    return compile_scene(scene), static_shapes, "scene"
 
 
 def engine_tree(scene, robot_names, *, model=None):
@@ -68,11 +94,9 @@ def engine_tree(scene, robot_names, *, model=None):
 
 def build_model(scene, *, active: str | None, reach_margin: float, tol) -> DetectModel:
     """Compile ``scene`` for the detector (explicit, repeatable; the scene is unchanged)."""
-    from armguard.scene import compile_scene
-
-    cs = compile_scene(scene)
+    cs, m_static, source = compile_for_engine(scene)
     m = DetectModel()
-    m.compiled = cs
+    m.compiled, m.static_shapes, m.source = cs, m_static, source
     robot_names = tuple(cs.robot_names)
     if active is not None and active not in robot_names:
         raise DetectionError(f"active: unknown robot {active!r}; robots are {list(robot_names)}")

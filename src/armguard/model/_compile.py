@@ -52,7 +52,7 @@ import numpy as np
 from ..geometry import Box, Capsule, ConvexPolyhedron, CoreKind, Cylinder, Polygon, Prism, Sphere
 from ._scene import PairCategory, Scene
 
-__all__ = ["CompiledScene", "compile_scene", "PAIR_CATEGORIES", "OWNER_BODY", "OWNER_LINK", "OWNER_PAYLOAD"]
+__all__ = ["CompiledScene", "compile_scene", "compile_owners", "scene_robots", "PAIR_CATEGORIES", "OWNER_BODY", "OWNER_LINK", "OWNER_PAYLOAD"]
 
 OWNER_BODY, OWNER_LINK, OWNER_PAYLOAD = 0, 1, 2
 PAIR_CATEGORIES: tuple[PairCategory, ...] = tuple(PairCategory)
@@ -144,7 +144,9 @@ def _box_topology(box: Box):
 
 
 def _polytope(shape):
-    """``(verts, faces, planes, edges)`` of a polytope shape, edges as local index pairs."""
+    """``(verts, faces, planes, edges)`` of a polytope shape: faces as ``(flat local vertex
+    indices, per-face lengths)`` int64 arrays, edges ``(ne, 2)`` local index pairs ``a < b``,
+    sorted, each once."""
     if isinstance(shape, Box):
         V, faces, planes = _box_topology(shape)
     elif isinstance(shape, Polygon):
@@ -155,13 +157,21 @@ def _polytope(shape):
         poly = shape.as_polyhedron() if isinstance(shape, Prism) else shape
         if not isinstance(poly, ConvexPolyhedron):  # pragma: no cover - every polytope is handled above
             raise TypeError(type(shape).__name__)
-        V, faces, planes = poly.vertices, [list(map(int, f)) for f in poly.faces], poly.planes
-    edges = set()
-    for f in faces:
-        for i in range(len(f)):
-            a, b = f[i], f[(i + 1) % len(f)]
-            edges.add((min(a, b), max(a, b)))
-    return V, faces, np.asarray(planes, dtype=np.float64).reshape(-1, 4), sorted(edges)
+        V, faces, planes = poly.vertices, poly.faces, poly.planes
+    lens = np.fromiter((len(f) for f in faces), dtype=np.int64, count=len(faces))
+    flat = np.concatenate([np.asarray(f, dtype=np.int64) for f in faces]) if len(faces) else np.zeros(0, np.int64)
+    # each face's edges (f[i], f[i + 1 mod n]): the next index is one on, the last wraps to the first
+    start = np.repeat(np.cumsum(lens) - lens, lens)
+    pos = np.arange(len(flat)) - start
+    nxt = flat[start + (pos + 1) % np.repeat(lens, lens)]
+    e = np.stack([np.minimum(flat, nxt), np.maximum(flat, nxt)], axis=1)
+    edges = np.unique(e, axis=0) if len(e) else np.zeros((0, 2), np.int64)
+    return V, (flat, lens), np.asarray(planes, dtype=np.float64).reshape(-1, 4), edges
+
+
+_SEGMENT_EDGE = np.array([[0, 1]], dtype=np.int64)  # a capsule's segment
+_NO_EDGE = np.zeros((0, 2), dtype=np.int64)
+_NO_FACE = np.zeros(0, dtype=np.int64)
 
 
 def _ro(a, dtype) -> np.ndarray:
@@ -174,9 +184,6 @@ def compile_scene(scene: Scene) -> CompiledScene:
     """Flatten ``scene`` into a :class:`CompiledScene` (explicit, repeatable; the scene is unchanged)."""
     robot_names = tuple(scene.robots)
     rid = {r: i for i, r in enumerate(robot_names)}
-    joint_start = [0]
-    for r in robot_names:
-        joint_start.append(joint_start[-1] + len(scene.robots[r].joint_names))
     # owners and their shapes in the element frame
     owners: list[tuple[str, int, int, int, int, tuple]] = []  # name, kind, robot, link, category, shapes
     for b in scene.bodies.values():
@@ -192,15 +199,41 @@ def compile_scene(scene: Scene) -> CompiledScene:
         shapes = tuple(s.transformed(p.X_LP) for s in p.shapes)
         owners.append((p.name, OWNER_PAYLOAD, rid[p.robot], robot.link_index(p.link), -1, shapes))
     oid = {o[0]: i for i, o in enumerate(owners)}
+    cat_code = {c: i for i, c in enumerate(PAIR_CATEGORIES)}
+    pairs = []
+    for p in scene.allowed_pairs():
+        a, b = oid[p.a], oid[p.b]
+        pairs.append((a, b, cat_code[p.category], [(i, j) for i in range(len(owners[a][5])) for j in range(len(owners[b][5]))]))
+    return compile_owners(scene_robots(scene), owners, pairs, scene.workspace)
 
+
+def scene_robots(scene: Scene) -> tuple:
+    """``(robot_names, joint_start, n_links)`` of ``scene``'s robots, as :func:`compile_owners` takes them."""
+    robot_names = tuple(scene.robots)
+    joint_start = [0]
+    for r in robot_names:
+        joint_start.append(joint_start[-1] + len(scene.robots[r].joint_names))
+    return robot_names, joint_start, [len(scene.robots[r].link_names) for r in robot_names]
+
+
+def compile_owners(robots: tuple, owners: list, pairs: list, workspace) -> CompiledScene:
+    """The :class:`CompiledScene` of owners and pairs given as lists (the layout's one definition,
+    shared by :func:`compile_scene` and the analytic engine's ``compile_model``).
+
+    ``robots``: ``(robot_names, joint_start, n_links)`` (:func:`scene_robots`); ``owners``: one
+    ``(name, kind, robot, link, category, shapes)`` per owner, shapes in the element frame (W for
+    bodies, the link frame for links and payloads); ``pairs``: one ``(owner a, owner b, category
+    code, [(shape i of a, shape j of b), ...])`` per owner pair; ``workspace``: a
+    :class:`~armguard.scene.WorkspaceBox` or None."""
+    robot_names, joint_start, n_links = robots
     owner_elem_start = [0]
     e_owner, e_kind, e_robot, e_link, e_core, e_rad, e_sphere = [], [], [], [], [], [], []
     vstart, verts = [0], []
     bc, ba, bh = [], [], []
     pstart, planes = [0], []
-    fstart, fvstart, fverts = [0], [0], []
+    fstart, fvstart, fverts = [0], [np.zeros(1, np.int64)], []
     estart, edges = [0], []
-    nv = 0
+    nv = n_fv = n_e = 0
     for k, (_, kind, r, ln, _, shapes) in enumerate(owners):
         for s in shapes:
             e_owner.append(k)
@@ -219,35 +252,33 @@ def compile_scene(scene: Scene) -> CompiledScene:
                 bc.append(np.zeros(3)), ba.append(np.zeros((3, 3))), bh.append(np.zeros(3))
             if isinstance(s, (Sphere, Capsule, Cylinder)):
                 V = s.core_points  # a Cylinder: the circumscribed prism's corners, bounds only
-                local_edges = [(0, 1)] if isinstance(s, Capsule) else []
-                faces, pl = [], np.zeros((0, 4))
+                local_edges = _SEGMENT_EDGE if isinstance(s, Capsule) else _NO_EDGE
+                flat, lens, pl = _NO_FACE, _NO_FACE, np.zeros((0, 4))
             else:
-                V, faces, pl, local_edges = _polytope(s)
+                V, (flat, lens), pl, local_edges = _polytope(s)
             verts.append(np.asarray(V, dtype=np.float64))
             planes.append(pl)
-            for f in faces:
-                fverts.extend(nv + i for i in f)
-                fvstart.append(len(fverts))
-            edges.extend((nv + a, nv + b) for a, b in local_edges)
+            fverts.append(flat + nv)
+            fvstart.append(n_fv + np.cumsum(lens))
+            n_fv += len(flat)
+            edges.append(local_edges + nv)
+            n_e += len(local_edges)
             nv += len(V)
             vstart.append(nv)
             pstart.append(pstart[-1] + len(pl))
-            fstart.append(fstart[-1] + len(faces))
-            estart.append(len(edges))
+            fstart.append(fstart[-1] + len(lens))
+            estart.append(n_e)
         owner_elem_start.append(len(e_owner))
 
-    pairs = scene.allowed_pairs()
-    cat_code = {c: i for i, c in enumerate(PAIR_CATEGORIES)}
     pa, pb, pc, pestart, epa, epb = [], [], [], [0], [], []
-    for p in pairs:
-        a, b = oid[p.a], oid[p.b]
-        pa.append(a), pb.append(b), pc.append(cat_code[p.category])
-        for i in range(owner_elem_start[a], owner_elem_start[a + 1]):
-            for j in range(owner_elem_start[b], owner_elem_start[b + 1]):
-                epa.append(i), epb.append(j)
+    for a, b, c, shape_pairs in pairs:
+        pa.append(a), pb.append(b), pc.append(c)
+        ea, eb = owner_elem_start[a], owner_elem_start[b]
+        for i, j in shape_pairs:
+            epa.append(ea + i), epb.append(eb + j)
         pestart.append(len(epa))
 
-    ws = scene.workspace
+    ws = workspace
     i64, f64 = np.int64, np.float64
     return CompiledScene(
         owner_names=tuple(o[0] for o in owners),
@@ -256,9 +287,9 @@ def compile_scene(scene: Scene) -> CompiledScene:
         owner_link=_ro([o[3] for o in owners], i64),
         owner_category=_ro([o[4] if o[1] == OWNER_BODY else -1 for o in owners], i64),
         owner_elem_start=_ro(owner_elem_start, i64),
-        robot_names=robot_names,
+        robot_names=tuple(robot_names),
         robot_joint_start=_ro(joint_start, i64),
-        robot_n_links=_ro([len(scene.robots[r].link_names) for r in robot_names], i64),
+        robot_n_links=_ro(n_links, i64),
         elem_owner=_ro(e_owner, i64),
         elem_kind=_ro(e_kind, i64),
         elem_robot=_ro(e_robot, i64),
@@ -274,10 +305,10 @@ def compile_scene(scene: Scene) -> CompiledScene:
         elem_plane_start=_ro(pstart, i64),
         planes=_ro(np.vstack(planes) if planes else np.zeros((0, 4)), f64),
         elem_face_start=_ro(fstart, i64),
-        face_vert_start=_ro(fvstart, i64),
-        face_verts=_ro(fverts, i64),
+        face_vert_start=_ro(np.concatenate(fvstart), i64),
+        face_verts=_ro(np.concatenate(fverts) if fverts else np.zeros(0), i64),
         elem_edge_start=_ro(estart, i64),
-        edges=_ro(np.reshape(edges, (-1, 2)), i64),
+        edges=_ro(np.concatenate(edges) if edges else np.zeros((0, 2)), i64),
         pair_a=_ro(pa, i64),
         pair_b=_ro(pb, i64),
         pair_category=_ro(pc, i64),

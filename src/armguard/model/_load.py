@@ -141,6 +141,7 @@ def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None):
     pin_model, geom, info = load_pinocchio(urdf, [models_dir(), *package_dirs])
     parts = scene_parts_from_pin(pin_model, geom, info, srdf_obj, accelerations=accelerations)
     parts.hull_cache = dict(info.hull_cache)
+    parts.hulls = _hulls_by_name(geom, info)
     scene = Scene(name or info.robot_name)
     try:
         for bname, shapes, cat in parts.bodies:
@@ -186,6 +187,12 @@ def _warn_stale(srdf_obj, pin_model, geom) -> None:
                       "`armguard srdf --update` rewrites them")
 
 
+def _hulls_by_name(geom, info) -> dict:
+    """GeometryObject name -> the MeshPolytope its coal.Convex was built from (load_pinocchio's hulls)."""
+    objs = geom.geometryObjects
+    return {objs[i].name: mp for i, mp in info.hulls.items()}
+
+
 def _link_frames(parts, pin_model) -> dict:
     """Scene link ``"robot/link"`` -> its BODY frame in ``pin_model`` (from the converter's URDF link owners)."""
     import pinocchio as pin
@@ -216,7 +223,7 @@ def model_from_urdf(path, *, srdf=None, package_dirs=()) -> Model:
     scene, pin_model, geom, parts = _build(path, srdf_obj, package_dirs, {})
     files = [path, *parts_files(parts, srdf_obj)]
     return Model(scene.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), hull_cache=parts.hull_cache,
-                 link_frames=_link_frames(parts, pin_model),
+                 link_frames=_link_frames(parts, pin_model), hulls=parts.hulls,
                  geometry_names=parts.geometry_names,
                  notes=parts.notes, files=files, srdf=srdf_obj)
 
@@ -278,7 +285,7 @@ def model_from_scenefile(sf, file: str, base: Path, *, srdf=None) -> Model:
     _add_extra_bodies(scene, geom, geometry_names, {b for b, _, _ in parts.bodies})
     files = [Path(file), urdf, *parts_files(parts, srdf_obj), *ctx.read]
     return Model(sf.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), hull_cache=parts.hull_cache,
-                 link_frames=_link_frames(parts, pin_model),
+                 link_frames=_link_frames(parts, pin_model), hulls=parts.hulls,
                  geometry_names=geometry_names,
                  notes=parts.notes, files=files, srdf=srdf_obj)
 
@@ -361,6 +368,7 @@ def model_from_scene(scene, *, file: str | None = None) -> Model:
         pin_model, geom, info = load_pinocchio(urdf)
         srdf_obj = read_srdf(written["srdf"]) if "srdf" in written else None
         parts = scene_parts_from_pin(pin_model, geom, info, srdf_obj)
+        hulls = _hulls_by_name(geom, info)
     q_index = np.empty(len(scene.joint_names), np.int64)
     pin_names = {}
     for robot, _, qi in parts.robots:
@@ -393,7 +401,7 @@ def model_from_scene(scene, *, file: str | None = None) -> Model:
                 placements[f"{r}/{ln}"] = np.asarray(spec.X_post, dtype=np.float64)
     return Model(scene.name, pin_model, geom, scene, q_index=q_index, circular=_circular(parts), geometry_names=geometry_names,
                  notes=parts.notes, files=files, link_frames=link_frames,
-                 link_placements=placements)
+                 link_placements=placements, hulls=hulls)
 
 
 def _owner_shapes(scene, owner: str):

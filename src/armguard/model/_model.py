@@ -66,7 +66,7 @@ class Model:
     name : str
     pin_model : pinocchio.Model        kinematics, joint limits, frames (the model of record)
     collision_model : pinocchio.GeometryModel   every shape, as coal geometry (capsules, convex hulls)
-    scene : armguard.Scene             the same system as the analytic backend compiles it, with
+    scene : armguard.Scene             the same system as armguard's Scene (robots, bodies, payloads), with
                                        the sidecar's workspace, trajectories and canned tests
     pairs : GeometryPairs              the active pairs (SRDF and the papers' rules applied)
     notes : Mapping[str, str]          GeometryObject name -> representation note (where a backend
@@ -80,10 +80,13 @@ class Model:
                                        when the model has no mesh
     link_frames : Mapping[str, int]    scene link ``"robot/link"`` -> the ``pin_model`` BODY frame F it is
                                        fixed to: its pose ``X_WL = oMf[F] @ link_placement(link)``
+    hulls : Mapping[str, MeshPolytope] GeometryObject name -> the mesh hull its ``coal.Convex`` was built
+                                       from (vertices, triangles and merged faces, in the object's
+                                       frame; :func:`armguard.model._hull.mesh_polytope`), for meshes
     """
 
     def __init__(self, name, pin_model, collision_model, scene, *, q_index, geometry_names, notes, files,
-                 circular=(), srdf=None, hull_cache=None, link_frames=None, link_placements=None) -> None:
+                 circular=(), srdf=None, hull_cache=None, link_frames=None, link_placements=None, hulls=None) -> None:
         self.name = str(name)
         self.pin_model = pin_model
         self.collision_model = collision_model
@@ -106,6 +109,9 @@ class Model:
         self.link_frames = types.MappingProxyType(dict(link_frames or {}))
         self._link_placements = {k: np.array(v, dtype=np.float64) for k, v in (link_placements or {}).items()}
         self._robots = tuple(scene.robots.items())  # the Robots pin_model moves (immutable objects)
+        self.hulls = types.MappingProxyType(dict(hulls or {}))
+        # the bodies and payloads the GeometryModel holds (immutable objects): geometry_is_of(scene)
+        self._parts = (tuple(scene.bodies.items()), tuple(scene.payloads.items()))
         scene._model_of_record = self  # model_of(scene) finds it (the scene it built is this model's)
 
     tol = DEFAULT_TOLERANCES
@@ -124,6 +130,18 @@ class Model:
         robots = scene.robots
         return len(robots) == len(self._robots) and all(
             a == n and r is self_r for (a, r), (n, self_r) in zip(robots.items(), self._robots))
+
+    def geometry_is_of(self, scene) -> bool:
+        """Whether ``collision_model`` holds exactly the shapes of ``scene``: it is this Model's scene,
+        with the robots it was built with (:meth:`moves_robots_of`) and the very Body and Payload
+        objects (same names, same order).  ``add_body``, ``remove_body``, ``attach_payload``,
+        ``grasp``... make it False; pair filters and the workspace box do not."""
+        if scene is not self.scene or not self.moves_robots_of(scene):
+            return False
+        bodies, payloads = self._parts
+        return (len(bodies) == len(scene.bodies) and len(payloads) == len(scene.payloads)
+                and all(a == n and b is o for (a, b), (n, o) in zip(scene.bodies.items(), bodies))
+                and all(a == n and b is o for (a, b), (n, o) in zip(scene.payloads.items(), payloads)))
 
     def check_limits(self, q_scene, where: str = "q") -> None:
         """Raise :class:`~armguard.JointLimitError` when the flat scene ``q`` ``(n,)`` leaves a joint's limits."""
@@ -247,23 +265,31 @@ class Model:
         return self._pairs
 
     def _compute_pairs(self) -> GeometryPairs:
-        from ._compile import PAIR_CATEGORIES, compile_scene
-
-        cs = compile_scene(self.scene)
+        """Every shape pair of :meth:`Scene.allowed_pairs` (owner pairs in its order, shapes of A
+        outer, of B inner), then one workspace row per robot shape (links, then payloads, owner
+        order) when the scene has a workspace box: :func:`~armguard.model.compile_scene`'s element
+        pairs, without compiling the geometry (tests/test_engine_from_model.py holds it to that)."""
+        scene = self.scene
+        n_shapes = {}
+        for name, body in scene.bodies.items():
+            n_shapes[name] = len(body.shapes)
+        for r, robot in scene.robots.items():
+            for ln in robot.link_names:
+                if robot.link_shapes.get(ln):
+                    n_shapes[f"{r}/{ln}"] = len(robot.link_shapes[ln])
+        for name, p in scene.payloads.items():
+            n_shapes[name] = len(p.shapes)
+        geom = self._geom
         a, b, oa, ob, cat = [], [], [], [], []
-
-        def gname(e: int):
-            o = int(cs.elem_owner[e])
-            return self._geom[(cs.owner_names[o], e - int(cs.owner_elem_start[o]))], cs.owner_names[o]
-
-        for p in range(len(cs.pair_a)):
-            c = PAIR_CATEGORIES[int(cs.pair_category[p])].value
-            for k in range(int(cs.pair_elem_start[p]), int(cs.pair_elem_start[p + 1])):
-                (na, owa), (nb, owb) = gname(int(cs.elem_pair_a[k])), gname(int(cs.elem_pair_b[k]))
-                a.append(na), b.append(nb), oa.append(owa), ob.append(owb), cat.append(c)
-        if cs.has_workspace:
-            for e in range(cs.n_elements):
-                if int(cs.elem_robot[e]) >= 0:
-                    na, owa = gname(e)
-                    a.append(na), b.append(WORKSPACE), oa.append(owa), ob.append(WORKSPACE), cat.append("workspace")
+        for p in scene.allowed_pairs():
+            c = p.category.value
+            for i in range(n_shapes[p.a]):
+                na = geom[(p.a, i)]
+                for j in range(n_shapes[p.b]):
+                    a.append(na), b.append(geom[(p.b, j)]), oa.append(p.a), ob.append(p.b), cat.append(c)
+        if scene.workspace is not None:
+            moving = [o for o in n_shapes if o not in scene.bodies]  # dict order: bodies, links, payloads
+            for o in moving:
+                for i in range(n_shapes[o]):
+                    a.append(geom[(o, i)]), b.append(WORKSPACE), oa.append(o), ob.append(WORKSPACE), cat.append("workspace")
         return GeometryPairs(tuple(a), tuple(b), tuple(oa), tuple(ob), tuple(cat))
