@@ -9,7 +9,10 @@ the hulls' vertex graphs, EPA for the depth, the exhaustive SAT as fallback).  T
 its own is the distance to the workspace walls (Ranger §2, "link-to-bounding box distances"), which
 is not a shape pair (for a cylinder: its exact support along each wall's normal).
 
-Element data are in W (the detector kernel moves link elements there once per check):
+Pairs of convex point cores (boxes, hulls, a point or segment against a moving polytope) and a
+cylinder against a polytope are checked in their element frames (:func:`narrow_rel`: GJK and EPA on
+``hull(A)`` and ``X_AB hull(B)``, no point moved), unless EPA cannot settle a depth; every other pair
+reads element data in W (the detector kernel moves its elements there once per check, ``_step``):
 ``verts (V, 3)`` core points; ``box (G, 15)`` ``[centre, half extents, R_WB row-major]`` (a
 cylinder: ``[c, r, r, h, R_WC row-major]``, the axis the third column, ``_pair_cylinder``'s buffer;
 its core points are its circumscribed prism's corners, used for bounds only); ``fnrm (F, 3)``
@@ -26,7 +29,7 @@ from armguard.geometry._pair_segment_box import capsule_box_scalar
 from armguard.geometry._pair_segment_polytope import capsule_polytope_at
 from armguard.geometry._pair_segment_segment import capsule_capsule_scalar
 from armguard.geometry._pair_cylinder import support_pair_graph
-from armguard.geometry._pair_epa import convex_convex_fast
+from armguard.geometry._pair_epa import convex_convex_fast, epa_depth
 from armguard.geometry._pair_gjk import GJK_SEPARATED, _inner_point, gjk_dir_rel
 from armguard.geometry._pair_segment_segment import write_rounded
 from armguard.geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_capsule
@@ -327,14 +330,16 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, be
     in their element frames: GJK in A's frame
     on hull(A) and ``X_AB hull(B)``, ``X_AB = X_WA^-1 X_WB`` (:func:`armguard.geometry._pair_gjk.gjk_dir_rel`),
     supports climbing each hull's vertex graph (cold climbs from its support table); only the support
-    points GJK visits are rotated, where :func:`pair_distance` needs every point, face normal and edge direction of both moved to W first
-    (on so101's hulls of 2,100 to 4,900 vertices, a quarter of a check).
+    points GJK visits are rotated, where :func:`pair_distance` needs every point, face normal and edge
+    direction of both moved to W first (on so101's hulls of 2,100 to 4,900 vertices, a quarter of a
+    check).
 
     Returns ``(distance, 0)`` with ``out[0:9]`` in W when the cores are apart (GJK's answer, exact to
-    ``gjk_eps`` like the W path's), or when they overlap and ``level`` is at least ``-(ra + rb)`` (as
-    :func:`armguard.geometry._pair_epa.convex_convex_fast`: an upper bound without a depth); else
-    ``(0, NOT_SCALAR)``: the caller moves both elements and calls :func:`narrow_other` (EPA and the
-    exhaustive SAT work on W points).  ``level`` as in :func:`narrow_other`; ``beyond`` (m, ``inf``:
+    ``gjk_eps`` like the W path's), when they overlap and ``level`` is at least ``-(ra + rb)`` (as
+    :func:`armguard.geometry._pair_epa.convex_convex_fast`: an upper bound without a depth), or when
+    they overlap and EPA settles the depth (``_pair_epa.epa_depth`` in A's frame, as the W path's);
+    else ``(0, NOT_SCALAR)``: the caller moves both elements and calls :func:`narrow_other` (its
+    exhaustive SAT works on W points).  ``level`` as in :func:`narrow_other`; ``beyond`` (m, ``inf``:
     off): GJK may stop once the distance is proved above it, returning an upper bound > ``beyond``
     (not a distance: ``_step.pair_step`` keeps no row of it).  A cylinder against a
     polytope: :func:`_cylinder_rel` (the whole pair in the polytope's frame, depth included)."""
@@ -373,8 +378,17 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, be
     status, d, ax, ay, az, bx, by, bz = gjk_dir_rel(pa, adja, taba, pb, adjb, tabb, rot, tx, ty, tz, gx - sx, gy - sy, gz - sz,
                                                     eps_len, gjk_eps, max_iter, simp, max(sep, 0.0))
     inside = status != GJK_SEPARATED and status != GJK_NOT_CONVERGED and simp[0] == 1.0
-    if status != GJK_SEPARATED and not (inside and -(ra + rb) <= level):
-        return 0.0, NOT_SCALAR  # touching, overlapping with a depth wanted, or not converged: the W path
+    if inside and -(ra + rb) > level:  # overlapping cores, a depth wanted: EPA in A's frame as well
+        ok, depth, nx, ny, nz, ax, ay, az, bx, by, bz = epa_depth(pa, adja, pb, adjb, work[0:nw], gjk_eps, rot,
+                                                                  tx, ty, tz)
+        if ok and depth > eps_len:
+            wax, way, waz = _to_world(SF, oA, ax, ay, az, 1.0)
+            wbx, wby, wbz = _to_world(SF, oA, bx, by, bz, 1.0)
+            wnx, wny, wnz = _to_world(SF, oA, nx, ny, nz, 0.0)
+            return write_rounded(wax, way, waz, ra, wbx, wby, wbz, rb, wnx, wny, wnz, -depth, out, 0), 0
+        return 0.0, NOT_SCALAR  # EPA did not settle it: the W path (its exhaustive SAT)
+    if status != GJK_SEPARATED and not inside:
+        return 0.0, NOT_SCALAR  # touching, or not converged: the W path
     wax, way, waz = _to_world(SF, oA, ax, ay, az, 1.0)  # the core witnesses to W
     if inside:  # a point of A's core as both core witnesses (p_WB - p_WA = distance * nhat holds)
         return write_rounded(wax, way, waz, ra, wax, way, waz, rb, 0.0, 0.0, 1.0, 0.0, out, 0), 0

@@ -32,8 +32,8 @@ import math
 
 from numba import njit
 
-from ._pair_gjk import (GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _support, gjk_core, gjk_dir_adj2,
-                        inner_difference)
+from ._pair_gjk import (GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _b_dir, _b_point, _support, gjk_core,
+                        gjk_dir_adj2, inner_difference)
 from ._pair_sat import _axis
 from ._pair_segment_segment import write_rounded
 
@@ -63,11 +63,12 @@ one it always takes the SAT path."""
 
 
 @njit(cache=True)
-def _put_vertex(w, k, pa, pb, ia, ib):  # pragma: no cover - compiled
+def _put_vertex(w, k, pa, pb, ia, ib, rot, ox, oy, oz):  # pragma: no cover - compiled
     o = _V0 + 5 * k
-    w[o] = pa[ia, 0] - pb[ib, 0]
-    w[o + 1] = pa[ia, 1] - pb[ib, 1]
-    w[o + 2] = pa[ia, 2] - pb[ib, 2]
+    qx, qy, qz = _b_point(pb, rot, ib)  # B's point as GJK saw it: R_AB pb + o (rot None: pb + o)
+    w[o] = pa[ia, 0] - qx - ox
+    w[o + 1] = pa[ia, 1] - qy - oy
+    w[o + 2] = pa[ia, 2] - qz - oz
     w[o + 3] = ia
     w[o + 4] = ib
 
@@ -145,7 +146,7 @@ def _kept(kept, d, nx, ny, nz, ax, ay, az, bx, by, bz):  # pragma: no cover - co
 
 
 @njit(cache=True, inline="always")
-def _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb):  # pragma: no cover - compiled
+def _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz):  # pragma: no cover - compiled
     """The witnesses on the cores of the face ``(j0, j1, j2)`` at distance ``dbest`` along ``n``:
     the origin's projection onto the face, in barycentric coordinates of its support pairs.
     ``(ok, ax, ay, az, bx, by, bz)``; ``ok`` False for a degenerate face."""
@@ -181,14 +182,15 @@ def _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb):  # pragma: no 
         ax += lam * pa[ka, 0]
         ay += lam * pa[ka, 1]
         az += lam * pa[ka, 2]
-        bx += lam * pb[kb, 0]
-        by += lam * pb[kb, 1]
-        bz += lam * pb[kb, 2]
-    return True, ax, ay, az, bx, by, bz
+        qx, qy, qz = _b_point(pb, rot, kb)
+        bx += lam * qx
+        by += lam * qy
+        bz += lam * qz
+    return True, ax, ay, az, bx + ox, by + oy, bz + oz
 
 
 @njit(cache=True)
-def epa_depth(pa, adja, pb, adjb, work, eps):  # pragma: no cover - compiled
+def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0):  # pragma: no cover - compiled
     """EPA on ``M = hull(pa) - hull(pb)`` from the tetrahedron GJK left in ``work[0:9]``.
 
     ``adja``, ``adjb``: vertex graphs (``_pack.polytope_adjacency`` format; empty: scan);
@@ -197,11 +199,14 @@ def epa_depth(pa, adja, pb, adjb, work, eps):  # pragma: no cover - compiled
     moving B by ``depth * n`` makes the cores touch (``n`` the outward normal of ``M``'s facet);
     ``a`` and ``b`` the witness points on the cores (``a - b = depth * n`` to rounding).
     ``ok`` False: EPA did not settle it (see the module docstring), the rest is meaningless.
+
+    ``rot`` (``R_AB`` row-major, or None), ``o``: B's points are ``R_AB pb + o`` in A's frame, as for
+    GJK (``_pair_gjk.gjk_dir_rel``); everything returned is in A's frame.
     """
     if work.shape[0] < EPA_WORK_SIZE or work[0] != 1.0:
         return False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     for k in range(4):
-        _put_vertex(work, k, pa, pb, int(work[1 + k]), int(work[5 + k]))
+        _put_vertex(work, k, pa, pb, int(work[1 + k]), int(work[5 + k]), rot, ox, oy, oz)
     # the tetrahedron's faces, each oriented away from the opposite vertex
     nf = 0
     for t in range(4):
@@ -249,10 +254,12 @@ def epa_depth(pa, adja, pb, adjb, work, eps):  # pragma: no cover - compiled
         ha = int(work[_V0 + 5 * j0 + 3])
         hb = int(work[_V0 + 5 * j0 + 4])
         ia = _support(pa, adja, ha, nx, ny, nz)
-        ib = _support(pb, adjb, hb, -nx, -ny, -nz)
-        wx = pa[ia, 0] - pb[ib, 0]
-        wy = pa[ia, 1] - pb[ib, 1]
-        wz = pa[ia, 2] - pb[ib, 2]
+        ex, ey, ez = _b_dir(rot, -nx, -ny, -nz)
+        ib = _support(pb, adjb, hb, ex, ey, ez)
+        qx, qy, qz = _b_point(pb, rot, ib)
+        wx = pa[ia, 0] - qx - ox
+        wy = pa[ia, 1] - qy - oy
+        wz = pa[ia, 2] - qz - oz
         h = nx * wx + ny * wy + nz * wz
         repeated = False
         for j in (j0, j1, j2):
@@ -261,12 +268,12 @@ def epa_depth(pa, adja, pb, adjb, work, eps):  # pragma: no cover - compiled
         if h < hmin:
             hmin = h
         if h - dbest <= eps or repeated:
-            ok, ax, ay, az, bx, by, bz = _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb)
+            ok, ax, ay, az, bx, by, bz = _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz)
             if not ok:
                 break
             return True, dbest, nx, ny, nz, ax, ay, az, bx, by, bz
         if hmin - dbest <= EPA_BRACKET:  # kept in case rounding stops EPA before eps
-            ok, ax, ay, az, bx, by, bz = _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb)
+            ok, ax, ay, az, bx, by, bz = _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz)
             if ok:
                 kept = True
                 kd, knx, kny, knz, kax, kay, kaz, kbx, kby, kbz = dbest, nx, ny, nz, ax, ay, az, bx, by, bz
@@ -275,7 +282,7 @@ def epa_depth(pa, adja, pb, adjb, work, eps):  # pragma: no cover - compiled
         for k in range(nv):  # w beyond the face yet already a vertex: rounding has broken convexity
             if work[_V0 + 5 * k + 3] == ia and work[_V0 + 5 * k + 4] == ib:
                 return _kept(kept, kd, knx, kny, knz, kax, kay, kaz, kbx, kby, kbz)
-        _put_vertex(work, nv, pa, pb, ia, ib)
+        _put_vertex(work, nv, pa, pb, ia, ib, rot, ox, oy, oz)
         # remove the faces seen from w; their unshared edges form the horizon
         ne = 0
         for f in range(nf):
