@@ -106,9 +106,10 @@ def pair_distance(
     if ka == _CYLINDER or kb == _CYLINDER:
         ca = box[ga] if ka == _CYLINDER else box[ga, 0:0]  # an empty buffer: the hull of the points
         cb = box[gb] if kb == _CYLINDER else box[gb, 0:0]
+        none = adj[0:0]  # no support tables on this path (one compiled signature with narrow_rel's calls)
         d, status = support_pair_graph(verts[vstart[ga]:vstart[ga + 1]], adj[adjs[ga]:adjs[ga + 1]], ca, ra,
                                        verts[vstart[gb]:vstart[gb + 1]], adj[adjs[gb]:adjs[gb + 1]], cb, rb,
-                                       out, work, eps_len, gjk_eps, max_iter, level)
+                                       out, work, eps_len, gjk_eps, max_iter, level, none, none)
         if status == GJK_NOT_CONVERGED:
             return d, ERR_GJK
         return d, 0
@@ -312,10 +313,10 @@ def _cylinder_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level)
     rb = MF[H[2 * _K_radius] + gb]
     if cyl_a:
         d, status = support_pair_graph(pc, gc, cyl, ra, ph, gh, none, rb, out, work[0:nw], eps_len, gjk_eps, max_iter,
-                                       level, None, th)
+                                       level, th[0:0], th)
     else:
         d, status = support_pair_graph(ph, gh, none, ra, pc, gc, cyl, rb, out, work[0:nw], eps_len, gjk_eps, max_iter,
-                                       level, th, None)
+                                       level, th, th[0:0])
     if status == GJK_NOT_CONVERGED:
         return d, ERR_GJK
     out[0], out[1], out[2] = _to_world(SF, oF, out[0], out[1], out[2], 1.0)

@@ -183,7 +183,7 @@ def support_pair_graph(pa, ga, ca, ra, pb, gb, cb, rb, out, work, eps_len, gjk_e
 
     ``ga``, ``gb``: the vertex graphs of the point cores (``_pack.hull_graph`` format, indices into
     ``pa`` / ``pb``; empty: the points are scanned); a cylinder side ignores its own.  ``ta``, ``tb``
-    (None, or a point core's ``_pack.support_table``): where its first climb starts."""
+    (None, or a point core's ``_pack.support_table``; empty: none): where its first climb starts."""
     gx, gy, gz = _centre(pa, ga, ca)
     hx, hy, hz = _centre(pb, gb, cb)
     sa = sb = -1
