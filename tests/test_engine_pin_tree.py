@@ -182,6 +182,28 @@ def test_a_moved_base_rebuilds_the_model():
     assert np.max(np.abs(np.sort(a.distance) - np.sort(c.distance))) <= 1e-6
 
 
+def test_a_moved_base_keeps_the_srdf_groups_and_states():
+    """The Model rebuilt after ``set_robot_base`` (its URDF is the scene written out, joints and links
+    renamed) answers the SRDF groups and states it was loaded with, in its own names."""
+    model = armguard.load_model("panda")
+    scene = model.scene
+    groups = sorted(model.srdf.groups)
+    before = {g: model.group_joints(g) for g in groups}
+    r = next(iter(scene.robots))
+    X = scene.robots[r].X_WB.copy()
+    X[:3, 3] += [0.3, 0.0, 0.0]
+    scene.set_robot_base(r, X)
+    new = model_of(scene)
+    assert new is not model and new.srdf is not None and "carried over" in new.srdf.found
+    assert {g: new.group_joints(g) for g in groups} == before
+    assert len(new.srdf.states) == len(model.srdf.states)
+    pin_joints = set(new.joint_names)
+    for st in new.srdf.states:  # the states name the rebuilt model's joints
+        assert set(st.values) <= pin_joints
+    scene.set_robot_base(r, np.eye(4))  # moved again: still carried
+    assert {g: model_of(scene).group_joints(g) for g in groups} == before
+
+
 def test_a_copy_and_a_new_body_keep_the_kinematic_model():
     scene = armguard.load_scene("hermes")
     m = model_of(scene)

@@ -340,7 +340,12 @@ def model_of(scene, *, geometry: bool = True) -> Model:
     m = getattr(scene, "_model_of_record", None)
     if m is not None and m.moves_robots_of(scene) and (not geometry or (m.scene is scene and _covers(m, scene))):
         return m
-    return model_from_scene(scene)
+    new = model_from_scene(scene)
+    if m is not None and m.scene is scene and m.srdf is not None and new.srdf is None:
+        from ._srdf import carry_srdf
+
+        new.srdf = carry_srdf(m, new)  # a moved or added robot keeps the groups and states it was loaded with
+    return new
 
 
 def _covers(model: Model, scene) -> bool:

@@ -180,3 +180,37 @@ def read_srdf(path, *, found: str = "given", partial: bool = False) -> Srdf:
         states.append(SrdfState(name, group, values, w, jw))
     out.groups, out.disabled, out.states = groups, tuple(disabled), tuple(states)
     return out
+
+
+def carry_srdf(old, new):
+    """The SRDF of Model ``old`` in the names of Model ``new``, built from the same scene after
+    ``set_robot_base`` or ``add_robot`` (its URDF is the scene written out, so joints and links are
+    renamed): joints are matched through the scene's joint names, links through ``link_frames``;
+    a name with no counterpart is kept as it was.  ``found`` says where the groups came from."""
+    import dataclasses
+
+    def by_iq(m):
+        pm = m.pin_model
+        return {pm.joints[j].idx_q: pm.names[j] for j in range(1, pm.njoints) if pm.joints[j].nq > 0}
+
+    old_iq, new_iq = by_iq(old), by_iq(new)
+    old_scene = [f"{n}/{j}" for n, r in old._robots for j in r.joint_names]
+    new_pos = {sn: k for k, sn in enumerate(new.scene.joint_names)}
+    names = {}
+    for k, sn in enumerate(old_scene):
+        if sn in new_pos:
+            names[old_iq[int(old.q_index[k])]] = new_iq[int(new.q_index[new_pos[sn]])]
+    for owner, f_old in old.link_frames.items():
+        f_new = new.link_frames.get(owner)
+        if f_new is not None:
+            names[old.pin_model.frames[f_old].name] = new.pin_model.frames[f_new].name
+    n = lambda x: names.get(x, x)  # noqa: E731
+    s = old.srdf
+    groups = {g: dataclasses.replace(grp, chains=tuple((n(a), n(b)) for a, b in grp.chains),
+                                     links=tuple(n(x) for x in grp.links), joints=tuple(n(x) for x in grp.joints))
+              for g, grp in s.groups.items()}
+    states = tuple(dataclasses.replace(st, values={n(j): v for j, v in st.values.items()},
+                                       joint_where={n(j): w for j, w in st.joint_where.items()}) for st in s.states)
+    return dataclasses.replace(s, groups=groups, states=states, disabled=tuple((n(a), n(b), r) for a, b, r in s.disabled),
+                               found=f"carried over from the model before the scene's robots changed ({s.found})")
+
