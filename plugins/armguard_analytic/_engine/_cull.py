@@ -127,3 +127,52 @@ def _argsort_heap(key, order, n):  # pragma: no cover - compiled
     for end in range(n - 1, 0, -1):
         t = order[0]; order[0] = order[end]; order[end] = t
         _sift_down(key, order, 0, end)
+
+
+@njit(cache=True, inline="always")
+def _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi):  # pragma: no cover - compiled
+    """Bounding-sphere gap of explicit pair ``p`` (m): to the workspace walls (``b < 0``), or between the
+    two elements' spheres (<= 0 when they overlap: then it bounds nothing, only orders)."""
+    a = pair_a[p]
+    b = pair_b[p]
+    if b < 0:
+        return min(ws_hi[0] - sphW[a, 0], ws_hi[1] - sphW[a, 1], ws_hi[2] - sphW[a, 2],
+                   sphW[a, 0] - ws_lo[0], sphW[a, 1] - ws_lo[1], sphW[a, 2] - ws_lo[2]) - sphW[a, 3]
+    dx = sphW[a, 0] - sphW[b, 0]; dy = sphW[a, 1] - sphW[b, 1]; dz = sphW[a, 2] - sphW[b, 2]
+    return math.sqrt(dx * dx + dy * dy + dz * dz) - sphW[a, 3] - sphW[b, 3]
+
+
+@njit(cache=True, inline="always")
+def _nearest_box_gap(a, mov_idx, sphW, MF, o_blo, o_bhi, o_slo, o_shi, bvh_left, bvh_right, bvh_start, bvh_count,
+                     bvh_items, pair_of, stack, gapst):  # pragma: no cover - compiled
+    """The least gap (m) between moving element ``a``'s bounding sphere and the box of a static element
+    it has a pair with (a BVH walk pruned by the least so far; ``inf`` when none): a lower bound on
+    the bounding-volume gap, hence on the distance, of each of ``a``'s static pairs when > 0."""
+    ma = mov_idx[a]
+    cx = sphW[a, 0]; cy = sphW[a, 1]; cz = sphW[a, 2]; cr = sphW[a, 3]
+    g_min = math.inf
+    stack[0] = 0
+    gapst[0] = _sb_gap(cx, cy, cz, cr, MF, o_blo, o_bhi)
+    top = 1
+    while top > 0:
+        top -= 1
+        node = stack[top]
+        if gapst[top] >= g_min:
+            continue
+        left = bvh_left[node]
+        if left >= 0:
+            right = bvh_right[node]
+            gl = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * left, o_bhi + 3 * left)
+            gr = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * right, o_bhi + 3 * right)
+            if gl <= gr:  # the nearer popped first
+                stack[top] = right; gapst[top] = gr; top += 1
+                stack[top] = left; gapst[top] = gl; top += 1
+            else:
+                stack[top] = left; gapst[top] = gl; top += 1
+                stack[top] = right; gapst[top] = gr; top += 1
+            continue
+        for it in range(bvh_start[node], bvh_start[node] + bvh_count[node]):
+            s = bvh_items[it]
+            if pair_of[ma, s] >= 0:
+                g_min = min(g_min, _sb_gap(cx, cy, cz, cr, MF, o_slo + 3 * s, o_shi + 3 * s))
+    return g_min

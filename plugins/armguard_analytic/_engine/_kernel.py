@@ -36,7 +36,8 @@ from armguard.kinematics._fk import _fk_kernel
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SC, at, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, SUM_STATUS, seg1, seg2, seg3
-from ._cull import _argsort_heap, _bb_gap, _obb_gap, _sb_gap, obb_apart_moving, obb_apart_static
+from ._cull import (_argsort_heap, _bb_gap, _explicit_gap, _nearest_box_gap, _obb_gap, _sb_gap, obb_apart_moving,
+                    obb_apart_static)
 from ._narrow import BOUNDED
 from ._step import move_element, pair_step
 
@@ -246,7 +247,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     # in yes/no mode (cut-off: the collision level).  Measured in the exact and min modes as well
     # (cut-off: the category's best so far): no gain there (the bounding spheres already cull the
     # pairs beyond a tight cut-off), so they skip the test.
-    box_cull = mode == MODE_YESNO
+    box_cull = mode == MODE_YESNO or by_best
 
     for m in range(lo, hi):
         q = Q[m:m + 1]
@@ -383,25 +384,27 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                 if err != 0 or (collided and mode == MODE_YESNO):
                     break
                 if (phase == 0) != (mode == MODE_YESNO):
-                    # ---- explicit pairs: moving-moving and workspace walls
-                    for p in range(n_explicit):
+                    # ---- explicit pairs: moving-moving and workspace walls.  The exact and min
+                    # modes take them in increasing bounding-sphere gap (plb, order: scratch that
+                    # only the tracked modes report), so a category's best tightens early and
+                    # GJK proves the later pairs beyond it sooner (or the spheres cull them)
+                    if by_best:
+                        for p in range(n_explicit):
+                            plb[p] = _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi)
+                        _argsort_heap(plb, order, n_explicit)
+                    for k in range(n_explicit):
                         if collided and mode == MODE_YESNO:
                             break
+                        p = order[k] if by_best else k
                         if pstamp[p] == stamp_now:
                             continue
                         a = pair_a[p]
                         b = pair_b[p]
                         c = pair_cat[p]
                         cut = max(cut0, best[c]) if by_best else cut0
-                        if b < 0:
-                            r = sphW[a, 3]
-                            lb = min(ws_hi[0] - sphW[a, 0], ws_hi[1] - sphW[a, 1], ws_hi[2] - sphW[a, 2],
-                                     sphW[a, 0] - ws_lo[0], sphW[a, 1] - ws_lo[1], sphW[a, 2] - ws_lo[2]) - r
-                        else:
-                            dx = sphW[a, 0] - sphW[b, 0]; dy = sphW[a, 1] - sphW[b, 1]; dz = sphW[a, 2] - sphW[b, 2]
-                            lb = math.sqrt(dx * dx + dy * dy + dz * dz) - sphW[a, 3] - sphW[b, 3]
-                            if not lb > 0.0:
-                                lb = -math.inf
+                        lb = plb[p] if by_best else _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi)
+                        if b >= 0 and not lb > 0.0:
+                            lb = -math.inf  # overlapping spheres bound nothing
                         if lb > cut:
                             if track:
                                 plb[p] = lb
@@ -422,12 +425,27 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                         if d <= level:
                             collided = True
                 elif n_st > 0:
-                    # ---- moving-static pairs through the BVH, nearest child first
-                    for i in range(st_mov.shape[0]):
+                    # ---- moving-static pairs through the BVH, nearest child first.  The exact and
+                    # min modes take the elements in increasing gap to their nearest obstacle box
+                    # (plb, order), so the category's best comes from the likeliest pair first and
+                    # an element whose nearest box is beyond the cut-off is skipped whole
+                    n_sm = st_mov.shape[0]
+                    if by_best:
+                        for i in range(n_sm):
+                            plb[i] = _nearest_box_gap(st_mov[i], mov_idx, sphW, MF, o_blo, o_bhi, o_slo, o_shi,
+                                                      bvh_left, bvh_right, bvh_start, bvh_count, bvh_items, pair_of,
+                                                      stack, gapst)
+                        _argsort_heap(plb, order, n_sm)
+                    for ii in range(n_sm):
                         if err != 0 or (collided and mode == MODE_YESNO):
                             break
+                        i = order[ii] if by_best else ii
                         a = st_mov[i]
                         sc_a = st_cat[i]
+                        if by_best:
+                            g_a = plb[i]  # a lower bound on every static pair of a: skip a whole if beyond
+                            if g_a > 0.0 and g_a > max(cut0, best[sc_a] if sc_a >= 0 else max(best[1], best[3])):
+                                continue
                         ma = mov_idx[a]
                         cx = sphW[a, 0]; cy = sphW[a, 1]; cz = sphW[a, 2]; cr = sphW[a, 3]
                         # yes/no: a sphere or capsule core also gets its segment's W-aligned box
