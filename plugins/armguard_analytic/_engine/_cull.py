@@ -143,36 +143,24 @@ def _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi):  # pragma: no cover - 
 
 
 @njit(cache=True, inline="always")
-def _nearest_box_gap(a, mov_idx, sphW, MF, o_blo, o_bhi, o_slo, o_shi, bvh_left, bvh_right, bvh_start, bvh_count,
-                     bvh_items, pair_of, stack, gapst):  # pragma: no cover - compiled
-    """The least gap (m) between moving element ``a``'s bounding sphere and the box of a static element
-    it has a pair with (a BVH walk pruned by the least so far; ``inf`` when none): a lower bound on
-    the bounding-volume gap, hence on the distance, of each of ``a``'s static pairs when > 0."""
+def _near_box_gap(a, mov_idx, sphW, MF, o_blo, o_bhi, o_slo, o_shi, bvh_left, bvh_right, bvh_start, bvh_count,
+                  bvh_items, pair_of):  # pragma: no cover - compiled
+    """A sort key, not a bound: the least gap (m) between moving element ``a``'s bounding sphere and the
+    boxes of the static elements it has a pair with in the BVH leaf reached by always descending to
+    the nearer child (``inf`` when that leaf holds none): O(depth), where the nearest box needs a
+    walk (PUMA among 10,000 boxes: 9.5 -> 11.1 us per check with that walk)."""
     ma = mov_idx[a]
     cx = sphW[a, 0]; cy = sphW[a, 1]; cz = sphW[a, 2]; cr = sphW[a, 3]
-    g_min = math.inf
-    stack[0] = 0
-    gapst[0] = _sb_gap(cx, cy, cz, cr, MF, o_blo, o_bhi)
-    top = 1
-    while top > 0:
-        top -= 1
-        node = stack[top]
-        if gapst[top] >= g_min:
-            continue
+    node = 0
+    while bvh_left[node] >= 0:
         left = bvh_left[node]
-        if left >= 0:
-            right = bvh_right[node]
-            gl = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * left, o_bhi + 3 * left)
-            gr = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * right, o_bhi + 3 * right)
-            if gl <= gr:  # the nearer popped first
-                stack[top] = right; gapst[top] = gr; top += 1
-                stack[top] = left; gapst[top] = gl; top += 1
-            else:
-                stack[top] = left; gapst[top] = gl; top += 1
-                stack[top] = right; gapst[top] = gr; top += 1
-            continue
-        for it in range(bvh_start[node], bvh_start[node] + bvh_count[node]):
-            s = bvh_items[it]
-            if pair_of[ma, s] >= 0:
-                g_min = min(g_min, _sb_gap(cx, cy, cz, cr, MF, o_slo + 3 * s, o_shi + 3 * s))
+        right = bvh_right[node]
+        gl = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * left, o_bhi + 3 * left)
+        gr = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * right, o_bhi + 3 * right)
+        node = left if gl <= gr else right
+    g_min = math.inf
+    for it in range(bvh_start[node], bvh_start[node] + bvh_count[node]):
+        s = bvh_items[it]
+        if pair_of[ma, s] >= 0:
+            g_min = min(g_min, _sb_gap(cx, cy, cz, cr, MF, o_slo + 3 * s, o_shi + 3 * s))
     return g_min
