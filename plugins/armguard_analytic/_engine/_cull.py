@@ -164,3 +164,10 @@ def _near_box_gap(a, mov_idx, sphW, MF, o_blo, o_bhi, o_slo, o_shi, bvh_left, bv
         if pair_of[ma, s] >= 0:
             g_min = min(g_min, _sb_gap(cx, cy, cz, cr, MF, o_slo + 3 * s, o_shi + 3 * s))
     return g_min
+
+
+@njit(cache=True, inline="always")
+def _gjk_pair(ka, kb):  # pragma: no cover - compiled
+    """Whether two moving elements of core kinds ``ka``, ``kb`` go to GJK (``_step.evaluate_pair``'s link-frame
+    pairs: two boxes or hulls, a hull and anything; a capsule and a box is a scalar kernel, tens of ns)."""
+    return ka == 3 or kb == 3 or (ka >= 2 and kb >= 2)

@@ -36,8 +36,8 @@ from armguard.kinematics._fk import _fk_kernel
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SC, at, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, SUM_STATUS, seg1, seg2, seg3
-from ._cull import (_argsort_heap, _bb_gap, _explicit_gap, _near_box_gap, _obb_gap, _sb_gap, obb_apart_moving,
-                    obb_apart_static)
+from ._cull import (_argsort_heap, _bb_gap, _explicit_gap, _gjk_pair, _near_box_gap, _obb_gap, _sb_gap,
+                    obb_apart_moving, obb_apart_static)
 from ._narrow import BOUNDED
 from ._step import move_element, pair_step
 
@@ -395,7 +395,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                     n_x = 0
                     if by_order:
                         for p in range(n_explicit):
-                            if pair_b[p] >= 0 and (core[pair_a[p]] >= 2 or core[pair_b[p]] >= 2):
+                            if pair_b[p] >= 0 and _gjk_pair(core[pair_a[p]], core[pair_b[p]]):
                                 plb[n_x] = _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi)
                                 pflag[n_x] = p
                                 n_x += 1
@@ -405,7 +405,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                             break
                         if k < n_explicit:
                             p = k
-                            if n_x > 0 and pair_b[p] >= 0 and (core[pair_a[p]] >= 2 or core[pair_b[p]] >= 2):
+                            if n_x > 0 and pair_b[p] >= 0 and _gjk_pair(core[pair_a[p]], core[pair_b[p]]):
                                 continue  # a GJK pair: in the sorted pass
                         else:
                             p = pflag[order[k - n_explicit]]
@@ -422,7 +422,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                             if track:
                                 plb[p] = lb
                             continue
-                        if ((box_cull or (by_best and (core[a] >= 2 or (b >= 0 and core[b] >= 2)))) and b >= 0
+                        if ((box_cull or (by_best and b >= 0 and _gjk_pair(core[a], core[b]))) and b >= 0
                                 and cut < math.inf and MF[o_obb + 16 * a + 15] != 0.0
                                 and MF[o_obb + 16 * b + 15] != 0.0
                                 and obb_apart_moving(MF, o_obb + 16 * a, o_Xs + 16 * glink[a], o_obb + 16 * b,
