@@ -127,3 +127,47 @@ def _argsort_heap(key, order, n):  # pragma: no cover - compiled
     for end in range(n - 1, 0, -1):
         t = order[0]; order[0] = order[end]; order[end] = t
         _sift_down(key, order, 0, end)
+
+
+@njit(cache=True, inline="always")
+def _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi):  # pragma: no cover - compiled
+    """Bounding-sphere gap of explicit pair ``p`` (m): to the workspace walls (``b < 0``), or between the
+    two elements' spheres (<= 0 when they overlap: then it bounds nothing, only orders)."""
+    a = pair_a[p]
+    b = pair_b[p]
+    if b < 0:
+        return min(ws_hi[0] - sphW[a, 0], ws_hi[1] - sphW[a, 1], ws_hi[2] - sphW[a, 2],
+                   sphW[a, 0] - ws_lo[0], sphW[a, 1] - ws_lo[1], sphW[a, 2] - ws_lo[2]) - sphW[a, 3]
+    dx = sphW[a, 0] - sphW[b, 0]; dy = sphW[a, 1] - sphW[b, 1]; dz = sphW[a, 2] - sphW[b, 2]
+    return math.sqrt(dx * dx + dy * dy + dz * dz) - sphW[a, 3] - sphW[b, 3]
+
+
+@njit(cache=True, inline="always")
+def _near_box_gap(a, mov_idx, sphW, MF, o_blo, o_bhi, o_slo, o_shi, bvh_left, bvh_right, bvh_start, bvh_count,
+                  bvh_items, pair_of):  # pragma: no cover - compiled
+    """A sort key, not a bound: the least gap (m) between moving element ``a``'s bounding sphere and the
+    boxes of the static elements it has a pair with in the BVH leaf reached by always descending to
+    the nearer child (``inf`` when that leaf holds none): O(depth), where the nearest box needs a
+    walk (PUMA among 10,000 boxes: 9.5 -> 11.1 us per check with that walk)."""
+    ma = mov_idx[a]
+    cx = sphW[a, 0]; cy = sphW[a, 1]; cz = sphW[a, 2]; cr = sphW[a, 3]
+    node = 0
+    while bvh_left[node] >= 0:
+        left = bvh_left[node]
+        right = bvh_right[node]
+        gl = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * left, o_bhi + 3 * left)
+        gr = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * right, o_bhi + 3 * right)
+        node = left if gl <= gr else right
+    g_min = math.inf
+    for it in range(bvh_start[node], bvh_start[node] + bvh_count[node]):
+        s = bvh_items[it]
+        if pair_of[ma, s] >= 0:
+            g_min = min(g_min, _sb_gap(cx, cy, cz, cr, MF, o_slo + 3 * s, o_shi + 3 * s))
+    return g_min
+
+
+@njit(cache=True, inline="always")
+def _gjk_pair(ka, kb):  # pragma: no cover - compiled
+    """Whether two moving elements of core kinds ``ka``, ``kb`` go to GJK (``_step.evaluate_pair``'s link-frame
+    pairs: two boxes or hulls, a hull and anything; a capsule and a box is a scalar kernel, tens of ns)."""
+    return ka == 3 or kb == 3 or (ka >= 2 and kb >= 2)

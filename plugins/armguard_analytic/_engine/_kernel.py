@@ -36,7 +36,8 @@ from armguard.kinematics._fk import _fk_kernel
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SC, at, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, SUM_STATUS, seg1, seg2, seg3
-from ._cull import _argsort_heap, _bb_gap, _obb_gap, _sb_gap, obb_apart_moving, obb_apart_static
+from ._cull import (_argsort_heap, _bb_gap, _explicit_gap, _gjk_pair, _near_box_gap, _obb_gap, _sb_gap,
+                    obb_apart_moving, obb_apart_static)
 from ._narrow import BOUNDED
 from ._step import move_element, pair_step
 
@@ -243,10 +244,13 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     o_vW = H[2 * _K_vW]
     o_rad = H[2 * _K_radius]
     o_obb = H[2 * _K_obb_L]  # the moving polytopes' boxes (flag in column 15): a cull before GJK
-    # in yes/no mode (cut-off: the collision level).  Measured in the exact and min modes as well
-    # (cut-off: the category's best so far): no gain there (the bounding spheres already cull the
-    # pairs beyond a tight cut-off), so they skip the test.
+    # in yes/no mode (cut-off: the collision level); in the exact and min modes (cut-off: the
+    # category's best so far) for pairs with a moving box, hull or cylinder only, whose narrow phase
+    # is GJK (~1 us): for capsule pairs (tens of ns) the test costs more than it saves (measured)
     box_cull = mode == MODE_YESNO
+    # the exact and min modes order the GJK pairs (a moving box, hull or cylinder: ~1 us each; the
+    # sort costs more than capsule pairs save): iiwa hulls in world20 23 -> 17 us per check
+    by_order = by_best
 
     for m in range(lo, hi):
         q = Q[m:m + 1]
@@ -383,30 +387,43 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                 if err != 0 or (collided and mode == MODE_YESNO):
                     break
                 if (phase == 0) != (mode == MODE_YESNO):
-                    # ---- explicit pairs: moving-moving and workspace walls
-                    for p in range(n_explicit):
+                    # ---- explicit pairs: moving-moving and workspace walls.  The exact and min
+                    # modes take the GJK pairs (a box, hull or cylinder side) after the others, in
+                    # increasing bounding-sphere gap (keys in plb, pair numbers in pflag, the sort in
+                    # order: scratch only the tracked modes report), so a category's best tightens
+                    # early and GJK proves the later pairs beyond it sooner (or the spheres cull them)
+                    n_x = 0
+                    if by_order:
+                        for p in range(n_explicit):
+                            if pair_b[p] >= 0 and _gjk_pair(core[pair_a[p]], core[pair_b[p]]):
+                                plb[n_x] = _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi)
+                                pflag[n_x] = p
+                                n_x += 1
+                        _argsort_heap(plb, order, n_x)
+                    for k in range(n_explicit + n_x):
                         if collided and mode == MODE_YESNO:
                             break
+                        if k < n_explicit:
+                            p = k
+                            if n_x > 0 and pair_b[p] >= 0 and _gjk_pair(core[pair_a[p]], core[pair_b[p]]):
+                                continue  # a GJK pair: in the sorted pass
+                        else:
+                            p = pflag[order[k - n_explicit]]
                         if pstamp[p] == stamp_now:
                             continue
                         a = pair_a[p]
                         b = pair_b[p]
                         c = pair_cat[p]
                         cut = max(cut0, best[c]) if by_best else cut0
-                        if b < 0:
-                            r = sphW[a, 3]
-                            lb = min(ws_hi[0] - sphW[a, 0], ws_hi[1] - sphW[a, 1], ws_hi[2] - sphW[a, 2],
-                                     sphW[a, 0] - ws_lo[0], sphW[a, 1] - ws_lo[1], sphW[a, 2] - ws_lo[2]) - r
-                        else:
-                            dx = sphW[a, 0] - sphW[b, 0]; dy = sphW[a, 1] - sphW[b, 1]; dz = sphW[a, 2] - sphW[b, 2]
-                            lb = math.sqrt(dx * dx + dy * dy + dz * dz) - sphW[a, 3] - sphW[b, 3]
-                            if not lb > 0.0:
-                                lb = -math.inf
+                        lb = _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi)
+                        if b >= 0 and not lb > 0.0:
+                            lb = -math.inf  # overlapping spheres bound nothing
                         if lb > cut:
                             if track:
                                 plb[p] = lb
                             continue
-                        if (box_cull and b >= 0 and cut < math.inf and MF[o_obb + 16 * a + 15] != 0.0
+                        if ((box_cull or (by_best and b >= 0 and _gjk_pair(core[a], core[b]))) and b >= 0
+                                and cut < math.inf and MF[o_obb + 16 * a + 15] != 0.0
                                 and MF[o_obb + 16 * b + 15] != 0.0
                                 and obb_apart_moving(MF, o_obb + 16 * a, o_Xs + 16 * glink[a], o_obb + 16 * b,
                                                      o_Xs + 16 * glink[b], SF, max(cut, 0.0), eps_par)):
@@ -422,10 +439,28 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                         if d <= level:
                             collided = True
                 elif n_st > 0:
-                    # ---- moving-static pairs through the BVH, nearest child first
-                    for i in range(st_mov.shape[0]):
+                    # ---- moving-static pairs through the BVH, nearest child first.  The exact and min
+                    # modes take the GJK elements last, in increasing gap to a near obstacle box (the
+                    # likeliest pair first, so the category's best tightens early)
+                    n_sm = st_mov.shape[0]
+                    n_x = 0
+                    if by_order:  # the elements with a GJK core, after the others (keys plb, numbers pflag)
+                        for i in range(n_sm):
+                            if core[st_mov[i]] >= 2:
+                                plb[n_x] = _near_box_gap(st_mov[i], mov_idx, sphW, MF, o_blo, o_bhi, o_slo, o_shi,
+                                                         bvh_left, bvh_right, bvh_start, bvh_count, bvh_items, pair_of)
+                                pflag[n_x] = i
+                                n_x += 1
+                        _argsort_heap(plb, order, n_x)
+                    for ii in range(n_sm + n_x):
                         if err != 0 or (collided and mode == MODE_YESNO):
                             break
+                        if ii < n_sm:
+                            i = ii
+                            if n_x > 0 and core[st_mov[i]] >= 2:
+                                continue  # in the sorted pass
+                        else:
+                            i = pflag[order[ii - n_sm]]
                         a = st_mov[i]
                         sc_a = st_cat[i]
                         ma = mov_idx[a]
@@ -447,7 +482,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                 by0 = min(by0, y); by1 = max(by1, y)
                                 bz0 = min(bz0, z); bz1 = max(bz1, z)
                             br = MF[o_rad + a]
-                        use_obb = box_cull and MF[o_obb + 16 * a + 15] != 0.0
+                        use_obb = (box_cull or (by_best and core[a] >= 2)) and MF[o_obb + 16 * a + 15] != 0.0
                         o_Xa = o_Xs + 16 * glink[a]
                         stack[0] = 0
                         gapst[0] = _sb_gap(cx, cy, cz, cr, MF, o_blo, o_bhi)
