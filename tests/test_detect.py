@@ -248,43 +248,23 @@ def test_pair_distances_of_one_robot_are_rows_of_all_pairs():
         det.pair_distances(q, robot="no_such_arm")
 
 
-def _move_all(ids, H, MF, MI, SF):
-    from numba import njit
-
-    from armguard_analytic._engine._step import move_element
-
-    @njit
-    def run(ids, H, MF, MI, SF):
-        for g in ids:
-            move_element(g, H, MF, MI, SF)
-
-    run(ids, H, MF, MI, SF)
-
-
 @pytest.mark.parametrize("name", ["ranger", "hermes", "rover"], ids=["ranger", "hermes", "rover"])
 def test_fast_narrow_phase_matches_generic_pair_kernel(name):
-    """The scalar / capsule-polytope dispatch of the kernel against the generic per-pair kernel (GJK + EPA / SAT)."""
-    from armguard_analytic._engine._narrow import pair_distance
+    """The scalar / capsule-polytope / link-frame dispatch of the kernel against the generic per-pair
+    kernel (GJK + EPA / SAT) on the same poses, every element moved to W."""
+    from _engine_world import move_all, world_pair_distance
 
     scene = load_scene(name)
     det = Detector(scene, threshold=0.0)
-    L, m, tol = det._layout, det._model, det._tol
-    V = lambda buf, k: L.view(buf, k)  # noqa: E731
-    from armguard.geometry._pair_epa import EPA_WORK_SIZE
-
-    out, work = np.zeros(9), np.zeros(EPA_WORK_SIZE)
+    m = det._model
     for q in _sample(scene, np.random.default_rng(11), 20):
         res = det.pair_distances(q)  # leaves the link poses; polytope pairs are checked in their link frames
-        _move_all(m.mov_ids, det._H, det._MF, det._MI, det._SF)  # so every element is moved to W here
+        move_all(det)
         for k, p in enumerate(res.pair_index):
             a, b = int(m.pair_a[p]), int(m.pair_b[p])
             if b < 0:
                 continue
-            d, err = pair_distance(a, b, V(det._MI, "core"), V(det._MF, "radius"), V(det._SF, "vW"), V(det._MI, "vstart"),
-                                   V(det._SF, "boxW"), V(det._SF, "fnW"), V(det._MI, "pstart"), V(det._SF, "edW"),
-                                   V(det._MI, "estart"), V(det._MI, "gadj"), V(det._MI, "gadjs"), V(det._MI, "gtri"),
-                                   V(det._MI, "gtris"), out, work, tol.length, tol.parallel, tol.gjk_epsilon,
-                                   tol.gjk_max_iterations, tol.penetration_witness_offset, -np.inf)
+            d, err = world_pair_distance(det, a, b)
             assert err == 0
             assert abs(d - res.distance[k]) <= 1e-9
 

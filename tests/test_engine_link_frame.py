@@ -119,47 +119,27 @@ def _robots() -> list[str]:
     return [n for n in ("z1", "kinova", "ur5", "ur3", "kuka_iiwa", "panda") if n in names]
 
 
-def _move_all(ids, H, MF, MI, SF):
-    """Every moving element to W (the W path's input)."""
-    from armguard_analytic._engine._step import move_element
-
-    @njit(cache=False)
-    def run(ids, H, MF, MI, SF):
-        for g in ids:
-            move_element(g, H, MF, MI, SF)
-
-    run(ids, H, MF, MI, SF)
-
-
 @pytest.mark.parametrize("name", _robots())
 def test_link_frame_pairs_equal_the_world_frame_kernel(name):
     """Every pair of a robot's check against the W path on the same poses (every element moved, the
     generic per-pair kernel) to 1e-9 m, over in-limit random configurations; verdicts equal coal's."""
-    from armguard_analytic._engine._narrow import pair_distance
-    from armguard.geometry._pair_epa import EPA_WORK_SIZE
-    from armguard.geometry._pair_cylinder import SUPPORT_WORK_SIZE
+    from _engine_world import move_all, world_pair_distance
 
     model = armguard.load_model(name)
     det = armguard.Detector(model, threshold=0.0)
-    L, m, tol = det._layout, det._model, det._tol
-    V = lambda buf, k: L.view(buf, k)  # noqa: E731
-    out, work = np.zeros(9), np.zeros(max(EPA_WORK_SIZE, SUPPORT_WORK_SIZE))
+    m = det._model
     coal = armguard.checker(model, "coal")
     cores = m.compiled.elem_core
     n_rel = 0
     for q in model.random_q(12, 5):
         res = det.pair_distances(model.scene_q(q))
-        _move_all(m.mov_ids, det._H, det._MF, det._MI, det._SF)
+        move_all(det)
         for k, p in enumerate(res.pair_index):
             a, b = int(m.pair_a[p]), int(m.pair_b[p])
             if b < 0:
                 continue
             n_rel += int(cores[a] in (2, 3, 4) and cores[b] in (2, 3, 4) and not cores[a] == cores[b] == 4)
-            d, err = pair_distance(a, b, V(det._MI, "core"), V(det._MF, "radius"), V(det._SF, "vW"), V(det._MI, "vstart"),
-                                   V(det._SF, "boxW"), V(det._SF, "fnW"), V(det._MI, "pstart"), V(det._SF, "edW"),
-                                   V(det._MI, "estart"), V(det._MI, "gadj"), V(det._MI, "gadjs"), V(det._MI, "gtri"),
-                                   V(det._MI, "gtris"), out, work, tol.length, tol.parallel, tol.gjk_epsilon,
-                                   tol.gjk_max_iterations, tol.penetration_witness_offset, -np.inf)
+            d, err = world_pair_distance(det, a, b)
             assert err == 0
             assert abs(d - res.distance[k]) <= 1e-9, (name, k)
             if d > 1e-6:  # apart: the nearest points are the W kernel's (ties aside, to GJK's accuracy)

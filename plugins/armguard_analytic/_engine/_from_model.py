@@ -43,22 +43,12 @@ import numpy as np
 from armguard._errors import DetectionError
 from armguard.model import WORKSPACE
 from armguard.model._compile import OWNER_BODY, OWNER_LINK, OWNER_PAYLOAD, PAIR_CATEGORIES, compile_owners, scene_robots
+from armguard.model._from_pin import _inv, _se3
 from armguard.model._shapes import shape_from_coal, shape_of_polytope
 
 __all__ = ["compile_model", "compile_model_parts"]
 
 _CAT_CODE = {c.value: i for i, c in enumerate(PAIR_CATEGORIES)}
-
-
-def _se3(M) -> np.ndarray:
-    return np.array(M.homogeneous, dtype=np.float64)
-
-
-def _inv(X: np.ndarray) -> np.ndarray:
-    Y = np.eye(4)
-    Y[:3, :3] = X[:3, :3].T
-    Y[:3, 3] = -X[:3, :3].T @ X[:3, 3]
-    return Y
 
 
 def compile_model(model):

@@ -32,6 +32,8 @@ import numpy as np
 
 from numba import carray, njit
 
+# ST_*: the status codes the Detector reads (kn.ST_COLLISION, ...), the framework's
+from armguard.detect._common import ST_CLEAR, ST_COLLISION, ST_INCOMPLETE, ST_WARNING, status_code  # noqa: F401
 from armguard.kinematics._fk import _fk_kernel
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
@@ -42,7 +44,7 @@ from ._narrow import BOUNDED
 from ._step import move_element, pair_step
 
 MODE_EXACT, MODE_LAZY, MODE_ANYTIME, MODE_YESNO, MODE_ALL, MODE_MIN = 0, 1, 2, 3, 4, 5
-ST_CLEAR, ST_WARNING, ST_COLLISION, ST_INCOMPLETE = 0, 1, 2, 3
+_status_code = njit(cache=True, inline="always")(status_code)  # the framework's rule, compiled
 # prm slots
 P_THR, P_STOP, P_EPS_LEN, P_EPS_PAR, P_GJK_EPS, P_OFFSET = 0, 1, 2, 3, 4, 5
 # iprm slots
@@ -576,14 +578,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                 if pflag[p] == 0 and plb[p] < lbmin:
                     lbmin = plb[p]
         summary[SUM_NEVAL] = n_eval
-        if dmin <= level:
-            st = ST_COLLISION
-        elif lbmin > thr_eff:  # nothing unevaluated can be within the threshold
-            st = ST_WARNING if dmin <= thr_eff else ST_CLEAR
-        elif dmin <= thr_eff and lbmin > level:
-            st = ST_WARNING
-        else:
-            st = ST_INCOMPLETE
+        st = _status_code(dmin, lbmin, level, thr_eff)  # never CLEAR by omission
         summary[SUM_STATUS] = st
         for c in range(4):
             min_d[m, c] = best[c]

@@ -13,7 +13,7 @@ from .._errors import DetectionError
 __all__ = ["check_length", "check_finite_margin", "require_pairs", "status_code", "combined_tree", "cylinder_aabb",
            "CAT_ARM", "CAT_ENVIRONMENT", "CAT_WORKSPACE", "CAT_PAYLOAD", "SCENE_CATEGORY", "CYLINDER"]
 
-ST_CLEAR, ST_WARNING, ST_COLLISION, ST_INCOMPLETE = 0, 1, 2, 3  # as the analytic kernel (armguard_analytic._engine._kernel)
+ST_CLEAR, ST_WARNING, ST_COLLISION, ST_INCOMPLETE = 0, 1, 2, 3  # the analytic kernel reads these
 CAT_ARM, CAT_ENVIRONMENT, CAT_WORKSPACE, CAT_PAYLOAD = 0, 1, 2, 3
 SCENE_CATEGORY = {
     "arm-arm": CAT_ARM,

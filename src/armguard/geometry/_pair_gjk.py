@@ -290,6 +290,17 @@ def _b_point(pb, rot, i):  # pragma: no cover - compiled
             rot[6] * x + rot[7] * y + rot[8] * z)
 
 
+@njit(cache=True, inline="always")
+def _m_support(pa, adja, ia, pb, adj, ib, rot, ox, oy, oz, dx, dy, dz):  # pragma: no cover - compiled
+    """The support of ``M = A - (R_AB B + o)`` along ``-d``: A's along ``-d`` and B's along ``+d``,
+    climbs from ``ia`` / ``ib``.  Returns ``(ia, ib, w)``."""
+    ia = _support(pa, adja, ia, -dx, -dy, -dz)
+    ex, ey, ez = _b_dir(rot, dx, dy, dz)
+    ib = _support(pb, adj, ib, ex, ey, ez)
+    qx, qy, qz = _b_point(pb, rot, ib)
+    return ia, ib, pa[ia, 0] - qx - ox, pa[ia, 1] - qy - oy, pa[ia, 2] - qz - oz
+
+
 @njit(cache=True, _nrt=False)
 def _gjk(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep=math.inf, sa=-1,
          sb=-1):  # pragma: no cover
@@ -312,13 +323,7 @@ def _gjk(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_i
     the direction, ``_seed``; a caller with a :func:`armguard.geometry._pack.support_table` passes its
     entry, :func:`table_start`)."""
     # the first vertex: supports along d
-    ia = _support(pa, adja, sa, -dx, -dy, -dz)
-    ex, ey, ez = _b_dir(rot, dx, dy, dz)
-    ib = _support(pb, adj, sb, ex, ey, ez)
-    qx, qy, qz = _b_point(pb, rot, ib)
-    x0 = pa[ia, 0] - qx - ox
-    y0 = pa[ia, 1] - qy - oy
-    z0 = pa[ia, 2] - qz - oz
+    ia, ib, x0, y0, z0 = _m_support(pa, adja, sa, pb, adj, sb, rot, ox, oy, oz, dx, dy, dz)
     ia0 = ia
     ib0 = ib
     x1 = y1 = z1 = x2 = y2 = z2 = x3 = y3 = z3 = 0.0
@@ -338,13 +343,7 @@ def _gjk(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_i
             status = GJK_INTERSECTING
             break
         # support of A along -v, of B along +v
-        ia = _support(pa, adja, ia, -vx, -vy, -vz)  # warm: from the last support
-        ex, ey, ez = _b_dir(rot, vx, vy, vz)
-        ib = _support(pb, adj, ib, ex, ey, ez)
-        qx, qy, qz = _b_point(pb, rot, ib)
-        wx = pa[ia, 0] - qx - ox
-        wy = pa[ia, 1] - qy - oy
-        wz = pa[ia, 2] - qz - oz
+        ia, ib, wx, wy, wz = _m_support(pa, adja, ia, pb, adj, ib, rot, ox, oy, oz, vx, vy, vz)  # warm starts
         vw = vx * wx + vy * wy + vz * wz
         if vv - vw <= gjk_eps * math.sqrt(vv):
             status = GJK_SEPARATED
