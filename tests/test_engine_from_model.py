@@ -223,8 +223,10 @@ def test_detector_takes_the_model_path(case):
 # ---------------------------------------------------------------- (2) the answers
 def _scene_path_checker(model):
     """The analytic checker on the compile_scene path (built, then used as it is)."""
+    compile_for_engine = engine_model.compile_for_engine
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(engine_model, "_model_of_geometry", lambda scene: None)
+        mp.setattr(engine_model, "compile_for_engine", lambda scene, model=None: compile_for_engine(scene))
         ref = armguard.checker(model, "analytic")
         ref.pair_distances(model.neutral())
         assert ref.detector()._model.source == "scene"
@@ -280,27 +282,34 @@ def test_pair_distances_equal_the_scene_path_and_agree_with_coal(case):
 
 
 # ---------------------------------------------------------------- the fallback and the pairs
-def test_a_scene_changed_after_loading_compiles_the_scene():
-    """A body added after loading is no GeometryObject: the engine compiles the Scene (and sees the body)."""
+def test_a_scene_changed_after_loading_compiles_a_derived_model():
+    """A body or payload added after loading: the engine compiles the Model derived from the loaded
+    one (``armguard.model._derive``: the same kinematics, the new shapes as GeometryObjects) and sees
+    them; a pair filter keeps the loaded Model; a copy of the scene gets a Model of its own."""
     model = load_model("ranger")
     scene = model.scene
-    assert engine_model.build_model(scene, active=None, reach_margin=np.inf, tol=model.tol).source == "model"
+    build = lambda s: engine_model.build_model(s, active=None, reach_margin=np.inf, tol=model.tol)  # noqa: E731
+    assert build(scene).source == "model"
     scene.disable_pair(*model.pairs.owner_a[:1], *model.pairs.owner_b[:1])  # a pair filter: still the Model's shapes
-    assert engine_model.build_model(scene, active=None, reach_margin=np.inf, tol=model.tol).source == "model"
+    assert build(scene).source == "model" and model_of(scene) is model
     scene.add_body("crate", [Box([0.5, 0.0, 0.2], [0.1, 0.1, 0.1], np.eye(3))])
-    m = engine_model.build_model(scene, active=None, reach_margin=np.inf, tol=model.tol)
-    assert m.source == "scene" and "crate" in m.compiled.owner_names
+    m = build(scene)
+    derived = model_of(scene)
+    assert m.source == "model" and "crate" in m.compiled.owner_names
+    assert derived is not model and derived.pin_model is model.pin_model and derived.geometry_is_of(scene)
+    assert "crate" not in model.bodies and model.collision_model.ngeoms + 1 == derived.collision_model.ngeoms
     det = armguard.Detector(scene, threshold=0.05, backend="analytic")
-    assert det._model.source == "scene" and any(n == "crate" for n in det._names_b)
-    scene.remove_body("crate")  # the Model's bodies again: its GeometryModel serves once more
-    assert engine_model.build_model(scene, active=None, reach_margin=np.inf, tol=model.tol).source == "model"
-    other = scene.copy()  # the same robots and shapes, but not the Model's scene (its pairs are the copy's own)
-    assert engine_model.build_model(other, active=None, reach_margin=np.inf, tol=model.tol).source == "scene"
+    assert det._model.source == "model" and any(n == "crate" for n in det._names_b)
+    scene.remove_body("crate")
+    assert build(scene).source == "model" and "crate" not in model_of(scene).bodies
+    other = scene.copy()  # the same robots and shapes; its own Model, with the same kinematics
+    assert build(other).source == "model" and model_of(other).scene is other
+    assert model_of(other).pin_model is model.pin_model
     robot = next(iter(scene.robots))
     link = scene.robots[robot].link_names[-1]
     scene.attach_payload("tool", robot, link, [Sphere([0.0, 0.0, 0.1], 0.05)])
-    m = engine_model.build_model(scene, active=None, reach_margin=np.inf, tol=model.tol)
-    assert m.source == "scene" and "tool" in m.compiled.owner_names
+    m = build(scene)
+    assert m.source == "model" and "tool" in m.compiled.owner_names
 
 
 def test_model_pairs_are_compile_scenes_element_pairs(case):

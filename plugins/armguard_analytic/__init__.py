@@ -169,7 +169,8 @@ class AnalyticChecker(CheckerBase):
 
     # ---------------------------------------------------------------- detectors
     def detector(self, stopping_distance: float = 0.0):
-        """The fused Detector of the Model's scene (every pair kept), one per stopping distance."""
+        """The fused Detector of the Model (every pair kept), one per stopping distance: it compiles this
+        Model, also after its scene moved on to a derived one (``armguard.model.model_of``)."""
         from ._engine._detector import FusedDetector
 
         key = float(stopping_distance)
@@ -179,7 +180,7 @@ class AnalyticChecker(CheckerBase):
                 det = self._detectors.get(key)
                 if det is None:
                     det = self._detectors[key] = FusedDetector(self.model.scene, threshold=0.0, stopping_distance=key,
-                                                               reach_margin=math.inf)
+                                                               reach_margin=math.inf, fixed_model=self.model)
         return det
 
     def _order(self):

@@ -70,8 +70,11 @@ class FusedDetector(Detector):
 
     def __init__(self, scene, threshold: float = 0.05, *, stopping_distance: float = 0.0, active: str | None = None,
                  tol: Tolerances = DEFAULT_TOLERANCES, reach_margin: float = math.inf, backend: str | None = None,
-                 backend_options=None, terrain=None) -> None:
+                 backend_options=None, terrain=None, fixed_model=None) -> None:
         self.scene, _ = scene_and_model(scene)  # a Model: its scene (the Model is the scene's model of record)
+        # fixed_model: compile this Model, not the scene's current one (an AnalyticChecker answers
+        # for its Model); otherwise the detector follows the scene (model_of(scene), rebuilt on change)
+        self._fixed_model = fixed_model
         self._threshold = _check_length(threshold, "threshold")
         self._stopping = _check_length(stopping_distance, "stopping_distance")
         self._tol = tol
@@ -89,7 +92,7 @@ class FusedDetector(Detector):
         """(Re)compile the scene: obstacle lists, BVH, buffers.  Call after changing the scene."""
         margin = max(self._reach_margin, self._threshold, self._stopping)
         self._revision = getattr(self.scene, "revision", None)  # read before compiling: a change during it is seen
-        m = build_model(self.scene, active=self._active, reach_margin=margin, tol=self._tol)
+        m = build_model(self.scene, active=self._active, reach_margin=margin, tol=self._tol, model=self._fixed_model)
         self._model = m
         cs = m.compiled
         _require_pairs(self.scene, cs, self._active, self._with_terrain or self.terrain is not None)

@@ -22,18 +22,20 @@ is the one definition of it) from
   make one owner, and the element order (owners as :meth:`Scene.owners` lists them, each owner's
   objects in its order), so the element and pair numbering is compile_scene's.
 
-What still comes from the Model's Scene, because the GeometryModel has no counterpart: the
-robots' names and link order (the engine tree's rows, :mod:`._pin_tree`, index links that way),
-which owners are static bodies, links or payloads, a body's category (``vehicle`` or
-``environment``, an SRDF group the Scene read), the link that holds a payload, and the workspace
-box (an axis-aligned box in W whose walls are no GeometryObject).
+What the GeometryModel has no counterpart for comes from the Model too: the robots' names and
+link order (``Model.robots``: the engine tree's rows, :mod:`._pin_tree`, index links that way),
+which owners are static bodies, links or payloads and a body's category (``Model.bodies``,
+``Model.payloads``: ``vehicle`` or ``environment``, an SRDF group), the link that holds a payload,
+and the workspace box (``Model.workspace``: an axis-aligned box in W whose walls are no
+GeometryObject).  Nothing is read from ``model.scene``.
 
 The shapes are made once per Model (as its kinematic tree is, ``_model.engine_tree``: a Model's
 GeometryModel and frames do not change; the owner pairs and the workspace box are read each time).
 
-``_model.build_model`` uses it when the Model's GeometryModel holds exactly the scene's shapes
-(:meth:`armguard.model.Model.geometry_is_of`); after ``add_body``, ``attach_payload`` and the
-like it compiles the Scene (``compile_scene``, also the slow reference the tests hold this to).
+``_model.build_model`` compiles the scene's Model (``armguard.model.model_of``): after
+``add_body``, ``attach_payload`` and the like, one derived from the Model the scene was loaded as
+(:mod:`armguard.model._derive`).  ``compile_scene`` compiles a scene without robots that no Model
+was made for, and is the slow reference the tests hold this to.
 """
 
 from __future__ import annotations
@@ -59,11 +61,11 @@ def compile_model(model):
 def compile_model_parts(model) -> tuple:
     """``(compiled, static_shapes)``: :func:`compile_model`'s arrays and, per static element number,
     its shape in W (the detector's static polytopes and feature annotations use the shape objects)."""
-    scene = model.scene
-    cache = model.__dict__.get("_engine_shapes")  # made once per Model: its GeometryModel does not change
-    if cache is None:
-        cache = model.__dict__.setdefault("_engine_shapes", {"owners": _owner_objects(model)})
-    names = cache["owners"]
+    # made once per Model: its GeometryModel does not change (a derived Model starts with the links' shapes)
+    cache = model.__dict__.setdefault("_engine_shapes", {})
+    names = cache.get("owners")
+    if names is None:
+        names = cache.setdefault("owners", _owner_objects(model))
 
     def shapes_in(owner: str, link: str | None) -> tuple:
         """``owner``'s objects as shapes in scene link ``link``'s frame (None: in W), made once per Model."""
@@ -72,23 +74,23 @@ def compile_model_parts(model) -> tuple:
             hit = cache[(owner, link)] = _shapes_in(model, names.get(owner, ()), owner, link)
         return hit
 
-    robots = scene_robots(scene)
+    robots = scene_robots(model)
     rid = {r: i for i, r in enumerate(robots[0])}
     owners = []  # name, kind, robot, link, category, shapes: compile_owners' input, compile_scene's order
     static_shapes, g = {}, 0
-    for b in scene.bodies.values():
+    for b in model.bodies.values():
         shapes = shapes_in(b.name, None)
         owners.append((b.name, OWNER_BODY, -1, -1, 0 if b.category == "vehicle" else 1, shapes))
         for s in shapes:
             static_shapes[g] = s
             g += 1
-    for r, robot in scene.robots.items():
+    for r, robot in model.robots.items():
         for i, ln in enumerate(robot.link_names):
             owner = f"{r}/{ln}"
             if owner in names:
                 owners.append((owner, OWNER_LINK, rid[r], i, -1, shapes_in(owner, owner)))
-    for p in scene.payloads.values():
-        owners.append((p.name, OWNER_PAYLOAD, rid[p.robot], scene.robots[p.robot].link_index(p.link), -1,
+    for p in model.payloads.values():
+        owners.append((p.name, OWNER_PAYLOAD, rid[p.robot], model.robots[p.robot].link_index(p.link), -1,
                        shapes_in(p.name, p.owner_link)))
 
     # the pairs: Model.pairs' rows, consecutive rows of one owner pair as one owner pair
@@ -106,7 +108,7 @@ def compile_model_parts(model) -> tuple:
             key = (oa, ob, cat)
             pairs.append((oid[oa], oid[ob], _CAT_CODE[cat], []))
         pairs[-1][3].append((local[a], local[b]))
-    return compile_owners(robots, owners, pairs, scene.workspace), static_shapes
+    return compile_owners(robots, owners, pairs, model.workspace), static_shapes
 
 
 def _owner_objects(model) -> dict:

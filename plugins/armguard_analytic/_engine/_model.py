@@ -53,19 +53,22 @@ class DetectModel:
 
 
 def _model_of_geometry(scene):
-    """The scene's Model when its GeometryModel holds exactly the scene's shapes, else None (see
-    the module docstring); a scene with robots gets one (``model_of(scene, geometry=False)``, as
-    :func:`engine_tree`), a scene without keeps the one it has, if any."""
+    """The scene's Model, its GeometryModel holding exactly the scene's shapes (``model_of``: the
+    Model the scene was loaded as, one derived from it after bodies or payloads changed, or one
+    built from the scene); None for a scene without robots that no Model was made for."""
     from armguard.model import model_of
 
-    model = model_of(scene, geometry=False) if scene.robots else getattr(scene, "_model_of_record", None)
-    return model if model is not None and model.geometry_is_of(scene) else None
+    if not scene.robots and getattr(scene, "_model_of_record", None) is None:
+        return None
+    model = model_of(scene)
+    return model if model.geometry_is_of(scene) else None
 
 
-def compile_for_engine(scene) -> tuple:
-    """``(compiled, static_shapes, source)``: the scene's element arrays and pairs, from its Model
-    (``source == "model"``) or, where the Model does not hold the scene's shapes, from the Scene."""
-    model = _model_of_geometry(scene)
+def compile_for_engine(scene, model=None) -> tuple:
+    """``(compiled, static_shapes, source)``: the element arrays and pairs of ``model`` when given,
+    else of the scene's Model (``source == "model"``) or, for a scene without one, of the Scene."""
+    if model is None:
+        model = _model_of_geometry(scene)
     if model is not None:
         cs, static_shapes = compile_model_parts(model)
         return cs, static_shapes, "model"
@@ -92,16 +95,20 @@ def engine_tree(scene, robot_names, *, model=None):
     return cache[key]
 
 
-def build_model(scene, *, active: str | None, reach_margin: float, tol) -> DetectModel:
-    """Compile ``scene`` for the detector (explicit, repeatable; the scene is unchanged)."""
-    cs, m_static, source = compile_for_engine(scene)
+def build_model(scene, *, active: str | None, reach_margin: float, tol, model=None) -> DetectModel:
+    """Compile ``scene`` for the detector (explicit, repeatable; the scene is unchanged): its Model
+    (``armguard.model.model_of``), or ``model`` as it is (an AnalyticChecker answers for its Model,
+    also after the scene moved on to a derived one)."""
+    cs, m_static, source = compile_for_engine(scene, model)
     m = DetectModel()
     m.compiled, m.static_shapes, m.source = cs, m_static, source
     robot_names = tuple(cs.robot_names)
     if active is not None and active not in robot_names:
         raise DetectionError(f"active: unknown robot {active!r}; robots are {list(robot_names)}")
     m.robot_names = robot_names
-    tree, link_off, joint_off = engine_tree(scene, robot_names)
+    if model is not None:
+        scene = model  # its robots and kinematics (the scene's while it moves them)
+    tree, link_off, joint_off = engine_tree(scene, robot_names, model=model)
     m.tree, m.link_off, m.joint_off = tree, link_off, joint_off
     m.link_names = tuple(f"{r}/{ln}" for r in robot_names for ln in scene.robots[r].link_names)
     m.link_robot = _c([i for i, r in enumerate(robot_names) for _ in scene.robots[r].link_names], np.int64)

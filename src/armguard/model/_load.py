@@ -334,28 +334,24 @@ def model_of(scene, *, geometry: bool = True) -> Model:
 
     Unchanged: the scene holds the robots the Model was built with (:meth:`Model.moves_robots_of`:
     ``set_robot_base`` or ``add_robot`` make a new one) and, with ``geometry`` (the default), the
-    Model is this scene's and names every shape of it.  ``geometry=False`` asks only for the
-    kinematics (``pin_model``, ``q_index``, ``link_frames``): the Model of record also serves after
-    bodies, payloads or pairs changed, and a :meth:`Scene.copy` with the same robots."""
+    Model's GeometryModel holds exactly the scene's shapes (:meth:`Model.geometry_is_of`).  Bodies
+    or payloads changed since: a Model derived from it (:func:`armguard.model._derive.derive_model`,
+    the same kinematics, no URDF round trip), which becomes the scene's.  ``geometry=False`` asks
+    only for the kinematics (``pin_model``, ``q_index``, ``link_frames``): the Model of record also
+    serves after bodies, payloads or pairs changed, and a :meth:`Scene.copy` with the same robots."""
     m = getattr(scene, "_model_of_record", None)
-    if m is not None and m.moves_robots_of(scene) and (not geometry or (m.scene is scene and _covers(m, scene))):
+    if m is not None and m.moves_robots_of(scene) and (not geometry or m.geometry_is_of(scene)):
         return m
+    if m is not None and geometry and m.moves_robots_of(scene):
+        from ._derive import derive_model
+
+        return derive_model(m, scene)  # bodies or payloads changed: the same kinematics (see _derive)
     new = model_from_scene(scene)
     if m is not None and m.scene is scene and m.srdf is not None and new.srdf is None:
         from ._srdf import carry_srdf
 
         new.srdf = carry_srdf(m, new)  # a moved or added robot keeps the groups and states it was loaded with
     return new
-
-
-def _covers(model: Model, scene) -> bool:
-    try:
-        for owner in scene.owners():
-            for i in range(len(_owner_shapes(scene, owner))):
-                model.geometry_name(owner, i)
-    except KeyError:
-        return False
-    return True
 
 
 def model_from_scene(scene, *, file: str | None = None) -> Model:

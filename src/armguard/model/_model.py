@@ -67,7 +67,11 @@ class Model:
     pin_model : pinocchio.Model        kinematics, joint limits, frames (the model of record)
     collision_model : pinocchio.GeometryModel   every shape, as coal geometry (capsules, convex hulls)
     scene : armguard.Scene             the same system as armguard's Scene (robots, bodies, payloads), with
-                                       the sidecar's workspace, trajectories and canned tests
+                                       the sidecar's workspace, trajectories and canned tests; its
+                                       edits of bodies and payloads make a derived Model
+                                       (``model_of``, :mod:`armguard.model._derive`)
+    robots, bodies, payloads           what ``pin_model`` moves and the GeometryModel holds (read-only)
+    workspace, trajectories, canned_tests   the scene's extras
     pairs : GeometryPairs              the active pairs (SRDF and the papers' rules applied)
     notes : Mapping[str, str]          GeometryObject name -> representation note (where a backend
                                        cannot hold the exact shape)
@@ -115,6 +119,43 @@ class Model:
         scene._model_of_record = self  # model_of(scene) finds it (the scene it built is this model's)
 
     tol = DEFAULT_TOLERANCES
+
+    # ---------------------------------------------------------------- what it is made of
+    @property
+    def robots(self) -> types.MappingProxyType:
+        """Robot name -> the Robot (kinematic chain, link shapes) ``pin_model`` moves, in q order."""
+        return types.MappingProxyType(dict(self._robots))
+
+    @property
+    def bodies(self) -> types.MappingProxyType:
+        """Body name -> the Body (shapes in W, category) whose objects the GeometryModel holds."""
+        return types.MappingProxyType(dict(self._parts[0]))
+
+    @property
+    def payloads(self) -> types.MappingProxyType:
+        """Payload name -> the Payload (holding link, ``X_LP``, shapes) whose objects it holds."""
+        return types.MappingProxyType(dict(self._parts[1]))
+
+    @property
+    def workspace(self):
+        """The workspace box (``WorkspaceBox``: ``lo``, ``hi`` in W) the pairs are measured against, or
+        None: the scene's, or for a Model the scene has moved on from, the one its pairs were listed with."""
+        pairs = self.pairs
+        return self.scene.workspace if self._is_current() else self._pairs_workspace if pairs is not None else None
+
+    def _is_current(self) -> bool:
+        """Whether this is the scene's Model (not one the scene has moved on from, see :attr:`pairs`)."""
+        return getattr(self.scene, "_model_of_record", None) is self
+
+    @property
+    def trajectories(self):
+        """Name -> the trajectories the model's sidecar or scene file names."""
+        return self.scene.trajectories
+
+    @property
+    def canned_tests(self):
+        """Name -> the canned tests (Ranger's operator checks) of the sidecar or scene file."""
+        return self.scene.canned_tests
 
     def link_placement(self, link: str) -> np.ndarray:
         """``X_FL`` (4, 4): scene link ``link``'s frame in its BODY frame ``link_frames[link]``: the
@@ -258,9 +299,12 @@ class Model:
 
     @property
     def pairs(self) -> GeometryPairs:
-        """The active pairs (recomputed if the scene changed since)."""
-        if self._pairs is None or self._revision != self.scene.revision:
-            self._pairs = self._compute_pairs()
+        """The active pairs: recomputed when the scene changed since, while this is the scene's Model;
+        a Model the scene has moved on from (bodies or payloads changed: ``model_of`` derived another)
+        keeps the pairs it had, or lists those among its own shapes, so Checkers built on it keep
+        answering for it."""
+        if self._pairs is None or (self._revision != self.scene.revision and self._is_current()):
+            self._pairs, self._pairs_workspace = self._compute_pairs(), self.scene.workspace
             self._revision = self.scene.revision
         return self._pairs
 
@@ -270,25 +314,28 @@ class Model:
         order) when the scene has a workspace box: :func:`~armguard.model.compile_scene`'s element
         pairs, without compiling the geometry (tests/test_engine_from_model.py holds it to that)."""
         scene = self.scene
-        n_shapes = {}
-        for name, body in scene.bodies.items():
+        n_shapes = {}  # the owners whose objects this Model holds (the scene's, while it is the scene's Model)
+        for name, body in self._parts[0]:
             n_shapes[name] = len(body.shapes)
-        for r, robot in scene.robots.items():
+        for r, robot in self._robots:
             for ln in robot.link_names:
                 if robot.link_shapes.get(ln):
                     n_shapes[f"{r}/{ln}"] = len(robot.link_shapes[ln])
-        for name, p in scene.payloads.items():
+        for name, p in self._parts[1]:
             n_shapes[name] = len(p.shapes)
         geom = self._geom
         a, b, oa, ob, cat = [], [], [], [], []
         for p in scene.allowed_pairs():
+            if p.a not in n_shapes or p.b not in n_shapes:
+                continue
             c = p.category.value
             for i in range(n_shapes[p.a]):
                 na = geom[(p.a, i)]
                 for j in range(n_shapes[p.b]):
                     a.append(na), b.append(geom[(p.b, j)]), oa.append(p.a), ob.append(p.b), cat.append(c)
         if scene.workspace is not None:
-            moving = [o for o in n_shapes if o not in scene.bodies]  # dict order: bodies, links, payloads
+            bodies = dict(self._parts[0])
+            moving = [o for o in n_shapes if o not in bodies]  # dict order: bodies, links, payloads
             for o in moving:
                 for i in range(n_shapes[o]):
                     a.append(geom[(o, i)]), b.append(WORKSPACE), oa.append(o), ob.append(WORKSPACE), cat.append("workspace")

@@ -1,0 +1,126 @@
+"""A Model for a scene whose bodies or payloads changed, derived from the Model it was loaded as.
+
+``add_body``, ``remove_body``, ``attach_payload``, ``release_payload`` and ``grasp`` change the
+scene's shapes, not its robots.  The Model the scene was loaded as still holds the kinematics
+(``pin_model``, ``q_index``, ``link_frames``, the SRDF), so :func:`derive_model` builds the new
+Model from it instead of writing the scene as URDF and reading it back
+(:func:`armguard.model.model_from_scene`):
+
+* the GeometryModel is a copy of the old one (its coal geometries are shared, not copied) less
+  the objects of the bodies and payloads that are gone, plus an object per shape of those that
+  are new, made as the URDF writer and Pinocchio's reader would make it
+  (:mod:`armguard.model.export`): shape ``i`` of owner ``N`` is the object ``N_i``; a body's
+  objects are fixed to the universe, a payload's to its holding link's joint at
+  ``X_JF X_FL X_LP X_PG``; a Prism or ConvexPolyhedron is a convex mesh hull
+  (:func:`~armguard.model._hull.mesh_polytope`, in ``Model.hulls``), a Polygon a flat one, a
+  Cylinder an exact ``coal.Cylinder``;
+* the files, hashes, hull-cache record, SRDF and the compiled kinematic trees are the old
+  Model's; the pairs follow the scene (``Model.pairs``).
+
+The old Model is left as it was: Checkers and Detectors built on it keep answering for it.
+``tests/test_model_derive.py`` holds a derived Model to the one the URDF round trip builds
+(the same object names, placements and shapes) and the analytic engine's arrays to
+``compile_scene``'s.
+"""
+
+from __future__ import annotations
+
+import types
+
+import numpy as np
+
+from ..geometry import ConvexPolyhedron, Polygon, Prism
+from ._from_pin import _se3
+from ._hull import mesh_polytope
+from ._model import Model
+from ._shapes import coal_from_shape, convex_of_polytope
+
+__all__ = ["derive_model"]
+
+# a Model's attributes that follow its GeometryModel: dropped or replaced in a derived one
+_GEOMETRY_CACHES = ("_engine_shapes", "_pairs", "_revision", "_pairs_workspace")
+
+
+def derive_model(model: Model, scene) -> Model | None:
+    """A Model of ``scene`` with ``model``'s kinematics and ``scene``'s bodies and payloads; None
+    when ``model`` does not move ``scene``'s robots (:meth:`Model.moves_robots_of`): a robot
+    moved or added needs a new ``pin_model``."""
+    import pinocchio as pin
+
+    if not model.moves_robots_of(scene):
+        return None
+    old_bodies, old_payloads = model._parts
+    kept = {n for n, b in old_bodies if scene.bodies.get(n) is b} | {n for n, p in old_payloads if scene.payloads.get(n) is p}
+    gone = {n for n, _ in (*old_bodies, *old_payloads)} - kept
+    geom = model.collision_model.copy()
+    names = {k: v for k, v in model._geom.items() if k[0] not in gone}
+    for (owner, _), gname in model._geom.items():
+        if owner in gone:
+            geom.removeGeometryObject(gname)
+    notes = {k: v for k, v in model.notes.items() if k in set(names.values())}
+    hulls = {k: v for k, v in model.hulls.items() if k in set(names.values())}
+    used = {go.name for go in geom.geometryObjects}
+
+    def add(owner: str, shapes, joint: int, frame: int, X_JS: np.ndarray) -> None:
+        for i, shape in enumerate(shapes):
+            g, X_SG, mp = _coal_object(shape)
+            gname = _fresh(f"{owner}_{i}", used)
+            X = X_JS @ X_SG
+            geom.addGeometryObject(pin.GeometryObject(gname, joint, frame, pin.SE3(X[:3, :3], X[:3, 3]), g))
+            names[(owner, i)] = gname
+            if mp is not None:
+                hulls[gname] = mp
+
+    for name, body in scene.bodies.items():
+        if name not in kept:
+            add(name, body.shapes, 0, 0, np.eye(4))
+    for name, p in scene.payloads.items():
+        if name not in kept:
+            f = int(model.link_frames[p.owner_link])
+            fr = model.pin_model.frames[f]
+            X_JL = _se3(fr.placement) @ model.link_placement(p.owner_link)
+            add(name, p.shapes, int(fr.parentJoint), f, X_JL @ np.asarray(p.X_LP, dtype=np.float64))
+
+    new = object.__new__(Model)
+    new.__dict__.update({k: v for k, v in model.__dict__.items() if k not in _GEOMETRY_CACHES})
+    new.collision_model = geom
+    new.scene = scene
+    new._geom = names
+    new._geom_index = {go.name: i for i, go in enumerate(geom.geometryObjects)}
+    new.notes = types.MappingProxyType(notes)
+    new.hulls = types.MappingProxyType(hulls)
+    new._parts = (tuple(scene.bodies.items()), tuple(scene.payloads.items()))
+    new._pairs = new._revision = None
+    links = {f"{r}/{ln}" for r, robot in scene.robots.items() for ln in robot.link_names}
+    shapes = model.__dict__.get("_engine_shapes")
+    if shapes is not None:  # the robots' link shapes are the same objects in the same frames
+        # (owner, link) -> shapes; not "owners" or "local" (GeometryObject names): made again
+        new._engine_shapes = {k: v for k, v in shapes.items() if isinstance(k, tuple) and k[0] in links}
+    scene._model_of_record = new
+    return new
+
+
+def _fresh(name: str, used: set) -> str:
+    """``name``, or ``name#k`` for the least k that no GeometryObject has yet; recorded in ``used``."""
+    out, k = name, 1
+    while out in used:
+        out, k = f"{name}#{k}", k + 1
+    used.add(out)
+    return out
+
+
+def _coal_object(shape) -> tuple:
+    """``(coal geometry, X_SG (4, 4), MeshPolytope or None)``: ``shape`` (given in frame S) as the
+    URDF writer writes it and Pinocchio reads it back (see the module docstring); a zero-length
+    Capsule stays a ``coal.Capsule`` (the writer makes it a sphere: the same points)."""
+    if isinstance(shape, Prism):
+        local = Prism(np.zeros(3), np.eye(3), shape.apothem, shape.half_length, shape.n_sides).as_polyhedron()
+        X = np.eye(4)
+        X[:3, :3], X[:3, 3] = shape.rotation, shape.center
+        mp = mesh_polytope(np.asarray(local.vertices, dtype=np.float64))
+        return convex_of_polytope(mp), X, mp
+    if isinstance(shape, (ConvexPolyhedron, Polygon)):
+        mp = mesh_polytope(np.asarray(shape.vertices, dtype=np.float64))
+        return convex_of_polytope(mp), np.eye(4), mp
+    g, X = coal_from_shape(shape)
+    return g, X, None

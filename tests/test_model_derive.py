@@ -1,0 +1,180 @@
+"""A Model derived after a scene's bodies or payloads changed (``armguard.model._derive``).
+
+The derived Model keeps the loaded Model's kinematics and adds the new shapes as GeometryObjects
+the way the URDF writer and Pinocchio's reader would.  Held here to:
+
+* the URDF round trip (``model_from_scene``: the scene written as URDF and read back, the slow
+  path it replaces): the same objects for bodies and payloads (names, shapes, world placements at
+  random configurations), and coal's distances on the two Models equal row for row;
+* ``compile_scene`` (the analytic engine's arrays from the derived Model equal the Scene's);
+* the loaded Model, which stays as it was: Checkers built on it answer as before.
+"""
+
+from __future__ import annotations
+
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import armguard
+from armguard.geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
+from armguard.model import load_model, model_of
+from armguard.model._load import model_from_scene
+from armguard.scene import compile_scene
+
+from armguard_analytic._engine._from_model import compile_model
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_engine_from_model import _assert_same_arrays, _rot, _scene_path_checker, coded_scene  # noqa: E402
+
+
+def _quiet(f, *a, **k):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return f(*a, **k)
+
+
+def _every_kind(rng, centre) -> list:
+    c = np.asarray(centre, dtype=np.float64)
+    return [Box(c + [0.0, 0.0, 0.0], [0.05, 0.08, 0.04], _rot(rng)),
+            Sphere(c + [0.2, 0.0, 0.0], 0.04),
+            Capsule(c + [0.0, 0.2, 0.0], c + [0.1, 0.25, 0.1], 0.03),
+            Cylinder(c + [-0.2, 0.0, 0.0], _rot(rng), 0.03, 0.08),
+            ConvexPolyhedron(rng.normal(size=(25, 3)) * 0.05 + c + [0.0, -0.2, 0.0]),
+            Prism(c + [0.0, 0.0, 0.2], _rot(rng), 0.03, 0.05, 6),
+            Polygon(c + np.array([[0.0, 0.0, -0.2], [0.1, 0.0, -0.2], [0.1, 0.1, -0.18], [0.0, 0.1, -0.18]]))]
+
+
+def _edited(name: str):
+    """``(loaded Model, scene)``: the Model, then its scene with a body of every shape kind, a
+    payload of two and the first body removed (a built-in's vehicle or a URDF's none)."""
+    model = _quiet(load_model, name) if name != "coded" else _quiet(model_of, coded_scene())
+    scene = model.scene
+    rng = np.random.default_rng(5)
+    scene.add_body("crate", _every_kind(rng, [0.5, 0.3, 0.3]))
+    robot = next(iter(scene.robots))
+    link = scene.robots[robot].link_names[-1]
+    X = np.eye(4)
+    X[:3, :3], X[:3, 3] = _rot(rng), [0.0, 0.01, 0.04]
+    scene.attach_payload("held", robot, link, [Box([0, 0, 0.03], [0.02, 0.03, 0.04], np.eye(3)),
+                                                ConvexPolyhedron(rng.normal(size=(12, 3)) * 0.02)], X)
+    if len(scene.bodies) > 1:
+        scene.remove_body(next(iter(scene.bodies)))
+    return model, scene
+
+
+_NAMES = ["ranger", "panda", "rover", "coded", "kuka_iiwa"]
+
+
+@pytest.fixture(scope="module", params=_NAMES)
+def edited(request):
+    if request.param == "kuka_iiwa" and "kuka_iiwa" not in {m.name for m in armguard.model.known_models() if m.available}:
+        pytest.skip("example-robot-data's kuka_iiwa is not installed")
+    model, scene = _edited(request.param)
+    return model, scene, _quiet(model_of, scene)
+
+
+def test_the_derived_model_keeps_the_kinematics_and_holds_the_scene(edited):
+    model, scene, derived = edited
+    assert derived is not model and derived.pin_model is model.pin_model
+    assert derived.scene is scene and model_of(scene) is derived  # and it is the scene's Model now
+    assert derived.geometry_is_of(scene) and not model.geometry_is_of(scene)
+    assert set(derived.bodies) == set(scene.bodies) and set(derived.payloads) == set(scene.payloads)
+    names = [go.name for go in derived.collision_model.geometryObjects]
+    assert len(set(names)) == len(names)
+    for owner in scene.owners():
+        n = len(scene.bodies[owner].shapes if owner in scene.bodies else
+                scene.payloads[owner].shapes if owner in scene.payloads else
+                scene.robots[owner.split("/")[0]].link_shapes.get(owner.split("/", 1)[1], ()))
+        for i in range(n):
+            assert derived.geometry_name(owner, i) in names
+
+
+def test_the_derived_model_equals_the_urdf_round_trip(edited):
+    """The added body's and payload's objects: the same names and coal shape types as the scene written as URDF
+    and read back, at the same world placements (1e-9 m); coal on both Models gives the same
+    distance for every pair row at random configurations (1e-9 m)."""
+    import pinocchio as pin
+
+    model, scene, derived = edited
+    trip = _quiet(model_from_scene, scene)
+    # the parts added after loading (a loaded body's objects are the loaded file's: the same points,
+    # another frame convention than the writer's)
+    parts = [("crate", len(scene.bodies["crate"].shapes)), ("held", len(scene.payloads["held"].shapes))]
+    dd, td = derived.pin_model.createData(), trip.pin_model.createData()
+    dg, tg = pin.GeometryData(derived.collision_model), pin.GeometryData(trip.collision_model)
+    for q in derived.random_q(4, 3):
+        qs = derived.scene_q(q)
+        pin.updateGeometryPlacements(derived.pin_model, dd, derived.collision_model, dg, q)
+        pin.updateGeometryPlacements(trip.pin_model, td, trip.collision_model, tg, trip.pin_q(qs))
+        for owner, n in parts:
+            for i in range(n):
+                a, b = derived.geometry_name(owner, i), trip.geometry_name(owner, i)
+                assert a == b, owner
+                ga = derived.collision_model.geometryObjects[derived.geometry_index(a)]
+                gb = trip.collision_model.geometryObjects[trip.geometry_index(b)]
+                assert type(ga.geometry) is type(gb.geometry), a
+                Xa, Xb = dg.oMg[derived.geometry_index(a)], tg.oMg[trip.geometry_index(b)]
+                np.testing.assert_allclose(Xa.homogeneous, Xb.homogeneous, rtol=0, atol=1e-9, err_msg=a)
+                if a in derived.hulls:
+                    np.testing.assert_allclose(np.sort(derived.hulls[a].vertices, axis=0),
+                                               np.sort(trip.hulls[b].vertices, axis=0), rtol=0, atol=1e-9)
+    assert list(derived.pairs.owner_a) == list(trip.pairs.owner_a) and list(derived.pairs.owner_b) == list(trip.pairs.owner_b)
+    cd, ct = armguard.checker(derived, "coal"), armguard.checker(trip, "coal")
+    for q in derived.random_q(10, 4):
+        a, b = cd.pair_distances(q), ct.pair_distances(trip.pin_q(derived.scene_q(q)))
+        np.testing.assert_allclose(a.distance, b.distance, rtol=0, atol=1e-9)
+
+
+def test_the_engine_compiles_the_derived_model_as_the_scene(edited):
+    """compile_model's arrays on the derived Model are compile_scene's; the analytic checker gives
+    the compile_scene path's distances (1e-12 m) and coal's verdicts."""
+    _, scene, derived = edited
+    _assert_same_arrays(compile_scene(scene), compile_model(derived), derived)
+    ana, ref, coal = armguard.checker(derived, "analytic"), _scene_path_checker(derived), armguard.checker(derived, "coal")
+    assert ana.detector()._model.source == "model"
+    for q in derived.random_q(10, 6):
+        a, r, c = ana.pair_distances(q), ref.pair_distances(q), coal.pair_distances(q)
+        np.testing.assert_allclose(a.distance, r.distance, rtol=0, atol=1e-12)
+        clear = (np.abs(a.distance) > 1e-6) & (np.abs(c.distance) > 1e-6)
+        np.testing.assert_array_equal((a.distance <= 0)[clear], (c.distance <= 0)[clear])
+
+
+def test_the_loaded_model_and_its_checkers_are_left_as_they_were():
+    model = _quiet(load_model, "panda")
+    ngeoms, npairs = model.collision_model.ngeoms, len(model.pairs)
+    ana, coal = armguard.checker(model, "analytic"), armguard.checker(model, "coal")
+    Q = model.random_q(5, 1)
+    before = [(ana.pair_distances(q).distance, coal.pair_distances(q).distance) for q in Q]
+    scene = model.scene
+    scene.add_body("crate", [Box([0.5, 0.0, 0.3], [0.1, 0.1, 0.1], np.eye(3))])
+    derived = model_of(scene)
+    assert model.collision_model.ngeoms == ngeoms and "crate" not in model.bodies
+    assert len(derived.pairs) > npairs
+    for q, (a, c) in zip(Q, before):
+        np.testing.assert_array_equal(ana.pair_distances(q).distance, a)
+        np.testing.assert_array_equal(coal.pair_distances(q).distance, c)
+
+
+def test_a_body_named_like_a_link_gets_an_object_name_of_its_own():
+    """Pinocchio names a link's objects ``link_i``; a body called like a link would clash: its
+    object is ``link_0#1`` and both are checked."""
+    model = _quiet(load_model, "panda")
+    scene = model.scene
+    robot = next(iter(scene.robots))
+    link = next(ln for ln in scene.robots[robot].link_names if scene.robots[robot].link_shapes.get(ln))
+    taken = model.geometry_name(f"{robot}/{link}", 0)
+    body = taken.rsplit("_", 1)[0]
+    scene.add_body(body, [Sphere([0.6, 0.0, 0.4], 0.05)])
+    derived = model_of(scene)
+    assert derived.geometry_name(body, 0) == f"{taken}#1"
+    assert derived.geometry_name(f"{robot}/{link}", 0) == taken
+    rows = [k for k, o in enumerate(derived.pairs.owner_b) if o == body]
+    assert rows
+    for q in derived.random_q(5, 2):
+        a = armguard.checker(derived, "analytic").pair_distances(q)
+        c = armguard.checker(derived, "coal").pair_distances(q)
+        np.testing.assert_allclose(a.distance[rows], c.distance[rows], rtol=0, atol=1e-6)
