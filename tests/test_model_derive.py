@@ -83,6 +83,7 @@ def test_the_derived_model_keeps_the_kinematics_and_holds_the_scene(edited):
     assert derived.scene is scene and model_of(scene) is derived  # and it is the scene's Model now
     assert derived.geometry_is_of(scene) and not model.geometry_is_of(scene)
     assert set(derived.bodies) == set(scene.bodies) and set(derived.payloads) == set(scene.payloads)
+    assert derived.files == () and not derived.sha256  # the loaded files describe other shapes
     names = [go.name for go in derived.collision_model.geometryObjects]
     assert len(set(names)) == len(names)
     for owner in scene.owners():

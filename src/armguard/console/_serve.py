@@ -5,6 +5,7 @@ from __future__ import annotations
 import threading
 from pathlib import Path
 
+from ..model import scene_of
 from ._app import ConsoleApp
 from ._state import DEFAULT_THRESHOLD, ConsoleState
 
@@ -91,6 +92,7 @@ def make_state(scene, *, threshold: float = DEFAULT_THRESHOLD, terrain=None, unc
     the cell as ``state.cell`` for the Tasks tab) with its model, a
     terrain (an ElevationMap, or a file for :func:`armguard.terrain.load_terrain`) and uncertain
     placements (UncertainPlacement objects or ``"BODY=SIGMA_M[,SIGMA_DEG]"`` texts)."""
+    scene = scene_of(scene)  # a Model: its scene
     from ._overlays import parse_uncertain
 
     model, cell, source = None, None, None
@@ -127,6 +129,7 @@ def serve(scene, *, host: str = "127.0.0.1", port: int = 8080, threshold: float 
     and ``uncertain`` as :func:`make_state`.  With ``block`` it serves until interrupted;
     otherwise it returns the started :class:`ConsoleApp`.
     """
+    scene = scene_of(scene)  # a Model: its scene
     name = scene
     app = ConsoleApp(make_state(scene, threshold=threshold, terrain=terrain, uncertain=uncertain),
                      host=host, port=port).start()

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model import scene_of
 from .._errors import ForbiddenMapError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._clearance import link_obstacle_scene, resolve_scene
@@ -54,6 +55,7 @@ def random_configurations(scene, n: int, seed: int = 0) -> np.ndarray:
     """``(n, n_q)`` flat scene configurations (rad or m), every joint with finite limits uniform within them
     (the others at ``scene.default_q()``).  A map's joints 1–3 span the robot's limits, so they are uniform
     over the map's grid; the other joints do not move the mapped links."""
+    scene = scene_of(scene)  # a Model: its scene
     rng = np.random.default_rng(seed)
     lo, hi = [], []
     for rob in scene.robots.values():

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from ..model import scene_of
 from .._tolerance import DEFAULT_TOLERANCES
 from ._report import CATEGORIES
 
@@ -50,6 +51,7 @@ def _wall_distance(shape, lo, hi) -> float:
 def check_reference(scene, q, threshold: float, *, stopping_distance: float = 0.0, active: str | None = None,
                     tol=DEFAULT_TOLERANCES) -> ReferenceResult:
     """All pairs of ``scene`` at ``q`` by brute force; see the module docstring."""
+    scene = scene_of(scene)  # a Model: its scene
     from ..geometry import distance
 
     items = scene.shapes_at(q)

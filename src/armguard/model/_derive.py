@@ -14,8 +14,10 @@ Model from it instead of writing the scene as URDF and reading it back
   ``X_JF X_FL X_LP X_PG``; a Prism or ConvexPolyhedron is a convex mesh hull
   (:func:`~armguard.model._hull.mesh_polytope`, in ``Model.hulls``), a Polygon a flat one, a
   Cylinder an exact ``coal.Cylinder``;
-* the files, hashes, hull-cache record, SRDF and the compiled kinematic trees are the old
-  Model's; the pairs follow the scene (``Model.pairs``).
+* the SRDF and the compiled kinematic trees are the old Model's; it has no source files (``files``,
+  ``sha256`` empty, as a scene built in code: the files describe the loaded shapes, and a
+  forbidden-values map or golden reference checked against them must not accept the new ones);
+  the pairs follow the scene (``Model.pairs``).
 
 The old Model is left as it was: Checkers and Detectors built on it keep answering for it.
 ``tests/test_model_derive.py`` holds a derived Model to the one the URDF round trip builds
@@ -84,6 +86,10 @@ def derive_model(model: Model, scene) -> Model | None:
     new = object.__new__(Model)
     new.__dict__.update({k: v for k, v in model.__dict__.items() if k not in _GEOMETRY_CACHES})
     new.collision_model = geom
+    # no source files: the files describe the loaded Model's shapes, not these (a forbidden-values
+    # map or a golden reference checked against them must not accept this Model), as for a scene
+    # built in code
+    new.files, new.sha256, new.hull_cache = (), types.MappingProxyType({}), None
     new.scene = scene
     new._geom = names
     new._geom_index = {go.name: i for i, go in enumerate(geom.geometryObjects)}

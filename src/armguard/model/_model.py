@@ -13,10 +13,18 @@ import numpy as np
 from .._errors import DetectionError
 from .._tolerance import DEFAULT_TOLERANCES
 
-__all__ = ["Model", "GeometryPairs", "WORKSPACE", "file_sha256"]
+__all__ = ["Model", "GeometryPairs", "WORKSPACE", "file_sha256", "scene_of"]
 
 WORKSPACE = "workspace"
 """The name of side B of a pair measured against the workspace box's walls (no GeometryObject)."""
+
+
+def scene_of(scene_or_model):
+    """The Scene of an entry point's first argument: a :class:`Model`'s scene, a Scene as given (every
+    function and class that takes a scene takes a Model as well)."""
+    if hasattr(scene_or_model, "pin_model") and hasattr(scene_or_model, "collision_model"):
+        return scene_or_model.scene
+    return scene_or_model
 
 
 def file_sha256(path) -> str:

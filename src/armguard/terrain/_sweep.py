@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..model import scene_of
 from .._errors import TerrainError, VerificationError
 from ..verify import Clearance, ClearanceProfile, Collision, VerificationReport, VerificationStatus
 from ..verify._advance import advance_step
@@ -251,6 +252,7 @@ def verify_with_terrain(scene, trajectory, terrain, *, unknown_margin: float | N
     clearance (capped at the sweep's reach; NaN at the scene check's times and vice versa);
     ``min_clearance`` / its lower bound over both; ``reason`` says what the terrain sweep found.
     """
+    scene = scene_of(scene)  # a Model: its scene
     from ..verify import verify
 
     scene = getattr(scene, "scene", scene)

@@ -76,6 +76,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
+from ..model import scene_of
 from .._errors import UncertaintyError
 from .._tolerance import DEFAULT_TOLERANCES
 from . import se3 as _se3
@@ -536,6 +537,7 @@ def verify_with_confidence(scene, trajectory, placements, confidence: float = 0.
     A robot-base placement needs a scene with one robot (another robot's links would have to
     grow too): otherwise UncertaintyError.
     """
+    scene = scene_of(scene)  # a Model: its scene
     from ..verify import verify
 
     if not 0.0 < float(confidence) < 1.0:

@@ -41,6 +41,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..model import scene_of
 from .._errors import VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ..kinematics._limits import limit_error
@@ -139,6 +140,7 @@ class Guard:
     def __init__(self, scene, *, stopping_distance=0.0, horizon_s: float = 0.5, period_s: float = 0.01,
                  robot: str | None = None, mode: GuardMode = GuardMode.AUTOMATIC, payload_mass: float = 0.0,
                  q_others=None, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES, avoidance=None) -> None:
+        scene = scene_of(scene)  # a Model: its scene
         self.scene = scene
         self.avoidance = avoidance
         self.tol = tol

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model import scene_of
 from .._errors import VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._motion import chain_bounds, shape_radius_about
@@ -66,6 +67,7 @@ class ClearanceModel:
 
     def __init__(self, scene, *, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES, backend: str | None = None,
                  backend_options=None) -> None:
+        scene = scene_of(scene)  # a Model: its scene
         if source not in ("auto", "detector", "reference"):
             raise VerificationError(f"source: expected one of 'auto', 'detector', 'reference', got {source!r}")
         self.scene = scene

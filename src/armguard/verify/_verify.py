@@ -23,6 +23,7 @@ import time as _time
 
 import numpy as np
 
+from ..model import scene_of
 from .._errors import KinematicsError, TrajectoryError, VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._advance import advance_step
@@ -85,6 +86,7 @@ class Verifier:
 
     def __init__(self, scene, *, robot: str | None = None, q_others=None, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES,
                  backend: str | None = None, backend_options=None) -> None:
+        scene = scene_of(scene)  # a Model: its scene
         self.scene = scene
         self.tol = tol
         self._source = source
@@ -533,6 +535,7 @@ def verify(scene, trajectory, *, stopping_distance=0.0, method: str = "certified
     VerificationReport
         SAFE, COLLISION (with the first collision) or INCOMPLETE (never read as safe).
     """
+    scene = scene_of(scene)  # a Model: its scene
     v = Verifier(scene, robot=robot, q_others=q_others, source=source, tol=tol, backend=backend,
                  backend_options=backend_options)
     return v.verify(trajectory, stopping_distance=stopping_distance, method=method, frequency=frequency,
