@@ -179,3 +179,14 @@ def test_a_body_named_like_a_link_gets_an_object_name_of_its_own():
         a = armguard.checker(derived, "analytic").pair_distances(q)
         c = armguard.checker(derived, "coal").pair_distances(q)
         np.testing.assert_allclose(a.distance[rows], c.distance[rows], rtol=0, atol=1e-6)
+
+
+def test_threads_asking_for_an_edited_scenes_model_get_one_derived_model():
+    from concurrent.futures import ThreadPoolExecutor
+
+    model = _quiet(load_model, "panda")
+    scene = model.scene
+    scene.add_body("crate", [Box([0.5, 0.0, 0.3], [0.1, 0.1, 0.1], np.eye(3))])
+    with ThreadPoolExecutor(4) as ex:
+        got = list(ex.map(lambda _: model_of(scene), range(16)))
+    assert all(g is got[0] for g in got) and got[0] is not model and got[0].geometry_is_of(scene)

@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import tempfile
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -329,6 +330,9 @@ def _model_from_plain_scene(sf, file: str, base: Path, ctx) -> Model:
     return model_from_scene(scene_from_dict_validated(sf, file, base), file=file)
 
 
+_DERIVE_LOCK = threading.Lock()
+
+
 def model_of(scene, *, geometry: bool = True) -> Model:
     """The Model of ``scene``: the one it was loaded as (when unchanged since), else one built from it.
 
@@ -345,7 +349,12 @@ def model_of(scene, *, geometry: bool = True) -> Model:
     if m is not None and geometry and m.moves_robots_of(scene):
         from ._derive import derive_model
 
-        return derive_model(m, scene)  # bodies or payloads changed: the same kinematics (see _derive)
+        with _DERIVE_LOCK:  # one derived Model per change, whichever thread asks first
+            m = scene._model_of_record
+            if m.moves_robots_of(scene) and m.geometry_is_of(scene):
+                return m
+            if m.moves_robots_of(scene):
+                return derive_model(m, scene)  # bodies or payloads changed: the same kinematics (see _derive)
     new = model_from_scene(scene)
     if m is not None and m.scene is scene and m.srdf is not None and new.srdf is None:
         from ._srdf import carry_srdf

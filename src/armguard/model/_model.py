@@ -196,7 +196,7 @@ class Model:
         """Raise :class:`~armguard.JointLimitError` when the flat scene ``q`` ``(n,)`` leaves a joint's limits."""
         from ..kinematics._limits import limit_error
 
-        robots = list(self.scene.robots.values())
+        robots = [r for _, r in self._robots]  # the robots pin_model moves
         if not robots:
             return
         lo = np.concatenate([r.lower for r in robots])
@@ -254,7 +254,7 @@ class Model:
     def random_q(self, n: int, rng=None) -> np.ndarray:
         """``(n, nq)`` uniform in-limit configurations (Pinocchio's order)."""
         rng = np.random.default_rng(rng)
-        robots = list(self.scene.robots.values())
+        robots = [r for _, r in self._robots]
         lo = np.concatenate([r.lower for r in robots]) if robots else np.zeros(0)
         hi = np.concatenate([r.upper for r in robots]) if robots else np.zeros(0)
         lo, hi = np.where(np.isfinite(lo), lo, -np.pi), np.where(np.isfinite(hi), hi, np.pi)
@@ -295,7 +295,7 @@ class Model:
                              "a trajectory moves the joints of one robot")
         (r,) = robots
         mine = {sn.split("/", 1)[1] for sn in flat}
-        return tuple(j for j in self.scene.robots[r].joint_names if j in mine)
+        return tuple(j for j in self.robots[r].joint_names if j in mine)
 
     # ---------------------------------------------------------------- pairs
     def geometry_name(self, owner: str, i: int) -> str:
