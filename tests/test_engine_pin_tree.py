@@ -183,8 +183,8 @@ def test_a_moved_base_rebuilds_the_model():
 
 
 def test_a_moved_base_keeps_the_srdf_groups_and_states():
-    """The Model rebuilt after ``set_robot_base`` (its URDF is the scene written out, joints and links
-    renamed) answers the SRDF groups and states it was loaded with, in its own names."""
+    """The Model after ``set_robot_base`` (derived from the loaded one: the same joint and link
+    names, ``armguard.model._derive``) answers the SRDF groups and states it was loaded with."""
     model = armguard.load_model("panda")
     scene = model.scene
     groups = sorted(model.srdf.groups)
@@ -194,7 +194,7 @@ def test_a_moved_base_keeps_the_srdf_groups_and_states():
     X[:3, 3] += [0.3, 0.0, 0.0]
     scene.set_robot_base(r, X)
     new = model_of(scene)
-    assert new is not model and new.srdf is not None and "carried over" in new.srdf.found
+    assert new is not model and new.srdf is model.srdf and new.pin_model is not model.pin_model
     assert {g: new.group_joints(g) for g in groups} == before
     assert len(new.srdf.states) == len(model.srdf.states)
     pin_joints = set(new.joint_names)
@@ -307,3 +307,22 @@ def test_a_chain_that_is_not_one_motion_is_refused():
     d = pm.createData()
     pin.framesForwardKinematics(pm, d, q)
     assert np.max(np.abs(fk_reference(tree, q[None])[0][2] - d.oMf[pm.getFrameId("l2")].homogeneous)) <= 1e-15
+
+
+def test_an_added_robot_keeps_the_srdf_groups_and_states():
+    """``add_robot`` changes the kinematics: the Model is rebuilt through the URDF writer (joints and
+    links renamed) and still answers the SRDF groups it was loaded with (``carry_srdf``)."""
+    model = armguard.load_model("panda")
+    scene = model.scene
+    groups = sorted(model.srdf.groups)
+    before = {g: model.group_joints(g) for g in groups}
+    r = next(iter(scene.robots))
+    X = np.eye(4)
+    X[:3, 3] = [1.5, 0.0, 0.0]
+    scene.add_robot(scene.robots[r].with_name("second").with_base(X))
+    new = model_of(scene)
+    assert new is not model and new.srdf is not None and "carried over" in new.srdf.found
+    assert {g: new.group_joints(g) for g in groups} == before
+    pin_joints = set(new.joint_names)
+    for st in new.srdf.states:  # the states name the rebuilt model's joints
+        assert set(st.values) <= pin_joints

@@ -32,7 +32,7 @@ import types
 import numpy as np
 
 from ..geometry import ConvexPolyhedron, Polygon, Prism
-from ._from_pin import _se3
+from ._from_pin import _inv, _se3
 from ._hull import mesh_polytope
 from ._model import Model
 from ._shapes import coal_from_shape, convex_of_polytope
@@ -49,7 +49,8 @@ def derive_model(model: Model, scene) -> Model | None:
     moved or added needs a new ``pin_model``."""
     import pinocchio as pin
 
-    if not model.moves_robots_of(scene):
+    moved = _rebased(model, scene)
+    if moved is None:
         return None
     old_bodies, old_payloads = model._parts
     kept = {n for n, b in old_bodies if scene.bodies.get(n) is b} | {n for n, p in old_payloads if scene.payloads.get(n) is p}
@@ -73,19 +74,23 @@ def derive_model(model: Model, scene) -> Model | None:
             if mp is not None:
                 hulls[gname] = mp
 
+    pin_model = _moved_bases(model, geom, names, moved, scene) if moved else model.pin_model
     for name, body in scene.bodies.items():
         if name not in kept:
             add(name, body.shapes, 0, 0, np.eye(4))
     for name, p in scene.payloads.items():
         if name not in kept:
             f = int(model.link_frames[p.owner_link])
-            fr = model.pin_model.frames[f]
+            fr = pin_model.frames[f]
             X_JL = _se3(fr.placement) @ model.link_placement(p.owner_link)
             add(name, p.shapes, int(fr.parentJoint), f, X_JL @ np.asarray(p.X_LP, dtype=np.float64))
 
     new = object.__new__(Model)
     new.__dict__.update({k: v for k, v in model.__dict__.items() if k not in _GEOMETRY_CACHES})
     new.collision_model = geom
+    if moved:  # other kinematics: the robots, and trees compiled again
+        new.pin_model, new._robots = pin_model, tuple(scene.robots.items())
+        new.__dict__.pop("_engine_trees", None)
     # no source files: the files describe the loaded Model's shapes, not these (a forbidden-values
     # map or a golden reference checked against them must not accept this Model), as for a scene
     # built in code
@@ -99,11 +104,83 @@ def derive_model(model: Model, scene) -> Model | None:
     new._pairs = new._revision = None
     links = {f"{r}/{ln}" for r, robot in scene.robots.items() for ln in robot.link_names}
     shapes = model.__dict__.get("_engine_shapes")
-    if shapes is not None:  # the robots' link shapes are the same objects in the same frames
+    if shapes is not None and not moved:  # the robots' link shapes are the same objects in the same frames
         # (owner, link) -> shapes; not "owners" or "local" (GeometryObject names): made again
         new._engine_shapes = {k: v for k, v in shapes.items() if isinstance(k, tuple) and k[0] in links}
     scene._model_of_record = new
     return new
+
+
+def _rebased(model: Model, scene) -> dict | None:
+    """Robot name -> ``D = X_WB' X_WB^-1`` for each robot of ``scene`` that is ``model``'s mounted
+    elsewhere (``set_robot_base``: the same joints, links and shapes, another ``X_WB``); ``{}`` when
+    ``model`` moves ``scene``'s robots; None when a robot was added, removed or changed otherwise."""
+    old = dict(model._robots)
+    if list(old) != list(scene.robots):
+        return None
+    moved = {}
+    for r, new in scene.robots.items():
+        o = old[r]
+        if new is o:
+            continue
+        same = (new.joints is o.joints and new.joint_names == o.joint_names and new.link_names == o.link_names
+                and new.tool_link == o.tool_link and new.ik == o.ik
+                and all(new.link_shapes[ln] is o.link_shapes[ln] for ln in o.link_names))
+        if not same:
+            return None
+        moved[r] = np.asarray(new.X_WB, dtype=np.float64) @ _inv(np.asarray(o.X_WB, dtype=np.float64))
+    return moved
+
+
+def _moved_bases(model: Model, geom, names: dict, moved: dict, scene):
+    """A copy of ``pin_model`` with each robot of ``moved`` mounted at ``D X_WB``: its root joints'
+    placements, the frames on the universe that lead only to its links (its root link and the fixed
+    joints above it; not a frame shared with another robot or a body, as the URDF writer's
+    ``world``), and in ``geom`` its objects on the universe (its fixed links' and payloads') become
+    ``D X``."""
+    import pinocchio as pin
+
+    pm = pin.Model(model.pin_model)
+    frames = pm.frames
+
+    def up(f: int) -> list:  # f and the frames above it on the universe, to (not including) frame 0
+        out = []
+        while f != 0 and int(frames[f].parentJoint) == 0:
+            out.append(f)
+            f = int(frames[f].parentFrame)
+        return out
+
+    robot_of_frame: dict[int, set] = {}
+    for owner, f in model.link_frames.items():
+        r = owner.split("/", 1)[0]
+        for g in up(int(f)):
+            robot_of_frame.setdefault(g, set()).add(r)
+    for (owner, _), gname in names.items():  # a body's objects hold their frames for no robot
+        go = geom.geometryObjects[geom.getGeometryId(gname)]
+        if owner in scene.bodies and int(go.parentJoint) == 0:
+            for g in up(int(go.parentFrame)):
+                robot_of_frame.setdefault(g, set()).add(None)
+    joint_robot = {}
+    for owner, f in model.link_frames.items():
+        j = int(frames[int(f)].parentJoint)
+        while j != 0 and int(pm.parents[j]) != 0:
+            j = int(pm.parents[j])
+        if j != 0:
+            joint_robot[j] = owner.split("/", 1)[0]
+    for r, D in moved.items():
+        S = pin.SE3(D[:3, :3], D[:3, 3])
+        for f, rs in robot_of_frame.items():
+            if rs == {r}:
+                frames[f].placement = S * frames[f].placement
+        for j, rj in joint_robot.items():
+            if rj == r:
+                pm.jointPlacements[j] = S * pm.jointPlacements[j]
+        for (owner, _), gname in names.items():
+            held = scene.payloads[owner].robot if owner in scene.payloads else owner.split("/", 1)[0] if "/" in owner else None
+            go = geom.geometryObjects[geom.getGeometryId(gname)]
+            if held == r and int(go.parentJoint) == 0:
+                go.placement = S * go.placement
+    return pm
 
 
 def _fresh(name: str, used: set) -> str:

@@ -338,23 +338,25 @@ def model_of(scene, *, geometry: bool = True) -> Model:
 
     Unchanged: the scene holds the robots the Model was built with (:meth:`Model.moves_robots_of`:
     ``set_robot_base`` or ``add_robot`` make a new one) and, with ``geometry`` (the default), the
-    Model's GeometryModel holds exactly the scene's shapes (:meth:`Model.geometry_is_of`).  Bodies
-    or payloads changed since: a Model derived from it (:func:`armguard.model._derive.derive_model`,
-    the same kinematics, no URDF round trip), which becomes the scene's.  ``geometry=False`` asks
+    Model's GeometryModel holds exactly the scene's shapes (:meth:`Model.geometry_is_of`).  Bodies,
+    payloads or robot bases (``set_robot_base``) changed since: a Model derived from it
+    (:func:`armguard.model._derive.derive_model`, no URDF round trip), which becomes the scene's; a
+    robot added or removed: one built from the scene.  ``geometry=False`` asks
     only for the kinematics (``pin_model``, ``q_index``, ``link_frames``): the Model of record also
     serves after bodies, payloads or pairs changed, and a :meth:`Scene.copy` with the same robots."""
     m = getattr(scene, "_model_of_record", None)
     if m is not None and m.moves_robots_of(scene) and (not geometry or m.geometry_is_of(scene)):
         return m
-    if m is not None and geometry and m.moves_robots_of(scene):
+    if m is not None:
         from ._derive import derive_model
 
         with _DERIVE_LOCK:  # one derived Model per change, whichever thread asks first
             m = scene._model_of_record
-            if m.moves_robots_of(scene) and m.geometry_is_of(scene):
+            if m.moves_robots_of(scene) and (not geometry or m.geometry_is_of(scene)):
                 return m
-            if m.moves_robots_of(scene):
-                return derive_model(m, scene)  # bodies or payloads changed: the same kinematics (see _derive)
+            derived = derive_model(m, scene)  # bodies, payloads or robot bases changed (see _derive)
+            if derived is not None:
+                return derived
     new = model_from_scene(scene)
     if m is not None and m.scene is scene and m.srdf is not None and new.srdf is None:
         from ._srdf import carry_srdf
