@@ -381,7 +381,7 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, be
     inside = status != GJK_SEPARATED and status != GJK_NOT_CONVERGED and simp[0] == 1.0
     if inside and -(ra + rb) > level:  # overlapping cores, a depth wanted: EPA in A's frame as well
         ok, depth, nx, ny, nz, ax, ay, az, bx, by, bz = epa_depth(pa, adja, pb, adjb, work[0:nw], gjk_eps, rot,
-                                                                  tx, ty, tz)
+                                                                  tx, ty, tz, taba, tabb)
         if ok and depth > eps_len:
             wax, way, waz = _to_world(SF, oA, ax, ay, az, 1.0)
             wbx, wby, wbz = _to_world(SF, oA, bx, by, bz, 1.0)

@@ -33,7 +33,7 @@ import math
 from numba import njit
 
 from ._pair_gjk import (GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _b_dir, _b_point, _support, gjk_core,
-                        gjk_dir_adj2, inner_difference)
+                        gjk_dir_adj2, inner_difference, table_size, warm_start)
 from ._pair_sat import _axis
 from ._pair_segment_segment import write_rounded
 
@@ -190,7 +190,8 @@ def _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz
 
 
 @njit(cache=True)
-def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0):  # pragma: no cover - compiled
+def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0, taba=None,
+              tabb=None):  # pragma: no cover - compiled
     """EPA on ``M = hull(pa) - hull(pb)`` from the tetrahedron GJK left in ``work[0:9]``.
 
     ``adja``, ``adjb``: vertex graphs (``_pack.polytope_adjacency`` format; empty: scan);
@@ -201,7 +202,10 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0): 
     ``ok`` False: EPA did not settle it (see the module docstring), the rest is meaningless.
 
     ``rot`` (``R_AB`` row-major, or None), ``o``: B's points are ``R_AB pb + o`` in A's frame, as for
-    GJK (``_pair_gjk.gjk_dir_rel``); everything returned is in A's frame.
+    GJK (``_pair_gjk.gjk_dir_rel``); everything returned is in A's frame.  ``taba``, ``tabb`` (``None``
+    or empty: none): the hulls' support tables; each climb starts from the better of the face's
+    first vertex and the table's entry for the face normal (``_pair_gjk.warm_start``; on ur3's
+    hulls 540 -> 240 dot products per depth).
     """
     if work.shape[0] < EPA_WORK_SIZE or work[0] != 1.0:
         return False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -230,6 +234,8 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0): 
             return False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         nf += 1
     nv = 4
+    na_t = table_size(taba)
+    nb_t = table_size(tabb)
     hmin = math.inf  # the least support value seen: depth <= hmin
     kept = False
     kd = knx = kny = knz = kax = kay = kaz = kbx = kby = kbz = 0.0
@@ -253,9 +259,9 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0): 
         j2 = int(work[of + 2])
         ha = int(work[_V0 + 5 * j0 + 3])
         hb = int(work[_V0 + 5 * j0 + 4])
-        ia = _support(pa, adja, ha, nx, ny, nz)
+        ia = _support(pa, adja, warm_start(pa, taba, na_t, ha, nx, ny, nz), nx, ny, nz)
         ex, ey, ez = _b_dir(rot, -nx, -ny, -nz)
-        ib = _support(pb, adjb, hb, ex, ey, ez)
+        ib = _support(pb, adjb, warm_start(pb, tabb, nb_t, hb, ex, ey, ez), ex, ey, ez)
         qx, qy, qz = _b_point(pb, rot, ib)
         wx = pa[ia, 0] - qx - ox
         wy = pa[ia, 1] - qy - oy
