@@ -204,25 +204,31 @@ def _pick(k, a0, a1, a2, a3):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def _climb(pb, adj, i, dx, dy, dz):  # pragma: no cover - compiled
-    """Steepest-ascent hill climbing of ``p . d`` over B's vertex graph from vertex ``i``.
+    """Hill climbing of ``p . d`` over B's vertex graph from vertex ``i``: first improvement (it moves to
+    the first strictly better neighbour it meets and scans that vertex's neighbours next).
 
     On the vertex graph of a convex polytope (or of any triangulation of its surface) a vertex
     with no strictly better neighbour maximises a linear function over the whole polytope (its
     edges span a cone containing the polytope), so the climb returns a true support vertex; the
     values strictly increase, so it terminates.  ``adj`` as :func:`armguard.geometry._pack.polytope_adjacency`.
+    Steepest ascent (every neighbour scanned before a move) took 10-13 % longer per separated hull
+    pair on ur3's, kuka_iiwa's and so101's hulls: warm-started climbs are one or two moves, and a
+    move needs no full scan.
     """
     best = pb[i, 0] * dx + pb[i, 1] * dy + pb[i, 2] * dz
-    while True:
-        nxt = i
-        for k in range(adj[ADJ_HEAD + i], adj[ADJ_HEAD + i + 1]):
-            j = adj[k]
-            s = pb[j, 0] * dx + pb[j, 1] * dy + pb[j, 2] * dz
-            if s > best:
-                best = s
-                nxt = j
-        if nxt == i:
-            return i
-        i = nxt
+    k = adj[ADJ_HEAD + i]
+    e = adj[ADJ_HEAD + i + 1]
+    while k < e:
+        j = adj[k]
+        s = pb[j, 0] * dx + pb[j, 1] * dy + pb[j, 2] * dz
+        if s > best:
+            best = s
+            i = j
+            k = adj[ADJ_HEAD + j]
+            e = adj[ADJ_HEAD + j + 1]
+        else:
+            k += 1
+    return i
 
 
 @njit(cache=True, inline="always")
