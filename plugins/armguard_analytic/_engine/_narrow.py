@@ -330,7 +330,7 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, be
     """Two convex point cores (boxes, hulls; a point or segment against a polytope) whose points stay
     in their element frames: GJK in A's frame
     on hull(A) and ``X_AB hull(B)``, ``X_AB = X_WA^-1 X_WB`` (:func:`armguard.geometry._pair_gjk.gjk_dir_rel`),
-    supports climbing each hull's vertex graph (cold climbs from its support table); only the support
+    supports climbing each hull's vertex graph (from its support table's entry or the previous support); only the support
     points GJK visits are rotated, where :func:`pair_distance` needs every point, face normal and edge
     direction of both moved to W first (on so101's hulls of 2,100 to 4,900 vertices, a quarter of a
     check).

@@ -32,9 +32,12 @@ import math
 
 from numba import njit
 
+from ._pair_support_table import table_cell, table_size, table_start, warm_start
+
 __all__ = [
     "GJK_WORK_SIZE", "GJK_SEPARATED", "GJK_INTERSECTING", "GJK_NOT_CONVERGED", "ADJ_HEAD", "CLIMB_MIN_VERTICES",
-    "gjk_core", "gjk_dir", "gjk_dir_adj", "gjk_dir_adj2", "gjk_dir_rel", "inner_difference", "table_size", "warm_start",
+    "gjk_core", "gjk_dir", "gjk_dir_adj", "gjk_dir_adj2", "gjk_dir_rel", "inner_difference",
+    "table_cell", "table_size", "table_start", "warm_start",  # from ._pair_support_table
 ]
 
 GJK_WORK_SIZE = 64
@@ -504,68 +507,6 @@ def gjk_dir_rel(pa, adja, taba, pb, adjb, tabb, rot, ox, oy, oz, dx, dy, dz, eps
     sb = table_start(tabb, ex, ey, ez)
     return _gjk(pa, adja, pb, adjb, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep, sa, sb, taba,
                 tabb)
-
-
-@njit(cache=True, inline="always")
-def table_cell(dx, dy, dz, n):  # pragma: no cover - compiled
-    """The cube-map cell of direction ``d`` (see :func:`armguard.geometry._pack.support_table`), or -1
-    for the zero vector."""
-    x = abs(dx)
-    y = abs(dy)
-    z = abs(dz)
-    if x >= y and x >= z:
-        f = 0 if dx >= 0.0 else 1
-        m, u, v = x, dy, dz
-    elif y >= z:
-        f = 2 if dy >= 0.0 else 3
-        m, u, v = y, dx, dz
-    else:
-        f = 4 if dz >= 0.0 else 5
-        m, u, v = z, dx, dy
-    if not m > 0.0:
-        return -1
-    iu = min(max(int((u / m + 1.0) * 0.5 * n), 0), n - 1)
-    iv = min(max(int((v / m + 1.0) * 0.5 * n), 0), n - 1)
-    return (f * n + iu) * n + iv
-
-
-@njit(cache=True, inline="always")
-def table_size(tab):  # pragma: no cover - compiled
-    """``n`` of a support table of ``6 n n`` entries (0: ``None`` or empty)."""
-    if tab is None:
-        return 0
-    if tab.shape[0] == 0:
-        return 0
-    return int(math.sqrt(tab.shape[0] / 6.0) + 0.5)
-
-
-@njit(cache=True, inline="always")
-def warm_start(p, tab, n, i, dx, dy, dz):  # pragma: no cover - compiled
-    """Where a warm climb along ``d`` starts: vertex ``i`` (the previous support), or ``tab``'s entry
-    for ``d`` (``n`` its :func:`table_size`; 0: no table) when that is farther along ``d``.  Any start
-    is correct (a climb ends at a true support); after GJK's first step the search direction turns by
-    tens of degrees, and a climb from the previous support took 4-6 steps where one from the table's
-    entry takes 1-2."""
-    if n == 0:
-        return i
-    k = table_cell(dx, dy, dz, n)
-    if k < 0:
-        return i
-    c = tab[k]
-    if p[c, 0] * dx + p[c, 1] * dy + p[c, 2] * dz > p[i, 0] * dx + p[i, 1] * dy + p[i, 2] * dz:
-        return c
-    return i
-
-
-@njit(cache=True, inline="always")
-def table_start(tab, dx, dy, dz):  # pragma: no cover - compiled
-    """Where a cold climb along ``d`` starts: ``tab``'s entry for ``d`` (-1, the stored extremes,
-    when ``tab`` is empty or ``d`` zero).  ``tab`` has ``6 n n`` entries."""
-    if tab.shape[0] == 0:
-        return -1
-    n = int(math.sqrt(tab.shape[0] / 6.0) + 0.5)
-    k = table_cell(dx, dy, dz, n)
-    return tab[k] if k >= 0 else -1
 
 
 @njit(cache=True, inline="always")
