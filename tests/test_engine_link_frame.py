@@ -18,7 +18,8 @@ from numba import njit
 
 import armguard
 from armguard.geometry._pack import hull_graph, support_table
-from armguard.geometry._pair_gjk import GJK_NOT_CONVERGED, _support, gjk_dir_adj2, gjk_dir_rel, table_start
+from armguard.geometry._pair_gjk import (GJK_NOT_CONVERGED, _support, gjk_dir_adj2, gjk_dir_rel, table_size, table_start,
+                                         warm_start)
 from armguard.model import known_models
 
 
@@ -47,6 +48,11 @@ def _start(tab, d):
     return table_start(tab, d[0], d[1], d[2])
 
 
+@njit(cache=False)
+def _warm(p, tab, i, d):
+    return warm_start(p, tab, table_size(tab), i, d[0], d[1], d[2])
+
+
 @settings(max_examples=30, deadline=None, derandomize=True)
 @given(seed=st.integers(0, 2**31), n=st.integers(60, 600))
 def test_climbs_from_the_support_table_reach_the_true_support(seed, n):
@@ -55,7 +61,7 @@ def test_climbs_from_the_support_table_reach_the_true_support(seed, n):
     p = _cloud(rng, n)
     adj, _ = hull_graph(p)
     tab = support_table(p)
-    assert tab.shape == (6 * 8 * 8,) and tab.min() >= 0 and tab.max() < n
+    assert tab.shape == (6 * 16 * 16,) and tab.min() >= 0 and tab.max() < n
     for d in rng.normal(size=(40, 3)):
         s = _start(tab, d)
         assert 0 <= s < n
@@ -63,6 +69,15 @@ def test_climbs_from_the_support_table_reach_the_true_support(seed, n):
         assert p[i] @ d >= np.max(p @ d) - 1e-12
     assert _start(tab, np.zeros(3)) == -1  # the zero vector: the stored extremes
     assert _start(np.zeros(0, np.int64), np.ones(3)) == -1  # no table
+    # a warm start (the better of a previous support and the table's entry) from any vertex: a
+    # vertex at least as far along d as the previous one, from which the climb is exact
+    for d in rng.normal(size=(40, 3)):
+        prev = int(rng.integers(0, n))
+        s = _warm(p, tab, prev, d)
+        assert 0 <= s < n and p[s] @ d >= p[prev] @ d
+        assert s == prev or s == _start(tab, d)
+        assert p[_climb_from(p, adj, s, d)] @ d >= np.max(p @ d) - 1e-12
+    assert _warm(p, tab, 3, np.zeros(3)) == 3 and _warm(p, np.zeros(0, np.int64), 3, np.ones(3)) == 3
 
 
 @settings(max_examples=40, deadline=None, derandomize=True)
@@ -100,10 +115,15 @@ def test_gjk_in_a_frame_of_its_own_equals_gjk_on_moved_points(seed, gap):
                      1e-12, 1e-12, 128, w_W[0:9], np.inf)
         e_rel = epa_depth(pa, ga, pb, gb, w_rel, 1e-12, np.ascontiguousarray(R_AB.ravel()), *t_AB)
         e_W = epa_depth(np.ascontiguousarray(pa_W), ga, np.ascontiguousarray(pb_W), gb, w_W, 1e-12)
-        if e_rel[0] and e_W[0]:
-            assert abs(e_rel[1] - e_W[1]) <= 1e-9  # the depth
-            n_W = R_WA @ np.array(e_rel[2:5])
-            assert np.linalg.norm(n_W - np.array(e_W[2:5])) <= 1e-6
+        w_tab = np.zeros(EPA_WORK_SIZE)  # the link-frame path's call: climbs warm-started from the tables
+        gjk_dir_rel(pa, ga, ta, pb, gb, tb, np.ascontiguousarray(R_AB.ravel()), *t_AB, *d0_A, 1e-12, 1e-12, 128,
+                    w_tab[0:9], np.inf)
+        e_tab = epa_depth(pa, ga, pb, gb, w_tab, 1e-12, np.ascontiguousarray(R_AB.ravel()), *t_AB, ta, tb)
+        for e in (e_rel, e_tab):
+            if e[0] and e_W[0]:
+                assert abs(e[1] - e_W[1]) <= 1e-9  # the depth
+                n_W = R_WA @ np.array(e[2:5])
+                assert np.linalg.norm(n_W - np.array(e_W[2:5])) <= 1e-6
     if ref[0] == 0:  # separated: the witnesses, mapped to W, are the reference's nearest points
         a_W = R_WA @ np.array(got[2:5]) + t_WA
         b_W = R_WA @ np.array(got[5:8]) + t_WA

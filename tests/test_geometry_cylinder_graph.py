@@ -20,7 +20,7 @@ from _geometry_strategies import random_rotation
 from armguard._tolerance import DEFAULT_TOLERANCES as TOL
 from armguard.geometry import Cylinder
 from armguard.geometry._dispatch import _support_core
-from armguard.geometry._pack import hull_graph
+from armguard.geometry._pack import hull_graph, support_table
 from armguard.geometry._pair_gjk import ADJ_HEAD
 from armguard.geometry._pair_cylinder import SUPPORT_WORK_SIZE, support_pair, support_pair_graph, support_point
 from armguard.geometry._pair_cylinder_support import _WA, _warm_point
@@ -54,6 +54,18 @@ def _both(p, adj, cyl_core, graph_first: bool):
     return (dg, sg, out_g), (ds, ss, out_s)
 
 
+def _with_table(p, adj, cyl_core, graph_first: bool):
+    """:func:`_both`'s graph call with the hull's support table as well (the detector's call)."""
+    pc, cc, rc = cyl_core
+    none = np.zeros(0, np.int64)
+    tab = support_table(p)
+    args = (TOL.length, TOL.gjk_epsilon, TOL.gjk_max_iterations, -np.inf)
+    out, work = np.empty(9), np.empty(SUPPORT_WORK_SIZE)
+    if graph_first:
+        return support_pair_graph(p, adj, np.zeros(0), 0.0, pc, none, cc, rc, out, work, *args, tab, none)
+    return support_pair_graph(pc, none, cc, rc, p, adj, np.zeros(0), 0.0, out, work, *args, none, tab)
+
+
 @pytest.mark.parametrize("graph_first", [True, False])
 def test_climbed_supports_give_the_scans_distance(graph_first):
     rng = np.random.default_rng(7)
@@ -65,6 +77,8 @@ def test_climbed_supports_give_the_scans_distance(graph_first):
         (dg, sg, og), (ds, ss, os_) = _both(p, adj, _support_core(cyl), graph_first)
         assert sg == ss
         assert abs(dg - ds) <= 1e-9, (dg, ds)
+        dt, st_ = _with_table(p, adj, _support_core(cyl), graph_first)  # climbs warm-started from the table
+        assert st_ == ss and abs(dt - ds) <= 1e-9, (dt, ds)
         # the contract: |p_WB - p_WA| = |d|, the witnesses within the scan's by the same tolerance
         assert abs(np.linalg.norm(og[3:6] - og[0:3]) - abs(dg)) <= 1e-9
         n_sep += ds > 0.0
@@ -103,6 +117,7 @@ def test_warm_climbs_return_true_support_vertices(seed, n, step):
     p = _cloud(rng, n)
     adj, _tri = hull_graph(p)
     p = np.ascontiguousarray(p @ random_rotation(rng).T + rng.uniform(-1.0, 1.0, 3))
+    tab = support_table(p)
     work = np.empty(SUPPORT_WORK_SIZE)
     on_hull = np.flatnonzero(np.diff(adj[ADJ_HEAD:ADJ_HEAD + len(p) + 1]) > 0)  # inner points have no neighbours
     work[_WA] = rng.choice([-1.0, float(rng.choice(on_hull)), float(len(p) + rng.integers(0, 10**6))])
@@ -116,3 +131,5 @@ def test_warm_climbs_return_true_support_vertices(seed, n, step):
         assert s[i] == s.max()  # the scan's value: a true support vertex
         x, y, z = support_point(p, adj, np.zeros(0), *d)  # the cold climb, from the best stored extreme
         assert x * d[0] + y * d[1] + z * d[2] == s.max()
+        x, y, z = _warm_point(p, adj, np.zeros(0), d[0], d[1], d[2], work, _WA, tab)  # from the table's entry too
+        assert x * d[0] + y * d[1] + z * d[2] == s.max() and s[int(work[_WA])] == s.max()

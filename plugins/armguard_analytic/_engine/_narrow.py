@@ -330,7 +330,7 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, be
     """Two convex point cores (boxes, hulls; a point or segment against a polytope) whose points stay
     in their element frames: GJK in A's frame
     on hull(A) and ``X_AB hull(B)``, ``X_AB = X_WA^-1 X_WB`` (:func:`armguard.geometry._pair_gjk.gjk_dir_rel`),
-    supports climbing each hull's vertex graph (cold climbs from its support table); only the support
+    supports climbing each hull's vertex graph (from its support table's entry or the previous support); only the support
     points GJK visits are rotated, where :func:`pair_distance` needs every point, face normal and edge
     direction of both moved to W first (on so101's hulls of 2,100 to 4,900 vertices, a quarter of a
     check).
@@ -381,7 +381,7 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, be
     inside = status != GJK_SEPARATED and status != GJK_NOT_CONVERGED and simp[0] == 1.0
     if inside and -(ra + rb) > level:  # overlapping cores, a depth wanted: EPA in A's frame as well
         ok, depth, nx, ny, nz, ax, ay, az, bx, by, bz = epa_depth(pa, adja, pb, adjb, work[0:nw], gjk_eps, rot,
-                                                                  tx, ty, tz)
+                                                                  tx, ty, tz, taba, tabb)
         if ok and depth > eps_len:
             wax, way, waz = _to_world(SF, oA, ax, ay, az, 1.0)
             wbx, wby, wbz = _to_world(SF, oA, bx, by, bz, 1.0)

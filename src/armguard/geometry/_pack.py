@@ -230,16 +230,18 @@ def hull_graph(points) -> tuple[np.ndarray, np.ndarray]:
     return _graph(v, [tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), tri
 
 
-def support_table(points, n: int = 8) -> np.ndarray:
+def support_table(points, n: int = 16) -> np.ndarray:
     """Where a cold support climb on ``points (V, 3)`` starts, by direction: ``(6 n n,) int64``, entry
-    :func:`armguard.geometry._pair_gjk.table_cell` of a direction holds the point maximising ``p . u``
+    :func:`armguard.geometry._pair_support_table.table_cell` of a direction holds the point maximising ``p . u``
     for ``u`` the centre of that cell of the cube map (6 faces of ``n x n`` cells; the cube's face
     ``+x`` holds directions with ``x`` their largest component, and so on).
 
     A climb from there to the true support along ``d`` is a few steps (on so101's hulls of 770 to
     4,900 vertices: about 15 dot products instead of 60 to 100 from the best of the six extreme
     vertices); any start is correct (a climb over the hull's graph ends at a true support vertex),
-    the table only shortens the walk."""
+    the table only shortens the walk.  GJK and EPA start every climb from the better of the table's
+    entry and the previous support (``_pair_support_table.warm_start``); ``n = 16`` (1,536 entries, 12 kB a
+    hull) took 4-8 % less time per separated hull pair than ``n = 8`` on ur3's and so101's hulls."""
     v = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     c = -1.0 + (np.arange(n) + 0.5) * (2.0 / n)
     uu, vv = np.meshgrid(c, c, indexing="ij")

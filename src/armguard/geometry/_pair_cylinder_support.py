@@ -7,7 +7,7 @@ import math
 
 from numba import njit
 
-from ._pair_gjk import _inner_point, _support
+from ._pair_gjk import _inner_point, _support, table_size, warm_start
 
 __all__ = ["CYL_W", "SUPPORT_WORK_SIZE", "SUPPORT_GAP", "support_point"]
 
@@ -86,26 +86,31 @@ def _put(w, o, ax, ay, az, bx, by, bz):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _warm_point(p, adj, cyl, dx, dy, dz, work, slot):  # pragma: no cover - compiled
+def _warm_point(p, adj, cyl, dx, dy, dz, work, slot, tab=None):  # pragma: no cover - compiled
     """:func:`support_point`, a point core's climb starting at the vertex ``work[slot]`` (the last
     support found on that core; < 0: a cold start) and storing the vertex it finds there.  A climb
     from any vertex returns a true support vertex (``_pair_gjk._climb``); GJK's and EPA's
     successive directions are close, so the warm climb is a few steps where a cold one, from the
-    stored extremes, took ~15 on a 6,877-vertex gripper hull."""
+    stored extremes, took ~15 on a 6,877-vertex gripper hull.  ``tab`` (``None``: none, pruned at
+    compile time; or the core's support table, empty: none): the climb starts from the better of
+    ``work[slot]`` and the table's entry for ``d`` (``_pair_gjk.warm_start``)."""
     if cyl.shape[0] >= CYL_W:
         return support_point(p, adj, cyl, dx, dy, dz)
     i = int(work[slot])
     if i >= p.shape[0]:
         i = -1  # not a vertex of this core (a buffer not reset by gjk_support): a cold start
+    if i >= 0:
+        i = warm_start(p, tab, table_size(tab), i, dx, dy, dz)
     i = _support(p, adj, i, dx, dy, dz)
     work[slot] = i
     return p[i, 0], p[i, 1], p[i, 2]
 
 
 @njit(cache=True, inline="always")
-def _pair_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, work):  # pragma: no cover - compiled
+def _pair_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, work, ta=None, tb=None):  # pragma: no cover - compiled
     """Support of ``M = A - B`` along ``d``: A's along ``d``, B's along ``-d`` (point cores climbed
-    from their last supports, ``work[_WA]`` and ``work[_WB]``)."""
-    ax, ay, az = _warm_point(pa, ga, ca, dx, dy, dz, work, _WA)
-    bx, by, bz = _warm_point(pb, gb, cb, -dx, -dy, -dz, work, _WB)
+    from their last supports, ``work[_WA]`` and ``work[_WB]``, or their support tables' entries
+    ``ta``, ``tb`` where those are farther along: :func:`_warm_point`)."""
+    ax, ay, az = _warm_point(pa, ga, ca, dx, dy, dz, work, _WA, ta)
+    bx, by, bz = _warm_point(pb, gb, cb, -dx, -dy, -dz, work, _WB, tb)
     return ax, ay, az, bx, by, bz

@@ -33,7 +33,7 @@ import math
 from numba import njit
 
 from ._pair_gjk import (GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _b_dir, _b_point, _support, gjk_core,
-                        gjk_dir_adj2, inner_difference)
+                        gjk_dir_adj2, inner_difference, table_size, warm_start)
 from ._pair_sat import _axis
 from ._pair_segment_segment import write_rounded
 
@@ -52,7 +52,7 @@ it stopped was 1.4e-10 to 6.9e-9 m.  The cylinder EPA (``_pair_cylinder_epa``) k
 bracket the same way, within ``SUPPORT_GAP`` (1e-8 m per m); this bound is wider because the
 alternative here is a SAT that does not return, not a refusal."""
 _NV = EPA_MAX_VERTICES
-_NF = 1024  # face slots (removed faces are compacted away when the slots run out)
+_NF = 1024  # face slots (kept packed: a removed face's slot takes the last face)
 _NE = 256  # horizon edges of one iteration
 _V0 = 9  # work[0:9]: GJK's final simplex (see _pair_gjk._gjk)
 _F0 = _V0 + 5 * _NV  # vertex k: [w (3), ia, ib] at _V0 + 5 k
@@ -190,7 +190,8 @@ def _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz
 
 
 @njit(cache=True)
-def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0):  # pragma: no cover - compiled
+def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0, taba=None,
+              tabb=None):  # pragma: no cover - compiled
     """EPA on ``M = hull(pa) - hull(pb)`` from the tetrahedron GJK left in ``work[0:9]``.
 
     ``adja``, ``adjb``: vertex graphs (``_pack.polytope_adjacency`` format; empty: scan);
@@ -201,7 +202,10 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0): 
     ``ok`` False: EPA did not settle it (see the module docstring), the rest is meaningless.
 
     ``rot`` (``R_AB`` row-major, or None), ``o``: B's points are ``R_AB pb + o`` in A's frame, as for
-    GJK (``_pair_gjk.gjk_dir_rel``); everything returned is in A's frame.
+    GJK (``_pair_gjk.gjk_dir_rel``); everything returned is in A's frame.  ``taba``, ``tabb`` (``None``
+    or empty: none): the hulls' support tables; each climb starts from the better of the face's
+    first vertex and the table's entry for the face normal (``_pair_gjk.warm_start``; on ur3's
+    hulls 540 -> 240 dot products per depth).
     """
     if work.shape[0] < EPA_WORK_SIZE or work[0] != 1.0:
         return False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -230,6 +234,8 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0): 
             return False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         nf += 1
     nv = 4
+    na_t = table_size(taba)
+    nb_t = table_size(tabb)
     hmin = math.inf  # the least support value seen: depth <= hmin
     kept = False
     kd = knx = kny = knz = kax = kay = kaz = kbx = kby = kbz = 0.0
@@ -239,7 +245,7 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0): 
         dbest = math.inf
         for f in range(nf):
             o = _F0 + 8 * f
-            if work[o + 7] != 0.0 and work[o + 6] < dbest:
+            if work[o + 6] < dbest:
                 dbest = work[o + 6]
                 fi = f
         if fi < 0:
@@ -253,9 +259,9 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0): 
         j2 = int(work[of + 2])
         ha = int(work[_V0 + 5 * j0 + 3])
         hb = int(work[_V0 + 5 * j0 + 4])
-        ia = _support(pa, adja, ha, nx, ny, nz)
+        ia = _support(pa, adja, warm_start(pa, taba, na_t, ha, nx, ny, nz), nx, ny, nz)
         ex, ey, ez = _b_dir(rot, -nx, -ny, -nz)
-        ib = _support(pb, adjb, hb, ex, ey, ez)
+        ib = _support(pb, adjb, warm_start(pb, tabb, nb_t, hb, ex, ey, ez), ex, ey, ez)
         qx, qy, qz = _b_point(pb, rot, ib)
         wx = pa[ia, 0] - qx - ox
         wy = pa[ia, 1] - qy - oy
@@ -283,12 +289,15 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0): 
             if work[_V0 + 5 * k + 3] == ia and work[_V0 + 5 * k + 4] == ib:
                 return _kept(kept, kd, knx, kny, knz, kax, kay, kaz, kbx, kby, kbz)
         _put_vertex(work, nv, pa, pb, ia, ib, rot, ox, oy, oz)
-        # remove the faces seen from w; their unshared edges form the horizon
+        # remove the faces seen from w (the last face moves into a removed one's slot, so the faces
+        # stay packed and the scans above read live faces only: on ur3's and so101's hulls, where the
+        # dead faces were kept until the slots ran out, EPA took 25-30 % longer); their unshared
+        # edges form the horizon
         ne = 0
-        for f in range(nf):
+        f = 0
+        while f < nf:
             o = _F0 + 8 * f
-            if work[o + 7] != 0.0 and work[o + 3] * wx + work[o + 4] * wy + work[o + 5] * wz - work[o + 6] > 0.0:
-                work[o + 7] = 0.0
+            if work[o + 3] * wx + work[o + 4] * wy + work[o + 5] * wz - work[o + 6] > 0.0:
                 a0 = work[o]
                 a1 = work[o + 1]
                 a2 = work[o + 2]
@@ -299,20 +308,16 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0): 
                     ne = _horizon_edge(work, ne, a2, a0)
                 if ne < 0:
                     return _kept(kept, kd, knx, kny, knz, kax, kay, kaz, kbx, kby, kbz)
+                nf -= 1  # the last face into this slot (the faces stay packed: every slot live)
+                ol = _F0 + 8 * nf
+                for q in range(8):
+                    work[o + q] = work[ol + q]
+            else:
+                f += 1
         if ne < 3:
             break
-        if nf + ne > _NF:  # compact: keep the live faces only
-            m = 0
-            for f in range(nf):
-                o = _F0 + 8 * f
-                if work[o + 7] != 0.0:
-                    om = _F0 + 8 * m
-                    for q in range(8):
-                        work[om + q] = work[o + q]
-                    m += 1
-            nf = m
-            if nf + ne > _NF:
-                break
+        if nf + ne > _NF:
+            break
         for k in range(ne):
             o = _E0 + 2 * k
             if not _put_face(work, nf, int(work[o]), int(work[o + 1]), nv):

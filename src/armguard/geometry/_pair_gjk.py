@@ -32,9 +32,12 @@ import math
 
 from numba import njit
 
+from ._pair_support_table import table_cell, table_size, table_start, warm_start
+
 __all__ = [
     "GJK_WORK_SIZE", "GJK_SEPARATED", "GJK_INTERSECTING", "GJK_NOT_CONVERGED", "ADJ_HEAD", "CLIMB_MIN_VERTICES",
     "gjk_core", "gjk_dir", "gjk_dir_adj", "gjk_dir_adj2", "gjk_dir_rel", "inner_difference",
+    "table_cell", "table_size", "table_start", "warm_start",  # from ._pair_support_table
 ]
 
 GJK_WORK_SIZE = 64
@@ -204,25 +207,31 @@ def _pick(k, a0, a1, a2, a3):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def _climb(pb, adj, i, dx, dy, dz):  # pragma: no cover - compiled
-    """Steepest-ascent hill climbing of ``p . d`` over B's vertex graph from vertex ``i``.
+    """Hill climbing of ``p . d`` over B's vertex graph from vertex ``i``: first improvement (it moves to
+    the first strictly better neighbour it meets and scans that vertex's neighbours next).
 
     On the vertex graph of a convex polytope (or of any triangulation of its surface) a vertex
     with no strictly better neighbour maximises a linear function over the whole polytope (its
     edges span a cone containing the polytope), so the climb returns a true support vertex; the
     values strictly increase, so it terminates.  ``adj`` as :func:`armguard.geometry._pack.polytope_adjacency`.
+    Steepest ascent (every neighbour scanned before a move) took 10-13 % longer per separated hull
+    pair on ur3's, kuka_iiwa's and so101's hulls: warm-started climbs are one or two moves, and a
+    move needs no full scan.
     """
     best = pb[i, 0] * dx + pb[i, 1] * dy + pb[i, 2] * dz
-    while True:
-        nxt = i
-        for k in range(adj[ADJ_HEAD + i], adj[ADJ_HEAD + i + 1]):
-            j = adj[k]
-            s = pb[j, 0] * dx + pb[j, 1] * dy + pb[j, 2] * dz
-            if s > best:
-                best = s
-                nxt = j
-        if nxt == i:
-            return i
-        i = nxt
+    k = adj[ADJ_HEAD + i]
+    e = adj[ADJ_HEAD + i + 1]
+    while k < e:
+        j = adj[k]
+        s = pb[j, 0] * dx + pb[j, 1] * dy + pb[j, 2] * dz
+        if s > best:
+            best = s
+            i = j
+            k = adj[ADJ_HEAD + j]
+            e = adj[ADJ_HEAD + j + 1]
+        else:
+            k += 1
+    return i
 
 
 @njit(cache=True, inline="always")
@@ -303,7 +312,7 @@ def _m_support(pa, adja, ia, pb, adj, ib, rot, ox, oy, oz, dx, dy, dz):  # pragm
 
 @njit(cache=True, _nrt=False)
 def _gjk(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep=math.inf, sa=-1,
-         sb=-1):  # pragma: no cover
+         sb=-1, taba=None, tabb=None):  # pragma: no cover
     """GJK from the initial direction ``d``; A's and B's supports by a scan (``adja`` / ``adj``
     ``None``, a branch numba prunes at compile time, or an empty graph) or by hill climbing on
     their vertex graphs.  ``rot`` (``None``: the identity, a branch pruned at compile time; else 9
@@ -321,11 +330,15 @@ def _gjk(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_i
 
     ``sa``, ``sb``: where A's and B's first climbs start (-1: the stored extreme vertex farthest along
     the direction, ``_seed``; a caller with a :func:`armguard.geometry._pack.support_table` passes its
-    entry, :func:`table_start`)."""
+    entry, :func:`table_start`).  ``taba``, ``tabb`` (``None``: none, a branch pruned at compile time;
+    or the support tables, empty: none): every later climb starts from the better of the previous
+    support and the table's entry for the new direction (:func:`warm_start`)."""
     # the first vertex: supports along d
     ia, ib, x0, y0, z0 = _m_support(pa, adja, sa, pb, adj, sb, rot, ox, oy, oz, dx, dy, dz)
     ia0 = ia
     ib0 = ib
+    na_t = table_size(taba)
+    nb_t = table_size(tabb)
     x1 = y1 = z1 = x2 = y2 = z2 = x3 = y3 = z3 = 0.0
     ia1 = ib1 = ia2 = ib2 = ia3 = ib3 = 0
     l0 = 1.0
@@ -335,6 +348,8 @@ def _gjk(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_i
     vy = y0
     vz = z0
     vv = vx * vx + vy * vy + vz * vz
+    pvx, pvy, pvz = dx, dy, dz  # the direction of the last climbs
+    pvv = dx * dx + dy * dy + dz * dz
     eps2 = eps_len * eps_len
     status = GJK_NOT_CONVERGED
     inside = False
@@ -342,8 +357,17 @@ def _gjk(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_i
         if vv <= eps2:
             status = GJK_INTERSECTING
             break
-        # support of A along -v, of B along +v
-        ia, ib, wx, wy, wz = _m_support(pa, adja, ia, pb, adj, ib, rot, ox, oy, oz, vx, vy, vz)  # warm starts
+        # support of A along -v, of B along +v, climbs from the previous supports or, where v turned by
+        # more than ~6 degrees since the last climbs (cos^2 < 0.99), the tables' entries if those are
+        # farther along (past that turn the previous supports are as good and the look-ups cost more
+        # than they save: -8-10 % per separated hull pair on ur3's, kuka_iiwa's and so101's hulls)
+        turn = pvx * vx + pvy * vy + pvz * vz
+        if turn < 0.0 or turn * turn < 0.99 * pvv * vv:
+            ia = warm_start(pa, taba, na_t, ia, -vx, -vy, -vz)
+            ex, ey, ez = _b_dir(rot, vx, vy, vz)
+            ib = warm_start(pb, tabb, nb_t, ib, ex, ey, ez)
+        pvx, pvy, pvz, pvv = vx, vy, vz, vv
+        ia, ib, wx, wy, wz = _m_support(pa, adja, ia, pb, adj, ib, rot, ox, oy, oz, vx, vy, vz)
         vw = vx * wx + vy * wy + vz * wz
         if vv - vw <= gjk_eps * math.sqrt(vv):
             status = GJK_SEPARATED
@@ -475,45 +499,14 @@ def gjk_dir_rel(pa, adja, taba, pb, adjb, tabb, rot, ox, oy, oz, dx, dy, dz, eps
     ``R_AB hull(pb) + o`` (``rot``: ``R_AB`` row-major, 9 floats), everything returned in A's frame.
     A caller holding both hulls in their link frames passes ``X_AB = X_WA^-1 X_WB`` and moves no
     vertex (only the support points GJK visits are rotated).  ``taba``, ``tabb``: each hull's
-    :func:`armguard.geometry._pack.support_table` (empty: start from the stored extremes)."""
+    :func:`armguard.geometry._pack.support_table` (empty: start from the stored extremes): the first
+    climbs start from their entries, every later one from the better of its entry and the previous
+    support (on ur3's and so101's hulls: 214 -> 131 dot products per separated pair)."""
     ex, ey, ez = _b_dir(rot, dx, dy, dz)
     sa = table_start(taba, -dx, -dy, -dz)
     sb = table_start(tabb, ex, ey, ez)
-    return _gjk(pa, adja, pb, adjb, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep, sa, sb)
-
-
-@njit(cache=True, inline="always")
-def table_cell(dx, dy, dz, n):  # pragma: no cover - compiled
-    """The cube-map cell of direction ``d`` (see :func:`armguard.geometry._pack.support_table`), or -1
-    for the zero vector."""
-    x = abs(dx)
-    y = abs(dy)
-    z = abs(dz)
-    if x >= y and x >= z:
-        f = 0 if dx >= 0.0 else 1
-        m, u, v = x, dy, dz
-    elif y >= z:
-        f = 2 if dy >= 0.0 else 3
-        m, u, v = y, dx, dz
-    else:
-        f = 4 if dz >= 0.0 else 5
-        m, u, v = z, dx, dy
-    if not m > 0.0:
-        return -1
-    iu = min(max(int((u / m + 1.0) * 0.5 * n), 0), n - 1)
-    iv = min(max(int((v / m + 1.0) * 0.5 * n), 0), n - 1)
-    return (f * n + iu) * n + iv
-
-
-@njit(cache=True, inline="always")
-def table_start(tab, dx, dy, dz):  # pragma: no cover - compiled
-    """Where a cold climb along ``d`` starts: ``tab``'s entry for ``d`` (-1, the stored extremes,
-    when ``tab`` is empty or ``d`` zero).  ``tab`` has ``6 n n`` entries."""
-    if tab.shape[0] == 0:
-        return -1
-    n = int(math.sqrt(tab.shape[0] / 6.0) + 0.5)
-    k = table_cell(dx, dy, dz, n)
-    return tab[k] if k >= 0 else -1
+    return _gjk(pa, adja, pb, adjb, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep, sa, sb, taba,
+                tabb)
 
 
 @njit(cache=True, inline="always")
