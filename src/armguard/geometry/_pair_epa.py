@@ -190,7 +190,7 @@ def _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz
 
 
 @njit(cache=True)
-def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0):  # pragma: no cover - compiled
+def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0, cap=-math.inf):  # pragma: no cover - compiled
     """EPA on ``M = hull(pa) - hull(pb)`` from the tetrahedron GJK left in ``work[0:9]``.
 
     ``adja``, ``adjb``: vertex graphs (``_pack.polytope_adjacency`` format; empty: scan);
@@ -202,6 +202,11 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0): 
 
     ``rot`` (``R_AB`` row-major, or None), ``o``: B's points are ``R_AB pb + o`` in A's frame, as for
     GJK (``_pair_gjk.gjk_dir_rel``); everything returned is in A's frame.
+
+    ``cap`` (m; ``-inf``: off): the caller only needs the depth when it is at least ``cap``.  Once
+    a support value ``h < cap`` is seen (``depth <= h``, see the module docstring) EPA stops and
+    returns ``(True, h, n, 0, ...)``: ``h`` an upper bound on the depth below ``cap``, not the depth,
+    witnesses not computed.  A depth returned below ``cap`` is therefore a bound in any case.
     """
     if work.shape[0] < EPA_WORK_SIZE or work[0] != 1.0:
         return False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -267,6 +272,8 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0): 
                 repeated = True
         if h < hmin:
             hmin = h
+        if hmin < cap:  # depth <= hmin < cap: the caller's cut-off is proved, the depth is not wanted
+            return True, hmin, nx, ny, nz, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         if h - dbest <= eps or repeated:
             ok, ax, ay, az, bx, by, bz = _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz)
             if not ok:
