@@ -129,6 +129,21 @@ def _argsort_heap(key, order, n):  # pragma: no cover - compiled
         _sift_down(key, order, 0, end)
 
 
+@njit(cache=True)
+def _argsort_small(key, order, n):  # pragma: no cover - compiled
+    """:func:`_argsort_heap`'s result (ties by index) by insertion sort up to 32 keys (fewer
+    branches and moves than the heap for the few pairs a check sorts), the heap beyond."""
+    if n > 32:
+        _argsort_heap(key, order, n)
+        return
+    for i in range(n):
+        j = i
+        while j > 0 and _before(key, i, order[j - 1]):
+            order[j] = order[j - 1]
+            j -= 1
+        order[j] = i
+
+
 @njit(cache=True, inline="always")
 def _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi):  # pragma: no cover - compiled
     """Bounding-sphere gap of explicit pair ``p`` (m): to the workspace walls (``b < 0``), or between the
@@ -167,11 +182,9 @@ def _near_box_gap(a, mov_idx, sphW, MF, o_blo, o_bhi, o_slo, o_shi, bvh_left, bv
 
 
 @njit(cache=True, inline="always")
-def _near_box_pair(a, mov_idx, sphW, MF, o_blo, o_bhi, o_slo, o_shi, bvh_left, bvh_right, bvh_start, bvh_count,
-                   bvh_items, pair_of):  # pragma: no cover - compiled
-    """:func:`_near_box_gap` and the pair number of the box that gives it (-1: none)."""
-    ma = mov_idx[a]
-    cx = sphW[a, 0]; cy = sphW[a, 1]; cz = sphW[a, 2]; cr = sphW[a, 3]
+def _near_leaf(cx, cy, cz, cr, MF, o_blo, o_bhi, bvh_left, bvh_right):  # pragma: no cover - compiled
+    """The BVH leaf reached from the root by always descending to the child whose box is nearer the
+    sphere ``(c, r)`` (:func:`_sb_gap`): O(depth), a likely home of the sphere's nearest boxes."""
     node = 0
     while bvh_left[node] >= 0:
         left = bvh_left[node]
@@ -179,17 +192,7 @@ def _near_box_pair(a, mov_idx, sphW, MF, o_blo, o_bhi, o_slo, o_shi, bvh_left, b
         gl = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * left, o_bhi + 3 * left)
         gr = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * right, o_bhi + 3 * right)
         node = left if gl <= gr else right
-    g_min = math.inf
-    p_min = -1
-    for it in range(bvh_start[node], bvh_start[node] + bvh_count[node]):
-        s = bvh_items[it]
-        p = pair_of[ma, s]
-        if p >= 0:
-            g = _sb_gap(cx, cy, cz, cr, MF, o_slo + 3 * s, o_shi + 3 * s)
-            if g < g_min:
-                g_min = g
-                p_min = p
-    return g_min, p_min
+    return node
 
 
 @njit(cache=True, inline="always")

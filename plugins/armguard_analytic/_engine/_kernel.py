@@ -38,7 +38,7 @@ from armguard.kinematics._fk import _fk_kernel
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SC, at, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, SUM_STATUS, seg1, seg2, seg3
-from ._cull import (_argsort_heap, _bb_gap, _explicit_gap, _gjk_pair, _obb_gap, _sb_gap,
+from ._cull import (_argsort_heap, _argsort_small, _bb_gap, _explicit_gap, _gjk_pair, _obb_gap, _sb_gap,
                     obb_apart_moving, obb_apart_static)
 from ._narrow import BOUNDED
 from ._step import move_element, pair_step
@@ -403,7 +403,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                 plb[n_x] = _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi)
                                 pflag[n_x] = p
                                 n_x += 1
-                        _argsort_heap(plb, order, n_x)
+                        _argsort_small(plb, order, n_x)
                     for k in range(n_explicit + n_x):
                         if collided and mode == MODE_YESNO:
                             break

@@ -2,8 +2,8 @@
 
 Branch and bound over those pairs, in three steps (:func:`static_gjk_pairs`):
 
-1. Seed: of each GJK element's nearest-descent BVH leaf (:func:`._cull._near_box_pair`), the pair
-   with the least bounding-sphere gap is evaluated first, so its category's cut-off is finite.
+1. Seed: of the pairs in each GJK element's nearest-descent BVH leaf (:func:`._cull._near_leaf`), the
+   one with the least key (below) is evaluated first, so its category's cut-off is finite.
 2. Collect: each GJK element walks the BVH against the cut-off (nearest child first, as the
    kernel's walk) and keeps every pair whose lower bound does not exceed it, with a key: the larger
    of the bounding-sphere gap and, for an obstacle box, the face-axis separation of the element's
@@ -25,7 +25,7 @@ import math
 
 from numba import njit
 
-from ._cull import _argsort_heap, _face_sep, _near_box_pair, _obb_gap, _obb_w, _sb_gap, obb_apart_static
+from ._cull import _argsort_small, _bb_gap, _face_sep, _near_leaf, _obb_gap, _obb_w, _sb_gap, obb_apart_static
 from ._layout import K, seg1, seg2
 from ._narrow import BOUNDED
 from ._step import pair_step
@@ -41,6 +41,26 @@ _K_glink, _K_pstamp, _K_plb, _K_pflag, _K_order = K["glink"], K["pstamp"], K["pl
 _K_stack, _K_gap, _K_best = K["stack"], K["gap"], K["best"]
 _K_bvh_lo, _K_bvh_hi, _K_static_lo, _K_static_hi = K["bvh_lo"], K["bvh_hi"], K["static_lo"], K["static_hi"]
 _K_obb_L, _K_boxW, _K_Xs = K["obb_L"], K["boxW"], K["Xs"]
+
+
+@njit(cache=True, inline="always")
+def _key(cx, cy, cz, cr, A, has_obb, kb, s, b, MF, o_slo, o_shi, SF, o_box, cut):  # pragma: no cover - compiled
+    """Sort key (m) of the pair of a moving element (sphere ``c, r``, box ``A`` when ``has_obb``) and
+    static element ``b`` (number ``s`` among the static ones, core kind ``kb``): the larger of the
+    sphere's gap to ``b``'s axis-aligned box, to its own box (a box or cylinder), and the two boxes'
+    face-axis separation; a lower bound on the distance when positive.  Cheapest first: once one
+    exceeds ``cut`` (> 0) the rest are not computed (the pair is culled either way)."""
+    key = _sb_gap(cx, cy, cz, cr, MF, o_slo + 3 * s, o_shi + 3 * s)
+    if key > 0.0 and key > cut:
+        return key
+    if kb == 2 or kb == 4:  # a box, or a cylinder's own box
+        if key > 0.0:  # the sphere-OBB gap
+            key = max(key, _obb_gap(cx, cy, cz, cr, SF, o_box + 15 * b))
+            if key > cut:
+                return key
+        if has_obb:  # the boxes' face-axis separation: tighter for long links
+            key = max(key, _face_sep(A, SF, o_box + 15 * b))
+    return key
 
 
 @njit(cache=True)
@@ -81,17 +101,27 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
     n_sm = st_mov.shape[0]
     err = 0
     collided = False
-    # ---- 1. seed: the least nearest-leaf gap over the GJK elements
+    # ---- 1. seed: the least key among the pairs of each GJK element's nearest-descent leaf
     g_seed = math.inf
     p_seed = -1
     for i in range(n_sm):
         a = st_mov[i]
-        if core[a] >= 2:
-            g, p = _near_box_pair(a, mov_idx, sphW, MF, o_blo, o_bhi, o_slo, o_shi, bvh_left, bvh_right, bvh_start,
-                                  bvh_count, bvh_items, pair_of)
-            if p >= 0 and g < g_seed:
-                g_seed = g
-                p_seed = p
+        if core[a] < 2:
+            continue
+        ma = mov_idx[a]
+        cx = sphW[a, 0]; cy = sphW[a, 1]; cz = sphW[a, 2]; cr = sphW[a, 3]
+        has_obb = MF[o_obb + 16 * a + 15] != 0.0
+        A = _obb_w(MF, o_obb + 16 * a, SF, o_Xs + 16 * glink[a], 0.0)
+        node = _near_leaf(cx, cy, cz, cr, MF, o_blo, o_bhi, bvh_left, bvh_right)
+        for it in range(bvh_start[node], bvh_start[node] + bvh_count[node]):
+            s = bvh_items[it]
+            p = pair_of[ma, s]
+            if p >= 0:
+                b = pair_b[p]
+                g = _key(cx, cy, cz, cr, A, has_obb, core[b], s, b, MF, o_slo, o_shi, SF, o_box, math.inf)
+                if g < g_seed:
+                    g_seed = g
+                    p_seed = p
     if p_seed >= 0 and pstamp[p_seed] != stamp_now:
         d, err = pair_step(p_seed, pair_a[p_seed], pair_b[p_seed], flag, H, MF, MI, SF, SI, out9, eps_len, eps_par,
                            gjk_eps, max_iter, woff, lvl, max(cut0, best[pair_cat[p_seed]]), n_eval, stamp_now)
@@ -113,8 +143,16 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
         cx = sphW[a, 0]; cy = sphW[a, 1]; cz = sphW[a, 2]; cr = sphW[a, 3]
         has_obb = MF[o_obb + 16 * a + 15] != 0.0
         A = _obb_w(MF, o_obb + 16 * a, SF, o_Xs + 16 * glink[a], 0.0)
+        # the W-aligned box of a's box (it contains a): a tighter node bound than the sphere for long links
+        ex = A[3] * abs(A[6]) + A[4] * abs(A[7]) + A[5] * abs(A[8])
+        ey = A[3] * abs(A[9]) + A[4] * abs(A[10]) + A[5] * abs(A[11])
+        ez = A[3] * abs(A[12]) + A[4] * abs(A[13]) + A[5] * abs(A[14])
+        lx = A[0] - ex; ly = A[1] - ey; lz = A[2] - ez
+        hx = A[0] + ex; hy = A[1] + ey; hz = A[2] + ez
         stack[0] = 0
         gapst[0] = _sb_gap(cx, cy, cz, cr, MF, o_blo, o_bhi)
+        if has_obb:
+            gapst[0] = max(gapst[0], _bb_gap(lx, ly, lz, hx, hy, hz, 0.0, MF, o_blo, o_bhi))
         top = 1
         while top > 0:
             top -= 1
@@ -128,6 +166,9 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
                 right = bvh_right[node]
                 gl = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * left, o_bhi + 3 * left)
                 gr = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * right, o_bhi + 3 * right)
+                if has_obb:
+                    gl = max(gl, _bb_gap(lx, ly, lz, hx, hy, hz, 0.0, MF, o_blo + 3 * left, o_bhi + 3 * left))
+                    gr = max(gr, _bb_gap(lx, ly, lz, hx, hy, hz, 0.0, MF, o_blo + 3 * right, o_bhi + 3 * right))
                 if gl <= gr:  # push the farther first: the nearer is popped first
                     stack[top] = right; gapst[top] = gr; top += 1
                     stack[top] = left; gapst[top] = gl; top += 1
@@ -141,19 +182,19 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
                 if p < 0 or pstamp[p] == stamp_now:
                     continue
                 b = pair_b[p]
-                kb = core[b]
-                key = _sb_gap(cx, cy, cz, cr, MF, o_slo + 3 * s, o_shi + 3 * s)
-                if key > 0.0 and (kb == 2 or kb == 4):  # a box, or a cylinder's own box: the sphere-OBB gap
-                    key = max(key, _obb_gap(cx, cy, cz, cr, SF, o_box + 15 * b))
-                if has_obb and (kb == 2 or kb == 4):  # the boxes' face-axis separation: tighter for long links
-                    key = max(key, _face_sep(A, SF, o_box + 15 * b))
-                if key > 0.0 and key > max(cut0, best[pair_cat[p]]):
+                cutp = max(cut0, best[pair_cat[p]])
+                if has_obb:
+                    g = _bb_gap(lx, ly, lz, hx, hy, hz, 0.0, MF, o_slo + 3 * s, o_shi + 3 * s)
+                    if g > 0.0 and g > cutp:
+                        continue
+                key = _key(cx, cy, cz, cr, A, has_obb, core[b], s, b, MF, o_slo, o_shi, SF, o_box, cutp)
+                if key > 0.0 and key > cutp:
                     continue
                 plb[n_c] = key
                 pflag[n_c] = p
                 n_c += 1
     # ---- 3. evaluate in increasing key
-    _argsort_heap(plb, order, n_c)
+    _argsort_small(plb, order, n_c)
     for k in range(n_c):
         p = pflag[order[k]]
         key = plb[order[k]]
