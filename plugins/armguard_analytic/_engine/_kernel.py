@@ -444,8 +444,8 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                             collided = True
                 elif n_st > 0:
                     # ---- moving-static pairs through the BVH, nearest child first.  The exact and min
-                    # modes take the GJK elements last, in increasing gap to a near obstacle box (the
-                    # likeliest pair first, so the category's best tightens early)
+                    # modes take the GJK elements last (._static_gjk: a seed pair, then every pair not
+                    # culled, in increasing key, so the category's best tightens early)
                     n_sm = st_mov.shape[0]
                     for i in range(n_sm):
                         if err != 0 or (collided and mode == MODE_YESNO):
@@ -546,7 +546,10 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                         break
                             if err != 0 or (collided and mode == MODE_YESNO):
                                 break
-                    if by_order and err == 0:
+                    has_gjk = False  # (no call, no views, for a model without GJK elements: the Ranger cycle)
+                    for i in range(n_sm):
+                        has_gjk = has_gjk or core[st_mov[i]] >= 2
+                    if by_order and err == 0 and has_gjk:
                         n_eval, err, hit = static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, track, eps_len, eps_par,
                                                             gjk_eps, max_iter, woff, lvl, level, n_eval, stamp_now)
                         collided = collided or hit

@@ -32,6 +32,8 @@ from ._step import pair_step
 
 __all__ = ["static_gjk_pairs"]
 
+_FLAT = 32  # up to this many static elements, step 2 tests every pair of an element (no tree walk)
+
 # numba's cache keys on this file only: a change of the segment tuples in ._layout must come with an edit here
 _K_core, _K_mov_idx, _K_st_mov, _K_st_cat, _K_sphW = K["core"], K["mov_idx"], K["st_mov"], K["st_cat"], K["sphW"]
 _K_bvh_left, _K_bvh_right, _K_bvh_start, _K_bvh_count = K["bvh_left"], K["bvh_right"], K["bvh_start"], K["bvh_count"]
@@ -61,6 +63,33 @@ def _key(cx, cy, cz, cr, A, has_obb, kb, s, b, MF, o_slo, o_shi, SF, o_box, cut)
         if has_obb:  # the boxes' face-axis separation: tighter for long links
             key = max(key, _face_sep(A, SF, o_box + 15 * b))
     return key
+
+
+@njit(cache=True, inline="always")
+def _collect(s, p, cx, cy, cz, cr, A, has_obb, lx, ly, lz, hx, hy, hz, cutp, kb, b, MF, o_slo, o_shi, SF, o_box, plb,
+             pflag, n_c):  # pragma: no cover - compiled
+    """Step 2 for one pair ``p`` (moving element: sphere ``c, r``, box ``A``, its W-aligned box
+    ``[l, h]``; static element ``b``, number ``s``): kept as ``plb[n_c]``, ``pflag[n_c]`` unless a
+    lower bound exceeds ``cutp``.  Returns the new count.  The first test is the largest per-axis
+    gap of the two W-aligned boxes (a lower bound on the distance, no square root)."""
+    olo = o_slo + 3 * s
+    ohi = o_shi + 3 * s
+    gx = max(MF[olo] - hx, lx - MF[ohi])
+    gy = max(MF[olo + 1] - hy, ly - MF[ohi + 1])
+    gz = max(MF[olo + 2] - hz, lz - MF[ohi + 2])
+    g = max(gx, gy, gz)
+    if g > 0.0 and g > cutp:
+        return n_c
+    if has_obb:
+        g = _bb_gap(lx, ly, lz, hx, hy, hz, 0.0, MF, olo, ohi)
+        if g > 0.0 and g > cutp:
+            return n_c
+    key = _key(cx, cy, cz, cr, A, has_obb, kb, s, b, MF, o_slo, o_shi, SF, o_box, cutp)
+    if key > 0.0 and key > cutp:
+        return n_c
+    plb[n_c] = key
+    pflag[n_c] = p
+    return n_c + 1
 
 
 @njit(cache=True)
@@ -143,12 +172,25 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
         cx = sphW[a, 0]; cy = sphW[a, 1]; cz = sphW[a, 2]; cr = sphW[a, 3]
         has_obb = MF[o_obb + 16 * a + 15] != 0.0
         A = _obb_w(MF, o_obb + 16 * a, SF, o_Xs + 16 * glink[a], 0.0)
-        # the W-aligned box of a's box (it contains a): a tighter node bound than the sphere for long links
-        ex = A[3] * abs(A[6]) + A[4] * abs(A[7]) + A[5] * abs(A[8])
-        ey = A[3] * abs(A[9]) + A[4] * abs(A[10]) + A[5] * abs(A[11])
-        ez = A[3] * abs(A[12]) + A[4] * abs(A[13]) + A[5] * abs(A[14])
-        lx = A[0] - ex; ly = A[1] - ey; lz = A[2] - ez
-        hx = A[0] + ex; hy = A[1] + ey; hz = A[2] + ez
+        # the W-aligned box of a's box (it contains a): a tighter node bound than the sphere for long
+        # links; without a box, the sphere's
+        if has_obb:
+            ex = A[3] * abs(A[6]) + A[4] * abs(A[7]) + A[5] * abs(A[8])
+            ey = A[3] * abs(A[9]) + A[4] * abs(A[10]) + A[5] * abs(A[11])
+            ez = A[3] * abs(A[12]) + A[4] * abs(A[13]) + A[5] * abs(A[14])
+            lx = A[0] - ex; ly = A[1] - ey; lz = A[2] - ez
+            hx = A[0] + ex; hy = A[1] + ey; hz = A[2] + ez
+        else:
+            lx = cx - cr; ly = cy - cr; lz = cz - cr
+            hx = cx + cr; hy = cy + cr; hz = cz + cr
+        if n_st <= _FLAT:  # a few obstacles: every pair of a, without the tree
+            for s in range(n_st):
+                p = pair_of[ma, s]
+                if p >= 0 and pstamp[p] != stamp_now:
+                    b = pair_b[p]
+                    n_c = _collect(s, p, cx, cy, cz, cr, A, has_obb, lx, ly, lz, hx, hy, hz, max(cut0, best[pair_cat[p]]),
+                                   core[b], b, MF, o_slo, o_shi, SF, o_box, plb, pflag, n_c)
+            continue
         stack[0] = 0
         gapst[0] = _sb_gap(cx, cy, cz, cr, MF, o_blo, o_bhi)
         if has_obb:
@@ -182,17 +224,8 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
                 if p < 0 or pstamp[p] == stamp_now:
                     continue
                 b = pair_b[p]
-                cutp = max(cut0, best[pair_cat[p]])
-                if has_obb:
-                    g = _bb_gap(lx, ly, lz, hx, hy, hz, 0.0, MF, o_slo + 3 * s, o_shi + 3 * s)
-                    if g > 0.0 and g > cutp:
-                        continue
-                key = _key(cx, cy, cz, cr, A, has_obb, core[b], s, b, MF, o_slo, o_shi, SF, o_box, cutp)
-                if key > 0.0 and key > cutp:
-                    continue
-                plb[n_c] = key
-                pflag[n_c] = p
-                n_c += 1
+                n_c = _collect(s, p, cx, cy, cz, cr, A, has_obb, lx, ly, lz, hx, hy, hz, max(cut0, best[pair_cat[p]]),
+                               core[b], b, MF, o_slo, o_shi, SF, o_box, plb, pflag, n_c)
     # ---- 3. evaluate in increasing key
     _argsort_small(plb, order, n_c)
     for k in range(n_c):
