@@ -122,7 +122,7 @@ def crowded(request):
 
     scene = _crowded_panda(request.param)
     robot = next(iter(scene.robots.values()))
-    Q = np.random.default_rng(5).uniform(robot.lower, robot.upper, size=(60, len(robot.lower)))
+    Q = np.random.default_rng(5).uniform(robot.lower, robot.upper, size=(120, len(robot.lower)))
     return scene, robot, Q, Detector(scene, threshold=0.05)
 
 
