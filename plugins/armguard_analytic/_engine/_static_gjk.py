@@ -2,13 +2,16 @@
 
 Branch and bound over those pairs, in three steps (:func:`static_gjk_pairs`):
 
-1. Seed: of the pairs in each GJK element's nearest-descent BVH leaf (:func:`._cull._near_leaf`), the
-   one with the least key (below) is evaluated first, so its category's cut-off is finite.
-2. Collect: each GJK element walks the BVH against the cut-off (nearest child first, as the
-   kernel's walk) and keeps every pair whose lower bound does not exceed it, with a key: the larger
-   of the bounding-sphere gap and, for an obstacle box, the face-axis separation of the element's
-   oriented box and the obstacle's (:func:`._cull._face_sep`; both lower bounds on the distance
-   when positive, since the volumes contain the elements).
+1. Seed: one pair is evaluated first, so its category's cut-off is finite.  Up to ``_FLAT`` static
+   elements, every pair is listed with the largest per-axis gap of the two W-aligned boxes (the
+   moving element's from its oriented box), and the seed is the pair with the least key (below)
+   among those whose W-aligned boxes overlap, or the least gap when that is smaller; beyond, the
+   least key among the pairs of each element's nearest-descent BVH leaf (:func:`._cull._near_leaf`).
+2. Collect every pair whose lower bounds do not exceed the cut-off (from the list, or walking the
+   BVH nearest child first), with its key: the larger of the bounding-sphere gaps and, for an
+   obstacle box, the face-axis separation of the element's oriented box and the obstacle's
+   (:func:`._cull._face_sep`); each a lower bound on the distance when positive, since the volumes
+   contain the elements.
 3. Evaluate in increasing key, each pair checked again against its category's cut-off as it
    tightens (the key when positive, the boxes grown by the cut-off, then GJK stopping at it).
 
@@ -42,7 +45,7 @@ _K_bvh_items, _K_pair_of, _K_pair_a, _K_pair_b, _K_pair_cat = (K["bvh_items"], K
 _K_glink, _K_pstamp, _K_plb, _K_pflag, _K_order = K["glink"], K["pstamp"], K["plb"], K["pflag"], K["order"]
 _K_stack, _K_gap, _K_best = K["stack"], K["gap"], K["best"]
 _K_bvh_lo, _K_bvh_hi, _K_static_lo, _K_static_hi = K["bvh_lo"], K["bvh_hi"], K["static_lo"], K["static_hi"]
-_K_obb_L, _K_boxW, _K_Xs = K["obb_L"], K["boxW"], K["Xs"]
+_K_obb_L, _K_boxW, _K_Xs, _K_st_idx = K["obb_L"], K["boxW"], K["Xs"], K["st_idx"]
 
 
 @njit(cache=True, inline="always")
@@ -66,6 +69,31 @@ def _key(cx, cy, cz, cr, A, has_obb, kb, s, b, MF, o_slo, o_shi, SF, o_box, cut)
 
 
 @njit(cache=True, inline="always")
+def _elem_box(a, MF, SF, o_obb, o_Xs, glink, sphW):  # pragma: no cover - compiled
+    """Moving element ``a``'s oriented box in W (:func:`._cull._obb_w`, 15 scalars), whether it has one,
+    and the W-aligned box ``[l, h]`` that contains it (without a box: its bounding sphere's)."""
+    has_obb = MF[o_obb + 16 * a + 15] != 0.0
+    A = _obb_w(MF, o_obb + 16 * a, SF, o_Xs + 16 * glink[a], 0.0)
+    if has_obb:
+        ex = A[3] * abs(A[6]) + A[4] * abs(A[7]) + A[5] * abs(A[8])
+        ey = A[3] * abs(A[9]) + A[4] * abs(A[10]) + A[5] * abs(A[11])
+        ez = A[3] * abs(A[12]) + A[4] * abs(A[13]) + A[5] * abs(A[14])
+        return A, has_obb, A[0] - ex, A[1] - ey, A[2] - ez, A[0] + ex, A[1] + ey, A[2] + ez
+    cx = sphW[a, 0]; cy = sphW[a, 1]; cz = sphW[a, 2]; cr = sphW[a, 3]
+    return A, has_obb, cx - cr, cy - cr, cz - cr, cx + cr, cy + cr, cz + cr
+
+
+@njit(cache=True, inline="always")
+def _axis_gap(lx, ly, lz, hx, hy, hz, MF, olo, ohi):  # pragma: no cover - compiled
+    """The largest per-axis gap (m) between the W-aligned boxes ``[l, h]`` and ``[MF[olo:olo + 3],
+    MF[ohi:ohi + 3]]``: a lower bound on their distance when positive (no square root)."""
+    gx = max(MF[olo] - hx, lx - MF[ohi])
+    gy = max(MF[olo + 1] - hy, ly - MF[ohi + 1])
+    gz = max(MF[olo + 2] - hz, lz - MF[ohi + 2])
+    return max(gx, gy, gz)
+
+
+@njit(cache=True, inline="always")
 def _collect(s, p, cx, cy, cz, cr, A, has_obb, lx, ly, lz, hx, hy, hz, cutp, kb, b, MF, o_slo, o_shi, SF, o_box, plb,
              pflag, n_c):  # pragma: no cover - compiled
     """Step 2 for one pair ``p`` (moving element: sphere ``c, r``, box ``A``, its W-aligned box
@@ -74,10 +102,7 @@ def _collect(s, p, cx, cy, cz, cr, A, has_obb, lx, ly, lz, hx, hy, hz, cutp, kb,
     gap of the two W-aligned boxes (a lower bound on the distance, no square root)."""
     olo = o_slo + 3 * s
     ohi = o_shi + 3 * s
-    gx = max(MF[olo] - hx, lx - MF[ohi])
-    gy = max(MF[olo + 1] - hy, ly - MF[ohi + 1])
-    gz = max(MF[olo + 2] - hz, lz - MF[ohi + 2])
-    g = max(gx, gy, gz)
+    g = _axis_gap(lx, ly, lz, hx, hy, hz, MF, olo, ohi)
     if g > 0.0 and g > cutp:
         return n_c
     if has_obb:
@@ -120,6 +145,7 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
     order = seg1(SI, H, _K_order)
     stack = seg1(SI, H, _K_stack)
     pstamp = seg1(SI, H, _K_pstamp)
+    st_idx = seg1(MI, H, _K_st_idx)
     o_blo = H[2 * _K_bvh_lo]
     o_bhi = H[2 * _K_bvh_hi]
     o_slo = H[2 * _K_static_lo]
@@ -130,10 +156,43 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
     n_sm = st_mov.shape[0]
     err = 0
     collided = False
-    # ---- 1. seed: the least key among the pairs of each GJK element's nearest-descent leaf
     g_seed = math.inf
     p_seed = -1
-    for i in range(n_sm):
+    n_c = 0
+    flat = n_st <= _FLAT
+    if flat:
+        # ---- 1. (a few obstacles) every pair's per-axis gap, listed; the seed: the least key among the
+        # pairs whose W-aligned boxes overlap, or the least gap when smaller
+        g_ax = math.inf
+        p_ax = -1
+        for i in range(n_sm):
+            a = st_mov[i]
+            if core[a] < 2:
+                continue
+            ma = mov_idx[a]
+            cx = sphW[a, 0]; cy = sphW[a, 1]; cz = sphW[a, 2]; cr = sphW[a, 3]
+            A, has_obb, lx, ly, lz, hx, hy, hz = _elem_box(a, MF, SF, o_obb, o_Xs, glink, sphW)
+            for s in range(n_st):
+                p = pair_of[ma, s]
+                if p < 0 or pstamp[p] == stamp_now:
+                    continue
+                g = _axis_gap(lx, ly, lz, hx, hy, hz, MF, o_slo + 3 * s, o_shi + 3 * s)
+                plb[n_c] = g
+                pflag[n_c] = p
+                n_c += 1
+                if g <= 0.0:
+                    b = pair_b[p]
+                    key = _key(cx, cy, cz, cr, A, has_obb, core[b], s, b, MF, o_slo, o_shi, SF, o_box, math.inf)
+                    if key < g_seed:
+                        g_seed = key
+                        p_seed = p
+                elif g < g_ax:
+                    g_ax = g
+                    p_ax = p
+        if p_ax >= 0 and g_ax < g_seed:
+            p_seed = p_ax
+    # ---- 1. seed: the least key among the pairs of each GJK element's nearest-descent leaf
+    for i in range(n_sm if not flat else 0):
         a = st_mov[i]
         if core[a] < 2:
             continue
@@ -162,35 +221,33 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
             n_eval += 1
             collided = d <= level
     # ---- 2. collect the pairs whose lower bound does not exceed the cut-off, with their keys
-    n_c = 0
-    for i in range(n_sm):
+    if flat:  # from the list, in place (entry k is read before any write at n_c <= k)
+        n_k = n_c
+        n_c = 0
+        a_prev = -1
+        for k in range(n_k):
+            p = pflag[k]
+            g = plb[k]
+            cutp = max(cut0, best[pair_cat[p]])
+            if pstamp[p] == stamp_now or (g > 0.0 and g > cutp):
+                continue
+            a = pair_a[p]
+            if a != a_prev:  # the list holds each element's pairs together
+                a_prev = a
+                cx = sphW[a, 0]; cy = sphW[a, 1]; cz = sphW[a, 2]; cr = sphW[a, 3]
+                A, has_obb, lx, ly, lz, hx, hy, hz = _elem_box(a, MF, SF, o_obb, o_Xs, glink, sphW)
+            b = pair_b[p]
+            n_c = _collect(st_idx[b], p, cx, cy, cz, cr, A, has_obb, lx, ly, lz, hx, hy, hz, cutp, core[b], b, MF,
+                           o_slo, o_shi, SF, o_box, plb, pflag, n_c)
+    for i in range(n_sm if not flat else 0):
         a = st_mov[i]
         if core[a] < 2:
             continue
         sc_a = st_cat[i]
         ma = mov_idx[a]
         cx = sphW[a, 0]; cy = sphW[a, 1]; cz = sphW[a, 2]; cr = sphW[a, 3]
-        has_obb = MF[o_obb + 16 * a + 15] != 0.0
-        A = _obb_w(MF, o_obb + 16 * a, SF, o_Xs + 16 * glink[a], 0.0)
-        # the W-aligned box of a's box (it contains a): a tighter node bound than the sphere for long
-        # links; without a box, the sphere's
-        if has_obb:
-            ex = A[3] * abs(A[6]) + A[4] * abs(A[7]) + A[5] * abs(A[8])
-            ey = A[3] * abs(A[9]) + A[4] * abs(A[10]) + A[5] * abs(A[11])
-            ez = A[3] * abs(A[12]) + A[4] * abs(A[13]) + A[5] * abs(A[14])
-            lx = A[0] - ex; ly = A[1] - ey; lz = A[2] - ez
-            hx = A[0] + ex; hy = A[1] + ey; hz = A[2] + ez
-        else:
-            lx = cx - cr; ly = cy - cr; lz = cz - cr
-            hx = cx + cr; hy = cy + cr; hz = cz + cr
-        if n_st <= _FLAT:  # a few obstacles: every pair of a, without the tree
-            for s in range(n_st):
-                p = pair_of[ma, s]
-                if p >= 0 and pstamp[p] != stamp_now:
-                    b = pair_b[p]
-                    n_c = _collect(s, p, cx, cy, cz, cr, A, has_obb, lx, ly, lz, hx, hy, hz, max(cut0, best[pair_cat[p]]),
-                                   core[b], b, MF, o_slo, o_shi, SF, o_box, plb, pflag, n_c)
-            continue
+        # the W-aligned box of a's box (it contains a): a tighter node bound than the sphere for long links
+        A, has_obb, lx, ly, lz, hx, hy, hz = _elem_box(a, MF, SF, o_obb, o_Xs, glink, sphW)
         stack[0] = 0
         gapst[0] = _sb_gap(cx, cy, cz, cr, MF, o_blo, o_bhi)
         if has_obb:
