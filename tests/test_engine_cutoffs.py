@@ -189,3 +189,31 @@ def test_check_many_equals_the_all_pairs_path(crowded, seed):
     assert np.array_equal(np.isfinite(a.min_distance), fin)
     assert np.allclose(a.min_distance[fin], b.min_distance[fin], atol=1e-9)
     assert np.array_equal(a.status, b.status)
+
+
+@settings(max_examples=80, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**31), offset=st.floats(0.0, 0.6))
+def test_the_boxes_face_separation_bounds_the_signed_distance_of_any_sign(seed, offset):
+    """``_static_gjk`` skips a pair when its key exceeds a negative cut-off: the face-axis separation
+    of a box containing the element and the obstacle box bounds their signed distance from below,
+    penetrating or not (oracle: :func:`armguard.geometry.distance`, EPA / SAT)."""
+    from armguard.geometry import Box, ConvexPolyhedron, distance
+    from armguard_analytic._engine._cull import _face_sep
+
+    rng = np.random.default_rng(seed)
+    R_WA = _rotation(rng)
+    p = _cloud(rng, 80) @ R_WA.T + rng.normal(size=3) * 0.1
+    # a box containing the hull: its points' extent along their principal axes
+    c0 = p.mean(axis=0)
+    axes = np.linalg.svd(p - c0)[2].T  # columns
+    u = (p - c0) @ axes
+    lo, hi = u.min(axis=0), u.max(axis=0)
+    cA = c0 + axes @ (0.5 * (lo + hi))
+    A = (*cA, *(0.5 * (hi - lo)), *axes.ravel())
+    R_WB = _rotation(rng)
+    h_B = rng.uniform(0.05, 0.3, size=3)
+    c_B = cA + offset * rng.normal(size=3)
+    B = np.concatenate([c_B, h_B, R_WB.ravel()])
+    s = _face_sep(tuple(float(x) for x in A), B, 0)
+    d = distance(ConvexPolyhedron(p), Box(c_B, h_B, R_WB)).distance
+    assert s <= d + 1e-9

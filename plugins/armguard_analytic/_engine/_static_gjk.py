@@ -53,8 +53,9 @@ def _key(cx, cy, cz, cr, A, has_obb, kb, s, b, MF, o_slo, o_shi, SF, o_box, cut)
     """Sort key (m) of the pair of a moving element (sphere ``c, r``, box ``A`` when ``has_obb``) and
     static element ``b`` (number ``s`` among the static ones, core kind ``kb``): the larger of the
     sphere's gap to ``b``'s axis-aligned box, to its own box (a box or cylinder), and the two boxes'
-    face-axis separation; a lower bound on the distance when positive.  Cheapest first: once one
-    exceeds ``cut`` (> 0) the rest are not computed (the pair is culled either way)."""
+    face-axis separation; a lower bound on the distance when positive, and of any sign when the two
+    boxes' separation is in it (:func:`_signed`).  Cheapest first: once one exceeds ``cut`` (> 0)
+    the rest are not computed (the pair is culled either way)."""
     key = _sb_gap(cx, cy, cz, cr, MF, o_slo + 3 * s, o_shi + 3 * s)
     if key > 0.0 and key > cut:
         return key
@@ -63,9 +64,22 @@ def _key(cx, cy, cz, cr, A, has_obb, kb, s, b, MF, o_slo, o_shi, SF, o_box, cut)
             key = max(key, _obb_gap(cx, cy, cz, cr, SF, o_box + 15 * b))
             if key > cut:
                 return key
-        if has_obb:  # the boxes' face-axis separation: tighter for long links
-            key = max(key, _face_sep(A, SF, o_box + 15 * b))
+        if has_obb:  # the boxes' face-axis separation: tighter for long links, a bound of any sign
+            fs = _face_sep(A, SF, o_box + 15 * b)
+            key = max(key, fs) if key > 0.0 else fs  # (a sphere gap <= 0 bounds nothing)
     return key
+
+
+@njit(cache=True, inline="always")
+def _signed(has_obb, kb):  # pragma: no cover - compiled
+    """Whether :func:`_key` bounds the signed distance whatever its sign: the moving element has its
+    box and the static one is a box (or a cylinder's box).  A face-axis separation ``s`` < 0 of two
+    boxes bounds their penetration depth: ``depth = min_u h(u) <= min over the six face normals`` of
+    the overlap, ``-s`` (``h`` the Minkowski difference's support function; van den Bergen 2003,
+    §4.3.7), and containing boxes are at least as deep as the elements they contain (the depth is
+    monotone under inclusion).  So ``d >= s``: a pair whose key exceeds a negative cut-off cannot be
+    deeper than its category's best (no GJK, no EPA)."""
+    return has_obb and (kb == 2 or kb == 4)
 
 
 @njit(cache=True, inline="always")
@@ -110,7 +124,7 @@ def _collect(s, p, cx, cy, cz, cr, A, has_obb, lx, ly, lz, hx, hy, hz, cutp, kb,
         if g > 0.0 and g > cutp:
             return n_c
     key = _key(cx, cy, cz, cr, A, has_obb, kb, s, b, MF, o_slo, o_shi, SF, o_box, cutp)
-    if key > 0.0 and key > cutp:
+    if key > cutp and (key > 0.0 or _signed(has_obb, kb)):
         return n_c
     plb[n_c] = key
     pflag[n_c] = p
@@ -291,9 +305,9 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
         a = pair_a[p]
         b = pair_b[p]
         cutp = max(cut0, best[pair_cat[p]])
-        if key > 0.0 and key > cutp:
-            continue
         kb = core[b]
+        if key > cutp and (key > 0.0 or _signed(MF[o_obb + 16 * a + 15] != 0.0, kb)):
+            continue
         if ((kb == 2 or kb == 4) and cutp < math.inf and MF[o_obb + 16 * a + 15] != 0.0
                 and obb_apart_static(MF, o_obb + 16 * a, o_Xs + 16 * glink[a], SF, o_box + 15 * b, max(cutp, 0.0),
                                      eps_par)):
