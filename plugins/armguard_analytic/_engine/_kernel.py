@@ -419,7 +419,10 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                         b = pair_b[p]
                         c = pair_cat[p]
                         cut = max(cut0, best[c]) if by_best else cut0
-                        lb = _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi)
+                        if k < n_explicit:
+                            lb = _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi)
+                        else:
+                            lb = plb[order[k - n_explicit]]  # the sorted pass's key is this gap
                         if b >= 0 and not lb > 0.0:
                             lb = -math.inf  # overlapping spheres bound nothing
                         if lb > cut:
