@@ -217,3 +217,17 @@ def test_the_boxes_face_separation_bounds_the_signed_distance_of_any_sign(seed, 
     s = _face_sep(tuple(float(x) for x in A), B, 0)
     d = distance(ConvexPolyhedron(p), Box(c_B, h_B, R_WB)).distance
     assert s <= d + 1e-9
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**31), n=st.integers(0, 40))
+def test_insertion_sort_order_matches_stable_argsort(seed, n):
+    """``_cull._argsort_small`` (insertion up to 32 keys, the heap beyond) orders as a stable argsort."""
+    from armguard_analytic._engine._cull import _argsort_small
+
+    rng = np.random.default_rng(seed)
+    key = np.round(rng.normal(size=n), 1)  # ties on purpose
+    key[: n // 5] = -np.inf
+    order = np.full(max(n, 1), -1, dtype=np.int64)
+    _argsort_small(key, order, n)
+    np.testing.assert_array_equal(order[:n], np.argsort(key, kind="stable"))

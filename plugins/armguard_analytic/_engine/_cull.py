@@ -158,30 +158,6 @@ def _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi):  # pragma: no cover - 
 
 
 @njit(cache=True, inline="always")
-def _near_box_gap(a, mov_idx, sphW, MF, o_blo, o_bhi, o_slo, o_shi, bvh_left, bvh_right, bvh_start, bvh_count,
-                  bvh_items, pair_of):  # pragma: no cover - compiled
-    """A sort key, not a bound: the least gap (m) between moving element ``a``'s bounding sphere and the
-    boxes of the static elements it has a pair with in the BVH leaf reached by always descending to
-    the nearer child (``inf`` when that leaf holds none): O(depth), where the nearest box needs a
-    walk (PUMA among 10,000 boxes: 9.5 -> 11.1 us per check with that walk)."""
-    ma = mov_idx[a]
-    cx = sphW[a, 0]; cy = sphW[a, 1]; cz = sphW[a, 2]; cr = sphW[a, 3]
-    node = 0
-    while bvh_left[node] >= 0:
-        left = bvh_left[node]
-        right = bvh_right[node]
-        gl = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * left, o_bhi + 3 * left)
-        gr = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * right, o_bhi + 3 * right)
-        node = left if gl <= gr else right
-    g_min = math.inf
-    for it in range(bvh_start[node], bvh_start[node] + bvh_count[node]):
-        s = bvh_items[it]
-        if pair_of[ma, s] >= 0:
-            g_min = min(g_min, _sb_gap(cx, cy, cz, cr, MF, o_slo + 3 * s, o_shi + 3 * s))
-    return g_min
-
-
-@njit(cache=True, inline="always")
 def _near_leaf(cx, cy, cz, cr, MF, o_blo, o_bhi, bvh_left, bvh_right):  # pragma: no cover - compiled
     """The BVH leaf reached from the root by always descending to the child whose box is nearer the
     sphere ``(c, r)`` (:func:`_sb_gap`): O(depth), a likely home of the sphere's nearest boxes."""
