@@ -129,6 +129,21 @@ def _argsort_heap(key, order, n):  # pragma: no cover - compiled
         _sift_down(key, order, 0, end)
 
 
+@njit(cache=True)
+def _argsort_small(key, order, n):  # pragma: no cover - compiled
+    """:func:`_argsort_heap`'s result (ties by index) by insertion sort up to 32 keys (fewer
+    branches and moves than the heap for the few pairs a check sorts), the heap beyond."""
+    if n > 32:
+        _argsort_heap(key, order, n)
+        return
+    for i in range(n):
+        j = i
+        while j > 0 and _before(key, i, order[j - 1]):
+            order[j] = order[j - 1]
+            j -= 1
+        order[j] = i
+
+
 @njit(cache=True, inline="always")
 def _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi):  # pragma: no cover - compiled
     """Bounding-sphere gap of explicit pair ``p`` (m): to the workspace walls (``b < 0``), or between the
@@ -143,14 +158,9 @@ def _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi):  # pragma: no cover - 
 
 
 @njit(cache=True, inline="always")
-def _near_box_gap(a, mov_idx, sphW, MF, o_blo, o_bhi, o_slo, o_shi, bvh_left, bvh_right, bvh_start, bvh_count,
-                  bvh_items, pair_of):  # pragma: no cover - compiled
-    """A sort key, not a bound: the least gap (m) between moving element ``a``'s bounding sphere and the
-    boxes of the static elements it has a pair with in the BVH leaf reached by always descending to
-    the nearer child (``inf`` when that leaf holds none): O(depth), where the nearest box needs a
-    walk (PUMA among 10,000 boxes: 9.5 -> 11.1 us per check with that walk)."""
-    ma = mov_idx[a]
-    cx = sphW[a, 0]; cy = sphW[a, 1]; cz = sphW[a, 2]; cr = sphW[a, 3]
+def _near_leaf(cx, cy, cz, cr, MF, o_blo, o_bhi, bvh_left, bvh_right):  # pragma: no cover - compiled
+    """The BVH leaf reached from the root by always descending to the child whose box is nearer the
+    sphere ``(c, r)`` (:func:`_sb_gap`): O(depth), a likely home of the sphere's nearest boxes."""
     node = 0
     while bvh_left[node] >= 0:
         left = bvh_left[node]
@@ -158,12 +168,45 @@ def _near_box_gap(a, mov_idx, sphW, MF, o_blo, o_bhi, o_slo, o_shi, bvh_left, bv
         gl = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * left, o_bhi + 3 * left)
         gr = _sb_gap(cx, cy, cz, cr, MF, o_blo + 3 * right, o_bhi + 3 * right)
         node = left if gl <= gr else right
-    g_min = math.inf
-    for it in range(bvh_start[node], bvh_start[node] + bvh_count[node]):
-        s = bvh_items[it]
-        if pair_of[ma, s] >= 0:
-            g_min = min(g_min, _sb_gap(cx, cy, cz, cr, MF, o_slo + 3 * s, o_shi + 3 * s))
-    return g_min
+    return node
+
+
+@njit(cache=True, inline="always")
+def _face_sep(A, B, o):  # pragma: no cover - compiled
+    """Separation (m) of the box ``A`` (15 scalars ``[c, h, R row-major]``, :func:`_obb_w`) and the box
+    ``B[o:o + 15]`` (same layout) along their six face normals: ``max_u |t . u| - r_A(u) - r_B(u)``,
+    ``t`` the centres' offset, ``r(u) = sum_k h_k |axis_k . u|`` a box's projected radius (the
+    separating-axis test's quantities, Gottschalk, Lin & Manocha, "OBBTree", SIGGRAPH 1996, §4).
+    Each axis is a unit vector, and projection onto it shortens no distance, so when positive this
+    is a lower bound on the distance between the boxes (and between anything inside them)."""
+    tx = B[o] - A[0]
+    ty = B[o + 1] - A[1]
+    tz = B[o + 2] - A[2]
+    sep = -math.inf
+    # C[i][j] = a_i . b_j, a_i / b_j the columns of R_A / R_B
+    c00 = A[6] * B[o + 6] + A[9] * B[o + 9] + A[12] * B[o + 12]
+    c01 = A[6] * B[o + 7] + A[9] * B[o + 10] + A[12] * B[o + 13]
+    c02 = A[6] * B[o + 8] + A[9] * B[o + 11] + A[12] * B[o + 14]
+    c10 = A[7] * B[o + 6] + A[10] * B[o + 9] + A[13] * B[o + 12]
+    c11 = A[7] * B[o + 7] + A[10] * B[o + 10] + A[13] * B[o + 13]
+    c12 = A[7] * B[o + 8] + A[10] * B[o + 11] + A[13] * B[o + 14]
+    c20 = A[8] * B[o + 6] + A[11] * B[o + 9] + A[14] * B[o + 12]
+    c21 = A[8] * B[o + 7] + A[11] * B[o + 10] + A[14] * B[o + 13]
+    c22 = A[8] * B[o + 8] + A[11] * B[o + 11] + A[14] * B[o + 14]
+    ha0 = A[3]; ha1 = A[4]; ha2 = A[5]
+    hb0 = B[o + 3]; hb1 = B[o + 4]; hb2 = B[o + 5]
+    # A's axes
+    sep = max(sep, abs(A[6] * tx + A[9] * ty + A[12] * tz) - ha0 - (hb0 * abs(c00) + hb1 * abs(c01) + hb2 * abs(c02)))
+    sep = max(sep, abs(A[7] * tx + A[10] * ty + A[13] * tz) - ha1 - (hb0 * abs(c10) + hb1 * abs(c11) + hb2 * abs(c12)))
+    sep = max(sep, abs(A[8] * tx + A[11] * ty + A[14] * tz) - ha2 - (hb0 * abs(c20) + hb1 * abs(c21) + hb2 * abs(c22)))
+    # B's axes
+    sep = max(sep, abs(B[o + 6] * tx + B[o + 9] * ty + B[o + 12] * tz) - hb0
+              - (ha0 * abs(c00) + ha1 * abs(c10) + ha2 * abs(c20)))
+    sep = max(sep, abs(B[o + 7] * tx + B[o + 10] * ty + B[o + 13] * tz) - hb1
+              - (ha0 * abs(c01) + ha1 * abs(c11) + ha2 * abs(c21)))
+    sep = max(sep, abs(B[o + 8] * tx + B[o + 11] * ty + B[o + 14] * tz) - hb2
+              - (ha0 * abs(c02) + ha1 * abs(c12) + ha2 * abs(c22)))
+    return sep
 
 
 @njit(cache=True, inline="always")

@@ -38,10 +38,11 @@ from armguard.kinematics._fk import _fk_kernel
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SC, at, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, SUM_STATUS, seg1, seg2, seg3
-from ._cull import (_argsort_heap, _bb_gap, _explicit_gap, _gjk_pair, _near_box_gap, _obb_gap, _sb_gap,
+from ._cull import (_argsort_heap, _argsort_small, _bb_gap, _explicit_gap, _gjk_pair, _obb_gap, _sb_gap,
                     obb_apart_moving, obb_apart_static)
 from ._narrow import BOUNDED
 from ._step import move_element, pair_step
+from ._static_gjk import static_gjk_pairs
 
 MODE_EXACT, MODE_LAZY, MODE_ANYTIME, MODE_YESNO, MODE_ALL, MODE_MIN = 0, 1, 2, 3, 4, 5
 _status_code = njit(cache=True, inline="always")(status_code)  # the framework's rule, compiled
@@ -251,7 +252,8 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
     # is GJK (~1 us): for capsule pairs (tens of ns) the test costs more than it saves (measured)
     box_cull = mode == MODE_YESNO
     # the exact and min modes order the GJK pairs (a moving box, hull or cylinder: ~1 us each; the
-    # sort costs more than capsule pairs save): iiwa hulls in world20 23 -> 17 us per check
+    # sort costs more than capsule pairs save): iiwa hulls in world20 23 -> 17 us per check; their
+    # moving-static pairs: seed, collect, sort by a box key, evaluate (._static_gjk)
     by_order = by_best
 
     for m in range(lo, hi):
@@ -401,7 +403,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                 plb[n_x] = _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi)
                                 pflag[n_x] = p
                                 n_x += 1
-                        _argsort_heap(plb, order, n_x)
+                        _argsort_small(plb, order, n_x)
                     for k in range(n_explicit + n_x):
                         if collided and mode == MODE_YESNO:
                             break
@@ -417,7 +419,10 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                         b = pair_b[p]
                         c = pair_cat[p]
                         cut = max(cut0, best[c]) if by_best else cut0
-                        lb = _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi)
+                        if k < n_explicit:
+                            lb = _explicit_gap(p, pair_a, pair_b, sphW, ws_lo, ws_hi)
+                        else:
+                            lb = plb[order[k - n_explicit]]  # the sorted pass's key is this gap
                         if b >= 0 and not lb > 0.0:
                             lb = -math.inf  # overlapping spheres bound nothing
                         if lb > cut:
@@ -442,27 +447,14 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                             collided = True
                 elif n_st > 0:
                     # ---- moving-static pairs through the BVH, nearest child first.  The exact and min
-                    # modes take the GJK elements last, in increasing gap to a near obstacle box (the
-                    # likeliest pair first, so the category's best tightens early)
+                    # modes take the GJK elements last (._static_gjk: a seed pair, then every pair not
+                    # culled, in increasing key, so the category's best tightens early)
                     n_sm = st_mov.shape[0]
-                    n_x = 0
-                    if by_order:  # the elements with a GJK core, after the others (keys plb, numbers pflag)
-                        for i in range(n_sm):
-                            if core[st_mov[i]] >= 2:
-                                plb[n_x] = _near_box_gap(st_mov[i], mov_idx, sphW, MF, o_blo, o_bhi, o_slo, o_shi,
-                                                         bvh_left, bvh_right, bvh_start, bvh_count, bvh_items, pair_of)
-                                pflag[n_x] = i
-                                n_x += 1
-                        _argsort_heap(plb, order, n_x)
-                    for ii in range(n_sm + n_x):
+                    for i in range(n_sm):
                         if err != 0 or (collided and mode == MODE_YESNO):
                             break
-                        if ii < n_sm:
-                            i = ii
-                            if n_x > 0 and core[st_mov[i]] >= 2:
-                                continue  # in the sorted pass
-                        else:
-                            i = pflag[order[ii - n_sm]]
+                        if by_order and core[st_mov[i]] >= 2:
+                            continue  # after the others, best first (._static_gjk)
                         a = st_mov[i]
                         sc_a = st_cat[i]
                         ma = mov_idx[a]
@@ -557,6 +549,13 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                         break
                             if err != 0 or (collided and mode == MODE_YESNO):
                                 break
+                    has_gjk = False  # (no call, no views, for a model without GJK elements: the Ranger cycle)
+                    for i in range(n_sm):
+                        has_gjk = has_gjk or core[st_mov[i]] >= 2
+                    if by_order and err == 0 and has_gjk:
+                        n_eval, err, hit = static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, track, eps_len, eps_par,
+                                                            gjk_eps, max_iter, woff, lvl, level, n_eval, stamp_now)
+                        collided = collided or hit
         if err != 0:
             summary[SUM_ERR] = err
             return err

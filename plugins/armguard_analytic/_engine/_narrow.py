@@ -342,7 +342,8 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, be
     else ``(0, NOT_SCALAR)``: the caller moves both elements and calls :func:`narrow_other` (its
     exhaustive SAT works on W points).  ``level`` as in :func:`narrow_other`; ``beyond`` (m, ``inf``:
     off): GJK may stop once the distance is proved above it, returning an upper bound > ``beyond``
-    (not a distance: ``_step.pair_step`` keeps no row of it).  A cylinder against a
+    (not a distance: ``_step.pair_step`` keeps no row of it), and so may EPA once the depth is
+    proved below ``-(beyond + ra + rb)`` (returns ``(lower bound, BOUNDED)``).  A cylinder against a
     polytope: :func:`_cylinder_rel` (the whole pair in the polytope's frame, depth included)."""
     oc = H[2 * _K_core]
     if MI[oc + ga] == _CYLINDER or MI[oc + gb] == _CYLINDER:
@@ -380,8 +381,12 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, be
                                                     eps_len, gjk_eps, max_iter, simp, max(sep, 0.0))
     inside = status != GJK_SEPARATED and status != GJK_NOT_CONVERGED and simp[0] == 1.0
     if inside and -(ra + rb) > level:  # overlapping cores, a depth wanted: EPA in A's frame as well
+        # a depth below cap would leave the signed distance above ``beyond``: EPA may stop at that proof
+        cap = -(beyond + (ra + rb)) if beyond < math.inf else -math.inf
         ok, depth, nx, ny, nz, ax, ay, az, bx, by, bz = epa_depth(pa, adja, pb, adjb, work[0:nw], gjk_eps, rot,
-                                                                  tx, ty, tz, taba, tabb)
+                                                                  tx, ty, tz, taba, tabb, cap)
+        if ok and depth < cap:
+            return -depth - (ra + rb), BOUNDED  # depth < cap: distance > beyond (an upper bound, no witnesses)
         if ok and depth > eps_len:
             wax, way, waz = _to_world(SF, oA, ax, ay, az, 1.0)
             wbx, wby, wbz = _to_world(SF, oA, bx, by, bz, 1.0)

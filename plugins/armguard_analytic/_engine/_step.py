@@ -142,7 +142,8 @@ def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
 
     ``beyond`` (m; ``inf``: off): the caller's cut-off (the exact and min modes: a category's best so
     far, or the threshold).  A pair checked in its link frames (:func:`._narrow.narrow_rel`) whose GJK
-    proves it farther than that stops there and returns ``(upper bound, BOUNDED)`` without a row:
+    proves it farther than that (or whose EPA proves its depth too shallow to reach it) stops there
+    and returns ``(bound, BOUNDED)`` without a row:
     like a pair its bounding volumes cull, it can be neither its category's nearest nor within the
     threshold, and its bound is kept nowhere (the anytime state would read it as a distance).
 
@@ -151,7 +152,7 @@ def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
     d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp_now)
     if err == LINK_FRAME:
         d, err = narrow_rel(a, b, H, MF, MI, SF, out9, eps_len, gjk_eps, max_iter, level, beyond)
-        if err == 0 and d > beyond:
+        if err == BOUNDED or (err == 0 and d > beyond):
             return d, BOUNDED  # proved beyond the caller's cut-off: not a row of this check
         if err < 0:  # overlapping cores with a depth wanted (or GJK unsettled): EPA / SAT on W points
             move_pair(a, b, H, MF, MI, SF, SI, stamp_now)

@@ -190,8 +190,8 @@ def _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz
 
 
 @njit(cache=True)
-def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0, taba=None,
-              tabb=None):  # pragma: no cover - compiled
+def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0, taba=None, tabb=None,
+              cap=-math.inf):  # pragma: no cover - compiled
     """EPA on ``M = hull(pa) - hull(pb)`` from the tetrahedron GJK left in ``work[0:9]``.
 
     ``adja``, ``adjb``: vertex graphs (``_pack.polytope_adjacency`` format; empty: scan);
@@ -206,6 +206,11 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0, t
     or empty: none): the hulls' support tables; each climb starts from the better of the face's
     first vertex and the table's entry for the face normal (``_pair_gjk.warm_start``; on ur3's
     hulls 540 -> 240 dot products per depth).
+
+    ``cap`` (m; ``-inf``: off): the caller only needs the depth when it is at least ``cap``.  Once
+    a support value ``h < cap`` is seen (``depth <= h``, see the module docstring) EPA stops and
+    returns ``(True, h, n, 0, ...)``: ``h`` an upper bound on the depth below ``cap``, not the depth,
+    witnesses not computed.  A depth returned below ``cap`` is therefore a bound in any case.
     """
     if work.shape[0] < EPA_WORK_SIZE or work[0] != 1.0:
         return False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -273,6 +278,8 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0, t
                 repeated = True
         if h < hmin:
             hmin = h
+        if hmin < cap:  # depth <= hmin < cap: the caller's cut-off is proved, the depth is not wanted
+            return True, hmin, nx, ny, nz, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         if h - dbest <= eps or repeated:
             ok, ax, ay, az, bx, by, bz = _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz)
             if not ok:
