@@ -268,3 +268,25 @@ def test_so101_edited_gets_a_model_where_the_urdf_round_trip_cannot():
         clear = (np.abs(a) > 1e-6) & (np.abs(c) > 1e-6)
         np.testing.assert_array_equal((a <= 0)[clear], (c <= 0)[clear])
         np.testing.assert_allclose(a[(a > 1e-6) & (c > 1e-6)], c[(a > 1e-6) & (c > 1e-6)], rtol=0, atol=1e-6)
+
+
+def test_many_bodies_added_compile_the_scene_and_agree():
+    """Pinocchio's ``addGeometryObject`` copies an ``ngeoms x ngeoms`` map per object, so the
+    engine compiles a scene with thousands of bodies added with ``compile_scene`` (the scaling
+    bench's 10 000 boxes) and one with a few by deriving its Model; both answer alike."""
+    from armguard_analytic._engine import _model as engine_model
+
+    model = _quiet(load_model, "puma560")
+    scene = model.scene
+    build = lambda: engine_model.build_model(scene, active=None, reach_margin=np.inf, tol=model.tol)  # noqa: E731
+    rng = np.random.default_rng(3)
+    scene.add_body("few", [Box(rng.uniform(-1, 1, 3), [0.05, 0.05, 0.05], np.eye(3)) for _ in range(3)])
+    assert build().source == "model"
+    small = armguard.Detector(scene, threshold=0.05)
+    q = scene.flat_q(scene.default_q())
+    few = small.check(q)
+    scene.add_body("many", [Box(rng.uniform(-3, 3, 3) + [0, 0, 10], [0.05, 0.05, 0.05], np.eye(3)) for _ in range(3000)])
+    m = build()
+    assert m.source == "scene" and "many" in m.compiled.owner_names
+    big = armguard.Detector(scene, threshold=0.05).check(q)  # the far boxes change nothing near the arm
+    assert big.status == few.status and big.nearest.distance == pytest.approx(few.nearest.distance, abs=1e-12)

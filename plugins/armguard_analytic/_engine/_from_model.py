@@ -35,7 +35,8 @@ GeometryModel and frames do not change; the owner pairs and the workspace box ar
 ``_model.build_model`` compiles the scene's Model (``armguard.model.model_of``): after
 ``add_body``, ``attach_payload`` and the like, one derived from the Model the scene was loaded as
 (:mod:`armguard.model._derive`).  ``compile_scene`` compiles a scene without robots that no Model
-was made for, and is the slow reference the tests hold this to.
+was made for and an edited scene with thousands of new objects (``_model._DERIVE_BUDGET``), and is
+the slow reference the tests hold this to.
 """
 
 from __future__ import annotations

@@ -52,13 +52,26 @@ class DetectModel:
     """
 
 
+_DERIVE_BUDGET = 50_000_000
+"""Above this ``derive_cost`` (~0.1 s of Pinocchio's pair-map copies) the engine compiles an edited
+scene with ``compile_scene`` instead of deriving its Model (many bodies added: the scaling bench's
+10 000 boxes); both give the same arrays (tests/test_engine_from_model.py, test_model_derive.py)."""
+
+
 def _model_of_geometry(scene):
     """The scene's Model, its GeometryModel holding exactly the scene's shapes (``model_of``: the
-    Model the scene was loaded as, one derived from it after bodies or payloads changed, or one
-    built from the scene); None for a scene without robots that no Model was made for."""
+    Model the scene was loaded as, or one derived from it after bodies or payloads changed); None
+    (compile the Scene) for a scene without robots that no Model was made for, or when deriving
+    would add more objects than Pinocchio adds cheaply (:data:`_DERIVE_BUDGET`)."""
     from armguard.model import model_of
+    from armguard.model._derive import derive_cost
 
     if not scene.robots and getattr(scene, "_model_of_record", None) is None:
+        return None
+    kin = model_of(scene, geometry=False) if scene.robots else scene._model_of_record
+    if kin.geometry_is_of(scene):
+        return kin
+    if derive_cost(kin, scene) > _DERIVE_BUDGET:
         return None
     model = model_of(scene)
     return model if model.geometry_is_of(scene) else None

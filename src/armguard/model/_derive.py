@@ -37,10 +37,24 @@ from ._hull import mesh_polytope
 from ._model import Model
 from ._shapes import coal_from_shape, convex_of_polytope
 
-__all__ = ["derive_model"]
+__all__ = ["derive_model", "derive_cost"]
 
 # a Model's attributes that follow its GeometryModel: dropped or replaced in a derived one
 _GEOMETRY_CACHES = ("_engine_shapes", "_pairs", "_revision", "_pairs_workspace")
+
+
+def derive_cost(model: Model, scene) -> int:
+    """About how many matrix entries Pinocchio copies to add the scene's new bodies' and payloads'
+    objects to a copy of ``model``'s GeometryModel: ``addGeometryObject`` resizes an
+    ``ngeoms x ngeoms`` pair map on every call, so adding ``k`` objects to ``n`` costs ``~k (n+k)^2``
+    (10 000 boxes added one by one: minutes).  Callers with an alternative (the analytic engine's
+    ``compile_scene``) use it above a budget."""
+    old_bodies, old_payloads = model._parts
+    kept = {n for n, b in old_bodies if scene.bodies.get(n) is b} | {n for n, p in old_payloads if scene.payloads.get(n) is p}
+    k = sum(len(b.shapes) for n, b in scene.bodies.items() if n not in kept)
+    k += sum(len(p.shapes) for n, p in scene.payloads.items() if n not in kept)
+    n = int(model.collision_model.ngeoms) + k
+    return k * n * n
 
 
 def derive_model(model: Model, scene) -> Model | None:
