@@ -1,5 +1,6 @@
 """The analytic engine's W path, for tests: every element moved to W, and one pair's distance by the
-generic per-pair kernel (``_narrow.pair_distance``) on the detector's buffers."""
+generic per-pair kernel (``_narrow.pair_distance``) on the detector's buffers; random point clouds
+and rotations for the link-frame kernel tests."""
 
 from __future__ import annotations
 
@@ -33,3 +34,20 @@ def world_pair_distance(det, a: int, b: int) -> tuple:
                          V(det._MI, "estart"), V(det._MI, "gadj"), V(det._MI, "gadjs"), V(det._MI, "gtri"),
                          V(det._MI, "gtris"), out, work, tol.length, tol.parallel, tol.gjk_epsilon,
                          tol.gjk_max_iterations, tol.penetration_witness_offset, -np.inf)
+
+
+def random_rotation(rng) -> np.ndarray:
+    """A uniformly random rotation (3, 3), from a random unit quaternion."""
+    q = rng.normal(size=4)
+    q /= np.linalg.norm(q)
+    w, x, y, z = q
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def random_cloud(rng, n: int) -> np.ndarray:
+    """``n`` points on a random ellipsoid (semi-axes 0.05-0.4 m): every one a hull vertex."""
+    p = rng.normal(size=(n, 3))
+    p /= np.linalg.norm(p, axis=1)[:, None]
+    return np.ascontiguousarray(p * rng.uniform(0.05, 0.4, size=3))

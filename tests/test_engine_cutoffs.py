@@ -16,6 +16,9 @@ obstacles at once.
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -26,19 +29,8 @@ from armguard.geometry._pair_epa import EPA_WORK_SIZE, epa_depth
 from armguard.geometry._pair_gjk import gjk_dir_rel
 
 
-def _cloud(rng, n: int) -> np.ndarray:
-    p = rng.normal(size=(n, 3))
-    p /= np.linalg.norm(p, axis=1)[:, None]
-    return np.ascontiguousarray(p * rng.uniform(0.05, 0.4, size=3))
-
-
-def _rotation(rng) -> np.ndarray:
-    q = rng.normal(size=4)
-    q /= np.linalg.norm(q)
-    w, x, y, z = q
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+sys.path.insert(0, str(Path(__file__).parent))
+from _engine_world import random_cloud as _cloud, random_rotation as _rotation  # noqa: E402
 
 
 def _epa(pa, ga, ta, pb, gb, tb, R_AB, t_AB, cap=None):

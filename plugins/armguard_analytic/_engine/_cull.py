@@ -214,3 +214,20 @@ def _gjk_pair(ka, kb):  # pragma: no cover - compiled
     """Whether two moving elements of core kinds ``ka``, ``kb`` go to GJK (``_step.evaluate_pair``'s link-frame
     pairs: two boxes or hulls, a hull and anything; a capsule and a box is a scalar kernel, tens of ns)."""
     return ka == 3 or kb == 3 or (ka >= 2 and kb >= 2)
+
+
+@njit(cache=True, inline="always")
+def _push_children(stack, gapst, top, left, gl, right, gr):  # pragma: no cover - compiled
+    """Push a BVH node's two children with their gaps, the farther first so that the nearer is
+    popped first; returns the new stack top."""
+    if gl <= gr:
+        stack[top] = right
+        gapst[top] = gr
+        stack[top + 1] = left
+        gapst[top + 1] = gl
+    else:
+        stack[top] = left
+        gapst[top] = gl
+        stack[top + 1] = right
+        gapst[top + 1] = gr
+    return top + 2

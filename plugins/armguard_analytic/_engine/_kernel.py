@@ -38,7 +38,7 @@ from armguard.kinematics._fk import _fk_kernel
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SC, at, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, SUM_STATUS, seg1, seg2, seg3
-from ._cull import (_argsort_heap, _argsort_small, _bb_gap, _explicit_gap, _gjk_pair, _obb_gap, _sb_gap,
+from ._cull import (_argsort_heap, _argsort_small, _bb_gap, _explicit_gap, _gjk_pair, _obb_gap, _push_children, _sb_gap,
                     obb_apart_moving, obb_apart_static)
 from ._narrow import BOUNDED
 from ._step import move_element, pair_step
@@ -503,12 +503,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                                          o_bhi + 3 * left))
                                     gr = max(gr, _bb_gap(bx0, by0, bz0, bx1, by1, bz1, br, MF, o_blo + 3 * right,
                                                          o_bhi + 3 * right))
-                                if gl <= gr:  # push the farther first: the nearer is popped first
-                                    stack[top] = right; gapst[top] = gr; top += 1
-                                    stack[top] = left; gapst[top] = gl; top += 1
-                                else:
-                                    stack[top] = left; gapst[top] = gl; top += 1
-                                    stack[top] = right; gapst[top] = gr; top += 1
+                                top = _push_children(stack, gapst, top, left, gl, right, gr)  # the nearer popped first
                                 continue
                             for it in range(bvh_start[node], bvh_start[node] + bvh_count[node]):
                                 s = bvh_items[it]

@@ -28,7 +28,8 @@ import math
 
 from numba import njit
 
-from ._cull import _argsort_small, _bb_gap, _face_sep, _near_leaf, _obb_gap, _obb_w, _sb_gap, obb_apart_static
+from ._cull import (_argsort_small, _bb_gap, _face_sep, _near_leaf, _obb_gap, _obb_w, _push_children, _sb_gap,
+                    obb_apart_static)
 from ._layout import K, seg1, seg2
 from ._narrow import BOUNDED
 from ._step import pair_step
@@ -282,12 +283,7 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
                 if has_obb:
                     gl = max(gl, _bb_gap(lx, ly, lz, hx, hy, hz, 0.0, MF, o_blo + 3 * left, o_bhi + 3 * left))
                     gr = max(gr, _bb_gap(lx, ly, lz, hx, hy, hz, 0.0, MF, o_blo + 3 * right, o_bhi + 3 * right))
-                if gl <= gr:  # push the farther first: the nearer is popped first
-                    stack[top] = right; gapst[top] = gr; top += 1
-                    stack[top] = left; gapst[top] = gl; top += 1
-                else:
-                    stack[top] = left; gapst[top] = gl; top += 1
-                    stack[top] = right; gapst[top] = gr; top += 1
+                top = _push_children(stack, gapst, top, left, gl, right, gr)  # the nearer popped first
                 continue
             for it in range(bvh_start[node], bvh_start[node] + bvh_count[node]):
                 s = bvh_items[it]
