@@ -116,6 +116,9 @@ def _derive_table(repeat: int) -> list[str]:
     from armguard.model import load_model, model_of
     from armguard.model._load import model_from_scene
 
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        puma = next(iter(load_model("puma560").robots.values()))
     rows = []
     for name in ("panda", "ranger", "kuka_iiwa", "so101"):
         with warnings.catch_warnings():
@@ -127,23 +130,30 @@ def _derive_table(repeat: int) -> list[str]:
         scene = model.scene
         robot = list(scene.robots)[-1]
         cells = []
-        for edit in ("add_body", "set_robot_base"):
+        for edit in ("add_body", "set_robot_base", "add_robot"):
             derived, trip = [], []
-            for k in range(repeat):
+            for k in range(repeat if edit != "add_robot" else min(repeat, 5)):
+                edited = scene
                 if edit == "add_body":
                     scene.add_body(f"crate{k}", [Box(center=[0.5, 0.2, 0.3 + 0.01 * k], half_extents=[0.05, 0.05, 0.05])])
-                else:
+                elif edit == "set_robot_base":
                     X = np.eye(4)
                     X[:3, 3] = [0.01, 0.0, 0.0]
                     scene.set_robot_base(robot, X @ scene.robots[robot].X_WB)
+                else:  # a second arm beside it, on a copy (the scene keeps one robot more each time otherwise)
+                    edited = scene.copy()
+                    model_of(edited)
+                    X = np.eye(4)
+                    X[:3, 3] = [1.0, 0.0, 0.0]
+                    edited.add_robot(puma.with_name("puma_2").with_base(X @ puma.X_WB))
                 t0 = time.perf_counter()
-                model_of(scene)
+                model_of(edited)
                 derived.append(time.perf_counter() - t0)
                 t0 = time.perf_counter()
                 try:
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore")
-                        model_from_scene(scene)
+                        model_from_scene(edited)
                     trip.append(time.perf_counter() - t0)
                 except Exception as exc:  # noqa: BLE001 - the writer refuses a pose (so101)
                     trip_text = f"fails ({type(exc).__name__})"
@@ -152,12 +162,14 @@ def _derive_table(repeat: int) -> list[str]:
         rows.append(f"| {name} | " + " | ".join(cells) + " |")
     return ["### The Model of an edited scene",
             "",
-            "`model_of(scene)` after `add_body` or `set_robot_base`: the Model derived from the loaded one "
-            "(`armguard.model._derive`: the GeometryModel copied with the new objects; for a remounted robot "
-            "a copy of `pin_model` with its base moved) against the URDF round trip it replaces "
+            "`model_of(scene)` after `add_body`, `set_robot_base` or `add_robot` (puma560 beside it): the Model "
+            "derived from the loaded one (`armguard.model._derive`: the GeometryModel copied with the new "
+            "objects; for a remounted robot a copy of `pin_model` with its base moved; an added robot written "
+            "as URDF alone and appended) against the URDF round trip it replaces "
             "(`model_from_scene`: the scene written as URDF and read back by Pinocchio). Wall time in "
             "process, medians.",
             "",
-            "| model | add_body: derived | round trip | set_robot_base: derived | round trip |",
-            "|---|---:|---:|---:|---:|",
+            "| model | add_body: derived | round trip | set_robot_base: derived | round trip "
+            "| add_robot: derived | round trip |",
+            "|---|---:|---:|---:|---:|---:|---:|",
             *rows]

@@ -198,7 +198,7 @@ def test_a_moved_base_keeps_the_srdf_groups_and_states():
     assert {g: new.group_joints(g) for g in groups} == before
     assert len(new.srdf.states) == len(model.srdf.states)
     pin_joints = set(new.joint_names)
-    for st in new.srdf.states:  # the states name the rebuilt model's joints
+    for st in new.srdf.states:  # the states name the new model's joints
         assert set(st.values) <= pin_joints
     scene.set_robot_base(r, np.eye(4))  # moved again: still carried
     assert {g: model_of(scene).group_joints(g) for g in groups} == before
@@ -310,8 +310,9 @@ def test_a_chain_that_is_not_one_motion_is_refused():
 
 
 def test_an_added_robot_keeps_the_srdf_groups_and_states():
-    """``add_robot`` changes the kinematics: the Model is rebuilt through the URDF writer (joints and
-    links renamed) and still answers the SRDF groups it was loaded with (``carry_srdf``)."""
+    """``add_robot`` changes the kinematics: the new robot is appended to the loaded Model's
+    ``pin_model`` (``armguard.model._derive``), whose joints and links keep their names, so the
+    Model keeps the very SRDF it was loaded with and answers its groups and states as before."""
     model = armguard.load_model("panda")
     scene = model.scene
     groups = sorted(model.srdf.groups)
@@ -320,6 +321,28 @@ def test_an_added_robot_keeps_the_srdf_groups_and_states():
     X = np.eye(4)
     X[:3, 3] = [1.5, 0.0, 0.0]
     scene.add_robot(scene.robots[r].with_name("second").with_base(X))
+    new = model_of(scene)
+    assert new is not model and new.srdf is model.srdf
+    assert {g: new.group_joints(g) for g in groups} == before
+    pin_joints = set(new.joint_names)
+    for st in new.srdf.states:  # the states name the new model's joints
+        assert set(st.values) <= pin_joints
+
+
+def test_a_rebuilt_model_carries_the_srdf_over(monkeypatch):
+    """Where no Model can be derived (``derive_model`` returns None: a robot removed or changed
+    otherwise), ``model_of`` rebuilds through the URDF writer, which renames joints and links, and
+    carries the SRDF over (``carry_srdf``): the groups answer as before."""
+    from armguard.model import _derive
+
+    model = armguard.load_model("panda")
+    scene = model.scene
+    groups = sorted(model.srdf.groups)
+    before = {g: model.group_joints(g) for g in groups}
+    X = np.eye(4)
+    X[:3, 3] = [1.5, 0.0, 0.0]
+    scene.add_robot(scene.robots[next(iter(scene.robots))].with_name("second").with_base(X))
+    monkeypatch.setattr(_derive, "derive_model", lambda model, scene: None)
     new = model_of(scene)
     assert new is not model and new.srdf is not None and "carried over" in new.srdf.found
     assert {g: new.group_joints(g) for g in groups} == before

@@ -65,6 +65,22 @@ def test_pose_from_xyz_rpy_is_workmate_product_and_inverts(xyz, rpy):
     np.testing.assert_allclose(rpy2, rpy, atol=1e-9)
 
 
+@SETTINGS
+@given(st.sampled_from([-1.0, 1.0]), st.floats(1e-9, 1e-2), angles, angles)
+def test_xyz_rpy_from_pose_near_gimbal_lock_reproduces_the_rotation(sign, off, roll, yaw):
+    """Near gimbal lock ``atan2(R21, R22)`` divides entries of size ``cos(pitch)``: the angles alone
+    lose digits (so101's URDF: 3.7e-6 rad from pi/2 gave 3.2e-11), the rotation they make must not."""
+    from scipy.spatial.transform import Rotation
+
+    # made through a quaternion (as a URDF reader may): entries right to ~1e-16 absolute, so the two
+    # of size cos(pitch) are not right to 1e-16 relative
+    X = np.eye(4)
+    X[:3, :3] = Rotation.from_euler("ZYX", [yaw, sign * (math.pi / 2 - off), roll]).as_matrix()
+    X[:3, 3] = [0.1, -0.2, 0.3]
+    X2 = pose_from_xyz_rpy(*xyz_rpy_from_pose(X))
+    np.testing.assert_allclose(X2, X, rtol=0, atol=1e-14)
+
+
 def test_xyz_rpy_from_pose_at_gimbal_lock_reproduces_pose():
     X = pose_from_xyz_rpy([0, 0, 0], [0.3, math.pi / 2, 0.8])
     np.testing.assert_allclose(pose_from_xyz_rpy(*xyz_rpy_from_pose(X)), X, atol=1e-12)

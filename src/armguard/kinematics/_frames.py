@@ -119,7 +119,44 @@ def xyz_rpy_from_pose(X) -> tuple[np.ndarray, np.ndarray]:
     else:
         roll = 0.0
         yaw = math.atan2(-R[0, 1], R[1, 1])
-    return X[:3, 3].copy(), np.array([roll, pitch, yaw])
+    rpy = np.array([roll, pitch, yaw])
+    if cp < _POLISH_BELOW:
+        rpy = _polish_rpy(R, rpy)
+    return X[:3, 3].copy(), rpy
+
+
+_POLISH_BELOW = 1e-2
+"""``cos(pitch)`` below which :func:`xyz_rpy_from_pose` polishes its angles (:func:`_polish_rpy`):
+near gimbal lock ``roll = atan2(R21, R22)`` divides two entries of size ``cos(pitch)``, so each
+angle alone is off by ``~1e-16 / cos(pitch)`` and the rotation they make by as much (so101's URDF:
+pitch 3.7e-6 rad from pi/2, 3.2e-11 off)."""
+
+
+def _rpy_matrix(rpy: np.ndarray) -> np.ndarray:
+    return (rot_z(rpy[2]) @ rot_y(rpy[1]) @ rot_x(rpy[0]))[:3, :3]
+
+
+def _polish_rpy(R: np.ndarray, rpy: np.ndarray, steps: int = 4) -> np.ndarray:
+    """Gauss-Newton steps on ``min |Rz(yaw) Ry(pitch) Rx(roll) - R|_F`` from ``rpy``: the angles are
+    ill-conditioned near gimbal lock but the rotation they make is not, so a few least-squares
+    steps bring it back to rounding; a step is kept only where it reduces the residual."""
+    best, err = rpy, np.abs(_rpy_matrix(rpy) - R).max()
+    for _ in range(steps):
+        if err < 1e-15:
+            break
+        r, p, y = best
+        Rx, Ry, Rz = rot_x(r)[:3, :3], rot_y(p)[:3, :3], rot_z(y)[:3, :3]
+        dRx = np.array([[0.0, 0, 0], [0, -math.sin(r), -math.cos(r)], [0, math.cos(r), -math.sin(r)]])
+        dRy = np.array([[-math.sin(p), 0, math.cos(p)], [0, 0.0, 0], [-math.cos(p), 0, -math.sin(p)]])
+        dRz = np.array([[-math.sin(y), -math.cos(y), 0], [math.cos(y), -math.sin(y), 0], [0, 0, 0.0]])
+        J = np.stack([(Rz @ Ry @ dRx).ravel(), (Rz @ dRy @ Rx).ravel(), (dRz @ Ry @ Rx).ravel()], axis=1)
+        step = np.linalg.lstsq(J, (R - Rz @ Ry @ Rx).ravel(), rcond=None)[0]
+        cand = best + step
+        e = np.abs(_rpy_matrix(cand) - R).max()
+        if not e < err:
+            break
+        best, err = cand, e
+    return best
 
 
 def dh_standard(a: float, alpha: float, d: float, theta: float) -> np.ndarray:

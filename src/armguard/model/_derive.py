@@ -19,6 +19,11 @@ Model from it instead of writing the scene as URDF and reading it back
   forbidden-values map or golden reference checked against them must not accept the new ones);
   the pairs follow the scene (``Model.pairs``).
 
+A robot added after the loaded ones (``add_robot``) is written as URDF alone, read by Pinocchio
+and appended (``pinocchio.appendModel`` on the universe; a frame, joint or object name the loaded
+Model already has gets ``#k``), so the loaded robots keep their joints, frames, objects and SRDF
+and only the new robot takes the writer's path.
+
 The old Model is left as it was: Checkers and Detectors built on it keep answering for it.
 ``tests/test_model_derive.py`` holds a derived Model to the one the URDF round trip builds
 (the same object names, placements and shapes) and the analytic engine's arrays to
@@ -58,14 +63,15 @@ def derive_cost(model: Model, scene) -> int:
 
 
 def derive_model(model: Model, scene) -> Model | None:
-    """A Model of ``scene`` with ``model``'s kinematics and ``scene``'s bodies and payloads; None
-    when ``model`` does not move ``scene``'s robots (:meth:`Model.moves_robots_of`): a robot
-    moved or added needs a new ``pin_model``."""
+    """A Model of ``scene`` from ``model``: its kinematics (with the robots ``set_robot_base``
+    moved, and those ``add_robot`` added after its own appended) and ``scene``'s bodies and
+    payloads; None when a robot of ``model`` was removed, reordered or changed otherwise."""
     import pinocchio as pin
 
     moved = _rebased(model, scene)
     if moved is None:
         return None
+    added = list(scene.robots)[len(model._robots):]
     old_bodies, old_payloads = model._parts
     kept = {n for n, b in old_bodies if scene.bodies.get(n) is b} | {n for n, p in old_payloads if scene.payloads.get(n) is p}
     gone = {n for n, _ in (*old_bodies, *old_payloads)} - kept
@@ -89,22 +95,32 @@ def derive_model(model: Model, scene) -> Model | None:
                 hulls[gname] = mp
 
     pin_model = _moved_bases(model, geom, names, moved, scene) if moved else model.pin_model
+    kin = None
+    if added:
+        pin_model, geom, kin = _append_robots(model, pin_model, geom, names, used, scene, added)
+        notes.update(kin.pop("notes"))
+        hulls.update(kin.pop("hulls"))
     for name, body in scene.bodies.items():
         if name not in kept:
             add(name, body.shapes, 0, 0, np.eye(4))
+    link_frames = kin["link_frames"] if kin is not None else model.link_frames
+    placements = kin["_link_placements"] if kin is not None else model._link_placements
     for name, p in scene.payloads.items():
         if name not in kept:
-            f = int(model.link_frames[p.owner_link])
+            f = int(link_frames[p.owner_link])
             fr = pin_model.frames[f]
-            X_JL = _se3(fr.placement) @ model.link_placement(p.owner_link)
+            X_FL = placements.get(p.owner_link)
+            X_JL = _se3(fr.placement) @ (np.eye(4) if X_FL is None else X_FL)
             add(name, p.shapes, int(fr.parentJoint), f, X_JL @ np.asarray(p.X_LP, dtype=np.float64))
 
     new = object.__new__(Model)
     new.__dict__.update({k: v for k, v in model.__dict__.items() if k not in _GEOMETRY_CACHES})
     new.collision_model = geom
-    if moved:  # other kinematics: the robots, and trees compiled again
+    if moved or added:  # other kinematics: the robots, and trees compiled again
         new.pin_model, new._robots = pin_model, tuple(scene.robots.items())
         new.__dict__.pop("_engine_trees", None)
+    if kin is not None:  # joint and frame indices of the appended model
+        new.__dict__.update(kin)
     # no source files: the files describe the loaded Model's shapes, not these (a forbidden-values
     # map or a golden reference checked against them must not accept this Model), as for a scene
     # built in code
@@ -118,7 +134,7 @@ def derive_model(model: Model, scene) -> Model | None:
     new._pairs = new._revision = None
     links = {f"{r}/{ln}" for r, robot in scene.robots.items() for ln in robot.link_names}
     shapes = model.__dict__.get("_engine_shapes")
-    if shapes is not None and not moved:  # the robots' link shapes are the same objects in the same frames
+    if shapes is not None and not moved and not added:  # the robots' link shapes are the same objects in the same frames
         # (owner, link) -> shapes; not "owners" or "local" (GeometryObject names): made again
         new._engine_shapes = {k: v for k, v in shapes.items() if isinstance(k, tuple) and k[0] in links}
     scene._model_of_record = new
@@ -128,17 +144,18 @@ def derive_model(model: Model, scene) -> Model | None:
 def _rebased(model: Model, scene) -> dict | None:
     """Robot name -> ``D = X_WB' X_WB^-1`` for each robot of ``scene`` that is ``model``'s mounted
     elsewhere (``set_robot_base``: the same joints, links and shapes, another ``X_WB``); ``{}`` when
-    ``model`` moves ``scene``'s robots; None when a robot was added, removed or changed otherwise."""
+    ``model`` moves ``scene``'s first robots as they are (robots added after them are
+    :func:`_append_robots`'); None when a robot was removed, reordered or changed otherwise."""
     old = dict(model._robots)
-    if list(old) != list(scene.robots):
+    if list(old) != list(scene.robots)[:len(old)]:
         return None
     moved = {}
-    for r, new in scene.robots.items():
-        o = old[r]
+    for r, o in old.items():
+        new = scene.robots[r]
         if new is o:
             continue
         same = (new.joints is o.joints and new.joint_names == o.joint_names and new.link_names == o.link_names
-                and new.tool_link == o.tool_link and new.ik == o.ik
+                and new.tool_link == o.tool_link  # not the IK routine (set_robot_ik): pin_model has none
                 and all(new.link_shapes[ln] is o.link_shapes[ln] for ln in o.link_names))
         if not same:
             return None
@@ -195,6 +212,66 @@ def _moved_bases(model: Model, geom, names: dict, moved: dict, scene):
             if held == r and int(go.parentJoint) == 0:
                 go.placement = S * go.placement
     return pm
+
+
+def _append_robots(model: Model, pin_model, geom, names: dict, used: set, scene, added: list) -> tuple:
+    """``(pin model, GeometryModel, attributes)``: ``pin_model`` and ``geom`` with the robots
+    ``added`` appended on the universe.  They are written as URDF alone and read by Pinocchio
+    (:func:`~armguard.model._load.model_from_scene` of a scene of just them, at their own
+    ``X_WB``); a frame, joint or object name ``pin_model`` or ``geom`` already has gets ``#k``.
+    ``names`` gets their objects; ``attributes`` are the new Model's ``_q_index``, ``_circular``,
+    ``link_frames``, ``_link_placements`` (joints and frames renumbered by name) and the new
+    robots' ``notes`` and ``hulls``."""
+    import pinocchio as pin
+
+    from ._load import model_from_scene
+    from ._scene import Scene
+
+    alone = Scene(f"{scene.name}+")
+    for r in added:
+        alone.add_robot(scene.robots[r], home=scene.home(r))
+    sub = model_from_scene(alone)
+    sp, sg = pin.Model(sub.pin_model), sub.collision_model.copy()
+    frame_names = {f.name for f in pin_model.frames}
+    for f in list(sp.frames)[1:]:
+        if f.name in frame_names:
+            f.name = _fresh(f.name, frame_names)
+    joint_names = set(pin_model.names)
+    for j in range(1, sp.njoints):
+        if sp.names[j] in joint_names:
+            sp.names[j] = _fresh(sp.names[j], joint_names)
+    renamed = {}
+    for go in sg.geometryObjects:
+        renamed[go.name] = go.name = _fresh(go.name, used)
+    pm, gm = pin.appendModel(pin_model, sp, geom, sg, 0, pin.SE3.Identity())
+    gm.removeAllCollisionPairs()  # appendModel pairs every object of A with every one of B; the Model's pairs are its own
+
+    def joint_map(src) -> dict:  # idx_q in src -> idx_q in pm, through the joint names
+        out = {}
+        for j in range(1, src.njoints):
+            jm = src.joints[j]
+            if jm.nq > 0:
+                k = pm.joints[pm.getJointId(src.names[j])].idx_q
+                out.update({jm.idx_q + i: k + i for i in range(jm.nq)})
+        return out
+
+    def frame_map(src, frames: dict) -> dict:
+        return {o: int(pm.getFrameId(src.frames[int(f)].name, src.frames[int(f)].type)) for o, f in frames.items()}
+
+    old_q, new_q = joint_map(pin_model), joint_map(sp)
+    q_index = np.concatenate([[old_q[int(i)] for i in model._q_index], [new_q[int(i)] for i in sub._q_index]]).astype(np.int64)
+    q_index.flags.writeable = False
+    n_old = len(model._q_index)
+    for (owner, i), gname in sub._geom.items():
+        names[(owner, i)] = renamed[gname]
+    return pm, gm, {
+        "_q_index": q_index,
+        "_circular": np.concatenate([model._circular, np.asarray(sub._circular, dtype=np.int64) + n_old]).astype(np.int64),
+        "link_frames": types.MappingProxyType({**frame_map(pin_model, model.link_frames), **frame_map(sp, sub.link_frames)}),
+        "_link_placements": {**model._link_placements, **sub._link_placements},
+        "notes": {renamed[k]: v for k, v in sub.notes.items()},
+        "hulls": {renamed[k]: v for k, v in sub.hulls.items()},
+    }
 
 
 def _fresh(name: str, used: set) -> str:

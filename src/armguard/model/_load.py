@@ -339,9 +339,10 @@ def model_of(scene, *, geometry: bool = True) -> Model:
     Unchanged: the scene holds the robots the Model was built with (:meth:`Model.moves_robots_of`:
     ``set_robot_base`` or ``add_robot`` make a new one) and, with ``geometry`` (the default), the
     Model's GeometryModel holds exactly the scene's shapes (:meth:`Model.geometry_is_of`).  Bodies,
-    payloads or robot bases (``set_robot_base``) changed since: a Model derived from it
-    (:func:`armguard.model._derive.derive_model`, no URDF round trip), which becomes the scene's; a
-    robot added or removed: one built from the scene.  ``geometry=False`` asks
+    payloads, robot bases (``set_robot_base``) or robots added after its own (``add_robot``: only
+    the new robot is written as URDF, then appended) changed since: a Model derived from it
+    (:func:`armguard.model._derive.derive_model`), which becomes the scene's; a scene with no
+    Model yet, or whose robots changed otherwise: one built from the scene.  ``geometry=False`` asks
     only for the kinematics (``pin_model``, ``q_index``, ``link_frames``): the Model of record also
     serves after bodies, payloads or pairs changed, and a :meth:`Scene.copy` with the same robots."""
     m = getattr(scene, "_model_of_record", None)
