@@ -30,8 +30,18 @@ from ._errors import (
 )
 from ._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._numba_cache import ensure_numba_cache as _ensure_numba_cache
+from . import _hooks
 
 _ensure_numba_cache()  # before any kernel is defined: a read-only install still caches them somewhere
+
+
+def _read_robot_urdf(*args, **kwargs):
+    from .model._robot_urdf import robot_from_urdf
+
+    return robot_from_urdf(*args, **kwargs)
+
+
+_hooks.read_robot_urdf = _read_robot_urdf  # Robot.from_urdf (kinematics) reads through armguard.model
 
 __version__ = "0.1.0"
 

@@ -29,6 +29,7 @@ class JointType(str, enum.Enum):
 _JT_CODE = {JointType.FIXED: JT_FIXED, JointType.REVOLUTE: JT_REVOLUTE, JointType.PRISMATIC: JT_PRISMATIC}
 
 
+
 def _finite(value, name: str) -> float:
     try:
         x = float(value)
@@ -533,10 +534,11 @@ class Robot:
 
     @classmethod
     def from_urdf(cls, path, *, name=None, X_WB=None, load_collision=True, mesh_dir=None) -> "Robot":
-        """A tree from a URDF file; see :func:`armguard.kinematics._urdf.robot_from_urdf`."""
-        from ._urdf import robot_from_urdf
+        """A tree from a URDF file, through Pinocchio: :func:`armguard.model._robot_urdf.robot_from_urdf`
+        (one layer up: reached through :mod:`armguard._hooks`, which the package root fills)."""
+        from .. import _hooks
 
-        return robot_from_urdf(cls, path, name=name, X_WB=X_WB, load_collision=load_collision, mesh_dir=mesh_dir)
+        return _hooks.read_robot_urdf(path, name=name, X_WB=X_WB, load_collision=load_collision, mesh_dir=mesh_dir)
 
 
 def _rebuild_robot(name, root, specs, kwargs) -> Robot:

@@ -18,6 +18,7 @@ from pydantic import ValidationError
 
 from .._errors import ArmguardError, KinematicsError, SceneError, SceneFileError, list_problems
 from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
+from ._robot_urdf import robot_from_urdf
 from ._scene import CannedTest, Scene
 from ._schema import SHAPE_TYPES, SceneFile
 from ._yaml import read_scene_yaml  # noqa: F401  (part of this module's interface)
@@ -250,7 +251,7 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
             raise ctx.error(f"{w}.urdf", f"URDF file not found: {path}")
         ctx.read.append(path)
         try:
-            robot = Robot.from_urdf(path, name=spec.name, X_WB=X_WB)
+            robot = robot_from_urdf(path, name=spec.name, X_WB=X_WB)
         except ArmguardError as exc:
             raise ctx.error(f"{w}.urdf", str(exc)) from None
         if spec.max_acceleration is not None:

@@ -1,16 +1,16 @@
 """Robots from URDF files, through Pinocchio (the model of record).
 
-``Robot.from_urdf(path)`` is the one arm of :func:`armguard.load_model` of that file: Pinocchio
+``Robot.from_urdf(path)`` (``robot_from_urdf``) is the one arm of :func:`armguard.load_model` of
+that file: Pinocchio
 parses the URDF (mimic joints included) and builds its collision geometry; armguard's Robot
 keeps its own batched FK compiled from Pinocchio's joint placements.  See
 :mod:`armguard.model` for the checks (a file that does not parse, a missing mesh, a dropped
 collision element: an error naming the file and element) and for the shapes (capsules, boxes,
 spheres, exact cylinders, and meshes as their convex hulls).
 
-The one import in :mod:`armguard.kinematics` that runs up the layers (to :mod:`armguard.model`,
-which builds Robots from Pinocchio's models): allowed by name in the import-linter contract
-(``pyproject.toml``) until the Model is the only model type and ``Robot`` retires
-(``docs/architecture.md``).
+It lives here, not in :mod:`armguard.kinematics` (one layer down, where ``Robot`` is): this
+package registers it there on import (:func:`armguard.kinematics._robot.register_urdf_reader`),
+so ``Robot.from_urdf`` works without kinematics importing upwards.
 """
 
 from __future__ import annotations
@@ -22,12 +22,12 @@ from .._errors import SceneFileError
 __all__ = ["robot_from_urdf"]
 
 
-def robot_from_urdf(cls, path, *, name=None, X_WB=None, load_collision=True, mesh_dir=None):
+def robot_from_urdf(path, *, name=None, X_WB=None, load_collision=True, mesh_dir=None):
     """The Robot of the URDF file ``path`` (its one arm); ``X_WB`` (4, 4) mounts its root link in W.
 
     ``name`` defaults to the URDF's robot name; ``mesh_dir`` is searched for mesh files too.
     """
-    from ..model._load import model_from_urdf
+    from ._load import model_from_urdf
 
     file = str(path)
     if not Path(file).is_file():
