@@ -210,6 +210,69 @@ class Model:
         return (f"Model({self.name!r}, nq={self.pin_model.nq}, {self.collision_model.ngeoms} geometries, "
                 f"{len(self.pairs)} pairs)")
 
+    # ---------------------------------------------------------------- edits: a new Model each
+    def edited(self, edit) -> "Model":
+        """A new Model: ``edit(scene)`` applied to a private copy of this Model's scene (robots, bodies,
+        payloads and workspace as this Model holds them; pair filters, trajectories and canned tests
+        as its scene has them).  This Model, its scene and the Checkers built on it are left as
+        they were; the new one is derived from this one (:mod:`armguard.model._derive`: no URDF
+        round trip unless a robot changed other than by ``set_robot_base`` or ``add_robot``).
+        The ``with_*`` methods are the common edits."""
+        from ._load import model_of
+
+        scene = self.scene.copy()
+        if not self._is_current():  # the scene has moved on: start from what this Model holds
+            scene._robots = dict(self._robots)
+            scene._bodies, scene._payloads = dict(self._parts[0]), dict(self._parts[1])
+            scene._workspace = self.workspace
+        scene._model_of_record = self
+        edit(scene)
+        return model_of(scene)
+
+    def with_body(self, name: str, shapes, *, category: str = "environment") -> "Model":
+        """This Model with a static body of ``shapes`` (given in W) added (:meth:`Scene.add_body`)."""
+        return self.edited(lambda s: s.add_body(name, shapes, category=category))
+
+    def without_body(self, name: str) -> "Model":
+        """This Model without body ``name`` (:meth:`Scene.remove_body`)."""
+        return self.edited(lambda s: s.remove_body(name))
+
+    def with_payload(self, name: str, robot: str, link: str, shapes, X_LP=None) -> "Model":
+        """This Model with ``shapes`` (in frame P) held at ``X_LP`` by ``robot``'s ``link``
+        (:meth:`Scene.attach_payload`)."""
+        return self.edited(lambda s: s.attach_payload(name, robot, link, shapes, X_LP))
+
+    def with_payload_released(self, name: str, q) -> "Model":
+        """WORKMATE's release: payload ``name`` left as a static body where it is at ``q``
+        (``(nq,)``, Pinocchio's order; :meth:`Scene.release_payload`)."""
+        q_scene = self.scene_q(q)
+        return self.edited(lambda s: s.release_payload(name, q_scene))
+
+    def with_grasp(self, body: str, robot: str, link: str, q) -> "Model":
+        """WORKMATE's grasp: static ``body`` held by ``robot``'s ``link`` where it is at ``q``
+        (``(nq,)``, Pinocchio's order; :meth:`Scene.grasp`)."""
+        q_scene = self.scene_q(q)
+        return self.edited(lambda s: s.grasp(body, robot, link, q_scene))
+
+    def with_robot_base(self, robot: str, X_WB) -> "Model":
+        """This Model with ``robot`` mounted at ``X_WB`` (4, 4) (:meth:`Scene.set_robot_base`)."""
+        return self.edited(lambda s: s.set_robot_base(robot, X_WB))
+
+    def with_robot(self, robot, *, home=None) -> "Model":
+        """This Model with ``robot`` (a ``Robot``, e.g. ``load_model(...).robots[...]`` or a DH
+        table's) added after its own (:meth:`Scene.add_robot`); its joints come after this Model's
+        in ``q``."""
+        return self.edited(lambda s: s.add_robot(robot, home=home))
+
+    def with_workspace(self, lo, hi) -> "Model":
+        """This Model with the workspace box ``lo``, ``hi`` ((3,) m in W; :meth:`Scene.set_workspace`)."""
+        return self.edited(lambda s: s.set_workspace(lo, hi))
+
+    def with_pair_disabled(self, a: str, b: str) -> "Model":
+        """This Model with owners ``a`` and ``b`` never checked against each other (a robot's name
+        stands for all its links; :meth:`Scene.disable_pair`)."""
+        return self.edited(lambda s: s.disable_pair(a, b))
+
     # ---------------------------------------------------------------- configurations
     @property
     def nq(self) -> int:

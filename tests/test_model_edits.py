@@ -1,0 +1,143 @@
+"""Edits on a Model: ``Model.edited`` and the ``with_*`` methods return a new Model and leave the
+one they were called on, its scene and its Checkers as they were.
+
+Held to the scene path they stand for (the same edit on the scene, then ``model_of``): the same
+pairs and coal's distances row for row; the analytic backend's verdicts equal coal's.
+"""
+
+from __future__ import annotations
+
+import warnings
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pytest
+
+import armguard
+from armguard import SceneError
+from armguard.geometry import Box, Sphere
+from armguard.model import load_model, model_of
+
+
+def _load(name):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return load_model(name)
+
+
+def _crate(x=0.5):
+    return [Box([x, 0.2, 0.3], [0.05, 0.05, 0.05], np.eye(3))]
+
+
+def _same_answers(a, b, n=8, seed=3):
+    """``a`` and ``b`` list the same pairs and coal gives the same distances (1e-9 m); the analytic
+    backend's verdicts on ``a`` are coal's."""
+    assert list(a.pairs.a) == list(b.pairs.a) and list(a.pairs.b) == list(b.pairs.b)
+    assert list(a.pairs.category) == list(b.pairs.category)
+    ca, cb, an = armguard.checker(a, "coal"), armguard.checker(b, "coal"), armguard.checker(a, "analytic")
+    for q in a.random_q(n, seed):
+        da, db = ca.pair_distances(q).distance, cb.pair_distances(q).distance
+        np.testing.assert_allclose(da, db, rtol=0, atol=1e-9)
+        x = an.pair_distances(q).distance
+        clear = (np.abs(x) > 1e-6) & (np.abs(da) > 1e-6)
+        np.testing.assert_array_equal((x <= 0)[clear], (da <= 0)[clear])
+
+
+@pytest.mark.parametrize("name", ["panda", "ranger"])
+def test_each_edit_equals_the_scene_path_and_leaves_the_model_alone(name):
+    model = _load(name)
+    robot = next(iter(model.robots))
+    link = model.robots[robot].link_names[-1]
+    before = list(model.pairs.a), dict(model.bodies), dict(model.payloads)
+    coal = armguard.checker(model, "coal")
+    q0 = model.random_q(1, 1)[0]
+    d0 = coal.pair_distances(q0).distance
+    X = np.eye(4)
+    X[:3, 3] = [0.1, 0.0, 0.0]
+    edits = {
+        "with_body": (lambda m: m.with_body("crate", _crate()), lambda s: s.add_body("crate", _crate())),
+        "with_payload": (lambda m: m.with_payload("held", robot, link, [Sphere([0, 0, 0.05], 0.03)]),
+                         lambda s: s.attach_payload("held", robot, link, [Sphere([0, 0, 0.05], 0.03)])),
+        "with_robot_base": (lambda m: m.with_robot_base(robot, X @ m.robots[robot].X_WB),
+                            lambda s: s.set_robot_base(robot, X @ s.robots[robot].X_WB)),
+        "with_workspace": (lambda m: m.with_workspace([-2, -2, -1], [2, 2, 2]), lambda s: s.set_workspace([-2, -2, -1], [2, 2, 2])),
+    }
+    for what, (on_model, on_scene) in edits.items():
+        new = on_model(model)
+        assert new is not model and new.scene is not model.scene, what
+        reference = _load(name)
+        on_scene(reference.scene)
+        _same_answers(new, model_of(reference.scene))
+    assert (list(model.pairs.a), dict(model.bodies), dict(model.payloads)) == before
+    assert model.scene.workspace is None or name == "ranger"
+    np.testing.assert_allclose(coal.pair_distances(q0).distance, d0, rtol=0, atol=1e-9)
+
+
+def test_edits_chain_and_a_robot_can_be_added():
+    model = _load("panda")
+    puma = next(iter(_load("puma560").robots.values())).with_name("puma_2")
+    X = np.eye(4)
+    X[:3, 3] = [1.0, 0.0, 0.0]
+    new = (model.with_body("crate", _crate())
+                .with_robot(puma.with_base(X))
+                .with_payload("tool", "puma_2", puma.link_names[-1], [Sphere([0, 0, 0.05], 0.03)])
+                .without_body("crate"))
+    assert list(new.robots) == ["panda", "puma_2"] and "crate" not in new.bodies and "tool" in new.payloads
+    assert new.nq == model.nq + len(puma.joint_names) and new.srdf is model.srdf
+    reference = _load("panda").scene
+    reference.add_robot(puma.with_base(X))
+    reference.attach_payload("tool", "puma_2", puma.link_names[-1], [Sphere([0, 0, 0.05], 0.03)])
+    _same_answers(new, model_of(reference))
+
+
+def test_grasp_then_release_puts_the_body_back_where_it_was():
+    model = _load("panda").with_body("crate", _crate(0.4))
+    robot = "panda"
+    link = model.robots[robot].link_names[-1]
+    q_grasp = model.neutral()
+    held = model.with_grasp("crate", robot, link, q_grasp)
+    assert "crate" in held.payloads and "crate" not in held.bodies
+    put_back = held.with_payload_released("crate", q_grasp)
+    assert "crate" in put_back.bodies
+    (b0,), (b1,) = model.bodies["crate"].shapes, put_back.bodies["crate"].shapes
+    np.testing.assert_allclose(b1.center, b0.center, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(b1.rotation, b0.rotation, rtol=0, atol=1e-12)
+
+
+def test_an_edit_of_a_model_the_scene_moved_on_from_starts_from_that_model():
+    """The scene was edited after this Model was made (a body ``x`` added: another Model derived);
+    an edit of this Model starts from its own bodies, not the scene's."""
+    model = _load("panda")
+    model.scene.add_body("x", _crate(0.6))
+    moved_on = model_of(model.scene)
+    assert "x" in moved_on.bodies and "x" not in model.bodies
+    new = model.with_body("y", _crate(-0.6))
+    assert "y" in new.bodies and "x" not in new.bodies
+    assert "x" not in new.pairs.owner_b and "y" in new.pairs.owner_b
+
+
+def test_a_refused_edit_raises_and_changes_nothing():
+    model = _load("panda").with_body("crate", _crate())
+    pairs = list(model.pairs.a)
+    with pytest.raises(SceneError, match="already used"):
+        model.with_body("crate", _crate(0.7))
+    with pytest.raises(SceneError, match="unknown body"):
+        model.without_body("nope")
+    assert list(model.pairs.a) == pairs and list(model.bodies) == ["crate"]
+
+
+def test_threads_editing_one_model_each_get_their_own():
+    model = _load("panda")
+    coal = armguard.checker(model, "coal")
+    q = model.random_q(1, 5)[0]
+    d = coal.pair_distances(q).distance
+
+    def edit(i):
+        return model.with_body(f"b{i}", _crate(0.3 + 0.05 * i))
+
+    with ThreadPoolExecutor(4) as ex:
+        got = list(ex.map(edit, range(8)))
+    for i, m in enumerate(got):
+        assert list(m.bodies) == [f"b{i}"]
+    assert not model.bodies
+    np.testing.assert_allclose(coal.pair_distances(q).distance, d, rtol=0, atol=1e-9)
