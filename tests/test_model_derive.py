@@ -261,13 +261,15 @@ def _installed(*names) -> bool:
     return all(n in have or n == "coded" for n in names)
 
 
-@pytest.mark.parametrize("name,other", [("panda", "kuka_iiwa"), ("ranger", "ranger"), ("so101", "puma560"), ("coded", "panda")])
+@pytest.mark.parametrize("name,other", [("panda", "kuka_iiwa"), ("ranger", "ranger"), ("so101", "puma560"), ("coded", "panda"),
+                                        ("rover", "rover"), ("z1", "so100")])
 def test_a_robot_added_gets_a_derived_model_equal_to_the_round_trip(name, other):
     """``add_robot``: the loaded Model's kinematics with the new robot written as URDF alone and
     appended (``pinocchio.appendModel``), not the whole scene written again: the loaded robots keep
     their joint and frame names and the SRDF they were loaded with; a second ranger's frame names
-    clash with the first's and get ``#k``.  Like the round trip in link poses, pairs and distances;
-    the loaded Model and its Checker answer as before."""
+    clash with the first's and get ``#k``; rover, z1 and so100 name a joint and a link alike (which
+    ``appendModel``'s look-ups by name alone refuse).  Like the round trip in link poses, pairs and
+    distances; the loaded Model and its Checker answer as before."""
     if not _installed(name, other):
         pytest.skip(f"{name} or {other} is not installed")
     model = _quiet(load_model, name) if name != "coded" else _quiet(model_of, coded_scene())
@@ -285,6 +287,9 @@ def test_a_robot_added_gets_a_derived_model_equal_to_the_round_trip(name, other)
     assert derived.srdf is model.srdf and len(derived.collision_model.collisionPairs) == 0
     old_joints = [model.pin_model.names[j] for j in range(1, model.pin_model.njoints)]
     assert [derived.pin_model.names[j] for j in range(1, len(old_joints) + 1)] == old_joints
+    frames = {(f.name, f.type.name) for f in derived.pin_model.frames}
+    assert {(f.name, f.type.name) for f in model.pin_model.frames} <= frames
+    assert not any("#joint" in n or "#fixed_joint" in n for n, _ in frames)
     _assert_like_the_round_trip(derived, scene)
     for q, d in zip(q0, before):  # the loaded Model is as it was (to coal's GJK tolerance: it is not bitwise repeatable)
         np.testing.assert_allclose(loaded.pair_distances(q).distance, d, rtol=0, atol=1e-8)

@@ -243,7 +243,19 @@ def _append_robots(model: Model, pin_model, geom, names: dict, used: set, scene,
     renamed = {}
     for go in sg.geometryObjects:
         renamed[go.name] = go.name = _fresh(go.name, used)
-    pm, gm = pin.appendModel(pin_model, sp, geom, sg, 0, pin.SE3.Identity())
+    # appendModel looks frames up by name alone, which fails where a URDF names a joint and a link
+    # alike (rover's arm_turret, z1's gripperStator, so100's gripper): such names are made unique
+    # for the call and given back after it
+    pa = pin.Model(pin_model)
+    restore = {**_unique_frame_names(pa, frame_names), **_unique_frame_names(sp, frame_names)}
+    pm, gm = pin.appendModel(pa, sp, geom, sg, 0, pin.SE3.Identity())
+    for f in pm.frames:
+        if f.name in restore:
+            f.name = restore[f.name]
+    for src in (pa, sp):
+        for f in src.frames:
+            if f.name in restore:
+                f.name = restore[f.name]
     gm.removeAllCollisionPairs()  # appendModel pairs every object of A with every one of B; the Model's pairs are its own
 
     def joint_map(src) -> dict:  # idx_q in src -> idx_q in pm, through the joint names
@@ -272,6 +284,22 @@ def _append_robots(model: Model, pin_model, geom, names: dict, used: set, scene,
         "notes": {renamed[k]: v for k, v in sub.notes.items()},
         "hulls": {renamed[k]: v for k, v in sub.hulls.items()},
     }
+
+
+def _unique_frame_names(pm, used: set) -> dict:
+    """Rename, in ``pm``, each frame other than a BODY frame whose name another frame of ``pm`` has
+    (to a name in no frame of ``used`` or ``pm``); returns new name -> old name."""
+    import collections
+
+    count = collections.Counter(f.name for f in pm.frames)
+    taken = used | set(count)
+    out = {}
+    for f in pm.frames:
+        if count[f.name] > 1 and f.type.name != "BODY":
+            new = _fresh(f"{f.name}#{f.type.name.lower()}", taken)
+            out[new] = f.name
+            f.name = new
+    return out
 
 
 def _fresh(name: str, used: set) -> str:
