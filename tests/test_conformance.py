@@ -1,7 +1,8 @@
 """The conformance suite (``armguard.testing``) on every bundled backend, and the suite itself.
 
 * Every bundled backend (the ``armguard.backends`` entry points of ``pyproject.toml``) runs every
-  check on the built-in models and example-robot-data's Panda and UR5 (``forbidden`` on Hermes
+  check on the built-in models, example-robot-data's Panda and UR5 and that Panda edited in
+  process (``panda+edits``: every shape kind, a payload, a second arm) (``forbidden`` on Hermes
   only: its map is built for one model), on the neutral pose and :data:`N_CONFIGS` seeded random
   configurations per model; the checks a backend declares it fails (its Checker's
   ``conformance_xfail``, each with the reason) show as xfail.  Bounded: a few configurations per

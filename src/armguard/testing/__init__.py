@@ -13,9 +13,10 @@ From the command line (the ``armguard`` pytest plugin, registered under ``pytest
     pytest --pyargs armguard.testing --backend NAME [--backend-option KEY=VALUE ...]
            [--conformance-models ranger,panda] [--conformance-configs 8]
 
-What is checked, per model (:data:`DEFAULT_MODELS`: the five built-in models and
-example-robot-data's Panda and UR5) and on the neutral pose plus seeded random in-limit
-configurations:
+What is checked, per model (:data:`DEFAULT_MODELS`: the five built-in models,
+example-robot-data's Panda and UR5, and ``"panda+edits"``: that Panda edited in process with a
+body of every shape kind, a payload and a second arm appended, a Model with no file behind it)
+and on the neutral pose plus seeded random in-limit configurations:
 
 * the Backend/Checker protocol: ``name``, ``model``, ``capabilities``; ``build`` refuses an unknown
   option with BackendError listing the accepted ones;

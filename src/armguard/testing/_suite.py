@@ -16,11 +16,13 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["Check", "Context", "ConformanceError", "NotApplicable", "ConformanceReport", "checks", "check_backend",
+__all__ = ["Check", "Context", "ConformanceError", "NotApplicable", "ConformanceReport", "checks", "check_backend", "EDITED_MODELS",
            "DEFAULT_MODELS", "load_conformance_model"]
 
-DEFAULT_MODELS = ("ranger", "hermes", "puma560", "gmf_s480", "rover", "panda", "ur5")
-"""The built-in models and two public robots (example-robot-data's Panda and UR5, with their SRDFs)."""
+DEFAULT_MODELS = ("ranger", "hermes", "puma560", "gmf_s480", "rover", "panda", "ur5", "panda+edits")
+"""The built-in models, two public robots (example-robot-data's Panda and UR5, with their SRDFs)
+and the Panda edited in process (``"panda+edits"``: every shape kind added, a payload, a second
+arm appended; :data:`EDITED_MODELS`)."""
 
 REFERENCE = "coal"
 
@@ -73,16 +75,50 @@ def _robots_dir() -> Path:
     return Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
 
 
+def _edited_panda():
+    """``"panda+edits"``: example-robot-data's Panda edited in process, as a user updates a model
+    without a file (``Model.with_*``): a body of every shape kind (box, sphere, capsule, cylinder,
+    convex polyhedron, prism, polygon) in reach, a payload in the hand, and a second arm (the
+    built-in puma560, mounted 1.1 m away) appended to the kinematics."""
+    from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
+    from ..model import load_model
+
+    panda = load_conformance_model("panda")
+    rng = np.random.default_rng(11)
+    c = np.array([0.45, 0.25, 0.35])
+    R = np.linalg.qr(rng.normal(size=(3, 3)))[0] * np.array([1.0, 1.0, -1.0])  # a right-handed turn
+    R = R if np.linalg.det(R) > 0 else -R
+    parts = [Box(c, [0.05, 0.08, 0.04], R), Sphere(c + [0.2, 0.0, 0.0], 0.04),
+             Capsule(c + [0.0, 0.2, 0.0], c + [0.1, 0.25, 0.1], 0.03), Cylinder(c + [-0.2, 0.0, 0.0], R, 0.03, 0.08),
+             ConvexPolyhedron(rng.normal(size=(25, 3)) * 0.05 + c + [0.0, -0.2, 0.0]),
+             Prism(c + [0.0, 0.0, 0.2], R, 0.03, 0.05, 6),
+             Polygon(c + np.array([[0.0, 0.0, -0.2], [0.1, 0.0, -0.2], [0.1, 0.1, -0.18], [0.0, 0.1, -0.18]]))]
+    puma = next(iter(load_model("puma560").robots.values())).with_name("puma_2")
+    X = np.eye(4)
+    X[:3, 3] = [1.1, 0.0, 0.0]
+    hand = panda.robots["panda"].link_names[-1]
+    return (panda.with_body("parts", parts)
+                 .with_robot(puma.with_base(X @ puma.X_WB))
+                 .with_payload("tool", "panda", hand, [Box([0.0, 0.0, 0.05], [0.02, 0.02, 0.03], np.eye(3))]))
+
+
+EDITED_MODELS = {"panda+edits": _edited_panda}
+"""Models made in process by editing a loaded one (no source file), by name."""
+
+
 def load_conformance_model(spec):
     """The Model of ``spec``: a Model as it is, ``"panda"`` / ``"ur5"`` (example-robot-data with its
-    SRDF) or anything :func:`armguard.load_model` takes.  Loaded once per process."""
+    SRDF), a name of :data:`EDITED_MODELS` or anything :func:`armguard.load_model` takes.  Loaded
+    once per process."""
     from ..model import Model, load_model
 
     if isinstance(spec, Model):
         return spec
     with _LOCK:
         if spec not in _MODELS:
-            if spec in PUBLIC_ROBOTS:
+            if spec in EDITED_MODELS:
+                _MODELS[spec] = EDITED_MODELS[spec]()
+            elif spec in PUBLIC_ROBOTS:
                 urdf, srdf = PUBLIC_ROBOTS[spec]
                 _MODELS[spec] = load_model(_robots_dir() / urdf, srdf=_robots_dir() / srdf)
             else:
