@@ -285,13 +285,16 @@ def test_pair_distances_equal_the_scene_path_and_agree_with_coal(case):
 def test_a_scene_changed_after_loading_compiles_a_derived_model():
     """A body or payload added after loading: the engine compiles the Model derived from the loaded
     one (``armguard.model._derive``: the same kinematics, the new shapes as GeometryObjects) and sees
-    them; a pair filter keeps the loaded Model; a copy of the scene gets a Model of its own."""
+    them; a pair filter gets a Model sharing the loaded one's Pinocchio models (a Model's pairs are
+    fixed when it is made); a copy of the scene gets a Model of its own."""
     model = load_model("ranger")
     scene = model.scene
     build = lambda s: engine_model.build_model(s, active=None, reach_margin=np.inf, tol=model.tol)  # noqa: E731
     assert build(scene).source == "model"
     scene.disable_pair(*model.pairs.owner_a[:1], *model.pairs.owner_b[:1])  # a pair filter: still the Model's shapes
-    assert build(scene).source == "model" and model_of(scene) is model
+    filtered = model_of(scene)
+    assert build(scene).source == "model" and filtered is not model and len(filtered.pairs) == len(model.pairs) - 1
+    assert filtered.collision_model is model.collision_model and filtered.pin_model is model.pin_model
     scene.add_body("crate", [Box([0.5, 0.0, 0.2], [0.1, 0.1, 0.1], np.eye(3))])
     m = build(scene)
     derived = model_of(scene)

@@ -141,3 +141,34 @@ def test_threads_editing_one_model_each_get_their_own():
         assert list(m.bodies) == [f"b{i}"]
     assert not model.bodies
     np.testing.assert_allclose(coal.pair_distances(q).distance, d, rtol=0, atol=1e-9)
+
+
+def test_a_models_pairs_are_fixed_when_it_is_made():
+    """Pair filters and the workspace box set on the scene afterwards leave the Model's pairs, and
+    every Checker built on it, as they were (before, the analytic Checker followed the scene to 56
+    rows on puma560 while coal's stayed at 62); the scene's Model is another one, sharing the
+    Pinocchio models, and a Detector on the scene follows the scene."""
+    from armguard.model import model_of
+
+    model = _load("puma560")
+    scene = model.scene
+    ana, coal = armguard.checker(model, "analytic"), armguard.checker(model, "coal")
+    q = model.neutral()
+    before = [tuple(map(tuple, model.pairs.names))]
+    body = next(iter(scene.bodies))
+    scene.disable_pair("puma560", body)
+    scene.set_workspace([-2.0, -2.0, -1.0], [2.0, 2.0, 2.0])
+    assert [tuple(map(tuple, model.pairs.names))] == before and model.workspace is None
+    a, c = ana.pair_distances(q), coal.pair_distances(q)
+    assert [tuple(map(tuple, a.pairs))] == before and [tuple(map(tuple, c.pairs))] == before
+    now = model_of(scene)
+    assert now is not model and now.is_model_of(scene) and not model.is_model_of(scene)
+    assert now.collision_model is model.collision_model and now.pin_model is model.pin_model
+    assert body not in now.pairs.owner_b and "workspace" in now.pairs.category and now.workspace is scene.workspace
+    assert not now.files and model.files  # its pairs are not the files': no map or reference for them accepts it
+    det = armguard.Detector(scene, threshold=0.05)
+    rows = det.pair_distances(scene.flat_q(scene.default_q()))
+    assert len(rows.distance) == len(now.pairs)
+    n_ana, n_coal = armguard.checker(now, "analytic").pair_distances(q), armguard.checker(now, "coal").pair_distances(q)
+    np.testing.assert_array_equal(n_ana.pairs, n_coal.pairs)
+    np.testing.assert_allclose(n_ana.distance, n_coal.distance, rtol=0, atol=1e-6)

@@ -69,12 +69,12 @@ def _model_of_geometry(scene):
     if not scene.robots and getattr(scene, "_model_of_record", None) is None:
         return None
     kin = model_of(scene, geometry=False) if scene.robots else scene._model_of_record
-    if kin.geometry_is_of(scene):
+    if kin.is_model_of(scene):
         return kin
     if derive_cost(kin, scene) > _DERIVE_BUDGET:
         return None
     model = model_of(scene)
-    return model if model.geometry_is_of(scene) else None
+    return model if model.is_model_of(scene) else None
 
 
 def compile_for_engine(scene, model=None) -> tuple:

@@ -39,13 +39,13 @@ import numpy as np
 from ..geometry import ConvexPolyhedron, Polygon, Prism
 from ._from_pin import _inv, _se3
 from ._hull import mesh_polytope
-from ._model import Model
+from ._model import Model, _frozen_spec
 from ._shapes import coal_from_shape, convex_of_polytope
 
 __all__ = ["derive_model", "derive_cost"]
 
 # a Model's attributes that follow its GeometryModel: dropped or replaced in a derived one
-_GEOMETRY_CACHES = ("_engine_shapes", "_pairs", "_revision", "_pairs_workspace")
+_GEOMETRY_CACHES = ("_engine_shapes", "_pairs")
 
 
 def derive_cost(model: Model, scene) -> int:
@@ -75,6 +75,9 @@ def derive_model(model: Model, scene) -> Model | None:
     old_bodies, old_payloads = model._parts
     kept = {n for n, b in old_bodies if scene.bodies.get(n) is b} | {n for n, p in old_payloads if scene.payloads.get(n) is p}
     gone = {n for n, _ in (*old_bodies, *old_payloads)} - kept
+    new_parts = [n for n in (*scene.bodies, *scene.payloads) if n not in kept]
+    if not gone and not new_parts and not moved and not added:  # pair filters or the workspace only
+        return _with_spec(model, scene)
     geom = model.collision_model.copy()
     names = {k: v for k, v in model._geom.items() if k[0] not in gone}
     for (owner, _), gname in model._geom.items():
@@ -131,12 +134,30 @@ def derive_model(model: Model, scene) -> Model | None:
     new.notes = types.MappingProxyType(notes)
     new.hulls = types.MappingProxyType(hulls)
     new._parts = (tuple(scene.bodies.items()), tuple(scene.payloads.items()))
-    new._pairs = new._revision = None
+    new._pairs = None
+    new._spec, new._spec_revision = _frozen_spec(scene), scene.revision
     links = {f"{r}/{ln}" for r, robot in scene.robots.items() for ln in robot.link_names}
     shapes = model.__dict__.get("_engine_shapes")
     if shapes is not None and not moved and not added:  # the robots' link shapes are the same objects in the same frames
         # (owner, link) -> shapes; not "owners" or "local" (GeometryObject names): made again
         new._engine_shapes = {k: v for k, v in shapes.items() if isinstance(k, tuple) and k[0] in links}
+    scene._model_of_record = new
+    return new
+
+
+def _with_spec(model: Model, scene) -> Model:
+    """``model`` for ``scene`` whose shapes and kinematics it holds as they are and whose pair
+    filters or workspace box changed: the same Pinocchio model and GeometryModel (shared, not
+    copied: neither is changed after it is made) and the shapes made for the engine, pairs listed
+    again.  No source files: the pairs may not be the files' (a forbidden-values map or golden
+    reference checked against the files must not accept it)."""
+    new = object.__new__(Model)
+    new.__dict__.update({k: v for k, v in model.__dict__.items() if k != "_pairs"})
+    new.files, new.sha256, new.hull_cache = (), types.MappingProxyType({}), None
+    new.scene = scene
+    new._pairs = None
+    new._parts = (tuple(scene.bodies.items()), tuple(scene.payloads.items()))
+    new._spec, new._spec_revision = _frozen_spec(scene), scene.revision
     scene._model_of_record = new
     return new
 

@@ -337,23 +337,24 @@ def model_of(scene, *, geometry: bool = True) -> Model:
     """The Model of ``scene``: the one it was loaded as (when unchanged since), else one built from it.
 
     Unchanged: the scene holds the robots the Model was built with (:meth:`Model.moves_robots_of`:
-    ``set_robot_base`` or ``add_robot`` make a new one) and, with ``geometry`` (the default), the
-    Model's GeometryModel holds exactly the scene's shapes (:meth:`Model.geometry_is_of`).  Bodies,
-    payloads, robot bases (``set_robot_base``) or robots added after its own (``add_robot``: only
-    the new robot is written as URDF, then appended) changed since: a Model derived from it
-    (:func:`armguard.model._derive.derive_model`), which becomes the scene's; a scene with no
+    ``set_robot_base`` or ``add_robot`` make a new one) and, with ``geometry`` (the default),
+    nothing the Model's shapes or pairs depend on changed (:meth:`Model.is_model_of`: a Model's
+    pairs are fixed when it is made).  Pair filters or the workspace box changed: a Model sharing
+    this one's Pinocchio models; bodies, payloads, robot bases (``set_robot_base``) or robots added
+    after its own (``add_robot``: only the new robot is written as URDF, then appended): a Model
+    derived from it (:func:`armguard.model._derive.derive_model`); either becomes the scene's; a scene with no
     Model yet, or whose robots changed otherwise: one built from the scene.  ``geometry=False`` asks
     only for the kinematics (``pin_model``, ``q_index``, ``link_frames``): the Model of record also
     serves after bodies, payloads or pairs changed, and a :meth:`Scene.copy` with the same robots."""
     m = getattr(scene, "_model_of_record", None)
-    if m is not None and m.moves_robots_of(scene) and (not geometry or m.geometry_is_of(scene)):
+    if m is not None and m.moves_robots_of(scene) and (not geometry or m.is_model_of(scene)):
         return m
     if m is not None:
         from ._derive import derive_model
 
         with _DERIVE_LOCK:  # one derived Model per change, whichever thread asks first
             m = scene._model_of_record
-            if m.moves_robots_of(scene) and (not geometry or m.geometry_is_of(scene)):
+            if m.moves_robots_of(scene) and (not geometry or m.is_model_of(scene)):
                 return m
             derived = derive_model(m, scene)  # bodies, payloads or robot bases changed (see _derive)
             if derived is not None:

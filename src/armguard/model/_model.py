@@ -58,6 +58,14 @@ class GeometryPairs:
         return out
 
 
+def _frozen_spec(scene):
+    """A private shallow copy of ``scene`` (its parts are immutable, its containers new): what a
+    Model lists its pairs from and its edits start from, whatever the scene does later."""
+    spec = scene.copy()
+    spec._model_of_record = None
+    return spec
+
+
 def _with_meshes(files, collision_model) -> tuple:
     """``files`` (resolved) then the mesh files the GeometryModel's objects were read from, each once."""
     out = [Path(p).resolve() for p in files]
@@ -116,7 +124,7 @@ class Model:
         known = dict(hull_cache.get("sha256", {})) if hull_cache else {}  # mesh files the hull cache hashed
         self.sha256 = types.MappingProxyType({str(p): known.get(str(p)) or file_sha256(p) for p in self.files})
         self._pairs = None
-        self._revision = None
+        self._spec, self._spec_revision = _frozen_spec(scene), scene.revision  # the system as made: pairs and edits start from it
         self._geom_index = {go.name: i for i, go in enumerate(collision_model.geometryObjects)}
         self.link_frames = types.MappingProxyType(dict(link_frames or {}))
         self._link_placements = {k: np.array(v, dtype=np.float64) for k, v in (link_placements or {}).items()}
@@ -147,23 +155,30 @@ class Model:
     @property
     def workspace(self):
         """The workspace box (``WorkspaceBox``: ``lo``, ``hi`` in W) the pairs are measured against, or
-        None: the scene's, or for a Model the scene has moved on from, the one its pairs were listed with."""
-        pairs = self.pairs
-        return self.scene.workspace if self._is_current() else self._pairs_workspace if pairs is not None else None
+        None: the scene's when this Model was made (see :attr:`pairs`)."""
+        return self._spec.workspace
 
-    def _is_current(self) -> bool:
-        """Whether this is the scene's Model (not one the scene has moved on from, see :attr:`pairs`)."""
-        return getattr(self.scene, "_model_of_record", None) is self
+    def is_model_of(self, scene) -> bool:
+        """Whether this Model is ``scene`` as it is now: made from it (or :meth:`Scene.copy` of the
+        scene it was made from) and nothing changed since that :attr:`pairs` or the shapes depend on
+        (the scene's ``revision``: robots, bodies, payloads, pair filters, the workspace box)."""
+        return (scene.revision == self._spec_revision and self.moves_robots_of(scene) and self.geometry_is_of(scene)
+                and self._same_filters(scene))
+
+    def _same_filters(self, scene) -> bool:
+        s = self._spec
+        return (scene._disabled == s._disabled and scene._self_pairs == s._self_pairs
+                and scene._exclude_adjacent == s._exclude_adjacent and scene.workspace is s.workspace)
 
     @property
     def trajectories(self):
         """Name -> the trajectories the model's sidecar or scene file names."""
-        return self.scene.trajectories
+        return self._spec.trajectories
 
     @property
     def canned_tests(self):
         """Name -> the canned tests (Ranger's operator checks) of the sidecar or scene file."""
-        return self.scene.canned_tests
+        return self._spec.canned_tests
 
     def link_placement(self, link: str) -> np.ndarray:
         """``X_FL`` (4, 4): scene link ``link``'s frame in its BODY frame ``link_frames[link]``: the
@@ -201,7 +216,7 @@ class Model:
             return
         lo = np.concatenate([r.lower for r in robots])
         hi = np.concatenate([r.upper for r in robots])
-        err = limit_error(where, np.asarray(q_scene, dtype=np.float64), self.scene.joint_names, lo, hi,
+        err = limit_error(where, np.asarray(q_scene, dtype=np.float64), self._spec.joint_names, lo, hi,
                           self.tol.joint_limit)
         if err is not None:
             raise err
@@ -212,19 +227,15 @@ class Model:
 
     # ---------------------------------------------------------------- edits: a new Model each
     def edited(self, edit) -> "Model":
-        """A new Model: ``edit(scene)`` applied to a private copy of this Model's scene (robots, bodies,
-        payloads and workspace as this Model holds them; pair filters, trajectories and canned tests
-        as its scene has them).  This Model, its scene and the Checkers built on it are left as
+        """A new Model: ``edit(scene)`` applied to a private copy of the system this Model holds (its
+        scene as it was when this Model was made: robots, bodies, payloads, pair filters, workspace,
+        trajectories, canned tests).  This Model, its scene and the Checkers built on it are left as
         they were; the new one is derived from this one (:mod:`armguard.model._derive`: no URDF
         round trip unless a robot changed other than by ``set_robot_base`` or ``add_robot``).
         The ``with_*`` methods are the common edits."""
         from ._load import model_of
 
-        scene = self.scene.copy()
-        if not self._is_current():  # the scene has moved on: start from what this Model holds
-            scene._robots = dict(self._robots)
-            scene._bodies, scene._payloads = dict(self._parts[0]), dict(self._parts[1])
-            scene._workspace = self.workspace
+        scene = self._spec.copy()  # what this Model holds, whatever its scene did since
         scene._model_of_record = self
         edit(scene)
         return model_of(scene)
@@ -312,7 +323,7 @@ class Model:
 
     def neutral(self) -> np.ndarray:
         """The scene's default configuration in Pinocchio's order (each arm's home)."""
-        return self.pin_q(self.scene.flat_q(self.scene.default_q()))
+        return self.pin_q(self._spec.flat_q(self._spec.default_q()))
 
     def random_q(self, n: int, rng=None) -> np.ndarray:
         """``(n, nq)`` uniform in-limit configurations (Pinocchio's order)."""
@@ -334,7 +345,7 @@ class Model:
             raise SceneError(f"unknown SRDF group {group!r}; the model's groups are {sorted(groups)}")
         m = self.pin_model
         by_iq = {m.joints[j].idx_q: m.names[j] for j in range(1, m.njoints) if m.joints[j].nq > 0}
-        scene_of = {by_iq.get(int(iq)): sn for iq, sn in zip(self._q_index, self.scene.joint_names)}
+        scene_of = {by_iq.get(int(iq)): sn for iq, sn in zip(self._q_index, self._spec.joint_names)}
         urdf: set = set()
         todo, seen = [group], set()
         while todo:
@@ -370,13 +381,11 @@ class Model:
 
     @property
     def pairs(self) -> GeometryPairs:
-        """The active pairs: recomputed when the scene changed since, while this is the scene's Model;
-        a Model the scene has moved on from (bodies or payloads changed: ``model_of`` derived another)
-        keeps the pairs it had, or lists those among its own shapes, so Checkers built on it keep
-        answering for it."""
-        if self._pairs is None or (self._revision != self.scene.revision and self._is_current()):
-            self._pairs, self._pairs_workspace = self._compute_pairs(), self.scene.workspace
-            self._revision = self.scene.revision
+        """The active pairs of the system as this Model was made (listed on first use, then fixed):
+        a later edit of the scene (a body, a pair filter, the workspace box) makes another Model
+        (``model_of``), so every Checker built on this one answers for the same pairs."""
+        if self._pairs is None:
+            self._pairs = self._compute_pairs()
         return self._pairs
 
     def _compute_pairs(self) -> GeometryPairs:
@@ -384,8 +393,8 @@ class Model:
         outer, of B inner), then one workspace row per robot shape (links, then payloads, owner
         order) when the scene has a workspace box: :func:`~armguard.model.compile_scene`'s element
         pairs, without compiling the geometry (tests/test_engine_from_model.py holds it to that)."""
-        scene = self.scene
-        n_shapes = {}  # the owners whose objects this Model holds (the scene's, while it is the scene's Model)
+        scene = self._spec
+        n_shapes = {}  # the owners whose objects this Model holds
         for name, body in self._parts[0]:
             n_shapes[name] = len(body.shapes)
         for r, robot in self._robots:
