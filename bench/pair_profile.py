@@ -15,8 +15,9 @@ random in-limit configurations (``Model.random_q``, seeded):
 * **GJK work** per polytope pair (hull or box against hull or box, the pairs checked in their link
   frames, ``_narrow.narrow_rel``), counted by replaying ``_pair_gjk._gjk`` in Python (``py_func``)
   on 20 configurations: support evaluations of the Minkowski difference (GJK iterations, the
-  first and the final verifying one included), hill climbs (two per iteration on two hulls) and
-  dot products the climbs take (``_pair_gjk._climb``; a box's supports scan its 8 corners).
+  first and the final verifying one included), hill climbs on the hulls' vertex graphs (one per
+  hull side per iteration, ``_pair_gjk._climb``) and the supports' dot products (the climbs'
+  neighbours; a box side scans its 8 corners), over the pairs GJK finds apart.
 """
 
 from __future__ import annotations
@@ -162,7 +163,7 @@ def run(quick: bool) -> str:
     env = dict(os.environ)
     env.pop("PYTHONDONTWRITEBYTECODE", None)
     rows = ["| robot | pairs (polytope) | call | Python wrapper | fixed (unboxing, views, FK) | per pair | same q "
-            "| GJK iterations / pair (p90) | climbs / pair (p90) | climb dot products / pair (p90) |",
+            "| GJK iterations / pair (p90) | climbs / pair (p90) | support dot products / pair (p90) |",
             "|---|---|---|---|---|---|---|---|---|---|"]
     for name in ROBOTS:
         proc = subprocess.run([sys.executable, "-m", "bench.pair_profile", name, str(n)], capture_output=True, text=True,
