@@ -1,0 +1,193 @@
+"""Where the analytic ``pair_distances(q)`` spends its time, and how much work GJK does per pair.
+
+Each robot is measured in a fresh process (``python -m bench.pair_profile NAME N``, one JSON line),
+all times ``time.thread_time`` medians over 5 runs of ``N / 5`` calls, ``q`` cycling over 200
+random in-limit configurations (``Model.random_q``, seeded):
+
+* **call**: ``checker.pair_distances(q)``, every pair (as ``bench robots``);
+* **kernel**: the same call's compiled entry point alone (``_Fast.entry``, preallocated outputs):
+  *call - kernel* is the Python wrapper (argument checks, three output arrays, the result object);
+* **fixed**: the entry point with no pair selected: unboxing its 15 arguments, the kernel's views,
+  the joint limits and forward kinematics; *(kernel - fixed) / pairs* is the mean cost of a pair;
+* **same q**: ``pair_distances`` at one configuration over and over: the same work with the
+  branch predictor trained on it (the gap to *call* is mostly mispredicted branches, as the
+  caches hold the hulls either way);
+* **GJK work** per polytope pair (hull or box against hull or box, the pairs checked in their link
+  frames, ``_narrow.narrow_rel``), counted by replaying ``_pair_gjk._gjk`` in Python (``py_func``)
+  on 20 configurations: support evaluations of the Minkowski difference (GJK iterations, the
+  first and the final verifying one included), hill climbs on the hulls' vertex graphs (one per
+  hull side per iteration, ``_pair_gjk._climb``) and the supports' dot products (the climbs'
+  neighbours; a box side scans its 8 corners), over the pairs GJK finds apart.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+
+TITLE = "Analytic pair_distances: where the time goes"
+ROBOTS = ("ur3", "kinova", "kuka_iiwa", "z1", "so101")
+
+
+def _tmed(fn, n: int) -> float:
+    fn()
+    runs = []
+    for _ in range(5):
+        t0 = time.thread_time()
+        for _ in range(n // 5):
+            fn()
+        runs.append((time.thread_time() - t0) / (n // 5))
+    return statistics.median(runs)
+
+
+def _gjk_work(model, ana, n_q: int) -> dict:
+    """Mean and 90th percentile of GJK iterations, climbs and climb dot products per polytope pair."""
+    import numpy as np
+
+    from armguard.geometry import _pair_gjk as G
+    from armguard_analytic._engine._layout import K
+
+    count = {"it": 0, "climb": 0, "dot": 0}
+
+    def climb(pb, adj, i, dx, dy, dz):  # _pair_gjk._climb, counted
+        count["climb"] += 1
+        best = pb[i, 0] * dx + pb[i, 1] * dy + pb[i, 2] * dz
+        k, e = adj[G.ADJ_HEAD + i], adj[G.ADJ_HEAD + i + 1]
+        while k < e:
+            j = adj[k]
+            count["dot"] += 1
+            s = pb[j, 0] * dx + pb[j, 1] * dy + pb[j, 2] * dz
+            if s > best:
+                best, i, k, e = s, j, adj[G.ADJ_HEAD + j], adj[G.ADJ_HEAD + j + 1]
+            else:
+                k += 1
+        return i
+
+    m_support_py = G._m_support.py_func
+
+    def m_support(*a):
+        count["it"] += 1
+        return m_support_py(*a)
+
+    scan_py = G._scan.py_func
+
+    def scan(pb, dx, dy, dz):  # _pair_gjk._scan, counted
+        count["dot"] += pb.shape[0]
+        return scan_py(pb, dx, dy, dz)
+
+    for nm in ("_support", "_seed", "_b_dir", "_b_point", "_pick", "warm_start", "table_size", "table_start",
+               "_closest_simplex", "_inner_point"):
+        setattr(G, nm, getattr(G, nm).py_func)
+    G._climb, G._m_support, G._scan = climb, m_support, scan  # this process ends after the replay
+
+    f = ana._plan()
+    H, MF, MI, prm, iprm = f.args
+
+    def seg(buf, k, w=0):
+        a = buf[H[2 * k]:H[2 * k] + H[2 * k + 1] * max(w, 1)]
+        return a.reshape(-1, w) if w else a
+
+    core, vst, glink = seg(MI, K["core"]), seg(MI, K["vstart"]), seg(MI, K["glink"])
+    gadj, gadjs, gdir, gdirs = seg(MI, K["gadj"]), seg(MI, K["gadjs"]), seg(MI, K["gdir"]), seg(MI, K["gdirs"])
+    vL, pair_a, pair_b = seg(MF, K["verts_L"], 3), seg(MI, K["pair_a"]), seg(MI, K["pair_b"])
+    rows = []
+    for q in model.random_q(n_q, 11):
+        ana.pair_distances(q)
+        Xs = seg(f.tls.s[0], K["Xs"], 16).reshape(-1, 4, 4)
+        for p in range(len(pair_a)):
+            a, b = int(pair_a[p]), int(pair_b[p])
+            if b < 0 or core[a] not in (2, 3) or core[b] not in (2, 3):
+                continue
+            X = np.linalg.inv(Xs[glink[a]] if glink[a] >= 0 else np.eye(4)) @ (Xs[glink[b]] if glink[b] >= 0 else np.eye(4))
+            rot = np.ascontiguousarray(X[:3, :3]).ravel()
+            pa, pb = vL[vst[a]:vst[a + 1]], vL[vst[b]:vst[b + 1]]
+            adja, adjb = gadj[gadjs[a]:gadjs[a + 1]], gadj[gadjs[b]:gadjs[b + 1]]
+            taba, tabb = gdir[gdirs[a]:gdirs[a + 1]], gdir[gdirs[b]:gdirs[b + 1]]
+            d0 = np.array(G._inner_point(pa, adja)) - (X[:3, :3] @ np.array(G._inner_point(pb, adjb)) + X[:3, 3])
+            e = G._b_dir(rot, *d0)
+            sa, sb = G.table_start(taba, *(-d0)), G.table_start(tabb, *e)
+            for k in count:
+                count[k] = 0
+            st = G._gjk.py_func(pa, adja, pb, adjb, rot, X[0, 3], X[1, 3], X[2, 3], *d0, prm[2], prm[4], iprm[2],
+                                np.zeros(9), np.inf, sa, sb, taba, tabb)[0]
+            if st == G.GJK_SEPARATED:
+                rows.append((count["it"], count["climb"], count["dot"]))
+    r = np.array(rows, dtype=float).reshape(-1, 3)
+    out = {"gjk_pairs": len(r)}
+    for j, k in enumerate(("it", "climb", "dot")):
+        out[k] = float(r[:, j].mean()) if len(r) else float("nan")
+        out[k + "_p90"] = float(np.percentile(r[:, j], 90)) if len(r) else float("nan")
+    return out
+
+
+def measure(name: str, n: int) -> dict:
+    """One robot's row (see the module docstring); run in a fresh process."""
+    import numpy as np
+
+    import armguard
+
+    model = armguard.load_model(name)
+    ana = armguard.checker(model, "analytic")
+    Q = [np.ascontiguousarray(q) for q in model.random_q(200, 7)]
+    ana.pair_distances(Q[0])
+    f = ana._plan()
+    H, MF, MI, prm, iprm = f.args
+    SF, SI, q1 = f.tls.s
+    it = iter(range(10**9))
+    d, pA, pB = np.empty(f.n), np.empty((f.n, 3)), np.empty((f.n, 3))
+    g0, e = f.subset(np.zeros(0, np.int64)), np.empty(0)
+    t_call = _tmed(lambda: ana.pair_distances(Q[next(it) % 200]), n)
+    t_kernel = _tmed(lambda: f.entry(Q[next(it) % 200], 0, 1, f.gmap, H, MF, MI, SF, SI, prm, iprm, q1, d, pA, pB), n)
+    t_fixed = _tmed(lambda: f.entry(Q[next(it) % 200], 0, 1, g0, H, MF, MI, SF, SI, prm, iprm, q1, e, e.reshape(0, 3),
+                                    e.reshape(0, 3)), n)
+    t_same = _tmed(lambda: ana.pair_distances(Q[0]), n)
+    from armguard_analytic._engine._layout import K
+
+    core = MI[H[2 * K["core"]]:H[2 * K["core"]] + H[2 * K["core"] + 1]]
+    pa = MI[H[2 * K["pair_a"]]:H[2 * K["pair_a"]] + H[2 * K["pair_a"] + 1]]
+    pb = MI[H[2 * K["pair_b"]]:H[2 * K["pair_b"]] + H[2 * K["pair_b"] + 1]]
+    poly = int(sum(1 for a, b in zip(pa, pb) if b >= 0 and core[a] in (2, 3) and core[b] in (2, 3)))
+    row = {"name": name, "pairs": f.n, "poly_pairs": poly, "us_call": t_call * 1e6, "us_kernel": t_kernel * 1e6,
+           "us_fixed": t_fixed * 1e6, "us_same": t_same * 1e6}
+    row.update(_gjk_work(model, ana, 20))
+    return row
+
+
+def run(quick: bool) -> str:
+    n = 2000 if quick else 10000
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env = dict(os.environ)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    rows = ["| robot | pairs (polytope) | call | Python wrapper | fixed (unboxing, views, FK) | per pair | same q "
+            "| GJK iterations / pair (p90) | climbs / pair (p90) | support dot products / pair (p90) |",
+            "|---|---|---|---|---|---|---|---|---|---|"]
+    for name in ROBOTS:
+        proc = subprocess.run([sys.executable, "-m", "bench.pair_profile", name, str(n)], capture_output=True, text=True,
+                              timeout=900, cwd=root, env=env)
+        lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
+        if proc.returncode != 0 or not lines:
+            tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
+            rows.append(f"| {name} | error: {tail[:120]} |||||||||")
+            continue
+        r = json.loads(lines[-1])
+        print(f"  {name}: {r}", file=sys.stderr, flush=True)
+        per = (r["us_kernel"] - r["us_fixed"]) / max(r["pairs"], 1)
+        work = (f"| {r['it']:.1f} ({r['it_p90']:.0f}) | {r['climb']:.1f} ({r['climb_p90']:.0f}) "
+                f"| {r['dot']:.0f} ({r['dot_p90']:.0f}) |") if r["gjk_pairs"] else "| — | — | — |"
+        rows.append(
+            f"| {name} | {r['pairs']} ({r['poly_pairs']}) | {r['us_call']:.1f} µs | {r['us_call'] - r['us_kernel']:.1f} µs "
+            f"| {r['us_fixed']:.1f} µs | {per:.2f} µs | {r['us_same']:.1f} µs " + work)
+    note = (f"\n\nThread-time medians, {n} calls per figure, `q` cycling over 200 random in-limit configurations; "
+            "GJK work over the separated polytope pairs of 20 configurations (`bench/pair_profile.py`). *per pair* "
+            "is (kernel - fixed) / pairs; *same q* repeats one configuration (forward kinematics skipped, branch "
+            "predictor trained). z1's pairs all have a cylinder side (GJK and EPA on support functions, "
+            "`_pair_cylinder.support_pair_graph`): not counted.")
+    return "\n".join(rows) + note
+
+
+if __name__ == "__main__":
+    print(json.dumps(measure(sys.argv[1], int(sys.argv[2]) if len(sys.argv) > 2 else 2000)))
