@@ -172,3 +172,24 @@ def test_a_models_pairs_are_fixed_when_it_is_made():
     n_ana, n_coal = armguard.checker(now, "analytic").pair_distances(q), armguard.checker(now, "coal").pair_distances(q)
     np.testing.assert_array_equal(n_ana.pairs, n_coal.pairs)
     np.testing.assert_allclose(n_ana.distance, n_coal.distance, rtol=0, atol=1e-6)
+
+
+def test_a_model_whose_scene_gained_a_robot_answers_as_before():
+    """The scene gained a robot (``add_robot``: more joints): the Model it was made as keeps its
+    joints, its neutral pose and its Checkers, without recompiling (the analytic Checker's plan is
+    the one it made)."""
+    model = _load("panda")
+    ana, coal = armguard.checker(model, "analytic"), armguard.checker(model, "coal")
+    q = model.neutral()
+    d_ana, d_coal = ana.pair_distances(q).distance, coal.pair_distances(q).distance
+    plan = ana._plan()
+    puma = next(iter(_load("puma560").robots.values())).with_name("puma_2")
+    X = np.eye(4)
+    X[:3, 3] = [1.0, 0.0, 0.0]
+    model.scene.add_robot(puma.with_base(X))
+    model.scene.disable_pair("panda", "puma_2")
+    assert model.neutral().shape == (model.nq,) == q.shape and len(model.scene.joint_names) > model.nq
+    np.testing.assert_array_equal(ana.pair_distances(q).distance, d_ana)
+    np.testing.assert_allclose(coal.pair_distances(q).distance, d_coal, rtol=0, atol=1e-9)
+    assert ana._plan() is plan
+    assert model_of(model.scene).nq == model.nq + len(puma.joint_names)

@@ -179,7 +179,7 @@ class AnalyticChecker(CheckerBase):
             with self._lock:
                 det = self._detectors.get(key)
                 if det is None:
-                    det = self._detectors[key] = FusedDetector(self.model.scene, threshold=0.0, stopping_distance=key,
+                    det = self._detectors[key] = FusedDetector(self.model._spec, threshold=0.0, stopping_distance=key,
                                                                reach_margin=math.inf, fixed_model=self.model)
         return det
 
@@ -223,11 +223,11 @@ class AnalyticChecker(CheckerBase):
     def _plan(self) -> _Fast:
         """The call plan for the scene's current revision (rebuilt, once, when it moved)."""
         f = self._fast
-        if f is not None and f.revision == self.model.scene.revision:
+        if f is not None and f.revision == self.model._spec.revision:
             return f
         with self._lock:
             f = self._fast
-            if f is None or f.revision != self.model.scene.revision:
+            if f is None or f.revision != self.model._spec.revision:
                 f = self._fast = _Fast(self)
                 self._pairs, self._category = f.names, f.category
         return f
@@ -246,7 +246,7 @@ class AnalyticChecker(CheckerBase):
 
     def pair_distances(self, q, *, pairs=None, jacobian: bool = False):
         f = self._fast
-        if f is None or f.revision != self.model.scene.revision:
+        if f is None or f.revision != self.model._spec.revision:
             f = self._plan()
         if type(q) is not _ND or q.dtype is not _F64 or q.shape != f.q_shape or not q.flags.carray:
             q = self._q(q)

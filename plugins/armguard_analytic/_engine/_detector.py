@@ -73,7 +73,8 @@ class FusedDetector(Detector):
                  backend_options=None, terrain=None, fixed_model=None) -> None:
         self.scene, _ = scene_and_model(scene)  # a Model: its scene (the Model is the scene's model of record)
         # fixed_model: compile this Model, not the scene's current one (an AnalyticChecker answers
-        # for its Model); otherwise the detector follows the scene (model_of(scene), rebuilt on change)
+        # for its Model, over the Model's own copy of its system, which never changes); otherwise the
+        # detector follows the scene (model_of(scene), rebuilt on change)
         self._fixed_model = fixed_model
         self._threshold = _check_length(threshold, "threshold")
         self._stopping = _check_length(stopping_distance, "stopping_distance")
@@ -422,7 +423,7 @@ class FusedDetector(Detector):
                 from armguard.model import model_of
                 from armguard.detect._category_jacobian import CategoryJacobians
 
-                hit = self._category_jac = (self._revision, CategoryJacobians(model_of(self.scene), "analytic"))
+                hit = self._category_jac = (self._revision, CategoryJacobians(self._fixed_model or model_of(self.scene), "analytic"))
         return report._with_jacobian(hit[1].of(q_flat, report.by_category))
 
     def _selection(self, robot: str | None):
