@@ -193,3 +193,33 @@ def test_a_model_whose_scene_gained_a_robot_answers_as_before():
     np.testing.assert_allclose(coal.pair_distances(q).distance, d_coal, rtol=0, atol=1e-9)
     assert ana._plan() is plan
     assert model_of(model.scene).nq == model.nq + len(puma.joint_names)
+
+
+def test_what_is_built_on_a_model_answers_for_that_model():
+    """The scene moved on (a body added) after the Model was made: a Detector and a Verifier
+    built on the Model answer for the Model (no such body), as its Checkers do; built on the scene
+    they see the body.  While nothing changed, the Model's own scene is used."""
+    from armguard.model import scene_of
+    from armguard.verify import Verifier
+
+    model = _load("puma560")
+    assert scene_of(model) is model.scene
+    q = model.neutral()
+    model.scene.add_body("wall", [Box([0.0, 0.0, 0.0], [2.0, 2.0, 2.0], np.eye(3))])  # encloses the arm
+    bound = scene_of(model)
+    assert bound is not model.scene and "wall" not in bound.bodies and model_of(bound) is model
+    assert scene_of(model) is bound
+    on_model = armguard.Detector(model, threshold=0.05)
+    on_scene = armguard.Detector(model.scene, threshold=0.05)
+    qs = model.scene_q(q)
+    assert on_model.check(qs).status.value != "collision" and on_scene.check(qs).status.value == "collision"
+    on_model_coal = armguard.Detector(model, threshold=0.05, backend="coal")  # Ranger's algorithm over coal
+    assert on_model_coal.check(qs).status.value == on_model.check(qs).status.value
+    checker = armguard.checker(model, "analytic").pair_distances(q)
+    rows = on_model.pair_distances(qs)
+    np.testing.assert_allclose(np.sort(rows.distance), np.sort(checker.distance), rtol=0, atol=1e-9)
+    robot = next(iter(model.robots))
+    traj = next(iter(model.trajectories.values()))
+    assert Verifier(model).verify(traj).safe == armguard.verify(model, traj).safe
+    assert not Verifier(model.scene).verify(traj).safe
+    assert robot in model.robots

@@ -70,7 +70,7 @@ def pair_bounds(model, *, active: str | None, reach_margin: float) -> PairBounds
     """The pair rows of ``model`` a Detector checks, with their lever arms (module docstring)."""
     from ..model._compile import compile_scene
 
-    scene = model.scene
+    scene = model.scene_for()
     cs = compile_scene(scene)
     robot_names = tuple(cs.robot_names)
     tree, link_off, _ = _combined_tree(scene, robot_names)

@@ -30,9 +30,10 @@ CYLINDER = 4  # armguard.geometry.CoreKind.CYLINDER
 
 def scene_and_model(scene_or_model, model=None) -> tuple:
     """``(scene, model)`` of a Detector's first argument: a Scene as given (``model`` as given, or
-    None), or a :class:`armguard.Model`: its scene and the Model itself (``armguard.Detector(model)``)."""
+    None), or a :class:`armguard.Model`: a scene whose Model it is (``Model.scene_for``: its own
+    while nothing changed there) and the Model itself (``armguard.Detector(model)``)."""
     if hasattr(scene_or_model, "pin_model") and hasattr(scene_or_model, "scene"):
-        return scene_or_model.scene, scene_or_model if model is None else model
+        return scene_or_model.scene_for(), scene_or_model if model is None else model
     return scene_or_model, model
 
 

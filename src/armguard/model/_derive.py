@@ -45,7 +45,7 @@ from ._shapes import coal_from_shape, convex_of_polytope
 __all__ = ["derive_model", "derive_cost"]
 
 # a Model's attributes that follow its GeometryModel: dropped or replaced in a derived one
-_GEOMETRY_CACHES = ("_engine_shapes", "_pairs")
+_GEOMETRY_CACHES = ("_engine_shapes", "_pairs", "_bound")  # "_bound": Model.scene_for's copy, its own
 
 
 def derive_cost(model: Model, scene) -> int:
@@ -152,7 +152,7 @@ def _with_spec(model: Model, scene) -> Model:
     again.  No source files: the pairs may not be the files' (a forbidden-values map or golden
     reference checked against the files must not accept it)."""
     new = object.__new__(Model)
-    new.__dict__.update({k: v for k, v in model.__dict__.items() if k != "_pairs"})
+    new.__dict__.update({k: v for k, v in model.__dict__.items() if k not in ("_pairs", "_bound")})
     new.files, new.sha256, new.hull_cache = (), types.MappingProxyType({}), None
     new.scene = scene
     new._pairs = None

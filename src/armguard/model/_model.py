@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import threading
 import types
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,11 +21,16 @@ WORKSPACE = "workspace"
 
 
 def scene_of(scene_or_model):
-    """The Scene of an entry point's first argument: a :class:`Model`'s scene, a Scene as given (every
-    function and class that takes a scene takes a Model as well)."""
+    """The Scene of an entry point's first argument (every function and class that takes a scene
+    takes a Model as well): a Scene as given; for a :class:`Model`, a scene whose Model it is
+    (:meth:`Model.scene_for`): its own scene while nothing changed there, else a copy of the system
+    the Model holds, so that what is built on a Model answers for that Model."""
     if hasattr(scene_or_model, "pin_model") and hasattr(scene_or_model, "collision_model"):
-        return scene_or_model.scene
+        return scene_or_model.scene_for()
     return scene_or_model
+
+
+_BOUND_LOCK = threading.Lock()  # Model.scene_for: one copy per Model, whichever thread asks first
 
 
 def file_sha256(path) -> str:
@@ -159,11 +165,28 @@ class Model:
         return self._spec.workspace
 
     def is_model_of(self, scene) -> bool:
-        """Whether this Model is ``scene`` as it is now: made from it (or :meth:`Scene.copy` of the
-        scene it was made from) and nothing changed since that :attr:`pairs` or the shapes depend on
+        """Whether this Model is ``scene`` as it is now: made from it (or handed out for it by
+        :meth:`scene_for`) and nothing changed since that :attr:`pairs` or the shapes depend on
         (the scene's ``revision``: robots, bodies, payloads, pair filters, the workspace box)."""
-        return (scene.revision == self._spec_revision and self.moves_robots_of(scene) and self.geometry_is_of(scene)
+        made = self._spec_revision if scene is self.scene else self.__dict__.get("_bound", (None, None))[1]
+        return (scene.revision == made and self.moves_robots_of(scene) and self.geometry_is_of(scene)
                 and self._same_filters(scene))
+
+    def scene_for(self):
+        """A scene whose Model this is: :attr:`scene` while nothing changed there
+        (:meth:`is_model_of`), else (the scene moved on: a body added, a filter set) a copy of the
+        system this Model holds, made once, whose Model is this one.  An entry point given a Model
+        works on it (``scene_of``): a Detector, Verifier or Guard built on a Model answers for that
+        Model, as its Checkers do, and follows that scene's edits from there."""
+        if self.is_model_of(self.scene):
+            return self.scene
+        with _BOUND_LOCK:
+            bound = self.__dict__.get("_bound")
+            if bound is None:
+                s = self._spec.copy()
+                s._model_of_record = self
+                bound = self._bound = (s, s.revision)
+            return bound[0]
 
     def _same_filters(self, scene) -> bool:
         s = self._spec
@@ -200,7 +223,7 @@ class Model:
         with the robots it was built with (:meth:`moves_robots_of`) and the very Body and Payload
         objects (same names, same order).  ``add_body``, ``remove_body``, ``attach_payload``,
         ``grasp``... make it False; pair filters and the workspace box do not."""
-        if scene is not self.scene or not self.moves_robots_of(scene):
+        if (scene is not self.scene and scene is not self.__dict__.get("_bound", (None,))[0]) or not self.moves_robots_of(scene):
             return False
         bodies, payloads = self._parts
         return (len(bodies) == len(scene.bodies) and len(payloads) == len(scene.payloads)
