@@ -20,12 +20,12 @@ cores, and the witnesses are the barycentric combinations of those.  The algorit
   distance is never above the exact one by more than ``gjk_epsilon`` plus rounding (the
   witnesses are then ``|v|`` apart, a little more than the distance).  Once a support plane has
   separated the origin from ``M`` (``v . w > 0``: a proof that the cores are apart) no later step
-  may call them intersecting: near
-  a rim the supports jump between nearly equal points, and rounding can then flatten the simplex
-  into a tetrahedron that seems to hold the origin (1 in 1,000 random cylinder-box pairs 18-28 mm
-  apart were once reported touching).  On a curved core GJK converges without terminating finitely;
-  with ``max_iterations`` spent it is accepted (with its lower bound) when the gap is below ``SUPPORT_GAP``, else
-  reported as ``GJK_NOT_CONVERGED`` (callers raise).
+  may call them intersecting: near a rim the supports jump between nearly equal points, and
+  rounding can then flatten the simplex into a tetrahedron that seems to hold the origin (1 in
+  1,000 random cylinder-box pairs 18-28 mm apart were once reported touching).  On a curved core
+  GJK converges without terminating finitely; with ``max_iterations`` spent it is accepted (with
+  its lower bound) when the gap is below ``SUPPORT_GAP``, else reported as ``GJK_NOT_CONVERGED``
+  (callers raise).
 * EPA (van den Bergen, GDC 2001, §4.3.7) on ``M = A - B`` from GJK's final tetrahedron; when GJK
   stops with the origin on a lower-dimensional simplex (touching cores) the simplex is first
   completed to a tetrahedron containing the origin by support points along directions off its
@@ -122,8 +122,8 @@ def gjk_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, 
     """GJK on the cores ``(pa, ca)`` and ``(pb, cb)`` from the initial direction ``d`` (B to A).
 
     Returns ``(status, dist, n, ax, ay, az, bx, by, bz)``: the core distance (``|v|`` where the
-    gap test met ``gjk_eps``, else, when apart, the proven lower bound; see the module docstring), the number of simplex
-    vertices left in ``work`` (4: the origin is inside their tetrahedron) and the witnesses on the
+    gap test met ``gjk_eps``, else, when apart, the proven lower bound; see the module docstring),
+    the number of simplex vertices left in ``work`` (4: the origin is inside their tetrahedron) and the witnesses on the
     cores.  ``status`` as ``_pair_gjk``.  ``sa``, ``sb``: where the point cores' first climbs start
     (-1: from their stored extremes; a caller with a support table passes its entries, see
     ``_pair_gjk.table_start``); ``ta``, ``tb`` (None or empty: none): their support tables, where the
