@@ -226,3 +226,63 @@ def test_an_srdf_naming_a_missing_link_is_an_error(tmp_path):
     (tmp_path / "ok.srdf").write_text('<robot name="bad"><disable_collisions link1="l1" link2="nope" reason="x"/></robot>')
     with pytest.raises(SceneFileError, match="nope"):
         armguard.load_model(p)
+
+
+def test_entry_points_are_discovered_once_per_path_and_refreshed_on_request(monkeypatch, tmp_path):
+    """``get_backend`` runs on every Detector's construction: the entry points are scanned once (by
+    one thread, the others waiting for its result), again when ``sys.path`` changes, and on
+    ``available(refresh=True)`` / ``refresh()``; a package installed into a folder already on the
+    path shows up only then."""
+    import sys
+    import threading
+    from importlib import metadata
+
+    from armguard import backends
+
+    scans = []
+    real = metadata.entry_points
+
+    def counting(**kw):
+        scans.append(threading.get_ident())
+        return real(**kw)
+
+    monkeypatch.setattr(backends.metadata, "entry_points", counting)
+    first = backends.available(refresh=True)
+    assert len(scans) == 1 and {"analytic", "coal"} <= set(first)
+    for _ in range(5):
+        assert backends.available() == first
+        backends.get_backend("analytic")
+    assert len(scans) == 1
+    scans.clear()
+    monkeypatch.setattr(backends, "_EP_CACHE", ((), None))  # as before the first call: threads race to it
+    go = threading.Barrier(8)
+    seen = []
+
+    def worker():
+        go.wait()
+        seen.append(backends.available())
+
+    threads = [threading.Thread(target=worker) for _ in range(8)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(scans) == 1 and seen == [first] * 8
+    # a package on a folder prepended to sys.path: seen without a refresh (the path changed)
+    info = tmp_path / "armguard_fake-0.1.0.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: armguard-fake\nVersion: 0.1.0\n")
+    (info / "entry_points.txt").write_text("[armguard.backends]\nfake = armguard_fake:Backend\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert "fake" in backends.available() and len(scans) == 2
+    # a second package installed into that folder while the process runs: seen after a refresh
+    info2 = tmp_path / "armguard_fake2-0.1.0.dist-info"
+    info2.mkdir()
+    (info2 / "METADATA").write_text("Metadata-Version: 2.1\nName: armguard-fake2\nVersion: 0.1.0\n")
+    (info2 / "entry_points.txt").write_text("[armguard.backends]\nfake2 = armguard_fake2:Backend\n")
+    assert "fake2" not in backends.available()
+    assert "fake2" in backends.refresh() and "fake2" in backends.available() and len(scans) == 3
+    with pytest.raises(BackendError, match="fake2"):  # the listing of installed backends names it
+        backends.get_backend("no_such_backend")
+    monkeypatch.undo()
+    assert "fake" not in backends.available() and sys.path[0] != str(tmp_path)

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, example, given, settings, strategies as st
 
 import armguard
 from armguard.geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere, distance
@@ -360,8 +360,10 @@ def random_scene(seed: int) -> Scene:
     return sc
 
 
-@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=True)
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(seed=st.integers(0, 2**31 - 1))
+@example(seed=2684).via("the W path's cylinder GJK stopped 1.25e-8 m above the distance")
+@example(seed=8402).via("... 1.03e-9 m above it")
 def test_random_scenes_compile_alike(seed):
     """Any mix of shapes on links, bodies and a payload: compile_model's arrays are compile_scene's,
     and the two paths' distances agree to the accuracy at which GJK and EPA stop, as their input
@@ -372,13 +374,14 @@ def test_random_scenes_compile_alike(seed):
     and scenes above agree to 1e-12 (the same shapes to rounding of their frames).
 
     A pair with a cylinder is checked by GJK on the cylinder's support function, which converges
-    without terminating finitely (``armguard.geometry._pair_cylinder``): the compile_scene path's
-    W-frame kernel and the link-frame kernel (warm-started from the hull's support table) stop at
-    different points of that convergence.  Seeds 2684 and 8402 gave 1.25e-8 and 1.03e-9 m on
-    separated cylinder-hull and cylinder-box pairs, the link-frame path within 5e-12 m of
-    ``geometry.distance`` and the W path above it; such pairs are held to 5e-8 m and, apart, to
-    ``geometry.distance`` from below (neither path short of the exact distance by more than 1e-9 m).
-    Derandomized: the same examples in every run (CI), seeds chosen by hypothesis once."""
+    without terminating finitely (``armguard.geometry._pair_cylinder``).  Its W-path run once stopped
+    on a rim up to 1.25e-8 m above the exact distance (seeds 2684 and 8402: 1.25e-8 and 1.03e-9 m);
+    since the stall is resumed (``_pair_cylinder_turn``) and an unproven stop reports GJK's lower
+    bound, over 42 seeds (2684 and 8402 among them) the two paths' cylinder pairs agreed to 8.9e-13 m
+    apart and 4.9e-11 m penetrating, and apart both were within 8.7e-13 m of ``geometry.distance``.
+    Cylinder pairs are held to the others' tolerances, and apart to ``geometry.distance`` within
+    1e-10 m (never above it by more: the unsafe side) and 1e-9 m below.  Random seeds in every run,
+    and the two that once failed."""
     from armguard.geometry import distance as exact_distance
 
     scene = random_scene(seed)
@@ -392,11 +395,10 @@ def test_random_scenes_compile_alike(seed):
         cyl = np.array([isinstance(shapes.get(na), Cylinder) or isinstance(shapes.get(nb), Cylinder) for na, nb in res.pairs],
                        dtype=bool)
         apart = (a > 0) & (r > 0)
-        np.testing.assert_allclose(a[apart & ~cyl], r[apart & ~cyl], rtol=0, atol=1e-9)
-        np.testing.assert_allclose(a[~apart & ~cyl], r[~apart & ~cyl], rtol=0, atol=1e-8)
-        np.testing.assert_allclose(a[cyl], r[cyl], rtol=0, atol=5e-8)
-        for k in np.flatnonzero(cyl & apart & (np.abs(a - r) > 1e-9)):
+        np.testing.assert_allclose(a[apart], r[apart], rtol=0, atol=1e-9)
+        np.testing.assert_allclose(a[~apart], r[~apart], rtol=0, atol=1e-8)
+        for k in np.flatnonzero(cyl & apart):
             na, nb = res.pairs[k]
             if nb in shapes:
                 d = exact_distance(shapes[na], shapes[nb]).distance
-                assert min(a[k], r[k]) >= d - 1e-9, (na, nb)
+                assert d - 1e-9 <= min(a[k], r[k]) and max(a[k], r[k]) <= d + 1e-10, (na, nb, a[k] - d, r[k] - d)

@@ -6,12 +6,20 @@ the explicit argument, else ``$ARMGUARD_BACKEND``, else ``armguard.toml`` (``[ba
 ``$ARMGUARD_CONFIG``), else ``"analytic"``.  Backends register under the entry-point group
 ``armguard.backends`` (``importlib.metadata``): a third party adds one by installing a
 package.  ``available()`` lists the installed ones.
+
+The entry points are discovered once per ``sys.path`` (``importlib.metadata`` reads every
+installed distribution's metadata, ~3-6 ms, and ``get_backend`` runs on every Detector's
+construction) and cached; a change of ``sys.path`` (a folder prepended, as a test installing a
+package does) discovers them again.  A package installed into a folder already on the path while
+the process runs is seen after ``available(refresh=True)`` (or :func:`refresh`).
 """
 
 from __future__ import annotations
 
 import contextvars
 import os
+import sys
+import threading
 import tomllib
 from importlib import metadata
 from pathlib import Path
@@ -21,7 +29,7 @@ from .._errors import BackendError, DetectionError
 from ._interface import (Backend, Capability, Checker, CheckerBase, NearestPair, PairDistances, PairDistancesMany, check_pairs,
                          check_Q, check_q)
 
-__all__ = ["available", "get_backend", "checker", "resolve", "command_line_choice", "Backend", "Checker", "CheckerBase", "PairDistances",
+__all__ = ["available", "refresh", "get_backend", "checker", "resolve", "command_line_choice", "Backend", "Checker", "CheckerBase", "PairDistances",
            "PairDistancesMany", "NearestPair", "check_pairs", "Capability", "check_q", "check_Q", "GROUP", "DEFAULT", "ENV"]
 
 GROUP = "armguard.backends"
@@ -31,13 +39,36 @@ CONFIG_ENV = "ARMGUARD_CONFIG"
 CONFIG_FILE = "armguard.toml"
 
 
-def _entry_points() -> dict:
-    return {ep.name: ep for ep in metadata.entry_points(group=GROUP)}
+_EP_LOCK = threading.Lock()
+_EP_CACHE: tuple = ((), None)  # (the sys.path they were discovered on, {name: entry point}); None: not yet
 
 
-def available() -> tuple[str, ...]:
-    """The names of the installed backends (sorted)."""
-    return tuple(sorted(_entry_points()))
+def _entry_points(refresh: bool = False) -> dict:
+    """``{name: entry point}`` of the installed backends: discovered on the first call (under a lock:
+    one thread scans, the others wait for its result) and again when ``sys.path`` has changed
+    since, or when ``refresh``.  A copy: callers may add to it."""
+    global _EP_CACHE
+    path = tuple(sys.path)
+    key, eps = _EP_CACHE
+    if refresh or eps is None or key != path:
+        with _EP_LOCK:
+            key, eps = _EP_CACHE
+            if refresh or eps is None or key != path:
+                eps = {ep.name: ep for ep in metadata.entry_points(group=GROUP)}
+                _EP_CACHE = (path, eps)
+    return dict(eps)
+
+
+def available(refresh: bool = False) -> tuple[str, ...]:
+    """The names of the installed backends (sorted).  ``refresh``: scan the installed packages again
+    (a backend installed while the process runs, into a folder already on ``sys.path``)."""
+    return tuple(sorted(_entry_points(refresh)))
+
+
+def refresh() -> tuple[str, ...]:
+    """Forget the discovered backends and scan the installed packages again; returns :func:`available`'s
+    names.  (The discovery is cached: see the module docstring.)"""
+    return available(refresh=True)
 
 
 def get_backend(name: str) -> Backend:

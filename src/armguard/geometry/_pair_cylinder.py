@@ -10,16 +10,22 @@ cores, and the witnesses are the barycentric combinations of those.  The algorit
   Environments* §4.3) with Johnson's sub-algorithm as Ericson's Voronoi-region tests (*Real-Time
   Collision Detection* §5.1, ``_pair_gjk._closest_simplex``); it stops when the duality gap
   ``(|v|^2 - v . w) / |v|`` (an upper minus a lower bound on the core distance) is below
-  ``gjk_epsilon``, when a support point repeats, or when ``|v|`` stops decreasing (as
-  ``_pair_gjk``: the simplex is then the answer; on two curved cores it stalls so with ``|v|``
-  within ~1e-11 m of the distance while the gap, whose lower bound sees the supports jump across
-  a rim, may still be ~1e-5 m).  Once a support plane has separated the origin from ``M``
-  (``v . w > 0``: a proof that the cores are apart) no later step may call them intersecting: near
-  a rim the supports jump between nearly equal points, and rounding can then flatten the simplex
-  into a tetrahedron that seems to hold the origin (1 in 1,000 random cylinder-box pairs 18-28 mm
-  apart were once reported touching).  On a curved core GJK converges without terminating finitely;
-  with ``max_iterations`` spent it is accepted when the gap is below ``SUPPORT_GAP``, else
-  reported as ``GJK_NOT_CONVERGED`` (callers raise).
+  ``gjk_epsilon``, when a support point repeats, or when ``|v|`` stops decreasing.  On a
+  cylinder's rim against a polytope's edge it used to stall so with ``|v|`` 1e-9 to 1.25e-8 m
+  above the distance (an old vertex's rim point left behind, each step's gain below rounding);
+  there the simplex's cylinder points are first turned to one best angle and GJK resumes
+  (``_pair_cylinder_turn``, up to ``_REFRESHES`` times), after which such pairs met the gap test.
+  A stop with the bounds still apart by more than ``gjk_epsilon`` (cores proven apart) reports the
+  proven lower bound ``max v . w / |v|`` over the iterations, never ``|v|``: the separated
+  distance is never above the exact one by more than ``gjk_epsilon`` plus rounding (the
+  witnesses are then ``|v|`` apart, a little more than the distance).  Once a support plane has
+  separated the origin from ``M`` (``v . w > 0``: a proof that the cores are apart) no later step
+  may call them intersecting: near a rim the supports jump between nearly equal points, and
+  rounding can then flatten the simplex into a tetrahedron that seems to hold the origin (1 in
+  1,000 random cylinder-box pairs 18-28 mm apart were once reported touching).  On a curved core
+  GJK converges without terminating finitely; with ``max_iterations`` spent it is accepted (with
+  its lower bound) when the gap is below ``SUPPORT_GAP``, else reported as ``GJK_NOT_CONVERGED``
+  (callers raise).
 * EPA (van den Bergen, GDC 2001, §4.3.7) on ``M = A - B`` from GJK's final tetrahedron; when GJK
   stops with the origin on a lower-dimensional simplex (touching cores) the simplex is first
   completed to a tetrahedron containing the origin by support points along directions off its
@@ -42,14 +48,72 @@ import numpy as np
 from numba import njit
 
 from ._pair_cylinder_epa import _complete, epa_support
+from ._pair_cylinder_turn import _refresh, _restore
 from ._pair_cylinder_support import (  # noqa: F401  (CYL_W, support_point: part of this module's interface)
-    _L0, _S0, _VIS, _WA, _WB, CYL_W, SUPPORT_GAP, SUPPORT_WORK_SIZE, _centre, _pair_support, _put, support_point,
+    _L0, _S0, _V0, _VIS, _WA, _WB, CYL_W, SUPPORT_GAP, SUPPORT_WORK_SIZE, _centre, _pair_support, _put, support_point,
 )
 from ._pair_gjk import GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, _closest_simplex, table_start
 from ._pair_segment_segment import write_rounded
 
+_REFRESHES = 16  # stalls gjk_support resumes by _refresh, at most
+
 __all__ = ["CYL_W", "SUPPORT_WORK_SIZE", "SUPPORT_GAP", "support_point", "gjk_support", "epa_support",
            "support_pair", "support_pair_graph"]
+
+
+@njit(cache=True, inline="always")
+def _combine(work, nn, k0, k1, k2, k3):  # pragma: no cover - compiled
+    """``v = sum_j k_j w_j`` over the first ``nn`` simplex vertices, and ``|v|^2``."""
+    nvx = nvy = nvz = 0.0
+    for j in range(nn):
+        lam = k0 if j == 0 else (k1 if j == 1 else (k2 if j == 2 else k3))
+        o = _S0 + 9 * j
+        nvx += lam * work[o]
+        nvy += lam * work[o + 1]
+        nvz += lam * work[o + 2]
+    return nvx, nvy, nvz, nvx * nvx + nvy * nvy + nvz * nvz
+
+
+@njit(cache=True, inline="always")
+def _plane_bound(pa, ga, ca, pb, gb, cb, work, n, vx, vy, vz, ta, tb):  # pragma: no cover - compiled
+    """A lower bound on the core distance along the final simplex's own normal: its triangle's
+    (``n == 3``) or ``v`` made orthogonal to its segment (``n == 2``), turned towards ``v``.
+
+    ``v . w / |v|`` is a lower bound whose error is first order in ``v``'s direction error, and
+    that is the rounding of ``v`` (~1e-16 of the simplex's size) over ``|v|``: at 8e-9 m between
+    a box's face and a cap it was 2.4e-9 m.  When ``v`` lies inside a triangle the nearest points'
+    normal is the triangle's, whose cross product of edges is exact to rounding of the edges, not
+    of ``v``.  Returns ``u . w(-u)`` for that unit ``u`` (``-inf`` where it is undefined)."""
+    o1 = _S0 + 9
+    ex = work[o1] - work[_S0]
+    ey = work[o1 + 1] - work[_S0 + 1]
+    ez = work[o1 + 2] - work[_S0 + 2]
+    if n == 3:
+        o2 = _S0 + 18
+        fx = work[o2] - work[_S0]
+        fy = work[o2 + 1] - work[_S0 + 1]
+        fz = work[o2 + 2] - work[_S0 + 2]
+        ux = ey * fz - ez * fy
+        uy = ez * fx - ex * fz
+        uz = ex * fy - ey * fx
+        if ux * vx + uy * vy + uz * vz < 0.0:
+            ux, uy, uz = -ux, -uy, -uz
+    else:
+        ee = ex * ex + ey * ey + ez * ez
+        if ee == 0.0:
+            return -math.inf
+        t = (vx * ex + vy * ey + vz * ez) / ee
+        ux = vx - t * ex
+        uy = vy - t * ey
+        uz = vz - t * ez
+    un = math.sqrt(ux * ux + uy * uy + uz * uz)
+    if un == 0.0:
+        return -math.inf
+    ux /= un
+    uy /= un
+    uz /= un
+    ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, -ux, -uy, -uz, work, ta, tb)
+    return ux * (ax - bx) + uy * (ay - by) + uz * (az - bz)
 
 
 @njit(cache=True)
@@ -57,8 +121,9 @@ def gjk_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, 
                 tb=None):  # pragma: no cover
     """GJK on the cores ``(pa, ca)`` and ``(pb, cb)`` from the initial direction ``d`` (B to A).
 
-    Returns ``(status, dist, n, ax, ay, az, bx, by, bz)``: the core distance, the number of simplex
-    vertices left in ``work`` (4: the origin is inside their tetrahedron) and the witnesses on the
+    Returns ``(status, dist, n, ax, ay, az, bx, by, bz)``: the core distance (``|v|`` where the
+    gap test met ``gjk_eps``, else, when apart, the proven lower bound; see the module docstring),
+    the number of simplex vertices left in ``work`` (4: the origin is inside their tetrahedron) and the witnesses on the
     cores.  ``status`` as ``_pair_gjk``.  ``sa``, ``sb``: where the point cores' first climbs start
     (-1: from their stored extremes; a caller with a support table passes its entries, see
     ``_pair_gjk.table_start``); ``ta``, ``tb`` (None or empty: none): their support tables, where the
@@ -77,7 +142,9 @@ def gjk_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, 
     vv = vx * vx + vy * vy + vz * vz
     status = GJK_NOT_CONVERGED
     gap = math.inf
+    lower = -math.inf  # the best lower bound on |v|'s limit seen: max v . w / |v|
     apart = False
+    refresh = 0  # stalls resumed by _refresh (at most _REFRESHES)
     for _it in range(max_iter):
         if vv <= eps2:
             status = GJK_INTERSECTING
@@ -91,6 +158,7 @@ def gjk_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, 
         # them), whatever later supports do near a rim (they jump between nearly equal points)
         apart = apart or vw > 0.0
         gap = (vv - vw) / math.sqrt(vv)
+        lower = max(lower, vw / math.sqrt(vv))
         if gap <= gjk_eps:
             status = GJK_SEPARATED
             break
@@ -102,40 +170,44 @@ def gjk_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, 
             ez = wz - work[o + 2]
             if ex * ex + ey * ey + ez * ez <= eps2:
                 dup = True
-        if dup:
-            # a repeated support point: no progress possible; apart when a support plane separated
-            status = GJK_SEPARATED if apart else GJK_INTERSECTING
-            break
-        _put(work, _S0 + 9 * n, ax, ay, az, bx, by, bz)
-        o1 = _S0 + 9
-        o2 = _S0 + 18
-        o3 = _S0 + 27
-        m, k0, k1, k2, k3 = _closest_simplex(
-            n + 1, work[_S0], work[_S0 + 1], work[_S0 + 2], work[o1], work[o1 + 1], work[o1 + 2],
-            work[o2], work[o2 + 1], work[o2 + 2], work[o3], work[o3 + 1], work[o3 + 2])
-        if m == 15:
-            if apart:
-                # a support plane separated the origin from M (a proof): the "inside" verdict came
-                # from the Voronoi tests on a tetrahedron that rounding has made flat; the simplex stands
-                status = GJK_SEPARATED
+        m = 0
+        nn = n + 1
+        k0 = k1 = k2 = k3 = nvx = nvy = nvz = 0.0
+        if not dup:
+            _put(work, _S0 + 9 * n, ax, ay, az, bx, by, bz)
+            o1 = _S0 + 9
+            o2 = _S0 + 18
+            o3 = _S0 + 27
+            m, k0, k1, k2, k3 = _closest_simplex(
+                n + 1, work[_S0], work[_S0 + 1], work[_S0 + 2], work[o1], work[o1 + 1], work[o1 + 2],
+                work[o2], work[o2 + 1], work[o2 + 2], work[o3], work[o3 + 1], work[o3 + 2])
+            if m == 15 and not apart:
+                status = GJK_INTERSECTING
+                n = 4
                 break
-            status = GJK_INTERSECTING
-            n = 4
-            break
-        nvx = nvy = nvz = 0.0
-        for j in range(n + 1):
-            lam = k0 if j == 0 else (k1 if j == 1 else (k2 if j == 2 else k3))
-            o = _S0 + 9 * j
-            nvx += lam * work[o]
-            nvy += lam * work[o + 1]
-            nvz += lam * work[o + 2]
-        nvv = nvx * nvx + nvy * nvy + nvz * nvz
+        if dup or m == 15:
+            # a repeated support point, or an "inside" verdict after a support plane separated the
+            # origin from M (a proof: rounding has made the tetrahedron flat): no progress possible
+            # on this simplex
+            nvv = math.inf
+        else:
+            nvx, nvy, nvz, nvv = _combine(work, nn, k0, k1, k2, k3)
+        if nvv >= vv and apart and refresh < _REFRESHES:
+            # a stall with the gap still open: the simplex's cylinder points turned to one best
+            # angle (_pair_cylinder_turn: the rim's optimum an old vertex's chord had missed)
+            refresh += 1
+            nn, m, k0, k1, k2, k3, nvv = _refresh(work, n, ca, cb, ax, ay, az, bx, by, bz, eps2,
+                                                  work[_V0 + 40:_V0 + 52])
+            if m != 15:
+                nvx, nvy, nvz, nvv = _combine(work, nn, k0, k1, k2, k3)
+            if nvv >= vv:
+                _restore(work)
         if nvv >= vv:
             # no progress (rounding): the previous simplex is the answer (apart when a support plane separated)
             status = GJK_SEPARATED if apart else GJK_INTERSECTING
             break
         c = 0
-        for j in range(n + 1):  # compact the kept vertices into slots 0 .. c-1, in order
+        for j in range(nn):  # compact the kept vertices into slots 0 .. c-1, in order
             if (m >> j) & 1:
                 if c != j:
                     for q in range(9):
@@ -146,6 +218,14 @@ def gjk_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, 
         vx, vy, vz, vv = nvx, nvy, nvz, nvv
     if status == GJK_NOT_CONVERGED and gap <= SUPPORT_GAP * (1.0 + math.sqrt(vv)):
         status = GJK_SEPARATED  # a curved core: iterations spent, the error bound met
+    dist = math.sqrt(vv)
+    if status == GJK_SEPARATED and apart and dist - lower > gjk_eps and 2 <= n <= 3:
+        lower = max(lower, _plane_bound(pa, ga, ca, pb, gb, cb, work, n, vx, vy, vz, ta, tb))
+    if status == GJK_SEPARATED and apart and dist - lower > gjk_eps:
+        # stopped (a stall, or iterations spent) before the bounds met: |v| may overstate the
+        # distance by up to their difference; the proven lower bound is the answer (the error on
+        # the safe side; the witnesses stay |v| apart)
+        dist = lower
     ax = ay = az = bx = by = bz = 0.0
     if n < 4:
         for k in range(n):
@@ -157,7 +237,7 @@ def gjk_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, 
             bx += lam * work[o + 6]
             by += lam * work[o + 7]
             bz += lam * work[o + 8]
-        return status, math.sqrt(vv), n, ax, ay, az, bx, by, bz
+        return status, dist, n, ax, ay, az, bx, by, bz
     return status, 0.0, 4, work[_S0 + 3], work[_S0 + 4], work[_S0 + 5], work[_S0 + 6], work[_S0 + 7], work[_S0 + 8]
 
 
