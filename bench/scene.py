@@ -62,13 +62,24 @@ def run(quick: bool) -> str:
     return "\n".join(lines)
 
 
+def _load_or_none(name: str):
+    """``load_model(name)`` (its warnings silenced), or None where a public robot's package is not installed."""
+    import warnings
+
+    from armguard.model import load_model
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            return load_model(name)
+        except Exception:  # noqa: BLE001 - a public robot's package is not installed
+            return None
+
+
 def _engine_table(repeat: int) -> list[str]:
     """The analytic engine's arrays from the Model (``_engine/_from_model.compile_model``) against
     ``compile_scene`` of the Scene, and the analytic Detector's construction (thread CPU)."""
-    import warnings
-
     import armguard
-    from armguard.model import load_model
     from armguard.scene import compile_scene
     from bench.timing import median_thread_seconds
 
@@ -76,14 +87,11 @@ def _engine_table(repeat: int) -> list[str]:
 
     rows = []
     for name in ("ranger", "panda", "z1"):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            try:
-                model = load_model(name)
-            except Exception:  # noqa: BLE001 - a public robot's package is not installed
-                continue
-            armguard.Detector(model.scene, threshold=0.05, backend="analytic")  # numba's kernels, loaded once
-            model = load_model(name)
+        model = _load_or_none(name)
+        if model is None:
+            continue
+        armguard.Detector(model.scene, threshold=0.05, backend="analytic")  # numba's kernels, loaded once
+        model = _load_or_none(name)
         model.pairs
         t0 = time.thread_time()
         armguard.Detector(model.scene, threshold=0.05, backend="analytic")  # the Model's shapes made here, once
@@ -113,20 +121,15 @@ def _derive_table(repeat: int) -> list[str]:
     import numpy as np
 
     from armguard.geometry import Box
-    from armguard.model import load_model, model_of
+    from armguard.model import model_of
     from armguard.model._load import model_from_scene
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        puma = next(iter(load_model("puma560").robots.values()))
+    puma = next(iter(_load_or_none("puma560").robots.values()))
     rows = []
     for name in ("panda", "ranger", "kuka_iiwa", "so101"):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            try:
-                model = load_model(name)
-            except Exception:  # noqa: BLE001 - a public robot's package is not installed
-                continue
+        model = _load_or_none(name)
+        if model is None:
+            continue
         scene = model.scene
         robot = list(scene.robots)[-1]
         cells = []

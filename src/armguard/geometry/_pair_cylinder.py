@@ -48,7 +48,7 @@ import numpy as np
 from numba import njit
 
 from ._pair_cylinder_epa import _complete, epa_support
-from ._pair_cylinder_turn import _refresh, _restore
+from ._pair_cylinder_turn import _combine, _refresh, _restore
 from ._pair_cylinder_support import (  # noqa: F401  (CYL_W, support_point: part of this module's interface)
     _L0, _S0, _V0, _VIS, _WA, _WB, CYL_W, SUPPORT_GAP, SUPPORT_WORK_SIZE, _centre, _pair_support, _put, support_point,
 )
@@ -59,19 +59,6 @@ _REFRESHES = 16  # stalls gjk_support resumes by _refresh, at most
 
 __all__ = ["CYL_W", "SUPPORT_WORK_SIZE", "SUPPORT_GAP", "support_point", "gjk_support", "epa_support",
            "support_pair", "support_pair_graph"]
-
-
-@njit(cache=True, inline="always")
-def _combine(work, nn, k0, k1, k2, k3):  # pragma: no cover - compiled
-    """``v = sum_j k_j w_j`` over the first ``nn`` simplex vertices, and ``|v|^2``."""
-    nvx = nvy = nvz = 0.0
-    for j in range(nn):
-        lam = k0 if j == 0 else (k1 if j == 1 else (k2 if j == 2 else k3))
-        o = _S0 + 9 * j
-        nvx += lam * work[o]
-        nvy += lam * work[o + 1]
-        nvz += lam * work[o + 2]
-    return nvx, nvy, nvz, nvx * nvx + nvy * nvy + nvz * nvz
 
 
 @njit(cache=True, inline="always")

@@ -34,10 +34,23 @@ from numba import njit
 from ._pair_cylinder_support import _L0, _S0, _V0, CYL_W, _put
 from ._pair_gjk import _closest_simplex
 
-__all__ = ["_refresh", "_restore"]
+__all__ = ["_combine", "_refresh", "_restore"]
 
 _GOLDEN = 0.6180339887498949
 _STEPS = 40  # golden-section steps: the bracket [-1, 2] shrinks to 3 * 0.618^40 = 1.3e-8 in t
+
+
+@njit(cache=True, inline="always")
+def _combine(work, nn, k0, k1, k2, k3):  # pragma: no cover - compiled
+    """``v = sum_j k_j w_j`` over the first ``nn`` simplex vertices, and ``|v|^2``."""
+    nvx = nvy = nvz = 0.0
+    for j in range(nn):
+        lam = k0 if j == 0 else (k1 if j == 1 else (k2 if j == 2 else k3))
+        o = _S0 + 9 * j
+        nvx += lam * work[o]
+        nvy += lam * work[o + 1]
+        nvz += lam * work[o + 2]
+    return nvx, nvy, nvz, nvx * nvx + nvy * nvy + nvz * nvz
 
 
 @njit(cache=True, inline="always")
@@ -122,14 +135,7 @@ def _turn(work, n, ca, cb, t, da, db, eps2):  # pragma: no cover - compiled
         work[o2], work[o2 + 1], work[o2 + 2], work[o3], work[o3 + 1], work[o3 + 2])
     if m == 15:
         return c, m, k0, k1, k2, k3, math.inf
-    vx = vy = vz = 0.0
-    for j in range(c):
-        lam = k0 if j == 0 else (k1 if j == 1 else (k2 if j == 2 else k3))
-        o = _S0 + 9 * j
-        vx += lam * work[o]
-        vy += lam * work[o + 1]
-        vz += lam * work[o + 2]
-    return c, m, k0, k1, k2, k3, vx * vx + vy * vy + vz * vz
+    return c, m, k0, k1, k2, k3, _combine(work, c, k0, k1, k2, k3)[3]
 
 
 @njit(cache=True)
