@@ -1,4 +1,4 @@
-"""The analytic engine's kinematic tree compiled from the Model's Pinocchio model (``_engine._pin_tree``).
+"""The analytic engine's kinematic tree compiled from the Model's Pinocchio model (``armguard.model._tree``).
 
 Held to three references: Pinocchio's own ``forwardKinematics`` + ``updateFramePlacements`` (the
 scene link's pose is ``oMf[link_frames[link]] @ link_placement(link)``), the Robots' trees
@@ -29,7 +29,7 @@ from armguard.kinematics._fk import fk_kernel, fk_reference
 from armguard.model import builtin_model_names, known_models, load_model, model_of
 from armguard.scene import Scene
 from armguard_analytic._engine import _model as engine_model
-from armguard_analytic._engine._pin_tree import pin_tree
+from armguard.model._tree import pin_tree
 
 from _verify_fixtures import planar_arm
 
@@ -276,9 +276,8 @@ def test_unaligned_continuous_and_offset_mimic_joints(odd_model, u):
 # ---------------------------------------------------------------- what the engine cannot express
 def _fake(pm, links, n_q):
     robot = types.SimpleNamespace(link_names=tuple(links), joint_names=tuple(f"j{k}" for k in range(n_q)))
-    scene = types.SimpleNamespace(robots={"r": robot})
     fid = {f"r/{ln}": pm.getFrameId(ln) for ln in links}
-    return types.SimpleNamespace(name="fake", pin_model=pm, scene=scene, q_index=np.arange(n_q), _circular=np.zeros(0, int),
+    return types.SimpleNamespace(name="fake", pin_model=pm, robots={"r": robot}, q_index=np.arange(n_q), _circular=np.zeros(0, int),
                                  link_frames=fid, link_placement=lambda link: np.eye(4))
 
 

@@ -1,7 +1,7 @@
 """The analytic backend: the papers' exact checker, armguard's numba kernels.
 
 The Model is compiled into flat arrays (its GeometryModel's shapes and ``Model.pairs``,
-:mod:`._engine._from_model`; Pinocchio's joint tree, :mod:`._engine._pin_tree`) and checked by
+:mod:`._engine._from_model`; Pinocchio's joint tree, :meth:`armguard.model.Model.kinematic_tree`) and checked by
 the fused detector kernel
 (:class:`._engine._detector.FusedDetector`, which ``armguard.Detector`` builds for this backend
 through ``ranger_detector``): exact signed distances for every shape pair (segment–segment
@@ -11,7 +11,7 @@ Model's own batched forward kinematics compiled from ``pin_model`` (tested again
 
 The engine is this package's own (:mod:`._engine`): the fused Detector (``_detector``,
 ``_scratch``, ``_raw``, ``_prep``), its compiled model (``_model``, ``_from_model``,
-``_pin_tree``, ``_bvh``, ``_hulls``), the
+``_bvh``, ``_hulls``), the
 packed buffers (``_layout``), the kernel (``_kernel``: FK, broad phase, the modes), the Checker's
 entry point (``_pair_rows``), culling (``_cull``), the narrow-phase dispatch over
 :mod:`armguard.geometry`'s pair kernels (``_narrow``, ``_step``), the Jacobian kernel

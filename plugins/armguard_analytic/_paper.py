@@ -144,7 +144,7 @@ class PaperChecker(CheckerBase):
         model, scene, tol = self.model, self.model.scene, self.tol
         cs = compile_scene(scene)
         robots = tuple(cs.robot_names)
-        tree, link_off, _ = engine_tree(scene, robots, model=model)  # from the Model's pin_model (_engine._pin_tree)
+        tree, link_off, _ = engine_tree(scene, robots, model=model)  # from the Model's pin_model (Model.kinematic_tree)
         G = cs.n_elements
         moving = cs.elem_kind != 0
         glink = np.where(moving, link_off[np.maximum(cs.elem_robot, 0)] + cs.elem_link, -1) if len(link_off) else \

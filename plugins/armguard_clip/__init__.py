@@ -254,9 +254,7 @@ class ClipChecker(CheckerBase):
     # ---------------------------------------------------------------- checking
     def _frame_poses(self, Q: np.ndarray) -> np.ndarray:
         """``(n_frames, M, 4, 4)``: each moving frame's pose in W for the rows of ``Q``."""
-        scene = self.model.scene
-        parts = scene.split_q(self.model.scene_q(Q))
-        fk = {rn: scene.robots[rn].forward_kinematics(parts[rn]) for rn in {r for r, _ in self._frames}}
+        fk = self.model.link_poses(self.model.scene_q(Q))  # the Model's kinematics (pin_model)
         out = np.empty((len(self._frames), len(Q), 4, 4))
         for f, (rn, li) in enumerate(self._frames):
             out[f] = fk[rn][:, li]

@@ -2,7 +2,7 @@
 
 :class:`._detector.FusedDetector` (a subclass of :class:`armguard.detect.Detector`, declared by
 ``AnalyticBackend.ranger_detector``) compiles the scene's Model (:mod:`._model`; its kinematic tree from
-the Pinocchio model, :mod:`._pin_tree`; its element arrays and pairs from the GeometryModel and
+the Pinocchio model, :meth:`armguard.model.Model.kinematic_tree`; its element arrays and pairs from the GeometryModel and
 ``Model.pairs``, :mod:`._from_model`; :mod:`._bvh`,
 :mod:`._hulls`, :mod:`._prep`) into packed buffers (:mod:`._layout`) and checks it with one numba
 call (:mod:`._kernel`; the narrow phase :mod:`._step`, :mod:`._narrow`; culling :mod:`._cull`);

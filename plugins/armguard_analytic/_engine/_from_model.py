@@ -10,7 +10,7 @@ is the one definition of it) from
   from, ``Model.hulls``, :func:`~armguard.model._shapes.shape_of_polytope`, so a hull keeps its
   vertex set and merged faces) at its placement.  Pinocchio places an object in its parent joint's
   frame (``oMg = oMi[parentJoint] * placement``); the element frame is the engine tree's link frame
-  L of the scene link it is fixed to (:mod:`._pin_tree`: ``F_L = frames[link_frames[L]].placement
+  L of the scene link it is fixed to (:meth:`armguard.model.Model.kinematic_tree`: ``F_L = frames[link_frames[L]].placement
   X_FL`` in that joint's frame, ``Model.link_frames``, ``Model.link_placement``), so the element is
   at ``X_LG = F_L^-1 placement``; a static body's (parent joint 0, the universe, at the identity)
   is at ``X_WG = placement``; a payload's in its holding link's frame, the same way.  An object on
@@ -23,7 +23,7 @@ is the one definition of it) from
   objects in its order), so the element and pair numbering is compile_scene's.
 
 What the GeometryModel has no counterpart for comes from the Model too: the robots' names and
-link order (``Model.robots``: the engine tree's rows, :mod:`._pin_tree`, index links that way),
+link order (``Model.robots``: the engine tree's rows, :meth:`armguard.model.Model.kinematic_tree`, index links that way),
 which owners are static bodies, links or payloads and a body's category (``Model.bodies``,
 ``Model.payloads``: ``vehicle`` or ``environment``, an SRDF group), the link that holds a payload,
 and the workspace box (``Model.workspace``: an axis-aligned box in W whose walls are no

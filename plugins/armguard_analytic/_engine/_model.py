@@ -6,9 +6,9 @@ their categories); this module adds what the detector needs on top of it:
 * one flattened kinematic tree over the links of *all* robots (global link index =
   robot's offset + link index), so one FK call serves the scene, compiled from the scene's
   Model (:func:`armguard.model.model_of` with ``geometry=False``: its Pinocchio joint tree,
-  placements and mimic couplings, :mod:`._pin_tree`); the Robots' own trees
-  (:func:`armguard.detect._common.combined_tree`) stay the framework's, for Ranger's bounds over
-  the other backends, and the slow reference the tests hold this tree to;
+  placements and mimic couplings, :meth:`armguard.model.Model.kinematic_tree`, which Ranger's
+  bounds over the other backends use too); the Robots' own trees
+  (:func:`armguard.detect._common.combined_tree`) are the slow reference the tests hold it to;
 * element frames as link numbers (-1 for static bodies), edge directions and face normals
   in the element frame, static elements' AABBs (a cylinder's exact one, see
   :func:`armguard.detect._common.cylinder_aabb`) and a :class:`BVH` over them;
@@ -29,7 +29,6 @@ from armguard.detect._reach import chain_bounds
 
 from ._bvh import build_bvh
 from ._from_model import compile_model_parts
-from ._pin_tree import pin_tree
 
 __all__ = ["DetectModel", "build_model", "compile_for_engine", "engine_tree", "CAT_ARM", "CAT_ENVIRONMENT", "CAT_WORKSPACE", "CAT_PAYLOAD"]
 
@@ -92,20 +91,17 @@ def compile_for_engine(scene, model=None) -> tuple:
 
 
 def engine_tree(scene, robot_names, *, model=None):
-    """``(tree, link_off, joint_off)``: the kinematic tree of the scene's Model (:mod:`._pin_tree`;
-    ``model`` when it moves the scene's robots, else ``model_of(scene, geometry=False)``),
-    compiled once per Model and robot set (a Model's kinematics do not change)."""
+    """``(tree, link_off, joint_off)``: the kinematic tree of the scene's Model
+    (:meth:`armguard.model.Model.kinematic_tree`, compiled from its Pinocchio model once per
+    robot set; ``model`` when it moves the scene's robots, else ``model_of(scene, geometry=False)``)."""
     from armguard.model import model_of
+    from armguard.model._tree import pin_tree
 
     if not robot_names:  # nothing moves: no Model needed
         return pin_tree(None, ())
     if model is None or not model.moves_robots_of(scene):
         model = model_of(scene, geometry=False)
-    cache = model.__dict__.setdefault("_engine_trees", {})
-    key = tuple(robot_names)
-    if key not in cache:
-        cache[key] = pin_tree(model, key)
-    return cache[key]
+    return model.kinematic_tree(tuple(robot_names))
 
 
 def build_model(scene, *, active: str | None, reach_margin: float, tol, model=None) -> DetectModel:

@@ -21,6 +21,7 @@ def fk_cmd(scene: str, q_text: str | None, robot_name: str | None, deg: bool) ->
     from rich.table import Table
 
     from ..kinematics import xyz_rpy_from_pose
+    from ..model import kinematics_of
     from ..scene import load_scene
 
     s = load_scene(scene)
@@ -44,7 +45,7 @@ def fk_cmd(scene: str, q_text: str | None, robot_name: str | None, deg: bool) ->
             rev = np.array([jt.value == "revolute" for jt in robot.joint_types])
             q = np.where(rev, np.radians(q), q)
     q = robot.check_q(q)
-    X = robot.forward_kinematics(q)
+    X = kinematics_of(s).robot_link_poses(name, q)  # the Model's kinematics (pin_model)
     unit = "deg" if deg else "rad"
     t = Table(title=f"{s.name}: robot {name}, link frames in W (xyz m, rpy {unit})")
     for col in ("link", "x", "y", "z", "roll", "pitch", "yaw"):

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ._draw_overlays import OverlayDrawer
-from ._meshes import item_frames, mesh_of, quat_wxyz_from_matrix
+from ._meshes import item_frames, link_poses, mesh_of, quat_wxyz_from_matrix
 from ._nodes import PosedItems, ShapeNode
 from ._readout import no_negative_zero
 from ._sight import SIGHT_PERIOD, hidden_from
@@ -150,7 +150,7 @@ class SceneDrawer:
         self._marker_r = {}
         snap = self.state.snapshot()
         scene = self.state.scene
-        items = scene.shapes_at(snap.q)
+        items = scene.shapes_at(snap.q, poses=link_poses(scene, snap.q))
         frames = item_frames(scene, snap.q)
         self.items: list[ShapeNode] = []
         lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
@@ -462,7 +462,7 @@ class SceneDrawer:
         (``focus="arm"``), or only the nearest pair (``focus="pair"``: :func:`~._view.pair_view`,
         seen across the line past every shape)."""
         r = snap.readout
-        items = self.state.scene.shapes_at(snap.q)
+        items = self.state.scene.shapes_at(snap.q, poses=link_poses(self.state.scene, snap.q))
         line = None if r.p_WB is None else np.array([r.p_WA, r.p_WB], dtype=np.float64)
         if focus == "pair" and line is not None:
             return pair_view(line, [it.shape for it in items], fov_rad=fov_rad, min_radius=0.02 * self.radius)

@@ -12,8 +12,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Shape, Sphere
+from ..model import kinematics_of
 
-__all__ = ["mesh_of", "rigid_motion", "item_frames", "quat_wxyz_from_matrix", "SPHERE_SUBDIVISIONS", "CAPSULE_SECTIONS"]
+__all__ = ["mesh_of", "rigid_motion", "item_frames", "link_poses", "quat_wxyz_from_matrix", "SPHERE_SUBDIVISIONS", "CAPSULE_SECTIONS"]
 
 SPHERE_SUBDIVISIONS = 2
 """Icosphere subdivisions for spheres (320 faces)."""
@@ -111,6 +112,13 @@ def quat_wxyz_from_matrix(R: np.ndarray) -> np.ndarray:
     return q if q[0] >= 0.0 else -q
 
 
+def link_poses(scene, q) -> dict:
+    """Robot name -> ``(n_links, 4, 4)`` link poses at ``q``: the scene's Model moves them
+    (:meth:`armguard.model.Model.link_poses`, compiled from ``pin_model``)."""
+    kin = kinematics_of(scene)
+    return kin.link_poses(q) if kin is not None else {}
+
+
 def item_frames(scene, q) -> list[np.ndarray]:
     """``X_W`` (4, 4) of each item of ``scene.shapes_at(q)``, in its order: the identity for a body
     (drawn where it is), the link's pose ``X_WL`` for a link's shape, ``X_WP`` for a payload's.
@@ -119,15 +127,13 @@ def item_frames(scene, q) -> list[np.ndarray]:
     ``X(q) X(q_built)⁻¹`` (a ConvexPolyhedron's ``transformed`` rebuilds its packed directions,
     milliseconds a shape).
     """
-    parts = scene.split_q(q)
     eye = np.eye(4)
     out: list[np.ndarray] = []
     for b in scene.bodies.values():
         out.extend(eye for _ in b.shapes)
-    poses = {}
+    poses = link_poses(scene, q)
     for name, robot in scene.robots.items():
-        X = np.asarray(robot.forward_kinematics(parts[name]), dtype=np.float64)
-        poses[name] = X
+        X = poses[name]
         for i, ln in enumerate(robot.link_names):
             out.extend(X[i] for _ in robot.link_shapes.get(ln, ()))
     for p in scene.payloads.values():

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._meshes import link_poses
 from ._parse import ConsoleInputError
 
 __all__ = ["OverlayMixin", "TerrainView", "Ellipsoid", "tested_boxes", "confidence_ellipsoids",
@@ -178,7 +179,7 @@ def _frame_of(scene, name: str) -> np.ndarray:
     """``X_W`` (4, 4) of a placed thing: a robot's base link at home, a body's centroid (axes of W)."""
     X = np.eye(4)
     if name in scene.robots:
-        return np.array(scene.link_poses(scene.flat_q(scene.default_q()))[name][0], dtype=np.float64)
+        return np.array(link_poses(scene, scene.default_q())[name][0], dtype=np.float64)
     if name in scene.bodies:
         pts = np.concatenate([np.atleast_2d(np.asarray(s.core_points)) for s in scene.bodies[name].shapes])
         X[:3, 3] = 0.5 * (pts.min(axis=0) + pts.max(axis=0))

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model import scene_of
+from ..model import kinematics_of, scene_of
 from .._errors import ForbiddenMapError
 from ._clearance import pick_robot
 
@@ -66,7 +66,7 @@ def ed_constant(scene, robot: str | None = None) -> EdConstant:
     moving = [j for j in rob.joints if j.joint_type.value != "fixed"]
     if len(moving) < 3:
         raise ForbiddenMapError(f"robot {robot!r} has {len(moving)} moving joints; eq. (4-5) needs three")
-    X_WL = rob.forward_kinematics(np.zeros(rob.n_joints))
+    X_WL = kinematics_of(scene).robot_link_poses(robot, np.zeros(rob.n_joints))  # the Model's kinematics
     p = {ln: X_WL[i, :3, 3] for i, ln in enumerate(rob.link_names)}
     wrist = moving[3].child if len(moving) > 3 else rob.tool_link
     l2 = float(np.linalg.norm(p[moving[2].child] - p[moving[1].child]))

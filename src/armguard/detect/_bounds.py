@@ -25,7 +25,6 @@ import numpy as np
 from ._common import CAT_WORKSPACE
 from ._common import CYLINDER as _CYLINDER
 from ._common import SCENE_CATEGORY as _SCENE_CAT
-from ._common import combined_tree as _combined_tree
 from ._common import cylinder_aabb as _cylinder_aabb
 from ._reach import chain_bounds
 
@@ -73,7 +72,7 @@ def pair_bounds(model, *, active: str | None, reach_margin: float) -> PairBounds
     scene = model.scene_for()
     cs = compile_scene(scene)
     robot_names = tuple(cs.robot_names)
-    tree, link_off, _ = _combined_tree(scene, robot_names)
+    tree, link_off, _ = model.kinematic_tree(robot_names)  # compiled from pin_model, the Robots' layout
     lower = np.concatenate([scene.robots[r].lower for r in robot_names]) if robot_names else np.zeros(0)
     upper = np.concatenate([scene.robots[r].upper for r in robot_names]) if robot_names else np.zeros(0)
     n_q = len(lower)

@@ -107,7 +107,7 @@ def combined_tree(scene, robot_names):
 
     Built from the Robots (``robot.flat_tree``): what Ranger's bounds over any backend
     (:mod:`._bounds`) use.  The analytic backend's engine compiles the same layout from the
-    scene's Model instead (``armguard_analytic._engine._pin_tree``) and is tested against this.
+    scene's Model instead (``Model.kinematic_tree``, ``armguard.model._tree``) and is tested against this.
     """
     from ..kinematics._fk import FlatTree
 

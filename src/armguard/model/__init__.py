@@ -11,9 +11,9 @@ Scene the Model holds (``_scene``, ``_items``, ``_compile``, ``_save``; :mod:`ar
 hands these on, one layer up, with its loaders).  See ``docs/architecture.md``.
 """
 
-from ._load import builtin_model_names, load_model, model_from_scene, model_of, models_dir
+from ._load import builtin_model_names, kinematics_of, load_model, model_from_scene, model_of, models_dir
 from ._model import WORKSPACE, GeometryPairs, Model, scene_of
 from ._public import known_models, public_robot_files, public_robot_names
 
-__all__ = ["load_model", "model_of", "scene_of", "model_from_scene", "Model", "GeometryPairs", "WORKSPACE", "models_dir", "builtin_model_names",
+__all__ = ["load_model", "model_of", "kinematics_of", "scene_of", "model_from_scene", "Model", "GeometryPairs", "WORKSPACE", "models_dir", "builtin_model_names",
            "known_models", "public_robot_names", "public_robot_files"]

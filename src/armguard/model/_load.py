@@ -367,6 +367,17 @@ def model_of(scene, *, geometry: bool = True) -> Model:
     return new
 
 
+def kinematics_of(scene_or_model):
+    """The Model whose ``pin_model`` moves the robots of ``scene_or_model`` (a Model: itself; a
+    scene: ``model_of(scene, geometry=False)``), or None for a scene without robots.  What the
+    framework moves links with (:meth:`Model.link_poses`, :meth:`Model.kinematic_tree`)."""
+    if isinstance(scene_or_model, Model):
+        return scene_or_model
+    if not scene_or_model.robots:
+        return None
+    return model_of(scene_or_model, geometry=False)
+
+
 def model_from_scene(scene, *, file: str | None = None) -> Model:
     """A Model of a Scene built in code or from a plain scene file: the scene is written as URDF
     (:func:`armguard.model.export.export_scene`) and Pinocchio loads that; the Model keeps

@@ -31,6 +31,7 @@ def scene_of(scene_or_model):
 
 
 _BOUND_LOCK = threading.Lock()  # Model.scene_for: one copy per Model, whichever thread asks first
+_TREE_LOCK = threading.Lock()  # Model.kinematic_tree: compiled once per Model and robot set
 
 
 def file_sha256(path) -> str:
@@ -393,6 +394,62 @@ class Model:
         (r,) = robots
         mine = {sn.split("/", 1)[1] for sn in flat}
         return tuple(j for j in self.robots[r].joint_names if j in mine)
+
+    # ---------------------------------------------------------------- kinematics
+    def kinematic_tree(self, robots=None) -> tuple:
+        """``(tree, link_off, joint_off)``: the forward kinematics of ``robots`` (names, in q order;
+        default every robot) compiled from ``pin_model`` (:func:`armguard.model._tree.pin_tree`:
+        joint tree, placements, mimic couplings; equal to Pinocchio's ``forwardKinematics`` to
+        1e-12), once per robot set.  Rows are the robots' links in order (``link_off[r]`` + link
+        index); joint terms index the scene's flat q.  The analytic engine, the verifier's lever
+        arms, the terrain guard and the console all move links with it."""
+        from ._tree import pin_tree
+
+        key = tuple(r for r, _ in self._robots) if robots is None else tuple(robots)
+        cache = self.__dict__.get("_engine_trees")
+        if cache is None or key not in cache:
+            with _TREE_LOCK:
+                cache = self.__dict__.setdefault("_engine_trees", {})
+                if key not in cache:
+                    cache[key] = pin_tree(self, key)
+        return cache[key]
+
+    def link_poses(self, q) -> dict:
+        """Robot name -> ``(..., n_links, 4, 4)`` world poses X_WL in its ``link_names`` order, at
+        ``q``: the scene's flat ``(..., n)`` array or a mapping robot -> its joints (as
+        :meth:`Scene.link_poses`, which moves the Robots' own chains: the reference this is held to)."""
+        from ..kinematics._fk import fk_kernel
+
+        q = self._spec.flat_q(q)  # validated: a NaN or a wrong length raises
+        tree, link_off, _ = self.kinematic_tree()
+        X = fk_kernel(tree, q)
+        return {name: X[..., int(link_off[i]):int(link_off[i]) + len(robot.link_names), :, :]
+                for i, (name, robot) in enumerate(self._robots)}
+
+    def robot_link_poses(self, robot: str, q_robot) -> np.ndarray:
+        """``(..., n_links, 4, 4)``: robot ``robot``'s links at its own joints ``q_robot`` ``(..., n_joints)``
+        (the other robots at home: no link of one robot moves with another's joints)."""
+        from ..kinematics._fk import fk_kernel
+
+        names = [r for r, _ in self._robots]
+        if robot not in names:
+            from .._errors import SceneError
+
+            raise SceneError(f"unknown robot {robot!r}; robots are {names}")
+        rob = dict(self._robots)[robot]
+        q_robot = rob.check_q(q_robot)
+        k0 = sum(len(r.joint_names) for n, r in self._robots[:names.index(robot)])
+        base = self._spec.flat_q(self._spec.default_q())
+        q = np.broadcast_to(base, q_robot.shape[:-1] + base.shape).copy()
+        q[..., k0:k0 + len(rob.joint_names)] = q_robot
+        tree, link_off, _ = self.kinematic_tree((robot,))
+        return fk_kernel(tree, q)
+
+    def shapes_at(self, q=None) -> list:
+        """The world-frame geometry of the system this Model holds at ``q`` (default: every robot
+        at home), as :meth:`Scene.shapes_at` lists it, the links moved by :meth:`link_poses`."""
+        q = self._spec.default_q() if q is None else q
+        return self._spec.shapes_at(q, poses=self.link_poses(q))
 
     # ---------------------------------------------------------------- pairs
     def geometry_name(self, owner: str, i: int) -> str:

@@ -447,21 +447,24 @@ class Scene:
             raise SceneError(f"q: expected one configuration, got shape {qr.shape}")
         return r.forward_kinematics(qr)[r.link_index(link)]
 
-    def shapes_at(self, q=None) -> list[SceneItem]:
+    def shapes_at(self, q=None, *, poses=None) -> list[SceneItem]:
         """The world-frame geometry at configuration ``q`` (default: every robot at home).
 
         Returns a list of :class:`SceneItem`: bodies, then links (robots in order, links in
         ``link_names`` order), then payloads.  ``q`` is one configuration (no batch axes).
+        ``poses``: the links' poses at ``q`` (robot name -> ``(n_links, 4, 4)``, as
+        :meth:`armguard.model.Model.link_poses` computes them from ``pin_model``); by default
+        the Robots' own chains move them (the reference the Model's kinematics is held to).
         """
         parts = self.split_q(self.default_q() if q is None else q)
         items: list[SceneItem] = []
         for b in self._bodies.values():
             items.extend(SceneItem(b.name, "body", s, category=b.category) for s in b.shapes)
-        poses = {}
+        given, poses = poses, {}
         for name, robot in self._robots.items():
             if parts[name].ndim != 1:
                 raise SceneError(f"shapes_at: expected one configuration, got shape {parts[name].shape} for {name!r}")
-            X = robot.forward_kinematics(parts[name])
+            X = robot.forward_kinematics(parts[name]) if given is None else np.asarray(given[name], dtype=np.float64)
             poses[name] = X
             for i, ln in enumerate(robot.link_names):
                 for s in robot.link_shapes.get(ln, ()):

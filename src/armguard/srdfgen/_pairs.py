@@ -20,6 +20,7 @@ the ancestor, and the joint is kept.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -104,6 +105,7 @@ def _urdf_link(model, owner: str) -> str:
 
 def pair_setup(model, tol: Tolerances = DEFAULT_TOLERANCES) -> PairSetup:
     """Every own-link pair of ``model``'s robots with geometry (see the module docstring)."""
+    from ..model import kinematics_of
     from ..verify._motion import chain_bounds
     from ..verify._oracle import ClearanceModel
 
@@ -117,7 +119,8 @@ def pair_setup(model, tol: Tolerances = DEFAULT_TOLERANCES) -> PairSetup:
     for name, robot in work.robots.items():
         offsets[name] = k
         k += len(robot.joint_names)
-    bounds = {name: chain_bounds(robot, tol) for name, robot in work.robots.items()}
+    kin = kinematics_of(model)  # the lever arms measured on the Model's kinematics (pin_model)
+    bounds = {name: chain_bounds(robot, tol, fk=functools.partial(kin.robot_link_poses, name)) for name, robot in work.robots.items()}
     pairs = []
     for cp in work.allowed_pairs():
         r, la = cp.a.split("/", 1)

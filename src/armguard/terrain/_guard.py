@@ -17,6 +17,7 @@ cell already gives COLLISION.  ``unknown_margin`` is the tolerance granted to th
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass, field
@@ -27,6 +28,7 @@ import numpy as np
 from .._errors import TerrainError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ..geometry import Box, distance
+from ..model import kinematics_of, scene_of
 from ._exact import column_distances
 from ._map import ElevationMap
 from ._pyramid import TerrainPyramid
@@ -197,7 +199,8 @@ class TerrainGuard:
                  tol: Tolerances = DEFAULT_TOLERANCES) -> None:
         from ..verify._motion import chain_bounds, shape_radius_about
 
-        scene = getattr(model_or_scene, "scene", model_or_scene)
+        scene = scene_of(model_or_scene)
+        self._kin = kinematics_of(model_or_scene)  # the links move by the Model's pin_model
         if isinstance(terrain, ElevationMap):
             terrain = TerrainPyramid(terrain, tol=tol)
         if not isinstance(terrain, TerrainPyramid):
@@ -210,7 +213,7 @@ class TerrainGuard:
         self.unknown_margin = _length(unknown_margin, "unknown_margin")
         self.reach = _length(reach, "reach")
         q0 = scene.flat_q(scene.default_q())
-        poses = scene.link_poses(q0)
+        poses = self._kin.link_poses(q0) if self._kin is not None else {}
         offsets, k = {}, 0
         for name, rob in scene.robots.items():
             offsets[name] = k
@@ -218,7 +221,7 @@ class TerrainGuard:
         self.n_q = k
         chains = {}
         owners, items, lever = [], [], []
-        for it in scene.shapes_at(q0):
+        for it in scene.shapes_at(q0, poses=poses):
             if it.kind not in ("link", "payload") or (robot is not None and it.robot != robot):
                 continue
             rob = scene.robots[it.robot]
@@ -227,7 +230,8 @@ class TerrainGuard:
             X_LW = _inv(X_WL)
             items.append((it.robot, li, it.shape.transformed(X_LW), link_volume(it.shape).transformed(X_LW)))
             owners.append(it.owner)
-            ch = chains.get(it.robot) or chains.setdefault(it.robot, chain_bounds(rob, tol))
+            ch = chains.get(it.robot) or chains.setdefault(
+                it.robot, chain_bounds(rob, tol, fk=functools.partial(self._kin.robot_link_poses, it.robot)))
             row = np.zeros(self.n_q)
             k0 = offsets[it.robot]
             row[k0:k0 + len(rob.joint_names)] = ch.lever(it.link, shape_radius_about([it.shape], X_WL[:3, 3]))
@@ -292,7 +296,7 @@ class TerrainGuard:
 
     def _poses(self, q) -> np.ndarray:
         """``(K, 4, 4)``: the pose in W of each moving shape's link at ``q``."""
-        poses = self.scene.link_poses(self.flat_q(q))
+        poses = self._kin.link_poses(self.flat_q(q))
         return np.stack([poses[rname][li] for rname, li in self._robot_of])
 
     def posed(self, q) -> tuple[list, list]:

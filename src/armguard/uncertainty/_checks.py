@@ -76,7 +76,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
-from ..model import scene_of
+from ..model import kinematics_of, scene_of
 from .._errors import UncertaintyError
 from .._tolerance import DEFAULT_TOLERANCES
 from . import se3 as _se3
@@ -324,13 +324,18 @@ class _Core:
     core_radius: float
 
 
+def _link_poses(scene, q_scene) -> dict:
+    """Robot name -> ``(n_links, 4, 4)`` at ``q_scene``: the scene's Model moves the links (``pin_model``)."""
+    kin = kinematics_of(scene)
+    return kin.link_poses(q_scene) if kin is not None else {}
+
+
 def _owner_cores(scene, q_scene) -> dict:
     """Owner -> the cores of its shapes in W at ``q_scene`` (posed points only: no shapes rebuilt)."""
     out: dict = {b: list(body.shapes) for b, body in scene.bodies.items()}
-    parts = scene.split_q(q_scene)
-    fk = {}
+    fk = _link_poses(scene, q_scene)
     for rn, robot in scene.robots.items():
-        X = fk[rn] = robot.forward_kinematics(parts[rn])
+        X = fk[rn]
         for i, ln in enumerate(robot.link_names):
             for sh in robot.link_shapes.get(ln, ()):
                 out.setdefault(f"{rn}/{ln}", []).append(
@@ -409,7 +414,7 @@ def clearance_sigmas(source, q, placements, *, confidence: float = 0.999, sample
             best[key] = (sigmas, cat, d, sigma, sig_max, tuple(ks), np.array(pa), np.array(pb))
     shapes: dict[str, list] = {}
     if samples > 0:
-        for it in scene.shapes_at(q_scene):
+        for it in scene.shapes_at(q_scene, poses=_link_poses(scene, q_scene)):
             shapes.setdefault(it.owner, []).append(it.shape)
     mc = _monte_carlo(scene, shapes, placements, moved, list(best), samples, seed) if samples > 0 else None
     pairs = []

@@ -27,10 +27,11 @@ travel for a prismatic one.  These are the chain's *configuration-independent le
 configuration, so the clearance of a pair can drop by at most ``rate * (s1 - s0)`` on
 ``[s0, s1]``.
 
-The chain geometry (axes, circle radii, coupling coefficients) is measured from the Robot's
-own forward kinematics: ``X_PL(q)`` for every link and its parent at a reference
-configuration and with each joint moved by ``_PROBE`` — a rigid motion is identified exactly
-from two poses, so no assumption is made about DH versus URDF conventions.
+The chain geometry (axes, circle radii, coupling coefficients) is measured from forward
+kinematics (the Model's, compiled from ``pin_model``; or the Robot's own chain): ``X_PL(q)``
+for every link and its parent at a reference configuration and with each joint moved by
+``_PROBE`` — a rigid motion is identified exactly from two poses, so no assumption is made
+about DH versus URDF conventions.
 """
 
 from __future__ import annotations
@@ -95,8 +96,12 @@ class ChainBounds:
         return self.A[:, k] + self.W[:, k] * radius + self.P[:, k]
 
 
-def chain_bounds(robot, tol: Tolerances = DEFAULT_TOLERANCES) -> ChainBounds:
-    """Measure the chain of ``robot`` (a :class:`armguard.kinematics.Robot`) and return its lever-arm bounds."""
+def chain_bounds(robot, tol: Tolerances = DEFAULT_TOLERANCES, *, fk=None) -> ChainBounds:
+    """Measure the chain of ``robot`` (a :class:`armguard.kinematics.Robot`) and return its lever-arm bounds.
+
+    ``fk``: ``Q (m, n_joints) -> (m, n_links, 4, 4)``, the forward kinematics measured (the
+    Model's, :meth:`armguard.model.Model.robot_link_poses`, moving links with ``pin_model``);
+    by default the Robot's own chain."""
     names = tuple(robot.link_names)
     n_links = len(names)
     n_q = len(robot.joint_names)
@@ -108,7 +113,7 @@ def chain_bounds(robot, tol: Tolerances = DEFAULT_TOLERANCES) -> ChainBounds:
     Q = np.repeat(q_ref[None, :], n_q + 1, axis=0)
     for j in range(n_q):
         Q[j + 1, j] += _PROBE
-    X = np.asarray(robot.forward_kinematics(Q), dtype=np.float64)  # (n_q + 1, n_links, 4, 4)
+    X = np.asarray((robot.forward_kinematics if fk is None else fk)(Q), dtype=np.float64)  # (n_q + 1, n_links, 4, 4)
     if not np.all(np.isfinite(X)):
         raise VerificationError(f"robot {robot.name!r}: forward kinematics is not finite at the reference configuration")
     scale = max(1.0, float(np.max(np.abs(X[0, :, :3, 3]))))

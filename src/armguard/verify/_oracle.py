@@ -8,19 +8,23 @@ configuration through one of two sources:
 
 * the Detector's ``pair_distances(q)`` (the fast path, when :mod:`armguard.detect` provides it);
 * the reference: ``scene.shapes_at(q)`` and :func:`armguard.geometry.distance` over
-  ``scene.allowed_pairs()`` (slow and obviously correct; the tests compare the two).
+  ``scene.allowed_pairs()`` (slow and obviously correct, the links moved by the Robots' own
+  chains rather than by the Model's kinematics: the tests compare the two).
 
 Each moving part (a link with shapes, or a payload carried by a link) gets a lever-arm row
-``lever (n_q,)`` from :mod:`._motion`: any of its points moves at most ``|dq| . lever``.
+``lever (n_q,)`` from :mod:`._motion`, measured on the Model's forward kinematics
+(:meth:`armguard.model.Model.robot_link_poses`, compiled from ``pin_model``): any of its points
+moves at most ``|dq| . lever``.
 """
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..model import scene_of
+from ..model import kinematics_of, scene_of
 from .._errors import VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._motion import chain_bounds, shape_radius_about
@@ -67,6 +71,7 @@ class ClearanceModel:
 
     def __init__(self, scene, *, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES, backend: str | None = None,
                  backend_options=None) -> None:
+        kin = kinematics_of(scene)  # what moves the links: the Model's pin_model (None without robots)
         scene = scene_of(scene)  # a Model: its scene
         if source not in ("auto", "detector", "reference"):
             raise VerificationError(f"source: expected one of 'auto', 'detector', 'reference', got {source!r}")
@@ -77,7 +82,8 @@ class ClearanceModel:
         self.joint_names = tuple(scene.joint_names)
         self.n_q = len(self.joint_names)
         q_home = scene.flat_q(scene.default_q())
-        items = scene.shapes_at(q_home)
+        poses = kin.link_poses(q_home) if kin is not None else {}
+        items = scene.shapes_at(q_home, poses=poses)
         # moving parts and their lever arms
         parts: dict[str, _Part] = {}
         shapes: dict[str, list] = {}
@@ -91,8 +97,8 @@ class ClearanceModel:
         for name, robot in scene.robots.items():
             offsets[name] = k
             k += len(robot.joint_names)
-        chains = {name: chain_bounds(robot, tol) for name, robot in scene.robots.items()}
-        poses = scene.link_poses(q_home)
+        chains = {name: chain_bounds(robot, tol, fk=functools.partial(kin.robot_link_poses, name))
+                  for name, robot in scene.robots.items()}
         lever = np.zeros((len(self.parts) + 1, self.n_q))  # last row: a static body (no motion)
         for i, o in enumerate(self.parts):
             p = parts[o]

@@ -485,7 +485,10 @@ def _feature_of(scene, q, owner: str, p_W: np.ndarray, tol):
         from ..geometry import Sphere
     except ImportError:
         return None
-    shapes = [it.shape for it in scene.shapes_at(q) if it.owner == owner]
+    from ..model import kinematics_of
+
+    kin = kinematics_of(scene)
+    shapes = [it.shape for it in scene.shapes_at(q, poses=kin.link_poses(q) if kin is not None else {}) if it.owner == owner]
     if not shapes:
         return None
     probe = Sphere(p_W, 0.0)

@@ -1,4 +1,4 @@
-"""The engine's kinematic tree compiled straight from the Model's Pinocchio model.
+"""A Model's kinematic tree, compiled straight from its Pinocchio model: the one forward kinematics.
 
 Pinocchio's conventions (Carpentier et al., "The Pinocchio C++ library", SII 2019, sec. III;
 ``pinocchio/multibody/model.hpp``): joint ``j`` has parent joint ``parents[j]`` (0 is the
@@ -38,8 +38,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from armguard._errors import DetectionError
-from armguard.kinematics._fk import JT_FIXED, JT_PRISMATIC, JT_REVOLUTE, FlatTree
+from .._errors import DetectionError
+from ..kinematics._fk import JT_FIXED, JT_PRISMATIC, JT_REVOLUTE, FlatTree
 
 __all__ = ["pin_tree"]
 
@@ -122,7 +122,7 @@ def pin_tree(model, robot_names) -> tuple[FlatTree, np.ndarray, np.ndarray]:
     import pinocchio as pin
 
     pm = model.pin_model
-    scene = model.scene
+    robots = model.robots  # the Robots pin_model moves (names, link order)
     where = f"model {model.name!r}"
     pdata = pm.createData()
     pin.forwardKinematics(pm, pdata, pin.neutral(pm))  # fills each joint's motion subspace S (mimic axes)
@@ -136,7 +136,7 @@ def pin_tree(model, robot_names) -> tuple[FlatTree, np.ndarray, np.ndarray]:
     names = list(pm.names)
     placements = [_se3(x) for x in pm.jointPlacements]
     try:
-        links_of_all = {int(model.link_frames[f"{r}/{ln}"]) for r, rb in scene.robots.items() for ln in rb.link_names}
+        links_of_all = {int(model.link_frames[f"{r}/{ln}"]) for r, rb in robots.items() for ln in rb.link_names}
     except KeyError as exc:
         raise DetectionError(f"{where}: scene link {exc.args[0]!r} has no frame in pin_model (Model.link_frames)") from None
     rows = {k: [] for k in ("parent", "axis", "jtype", "offset", "term_start", "term_joint", "term_coeff")}
@@ -145,7 +145,7 @@ def pin_tree(model, robot_names) -> tuple[FlatTree, np.ndarray, np.ndarray]:
     link_off, joint_off = [], []
     nl = nj = 0
     for r in robot_names:
-        robot = scene.robots[r]
+        robot = robots[r]
         link_off.append(nl)
         joint_off.append(nj)
         fid = [int(model.link_frames[f"{r}/{ln}"]) for ln in robot.link_names]
