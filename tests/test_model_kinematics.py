@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import functools
 import threading
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pinocchio as pin
@@ -103,7 +104,7 @@ def test_batches_mappings_and_shapes(name):
 def test_bad_input_is_refused():
     model = _model("puma560")
     with pytest.raises(armguard.ArmguardError):
-        model.link_poses(np.full(model.scene.n_q if hasattr(model.scene, "n_q") else len(model.scene.joint_names), np.nan))
+        model.link_poses(np.full(len(model.scene.joint_names), np.nan))
     with pytest.raises(armguard.ArmguardError):
         model.link_poses(np.zeros(len(model.scene.joint_names) + 1))
     with pytest.raises(armguard.ArmguardError, match="unknown robot"):
@@ -123,17 +124,9 @@ def test_kinematics_of():
 def test_one_tree_per_model_across_threads():
     model = _model("coded-modified")
     model.__dict__.pop("_engine_trees", None)
-    out, barrier = [], threading.Barrier(4)
-
-    def work():
-        barrier.wait()
-        out.append(model.kinematic_tree())
-
-    ts = [threading.Thread(target=work) for _ in range(4)]
-    for t in ts:
-        t.start()
-    for t in ts:
-        t.join()
+    barrier = threading.Barrier(4)  # four threads ask at once: one compile, one tree
+    with ThreadPoolExecutor(4) as ex:
+        out = list(ex.map(lambda _: (barrier.wait(), model.kinematic_tree())[1], range(4)))
     assert len(out) == 4 and all(o is out[0] for o in out)
 
 
