@@ -18,7 +18,8 @@ cores, and the witnesses are the barycentric combinations of those.  The algorit
   A stop with the bounds still apart by more than ``gjk_epsilon`` (cores proven apart) reports the
   proven lower bound ``max v . w / |v|`` over the iterations, never ``|v|``: the separated
   distance is never above the exact one by more than ``gjk_epsilon`` plus rounding (the
-  witnesses are then ``|v|`` apart, a little more than the distance).  Once a support plane has
+  witnesses, ``|v|`` apart, are then each drawn ``(|v| - bound) / 2`` towards the other, so that
+  they are the reported distance apart, within that of their surfaces).  Once a support plane has
   separated the origin from ``M`` (``v . w > 0``: a proof that the cores are apart) no later step
   may call them intersecting: near a rim the supports jump between nearly equal points, and
   rounding can then flatten the simplex into a tetrahedron that seems to hold the origin (1 in
@@ -205,14 +206,14 @@ def gjk_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, 
         vx, vy, vz, vv = nvx, nvy, nvz, nvv
     if status == GJK_NOT_CONVERGED and gap <= SUPPORT_GAP * (1.0 + math.sqrt(vv)):
         status = GJK_SEPARATED  # a curved core: iterations spent, the error bound met
-    dist = math.sqrt(vv)
+    dist, lowered = math.sqrt(vv), False
     if status == GJK_SEPARATED and apart and dist - lower > gjk_eps and 2 <= n <= 3:
         lower = max(lower, _plane_bound(pa, ga, ca, pb, gb, cb, work, n, vx, vy, vz, ta, tb))
     if status == GJK_SEPARATED and apart and dist - lower > gjk_eps:
         # stopped (a stall, or iterations spent) before the bounds met: |v| may overstate the
         # distance by up to their difference; the proven lower bound is the answer (the error on
-        # the safe side; the witnesses stay |v| apart)
-        dist = lower
+        # the safe side; the witnesses are drawn together below to be that far apart)
+        dist, lowered = lower, True
     ax = ay = az = bx = by = bz = 0.0
     if n < 4:
         for k in range(n):
@@ -224,6 +225,11 @@ def gjk_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, 
             bx += lam * work[o + 6]
             by += lam * work[o + 7]
             bz += lam * work[o + 8]
+        gx, gy, gz = bx - ax, by - ay, bz - az
+        g = math.sqrt(gx * gx + gy * gy + gz * gz)
+        if lowered and g > dist >= 0.0:  # the lower bound reported: each witness moves (g - dist) / 2 towards the other
+            t = 0.5 * (g - dist) / g
+            ax, ay, az, bx, by, bz = ax + t * gx, ay + t * gy, az + t * gz, bx - t * gx, by - t * gy, bz - t * gz
         return status, dist, n, ax, ay, az, bx, by, bz
     return status, 0.0, 4, work[_S0 + 3], work[_S0 + 4], work[_S0 + 5], work[_S0 + 6], work[_S0 + 7], work[_S0 + 8]
 
