@@ -123,7 +123,7 @@ def test_kinematics_of():
 
 def test_one_tree_per_model_across_threads():
     model = _model("coded-modified")
-    model.__dict__.pop("_engine_trees", None)
+    model.__dict__.pop("_kinematic_trees", None)
     barrier = threading.Barrier(4)  # four threads ask at once: one compile, one tree
     with ThreadPoolExecutor(4) as ex:
         out = list(ex.map(lambda _: (barrier.wait(), model.kinematic_tree())[1], range(4)))

@@ -121,7 +121,7 @@ def derive_model(model: Model, scene) -> Model | None:
     new.collision_model = geom
     if moved or added:  # other kinematics: the robots, and trees compiled again
         new.pin_model, new._robots = pin_model, tuple(scene.robots.items())
-        new.__dict__.pop("_engine_trees", None)
+        new.__dict__.pop("_kinematic_trees", None)
     if kin is not None:  # joint and frame indices of the appended model
         new.__dict__.update(kin)
     # no source files: the files describe the loaded Model's shapes, not these (a forbidden-values

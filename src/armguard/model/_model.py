@@ -406,10 +406,10 @@ class Model:
         from ._tree import pin_tree
 
         key = tuple(r for r, _ in self._robots) if robots is None else tuple(robots)
-        cache = self.__dict__.get("_engine_trees")
+        cache = self.__dict__.get("_kinematic_trees")
         if cache is None or key not in cache:
             with _TREE_LOCK:
-                cache = self.__dict__.setdefault("_engine_trees", {})
+                cache = self.__dict__.setdefault("_kinematic_trees", {})
                 if key not in cache:
                     cache[key] = pin_tree(self, key)
         return cache[key]
