@@ -1,4 +1,4 @@
-"""The analytic engine's kinematic tree compiled from the Model's Pinocchio model (``armguard.model._tree``).
+"""The Model's kinematic tree compiled from its Pinocchio model (``Model.kinematic_tree``, ``armguard.model._tree``).
 
 Held to three references: Pinocchio's own ``forwardKinematics`` + ``updateFramePlacements`` (the
 scene link's pose is ``oMf[link_frames[link]] @ link_placement(link)``), the Robots' trees
