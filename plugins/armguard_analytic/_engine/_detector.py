@@ -118,7 +118,7 @@ class FusedDetector(Detector):
         L.add("MF", "X_pre", t.X_pre); L.add("MF", "axis", t.axis); L.add("MF", "X_post", t.X_post)
         L.add("MF", "offset", t.offset); L.add("MF", "term_coeff", t.term_coeff); L.add("MF", "radius", cs.elem_radius)
         L.add("MF", "verts_L", cs.verts.reshape(-1, 3)); L.add("MF", "box_L", m.box_local.reshape(-1, 15))
-        vg = vertex_graphs(cs, m.fnrm_local, m.edir_local)  # the hulls' graphs; their normals dropped
+        vg = vertex_graphs(cs, m.fnrm_local, m.edir_local, self._tol.parallel)  # hulls' graphs; axes one per class
         L.add("MF", "obb_L", link_obbs(cs, m.elem_glink, self._tol.length))  # the yes/no cull
         L.add("MF", "fn_L", vg["fn_L"]); L.add("MF", "ed_L", vg["ed_L"])
         L.add("MF", "sph_L", cs.elem_sphere.reshape(-1, 4)); L.add("MF", "static_lo", m.static_lo.reshape(-1, 3))
@@ -162,8 +162,12 @@ class FusedDetector(Detector):
         del static_mask  # static elements are already in W: the scratch starts as their copy
         # room for EPA where a hull has a vertex graph, and for GJK + EPA on support functions
         # (armguard.geometry._pair_cylinder) where a cylinder is present
+        # (armguard.geometry._pair_cylinder) where a cylinder is present; EPA also serves the small
+        # polytopes without a graph (scanned supports: on rover's box and prisms 0.8-3 us a depth,
+        # where the SAT on W points it replaces took 10 us, moving the elements included)
         has_cyl = bool(np.any(cs.elem_core == _CYLINDER))
-        n_work = max(EPA_WORK_SIZE if len(vg["gadj"]) else 64, SUPPORT_WORK_SIZE if has_cyl else 64) + WORK_TAIL
+        has_epa = len(vg["gadj"]) > 0 or bool(np.any(cs.elem_core == 3)) or int(np.count_nonzero(cs.elem_core == 2)) >= 2
+        n_work = max(EPA_WORK_SIZE if has_epa else 64, SUPPORT_WORK_SIZE if has_cyl else 64) + WORK_TAIL
         for name, arr in (("Xs", np.zeros((t.n_links, 4, 4))), ("vW", vW0), ("boxW", boxW0), ("fnW", fnW0),
                           ("edW", edW0), ("sphW", sphW0), ("out9", np.zeros(9)), ("work", np.zeros(n_work)),
                           ("gap", np.zeros(stack_n)), ("ev", np.zeros((P, EV_W))),

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from armguard.geometry._pack import hull_graph, support_table
+from armguard.geometry._pack import hull_graph, support_table, unique_directions
 from armguard.geometry._pair_gjk import CLIMB_MIN_VERTICES
 
 __all__ = ["vertex_graphs", "link_obbs"]
@@ -17,7 +17,7 @@ __all__ = ["vertex_graphs", "link_obbs"]
 _CYLINDER = 4  # armguard.geometry.CoreKind.CYLINDER
 
 
-def vertex_graphs(cs, fn_L: np.ndarray, ed_L: np.ndarray) -> dict:
+def vertex_graphs(cs, fn_L: np.ndarray, ed_L: np.ndarray, parallel: float) -> dict:
     """Vertex graphs, surface triangles and support tables (``gdir``, ``gdirs``:
     :func:`armguard.geometry._pack.support_table`) of the polytope elements with at least
     ``CLIMB_MIN_VERTICES`` core points (:func:`armguard.geometry._pack.hull_graph` of the element's
@@ -26,8 +26,14 @@ def vertex_graphs(cs, fn_L: np.ndarray, ed_L: np.ndarray) -> dict:
 
     Those elements' face normals and edge directions are dropped from ``fn_L``, ``ed_L`` and their
     offsets (``pstart``, ``estart``): the convex kernel's SAT fallback takes their axes from the
-    triangles and the graph, and the kernel then no longer moves thousands of normals per check."""
+    triangles and the graph, and the kernel then no longer moves thousands of normals per check.
+    The other elements keep one face normal and one edge direction per parallel class
+    (:func:`armguard.geometry._pack.unique_directions` with ``parallel``, as a shape's own SAT data):
+    the SAT tests both signs of an axis, so a box's 6 normals and 12 edges are 3 axes and 3 edge
+    classes, an octagonal prism's 10 and 24 are 5 and 5 (the SAT's edge-pair axes 288 -> 15)."""
     adj, tri, adjs, tris, fkeep, ekeep, tab, tabs = [], [], [0], [0], [], [], [], [0]
+    fn = np.asarray(fn_L, dtype=np.float64).reshape(-1, 3)
+    ed = np.asarray(ed_L, dtype=np.float64).reshape(-1, 3)
     pstart, estart = [0], [0]
     for g in range(cs.n_elements):
         vs, ve = int(cs.elem_vert_start[g]), int(cs.elem_vert_start[g + 1])
@@ -39,18 +45,18 @@ def vertex_graphs(cs, fn_L: np.ndarray, ed_L: np.ndarray) -> dict:
                 a, t = np.zeros(0, np.int64), np.zeros((0, 3), np.int64)
         adj.append(a); tri.append(t); adjs.append(adjs[-1] + len(a)); tris.append(tris[-1] + len(t))
         tab.append(support_table(cs.verts[vs:ve]) if len(a) else np.zeros(0, np.int64)); tabs.append(tabs[-1] + len(tab[-1]))
-        f = np.arange(cs.elem_plane_start[g], cs.elem_plane_start[g + 1])
-        e = np.arange(cs.elem_edge_start[g], cs.elem_edge_start[g + 1])
+        f = unique_directions(fn[cs.elem_plane_start[g]:cs.elem_plane_start[g + 1]], parallel)
+        e = unique_directions(ed[cs.elem_edge_start[g]:cs.elem_edge_start[g + 1]], parallel)
         if len(a):
             f, e = f[:0], e[:0]
         fkeep.append(f); ekeep.append(e)
         pstart.append(pstart[-1] + len(f)); estart.append(estart[-1] + len(e))
     cat = lambda parts, dt: np.concatenate(parts).astype(dt) if parts else np.zeros(0, dt)  # noqa: E731
-    fk, ek = cat(fkeep, np.int64), cat(ekeep, np.int64)
     return {"gadj": cat(adj, np.int64), "gadjs": np.array(adjs, np.int64),
             "gtri": cat(tri, np.int64).reshape(-1, 3), "gtris": np.array(tris, np.int64),
             "gdir": cat(tab, np.int64), "gdirs": np.array(tabs, np.int64),
-            "fn_L": np.ascontiguousarray(fn_L.reshape(-1, 3)[fk]), "ed_L": np.ascontiguousarray(ed_L.reshape(-1, 3)[ek]),
+            "fn_L": np.ascontiguousarray(cat(fkeep, np.float64).reshape(-1, 3)),
+            "ed_L": np.ascontiguousarray(cat(ekeep, np.float64).reshape(-1, 3)),
             "pstart": np.array(pstart, np.int64), "estart": np.array(estart, np.int64)}
 
 

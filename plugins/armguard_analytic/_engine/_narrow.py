@@ -11,7 +11,8 @@ is not a shape pair (for a cylinder: its exact support along each wall's normal)
 
 Pairs of convex point cores (boxes, hulls, a point or segment against a moving polytope) and a
 cylinder against a polytope are checked in their element frames (:func:`narrow_rel`: GJK and EPA on
-``hull(A)`` and ``X_AB hull(B)``, no point moved), unless EPA cannot settle a depth; every other pair
+``hull(A)`` and ``X_AB hull(B)``, no point moved; two boxes' depth by the SAT there), unless EPA cannot
+settle a depth; every other pair
 reads element data in W (the detector kernel moves its elements there once per check, ``_step``):
 ``verts (V, 3)`` core points; ``box (G, 15)`` ``[centre, half extents, R_WB row-major]`` (a
 cylinder: ``[c, r, r, h, R_WC row-major]``, the axis the third column, ``_pair_cylinder``'s buffer;
@@ -29,8 +30,9 @@ from armguard.geometry._pair_segment_box import capsule_box_scalar
 from armguard.geometry._pair_segment_polytope import capsule_polytope_at
 from armguard.geometry._pair_segment_segment import capsule_capsule_scalar
 from armguard.geometry._pair_cylinder import support_pair_graph
-from armguard.geometry._pair_epa import convex_convex_fast, epa_depth
+from armguard.geometry._pair_epa import EPA_WORK_SIZE, convex_convex_fast, epa_depth
 from armguard.geometry._pair_gjk import GJK_SEPARATED, _inner_point, gjk_dir_rel
+from armguard.geometry._pair_sat_rel import sat_cost, sat_depth_rel, sat_witnesses_rel
 from armguard.geometry._pair_segment_segment import write_rounded
 from armguard.geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_capsule
 
@@ -49,12 +51,21 @@ _K_ws, _K_out9 = K["ws"], K["out9"]
 _K_gadj, _K_gadjs, _K_gtri, _K_gtris = K["gadj"], K["gadjs"], K["gtri"], K["gtris"]
 _K_box_L = K["box_L"]
 _K_verts_L, _K_Xs, _K_glink, _K_gdir, _K_gdirs = K["verts_L"], K["Xs"], K["glink"], K["gdir"], K["gdirs"]
+_K_fn_L, _K_ed_L = K["fn_L"], K["ed_L"]
 
 ERR_GJK = 2  # the convex kernel did not converge: the caller raises, never a verdict
 NOT_SCALAR = -1  # narrow_flat: not a capsule-capsule / capsule-box pair, call narrow_other
 LINK_FRAME = -2  # polytope cores (boxes, hulls), or one and a cylinder: narrow_rel in their own frames, none moved
 BOUNDED = -3  # _step.pair_step: the pair is proved beyond the caller's cut-off (no row)
 WORK_TAIL = 24  # the last floats of the "work" scratch: narrow_rel's X_AB and a cylinder's buffer in a hull's frame
+SAT_REL_BUDGET = 400
+"""Dot products (:func:`armguard.geometry._pair_sat_rel.sat_cost`) up to which :func:`narrow_rel` takes a
+penetration depth from the SAT in the link frames rather than from EPA (both cores without a vertex
+graph, so with their face normals and edge directions); above it EPA when the scratch has room for
+it, else the SAT all the same (the W path would run the same SAT on moved points).  Measured on
+overlapping pairs in random poses (medians of 20 poses, the depth's witnesses included): box-box
+(cost 240) SAT 0.8 us, EPA 2.7 us; box-octagonal prism (552) 1.1 vs 0.8 us; octagonal-16-gonal
+prisms (2,832) 5.0 vs 2.8 us; 20-point hulls (22,560) 31 vs 1.2 us."""
 
 _POINT, _SEGMENT, _BOX, _CYLINDER = 0, 1, 2, 4  # armguard.geometry.CoreKind
 
@@ -326,7 +337,33 @@ def _cylinder_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level)
 
 
 @njit(cache=True)
-def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, beyond):  # pragma: no cover - compiled
+def _sat_rel(pa, fa, ea, adja, taba, ra, pb, fb, eb, adjb, tabb, rb, rot, tx, ty, tz, SF, oA, out, simp, eps_len, eps_par,
+             gjk_eps, max_iter, offset, cap):  # pragma: no cover - compiled
+    """:func:`narrow_rel`'s depth for overlapping cores by the exhaustive SAT in A's frame
+    (:func:`armguard.geometry._pair_sat_rel.sat_depth_rel`, B's axes rotated, no point moved) with
+    the W path's witnesses (B pushed out along the axis, GJK:
+    :func:`armguard.geometry._pair_sat_rel.sat_witnesses_rel`).  Returns as :func:`narrow_rel`:
+    ``(lower bound, BOUNDED)`` when the depth is below ``cap``, ``(0, NOT_SCALAR)`` when the
+    witnesses' GJK does not converge (the W path then decides), else ``(distance, 0)``."""
+    depth, nx, ny, nz = sat_depth_rel(pa, fa, ea, pb, fb, eb, rot, tx, ty, tz, eps_par)
+    if not depth < math.inf:
+        depth = 0.0  # no axis at all: point cores that coincide
+    if depth < cap:
+        return -depth - (ra + rb), BOUNDED
+    st, ax, ay, az, bx, by, bz = sat_witnesses_rel(pa, adja, taba, pb, adjb, tabb, rot, tx, ty, tz, depth, nx, ny, nz,
+                                                   simp, eps_len, gjk_eps, max_iter, offset)
+    if st == GJK_NOT_CONVERGED:
+        return 0.0, NOT_SCALAR
+    wax, way, waz = _to_world(SF, oA, ax, ay, az, 1.0)
+    wbx, wby, wbz = _to_world(SF, oA, bx, by, bz, 1.0)
+    wnx, wny, wnz = _to_world(SF, oA, nx, ny, nz, 0.0)
+    # depth < 0: GJK stopped within its tolerance of touching, an axis shows a gap (as the W path)
+    return write_rounded(wax, way, waz, ra, wbx, wby, wbz, rb, wnx, wny, wnz, -depth, out, 0), 0
+
+
+@njit(cache=True)
+def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, offset, level,
+               beyond):  # pragma: no cover - compiled
     """Two convex point cores (boxes, hulls; a point or segment against a polytope) whose points stay
     in their element frames: GJK in A's frame
     on hull(A) and ``X_AB hull(B)``, ``X_AB = X_WA^-1 X_WB`` (:func:`armguard.geometry._pair_gjk.gjk_dir_rel`),
@@ -338,8 +375,9 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, be
     Returns ``(distance, 0)`` with ``out[0:9]`` in W when the cores are apart (GJK's answer, exact to
     ``gjk_eps`` like the W path's), when they overlap and ``level`` is at least ``-(ra + rb)`` (as
     :func:`armguard.geometry._pair_epa.convex_convex_fast`: an upper bound without a depth), or when
-    they overlap and EPA settles the depth (``_pair_epa.epa_depth`` in A's frame, as the W path's);
-    else ``(0, NOT_SCALAR)``: the caller moves both elements and calls :func:`narrow_other` (its
+    they overlap and EPA settles the depth (``_pair_epa.epa_depth`` in A's frame, as the W path's) or,
+    for two cores without vertex graphs whose SAT costs at most ``SAT_REL_BUDGET`` dot products (two
+    boxes), the exhaustive SAT in A's frame does (:func:`_sat_rel`); else ``(0, NOT_SCALAR)``: the caller moves both elements and calls :func:`narrow_other` (its
     exhaustive SAT works on W points).  ``level`` as in :func:`narrow_other`; ``beyond`` (m, ``inf``:
     off): GJK may stop once the distance is proved above it, returning an upper bound > ``beyond``
     (not a distance: ``_step.pair_step`` keeps no row of it), and so may EPA once the depth is
@@ -383,6 +421,19 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, be
     if inside and -(ra + rb) > level:  # overlapping cores, a depth wanted: EPA in A's frame as well
         # a depth below cap would leave the signed distance above ``beyond``: EPA may stop at that proof
         cap = -(beyond + (ra + rb)) if beyond < math.inf else -math.inf
+        if adja.shape[0] == 0 and adjb.shape[0] == 0:  # both keep their face normals and edge directions
+            ops = H[2 * _K_pstart]
+            oes = H[2 * _K_estart]
+            fL = seg2(MF, H, _K_fn_L, 3)
+            eL = seg2(MF, H, _K_ed_L, 3)
+            fa = fL[MI[ops + ga]:MI[ops + ga + 1]]
+            fb = fL[MI[ops + gb]:MI[ops + gb + 1]]
+            ea = eL[MI[oes + ga]:MI[oes + ga + 1]]
+            eb = eL[MI[oes + gb]:MI[oes + gb + 1]]
+            if nw < EPA_WORK_SIZE or sat_cost(pa.shape[0], fa.shape[0], ea.shape[0], pb.shape[0], fb.shape[0],
+                                               eb.shape[0]) <= SAT_REL_BUDGET:
+                return _sat_rel(pa, fa, ea, adja, taba, ra, pb, fb, eb, adjb, tabb, rb, rot, tx, ty, tz, SF, oA, out,
+                                simp, eps_len, eps_par, gjk_eps, max_iter, offset, cap)
         ok, depth, nx, ny, nz, ax, ay, az, bx, by, bz = epa_depth(pa, adja, pb, adjb, work[0:nw], gjk_eps, rot,
                                                                   tx, ty, tz, taba, tabb, cap)
         if ok and depth < cap:
