@@ -13,7 +13,7 @@ random in-limit configurations (``Model.random_q``, seeded):
   branch predictor trained on it (the gap to *call* is mostly mispredicted branches, as the
   caches hold the hulls either way);
 * **GJK work** per polytope pair (hull or box against hull or box, the pairs checked in their link
-  frames, ``_narrow.narrow_rel``), counted by replaying ``_pair_gjk._gjk`` in Python (``py_func``)
+  frames, ``_narrow.narrow_rel``), counted by replaying ``_pair_gjk._gjk_body`` in Python (``py_func``)
   on 20 configurations: support evaluations of the Minkowski difference (GJK iterations, the
   first and the final verifying one included), hill climbs on the hulls' vertex graphs (one per
   hull side per iteration, ``_pair_gjk._climb``) and the supports' dot products (the climbs'
@@ -79,7 +79,7 @@ def _gjk_work(model, ana, n_q: int) -> dict:
         count["dot"] += pb.shape[0]
         return scan_py(pb, dx, dy, dz)
 
-    for nm in ("_support", "_seed", "_b_dir", "_b_point", "_pick", "warm_start", "table_size", "table_start",
+    for nm in ("_gjk_body", "_support", "_seed", "_b_dir", "_b_point", "_pick", "warm_start", "table_size", "table_start",
                "_closest_simplex", "_inner_point"):
         setattr(G, nm, getattr(G, nm).py_func)
     G._climb, G._m_support, G._scan = climb, m_support, scan  # this process ends after the replay
@@ -112,7 +112,7 @@ def _gjk_work(model, ana, n_q: int) -> dict:
             sa, sb = G.table_start(taba, *(-d0)), G.table_start(tabb, *e)
             for k in count:
                 count[k] = 0
-            st = G._gjk.py_func(pa, adja, pb, adjb, rot, X[0, 3], X[1, 3], X[2, 3], *d0, prm[2], prm[4], iprm[2],
+            st = G._gjk_body(pa, adja, pb, adjb, rot, X[0, 3], X[1, 3], X[2, 3], *d0, prm[2], prm[4], iprm[2],
                                 np.zeros(9), np.inf, sa, sb, taba, tabb)[0]
             if st == G.GJK_SEPARATED:
                 rows.append((count["it"], count["climb"], count["dot"]))
