@@ -157,3 +157,24 @@ def test_bounding_volumes(kind):
             # and the inner sphere's support point lies inside the shape
             q = inner.support(u)
             assert sdf(q, s) <= 1e-9
+
+
+def test_inscribed_sphere_of_a_polyhedron_the_dual_simplex_gives_up_on():
+    """A regular pentagonal prism (``tests/test_clip.py``'s seed 6665) whose Chebyshev-centre LP
+    HiGHS's dual simplex once left unsolved (status "Unknown" on a feasible LP, so
+    ``Guard.from_shape`` raised): its largest inscribed sphere is the prism's own, as a Prism
+    says (its radius; the centre is free along the longer span), and inside the prism."""
+    _same_inscribed_sphere(random_shape("prism", np.random.default_rng(6665), spread=0.0))
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_inscribed_sphere_of_a_prism_polyhedron(seed):
+    _same_inscribed_sphere(random_shape("prism", np.random.default_rng(seed)))
+
+
+def _same_inscribed_sphere(prism):
+    want, got = prism.inscribed_sphere(), prism.as_polyhedron().inscribed_sphere()
+    assert abs(got.radius - want.radius) <= 1e-9
+    for u in np.random.default_rng(0).normal(size=(12, 3)):
+        assert sdf(got.support(u), prism) <= 1e-9

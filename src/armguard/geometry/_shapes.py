@@ -303,14 +303,21 @@ class ConvexPolyhedron(Shape):
         return Polygon(self.vertices[self.faces[i]])
 
     def inscribed_sphere(self) -> "Sphere":
-        """The largest inscribed sphere (Chebyshev centre, a small LP)."""
+        """The largest inscribed sphere (Chebyshev centre, a small LP: max r with n_f . x + r <= d_f).
+
+        Posed about the vertex centroid; HiGHS's dual simplex, then its interior-point method: the
+        simplex once gave up on a regular pentagonal prism (status "Unknown", a feasible LP: x = 0,
+        r = half its length), which the interior-point method solves."""
         from scipy.optimize import linprog
 
+        c0 = self.vertices.mean(axis=0)
         A = np.hstack([self.planes[:, :3], np.ones((len(self.planes), 1))])
-        res = linprog(c=[0, 0, 0, -1], A_ub=A, b_ub=self.planes[:, 3], bounds=[(None, None)] * 3 + [(0, None)])
-        if not res.success:  # pragma: no cover - a valid hull always has an interior
-            raise GeometryError("ConvexPolyhedron: inscribed sphere LP failed")
-        return Sphere(res.x[:3], max(0.0, float(res.x[3])))
+        b = self.planes[:, 3] - self.planes[:, :3] @ c0
+        for method in ("highs-ds", "highs-ipm"):
+            res = linprog(c=[0, 0, 0, -1], A_ub=A, b_ub=b, bounds=[(None, None)] * 3 + [(0, None)], method=method)
+            if res.success:
+                return Sphere(c0 + res.x[:3], max(0.0, float(res.x[3])))
+        raise GeometryError(f"ConvexPolyhedron: inscribed sphere LP failed ({res.message})")  # pragma: no cover
 
     def transformed(self, X_AW) -> "ConvexPolyhedron":
         X = check_pose(X_AW, "X_AW")
