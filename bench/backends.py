@@ -8,7 +8,7 @@ each backend's own batch path: the analytic one multi-threaded numba, coal's
 A second table: the analytic interface's cost around its kernel -- one ``pair_distances(q)``
 against the bare compiled call it makes (the difference is the Python per call),
 ``pair_distances_many(Q)`` per row, the same calls from two threads sharing one checker (the
-kernel releases the GIL), and yes/no per thread against coal with one thread; the built-in
+checker's GIL policy, and the GIL always released), and yes/no per thread against coal with one thread; the built-in
 models, the Panda and, where example-robot-data is installed, z1 and xarm7.
 """
 
@@ -122,8 +122,9 @@ def interface_rows(quick: bool) -> str:
 
     n_q = 40 if quick else 200
     rows = ["| model | pairs | analytic `pair_distances` | bare kernel call | Python per call | `pair_distances_many` "
-            "per row | coal `pair_distances` | coal / analytic | 2 threads, one checker (speed-up) |",
-            "|---|---|---|---|---|---|---|---|---|"]
+            "per row | coal `pair_distances` | coal / analytic | 2 threads, one checker (speed-up; GIL) | 2 threads, "
+            "GIL always released |",
+            "|---|---|---|---|---|---|---|---|---|---|"]
     for name, load in _models() + _public_robots():
         m = load()
         Q = m.random_q(n_q, 3)
@@ -141,8 +142,15 @@ def interface_rows(quick: bool) -> str:
         n2 = 20 * n_q
         one = median_seconds(lambda: [a.pair_distances(Q[i % n_q]) for i in range(n2)], repeat=3)
         two = float(np.median([_two_threads(lambda i: a.pair_distances(Q[i % n_q]), n2) for _ in range(3)]))
+        free = armguard.checker(m, "analytic", {"release_gil": True})
+        one_f = median_seconds(lambda: [free.pair_distances(Q[i % n_q]) for i in range(n2)], repeat=3)
+        two_f = float(np.median([_two_threads(lambda i: free.pair_distances(Q[i % n_q]), n2) for _ in range(3)]))
+        gil = "released" if a.releases_gil else "held"
         rows.append(f"| {name} | {len(m.pairs)} | {fmt_ns(t_full)} | {fmt_ns(t_bare)} | {fmt_ns(max(t_full - t_bare, 0.0))} "
-                    f"| {fmt_ns(t_many)} | {fmt_ns(t_coal)} | {t_coal / t_full:.1f}× | {one / two:.2f}× |")
+                    f"| {fmt_ns(t_many)} | {fmt_ns(t_coal)} | {t_coal / t_full:.1f}× | {one / two:.2f}× ({gil}) "
+                    f"| {one_f / two_f:.2f}× |")
+    from armguard_analytic._engine._scratch import GIL_RELEASE_US
+
     yn = ["| hull robot | pairs | analytic yes/no per thread | coal yes/no, 1 thread | analytic / coal |", "|---|---|---|---|---|"]
     n_yn = 200 if quick else 2000
     for name, load in _hull_robots():
@@ -157,6 +165,8 @@ def interface_rows(quick: bool) -> str:
             "`pair_rows` through its compiled entry point with preallocated outputs, so the Python per call is "
             "validation, the plan and scratch lookups, three output arrays and the result. Two threads: wall time of "
             f"{20 * n_q} calls on one thread over the same calls split between two threads sharing one checker "
-            "(2.0× is perfect scaling; a shared machine's load lowers it). Yes/no per thread: `collides` on blocks "
+            "(2.0× is perfect scaling; a shared machine's load lowers it), with the checker's own GIL policy (it holds "
+            f"the GIL when one call takes under {GIL_RELEASE_US:g} µs: handing it to the other thread and back costs more than such a "
+            "call) and with the GIL always released (option `release_gil=True`). Yes/no per thread: `collides` on blocks "
             "of 200 configurations (one analytic worker thread; coal built with `threads=1`).")
     return "\n".join(rows) + "\n\n" + "\n".join(yn) + note

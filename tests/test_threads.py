@@ -291,3 +291,44 @@ def test_verdict_backends_refuse_distances(backend, ranger):
                  lambda: c.pair_distances_many(q[None]), lambda: c.pair_distances_many(q[None], pairs=[0])):
         with pytest.raises(BackendError, match="does not answer distances"):
             call()
+
+
+# ---------------------------------------------------------------- the GIL policy (analytic)
+@pytest.mark.parametrize("release_gil", [True, False])
+def test_both_gil_policies_answer_alike_from_threads(release_gil, ranger):
+    """Holding the GIL (short calls) or releasing it, 4 threads get the single-threaded answers,
+    and both policies the same answers."""
+    c = armguard.checker(ranger, "analytic", {"release_gil": release_gil})
+    assert c.releases_gil is release_gil
+    other = armguard.checker(ranger, "analytic", {"release_gil": not release_gil})
+    Q = ranger.random_q(60, 31)
+    want = [_pd_tuple(c.pair_distances(q)) for q in Q]
+    _assert_same_pd([_pd_tuple(other.pair_distances(q)) for q in Q], want)
+    for got in _in_threads(lambda q: _pd_tuple(c.pair_distances(q)), list(Q)):
+        _assert_same_pd(got, want)
+    many = c.pair_distances_many(ranger.random_q(600, 32))  # split over worker threads: these release it
+    np.testing.assert_array_equal(many.distance[599], c.pair_distances(ranger.random_q(600, 32)[599]).distance)
+
+
+def test_gil_policy_goes_by_the_measured_call(monkeypatch, ranger):
+    """``"auto"``: the GIL is released when a call takes at least ``GIL_RELEASE_US`` (the Checker's
+    call plan and the fused Detector each time their own call)."""
+    from armguard_analytic._engine import _scratch
+
+    for limit, released in ((0.0, True), (math.inf, False)):
+        monkeypatch.setattr(_scratch, "GIL_RELEASE_US", limit)
+        c = armguard.checker(ranger, "analytic")
+        assert c.releases_gil is released
+        assert 0.0 < c._plan().call_us < 1e6
+        det = armguard.Detector(ranger.scene, threshold=0.1)
+        assert det.releases_gil is released and 0.0 < det.call_us < 1e6
+        Q = ranger.scene_q(ranger.random_q(40, 33))
+        want = [_report_tuple(det.check(q)) for q in Q]
+        for got in _in_threads(lambda q: _report_tuple(det.check(q)), list(Q)):
+            assert got == want
+
+
+def test_release_gil_option_is_checked(ranger):
+    assert armguard.checker(ranger, "analytic", {"release_gil": "auto"}).releases_gil in (True, False)
+    with pytest.raises(BackendError, match="release_gil"):
+        armguard.checker(ranger, "analytic", {"release_gil": "sometimes"})

@@ -29,8 +29,9 @@ circumscribed prism), ``representation`` says so.
 ``pair_distances(q, pairs=None)`` and ``pair_distances_many(Q, pairs=None)`` are one numba call
 (:func:`._engine._pair_rows.pair_rows`) that reorders the joints, checks every selected pair
 and writes the rows straight in the Model's pair order (sides exchanged where the detector holds
-a pair the other way round); the call releases the GIL and each thread has its own scratch, so
-threads sharing a checker run in parallel with single-threaded answers.
+a pair the other way round).  Each thread has its own scratch, so threads sharing a checker get
+single-threaded answers; the call releases the GIL, so they run in parallel, when it is long enough
+for that to pay (:data:`._engine._scratch.GIL_RELEASE_US`, option ``release_gil``: ``"auto"``, ``True``, ``False``).
 
 ``pair_distances(q, jacobian=True)`` differentiates every selected pair right after, in a second
 numba call on the link poses the first left in the thread's scratch (:mod:`._jacobian`,
@@ -67,11 +68,12 @@ class _Fast:
     the gather map, the compiled entry point, and per-thread scratch copied from the pristine one."""
 
     __slots__ = ("revision", "det", "head", "sel", "swap", "gmap", "n", "names", "category", "q_shape", "entry",
-                 "args", "SF0", "SI0", "n_q", "tls", "subsets", "jac")
+                 "entry_free", "call_us", "releases_gil", "args", "SF0", "SI0", "n_q", "tls", "subsets", "jac")
 
-    def __init__(self, checker: "AnalyticChecker") -> None:
+    def __init__(self, checker: "AnalyticChecker", release_gil: bool | None = None) -> None:
         from ._engine import _kernel as kn
-        from ._engine._pair_rows import pair_rows
+        from ._engine._pair_rows import pair_rows, pair_rows_held
+        from ._engine._scratch import GIL_RELEASE_US, compiled, median_call_us
 
         model = checker.model
         det = checker.detector()
@@ -104,13 +106,13 @@ class _Fast:
         H, MF, MI, prm, iprm = self.args
         out = (np.empty(n), np.empty((n, 3)), np.empty((n, 3)))
         call = (q, 0, 1, self.gmap, H, MF, MI, SF, SI, prm, iprm, q1, *out)
-        pair_rows(*call)
-        try:
-            from numba import typeof
-
-            self.entry = pair_rows.overloads[tuple(typeof(a) for a in call)].entry_point
-        except (KeyError, AttributeError):  # pragma: no cover - numba internals changed
-            self.entry = pair_rows
+        self.entry_free = compiled(pair_rows, call)  # releases the GIL (pair_distances_many's workers)
+        Q = np.ascontiguousarray(model.random_q(9, 0), dtype=np.float64)
+        self.call_us = median_call_us(lambda q: self.entry_free(q, *call[1:]), Q)
+        if release_gil is None:  # the GIL policy (._engine._scratch.GIL_RELEASE_US)
+            release_gil = self.call_us >= GIL_RELEASE_US
+        self.releases_gil = bool(release_gil)
+        self.entry = self.entry_free if self.releases_gil else compiled(pair_rows_held, call)
 
     def new_scratch(self) -> tuple:
         """``(SF, SI, q1)``: scratch for one thread or one worker, from the pristine buffers."""
@@ -159,8 +161,12 @@ class AnalyticChecker(CheckerBase):
             raise BackendError(f"analytic: fidelity {self.fidelity!r} is not one of {list(_FIDELITIES)}")
         if self.fidelity != "exact":
             raise BackendError(f"analytic: fidelity {self.fidelity!r} is built by AnalyticBackend().build (armguard.checker)")
+        gil = opts.pop("release_gil", "auto")
+        if gil not in ("auto", None, True, False):
+            raise BackendError(f"analytic: release_gil {gil!r} is not one of ['auto', True, False]")
+        self._release_gil = None if gil in ("auto", None) else bool(gil)
         if opts:
-            raise BackendError(f"analytic: unknown options {sorted(opts)}; options are ['fidelity']")
+            raise BackendError(f"analytic: unknown options {sorted(opts)}; options are ['fidelity', 'release_gil']")
         self.representation = dict(model.notes)
         self._detectors: dict = {}
         self._map = None
@@ -228,9 +234,15 @@ class AnalyticChecker(CheckerBase):
         with self._lock:
             f = self._fast
             if f is None or f.revision != self.model._spec.revision:
-                f = self._fast = _Fast(self)
+                f = self._fast = _Fast(self, self._release_gil)
                 self._pairs, self._category = f.names, f.category
         return f
+
+    @property
+    def releases_gil(self) -> bool:
+        """Whether ``pair_distances(q)`` releases the GIL: option ``release_gil`` (``"auto"``, the
+        default: when one call takes at least ``_engine._scratch.GIL_RELEASE_US``, measured once per scene revision)."""
+        return self._plan().releases_gil
 
     def _q(self, q) -> np.ndarray:
         """``q`` checked, as a fresh writeable C-contiguous float64 array (the kernel's argument type)."""
@@ -353,7 +365,7 @@ class AnalyticChecker(CheckerBase):
         H, MF, MI, prm, iprm = f.args
         n_threads = max(1, min(M, os.cpu_count() or 1, -(-M // _MIN_ROWS_PER_THREAD)))
         bounds = [(M * k) // n_threads for k in range(n_threads + 1)]
-        entry = f.entry if M else pair_rows
+        entry = pair_rows if not M else f.entry if n_threads == 1 else f.entry_free
 
         def work(k: int) -> int:
             SF, SI, q1 = f.scratch() if n_threads == 1 else f.new_scratch()  # each worker its own

@@ -23,14 +23,14 @@ from armguard.geometry._pair_cylinder import SUPPORT_WORK_SIZE
 from armguard.geometry._pair_epa import EPA_WORK_SIZE
 from armguard.kinematics._limits import limit_error, limit_rows
 
-from . import _kernel as kn
+from . import _kernel as kn, _scratch
 from ._hulls import link_obbs, vertex_graphs
 from ._layout import EV_W, SUM_SIZE, Layout
 from ._model import CAT_WORKSPACE, build_model
 from ._narrow import WORK_TAIL
 from ._prep import _fk_blocks, _static_polytopes
 from ._raw import _UNHELD, _Raw, _refcount
-from ._scratch import _entry_point, _Scratch
+from ._scratch import _entry_point, _Scratch, median_call_us
 
 __all__ = ["FusedDetector"]
 
@@ -65,7 +65,8 @@ class FusedDetector(Detector):
     ``check(q)`` is one numba call (:mod:`._kernel`: FK, transforms, broad and narrow phase).
 
     Thread safety: each thread gets its own scratch buffers (:mod:`._scratch`); the numba
-    kernels release the GIL, so the checks of several threads run in parallel.
+    kernels release the GIL, so the checks of several threads run in parallel, except a check
+    too short for handing the GIL over to pay (``releases_gil``, ``call_us``: ``_scratch.GIL_RELEASE_US``).
     """
 
     def __init__(self, scene, threshold: float = 0.05, *, stopping_distance: float = 0.0, active: str | None = None,
@@ -197,7 +198,7 @@ class FusedDetector(Detector):
             self._iprm_by_mode[mode] = ip
         # per-thread scratch (a report reading the old buffers keeps them alive: nothing to copy)
         self._tls = threading.local()
-        self._entry = _entry_point(*self._scratch().entry_args)
+        self._entry, self.call_us, self.releases_gil = self._pick_entry(m)
         self._q_shape = (m.n_q,)
         self._names_a = tuple(cs.owner_names[cs.elem_owner[a]] for a in m.pair_a)
         self._names_b = tuple("workspace" if b < 0 else cs.owner_names[cs.elem_owner[b]] for b in m.pair_b)
@@ -319,6 +320,24 @@ class FusedDetector(Detector):
             s.last_raw = None
             if _refcount(last) > _UNHELD:
                 last.detach()
+
+    def _pick_entry(self, m) -> tuple:
+        """``(entry, call_us, releases_gil)``: ``check``'s compiled entry, releasing the GIL when one
+        exact check takes at least ``GIL_RELEASE_US`` (:mod:`._scratch`; timed on a scratch of its
+        own at 9 seeded in-limit configurations, so no thread's state moves)."""
+        s = _Scratch(self)
+        free = _entry_point(*s.entry_args)
+        lo, hi = np.maximum(m.lower, -np.pi), np.minimum(m.upper, np.pi)
+        Q = np.random.default_rng(0).uniform(lo, hi, (9, len(lo))) if len(lo) else np.zeros((9, 0))
+
+        def run(q):
+            s.q1[0] = q
+            free(*s.entry_args)
+
+        us = median_call_us(run, Q)
+        if us >= _scratch.GIL_RELEASE_US:
+            return free, us, True
+        return _entry_point(*s.entry_args, release_gil=False), us, False
 
     def _run(self, s: _Scratch, mode: int, allowance: int, lazy: bool, sel=None) -> tuple[int, int]:
         self._release_last(s)

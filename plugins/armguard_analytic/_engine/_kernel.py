@@ -590,3 +590,9 @@ def detect_entry(q, H, MF, MI, SF, SI, prm, iprm, sel):  # pragma: no cover - co
     # 0 and 1 made numba compile a second, specialised copy of the whole kernel on a cold cache)
     err = detect_rows(q, np.int64(0), np.int64(1), H, MF, MI, SF, SI, prm, iprm, sel, best, st)
     return summary[SUM_STATUS], summary[SUM_NEVAL], err
+
+
+@njit(cache=True)
+def detect_entry_held(q, H, MF, MI, SF, SI, prm, iprm, sel):  # pragma: no cover - compiled
+    """:func:`detect_entry` holding the GIL (a check too short for a hand-over to pay, ``_scratch``)."""
+    return detect_entry(q, H, MF, MI, SF, SI, prm, iprm, sel)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -11,24 +12,48 @@ from . import _kernel as kn
 if TYPE_CHECKING:
     from ._detector import FusedDetector
 
-__all__ = ["_Scratch", "_entry_point"]
+__all__ = ["GIL_RELEASE_US", "_Scratch", "_entry_point", "compiled", "median_call_us"]
+
+GIL_RELEASE_US = 12.0
+"""A compiled call releases the GIL when one call takes at least this long (µs, measured when the
+Detector or the Checker's call plan is made: :func:`median_call_us`).  Below it, handing the GIL to
+another thread and taking it back costs more than the call: two threads sharing a checker got
+0.5-0.9x of one thread's throughput (gmf_s480, hermes), holding the GIL gives ~1x; above it the
+threads run in parallel (ranger 1.7x, ur3 1.3x; ``python -m bench backends``, "2 threads")."""
 
 
-def _entry_point(*args):
-    """The compiled ``detect_entry`` for these argument types, called without numba's dispatcher.
+def compiled(dispatcher, call: tuple):
+    """The compiled overload of ``dispatcher`` for exactly the types of ``call`` (compiled, or loaded
+    from numba's cache, by calling it once), called without numba's dispatcher.
 
-    The dispatcher types all nine arguments on every call (~0.3 µs of a ~4 µs check); ``check``
-    always passes the same buffers (float64 / int64, C-contiguous, writeable), so after one
-    typed call the overload for that signature is the one that would be picked every time.
-    Falls back to the dispatcher when numba does not expose the overload."""
-    kn.detect_entry(*args)  # compiles (or loads from the cache) for exactly these types
+    The dispatcher types every argument on every call (~40 ns an array); the callers always pass the
+    same buffers (float64 / int64, C-contiguous, writeable), so after one typed call the overload
+    for that signature is the one that would be picked every time.  Falls back to the dispatcher
+    when numba does not expose the overload."""
+    dispatcher(*call)
     try:
         from numba import typeof
 
-        sig = tuple(typeof(a) for a in args)
-        return kn.detect_entry.overloads[sig].entry_point
+        return dispatcher.overloads[tuple(typeof(a) for a in call)].entry_point
     except (KeyError, AttributeError):  # pragma: no cover - numba internals changed
-        return kn.detect_entry
+        return dispatcher
+
+
+def median_call_us(run, Q: np.ndarray) -> float:
+    """Median wall time (µs) of ``run(q)`` over the rows of ``Q`` (each a different configuration:
+    one repeated would train the branch predictor and time half the real cost)."""
+    ts = []
+    for q in Q:
+        t = time.perf_counter()
+        run(q)
+        ts.append(time.perf_counter() - t)
+    return float(np.median(ts)) * 1e6 if ts else 0.0
+
+
+def _entry_point(*args, release_gil: bool = True):
+    """The compiled ``detect_entry`` (or, holding the GIL, ``detect_entry_held``) for these
+    argument types (:func:`compiled`)."""
+    return compiled(kn.detect_entry if release_gil else kn.detect_entry_held, args)
 
 
 class _Scratch:

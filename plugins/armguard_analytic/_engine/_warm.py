@@ -32,11 +32,11 @@ LEAVES_MAIN = (
 
 def warm_up(scene) -> None:
     """Compile (or load) the fused Detector's entry points and the Checker's ``pair_rows`` on
-    ``scene``, with the argument types their callers pass."""
+    ``scene``, both GIL policies, with the argument types their callers pass."""
     from . import _kernel as kn
     from ._detector import FusedDetector
-    from ._pair_rows import pair_rows
-    from ._scratch import _Scratch
+    from ._pair_rows import pair_rows, pair_rows_held
+    from ._scratch import _entry_point, _Scratch
 
     det = FusedDetector(scene, threshold=0.05)
     q = scene.flat_q(scene.default_q())
@@ -45,5 +45,9 @@ def warm_up(scene) -> None:
     # the Checker's pair_distances(_many): pair_rows, with the argument types it is given
     s, n, nq = _Scratch(det), det.n_pairs, len(q)
     gmap = np.concatenate([[nq, nq, 0, n], np.arange(nq), np.arange(n), np.zeros(n)]).astype(np.int64)
-    pair_rows(np.ascontiguousarray(q, dtype=np.float64), 0, 1, gmap, det._H, det._MF, det._MI, s.SF, s.SI, det._prm,
-              det._iprm_by_mode[kn.MODE_ALL], s.q1, np.empty(n), np.empty((n, 3)), np.empty((n, 3)))
+    call = (np.ascontiguousarray(q, dtype=np.float64), 0, 1, gmap, det._H, det._MF, det._MI, s.SF, s.SI, det._prm,
+            det._iprm_by_mode[kn.MODE_ALL], s.q1, np.empty(n), np.empty((n, 3)), np.empty((n, 3)))
+    pair_rows(*call)
+    # the entry points that hold the GIL (calls too short for handing it over to pay, ._scratch)
+    pair_rows_held(*call)
+    _entry_point(*s.entry_args, release_gil=False)
