@@ -311,7 +311,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
             for p in range(P):
                 pflag[p] = 2
                 plb[p] = -math.inf
-        n_eval = 0
+        n_eval = np.int64(0)  # int64, not a literal 0: one compiled pair_step and static_gjk_pairs, not two
         collided = False
         err = 0
 

@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from numba import njit
 
 from ._cull import (_argsort_small, _bb_gap, _face_sep, _near_leaf, _obb_gap, _obb_w, _push_children, _sb_gap,
@@ -172,7 +174,7 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
     err = 0
     collided = False
     g_seed = math.inf
-    p_seed = -1
+    p_seed = np.int64(-1)  # not a literal -1: pair_step compiled once
     n_c = 0
     flat = n_st <= _FLAT
     if flat:

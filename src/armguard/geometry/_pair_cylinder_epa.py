@@ -193,7 +193,7 @@ def _answer(w, nf, i0, i1, i2, dbest, nx, ny, nz, tol):  # pragma: no cover - co
     return found
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _area(ux, uy, uz, vx, vy, vz, nx, ny, nz):  # pragma: no cover - compiled
     """``(u x v) . n``: twice the signed area of the triangle (p, p + u, p + v) seen along ``n``."""
     return (uy * vz - uz * vy) * nx + (uz * vx - ux * vz) * ny + (ux * vy - uy * vx) * nz

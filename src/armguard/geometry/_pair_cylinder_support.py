@@ -106,7 +106,7 @@ def _warm_point(p, adj, cyl, dx, dy, dz, work, slot, tab=None):  # pragma: no co
     return p[i, 0], p[i, 1], p[i, 2]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False)  # a plain call (not inlined at its 8 call sites: cold compile time); allocates nothing
 def _pair_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, work, ta=None, tb=None):  # pragma: no cover - compiled
     """Support of ``M = A - B`` along ``d``: A's along ``d``, B's along ``-d`` (point cores climbed
     from their last supports, ``work[_WA]`` and ``work[_WB]``, or their support tables' entries

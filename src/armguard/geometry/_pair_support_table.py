@@ -17,7 +17,7 @@ from numba import njit
 __all__ = ["table_cell", "table_size", "table_start", "warm_start"]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def table_cell(dx, dy, dz, n):  # pragma: no cover - compiled
     """The cube-map cell of direction ``d`` (see :func:`armguard.geometry._pack.support_table`), or -1
     for the zero vector."""
