@@ -51,7 +51,7 @@ _K_bvh_lo, _K_bvh_hi, _K_static_lo, _K_static_hi = K["bvh_lo"], K["bvh_hi"], K["
 _K_obb_L, _K_boxW, _K_Xs, _K_st_idx = K["obb_L"], K["boxW"], K["Xs"], K["st_idx"]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False)  # a plain call: inlined at each call site it doubled the cold compile
 def _key(cx, cy, cz, cr, A, has_obb, kb, s, b, MF, o_slo, o_shi, SF, o_box, cut):  # pragma: no cover - compiled
     """Sort key (m) of the pair of a moving element (sphere ``c, r``, box ``A`` when ``has_obb``) and
     static element ``b`` (number ``s`` among the static ones, core kind ``kb``): the larger of the
@@ -110,7 +110,7 @@ def _axis_gap(lx, ly, lz, hx, hy, hz, MF, olo, ohi):  # pragma: no cover - compi
     return max(gx, gy, gz)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False)  # a plain call: inlined at each call site it doubled the cold compile
 def _collect(s, p, cx, cy, cz, cr, A, has_obb, lx, ly, lz, hx, hy, hz, cutp, kb, b, MF, o_slo, o_shi, SF, o_box, plb,
              pflag, n_c):  # pragma: no cover - compiled
     """Step 2 for one pair ``p`` (moving element: sphere ``c, r``, box ``A``, its W-aligned box

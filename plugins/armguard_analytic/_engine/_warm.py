@@ -20,6 +20,8 @@ __all__ = ["LEAVES_MAIN", "LEAVES_SIDE", "warm_up"]
 LEAVES_SIDE = (
     ("armguard.geometry._pair_cylinder", "support_pair_graph", "F2 I1 F1 f F2 I1 F1 f F1 F1 f f i f I1 I1"),
     ("armguard_analytic._engine._narrow", "_capsule_polytope", "F2 f i F2 F2 I2 F2 F2 I1 I1 I1 f F1 f f f i f"),
+    # the link-frame narrow phase (GJK, EPA, SAT on hulls and boxes, cylinders: support_pair_graph above)
+    ("armguard_analytic._engine._narrow", "narrow_rel", "i i I1 F1 I1 F1 F1 f f f i f f f"),
 )
 """Leaf kernels compiled in the second process: (module, function, signature codes)."""
 LEAVES_MAIN = (
