@@ -27,8 +27,8 @@ _K_ev = K["ev"]
 _K_summary = K["summary"]
 
 
-@njit(cache=True)
-def _rows(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out):  # pragma: no cover - compiled
+@njit(cache=True, nogil=True)
+def pair_rows(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out):  # pragma: no cover - compiled
     """Every pair of a selection at rows ``lo:hi`` of ``Q`` (Pinocchio's joint order, flattened:
     row ``m`` is ``Q[m * nq:(m + 1) * nq]``), written straight into the caller's order.
 
@@ -38,7 +38,8 @@ def _rows(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_o
     with sides A and B exchanged where ``swap[j]``.  Row ``m``'s pairs go to rows ``m * n_sel + j``
     of ``d_out`` ``(., )`` and ``pA_out`` / ``pB_out`` ``(., 3)``.  ``q1`` ``(1, n_q)``: scratch.
     Returns 0, else ``err + 4 * m`` for the first failing row ``m`` (``err`` as :func:`detect_rows`).
-    Called through :func:`pair_rows` (releases the GIL) or :func:`pair_rows_held` (holds it)."""
+    Releases the GIL: callers on several threads, each with its own ``SF`` / ``SI`` / ``q1``, run in
+    parallel (:func:`pair_rows_held` holds it)."""
     nq = gmap[0]
     n_q = gmap[1]
     n_circ = gmap[2]
@@ -80,15 +81,8 @@ def _rows(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_o
     return 0
 
 
-@njit(cache=True, nogil=True)
-def pair_rows(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out):  # pragma: no cover - compiled
-    """:func:`_rows`, the GIL released: callers on several threads, each with its own ``SF`` /
-    ``SI`` / ``q1``, run in parallel."""
-    return _rows(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out)
-
-
 @njit(cache=True)
 def pair_rows_held(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out):  # pragma: no cover - compiled
-    """:func:`_rows`, the GIL held: for calls so short that handing the GIL to another thread and
+    """:func:`pair_rows`, the GIL held: for calls so short that handing the GIL to another thread and
     back costs more than the call (``AnalyticChecker`` picks it by the call's measured time)."""
-    return _rows(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out)
+    return pair_rows(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out)

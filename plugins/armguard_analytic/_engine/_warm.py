@@ -20,11 +20,14 @@ __all__ = ["LEAVES_MAIN", "LEAVES_SIDE", "warm_up"]
 LEAVES_SIDE = (
     ("armguard.geometry._pair_cylinder", "support_pair_graph", "F2 I1 F1 f F2 I1 F1 f F1 F1 f f i f I1 I1"),
     ("armguard_analytic._engine._narrow", "_capsule_polytope", "F2 f i F2 F2 I2 F2 F2 I1 I1 I1 f F1 f f f i f"),
-    # the link-frame narrow phase (GJK, EPA, SAT on hulls and boxes, cylinders: support_pair_graph above)
+    # the link-frame narrow phase (EPA, SAT on hulls and boxes, cylinders: support_pair_graph above;
+    # its GJK, gjk_dir_rel, first in the main process) and the scanned GJK of the W-frame SAT path
     ("armguard_analytic._engine._narrow", "narrow_rel", "i i I1 F1 I1 F1 F1 f f f i f f f"),
+    ("armguard.geometry._pair_gjk", "gjk_dir", "F2 F2 f f f f f f f f i"),
 )
 """Leaf kernels compiled in the second process: (module, function, signature codes)."""
 LEAVES_MAIN = (
+    ("armguard.geometry._pair_gjk", "gjk_dir_rel", "F2 I1 I1 F2 I1 I1 F1 f f f f f f f f i F1 f"),
     ("armguard.geometry._pair_epa", "convex_convex_fast", "F2 F2 F2 I1 I2 f F2 F2 F2 I1 I2 f F1 F1 f f f i f f"),
     ("armguard_analytic._engine._step", "evaluate_pair", "i i I1 F1 I1 F1 I1 F1 f f f i"),
     ("armguard_analytic._engine._narrow", "narrow_flat", "i i I1 F1 I1 F1 F1 f f f"),
