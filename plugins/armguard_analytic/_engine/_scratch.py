@@ -17,9 +17,9 @@ __all__ = ["GIL_RELEASE_US", "_Scratch", "_entry_point", "compiled", "median_cal
 GIL_RELEASE_US = 12.0
 """A compiled call releases the GIL when one call takes at least this long (µs, measured when the
 Detector or the Checker's call plan is made: :func:`median_call_us`).  Below it, handing the GIL to
-another thread and taking it back costs more than the call: two threads sharing a checker got
-0.5-0.9x of one thread's throughput (gmf_s480, hermes), holding the GIL gives ~1x; above it the
-threads run in parallel (ranger 1.7x, ur3 1.3x; ``python -m bench backends``, "2 threads")."""
+another thread and taking it back costs more than the call: two threads sharing a gmf_s480 or hermes
+checker made fewer calls than one thread, holding the GIL about as many; above it the threads run
+in parallel (ranger, z1; ``python -m bench backends``, the two "2 threads" columns)."""
 
 
 def compiled(dispatcher, call: tuple):
