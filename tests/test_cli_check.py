@@ -129,3 +129,21 @@ def test_waiting_for_the_side_process_ends_on_its_report_its_exit_or_the_timeout
     p = child("pass")  # ends without a word
     _wait_for(p, "_leaves_side", set(), 20.0)
     assert p.wait(5) == 0
+
+
+def test_the_collector_is_tuned_only_while_compiling_and_restored_after():
+    import gc
+
+    from armguard.cli._compile import GC_THRESHOLDS, _compiling_gc, _spawn_side
+
+    before, frozen = gc.get_threshold(), gc.get_freeze_count()
+    with pytest.raises(RuntimeError, match="inside"):
+        with _compiling_gc():
+            assert gc.get_threshold() == GC_THRESHOLDS
+            assert gc.get_freeze_count() > frozen  # the heap so far is not walked while compiling
+            raise RuntimeError("a stage failed inside")
+    assert gc.get_threshold() == before and gc.get_freeze_count() == frozen
+    # the side process runs its stages in the same block and reports each one
+    p = _spawn_side(("POLL_S.__class__",))  # a harmless call: float()
+    assert p.stdout.read().decode().split() == ["POLL_S.__class__"]
+    assert p.wait(60) == 0

@@ -4,9 +4,9 @@
 The fused kernel is one chain of compiled calls (``detect_entry -> detect_rows -> pair_step ->
 narrow_other -> pair_distance ->`` the pair kernels): on a cold cache numba compiles it in one
 thread, over a minute on a 2-core machine, more than half of it in a few leaf kernels that share
-nothing.  Compiled first with the signatures the chain calls them with (two in a second process,
-three in the first), they are in numba's on-disk cache when the chain reaches them, and it only
-loads them.  A signature that no longer matches the chain's call costs time, never an answer: the
+nothing.  Compiled first with the signatures the chain calls them with (some in a second process,
+the others in the first), they are in numba's on-disk cache when the chain reaches them, and it
+only loads them.  A signature that no longer matches the chain's call costs time, never an answer: the
 chain then compiles that kernel itself (tests/test_detect_cold.py checks they all match).  Codes:
 F1/F2 float64 C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64.
 """
@@ -18,19 +18,29 @@ import numpy as np
 __all__ = ["LEAVES_MAIN", "LEAVES_SIDE", "warm_up"]
 
 LEAVES_SIDE = (
-    ("armguard.geometry._pair_cylinder", "support_pair_graph", "F2 I1 F1 f F2 I1 F1 f F1 F1 f f i f I1 I1"),
-    ("armguard_analytic._engine._narrow", "_capsule_polytope", "F2 f i F2 F2 I2 F2 F2 I1 I1 I1 f F1 f f f i f"),
-    # the link-frame narrow phase (EPA, SAT on hulls and boxes, cylinders: support_pair_graph above;
-    # its GJK, gjk_dir_rel, first in the main process) and the scanned GJK of the W-frame SAT path
-    ("armguard_analytic._engine._narrow", "narrow_rel", "i i I1 F1 I1 F1 F1 f f f i f f f"),
+    # the scanned GJK of the W-frame SAT path (convex_convex_fast's, in the first process, reaches
+    # it later), then the link-frame narrow phase: cylinders (GJK and EPA on support functions),
+    # SAT on hulls and boxes, EPA (narrow_rel; its GJK, SAT and EPA first in the first process)
     ("armguard.geometry._pair_gjk", "gjk_dir", "F2 F2 f f f f f f f f i"),
+    ("armguard.geometry._pair_cylinder", "support_pair_graph", "F2 I1 F1 f F2 I1 F1 f F1 F1 f f i f I1 I1"),
+    ("armguard_analytic._engine._narrow", "narrow_rel", "i i I1 F1 I1 F1 F1 f f f i f f f"),
 )
 """Leaf kernels compiled in the second process: (module, function, signature codes)."""
 LEAVES_MAIN = (
+    # the link-frame GJK, then narrow_rel's SAT and EPA (in the second process narrow_rel reaches
+    # them after support_pair_graph, by which time they are cached)
     ("armguard.geometry._pair_gjk", "gjk_dir_rel", "F2 I1 I1 F2 I1 I1 F1 f f f f f f f f i F1 f"),
+    ("armguard_analytic._engine._narrow", "_sat_rel",
+     "F2 F2 F2 I1 I1 f F2 F2 F2 I1 I1 f F1 f f f F1 i F1 F1 f f f i f f"),
+    ("armguard.geometry._pair_epa", "epa_depth", "F2 I1 F2 I1 F1 f F1 f f f I1 I1 f"),
     ("armguard.geometry._pair_epa", "convex_convex_fast", "F2 F2 F2 I1 I2 f F2 F2 F2 I1 I2 f F1 F1 f f f i f f"),
     ("armguard_analytic._engine._step", "evaluate_pair", "i i I1 F1 I1 F1 I1 F1 f f f i"),
     ("armguard_analytic._engine._narrow", "narrow_flat", "i i I1 F1 I1 F1 F1 f f f"),
+    # the capsule-polytope narrow phase and the culling tests: compiled while the second process
+    # still works on narrow_rel, which the chain needs first
+    ("armguard_analytic._engine._narrow", "_capsule_polytope", "F2 f i F2 F2 I2 F2 F2 I1 I1 I1 f F1 f f f i f"),
+    ("armguard_analytic._engine._cull", "obb_apart_moving", "F1 i i i i F1 f f"),
+    ("armguard_analytic._engine._cull", "obb_apart_static", "F1 i i F1 i f f"),
 )
 """Leaf kernels compiled in the first process while the second compiles :data:`LEAVES_SIDE`."""
 

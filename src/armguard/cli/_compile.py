@@ -13,6 +13,7 @@ framework names no backend's kernels.
 from __future__ import annotations
 
 import threading
+from contextlib import contextmanager
 
 __all__ = ["warm_up", "leaves", "STAGES", "SIDE_STAGES", "POLL_S"]
 
@@ -138,6 +139,31 @@ SIDE_WAIT_S = 600.0
 """The longest a main stage waits for the side process (s); then it compiles what it needs itself."""
 
 
+GC_THRESHOLDS = (50_000, 20, 20)
+"""The garbage collector's thresholds while kernels compile (Python's: 700, 10, 10).  numba's
+compiler makes millions of short-lived objects, and at Python's thresholds the collector walks
+the whole heap (every module, every type numba has inferred) again and again.  With these, and
+the heap as it is when compiling starts frozen (never walked), ``convex_convex_fast`` alone
+compiles in 17.2 s instead of 21.6 s (peak memory 535 MB instead of 459 MB; with the collector
+off: 15.8 s and 901 MB)."""
+
+
+@contextmanager
+def _compiling_gc():
+    """The collector tuned for compiling (:data:`GC_THRESHOLDS`, the heap so far frozen) inside the
+    block; the thresholds restored and the frozen objects handed back to it after."""
+    import gc
+
+    old = gc.get_threshold()
+    gc.freeze()
+    gc.set_threshold(*GC_THRESHOLDS)
+    try:
+        yield
+    finally:
+        gc.set_threshold(*old)
+        gc.unfreeze()
+
+
 def _spawn_side(names):
     """Start a process compiling the stages ``names`` (None when there are none or it cannot start);
     it prints each stage's name on its stdout when that stage ends."""
@@ -146,7 +172,8 @@ def _spawn_side(names):
 
     if not names:
         return None
-    code = "from armguard.cli import _compile as c\n" + "".join(f"c.{n}(); print({n!r}, flush=True)\n" for n in names)
+    code = ("from armguard.cli import _compile as c\nwith c._compiling_gc():\n"
+            + "".join(f"    c.{n}(); print({n!r}, flush=True)\n" for n in names))
     try:
         return subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
     except OSError:
@@ -227,22 +254,23 @@ def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES, waits=None) -> boo
     listener = _compile_listener(compiling)
     event.register("numba:compile", listener)
     try:
-        th = threading.Thread(target=work, name="armguard-warm-up", daemon=True)
-        th.start()
-        while th.is_alive() and not compiling[0]:
-            th.join(POLL_S)
-        if compiling[0] and th.is_alive():
-            child.append(_spawn_side(side))
-        if compiling[0] and (th.is_alive() or (child and child[0] is not None)):
-            console = console or Console(stderr=True)
-            with Progress(TextColumn("compiling kernels (first run only): {task.description}"), BarColumn(),
-                          MofNCompleteColumn(), TimeElapsedColumn(), console=console) as bar:
-                task = bar.add_task(label[0], total=len(stages))
-                while th.is_alive() or (child and child[0] is not None and child[0].poll() is None):
-                    th.join(POLL_S)
-                    bar.update(task, completed=len(done), description=label[0] if th.is_alive() else "geometry kernels")
-                bar.update(task, completed=len(done), description="done")
-        th.join()
+        with _compiling_gc():  # the collector tuned for compiling (the side process tunes its own)
+            th = threading.Thread(target=work, name="armguard-warm-up", daemon=True)
+            th.start()
+            while th.is_alive() and not compiling[0]:
+                th.join(POLL_S)
+            if compiling[0] and th.is_alive():
+                child.append(_spawn_side(side))
+            if compiling[0] and (th.is_alive() or (child and child[0] is not None)):
+                console = console or Console(stderr=True)
+                with Progress(TextColumn("compiling kernels (first run only): {task.description}"), BarColumn(),
+                              MofNCompleteColumn(), TimeElapsedColumn(), console=console) as bar:
+                    task = bar.add_task(label[0], total=len(stages))
+                    while th.is_alive() or (child and child[0] is not None and child[0].poll() is None):
+                        th.join(POLL_S)
+                        bar.update(task, completed=len(done), description=label[0] if th.is_alive() else "geometry kernels")
+                    bar.update(task, completed=len(done), description="done")
+            th.join()
     finally:
         event.unregister("numba:compile", listener)
         if child and child[0] is not None and child[0].stdout is not None:
