@@ -136,13 +136,22 @@ def test_the_collector_is_tuned_only_while_compiling_and_restored_after():
 
     from armguard.cli._compile import GC_THRESHOLDS, _compiling_gc, _spawn_side
 
-    before, frozen = gc.get_threshold(), gc.get_freeze_count()
+    gc.unfreeze()
+    before = gc.get_threshold()
     with pytest.raises(RuntimeError, match="inside"):
         with _compiling_gc():
             assert gc.get_threshold() == GC_THRESHOLDS
-            assert gc.get_freeze_count() > frozen  # the heap so far is not walked while compiling
+            assert gc.get_freeze_count() > 0  # the heap so far is not walked while compiling
             raise RuntimeError("a stage failed inside")
-    assert gc.get_threshold() == before and gc.get_freeze_count() == frozen
+    assert gc.get_threshold() == before and gc.get_freeze_count() == 0
+    gc.freeze()  # a host process that froze its own heap keeps it frozen
+    try:
+        frozen = gc.get_freeze_count()
+        with _compiling_gc():
+            assert gc.get_threshold() == GC_THRESHOLDS
+        assert gc.get_threshold() == before and gc.get_freeze_count() == frozen
+    finally:
+        gc.unfreeze()
     # the side process runs its stages in the same block and reports each one
     p = _spawn_side(("POLL_S.__class__",))  # a harmless call: float()
     assert p.stdout.read().decode().split() == ["POLL_S.__class__"]

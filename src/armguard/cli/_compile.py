@@ -151,17 +151,20 @@ off: 15.8 s and 901 MB)."""
 @contextmanager
 def _compiling_gc():
     """The collector tuned for compiling (:data:`GC_THRESHOLDS`, the heap so far frozen) inside the
-    block; the thresholds restored and the frozen objects handed back to it after."""
+    block; the thresholds restored and the frozen objects handed back to it after.  A process that
+    froze objects of its own (``gc.freeze``) keeps them frozen: then only the thresholds change."""
     import gc
 
-    old = gc.get_threshold()
-    gc.freeze()
+    old, ours = gc.get_threshold(), gc.get_freeze_count() == 0
+    if ours:
+        gc.freeze()
     gc.set_threshold(*GC_THRESHOLDS)
     try:
         yield
     finally:
         gc.set_threshold(*old)
-        gc.unfreeze()
+        if ours:
+            gc.unfreeze()
 
 
 def _spawn_side(names):
