@@ -143,9 +143,9 @@ GC_THRESHOLDS = (50_000, 20, 20)
 """The garbage collector's thresholds while kernels compile (Python's: 700, 10, 10).  numba's
 compiler makes millions of short-lived objects, and at Python's thresholds the collector walks
 the whole heap (every module, every type numba has inferred) again and again.  With these, and
-the heap as it is when compiling starts frozen (never walked), ``convex_convex_fast`` alone
-compiles in 17.2 s instead of 21.6 s (peak memory 535 MB instead of 459 MB; with the collector
-off: 15.8 s and 901 MB)."""
+the heap as it is when compiling starts frozen (never walked), a kernel compiles ~10-20 % faster
+for a little more peak memory; with the collector off, a little faster still for ~2x the memory
+(``python -m bench compile``, ``docs/performance.md``)."""
 
 
 @contextmanager
@@ -271,7 +271,8 @@ def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES, waits=None) -> boo
                     task = bar.add_task(label[0], total=len(stages))
                     while th.is_alive() or (child and child[0] is not None and child[0].poll() is None):
                         th.join(POLL_S)
-                        bar.update(task, completed=len(done), description=label[0] if th.is_alive() else "geometry kernels")
+                        bar.update(task, completed=len(done),
+                                   description=label[0] if th.is_alive() else "geometry kernels")
                     bar.update(task, completed=len(done), description="done")
             th.join()
     finally:

@@ -469,9 +469,10 @@ def _gjk_body(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, 
 _gjk = njit(cache=True, _nrt=False)(_gjk_body.py_func)
 """The body as a compiled call of its own (see the module docstring).  Built from the body's own
 Python function, not a wrapper that inlines it: numba inlines by deep-copying the callee's IR
-block by block, each copy taking the whole function's variable scope along (~3.6 s of a cold
-compile for each wrapper's signature).  Its numba cache files carry the body's name; the inlined
-``_gjk_body`` itself is never compiled on its own, so nothing else writes them."""
+block by block, each copy taking the whole function's variable scope along (~2 s of a cold
+compile for each wrapper's signature: ``python -m bench compile``).  Its numba cache files carry
+the body's name; the inlined ``_gjk_body`` itself is never compiled on its own, so nothing else
+writes them."""
 
 
 @njit(cache=True)
