@@ -156,3 +156,61 @@ def test_the_collector_is_tuned_only_while_compiling_and_restored_after():
     p = _spawn_side(("POLL_S.__class__",))  # a harmless call: float()
     assert p.stdout.read().decode().split() == ["POLL_S.__class__"]
     assert p.wait(60) == 0
+
+
+def test_the_side_process_compiles_its_after_kernels_once_the_main_process_reports_its_leaves():
+    import subprocess
+    import sys
+    import time
+
+    from armguard.cli._compile import _tell
+
+    # _side_after with the compile replaced by a report: nothing before "_leaves_main" arrives on stdin
+    code = ("from armguard.cli import _compile as c\n"
+            "c._compile_leaves = lambda plan, report=None: report('after')\n"
+            "print('ready', flush=True)\nc._side_after()\n")
+    p = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+    try:
+        assert p.stdout.readline().strip() == b"ready"
+        _tell(p, "_geometry")  # another stage's report: still waiting
+        time.sleep(0.5)
+        assert p.poll() is None
+        _tell(p, "_leaves_main")
+        assert p.stdout.readline().strip() == b"after"
+        assert p.wait(30) == 0
+    finally:
+        p.kill()
+    _tell(p, "_leaves_main")  # a process that ended: nothing happens
+    p = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+    p.stdin.close()  # the main process ended: the side process goes on
+    assert p.stdout.read().split() == [b"ready", b"after"]
+    assert p.wait(30) == 0
+
+
+def test_the_detector_stage_hands_the_side_wait_to_a_backend_that_takes_it(monkeypatch):
+    from armguard.cli import _compile as c
+
+    calls = []
+
+    class Waits:
+        def warm_up(self, scene, wait=None):
+            calls.append(("waits", scene, wait))
+
+    class Plain:
+        def warm_up(self, scene):
+            calls.append(("plain", scene))
+
+    def wait(name):
+        return None
+
+    monkeypatch.setattr(c, "_scene", lambda: "scene")
+    for backend in (Waits(), Plain()):
+        monkeypatch.setattr(c, "_backend", lambda b=backend: b)
+        monkeypatch.setattr(c, "_side_wait", [wait])
+        c._detector()
+        monkeypatch.setattr(c, "_side_wait", [None])  # no side process: no wait
+        c._detector()
+    assert calls == [("waits", "scene", wait), ("waits", "scene", None), ("plain", "scene"), ("plain", "scene")]
+    # the plan of a backend that gives (main, side) only: no after kernels
+    monkeypatch.setattr(c, "_backend", lambda: type("Two", (), {"warm_up_leaves": lambda self: ((1,), (2,))})())
+    assert c.leaves() == ((1,), (2,), ())

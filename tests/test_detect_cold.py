@@ -8,7 +8,8 @@ process with a fresh, empty cache directory and checks the process exits normall
 the same answers as this (possibly warm-cached) process.
 
 The process compiles the way a first run does (``armguard.cli._compile``): the leaf kernels first,
-with the signatures the analytic backend's warm-up plan gives them (``warm_up_leaves``), then the detector's chain.  It records which
+with the signatures the analytic backend's warm-up plan gives them (``warm_up_leaves``: the leaves of both
+processes, then the kernels above them the second process compiles), then the detector's entry points.  It records which
 kernels the chain still compiles: a planned leaf among them means its planned signature no
 longer matches the chain's call, and the first run's two processes would compile it twice.
 """
@@ -38,6 +39,7 @@ _SCRIPT = textwrap.dedent(
 
     plan._leaves_main()
     plan._leaves_side()
+    plan._leaves_after()
     compiled = []
 
     class Listener(event.Listener):
@@ -83,9 +85,9 @@ def test_detector_kernels_compile_from_an_empty_cache(tmp_path):
     assert got["yesno"] == det.collides_many(q[None, :]).tolist()
     assert got["brute"] == det.check_many_bruteforce(q[None, :]).min_distance.tolist()
     assert got["pairs"] == det.pair_distances(q).distance.tolist()
-    main, side = get_backend("analytic").warm_up_leaves()  # what the subprocess compiled first (the default backend)
-    planned = {(m, n) for m, n, _ in main + side}
+    main, side, after = get_backend("analytic").warm_up_leaves()  # what the subprocess compiled first (the default backend)
+    planned = {(m, n) for m, n, _ in main + side + after}
     assert planned
     again = planned & {tuple(x) for x in got["compiled"]}
     assert not again, f"the warm-up plan's signatures no longer match the detector's calls of {sorted(again)}"
-    assert ("armguard_analytic._engine._kernel", "detect_rows") in {tuple(x) for x in got["compiled"]}  # the listener saw the chain
+    assert ("armguard_analytic._engine._kernel", "detect_entry") in {tuple(x) for x in got["compiled"]}  # the listener saw the chain

@@ -410,19 +410,20 @@ class AnalyticBackend:
 
         return FusedDetector
 
-    def warm_up(self, scene) -> None:
+    def warm_up(self, scene, wait=None) -> None:
         """Compile (or load from numba's cache) the fused Detector's and the Checker's kernels on
-        ``scene`` (the framework's first-run warm-up, :mod:`armguard.cli._compile`)."""
+        ``scene`` (the framework's first-run warm-up, :mod:`armguard.cli._compile`); ``wait(name)``
+        blocks until the framework's second process has compiled kernel ``name``."""
         from ._engine._warm import warm_up
 
-        warm_up(scene)
+        warm_up(scene, wait)
 
     def warm_up_leaves(self) -> tuple:
-        """``(main, side)``: the fused kernel's leaf kernels to compile ahead, in two processes
-        (:mod:`._engine._warm`)."""
-        from ._engine._warm import LEAVES_MAIN, LEAVES_SIDE
+        """``(main, side, after)``: the fused kernel's leaf kernels to compile ahead, in two processes,
+        and the kernels above them the second process compiles next (:mod:`._engine._warm`)."""
+        from ._engine._warm import LEAVES_AFTER, LEAVES_MAIN, LEAVES_SIDE
 
-        return LEAVES_MAIN, LEAVES_SIDE
+        return LEAVES_MAIN, LEAVES_SIDE, LEAVES_AFTER
 
     def build(self, model, options: Mapping | None = None):
         if str(dict(options or {}).get("fidelity", "exact")) == "paper":

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["LEAVES_MAIN", "LEAVES_SIDE", "warm_up"]
+__all__ = ["LEAVES_AFTER", "LEAVES_MAIN", "LEAVES_SIDE", "warm_up"]
 
 LEAVES_SIDE = (
     # the scanned GJK of the W-frame SAT path (convex_convex_fast's, in the first process, reaches
@@ -24,6 +24,9 @@ LEAVES_SIDE = (
     ("armguard.geometry._pair_gjk", "gjk_dir", "F2 F2 f f f f f f f f i"),
     ("armguard.geometry._pair_cylinder", "support_pair_graph", "F2 I1 F1 f F2 I1 F1 f F1 F1 f f i f I1 I1"),
     ("armguard_analytic._engine._narrow", "narrow_rel", "i i I1 F1 I1 F1 F1 f f f i f f f"),
+    # the scalar pairs' step (capsules, boxes, walls; narrow_flat compiles inside it)
+    ("armguard_analytic._engine._step", "evaluate_pair", "i i I1 F1 I1 F1 I1 F1 f f f i"),
+    ("armguard_analytic._engine._narrow", "narrow_flat", "i i I1 F1 I1 F1 F1 f f f"),
 )
 """Leaf kernels compiled in the second process: (module, function, signature codes)."""
 LEAVES_MAIN = (
@@ -34,35 +37,57 @@ LEAVES_MAIN = (
      "F2 F2 F2 I1 I1 f F2 F2 F2 I1 I1 f F1 f f f F1 i F1 F1 f f f i f f"),
     ("armguard.geometry._pair_epa", "epa_depth", "F2 I1 F2 I1 F1 f F1 f f f I1 I1 f"),
     ("armguard.geometry._pair_epa", "convex_convex_fast", "F2 F2 F2 I1 I2 f F2 F2 F2 I1 I2 f F1 F1 f f f i f f"),
-    ("armguard_analytic._engine._step", "evaluate_pair", "i i I1 F1 I1 F1 I1 F1 f f f i"),
-    ("armguard_analytic._engine._narrow", "narrow_flat", "i i I1 F1 I1 F1 F1 f f f"),
     # the capsule-polytope narrow phase and the culling tests: compiled while the second process
     # still works on narrow_rel, which the chain needs first
     ("armguard_analytic._engine._narrow", "_capsule_polytope", "F2 f i F2 F2 I2 F2 F2 I1 I1 I1 f F1 f f f i f"),
     ("armguard_analytic._engine._cull", "obb_apart_moving", "F1 i i i i F1 f f"),
     ("armguard_analytic._engine._cull", "obb_apart_static", "F1 i i F1 i f f"),
+    # the other pairs' narrow phase (pair_distance: it calls the leaves of both lists), which the pair
+    # step calls: compiled here while the second process still works on narrow_rel
+    ("armguard_analytic._engine._narrow", "narrow_other", "i i I1 F1 I1 F1 F1 f f f i f f"),
 )
 """Leaf kernels compiled in the first process while the second compiles :data:`LEAVES_SIDE`."""
+LEAVES_AFTER = (
+    # the chain above the leaves, in the second process once the first has compiled its leaves (while
+    # the first compiles the geometry kernels): the pair step, the static pairs' branch and bound,
+    # the fused rows, then the Checker's entry points while the first compiles the Detector's
+    ("armguard_analytic._engine._step", "pair_step", "i i i b I1 F1 I1 F1 I1 F1 f f f i f f f i i"),
+    ("armguard_analytic._engine._static_gjk", "static_gjk_pairs", "I1 F1 I1 F1 I1 F1 i f b f f f i f f f i i"),
+    ("armguard_analytic._engine._kernel", "detect_rows", "F2 i i I1 F1 I1 F1 I1 F1 I1 I1 F2 I1"),
+    ("armguard_analytic._engine._pair_rows", "pair_rows", "F1 i i I1 I1 F1 I1 F1 I1 F1 I1 F2 F1 F2 F2"),
+    ("armguard_analytic._engine._pair_rows", "pair_rows_held", "F1 i i I1 I1 F1 I1 F1 I1 F1 I1 F2 F1 F2 F2"),
+)
+"""Kernels the second process compiles after the first process's :data:`LEAVES_MAIN` (they call
+kernels of both lists); :func:`warm_up` waits for them by name."""
 
 
-def warm_up(scene) -> None:
+def warm_up(scene, wait=None) -> None:
     """Compile (or load) the fused Detector's entry points and the Checker's ``pair_rows`` on
-    ``scene``, both GIL policies, with the argument types their callers pass."""
+    ``scene``, both GIL policies, with the argument types their callers pass.
+
+    ``wait(name)`` (the framework's, while a second process compiles :data:`LEAVES_AFTER`) blocks
+    until that process has compiled kernel ``name``: the Detector's entry points are compiled here
+    once ``detect_rows`` is in numba's cache, the Checker's (``pair_rows``) are loaded once there."""
+    wait = wait or (lambda name: None)
     from . import _kernel as kn
     from ._detector import FusedDetector
     from ._pair_rows import pair_rows, pair_rows_held
     from ._scratch import _entry_point, _Scratch
 
+    wait("detect_rows")
     det = FusedDetector(scene, threshold=0.05)
     q = scene.flat_q(scene.default_q())
     det.check(q)
     det.check_many(np.tile(q, (4, 1)))
+    # the entry point that holds the GIL (calls too short for handing it over to pay, ._scratch)
+    s = _Scratch(det)
+    _entry_point(*s.entry_args, release_gil=False)
     # the Checker's pair_distances(_many): pair_rows, with the argument types it is given
-    s, n, nq = _Scratch(det), det.n_pairs, len(q)
+    n, nq = det.n_pairs, len(q)
     gmap = np.concatenate([[nq, nq, 0, n], np.arange(nq), np.arange(n), np.zeros(n)]).astype(np.int64)
     call = (np.ascontiguousarray(q, dtype=np.float64), 0, 1, gmap, det._H, det._MF, det._MI, s.SF, s.SI, det._prm,
             det._iprm_by_mode[kn.MODE_ALL], s.q1, np.empty(n), np.empty((n, 3)), np.empty((n, 3)))
+    wait("pair_rows")
     pair_rows(*call)
-    # the entry points that hold the GIL (calls too short for handing it over to pay, ._scratch)
+    wait("pair_rows_held")
     pair_rows_held(*call)
-    _entry_point(*s.entry_args, release_gil=False)

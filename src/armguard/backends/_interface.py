@@ -211,10 +211,13 @@ class Backend(Protocol):
 
     * ``ranger_detector(options)``: the Detector class for Ranger's cycle with this backend, or None
       (the declared fast path, :func:`armguard.detect._ranger.fast_path`);
-    * ``warm_up(scene)``: compile (or load from numba's cache) the backend's kernels on ``scene``
-      before a command's real work (:mod:`armguard.cli._compile`, for the default backend);
-    * ``warm_up_leaves()``: ``(main, side)``, tuples of ``(module, function, signature codes)``:
-      leaf kernels worth compiling ahead of ``warm_up``, ``side`` in a second process at once
+    * ``warm_up(scene)`` (or ``warm_up(scene, wait=None)``): compile (or load from numba's cache)
+      the backend's kernels on ``scene`` before a command's real work (:mod:`armguard.cli._compile`,
+      for the default backend); ``wait(name)``, given while a second process compiles, blocks until
+      that process has compiled kernel ``name`` of the ``after`` list;
+    * ``warm_up_leaves()``: ``(main, side)`` or ``(main, side, after)``, tuples of ``(module,
+      function, signature codes)``: leaf kernels worth compiling ahead of ``warm_up``, ``side`` in a
+      second process at once, ``after`` in that process once the first has compiled ``main``
       (codes as :func:`armguard.cli._compile.signature` reads them).
     """
 

@@ -12,6 +12,7 @@ framework names no backend's kernels.
 
 from __future__ import annotations
 
+import inspect
 import threading
 from contextlib import contextmanager
 
@@ -64,7 +65,10 @@ def _detector() -> None:
     sc = _scene()
     warm = getattr(_backend(), "warm_up", None)
     if warm is not None:  # the backend compiles its own kernels (the analytic one: its fused Detector and Checker)
-        warm(sc)
+        if _side_wait[0] is not None and "wait" in inspect.signature(warm).parameters:
+            warm(sc, wait=_side_wait[0])  # it waits for the kernels the side process compiles
+        else:
+            warm(sc)
         return
     import numpy as np
 
@@ -92,9 +96,11 @@ def _verifier() -> None:
 # the signatures its chain calls them with, they are in numba's on-disk cache when the chain
 # reaches them.  Codes: F1/F2 float64 C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64.
 def leaves() -> tuple:
-    """``(main, side)``: the default backend's leaf kernels (``warm_up_leaves``), else ``((), ())``."""
+    """``(main, side, after)``: the default backend's leaf kernels (``warm_up_leaves``; a backend
+    that gives ``(main, side)`` has no ``after``), else ``((), (), ())``."""
     plan = getattr(_backend(), "warm_up_leaves", None)
-    return tuple(plan()) if plan is not None else ((), ())
+    got = tuple(plan()) if plan is not None else ()
+    return tuple(got) + ((),) * (3 - len(got))
 
 
 def signature(codes: str) -> tuple:
@@ -102,18 +108,20 @@ def signature(codes: str) -> tuple:
     from numba import types
 
     kinds = {"F1": types.float64[::1], "F2": types.float64[:, ::1], "I1": types.int64[::1],
-             "I2": types.int64[:, ::1], "f": types.float64, "i": types.int64}
+             "I2": types.int64[:, ::1], "f": types.float64, "i": types.int64, "b": types.boolean}
     try:
         return tuple(kinds[c] for c in codes.split())
     except KeyError as exc:
         raise ValueError(f"unknown signature code {exc.args[0]!r} in {codes!r} (known: {sorted(kinds)})") from None
 
 
-def _compile_leaves(plan) -> None:
+def _compile_leaves(plan, report=None) -> None:
     import importlib
 
     for module, name, codes in plan:
         getattr(importlib.import_module(module), name).compile(signature(codes))
+        if report is not None:
+            report(name)
 
 
 def _leaves_main() -> None:
@@ -124,15 +132,34 @@ def _leaves_side() -> None:
     _compile_leaves(leaves()[1])
 
 
-STAGES = (("pair kernels", _leaves_main), ("detector kernels", _detector), ("verifier kernels", _verifier),
-          ("geometry kernels", _geometry))
+def _leaves_after() -> None:
+    """The ``after`` kernels (they call kernels of both ``main`` and ``side``), in this process."""
+    _compile_leaves(leaves()[2])
+
+
+def _side_after() -> None:
+    """The side process's ``after`` stage: wait until the main process reports ``_leaves_main``
+    done on this process's stdin (or closes it), then compile the ``after`` kernels, reporting each
+    one's name on stdout as it is compiled (the main process's backend ``warm_up`` waits for them)."""
+    import sys
+
+    for line in sys.stdin:
+        if line.strip() == "_leaves_main":
+            break
+    _compile_leaves(leaves()[2], report=lambda name: print(name, flush=True))
+
+
+STAGES = (("pair kernels", _leaves_main), ("geometry kernels", _geometry), ("detector kernels", _detector),
+          ("verifier kernels", _verifier))
 """The warm-up stages: (label, function), in order; a compilation starts at once in the first."""
-SIDE_STAGES = ("_leaves_side", "_geometry")
+SIDE_STAGES = ("_leaves_side", "_side_after")
 """Stages compiled in a second process beside the others when compiling starts (names of this
 module's functions, in order): on two cores both processes compile at once; each writes numba's
 on-disk cache and the other loads what it finds there.  The side process reports each stage's
-end on its stdout; a main stage listed in :data:`SIDE_WAITS` first waits for the side stage it
-needs, and a main stage of the same name as a side stage is skipped."""
+end (and each ``after`` kernel) on its stdout; a main stage listed in :data:`SIDE_WAITS` first
+waits for the side stage it needs, and a main stage of the same name as a side stage is skipped.
+The main process reports each of its stages' end on the side process's stdin (``_side_after``
+waits for ``_leaves_main``: the ``after`` kernels call the main process's leaves)."""
 SIDE_WAITS = {"_detector": "_leaves_side"}
 """Main stage -> the side stage it waits for (its kernels' callees), when a side process runs."""
 SIDE_WAIT_S = 600.0
@@ -167,9 +194,15 @@ def _compiling_gc():
             gc.unfreeze()
 
 
+_side_wait = [None]
+"""While a side process runs: ``wait(name)``, blocking until it reports ``name`` (or ends, or
+:data:`SIDE_WAIT_S` passes); handed to a backend ``warm_up`` that takes ``wait``."""
+
+
 def _spawn_side(names):
     """Start a process compiling the stages ``names`` (None when there are none or it cannot start);
-    it prints each stage's name on its stdout when that stage ends."""
+    it prints each stage's name on its stdout when that stage ends, and reads the main process's
+    reports on its stdin."""
     import subprocess
     import sys
 
@@ -178,9 +211,19 @@ def _spawn_side(names):
     code = ("from armguard.cli import _compile as c\nwith c._compiling_gc():\n"
             + "".join(f"    c.{n}(); print({n!r}, flush=True)\n" for n in names))
     try:
-        return subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+        return subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                stderr=subprocess.DEVNULL)
     except OSError:
         return None
+
+
+def _tell(child, fname: str) -> None:
+    """Write ``fname`` as a line on the side process's stdin (a process that ended: nothing)."""
+    try:
+        child.stdin.write((fname + "\n").encode())
+        child.stdin.flush()
+    except (OSError, ValueError, AttributeError):
+        pass
 
 
 def _wait_for(child, name: str, seen: set, timeout_s: float) -> None:
@@ -235,7 +278,14 @@ def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES, waits=None) -> boo
     names = {getattr(fn, "__name__", "") for _, fn in stages}
     # a side process only when it has work that one of these stages would otherwise do
     side = side if (names & set(side)) or (names & set(waits)) else ()
-    child, reported = [], set()
+    child, reported, told, lock = [], set(), [], threading.Lock()
+
+    def tell(fname: str) -> None:
+        """Report a main stage's end to the side process (now, or when it starts)."""
+        with lock:
+            told.append(fname)
+            if child and child[0] is not None:
+                _tell(child[0], fname)
 
     def work() -> None:
         try:
@@ -251,6 +301,7 @@ def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES, waits=None) -> boo
                 label[0] = name
                 fn()
                 done.append(name)
+                tell(fname)
         except BaseException as exc:  # handed to the caller's thread
             error.append(exc)
 
@@ -263,7 +314,12 @@ def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES, waits=None) -> boo
             while th.is_alive() and not compiling[0]:
                 th.join(POLL_S)
             if compiling[0] and th.is_alive():
-                child.append(_spawn_side(side))
+                with lock:
+                    child.append(_spawn_side(side))
+                    if child[0] is not None:
+                        for fname in told:
+                            _tell(child[0], fname)
+                        _side_wait[0] = lambda kernel: _wait_for(child[0], kernel, reported, SIDE_WAIT_S)
             if compiling[0] and (th.is_alive() or (child and child[0] is not None)):
                 console = console or Console(stderr=True)
                 with Progress(TextColumn("compiling kernels (first run only): {task.description}"), BarColumn(),
@@ -272,13 +328,19 @@ def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES, waits=None) -> boo
                     while th.is_alive() or (child and child[0] is not None and child[0].poll() is None):
                         th.join(POLL_S)
                         bar.update(task, completed=len(done),
-                                   description=label[0] if th.is_alive() else "geometry kernels")
+                                   description=label[0] if th.is_alive() else "the second process's kernels")
                     bar.update(task, completed=len(done), description="done")
             th.join()
     finally:
         event.unregister("numba:compile", listener)
-        if child and child[0] is not None and child[0].stdout is not None:
-            child[0].stdout.close()
+        _side_wait[0] = None
+        if child and child[0] is not None:
+            for pipe in (child[0].stdin, child[0].stdout):
+                if pipe is not None:
+                    try:
+                        pipe.close()
+                    except OSError:
+                        pass
     if error:
         raise error[0]
     return compiling[0]
