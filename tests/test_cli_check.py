@@ -214,3 +214,25 @@ def test_the_detector_stage_hands_the_side_wait_to_a_backend_that_takes_it(monke
     # the plan of a backend that gives (main, side) only: no after kernels
     monkeypatch.setattr(c, "_backend", lambda: type("Two", (), {"warm_up_leaves": lambda self: ((1,), (2,))})())
     assert c.leaves() == ((1,), (2,), ())
+
+
+def test_a_stage_that_fails_while_the_side_process_waits_for_it_is_raised_not_waited_on():
+    import time
+
+    from numba import njit
+    from rich.console import Console
+
+    from armguard.cli._compile import warm_up
+
+    def failing():
+        njit(lambda x: x + 1)(1)  # a compilation: the side process starts
+        time.sleep(0.5)
+        raise RuntimeError("the leaves failed")
+
+    t0 = time.monotonic()
+    with pytest.raises(RuntimeError, match="the leaves failed"):
+        # the side stage waits for "_leaves_main", which never comes: the failed stage closes its stdin
+        # and the side process is stopped
+        warm_up((("pair kernels", failing),), console=Console(file=io.StringIO()), side=("_side_after",),
+                waits={"failing": "never reported"})
+    assert time.monotonic() - t0 < 60.0

@@ -217,11 +217,15 @@ def _spawn_side(names):
         return None
 
 
-def _tell(child, fname: str) -> None:
-    """Write ``fname`` as a line on the side process's stdin (a process that ended: nothing)."""
+def _tell(child, fname: str | None) -> None:
+    """Write ``fname`` as a line on the side process's stdin, or close it (``None``); a process
+    that ended: nothing."""
     try:
-        child.stdin.write((fname + "\n").encode())
-        child.stdin.flush()
+        if fname is None:
+            child.stdin.close()
+        else:
+            child.stdin.write((fname + "\n").encode())
+            child.stdin.flush()
     except (OSError, ValueError, AttributeError):
         pass
 
@@ -262,10 +266,12 @@ def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES, waits=None) -> boo
 
     When a compilation starts, the stages named in ``side`` (:data:`SIDE_STAGES`) are compiled in
     a second process at the same time; a stage here of the same name is skipped, and one named in
-    ``waits`` (:data:`SIDE_WAITS`) first waits for the side stage it needs.  The bar lasts until
-    both processes end (a side process that fails only costs its time: the kernels compile here
-    when first called).  Returns whether anything was compiled.  An exception in a stage is
-    raised here.
+    ``waits`` (:data:`SIDE_WAITS`) first waits for the side stage it needs.  Each stage's end here
+    is reported on the side process's stdin, which is closed when the stages here end (a side stage
+    waiting for a report goes on then); while it runs, a backend ``warm_up`` that takes ``wait`` is
+    handed one (:data:`_side_wait`).  The bar lasts until both processes end (a side process that
+    fails only costs its time: the kernels compile here when first called).  Returns whether
+    anything was compiled.  An exception in a stage is raised here (the side process is stopped).
     """
     from numba.core import event
     from rich.console import Console
@@ -280,8 +286,9 @@ def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES, waits=None) -> boo
     side = side if (names & set(side)) or (names & set(waits)) else ()
     child, reported, told, lock = [], set(), [], threading.Lock()
 
-    def tell(fname: str) -> None:
-        """Report a main stage's end to the side process (now, or when it starts)."""
+    def tell(fname: str | None) -> None:
+        """Report a main stage's end to the side process (now, or when it starts); ``None``: this
+        process's stages are over (its stdin is closed: a side stage waiting for a report goes on)."""
         with lock:
             told.append(fname)
             if child and child[0] is not None:
@@ -304,6 +311,8 @@ def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES, waits=None) -> boo
                 tell(fname)
         except BaseException as exc:  # handed to the caller's thread
             error.append(exc)
+        finally:
+            tell(None)
 
     listener = _compile_listener(compiling)
     event.register("numba:compile", listener)
@@ -327,6 +336,8 @@ def warm_up(stages=STAGES, *, console=None, side=SIDE_STAGES, waits=None) -> boo
                     task = bar.add_task(label[0], total=len(stages))
                     while th.is_alive() or (child and child[0] is not None and child[0].poll() is None):
                         th.join(POLL_S)
+                        if error and child and child[0] is not None and child[0].poll() is None:
+                            child[0].kill()  # a stage failed here: its error is raised, nothing more compiles
                         bar.update(task, completed=len(done),
                                    description=label[0] if th.is_alive() else "the second process's kernels")
                     bar.update(task, completed=len(done), description="done")
