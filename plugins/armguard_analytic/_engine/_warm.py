@@ -7,8 +7,10 @@ thread, over a minute on a 2-core machine, more than half of it in a few leaf ke
 nothing.  Compiled first with the signatures the chain calls them with (some in a second process,
 the others in the first), they are in numba's on-disk cache when the chain reaches them, and it
 only loads them.  A signature that no longer matches the chain's call costs time, never an answer: the
-chain then compiles that kernel itself (tests/test_detect_cold.py checks they all match).  Codes:
-F1/F2 float64 C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64.
+chain then compiles that kernel itself (tests/test_detect_cold.py checks they all match).  The
+chain above the leaves (:data:`LEAVES_AFTER`) compiles in the second process too, once the first
+has its leaves, while the first compiles the geometry kernels and then the Detector's entry points.
+Codes: F1/F2 float64 C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64, b boolean.
 """
 
 from __future__ import annotations

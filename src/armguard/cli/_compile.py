@@ -91,10 +91,12 @@ def _verifier() -> None:
 # ---- the backend's largest leaf kernels, compiled ahead of its chain in two processes at once
 #
 # A backend may name leaf kernels that its first call would otherwise compile one after another
-# (``Backend.warm_up_leaves()``: ``(main, side)``, tuples of ``(module, function, signature
-# codes)``; the analytic backend's: ``armguard_analytic._engine._warm``).  Compiled first, with
-# the signatures its chain calls them with, they are in numba's on-disk cache when the chain
-# reaches them.  Codes: F1/F2 float64 C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64.
+# (``Backend.warm_up_leaves()``: ``(main, side)`` or ``(main, side, after)``, tuples of ``(module,
+# function, signature codes)``; the analytic backend's: ``armguard_analytic._engine._warm``).
+# Compiled first, with the signatures its chain calls them with, they are in numba's on-disk cache
+# when the chain reaches them; ``after`` (kernels calling both lists' leaves) compiles in the second
+# process once the first reports ``main`` done.  Codes: F1/F2 float64 C arrays (1-D/2-D), I1/I2
+# int64 ones, f float64, i int64, b boolean.
 def leaves() -> tuple:
     """``(main, side, after)``: the default backend's leaf kernels (``warm_up_leaves``; a backend
     that gives ``(main, side)`` has no ``after``), else ``((), (), ())``."""
