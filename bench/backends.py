@@ -135,7 +135,7 @@ def interface_rows(quick: bool) -> str:
         out = (np.empty(f.n), np.empty((f.n, 3)), np.empty((f.n, 3)))
         it = iter(range(10**9))
         t_full = median_thread_seconds(lambda: a.pair_distances(Q[next(it) % n_q]), repeat=7, number=n_q)
-        t_bare = median_thread_seconds(lambda: f.entry(Q[next(it) % n_q], 0, 1, f.gmap, H, MF, MI, SF, SI, prm,
+        t_bare = median_thread_seconds(lambda: f.entry(f.fn, Q[next(it) % n_q], 0, 1, f.gmap, H, MF, MI, SF, SI, prm,
                                                        iprm, q1, *out), repeat=7, number=n_q)
         t_many = median_thread_seconds(lambda: a.pair_distances_many(Q[:100]), repeat=5) / min(100, n_q)
         t_coal = median_thread_seconds(lambda: c.pair_distances(Q[next(it) % n_q]), repeat=5, number=max(10, n_q // 5))

@@ -141,8 +141,8 @@ def measure(name: str, n: int) -> dict:
     d, pA, pB = np.empty(f.n), np.empty((f.n, 3)), np.empty((f.n, 3))
     g0, e = f.subset(np.zeros(0, np.int64)), np.empty(0)
     t_call = _tmed(lambda: ana.pair_distances(Q[next(it) % 200]), n)
-    t_kernel = _tmed(lambda: f.entry(Q[next(it) % 200], 0, 1, f.gmap, H, MF, MI, SF, SI, prm, iprm, q1, d, pA, pB), n)
-    t_fixed = _tmed(lambda: f.entry(Q[next(it) % 200], 0, 1, g0, H, MF, MI, SF, SI, prm, iprm, q1, e, e.reshape(0, 3),
+    t_kernel = _tmed(lambda: f.entry(f.fn, Q[next(it) % 200], 0, 1, f.gmap, H, MF, MI, SF, SI, prm, iprm, q1, d, pA, pB), n)
+    t_fixed = _tmed(lambda: f.entry(f.fn, Q[next(it) % 200], 0, 1, g0, H, MF, MI, SF, SI, prm, iprm, q1, e, e.reshape(0, 3),
                                     e.reshape(0, 3)), n)
     t_same = _tmed(lambda: ana.pair_distances(Q[0]), n)
     from armguard_analytic._engine._layout import K

@@ -68,10 +68,11 @@ class _Fast:
     the gather map, the compiled entry point, and per-thread scratch copied from the pristine one."""
 
     __slots__ = ("revision", "det", "head", "sel", "swap", "gmap", "n", "names", "category", "q_shape", "entry",
-                 "entry_free", "call_us", "releases_gil", "args", "SF0", "SI0", "n_q", "tls", "subsets", "jac")
+                 "entry_free", "fn", "call_us", "releases_gil", "args", "SF0", "SI0", "n_q", "tls", "subsets", "jac")
 
     def __init__(self, checker: "AnalyticChecker", release_gil: bool | None = None) -> None:
         from ._engine import _kernel as kn
+        from ._engine._entry import addresses
         from ._engine._pair_rows import pair_rows, pair_rows_held
         from ._engine._scratch import GIL_RELEASE_US, compiled, median_call_us
 
@@ -105,10 +106,11 @@ class _Fast:
         q = np.ascontiguousarray(model.neutral(), dtype=np.float64)
         H, MF, MI, prm, iprm = self.args
         out = (np.empty(n), np.empty((n, 3)), np.empty((n, 3)))
-        call = (q, 0, 1, self.gmap, H, MF, MI, SF, SI, prm, iprm, q1, *out)
+        self.fn = addresses()  # the fused kernel's addresses in this process (._engine._entry)
+        call = (self.fn, q, 0, 1, self.gmap, H, MF, MI, SF, SI, prm, iprm, q1, *out)
         self.entry_free = compiled(pair_rows, call)  # releases the GIL (pair_distances_many's workers)
         Q = np.ascontiguousarray(model.random_q(9, 0), dtype=np.float64)
-        self.call_us = median_call_us(lambda q: self.entry_free(q, *call[1:]), Q)
+        self.call_us = median_call_us(lambda q: self.entry_free(self.fn, q, *call[2:]), Q)
         if release_gil is None:  # the GIL policy (._engine._scratch.GIL_RELEASE_US)
             release_gil = self.call_us >= GIL_RELEASE_US
         self.releases_gil = bool(release_gil)
@@ -281,7 +283,7 @@ class AnalyticChecker(CheckerBase):
             SF, SI, q1 = f.scratch()
         d, p_WA, p_WB = np.empty(n), np.empty((n, 3)), np.empty((n, 3))
         H, MF, MI, prm, iprm = f.args
-        err = f.entry(q, 0, 1, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d, p_WA, p_WB)
+        err = f.entry(f.fn, q, 0, 1, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d, p_WA, p_WB)
         if err:
             self._kernel_error(f, err, q[None], False)
         if not jacobian:
@@ -331,7 +333,7 @@ class AnalyticChecker(CheckerBase):
         jp = f.jac or self._jacobian_plan(f)
         H, MF, MI, prm, iprm = f.args
         e = np.empty(0)
-        err = f.entry(q, 0, 1, jp.zero_gmap, H, MF, MI, SF, SI, prm, iprm, q1, e, e.reshape(0, 3), e.reshape(0, 3))
+        err = f.entry(f.fn, q, 0, 1, jp.zero_gmap, H, MF, MI, SF, SI, prm, iprm, q1, e, e.reshape(0, 3), e.reshape(0, 3))
         if err:
             self._kernel_error(f, err, q[None], False)
         c = np.ascontiguousarray
@@ -369,7 +371,7 @@ class AnalyticChecker(CheckerBase):
 
         def work(k: int) -> int:
             SF, SI, q1 = f.scratch() if n_threads == 1 else f.new_scratch()  # each worker its own
-            return int(entry(Qf, bounds[k], bounds[k + 1], gmap, H, MF, MI, SF, SI, prm, iprm, q1, df, pAf, pBf))
+            return int(entry(f.fn, Qf, bounds[k], bounds[k + 1], gmap, H, MF, MI, SF, SI, prm, iprm, q1, df, pAf, pBf))
 
         if M == 0:
             errs = [0]

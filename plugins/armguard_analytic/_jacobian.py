@@ -50,8 +50,8 @@ class JacobianPlan:
         q0 = np.ascontiguousarray(model.neutral(), dtype=np.float64)
         n = fast.n
         H, MF, MI, prm, iprm = fast.args
-        err = pair_rows(q0, 0, 1, fast.gmap, H, MF, MI, SF, SI, prm, iprm, q1, np.empty(n), np.empty((n, 3)),
-                           np.empty((n, 3)))
+        err = pair_rows(fast.fn, q0, 0, 1, fast.gmap, H, MF, MI, SF, SI, prm, iprm, q1, np.empty(n), np.empty((n, 3)),
+                        np.empty((n, 3)))
         if err:
             checker._kernel_error(fast, int(err), q0[None], False)
         X_WL = det._layout.view(SF, "Xs")

@@ -24,6 +24,7 @@ from armguard.geometry._pair_epa import EPA_WORK_SIZE
 from armguard.kinematics._limits import limit_error, limit_rows
 
 from . import _kernel as kn, _scratch
+from ._entry import addresses, detect_entry
 from ._hulls import link_obbs, vertex_graphs
 from ._layout import EV_W, SUM_SIZE, Layout
 from ._model import CAT_WORKSPACE, build_model
@@ -198,6 +199,7 @@ class FusedDetector(Detector):
             self._iprm_by_mode[mode] = ip
         # per-thread scratch (a report reading the old buffers keeps them alive: nothing to copy)
         self._tls = threading.local()
+        self._fn = addresses()  # the kernels' addresses in this process, the entry points' first argument
         self._entry, self.call_us, self.releases_gil = self._pick_entry(m)
         self._q_shape = (m.n_q,)
         self._names_a = tuple(cs.owner_names[cs.elem_owner[a]] for a in m.pair_a)
@@ -347,11 +349,11 @@ class FusedDetector(Detector):
             iprm[1] = allowance
             iprm[4] = 1 if lazy else 0
         if sel is None:  # the same argument types as check's: its bound overload, without the dispatcher
-            status, n_eval, err = self._entry(q1, self._H, self._MF, self._MI, s.SF, s.SI, self._prm, iprm,
-                                              self._all_p)
+            status, n_eval, err = self._entry(self._fn, q1, self._H, self._MF, self._MI, s.SF, s.SI, self._prm,
+                                              iprm, self._all_p)
         else:
-            status, n_eval, err = kn.detect_entry(q1, self._H, self._MF, self._MI, s.SF, s.SI, self._prm,
-                                                  iprm, sel)
+            status, n_eval, err = detect_entry(self._fn, q1, self._H, self._MF, self._MI, s.SF, s.SI, self._prm,
+                                               iprm, sel)
         if err:
             self._raise_kernel_error(err, q1, "Detector.check: q" if sel is None else "Detector.pair_distances: q")
         return status, n_eval
@@ -520,7 +522,8 @@ class FusedDetector(Detector):
 
         def work(k: int) -> int:  # the kernel releases the GIL: threads run in parallel
             H, MF, MI, prm, ip, sel = per[k]
-            return int(kn.detect_rows(Q, bounds[k], bounds[k + 1], H, MF, MI, SF2[k], SI2[k], prm, ip, sel, min_d, status))
+            return int(kn.detect_rows(Q, bounds[k], bounds[k + 1], H, MF, MI, SF2[k], SI2[k], prm, ip, sel, min_d, status,
+                                      self._fn))
 
         if n_threads == 1:
             errs = [work(0)]

@@ -41,8 +41,9 @@ from ._layout import EV_W, K, SC, at, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, S
 from ._cull import (_argsort_heap, _argsort_small, _bb_gap, _explicit_gap, _gjk_pair, _obb_gap, _push_children, _sb_gap,
                     obb_apart_moving, obb_apart_static)
 from ._narrow import BOUNDED
-from ._step import move_element, pair_step
-from ._static_gjk import static_gjk_pairs
+from ._entry import FN_STATIC, FN_STEP
+from ._step import call_step, move_element
+from ._static_gjk import call_static
 
 MODE_EXACT, MODE_LAZY, MODE_ANYTIME, MODE_YESNO, MODE_ALL, MODE_MIN = 0, 1, 2, 3, 4, 5
 _status_code = njit(cache=True, inline="always")(status_code)  # the framework's rule, compiled
@@ -125,12 +126,14 @@ _SC_n_st = SC["n_st"]
 # The segment views cost no reference counting anyway (numba.carray views, see ._layout), and the
 # per-pair helpers it calls are compiled without it (._step).
 @njit(cache=True, nogil=True)
-def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out):  # pragma: no cover - compiled
+def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out, fns):  # pragma: no cover - compiled
     """Checks of rows ``lo:hi`` of ``Q`` ``(M, n_q)``; per row the nearest distance per category goes to
     ``min_d[m]`` ``(4,)`` and the status code to ``status_out[m]``; the last row's pairs stay in the
     compact outputs (``ev``, ``ev_p``, ``summary``).  ``sel``: the pairs ``MODE_ALL`` evaluates, in
     that order.  Returns an error code (0 none, 1 non-finite q, 2 GJK did not converge, 3 a joint
     outside its limits (``qlim``): the reach lists and lever-arm bounds hold only within them).
+    ``fns``: the kernels' addresses (:func:`._entry.addresses`): the pair step and the static pairs'
+    branch and bound are called there, not linked (:mod:`._native`).
 
     Per check, only the pairs actually evaluated are touched (a per-pair stamp marks them), so the
     cost follows the BVH walk, not the number of candidate pairs; the anytime and lazy modes,
@@ -320,8 +323,8 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                 p = sel[k]
                 a = pair_a[p]
                 b = pair_b[p]
-                d, err = pair_step(p, a, b, flag_no, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
-                                   math.inf, n_eval, stamp_now)
+                d, err = call_step(fns[FN_STEP], (p, a, b, flag_no, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
+                                                   max_iter, woff, lvl, math.inf, n_eval, stamp_now))
                 if err != 0:
                     break
                 n_eval += 1
@@ -365,8 +368,8 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                     continue
                 a = pair_a[p]
                 b = pair_b[p]
-                d, err = pair_step(p, a, b, flag_yes, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
-                                   math.inf, n_eval, stamp_now)
+                d, err = call_step(fns[FN_STEP], (p, a, b, flag_yes, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
+                                                   max_iter, woff, lvl, math.inf, n_eval, stamp_now))
                 if err != 0:
                     break
                 n_eval += 1
@@ -381,8 +384,8 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                         continue
                     a = pair_a[p]
                     b = pair_b[p]
-                    d, err = pair_step(p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
-                                       math.inf, n_eval, stamp_now)
+                    d, err = call_step(fns[FN_STEP], (p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
+                                                       max_iter, woff, lvl, math.inf, n_eval, stamp_now))
                     if err != 0:
                         break
                     n_eval += 1
@@ -435,8 +438,8 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                 and obb_apart_moving(MF, o_obb + 16 * a, o_Xs + 16 * glink[a], o_obb + 16 * b,
                                                      o_Xs + 16 * glink[b], SF, max(cut, 0.0), eps_par)):
                             continue  # boxes containing both, one grown by the cut-off, apart: d > cut
-                        d, err = pair_step(p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
-                                           cut if by_best else math.inf, n_eval, stamp_now)
+                        d, err = call_step(fns[FN_STEP], (p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
+                                                           max_iter, woff, lvl, cut if by_best else math.inf, n_eval, stamp_now))
                         if err == BOUNDED:
                             err = 0
                             continue
@@ -530,8 +533,8 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                                         and obb_apart_static(MF, o_obb + 16 * a, o_Xa, SF, o_box + 15 * b,
                                                              max(cutp, 0.0), eps_par)):
                                     continue  # a's box grown by the cut-off misses the obstacle box: d > cut
-                                d, err = pair_step(p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff, lvl,
-                                                   cutp if by_best else math.inf, n_eval, stamp_now)
+                                d, err = call_step(fns[FN_STEP], (p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
+                                                                   max_iter, woff, lvl, cutp if by_best else math.inf, n_eval, stamp_now))
                                 if err == BOUNDED:
                                     err = 0
                                     continue
@@ -548,8 +551,9 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
                     for i in range(n_sm):
                         has_gjk = has_gjk or core[st_mov[i]] >= 2
                     if by_order and err == 0 and has_gjk:
-                        n_eval, err, hit = static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, track, eps_len, eps_par,
-                                                            gjk_eps, max_iter, woff, lvl, level, n_eval, stamp_now)
+                        n_eval, err, hit = call_static(fns[FN_STATIC], (H, MF, MI, SF, SI, out9, n_st, cut0, track, eps_len,
+                                                                        eps_par, gjk_eps, max_iter, woff, lvl, level, n_eval,
+                                                                        stamp_now, fns))
                         collided = collided or hit
         if err != 0:
             summary[SUM_ERR] = err
@@ -579,20 +583,3 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out)
         status_out[m] = st
     return 0
 
-
-@njit(cache=True, nogil=True)
-def detect_entry(q, H, MF, MI, SF, SI, prm, iprm, sel):  # pragma: no cover - compiled
-    """One check at ``q`` ``(1, n_q)``, returning ``(status, n_evaluated, error)`` (saves reads from Python)."""
-    summary = seg1(SI, H, _K_summary)
-    best = carray(at(SF, H[2 * _K_best]), (1, 4))
-    st = summary[SUM_STATUS:SUM_STATUS + 1]
-    # the row bounds as int64, not literals: the same compiled detect_rows the batches call (a literal
-    # 0 and 1 made numba compile a second, specialised copy of the whole kernel on a cold cache)
-    err = detect_rows(q, np.int64(0), np.int64(1), H, MF, MI, SF, SI, prm, iprm, sel, best, st)
-    return summary[SUM_STATUS], summary[SUM_NEVAL], err
-
-
-@njit(cache=True)
-def detect_entry_held(q, H, MF, MI, SF, SI, prm, iprm, sel):  # pragma: no cover - compiled
-    """:func:`detect_entry` holding the GIL (a check too short for a hand-over to pay, ``_scratch``)."""
-    return detect_entry(q, H, MF, MI, SF, SI, prm, iprm, sel)

@@ -4,7 +4,9 @@
 :func:`pair_rows`: it reorders Pinocchio's joints into the scene's, runs the fused kernel's
 all-pairs mode (:func:`._kernel.detect_rows`, ``MODE_ALL``) and writes each selected pair's row
 straight into the caller's arrays, sides exchanged where the Model holds the pair the other way
-round.  Split from :mod:`._kernel` (it calls that kernel and reads the same packed buffers).
+round.  Split from :mod:`._kernel` (it calls that kernel and reads the same packed buffers); it
+calls the kernel at its address (:func:`._entry.addresses`, the first argument), so it compiles
+its own lines only (:mod:`._native`).
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from numba import carray, njit
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SUM_STATUS, at, seg1, seg2
-from ._kernel import detect_rows
+from ._entry import FN_ROWS, call_rows
 
 __all__ = ["pair_rows", "pair_rows_held"]
 
@@ -28,7 +30,7 @@ _K_summary = K["summary"]
 
 
 @njit(cache=True, nogil=True)
-def pair_rows(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out):  # pragma: no cover - compiled
+def pair_rows(fns, Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out):  # pragma: no cover - compiled
     """Every pair of a selection at rows ``lo:hi`` of ``Q`` (Pinocchio's joint order, flattened:
     row ``m`` is ``Q[m * nq:(m + 1) * nq]``), written straight into the caller's order.
 
@@ -37,6 +39,7 @@ def pair_rows(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, 
     Pinocchio's ``(cos, sin)`` at ``qidx[k]``), output row ``j`` is the detector's pair ``sel[j]``,
     with sides A and B exchanged where ``swap[j]``.  Row ``m``'s pairs go to rows ``m * n_sel + j``
     of ``d_out`` ``(., )`` and ``pA_out`` / ``pB_out`` ``(., 3)``.  ``q1`` ``(1, n_q)``: scratch.
+    ``fns``: :func:`._entry.addresses`.
     Returns 0, else ``err + 4 * m`` for the first failing row ``m`` (``err`` as :func:`detect_rows`).
     Releases the GIL: callers on several threads, each with its own ``SF`` / ``SI`` / ``q1``, run in
     parallel (:func:`pair_rows_held` holds it)."""
@@ -63,7 +66,8 @@ def pair_rows(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, 
             k = gmap[o_circ + c]
             i = b + gmap[4 + k]
             q1[0, k] = math.atan2(Q[i + 1], Q[i])
-        err = detect_rows(q1, np.int64(0), np.int64(1), H, MF, MI, SF, SI, prm, iprm, sel, best, st)
+        err = call_rows(fns[FN_ROWS], (q1, np.int64(0), np.int64(1), H, MF, MI, SF, SI, prm, iprm, sel, best, st,
+                                       fns))
         if err != 0:
             return err + 4 * m
         o = m * n_sel
@@ -82,7 +86,7 @@ def pair_rows(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, 
 
 
 @njit(cache=True)
-def pair_rows_held(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out):  # pragma: no cover - compiled
+def pair_rows_held(fns, Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out):  # pragma: no cover - compiled
     """:func:`pair_rows`, the GIL held: for calls so short that handing the GIL to another thread and
     back costs more than the call (``AnalyticChecker`` picks it by the call's measured time)."""
-    return pair_rows(Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out)
+    return pair_rows(fns, Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out)

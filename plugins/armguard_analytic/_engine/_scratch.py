@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import _kernel as kn
+from . import _entry, _kernel as kn
 
 if TYPE_CHECKING:
     from ._detector import FusedDetector
@@ -53,7 +53,7 @@ def median_call_us(run, Q: np.ndarray) -> float:
 def _entry_point(*args, release_gil: bool = True):
     """The compiled ``detect_entry`` (or, holding the GIL, ``detect_entry_held``) for these
     argument types (:func:`compiled`)."""
-    return compiled(kn.detect_entry if release_gil else kn.detect_entry_held, args)
+    return compiled(_entry.detect_entry if release_gil else _entry.detect_entry_held, args)
 
 
 class _Scratch:
@@ -75,6 +75,6 @@ class _Scratch:
         self.pflag = L.view(self.SI, "pflag")
         self.plb = L.view(self.SF, "plb")
         self.iprm_by_mode = {mode: ip.copy() for mode, ip in det._iprm_by_mode.items()}
-        self.entry_args = (self.q1, det._H, det._MF, det._MI, self.SF, self.SI, det._prm,
+        self.entry_args = (det._fn, self.q1, det._H, det._MF, det._MI, self.SF, self.SI, det._prm,
                            self.iprm_by_mode[kn.MODE_EXACT], det._all_p)
         self.last_raw = None  # this thread's last report, still reading SF / SI

@@ -17,12 +17,13 @@ ten minutes; numba 0.68).  A cold-cache test (``tests/test_detect_cold.py``) gua
 
 from __future__ import annotations
 
-from numba import njit
+from numba import njit, types
 
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SUM_BEST, SUM_BSLOT
 from ._narrow import BOUNDED, LINK_FRAME, narrow_flat, narrow_other, narrow_rel, wall_flat
+from ._native import native_caller
 
 __all__ = ["evaluate_pair", "move_element", "move_pair", "pair_step", "record_pair"]
 
@@ -163,3 +164,12 @@ def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
             SI[H[2 * _K_pflag] + p] = 1
         record_pair(p, MI[H[2 * _K_pair_cat] + p], d, n_eval, H, SF, SI, stamp_now)
     return d, err
+
+
+_F1, _I1, _f, _i = types.float64[::1], types.int64[::1], types.float64, types.int64
+STEP_ARGTYPES = (_i, _i, _i, types.boolean, _I1, _F1, _I1, _F1, _I1, _F1, _f, _f, _f, _i, _f, _f, _f, _i, _i)
+STEP_RETURN = types.Tuple((_f, _i))
+""":func:`pair_step`'s argument and return types: the one overload its native callers call."""
+call_step = native_caller(STEP_RETURN, STEP_ARGTYPES)
+"""``call_step(fn, (p, a, b, ...))``: :func:`pair_step` at address ``fn`` (``fns[FN_STEP]``, :mod:`._entry`):
+the fused kernel and the static pairs' branch and bound call it so, and compile without its tree."""

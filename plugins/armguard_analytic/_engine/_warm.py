@@ -1,15 +1,17 @@
 """The analytic backend's first-run warm-up: what ``AnalyticBackend.warm_up`` and
 ``warm_up_leaves`` give the framework's :mod:`armguard.cli._compile`.
 
-The fused kernel is one chain of compiled calls (``detect_entry -> detect_rows -> pair_step ->
-narrow_other -> pair_distance ->`` the pair kernels): on a cold cache numba compiles it in one
-thread, over a minute on a 2-core machine, more than half of it in a few leaf kernels that share
-nothing.  Compiled first with the signatures the chain calls them with (some in a second process,
-the others in the first), they are in numba's on-disk cache when the chain reaches them, and it
-only loads them.  A signature that no longer matches the chain's call costs time, never an answer: the
-chain then compiles that kernel itself (tests/test_detect_cold.py checks they all match).  The
-chain above the leaves (:data:`LEAVES_AFTER`) compiles in the second process too, once the first
-has its leaves, while the first compiles the geometry kernels and then the Detector's entry points.
+The fused kernel is a chain of compiled calls (``detect_entry => detect_rows => pair_step ->
+narrow_other -> pair_distance ->`` the pair kernels; ``=>`` a call at an address, :mod:`._entry`,
+``->`` a linked call): on a cold cache numba compiles it in one thread, over a minute on a 2-core
+machine, more than half of it in a few leaf kernels that share nothing.  Compiled first with the
+signatures the chain calls them with (some in a second process, the others in the first), they are
+in numba's on-disk cache when the chain reaches them, and it only loads them.  A signature that no
+longer matches the chain's call costs time, never an answer: the chain then compiles that kernel
+itself (tests/test_detect_cold.py checks they all match).  The kernels called at an address link
+none of the others' trees: ``detect_rows`` and ``static_gjk_pairs`` are leaves of the second
+process; the pair step (:data:`LEAVES_AFTER`) compiles there too, once the first process has its
+leaves, while the first compiles the geometry kernels and then the Detector's entry points.
 Codes: F1/F2 float64 C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64, b boolean.
 """
 
@@ -29,6 +31,11 @@ LEAVES_SIDE = (
     # the scalar pairs' step (capsules, boxes, walls; narrow_flat compiles inside it)
     ("armguard_analytic._engine._step", "evaluate_pair", "i i I1 F1 I1 F1 I1 F1 f f f i"),
     ("armguard_analytic._engine._narrow", "narrow_flat", "i i I1 F1 I1 F1 F1 f f f"),
+    # the fused rows and the static pairs' branch and bound: they call the pair step at its address
+    # (._entry), so they need no other kernel of either list and compile here while the first
+    # process compiles the geometry kernels
+    ("armguard_analytic._engine._static_gjk", "static_gjk_pairs", "I1 F1 I1 F1 I1 F1 i f b f f f i f f f i i I1"),
+    ("armguard_analytic._engine._kernel", "detect_rows", "F2 i i I1 F1 I1 F1 I1 F1 I1 I1 F2 I1 I1"),
 )
 """Leaf kernels compiled in the second process: (module, function, signature codes)."""
 LEAVES_MAIN = (
@@ -50,14 +57,12 @@ LEAVES_MAIN = (
 )
 """Leaf kernels compiled in the first process while the second compiles :data:`LEAVES_SIDE`."""
 LEAVES_AFTER = (
-    # the chain above the leaves, in the second process once the first has compiled its leaves (while
-    # the first compiles the geometry kernels): the pair step, the static pairs' branch and bound,
-    # the fused rows, then the Checker's entry points while the first compiles the Detector's
+    # the pair step (it links narrow_rel and evaluate_pair from the second process's list and
+    # narrow_other from the first's), in the second process once the first has compiled its leaves,
+    # then the Checker's entry points while the first compiles the Detector's
     ("armguard_analytic._engine._step", "pair_step", "i i i b I1 F1 I1 F1 I1 F1 f f f i f f f i i"),
-    ("armguard_analytic._engine._static_gjk", "static_gjk_pairs", "I1 F1 I1 F1 I1 F1 i f b f f f i f f f i i"),
-    ("armguard_analytic._engine._kernel", "detect_rows", "F2 i i I1 F1 I1 F1 I1 F1 I1 I1 F2 I1"),
-    ("armguard_analytic._engine._pair_rows", "pair_rows", "F1 i i I1 I1 F1 I1 F1 I1 F1 I1 F2 F1 F2 F2"),
-    ("armguard_analytic._engine._pair_rows", "pair_rows_held", "F1 i i I1 I1 F1 I1 F1 I1 F1 I1 F2 F1 F2 F2"),
+    ("armguard_analytic._engine._pair_rows", "pair_rows", "I1 F1 i i I1 I1 F1 I1 F1 I1 F1 I1 F2 F1 F2 F2"),
+    ("armguard_analytic._engine._pair_rows", "pair_rows_held", "I1 F1 i i I1 I1 F1 I1 F1 I1 F1 I1 F2 F1 F2 F2"),
 )
 """Kernels the second process compiles after the first process's :data:`LEAVES_MAIN` (they call
 kernels of both lists); :func:`warm_up` waits for them by name."""
@@ -68,15 +73,16 @@ def warm_up(scene, wait=None) -> None:
     ``scene``, both GIL policies, with the argument types their callers pass.
 
     ``wait(name)`` (the framework's, while a second process compiles :data:`LEAVES_AFTER`) blocks
-    until that process has compiled kernel ``name``: the Detector's entry points are compiled here
-    once ``detect_rows`` is in numba's cache, the Checker's (``pair_rows``) are loaded once there."""
+    until that process has compiled kernel ``name``: the Detector is built once the kernels whose
+    addresses it takes (``pair_step`` last) are in numba's cache, the Checker's entry points
+    (``pair_rows``) are loaded once there."""
     wait = wait or (lambda name: None)
     from . import _kernel as kn
     from ._detector import FusedDetector
     from ._pair_rows import pair_rows, pair_rows_held
     from ._scratch import _entry_point, _Scratch
 
-    wait("detect_rows")
+    wait("pair_step")
     det = FusedDetector(scene, threshold=0.05)
     q = scene.flat_q(scene.default_q())
     det.check(q)
@@ -87,7 +93,7 @@ def warm_up(scene, wait=None) -> None:
     # the Checker's pair_distances(_many): pair_rows, with the argument types it is given
     n, nq = det.n_pairs, len(q)
     gmap = np.concatenate([[nq, nq, 0, n], np.arange(nq), np.arange(n), np.zeros(n)]).astype(np.int64)
-    call = (np.ascontiguousarray(q, dtype=np.float64), 0, 1, gmap, det._H, det._MF, det._MI, s.SF, s.SI, det._prm,
+    call = (det._fn, np.ascontiguousarray(q, dtype=np.float64), 0, 1, gmap, det._H, det._MF, det._MI, s.SF, s.SI, det._prm,
             det._iprm_by_mode[kn.MODE_ALL], s.q1, np.empty(n), np.empty((n, 3)), np.empty((n, 3)))
     wait("pair_rows")
     pair_rows(*call)
