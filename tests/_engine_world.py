@@ -24,6 +24,7 @@ def world_pair_distance(det, a: int, b: int) -> tuple:
     """``(distance, error)`` of elements ``a``, ``b`` by the generic kernel on the W data."""
     from armguard.geometry._pair_cylinder import SUPPORT_WORK_SIZE
     from armguard.geometry._pair_epa import EPA_WORK_SIZE
+    from armguard_analytic._engine._calls import addresses
     from armguard_analytic._engine._narrow import pair_distance
 
     L, tol = det._layout, det._tol
@@ -33,7 +34,7 @@ def world_pair_distance(det, a: int, b: int) -> tuple:
                          V(det._SF, "boxW"), V(det._SF, "fnW"), V(det._MI, "pstart"), V(det._SF, "edW"),
                          V(det._MI, "estart"), V(det._MI, "gadj"), V(det._MI, "gadjs"), V(det._MI, "gtri"),
                          V(det._MI, "gtris"), out, work, tol.length, tol.parallel, tol.gjk_epsilon,
-                         tol.gjk_max_iterations, tol.penetration_witness_offset, -np.inf)
+                         tol.gjk_max_iterations, tol.penetration_witness_offset, -np.inf, addresses())
 
 
 def random_rotation(rng) -> np.ndarray:

@@ -1,9 +1,9 @@
 """Calls between compiled kernels at an address (armguard_analytic._engine._native).
 
-The fused kernel's entry points call it, and it calls the pair step and the static pairs' branch
-and bound, at addresses looked up in the calling process: the answers must be those of a linked
-call, an exception in the callee must reach the caller, and a call with other argument types than
-the callee's must not compile.
+The fused kernel's entry points call it, it calls the pair step and the static pairs' branch
+and bound, and the narrow phase its large pair kernels, at addresses looked up in the calling
+process: the answers must be those of a linked call, an exception in the callee must reach the
+caller, and a call with other argument types than the callee's must not compile.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import pytest
 from numba import njit, types
 from numba.core.errors import TypingError
 
-from armguard_analytic._engine import _entry
+from armguard_analytic._engine import _calls
 from armguard_analytic._engine._native import native_address, native_caller
 
 _ARGS = (types.float64[::1], types.int64)
@@ -77,11 +77,12 @@ def test_a_callee_returning_another_type_is_refused():
 
 def test_the_kernels_addresses_are_one_array_per_process_whichever_thread_asks():
     got = []
-    threads = [threading.Thread(target=lambda: got.append(_entry.addresses())) for _ in range(4)]
+    threads = [threading.Thread(target=lambda: got.append(_calls.addresses())) for _ in range(4)]
     for t in threads:
         t.start()
     for t in threads:
         t.join()
     assert len(got) == 4 and all(a is got[0] for a in got)
-    assert got[0].dtype == np.int64 and got[0].shape == (3,) and np.all(got[0] != 0)
-    assert len(set(got[0].tolist())) == 3  # three kernels, three addresses
+    fns = got[0]
+    assert fns.dtype == np.int64 and fns.shape == (len(_calls.NATIVE),) and np.all(fns != 0)
+    assert len(set(fns.tolist())) == len(_calls.NATIVE)  # one kernel, one address

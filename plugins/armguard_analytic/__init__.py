@@ -72,7 +72,7 @@ class _Fast:
 
     def __init__(self, checker: "AnalyticChecker", release_gil: bool | None = None) -> None:
         from ._engine import _kernel as kn
-        from ._engine._entry import addresses
+        from ._engine._calls import addresses
         from ._engine._pair_rows import pair_rows, pair_rows_held
         from ._engine._scratch import GIL_RELEASE_US, compiled, median_call_us
 

@@ -24,7 +24,8 @@ from armguard.geometry._pair_epa import EPA_WORK_SIZE
 from armguard.kinematics._limits import limit_error, limit_rows
 
 from . import _kernel as kn, _scratch
-from ._entry import addresses, detect_entry
+from ._calls import addresses
+from ._entry import detect_entry
 from ._hulls import link_obbs, vertex_graphs
 from ._layout import EV_W, SUM_SIZE, Layout
 from ._model import CAT_WORKSPACE, build_model

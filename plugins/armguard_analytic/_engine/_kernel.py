@@ -41,9 +41,8 @@ from ._layout import EV_W, K, SC, at, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, S
 from ._cull import (_argsort_heap, _argsort_small, _bb_gap, _explicit_gap, _gjk_pair, _obb_gap, _push_children, _sb_gap,
                     obb_apart_moving, obb_apart_static)
 from ._narrow import BOUNDED
-from ._entry import FN_STATIC, FN_STEP
-from ._step import call_step, move_element
-from ._static_gjk import call_static
+from ._calls import FN_STATIC, call_static
+from ._step import move_element, pair_step
 
 MODE_EXACT, MODE_LAZY, MODE_ANYTIME, MODE_YESNO, MODE_ALL, MODE_MIN = 0, 1, 2, 3, 4, 5
 _status_code = njit(cache=True, inline="always")(status_code)  # the framework's rule, compiled
@@ -132,7 +131,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out,
     compact outputs (``ev``, ``ev_p``, ``summary``).  ``sel``: the pairs ``MODE_ALL`` evaluates, in
     that order.  Returns an error code (0 none, 1 non-finite q, 2 GJK did not converge, 3 a joint
     outside its limits (``qlim``): the reach lists and lever-arm bounds hold only within them).
-    ``fns``: the kernels' addresses (:func:`._entry.addresses`): the pair step and the static pairs'
+    ``fns``: the kernels' addresses (:func:`._calls.addresses`): the pair step and the static pairs'
     branch and bound are called there, not linked (:mod:`._native`).
 
     Per check, only the pairs actually evaluated are touched (a per-pair stamp marks them), so the
@@ -323,8 +322,8 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out,
                 p = sel[k]
                 a = pair_a[p]
                 b = pair_b[p]
-                d, err = call_step(fns[FN_STEP], (p, a, b, flag_no, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
-                                                   max_iter, woff, lvl, math.inf, n_eval, stamp_now))
+                d, err = pair_step(p, a, b, flag_no, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
+                                   max_iter, woff, lvl, math.inf, n_eval, stamp_now, fns)
                 if err != 0:
                     break
                 n_eval += 1
@@ -368,8 +367,8 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out,
                     continue
                 a = pair_a[p]
                 b = pair_b[p]
-                d, err = call_step(fns[FN_STEP], (p, a, b, flag_yes, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
-                                                   max_iter, woff, lvl, math.inf, n_eval, stamp_now))
+                d, err = pair_step(p, a, b, flag_yes, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
+                                   max_iter, woff, lvl, math.inf, n_eval, stamp_now, fns)
                 if err != 0:
                     break
                 n_eval += 1
@@ -384,8 +383,8 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out,
                         continue
                     a = pair_a[p]
                     b = pair_b[p]
-                    d, err = call_step(fns[FN_STEP], (p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
-                                                       max_iter, woff, lvl, math.inf, n_eval, stamp_now))
+                    d, err = pair_step(p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
+                                       max_iter, woff, lvl, math.inf, n_eval, stamp_now, fns)
                     if err != 0:
                         break
                     n_eval += 1
@@ -438,8 +437,9 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out,
                                 and obb_apart_moving(MF, o_obb + 16 * a, o_Xs + 16 * glink[a], o_obb + 16 * b,
                                                      o_Xs + 16 * glink[b], SF, max(cut, 0.0), eps_par)):
                             continue  # boxes containing both, one grown by the cut-off, apart: d > cut
-                        d, err = call_step(fns[FN_STEP], (p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
-                                                           max_iter, woff, lvl, cut if by_best else math.inf, n_eval, stamp_now))
+                        d, err = pair_step(p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
+                                           max_iter, woff, lvl, cut if by_best else math.inf, n_eval,
+                                           stamp_now, fns)
                         if err == BOUNDED:
                             err = 0
                             continue
@@ -533,8 +533,9 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out,
                                         and obb_apart_static(MF, o_obb + 16 * a, o_Xa, SF, o_box + 15 * b,
                                                              max(cutp, 0.0), eps_par)):
                                     continue  # a's box grown by the cut-off misses the obstacle box: d > cut
-                                d, err = call_step(fns[FN_STEP], (p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
-                                                                   max_iter, woff, lvl, cutp if by_best else math.inf, n_eval, stamp_now))
+                                d, err = pair_step(p, a, b, track, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
+                                                   max_iter, woff, lvl, cutp if by_best else math.inf,
+                                                   n_eval, stamp_now, fns)
                                 if err == BOUNDED:
                                     err = 0
                                     continue

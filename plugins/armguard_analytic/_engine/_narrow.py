@@ -29,15 +29,16 @@ from numba import njit
 from armguard.geometry._pair_segment_box import capsule_box_scalar
 from armguard.geometry._pair_segment_polytope import capsule_polytope_at
 from armguard.geometry._pair_segment_segment import capsule_capsule_scalar
-from armguard.geometry._pair_cylinder import support_pair_graph
-from armguard.geometry._pair_epa import EPA_WORK_SIZE, convex_convex_fast, epa_depth
-from armguard.geometry._pair_gjk import GJK_SEPARATED, _inner_point, gjk_dir_rel
+from armguard.geometry._pair_epa import EPA_WORK_SIZE
+from armguard.geometry._pair_gjk import GJK_SEPARATED, _inner_point
 from armguard.geometry._pair_sat_rel import sat_cost, sat_depth_rel, sat_witnesses_rel
 from armguard.geometry._pair_segment_segment import write_rounded
 from armguard.geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_capsule
 
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
+from ._calls import (FN_CAPSULE_POLY, FN_CONVEX, FN_EPA, FN_GJK_REL, FN_SAT_REL, FN_SUPPORT, call_capsule_poly,
+                     call_convex, call_epa, call_gjk_rel, call_sat_rel, call_support)
 from ._layout import K, seg1, seg2
 
 __all__ = ["pair_distance", "narrow_flat", "narrow_other", "narrow_rel", "wall_flat", "ERR_GJK", "NOT_SCALAR",
@@ -80,7 +81,7 @@ def _capsule_box(verts, vs, ve, ra, box, gb, out, eps_len, eps_par, offset):  # 
 @njit(cache=True)
 def pair_distance(
     ga, gb, core, radius, verts, vstart, box, fnrm, fstart, edir, estart, adj, adjs, tri, tris, out, work,
-    eps_len, eps_par, gjk_eps, max_iter, offset, level,
+    eps_len, eps_par, gjk_eps, max_iter, offset, level, fns,
 ):  # pragma: no cover - compiled
     """Signed distance (m) of elements ``ga`` (A) and ``gb`` (B); writes ``out[0:9]`` =
     ``[p_WA, p_WB, nhat_AB_W]``.  Returns ``(distance, error)``; ``error`` is 0 or ``ERR_GJK``.
@@ -118,19 +119,19 @@ def pair_distance(
         ca = box[ga] if ka == _CYLINDER else box[ga, 0:0]  # an empty buffer: the hull of the points
         cb = box[gb] if kb == _CYLINDER else box[gb, 0:0]
         none = adj[0:0]  # no support tables on this path (one compiled signature with narrow_rel's calls)
-        d, status = support_pair_graph(verts[vstart[ga]:vstart[ga + 1]], adj[adjs[ga]:adjs[ga + 1]], ca, ra,
-                                       verts[vstart[gb]:vstart[gb + 1]], adj[adjs[gb]:adjs[gb + 1]], cb, rb,
-                                       out, work, eps_len, gjk_eps, max_iter, level, none, none)
+        d, status = call_support(fns[FN_SUPPORT], (verts[vstart[ga]:vstart[ga + 1]], adj[adjs[ga]:adjs[ga + 1]], ca, ra,
+                                                   verts[vstart[gb]:vstart[gb + 1]], adj[adjs[gb]:adjs[gb + 1]], cb, rb,
+                                                   out, work, eps_len, gjk_eps, max_iter, level, none, none))
         if status == GJK_NOT_CONVERGED:
             return d, ERR_GJK
         return d, 0
-    d, status = convex_convex_fast(
+    d, status = call_convex(fns[FN_CONVEX], (
         verts[vstart[ga]:vstart[ga + 1]], fnrm[fstart[ga]:fstart[ga + 1]], edir[estart[ga]:estart[ga + 1]],
         adj[adjs[ga]:adjs[ga + 1]], tri[tris[ga]:tris[ga + 1]], ra,
         verts[vstart[gb]:vstart[gb + 1]], fnrm[fstart[gb]:fstart[gb + 1]], edir[estart[gb]:estart[gb + 1]],
         adj[adjs[gb]:adjs[gb + 1]], tri[tris[gb]:tris[gb + 1]], rb,
         out, work, eps_len, eps_par, gjk_eps, max_iter, offset, level,
-    )
+    ))
     if status == 2:
         return d, ERR_GJK
     return d, 0
@@ -204,7 +205,7 @@ def narrow_flat(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, offset):  # pragma
 
 
 @njit(cache=True)
-def narrow_other(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, offset, level):  # pragma: no cover
+def narrow_other(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, offset, level, fns):  # pragma: no cover
     """The pairs :func:`narrow_flat` leaves (``NOT_SCALAR``): capsule against a static polytope through
     the capsule-polytope kernel, everything else through :func:`pair_distance`.
 
@@ -224,10 +225,10 @@ def narrow_other(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter
         for i in range(3):
             seg[0, i] = SF[ov + 3 * va + i]
             seg[1, i] = SF[ov + 3 * ja + i]
-        d, status = _capsule_polytope(
+        d, status = call_capsule_poly(fns[FN_CAPSULE_POLY], (
             seg, MF[orad + ga], k, seg2(MF, H, _K_pv, 3), seg2(MF, H, _K_ppl, 4), seg2(MI, H, _K_ped, 4),
             seg2(MF, H, _K_pbis, 3), seg2(MF, H, _K_pcen, 3), seg1(MI, H, _K_pvs), seg1(MI, H, _K_pps),
-            seg1(MI, H, _K_pes), MF[orad + gb], out, eps_len, eps_par, gjk_eps, max_iter, offset)
+            seg1(MI, H, _K_pes), MF[orad + gb], out, eps_len, eps_par, gjk_eps, max_iter, offset))
         if status == GJK_NOT_CONVERGED:
             return d, ERR_GJK
         return d, 0
@@ -235,7 +236,7 @@ def narrow_other(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter
                          seg1(MI, H, _K_vstart), seg2(SF, H, _K_boxW, 15), seg2(SF, H, _K_fnW, 3), seg1(MI, H, _K_pstart),
                          seg2(SF, H, _K_edW, 3), seg1(MI, H, _K_estart), seg1(MI, H, _K_gadj), seg1(MI, H, _K_gadjs),
                          seg2(MI, H, _K_gtri, 3), seg1(MI, H, _K_gtris), out, seg1(SF, H, _K_work),
-                         eps_len, eps_par, gjk_eps, max_iter, offset, level)
+                         eps_len, eps_par, gjk_eps, max_iter, offset, level, fns)
 
 
 @njit(cache=True, inline="always")
@@ -279,7 +280,7 @@ def _to_world(SF, o, x, y, z, w):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _cylinder_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level):  # pragma: no cover - compiled
+def _cylinder_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, fns):  # pragma: no cover - compiled
     """:func:`narrow_rel` for a cylinder against a polytope core: the cylinder's 15-float buffer is
     mapped into the polytope's element frame F (``X_FC = X_WF^-1 X_WL X_LC``), GJK and EPA on support
     functions run there (:func:`armguard.geometry._pair_cylinder.support_pair_graph`, the polytope's
@@ -323,11 +324,11 @@ def _cylinder_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level)
     ra = MF[H[2 * _K_radius] + ga]
     rb = MF[H[2 * _K_radius] + gb]
     if cyl_a:
-        d, status = support_pair_graph(pc, gc, cyl, ra, ph, gh, none, rb, out, work[0:nw], eps_len, gjk_eps, max_iter,
-                                       level, th[0:0], th)
+        d, status = call_support(fns[FN_SUPPORT], (pc, gc, cyl, ra, ph, gh, none, rb, out, work[0:nw], eps_len, gjk_eps,
+                                                   max_iter, level, th[0:0], th))
     else:
-        d, status = support_pair_graph(ph, gh, none, ra, pc, gc, cyl, rb, out, work[0:nw], eps_len, gjk_eps, max_iter,
-                                       level, th, th[0:0])
+        d, status = call_support(fns[FN_SUPPORT], (ph, gh, none, ra, pc, gc, cyl, rb, out, work[0:nw], eps_len, gjk_eps,
+                                                   max_iter, level, th, th[0:0]))
     if status == GJK_NOT_CONVERGED:
         return d, ERR_GJK
     out[0], out[1], out[2] = _to_world(SF, oF, out[0], out[1], out[2], 1.0)
@@ -363,7 +364,7 @@ def _sat_rel(pa, fa, ea, adja, taba, ra, pb, fb, eb, adjb, tabb, rb, rot, tx, ty
 
 @njit(cache=True)
 def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, offset, level,
-               beyond):  # pragma: no cover - compiled
+               beyond, fns):  # pragma: no cover - compiled
     """Two convex point cores (boxes, hulls; a point or segment against a polytope) whose points stay
     in their element frames: GJK in A's frame
     on hull(A) and ``X_AB hull(B)``, ``X_AB = X_WA^-1 X_WB`` (:func:`armguard.geometry._pair_gjk.gjk_dir_rel`),
@@ -385,7 +386,7 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, 
     polytope: :func:`_cylinder_rel` (the whole pair in the polytope's frame, depth included)."""
     oc = H[2 * _K_core]
     if MI[oc + ga] == _CYLINDER or MI[oc + gb] == _CYLINDER:
-        return _cylinder_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level)
+        return _cylinder_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, fns)
     ovs = H[2 * _K_vstart]
     ov = H[2 * _K_verts_L]
     ogs = H[2 * _K_gadjs]
@@ -415,8 +416,9 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, 
     sz = rot[6] * hx + rot[7] * hy + rot[8] * hz + tz
     lim = level if beyond == math.inf else max(level, beyond)
     sep = lim + (ra + rb) if lim > -math.inf else math.inf
-    status, d, ax, ay, az, bx, by, bz = gjk_dir_rel(pa, adja, taba, pb, adjb, tabb, rot, tx, ty, tz, gx - sx, gy - sy, gz - sz,
-                                                    eps_len, gjk_eps, max_iter, simp, max(sep, 0.0))
+    status, d, ax, ay, az, bx, by, bz = call_gjk_rel(fns[FN_GJK_REL], (pa, adja, taba, pb, adjb, tabb, rot, tx, ty, tz,
+                                                                       gx - sx, gy - sy, gz - sz, eps_len, gjk_eps,
+                                                                       max_iter, simp, max(sep, 0.0)))
     inside = status != GJK_SEPARATED and status != GJK_NOT_CONVERGED and simp[0] == 1.0
     if inside and -(ra + rb) > level:  # overlapping cores, a depth wanted: EPA in A's frame as well
         # a depth below cap would leave the signed distance above ``beyond``: EPA may stop at that proof
@@ -432,10 +434,11 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, 
             eb = eL[MI[oes + gb]:MI[oes + gb + 1]]
             if nw < EPA_WORK_SIZE or sat_cost(pa.shape[0], fa.shape[0], ea.shape[0], pb.shape[0], fb.shape[0],
                                                eb.shape[0]) <= SAT_REL_BUDGET:
-                return _sat_rel(pa, fa, ea, adja, taba, ra, pb, fb, eb, adjb, tabb, rb, rot, tx, ty, tz, SF, oA, out,
-                                simp, eps_len, eps_par, gjk_eps, max_iter, offset, cap)
-        ok, depth, nx, ny, nz, ax, ay, az, bx, by, bz = epa_depth(pa, adja, pb, adjb, work[0:nw], gjk_eps, rot,
-                                                                  tx, ty, tz, taba, tabb, cap)
+                return call_sat_rel(fns[FN_SAT_REL], (pa, fa, ea, adja, taba, ra, pb, fb, eb, adjb, tabb, rb, rot, tx, ty,
+                                                      tz, SF, oA, out, simp, eps_len, eps_par, gjk_eps, max_iter, offset,
+                                                      cap))
+        ok, depth, nx, ny, nz, ax, ay, az, bx, by, bz = call_epa(fns[FN_EPA], (pa, adja, pb, adjb, work[0:nw], gjk_eps,
+                                                                               rot, tx, ty, tz, taba, tabb, cap))
         if ok and depth < cap:
             return -depth - (ra + rb), BOUNDED  # depth < cap: distance > beyond (an upper bound, no witnesses)
         if ok and depth > eps_len:

@@ -5,7 +5,7 @@
 all-pairs mode (:func:`._kernel.detect_rows`, ``MODE_ALL``) and writes each selected pair's row
 straight into the caller's arrays, sides exchanged where the Model holds the pair the other way
 round.  Split from :mod:`._kernel` (it calls that kernel and reads the same packed buffers); it
-calls the kernel at its address (:func:`._entry.addresses`, the first argument), so it compiles
+calls the kernel at its address (:func:`._calls.addresses`, the first argument), so it compiles
 its own lines only (:mod:`._native`).
 """
 
@@ -20,7 +20,7 @@ from numba import carray, njit
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SUM_STATUS, at, seg1, seg2
-from ._entry import FN_ROWS, call_rows
+from ._calls import FN_ROWS, call_rows
 
 __all__ = ["pair_rows", "pair_rows_held"]
 
@@ -39,7 +39,7 @@ def pair_rows(fns, Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_
     Pinocchio's ``(cos, sin)`` at ``qidx[k]``), output row ``j`` is the detector's pair ``sel[j]``,
     with sides A and B exchanged where ``swap[j]``.  Row ``m``'s pairs go to rows ``m * n_sel + j``
     of ``d_out`` ``(., )`` and ``pA_out`` / ``pB_out`` ``(., 3)``.  ``q1`` ``(1, n_q)``: scratch.
-    ``fns``: :func:`._entry.addresses`.
+    ``fns``: :func:`._calls.addresses`.
     Returns 0, else ``err + 4 * m`` for the first failing row ``m`` (``err`` as :func:`detect_rows`).
     Releases the GIL: callers on several threads, each with its own ``SF`` / ``SI`` / ``q1``, run in
     parallel (:func:`pair_rows_held` holds it)."""

@@ -28,15 +28,13 @@ import math
 
 import numpy as np
 
-from numba import njit, types
+from numba import njit
 
 from ._cull import (_argsort_small, _bb_gap, _face_sep, _near_leaf, _obb_gap, _obb_w, _push_children, _sb_gap,
                     obb_apart_static)
 from ._layout import K, seg1, seg2
 from ._narrow import BOUNDED
-from ._native import native_caller
-from ._entry import FN_STEP
-from ._step import call_step
+from ._calls import FN_STEP, call_step
 
 __all__ = ["static_gjk_pairs"]
 
@@ -142,7 +140,7 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
     """The moving-static pairs of the GJK elements of ``st_mov`` (see the module docstring); the
     kernel's buffers (meminfo-free views), ``cut0`` its base cut-off (``-inf`` in the min mode, the
     effective threshold in the exact mode).  Returns ``(n_eval, error, collided)``.  ``fns``: the
-    kernels' addresses (:func:`._entry.addresses`; the pair step is called at ``fns[FN_STEP]``)."""
+    kernels' addresses (:func:`._calls.addresses`; the pair step is called at ``fns[FN_STEP]``)."""
     core = seg1(MI, H, _K_core)
     mov_idx = seg1(MI, H, _K_mov_idx)
     st_mov = seg1(MI, H, _K_st_mov)
@@ -233,7 +231,7 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
     if p_seed >= 0 and pstamp[p_seed] != stamp_now:
         d, err = call_step(fns[FN_STEP], (p_seed, pair_a[p_seed], pair_b[p_seed], flag, H, MF, MI, SF, SI, out9, eps_len,
                                           eps_par, gjk_eps, max_iter, woff, lvl, max(cut0, best[pair_cat[p_seed]]), n_eval,
-                                          stamp_now))
+                                          stamp_now, fns))
         if err == BOUNDED:
             err = 0
         elif err != 0:
@@ -315,7 +313,7 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
                                      eps_par)):
             continue  # a's box grown by the cut-off misses the obstacle box: d > cut
         d, err = call_step(fns[FN_STEP], (p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, woff,
-                                          lvl, cutp, n_eval, stamp_now))
+                                          lvl, cutp, n_eval, stamp_now, fns))
         if err == BOUNDED:
             err = 0
             continue
@@ -326,10 +324,3 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
             collided = True
     return n_eval, err, collided
 
-
-_F1, _I1, _f, _i = types.float64[::1], types.int64[::1], types.float64, types.int64
-STATIC_ARGTYPES = (_I1, _F1, _I1, _F1, _I1, _F1, _i, _f, types.boolean, _f, _f, _f, _i, _f, _f, _f, _i, _i, _I1)
-STATIC_RETURN = types.Tuple((_i, _i, types.boolean))
-""":func:`static_gjk_pairs`' argument and return types: the one overload the fused kernel calls."""
-call_static = native_caller(STATIC_RETURN, STATIC_ARGTYPES)
-"""``call_static(fn, (H, MF, ...))``: :func:`static_gjk_pairs` at address ``fn`` (``fns[FN_STATIC]``)."""

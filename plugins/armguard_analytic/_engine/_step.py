@@ -17,13 +17,13 @@ ten minutes; numba 0.68).  A cold-cache test (``tests/test_detect_cold.py``) gua
 
 from __future__ import annotations
 
-from numba import njit, types
+from numba import njit
 
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SUM_BEST, SUM_BSLOT
-from ._narrow import BOUNDED, LINK_FRAME, narrow_flat, narrow_other, narrow_rel, wall_flat
-from ._native import native_caller
+from ._calls import FN_NARROW_OTHER, FN_NARROW_REL, call_narrow_other, call_narrow_rel
+from ._narrow import BOUNDED, LINK_FRAME, narrow_flat, wall_flat
 
 __all__ = ["evaluate_pair", "move_element", "move_pair", "pair_step", "record_pair"]
 
@@ -136,7 +136,7 @@ def move_pair(a, b, H, MF, MI, SF, SI, stamp_now):  # pragma: no cover - compile
 
 @njit(cache=True)
 def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, offset, level, beyond, n_eval,
-              stamp_now):  # pragma: no cover - compiled
+              stamp_now, fns):  # pragma: no cover - compiled
     """One pair of the kernel: :func:`evaluate_pair`, :func:`._narrow.narrow_other` for the pairs it
     leaves, then (no error) :func:`record_pair` as row ``n_eval`` and, when ``flag``, the pair's
     report flag 1 (evaluated).  ``level`` as in ``narrow_other``.  Returns ``(distance, error)``.
@@ -148,28 +148,26 @@ def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
     like a pair its bounding volumes cull, it can be neither its category's nearest nor within the
     threshold, and its bound is kept nowhere (the anytime state would read it as a distance).
 
+    ``fns``: the kernels' addresses (:func:`._calls.addresses`): the link-frame and the other narrow
+    phase are called at theirs (:mod:`._native`), so this function links only :func:`evaluate_pair`,
+    and the fused kernel links it (inlined at its call sites: called at an address, ranger's 200
+    capsule pairs took ~6 % longer).
     Compiled with reference counting, as it links the convex kernels; the kernel passes it the
     buffers as meminfo-free views, so that costs no atomic operation."""
     d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp_now)
     if err == LINK_FRAME:
-        d, err = narrow_rel(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, offset, level, beyond)
+        d, err = call_narrow_rel(fns[FN_NARROW_REL], (a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, offset,
+                                                      level, beyond, fns))
         if err == BOUNDED or (err == 0 and d > beyond):
             return d, BOUNDED  # proved beyond the caller's cut-off: not a row of this check
         if err < 0:  # overlapping cores with a depth wanted (or GJK unsettled): EPA / SAT on W points
             move_pair(a, b, H, MF, MI, SF, SI, stamp_now)
     if err < 0:
-        d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, offset, level)
+        d, err = call_narrow_other(fns[FN_NARROW_OTHER], (a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter,
+                                                          offset, level, fns))
     if err == 0:
         if flag:
             SI[H[2 * _K_pflag] + p] = 1
         record_pair(p, MI[H[2 * _K_pair_cat] + p], d, n_eval, H, SF, SI, stamp_now)
     return d, err
 
-
-_F1, _I1, _f, _i = types.float64[::1], types.int64[::1], types.float64, types.int64
-STEP_ARGTYPES = (_i, _i, _i, types.boolean, _I1, _F1, _I1, _F1, _I1, _F1, _f, _f, _f, _i, _f, _f, _f, _i, _i)
-STEP_RETURN = types.Tuple((_f, _i))
-""":func:`pair_step`'s argument and return types: the one overload its native callers call."""
-call_step = native_caller(STEP_RETURN, STEP_ARGTYPES)
-"""``call_step(fn, (p, a, b, ...))``: :func:`pair_step` at address ``fn`` (``fns[FN_STEP]``, :mod:`._entry`):
-the fused kernel and the static pairs' branch and bound call it so, and compile without its tree."""

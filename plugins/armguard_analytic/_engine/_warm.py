@@ -1,17 +1,18 @@
 """The analytic backend's first-run warm-up: what ``AnalyticBackend.warm_up`` and
 ``warm_up_leaves`` give the framework's :mod:`armguard.cli._compile`.
 
-The fused kernel is a chain of compiled calls (``detect_entry => detect_rows => pair_step ->
-narrow_other -> pair_distance ->`` the pair kernels; ``=>`` a call at an address, :mod:`._entry`,
+The fused kernel is a chain of compiled calls (``detect_entry => detect_rows -> pair_step =>
+narrow_other -> pair_distance =>`` the pair kernels; ``=>`` a call at an address, :mod:`._calls`,
 ``->`` a linked call): on a cold cache numba compiles it in one thread, over a minute on a 2-core
 machine, more than half of it in a few leaf kernels that share nothing.  Compiled first with the
 signatures the chain calls them with (some in a second process, the others in the first), they are
 in numba's on-disk cache when the chain reaches them, and it only loads them.  A signature that no
 longer matches the chain's call costs time, never an answer: the chain then compiles that kernel
-itself (tests/test_detect_cold.py checks they all match).  The kernels called at an address link
-none of the others' trees: ``detect_rows`` and ``static_gjk_pairs`` are leaves of the second
-process; the pair step (:data:`LEAVES_AFTER`) compiles there too, once the first process has its
-leaves, while the first compiles the geometry kernels and then the Detector's entry points.
+itself (tests/test_detect_cold.py checks they all match).  The kernels called at an address
+(:mod:`._calls`) link none of the others' trees, so the chain's kernels are leaves too (the pair
+step links ``evaluate_pair`` only, ``detect_rows`` the pair step); the Checker's entry points
+(:data:`LEAVES_AFTER`) compile in the second process once the first has its leaves, while the first
+compiles the geometry kernels and then the Detector's entry points.
 Codes: F1/F2 float64 C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64, b boolean.
 """
 
@@ -24,17 +25,15 @@ __all__ = ["LEAVES_AFTER", "LEAVES_MAIN", "LEAVES_SIDE", "warm_up"]
 LEAVES_SIDE = (
     # the scanned GJK of the W-frame SAT path (convex_convex_fast's, in the first process, reaches
     # it later), then the link-frame narrow phase: cylinders (GJK and EPA on support functions),
-    # SAT on hulls and boxes, EPA (narrow_rel; its GJK, SAT and EPA first in the first process)
+    # SAT on hulls and boxes, EPA (narrow_rel calls them at their addresses, ._calls)
     ("armguard.geometry._pair_gjk", "gjk_dir", "F2 F2 f f f f f f f f i"),
     ("armguard.geometry._pair_cylinder", "support_pair_graph", "F2 I1 F1 f F2 I1 F1 f F1 F1 f f i f I1 I1"),
-    ("armguard_analytic._engine._narrow", "narrow_rel", "i i I1 F1 I1 F1 F1 f f f i f f f"),
-    # the scalar pairs' step (capsules, boxes, walls; narrow_flat compiles inside it)
+    ("armguard_analytic._engine._narrow", "narrow_rel", "i i I1 F1 I1 F1 F1 f f f i f f f I1"),
+    # the scalar pairs' step (capsules, boxes, walls; narrow_flat compiles inside it), the pair step
+    # (it links evaluate_pair only) and the fused rows (they link the pair step)
     ("armguard_analytic._engine._step", "evaluate_pair", "i i I1 F1 I1 F1 I1 F1 f f f i"),
     ("armguard_analytic._engine._narrow", "narrow_flat", "i i I1 F1 I1 F1 F1 f f f"),
-    # the fused rows and the static pairs' branch and bound: they call the pair step at its address
-    # (._entry), so they need no other kernel of either list and compile here while the first
-    # process compiles the geometry kernels
-    ("armguard_analytic._engine._static_gjk", "static_gjk_pairs", "I1 F1 I1 F1 I1 F1 i f b f f f i f f f i i I1"),
+    ("armguard_analytic._engine._step", "pair_step", "i i i b I1 F1 I1 F1 I1 F1 f f f i f f f i i I1"),
     ("armguard_analytic._engine._kernel", "detect_rows", "F2 i i I1 F1 I1 F1 I1 F1 I1 I1 F2 I1 I1"),
 )
 """Leaf kernels compiled in the second process: (module, function, signature codes)."""
@@ -51,21 +50,19 @@ LEAVES_MAIN = (
     ("armguard_analytic._engine._narrow", "_capsule_polytope", "F2 f i F2 F2 I2 F2 F2 I1 I1 I1 f F1 f f f i f"),
     ("armguard_analytic._engine._cull", "obb_apart_moving", "F1 i i i i F1 f f"),
     ("armguard_analytic._engine._cull", "obb_apart_static", "F1 i i F1 i f f"),
-    # the other pairs' narrow phase (pair_distance: it calls the leaves of both lists), which the pair
-    # step calls: compiled here while the second process still works on narrow_rel
-    ("armguard_analytic._engine._narrow", "narrow_other", "i i I1 F1 I1 F1 F1 f f f i f f"),
+    # the other pairs' narrow phase (pair_distance), which the pair step calls, and the static pairs'
+    # branch and bound (it calls the pair step at its address): none links another's tree
+    ("armguard_analytic._engine._narrow", "narrow_other", "i i I1 F1 I1 F1 F1 f f f i f f I1"),
+    ("armguard_analytic._engine._static_gjk", "static_gjk_pairs", "I1 F1 I1 F1 I1 F1 i f b f f f i f f f i i I1"),
 )
 """Leaf kernels compiled in the first process while the second compiles :data:`LEAVES_SIDE`."""
 LEAVES_AFTER = (
-    # the pair step (it links narrow_rel and evaluate_pair from the second process's list and
-    # narrow_other from the first's), in the second process once the first has compiled its leaves,
-    # then the Checker's entry points while the first compiles the Detector's
-    ("armguard_analytic._engine._step", "pair_step", "i i i b I1 F1 I1 F1 I1 F1 f f f i f f f i i"),
+    # the Checker's entry points, in the second process while the first compiles the geometry kernels
     ("armguard_analytic._engine._pair_rows", "pair_rows", "I1 F1 i i I1 I1 F1 I1 F1 I1 F1 I1 F2 F1 F2 F2"),
     ("armguard_analytic._engine._pair_rows", "pair_rows_held", "I1 F1 i i I1 I1 F1 I1 F1 I1 F1 I1 F2 F1 F2 F2"),
 )
-"""Kernels the second process compiles after the first process's :data:`LEAVES_MAIN` (they call
-kernels of both lists); :func:`warm_up` waits for them by name."""
+"""Kernels the second process compiles after the first process's :data:`LEAVES_MAIN` (no kernel
+of either list waits for them); :func:`warm_up` waits for them by name."""
 
 
 def warm_up(scene, wait=None) -> None:
@@ -73,16 +70,15 @@ def warm_up(scene, wait=None) -> None:
     ``scene``, both GIL policies, with the argument types their callers pass.
 
     ``wait(name)`` (the framework's, while a second process compiles :data:`LEAVES_AFTER`) blocks
-    until that process has compiled kernel ``name``: the Detector is built once the kernels whose
-    addresses it takes (``pair_step`` last) are in numba's cache, the Checker's entry points
-    (``pair_rows``) are loaded once there."""
+    until that process has compiled kernel ``name``: the Checker's entry points (``pair_rows``) are
+    loaded once there.  (The framework runs this once the second process's leaves are compiled:
+    every kernel whose address the Detector takes is in numba's cache by then.)"""
     wait = wait or (lambda name: None)
     from . import _kernel as kn
     from ._detector import FusedDetector
     from ._pair_rows import pair_rows, pair_rows_held
     from ._scratch import _entry_point, _Scratch
 
-    wait("pair_step")
     det = FusedDetector(scene, threshold=0.05)
     q = scene.flat_q(scene.default_q())
     det.check(q)
