@@ -46,6 +46,7 @@ def w_path(cyl: Cylinder, poly, cyl_first: bool, gjk_eps: float = TOL.gjk_epsilo
     """Signed distance of the pair by the engine's W-path kernel, on the elements' W data as the
     detector holds them (the cylinder's 15-float buffer, the polytope's core points and vertex graph);
     with ``witnesses``, ``(distance, p_WA, p_WB)``, or None where GJK did not converge (``max_iter``)."""
+    from armguard_analytic._engine._calls import addresses
     from armguard_analytic._engine._narrow import pair_distance
 
     pts = np.ascontiguousarray(poly._sat[0], dtype=np.float64)
@@ -66,7 +67,7 @@ def w_path(cyl: Cylinder, poly, cyl_first: bool, gjk_eps: float = TOL.gjk_epsilo
     d, err = pair_distance(0, 1, core, np.zeros(2), verts, vstart, box, e3, np.zeros(3, np.int64), e3,
                            np.zeros(3, np.int64), adj, adjs, np.zeros((0, 3), np.int64), np.zeros(3, np.int64), out,
                            work, TOL.length, TOL.parallel, gjk_eps, max_iter,
-                           TOL.penetration_witness_offset, -np.inf)
+                           TOL.penetration_witness_offset, -np.inf, addresses())
     if witnesses:
         return (float(d), out[0:3].copy(), out[3:6].copy()) if err == 0 else None
     assert err == 0
