@@ -86,3 +86,17 @@ def test_the_kernels_addresses_are_one_array_per_process_whichever_thread_asks()
     fns = got[0]
     assert fns.dtype == np.int64 and fns.shape == (len(_calls.NATIVE),) and np.all(fns != 0)
     assert len(set(fns.tolist())) == len(_calls.NATIVE)  # one kernel, one address
+
+
+def test_the_address_table_only_grows():
+    """The ``FN_*`` indices are compiled into the callers, and numba's cache keys on a caller's own
+    file: a row moved or removed in ``_calls.NATIVE`` would make a caller cached before the edit
+    call another kernel.  New rows go at the end; this list grows with them."""
+    pinned = ["detect_rows", "pair_step", "static_gjk_pairs", "gjk_dir_rel", "_sat_rel", "epa_depth",
+              "support_pair_graph", "convex_convex_fast", "narrow_rel", "narrow_other"]
+    assert [row[1] for row in _calls.NATIVE][:len(pinned)] == pinned
+    for k, name in enumerate(pinned):
+        assert getattr(_calls, "FN_" + {"detect_rows": "ROWS", "pair_step": "STEP", "static_gjk_pairs": "STATIC",
+                                        "gjk_dir_rel": "GJK_REL", "_sat_rel": "SAT_REL", "epa_depth": "EPA",
+                                        "support_pair_graph": "SUPPORT", "convex_convex_fast": "CONVEX",
+                                        "narrow_rel": "NARROW_REL", "narrow_other": "NARROW_OTHER"}[name]) == k

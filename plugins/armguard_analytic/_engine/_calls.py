@@ -1,14 +1,17 @@
 """The kernels the analytic engine calls at an address (:mod:`._native`), and those addresses.
 
 Each row of :data:`NATIVE` is a kernel its callers call at ``fns[FN_*]`` instead of linking it: the
-fused kernel, the pair step and the static pairs' branch and bound (:mod:`._entry`), and the large
-pair kernels the narrow phase calls (GJK, SAT and EPA in link frames, the cylinder and convex
-kernels, the capsule-polytope kernel).  A caller linking such a kernel had LLVM generate its whole
-tree's machine code again: ``narrow_rel`` took 15 s of a cold compile, nearly all of it the four
-kernels it calls, ``pair_distance``'s caller 12.6 s.  Called at an address, each kernel's machine
-code is generated once, and a caller compiles without its callees (in any order, in either process
-of the first run's warm-up, :mod:`._warm`).  The cost per call is one indirect call, against a
-microsecond of GJK.
+fused kernel (from the entry points, :mod:`._entry`), the static pairs' branch and bound and the
+pair step it calls, the link-frame narrow phase the pair step calls, and the large pair kernels the
+narrow phases call (GJK, SAT and EPA in link frames, the cylinder and convex kernels).  A caller linking such a
+kernel had LLVM generate its whole tree's machine code again: ``narrow_rel`` took 15 s of a cold
+compile, nearly all of it the four kernels it calls, ``pair_distance``'s caller 12.6 s.  Called at
+an address, each kernel's machine code is generated once, and a caller compiles without its
+callees (in any order, in either process of the first run's warm-up, :mod:`._warm`).  The cost per
+call is one indirect call with its arguments, against a microsecond of GJK; the hot small calls
+stay linked (the fused kernel links the pair step, the pair step the scalar pairs' kernel and the
+other narrow phase, which links the capsule-polytope kernel: at an address ranger's 200 pairs took
+6-10 % longer).  ``narrow_other``'s row is one such: no kernel calls it at its address now.
 
 ``fns`` (:func:`addresses`) is made in each process and passed down as an argument from the entry
 points: an address is never stored in a buffer that could reach another process.  The signature
@@ -26,10 +29,10 @@ from numba import types
 
 from ._native import native_address, native_caller
 
-__all__ = ["FN_CAPSULE_POLY", "FN_CONVEX", "FN_EPA", "FN_GJK_REL", "FN_NARROW_OTHER", "FN_NARROW_REL", "FN_ROWS",
-           "FN_SAT_REL", "FN_STATIC", "FN_STEP", "FN_SUPPORT", "NATIVE", "addresses", "argtypes", "call_capsule_poly",
-           "call_convex", "call_epa", "call_gjk_rel", "call_narrow_other", "call_narrow_rel", "call_rows",
-           "call_sat_rel", "call_static", "call_step", "call_support"]
+__all__ = ["FN_CONVEX", "FN_EPA", "FN_GJK_REL", "FN_NARROW_OTHER", "FN_NARROW_REL", "FN_ROWS", "FN_SAT_REL",
+           "FN_STATIC", "FN_STEP", "FN_SUPPORT", "NATIVE", "addresses", "argtypes", "call_convex", "call_epa",
+           "call_gjk_rel", "call_narrow_other", "call_narrow_rel", "call_rows", "call_sat_rel", "call_static",
+           "call_step", "call_support"]
 
 _f, _i, _b = types.float64, types.int64, types.boolean
 _KINDS = {"F1": types.float64[::1], "F2": types.float64[:, ::1], "I1": types.int64[::1], "I2": types.int64[:, ::1],
@@ -56,17 +59,18 @@ NATIVE = (
      types.Tuple((_f, _i))),
     ("armguard.geometry._pair_epa", "convex_convex_fast", "F2 F2 F2 I1 I2 f F2 F2 F2 I1 I2 f F1 F1 f f f i f f",
      types.Tuple((_f, _i))),
-    ("armguard_analytic._engine._narrow", "_capsule_polytope", "F2 f i F2 F2 I2 F2 F2 I1 I1 I1 f F1 f f f i f",
-     types.Tuple((_f, _i))),
     ("armguard_analytic._engine._narrow", "narrow_rel", "i i I1 F1 I1 F1 F1 f f f i f f f I1", types.Tuple((_f, _i))),
     ("armguard_analytic._engine._narrow", "narrow_other", "i i I1 F1 I1 F1 F1 f f f i f f I1", types.Tuple((_f, _i))),
 )
 """``(module, function, signature codes, return type)`` of each kernel called at an address, in
-``FN_*`` order."""
-(FN_ROWS, FN_STEP, FN_STATIC, FN_GJK_REL, FN_SAT_REL, FN_EPA, FN_SUPPORT, FN_CONVEX, FN_CAPSULE_POLY, FN_NARROW_REL,
+``FN_*`` order.  Append only: the ``FN_*`` indices are compiled into the callers as constants, and
+numba's cache keys on a function's own file, so a caller cached before a row moved would call the
+wrong kernel (a crash, not an error); a row that is no longer called stays (``tests/test_native_call.py``
+pins the order).  After editing this table in a checkout: ``make clean-cache``."""
+(FN_ROWS, FN_STEP, FN_STATIC, FN_GJK_REL, FN_SAT_REL, FN_EPA, FN_SUPPORT, FN_CONVEX, FN_NARROW_REL,
  FN_NARROW_OTHER) = range(len(NATIVE))
-(call_rows, call_step, call_static, call_gjk_rel, call_sat_rel, call_epa, call_support, call_convex, call_capsule_poly,
- call_narrow_rel, call_narrow_other) = (native_caller(ret, argtypes(codes)) for _, _, codes, ret in NATIVE)
+(call_rows, call_step, call_static, call_gjk_rel, call_sat_rel, call_epa, call_support, call_convex, call_narrow_rel,
+ call_narrow_other) = (native_caller(ret, argtypes(codes)) for _, _, codes, ret in NATIVE)
 """``call_X(fns[FN_X], (args...))``: kernel ``FN_X`` of :data:`NATIVE` at its address."""
 
 _fns: list = []

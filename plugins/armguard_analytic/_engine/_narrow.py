@@ -37,8 +37,8 @@ from armguard.geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_ca
 
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
-from ._calls import (FN_CAPSULE_POLY, FN_CONVEX, FN_EPA, FN_GJK_REL, FN_SAT_REL, FN_SUPPORT, call_capsule_poly,
-                     call_convex, call_epa, call_gjk_rel, call_sat_rel, call_support)
+from ._calls import (FN_CONVEX, FN_EPA, FN_GJK_REL, FN_SAT_REL, FN_SUPPORT, call_convex, call_epa, call_gjk_rel,
+                     call_sat_rel, call_support)
 from ._layout import K, seg1, seg2
 
 __all__ = ["pair_distance", "narrow_flat", "narrow_other", "narrow_rel", "wall_flat", "ERR_GJK", "NOT_SCALAR",
@@ -225,10 +225,10 @@ def narrow_other(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter
         for i in range(3):
             seg[0, i] = SF[ov + 3 * va + i]
             seg[1, i] = SF[ov + 3 * ja + i]
-        d, status = call_capsule_poly(fns[FN_CAPSULE_POLY], (
+        d, status = _capsule_polytope(
             seg, MF[orad + ga], k, seg2(MF, H, _K_pv, 3), seg2(MF, H, _K_ppl, 4), seg2(MI, H, _K_ped, 4),
             seg2(MF, H, _K_pbis, 3), seg2(MF, H, _K_pcen, 3), seg1(MI, H, _K_pvs), seg1(MI, H, _K_pps),
-            seg1(MI, H, _K_pes), MF[orad + gb], out, eps_len, eps_par, gjk_eps, max_iter, offset))
+            seg1(MI, H, _K_pes), MF[orad + gb], out, eps_len, eps_par, gjk_eps, max_iter, offset)
         if status == GJK_NOT_CONVERGED:
             return d, ERR_GJK
         return d, 0

@@ -22,8 +22,8 @@ from numba import njit
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SUM_BEST, SUM_BSLOT
-from ._calls import FN_NARROW_OTHER, FN_NARROW_REL, call_narrow_other, call_narrow_rel
-from ._narrow import BOUNDED, LINK_FRAME, narrow_flat, wall_flat
+from ._calls import FN_NARROW_REL, call_narrow_rel
+from ._narrow import BOUNDED, LINK_FRAME, narrow_flat, narrow_other, wall_flat
 
 __all__ = ["evaluate_pair", "move_element", "move_pair", "pair_step", "record_pair"]
 
@@ -148,10 +148,10 @@ def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
     like a pair its bounding volumes cull, it can be neither its category's nearest nor within the
     threshold, and its bound is kept nowhere (the anytime state would read it as a distance).
 
-    ``fns``: the kernels' addresses (:func:`._calls.addresses`): the link-frame and the other narrow
-    phase are called at theirs (:mod:`._native`), so this function links only :func:`evaluate_pair`,
-    and the fused kernel links it (inlined at its call sites: called at an address, ranger's 200
-    capsule pairs took ~6 % longer).
+    ``fns``: the kernels' addresses (:func:`._calls.addresses`): the link-frame narrow phase is
+    called at its own (:mod:`._native`); :func:`evaluate_pair` and :func:`._narrow.narrow_other`
+    (whose GJK, EPA and convex kernels are called at theirs) are linked, and the fused kernel links
+    this function (each at an address, ranger's 200 pairs took 6-10 % longer).
     Compiled with reference counting, as it links the convex kernels; the kernel passes it the
     buffers as meminfo-free views, so that costs no atomic operation."""
     d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp_now)
@@ -163,8 +163,7 @@ def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
         if err < 0:  # overlapping cores with a depth wanted (or GJK unsettled): EPA / SAT on W points
             move_pair(a, b, H, MF, MI, SF, SI, stamp_now)
     if err < 0:
-        d, err = call_narrow_other(fns[FN_NARROW_OTHER], (a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter,
-                                                          offset, level, fns))
+        d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, offset, level, fns)
     if err == 0:
         if flag:
             SI[H[2 * _K_pflag] + p] = 1

@@ -1,7 +1,7 @@
 """The analytic backend's first-run warm-up: what ``AnalyticBackend.warm_up`` and
 ``warm_up_leaves`` give the framework's :mod:`armguard.cli._compile`.
 
-The fused kernel is a chain of compiled calls (``detect_entry => detect_rows -> pair_step =>
+The fused kernel is a chain of compiled calls (``detect_entry => detect_rows -> pair_step ->
 narrow_other -> pair_distance =>`` the pair kernels; ``=>`` a call at an address, :mod:`._calls`,
 ``->`` a linked call): on a cold cache numba compiles it in one thread, over a minute on a 2-core
 machine, more than half of it in a few leaf kernels that share nothing.  Compiled first with the
@@ -10,9 +10,9 @@ in numba's on-disk cache when the chain reaches them, and it only loads them.  A
 longer matches the chain's call costs time, never an answer: the chain then compiles that kernel
 itself (tests/test_detect_cold.py checks they all match).  The kernels called at an address
 (:mod:`._calls`) link none of the others' trees, so the chain's kernels are leaves too (the pair
-step links ``evaluate_pair`` only, ``detect_rows`` the pair step); the Checker's entry points
-(:data:`LEAVES_AFTER`) compile in the second process once the first has its leaves, while the first
-compiles the geometry kernels and then the Detector's entry points.
+step links ``evaluate_pair`` and ``narrow_other``, ``detect_rows`` the pair step); the Checker's
+entry points (:data:`LEAVES_AFTER`) compile in the second process once the first has its leaves,
+while the first compiles the geometry kernels and then the Detector's entry points.
 Codes: F1/F2 float64 C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64, b boolean.
 """
 
@@ -30,30 +30,31 @@ LEAVES_SIDE = (
     ("armguard.geometry._pair_cylinder", "support_pair_graph", "F2 I1 F1 f F2 I1 F1 f F1 F1 f f i f I1 I1"),
     ("armguard_analytic._engine._narrow", "narrow_rel", "i i I1 F1 I1 F1 F1 f f f i f f f I1"),
     # the scalar pairs' step (capsules, boxes, walls; narrow_flat compiles inside it), the pair step
-    # (it links evaluate_pair only) and the fused rows (they link the pair step)
+    # (it links evaluate_pair and narrow_other) and the fused rows (they link the pair step)
     ("armguard_analytic._engine._step", "evaluate_pair", "i i I1 F1 I1 F1 I1 F1 f f f i"),
     ("armguard_analytic._engine._narrow", "narrow_flat", "i i I1 F1 I1 F1 F1 f f f"),
     ("armguard_analytic._engine._step", "pair_step", "i i i b I1 F1 I1 F1 I1 F1 f f f i f f f i i I1"),
     ("armguard_analytic._engine._kernel", "detect_rows", "F2 i i I1 F1 I1 F1 I1 F1 I1 I1 F2 I1 I1"),
+    # the static pairs' branch and bound (it calls the pair step at its address): here, while the
+    # first process compiles the geometry kernels
+    ("armguard_analytic._engine._static_gjk", "static_gjk_pairs", "I1 F1 I1 F1 I1 F1 i f b f f f i f f f i i I1"),
 )
 """Leaf kernels compiled in the second process: (module, function, signature codes)."""
 LEAVES_MAIN = (
-    # the link-frame GJK, then narrow_rel's SAT and EPA (in the second process narrow_rel reaches
-    # them after support_pair_graph, by which time they are cached)
+    # the link-frame GJK, then narrow_rel's SAT and EPA (narrow_rel, in the second process, calls them
+    # at their addresses)
     ("armguard.geometry._pair_gjk", "gjk_dir_rel", "F2 I1 I1 F2 I1 I1 F1 f f f f f f f f i F1 f"),
     ("armguard_analytic._engine._narrow", "_sat_rel",
      "F2 F2 F2 I1 I1 f F2 F2 F2 I1 I1 f F1 f f f F1 i F1 F1 f f f i f f"),
     ("armguard.geometry._pair_epa", "epa_depth", "F2 I1 F2 I1 F1 f F1 f f f I1 I1 f"),
-    ("armguard.geometry._pair_epa", "convex_convex_fast", "F2 F2 F2 I1 I2 f F2 F2 F2 I1 I2 f F1 F1 f f f i f f"),
-    # the capsule-polytope narrow phase and the culling tests: compiled while the second process
-    # still works on narrow_rel, which the chain needs first
+    # the other pairs' narrow phase (pair_distance; the capsule-polytope kernel linked), which the pair
+    # step in the second process links: compiled early, before that process reaches the pair step
     ("armguard_analytic._engine._narrow", "_capsule_polytope", "F2 f i F2 F2 I2 F2 F2 I1 I1 I1 f F1 f f f i f"),
+    ("armguard_analytic._engine._narrow", "narrow_other", "i i I1 F1 I1 F1 F1 f f f i f f I1"),
+    # the W-frame convex kernel (pair_distance calls it at its address) and the culling tests
+    ("armguard.geometry._pair_epa", "convex_convex_fast", "F2 F2 F2 I1 I2 f F2 F2 F2 I1 I2 f F1 F1 f f f i f f"),
     ("armguard_analytic._engine._cull", "obb_apart_moving", "F1 i i i i F1 f f"),
     ("armguard_analytic._engine._cull", "obb_apart_static", "F1 i i F1 i f f"),
-    # the other pairs' narrow phase (pair_distance), which the pair step calls, and the static pairs'
-    # branch and bound (it calls the pair step at its address): none links another's tree
-    ("armguard_analytic._engine._narrow", "narrow_other", "i i I1 F1 I1 F1 F1 f f f i f f I1"),
-    ("armguard_analytic._engine._static_gjk", "static_gjk_pairs", "I1 F1 I1 F1 I1 F1 i f b f f f i f f f i i I1"),
 )
 """Leaf kernels compiled in the first process while the second compiles :data:`LEAVES_SIDE`."""
 LEAVES_AFTER = (
