@@ -583,4 +583,3 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out,
             min_d[m, c] = best[c]
         status_out[m] = st
     return 0
-

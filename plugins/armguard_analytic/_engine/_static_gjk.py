@@ -323,4 +323,3 @@ def static_gjk_pairs(H, MF, MI, SF, SI, out9, n_st, cut0, flag, eps_len, eps_par
         if d <= level:
             collided = True
     return n_eval, err, collided
-

@@ -169,4 +169,3 @@ def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
             SI[H[2 * _K_pflag] + p] = 1
         record_pair(p, MI[H[2 * _K_pair_cat] + p], d, n_eval, H, SF, SI, stamp_now)
     return d, err
-
