@@ -16,7 +16,7 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["ensure_numba_cache", "writable"]
+__all__ = ["ensure_numba_cache", "signature", "writable"]
 
 
 def writable(folder: Path) -> bool:
@@ -56,3 +56,17 @@ def ensure_numba_cache(package_dir: Path | None = None) -> Path | None:
 
     config.CACHE_DIR = str(folder)  # numba read the environment when it was imported above
     return folder
+
+
+def signature(codes: str) -> tuple:
+    """The numba argument types of a kernel signature written in codes, as the first-run warm-up's
+    plans give them (:mod:`armguard.cli._compile`; a backend's ``warm_up_leaves``): F1/F2 float64
+    C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64, b boolean."""
+    from numba import types
+
+    kinds = {"F1": types.float64[::1], "F2": types.float64[:, ::1], "I1": types.int64[::1],
+             "I2": types.int64[:, ::1], "f": types.float64, "i": types.int64, "b": types.boolean}
+    try:
+        return tuple(kinds[c] for c in codes.split())
+    except KeyError as exc:
+        raise ValueError(f"unknown signature code {exc.args[0]!r} in {codes!r} (known: {sorted(kinds)})") from None

@@ -27,6 +27,8 @@ import numpy as np
 
 from numba import types
 
+from armguard._numba_cache import signature
+
 from ._native import native_address, native_caller
 
 __all__ = ["FN_CONVEX", "FN_EPA", "FN_GJK_REL", "FN_NARROW_OTHER", "FN_NARROW_REL", "FN_ROWS", "FN_SAT_REL",
@@ -35,13 +37,8 @@ __all__ = ["FN_CONVEX", "FN_EPA", "FN_GJK_REL", "FN_NARROW_OTHER", "FN_NARROW_RE
            "call_step", "call_support"]
 
 _f, _i, _b = types.float64, types.int64, types.boolean
-_KINDS = {"F1": types.float64[::1], "F2": types.float64[:, ::1], "I1": types.int64[::1], "I2": types.int64[:, ::1],
-          "f": _f, "i": _i, "b": _b}
-
-
-def argtypes(codes: str) -> tuple:
-    """The numba types of signature ``codes`` (as :func:`armguard.cli._compile.signature`)."""
-    return tuple(_KINDS[c] for c in codes.split())
+argtypes = signature
+"""The numba types of signature codes (:func:`armguard._numba_cache.signature`, the warm-up's)."""
 
 
 NATIVE = (

@@ -20,6 +20,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._calls import NATIVE
+
+
+def _native(module: str, name: str) -> tuple:
+    """A plan entry for a kernel called at its address, its signature codes from :data:`._calls.NATIVE`
+    (the one overload the address table looks up: the plan compiles exactly that one)."""
+    return next((m, f, codes) for m, f, codes, _ in NATIVE if (m, f) == (module, name))
+
 __all__ = ["LEAVES_AFTER", "LEAVES_MAIN", "LEAVES_SIDE", "warm_up"]
 
 LEAVES_SIDE = (
@@ -27,32 +35,31 @@ LEAVES_SIDE = (
     # it later), then the link-frame narrow phase: cylinders (GJK and EPA on support functions),
     # SAT on hulls and boxes, EPA (narrow_rel calls them at their addresses, ._calls)
     ("armguard.geometry._pair_gjk", "gjk_dir", "F2 F2 f f f f f f f f i"),
-    ("armguard.geometry._pair_cylinder", "support_pair_graph", "F2 I1 F1 f F2 I1 F1 f F1 F1 f f i f I1 I1"),
-    ("armguard_analytic._engine._narrow", "narrow_rel", "i i I1 F1 I1 F1 F1 f f f i f f f I1"),
+    _native("armguard.geometry._pair_cylinder", "support_pair_graph"),
+    _native("armguard_analytic._engine._narrow", "narrow_rel"),
     # the scalar pairs' step (capsules, boxes, walls; narrow_flat compiles inside it), the pair step
     # (it links evaluate_pair and narrow_other) and the fused rows (they link the pair step)
     ("armguard_analytic._engine._step", "evaluate_pair", "i i I1 F1 I1 F1 I1 F1 f f f i"),
     ("armguard_analytic._engine._narrow", "narrow_flat", "i i I1 F1 I1 F1 F1 f f f"),
-    ("armguard_analytic._engine._step", "pair_step", "i i i b I1 F1 I1 F1 I1 F1 f f f i f f f i i I1"),
-    ("armguard_analytic._engine._kernel", "detect_rows", "F2 i i I1 F1 I1 F1 I1 F1 I1 I1 F2 I1 I1"),
+    _native("armguard_analytic._engine._step", "pair_step"),
+    _native("armguard_analytic._engine._kernel", "detect_rows"),
     # the static pairs' branch and bound (it calls the pair step at its address): here, while the
     # first process compiles the geometry kernels
-    ("armguard_analytic._engine._static_gjk", "static_gjk_pairs", "I1 F1 I1 F1 I1 F1 i f b f f f i f f f i i I1"),
+    _native("armguard_analytic._engine._static_gjk", "static_gjk_pairs"),
 )
 """Leaf kernels compiled in the second process: (module, function, signature codes)."""
 LEAVES_MAIN = (
     # the link-frame GJK, then narrow_rel's SAT and EPA (narrow_rel, in the second process, calls them
     # at their addresses)
-    ("armguard.geometry._pair_gjk", "gjk_dir_rel", "F2 I1 I1 F2 I1 I1 F1 f f f f f f f f i F1 f"),
-    ("armguard_analytic._engine._narrow", "_sat_rel",
-     "F2 F2 F2 I1 I1 f F2 F2 F2 I1 I1 f F1 f f f F1 i F1 F1 f f f i f f"),
-    ("armguard.geometry._pair_epa", "epa_depth", "F2 I1 F2 I1 F1 f F1 f f f I1 I1 f"),
+    _native("armguard.geometry._pair_gjk", "gjk_dir_rel"),
+    _native("armguard_analytic._engine._narrow", "_sat_rel"),
+    _native("armguard.geometry._pair_epa", "epa_depth"),
     # the other pairs' narrow phase (pair_distance; the capsule-polytope kernel linked), which the pair
     # step in the second process links: compiled early, before that process reaches the pair step
     ("armguard_analytic._engine._narrow", "_capsule_polytope", "F2 f i F2 F2 I2 F2 F2 I1 I1 I1 f F1 f f f i f"),
-    ("armguard_analytic._engine._narrow", "narrow_other", "i i I1 F1 I1 F1 F1 f f f i f f I1"),
+    _native("armguard_analytic._engine._narrow", "narrow_other"),
     # the W-frame convex kernel (pair_distance calls it at its address) and the culling tests
-    ("armguard.geometry._pair_epa", "convex_convex_fast", "F2 F2 F2 I1 I2 f F2 F2 F2 I1 I2 f F1 F1 f f f i f f"),
+    _native("armguard.geometry._pair_epa", "convex_convex_fast"),
     ("armguard_analytic._engine._cull", "obb_apart_moving", "F1 i i i i F1 f f"),
     ("armguard_analytic._engine._cull", "obb_apart_static", "F1 i i F1 i f f"),
 )

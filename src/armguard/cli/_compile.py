@@ -16,7 +16,9 @@ import inspect
 import threading
 from contextlib import contextmanager
 
-__all__ = ["warm_up", "leaves", "STAGES", "SIDE_STAGES", "POLL_S"]
+from .._numba_cache import signature
+
+__all__ = ["warm_up", "leaves", "signature", "STAGES", "SIDE_STAGES", "POLL_S"]
 
 POLL_S = 0.1
 """How often the main thread looks whether a compilation has started (s)."""
@@ -103,18 +105,6 @@ def leaves() -> tuple:
     plan = getattr(_backend(), "warm_up_leaves", None)
     got = tuple(plan()) if plan is not None else ()
     return tuple(got) + ((),) * (3 - len(got))
-
-
-def signature(codes: str) -> tuple:
-    """The numba argument types of a signature written in :func:`leaves`'s codes."""
-    from numba import types
-
-    kinds = {"F1": types.float64[::1], "F2": types.float64[:, ::1], "I1": types.int64[::1],
-             "I2": types.int64[:, ::1], "f": types.float64, "i": types.int64, "b": types.boolean}
-    try:
-        return tuple(kinds[c] for c in codes.split())
-    except KeyError as exc:
-        raise ValueError(f"unknown signature code {exc.args[0]!r} in {codes!r} (known: {sorted(kinds)})") from None
 
 
 def _compile_leaves(plan, report=None) -> None:
