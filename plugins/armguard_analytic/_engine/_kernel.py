@@ -147,6 +147,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out,
     MI = carray(at(MI, 0), MI.shape)
     SF = carray(at(SF, 0), SF.shape)
     SI = carray(at(SI, 0), SI.shape)
+    fns = carray(at(fns, 0), fns.shape)  # passed on to every pair step
     # ---- views (once per call, not per row)
     n_links = H[_SC_n_links]
     n_q = H[_SC_n_q]
