@@ -16,11 +16,16 @@ PIP_QUIET  := 2>&1 | { grep -v "^WARNING: Location" || true; }
 # pyproject.toml asks for.  `make ... INSTALLER=pip` forces pip.
 INSTALLER ?= uv
 UV     := $(VENV)/bin/uv
+# The venv is made without pip (its ensurepip took ~5 s of a fresh `make run`): uv is installed into
+# it by the system's pip (`pip --python`, pip >= 22.3); pip is put in the venv only where that or uv
+# fails, for the pip install.
 define install
-	test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	if [ "$(INSTALLER)" = uv ] && { test -x $(UV) || $(PY) -m pip install -q uv $(PIP_QUIET); } && test -x $(UV); then \
-	  $(UV) pip install -q --python $(PY) $(1) || $(PY) -m pip install -q --no-compile $(1) $(PIP_QUIET); \
-	else $(PY) -m pip install -q --no-compile $(1) $(PIP_QUIET); fi
+	test -x $(PY) || $(PYTHON) -m venv --without-pip $(VENV)
+	if [ "$(INSTALLER)" = uv ] && { test -x $(UV) || $(PYTHON) -m pip --python $(PY) install -q uv $(PIP_QUIET) \
+	     || { $(PY) -m ensurepip -q && $(PY) -m pip install -q uv $(PIP_QUIET); }; } && test -x $(UV); then \
+	  $(UV) pip install -q --python $(PY) $(1) \
+	    || { $(PY) -m ensurepip -q && $(PY) -m pip install -q --no-compile $(1) $(PIP_QUIET); }; \
+	else $(PY) -m ensurepip -q && $(PY) -m pip install -q --no-compile $(1) $(PIP_QUIET); fi
 endef
 
 # run: armguard and what running needs (no test extras: no mujoco, pybullet, playwright)
