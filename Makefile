@@ -22,10 +22,10 @@ UV     := $(VENV)/bin/uv
 define install
 	test -x $(PY) || $(PYTHON) -m venv --without-pip $(VENV)
 	if [ "$(INSTALLER)" = uv ] && { test -x $(UV) || $(PYTHON) -m pip --python $(PY) install -q uv $(PIP_QUIET) \
-	     || { $(PY) -m ensurepip -q && $(PY) -m pip install -q uv $(PIP_QUIET); }; } && test -x $(UV); then \
+	     || { $(PY) -m ensurepip >/dev/null && $(PY) -m pip install -q uv $(PIP_QUIET); }; } && test -x $(UV); then \
 	  $(UV) pip install -q --python $(PY) $(1) \
-	    || { $(PY) -m ensurepip -q && $(PY) -m pip install -q --no-compile $(1) $(PIP_QUIET); }; \
-	else $(PY) -m ensurepip -q && $(PY) -m pip install -q --no-compile $(1) $(PIP_QUIET); fi
+	    || { $(PY) -m ensurepip >/dev/null && $(PY) -m pip install -q --no-compile $(1) $(PIP_QUIET); }; \
+	else $(PY) -m ensurepip >/dev/null && $(PY) -m pip install -q --no-compile $(1) $(PIP_QUIET); fi
 endef
 
 # run: armguard and what running needs (no test extras: no mujoco, pybullet, playwright)
