@@ -48,8 +48,9 @@ def main(argv: list[str] | None = None) -> int:
         body = mod.run(quick=args.quick)
         print(body, flush=True)
         stamp = _dt.date.today().isoformat()
+        quick = " --quick" if args.quick else ""  # the figures' own command
         sections[name] = (
-            f"<!-- bench:{name} -->\n## {mod.TITLE}\n\nReproduce: `.venv/bin/python -m bench {name}` "
+            f"<!-- bench:{name} -->\n## {mod.TITLE}\n\nReproduce: `.venv/bin/python -m bench {name}{quick}` "
             f"(measured {stamp}; {_machine()}).\n\n{body.strip()}\n<!-- /bench:{name} -->"
         )
     order = [b for b in BENCHES if b in sections] + [b for b in sections if b not in BENCHES]
