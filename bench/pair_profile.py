@@ -79,9 +79,11 @@ def _gjk_work(model, ana, n_q: int) -> dict:
         count["dot"] += pb.shape[0]
         return scan_py(pb, dx, dy, dz)
 
-    for nm in ("_gjk_body", "_support", "_seed", "_b_dir", "_b_point", "_pick", "warm_start", "table_size", "table_start",
-               "_closest_simplex", "_inner_point"):
-        setattr(G, nm, getattr(G, nm).py_func)
+    from numba.core.registry import CPUDispatcher
+
+    for nm, fn in list(vars(G).items()):  # every compiled helper GJK's body calls, as Python
+        if isinstance(fn, CPUDispatcher):
+            setattr(G, nm, fn.py_func)
     G._climb, G._m_support, G._scan = climb, m_support, scan  # this process ends after the replay
 
     f = ana._plan()

@@ -1,0 +1,30 @@
+"""``bench pair_profile`` replays GJK in Python to count its work: the replay must run the compiled
+kernel's own helpers (a helper renamed or removed in ``armguard.geometry._pair_gjk`` once broke it
+silently, the benchmark writing an error row), and count the path the kernel takes."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_pair_profile_counts_gjk_work():
+    env = dict(os.environ)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    # a fresh process: the replay swaps the GJK module's compiled helpers for their Python bodies
+    proc = subprocess.run([sys.executable, "-m", "bench.pair_profile", "kuka_iiwa", "10"], capture_output=True,
+                          text=True, cwd=ROOT, env=env, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    row = json.loads([ln for ln in proc.stdout.splitlines() if ln.startswith("{")][-1])
+    assert row["pairs"] == row["poly_pairs"] == 21
+    assert row["gjk_pairs"] > 100  # separated hull pairs of 20 configurations
+    # GJK evaluates the first support and one per iteration, the last one verifying: at least two
+    assert 2.0 <= row["it"] <= row["it_p90"] <= 64
+    # every hull of kuka_iiwa has a vertex graph: each support climbs both hulls, once each
+    assert row["climb"] == 2 * row["it"]
+    assert row["dot"] >= row["climb"]
