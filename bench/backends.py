@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .timing import fmt_ns, median_seconds, median_thread_seconds
+from .timing import fmt_ns, interleaved_thread_seconds, median_seconds, median_thread_seconds
 
 TITLE = "Backends: analytic vs coal vs python-fcl on the same Model"
 
@@ -134,11 +134,12 @@ def interface_rows(quick: bool) -> str:
         H, MF, MI, prm, iprm = f.args
         out = (np.empty(f.n), np.empty((f.n, 3)), np.empty((f.n, 3)))
         it = iter(range(10**9))
-        t_full = median_thread_seconds(lambda: a.pair_distances(Q[next(it) % n_q]), repeat=7, number=n_q)
-        t_bare = median_thread_seconds(lambda: f.entry(f.fn, Q[next(it) % n_q], 0, 1, f.gmap, H, MF, MI, SF, SI, prm,
-                                                       iprm, q1, *out), repeat=7, number=n_q)
+        t = interleaved_thread_seconds({
+            "full": lambda: a.pair_distances(Q[next(it) % n_q]),
+            "bare": lambda: f.entry(f.fn, Q[next(it) % n_q], 0, 1, f.gmap, H, MF, MI, SF, SI, prm, iprm, q1, *out),
+            "coal": lambda: c.pair_distances(Q[next(it) % n_q])}, repeat=7, number=n_q)
+        t_full, t_bare, t_coal = t["full"], t["bare"], t["coal"]
         t_many = median_thread_seconds(lambda: a.pair_distances_many(Q[:100]), repeat=5) / min(100, n_q)
-        t_coal = median_thread_seconds(lambda: c.pair_distances(Q[next(it) % n_q]), repeat=5, number=max(10, n_q // 5))
         n2 = 20 * n_q
         one = median_seconds(lambda: [a.pair_distances(Q[i % n_q]) for i in range(n2)], repeat=3)
         two = float(np.median([_two_threads(lambda i: a.pair_distances(Q[i % n_q]), n2) for _ in range(3)]))
@@ -158,10 +159,12 @@ def interface_rows(quick: bool) -> str:
         Q = m.random_q(n_yn, 4)
         a, c = armguard.checker(m, "analytic"), armguard.checker(m, "coal", {"threads": 1})
         blocks = [Q[k:k + 200] for k in range(0, n_yn, 200)]  # 200 rows: the analytic batch stays on one thread
-        t_a = median_thread_seconds(lambda: [a.collides(b) for b in blocks], repeat=3) / n_yn
-        t_c = median_thread_seconds(lambda: [c.collides(b) for b in blocks], repeat=3) / n_yn
+        t = interleaved_thread_seconds({"a": lambda: [a.collides(b) for b in blocks],
+                                        "c": lambda: [c.collides(b) for b in blocks]}, repeat=3)
+        t_a, t_c = t["a"] / n_yn, t["c"] / n_yn
         yn.append(f"| {name} | {len(m.pairs)} | {1 / t_a / 1e3:.0f} k/s | {1 / t_c / 1e3:.1f} k/s | {t_c / t_a:.1f}× |")
-    note = ("\n\nThread CPU time (`time.thread_time`, medians) for the per-call figures; the bare kernel call is "
+    note = ("\n\nThread CPU time (`time.thread_time`, medians) for the per-call figures, the runs of analytic, its bare "
+            "kernel call and coal interleaved (so is each yes/no pair of figures); the bare kernel call is "
             "`pair_rows` through its compiled entry point with preallocated outputs, so the Python per call is "
             "validation, the plan and scratch lookups, three output arrays and the result. Two threads: wall time of "
             f"{20 * n_q} calls on one thread over the same calls split between two threads sharing one checker "

@@ -14,7 +14,8 @@ disk, as after a user's first run); load times and peak memory are those of a us
 * **agreement**: on ``N`` random in-limit configurations, verdicts (distance ≤ 0) where analytic and
   coal differ, and the largest ``|d_analytic − d_coal|``;
 * **µs / configuration**: ``checker.pair_distances(q)`` (every pair's signed distance and witness
-  points) for analytic and coal, median of 5 runs.
+  points) for analytic and coal: thread CPU time, median of 7 runs of ``N`` calls, the two backends'
+  runs interleaved (a spell of load on the shared machine lands on both).
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ def measure(name: str, n: int) -> dict:
 
     import armguard
 
-    from .timing import median_seconds
+    from .timing import interleaved_thread_seconds
 
     t0 = time.perf_counter()
     model = armguard.load_model(name)
@@ -59,8 +60,9 @@ def measure(name: str, n: int) -> dict:
     d_c = np.array([ref.pair_distances(q).distance for q in Q])
     verdict_a, verdict_c = (d_a <= 0).any(axis=1), (d_c <= 0).any(axis=1)
     it = iter(range(10**9))
-    t_a = median_seconds(lambda: ana.pair_distances(Q[next(it) % n]), repeat=5, number=max(1, n // 5))
-    t_c = median_seconds(lambda: ref.pair_distances(Q[next(it) % n]), repeat=5, number=max(1, n // 5))
+    t = interleaved_thread_seconds({"a": lambda: ana.pair_distances(Q[next(it) % n]),
+                                    "c": lambda: ref.pair_distances(Q[next(it) % n])}, repeat=7, number=n)
+    t_a, t_c = t["a"], t["c"]
     return {
         "name": name, "nq": int(model.nq), "cold_s": cold, "warm_s": warm,
         "rss_load_mb": rss_load, "rss_peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
@@ -139,7 +141,8 @@ def run(quick: bool) -> str:
             "first `load_model` of the robot (an empty hull cache: every mesh read and hulled, in an earlier "
             "process); *load cold* is a user's next first `load_model` in a new process (hulls read from the hull "
             "cache, `docs/models.md`), *load warm* a second one in the same process; *peak RSS* includes Python, "
-            "numpy, Pinocchio, coal and the compiled kernels. *colliding*: configurations coal finds in contact; "
+            "numpy, Pinocchio, coal and the compiled kernels. *analytic*, *coal*: `pair_distances(q)` over the N "
+            "configurations, thread CPU time, median of 7 runs, the two backends' runs interleaved. *colliding*: configurations coal finds in contact; "
             "*disagree*: configurations where the analytic verdict differs from coal's. *max |Δd| apart*: over "
             "pairs both backends find apart. *depths off*: pairs in contact (for either backend) whose penetration "
             "depths differ by more than 1 mm, of all pairs in contact. coal's depth comes from EPA, which is not exact "

@@ -32,6 +32,23 @@ def median_thread_seconds(fn: Callable[[], object], *, repeat: int = 7, number: 
     return statistics.median(samples)
 
 
+def interleaved_thread_seconds(fns: dict[str, Callable[[], object]], *, repeat: int = 7,
+                               number: int = 1) -> dict[str, float]:
+    """:func:`median_thread_seconds` of each of ``fns`` (name -> call), their runs interleaved (run
+    ``r`` of every call, then run ``r + 1``): a spell of load on a shared machine lands on all of
+    them, not on whichever was being timed then, so their ratios hold where each time alone moves."""
+    for fn in fns.values():
+        fn()  # warm-up (JIT compilation, caches)
+    samples: dict[str, list[float]] = {k: [] for k in fns}
+    for _ in range(repeat):
+        for k, fn in fns.items():
+            t0 = time.thread_time()
+            for _ in range(number):
+                fn()
+            samples[k].append((time.thread_time() - t0) / number)
+    return {k: statistics.median(v) for k, v in samples.items()}
+
+
 def fmt_ns(seconds: float) -> str:
     """Format a duration given in seconds as ns / µs / ms."""
     ns = seconds * 1e9
