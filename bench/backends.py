@@ -116,6 +116,26 @@ def _two_threads(fn, n: int) -> float:
     return time.perf_counter() - t0
 
 
+def _no_kernel(*args) -> int:
+    return 0
+
+
+def _wrapper_seconds(a, f, q) -> float:
+    """The Python of one ``pair_distances(q)`` call without its kernel: the call with the plan's compiled
+    entry swapped for a Python function that returns at once, less that function's own call.  (The
+    difference of the call and the bare kernel call, two noisy times of tens of µs, moved by ±3 µs
+    from run to run.)"""
+    args = (f.fn, q, 0, 1, f.gmap, *f.args[:3], *f.scratch()[:2], *f.args[3:], f.scratch()[2], q, q, q)
+    entry = f.entry
+    f.entry = _no_kernel
+    try:
+        t = interleaved_thread_seconds({"call": lambda: a.pair_distances(q), "nop": lambda: _no_kernel(*args)},
+                                       repeat=7, number=2000)
+    finally:
+        f.entry = entry
+    return max(t["call"] - t["nop"], 0.0)
+
+
 def interface_rows(quick: bool) -> str:
     """The analytic interface around its kernel (see the module docstring)."""
     import armguard
@@ -139,6 +159,7 @@ def interface_rows(quick: bool) -> str:
             "bare": lambda: f.entry(f.fn, Q[next(it) % n_q], 0, 1, f.gmap, H, MF, MI, SF, SI, prm, iprm, q1, *out),
             "coal": lambda: c.pair_distances(Q[next(it) % n_q])}, repeat=7, number=n_q)
         t_full, t_bare, t_coal = t["full"], t["bare"], t["coal"]
+        t_wrap = _wrapper_seconds(a, f, Q[0])
         t_many = median_thread_seconds(lambda: a.pair_distances_many(Q[:100]), repeat=5) / min(100, n_q)
         n2 = 20 * n_q
         one = median_seconds(lambda: [a.pair_distances(Q[i % n_q]) for i in range(n2)], repeat=3)
@@ -147,7 +168,7 @@ def interface_rows(quick: bool) -> str:
         one_f = median_seconds(lambda: [free.pair_distances(Q[i % n_q]) for i in range(n2)], repeat=3)
         two_f = float(np.median([_two_threads(lambda i: free.pair_distances(Q[i % n_q]), n2) for _ in range(3)]))
         gil = "released" if a.releases_gil else "held"
-        rows.append(f"| {name} | {len(m.pairs)} | {fmt_ns(t_full)} | {fmt_ns(t_bare)} | {fmt_ns(max(t_full - t_bare, 0.0))} "
+        rows.append(f"| {name} | {len(m.pairs)} | {fmt_ns(t_full)} | {fmt_ns(t_bare)} | {fmt_ns(t_wrap)} "
                     f"| {fmt_ns(t_many)} | {fmt_ns(t_coal)} | {t_coal / t_full:.1f}× | {one / two:.2f}× ({gil}) "
                     f"| {one_f / two_f:.2f}× |")
     from armguard_analytic._engine._scratch import GIL_RELEASE_US
@@ -165,8 +186,10 @@ def interface_rows(quick: bool) -> str:
         yn.append(f"| {name} | {len(m.pairs)} | {1 / t_a / 1e3:.0f} k/s | {1 / t_c / 1e3:.1f} k/s | {t_c / t_a:.1f}× |")
     note = ("\n\nThread CPU time (`time.thread_time`, medians) for the per-call figures, the runs of analytic, its bare "
             "kernel call and coal interleaved (so is each yes/no pair of figures); the bare kernel call is "
-            "`pair_rows` through its compiled entry point with preallocated outputs, so the Python per call is "
-            "validation, the plan and scratch lookups, three output arrays and the result. Two threads: wall time of "
+            "`pair_rows` through its compiled entry point with preallocated outputs (numba's unboxing of its "
+            "arguments included); the Python per call is `pair_distances` with that entry point swapped for a Python "
+            "function that returns at once (less that function's call): validation, the plan and scratch lookups, "
+            "three output arrays and the result. Two threads: wall time of "
             f"{20 * n_q} calls on one thread over the same calls split between two threads sharing one checker "
             "(2.0× is perfect scaling; a shared machine's load lowers it), with the checker's own GIL policy (it holds "
             f"the GIL when one call takes under {GIL_RELEASE_US:g} µs: handing it to the other thread and back costs more than such a "
