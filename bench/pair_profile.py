@@ -1,12 +1,14 @@
 """Where the analytic ``pair_distances(q)`` spends its time, and how much work GJK does per pair.
 
 Each robot is measured in a fresh process (``python -m bench.pair_profile NAME N``, one JSON line),
-all times ``time.thread_time`` medians over 5 runs of ``N / 5`` calls, ``q`` cycling over 200
+all times ``time.thread_time`` medians over 5 runs of ``N / 5`` calls (the runs of the four figures below interleaved), ``q`` cycling over 200
 random in-limit configurations (``Model.random_q``, seeded):
 
 * **call**: ``checker.pair_distances(q)``, every pair (as ``bench robots``);
-* **kernel**: the same call's compiled entry point alone (``_Fast.entry``, preallocated outputs):
-  *call - kernel* is the Python wrapper (argument checks, three output arrays, the result object);
+* **kernel**: the same call's compiled entry point alone (``_Fast.entry``, preallocated outputs);
+* **Python wrapper**: the call with that entry point swapped for a Python function that returns at
+  once, less that function's call (argument checks, three output arrays, the result object;
+  :func:`bench.backends._wrapper_seconds`);
 * **fixed**: the entry point with no pair selected: unboxing its 15 arguments, the kernel's views,
   the joint limits and forward kinematics; *(kernel - fixed) / pairs* is the mean cost of a pair;
 * **same q**: ``pair_distances`` at one configuration over and over: the same work with the
@@ -24,24 +26,11 @@ from __future__ import annotations
 
 import json
 import os
-import statistics
 import subprocess
 import sys
-import time
 
 TITLE = "Analytic pair_distances: where the time goes"
 ROBOTS = ("ur3", "kinova", "kuka_iiwa", "z1", "so101")
-
-
-def _tmed(fn, n: int) -> float:
-    fn()
-    runs = []
-    for _ in range(5):
-        t0 = time.thread_time()
-        for _ in range(n // 5):
-            fn()
-        runs.append((time.thread_time() - t0) / (n // 5))
-    return statistics.median(runs)
 
 
 def _gjk_work(model, ana, n_q: int) -> dict:
@@ -142,11 +131,17 @@ def measure(name: str, n: int) -> dict:
     it = iter(range(10**9))
     d, pA, pB = np.empty(f.n), np.empty((f.n, 3)), np.empty((f.n, 3))
     g0, e = f.subset(np.zeros(0, np.int64)), np.empty(0)
-    t_call = _tmed(lambda: ana.pair_distances(Q[next(it) % 200]), n)
-    t_kernel = _tmed(lambda: f.entry(f.fn, Q[next(it) % 200], 0, 1, f.gmap, H, MF, MI, SF, SI, prm, iprm, q1, d, pA, pB), n)
-    t_fixed = _tmed(lambda: f.entry(f.fn, Q[next(it) % 200], 0, 1, g0, H, MF, MI, SF, SI, prm, iprm, q1, e, e.reshape(0, 3),
-                                    e.reshape(0, 3)), n)
-    t_same = _tmed(lambda: ana.pair_distances(Q[0]), n)
+    from .backends import _wrapper_seconds
+    from .timing import interleaved_thread_seconds
+
+    E3 = e.reshape(0, 3)
+    t = interleaved_thread_seconds({
+        "call": lambda: ana.pair_distances(Q[next(it) % 200]),
+        "kernel": lambda: f.entry(f.fn, Q[next(it) % 200], 0, 1, f.gmap, H, MF, MI, SF, SI, prm, iprm, q1, d, pA, pB),
+        "fixed": lambda: f.entry(f.fn, Q[next(it) % 200], 0, 1, g0, H, MF, MI, SF, SI, prm, iprm, q1, e, E3, E3),
+        "same": lambda: ana.pair_distances(Q[0])}, repeat=5, number=n // 5)
+    t_call, t_kernel, t_fixed, t_same = t["call"], t["kernel"], t["fixed"], t["same"]
+    t_wrap = _wrapper_seconds(ana, f, Q[0])
     from armguard_analytic._engine._layout import K
 
     core = MI[H[2 * K["core"]]:H[2 * K["core"]] + H[2 * K["core"] + 1]]
@@ -154,7 +149,7 @@ def measure(name: str, n: int) -> dict:
     pb = MI[H[2 * K["pair_b"]]:H[2 * K["pair_b"]] + H[2 * K["pair_b"] + 1]]
     poly = int(sum(1 for a, b in zip(pa, pb) if b >= 0 and core[a] in (2, 3) and core[b] in (2, 3)))
     row = {"name": name, "pairs": f.n, "poly_pairs": poly, "us_call": t_call * 1e6, "us_kernel": t_kernel * 1e6,
-           "us_fixed": t_fixed * 1e6, "us_same": t_same * 1e6}
+           "us_fixed": t_fixed * 1e6, "us_same": t_same * 1e6, "us_wrap": t_wrap * 1e6}
     row.update(_gjk_work(model, ana, 20))
     return row
 
@@ -181,7 +176,7 @@ def run(quick: bool) -> str:
         work = (f"| {r['it']:.1f} ({r['it_p90']:.0f}) | {r['climb']:.1f} ({r['climb_p90']:.0f}) "
                 f"| {r['dot']:.0f} ({r['dot_p90']:.0f}) |") if r["gjk_pairs"] else "| — | — | — |"
         rows.append(
-            f"| {name} | {r['pairs']} ({r['poly_pairs']}) | {r['us_call']:.1f} µs | {r['us_call'] - r['us_kernel']:.1f} µs "
+            f"| {name} | {r['pairs']} ({r['poly_pairs']}) | {r['us_call']:.1f} µs | {r['us_wrap']:.1f} µs "
             f"| {r['us_fixed']:.1f} µs | {per:.2f} µs | {r['us_same']:.1f} µs " + work)
     note = (f"\n\nThread-time medians, {n} calls per figure, `q` cycling over 200 random in-limit configurations; "
             "GJK work over the separated polytope pairs of 20 configurations (`bench/pair_profile.py`). *per pair* "
