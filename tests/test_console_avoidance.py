@@ -246,7 +246,7 @@ def test_avoidance_in_a_browser():
                               "}, 50); }")
                 page.get_by_role("tab", name="Tests").click()
                 page.get_by_role("button", name=f"Run {TEST}").click()
-                _wait_run(page, "stopped short by avoidance")
+                _wait_run(page, st, "stopped short by avoidance")
                 seen = set(page.evaluate("() => Array.from(window.__seen)"))
                 assert seen and "collision" not in seen, seen
                 run = st.snapshot().player.report
@@ -265,7 +265,7 @@ def test_avoidance_in_a_browser():
                 _until(lambda: st.avoidance_settings()[0] is False, "avoidance off")
                 page.get_by_role("tab", name="Tests").click()
                 page.get_by_role("button", name=f"Run {TEST}").click()
-                _wait_run(page, "stopped by detection")
+                _wait_run(page, st, "stopped by detection")
                 assert st.snapshot().readout.distance <= STAND_OFF
             finally:
                 browser.close()
@@ -277,13 +277,20 @@ RUN_TIMEOUT_S = 240.0
 """A run's filtering and its 13 s of play, on a loaded machine with software WebGL."""
 
 
-def _wait_run(page, state: str) -> None:
+def _wait_run(page, st, state: str) -> None:
+    """Until the page says the run ended in ``state``; a failure says where the server's run was
+    (its state, time and whether it still plays), so a page left behind tells from a run that stalled."""
     deadline = time.monotonic() + RUN_TIMEOUT_S
     while time.monotonic() < deadline:
         if f"test: {state}" in page.inner_text("body"):
             return
         page.wait_for_timeout(200)
-    raise AssertionError(f"the run did not end {state!r}: {page.inner_text('body')[:2000]}")
+    snap = st.snapshot()
+    tl = None if snap.player is None else snap.player.timeline.state
+    server = (f"server: run state {snap.run_state!r}, message {snap.message!r}, "
+              + ("no player" if tl is None else f"t = {tl.t:.2f} / {tl.duration:.2f} s, playing {tl.playing}"))
+    raise AssertionError(f"the page did not show the run ended {state!r} in {RUN_TIMEOUT_S:g} s; {server}; "
+                         f"page: {page.inner_text('body')[:1500]}")
 
 
 def _num(text: str) -> float:

@@ -266,6 +266,46 @@ def test_clearance_plot_marker_moves_with_time():
     assert not np.array_equal(img, plot.image_at(3.0))
 
 
+class _Widget:
+    """Records what the feed sends, as a viser image or markdown handle would receive it."""
+
+    def __init__(self) -> None:
+        self.sent: list = []
+
+    image = property(lambda self: self.sent[-1], lambda self, v: self.sent.append(np.array(v)))
+    content = property(lambda self: self.sent[-1], lambda self, v: self.sent.append(v))
+
+
+def test_marker_feed_throttles_while_playing_and_sends_the_stop_at_once(monkeypatch):
+    """While playing, at most one image per PLOT_PERIOD and only when the marker moved a column;
+    paused, the image at the stop goes out at once; a caption goes out only when it changed."""
+    from armguard.console import _plot
+
+    clock = [100.0]
+    monkeypatch.setattr(_plot.time, "perf_counter", lambda: clock[0])
+    t = np.linspace(0, 4, 50)
+    plot = ClearancePlot(t, 0.2 - 0.1 * t, threshold=0.05)
+    feed, img, cap = _plot.MarkerFeed(), _Widget(), _Widget()
+    assert feed.push(plot, 0.0, True, "t = 0", img, cap)  # the first one goes out
+    assert len(img.sent) == 1 and cap.sent == ["t = 0"]
+    clock[0] += _plot.PLOT_PERIOD / 2
+    assert not feed.push(plot, 1.0, True, "t = 1", img, cap)  # too soon while playing
+    clock[0] += _plot.PLOT_PERIOD
+    assert feed.push(plot, 1.0, True, "t = 1", img, cap)
+    np.testing.assert_array_equal(img.sent[-1], plot.image_at(1.0))
+    clock[0] += _plot.PLOT_PERIOD
+    same_column = 1.0 + 0.1 * (t[-1] - t[0]) / plot.shape[1]  # a tenth of a pixel later
+    assert plot.column_of(same_column) == plot.column_of(1.0)
+    assert not feed.push(plot, same_column, True, "t = 1", img, cap)  # nothing moved: nothing sent
+    assert len(img.sent) == 2 and len(cap.sent) == 2
+    clock[0] += 0.001
+    assert feed.push(plot, 2.5, False, "t = 2.5 paused", img, cap)  # stopped: at once
+    np.testing.assert_array_equal(img.sent[-1], plot.image_at(2.5))
+    assert cap.sent[-1] == "t = 2.5 paused"
+    feed.reset()  # a new plot: everything again
+    assert feed.push(plot, 2.5, True, "t = 2.5 paused", img, cap) and len(img.sent) == 4
+
+
 @pytest.mark.parametrize("label", VIEWS, ids=list(VIEWS))
 def test_views_look_at_the_scene_from_outside(label):
     c = np.array([1.0, 2.0, 0.5])

@@ -20,7 +20,7 @@ from .._errors import ArmguardError
 from ._avoid_panel import AvoidPanel
 from ._draw import SceneDrawer
 from ._fields import COMMIT_ON_BLUR_HTML, TypedField
-from ._plot import ClearancePlot
+from ._plot import PLOT_PERIOD, ClearancePlot, MarkerFeed
 from ._readout import panel_html
 from ._state import MAX_DISTANCE_SETTING, ConsoleState
 from ._targets import MAX_ANGLE_DEG, MAX_COORDINATE
@@ -31,8 +31,6 @@ __all__ = ["ConsoleApp", "PortInUseError", "FPS", "PLOT_PERIOD"]
 
 FPS = 30.0
 """Rate of the draw / player loop (Hz)."""
-PLOT_PERIOD = 0.2
-"""Seconds between clearance-plot marker refreshes while playing."""
 
 
 class PortInUseError(ArmguardError):
@@ -137,7 +135,7 @@ class ConsoleApp:
         self._shown_version = -1
         self._plot: ClearancePlot | None = None
         self._plot_player = None
-        self._plot_last = 0.0
+        self._plot_feed = MarkerFeed()
         self._framed_active = None
         self._model_generation = 0
         self._built_generation = 0
@@ -521,7 +519,7 @@ class ConsoleApp:
         with self._draw_lock:  # the draw loop and a typed field's commit never draw at once
             snap = self.state.snapshot()
             if snap.version == self._shown_version and not force:
-                self._refresh_plot(snap, periodic=True)
+                self._refresh_plot(snap)
                 return
             self._shown_version = snap.version
             with self.server.atomic():  # the panel first, alone: shown at once, not at the next WebGL frame
@@ -529,7 +527,7 @@ class ConsoleApp:
                                                  compare=snap.compare, update_us=snap.update_us, changes=snap.changes,
                                                  terrain=snap.terrain, sigmas=snap.sigmas, draw_ms=self.drawer.draw_ms)
                 self._sync_widgets()
-                self._refresh_plot(snap, periodic=False)
+                self._refresh_plot(snap)
             self.server.flush()
             self.drawer.draw(snap)
             for extra in (self._tasks, self._jog, self._training):
@@ -541,8 +539,8 @@ class ConsoleApp:
                 for client in self.server.get_clients().values():
                     self._frame(client)
 
-    def _refresh_plot(self, snap, *, periodic: bool) -> None:
-        self._avoid.refresh(snap, periodic=periodic)
+    def _refresh_plot(self, snap) -> None:
+        self._avoid.refresh(snap)
         p = snap.player
         if p is None or p.kind != "verified":
             if self._plot_player is not None:
@@ -559,12 +557,8 @@ class ConsoleApp:
             summary = rep.summary() if hasattr(rep, "summary") else str(rep)
             self._w_report.content = report_html(summary)
             self._w_plot.visible = True
-            periodic = False
-        now = time.perf_counter()
-        if periodic and now - self._plot_last < PLOT_PERIOD:
-            return
-        self._plot_last = now
+            self._plot_feed.reset()
         tl = p.timeline.state
-        self._w_plot.image = self._plot.image_at(tl.t)
         state = "playing" if tl.playing else "paused"
-        self._w_rate.content = f"t = {tl.t:.2f} / {tl.duration:.2f} s · {state} {tl.direction} · speed ×{abs(tl.rate):g}"
+        caption = f"t = {tl.t:.2f} / {tl.duration:.2f} s · {state} {tl.direction} · speed ×{abs(tl.rate):g}"
+        self._plot_feed.push(self._plot, tl.t, tl.playing, caption, self._w_plot, self._w_rate)

@@ -9,12 +9,11 @@ box put back).
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 
 from ._avoid import MAX_STAND_OFF
-from ._plot import MarkedPlot
+from ._plot import MarkedPlot, MarkerFeed
 
 __all__ = ["AvoidPanel", "AvoidPlot"]
 
@@ -80,7 +79,7 @@ class AvoidPanel:
         self.app = app
         self._plot: AvoidPlot | None = None
         self._player = None
-        self._last = 0.0
+        self._feed = MarkerFeed()
 
     def build_control(self, order: float) -> "AvoidPanel":
         """The "avoidance" folder (checkbox, stand-off field) at ``order`` in the current tab."""
@@ -107,7 +106,7 @@ class AvoidPanel:
             self.checkbox.value = on
         self.field.show(_fmt(stand_off))
 
-    def refresh(self, snap, *, periodic: bool) -> None:
+    def refresh(self, snap) -> None:
         """The plot of the player's run with avoidance, marked at its time; hidden for anything else."""
         p = snap.player
         if p is None or p.kind != "avoid":
@@ -119,13 +118,9 @@ class AvoidPanel:
             self._plot = AvoidPlot(p.report, self.app.state.joint_units(p.robot))
             self._player = p
             self.image.visible = True
-            periodic = False
-        now = time.perf_counter()
-        if periodic and now - self._last < 0.2:
-            return
-        self._last = now
+            self._feed.reset()
         tl = p.timeline.state
-        self.image.image = self._plot.image_at(tl.t)
         state = "playing" if tl.playing else "paused"
-        self.app._w_rate.content = (f"t = {tl.t:.2f} / {tl.duration:.2f} s · {state} {tl.direction} · "
-                                    f"speed ×{abs(tl.rate):g} · with avoidance")
+        caption = (f"t = {tl.t:.2f} / {tl.duration:.2f} s · {state} {tl.direction} · "
+                   f"speed ×{abs(tl.rate):g} · with avoidance")
+        self._feed.push(self._plot, tl.t, tl.playing, caption, self.image, self.app._w_rate)

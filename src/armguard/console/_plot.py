@@ -8,10 +8,14 @@ the play head at the display rate without re-rendering the figure.
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
-__all__ = ["ClearancePlot", "MARKER_RGB"]
+__all__ = ["ClearancePlot", "MarkerFeed", "MARKER_RGB", "PLOT_PERIOD"]
+
+PLOT_PERIOD = 0.2
+"""Least time (s) between two marker images sent while the time line plays (at most 5 a second)."""
 
 MARKER_RGB = (30, 90, 220)
 """Colour of the current-time marker (RGB 0..255)."""
@@ -44,6 +48,44 @@ class MarkedPlot:
         x = self.column_of(t)
         img[self._y0 : self._y1, max(0, x - 1) : min(img.shape[1], x + 1)] = MARKER_RGB
         return img
+
+
+class MarkerFeed:
+    """What of a marked plot goes to the browser, and when.
+
+    Each image is a PNG of tens of kB that the browser decodes; sent on every frame (30 a second)
+    it kept a loaded machine's browser behind the run. While the time line plays, the feed sends
+    at most one image every ``period`` s, and only when the marker has moved a pixel column. When
+    the time line is paused or stopped, the feed sends at once, so the last image shows where the
+    run stopped. The caption goes out only when its text changes.
+    """
+
+    def __init__(self, period: float = PLOT_PERIOD) -> None:
+        self.period = float(period)
+        self.reset()
+
+    def reset(self) -> None:
+        """A new plot: its first image and caption go out on the next :meth:`push`."""
+        self._sent_at = -math.inf
+        self._column: int | None = None
+        self._caption: str | None = None
+
+    def push(self, plot: MarkedPlot, t: float, playing: bool, caption: str, image_widget, caption_widget) -> bool:
+        """Send ``plot`` marked at ``t`` (s) to ``image_widget.image`` and ``caption`` to
+        ``caption_widget.content`` if due (see the class docstring); returns whether anything was sent."""
+        now = time.perf_counter()
+        if playing and now - self._sent_at < self.period:
+            return False
+        self._sent_at = now
+        sent = False
+        column = plot.column_of(t)
+        if column != self._column:
+            image_widget.image = plot.image_at(t)
+            self._column, sent = column, True
+        if caption != self._caption:
+            caption_widget.content = caption
+            self._caption, sent = caption, True
+        return sent
 
 
 class ClearancePlot(MarkedPlot):
