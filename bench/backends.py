@@ -136,6 +136,47 @@ def _wrapper_seconds(a, f, q) -> float:
     return max(t["call"] - t["nop"], 0.0)
 
 
+def _collides_python_seconds(a, Q) -> float:
+    """The Python of one ``collides(Q)`` call without its kernel (as :func:`_wrapper_seconds`): the
+    fused kernel's ``detect_rows`` swapped for a Python function that returns at once."""
+    from armguard_analytic._engine import _kernel as kn
+
+    det = a.detector(0.0)
+    SF, SI, ip = det._scratch().batch_buffers(det, kn.MODE_YESNO)
+    args = (Q, 0, len(Q), det._H, det._MF, det._MI, SF, SI, det._prm, ip, det._all_p, Q, Q, det._fn)
+    kernel = kn.detect_rows
+    kn.detect_rows = _no_kernel
+    try:
+        t = interleaved_thread_seconds({"call": lambda: a.collides(Q), "nop": lambda: _no_kernel(*args)},
+                                       repeat=7, number=2000)
+    finally:
+        kn.detect_rows = kernel
+    return max(t["call"] - t["nop"], 0.0)
+
+
+def collides_rows(quick: bool) -> str:
+    """``collides(Q)`` on one configuration: the call, its Python, coal's call."""
+    import armguard
+
+    n_q = 40 if quick else 200
+    rows = ["| model | analytic `collides(Q)`, one row | Python per call | coal `collides(Q)`, one row | coal / analytic |",
+            "|---|---|---|---|---|"]
+    for name, load in _models() + _public_robots():
+        m = load()
+        Q = [np.ascontiguousarray(q[None]) for q in m.random_q(n_q, 5)]
+        a, c = armguard.checker(m, "analytic"), armguard.checker(m, "coal", {"threads": 1})
+        it = iter(range(10**9))
+        t = interleaved_thread_seconds({"a": lambda: a.collides(Q[next(it) % n_q]),
+                                        "c": lambda: c.collides(Q[next(it) % n_q])}, repeat=7, number=n_q)
+        t_py = _collides_python_seconds(a, Q[0])
+        rows.append(f"| {name} | {fmt_ns(t['a'])} | {fmt_ns(t_py)} | {fmt_ns(t['c'])} | {t['c'] / t['a']:.1f}× |")
+    note = ("\n\nThread CPU time, medians of 7 interleaved runs over random in-limit configurations, one `(1, nq)` row "
+            "per call. The Python per call is `collides` with the fused kernel's `detect_rows` swapped for a Python "
+            "function that returns at once (less that function's call): the argument checks, the joint reordering "
+            "where Pinocchio's order is not the scene's (ranger, kinova), the thread's scratch and two output arrays.")
+    return "\n".join(rows) + note
+
+
 def interface_rows(quick: bool) -> str:
     """The analytic interface around its kernel (see the module docstring)."""
     import armguard
@@ -195,4 +236,4 @@ def interface_rows(quick: bool) -> str:
             f"the GIL when one call takes under {GIL_RELEASE_US:g} µs: handing it to the other thread and back costs more than such a "
             "call) and with the GIL always released (option `release_gil=True`). Yes/no per thread: `collides` on blocks "
             "of 200 configurations (one analytic worker thread; coal built with `threads=1`).")
-    return "\n".join(rows) + "\n\n" + "\n".join(yn) + note
+    return "\n".join(rows) + "\n\n" + "\n".join(yn) + note + "\n\n" + collides_rows(quick)

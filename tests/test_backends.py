@@ -195,6 +195,28 @@ def test_q_is_in_pin_model_order(checkers):
         a.pair_distances(np.full(model.nq, np.nan))
 
 
+@pytest.mark.parametrize("name", ["gmf_s480", "ranger", "kinova"])  # q in the scene's order; gathered; converted
+def test_analytic_collides_a_row_at_a_time_as_in_one_batch(checkers, name):
+    """``collides`` on a few rows runs inline on the thread's batch scratch (reused from call to
+    call): every row alone answers as the rows in one batch, the batch again after other calls as
+    before, and as the fused Detector's ``collides_many`` and coal's distances (clear of contact)."""
+    model, a, c = checkers(name)
+    Q = model.random_q(300, 17)
+    Q[::7] = model.random_q(len(Q[::7]), 18)  # more rows, some in contact
+    whole = a.collides(Q)
+    assert whole.dtype == bool and whole.shape == (len(Q),) and whole.any() and not whole.all()
+    rows = np.array([a.collides(Q[m:m + 1])[0] for m in range(len(Q))])
+    np.testing.assert_array_equal(rows, whole)
+    a.collides(model.random_q(5, 19))
+    np.testing.assert_array_equal(a.collides(Q), whole)
+    np.testing.assert_array_equal(a.detector(0.0).collides_many(model.scene_q(Q)), whole)
+    d = np.array([c.pair_distances(q).distance.min() for q in Q[:60]])
+    far = np.abs(d) > CONTACT_BAND
+    np.testing.assert_array_equal(whole[:60][far], d[far] <= 0.0)
+    with pytest.raises(BackendError, match="NaN"):
+        a.collides(np.full((1, model.nq), np.nan))
+
+
 _BAD = """<robot name="bad"><link name="base"/><link name="l1">
   <collision name="c"><geometry>{geom}</geometry></collision></link>
   <joint name="j" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/>

@@ -42,7 +42,6 @@ same witness points) is kept as the slow reference.
 from __future__ import annotations
 
 import math
-import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
 from typing import Mapping
@@ -59,7 +58,6 @@ _F64 = np.dtype(np.float64)
 _I64 = np.dtype(np.int64)
 _ND = np.ndarray
 _new_result = PairDistances._unchecked
-_MIN_ROWS_PER_THREAD = 256  # pair_distances_many: below this many rows per thread, a thread costs more than it saves
 
 
 class _Fast:
@@ -171,6 +169,10 @@ class AnalyticChecker(CheckerBase):
             raise BackendError(f"analytic: unknown options {sorted(opts)}; options are ['fidelity', 'release_gil']")
         self.representation = dict(model.notes)
         self._detectors: dict = {}
+        self._nq = model.nq
+        # collides: Pinocchio's rows as they are, gathered (a column take), or converted (continuous joints)
+        self._scene_order = model.q_in_scene_order
+        self._q_take = None if model.has_continuous_joints else model.q_index
         self._map = None
         self._fast = None
         self._lock = threading.RLock()  # building a detector or the call plan: once, whichever thread asks
@@ -179,11 +181,11 @@ class AnalyticChecker(CheckerBase):
     def detector(self, stopping_distance: float = 0.0):
         """The fused Detector of the Model (every pair kept), one per stopping distance: it compiles this
         Model, also after its scene moved on to a derived one (``armguard.model.model_of``)."""
-        from ._engine._detector import FusedDetector
-
         key = float(stopping_distance)
         det = self._detectors.get(key)
         if det is None:
+            from ._engine._detector import FusedDetector
+
             with self._lock:
                 det = self._detectors.get(key)
                 if det is None:
@@ -346,6 +348,7 @@ class AnalyticChecker(CheckerBase):
         """Every pair (or the Model rows ``pairs``) at each row of ``Q`` ``(M, nq)``; rows split over
         threads (one numba call each, the GIL released) when there are many."""
         from ._engine._pair_rows import pair_rows
+        from ._engine._scratch import row_threads
 
         f = self._plan()
         Q = check_Q(self.model, Q)
@@ -365,7 +368,7 @@ class AnalyticChecker(CheckerBase):
         d, p_WA, p_WB = np.empty((M, n)), np.empty((M, n, 3)), np.empty((M, n, 3))
         Qf, df, pAf, pBf = Q.reshape(-1), d.reshape(-1), p_WA.reshape(-1, 3), p_WB.reshape(-1, 3)
         H, MF, MI, prm, iprm = f.args
-        n_threads = max(1, min(M, os.cpu_count() or 1, -(-M // _MIN_ROWS_PER_THREAD)))
+        n_threads = row_threads(M)
         bounds = [(M * k) // n_threads for k in range(n_threads + 1)]
         entry = pair_rows if not M else f.entry if n_threads == 1 else f.entry_free
 
@@ -386,10 +389,29 @@ class AnalyticChecker(CheckerBase):
         return PairDistancesMany(names, d, p_WA, p_WB, cat)
 
     def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
-        Q = check_Q(self.model, Q)
+        """Yes/no per row of ``Q`` ``(M, nq)``: the fused kernel's early-exit mode, straight on ``Q``
+        when it is already a C-contiguous float64 array of the right width (the kernel itself refuses
+        a non-finite row, then :func:`check_Q` names it), the joints reordered only where Pinocchio's
+        order is not the scene's."""
         if not (margin >= 0.0 and math.isfinite(margin)):
             raise BackendError(f"margin: expected a finite length >= 0, got {margin!r}")
-        return self.detector(margin).collides_many(self.model.scene_q(Q))
+        model = self.model
+        if type(Q) is not _ND or Q.dtype is not _F64 or Q.ndim != 2 or Q.shape[1] != self._nq or not Q.flags.carray:
+            Q = check_Q(model, Q)
+            if not Q.flags.writeable:  # a read-only array would compile the kernel again, for that type
+                Q = Q.copy()
+        if self._scene_order:
+            Qs = Q
+        elif self._q_take is not None:
+            Qs = Q.take(self._q_take, axis=1)
+        else:
+            Qs = model.scene_q(Q)
+        det = self.detector(margin)
+        hit, err = det._yesno_rows(Qs)
+        if err != 0:
+            check_Q(model, Q)  # a non-finite row: the same error as every backend's
+            det._raise_kernel_error(err, Qs, "Detector: Q", batch=True)
+        return hit
 
     def min_distance_many(self, Q) -> np.ndarray:
         Q = check_Q(self.model, Q)

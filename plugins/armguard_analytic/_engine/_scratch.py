@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 from typing import TYPE_CHECKING
 
@@ -12,7 +13,19 @@ from . import _entry, _kernel as kn
 if TYPE_CHECKING:
     from ._detector import FusedDetector
 
-__all__ = ["GIL_RELEASE_US", "_Scratch", "_entry_point", "compiled", "median_call_us"]
+__all__ = ["CPUS", "GIL_RELEASE_US", "MIN_ROWS_PER_THREAD", "_Scratch", "_entry_point", "compiled", "median_call_us",
+           "row_threads"]
+
+CPUS = os.cpu_count() or 1
+"""This machine's processors, read once: ``os.cpu_count()`` took 7.7 µs a call here, more than a
+one-row ``collides`` needs for all its work."""
+MIN_ROWS_PER_THREAD = 256
+"""Below this many configurations per thread, a thread of a batch costs more than it saves."""
+
+
+def row_threads(M: int) -> int:
+    """How many threads a batch of ``M`` configurations is split over (one for small batches)."""
+    return max(1, min(M, CPUS, -(-M // MIN_ROWS_PER_THREAD)))
 
 GIL_RELEASE_US = 12.0
 """A compiled call releases the GIL when one call takes at least this long (µs, measured when the
@@ -64,7 +77,7 @@ class _Scratch:
     model buffers (``H``, ``MF``, ``MI``) are read-only in the kernel and shared.  The state the
     anytime mode keeps between checks (last distances, time since checked) is per thread too."""
 
-    __slots__ = ("SF", "SI", "q1", "ev", "pflag", "plb", "iprm_by_mode", "entry_args", "last_raw")
+    __slots__ = ("SF", "SI", "q1", "ev", "pflag", "plb", "iprm_by_mode", "entry_args", "last_raw", "batch")
 
     def __init__(self, det: "FusedDetector") -> None:
         L = det._layout
@@ -78,3 +91,18 @@ class _Scratch:
         self.entry_args = (det._fn, self.q1, det._H, det._MF, det._MI, self.SF, self.SI, det._prm,
                            self.iprm_by_mode[kn.MODE_EXACT], det._all_p)
         self.last_raw = None  # this thread's last report, still reading SF / SI
+        self.batch = None  # the buffers of this thread's one-thread batches (:meth:`batch_buffers`)
+
+    def batch_buffers(self, det: "FusedDetector", mode: int) -> tuple:
+        """``(SF, SI, iprm)`` for a batch run on this thread alone, in ``mode``: scratch of its own (a
+        batch never moves the state ``check`` keeps between calls, nor a report still reading
+        ``SF``), made on the thread's first batch and reused by the next ones, as one batch reuses it
+        from row to row."""
+        b = self.batch
+        if b is None:
+            b = self.batch = (det._SF0.copy(), det._SI0.copy(), {})
+        ip = b[2].get(mode)
+        if ip is None:  # the kernel only reads it
+            ip = b[2][mode] = det._iprm.copy()
+            ip[kn.I_MODE], ip[kn.I_STATE] = mode, 0
+        return b[0], b[1], ip

@@ -318,15 +318,28 @@ class Model:
         """``(n,) int64``: flat scene q[k] = pinocchio q[q_index[k]] (``scene.joint_names`` order)."""
         return self._q_index
 
+    @property
+    def has_continuous_joints(self) -> bool:
+        """Whether a joint is continuous (Pinocchio's ``q`` holds its ``(cos, sin)``, the scene's ``q`` its angle)."""
+        return len(self._circular) > 0
+
+    @property
+    def q_in_scene_order(self) -> bool:
+        """Whether Pinocchio's ``q`` already is the scene's flat ``q``: the same joints in the same
+        order, none continuous (then :meth:`scene_q` only copies)."""
+        qi = self._q_index
+        return not self.has_continuous_joints and len(qi) == self.nq and bool(np.array_equal(qi, np.arange(len(qi))))
+
     def scene_q(self, q) -> np.ndarray:
         """Pinocchio-ordered ``q`` ``(..., nq)`` -> the scene's flat order ``(..., n)``."""
         q = np.asarray(q, dtype=np.float64)
         if q.shape[-1:] != (self.nq,):
             raise DetectionError(f"q: expected {self.nq} values in pin_model's order {self.joint_names}, got shape {q.shape}")
-        out = q[..., self._q_index]
-        for k in self._circular:  # a continuous joint: pinocchio's (cos, sin) -> its angle
-            i = self._q_index[k]
-            out[..., k] = np.arctan2(q[..., i + 1], q[..., i])
+        out = q.take(self._q_index, axis=-1)
+        circ = self._circular
+        if len(circ):  # continuous joints: pinocchio's (cos, sin) -> the angle
+            i = self._q_index[circ]
+            out[..., circ] = np.arctan2(q[..., i + 1], q[..., i])
         return out
 
     def pin_q(self, q_scene) -> np.ndarray:
