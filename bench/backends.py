@@ -122,7 +122,8 @@ def _no_kernel(*args) -> int:
 
 def _wrapper_seconds(a, f, q) -> float:
     """The Python of one ``pair_distances(q)`` call without its kernel: the call with the plan's compiled
-    entry swapped for a Python function that returns at once, less that function's own call.  (The
+    entry swapped for a Python function that returns at once, less that function's own call (the best
+    of 21 interleaved runs of 500 calls each: a cost of the code, not of the machine's load).  (The
     difference of the call and the bare kernel call, two noisy times of tens of µs, moved by ±3 µs
     from run to run.)"""
     args = (f.fn, q, 0, 1, f.gmap, *f.args[:3], *f.scratch()[:2], *f.args[3:], f.scratch()[2], q, q, q)
@@ -130,7 +131,7 @@ def _wrapper_seconds(a, f, q) -> float:
     f.entry = _no_kernel
     try:
         t = interleaved_thread_seconds({"call": lambda: a.pair_distances(q), "nop": lambda: _no_kernel(*args)},
-                                       repeat=7, number=2000)
+                                       repeat=21, number=500, reduce=min)
     finally:
         f.entry = entry
     return max(t["call"] - t["nop"], 0.0)
@@ -148,7 +149,7 @@ def _collides_python_seconds(a, Q) -> float:
     kn.detect_rows = _no_kernel
     try:
         t = interleaved_thread_seconds({"call": lambda: a.collides(Q), "nop": lambda: _no_kernel(*args)},
-                                       repeat=7, number=2000)
+                                       repeat=21, number=500, reduce=min)
     finally:
         kn.detect_rows = kernel
     return max(t["call"] - t["nop"], 0.0)
@@ -165,14 +166,15 @@ def collides_rows(quick: bool) -> str:
         m = load()
         Q = [np.ascontiguousarray(q[None]) for q in m.random_q(n_q, 5)]
         a, c = armguard.checker(m, "analytic"), armguard.checker(m, "coal", {"threads": 1})
+        t_py = _collides_python_seconds(a, Q[0])
         it = iter(range(10**9))
         t = interleaved_thread_seconds({"a": lambda: a.collides(Q[next(it) % n_q]),
                                         "c": lambda: c.collides(Q[next(it) % n_q])}, repeat=7, number=n_q)
-        t_py = _collides_python_seconds(a, Q[0])
         rows.append(f"| {name} | {fmt_ns(t['a'])} | {fmt_ns(t_py)} | {fmt_ns(t['c'])} | {t['c'] / t['a']:.1f}× |")
     note = ("\n\nThread CPU time, medians of 7 interleaved runs over random in-limit configurations, one `(1, nq)` row "
             "per call. The Python per call is `collides` with the fused kernel's `detect_rows` swapped for a Python "
-            "function that returns at once (less that function's call): the argument checks, the joint reordering "
+            "function that returns at once (less that function's call; best of 21 interleaved runs of 500 calls, "
+            "as for `pair_distances`): the argument checks, the joint reordering "
             "where Pinocchio's order is not the scene's (ranger, kinova), the thread's scratch and two output arrays.")
     return "\n".join(rows) + note
 
@@ -229,8 +231,9 @@ def interface_rows(quick: bool) -> str:
             "kernel call and coal interleaved (so is each yes/no pair of figures); the bare kernel call is "
             "`pair_rows` through its compiled entry point with preallocated outputs (numba's unboxing of its "
             "arguments included); the Python per call is `pair_distances` with that entry point swapped for a Python "
-            "function that returns at once (less that function's call): validation, the plan and scratch lookups, "
-            "three output arrays and the result. Two threads: wall time of "
+            "function that returns at once (less that function's call; best of 21 interleaved runs of 500 calls, as "
+            "`timeit` advises for a cost of the code: slower runs measure the machine's other load): validation, the "
+            "plan and scratch lookups, three output arrays and the result. Two threads: wall time of "
             f"{20 * n_q} calls on one thread over the same calls split between two threads sharing one checker "
             "(2.0× is perfect scaling; a shared machine's load lowers it), with the checker's own GIL policy (it holds "
             f"the GIL when one call takes under {GIL_RELEASE_US:g} µs: handing it to the other thread and back costs more than such a "

@@ -180,7 +180,7 @@ def run(quick: bool) -> str:
             f"| {r['us_fixed']:.1f} µs | {per:.2f} µs | {r['us_same']:.1f} µs " + work)
     note = (f"\n\nThread-time medians, {n} calls per figure, `q` cycling over 200 random in-limit configurations; "
             "GJK work over the separated polytope pairs of 20 configurations (`bench/pair_profile.py`). *per pair* "
-            "is (kernel - fixed) / pairs; *same q* repeats one configuration (forward kinematics skipped, branch "
+            "is (kernel - fixed) / pairs; *Python wrapper* is the best of 21 interleaved runs (as `bench backends`); *same q* repeats one configuration (forward kinematics skipped, branch "
             "predictor trained). z1's pairs all have a cylinder side (GJK and EPA on support functions, "
             "`_pair_cylinder.support_pair_graph`): not counted.")
     return "\n".join(rows) + note

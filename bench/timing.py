@@ -33,10 +33,12 @@ def median_thread_seconds(fn: Callable[[], object], *, repeat: int = 7, number: 
 
 
 def interleaved_thread_seconds(fns: dict[str, Callable[[], object]], *, repeat: int = 7,
-                               number: int = 1) -> dict[str, float]:
+                               number: int = 1, reduce: Callable = statistics.median) -> dict[str, float]:
     """:func:`median_thread_seconds` of each of ``fns`` (name -> call), their runs interleaved (run
     ``r`` of every call, then run ``r + 1``): a spell of load on a shared machine lands on all of
-    them, not on whichever was being timed then, so their ratios hold where each time alone moves."""
+    them, not on whichever was being timed then, so their ratios hold where each time alone moves.
+    ``reduce=min``: the best run of each instead (``timeit``'s advice for a cost of the code itself:
+    the slower runs measure the machine's other load)."""
     for fn in fns.values():
         fn()  # warm-up (JIT compilation, caches)
     samples: dict[str, list[float]] = {k: [] for k in fns}
@@ -46,7 +48,7 @@ def interleaved_thread_seconds(fns: dict[str, Callable[[], object]], *, repeat: 
             for _ in range(number):
                 fn()
             samples[k].append((time.thread_time() - t0) / number)
-    return {k: statistics.median(v) for k, v in samples.items()}
+    return {k: reduce(v) for k, v in samples.items()}
 
 
 def fmt_ns(seconds: float) -> str:
