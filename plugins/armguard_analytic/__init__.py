@@ -173,6 +173,7 @@ class AnalyticChecker(CheckerBase):
         # collides: Pinocchio's rows as they are, gathered (a column take), or converted (continuous joints)
         self._scene_order = model.q_in_scene_order
         self._q_take = None if model.has_continuous_joints else model.q_index
+        self._yesno_rows = None  # set with the first detector (:meth:`detector`)
         self._map = None
         self._fast = None
         self._lock = threading.RLock()  # building a detector or the call plan: once, whichever thread asks
@@ -184,8 +185,10 @@ class AnalyticChecker(CheckerBase):
         key = float(stopping_distance)
         det = self._detectors.get(key)
         if det is None:
+            from ._engine._batch import yesno_rows
             from ._engine._detector import FusedDetector
 
+            self._yesno_rows = yesno_rows  # collides' path (the engine is imported on first use)
             with self._lock:
                 det = self._detectors.get(key)
                 if det is None:
@@ -407,7 +410,7 @@ class AnalyticChecker(CheckerBase):
         else:
             Qs = model.scene_q(Q)
         det = self.detector(margin)
-        hit, err = det._yesno_rows(Qs)
+        hit, err = self._yesno_rows(det, Qs)
         if err != 0:
             check_Q(model, Q)  # a non-finite row: the same error as every backend's
             det._raise_kernel_error(err, Qs, "Detector: Q", batch=True)

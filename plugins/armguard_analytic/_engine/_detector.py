@@ -6,7 +6,6 @@ from __future__ import annotations
 import math
 import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
 from typing import Mapping
 
 import numpy as np
@@ -31,7 +30,8 @@ from ._model import CAT_WORKSPACE, build_model
 from ._narrow import WORK_TAIL
 from ._prep import _fk_blocks, _static_polytopes
 from ._raw import _UNHELD, _Raw, _refcount
-from ._scratch import MIN_ROWS_PER_THREAD, _entry_point, _Scratch, median_call_us, row_threads
+from ._batch import rows
+from ._scratch import _entry_point, _Scratch, median_call_us
 
 __all__ = ["FusedDetector"]
 
@@ -495,9 +495,6 @@ class FusedDetector(Detector):
         return PairDistances(rows[:, 0].copy(), rows[:, 1:4].copy(), rows[:, 4:7].copy(), la, ra, lb, cat, na, nb,
                              self._model.link_names, pidx)
 
-    def _scratch_rows(self, n_chunks: int):
-        return np.tile(self._SF0, (n_chunks, 1)), np.tile(self._SI0, (n_chunks, 1))
-
     def _many(self, Q, mode: int):
         try:
             Q = np.ascontiguousarray(np.asarray(Q, dtype=np.float64))
@@ -505,43 +502,10 @@ class FusedDetector(Detector):
             raise DetectionError(f"Q: expected an (M, {self._model.n_q}) array of numbers") from exc
         if Q.ndim != 2 or Q.shape[1] != self._model.n_q:
             raise DetectionError(f"Q: expected shape (M, {self._model.n_q}), got {Q.shape}")
-        min_d, status, err = self._rows(Q, mode)
+        min_d, status, err = rows(self, Q, mode)
         if err != 0:
             self._raise_kernel_error(err, Q, "Detector: Q", batch=True)
         return min_d, status
-
-    def _rows(self, Q: np.ndarray, mode: int) -> tuple:
-        """``(min_d (M, 4), status (M,), err)``: the kernel over the rows of ``Q`` (a C-contiguous
-        float64 ``(M, n_q)`` array, the scene's joint order; callers check that) in ``mode``, split
-        over threads for a large ``M``; ``err`` the first failing row's error code (0: none; the
-        kernel rejects non-finite rows itself)."""
-        self._fresh()
-        M = Q.shape[0]
-        n_threads = row_threads(M)
-        min_d = np.empty((M, 4))  # the kernel writes every row (read only when err == 0)
-        status = np.empty(M, dtype=np.int64)
-        if n_threads == 1:  # this thread's batch scratch; the model buffers shared (the kernel only reads them)
-            SF, SI, iprm = self._scratch().batch_buffers(self, mode)
-            err = int(kn.detect_rows(Q, 0, M, self._H, self._MF, self._MI, SF, SI, self._prm, iprm, self._all_p, min_d,
-                                     status, self._fn))
-            return min_d, status, err
-        SF2, SI2 = self._scratch_rows(n_threads)
-        iprm = self._iprm.copy()
-        iprm[0], iprm[3] = mode, 0
-        bounds = [(M * k) // n_threads for k in range(n_threads + 1)]
-        # each thread gets its own copy of the (small) model buffers: shared arrays would make
-        # the threads contend on their reference counts and cache lines
-        per = [(self._H.copy(), self._MF.copy(), self._MI.copy(), self._prm.copy(), iprm.copy(), self._all_p.copy())
-               for _ in range(n_threads)]
-
-        def work(k: int) -> int:  # the kernel releases the GIL: threads run in parallel
-            H, MF, MI, prm, ip, sel = per[k]
-            return int(kn.detect_rows(Q, bounds[k], bounds[k + 1], H, MF, MI, SF2[k], SI2[k], prm, ip, sel, min_d, status,
-                                      self._fn))
-
-        with ThreadPoolExecutor(n_threads) as ex:
-            errs = list(ex.map(work, range(n_threads)))
-        return min_d, status, next((e for e in errs if e != 0), 0)
 
     def check_many(self, Q) -> BatchReport:
         """Exact per-category nearest distances and status for each row of ``Q`` ``(M, n_q)``, in parallel."""
@@ -563,22 +527,6 @@ class FusedDetector(Detector):
         """``(M,) bool``: collision (distance <= 0, or <= the stopping distance) per row, early exit."""
         _, status = self._many(Q, kn.MODE_YESNO)
         return status == kn.ST_COLLISION
-
-    def _yesno_rows(self, Q: np.ndarray) -> tuple:
-        """:meth:`collides_many` on rows the caller checked (see :meth:`_rows`): ``(hit (M,) bool, err)``.
-        A batch for one thread runs inline here: the Checker's ``collides`` on a few rows is this
-        call, and each Python step it saves is a measurable share of it."""
-        M = Q.shape[0]
-        if M >= 2 * MIN_ROWS_PER_THREAD:
-            _, status, err = self._rows(Q, kn.MODE_YESNO)
-            return status == kn.ST_COLLISION, err
-        self._fresh()
-        SF, SI, iprm = self._scratch().batch_buffers(self, kn.MODE_YESNO)
-        min_d = np.empty((M, 4))  # the kernel writes every row (read only when err == 0)
-        status = np.empty(M, dtype=np.int64)
-        err = kn.detect_rows(Q, 0, M, self._H, self._MF, self._MI, SF, SI, self._prm, iprm, self._all_p, min_d, status,
-                             self._fn)
-        return status == kn.ST_COLLISION, err
 
     # ------------------------------------------------------------------ reporting helpers
     def _pair_names(self, p: int) -> tuple[str, str]:
