@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import _kernel as kn
-from ._scratch import MIN_ROWS_PER_THREAD, row_threads
+from ._scratch import CPUS, MIN_ROWS_PER_THREAD, row_threads
 
 if TYPE_CHECKING:
     from ._detector import FusedDetector
@@ -69,7 +69,7 @@ def yesno_rows(det: "FusedDetector", Q: np.ndarray) -> tuple:
     """``collides_many`` on rows the caller checked (see :func:`rows`): ``(hit (M,) bool, err)``. A few
     rows go straight to :func:`rows_here`: the Checker's ``collides`` on one row is this call, and
     each Python step it skips is a measurable share of it (``python -m bench backends``)."""
-    if Q.shape[0] < 2 * MIN_ROWS_PER_THREAD:
+    if Q.shape[0] <= MIN_ROWS_PER_THREAD or CPUS == 1:  # row_threads would say 1
         _, status, err = rows_here(det, Q, kn.MODE_YESNO)
     else:
         _, status, err = rows(det, Q, kn.MODE_YESNO)
