@@ -120,39 +120,38 @@ def _no_kernel(*args) -> int:
     return 0
 
 
-def _wrapper_seconds(a, f, q) -> float:
-    """The Python of one ``pair_distances(q)`` call without its kernel: the call with the plan's compiled
-    entry swapped for a Python function that returns at once, less that function's own call (the best
-    of 21 interleaved runs of 500 calls each: a cost of the code, not of the machine's load).  (The
-    difference of the call and the bare kernel call, two noisy times of tens of µs, moved by ±3 µs
-    from run to run.)"""
-    args = (f.fn, q, 0, 1, f.gmap, *f.args[:3], *f.scratch()[:2], *f.args[3:], f.scratch()[2], q, q, q)
-    entry = f.entry
-    f.entry = _no_kernel
+def _python_seconds(call, owner, name: str, args: tuple) -> float:
+    """The Python of ``call()`` without its kernel: ``owner.name`` (the compiled kernel it calls)
+    swapped for a Python function that returns at once, less that function's own call on ``args``
+    (the kernel's arguments); the best of 21 interleaved runs of 500 calls each: a cost of the code,
+    not of the machine's load."""
+    kernel = getattr(owner, name)
+    setattr(owner, name, _no_kernel)
     try:
-        t = interleaved_thread_seconds({"call": lambda: a.pair_distances(q), "nop": lambda: _no_kernel(*args)},
-                                       repeat=21, number=500, reduce=min)
+        t = interleaved_thread_seconds({"call": call, "nop": lambda: _no_kernel(*args)}, repeat=21, number=500,
+                                       reduce=min)
     finally:
-        f.entry = entry
+        setattr(owner, name, kernel)
     return max(t["call"] - t["nop"], 0.0)
 
 
+def _wrapper_seconds(a, f, q) -> float:
+    """The Python of one ``pair_distances(q)`` call (:func:`_python_seconds`, the plan's compiled entry
+    swapped).  (The difference of the call and the bare kernel call, two noisy times of tens of µs,
+    moved by ±3 µs from run to run.)"""
+    args = (f.fn, q, 0, 1, f.gmap, *f.args[:3], *f.scratch()[:2], *f.args[3:], f.scratch()[2], q, q, q)
+    return _python_seconds(lambda: a.pair_distances(q), f, "entry", args)
+
+
 def _collides_python_seconds(a, Q) -> float:
-    """The Python of one ``collides(Q)`` call without its kernel (as :func:`_wrapper_seconds`): the
-    fused kernel's ``detect_rows`` swapped for a Python function that returns at once."""
+    """The Python of one ``collides(Q)`` call (:func:`_python_seconds`, the fused kernel's
+    ``detect_rows`` swapped)."""
     from armguard_analytic._engine import _kernel as kn
 
     det = a.detector(0.0)
     SF, SI, ip = det._scratch().batch_buffers(det, kn.MODE_YESNO)
     args = (Q, 0, len(Q), det._H, det._MF, det._MI, SF, SI, det._prm, ip, det._all_p, Q, Q, det._fn)
-    kernel = kn.detect_rows
-    kn.detect_rows = _no_kernel
-    try:
-        t = interleaved_thread_seconds({"call": lambda: a.collides(Q), "nop": lambda: _no_kernel(*args)},
-                                       repeat=21, number=500, reduce=min)
-    finally:
-        kn.detect_rows = kernel
-    return max(t["call"] - t["nop"], 0.0)
+    return _python_seconds(lambda: a.collides(Q), kn, "detect_rows", args)
 
 
 def collides_rows(quick: bool) -> str:
