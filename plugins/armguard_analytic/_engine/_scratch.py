@@ -17,8 +17,8 @@ __all__ = ["CPUS", "GIL_RELEASE_US", "MIN_ROWS_PER_THREAD", "_Scratch", "_entry_
            "row_threads"]
 
 CPUS = os.cpu_count() or 1
-"""This machine's processors, read once: ``os.cpu_count()`` took 7.7 µs a call here, more than a
-one-row ``collides`` needs for all its work."""
+"""This machine's processors, read once: ``os.cpu_count()`` asks the system on every call, which
+took longer than a one-row ``collides`` needs for all its work."""
 MIN_ROWS_PER_THREAD = 256
 """Below this many configurations per thread, a thread of a batch costs more than it saves."""
 
