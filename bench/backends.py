@@ -148,9 +148,9 @@ def _collides_python_seconds(a, Q) -> float:
     ``detect_rows`` swapped)."""
     from armguard_analytic._engine import _kernel as kn
 
-    det = a.detector(0.0)
-    SF, SI, ip = det._scratch().batch_buffers(det, kn.MODE_YESNO)
-    args = (Q, 0, len(Q), det._H, det._MF, det._MI, SF, SI, det._prm, ip, det._all_p, Q, Q, det._fn)
+    b = a.detector(0.0)._fresh()
+    SF, SI, ip = b.tls.s.batch_buffers(kn.MODE_YESNO)
+    args = (Q, 0, len(Q), b.H, b.MF, b.MI, SF, SI, b.prm, ip, b.all_p, Q, Q, b.fn)
     return _python_seconds(lambda: a.collides(Q), kn, "detect_rows", args)
 
 

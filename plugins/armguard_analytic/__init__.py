@@ -65,7 +65,7 @@ class _Fast:
     buffers of that revision (held here, so a later rebuild of the detector cannot mix with them),
     the gather map, the compiled entry point, and per-thread scratch copied from the pristine one."""
 
-    __slots__ = ("revision", "det", "head", "sel", "swap", "gmap", "n", "names", "category", "q_shape", "entry",
+    __slots__ = ("revision", "det", "b", "head", "sel", "swap", "gmap", "n", "names", "category", "q_shape", "entry",
                  "entry_free", "fn", "call_us", "releases_gil", "args", "SF0", "SI0", "n_q", "tls", "subsets", "jac")
 
     def __init__(self, checker: "AnalyticChecker", release_gil: bool | None = None) -> None:
@@ -76,10 +76,10 @@ class _Fast:
 
         model = checker.model
         det = checker.detector()
-        det._fresh()
-        self.revision = det._revision
-        self.det = det
-        inv, swap_rows = checker._order()
+        b = det._fresh()  # one revision of the detector throughout (its ._engine._built)
+        self.revision = b.revision
+        self.det, self.b = det, b
+        inv, swap_rows = checker._order(b)
         n = len(inv)
         swap = np.zeros(n, np.int64)
         swap[swap_rows] = 1
@@ -93,8 +93,8 @@ class _Fast:
         pairs = model.pairs
         self.names, self.category = pairs.names, pairs.category
         self.q_shape = (model.nq,)
-        self.args = (det._H, det._MF, det._MI, det._prm, det._iprm_by_mode[kn.MODE_ALL])
-        self.SF0, self.SI0, self.n_q = det._SF0, det._SI0, det._model.n_q
+        self.args = (b.H, b.MF, b.MI, b.prm, b.iprm_by_mode[kn.MODE_ALL])
+        self.SF0, self.SI0, self.n_q = b.SF0, b.SI0, b.model.n_q
         self.tls = threading.local()
         self.subsets: dict = {}  # idx.tobytes() -> (n, gmap, names, category): a repeated subset is planned once
         self.jac = None  # the Jacobian kernel's arrays (._jacobian.JacobianPlan), made on the first jacobian=True
@@ -196,13 +196,15 @@ class AnalyticChecker(CheckerBase):
                                                                reach_margin=math.inf, fixed_model=self.model)
         return det
 
-    def _order(self):
+    def _order(self, b=None):
         """For each Model pair row, its detector pair (a gather index), and the Model rows whose
-        detector pair has A and B the other way round."""
-        det = self.detector()
-        if self._map is not None and self._map[0] == det._revision:
+        detector pair has A and B the other way round, in the detector's revision ``b`` (None: its
+        current one)."""
+        if b is None:
+            b = self.detector()._fresh()
+        if self._map is not None and self._map[0] == b.revision:
             return self._map[1:]
-        m = det._model
+        m = b.model
         cs = m.compiled
         model = self.model
 
@@ -229,7 +231,7 @@ class AnalyticChecker(CheckerBase):
             raise BackendError(f"analytic: the detector checks {P} pairs, the Model lists {len(pairs)}")
         inv = np.empty(P, np.int64)
         inv[dest] = np.arange(P)
-        self._map = (det._revision, inv, np.sort(dest[swap]))
+        self._map = (b.revision, inv, np.sort(dest[swap]))
         return self._map[1:]
 
     # ---------------------------------------------------------------- the interface
@@ -261,7 +263,7 @@ class AnalyticChecker(CheckerBase):
             if batch:
                 check_Q(self.model, Q)
             check_q(self.model, Q[m])
-        f.det._raise_kernel_error(e, self.model.scene_q(Q[m:m + 1]), "Detector.pair_distances: q")
+        f.det._raise_kernel_error(e, self.model.scene_q(Q[m:m + 1]), "Detector.pair_distances: q", b=f.b)
 
     def pair_distances(self, q, *, pairs=None, jacobian: bool = False):
         f = self._fast

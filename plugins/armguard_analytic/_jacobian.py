@@ -39,8 +39,7 @@ class JacobianPlan:
         model = checker.model
         pm = model.pin_model
         self.nv = int(pm.nv)
-        det = fast.det
-        dm = det._model
+        dm = fast.b.model
         glink = np.asarray(dm.elem_glink, dtype=np.int64)
         parent = np.asarray(dm.tree.parent)
         if np.any(parent >= np.arange(len(parent))):  # the kernel's walk to a common ancestor needs it
@@ -54,7 +53,7 @@ class JacobianPlan:
                         np.empty((n, 3)))
         if err:
             checker._kernel_error(fast, int(err), q0[None], False)
-        X_WL = det._layout.view(SF, "Xs")
+        X_WL = fast.b.layout.view(SF, "Xs")
         data = pm.createData()
         pin.forwardKinematics(pm, data, q0)
         geoms = model.collision_model.geometryObjects

@@ -3,6 +3,7 @@ check (exact, anytime, batched), a subclass of the framework's :class:`armguard.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import threading
 import time
@@ -31,6 +32,7 @@ from ._narrow import WORK_TAIL
 from ._prep import _fk_blocks, _static_polytopes
 from ._raw import _UNHELD, _Raw, _refcount
 from ._batch import rows
+from ._built import Built
 from ._scratch import _entry_point, _Scratch, median_call_us
 
 __all__ = ["FusedDetector"]
@@ -48,11 +50,6 @@ def _single(cats: np.ndarray) -> int:
     """The category shared by all of ``cats``, or -1 when they differ."""
     u = np.unique(cats)
     return int(u[0]) if len(u) == 1 else -1
-
-
-def _readonly(a: np.ndarray) -> np.ndarray:
-    a.flags.writeable = False
-    return a
 
 
 class FusedDetector(Detector):
@@ -91,11 +88,21 @@ class FusedDetector(Detector):
 
     # ------------------------------------------------------------------ set-up
     def prepare(self) -> "FusedDetector":
-        """(Re)compile the scene: obstacle lists, BVH, buffers.  Call after changing the scene."""
+        """(Re)compile the scene: obstacle lists, BVH, buffers.  Call after changing the scene.
+
+        Holds the scene's lock while it reads the scene (an edit on another thread waits), and
+        publishes the result with one assignment (:mod:`._built`): a call running meanwhile finishes
+        on the revision it started with."""
+        lock = getattr(self.scene, "lock", None)
+        with self._prepare_lock, (lock if lock is not None else contextlib.nullcontext()):
+            self._b = self._build()
+        return self
+
+    def _build(self) -> Built:
         margin = max(self._reach_margin, self._threshold, self._stopping)
-        self._revision = getattr(self.scene, "revision", None)  # read before compiling: a change during it is seen
+        revision = getattr(self.scene, "revision", None)  # read before compiling: a change during it is seen
         m = build_model(self.scene, active=self._active, reach_margin=margin, tol=self._tol, model=self._fixed_model)
-        self._model = m
+        b = Built(self, revision, m)
         cs = m.compiled
         _require_pairs(self.scene, cs, self._active, self._with_terrain or self.terrain is not None)
         t = m.tree
@@ -127,8 +134,8 @@ class FusedDetector(Detector):
         L.add("MF", "bvh_hi", m.bvh.hi.reshape(-1, 3)); L.add("MF", "lever", lever)
         L.add("MF", "ws", np.concatenate([m.ws_lo, m.ws_hi]))
         L.add("MF", "qlim", limit_rows(m.lower, m.upper, self._tol.joint_limit))  # refused outside (kinematics._limits)
-        self._static_shapes = self._static_shape_table()
-        poly = _static_polytopes(cs, self._static_shapes)
+        b.static_shapes = dict(m.static_shapes)  # element number -> its shape (W), static bodies
+        poly = _static_polytopes(cs, b.static_shapes)
         L.add("MF", "pv", poly["pv"]); L.add("MF", "ppl", poly["ppl"]); L.add("MF", "pbis", poly["pbis"])
         L.add("MF", "pcen", poly["pcen"])
         for name in ("gadj", "gadjs", "gtri", "gtris", "gdir", "gdirs"):
@@ -181,37 +188,30 @@ class FusedDetector(Detector):
             L.add("SI", name, arr)
         L.scalar("n_q", m.n_q); L.scalar("n_explicit", m.n_explicit); L.scalar("n_mov", len(m.mov_ids))
         L.scalar("n_st", len(m.st_ids)); L.scalar("n_links", t.n_links)
-        self._layout = L
+        b.layout = L
         # SF0 / SI0: the pristine scratch every thread's own copy starts from (never passed to a kernel)
-        self._H, self._MF, self._MI, self._SF0, self._SI0 = L.buffers()
-        self._P = P
-        self._ev_off = L._shape["ev"][1]
-        self._sum_off = L._shape["summary"][1]  # "ev_p" follows it
-        self._all_p = L.view(self._MI, "all_p")
-        self._prm = np.array([self._threshold, self._stopping, self._tol.length, self._tol.parallel,
+        b.H, b.MF, b.MI, b.SF0, b.SI0 = L.buffers()
+        b.P = P
+        b.ev_off = L._shape["ev"][1]
+        b.sum_off = L._shape["summary"][1]  # "ev_p" follows it
+        b.all_p = L.view(b.MI, "all_p")
+        b.prm = np.array([self._threshold, self._stopping, self._tol.length, self._tol.parallel,
                               self._tol.gjk_epsilon, self._tol.penetration_witness_offset])
-        self._iprm = np.array([kn.MODE_EXACT, 0, self._tol.gjk_max_iterations, 1, 0], dtype=np.int64)
-        self._iprm_by_mode = {}
+        b.iprm = np.array([kn.MODE_EXACT, 0, self._tol.gjk_max_iterations, 1, 0], dtype=np.int64)
+        b.iprm_by_mode = {}
         for mode in (kn.MODE_EXACT, kn.MODE_LAZY, kn.MODE_ANYTIME, kn.MODE_YESNO, kn.MODE_ALL, kn.MODE_MIN):
-            ip = self._iprm.copy()
+            ip = b.iprm.copy()
             ip[0] = mode
-            self._iprm_by_mode[mode] = ip
-        # per-thread scratch (a report reading the old buffers keeps them alive: nothing to copy)
-        self._tls = threading.local()
-        self._fn = addresses()  # the kernels' addresses in this process, the entry points' first argument
-        self._entry, self.call_us, self.releases_gil = self._pick_entry(m)
-        self._q_shape = (m.n_q,)
-        self._names_a = tuple(cs.owner_names[cs.elem_owner[a]] for a in m.pair_a)
-        self._names_b = tuple("workspace" if b < 0 else cs.owner_names[cs.elem_owner[b]] for b in m.pair_b)
-        self._links_a = tuple(m.link_names[m.elem_glink[a]] for a in m.pair_a)
-        self._margin_built = margin
-        self._pd_cache = {}
-        return self
-
-    def _static_shape_table(self) -> dict[int, object]:
-        """Element number -> its shape (W) for static bodies, as the compiled arrays hold them
-        (the Model's GeometryObjects, or the Scene's bodies: ``_model.compile_for_engine``)."""
-        return dict(self._model.static_shapes)
+            b.iprm_by_mode[mode] = ip
+        # per-thread scratch: b.tls (a report reading the old buffers keeps them alive: nothing to copy)
+        b.fn = addresses()  # the kernels' addresses in this process, the entry points' first argument
+        b.q_shape = (m.n_q,)
+        b.names_a = tuple(cs.owner_names[cs.elem_owner[a]] for a in m.pair_a)
+        b.names_b = tuple("workspace" if e < 0 else cs.owner_names[cs.elem_owner[e]] for e in m.pair_b)
+        b.links_a = tuple(m.link_names[m.elem_glink[a]] for a in m.pair_a)
+        b.margin_built = margin
+        b.entry, b.call_us, b.releases_gil = self._pick_entry(b)
+        return b
 
     def _fresh(self) -> None:
         """Rebuild when the scene changed since :meth:`prepare` (a body added, a filter changed, ...).
@@ -219,18 +219,46 @@ class FusedDetector(Detector):
         A query on a stale model could say CLEAR while a new body encloses a link; every query
         compares ``scene.revision`` (one attribute read) and recompiles when it moved (once, when
         several threads see it)."""
-        if getattr(self.scene, "revision", None) != self._revision:
+        b = self._b
+        if getattr(self.scene, "revision", None) != b.revision:
             with self._prepare_lock:
-                if getattr(self.scene, "revision", None) != self._revision:
+                if getattr(self.scene, "revision", None) != self._b.revision:
                     self.prepare()
+                b = self._b
+        return b
 
-    def _scratch(self) -> _Scratch:
-        """The calling thread's scratch (made on its first call)."""
+    def _scratch(self, b: Built | None = None) -> _Scratch:
+        """The calling thread's scratch of revision ``b`` (None: the current one; made on its first call)."""
+        if b is None:
+            b = self._b
         try:
-            return self._tls.s
+            return b.tls.s
         except AttributeError:
-            s = self._tls.s = _Scratch(self)
+            s = b.tls.s = _Scratch(b)
             return s
+
+    # the current revision's parts, by their former names (tests, tools and the Checker read them;
+    # a call reads self._b once instead, so that a rebuild meanwhile cannot mix two revisions)
+    _revision = property(lambda self: self._b.revision)
+    _model = property(lambda self: self._b.model)
+    _layout = property(lambda self: self._b.layout)
+    _H = property(lambda self: self._b.H)
+    _MF = property(lambda self: self._b.MF)
+    _MI = property(lambda self: self._b.MI)
+    _SF0 = property(lambda self: self._b.SF0)
+    _SI0 = property(lambda self: self._b.SI0)
+    _P = property(lambda self: self._b.P)
+    _all_p = property(lambda self: self._b.all_p)
+    _prm = property(lambda self: self._b.prm)
+    _iprm = property(lambda self: self._b.iprm)
+    _tls = property(lambda self: self._b.tls)
+    _fn = property(lambda self: self._b.fn)
+    _entry = property(lambda self: self._b.entry)
+    _names_a = property(lambda self: self._b.names_a)
+    _names_b = property(lambda self: self._b.names_b)
+    _static_shapes = property(lambda self: self._b.static_shapes)
+    call_us = property(lambda self: self._b.call_us, doc="One exact check's measured time (µs) when prepared.")
+    releases_gil = property(lambda self: self._b.releases_gil, doc="Whether ``check`` releases the GIL.")
 
     # the calling thread's buffers, by their former names (tests and tools read them)
     _SF = property(lambda self: self._scratch().SF)
@@ -258,23 +286,23 @@ class FusedDetector(Detector):
     @property
     def link_names(self) -> tuple[str, ...]:
         """Global link names ``"robot/link"`` (the index space of ``PairDistances.link_a``)."""
-        return self._model.link_names
+        return self._b.model.link_names
 
     @property
     def n_pairs(self) -> int:
         """Number of candidate element pairs (after pair filters, active arm and obstacle lists)."""
-        return self._P
+        return self._b.P
 
     def set_threshold(self, threshold: float) -> None:
         self._threshold = _check_length(threshold, "threshold")
-        self._prm[0] = self._threshold
-        if max(self._threshold, self._stopping) > self._margin_built:
+        self._b.prm[0] = self._threshold
+        if max(self._threshold, self._stopping) > self._b.margin_built:
             self.prepare()
 
     def set_stopping_distance(self, stopping_distance: float) -> None:
         self._stopping = _check_length(stopping_distance, "stopping_distance")
-        self._prm[1] = self._stopping
-        if max(self._threshold, self._stopping) > self._margin_built:
+        self._b.prm[1] = self._stopping
+        if max(self._threshold, self._stopping) > self._b.margin_built:
             self.prepare()
 
     def set_active(self, name: str | None) -> None:
@@ -285,17 +313,18 @@ class FusedDetector(Detector):
 
     def obstacle_list(self, link: str) -> tuple[str, ...]:
         """Owner names in the obstacle list of ``link`` (``"robot/link"``), in pair order."""
-        self._fresh()
+        b = self._fresh()
         out = []
-        for p in range(self._P):
-            if self._links_a[p] == link and self._names_b[p] not in out:
-                out.append(self._names_b[p])
+        for p in range(b.P):
+            if b.links_a[p] == link and b.names_b[p] not in out:
+                out.append(b.names_b[p])
         return tuple(out)
 
     # ------------------------------------------------------------------ queries
     def _flat_q(self, q, q1: np.ndarray) -> np.ndarray:
         """``q`` (array or mapping) written into ``q1`` ``(1, n_q)`` (a thread's scratch), checked."""
-        if isinstance(q, np.ndarray) and q.dtype == np.float64 and q.shape == (self._model.n_q,):
+        n_q = q1.shape[1]
+        if isinstance(q, np.ndarray) and q.dtype == np.float64 and q.shape == (n_q,):
             q1[0] = q
             return q1
         if isinstance(q, Mapping):
@@ -305,9 +334,9 @@ class FusedDetector(Detector):
                 flat = np.asarray(q, dtype=np.float64)
             except (TypeError, ValueError) as exc:
                 raise DetectionError(f"q: expected numbers, got {q!r}") from exc
-        if flat.shape != (self._model.n_q,):
+        if flat.shape != (n_q,):
             raise DetectionError(
-                f"q: expected one configuration of {self._model.n_q} joints (scene.joint_names), got shape {flat.shape}"
+                f"q: expected one configuration of {n_q} joints (scene.joint_names), got shape {flat.shape}"
             )
         q1[0] = flat
         return q1
@@ -322,11 +351,12 @@ class FusedDetector(Detector):
             if _refcount(last) > _UNHELD:
                 last.detach()
 
-    def _pick_entry(self, m) -> tuple:
+    def _pick_entry(self, b: Built) -> tuple:
         """``(entry, call_us, releases_gil)``: ``check``'s compiled entry, releasing the GIL when one
         exact check takes at least ``GIL_RELEASE_US`` (:mod:`._scratch`; timed on a scratch of its
         own at 9 seeded in-limit configurations, so no thread's state moves)."""
-        s = _Scratch(self)
+        m = b.model
+        s = _Scratch(b)
         free = _entry_point(*s.entry_args)
         lo, hi = np.maximum(m.lower, -np.pi), np.minimum(m.upper, np.pi)
         Q = np.random.default_rng(0).uniform(lo, hi, (9, len(lo))) if len(lo) else np.zeros((9, 0))
@@ -342,29 +372,30 @@ class FusedDetector(Detector):
 
     def _run(self, s: _Scratch, mode: int, allowance: int, lazy: bool, sel=None) -> tuple[int, int]:
         self._release_last(s)
+        b = s.b
         q1 = s.q1
         iprm = s.iprm_by_mode[mode]
         if mode == kn.MODE_ANYTIME:
             iprm[1] = allowance
             iprm[4] = 1 if lazy else 0
         if sel is None:  # the same argument types as check's: its bound overload, without the dispatcher
-            status, n_eval, err = self._entry(self._fn, q1, self._H, self._MF, self._MI, s.SF, s.SI, self._prm,
-                                              iprm, self._all_p)
+            status, n_eval, err = b.entry(b.fn, q1, b.H, b.MF, b.MI, s.SF, s.SI, b.prm, iprm, b.all_p)
         else:
-            status, n_eval, err = detect_entry(self._fn, q1, self._H, self._MF, self._MI, s.SF, s.SI, self._prm,
-                                               iprm, sel)
+            status, n_eval, err = detect_entry(b.fn, q1, b.H, b.MF, b.MI, s.SF, s.SI, b.prm, iprm, sel)
         if err:
-            self._raise_kernel_error(err, q1, "Detector.check: q" if sel is None else "Detector.pair_distances: q")
+            self._raise_kernel_error(err, q1, "Detector.check: q" if sel is None else "Detector.pair_distances: q", b=b)
         return status, n_eval
 
-    def _raise_kernel_error(self, err: int, Q: np.ndarray, where: str = "Detector.check: q", batch: bool = False) -> None:
+    def _raise_kernel_error(self, err: int, Q: np.ndarray, where: str = "Detector.check: q", batch: bool = False,
+                            b: Built | None = None) -> None:
         """The kernel's error code for ``Q`` ``(M, n_q)`` as an ArmguardError (1 non-finite, 3 outside the
-        joint limits: :mod:`armguard.kinematics._limits`, 2 GJK); ``batch``: name the row."""
+        joint limits: :mod:`armguard.kinematics._limits`, 2 GJK); ``batch``: name the row; ``b``: the
+        revision that ran (None: the current one)."""
         if err == 1:
             bad = np.argwhere(~np.isfinite(Q))[0]
             raise DetectionError(f"{where} contains NaN or infinite values (first at {tuple(int(x) for x in bad)})")
         if err == 3:
-            m = self._model
+            m = (b or self._b).model
             exc = limit_error(where, Q if batch else Q[0], self.scene.joint_names, m.lower, m.upper,
                               self._tol.joint_limit)
             if exc is not None:
@@ -390,14 +421,15 @@ class FusedDetector(Detector):
         if jacobian:
             return self._check_with_jacobian(q, budget_us, lazy)
         t0 = _perf_counter()
-        if getattr(self.scene, "revision", None) != self._revision:  # stale model: rebuild (see _fresh)
-            self._fresh()
+        b = self._b  # one revision for the whole call (._built)
+        if getattr(self.scene, "revision", None) != b.revision:  # stale model: rebuild (see _fresh)
+            b = self._fresh()
         try:  # this thread's scratch (_scratch, inline)
-            s = self._tls.s
+            s = b.tls.s
         except AttributeError:
-            s = self._scratch()
+            s = self._scratch(b)
         q1 = s.q1
-        if type(q) is np.ndarray and q.dtype is _F64 and q.shape == self._q_shape:
+        if type(q) is np.ndarray and q.dtype is _F64 and q.shape == b.q_shape:
             q1[0] = q  # the common case, inline (validation of everything else in _flat_q)
         else:
             self._flat_q(q, q1)
@@ -408,26 +440,26 @@ class FusedDetector(Detector):
                 last.detach()
             del last
         if budget_us is None and not lazy:
-            status, n_eval, err = self._entry(*s.entry_args)  # q1 is the array in entry_args
+            status, n_eval, err = b.entry(*s.entry_args)  # q1 is the array in entry_args
             if err:
-                self._raise_kernel_error(err, q1)
-            raw = _Raw(self, s.SF, s.SI, self._ev_off, self._sum_off, n_eval, None, None, _MODE_EXACT)
+                self._raise_kernel_error(err, q1, b=b)
+            raw = _Raw(b, s.SF, s.SI, b.ev_off, b.sum_off, n_eval, None, None, _MODE_EXACT)
             s.last_raw = raw
             elapsed = (_perf_counter() - t0) * 1e6
             if n_eval > 0:
                 self._ns_per_pair = 0.8 * self._ns_per_pair + 0.2 * max(elapsed * 1e3 / n_eval, 1.0)
             return DetectionReport._from_check(STATUS_CODES[status], self._threshold, self._stopping, elapsed, raw)
         if budget_us is not None:
-            b = float(budget_us)
-            if not (b >= 0.0 and math.isfinite(b)):
+            us = float(budget_us)
+            if not (us >= 0.0 and math.isfinite(us)):
                 raise DetectionError(f"budget_us: must be finite and >= 0, got {budget_us!r}")
-            allowance = int(max(0.0, b * 1e3) // self._ns_per_pair)
+            allowance = int(max(0.0, us * 1e3) // self._ns_per_pair)
             mode = kn.MODE_ANYTIME
             status, n_eval = self._run(s, mode, allowance, lazy)
         else:
             mode = kn.MODE_LAZY if lazy else kn.MODE_EXACT
             status, n_eval = self._run(s, mode, 0, False)
-        raw_buffers = (s.SF, s.SI, self._ev_off, self._sum_off)
+        raw_buffers = (s.SF, s.SI, b.ev_off, b.sum_off)
         if mode == kn.MODE_EXACT:
             flags = bounds = None
         else:
@@ -435,46 +467,21 @@ class FusedDetector(Detector):
         elapsed = (_perf_counter() - t0) * 1e6
         if n_eval > 0:  # the cost model of the anytime mode: an exponential average of ns per pair
             self._ns_per_pair = 0.8 * self._ns_per_pair + 0.2 * max(elapsed * 1e3 / n_eval, 1.0)
-        raw = s.last_raw = _Raw(self, *raw_buffers, n_eval, flags, bounds, mode)
+        raw = s.last_raw = _Raw(b, *raw_buffers, n_eval, flags, bounds, mode)
         return DetectionReport._from_check(STATUS_CODES[status], self._threshold, self._stopping, elapsed, raw)
 
     def _check_with_jacobian(self, q, budget_us, lazy) -> DetectionReport:
+        b = self._fresh()
         report = self.check(q, budget_us=budget_us, lazy=lazy)
-        q_flat = self._tls.s.q1[0].copy()  # what check() read, in scene order
+        q_flat = self._flat_q(q, np.zeros((1, b.model.n_q)))[0]  # what check() read, in scene order
         with self._prepare_lock:
             hit = getattr(self, "_category_jac", None)
-            if hit is None or hit[0] != self._revision:
+            if hit is None or hit[0] != b.revision:
                 from armguard.model import model_of
                 from armguard.detect._category_jacobian import CategoryJacobians
 
-                hit = self._category_jac = (self._revision, CategoryJacobians(self._fixed_model or model_of(self.scene), "analytic"))
+                hit = self._category_jac = (b.revision, CategoryJacobians(self._fixed_model or model_of(self.scene), "analytic"))
         return report._with_jacobian(hit[1].of(q_flat, report.by_category))
-
-    def _selection(self, robot: str | None):
-        """Pair numbers checked by ``pair_distances(q, robot=robot)`` and their static columns (cached)."""
-        hit = self._pd_cache.get(robot)
-        if hit is not None:
-            return hit
-        m = self._model
-        if robot is None:
-            sel = np.arange(self._P, dtype=np.int64)
-        else:
-            if robot not in m.robot_names:
-                raise DetectionError(f"robot: unknown robot {robot!r}; robots are {list(m.robot_names)}")
-            r = m.robot_names.index(robot)
-            cs = m.compiled
-            on_a = cs.elem_robot[m.pair_a] == r
-            on_b = np.where(m.pair_b >= 0, cs.elem_robot[np.maximum(m.pair_b, 0)], -1) == r
-            sel = np.flatnonzero(on_a | on_b).astype(np.int64)
-        la = m.elem_glink[m.pair_a[sel]]
-        pb = m.pair_b[sel]
-        lb = np.where(pb >= 0, m.elem_glink[np.maximum(pb, 0)], -1)
-        ro = lambda a: _readonly(np.ascontiguousarray(a))  # noqa: E731
-        hit = (np.ascontiguousarray(sel), ro(la), ro(m.link_robot[la] if len(la) else la.copy()), ro(lb),
-               ro(m.pair_cat[sel]), tuple(self._names_a[p] for p in sel), tuple(self._names_b[p] for p in sel),
-               ro(sel.copy()))
-        self._pd_cache[robot] = hit
-        return hit
 
     def pair_distances(self, q, *, robot: str | None = None) -> PairDistances:
         """Every candidate pair's signed distance at ``q`` (no pruning), with witness points.
@@ -485,26 +492,28 @@ class FusedDetector(Detector):
         ``NotEvaluated.pair_index``).  The arrays are fresh copies (a few hundred ns for ~100
         pairs), so a result stays valid after the next call.
         """
-        self._fresh()
-        sel, la, ra, lb, cat, na, nb, pidx = self._selection(robot)
-        s = self._scratch()
+        b = self._fresh()
+        sel, la, ra, lb, cat, na, nb, pidx = b.selection(robot)
+        s = self._scratch(b)
         self._flat_q(q, s.q1)
         n = len(sel)
         self._run(s, kn.MODE_ALL, 0, False, sel)
         rows = s.ev[:n]
         return PairDistances(rows[:, 0].copy(), rows[:, 1:4].copy(), rows[:, 4:7].copy(), la, ra, lb, cat, na, nb,
-                             self._model.link_names, pidx)
+                             b.model.link_names, pidx)
 
     def _many(self, Q, mode: int):
+        b = self._fresh()
+        n_q = b.model.n_q
         try:
             Q = np.ascontiguousarray(np.asarray(Q, dtype=np.float64))
         except (TypeError, ValueError) as exc:
-            raise DetectionError(f"Q: expected an (M, {self._model.n_q}) array of numbers") from exc
-        if Q.ndim != 2 or Q.shape[1] != self._model.n_q:
-            raise DetectionError(f"Q: expected shape (M, {self._model.n_q}), got {Q.shape}")
-        min_d, status, err = rows(self, Q, mode)
+            raise DetectionError(f"Q: expected an (M, {n_q}) array of numbers") from exc
+        if Q.ndim != 2 or Q.shape[1] != n_q:
+            raise DetectionError(f"Q: expected shape (M, {n_q}), got {Q.shape}")
+        min_d, status, err = rows(self, b, Q, mode)
         if err != 0:
-            self._raise_kernel_error(err, Q, "Detector: Q", batch=True)
+            self._raise_kernel_error(err, Q, "Detector: Q", batch=True, b=b)
         return min_d, status
 
     def check_many(self, Q) -> BatchReport:
@@ -530,29 +539,14 @@ class FusedDetector(Detector):
 
     # ------------------------------------------------------------------ reporting helpers
     def _pair_names(self, p: int) -> tuple[str, str]:
-        return self._names_a[p], self._names_b[p]
+        return self._b.pair_names(p)
 
     def _pair_result(self, p: int, d: float, p_WA: np.ndarray, p_WB: np.ndarray) -> PairResult:
-        m = self._model
-        b = int(m.pair_b[p])
-        feature = None
-        shape = self._static_shapes.get(b) if b >= 0 else None
-        if shape is not None and m.compiled.elem_core[b] >= 2:
-            from armguard.geometry import feature_at
-
-            try:
-                feature = feature_at(shape, p_WB, self._tol)
-            except Exception:  # noqa: BLE001 - a feature is an annotation, never a verdict
-                feature = None
-        p_WA.flags.writeable = False
-        p_WB.flags.writeable = False
-        cat = CATEGORIES[int(m.pair_cat[p])]
-        return PairResult(d, p_WA, p_WB, self._names_a[p], self._names_b[p], cat, self._links_a[p], self._names_b[p],
-                          feature, p)
+        return self._b.pair_result(p, d, p_WA, p_WB)
 
     def __repr__(self) -> str:
         return (f"Detector({self.scene.name!r}, threshold={self._threshold}, stopping_distance={self._stopping}, "
-                f"active={self._active!r}, {self._P} pairs)")
+                f"active={self._active!r}, {self._b.P} pairs)")
 
 
 del CAT_WORKSPACE

@@ -13,7 +13,7 @@ from . import _kernel as kn
 from ._layout import EV_W, SUM_BSLOT, SUM_SIZE
 
 if TYPE_CHECKING:
-    from ._detector import FusedDetector
+    from ._built import Built
 
 
 def _refcount(obj) -> int:
@@ -36,7 +36,8 @@ _UNHELD = _unheld_count()
 
 
 class _Raw:
-    """One check's compact kernel outputs; builds the report's views on demand.
+    """One check's compact kernel outputs; builds the report's views on demand, with the names of the
+    revision ``b`` (:mod:`._built`) that made them.
 
     ``f`` ``(n, 7)``: ``[distance, p_WA, p_WB]`` of the ``n`` evaluated pairs in evaluation order;
     ``i``: the summary slots followed by the ``n`` pair numbers; ``flags`` / ``bounds`` ``(P,)``
@@ -47,11 +48,11 @@ class _Raw:
     referenced (:meth:`FusedDetector._release_last`).  A report dropped before the next check (a
     control loop reading only ``status``) costs no copy."""
 
-    __slots__ = ("det", "_f", "_i", "_SF", "_SI", "_of", "_oi", "n_evaluated", "flags", "bounds", "mode")
+    __slots__ = ("b", "_f", "_i", "_SF", "_SI", "_of", "_oi", "n_evaluated", "flags", "bounds", "mode")
 
-    def __init__(self, det: "FusedDetector", SF: np.ndarray, SI: np.ndarray, of: int, oi: int, n_evaluated: int,
+    def __init__(self, b: "Built", SF: np.ndarray, SI: np.ndarray, of: int, oi: int, n_evaluated: int,
                  flags, bounds, mode) -> None:
-        self.det, self._SF, self._SI, self._of, self._oi, self.n_evaluated = det, SF, SI, of, oi, n_evaluated
+        self.b, self._SF, self._SI, self._of, self._oi, self.n_evaluated = b, SF, SI, of, oi, n_evaluated
         self._f = self._i = None
         self.flags, self.bounds, self.mode = flags, bounds, mode
 
@@ -77,7 +78,7 @@ class _Raw:
 
     def row(self, k: int) -> PairResult:
         r = self.f[k]
-        return self.det._pair_result(int(self.i[SUM_SIZE + k]), float(r[0]), r[1:4].copy(), r[4:7].copy())
+        return self.b.pair_result(int(self.i[SUM_SIZE + k]), float(r[0]), r[1:4].copy(), r[4:7].copy())
 
     def by_category(self) -> dict[str, PairResult]:
         out = {}
@@ -96,15 +97,15 @@ class _Raw:
     def not_evaluated(self) -> tuple[NotEvaluated, ...]:
         if self.flags is None:  # exact: every skipped pair is beyond its category's cut-off
             return ()
-        det, flags, plb = self.det, self.flags, self.bounds
-        cat = det._model.pair_cat
+        b, flags, plb = self.b, self.flags, self.bounds
+        cat = b.model.pair_cat
         out = []
         for p in np.flatnonzero(flags == 0):
-            a, b = det._pair_names(int(p))
-            out.append(NotEvaluated(a, b, CATEGORIES[int(cat[p])], float(plb[p]), int(p)))
+            na, nb = b.pair_names(int(p))
+            out.append(NotEvaluated(na, nb, CATEGORIES[int(cat[p])], float(plb[p]), int(p)))
         if self.mode == kn.MODE_LAZY:  # lazily skipped pairs: proved beyond the threshold
-            thr = max(det.threshold, det.stopping_distance)
+            thr = max(b.det.threshold, b.det.stopping_distance)
             for p in np.flatnonzero(flags == 2):
-                a, b = det._pair_names(int(p))
-                out.append(NotEvaluated(a, b, CATEGORIES[int(cat[p])], max(float(plb[p]), thr), int(p)))
+                na, nb = b.pair_names(int(p))
+                out.append(NotEvaluated(na, nb, CATEGORIES[int(cat[p])], max(float(plb[p]), thr), int(p)))
         return tuple(out)

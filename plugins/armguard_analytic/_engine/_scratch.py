@@ -11,7 +11,7 @@ import numpy as np
 from . import _entry, _kernel as kn
 
 if TYPE_CHECKING:
-    from ._detector import FusedDetector
+    from ._built import Built
 
 __all__ = ["CPUS", "GIL_RELEASE_US", "MIN_ROWS_PER_THREAD", "_Scratch", "_entry_point", "compiled", "median_call_us",
            "row_threads"]
@@ -70,39 +70,40 @@ def _entry_point(*args, release_gil: bool = True):
 
 
 class _Scratch:
-    """One thread's scratch and outputs of a :class:`FusedDetector`.
+    """One thread's scratch and outputs of one revision ``b`` of a fused Detector (:mod:`._built`).
 
-    Every thread calling a Detector gets its own (``threading.local``), copied from the pristine
-    buffers of :meth:`FusedDetector.prepare`, so threads never share a buffer the kernel writes; the
-    model buffers (``H``, ``MF``, ``MI``) are read-only in the kernel and shared.  The state the
-    anytime mode keeps between checks (last distances, time since checked) is per thread too."""
+    Every thread calling a Detector gets its own (``b.tls``), copied from the pristine buffers of
+    :meth:`FusedDetector.prepare`, so threads never share a buffer the kernel writes; the model
+    buffers (``H``, ``MF``, ``MI``) are read-only in the kernel and shared.  The state the anytime
+    mode keeps between checks (last distances, time since checked) is per thread too."""
 
-    __slots__ = ("SF", "SI", "q1", "ev", "pflag", "plb", "iprm_by_mode", "entry_args", "last_raw", "batch")
+    __slots__ = ("b", "SF", "SI", "q1", "ev", "pflag", "plb", "iprm_by_mode", "entry_args", "last_raw", "batch")
 
-    def __init__(self, det: "FusedDetector") -> None:
-        L = det._layout
-        self.SF = det._SF0.copy()
-        self.SI = det._SI0.copy()
-        self.q1 = np.zeros((1, det._model.n_q))
+    def __init__(self, b: "Built") -> None:
+        L = b.layout
+        self.b = b
+        self.SF = b.SF0.copy()
+        self.SI = b.SI0.copy()
+        self.q1 = np.zeros((1, b.model.n_q))
         self.ev = L.view(self.SF, "ev")
         self.pflag = L.view(self.SI, "pflag")
         self.plb = L.view(self.SF, "plb")
-        self.iprm_by_mode = {mode: ip.copy() for mode, ip in det._iprm_by_mode.items()}
-        self.entry_args = (det._fn, self.q1, det._H, det._MF, det._MI, self.SF, self.SI, det._prm,
-                           self.iprm_by_mode[kn.MODE_EXACT], det._all_p)
+        self.iprm_by_mode = {mode: ip.copy() for mode, ip in b.iprm_by_mode.items()}
+        self.entry_args = (b.fn, self.q1, b.H, b.MF, b.MI, self.SF, self.SI, b.prm,
+                           self.iprm_by_mode[kn.MODE_EXACT], b.all_p)
         self.last_raw = None  # this thread's last report, still reading SF / SI
         self.batch = None  # the buffers of this thread's one-thread batches (:meth:`batch_buffers`)
 
-    def batch_buffers(self, det: "FusedDetector", mode: int) -> tuple:
+    def batch_buffers(self, mode: int) -> tuple:
         """``(SF, SI, iprm)`` for a batch run on this thread alone, in ``mode``: scratch of its own (a
         batch never moves the state ``check`` keeps between calls, nor a report still reading
         ``SF``), made on the thread's first batch and reused by the next ones, as one batch reuses it
         from row to row."""
-        b = self.batch
-        if b is None:
-            b = self.batch = (det._SF0.copy(), det._SI0.copy(), {})
-        ip = b[2].get(mode)
+        bb = self.batch
+        if bb is None:
+            bb = self.batch = (self.b.SF0.copy(), self.b.SI0.copy(), {})
+        ip = bb[2].get(mode)
         if ip is None:  # the kernel only reads it
-            ip = b[2][mode] = det._iprm.copy()
+            ip = bb[2][mode] = self.b.iprm.copy()
             ip[kn.I_MODE], ip[kn.I_STATE] = mode, 0
-        return b[0], b[1], ip
+        return bb[0], bb[1], ip

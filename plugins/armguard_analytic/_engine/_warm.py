@@ -92,13 +92,14 @@ def warm_up(scene, wait=None) -> None:
     det.check(q)
     det.check_many(np.tile(q, (4, 1)))
     # the entry point that holds the GIL (calls too short for handing it over to pay, ._scratch)
-    s = _Scratch(det)
+    b = det._b
+    s = _Scratch(b)
     _entry_point(*s.entry_args, release_gil=False)
     # the Checker's pair_distances(_many): pair_rows, with the argument types it is given
     n, nq = det.n_pairs, len(q)
     gmap = np.concatenate([[nq, nq, 0, n], np.arange(nq), np.arange(n), np.zeros(n)]).astype(np.int64)
-    call = (det._fn, np.ascontiguousarray(q, dtype=np.float64), 0, 1, gmap, det._H, det._MF, det._MI, s.SF, s.SI, det._prm,
-            det._iprm_by_mode[kn.MODE_ALL], s.q1, np.empty(n), np.empty((n, 3)), np.empty((n, 3)))
+    call = (b.fn, np.ascontiguousarray(q, dtype=np.float64), 0, 1, gmap, b.H, b.MF, b.MI, s.SF, s.SI, b.prm,
+            b.iprm_by_mode[kn.MODE_ALL], s.q1, np.empty(n), np.empty((n, 3)), np.empty((n, 3)))
     wait("pair_rows")
     pair_rows(*call)
     wait("pair_rows_held")

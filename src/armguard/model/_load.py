@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import tempfile
 import threading
 from pathlib import Path
@@ -346,6 +347,17 @@ def model_of(scene, *, geometry: bool = True) -> Model:
     Model yet, or whose robots changed otherwise: one built from the scene.  ``geometry=False`` asks
     only for the kinematics (``pin_model``, ``q_index``, ``link_frames``): the Model of record also
     serves after bodies, payloads or pairs changed, and a :meth:`Scene.copy` with the same robots."""
+    m = getattr(scene, "_model_of_record", None)
+    if m is not None and m.moves_robots_of(scene) and (not geometry or m.is_model_of(scene)):
+        return m
+    lock = getattr(scene, "lock", None)
+    with lock if lock is not None else contextlib.nullcontext():  # no edit while it is read (Scene.lock)
+        return _model_of_locked(scene, geometry)
+
+
+def _model_of_locked(scene, geometry: bool) -> Model:
+    """:func:`model_of` past its fast path, the scene's lock held (always taken before
+    ``_DERIVE_LOCK``: an edit holding the scene's lock may ask for its kinematics)."""
     m = getattr(scene, "_model_of_record", None)
     if m is not None and m.moves_robots_of(scene) and (not geometry or m.is_model_of(scene)):
         return m

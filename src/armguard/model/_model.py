@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import threading
@@ -170,8 +171,10 @@ class Model:
         :meth:`scene_for`) and nothing changed since that :attr:`pairs` or the shapes depend on
         (the scene's ``revision``: robots, bodies, payloads, pair filters, the workspace box)."""
         made = self._spec_revision if scene is self.scene else self.__dict__.get("_bound", (None, None))[1]
-        return (scene.revision == made and self.moves_robots_of(scene) and self.geometry_is_of(scene)
-                and self._same_filters(scene))
+        lock = getattr(scene, "lock", None)
+        with lock if lock is not None else contextlib.nullcontext():  # no edit while it is compared
+            return (scene.revision == made and self.moves_robots_of(scene) and self.geometry_is_of(scene)
+                    and self._same_filters(scene))
 
     def scene_for(self):
         """A scene whose Model this is: :attr:`scene` while nothing changed there

@@ -12,6 +12,8 @@ Owners (the things a distance is measured between) are named:
 
 from __future__ import annotations
 
+import functools
+import threading
 import types
 from typing import Mapping, Sequence
 
@@ -19,6 +21,7 @@ import numpy as np
 
 from .._errors import SceneError
 from ..geometry import Shape
+from ._allowed import adjacent, allowed_pairs
 from ._items import (  # noqa: F401  (re-exported: the scene's parts live in _items.py)
     BODY_CATEGORIES,
     Body,
@@ -36,6 +39,18 @@ from ._items import (  # noqa: F401  (re-exported: the scene's parts live in _it
 
 __all__ = ["Scene", "Body", "Payload", "SceneItem", "WorkspaceBox", "CheckPair", "PairCategory", "CannedTest",
            "BODY_CATEGORIES"]
+
+
+def _locked(method):
+    """``method`` run holding the scene's :attr:`Scene.lock`: an edit is never seen half made, and a
+    read that walks the containers never sees one change under it."""
+
+    @functools.wraps(method)
+    def run(self, *args, **kwargs):
+        with self._lock:
+            return method(self, *args, **kwargs)
+
+    return run
 
 
 class Scene:
@@ -70,8 +85,16 @@ class Scene:
         # Bumped by every change to what is checked (robots, bodies, payloads, workspace, pair
         # filters), so that precomputed models (Verifier, Guard, Detector) can tell they are stale.
         self._revision = 0
+        self._lock = threading.RLock()
 
     # ---------------------------------------------------------------- read-only views
+    @property
+    def lock(self) -> threading.RLock:
+        """Held by every edit and by the reads that walk several containers (and by
+        :func:`armguard.model.model_of` while it builds the scene's Model): hold it to read the scene
+        consistently while other threads may edit it (``with scene.lock: ...``)."""
+        return self._lock
+
     @property
     def revision(self) -> int:
         """A counter bumped by every change to the checked geometry or pair filters.
@@ -119,8 +142,9 @@ class Scene:
 
     @exclude_adjacent.setter
     def exclude_adjacent(self, value: bool) -> None:
-        self._exclude_adjacent = bool(value)
-        self._revision += 1
+        with self._lock:
+            self._exclude_adjacent = bool(value)
+            self._revision += 1
 
     @property
     def disabled_pairs(self) -> frozenset:
@@ -135,8 +159,10 @@ class Scene:
     @property
     def joint_names(self) -> tuple[str, ...]:
         """Every independent movable joint of every robot as ``"robot/joint"``: the order of a flat q."""
-        return tuple(f"{r}/{j}" for r, robot in self._robots.items() for j in robot.joint_names)
+        with self._lock:
+            return tuple(f"{r}/{j}" for r, robot in self._robots.items() for j in robot.joint_names)
 
+    @_locked
     def owners(self) -> tuple[str, ...]:
         """Every owner with geometry: bodies, then ``robot/link`` owners, then payloads."""
         out = list(self._bodies)
@@ -166,6 +192,7 @@ class Scene:
         return False
 
     # ---------------------------------------------------------------- robots
+    @_locked
     def add_robot(self, robot, *, home=None, self_pairs=None, _source: dict | None = None) -> None:
         """Add ``robot`` (a ``Robot``; its name must be new).
 
@@ -209,6 +236,7 @@ class Scene:
             raise SceneError(f"robot {robot.name!r}: a link pair needs two different links, got {a!r} twice")
         return (a, b) if a < b else (b, a)
 
+    @_locked
     def set_robot_ik(self, robot: str, routine: str | None) -> None:
         """Robot ``robot``'s inverse kinematics: ``routine`` (see :meth:`armguard.kinematics.Robot.with_ik`;
         checked first, so an unknown routine leaves the scene as it was).  Changes no geometry."""
@@ -216,6 +244,7 @@ class Scene:
             raise SceneError(f"unknown robot {robot!r}; robots are {list(self._robots)}")
         self._robots[robot] = self._robots[robot].with_ik(routine)
 
+    @_locked
     def set_robot_base(self, robot: str, X_WB) -> None:
         """Mount robot ``robot`` at ``X_WB`` (4, 4; its links and payloads move with it)."""
         self._robots[robot] = self._robot(robot).with_base(X_WB)
@@ -233,6 +262,7 @@ class Scene:
             raise SceneError(f"unknown robot {name!r}; robots are {list(self._robots)}") from None
 
     # ---------------------------------------------------------------- bodies
+    @_locked
     def add_body(self, name: str, shapes: Sequence[Shape] | Shape, *, category: str = "environment") -> Body:
         """Add a static body made of ``shapes`` given in the world frame W; returns it."""
         _check_name(name, "body name")
@@ -245,6 +275,7 @@ class Scene:
         self._revision += 1
         return body
 
+    @_locked
     def remove_body(self, name: str) -> Body:
         """Remove and return the body ``name``; disabled pairs naming it are dropped."""
         if name not in self._bodies:
@@ -254,6 +285,7 @@ class Scene:
         return self._bodies.pop(name)
 
     # ---------------------------------------------------------------- payloads
+    @_locked
     def attach_payload(self, name: str, robot: str, link: str, shapes, X_LP=None) -> Payload:
         """Attach a payload: ``shapes`` in its frame P, held at ``X_LP`` (4, 4; default identity) by ``robot``'s ``link``."""
         _check_name(name, "payload name")
@@ -268,6 +300,7 @@ class Scene:
         self._revision += 1
         return p
 
+    @_locked
     def release_payload(self, name: str, q) -> Body:
         """WORKMATE release: payload ``name`` becomes a static body where it is at configuration ``q``."""
         if name not in self._payloads:
@@ -282,6 +315,7 @@ class Scene:
         self._revision += 1
         return body
 
+    @_locked
     def grasp(self, body: str, robot: str, link: str, q) -> Payload:
         """WORKMATE grasp: static ``body`` becomes a payload of ``robot``'s ``link``, held where it is at ``q``."""
         if body not in self._bodies:
@@ -301,17 +335,20 @@ class Scene:
         return p
 
     # ---------------------------------------------------------------- workspace, filters
+    @_locked
     def set_workspace(self, lo, hi) -> WorkspaceBox:
         """Set the axis-aligned workspace box (``lo``, ``hi``: (3,) m in W)."""
         self._workspace = WorkspaceBox(lo, hi)
         self._revision += 1
         return self._workspace
 
+    @_locked
     def clear_workspace(self) -> None:
         """Remove the workspace box."""
         self._workspace = None
         self._revision += 1
 
+    @_locked
     def disable_pair(self, a: str, b: str) -> None:
         """Never check owners ``a`` and ``b`` against each other (a robot name stands for all its links)."""
         for n in (a, b):
@@ -321,11 +358,13 @@ class Scene:
         self._disabled.add(frozenset((a, b)))
         self._revision += 1
 
+    @_locked
     def enable_pair(self, a: str, b: str) -> None:
         """Undo :meth:`disable_pair` (no effect when the pair was not disabled)."""
         self._disabled.discard(frozenset((a, b)))
         self._revision += 1
 
+    @_locked
     def set_self_pairs(self, robot: str, pairs) -> None:
         """Hermes-style: check only these own-link pairs of ``robot`` (``None``: all non-adjacent pairs)."""
         r = self._robot(robot)
@@ -346,6 +385,7 @@ class Scene:
         raise SceneError(f"unknown owner {n!r}: expected a body, a payload, a robot or 'robot/link'")
 
     # ---------------------------------------------------------------- trajectories, tests
+    @_locked
     def add_trajectory(self, name: str, trajectory) -> None:
         """Add a named canned ``Trajectory`` (its ``robot_name`` must be a robot of the scene)."""
         _check_name(name, "trajectory name")
@@ -354,6 +394,7 @@ class Scene:
             raise SceneError(f"trajectory {name!r}: the name is already used")
         self._trajectories[name] = trajectory
 
+    @_locked
     def add_canned_test(self, test: CannedTest) -> None:
         """Add a :class:`CannedTest`; its robots and configurations are checked."""
         _check_name(test.name, "canned test name")
@@ -388,6 +429,7 @@ class Scene:
         return q
 
     # ---------------------------------------------------------------- configurations
+    @_locked
     def split_q(self, q) -> dict[str, np.ndarray]:
         """Robot name -> ``(..., n_joints)`` float64 from a mapping or a flat ``(..., n)`` array over ``joint_names``.
 
@@ -415,6 +457,7 @@ class Scene:
             k += m
         return out
 
+    @_locked
     def flat_q(self, q) -> np.ndarray:
         """``(..., n) float64``: ``q`` (mapping or flat) as one flat array over ``joint_names``."""
         parts = self.split_q(q)
@@ -422,10 +465,12 @@ class Scene:
             return np.zeros(0)
         return np.concatenate([parts[n] for n in self._robots], axis=-1)
 
+    @_locked
     def default_q(self) -> dict[str, np.ndarray]:
         """The home configuration of every robot: robot name -> (n_joints,) float64."""
         return {name: self._homes[name].copy() for name in self._robots}
 
+    @_locked
     def link_poses(self, q) -> dict[str, np.ndarray]:
         """Robot name -> ``(..., n_links, 4, 4)`` world poses X_WL in ``link_names`` order."""
         parts = self.split_q(q)
@@ -447,6 +492,7 @@ class Scene:
             raise SceneError(f"q: expected one configuration, got shape {qr.shape}")
         return r.forward_kinematics(qr)[r.link_index(link)]
 
+    @_locked
     def shapes_at(self, q=None, *, poses=None) -> list[SceneItem]:
         """The world-frame geometry at configuration ``q`` (default: every robot at home).
 
@@ -478,6 +524,7 @@ class Scene:
         return items
 
     # ---------------------------------------------------------------- pairs
+    @_locked
     def allowed_pairs(self) -> tuple[CheckPair, ...]:
         """Every owner pair that must be checked, with its :class:`PairCategory`.
 
@@ -492,69 +539,11 @@ class Scene:
         Only owners with shapes take part; disabled pairs are left out (a robot name in a
         disabled pair stands for all its links).  Order: as listed above, then owner order.
         """
-        links = []  # (robot, link, owner)
-        for r, robot in self._robots.items():
-            links.extend((r, ln, f"{r}/{ln}") for ln in robot.link_names if robot.link_shapes.get(ln))
-        out: list[CheckPair] = []
-
-        def disabled(a: str, b: str, ra: str | None, rb: str | None) -> bool:
-            for x in (a, ra):
-                for y in (b, rb):
-                    if x is not None and y is not None and frozenset((x, y)) in self._disabled:
-                        return True
-            return False
-
-        for i in range(len(links)):
-            ra, la, a = links[i]
-            for j in range(i + 1, len(links)):
-                rb, lb, b = links[j]
-                if ra == rb:
-                    key = (la, lb) if la < lb else (lb, la)
-                    listed = self._self_pairs.get(ra)
-                    if listed is not None:
-                        if key not in listed:
-                            continue
-                    elif self._exclude_adjacent and self._adjacent(ra, la, lb):
-                        continue
-                if not disabled(a, b, ra, rb):
-                    out.append(CheckPair(a, b, PairCategory.ARM_ARM))
-        for r, _, a in links:
-            for body in self._bodies.values():
-                cat = PairCategory.ARM_VEHICLE if body.category == "vehicle" else PairCategory.ARM_ENVIRONMENT
-                if not disabled(a, body.name, r, None):
-                    out.append(CheckPair(a, body.name, cat))
-        for r, _, a in links:
-            for p in self._payloads.values():
-                if p.owner_link != a and not disabled(a, p.name, r, None):
-                    out.append(CheckPair(a, p.name, PairCategory.ARM_PAYLOAD))
-        plist = list(self._payloads.values())
-        for p in plist:
-            for body in self._bodies.values():
-                cat = PairCategory.PAYLOAD_VEHICLE if body.category == "vehicle" else PairCategory.PAYLOAD_ENVIRONMENT
-                if not disabled(p.name, body.name, None, None):
-                    out.append(CheckPair(p.name, body.name, cat))
-        for i in range(len(plist)):
-            for j in range(i + 1, len(plist)):
-                if not disabled(plist[i].name, plist[j].name, None, None):
-                    out.append(CheckPair(plist[i].name, plist[j].name, PairCategory.PAYLOAD_PAYLOAD))
-        return tuple(out)
+        return allowed_pairs(self)
 
     def _adjacent(self, robot: str, a: str, b: str) -> bool:
-        """Whether links ``a`` and ``b`` are joined by one joint, or by a chain of joints whose
-        intermediate links have no geometry (a zero-length link between two capsules, as in
-        Ranger's and HERA's wrists: their shapes always touch at the shared joint)."""
-        r = self._robots[robot]
-        key = (a, b) if a < b else (b, a)
-        if key in r.adjacent_pairs:
-            return True
-
-        def shaped_ancestor(ln: str) -> str | None:
-            p = r.parent_link(ln)
-            while p is not None and not r.link_shapes.get(p):
-                p = r.parent_link(p)
-            return p
-
-        return shaped_ancestor(a) == b or shaped_ancestor(b) == a
+        """Whether links ``a`` and ``b`` of ``robot`` count as adjacent (:func:`._allowed.adjacent`)."""
+        return adjacent(self, robot, a, b)
 
     def allowed_pairs_by_category(self) -> dict[PairCategory, tuple[tuple[str, str], ...]]:
         """:meth:`allowed_pairs` grouped: category -> tuple of (owner, owner)."""
@@ -564,12 +553,14 @@ class Scene:
         return {c: tuple(v) for c, v in out.items()}
 
     # ---------------------------------------------------------------- other
+    @_locked
     def compile(self):
         """The scene as flat arrays for kernels (see :func:`armguard.scene.compile_scene`)."""
         from ._compile import compile_scene
 
         return compile_scene(self)
 
+    @_locked
     def copy(self) -> "Scene":
         """A shallow copy (the parts are immutable, the containers are new)."""
         s = Scene(self.name, description=self.description)

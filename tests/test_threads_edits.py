@@ -1,0 +1,151 @@
+"""A scene edited while other threads check it: every answer is the scene's before or after an
+edit, never a mix, and a report keeps the names of the model that made it.
+
+The failures these guard against, as they were: a Detector's rebuild on one thread while another
+read the scene raised ``RuntimeError: dictionary changed size during iteration`` (the Model's
+derivation iterating ``scene.bodies`` during ``add_body``); and a report held across a rebuild
+named its pairs from the new pair list (40 of 40 reports on ranger after one ``add_body`` each).
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+
+import numpy as np
+import pytest
+
+import armguard
+from armguard.geometry import Sphere
+
+POSTS = [Sphere([0.5, 0.0, 0.5], 0.3), Sphere([-0.5, 0.2, 0.3], 0.2)]
+
+
+@pytest.fixture
+def ranger():
+    return armguard.load_model("ranger")  # a fresh Model per test: the tests edit its scene
+
+
+def _names(rep) -> tuple:
+    return ([(r.a, r.b, r.distance) for r in rep.within_threshold],
+            {k: (v.a, v.b, v.distance) for k, v in rep.by_category.items()},
+            [(n.a, n.b, n.lower_bound) for n in rep.not_evaluated])
+
+
+def test_a_held_report_keeps_the_names_of_the_model_that_made_it(ranger):
+    sc = ranger.scene
+    det = armguard.Detector(sc, threshold=0.3)
+    Q = ranger.scene_q(ranger.random_q(12, 5))
+    changed = 0
+    for i, q in enumerate(Q):
+        want = _names(det.check(q, lazy=True))
+        rep = det.check(q, lazy=True)  # read only after the rebuild below
+        n_before = det.n_pairs
+        sc.add_body(f"post{i}", [Sphere([0.5, 0.0, 0.5], 0.05)])
+        det.check(q)  # rebuilds: more pairs, numbered afresh
+        changed += det.n_pairs != n_before
+        assert _names(rep) == want
+    assert changed == len(Q)  # every edit did renumber the pairs
+
+
+def test_checks_while_another_thread_adds_and_removes_a_body(ranger):
+    sc = ranger.scene
+    det = armguard.Detector(sc, threshold=0.1)
+    Q = ranger.scene_q(ranger.random_q(30, 6))
+    status0 = [det.check(q).status for q in Q]
+    dist0 = [det.pair_distances(q).distance for q in Q]
+    sc.add_body("post", POSTS)
+    status1 = [det.check(q).status for q in Q]
+    dist1 = [det.pair_distances(q).distance for q in Q]
+    sc.remove_body("post")
+    assert status0 != status1  # the body changes some answers
+
+    stop = threading.Event()
+    errors: list = []
+    mixed: list = []
+
+    def editor() -> None:
+        k = 0
+        while not stop.is_set():
+            sc.add_body("post", POSTS) if k % 2 == 0 else sc.remove_body("post")
+            k += 1
+
+    def worker(t: int) -> None:
+        rng = np.random.default_rng(t)
+        try:
+            for it in range(240):
+                i = int(rng.integers(len(Q)))
+                if it % 3 == 0:
+                    st = det.check(Q[i]).status
+                elif it % 3 == 1:
+                    st = det.check(Q[i], budget_us=1e6).status
+                else:
+                    d = det.pair_distances(Q[i]).distance
+                    if not any(len(d) == len(w[i]) and np.array_equal(d, w[i]) for w in (dist0, dist1)):
+                        mixed.append(("pair_distances", i))
+                    continue
+                if st not in (status0[i], status1[i]):
+                    mixed.append(("check", i, st))
+        except BaseException as exc:  # noqa: BLE001 - reported in the test's thread
+            errors.append(exc)
+
+    switch = sys.getswitchinterval()
+    sys.setswitchinterval(1e-5)  # hand the GIL over often: the edits land inside the calls
+    try:
+        ed = threading.Thread(target=editor)
+        ed.start()
+        workers = [threading.Thread(target=worker, args=(t,)) for t in range(3)]
+        for w in workers:
+            w.start()
+        for w in workers:
+            w.join()
+        stop.set()
+        ed.join()
+    finally:
+        sys.setswitchinterval(switch)
+    if errors:
+        raise errors[0]
+    assert mixed == []
+
+
+def test_scene_reads_while_another_thread_edits(ranger):
+    sc = ranger.scene
+    q = sc.default_q()
+    stop = threading.Event()
+    errors: list = []
+    seen: set = set()
+
+    def editor() -> None:
+        k = 0
+        while not stop.is_set():
+            name = f"b{k % 8}"
+            sc.remove_body(name) if name in sc.bodies else sc.add_body(name, [Sphere([2.0 + k % 8, 0.0, 0.0], 0.1)])
+            k += 1
+
+    def reader() -> None:
+        try:
+            for _ in range(300):
+                items = sc.shapes_at(q)
+                seen.add(len(items))
+                sc.allowed_pairs()
+                c = sc.copy()  # one state of the scene: its pairs name its own owners only
+                owners = set(c.owners())
+                assert all(p.a in owners and p.b in owners for p in c.allowed_pairs())
+        except BaseException as exc:  # noqa: BLE001
+            errors.append(exc)
+
+    switch = sys.getswitchinterval()
+    sys.setswitchinterval(1e-5)
+    try:
+        ed = threading.Thread(target=editor)
+        rd = threading.Thread(target=reader)
+        ed.start()
+        rd.start()
+        rd.join()
+        stop.set()
+        ed.join()
+    finally:
+        sys.setswitchinterval(switch)
+    if errors:
+        raise errors[0]
+    assert len(seen) > 1  # the reads did overlap the edits
