@@ -39,11 +39,12 @@ def _pair_distances(det, q):
     return bool(np.min(det.pair_distances(q).distance) <= 0.0)
 
 
+@pytest.mark.parametrize("backend", ["analytic", "coal"])  # the fused Detector; Ranger's over a Checker
 @pytest.mark.parametrize("query", [_check, _check_many, _collides_many, _pair_distances],
                          ids=["check", "check_many", "collides_many", "pair_distances"])
-def test_query_after_add_body_sees_the_new_body(query):
+def test_query_after_add_body_sees_the_new_body(query, backend):
     sc = _scene()
-    det = armguard.Detector(sc, threshold=0.05)
+    det = armguard.Detector(sc, threshold=0.05, backend=backend)
     q = np.zeros(3)
     assert not query(det, q)
     n0 = det.n_pairs

@@ -26,7 +26,10 @@ framework code here, over the Checker interface only:
 
 Per-thread state (last distances, where they were taken, when) lives in a ``threading.local``:
 several threads may call one detector with the answers of single-threaded calls, provided the
-Checker is itself safe across threads (every bundled one is, ``docs/backends.md``).
+Checker is itself safe across threads (every bundled one is, ``docs/backends.md``).  After a scene
+edit the next call builds again on the scene's Model (a new Checker over it), as the analytic
+Detector rebuilds; each build is one :class:`_Plan`, published whole, so a call or a report never
+mixes two of them.
 """
 
 from __future__ import annotations
@@ -77,28 +80,38 @@ class _State:
         self.tick = 0
 
 
+class _Plan:
+    """One build of a :class:`RangerDetector` (its Model and Checker, obstacle lists, pair names and
+    categories), published with one assignment: a call reads it once and works on it alone, so a
+    rebuild on another thread (a scene edit, ``set_active``) never mixes two builds, and a report
+    keeps the names of the build that made it."""
+
+    __slots__ = ("model", "checker", "distances", "revision", "generation", "bounds", "sel", "all_rows", "swap",
+                 "lever", "a", "b", "cat_code", "cat_masks", "margin_built", "limits", "n_q", "det")
+
+
 class _Raw:
     """What a DetectionReport reads: the evaluated pairs (detector pair numbers ``idx``, in
     evaluation order) and, for the lazy and anytime modes, every pair's flag and lower bound."""
 
-    __slots__ = ("det", "d", "p_WA", "p_WB", "idx", "flags", "bounds", "lazy", "n_evaluated")
+    __slots__ = ("plan", "d", "p_WA", "p_WB", "idx", "flags", "bounds", "lazy", "n_evaluated")
 
-    def __init__(self, det, d, p_WA, p_WB, idx, flags, bounds, lazy) -> None:
-        self.det, self.d, self.p_WA, self.p_WB, self.idx = det, d, p_WA, p_WB, idx
+    def __init__(self, plan, d, p_WA, p_WB, idx, flags, bounds, lazy) -> None:
+        self.plan, self.d, self.p_WA, self.p_WB, self.idx = plan, d, p_WA, p_WB, idx
         self.flags, self.bounds, self.lazy = flags, bounds, lazy
         self.n_evaluated = len(d)
 
     def _result(self, k: int) -> PairResult:
-        det = self.det
+        plan = self.plan  # the build that made this report
         p = int(self.idx[k])
         pA, pB = self.p_WA[k].copy(), self.p_WB[k].copy()
         pA.flags.writeable = pB.flags.writeable = False
-        a, b = det._a[p], det._b[p]
-        return PairResult(float(self.d[k]), pA, pB, a, b, CATEGORIES[det._cat_code[p]], a, b, None, p)
+        a, b = plan.a[p], plan.b[p]
+        return PairResult(float(self.d[k]), pA, pB, a, b, CATEGORIES[plan.cat_code[p]], a, b, None, p)
 
     def by_category(self) -> dict:
         out = {}
-        cat = self.det._cat_code[self.idx]
+        cat = self.plan.cat_code[self.idx]
         for c, name in enumerate(CATEGORIES):
             ks = np.flatnonzero(cat == c)
             if ks.size:
@@ -113,12 +126,12 @@ class _Raw:
     def not_evaluated(self) -> tuple:
         if self.flags is None:
             return ()
-        det = self.det
-        out = [NotEvaluated(det._a[p], det._b[p], CATEGORIES[det._cat_code[p]], float(self.bounds[p]), int(p))
+        plan = self.plan
+        out = [NotEvaluated(plan.a[p], plan.b[p], CATEGORIES[plan.cat_code[p]], float(self.bounds[p]), int(p))
                for p in np.flatnonzero(self.flags == _FLAG_SKIPPED)]
         if self.lazy:  # proved beyond the threshold by their bounds
-            thr = max(det.threshold, det.stopping_distance)
-            out += [NotEvaluated(det._a[p], det._b[p], CATEGORIES[det._cat_code[p]], max(float(self.bounds[p]), thr),
+            thr = max(plan.det.threshold, plan.det.stopping_distance)
+            out += [NotEvaluated(plan.a[p], plan.b[p], CATEGORIES[plan.cat_code[p]], max(float(self.bounds[p]), thr),
                                  int(p)) for p in np.flatnonzero(self.flags == _FLAG_PROVED)]
         return tuple(out)
 
@@ -130,7 +143,6 @@ class RangerDetector(Detector):
     def __init__(self, scene, threshold: float = 0.05, *, stopping_distance: float = 0.0, active: str | None = None,
                  backend: str | None = None, backend_options=None, model=None, tol=None,
                  reach_margin: float | None = None, terrain=None) -> None:
-        from ..backends import Capability, checker
         from ..model import model_of
 
         scene, model = scene_and_model(scene, model)
@@ -138,23 +150,25 @@ class RangerDetector(Detector):
         self._threshold = check_length(threshold, "threshold")
         self._stopping = check_length(stopping_distance, "stopping_distance")
         self._reach_margin = check_finite_margin(math.inf if reach_margin is None else reach_margin)
-        self.model = model if model is not None else model_of(scene)
-        self._tol = tol if tol is not None else self.model.tol
-        self.checker = checker(self.model, backend, backend_options)
-        self.backend = self.checker.name
-        self._distances = Capability.DISTANCES in self.checker.capabilities
+        self._backend_args = (backend, backend_options)
+        self._tol_given = tol
         self._us_per_pair = _FIRST_US_PER_PAIR
         self._us_per_check = _FIRST_US_PER_CHECK
         self._tls = threading.local()
+        self._lock = threading.RLock()
         self._generation = 0
         self._active = None
         self.terrain = None
-        self.set_active(active)
+        if active is not None and active not in scene.robots:
+            raise DetectionError(f"active: unknown robot {active!r}; robots are {list(scene.robots)}")
+        self._active = active
+        self._plan = None
+        self._build(model if model is not None else model_of(scene))
         if terrain is not None:  # the terrain category, composed outside the backend
             attach_extra(self, "terrain", terrain)
 
-    def _require_distances(self, what: str) -> None:
-        if not self._distances:
+    def _require_distances(self, what: str, plan: _Plan | None = None) -> None:
+        if not (plan or self._plan).distances:
             from .._errors import BackendError
 
             raise BackendError(f"backend {self.backend!r} answers verdicts only (no distances), so it has no {what}; "
@@ -165,10 +179,17 @@ class RangerDetector(Detector):
     stopping_distance = property(lambda self: self._stopping, doc="Stopping distance (m); 0 when unset.")
     active = property(lambda self: self._active, doc="The active robot's name, or None for all arms.")
 
+    # the current build's parts (a call reads self._fresh() once instead)
+    model = property(lambda self: self._plan.model, doc="The Model this detector checks (the scene's, rebuilt after an edit).")
+    checker = property(lambda self: self._plan.checker, doc="The backend's Checker over :attr:`model`.")
+    backend = property(lambda self: self._plan.checker.name, doc="The backend's name.")
+    _tol = property(lambda self: self._tol_given if self._tol_given is not None else self._plan.model.tol)
+    _sel = property(lambda self: self._plan.sel)
+
     @property
     def n_pairs(self) -> int:
         """Number of candidate pairs (after pair filters, active arm and obstacle lists)."""
-        return len(self._sel)
+        return len(self._fresh().sel)
 
     @property
     def link_names(self) -> tuple:
@@ -176,12 +197,12 @@ class RangerDetector(Detector):
 
     def set_threshold(self, threshold: float) -> None:
         self._threshold = check_length(threshold, "threshold")
-        if max(self._threshold, self._stopping) > self._margin_built:
+        if max(self._threshold, self._stopping) > self._plan.margin_built:
             self.prepare()
 
     def set_stopping_distance(self, stopping_distance: float) -> None:
         self._stopping = check_length(stopping_distance, "stopping_distance")
-        if max(self._threshold, self._stopping) > self._margin_built:
+        if max(self._threshold, self._stopping) > self._plan.margin_built:
             self.prepare()
 
     def set_active(self, name: str | None) -> None:
@@ -192,64 +213,103 @@ class RangerDetector(Detector):
 
     def prepare(self) -> "RangerDetector":
         """(Re)build the obstacle lists and bounds; forget every thread's last distances."""
-        margin = max(self._reach_margin, self._threshold, self._stopping)
-        b = pair_bounds(self.model, active=self._active, reach_margin=margin)
-        pairs = self.model.pairs
-        self._bounds = b
-        self._sel = b.rows
-        self._all_rows = len(b.rows) == len(pairs)  # every Model row, in order: ask without pairs=
-        self._swap = b.swap
-        self._lever = b.lever
-        oa, ob = pairs.owner_a, pairs.owner_b
-        self._a = tuple(ob[k] if s else oa[k] for k, s in zip(b.rows, b.swap))
-        self._b = tuple(oa[k] if s else ob[k] for k, s in zip(b.rows, b.swap))
-        self._cat_code = b.category
-        self._cat = tuple(CATEGORIES[c] for c in b.category)
-        self._cat_masks = tuple(b.category == c for c in range(len(CATEGORIES)))
-        self._margin_built = margin
-        robots = list(self.scene.robots.values())
-        slack = self._tol.joint_limit
-        self._limits = ((np.concatenate([r.lower for r in robots]) - slack, np.concatenate([r.upper for r in robots]) + slack)
-                        if robots else (np.zeros(0), np.zeros(0)))
-        self._revision = getattr(self.scene, "revision", None)
-        self._generation += 1
+        self._build(self._plan.model)
         return self
+
+    def _build(self, model, revision=None) -> _Plan:
+        """A new build on ``model`` (the Checker made again when the Model is another), published
+        with one assignment (:class:`_Plan`); ``revision``: the scene's, read before ``model`` was
+        derived from it (None: read now)."""
+        from ..backends import Capability, checker
+
+        with self._lock:
+            old = self._plan
+            plan = _Plan()
+            plan.det = self
+            plan.revision = getattr(self.scene, "revision", None) if revision is None else revision
+            plan.model = model
+            plan.checker = old.checker if old is not None and old.model is model else checker(model, *self._backend_args)
+            plan.distances = Capability.DISTANCES in plan.checker.capabilities
+            margin = max(self._reach_margin, self._threshold, self._stopping)
+            b = pair_bounds(model, active=self._active, reach_margin=margin)
+            pairs = model.pairs
+            plan.bounds = b
+            plan.sel = b.rows
+            plan.all_rows = len(b.rows) == len(pairs)  # every Model row, in order: ask without pairs=
+            plan.swap = b.swap
+            plan.lever = b.lever
+            oa, ob = pairs.owner_a, pairs.owner_b
+            plan.a = tuple(ob[k] if s else oa[k] for k, s in zip(b.rows, b.swap))
+            plan.b = tuple(oa[k] if s else ob[k] for k, s in zip(b.rows, b.swap))
+            plan.cat_code = b.category
+            plan.cat_masks = tuple(b.category == c for c in range(len(CATEGORIES)))
+            plan.margin_built = margin
+            robots = [r for _, r in model._robots]  # the robots the Model moves, in its joint order
+            slack = (self._tol_given or model.tol).joint_limit
+            plan.limits = ((np.concatenate([r.lower for r in robots]) - slack,
+                            np.concatenate([r.upper for r in robots]) + slack) if robots else (np.zeros(0), np.zeros(0)))
+            plan.n_q = int(plan.limits[0].shape[0])
+            self._generation += 1
+            plan.generation = self._generation
+            self._plan = plan
+        return plan
+
+    def _fresh(self) -> _Plan:
+        """The current build, made again first when the scene changed since (a body added, a pair
+        filter set...: the scene's Model then, and a Checker over it), as the analytic Detector does."""
+        plan = self._plan
+        if getattr(self.scene, "revision", None) == plan.revision:
+            return plan
+        from ..model import model_of
+
+        lock = getattr(self.scene, "lock", None)
+        with self._lock:
+            plan = self._plan
+            if getattr(self.scene, "revision", None) == plan.revision:
+                return plan
+            if lock is not None:  # the scene's lock after this detector's (the order the analytic Detector takes them)
+                with lock:
+                    revision = self.scene.revision
+                    model = model_of(self.scene)
+            else:
+                revision = getattr(self.scene, "revision", None)
+                model = model_of(self.scene)
+            return self._build(model, revision)
 
     def obstacle_list(self, link: str) -> tuple[str, ...]:
         """Owner names in the obstacle list of ``link`` (``"robot/link"``), in pair order."""
-        return tuple(dict.fromkeys(b for a, b in zip(self._a, self._b) if a == link))
+        plan = self._fresh()
+        return tuple(dict.fromkeys(b for a, b in zip(plan.a, plan.b) if a == link))
 
     def _payload_of(self, owner: str):
         p = self.scene.payloads.get(owner)
         return None if p is None else p.robot
 
     # ------------------------------------------------------------------ evaluation
-    def _state(self) -> _State:
+    def _state(self, plan: _Plan) -> _State:
         s = getattr(self._tls, "s", None)
-        if s is None or s.generation != self._generation:
-            s = self._tls.s = _State(self._generation, len(self._sel), len(self.scene.joint_names))
+        if s is None or s.generation != plan.generation:
+            s = self._tls.s = _State(plan.generation, len(plan.sel), plan.n_q)
         return s
 
-    def _query(self, q_flat: np.ndarray, which: np.ndarray | None):
+    def _query(self, plan: _Plan, q_flat: np.ndarray, which: np.ndarray | None):
         """Distances and witness points (moving side on A) of detector pairs ``which`` (None: all)."""
-        self._require_distances("per-pair distances (check, pair_distances, check_many)")
-        if getattr(self.scene, "revision", None) != self._revision:
-            raise DetectionError("the scene changed after this detector was built; build a new one")
-        q_pin = self.model.pin_q(q_flat)
-        if which is None and self._all_rows:
-            r = self.checker.pair_distances(q_pin)
-            swap = self._swap
+        self._require_distances("per-pair distances (check, pair_distances, check_many)", plan)
+        q_pin = plan.model.pin_q(q_flat)
+        if which is None and plan.all_rows:
+            r = plan.checker.pair_distances(q_pin)
+            swap = plan.swap
         else:
-            rows = self._sel if which is None else self._sel[which]
-            swap = self._swap if which is None else self._swap[which]
-            r = self.checker.pair_distances(q_pin, pairs=rows)
+            rows = plan.sel if which is None else plan.sel[which]
+            swap = plan.swap if which is None else plan.swap[which]
+            r = plan.checker.pair_distances(q_pin, pairs=rows)
         d = np.asarray(r.distance, dtype=np.float64)
         if np.isnan(d).any():  # never a verdict from a NaN
-            raise DetectionError(f"backend {self.backend!r} answered a NaN distance; no verdict")
+            raise DetectionError(f"backend {plan.checker.name!r} answered a NaN distance; no verdict")
         sw = swap[:, None]
         return d, np.where(sw, r.p_WB, r.p_WA), np.where(sw, r.p_WA, r.p_WB)
 
-    def _flat(self, q) -> np.ndarray:
+    def _flat(self, q, plan: _Plan) -> np.ndarray:
         try:
             q = self.scene.flat_q(q)
         except Exception as exc:  # noqa: BLE001 - one error type at the boundary
@@ -257,9 +317,9 @@ class RangerDetector(Detector):
         q = np.asarray(q, dtype=np.float64)
         if not np.all(np.isfinite(q)):
             raise DetectionError(f"q: contains NaN or infinite values: {q.tolist()}")
-        lo, hi = self._limits
+        lo, hi = plan.limits
         if q.shape != lo.shape or not (np.all(q >= lo) and np.all(q <= hi)):  # the Model's error, naming the joint
-            self.model.check_limits(q, "Detector.check")
+            plan.model.check_limits(q, "Detector.check")
         return q
 
     def _levels(self) -> tuple[float, float]:
@@ -268,11 +328,12 @@ class RangerDetector(Detector):
 
     def lower_bounds(self, q) -> np.ndarray:
         """``(P,)`` this thread's lower bound on every pair's distance at ``q`` (m; ``-inf``: never evaluated)."""
-        return self._lower_bounds(self._state(), self._flat(q))
+        plan = self._fresh()
+        return self._lower_bounds(plan, self._state(plan), self._flat(q, plan))
 
-    def _lower_bounds(self, s: _State, q: np.ndarray) -> np.ndarray:
+    def _lower_bounds(self, plan: _Plan, s: _State, q: np.ndarray) -> np.ndarray:
         dq = np.abs(q[None, :] - s.last_q)
-        moved = np.where(dq > 0.0, dq * self._lever, 0.0).sum(axis=1)  # 0 * inf lever: no motion
+        moved = np.where(dq > 0.0, dq * plan.lever, 0.0).sum(axis=1)  # 0 * inf lever: no motion
         return np.where(s.has_last, s.last_d - moved, -math.inf)
 
     def check(self, q, *, budget_us: float | None = None, lazy: bool = False,
@@ -281,29 +342,34 @@ class RangerDetector(Detector):
         docstring for ``budget_us`` (µs) and ``lazy``; ``jacobian=True`` as the analytic Detector's
         (:mod:`._category_jacobian`, this detector's Checker, the nearest pair's Model row)."""
         if jacobian:
-            report = self.check(q, budget_us=budget_us, lazy=lazy)
-            rows = {c: int(self._sel[r.pair_index]) for c, r in report.by_category.items() if r.pair_index >= 0}
-            if getattr(self, "_category_jac", None) is None:
+            plan = self._fresh()
+            report = self._check(plan, q, budget_us, lazy)
+            rows = {c: int(plan.sel[r.pair_index]) for c, r in report.by_category.items() if r.pair_index >= 0}
+            hit = getattr(self, "_category_jac", None)
+            if hit is None or hit[0] is not plan.model:
                 from ._category_jacobian import CategoryJacobians
 
-                self._category_jac = CategoryJacobians(self.model, checker=self.checker)
-            return report._with_jacobian(self._category_jac.of(self._flat(q), report.by_category, rows))
+                hit = self._category_jac = (plan.model, CategoryJacobians(plan.model, checker=plan.checker))
+            return report._with_jacobian(hit[1].of(self._flat(q, plan), report.by_category, rows))
+        return self._check(self._fresh(), q, budget_us, lazy)
+
+    def _check(self, plan: _Plan, q, budget_us, lazy) -> DetectionReport:
         t0 = time.perf_counter()
         if budget_us is not None:
             b = float(budget_us)
             if not (b >= 0.0 and math.isfinite(b)):
                 raise DetectionError(f"budget_us: must be finite and >= 0, got {budget_us!r}")
-        q = self._flat(q)
-        s = self._state()
+        q = self._flat(q, plan)
+        s = self._state(plan)
         level, thr = self._levels()
-        P = len(self._sel)
+        P = len(plan.sel)
         if budget_us is None and not lazy:  # exact: every listed pair
             which = np.arange(P)
-            d, pA, pB = self._query(q, None)
+            d, pA, pB = self._query(plan, q, None)
             flags = bounds = None
             lbmin = math.inf
         else:
-            bounds = self._lower_bounds(s, q)
+            bounds = self._lower_bounds(plan, s, q)
             order = np.lexsort((s.stamp, bounds))  # increasing bound, then longest unevaluated first
             flags = np.full(P, _FLAG_SKIPPED, dtype=np.int8)
             if lazy:
@@ -314,7 +380,7 @@ class RangerDetector(Detector):
                 order = order[:self._allowance(float(budget_us))]
             which = np.sort(order)  # the Checker answers in Model order
             flags[which] = _FLAG_EVALUATED
-            d, pA, pB = self._query(q, which) if len(which) else (np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)))
+            d, pA, pB = self._query(plan, q, which) if len(which) else (np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)))
             skipped = bounds[flags == _FLAG_SKIPPED]
             lbmin = float(skipped.min()) if skipped.size else math.inf
         s.tick += 1
@@ -322,7 +388,7 @@ class RangerDetector(Detector):
         status = STATUS_CODES[status_code(float(d.min(initial=math.inf)), lbmin, level, thr)]
         elapsed = (time.perf_counter() - t0) * 1e6
         self._learn(elapsed, len(d))
-        raw = _Raw(self, d, pA, pB, which, flags, bounds, lazy)
+        raw = _Raw(plan, d, pA, pB, which, flags, bounds, lazy)
         return DetectionReport._from_check(status, self._threshold, self._stopping, elapsed, raw)
 
     def _allowance(self, budget_us: float) -> int:
@@ -341,58 +407,60 @@ class RangerDetector(Detector):
 
     def pair_distances(self, q, *, robot: str | None = None) -> PairDistances:
         """Every checked pair's signed distance (rows: one per shape pair), as the analytic detector's."""
-        d, pA, pB = self._query(self._flat(q), None)
+        plan = self._fresh()
+        d, pA, pB = self._query(plan, self._flat(q, plan), None)
         names = self.link_names
         li = {n: i for i, n in enumerate(names)}
         rid = {r: i for i, r in enumerate(self.scene.robots)}
-        link_a = np.array([li.get(a, li.get(self._carrier(a), -1)) for a in self._a], dtype=np.int64)
-        robot_a = np.array([rid.get(a.split("/", 1)[0], rid.get(self._payload_of(a), -1)) for a in self._a], dtype=np.int64)
-        link_b = np.array([li.get(b, li.get(self._carrier(b), -1)) for b in self._b], dtype=np.int64)
+        link_a = np.array([li.get(a, li.get(self._carrier(a), -1)) for a in plan.a], dtype=np.int64)
+        robot_a = np.array([rid.get(a.split("/", 1)[0], rid.get(self._payload_of(a), -1)) for a in plan.a], dtype=np.int64)
+        link_b = np.array([li.get(b, li.get(self._carrier(b), -1)) for b in plan.b], dtype=np.int64)
         idx = np.arange(len(d), dtype=np.int64)
         if robot is not None:
             if robot not in rid:
                 raise DetectionError(f"robot: unknown robot {robot!r}; robots are {list(rid)}")
             on = robot_a == rid[robot]
-            on |= np.array([rid.get(b.split("/", 1)[0], rid.get(self._payload_of(b), -2)) == rid[robot] for b in self._b])
+            on |= np.array([rid.get(b.split("/", 1)[0], rid.get(self._payload_of(b), -2)) == rid[robot] for b in plan.b])
             idx = np.flatnonzero(on)
         ro = np.ascontiguousarray
         return PairDistances(d[idx].copy(), pA[idx].copy(), pB[idx].copy(), ro(link_a[idx]), ro(robot_a[idx]),
-                             ro(link_b[idx]), ro(self._cat_code[idx]), tuple(self._a[i] for i in idx),
-                             tuple(self._b[i] for i in idx), names, ro(idx))
+                             ro(link_b[idx]), ro(plan.cat_code[idx]), tuple(plan.a[i] for i in idx),
+                             tuple(plan.b[i] for i in idx), names, ro(idx))
 
     def _carrier(self, owner: str):
         p = self.scene.payloads.get(owner)
         return None if p is None else f"{p.robot}/{p.link}"
 
-    def _rows(self, Q) -> np.ndarray:
+    def _rows(self, Q, plan: _Plan) -> np.ndarray:
+        n = plan.n_q
         try:
             Q = np.asarray(Q, dtype=np.float64)
         except (TypeError, ValueError) as exc:
-            raise DetectionError(f"Q: expected an (M, {len(self.scene.joint_names)}) array of numbers") from exc
-        n = len(self.scene.joint_names)
+            raise DetectionError(f"Q: expected an (M, {n}) array of numbers") from exc
         if Q.ndim != 2 or Q.shape[1] != n:
             raise DetectionError(f"Q: expected shape (M, {n}), got {Q.shape}")
         if not np.all(np.isfinite(Q)):
             raise DetectionError("Q contains NaN or infinite values")
         for i, q in enumerate(Q):
-            self.model.check_limits(q, f"Detector: Q[{i}]")
+            plan.model.check_limits(q, f"Detector: Q[{i}]")
         return Q
 
     def check_many(self, Q) -> BatchReport:
         """Per-category nearest distances and status for each row of ``Q`` ``(M, n_q)`` (the
         Checker's ``pair_distances_many`` over the listed pairs)."""
-        self._require_distances("per-pair distances (check_many)")
-        Q = self._rows(Q)
+        plan = self._fresh()
+        self._require_distances("per-pair distances (check_many)", plan)
+        Q = self._rows(Q, plan)
         M = len(Q)
         min_d = np.full((M, len(CATEGORIES)), np.inf)
-        if M and len(self._sel):
-            Q_pin = self.model.pin_q(Q)
-            many = (self.checker.pair_distances_many(Q_pin) if self._all_rows
-                    else self.checker.pair_distances_many(Q_pin, pairs=self._sel))
-            D = np.asarray(many.distance, dtype=np.float64).reshape(M, len(self._sel))
+        if M and len(plan.sel):
+            Q_pin = plan.model.pin_q(Q)
+            many = (plan.checker.pair_distances_many(Q_pin) if plan.all_rows
+                    else plan.checker.pair_distances_many(Q_pin, pairs=plan.sel))
+            D = np.asarray(many.distance, dtype=np.float64).reshape(M, len(plan.sel))
             if np.isnan(D).any():
-                raise DetectionError(f"backend {self.backend!r} answered a NaN distance; no verdict")
-            for c, mask in enumerate(self._cat_masks):
+                raise DetectionError(f"backend {plan.checker.name!r} answered a NaN distance; no verdict")
+            for c, mask in enumerate(plan.cat_masks):
                 if mask.any():
                     min_d[:, c] = D[:, mask].min(axis=1)
         level, thr = self._levels()
@@ -404,12 +472,13 @@ class RangerDetector(Detector):
 
     def collides_many(self, Q) -> np.ndarray:
         """``(M,) bool``: collision (distance <= 0, or <= the stopping distance) per row (the backend's batch)."""
-        Q = self._rows(Q)
-        if self._active is None and self._all_rows:
-            return self.checker.collides(self.model.pin_q(Q), margin=self._stopping)
-        self._require_distances("active-arm batches (collides_many with active= checks the whole Model)")
+        plan = self._fresh()
+        Q = self._rows(Q, plan)
+        if self._active is None and plan.all_rows:
+            return plan.checker.collides(plan.model.pin_q(Q), margin=self._stopping)
+        self._require_distances("active-arm batches (collides_many with active= checks the whole Model)", plan)
         return self.check_many(Q).collision
 
     def __repr__(self) -> str:
         return (f"Detector({self.scene.name!r}, backend={self.backend!r}, threshold={self._threshold}, "
-                f"stopping_distance={self._stopping}, active={self._active!r}, {len(self._sel)} pairs)")
+                f"stopping_distance={self._stopping}, active={self._active!r}, {len(self._plan.sel)} pairs)")
