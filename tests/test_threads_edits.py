@@ -155,3 +155,16 @@ def test_scene_reads_while_another_thread_edits(ranger):
     if errors:
         raise errors[0]
     assert len(seen) > 1  # the reads did overlap the edits
+
+
+def test_a_scene_travels_to_workers_without_its_lock(ranger):
+    """Dask ships scenes with cloudpickle (``verify_many`` on a cluster): the lock stays behind and
+    the copy gets its own."""
+    cloudpickle = pytest.importorskip("cloudpickle")
+    sc = ranger.scene
+    back = cloudpickle.loads(cloudpickle.dumps(sc))
+    assert back.lock is not sc.lock and back.revision == sc.revision
+    with back.lock:  # usable, and re-entrant for the edits made while holding it
+        back.add_body("post", POSTS)
+    assert "post" in back.bodies and "post" not in sc.bodies
+    assert back.joint_names == sc.joint_names

@@ -87,6 +87,16 @@ class Scene:
         self._revision = 0
         self._lock = threading.RLock()
 
+    def __getstate__(self) -> dict:
+        with self._lock:
+            state = dict(self.__dict__)
+        del state["_lock"]  # a lock does not travel (Dask ships scenes to its workers): each copy gets its own
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._lock = threading.RLock()
+
     # ---------------------------------------------------------------- read-only views
     @property
     def lock(self) -> threading.RLock:
