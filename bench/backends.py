@@ -148,8 +148,9 @@ def _collides_python_seconds(a, Q) -> float:
     ``detect_rows`` swapped)."""
     from armguard_analytic._engine import _kernel as kn
 
-    b = a.detector(0.0)._fresh()
-    SF, SI, ip = b.tls.s.batch_buffers(kn.MODE_YESNO)
+    det = a.detector(0.0)
+    b = det._fresh()
+    SF, SI, ip = det._scratch(b).batch_buffers(kn.MODE_YESNO)
     args = (Q, 0, len(Q), b.H, b.MF, b.MI, SF, SI, b.prm, ip, b.all_p, Q, Q, b.fn)
     return _python_seconds(lambda: a.collides(Q), kn, "detect_rows", args)
 
