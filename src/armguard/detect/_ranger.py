@@ -86,8 +86,8 @@ class _Plan:
     rebuild on another thread (a scene edit, ``set_active``) never mixes two builds, and a report
     keeps the names of the build that made it."""
 
-    __slots__ = ("model", "checker", "distances", "revision", "generation", "bounds", "sel", "all_rows", "swap",
-                 "lever", "a", "b", "cat_code", "cat_masks", "margin_built", "limits", "n_q", "det")
+    __slots__ = ("model", "checker", "distances", "revision", "generation", "active", "bounds", "sel", "all_rows",
+                 "swap", "lever", "a", "b", "cat_code", "cat_masks", "margin_built", "limits", "n_q", "det")
 
 
 class _Raw:
@@ -180,7 +180,8 @@ class RangerDetector(Detector):
     active = property(lambda self: self._active, doc="The active robot's name, or None for all arms.")
 
     # the current build's parts (a call reads self._fresh() once instead)
-    model = property(lambda self: self._plan.model, doc="The Model this detector checks (the scene's, rebuilt after an edit).")
+    model = property(lambda self: self._plan.model,
+                     doc="The Model this detector checks (the scene's, built again after an edit).")
     checker = property(lambda self: self._plan.checker, doc="The backend's Checker over :attr:`model`.")
     backend = property(lambda self: self._plan.checker.name, doc="The backend's name.")
     _tol = property(lambda self: self._tol_given if self._tol_given is not None else self._plan.model.tol)
@@ -231,7 +232,8 @@ class RangerDetector(Detector):
             plan.checker = old.checker if old is not None and old.model is model else checker(model, *self._backend_args)
             plan.distances = Capability.DISTANCES in plan.checker.capabilities
             margin = max(self._reach_margin, self._threshold, self._stopping)
-            b = pair_bounds(model, active=self._active, reach_margin=margin)
+            plan.active = self._active
+            b = pair_bounds(model, active=plan.active, reach_margin=margin)
             pairs = model.pairs
             plan.bounds = b
             plan.sel = b.rows
@@ -474,7 +476,7 @@ class RangerDetector(Detector):
         """``(M,) bool``: collision (distance <= 0, or <= the stopping distance) per row (the backend's batch)."""
         plan = self._fresh()
         Q = self._rows(Q, plan)
-        if self._active is None and plan.all_rows:
+        if plan.active is None and plan.all_rows:
             return plan.checker.collides(plan.model.pin_q(Q), margin=self._stopping)
         self._require_distances("active-arm batches (collides_many with active= checks the whole Model)", plan)
         return self.check_many(Q).collision
