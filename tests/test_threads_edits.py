@@ -3,8 +3,10 @@ edit, never a mix, and a report keeps the names of the model that made it.
 
 The failures these guard against, as they were: a Detector's rebuild on one thread while another
 read the scene raised ``RuntimeError: dictionary changed size during iteration`` (the Model's
-derivation iterating ``scene.bodies`` during ``add_body``); and a report held across a rebuild
-named its pairs from the new pair list (40 of 40 reports on ranger after one ``add_body`` each).
+derivation iterating ``scene.bodies`` during ``add_body``); a report held across a rebuild named
+its pairs from the new pair list (40 of 40 reports on ranger after one ``add_body`` each); Ranger's
+detector over coal compiled its obstacle lists from the live scene, not the state its Model was
+made from (2 of 5 runs of 3 x 100 calls answered rows of the other state, or raised ``KeyError``).
 """
 
 from __future__ import annotations
@@ -52,7 +54,7 @@ def test_a_held_report_keeps_the_names_of_the_model_that_made_it(ranger, backend
     assert changed == len(Q)  # every edit did renumber the pairs
 
 
-@pytest.mark.parametrize("backend, n_calls", [("analytic", 240), ("coal", 24)])
+@pytest.mark.parametrize("backend, n_calls", [("analytic", 240), ("coal", 60)])
 def test_checks_while_another_thread_adds_and_removes_a_body(ranger, backend, n_calls):
     sc = ranger.scene
     det = armguard.Detector(sc, threshold=0.1, backend=backend)
@@ -168,3 +170,21 @@ def test_a_scene_travels_to_workers_without_its_lock(ranger):
         back.add_body("post", POSTS)
     assert "post" in back.bodies and "post" not in sc.bodies
     assert back.joint_names == sc.joint_names
+
+
+@pytest.mark.parametrize("budget_us", [5.0, 20.0])
+@pytest.mark.parametrize("backend", ["analytic", "coal"])
+def test_the_anytime_budget_recovers_after_a_rebuild(ranger, backend, budget_us):
+    """A check that rebuilt after an edit (milliseconds) is not what a check costs: the pairs a
+    budget buys come back within a few checks.  Before, the analytic Detector learned ~110 µs a
+    pair from such a check, and at a 5 µs budget then evaluated 0 pairs on every later check."""
+    sc = ranger.scene
+    det = armguard.Detector(sc, threshold=0.1, backend=backend)
+    q = ranger.scene_q(ranger.random_q(1, 8))[0]
+    if backend == "coal":
+        budget_us *= 500  # coal's pairs cost ~5 µs each through the Checker, its call ~0.3 ms
+    before = [det.check(q, budget_us=budget_us).n_evaluated for _ in range(30)][-10:]
+    assert max(before) > 0
+    sc.add_body("post", [Sphere([3.0, 3.0, 3.0], 0.1)])  # far from everything: the same pairs cost the same
+    after = [det.check(q, budget_us=budget_us).n_evaluated for _ in range(12)]
+    assert max(after[-6:]) >= max(1, min(before) // 4), (before, after)

@@ -420,10 +420,10 @@ class FusedDetector(Detector):
         """
         if jacobian:
             return self._check_with_jacobian(q, budget_us, lazy)
-        t0 = _perf_counter()
         b = self._b  # one revision for the whole call (._built)
         if getattr(self.scene, "revision", None) != b.revision:  # stale model: rebuild (see _fresh)
             b = self._fresh()
+        t0 = _perf_counter()  # after any rebuild: the cost model learns what a check costs, not a rebuild
         try:  # this thread's scratch (_scratch, inline)
             s = b.tls.s
         except AttributeError:
@@ -446,8 +446,7 @@ class FusedDetector(Detector):
             raw = _Raw(b, s.SF, s.SI, b.ev_off, b.sum_off, n_eval, None, None, _MODE_EXACT)
             s.last_raw = raw
             elapsed = (_perf_counter() - t0) * 1e6
-            if n_eval > 0:
-                self._ns_per_pair = 0.8 * self._ns_per_pair + 0.2 * max(elapsed * 1e3 / n_eval, 1.0)
+            self._learn(elapsed, n_eval, None)
             return DetectionReport._from_check(STATUS_CODES[status], self._threshold, self._stopping, elapsed, raw)
         if budget_us is not None:
             us = float(budget_us)
@@ -465,10 +464,21 @@ class FusedDetector(Detector):
         else:
             flags, bounds = s.pflag.copy(), s.plb.copy()
         elapsed = (_perf_counter() - t0) * 1e6
-        if n_eval > 0:  # the cost model of the anytime mode: an exponential average of ns per pair
-            self._ns_per_pair = 0.8 * self._ns_per_pair + 0.2 * max(elapsed * 1e3 / n_eval, 1.0)
+        self._learn(elapsed, n_eval, budget_us)
         raw = s.last_raw = _Raw(b, *raw_buffers, n_eval, flags, bounds, mode)
         return DetectionReport._from_check(STATUS_CODES[status], self._threshold, self._stopping, elapsed, raw)
+
+    def _learn(self, elapsed_us: float, n_eval: int, budget_us) -> None:
+        """The anytime mode's cost model, an exponential average of ns per evaluated pair, after one
+        check.  One outlier (a pause, a wait for the GIL) moves it at most 4x, as Ranger's detector
+        over a Checker; a positive budget that fitted no pair lowers it (it learns nothing from such
+        a check, and without this one outlier could leave every later budgeted check at 0 pairs)."""
+        ref = self._ns_per_pair
+        if n_eval > 0:
+            x = max(elapsed_us * 1e3 / n_eval, 1.0)
+            self._ns_per_pair = 0.8 * ref + 0.2 * min(max(x, 0.25 * ref), 4.0 * ref)
+        elif budget_us:
+            self._ns_per_pair = 0.8 * ref
 
     def _check_with_jacobian(self, q, budget_us, lazy) -> DetectionReport:
         b = self._fresh()

@@ -18,6 +18,7 @@ then one workspace row per moving element), so element ``e`` of a row is the com
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -69,12 +70,14 @@ def pair_bounds(model, *, active: str | None, reach_margin: float) -> PairBounds
     """The pair rows of ``model`` a Detector checks, with their lever arms (module docstring)."""
     from ..model._compile import compile_scene
 
-    scene = model.scene_for()
-    cs = compile_scene(scene)
-    robot_names = tuple(cs.robot_names)
+    lock = getattr(model.scene, "lock", None)
+    with lock if lock is not None else contextlib.nullcontext():  # the scene as the Model holds it, read whole
+        scene = model.scene_for()  # its own scene while unchanged, else a copy of what the Model holds
+        cs = compile_scene(scene)
+        robot_names = tuple(cs.robot_names)
+        lower = np.concatenate([scene.robots[r].lower for r in robot_names]) if robot_names else np.zeros(0)
+        upper = np.concatenate([scene.robots[r].upper for r in robot_names]) if robot_names else np.zeros(0)
     tree, link_off, _ = model.kinematic_tree(robot_names)  # compiled from pin_model, the Robots' layout
-    lower = np.concatenate([scene.robots[r].lower for r in robot_names]) if robot_names else np.zeros(0)
-    upper = np.concatenate([scene.robots[r].upper for r in robot_names]) if robot_names else np.zeros(0)
     n_q = len(lower)
     moving = np.asarray(cs.elem_kind) != 0
     G = cs.n_elements

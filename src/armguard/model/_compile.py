@@ -45,6 +45,7 @@ Workspace
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -181,7 +182,14 @@ def _ro(a, dtype) -> np.ndarray:
 
 
 def compile_scene(scene: Scene) -> CompiledScene:
-    """Flatten ``scene`` into a :class:`CompiledScene` (explicit, repeatable; the scene is unchanged)."""
+    """Flatten ``scene`` into a :class:`CompiledScene` (explicit, repeatable; the scene is unchanged),
+    holding its lock (:attr:`Scene.lock`): an edit on another thread waits, never lands half-read."""
+    lock = getattr(scene, "lock", None)
+    with lock if lock is not None else contextlib.nullcontext():
+        return _compile_scene(scene)
+
+
+def _compile_scene(scene: Scene) -> CompiledScene:
     robot_names = tuple(scene.robots)
     rid = {r: i for i, r in enumerate(robot_names)}
     # owners and their shapes in the element frame
