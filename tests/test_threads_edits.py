@@ -28,6 +28,25 @@ def ranger():
     return armguard.load_model("ranger")  # a fresh Model per test: the tests edit its scene
 
 
+def _edit_while(editor, readers, stop: threading.Event) -> None:
+    """Run ``editor`` on a thread of its own until every one of ``readers`` (each on its own thread)
+    has returned, the GIL handed over every 10 µs so that the edits land inside the calls."""
+    switch = sys.getswitchinterval()
+    sys.setswitchinterval(1e-5)
+    try:
+        ed = threading.Thread(target=editor)
+        ed.start()
+        threads = [threading.Thread(target=r) for r in readers]
+        for th in threads:
+            th.start()
+        for th in threads:
+            th.join()
+        stop.set()
+        ed.join()
+    finally:
+        sys.setswitchinterval(switch)
+
+
 def _names(rep) -> tuple:
     return ([(r.a, r.b, r.distance) for r in rep.within_threshold],
             {k: (v.a, v.b, v.distance) for k, v in rep.by_category.items()},
@@ -97,20 +116,7 @@ def test_checks_while_another_thread_adds_and_removes_a_body(ranger, backend, n_
         except BaseException as exc:  # noqa: BLE001 - reported in the test's thread
             errors.append(exc)
 
-    switch = sys.getswitchinterval()
-    sys.setswitchinterval(1e-5)  # hand the GIL over often: the edits land inside the calls
-    try:
-        ed = threading.Thread(target=editor)
-        ed.start()
-        workers = [threading.Thread(target=worker, args=(t,)) for t in range(3)]
-        for w in workers:
-            w.start()
-        for w in workers:
-            w.join()
-        stop.set()
-        ed.join()
-    finally:
-        sys.setswitchinterval(switch)
+    _edit_while(editor, [lambda t=t: worker(t) for t in range(3)], stop)
     if errors:
         raise errors[0]
     assert mixed == []
@@ -142,18 +148,7 @@ def test_scene_reads_while_another_thread_edits(ranger):
         except BaseException as exc:  # noqa: BLE001
             errors.append(exc)
 
-    switch = sys.getswitchinterval()
-    sys.setswitchinterval(1e-5)
-    try:
-        ed = threading.Thread(target=editor)
-        rd = threading.Thread(target=reader)
-        ed.start()
-        rd.start()
-        rd.join()
-        stop.set()
-        ed.join()
-    finally:
-        sys.setswitchinterval(switch)
+    _edit_while(editor, [reader], stop)
     if errors:
         raise errors[0]
     assert len(seen) > 1  # the reads did overlap the edits
