@@ -62,3 +62,17 @@ def test_disable_pair_after_build_is_honoured():
     sc.disable_pair("arm", "post")
     assert det.check(q).status.value != "collision"
     assert "post" not in det.obstacle_list(det.link_names[-1])
+
+
+@pytest.mark.parametrize("backend", ["analytic", "coal"])
+def test_settings_changed_after_an_edit_still_see_the_edit(backend):
+    """``set_active`` or a larger threshold rebuilds on the Model the Detector holds; the scene's
+    edit before it is still seen by the next query."""
+    sc = _scene()
+    det = armguard.Detector(sc, threshold=0.05, backend=backend)
+    q = np.zeros(3)
+    assert not _check(det, q)
+    sc.add_body("post", [Sphere([1.2, 0.0, 0.0], 0.05)])
+    det.set_active("arm")
+    det.set_threshold(0.5)
+    assert _check(det, q)

@@ -34,6 +34,7 @@ mixes two of them.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import threading
 import time
@@ -163,7 +164,11 @@ class RangerDetector(Detector):
             raise DetectionError(f"active: unknown robot {active!r}; robots are {list(scene.robots)}")
         self._active = active
         self._plan = None
-        self._build(model if model is not None else model_of(scene))
+        lock = getattr(scene, "lock", None)
+        with lock if lock is not None else contextlib.nullcontext():  # the revision the Model is of
+            revision = getattr(scene, "revision", None)
+            model = model if model is not None else model_of(scene)
+        self._build(model, revision)
         if terrain is not None:  # the terrain category, composed outside the backend
             attach_extra(self, "terrain", terrain)
 
@@ -214,20 +219,20 @@ class RangerDetector(Detector):
 
     def prepare(self) -> "RangerDetector":
         """(Re)build the obstacle lists and bounds; forget every thread's last distances."""
-        self._build(self._plan.model)
+        plan = self._plan
+        self._build(plan.model, plan.revision)  # the same Model: a scene edit since is still seen (_fresh)
         return self
 
-    def _build(self, model, revision=None) -> _Plan:
+    def _build(self, model, revision) -> _Plan:
         """A new build on ``model`` (the Checker made again when the Model is another), published
-        with one assignment (:class:`_Plan`); ``revision``: the scene's, read before ``model`` was
-        derived from it (None: read now)."""
+        with one assignment (:class:`_Plan`); ``revision``: the scene's revision ``model`` is of."""
         from ..backends import Capability, checker
 
         with self._lock:
             old = self._plan
             plan = _Plan()
             plan.det = self
-            plan.revision = getattr(self.scene, "revision", None) if revision is None else revision
+            plan.revision = revision
             plan.model = model
             plan.checker = old.checker if old is not None and old.model is model else checker(model, *self._backend_args)
             plan.distances = Capability.DISTANCES in plan.checker.capabilities
