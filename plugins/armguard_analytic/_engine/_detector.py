@@ -237,26 +237,15 @@ class FusedDetector(Detector):
             s = b.tls.s = _Scratch(b)
             return s
 
-    # the current revision's parts, by their former names (tests, tools and the Checker read them;
+    # the current revision's parts, by their former names (tests read them;
     # a call reads self._b once instead, so that a rebuild meanwhile cannot mix two revisions)
-    _revision = property(lambda self: self._b.revision)
     _model = property(lambda self: self._b.model)
     _layout = property(lambda self: self._b.layout)
     _H = property(lambda self: self._b.H)
     _MF = property(lambda self: self._b.MF)
     _MI = property(lambda self: self._b.MI)
-    _SF0 = property(lambda self: self._b.SF0)
-    _SI0 = property(lambda self: self._b.SI0)
-    _P = property(lambda self: self._b.P)
-    _all_p = property(lambda self: self._b.all_p)
-    _prm = property(lambda self: self._b.prm)
-    _iprm = property(lambda self: self._b.iprm)
-    _tls = property(lambda self: self._b.tls)
-    _fn = property(lambda self: self._b.fn)
-    _entry = property(lambda self: self._b.entry)
     _names_a = property(lambda self: self._b.names_a)
     _names_b = property(lambda self: self._b.names_b)
-    _static_shapes = property(lambda self: self._b.static_shapes)
     call_us = property(lambda self: self._b.call_us, doc="One exact check's measured time (µs) when prepared.")
     releases_gil = property(lambda self: self._b.releases_gil, doc="Whether ``check`` releases the GIL.")
 
