@@ -91,7 +91,7 @@ def test_avoidance_decision_reports_the_filter(ranger):
     assert d.avoidance is not None and d.avoidance.velocity.shape == (m.pin_model.nv,)
     assert d.motion == d.avoidance.status.value == "slowed"  # clipped to 0.5 rad/s
     assert np.all(np.abs(d.velocity) <= 0.5 + 1e-12)
-    other = np.setdiff1d(np.arange(m.pin_model.nv), g._v_index)
+    other = np.setdiff1d(np.arange(m.pin_model.nv), g._st.v_index)
     assert not np.any(d.avoidance.velocity[other])  # only the guarded robot moves
     same = g.step(q_start, q_cmd_next=np.clip(q_start + v * PERIOD, lo, hi))
     assert same.avoidance.status in (AvoidanceStatus.FREE, AvoidanceStatus.SLOWED)
@@ -122,11 +122,11 @@ def test_filtered_velocity_keeps_every_damper_and_moves_only_the_robot(ranger, s
     d = g.step(q, qdot=cmd)
     av = d.avoidance
     assert np.all(np.abs(av.velocity) <= 1.0 + 1e-9)
-    other = np.setdiff1d(np.arange(m.pin_model.nv), g._v_index)
+    other = np.setdiff1d(np.arange(m.pin_model.nv), g._st.v_index)
     assert not np.any(av.velocity[other])
     assert np.all(av.closing >= av.rate - 1e-9)
     if d.ok:
-        np.testing.assert_array_equal(d.velocity, av.velocity[g._v_index])
+        np.testing.assert_array_equal(d.velocity, av.velocity[g._st.v_index])
     else:
         assert not np.any(d.velocity)
 

@@ -26,6 +26,7 @@ from ._errors import (
     TerrainError,
     TrajectoryError,
     UncertaintyError,
+    StaleModelError,
     VerificationError,
 )
 from ._tolerance import DEFAULT_TOLERANCES, Tolerances
@@ -76,6 +77,7 @@ __all__ = [
     "SceneFileError",
     "TrajectoryError",
     "DetectionError",
+    "StaleModelError",
     "VerificationError",
     "OutputError",
     "ClipError",

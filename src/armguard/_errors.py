@@ -13,6 +13,7 @@ __all__ = [
     "TrajectoryError",
     "DetectionError",
     "VerificationError",
+    "StaleModelError",
     "ClipError",
     "ForbiddenMapError",
     "ForbiddenMapFileError",
@@ -99,6 +100,13 @@ class DetectionError(ArmguardError, ValueError):
 
 class VerificationError(ArmguardError, ValueError):
     """A trajectory verification request is invalid."""
+
+
+class StaleModelError(VerificationError):
+    """The scene changed (a body added, a pair disabled, ...) after a clearance model was built from it,
+    or while it answered: its pairs are no longer the scene's, so it gives no answer.  ``Verifier`` and
+    ``Guard`` catch it and build again from the scene as it is; code holding a
+    :class:`armguard.verify.ClearanceModel` of its own builds a new one."""
 
 
 class UncertaintyError(ArmguardError, ValueError):

@@ -36,13 +36,14 @@ from __future__ import annotations
 
 import enum
 import math
+import threading
 import time as _time
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..model import scene_of
-from .._errors import VerificationError
+from .._errors import StaleModelError, VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ..kinematics._limits import limit_error
 from ._oracle import ClearanceModel
@@ -51,6 +52,7 @@ from ._stopping import StoppingDistance, check_stopping_distance
 __all__ = ["Guard", "GuardDecision", "GuardMode", "GuardVerdict"]
 
 _GUARD_EVALUATIONS = 256  # clearance evaluations one prediction may use before answering STOP
+_ATTEMPTS = 3  # predictions started over after a scene edit before answering STOP
 
 
 class GuardMode(enum.Enum):
@@ -109,6 +111,23 @@ class GuardDecision:
         return "stopped" if not self.ok else self.avoidance.status.value
 
 
+class _GuardState:
+    """What one step reads (:meth:`Guard._build`, published whole): ``model`` (the ClearanceModel),
+    ``base`` (the flat configuration of every robot), ``k0:k1`` (the guarded joints in it), ``names``,
+    ``lower``, ``upper``, ``lo_ok``, ``hi_ok`` (their limits, and with the tolerance); with avoidance
+    ``v_index``, ``damper``, ``pin_model``, ``checker``, ``nv``."""
+
+    __slots__ = ("model", "base", "k0", "k1", "names", "lower", "upper", "lo_ok", "hi_ok", "v_index", "damper",
+                 "pin_model", "checker", "nv")
+
+
+def _full(st: _GuardState, q_robot: np.ndarray) -> np.ndarray:
+    """The flat configuration with the guarded robot at ``q_robot``, the others where ``st`` holds them."""
+    q = st.base.copy()
+    q[st.k0 : st.k1] = q_robot
+    return q
+
+
 def _time_to(s: float, T: float) -> float:
     """Time (s) to reach fraction ``s`` of a predicted path that takes ``T`` s; 0 when ``s`` is 0 or the
     duration is unknown (``T`` inf: no commanded speed), never NaN."""
@@ -135,6 +154,11 @@ class Guard:
         Filter the commanded velocity instead of only stopping (see the module docstring); its
         ``velocity_limit`` is a number or one per joint of the guarded robot; its ``period`` is
         the control period of the filter (``period_s`` is used for ``q_cmd_next``).
+
+    One Guard may be stepped from several threads, and its scene edited meanwhile: a step reads the
+    guard's state once (the clearance model, the guarded joints' span and limits), and a step that
+    finds the scene changed under it (:class:`armguard.StaleModelError`) predicts again on the scene
+    as it is; after 3 such attempts it answers STOP.
     """
 
     def __init__(self, scene, *, stopping_distance=0.0, horizon_s: float = 0.5, period_s: float = 0.01,
@@ -164,33 +188,58 @@ class Guard:
         self.robot = robot
         self._source = source
         self._q_others = None if q_others is None else dict(q_others)
-        self._prepare()
+        self._lock = threading.Lock()  # one rebuild after an edit, however many threads find it
+        self._st = self._build()
 
-    def _prepare(self) -> None:
-        """Build the clearance model and the other robots' configuration from the scene as it is now."""
+    def __getstate__(self):
+        return {k: v for k, v in self.__dict__.items() if k != "_lock"}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._lock = threading.Lock()
+
+    @property
+    def model(self) -> ClearanceModel:
+        """The clearance model of the scene as the last step found it."""
+        return self._st.model
+
+    def _build(self) -> _GuardState:
+        """The clearance model, the other robots' configuration and the guarded joints of the scene as it is now."""
         scene = self.scene
-        self.model = ClearanceModel(scene, source=self._source, tol=self.tol)
+        st = _GuardState()
+        st.model = ClearanceModel(scene, source=self._source, tol=self.tol)
         base = scene.default_q()
         if self._q_others is not None:
             base.update({k: np.asarray(v, dtype=np.float64) for k, v in self._q_others.items()})
-        self._base = scene.flat_q(base)
+        st.base = scene.flat_q(base)
         k0 = 0
         for name, rob in scene.robots.items():
             if name == self.robot:
                 break
             k0 += len(rob.joint_names)
-        self._k0, self._k1 = k0, k0 + len(scene.robots[self.robot].joint_names)
         rob = scene.robots[self.robot]
-        self._names = tuple(f"{self.robot}/{j}" for j in rob.joint_names)
-        self._lower, self._upper = np.asarray(rob.lower, dtype=np.float64), np.asarray(rob.upper, dtype=np.float64)
+        st.k0, st.k1 = k0, k0 + len(rob.joint_names)
+        st.names = tuple(f"{self.robot}/{j}" for j in rob.joint_names)
+        st.lower, st.upper = np.asarray(rob.lower, dtype=np.float64), np.asarray(rob.upper, dtype=np.float64)
         a = self.tol.joint_limit
-        self._lo_ok, self._hi_ok = self._lower - a, self._upper + a
+        st.lo_ok, st.hi_ok = st.lower - a, st.upper + a
         if self.avoidance is not None:
-            self._prepare_avoidance(self.avoidance)
+            self._prepare_avoidance(st, self.avoidance)
+        return st
 
-    def _prepare_avoidance(self, damper) -> None:
+    def _current(self) -> _GuardState:
+        """The state to step with: the last one, or a new one if the scene changed since (published whole)."""
+        st = self._st
+        if st.model.is_stale():  # the scene changed since the model was built: never guard with the old one
+            with self._lock:
+                st = self._st
+                if st.model.is_stale():
+                    st = self._st = self._build()
+        return st
+
+    def _prepare_avoidance(self, st: _GuardState, damper) -> None:
         """The Model's analytic Checker, the guarded joints' velocity columns, and a damper whose
-        velocity limits are zero on every other column (only this robot moves)."""
+        velocity limits are zero on every other column (only this robot moves), into ``st``."""
         from ..avoidance import Damper
         from ..backends import checker
         from ..model import model_of
@@ -200,36 +249,32 @@ class Guard:
         mdl = model_of(self.scene)
         pm = mdl.pin_model
         v_of_q = {int(pm.joints[j].idx_q): int(pm.joints[j].idx_v) for j in range(1, pm.njoints) if pm.joints[j].nq > 0}
-        self._v_index = np.array([v_of_q[int(i)] for i in mdl.q_index[self._k0 : self._k1]], dtype=np.int64)
-        n, nv = self._k1 - self._k0, int(pm.nv)
+        st.v_index = np.array([v_of_q[int(i)] for i in mdl.q_index[st.k0 : st.k1]], dtype=np.int64)
+        n, nv = st.k1 - st.k0, int(pm.nv)
         lim = np.asarray(damper.velocity_limit, dtype=np.float64)
         if lim.ndim == 1 and lim.shape == (nv,) and n != nv:
-            lim = lim[self._v_index]
+            lim = lim[st.v_index]
         try:
             lim = np.broadcast_to(lim, (n,))
         except ValueError:
             raise VerificationError(f"avoidance.velocity_limit: expected a number or {n} numbers (the joints of "
                                     f"{self.robot!r}), got {damper.velocity_limit!r}") from None
         full = np.zeros(nv)
-        full[self._v_index] = lim
-        self._damper = replace(damper, velocity_limit=tuple(float(x) for x in full))
-        self._pin_model, self._checker, self._nv = mdl, checker(mdl, "analytic"), nv
+        full[st.v_index] = lim
+        st.damper = replace(damper, velocity_limit=tuple(float(x) for x in full))
+        st.pin_model, st.checker, st.nv = mdl, checker(mdl, "analytic"), nv
 
-    def _in_limits(self, a: np.ndarray, name: str) -> np.ndarray:
-        exc = limit_error(f"Guard.step: {name}", a, self._names, self._lower, self._upper, self.tol.joint_limit)
+    def _in_limits(self, st: _GuardState, a: np.ndarray, name: str) -> np.ndarray:
+        exc = limit_error(f"Guard.step: {name}", a, st.names, st.lower, st.upper, self.tol.joint_limit)
         if exc is not None:
             raise exc
         return a
 
-    def _full(self, q_robot: np.ndarray) -> np.ndarray:
-        q = self._base.copy()
-        q[self._k0 : self._k1] = q_robot
-        return q
-
-    def _check(self, x, name: str) -> np.ndarray:
+    @staticmethod
+    def _check(st: _GuardState, x, name: str) -> np.ndarray:
         a = np.asarray(x, dtype=np.float64)
-        if a.shape != (self._k1 - self._k0,):
-            raise VerificationError(f"{name}: expected {self._k1 - self._k0} joint values, got shape {a.shape}")
+        if a.shape != (st.k1 - st.k0,):
+            raise VerificationError(f"{name}: expected {st.k1 - st.k0} joint values, got shape {a.shape}")
         if not np.all(np.isfinite(a)):
             raise VerificationError(f"{name}: contains NaN or infinite values")
         return a
@@ -253,25 +298,42 @@ class Guard:
         Exactly one of ``q_cmd_next`` / ``qdot`` / ``target`` (``target`` may come with ``qdot``).
         With ``avoidance``: ``q_cmd_next`` or ``qdot`` only; the decision's ``velocity`` is the one to send.
         """
-        if self.avoidance is None:
-            return self._step(q, q_cmd_next, qdot, target, self.horizon_s)
         t_start = _time.perf_counter()
-        if self.model.is_stale():
-            self._prepare()
-        q = self._in_limits(self._check(q, "q"), "q")
+        for _ in range(_ATTEMPTS):
+            st = self._current()
+            try:
+                if self.avoidance is None:
+                    dec = self._step(st, q, q_cmd_next, qdot, target, self.horizon_s)
+                else:
+                    dec = self._avoid(st, q, q_cmd_next, qdot, target, t_start)
+            except Exception:
+                if not st.model.is_stale():
+                    raise
+                continue  # the scene changed under this prediction: again, on the scene as it is now
+            if not st.model.is_stale():
+                return dec
+        sd = self.stopping_distance
+        m = sd.max_distance if isinstance(sd, StoppingDistance) else float(sd)
+        dec = self._decide(GuardVerdict.STOP, f"the scene changed during each of {_ATTEMPTS} predictions ({StaleModelError.__name__})",
+                           math.nan, -math.inf, 0.0, None, m, 0, t_start)
+        return dec if self.avoidance is None else replace(dec, velocity=np.zeros(st.k1 - st.k0))
+
+    def _avoid(self, st: _GuardState, q, q_cmd_next, qdot, target, t_start: float) -> GuardDecision:
+        """:meth:`step` with the avoidance filter, on the state ``st``."""
+        q = self._in_limits(st, self._check(st, q, "q"), "q")
         if target is not None or (q_cmd_next is None) == (qdot is None):
             raise VerificationError("step with avoidance: give the commanded velocity, q_cmd_next or qdot (no target)")
         if q_cmd_next is not None:
-            qd = (self._in_limits(self._check(q_cmd_next, "q_cmd_next"), "q_cmd_next") - q) / self.period_s
+            qd = (self._in_limits(st, self._check(st, q_cmd_next, "q_cmd_next"), "q_cmd_next") - q) / self.period_s
         else:
-            qd = self._check(qdot, "qdot")
+            qd = self._check(st, qdot, "qdot")
         from ..avoidance import AvoidanceStatus, avoid_step
 
-        v_cmd = np.zeros(self._nv)
-        v_cmd[self._v_index] = qd
-        av = avoid_step(self._checker, self._pin_model.pin_q(self._full(q)), v_cmd, self._damper, tol=self.tol)
-        v = np.array(av.velocity[self._v_index])
-        dec = self._step(q, None, v, None, self._damper.period, checked=True)
+        v_cmd = np.zeros(st.nv)
+        v_cmd[st.v_index] = qd
+        av = avoid_step(st.checker, st.pin_model.pin_q(_full(st, q)), v_cmd, st.damper, tol=self.tol)
+        v = np.array(av.velocity[st.v_index])
+        dec = self._step(st, q, None, v, None, st.damper.period, checked=True)
         if av.status is AvoidanceStatus.STOPPED and dec.ok:
             dec = replace(dec, verdict=GuardVerdict.STOP, reason=f"avoidance stopped the arm ({av.solver})")
         if not dec.ok:
@@ -279,21 +341,20 @@ class Guard:
         v.flags.writeable = False
         return replace(dec, velocity=v, avoidance=av, elapsed_us=(_time.perf_counter() - t_start) * 1e6)
 
-    def _step(self, q, q_cmd_next, qdot, target, horizon_s: float, checked: bool = False) -> GuardDecision:
-        """The prediction and its certificate over ``horizon_s`` (``checked``: ``q`` is checked already)."""
+    def _step(self, st: _GuardState, q, q_cmd_next, qdot, target, horizon_s: float, checked: bool = False) -> GuardDecision:
+        """The prediction and its certificate over ``horizon_s`` on the state ``st`` (``checked``: ``q`` is
+        checked already)."""
         t_start = _time.perf_counter()
         if not checked:
-            if self.model.is_stale():  # the scene changed since the model was built: never guard with the old one
-                self._prepare()
-            q = self._in_limits(self._check(q, "q"), "q")
+            q = self._in_limits(st, self._check(st, q, "q"), "q")
         if q_cmd_next is not None:
             if qdot is not None or target is not None:
                 raise VerificationError("give q_cmd_next, or qdot (optionally with target), or target")
-            qd = (self._in_limits(self._check(q_cmd_next, "q_cmd_next"), "q_cmd_next") - q) / self.period_s
+            qd = (self._in_limits(st, self._check(st, q_cmd_next, "q_cmd_next"), "q_cmd_next") - q) / self.period_s
             q_end = q + qd * horizon_s
         elif target is not None:
-            tgt = self._in_limits(self._check(target, "target"), "target")
-            qd = None if qdot is None else self._check(qdot, "qdot")
+            tgt = self._in_limits(st, self._check(st, target, "target"), "target")
+            qd = None if qdot is None else self._check(st, qdot, "qdot")
             q_end = tgt
             if qd is not None:
                 # how long the segment takes at this speed; predict no further than the horizon
@@ -303,7 +364,7 @@ class Guard:
                 if t_seg > horizon_s:
                     q_end = q + (tgt - q) * (horizon_s / t_seg)
         elif qdot is not None:
-            qd = self._check(qdot, "qdot")
+            qd = self._check(st, qdot, "qdot")
             q_end = q + qd * horizon_s
         else:
             raise VerificationError("step: give the commanded motion (q_cmd_next, qdot or target)")
@@ -315,12 +376,12 @@ class Guard:
             with np.errstate(divide="ignore", invalid="ignore"):
                 r = np.where(np.abs(qd) > 0.0, np.abs(dq) / np.abs(qd), 0.0)
             T = float(np.max(r)) if len(r) else 0.0
-        model = self.model
+        model = st.model
         full_dq = np.zeros(model.n_q)
-        full_dq[self._k0 : self._k1] = dq
+        full_dq[st.k0 : st.k1] = dq
         if qd is not None:
             full_qd = np.zeros(model.n_q)
-            full_qd[self._k0 : self._k1] = qd
+            full_qd[st.k0 : st.k1] = qd
             speed = model.max_point_speed(full_qd)
         else:
             speed = 0.0
@@ -340,7 +401,7 @@ class Guard:
         rates = model.pair_rates(full_dq)
         pos = rates > 0.0
         s = 0.0
-        d, _, _ = model.distances(self._full(q))
+        d, _, _ = model.distances(_full(st, q))
         evals = 1
         now = float(d.min())
         lower = now
@@ -367,7 +428,7 @@ class Guard:
                 return self._decide(GuardVerdict.STOP, "prediction not finished within its evaluation budget",
                                     now, lower, _time_to(s, T), (model.owner_a[i], model.owner_b[i]), m, evals, t_start)
             # saturated at the limits (see the module docstring); q itself is within them
-            d_next, _, _ = model.distances(self._full(np.clip(q + s_next * dq, self._lo_ok, self._hi_ok)))
+            d_next, _, _ = model.distances(_full(st, np.clip(q + s_next * dq, st.lo_ok, st.hi_ok)))
             evals += 1
             L = s_next - s
             lower = min(lower, float(np.min(np.minimum(np.minimum(d, d_next), 0.5 * (d + d_next - rates * L)))))

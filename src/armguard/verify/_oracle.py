@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model import kinematics_of, scene_of
-from .._errors import VerificationError
+from .._errors import StaleModelError, VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._motion import chain_bounds, shape_radius_about
 
@@ -144,6 +144,28 @@ class ClearanceModel:
         """True when the scene changed (a body added, a pair disabled, ...) after this model was built."""
         return getattr(self.scene, "revision", None) != self.scene_revision
 
+    def _checked(self, fn, *args, **kwargs):
+        """``fn(*args, **kwargs)`` if the scene is still the one this model was built from when it
+        returns; else :class:`StaleModelError`, also in place of any error ``fn`` raised (rows of
+        another scene do not fit this model's).  Checked after the answer: a source that follows scene
+        edits (the Detector rebuilds on its next call) can only have answered for a newer scene if the
+        revision had changed before it read the scene (edits hold the scene's lock while they change it
+        and its revision), so an unchanged revision afterwards proves every row is of this model's pairs."""
+        try:
+            out = fn(*args, **kwargs)
+        except Exception:
+            self._refuse_if_stale()
+            raise
+        self._refuse_if_stale()
+        return out
+
+    def _refuse_if_stale(self) -> None:
+        if getattr(self.scene, "revision", None) != self.scene_revision:
+            raise StaleModelError(
+                f"scene {getattr(self.scene, 'name', 'scene')!r} changed (revision {self.scene_revision} -> "
+                f"{getattr(self.scene, 'revision', None)}) since this ClearanceModel was built: its pairs are no "
+                "longer the scene's; build a new one (Verifier and Guard do so themselves)")
+
     # ----------------------------------------------------------------- sources
     def _pick_source(self, source: str) -> str:
         if source == "reference":
@@ -191,9 +213,16 @@ class ClearanceModel:
         ``distance`` is the minimum over the shapes of the two owners (signed).  ``robot``: the
         moving robot, when only its joints change between calls: the detector then evaluates only
         the pairs with a side on it, and the others are taken from the last full evaluation at the
-        same joints of the other robots (they cannot have changed).
+        same joints of the other robots (they cannot have changed).  After a scene edit (on any thread,
+        even during the call): :class:`armguard.StaleModelError`, never rows of another scene.
+
+        ``evaluations`` counts the calls: a statistic of the model's life (under calls from several
+        threads an increment may be lost); a verification counts its own.
         """
         self.evaluations += 1
+        return self._checked(self._distances, q, robot)
+
+    def _distances(self, q: np.ndarray, robot: str | None):
         if self.source == "detector" and robot is not None and self._det_perm:
             return self._moving_distances(q, robot)
         if self.source == "detector":
@@ -218,7 +247,7 @@ class ClearanceModel:
             pA[self._det_map[first]] = np.asarray(res.p_WA)[first]
             pB[self._det_map[first]] = np.asarray(res.p_WB)[first]
             return d, pA, pB
-        return self.reference_distances(q)
+        return self._reference(q)
 
     def _moving_distances(self, q: np.ndarray, robot: str):
         k0, k1 = self._joint_span(robot)
@@ -270,7 +299,11 @@ class ClearanceModel:
         raise VerificationError(f"unknown robot {robot!r}; robots are {list(self.scene.robots)}")
 
     def reference_distances(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The slow, obviously-correct path: ``shapes_at`` + ``geometry.distance`` over every shape pair."""
+        """The slow, obviously-correct path: ``shapes_at`` + ``geometry.distance`` over every shape pair
+        (:class:`armguard.StaleModelError` after a scene edit, as :meth:`distances`)."""
+        return self._checked(self._reference, q)
+
+    def _reference(self, q: np.ndarray):
         from ..geometry import distance
 
         items = self.scene.shapes_at(q)

@@ -70,7 +70,9 @@ class _Run:
             setattr(self, name, new)
 
     def eval(self, si: int, s: float, q_robot: np.ndarray, t: float | None = None) -> int:
-        """Evaluate the clearances with the moving robot at ``q_robot`` ``(k1 - k0,)``; returns the row."""
+        """Evaluate the clearances with the moving robot at ``q_robot`` ``(k1 - k0,)``; returns the row
+        (``n``, the rows so far, is this verification's count of evaluations).  A scene edited since the
+        model was built: :class:`armguard.StaleModelError` (the Verifier starts again on the new scene)."""
         i = self.n
         if i == self.D.shape[0]:
             self._grow()
@@ -78,9 +80,7 @@ class _Run:
         q[self.k0 : self.k1] = q_robot
         row = self.D[i]
         if self._fast:
-            res = self._det.pair_distances(q, robot=self.robot)
-            row[:] = self._fixed[0]
-            row[self._index_of(res)] = res.distance
+            res = self.model._checked(self._fast_row, q, row)  # never another scene's rows
             self._last = res
             self.model.evaluations += 1
         else:
@@ -93,6 +93,12 @@ class _Run:
         self.t[i] = math.nan if t is None else t
         self.n = i + 1
         return i
+
+    def _fast_row(self, q: np.ndarray, row: np.ndarray):
+        res = self._det.pair_distances(q, robot=self.robot)
+        row[:] = self._fixed[0]
+        row[self._index_of(res)] = res.distance
+        return res
 
     def _index_of(self, res) -> np.ndarray:
         """Rows of the detector result ``res`` in the model's pair order (cached while the detector

@@ -19,12 +19,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import threading
 import time as _time
 
 import numpy as np
 
 from ..model import scene_of
-from .._errors import KinematicsError, TrajectoryError, VerificationError
+from .._errors import KinematicsError, StaleModelError, TrajectoryError, VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._advance import advance_step
 from ._oracle import CATEGORIES, WORKSPACE, ClearanceModel
@@ -46,6 +47,7 @@ __all__ = ["Verifier", "verify", "DRAKE_JOINT_STEP"]
 
 #: Drake's suggested edge-checking step (rad), used by sampled mode when no frequency is given.
 DRAKE_JOINT_STEP = 0.05
+_ATTEMPTS = 5  # verifications started over after a scene edit before giving up (StaleModelError)
 _SPEED_SAMPLES = 17  # time-law samples per segment used to find its peak speed (odd: includes the midpoint)
 _OBJECTS = {
     "link-obstacle": ("arm", "obstacle"),
@@ -82,6 +84,11 @@ class Verifier:
     backend, backend_options : str, mapping
         The backend the detector source takes its distances from (argument > ``$ARMGUARD_BACKEND``
         > ``armguard.toml`` > ``"analytic"``); the motion bounds are the scene's, whatever the backend.
+
+    One Verifier may verify on several threads at once, and its scene may be edited meanwhile: each
+    verification reads the clearance model once and counts its own evaluations; one that finds the
+    scene changed under it (:class:`armguard.StaleModelError`) starts again on the scene as it is,
+    up to 5 times, so every report is of one state of the scene, never a mix.
     """
 
     def __init__(self, scene, *, robot: str | None = None, q_others=None, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES,
@@ -93,19 +100,43 @@ class Verifier:
         self._backend = (backend, backend_options)
         self._robot = robot
         self._q_others = None if q_others is None else dict(q_others)
-        self._prepare()
+        self._lock = threading.Lock()  # one rebuild after an edit, however many threads find it
+        self._state = self._build()
 
-    def _prepare(self) -> None:
-        """Build the clearance model and the other robots' configuration from the scene as it is now."""
-        self.model = ClearanceModel(self.scene, source=self._source, tol=self.tol, backend=self._backend[0],
-                                    backend_options=self._backend[1])
+    def __getstate__(self):
+        return {k: v for k, v in self.__dict__.items() if k != "_lock"}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._lock = threading.Lock()
+
+    @property
+    def model(self) -> ClearanceModel:
+        """The clearance model of the scene as the last verification found it."""
+        return self._state[0]
+
+    def _build(self) -> tuple:
+        """``(clearance model, every robot's configuration)`` of the scene as it is now."""
+        model = ClearanceModel(self.scene, source=self._source, tol=self.tol, backend=self._backend[0],
+                               backend_options=self._backend[1])
         base = self.scene.default_q()
         if self._q_others is not None:
             for k, v in self._q_others.items():
                 if k not in base:
                     raise VerificationError(f"q_others names unknown robot {k!r}; robots are {list(base)}")
                 base[k] = _finite_array(v, f"q_others[{k!r}]")
-        self._base = base
+        return model, base
+
+    def _current(self) -> tuple:
+        """The state to verify with: the last one, or a new one if the scene changed since (published
+        whole: a verification on another thread keeps the one it read)."""
+        st = self._state
+        if st[0].is_stale():  # the scene changed since the model was built: never verify against the old one
+            with self._lock:
+                st = self._state
+                if st[0].is_stale():
+                    st = self._state = self._build()
+        return st
 
     # ------------------------------------------------------------ helpers
     def _robot_of(self, trajectory, robot: str | None) -> str:
@@ -117,7 +148,7 @@ class Verifier:
             raise VerificationError(f"robot {r!r} is not in the scene; robots are {names}")
         return r
 
-    def _over_robot(self, trajectory, r: str):
+    def _over_robot(self, trajectory, r: str, base: dict):
         """``(trajectory, held)``: a trajectory naming a subset of robot ``r``'s joints (any order)
         over all of them, the others held where the verifier holds the robot (its home, or
         ``q_others[r]``); ``held`` those joints and values."""
@@ -133,13 +164,13 @@ class Verifier:
             raise VerificationError(
                 f"trajectory joints {list(trajectory.joint_names)} do not match robot {r!r} joints {list(rob.joint_names)}")
         try:
-            full, held = inner.over_joints(rob.joint_names, self._base[r])
+            full, held = inner.over_joints(rob.joint_names, base[r])
         except TrajectoryError as exc:
             raise VerificationError(f"robot {r!r}: {exc}") from None
         return (Subdivided(full, trajectory.n) if inner is not trajectory else full), held
 
-    def _flat(self, robot: str):
-        base = self.scene.flat_q(self._base)
+    def _flat(self, robot: str, base: dict):
+        base = self.scene.flat_q(base)
         k0 = 0
         for name, rob in self.scene.robots.items():
             if name == robot:
@@ -160,13 +191,13 @@ class Verifier:
             except KinematicsError as exc:
                 raise VerificationError(f"trajectory waypoints[{k}]: {exc}") from None
 
-    def _segment_speeds(self, trajectory, segs, k0: int, k1: int) -> np.ndarray:
+    def _segment_speeds(self, trajectory, segs, k0: int, k1: int, model: ClearanceModel) -> np.ndarray:
         """Per segment, a bound (m/s) on the speed of the fastest point of the arm (peak of the time law)."""
         from ..kinematics import Trajectory
 
-        n_q = self.model.n_q
+        n_q = model.n_q
         out = np.zeros(len(segs))
-        if not len(self.model.parts):
+        if not len(model.parts):
             return out
         if type(trajectory).velocity is Trajectory.velocity:
             # the trapezoid time law's peak path speed is its plateau (or triangle apex) 1 / (T - tb)
@@ -176,14 +207,14 @@ class Verifier:
             W = np.asarray(trajectory.waypoints, dtype=np.float64)
             qd = np.zeros((len(segs), n_q))
             qd[:, k0:k1] = np.abs(_finite_array(v[:, None] * (W[1:] - W[:-1]), "trajectory velocity"))
-            return np.max(qd @ self.model.lever[:-1].T, axis=1)
+            return np.max(qd @ model.lever[:-1].T, axis=1)
         u = (np.arange(_SPEED_SAMPLES) + 0.5) / _SPEED_SAMPLES
         ts = np.concatenate([t0 + u * (t1 - t0) for t0, t1, _, _ in segs])
         V = np.abs(_finite_array(trajectory.velocity(ts), "trajectory velocity")).reshape(len(segs), _SPEED_SAMPLES, -1)
         qd = np.zeros((len(segs), n_q))
         qd[:, k0:k1] = V.max(axis=1)
         # max_point_speed of every segment's peak joint speeds at once: (segments, parts) -> max over parts
-        return np.max(qd @ self.model.lever[:-1].T, axis=1)
+        return np.max(qd @ model.lever[:-1].T, axis=1)
 
     # ------------------------------------------------------------ the check
     def _trajectory_name(self, trajectory) -> str:
@@ -220,21 +251,33 @@ class Verifier:
         mass = _float(payload_mass, "payload_mass")
         if not math.isfinite(mass) or mass < 0.0:
             raise VerificationError(f"payload_mass: expected a finite number >= 0 (kg), got {mass}")
-        if self.model.is_stale():  # the scene changed since the model was built: never verify against the old one
-            self._prepare()
+        args = (sd, method, frequency, joint_step, robot, thr, mass, name, t_start)
+        for _ in range(_ATTEMPTS):
+            st = self._current()
+            try:
+                rep = self._verify_once(st, trajectory, *args)
+            except Exception:
+                if not st[0].is_stale():
+                    raise
+                continue  # the scene changed under this verification: again, on the scene as it is now
+            if not st[0].is_stale():  # the report (its collision's feature included) is of one scene
+                return rep
+        raise StaleModelError(f"the scene changed during each of {_ATTEMPTS} attempts to verify this trajectory: no verdict")
+
+    def _verify_once(self, st, trajectory, sd, method, frequency, joint_step, robot, thr, mass, name, t_start):
+        """One verification with the clearance model and configurations ``st`` (:meth:`_current`)."""
+        model, base_q = st
         rname = self._robot_of(trajectory, robot)
         named = self._trajectory_name(trajectory) if name is None else name
-        trajectory, held = self._over_robot(trajectory, rname)
-        base, k0, k1 = self._flat(rname)
+        trajectory, held = self._over_robot(trajectory, rname, base_q)
+        base, k0, k1 = self._flat(rname, base_q)
         segs = segments_of(trajectory)
         self._check_knots_in_limits(segs, rname)
-        speeds = self._segment_speeds(trajectory, segs, k0, k1)
+        speeds = self._segment_speeds(trajectory, segs, k0, k1, model)
         if isinstance(sd, StoppingDistance):
             margins = np.array([sd.at(v, mass) for v in speeds])
         else:
             margins = np.full(len(segs), sd)
-        model = self.model
-        model.evaluations = 0
         run = _Run(model, base, k0, k1, rname, capacity=2 * len(segs) + 2)
         if not run.moving.any():
             raise VerificationError(f"robot {rname!r} has no pair to check (no shapes, or every pair with it disabled)")
@@ -253,7 +296,7 @@ class Verifier:
         The per-pair arithmetic after each evaluation (gap, next step, interval lower bound) is one
         call of :func:`._advance.advance_step`; the pair rates of all segments are computed at once.
         """
-        model, tol = self.model, self.tol
+        model, tol = run.model, self.tol
         contact = tol.verify_contact
         budget = tol.verify_max_evaluations
         lower = math.inf
@@ -294,7 +337,7 @@ class Verifier:
                 s_next = min(1.0, s + step)
                 if not s_next > s:
                     return VerificationStatus.INCOMPLETE, f"no progress in segment {si} (clearance {g:.3g} m)", lower, intervals, (si, s, None)
-                if model.evaluations >= budget:
+                if run.n >= budget:
                     return VerificationStatus.INCOMPLETE, f"evaluation budget ({budget}) spent in segment {si}", lower, intervals, (si, s, None)
                 prev, L = row, s_next - s
                 row = run.eval(si, s_next, q1 if s_next == 1.0 else q0 + s_next * dq)
@@ -322,7 +365,7 @@ class Verifier:
         return steps.astype(np.int64)
 
     def _sampled(self, trajectory, segs, margins, run, frequency, joint_step, speeds):
-        model = self.model
+        model = run.model
         steps = self._sample_counts(segs, frequency, joint_step)
         if frequency is not None:
             ts, Q = trajectory.sample(frequency=frequency)
@@ -361,7 +404,7 @@ class Verifier:
     # ------------------------------------------------------------ the report
     def _report(self, trajectory, rname, segs, run, status, reason, lower, intervals, where, ed, speeds, margins, method,
                 frequency, joint_step, thr, sd, name, t_start, k0):
-        model = self.model
+        model = run.model
         collision = None
         if where is not None:
             si, s_c, pair = where
@@ -405,7 +448,7 @@ class Verifier:
         profile = ClearanceProfile(times, overall, by_cat)
         details = MethodDetails(
             method=method,
-            samples_evaluated=int(model.evaluations),
+            samples_evaluated=int(run.n),
             intervals_certified=int(intervals) if method == "certified" else 0,
             frequency=frequency,
             joint_step=joint_step if method == "sampled" else None,
@@ -436,11 +479,11 @@ class Verifier:
 
     def _moves(self, owner: str, run) -> bool:
         """Whether the moving robot's joints move any point of ``owner`` (a part with a lever arm)."""
-        i = self.model._part_index.get(owner)
-        return i is not None and bool(np.any(self.model.lever[i, run.k0 : run.k1] > 0.0))
+        i = run.model._part_index.get(owner)
+        return i is not None and bool(np.any(run.model.lever[i, run.k0 : run.k1] > 0.0))
 
     def _collision(self, run, si, t_c, pair, rname, margin: float) -> Collision:
-        model = self.model
+        model = run.model
         q_full = run.full_q(run.n - 1)
         pA, pB = run.last_witnesses()
         pA = np.array(pA[pair])
