@@ -111,7 +111,7 @@ def test_closed_form_segment_speeds_match_sampled_time_law(profile):
     sampled = _SampledVelocity(t.robot_name, t.joint_names, t.times, t.waypoints, t.blend_times)
     v = Verifier(sc, robot=rob.name)
     segs = segments_of(t)
-    k0, k1 = v._flat(rob.name, v._state[1])[1:]
+    k0, k1 = v._flat(rob.name, v._st.base)[1:]
     fast = v._segment_speeds(t, segs, k0, k1, v.model)
     ref = v._segment_speeds(sampled, segs, k0, k1, v.model)
     # the closed form is the true peak; the 17 samples include each segment's midpoint (on the plateau)

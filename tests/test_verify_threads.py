@@ -12,6 +12,7 @@ answering after ``add_body``, without the new body.
 
 from __future__ import annotations
 
+import functools
 import math
 import sys
 import threading
@@ -44,12 +45,26 @@ def _key(rep) -> tuple:
             None if c is None else (c.a, c.b, c.time))
 
 
+def _run_threads(targets) -> None:
+    """Each of ``targets`` on a thread of its own, the GIL handed over every 10 µs; returns when all have."""
+    switch = sys.getswitchinterval()
+    sys.setswitchinterval(1e-5)
+    try:
+        threads = [threading.Thread(target=t) for t in targets]
+        for th in threads:
+            th.start()
+        for th in threads:
+            th.join()
+    finally:
+        sys.setswitchinterval(switch)
+
+
 def _toggle_while(scene, name, shape, readers, n_toggles: int) -> None:
     """Add and remove body ``name`` ``n_toggles`` times on a thread of its own while ``readers`` (each a
     function of ``done`` and ``stop``) run on theirs; after each edit the editor waits until every
     reader has finished one call since (``done()``), so that edits land inside the other readers'
     calls while each reader still gets calls through.  A reader that returns counts as done from then
-    on.  The GIL changes hands every 10 µs."""
+    on."""
     cond = threading.Condition()
     since = [0] * len(readers)
     stop = threading.Event()
@@ -78,16 +93,7 @@ def _toggle_while(scene, name, shape, readers, n_toggles: int) -> None:
         finally:
             done(k, math.inf)
 
-    switch = sys.getswitchinterval()
-    sys.setswitchinterval(1e-5)
-    try:
-        threads = [threading.Thread(target=editor)] + [threading.Thread(target=run, args=(k, r)) for k, r in enumerate(readers)]
-        for th in threads:
-            th.start()
-        for th in threads:
-            th.join()
-    finally:
-        sys.setswitchinterval(switch)
+    _run_threads([editor] + [functools.partial(run, k, r) for k, r in enumerate(readers)])
 
 
 @pytest.mark.parametrize("source", ["detector", "reference"])
@@ -123,16 +129,7 @@ def test_one_verifier_on_three_threads_gives_each_its_own_report(ranger):
         except Exception as exc:  # noqa: BLE001 - reported by the assertion below
             errors.append(repr(exc))
 
-    switch = sys.getswitchinterval()
-    sys.setswitchinterval(1e-5)
-    try:
-        threads = [threading.Thread(target=worker) for _ in range(3)]
-        for th in threads:
-            th.start()
-        for th in threads:
-            th.join()
-    finally:
-        sys.setswitchinterval(switch)
+    _run_threads([worker] * 3)
     assert not errors
     assert len(out) == 45 and all(k == ref for k in out)
 
@@ -196,3 +193,19 @@ def test_guard_steps_while_another_thread_edits_the_scene_are_of_one_state(range
     assert not errors
     assert set(seen) <= {clear, blocked}
     assert {clear, blocked} <= set(seen)
+
+
+def test_a_scene_that_never_holds_still_gets_no_verdict(ranger, monkeypatch):
+    """Where every attempt finds the scene changed, verify raises and the guard answers STOP: never
+    SAFE or OK from a check that did not finish on one scene."""
+    sc = ranger.scene
+    tr = sc.trajectories["left_arm_sweep"]
+    v = Verifier(sc)
+    g = Guard(sc, robot=tr.robot_name)
+    q = sc.default_q()[tr.robot_name]
+    assert g.step(q, qdot=np.zeros(len(q))).ok and v.verify(tr).safe
+    monkeypatch.setattr(ClearanceModel, "is_stale", lambda self: True)
+    with pytest.raises(armguard.StaleModelError, match="changed during each of 5 attempts to verify"):
+        v.verify(tr)
+    dec = g.step(q, qdot=np.zeros(len(q)))
+    assert dec.verdict is GuardVerdict.STOP and "changed during each of 3 attempts" in dec.reason

@@ -36,7 +36,6 @@ from __future__ import annotations
 
 import enum
 import math
-import threading
 import time as _time
 from dataclasses import dataclass, replace
 
@@ -46,6 +45,7 @@ from ..model import scene_of
 from .._errors import StaleModelError, VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ..kinematics._limits import limit_error
+from ._follow import FollowsScene
 from ._oracle import ClearanceModel
 from ._stopping import StoppingDistance, check_stopping_distance
 
@@ -134,7 +134,7 @@ def _time_to(s: float, T: float) -> float:
     return 0.0 if s == 0.0 or math.isinf(T) else s * T
 
 
-class Guard:
+class Guard(FollowsScene):
     """Streaming collision prediction for one robot of ``scene``.
 
     Parameters
@@ -188,20 +188,7 @@ class Guard:
         self.robot = robot
         self._source = source
         self._q_others = None if q_others is None else dict(q_others)
-        self._lock = threading.Lock()  # one rebuild after an edit, however many threads find it
-        self._st = self._build()
-
-    def __getstate__(self):
-        return {k: v for k, v in self.__dict__.items() if k != "_lock"}
-
-    def __setstate__(self, state):
-        self.__dict__.update(state)
-        self._lock = threading.Lock()
-
-    @property
-    def model(self) -> ClearanceModel:
-        """The clearance model of the scene as the last step found it."""
-        return self._st.model
+        self._follow()
 
     def _build(self) -> _GuardState:
         """The clearance model, the other robots' configuration and the guarded joints of the scene as it is now."""
@@ -225,16 +212,6 @@ class Guard:
         st.lo_ok, st.hi_ok = st.lower - a, st.upper + a
         if self.avoidance is not None:
             self._prepare_avoidance(st, self.avoidance)
-        return st
-
-    def _current(self) -> _GuardState:
-        """The state to step with: the last one, or a new one if the scene changed since (published whole)."""
-        st = self._st
-        if st.model.is_stale():  # the scene changed since the model was built: never guard with the old one
-            with self._lock:
-                st = self._st
-                if st.model.is_stale():
-                    st = self._st = self._build()
         return st
 
     def _prepare_avoidance(self, st: _GuardState, damper) -> None:
@@ -299,24 +276,16 @@ class Guard:
         With ``avoidance``: ``q_cmd_next`` or ``qdot`` only; the decision's ``velocity`` is the one to send.
         """
         t_start = _time.perf_counter()
-        for _ in range(_ATTEMPTS):
-            st = self._current()
-            try:
-                if self.avoidance is None:
-                    dec = self._step(st, q, q_cmd_next, qdot, target, self.horizon_s)
-                else:
-                    dec = self._avoid(st, q, q_cmd_next, qdot, target, t_start)
-            except Exception:
-                if not st.model.is_stale():
-                    raise
-                continue  # the scene changed under this prediction: again, on the scene as it is now
-            if not st.model.is_stale():
-                return dec
-        sd = self.stopping_distance
-        m = sd.max_distance if isinstance(sd, StoppingDistance) else float(sd)
-        dec = self._decide(GuardVerdict.STOP, f"the scene changed during each of {_ATTEMPTS} predictions ({StaleModelError.__name__})",
-                           math.nan, -math.inf, 0.0, None, m, 0, t_start)
-        return dec if self.avoidance is None else replace(dec, velocity=np.zeros(st.k1 - st.k0))
+        try:
+            if self.avoidance is None:
+                return self._on_one_state(lambda st: self._step(st, q, q_cmd_next, qdot, target, self.horizon_s),
+                                          _ATTEMPTS, "predict")
+            return self._on_one_state(lambda st: self._avoid(st, q, q_cmd_next, qdot, target, t_start), _ATTEMPTS, "predict")
+        except StaleModelError as exc:  # never OK from a prediction that did not finish on one scene
+            sd = self.stopping_distance
+            m = sd.max_distance if isinstance(sd, StoppingDistance) else float(sd)
+            dec = self._decide(GuardVerdict.STOP, str(exc), math.nan, -math.inf, 0.0, None, m, 0, t_start)
+            return dec if self.avoidance is None else replace(dec, velocity=np.zeros(len(self._st.names)))
 
     def _avoid(self, st: _GuardState, q, q_cmd_next, qdot, target, t_start: float) -> GuardDecision:
         """:meth:`step` with the avoidance filter, on the state ``st``."""

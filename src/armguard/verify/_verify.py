@@ -19,15 +19,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import threading
 import time as _time
 
 import numpy as np
 
 from ..model import scene_of
-from .._errors import KinematicsError, StaleModelError, TrajectoryError, VerificationError
+from .._errors import KinematicsError, TrajectoryError, VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._advance import advance_step
+from ._follow import FollowsScene
 from ._oracle import CATEGORIES, WORKSPACE, ClearanceModel
 from ._record import _Run
 from ._report import (
@@ -68,7 +68,16 @@ def _float(x, name: str) -> float:
         raise VerificationError(f"{name}: expected a number, got {x!r}") from None
 
 
-class Verifier:
+class _State:
+    """What one verification reads (:meth:`Verifier._build`): the clearance model and every robot's configuration."""
+
+    __slots__ = ("model", "base")
+
+    def __init__(self, model: ClearanceModel, base: dict) -> None:
+        self.model, self.base = model, base
+
+
+class Verifier(FollowsScene):
     """Verifies trajectories of one robot of ``scene`` (the precomputation made explicit).
 
     Parameters
@@ -100,23 +109,10 @@ class Verifier:
         self._backend = (backend, backend_options)
         self._robot = robot
         self._q_others = None if q_others is None else dict(q_others)
-        self._lock = threading.Lock()  # one rebuild after an edit, however many threads find it
-        self._state = self._build()
+        self._follow()
 
-    def __getstate__(self):
-        return {k: v for k, v in self.__dict__.items() if k != "_lock"}
-
-    def __setstate__(self, state):
-        self.__dict__.update(state)
-        self._lock = threading.Lock()
-
-    @property
-    def model(self) -> ClearanceModel:
-        """The clearance model of the scene as the last verification found it."""
-        return self._state[0]
-
-    def _build(self) -> tuple:
-        """``(clearance model, every robot's configuration)`` of the scene as it is now."""
+    def _build(self) -> _State:
+        """The clearance model and every robot's configuration of the scene as it is now."""
         model = ClearanceModel(self.scene, source=self._source, tol=self.tol, backend=self._backend[0],
                                backend_options=self._backend[1])
         base = self.scene.default_q()
@@ -125,18 +121,7 @@ class Verifier:
                 if k not in base:
                     raise VerificationError(f"q_others names unknown robot {k!r}; robots are {list(base)}")
                 base[k] = _finite_array(v, f"q_others[{k!r}]")
-        return model, base
-
-    def _current(self) -> tuple:
-        """The state to verify with: the last one, or a new one if the scene changed since (published
-        whole: a verification on another thread keeps the one it read)."""
-        st = self._state
-        if st[0].is_stale():  # the scene changed since the model was built: never verify against the old one
-            with self._lock:
-                st = self._state
-                if st[0].is_stale():
-                    st = self._state = self._build()
-        return st
+        return _State(model, base)
 
     # ------------------------------------------------------------ helpers
     def _robot_of(self, trajectory, robot: str | None) -> str:
@@ -252,21 +237,11 @@ class Verifier:
         if not math.isfinite(mass) or mass < 0.0:
             raise VerificationError(f"payload_mass: expected a finite number >= 0 (kg), got {mass}")
         args = (sd, method, frequency, joint_step, robot, thr, mass, name, t_start)
-        for _ in range(_ATTEMPTS):
-            st = self._current()
-            try:
-                rep = self._verify_once(st, trajectory, *args)
-            except Exception:
-                if not st[0].is_stale():
-                    raise
-                continue  # the scene changed under this verification: again, on the scene as it is now
-            if not st[0].is_stale():  # the report (its collision's feature included) is of one scene
-                return rep
-        raise StaleModelError(f"the scene changed during each of {_ATTEMPTS} attempts to verify this trajectory: no verdict")
+        return self._on_one_state(lambda st: self._verify_once(st, trajectory, *args), _ATTEMPTS, "verify this trajectory")
 
     def _verify_once(self, st, trajectory, sd, method, frequency, joint_step, robot, thr, mass, name, t_start):
         """One verification with the clearance model and configurations ``st`` (:meth:`_current`)."""
-        model, base_q = st
+        model, base_q = st.model, st.base
         rname = self._robot_of(trajectory, robot)
         named = self._trajectory_name(trajectory) if name is None else name
         trajectory, held = self._over_robot(trajectory, rname, base_q)
