@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import functools
 import math
-import sys
 import threading
 
 import numpy as np
@@ -22,6 +21,7 @@ import pytest
 
 import armguard
 from armguard.geometry import Sphere
+from armguard.testing import run_in_threads
 from armguard.verify import ClearanceModel, Guard, GuardVerdict, Verifier, VerificationStatus
 
 
@@ -45,26 +45,12 @@ def _key(rep) -> tuple:
             None if c is None else (c.a, c.b, c.time))
 
 
-def _run_threads(targets) -> None:
-    """Each of ``targets`` on a thread of its own, the GIL handed over every 10 µs; returns when all have."""
-    switch = sys.getswitchinterval()
-    sys.setswitchinterval(1e-5)
-    try:
-        threads = [threading.Thread(target=t) for t in targets]
-        for th in threads:
-            th.start()
-        for th in threads:
-            th.join()
-    finally:
-        sys.setswitchinterval(switch)
-
-
 def _toggle_while(scene, name, shape, readers, n_toggles: int) -> None:
     """Add and remove body ``name`` ``n_toggles`` times on a thread of its own while ``readers`` (each a
     function of ``done`` and ``stop``) run on theirs; after each edit the editor waits until every
     reader has finished one call since (``done()``), so that edits land inside the other readers'
     calls while each reader still gets calls through.  A reader that returns counts as done from then
-    on."""
+    on.  The GIL changes hands every 10 µs (:func:`armguard.testing.run_in_threads`)."""
     cond = threading.Condition()
     since = [0] * len(readers)
     stop = threading.Event()
@@ -93,7 +79,7 @@ def _toggle_while(scene, name, shape, readers, n_toggles: int) -> None:
         finally:
             done(k, math.inf)
 
-    _run_threads([editor] + [functools.partial(run, k, r) for k, r in enumerate(readers)])
+    run_in_threads([editor] + [functools.partial(run, k, r) for k, r in enumerate(readers)])
 
 
 @pytest.mark.parametrize("source", ["detector", "reference"])
@@ -129,7 +115,7 @@ def test_one_verifier_on_three_threads_gives_each_its_own_report(ranger):
         except Exception as exc:  # noqa: BLE001 - reported by the assertion below
             errors.append(repr(exc))
 
-    _run_threads([worker] * 3)
+    run_in_threads([worker] * 3)
     assert not errors
     assert len(out) == 45 and all(k == ref for k in out)
 

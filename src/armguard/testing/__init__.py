@@ -50,9 +50,10 @@ from ._suite import (
     checks,
     load_conformance_model,
 )
+from ._threads import run_in_threads
 
 __all__ = ["check_backend", "checks", "Check", "ConformanceError", "ConformanceReport", "NotApplicable",
-           "DEFAULT_MODELS", "load_conformance_model", "check_names"]
+           "DEFAULT_MODELS", "load_conformance_model", "check_names", "run_in_threads"]
 
 
 def check_names() -> tuple[str, ...]:

@@ -9,9 +9,9 @@ claim what the check is about.  Tolerances are :data:`armguard.DEFAULT_TOLERANCE
 
 from __future__ import annotations
 
+import functools
 import inspect
 import math
-import sys
 import threading
 
 import numpy as np
@@ -21,6 +21,7 @@ from .._tolerance import DEFAULT_TOLERANCES as TOL
 from ..backends import Backend, Capability, Checker
 from ._suite import REFERENCE, NotApplicable, expect, fail
 from ._surface import surface_residuals
+from ._threads import run_in_threads
 
 __all__ = ["BACKEND_CHECKS", "MODEL_CHECKS"]
 
@@ -483,16 +484,7 @@ def check_thread_safety(ctx, model):
         except Exception as exc:  # noqa: BLE001 - a crash under threads is the finding
             problems.append(f"thread {t} raised {type(exc).__name__}: {exc}")
 
-    old = sys.getswitchinterval()
-    sys.setswitchinterval(1e-5)  # switch threads as often as the interpreter will, so shared state shows
-    try:
-        threads = [threading.Thread(target=work, args=(t,)) for t in range(THREADS)]
-        for th in threads:
-            th.start()
-        for th in threads:
-            th.join()
-    finally:
-        sys.setswitchinterval(old)
+    run_in_threads([functools.partial(work, t) for t in range(THREADS)])
     expect(not problems, lambda: f"{len(problems)} of {THREADS} threads saw wrong answers; first: {problems[0]}")
 
 
