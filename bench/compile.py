@@ -63,7 +63,7 @@ icc.InlineWorker.inline_ir = timed
 import armguard.geometry._pair_gjk as g
 t = time.perf_counter()
 with c._compiling_gc():
-    g.gjk_dir_rel.compile(c.signature("F2 I1 I1 F2 I1 I1 F1 f f f f f f f f i F1 f"))
+    g.gjk_dir_rel.compile(c.signature("F2 I1 I1 F2 I1 I1 F1 f f f f f f f f i F1 f I1"))
 out = {"s": time.perf_counter() - t, "body": spent.get("_gjk_body", 0.0), "all": sum(spent.values())}
 """
 _POST = """

@@ -38,7 +38,7 @@ def _epa(pa, ga, ta, pb, gb, tb, R_AB, t_AB, cap=None):
     work = np.zeros(EPA_WORK_SIZE)
     d0 = pa.mean(axis=0) - (R_AB @ pb.mean(axis=0) + t_AB)
     rot = np.ascontiguousarray(R_AB.ravel())
-    gjk_dir_rel(pa, ga, ta, pb, gb, tb, rot, *t_AB, *d0, 1e-12, 1e-12, 128, work[0:9], np.inf)
+    gjk_dir_rel(pa, ga, ta, pb, gb, tb, rot, *t_AB, *d0, 1e-12, 1e-12, 128, work[0:9], np.inf, np.zeros(0, np.int64))
     if work[0] != 1.0:
         return None
     if cap is None:

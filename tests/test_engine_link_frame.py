@@ -92,7 +92,7 @@ def test_gjk_in_a_frame_of_its_own_equals_gjk_on_moved_points(seed, gap):
                        1e-12, 1e-12, 128, simp, np.inf)
     d0_A = R_WA.T @ d0
     got = gjk_dir_rel(pa, ga, ta, pb, gb, tb, np.ascontiguousarray(R_AB.ravel()), *t_AB, *d0_A,
-                      1e-12, 1e-12, 128, simp, np.inf)
+                      1e-12, 1e-12, 128, simp, np.inf, np.zeros(0, np.int64))
     assert ref[0] != GJK_NOT_CONVERGED and got[0] != GJK_NOT_CONVERGED
     assert got[0] == ref[0]
     assert abs(got[1] - ref[1]) <= 1e-9
@@ -101,7 +101,7 @@ def test_gjk_in_a_frame_of_its_own_equals_gjk_on_moved_points(seed, gap):
 
         w_rel = np.zeros(EPA_WORK_SIZE)
         gjk_dir_rel(pa, ga, ta, pb, gb, tb, np.ascontiguousarray(R_AB.ravel()), *t_AB, *d0_A, 1e-12, 1e-12, 128,
-                    w_rel[0:9], np.inf)
+                    w_rel[0:9], np.inf, np.zeros(0, np.int64))
         w_W = np.zeros(EPA_WORK_SIZE)
         gjk_dir_adj2(np.ascontiguousarray(pa_W), ga, np.ascontiguousarray(pb_W), gb, 0.0, 0.0, 0.0, *d0,
                      1e-12, 1e-12, 128, w_W[0:9], np.inf)
@@ -109,7 +109,7 @@ def test_gjk_in_a_frame_of_its_own_equals_gjk_on_moved_points(seed, gap):
         e_W = epa_depth(np.ascontiguousarray(pa_W), ga, np.ascontiguousarray(pb_W), gb, w_W, 1e-12)
         w_tab = np.zeros(EPA_WORK_SIZE)  # the link-frame path's call: climbs warm-started from the tables
         gjk_dir_rel(pa, ga, ta, pb, gb, tb, np.ascontiguousarray(R_AB.ravel()), *t_AB, *d0_A, 1e-12, 1e-12, 128,
-                    w_tab[0:9], np.inf)
+                    w_tab[0:9], np.inf, np.zeros(0, np.int64))
         e_tab = epa_depth(pa, ga, pb, gb, w_tab, 1e-12, np.ascontiguousarray(R_AB.ravel()), *t_AB, ta, tb)
         for e in (e_rel, e_tab):
             if e[0] and e_W[0]:

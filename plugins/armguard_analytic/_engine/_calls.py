@@ -47,7 +47,7 @@ NATIVE = (
      types.Tuple((_f, _i))),
     ("armguard_analytic._engine._static_gjk", "static_gjk_pairs", "I1 F1 I1 F1 I1 F1 i f b f f f i f f f i i I1",
      types.Tuple((_i, _i, _b))),
-    ("armguard.geometry._pair_gjk", "gjk_dir_rel", "F2 I1 I1 F2 I1 I1 F1 f f f f f f f f i F1 f",
+    ("armguard.geometry._pair_gjk", "gjk_dir_rel", "F2 I1 I1 F2 I1 I1 F1 f f f f f f f f i F1 f I1",
      types.Tuple((_i,) + (_f,) * 7)),
     ("armguard_analytic._engine._narrow", "_sat_rel", "F2 F2 F2 I1 I1 f F2 F2 F2 I1 I1 f F1 f f f F1 i F1 F1 f f f i f f",
      types.Tuple((_f, _i))),
@@ -56,7 +56,7 @@ NATIVE = (
      types.Tuple((_f, _i))),
     ("armguard.geometry._pair_epa", "convex_convex_fast", "F2 F2 F2 I1 I2 f F2 F2 F2 I1 I2 f F1 F1 f f f i f f",
      types.Tuple((_f, _i))),
-    ("armguard_analytic._engine._narrow", "narrow_rel", "i i I1 F1 I1 F1 F1 f f f i f f f I1", types.Tuple((_f, _i))),
+    ("armguard_analytic._engine._narrow", "narrow_rel", "i i I1 F1 I1 F1 F1 f f f i f f f I1 i", types.Tuple((_f, _i))),
     ("armguard_analytic._engine._narrow", "narrow_other", "i i I1 F1 I1 F1 F1 f f f i f f I1", types.Tuple((_f, _i))),
 )
 """``(module, function, signature codes, return type)`` of each kernel called at an address, in

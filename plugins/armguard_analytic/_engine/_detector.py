@@ -34,6 +34,7 @@ from ._raw import _UNHELD, _Raw, _refcount
 from ._batch import rows
 from ._built import Built
 from ._scratch import _entry_point, _Scratch, median_call_us
+from ._seeds import seed_tables
 
 __all__ = ["FusedDetector"]
 
@@ -133,13 +134,18 @@ class FusedDetector(Detector):
         L.add("MF", "static_hi", m.static_hi.reshape(-1, 3)); L.add("MF", "bvh_lo", m.bvh.lo.reshape(-1, 3))
         L.add("MF", "bvh_hi", m.bvh.hi.reshape(-1, 3)); L.add("MF", "lever", lever)
         L.add("MF", "ws", np.concatenate([m.ws_lo, m.ws_hi]))
-        L.add("MF", "qlim", limit_rows(m.lower, m.upper, self._tol.joint_limit))  # refused outside (kinematics._limits)
+        qlim = limit_rows(m.lower, m.upper, self._tol.joint_limit)
+        L.add("MF", "qlim", qlim)  # refused outside (kinematics._limits)
         b.static_shapes = dict(m.static_shapes)  # element number -> its shape (W), static bodies
         poly = _static_polytopes(cs, b.static_shapes)
         L.add("MF", "pv", poly["pv"]); L.add("MF", "ppl", poly["ppl"]); L.add("MF", "pbis", poly["pbis"])
         L.add("MF", "pcen", poly["pcen"])
         for name in ("gadj", "gadjs", "gtri", "gtris", "gdir", "gdirs"):
             L.add("MI", name, vg[name])
+        seeds = seed_tables(t, qlim, m.elem_glink, cs.elem_core, cs.elem_vert_start, cs.verts.reshape(-1, 3), vg["gadj"],
+                            vg["gadjs"], vg["gdir"], vg["gdirs"], m.pair_a, m.pair_b, m.mov_idx, self._tol.length,
+                            self._tol.gjk_epsilon, self._tol.gjk_max_iterations)
+        L.add("MI", "spair", seeds["spair"]); L.add("MF", "sgrid", seeds["sgrid"]); L.add("MI", "sdt", seeds["sdt"])
         rob_l, rob_j, parent_loc = _fk_blocks(t.parent, m.link_robot, [len(self.scene.robots[r].joint_names)
                                                                         for r in m.robot_names])
         for name, arr in (("parent", t.parent), ("jtype", t.jtype), ("has_post", t.has_post.astype(np.int64)),

@@ -44,8 +44,10 @@ SCALARS = ("n_q", "n_explicit", "n_mov", "n_st", "n_links", "stamp_now")
 # floats ``(n_q, 2)``: each joint's [lower, upper] widened by Tolerances.joint_limit (a row outside
 # it is refused before any bound that assumes the limits is used); "gdir", model ints, with CSR
 # offsets "gdirs": each graph element's support table (armguard.geometry._pack.support_table: where
-# a cold climb along a direction starts; ._narrow.narrow_rel)
-MI_LATE = ("gadj", "gadjs", "gtri", "gtris", "obb_L", "qlim", "gdir", "gdirs")
+# a cold climb along a direction starts; ._narrow.narrow_rel); "spair" (model ints, ``(n_pairs, 6)``),
+# "sgrid" (model floats, ``(n_pairs, 6)``) and "sdt" (model ints, ``(cells, 7)``): the seed tables of
+# the pairs GJK checks in link frames whose relative pose depends on one or two joints (._seeds)
+MI_LATE = ("gadj", "gadjs", "gtri", "gtris", "obb_L", "qlim", "gdir", "gdirs", "spair", "sgrid", "sdt")
 
 _ALL = MF + MI + SFN + SIN
 K = {name: k for k, name in enumerate(_ALL)}

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from numba import carray, njit
 
 from armguard.geometry._pair_segment_box import capsule_box_scalar
 from armguard.geometry._pair_segment_polytope import capsule_polytope_at
@@ -39,7 +39,7 @@ from armguard.geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_ca
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._calls import (FN_CONVEX, FN_EPA, FN_GJK_REL, FN_SAT_REL, FN_SUPPORT, call_convex, call_epa, call_gjk_rel,
                      call_sat_rel, call_support)
-from ._layout import K, seg1, seg2
+from ._layout import K, at, seg1, seg2
 
 __all__ = ["pair_distance", "narrow_flat", "narrow_other", "narrow_rel", "wall_flat", "ERR_GJK", "NOT_SCALAR",
            "LINK_FRAME", "BOUNDED", "WORK_TAIL"]
@@ -53,6 +53,7 @@ _K_gadj, _K_gadjs, _K_gtri, _K_gtris = K["gadj"], K["gadjs"], K["gtri"], K["gtri
 _K_box_L = K["box_L"]
 _K_verts_L, _K_Xs, _K_glink, _K_gdir, _K_gdirs = K["verts_L"], K["Xs"], K["glink"], K["gdir"], K["gdirs"]
 _K_fn_L, _K_ed_L = K["fn_L"], K["ed_L"]
+_K_spair, _K_sgrid, _K_sdt, _K_fk_q = K["spair"], K["sgrid"], K["sdt"], K["fk_q"]
 
 ERR_GJK = 2  # the convex kernel did not converge: the caller raises, never a verdict
 NOT_SCALAR = -1  # narrow_flat: not a capsule-capsule / capsule-box pair, call narrow_other
@@ -362,9 +363,28 @@ def _sat_rel(pa, fa, ea, adja, taba, ra, pb, fb, eb, adjb, tabb, rb, rot, tx, ty
     return write_rounded(wax, way, waz, ra, wbx, wby, wbz, rb, wnx, wny, wnz, -depth, out, 0), 0
 
 
+@njit(cache=True, inline="always")
+def _seed(H, MF, MI, SF, p):  # pragma: no cover - compiled
+    """Pair ``p``'s seed: the row of its seed table (``"sdt"``, 7 ints) at the node nearest the joint
+    values of the last forward kinematics, or an empty view (no table).  ``"spair"`` row ``p``:
+    ``[first row of the table, nodes per joint, joints (1 to 3), joint i, j, k]``, ``"sgrid"`` row
+    ``p``: ``[lower, 1 / step]`` of each (``._seeds``)."""
+    osp = H[2 * _K_spair] + 6 * p
+    if p < 0 or p >= H[2 * _K_spair + 1] or MI[osp] < 0:
+        return carray(at(MI, 0), (0,))
+    osg = H[2 * _K_sgrid] + 6 * p
+    ofq = H[2 * _K_fk_q]
+    n = MI[osp + 1]
+    c = 0
+    for k in range(MI[osp + 2]):
+        c = c * n + int(min(max((SF[ofq + MI[osp + 3 + k]] - MF[osg + 2 * k]) * MF[osg + 2 * k + 1] + 0.5, 0.0),
+                            n - 1.0))
+    return carray(at(MI, H[2 * _K_sdt] + 7 * (MI[osp] + c)), (7,))
+
+
 @njit(cache=True)
 def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, offset, level,
-               beyond, fns):  # pragma: no cover - compiled
+               beyond, fns, p):  # pragma: no cover - compiled
     """Two convex point cores (boxes, hulls; a point or segment against a polytope) whose points stay
     in their element frames: GJK in A's frame
     on hull(A) and ``X_AB hull(B)``, ``X_AB = X_WA^-1 X_WB`` (:func:`armguard.geometry._pair_gjk.gjk_dir_rel`),
@@ -383,7 +403,11 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, 
     off): GJK may stop once the distance is proved above it, returning an upper bound > ``beyond``
     (not a distance: ``_step.pair_step`` keeps no row of it), and so may EPA once the depth is
     proved below ``-(beyond + ra + rb)`` (returns ``(lower bound, BOUNDED)``).  A cylinder against a
-    polytope: :func:`_cylinder_rel` (the whole pair in the polytope's frame, depth included)."""
+    polytope: :func:`_cylinder_rel` (the whole pair in the polytope's frame, depth included).
+
+    ``p``: the pair's number (-1: none).  A pair with a seed table (``._seeds``) starts GJK from the
+    simplex of the table's node nearest the joint values of this check's forward kinematics
+    (``fk_q``): fewer iterations, the same answer (``_pair_gjk._gjk_body``)."""
     oc = H[2 * _K_core]
     if MI[oc + ga] == _CYLINDER or MI[oc + gb] == _CYLINDER:
         return _cylinder_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, fns)
@@ -416,9 +440,10 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, 
     sz = rot[6] * hx + rot[7] * hy + rot[8] * hz + tz
     lim = level if beyond == math.inf else max(level, beyond)
     sep = lim + (ra + rb) if lim > -math.inf else math.inf
+    seed = _seed(H, MF, MI, SF, p)
     status, d, ax, ay, az, bx, by, bz = call_gjk_rel(fns[FN_GJK_REL], (pa, adja, taba, pb, adjb, tabb, rot, tx, ty, tz,
                                                                        gx - sx, gy - sy, gz - sz, eps_len, gjk_eps,
-                                                                       max_iter, simp, max(sep, 0.0)))
+                                                                       max_iter, simp, max(sep, 0.0), seed))
     inside = status != GJK_SEPARATED and status != GJK_NOT_CONVERGED and simp[0] == 1.0
     if inside and -(ra + rb) > level:  # overlapping cores, a depth wanted: EPA in A's frame as well
         # a depth below cap would leave the signed distance above ``beyond``: EPA may stop at that proof

@@ -157,7 +157,7 @@ def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
     d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp_now)
     if err == LINK_FRAME:
         d, err = call_narrow_rel(fns[FN_NARROW_REL], (a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, offset,
-                                                      level, beyond, fns))
+                                                      level, beyond, fns, p))
         if err == BOUNDED or (err == 0 and d > beyond):
             return d, BOUNDED  # proved beyond the caller's cut-off: not a row of this check
         if err < 0:  # overlapping cores with a depth wanted (or GJK unsettled): EPA / SAT on W points

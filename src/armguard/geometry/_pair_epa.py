@@ -211,6 +211,11 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0, t
     a support value ``h < cap`` is seen (``depth <= h``, see the module docstring) EPA stops and
     returns ``(True, h, n, 0, ...)``: ``h`` an upper bound on the depth below ``cap``, not the depth,
     witnesses not computed.  A depth returned below ``cap`` is therefore a bound in any case.
+
+    When EPA settles the depth on its stopping test, it leaves the facet of ``M`` it ended on in
+    ``work[0:9]``: ``work[0] = 2``, ``work[1:4]`` A's and ``work[5:8]`` B's support indices of its three
+    vertices (the analytic engine's seed tables start GJK from them at nearby configurations,
+    ``armguard_analytic._engine._seeds``); else ``work[0:9]`` is as GJK left it.
     """
     if work.shape[0] < EPA_WORK_SIZE or work[0] != 1.0:
         return False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -284,6 +289,10 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0, t
             ok, ax, ay, az, bx, by, bz = _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz)
             if not ok:
                 break
+            for k, j in enumerate((j0, j1, j2)):  # the face, for a seed table (see the docstring)
+                work[1 + k] = work[_V0 + 5 * j + 3]
+                work[5 + k] = work[_V0 + 5 * j + 4]
+            work[0] = 2.0
             return True, dbest, nx, ny, nz, ax, ay, az, bx, by, bz
         if hmin - dbest <= EPA_BRACKET:  # kept in case rounding stops EPA before eps
             ok, ax, ay, az, bx, by, bz = _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz)

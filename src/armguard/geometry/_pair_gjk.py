@@ -3,7 +3,7 @@
 Gilbert, Johnson & Keerthi (1988).  The sub-algorithm that finds the point of the current
 simplex closest to the origin is Johnson's distance sub-algorithm written as the Voronoi-region
 tests of Ericson, *Real-Time Collision Detection* §5.1.2-5.1.6 (``ClosestPtPointTriangle``,
-``ClosestPtPointTetrahedron`` with the query point at the origin); the simplex keeps only the
+``ClosestPtPointTetrahedron`` with the query point at the origin; ``._pair_simplex``); the simplex keeps only the
 vertices with non-zero barycentric weight.  Support points are the hull vertices maximising the
 dot product, so on polytopes GJK terminates finitely; we stop when the duality gap
 ``(|v|^2 - v.w) / |v|`` is below ``gjk_epsilon``, when a support pair repeats, or when ``|v|``
@@ -41,6 +41,7 @@ import math
 
 from numba import njit
 
+from ._pair_simplex import _closest_simplex, _closest_tetra, _closest_triangle, _origin_outside  # noqa: F401
 from ._pair_support_table import table_cell, table_size, table_start, warm_start
 
 __all__ = [
@@ -64,148 +65,6 @@ CLIMB_MIN_VERTICES = 48
 (a climb's unpredictable branches cost more than the dot products it saves; measured with
 ``bench/pairwise.py``-style capsule-hull batches: 20 vertices scan 101 ns vs climb 117 ns per
 separated pair, 80 vertices 243 vs 145 ns, 160 vertices 459 vs 172 ns)."""
-
-
-@njit(cache=True)
-def _closest_triangle(ax, ay, az, bx, by, bz, cx, cy, cz):  # pragma: no cover - compiled
-    """Ericson ``ClosestPtPointTriangle`` (§5.1.5) with the query point at the origin.
-
-    Returns ``(mask, la, lb, lc, vv)``: the vertices with non-zero weight (bits 1 = a, 2 = b,
-    4 = c), their barycentric weights and the squared distance of the closest point.
-    """
-    abx = bx - ax
-    aby = by - ay
-    abz = bz - az
-    acx = cx - ax
-    acy = cy - ay
-    acz = cz - az
-    d1 = -(abx * ax + aby * ay + abz * az)
-    d2 = -(acx * ax + acy * ay + acz * az)
-    if d1 <= 0.0 and d2 <= 0.0:
-        return 1, 1.0, 0.0, 0.0, ax * ax + ay * ay + az * az
-    d3 = -(abx * bx + aby * by + abz * bz)
-    d4 = -(acx * bx + acy * by + acz * bz)
-    if d3 >= 0.0 and d4 <= d3:
-        return 2, 0.0, 1.0, 0.0, bx * bx + by * by + bz * bz
-    vc = d1 * d4 - d3 * d2
-    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
-        v = d1 / (d1 - d3)
-        px = ax + v * abx
-        py = ay + v * aby
-        pz = az + v * abz
-        return 3, 1.0 - v, v, 0.0, px * px + py * py + pz * pz
-    d5 = -(abx * cx + aby * cy + abz * cz)
-    d6 = -(acx * cx + acy * cy + acz * cz)
-    if d6 >= 0.0 and d5 <= d6:
-        return 4, 0.0, 0.0, 1.0, cx * cx + cy * cy + cz * cz
-    vb = d5 * d2 - d1 * d6
-    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
-        w = d2 / (d2 - d6)
-        px = ax + w * acx
-        py = ay + w * acy
-        pz = az + w * acz
-        return 5, 1.0 - w, 0.0, w, px * px + py * py + pz * pz
-    va = d3 * d6 - d5 * d4
-    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
-        w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-        px = bx + w * (cx - bx)
-        py = by + w * (cy - by)
-        pz = bz + w * (cz - bz)
-        return 6, 0.0, 1.0 - w, w, px * px + py * py + pz * pz
-    denom = 1.0 / (va + vb + vc)
-    v = vb * denom
-    w = vc * denom
-    px = ax + v * abx + w * acx
-    py = ay + v * aby + w * acy
-    pz = az + v * abz + w * acz
-    return 7, 1.0 - v - w, v, w, px * px + py * py + pz * pz
-
-
-@njit(cache=True)
-def _origin_outside(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):  # pragma: no cover
-    """True when the origin is not on ``d``'s side of the plane through ``a, b, c`` (Ericson
-    ``PointOutsideOfPlane``; a degenerate face, ``d`` on its plane, counts as outside)."""
-    ux = bx - ax
-    uy = by - ay
-    uz = bz - az
-    vx = cx - ax
-    vy = cy - ay
-    vz = cz - az
-    nx = uy * vz - uz * vy
-    ny = uz * vx - ux * vz
-    nz = ux * vy - uy * vx
-    sp = -(nx * ax + ny * ay + nz * az)
-    sd = nx * (dx - ax) + ny * (dy - ay) + nz * (dz - az)
-    return sp * sd < 0.0 or sd == 0.0
-
-
-@njit(cache=True)
-def _closest_tetra(x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3):  # pragma: no cover - compiled
-    """:func:`_closest_simplex` of a tetrahedron: a plain compiled call (its four inlined triangle
-    tests are most of GJK's code; GJK reaches four vertices only near contact)."""
-    # tetrahedron (Ericson ClosestPtPointTetrahedron): the best face whose plane separates the
-    # origin from the opposite vertex; none means the origin is inside
-    best = math.inf
-    mask = 15
-    l0 = l1 = l2 = l3 = 0.0
-    if _origin_outside(x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3):
-        m, la, lb, lc, vv = _closest_triangle(x0, y0, z0, x1, y1, z1, x2, y2, z2)
-        if vv < best:
-            best = vv
-            mask = m
-            l0, l1, l2, l3 = la, lb, lc, 0.0
-    if _origin_outside(x0, y0, z0, x2, y2, z2, x3, y3, z3, x1, y1, z1):
-        m, la, lb, lc, vv = _closest_triangle(x0, y0, z0, x2, y2, z2, x3, y3, z3)
-        if vv < best:
-            best = vv
-            mask = (m & 1) | ((m & 2) << 1) | ((m & 4) << 1)
-            l0, l1, l2, l3 = la, 0.0, lb, lc
-    if _origin_outside(x0, y0, z0, x3, y3, z3, x1, y1, z1, x2, y2, z2):
-        m, la, lb, lc, vv = _closest_triangle(x0, y0, z0, x3, y3, z3, x1, y1, z1)
-        if vv < best:
-            best = vv
-            mask = (m & 1) | ((m & 2) << 2) | ((m & 4) >> 1)
-            l0, l1, l2, l3 = la, lc, 0.0, lb
-    if _origin_outside(x1, y1, z1, x3, y3, z3, x2, y2, z2, x0, y0, z0):
-        m, la, lb, lc, vv = _closest_triangle(x1, y1, z1, x3, y3, z3, x2, y2, z2)
-        if vv < best:
-            best = vv
-            mask = ((m & 1) << 1) | ((m & 2) << 2) | m & 4
-            l0, l1, l2, l3 = 0.0, la, lc, lb
-    return mask, l0, l1, l2, l3
-
-
-@njit(cache=True, inline="always")
-def _closest_simplex(n, x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3):  # pragma: no cover
-    """Johnson's sub-algorithm as Ericson's Voronoi-region tests, on the simplex ``w0 .. w(n-1)``.
-
-    Returns ``(mask, l0, l1, l2, l3)``: bit ``k`` of ``mask`` is set when ``w_k`` keeps a
-    non-zero weight ``l_k`` in the point of the simplex closest to the origin; ``mask == 15``
-    means the origin is inside the tetrahedron.
-
-    The signed-volume sub-algorithm (Montanari, Petrinic & Barbieri, ACM TOG 36(3) 2017, S1D-S3D)
-    was measured against this on the simplices GJK solves on ur3's and so101's hulls: same
-    regions, 14-15 ns per triangle against 7 and 39-44 ns per tetrahedron against 30 (the
-    projection onto the largest-area plane costs more than Ericson's tests); not used.
-    """
-    if n == 1:
-        return 1, 1.0, 0.0, 0.0, 0.0
-    if n == 2:
-        ex = x1 - x0
-        ey = y1 - y0
-        ez = z1 - z0
-        ee = ex * ex + ey * ey + ez * ez
-        t = -(x0 * ex + y0 * ey + z0 * ez)
-        if t <= 0.0 or ee == 0.0:
-            return 1, 1.0, 0.0, 0.0, 0.0
-        if t >= ee:
-            return 2, 0.0, 1.0, 0.0, 0.0
-        t = t / ee
-        return 3, 1.0 - t, t, 0.0, 0.0
-    if n == 3:
-        m, la, lb, lc, _vv = _closest_triangle(x0, y0, z0, x1, y1, z1, x2, y2, z2)
-        return m, la, lb, lc, 0.0
-    return _closest_tetra(x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3)
 
 
 @njit(cache=True, inline="always")
@@ -315,7 +174,7 @@ def _m_support(pa, adja, ia, pb, adj, ib, rot, ox, oy, oz, dx, dy, dz):  # pragm
 
 @njit(cache=True, inline="always")
 def _gjk_body(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep=math.inf, sa=-1,
-              sb=-1, taba=None, tabb=None):  # pragma: no cover
+              sb=-1, taba=None, tabb=None, seed=None):  # pragma: no cover
     """GJK from the initial direction ``d``; A's and B's supports by a scan (``adja`` / ``adj``
     ``None``, a branch numba prunes at compile time, or an empty graph) or by hill climbing on
     their vertex graphs.  ``rot`` (``None``: the identity, a branch pruned at compile time; else 9
@@ -335,9 +194,32 @@ def _gjk_body(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, 
     the direction, ``_seed``; a caller with a :func:`armguard.geometry._pack.support_table` passes its
     entry, :func:`table_start`).  ``taba``, ``tabb`` (``None``: none, a branch pruned at compile time;
     or the support tables, empty: none): every later climb starts from the better of the previous
-    support and the table's entry for the new direction (:func:`warm_start`)."""
-    # the first vertex: supports along d
-    ia, ib, x0, y0, z0 = _m_support(pa, adja, sa, pb, adj, sb, rot, ox, oy, oz, dx, dy, dz)
+    support and the table's entry for the new direction (:func:`warm_start`).
+
+    ``seed`` (``None``, a branch pruned at compile time; or int64 ``[n, ia_0, ib_0, .., ia_2, ib_2]``,
+    ``n`` 0 to 3; shorter than 7 entries or ``n = 0``: none): a starting simplex, the support index
+    pairs of the simplex another configuration ended with (the analytic engine's seed tables,
+    ``armguard_analytic._engine._seeds``).  Its vertices are points of ``A - (R_AB B + o)`` whatever
+    the pose, so GJK may start from them: they enter the simplex one by one before the first support
+    (the sub-algorithm drops a vertex that does not bring the simplex nearer the origin), and GJK
+    stops only on the same tests after a true support, so a seed changes how many iterations GJK
+    takes, never its answer beyond ``gjk_eps``.  On kuka_iiwa's hull pairs two joints apart: 8.9
+    iterations from a cold start, 2.5 from the simplex of the nearest node of a 32 x 32 grid over
+    their two joints.  When ``simp`` has 16 entries or more, ``simp[9:16]`` receives the final
+    simplex in ``seed``'s layout when GJK ends ``GJK_SEPARATED`` (else ``simp[9] = 0``): how a seed
+    table is made."""
+    ns = 0  # (each use of seed sits under "seed is not None", a branch numba prunes for None)
+    ia = ib = 0
+    x0 = y0 = z0 = 0.0
+    if seed is not None:
+        if seed.shape[0] >= 7 and seed[0] > 0:  # the first vertex: the seed's first
+            ns = min(seed[0], 3)
+            ia = seed[1]
+            ib = seed[2]
+            qx, qy, qz = _b_point(pb, rot, ib)
+            x0, y0, z0 = pa[ia, 0] - qx - ox, pa[ia, 1] - qy - oy, pa[ia, 2] - qz - oz
+    if ns == 0:  # the first vertex: supports along d
+        ia, ib, x0, y0, z0 = _m_support(pa, adja, sa, pb, adj, sb, rot, ox, oy, oz, dx, dy, dz)
     ia0 = ia
     ib0 = ib
     na_t = table_size(taba)
@@ -356,10 +238,50 @@ def _gjk_body(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, 
     eps2 = eps_len * eps_len
     status = GJK_NOT_CONVERGED
     inside = False
-    for _it in range(max_iter):
+    k_seed = 1
+    for _it in range(max_iter + ns):
         if vv <= eps2:
             status = GJK_INTERSECTING
             break
+        if seed is not None:
+            if k_seed < ns:  # the seed's next vertex: no support, no stopping test
+                ia = seed[1 + 2 * k_seed]
+                ib = seed[2 + 2 * k_seed]
+                k_seed += 1
+                if (ia == ia0 and ib == ib0) or (n > 1 and ia == ia1 and ib == ib1):
+                    continue  # already in the simplex
+                qx, qy, qz = _b_point(pb, rot, ib)
+                wx, wy, wz = pa[ia, 0] - qx - ox, pa[ia, 1] - qy - oy, pa[ia, 2] - qz - oz
+                if n == 1:
+                    x1, y1, z1, ia1, ib1 = wx, wy, wz, ia, ib
+                else:
+                    x2, y2, z2, ia2, ib2 = wx, wy, wz, ia, ib
+                m, k0, k1, k2, k3 = _closest_simplex(n + 1, x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3)
+                nvx = k0 * x0 + k1 * x1 + k2 * x2
+                nvy = k0 * y0 + k1 * y1 + k2 * y2
+                nvz = k0 * z0 + k1 * z1 + k2 * z2
+                nvv = nvx * nvx + nvy * nvy + nvz * nvz
+                if nvv >= vv:
+                    continue  # no nearer: the simplex stays as it was (slot n is free again)
+                c = 0
+                j0 = j1 = j2 = 0
+                for j in range(3):  # the kept vertices, in order, into slots 0 .. c-1
+                    if (m >> j) & 1:
+                        if c == 0:
+                            j0 = j
+                        elif c == 1:
+                            j1 = j
+                        else:
+                            j2 = j
+                        c += 1
+                x0, y0, z0, ia0, ib0, x1, y1, z1, ia1, ib1, x2, y2, z2, ia2, ib2, l0, l1, l2 = (
+                    (x0, x1, x2)[j0], (y0, y1, y2)[j0], (z0, z1, z2)[j0], (ia0, ia1, ia2)[j0], (ib0, ib1, ib2)[j0],
+                    (x0, x1, x2)[j1], (y0, y1, y2)[j1], (z0, z1, z2)[j1], (ia0, ia1, ia2)[j1], (ib0, ib1, ib2)[j1],
+                    (x0, x1, x2)[j2], (y0, y1, y2)[j2], (z0, z1, z2)[j2], (ia0, ia1, ia2)[j2], (ib0, ib1, ib2)[j2],
+                    (k0, k1, k2)[j0], (k0, k1, k2)[j1] if c > 1 else 0.0, (k0, k1, k2)[j2] if c > 2 else 0.0)
+                n = c
+                vx, vy, vz, vv = nvx, nvy, nvz, nvv
+                continue
         # support of A along -v, of B along +v, climbs from the previous supports or, where v turned by
         # more than ~6 degrees since the last climbs (cos^2 < 0.99), the tables' entries if those are
         # farther along (past that turn the previous supports are as good and the look-ups cost more
@@ -461,6 +383,11 @@ def _gjk_body(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, 
             for k in range(4):
                 simp[1 + k] = (ia0, ia1, ia2, ia3)[k]
                 simp[5 + k] = (ib0, ib1, ib2, ib3)[k]
+        if simp.shape[0] >= 16:  # the final simplex as a seed (see the docstring)
+            simp[9] = n if status == GJK_SEPARATED else 0
+            for k in range(3):
+                simp[10 + 2 * k] = (ia0, ia1, ia2)[k] if k < n else 0
+                simp[11 + 2 * k] = (ib0, ib1, ib2)[k] if k < n else 0
     if inside:
         return status, 0.0, ax, ay, az, bx, by, bz
     return status, math.sqrt(vv), ax, ay, az, bx, by, bz
@@ -506,19 +433,20 @@ def gjk_dir_adj2(pa, adja, pb, adjb, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, m
 
 @njit(cache=True, _nrt=False)
 def gjk_dir_rel(pa, adja, taba, pb, adjb, tabb, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp,
-                sep):  # pragma: no cover
+                sep, seed):  # pragma: no cover
     """:func:`gjk_dir_adj2` with B's points in a frame of their own: hull(pa) against
     ``R_AB hull(pb) + o`` (``rot``: ``R_AB`` row-major, 9 floats), everything returned in A's frame.
     A caller holding both hulls in their link frames passes ``X_AB = X_WA^-1 X_WB`` and moves no
     vertex (only the support points GJK visits are rotated).  ``taba``, ``tabb``: each hull's
     :func:`armguard.geometry._pack.support_table` (empty: start from the stored extremes): the first
     climbs start from their entries, every later one from the better of its entry and the previous
-    support (on ur3's and so101's hulls: 214 -> 131 dot products per separated pair)."""
+    support (on ur3's and so101's hulls: 214 -> 131 dot products per separated pair).  ``seed``: a
+    starting simplex (int64, empty: none; see ``_gjk_body``)."""
     ex, ey, ez = _b_dir(rot, dx, dy, dz)
     sa = table_start(taba, -dx, -dy, -dz)
     sb = table_start(tabb, ex, ey, ez)
     return _gjk_body(pa, adja, pb, adjb, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep, sa, sb,
-                     taba, tabb)
+                     taba, tabb, seed)
 
 
 @njit(cache=True, inline="always")

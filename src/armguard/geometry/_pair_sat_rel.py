@@ -117,7 +117,7 @@ def sat_witnesses_rel(pa, adja, taba, pb, adjb, tabb, rot, tx, ty, tz, depth, nx
     oy = ty + shift * ny
     oz = tz + shift * nz
     status, d, ax, ay, az, bx, by, bz = gjk_dir_rel(pa, adja, taba, pb, adjb, tabb, rot, ox, oy, oz, -nx, -ny, -nz,
-                                                    eps_len, gjk_eps, max_iter, simp, math.inf)
+                                                    eps_len, gjk_eps, max_iter, simp, math.inf, adja[0:0])
     if status == GJK_NOT_CONVERGED:
         return GJK_NOT_CONVERGED, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     return (GJK_INTERSECTING if depth >= 0.0 else GJK_SEPARATED), ax, ay, az, bx - shift * nx, by - shift * ny, \

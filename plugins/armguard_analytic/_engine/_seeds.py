@@ -1,0 +1,177 @@
+"""Seed tables: where GJK starts on a link-frame pair whose relative pose depends on one to three joints.
+
+GJK on two hulls of links two joints apart took 7-10 iterations from a cold start on the public
+robots' hulls (``bench pair_profile``), even started along the exact final direction: their nearest
+features are faces and edges nearly parallel, and GJK builds its simplex one support at a time.  And
+EPA, on the pairs that overlap at a configuration (17 % of ur3's random configurations for some of
+its pairs), took ~10 us a depth.  The pose of link B in link A's frame, though, depends only on the
+joints between them (the links on one chain from the root and not on the other: their joint values,
+mimic terms included).  For a pair whose pose depends on one, two or three joint values, this module
+runs the narrow phase at the nodes of a grid over them (64 nodes for one joint, 32 x 32 for two,
+16 x 16 x 16 for three, each joint over its limits, at most 4 pi wide) and keeps, per node, the
+simplex GJK ended with when the hulls are apart (the support index pairs of up to three vertices)
+or the facet EPA ended on when they overlap (three vertices).  At a check,
+:func:`._narrow.narrow_rel` starts GJK from the seed of the node nearest the check's joint values
+(``_pair_gjk._gjk_body``'s ``seed``): near a facet, GJK's tetrahedron holds the facet, and EPA starts
+next to its answer.  A vertex of a seed is a point of the Minkowski difference at every pose, and GJK
+and EPA stop only on their usual tests after true supports, so a seed changes the number of
+iterations, never the answer: on kuka_iiwa's six pairs two joints apart, 8.9 iterations from a cold
+start, 2.5 seeded (2-joint tables); its pairs three joints apart 4.2 and 2.9.  A pair whose pose
+depends on four joints or more (links far apart, 2.5-4 iterations cold) has no table: an 8^4 grid
+gave no fewer iterations.
+
+Made at each build, in Python over the compiled ``gjk_dir_rel`` and ``epa_depth`` (the signatures
+the kernels call), ~5 us a node; kept per process (:data:`CACHE_TABLES`, keyed by the hulls, the
+links' chains and the grid), so a rebuild after a scene edit makes none again.
+
+Layout (``._layout``): ``spair`` ``(n_pairs, 6)`` int64 ``[first row of the pair's table in sdt (-1:
+none), nodes per joint, joints (1-3), joint i, j, k]``; ``sgrid`` ``(n_pairs, 6)`` float64 ``[lower,
+1 / step]`` per joint; ``sdt`` ``(rows, 7)`` int64, a row per node, row-major over the joints:
+``[n, ia_0, ib_0, ia_1, ib_1, ia_2, ib_2]`` (``n = 0``: no seed, GJK starts cold).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import threading
+from collections import OrderedDict
+
+import numpy as np
+
+from armguard.geometry._pair_epa import EPA_WORK_SIZE, epa_depth
+from armguard.geometry._pair_gjk import GJK_SEPARATED, _inner_point, gjk_dir_rel
+from armguard.kinematics._fk import fk_kernel
+
+__all__ = ["NODES", "pair_joints", "seed_tables"]
+
+NODES = {1: 64, 2: 32, 3: 16}
+"""Grid nodes per joint of a pair whose pose depends on one, two or three joint values (64, 32 x 32
+and 16 x 16 x 16 nodes)."""
+_SPAN_MAX = 4.0 * math.pi
+"""A joint's grid covers its limits, at most this wide around their middle (rad or m); a value
+outside the grid takes the nearest edge node's seed (a poorer start, the same answer)."""
+
+
+def _chain(parent: np.ndarray, link: int) -> set:
+    """``link`` and its ancestors in the engine tree (empty for -1, W)."""
+    out = set()
+    while link >= 0:
+        out.add(int(link))
+        link = int(parent[link])
+    return out
+
+
+def pair_joints(tree, la: int, lb: int) -> tuple:
+    """The joint values (indices into ``q``) that ``X_AB`` of links ``la``, ``lb`` (-1: W) depends on:
+    those of the links on one chain from the root and not on the other (mimic terms included)."""
+    out = set()
+    for i in _chain(tree.parent, la) ^ _chain(tree.parent, lb):
+        if tree.jtype[i] != 0:
+            out.update(int(j) for j in tree.term_joint[tree.term_start[i]:tree.term_start[i + 1]])
+    return tuple(sorted(out))
+
+
+def _seeded(core_a: int, core_b: int, b_moving: bool) -> bool:
+    """Whether ``._step.evaluate_pair`` sends the pair to ``narrow_rel``'s GJK (no cylinder)."""
+    return ((core_a in (2, 3) and core_b in (2, 3)) or (core_a == 3 and core_b <= 1)
+            or (core_a <= 1 and core_b == 3 and b_moving))
+
+
+def seed_tables(tree, qlim, glink, core, vstart, verts, gadj, gadjs, gdir, gdirs, pair_a, pair_b, mov_idx,
+                eps_len: float, gjk_eps: float, max_iter: int) -> dict:
+    """``spair``, ``sgrid`` and ``sdt`` (the module docstring) for the pairs ``pair_a``, ``pair_b``."""
+    P = len(pair_a)
+    spair = np.full((P, 6), -1, dtype=np.int64)
+    sgrid = np.zeros((P, 6))
+    rows: list = []
+    n_rows = 0
+    for p in range(P):
+        a, b = int(pair_a[p]), int(pair_b[p])
+        if b < 0 or not _seeded(int(core[a]), int(core[b]), mov_idx[b] >= 0):
+            continue
+        la, lb = int(glink[a]), int(glink[b])
+        js = pair_joints(tree, la, lb)
+        if not 1 <= len(js) <= 3 or not np.all(np.isfinite(qlim[list(js)])):
+            continue
+        n = NODES[len(js)]
+        mid = 0.5 * (qlim[list(js), 0] + qlim[list(js), 1])
+        half = 0.5 * np.minimum(qlim[list(js), 1] - qlim[list(js), 0], _SPAN_MAX)
+        if np.any(half <= 0.0):
+            continue
+        part = (verts[vstart[a]:vstart[a + 1]], gadj[gadjs[a]:gadjs[a + 1]], gdir[gdirs[a]:gdirs[a + 1]],
+                verts[vstart[b]:vstart[b + 1]], gadj[gadjs[b]:gadjs[b + 1]], gdir[gdirs[b]:gdirs[b + 1]])
+        table = _table(tree, qlim, la, lb, js, mid - half, half, n, part, (eps_len, gjk_eps, max_iter))
+        spair[p, :3 + len(js)] = (n_rows, n, len(js)) + js
+        sgrid[p, :2 * len(js)] = np.ravel(np.column_stack([mid - half, (n - 1) / (2.0 * half)]))
+        rows.append(table)
+        n_rows += len(table)
+    sdt = np.concatenate(rows) if rows else np.zeros((1, 7), dtype=np.int64)
+    return {"spair": spair, "sgrid": sgrid, "sdt": sdt}
+
+
+_cache: OrderedDict = OrderedDict()
+_cache_lock = threading.Lock()
+CACHE_TABLES = 512
+"""Seed tables kept in this process (least recently used dropped first): a Detector rebuilt after a
+scene edit, or a second checker on the same model, finds its tables here instead of making them
+again (so101: 1.6 s of GJK and EPA for 54 tables)."""
+
+
+def _key(tree, la: int, lb: int, js: tuple, lo, n: int, part: tuple, tol: tuple) -> bytes:
+    """What a table depends on: both hulls (points, graphs, support tables), the rows of the engine
+    tree on both links' chains, the joints and the grid, the tolerances."""
+    h = hashlib.blake2b(digest_size=20)
+    for arr in part:
+        h.update(np.ascontiguousarray(arr).tobytes())
+        h.update(b"|")
+    for link in sorted(_chain(tree.parent, la) | _chain(tree.parent, lb)):
+        for arr in (tree.X_pre[link], tree.axis[link], tree.X_post[link], tree.term_coeff[tree.term_start[link]:tree.term_start[link + 1]],
+                    tree.term_joint[tree.term_start[link]:tree.term_start[link + 1]]):
+            h.update(np.ascontiguousarray(arr).tobytes())
+        h.update(np.array([link, tree.parent[link], tree.jtype[link], tree.has_post[link], tree.offset[link]]).tobytes())
+    h.update(np.array([la, lb, n, *js, *lo, *tol], dtype=np.float64).tobytes())
+    return h.digest()
+
+
+def _table(tree, qlim, la: int, lb: int, js: tuple, lo, half, n: int, part: tuple, tol: tuple) -> np.ndarray:
+    """The ``(n ** len(js), 7)`` seed rows of one pair (cached, :data:`CACHE_TABLES`)."""
+    key = _key(tree, la, lb, js, lo, n, part, tol)
+    with _cache_lock:
+        hit = _cache.get(key)
+        if hit is not None:
+            _cache.move_to_end(key)
+            return hit
+    pa, adja, taba, pb, adjb, tabb = part
+    eps_len, gjk_eps, max_iter = tol
+    axes = [np.linspace(l0, l0 + 2.0 * h0, n) for l0, h0 in zip(lo, half)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(js))
+    Q = np.zeros((len(grid), qlim.shape[0]))
+    Q[:] = np.clip(0.0, qlim[:, 0], qlim[:, 1])  # the other joints: X_AB does not depend on them
+    Q[:, list(js)] = grid
+    Xs = fk_kernel(tree, Q)
+    X_A = Xs[:, la] if la >= 0 else np.broadcast_to(np.eye(4), (len(Q), 4, 4))
+    X_B = Xs[:, lb] if lb >= 0 else np.broadcast_to(np.eye(4), (len(Q), 4, 4))
+    R_AB = np.einsum("nji,njk->nik", X_A[:, :3, :3], X_B[:, :3, :3])
+    t_AB = np.einsum("nji,nj->ni", X_A[:, :3, :3], X_B[:, :3, 3] - X_A[:, :3, 3])
+    d0 = np.array(_inner_point(pa, adja)) - (R_AB @ np.array(_inner_point(pb, adjb)) + t_AB)  # as narrow_rel's
+    work = np.zeros(max(EPA_WORK_SIZE, 16))
+    no_seed = np.zeros(0, dtype=np.int64)
+    table = np.zeros((len(Q), 7), dtype=np.int64)
+    for k in range(len(Q)):
+        rot = np.ascontiguousarray(R_AB[k].ravel())
+        tx, ty, tz = t_AB[k]
+        st = gjk_dir_rel(pa, adja, taba, pb, adjb, tabb, rot, tx, ty, tz, d0[k, 0], d0[k, 1], d0[k, 2], eps_len,
+                         gjk_eps, max_iter, work[0:16], math.inf, no_seed)[0]
+        if st == GJK_SEPARATED and work[9] > 0:  # apart: GJK's final simplex
+            table[k] = work[9:16]
+        elif work[0] == 1.0:  # overlapping: the facet EPA ends on
+            if epa_depth(pa, adja, pb, adjb, work, gjk_eps, rot, tx, ty, tz, taba, tabb, -math.inf)[0] \
+                    and work[0] == 2.0:
+                table[k] = (3, work[1], work[5], work[2], work[6], work[3], work[7])
+    table.flags.writeable = False
+    with _cache_lock:
+        _cache[key] = table
+        while len(_cache) > CACHE_TABLES:
+            _cache.popitem(last=False)
+    return table

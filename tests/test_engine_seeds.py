@@ -1,0 +1,141 @@
+"""Seed tables: GJK started from another configuration's simplex (``armguard_analytic._engine._seeds``).
+
+A seed changes where GJK starts, never its answer: a property test starts GJK from random simplices
+(any support index pairs are points of the Minkowski difference) and compares with the cold start; on
+public robots the engine's answers with its tables equal its answers with them switched off, and
+coal's.  EPA leaves the facet it ends on for the tables, and that facet lies at the depth EPA returns.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import armguard
+from armguard.geometry._pack import hull_graph, support_table
+from armguard.geometry._pair_epa import EPA_WORK_SIZE, epa_depth
+from armguard.geometry._pair_gjk import GJK_INTERSECTING, GJK_NOT_CONVERGED, GJK_SEPARATED, gjk_dir_rel
+from armguard.model import known_models
+
+sys.path.insert(0, str(Path(__file__).parent))
+from _engine_world import random_cloud as _cloud, random_rotation as _rotation  # noqa: E402
+
+_NO_SEED = np.zeros(0, np.int64)
+
+
+def _pair(seed: int, gap: float):
+    rng = np.random.default_rng(seed)
+    pa, pb = _cloud(rng, int(rng.integers(20, 300))), _cloud(rng, int(rng.integers(20, 300)))
+    R_AB = _rotation(rng)
+    t_AB = (0.6 + gap) * rng.normal(size=3) / np.sqrt(3)
+    d0 = pa.mean(axis=0) - (R_AB @ pb.mean(axis=0) + t_AB)
+    return rng, pa, pb, np.ascontiguousarray(R_AB.ravel()), t_AB, d0
+
+
+def _gjk(pa, pb, rot, t_AB, d0, seed_row, work):
+    ga, gb = hull_graph(pa)[0], hull_graph(pb)[0]
+    ta, tb = support_table(pa), support_table(pb)
+    return gjk_dir_rel(pa, ga, ta, pb, gb, tb, rot, *t_AB, *d0, 1e-12, 1e-12, 128, work, np.inf, seed_row)
+
+
+@settings(max_examples=80, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**31), gap=st.floats(-0.3, 0.8), n=st.integers(0, 3))
+def test_gjk_from_any_seed_gives_the_cold_answer(seed, gap, n):
+    """Any simplex of support index pairs (repeats included) as the start: the same status and the same
+    distance to 1e-9 m as GJK from a cold start; and the final simplex a separated run leaves in
+    ``simp[9:16]`` is a seed that brings the distance back."""
+    rng, pa, pb, rot, t_AB, d0 = _pair(seed, gap)
+    row = np.zeros(7, np.int64)
+    row[0] = n
+    row[1::2] = rng.integers(0, len(pa), size=3)
+    row[2::2] = rng.integers(0, len(pb), size=3)
+    w0, w1 = np.zeros(16), np.zeros(16)
+    ref = _gjk(pa, pb, rot, t_AB, d0, _NO_SEED, w0)
+    got = _gjk(pa, pb, rot, t_AB, d0, row, w1)
+    assert ref[0] != GJK_NOT_CONVERGED and got[0] != GJK_NOT_CONVERGED
+    if ref[0] == GJK_SEPARATED and ref[1] > 1e-9:
+        assert got[0] == GJK_SEPARATED
+        assert abs(got[1] - ref[1]) <= 1e-9
+        again = _gjk(pa, pb, rot, t_AB, d0, w0[9:16].astype(np.int64), np.zeros(16))
+        assert 1 <= w0[9] <= 3 and again[0] == GJK_SEPARATED and abs(again[1] - ref[1]) <= 1e-9
+    elif ref[0] == GJK_INTERSECTING:
+        assert got[0] == GJK_INTERSECTING or got[1] <= 1e-9
+        assert w0[9] == 0  # no seed from an overlapping run's simplex
+
+
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**31), shift=st.floats(0.0, 0.05))
+def test_epa_leaves_the_facet_it_ends_on(seed, shift):
+    """Two ellipsoid hulls about the same centre (offset at most 5 cm): after a settled depth,
+    ``work[0] == 2`` and ``work[1:4]``, ``work[5:8]`` index three vertices of the Minkowski difference
+    on the plane ``n . w = depth``."""
+    rng, pa, pb, rot, t_AB, d0 = _pair(seed, -0.6)
+    t_AB = shift * rng.normal(size=3) / np.sqrt(3)  # the centres within ~5 cm: the hulls overlap
+    d0 = pa.mean(axis=0) - (rot.reshape(3, 3) @ pb.mean(axis=0) + t_AB)
+    ga, gb = hull_graph(pa)[0], hull_graph(pb)[0]
+    ta, tb = support_table(pa), support_table(pb)
+    work = np.zeros(EPA_WORK_SIZE)
+    st_ = gjk_dir_rel(pa, ga, ta, pb, gb, tb, rot, *t_AB, *d0, 1e-12, 1e-12, 128, work[0:9], np.inf, _NO_SEED)
+    assert st_[0] == GJK_INTERSECTING and work[0] == 1.0  # the origin inside GJK's tetrahedron
+    ok, d, nx, ny, nz = epa_depth(pa, ga, pb, gb, work, 1e-12, rot, *t_AB, ta, tb, -math.inf)[:5]
+    assert ok and d > 0.0 and work[0] == 2.0
+    R = rot.reshape(3, 3)
+    for k in range(3):
+        w = pa[int(work[1 + k])] - (R @ pb[int(work[5 + k])] + t_AB)
+        assert abs(np.dot((nx, ny, nz), w) - d) <= 1e-9
+
+
+def _seg(f, name, w=0):
+    from armguard_analytic._engine._layout import K
+
+    H, MI = f.args[0], f.args[2]
+    buf = f.args[1] if name == "sgrid" else MI
+    a = buf[H[2 * K[name]]:H[2 * K[name]] + H[2 * K[name] + 1] * max(w, 1)]
+    return a.reshape(-1, w) if w else a
+
+
+@pytest.mark.parametrize("name", ["kuka_iiwa", "ur3"])
+def test_seed_tables_change_no_answer(name):
+    """kuka_iiwa and ur3 (hull pairs apart and overlapping at random configurations): every pair whose
+    pose depends on one to three joints has a table (the iiwa's links two joints apart on exactly
+    two), and the distances and witnesses with the tables equal those with every table switched off
+    to 1e-9 m, and coal's verdicts."""
+    if name not in {m.name for m in known_models() if m.available}:
+        pytest.skip(f"{name}'s package is not installed")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = armguard.load_model(name)
+    ana = armguard.checker(model, "analytic")
+    coal = armguard.checker(model, "coal")
+    Q = model.random_q(60, 3)
+    ana.pair_distances(Q[0])
+    f = ana._plan()
+    spair = _seg(f, "spair", 6)
+    seeded = spair[:, 0] >= 0
+    assert seeded.sum() >= 11 and set(spair[seeded, 2]) <= {1, 2, 3}
+    if name == "kuka_iiwa":
+        assert np.count_nonzero(spair[:, 2] == 2) == 6
+    on = spair[:, 0].copy()
+    with_tables = [ana.pair_distances(q) for q in Q]
+    try:
+        spair[:, 0] = -1  # every pair starts cold
+        cold = [ana.pair_distances(q) for q in Q]
+    finally:
+        spair[:, 0] = on
+    overlapping = 0
+    for q, a, b in zip(Q, with_tables, cold):
+        np.testing.assert_allclose(a.distance, b.distance, atol=1e-9, rtol=0)
+        apart = a.distance > 1e-6  # where the nearest points are unique enough to compare
+        np.testing.assert_allclose(a.p_WA[apart], b.p_WA[apart], atol=1e-6, rtol=0)
+        ref = np.asarray(coal.pair_distances(q).distance)
+        clear = np.abs(ref) > 1e-6
+        assert np.array_equal(a.distance[clear] < 0, ref[clear] < 0)
+        overlapping += int(np.count_nonzero(a.distance < 0))
+    assert overlapping > 0 or name == "kuka_iiwa"  # ur3's random configurations overlap: EPA's facets seed
