@@ -23,8 +23,11 @@ def test_pair_profile_counts_gjk_work():
     row = json.loads([ln for ln in proc.stdout.splitlines() if ln.startswith("{")][-1])
     assert row["pairs"] == row["poly_pairs"] == 21
     assert row["gjk_pairs"] > 100  # separated hull pairs of 20 configurations
-    # GJK evaluates the first support and one per iteration, the last one verifying: at least two
-    assert 2.0 <= row["it"] <= row["it_p90"] <= 64
+    # from a cold start GJK evaluates the first support and one per iteration, the last one
+    # verifying: at least two; from a seed (the pairs' tables) at least the verifying one, and fewer
+    # than cold on kuka_iiwa's hulls (its pairs two joints apart: 8.9 cold, 2.5 seeded)
+    assert 1.0 <= row["it"] <= row["it_p90"] <= 64
+    assert 2.0 <= row["it_cold"] and row["it"] < 0.8 * row["it_cold"]
     # every hull of kuka_iiwa has a vertex graph: each support climbs both hulls, once each
     assert row["climb"] == 2 * row["it"]
     assert row["dot"] >= row["climb"]

@@ -43,7 +43,7 @@ from armguard.geometry._pair_epa import EPA_WORK_SIZE, epa_depth
 from armguard.geometry._pair_gjk import GJK_SEPARATED, _inner_point, gjk_dir_rel
 from armguard.kinematics._fk import fk_kernel
 
-__all__ = ["NODES", "pair_joints", "seed_tables"]
+__all__ = ["CACHE_TABLES", "NODES", "pair_joints", "seed_row", "seed_tables"]
 
 NODES = {1: 64, 2: 32, 3: 16}
 """Grid nodes per joint of a pair whose pose depends on one, two or three joint values (64, 32 x 32
@@ -175,3 +175,15 @@ def _table(tree, qlim, la: int, lb: int, js: tuple, lo, half, n: int, part: tupl
         while len(_cache) > CACHE_TABLES:
             _cache.popitem(last=False)
     return table
+
+
+def seed_row(spair: np.ndarray, sgrid: np.ndarray, sdt: np.ndarray, p: int, q: np.ndarray) -> np.ndarray:
+    """Pair ``p``'s seed at joint values ``q`` (engine order), as ``._narrow._seed`` picks it (the
+    nearest node, each joint clamped to its grid): a row of ``sdt``, or an empty array (no table)."""
+    if spair[p, 0] < 0:
+        return np.zeros(0, dtype=np.int64)
+    n, c = int(spair[p, 1]), 0
+    for k in range(int(spair[p, 2])):
+        x = (q[spair[p, 3 + k]] - sgrid[p, 2 * k]) * sgrid[p, 2 * k + 1] + 0.5
+        c = c * n + int(min(max(x, 0.0), n - 1.0))
+    return np.ascontiguousarray(sdt[spair[p, 0] + c])
