@@ -433,14 +433,17 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, 
     nw = work.shape[0] - WORK_TAIL
     rot = work[nw:nw + 9]
     tx, ty, tz = _relative(SF, oA, _pose(SF, H, MI, gb), rot)
-    gx, gy, gz = _inner_point(pa, adja)  # GJK's first direction: inner point of A minus that of X_AB B
-    hx, hy, hz = _inner_point(pb, adjb)
-    sx = rot[0] * hx + rot[1] * hy + rot[2] * hz + tx
-    sy = rot[3] * hx + rot[4] * hy + rot[5] * hz + ty
-    sz = rot[6] * hx + rot[7] * hy + rot[8] * hz + tz
+    seed = _seed(H, MF, MI, SF, p)
+    gx, gy, gz = -tx, -ty, -tz  # GJK's first direction, unused from a seed (it reads no support along it)
+    sx = sy = sz = 0.0
+    if seed.shape[0] == 0 or seed[0] == 0:  # a cold start: inner point of A minus that of X_AB B
+        gx, gy, gz = _inner_point(pa, adja)
+        hx, hy, hz = _inner_point(pb, adjb)
+        sx = rot[0] * hx + rot[1] * hy + rot[2] * hz + tx
+        sy = rot[3] * hx + rot[4] * hy + rot[5] * hz + ty
+        sz = rot[6] * hx + rot[7] * hy + rot[8] * hz + tz
     lim = level if beyond == math.inf else max(level, beyond)
     sep = lim + (ra + rb) if lim > -math.inf else math.inf
-    seed = _seed(H, MF, MI, SF, p)
     status, d, ax, ay, az, bx, by, bz = call_gjk_rel(fns[FN_GJK_REL], (pa, adja, taba, pb, adjb, tabb, rot, tx, ty, tz,
                                                                        gx - sx, gy - sy, gz - sz, eps_len, gjk_eps,
                                                                        max_iter, simp, max(sep, 0.0), seed))

@@ -442,9 +442,11 @@ def gjk_dir_rel(pa, adja, taba, pb, adjb, tabb, rot, ox, oy, oz, dx, dy, dz, eps
     climbs start from their entries, every later one from the better of its entry and the previous
     support (on ur3's and so101's hulls: 214 -> 131 dot products per separated pair).  ``seed``: a
     starting simplex (int64, empty: none; see ``_gjk_body``)."""
-    ex, ey, ez = _b_dir(rot, dx, dy, dz)
-    sa = table_start(taba, -dx, -dy, -dz)
-    sb = table_start(tabb, ex, ey, ez)
+    sa = sb = -1
+    if seed.shape[0] < 7 or seed[0] <= 0:  # a cold start: the tables' entries for d (a seed needs neither)
+        ex, ey, ez = _b_dir(rot, dx, dy, dz)
+        sa = table_start(taba, -dx, -dy, -dz)
+        sb = table_start(tabb, ex, ey, ez)
     return _gjk_body(pa, adja, pb, adjb, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, max_iter, simp, sep, sa, sb,
                      taba, tabb, seed)
 
