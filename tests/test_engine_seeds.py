@@ -119,9 +119,22 @@ def test_seed_tables_change_no_answer(name):
     f = ana._plan()
     spair = _seg(f, "spair", 6)
     seeded = spair[:, 0] >= 0
-    assert seeded.sum() >= 11 and set(spair[seeded, 2]) <= {1, 2, 3}
-    if name == "kuka_iiwa":
+    assert seeded.sum() >= 11 and set(spair[seeded, 2] & 3) <= {1, 2, 3}
+    if name == "kuka_iiwa":  # limits under a turn: plain grids
         assert np.count_nonzero(spair[:, 2] == 2) == 6
+    else:  # ur3's joints turn +-2 pi: periodic grids, a value and the same angle a turn away share a node
+        from armguard_analytic._engine._seeds import seed_row
+
+        periodic = seeded & (spair[:, 2] >= 4)
+        assert periodic.sum() >= 11
+        sgrid, sdt = _seg(f, "sgrid", 6), _seg(f, "sdt", 7)
+        for q in Q[:10]:
+            for p in np.nonzero(periodic)[0]:
+                for k in range(spair[p, 2] & 3):
+                    if (spair[p, 2] >> (2 + k)) & 1:
+                        q2 = q.copy()
+                        q2[spair[p, 3 + k]] += 2 * np.pi * (1 if q2[spair[p, 3 + k]] < 0 else -1)
+                        assert np.array_equal(seed_row(spair, sgrid, sdt, p, q), seed_row(spair, sgrid, sdt, p, q2))
     on = spair[:, 0].copy()
     with_tables = [ana.pair_distances(q) for q in Q]
     try:

@@ -367,18 +367,22 @@ def _sat_rel(pa, fa, ea, adja, taba, ra, pb, fb, eb, adjb, tabb, rb, rot, tx, ty
 def _seed(H, MF, MI, SF, p):  # pragma: no cover - compiled
     """Pair ``p``'s seed: the row of its seed table (``"sdt"``, 7 ints) at the node nearest the joint
     values of the last forward kinematics, or an empty view (no table).  ``"spair"`` row ``p``:
-    ``[first row of the table, nodes per joint, joints (1 to 3), joint i, j, k]``, ``"sgrid"`` row
-    ``p``: ``[lower, 1 / step]`` of each (``._seeds``)."""
+    ``[first row of the table, nodes per joint, joints (1 to 3) + 4 << m for each periodic joint m,
+    joint i, j, k]``, ``"sgrid"`` row ``p``: ``[lower, 1 / step]`` of each (``._seeds``)."""
     osp = H[2 * _K_spair] + 6 * p
     if p < 0 or p >= H[2 * _K_spair + 1] or MI[osp] < 0:
         return carray(at(MI, 0), (0,))
     osg = H[2 * _K_sgrid] + 6 * p
     ofq = H[2 * _K_fk_q]
     n = MI[osp + 1]
+    kk = MI[osp + 2]
     c = 0
-    for k in range(MI[osp + 2]):
-        c = c * n + int(min(max((SF[ofq + MI[osp + 3 + k]] - MF[osg + 2 * k]) * MF[osg + 2 * k + 1] + 0.5, 0.0),
-                            n - 1.0))
+    for k in range(kk & 3):
+        x = (SF[ofq + MI[osp + 3 + k]] - MF[osg + 2 * k]) * MF[osg + 2 * k + 1]
+        if (kk >> (2 + k)) & 1:  # a periodic grid: the value wrapped onto its nodes
+            c = c * n + int(x - n * math.floor(x / n) + 0.5) % n
+        else:
+            c = c * n + int(min(max(x + 0.5, 0.0), n - 1.0))
     return carray(at(MI, H[2 * _K_sdt] + 7 * (MI[osp] + c)), (7,))
 
 

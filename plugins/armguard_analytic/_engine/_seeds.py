@@ -8,7 +8,9 @@ its pairs), took ~10 us a depth.  The pose of link B in link A's frame, though, 
 joints between them (the links on one chain from the root and not on the other: their joint values,
 mimic terms included).  For a pair whose pose depends on one, two or three joint values, this module
 runs the narrow phase at the nodes of a grid over them (64 nodes for one joint, 32 x 32 for two,
-16 x 16 x 16 for three, each joint over its limits, at most 4 pi wide) and keeps, per node, the
+16 x 16 x 16 for three; a revolute joint that turns a whole turn or more, or without limits, over
+one turn with its values wrapped onto the grid; any other over its limits, at most 4 pi wide:
+:func:`_axis`) and keeps, per node, the
 simplex GJK ended with when the hulls are apart (the support index pairs of up to three vertices)
 or the facet EPA ended on when they overlap (three vertices).  At a check,
 :func:`._narrow.narrow_rel` starts GJK from the seed of the node nearest the check's joint values
@@ -25,7 +27,7 @@ the kernels call), ~5 us a node; kept per process (:data:`CACHE_TABLES`, keyed b
 links' chains and the grid), so a rebuild after a scene edit makes none again.
 
 Layout (``._layout``): ``spair`` ``(n_pairs, 6)`` int64 ``[first row of the pair's table in sdt (-1:
-none), nodes per joint, joints (1-3), joint i, j, k]``; ``sgrid`` ``(n_pairs, 6)`` float64 ``[lower,
+none), nodes per joint, joints (1-3) + 4 << m for each periodic joint m, joint i, j, k]``; ``sgrid`` ``(n_pairs, 6)`` float64 ``[lower,
 1 / step]`` per joint; ``sdt`` ``(rows, 7)`` int64, a row per node, row-major over the joints:
 ``[n, ia_0, ib_0, ia_1, ib_1, ia_2, ib_2]`` (``n = 0``: no seed, GJK starts cold).
 """
@@ -92,22 +94,43 @@ def seed_tables(tree, qlim, glink, core, vstart, verts, gadj, gadjs, gdir, gdirs
             continue
         la, lb = int(glink[a]), int(glink[b])
         js = pair_joints(tree, la, lb)
-        if not 1 <= len(js) <= 3 or not np.all(np.isfinite(qlim[list(js)])):
+        if not 1 <= len(js) <= 3:
             continue
         n = NODES[len(js)]
-        mid = 0.5 * (qlim[list(js), 0] + qlim[list(js), 1])
-        half = 0.5 * np.minimum(qlim[list(js), 1] - qlim[list(js), 0], _SPAN_MAX)
-        if np.any(half <= 0.0):
+        grid = [_axis(tree, qlim, j, n) for j in js]
+        if any(g is None for g in grid):
             continue
+        lo, inv, wrap = (np.array([g[k] for g in grid]) for k in range(3))
+        axes = [lo[k] + np.arange(n) / inv[k] for k in range(len(js))]
         part = (verts[vstart[a]:vstart[a + 1]], gadj[gadjs[a]:gadjs[a + 1]], gdir[gdirs[a]:gdirs[a + 1]],
                 verts[vstart[b]:vstart[b + 1]], gadj[gadjs[b]:gadjs[b + 1]], gdir[gdirs[b]:gdirs[b + 1]])
-        table = _table(tree, qlim, la, lb, js, mid - half, half, n, part, (eps_len, gjk_eps, max_iter))
-        spair[p, :3 + len(js)] = (n_rows, n, len(js)) + js
-        sgrid[p, :2 * len(js)] = np.ravel(np.column_stack([mid - half, (n - 1) / (2.0 * half)]))
+        table = _table(tree, qlim, la, lb, js, axes, part, (eps_len, gjk_eps, max_iter))
+        mask = sum(4 << k for k in range(len(js)) if wrap[k])
+        spair[p, :3 + len(js)] = (n_rows, n, len(js) + mask) + js
+        sgrid[p, :2 * len(js)] = np.ravel(np.column_stack([lo, inv]))
         rows.append(table)
         n_rows += len(table)
     sdt = np.concatenate(rows) if rows else np.zeros((1, 7), dtype=np.int64)
     return {"spair": spair, "sgrid": sgrid, "sdt": sdt}
+
+
+def _axis(tree, qlim, j: int, n: int):
+    """``(lower, 1 / step, periodic)`` of joint value ``j``'s grid of ``n`` nodes, or None (no grid).
+
+    A revolute joint whose value enters every link with coefficient +-1 and whose limits span a
+    whole turn or more (or none: a continuous joint) is periodic: nodes ``-pi + 2 pi k / n``, values
+    wrapped onto them.  Else the grid spans the limits (at most :data:`_SPAN_MAX` around their
+    middle; a value beyond takes the edge node)."""
+    terms = np.nonzero(tree.term_joint == j)[0]
+    links = np.searchsorted(tree.term_start, terms, side="right") - 1
+    turn = len(terms) > 0 and bool(np.all(tree.jtype[links] == 1)) and bool(np.all(np.abs(tree.term_coeff[terms]) == 1.0))
+    q0, q1 = float(qlim[j, 0]), float(qlim[j, 1])
+    if turn and not (q1 - q0 < 2.0 * math.pi):  # infinite limits included
+        return -math.pi, n / (2.0 * math.pi), True
+    if not (math.isfinite(q0) and math.isfinite(q1)) or q1 <= q0:
+        return None
+    mid, half = 0.5 * (q0 + q1), 0.5 * min(q1 - q0, _SPAN_MAX)
+    return mid - half, (n - 1) / (2.0 * half), False
 
 
 _cache: OrderedDict = OrderedDict()
@@ -118,7 +141,7 @@ scene edit, or a second checker on the same model, finds its tables here instead
 again (so101: 1.6 s of GJK and EPA for 54 tables)."""
 
 
-def _key(tree, la: int, lb: int, js: tuple, lo, n: int, part: tuple, tol: tuple) -> bytes:
+def _key(tree, la: int, lb: int, js: tuple, axes: list, part: tuple, tol: tuple) -> bytes:
     """What a table depends on: both hulls (points, graphs, support tables), the rows of the engine
     tree on both links' chains, the joints and the grid, the tolerances."""
     h = hashlib.blake2b(digest_size=20)
@@ -130,13 +153,16 @@ def _key(tree, la: int, lb: int, js: tuple, lo, n: int, part: tuple, tol: tuple)
                     tree.term_joint[tree.term_start[link]:tree.term_start[link + 1]]):
             h.update(np.ascontiguousarray(arr).tobytes())
         h.update(np.array([link, tree.parent[link], tree.jtype[link], tree.has_post[link], tree.offset[link]]).tobytes())
-    h.update(np.array([la, lb, n, *js, *lo, *tol], dtype=np.float64).tobytes())
+    h.update(np.array([la, lb, *js, *tol], dtype=np.float64).tobytes())
+    for ax in axes:
+        h.update(np.ascontiguousarray(ax, dtype=np.float64).tobytes())
     return h.digest()
 
 
-def _table(tree, qlim, la: int, lb: int, js: tuple, lo, half, n: int, part: tuple, tol: tuple) -> np.ndarray:
-    """The ``(n ** len(js), 7)`` seed rows of one pair (cached, :data:`CACHE_TABLES`)."""
-    key = _key(tree, la, lb, js, lo, n, part, tol)
+def _table(tree, qlim, la: int, lb: int, js: tuple, axes: list, part: tuple, tol: tuple) -> np.ndarray:
+    """The seed rows of one pair, a row per node of the grid ``axes`` (one array of node values per
+    joint of ``js``), row-major (cached, :data:`CACHE_TABLES`)."""
+    key = _key(tree, la, lb, js, axes, part, tol)
     with _cache_lock:
         hit = _cache.get(key)
         if hit is not None:
@@ -144,10 +170,9 @@ def _table(tree, qlim, la: int, lb: int, js: tuple, lo, half, n: int, part: tupl
             return hit
     pa, adja, taba, pb, adjb, tabb = part
     eps_len, gjk_eps, max_iter = tol
-    axes = [np.linspace(l0, l0 + 2.0 * h0, n) for l0, h0 in zip(lo, half)]
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(js))
     Q = np.zeros((len(grid), qlim.shape[0]))
-    Q[:] = np.clip(0.0, qlim[:, 0], qlim[:, 1])  # the other joints: X_AB does not depend on them
+    Q[:] = np.clip(0.0, np.nan_to_num(qlim[:, 0]), np.nan_to_num(qlim[:, 1]))  # X_AB depends on none of them
     Q[:, list(js)] = grid
     Xs = fk_kernel(tree, Q)
     X_A = Xs[:, la] if la >= 0 else np.broadcast_to(np.eye(4), (len(Q), 4, 4))
@@ -182,8 +207,11 @@ def seed_row(spair: np.ndarray, sgrid: np.ndarray, sdt: np.ndarray, p: int, q: n
     nearest node, each joint clamped to its grid): a row of ``sdt``, or an empty array (no table)."""
     if spair[p, 0] < 0:
         return np.zeros(0, dtype=np.int64)
-    n, c = int(spair[p, 1]), 0
-    for k in range(int(spair[p, 2])):
-        x = (q[spair[p, 3 + k]] - sgrid[p, 2 * k]) * sgrid[p, 2 * k + 1] + 0.5
-        c = c * n + int(min(max(x, 0.0), n - 1.0))
+    n, c, kk = int(spair[p, 1]), 0, int(spair[p, 2])
+    for k in range(kk & 3):
+        x = (q[spair[p, 3 + k]] - sgrid[p, 2 * k]) * sgrid[p, 2 * k + 1]
+        if (kk >> (2 + k)) & 1:  # periodic: wrapped onto the nodes
+            c = c * n + int(x - n * math.floor(x / n) + 0.5) % n
+        else:
+            c = c * n + int(min(max(x + 0.5, 0.0), n - 1.0))
     return np.ascontiguousarray(sdt[spair[p, 0] + c])
