@@ -152,3 +152,34 @@ def test_seed_tables_change_no_answer(name):
         assert np.array_equal(a.distance[clear] < 0, ref[clear] < 0)
         overlapping += int(np.count_nonzero(a.distance < 0))
     assert overlapping > 0 or name == "kuka_iiwa"  # ur3's random configurations overlap: EPA's facets seed
+
+
+def test_seed_tables_are_made_once_per_process():
+    """A second checker on the same model makes no table again (the process cache, keyed by content),
+    and gets the same tables."""
+    if "kuka_iiwa" not in {m.name for m in known_models() if m.available}:
+        pytest.skip("kuka_iiwa's package is not installed")
+    from armguard_analytic._engine import _seeds
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = armguard.load_model("kuka_iiwa")
+    q = model.random_q(1, 5)[0]
+    first = armguard.checker(model, "analytic")
+    first.pair_distances(q)
+    made = []
+    real = _seeds.gjk_dir_rel
+
+    def counted(*args):
+        made.append(1)
+        return real(*args)
+
+    _seeds.gjk_dir_rel = counted
+    try:
+        second = armguard.checker(model, "analytic")
+        second.pair_distances(q)
+    finally:
+        _seeds.gjk_dir_rel = real
+    assert not made
+    assert np.array_equal(_seg(first._plan(), "sdt", 7), _seg(second._plan(), "sdt", 7))
+    assert len(_seg(first._plan(), "sdt", 7)) == 6 * 32**2 + 5 * 16**3

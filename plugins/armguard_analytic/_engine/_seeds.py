@@ -23,7 +23,7 @@ depends on four joints or more (links far apart, 2.5-4 iterations cold) has no t
 gave no fewer iterations.
 
 Made at each build, in Python over the compiled ``gjk_dir_rel`` and ``epa_depth`` (the signatures
-the kernels call), ~5 us a node; kept per process (:data:`CACHE_TABLES`, keyed by the hulls, the
+the kernels call), ~5 us a node; kept per process (:data:`CACHE_BYTES`, keyed by the hulls, the
 links' chains and the grid), so a rebuild after a scene edit makes none again.
 
 Layout (``._layout``): ``spair`` ``(n_pairs, 6)`` int64 ``[first row of the pair's table in sdt (-1:
@@ -45,7 +45,7 @@ from armguard.geometry._pair_epa import EPA_WORK_SIZE, epa_depth
 from armguard.geometry._pair_gjk import GJK_SEPARATED, _inner_point, gjk_dir_rel
 from armguard.kinematics._fk import fk_kernel
 
-__all__ = ["CACHE_TABLES", "NODES", "pair_joints", "seed_row", "seed_tables"]
+__all__ = ["CACHE_BYTES", "NODES", "pair_joints", "seed_row", "seed_tables"]
 
 NODES = {1: 64, 2: 32, 3: 16}
 """Grid nodes per joint of a pair whose pose depends on one, two or three joint values (64, 32 x 32
@@ -135,10 +135,10 @@ def _axis(tree, qlim, j: int, n: int):
 
 _cache: OrderedDict = OrderedDict()
 _cache_lock = threading.Lock()
-CACHE_TABLES = 512
-"""Seed tables kept in this process (least recently used dropped first): a Detector rebuilt after a
-scene edit, or a second checker on the same model, finds its tables here instead of making them
-again (so101: 1.6 s of GJK and EPA for 54 tables)."""
+CACHE_BYTES = 64 << 20
+"""Bytes of seed tables kept in this process (least recently used dropped first; a 16^3 table is
+229 kB): a Detector rebuilt after a scene edit, or a second checker on the same model, finds its
+tables here instead of making them again (so101: 0.6 s of GJK and EPA for 54 tables)."""
 
 
 def _key(tree, la: int, lb: int, js: tuple, axes: list, part: tuple, tol: tuple) -> bytes:
@@ -161,7 +161,7 @@ def _key(tree, la: int, lb: int, js: tuple, axes: list, part: tuple, tol: tuple)
 
 def _table(tree, qlim, la: int, lb: int, js: tuple, axes: list, part: tuple, tol: tuple) -> np.ndarray:
     """The seed rows of one pair, a row per node of the grid ``axes`` (one array of node values per
-    joint of ``js``), row-major (cached, :data:`CACHE_TABLES`)."""
+    joint of ``js``), row-major (cached, :data:`CACHE_BYTES`)."""
     key = _key(tree, la, lb, js, axes, part, tol)
     with _cache_lock:
         hit = _cache.get(key)
@@ -197,7 +197,7 @@ def _table(tree, qlim, la: int, lb: int, js: tuple, axes: list, part: tuple, tol
     table.flags.writeable = False
     with _cache_lock:
         _cache[key] = table
-        while len(_cache) > CACHE_TABLES:
+        while sum(t.nbytes for t in _cache.values()) > CACHE_BYTES and len(_cache) > 1:
             _cache.popitem(last=False)
     return table
 
