@@ -239,12 +239,15 @@ def _gjk_body(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, 
     status = GJK_NOT_CONVERGED
     inside = False
     k_seed = 1
+    wx = wy = wz = 0.0
     for _it in range(max_iter + ns):
         if vv <= eps2:
             status = GJK_INTERSECTING
             break
+        forced = False
         if seed is not None:
             if k_seed < ns:  # the seed's next vertex: no support, no stopping test
+                forced = True
                 ia = seed[1 + 2 * k_seed]
                 ib = seed[2 + 2 * k_seed]
                 k_seed += 1
@@ -252,61 +255,32 @@ def _gjk_body(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, 
                     continue  # already in the simplex
                 qx, qy, qz = _b_point(pb, rot, ib)
                 wx, wy, wz = pa[ia, 0] - qx - ox, pa[ia, 1] - qy - oy, pa[ia, 2] - qz - oz
-                if n == 1:
-                    x1, y1, z1, ia1, ib1 = wx, wy, wz, ia, ib
-                else:
-                    x2, y2, z2, ia2, ib2 = wx, wy, wz, ia, ib
-                m, k0, k1, k2, k3 = _closest_simplex(n + 1, x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3)
-                nvx = k0 * x0 + k1 * x1 + k2 * x2
-                nvy = k0 * y0 + k1 * y1 + k2 * y2
-                nvz = k0 * z0 + k1 * z1 + k2 * z2
-                nvv = nvx * nvx + nvy * nvy + nvz * nvz
-                if nvv >= vv:
-                    continue  # no nearer: the simplex stays as it was (slot n is free again)
-                c = 0
-                j0 = j1 = j2 = 0
-                for j in range(3):  # the kept vertices, in order, into slots 0 .. c-1
-                    if (m >> j) & 1:
-                        if c == 0:
-                            j0 = j
-                        elif c == 1:
-                            j1 = j
-                        else:
-                            j2 = j
-                        c += 1
-                x0, y0, z0, ia0, ib0, x1, y1, z1, ia1, ib1, x2, y2, z2, ia2, ib2, l0, l1, l2 = (
-                    (x0, x1, x2)[j0], (y0, y1, y2)[j0], (z0, z1, z2)[j0], (ia0, ia1, ia2)[j0], (ib0, ib1, ib2)[j0],
-                    (x0, x1, x2)[j1], (y0, y1, y2)[j1], (z0, z1, z2)[j1], (ia0, ia1, ia2)[j1], (ib0, ib1, ib2)[j1],
-                    (x0, x1, x2)[j2], (y0, y1, y2)[j2], (z0, z1, z2)[j2], (ia0, ia1, ia2)[j2], (ib0, ib1, ib2)[j2],
-                    (k0, k1, k2)[j0], (k0, k1, k2)[j1] if c > 1 else 0.0, (k0, k1, k2)[j2] if c > 2 else 0.0)
-                n = c
-                vx, vy, vz, vv = nvx, nvy, nvz, nvv
-                continue
-        # support of A along -v, of B along +v, climbs from the previous supports or, where v turned by
-        # more than ~6 degrees since the last climbs (cos^2 < 0.99), the tables' entries if those are
-        # farther along (past that turn the previous supports are as good and the look-ups cost more
-        # than they save: -8-10 % per separated hull pair on ur3's, kuka_iiwa's and so101's hulls)
-        turn = pvx * vx + pvy * vy + pvz * vz
-        if turn < 0.0 or turn * turn < 0.99 * pvv * vv:
-            ia = warm_start(pa, taba, na_t, ia, -vx, -vy, -vz)
-            ex, ey, ez = _b_dir(rot, vx, vy, vz)
-            ib = warm_start(pb, tabb, nb_t, ib, ex, ey, ez)
-        pvx, pvy, pvz, pvv = vx, vy, vz, vv
-        ia, ib, wx, wy, wz = _m_support(pa, adja, ia, pb, adj, ib, rot, ox, oy, oz, vx, vy, vz)
-        vw = vx * wx + vy * wy + vz * wz
-        if vv - vw <= gjk_eps * math.sqrt(vv):
-            status = GJK_SEPARATED
-            break
-        if vw > 0.0 and vw * vw > sep * sep * vv and sep >= 0.0:
-            status = GJK_SEPARATED  # proved apart by more than sep (the yes/no early out)
-            break
-        if (
-            (ia == ia0 and ib == ib0)
-            or (n > 1 and ia == ia1 and ib == ib1)
-            or (n > 2 and ia == ia2 and ib == ib2)
-        ):
-            status = GJK_SEPARATED  # a repeated support pair: no progress possible
-            break
+        if not forced:
+            # support of A along -v, of B along +v, climbs from the previous supports or, where v turned by
+            # more than ~6 degrees since the last climbs (cos^2 < 0.99), the tables' entries if those are
+            # farther along (past that turn the previous supports are as good and the look-ups cost more
+            # than they save: -8-10 % per separated hull pair on ur3's, kuka_iiwa's and so101's hulls)
+            turn = pvx * vx + pvy * vy + pvz * vz
+            if turn < 0.0 or turn * turn < 0.99 * pvv * vv:
+                ia = warm_start(pa, taba, na_t, ia, -vx, -vy, -vz)
+                ex, ey, ez = _b_dir(rot, vx, vy, vz)
+                ib = warm_start(pb, tabb, nb_t, ib, ex, ey, ez)
+            pvx, pvy, pvz, pvv = vx, vy, vz, vv
+            ia, ib, wx, wy, wz = _m_support(pa, adja, ia, pb, adj, ib, rot, ox, oy, oz, vx, vy, vz)
+            vw = vx * wx + vy * wy + vz * wz
+            if vv - vw <= gjk_eps * math.sqrt(vv):
+                status = GJK_SEPARATED
+                break
+            if vw > 0.0 and vw * vw > sep * sep * vv and sep >= 0.0:
+                status = GJK_SEPARATED  # proved apart by more than sep (the yes/no early out)
+                break
+            if (
+                (ia == ia0 and ib == ib0)
+                or (n > 1 and ia == ia1 and ib == ib1)
+                or (n > 2 and ia == ia2 and ib == ib2)
+            ):
+                status = GJK_SEPARATED  # a repeated support pair: no progress possible
+                break
         if n == 1:
             x1, y1, z1, ia1, ib1 = wx, wy, wz, ia, ib
         elif n == 2:
@@ -323,6 +297,8 @@ def _gjk_body(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, 
         nvz = k0 * z0 + k1 * z1 + k2 * z2 + k3 * z3
         nvv = nvx * nvx + nvy * nvy + nvz * nvz
         if nvv >= vv:
+            if forced:
+                continue  # a seed vertex that brings the simplex no nearer: dropped (slot n is free again)
             status = GJK_SEPARATED  # no progress (rounding): the previous simplex is the answer
             break
         # compact the kept vertices into slots 0 .. c-1, in order
