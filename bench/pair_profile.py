@@ -90,7 +90,7 @@ def _gjk_work(model, ana, n_q: int) -> dict:
     from armguard_analytic._engine._seeds import seed_row
 
     spair, sgrid, sdt = seg(MI, K["spair"], 6), seg(MF, K["sgrid"], 6), seg(MI, K["sdt"], 7)
-    rows, cold = [], []
+    rows, cold, by = [], [], {}  # by: the table's joint count (0: no table) -> [(seeded, cold) iterations]
     for q in model.random_q(n_q, 11):
         ana.pair_distances(q)
         Xs = seg(f.tls.s[0], K["Xs"], 16).reshape(-1, 4, 4)
@@ -107,6 +107,7 @@ def _gjk_work(model, ana, n_q: int) -> dict:
             d0 = np.array(G._inner_point(pa, adja)) - (X[:3, :3] @ np.array(G._inner_point(pb, adjb)) + X[:3, 3])
             e = G._b_dir(rot, *d0)
             sa, sb = G.table_start(taba, *(-d0)), G.table_start(tabb, *e)
+            its = []
             for out, seed in ((cold, None), (rows, seed_row(spair, sgrid, sdt, p, q_engine))):
                 for k in count:
                     count[k] = 0
@@ -114,8 +115,13 @@ def _gjk_work(model, ana, n_q: int) -> dict:
                                  np.zeros(9), np.inf, sa, sb, taba, tabb, seed)[0]
                 if st == G.GJK_SEPARATED:
                     out.append((count["it"], count["climb"], count["dot"]))
+                    its.append(count["it"])
+            if len(its) == 2:
+                by.setdefault(int(spair[p, 2] & 3) if spair[p, 0] >= 0 else 0, []).append((its[1], its[0]))
     r = np.array(rows, dtype=float).reshape(-1, 3)
-    out = {"gjk_pairs": len(r), "it_cold": float(np.mean([c[0] for c in cold])) if cold else float("nan")}
+    out = {"gjk_pairs": len(r), "it_cold": float(np.mean([c[0] for c in cold])) if cold else float("nan"),
+           "by_joints": {str(k): [float(np.mean([v[0] for v in b])), float(np.mean([v[1] for v in b]))]
+                         for k, b in sorted(by.items())}}
     for j, k in enumerate(("it", "climb", "dot")):
         out[k] = float(r[:, j].mean()) if len(r) else float("nan")
         out[k + "_p90"] = float(np.percentile(r[:, j], 90)) if len(r) else float("nan")
@@ -167,28 +173,32 @@ def run(quick: bool) -> str:
     env = dict(os.environ)
     env.pop("PYTHONDONTWRITEBYTECODE", None)
     rows = ["| robot | pairs (polytope) | call | Python wrapper | fixed (unboxing, views, FK) | per pair | same q "
-            "| GJK iterations / pair (p90) | from a cold start | climbs / pair (p90) | support dot products / pair (p90) |",
-            "|---|---|---|---|---|---|---|---|---|---|---|"]
+            "| GJK iterations / pair (p90) | from a cold start | seeded / cold, by the joints of the pair's table "
+            "| climbs / pair (p90) | support dot products / pair (p90) |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for name in ROBOTS:
         proc = subprocess.run([sys.executable, "-m", "bench.pair_profile", name, str(n)], capture_output=True, text=True,
                               timeout=900, cwd=root, env=env)
         lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
         if proc.returncode != 0 or not lines:
             tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
-            rows.append(f"| {name} | error: {tail[:120]} ||||||||||")
+            rows.append(f"| {name} | error: {tail[:120]} |||||||||||")
             continue
         r = json.loads(lines[-1])
         print(f"  {name}: {r}", file=sys.stderr, flush=True)
         per = (r["us_kernel"] - r["us_fixed"]) / max(r["pairs"], 1)
-        work = (f"| {r['it']:.1f} ({r['it_p90']:.0f}) | {r['it_cold']:.1f} | {r['climb']:.1f} ({r['climb_p90']:.0f}) "
-                f"| {r['dot']:.0f} ({r['dot_p90']:.0f}) |") if r["gjk_pairs"] else "| — | — | — | — |"
+        by = ", ".join(f"{'no table' if k == '0' else k}: {s:.1f} / {c:.1f}" for k, (s, c) in r["by_joints"].items())
+        work = (f"| {r['it']:.1f} ({r['it_p90']:.0f}) | {r['it_cold']:.1f} | {by} | {r['climb']:.1f} ({r['climb_p90']:.0f}) "
+                f"| {r['dot']:.0f} ({r['dot_p90']:.0f}) |") if r["gjk_pairs"] else "| — | — | — | — | — |"
         rows.append(
             f"| {name} | {r['pairs']} ({r['poly_pairs']}) | {r['us_call']:.1f} µs | {r['us_wrap']:.1f} µs "
             f"| {r['us_fixed']:.1f} µs | {per:.2f} µs | {r['us_same']:.1f} µs " + work)
     note = (f"\n\nThread-time medians, {n} calls per figure, `q` cycling over 200 random in-limit configurations; "
             "GJK work over the separated polytope pairs of 20 configurations (`bench/pair_profile.py`). *per pair* "
             "is (kernel - fixed) / pairs; *Python wrapper* is the best of 21 interleaved runs (as `bench backends`); *same q* repeats one configuration (forward kinematics skipped, branch "
-            "predictor trained). z1's pairs all have a cylinder side (GJK and EPA on support functions, "
+            "predictor trained). *by the joints of the pair's table*: the mean GJK iterations of the pairs whose "
+            "pose depends on 1, 2 or 3 joint values (their seed tables, `armguard_analytic._engine._seeds`), and of "
+            "those without a table. z1's pairs all have a cylinder side (GJK and EPA on support functions, "
             "`_pair_cylinder.support_pair_graph`): not counted.")
     return "\n".join(rows) + note
 

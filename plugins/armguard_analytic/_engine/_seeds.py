@@ -1,11 +1,9 @@
 """Seed tables: where GJK starts on a link-frame pair whose relative pose depends on one to three joints.
 
-GJK on two hulls of links two joints apart took 7-10 iterations from a cold start on the public
-robots' hulls (``bench pair_profile``), even started along the exact final direction: their nearest
-features are faces and edges nearly parallel, and GJK builds its simplex one support at a time.  And
-EPA, on the pairs that overlap at a configuration (17 % of ur3's random configurations for some of
-its pairs), took ~10 us a depth.  The pose of link B in link A's frame, though, depends only on the
-joints between them (the links on one chain from the root and not on the other: their joint values,
+GJK on two hulls of links a few joints apart takes many iterations from a cold start on the public
+robots' hulls, even along a good first direction: their nearest features are faces and edges nearly
+parallel, and GJK builds its simplex one support at a time.  The pose of link B in link A's frame,
+though, depends only on the joints between them (the links on one chain from the root and not on the other: their joint values,
 mimic terms included).  For a pair whose pose depends on one, two or three joint values, this module
 runs the narrow phase at the nodes of a grid over them (64 nodes for one joint, 32 x 32 for two,
 16 x 16 x 16 for three; a revolute joint that turns a whole turn or more, or without limits, over
@@ -14,16 +12,18 @@ one turn with its values wrapped onto the grid; any other over its limits, at mo
 simplex GJK ended with when the hulls are apart (the support index pairs of up to three vertices)
 or the facet EPA ended on when they overlap (three vertices).  At a check,
 :func:`._narrow.narrow_rel` starts GJK from the seed of the node nearest the check's joint values
-(``_pair_gjk._gjk_body``'s ``seed``): near a facet, GJK's tetrahedron holds the facet, and EPA starts
-next to its answer.  A vertex of a seed is a point of the Minkowski difference at every pose, and GJK
+(``_pair_gjk._gjk_body``'s ``seed``); where the hulls overlap, GJK reaches its tetrahedron from the
+facet's vertices.  EPA itself still starts from GJK's tetrahedron: inserting the seed facet into its
+polytope as well saved ur3's overlapping pairs few EPA iterations, too few for the code (on hulls
+of 400-650 vertices the nearest facet changes between grid nodes).  A vertex of a seed is a point of the Minkowski difference at every pose, and GJK
 and EPA stop only on their usual tests after true supports, so a seed changes the number of
-iterations, never the answer: on kuka_iiwa's six pairs two joints apart, 8.9 iterations from a cold
-start, 2.5 seeded (2-joint tables); its pairs three joints apart 4.2 and 2.9.  A pair whose pose
-depends on four joints or more (links far apart, 2.5-4 iterations cold) has no table: an 8^4 grid
-gave no fewer iterations.
+iterations, never the answer.  ``python -m bench pair_profile`` counts them: on kuka_iiwa's separated
+pairs two joints apart 2.5 seeded against 9.7 from a cold start, three joints apart 3.0 against 5.4.
+A pair whose pose depends on four joints or more (links far apart, about 4 iterations cold) has no
+table: a grid over four joints fine enough to help would take megabytes a pair.
 
 Made at each build, in Python over the compiled ``gjk_dir_rel`` and ``epa_depth`` (the signatures
-the kernels call), ~5 us a node; kept per process (:data:`CACHE_BYTES`, keyed by the hulls, the
+the kernels call); kept per process (:data:`CACHE_BYTES`, keyed by the hulls, the
 links' chains and the grid), so a rebuild after a scene edit makes none again.
 
 Layout (``._layout``): ``spair`` ``(n_pairs, 6)`` int64 ``[first row of the pair's table in sdt (-1:
@@ -138,7 +138,7 @@ _cache_lock = threading.Lock()
 CACHE_BYTES = 64 << 20
 """Bytes of seed tables kept in this process (least recently used dropped first; a 16^3 table is
 229 kB): a Detector rebuilt after a scene edit, or a second checker on the same model, finds its
-tables here instead of making them again (so101: 0.6 s of GJK and EPA for 54 tables)."""
+tables here instead of making them again (``tests/test_engine_seeds.py``)."""
 
 
 def _key(tree, la: int, lb: int, js: tuple, axes: list, part: tuple, tol: tuple) -> bytes:

@@ -203,9 +203,9 @@ def _gjk_body(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, 
     the pose, so GJK may start from them: they enter the simplex one by one before the first support
     (the sub-algorithm drops a vertex that does not bring the simplex nearer the origin), and GJK
     stops only on the same tests after a true support, so a seed changes how many iterations GJK
-    takes, never its answer beyond ``gjk_eps``.  On kuka_iiwa's hull pairs two joints apart: 8.9
+    takes, never its answer beyond ``gjk_eps``.  On kuka_iiwa's hull pairs two joints apart: 9.7
     iterations from a cold start, 2.5 from the simplex of the nearest node of a 32 x 32 grid over
-    their two joints.  When ``simp`` has 16 entries or more, ``simp[9:16]`` receives the final
+    their two joints (``python -m bench pair_profile``).  When ``simp`` has 16 entries or more, ``simp[9:16]`` receives the final
     simplex in ``seed``'s layout when GJK ends ``GJK_SEPARATED`` (else ``simp[9] = 0``): how a seed
     table is made."""
     ns = 0  # (each use of seed sits under "seed is not None", a branch numba prunes for None)
