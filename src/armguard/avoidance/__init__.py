@@ -193,7 +193,7 @@ def avoid(v_cmd, distances, damper: Damper, *, tol: Tolerances = DEFAULT_TOLERAN
     upper = np.concatenate([np.minimum(lim, big), np.full(len(rows), big)])
     lower = np.concatenate([-np.minimum(lim, big), b])
     x, _, flag, _ = daqp.solve(np.eye(nv), -v_cmd, A, upper, lower, np.zeros(nv + len(rows), dtype=np.intc))
-    x = np.asarray(x, dtype=np.float64)
+    x = np.clip(np.asarray(x, dtype=np.float64), -lim, lim)  # the limits exactly (DAQP meets them to its tolerance)
     if flag != 1 or not np.all(np.isfinite(x)):
         return _result(np.zeros(nv), v_cmd, rows, b, A, dmin, f"daqp: exit flag {flag}; stopped", tol)
     worst = max(float(np.max(b - A @ x, initial=0.0)), float(np.max(np.abs(x) - lim, initial=0.0)))

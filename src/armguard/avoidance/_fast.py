@@ -140,7 +140,9 @@ def filter_velocity(v_cmd: np.ndarray, d: np.ndarray, J: np.ndarray, lim: np.nda
         if buf is None:
             buf = _BUFFERS[(n, nv)] = _Buffers(n, nv)
         x, _, flag, _ = daqp.solve(buf.eye, -v_cmd, A, upper[:nv + k], lower[:nv + k], buf.sense[:nv + k])
-        v = np.asarray(x, dtype=np.float64)
+        # the limits exactly: DAQP meets a bound to its own tolerance (1.9e-34 rad/s was seen on a column
+        # whose limit is 0, another robot's under a Guard); the constraint check below reads this velocity
+        v = np.clip(np.asarray(x, dtype=np.float64), -lim, lim)
         note = "daqp: optimal"
         if flag != 1:
             v, note = np.zeros(nv), f"daqp: exit flag {flag}; stopped"
