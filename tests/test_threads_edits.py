@@ -183,3 +183,63 @@ def test_the_anytime_budget_recovers_after_a_rebuild(ranger, backend, budget_us)
     sc.add_body("post", [Sphere([3.0, 3.0, 3.0], 0.1)])  # far from everything: the same pairs cost the same
     after = [det.check(q, budget_us=budget_us).n_evaluated for _ in range(12)]
     assert max(after[-6:]) >= max(1, min(before) // 4), (before, after)
+
+
+@pytest.mark.parametrize("backend, n_calls", [("analytic", 300), ("coal", 40)])
+def test_checks_while_another_thread_moves_the_threshold(ranger, backend, n_calls):
+    # Every report answers for the threshold it names: its status and (exact) the pairs within it.  set_threshold used to write the kernel's threshold in place
+    # (a check could read two thresholds, report another than it used, or run with one beyond the
+    # margin its obstacle lists were built for until the rebuild landed).
+    lo, hi = 0.02, 0.4  # the first move to hi rebuilds the lists (beyond the margin built for lo)
+    det = armguard.Detector(ranger.scene, threshold=lo, backend=backend)
+    exact = armguard.Detector(ranger.scene, threshold=hi, backend=backend)
+    Q = ranger.scene_q(ranger.random_q(20, 8))
+    dmin = [float(min(exact.pair_distances(q).distance)) for q in Q]
+    pd = [np.sort(exact.pair_distances(q).distance) for q in Q]
+    assert any(lo < d <= hi for d in dmin)  # configurations whose status the threshold decides
+
+    def expected(i: int, thr: float) -> armguard.Status:
+        level = ranger.tol.length
+        return (armguard.Status.COLLISION if dmin[i] <= level
+                else armguard.Status.WARNING if dmin[i] <= thr else armguard.Status.CLEAR)
+
+    stop = threading.Event()
+    errors: list = []
+    wrong: list = []
+
+    def editor() -> None:
+        k = 0
+        while not stop.is_set():
+            det.set_threshold(hi if k % 2 == 0 else lo)
+            k += 1
+            stop.wait(0.0005)
+
+    def worker(t: int) -> None:
+        rng = np.random.default_rng(t)
+        try:
+            for it in range(n_calls):
+                i = int(rng.integers(len(Q)))
+                if it % 3 == 2:
+                    rep = det.check_many(Q[i:i + 1])
+                    thr, st = rep.threshold, rep.statuses()[0]
+                    if thr not in (lo, hi) or st != expected(i, thr):
+                        wrong.append(("check_many", i, thr, st))
+                    continue
+                lazy = it % 3 == 1
+                rep = det.check(Q[i], lazy=lazy)
+                thr = rep.threshold
+                if thr not in (lo, hi) or rep.status != expected(i, thr):
+                    wrong.append(("check", lazy, i, thr, rep.status))
+                if not lazy:  # exact: every pair within the threshold, with its distance
+                    within = sorted(r.distance for r in rep.within_threshold)
+                    want = pd[i][pd[i] <= thr]
+                    if len(within) != len(want) or not np.allclose(within, want, atol=1e-9):
+                        wrong.append(("within", i, thr, len(within), len(want)))
+        except BaseException as exc:  # noqa: BLE001 - reported in the test's thread
+            errors.append(exc)
+
+    _edit_while(editor, [lambda t=t: worker(t) for t in range(3)], stop)
+    if errors:
+        raise errors[0]
+    assert wrong == []
+    assert det.threshold in (lo, hi)

@@ -22,15 +22,16 @@ if TYPE_CHECKING:
 __all__ = ["rows", "rows_here", "yesno_rows"]
 
 
-def rows(det: "FusedDetector", b: "Built", Q: np.ndarray, mode: int) -> tuple:
+def rows(det: "FusedDetector", b: "Built", Q: np.ndarray, mode: int, prm: np.ndarray) -> tuple:
     """``(min_d (M, 4), status (M,), err)``: the kernel of revision ``b`` (:mod:`._built`, one for the
     whole batch) over the rows of ``Q`` (a C-contiguous float64 ``(M, n_q)`` array in the scene's joint
     order; callers check that) in ``mode``, split over threads for a large ``M``; ``err`` the first
-    failing row's error code (0: none; the kernel refuses a non-finite row itself)."""
+    failing row's error code (0: none; the kernel refuses a non-finite row itself).  ``prm``: the
+    threshold array the caller read from ``b`` once (``FusedDetector._set_limits``), every thread's."""
     M = Q.shape[0]
     n_threads = row_threads(M)
     if n_threads == 1:
-        return rows_here(det, b, Q, mode)
+        return rows_here(det, b, Q, mode, prm)
     min_d = np.empty((M, 4))  # the kernel writes every row (read only when err == 0)
     status = np.empty(M, dtype=np.int64)
     SF2, SI2 = np.tile(b.SF0, (n_threads, 1)), np.tile(b.SI0, (n_threads, 1))
@@ -39,7 +40,7 @@ def rows(det: "FusedDetector", b: "Built", Q: np.ndarray, mode: int) -> tuple:
     bounds = [(M * k) // n_threads for k in range(n_threads + 1)]
     # each thread gets its own copy of the (small) model buffers: shared arrays would make the
     # threads contend on their cache lines (the copies cost little against a batch this long)
-    per = [(b.H.copy(), b.MF.copy(), b.MI.copy(), b.prm.copy(), iprm.copy(), b.all_p.copy())
+    per = [(b.H.copy(), b.MF.copy(), b.MI.copy(), prm.copy(), iprm.copy(), b.all_p.copy())
            for _ in range(n_threads)]
 
     def work(k: int) -> int:  # the kernel releases the GIL: threads run in parallel
@@ -52,7 +53,7 @@ def rows(det: "FusedDetector", b: "Built", Q: np.ndarray, mode: int) -> tuple:
     return min_d, status, next((e for e in errs if e != 0), 0)
 
 
-def rows_here(det: "FusedDetector", b: "Built", Q: np.ndarray, mode: int) -> tuple:
+def rows_here(det: "FusedDetector", b: "Built", Q: np.ndarray, mode: int, prm: np.ndarray) -> tuple:
     """:func:`rows` on the calling thread alone: its batch scratch
     (:meth:`._scratch._Scratch.batch_buffers`), the model buffers shared (the kernel only reads
     them), nothing copied."""
@@ -60,7 +61,7 @@ def rows_here(det: "FusedDetector", b: "Built", Q: np.ndarray, mode: int) -> tup
     SF, SI, iprm = det._scratch(b).batch_buffers(mode)
     min_d = np.empty((M, 4))  # the kernel writes every row (read only when err == 0)
     status = np.empty(M, dtype=np.int64)
-    err = kn.detect_rows(Q, 0, M, b.H, b.MF, b.MI, SF, SI, b.prm, iprm, b.all_p, min_d, status, b.fn)
+    err = kn.detect_rows(Q, 0, M, b.H, b.MF, b.MI, SF, SI, prm, iprm, b.all_p, min_d, status, b.fn)
     return min_d, status, int(err)
 
 
@@ -70,7 +71,7 @@ def yesno_rows(det: "FusedDetector", Q: np.ndarray) -> tuple:
     each Python step it skips is a measurable share of it (``python -m bench backends``)."""
     b = det._fresh()
     if Q.shape[0] <= MIN_ROWS_PER_THREAD or CPUS == 1:  # row_threads would say 1
-        _, status, err = rows_here(det, b, Q, kn.MODE_YESNO)
+        _, status, err = rows_here(det, b, Q, kn.MODE_YESNO, b.prm)
     else:
-        _, status, err = rows(det, b, Q, kn.MODE_YESNO)
+        _, status, err = rows(det, b, Q, kn.MODE_YESNO, b.prm)
     return status == kn.ST_COLLISION, err

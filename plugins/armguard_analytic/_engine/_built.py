@@ -33,12 +33,13 @@ def _readonly(a: np.ndarray) -> np.ndarray:
 
 class Built:
     """Everything one revision's calls read (see the module docstring).  Made by
-    :meth:`FusedDetector.prepare`; nothing here changes after it is published except the threshold
-    and stopping distance in ``prm`` (``set_threshold``), the per-thread scratch in ``tls`` and the
+    :meth:`FusedDetector.prepare`; nothing here changes after it is published except ``lim`` (``(prm,
+    threshold, stopping distance)``, what a call reads once) and ``prm``, replaced (never written) by
+    ``set_threshold`` (``FusedDetector._set_limits``), the per-thread scratch in ``tls`` and the
     ``pair_distances`` selection cache."""
 
     __slots__ = ("det", "revision", "model", "layout", "H", "MF", "MI", "SF0", "SI0", "P", "ev_off", "sum_off",
-                 "all_p", "prm", "iprm", "iprm_by_mode", "tls", "fn", "entry", "call_us", "releases_gil", "q_shape",
+                 "all_p", "prm", "lim", "iprm", "iprm_by_mode", "tls", "fn", "entry", "call_us", "releases_gil", "q_shape",
                  "names_a", "names_b", "links_a", "static_shapes", "margin_built", "pd_cache")
 
     def __init__(self, det: "FusedDetector", revision, model) -> None:

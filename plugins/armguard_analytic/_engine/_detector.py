@@ -203,6 +203,7 @@ class FusedDetector(Detector):
         b.all_p = L.view(b.MI, "all_p")
         b.prm = np.array([self._threshold, self._stopping, self._tol.length, self._tol.parallel,
                               self._tol.gjk_epsilon, self._tol.penetration_witness_offset])
+        b.lim = (b.prm, self._threshold, self._stopping)
         b.iprm = np.array([kn.MODE_EXACT, 0, self._tol.gjk_max_iterations, 1, 0], dtype=np.int64)
         b.iprm_by_mode = {}
         for mode in (kn.MODE_EXACT, kn.MODE_LAZY, kn.MODE_ANYTIME, kn.MODE_YESNO, kn.MODE_ALL, kn.MODE_MIN):
@@ -289,16 +290,30 @@ class FusedDetector(Detector):
         return self._b.P
 
     def set_threshold(self, threshold: float) -> None:
-        self._threshold = _check_length(threshold, "threshold")
-        self._b.prm[0] = self._threshold
-        if max(self._threshold, self._stopping) > self._b.margin_built:
-            self.prepare()
+        self._set_limits(_check_length(threshold, "threshold"), self._stopping)
 
     def set_stopping_distance(self, stopping_distance: float) -> None:
-        self._stopping = _check_length(stopping_distance, "stopping_distance")
-        self._b.prm[1] = self._stopping
-        if max(self._threshold, self._stopping) > self._b.margin_built:
-            self.prepare()
+        self._set_limits(self._threshold, _check_length(stopping_distance, "stopping_distance"))
+
+    def _set_limits(self, threshold: float, stopping: float) -> None:
+        """Publish a new threshold and stopping distance.  A call reads ``Built.lim`` once, passes its
+        ``prm`` to the kernel and reports its values, so ``prm`` is never written after it is
+        published: the new values go into a new array, published with them in one assignment (a call on another thread meanwhile keeps
+        the one it started with; writing ``prm[0]`` in place could hand one call two thresholds).  A
+        value beyond the margin the obstacle lists were built with rebuilds them first: until that
+        build is published, calls run on the old one with the old values, never on lists too short
+        for the new threshold."""
+        with self._prepare_lock:
+            b = self._b
+            if max(threshold, stopping) > b.margin_built:
+                self._threshold, self._stopping = threshold, stopping
+                self.prepare()
+                return
+            prm = b.prm.copy()
+            prm[0], prm[1] = threshold, stopping
+            b.lim = (prm, threshold, stopping)  # what the calls read
+            b.prm = prm
+            self._threshold, self._stopping = threshold, stopping
 
     def set_active(self, name: str | None) -> None:
         if name is not None and name not in self.scene.robots:
@@ -365,21 +380,24 @@ class FusedDetector(Detector):
             return free, us, True
         return _entry_point(*s.entry_args, release_gil=False), us, False
 
-    def _run(self, s: _Scratch, mode: int, allowance: int, lazy: bool, sel=None) -> tuple[int, int]:
+    def _run(self, s: _Scratch, mode: int, allowance: int, lazy: bool, sel=None) -> tuple[int, int, tuple]:
+        """One kernel call in ``mode`` on this thread's scratch: ``(status, evaluated pairs, lim)``,
+        ``lim`` the ``Built.lim`` the call read (``_set_limits``)."""
         self._release_last(s)
         b = s.b
+        lim = b.lim
         q1 = s.q1
         iprm = s.iprm_by_mode[mode]
         if mode == kn.MODE_ANYTIME:
             iprm[1] = allowance
             iprm[4] = 1 if lazy else 0
         if sel is None:  # the same argument types as check's: its bound overload, without the dispatcher
-            status, n_eval, err = b.entry(b.fn, q1, b.H, b.MF, b.MI, s.SF, s.SI, b.prm, iprm, b.all_p)
+            status, n_eval, err = b.entry(b.fn, q1, b.H, b.MF, b.MI, s.SF, s.SI, lim[0], iprm, b.all_p)
         else:
-            status, n_eval, err = detect_entry(b.fn, q1, b.H, b.MF, b.MI, s.SF, s.SI, b.prm, iprm, sel)
+            status, n_eval, err = detect_entry(b.fn, q1, b.H, b.MF, b.MI, s.SF, s.SI, lim[0], iprm, sel)
         if err:
             self._raise_kernel_error(err, q1, "Detector.check: q" if sel is None else "Detector.pair_distances: q", b=b)
-        return status, n_eval
+        return status, n_eval, lim
 
     def _raise_kernel_error(self, err: int, Q: np.ndarray, where: str = "Detector.check: q", batch: bool = False,
                             b: Built | None = None) -> None:
@@ -435,7 +453,11 @@ class FusedDetector(Detector):
                 last.detach()
             del last
         if budget_us is None and not lazy:
-            status, n_eval, err = b.entry(*s.entry_args)  # q1 is the array in entry_args
+            args = s.entry_args
+            lim = b.lim  # read once: the values this call uses and reports (_set_limits)
+            if args[7] is not lim[0]:
+                args = s.bind_prm(lim[0])
+            status, n_eval, err = b.entry(*args)  # q1 is the array in entry_args
             if err:
                 self._raise_kernel_error(err, q1, b=b)
             raw = _Raw(b, s.SF, s.SI, b.ev_off, b.sum_off, n_eval, None, None, _MODE_EXACT)
@@ -448,17 +470,17 @@ class FusedDetector(Detector):
                     self._ns_per_pair = 0.8 * ref + 0.2 * x
                 else:
                     self._learn(elapsed, n_eval, None)
-            return DetectionReport._from_check(STATUS_CODES[status], self._threshold, self._stopping, elapsed, raw)
+            return DetectionReport._from_check(STATUS_CODES[status], lim[1], lim[2], elapsed, raw)
         if budget_us is not None:
             us = float(budget_us)
             if not (us >= 0.0 and math.isfinite(us)):
                 raise DetectionError(f"budget_us: must be finite and >= 0, got {budget_us!r}")
             allowance = int(max(0.0, us * 1e3) // self._ns_per_pair)
             mode = kn.MODE_ANYTIME
-            status, n_eval = self._run(s, mode, allowance, lazy)
+            status, n_eval, lim = self._run(s, mode, allowance, lazy)
         else:
             mode = kn.MODE_LAZY if lazy else kn.MODE_EXACT
-            status, n_eval = self._run(s, mode, 0, False)
+            status, n_eval, lim = self._run(s, mode, 0, False)
         raw_buffers = (s.SF, s.SI, b.ev_off, b.sum_off)
         if mode == kn.MODE_EXACT:
             flags = bounds = None
@@ -466,8 +488,8 @@ class FusedDetector(Detector):
             flags, bounds = s.pflag.copy(), s.plb.copy()
         elapsed = (_perf_counter() - t0) * 1e6
         self._learn(elapsed, n_eval, budget_us)
-        raw = s.last_raw = _Raw(b, *raw_buffers, n_eval, flags, bounds, mode)
-        return DetectionReport._from_check(STATUS_CODES[status], self._threshold, self._stopping, elapsed, raw)
+        raw = s.last_raw = _Raw(b, *raw_buffers, n_eval, flags, bounds, mode, max(lim[1], lim[2]))
+        return DetectionReport._from_check(STATUS_CODES[status], lim[1], lim[2], elapsed, raw)
 
     def _learn(self, elapsed_us: float, n_eval: int, budget_us) -> None:
         """The anytime mode's cost model, an exponential average of ns per evaluated pair, after one
@@ -522,30 +544,32 @@ class FusedDetector(Detector):
             raise DetectionError(f"Q: expected an (M, {n_q}) array of numbers") from exc
         if Q.ndim != 2 or Q.shape[1] != n_q:
             raise DetectionError(f"Q: expected shape (M, {n_q}), got {Q.shape}")
-        min_d, status, err = rows(self, b, Q, mode)
+        lim = b.lim  # read once: the values the batch uses and reports (_set_limits)
+        min_d, status, err = rows(self, b, Q, mode, lim[0])
         if err != 0:
             self._raise_kernel_error(err, Q, "Detector: Q", batch=True, b=b)
-        return min_d, status
+        return min_d, status, lim
 
     def check_many(self, Q) -> BatchReport:
         """Exact per-category nearest distances and status for each row of ``Q`` ``(M, n_q)``, in parallel."""
-        min_d, status = self._many(Q, kn.MODE_MIN)
-        return BatchReport(min_d, status == kn.ST_COLLISION, status.astype(np.int8), self._threshold, self._stopping)
+        min_d, status, lim = self._many(Q, kn.MODE_MIN)
+        return BatchReport(min_d, status == kn.ST_COLLISION, status.astype(np.int8), lim[1], lim[2])
 
     def check_many_bruteforce(self, Q) -> BatchReport:
         """Like :meth:`check_many` but every candidate pair is evaluated (no bounds, no BVH).
 
         The all-pairs path the tests compare the pruned one against (same narrow phase)."""
-        min_d, status = self._many(Q, kn.MODE_ALL)
-        level = max(self._tol.length, self._stopping)  # the contact tolerance, as the kernel
+        min_d, status, lim = self._many(Q, kn.MODE_ALL)
+        threshold, stopping = lim[1], lim[2]
+        level = max(self._tol.length, stopping)  # the contact tolerance, as the kernel
         dmin = min_d.min(axis=1)
         status = np.where(dmin <= level, kn.ST_COLLISION,
-                          np.where(dmin <= max(self._threshold, self._stopping), kn.ST_WARNING, kn.ST_CLEAR))
-        return BatchReport(min_d, status == kn.ST_COLLISION, status.astype(np.int8), self._threshold, self._stopping)
+                          np.where(dmin <= max(threshold, stopping), kn.ST_WARNING, kn.ST_CLEAR))
+        return BatchReport(min_d, status == kn.ST_COLLISION, status.astype(np.int8), threshold, stopping)
 
     def collides_many(self, Q) -> np.ndarray:
         """``(M,) bool``: collision (distance <= 0, or <= the stopping distance) per row, early exit."""
-        _, status = self._many(Q, kn.MODE_YESNO)
+        _, status, _ = self._many(Q, kn.MODE_YESNO)
         return status == kn.ST_COLLISION
 
     # ------------------------------------------------------------------ reporting helpers

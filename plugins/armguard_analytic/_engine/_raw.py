@@ -48,13 +48,14 @@ class _Raw:
     referenced (:meth:`FusedDetector._release_last`).  A report dropped before the next check (a
     control loop reading only ``status``) costs no copy."""
 
-    __slots__ = ("b", "_f", "_i", "_SF", "_SI", "_of", "_oi", "n_evaluated", "flags", "bounds", "mode")
+    __slots__ = ("b", "_f", "_i", "_SF", "_SI", "_of", "_oi", "n_evaluated", "flags", "bounds", "mode", "reach")
 
     def __init__(self, b: "Built", SF: np.ndarray, SI: np.ndarray, of: int, oi: int, n_evaluated: int,
-                 flags, bounds, mode) -> None:
+                 flags, bounds, mode, reach: float = 0.0) -> None:
         self.b, self._SF, self._SI, self._of, self._oi, self.n_evaluated = b, SF, SI, of, oi, n_evaluated
         self._f = self._i = None
         self.flags, self.bounds, self.mode = flags, bounds, mode
+        self.reach = reach  # the larger of the threshold and stopping distance the check used
 
     def detach(self) -> None:
         """Copy this check's rows out of the scratch buffers (idempotent)."""
@@ -104,7 +105,7 @@ class _Raw:
             na, nb = b.pair_names(int(p))
             out.append(NotEvaluated(na, nb, CATEGORIES[int(cat[p])], float(plb[p]), int(p)))
         if self.mode == kn.MODE_LAZY:  # lazily skipped pairs: proved beyond the threshold
-            thr = max(b.det.threshold, b.det.stopping_distance)
+            thr = self.reach
             for p in np.flatnonzero(flags == 2):
                 na, nb = b.pair_names(int(p))
                 out.append(NotEvaluated(na, nb, CATEGORIES[int(cat[p])], max(float(plb[p]), thr), int(p)))

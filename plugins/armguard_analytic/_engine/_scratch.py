@@ -94,6 +94,13 @@ class _Scratch:
         self.last_raw = None  # this thread's last report, still reading SF / SI
         self.batch = None  # the buffers of this thread's one-thread batches (:meth:`batch_buffers`)
 
+    def bind_prm(self, prm: np.ndarray) -> tuple:
+        """``entry_args`` with the threshold array ``prm`` (``FusedDetector._set_limits`` publishes a
+        new one instead of writing the old)."""
+        a = self.entry_args
+        self.entry_args = a = (*a[:7], prm, *a[8:])
+        return a
+
     def batch_buffers(self, mode: int) -> tuple:
         """``(SF, SI, iprm)`` for a batch run on this thread alone, in ``mode``: scratch of its own (a
         batch never moves the state ``check`` keeps between calls, nor a report still reading

@@ -88,7 +88,17 @@ class _Plan:
     keeps the names of the build that made it."""
 
     __slots__ = ("model", "checker", "distances", "revision", "generation", "active", "bounds", "sel", "all_rows",
-                 "swap", "lever", "a", "b", "cat_code", "cat_masks", "margin_built", "limits", "n_q", "det")
+                 "swap", "lever", "a", "b", "cat_code", "cat_masks", "margin_built", "limits", "n_q", "det",
+                 "threshold", "stopping")
+
+    def with_levels(self, threshold: float, stopping: float) -> "_Plan":
+        """This build with another threshold and stopping distance (within ``margin_built``): the same
+        generation, so every thread's state carries over (``RangerDetector._set_limits``)."""
+        new = _Plan()
+        for k in _Plan.__slots__:
+            setattr(new, k, getattr(self, k))
+        new.threshold, new.stopping = threshold, stopping
+        return new
 
 
 class _Raw:
@@ -180,8 +190,8 @@ class RangerDetector(Detector):
                                "use collides_many(Q) with it, or a backend that answers distances")
 
     # ------------------------------------------------------------------ settings
-    threshold = property(lambda self: self._threshold, doc="Detection threshold (m).")
-    stopping_distance = property(lambda self: self._stopping, doc="Stopping distance (m); 0 when unset.")
+    threshold = property(lambda self: self._plan.threshold, doc="Detection threshold (m).")
+    stopping_distance = property(lambda self: self._plan.stopping, doc="Stopping distance (m); 0 when unset.")
     active = property(lambda self: self._active, doc="The active robot's name, or None for all arms.")
 
     # the current build's parts (a call reads self._fresh() once instead)
@@ -202,14 +212,23 @@ class RangerDetector(Detector):
         return tuple(f"{r}/{ln}" for r, robot in self.scene.robots.items() for ln in robot.link_names)
 
     def set_threshold(self, threshold: float) -> None:
-        self._threshold = check_length(threshold, "threshold")
-        if max(self._threshold, self._stopping) > self._plan.margin_built:
-            self.prepare()
+        self._set_limits(check_length(threshold, "threshold"), self._stopping)
 
     def set_stopping_distance(self, stopping_distance: float) -> None:
-        self._stopping = check_length(stopping_distance, "stopping_distance")
-        if max(self._threshold, self._stopping) > self._plan.margin_built:
-            self.prepare()
+        self._set_limits(self._threshold, check_length(stopping_distance, "stopping_distance"))
+
+    def _set_limits(self, threshold: float, stopping: float) -> None:
+        """Publish a new threshold and stopping distance with the build they go with: a call reads
+        ``_plan`` once and takes both from it, so it never pairs one threshold with obstacle lists
+        built for a smaller one, nor reports a threshold it did not use.  Beyond the margin the
+        lists were built with, they are built again first."""
+        with self._lock:
+            self._threshold, self._stopping = threshold, stopping
+            plan = self._plan
+            if max(threshold, stopping) > plan.margin_built:
+                self._build(plan.model, plan.revision)
+            else:
+                self._plan = plan.with_levels(threshold, stopping)
 
     def set_active(self, name: str | None) -> None:
         if name is not None and name not in self.scene.robots:
@@ -251,6 +270,7 @@ class RangerDetector(Detector):
             plan.cat_code = b.category
             plan.cat_masks = tuple(b.category == c for c in range(len(CATEGORIES)))
             plan.margin_built = margin
+            plan.threshold, plan.stopping = self._threshold, self._stopping
             robots = [r for _, r in model._robots]  # the robots the Model moves, in its joint order
             slack = (self._tol_given or model.tol).joint_limit
             plan.limits = ((np.concatenate([r.lower for r in robots]) - slack,
@@ -329,9 +349,9 @@ class RangerDetector(Detector):
             plan.model.check_limits(q, "Detector.check")
         return q
 
-    def _levels(self) -> tuple[float, float]:
-        """(collision level, effective threshold), as the analytic kernel's."""
-        return max(self._tol.length, self._stopping), max(self._threshold, self._stopping)
+    def _levels(self, plan: _Plan) -> tuple[float, float]:
+        """(collision level, effective threshold) of build ``plan``, as the analytic kernel's."""
+        return max(self._tol.length, plan.stopping), max(plan.threshold, plan.stopping)
 
     def lower_bounds(self, q) -> np.ndarray:
         """``(P,)`` this thread's lower bound on every pair's distance at ``q`` (m; ``-inf``: never evaluated)."""
@@ -368,7 +388,7 @@ class RangerDetector(Detector):
                 raise DetectionError(f"budget_us: must be finite and >= 0, got {budget_us!r}")
         q = self._flat(q, plan)
         s = self._state(plan)
-        level, thr = self._levels()
+        level, thr = self._levels(plan)
         P = len(plan.sel)
         if budget_us is None and not lazy:  # exact: every listed pair
             which = np.arange(P)
@@ -396,7 +416,7 @@ class RangerDetector(Detector):
         elapsed = (time.perf_counter() - t0) * 1e6
         self._learn(elapsed, len(d))
         raw = _Raw(plan, d, pA, pB, which, flags, bounds, lazy)
-        return DetectionReport._from_check(status, self._threshold, self._stopping, elapsed, raw)
+        return DetectionReport._from_check(status, plan.threshold, plan.stopping, elapsed, raw)
 
     def _allowance(self, budget_us: float) -> int:
         """How many pairs the cost model says fit in ``budget_us`` besides the check's own cost."""
@@ -470,10 +490,10 @@ class RangerDetector(Detector):
             for c, mask in enumerate(plan.cat_masks):
                 if mask.any():
                     min_d[:, c] = D[:, mask].min(axis=1)
-        level, thr = self._levels()
+        level, thr = self._levels(plan)
         dmin = min_d.min(axis=1)
         status = np.where(dmin <= level, 2, np.where(dmin <= thr, 1, 0)).astype(np.int8)
-        return BatchReport(min_d, status == 2, status, self._threshold, self._stopping)
+        return BatchReport(min_d, status == 2, status, plan.threshold, plan.stopping)
 
     check_many_bruteforce = check_many
 
@@ -482,7 +502,7 @@ class RangerDetector(Detector):
         plan = self._fresh()
         Q = self._rows(Q, plan)
         if plan.active is None and plan.all_rows:
-            return plan.checker.collides(plan.model.pin_q(Q), margin=self._stopping)
+            return plan.checker.collides(plan.model.pin_q(Q), margin=plan.stopping)
         self._require_distances("active-arm batches (collides_many with active= checks the whole Model)", plan)
         return self.check_many(Q).collision
 
