@@ -9,9 +9,9 @@ compile, nearly all of it the four kernels it calls, ``pair_distance``'s caller 
 an address, each kernel's machine code is generated once, and a caller compiles without its
 callees (in any order, in either process of the first run's warm-up, :mod:`._warm`).  The cost per
 call is one indirect call with its arguments, against a microsecond of GJK; the hot small calls
-stay linked (the fused kernel links the pair step, the pair step the scalar pairs' kernel and the
-other narrow phase, which links the capsule-polytope kernel).  ``narrow_other``'s row is kept
-although no kernel calls it at its address now (the table only grows, see :data:`NATIVE`).
+stay linked (the fused kernel links the pair step, the pair step the scalar pairs' kernel).  The
+pair step calls both narrow phases at their addresses, so that it links nothing compiled with
+reference counting and may be compiled without (``._step``).
 
 ``fns`` (:func:`addresses`) is made in each process and passed down as an argument from the entry
 points: an address is never stored in a buffer that could reach another process.  The signature

@@ -13,10 +13,11 @@ from __future__ import annotations
 
 import numpy as np
 from numba import carray, njit
-from numba.core import types
+from numba.core import cgutils, types
 from numba.extending import intrinsic
+from numba.np.arrayobj import populate_array
 
-__all__ = ["Layout", "at", "seg1", "seg2", "seg3"]
+__all__ = ["Layout", "at", "seg1", "seg2", "seg3", "view1"]
 
 # Segment numbers are compiled into _kernel.py, _narrow.py and _pair_jacobian.py as constants and numba
 # caches key on the defining file only: a change to these tuples must come with an edit of those files.
@@ -117,21 +118,63 @@ def at(typingctx, buf, offset):  # pragma: no cover - compiled
     return sig, codegen
 
 
-# The views are numba.carray views of the buffers: they carry no reference to the buffer's memory
+def _view_codegen(ndim: int):
+    def typer(typingctx, buf, offset, *dims):
+        arr = types.Array(buf.dtype, ndim, "C")
+
+        def codegen(context, builder, signature, args):
+            src = context.make_array(signature.args[0])(context, builder, args[0])
+            data = builder.gep(src.data, [args[1]])
+            item = context.get_constant(types.intp, context.get_abi_sizeof(context.get_data_type(buf.dtype)))
+            shape = [context.cast(builder, a, t, types.intp) for a, t in zip(args[2:], signature.args[2:])]
+            strides, acc = [], item
+            for n in reversed(shape):
+                strides.insert(0, acc)
+                acc = builder.mul(acc, n)
+            out = context.make_array(arr)(context, builder)
+            populate_array(out, data=data, shape=cgutils.pack_array(builder, shape),
+                           strides=cgutils.pack_array(builder, strides), itemsize=item, meminfo=None)
+            return out._getvalue()
+
+        return arr(buf, offset, *dims), codegen
+
+    return typer
+
+
+@intrinsic
+def view1(typingctx, buf, offset, n):  # pragma: no cover - compiled
+    """The ``n`` elements of the 1-D array ``buf`` from ``offset``: a C array without a meminfo, as
+    ``numba.carray(at(buf, offset), (n,))``, but built in place, so that a kernel compiled without
+    reference counting may take one (numba refuses ``carray`` there: its implementation is a
+    function that returns a new array).  :func:`seg1` to :func:`seg3` are built the same way."""
+    return _view_codegen(1)(typingctx, buf, offset, n)
+
+
+@intrinsic
+def _view2(typingctx, buf, offset, n, w):  # pragma: no cover - compiled
+    return _view_codegen(2)(typingctx, buf, offset, n, w)
+
+
+@intrinsic
+def _view3(typingctx, buf, offset, n, w1, w2):  # pragma: no cover - compiled
+    return _view_codegen(3)(typingctx, buf, offset, n, w1, w2)
+
+
+# The views are views of the buffers without a meminfo (as numba.carray's): they carry no reference to the buffer's memory
 # (no meminfo), so creating and passing them costs no reference counting (a sliced and reshaped
 # view costs two atomic operations and a reshape helper call, ~25-30 ns: the ~55 views the kernel
 # takes per call cost more than the check itself, ~1.7 us).  They are only used inside a kernel
 # call while the caller holds the buffers; no kernel returns one.
 @njit(cache=True, inline="always")
 def seg1(buf, H, k):  # pragma: no cover - compiled
-    return carray(at(buf, H[2 * k]), (H[2 * k + 1],))
+    return view1(buf, H[2 * k], H[2 * k + 1])
 
 
 @njit(cache=True, inline="always")
 def seg2(buf, H, k, w):  # pragma: no cover - compiled
-    return carray(at(buf, H[2 * k]), (H[2 * k + 1], w))
+    return _view2(buf, H[2 * k], H[2 * k + 1], w)
 
 
 @njit(cache=True, inline="always")
 def seg3(buf, H, k, w1, w2):  # pragma: no cover - compiled
-    return carray(at(buf, H[2 * k]), (H[2 * k + 1], w1, w2))
+    return _view3(buf, H[2 * k], H[2 * k + 1], w1, w2)

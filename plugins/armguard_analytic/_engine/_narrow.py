@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 
-from numba import carray, njit
+from numba import njit
 
 from armguard.geometry._pair_segment_box import capsule_box_scalar
 from armguard.geometry._pair_segment_polytope import capsule_polytope_at
@@ -39,7 +39,7 @@ from armguard.geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_ca
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._calls import (FN_CONVEX, FN_EPA, FN_GJK_REL, FN_SAT_REL, FN_SUPPORT, call_convex, call_epa, call_gjk_rel,
                      call_sat_rel, call_support)
-from ._layout import K, at, seg1, seg2
+from ._layout import K, seg1, seg2, view1
 
 __all__ = ["pair_distance", "narrow_flat", "narrow_other", "narrow_rel", "wall_flat", "ERR_GJK", "NOT_SCALAR",
            "LINK_FRAME", "BOUNDED", "WORK_TAIL"]
@@ -280,7 +280,7 @@ def _to_world(SF, o, x, y, z, w):  # pragma: no cover - compiled
             _rt(SF, o, 2, 0) * x + _rt(SF, o, 2, 1) * y + _rt(SF, o, 2, 2) * z + w * _rt(SF, o, 2, 3))
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _cylinder_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, fns):  # pragma: no cover - compiled
     """:func:`narrow_rel` for a cylinder against a polytope core: the cylinder's 15-float buffer is
     mapped into the polytope's element frame F (``X_FC = X_WF^-1 X_WL X_LC``), GJK and EPA on support
@@ -371,7 +371,7 @@ def _seed(H, MF, MI, SF, p):  # pragma: no cover - compiled
     joint i, j, k]``, ``"sgrid"`` row ``p``: ``[lower, 1 / step]`` of each (``._seeds``)."""
     osp = H[2 * _K_spair] + 6 * p
     if p < 0 or p >= H[2 * _K_spair + 1] or MI[osp] < 0:
-        return carray(at(MI, 0), (0,))
+        return view1(MI, 0, 0)
     osg = H[2 * _K_sgrid] + 6 * p
     ofq = H[2 * _K_fk_q]
     n = MI[osp + 1]
@@ -383,10 +383,10 @@ def _seed(H, MF, MI, SF, p):  # pragma: no cover - compiled
             c = c * n + int(x - n * math.floor(x / n) + 0.5) % n
         else:
             c = c * n + int(min(max(x + 0.5, 0.0), n - 1.0))
-    return carray(at(MI, H[2 * _K_sdt] + 7 * (MI[osp] + c)), (7,))
+    return view1(MI, H[2 * _K_sdt] + 7 * (MI[osp] + c), 7)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, offset, level,
                beyond, fns, p):  # pragma: no cover - compiled
     """Two convex point cores (boxes, hulls; a point or segment against a polytope) whose points stay

@@ -8,11 +8,16 @@ times per check, so they read the packed buffers (:mod:`._layout`) by offset and
 without numba's reference counting (``_nrt=False``, a private option): they allocate nothing and
 keep no reference, and with it each call of a function taking arrays costs two atomic
 increments and decrements per array argument (~40 ns for :func:`record_pair`, more than the
-capsule-capsule distance itself).  The kernel that calls them keeps reference counting, and so does
-everything that links the convex kernels (:func:`._narrow.narrow_other`): compiled with
-``_nrt=False``, those make LLVM's code generator crash from a cold cache (a segfault in
-``finalize_object`` on the default 8 MiB stack; on an unlimited stack it had not finished after
-ten minutes; numba 0.68).  A cold-cache test (``tests/test_detect_cold.py``) guards this.
+capsule-capsule distance itself).  So is :func:`pair_step`, which calls both narrow phases at their
+addresses (:mod:`._calls`) and links nothing that keeps reference counting.  The kernel that calls
+it keeps reference counting, and so does everything that links the convex kernels
+(:func:`._narrow.narrow_other`): compiled with ``_nrt=False``, those make LLVM's code generator
+crash from a cold cache (a segfault in ``finalize_object`` on the default 8 MiB stack; on an
+unlimited stack it had not finished after ten minutes; numba 0.68).  A cold-cache test
+(``tests/test_detect_cold.py``) guards this.  Even with the views' meminfo null, a function with
+reference counting calls ``NRT_incref`` / ``NRT_decref`` for each array it takes or makes: with the
+pair step, the link-frame narrow phase and EPA compiled with it, those calls were 4 % of ur3's
+``pair_distances`` (sampled with ``perf``).
 """
 
 from __future__ import annotations
@@ -22,8 +27,8 @@ from numba import njit
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SUM_BEST, SUM_BSLOT
-from ._calls import FN_NARROW_REL, call_narrow_rel
-from ._narrow import BOUNDED, LINK_FRAME, narrow_flat, narrow_other, wall_flat
+from ._calls import FN_NARROW_OTHER, FN_NARROW_REL, call_narrow_other, call_narrow_rel
+from ._narrow import BOUNDED, LINK_FRAME, narrow_flat, wall_flat
 
 __all__ = ["evaluate_pair", "move_element", "move_pair", "pair_step", "record_pair"]
 
@@ -134,7 +139,7 @@ def move_pair(a, b, H, MF, MI, SF, SI, stamp_now):  # pragma: no cover - compile
         SI[ost + b] = stamp_now
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps, max_iter, offset, level, beyond, n_eval,
               stamp_now, fns):  # pragma: no cover - compiled
     """One pair of the kernel: :func:`evaluate_pair`, :func:`._narrow.narrow_other` for the pairs it
@@ -148,12 +153,10 @@ def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
     like a pair its bounding volumes cull, it can be neither its category's nearest nor within the
     threshold, and its bound is kept nowhere (the anytime state would read it as a distance).
 
-    ``fns``: the kernels' addresses (:func:`._calls.addresses`): the link-frame narrow phase is
-    called at its own (:mod:`._native`); :func:`evaluate_pair` and :func:`._narrow.narrow_other`
-    (whose GJK, EPA and convex kernels are called at theirs) are linked, and the fused kernel links
-    this function: the hot, small calls.
-    Compiled with reference counting, as it links the convex kernels; the kernel passes it the
-    buffers as meminfo-free views, so that costs no atomic operation."""
+    ``fns``: the kernels' addresses (:func:`._calls.addresses`): both narrow phases are called at
+    theirs (:mod:`._native`); :func:`evaluate_pair` and :func:`record_pair` are linked, and the
+    fused kernel links this function: the hot, small calls.  Compiled without reference counting
+    (see the module docstring): it links nothing that has it."""
     d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp_now)
     if err == LINK_FRAME:
         d, err = call_narrow_rel(fns[FN_NARROW_REL], (a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, offset,
@@ -163,7 +166,8 @@ def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
         if err < 0:  # overlapping cores with a depth wanted (or GJK unsettled): EPA / SAT on W points
             move_pair(a, b, H, MF, MI, SF, SI, stamp_now)
     if err < 0:
-        d, err = narrow_other(a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, offset, level, fns)
+        d, err = call_narrow_other(fns[FN_NARROW_OTHER], (a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter,
+                                                          offset, level, fns))
     if err == 0:
         if flag:
             SI[H[2 * _K_pflag] + p] = 1

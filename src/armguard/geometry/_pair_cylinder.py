@@ -39,7 +39,9 @@ A core is ``(p, cyl, r)``: ``cyl`` a Cylinder's 15-float buffer ``[c, r, r, h, R
 (``_pack``), or empty, and then the core is the hull of the points ``p (n, 3)`` (scanned, or climbed
 over their vertex graph when one is given: :func:`support_pair_graph`), swept
 by the radius ``r`` (spheres, capsules; 0 for polytopes).  Allocation-free: GJK's simplex and
-EPA's polytope live in the caller's ``work`` (``SUPPORT_WORK_SIZE`` float64).
+EPA's polytope live in the caller's ``work`` (``SUPPORT_WORK_SIZE`` float64), so these kernels are
+compiled without numba's reference counting (``_nrt=False``, as ``_pair_epa``), except
+:func:`support_pair`, which makes its empty graphs.
 """
 from __future__ import annotations
 
@@ -104,7 +106,7 @@ def _plane_bound(pa, ga, ca, pb, gb, cb, work, n, vx, vy, vz, ta, tb):  # pragma
     return ux * (ax - bx) + uy * (ay - by) + uz * (az - bz)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def gjk_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, eps_len, gjk_eps, max_iter, work, sa=-1, sb=-1, ta=None,
                 tb=None):  # pragma: no cover
     """GJK on the cores ``(pa, ca)`` and ``(pb, cb)`` from the initial direction ``d`` (B to A).
@@ -241,7 +243,7 @@ def support_pair(pa, ca, ra, pb, cb, rb, out, work, eps_len, gjk_eps, max_iter, 
     return support_pair_graph(pa, none, ca, ra, pb, none, cb, rb, out, work, eps_len, gjk_eps, max_iter, level)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def support_pair_graph(pa, ga, ca, ra, pb, gb, cb, rb, out, work, eps_len, gjk_eps, max_iter, level, ta=None,
                        tb=None):  # pragma: no cover
     """Signed distance (m) of the sphere-swept cores ``(pa, ca, ra)`` (A) and ``(pb, cb, rb)`` (B)

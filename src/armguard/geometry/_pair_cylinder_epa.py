@@ -15,7 +15,7 @@ from ._pair_epa import triangle_normal
 
 __all__ = ["epa_support"]
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _complete(pa, ga, ca, pb, gb, cb, work, n, eps):  # pragma: no cover - compiled
     """Complete GJK's simplex (``n < 4`` vertices, the origin within ``eps`` of it) to a tetrahedron
     of support points of ``M`` containing the origin: add supports along directions off the
@@ -92,7 +92,7 @@ def _complete(pa, ga, ca, pb, gb, cb, work, n, eps):  # pragma: no cover - compi
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _face(w, f, i0, i1, i2, tol):  # pragma: no cover - compiled
     """Face ``f`` = triangle ``(i0, i1, i2)`` (counter-clockwise seen from outside); False when it is
     degenerate or its plane has the origin outside (by more than ``tol``)."""
@@ -115,7 +115,7 @@ def _face(w, f, i0, i1, i2, tol):  # pragma: no cover - compiled
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _horizon(w, ne, a, b):  # pragma: no cover - compiled
     """Add the directed edge ``a -> b`` to the horizon, or cancel it against ``b -> a``; -1: full."""
     for k in range(ne):
@@ -133,7 +133,7 @@ def _horizon(w, ne, a, b):  # pragma: no cover - compiled
     return ne + 1
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _witness(w, i0, i1, i2, dbest, nx, ny, nz):  # pragma: no cover - compiled
     """The origin's projection ``p = dbest n`` onto the triangle of vertices ``i0, i1, i2`` in
     barycentric coordinates, applied to the vertices' A and B points.  Returns ``(ok, lmin, ax, ay, az, bx, by, bz)``, ``lmin`` the least
@@ -166,7 +166,7 @@ def _witness(w, i0, i1, i2, dbest, nx, ny, nz):  # pragma: no cover - compiled
     return True, min(l0, l1, l2), ax, ay, az, bx, by, bz
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _answer(w, nf, i0, i1, i2, dbest, nx, ny, nz, tol):  # pragma: no cover - compiled
     """EPA's answer ``(ok, depth, nx, ny, nz, ax, ay, az, bx, by, bz)`` at the closest face (vertices
     ``i0, i1, i2``; passed by vertex, as the face's slot may be reused once it is removed).
@@ -193,13 +193,13 @@ def _answer(w, nf, i0, i1, i2, dbest, nx, ny, nz, tol):  # pragma: no cover - co
     return found
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _area(ux, uy, uz, vx, vy, vz, nx, ny, nz):  # pragma: no cover - compiled
     """``(u x v) . n``: twice the signed area of the triangle (p, p + u, p + v) seen along ``n``."""
     return (uy * vz - uz * vy) * nx + (uz * vx - ux * vz) * ny + (ux * vy - uy * vx) * nz
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _settle(work, nf, fv, dbest, nx, ny, nz, h, best, tol):  # pragma: no cover - compiled
     """EPA's answer from the closest face (vertices ``fv``) when the polytope cannot grow (rounding on a curved core): its
     distance ``dbest`` when the support value ``h`` along its normal is within ``SUPPORT_GAP``,
@@ -211,7 +211,7 @@ def _settle(work, nf, fv, dbest, nx, ny, nz, h, best, tol):  # pragma: no cover 
     return best
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def epa_support(pa, ga, ca, pb, gb, cb, work, eps, tol, vis):  # pragma: no cover - compiled
     """EPA on ``M = A - B`` from the tetrahedron in ``work`` (GJK's, or :func:`_complete`'s).
 

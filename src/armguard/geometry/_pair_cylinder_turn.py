@@ -101,7 +101,7 @@ def _turned(cyl, work, o, t, wx, wy, wz, sx, sy, sz):  # pragma: no cover - comp
     return (cyl[0] + h * cyl[8] + r * ux, cyl[1] + h * cyl[11] + r * uy, cyl[2] + h * cyl[14] + r * uz)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _turn(work, n, ca, cb, t, da, db, eps2):  # pragma: no cover - compiled
     """The saved simplex (``_V0``) with its cylinder points turned to ``u(t)`` (``da``, ``db``: each
     side's ``[u_w, u_s]``; an empty ``ca`` / ``cb``: not a cylinder, kept), repeated points (within
@@ -138,7 +138,7 @@ def _turn(work, n, ca, cb, t, da, db, eps2):  # pragma: no cover - compiled
     return c, m, k0, k1, k2, k3, _combine(work, c, k0, k1, k2, k3)[3]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _refresh(work, n, ca, cb, ax, ay, az, bx, by, bz, eps2, dirs):  # pragma: no cover - compiled
     """The simplex ``work[_S0:]`` (``n`` vertices, weights at ``_L0``) with its cylinder points
     turned to the best common angle (the module docstring); ``a``, ``b``: the latest supports of A
