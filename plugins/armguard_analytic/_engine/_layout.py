@@ -17,7 +17,7 @@ from numba.core import cgutils, types
 from numba.extending import intrinsic
 from numba.np.arrayobj import populate_array
 
-__all__ = ["Layout", "at", "seg1", "seg2", "seg3", "view1"]
+__all__ = ["Layout", "at", "seg1", "seg2", "seg3", "view1", "view2"]
 
 # Segment numbers are compiled into _kernel.py, _narrow.py and _pair_jacobian.py as constants and numba
 # caches key on the defining file only: a change to these tuples must come with an edit of those files.
@@ -151,7 +151,7 @@ def view1(typingctx, buf, offset, n):  # pragma: no cover - compiled
 
 
 @intrinsic
-def _view2(typingctx, buf, offset, n, w):  # pragma: no cover - compiled
+def view2(typingctx, buf, offset, n, w):  # pragma: no cover - compiled
     return _view_codegen(2)(typingctx, buf, offset, n, w)
 
 
@@ -172,7 +172,7 @@ def seg1(buf, H, k):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def seg2(buf, H, k, w):  # pragma: no cover - compiled
-    return _view2(buf, H[2 * k], H[2 * k + 1], w)
+    return view2(buf, H[2 * k], H[2 * k + 1], w)
 
 
 @njit(cache=True, inline="always")
