@@ -79,7 +79,7 @@ def _capsule_box(verts, vs, ve, ra, box, gb, out, eps_len, eps_par, offset):  # 
     return capsule_box(verts[vs], verts[j], ra, b[0:3], b[3:6], b[6:15].reshape((3, 3)), out, eps_len, eps_par, offset)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def pair_distance(
     ga, gb, core, radius, verts, vstart, box, fnrm, fstart, edir, estart, adj, adjs, tri, tris, out, work,
     eps_len, eps_par, gjk_eps, max_iter, offset, level, fns,
@@ -138,7 +138,7 @@ def pair_distance(
     return d, 0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _capsule_polytope(seg, ra, k, pv, ppl, ped, pbis, pcen, pvs, pps, pes, rb, out, eps_len, eps_par, gjk_eps, max_iter,
                       offset):  # pragma: no cover - compiled
     """Capsule (core ``seg (2, 3)``, radius ``ra``) against static polytope number ``k`` of the packed
@@ -205,7 +205,7 @@ def narrow_flat(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, offset):  # pragma
     return 0.0, NOT_SCALAR
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def narrow_other(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, offset, level, fns):  # pragma: no cover
     """The pairs :func:`narrow_flat` leaves (``NOT_SCALAR``): capsule against a static polytope through
     the capsule-polytope kernel, everything else through :func:`pair_distance`.
