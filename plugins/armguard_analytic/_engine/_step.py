@@ -9,15 +9,15 @@ without numba's reference counting (``_nrt=False``, a private option): they allo
 keep no reference, and with it each call of a function taking arrays costs two atomic
 increments and decrements per array argument (~40 ns for :func:`record_pair`, more than the
 capsule-capsule distance itself).  So is :func:`pair_step`, which calls both narrow phases at their
-addresses (:mod:`._calls`) and links nothing that keeps reference counting.  The kernel that calls
-it keeps reference counting, and so does everything that links the convex kernels
-(:func:`._narrow.narrow_other`): compiled with ``_nrt=False``, those make LLVM's code generator
-crash from a cold cache (a segfault in ``finalize_object`` on the default 8 MiB stack; on an
-unlimited stack it had not finished after ten minutes; numba 0.68).  A cold-cache test
-(``tests/test_detect_cold.py``) guards this.  Even with the views' meminfo null, a function with
-reference counting calls ``NRT_incref`` / ``NRT_decref`` for each array it takes or makes: with the
-pair step, the link-frame narrow phase and EPA compiled with it, those calls were 4 % of ur3's
-``pair_distances`` (sampled with ``perf``).
+addresses (:mod:`._calls`), and so are the narrow phases.  Even with the views' meminfo null, a
+function with reference counting calls ``NRT_incref`` / ``NRT_decref`` for each array it takes or
+makes: with the pair step, the narrow phases and EPA compiled with it, those calls were 4 % of
+ur3's ``pair_distances`` (sampled with ``perf``).  Once, when the kernels linked the convex kernels
+instead of calling them at their addresses, compiling them without reference counting made LLVM's
+code generator crash from a cold cache (a segfault in ``finalize_object``; numba 0.68); a
+cold-cache test (``tests/test_detect_cold.py``) guards against its return.  The fused kernel
+(:mod:`._kernel`) keeps reference counting: per check, not per pair, its calls cost nothing
+measurable.
 """
 
 from __future__ import annotations
