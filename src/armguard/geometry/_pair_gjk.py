@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from ._pair_simplex import _closest_simplex, _closest_tetra, _closest_triangle, _origin_outside  # noqa: F401
@@ -80,20 +81,26 @@ def _climb(pb, adj, i, dx, dy, dz):  # pragma: no cover - compiled
     pair on ur3's, kuka_iiwa's and so101's hulls: warm-started climbs are one or two moves, and a
     move needs no full scan.
     """
-    best = pb[i, 0] * dx + pb[i, 1] * dy + pb[i, 2] * dz
-    k = adj[ADJ_HEAD + i]
-    e = adj[ADJ_HEAD + i + 1]
+    # unsigned indices: numba indexes with a signed one only after a test for a negative index (the
+    # wraparound), three instructions on each load of this loop's chain; 28 -> 24 ns a climb on
+    # kuka_iiwa's GJK climbs replayed (the vertex graph's entries are never negative)
+    u = np.uint64(i)
+    one = np.uint64(1)
+    head = np.uint64(ADJ_HEAD)
+    best = pb[u, 0] * dx + pb[u, 1] * dy + pb[u, 2] * dz
+    k = np.uint64(adj[head + u])
+    e = np.uint64(adj[head + u + one])
     while k < e:
-        j = adj[k]
+        j = np.uint64(adj[k])
         s = pb[j, 0] * dx + pb[j, 1] * dy + pb[j, 2] * dz
         if s > best:
             best = s
-            i = j
-            k = adj[ADJ_HEAD + j]
-            e = adj[ADJ_HEAD + j + 1]
+            u = j
+            k = np.uint64(adj[head + j])
+            e = np.uint64(adj[head + j + one])
         else:
-            k += 1
-    return i
+            k += one
+    return np.int64(u)
 
 
 @njit(cache=True, inline="always")
