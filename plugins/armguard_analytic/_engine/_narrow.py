@@ -379,8 +379,8 @@ def _seed(H, MF, MI, SF, p):  # pragma: no cover - compiled
     c = 0
     for k in range(kk & 3):
         x = (SF[ofq + MI[osp + 3 + k]] - MF[osg + 2 * k]) * MF[osg + 2 * k + 1]
-        if (kk >> (2 + k)) & 1:  # a periodic grid: the value wrapped onto its nodes
-            c = c * n + int(x - n * math.floor(x / n) + 0.5) % n
+        if (kk >> (2 + k)) & 1:  # a periodic grid: the nearest node wrapped onto it (n a power of two, ._seeds.NODES:
+            c = c * n + (int(math.floor(x + 0.5)) & (n - 1))  # a mask, where % n was an integer division)
         else:
             c = c * n + int(min(max(x + 0.5, 0.0), n - 1.0))
     return view1(MI, H[2 * _K_sdt] + 7 * (MI[osp] + c), 7)
@@ -485,7 +485,8 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, 
     if inside:  # a point of A's core as both core witnesses (p_WB - p_WA = distance * nhat holds)
         return write_rounded(wax, way, waz, ra, wax, way, waz, rb, 0.0, 0.0, 1.0, 0.0, out, 0), 0
     wbx, wby, wbz = _to_world(SF, oA, bx, by, bz, 1.0)
-    return write_rounded(wax, way, waz, ra, wbx, wby, wbz, rb, (wbx - wax) / d, (wby - way) / d, (wbz - waz) / d, d,
+    r = 1.0 / d  # one division for the three components of the unit normal
+    return write_rounded(wax, way, waz, ra, wbx, wby, wbz, rb, (wbx - wax) * r, (wby - way) * r, (wbz - waz) * r, d,
                          out, 0), 0
 
 

@@ -49,7 +49,9 @@ __all__ = ["CACHE_BYTES", "NODES", "pair_joints", "seed_row", "seed_tables"]
 
 NODES = {1: 64, 2: 32, 3: 16}
 """Grid nodes per joint of a pair whose pose depends on one, two or three joint values (64, 32 x 32
-and 16 x 16 x 16 nodes)."""
+and 16 x 16 x 16 nodes).  Powers of two: a periodic grid wraps a node index with a mask
+(``._narrow._seed``), not an integer division."""
+assert all(n & (n - 1) == 0 for n in NODES.values())
 _SPAN_MAX = 4.0 * math.pi
 """A joint's grid covers its limits, at most this wide around their middle (rad or m); a value
 outside the grid takes the nearest edge node's seed (a poorer start, the same answer)."""
@@ -210,8 +212,8 @@ def seed_row(spair: np.ndarray, sgrid: np.ndarray, sdt: np.ndarray, p: int, q: n
     n, c, kk = int(spair[p, 1]), 0, int(spair[p, 2])
     for k in range(kk & 3):
         x = (q[spair[p, 3 + k]] - sgrid[p, 2 * k]) * sgrid[p, 2 * k + 1]
-        if (kk >> (2 + k)) & 1:  # periodic: wrapped onto the nodes
-            c = c * n + int(x - n * math.floor(x / n) + 0.5) % n
+        if (kk >> (2 + k)) & 1:  # periodic: the nearest node, wrapped onto the grid (n a power of two)
+            c = c * n + (int(math.floor(x + 0.5)) & (n - 1))
         else:
             c = c * n + int(min(max(x + 0.5, 0.0), n - 1.0))
     return np.ascontiguousarray(sdt[spair[p, 0] + c])

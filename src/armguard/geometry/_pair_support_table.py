@@ -17,10 +17,11 @@ from numba import njit
 __all__ = ["table_cell", "table_size", "table_start", "warm_start"]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def table_cell(dx, dy, dz, n):  # pragma: no cover - compiled
     """The cube-map cell of direction ``d`` (see :func:`armguard.geometry._pack.support_table`), or -1
-    for the zero vector."""
+    for the zero vector.  Inlined, with one division (a compiled call of its own was 1.6 % of ur5's
+    ``pair_distances``, sampled with ``perf``)."""
     x = abs(dx)
     y = abs(dy)
     z = abs(dz)
@@ -35,8 +36,9 @@ def table_cell(dx, dy, dz, n):  # pragma: no cover - compiled
         m, u, v = z, dx, dy
     if not m > 0.0:
         return -1
-    iu = min(max(int((u / m + 1.0) * 0.5 * n), 0), n - 1)
-    iv = min(max(int((v / m + 1.0) * 0.5 * n), 0), n - 1)
+    h = 0.5 * n / m
+    iu = min(max(int(u * h + 0.5 * n), 0), n - 1)
+    iv = min(max(int(v * h + 0.5 * n), 0), n - 1)
     return (f * n + iu) * n + iv
 
 
