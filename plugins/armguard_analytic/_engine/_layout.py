@@ -12,12 +12,12 @@ same memory to read the outputs without copies.
 from __future__ import annotations
 
 import numpy as np
-from numba import carray, njit
+from numba import njit
 from numba.core import cgutils, types
 from numba.extending import intrinsic
 from numba.np.arrayobj import populate_array
 
-__all__ = ["Layout", "at", "seg1", "seg2", "seg3", "view1", "view2"]
+__all__ = ["Layout", "at", "seg1", "seg2", "seg3", "view1", "view2", "view3"]
 
 # Segment numbers are compiled into _kernel.py, _narrow.py and _pair_jacobian.py as constants and numba
 # caches key on the defining file only: a change to these tuples must come with an edit of those files.
@@ -119,6 +119,8 @@ def at(typingctx, buf, offset):  # pragma: no cover - compiled
 
 
 def _view_codegen(ndim: int):
+    """Typing and code generation of an ``ndim``-dimensional C view (the ``view*`` intrinsics)."""
+
     def typer(typingctx, buf, offset, *dims):
         arr = types.Array(buf.dtype, ndim, "C")
 
@@ -152,18 +154,20 @@ def view1(typingctx, buf, offset, n):  # pragma: no cover - compiled
 
 @intrinsic
 def view2(typingctx, buf, offset, n, w):  # pragma: no cover - compiled
+    """:func:`view1` with shape ``(n, w)``."""
     return _view_codegen(2)(typingctx, buf, offset, n, w)
 
 
 @intrinsic
-def _view3(typingctx, buf, offset, n, w1, w2):  # pragma: no cover - compiled
+def view3(typingctx, buf, offset, n, w1, w2):  # pragma: no cover - compiled
+    """:func:`view1` with shape ``(n, w1, w2)``."""
     return _view_codegen(3)(typingctx, buf, offset, n, w1, w2)
 
 
-# The views are views of the buffers without a meminfo (as numba.carray's): they carry no reference to the buffer's memory
-# (no meminfo), so creating and passing them costs no reference counting (a sliced and reshaped
-# view costs two atomic operations and a reshape helper call, ~25-30 ns: the ~55 views the kernel
-# takes per call cost more than the check itself, ~1.7 us).  They are only used inside a kernel
+# The segments are views of the buffers without a meminfo (as numba.carray's): they carry no
+# reference to the buffer's memory, so creating and passing them costs no atomic operation (a sliced
+# and reshaped view costs two and a reshape helper call, ~25-30 ns: the ~55 views the kernel takes
+# per call cost more than the check itself, ~1.7 us).  They are only used inside a kernel
 # call while the caller holds the buffers; no kernel returns one.
 @njit(cache=True, inline="always")
 def seg1(buf, H, k):  # pragma: no cover - compiled
@@ -177,4 +181,4 @@ def seg2(buf, H, k, w):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def seg3(buf, H, k, w1, w2):  # pragma: no cover - compiled
-    return _view3(buf, H[2 * k], H[2 * k + 1], w1, w2)
+    return view3(buf, H[2 * k], H[2 * k + 1], w1, w2)

@@ -55,7 +55,7 @@ class _Raw:
         self.b, self._SF, self._SI, self._of, self._oi, self.n_evaluated = b, SF, SI, of, oi, n_evaluated
         self._f = self._i = None
         self.flags, self.bounds, self.mode = flags, bounds, mode
-        self.reach = reach  # the larger of the threshold and stopping distance the check used
+        self.reach = reach  # the larger of the threshold and stopping distance the check used (lazy mode)
 
     def detach(self) -> None:
         """Copy this check's rows out of the scratch buffers (idempotent)."""
