@@ -191,7 +191,7 @@ def test_checks_while_another_thread_moves_the_threshold(ranger, backend, n_call
     # (a check could read two thresholds, report another than it used, or run with one beyond the
     # margin its obstacle lists were built for until the rebuild landed).
     lo, hi = 0.02, 0.4  # the first move to hi rebuilds the lists (beyond the margin built for lo)
-    det = armguard.Detector(ranger.scene, threshold=lo, backend=backend)
+    det = armguard.Detector(ranger.scene, threshold=lo, backend=backend, reach_margin=0.05)
     exact = armguard.Detector(ranger.scene, threshold=hi, backend=backend)
     Q = ranger.scene_q(ranger.random_q(20, 8))
     dmin = [float(min(exact.pair_distances(q).distance)) for q in Q]
@@ -243,3 +243,25 @@ def test_checks_while_another_thread_moves_the_threshold(ranger, backend, n_call
         raise errors[0]
     assert wrong == []
     assert det.threshold in (lo, hi)
+
+
+@pytest.mark.parametrize("backend", ["analytic", "coal"])
+def test_a_threshold_whose_rebuild_fails_is_not_taken(ranger, backend, monkeypatch):
+    det = armguard.Detector(ranger.scene, threshold=0.02, backend=backend, reach_margin=0.05)
+    q = ranger.scene_q(ranger.random_q(1, 3))[0]
+    before = det.check(q)
+
+    def fail(*args, **kwargs):
+        raise RuntimeError("rebuild failed")
+
+    monkeypatch.setattr(det, "prepare" if backend == "analytic" else "_build", fail)
+    with pytest.raises(RuntimeError, match="rebuild failed"):
+        det.set_threshold(0.5)  # beyond the margin the lists were built for: a rebuild first
+    assert det.threshold == 0.02
+    rep = det.check(q)
+    assert rep.threshold == 0.02 and rep.status == before.status
+    monkeypatch.undo()
+    det.prepare()  # a later rebuild (a scene edit's) does not take up the refused value either
+    assert det.threshold == 0.02 and det.check(q).threshold == 0.02
+    det.set_threshold(0.01)  # within the margin: no rebuild
+    assert det.threshold == 0.01 and det.check(q).threshold == 0.01

@@ -306,8 +306,13 @@ class FusedDetector(Detector):
         with self._prepare_lock:
             b = self._b
             if max(threshold, stopping) > b.margin_built:
+                old = self._threshold, self._stopping
                 self._threshold, self._stopping = threshold, stopping
-                self.prepare()
+                try:
+                    self.prepare()
+                except BaseException:
+                    self._threshold, self._stopping = old  # the build in use keeps its values
+                    raise
                 return
             prm = b.prm.copy()
             prm[0], prm[1] = threshold, stopping

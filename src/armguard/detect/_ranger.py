@@ -223,10 +223,15 @@ class RangerDetector(Detector):
         built for a smaller one, nor reports a threshold it did not use.  Beyond the margin the
         lists were built with, they are built again first."""
         with self._lock:
+            old = self._threshold, self._stopping
             self._threshold, self._stopping = threshold, stopping
             plan = self._plan
             if max(threshold, stopping) > plan.margin_built:
-                self._build(plan.model, plan.revision)
+                try:
+                    self._build(plan.model, plan.revision)
+                except BaseException:
+                    self._threshold, self._stopping = old  # the plan in use keeps its values
+                    raise
             else:
                 self._plan = plan.with_levels(threshold, stopping)
 
