@@ -11,7 +11,7 @@ first argument of an entry point; the kernels pass them on.
 Compiled without numba's reference counting (``_nrt=False``: they allocate nothing and keep no
 array): with it, numba's wrapper gave each array argument a new meminfo on entry and released it
 on return (``NRT_adapt_ndarray_from_python``, ``NRT_MemInfo_new``, ``NRT_incref`` / ``NRT_decref``
-calls: 2-3 % of ur3's ``pair_distances`` in perf samples, as :mod:`._pair_rows`).
+calls, seen in perf samples of ur3's ``pair_distances``; :mod:`._pair_rows` alike).
 """
 
 from __future__ import annotations

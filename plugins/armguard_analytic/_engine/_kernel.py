@@ -122,7 +122,7 @@ _SC_n_st = SC["n_st"]
 # Compiled WITH numba's reference counting.  Without it (numba's private ``_nrt=False``), LLVM's code
 # generator once segfaulted compiling this kernel from a cold cache (numba 0.68), when it linked the
 # convex kernels; it now calls them at their addresses and compiles either way, but without it
-# neither Ranger's check (12.4 us on ranger) nor the yes/no rows (1.28 us on kuka_iiwa) got faster:
+# neither Ranger's check nor the yes/no rows got faster (timed both ways, within noise):
 # its reference counting is per check, and the per-pair helpers it calls are compiled without it
 # (._step).  The segment views cost no atomic operation anyway (meminfo-free views, see ._layout).
 @njit(cache=True, nogil=True)

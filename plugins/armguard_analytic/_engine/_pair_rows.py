@@ -7,7 +7,7 @@ straight into the caller's arrays, sides exchanged where the Model holds the pai
 round.  Split from :mod:`._kernel` (it calls that kernel and reads the same packed buffers); it
 calls the kernel at its address (:func:`._calls.addresses`, the first argument), so it compiles
 its own lines only (:mod:`._native`).  Compiled without numba's reference counting, as the
-Detector's entry points (:mod:`._entry`): ur3's ``pair_distances`` kernel call 23.4 -> 21.9 µs.
+Detector's entry points (:mod:`._entry`): the fixed cost per call of ``python -m bench pair_profile``.
 """
 
 from __future__ import annotations

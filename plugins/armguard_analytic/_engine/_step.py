@@ -11,8 +11,8 @@ increments and decrements per array argument (~40 ns for :func:`record_pair`, mo
 capsule-capsule distance itself).  So is :func:`pair_step`, which calls both narrow phases at their
 addresses (:mod:`._calls`), and so are the narrow phases.  Even with the views' meminfo null, a
 function with reference counting calls ``NRT_incref`` / ``NRT_decref`` for each array it takes or
-makes: with the pair step, the narrow phases and EPA compiled with it, those calls were 4 % of
-ur3's ``pair_distances`` (sampled with ``perf``).  Once, when the kernels linked the convex kernels
+makes: with the pair step, the narrow phases and EPA compiled with it, those calls showed in
+``perf`` samples of ur3's ``pair_distances``.  Once, when the kernels linked the convex kernels
 instead of calling them at their addresses, compiling them without reference counting made LLVM's
 code generator crash from a cold cache (a segfault in ``finalize_object``; numba 0.68); a
 cold-cache test (``tests/test_detect_cold.py``) guards against its return.  The fused kernel

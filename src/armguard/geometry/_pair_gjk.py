@@ -82,8 +82,8 @@ def _climb(pb, adj, i, dx, dy, dz):  # pragma: no cover - compiled
     move needs no full scan.
     """
     # unsigned indices: numba indexes with a signed one only after a test for a negative index (the
-    # wraparound), three instructions on each load of this loop's chain; 28 -> 24 ns a climb on
-    # kuka_iiwa's GJK climbs replayed (the vertex graph's entries are never negative)
+    # wraparound), three instructions on each load of this loop's chain (the vertex graph's entries
+    # are never negative)
     u = np.uint64(i)
     one = np.uint64(1)
     head = np.uint64(ADJ_HEAD)

@@ -20,8 +20,8 @@ __all__ = ["table_cell", "table_size", "table_start", "warm_start"]
 @njit(cache=True, inline="always")
 def table_cell(dx, dy, dz, n):  # pragma: no cover - compiled
     """The cube-map cell of direction ``d`` (see :func:`armguard.geometry._pack.support_table`), or -1
-    for the zero vector.  Inlined, with one division (a compiled call of its own was 1.6 % of ur5's
-    ``pair_distances``, sampled with ``perf``)."""
+    for the zero vector.  Inlined, with one division (a compiled call of its own showed in
+    ``perf`` samples of ur5's ``pair_distances``)."""
     x = abs(dx)
     y = abs(dy)
     z = abs(dz)
