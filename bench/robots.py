@@ -15,7 +15,13 @@ disk, as after a user's first run); load times and peak memory are those of a us
   coal differ, and the largest ``|d_analytic − d_coal|``;
 * **µs / configuration**: ``checker.pair_distances(q)`` (every pair's signed distance and witness
   points) for analytic and coal: thread CPU time, median of 7 runs of ``N`` calls, the two backends'
-  runs interleaved (a spell of load on the shared machine lands on both).
+  runs interleaved (a spell of load on the shared machine lands on both);
+* **along a path**: the same, the configurations taken in order along straight joint-space segments
+  between random waypoints, sampled every ``PATH_STEP`` (a motion planner's edge check, a trajectory's
+  verification), the analytic backend as it is and with its option ``warm_start`` (each pair's GJK
+  starts from the simplex it ended with at the previous configuration,
+  ``armguard_analytic._engine._layout.COHERENT_STEP``), coal as its reference runs (no guess carried
+  over: ``plugins/armguard_coal``); the path's verdicts are compared with coal's too.
 """
 
 from __future__ import annotations
@@ -27,6 +33,23 @@ import sys
 import time
 
 TITLE = "Public robots: load, memory, SRDF pairs, agreement and speed against coal"
+PATH_STEP = 0.01
+"""rad (m for a prismatic joint): the largest joint step between consecutive configurations of the path."""
+
+
+def path(model, n_way: int, step: float, seed: int):
+    """Configurations along straight joint-space segments (Pinocchio's ``interpolate``: continuous joints
+    turn the short way) between ``n_way`` random in-limit waypoints, no joint moving more than ``step``
+    between consecutive ones."""
+    import numpy as np
+    import pinocchio as pin
+
+    W = model.random_q(n_way, seed)
+    out = []
+    for a, b in zip(W[:-1], W[1:]):
+        k = max(1, int(np.ceil(np.max(np.abs(pin.difference(model.pin_model, a, b))) / step)))
+        out += [pin.interpolate(model.pin_model, a, b, i / k) for i in range(k)]
+    return np.array(out)
 
 
 def _names() -> list[str]:
@@ -63,6 +86,14 @@ def measure(name: str, n: int) -> dict:
     t = interleaved_thread_seconds({"a": lambda: ana.pair_distances(Q[next(it) % n]),
                                     "c": lambda: ref.pair_distances(Q[next(it) % n])}, repeat=7, number=n)
     t_a, t_c = t["a"], t["c"]
+    T = path(model, 9, PATH_STEP, 11)
+    ana_w = armguard.checker(model, "analytic", {"warm_start": True})
+    p_a = np.array([ana_w.pair_distances(q).distance for q in T])
+    p_c = np.array([ref.pair_distances(q).distance for q in T])
+    it, it2, it3 = iter(range(10**9)), iter(range(10**9)), iter(range(10**9))
+    tp = interleaved_thread_seconds({"w": lambda: ana_w.pair_distances(T[next(it) % len(T)]),
+                                     "a": lambda: ana.pair_distances(T[next(it3) % len(T)]),
+                                     "c": lambda: ref.pair_distances(T[next(it2) % len(T)])}, repeat=7, number=n)
     return {
         "name": name, "nq": int(model.nq), "cold_s": cold, "warm_s": warm,
         "rss_load_mb": rss_load, "rss_peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
@@ -73,6 +104,8 @@ def measure(name: str, n: int) -> dict:
         "depths_off": int((((d_a <= 0) | (d_c <= 0)) & (np.abs(d_a - d_c) > 1e-3)).sum()),
         "coal_depth_max": int((d_c < -1.0).sum()),
         "us_analytic": t_a * 1e6, "us_coal": t_c * 1e6,
+        "path_n": len(T), "path_disagree": int(((p_a <= 0).any(axis=1) != (p_c <= 0).any(axis=1)).sum()),
+        "us_path_warm": tp["w"] * 1e6, "us_path_analytic": tp["a"] * 1e6, "us_path_coal": tp["c"] * 1e6,
     }
 
 
@@ -113,8 +146,9 @@ def run(quick: bool) -> str:
 
     n = 50 if quick else 300
     rows = ["| robot | nq | load first | load cold | load warm | peak RSS | SRDF | pairs (no SRDF) | colliding / "
-            "disagree (of N) | max \\|Δd\\| apart | depths off > 1 mm | analytic | coal | coal / analytic |",
-            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+            "disagree (of N) | max \\|Δd\\| apart | depths off > 1 mm | analytic | coal | coal / analytic "
+            "| along a path: analytic | analytic, `warm_start` | coal | coal / analytic (`warm_start`) | disagree (path) |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     cache = tempfile.mkdtemp(prefix="armguard-bench-cache-")
     try:
         results = []
@@ -135,14 +169,24 @@ def run(quick: bool) -> str:
             f"| {r['max_dd']:.1e} m | {r['depths_off']} of {r['depths']}"
             + (f" (coal < -1 m: {r['coal_depth_max']})" if r['coal_depth_max'] else "")
             + f" | {r['us_analytic']:.1f} µs | {r['us_coal']:.1f} µs "
-            f"| {r['us_coal'] / r['us_analytic']:.1f}× |")
+            f"| {r['us_coal'] / r['us_analytic']:.1f}× "
+            f"| {r['us_path_analytic']:.1f} µs | {r['us_path_warm']:.1f} µs | {r['us_path_coal']:.1f} µs "
+            f"| {r['us_path_coal'] / r['us_path_analytic']:.1f}× ({r['us_path_coal'] / r['us_path_warm']:.1f}×) "
+            f"| {r['path_disagree']} of {r['path_n']} |")
     note = (f"\n\nN = {n} random in-limit configurations per robot (seeded). Each robot runs in its own process "
             "with numba's kernel cache already compiled (`make run` or one earlier bench). *load first* is the very "
             "first `load_model` of the robot (an empty hull cache: every mesh read and hulled, in an earlier "
             "process); *load cold* is a user's next first `load_model` in a new process (hulls read from the hull "
             "cache, `docs/models.md`), *load warm* a second one in the same process; *peak RSS* includes Python, "
             "numpy, Pinocchio, coal and the compiled kernels. *analytic*, *coal*: `pair_distances(q)` over the N "
-            "configurations, thread CPU time, median of 7 runs, the two backends' runs interleaved. *colliding*: configurations coal finds in contact; "
+            "configurations, thread CPU time, median of 7 runs, the two backends' runs interleaved. *along a path*: "
+            f"the same, over configurations in order along straight joint-space segments between 9 random waypoints, "
+            f"no joint moving more than {PATH_STEP} rad (m) a step (a planner's edge check), {n} calls a run; with the "
+            "option `warm_start` the analytic backend starts each pair's GJK from the simplex it ended with at the "
+            "previous configuration (answers the same to `gjk_epsilon`, their last bits then depending on the "
+            "previous call: off by default); coal runs as its reference (no guess carried over, `plugins/armguard_coal`); "
+            "*disagree (path)*: configurations of the path where the warm-started verdict differs from coal's. "
+            "*colliding*: configurations coal finds in contact; "
             "*disagree*: configurations where the analytic verdict differs from coal's. *max |Δd| apart*: over "
             "pairs both backends find apart. *depths off*: pairs in contact (for either backend) whose penetration "
             "depths differ by more than 1 mm, of all pairs in contact. coal's depth comes from EPA, which is not exact "

@@ -4,6 +4,8 @@ A seed changes where GJK starts, never its answer: a property test starts GJK fr
 (any support index pairs are points of the Minkowski difference) and compares with the cold start; on
 public robots the engine's answers with its tables equal its answers with them switched off, and
 coal's.  EPA leaves the facet it ends on for the tables, and that facet lies at the depth EPA returns.
+Along a path, GJK starting from each pair's simplex at the previous configuration gives the answers of
+a checker that sees the same configurations in another order.
 """
 
 from __future__ import annotations
@@ -183,3 +185,70 @@ def test_seed_tables_are_made_once_per_process():
     assert not made
     assert np.array_equal(_seg(first._plan(), "sdt", 7), _seg(second._plan(), "sdt", 7))
     assert len(_seg(first._plan(), "sdt", 7)) == 6 * 32**2 + 5 * 16**3
+
+
+def _path(model, step: float, seed: int):
+    """Configurations along straight joint-space segments between 5 random waypoints, no joint moving
+    more than ``step`` between consecutive ones."""
+    import pinocchio as pin
+
+    W = model.random_q(5, seed)
+    out = []
+    for a, b in zip(W[:-1], W[1:]):
+        k = max(1, int(np.ceil(np.max(np.abs(pin.difference(model.pin_model, a, b))) / step)))
+        out += [pin.interpolate(model.pin_model, a, b, i / k) for i in range(k)]
+    return np.array(out)
+
+
+@pytest.mark.parametrize("name", ["kuka_iiwa", "ur3"])
+def test_the_previous_simplex_changes_no_answer(name):
+    """Option ``warm_start``: along a path (joint steps of 0.01 rad, within ``COHERENT_STEP``) each
+    link-frame GJK starts from the simplex that pair ended with at the thread's previous check: the
+    thread's scratch says so (the flag set, final simplices kept for pairs apart), and every distance
+    equals the same configuration's from a second warm-started checker that sees the path's
+    configurations in shuffled order (its flag set on at most a tenth of them) and from a checker
+    without the option (its flag never set) to 1e-9 m, its witnesses to 1e-6 m where the pair is
+    apart, and coal's verdicts."""
+    if name not in {m.name for m in known_models() if m.available}:
+        pytest.skip(f"{name}'s package is not installed")
+    from armguard_analytic._engine._layout import COHERENT_STEP, K
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = armguard.load_model(name)
+    T = _path(model, 0.01, 4)
+    assert 0.01 < COHERENT_STEP and len(T) > 300
+    rng = np.random.default_rng(0)
+    pick = set(rng.choice(len(T), size=120, replace=False).tolist())  # the configurations compared
+    walk, fresh = (armguard.checker(model, "analytic", {"warm_start": True}) for _ in range(2))
+    plain = armguard.checker(model, "analytic")
+    coal = armguard.checker(model, "coal")
+    on_path, coherent, kept = {}, 0, 0
+    for k, q in enumerate(T):
+        r = walk.pair_distances(q)
+        if k in pick:
+            on_path[k] = r
+        f = walk._plan()
+        H, SF = f.args[0], f.tls.s[0]
+        coherent += int(SF[H[2 * K["coh"]] + 1] == 1.0)
+        lseed = SF[H[2 * K["lseed"]]:H[2 * K["lseed"]] + 7 * H[2 * K["lseed"] + 1]].view(np.int64).reshape(-1, 7)
+        kept = max(kept, int(np.count_nonzero(lseed[:, 0] > 0)))
+    assert coherent == len(T) - 1  # every check after the first
+    assert kept >= 10
+    control_coherent = 0
+    for k in rng.permutation(sorted(pick)):
+        a, b = on_path[k], fresh.pair_distances(T[k])
+        f = fresh._plan()
+        control_coherent += int(f.tls.s[0][f.args[0][2 * K["coh"]] + 1] == 1.0)
+        c = plain.pair_distances(T[k])
+        f = plain._plan()
+        assert f.tls.s[0][f.args[0][2 * K["coh"]] + 1] == 0.0
+        for other in (b, c):
+            np.testing.assert_allclose(a.distance, other.distance, atol=1e-9, rtol=0)
+            apart = a.distance > 1e-6
+            np.testing.assert_allclose(a.p_WA[apart], other.p_WA[apart], atol=1e-6, rtol=0)
+            np.testing.assert_allclose(a.p_WB[apart], other.p_WB[apart], atol=1e-6, rtol=0)
+        ref = np.asarray(coal.pair_distances(T[k]).distance)
+        clear = np.abs(ref) > 1e-6
+        assert np.array_equal(a.distance[clear] < 0, ref[clear] < 0)
+    assert control_coherent <= len(pick) // 10  # the control starts from tables or cold, not the walk's simplices

@@ -35,3 +35,13 @@ def test_guides_have_examples():
 @pytest.mark.parametrize("guide,code", GUIDE_BLOCKS, ids=[f"{g.stem}{i}" for i, (g, _) in enumerate(GUIDE_BLOCKS)])
 def test_guide_block_runs(guide, code):
     exec(compile(code, str(guide), "exec"), {"__name__": "__guide__"})
+
+
+def test_backends_guide_warm_start_block_runs():
+    """docs/backends.md's warm-start example (the guide's other blocks need the example backend
+    package installed: tests/test_conformance.py runs that package)."""
+    text = (ROOT / "docs" / "backends.md").read_text(encoding="utf-8")
+    section = text.split("### Along a path: warm starts (analytic)", 1)[1]
+    code = re.findall(r"```python\n(.*?)```", section, re.S)[0]
+    assert "warm_start" in code
+    exec(compile(code, "docs/backends.md", "exec"), {"__name__": "__guide__"})

@@ -332,3 +332,35 @@ def test_release_gil_option_is_checked(ranger):
     assert armguard.checker(ranger, "analytic", {"release_gil": "auto"}).releases_gil in (True, False)
     with pytest.raises(BackendError, match="release_gil"):
         armguard.checker(ranger, "analytic", {"release_gil": "sometimes"})
+
+
+# ---------------------------------------------------------------- warm starts (analytic option)
+def test_warm_starts_from_threads_answer_as_one_thread(panda):
+    """Option ``warm_start``: each thread keeps its own previous simplices, so 4 threads walking one
+    path in small steps on one shared checker (each from its own start, so each thread's previous call
+    is its own) get the distances of a plain checker to 1e-9 m, its verdicts, and pair names."""
+    import pinocchio as pin
+
+    c = armguard.checker(panda, "analytic", {"warm_start": True})
+    plain = armguard.checker(panda, "analytic")
+    a, b = panda.random_q(2, 41)
+    path = [pin.interpolate(panda.pin_model, a, b, t) for t in np.linspace(0.0, 1.0, 160)]
+    want = [_pd_tuple(plain.pair_distances(q)) for q in path]
+    barrier = threading.Barrier(N_THREADS)
+    out: list = [None] * N_THREADS
+
+    def walk(t: int) -> None:
+        barrier.wait()
+        out[t] = [(k, _pd_tuple(c.pair_distances(path[k]))) for k in np.roll(np.arange(len(path)), 40 * t)]
+
+    threads = [threading.Thread(target=walk, args=(t,)) for t in range(N_THREADS)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    for got in out:
+        assert got is not None and len(got) == len(path)
+        for k, g in got:
+            np.testing.assert_allclose(g[0], want[k][0], atol=1e-9, rtol=0)
+            clear = np.abs(want[k][0]) > 1e-9
+            assert np.array_equal(g[0][clear] <= 0.0, want[k][0][clear] <= 0.0) and g[3:] == want[k][3:]

@@ -186,7 +186,8 @@ class FusedDetector(Detector):
                           ("edW", edW0), ("sphW", sphW0), ("out9", np.zeros(9)), ("work", np.zeros(n_work)),
                           ("gap", np.zeros(stack_n)), ("ev", np.zeros((P, EV_W))),
                           ("plb", np.zeros(P)), ("last_d", np.zeros(P)), ("last_q", np.zeros((P, nq))),
-                          ("best", np.zeros(4)), ("seg", np.zeros((2, 3))), ("fk_q", np.zeros(max(m.n_q, 1)))):
+                          ("best", np.zeros(4)), ("seg", np.zeros((2, 3))), ("fk_q", np.zeros(max(m.n_q, 1))),
+                          ("lseed", np.zeros((P, 7))), ("coh", np.zeros(2))):
             L.add("SF", name, arr)
         for name, arr in (("summary", np.full(SUM_SIZE, -1)), ("ev_p", np.zeros(P)), ("pflag", np.zeros(P)),
                           ("stack", np.zeros(stack_n)), ("order", np.zeros(P)), ("has_last", np.zeros(P)),

@@ -37,7 +37,7 @@ from armguard.detect._common import ST_CLEAR, ST_COLLISION, ST_INCOMPLETE, ST_WA
 from armguard.kinematics._fk import _fk_kernel
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
-from ._layout import EV_W, K, SC, at, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, SUM_STATUS, seg1, seg2, seg3
+from ._layout import COHERENT_STEP, EV_W, K, SC, at, SUM_BEST, SUM_BSLOT, SUM_ERR, SUM_NEVAL, SUM_STATUS, seg1, seg2, seg3
 from ._cull import (_argsort_heap, _argsort_small, _bb_gap, _explicit_gap, _gjk_pair, _obb_gap, _push_children, _sb_gap,
                     obb_apart_moving, obb_apart_static)
 from ._narrow import BOUNDED
@@ -111,6 +111,7 @@ _K_rob_j = K["rob_j"]
 _K_parent_loc = K["parent_loc"]
 _K_fk_q = K["fk_q"]
 _K_fk_ok = K["fk_ok"]
+_K_coh = K["coh"]
 _K_obb_L = K["obb_L"]
 _K_qlim = K["qlim"]
 _SC_n_explicit = SC["n_explicit"]
@@ -192,6 +193,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out,
     fk_q = seg1(SF, H, _K_fk_q)
     qlim = seg2(MF, H, _K_qlim, 2)
     fk_ok = seg1(SI, H, _K_fk_ok)
+    o_coh = H[2 * _K_coh]
     o_Xs = H[2 * _K_Xs]
     Xs = carray(at(SF, o_Xs), (1, n_links, 4, 4))
     sphW = seg2(SF, H, _K_sphW, 4)
@@ -271,6 +273,16 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out,
             if x < qlim[j, 0] or x > qlim[j, 1]:
                 summary[SUM_ERR] = 3
                 return 3
+        # ---- warm start (on) and near this thread's previous check (FK done, each joint within COHERENT_STEP)?
+        coh = SF[o_coh]
+        for r in range(rob_l.shape[0] - 1):
+            coh = coh if fk_ok[r] != 0 else 0.0
+        if coh != 0.0:
+            for j in range(n_q):
+                if abs(q[0, j] - fk_q[j]) > COHERENT_STEP:
+                    coh = 0.0
+                    break
+        SF[o_coh + 1] = coh
         # ---- FK and bounding spheres of the moving elements
         # FK per robot block, only for the robots whose joint values changed since the last check
         # (exact equality: an unchanged block's poses are the ones FK would compute again)

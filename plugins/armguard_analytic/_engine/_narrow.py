@@ -39,7 +39,7 @@ from armguard.geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_ca
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._calls import (FN_CONVEX, FN_EPA, FN_GJK_REL, FN_SAT_REL, FN_SUPPORT, call_convex, call_epa, call_gjk_rel,
                      call_sat_rel, call_support)
-from ._layout import K, seg1, seg2, view1
+from ._layout import K, iview1, seg1, seg2, view1
 
 __all__ = ["pair_distance", "narrow_flat", "narrow_other", "narrow_rel", "wall_flat", "ERR_GJK", "NOT_SCALAR",
            "LINK_FRAME", "BOUNDED", "WORK_TAIL"]
@@ -54,6 +54,7 @@ _K_box_L = K["box_L"]
 _K_verts_L, _K_Xs, _K_glink, _K_gdir, _K_gdirs = K["verts_L"], K["Xs"], K["glink"], K["gdir"], K["gdirs"]
 _K_fn_L, _K_ed_L = K["fn_L"], K["ed_L"]
 _K_spair, _K_sgrid, _K_sdt, _K_fk_q = K["spair"], K["sgrid"], K["sdt"], K["fk_q"]
+_K_lseed, _K_coh = K["lseed"], K["coh"]
 
 ERR_GJK = 2  # the convex kernel did not converge: the caller raises, never a verdict
 NOT_SCALAR = -1  # narrow_flat: not a capsule-capsule / capsule-box pair, call narrow_other
@@ -386,6 +387,15 @@ def _seed(H, MF, MI, SF, p):  # pragma: no cover - compiled
     return view1(MI, H[2 * _K_sdt] + 7 * (MI[osp] + c), 7)
 
 
+@njit(cache=True, inline="always")
+def _last_seed(H, SF, p):  # pragma: no cover - compiled
+    """Pair ``p``'s final simplex at this thread's previous check ("lseed" row ``p``, 7 ints in a seed
+    row's layout, ``n = 0``: none kept), or an empty view (no such pair)."""
+    if p < 0 or p >= H[2 * _K_lseed + 1]:
+        return iview1(SF, 0, 0)
+    return iview1(SF, H[2 * _K_lseed] + 7 * p, 7)
+
+
 @njit(cache=True, _nrt=False)
 def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, offset, level,
                beyond, fns, p):  # pragma: no cover - compiled
@@ -411,7 +421,9 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, 
 
     ``p``: the pair's number (-1: none).  A pair with a seed table (``._seeds``) starts GJK from the
     simplex of the table's node nearest the joint values of this check's forward kinematics
-    (``fk_q``): fewer iterations, the same answer (``_pair_gjk._gjk_body``)."""
+    (``fk_q``): fewer iterations, the same answer (``_pair_gjk._gjk_body``); with the Checker's option
+    ``warm_start``, a check near this thread's previous one (``"coh"``, ``._layout.COHERENT_STEP``)
+    starts from the simplex the pair ended with there (``"lseed"``, kept after every GJK)."""
     oc = H[2 * _K_core]
     if MI[oc + ga] == _CYLINDER or MI[oc + gb] == _CYLINDER:
         return _cylinder_rel(ga, gb, H, MF, MI, SF, out, eps_len, gjk_eps, max_iter, level, fns)
@@ -433,11 +445,15 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, 
     ra = MF[orad + ga]
     rb = MF[orad + gb]
     oA = _pose(SF, H, MI, ga)
-    simp = work[0:9]
+    simp = work[0:16]  # [0:9] EPA's start where the cores overlap, [9:16] the final simplex as a seed row
     nw = work.shape[0] - WORK_TAIL
     rot = work[nw:nw + 9]
     tx, ty, tz = _relative(SF, oA, _pose(SF, H, MI, gb), rot)
-    seed = _seed(H, MF, MI, SF, p)
+    last = _last_seed(H, SF, p)
+    if SF[H[2 * _K_coh] + 1] != 0.0 and last.shape[0] == 7 and last[0] > 0:
+        seed = last  # warm start, near this thread's previous check: that check's final simplex
+    else:
+        seed = _seed(H, MF, MI, SF, p)
     gx, gy, gz = -tx, -ty, -tz  # GJK's first direction, unused from a seed (it reads no support along it)
     sx = sy = sz = 0.0
     if seed.shape[0] == 0 or seed[0] == 0:  # a cold start: inner point of A minus that of X_AB B
@@ -452,6 +468,9 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, 
                                                                        gx - sx, gy - sy, gz - sz, eps_len, gjk_eps,
                                                                        max_iter, simp, max(sep, 0.0), seed))
     inside = status != GJK_SEPARATED and status != GJK_NOT_CONVERGED and simp[0] == 1.0
+    if last.shape[0] == 7:  # keep the final simplex (n = 0 unless apart) for the next check on this thread
+        for k in range(7):
+            last[k] = int(simp[9 + k])
     if inside and -(ra + rb) > level:  # overlapping cores, a depth wanted: EPA in A's frame as well
         # a depth below cap would leave the signed distance above ``beyond``: EPA may stop at that proof
         cap = -(beyond + (ra + rb)) if beyond < math.inf else -math.inf
