@@ -195,10 +195,12 @@ def test_a_zero_budget_evaluates_nothing_and_says_so(backend):
     det.check(q)
     again = det.check(q, budget_us=0.0)  # same q: each bound is the distance itself
     d = _truth(det, q)
-    assert {n.pair_index: n.lower_bound for n in again.not_evaluated} == {p: d[p] for p in range(det.n_pairs)}
-    exact = det.check(q)
-    if exact.status is Status.CLEAR:  # the bounds alone prove it
-        assert again.status is Status.CLEAR
+    if backend == "fcl":  # its distances may run long: none bounds anything, the check stays incomplete
+        assert again.status is Status.INCOMPLETE and all(n.lower_bound == -math.inf for n in again.not_evaluated)
+    else:
+        assert {n.pair_index: n.lower_bound for n in again.not_evaluated} == {p: d[p] for p in range(det.n_pairs)}
+        if det.check(q).status is Status.CLEAR:  # the bounds alone prove it
+            assert again.status is Status.CLEAR
     with pytest.raises(armguard.ArmguardError):
         det.check(q, budget_us=float("nan"))
 

@@ -252,3 +252,32 @@ def test_the_previous_simplex_changes_no_answer(name):
         clear = np.abs(ref) > 1e-6
         assert np.array_equal(a.distance[clear] < 0, ref[clear] < 0)
     assert control_coherent <= len(pick) // 10  # the control starts from tables or cold, not the walk's simplices
+
+
+def test_a_warm_started_detector_reports_as_a_plain_one():
+    """``armguard.Detector(model, backend_options={"warm_start": True})`` (Ranger's cycle, the analytic
+    fast path): along a path its thread's checks start from the previous simplices (the flag set on
+    every check after the first), and each report has the plain detector's status, pairs within the
+    threshold and their distances to 1e-9 m; a value other than True or False is refused."""
+    if "kuka_iiwa" not in {m.name for m in known_models() if m.available}:
+        pytest.skip("kuka_iiwa's package is not installed")
+    from armguard_analytic._engine._layout import K
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = armguard.load_model("kuka_iiwa")
+    warm = armguard.Detector(model, threshold=0.05, backend="analytic", backend_options={"warm_start": True})
+    plain = armguard.Detector(model, threshold=0.05, backend="analytic")
+    T = model.scene_q(_path(model, 0.01, 6))
+    coherent = 0
+    for q in T:
+        a, b = warm.check(q), plain.check(q)
+        coherent += int(warm._scratch().SF[warm._b.H[2 * K["coh"]] + 1] == 1.0)
+        assert plain._scratch().SF[plain._b.H[2 * K["coh"]] + 1] == 0.0
+        assert a.status is b.status
+        assert [(r.a, r.b) for r in a.within_threshold] == [(r.a, r.b) for r in b.within_threshold]
+        np.testing.assert_allclose([r.distance for r in a.within_threshold], [r.distance for r in b.within_threshold],
+                                   atol=1e-9, rtol=0)
+    assert coherent == len(T) - 1
+    with pytest.raises(ValueError, match="warm_start"):
+        armguard.Detector(model, backend="analytic", backend_options={"warm_start": "yes"})

@@ -26,10 +26,10 @@ from . import _kernel as kn, _scratch
 from ._calls import addresses
 from ._entry import detect_entry
 from ._hulls import link_obbs, vertex_graphs
-from ._layout import EV_W, SUM_SIZE, Layout
+from ._layout import EV_W, K, SUM_SIZE, Layout
 from ._model import CAT_WORKSPACE, build_model
 from ._narrow import WORK_TAIL
-from ._prep import _fk_blocks, _static_polytopes
+from ._prep import _fk_blocks, _static_polytopes, _warm_option
 from ._raw import _UNHELD, _Raw, _refcount
 from ._batch import rows
 from ._built import Built
@@ -83,6 +83,7 @@ class FusedDetector(Detector):
         self._ns_per_pair = _DEFAULT_NS_PER_PAIR
         self._prepare_lock = threading.RLock()
         self._with_terrain = terrain is not None  # terrain alone is something to check
+        self._warm_start = _warm_option(backend, backend_options)
         self.prepare()
         if terrain is not None:  # the terrain category: check() returns armguard.terrain's merged report
             attach_extra(self, "terrain", terrain)
@@ -198,6 +199,7 @@ class FusedDetector(Detector):
         b.layout = L
         # SF0 / SI0: the pristine scratch every thread's own copy starts from (never passed to a kernel)
         b.H, b.MF, b.MI, b.SF0, b.SI0 = L.buffers()
+        b.SF0[b.H[2 * K["coh"]]] = 1.0 if self._warm_start else 0.0  # each thread's warm starts (._layout "coh")
         b.P = P
         b.ev_off = L._shape["ev"][1]
         b.sum_off = L._shape["summary"][1]  # "ev_p" follows it

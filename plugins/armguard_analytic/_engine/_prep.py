@@ -60,3 +60,13 @@ def _fk_blocks(parent: np.ndarray, link_robot: np.ndarray, n_joints: list[int]):
         return (np.array([0, n], np.int64), np.array([0, int(sum(n_joints))], np.int64),
                 np.array(parent, dtype=np.int64))
     return rob_l, rob_j, parent_loc
+
+
+def _warm_option(backend, backend_options) -> bool:
+    """The backend option ``warm_start`` (the analytic Checker's, :mod:`armguard_analytic`), as resolved."""
+    from armguard.backends import resolve
+
+    warm = resolve(backend, backend_options)[1].get("warm_start", False)
+    if warm not in (True, False):
+        raise ValueError(f"analytic: warm_start {warm!r} is not one of [True, False]")
+    return bool(warm)

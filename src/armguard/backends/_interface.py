@@ -241,6 +241,10 @@ class CheckerBase:
     # a cost near the distances' (the analytic backend's kernel): a caller wanting the Jacobians of
     # a few rows then asks for all of them; otherwise it asks distance_jacobian for those rows only
     jacobian_with_distances: bool = False
+    # True where a separated pair's distance may come out longer than the exact one (an early-stopping
+    # GJK): such a distance bounds nothing from below, so Ranger's Detector over the backend takes no
+    # lower bound from its memory (armguard.detect._ranger)
+    distances_may_run_long: bool = False
 
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)

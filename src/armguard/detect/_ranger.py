@@ -11,7 +11,8 @@ framework code here, over the Checker interface only:
   inside the joint limits (:mod:`._bounds`, :mod:`._reach`); the others are never asked for;
 * **lower bounds**: a pair evaluated at ``q0`` with distance ``d0`` is at least
   ``d0 - sum_j |q_j - q0_j| lever[p, j]`` away at ``q`` (signed distance is 1-Lipschitz in the
-  motion of its shapes); a pair never evaluated (in this thread) bounds nothing (``-inf``);
+  motion of its shapes); a pair never evaluated (in this thread) bounds nothing (``-inf``), nor
+  does any pair of a Checker whose distances may run long (``distances_may_run_long``: python-fcl);
 * **priority**: pairs are evaluated in increasing lower bound (near last time, or moved much
   since), ties broken by the time since they were last evaluated (oldest first);
 * **the anytime budget**: ``check(q, budget_us=...)`` turns the budget into a number of pairs by
@@ -364,6 +365,8 @@ class RangerDetector(Detector):
         return self._lower_bounds(plan, self._state(plan), self._flat(q, plan))
 
     def _lower_bounds(self, plan: _Plan, s: _State, q: np.ndarray) -> np.ndarray:
+        if getattr(plan.checker, "distances_may_run_long", False):  # python-fcl: a remembered distance may
+            return np.full(len(s.last_d), -math.inf)  # exceed the exact one (4e-5 m at the same q): no bound
         dq = np.abs(q[None, :] - s.last_q)
         moved = np.where(dq > 0.0, dq * plan.lever, 0.0).sum(axis=1)  # 0 * inf lever: no motion
         return np.where(s.has_last, s.last_d - moved, -math.inf)
