@@ -36,7 +36,7 @@ for that to pay (:data:`._engine._scratch.GIL_RELEASE_US`, option ``release_gil`
 Option ``warm_start`` (``False`` by default): a call whose every joint value is within
 :data:`._engine._layout.COHERENT_STEP` of the same thread's previous call starts each link-frame GJK
 from the simplex that pair ended with there (a motion planner's edge check, a trajectory sampled
-finely: ur3 9.4 us a call along a path of 0.01 rad steps against 22 us at random configurations,
+finely: ur3 10.3 us a call along a path of 0.01 rad steps against 14.9 us without the option,
 ``python -m bench robots``).  The answers are the same to ``gjk_epsilon``, but their last bits then
 depend on the thread's previous call; off, the same call always gives the same bits.
 
