@@ -177,10 +177,9 @@ class AnalyticChecker(CheckerBase):
         if gil not in ("auto", None, True, False):
             raise BackendError(f"analytic: release_gil {gil!r} is not one of ['auto', True, False]")
         self._release_gil = None if gil in ("auto", None) else bool(gil)
-        warm = opts.pop("warm_start", False)
-        if warm not in (True, False):
-            raise BackendError(f"analytic: warm_start {warm!r} is not one of [True, False]")
-        self._warm_start = bool(warm)
+        from ._engine._prep import warm_start_option
+
+        self._warm_start = warm_start_option(opts.pop("warm_start", False))
         if opts:
             raise BackendError(f"analytic: unknown options {sorted(opts)}; options are ['fidelity', 'release_gil', "
                                "'warm_start']")

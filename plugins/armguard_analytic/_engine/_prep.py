@@ -62,11 +62,18 @@ def _fk_blocks(parent: np.ndarray, link_robot: np.ndarray, n_joints: list[int]):
     return rob_l, rob_j, parent_loc
 
 
+def warm_start_option(value) -> bool:
+    """The analytic backend's option ``warm_start`` (:mod:`armguard_analytic`), checked: True or False."""
+    from armguard._errors import BackendError
+
+    if value not in (True, False):
+        raise BackendError(f"analytic: warm_start {value!r} is not one of [True, False]")
+    return bool(value)
+
+
 def _warm_option(backend, backend_options) -> bool:
-    """The backend option ``warm_start`` (the analytic Checker's, :mod:`armguard_analytic`), as resolved."""
+    """:func:`warm_start_option` of the Detector's backend options, as resolved (argument > environment >
+    ``armguard.toml``)."""
     from armguard.backends import resolve
 
-    warm = resolve(backend, backend_options)[1].get("warm_start", False)
-    if warm not in (True, False):
-        raise ValueError(f"analytic: warm_start {warm!r} is not one of [True, False]")
-    return bool(warm)
+    return warm_start_option(resolve(backend, backend_options)[1].get("warm_start", False))
