@@ -169,15 +169,18 @@ def test_view_buttons_set_the_camera_and_the_training_views_render(app, browser)
         for label, ahead in (("top", (0, 0, -1)), ("front", (-1, 0, 0)), ("side", (0, 1, 0))):
             _button(page, label).click()
             pos, look = view_pose(label, d.center, d.radius)
-            _until(page, lambda: np.allclose(_client(app).camera.position, pos, atol=1e-4), f"the {label} view")
+            # the client reports its camera back a property at a time: wait for both, position and target
+            _until(page, lambda: np.allclose(_client(app).camera.position, pos, atol=1e-4)
+                   and np.allclose(_client(app).camera.look_at, look, atol=1e-4), f"the {label} view")
             cam = _client(app).camera
-            assert np.allclose(cam.look_at, look, atol=1e-4)
+            assert np.allclose(cam.position, pos, atol=1e-4) and np.allclose(cam.look_at, look, atol=1e-4)
             assert np.allclose(_look(cam), ahead, atol=2e-3)
 
         # the main camera rides on the tool
         page.locator("label").filter(has_text=re.compile("^main view: eye in the hand$")).first.click()
         X = app.state.ee_pose()
-        _until(page, lambda: np.allclose(_client(app).camera.position, X[:3, 3], atol=1e-4), "the eye in the hand")
+        _until(page, lambda: np.allclose(_client(app).camera.position, X[:3, 3], atol=1e-4)
+               and np.allclose(_look(_client(app).camera), X[:3, 2], atol=1e-4), "the eye in the hand")
         assert np.allclose(_look(_client(app).camera), X[:3, 2], atol=1e-4)
         page.locator("label").filter(has_text=re.compile("^main view: eye in the hand$")).first.click()
         _until(page, lambda: not app._training.w_eye.value, "the eye in the hand off")
