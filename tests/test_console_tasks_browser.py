@@ -11,7 +11,10 @@ Runs :class:`armguard.console.ConsoleApp` in-process on the demonstration's cell
   poses, *main view: eye in the hand* puts it on the tool looking along the tool's z, and the four
   insets are rendered, each a picture (not blank) and each different;
 * jogging +x in tool coordinates moves the tool 20 mm along its own x axis (not W's), its
-  orientation kept.
+  orientation kept;
+* a step typed at machine speed right after a dropdown choice lands, each of eight times (the
+  page's GUI throttle keeps only the latest message of each 50 ms, and such a value was once lost:
+  ``armguard.console._fields.COMMIT_GAP_MS``).
 """
 
 from __future__ import annotations
@@ -58,6 +61,9 @@ def browser():
 
 def _open(browser, app):
     page = browser.new_page(viewport=VIEWPORT)
+    logs: list = []  # the tab's console (viser logs its connects and disconnects there): said on a timeout
+    page.on("console", lambda m: logs.append(m.text))
+    page.armguard_logs = logs
     page.goto(app.url)
     page.wait_for_selector("#armguard-status", timeout=UI_TIMEOUT_MS)
     page.add_style_tag(content=HIDE_NOTICES)
@@ -70,7 +76,10 @@ def _until(page, ok, what: str, timeout_s: float = UI_TIMEOUT_MS / 1000) -> None
         if ok():
             return
         page.wait_for_timeout(POLL_MS)
-    raise AssertionError(f"timed out waiting for {what}")
+    shown = page.evaluate("() => { const m = document.querySelector('#armguard-message'); "
+                          "return m === null ? '(no #armguard-message)' : m.innerText; }")
+    logs = getattr(page, "armguard_logs", [])[-12:]
+    raise AssertionError(f"timed out waiting for {what}; the tab's message: {shown!r}; its last console lines: {logs}")
 
 
 def _choose(page, label: str, option: str) -> None:
@@ -232,3 +241,19 @@ def test_jog_plus_x_in_tool_coordinates_moves_along_the_tool_x(app, browser):
     finally:
         page.close()
         st.set_joints("puma560", home)
+
+
+def test_a_value_typed_at_once_after_a_dropdown_choice_lands(app, browser):
+    page = _open(browser, app)
+    try:
+        page.get_by_role("tab", name="Control").click()
+        _choose(page, "mode", "cartesian")
+        _until(page, lambda: app.state.snapshot().mode == "cartesian", "cartesian mode")
+        for k in range(8):
+            frame, mm = ("tool", "world")[k % 2], 11 + k
+            _choose(page, "jog in", frame)  # no wait for the server: the value follows at machine speed
+            _type(_input_for(page, "jog step (mm)"), str(mm))
+            _until(page, lambda: app._jog.w_frame.value == frame and app._jog.step == pytest.approx(mm * 1e-3),
+                   f"the frame {frame} and the {mm} mm step")
+    finally:
+        page.close()

@@ -35,36 +35,70 @@ def _report(done) -> None:
     if exc is not None:
         traceback.print_exception(exc)
 
-COMMIT_GAP_MS = 120
-"""Milliseconds between a commit's value update and its submit, and between one commit and the next.
+COMMIT_GAP_MS = 60
+"""Milliseconds with no GUI message sent that the page waits for before it sends one of its own:
+a commit's value update, its submit, and every click on a button.
 
 The page sends every GUI message through one 50 ms throttle that keeps only the latest message:
-a value update sent within 50 ms of an earlier message waits, and the form's "dirty" notice that
-follows it replaces it, so the typed value never reaches the server (measured: with a click into
-the next field 60-300 ms after an Enter, 7 of 26 typed values were lost).  Commits therefore go
-out one at a time from a queue, each message more than 50 ms after the one before."""
+a message handed to it within 50 ms of the one before waits, and the next message replaces it.
+A commit's value update is followed at once by the form's "dirty" notice, so a value typed within
+50 ms of another GUI message (a dropdown's choice, a keystroke in a plain text box) never reached
+the server, and its submit then applied the old value (seen in 2 of 44 runs of a browser test that
+chooses a dropdown entry and types into the next field at machine speed: the submit arrived with
+the old value and no value update before it; with a click into the next field 60-300 ms after an
+Enter, 7 of 26 typed values were once lost).  The page therefore watches
+the GUI messages that go out (``Worker.prototype.postMessage``, viser's websocket worker): each of
+its own waits, on a timer (due after the throttle's own), until none has gone out for this long,
+so that the throttle is idle and sends it at once.  Under load the throttle's own timer can run
+after the page's, later than it was due (two browser tests at once on 2 cores: seen a few times a
+run), and the throttle then still holds the message: the page sees that nothing went out, waits,
+and acts again if the held message was replaced rather than sent (a value, at most 5 times; a
+submit or a click only when it never went out, so that nothing acts twice).  Commits and clicks go
+out one at a time from a queue: a click on a button while a commit is under way waits for its
+submit, so the server sees the typed value before the button acts on it."""
 
 _JS = (
-    "if(!window.__armguardBlur){window.__armguardBlur=1;var pass=false;var GAP=" + str(COMMIT_GAP_MS) + ";"
+    "if(!window.__armguardBlur){window.__armguardBlur=1;var pass=false;var QUIET=" + str(COMMIT_GAP_MS) + ";"
     "var isField=function(t){return !!(t&&t.tagName==='INPUT'&&t.dataset&&t.dataset.armguardField);};"
     "var field=function(t){return isField(t)&&t.closest?t.closest('form'):null;};"
     # keystrokes stay in the box: the page's own handlers (and so the server) never see them
-    "var hold=function(e){if(!pass&&isField(e.target)){e.target.__agTyped=true;e.stopImmediatePropagation();}};"
+    # (the change event a blur fires after a commit is no new typing: it commits nothing again)
+    "var hold=function(e){if(!pass&&isField(e.target)){if(e.type==='input')e.target.__agTyped=true;e.stopImmediatePropagation();}};"
     "document.addEventListener('input',hold,true);document.addEventListener('change',hold,true);"
-    # on Enter / blur: queue the box's whole text; commits go out one at a time (see COMMIT_GAP_MS)
+    # the GUI messages that went out (viser's websocket worker carries them): when the last did, how many of each
+    "var last=-1e9,sent={},post=Worker.prototype.postMessage;"
+    "Worker.prototype.postMessage=function(d){var m=d&&d.type==='send'?d.message:null;"
+    "if(m&&typeof m.type==='string'&&m.type.indexOf('Gui')===0){last=performance.now();"
+    "sent[m.type]=(sent[m.type]||0)+1;if(m.uuid){var k=m.type+':'+m.uuid;sent[k]=(sent[k]||0)+1;}}"
+    "return post.apply(this,arguments);};"
+    "var count=function(k){return sent[k]||0;};"
+    # fn once no GUI message has gone out for QUIET ms
+    "var quiet=function(fn){setTimeout(function(){if(performance.now()-last<QUIET)quiet(fn);else fn();},"
+    "Math.max(1,QUIET-(performance.now()-last)));};"
+    # act into an idle throttle; a message it held instead of sending (a timer ran late) is awaited,
+    # and the act repeated (at most 5 times) only if the message never went out (it was replaced)
+    "var emit=function(act,key,done,tries){quiet(function(){var c0=count(key);act();if(count(key)>c0||tries>=5){done();return;}"
+    "quiet(function(){if(count(key)>c0)done();else emit(act,key,done,tries+1);});});};"
+    # on Enter / blur: queue the box's whole text; commits and clicks go out one at a time (see COMMIT_GAP_MS)
     "var proto=Object.getOwnPropertyDescriptor(HTMLInputElement.prototype,'value');"
     "var queue=[],busy=false;"
     "var run=function(){if(busy||!queue.length)return;busy=true;var c=queue.shift();"
-    "proto.set.call(c.t,c.text);pass=true;"
-    "try{c.t.dispatchEvent(new Event('input',{bubbles:true}));}finally{pass=false;}"
-    "setTimeout(function(){if(c.f.requestSubmit)c.f.requestSubmit();"
-    "setTimeout(function(){busy=false;run();},GAP);},GAP);};"
+    "var next=function(){busy=false;run();};"
+    "if(c.b){emit(function(){pass=true;try{c.b.click();}finally{pass=false;}},'GuiUpdateMessage:'+c.b.id,next,1);return;}"
+    # the value set through the page's own setter first (another text), so that the input event is a change to it
+    "emit(function(){c.t.value=c.text+' ';proto.set.call(c.t,c.text);pass=true;"
+    "try{c.t.dispatchEvent(new Event('input',{bubbles:true}));}finally{pass=false;}},'GuiUpdateMessage',"
+    "function(){emit(function(){if(c.f.requestSubmit)c.f.requestSubmit();},'GuiFormSubmitMessage',next,1);},1);};"
     "var commit=function(t){var f=field(t);if(!f)return;t.__agTyped=false;"
     "queue.push({t:t,f:f,text:t.value});run();};"
     "document.addEventListener('keydown',function(e){if(e.key!=='Enter'||!isField(e.target))return;"
     "e.preventDefault();e.stopPropagation();commit(e.target);},true);"
     # leaving a box commits only what was typed since its last commit (Enter then a click: once)
     "document.addEventListener('focusout',function(e){if(isField(e.target)&&e.target.__agTyped)commit(e.target);},true);"
+    # a click on a GUI button goes out from the queue too: after the commits before it, into an idle throttle
+    "document.addEventListener('click',function(e){if(pass)return;"
+    "var b=e.target&&e.target.closest?e.target.closest('button[id]'):null;if(!b||b.type==='submit')return;"
+    "e.preventDefault();e.stopImmediatePropagation();queue.push({b:b});run();},true);"
     # a value pushed by the server never overwrites what is being typed in the focused box
     "var guard=function(i){var d=Object.getOwnPropertyDescriptor(i,'value')||proto;"
     "Object.defineProperty(i,'value',{configurable:true,get:function(){return d.get.call(i);},"
