@@ -241,7 +241,15 @@ def support_table(points, n: int = 16) -> np.ndarray:
     vertices); any start is correct (a climb over the hull's graph ends at a true support vertex),
     the table only shortens the walk.  GJK and EPA start every climb from the better of the table's
     entry and the previous support (``_pair_support_table.warm_start``); ``n = 16`` (1,536 entries, 12 kB a
-    hull) took 4-8 % less time per separated hull pair than ``n = 8`` on ur3's and so101's hulls."""
+    hull) took 4-8 % less time per separated hull pair than ``n = 8`` on ur3's and so101's hulls.
+
+    Measured and not kept: flagging the entries whose whole cell lies in their vertex's normal cone
+    (the cone over a cell is spanned by its four corner rays, so the test is the climb's stopping
+    test at the corners; the flagged entry is the support itself, with no climb).  On ur3's hulls
+    (75-650 vertices) 6-56 % of the cells are such at ``n = 16``, 51-87 % at ``n = 64``, but the
+    kernel's call at 256 random configurations took 19.9-20.2 µs against 20.3 µs without, with the
+    tables consulted at every climb or only after a turn: a climb from a table's entry is already
+    one scan of a vertex's neighbours."""
     v = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     c = -1.0 + (np.arange(n) + 0.5) * (2.0 / n)
     uu, vv = np.meshgrid(c, c, indexing="ij")
