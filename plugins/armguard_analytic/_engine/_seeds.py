@@ -21,9 +21,9 @@ iterations, never the answer.  ``python -m bench pair_profile`` counts them: on 
 pairs two joints apart 2.5 seeded against 9.7 from a cold start, three joints apart 3.0 against 5.4.
 A pair whose pose depends on four joints or more (links far apart, about 4 iterations cold) has no
 table: a grid over four joints fine enough to help would take megabytes a pair, and a 16^3 table over
-three of them (the others at their middle) saves too little: on ur3, whose 21 pairs include 9 such,
-3.63 GJK iterations per separated pair (over all 21) against 3.47 with the best of four choices of
-the three (those nearest A's link).
+three of them (the others at their middle) was tried on ur3 (9 of its 21 pairs are such): with the
+best of four choices of the three, the mean GJK iterations of ``bench pair_profile`` fell by less
+than a twentieth, too little for 229 kB a pair.
 
 Made at each build, in Python over the compiled ``gjk_dir_rel`` and ``epa_depth`` (the signatures
 the kernels call); kept per process (:data:`CACHE_BYTES`, keyed by the hulls, the

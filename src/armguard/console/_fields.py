@@ -43,15 +43,15 @@ The page sends every GUI message through one 50 ms throttle that keeps only the 
 a message handed to it within 50 ms of the one before waits, and the next message replaces it.
 A commit's value update is followed at once by the form's "dirty" notice, so a value typed within
 50 ms of another GUI message (a dropdown's choice, a keystroke in a plain text box) never reached
-the server, and its submit then applied the old value (seen in 2 of 44 runs of a browser test that
-chooses a dropdown entry and types into the next field at machine speed: the submit arrived with
-the old value and no value update before it; with a click into the next field 60-300 ms after an
-Enter, 7 of 26 typed values were once lost).  The page therefore watches
+the server, and its submit then applied the old value (seen now and then in the browser tests
+on a loaded 2-core machine, ``test_jog_plus_x_in_tool_coordinates_moves_along_the_tool_x``: the
+submit arrived with the old value and no value update before it; with a click into the next
+field 60-300 ms after an Enter, 7 of 26 typed values were once lost).  The page therefore watches
 the GUI messages that go out (``Worker.prototype.postMessage``, viser's websocket worker): each of
 its own waits, on a timer (due after the throttle's own), until none has gone out for this long,
 so that the throttle is idle and sends it at once.  Under load the throttle's own timer can run
-after the page's, later than it was due (two browser tests at once on 2 cores: seen a few times a
-run), and the throttle then still holds the message: the page sees that nothing went out, waits,
+after the page's, later than it was due (seen with two browser tests at once on 2 cores), and the
+throttle then still holds the message: the page sees that nothing went out, waits,
 and acts again if the held message was replaced rather than sent (a value, at most 5 times; a
 submit or a click only when it never went out, so that nothing acts twice).  Commits and clicks go
 out one at a time from a queue: a click on a button while a commit is under way waits for its
@@ -95,9 +95,11 @@ _JS = (
     "e.preventDefault();e.stopPropagation();commit(e.target);},true);"
     # leaving a box commits only what was typed since its last commit (Enter then a click: once)
     "document.addEventListener('focusout',function(e){if(isField(e.target)&&e.target.__agTyped)commit(e.target);},true);"
-    # a click on a GUI button goes out from the queue too: after the commits before it, into an idle throttle
+    # a click on a GUI button (its id the element's uuid; other buttons act in the page only) goes out
+    # from the queue too: after the commits before it, into an idle throttle
     "document.addEventListener('click',function(e){if(pass)return;"
-    "var b=e.target&&e.target.closest?e.target.closest('button[id]'):null;if(!b||b.type==='submit')return;"
+    "var b=e.target&&e.target.closest?e.target.closest('button[id]'):null;"
+    "if(!b||b.type==='submit'||!/^[0-9a-f]{8}-[0-9a-f]{4}-/.test(b.id))return;"
     "e.preventDefault();e.stopImmediatePropagation();queue.push({b:b});run();},true);"
     # a value pushed by the server never overwrites what is being typed in the focused box
     "var guard=function(i){var d=Object.getOwnPropertyDescriptor(i,'value')||proto;"

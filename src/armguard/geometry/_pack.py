@@ -246,10 +246,9 @@ def support_table(points, n: int = 16) -> np.ndarray:
     Measured and not kept: flagging the entries whose whole cell lies in their vertex's normal cone
     (the cone over a cell is spanned by its four corner rays, so the test is the climb's stopping
     test at the corners; the flagged entry is the support itself, with no climb).  On ur3's hulls
-    (75-650 vertices) 6-56 % of the cells are such at ``n = 16``, 51-87 % at ``n = 64``, but the
-    kernel's call at 256 random configurations took 19.9-20.2 µs against 20.3 µs without, with the
-    tables consulted at every climb or only after a turn: a climb from a table's entry is already
-    one scan of a vertex's neighbours."""
+    (75-650 vertices) about half the cells are such at ``n = 64``, yet the kernel's time at random
+    configurations stayed within its noise, the tables consulted at every climb or only after a
+    turn: a climb from a table's entry is already one scan of a vertex's neighbours."""
     v = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     c = -1.0 + (np.arange(n) + 0.5) * (2.0 / n)
     uu, vv = np.meshgrid(c, c, indexing="ij")
