@@ -1,8 +1,9 @@
 """Public robots, analytic against coal: the differential spine on robots no one here wrote.
 
-Three robots of different kinds, loaded by name with the SRDF armguard finds for them: the KUKA
+Four robots of different kinds, loaded by name with the SRDF armguard finds for them: the KUKA
 iiwa of pybullet_data (mesh hulls, no SRDF), xarm7 (dense meshes and its SRDF) and z1 (dense
-meshes, cylinders; its SRDF's chain names a link the URDF lacks).  On seeded random in-limit
+meshes, cylinders; its SRDF's chain names a link the URDF lacks), and panda_collision (spheres and
+cylinders only: 112 of its 252 pairs a sphere and a cylinder, ``_pair_point_cylinder``'s closed form).  On seeded random in-limit
 configurations both backends must give the same verdict everywhere, and the same distance on
 every separated pair.  Penetration depths of cylinder pairs are left out of the distance check:
 coal's EPA overestimates deep cylinder–cylinder penetrations (z1 ``link02_1``/``link04_0``: coal
@@ -23,7 +24,7 @@ from armguard.model import known_models
 _AVAILABLE = {m.name for m in known_models() if m.available}
 
 
-@pytest.mark.parametrize("name", ["kuka_iiwa", "xarm7", "z1"])
+@pytest.mark.parametrize("name", ["kuka_iiwa", "xarm7", "z1", "panda_collision"])
 def test_public_robot_analytic_equals_coal(name):
     if name not in _AVAILABLE:
         pytest.skip(f"{name}'s package is not installed")

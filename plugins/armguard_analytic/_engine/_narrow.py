@@ -1,23 +1,21 @@
 """Narrow phase of the detector: one element pair's signed distance, dispatched on core kinds.
 
 No distance formula lives here: each branch calls the geometry core's per-pair kernel
-(:mod:`armguard.geometry`): capsule-capsule (Ranger §3 link-link and link-edge),
-capsule-box, capsule against a static polytope (GJK + Minkowski facets), GJK and EPA on support
-functions for any pair with a cylinder side (:func:`armguard.geometry._pair_cylinder.support_pair_graph`),
-and the exact convex-convex kernel for every other pair (faces, polyhedra, mesh hulls: GJK climbing
-the hulls' vertex graphs, EPA for the depth, the exhaustive SAT as fallback).  The only formula of
-its own is the distance to the workspace walls (Ranger §2, "link-to-bounding box distances"), which
-is not a shape pair (for a cylinder: its exact support along each wall's normal).
-
-Pairs of convex point cores (boxes, hulls, a point or segment against a moving polytope) and a
-cylinder against a polytope are checked in their element frames (:func:`narrow_rel`: GJK and EPA on
-``hull(A)`` and ``X_AB hull(B)``, no point moved; two boxes' depth by the SAT there), unless EPA cannot
-settle a depth; every other pair
-reads element data in W (the detector kernel moves its elements there once per check, ``_step``):
-``verts (V, 3)`` core points; ``box (G, 15)`` ``[centre, half extents, R_WB row-major]`` (a
-cylinder: ``[c, r, r, h, R_WC row-major]``, the axis the third column, ``_pair_cylinder``'s buffer;
-its core points are its circumscribed prism's corners, used for bounds only); ``fnrm (F, 3)``
-face normals; ``edir (E, 3)`` unit edge directions; ``*_start`` CSR offsets.
+(:mod:`armguard.geometry`): capsule-capsule (Ranger §3 link-link and link-edge), capsule-box,
+sphere-cylinder (closed form), capsule against a static polytope (GJK + Minkowski facets), GJK and
+EPA on support functions for any other pair with a cylinder side
+(:func:`armguard.geometry._pair_cylinder.support_pair_graph`), and the exact convex-convex kernel
+for every other pair (faces, polyhedra, mesh hulls: GJK climbing the hulls' vertex graphs, EPA for
+the depth, the exhaustive SAT as fallback).  The only formula of its own is the distance to the
+workspace walls (Ranger §2), which is not a shape pair (for a cylinder: its exact support along
+each wall's normal).  Pairs of convex point cores (boxes, hulls, a point or segment against a moving
+polytope) and a cylinder against a polytope are checked in their element frames (:func:`narrow_rel`:
+GJK and EPA on ``hull(A)`` and ``X_AB hull(B)``, no point moved; two boxes' depth by the SAT there),
+unless EPA cannot settle a depth; every other pair reads element data in W (moved there once per
+check, ``_step``): ``verts (V, 3)`` core points; ``box (G, 15)`` ``[centre, half extents, R_WB
+row-major]`` (a cylinder: ``[c, r, r, h, R_WC row-major]``, the axis the third column; its core
+points are its circumscribed prism's corners, for bounds only); ``fnrm (F, 3)`` face normals;
+``edir (E, 3)`` unit edge directions; ``*_start`` CSR offsets.
 """
 
 from __future__ import annotations
@@ -28,11 +26,11 @@ from numba import njit
 
 from armguard.geometry._pair_segment_box import capsule_box_scalar
 from armguard.geometry._pair_segment_polytope import capsule_polytope_at
-from armguard.geometry._pair_segment_segment import capsule_capsule_scalar
+from armguard.geometry._pair_point_cylinder import point_cylinder_flat
+from armguard.geometry._pair_segment_segment import capsule_capsule_scalar, write_rounded
 from armguard.geometry._pair_epa import EPA_WORK_SIZE
 from armguard.geometry._pair_gjk import GJK_SEPARATED, _inner_point
 from armguard.geometry._pair_sat_rel import sat_cost, sat_depth_rel, sat_witnesses_rel
-from armguard.geometry._pair_segment_segment import write_rounded
 from armguard.geometry.kernels import GJK_NOT_CONVERGED, capsule_box, capsule_capsule
 
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
@@ -111,12 +109,7 @@ def pair_distance(
         return _capsule_box(verts, vstart[ga], vstart[ga + 1], ra, box, gb, out, eps_len, eps_par, offset), 0
     if ka == _BOX and kb <= _SEGMENT:
         d = _capsule_box(verts, vstart[gb], vstart[gb + 1], rb, box, ga, out, eps_len, eps_par, offset)
-        for i in range(3):  # swap the witnesses, negate the normal
-            t = out[i]
-            out[i] = out[3 + i]
-            out[3 + i] = t
-            out[6 + i] = -out[6 + i]
-        return d, 0
+        return _swapped(out, d), 0
     if ka == _CYLINDER or kb == _CYLINDER:
         ca = box[ga] if ka == _CYLINDER else box[ga, 0:0]  # an empty buffer: the hull of the points
         cb = box[gb] if kb == _CYLINDER else box[gb, 0:0]
@@ -148,23 +141,28 @@ def _capsule_polytope(seg, ra, k, pv, ppl, ped, pbis, pcen, pvs, pps, pes, rb, o
                                pbis[pes[k]:pes[k + 1]], pcen[k], rb, out, 0, eps_len, eps_par, gjk_eps, max_iter, offset)
 
 
+@njit(cache=True, inline="always")
+def _swapped(out, d):  # pragma: no cover - compiled
+    """``d``, with ``out``'s witnesses swapped and its normal negated (a kernel ran with B as A)."""
+    for i in range(3):
+        t = out[i]
+        out[i] = out[3 + i]
+        out[3 + i] = t
+        out[6 + i] = -out[6 + i]
+    return d
+
+
 @njit(cache=True, _nrt=False)
 def narrow_flat(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, offset):  # pragma: no cover
     """:func:`pair_distance` on the detector's packed buffers (:mod:`._layout`), same outputs and errors.
 
     The common pairs read their cores straight from the flat buffers into registers and call the
-    geometry core's scalar entry points (capsule-capsule, capsule-box: ~30 ns per pair, against
-    ~200 ns when a dozen array views are passed around).  Returns ``(distance, error)``, or
-    ``(0, NOT_SCALAR)`` for any other pair: the caller then calls :func:`narrow_other` (kept apart
-    so that this function creates no array view: views cost reference counting on every call).
-    """
-    oc = H[2 * _K_core]
-    ovs = H[2 * _K_vstart]
-    orad = H[2 * _K_radius]
-    ov = H[2 * _K_vW]
-    obox = H[2 * _K_boxW]
-    ka = MI[oc + ga]
-    kb = MI[oc + gb]
+    geometry core's scalar entry points (capsule-capsule, capsule-box, sphere-cylinder: ~30 ns per
+    pair, against ~200 ns when a dozen array views are passed around).  Returns ``(distance,
+    error)``, or ``(0, NOT_SCALAR)`` for any other pair: the caller then calls :func:`narrow_other`
+    (kept apart so that this function creates no array view: views cost reference counting)."""
+    oc, ovs, orad, ov, obox = H[2 * _K_core], H[2 * _K_vstart], H[2 * _K_radius], H[2 * _K_vW], H[2 * _K_boxW]
+    ka, kb = MI[oc + ga], MI[oc + gb]
     if ka <= _SEGMENT:
         va = MI[ovs + ga]
         ja = va if MI[ovs + ga + 1] - va == 1 else va + 1
@@ -179,6 +177,9 @@ def narrow_flat(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, offset):  # pragma
                 SF[a0], SF[a0 + 1], SF[a0 + 2], SF[a1], SF[a1 + 1], SF[a1 + 2], MF[orad + ga],
                 SF[b0], SF[b0 + 1], SF[b0 + 2], SF[b1], SF[b1 + 1], SF[b1 + 2], MF[orad + gb],
                 out, 0, eps_len, eps_par), 0
+        if kb == _CYLINDER and ja == va:  # a sphere and a cylinder: closed form
+            return point_cylinder_flat(SF[a0], SF[a0 + 1], SF[a0 + 2], MF[orad + ga], SF, obox + 15 * gb, MF[orad + gb],
+                                       out, 0), 0
         if kb == _BOX:
             o = obox + 15 * gb
             return capsule_box_scalar(
@@ -186,6 +187,10 @@ def narrow_flat(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, offset):  # pragma
                 SF[o], SF[o + 1], SF[o + 2], SF[o + 3], SF[o + 4], SF[o + 5], SF[o + 6], SF[o + 7], SF[o + 8],
                 SF[o + 9], SF[o + 10], SF[o + 11], SF[o + 12], SF[o + 13], SF[o + 14],
                 out, 0, eps_len, eps_par, offset), 0
+    elif ka == _CYLINDER and kb <= _SEGMENT and MI[ovs + gb + 1] - MI[ovs + gb] == 1:  # a cylinder and a sphere
+        b0 = ov + 3 * MI[ovs + gb]
+        d = point_cylinder_flat(SF[b0], SF[b0 + 1], SF[b0 + 2], MF[orad + gb], SF, obox + 15 * ga, MF[orad + ga], out, 0)
+        return _swapped(out, d), 0
     elif ka == _BOX and kb <= _SEGMENT:
         vb = MI[ovs + gb]
         jb = vb if MI[ovs + gb + 1] - vb == 1 else vb + 1
@@ -197,12 +202,7 @@ def narrow_flat(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, offset):  # pragma
             SF[o], SF[o + 1], SF[o + 2], SF[o + 3], SF[o + 4], SF[o + 5], SF[o + 6], SF[o + 7], SF[o + 8],
             SF[o + 9], SF[o + 10], SF[o + 11], SF[o + 12], SF[o + 13], SF[o + 14],
             out, 0, eps_len, eps_par, offset)
-        for i in range(3):  # swap the witnesses, negate the normal
-            t = out[i]
-            out[i] = out[3 + i]
-            out[3 + i] = t
-            out[6 + i] = -out[6 + i]
-        return d, 0
+        return _swapped(out, d), 0
     return 0.0, NOT_SCALAR
 
 

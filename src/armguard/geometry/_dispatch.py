@@ -16,6 +16,7 @@ from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._cylinder import Cylinder
 from ._pair_box_box import box_box_overlap_packed
 from ._pair_cylinder import SUPPORT_WORK_SIZE, support_pair
+from ._pair_point_cylinder import point_cylinder_flat
 from ._pair_epa import EPA_WORK_SIZE, convex_convex_fast
 from ._pair_gjk import CLIMB_MIN_VERTICES, GJK_NOT_CONVERGED, GJK_WORK_SIZE
 from ._pair_sat import convex_convex
@@ -191,6 +192,19 @@ def _cylinder_pair(a, b, tol: Tolerances) -> Proximity:
     return _proximity(d, out)
 
 
+def _point_cylinder(a, b, tol: Tolerances) -> Proximity:
+    """A Sphere against a Cylinder: the closed form (``_pair_point_cylinder``; exact, no iterations)."""
+    p, out = a._sat[0][0], np.empty(9)
+    return _proximity(point_cylinder_flat(p[0], p[1], p[2], a._sat[3], b._pk, 0, 0.0, out, 0), out)
+
+
+def _cylinder_point(a, b, tol: Tolerances) -> Proximity:
+    """:func:`_point_cylinder` with the sides swapped back (witnesses exchanged, the normal negated)."""
+    p, out = b._sat[0][0], np.empty(9)
+    d = point_cylinder_flat(p[0], p[1], p[2], b._sat[3], a._pk, 0, 0.0, out, 0)
+    return _proximity(d, np.concatenate([out[3:6], out[0:3], -out[6:9]]))
+
+
 _P, _S, _B, _T = CoreKind.POINT, CoreKind.SEGMENT, CoreKind.BOX, CoreKind.POLYTOPE
 _C = CoreKind.CYLINDER
 
@@ -215,6 +229,8 @@ _TABLE = {
 }
 for _k in (_P, _S, _B, _T, _C):
     _TABLE[(_C, _k)] = _TABLE[(_k, _C)] = (_cylinder_pair, "support_pair (GJK + EPA on support functions)")
+_TABLE[(_P, _C)] = (_point_cylinder, "point_cylinder (closed form)")
+_TABLE[(_C, _P)] = (_cylinder_point, "point_cylinder (closed form, swapped)")
 
 _SHAPES = (Sphere, Capsule, Box, Prism, ConvexPolyhedron, Polygon, Cylinder)
 _BY_TYPE = {(ta, tb): _TABLE[(ta.core_kind, tb.core_kind)][0] for ta in _SHAPES for tb in _SHAPES}
