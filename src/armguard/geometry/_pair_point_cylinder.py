@@ -10,8 +10,10 @@ intervals, here a disk times a segment).  Inside ``C`` the nearest boundary poin
 radius ``rp`` around ``p`` against ``C`` swept by ``rb`` is then ``d(p, C) - rp - rb`` apart (the
 depth when negative: the swept sets' distance function is ``d(p, C) - rb`` outside ``C`` and
 ``-(depth to the boundary) - rb`` inside).  The general cylinder kernels (``_pair_cylinder``: GJK and
-EPA on support functions) answer the same to their tolerance; this one is exact to rounding and has
-no iterations (``tests/test_geometry_point_cylinder.py`` holds them together).
+EPA on support functions) answer the same to their tolerance wherever EPA settles a depth (for a
+sphere deep on the axis it may not, and reports the cores touching: ``-(rp + rb)``, an upper
+bound); this one is exact to rounding and has no iterations (``tests/test_geometry_point_cylinder.py``
+holds them together).
 """
 
 from __future__ import annotations
