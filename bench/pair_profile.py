@@ -21,7 +21,9 @@ random in-limit configurations (``Model.random_q``, seeded):
   hull side per iteration, ``_pair_gjk._climb``) and the supports' dot products (the climbs'
   neighbours; a box side scans its 8 corners), over the pairs GJK finds apart GJK starts as the kernel does,
   from the pair's seed table where it has one (``armguard_analytic._engine._seeds.seed_row``; a
-  seed's vertices are no support evaluations); *from a cold start* counts the iterations without it.
+  seed's vertices are no support evaluations); *from a cold start* counts the iterations without it,
+  and *along the answer* those of a cold start whose first direction is the pair's final one: what no
+  better first direction can save (a far pair, with no seed table, cannot get below it by its direction).
 """
 
 from __future__ import annotations
@@ -107,21 +109,28 @@ def _gjk_work(model, ana, n_q: int) -> dict:
             d0 = np.array(G._inner_point(pa, adja)) - (X[:3, :3] @ np.array(G._inner_point(pb, adjb)) + X[:3, 3])
             e = G._b_dir(rot, *d0)
             sa, sb = G.table_start(taba, *(-d0)), G.table_start(tabb, *e)
-            its = []
+            its, answer = [], None
             for out, seed in ((cold, None), (rows, seed_row(spair, sgrid, sdt, p, q_engine))):
                 for k in count:
                     count[k] = 0
-                st = G._gjk_body(pa, adja, pb, adjb, rot, X[0, 3], X[1, 3], X[2, 3], *d0, prm[2], prm[4], iprm[2],
-                                 np.zeros(9), np.inf, sa, sb, taba, tabb, seed)[0]
-                if st == G.GJK_SEPARATED:
+                r = G._gjk_body(pa, adja, pb, adjb, rot, X[0, 3], X[1, 3], X[2, 3], *d0, prm[2], prm[4], iprm[2],
+                                np.zeros(9), np.inf, sa, sb, taba, tabb, seed)
+                if r[0] == G.GJK_SEPARATED:
                     out.append((count["it"], count["climb"], count["dot"]))
                     its.append(count["it"])
+                    answer = np.array(r[2:5]) - np.array(r[5:8])  # the witnesses' difference: the answer's direction
             if len(its) == 2:
-                by.setdefault(int(spair[p, 2] & 3) if spair[p, 0] >= 0 else 0, []).append((its[1], its[0]))
+                # a cold start along the answer's own direction (climbs from the tables' entries for it): the
+                # iterations no better first direction can save
+                e = G._b_dir(rot, *answer)
+                for k in count:
+                    count[k] = 0
+                G._gjk_body(pa, adja, pb, adjb, rot, X[0, 3], X[1, 3], X[2, 3], *answer, prm[2], prm[4], iprm[2],
+                            np.zeros(9), np.inf, G.table_start(taba, *(-answer)), G.table_start(tabb, *e), taba, tabb)
+                by.setdefault(int(spair[p, 2] & 3) if spair[p, 0] >= 0 else 0, []).append((its[1], its[0], count["it"]))
     r = np.array(rows, dtype=float).reshape(-1, 3)
     out = {"gjk_pairs": len(r), "it_cold": float(np.mean([c[0] for c in cold])) if cold else float("nan"),
-           "by_joints": {str(k): [float(np.mean([v[0] for v in b])), float(np.mean([v[1] for v in b]))]
-                         for k, b in sorted(by.items())}}
+           "by_joints": {str(k): [float(np.mean([v[j] for v in b])) for j in range(3)] for k, b in sorted(by.items())}}
     for j, k in enumerate(("it", "climb", "dot")):
         out[k] = float(r[:, j].mean()) if len(r) else float("nan")
         out[k + "_p90"] = float(np.percentile(r[:, j], 90)) if len(r) else float("nan")
@@ -173,7 +182,7 @@ def run(quick: bool) -> str:
     env = dict(os.environ)
     env.pop("PYTHONDONTWRITEBYTECODE", None)
     rows = ["| robot | pairs (polytope) | call | Python wrapper | fixed (unboxing, views, FK) | per pair | same q "
-            "| GJK iterations / pair (p90) | from a cold start | seeded / cold, by the joints of the pair's table "
+            "| GJK iterations / pair (p90) | from a cold start | seeded / cold / along the answer, by the joints of the pair's table "
             "| climbs / pair (p90) | support dot products / pair (p90) |",
             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for name in ROBOTS:
@@ -187,7 +196,7 @@ def run(quick: bool) -> str:
         r = json.loads(lines[-1])
         print(f"  {name}: {r}", file=sys.stderr, flush=True)
         per = (r["us_kernel"] - r["us_fixed"]) / max(r["pairs"], 1)
-        by = ", ".join(f"{'no table' if k == '0' else k}: {s:.1f} / {c:.1f}" for k, (s, c) in r["by_joints"].items())
+        by = ", ".join(f"{'no table' if k == '0' else k}: {s:.1f} / {c:.1f} / {a:.1f}" for k, (s, c, a) in r["by_joints"].items())
         work = (f"| {r['it']:.1f} ({r['it_p90']:.0f}) | {r['it_cold']:.1f} | {by} | {r['climb']:.1f} ({r['climb_p90']:.0f}) "
                 f"| {r['dot']:.0f} ({r['dot_p90']:.0f}) |") if r["gjk_pairs"] else "| — | — | — | — | — |"
         rows.append(
@@ -198,7 +207,8 @@ def run(quick: bool) -> str:
             "is (kernel - fixed) / pairs; *Python wrapper* is the best of 21 interleaved runs (as `bench backends`); *same q* repeats one configuration (forward kinematics skipped, branch "
             "predictor trained). *by the joints of the pair's table*: the mean GJK iterations of the pairs whose "
             "pose depends on 1, 2 or 3 joint values (their seed tables, `armguard_analytic._engine._seeds`), and of "
-            "those without a table. z1's pairs all have a cylinder side (GJK and EPA on support functions, "
+            "those without a table; *along the answer*: a cold start whose first direction is the pair's own final one (the witnesses' difference; "
+            "the climbs starting from the support tables' entries for it), the iterations that no better first direction saves. z1's pairs all have a cylinder side (GJK and EPA on support functions, "
             "`_pair_cylinder.support_pair_graph`): not counted.")
     return "\n".join(rows) + note
 
