@@ -28,8 +28,12 @@ def test_pair_profile_counts_gjk_work():
     # than cold on kuka_iiwa's hulls (its pairs two joints apart: 9.7 cold, 2.5 seeded)
     assert 1.0 <= row["it"] <= row["it_p90"] <= 64
     assert 2.0 <= row["it_cold"] and row["it"] < 0.8 * row["it_cold"]
-    seeded, cold = row["by_joints"]["2"]  # the six pairs two joints apart, 32 x 32 tables
+    seeded, cold, along = row["by_joints"]["2"]  # the six pairs two joints apart, 32 x 32 tables
     assert 1.0 <= seeded < 0.5 * cold
+    # along the answer's own direction a cold start still builds its simplex one support at a time
+    # (at least the first and the verifying one) and never takes more than 64 iterations
+    far = row["by_joints"]["0"]  # the pairs with no table
+    assert 2.0 <= along <= 64 and 2.0 <= far[2] <= far[1]
     # every hull of kuka_iiwa has a vertex graph: each support climbs both hulls, once each
     assert row["climb"] == 2 * row["it"]
     assert row["dot"] >= row["climb"]
