@@ -46,3 +46,54 @@ def test_public_robot_analytic_equals_coal(name):
         gap = np.linalg.norm(a.p_WA - a.p_WB, axis=1)
         np.testing.assert_allclose(gap, np.abs(a.distance), rtol=0, atol=1e-9)
     assert ana.collides(Q).tolist() == ref.collides(Q).tolist()
+
+
+# z1 at a configuration where coal's EPA, at the reference's 1e-9 tolerance, gives up on a
+# penetrating cylinder pair and returns -DBL_MAX as the distance (found by `armguard compare z1`)
+_Z1_EPA_GAVE_UP = [-0.8453603385916364, 1.9922585316821473, -0.24661979153421276, 1.4037013798562386,
+                   -0.5459526902129788, 0.5770467243061099, -1.2367346345542591]
+
+
+def _z1_pair(model, a, b):
+    return next(k for k, (x, y) in enumerate(zip(model.pairs.a, model.pairs.b)) if {x, y} == {a, b})
+
+
+def test_coal_settles_a_depth_its_epa_gave_up_on():
+    if "z1" not in _AVAILABLE:
+        pytest.skip("z1's package is not installed")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = armguard.load_model("z1")
+    q = np.array(_Z1_EPA_GAVE_UP)
+    k = _z1_pair(model, "link02_1", "link06_0")
+    ref = armguard.checker(model, "coal")
+    import pinocchio as pin
+
+    # the premise: at the reference's own EPA tolerance coal returns its sentinel for this pair
+    data, gdata = ref._thread_data()
+    pin.updateGeometryPlacements(model.pin_model, data, ref.geometry_model, gdata, q)
+    i = ref._row_pairs[k][0]
+    assert pin.computeDistance(ref.geometry_model, gdata, i).min_distance < -1e300
+    c = ref.pair_distances(q)
+    a = armguard.checker(model, "analytic").pair_distances(q)
+    assert np.all(c.distance > -1.0)  # no sentinel left in any row
+    # the retried depth (EPA tolerance 1e-8 or looser) against the exact one: -20.7356 mm
+    assert c.distance[k] < 0 and abs(c.distance[k] - a.distance[k]) < 1e-6
+    np.testing.assert_allclose(np.linalg.norm(c.p_WA[k] - c.p_WB[k]), -c.distance[k], rtol=0, atol=1e-6)
+    # the request keeps the reference's tolerance for the next call
+    assert gdata.distanceRequests[i].epa_tolerance == ref.gjk_tolerance
+
+
+def test_coal_refuses_a_depth_no_tolerance_settles(monkeypatch):
+    if "z1" not in _AVAILABLE:
+        pytest.skip("z1's package is not installed")
+    import armguard_coal
+
+    from armguard._errors import BackendError
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = armguard.load_model("z1")
+    monkeypatch.setattr(armguard_coal, "EPA_RETRY_TOLERANCES", (1e-9,))  # the tolerance that gave up
+    with pytest.raises(BackendError, match=r"no penetration depth for link0\d_\d / link0\d_\d at q = \[-0\.845"):
+        armguard.checker(model, "coal").pair_distances(np.array(_Z1_EPA_GAVE_UP))

@@ -13,7 +13,11 @@ placements and requests are per-call state), and the batch pool is used by one c
 
 Options: ``threads`` (batches; default: all cores), ``gjk_tolerance`` (m, default 1e-9: coal's
 own default of 1e-6 stops GJK up to ~1e-5 m above the distance on curved hulls; a reference
-has to be tighter than the 1e-6 m the differential tests hold the backends to).
+has to be tighter than the 1e-6 m the differential tests hold the backends to).  Where coal's EPA
+gives up on a penetrating pair (it returns ``-DBL_MAX`` as the distance: z1's cylinder pairs at
+the 1e-9 EPA tolerance), that pair is computed again with the EPA tolerance loosened step by step
+(:data:`EPA_RETRY_TOLERANCES`), and a pair no tolerance settles is an error: never a distance of
+-1.8e308 m.
 """
 
 from __future__ import annotations
@@ -30,7 +34,16 @@ from armguard._errors import BackendError
 from armguard.backends import Capability, CheckerBase, PairDistances, PairDistancesMany, check_pairs, check_q, check_Q
 from armguard.model import WORKSPACE
 
-__all__ = ["CoalBackend", "CoalChecker"]
+__all__ = ["CoalBackend", "CoalChecker", "EPA_FAILED", "EPA_RETRY_TOLERANCES"]
+
+EPA_FAILED = -1e300
+"""m: a distance at or below this is coal's sign that its EPA gave up (``-DBL_MAX``, -1.8e308 m),
+not a depth.  Seen on z1's cylinder pairs with the reference's EPA tolerance of 1e-9: the
+polytope outgrows EPA's own limits on a curved core before the gap closes."""
+EPA_RETRY_TOLERANCES = (1e-8, 1e-7, 1e-6, 1e-5)
+"""m: the EPA tolerances a pair whose EPA gave up is computed again with, in order (the first
+that settles a depth is kept; the differential tests hold depths to 1e-6 m only where both sides
+are polytopes)."""
 
 
 def workspace_walls(lo, hi):
@@ -147,6 +160,9 @@ class CoalChecker(CheckerBase):
         d.fill(np.inf)
         for r, i, j in zip(results, cps, rows):  # the least distance of a row's collision pairs wins
             dist = r.min_distance
+            if dist <= EPA_FAILED:
+                r = self._depth_retry(gdata, i, q)
+                dist = r.min_distance
             if dist <= d[j]:
                 d[j] = dist
                 p1, p2 = r.getNearestPoint1(), r.getNearestPoint2()
@@ -156,6 +172,27 @@ class CoalChecker(CheckerBase):
                 p_WB[j] = p2
         if not np.all(np.isfinite(d)):
             raise BackendError("coal: a distance came back NaN or infinite; no verdict")
+
+    def _depth_retry(self, gdata, i: int, q):
+        """Collision pair ``i`` again (placements at ``q`` already in ``gdata``) after coal's EPA gave up
+        (``-DBL_MAX``), with its EPA tolerance loosened step by step (:data:`EPA_RETRY_TOLERANCES`);
+        the request is restored after.  No tolerance settling it: ``BackendError`` naming the pair."""
+        import pinocchio as pin
+
+        req = gdata.distanceRequests[i]
+        keep = req.epa_tolerance
+        try:
+            for tol in EPA_RETRY_TOLERANCES:
+                req.epa_tolerance = tol
+                r = pin.computeDistance(self.geometry_model, gdata, i)
+                if r.min_distance > EPA_FAILED:
+                    return r
+        finally:
+            req.epa_tolerance = keep
+        cp = self.geometry_model.collisionPairs[i]
+        names = [self.geometry_model.geometryObjects[k].name for k in (cp.first, cp.second)]
+        raise BackendError(f"coal: no penetration depth for {names[0]} / {names[1]} at q = {np.asarray(q).tolist()} "
+                           f"(its EPA gave up at every tolerance up to {EPA_RETRY_TOLERANCES[-1]:g} m); no verdict")
 
     distance_jacobian = CheckerBase.witness_jacobian  # Pinocchio's frame Jacobians at coal's witness points
 
