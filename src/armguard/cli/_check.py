@@ -16,6 +16,7 @@ import click
 
 from . import main
 from ._exit import ExitCode, exit_epilog
+from ._output import output_console
 
 _STATUS_EXIT = {"clear": ExitCode.OK, "warning": ExitCode.OK, "collision": ExitCode.UNSAFE,
                 "incomplete": ExitCode.INCOMPLETE}
@@ -82,7 +83,6 @@ def parse_q(sc, q_text: str, deg: bool):
               help="Add the terrain category: a sensed terrain file (armguard.terrain.load_terrain).")
 def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_us, as_json, terrain_file) -> None:
     """Check SCENE (a built-in name or a scene file) at one configuration."""
-    from rich.console import Console
     from rich.table import Table
 
     from ..detect import Detector
@@ -103,9 +103,7 @@ def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_u
     if as_json:
         click.echo(json.dumps(rep.to_dict(), indent=2))  # features as data (Feature.to_dict)
         sys.exit(int(code))
-    out = Console()
-    if not out.is_terminal:  # piped: don't cut names to 80 columns
-        out = Console(width=200)
+    out = output_console()
     colour = _COLOUR[rep.status.value]
     out.print(f"[bold]{sc.name}[/bold]  status: [bold {colour}]{rep.status.value.upper()}[/bold {colour}]  "
               f"(threshold {threshold} m, {rep.elapsed_us:.1f} µs, {rep.n_evaluated} pairs evaluated)")

@@ -9,6 +9,7 @@ import click
 
 from . import main
 from ._exit import ExitCode, exit_epilog
+from ._output import output_console
 
 
 def _floats(text: str) -> list:
@@ -42,12 +43,11 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
     .urdf/.yaml path): verdicts, distances, nearest points and timings on the same configurations.
     With --out, compare.json and the PNGs are written as one set: an interrupted or failed run leaves
     the previous run's set as it was."""
-    from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     from ..harness import compare_at, parse_backend_options, run_compare, summary_table
 
-    console = Console()
+    console = output_console()
     names = tuple(b.strip() for b in backends.split(",") if b.strip())
     options = parse_backend_options(backend_options)
     if q_text is not None:
@@ -104,7 +104,6 @@ def check_urdf_cmd(path, n_configs, as_json) -> None:
     """Lint a model (a built-in name, .urdf or .yaml): dropped collision elements, non-convex meshes marked
     convex, zero-length capsules, SRDF names that match nothing, disabled pairs whose certificate (armguard srdf)
     an edit broke -- searched again, with the configuration where they now collide -- and pairs in permanent collision."""
-    from rich.console import Console
     from rich.table import Table
 
     from pathlib import Path
@@ -119,7 +118,7 @@ def check_urdf_cmd(path, n_configs, as_json) -> None:
     if as_json:
         click.echo(json.dumps(report.to_dict(), indent=1))
     else:
-        console = Console()
+        console = output_console()
         if not report.findings:
             console.print(f"[green]{report.target}: clean[/green] ({report.summary})")
         else:

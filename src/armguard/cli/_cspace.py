@@ -8,6 +8,7 @@ import click
 
 from . import main
 from ._exit import ExitCode, exit_epilog
+from ._output import output_console
 
 
 def _angle(value: str) -> float:
@@ -48,11 +49,10 @@ def cspace() -> None:
 def build_cmd(model, out, resolution, j3_resolution, cell, stopping_distance, robot, max_depth, workers, scheduler,
               no_resume) -> None:
     """Build the map of MODEL (a built-in scene name or a .yaml / .urdf file) and write it to OUT."""
-    from rich.console import Console
 
     from ..cspace import ForbiddenMap
 
-    console = Console()
+    console = output_console()
     c = _angle(cell)
     fmap = ForbiddenMap.build(model, out=out, robot=robot, resolution=_angle(resolution),
                               j3_resolution=None if j3_resolution is None else _angle(j3_resolution), cell=(c, c),

@@ -18,6 +18,7 @@ import click
 import numpy as np
 
 from . import main
+from ._output import output_console
 
 #: Hermes (001_…, §4): "the maximum value of the stopping distance be 100 mm, i.e. the typical value
 #: for maximum speed movements".
@@ -114,7 +115,6 @@ def demo_cmd(out_dir, scenes, stopping_distances, list_only) -> None:
         for cmd, what in EXAMPLES:
             click.echo(f"{cmd}: {what}")
         return
-    from rich.console import Console
     from rich.table import Table
 
     from .._io import make_folder
@@ -123,9 +123,7 @@ def demo_cmd(out_dir, scenes, stopping_distances, list_only) -> None:
     from ..verify import Subdivided, Verifier
     from ._compile import warm_up
 
-    console = Console()
-    if not console.is_terminal:  # piped or under make: don't fold the table into 80 columns
-        console = Console(width=180)
+    console = output_console()
     out = make_folder(out_dir)  # OutputError (exit status 3) when it cannot be made
     table = Table(title="armguard: certified verification of the built-in scenes' canned trajectories")
     modes = [("fixed", float(sd)) for sd in stopping_distances] or [("fixed", 0.0), ("hermes", HERMES_MAX_STOPPING_DISTANCE)]

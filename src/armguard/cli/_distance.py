@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from . import main
+from ._output import output_console
 
 
 @main.command("distance")
@@ -19,14 +20,13 @@ def _fmt(p) -> str:
 
 def print_table() -> None:
     """Print a rich table: pair, kernel, signed distance, witness points and the B feature."""
-    from rich.console import Console
     from rich.table import Table
 
     from ..geometry import distance, feature_at, kernel_name
     from ..geometry._demo import example_pairs
     from ._compile import warm_up
 
-    console = Console()
+    console = output_console()
     rows = example_pairs()
     warm_up((("geometry kernels", lambda: [distance(a, b) for _, a, b in rows]),), console=console, side=())  # a bar only when compiling
     table = Table(title="armguard signed distance (m): > 0 apart, < 0 penetrating")

@@ -7,6 +7,7 @@ import numpy as np
 
 from .._errors import SceneError
 from . import main
+from ._output import output_console
 
 
 @main.command("fk")
@@ -17,7 +18,6 @@ from . import main
 @click.option("--deg", is_flag=True, help="--q gives revolute joints in degrees; rpy is printed in degrees.")
 def fk_cmd(scene: str, q_text: str | None, robot_name: str | None, deg: bool) -> None:
     """Print the world pose (xyz in m, rpy) of every link of a robot of SCENE at --q."""
-    from rich.console import Console
     from rich.table import Table
 
     from ..kinematics import xyz_rpy_from_pose
@@ -56,6 +56,6 @@ def fk_cmd(scene: str, q_text: str | None, robot_name: str | None, deg: bool) ->
             rpy = np.degrees(rpy)
         t.add_row(ln, *(f"{v: .6f}" for v in xyz), *(f"{v: .4f}" for v in rpy))
     outside = [robot.joint_names[k] for k in range(robot.n_joints) if not (robot.lower[k] <= q[k] <= robot.upper[k])]
-    Console().print(t)
+    output_console().print(t)
     if outside:
         click.secho(f"warning: joints outside their limits: {', '.join(outside)}", fg="yellow", err=True)

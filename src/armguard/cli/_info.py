@@ -8,6 +8,7 @@ import math
 import click
 
 from . import main
+from ._output import output_console
 
 # Sciomachen & Magnani (seed 001): "The memory required for the database, in the case of the
 # Hermes model described above, is about 3 kbytes"; "the memory available on board is about 40 kbytes".
@@ -37,12 +38,11 @@ def _limit(v: float, revolute: bool, deg: bool) -> str:
 
 def _print_known_models() -> None:
     """The names ``load_model`` takes: built-in and public robots, whether each is installed, its file."""
-    from rich.console import Console
     from rich.table import Table
 
     from ..model._public import known_models
 
-    con = Console() if Console().is_terminal else Console(width=200)
+    con = output_console()
     t = Table(title="known models (armguard info NAME describes one; any .urdf or .yaml path loads too)",
               title_justify="left")
     for col in ("name", "source", "available", "file"):
@@ -83,7 +83,6 @@ def info_cmd(scene: str | None, rad: bool, srdf: str | None) -> None:
     """Describe SCENE (a built-in or public robot name, a .yaml scene or a .urdf): bodies, robots, joints,
     pairs, size, and the SRDF used.  Without SCENE: list the model names armguard knows, and whether each
     is installed."""
-    from rich.console import Console
     from rich.table import Table
 
     from ..scene import compile_scene, load_scene
@@ -102,7 +101,7 @@ def info_cmd(scene: str | None, rad: bool, srdf: str | None) -> None:
     else:
         s = load_scene(scene)
     c = compile_scene(s)
-    con = Console()
+    con = output_console()
     con.print(f"[bold]{s.name}[/bold]: {s.description}" if s.description else f"[bold]{s.name}[/bold]")
     _print_srdf(con, s, scene)
 

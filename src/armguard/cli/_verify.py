@@ -9,6 +9,7 @@ import click
 
 from . import main
 from ._exit import ExitCode, exit_epilog
+from ._output import output_console
 
 
 def resolve_trajectories(scene, specs):
@@ -84,7 +85,6 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
     """Verify TRAJECTORIES (.yaml files, canned names of SCENE, or 'all') in SCENE."""
     import json
 
-    from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     from .._io import atomic_write
@@ -94,9 +94,7 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
     from ._compile import warm_up
     from ._demo import verdict_text
 
-    console = Console()
-    if not console.is_terminal:  # piped: one summary line per line, not folded at 80 columns
-        console = Console(width=200)
+    console = output_console()
     sc = load_scene(scene)
     items = resolve_trajectories(sc, trajectories)
     warm_up(console=console)
