@@ -193,3 +193,25 @@ def test_body_and_robot_problems_are_listed_together(tmp_path):
     assert res.exit_code == ExitCode.INPUT
     assert "bodies[1].shapes[0] (line" in res.output and "no volume" in res.output
     assert "1 more problem:" in res.output and "robots[0].joints[1].limits (line" in res.output
+
+
+def test_the_command_shows_an_armguard_warning_as_one_line(capsys):
+    """``armguard``'s warnings hook: an ArmguardWarning (its message names the file and the element)
+    is ``warning: <message>`` on stderr, without Python's source line of the library under it; other
+    warnings keep Python's form."""
+    import warnings
+
+    from armguard import ArmguardWarning
+    from armguard.cli._output import one_line_warnings
+
+    before = []  # the hook in place before: it still shows the other warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        warnings.showwarning = lambda message, category, *a, **k: before.append((category, str(message)))
+        one_line_warnings()
+        one_line_warnings()  # a second call wraps nothing twice
+        warnings.warn(ArmguardWarning("robot.srdf: group_state[0] (home): no attribute 'group'"))
+        warnings.warn(UserWarning("not armguard's"))
+    err = capsys.readouterr().err.splitlines()
+    assert err == ["warning: robot.srdf: group_state[0] (home): no attribute 'group'"]  # once, no source line
+    assert before == [(UserWarning, "not armguard's")]

@@ -45,7 +45,9 @@ def _option_names(ctx, message: str) -> str:
 def main(ctx, backend: str | None, config: str | None, traceback: bool) -> None:
     """armguard: collision and proximity detection for robot manipulators."""
     from ..backends import available, command_line_choice
+    from ._output import one_line_warnings
 
+    one_line_warnings()
     if backend is not None and backend not in available():
         raise click.BadParameter(f"unknown backend {backend!r}; installed backends are {list(available())}",
                                  param_hint="--backend")

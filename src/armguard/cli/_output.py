@@ -1,13 +1,20 @@
-"""The console a command prints its tables to.
+"""The console a command prints its tables to, and how its warnings read.
 
 In a terminal: rich's own (the terminal's width).  Piped into a file, a log or ``make``'s output,
 rich would fold every table into 80 columns and cut its headers and names to ``…``; there the
 console is :data:`PIPED_WIDTH` columns wide instead, so a log keeps whole names and columns.
+
+An :class:`armguard.ArmguardWarning` (a lenient reading of an input: its message names the file
+and the element) is one line on stderr, ``warning: <message>``, not Python's form with the
+library's source line under it.
 """
 
 from __future__ import annotations
 
-__all__ = ["PIPED_WIDTH", "output_console"]
+import sys
+import warnings
+
+__all__ = ["PIPED_WIDTH", "output_console", "one_line_warnings"]
 
 PIPED_WIDTH = 200
 """Columns of a command's output when it does not go to a terminal."""
@@ -19,3 +26,22 @@ def output_console():
 
     console = Console()
     return console if console.is_terminal else Console(width=PIPED_WIDTH)
+
+
+def one_line_warnings() -> None:
+    """Show :class:`armguard.ArmguardWarning` as ``warning: <message>`` on stderr (other warnings as
+    Python shows them); called once by the ``armguard`` command, never by the library."""
+    from .._errors import ArmguardWarning
+
+    shown = warnings.showwarning
+    if getattr(shown, "_armguard_one_line", False):
+        return
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, ArmguardWarning):
+            print(f"warning: {message}", file=file or sys.stderr)
+        else:
+            shown(message, category, filename, lineno, file, line)
+
+    show._armguard_one_line = True
+    warnings.showwarning = show
