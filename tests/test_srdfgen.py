@@ -219,3 +219,28 @@ def test_a_dask_cluster_gives_the_same_matrix(puma):
     assert [(e.link1, e.link2, e.reason, e.status, e.q, e.fingerprint) for e in dm.entries] == \
         [(e.link1, e.link2, e.reason, e.status, e.q, e.fingerprint) for e in cm.entries]
     np.testing.assert_array_equal([e.distance for e in dm.entries], [e.distance for e in cm.entries])
+
+
+def test_check_srdf_without_srdf_lints_the_one_armguard_finds(tmp_path):
+    """``armguard check-srdf ROBOT``: the SRDF armguard loads ROBOT with (named on the first line);
+    a robot it finds none for is a usage error that says to give one."""
+    import shutil
+
+    from armguard.cli import main
+
+    from pathlib import Path
+
+    found = Path(armguard.load_model("puma560").srdf.file)
+    res = CliRunner().invoke(main, ["check-srdf", "puma560", "--max-evaluations", "30000"])
+    assert res.exit_code == 0, res.output
+    lines = res.output.splitlines()
+    assert lines[0].startswith(f"SRDF: {found} (")
+    given = CliRunner().invoke(main, ["check-srdf", "puma560", str(found), "--max-evaluations", "30000"])
+    assert given.exit_code == 0, given.output
+    # the same findings as with the file given by name (the summary's elapsed time aside)
+    strip = [ln.split(" (")[0] if ln.startswith(str(found)) else ln for ln in given.output.splitlines() if "linting" not in ln]
+    assert [ln.split(" (")[0] if ln.startswith(str(found)) else ln for ln in lines[1:] if "linting" not in ln] == strip
+    lone = tmp_path / "lone" / "puma560.urdf"  # a URDF with no SRDF beside it, in ../srdf/ or under its name
+    shutil.copytree(found.parent, lone.parent, ignore=shutil.ignore_patterns("*.srdf", "*.yaml"))
+    res = CliRunner().invoke(main, ["check-srdf", str(lone)])
+    assert res.exit_code == 2 and "finds no SRDF" in res.output and "give SRDF" in res.output

@@ -1,4 +1,4 @@
-"""``armguard srdf ROBOT --out FILE.srdf`` and ``armguard check-srdf ROBOT SRDF``: certified collision matrices.
+"""``armguard srdf ROBOT --out FILE.srdf`` and ``armguard check-srdf ROBOT [SRDF]``: certified collision matrices.
 
 ``srdf`` writes MoveIt's ``disable_collisions`` entries (Adjacent, Default, Never, Always) with
 *Never* proven by branch and bound (or sampled as MoveIt does, ``--method sampled``); the pairs
@@ -92,7 +92,7 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
     ok="linted (findings, if any, are printed)",
     unsafe="with --strict: a disabled pair other than Adjacent or Default can collide"))
 @click.argument("robot")
-@click.argument("srdf", type=click.Path(dir_okay=False))
+@click.argument("srdf", type=click.Path(dir_okay=False), required=False)
 @click.option("--margin", type=float, default=0.0, show_default=True, help="Collide means within this distance (m).")
 @click.option("--workers", type=int, default=None, help="Threads over the pairs (default: one).")
 @click.option("--max-evaluations", type=int, default=200_000, show_default=True,
@@ -102,10 +102,18 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
 @click.option("--json", "as_json", is_flag=True,
               help="Print a JSON object: can_collide [{link1, link2, reason, q (pin_model order), distance}], never_checked, ...")
 def check_srdf_cmd(robot, srdf, margin, workers, max_evaluations, evaluator, strict, as_json) -> None:
-    """Lint SRDF for ROBOT: disabled pairs that can collide (with a witness), checked pairs proven never to."""
+    """Lint SRDF for ROBOT: disabled pairs that can collide (with a witness), checked pairs proven never to.
+    Without SRDF: the one armguard finds for ROBOT (as `armguard info ROBOT` names it)."""
     from ..model import load_model
     from ..srdfgen import check_srdf
 
+    if srdf is None:
+        found = load_model(robot).srdf
+        if found is None:
+            raise click.UsageError(f"armguard finds no SRDF for {robot!r} (docs/models.md says where it looks): give SRDF")
+        srdf = str(found.file)
+        if not as_json:
+            click.echo(f"SRDF: {srdf} ({found.found})")
     model = load_model(robot, srdf=False)
     lint = check_srdf(model, srdf, margin=margin, workers=workers, max_evaluations=max_evaluations, backend=evaluator,
                       progress=not as_json)
@@ -117,7 +125,7 @@ def check_srdf_cmd(robot, srdf, margin, workers, max_evaluations, evaluator, str
                    f"({lint.elapsed_s:.1f} s; q over {', '.join(lint.joint_names)})")
         for d in lint.can_collide:
             coal = "" if d.get("coal_distance") is None else f" (coal: {d['coal_distance']:.4f} m)"
-            click.echo(f"  disabled ({d['reason']}) {d['link1']} - {d['link2']}: distance {d['distance']:.4f} m{coal} at q = {_q(d['q'])}")
+            click.echo(f"  disabled ({d['reason'] or 'no reason given'}) {d['link1']} - {d['link2']}: distance {d['distance']:.4f} m{coal} at q = {_q(d['q'])}")
         for d in lint.never_checked:
             click.echo(f"  checked {d['link1']} - {d['link2']}: proven never (clearance >= {d['clearance_lower_bound']:.4f} m)")
         for d in lint.undecided:
