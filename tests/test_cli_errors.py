@@ -215,3 +215,11 @@ def test_the_command_shows_an_armguard_warning_as_one_line(capsys):
     err = capsys.readouterr().err.splitlines()
     assert err == ["warning: robot.srdf: group_state[0] (home): no attribute 'group'"]  # once, no source line
     assert before == [(UserWarning, "not armguard's")]
+
+
+def test_verify_all_on_a_model_without_canned_trajectories_says_what_to_give():
+    from armguard.harness import repo_root
+
+    res = CliRunner().invoke(main, ["verify", str(repo_root() / "urdf" / "puma560" / "puma560.urdf"), "all"])
+    assert res.exit_code == int(ExitCode.INPUT), res.output
+    assert "has no canned trajectory: give trajectory files (.yaml, docs/trajectory-format.md" in res.output

@@ -36,7 +36,8 @@ def resolve_trajectories(scene, specs):
             raise VerificationError(f"trajectory {spec!r}: not a .yaml file nor a canned trajectory of scene "
                                     f"{scene.name!r} (it has: {', '.join(names) or 'none'}; or 'all')")
     if not out:
-        raise VerificationError(f"scene {scene.name!r} has no canned trajectory")
+        raise VerificationError(f"scene {scene.name!r} has no canned trajectory: give trajectory files "
+                                "(.yaml, docs/trajectory-format.md; Trajectory.save_yaml writes one)")
     return out
 
 
