@@ -16,6 +16,7 @@ import socket
 import subprocess
 import sys
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -71,10 +72,18 @@ def _free_port() -> int:
 
 @pytest.fixture()
 def console_url():
+    with console_running(str(SCENE)) as url:
+        yield url
+
+
+@contextmanager
+def console_running(scene: str):
+    """``armguard console SCENE`` on a free loopback port in a subprocess; yields its URL, and
+    fails if the server dies before the end."""
     _need_chromium()
     port = _free_port()
     proc = subprocess.Popen(
-        [sys.executable, "-m", "armguard.cli", "console", str(SCENE), "--port", str(port)],
+        [sys.executable, "-m", "armguard.cli", "console", scene, "--port", str(port)],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
     )
     url = None
