@@ -281,3 +281,35 @@ def test_a_warm_started_detector_reports_as_a_plain_one():
     assert coherent == len(T) - 1
     with pytest.raises(ValueError, match="warm_start"):
         armguard.Detector(model, backend="analytic", backend_options={"warm_start": "yes"})
+
+
+def test_building_the_tables_compiles_no_kernel_of_its_own():
+    """The tables' GJK and EPA calls use the argument types the fused kernel's narrow phase passes
+    (writeable hulls, ``._calls.NATIVE``), so a first run compiles each of those kernels once: with the
+    model's read-only hull arrays numba compiled a second gjk_dir_rel and epa_depth for them, 11 s and
+    7 s of ``make run`` on a fresh checkout.  A fresh process builds puma560's tables (from numba's cache,
+    or compiling) and lists the overloads it made."""
+    import subprocess
+
+    code = (
+        "import json, armguard\n"
+        "from numba import types\n"
+        "from armguard.geometry._pair_gjk import gjk_dir_rel\n"
+        "from armguard.geometry._pair_epa import epa_depth\n"
+        "from armguard_analytic._engine import _seeds\n"
+        "before = {k: set(f.overloads) for k, f in (('gjk', gjk_dir_rel), ('epa', epa_depth))}\n"
+        "_seeds._cache.clear()\n"
+        "c = armguard.checker(armguard.load_model('puma560'), 'analytic')\n"
+        "c.pair_distances(c.model.random_q(1, 0)[0])\n"
+        "new = {k: [str(s) for s in set(f.overloads) - before[k]] for k, f in (('gjk', gjk_dir_rel), ('epa', epa_depth))}\n"
+        "print(json.dumps({'sdt': int(c._plan().b.layout.view(c._plan().b.MI, 'sdt').size), 'new': new,\n"
+        "                  'readonly': [str(s) for f in (gjk_dir_rel, epa_depth) for s in f.overloads\n"
+        "                               if any(isinstance(a, types.Array) and not a.mutable for a in s)]}))\n"
+    )
+    import json
+
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert out["sdt"] > 7  # puma560 has seed tables (more than the one empty row)
+    assert out["readonly"] == [], out["readonly"]  # no overload for read-only arrays

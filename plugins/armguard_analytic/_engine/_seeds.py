@@ -173,7 +173,10 @@ def _table(tree, qlim, la: int, lb: int, js: tuple, axes: list, part: tuple, tol
         if hit is not None:
             _cache.move_to_end(key)
             return hit
-    pa, adja, taba, pb, adjb, tabb = part
+    # the kernels' argument types as the fused kernel's narrow phase passes them (._calls.NATIVE:
+    # writeable arrays): a read-only hull would make numba compile a second gjk_dir_rel and epa_depth
+    # for it, 11 s and 7 s of a cold first run (their warmed overloads are the writeable ones)
+    pa, adja, taba, pb, adjb, tabb = (x if x.flags.writeable else x.copy() for x in part)
     eps_len, gjk_eps, max_iter = tol
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(js))
     Q = np.zeros((len(grid), qlim.shape[0]))
