@@ -114,6 +114,24 @@ def test_the_stored_timing_figures_are_compared():
         assert figure in section, figure
 
 
+def test_paper_fidelity_quotes_the_seeds_bench_figures():
+    """docs/paper-fidelity.md's readings table quotes armguard's side of the timing comparisons; each
+    figure it quotes is the one ``bench seeds`` last wrote into performance.md (a rerun that moves
+    them leaves this copy stale: it once quoted a cycle 15x slower than the bench measured)."""
+    text = (ROOT / "docs/performance.md").read_text(encoding="utf-8")
+    section = text.split("<!-- bench:seeds -->")[1].split("<!-- /bench:seeds -->")[0]
+    ours = [ln.split("|")[-3].strip().split(" (")[0] for ln in section.splitlines()
+            if ln.startswith("| segment–segment") or ln.startswith("| full detection cycle")]
+    ours += [ln.split("|")[-3].strip().split(" (")[0] for ln in section.splitlines()
+             if ln.startswith(("| one clipped coordinate", "| 100-vertex obstacle", "| PUMA 560 configuration"))]
+    assert len(ours) == 6, ours
+    fidelity = (ROOT / "docs/paper-fidelity.md").read_text(encoding="utf-8")
+    rows = [ln for ln in fidelity.splitlines() if ln.startswith(("| `000` §5, timing", "| `004` clipping §V, timing"))]
+    assert len(rows) == 2
+    for figure in ours:
+        assert figure in " ".join(rows), figure
+
+
 def test_paper_fidelity_names_only_tests_that_exist():
     """docs/paper-fidelity.md's table of seed readings cites tests by file::name; each must exist."""
     import re
