@@ -121,3 +121,36 @@ def test_z1_cylinder_depths_equal_python_fcl():
         np.testing.assert_allclose(a.distance[pen], f.distance[pen], rtol=0, atol=1e-6)
         np.testing.assert_array_equal(a.distance <= 0, f.distance <= 0)
     assert n_pen >= 5  # the check saw penetrations: 10 pair entries in these 60 configurations, within 2.6e-7 m
+
+
+def test_coal_on_z1_from_four_threads_within_its_tolerance():
+    """z1's hull–cylinder pairs make coal's answers depend, within its GJK tolerance, on the calling
+    thread's earlier calls (``armguard_coal``'s docstring): from 4 threads at once, each walking the
+    configurations in its own order, every distance is within ``gjk_tolerance`` of the single-threaded
+    one and every verdict the same."""
+    import threading
+
+    if "z1" not in _AVAILABLE:
+        pytest.skip("z1's package is not installed")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = armguard.load_model("z1")
+    ref = armguard.checker(model, "coal")
+    Q = model.random_q(40, 3)
+    want = np.array([ref.pair_distances(q).distance for q in Q])
+    got = np.full((4,) + want.shape, np.nan)
+    start = threading.Barrier(4)
+
+    def work(t):
+        start.wait()
+        for i in np.random.default_rng(t).permutation(len(Q)):
+            got[t, i] = ref.pair_distances(Q[i]).distance
+
+    threads = [threading.Thread(target=work, args=(t,)) for t in range(4)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    assert np.isfinite(got).all()
+    np.testing.assert_allclose(got, np.broadcast_to(want, got.shape), rtol=0, atol=ref.gjk_tolerance)
+    np.testing.assert_array_equal(got <= 0, np.broadcast_to(want <= 0, got.shape))
