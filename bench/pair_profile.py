@@ -23,12 +23,17 @@ random in-limit configurations (``Model.random_q``, seeded):
   from the pair's seed table where it has one (``armguard_analytic._engine._seeds.seed_row``; a
   seed's vertices are no support evaluations); *from a cold start* counts the iterations without it,
   and *along the answer* those of a cold start whose first direction is the pair's final one: what no
-  better first direction can save (a far pair, with no seed table, cannot get below it by its direction).
+  better first direction can save (a far pair, with no seed table, cannot get below it by its direction);
+* **by pair kind** (:func:`_by_kind`): each pair alone, its configuration repeated (hot), grouped into
+  apart with a seed table, apart without, and overlapping (EPA), and the whole kernel with each
+  configuration repeated: against *kernel - fixed* this tells how much of a call goes to the pairs'
+  own work and how much to what changes from one configuration to the next.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -137,6 +142,51 @@ def _gjk_work(model, ana, n_q: int) -> dict:
     return out
 
 
+KINDS = ("apart, seed table", "apart, no table", "overlapping")
+
+
+def _by_kind(ana, f, Q) -> dict:
+    """Each pair alone, hot: the kernel's entry point on that one pair (``f.subset``), the same
+    configuration 15 times (the best time, so the pair's data in L1 and its branches learnt), less
+    the same for no pair; per configuration of ``Q`` and pair, grouped by what the pair is there:
+    apart with a seed table, apart without, overlapping (EPA's depth)."""
+    import time
+
+    import numpy as np
+
+    from armguard_analytic._engine._layout import K
+
+    H, MF, MI, prm, iprm = f.args
+    SF, SI, q1 = f.tls.s
+    spair = MI[H[2 * K["spair"]]:H[2 * K["spair"]] + 6 * H[2 * K["spair"] + 1]].reshape(-1, 6)
+    tabled = spair[:, 0] >= 0 if len(spair) else np.zeros(f.n, bool)
+    g_one = [f.subset(np.array([p], np.int64)) for p in range(f.n)]
+    g0, e = f.subset(np.zeros(0, np.int64)), np.empty(0)
+    d1, a1, b1 = np.empty(1), np.empty((1, 3)), np.empty((1, 3))
+
+    def best(q, g, d, a, b):
+        t_best = math.inf
+        for _ in range(15):
+            t = time.perf_counter()
+            f.entry(f.fn, q, 0, 1, g, H, MF, MI, SF, SI, prm, iprm, q1, d, a, b)
+            t_best = min(t_best, time.perf_counter() - t)
+        return t_best
+
+    sums = {k: [0, 0.0] for k in KINDS}
+    again = []  # every pair at once, the configuration repeated: the call with its data and branches warm
+    d, pa, pb = np.empty(f.n), np.empty((f.n, 3)), np.empty((f.n, 3))
+    for q in Q:
+        dist = ana.pair_distances(q).distance
+        t0 = best(q, g0, e, e.reshape(0, 3), e.reshape(0, 3))
+        again.append(best(q, f.gmap, d, pa, pb) - t0)
+        for p in range(f.n):
+            kind = KINDS[2] if dist[p] < 0.0 else (KINDS[0] if tabled[p] else KINDS[1])
+            sums[kind][0] += 1
+            sums[kind][1] += max(best(q, g_one[p], d1, a1, b1) - t0, 0.0)
+    out = {k: [c / len(Q), (t / c * 1e9) if c else float("nan")] for k, (c, t) in sums.items()}
+    return out, float(np.mean(again)) * 1e6
+
+
 def measure(name: str, n: int) -> dict:
     """One robot's row (see the module docstring); run in a fresh process."""
     import numpy as np
@@ -172,6 +222,7 @@ def measure(name: str, n: int) -> dict:
     poly = int(sum(1 for a, b in zip(pa, pb) if b >= 0 and core[a] in (2, 3) and core[b] in (2, 3)))
     row = {"name": name, "pairs": f.n, "poly_pairs": poly, "us_call": t_call * 1e6, "us_kernel": t_kernel * 1e6,
            "us_fixed": t_fixed * 1e6, "us_same": t_same * 1e6, "us_wrap": t_wrap * 1e6}
+    row["by_kind"], row["us_again"] = _by_kind(ana, f, Q[:40])  # before the replay below swaps GJK's helpers for Python
     row.update(_gjk_work(model, ana, 20))
     return row
 
@@ -185,6 +236,9 @@ def run(quick: bool) -> str:
             "| GJK iterations / pair (p90) | from a cold start | seeded / cold / along the answer, by the joints of the pair's table "
             "| climbs / pair (p90) | support dot products / pair (p90) |",
             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    kinds = ["| robot | " + " | ".join(f"{k}: pairs / configuration, ns each" for k in KINDS)
+             + " | the pairs alone | all at once, the configuration again | kernel - fixed | the rest |",
+             "|---|---|---|---|---|---|---|---|"]
     for name in ROBOTS:
         proc = subprocess.run([sys.executable, "-m", "bench.pair_profile", name, str(n)], capture_output=True, text=True,
                               timeout=900, cwd=root, env=env)
@@ -202,6 +256,11 @@ def run(quick: bool) -> str:
         rows.append(
             f"| {name} | {r['pairs']} ({r['poly_pairs']}) | {r['us_call']:.1f} µs | {r['us_wrap']:.1f} µs "
             f"| {r['us_fixed']:.1f} µs | {per:.2f} µs | {r['us_same']:.1f} µs " + work)
+        alone = sum(c * t for c, t in r["by_kind"].values() if c) / 1e3
+        rest = r["us_kernel"] - r["us_fixed"] - alone
+        kinds.append(f"| {name} | " + " | ".join(f"{c:.2f}, {t:.0f} ns" if c else "—" for c, t in r["by_kind"].values())
+                     + f" | {alone:.1f} µs | {r['us_again']:.1f} µs | {r['us_kernel'] - r['us_fixed']:.1f} µs | {rest:.1f} µs "
+                     f"({rest / max(r['us_kernel'] - r['us_fixed'], 1e-9):.0%}) |")
     note = (f"\n\nThread-time medians, {n} calls per figure, `q` cycling over 200 random in-limit configurations; "
             "GJK work over the separated polytope pairs of 20 configurations (`bench/pair_profile.py`). *per pair* "
             "is (kernel - fixed) / pairs; *Python wrapper* is the best of 21 interleaved runs (as `bench backends`); *same q* repeats one configuration (forward kinematics skipped, branch "
@@ -210,7 +269,15 @@ def run(quick: bool) -> str:
             "those without a table; *along the answer*: a cold start whose first direction is the pair's own final one (the witnesses' difference; "
             "the climbs starting from the support tables' entries for it), the iterations that no better first direction saves. z1's pairs all have a cylinder side (GJK and EPA on support functions, "
             "`_pair_cylinder.support_pair_graph`): not counted.")
-    return "\n".join(rows) + note
+    note2 = ("\n\nThe same kernel, pair by pair (`_by_kind`): each pair of 40 of those configurations alone, "
+             "its configuration repeated 15 times and the best time kept (its hulls in L1, its branches learnt), "
+             "less the same call with no pair; grouped by what the pair is at that configuration: apart with a seed "
+             "table, apart without one (a cold start), overlapping (GJK, then EPA's depth). *the pairs alone*: their "
+             "sum per configuration; *all at once, the configuration again*: the whole kernel, less the same "
+             "fixed part, each of the 40 configurations repeated 15 times (best kept); *the rest*: what the same "
+             "pairs cost more in *kernel - fixed*, which cycles over 200 configurations: each call finds the branches "
+             "of GJK's climbs, Voronoi tests and EPA trained on another configuration, and other vertices in the caches.")
+    return "\n".join(rows) + note + "\n\n" + "\n".join(kinds) + note2
 
 
 if __name__ == "__main__":

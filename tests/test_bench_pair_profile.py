@@ -37,3 +37,21 @@ def test_pair_profile_counts_gjk_work():
     # every hull of kuka_iiwa has a vertex graph: each support climbs both hulls, once each
     assert row["climb"] == 2 * row["it"]
     assert row["dot"] >= row["climb"]
+
+
+def test_pair_profile_times_each_kind_of_pair():
+    """The by-kind table: every pair counted once per configuration, in one of the three kinds, each
+    kind's hot time positive and an overlapping pair (EPA after GJK) dearer than an apart one."""
+    env = dict(os.environ)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    proc = subprocess.run([sys.executable, "-m", "bench.pair_profile", "ur3", "10"], capture_output=True,
+                          text=True, cwd=ROOT, env=env, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    row = json.loads([ln for ln in proc.stdout.splitlines() if ln.startswith("{")][-1])
+    kinds = row["by_kind"]
+    assert set(kinds) == {"apart, seed table", "apart, no table", "overlapping"}
+    assert abs(sum(c for c, _ in kinds.values()) - row["pairs"]) < 1e-9
+    for c, t in kinds.values():
+        assert c > 0.0 and 0.0 < t < 1e6  # ur3 has pairs of every kind at random configurations (ns each)
+    assert kinds["overlapping"][1] > kinds["apart, seed table"][1]
+    assert 0.0 < row["us_again"]
