@@ -367,7 +367,13 @@ class AnalyticChecker(CheckerBase):
 
     def pair_distances_many(self, Q, *, pairs=None) -> PairDistancesMany:
         """Every pair (or the Model rows ``pairs``) at each row of ``Q`` ``(M, nq)``; rows split over
-        threads (one numba call each, the GIL released) when there are many."""
+        threads (one numba call each, the GIL released) when there are many.
+
+        Row by row, every pair at each.  The other order, each pair over every row (measured with the
+        kernel's one-pair subsets over 200 random rows), took the pairs per row 18.8 us against 18.5
+        on ur3, 26.7 against 28.1 on kinova and 63.1 against 73.5 on so101 (hulls of 800-4,262
+        vertices, which then stay in the caches), before the forward kinematics it would repeat for
+        every pair; not kept."""
         from ._engine._pair_rows import pair_rows
         from ._engine._scratch import row_threads
 

@@ -23,7 +23,13 @@ A pair whose pose depends on four joints or more (links far apart, about 4 itera
 table: a grid over four joints fine enough to help would take megabytes a pair, and a 16^3 table over
 three of them (the others at their middle) was tried on ur3 (9 of its 21 pairs are such): with the
 best of four choices of the three, the mean GJK iterations of ``bench pair_profile`` fell by less
-than a twentieth, too little for 229 kB a pair.
+than a twentieth, too little for 229 kB a pair.  Nor did a start from a face of one hull turned
+towards the other and the other's vertex facing back (a face table of 384 cells a hull, the face
+nearest each cell's direction, with the side better turned chosen at the check): it cut those
+pairs' GJK support evaluations (ur3 5.8 -> 4.3, panda 4.0 -> 2.6, kinova 4.9 -> 3.8, 10 random
+configurations) but not the time, each seed vertex entering the simplex at the cost of an
+iteration's sub-algorithm (the kernel over 200 configurations: ur3 and panda within 2 %, kinova 4-6 %
+slower; measured 2026-12-05, not kept).
 
 Made at each build, in Python over the compiled ``gjk_dir_rel`` and ``epa_depth`` (the signatures
 the kernels call); kept per process (:data:`CACHE_BYTES`, keyed by the hulls, the

@@ -248,7 +248,8 @@ def support_table(points, n: int = 16) -> np.ndarray:
     test at the corners; the flagged entry is the support itself, with no climb).  On ur3's hulls
     (75-650 vertices) about half the cells are such at ``n = 64``, yet the kernel's time at random
     configurations stayed within its noise, the tables consulted at every climb or only after a
-    turn: a climb from a table's entry is already one scan of a vertex's neighbours."""
+    turn: a climb from a table's entry is already one scan of a vertex's neighbours.  Nor did ``n = 32``
+    (6,144 entries): ur3's kernel 20.6 against 20.5 us, kinova's 29.1 against 30.1 us, within noise."""
     v = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     c = -1.0 + (np.arange(n) + 0.5) * (2.0 / n)
     uu, vv = np.meshgrid(c, c, indexing="ij")
