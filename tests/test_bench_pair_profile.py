@@ -54,4 +54,4 @@ def test_pair_profile_times_each_kind_of_pair():
     for c, t in kinds.values():
         assert c > 0.0 and 0.0 < t < 1e6  # ur3 has pairs of every kind at random configurations (ns each)
     assert kinds["overlapping"][1] > kinds["apart, seed table"][1]
-    assert 0.0 < row["us_again"]
+    assert 0.0 < row["us_again"] and 0.0 < row["us_alone_cycling"]
