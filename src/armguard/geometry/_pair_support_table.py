@@ -21,7 +21,9 @@ __all__ = ["table_cell", "table_size", "table_start", "warm_start"]
 def table_cell(dx, dy, dz, n):  # pragma: no cover - compiled
     """The cube-map cell of direction ``d`` (see :func:`armguard.geometry._pack.support_table`), or -1
     for the zero vector.  Inlined, with one division (a compiled call of its own showed in
-    ``perf`` samples of ur5's ``pair_distances``)."""
+    ``perf`` samples of ur5's ``pair_distances``).  The face chosen by selects instead of these
+    branches (which mispredict when the direction changes) left ur3's and ur5's kernels as they were
+    (20.8 / 13.1 against 20.1 / 13.0 us, 2026-12-05)."""
     x = abs(dx)
     y = abs(dy)
     z = abs(dz)
