@@ -93,6 +93,25 @@ def test_srdf_names_that_match_nothing(hermes_copy):
     assert ("group_state[ready].joint", "joint 'hera_knee' matches nothing in the URDF") in found
 
 
+def test_a_group_state_without_group_is_a_warning_as_the_loader_reads_it(hermes_copy):
+    # the loader reads such a state as the whole robot's (as Pinocchio does) and warns; the lint says
+    # the same, not "group None matches nothing"
+    _edit(hermes_copy / "hermes.srdf", "</robot>",
+          '<group_state name="stowed"><joint name="hera_elbow" value="0"/></group_state>\n</robot>')
+    report = check_model_files(hermes_copy / "hermes.yaml", n_configs=10)
+    found = [f for f in report.by_check(Check.SRDF_NAME) if "stowed" in f.where]
+    assert [(f.severity, f.where.split(": ")[1]) for f in found] == [(Severity.WARNING, "group_state[stowed]")]
+    assert "whole robot" in found[0].message and "None" not in found[0].message
+
+
+def test_the_findings_table_prints_brackets_as_they_are(hermes_copy):
+    # rich read "[tools]" in a finding's place as markup and dropped it: "group.link" instead of "group[tools].link"
+    _edit(hermes_copy / "hermes.srdf", "</robot>", '<group name="tools"><link name="gripper"/></group>\n</robot>')
+    res = CliRunner().invoke(main, ["check-urdf", str(hermes_copy / "hermes.yaml"), "--configs", "5"])
+    assert res.exit_code == 1, res.output
+    assert "group[tools].link" in res.output and "link 'gripper' matches nothing in the URDF" in res.output
+
+
 def test_a_pair_in_permanent_collision_gets_a_disable_line(hermes_copy):
     # link 2 grown to a 3 m radius round the shoulder, which stands on the bay floor: it never clears the floor
     _edit(hermes_copy / "hermes.urdf", '<geometry><cylinder radius="0.18" length="4.2"/>',

@@ -16,7 +16,7 @@ import click
 
 from . import main
 from ._exit import ExitCode, exit_epilog
-from ._output import output_console
+from ._output import esc, output_console
 
 _STATUS_EXIT = {"clear": ExitCode.OK, "warning": ExitCode.OK, "collision": ExitCode.UNSAFE,
                 "incomplete": ExitCode.INCOMPLETE}
@@ -105,13 +105,13 @@ def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_u
         sys.exit(int(code))
     out = output_console()
     colour = _COLOUR[rep.status.value]
-    out.print(f"[bold]{sc.name}[/bold]  status: [bold {colour}]{rep.status.value.upper()}[/bold {colour}]  "
+    out.print(f"[bold]{esc(sc.name)}[/bold]  status: [bold {colour}]{rep.status.value.upper()}[/bold {colour}]  "
               f"(threshold {threshold} m, {rep.elapsed_us:.1f} µs, {rep.n_evaluated} pairs evaluated)")
     table = Table("category", "distance (m)", "link", "object", "feature", "p_WA (m)", "p_WB (m)")
     for cat, r in rep.by_category.items():
         feat = "" if r.feature is None else str(r.feature)
         style = "red" if r.distance <= max(0.0, stopping_distance) else ("yellow" if r.distance <= threshold else "")
-        table.add_row(cat, f"{r.distance:.6f}", r.link, r.obstacle, feat, _fmt(r.p_WA), _fmt(r.p_WB), style=style)
+        table.add_row(cat, f"{r.distance:.6f}", esc(r.link), esc(r.obstacle), esc(feat), _fmt(r.p_WA), _fmt(r.p_WB), style=style)
     out.print(table)
     if rep.not_evaluated:
         lb = min(n.lower_bound for n in rep.not_evaluated)

@@ -9,7 +9,7 @@ import click
 
 from . import main
 from ._exit import ExitCode, exit_epilog
-from ._output import output_console
+from ._output import esc, output_console
 
 
 def _floats(text: str) -> list:
@@ -57,7 +57,7 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
             click.echo(json.dumps(rows, indent=1))
             return
         for r in rows:
-            console.print(f"[bold]{r['pair'][0]} / {r['pair'][1]}[/bold] ({r['category']})")
+            console.print(f"[bold]{esc(r['pair'][0])} / {esc(r['pair'][1])}[/bold] ({r['category']})")
             for b in names:
                 ans = r[b]
                 if isinstance(ans, dict):  # a verdicts-only backend answers a verdict, not a distance
@@ -85,9 +85,9 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
                 console.print(f"[bold]{key}: worst configurations[/bold]")
             for w in bad:
                 a, b = p["a"], p["b"]
-                console.print(f"  {w['why']:8s} #{w['config']} ({w['source']}) {w['pair'][0]} / {w['pair'][1]}: "
+                console.print(f"  {w['why']:8s} #{w['config']} ({w['source']}) {esc(w['pair'][0])} / {esc(w['pair'][1])}: "
                               f"{a} {w[a]['distance']:.6e} m, {b} {w[b]['distance']:.6e} m")
-                console.print(f"    {w['reproduce']}", style="dim", soft_wrap=True)
+                console.print(f"    {w['reproduce']}", style="dim", soft_wrap=True, markup=False)
         tm = comp.summary["timing"]
         console.print(f"{comp.summary['configs']['total']} configurations: answers {tm['answers_s']:.1f} s, "
                       f"comparison {tm['compare_s']:.1f} s" + (f", outputs {tm['outputs_s']:.1f} s in {out_dir}" if out_dir else ""))
@@ -120,13 +120,13 @@ def check_urdf_cmd(path, n_configs, as_json) -> None:
     else:
         console = output_console()
         if not report.findings:
-            console.print(f"[green]{report.target}: clean[/green] ({report.summary})")
+            console.print(f"[green]{esc(report.target)}: clean[/green] ({esc(report.summary)})")
         else:
-            t = Table(title=f"{report.target}: {len(report.findings)} findings", title_justify="left")
+            t = Table(title=f"{esc(report.target)}: {len(report.findings)} findings", title_justify="left")
             for col in ("severity", "check", "where", "finding", "suggestion"):
                 t.add_column(col, overflow="fold")
             for f in report.findings:
-                t.add_row(f.severity.value, f.check.value, f.where, f.message, f.suggestion or "")
+                t.add_row(f.severity.value, f.check.value, esc(f.where), esc(f.message), esc(f.suggestion or ""))
             console.print(t)
     if report.status.value == "errors":
         sys.exit(int(ExitCode.UNSAFE))

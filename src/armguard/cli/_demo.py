@@ -18,7 +18,7 @@ import click
 import numpy as np
 
 from . import main
-from ._output import output_console
+from ._output import esc, output_console
 
 #: Hermes (001_…, §4): "the maximum value of the stopping distance be 100 mm, i.e. the typical value
 #: for maximum speed movements".
@@ -157,7 +157,7 @@ def demo_cmd(out_dir, scenes, stopping_distances, list_only) -> None:
                 stem = f"{_file_stem(name, sc)}__{tname}__{stem_sd}"
                 r.save_json(out / f"{stem}.json")  # each all or nothing (armguard._io.atomic_write)
                 r.plot(out / f"{stem}.png")
-                table.add_row(name, tname, label, verdict_text(r), first_collision_text(r),
+                table.add_row(esc(name), esc(tname), label, verdict_text(r), esc(first_collision_text(r)),
                               f"{clearance * 1e3:.1f} mm", f"{dt * 1e3:.0f} ms")
     console.print(table)
     console.print(f"reports and plots in {out}/ ({time.perf_counter() - t_all:.1f} s in all); "

@@ -7,7 +7,7 @@ import numpy as np
 
 from .._errors import SceneError
 from . import main
-from ._output import output_console
+from ._output import esc, output_console
 
 
 @main.command("fk")
@@ -47,14 +47,14 @@ def fk_cmd(scene: str, q_text: str | None, robot_name: str | None, deg: bool) ->
     q = robot.check_q(q)
     X = kinematics_of(s).robot_link_poses(name, q)  # the Model's kinematics (pin_model)
     unit = "deg" if deg else "rad"
-    t = Table(title=f"{s.name}: robot {name}, link frames in W (xyz m, rpy {unit})")
+    t = Table(title=f"{esc(s.name)}: robot {esc(name)}, link frames in W (xyz m, rpy {unit})")
     for col in ("link", "x", "y", "z", "roll", "pitch", "yaw"):
         t.add_column(col, justify="right" if col != "link" else "left")
     for i, ln in enumerate(robot.link_names):
         xyz, rpy = xyz_rpy_from_pose(X[i])
         if deg:
             rpy = np.degrees(rpy)
-        t.add_row(ln, *(f"{v: .6f}" for v in xyz), *(f"{v: .4f}" for v in rpy))
+        t.add_row(esc(ln), *(f"{v: .6f}" for v in xyz), *(f"{v: .4f}" for v in rpy))
     outside = [robot.joint_names[k] for k in range(robot.n_joints) if not (robot.lower[k] <= q[k] <= robot.upper[k])]
     output_console().print(t)
     if outside:

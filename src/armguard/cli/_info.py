@@ -8,7 +8,7 @@ import math
 import click
 
 from . import main
-from ._output import output_console
+from ._output import esc, output_console
 
 # Sciomachen & Magnani (seed 001): "The memory required for the database, in the case of the
 # Hermes model described above, is about 3 kbytes"; "the memory available on board is about 40 kbytes".
@@ -49,7 +49,7 @@ def _print_known_models() -> None:
         t.add_column(col, overflow="fold")
     for m in known_models():
         name = m.name + (f" ({', '.join(m.aliases)})" if m.aliases else "")
-        t.add_row(name, m.source, "yes" if m.available else "no", str(m.path) if m.available else m.reason)
+        t.add_row(esc(name), esc(m.source), "yes" if m.available else "no", esc(str(m.path) if m.available else m.reason))
     con.print(t)
 
 
@@ -102,7 +102,7 @@ def info_cmd(scene: str | None, rad: bool, srdf: str | None) -> None:
         s = load_scene(scene)
     c = compile_scene(s)
     con = output_console()
-    con.print(f"[bold]{s.name}[/bold]: {s.description}" if s.description else f"[bold]{s.name}[/bold]")
+    con.print(f"[bold]{esc(s.name)}[/bold]: {esc(s.description)}" if s.description else f"[bold]{esc(s.name)}[/bold]")
     _print_srdf(con, s, scene)
 
     t = Table(title="bodies")
@@ -115,12 +115,12 @@ def info_cmd(scene: str | None, rad: bool, srdf: str | None) -> None:
             ff, vv = _shape_counts(sh)
             f, v = f + ff, v + vv
         tot = [tot[0] + len(b.shapes), tot[1] + f, tot[2] + v]
-        t.add_row(b.name, b.category, str(len(b.shapes)), str(f), str(v))
+        t.add_row(esc(b.name), esc(b.category), str(len(b.shapes)), str(f), str(v))
     t.add_row("[bold]total[/bold]", "", *(str(x) for x in tot))
     con.print(t)
 
     for rname, robot in s.robots.items():
-        t = Table(title=f"robot {rname}: {robot.n_joints} joints, {len(robot.link_names)} links")
+        t = Table(title=f"robot {esc(rname)}: {robot.n_joints} joints, {len(robot.link_names)} links")
         for col in ("joint", "type", "lower", "upper", "max velocity", "home"):
             t.add_column(col)
         home = s.home(rname)
@@ -128,18 +128,18 @@ def info_cmd(scene: str | None, rad: bool, srdf: str | None) -> None:
             rev = robot.joint_types[k].value == "revolute"
             vel = robot.max_velocity[k]
             vtxt = "inf" if math.isinf(vel) else (f"{math.degrees(vel):.1f}°/s" if rev and not rad else f"{vel:.4g}/s")
-            t.add_row(j, robot.joint_types[k].value, _limit(robot.lower[k], rev, not rad),
+            t.add_row(esc(j), robot.joint_types[k].value, _limit(robot.lower[k], rev, not rad),
                       _limit(robot.upper[k], rev, not rad), vtxt, _limit(home[k], rev, not rad))
         for cp in robot.couplings:
             terms = " ".join(f"{v:+g}·{k}" for k, v in cp.terms.items())
-            t.add_row(cp.joint, "coupled", f"= {cp.offset:+.4g} {terms}", "", "", "")
+            t.add_row(esc(cp.joint), "coupled", esc(f"= {cp.offset:+.4g} {terms}"), "", "", "")
         con.print(t)
         shaped = [ln for ln in robot.link_names if robot.link_shapes.get(ln)]
-        con.print(f"  links with shapes: {', '.join(shaped) or 'none'}")
+        con.print(f"  links with shapes: {esc(', '.join(shaped)) or 'none'}")
 
     if s.payloads:
         for p in s.payloads.values():
-            con.print(f"payload [bold]{p.name}[/bold]: {len(p.shapes)} shapes on {p.robot}/{p.link}")
+            con.print(f"payload [bold]{esc(p.name)}[/bold]: {len(p.shapes)} shapes on {esc(p.robot)}/{esc(p.link)}")
     if s.workspace is not None:
         con.print(f"workspace box: lo {s.workspace.lo.tolist()} hi {s.workspace.hi.tolist()} m")
 
@@ -148,16 +148,16 @@ def info_cmd(scene: str | None, rad: bool, srdf: str | None) -> None:
     t.add_column("value")
     t.add_row("adjacent links excluded", str(s.exclude_adjacent))
     for rname, pairs in s.self_pairs.items():
-        t.add_row(f"listed link pairs of {rname}", ", ".join(f"{a}-{b}" for a, b in sorted(pairs)))
+        t.add_row(f"listed link pairs of {esc(rname)}", esc(", ".join(f"{a}-{b}" for a, b in sorted(pairs))))
     for rname in s.robots:  # own-link pairs left after the SRDF's rules (Hermes: only 1-3, 1-4, ...)
         if rname in s.self_pairs:
             continue
         own = sorted(tuple(sorted((p.a.split("/", 1)[1], p.b.split("/", 1)[1]))) for p in s.allowed_pairs()
                      if p.a.startswith(rname + "/") and p.b.startswith(rname + "/"))
         if own:
-            t.add_row(f"checked link pairs of {rname}", ", ".join(f"{a}-{b}" for a, b in own))
+            t.add_row(f"checked link pairs of {esc(rname)}", esc(", ".join(f"{a}-{b}" for a, b in own)))
     for p in sorted(sorted(x) for x in s.disabled_pairs):
-        t.add_row("disabled", " - ".join(p))
+        t.add_row("disabled", esc(" - ".join(p)))
     for cat, pairs in s.allowed_pairs_by_category().items():
         if pairs:
             t.add_row(f"checked {cat.value}", str(len(pairs)))

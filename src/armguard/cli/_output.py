@@ -4,6 +4,8 @@ In a terminal: rich's own (the terminal's width).  Piped into a file, a log or `
 rich would fold every table into 80 columns and cut its headers and names to ``…``; there the
 console is :data:`PIPED_WIDTH` columns wide instead, so a log keeps whole names and columns.
 
+Names and messages from the user's files go into rich's markup through :func:`esc`.
+
 An :class:`armguard.ArmguardWarning` (a lenient reading of an input: its message names the file
 and the element) is one line on stderr, ``warning: <message>``, not Python's form with the
 library's source line under it.
@@ -14,7 +16,7 @@ from __future__ import annotations
 import sys
 import warnings
 
-__all__ = ["PIPED_WIDTH", "output_console", "one_line_warnings"]
+__all__ = ["PIPED_WIDTH", "esc", "output_console", "one_line_warnings"]
 
 PIPED_WIDTH = 200
 """Columns of a command's output when it does not go to a terminal."""
@@ -26,6 +28,15 @@ def output_console():
 
     console = Console()
     return console if console.is_terminal else Console(width=PIPED_WIDTH)
+
+
+def esc(value) -> str:
+    """``value`` as text that rich prints as it is: names and messages come from the user's files, and
+    rich would read ``[...]`` in them as markup and drop it (``group_state[home]`` printed as
+    ``group_state``)."""
+    from rich.markup import escape
+
+    return escape(str(value))
 
 
 def one_line_warnings() -> None:

@@ -9,7 +9,7 @@ import click
 
 from . import main
 from ._exit import ExitCode, exit_epilog
-from ._output import output_console
+from ._output import esc, output_console
 
 
 def resolve_trajectories(scene, specs):
@@ -120,7 +120,7 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
     else:
         reports = verify_many(sc, items, **kwargs)
     for r in reports:
-        console.rule(f"[bold]{r.trajectory}[/] — {verdict_text(r)}")
+        console.rule(f"[bold]{esc(r.trajectory)}[/] — {verdict_text(r)}")
         console.print(r.summary(), highlight=False, markup=False)
     if report_path:  # an output that cannot be written: OutputError, one line, exit status 3
         p = Path(report_path)

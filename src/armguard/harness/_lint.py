@@ -12,7 +12,8 @@ Checks (each a :class:`Check`), on the files as written, then on the loaded mode
   (a polygon) with vertices inside its 2-D hull;
 * ``zero-length-capsule``: a ``<capsule>``-marked cylinder of length 0 (a sphere: say so), or a
   ``<capsule>`` mark on something not a cylinder;
-* ``srdf-name``: an SRDF link, joint or group name that matches nothing in the URDF;
+* ``srdf-name``: an SRDF link, joint or group name that matches nothing in the URDF (an error), or a
+  ``group_state`` without ``group`` (a warning: read as the whole robot's state, as the loader does);
 * ``srdf-certificate``: a pair the SRDF disables with a certificate (``armguard srdf``) that the
   URDF no longer matches -- a shape of either link or a joint between them edited -- is searched
   again (:func:`armguard.srdfgen.check_srdf`): an error with the configuration where it now
@@ -241,7 +242,12 @@ def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport) -> Non
         for side in ("link1", "link2"):
             need(el.get(side), "link", f"disable_collisions[{k}].{side}", links)
     for k, st in enumerate(root.iter("group_state")):
-        need(st.get("group"), "group", f"group_state[{st.get('name')}].group", groups)
+        if st.get("group") is None:  # as the loader reads it (armguard.model._srdf): the whole robot's state
+            report.findings.append(Finding(Check.SRDF_NAME, Severity.WARNING, f"{f}: group_state[{st.get('name')}]",
+                                           "no attribute 'group'; read as a state of the whole robot (as Pinocchio "
+                                           "does)", f'<group_state name="{st.get("name")}" group="...">'))
+        else:
+            need(st.get("group"), "group", f"group_state[{st.get('name')}].group", groups)
         for j in st.findall("joint"):
             need(j.get("name"), "joint", f"group_state[{st.get('name')}].joint", joints)
 
