@@ -22,6 +22,14 @@ def test_info_hermes_counts_and_size():
     assert "360.0°" in res.output  # revolute limits in degrees
 
 
+def test_info_on_a_public_robot_says_it_has_no_static_bodies():
+    # a public robot's URDF has no scene bodies: one line, not a table whose only row is a total of 0
+    res = CliRunner().invoke(main, ["info", "ur5"], terminal_width=200)
+    assert res.exit_code == 0, res.output
+    assert "static bodies: none" in res.output and "bodies" not in res.output.replace("static bodies: none", "")
+    assert "shoulder_pan_joint" in res.output  # the joint table follows
+
+
 def test_fk_prints_link_frames_in_degrees():
     res = CliRunner().invoke(main, ["fk", "puma560", "--q", "0,45,-135,0,-45,0", "--deg"], terminal_width=200)
     assert res.exit_code == 0, res.output

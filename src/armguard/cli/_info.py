@@ -105,19 +105,22 @@ def info_cmd(scene: str | None, rad: bool, srdf: str | None) -> None:
     con.print(f"[bold]{esc(s.name)}[/bold]: {esc(s.description)}" if s.description else f"[bold]{esc(s.name)}[/bold]")
     _print_srdf(con, s, scene)
 
-    t = Table(title="bodies")
-    for col in ("body", "category", "shapes", "faces", "vertices"):
-        t.add_column(col)
-    tot = [0, 0, 0]
-    for b in s.bodies.values():
-        f = v = 0
-        for sh in b.shapes:
-            ff, vv = _shape_counts(sh)
-            f, v = f + ff, v + vv
-        tot = [tot[0] + len(b.shapes), tot[1] + f, tot[2] + v]
-        t.add_row(esc(b.name), esc(b.category), str(len(b.shapes)), str(f), str(v))
-    t.add_row("[bold]total[/bold]", "", *(str(x) for x in tot))
-    con.print(t)
+    if not s.bodies:  # a robot on its own (a public robot's URDF): no table of nothing
+        con.print("static bodies: none (the robot's own links only)")
+    else:
+        t = Table(title="bodies")
+        for col in ("body", "category", "shapes", "faces", "vertices"):
+            t.add_column(col)
+        tot = [0, 0, 0]
+        for b in s.bodies.values():
+            f = v = 0
+            for sh in b.shapes:
+                ff, vv = _shape_counts(sh)
+                f, v = f + ff, v + vv
+            tot = [tot[0] + len(b.shapes), tot[1] + f, tot[2] + v]
+            t.add_row(esc(b.name), esc(b.category), str(len(b.shapes)), str(f), str(v))
+        t.add_row("[bold]total[/bold]", "", *(str(x) for x in tot))
+        con.print(t)
 
     for rname, robot in s.robots.items():
         t = Table(title=f"robot {esc(rname)}: {robot.n_joints} joints, {len(robot.link_names)} links")
