@@ -25,9 +25,11 @@ random in-limit configurations (``Model.random_q``, seeded):
   and *along the answer* those of a cold start whose first direction is the pair's final one: what no
   better first direction can save (a far pair, with no seed table, cannot get below it by its direction);
 * **by pair kind** (:func:`_by_kind`): each pair alone, its configuration repeated (hot), grouped into
-  apart with a seed table, apart without, and overlapping (EPA), and the whole kernel with each
-  configuration repeated: against *kernel - fixed* this tells how much of a call goes to the pairs'
-  own work and how much to what changes from one configuration to the next.
+  apart with a seed table, apart without, and overlapping (EPA); the whole kernel with each
+  configuration repeated; each pair alone with the configurations in turn.  Against *kernel - fixed*
+  this tells how much of a call goes to the pairs' own work and how much to what changes from one
+  configuration to the next, and that the latter is no matter of the caches' capacity (a pair alone
+  pays it too).
 """
 
 from __future__ import annotations
