@@ -364,3 +364,42 @@ def test_warm_starts_from_threads_answer_as_one_thread(panda):
             np.testing.assert_allclose(g[0], want[k][0], atol=1e-9, rtol=0)
             clear = np.abs(want[k][0]) > 1e-9
             assert np.array_equal(g[0][clear] <= 0.0, want[k][0][clear] <= 0.0) and g[3:] == want[k][3:]
+
+
+_WARNING_FILTERS_SCRIPT = """
+import sys, threading, warnings
+import armguard
+sys.setswitchinterval(1e-6)  # threads switch as often as they can: the old per-call filters' race shows
+model = armguard.load_model("ranger")
+checker = armguard.checker(model, "coal")
+q = model.neutral()
+seen = []
+warnings.showwarning = lambda message, *a, **k: seen.append(str(message))
+before = list(warnings.filters)
+for _ in range(40):  # 40 rounds of 8 new threads: each thread's first call makes its GeometryData
+    barrier = threading.Barrier(8)
+    def first_call():
+        barrier.wait()
+        checker.pair_distances(q)
+    threads = [threading.Thread(target=first_call) for _ in range(8)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+print(sum("enable_cached_gjk_guess" in m for m in seen), list(warnings.filters) == before)
+"""
+
+
+def test_coal_first_calls_from_threads_leave_the_warning_filters_alone():
+    """Each thread's first call makes its own GeometryData and turns coal's cached GJK guess off through
+    a setter coal deprecates.  That warning was once silenced by a ``warnings.catch_warnings()`` per
+    call: from threads at once they restored one another's filters, letting the warnings through and
+    leaving filters behind.  In a process that shows every DeprecationWarning (``-W always``), 40
+    rounds of 8 threads' first calls now show none of it and leave the filters as they were."""
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-W", "always::DeprecationWarning", "-c", _WARNING_FILTERS_SCRIPT],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.split() == ["0", "True"], proc.stdout

@@ -45,6 +45,16 @@ from armguard.model import WORKSPACE
 
 __all__ = ["CoalBackend", "CoalChecker", "EPA_FAILED", "EPA_RETRY_TOLERANCES"]
 
+# Pinocchio's GeometryData turns coal's cached GJK guess on, and the one switch that turns it off,
+# ``enable_cached_gjk_guess``, warns that it is deprecated (coal 3).  The warning is silenced once
+# here, for this module's own assignments only: a ``warnings.catch_warnings()`` around them (as
+# before) changes the process's filters for the while, and from several threads at once (each
+# thread's first call makes its GeometryData) they restored one another's filters -- tests/
+# test_threads_edits.py saw 672 of the warnings through, and a process could be left with a filter
+# it never asked for.
+warnings.filterwarnings("ignore", message="enable_cached_gjk_guess has been marked as deprecated",
+                        category=DeprecationWarning, module="armguard_coal")
+
 EPA_FAILED = -1e300
 """m: a distance at or below this is coal's sign that its EPA gave up (``-DBL_MAX``, -1.8e308 m),
 not a depth.  Seen on z1's cylinder pairs with the reference's EPA tolerance of 1e-9: the
@@ -80,13 +90,11 @@ def _reference_requests(gdata) -> None:
     """
     import coal
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        for req in [*gdata.distanceRequests, *gdata.collisionRequests]:
-            req.gjk_initial_guess = coal.GJKInitialGuess.DefaultGuess
-            req.enable_cached_gjk_guess = False
-        for req in gdata.collisionRequests:
-            req.enable_contact = True
+    for req in [*gdata.distanceRequests, *gdata.collisionRequests]:
+        req.gjk_initial_guess = coal.GJKInitialGuess.DefaultGuess
+        req.enable_cached_gjk_guess = False  # its deprecation warning: silenced at import (above)
+    for req in gdata.collisionRequests:
+        req.enable_contact = True
 
 
 class CoalChecker(CheckerBase):
