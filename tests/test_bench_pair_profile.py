@@ -13,14 +13,19 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def test_pair_profile_counts_gjk_work():
+def _row(name: str) -> dict:
+    """``python -m bench.pair_profile NAME 10``'s JSON row, in a fresh process: the replay swaps the GJK
+    module's compiled helpers for their Python bodies."""
     env = dict(os.environ)
     env.pop("PYTHONDONTWRITEBYTECODE", None)
-    # a fresh process: the replay swaps the GJK module's compiled helpers for their Python bodies
-    proc = subprocess.run([sys.executable, "-m", "bench.pair_profile", "kuka_iiwa", "10"], capture_output=True,
+    proc = subprocess.run([sys.executable, "-m", "bench.pair_profile", name, "10"], capture_output=True,
                           text=True, cwd=ROOT, env=env, timeout=600)
     assert proc.returncode == 0, proc.stderr[-2000:]
-    row = json.loads([ln for ln in proc.stdout.splitlines() if ln.startswith("{")][-1])
+    return json.loads([ln for ln in proc.stdout.splitlines() if ln.startswith("{")][-1])
+
+
+def test_pair_profile_counts_gjk_work():
+    row = _row("kuka_iiwa")
     assert row["pairs"] == row["poly_pairs"] == 21
     assert row["gjk_pairs"] > 100  # separated hull pairs of 20 configurations
     # from a cold start GJK evaluates the first support and one per iteration, the last one
@@ -42,12 +47,7 @@ def test_pair_profile_counts_gjk_work():
 def test_pair_profile_times_each_kind_of_pair():
     """The by-kind table: every pair counted once per configuration, in one of the three kinds, each
     kind's hot time positive and an overlapping pair (EPA after GJK) dearer than an apart one."""
-    env = dict(os.environ)
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
-    proc = subprocess.run([sys.executable, "-m", "bench.pair_profile", "ur3", "10"], capture_output=True,
-                          text=True, cwd=ROOT, env=env, timeout=600)
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    row = json.loads([ln for ln in proc.stdout.splitlines() if ln.startswith("{")][-1])
+    row = _row("ur3")
     kinds = row["by_kind"]
     assert set(kinds) == {"apart, seed table", "apart, no table", "overlapping"}
     assert abs(sum(c for c, _ in kinds.values()) - row["pairs"]) < 1e-9
