@@ -33,9 +33,6 @@ class AvoidPlot(MarkedPlot):
     (``units``) and m for prismatic ones.  Rendered once; :meth:`image_at` marks the time ``t``."""
 
     def __init__(self, run, units, *, width_px: int = 480, height_px: int = 360) -> None:
-        import matplotlib
-
-        matplotlib.use("Agg", force=False)
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
 

@@ -96,9 +96,6 @@ class ClearancePlot(MarkedPlot):
 
     def __init__(self, times, clearance, *, threshold: float, first_collision: float | None = None,
                  width_px: int = 480, height_px: int = 200) -> None:
-        import matplotlib
-
-        matplotlib.use("Agg", force=False)
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
 

@@ -17,11 +17,8 @@ def plot_slice(fmap, q2: float, out, *, q=None, dpi: int = 120) -> None:
 
     ``q``: a configuration ``(3,)`` rad (joints 1–3) to mark, or None.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.colors import ListedColormap
+    from matplotlib.figure import Figure  # no pyplot: the caller's backend and figures are left alone
 
     g = fmap.grid
     cell = g.cell_of([g.lower[0], q2, g.lower[2]])
@@ -36,7 +33,8 @@ def plot_slice(fmap, q2: float, out, *, q=None, dpi: int = 120) -> None:
     deg = math.degrees
     x1 = min(g.lower[0] + g.counts[0] * g.step[0], g.upper[0])
     x3 = min(g.lower[2] + g.counts[2] * g.step[2], g.upper[2])
-    fig, ax = plt.subplots(figsize=(8, 5))
+    fig = Figure(figsize=(8, 5))
+    ax = fig.subplots()
     ax.imshow(img, origin="lower", aspect="auto", interpolation="nearest", cmap=ListedColormap(["#f4f4f4", "#d62728"]),
               vmin=0, vmax=1, extent=(deg(g.lower[0]), deg(x1), deg(g.lower[2]), deg(x3)))
     if q is not None:
@@ -52,7 +50,4 @@ def plot_slice(fmap, q2: float, out, *, q=None, dpi: int = 120) -> None:
                  f"[{deg(lo2):.3g}°, {deg(min(lo2 + g.step[1], g.upper[1])):.3g}°], stopping distance "
                  f"{fmap.stopping_distance} m", fontsize=9)
     fig.tight_layout()
-    try:
-        atomic_write(out, lambda f: fig.savefig(f, format="png", dpi=dpi))
-    finally:
-        plt.close(fig)
+    atomic_write(out, lambda f: fig.savefig(f, format="png", dpi=dpi))

@@ -12,13 +12,14 @@ __all__ = ["write_plots"]
 _MAX_POINTS = 60_000  # scatter points drawn per backend pair (a seeded subsample, disagreements always kept)
 
 
-def _pyplot():
-    import matplotlib
+def _subplots(nrows: int = 1, ncols: int = 1, **fig_kw):
+    """``(figure, axes)`` as ``pyplot.subplots`` gives them, from ``matplotlib.figure.Figure`` itself:
+    no pyplot, so the caller's backend and open figures are left as they were (``matplotlib.use``
+    here switched a user's backend to Agg) and threads share no pyplot state."""
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    return plt
+    fig = Figure(**fig_kw)
+    return fig, fig.subplots(nrows, ncols)
 
 
 def _save(fig, p: Path) -> None:
@@ -31,7 +32,6 @@ def _save(fig, p: Path) -> None:
 def write_plots(comparison, out_dir) -> list:
     """Write ``scatter_<a>_<b>.png``, ``hist_<a>_<b>.png`` per backend pair (``verdicts_<a>_<b>.png`` where a side
     answers verdicts only) and ``timing.png``; returns the paths."""
-    plt = _pyplot()
     from .._io import make_folder
 
     out = make_folder(out_dir)
@@ -42,11 +42,11 @@ def write_plots(comparison, out_dir) -> list:
     for key, s in comparison.summary["pairs"].items():
         a, b = s["a"], s["b"]
         if s.get("answers") == "verdicts":
-            written.append(_verdict_bars(plt, comparison, s, out))
+            written.append(_verdict_bars(comparison, s, out))
             continue
         A, B = comparison.answers[a].distance, comparison.answers[b].distance
         R = comparison.answers[s["reference"]].distance
-        fig, ax = plt.subplots(figsize=(6, 6))
+        fig, ax = _subplots(figsize=(6, 6))
         flat_a, flat_b, flat_r = A.ravel(), B.ravel(), R.ravel()
         flat_c = np.broadcast_to(cats, A.shape).ravel()
         sign_bad = ((flat_a <= 0) != (flat_b <= 0)) & (np.abs(flat_r) > band)
@@ -71,10 +71,9 @@ def write_plots(comparison, out_dir) -> list:
         ax.legend(fontsize=7, markerscale=3, loc="upper left")
         p = out / f"scatter_{a}_{b}.png"
         _save(fig, p)
-        plt.close(fig)
         written.append(p)
 
-        fig, ax = plt.subplots(figsize=(7, 4))
+        fig, ax = _subplots(figsize=(7, 4))
         err = np.abs(A - B)
         floor = 1e-17
         bins = np.linspace(-17, 1, 73)
@@ -88,10 +87,9 @@ def write_plots(comparison, out_dir) -> list:
         ax.legend(fontsize=7)
         p = out / f"hist_{a}_{b}.png"
         _save(fig, p)
-        plt.close(fig)
         written.append(p)
 
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.5))
+    fig, (ax1, ax2) = _subplots(1, 2, figsize=(9, 3.5))
     per = comparison.summary["backends"]
     names = list(per)
     dist = [n for n in names if per[n].get("answers") != "verdicts"]
@@ -111,12 +109,11 @@ def write_plots(comparison, out_dir) -> list:
     fig.suptitle(f"{comparison.model.name}: {len(comparison.configs)} configurations")
     p = out / "timing.png"
     _save(fig, p)
-    plt.close(fig)
     written.append(p)
     return written
 
 
-def _verdict_bars(plt, comparison, s, out: Path) -> Path:
+def _verdict_bars(comparison, s, out: Path) -> Path:
     """``verdicts_<a>_<b>.png``: per category, the shares of configurations the verdicts-only side answers
     wrongly clear (unsafe), wrongly as a definite collision, undecided (first level and final), and
     conservatively (said collision, clear), with the counts annotated."""
@@ -133,7 +130,7 @@ def _verdict_bars(plt, comparison, s, out: Path) -> Path:
             (und, lambda r: r["undecided_share"], "gold"),
             ("said collision, clear (conservative)", lambda r: r["conservative_share"], "tab:blue")]
     ff = s.get("false_forbidden")
-    fig, ax = plt.subplots(figsize=(max(6, 1.8 * len(cats) + 3), 4))
+    fig, ax = _subplots(figsize=(max(6, 1.8 * len(cats) + 3), 4))
     width = 0.8 / len(bars)
     for j, (label, get, colour) in enumerate(bars):
         xs, ys = [], []
@@ -156,5 +153,4 @@ def _verdict_bars(plt, comparison, s, out: Path) -> Path:
     ax.legend(fontsize=7)
     p = out / f"verdicts_{a}_{b}.png"
     _save(fig, p)
-    plt.close(fig)
     return p

@@ -317,15 +317,13 @@ class VerificationReport:
     def plot(self, path, *, title: str | None = None) -> Path:
         """Write a PNG of clearance against time per category, with the threshold and the stopping
         distance marked and the first collision flagged.  Returns the path."""
-        import matplotlib
-
-        matplotlib.use("Agg", force=False)
-        import matplotlib.pyplot as plt
+        from matplotlib.figure import Figure  # no pyplot: the caller's backend and figures are left alone
 
         from .._io import atomic_write
 
         p = Path(path)
-        fig, ax = plt.subplots(figsize=(8, 4.2), dpi=100)
+        fig = Figure(figsize=(8, 4.2), dpi=100)
+        ax = fig.subplots()
         t = self.profile.time
         for cat, y in self.profile.by_category.items():
             finite = np.isfinite(y)
@@ -352,8 +350,5 @@ class VerificationReport:
         ax.legend(loc="best", fontsize=8)
         ax.grid(alpha=0.3)
         fig.tight_layout()
-        try:
-            atomic_write(p, lambda f: fig.savefig(f, format="png"), parents=True)
-        finally:
-            plt.close(fig)
+        atomic_write(p, lambda f: fig.savefig(f, format="png"), parents=True)
         return p
