@@ -103,8 +103,9 @@ def test_verify_names_the_file_for_a_robot_or_joints_the_scene_lacks(tmp_path):
 
 
 def test_option_errors_use_the_option_names():
+    """An option's value refused: the option named (click reads the number: a usage error, exit 2)."""
     res = _run("verify", "puma560", "pick_and_place", "--stopping-distance", "-1")
-    assert res.exit_code == ExitCode.INPUT and "error: --stopping-distance: expected a finite number >= 0" in res.output
+    assert res.exit_code == ExitCode.USAGE and "--stopping-distance" in res.output and "'-1' must be >= 0" in res.output
 
 
 def test_check_json_holds_every_feature_as_data():

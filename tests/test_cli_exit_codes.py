@@ -1,6 +1,6 @@
 """Every ``armguard`` exit status means one thing (armguard.cli.ExitCode), and every command's
 ``--help`` says which: 0 done / clear, 1 unsafe, 2 usage, 3 a file or value refused, 4 internal
-error, 5 incomplete, 130 interrupted.  In-process with click's CliRunner, and one real SIGINT in
+error, 5 incomplete, 130 interrupted, 141 output closed early.  In-process with click's CliRunner, and one real SIGINT in
 a subprocess."""
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ def _run(*args, env=None):
 
 def test_codes_are_distinct_and_fixed():
     """Scripts rely on the numbers: they are part of the interface."""
-    assert [int(c) for c in ExitCode] == [0, 1, 2, 3, 4, 5, 130]
+    assert [int(c) for c in ExitCode] == [0, 1, 2, 3, 4, 5, 130, 141]
     assert click.UsageError("x").exit_code == ExitCode.USAGE
 
 
@@ -104,6 +104,18 @@ def test_real_sigint_is_130():
         if child.poll() is None:
             child.kill()
     assert child.returncode == ExitCode.INTERRUPTED and "interrupted" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("args", [("info", "ur5"), ("check", "hermes", "--q", "195,0,0,0,0,0", "--deg")])
+def test_output_closed_early_is_141_never_a_verdict(args):
+    """Output into a pipe whose reader has gone (``| head``): 141, not rich's or click's 1, which
+    here means "unsafe" (the check of hermes at 195 deg is a collision, info has no verdict)."""
+    child = subprocess.Popen([sys.executable, "-m", "armguard.cli", *args], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE)
+    child.stdout.close()  # the reader goes before the command writes
+    _, err = child.communicate(timeout=300)
+    assert child.returncode == ExitCode.OUTPUT_CLOSED, err.decode()
+    assert b"Traceback" not in err, err.decode()
 
 
 def test_check_verdicts_map_to_their_codes():

@@ -62,3 +62,27 @@ def test_info_exits_1_when_the_map_allows_a_colliding_configuration(tmp_path, mo
         assert ("3 allowed but colliding" in r.output) if not extra else json.loads(r.output)["exactness"]["allowed_but_colliding"] == 3
     r = runner.invoke(main, ["cspace", "info", str(out), "--samples", "0"])
     assert r.exit_code == 0
+
+
+def test_plot_refuses_what_it_cannot_mark_and_writes_the_format_asked(tmp_path):
+    """A NaN or unreadable angle, or a ``--q`` whose joint 2 is on another slice than ``--q2``'s (its
+    marker would show this slice's verdict where it does not hold), is refused with exit 3 and no
+    file; ``--out`` writes the format its suffix names (it wrote PNG bytes into a .pdf)."""
+    out = tmp_path / "h.agmap"
+    runner = CliRunner()
+    assert runner.invoke(main, ["cspace", "build", "hermes", "--resolution", "30deg", "--max-depth", "0",
+                                "--out", str(out)]).exit_code == 0
+    png = tmp_path / "s.png"
+    for args, said in ((["--q2", "30", "--q", "nan,30,-20"], "not a finite angle"),
+                       (["--q2", "30", "--q", "1,abc,3"], "--q: 'abc' is not a finite angle"),
+                       (["--q2", "abc"], "--q2: 'abc' is not a finite angle"),
+                       (["--q2", "30", "--q", "180,90,-20"], "is not in the slice's cell")):
+        r = runner.invoke(main, ["cspace", "plot", str(out), *args, "--out", str(png)])
+        assert r.exit_code == 3 and said in r.output, (args, r.output)
+        assert not png.exists()
+    r = runner.invoke(main, ["cspace", "plot", str(out), "--q2", "30", "--q", "180,30,-20", "--out", str(tmp_path / "s.pdf")])
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "s.pdf").read_bytes()[:5] == b"%PDF-"
+    r = runner.invoke(main, ["cspace", "plot", str(out), "--q2", "30", "--out", str(tmp_path / "s.xyz")])
+    assert r.exit_code == 3 and "matplotlib writes no .xyz plots" in r.output, r.output
+    assert not (tmp_path / "s.xyz").exists()

@@ -167,3 +167,38 @@ def test_a_built_in_model_takes_the_srdf_it_is_given(certified):
     assert frozenset(("puma560/link1", "puma560/link3")) in own
     assert frozenset(("puma560/link1", "puma560/link3")) not in {frozenset(p) for p in zip(given.pairs.owner_a, given.pairs.owner_b)}
     assert armguard.load_model("puma560", srdf=False).srdf.disabled == ()
+
+
+_HAND = """<?xml version="1.0"?>
+<robot name="puma560">
+  <!-- written by hand, as MoveIt's Setup Assistant would -->
+  <group name="puma560"><chain base_link="puma560_base" tip_link="puma560_tool"/></group>
+  <group_state name="home" group="puma560"><joint name="puma560_j1" value="0"/></group_state>
+  <end_effector name="tool" parent_link="puma560_tool" group="puma560"/>
+  <disable_collisions link1="puma560_link1" link2="puma560_link2" reason="Adjacent"/>
+</robot>
+"""
+
+
+def test_srdf_never_drops_a_hand_written_srdfs_groups(tmp_path):
+    """A MoveIt SRDF's groups, states and end effector are not a collision matrix's to drop: writing over
+    such a file is refused (the file untouched), ``--update`` keeps them, in order, and replaces the
+    ``disable_collisions`` (no certificates in the file: every pair searched)."""
+    srdf = tmp_path / "hand.srdf"
+    srdf.write_text(_HAND)
+    runner = CliRunner()
+    r = runner.invoke(main, ["srdf", "puma560", "--out", str(srdf), "--max-evaluations", "300"])
+    assert r.exit_code == 2 and "--update keeps them" in r.output and "group_state" in r.output, r.output
+    assert srdf.read_text() == _HAND
+
+    r = runner.invoke(main, ["srdf", "puma560", "--out", str(srdf), "--update", "--max-evaluations", "300"])
+    assert r.exit_code == 0, r.output
+    assert "carried no armguard certificates" in r.output and "kept 1 group, 1 group_state, 1 end_effector" in r.output, r.output
+    root = ET.parse(srdf).getroot()
+    assert [el.tag for el in root if el.tag != "disable_collisions"] == ["group", "group_state", "end_effector"]
+    assert root.find("group/chain").get("tip_link") == "puma560_tool"
+    assert root.find("group_state/joint").get("name") == "puma560_j1"
+    disabled = root.findall("disable_collisions")
+    assert disabled and all(el.get(FINGERPRINT_ATTR) for el in disabled)  # armguard's entries, with certificates
+    model = armguard.load_model("puma560", srdf=srdf)
+    assert model.srdf.file == srdf or Path(model.srdf.file) == srdf

@@ -84,3 +84,30 @@ def test_cli_verify_yaml_trajectory_and_unknown_name(tmp_path):
     assert "sampled at 20 Hz" in out.stdout
     bad = subprocess.run([sys.executable, "-m", "armguard.cli", "verify", "puma560", "no_such"], capture_output=True, text=True)
     assert bad.returncode == 3 and "pick_and_place" in bad.stderr  # ExitCode.INPUT
+
+
+def test_cli_verify_gives_files_of_the_same_name_their_own_report_and_plot(tmp_path):
+    """Two trajectory files named alike in different folders: two reports named apart (``t``, ``t_2``)
+    and two plots, none written over the other (both were named ``t``: one plot was printed twice, the
+    other lost)."""
+    import armguard
+    from click.testing import CliRunner
+
+    from armguard.cli import main
+
+    sc = armguard.load_scene("puma560")
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    sc.trajectories["pick_and_place"].save_yaml(tmp_path / "a" / "t.yaml")
+    sc.trajectories["pick_and_place"].save_yaml(tmp_path / "b" / "t.yaml")
+    r = CliRunner().invoke(main, ["verify", "puma560", str(tmp_path / "a" / "t.yaml"), str(tmp_path / "b" / "t.yaml"),
+                                  "--method", "sampled", "--frequency", "20", "--report", str(tmp_path / "r.json"),
+                                  "--plot", str(tmp_path / "p.png")])
+    assert r.exit_code in (0, 1), r.output
+    doc = json.loads((tmp_path / "r.json").read_text())
+    assert [d["trajectory"] for d in doc] == ["t", "t_2"]
+    for name in ("p_t.png", "p_t_2.png"):
+        assert (tmp_path / name).read_bytes()[:4] == b"\x89PNG"
+        assert r.output.count(f"plot: {tmp_path / name}") == 1, r.output
+    r = CliRunner().invoke(main, ["verify", "puma560", "pick_and_place", "--plot", str(tmp_path / "p.xyz")])
+    assert r.exit_code == 3 and "matplotlib writes no .xyz plots" in r.output, r.output

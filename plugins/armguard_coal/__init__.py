@@ -97,6 +97,20 @@ def _reference_requests(gdata) -> None:
         req.enable_contact = True
 
 
+def _option(opts: dict, key: str, default, kind, expected: str, ok):
+    """Option ``key`` of ``opts`` (popped) as ``kind``; a value that is not ``expected`` is a BackendError
+    naming it (an armguard.toml's ``threads = "x"`` was an internal ValueError)."""
+    raw = opts.pop(key, default)
+    try:
+        value = kind(raw)
+        good = not isinstance(raw, bool) and (kind is not int or float(raw) == value) and ok(value)
+    except (TypeError, ValueError):
+        good = False
+    if not good:
+        raise BackendError(f"coal: option {key} = {raw!r}: expected {expected}")
+    return value
+
+
 class CoalChecker(CheckerBase):
     """A Checker over Pinocchio + coal (see the module docstring)."""
 
@@ -108,8 +122,9 @@ class CoalChecker(CheckerBase):
 
         super().__init__(model)
         opts = dict(options or {})
-        self.threads = int(opts.pop("threads", os.cpu_count() or 1))
-        self.gjk_tolerance = float(opts.pop("gjk_tolerance", 1e-9))
+        self.threads = _option(opts, "threads", os.cpu_count() or 1, int, "an integer >= 1", lambda v: v >= 1)
+        self.gjk_tolerance = _option(opts, "gjk_tolerance", 1e-9, float, "a finite length > 0 (m)",
+                                     lambda v: math.isfinite(v) and v > 0.0)
         if opts:
             raise BackendError(f"coal: unknown options {sorted(opts)}; options are ['gjk_tolerance', 'threads']")
         self.representation = {}

@@ -26,7 +26,7 @@ from pathlib import Path
 
 from ._errors import OutputError
 
-__all__ = ["atomic_write", "make_folder", "output_set", "check_target"]
+__all__ = ["atomic_write", "make_folder", "output_set", "check_target", "figure_format", "save_figure"]
 
 
 def _reason(exc: OSError) -> str:
@@ -148,6 +148,27 @@ def atomic_write(path, data, *, parents: bool = False) -> Path:
         raise OutputError(f"cannot write {path}: {_reason(exc)}") from None
     _fsync_folder(path.parent)
     return path
+
+
+def figure_format(path) -> str:
+    """The plot format ``path``'s suffix names (``.png``, ``.pdf``, ``.svg``, ...; none: ``png``); a
+    suffix matplotlib cannot write is an OutputError naming the path and the formats it can (checked
+    before any work, so a typo does not cost a run or leave PNG bytes in a ``.pdf``)."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    fmt = Path(path).suffix[1:].lower() or "png"
+    supported = FigureCanvasBase.get_supported_filetypes()
+    if fmt not in supported:
+        raise OutputError(f"cannot write {path}: matplotlib writes no .{fmt} plots (it writes "
+                          f"{', '.join('.' + k for k in sorted(supported))})")
+    return fmt
+
+
+def save_figure(fig, path, *, parents: bool = False, **savefig) -> Path:
+    """A matplotlib Figure at ``path`` in the format of its suffix (:func:`figure_format`), all or nothing
+    (:func:`atomic_write`); ``savefig``: more of ``Figure.savefig``'s options (dpi, bbox_inches)."""
+    fmt = figure_format(path)
+    return atomic_write(path, lambda f: fig.savefig(f, format=fmt, **savefig), parents=parents)
 
 
 @contextlib.contextmanager

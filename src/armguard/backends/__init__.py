@@ -154,4 +154,17 @@ def checker(model, backend: str | None = None, options: Mapping | None = None, *
         model = load_model(model)
     require_pairs(model)
     name, opts = resolve(backend, options, config=config)
-    return get_backend(name).build(model, opts)
+    try:
+        return get_backend(name).build(model, opts)
+    except BackendError as exc:  # an option the backend refuses: named with the file it came from
+        source = _options_file(name, options, config)
+        if source is None:
+            raise
+        raise BackendError(f"{source}: [backend]: {exc}") from None
+
+
+def _options_file(name: str, options, config) -> str | None:
+    """The armguard.toml whose ``[backend]`` options :func:`resolve` gave backend ``name``, or None."""
+    cfg = read_config(config)
+    mine = {k for k in cfg if k not in ("name", "file")} if cfg.get("name", name) == name else set()
+    return cfg.get("file") if mine - set(options or {}) else None

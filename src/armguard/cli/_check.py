@@ -15,6 +15,7 @@ import sys
 import click
 
 from . import main
+from ._params import LENGTH
 from ._exit import ExitCode, exit_epilog
 from ._output import esc, output_console
 
@@ -74,10 +75,10 @@ def parse_q(sc, q_text: str, deg: bool):
               help="Joint values, comma-separated, in the scene's joint order (`armguard info SCENE` lists it; "
                    "default: the home pose).")
 @click.option("--deg", is_flag=True, help="--q gives revolute joints in degrees (prismatic stay in m).")
-@click.option("--threshold", type=float, default=0.05, show_default=True, help="Detection threshold (m).")
-@click.option("--stopping-distance", type=float, default=0.0, show_default=True, help="Stopping distance (m).")
+@click.option("--threshold", type=LENGTH, default=0.05, show_default=True, help="Detection threshold (m).")
+@click.option("--stopping-distance", type=LENGTH, default=0.0, show_default=True, help="Stopping distance (m).")
 @click.option("--active", default=None, help="Check only this robot against everything (default: all arms).")
-@click.option("--budget-us", type=float, default=None, help="Anytime mode: time budget in microseconds.")
+@click.option("--budget-us", type=LENGTH, default=None, help="Anytime mode: time budget in microseconds.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
 @click.option("--terrain", "terrain_file", type=click.Path(dir_okay=False), default=None,
               help="Add the terrain category: a sensed terrain file (armguard.terrain.load_terrain).")

@@ -8,6 +8,7 @@ import sys
 import click
 
 from . import main
+from ._params import AT_LEAST_ONE, COUNT, POSITIVE
 from ._exit import ExitCode, exit_epilog
 from ._output import esc, output_console
 
@@ -22,18 +23,18 @@ def _floats(text: str) -> list:
 @main.command("compare", epilog=exit_epilog(ok="the backends agree (--q: answered)", unsafe="a backend pair differs"))
 @click.argument("model")
 @click.option("--backends", default="analytic,coal", show_default=True, help="Comma-separated backends to compare.")
-@click.option("--configs", "n_configs", type=int, default=1000, show_default=True, help="Seeded random in-limit configurations.")
+@click.option("--configs", "n_configs", type=AT_LEAST_ONE, default=1000, show_default=True, help="Seeded random in-limit configurations.")
 @click.option("--trajectory", "trajectories", multiple=True, default=("all",), show_default=True,
               help="Canned trajectories whose samples are added: a name (repeatable), 'all' or 'none'.")
-@click.option("--frequency", type=float, default=1.0, show_default=True, help="Trajectory sampling rate (Hz).")
+@click.option("--frequency", type=POSITIVE, default=1.0, show_default=True, help="Trajectory sampling rate (Hz).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random configurations.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None, help="Write compare.json and PNGs here.")
 @click.option("--backend-option", "backend_options", multiple=True, metavar="B.KEY=VALUE",
               help="An option of one backend, e.g. analytic.fidelity=paper (repeatable).")
-@click.option("--workers", type=int, default=None, help="Spread the configurations over a Dask LocalCluster of N processes.")
+@click.option("--workers", type=AT_LEAST_ONE, default=None, help="Spread the configurations over a Dask LocalCluster of N processes.")
 @click.option("--scheduler", default=None, help="... or over an existing Dask cluster (scheduler address).")
 @click.option("--no-plots", is_flag=True, help="Skip the PNGs.")
-@click.option("--worst", "n_worst", type=int, default=5, show_default=True, help="Worst configurations listed per backend pair.")
+@click.option("--worst", "n_worst", type=COUNT, default=5, show_default=True, help="Worst configurations listed per backend pair.")
 @click.option("--q", "q_text", default=None, help="Answer at this one configuration (pin order, comma-separated) instead.")
 @click.option("--pair", "pair_text", default=None, help="With --q: only this pair (A,B GeometryObject names).")
 @click.option("--json", "as_json", is_flag=True, help="Print compare.json (or the --q answers) instead of tables.")
@@ -97,7 +98,7 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
 
 @main.command("check-urdf", epilog=exit_epilog(ok="no error-level finding", unsafe="an error-level finding"))
 @click.argument("path")
-@click.option("--configs", "n_configs", type=int, default=200, show_default=True,
+@click.option("--configs", "n_configs", type=AT_LEAST_ONE, default=200, show_default=True,
               help="Random configurations for the permanent-collision check.")
 @click.option("--json", "as_json", is_flag=True, help="Print the findings as JSON.")
 def check_urdf_cmd(path, n_configs, as_json) -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from . import main
+from ._params import LENGTH
 
 
 @main.command("console")
@@ -13,7 +14,7 @@ from . import main
               help="Address to bind; the default serves this machine only.")
 @click.option("--port", default=8080, show_default=True, type=click.IntRange(0, 65535),
               help="TCP port (0: any free port). A port in use is an error.")
-@click.option("--threshold", default=0.05, show_default=True, type=float, help="Initial detection threshold (m).")
+@click.option("--threshold", default=0.05, show_default=True, type=LENGTH, help="Initial detection threshold (m).")
 @click.option("--watch", is_flag=True, help="Reload the model when its files change, keeping the configuration.")
 @click.option("--terrain", "terrain_file", type=click.Path(dir_okay=False, exists=True), default=None,
               help="Check against a sensed terrain file (as armguard check --terrain) and draw it with the "

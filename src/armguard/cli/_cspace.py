@@ -7,6 +7,7 @@ import math
 import click
 
 from . import main
+from ._params import AT_LEAST_ONE, COUNT, LENGTH
 from ._exit import ExitCode, exit_epilog
 from ._output import output_console
 
@@ -15,6 +16,20 @@ def _angle(value: str) -> float:
     from ..cspace import parse_angle
 
     return parse_angle(value)
+
+
+def _one_angle(text: str, option: str) -> float:
+    """One angle of ``option`` (deg unless it carries its unit) in rad; not a finite number: an error naming the option."""
+    from .._errors import ForbiddenMapError
+
+    text = text.strip()
+    try:
+        value = _angle(text) if text.endswith(("deg", "°", "rad")) else math.radians(float(text))
+    except (ValueError, ForbiddenMapError):
+        value = math.nan
+    if not math.isfinite(value):
+        raise ForbiddenMapError(f"{option}: {text!r} is not a finite angle (e.g. 30, 30deg, 0.5rad)")
+    return value
 
 
 def _angles(text: str | None):
@@ -26,7 +41,7 @@ def _angles(text: str | None):
     parts = [p.strip() for p in text.split(",")]
     if len(parts) != 3:
         raise ForbiddenMapError(f"--q: expected three angles (joints 1-3), got {text!r}")
-    return [_angle(p) if p.endswith(("deg", "°", "rad")) else math.radians(float(p)) for p in parts]
+    return [_one_angle(p, "--q") for p in parts]
 
 
 @main.group("cspace")
@@ -40,10 +55,10 @@ def cspace() -> None:
 @click.option("--resolution", default="1deg", show_default=True, help="Cell width of joints 1, 2 ('1deg', '0.5°', rad).")
 @click.option("--j3-resolution", default=None, help="Joint-3 quantum (default: the resolution).")
 @click.option("--cell", default="10deg", show_default=True, help="Substructure extent over joints 1, 2.")
-@click.option("--stopping-distance", type=float, default=0.0, show_default=True, help="Worst-case stopping distance (m).")
+@click.option("--stopping-distance", type=LENGTH, default=0.0, show_default=True, help="Worst-case stopping distance (m).")
 @click.option("--robot", default=None, help="The robot (default: the scene's only one).")
-@click.option("--max-depth", type=int, default=None, help="Halvings below one cell x bin box (default: Tolerances).")
-@click.option("--workers", type=int, default=None, help="Build on a Dask LocalCluster with N worker processes.")
+@click.option("--max-depth", type=COUNT, default=None, help="Halvings below one cell x bin box (default: Tolerances).")
+@click.option("--workers", type=AT_LEAST_ONE, default=None, help="Build on a Dask LocalCluster with N worker processes.")
 @click.option("--scheduler", default=None, help="Build on an existing Dask cluster (scheduler address).")
 @click.option("--no-resume", is_flag=True, help="Ignore a partial build at OUT.partial.")
 def build_cmd(model, out, resolution, j3_resolution, cell, stopping_distance, robot, max_depth, workers, scheduler,
@@ -69,7 +84,7 @@ def build_cmd(model, out, resolution, j3_resolution, cell, stopping_distance, ro
     unsafe="with --samples: a configuration the map allows collides (the map is not conservative there)"))
 @click.argument("map_path", type=click.Path(exists=True, dir_okay=False))
 @click.option("--model", default=None, help="Check against these model files / this scene (default: the recorded files).")
-@click.option("--samples", type=int, default=10_000, show_default=True,
+@click.option("--samples", type=COUNT, default=10_000, show_default=True,
               help="Random configurations compared with the exact check (0: skip).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def info_cmd(map_path, model, samples, as_json) -> None:
@@ -111,18 +126,20 @@ def info_cmd(map_path, model, samples, as_json) -> None:
         raise SystemExit(int(ExitCode.UNSAFE))
 
 
-@cspace.command("plot", epilog=exit_epilog(ok="the PNG written (whole, or the previous file left as it was)"))
+@cspace.command("plot", epilog=exit_epilog(ok="the plot written (whole, or the previous file left as it was)"))
 @click.argument("map_path", type=click.Path(exists=True, dir_okay=False))
 @click.option("--q2", required=True, help="Joint 2 of the slice ('30deg', '30°', rad; a bare number is deg).")
 @click.option("--q", "q", default=None, help="Configuration to mark: joints 1-3 as 'a,b,c' (deg unless suffixed).")
 @click.option("--model", default=None, help="Check against these model files / this scene (default: the recorded files).")
-@click.option("--out", "out", type=click.Path(dir_okay=False), required=True, help="PNG to write.")
+@click.option("--out", "out", type=click.Path(dir_okay=False), required=True,
+              help="The plot to write: .png, or another format matplotlib writes (.pdf, .svg).")
 def plot_cmd(map_path, q2, q, model, out) -> None:
-    """A joint-1 x joint-3 slice of MAP_PATH at joint 2 = Q2: forbidden bins red, the configuration Q marked."""
+    """A joint-1 x joint-3 slice of MAP_PATH at joint 2 = Q2: forbidden bins red, the configuration Q marked
+    (its joint 2 must lie in the slice's cell)."""
     from ..cspace import ForbiddenMap, plot_slice
 
-    fmap = ForbiddenMap.load(map_path, model=model)
-    q2r = _angle(q2) if q2.strip().endswith(("deg", "°", "rad")) else math.radians(float(q2))
+    q2r = _one_angle(q2, "--q2")
     qq = _angles(q)
+    fmap = ForbiddenMap.load(map_path, model=model)
     plot_slice(fmap, q2r, out, q=qq)
     click.echo(f"wrote {out}")

@@ -18,6 +18,7 @@ import click
 import numpy as np
 
 from . import main
+from ._params import LENGTH
 from ._output import esc, output_console
 
 #: Hermes (001_…, §4): "the maximum value of the stopping distance be 100 mm, i.e. the typical value
@@ -100,7 +101,7 @@ def verdict_text(r) -> str:
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default="out", show_default=True,
               help="Where the JSON reports and PNG plots go.")
 @click.option("--scene", "scenes", multiple=True, help="Only these built-in scenes (default: all).")
-@click.option("--stopping-distance", "stopping_distances", type=float, multiple=True,
+@click.option("--stopping-distance", "stopping_distances", type=LENGTH, multiple=True,
               help="Constant stopping distances to verify with (m); default: 0 and Hermes's speed-dependent table.")
 @click.option("--list", "list_only", is_flag=True, help="List the demonstrations (this one and the examples) and exit.")
 def demo_cmd(out_dir, scenes, stopping_distances, list_only) -> None:
@@ -124,6 +125,12 @@ def demo_cmd(out_dir, scenes, stopping_distances, list_only) -> None:
     from ._compile import warm_up
 
     console = output_console()
+    loaded = [(name, load_scene(name)) for name in scenes or builtin_names()]
+    bare = [name for name, sc in loaded if not sc.trajectories]
+    if scenes and bare:  # nothing to verify there: said, not an empty table and "reports and plots in out/"
+        raise click.BadParameter(f"{', '.join(map(repr, bare))} has no canned trajectory to verify; the built-in scenes "
+                                 f"have ({', '.join(builtin_names())}); for another model give trajectory files to "
+                                 "`armguard verify` (docs/trajectory-format.md)", param_hint="--scene")
     out = make_folder(out_dir)  # OutputError (exit status 3) when it cannot be made
     table = Table(title="armguard: certified verification of the built-in scenes' canned trajectories")
     modes = [("fixed", float(sd)) for sd in stopping_distances] or [("fixed", 0.0), ("hermes", HERMES_MAX_STOPPING_DISTANCE)]
@@ -133,8 +140,7 @@ def demo_cmd(out_dir, scenes, stopping_distances, list_only) -> None:
         table.add_column(col, overflow="fold")
     warm_up(console=console)
     t_all = time.perf_counter()
-    for name in scenes or builtin_names():
-        sc = load_scene(name)
+    for name, sc in loaded:
         if not sc.trajectories:
             continue
         verifiers = {}

@@ -5,7 +5,7 @@ A script can tell "unsafe" (1) from "could not finish" (5) from "could not check
 an :class:`armguard.ArmguardError` (a file or value armguard refuses, an output it cannot write)
 and an ``OSError`` are one located line and 3; any other exception is one line and 4, with the
 traceback under ``armguard --traceback ...`` or ``ARMGUARD_DEBUG=1``; Ctrl-C is 130 (128 + SIGINT,
-the shell's convention).  Click's own usage errors keep click's 2.
+the shell's convention); output into a pipe closed early (``| head``) is 141 (128 + SIGPIPE).  Click's own usage errors keep click's 2.
 """
 
 from __future__ import annotations
@@ -44,6 +44,9 @@ class ExitCode(enum.IntEnum):
     """The check could not finish (a budget ran out before a verdict): never read as safe, nor as a collision."""
     INTERRUPTED = 130
     """Interrupted (Ctrl-C, SIGINT): nothing half-written is left in place of an output."""
+    OUTPUT_CLOSED = 141
+    """The output was closed before the command had printed everything (``armguard check ur5 | head -1``):
+    128 + SIGPIPE, the shell's convention; never 0 or 1, since what was not printed may hold the verdict."""
 
 
 _GENERIC = {
@@ -51,6 +54,7 @@ _GENERIC = {
     ExitCode.INPUT: "a file or value refused (named in the message), or an output that cannot be written",
     ExitCode.INTERNAL: f"internal error (rerun as armguard --traceback ..., or with {DEBUG_ENV}=1)",
     ExitCode.INTERRUPTED: "interrupted (Ctrl-C)",
+    ExitCode.OUTPUT_CLOSED: "the output was closed before everything was printed (| head)",
 }
 
 
@@ -77,6 +81,19 @@ def _error(message: str, code: ExitCode):
     sys.exit(int(code))
 
 
+def _output_closed():
+    """Exit with :attr:`ExitCode.OUTPUT_CLOSED` after a write to a closed pipe: stdout is pointed at
+    the null device first, so that the interpreter's last flush does not fail again (click's own
+    handling exits 1, which here means "unsafe")."""
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, sys.stdout.fileno())
+        os.close(null)
+    except (OSError, ValueError):  # no file descriptor behind stdout (a test's capture)
+        pass
+    sys.exit(int(ExitCode.OUTPUT_CLOSED))
+
+
 def run_guarded(ctx, invoke, located):
     """``invoke()``, with what it raises turned into one line on stderr and its :class:`ExitCode`;
     ``located(message)`` words an ArmguardError's message in the command's terms."""
@@ -91,7 +108,7 @@ def run_guarded(ctx, invoke, located):
         _error(located(str(exc)), ExitCode.INPUT)
     except OSError as exc:
         if exc.errno == errno.EPIPE:
-            raise  # a closed pipe (| head): click's own handling
+            _output_closed()
         if _debug(ctx):
             traceback.print_exc()
         where = exc.filename if exc.filename is not None else ""

@@ -13,6 +13,7 @@ library's source line under it.
 
 from __future__ import annotations
 
+import errno
 import sys
 import warnings
 
@@ -23,11 +24,19 @@ PIPED_WIDTH = 200
 
 
 def output_console():
-    """A ``rich.console.Console`` on stdout: the terminal's width, or :data:`PIPED_WIDTH` when piped."""
+    """A ``rich.console.Console`` on stdout: the terminal's width, or :data:`PIPED_WIDTH` when piped.
+
+    A write into a pipe closed early (``| head``) raises ``BrokenPipeError`` for the command's exit
+    status (``_exit.ExitCode.OUTPUT_CLOSED``): rich's own handling exits 1, which here means "unsafe"."""
     from rich.console import Console
 
-    console = Console()
-    return console if console.is_terminal else Console(width=PIPED_WIDTH)
+    class _Console(Console):
+        def on_broken_pipe(self) -> None:
+            self.quiet = True
+            raise BrokenPipeError(errno.EPIPE, "output closed")
+
+    console = _Console()
+    return console if console.is_terminal else _Console(width=PIPED_WIDTH)
 
 
 def esc(value) -> str:

@@ -13,6 +13,7 @@ import json
 import click
 
 from . import main
+from ._params import AT_LEAST_ONE, LENGTH
 from ._exit import ExitCode, exit_epilog
 
 
@@ -23,22 +24,23 @@ def _q(q) -> str:
 @main.command("srdf", epilog=exit_epilog(ok="the SRDF written"))
 @click.argument("robot")
 @click.option("--out", "out", type=click.Path(dir_okay=False), required=True, help="The .srdf file to write.")
-@click.option("--margin", type=float, default=0.0, show_default=True,
+@click.option("--margin", type=LENGTH, default=0.0, show_default=True,
               help="Never means never within this distance (m) anywhere within the joint limits.")
 @click.option("--method", type=click.Choice(["certified", "sampled"]), default="certified", show_default=True,
               help="certified: Never proven by branch and bound; sampled: MoveIt Setup Assistant's rules.")
-@click.option("--samples", type=int, default=10_000, show_default=True, help="Random configurations of --method sampled.")
-@click.option("--workers", type=int, default=None, help="Threads over the pairs (default: one); with --scheduler local, "
+@click.option("--samples", type=AT_LEAST_ONE, default=10_000, show_default=True, help="Random configurations of --method sampled.")
+@click.option("--workers", type=AT_LEAST_ONE, default=None, help="Threads over the pairs (default: one); with --scheduler local, "
               "the Dask worker processes.")
 @click.option("--scheduler", default=None, help="Search the pairs on Dask: 'local' (a LocalCluster of --workers "
               "processes) or a scheduler's address (tcp://host:8786); each worker loads ROBOT from its file.")
-@click.option("--max-evaluations", type=int, default=200_000, show_default=True,
+@click.option("--max-evaluations", type=AT_LEAST_ONE, default=200_000, show_default=True,
               help="Per pair, distance evaluations before it is left undecided (certified).")
 @click.option("--evaluator", default="analytic", show_default=True,
               help="The backend whose distances are evaluated at cell centres (analytic, coal, ...).")
 @click.option("--update", is_flag=True,
               help="--out is an SRDF written before: keep every pair whose certificate (its links' shapes, the joints "
-                   "between them, margin and method) is unchanged, search the rest again.")
+                   "between them, margin and method) is unchanged, search the rest again; keep its groups, group "
+                   "states, end effectors, virtual and passive joints (a hand-written MoveIt SRDF: all pairs searched).")
 @click.option("--json", "as_json", is_flag=True, help="Print the matrix as JSON.")
 def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evaluations, evaluator, update, as_json) -> None:
     """Write the collision matrix of ROBOT (a built-in name, a public robot's name, or a .urdf) as an SRDF."""
@@ -47,21 +49,26 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
     from ..model import load_model
     from ..srdfgen import collision_matrix
 
+    from ..srdfgen._io import other_elements, read_previous
+
     if update and not Path(out).is_file():
         raise click.BadParameter(f"{out} is not a file: --update rewrites an SRDF written before", param_hint="--out")
+    keep = other_elements(out) if Path(out).is_file() else []
+    if keep and not update:  # a MoveIt SRDF's groups and states: never lost to a rewrite
+        tags = sorted({el.tag for el in keep if isinstance(el.tag, str)})
+        if tags:
+            raise click.BadParameter(f"{out} holds elements a collision matrix does not make ({', '.join(tags)}): "
+                                     "--update keeps them and replaces its disable_collisions; or write to another file",
+                                     param_hint="--out")
     model = load_model(robot, srdf=False)
-    before = {}
-    if update:
-        from ..srdfgen._io import read_previous
-
-        before = read_previous(out)
+    before = read_previous(out) if update else {}
     cm = collision_matrix(model, margin=margin, method=method, samples=samples, workers=workers,
                           max_evaluations=max_evaluations, backend=evaluator, progress=not as_json,
                           previous=out if update else None, scheduler=scheduler)
     changed = [(before[frozenset((e.link1, e.link2))], e) for e in cm.entries if frozenset((e.link1, e.link2)) in before
                and (before[frozenset((e.link1, e.link2))].reason, before[frozenset((e.link1, e.link2))].status)
                != (e.reason, e.status)]
-    cm.write_srdf(out)
+    cm.write_srdf(out, keep if update else ())
     c = cm.counts()
     if as_json:
         click.echo(json.dumps({"model": cm.model, "method": cm.method, "margin": cm.margin, "out": str(out),
@@ -78,7 +85,12 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
                f"{c['undecided']} undecided; {cm.method}, {cm.elapsed_s:.1f} s")
     if update:
         click.echo(f"  --update: {len(cm.kept)} pairs kept (certificate unchanged), "
-                   f"{c['pairs'] - c['Adjacent'] - c['Default'] - len(cm.kept)} searched again")
+                   f"{c['pairs'] - c['Adjacent'] - c['Default'] - len(cm.kept)} searched again"
+                   + ("" if before else f" ({out} carried no armguard certificates)"))
+        kept_tags = [el.tag for el in keep if isinstance(el.tag, str)]
+        if kept_tags:
+            counts = {t: kept_tags.count(t) for t in dict.fromkeys(kept_tags)}
+            click.echo("  --update: kept " + ", ".join(f"{n} {t}" for t, n in counts.items()) + f" of {out}")
         for o, e in changed:
             click.echo(f"  changed {e.link1} - {e.link2}: {o.reason or o.status} -> {e.reason or e.status}")
     for e in cm.entries:
@@ -93,9 +105,9 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
     unsafe="with --strict: a disabled pair other than Adjacent or Default can collide"))
 @click.argument("robot")
 @click.argument("srdf", type=click.Path(dir_okay=False), required=False)
-@click.option("--margin", type=float, default=0.0, show_default=True, help="Collide means within this distance (m).")
-@click.option("--workers", type=int, default=None, help="Threads over the pairs (default: one).")
-@click.option("--max-evaluations", type=int, default=200_000, show_default=True,
+@click.option("--margin", type=LENGTH, default=0.0, show_default=True, help="Collide means within this distance (m).")
+@click.option("--workers", type=AT_LEAST_ONE, default=None, help="Threads over the pairs (default: one).")
+@click.option("--max-evaluations", type=AT_LEAST_ONE, default=200_000, show_default=True,
               help="Per pair, distance evaluations before it is left undecided.")
 @click.option("--evaluator", default="analytic", show_default=True, help="The backend whose distances are evaluated.")
 @click.option("--strict", is_flag=True, help="Exit 1 when a pair disabled for a reason other than Adjacent or Default can collide.")

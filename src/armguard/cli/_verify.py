@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from . import main
+from ._params import AT_LEAST_ONE, LENGTH, POSITIVE
 from ._exit import ExitCode, exit_epilog
 from ._output import esc, output_console
 
@@ -38,6 +39,20 @@ def resolve_trajectories(scene, specs):
     if not out:
         raise VerificationError(f"scene {scene.name!r} has no canned trajectory: give trajectory files "
                                 "(.yaml, docs/trajectory-format.md; Trajectory.save_yaml writes one)")
+    return _unique_names(out)
+
+
+def _unique_names(items):
+    """``items`` with a name repeated (two files ``a/ok.yaml``, ``b/ok.yaml``) made unique, ``ok``,
+    ``ok_2``, ...: a report and a plot file per trajectory, none written over another's."""
+    seen, out = set(), []
+    for name, traj in items:
+        new, k = name, 1
+        while new in seen:
+            k += 1
+            new = f"{name}_{k}"
+        seen.add(new)
+        out.append((new, traj))
     return out
 
 
@@ -67,17 +82,18 @@ def _checked_file(scene, path: Path, traj):
 @click.argument("trajectories", nargs=-1, required=True)
 @click.option("--method", type=click.Choice(["certified", "sampled"]), default="certified", show_default=True,
               help="certified: proven between samples (never misses); sampled: Hermes's discrete checks.")
-@click.option("--frequency", type=float, default=None, help="Sampled mode: checks per second along the time law (Hz).")
-@click.option("--joint-step", type=float, default=None, help="Sampled mode: joint-space step (rad; default 0.05).")
-@click.option("--stopping-distance", type=float, default=0.0, show_default=True, help="Obstacles grow by this (m).")
+@click.option("--frequency", type=POSITIVE, default=None, help="Sampled mode: checks per second along the time law (Hz).")
+@click.option("--joint-step", type=POSITIVE, default=None, help="Sampled mode: joint-space step (rad; default 0.05).")
+@click.option("--stopping-distance", type=LENGTH, default=0.0, show_default=True, help="Obstacles grow by this (m).")
 @click.option("--speed-dependent", is_flag=True,
               help="Hermes's stepwise stopping distance instead of a constant one: 10 speed ranges reaching "
                    "--stopping-distance at the trajectory's top speed, 0 at rest (each segment split in 8).")
-@click.option("--threshold", type=float, default=None, help="Warning threshold drawn on the plot (m; default 0.05).")
+@click.option("--threshold", type=LENGTH, default=None, help="Warning threshold drawn on the plot (m; default 0.05).")
 @click.option("--robot", default=None, help="The moving robot (default: the trajectory's).")
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="Write the JSON report here.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None, help="Write a PNG of clearance vs time here.")
-@click.option("--workers", type=int, default=None, help="Run on a Dask LocalCluster with N worker processes.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None, help="Write a plot of clearance vs time here (.png, or .pdf, .svg; one file per trajectory, "
+              "FILE_<trajectory>.png, when there are several).")
+@click.option("--workers", type=AT_LEAST_ONE, default=None, help="Run on a Dask LocalCluster with N worker processes.")
 @click.option("--scheduler", default=None, help="Run on an existing Dask cluster (scheduler address).")
 @click.option("--terrain", "terrain_file", type=click.Path(dir_okay=False), default=None,
               help="Also verify against a sensed terrain file (certified; serial; armguard.terrain.load_terrain).")
@@ -88,7 +104,7 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
 
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from .._io import atomic_write
+    from .._io import atomic_write, figure_format
     from ..scene import load_scene
     from ..verify import verify_many
 
@@ -96,6 +112,8 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
     from ._demo import verdict_text
 
     console = output_console()
+    if plot_path:
+        figure_format(plot_path)  # a format matplotlib cannot write: refused before the work
     sc = load_scene(scene)
     items = resolve_trajectories(sc, trajectories)
     warm_up(console=console)

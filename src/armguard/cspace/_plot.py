@@ -7,24 +7,36 @@ import math
 import numpy as np
 
 from .._errors import ForbiddenMapError
-from .._io import atomic_write
+from .._io import figure_format, save_figure
 
 __all__ = ["plot_slice"]
 
 
 def plot_slice(fmap, q2: float, out, *, q=None, dpi: int = 120) -> None:
-    """Write a PNG of the cells at joint 2 = ``q2`` (rad): joint 1 across, joint 3 up, forbidden bins red.
+    """Write a plot of the cells at joint 2 = ``q2`` (rad): joint 1 across, joint 3 up, forbidden bins red
+    (a PNG, or the format ``out``'s suffix names: ``armguard._io.figure_format``).
 
-    ``q``: a configuration ``(3,)`` rad (joints 1–3) to mark, or None.
+    ``q``: a configuration ``(3,)`` rad (joints 1–3) to mark, or None; finite, with its joint 2 in the
+    slice's cell (a marker on another slice would show that slice's verdict where it does not hold).
     """
     from matplotlib.colors import ListedColormap
     from matplotlib.figure import Figure  # no pyplot: the caller's backend and figures are left alone
 
+    figure_format(out)
     g = fmap.grid
     cell = g.cell_of([g.lower[0], q2, g.lower[2]])
     if cell is None:
         raise ForbiddenMapError(f"q2 = {q2} rad is outside joint 2's limits [{g.lower[1]}, {g.upper[1]}]")
     i2 = cell[1]
+    lo2 = g.lower[1] + i2 * g.step[1]
+    hi2 = min(lo2 + g.step[1], g.upper[1])
+    if q is not None:
+        q = np.asarray(q, dtype=np.float64).reshape(-1)
+        if q.shape != (3,) or not np.all(np.isfinite(q)):
+            raise ForbiddenMapError(f"q: expected 3 finite joint values (rad), got {q.tolist()}")
+        if not lo2 - 1e-12 <= q[1] <= hi2 + 1e-12:
+            raise ForbiddenMapError(f"q: its joint 2 ({math.degrees(q[1]):.6g}°) is not in the slice's cell "
+                                    f"[{math.degrees(lo2):.6g}°, {math.degrees(hi2):.6g}°] at q2: plot the slice at its joint 2")
     img = np.zeros((int(g.counts[2]), int(g.counts[0])), dtype=np.int8)
     for k1 in range(int(g.n_sub[0])):
         s = k1 * int(g.n_sub[1]) + i2 // int(g.per_sub[1])
@@ -38,16 +50,14 @@ def plot_slice(fmap, q2: float, out, *, q=None, dpi: int = 120) -> None:
     ax.imshow(img, origin="lower", aspect="auto", interpolation="nearest", cmap=ListedColormap(["#f4f4f4", "#d62728"]),
               vmin=0, vmax=1, extent=(deg(g.lower[0]), deg(x1), deg(g.lower[2]), deg(x3)))
     if q is not None:
-        q = np.asarray(q, dtype=np.float64).reshape(-1)[:3]
         ok = fmap.allowed(q)
         ax.plot([deg(q[0])], [deg(q[2])], marker="x" if not ok else "o", color="k", markersize=9, mew=2,
                 label=f"q ({'allowed' if ok else 'forbidden'})")
         ax.legend(loc="upper right")
-    lo2 = g.lower[1] + i2 * g.step[1]
     ax.set_xlabel(f"{fmap.joints[0]} (deg)")
     ax.set_ylabel(f"{fmap.joints[2]} (deg)")
     ax.set_title(f"forbidden (red): {fmap.robot} links {', '.join(fmap.links)}; {fmap.joints[1]} in "
-                 f"[{deg(lo2):.3g}°, {deg(min(lo2 + g.step[1], g.upper[1])):.3g}°], stopping distance "
+                 f"[{deg(lo2):.3g}°, {deg(hi2):.3g}°], stopping distance "
                  f"{fmap.stopping_distance} m", fontsize=9)
     fig.tight_layout()
-    atomic_write(out, lambda f: fig.savefig(f, format="png", dpi=dpi))
+    save_figure(fig, out, dpi=dpi)

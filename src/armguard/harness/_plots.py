@@ -23,10 +23,10 @@ def _subplots(nrows: int = 1, ncols: int = 1, **fig_kw):
 
 
 def _save(fig, p: Path) -> None:
-    """The figure as a PNG at ``p``, all or nothing (``armguard._io.atomic_write``)."""
-    from .._io import atomic_write
+    """The figure at ``p`` (a PNG, or the format its suffix names), all or nothing (``armguard._io.save_figure``)."""
+    from .._io import save_figure
 
-    atomic_write(p, lambda f: fig.savefig(f, format="png", dpi=110, bbox_inches="tight"))
+    save_figure(fig, p, dpi=110, bbox_inches="tight")
 
 
 def write_plots(comparison, out_dir) -> list:

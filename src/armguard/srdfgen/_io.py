@@ -15,16 +15,20 @@ from pathlib import Path
 from .._errors import SceneFileError
 from ..model._certificate import FINGERPRINT_ATTR, MARGIN_ATTR, METHOD_ATTR
 
-__all__ = ["write_srdf", "srdf_text", "read_previous"]
+__all__ = ["write_srdf", "srdf_text", "read_previous", "other_elements"]
 
 _CHECKED = re.compile(r"^ checked: (?P<a>\S+) - (?P<b>\S+): (?P<what>.*) \[" + FINGERPRINT_ATTR + r"=(?P<fp>[0-9a-f]+)\] $")
 _WITNESS = re.compile(r"^witnessed at q = \[(?P<q>[^\]]*)\] \(distance (?P<d>\S+) m\)$")
 
 
-def srdf_text(matrix) -> str:
+def srdf_text(matrix, keep=()) -> str:
     """The SRDF of ``matrix``: one ``<disable_collisions link1 link2 reason/>`` per disabled pair, and
-    a comment per checked pair (witnessed, with its configuration, or undecided)."""
+    a comment per checked pair (witnessed, with its configuration, or undecided); the elements
+    ``keep`` (:func:`other_elements` of the SRDF it replaces: groups, group states, end effectors,
+    virtual and passive joints) first, as they were."""
     root = ET.Element("robot", name=str(matrix.model), **{MARGIN_ATTR: repr(float(matrix.margin)), METHOD_ATTR: matrix.method})
+    for el in keep:
+        root.append(el)
     root.append(ET.Comment(f" collision matrix by armguard srdf: method {matrix.method}, margin {matrix.margin:g} m, "
                            f"{len(matrix.disabled)} of {len(matrix.entries)} link pairs disabled "))
     for e in matrix.entries:
@@ -41,12 +45,39 @@ def srdf_text(matrix) -> str:
     return '<?xml version="1.0" ?>\n' + ET.tostring(root, encoding="unicode") + "\n"
 
 
-def write_srdf(matrix, path) -> None:
+def write_srdf(matrix, path, keep=()) -> None:
     """Write :func:`srdf_text` to ``path`` whole (:func:`armguard._io.atomic_write`: a temporary file beside
     it, flushed, then renamed; a FIFO, a folder or a full disk is an OutputError naming the path)."""
     from .._io import atomic_write
 
-    atomic_write(Path(path), srdf_text(matrix))
+    atomic_write(Path(path), srdf_text(matrix, keep))
+
+
+def _parse(path, what: str):
+    parser = ET.XMLParser(target=ET.TreeBuilder(insert_comments=True))
+    try:
+        return ET.parse(str(path), parser=parser).getroot()
+    except ET.ParseError as exc:
+        line, col = exc.position
+        raise SceneFileError(str(path), f"line {line}, column {col + 1}", f"not well-formed XML: {exc.msg}") from None
+    except OSError as exc:
+        raise SceneFileError(str(path), "", f"cannot read {what} ({exc.strerror or exc})") from None
+
+
+def other_elements(path) -> list:
+    """The elements of the SRDF at ``path`` that a collision matrix does not make: everything but its
+    ``<disable_collisions>`` and the comments :func:`srdf_text` writes (a hand-written MoveIt SRDF's
+    groups, group states, end effectors, virtual and passive joints), in the file's order, for
+    ``armguard srdf --update`` to keep.  A file that does not parse is a located error."""
+    out = []
+    for el in _parse(path, "the SRDF"):
+        if el.tag == "disable_collisions":
+            continue
+        if el.tag is ET.Comment and (_CHECKED.match(el.text or "") or (el.text or "").startswith(" collision matrix by armguard")):
+            continue
+        el.tail = None
+        out.append(el)
+    return out
 
 
 def read_previous(path) -> dict:
@@ -55,16 +86,8 @@ def read_previous(path) -> dict:
     SRDF made otherwise gives none.  A file that does not parse is a located error."""
     from ._matrix import MatrixEntry
 
-    parser = ET.XMLParser(target=ET.TreeBuilder(insert_comments=True))
-    try:
-        root = ET.parse(str(path), parser=parser).getroot()
-    except ET.ParseError as exc:
-        line, col = exc.position
-        raise SceneFileError(str(path), f"line {line}, column {col + 1}", f"not well-formed XML: {exc.msg}") from None
-    except OSError as exc:
-        raise SceneFileError(str(path), "", f"cannot read the previous SRDF ({exc.strerror or exc})") from None
     out = {}
-    for el in root:
+    for el in _parse(path, "the previous SRDF"):
         if el.tag == "disable_collisions" and el.get(FINGERPRINT_ATTR):
             a, b = el.get("link1", ""), el.get("link2", "")
             out[frozenset((a, b))] = MatrixEntry(a, b, el.get("reason", ""), "disabled", how=f"kept from {path}: "

@@ -88,11 +88,12 @@ class CollisionMatrix:
         out.update(witnessed=self.count("witnessed"), undecided=self.count("undecided"), pairs=len(self.entries))
         return out
 
-    def write_srdf(self, path) -> None:
-        """Write the matrix as an SRDF (:func:`armguard.srdfgen.write_srdf`)."""
+    def write_srdf(self, path, keep=()) -> None:
+        """Write the matrix as an SRDF (:func:`armguard.srdfgen.write_srdf`), with the elements ``keep``
+        (``armguard.srdfgen._io.other_elements`` of the SRDF it replaces) first."""
         from ._io import write_srdf
 
-        write_srdf(self, path)
+        write_srdf(self, path, keep)
 
 
 class PairEvaluator:

@@ -68,6 +68,6 @@ def plot_monte_carlo(path, samples, estimate: UncertainPose2, *, confidences: Se
     if title:
         ax.set_title(title)
     ax.legend(loc="best", fontsize=7)
-    from .._io import atomic_write
+    from .._io import save_figure
 
-    return atomic_write(Path(path), lambda f: fig.savefig(f, format="png"), parents=True)  # whole or not at all
+    return save_figure(fig, Path(path), parents=True)  # whole or not at all, in the format of its suffix

@@ -315,13 +315,15 @@ class VerificationReport:
         return "\n".join(lines)
 
     def plot(self, path, *, title: str | None = None) -> Path:
-        """Write a PNG of clearance against time per category, with the threshold and the stopping
-        distance marked and the first collision flagged.  Returns the path."""
+        """Write a plot of clearance against time per category, with the threshold and the stopping
+        distance marked and the first collision flagged: a PNG, or the format ``path``'s suffix names
+        (``.pdf``, ``.svg``, ...: ``armguard._io.figure_format``).  Returns the path."""
         from matplotlib.figure import Figure  # no pyplot: the caller's backend and figures are left alone
 
-        from .._io import atomic_write
+        from .._io import figure_format, save_figure
 
         p = Path(path)
+        figure_format(p)
         fig = Figure(figsize=(8, 4.2), dpi=100)
         ax = fig.subplots()
         t = self.profile.time
@@ -350,5 +352,5 @@ class VerificationReport:
         ax.legend(loc="best", fontsize=8)
         ax.grid(alpha=0.3)
         fig.tight_layout()
-        atomic_write(p, lambda f: fig.savefig(f, format="png"), parents=True)
+        save_figure(fig, p, parents=True)
         return p

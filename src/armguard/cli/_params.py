@@ -1,0 +1,47 @@
+"""Option types shared by the commands: counts and finite numbers checked where click reads them.
+
+click's ``FloatRange`` lets ``nan`` through (every comparison with it is false), so a number here
+is refused unless finite; a refused value is click's usage error (exit status 2) naming the option.
+"""
+
+from __future__ import annotations
+
+import math
+
+import click
+
+__all__ = ["AT_LEAST_ONE", "COUNT", "Finite", "LENGTH", "POSITIVE"]
+
+AT_LEAST_ONE = click.IntRange(min=1)
+"""An integer >= 1 (configurations, workers, evaluations)."""
+COUNT = click.IntRange(min=0)
+"""An integer >= 0."""
+
+
+class Finite(click.ParamType):
+    """A finite float, at least ``low`` (above it when ``open_low``)."""
+
+    name = "float"
+
+    def __init__(self, low: float | None = None, open_low: bool = False):
+        self.low, self.open_low = low, open_low
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, float) and math.isfinite(value):
+            x = value
+        else:
+            try:
+                x = float(value)
+            except (TypeError, ValueError):
+                self.fail(f"{value!r} is not a number", param, ctx)
+        if not math.isfinite(x):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        if self.low is not None and (x <= self.low if self.open_low else x < self.low):
+            self.fail(f"{value!r} must be {'>' if self.open_low else '>='} {self.low:g}", param, ctx)
+        return x
+
+
+LENGTH = Finite(0.0)
+"""A finite length (m, or µs of a budget) >= 0."""
+POSITIVE = Finite(0.0, open_low=True)
+"""A finite number > 0 (a rate, a step)."""
