@@ -111,3 +111,18 @@ def test_cli_verify_gives_files_of_the_same_name_their_own_report_and_plot(tmp_p
         assert r.output.count(f"plot: {tmp_path / name}") == 1, r.output
     r = CliRunner().invoke(main, ["verify", "puma560", "pick_and_place", "--plot", str(tmp_path / "p.xyz")])
     assert r.exit_code == 3 and "matplotlib writes no .xyz plots" in r.output, r.output
+
+
+def test_cli_verify_names_the_waypoint_outside_the_limits(tmp_path):
+    """A waypoint outside its joint's limits: the file, the waypoint's place and line (it said "trajectory
+    waypoints[1]: ... (at index (np.int64(2),))", with neither file nor line)."""
+    from click.testing import CliRunner
+
+    from armguard.cli import main
+
+    path = tmp_path / "out.yaml"
+    path.write_text("format: armguard.trajectory\nversion: 1\nrobot: puma560\njoint_names: [j1, j2, j3]\n"
+                    "times: [0.0, 1.0, 2.0]\nwaypoints:\n  - [0.0, 0.5, -1.0]\n  - [0.1, 10.0, -1.0]\n  - [0.2, 0.5, -1.0]\n")
+    r = CliRunner().invoke(main, ["verify", "puma560", str(path)])
+    assert r.exit_code == 3, r.output
+    assert f"{path}: waypoints[1][1] (line 8): joint 'j2' = 10 is outside its limits" in r.output, r.output

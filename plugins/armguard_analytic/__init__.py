@@ -151,7 +151,9 @@ class _Fast:
         plan = self.subsets.get(key)
         if plan is None:
             cat = self.category
-            plan = (len(idx), self.subset(idx), self.names[idx], tuple(cat[int(k)] for k in idx))
+            names = self.names[idx]
+            names.flags.writeable = False  # handed to every result of this subset
+            plan = (len(idx), self.subset(idx), names, tuple(cat[int(k)] for k in idx))
             if len(self.subsets) >= 256:
                 self.subsets.clear()
             self.subsets[key] = plan
@@ -184,7 +186,7 @@ class AnalyticChecker(CheckerBase):
             raise BackendError(f"analytic: unknown options {sorted(opts)}; options are ['fidelity', 'release_gil', "
                                "'warm_start']")
         self.representation = dict(model.notes)
-        self._detectors: dict = {}
+        self._detector = None
         self._nq = model.nq
         # collides: Pinocchio's rows as they are, gathered (a column take), or converted (continuous joints)
         self._scene_order = model.q_in_scene_order
@@ -195,21 +197,23 @@ class AnalyticChecker(CheckerBase):
         self._lock = threading.RLock()  # building a detector or the call plan: once, whichever thread asks
 
     # ---------------------------------------------------------------- detectors
-    def detector(self, stopping_distance: float = 0.0):
-        """The fused Detector of the Model (every pair kept), one per stopping distance: it compiles this
-        Model, also after its scene moved on to a derived one (``armguard.model.model_of``)."""
-        key = float(stopping_distance)
-        det = self._detectors.get(key)
+    def detector(self):
+        """The fused Detector of the Model (every pair kept, threshold and stopping distance 0): it compiles
+        this Model, also after its scene moved on to a derived one (``armguard.model.model_of``).  One for
+        every margin of :meth:`collides`: its obstacle lists keep every pair (``reach_margin`` inf), so a
+        margin is only the kernel's stopping-distance parameter (a detector per margin cost 32 ms and
+        5 MB on panda, 1.1 s and 35 MB on so101, each kept)."""
+        det = self._detector
         if det is None:
             from ._engine._batch import yesno_rows
             from ._engine._detector import FusedDetector
 
             self._yesno_rows = yesno_rows  # collides' path (the engine is imported on first use)
             with self._lock:
-                det = self._detectors.get(key)
+                det = self._detector
                 if det is None:
-                    det = self._detectors[key] = FusedDetector(self.model._spec, threshold=0.0, stopping_distance=key,
-                                                               reach_margin=math.inf, fixed_model=self.model)
+                    det = self._detector = FusedDetector(self.model._spec, threshold=0.0, stopping_distance=0.0,
+                                                         reach_margin=math.inf, fixed_model=self.model)
         return det
 
     def _order(self, b=None):
@@ -275,10 +279,9 @@ class AnalyticChecker(CheckerBase):
 
     def _kernel_error(self, f: _Fast, err: int, Q: np.ndarray, batch: bool):
         e, m = err % 4, err // 4
-        if e == 1:
-            if batch:
-                check_Q(self.model, Q)
-            check_q(self.model, Q[m])
+        if batch:  # the framework's own checks first: their errors name the row (non-finite, circle, limits)
+            check_Q(self.model, Q)
+        check_q(self.model, Q[m])
         f.det._raise_kernel_error(e, self.model.scene_q(Q[m:m + 1]), "Detector.pair_distances: q", b=f.b)
 
     def pair_distances(self, q, *, pairs=None, jacobian: bool = False):
@@ -432,9 +435,10 @@ class AnalyticChecker(CheckerBase):
         elif self._q_take is not None:
             Qs = Q.take(self._q_take, axis=1)
         else:
+            check_Q(model, Q)  # continuous joints: each (cos, sin) on the unit circle before it is read as an angle
             Qs = model.scene_q(Q)
-        det = self.detector(margin)
-        hit, err = self._yesno_rows(det, Qs)
+        det = self.detector()
+        hit, err = self._yesno_rows(det, Qs, margin)
         if err != 0:
             check_Q(model, Q)  # a non-finite row: the same error as every backend's
             det._raise_kernel_error(err, Qs, "Detector: Q", batch=True)

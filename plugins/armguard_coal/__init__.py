@@ -11,14 +11,18 @@ the six.  Budgets and per-category nearest pairs come from the framework default
 Thread safety: each calling thread gets its own ``pinocchio.Data`` / ``GeometryData`` (their
 placements and requests are per-call state), and the batch pool is used by one call at a time.
 A GeometryData's distance functors keep their GJK solver's state from one call to the next (a
-thread's own, never shared): where GJK stops at its tolerance rather than on a vertex -- a hull
-against a cylinder -- the answer depends, within that tolerance, on the thread's earlier calls.
-On z1, calling 200 random configurations in a shuffled order on one thread gave 18 of 1,000 calls
-a hull–cylinder distance different from the first pass's, by up to 3.0e-10 m; a fresh
-GeometryData per call gives the same answers in any order.  Pinocchio exposes no reset of that
-state, and a fresh GeometryData costs ~26 µs a call, so the answers are identical across threads
-only to ``gjk_tolerance`` there (``tests/test_threads.py`` holds them bit-equal on its models,
-which have no such pair).
+thread's own, never shared; the support hint survives ``DefaultGuess``), so an answer depends, in
+its last bits, on the thread's earlier calls: where GJK stops at its tolerance rather than on a
+vertex (a hull against a cylinder, large hulls), and where the nearest points are not unique (two
+parallel faces: any pair of points of the overlap is nearest).  100 random configurations called
+in order, then shuffled, on one thread (``armguard.load_model(name).random_q(100, 2)``): ur5 and
+panda, 0 calls differ; z1, 1 (distances by 6.2e-10 m, witness points by 0.55 mm); kinova, 44
+(distances by 2.2e-14 m, witness points by 6.4 mm on parallel faces); so101, 96 (1.1e-9 m,
+5.5 mm).  A fresh GeometryData per call gives the same answers in any order, but Pinocchio exposes
+no reset of that state and a fresh GeometryData costs ~26 µs a call; so the answers are identical
+across threads, batches and pair subsets only to ``gjk_tolerance`` on such models (declared in
+:attr:`CoalChecker.conformance_xfail`; ``tests/test_threads.py`` holds them bit-equal on its
+models).
 
 Options: ``threads`` (batches; default: all cores), ``gjk_tolerance`` (m, default 1e-9: coal's
 own default of 1e-6 stops GJK up to ~1e-5 m above the distance on curved hulls; a reference
@@ -111,11 +115,20 @@ def _option(opts: dict, key: str, default, kind, expected: str, ok):
     return value
 
 
+_HISTORY = ("the GJK solver state coal keeps between calls (the module docstring) changes the last bits of "
+            "distances and, on parallel faces, which nearest points: measured on this public robot")
+
+
 class CoalChecker(CheckerBase):
     """A Checker over Pinocchio + coal (see the module docstring)."""
 
     name = "coal"
     capabilities = frozenset({Capability.DISTANCES, Capability.VERDICTS})
+    conformance_xfail = {  # armguard.testing: public robots where the bit-equality checks fail (2026-12-05)
+        **{f"deterministic[{m}]": _HISTORY for m in ("kinova", "so101", "z1")},
+        **{f"thread_safety[{m}]": _HISTORY for m in ("kinova", "so101", "z1")},
+        **{f"{c}[{m}]": _HISTORY for c in ("pair_distances_many", "pair_subset") for m in ("so101", "z1")},
+    }
 
     def __init__(self, model, options: Mapping | None = None) -> None:
         import pinocchio as pin

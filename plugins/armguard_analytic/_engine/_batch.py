@@ -65,13 +65,19 @@ def rows_here(det: "FusedDetector", b: "Built", Q: np.ndarray, mode: int, prm: n
     return min_d, status, int(err)
 
 
-def yesno_rows(det: "FusedDetector", Q: np.ndarray) -> tuple:
-    """``collides_many`` on rows the caller checked (see :func:`rows`): ``(hit (M,) bool, err)``. A few
-    rows go straight to :func:`rows_here`: the Checker's ``collides`` on one row is this call, and
-    each Python step it skips is a measurable share of it (``python -m bench backends``)."""
+def yesno_rows(det: "FusedDetector", Q: np.ndarray, margin: float = 0.0) -> tuple:
+    """``collides_many`` on rows the caller checked (see :func:`rows`): ``(hit (M,) bool, err)``, a hit
+    where a pair is within ``margin`` (the kernel's stopping distance, ``prm[1]``: in a copy of the
+    published parameters, which are never written). A few rows go straight to :func:`rows_here`: the
+    Checker's ``collides`` on one row is this call, and each Python step it skips is a measurable share
+    of it (``python -m bench backends``)."""
     b = det._fresh()
+    prm = b.prm
+    if margin != prm[1]:
+        prm = prm.copy()
+        prm[1] = margin
     if Q.shape[0] <= MIN_ROWS_PER_THREAD or CPUS == 1:  # row_threads would say 1
-        _, status, err = rows_here(det, b, Q, kn.MODE_YESNO, b.prm)
+        _, status, err = rows_here(det, b, Q, kn.MODE_YESNO, prm)
     else:
-        _, status, err = rows(det, b, Q, kn.MODE_YESNO, b.prm)
+        _, status, err = rows(det, b, Q, kn.MODE_YESNO, prm)
     return status == kn.ST_COLLISION, err

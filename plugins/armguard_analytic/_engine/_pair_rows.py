@@ -18,6 +18,8 @@ import numpy as np
 
 from numba import njit
 
+from armguard.backends._interface import UNIT_CIRCLE  # compiled in as a constant (numba's cache keys on this file)
+
 # The segment numbers K come from ._layout and are compiled in as constants; numba's cache keys on
 # this file only, so a change of the segment tuples in ._layout must come with an edit here.
 from ._layout import EV_W, K, SUM_STATUS, seg1, seg2, view2
@@ -66,6 +68,8 @@ def pair_rows(fns, Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_
         for c in range(n_circ):
             k = gmap[o_circ + c]
             i = b + gmap[4 + k]
+            if abs(Q[i] * Q[i] + Q[i + 1] * Q[i + 1] - 1.0) > UNIT_CIRCLE:  # not a (cos, sin): check_q says so
+                return 1 + 4 * m
             q1[0, k] = math.atan2(Q[i + 1], Q[i])
         err = call_rows(fns[FN_ROWS], (q1, np.int64(0), np.int64(1), H, MF, MI, SF, SI, prm, iprm, sel, best, st,
                                        fns))

@@ -141,8 +141,37 @@ class NearestPair:
     index: int
 
 
+UNIT_CIRCLE = 1e-6
+"""A continuous joint's ``(cos, sin)`` in ``q`` is refused when ``|cos² + sin² − 1|`` exceeds this: off the
+unit circle Pinocchio's placement is not a rotation (coal then checks a scaled, sheared link; the
+analytic backend reads the angle, so the two gave different verdicts), and 1e-6 scales a link 1 m
+away by at most 0.5 µm, within the contact band."""
+
+
+def _check_unit_circle(model, Q2: np.ndarray, what: str) -> None:
+    cq = model.continuous_q
+    if not len(cq):
+        return
+    r = np.abs(Q2[:, cq] ** 2 + Q2[:, cq + 1] ** 2 - 1.0)
+    bad = np.argwhere(r > UNIT_CIRCLE)
+    if len(bad):
+        m, k = int(bad[0][0]), int(cq[bad[0][1]])
+        row = f" row {m}:" if what == "Q" else ""
+        name = model.joint_names[int(np.searchsorted(_joint_starts(model), k, side="right")) - 1]
+        raise BackendError(f"{what}:{row} continuous joint {name!r}: (cos, sin) = ({float(Q2[m, k]):.6g}, "
+                           f"{float(Q2[m, k + 1]):.6g}) is not on the unit circle (|cos² + sin² - 1| = "
+                           f"{float(r[bad[0][0], bad[0][1]]):.3g} > {UNIT_CIRCLE:g}): give (cos θ, sin θ)")
+
+
+def _joint_starts(model) -> np.ndarray:
+    m = model.pin_model
+    return np.array([m.joints[j].idx_q for j in range(1, m.njoints) if m.joints[j].nq > 0], dtype=np.int64)
+
+
 def check_q(model, q) -> np.ndarray:
-    """``q`` as a finite ``(nq,)`` float64 array in ``pin_model``'s order, else a BackendError."""
+    """``q`` as a finite ``(nq,)`` float64 array in ``pin_model``'s order (a continuous joint's ``(cos, sin)``
+    on the unit circle, :data:`UNIT_CIRCLE`), else a BackendError; a joint outside its limits is a
+    :class:`~armguard.JointLimitError` (``Model.check_pin_limits``), the rule of every backend."""
     try:
         q = np.asarray(q, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -151,11 +180,14 @@ def check_q(model, q) -> np.ndarray:
         raise BackendError(f"q: expected shape ({model.nq},) in pin_model's order {list(model.joint_names)}, got {q.shape}")
     if not np.all(np.isfinite(q)):
         raise BackendError(f"q: contains NaN or infinite values: {q.tolist()}")
+    _check_unit_circle(model, q[None], "q")
+    model.check_pin_limits(q, "q")
     return q
 
 
 def check_Q(model, Q) -> np.ndarray:
-    """``Q`` as a finite C-contiguous ``(M, nq)`` float64 array, else a BackendError."""
+    """``Q`` as a finite C-contiguous ``(M, nq)`` float64 array (continuous joints on the unit circle, as
+    :func:`check_q`), else a BackendError."""
     try:
         Q = np.ascontiguousarray(np.asarray(Q, dtype=np.float64))
     except (TypeError, ValueError) as exc:
@@ -165,6 +197,8 @@ def check_Q(model, Q) -> np.ndarray:
     if not np.all(np.isfinite(Q)):
         bad = np.argwhere(~np.isfinite(Q))[0]
         raise BackendError(f"Q contains NaN or infinite values (first at {tuple(int(x) for x in bad)})")
+    _check_unit_circle(model, Q, "Q")
+    model.check_pin_limits(Q, "Q")
     return Q
 
 

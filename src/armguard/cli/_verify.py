@@ -59,8 +59,11 @@ def _unique_names(items):
 def _checked_file(scene, path: Path, traj):
     """``traj`` (loaded from ``path``) after checking its robot and joints against ``scene``: a
     mismatch is an error naming the file, the key and its line."""
+    import numpy as np
+
     from .._errors import SceneFileError
     from .._lines import lines_for
+    from .._tolerance import DEFAULT_TOLERANCES
 
     with lines_for(path):
         if traj.robot_name not in scene.robots:
@@ -72,6 +75,15 @@ def _checked_file(scene, path: Path, traj):
         if bad:  # a subset of the joints is fine: the others are held at home (docs/trajectory-format.md)
             raise SceneFileError(str(path), "joint_names", f"{bad[0]!r} is not a joint of robot {traj.robot_name!r} or "
                                  f"is named twice; expected some of its joints {want}")
+        robot, slack = scene.robots[traj.robot_name], DEFAULT_TOLERANCES.joint_limit
+        for j, name in enumerate(names):  # a waypoint outside the limits: its place in the file
+            i = want.index(name)
+            lo, hi = float(robot.lower[i]), float(robot.upper[i])
+            out = np.flatnonzero((traj.waypoints[:, j] < lo - slack) | (traj.waypoints[:, j] > hi + slack))
+            if len(out):
+                k = int(out[0])
+                raise SceneFileError(str(path), f"waypoints[{k}][{j}]", f"joint {name!r} = {traj.waypoints[k, j]:.6g} "
+                                     f"is outside its limits [{lo:.6g}, {hi:.6g}]")
     return traj
 
 

@@ -434,11 +434,12 @@ class Robot:
         q = self.check_q(q)
         bad = (q < self._lower - tol.joint_limit) | (q > self._upper + tol.joint_limit)
         if np.any(bad):
-            idx = tuple(np.argwhere(bad)[0])
+            idx = tuple(int(i) for i in np.argwhere(bad)[0])
             k = idx[-1]
+            at = "" if len(idx) == 1 else f" (row {idx[0]})" if len(idx) == 2 else f" (at index {idx[:-1]})"
             raise KinematicsError(
                 f"robot {self._name!r}: joint {self._joint_names[k]!r} = {q[idx]:.6g} is outside its limits "
-                f"[{self._lower[k]:.6g}, {self._upper[k]:.6g}] (at index {idx})"
+                f"[{self._lower[k]:.6g}, {self._upper[k]:.6g}]{at}"
             )
         return q
 

@@ -60,9 +60,12 @@ class GeometryPairs:
 
     @property
     def names(self) -> np.ndarray:
-        """``(n, 2)`` object array of GeometryObject names."""
+        """``(n, 2)`` object array of GeometryObject names, read-only: the checkers hand this array to
+        every result they return (``PairDistances.pairs``), so a write into one result's names would
+        rename the pair in every later result."""
         out = np.empty((len(self.a), 2), dtype=object)
         out[:, 0], out[:, 1] = self.a, self.b
+        out.flags.writeable = False
         return out
 
 
@@ -234,6 +237,30 @@ class Model:
                 and all(a == n and b is o for (a, b), (n, o) in zip(scene.bodies.items(), bodies))
                 and all(a == n and b is o for (a, b), (n, o) in zip(scene.payloads.items(), payloads)))
 
+    def check_pin_limits(self, Q, where: str = "q") -> None:
+        """Raise :class:`~armguard.JointLimitError` when Pinocchio-ordered ``Q`` ``(nq,)`` or ``(M, nq)`` leaves
+        a joint's limits (continuous joints have none): the rule of :mod:`armguard.kinematics._limits`,
+        for every backend's ``check_q`` / ``check_Q``."""
+        lim = self.__dict__.get("_pin_limits")
+        if lim is None or lim[0] is not self.pin_model:  # once per pin_model (an edit may append an arm)
+            lo = np.array(self.pin_model.lowerPositionLimit, dtype=np.float64)
+            hi = np.array(self.pin_model.upperPositionLimit, dtype=np.float64)
+            cq = self.continuous_q
+            lo[cq], lo[cq + 1], hi[cq], hi[cq + 1] = -np.inf, -np.inf, np.inf, np.inf
+            allowance = self.tol.joint_limit
+            lim = self._pin_limits = (self.pin_model, list(zip((lo - allowance).tolist(), (hi + allowance).tolist())), lo, hi)
+        _, bounds, lo, hi = lim
+        Q = np.asarray(Q, dtype=np.float64)
+        if Q.ndim == 1:  # one configuration: a plain loop (0.5 µs on 6 joints; numpy's compares took 5)
+            if all(a <= x <= b for (a, b), x in zip(bounds, Q.tolist())):
+                return
+        elif np.all(Q >= [a for a, _ in bounds]) and np.all(Q <= [b for _, b in bounds]):
+            return
+        from ..kinematics._limits import limit_error
+
+        names = [self.pin_model.names[j] for j in range(1, self.pin_model.njoints) for _ in range(self.pin_model.joints[j].nq)]
+        raise limit_error(where, Q, names, lo, hi, self.tol.joint_limit)
+
     def check_limits(self, q_scene, where: str = "q") -> None:
         """Raise :class:`~armguard.JointLimitError` when the flat scene ``q`` ``(n,)`` leaves a joint's limits."""
         from ..kinematics._limits import limit_error
@@ -325,6 +352,11 @@ class Model:
     def has_continuous_joints(self) -> bool:
         """Whether a joint is continuous (Pinocchio's ``q`` holds its ``(cos, sin)``, the scene's ``q`` its angle)."""
         return len(self._circular) > 0
+
+    @property
+    def continuous_q(self) -> np.ndarray:
+        """Positions in Pinocchio's ``q`` of each continuous joint's ``cos`` (its ``sin`` follows), ``(k,)`` int64."""
+        return self._q_index[self._circular]
 
     @property
     def q_in_scene_order(self) -> bool:

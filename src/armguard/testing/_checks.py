@@ -202,7 +202,8 @@ def check_sign_convention(ctx, model):
 
 def check_bad_q_refused(ctx, model):
     """NaN, infinite, wrongly shaped and non-numeric ``q`` / ``Q`` raise BackendError from
-    ``pair_distances`` and ``collides`` (and the optional batch paths): never a verdict."""
+    ``pair_distances`` and ``collides`` (and the optional batch paths), a joint outside its limits
+    JointLimitError: never a verdict."""
     c = ctx.checker(model)
     m = ctx.model(model)
     q = ctx.configs(model)[0]
@@ -225,6 +226,36 @@ def check_bad_q_refused(ctx, model):
             _raises_backend_error(lambda: c.pair_distances_many(bQ), f"pair_distances_many(Q with {what})")
     for margin in (math.nan, -0.01, math.inf):
         _raises_backend_error(lambda: c.collides(Q, margin=margin), f"collides(Q, margin={margin})")
+    _out_of_limits_refused(c, m, q, Q)
+
+
+def _out_of_limits_refused(c, m, q, Q) -> None:
+    """A joint 0.1 beyond its upper limit (the first joint with finite limits): JointLimitError from every
+    entry point, as every backend's ``check_q`` / ``check_Q`` (``Model.check_pin_limits``) raise it."""
+    from .._errors import JointLimitError
+
+    hi = np.asarray(m.pin_model.upperPositionLimit, dtype=np.float64)
+    free = set(m.continuous_q.tolist()) | set((m.continuous_q + 1).tolist())
+    j = next((k for k in range(m.nq) if k not in free and np.isfinite(hi[k]) and abs(hi[k]) < 1e6), None)
+    if j is None:
+        return
+    out = q.copy()
+    out[j] = hi[j] + 0.1
+    Qo = Q.copy()
+    Qo[-1, j] = hi[j] + 0.1
+    calls = {"collides(Q with a row out of limits)": lambda: c.collides(Qo)}
+    if _distances(c):
+        calls["pair_distances(q out of limits)"] = lambda: c.pair_distances(out)
+        if hasattr(c, "pair_distances_many"):
+            calls["pair_distances_many(Q with a row out of limits)"] = lambda: c.pair_distances_many(Qo)
+    for what, call in calls.items():
+        try:
+            got = call()
+        except JointLimitError:
+            continue
+        except Exception as exc:  # noqa: BLE001 - the wrong kind of refusal
+            fail(f"{what}: raised {type(exc).__name__}: {exc} (expected armguard.JointLimitError)")
+        fail(f"{what}: answered {type(got).__name__} instead of raising armguard.JointLimitError")
 
 
 def check_capabilities_honoured(ctx, model):

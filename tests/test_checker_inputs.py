@@ -1,0 +1,81 @@
+"""Inputs a Checker must refuse or protect, on a public robot with continuous joints (kinova).
+
+* A continuous joint's ``(cos, sin)`` off the unit circle: coal checked a scaled, sheared link and
+  the analytic backend read the angle, so the two gave different verdicts (``(0, 0)``: analytic
+  clear by 29 mm, coal in contact by 16 mm); now every entry point of both refuses it.
+* The names in ``PairDistances.pairs`` are one array shared by every result: a write into one
+  result's names renamed the pair in later results (and in ``nearest``); now read-only.
+* coal's options: ``threads="x"`` was an internal ValueError, ``gjk_tolerance=1.0`` accepted.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import armguard
+from armguard._errors import BackendError
+
+from armguard.backends._interface import UNIT_CIRCLE
+
+
+@pytest.fixture(scope="module")
+def kinova():
+    return armguard.load_model("kinova")
+
+
+@pytest.mark.parametrize("backend", ["analytic", "coal"])
+def test_a_cos_sin_off_the_unit_circle_is_refused(kinova, backend):
+    c = armguard.checker(kinova, backend)
+    q = kinova.random_q(1, 7)[0]
+    k = int(kinova.continuous_q[1])
+    good = c.pair_distances(q).distance
+    near = q.copy()
+    near[k:k + 2] *= 1.0 + 0.25 * UNIT_CIRCLE  # rounding of a stored (cos, sin): accepted
+    assert np.allclose(c.pair_distances(near).distance, good, atol=1e-6)
+    for bad_pair in ((0.0, 0.0), (3 * q[k], 3 * q[k + 1]), (q[k] * (1 + 4 * UNIT_CIRCLE), q[k + 1] * (1 + 4 * UNIT_CIRCLE))):
+        bad = q.copy()
+        bad[k:k + 2] = bad_pair
+        for call in (lambda: c.pair_distances(bad), lambda: c.pair_distances(bad, pairs=np.arange(3)),
+                     lambda: c.collides(bad[None]), lambda: c.pair_distances_many(np.stack([q, bad]))):
+            with pytest.raises(BackendError, match="not on the unit circle") as e:
+                call()
+            assert "continuous joint" in str(e.value)
+    with pytest.raises(BackendError, match="row 1"):
+        c.collides(np.stack([q, np.where(np.arange(len(q)) == k, 0.0, q)]))
+
+
+@pytest.mark.parametrize("backend", ["analytic", "coal"])
+def test_result_names_cannot_rename_a_pair(kinova, backend):
+    c = armguard.checker(kinova, backend)
+    q = kinova.random_q(1, 3)[0]
+    for r in (c.pair_distances(q), c.pair_distances(q, pairs=np.array([2, 0])), c.pair_distances_many(q[None]),
+              c.pair_distances_many(q[None], pairs=np.array([2, 0]))):
+        try:
+            r.pairs[0] = ["X", "Y"]  # read-only where shared; a fresh array of its own otherwise
+        except ValueError:
+            pass
+    assert tuple(c.pair_distances(q).pairs[0]) == (kinova.pairs.a[0], kinova.pairs.b[0])
+    assert tuple(c.pair_distances(q, pairs=np.array([2, 0])).pairs[0]) == (kinova.pairs.a[2], kinova.pairs.b[2])
+    assert tuple(c.pair_distances_many(q[None]).pairs[0]) == (kinova.pairs.a[0], kinova.pairs.b[0])
+    assert all(n.a != "X" for n in c.nearest(q).values())
+    with pytest.raises(ValueError):
+        c.pair_distances(q).pairs[0] = ["X", "Y"]
+    assert not kinova.pairs.names.flags.writeable
+
+
+@pytest.mark.parametrize("options,said", [({"threads": "x"}, "threads = 'x'"), ({"threads": 0}, "threads = 0"),
+                                          ({"threads": 1.5}, "threads = 1.5"), ({"gjk_tolerance": float("nan")}, "gjk_tolerance"),
+                                          ({"gjk_tolerance": 0.0}, "gjk_tolerance"), ({"gjk_tolerance": "a"}, "gjk_tolerance")])
+def test_coal_options_are_checked(options, said):
+    with pytest.raises(BackendError, match="expected") as e:
+        armguard.checker("puma560", "coal", options)
+    assert said in str(e.value)
+
+
+def test_coal_option_from_a_config_file_names_the_file(tmp_path, monkeypatch):
+    cfg = tmp_path / "armguard.toml"
+    cfg.write_text('[backend]\nname = "coal"\nthreads = "x"\n')
+    with pytest.raises(BackendError) as e:
+        armguard.checker("puma560", config=cfg)
+    assert str(cfg) in str(e.value) and "threads = 'x'" in str(e.value)
