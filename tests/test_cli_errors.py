@@ -224,3 +224,21 @@ def test_verify_all_on_a_model_without_canned_trajectories_says_what_to_give():
     res = CliRunner().invoke(main, ["verify", str(repo_root() / "urdf" / "puma560" / "puma560.urdf"), "all"])
     assert res.exit_code == int(ExitCode.INPUT), res.output
     assert "has no canned trajectory: give trajectory files (.yaml, docs/trajectory-format.md" in res.output
+
+
+def test_located_messages_say_the_place_once(tmp_path):
+    """"line 12 (line 12): not well-formed XML: no element found: line 12, column 0" and "blend_times[0] = 1.5
+    must lie in [...] (line 9): " (the place run into the message): each place said once, then what is wrong."""
+    urdf = tmp_path / "u.urdf"
+    urdf.write_text("<robot name='x'>\n  <link name='a'>\n")
+    res = _run("info", urdf)
+    assert res.exit_code == ExitCode.INPUT, res.output
+    assert f"{urdf}: line 3, column 1: not well-formed XML: no element found" in res.output, res.output
+    assert res.output.count("line 3") == 1
+    traj = tmp_path / "t.yaml"
+    traj.write_text("format: armguard.trajectory\nversion: 1\nrobot: puma560\njoint_names: [j1, j2, j3]\n"
+                    "times: [0.0, 1.0, 2.0]\nwaypoints:\n  - [0.0, 0.5, -1.0]\n  - [0.1, 0.6, -1.0]\n  - [0.2, 0.5, -1.0]\n"
+                    "blend_times: [1.5, 0.5]\n")
+    res = _run("verify", "puma560", traj)
+    assert res.exit_code == ExitCode.INPUT, res.output
+    assert f"{traj}: blend_times[0] (line 10): 1.5 s must lie in [0, half the segment duration 0.5 s]" in res.output, res.output

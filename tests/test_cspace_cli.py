@@ -86,3 +86,13 @@ def test_plot_refuses_what_it_cannot_mark_and_writes_the_format_asked(tmp_path):
     r = runner.invoke(main, ["cspace", "plot", str(out), "--q2", "30", "--out", str(tmp_path / "s.xyz")])
     assert r.exit_code == 3 and "matplotlib writes no .xyz plots" in r.output, r.output
     assert not (tmp_path / "s.xyz").exists()
+
+
+def test_build_on_a_robot_without_bodies_says_what_the_map_lacks(tmp_path):
+    """ur5 has 17 checked pairs but no static body: the map has nothing to map, and says so (it said
+    "model 'ur5' has no pair to check ... enable a pair", which ur5 has)."""
+    r = CliRunner().invoke(main, ["cspace", "build", "ur5", "--resolution", "10deg", "--cell", "40deg",
+                                  "--out", str(tmp_path / "x.agmap")])
+    assert r.exit_code == 3, r.output
+    assert "no pair of a mapped link (links 1-3) against a static body" in r.output and "enable a pair" not in r.output
+    assert not (tmp_path / "x.agmap").exists()

@@ -382,3 +382,13 @@ def test_info_says_which_srdf_was_used(tmp_path):
     found.unlink()
     out = CliRunner().invoke(main, ["info", str(urdf)])
     assert out.exit_code == 0 and "SRDF: none found" in out.output, out.output
+
+
+def test_info_on_public_robots_says_how_their_srdf_came():
+    """ur5's SRDF comes from armguard's table of public robots, not from the user ("given (srdf=)" was
+    printed); a public robot without one says so (ur3 printed no SRDF line at all)."""
+    out = CliRunner().invoke(main, ["info", "ur5"])
+    assert out.exit_code == 0 and "(the SRDF of public robot 'ur5' (docs/models.md))" in out.output, out.output
+    assert "given (srdf=)" not in out.output
+    out = CliRunner().invoke(main, ["info", "ur3"])
+    assert out.exit_code == 0 and "SRDF: none found" in out.output, out.output

@@ -42,3 +42,18 @@ def test_cli_srdf_a_directory_is_refused_in_one_line(tmp_path):
     assert res.exit_code == ExitCode.INPUT, res.output
     assert "Traceback" not in res.output and "IsADirectoryError" not in res.output
     assert str(scene) in res.output and "robots[0].srdf" in res.output and "is a directory" in res.output
+
+
+def test_a_urdf_given_as_the_srdf_is_refused():
+    """A URDF given where the SRDF goes read as an SRDF that disables nothing (``check-srdf ur5 ur5.urdf``
+    linted it, exit 0): its top-level ``<link>`` says what it is."""
+    from click.testing import CliRunner
+
+    from armguard.cli import main
+
+    urdf = repo_root() / "urdf" / "hermes" / "hermes.urdf"
+    with pytest.raises(SceneFileError, match="this is a URDF, not an SRDF") as e:
+        armguard.load_model(str(urdf), srdf=urdf)
+    assert e.value.file == str(urdf) and "link[0]" in str(e.value)
+    r = CliRunner().invoke(main, ["check-srdf", "hermes", str(urdf)])
+    assert r.exit_code == 3 and "this is a URDF, not an SRDF" in r.output, r.output

@@ -78,7 +78,15 @@ CASES = {
     "zero-mesh-scale": (_urdf('<mesh filename="cube.stl" scale="0.1 0 0.1"/>'), "link[l1].collision[0]",
                         "<mesh scale='0.1 0 0.1'>: a zero scale"),
     "malformed-number": (_urdf('<box size="0.1 0.1 abc"/>'), "link[l1].collision[0]", "size='0.1 0.1 abc': expected 3 numbers"),
+    # urdfdom and Pinocchio named neither element nor line for these three
+    "negative-velocity": (_urdf(joint=_joint(limit='<limit lower="-1" upper="1" velocity="-1" effort="1"/>')),
+                          "joint[j1].limit", "velocity='-1': must be >= 0"),
+    "two-root-links": (_urdf(more='<link name="l2"/>'), "link[l2]", "2 root links ('base', 'l2'): no joint joins link 'l2'"),
+    "child-of-two-joints": (_urdf(more='<link name="l2"/>' + JOINT1.replace('name="j1"', 'name="j2"').replace(
+                                '<parent link="base"/>', '<parent link="l2"/>')),
+                            "joint[j2].child", "link='l1' is already the child of joint 'j1' (line 4): a URDF is a tree"),
 }
+_LINE_5 = ("duplicate-link", "duplicate-joint", "mimic-missing-joint", "two-root-links", "child-of-two-joints")
 
 
 @pytest.mark.parametrize("case", list(CASES))
@@ -90,7 +98,7 @@ def test_a_refused_urdf_names_the_element_and_attribute(tmp_path, case):
     err = _refused(tmp_path, text)
     assert err.where == where, err
     assert what in err.message, err
-    line = 5 if case in ("duplicate-link", "duplicate-joint", "mimic-missing-joint") else 3 if where.startswith("link[l1]") else 4
+    line = 5 if case in _LINE_5 else 3 if where.startswith("link[l1]") else 4
     assert err.line == line, err  # the line of the element named
 
 

@@ -76,7 +76,7 @@ class SceneFileError(SceneError):
         self.where = where
         self.message = message
         self.line = line  # 1-based line of ``where`` in the file, when known
-        at = f" (line {line})" if line is not None else ""
+        at = f" (line {line})" if line is not None and not where.startswith(f"line {line}") else ""
         loc = f"{self.file}: {where}{at}" if where else self.file
         super().__init__(f"{loc}: {message}")
 

@@ -62,7 +62,7 @@ def _print_srdf(con, scene, given: str) -> None:
         con.print(f"SRDF: {model.srdf.file} ({model.srdf.found})", markup=False, highlight=False, soft_wrap=True)
         for w in model.srdf.warnings:
             con.print(f"  warning: {w}", markup=False, highlight=False, soft_wrap=True)
-    elif given.lower().endswith(".urdf"):
+    elif given.lower().endswith(".urdf") or any(str(f).endswith(".urdf") for f in getattr(model, "files", ())):
         con.print("SRDF: none found (looked beside the URDF, in ../srdf/ and under the robot's name; "
                   "every pair but adjacent links is checked)", markup=False, highlight=False, soft_wrap=True)
     hc = getattr(model, "hull_cache", None)

@@ -210,9 +210,18 @@ def sub_model(model, scene):
 def checker_over(model, scene, backend, options=None, *, need_distances: bool = False):
     """``armguard.checker`` of ``backend`` over :func:`sub_model` ``(model, scene)``; with ``need_distances``,
     a backend that answers verdicts only is refused (:class:`ForbiddenMapError`)."""
+    from .._errors import DetectionError
     from ..backends import Capability, checker
 
-    chk = checker(sub_model(model, scene), backend, options)
+    sub = sub_model(model, scene)
+    if len(sub.pairs) == 0:  # the map's own pairs (links 1-3 vs the static bodies), not the model's
+        raise ForbiddenMapError(f"model {model.name!r} has no pair of a mapped link (links 1-3) against a static body: "
+                                "a forbidden-values map has nothing to map (its pairs are links 1-3 vs the bodies; "
+                                "add a body to the scene)")
+    try:
+        chk = checker(sub, backend, options)
+    except DetectionError as exc:
+        raise ForbiddenMapError(f"the map's pairs (links 1-3 vs the static bodies): {exc}") from None
     if need_distances and Capability.DISTANCES not in chk.capabilities:
         raise ForbiddenMapError(f"backend {chk.name!r} answers verdicts only; a map's clearances need signed distances "
                                 "(use analytic, coal or another backend that answers distances)")

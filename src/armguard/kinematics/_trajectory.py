@@ -92,7 +92,7 @@ class Trajectory:
         bad = (tb < 0.0) | (tb > 0.5 * dt * (1.0 + _TIME_SLACK))
         if np.any(bad):
             k = int(np.argmax(bad))
-            raise TrajectoryError(f"blend_times[{k}] = {tb[k]} must lie in [0, half the segment duration {0.5 * dt[k]}]")
+            raise TrajectoryError(f"blend_times[{k}]: {tb[k]:g} s must lie in [0, half the segment duration {0.5 * dt[k]:g} s]")
         tb = np.minimum(tb, 0.5 * dt)
         tb.flags.writeable = False
         self._times, self._waypoints, self._blend = t, w, tb

@@ -74,7 +74,10 @@ def _model_by_name(name: str, *, srdf=None, package_dirs=()) -> Model:
         return model_from_yaml(path, srdf=srdf)
     if public_robot(name) is not None:
         urdf, known_srdf = public_robot_files(name)
-        return model_from_urdf(urdf, srdf=srdf if srdf is not None else known_srdf, package_dirs=package_dirs)
+        if srdf is None and known_srdf is not None:  # the package's own SRDF, as armguard's table names it
+            return model_from_urdf(urdf, srdf=known_srdf, package_dirs=package_dirs,
+                                   srdf_found=f"the SRDF of public robot {name!r} (docs/models.md)")
+        return model_from_urdf(urdf, srdf=srdf, package_dirs=package_dirs)
     if name in _BUILTINS:
         raise SceneError(f"built-in model {name!r} is missing: no {name}/{name}.yaml in {models_dir()}")
     raise SceneError(f"unknown model {name!r}; known models are {_known_names_text()} "
@@ -121,13 +124,13 @@ def _urdf_robot_name(urdf: Path) -> str | None:
     return None
 
 
-def _srdf_for(urdf: Path, srdf):
-    """The SRDF of ``urdf``: ``srdf`` when given (it wins), else the first of :func:`srdf_candidates`
-    that exists; None when there is none (or ``srdf`` is False)."""
+def _srdf_for(urdf: Path, srdf, found: str = "given (srdf=)"):
+    """The SRDF of ``urdf``: ``srdf`` when given (it wins; ``found`` says how it came), else the first of
+    :func:`srdf_candidates` that exists; None when there is none (or ``srdf`` is False)."""
     if srdf is False:
         return None
     if srdf is not None:
-        return read_srdf(srdf, found="given (srdf=)")
+        return read_srdf(srdf, found=found)
     for path, how, partial in srdf_candidates(urdf):
         if path.is_file():
             return read_srdf(path.resolve(), found=how, partial=partial)
@@ -216,12 +219,12 @@ def _circular(parts) -> np.ndarray:
     return np.asarray(out, dtype=np.int64)
 
 
-def model_from_urdf(path, *, srdf=None, package_dirs=()) -> Model:
-    """A Model of one URDF file (and its SRDF)."""
+def model_from_urdf(path, *, srdf=None, package_dirs=(), srdf_found: str = "given (srdf=)") -> Model:
+    """A Model of one URDF file (and its SRDF; ``srdf_found``: how a given ``srdf`` came, for ``Srdf.found``)."""
     path = Path(path).resolve()
     if not path.is_file():
         raise SceneFileError(str(path), "", "URDF file not found")
-    srdf_obj = _srdf_for(path, srdf)
+    srdf_obj = _srdf_for(path, srdf, srdf_found)
     scene, pin_model, geom, parts = _build(path, srdf_obj, package_dirs, {})
     files = [path, *parts_files(parts, srdf_obj)]
     return Model(scene.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), hull_cache=parts.hull_cache,

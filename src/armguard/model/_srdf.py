@@ -143,6 +143,11 @@ def read_srdf(path, *, found: str = "given", partial: bool = False) -> Srdf:
         raise SceneFileError(f, f"line {exc.position[0]}", f"not well-formed XML: {exc}") from None
     if root.tag != "robot":
         raise SceneFileError(f, root.tag, "expected a <robot> root element (an SRDF file)")
+    urdf = [t for t in ("link", "joint", "transmission", "gazebo") if root.find(t) is not None]
+    if urdf:  # a URDF given as the SRDF: it would read as an SRDF that disables nothing
+        raise SceneFileError(f, f"{urdf[0]}[0]", f"a URDF element <{urdf[0]}> at the top level: this is a URDF, not an "
+                             "SRDF (an SRDF holds group, group_state, end_effector, virtual_joint, passive_joint, "
+                             "disable_collisions)")
     out = Srdf(f, found=found, partial=partial)
     groups: dict[str, SrdfGroup] = {}
     for k, g in enumerate(root.findall("group")):  # top level: nested <group name/> are references

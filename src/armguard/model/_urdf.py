@@ -77,7 +77,8 @@ def _read_xml(path: Path, package_dirs) -> UrdfInfo:
     except FileNotFoundError:
         raise SceneFileError(f, "", "URDF file not found") from None
     except expat.ExpatError as exc:
-        raise SceneFileError(f, f"line {exc.lineno}", f"not well-formed XML: {exc}", line=exc.lineno) from None
+        raise SceneFileError(f, f"line {exc.lineno}, column {exc.offset + 1}",
+                             f"not well-formed XML: {expat.ErrorString(exc.code)}", line=exc.lineno) from None
     if root.tag != "robot":
         raise SceneFileError(f, root.tag, "expected a <robot> root element (a URDF file)")
     links = root.findall("link")

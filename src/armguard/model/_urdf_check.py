@@ -167,6 +167,9 @@ def urdf_problems(root: ET.Element, lines: dict) -> list[tuple[str, str, int | N
             lo, hi = got["lower"], got["upper"]
             if jt in ("revolute", "prismatic") and lo is not None and hi is not None and lo[0] > hi[0]:
                 add(f"{w}.limit", f"lower={lim.get('lower')!r} > upper={lim.get('upper')!r}", lim)
+            for a in ("velocity", "effort"):  # Pinocchio: "min_velocity greater than max_velocity", no joint named
+                if got[a] is not None and got[a][0] < 0.0:
+                    add(f"{w}.limit", f"{a}={lim.get(a)!r}: must be >= 0 (a bound on its magnitude)", lim)
         for tag, attrs in (("dynamics", ("damping", "friction")), ("calibration", ("rising", "falling")),
                            ("safety_controller", ("soft_lower_limit", "soft_upper_limit", "k_position", "k_velocity"))):
             el = j.find(tag)
@@ -174,6 +177,7 @@ def urdf_problems(root: ET.Element, lines: dict) -> list[tuple[str, str, int | N
                 for a in attrs:
                     if el.get(a) is not None:
                         check(f"{w}.{tag}", el, a, 1)
+    _tree_problems(links, joints, add, lines)
     for jn, j in joints.items():
         m = j.find("mimic")
         if m is None:
@@ -186,3 +190,35 @@ def urdf_problems(root: ET.Element, lines: dict) -> list[tuple[str, str, int | N
         for a, d in (("multiplier", "1"), ("offset", "0")):
             check(f"joint[{jn}].mimic", m, a, 1, d)
     return out
+
+
+def _tree_problems(links: dict, joints: dict, add, lines: dict) -> None:
+    """The links and joints must form one tree (urdfdom said only "Failed to find root link: Two root links
+    found" or "Failed to build tree", and Pinocchio "does not contain a valid URDF model", naming nothing):
+    a link that is the child of two joints, a loop of joints, or more than one root link."""
+    parent_of: dict = {}  # child link -> (joint name, joint element)
+    for jn, j in joints.items():
+        p, c = j.find("parent"), j.find("child")
+        if p is None or c is None or p.get("link") not in links or c.get("link") not in links:
+            continue  # named above
+        child = c.get("link")
+        if child in parent_of:
+            first = parent_of[child][1]
+            add(f"joint[{jn}].child", f"link={child!r} is already the child of joint {parent_of[child][0]!r} (line "
+                f"{lines.get(id(first), '?')}): a URDF is a tree, each link the child of one joint at most", c)
+            continue
+        parent_of[child] = (jn, j, p.get("link"))
+    for child, (jn, j, _) in parent_of.items():  # a loop: walking up from a child comes back to it
+        seen, up = {child}, parent_of[child][2]
+        while up in parent_of and up not in seen:
+            seen.add(up)
+            up = parent_of[up][2]
+        if up == child:
+            add(f"joint[{jn}]", f"the joints make a loop through link {child!r} ({' -> '.join(sorted(seen))}): a URDF "
+                "is a tree", j)
+            return
+    roots = [ln for ln in links if ln not in parent_of]
+    if len(roots) > 1:
+        add(f"link[{roots[1]}]", f"{len(roots)} root links ({', '.join(map(repr, roots[:6]))}"
+            f"{' ...' if len(roots) > 6 else ''}): no joint joins link {roots[1]!r} to the tree of {roots[0]!r} "
+            "(a URDF has one root link)", links[roots[1]])

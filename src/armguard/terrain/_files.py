@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ..model import scene_of
-from .._errors import TerrainError, TerrainFileError
+from .._errors import ArmguardWarning, TerrainError, TerrainFileError
 from ._io import read_points
 from ._map import ElevationMap
 
@@ -33,8 +33,9 @@ MAX_CELLS = 1 << 24
 point kilometres away would otherwise ask for gigabytes."""
 
 
-class TerrainPointsDropped(UserWarning):
-    """A terrain file's point rows holding a NaN or inf were dropped (the message says how many)."""
+class TerrainPointsDropped(ArmguardWarning):
+    """A terrain file's point rows holding a NaN or inf were dropped (the message names the file and says how
+    many): a lenient reading, so the command line shows it as one ``warning:`` line."""
 
 
 def _base_xy(scene, robot: str | None) -> np.ndarray:
