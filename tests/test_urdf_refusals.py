@@ -81,6 +81,8 @@ CASES = {
     # urdfdom and Pinocchio named neither element nor line for these three
     "negative-velocity": (_urdf(joint=_joint(limit='<limit lower="-1" upper="1" velocity="-1" effort="1"/>')),
                           "joint[j1].limit", "velocity='-1': must be >= 0"),
+    "huge-limit": (_urdf(joint=_joint(limit='<limit lower="-1e308" upper="1" velocity="1" effort="1"/>')),
+                   "joint[j1].limit", "lower='-1e308': beyond 1e+09"),
     "two-root-links": (_urdf(more='<link name="l2"/>'), "link[l2]", "2 root links ('base', 'l2'): no joint joins link 'l2'"),
     "child-of-two-joints": (_urdf(more='<link name="l2"/>' + JOINT1.replace('name="j1"', 'name="j2"').replace(
                                 '<parent link="base"/>', '<parent link="l2"/>')),
@@ -158,3 +160,13 @@ def test_a_mirrored_mesh_is_the_mirrored_hull(tmp_path):
     want = np.array(_TET) * [-2, 1, 1] + [0, 0, 0.2]
     got = poly.vertices[np.lexsort(poly.vertices.T)]
     assert np.allclose(got, want[np.lexsort(want.T)], rtol=0, atol=1e-7)  # STL keeps single precision
+
+
+@pytest.mark.parametrize("name,content,said", [("m.obj", b"", "the file is empty (0 bytes)"),
+                                               ("m.stl", b"garbage!", "Failed to determine STL storage representation")])
+def test_an_unreadable_mesh_file_says_why_without_a_folder_hint(tmp_path, name, content, said):
+    """A mesh file that exists but holds no mesh: the loaders' reason, not coal's "Hint: the mesh directory
+    may be wrong" (the file was found)."""
+    (tmp_path / name).write_bytes(content)
+    err = _refused(tmp_path, _urdf(f'<mesh filename="{name}"/>'))
+    assert err.where == "link[l1].collision[0]" and said in err.message and "Hint" not in err.message, err

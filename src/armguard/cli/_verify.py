@@ -99,7 +99,9 @@ def _checked_file(scene, path: Path, traj):
 @click.option("--stopping-distance", type=LENGTH, default=0.0, show_default=True, help="Obstacles grow by this (m).")
 @click.option("--speed-dependent", is_flag=True,
               help="Hermes's stepwise stopping distance instead of a constant one: 10 speed ranges reaching "
-                   "--stopping-distance at the trajectory's top speed, 0 at rest (each segment split in 8).")
+                   "--stopping-distance at the trajectory's top speed, 0 at rest; each segment is split in 8 and "
+                   "each eighth holds the distance of its own top speed (so a move from rest has its first "
+                   "eighth's distance from t = 0).")
 @click.option("--threshold", type=LENGTH, default=None, help="Warning threshold drawn on the plot (m; default 0.05).")
 @click.option("--robot", default=None, help="The moving robot (default: the trajectory's).")
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="Write the JSON report here.")

@@ -19,9 +19,12 @@ Checks (each a :class:`Check`), on the files as written, then on the loaded mode
   again (:func:`armguard.srdfgen.check_srdf`): an error with the configuration where it now
   collides, else a warning (still proven: refresh the SRDF with ``armguard srdf --update``; or
   undecided);
-* ``permanent-collision``: an active pair in collision (coal, ``d <= 0``) at the home pose, and
-  whether it is in collision at more than ``permanent_fraction`` of ``n_configs`` seeded random
-  configurations (then a ``<disable_collisions>`` line is suggested).
+* ``permanent-collision``: an active pair in collision (coal, ``d <= 0``) at more than
+  ``permanent_fraction`` of ``n_configs`` seeded random configurations (an error; a
+  ``<disable_collisions reason="Always">`` line is suggested, MoveIt's name for a pair its Setup
+  Assistant finds in collision in at least 95 % of its samples);
+* ``home-collision``: an active pair in collision at the home pose but not permanently (a warning,
+  with its share of the random configurations: the home pose or the shapes may be wrong).
 """
 
 from __future__ import annotations
@@ -45,6 +48,7 @@ class Check(str, enum.Enum):
     ZERO_LENGTH_CAPSULE = "zero-length-capsule"
     SRDF_NAME = "srdf-name"
     PERMANENT_COLLISION = "permanent-collision"
+    HOME_COLLISION = "home-collision"
     SRDF_CERTIFICATE = "srdf-certificate"
 
 
@@ -317,9 +321,9 @@ def _collision_checks(model, report: LintReport, n_configs: int, seed: int, frac
                f"pose (d = {home[k]:.4g} m), in collision at {share[k]:.0%} of {len(Q)} random configurations")
         sug = None
         if perm and "workspace" not in (la, lb):
-            sug = f'<disable_collisions link1="{la}" link2="{lb}" reason="Never"/>'
-        report.findings.append(Finding(Check.PERMANENT_COLLISION, Severity.ERROR if perm else Severity.WARNING,
-                                       f"pair[{a}, {b}]", msg, sug))
+            sug = f'<disable_collisions link1="{la}" link2="{lb}" reason="Always"/>'
+        report.findings.append(Finding(Check.PERMANENT_COLLISION if perm else Check.HOME_COLLISION,
+                                       Severity.ERROR if perm else Severity.WARNING, f"pair[{a}, {b}]", msg, sug))
 
 
 def check_model_files(target, *, n_configs: int = 200, seed: int = 0, permanent_fraction: float = 0.95,

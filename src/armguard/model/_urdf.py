@@ -204,6 +204,14 @@ def _mesh_vertices(mesh_path, scale) -> np.ndarray:
     try:
         bvh = coal.MeshLoader().load(str(mesh_path), scale)
     except (RuntimeError, ValueError) as exc:
-        first = str(exc).strip().splitlines()
-        raise GeometryError(f"neither trimesh nor coal's loader could read it ({first[-1] if first else exc})") from None
+        # coal's message: its C++ source place, then assimp's reason, then a hint about mesh folders that
+        # does not apply to a file found and opened: the reason is kept
+        said = [ln.strip() for ln in str(exc).splitlines() if ln.strip() and not ln.strip().startswith(
+            ("From file:", "in function:", "at line:", "message:", "Hint:"))]
+        try:
+            empty = Path(mesh_path).stat().st_size == 0
+        except OSError:
+            empty = False
+        reason = "the file is empty (0 bytes)" if empty else said[-1] if said else str(exc).strip()
+        raise GeometryError(f"neither trimesh nor coal's loader could read it: {reason}") from None
     return np.asarray(bvh.vertices(), dtype=np.float64)

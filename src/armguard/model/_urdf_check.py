@@ -27,6 +27,8 @@ import math
 import xml.etree.ElementTree as ET
 from xml.parsers import expat
 
+from .._tolerance import DEFAULT_TOLERANCES
+
 __all__ = ["parse_with_lines", "urdf_problems"]
 
 _JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
@@ -165,6 +167,10 @@ def urdf_problems(root: ET.Element, lines: dict) -> list[tuple[str, str, int | N
             got = {a: check(f"{w}.limit", lim, a, 1, None if a in ("velocity", "effort") else "0")
                    for a in ("lower", "upper", "velocity", "effort")}
             lo, hi = got["lower"], got["upper"]
+            for a, v in (("lower", lo), ("upper", hi)):  # 1e308: upper - lower overflows, every sample NaN
+                if jt in ("revolute", "prismatic") and v is not None and abs(v[0]) > DEFAULT_TOLERANCES.max_magnitude:
+                    add(f"{w}.limit", f"{a}={lim.get(a)!r}: beyond {DEFAULT_TOLERANCES.max_magnitude:g} (Tolerances."
+                        "max_magnitude); a revolute joint that turns without end is type=\"continuous\"", lim)
             if jt in ("revolute", "prismatic") and lo is not None and hi is not None and lo[0] > hi[0]:
                 add(f"{w}.limit", f"lower={lim.get('lower')!r} > upper={lim.get('upper')!r}", lim)
             for a in ("velocity", "effort"):  # Pinocchio: "min_velocity greater than max_velocity", no joint named
