@@ -79,3 +79,27 @@ def test_coal_option_from_a_config_file_names_the_file(tmp_path, monkeypatch):
     with pytest.raises(BackendError) as e:
         armguard.checker("puma560", config=cfg)
     assert str(cfg) in str(e.value) and "threads = 'x'" in str(e.value)
+
+
+def test_subpackages_are_attributes_after_a_plain_import():
+    """``import armguard; armguard.backends.available()`` raised AttributeError in a fresh process."""
+    import subprocess
+    import sys
+
+    code = "import armguard; print(sorted(armguard.backends.available())); print(armguard.geometry.Box.__name__)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert "'analytic'" in out.stdout and "'coal'" in out.stdout and "Box" in out.stdout
+
+
+@pytest.mark.parametrize("backend", ["analytic", "coal"])
+def test_complex_and_boolean_joint_values_are_refused(backend):
+    """numpy read a complex q as its real part (a ComplexWarning only) and True as 1 rad: a verdict from
+    values no caller meant."""
+    c = armguard.checker("puma560", backend)
+    q = c.model.neutral()
+    for bad in (q.astype(complex), np.ones(len(q), bool), [True] * len(q)):
+        with pytest.raises(BackendError, match="expected real joint values"):
+            c.pair_distances(bad)
+    with pytest.raises(BackendError, match="expected real joint values"):
+        c.collides(np.ones((2, len(q)), bool))

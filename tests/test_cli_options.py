@@ -18,6 +18,7 @@ BAD = [
     (["compare", "ur5", "--configs", "0"], "--configs"),
     (["compare", "ur5", "--worst", "-1"], "--worst"),
     (["compare", "ur5", "--workers", "0"], "--workers"),
+    (["compare", "ur5", "--pair", "a,b"], "--pair"),
     (["check-urdf", "ur5", "--configs", "0"], "--configs"),
     (["check", "hermes", "--threshold", "nan"], "--threshold"),
     (["check", "hermes", "--budget-us", "-1"], "--budget-us"),

@@ -90,7 +90,15 @@ __all__ = [
 ]
 
 
+# subpackages reachable as attributes after a plain ``import armguard`` (``armguard.backends.available()``
+# raised AttributeError until something had imported the subpackage)
+_SUBPACKAGES = frozenset({"avoidance", "backends", "clip", "cspace", "detect", "geometry", "harness", "kinematics",
+                          "model", "models", "program", "scene", "srdfgen", "terrain", "testing", "uncertainty", "verify"})
+
+
 def __getattr__(name: str):
+    if name in _SUBPACKAGES:
+        return importlib.import_module(f"armguard.{name}")
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'armguard' has no attribute {name!r}")
@@ -100,4 +108,4 @@ def __getattr__(name: str):
 
 
 def __dir__():
-    return sorted(set(globals()) | set(_LAZY))
+    return sorted(set(globals()) | set(_LAZY) | _SUBPACKAGES)

@@ -168,10 +168,24 @@ def _joint_starts(model) -> np.ndarray:
     return np.array([m.joints[j].idx_q for j in range(1, m.njoints) if m.joints[j].nq > 0], dtype=np.int64)
 
 
+def _real(x, what: str) -> None:
+    """A BackendError when ``x`` is a complex or boolean array (numpy would drop the imaginary part with a
+    warning, or read True as 1 rad)."""
+    kind = getattr(x, "dtype", None)
+    if kind is None and isinstance(x, (list, tuple)):
+        try:
+            kind = np.asarray(x).dtype
+        except (TypeError, ValueError):
+            return
+    if kind is not None and kind.kind in "cb":
+        raise BackendError(f"{what}: expected real joint values, got dtype {kind}")
+
+
 def check_q(model, q) -> np.ndarray:
     """``q`` as a finite ``(nq,)`` float64 array in ``pin_model``'s order (a continuous joint's ``(cos, sin)``
     on the unit circle, :data:`UNIT_CIRCLE`), else a BackendError; a joint outside its limits is a
     :class:`~armguard.JointLimitError` (``Model.check_pin_limits``), the rule of every backend."""
+    _real(q, "q")
     try:
         q = np.asarray(q, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -188,6 +202,7 @@ def check_q(model, q) -> np.ndarray:
 def check_Q(model, Q) -> np.ndarray:
     """``Q`` as a finite C-contiguous ``(M, nq)`` float64 array (continuous joints on the unit circle, as
     :func:`check_q`), else a BackendError."""
+    _real(Q, "Q")
     try:
         Q = np.ascontiguousarray(np.asarray(Q, dtype=np.float64))
     except (TypeError, ValueError) as exc:

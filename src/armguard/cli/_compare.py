@@ -51,6 +51,8 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
     console = output_console()
     names = tuple(b.strip() for b in backends.split(",") if b.strip())
     options = parse_backend_options(backend_options)
+    if pair_text is not None and q_text is None:  # it was ignored: the whole comparison ran
+        raise click.UsageError("--pair answers one pair at one configuration: give --q as well")
     if q_text is not None:
         pair = tuple(p.strip() for p in pair_text.split(",")) if pair_text else None
         rows = compare_at(model, names, _floats(q_text), options=options, pair=pair)

@@ -248,8 +248,9 @@ class PairDistances:
     B is static (a body or the workspace walls); ``category`` ``(P,) int64`` code into
     ``CATEGORIES``; ``owner_a`` / ``owner_b`` ``(P,)`` owner names; ``link_names`` the global link
     names ``"robot/link"``; ``pair_index`` ``(P,) int64`` each row's pair number in the detector
-    (rows follow it in increasing order; all pairs, or those of one robot).  The index arrays are
-    read-only and shared between calls; the distance and witness arrays are fresh per call.
+    (rows follow it in increasing order; all pairs, or those of one robot).  The index arrays may be
+    shared between calls (the fused detector's are, read-only; the generic detector makes them per
+    call): do not write into them.  The distance and witness arrays are fresh per call.
     """
 
     distance: np.ndarray
