@@ -197,12 +197,18 @@ class AnalyticChecker(CheckerBase):
         self._lock = threading.RLock()  # building a detector or the call plan: once, whichever thread asks
 
     # ---------------------------------------------------------------- detectors
-    def detector(self):
-        """The fused Detector of the Model (every pair kept, threshold and stopping distance 0): it compiles
-        this Model, also after its scene moved on to a derived one (``armguard.model.model_of``).  One for
-        every margin of :meth:`collides`: its obstacle lists keep every pair (``reach_margin`` inf), so a
-        margin is only the kernel's stopping-distance parameter (a detector per margin cost 32 ms and
-        5 MB on panda, 1.1 s and 35 MB on so101, each kept)."""
+    def detector(self, stopping_distance: float = 0.0):
+        """The fused Detector of the Model (every pair kept, threshold 0): it compiles this Model, also after
+        its scene moved on to a derived one (``armguard.model.model_of``).  With stopping distance 0 it is
+        the checker's own, one for every margin of :meth:`collides`: its obstacle lists keep every pair
+        (``reach_margin`` inf), so a margin is only the kernel's stopping-distance parameter (a detector
+        per margin cost 32 ms and 5 MB on panda, 1.1 s and 35 MB on so101, each kept); another stopping
+        distance makes a new detector, not kept."""
+        if stopping_distance != 0.0:
+            from ._engine._detector import FusedDetector
+
+            return FusedDetector(self.model._spec, threshold=0.0, stopping_distance=float(stopping_distance),
+                                 reach_margin=math.inf, fixed_model=self.model)
         det = self._detector
         if det is None:
             from ._engine._batch import yesno_rows
