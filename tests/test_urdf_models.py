@@ -395,3 +395,17 @@ def test_command_line_tool(tmp_path):
     assert r.returncode == 0, r.stderr
     model, geom = _load(out / "gmf_s480.urdf")
     assert model.nq == 4 and geom.ngeoms == 7
+
+
+def test_the_sidecar_keeps_each_arms_ik(tmp_path):
+    """A scene whose arms name their inverse kinematics writes them into the sidecar (it dropped the
+    ``ik:`` line, so an arm rebuilt from the files warned on its first IK that it had no routine)."""
+    import armguard
+    from armguard.model.export import export_scene
+
+    for name, line in (("puma560", "ik: {puma560: puma560}"), ("hermes", "ik: {hera: numeric}")):
+        paths = export_scene(armguard.load_scene(name), tmp_path / name)
+        text = paths["yaml"].read_text()
+        assert line in text, text
+        assert {r: rb.ik for r, rb in armguard.load_scene(str(paths["yaml"])).robots.items()} == \
+            {r: rb.ik for r, rb in armguard.load_scene(name).robots.items()}

@@ -154,6 +154,14 @@ def sidecar_text(name: str, scene, header: str, sections: dict, units: dict) -> 
         out.append(yaml.safe_dump({"description": scene.description}, width=10**6).rstrip())
     out += [f"units: {{angle: {'deg' if deg else 'rad'}, length: {'mm' if mm else 'm'}}}",
             f"model: {{urdf: {name}.urdf, srdf: {name}.srdf}}"]
+    ik = {r: robot.ik for r, robot in scene.robots.items() if getattr(robot, "ik", None)}
+    if ik:  # each arm's inverse kinematics (without it a numeric arm warns on its first use)
+        flow = "ik: {" + ", ".join(f"{r}: {routine}" for r, routine in ik.items()) + "}"
+        if all(routine == "numeric" for routine in ik.values()):
+            out.append(flow + "  # inverse kinematics: damped least squares (no closed form for this arm)")
+        else:
+            out += ["# Each robot's inverse kinematics: a routine registered by name (armguard.kinematics.register_ik),",
+                    '# "module:function", or "numeric" (the default solver).', flow]
     if "workspace" in sections:
         out += ["", sections["workspace"]]
     acc = []
