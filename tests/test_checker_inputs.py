@@ -103,3 +103,21 @@ def test_complex_and_boolean_joint_values_are_refused(backend):
             c.pair_distances(bad)
     with pytest.raises(BackendError, match="expected real joint values"):
         c.collides(np.ones((2, len(q)), bool))
+
+
+@pytest.mark.parametrize("backend", ["analytic", "coal"])
+def test_detectors_and_trajectories_refuse_complex_and_boolean_values(backend):
+    """The same refusal outside the Checkers: the Detector (both backends: check, check_many,
+    collides_many, pair_distances) and Trajectory read q + 0.5j as q and True as 1 rad."""
+    from armguard import DetectionError, Trajectory, TrajectoryError
+
+    m = armguard.load_model("ur5")
+    q = np.array([np.pi, -1.57, 0.0, -1.57, 0.0, 0.0])
+    det = armguard.Detector(m, threshold=0.05, backend=backend)
+    for call in (lambda: det.check(q + 0.5j), lambda: det.check(np.array([True, False] * 3)),
+                 lambda: det.check_many((q + 0.5j)[None]), lambda: det.collides_many(np.ones((2, 6), bool)),
+                 lambda: det.pair_distances(q + 0.5j)):
+        with pytest.raises(DetectionError, match="expected real joint values"):
+            call()
+    with pytest.raises(TrajectoryError, match="expected real joint values"):
+        Trajectory("ur5", list(m.scene.robots["ur5"].joint_names), [0.0, 1.0], [q, q + 1j])

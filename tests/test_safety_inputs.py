@@ -136,7 +136,7 @@ def test_the_witness_relation_holds_to_the_documented_bound_far_from_the_origin(
 def _one_shape(shape: str, tmp_path) -> dict:
     import yaml
 
-    from armguard.model._yaml import _SceneLoader
+    from armguard._yaml import _SceneLoader
 
     text = f"armguard_scene: 1\nname: t\nbodies:\n  - name: b\n    shapes:\n      - {shape}\n"
     return yaml.load(text, Loader=_SceneLoader)

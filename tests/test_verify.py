@@ -347,3 +347,41 @@ def test_top_level_verify_is_callable_even_after_the_subpackage_import():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=str(__import__("pathlib").Path(__file__).parent.parent))
     assert out.returncode == 0, out.stderr
     assert out.stdout.split() == ["True", "None", "True"]
+
+
+def test_pieces_keep_the_segments_peak_speed():
+    """``Subdivided`` sampled each piece's speed strictly inside it: an accelerating piece peaks at its end,
+    so a triangle profile seen in 2 pieces had a fastest point 2.9 % slow, and a stopping-distance table
+    stepping up just below the true top speed read SAFE where the whole segment reads UNSAFE."""
+    import armguard
+    from armguard.verify import Subdivided
+
+    m = armguard.load_model("ur5")
+    J = list(m.scene.robots["ur5"].joint_names)
+    q0 = np.array([np.pi, -1.57, 0.0, -1.57, 0.0, 0.0])
+    tr = Trajectory("ur5", J, [0.0, 2.0], [q0, q0 + [0.5, 0.3, 0.4, 0.0, 0.0, 0.0]], blend_times=[1.0])
+    top = armguard.verify(m, tr).details.max_speed
+    for n in (2, 3, 8):
+        assert armguard.verify(m, Subdivided(tr, n)).details.max_speed == pytest.approx(top, rel=1e-12)
+    sd = StoppingDistance((0.0, 0.995 * top, 1.5 * top), (0.0, 1e300), ((0.0,), (0.1,)))
+    assert armguard.verify(m, tr, stopping_distance=sd).verdict() == "unsafe (stopping distance)"
+    assert armguard.verify(m, Subdivided(tr, 8), stopping_distance=sd).verdict() == "unsafe (stopping distance)"
+
+
+def test_robot_argument_never_moves_another_arm_than_the_trajectorys():
+    """Two alike arms: a trajectory for ``arm2`` verified with ``robot="ur5"`` was checked on ur5 and said
+    SAFE, where arm2 collides; now refused, naming both."""
+    import armguard
+    from armguard.verify import Verifier
+
+    m = armguard.load_model("ur5")
+    X = np.eye(4)
+    X[:3, 3] = [0.9, 0.0, 0.0]
+    two = m.with_robot(m.robots["ur5"].with_name("arm2").with_base(X))
+    q0 = np.array([np.pi, -1.57, 0.0, -1.57, 0.0, 0.0])
+    tr = Trajectory("arm2", m.robots["ur5"].joint_names, [0.0, 2.0], [q0, q0 + [0.0, 1.57, 0.0, 0.0, 0.0, 0.0]])
+    assert armguard.verify(two, tr).status is VerificationStatus.COLLISION
+    assert armguard.verify(two, tr, robot="arm2").status is VerificationStatus.COLLISION
+    for call in (lambda: armguard.verify(two, tr, robot="ur5"), lambda: Verifier(two, robot="ur5").verify(tr)):
+        with pytest.raises(VerificationError, match="the trajectory is for robot 'arm2'"):
+            call()

@@ -126,3 +126,33 @@ def test_cli_verify_names_the_waypoint_outside_the_limits(tmp_path):
     r = CliRunner().invoke(main, ["verify", "puma560", str(path)])
     assert r.exit_code == 3, r.output
     assert f"{path}: waypoints[1][1] (line 8): joint 'j2' = 10 is outside its limits" in r.output, r.output
+
+
+@pytest.mark.parametrize("value,said", [("on", "a boolean"), ("true", "a boolean"), ("null", "nothing (null"),
+                                        ("'0.5'", "the text '0.5'")])
+def test_a_trajectory_value_that_is_not_a_number_is_refused(tmp_path, value, said):
+    """YAML reads on/yes/true as True, which numpy took as 1.0 rad (a SAFE verdict on a motion nobody wrote);
+    null was called "NaN or inf"; quoted text was read as its number."""
+    from click.testing import CliRunner
+
+    from armguard.cli import main
+
+    path = tmp_path / "t.yaml"
+    path.write_text("format: armguard.trajectory\nversion: 1\nrobot: puma560\njoint_names: [j1, j2, j3]\n"
+                    f"times: [0.0, 1.0, 2.0]\nwaypoints:\n  - [0.0, 0.5, -1.0]\n  - [{value}, 0.6, -1.0]\n  - [0.2, 0.5, -1.0]\n")
+    r = CliRunner().invoke(main, ["verify", "puma560", str(path)])
+    assert r.exit_code == 3, r.output
+    assert f"{path}: waypoints[1][0] (line 8): expected a number, got {said}" in r.output, r.output
+
+
+def test_a_trajectory_file_with_a_repeated_key_is_refused(tmp_path):
+    """The second ``times:`` won silently (a 9 s trajectory verified SAFE in place of the 2 s one written first)."""
+    import armguard
+    from armguard import SceneFileError
+
+    path = tmp_path / "t.yaml"
+    path.write_text("format: armguard.trajectory\nversion: 1\nrobot: puma560\njoint_names: [j1, j2, j3]\n"
+                    "times: [0.0, 1.0, 2.0]\ntimes: [0.0, 4.0, 9.0]\nwaypoints:\n  - [0.0, 0.5, -1.0]\n"
+                    "  - [0.1, 0.6, -1.0]\n  - [0.2, 0.5, -1.0]\n")
+    with pytest.raises(SceneFileError, match="duplicate key 'times' \\(first given at line 5\\)"):
+        armguard.Trajectory.load_yaml(path)

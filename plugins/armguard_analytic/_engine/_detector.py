@@ -13,6 +13,7 @@ import numpy as np
 
 from armguard._errors import DetectionError
 from armguard._tolerance import DEFAULT_TOLERANCES, Tolerances
+from armguard._values import refuse_complex_or_bool
 from armguard.detect._common import (check_finite_margin, check_length as _check_length, require_pairs as _require_pairs,
                                      scene_and_model)
 from armguard.detect._detector import Detector
@@ -345,6 +346,7 @@ class FusedDetector(Detector):
         if isinstance(q, np.ndarray) and q.dtype == np.float64 and q.shape == (n_q,):
             q1[0] = q
             return q1
+        refuse_complex_or_bool(q, "q", DetectionError)
         if isinstance(q, Mapping):
             flat = self.scene.flat_q(q)
         else:
@@ -546,6 +548,7 @@ class FusedDetector(Detector):
     def _many(self, Q, mode: int):
         b = self._fresh()
         n_q = b.model.n_q
+        refuse_complex_or_bool(Q, "Q", DetectionError)
         try:
             Q = np.ascontiguousarray(np.asarray(Q, dtype=np.float64))
         except (TypeError, ValueError) as exc:

@@ -34,6 +34,7 @@ from typing import Mapping, Protocol, runtime_checkable
 import numpy as np
 
 from .._errors import BackendError
+from .._values import refuse_complex_or_bool
 
 __all__ = ["Backend", "Checker", "CheckerBase", "PairDistances", "PairDistancesMany", "NearestPair", "Capability",
            "check_q", "check_Q", "check_pairs"]
@@ -169,16 +170,7 @@ def _joint_starts(model) -> np.ndarray:
 
 
 def _real(x, what: str) -> None:
-    """A BackendError when ``x`` is a complex or boolean array (numpy would drop the imaginary part with a
-    warning, or read True as 1 rad)."""
-    kind = getattr(x, "dtype", None)
-    if kind is None and isinstance(x, (list, tuple)):
-        try:
-            kind = np.asarray(x).dtype
-        except (TypeError, ValueError):
-            return
-    if kind is not None and kind.kind in "cb":
-        raise BackendError(f"{what}: expected real joint values, got dtype {kind}")
+    refuse_complex_or_bool(x, what, BackendError)
 
 
 def check_q(model, q) -> np.ndarray:

@@ -43,6 +43,7 @@ import time
 import numpy as np
 
 from .._errors import DetectionError
+from .._values import refuse_complex_or_bool
 from ._bounds import pair_bounds
 from ._common import check_finite_margin, check_length, scene_and_model, status_code
 from ._detector import Detector
@@ -343,6 +344,7 @@ class RangerDetector(Detector):
         return d, np.where(sw, r.p_WB, r.p_WA), np.where(sw, r.p_WA, r.p_WB)
 
     def _flat(self, q, plan: _Plan) -> np.ndarray:
+        refuse_complex_or_bool(q, "q", DetectionError)
         try:
             q = self.scene.flat_q(q)
         except Exception as exc:  # noqa: BLE001 - one error type at the boundary
@@ -468,6 +470,7 @@ class RangerDetector(Detector):
 
     def _rows(self, Q, plan: _Plan) -> np.ndarray:
         n = plan.n_q
+        refuse_complex_or_bool(Q, "Q", DetectionError)
         try:
             Q = np.asarray(Q, dtype=np.float64)
         except (TypeError, ValueError) as exc:

@@ -16,6 +16,7 @@ from typing import Iterator, Sequence
 import numpy as np
 
 from .._errors import KinematicsError, TrajectoryError
+from .._values import refuse_complex_or_bool
 from ._frames import rotation_about_axis, rotation_vector_from_matrix
 from ._profile import blend_for_duration, min_time_trapezoid, path_ds, path_s
 from ._robot import _check_X
@@ -29,6 +30,7 @@ _TIME_SLACK = 1e-12
 
 
 def _array(value, name: str, ndim: int) -> np.ndarray:
+    refuse_complex_or_bool(value, name, TrajectoryError)
     try:
         arr = np.array(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:

@@ -45,6 +45,26 @@ def _fail(file, where: str, message: str):
     return TrajectoryError(f"{where}: {message}")
 
 
+def _not_a_number(value, place: str = ""):
+    """``(place, what)`` of the first entry of ``value`` (a number or nested lists) that is not a YAML number,
+    else None."""
+    if isinstance(value, list):
+        for k, v in enumerate(value):
+            bad = _not_a_number(v, f"{place}[{k}]")
+            if bad is not None:
+                return bad
+        return None
+    if isinstance(value, bool):
+        return place, f"a boolean ({str(value).lower()}; YAML reads yes/no/on/off so)"
+    if value is None:
+        return place, "nothing (null, or an empty entry)"
+    if isinstance(value, str):
+        return place, f"the text {value!r} (a number is written unquoted)"
+    if not isinstance(value, (int, float)):
+        return place, f"a {type(value).__name__}"
+    return None
+
+
 def _numbers(d, key: str, ndim: int, problems: list, width: int | None = None):
     """``d[key]`` as a float64 array of ``ndim`` dimensions, or None with the problem noted."""
     value = d[key]
@@ -56,6 +76,11 @@ def _numbers(d, key: str, ndim: int, problems: list, width: int | None = None):
             if width is not None and len(row) != width:
                 problems.append((f"{key}[{k}]", f"expected {width} joint values (one per joint_names entry), got {len(row)}"))
                 return None
+    bad = _not_a_number(value)
+    if bad is not None:  # YAML's true / yes / on, null and quoted text: numpy would read 1.0, NaN or the number
+        place, what = bad
+        problems.append((f"{key}{place}", f"expected a number, got {what}"))
+        return None
     try:
         arr = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError, OverflowError):  # OverflowError: an integer beyond float range
@@ -131,17 +156,11 @@ def save_yaml(traj, path) -> None:
 
 
 def load_yaml(cls, path, groups=None):
-    file = os.fspath(path)
-    try:
-        with open(file, encoding="utf-8") as fh:
-            d = yaml.safe_load(fh)
-    except OSError as exc:
-        raise SceneFileError(file, "", f"cannot read: {exc.strerror or exc}") from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-        raise SceneFileError(file, where, f"not valid YAML: {getattr(exc, 'problem', exc)}") from None
     from .._lines import lines_for
+    from .._yaml import read_scene_yaml
+
+    file = os.fspath(path)
+    d = read_scene_yaml(file)  # the scene files' strict reading: a repeated key, an alias or bad YAML located
 
     with lines_for(file):
         return trajectory_from_dict(cls, d, file=file, groups=groups)

@@ -21,7 +21,7 @@ from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism,
 from ._robot_urdf import robot_from_urdf
 from ._scene import CannedTest, Scene
 from ._schema import SHAPE_TYPES, SceneFile
-from ._yaml import read_scene_yaml  # noqa: F401  (part of this module's interface)
+from .._yaml import read_scene_yaml  # noqa: F401  (part of this module's interface)
 
 __all__ = ["validate_scene_dict", "scene_from_dict_validated", "read_scene_yaml", "read_srdf_disabled", "where_of"]
 

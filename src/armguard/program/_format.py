@@ -215,7 +215,7 @@ def _task(raw, i: int, L: float, A: float, file: str, lines: dict) -> Task:
 
 def _load(path, head_model, kind: str):
     from .._lines import line_map, lines_for
-    from ..model._yaml import read_scene_yaml
+    from .._yaml import read_scene_yaml
 
     path = Path(path)
     file = str(path)

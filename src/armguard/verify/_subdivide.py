@@ -31,6 +31,31 @@ class Subdivided:
     def sample(self, *args, **kwargs):
         return self._t.sample(*args, **kwargs)
 
+    def piece_peak_joint_speeds(self):
+        """``(pieces, n_joints)``: each piece's peak ``|q̇|`` per joint, exact for a :class:`Trajectory`'s
+        trapezoid time law (its path speed is piecewise linear in time: the peak over a piece is at one of
+        its ends, or the plateau where the piece meets it), else None.  Sampling inside the pieces missed
+        an accelerating piece's peak at its end (2.9 % low in 2 pieces of a triangle profile, enough for a
+        speed step of Hermes's stopping-distance table to be skipped)."""
+        from ..kinematics import Trajectory
+        from ..kinematics._profile import path_ds
+
+        t = self._t
+        if type(t).velocity is not Trajectory.velocity:
+            return None
+        times = np.asarray(t.times, dtype=np.float64)
+        T, tb = np.diff(times), np.asarray(t.blend_times, dtype=np.float64)
+        W = np.asarray(t.waypoints, dtype=np.float64)
+        u = np.arange(self.n + 1) / self.n
+        out = []
+        for k in range(len(T)):
+            a, b = u[:-1] * T[k], u[1:] * T[k]
+            ds = np.maximum(path_ds(a, T[k], tb[k]), path_ds(b, T[k], tb[k]))
+            plateau = (b >= tb[k]) & (a <= T[k] - tb[k])  # the piece meets the constant-speed part
+            ds = np.where(plateau, path_ds(np.full_like(a, 0.5 * T[k]), T[k], tb[k]), ds)
+            out.append(ds[:, None] * np.abs(W[k + 1] - W[k])[None, :])
+        return np.concatenate(out, axis=0)
+
     def segments(self):
         for t0, t1, _q0, _q1 in self._t.segments():
             ts = np.linspace(float(t0), float(t1), self.n + 1)

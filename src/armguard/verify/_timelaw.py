@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._errors import VerificationError
+from .._values import refuse_complex_or_bool
 
 __all__ = ["segments_of", "segment_times", "profile_times", "finite_array", "TIME_BISECTIONS", "PROFILE_TABLE"]
 
@@ -22,6 +23,7 @@ PROFILE_TABLE = 65
 
 
 def finite_array(x, name: str) -> np.ndarray:
+    refuse_complex_or_bool(x, name, VerificationError)
     a = np.asarray(x, dtype=np.float64)
     if not np.all(np.isfinite(a)):
         raise VerificationError(f"{name}: contains NaN or infinite values")

@@ -48,7 +48,7 @@ __all__ = ["Verifier", "verify", "DRAKE_JOINT_STEP"]
 #: Drake's suggested edge-checking step (rad), used by sampled mode when no frequency is given.
 DRAKE_JOINT_STEP = 0.05
 _ATTEMPTS = 5  # verifications started over after a scene edit before giving up (StaleModelError)
-_SPEED_SAMPLES = 17  # time-law samples per segment used to find its peak speed (odd: includes the midpoint)
+_SPEED_SAMPLES = 17  # time-law samples per segment used to find its peak speed (both ends and the midpoint)
 _OBJECTS = {
     "link-obstacle": ("arm", "obstacle"),
     "link-link": ("arm", "arm"),
@@ -126,11 +126,16 @@ class Verifier(FollowsScene):
     # ------------------------------------------------------------ helpers
     def _robot_of(self, trajectory, robot: str | None) -> str:
         names = list(self.scene.robots)
-        r = robot or self._robot or getattr(trajectory, "robot_name", None)
+        own = getattr(trajectory, "robot_name", None)
+        r = robot or self._robot or own
         if not r and len(names) == 1:  # a trajectory that names no robot: the scene's only one
             r = names[0]
         if r not in self.scene.robots:
             raise VerificationError(f"robot {r!r} is not in the scene; robots are {names}")
+        if own and own != r and own in self.scene.robots:  # never a verdict on an arm the trajectory is not for
+            raise VerificationError(f"robot {r!r}: the trajectory is for robot {own!r} of this scene; verify it on "
+                                    f"{own!r} (robot= names the arm of a trajectory that names none, or one not "
+                                    "in the scene)")
         return r
 
     def _over_robot(self, trajectory, r: str, base: dict):
@@ -193,7 +198,13 @@ class Verifier(FollowsScene):
             qd = np.zeros((len(segs), n_q))
             qd[:, k0:k1] = np.abs(_finite_array(v[:, None] * (W[1:] - W[:-1]), "trajectory velocity"))
             return np.max(qd @ model.lever[:-1].T, axis=1)
-        u = (np.arange(_SPEED_SAMPLES) + 0.5) / _SPEED_SAMPLES
+        exact = getattr(trajectory, "piece_peak_joint_speeds", None)
+        exact = exact() if exact is not None else None
+        if exact is not None and len(exact) == len(segs):  # Subdivided(Trajectory): each piece's peak in closed form
+            qd = np.zeros((len(segs), n_q))
+            qd[:, k0:k1] = _finite_array(exact, "trajectory velocity")
+            return np.max(qd @ model.lever[:-1].T, axis=1)
+        u = np.linspace(0.0, 1.0, _SPEED_SAMPLES)  # the ends too: an accelerating piece peaks at its end
         ts = np.concatenate([t0 + u * (t1 - t0) for t0, t1, _, _ in segs])
         V = np.abs(_finite_array(trajectory.velocity(ts), "trajectory velocity")).reshape(len(segs), _SPEED_SAMPLES, -1)
         qd = np.zeros((len(segs), n_q))

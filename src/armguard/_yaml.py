@@ -1,4 +1,5 @@
-"""Reading a scene file's YAML: a stricter safe loader (duplicate keys, aliases, YAML 1.2 floats)."""
+"""Reading a scene, trajectory or program file's YAML: a stricter safe loader (duplicate keys, aliases,
+YAML 1.2 floats)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ from pathlib import Path
 
 import yaml
 
-from .._errors import SceneFileError
+from ._errors import SceneFileError
 
 __all__ = ["read_scene_yaml"]
 
