@@ -156,7 +156,7 @@ def test_synthetic_tree_joint_kinds_and_shapes(synthetic):
     [
         (lambda s: s.replace('type="continuous"', 'type="floating"'), "joint[spin]"),
         (lambda s: s.replace('<sphere radius="0.07"/>', '<mesh filename="nowhere/missing.stl"/>'), "link[arm_a].collision[0]"),
-        (lambda s: "not a robot", "line 1"),
+        (lambda s: "not a robot", "line 1, column 1"),
     ],
     ids=["floating-joint", "missing-mesh", "broken-xml"],
 )

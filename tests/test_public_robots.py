@@ -62,7 +62,8 @@ def test_load_model_by_name_loads_the_registry_files(name, monkeypatch):
     monkeypatch.setattr(_load, "model_from_urdf", lambda path, **kw: calls.append((path, kw)) or "model")
     assert armguard.load_model(name) == "model"
     urdf, srdf = public_robot_files(name)
-    assert calls == [(urdf, {"srdf": srdf, "package_dirs": ()})]
+    assert calls == [(urdf, {"srdf": srdf, "package_dirs": ()} if srdf is None else
+                      {"srdf": srdf, "package_dirs": (), "srdf_found": f"the SRDF of public robot {name!r} (docs/models.md)"})]
     calls.clear()
     armguard.load_model(name, srdf="other.srdf")  # srdf= wins over the registry's
     assert calls[0][1]["srdf"] == "other.srdf"

@@ -236,3 +236,9 @@ def test_bad_yaml_names_file_and_key(tmp_path, text, where):
     with pytest.raises(SceneFileError) as info:
         Trajectory.load_yaml(path)
     assert info.value.file == str(path) and info.value.where == where
+
+
+def test_a_trajectory_of_no_joint_is_refused():
+    """It moved nothing: verify gave SAFE with the robot held at home, for whatever motion was meant."""
+    with pytest.raises(TrajectoryError, match="at least one joint"):
+        Trajectory("ur5", [], [0.0, 1.0], np.zeros((2, 0)))

@@ -343,7 +343,7 @@ class RangerDetector(Detector):
         sw = swap[:, None]
         return d, np.where(sw, r.p_WB, r.p_WA), np.where(sw, r.p_WA, r.p_WB)
 
-    def _flat(self, q, plan: _Plan) -> np.ndarray:
+    def _flat(self, q, plan: _Plan, entry: str = "Detector.check") -> np.ndarray:
         refuse_complex_or_bool(q, "q", DetectionError)
         try:
             q = self.scene.flat_q(q)
@@ -354,7 +354,7 @@ class RangerDetector(Detector):
             raise DetectionError(f"q: contains NaN or infinite values: {q.tolist()}")
         lo, hi = plan.limits
         if q.shape != lo.shape or not (np.all(q >= lo) and np.all(q <= hi)):  # the Model's error, naming the joint
-            plan.model.check_limits(q, "Detector.check")
+            plan.model.check_limits(q, entry)
         return q
 
     def _levels(self, plan: _Plan) -> tuple[float, float]:
@@ -445,7 +445,7 @@ class RangerDetector(Detector):
     def pair_distances(self, q, *, robot: str | None = None) -> PairDistances:
         """Every checked pair's signed distance (rows: one per shape pair), as the analytic detector's."""
         plan = self._fresh()
-        d, pA, pB = self._query(plan, self._flat(q, plan), None)
+        d, pA, pB = self._query(plan, self._flat(q, plan, "Detector.pair_distances"), None)
         names = self.link_names
         li = {n: i for i, n in enumerate(names)}
         rid = {r: i for i, r in enumerate(self.scene.robots)}
@@ -478,7 +478,8 @@ class RangerDetector(Detector):
         if Q.ndim != 2 or Q.shape[1] != n:
             raise DetectionError(f"Q: expected shape (M, {n}), got {Q.shape}")
         if not np.all(np.isfinite(Q)):
-            raise DetectionError("Q contains NaN or infinite values")
+            bad = np.argwhere(~np.isfinite(Q))[0]
+            raise DetectionError(f"Q contains NaN or infinite values (first at {tuple(int(x) for x in bad)})")
         for i, q in enumerate(Q):
             plan.model.check_limits(q, f"Detector: Q[{i}]")
         return Q

@@ -77,6 +77,8 @@ class Trajectory:
     def __init__(self, robot_name: str, joint_names: Sequence[str], times, waypoints, blend_times=None) -> None:
         self._robot_name = str(robot_name)
         self._joint_names = tuple(str(j) for j in joint_names)
+        if not self._joint_names:  # it moved nothing: a verdict on the robot held at home, for any motion
+            raise TrajectoryError("joint_names: a trajectory moves at least one joint, got none")
         t = _array(times, "times", 1)
         w = _array(waypoints, "waypoints", 2)
         if t.shape[0] < 2:
