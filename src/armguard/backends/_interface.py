@@ -150,34 +150,25 @@ away by at most 0.5 µm, within the contact band."""
 
 
 def _check_unit_circle(model, Q2: np.ndarray, what: str) -> None:
-    cq = model.continuous_q
-    if not len(cq):
+    if not model.has_continuous_joints:
         return
+    cq = model.continuous_q
     r = np.abs(Q2[:, cq] ** 2 + Q2[:, cq + 1] ** 2 - 1.0)
     bad = np.argwhere(r > UNIT_CIRCLE)
     if len(bad):
         m, k = int(bad[0][0]), int(cq[bad[0][1]])
         row = f" row {m}:" if what == "Q" else ""
-        name = model.joint_names[int(np.searchsorted(_joint_starts(model), k, side="right")) - 1]
+        name = model.q_joint_names[k]
         raise BackendError(f"{what}:{row} continuous joint {name!r}: (cos, sin) = ({float(Q2[m, k]):.6g}, "
                            f"{float(Q2[m, k + 1]):.6g}) is not on the unit circle (|cos² + sin² - 1| = "
                            f"{float(r[bad[0][0], bad[0][1]]):.3g} > {UNIT_CIRCLE:g}): give (cos θ, sin θ)")
-
-
-def _joint_starts(model) -> np.ndarray:
-    m = model.pin_model
-    return np.array([m.joints[j].idx_q for j in range(1, m.njoints) if m.joints[j].nq > 0], dtype=np.int64)
-
-
-def _real(x, what: str) -> None:
-    refuse_complex_or_bool(x, what, BackendError)
 
 
 def check_q(model, q) -> np.ndarray:
     """``q`` as a finite ``(nq,)`` float64 array in ``pin_model``'s order (a continuous joint's ``(cos, sin)``
     on the unit circle, :data:`UNIT_CIRCLE`), else a BackendError; a joint outside its limits is a
     :class:`~armguard.JointLimitError` (``Model.check_pin_limits``), the rule of every backend."""
-    _real(q, "q")
+    refuse_complex_or_bool(q, "q", BackendError)
     try:
         q = np.asarray(q, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -194,7 +185,7 @@ def check_q(model, q) -> np.ndarray:
 def check_Q(model, Q) -> np.ndarray:
     """``Q`` as a finite C-contiguous ``(M, nq)`` float64 array (continuous joints on the unit circle, as
     :func:`check_q`), else a BackendError."""
-    _real(Q, "Q")
+    refuse_complex_or_bool(Q, "Q", BackendError)
     try:
         Q = np.ascontiguousarray(np.asarray(Q, dtype=np.float64))
     except (TypeError, ValueError) as exc:
