@@ -148,7 +148,7 @@ def _collides_python_seconds(a, Q) -> float:
     ``detect_rows`` swapped)."""
     from armguard_analytic._engine import _kernel as kn
 
-    det = a.detector(0.0)
+    det = a.detector()
     b = det._fresh()
     SF, SI, ip = det._scratch(b).batch_buffers(kn.MODE_YESNO)
     args = (Q, 0, len(Q), b.H, b.MF, b.MI, SF, SI, b.prm, ip, b.all_p, Q, Q, b.fn)

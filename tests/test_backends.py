@@ -209,7 +209,7 @@ def test_analytic_collides_a_row_at_a_time_as_in_one_batch(checkers, name):
     np.testing.assert_array_equal(rows, whole)
     a.collides(model.random_q(5, 19))
     np.testing.assert_array_equal(a.collides(Q), whole)
-    np.testing.assert_array_equal(a.detector(0.0).collides_many(model.scene_q(Q)), whole)
+    np.testing.assert_array_equal(a.detector().collides_many(model.scene_q(Q)), whole)
     d = np.array([c.pair_distances(q).distance.min() for q in Q[:60]])
     far = np.abs(d) > CONTACT_BAND
     np.testing.assert_array_equal(whole[:60][far], d[far] <= 0.0)

@@ -56,7 +56,8 @@ from typing import Mapping
 import numpy as np
 
 from armguard._errors import BackendError
-from armguard.backends import Capability, CheckerBase, PairDistances, PairDistancesMany, check_pairs, check_q, check_Q
+from armguard.backends import (Capability, CheckerBase, PairDistances, PairDistancesMany, check_pairs, check_q, check_Q,
+                               check_unit_circle)
 
 __all__ = ["AnalyticBackend", "AnalyticChecker"]
 
@@ -197,18 +198,12 @@ class AnalyticChecker(CheckerBase):
         self._lock = threading.RLock()  # building a detector or the call plan: once, whichever thread asks
 
     # ---------------------------------------------------------------- detectors
-    def detector(self, stopping_distance: float = 0.0):
-        """The fused Detector of the Model (every pair kept, threshold 0): it compiles this Model, also after
-        its scene moved on to a derived one (``armguard.model.model_of``).  With stopping distance 0 it is
-        the checker's own, one for every margin of :meth:`collides`: its obstacle lists keep every pair
-        (``reach_margin`` inf), so a margin is only the kernel's stopping-distance parameter (a detector
-        per margin cost 32 ms and 5 MB on panda, 1.1 s and 35 MB on so101, each kept); another stopping
-        distance makes a new detector, not kept."""
-        if stopping_distance != 0.0:
-            from ._engine._detector import FusedDetector
-
-            return FusedDetector(self.model._spec, threshold=0.0, stopping_distance=float(stopping_distance),
-                                 reach_margin=math.inf, fixed_model=self.model)
+    def detector(self):
+        """The fused Detector of the Model (every pair kept, threshold and stopping distance 0): it compiles
+        this Model, also after its scene moved on to a derived one (``armguard.model.model_of``).  One for
+        every margin of :meth:`collides`: its obstacle lists keep every pair (``reach_margin`` inf), so a
+        margin is only the kernel's stopping-distance parameter (a detector per margin cost 32 ms and
+        5 MB on panda, 1.1 s and 35 MB on so101, each kept)."""
         det = self._detector
         if det is None:
             from ._engine._batch import yesno_rows
@@ -287,7 +282,8 @@ class AnalyticChecker(CheckerBase):
         e, m = err % 4, err // 4
         if batch:  # the framework's own checks first: their errors name the row (non-finite, circle, limits)
             check_Q(self.model, Q)
-        check_q(self.model, Q[m])
+        else:
+            check_q(self.model, Q[m])
         f.det._raise_kernel_error(e, self.model.scene_q(Q[m:m + 1]), "Detector.pair_distances: q", b=f.b)
 
     def pair_distances(self, q, *, pairs=None, jacobian: bool = False):
@@ -441,7 +437,7 @@ class AnalyticChecker(CheckerBase):
         elif self._q_take is not None:
             Qs = Q.take(self._q_take, axis=1)
         else:
-            check_Q(model, Q)  # continuous joints: each (cos, sin) on the unit circle before it is read as an angle
+            check_unit_circle(model, Q)  # each (cos, sin) of a continuous joint, before it is read as an angle
             Qs = model.scene_q(Q)
         det = self.detector()
         hit, err = self._yesno_rows(det, Qs, margin)

@@ -149,7 +149,10 @@ analytic backend reads the angle, so the two gave different verdicts), and 1e-6 
 away by at most 0.5 µm, within the contact band."""
 
 
-def _check_unit_circle(model, Q2: np.ndarray, what: str) -> None:
+def check_unit_circle(model, Q2: np.ndarray, what: str = "Q") -> None:
+    """A BackendError naming the row and joint when a continuous joint's ``(cos, sin)`` in ``Q2`` ``(M, nq)``
+    is off the unit circle (:data:`UNIT_CIRCLE`); part of :func:`check_q` / :func:`check_Q`, alone for a
+    backend whose fast path checks the rest itself."""
     if not model.has_continuous_joints:
         return
     cq = model.continuous_q
@@ -177,7 +180,7 @@ def check_q(model, q) -> np.ndarray:
         raise BackendError(f"q: expected shape ({model.nq},) in pin_model's order {list(model.joint_names)}, got {q.shape}")
     if not np.all(np.isfinite(q)):
         raise BackendError(f"q: contains NaN or infinite values: {q.tolist()}")
-    _check_unit_circle(model, q[None], "q")
+    check_unit_circle(model, q[None], "q")
     model.check_pin_limits(q, "q")
     return q
 
@@ -195,7 +198,7 @@ def check_Q(model, Q) -> np.ndarray:
     if not np.all(np.isfinite(Q)):
         bad = np.argwhere(~np.isfinite(Q))[0]
         raise BackendError(f"Q contains NaN or infinite values (first at {tuple(int(x) for x in bad)})")
-    _check_unit_circle(model, Q, "Q")
+    check_unit_circle(model, Q, "Q")
     model.check_pin_limits(Q, "Q")
     return Q
 
