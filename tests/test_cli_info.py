@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from click.testing import CliRunner
 
 from armguard.cli import main
@@ -42,7 +43,21 @@ def test_fk_prints_link_frames_in_degrees():
 
 
 def test_errors_are_one_line_exit_3():
-    for args in (["info", "no_such_scene"], ["fk", "hermes", "--q", "1,2"], ["fk", "hermes", "--robot", "x"]):
+    for args in (["info", "no_such_scene"], ["fk", "hermes", "--robot", "x"]):
         res = CliRunner().invoke(main, args)
         assert res.exit_code == 3, (args, res.output)  # ExitCode.INPUT: a value refused
         assert res.output.strip().count("\n") == 0 and res.output.startswith("error:")
+
+
+@pytest.mark.parametrize("args, words", [
+    (["fk", "hermes", "--q", "1,2"], ["has 6 joints", "got 2 values"]),
+    (["fk", "hermes", "--q", "a,b"], ["expected numbers"]),
+    (["fk", "ur5", "--q", "0,nan,0,0,0,0"], ["shoulder_lift_joint (value 2 of 6) = nan", "finite"]),
+    (["compare", "ur5", "--q", "0,0,inf,0,0,0"], ["value 3 of 6 = inf", "finite"]),
+])
+def test_q_that_is_not_finite_numbers_is_a_usage_error(args, words):
+    """--q typed wrong is a usage error (exit status 2) in fk and compare as in check, naming the value."""
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 2, (args, res.output)
+    for w in words:
+        assert w in res.output, res.output

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
 
 import click
@@ -14,10 +15,16 @@ from ._output import esc, output_console
 
 
 def _floats(text: str) -> list:
+    """--q's values; a value that is not a finite number is a usage error (exit status 2, as
+    check's and fk's --q)."""
     try:
-        return [float(v) for v in text.split(",") if v.strip()]
+        vals = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
-        raise click.BadParameter(f"expected comma-separated numbers, got {text!r}") from None
+        raise click.BadParameter(f"expected comma-separated numbers, got {text!r}", param_hint="--q") from None
+    for k, v in enumerate(vals):
+        if not math.isfinite(v):
+            raise click.BadParameter(f"value {k + 1} of {len(vals)} = {v}: every value must be finite", param_hint="--q")
+    return vals
 
 
 @main.command("compare", epilog=exit_epilog(ok="the backends agree (--q: answered)", unsafe="a backend pair differs"))

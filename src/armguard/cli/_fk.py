@@ -37,10 +37,16 @@ def fk_cmd(scene: str, q_text: str | None, robot_name: str | None, deg: bool) ->
         try:
             vals = [float(x) for x in q_text.replace(",", " ").split()]
         except ValueError:
-            raise SceneError(f"--q: expected numbers, got {q_text!r}") from None
+            raise click.BadParameter(f"expected numbers, got {q_text!r}", param_hint="--q") from None
         if len(vals) != robot.n_joints:
-            raise SceneError(f"--q: robot {name!r} has {robot.n_joints} joints {list(robot.joint_names)}, got {len(vals)} values")
+            raise click.BadParameter(f"robot {name!r} has {robot.n_joints} joints {list(robot.joint_names)}, got {len(vals)} "
+                                     "values", param_hint="--q")
         q = np.array(vals)
+        bad = np.flatnonzero(~np.isfinite(q))
+        if len(bad):  # a usage error, as check's --q (exit status 2), naming the joint
+            k = int(bad[0])
+            raise click.BadParameter(f"{name}/{robot.joint_names[k]} (value {k + 1} of {len(q)}) = {q[k]}: every value "
+                                     "must be finite", param_hint="--q")
         if deg:
             rev = np.array([jt.value == "revolute" for jt in robot.joint_types])
             q = np.where(rev, np.radians(q), q)
