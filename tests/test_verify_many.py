@@ -128,6 +128,31 @@ def test_cli_verify_names_the_waypoint_outside_the_limits(tmp_path):
     assert f"{path}: waypoints[1][1] (line 8): joint 'j2' = 10 is outside its limits" in r.output, r.output
 
 
+def test_verify_takes_a_trajectory_file_and_locates_its_errors(tmp_path):
+    """armguard.verify(model, path): the file read and checked against the scene as the CLI does (a knot
+    outside the limits named by file, place and line; it was "trajectory waypoints[1]: ..." from a
+    Trajectory loaded by hand, and an AttributeError from a path); anything else is refused by name."""
+    import armguard
+    from armguard import SceneFileError, VerificationError
+    from armguard.verify import load_trajectory
+
+    model = armguard.load_model("puma560")
+    text = ("format: armguard.trajectory\nversion: 1\nrobot: puma560\njoint_names: [j1, j2, j3]\n"
+            "times: [0.0, 1.0, 2.0]\nwaypoints:\n  - [0.0, 0.5, -1.0]\n  - [0.1, {}, -1.0]\n  - [0.2, 0.5, -1.0]\n")
+    bad, good = tmp_path / "out.yaml", tmp_path / "fine.yaml"
+    bad.write_text(text.format("10.0"))
+    good.write_text(text.format("0.6"))
+    for call in (lambda: verify(model, bad), lambda: verify(model, str(bad)), lambda: load_trajectory(model, bad)):
+        with pytest.raises(SceneFileError, match=r"out\.yaml: waypoints\[1\]\[1\] \(line 8\): joint 'j2' = 10 is outside"):
+            call()
+    r = verify(model, good, method="sampled", frequency=20)
+    assert r.trajectory == "fine"
+    same = verify(model, load_trajectory(model, good), method="sampled", frequency=20, name="fine")
+    assert _strip(r) == _strip(same)
+    with pytest.raises(VerificationError, match="expected an armguard.kinematics.Trajectory or the path"):
+        verify(model, 3)
+
+
 @pytest.mark.parametrize("value,said", [("on", "a boolean"), ("true", "a boolean"), ("null", "nothing (null"),
                                         ("'0.5'", "the text '0.5'")])
 def test_a_trajectory_value_that_is_not_a_number_is_refused(tmp_path, value, said):

@@ -17,7 +17,7 @@ def resolve_trajectories(scene, specs):
     """``(name, Trajectory)`` for each spec: a ``.yaml`` file, a canned trajectory or canned test of
     the scene, or ``all`` (every canned trajectory of the scene)."""
     from .._errors import VerificationError
-    from ..kinematics import Trajectory
+    from ..verify import load_trajectory
 
     out = []
     for spec in specs:
@@ -25,9 +25,7 @@ def resolve_trajectories(scene, specs):
         if spec == "all":
             out.extend((n, t) for n, t in scene.trajectories.items())
         elif p.suffix.lower() in (".yaml", ".yml") or p.exists():
-            model = getattr(scene, "_model_of_record", None)  # its SRDF groups name joints too
-            groups = model.group_joints if model is not None and model.srdf is not None else None
-            out.append((p.stem, _checked_file(scene, p, Trajectory.load_yaml(p, groups=groups))))
+            out.append((p.stem, load_trajectory(scene, p)))  # checked against the scene, errors located
         elif spec in scene.trajectories:
             out.append((spec, scene.trajectories[spec]))
         elif spec in scene.canned_tests:
@@ -54,37 +52,6 @@ def _unique_names(items):
         seen.add(new)
         out.append((new, traj))
     return out
-
-
-def _checked_file(scene, path: Path, traj):
-    """``traj`` (loaded from ``path``) after checking its robot and joints against ``scene``: a
-    mismatch is an error naming the file, the key and its line."""
-    import numpy as np
-
-    from .._errors import SceneFileError
-    from .._lines import lines_for
-    from .._tolerance import DEFAULT_TOLERANCES
-
-    with lines_for(path):
-        if traj.robot_name not in scene.robots:
-            raise SceneFileError(str(path), "robot", f"robot {traj.robot_name!r} is not in scene {scene.name!r} "
-                                 f"(its robots: {', '.join(scene.robots)})")
-        want = list(scene.robots[traj.robot_name].joint_names)
-        names = list(traj.joint_names)
-        bad = [j for j in names if j not in want] or [j for k, j in enumerate(names) if j in names[:k]]
-        if bad:  # a subset of the joints is fine: the others are held at home (docs/trajectory-format.md)
-            raise SceneFileError(str(path), "joint_names", f"{bad[0]!r} is not a joint of robot {traj.robot_name!r} or "
-                                 f"is named twice; expected some of its joints {want}")
-        robot, slack = scene.robots[traj.robot_name], DEFAULT_TOLERANCES.joint_limit
-        for j, name in enumerate(names):  # a waypoint outside the limits: its place in the file
-            i = want.index(name)
-            lo, hi = float(robot.lower[i]), float(robot.upper[i])
-            out = np.flatnonzero((traj.waypoints[:, j] < lo - slack) | (traj.waypoints[:, j] > hi + slack))
-            if len(out):
-                k = int(out[0])
-                raise SceneFileError(str(path), f"waypoints[{k}][{j}]", f"joint {name!r} = {traj.waypoints[k, j]:.6g} "
-                                     f"is outside its limits [{lo:.6g}, {hi:.6g}]")
-    return traj
 
 
 @main.command("verify", epilog=exit_epilog(

@@ -22,10 +22,12 @@ from ._report import (
 )
 from ._stopping import StoppingDistance, discretisation_error
 from ._subdivide import Subdivided
+from ._trajectory_file import load_trajectory
 from ._verify import DRAKE_JOINT_STEP, Verifier, verify
 
 __all__ = [
     "verify",
+    "load_trajectory",
     "verify_many",
     "Verifier",
     "VerificationReport",

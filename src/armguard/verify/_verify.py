@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import time as _time
 
 import numpy as np
@@ -124,6 +125,23 @@ class Verifier(FollowsScene):
         return _State(model, base)
 
     # ------------------------------------------------------------ helpers
+    def _trajectory_of(self, trajectory, name: str | None):
+        """``(Trajectory, name)``: a path is read and checked against the scene (:func:`load_trajectory`:
+        an error names the file, the key and its line; the name defaults to the file's stem); anything
+        but a Trajectory is refused saying what was expected."""
+        from ..kinematics import Trajectory
+        from ._subdivide import Subdivided
+
+        if isinstance(trajectory, (str, os.PathLike)):
+            from ._trajectory_file import load_trajectory
+
+            path = os.fspath(trajectory)
+            return load_trajectory(self.scene, path), name or os.path.splitext(os.path.basename(path))[0]
+        if not isinstance(trajectory, (Trajectory, Subdivided)):
+            raise VerificationError(f"trajectory: expected an armguard.kinematics.Trajectory or the path of a "
+                                    f"trajectory YAML file, got {type(trajectory).__name__}")
+        return trajectory, name
+
     def _robot_of(self, trajectory, robot: str | None) -> str:
         names = list(self.scene.robots)
         own = getattr(trajectory, "robot_name", None)
@@ -231,6 +249,7 @@ class Verifier(FollowsScene):
                payload_mass: float = 0.0, name: str | None = None) -> VerificationReport:
         """Verify ``trajectory``; see :func:`verify` for the parameters."""
         t_start = _time.perf_counter()
+        trajectory, name = self._trajectory_of(trajectory, name)
         if method not in ("certified", "sampled"):
             raise VerificationError(f"method: expected 'certified' or 'sampled', got {method!r}")
         sd = check_stopping_distance(stopping_distance)
@@ -540,8 +559,10 @@ def verify(scene, trajectory, *, stopping_distance=0.0, method: str = "certified
     Parameters
     ----------
     scene : armguard.scene.Scene
-    trajectory : armguard.kinematics.Trajectory
-        Every segment moves on the straight joint-space line between its knots.
+    trajectory : armguard.kinematics.Trajectory, or the path of a trajectory YAML file
+        Every segment moves on the straight joint-space line between its knots.  A file is read
+        and checked against the scene (:func:`load_trajectory`: an error names the file, the key
+        and its line).
     stopping_distance : float (m) or StoppingDistance
         Obstacles are grown by it (Hermes): a pair closer than this is a collision.  A
         :class:`StoppingDistance` gives it per segment from the segment's peak speed (of the

@@ -1,0 +1,53 @@
+"""A trajectory file checked against the scene it is to be verified in, its errors located in the file."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+__all__ = ["load_trajectory"]
+
+
+def load_trajectory(scene, path):
+    """The :class:`armguard.kinematics.Trajectory` in the YAML file ``path`` (``docs/trajectory-format.md``),
+    checked against ``scene`` (a Scene or Model): its robot is one of the scene's, its joints are
+    joints of that robot (a subset is fine: the others are held at home), each named once, and every
+    waypoint is within the joint's limits.  ``joint_names`` may name an SRDF group of the Model.
+
+    Any problem raises :class:`armguard.SceneFileError` naming the file, the key, its line and what
+    was expected, e.g. ``traj.yaml: waypoints[1][1] (line 8): joint 'j2' = 9 is outside its limits
+    [-0.785398, 3.92699]``.  :func:`armguard.verify` calls this for a path; ``armguard verify`` for
+    each ``.yaml`` argument."""
+    from .._errors import SceneFileError
+    from .._lines import lines_for
+    from .._tolerance import DEFAULT_TOLERANCES
+    from ..kinematics import Trajectory
+    from ..model import scene_of
+
+    scene = scene_of(scene)  # a Model: its scene
+    file = os.fspath(path)
+    model = getattr(scene, "_model_of_record", None)  # its SRDF groups name joints too
+    groups = model.group_joints if model is not None and model.srdf is not None else None
+    traj = Trajectory.load_yaml(file, groups=groups)
+    with lines_for(file):
+        if traj.robot_name not in scene.robots:
+            raise SceneFileError(file, "robot", f"robot {traj.robot_name!r} is not in scene {scene.name!r} "
+                                 f"(its robots: {', '.join(scene.robots)})")
+        robot = scene.robots[traj.robot_name]
+        want = list(robot.joint_names)
+        names = list(traj.joint_names)
+        bad = [j for j in names if j not in want] or [j for k, j in enumerate(names) if j in names[:k]]
+        if bad:
+            raise SceneFileError(file, "joint_names", f"{bad[0]!r} is not a joint of robot {traj.robot_name!r} or "
+                                 f"is named twice; expected some of its joints {want}")
+        slack = DEFAULT_TOLERANCES.joint_limit
+        for j, name in enumerate(names):  # a waypoint outside the limits: its place in the file
+            i = want.index(name)
+            lo, hi = float(robot.lower[i]), float(robot.upper[i])
+            out = np.flatnonzero((traj.waypoints[:, j] < lo - slack) | (traj.waypoints[:, j] > hi + slack))
+            if len(out):
+                k = int(out[0])
+                raise SceneFileError(file, f"waypoints[{k}][{j}]", f"joint {name!r} = {traj.waypoints[k, j]:.6g} "
+                                     f"is outside its limits [{lo:.6g}, {hi:.6g}]")
+    return traj
