@@ -169,6 +169,19 @@ def test_a_built_in_model_takes_the_srdf_it_is_given(certified):
     assert armguard.load_model("puma560", srdf=False).srdf.disabled == ()
 
 
+def test_a_given_srdf_that_renames_the_arm_says_so(tmp_path):
+    """An SRDF given to a built-in model whose group names its arm otherwise: the sidecar's references to
+    the arm fail, and the error says why (the arms are named by the SRDF's groups), naming both names."""
+    from armguard import SceneFileError
+
+    text = Path(armguard.load_model("puma560").srdf.file).read_text()
+    renamed = tmp_path / "hand.srdf"
+    renamed.write_text(text.replace('group name="puma560"', 'group name="manipulator"').replace('group="puma560"',
+                                                                                                 'group="manipulator"'))
+    with pytest.raises(SceneFileError, match=r"srdf=.*hand\.srdf names 'manipulator' where this file names 'puma560'"):
+        armguard.load_model("puma560", srdf=renamed)
+
+
 _HAND = """<?xml version="1.0"?>
 <robot name="puma560">
   <!-- written by hand, as MoveIt's Setup Assistant would -->

@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import contextlib
+import os
 import tempfile
 import threading
 from pathlib import Path
@@ -277,7 +278,13 @@ def model_from_scenefile(sf, file: str, base: Path, *, srdf=None) -> Model:
     known = {jn.replace("/", "_", 1) for jn in scene.joint_names} | set(scene.joint_names)
     for jn in sf.joints:
         if jn not in known and jn.replace("/", "_", 1) not in known:
-            raise ctx.error(f"joints.{jn}", f"unknown joint; joints are {list(scene.joint_names)}")
+            robot = jn.split("/", 1)[0]
+            hint = ""
+            if srdf not in (None, False) and "/" in jn and robot not in scene.robots:
+                hint = (f" (the arms are named by the SRDF's groups, and srdf={os.fspath(srdf)} names "
+                        f"{', '.join(map(repr, scene.robots)) or 'none'} where this file names {robot!r}: give it the "
+                        "sidecar's group names, or no groups to keep the sidecar's)")
+            raise ctx.error(f"joints.{jn}", f"unknown joint; joints are {list(scene.joint_names)}{hint}")
     scene.description = sf.description
     frames = _frames(sf, ctx)
     try:
