@@ -153,6 +153,26 @@ def test_verify_takes_a_trajectory_file_and_locates_its_errors(tmp_path):
         verify(model, 3)
 
 
+@pytest.mark.parametrize("q_others, said", [
+    ({"puma560": [0, 9, 0, 0, 0, 0]}, r"q_others\['puma560'\]: joint 'j2' = 9 is outside its limits"),
+    ({"puma560": [0, 0.5, 0, 0, 0]}, r"q_others\['puma560'\]: expected 6 values"),
+    (np.zeros(6), "q_others: expected a mapping robot name -> joint values, got ndarray"),
+])
+def test_q_others_is_checked_where_it_is_given(q_others, said):
+    """The held joints' values come from q_others: a value outside its limits is named there (it was
+    called "trajectory waypoints[0]"), and an array where a mapping belongs is refused (a TypeError)."""
+    import armguard
+    from armguard import VerificationError
+    from armguard.kinematics import Trajectory
+
+    model = armguard.load_model("puma560")
+    traj = Trajectory("puma560", ["j1"], [0.0, 1.0], [[0.0], [0.3]])
+    with pytest.raises(VerificationError, match=said):
+        verify(model, traj, q_others=q_others, method="sampled", frequency=5)
+    held = verify(model, traj, q_others={"puma560": [0, 0.5, -1, 0, 0, 0]}, method="sampled", frequency=5)
+    assert held.held_joints == {"j2": 0.5, "j3": -1.0, "j4": 0.0, "j5": 0.0, "j6": 0.0}
+
+
 @pytest.mark.parametrize("value,said", [("on", "a boolean"), ("true", "a boolean"), ("null", "nothing (null"),
                                         ("'0.5'", "the text '0.5'")])
 def test_a_trajectory_value_that_is_not_a_number_is_refused(tmp_path, value, said):

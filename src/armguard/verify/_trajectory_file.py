@@ -1,4 +1,5 @@
-"""A trajectory file checked against the scene it is to be verified in, its errors located in the file."""
+"""What a verification is given, checked against its scene: a trajectory file (its errors located in the
+file), the trajectory argument itself, and the other robots' configurations (``q_others``)."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import os
 
 import numpy as np
 
-__all__ = ["load_trajectory"]
+__all__ = ["load_trajectory", "trajectory_of", "within_limits"]
 
 
 def load_trajectory(scene, path):
@@ -51,3 +52,37 @@ def load_trajectory(scene, path):
                 raise SceneFileError(file, f"waypoints[{k}][{j}]", f"joint {name!r} = {traj.waypoints[k, j]:.6g} "
                                      f"is outside its limits [{lo:.6g}, {hi:.6g}]")
     return traj
+
+
+def trajectory_of(scene, trajectory, name: str | None):
+    """``(Trajectory, name)``: a path is read and checked against the scene (:func:`load_trajectory`:
+    an error names the file, the key and its line; the name defaults to the file's stem); anything
+    but a Trajectory is refused saying what was expected."""
+    from .._errors import VerificationError
+    from ..kinematics import Trajectory
+    from ._subdivide import Subdivided
+
+    if isinstance(trajectory, (str, os.PathLike)):
+        path = os.fspath(trajectory)
+        return load_trajectory(scene, path), name or os.path.splitext(os.path.basename(path))[0]
+    if not isinstance(trajectory, (Trajectory, Subdivided)):
+        raise VerificationError(f"trajectory: expected an armguard.kinematics.Trajectory or the path of a "
+                                f"trajectory YAML file, got {type(trajectory).__name__}")
+    return trajectory, name
+
+
+def within_limits(robot, q, where: str):
+    """``q`` (a robot's joint values) when it has one value per joint, each within the joint's limits (to
+    ``Tolerances.joint_limit``); else a VerificationError naming ``where`` and the joint."""
+    from .._errors import VerificationError
+    from .._tolerance import DEFAULT_TOLERANCES
+
+    names = list(robot.joint_names)
+    if q.shape != (len(names),):
+        raise VerificationError(f"{where}: expected {len(names)} values (one per joint {names}), got shape {q.shape}")
+    slack = DEFAULT_TOLERANCES.joint_limit
+    for i, name in enumerate(names):
+        lo, hi = float(robot.lower[i]), float(robot.upper[i])
+        if not lo - slack <= q[i] <= hi + slack:
+            raise VerificationError(f"{where}: joint {name!r} = {q[i]:.6g} is outside its limits [{lo:.6g}, {hi:.6g}]")
+    return q

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
 import time as _time
 
 import numpy as np
@@ -42,6 +41,7 @@ from ._report import (
 )
 from ._stopping import StoppingDistance, check_stopping_distance
 from ._timelaw import finite_array as _finite_array
+from ._trajectory_file import trajectory_of, within_limits
 from ._timelaw import profile_times, segment_times, segments_of
 
 __all__ = ["Verifier", "verify", "DRAKE_JOINT_STEP"]
@@ -109,6 +109,8 @@ class Verifier(FollowsScene):
         self._source = source
         self._backend = (backend, backend_options)
         self._robot = robot
+        if q_others is not None and not hasattr(q_others, "items"):
+            raise VerificationError(f"q_others: expected a mapping robot name -> joint values, got {type(q_others).__name__}")
         self._q_others = None if q_others is None else dict(q_others)
         self._follow()
 
@@ -121,27 +123,10 @@ class Verifier(FollowsScene):
             for k, v in self._q_others.items():
                 if k not in base:
                     raise VerificationError(f"q_others names unknown robot {k!r}; robots are {list(base)}")
-                base[k] = _finite_array(v, f"q_others[{k!r}]")
+                base[k] = within_limits(self.scene.robots[k], _finite_array(v, f"q_others[{k!r}]"), f"q_others[{k!r}]")
         return _State(model, base)
 
     # ------------------------------------------------------------ helpers
-    def _trajectory_of(self, trajectory, name: str | None):
-        """``(Trajectory, name)``: a path is read and checked against the scene (:func:`load_trajectory`:
-        an error names the file, the key and its line; the name defaults to the file's stem); anything
-        but a Trajectory is refused saying what was expected."""
-        from ..kinematics import Trajectory
-        from ._subdivide import Subdivided
-
-        if isinstance(trajectory, (str, os.PathLike)):
-            from ._trajectory_file import load_trajectory
-
-            path = os.fspath(trajectory)
-            return load_trajectory(self.scene, path), name or os.path.splitext(os.path.basename(path))[0]
-        if not isinstance(trajectory, (Trajectory, Subdivided)):
-            raise VerificationError(f"trajectory: expected an armguard.kinematics.Trajectory or the path of a "
-                                    f"trajectory YAML file, got {type(trajectory).__name__}")
-        return trajectory, name
-
     def _robot_of(self, trajectory, robot: str | None) -> str:
         names = list(self.scene.robots)
         own = getattr(trajectory, "robot_name", None)
@@ -249,7 +234,7 @@ class Verifier(FollowsScene):
                payload_mass: float = 0.0, name: str | None = None) -> VerificationReport:
         """Verify ``trajectory``; see :func:`verify` for the parameters."""
         t_start = _time.perf_counter()
-        trajectory, name = self._trajectory_of(trajectory, name)
+        trajectory, name = trajectory_of(self.scene, trajectory, name)
         if method not in ("certified", "sampled"):
             raise VerificationError(f"method: expected 'certified' or 'sampled', got {method!r}")
         sd = check_stopping_distance(stopping_distance)
