@@ -193,3 +193,54 @@ def test_bad_point_files_name_the_file(tmp_path, content, where):
     z.write_bytes(b"")
     with pytest.raises(TerrainFileError, match="empty.ply: cannot read points"):
         read_points(z)
+
+
+@pytest.mark.parametrize("make, said", [
+    (lambda: _map(origin=(np.nan, 0.0)), "ElevationMap.origin: expected (x0, y0), two finite numbers"),
+    (lambda: _map(origin=(0.0, 0.0, 5.0)), "ElevationMap.origin: expected (x0, y0)"),
+    (lambda: _map(origin=0.0), "ElevationMap.origin: expected (x0, y0)"),
+    (lambda: _map(cell="abc"), "from_heights: cell (m): expected a number, got 'abc'"),
+    (lambda: _map(heights=np.array([[1e308, -1e308]])), "beyond the largest magnitude a map holds"),
+    (lambda: _from_points(1e-7), "more than MAX_CELLS"),
+    (lambda: _from_points(0.1, bounds=(0.0, 0.0, np.inf, 1.0)), "bounds (m): expected a finite number, got inf"),
+    (lambda: _from_points(0.1, bounds=(0.0, 0.0, 1.0)), "bounds: expected (x_min, y_min, x_max, y_max)"),
+    (lambda: _from_points(0.1, floor="low"), "floor (m): expected a number"),
+])
+def test_a_map_refuses_what_would_give_a_verdict_from_nothing(make, said):
+    """A NaN origin was kept and the pyramid then answered HIT from NaN boxes; an origin of three
+    numbers, text for a cell, or heights of 1e308 failed later with numpy's errors; a 1e-7 m cell asked
+    for 720 TiB."""
+    with pytest.raises(TerrainError) as e:
+        make()
+    assert said in str(e.value), str(e.value)
+
+
+def _map(heights=None, cell=0.05, origin=(0.0, 0.0)):
+    from armguard.terrain import ElevationMap
+
+    return ElevationMap.from_heights(np.zeros((8, 8)) if heights is None else heights, cell, origin=origin)
+
+
+def _from_points(cell, **kw):
+    from armguard.terrain import ElevationMap
+
+    return ElevationMap.from_points(_cloud(200, seed=5), cell, **kw)
+
+
+def test_load_terrain_never_takes_one_cell_for_another(tmp_path):
+    """A cell= other than the file's own was dropped without a word (the file's won), cell=0 on a .npz
+    without one read as 0.05 m, text raised ValueError; a cloud too sparse for the outlier rule named no
+    file."""
+    p = _npz(tmp_path / "grid.npz", heights=np.zeros((4, 4)), cell=0.1)
+    assert load_terrain(p, cell=0.1).shape == (4, 4)
+    with pytest.raises(TerrainFileError, match="the file's cell is 0.1 m and cell=0.5 was given") as e:
+        load_terrain(p, cell=0.5)
+    assert e.value.file == str(p)
+    for bad in (0, -1.0, "abc", float("nan")):
+        with pytest.raises(TerrainError, match="load_terrain: cell"):
+            load_terrain(_npz(tmp_path / "pts.npz", points_W=_cloud(50, seed=2)), cell=bad)
+    sparse = tmp_path / "sparse.npy"
+    np.save(sparse, np.column_stack([np.linspace(0, 2, 10), np.linspace(0, 2, 10), np.zeros(10)]))
+    with pytest.raises(TerrainFileError, match="no cell has a surviving point") as e:
+        load_terrain(sparse)
+    assert e.value.file == str(sparse) and e.value.where == "points"

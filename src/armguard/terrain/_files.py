@@ -23,14 +23,11 @@ import numpy as np
 from ..model import scene_of
 from .._errors import ArmguardWarning, TerrainError, TerrainFileError
 from ._io import read_points
-from ._map import ElevationMap
+from ._map import MAX_CELLS, ElevationMap
 
 __all__ = ["load_terrain", "verify_items", "TerrainPointsDropped", "MAX_CELLS"]
 
 
-MAX_CELLS = 1 << 24
-"""The most cells (4096 x 4096) :func:`load_terrain` builds from a point file: a tiny cell or a
-point kilometres away would otherwise ask for gigabytes."""
 
 
 class TerrainPointsDropped(ArmguardWarning):
@@ -63,10 +60,17 @@ def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | No
         raise TerrainError(f"terrain file {str(p)!r} does not exist")
     origin = None
     heights = None
+    if cell is not None:
+        try:
+            cell = float(cell)
+        except (TypeError, ValueError):
+            raise TerrainError(f"load_terrain: cell: expected a cell side (m), got {cell!r}") from None
+        if not (np.isfinite(cell) and cell > 0.0):
+            raise TerrainError(f"load_terrain: cell: expected a finite cell side > 0 m, got {cell!r}")
     if p.suffix.lower() == ".npz":
         c, pts, heights, origin = _read_npz(p, cell)
     else:
-        c = 0.05 if cell is None else float(cell)
+        c = 0.05 if cell is None else cell
         pts = read_points(p)
     if not (np.isfinite(c) and c > 0.0):
         raise TerrainFileError(p, "cell", f"expected a cell side > 0 m, got {c!r}")
@@ -94,11 +98,14 @@ def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | No
     if origin is None and scene is not None:
         shift[:2] = _base_xy(scene, robot) - (lo + 0.5 * extent)
     x0, y0 = lo + shift[:2]
-    if pts is None:
-        m = ElevationMap.from_heights(heights, c, origin=(x0, y0))
-    else:
-        m = ElevationMap.from_points(pts + shift, c, bounds=(x0, y0, x0 + extent[0], y0 + extent[1]))
-    return m
+    try:
+        if pts is None:
+            return ElevationMap.from_heights(heights, c, origin=(x0, y0))
+        return ElevationMap.from_points(pts + shift, c, bounds=(x0, y0, x0 + extent[0], y0 + extent[1]))
+    except TerrainFileError:
+        raise
+    except TerrainError as exc:  # what the map refuses (heights beyond any terrain, no supported point): this file's
+        raise TerrainFileError(p, "heights" if pts is None else "points", str(exc)) from None
 
 
 def _read_npz(p: Path, cell):
@@ -118,8 +125,11 @@ def _read_npz(p: Path, cell):
         if a.size != 1:
             raise TerrainFileError(p, "cell", f"expected one number (m), got shape {a.shape}")
         c = float(a.reshape(()))
+        if cell is not None and cell != c:  # never one quietly for the other
+            raise TerrainFileError(p, "cell", f"the file's cell is {c:.6g} m and cell={cell:.6g} was given: give none, "
+                                   "or the file's")
     else:
-        c = cell or 0.05
+        c = 0.05 if cell is None else cell
     pts = heights = origin = None
     if "points_W" in arrays:
         pts = _numbers(p, "points_W", arrays["points_W"])

@@ -26,8 +26,26 @@ import numpy as np
 from scipy import ndimage
 
 from .._errors import TerrainError
+from .._tolerance import DEFAULT_TOLERANCES
 
-__all__ = ["ElevationMap", "OutlierRule"]
+__all__ = ["ElevationMap", "MAX_CELLS", "OutlierRule"]
+
+MAX_CELLS = 1 << 24
+"""The most cells (4096 x 4096) a map is built with from points (:meth:`ElevationMap.from_points`,
+:func:`armguard.terrain.load_terrain`): a tiny cell or a point kilometres away would otherwise ask for
+gigabytes."""
+
+
+def _number(value, where: str, *, positive: bool = False) -> float:
+    """``value`` as a finite float (> 0 with ``positive``), else a TerrainError naming ``where``."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise TerrainError(f"{where}: expected a number, got {value!r}") from None
+    if not np.isfinite(x) or (positive and x <= 0.0):
+        raise TerrainError(f"{where}: expected a finite number{' > 0' if positive else ''}, got {value!r}")
+    return x
+
 
 _MAD_TO_SIGMA = 1.4826  # MAD of a normal distribution times this is its standard deviation
 
@@ -113,9 +131,20 @@ class ElevationMap:
         h = np.asarray(self.heights, dtype=np.float64)
         if h.ndim != 2 or h.size == 0 or not np.all(np.isfinite(h)):
             raise TerrainError(f"ElevationMap.heights: expected a finite (ny, nx) array, got shape {h.shape}")
-        if not (np.isfinite(self.cell) and self.cell > 0.0):
-            raise TerrainError(f"ElevationMap.cell: expected a side > 0 m, got {self.cell!r}")
-        if not np.isfinite(self.floor) or self.floor > float(h.min()):
+        big = DEFAULT_TOLERANCES.max_magnitude
+        if float(np.abs(h).max()) > big:
+            raise TerrainError(f"ElevationMap.heights: {float(np.abs(h).max()):.6g} m is beyond the largest magnitude a "
+                               f"map holds ({big:g} m, Tolerances.max_magnitude)")
+        object.__setattr__(self, "cell", _number(self.cell, "ElevationMap.cell (m)", positive=True))
+        try:
+            o = np.asarray(self.origin, dtype=np.float64)
+        except (TypeError, ValueError):
+            o = np.zeros(0)
+        if o.shape != (2,) or not np.all(np.isfinite(o)) or float(np.abs(o).max()) > big:
+            raise TerrainError(f"ElevationMap.origin: expected (x0, y0), two finite numbers (m, W), got {self.origin!r}")
+        object.__setattr__(self, "origin", o)
+        object.__setattr__(self, "floor", _number(self.floor, "ElevationMap.floor (m)"))
+        if self.floor > float(h.min()):
             raise TerrainError(f"ElevationMap.floor {self.floor!r} must be finite and <= the lowest height {h.min():.6g}")
         for name, a in (("known", self.known), ("counts", self.counts)):
             if np.shape(a) != h.shape:
@@ -165,9 +194,10 @@ class ElevationMap:
         h = np.asarray(heights, dtype=np.float64)
         if h.ndim != 2 or h.size == 0:
             raise TerrainError(f"from_heights: expected a (ny, nx) array, got shape {h.shape}")
+        cell = _number(cell, "from_heights: cell (m)", positive=True)
         k = np.ones(h.shape, bool) if known is None else np.asarray(known, bool)
-        fl = float(h.min()) - float(cell) if floor is None else float(floor)
-        return cls(h, np.asarray(origin, np.float64), float(cell), k, k.astype(np.int64), fl)
+        fl = float(h.min()) - cell if floor is None else _number(floor, "from_heights: floor (m)")
+        return cls(h, origin, cell, k, k.astype(np.int64), fl)
 
     @classmethod
     def from_points(cls, points_W, cell: float, *, bounds=None, rule: OutlierRule = OutlierRule(),
@@ -194,8 +224,7 @@ class ElevationMap:
         floor : float, m, optional
             Bottom of the terrain columns; default one cell side below the lowest cell.
         """
-        if not (np.isfinite(cell) and cell > 0.0):
-            raise TerrainError(f"from_points: cell must be > 0 m, got {cell!r}")
+        cell = _number(cell, "from_points: cell (m)", positive=True)
         if fill not in ("neighbourhood", "ceiling"):
             raise TerrainError(f"from_points: fill must be 'neighbourhood' or 'ceiling', got {fill!r}")
         p = np.asarray(points_W, dtype=np.float64)
@@ -210,11 +239,18 @@ class ElevationMap:
             x_min, y_min = p[:, 0].min(), p[:, 1].min()
             x_max, y_max = p[:, 0].max(), p[:, 1].max()
         else:
-            x_min, y_min, x_max, y_max = (float(v) for v in bounds)
+            b = list(bounds) if np.ndim(bounds) == 1 else []
+            if len(b) != 4:
+                raise TerrainError(f"from_points: bounds: expected (x_min, y_min, x_max, y_max), got {bounds!r}")
+            x_min, y_min, x_max, y_max = (_number(v, "from_points: bounds (m)") for v in b)
             if not (x_max > x_min and y_max > y_min):
                 raise TerrainError(f"from_points: empty bounds {bounds!r}")
-        nx = max(1, int(np.ceil((x_max - x_min) / cell)))
-        ny = max(1, int(np.ceil((y_max - y_min) / cell)))
+        nx = max(1, int(min(np.ceil((x_max - x_min) / cell), 2.0**62)))
+        ny = max(1, int(min(np.ceil((y_max - y_min) / cell), 2.0**62)))
+        if nx * ny > MAX_CELLS:
+            raise TerrainError(f"from_points: a {cell:.6g} m cell over {x_max - x_min:.6g} m x {y_max - y_min:.6g} m makes "
+                               f"{nx} x {ny} cells, more than MAX_CELLS = {MAX_CELLS} (a larger cell, or bounds "
+                               "cropped to the workspace)")
         col = np.floor((p[:, 0] - x_min) / cell).astype(np.int64)
         row = np.floor((p[:, 1] - y_min) / cell).astype(np.int64)
         col = np.where(p[:, 0] == x_max, nx - 1, col)  # the far edge belongs to the last cell
@@ -234,15 +270,20 @@ class ElevationMap:
         known = counts > 0
         if not known.any():
             if ceiling is None:
-                raise TerrainError("from_points: no cell has a surviving point; give a ceiling to fill the map")
-        top = float(hmax[known].max()) if known.any() else float(ceiling)
-        ceil_h = top if ceiling is None else float(ceiling)
+                raise TerrainError(f"from_points: no cell has a surviving point (the outlier rule rejected all {rejected} "
+                                   f"of the {len(p)} points: a point is kept with at least {rule.spike_support} points, "
+                                   f"itself included, as high within {rule.spike_radius} cells); give a ceiling to fill "
+                                   "the map, or a denser cloud")
+        if ceiling is not None:
+            ceiling = _number(ceiling, "from_points: ceiling (m)")
+        top = float(hmax[known].max()) if known.any() else ceiling
+        ceil_h = top if ceiling is None else ceiling
         heights = np.where(known, hmax, ceil_h)
         if fill == "neighbourhood" and known.any() and fill_radius > 0:
             win = 2 * int(fill_radius) + 1
             neigh = ndimage.maximum_filter(np.where(known, hmax, -np.inf), size=win, mode="constant", cval=-np.inf)
             heights = np.where(known, hmax, np.where(np.isfinite(neigh), neigh, ceil_h))
-        fl = float(heights.min()) - cell if floor is None else float(floor)
+        fl = float(heights.min()) - cell if floor is None else _number(floor, "from_points: floor (m)")
         return cls(heights, np.array([x_min, y_min]), float(cell), known, counts, fl, rejected, invalid)
 
 
