@@ -211,6 +211,18 @@ def test_combined_check_never_misses_a_collision(built, scene):
     assert np.any(batch.status == CombinedStatus.FREE) and np.any(batch.status == CombinedStatus.COLLISION)
 
 
+def test_combined_check_refuses_a_nan_in_any_joint(built, scene):
+    """A NaN in joints 1-3 read as a map bin gave MAP_FORBIDDEN (a verdict from a NaN); in 4-6 the
+    backend refused it: now every column is refused, naming the row and the joint."""
+    comb = CombinedChecker(built, scene).prepare()
+    Q = random_configurations(scene, 3, seed=4)
+    for k in range(Q.shape[1]):
+        bad = Q.copy()
+        bad[1, k] = np.nan if k % 2 else np.inf
+        with pytest.raises(ForbiddenMapError, match=f"Q row 1: joint '{scene.joint_names[k]}' = (nan|inf)"):
+            comb.check_many(bad)
+
+
 def test_batched_lookup_equals_one_at_a_time(built):
     """``allowed_many`` (the batched numba lookup; its speed is measured in bench/cspace.py) answers
     exactly what ``allowed`` answers configuration by configuration."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 from click.testing import CliRunner
 
 from armguard.cli import main
@@ -76,7 +77,8 @@ def test_plot_refuses_what_it_cannot_mark_and_writes_the_format_asked(tmp_path):
     for args, said in ((["--q2", "30", "--q", "nan,30,-20"], "not a finite angle"),
                        (["--q2", "30", "--q", "1,abc,3"], "--q: 'abc' is not a finite angle"),
                        (["--q2", "abc"], "--q2: 'abc' is not a finite angle"),
-                       (["--q2", "30", "--q", "180,90,-20"], "is not in the slice's cell")):
+                       (["--q2", "30", "--q", "180,90,-20"], "is not in the slice's cell"),
+                       (["--q2", "30", "--q", "999,30,-20"], "its joint 1 (999°) is outside the map's limits")):
         r = runner.invoke(main, ["cspace", "plot", str(out), *args, "--out", str(png)])
         assert r.exit_code == 3 and said in r.output, (args, r.output)
         assert not png.exists()
@@ -96,3 +98,47 @@ def test_build_on_a_robot_without_bodies_says_what_the_map_lacks(tmp_path):
     assert r.exit_code == 3, r.output
     assert "no pair of a mapped link (links 1-3) against a static body" in r.output and "enable a pair" not in r.output
     assert not (tmp_path / "x.agmap").exists()
+
+
+def test_build_refuses_what_it_cannot_hold_and_leaves_no_empty_journal(tmp_path):
+    """A 0.0001 deg resolution asked numpy for 298 GiB (an internal error, exit 4, and a .partial left
+    behind); a scheduler that is no address was an internal error and left an empty journal."""
+    runner = CliRunner()
+    tiny = tmp_path / "tiny.agmap"
+    r = runner.invoke(main, ["cspace", "build", "hermes", "--resolution", "0.0001deg", "--j3-resolution", "10deg",
+                             "--out", str(tiny)])
+    assert r.exit_code == 3 and "more than 1073741824 (MAX_MAP_BINS)" in r.output, r.output
+    assert not tiny.exists() and not tiny.with_name("tiny.agmap.partial").exists()
+    sch = tmp_path / "sch.agmap"
+    r = runner.invoke(main, ["cspace", "build", "hermes", "--resolution", "30deg", "--scheduler", "nonsense",
+                             "--out", str(sch)])
+    assert r.exit_code == 3 and "'nonsense' is not a Dask scheduler's address" in r.output, r.output
+    assert not sch.exists() and not sch.with_name("sch.agmap.partial").exists()
+
+
+def test_map_queries_refuse_cells_it_does_not_have(tmp_path):
+    """forbidden_intervals(-1, 0) answered the last cell's intervals (a plausible answer for no cell);
+    (60, 0) and substructure_mask(1000) were raw IndexErrors; check_exactness(n=0) called a map it never
+    sampled CONSERVATIVE."""
+    import pytest
+
+    from armguard._errors import ForbiddenMapError
+    from armguard.cspace import ForbiddenMap, check_exactness
+
+    out = tmp_path / "h.agmap"
+    fmap = ForbiddenMap.build("hermes", out=out, resolution="30deg", max_depth=0)
+    n1, n2 = (int(c) for c in fmap.grid.counts[:2])
+    assert fmap.forbidden_intervals(n1 - 1, n2 - 1).shape[1] == 2
+    for i1, i2 in ((-1, 0), (0, -1), (n1, 0), (0, n2), (1.5, 0)):
+        with pytest.raises(ForbiddenMapError, match="is not a cell of this map"):
+            fmap.forbidden_intervals(i1, i2)
+    for s in (-1, fmap.grid.n_substructures, "0"):
+        with pytest.raises(ForbiddenMapError, match="substructure"):
+            fmap.substructure_mask(s)
+    for n in (0, -1, 2.5):
+        with pytest.raises(ForbiddenMapError, match="n: expected a number of configurations >= 1"):
+            check_exactness(fmap, n=n)
+    with pytest.raises(ForbiddenMapError, match="M >= 1"):
+        check_exactness(fmap, Q=np.zeros((0, 6)))
+    with pytest.raises(ForbiddenMapError, match="stopping_distance"):
+        ForbiddenMap.build("hermes", out=tmp_path / "x.agmap", resolution="30deg", stopping_distance="x")

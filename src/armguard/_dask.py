@@ -28,6 +28,9 @@ def dask_client(workers: int | None, scheduler: str | None, error: type = Armgua
             client = Client(scheduler, timeout="20s")
         except (OSError, TimeoutError) as exc:
             raise error(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}") from exc
+        except (ValueError, TypeError) as exc:  # not an address at all ("nonsense": no port number)
+            raise error(f"scheduler {scheduler!r} is not a Dask scheduler's address (expected e.g. "
+                        f"'tcp://10.0.0.5:8786'): {exc}") from exc
     try:
         yield client, max(1, len(client.scheduler_info().get("workers", {})) or int(workers or 1))
     finally:

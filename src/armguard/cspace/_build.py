@@ -190,12 +190,16 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
         raise ForbiddenMapError("give workers (a new LocalCluster) or scheduler (an existing cluster), not both")
     if workers is not None and (int(workers) != workers or workers < 1):
         raise ForbiddenMapError(f"workers: expected an integer >= 1, got {workers!r}")
-    m = float(stopping_distance)
+    try:
+        m = float(stopping_distance)
+    except (TypeError, ValueError):
+        m = math.nan
     if not (math.isfinite(m) and m >= 0.0):
         raise ForbiddenMapError(f"stopping_distance: expected a finite number of metres >= 0, got {stopping_distance!r}")
-    depth = int(tol.cspace_max_depth if max_depth is None else max_depth)
-    if not 0 <= depth <= 20:
-        raise ForbiddenMapError(f"max_depth: expected 0..20, got {depth}")
+    depth = tol.cspace_max_depth if max_depth is None else max_depth
+    if isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or not 0 <= depth <= 20:
+        raise ForbiddenMapError(f"max_depth: expected an integer 0..20, got {depth!r}")
+    depth = int(depth)
     if clearance is not None and (backend is not None or backend_options):
         raise ForbiddenMapError("give a clearance hook or a backend, not both")
     from ..scene import Scene
@@ -271,7 +275,9 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
             evaluations, n_workers = _on_dask(args, todo, journal, bar, workers, scheduler)
     finally:
         bar.close()
-        journal.close()
+        # a journal that holds nothing (a scheduler never reached, a failure before the first substructure)
+        # is no build to resume: removed, not left for a later build with other settings to refuse
+        journal.close(remove=not journal.done)
     subs, ev_all, un_all = [], 0, 0
     for s in range(grid.n_substructures):
         ptr, iv, ev, un = journal.done[s]

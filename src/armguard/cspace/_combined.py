@@ -115,6 +115,11 @@ class CombinedChecker:
         return self
 
     def _check(self, Q_flat: np.ndarray, Q_pin: np.ndarray, margin: float) -> CombinedBatch:
+        bad = np.argwhere(~np.isfinite(Q_flat))
+        if len(bad):  # never a verdict from a NaN, whichever joint holds it (the map's bins took it as forbidden)
+            r, k = (int(x) for x in bad[0])
+            raise ForbiddenMapError(f"Q row {r}: joint {self.scene.joint_names[k]!r} = {Q_flat[r, k]}: every value must "
+                                    "be finite")
         if not (math.isfinite(margin) and 0.0 <= margin <= self.max_margin):
             raise ForbiddenMapError(f"margin {margin!r} m: the map {self.map.path.name} proves links {self.map.links} clear "
                                     f"by at most its stopping distance {self.map.stopping_distance} m; rebuild it with "

@@ -83,8 +83,19 @@ def check_exactness(fmap, scene=None, *, n: int = 10_000, seed: int = 0, Q=None,
     det = Detector(link_obstacle_scene(scene, fmap.robot, fmap.links), threshold=0.0,
                    stopping_distance=fmap.stopping_distance, tol=tol)
     if Q is None:
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ForbiddenMapError(f"n: expected a number of configurations >= 1, got {n!r} (no sample proves nothing)")
         Q = random_configurations(scene, int(n), seed)
-    Q = np.asarray(Q, dtype=np.float64)
+    try:
+        Q = np.asarray(Q, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ForbiddenMapError(f"Q: expected an (M, n_q) array of joint values (rad), got {type(Q).__name__}") from None
+    if Q.ndim != 2 or Q.shape[1] != len(scene.joint_names) or len(Q) == 0:
+        raise ForbiddenMapError(f"Q: expected an (M, {len(scene.joint_names)}) array with M >= 1 (no sample proves "
+                                f"nothing), got shape {Q.shape}")
+    if not np.all(np.isfinite(Q)):
+        r, k = (int(x) for x in np.argwhere(~np.isfinite(Q))[0])
+        raise ForbiddenMapError(f"Q row {r}: joint {scene.joint_names[k]!r} = {Q[r, k]}: every value must be finite")
     k0 = 0
     for name, rob in scene.robots.items():
         if name == fmap.robot:

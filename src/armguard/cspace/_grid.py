@@ -22,10 +22,13 @@ import numpy as np
 
 from .._errors import ForbiddenMapError
 
-__all__ = ["MapGrid", "parse_angle"]
+__all__ = ["MAX_BINS", "MAX_MAP_BINS", "MapGrid", "parse_angle"]
 
 #: the most joint-3 bins (stored as uint16 bin numbers)
 MAX_BINS = 65535
+#: the most bins of a whole map (joint-1 cells x joint-2 cells x joint-3 bins): 2^30, a 1 GiB mask
+#: (a 0.0001 deg resolution asked numpy for 298 GiB and ended in a MemoryError)
+MAX_MAP_BINS = 1 << 30
 _COUNT_SLACK = 1e-9  # relative: (hi - lo) / step within this of an integer counts as that integer
 
 
@@ -80,9 +83,9 @@ class MapGrid:
         hi = np.asarray(upper, dtype=np.float64).reshape(3)
         if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)) and np.all(hi > lo)):
             raise ForbiddenMapError(f"the three joints need finite limits with upper > lower, got {lo} .. {hi}")
-        res = float(resolution)
-        r3 = float(j3_resolution)
-        cell = np.broadcast_to(np.asarray(cell, dtype=np.float64), (2,))
+        res = parse_angle(resolution)
+        r3 = parse_angle(j3_resolution)
+        cell = np.broadcast_to(np.asarray([parse_angle(c) for c in np.atleast_1d(cell)], dtype=np.float64), (2,))
         for name, v in (("resolution", res), ("j3_resolution", r3), ("cell", float(cell.min()))):
             if not (math.isfinite(v) and v > 0.0):
                 raise ForbiddenMapError(f"{name}: expected a positive angle (rad), got {v}")
@@ -90,6 +93,11 @@ class MapGrid:
         counts = np.array([_count(hi[k] - lo[k], step[k]) for k in range(3)], dtype=np.int64)
         if counts[2] > MAX_BINS:
             raise ForbiddenMapError(f"j3_resolution {r3} rad gives {counts[2]} joint-3 bins; at most {MAX_BINS}")
+        total = int(counts[0]) * int(counts[1]) * int(counts[2])
+        if total > MAX_MAP_BINS:
+            raise ForbiddenMapError(f"resolution {math.degrees(res):.6g} deg and j3_resolution {math.degrees(r3):.6g} deg give "
+                                    f"{counts[0]} x {counts[1]} x {counts[2]} = {total:.3g} bins, more than {MAX_MAP_BINS} "
+                                    "(MAX_MAP_BINS): a coarser resolution")
         per_sub = np.maximum(1, np.rint(cell / res)).astype(np.int64)
         n_sub = -(-counts[:2] // per_sub)
         return cls(lo, hi, step, counts, per_sub, n_sub)

@@ -279,13 +279,20 @@ class ForbiddenMap:
 
     def substructure(self, s: int) -> tuple[np.ndarray, np.ndarray]:
         """``(pointers (n_cells + 1,) uint16, intervals (K, 2) uint16)`` of substructure ``s`` (copies)."""
+        ptr, iv = self._raw_sub(self._sub_index(s))
+        return ptr.copy(), iv.copy()
+
+    def _sub_index(self, s) -> int:
+        """``s`` as a substructure number of this map, else a ForbiddenMapError saying the range."""
+        if isinstance(s, (bool, np.bool_)) or not isinstance(s, (int, np.integer)):
+            raise ForbiddenMapError(f"substructure: expected an integer, got {s!r}")
         if not 0 <= int(s) < self.grid.n_substructures:
             raise ForbiddenMapError(f"substructure {s} is not in 0..{self.grid.n_substructures - 1}")
-        ptr, iv = self._raw_sub(int(s))
-        return ptr.copy(), iv.copy()
+        return int(s)
 
     def substructure_mask(self, s: int) -> np.ndarray:
         """``(c1, c2, n3) bool``: forbidden bins of every cell of substructure ``s``."""
+        s = self._sub_index(s)
         i1a, i1b, i2a, i2b = self.grid.sub_cells(s)
         ptr, iv = self._raw_sub(int(s))
         return decode_intervals(ptr, iv, (i1b - i1a, i2b - i2a, int(self.grid.counts[2])))
@@ -357,6 +364,12 @@ class ForbiddenMap:
     def forbidden_intervals(self, i1: int, i2: int) -> np.ndarray:
         """``(K, 2) float64, rad``: cell ``(i1, i2)``'s forbidden joint-3 intervals (bin edges, clipped to the limits)."""
         g = self.grid
+        n1, n2 = int(g.counts[0]), int(g.counts[1])
+        for name, i, n in (("i1", i1, n1), ("i2", i2, n2)):  # -1 once read the last cell, a plausible answer
+            if isinstance(i, (bool, np.bool_)) or not isinstance(i, (int, np.integer)) or not 0 <= int(i) < n:
+                raise ForbiddenMapError(f"cell ({i1!r}, {i2!r}) is not a cell of this map: {name} must be an integer in "
+                                        f"0..{n - 1} (the grid is {n1} x {n2} cells)")
+        i1, i2 = int(i1), int(i2)
         s = g.sub_of(i1, i2)
         i1a, _, i2a, i2b = g.sub_cells(s)
         ptr, iv = self._raw_sub(s)

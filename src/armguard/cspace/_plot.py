@@ -34,6 +34,10 @@ def plot_slice(fmap, q2: float, out, *, q=None, dpi: int = 120) -> None:
         q = np.asarray(q, dtype=np.float64).reshape(-1)
         if q.shape != (3,) or not np.all(np.isfinite(q)):
             raise ForbiddenMapError(f"q: expected 3 finite joint values (rad), got {q.tolist()}")
+        for k in (0, 2):  # the marker on a configuration the map has no bin for would read as its verdict
+            if not g.lower[k] - 1e-12 <= q[k] <= g.upper[k] + 1e-12:
+                raise ForbiddenMapError(f"q: its joint {k + 1} ({math.degrees(q[k]):.6g}°) is outside the map's limits "
+                                        f"[{math.degrees(g.lower[k]):.6g}°, {math.degrees(g.upper[k]):.6g}°]")
         if not lo2 - 1e-12 <= q[1] <= hi2 + 1e-12:
             raise ForbiddenMapError(f"q: its joint 2 ({math.degrees(q[1]):.6g}°) is not in the slice's cell "
                                     f"[{math.degrees(lo2):.6g}°, {math.degrees(hi2):.6g}°] at q2: plot the slice at its joint 2")
