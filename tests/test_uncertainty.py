@@ -315,3 +315,32 @@ def test_results_are_read_only():
     p = pose(1, 2, 3)
     with pytest.raises(ValueError):
         p.mean[0] = 5.0
+
+
+def test_mahalanobis2_of_a_direction_known_exactly_is_infinite():
+    """A singular covariance knows a direction exactly: an observation off the mean along it is
+    impossible (inf), where the pseudo-inverse called it a perfect fit (0.0); along the known
+    directions, and for a regular covariance, the distance is d^T C^-1 d."""
+    p = UncertainPose2([0.0, 0.0, 0.0], np.diag([1e-4, 0.0, 1e-4]))
+    assert p.mahalanobis2([0.0, 1.0, 0.0]) == np.inf
+    assert p.mahalanobis2([0.01, 0.0, 0.0]) == pytest.approx(1.0, rel=1e-12)
+    assert p.mahalanobis2([0.0, 0.0, 0.0]) == 0.0
+    assert UncertainPose2([0.0, 0.0, 0.0], np.zeros((3, 3))).mahalanobis2([1.0, 0.0, 0.0]) == np.inf
+    C = np.array([[2.0, 0.5, 0.1], [0.5, 1.0, 0.2], [0.1, 0.2, 0.5]]) * 1e-3
+    q = UncertainPose2([1.0, 2.0, 0.3], C)
+    x = np.array([1.02, 1.97, 0.35])
+    d = x - q.mean
+    assert q.mahalanobis2(x) == pytest.approx(d @ np.linalg.solve(C, d), rel=1e-12)
+
+
+def test_an_overflowing_relation_is_refused_where_it_is_made():
+    """Exponential coordinates of 1e300 m gave a pose of NaNs (found later by a LinAlgError); a mean or
+    covariance near 1e308 overflowed in the symmetry test."""
+    from armguard.uncertainty import UncertainPose3
+
+    with pytest.raises(UncertaintyError, match=r"xi: .* beyond 1e\+09"):
+        UncertainPose3.from_exp_coords([0, 0, 0, 1e300, 0, 0], np.eye(6) * 1e-4)
+    with pytest.raises(UncertaintyError, match="beyond"):
+        UncertainPose2([1e308, 0.0, 0.0], np.eye(3) * 1e-4)
+    with pytest.raises(UncertaintyError, match="beyond"):
+        UncertainPose2([0.0, 0.0, 0.0], 1e308 * np.eye(3))

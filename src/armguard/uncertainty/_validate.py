@@ -12,9 +12,15 @@ __all__ = ["as_vector", "as_covariance", "as_transform", "symmetrize", "freeze_r
 
 
 def freeze_relation(obj, mean: np.ndarray, cov: np.ndarray):
-    """Set ``obj.mean`` and ``obj.cov`` (a frozen dataclass's fields) to read-only float64 copies; returns ``obj``."""
+    """Set ``obj.mean`` and ``obj.cov`` (a frozen dataclass's fields) to read-only float64 copies; returns ``obj``.
+
+    A result that is not finite (an overflow: exponential coordinates of 1e300 m, a compound of two
+    relations near 1e308) is refused here, where it is made, not later by a LinAlgError."""
     mean = np.array(mean, dtype=np.float64)
     cov = np.array(cov, dtype=np.float64)
+    if not (np.all(np.isfinite(mean)) and np.all(np.isfinite(cov))):
+        raise UncertaintyError(f"{type(obj).__name__}: the result is not finite (an overflow; mean {mean.tolist()}): "
+                               "inputs of this magnitude have no finite relation")
     mean.flags.writeable = False
     cov.flags.writeable = False
     object.__setattr__(obj, "mean", mean)
@@ -32,6 +38,9 @@ def as_vector(value, n: int, name: str) -> np.ndarray:
         raise UncertaintyError(f"{name}: expected shape ({n},), got {a.shape}")
     if not np.all(np.isfinite(a)):
         raise UncertaintyError(f"{name}: contains NaN or infinity: {a}")
+    big = DEFAULT_TOLERANCES.max_magnitude
+    if float(np.max(np.abs(a), initial=0.0)) > big:
+        raise UncertaintyError(f"{name}: {a} holds a value beyond {big:g} (Tolerances.max_magnitude; m or rad)")
     return a
 
 
@@ -56,6 +65,9 @@ def as_covariance(value, n: int, name: str, tol: Tolerances = DEFAULT_TOLERANCES
     if not np.all(np.isfinite(c)):
         raise UncertaintyError(f"{name}: contains NaN or infinity")
     scale = float(np.max(np.abs(c)))
+    if scale > tol.max_magnitude**2:
+        raise UncertaintyError(f"{name}: an entry of {scale:.3g} is beyond {tol.max_magnitude**2:g} (Tolerances.max_magnitude "
+                               "squared; m^2, rad^2)")
     allowance = tol.covariance_relative * scale
     asym = float(np.max(np.abs(c - c.T)))
     if asym > allowance:

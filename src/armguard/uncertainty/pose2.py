@@ -127,10 +127,20 @@ class UncertainPose2:
     def mahalanobis2(self, x) -> float:
         """Squared Mahalanobis distance of a relation ``x`` (3,), (m, m, rad), from this one,
         angle difference wrapped; compare with :func:`k2_for_confidence` (..., dim=3) to
-        decide whether an observation is plausible (Section 5.2, step 2)."""
+        decide whether an observation is plausible (Section 5.2, step 2).
+
+        A singular covariance knows some direction exactly: ``x`` off the mean along it is impossible,
+        ``inf`` (a pseudo-inverse drops that direction and called such an ``x`` a perfect fit, 0);
+        along the known directions the distance is the pseudo-inverse's.  Eigenvalues below
+        ``Tolerances.covariance_relative`` times the largest count as zero, as everywhere here."""
         d = as_vector(x, 3, "x") - self.mean
         d[2] = _se2.wrap_angle(d[2])
-        return float(d @ np.linalg.lstsq(self.cov, d, rcond=None)[0])
+        lam, V = np.linalg.eigh(self.cov)
+        c = V.T @ d
+        zero = lam <= DEFAULT_TOLERANCES.covariance_relative * max(float(lam.max()), 0.0)
+        if np.any(zero & (np.abs(c) > 1e-12 * (1.0 + float(np.abs(d).max())))):
+            return float("inf")
+        return float(np.sum(c[~zero] ** 2 / lam[~zero]))
 
     def sample(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """(n, 3) float64, (m, m, rad): draws from N(mean, cov) with ``rng``."""
