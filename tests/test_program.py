@@ -264,3 +264,28 @@ def test_the_command_line_exit_status(tmp_path):
     assert r.exit_code == 3 and "file not found" in r.output
     r = runner.invoke(main, ["program", "export", str(good), "--out", str(tmp_path / "g.py")])
     assert r.exit_code == 0 and "wc.move(F @ pose(" in (tmp_path / "g.py").read_text(encoding="utf-8")
+
+
+def test_run_and_export_refuse_another_robot_a_self_placement_and_unknown_names(tmp_path):
+    """The program's robot: was never read (a program for 'nobody' ran on the PUMA); placing an object
+    onto itself ran until inverse kinematics failed (exit 1); export wrote a program run refuses, whose
+    script then failed with a traceback; each is now a located SceneFileError, and the exported
+    script's errors are one line with exit status 3."""
+    from armguard.program import export_program, run_program
+
+    robot = tmp_path / "robot.yaml"
+    robot.write_text(PROGRAM.format(cell=EXAMPLE / "cell.yaml", tasks=PICK).replace("tasks:", "robot: nobody\ntasks:"))
+    with pytest.raises(SceneFileError, match=r"robot \(line \d+\): 'nobody' is not the robot of cell 'workmate_cell'"):
+        run_program(robot)
+    onto = PICK + "  - place: cylinder_a\n    onto: cylinder_a\n    approach: {xyz: [0, 0, 0.22], rpy: [180, 0, 0]}\n" \
+                  "    release: {xyz: [0, 0, 0.11], rpy: [180, 0, 0]}\n    depart: {xyz: [0, 0, 0.22], rpy: [180, 0, 0]}\n"
+    with pytest.raises(SceneFileError, match=r"tasks\[1\]\.onto \(line \d+\): cannot place 'cylinder_a' onto itself"):
+        run_program(_write(tmp_path, onto, cell=str(EXAMPLE / "cell.yaml"), name="onto.yaml"))
+    unknown = _write(tmp_path, "  - find: cylinder_c\n", cell=str(EXAMPLE / "cell.yaml"), name="c.yaml")
+    with pytest.raises(SceneFileError, match=r"tasks\[0\]\.find \(line \d+\): 'cylinder_c' is not in cell"):
+        export_program(unknown, tmp_path / "c.py")
+    assert not (tmp_path / "c.py").exists()
+    script = export_program(EXAMPLE / "stack.yaml", tmp_path / "s.py")
+    r = subprocess.run([sys.executable, str(script), "--cell", "nosuch"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 3 and r.stderr.strip().startswith("error: unknown model 'nosuch'"), r.stderr
+    assert r.stderr.strip().count("\n") == 0, r.stderr

@@ -357,3 +357,19 @@ def test_the_demonstration_places_better_calibrated(tmp_path):
     assert r.exit_code == 0 and "python examples/workmate_demo.py" in r.output
     for line in r.output.splitlines()[1:]:
         assert (ROOT / line.split(":")[0].split()[-1]).is_file(), line
+
+
+@pytest.mark.parametrize("kw, said", [
+    (dict(n=2), "n: expected an integer >= 3"), (dict(n=2.5), "n: expected an integer >= 3"),
+    (dict(n=0), "n: expected an integer >= 3"),
+    (dict(poses=np.zeros((3, 3))), r"poses\[0\]"), (dict(poses=np.full((3, 4, 4), np.nan)), r"poses\[0\]"),
+    (dict(poses=[np.eye(4)] * 2), "at least 3 tool poses"),
+    (dict(X_EK=np.full((4, 4), np.nan)), "X_EK"), (dict(X_EK=[1, 2, 3]), "X_EK"),
+])
+def test_calibrate_camera_checks_its_inputs_before_moving(kw, said):
+    """A NaN X_EK gave STOPPED "outside the camera's field of view" after a motion; NaN poses were
+    "unreachable"; n = 2 moved the arm twice before the fit refused it; n = 2.5 ran as 2."""
+    from armguard import UncertaintyError
+
+    with pytest.raises(UncertaintyError, match=said):
+        calibrate_camera(load_cell(EXAMPLE / "cell.yaml"), **kw)

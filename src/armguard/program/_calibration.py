@@ -23,6 +23,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .._errors import UncertaintyError
 from ._calibfile import Calibration
 from ._cell import Cell, _inv
 from ._workcell import ProgramRun, ProgramStopped, Workcell, pose
@@ -154,9 +155,23 @@ def calibrate_camera(cell: Cell, *, poses=None, n: int = 12, X_EK=None, seed: in
     """Calibrate ``cell``'s camera to its robot: move through ``poses`` (X_WE; default
     :func:`calibration_poses` with ``n`` points), each motion verified and emulated; FIND the
     calibration object at ``X_EK`` in the hand (default the tool point) at each stop; fit.  ``seed``
-    seeds the camera's noise."""
-    poses = calibration_poses(cell, n) if poses is None else list(poses)
-    X_EK = np.eye(4) if X_EK is None else np.asarray(X_EK, dtype=np.float64)
+    seeds the camera's noise.  Every input is checked before the first motion: at least 3 points
+    (the rigid fit's minimum; ``n`` an integer), each pose and ``X_EK`` a finite rigid transform (4, 4)."""
+    from ..uncertainty._validate import as_transform
+
+    if poses is None:
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 3:
+            raise UncertaintyError(f"n: expected an integer >= 3 calibration points (the rigid fit needs three), got {n!r}")
+        poses = calibration_poses(cell, n)
+    else:
+        try:
+            poses = list(poses)
+        except TypeError:
+            raise UncertaintyError(f"poses: expected a sequence of X_WE (4, 4), got {type(poses).__name__}") from None
+        if len(poses) < 3:
+            raise UncertaintyError(f"poses: expected at least 3 tool poses (the rigid fit needs three), got {len(poses)}")
+        poses = [as_transform(X, f"poses[{i}]") for i, X in enumerate(poses)]
+    X_EK = np.eye(4) if X_EK is None else as_transform(X_EK, "X_EK")
     wc = Workcell(cell, seed=seed, speed=speed, confidence=confidence, method=method, name="calibrate_camera")
     arm, real = wc.believed.robots[cell.robot], wc.real.robots[cell.robot]
     out = CameraCalibration(cell, CalibrationStatus.STOPPED, wc.run, seed=seed, X_WC_before=np.array(cell.camera.X_WC))

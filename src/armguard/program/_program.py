@@ -10,6 +10,7 @@ interprets it; :func:`export_program` writes it as Python — so both run the sa
 from __future__ import annotations
 
 import copy
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -67,12 +68,17 @@ class Program:
         objects = set(cell.objects)
         frames = objects | {"world", "base", "tool"}
         problems = []
+        if self.spec.robot is not None and self.spec.robot != cell.robot:
+            problems.append(("robot", f"{self.spec.robot!r} is not the robot of cell {cell.name!r} (its robot: "
+                                      f"{cell.robot!r})"))
         for t in self.tasks:
             names = []
             if t.object is not None:
                 names.append(("find" if t.kind == "find" else t.kind, t.object, objects))
             if t.kind == "place":
                 names.append(("onto", t.target, objects))
+                if t.target == t.object:
+                    problems.append((f"{t.where}.onto", f"cannot place {t.object!r} onto itself"))
             for m in t.motions if t.kind == "move" else ():
                 names.append(("frame", m.frame, frames))
             if t.q is not None and len(t.q) != cell.model.scene.robots[cell.robot].n_joints:
@@ -84,8 +90,10 @@ class Program:
                                                          f"expected one of {sorted(known)}"))
         if problems:
             from .._errors import list_problems
+            from .._lines import lines_for
 
-            raise SceneFileError(self.file, *list_problems(problems))
+            with lines_for(self.file):  # each problem's line in the file
+                raise SceneFileError(self.file, *list_problems(problems))
 
     def steps(self) -> list[Step]:
         """The listing: every task expanded into workcell primitives, in order."""
@@ -257,6 +265,8 @@ def export_program(program: Program | str | Path, out, *, cell: str | None = Non
 
         read_calibration(calibration)  # a bad file is refused now, not when the exported program runs
         calibration = str(Path(calibration).resolve())
+    if cell is not None:  # what run refuses (an object or frame not in the cell, another robot) is not exported
+        program.check(load_cell(cell, calibration))
     text = program_text(program, cell=cell, calibration=calibration)
     from .._io import atomic_write
 
@@ -278,11 +288,16 @@ def workcell_main(program, *, cell: str | None, name: str = "program", speed: fl
     a = ap.parse_args(argv)
     if a.cell is None:
         ap.error("no cell: give --cell")
-    wc = Workcell(load_cell(a.cell, a.calibration), seed=a.seed, speed=speed, confidence=confidence, name=name)
+    from .._errors import ArmguardError
+
     try:
+        wc = Workcell(load_cell(a.cell, a.calibration), seed=a.seed, speed=speed, confidence=confidence, name=name)
         program(wc)
     except ProgramStopped:
         pass
+    except ArmguardError as exc:  # a cell that does not load, an object the program names that it lacks: one line
+        print(f"error: {exc}", file=sys.stderr)
+        return 3  # as armguard's exit status for a file or value refused (1 is "a motion was refused")
     run = wc.finish()
     print(run.summary())
     if a.save:
