@@ -204,6 +204,34 @@ def test_errors_and_capability():
     assert issubclass(armguard.ClipError, ValueError)
 
 
+@pytest.mark.parametrize("X, said", [
+    (np.diag([1.0, 1.0, -1.0, 1.0]), "a reflection"),
+    (np.vstack([np.eye(4)[:3], [1.0, 1.0, 1.0, 1.0]]), "the last row must be 0 0 0 1"),
+    (np.full((4, 4), np.nan), "finite 4x4"), ("pose", "finite 4x4"),
+])
+def test_a_pose_that_is_no_rigid_transform_is_refused(X, said):
+    """A reflection was accepted as a rigid transform (the guard turned inside out; the Predictor then
+    failed in scipy), and so was a last row of ones; check(None, ...) was an AttributeError; a
+    Predictor's NaN growth failed only at predict, an empty run was an IndexError."""
+    from armguard.clip import Predictor
+
+    guard = Guard.from_shape(Box([0, 0, 0], [0.1, 0.1, 0.1]))
+    table = Obstacle.from_shape(Box([0, 0, -1.0], [1.0, 1.0, 0.1]))
+    with pytest.raises(armguard.ClipError, match=said):
+        check(guard, table, X)
+    with pytest.raises(armguard.ClipError, match=said):
+        Predictor([guard], [table]).predict(np.eye(4)[None], np.asarray(X)[None] if not isinstance(X, str) else X)
+    with pytest.raises(armguard.ClipError, match="expected a Guard and an Obstacle"):
+        check(None, table)
+    for growth in (np.nan, -1.0, "x"):
+        with pytest.raises(armguard.ClipError, match="growth"):
+            Predictor([guard], [table], growth=growth)
+    with pytest.raises(armguard.ClipError, match="max_halvings"):
+        Predictor([guard], [table], max_halvings=np.nan)
+    with pytest.raises(armguard.ClipError, match="T >= 2"):
+        Predictor([guard], [table]).run(np.zeros((0, 1, 4, 4)))
+
+
 def test_clip_model_on_the_puma560_cell():
     from armguard.clip import ClipModel
 

@@ -161,3 +161,18 @@ def test_workspace_walls_are_definite_and_agree_with_coal(tmp_path):
     assert not _wrong(batch.pair_codes, pair_truth).any()
     assert np.all(batch.pair_codes[:, ws] != 2)
     assert np.any(pair_truth[:, ws]) and not np.all(pair_truth[:, ws])
+
+
+@pytest.mark.parametrize("opts, said", [
+    ({"subdivide": "no"}, "subdivide: expected true or false"), ({"rings": 8}, "rings: expected"),
+    ({"rings": "8"}, "rings: expected"), ({"rings": [2, 1]}, "rings: expected"),
+    ({"inner_scale": "abc"}, "inner_scale: expected a number in (0, 1)"), ({"inner_scale": 1.5}, "inner_scale"),
+    ({"max_depth": 1.5}, "max_depth: expected an integer >= 0"), ({"bracket_rings": None}, "bracket_rings"),
+])
+def test_bad_options_are_refused_naming_the_option(puma, opts, said):
+    """rings=8 and inner_scale=abc were internal errors (TypeError, ValueError; exit 4 from the CLI);
+    subdivide="no" was read as True."""
+    model = puma[0]
+    with pytest.raises(BackendError, match=said.replace("(", r"\(").replace(")", r"\)")):
+        armguard.checker(model, "clip", opts)
+    assert armguard.checker(model, "clip", {"rings": "12,3", "subdivide": False})._guard_opts["rings"] == (12, 3)

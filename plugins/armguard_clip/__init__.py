@@ -43,9 +43,11 @@ answers True for INTERSECTED **and for MAYBE** — conservative: a MAYBE is neve
 The backend answers verdicts only (``capabilities = {VERDICTS}``): asking it for distances
 (``pair_distances``, ``nearest``, ``min_distance_many``) raises BackendError naming that.
 
-Options: ``subdivide`` (bool, default True: the second level), ``inner_scale``, ``max_depth``,
-``rings`` (passed to :meth:`armguard.clip.Guard.from_shape`), ``bracket_rings`` (curved obstacles'
-surface sampling, default :data:`BRACKET_RINGS`).
+Options: ``subdivide`` (true or false, default true: the second level), ``inner_scale`` (in (0, 1)),
+``max_depth`` (an integer >= 0), ``rings`` (``[points per ring, rings per quarter meridian]``, or the
+text ``"16,4"`` from ``--backend-option clip.rings=16,4``; passed to
+:meth:`armguard.clip.Guard.from_shape`), ``bracket_rings`` (curved obstacles' surface sampling,
+default :data:`BRACKET_RINGS`).  A value of another kind is refused naming the option.
 """
 
 from __future__ import annotations
@@ -81,6 +83,44 @@ STATUS = np.array([ClipStatus.CLEAR, ClipStatus.INTERSECTED, ClipStatus.MAYBE], 
 
 _CLEAR, _HIT, _MAYBE = 0, 1, 2
 _OPTIONS = ("bracket_rings", "inner_scale", "max_depth", "rings", "subdivide")
+
+
+def _flag(v, name: str) -> bool:
+    """An option that is true or false (``"no"`` was read as True)."""
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    raise BackendError(f"clip: option {name}: expected true or false, got {v!r}")
+
+
+def _fraction(v, name: str) -> float:
+    """An option in (0, 1)."""
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        x = math.nan
+    if isinstance(v, bool) or not 0.0 < x < 1.0:
+        raise BackendError(f"clip: option {name}: expected a number in (0, 1), got {v!r}")
+    return x
+
+
+def _count(v, name: str) -> int:
+    """An option that is an integer >= 0."""
+    if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 0:
+        raise BackendError(f"clip: option {name}: expected an integer >= 0, got {v!r}")
+    return int(v)
+
+
+def _rings(v, name: str) -> tuple:
+    """A curved shape's sampling: ``[points per ring (>= 3), rings per quarter meridian (>= 1)]``, or the text
+    ``"16,4"`` (``--backend-option clip.rings=16,4``)."""
+    try:
+        n, m = (int(x) for x in v.strip("[]() ").split(",")) if isinstance(v, str) else v
+    except (TypeError, ValueError):
+        n = m = None
+    if any(isinstance(x, bool) or not isinstance(x, (int, np.integer)) for x in (n, m)) or n < 3 or m < 1:
+        raise BackendError(f"clip: option {name}: expected [points per ring >= 3, rings per quarter meridian >= 1] "
+                           f"(or the text '16,4'), got {v!r}")
+    return (int(n), int(m))
 
 
 @dataclass(frozen=True)
@@ -159,11 +199,11 @@ class ClipChecker(CheckerBase):
         unknown = sorted(set(opts) - set(_OPTIONS))
         if unknown:
             raise BackendError(f"clip: unknown options {unknown}; options are {list(_OPTIONS)}")
-        self.subdivide = bool(opts.get("subdivide", True))
-        self._guard_opts = {"inner_scale": float(opts.get("inner_scale", DEFAULT_INNER_SCALE)),
-                            "max_depth": int(opts.get("max_depth", DEFAULT_MAX_DEPTH)),
-                            "rings": tuple(opts.get("rings", DEFAULT_RINGS))}
-        self._bracket_rings = tuple(opts.get("bracket_rings", BRACKET_RINGS))
+        self.subdivide = _flag(opts.get("subdivide", True), "subdivide")
+        self._guard_opts = {"inner_scale": _fraction(opts.get("inner_scale", DEFAULT_INNER_SCALE), "inner_scale"),
+                            "max_depth": _count(opts.get("max_depth", DEFAULT_MAX_DEPTH), "max_depth"),
+                            "rings": _rings(opts.get("rings", DEFAULT_RINGS), "rings")}
+        self._bracket_rings = _rings(opts.get("bracket_rings", BRACKET_RINGS), "bracket_rings")
         self.tol = DEFAULT_TOLERANCES
         self.representation = dict(model.notes)
         self._build()

@@ -24,6 +24,7 @@ it (``max_halvings`` times, poses interpolated by the model); what is still MAYB
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -130,9 +131,17 @@ class Predictor:
     ) -> None:
         self.guards = list(guards)
         self.obstacles = [(o, np.eye(4)) if not isinstance(o, tuple) else (o[0], _pose(o[1], "X_W_OB")) for o in obstacles]
-        if int(max_halvings) != max_halvings or max_halvings < 0:
+        if isinstance(max_halvings, bool) or not isinstance(max_halvings, (int, np.integer)) or max_halvings < 0:
             raise ClipError(f"Predictor: max_halvings must be an integer >= 0, got {max_halvings!r}")
-        self.max_halvings, self.growth, self.tol = int(max_halvings), float(growth), tol
+        try:
+            g = float(growth)
+        except (TypeError, ValueError):
+            g = math.nan
+        if not (math.isfinite(g) and g >= 0.0):
+            raise ClipError(f"Predictor: growth must be a finite length >= 0 (m), got {growth!r}")
+        if not self.guards:
+            raise ClipError("Predictor: no guard to check")
+        self.max_halvings, self.growth, self.tol = int(max_halvings), g, tol
         self._last: np.ndarray | None = None
 
     def _poses(self, X) -> np.ndarray:
@@ -187,7 +196,9 @@ class Predictor:
 
     def run(self, poses) -> list[Prediction]:
         """:meth:`step` over ``poses (T, k, 4, 4)``: one answer per interval (``T - 1``)."""
-        poses = np.asarray(poses, dtype=np.float64)
+        poses = _pose(poses, "poses")
+        if poses.ndim != 4 or len(poses) < 2:
+            raise ClipError(f"Predictor.run: expected poses (T, k, 4, 4) with T >= 2 set points, got shape {poses.shape}")
         self._last = None
         self.step(poses[0])
         return [self.step(p) for p in poses[1:]]

@@ -89,12 +89,21 @@ class ListResult:
 
 
 def _pose(X, what: str) -> np.ndarray:
-    X = np.ascontiguousarray(np.eye(4) if X is None else X, dtype=np.float64)
-    if X.shape[-2:] != (4, 4) or not np.all(np.isfinite(X)):
+    """``X`` as finite 4x4 rigid transforms (one, or a stack): a proper rotation (orthonormal, det +1:
+    a reflection turns the guard inside out) and a last row ``0 0 0 1``; else a ClipError naming ``what``."""
+    try:
+        X = np.ascontiguousarray(np.eye(4) if X is None else X, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ClipError(f"{what}: expected finite 4x4 rigid transforms, got {type(X).__name__}") from None
+    if X.ndim < 2 or X.shape[-2:] != (4, 4) or not np.all(np.isfinite(X)):
         raise ClipError(f"{what}: expected finite 4x4 rigid transforms, got shape {X.shape}")
     R = X[..., :3, :3]
     if not np.allclose(R @ np.swapaxes(R, -1, -2), np.eye(3), atol=1e-9):
         raise ClipError(f"{what}: the rotation part is not orthonormal")
+    if np.any(np.linalg.det(R) < 0.0):
+        raise ClipError(f"{what}: the rotation part is a reflection (det -1), not a rotation")
+    if not np.allclose(X[..., 3, :], [0.0, 0.0, 0.0, 1.0], rtol=0.0, atol=1e-12):
+        raise ClipError(f"{what}: the last row must be 0 0 0 1, got {X[..., 3, :].reshape(-1, 4)[0].tolist()}")
     return X
 
 
@@ -109,6 +118,8 @@ def check(
 ) -> ClipResult:
     """Appendix A for one guard ``VOL`` posed at ``X_W_VOL`` (4x4, ``F(VOL)`` in W; default
     identity) and one obstacle posed at ``X_W_OB`` (``OBLOC``; default identity)."""
+    if not isinstance(guard, Guard) or not isinstance(obstacle, Obstacle):
+        raise ClipError(f"check: expected a Guard and an Obstacle, got {type(guard).__name__} and {type(obstacle).__name__}")
     s, k = procedure(guard.pack(), _pose(X_W_VOL, "X_W_VOL"), obstacle.pack(), _pose(X_W_OB, "X_W_OB"), tol.clip_plane, subdivide)
     return ClipResult(_CODES[int(s)], int(k))
 
