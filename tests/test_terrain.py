@@ -120,6 +120,28 @@ def test_point_files_round_trip(tmp_path, ext):
     np.testing.assert_allclose(read_points(tmp_path / f"cloud{ext}", X_WS=X), p + [1, 2, 3], atol=1e-6)
 
 
+@pytest.mark.parametrize("ext", [".ply", ".pcd", ".npy", ".npz"])
+def test_point_files_are_written_whole_or_not_at_all(tmp_path, monkeypatch, ext):
+    """A full disk left a truncated file (and a raw OSError); a missing folder was a FileNotFoundError:
+    now an OutputError naming the file, and the previous file as it was."""
+    from armguard._errors import OutputError
+
+    old = write_points(tmp_path / f"c{ext}", np.zeros((4, 3)))
+    before = old.read_bytes()
+    import armguard._io as io
+
+    def full(path, blob):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(io, "_write_file", full)
+    with pytest.raises(OutputError, match=f"cannot write .*c\\{ext}: No space left on device"):
+        write_points(old, np.ones((2000, 3)))
+    assert old.read_bytes() == before
+    monkeypatch.undo()
+    with pytest.raises(OutputError, match="is not a folder"):
+        write_points(tmp_path / "nodir" / f"x{ext}", np.zeros((2, 3)))
+
+
 def test_reads_a_hand_written_ascii_pcd_and_names_bad_files(tmp_path):
     f = tmp_path / "scan.pcd"
     f.write_text("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z intensity\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n"

@@ -118,25 +118,29 @@ def read_points(path, X_WS=None) -> np.ndarray:
 
 def write_points(path, points) -> Path:
     """Write ``points (N, 3) m`` to ``.ply`` (binary, trimesh), ``.pcd`` (ASCII, pypcd4; float32),
-    ``.npy`` or ``.npz`` (array ``points``); returns the path."""
+    ``.npy`` or ``.npz`` (array ``points``); returns the path.  The file is written whole or not at
+    all (``armguard._io.atomic_write``: a full disk or a missing folder is an OutputError naming the
+    file, and a previous file of that name is left as it was)."""
+    from .._io import atomic_write
+
     path = Path(path)
     p = _as_points(points, "write_points")
     ext = path.suffix.lower()
     if ext == ".npy":
-        np.save(path, p)
+        data = lambda f: np.save(f, p)  # noqa: E731 - written into memory, then to the file at once
     elif ext == ".npz":
-        np.savez_compressed(path, points=p)
+        data = lambda f: np.savez_compressed(f, points=p)  # noqa: E731
     elif ext == ".ply":
         import trimesh
 
-        trimesh.PointCloud(p).export(path)
+        data = trimesh.PointCloud(p).export(file_type="ply")
     elif ext == ".pcd":
         import pypcd4
 
-        pypcd4.PointCloud.from_xyz_points(p.astype(np.float32)).save(path, encoding=pypcd4.Encoding.ASCII)
+        data = lambda f: pypcd4.PointCloud.from_xyz_points(p.astype(np.float32)).save(f, encoding=pypcd4.Encoding.ASCII)  # noqa: E731
     else:
-        raise TerrainError(f"write_points: unsupported file type {ext!r}")
-    return path
+        raise TerrainError(f"write_points: unsupported file type {ext!r} (expected .ply, .pcd, .npy or .npz)")
+    return atomic_write(path, data)
 
 
 def depth_to_points(depth, fx: float, fy: float, cx: float, cy: float, X_WC=None, *, max_range: float | None = None) -> np.ndarray:
