@@ -257,3 +257,25 @@ def test_avoid_step_refuses_nan():
     bad[0] = np.nan
     with pytest.raises(armguard.BackendError):
         avoid_step(c, bad, np.zeros(m.pin_model.nv), damper, pairs=rows)
+
+
+def test_run_canned_takes_per_column_limits_and_refuses_bad_arguments():
+    """Damper's velocity_limit may be (nv,), one per velocity column of the model: run_canned broadcast it
+    to the test robot's 7 columns and failed (numpy's broadcast error); an unknown test was a KeyError,
+    None an AttributeError, a negative settle time ran -1e11 steps' worth of nothing."""
+    from armguard import AvoidanceError
+    from armguard.avoidance import run_canned
+
+    m = armguard.load_model("ranger")
+    kw = dict(stand_off=0.03, influence=0.15, approach_speed=0.3, period=0.01)
+    name = "test1_left_inward"
+    one = run_canned(m, name, Damper(**kw, velocity_limit=1.0))
+    per_column = run_canned(m, name, Damper(**kw, velocity_limit=tuple([1.0] * m.pin_model.nv)))
+    assert np.array_equal(one.q_end, per_column.q_end) and one.min_distance == per_column.min_distance
+    damper = Damper(**kw, velocity_limit=1.0)
+    with pytest.raises(AvoidanceError, match="'nope' is not a canned test of 'ranger'"):
+        run_canned(m, "nope", damper)
+    with pytest.raises(AvoidanceError, match="expected a canned test"):
+        run_canned(m, None, damper)
+    with pytest.raises(AvoidanceError, match="settle_s: expected a finite number >= 0"):
+        run_canned(m, name, damper, settle_s=-1e9)

@@ -77,14 +77,26 @@ def run_canned(model, test, damper, *, gain: float = 5.0, settle_s: float = 2.0,
     from ..backends import checker as make_checker
     from . import avoid_step
 
+    from .._errors import AvoidanceError
+
     scene = model.scene
     if isinstance(test, str):
+        if test not in scene.canned_tests:
+            raise AvoidanceError(f"run_canned: {test!r} is not a canned test of {scene.name!r} (its tests: "
+                                 f"{', '.join(scene.canned_tests) or 'none'})")
         test = scene.canned_tests[test]
+    if not hasattr(test, "trajectory") or not hasattr(test, "robot"):
+        raise AvoidanceError(f"run_canned: expected a canned test of the model or its name, got {type(test).__name__}")
+    for name, v in (("settle_s", settle_s), ("gain", gain)):
+        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0.0):
+            raise AvoidanceError(f"run_canned: {name}: expected a finite number >= 0, got {v!r}")
     c = checker if checker is not None else make_checker(model, "analytic")
     rows, ks, cols = robot_rows_and_columns(model, test.robot)
     nv = int(model.pin_model.nv)
     lim = np.zeros(nv)
-    lim[cols] = np.broadcast_to(np.asarray(damper.velocity_limit, dtype=np.float64), (len(cols),))
+    given = np.asarray(damper.velocity_limit, dtype=np.float64)
+    # a number, one per velocity column of the model (Damper's (nv,)), or one per column of the test's robot
+    lim[cols] = given[cols] if given.shape == (nv,) else damper.limits(len(cols))
     d_robot = replace(damper, velocity_limit=tuple(float(x) for x in lim))  # only the test's robot moves
     robot = scene.robots[test.robot]
     lo, hi = np.asarray(robot.lower, dtype=np.float64), np.asarray(robot.upper, dtype=np.float64)
