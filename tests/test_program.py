@@ -289,3 +289,15 @@ def test_run_and_export_refuse_another_robot_a_self_placement_and_unknown_names(
     r = subprocess.run([sys.executable, str(script), "--cell", "nosuch"], capture_output=True, text=True, timeout=300)
     assert r.returncode == 3 and r.stderr.strip().startswith("error: unknown model 'nosuch'"), r.stderr
     assert r.stderr.strip().count("\n") == 0, r.stderr
+
+
+def test_every_problem_of_every_task_is_listed_once(tmp_path):
+    """Each task's schema problems were joined into one message and the file's listing then joined those
+    again ("2 more problems:" under "2 more problems:"): now one listing, one line per problem."""
+    bad = PICK.replace("grasp:", "grsp:")
+    p = _write(tmp_path, "  - find: cylinder_a\n    move: joints\n" + bad + bad)
+    with pytest.raises(SceneFileError) as ei:
+        load_program(p)
+    msg = str(ei.value)
+    assert msg.count("more problems:") == 1 and "6 more problems:" in msg, msg
+    assert msg.count("tasks[1].grsp") == 1 and msg.count("tasks[2].grasp") == 1, msg

@@ -190,7 +190,7 @@ def _task(raw, i: int, L: float, A: float, file: str, lines: dict) -> Task:
     try:
         spec = _TASK_MODELS[kind].model_validate(raw)
     except ValidationError as exc:
-        raise SceneFileError(file, *list_problems(_schema_error(file, exc, ("tasks", i)))) from None
+        raise _TaskProblems(_schema_error(file, exc, ("tasks", i))) from None
     line = lines.get(("tasks", i))
     if kind == "find":
         return Task("find", spec.find, None, (), None, where, line)
@@ -211,6 +211,14 @@ def _task(raw, i: int, L: float, A: float, file: str, lines: dict) -> Task:
     if spec.move == "home":
         return Task("move", None, "home", (), None, where, line)
     return Task("move", None, None, (Motion(spec.frame, _pose(spec, L, A, file, where), spec.mode),), None, where, line)
+
+
+class _TaskProblems(Exception):
+    """A task's schema problems, ``(where, message)`` pairs, for :func:`read_program`'s one listing."""
+
+    def __init__(self, problems) -> None:
+        super().__init__(problems)
+        self.problems = list(problems)
 
 
 def _load(path, head_model, kind: str):
@@ -241,6 +249,8 @@ def read_program(path) -> ProgramFile:
         for i, raw in enumerate(head.tasks):
             try:
                 tasks.append(_task(raw, i, L, A, file, lines))
+            except _TaskProblems as exc:  # each of a task's problems one line of the one listing
+                problems.extend(exc.problems)
             except SceneFileError as exc:
                 problems.append((exc.where, exc.message))
         if problems:
