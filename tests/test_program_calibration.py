@@ -373,3 +373,17 @@ def test_calibrate_camera_checks_its_inputs_before_moving(kw, said):
 
     with pytest.raises(UncertaintyError, match=said):
         calibrate_camera(load_cell(EXAMPLE / "cell.yaml"), **kw)
+
+
+def test_calibrate_a_bare_model_cell_with_the_defaults():
+    """`armguard program calibrate puma560` stopped at point 6 ("8 solutions exist but each violates a
+    joint limit"): the default spiral under the bare cell's camera reached beyond the PUMA's limits.
+    Unreachable points are now drawn in towards the camera's axis; every default point is reachable."""
+    from armguard.program import calibration_poses
+    from armguard.program._calibration import _reachable
+
+    cell = load_cell("puma560")
+    poses = calibration_poses(cell, 12)
+    assert len(poses) == 12 and all(_reachable(cell, X) for X in poses)
+    cal = calibrate_camera(cell, n=6)
+    assert cal.status.value == "calibrated", cal.stopped

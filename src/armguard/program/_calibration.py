@@ -126,9 +126,29 @@ def calibration_poses(cell: Cell, n: int = 12, *, height: float = 0.15, radius: 
     for i in range(int(n)):
         r = radius * math.sqrt((i + 0.5) / n)
         a = i * math.pi * (3.0 - math.sqrt(5.0))
-        xyz = [c[0] + r * math.cos(a), c[1] + r * math.sin(a), z0 + (depth if i % 2 else 0.0)]
-        out.append(pose(xyz, [math.pi, 0.0, 0.0]))
+        # a point the arm cannot reach (the default camera of a bare model cell stands where the spiral's
+        # outer, higher points are beyond the PUMA's limits) is drawn in towards the axis and down to z0
+        tries = [(r, depth if i % 2 else 0.0), (0.5 * r, depth if i % 2 else 0.0), (0.5 * r, 0.0), (0.0, 0.0)]
+        for rr, dz in tries:
+            X = pose([c[0] + rr * math.cos(a), c[1] + rr * math.sin(a), z0 + dz], [math.pi, 0.0, 0.0])
+            if _reachable(cell, X):
+                break
+        out.append(X)  # the last try when none is reachable: the run stops there and says so
     return out
+
+
+def _reachable(cell: Cell, X_WE) -> bool:
+    """Whether the cell's robot has an inverse-kinematics solution within its limits for the tool pose ``X_WE``."""
+    from .._errors import TrajectoryError
+    from ..kinematics import Trajectory
+
+    scene = cell.model.scene
+    arm = scene.robots[cell.robot]
+    try:
+        Trajectory.through_poses(arm, scene.home(cell.robot), np.asarray(X_WE)[None], mode="joint", speed=0.1)
+    except TrajectoryError:
+        return False
+    return True
 
 
 def fit_camera(cell: Cell, stops, rng: np.random.Generator):
