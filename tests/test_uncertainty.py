@@ -344,3 +344,21 @@ def test_an_overflowing_relation_is_refused_where_it_is_made():
         UncertainPose2([1e308, 0.0, 0.0], np.eye(3) * 1e-4)
     with pytest.raises(UncertaintyError, match="beyond"):
         UncertainPose2([0.0, 0.0, 0.0], 1e308 * np.eye(3))
+
+
+def test_operations_refuse_a_relation_of_another_kind():
+    """A 2-D pose compounded with a 3-D one, a list or None, and sample's bad arguments, were raw
+    TypeError / ValueError / AttributeError from numpy."""
+    from armguard.uncertainty import UncertainPose3
+
+    a = UncertainPose2([1.0, 2.0, 0.3], np.eye(3) * 1e-3)
+    for call in (lambda: a.compound(UncertainPose3.identity()), lambda: a.compound([1, 2, 3]), lambda: a.merge(None),
+                 lambda: UncertainPose3.identity().merge(a), lambda: UncertainPose3.chain(a),
+                 lambda: UncertainPose2.chain(a, 5), lambda: UncertainPose2.chain(5, a)):
+        with pytest.raises(UncertaintyError, match="expected another UncertainPose"):
+            call()
+    with pytest.raises(UncertaintyError, match="rng: expected a numpy Generator"):
+        a.sample(3, None)
+    with pytest.raises(UncertaintyError, match="n: expected an integer >= 0"):
+        a.sample(-1, np.random.default_rng(0))
+    assert UncertainPose2.chain(a) == a or np.array_equal(UncertainPose2.chain(a).mean, a.mean)

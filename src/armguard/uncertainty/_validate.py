@@ -102,3 +102,21 @@ def as_transform(value, name: str, tol: Tolerances = DEFAULT_TOLERANCES) -> np.n
     if np.any(t[3] != (0.0, 0.0, 0.0, 1.0)):
         raise UncertaintyError(f"{name}: last row must be 0 0 0 1, got {t[3]}")
     return t
+
+
+def same_kind(self, other, op: str) -> None:
+    """Refuse ``other`` unless it is a relation of ``self``'s class (a 3-D pose compounded with a 2-D one,
+    a list, None), naming the operation and both types."""
+    if type(other) is not type(self):
+        raise UncertaintyError(f"{type(self).__name__}.{op}: expected another {type(self).__name__}, got "
+                               f"{type(other).__name__}")
+
+
+def sample_args(n, rng) -> int:
+    """``n`` (draws, an integer >= 0) after checking it and ``rng`` (a numpy Generator)."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+        raise UncertaintyError(f"sample: n: expected an integer >= 0, got {n!r}")
+    if not isinstance(rng, np.random.Generator):
+        raise UncertaintyError(f"sample: rng: expected a numpy Generator (np.random.default_rng(seed)), got "
+                               f"{type(rng).__name__}")
+    return int(n)

@@ -112,6 +112,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--plot", help="also write a PNG of the Fig. 1 chain's samples and ellipses")
     args = ap.parse_args(argv)
+    if args.samples < 2:  # a usage error (exit 2), not a traceback from the Monte Carlo
+        ap.error(f"--samples: expected an integer >= 2, got {args.samples}")
     print(agreement_table(args.samples, args.seed))
     if args.plot:
         from .plot import plot_monte_carlo

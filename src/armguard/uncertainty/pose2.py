@@ -12,7 +12,7 @@ import numpy as np
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from . import confidence as _conf
 from . import se2 as _se2
-from ._validate import as_covariance, freeze_relation, as_vector
+from ._validate import as_covariance, as_vector, freeze_relation, same_kind, sample_args
 
 __all__ = ["UncertainPose2"]
 
@@ -69,6 +69,7 @@ class UncertainPose2:
         dependent (the paper's "treat the dependent combination as a unit"); ``None``:
         independent.
         """
+        same_kind(self, other, "compound")
         if cross_cov is None:
             x3, c3, _, _ = _se2._compound(self.mean, self.cov, other.mean, other.cov)
         else:
@@ -77,6 +78,7 @@ class UncertainPose2:
 
     def compound_jacobians(self, other: "UncertainPose2") -> tuple[np.ndarray, np.ndarray]:
         """J⊕ = [J1 | J2] of ``self ⊕ other`` at the means, (3, 3) each (Eqn. 2)."""
+        same_kind(self, other, "compound_jacobians")
         x3 = _se2._compound_mean(self.mean, other.mean)
         return _se2._compound_jacobians(self.mean, other.mean, x3)
 
@@ -91,6 +93,7 @@ class UncertainPose2:
 
     def merge(self, other: "UncertainPose2", *, tol: Tolerances = DEFAULT_TOLERANCES) -> "UncertainPose2":
         """Merge with an independent parallel estimate of the same relation (Eqns. 5–7)."""
+        same_kind(self, other, "merge")
         x3, c3, _ = _se2._merge(self.mean, self.cov, other.mean, other.cov, tol)
         return UncertainPose2._trusted(x3, c3)
 
@@ -105,11 +108,9 @@ class UncertainPose2:
     @staticmethod
     def chain(*poses: "UncertainPose2") -> "UncertainPose2":
         """``poses[0] ⊕ poses[1] ⊕ …`` compounded left to right (Section 3.1's recursion)."""
-        if not poses:
-            return UncertainPose2.identity()
-        out = poses[0]
-        for p in poses[1:]:
-            out = out.compound(p)
+        out = UncertainPose2.identity()
+        for p in poses:
+            out = out.compound(p)  # (each checked: another UncertainPose2)
         return out
 
     # --- decisions -----------------------------------------------------------------------
@@ -144,6 +145,7 @@ class UncertainPose2:
 
     def sample(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """(n, 3) float64, (m, m, rad): draws from N(mean, cov) with ``rng``."""
+        n = sample_args(n, rng)
         return rng.multivariate_normal(self.mean, self.cov, size=int(n), method="eigh")
 
     def __repr__(self) -> str:

@@ -9,7 +9,7 @@ import numpy as np
 
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from . import se3 as _se3
-from ._validate import as_covariance, freeze_relation, as_transform, as_vector
+from ._validate import as_covariance, as_transform, as_vector, freeze_relation, same_kind, sample_args
 
 __all__ = ["UncertainPose3"]
 
@@ -64,11 +64,13 @@ class UncertainPose3:
 
     def compound(self, other: "UncertainPose3") -> "UncertainPose3":
         """``self ⊕ other``: A→B then B→C gives A→C; ``C = C1 + Ad(T̄1) C2 Ad(T̄1)^T``."""
+        same_kind(self, other, "compound")
         t, c, _ = _se3._compound(self.mean, self.cov, other.mean, other.cov)
         return UncertainPose3._trusted(t, c)
 
     def compound_jacobians(self, other: "UncertainPose3") -> tuple[np.ndarray, np.ndarray]:
         """J⊕ = [I | Ad(T̄1)], (6, 6) each (``other`` enters only through the chain's order)."""
+        same_kind(self, other, "compound_jacobians")
         return np.eye(6), _se3._adjoint(self.mean)
 
     def inverse(self) -> "UncertainPose3":
@@ -84,6 +86,7 @@ class UncertainPose3:
 
     def merge(self, other: "UncertainPose3", *, tol: Tolerances = DEFAULT_TOLERANCES) -> "UncertainPose3":
         """Merge with an independent estimate of the same relation (Eqns. 5–7 on the tangent space)."""
+        same_kind(self, other, "merge")
         t, c, _ = _se3._merge3(self.mean, self.cov, other.mean, other.cov, tol)
         return UncertainPose3._trusted(t, c)
 
@@ -97,6 +100,7 @@ class UncertainPose3:
 
     def sample(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """(n, 4, 4) float64: draws ``exp(ξ^) T̄`` with ``ξ ~ N(0, cov)`` from ``rng``."""
+        n = sample_args(n, rng)
         xi = rng.multivariate_normal(np.zeros(6), self.cov, size=int(n), method="eigh")
         return _se3._exp(xi) @ self.mean
 
