@@ -140,5 +140,8 @@ def test_map_queries_refuse_cells_it_does_not_have(tmp_path):
             check_exactness(fmap, n=n)
     with pytest.raises(ForbiddenMapError, match="M >= 1"):
         check_exactness(fmap, Q=np.zeros((0, 6)))
+    for q in ("abc", None, [[0.1, 0.2, 0.3]]):
+        with pytest.raises(ForbiddenMapError, match="q: expected"):
+            fmap.allowed(q)
     with pytest.raises(ForbiddenMapError, match="stopping_distance"):
         ForbiddenMap.build("hermes", out=tmp_path / "x.agmap", resolution="30deg", stopping_distance="x")

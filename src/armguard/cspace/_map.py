@@ -343,7 +343,7 @@ class ForbiddenMap:
 
     def allowed(self, q) -> bool:
         """One configuration ``q`` (``(3,)`` or the robot's ``(n,)``, rad): see :meth:`allowed_many`."""
-        return bool(self.allowed_many(np.asarray(q, dtype=np.float64)[None, :])[0])
+        return bool(self.allowed_many(_one_row(q))[0])
 
     def neighbourhood(self, q) -> "Neighbourhood":
         """The 3 × 3 block of substructures around ``q`` (fewer at the grid's edges), read from the file alone."""
@@ -435,4 +435,15 @@ class Neighbourhood:
         return codes == Lookup.ALLOWED
 
     def allowed(self, q) -> bool:
-        return bool(self.allowed_many(np.asarray(q, dtype=np.float64)[None, :])[0])
+        return bool(self.allowed_many(_one_row(q))[0])
+
+
+def _one_row(q) -> np.ndarray:
+    """``q`` (one configuration: numbers, rad) as a ``(1, n)`` float64 row; else a ForbiddenMapError."""
+    try:
+        a = np.asarray(q, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ForbiddenMapError(f"q: expected joint values (rad), got {q!r}") from None
+    if a.ndim != 1 or a.size == 0:
+        raise ForbiddenMapError(f"q: expected one configuration, (3,) joints 1-3 or the robot's (n,), got {q!r}")
+    return a[None, :]
