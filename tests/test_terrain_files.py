@@ -244,3 +244,16 @@ def test_load_terrain_never_takes_one_cell_for_another(tmp_path):
     with pytest.raises(TerrainFileError, match="no cell has a surviving point") as e:
         load_terrain(sparse)
     assert e.value.file == str(sparse) and e.value.where == "points"
+
+
+def test_a_pyramid_check_refuses_a_clearance_that_is_no_length():
+    from armguard.geometry import Box
+    from armguard.terrain import TerrainPyramid
+
+    pyramid = TerrainPyramid(_map())
+    box = Box([0.1, 0.1, 0.5], [0.05, 0.05, 0.05])
+    for bad in ("x", np.nan, -1.0, True):
+        with pytest.raises(TerrainError, match="clearance must be a finite length >= 0"):
+            pyramid.check([box], clearance=bad)
+        with pytest.raises(TerrainError, match="clearance must be a finite length >= 0"):
+            pyramid.check_flat([box], clearance=bad)

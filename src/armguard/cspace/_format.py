@@ -273,15 +273,15 @@ class Journal:
         if not data.startswith(head):
             if data.startswith(_OLD_JOURNAL_MAGIC):
                 raise ForbiddenMapFileError(self.path, "fingerprint", "a journal of an older armguard (no checksums); "
-                                            "remove it, or build with resume=False")
+                                            "remove it, or build with resume=False (--no-resume)")
             ok = data.startswith(JOURNAL_MAGIC) and len(data) >= 12
             n = _CRC.unpack_from(data, 8)[0] if ok else 0
             ok = ok and len(data) >= 16 + n and _crc(data[12:12 + n]) == _CRC.unpack_from(data, 12 + n)[0]
             if not ok:
                 raise ForbiddenMapFileError(self.path, "fingerprint", "damaged or not a build journal; remove it, "
-                                            "or build with resume=False")
+                                            "or build with resume=False (--no-resume)")
             raise ForbiddenMapError(f"{self.path}: a partial build with other settings (or model files) is there; "
-                                    "remove it, or build with resume=False")
+                                    "remove it, or build with resume=False (--no-resume)")
         pos = len(head)
         k = 0
         while pos < len(data):

@@ -261,7 +261,7 @@ class ForbiddenMap:
             files = [r["path"] for r in recorded]
             missing = [f for f in files if not Path(f).is_file()]
             if missing:
-                raise ForbiddenMapError(f"{self.path}: cannot check the model: {missing} not found; pass model=")
+                raise ForbiddenMapError(f"{self.path}: cannot check the model: {missing} not found; pass model= (--model)")
         else:
             files = model_files_of(model)
         changes = model_file_changes(recorded, model_file_hashes(files))

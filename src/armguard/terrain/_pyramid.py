@@ -204,8 +204,7 @@ class TerrainPyramid:
         vols, K = list(volumes), len(volumes)
         if K == 0:
             raise TerrainError("check: no link volumes")
-        if not (np.isfinite(clearance) and clearance >= 0.0):
-            raise TerrainError(f"check: clearance must be finite and >= 0, got {clearance!r}")
+        clearance = _clearance(clearance, "check")
         if exact and first:
             raise TerrainError("check: exact mode needs every finest-level hit; drop first=True")
         if shapes is not None and len(shapes) != K:
@@ -253,6 +252,7 @@ class TerrainPyramid:
         vols, K = list(volumes), len(volumes)
         if K == 0:
             raise TerrainError("check_flat: no link volumes")
+        clearance = _clearance(clearance, "check_flat")
         rows, rstart = pack_rows(vols, clearance, self.tol.parallel)
         lo_b, hi_b = int(self.offsets[-2]), int(self.offsets[-1])
         cells, masks, tests = [], [], 0
@@ -322,3 +322,14 @@ def _shift_masks(m: np.ndarray, lo: int, K: int) -> np.ndarray:
     nb = min(_MAX_LINKS, K - lo)
     out[:, lo:lo + nb] = (m[:, None] >> np.arange(nb, dtype=np.int64)) & 1
     return out
+
+
+def _clearance(value, where: str) -> float:
+    """``value`` as a finite clearance >= 0 (m); else a TerrainError naming ``where`` (text was a raw TypeError)."""
+    try:
+        c = float(value)
+    except (TypeError, ValueError):
+        c = float("nan")
+    if isinstance(value, bool) or not (np.isfinite(c) and c >= 0.0):
+        raise TerrainError(f"{where}: clearance must be a finite length >= 0 (m), got {value!r}")
+    return c
