@@ -362,3 +362,15 @@ def test_operations_refuse_a_relation_of_another_kind():
     with pytest.raises(UncertaintyError, match="n: expected an integer >= 0"):
         a.sample(-1, np.random.default_rng(0))
     assert UncertainPose2.chain(a) == a or np.array_equal(UncertainPose2.chain(a).mean, a.mean)
+
+
+def test_messages_say_what_is_wrong():
+    """A NaN cross-covariance said "expected a finite (3, 3) array, got shape (3, 3)"; a reflection passed
+    as a rotation said "max |R^T R - I| = 0"."""
+    from armguard.uncertainty import UncertainPose3
+
+    a = UncertainPose2([1.0, 2.0, 0.3], np.eye(3) * 1e-3)
+    with pytest.raises(UncertaintyError, match="cross_cov: contains NaN or infinity"):
+        a.compound(a, cross_cov=np.full((3, 3), np.nan))
+    with pytest.raises(UncertaintyError, match="rotation block is a reflection"):
+        UncertainPose3(np.diag([1.0, 1.0, -1.0, 1.0]), np.eye(6) * 1e-4)

@@ -97,8 +97,10 @@ def as_transform(value, name: str, tol: Tolerances = DEFAULT_TOLERANCES) -> np.n
         raise UncertaintyError(f"{name}: contains NaN or infinity")
     r = t[:3, :3]
     ortho = float(np.max(np.abs(r.T @ r - np.eye(3))))
-    if ortho > tol.rotation_orthonormality or np.linalg.det(r) <= 0.0:
+    if ortho > tol.rotation_orthonormality:
         raise UncertaintyError(f"{name}: rotation block is not a rotation (max |R^T R - I| = {ortho:.3g})")
+    if np.linalg.det(r) <= 0.0:
+        raise UncertaintyError(f"{name}: rotation block is a reflection (det R = {np.linalg.det(r):.3g}), not a rotation")
     if np.any(t[3] != (0.0, 0.0, 0.0, 1.0)):
         raise UncertaintyError(f"{name}: last row must be 0 0 0 1, got {t[3]}")
     return t

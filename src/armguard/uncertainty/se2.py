@@ -193,9 +193,14 @@ def compound(x1, c1, x2, c2, c12=None, *, tol: Tolerances = DEFAULT_TOLERANCES):
     c1 = as_covariance(c1, 3, "c1", tol)
     c2 = as_covariance(c2, 3, "c2", tol)
     if c12 is not None:
-        c12 = np.array(c12, dtype=np.float64)
-        if c12.shape != (3, 3) or not np.all(np.isfinite(c12)):
-            raise UncertaintyError(f"c12: expected a finite (3, 3) array, got shape {c12.shape}")
+        try:
+            c12 = np.array(c12, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise UncertaintyError(f"cross_cov: expected a finite (3, 3) array, got {type(c12).__name__}") from None
+        if c12.shape != (3, 3):
+            raise UncertaintyError(f"cross_cov: expected a finite (3, 3) array, got shape {c12.shape}")
+        if not np.all(np.isfinite(c12)):
+            raise UncertaintyError("cross_cov: contains NaN or infinity")
         as_covariance(np.block([[c1, c12], [c12.T, c2]]), 6, "joint covariance [[c1, c12], [c12^T, c2]]", tol)
     return _compound(x1, c1, x2, c2, c12)
 
