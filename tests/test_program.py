@@ -301,3 +301,17 @@ def test_every_problem_of_every_task_is_listed_once(tmp_path):
     msg = str(ei.value)
     assert msg.count("more problems:") == 1 and "4 more problems:" in msg, msg  # PICK has its depart
     assert msg.count("tasks[1].grsp") == 1 and msg.count("tasks[2].grasp") == 1, msg
+
+
+def test_loaders_refuse_what_is_no_path():
+    """load_program(None), load_cell(None), read_calibration(None) were TypeErrors from pathlib, and
+    write_calibration(None, path) an AttributeError."""
+    from armguard import SceneError
+    from armguard.program import load_cell, read_calibration, write_calibration
+
+    for call, said in ((lambda: load_program(None), "path of an armguard_program file"),
+                       (lambda: load_cell(None), "load_cell: expected a cell file"),
+                       (lambda: read_calibration(None), "path of an armguard_calibration file"),
+                       (lambda: write_calibration(None, "x.yaml"), "expected a Calibration")):
+        with pytest.raises(SceneError, match=said):
+            call()

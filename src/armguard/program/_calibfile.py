@@ -22,7 +22,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field
 
-from .._errors import SceneFileError, list_problems
+from .._errors import SceneError, SceneFileError, list_problems
 from ..model._schema import Name, Num, Vec3
 from ._format import _load, _Model, _pose, _Units, _units
 
@@ -200,4 +200,6 @@ def write_calibration(cal: Calibration, path) -> Path:
     OutputError and the previous file stays as it was); returns the path."""
     from .._io import atomic_write
 
+    if not isinstance(cal, Calibration):
+        raise SceneError(f"write_calibration: expected a Calibration, got {type(cal).__name__}")
     return atomic_write(Path(path), calibration_text(cal))

@@ -11,6 +11,7 @@ covariance is ``cov_origin`` moved to W's origin, Smith & Cheeseman 1986's compo
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -235,6 +236,8 @@ def load_cell(name_or_path, calibration=None) -> Cell:
 
     if calibration is not None and not isinstance(calibration, Calibration):
         calibration = read_calibration(calibration)
+    if not isinstance(name_or_path, (str, os.PathLike)):
+        raise SceneError(f"load_cell: expected a cell file, a model file or a model name, got {type(name_or_path).__name__}")
     if is_cell_file(name_or_path):
         spec = read_cell(name_or_path)
         if calibration is None and spec.calibration is not None:

@@ -10,6 +10,7 @@ file, the place (``tasks[2].grasp.xyz``, with its line) and what was expected.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Literal
@@ -225,6 +226,10 @@ def _load(path, head_model, kind: str):
     from .._lines import line_map, lines_for
     from .._yaml import read_scene_yaml
 
+    if not isinstance(path, (str, os.PathLike)):
+        from .._errors import SceneError
+
+        raise SceneError(f"expected the path of an {kind} file, got {type(path).__name__}")
     path = Path(path)
     file = str(path)
     with lines_for(file):
