@@ -115,3 +115,14 @@ def test_the_example_table_runs():
         sys.path.pop(0)
     text = grasp_error.table(noise=((0.05, 0.005),), poses=(4, 16), trials=10)
     assert text.count("mm") == 2 and "N = 16" in text
+
+
+def test_weigh_refuses_a_noise_that_is_no_positive_number_and_no_data():
+    """sigma_f=-1 was accepted (a covariance from a negative noise); no orientations raised numpy's
+    zero-size error."""
+    R = np.tile(np.eye(3), (3, 1, 1))
+    for kw in (dict(sigma_f=-1.0), dict(sigma_tau="x"), dict(sigma_f=np.nan)):
+        with pytest.raises(UncertaintyError, match="expected the sensor's noise"):
+            weigh(R, np.zeros((3, 3)), np.zeros((3, 3)), **kw)
+    with pytest.raises(UncertaintyError, match=r"R_WS: expected \(n, 3, 3\)"):
+        weigh(np.zeros((0, 3, 3)), np.zeros((0, 3)), np.zeros((0, 3)))

@@ -28,6 +28,7 @@ principal moments are equal about some axis (a cylinder about its own) cannot sh
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,7 +49,7 @@ def _skew(v) -> np.ndarray:
 
 def _rotations(R_WS, where: str) -> np.ndarray:
     R = np.asarray(R_WS, dtype=np.float64)
-    if R.ndim != 3 or R.shape[1:] != (3, 3) or not np.all(np.isfinite(R)):
+    if R.ndim != 3 or R.shape[1:] != (3, 3) or len(R) == 0 or not np.all(np.isfinite(R)):
         raise UncertaintyError(f"{where}: expected (n, 3, 3) finite rotations, got shape {R.shape}")
     if np.abs(R @ np.swapaxes(R, 1, 2) - np.eye(3)).max() > 1e-6:
         raise UncertaintyError(f"{where}: not rotation matrices (R R^T != E)")
@@ -112,6 +113,11 @@ def _lstsq(A: np.ndarray, y: np.ndarray, sigma) -> tuple[np.ndarray, np.ndarray,
 def weigh(R_WS, f_S, tau_S, *, g_W=G_W, sigma_f: float | None = None, sigma_tau: float | None = None) -> Weighing:
     """The object's mass and centre of mass from wrenches at rest (module docstring).  ``sigma_f``,
     ``sigma_tau``: the sensor's noise (N, N m) for the covariance, else estimated from the residuals."""
+    for name, sigma in (("sigma_f", sigma_f), ("sigma_tau", sigma_tau)):
+        if sigma is not None and (isinstance(sigma, bool) or not isinstance(sigma, (int, float, np.floating, np.integer))
+                                  or not (math.isfinite(sigma) and sigma > 0.0)):
+            raise UncertaintyError(f"weigh: {name}: expected the sensor's noise, a finite number > 0, or None "
+                                   f"(estimated from the residuals), got {sigma!r}")
     R = _rotations(R_WS, "R_WS")
     n = len(R)
     f, tau = _vectors(f_S, n, "f_S"), _vectors(tau_S, n, "tau_S")
