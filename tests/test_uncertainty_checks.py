@@ -169,3 +169,18 @@ def test_grown_shape_contains_the_minkowski_sum(shape):
     assert all(distance(Sphere(p, 0.0), grown).distance <= 1e-12 for p in far)
     outside = pts + (shape.core_radius + 3 * g) * u / np.linalg.norm(u, axis=1)[:, None]
     assert any(distance(Sphere(p, 0.0), grown).distance > 0 for p in outside)  # it is not everything
+
+
+@pytest.mark.parametrize("kw, said", [
+    (dict(samples=-5), "samples: expected an integer >= 0"), (dict(samples=2.5), "samples: expected an integer"),
+    (dict(samples="10"), "samples: expected an integer"), (dict(seed="x"), "seed: expected an integer"),
+    (dict(confidence="abc"), r"confidence must be in \(0, 1\)"), (dict(confidence=1.0), r"confidence must be in"),
+])
+def test_clearance_sigmas_refuses_bad_arguments_by_name(kw, said):
+    """samples=-5 was accepted; 2.5, "10" and seed="x" were raw TypeErrors, confidence="abc" a ValueError."""
+    scene = _ball_scene()
+    det = armguard.Detector(scene, threshold=0.0)
+    q = scene.flat_q(scene.default_q())
+    place = [UncertainPlacement("ball", _pose3(0.005, 1.0))]
+    with pytest.raises(UncertaintyError, match=said):
+        clearance_sigmas(det, q, place, **kw)

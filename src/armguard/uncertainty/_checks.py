@@ -375,8 +375,11 @@ def clearance_sigmas(source, q, placements, *, confidence: float = 0.999, sample
     -------
     SigmaReport (module docstring: linearised sigmas, the χ² bound, the Monte Carlo share)
     """
-    if not 0.0 < float(confidence) < 1.0:
-        raise UncertaintyError(f"confidence must be in (0, 1), got {confidence!r}")
+    _confidence(confidence)
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
+        raise UncertaintyError(f"samples: expected an integer >= 0 (Monte Carlo draws; 0: none), got {samples!r}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+        raise UncertaintyError(f"seed: expected an integer, got {seed!r}")
     scene, q_scene, rows = _pair_rows(source, q)
     placements = _check_placements(scene, placements)
     moved = [_moved_by(scene, p) for p in placements]
@@ -545,8 +548,7 @@ def verify_with_confidence(scene, trajectory, placements, confidence: float = 0.
     scene = scene_of(scene)  # a Model: its scene
     from ..verify import verify
 
-    if not 0.0 < float(confidence) < 1.0:
-        raise UncertaintyError(f"confidence must be in (0, 1), got {confidence!r}")
+    _confidence(confidence)
     placements = _check_placements(scene, placements)
     dof = sum(p.rank for p in placements)
     k = math.sqrt(float(stats.chi2.ppf(float(confidence), dof))) if dof > 0 else 0.0
@@ -585,3 +587,14 @@ def verify_with_confidence(scene, trajectory, placements, confidence: float = 0.
     report = verify(grown, trajectory, **verify_options)
     return ConfidentVerification(report, float(confidence), k, dof, {b: g for b, g in growth.items() if g > 0.0},
                                  shrink, grown)
+
+
+def _confidence(value) -> float:
+    """``value`` as a probability in (0, 1); else an UncertaintyError (text was a raw ValueError)."""
+    try:
+        c = float(value)
+    except (TypeError, ValueError):
+        c = math.nan
+    if isinstance(value, bool) or not 0.0 < c < 1.0:
+        raise UncertaintyError(f"confidence must be in (0, 1), got {value!r}")
+    return c
