@@ -134,6 +134,8 @@ def test_bad_options(fmap, forbidden, model, tmp_path):
     missing = tmp_path / "none.agmap"
     with pytest.raises(BackendError, match=f"{missing} not found; build it with `armguard cspace build hermes .*--out {missing}`"):
         armguard.checker(model, "forbidden", {"map": str(missing)})
+    with pytest.raises(BackendError, match=f"map {tmp_path} is a folder, not a .agmap file"):  # it said "not found"
+        armguard.checker(model, "forbidden", {"map": str(tmp_path)})
     with pytest.raises(BackendError, match="unknown options"):
         armguard.checker(model, "forbidden", {"map": str(fmap.path), "bogus": 1})
     with pytest.raises(BackendError, match="not forbidden itself"):

@@ -100,8 +100,12 @@ def test_avoidance_decision_reports_the_filter(ranger):
 def test_avoidance_needs_a_velocity_and_a_damper(ranger):
     m, s, q_start, lo, hi, v, _ = ranger
     g = Guard(s, robot=ROBOT, avoidance=DAMPER)
-    with pytest.raises(VerificationError, match="q_cmd_next or qdot"):
+    with pytest.raises(VerificationError, match="a target is not filtered"):
         g.step(q_start, target=q_start)
+    with pytest.raises(VerificationError, match="one of q_cmd_next or qdot, not both"):  # it said "(no target)"
+        g.step(q_start, q_cmd_next=q_start, qdot=np.zeros_like(q_start))
+    with pytest.raises(VerificationError, match="got neither"):
+        g.step(q_start)
     with pytest.raises(VerificationError, match="Damper"):
         Guard(s, robot=ROBOT, avoidance=0.03)
     with pytest.raises(VerificationError, match="velocity_limit"):

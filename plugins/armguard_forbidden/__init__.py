@@ -93,6 +93,9 @@ class ForbiddenChecker(CheckerBase):
             raise BackendError("forbidden: option 'map' is required (the .agmap file); build one with "
                                f"`{build_command(model, 'maps/' + model.name + '.agmap')}`")
         path = Path(str(path)).expanduser()
+        if path.is_dir():
+            raise BackendError(f"forbidden: map {path} is a folder, not a .agmap file; build one with "
+                               f"`{build_command(model, path / (model.name + '.agmap'))}`")
         if not path.is_file():
             raise BackendError(f"forbidden: map {path} not found; build it with `{build_command(model, path)}`")
         if not model.files:

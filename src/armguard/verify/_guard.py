@@ -290,8 +290,12 @@ class Guard(FollowsScene):
     def _avoid(self, st: _GuardState, q, q_cmd_next, qdot, target, t_start: float) -> GuardDecision:
         """:meth:`step` with the avoidance filter, on the state ``st``."""
         q = self._in_limits(st, self._check(st, q, "q"), "q")
-        if target is not None or (q_cmd_next is None) == (qdot is None):
-            raise VerificationError("step with avoidance: give the commanded velocity, q_cmd_next or qdot (no target)")
+        if target is not None:
+            raise VerificationError("step with avoidance: a target is not filtered; give the commanded velocity, "
+                                    "q_cmd_next or qdot")
+        if (q_cmd_next is None) == (qdot is None):
+            raise VerificationError("step with avoidance: give the commanded velocity as one of q_cmd_next or qdot, "
+                                    f"{'not both' if qdot is not None else 'got neither'}")
         if q_cmd_next is not None:
             qd = (self._in_limits(st, self._check(st, q_cmd_next, "q_cmd_next"), "q_cmd_next") - q) / self.period_s
         else:
