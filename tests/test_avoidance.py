@@ -279,3 +279,11 @@ def test_run_canned_takes_per_column_limits_and_refuses_bad_arguments():
         run_canned(m, None, damper)
     with pytest.raises(AvoidanceError, match="settle_s: expected a finite number >= 0"):
         run_canned(m, name, damper, settle_s=-1e9)
+
+
+def test_damper_refuses_a_velocity_limit_that_is_no_numbers():
+    """'abc' was a raw ValueError; [] was accepted and failed at the first step."""
+    kw = dict(stand_off=0.03, influence=0.15, approach_speed=0.3, period=0.01)
+    for bad in ("abc", [], [[1.0]], -1.0):
+        with pytest.raises(AvoidanceError, match="Damper.velocity_limit: expected a number or one per velocity column"):
+            Damper(**kw, velocity_limit=bad)

@@ -81,9 +81,13 @@ class Damper:
             raise AvoidanceError(f"Damper.approach_speed: expected > 0 m/s, got {self.approach_speed}")
         if not self.period > 0.0:
             raise AvoidanceError(f"Damper.period: expected > 0 s, got {self.period}")
-        lim = np.asarray(self.velocity_limit, dtype=np.float64)
-        if np.any(np.isnan(lim)) or np.any(lim < 0.0):
-            raise AvoidanceError(f"Damper.velocity_limit: expected numbers >= 0 (inf: none), got {self.velocity_limit!r}")
+        try:
+            lim = np.asarray(self.velocity_limit, dtype=np.float64)
+        except (TypeError, ValueError):
+            lim = np.array([np.nan])
+        if lim.ndim > 1 or lim.size == 0 or np.any(np.isnan(lim)) or np.any(lim < 0.0):
+            raise AvoidanceError(f"Damper.velocity_limit: expected a number or one per velocity column, each >= 0 "
+                                 f"(inf: none), got {self.velocity_limit!r}")
 
     @functools.cached_property
     def _limits(self) -> dict:
