@@ -30,7 +30,7 @@ from ._ed import PAPER_CM_PER_DEGREE, EdConstant, ed_constant
 from ._combined import CombinedBatch, CombinedChecker, CombinedStatus, map_model
 from ._exactness import ExactnessReport, ExactnessStatus, check_exactness, random_configurations
 from ._format import FORMAT_VERSION
-from ._grid import MapGrid, parse_angle
+from ._grid import MAX_BINS, MAX_MAP_BINS, MapGrid, parse_angle
 from ._map import ForbiddenMap, Lookup, MapInfo, Neighbourhood
 from ._plot import plot_slice
 
@@ -58,6 +58,8 @@ __all__ = [
     "map_links",
     "model_files_of",
     "parse_angle",
+    "MAX_BINS",
+    "MAX_MAP_BINS",
     "plot_slice",
     "FORMAT_VERSION",
     "EdConstant",
