@@ -36,6 +36,23 @@ __all__ = [
 ]
 
 
+def _float(value) -> float:
+    """``value`` as a float (NaN where it is none: the caller's range test then names it)."""
+    if isinstance(value, bool):
+        return math.nan
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def _dim(dim) -> None:
+    """Refuse ``dim`` unless it is an integer >= 1 (NaN and text were raw ValueErrors)."""
+    ok = isinstance(dim, (int, np.integer, float, np.floating)) and not isinstance(dim, bool)
+    if not ok or not (math.isfinite(dim) and dim == int(dim) and dim >= 1):
+        raise UncertaintyError(f"dim must be a positive integer, got {dim!r}")
+
+
 def k2_for_confidence(confidence: float, dim: int = 2) -> float:
     """``k²`` of the ``confidence`` ellipsoid in ``dim`` dimensions (Appendix A).
 
@@ -51,11 +68,10 @@ def k2_for_confidence(confidence: float, dim: int = 2) -> float:
     -------
     float, dimensionless (squared Mahalanobis radius)
     """
-    p = float(confidence)
+    p = _float(confidence)
     if not 0.0 < p < 1.0 or not math.isfinite(p):
         raise UncertaintyError(f"confidence must be in (0, 1), got {confidence!r}")
-    if int(dim) != dim or dim < 1:
-        raise UncertaintyError(f"dim must be a positive integer, got {dim!r}")
+    _dim(dim)
     if dim == 2:
         return -2.0 * math.log1p(-p)
     return float(stats.chi2.ppf(p, int(dim)))
@@ -75,11 +91,11 @@ def confidence_for_k2(k2: float, dim: int = 2) -> float:
     -------
     float in [0, 1], probability
     """
-    k2 = float(k2)
+    value = k2
+    k2 = _float(k2)
     if not k2 >= 0.0 or not math.isfinite(k2):
-        raise UncertaintyError(f"k2 must be finite and >= 0, got {k2!r}")
-    if int(dim) != dim or dim < 1:
-        raise UncertaintyError(f"dim must be a positive integer, got {dim!r}")
+        raise UncertaintyError(f"k2 must be finite and >= 0, got {value!r}")
+    _dim(dim)
     k = math.sqrt(k2)
     if dim == 1:
         return math.erf(k / math.sqrt(2.0))
