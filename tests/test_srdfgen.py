@@ -244,3 +244,17 @@ def test_check_srdf_without_srdf_lints_the_one_armguard_finds(tmp_path):
     shutil.copytree(found.parent, lone.parent, ignore=shutil.ignore_patterns("*.srdf", "*.yaml"))
     res = CliRunner().invoke(main, ["check-srdf", str(lone)])
     assert res.exit_code == 2 and "finds no SRDF" in res.output and "give SRDF" in res.output
+
+
+def test_an_evaluator_that_cannot_prove_never_is_refused_by_name():
+    """--evaluator fcl hung without end on hermes's adjacent cylinders (python-fcl never returned); clip was
+    refused in the words of a forbidden-values map ("a map's clearances need signed distances")."""
+    from click.testing import CliRunner
+
+    from armguard.cli import main
+
+    runner = CliRunner()
+    r = runner.invoke(main, ["srdf", "hermes", "--out", "unused.srdf", "--evaluator", "fcl", "--max-evaluations", "200"])
+    assert r.exit_code == 3 and "evaluator 'fcl': its distances may not return" in r.output, r.output
+    r = runner.invoke(main, ["srdf", "puma560", "--out", "unused.srdf", "--evaluator", "clip"])
+    assert r.exit_code == 3 and "proving pairs Never needs signed distances" in r.output, r.output

@@ -207,9 +207,11 @@ def sub_model(model, scene):
                  link_frames=model.link_frames, link_placements={k: model.link_placement(k) for k in model.link_frames})
 
 
-def checker_over(model, scene, backend, options=None, *, need_distances: bool = False):
+def checker_over(model, scene, backend, options=None, *, need_distances: bool = False,
+                 needs: str = "a map's clearances need"):
     """``armguard.checker`` of ``backend`` over :func:`sub_model` ``(model, scene)``; with ``need_distances``,
-    a backend that answers verdicts only is refused (:class:`ForbiddenMapError`)."""
+    a backend that answers verdicts only is refused (:class:`ForbiddenMapError`; ``needs`` says who needs
+    the distances)."""
     from .._errors import DetectionError
     from ..backends import Capability, checker
 
@@ -223,7 +225,7 @@ def checker_over(model, scene, backend, options=None, *, need_distances: bool = 
     except DetectionError as exc:
         raise ForbiddenMapError(f"the map's pairs (links 1-3 vs the static bodies): {exc}") from None
     if need_distances and Capability.DISTANCES not in chk.capabilities:
-        raise ForbiddenMapError(f"backend {chk.name!r} answers verdicts only; a map's clearances need signed distances "
+        raise ForbiddenMapError(f"backend {chk.name!r} answers verdicts only; {needs} signed distances "
                                 "(use analytic, coal or another backend that answers distances)")
     return chk
 

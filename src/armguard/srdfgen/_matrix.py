@@ -106,10 +106,20 @@ class PairEvaluator:
     def __init__(self, model, setup, backend: str | None = "analytic", options=None) -> None:
         from ..cspace._clearance import checker_over
 
+        from .._errors import ForbiddenMapError
+
         self.model = model
         self.setup = setup
-        self.checker = checker_over(model, setup.scene, backend, options, need_distances=True)
+        try:
+            self.checker = checker_over(model, setup.scene, backend, options, need_distances=True,
+                                        needs="proving pairs Never needs")
+        except ForbiddenMapError as exc:
+            raise VerificationError(str(exc)) from None
         self.backend = self.checker.name
+        if getattr(self.checker, "distances_may_run_long", False):  # python-fcl: may never return on overlapping shapes
+            raise VerificationError(f"evaluator {self.backend!r}: its distances may not return on overlapping shapes "
+                                    "(python-fcl hung on hermes's adjacent cylinders); proving pairs Never needs "
+                                    "distances that always return: use analytic or coal")
         gp = self.checker.model.pairs
         where: dict = {}
         for row, (a, b) in enumerate(zip(gp.owner_a, gp.owner_b)):
