@@ -167,3 +167,17 @@ def test_detector_verifier_and_harness_follow_an_edited_urdf(tmp_path):
     assert np.abs(d1[:, bay] - d0[:, bay]).max() > 0.1  # the bay moved
     untouched = ~bay & ~np.array(["hera_link3_0" in p or p[1].startswith("cargo_bay") for p in map(tuple, names)])
     np.testing.assert_array_equal(d1[:, untouched], d0[:, untouched])
+
+
+def test_run_compare_gives_no_verdict_from_no_configuration():
+    """n_configs=0 without trajectories reported 'agree' over 0 configurations (and wrote compare.json);
+    -3 was numpy's negative-dimensions error, 2.7 ran as 2; a backends string was split into letters."""
+    from armguard import ArmguardError
+    from armguard.harness import run_compare
+
+    with pytest.raises(ArmguardError, match="no configuration to compare"):
+        run_compare("hermes", n_configs=0, trajectories=None)
+    for bad in (-3, 2.7, True):
+        with pytest.raises(ArmguardError, match="n_configs: expected an integer >= 0"):
+            run_compare("hermes", n_configs=bad, trajectories=None)
+    assert list(run_compare("hermes", "analytic,coal", n_configs=3, trajectories=None).summary["pairs"]) == ["analytic/coal"]

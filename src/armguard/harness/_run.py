@@ -39,7 +39,11 @@ def run_compare(spec, backends=("analytic", "coal"), *, n_configs: int = 1000, s
 
     Returns the :class:`Comparison`; ``summary["timing"]`` holds the wall times of the stages (s).
     """
+    if isinstance(backends, str):  # "analytic,coal" (the CLI's text), not its characters
+        backends = [b.strip() for b in backends.split(",") if b.strip()]
     backends = tuple(backends)
+    if isinstance(n_configs, bool) or not isinstance(n_configs, (int, np.integer)) or n_configs < 0:
+        raise ArmguardError(f"n_configs: expected an integer >= 0, got {n_configs!r}")
     if len(backends) < 2:
         raise ArmguardError(f"--backends: give at least two backends to compare, got {list(backends)}")
     if len(set(backends)) != len(backends):
@@ -51,6 +55,9 @@ def run_compare(spec, backends=("analytic", "coal"), *, n_configs: int = 1000, s
     t0 = time.perf_counter()
     model = model if model is not None else resolve_model(spec)
     configs = build_configs(model, n_configs, seed, trajectories, frequency)
+    if len(configs.Q) == 0:  # "agree" from no configuration is no verdict
+        raise ArmguardError(f"no configuration to compare: n_configs = {n_configs} and no trajectory samples (give "
+                            "--configs >= 1 or a trajectory)")
     t1 = time.perf_counter()
     answers = evaluate(model, configs.Q, backends, options, spec=str(spec), workers=workers, scheduler=scheduler,
                        progress=progress)
