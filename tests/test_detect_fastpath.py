@@ -111,3 +111,13 @@ def test_yesno_box_cull_agrees_with_all_pairs_on_capsules_among_boxes():
     want = det.check_many_bruteforce(Q).collision
     assert 0.05 < want.mean() < 0.95  # both verdicts occur
     np.testing.assert_array_equal(got, want)
+
+
+def test_the_fused_detector_refuses_an_unknown_option():
+    """Detector(scene, backend_options={"warm_strat": True}) was accepted and left warm start off (coal's
+    Detector and the analytic Checker refused it)."""
+    from armguard._errors import BackendError
+
+    scene = load_scene("ranger")
+    with pytest.raises(BackendError, match=r"analytic: unknown options \['warm_strat'\]"):
+        Detector(scene, threshold=0.02, backend_options={"warm_strat": True})

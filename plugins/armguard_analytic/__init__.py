@@ -461,7 +461,11 @@ class AnalyticBackend:
         (:class:`._engine._detector.FusedDetector`, a subclass of :class:`armguard.detect.Detector`)
         in the exact fidelity; None (Ranger's algorithm over this backend's Checker) in the paper
         fidelity."""
-        if str(dict(options or {}).get("fidelity", "exact")) != "exact":
+        opts = dict(options or {})
+        unknown = sorted(set(opts) - {"fidelity", "release_gil", "warm_start"})
+        if unknown:  # a typo ("warm_strat") would else leave the option off without a word
+            raise BackendError(f"analytic: unknown options {unknown}; options are ['fidelity', 'release_gil', 'warm_start']")
+        if str(opts.get("fidelity", "exact")) != "exact":
             return None
         from ._engine._detector import FusedDetector
 
