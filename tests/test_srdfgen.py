@@ -258,3 +258,15 @@ def test_an_evaluator_that_cannot_prove_never_is_refused_by_name():
     assert r.exit_code == 3 and "evaluator 'fcl': its distances may not return" in r.output, r.output
     r = runner.invoke(main, ["srdf", "puma560", "--out", "unused.srdf", "--evaluator", "clip"])
     assert r.exit_code == 3 and "proving pairs Never needs signed distances" in r.output, r.output
+
+
+def test_srdf_json_is_strict_json(tmp_path):
+    """--json printed bare NaN for the distances of Adjacent and undecided pairs (not JSON); now null."""
+    from armguard.cli import main
+
+    r = CliRunner().invoke(main, ["srdf", "puma560", "--out", str(tmp_path / "s.srdf"), "--max-evaluations", "500",
+                                        "--json"])
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.output, parse_constant=lambda c: pytest.fail(f"{c} in --json output"))
+    assert any(p["distance"] is None for p in doc["pairs"]) and all(
+        p["distance"] is None or isinstance(p["distance"], float) for p in doc["pairs"])

@@ -9,6 +9,7 @@ lints an existing SRDF (``armguard.srdfgen``, ``docs/srdf.md``).
 from __future__ import annotations
 
 import json
+import math
 
 import click
 
@@ -77,8 +78,10 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
                                "changed": [{"link1": e.link1, "link2": e.link2, "was": o.reason or o.status,
                                             "now": e.reason or e.status} for o, e in changed],
                                "pairs": [{"link1": e.link1, "link2": e.link2, "reason": e.reason, "status": e.status,
-                                          "q": None if e.q is None else list(e.q), "distance": e.distance, "how": e.how}
-                                         for e in cm.entries]}, default=float))
+                                          "q": None if e.q is None else list(e.q),
+                                          "distance": e.distance if e.distance is not None and math.isfinite(e.distance) else None,
+                                          "how": e.how}
+                                         for e in cm.entries]}, default=float, allow_nan=False))
         return
     click.echo(f"wrote {out}: {len(cm.disabled)} of {c['pairs']} pairs disabled (Adjacent {c['Adjacent']}, "
                f"Default {c['Default']}, Never {c['Never']}, Always {c['Always']}); checked: {c['witnessed']} witnessed, "
