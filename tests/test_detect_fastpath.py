@@ -121,3 +121,13 @@ def test_the_fused_detector_refuses_an_unknown_option():
     scene = load_scene("ranger")
     with pytest.raises(BackendError, match=r"analytic: unknown options \['warm_strat'\]"):
         Detector(scene, threshold=0.02, backend_options={"warm_strat": True})
+
+
+def test_a_detector_of_a_name_or_nothing_is_refused_by_name():
+    """Detector("ranger") and Detector(None) were AttributeErrors ('str' object has no attribute 'robots')."""
+    from armguard._errors import DetectionError
+
+    with pytest.raises(DetectionError, match=r"expected a Scene or a Model \(armguard.load_model\('ranger'\)\), got str"):
+        Detector("ranger", threshold=0.1)
+    with pytest.raises(DetectionError, match="expected a Scene or a Model, got NoneType"):
+        Detector(None, threshold=0.1)

@@ -34,6 +34,9 @@ def scene_and_model(scene_or_model, model=None) -> tuple:
     while nothing changed there) and the Model itself (``armguard.Detector(model)``)."""
     if hasattr(scene_or_model, "pin_model") and hasattr(scene_or_model, "scene"):
         return scene_or_model.scene_for(), scene_or_model if model is None else model
+    if not hasattr(scene_or_model, "robots"):  # a name or None was an AttributeError ('str' has no 'robots')
+        hint = f" (armguard.load_model({scene_or_model!r}))" if isinstance(scene_or_model, str) else ""
+        raise DetectionError(f"Detector: expected a Scene or a Model{hint}, got {type(scene_or_model).__name__}")
     return scene_or_model, model
 
 
