@@ -41,8 +41,8 @@ from ._report import (
 )
 from ._stopping import StoppingDistance, check_stopping_distance
 from ._timelaw import finite_array as _finite_array
-from ._trajectory_file import trajectory_of, within_limits
 from ._timelaw import profile_times, segment_times, segments_of
+from ._trajectory_file import trajectory_of, within_limits
 
 __all__ = ["Verifier", "verify", "DRAKE_JOINT_STEP"]
 
