@@ -197,6 +197,31 @@ def test_check_srdf_reports_a_disabled_pair_that_collides(tmp_path):
     assert strict.exit_code == 1
 
 
+def test_check_srdf_names_a_disabled_pair_of_a_link_the_robot_lacks(tmp_path):
+    """A disabled pair naming a link puma560 lacks (a typo) was only listed under --json "skipped", exit 0 even
+    with --strict, where load_model refuses the same SRDF: now printed, and --strict exits 1.  A pair of a link
+    without geometry stays a quiet skip."""
+    from armguard.cli import main
+
+    srdf = tmp_path / "typo.srdf"
+    srdf.write_text('<robot name="puma560"><disable_collisions link1="puma560_link1" link2="puma560_link33" reason="Never"/>'
+                    '<disable_collisions link1="puma560_link1" link2="puma560_link3" reason="Never"/></robot>')
+    with pytest.raises(armguard.ArmguardError, match="puma560_link33"):
+        armguard.load_model("puma560", srdf=srdf)
+    res = CliRunner().invoke(main, ["check-srdf", "puma560", str(srdf), "--max-evaluations", "3000"])
+    assert res.exit_code == 0, res.output
+    assert "1 disabled pairs name links puma560 does not have (puma560_link33)" in res.output, res.output
+    assert "disabled (Never) puma560_link1 - puma560_link33: unknown link" in res.output
+    js = CliRunner().invoke(main, ["check-srdf", "puma560", str(srdf), "--json", "--max-evaluations", "3000"])
+    assert json.loads(js.output)["skipped"] == [{"link1": "puma560_link1", "link2": "puma560_link33", "reason": "Never",
+                                                 "why": "unknown link"}]
+    strict = CliRunner().invoke(main, ["check-srdf", "puma560", str(srdf), "--strict", "--max-evaluations", "3000"])
+    assert strict.exit_code == 1, strict.output
+    srdf.write_text('<robot name="puma560"><disable_collisions link1="puma560_link1" link2="puma560_link3" reason="Never"/>'
+                    '</robot>')
+    assert CliRunner().invoke(main, ["check-srdf", "puma560", str(srdf), "--strict", "--max-evaluations", "3000"]).exit_code == 0
+
+
 def test_srdf_to_a_missing_folder_is_an_output_error(puma, tmp_path):
     from armguard._errors import OutputError
 
@@ -234,7 +259,8 @@ def test_check_srdf_without_srdf_lints_the_one_armguard_finds(tmp_path):
     res = CliRunner().invoke(main, ["check-srdf", "puma560", "--max-evaluations", "30000"])
     assert res.exit_code == 0, res.output
     lines = res.output.splitlines()
-    assert lines[0].startswith(f"SRDF: {found} (")
+    # a built-in's SRDF is the one its sidecar names ("given (srdf=)" was printed, as if the user gave it)
+    assert lines[0] == f"SRDF: {found} (named by puma560.yaml's model.srdf)"
     given = CliRunner().invoke(main, ["check-srdf", "puma560", str(found), "--max-evaluations", "30000"])
     assert given.exit_code == 0, given.output
     # the same findings as with the file given by name (the summary's elapsed time aside)

@@ -105,7 +105,8 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
 
 @main.command("check-srdf", epilog=exit_epilog(
     ok="linted (findings, if any, are printed)",
-    unsafe="with --strict: a disabled pair other than Adjacent or Default can collide"))
+    unsafe="with --strict: a disabled pair other than Adjacent or Default can collide, or a disabled pair names "
+           "a link the robot lacks (unless the SRDF was found under the robot's name: one of a larger robot)"))
 @click.argument("robot")
 @click.argument("srdf", type=click.Path(dir_okay=False), required=False)
 @click.option("--margin", type=LENGTH, default=0.0, show_default=True, help="Collide means within this distance (m).")
@@ -113,7 +114,8 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
 @click.option("--max-evaluations", type=AT_LEAST_ONE, default=200_000, show_default=True,
               help="Per pair, distance evaluations before it is left undecided.")
 @click.option("--evaluator", default="analytic", show_default=True, help="The backend whose distances are evaluated.")
-@click.option("--strict", is_flag=True, help="Exit 1 when a pair disabled for a reason other than Adjacent or Default can collide.")
+@click.option("--strict", is_flag=True, help="Exit 1 when a pair disabled for a reason other than Adjacent or Default can "
+              "collide, or a disabled pair names a link the robot lacks.")
 @click.option("--json", "as_json", is_flag=True,
               help="Print a JSON object: can_collide [{link1, link2, reason, q (pin_model order), distance}], never_checked, ...")
 def check_srdf_cmd(robot, srdf, margin, workers, max_evaluations, evaluator, strict, as_json) -> None:
@@ -122,11 +124,12 @@ def check_srdf_cmd(robot, srdf, margin, workers, max_evaluations, evaluator, str
     from ..model import load_model
     from ..srdfgen import check_srdf
 
+    partial = False  # an SRDF found under the robot's name may describe a larger robot (load_model skips its other links)
     if srdf is None:
         found = load_model(robot).srdf
         if found is None:
             raise click.UsageError(f"armguard finds no SRDF for {robot!r} (docs/models.md says where it looks): give SRDF")
-        srdf = str(found.file)
+        srdf, partial = str(found.file), bool(found.partial)
         if not as_json:
             click.echo(f"SRDF: {srdf} ({found.found})")
     model = load_model(robot, srdf=False)
@@ -145,5 +148,23 @@ def check_srdf_cmd(robot, srdf, margin, workers, max_evaluations, evaluator, str
             click.echo(f"  checked {d['link1']} - {d['link2']}: proven never (clearance >= {d['clearance_lower_bound']:.4f} m)")
         for d in lint.undecided:
             click.echo(f"  undecided {d['link1']} - {d['link2']} ({'disabled' if d['disabled'] else 'checked'})")
-    if strict and any(d["reason"] not in ("Adjacent", "Default") for d in lint.can_collide):
+        unknown = lint.unknown_links
+        if unknown and partial:
+            click.echo(f"  {len(unknown)} disabled pairs name links {robot} does not have (an SRDF of a larger robot: "
+                       "not applied, as load_model skips them)")
+        elif unknown:
+            links = {x for d in unknown for x in (d["link1"], d["link2"])} - set(_links(model))
+            click.echo(f"  {len(unknown)} disabled pairs name links {robot} does not have ({', '.join(sorted(links))}): "
+                       "not checked, and load_model refuses this SRDF")
+            for d in unknown:
+                click.echo(f"  disabled ({d['reason'] or 'no reason given'}) {d['link1']} - {d['link2']}: unknown link")
+    bad_links = bool(lint.unknown_links) and not partial
+    if strict and (bad_links or any(d["reason"] not in ("Adjacent", "Default") for d in lint.can_collide)):
         raise SystemExit(int(ExitCode.UNSAFE))
+
+
+def _links(model) -> list:
+    """The URDF links of ``model`` (Pinocchio's body frames): the names an SRDF may use."""
+    import pinocchio as pin
+
+    return [f.name for f in model.pin_model.frames if f.type == pin.FrameType.BODY]

@@ -267,7 +267,8 @@ def model_from_scenefile(sf, file: str, base: Path, *, srdf=None) -> Model:
     urdf = ctx.path(sf.model.urdf)
     if not urdf.is_file():
         raise ctx.error("model.urdf", f"URDF file not found: {urdf}")
-    srdf_obj = _srdf_for(urdf, ctx.path(sf.model.srdf) if sf.model.srdf else None)
+    srdf_obj = _srdf_for(urdf, ctx.path(sf.model.srdf) if sf.model.srdf else None,
+                         found=f"named by {Path(file).name}'s model.srdf")
     if srdf is not None:
         srdf_obj = _replace_pairs(srdf_obj, srdf)
     acc = {}

@@ -14,6 +14,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
+import pinocchio as pin
 
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._matrix import PairEvaluator, _progress
@@ -33,8 +34,11 @@ class SrdfLint:
     another backend).  ``never_checked``: ``{link1, link2}``
     pairs the SRDF checks that are proven never within the margin.  ``undecided``: pairs neither
     proven nor witnessed (``disabled`` says which side of the SRDF they are on).  ``adjacent``:
-    disabled pairs joined by a joint (not searched); ``skipped``: disabled pairs naming a link
-    without geometry or one the URDF lacks.
+    disabled pairs joined by a joint (not searched); ``skipped``: disabled pairs not searched,
+    ``{link1, link2, reason, why}``, ``why`` either ``"no geometry"`` (a link of the robot without
+    collision geometry: nothing to check) or ``"unknown link"`` (a link the URDF lacks: a typo or
+    an SRDF of another robot; ``load_model`` refuses such an SRDF unless it was found under the
+    robot's name, see :attr:`unknown_links`).
     """
 
     model: str
@@ -55,6 +59,11 @@ class SrdfLint:
                 "undecided": [dict(d) for d in self.undecided], "proven_disabled": [dict(d) for d in self.proven_disabled],
                 "adjacent": [dict(d) for d in self.adjacent], "skipped": [dict(d) for d in self.skipped],
                 "elapsed_s": self.elapsed_s}
+
+    @property
+    def unknown_links(self) -> tuple:
+        """The ``skipped`` pairs naming a link the URDF lacks (``why == "unknown link"``)."""
+        return tuple(d for d in self.skipped if d["why"] == "unknown link")
 
 
 def check_srdf(model, srdf, *, margin: float = 0.0, backend: str | None = "analytic", options=None,
@@ -78,11 +87,13 @@ def check_srdf(model, srdf, *, margin: float = 0.0, backend: str | None = "analy
     index = {frozenset((p.link1, p.link2)): k for k, p in enumerate(setup.pairs)}
     disabled: dict = {}
     skipped = []
+    links = {f.name for f in model.pin_model.frames if f.type == pin.FrameType.BODY}
     for a, b, reason in sr.disabled:
         k = index.get(frozenset((a, b)))
         if k is None:
             if a != b:
-                skipped.append({"link1": a, "link2": b, "reason": reason})
+                why = "no geometry" if a in links and b in links else "unknown link"
+                skipped.append({"link1": a, "link2": b, "reason": reason, "why": why})
             continue
         disabled.setdefault(k, reason)
     adjacent = [{"link1": setup.pairs[k].link1, "link2": setup.pairs[k].link2, "reason": disabled[k]}
