@@ -215,3 +215,29 @@ def test_srdf_never_drops_a_hand_written_srdfs_groups(tmp_path):
     assert disabled and all(el.get(FINGERPRINT_ATTR) for el in disabled)  # armguard's entries, with certificates
     model = armguard.load_model("puma560", srdf=srdf)
     assert model.srdf.file == srdf or Path(model.srdf.file) == srdf
+
+
+def test_srdf_update_keeps_the_disabled_pairs_it_does_not_search(tmp_path):
+    """hermes.srdf disables pairs the collision matrix never searches: static bodies against each other
+    (``Static``) and links against obstacles by the paper's rules (``Seed``).  ``--update`` dropped them
+    unannounced (the model then checked 8 more pairs); now they are kept as written and counted."""
+    import shutil
+
+    src = Path(armguard.load_model("hermes").srdf.file)
+    srdf = tmp_path / "hermes.srdf"
+    shutil.copy(src, srdf)
+    outside = {(el.get("link1"), el.get("link2"), el.get("reason")) for el in ET.parse(src).getroot().findall("disable_collisions")
+               if el.get("reason") in ("Static", "Seed") and not (el.get("link1") + el.get("link2")).count("hera_link") == 2}
+    assert outside
+    r = CliRunner().invoke(main, ["srdf", "hermes", "--out", str(srdf), "--update", "--max-evaluations", "300"])
+    assert r.exit_code == 0, r.output
+    n_static = sum(1 for o in outside if o[2] == "Static")
+    assert f"{n_static} disable_collisions (Static, not searched)" in r.output, r.output
+    after = {(el.get("link1"), el.get("link2"), el.get("reason")) for el in ET.parse(srdf).getroot().findall("disable_collisions")}
+    assert outside <= after
+    before_pairs = armguard.load_model("hermes").pairs
+    after_pairs = armguard.load_model("hermes", srdf=srdf).pairs
+
+    def robot_vs_rest(p):  # every pair but HERA's link-link pairs (the matrix's)
+        return {(a, b) for a, b in zip(p.owner_a, p.owner_b) if not (a.startswith("hera/") and b.startswith("hera/"))}
+    assert robot_vs_rest(after_pairs) == robot_vs_rest(before_pairs)  # the pairs the matrix does not search: as they were

@@ -69,6 +69,8 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
     changed = [(before[frozenset((e.link1, e.link2))], e) for e in cm.entries if frozenset((e.link1, e.link2)) in before
                and (before[frozenset((e.link1, e.link2))].reason, before[frozenset((e.link1, e.link2))].status)
                != (e.reason, e.status)]
+    if update:  # and the disabled pairs the matrix does not search (static bodies, a link against an obstacle)
+        keep = other_elements(out, searched={frozenset((e.link1, e.link2)) for e in cm.entries})
     cm.write_srdf(out, keep if update else ())
     c = cm.counts()
     if as_json:
@@ -90,7 +92,8 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
         click.echo(f"  --update: {len(cm.kept)} pairs kept (certificate unchanged), "
                    f"{c['pairs'] - c['Adjacent'] - c['Default'] - len(cm.kept)} searched again"
                    + ("" if before else f" ({out} carried no armguard certificates)"))
-        kept_tags = [el.tag for el in keep if isinstance(el.tag, str)]
+        kept_tags = [el.tag if el.tag != "disable_collisions" else f"disable_collisions ({el.get('reason') or 'no reason'}, "
+                     "not searched)" for el in keep if isinstance(el.tag, str)]
         if kept_tags:
             counts = {t: kept_tags.count(t) for t in dict.fromkeys(kept_tags)}
             click.echo("  --update: kept " + ", ".join(f"{n} {t}" for t, n in counts.items()) + f" of {out}")

@@ -64,15 +64,19 @@ def _parse(path, what: str):
         raise SceneFileError(str(path), "", f"cannot read {what} ({exc.strerror or exc})") from None
 
 
-def other_elements(path) -> list:
+def other_elements(path, searched=None) -> list:
     """The elements of the SRDF at ``path`` that a collision matrix does not make: everything but its
     ``<disable_collisions>`` and the comments :func:`srdf_text` writes (a hand-written MoveIt SRDF's
     groups, group states, end effectors, virtual and passive joints), in the file's order, for
-    ``armguard srdf --update`` to keep.  A file that does not parse is a located error."""
+    ``armguard srdf --update`` to keep.  ``searched``: the matrix's pairs (frozensets of two link
+    names); a ``<disable_collisions>`` of any other pair (two static bodies, ``reason="Static"``; a
+    link against an obstacle, a built-in's ``reason="Seed"``) is not the matrix's to decide and is
+    kept too.  A file that does not parse is a located error."""
     out = []
     for el in _parse(path, "the SRDF"):
         if el.tag == "disable_collisions":
-            continue
+            if searched is None or frozenset((el.get("link1", ""), el.get("link2", ""))) in searched:
+                continue
         if el.tag is ET.Comment and (_CHECKED.match(el.text or "") or (el.text or "").startswith(" collision matrix by armguard")):
             continue
         el.tail = None
