@@ -166,7 +166,7 @@ def test_workspace_walls_are_definite_and_agree_with_coal(tmp_path):
 @pytest.mark.parametrize("opts, said", [
     ({"subdivide": "no"}, "subdivide: expected true or false"), ({"rings": 8}, "rings: expected"),
     ({"rings": "8"}, "rings: expected"), ({"rings": [2, 1]}, "rings: expected"),
-    ({"inner_scale": "abc"}, "inner_scale: expected a number in (0, 1)"), ({"inner_scale": 1.5}, "inner_scale"),
+    ({"inner_scale": "abc"}, "inner_scale: expected a finite number in (0, 1)"), ({"inner_scale": 1.5}, "inner_scale"),
     ({"max_depth": 1.5}, "max_depth: expected an integer >= 0"), ({"bracket_rings": None}, "bracket_rings"),
 ])
 def test_bad_options_are_refused_naming_the_option(puma, opts, said):

@@ -380,9 +380,9 @@ def test_confidence_helpers_refuse_what_is_no_number():
     from armguard.uncertainty import confidence_for_k2, k2_for_confidence
 
     assert k2_for_confidence(0.9, dim=2.0) == k2_for_confidence(0.9, 2)
-    for call, said in ((lambda: k2_for_confidence(0.9, dim=float("nan")), "dim must be a positive integer"),
-                       (lambda: k2_for_confidence(0.9, dim="2"), "dim must be a positive integer"),
-                       (lambda: confidence_for_k2("x"), "k2 must be finite and >= 0"),
-                       (lambda: k2_for_confidence("abc"), r"confidence must be in \(0, 1\)")):
+    for call, said in ((lambda: k2_for_confidence(0.9, dim=float("nan")), "dim: expected an integer >= 1"),
+                       (lambda: k2_for_confidence(0.9, dim="2"), "dim: expected an integer >= 1"),
+                       (lambda: confidence_for_k2("x"), "k2: expected a finite number >= 0"),
+                       (lambda: k2_for_confidence("abc"), r"confidence: expected a finite number in \(0, 1\)")):
         with pytest.raises(UncertaintyError, match=said):
             call()

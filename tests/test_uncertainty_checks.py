@@ -174,7 +174,7 @@ def test_grown_shape_contains_the_minkowski_sum(shape):
 @pytest.mark.parametrize("kw, said", [
     (dict(samples=-5), "samples: expected an integer >= 0"), (dict(samples=2.5), "samples: expected an integer"),
     (dict(samples="10"), "samples: expected an integer"), (dict(seed="x"), "seed: expected an integer"),
-    (dict(confidence="abc"), r"confidence must be in \(0, 1\)"), (dict(confidence=1.0), r"confidence must be in"),
+    (dict(confidence="abc"), r"confidence: expected a finite number in \(0, 1\)"), (dict(confidence=1.0), r"confidence: expected a finite number in"),
 ])
 def test_clearance_sigmas_refuses_bad_arguments_by_name(kw, said):
     """samples=-5 was accepted; 2.5, "10" and seed="x" were raw TypeErrors, confidence="abc" a ValueError."""

@@ -61,6 +61,7 @@ import numpy as np
 
 from armguard._errors import BackendError, ClipError
 from armguard._tolerance import DEFAULT_TOLERANCES
+from armguard._values import number
 from armguard.backends import Capability, CheckerBase, check_Q
 from armguard.clip import DEFAULT_INNER_SCALE, DEFAULT_MAX_DEPTH, DEFAULT_RINGS, ClipStatus, Guard, Obstacle, curved_polytopes
 from armguard.clip._kernels import procedure_many
@@ -93,14 +94,8 @@ def _flag(v, name: str) -> bool:
 
 
 def _fraction(v, name: str) -> float:
-    """An option in (0, 1)."""
-    try:
-        x = float(v)
-    except (TypeError, ValueError):
-        x = math.nan
-    if isinstance(v, bool) or not 0.0 < x < 1.0:
-        raise BackendError(f"clip: option {name}: expected a number in (0, 1), got {v!r}")
-    return x
+    """An option in (0, 1) (text too: ``--backend-option inner_scale=0.5``)."""
+    return number(v, f"clip: option {name}", BackendError, low=0.0, high=1.0, low_open=True, high_open=True, text=True)
 
 
 def _count(v, name: str) -> int:

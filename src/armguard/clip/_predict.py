@@ -24,7 +24,6 @@ it (``max_halvings`` times, poses interpolated by the model); what is still MAYB
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,6 +31,7 @@ from scipy.spatial.transform import Rotation, Slerp
 
 from .._errors import ClipError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from .._values import number
 from ..geometry import ConvexPolyhedron
 from ._cells import build_cells
 from ._guard import Guard
@@ -75,8 +75,7 @@ def swept_guard(guard: Guard, X0, X1, *, growth: float = 0.0, tol: Tolerances = 
     ``growth`` + ``clip_plane``; ``PI``, ``RI``, ``CS`` = the guard's at ``X1``; ``RO`` grown by
     the centre's travel; no shell cells (MAYBE is refined in time by :class:`Predictor`)."""
     X0, X1 = _pose(X0, "X0"), _pose(X1, "X1")
-    if growth < 0.0 or not np.isfinite(growth):
-        raise ClipError(f"swept_guard: growth must be finite and >= 0, got {growth!r}")
+    growth = number(growth, "swept_guard: growth", ClipError, low=0.0, unit=" (m)")
     if guard.outer is None:
         raise ClipError("swept_guard: the guard has no outer vertices (a swept guard cannot be swept again)")
     V = guard.outer.vertices
@@ -133,12 +132,7 @@ class Predictor:
         self.obstacles = [(o, np.eye(4)) if not isinstance(o, tuple) else (o[0], _pose(o[1], "X_W_OB")) for o in obstacles]
         if isinstance(max_halvings, bool) or not isinstance(max_halvings, (int, np.integer)) or max_halvings < 0:
             raise ClipError(f"Predictor: max_halvings must be an integer >= 0, got {max_halvings!r}")
-        try:
-            g = float(growth)
-        except (TypeError, ValueError):
-            g = math.nan
-        if not (math.isfinite(g) and g >= 0.0):
-            raise ClipError(f"Predictor: growth must be a finite length >= 0 (m), got {growth!r}")
+        g = number(growth, "Predictor: growth", ClipError, low=0.0, unit=" (m)")
         if not self.guards:
             raise ClipError("Predictor: no guard to check")
         self.max_halvings, self.growth, self.tol = int(max_halvings), g, tol

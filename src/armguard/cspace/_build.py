@@ -23,6 +23,7 @@ from .._dask import dask_client
 from .._errors import ForbiddenMapError, ForbiddenMapFileError
 from .._io import check_target, make_folder
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from .._values import number
 from ._certify import certify_substructure
 from ._clearance import CheckerClearance, map_links
 from ._format import FORMAT_VERSION, KERNEL_VERSION, Journal, check_substructure, write_map
@@ -190,12 +191,7 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
         raise ForbiddenMapError("give workers (a new LocalCluster) or scheduler (an existing cluster), not both")
     if workers is not None and (int(workers) != workers or workers < 1):
         raise ForbiddenMapError(f"workers: expected an integer >= 1, got {workers!r}")
-    try:
-        m = float(stopping_distance)
-    except (TypeError, ValueError):
-        m = math.nan
-    if not (math.isfinite(m) and m >= 0.0):
-        raise ForbiddenMapError(f"stopping_distance: expected a finite number of metres >= 0, got {stopping_distance!r}")
+    m = number(stopping_distance, "stopping_distance", ForbiddenMapError, low=0.0, unit=" (m)")
     depth = tol.cspace_max_depth if max_depth is None else max_depth
     if isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or not 0 <= depth <= 20:
         raise ForbiddenMapError(f"max_depth: expected an integer 0..20, got {depth!r}")

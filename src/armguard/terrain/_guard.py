@@ -27,6 +27,7 @@ import numpy as np
 
 from .._errors import TerrainError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from .._values import number
 from ..geometry import Box, distance
 from ..model import kinematics_of, scene_of
 from ._exact import column_distances
@@ -50,13 +51,7 @@ def _inv(X: np.ndarray) -> np.ndarray:
 
 
 def _length(x, name: str) -> float:
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        raise TerrainError(f"{name}: expected a number of metres, got {x!r}") from None
-    if not (math.isfinite(v) and v >= 0.0):
-        raise TerrainError(f"{name}: must be finite and >= 0, got {v}")
-    return v
+    return number(x, name, TerrainError, low=0.0, unit=" (m)")
 
 
 @dataclass(frozen=True)

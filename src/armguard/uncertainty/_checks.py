@@ -79,6 +79,7 @@ from scipy import stats
 from ..model import kinematics_of, scene_of
 from .._errors import UncertaintyError
 from .._tolerance import DEFAULT_TOLERANCES
+from .._values import number
 from . import se3 as _se3
 from ._grow import grow_shape
 from .pose2 import UncertainPose2
@@ -591,10 +592,4 @@ def verify_with_confidence(scene, trajectory, placements, confidence: float = 0.
 
 def _confidence(value) -> float:
     """``value`` as a probability in (0, 1); else an UncertaintyError (text was a raw ValueError)."""
-    try:
-        c = float(value)
-    except (TypeError, ValueError):
-        c = math.nan
-    if isinstance(value, bool) or not 0.0 < c < 1.0:
-        raise UncertaintyError(f"confidence must be in (0, 1), got {value!r}")
-    return c
+    return number(value, "confidence", UncertaintyError, low=0.0, high=1.0, low_open=True, high_open=True)

@@ -23,6 +23,7 @@ from scipy import integrate, stats
 
 from .._errors import UncertaintyError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from .._values import number, whole_number
 from ._validate import as_covariance, as_vector
 
 __all__ = [
@@ -36,21 +37,9 @@ __all__ = [
 ]
 
 
-def _float(value) -> float:
-    """``value`` as a float (NaN where it is none: the caller's range test then names it)."""
-    if isinstance(value, bool):
-        return math.nan
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        return math.nan
-
-
-def _dim(dim) -> None:
-    """Refuse ``dim`` unless it is an integer >= 1 (NaN and text were raw ValueErrors)."""
-    ok = isinstance(dim, (int, np.integer, float, np.floating)) and not isinstance(dim, bool)
-    if not ok or not (math.isfinite(dim) and dim == int(dim) and dim >= 1):
-        raise UncertaintyError(f"dim must be a positive integer, got {dim!r}")
+def _dim(dim) -> int:
+    """``dim`` as an integer >= 1 (NaN and text were raw ValueErrors)."""
+    return whole_number(dim, "dim", UncertaintyError, low=1)
 
 
 def k2_for_confidence(confidence: float, dim: int = 2) -> float:
@@ -68,13 +57,11 @@ def k2_for_confidence(confidence: float, dim: int = 2) -> float:
     -------
     float, dimensionless (squared Mahalanobis radius)
     """
-    p = _float(confidence)
-    if not 0.0 < p < 1.0 or not math.isfinite(p):
-        raise UncertaintyError(f"confidence must be in (0, 1), got {confidence!r}")
-    _dim(dim)
+    p = number(confidence, "confidence", UncertaintyError, low=0.0, high=1.0, low_open=True, high_open=True)
+    dim = _dim(dim)
     if dim == 2:
         return -2.0 * math.log1p(-p)
-    return float(stats.chi2.ppf(p, int(dim)))
+    return float(stats.chi2.ppf(p, dim))
 
 
 def confidence_for_k2(k2: float, dim: int = 2) -> float:
@@ -91,11 +78,8 @@ def confidence_for_k2(k2: float, dim: int = 2) -> float:
     -------
     float in [0, 1], probability
     """
-    value = k2
-    k2 = _float(k2)
-    if not k2 >= 0.0 or not math.isfinite(k2):
-        raise UncertaintyError(f"k2 must be finite and >= 0, got {value!r}")
-    _dim(dim)
+    k2 = number(k2, "k2", UncertaintyError, low=0.0)
+    dim = _dim(dim)
     k = math.sqrt(k2)
     if dim == 1:
         return math.erf(k / math.sqrt(2.0))
@@ -103,7 +87,7 @@ def confidence_for_k2(k2: float, dim: int = 2) -> float:
         return -math.expm1(-0.5 * k2)
     if dim == 3:
         return math.erf(k / math.sqrt(2.0)) - math.sqrt(2.0 / math.pi) * k * math.exp(-0.5 * k2)
-    return float(stats.chi2.cdf(k2, int(dim)))
+    return float(stats.chi2.cdf(k2, dim))
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,7 @@ from scipy import stats
 
 from .._errors import UncertaintyError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from .._values import number
 from . import se2 as _se2
 from . import se3 as _se3
 from .confidence import k2_for_confidence
@@ -116,8 +117,8 @@ def glitch_test(expected: Relation, observed: Relation, confidence: float = 0.99
     below :attr:`Tolerances.merge_conditioning`: both claim exact knowledge along a common
     direction, so no probability can be given).
     """
-    if not (isinstance(confidence, (int, float)) and 0.0 < confidence < 1.0):
-        raise UncertaintyError(f"glitch_test: confidence must be in (0, 1), got {confidence!r}")
+    confidence = number(confidence, "glitch_test: confidence", UncertaintyError, low=0.0, high=1.0, low_open=True,
+                        high_open=True)
     nu = _innovation(expected, observed)
     dof = nu.size
     s = expected.cov + observed.cov

@@ -17,18 +17,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._errors import VerificationError
+from .._values import number
 
 __all__ = ["StoppingDistance", "discretisation_error", "check_stopping_distance"]
 
 
 def _finite_nonneg(x, name: str) -> float:
-    try:
-        v = float(x)
-    except (TypeError, ValueError) as exc:
-        raise VerificationError(f"{name}: expected a number, got {x!r}") from exc
-    if not math.isfinite(v) or v < 0.0:
-        raise VerificationError(f"{name}: expected a finite number >= 0, got {v}")
-    return v
+    return number(x, name, VerificationError, low=0.0)
 
 
 @dataclass(frozen=True)
