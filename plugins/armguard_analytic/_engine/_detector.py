@@ -14,8 +14,8 @@ import numpy as np
 from armguard._errors import DetectionError
 from armguard._tolerance import DEFAULT_TOLERANCES, Tolerances
 from armguard._values import refuse_complex_or_bool
-from armguard.detect._common import (check_finite_margin, check_length as _check_length, require_pairs as _require_pairs,
-                                     scene_and_model)
+from armguard.detect._common import (check_finite_margin, check_length as _check_length, check_link,
+                                     require_pairs as _require_pairs, scene_and_model)
 from armguard.detect._detector import Detector
 from armguard.detect._extras import attach_extra
 from armguard.detect._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, PairDistances, PairResult
@@ -332,6 +332,7 @@ class FusedDetector(Detector):
 
     def obstacle_list(self, link: str) -> tuple[str, ...]:
         """Owner names in the obstacle list of ``link`` (``"robot/link"``), in pair order."""
+        check_link(self.scene, link)
         b = self._fresh()
         out = []
         for p in range(b.P):

@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from .._errors import DetectionError
+from .._values import number
 
 __all__ = ["check_length", "check_finite_margin", "require_pairs", "status_code", "combined_tree", "cylinder_aabb",
            "CAT_ARM", "CAT_ENVIRONMENT", "CAT_WORKSPACE", "CAT_PAYLOAD", "SCENE_CATEGORY", "CYLINDER"]
@@ -41,14 +42,19 @@ def scene_and_model(scene_or_model, model=None) -> tuple:
 
 
 def check_length(value, name: str) -> float:
-    """``value`` as a finite length >= 0 (m), else a DetectionError naming ``name``."""
-    try:
-        x = float(value)
-    except (TypeError, ValueError) as exc:
-        raise DetectionError(f"{name}: expected a number of metres, got {value!r}") from exc
-    if not math.isfinite(x) or x < 0.0:
-        raise DetectionError(f"{name}: must be finite and >= 0, got {x}")
-    return x
+    """``value`` as a finite length >= 0 (m), else a DetectionError naming ``name`` (text and ``True`` too:
+    ``threshold="0.1"`` was read as 0.1 m, ``True`` as 1 m)."""
+    return number(value, name, DetectionError, low=0.0, unit=" (m)")
+
+
+def check_link(scene, link) -> str:
+    """``link`` when it names a moving owner of ``scene`` (``"robot/link"`` or a payload), else a DetectionError
+    listing them (``obstacle_list("nosuch")`` answered an empty list: read as "nothing near")."""
+    owners = [f"{r}/{ln}" for r, robot in scene.robots.items() for ln in robot.link_names] + list(scene.payloads)
+    if link not in owners:
+        raise DetectionError(f"link: expected a robot link ('robot/link') or a payload of scene {scene.name!r}, "
+                             f"got {link!r}; they are {owners}")
+    return link
 
 
 def status_code(dmin: float, lbmin: float, level: float, thr_eff: float) -> int:

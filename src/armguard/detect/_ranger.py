@@ -45,7 +45,7 @@ import numpy as np
 from .._errors import DetectionError
 from .._values import refuse_complex_or_bool
 from ._bounds import pair_bounds
-from ._common import check_finite_margin, check_length, scene_and_model, status_code
+from ._common import check_finite_margin, check_length, check_link, scene_and_model, status_code
 from ._detector import Detector
 from ._extras import attach_extra
 from ._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, NotEvaluated, PairDistances, PairResult
@@ -312,6 +312,7 @@ class RangerDetector(Detector):
 
     def obstacle_list(self, link: str) -> tuple[str, ...]:
         """Owner names in the obstacle list of ``link`` (``"robot/link"``), in pair order."""
+        check_link(self.scene, link)
         plan = self._fresh()
         return tuple(dict.fromkeys(b for a, b in zip(plan.a, plan.b) if a == link))
 

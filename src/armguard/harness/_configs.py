@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._errors import ArmguardError
+from .._values import number, whole_number
 
 __all__ = ["ConfigSet", "build_configs", "trajectory_q"]
 
@@ -52,9 +53,13 @@ def build_configs(model, n_random: int, seed: int = 0, trajectories="all", frequ
     ``trajectories``: ``"all"`` (every canned trajectory of the model), ``None``/``"none"``, a
     name, or a sequence of names; each is sampled at ``frequency`` Hz.
     """
+    n_random = whole_number(n_random, "n_random", ArmguardError)
+    seed = whole_number(seed, "seed", ArmguardError)
     names = _names(model, trajectories)
-    Qs = [model.random_q(int(n_random), int(seed))]
-    src = ["random"] * int(n_random)
+    if names:  # 0 Hz divided by zero; NaN was refused deep inside, as the trajectory's time step
+        frequency = number(frequency, "frequency", ArmguardError, low=0.0, low_open=True, unit=" (Hz)")
+    Qs = [model.random_q(n_random, seed)]
+    src = ["random"] * n_random
     counts = {}
     for name in names:
         t, Q = trajectory_q(model, model.scene.trajectories[name], frequency)
@@ -70,7 +75,7 @@ def _names(model, trajectories) -> list:
         return []
     if trajectories == "all":
         return known
-    names = [trajectories] if isinstance(trajectories, str) else list(trajectories)
+    names = [trajectories] if isinstance(trajectories, str) else list(dict.fromkeys(trajectories))  # each sampled once
     for n in names:
         if n not in known:
             raise ArmguardError(f"trajectory {n!r}: model {model.name!r} has {known or 'no canned trajectories'} (or 'all')")

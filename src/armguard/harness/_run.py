@@ -174,8 +174,10 @@ def compare_at(spec, backends, q, *, options=None, pair=None, model=None) -> lis
     ``{"collides": bool, "verdict": name or None, "pair_verdict": name or None}`` (its three-valued
     answer for the configuration and for the row's pair, where it exposes them).
     """
+    from ..backends import check_q
+
     model = model if model is not None else resolve_model(spec)
-    q = np.asarray(q, dtype=np.float64)
+    q = check_q(model, q)  # q="abc" was a raw ValueError; every backend's rule (shape, finite, limits) before any is built
     checkers = build_checkers(model, backends, options)
     res = {}
     for b, c in checkers.items():

@@ -17,6 +17,7 @@ import numpy as np
 import pinocchio as pin
 
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from .._values import number, whole_number
 from ._matrix import PairEvaluator, _progress
 from ._pairs import pair_setup
 from ._prove import PairVerdict, prove_pair
@@ -74,8 +75,11 @@ def check_srdf(model, srdf, *, margin: float = 0.0, backend: str | None = "analy
     from .._errors import VerificationError
     from ..model._srdf import read_srdf
 
-    if not (np.isfinite(margin) and margin >= 0.0):
-        raise VerificationError(f"margin: expected a finite length >= 0 (m), got {margin!r}")
+    margin = number(margin, "margin", VerificationError, low=0.0, unit=" (m)")
+    if workers is not None:
+        workers = whole_number(workers, "workers", VerificationError, low=1)
+    max_evaluations = whole_number(max_evaluations, "max_evaluations", VerificationError, low=1)
+    min_width = number(min_width, "min_width", VerificationError, low=0.0, low_open=True, unit=" (rad)")
     if not hasattr(model, "pin_model"):
         from ..model import load_model
 

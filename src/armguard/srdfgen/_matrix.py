@@ -29,6 +29,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .._errors import VerificationError
+from .._values import number, whole_number
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ..model._certificate import pair_fingerprint
 from ._io import read_previous
@@ -204,12 +205,12 @@ def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", b
     """
     if method not in METHODS:
         raise VerificationError(f"method: expected one of {list(METHODS)}, got {method!r}")
-    if not (np.isfinite(margin) and margin >= 0.0):
-        raise VerificationError(f"margin: expected a finite length >= 0 (m), got {margin!r}")
-    if workers is not None and int(workers) < 1:
-        raise VerificationError(f"workers: expected a positive number, got {workers!r}")
-    if method == "sampled" and int(samples) < 1:
-        raise VerificationError(f"samples: expected a positive number, got {samples!r}")
+    margin = number(margin, "margin", VerificationError, low=0.0, unit=" (m)")
+    if workers is not None:
+        workers = whole_number(workers, "workers", VerificationError, low=1)
+    samples = whole_number(samples, "samples", VerificationError, low=1)
+    max_evaluations = whole_number(max_evaluations, "max_evaluations", VerificationError, low=1)
+    min_width = number(min_width, "min_width", VerificationError, low=0.0, low_open=True, unit=" (rad)")
     if not hasattr(model, "pin_model"):
         from ..model import load_model
 
