@@ -145,3 +145,16 @@ def test_map_queries_refuse_cells_it_does_not_have(tmp_path):
             fmap.allowed(q)
     with pytest.raises(ForbiddenMapError, match="stopping_distance"):
         ForbiddenMap.build("hermes", out=tmp_path / "x.agmap", resolution="30deg", stopping_distance="x")
+
+
+def test_a_missing_or_folder_map_exits_3_like_every_missing_input(tmp_path):
+    """``cspace info``/``plot`` of a missing map exited 2 (click's path check: a usage error) where every other
+    missing input file is refused with 3, naming the file."""
+    runner = CliRunner()
+    for args in (["cspace", "info", str(tmp_path / "none.agmap")],
+                 ["cspace", "plot", str(tmp_path / "none.agmap"), "--q2", "0", "--out", str(tmp_path / "s.png")]):
+        r = runner.invoke(main, args)
+        assert r.exit_code == 3 and "none.agmap: no such map file" in r.output, r.output
+    r = runner.invoke(main, ["cspace", "info", str(tmp_path)])
+    assert r.exit_code == 3 and "is a directory, not a map file" in r.output, r.output
+    assert not (tmp_path / "s.png").exists()

@@ -111,7 +111,32 @@ def test_cli_compare_writes_compare_json(tmp_path):
     header = next(ln for ln in res.output.splitlines() if "category" in ln)
     assert "…" not in header and "contract ✗ analytic" in header and "sep |Δd| max" in header, header
     res = CliRunner().invoke(main, ["compare", "gmf_s480", "--backends", "coal"])
-    assert res.exit_code == 3 and "at least two backends" in res.output  # ExitCode.INPUT
+    assert res.exit_code == 2 and "at least two backends" in res.output, res.output  # ExitCode.USAGE (was 3)
+
+
+@pytest.mark.parametrize("args, said", [
+    (["--backends", "coal,coal"], "each once"),
+    (["--backend-option", "analytic"], "expected BACKEND.KEY=VALUE"),
+    (["--workers", "2", "--scheduler", "tcp://localhost:1"], "not both"),
+    (["--q", "0,0,0,0,0,0", "--out", "somewhere"], "drop --out, or --q"),
+    (["--trajectory", "all", "--trajectory", "reach_over_fixture"], "'all' stands alone"),
+])
+def test_cli_compare_usage_errors_exit_2(args, said, tmp_path):
+    """A bad option is click's usage error (2): these exited 3 (a refused file), and --q with --out wrote
+    nothing without saying so."""
+    res = CliRunner().invoke(main, ["compare", "gmf_s480", "--configs", "4", *args])
+    assert res.exit_code == 2 and said in res.output, res.output
+    assert not (tmp_path / "somewhere").exists()
+
+
+def test_a_trajectory_named_twice_is_sampled_once():
+    from armguard.harness import build_configs
+
+    model = armguard.load_model("gmf_s480")
+    name = next(iter(model.scene.trajectories))
+    once = build_configs(model, 0, trajectories=[name])
+    twice = build_configs(model, 0, trajectories=[name, name])
+    assert twice.Q.shape == once.Q.shape and twice.trajectories == once.trajectories and len(once) > 0
 
 
 # ------------------------------------------------------------------ URDF-driven updates

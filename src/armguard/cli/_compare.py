@@ -55,11 +55,24 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
 
     from ..harness import compare_at, parse_backend_options, run_compare, summary_table
 
+    from .._errors import ArmguardError
+
     console = output_console()
     names = tuple(b.strip() for b in backends.split(",") if b.strip())
-    options = parse_backend_options(backend_options)
+    try:  # a malformed option is a usage error (2), as every other bad option, not a refused file (3)
+        options = parse_backend_options(backend_options)
+    except ArmguardError as exc:
+        raise click.BadParameter(str(exc).removeprefix("--backend-option "), param_hint="--backend-option") from None
     if pair_text is not None and q_text is None:  # it was ignored: the whole comparison ran
         raise click.UsageError("--pair answers one pair at one configuration: give --q as well")
+    if q_text is not None and out_dir is not None:  # nothing was written, and nothing said so
+        raise click.UsageError("--out writes a comparison's compare.json and plots; --q answers one configuration on "
+                               "the terminal (add --json for JSON): drop --out, or --q")
+    if q_text is None and (len(names) < 2 or len(set(names)) != len(names)):
+        raise click.BadParameter(f"give at least two backends to compare, each once, got {list(names)}",
+                                 param_hint="--backends")
+    if workers is not None and scheduler is not None:
+        raise click.UsageError("give --workers (a new LocalCluster) or --scheduler (an existing cluster), not both")
     if q_text is not None:
         pair = tuple(p.strip() for p in pair_text.split(",")) if pair_text else None
         rows = compare_at(model, names, _floats(q_text), options=options, pair=pair)
@@ -76,7 +89,10 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
                 d, pa, pb = ans
                 console.print(f"  {b:10s} d = {d!r} m  p_WA = {pa}  p_WB = {pb}", soft_wrap=True)
         return
-    traj = list(trajectories)
+    traj = list(dict.fromkeys(trajectories))  # a name given twice is sampled once
+    for word in ("all", "none"):
+        if word in traj and len(traj) > 1:
+            raise click.BadParameter(f"'{word}' stands alone, got {traj}", param_hint="--trajectory")
     traj = "all" if traj == ["all"] else (None if traj == ["none"] else traj)
     with Progress(TextColumn("answering"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
                   console=console, transient=True, disable=as_json) as bar:

@@ -82,7 +82,7 @@ def build_cmd(model, out, resolution, j3_resolution, cell, stopping_distance, ro
 @cspace.command("info", epilog=exit_epilog(
     ok="read (and, with --samples, no sampled configuration the map allows collides)",
     unsafe="with --samples: a configuration the map allows collides (the map is not conservative there)"))
-@click.argument("map_path", type=click.Path(exists=True, dir_okay=False))
+@click.argument("map_path")
 @click.option("--model", default=None, help="Check against these model files / this scene (default: the recorded files).")
 @click.option("--samples", type=COUNT, default=10_000, show_default=True,
               help="Random configurations compared with the exact check (0: skip).")
@@ -127,7 +127,7 @@ def info_cmd(map_path, model, samples, as_json) -> None:
 
 
 @cspace.command("plot", epilog=exit_epilog(ok="the plot written (whole, or the previous file left as it was)"))
-@click.argument("map_path", type=click.Path(exists=True, dir_okay=False))
+@click.argument("map_path")
 @click.option("--q2", required=True, help="Joint 2 of the slice ('30deg', '30°', rad; a bare number is deg).")
 @click.option("--q", "q", default=None, help="Configuration to mark: joints 1-3 as 'a,b,c' (deg unless suffixed).")
 @click.option("--model", default=None, help="Check against these model files / this scene (default: the recorded files).")
