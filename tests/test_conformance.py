@@ -106,6 +106,14 @@ class _Wrapped(armguard.backends.CheckerBase):
             d = -d
         if mut == "witness points moved together":
             p_WA, p_WB = p_WA + 0.01, p_WB + 0.01
+        if mut == "penetration answered as touching":  # within the contact band, whatever the depth
+            d = np.where(d < 0.0, -5e-7, d)
+        if mut == "witness points from shared scratch":
+            self._buf = p_WA
+            import time
+
+            time.sleep(1e-4)
+            p_WA = self._buf.copy()
         if mut == "answers one call behind":
             self._last, out = (d, p_WA, p_WB), self._last or (d, p_WA, p_WB)
             d, p_WA, p_WB = out
@@ -129,13 +137,27 @@ class _Wrapped(armguard.backends.CheckerBase):
         from types import SimpleNamespace
 
         Q = armguard.backends.check_Q(self.model, Q)
+        if self.mutation == "batch ignores pairs":
+            pairs = None
         rows = [self.pair_distances(q, pairs=pairs) for q in Q]
         n = len(self.model.pairs) if pairs is None else len(pairs)
-        out = SimpleNamespace(distance=np.array([r.distance for r in rows]).reshape(len(Q), n),
-                              p_WA=np.array([r.p_WA for r in rows]).reshape(len(Q), n, 3),
-                              p_WB=np.array([r.p_WB for r in rows]).reshape(len(Q), n, 3))
+        idx = np.arange(len(self.model.pairs)) if pairs is None else np.asarray(pairs)
+        d = np.array([r.distance for r in rows]).reshape(len(Q), n)
+        p_WA = np.array([r.p_WA for r in rows]).reshape(len(Q), n, 3)
+        p_WB = np.array([r.p_WB for r in rows]).reshape(len(Q), n, 3)
         if self.mutation == "batch rows shifted":
-            out.distance = np.roll(out.distance, 1, axis=0)
+            d = np.roll(d, 1, axis=0)
+        if self.mutation == "batch rows unnamed":
+            return SimpleNamespace(distance=d, p_WA=p_WA, p_WB=p_WB)
+        return armguard.backends.PairDistancesMany(self.model.pairs.names[idx], d, p_WA, p_WB,
+                                                   tuple(np.asarray(self.model.pairs.category, dtype=object)[idx]))
+
+    def nearest(self, q):
+        import dataclasses
+
+        out = self.pair_distances(q).nearest()
+        if self.mutation == "nearest witness points moved":
+            out = {c: dataclasses.replace(n, p_WA=n.p_WA + 1.0) for c, n in out.items()}
         return out
 
     def collides(self, Q, *, margin: float = 0.0):
@@ -172,6 +194,13 @@ MUTATIONS = {
     "subset rows shifted": "pair_subset",
     "batch rows shifted": "pair_distances_many",
     "shared scratch buffer": "thread_safety",
+    # holes a review found (each passed the suite before): a depth inside the band was never compared, the
+    # threads compared distances only, a batch's pairs= and names went unchecked, nearest's points too
+    "penetration answered as touching": "coal_distances",
+    "witness points from shared scratch": "thread_safety",
+    "batch ignores pairs": "pair_distances_many",
+    "batch rows unnamed": "pair_distances_many",
+    "nearest witness points moved": "optional_fast_paths",
 }
 
 
@@ -241,3 +270,51 @@ def test_the_pytest_entry_runs_the_suite(tmp_path):
     assert "not applicable: the backend is the reference (coal) itself" in out.stdout
     bad = subprocess.run([*cmd[:6], "nonesuch", *cmd[7:]], cwd=tmp_path, capture_output=True, text=True, timeout=600)
     assert bad.returncode != 0 and "installed backends are" in bad.stdout + bad.stderr
+
+
+class _OnlyDistances(armguard.backends.CheckerBase):
+    """The least a backend writes: ``pair_distances(q)``; ``collides`` and ``pairs=`` are the framework's."""
+
+    name = "only_distances"
+    capabilities = frozenset({armguard.backends.Capability.DISTANCES, armguard.backends.Capability.VERDICTS})
+
+    def __init__(self, model) -> None:
+        super().__init__(model)
+        self.inner = armguard.checker(model, "coal", {"threads": 1})
+
+    def pair_distances(self, q):
+        r = self.inner.pair_distances(q)
+        return self._result(r.distance.copy(), r.p_WA.copy(), r.p_WB.copy())
+
+
+class _OnlyDistancesBackend:
+    name = "only_distances"
+
+    def build(self, model, options=None):
+        if options:
+            raise BackendError(f"only_distances: unknown options {sorted(options)}; this backend takes none")
+        return _OnlyDistances(model)
+
+
+def test_the_framework_default_collides_refuses_a_bad_margin():
+    """``CheckerBase.collides`` compared ``min(d) <= margin`` unchecked: NaN or a negative margin said clear at a
+    collision, True read as 1 m, text a raw UFuncTypeError."""
+    model = armguard.load_model("puma560")
+    c = _OnlyDistances(model)
+    Q = model.random_q(4, 0)
+    assert c.collides(Q).any()  # a colliding row among them
+    for margin in (math.nan, -1.0, True, "0.1", None):
+        with pytest.raises(BackendError, match="margin: expected a finite number >= 0"):
+            c.collides(Q, margin=margin)
+    assert c.collides(Q, margin=np.float32(0.0)).tolist() == c.collides(Q).tolist()
+
+
+def test_the_frameworks_pairs_argument_is_checked_and_small_counts_work():
+    """A Checker given ``pairs=`` by the framework (its own ``pair_distances(q)`` takes none) had ``pair_subset``
+    skipped as not applicable (``functools.wraps`` showed the wrapped signature); ``n_configs=0`` (the neutral pose
+    alone) failed bad_q_refused with an IndexError blamed on the backend; a negative count failed every check."""
+    report = check_backend(_OnlyDistancesBackend(), models=["puma560"], n_configs=0)
+    assert "pair_subset[puma560]" in report.passed and "bad_q_refused[puma560]" in report.passed, str(report)
+    assert not report.not_applicable, str(report)
+    with pytest.raises(armguard.ArmguardError, match=r"n_configs \(--conformance-configs\): expected an integer >= 0"):
+        check_backend(_OnlyDistancesBackend(), models=["puma560"], n_configs=-1)

@@ -56,8 +56,8 @@ from typing import Mapping
 import numpy as np
 
 from armguard._errors import BackendError
-from armguard.backends import (Capability, CheckerBase, PairDistances, PairDistancesMany, check_pairs, check_q, check_Q,
-                               check_unit_circle)
+from armguard.backends import (Capability, CheckerBase, PairDistances, PairDistancesMany, check_margin, check_pairs, check_q,
+                               check_Q, check_unit_circle)
 
 __all__ = ["AnalyticBackend", "AnalyticChecker"]
 
@@ -425,8 +425,7 @@ class AnalyticChecker(CheckerBase):
         when it is already a C-contiguous float64 array of the right width (the kernel itself refuses
         a non-finite row, then :func:`check_Q` names it), the joints reordered only where Pinocchio's
         order is not the scene's."""
-        if not (margin >= 0.0 and math.isfinite(margin)):
-            raise BackendError(f"margin: expected a finite length >= 0, got {margin!r}")
+        margin = check_margin(margin)
         model = self.model
         if type(Q) is not _ND or Q.dtype is not _F64 or Q.ndim != 2 or Q.shape[1] != self._nq or not Q.flags.carray:
             Q = check_Q(model, Q)

@@ -52,7 +52,6 @@ default :data:`BRACKET_RINGS`).  A value of another kind is refused naming the o
 
 from __future__ import annotations
 
-import math
 import pickle
 from dataclasses import dataclass
 from typing import Mapping
@@ -62,7 +61,7 @@ import numpy as np
 from armguard._errors import BackendError, ClipError
 from armguard._tolerance import DEFAULT_TOLERANCES
 from armguard._values import number
-from armguard.backends import Capability, CheckerBase, check_Q
+from armguard.backends import Capability, CheckerBase, check_margin, check_Q
 from armguard.clip import DEFAULT_INNER_SCALE, DEFAULT_MAX_DEPTH, DEFAULT_RINGS, ClipStatus, Guard, Obstacle, curved_polytopes
 from armguard.clip._kernels import procedure_many
 from armguard.geometry import Capsule, Cylinder, Polygon, Sphere
@@ -362,7 +361,7 @@ class ClipChecker(CheckerBase):
     def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
         """``(M,) bool``: True where the verdict is INTERSECTED **or MAYBE** (conservative: a MAYBE
         is never answered clear).  Only ``margin = 0`` (contact): the guards are the shapes."""
-        if not (margin == 0.0 and math.isfinite(margin)):
+        if check_margin(margin) != 0.0:
             raise BackendError(f"clip: answers contact only (margin 0), got margin={margin!r}; "
                                "use a distances backend for a margin")
         return self.check_pairs(Q).codes != _CLEAR

@@ -44,7 +44,8 @@ from typing import Mapping
 import numpy as np
 
 from armguard._errors import BackendError
-from armguard.backends import Capability, CheckerBase, PairDistances, PairDistancesMany, check_pairs, check_q, check_Q
+from armguard.backends import (Capability, CheckerBase, PairDistances, PairDistancesMany, check_margin, check_pairs, check_q,
+                               check_Q)
 from armguard.model import WORKSPACE
 
 __all__ = ["CoalBackend", "CoalChecker", "EPA_FAILED", "EPA_RETRY_TOLERANCES"]
@@ -266,8 +267,7 @@ class CoalChecker(CheckerBase):
         import pinocchio as pin
 
         Q = check_Q(self.model, Q)
-        if not (margin >= 0.0 and math.isfinite(margin)):
-            raise BackendError(f"margin: expected a finite length >= 0, got {margin!r}")
+        margin = check_margin(margin)
         if self.threads > 1 and len(Q) >= 64:
             with self._pool_lock:  # one batch at a time on the pool (its datas hold the margin)
                 if self._pool is None:

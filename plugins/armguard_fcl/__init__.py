@@ -11,14 +11,13 @@ threads may share a checker.  ``pairs=`` is the framework's default (the full re
 
 from __future__ import annotations
 
-import math
 import threading
 from typing import Mapping
 
 import numpy as np
 
 from armguard._errors import BackendError
-from armguard.backends import Capability, CheckerBase, check_q, check_Q
+from armguard.backends import Capability, CheckerBase, check_margin, check_q, check_Q
 from armguard.model import WORKSPACE
 
 __all__ = ["FclBackend", "FclChecker"]
@@ -137,8 +136,7 @@ class FclChecker(CheckerBase):
 
     def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
         Q = check_Q(self.model, Q)
-        if not (margin >= 0.0 and math.isfinite(margin)):
-            raise BackendError(f"margin: expected a finite length >= 0, got {margin!r}")
+        margin = check_margin(margin)
         return np.array([bool(np.min(self.pair_distances(q).distance, initial=np.inf) <= margin) for q in Q], dtype=bool)
 
 

@@ -34,14 +34,13 @@ forbidden.geometric.threads=1``) for the geometric backend's options.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Mapping
 
 import numpy as np
 
 from armguard._errors import BackendError, ForbiddenMapError
-from armguard.backends import Capability, CheckerBase, check_Q
+from armguard.backends import Capability, CheckerBase, check_margin, check_Q
 
 __all__ = ["ForbiddenBackend", "ForbiddenChecker", "build_command"]
 
@@ -113,12 +112,7 @@ class ForbiddenChecker(CheckerBase):
         self.representation = dict(getattr(self.geometric, "representation", {}) or {})
 
     def _margin(self, margin) -> float:
-        try:
-            m = float(margin)
-        except (TypeError, ValueError):
-            raise BackendError(f"margin: expected a finite length >= 0, got {margin!r}") from None
-        if not (m >= 0.0 and math.isfinite(m)):
-            raise BackendError(f"margin: expected a finite length >= 0, got {margin!r}")
+        m = check_margin(margin)
         if m > self.max_margin:
             raise BackendError(f"forbidden: margin {m} m exceeds the map's stopping distance "
                                f"{self.map.stopping_distance} m (the map proves links {self.map.links} clear by that "

@@ -27,7 +27,9 @@ def number(value, what: str, error: type, *, low: float | None = None, high: flo
     excluded); else ``error("<what>: expected a finite number <range><unit>, got <value!r>")``.
     ``text``: a string that reads as such a number is taken too (an option given on a command line)."""
     x = math.nan
-    if not isinstance(value, (bool, np.bool_)) and isinstance(value, (numbers.Real, np.floating, np.integer)):
+    if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "fiu":
+        x = float(value)  # a 0-d array of a real kind: the number it holds
+    elif not isinstance(value, (bool, np.bool_)) and isinstance(value, (numbers.Real, np.floating, np.integer)):
         x = float(value)
     elif text and isinstance(value, str):
         try:

@@ -18,13 +18,12 @@ shapes (nothing is shared between calls).
 
 from __future__ import annotations
 
-import math
 from typing import Mapping
 
 import numpy as np
 
 from armguard import BackendError, GeometryError
-from armguard.backends import Capability, CheckerBase, check_q, check_Q
+from armguard.backends import Capability, CheckerBase, check_margin, check_q, check_Q
 
 __all__ = ["PairwiseBackend", "PairwiseChecker"]
 
@@ -118,8 +117,7 @@ class PairwiseChecker(CheckerBase):
 
     def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
         Q = check_Q(self.model, Q)
-        if not (margin >= 0.0 and math.isfinite(margin)):
-            raise BackendError(f"margin: expected a finite length >= 0, got {margin!r}")
+        margin = check_margin(margin)
         return np.array([bool(np.min(self.pair_distances(q).distance, initial=np.inf) <= margin) for q in Q],
                         dtype=bool)
 

@@ -26,11 +26,11 @@ from pathlib import Path
 from typing import Mapping
 
 from .._errors import BackendError, DetectionError
-from ._interface import (Backend, Capability, Checker, CheckerBase, NearestPair, PairDistances, PairDistancesMany, check_pairs,
-                         check_Q, check_q, check_unit_circle)
+from ._interface import (Backend, Capability, Checker, CheckerBase, NearestPair, PairDistances, PairDistancesMany, check_margin,
+                         check_pairs, check_Q, check_q, check_unit_circle)
 
 __all__ = ["available", "refresh", "get_backend", "checker", "resolve", "command_line_choice", "Backend", "Checker", "CheckerBase", "PairDistances",
-           "PairDistancesMany", "NearestPair", "check_pairs", "Capability", "check_q", "check_Q", "check_unit_circle", "GROUP", "DEFAULT", "ENV"]
+           "PairDistancesMany", "NearestPair", "check_margin", "check_pairs", "Capability", "check_q", "check_Q", "check_unit_circle", "GROUP", "DEFAULT", "ENV"]
 
 GROUP = "armguard.backends"
 DEFAULT = "analytic"

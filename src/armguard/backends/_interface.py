@@ -28,13 +28,14 @@ from __future__ import annotations
 import enum
 import functools
 import inspect
+import math
 from dataclasses import dataclass
 from typing import Mapping, Protocol, runtime_checkable
 
 import numpy as np
 
 from .._errors import BackendError
-from .._values import refuse_complex_or_bool
+from .._values import number, refuse_complex_or_bool
 
 __all__ = ["Backend", "Checker", "CheckerBase", "PairDistances", "PairDistancesMany", "NearestPair", "Capability",
            "check_q", "check_Q", "check_pairs"]
@@ -165,6 +166,15 @@ def check_unit_circle(model, Q2: np.ndarray, what: str = "Q") -> None:
         raise BackendError(f"{what}:{row} continuous joint {name!r}: (cos, sin) = ({float(Q2[m, k]):.6g}, "
                            f"{float(Q2[m, k + 1]):.6g}) is not on the unit circle (|cos² + sin² - 1| = "
                            f"{float(r[bad[0][0], bad[0][1]]):.3g} > {UNIT_CIRCLE:g}): give (cos θ, sin θ)")
+
+
+def check_margin(margin) -> float:
+    """``collides``'s ``margin`` as a finite float >= 0 (m), else a BackendError naming it: NaN and a
+    negative margin made ``min(d) <= margin`` false everywhere (clear at a collision), ``True`` read as
+    1 m, text a raw TypeError.  A plain float in range passes at the cost of one type test."""
+    if type(margin) is float and 0.0 <= margin < math.inf:
+        return margin
+    return number(margin, "margin", BackendError, low=0.0, unit=" (m)")
 
 
 def check_q(model, q) -> np.ndarray:
@@ -331,6 +341,7 @@ class CheckerBase:
     def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
         """Default: ``min(pair_distances(q).distance) <= margin`` row by row."""
         self._require(Capability.DISTANCES)
+        margin = check_margin(margin)
         Q = check_Q(self.model, Q)
         return np.array([bool(np.min(self.pair_distances(q).distance, initial=np.inf) <= margin) for q in Q], dtype=bool)
 

@@ -54,8 +54,10 @@ def _raises_backend_error(call, what: str) -> BackendError:
 
 
 def _has_pairs_argument(checker) -> bool:
+    """Whether ``pair_distances`` takes ``pairs=``: its own signature, not the one ``functools.wraps`` copied
+    onto the framework's wrapper (a CheckerBase whose ``pair_distances(q)`` takes no ``pairs`` is given them)."""
     try:
-        return "pairs" in inspect.signature(checker.pair_distances).parameters
+        return "pairs" in inspect.signature(checker.pair_distances, follow_wrapped=False).parameters
     except (TypeError, ValueError):
         return False
 
@@ -214,7 +216,7 @@ def check_bad_q_refused(ctx, model):
     if _distances(c):
         for what, bq in bad_q.items():
             _raises_backend_error(lambda: c.pair_distances(bq), f"pair_distances(q {what})")
-    Q = ctx.configs(model)[:3].copy()
+    Q = np.resize(ctx.configs(model), (3, m.nq))  # three rows, repeated when n_configs < 2
     Qn = Q.copy()
     Qn[1, 0] = np.nan
     Qi = Q.copy()
@@ -323,6 +325,12 @@ def check_optional_fast_paths(ctx, model):
                        f"configuration {i}, {cat}: nearest names {(g.a, g.b)}, pair_distances {(w.a, w.b)}")
                 expect(abs(g.distance - w.distance) <= TOL.differential_distance,
                        f"configuration {i}, {cat}: nearest distance {g.distance} vs {w.distance} m")
+                if (g.a, g.b) == (w.a, w.b):  # the same pair: its row and witness points too
+                    expect(g.index == w.index, f"configuration {i}, {cat}: nearest index {g.index}, pair_distances {w.index}")
+                    for key in ("p_WA", "p_WB"):
+                        x, y = np.asarray(getattr(g, key), dtype=np.float64), np.asarray(getattr(w, key))
+                        expect(x.shape == y.shape and np.allclose(x, y, rtol=0, atol=TOL.differential_distance),
+                               f"configuration {i}, {cat}: nearest {key} {x.tolist()}, pair_distances {y.tolist()}")
     if hasattr(c, "min_distance_many"):
         got = np.asarray(c.min_distance_many(Q), dtype=np.float64)
         want = np.array([r.distance.min(initial=np.inf) for r in full])
@@ -379,9 +387,10 @@ def check_coal_distances(ctx, model):
         bad = np.flatnonzero(far & (np.sign(d) != np.sign(dr)) & ~approx)
         expect(not bad.size, lambda: f"configuration {i}, pair {tuple(names[bad[0]])}: distance {d[bad[0]]:.9g} m, "
                                      f"coal {dr[bad[0]]:.9g} m (opposite signs); q = {q.tolist()}")
-        both = (np.abs(d) > BAND) & far
+        # wherever coal is outside the contact band, whatever the backend's own value: a backend that
+        # answered every penetration as touching (-5e-7 m) escaped a test on |d| > BAND as well
         err = np.where(approx, np.maximum(d - dr, 0.0), np.abs(d - dr))
-        bad = np.flatnonzero(both & (err > tol))
+        bad = np.flatnonzero(far & (err > tol))
         expect(not bad.size, lambda: f"configuration {i}, pair {tuple(names[bad[0]])}: distance {d[bad[0]]:.12g} m, "
                                      f"coal {dr[bad[0]]:.12g} m (|difference| {err[bad[0]]:.3g} > {tol[bad[0]]:g} m); "
                                      f"q = {q.tolist()}")
@@ -398,7 +407,14 @@ def check_coal_verdicts(ctx, model):
     unsafe = np.flatnonzero(~v & (dmin <= BAND))
     expect(not unsafe.size, lambda: f"configuration {unsafe[0]}: said clear, coal's least distance is "
                                     f"{dmin[unsafe[0]]:.9g} m; q = {Q[unsafe[0]].tolist()}")
-    if not _distances(c):
+    if not _distances(c):  # conservative only, at a margin too (where it takes one: clip answers contact alone)
+        try:
+            v = c.collides(Q, margin=MARGIN)
+        except BackendError:
+            return
+        unsafe = np.flatnonzero(~v & (dmin <= MARGIN - BAND))
+        expect(not unsafe.size, lambda: f"margin {MARGIN} m, configuration {unsafe[0]}: said clear, coal's least "
+                                        f"distance is {dmin[unsafe[0]]:.9g} m; q = {Q[unsafe[0]].tolist()}")
         return
     for margin in (0.0, MARGIN):
         v = c.collides(Q, margin=margin)
@@ -459,11 +475,10 @@ def check_pair_distances_many(ctx, model):
         many = c.pair_distances_many(Q) if subset is None else c.pair_distances_many(Q, pairs=subset)
         idx = np.arange(n) if subset is None else subset
         what = "pair_distances_many(Q)" if subset is None else "pair_distances_many(Q, pairs=rows)"
-        if hasattr(many, "pairs"):
-            expect(np.array_equal(np.asarray(many.pairs), m.pairs.names[idx]), f"{what}: pairs are not the rows asked for")
-        if hasattr(many, "category"):
-            expect(tuple(many.category) == tuple(np.asarray(m.pairs.category, dtype=object)[idx]),
-                   f"{what}: category differs")
+        for key in ("pairs", "category"):
+            expect(hasattr(many, key), f"{what}: the result has no {key!r} (a PairDistancesMany names its rows)")
+        expect(np.array_equal(np.asarray(many.pairs), m.pairs.names[idx]), f"{what}: pairs are not the rows asked for")
+        expect(tuple(many.category) == tuple(np.asarray(m.pairs.category, dtype=object)[idx]), f"{what}: category differs")
         for key, shape in (("distance", (len(Q), len(idx))), ("p_WA", (len(Q), len(idx), 3)),
                            ("p_WB", (len(Q), len(idx), 3))):
             a = np.asarray(getattr(many, key))
@@ -481,14 +496,30 @@ def check_pair_distances_many(ctx, model):
 THREADS = 4
 
 
+def _answer(r) -> tuple:
+    return tuple(np.asarray(getattr(r, k)) for k in ("distance", "p_WA", "p_WB"))
+
+
 def check_thread_safety(ctx, model):
-    """One Checker called from 4 threads at once (``pair_distances`` on different configurations,
-    ``collides`` on different batches; thread switches forced often) gives exactly the answers of
-    single-threaded calls."""
+    """One Checker called from 4 threads at once (``pair_distances`` on different configurations, with
+    and without ``pairs=`` where it takes them, ``pair_distances_many`` where it has it, ``collides``
+    on different batches; thread switches forced often) gives exactly the answers of single-threaded
+    calls: distances and witness points."""
     c = ctx.checker(model)
     Q = ctx.configs(model)
     dist = _distances(c)
-    want_d = [c.pair_distances(q).distance for q in Q] if dist else None
+    rows = np.random.default_rng(ctx.seed).permutation(len(ctx.model(model).pairs))[:3]
+    calls = {}  # what -> (call, its single-threaded answer)
+    if dist:
+        for i, q in enumerate(Q):
+            calls[f"pair_distances(configuration {i})"] = functools.partial(c.pair_distances, q)
+            if _has_pairs_argument(c):
+                calls[f"pair_distances(configuration {i}, pairs={rows.tolist()})"] = functools.partial(c.pair_distances, q,
+                                                                                                       pairs=rows)
+        if hasattr(c, "pair_distances_many"):
+            calls["pair_distances_many(Q)"] = functools.partial(c.pair_distances_many, Q)
+    want = {k: _answer(f()) for k, f in calls.items()}
+    order = list(calls)
     batches = [np.roll(Q, k, axis=0)[:3] for k in range(THREADS)]
     want_v = [c.collides(b) for b in batches]
     rounds = 2
@@ -499,13 +530,13 @@ def check_thread_safety(ctx, model):
         try:
             barrier.wait()
             for _ in range(rounds):
-                if dist:
-                    for k in range(len(Q)):
-                        i = (k + t) % len(Q)
-                        got = c.pair_distances(Q[i]).distance
-                        if not np.array_equal(got, want_d[i]):
-                            problems.append(f"thread {t}: pair_distances(configuration {i}) differs from the "
-                                            f"single-threaded answer by up to {np.max(np.abs(got - want_d[i])):.3g} m")
+                for k in range(len(order)):
+                    what = order[(k + t) % len(order)]
+                    got = _answer(calls[what]())
+                    for key, x, y in zip(("distance", "p_WA", "p_WB"), got, want[what]):
+                        if not np.array_equal(x, y):
+                            problems.append(f"thread {t}: {what}.{key} differs from the single-threaded answer"
+                                            + (f" by up to {np.max(np.abs(x - y)):.3g} m" if x.shape == y.shape else ""))
                             return
                 got = c.collides(batches[t])
                 if not np.array_equal(got, want_v[t]):

@@ -20,13 +20,15 @@ __all__ = ["pytest_addoption", "pytest_load_initial_conftests", "options_from_co
 
 
 def pytest_addoption(parser) -> None:
+    from ._suite import DEFAULT_MODELS
+
     group = parser.getgroup("armguard", "armguard backend conformance (pytest --pyargs armguard.testing)")
     group.addoption("--armguard-backend", dest="armguard_backend", default=None, metavar="NAME",
                     help="backend the conformance suite checks (default: as armguard.backends.resolve picks)")
     group.addoption("--armguard-backend-option", dest="armguard_backend_options", action="append", default=[],
                     metavar="KEY=VALUE", help="a build option of that backend (repeatable)")
     group.addoption("--conformance-models", dest="armguard_models", default=None, metavar="A,B,...",
-                    help="models to check on (default: ranger,hermes,puma560,gmf_s480,rover,panda,ur5)")
+                    help=f"models to check on (default: {','.join(DEFAULT_MODELS)})")
     group.addoption("--conformance-configs", dest="armguard_configs", type=int, default=8, metavar="N",
                     help="seeded random in-limit configurations per model, besides the neutral pose (default 8)")
     group.addoption("--conformance-seed", dest="armguard_seed", type=int, default=0, metavar="S",

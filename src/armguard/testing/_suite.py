@@ -16,6 +16,9 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
+from .._errors import ArmguardError
+from .._values import whole_number
+
 __all__ = ["Check", "Context", "ConformanceError", "NotApplicable", "ConformanceReport", "checks", "check_backend", "EDITED_MODELS",
            "DEFAULT_MODELS", "load_conformance_model"]
 
@@ -138,8 +141,9 @@ class Context:
             self.backend, self.backend_object = str(getattr(backend, "name", type(backend).__name__)), backend
         self.options = dict(options or {})
         self.model_specs = {self._label(m): m for m in models}
-        self.n_configs = int(n_configs)
-        self.seed = int(seed)
+        # n_configs 0: the neutral pose alone; a negative count failed every check as the backend's fault
+        self.n_configs = whole_number(n_configs, "n_configs (--conformance-configs)", ArmguardError, low=0)
+        self.seed = whole_number(seed, "seed (--conformance-seed)", ArmguardError, low=0)
         self.xfail = dict(xfail or {})
         self._checkers: dict = {}
         self._failed_build: dict = {}
