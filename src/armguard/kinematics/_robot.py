@@ -12,6 +12,7 @@ import numpy as np
 
 from .._errors import KinematicsError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from .._values import refuse_complex_or_bool
 from ..geometry import Shape
 from ._fk import JT_FIXED, JT_PRISMATIC, JT_REVOLUTE, FlatTree, fk_kernel, fk_reference
 
@@ -121,6 +122,21 @@ class JointSpec:
     max_velocity: float = math.inf
     max_acceleration: float = math.inf
     coupling: Coupling | None = None
+
+    def __post_init__(self) -> None:
+        # a type given as its string ("prismatic") failed every ``is JointType.X`` test: the joint was
+        # exported and checked as revolute, and "fixed" became a commanded joint
+        object.__setattr__(self, "joint_type", joint_type_from(self.joint_type, f"joint {self.name!r}"))
+        for key in ("lower", "upper", "max_velocity", "max_acceleration"):
+            v = getattr(self, key)
+            try:
+                x = math.nan if isinstance(v, (bool, np.bool_)) else float(v)
+            except (TypeError, ValueError):
+                x = math.nan
+            if math.isnan(x):
+                raise KinematicsError(f"joint {self.name!r}: {key}: expected a number (rad or m, +-inf when unbounded), "
+                                      f"got {v!r}")
+            object.__setattr__(self, key, x)
 
 
 def _readonly(a) -> np.ndarray:
@@ -407,7 +423,9 @@ class Robot:
 
     # ------------------------------------------------------------------ validation
     def check_q(self, q) -> np.ndarray:
-        """Coerce ``q`` to float64 ``(..., n_joints)`` (rad or m); KinematicsError on NaN/inf or wrong length."""
+        """Coerce ``q`` to float64 ``(..., n_joints)`` (rad or m); KinematicsError on NaN/inf, wrong length,
+        booleans or complex values (read as 1 rad, or their real part)."""
+        refuse_complex_or_bool(q, f"robot {self._name!r}: q", KinematicsError)
         try:
             arr = np.asarray(q, dtype=np.float64)
         except (TypeError, ValueError) as exc:

@@ -11,12 +11,12 @@ and tool poses relative to a variable base frame (WORKMATE, seed ``004`` "Traini
 from __future__ import annotations
 
 import math
-from typing import Iterator, Sequence
+from typing import Iterable, Iterator, Sequence
 
 import numpy as np
 
 from .._errors import KinematicsError, TrajectoryError
-from .._values import refuse_complex_or_bool
+from .._values import number, refuse_complex_or_bool
 from ._frames import rotation_about_axis, rotation_vector_from_matrix
 from ._profile import blend_for_duration, min_time_trapezoid, path_ds, path_s
 from ._robot import _check_X
@@ -27,6 +27,8 @@ PROFILES = ("trapezoidal", "linear")
 
 _TIME_SLACK = 1e-12
 """Relative slack (of the duration) for a query time at the ends of the trajectory (round-off)."""
+MAX_SAMPLES = 100_000_000
+"""The most samples :meth:`Trajectory.sample` makes at once (10^8 rows: 5 GB for six joints)."""
 
 
 def _array(value, name: str, ndim: int) -> np.ndarray:
@@ -76,6 +78,8 @@ class Trajectory:
 
     def __init__(self, robot_name: str, joint_names: Sequence[str], times, waypoints, blend_times=None) -> None:
         self._robot_name = str(robot_name)
+        if isinstance(joint_names, str) or not isinstance(joint_names, Iterable):  # "j1" read as ('j', '1')
+            raise TrajectoryError(f"joint_names: expected a sequence of joint names, got {joint_names!r}")
         self._joint_names = tuple(str(j) for j in joint_names)
         if not self._joint_names:  # it moved nothing: a verdict on the robot held at home, for any motion
             raise TrajectoryError("joint_names: a trajectory moves at least one joint, got none")
@@ -200,10 +204,16 @@ class Trajectory:
         """
         if (frequency is None) == (dt is None):
             raise TrajectoryError("sample: give exactly one of frequency (Hz) and dt (s)")
-        step = 1.0 / float(frequency) if frequency is not None else float(dt)
+        if frequency is not None:  # 0 Hz divided by zero; text, True: raw errors or 1 Hz
+            step = 1.0 / number(frequency, "sample: frequency", TrajectoryError, low=0.0, low_open=True, unit=" (Hz)")
+        else:
+            step = number(dt, "sample: dt", TrajectoryError, low=0.0, low_open=True, unit=" (s)")
         if not math.isfinite(step) or step <= 0.0:
             raise TrajectoryError(f"sample: the time step must be finite and > 0, got {step}")
         n = int(math.floor(self.duration / step * (1.0 + _TIME_SLACK)))
+        if n > MAX_SAMPLES:  # dt = 1e-300 asked numpy for 10^300 samples
+            raise TrajectoryError(f"sample: {n + 1:.3g} samples of {step:g} s over {self.duration:g} s; at most "
+                                  f"{MAX_SAMPLES + 1:,} (a larger step, or sample a part with at())")
         t = self._times[0] + step * np.arange(n + 1)
         if self._times[-1] - t[-1] > _TIME_SLACK * max(1.0, self.duration):
             t = np.append(t, self._times[-1])
@@ -304,7 +314,7 @@ class Trajectory:
     @classmethod
     def trapezoidal(cls, robot, q_start, q_goal, *, max_velocity=None, max_acceleration=None) -> "Trajectory":
         """Shortest synchronised trapezoidal-velocity move ``q_start -> q_goal`` (a canned test's ``goal`` motion)."""
-        W = np.stack([np.asarray(q_start, dtype=np.float64), np.asarray(q_goal, dtype=np.float64)])
+        W = np.stack([robot.check_q(q_start), robot.check_q(q_goal)])  # a short q was a raw numpy error
         return cls.joint_interpolated(robot, W, max_velocity=max_velocity, max_acceleration=max_acceleration)
 
     @classmethod
@@ -413,6 +423,9 @@ class Trajectory:
         """Join trajectories end to start (each next one starts where the previous ended), times shifted."""
         if not parts:
             raise TrajectoryError("concatenate: no trajectories")
+        for k, p in enumerate(parts):
+            if not isinstance(p, Trajectory):
+                raise TrajectoryError(f"concatenate: parts[{k}]: expected a Trajectory, got {type(p).__name__}")
         first = parts[0]
         t, w, b = [first.times - first.times[0]], [first.waypoints], [first.blend_times]
         end = first.duration

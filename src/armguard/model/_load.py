@@ -53,7 +53,10 @@ def builtin_model_path(name: str) -> Path | None:
 
 def load_model(name_or_path, *, srdf=None, package_dirs=()) -> Model:
     """A :class:`Model` from a built-in or public robot name, a ``.urdf`` or a ``.yaml`` file (see the module
-    docstring); ``srdf=`` replaces the SRDF a public robot or URDF would have."""
+    docstring); ``srdf=`` replaces the SRDF a public robot or URDF would have; ``package_dirs``: folders
+    ``package://`` mesh names resolve against (one path, or a list of them)."""
+    if isinstance(package_dirs, (str, os.PathLike)):  # one folder (was read as a list of one-letter folders)
+        package_dirs = (package_dirs,)
     s = str(name_or_path)
     p = Path(s)
     suffix = p.suffix.lower()

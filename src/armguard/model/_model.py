@@ -12,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .._errors import DetectionError
+from .._errors import DetectionError, KinematicsError
+from .._values import refuse_complex_or_bool
 from .._tolerance import DEFAULT_TOLERANCES
 
 __all__ = ["Model", "GeometryPairs", "WORKSPACE", "file_sha256", "scene_of"]
@@ -250,7 +251,12 @@ class Model:
             allowance = self.tol.joint_limit
             lim = self._pin_limits = (self.pin_model, list(zip((lo - allowance).tolist(), (hi + allowance).tolist())), lo, hi)
         _, bounds, lo, hi = lim
+        if getattr(Q, "dtype", None) != np.float64:
+            refuse_complex_or_bool(Q, where, KinematicsError)  # True read as 1 rad, a complex value as its real part
         Q = np.asarray(Q, dtype=np.float64)
+        if Q.shape[-1:] != (len(bounds),) or Q.ndim > 2:  # zip() would check a short q's first joints only
+            raise KinematicsError(f"{where}: expected shape ({len(bounds)},) or (M, {len(bounds)}) in pin_model's order "
+                                  f"{list(self.q_joint_names)}, got {Q.shape}")
         if Q.ndim == 1:  # one configuration: a plain loop (0.5 µs on 6 joints; numpy's compares took 2-5)
             for (a, b), x in zip(bounds, Q.tolist()):
                 if not a <= x <= b:
@@ -261,7 +267,10 @@ class Model:
             return
         from ..kinematics._limits import limit_error
 
-        raise limit_error(where, Q, self.q_joint_names, lo, hi, self.tol.joint_limit)
+        err = limit_error(where, Q, self.q_joint_names, lo, hi, self.tol.joint_limit)
+        if err is None:  # no joint outside: a NaN failed the test (it compares false everywhere)
+            raise KinematicsError(f"{where}: contains NaN: {Q.tolist()}")
+        raise err
 
     def check_limits(self, q_scene, where: str = "q") -> None:
         """Raise :class:`~armguard.JointLimitError` when the flat scene ``q`` ``(n,)`` leaves a joint's limits."""
@@ -272,8 +281,17 @@ class Model:
             return
         lo = np.concatenate([r.lower for r in robots])
         hi = np.concatenate([r.upper for r in robots])
-        err = limit_error(where, np.asarray(q_scene, dtype=np.float64), self._spec.joint_names, lo, hi,
-                          self.tol.joint_limit)
+        refuse_complex_or_bool(q_scene, where, KinematicsError)
+        try:
+            q = np.asarray(q_scene, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise KinematicsError(f"{where}: expected {len(lo)} joint values, got {q_scene!r}") from None
+        if q.shape != lo.shape:  # one value was broadcast over every joint
+            raise KinematicsError(f"{where}: expected shape {lo.shape} in the scene's order "
+                                  f"{list(self._spec.joint_names)}, got {q.shape}")
+        if np.isnan(q).any():
+            raise KinematicsError(f"{where}: contains NaN: {q.tolist()}")
+        err = limit_error(where, q, self._spec.joint_names, lo, hi, self.tol.joint_limit)
         if err is not None:
             raise err
 
@@ -375,6 +393,7 @@ class Model:
 
     def scene_q(self, q) -> np.ndarray:
         """Pinocchio-ordered ``q`` ``(..., nq)`` -> the scene's flat order ``(..., n)``."""
+        refuse_complex_or_bool(q, "q", DetectionError)
         q = np.asarray(q, dtype=np.float64)
         if q.shape[-1:] != (self.nq,):
             raise DetectionError(f"q: expected {self.nq} values in pin_model's order {self.joint_names}, got shape {q.shape}")
@@ -387,7 +406,12 @@ class Model:
 
     def pin_q(self, q_scene) -> np.ndarray:
         """The scene's flat ``q`` ``(..., n)`` -> Pinocchio's order ``(..., nq)``."""
+        refuse_complex_or_bool(q_scene, "q_scene", DetectionError)
         q_scene = np.asarray(q_scene, dtype=np.float64)
+        n = len(self._q_index)
+        if q_scene.shape[-1:] != (n,):  # a raw numpy broadcast error
+            raise DetectionError(f"q_scene: expected {n} values in the scene's order {list(self._spec.joint_names)}, "
+                                 f"got shape {q_scene.shape}")
         out = np.zeros(q_scene.shape[:-1] + (self.nq,))
         out[..., self._q_index] = q_scene
         for k in self._circular:
@@ -406,13 +430,19 @@ class Model:
         return self.pin_q(self._spec.flat_q(self._spec.default_q()))
 
     def random_q(self, n: int, rng=None) -> np.ndarray:
-        """``(n, nq)`` uniform in-limit configurations (Pinocchio's order)."""
-        rng = np.random.default_rng(rng)
+        """``(n, nq)`` uniform in-limit configurations (Pinocchio's order); ``rng`` a seed or a numpy Generator."""
+        from .._values import whole_number
+
+        n = whole_number(n, "random_q: n", DetectionError)  # 2.7 gave 2 rows, True 1
+        try:
+            rng = np.random.default_rng(rng)
+        except (TypeError, ValueError):
+            raise DetectionError(f"random_q: rng: expected a seed (an integer >= 0) or a numpy Generator, got {rng!r}") from None
         robots = [r for _, r in self._robots]
         lo = np.concatenate([r.lower for r in robots]) if robots else np.zeros(0)
         hi = np.concatenate([r.upper for r in robots]) if robots else np.zeros(0)
         lo, hi = np.where(np.isfinite(lo), lo, -np.pi), np.where(np.isfinite(hi), hi, np.pi)
-        return self.pin_q(lo + (hi - lo) * rng.random((int(n), len(lo))))
+        return self.pin_q(lo + (hi - lo) * rng.random((n, len(lo))))
 
     def group_joints(self, group: str) -> tuple[str, ...]:
         """The movable joints of SRDF group ``group`` (its ``<joint>`` members, the joints of its

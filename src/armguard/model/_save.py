@@ -15,6 +15,7 @@ import yaml
 
 from .._errors import SceneError
 from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
+from ..kinematics import JointType
 from ._scene import Scene
 from ._schema import SCHEMA_VERSION
 
@@ -83,6 +84,9 @@ def _robot_to_dict(scene: Scene, name: str) -> dict:
             js = specs[k]
             j = {"name": js.name, "type": row.joint_type, "a": row.a, "alpha": row.alpha, "d": row.d, "theta": row.theta}
             lim = _limits(js.lower, js.upper, f"robot {name!r} joint {js.name!r}")
+            if lim is None and js.joint_type is JointType.PRISMATIC:  # the file would not load back
+                raise SceneError(f"robot {name!r} joint {js.name!r}: a prismatic joint without limits cannot be written "
+                                 "to a scene file (a scene file's prismatic joint needs finite limits)")
             if lim is not None:
                 j["limits"] = lim
             if math.isfinite(js.max_velocity):
@@ -104,6 +108,11 @@ def _robot_to_dict(scene: Scene, name: str) -> dict:
         if shapes:
             out["link_shapes"] = shapes
     elif source.get("kind") == "urdf":
+        shared = [n for n, src in scene._robot_sources.items() if src.get("kind") == "urdf" and src.get("urdf") == source["urdf"]]
+        if len(shared) > 1:  # the file would not load back: a scene file's robot takes a URDF of one arm
+            raise SceneError(f"cannot save robot {name!r}: its URDF {source['urdf']} holds the arms {shared}, and a scene "
+                             "file's robot takes a URDF of one arm; load that URDF with armguard.load_model (its sidecar "
+                             "YAML is the scene file of such a model)")
         out["urdf"] = source["urdf"]
         if np.all(np.isfinite(robot.max_acceleration)):
             out["max_acceleration"] = _l(robot.max_acceleration)

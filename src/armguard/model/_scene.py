@@ -19,7 +19,8 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from .._errors import SceneError
+from .._errors import KinematicsError, SceneError
+from .._values import refuse_complex_or_bool
 from ..geometry import Shape
 from ._allowed import adjacent, allowed_pairs
 from ._items import (  # noqa: F401  (re-exported: the scene's parts live in _items.py)
@@ -453,6 +454,7 @@ class Scene:
             if missing:
                 raise SceneError(f"q has no configuration for robots {missing}")
             return {name: self._robots[name].check_q(q[name]) for name in self._robots}
+        refuse_complex_or_bool(q, "q", KinematicsError)  # True read as 1 rad, a complex value as its real part
         try:
             arr = np.asarray(q, dtype=np.float64)
         except (TypeError, ValueError) as exc:

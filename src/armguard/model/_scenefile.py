@@ -217,6 +217,8 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
             rows.append(DHRow(j.a * L, j.alpha * A, j.d * L, j.theta * A, j.type))
             if j.limits is not None and j.limits[0] > j.limits[1]:
                 raise ctx.error(f"{w}.joints[{k}].limits", f"expected [lower, upper] with lower <= upper, got {j.limits}")
+            if j.type == "prismatic" and j.limits is None:  # the URDF it becomes needs them (every check failed)
+                raise ctx.error(f"{w}.joints[{k}]", "a prismatic joint needs limits [lower, upper]")
             lo, hi = (j.limits if j.limits is not None else (-math.inf, math.inf))
             lower.append(lo * s), upper.append(hi * s)
             vmax.append(j.max_velocity * s if j.max_velocity is not None else math.inf)

@@ -180,6 +180,11 @@ def _robot_parts(m: _Model, rname: str, robot, comment: str) -> None:
                 lower, upper, vel = ends[0], ends[1], abs(c) * vmax[src]
             jtype = "prismatic" if s.joint_type is JointType.PRISMATIC else (
                 "continuous" if math.isinf(lower) and math.isinf(upper) else "revolute")
+            if jtype != "continuous" and not (math.isfinite(lower) and math.isfinite(upper)):
+                # a URDF <limit> needs both (the model made from it was refused, naming a deleted temporary file)
+                raise SceneError(f"robot {rname!r}, joint {s.name!r} ({jtype}): limits [{lower}, {upper}]: "
+                                 + ("a prismatic joint needs both limits finite" if jtype == "prismatic" else
+                                    "give both limits finite, or none (a revolute joint without limits turns freely)"))
             m.joints.append(_Joint(jn, jtype, parent, child, X if k == 0 else np.eye(4), axis, lower, upper, vel,
                                    None if src is None else (P + src, c), note if k == 0 else ""))
             if not last:
@@ -458,9 +463,10 @@ def export_scene(scene, out_dir, *, name: str | None = None, source=None, sideca
     urdf = _urdf_text(name, model, urdf_header, meshes)
     srdf = _srdf_text(name, scene, model, notes)
     sidecar = sidecar_text(name, scene, header, sections, units) if sidecar else None
-    (out / "meshes").mkdir(parents=True, exist_ok=True)
+    from .._io import atomic_write, make_folder
+
+    make_folder(out / "meshes")  # an OutputError naming the folder (a raw FileExistsError / NotADirectoryError)
     paths = {"urdf": out / f"{name}.urdf", "srdf": out / f"{name}.srdf", "yaml": out / f"{name}.yaml", "meshes": []}
-    from .._io import atomic_write
 
     if sidecar is None:
         del paths["yaml"]
