@@ -135,6 +135,7 @@ class ConsoleApp:
         self._shown_version = -1
         self._plot: ClearancePlot | None = None
         self._plot_player = None
+        self._plot_threshold = None
         self._plot_feed = MarkerFeed()
         self._framed_active = None
         self._model_generation = 0
@@ -548,12 +549,12 @@ class ConsoleApp:
                 self._w_report.content = ""
                 self._plot_player = None
             return
-        if p is not self._plot_player:
+        if p is not self._plot_player or snap.threshold != self._plot_threshold:  # the dashed line: the threshold now
             rep = p.report
             fc = getattr(rep, "first_collision", None)
             self._plot = ClearancePlot(p.times, p.clearance, threshold=snap.threshold,
                                        first_collision=None if fc is None else float(fc.time))
-            self._plot_player = p
+            self._plot_player, self._plot_threshold = p, snap.threshold
             summary = rep.summary() if hasattr(rep, "summary") else str(rep)
             self._w_report.content = report_html(summary)
             self._w_plot.visible = True

@@ -210,10 +210,15 @@ class AvoidMixin:
                 raise ConsoleInputError(f"{name} with avoidance: the scene has no Model with this test; "
                                         "turn avoidance off to run it with detection")
             self._run_state, self._run_detail = "filtering", f"with avoidance, stand-off {stand_off * 1000:g} mm"
+            self._filtering = token = object()  # Stop (another thread, meanwhile) clears it
             self._changed(f"{name}: filtering the motion with avoidance (stand-off {stand_off * 1000:g} mm)")
         run = avoid_canned(model, name, stand_off, self._avoid_checker_for(model))  # seconds: outside the lock
         with self._lock:
+            if getattr(self, "_filtering", None) is not token:  # the arm moved after Stop
+                raise ConsoleInputError(f"{name} with avoidance: stopped while the motion was filtered; nothing ran")
+            self._filtering = None
             if self._model is not model:
+                self._run_state, self._run_detail = "stopped", "the model was reloaded while the motion was filtered"
                 raise ConsoleInputError(f"{name} with avoidance: the model was reloaded meanwhile; run it again")
             self._stop_player()
             tl = Timeline(run.duration)

@@ -55,11 +55,11 @@ def jog_frames(state, cell=None) -> tuple[str, ...]:
     return FIXED_FRAMES + tuple(b for b in bodies if b not in FIXED_FRAMES)
 
 
-def frame_pose(state, frame: str, cell=None) -> np.ndarray:
-    """``X_WF`` (4, 4) of ``frame`` for the active arm now: ``world``; ``base`` (the arm's mount);
-    ``tool`` (its tool pose now); an object: the cell's frame for it (the nominal layout or its
+def frame_pose(state, frame: str, cell=None, robot: str | None = None) -> np.ndarray:
+    """``X_WF`` (4, 4) of ``frame`` for the arm ``robot`` (default: the active arm) now: ``world``; ``base`` (the
+    arm's mount); ``tool`` (its tool pose now); an object: the cell's frame for it (the nominal layout or its
     calibration) or, without a cell, its shapes' bounding-box centre with W's axes."""
-    name = state.snapshot().active
+    name = state.snapshot().active if robot is None else robot
     robot = state.scene.robots[name]
     if frame == "world":
         return np.eye(4)
@@ -110,6 +110,7 @@ def jog(state, frame: str, axis: str, *, translate: float = 0.0, turn: float = 0
         X_new = jogged_pose(robot.link_pose(q0), X_WF, k, translate=translate, turn=turn)
         q = state._solve_ik(robot, X_new, q0)
         state._q[name] = q
+        state._arm_moved(name)
         what = (f"{translate * 1e3:+g} mm along" if translate else f"{math.degrees(turn):+g} deg about")
         state._changed(f"jog: tool {what} {frame} {axis}")
         return q.copy()

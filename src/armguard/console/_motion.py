@@ -34,6 +34,7 @@ class MotionMixin:
             X = pose_from_xyz_rpy(p, rpy)
             q = self._solve_ik(robot, X, self._q[name])
             self._q[name] = q
+            self._arm_moved(name)
             self._changed()
             return q.copy()
 

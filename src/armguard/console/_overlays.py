@@ -205,6 +205,30 @@ def isotropic_placement(scene, name: str, sigma_m: float, sigma_deg: float = 0.0
     return UncertainPlacement(name, UncertainPose3(T, Ad @ C @ Ad.T))
 
 
+def reanchored(placements, old_scene, new_scene) -> tuple[tuple, list]:
+    """``placements`` after a reload from ``old_scene`` to ``new_scene``: each moved with its body or robot base
+    (``D = X_new X_old^-1`` applied on the left, the covariance by ``Ad(D)``: the same spread about the moved
+    frame; they kept the old pose, so the ellipsoids and sigmas measured from where the body was); a placement
+    whose body or robot is gone is dropped.  Returns ``(placements, names dropped)``."""
+    from ..uncertainty import UncertainPlacement, UncertainPose3, se3
+
+    kept, dropped = [], []
+    for p in placements:
+        try:
+            D = _frame_of(new_scene, p.name) @ np.linalg.inv(_frame_of(old_scene, p.name))
+        except ConsoleInputError:
+            dropped.append(p.name)
+            continue
+        if np.allclose(D, np.eye(4), rtol=0.0, atol=1e-12):
+            kept.append(p)
+        elif isinstance(p.pose, UncertainPose3):
+            Ad = se3.adjoint(D)
+            kept.append(UncertainPlacement(p.name, UncertainPose3(D @ p.pose.mean, Ad @ p.pose.cov @ Ad.T)))
+        else:  # a planar placement of a body that moved: no planar relation to carry it by
+            dropped.append(p.name)
+    return tuple(kept), dropped
+
+
 def parse_uncertain(scene, text: str):
     """``BODY=SIGMA_M[,SIGMA_DEG]`` (the CLI's ``--uncertain``) as :func:`isotropic_placement`."""
     name, eq, spec = str(text).partition("=")
@@ -255,16 +279,25 @@ class OverlayMixin:
 
     def _attach_overlays(self) -> None:
         """Called after the detector is (re)built: attach the terrain to it."""
-        if self._terrain_map is None:
+        guard = self._terrain_guard()
+        if guard is None:
             return
-        from ..terrain import TerrainGuard, attach_terrain
+        from ..terrain import attach_terrain
+
+        attach_terrain(self._detector, guard)
+
+    def _terrain_guard(self):
+        """A TerrainGuard of the scene against the loaded terrain (its pyramid built once), or None."""
+        if self._terrain_map is None:
+            return None
+        from ..terrain import TerrainGuard
 
         pyr = getattr(self, "_pyramid", None)
         if pyr is None or pyr.map is not self._terrain_map:
             from ..terrain import TerrainPyramid
 
             pyr = self._pyramid = TerrainPyramid(self._terrain_map, tol=self._tol)
-        attach_terrain(self._detector, TerrainGuard(self._scene, pyr, tol=self._tol))
+        return TerrainGuard(self._scene, pyr, tol=self._tol)
 
     # ------------------------------------------------------------------ uncertain placements
     @property
@@ -288,7 +321,11 @@ class OverlayMixin:
 
     def add_uncertain(self, name: str, sigma_m: float, sigma_deg: float = 0.0) -> None:
         """Add an isotropic placement of ``name`` (:func:`isotropic_placement`), replacing one of that name."""
-        p = isotropic_placement(self._scene, name, float(sigma_m), float(sigma_deg))
+        from .._values import number
+
+        sigma_m = number(sigma_m, "uncertain placement: sigma", ConsoleInputError, low=0.0, unit=" (m)", text=True)
+        sigma_deg = number(sigma_deg, "uncertain placement: sigma_deg", ConsoleInputError, low=0.0, unit=" (deg)", text=True)
+        p = isotropic_placement(self._scene, name, sigma_m, sigma_deg)
         self.set_placements(tuple(x for x in self._placements if x.name != name) + (p,))
 
     def ellipsoids(self) -> tuple[Ellipsoid, ...]:

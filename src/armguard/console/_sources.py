@@ -117,17 +117,21 @@ class SourcesMixin:
         arm, settings and backends stay when they still exist.  Any failure leaves the old model
         running and raises.
         """
+        from ._overlays import reanchored
         from ._reload import carry_q, describe_changes
 
         if not scene.robots:
             raise ConsoleInputError(f"scene {scene.name!r} has no robot to drive")
         with self._lock:
             old = (self._scene, self._model, self._q, self._active, self._detector, self._views, self._backend,
-                   self._compare_with, self._refused)
+                   self._compare_with, self._refused, self._placements)
             new_scene = scene.copy()
             new_q = carry_q(self._q, self._scene, new_scene)
             try:
                 changes = describe_changes(self._scene, new_scene, self._q, new_q, self._model, model)
+                self._placements, dropped = reanchored(self._placements, self._scene, new_scene)
+                if dropped:
+                    changes += f"; uncertain placements dropped (gone or moved in the plane): {', '.join(dropped)}"
                 self._scene, self._model, self._q, self._views = new_scene, model, new_q, {}
                 self._refused = {}
                 self._ws_draft = (None, None)
@@ -143,7 +147,7 @@ class SourcesMixin:
                 self._changed(self._changes)
             except Exception:
                 (self._scene, self._model, self._q, self._active, self._detector, self._views, self._backend,
-                 self._compare_with, self._refused) = old
+                 self._compare_with, self._refused, self._placements) = old
                 self._evaluate()
                 raise
             return changes

@@ -283,6 +283,12 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
                 )
         return np.clip(q, lo, hi)
 
+    def _arm_moved(self, robot: str) -> None:
+        """The arm ``robot`` moved other than by its arm angle: the active arm's arm-angle label goes back to 0
+        (docs/console.md; it kept the last value, and the next slider move was taken from it)."""
+        if robot == self._active:
+            self._arm_angle = 0.0
+
     def note_error(self, message: str) -> None:
         """Show ``message`` (an input the GUI rejected before it reached a command)."""
         with self._lock:
@@ -295,6 +301,11 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
         """Select the active arm (the one driven and checked against everything)."""
         with self._lock:
             self._robot(robot)
+            p = self._player
+            if (p is not None and p.kind in ("run", "avoid") and self._run_state in ("running", "filtering")
+                    and robot != p.robot):  # the run stops on the active arm's readout: it would stop checking its arm
+                raise ConsoleInputError(f"{p.robot} is running {p.name}: stop it before selecting another arm "
+                                        "(a run is stopped by the readout of the arm it moves)")
             self._active = robot
             self._arm_angle = 0.0
             self._detector.set_active(robot)
@@ -347,8 +358,8 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
         """
         with self._lock:
             r = self._robot(robot)
-            if not 0 <= int(index) < r.n_joints:
-                raise ConsoleInputError(f"{robot}: joint index {index} out of range 0..{r.n_joints - 1}")
+            if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < r.n_joints:
+                raise ConsoleInputError(f"{robot}: joint index {index!r}: expected an integer in 0..{r.n_joints - 1}")
             j = int(index)
             in_deg = deg and self.joint_units(robot)[j] == "deg"
             unit = "deg" if in_deg else ("m" if self.joint_units(robot)[j] == "m" else "rad")
@@ -360,6 +371,7 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
             q = self._q[robot].copy()
             q[j] = x / k
             self._q[robot] = self._checked_q(robot, q)
+            self._arm_moved(robot)
             self._changed()
             return float(self._q[robot][j])
 
@@ -369,6 +381,7 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
             r = self._robot(robot)
             q = parse_numbers(values, f"{robot} joints", r.n_joints, scale=scale)
             self._q[robot] = self._checked_q(robot, q)
+            self._arm_moved(robot)
             self._changed()
             return self._q[robot].copy()
 
@@ -378,6 +391,7 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
         with self._lock:
             new = {name: self._checked_q(name, v) for name, v in parts.items()}
             self._q = new
+            self._arm_moved(self._active)
             self._changed()
 
     # ------------------------------------------------------------------ canned tests
@@ -442,7 +456,13 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
             raise ConsoleInputError(f"unknown trajectory {name!r}; trajectories are {list(self._scene.trajectories)}") from None
         robot = traj.robot_name
         with self._lock:
-            report = verify(self._scene, traj, stopping_distance=self._stopping)
+            guard = self._terrain_guard()
+            if guard is None:
+                report = verify(self._scene, traj, stopping_distance=self._stopping)
+            else:  # the terrain too (a verdict without it said safe where the arm goes through the ground)
+                from ..terrain import verify_with_terrain
+
+                report = verify_with_terrain(self._scene, traj, guard, stopping_distance=self._stopping)
             T = _duration_of(traj)
             times = np.linspace(0.0, T, max(2, int(samples)))
             base = {k: v.copy() for k, v in self._q.items()}
@@ -454,6 +474,9 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
                                        active=robot, tol=self._tol)
             batch = det.check_many(np.array(rows))
             clearance = np.min(np.asarray(batch.min_distance, dtype=np.float64), axis=1)
+            if guard is not None:  # the profile against the terrain too, as the panel checks it
+                ground = [guard.check(q, threshold=self._threshold, stopping_distance=self._stopping).distance for q in rows]
+                clearance = np.minimum(clearance, np.asarray(ground, dtype=np.float64))
             safe = getattr(report, "safe", None)
             return self.show_verified(name, traj, times, clearance, report,
                                       f"verified {name}: {'safe' if safe else 'NOT safe'}")
@@ -477,8 +500,11 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
 
     # ------------------------------------------------------------------ time line
     def _stop_player(self) -> None:
-        if self._player is not None:
-            self._player.timeline.pause()
+        p = self._player
+        if p is not None:
+            p.timeline.pause()
+            if p.kind in ("run", "avoid") and self._run_state == "running":  # the Tests tab said running on
+                self._run_state, self._run_detail = "stopped", f"at t = {p.timeline.t:.2f} s (replaced)"
         self._player = None
 
     def stop(self) -> None:
@@ -487,7 +513,11 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
             p = self._player
             was_running = p is not None and p.kind in ("run", "avoid") and self._run_state == "running"
             self._stop_player()
-            if was_running:
+            if self._run_state == "filtering":  # a run with avoidance still being filtered: it must not start
+                self._filtering = None
+                self._run_state, self._run_detail = "stopped", "while the motion was filtered"
+                self._changed("stopped by the operator while the motion was filtered")
+            elif was_running:
                 self._run_state = "stopped"
                 self._run_detail = f"at t = {p.timeline.t:.2f} s"
                 self._changed(f"{p.name}: stopped by the operator")

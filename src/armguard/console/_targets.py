@@ -161,12 +161,23 @@ class TargetsMixin:
             self._scene.clear_workspace()
             try:
                 self._rebuild_detector()
+                self._refresh_model()
             except Exception:
                 self._scene.set_workspace(old.lo, old.hi)
                 self._rebuild_detector()
                 raise
             self._ws_draft = (None, None)
             self._changed("workspace box removed")
+
+    def _refresh_model(self) -> None:
+        """The Model (and the other backends' checkers on it) after an edit of the scene's workspace box: the
+        coal and fcl panels measured the old box (a violated new box read clear; the comparison a false delta)."""
+        if self._model is None:
+            return
+        from ..model import model_of
+
+        self._model = model_of(self._scene)
+        self._views = {}
 
     def set_workspace(self, lo, hi) -> None:
         """Workspace bounding-box limits ``lo``, ``hi`` (3 numbers each, m; hi > lo on every axis)."""
@@ -182,6 +193,7 @@ class TargetsMixin:
             self._scene.set_workspace(lo_v, hi_v)
             try:
                 self._rebuild_detector()
+                self._refresh_model()
             except Exception:
                 if old is None:
                     self._scene.clear_workspace()

@@ -185,7 +185,10 @@ class TasksPanel:
                 from ..kinematics._frames import xyz_rpy_from_pose
                 from ._jog import frame_pose
 
-                X_FE = np.linalg.inv(frame_pose(self.app.state, self.w_frame.value, self.cell)) @ self.app.state.ee_pose()
+                # the cell's arm, whichever arm the panel has active (the active arm's pose was recorded)
+                arm = self.cell.robot
+                X_FE = np.linalg.inv(frame_pose(self.app.state, self.w_frame.value, self.cell, robot=arm)) @ \
+                    self.app.state.ee_pose(arm)
                 xyz, rpy = xyz_rpy_from_pose(X_FE)
                 kw.update(frame=self.w_frame.value, xyz=xyz, rpy_deg=np.degrees(rpy), mode=self.w_mode.value)
         else:
