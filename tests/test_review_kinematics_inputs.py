@@ -168,3 +168,19 @@ def test_package_dirs_may_be_one_folder(tmp_path):
     listed = armguard.load_model(copy, package_dirs=[share])
     assert [g.meshPath for g in one.collision_model.geometryObjects] == \
         [g.meshPath for g in listed.collision_model.geometryObjects]
+
+
+def test_frame_helpers_and_builders_name_what_they_refuse():
+    from armguard.kinematics import Coupling, DHRow, invert_pose, xyz_rpy_from_pose
+
+    for call, said in ((lambda: invert_pose(np.eye(3)), r"expected rigid transforms \(\.\.\., 4, 4\)"),  # IndexError
+                       (lambda: invert_pose("x"), "expected rigid transforms"),
+                       (lambda: xyz_rpy_from_pose(np.diag([2.0, 2.0, 2.0, 1.0])), "not a rigid transform"),  # rpy 0
+                       (lambda: Robot.from_dh("r", [DHRow(0.1, 0, 0)], lower=["x"], upper=[1]), "lower: expected numbers"),
+                       (lambda: Coupling("j", [1, 2]), r"terms: expected a mapping"),
+                       (lambda: Robot("r", "base", [1]), r"joints\[0\]: expected a JointSpec"),
+                       (lambda: Robot.from_dh("r", [DHRow(0.1, 0, 0)]).with_link_shapes([1]), "expected a mapping")):
+        with pytest.raises(KinematicsError, match=said):
+            call()
+    X = invert_pose(np.stack([np.eye(4)] * 2))
+    assert X.shape == (2, 4, 4)

@@ -21,6 +21,7 @@ from typing import Mapping
 import numpy as np
 
 from .._errors import KinematicsError
+from .._values import refuse_complex_or_bool
 from ._frames import rot_x, rot_z, trans
 from ._robot import Coupling, DHRow, JointSpec, JointType
 
@@ -50,7 +51,11 @@ def _per_joint(values, n_rows: int, indep_rows: list[int], default: float, name:
     """Limits given per row (n_rows) or per independent joint; returns one value per row."""
     if values is None:
         return [default] * n_rows
-    arr = np.asarray(values, dtype=np.float64).ravel()
+    refuse_complex_or_bool(values, name, KinematicsError)
+    try:
+        arr = np.asarray(values, dtype=np.float64).ravel()
+    except (TypeError, ValueError):
+        raise KinematicsError(f"{name}: expected numbers (one per DH row or per independent joint), got {values!r}") from None
     if arr.shape[0] == n_rows:
         return [float(x) for x in arr]
     if arr.shape[0] == len(indep_rows):

@@ -109,6 +109,8 @@ def xyz_rpy_from_pose(X) -> tuple[np.ndarray, np.ndarray]:
     if X.shape != (4, 4) or not np.all(np.isfinite(X)):
         raise KinematicsError(f"X: expected a finite 4x4 pose, got shape {X.shape}")
     R = X[:3, :3]
+    if not np.allclose(R.T @ R, np.eye(3), rtol=0.0, atol=1e-6) or np.linalg.det(R) < 0.0:
+        raise KinematicsError("X: not a rigid transform (its rotation part is not orthonormal with det +1)")
     # R = Rz(yaw) Ry(pitch) Rx(roll):  R[2,0] = -sin(pitch), R[2,1] = cos(pitch) sin(roll), ...
     sp = -R[2, 0]
     cp = math.hypot(R[0, 0], R[1, 0])
@@ -171,7 +173,12 @@ def dh_modified(a: float, alpha: float, d: float, theta: float) -> np.ndarray:
 
 def invert_pose(X: np.ndarray) -> np.ndarray:
     """Inverse of rigid transforms ``X`` (..., 4, 4): ``[R^T, -R^T p]``."""
-    X = np.asarray(X, dtype=np.float64)
+    try:
+        X = np.asarray(X, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise KinematicsError(f"X: expected rigid transforms (..., 4, 4), got {X!r}") from None
+    if X.shape[-2:] != (4, 4):
+        raise KinematicsError(f"X: expected rigid transforms (..., 4, 4), got shape {X.shape}")
     out = np.zeros_like(X)
     Rt = np.swapaxes(X[..., :3, :3], -1, -2)
     out[..., :3, :3] = Rt

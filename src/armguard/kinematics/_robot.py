@@ -92,6 +92,8 @@ class Coupling:
     def __post_init__(self) -> None:
         if not isinstance(self.joint, str) or not self.joint:
             raise KinematicsError(f"Coupling.joint: expected a joint name, got {self.joint!r}")
+        if not isinstance(self.terms, Mapping):
+            raise KinematicsError(f"Coupling({self.joint}).terms: expected a mapping joint -> factor, got {self.terms!r}")
         terms = {str(k): _finite(v, f"Coupling({self.joint}).terms[{k!r}]") for k, v in dict(self.terms).items()}
         object.__setattr__(self, "terms", types.MappingProxyType(terms))
         object.__setattr__(self, "offset", _finite(self.offset, f"Coupling({self.joint}).offset"))
@@ -200,6 +202,9 @@ class Robot:
         self._ik = None if ik is None else str(ik)
         self._root = str(root_link)
         self._specs = tuple(joints)
+        for k, s in enumerate(self._specs):
+            if not isinstance(s, JointSpec):
+                raise KinematicsError(f"Robot {name!r}: joints[{k}]: expected a JointSpec, got {type(s).__name__}")
         self._dh = dh
         X_WB = np.eye(4) if X_WB is None else _check_X(X_WB, "X_WB")
         self._X_WB = _readonly(X_WB)
@@ -349,6 +354,8 @@ class Robot:
 
     def _merged_shapes(self, link_shapes) -> Mapping[str, tuple[Shape, ...]]:
         merged = dict(self._link_shapes)
+        if not isinstance(link_shapes, Mapping):
+            raise KinematicsError(f"link_shapes: expected a mapping link -> shapes, got {type(link_shapes).__name__}")
         for link, shapes in dict(link_shapes).items():
             if link not in self._link_index:
                 raise KinematicsError(f"link_shapes: unknown link {link!r}; links are {list(self._link_names)}")
