@@ -308,3 +308,17 @@ def test_entry_points_are_discovered_once_per_path_and_refreshed_on_request(monk
         backends.get_backend("no_such_backend")
     monkeypatch.undo()
     assert "fake" not in backends.available() and sys.path[0] != str(tmp_path)
+
+
+def test_coal_yes_no_agrees_with_its_distances_just_above_contact():
+    """puma560's tool 1e-6 m above the table: coal's collision requests kept coal's GJK tolerance 1e-6 (the distance
+    requests were tightened to 1e-9) and ``collides`` said collision there, on one row and on its 64-row pool, where
+    its own distance, the analytic backend and ``check`` say apart."""
+    model = armguard.load_model("puma560")
+    q = np.array([2.497641659227946, 2.5627451813342916, -0.1846978379996368,
+                  0.5763358132833984, -0.566416407672864, -0.36291853231111804])
+    c = armguard.checker(model, "coal")
+    d = c.pair_distances(q).distance.min()
+    assert 0.0 < d < 2e-6
+    assert not c.collides(q[None])[0] and not c.collides(np.repeat(q[None], 64, axis=0)).any()
+    assert not armguard.checker(model, "analytic").collides(q[None])[0]

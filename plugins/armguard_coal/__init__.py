@@ -83,9 +83,12 @@ def workspace_walls(lo, hi):
     return out
 
 
-def _reference_requests(gdata) -> None:
+def _reference_requests(gdata, tolerance: float) -> None:
     """Set every request of ``gdata`` so that coal answers as a reference must.
 
+    * GJK and EPA stop within ``tolerance`` (the option ``gjk_tolerance``), the collision requests as
+      the distance ones: with coal's 1e-6 on the collision requests, ``collides`` said collision at
+      +1e-6 m where the distance query, ``check`` and the analytic backend said apart;
     * GJK starts afresh: with a guess carried over from another configuration, GJK was seen to
       stop 1.4e-5 m above a Panda hull pair's distance whatever the tolerance, and a batch to miss
       a 0.16 mm penetration;
@@ -98,6 +101,8 @@ def _reference_requests(gdata) -> None:
     for req in [*gdata.distanceRequests, *gdata.collisionRequests]:
         req.gjk_initial_guess = coal.GJKInitialGuess.DefaultGuess
         req.enable_cached_gjk_guess = False  # its deprecation warning: silenced at import (above)
+        req.gjk_tolerance = req.epa_tolerance = tolerance
+        req.gjk_max_iterations = req.epa_max_iterations = 1000
     for req in gdata.collisionRequests:
         req.enable_contact = True
 
@@ -177,10 +182,7 @@ class CoalChecker(CheckerBase):
             import pinocchio as pin
 
             gdata = pin.GeometryData(self.geometry_model)
-            _reference_requests(gdata)
-            for req in gdata.distanceRequests:
-                req.gjk_tolerance = req.epa_tolerance = self.gjk_tolerance
-                req.gjk_max_iterations = req.epa_max_iterations = 1000
+            _reference_requests(gdata, self.gjk_tolerance)
             dg = self._tls.dg = (self.model.pin_model.createData(), gdata)
             return dg
 
@@ -273,7 +275,7 @@ class CoalChecker(CheckerBase):
                 if self._pool is None:
                     self._pool = pin.GeometryPool(self.model.pin_model, self.geometry_model, self.threads)
                     for gd in self._pool.getGeometryDatas():
-                        _reference_requests(gd)
+                        _reference_requests(gd, self.gjk_tolerance)
                 for gd in self._pool.getGeometryDatas():
                     for req in gd.collisionRequests:
                         req.security_margin = margin
