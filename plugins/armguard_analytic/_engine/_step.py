@@ -42,7 +42,7 @@ _K_stamp, _K_mov_idx, _K_pflag, _K_pair_cat = K["stamp"], K["mov_idx"], K["pflag
 @njit(cache=True, _nrt=False)
 def record_pair(p, c, d, n_eval, H, SF, SI, stamp_now):  # pragma: no cover - compiled
     """Store pair ``p``'s result (``d`` and the witnesses in ``out9``) in row ``n_eval`` of the compact
-    outputs and update its category's best."""
+    outputs and update its category's best (an equal distance: the lower pair number)."""
     o = H[2 * _K_ev] + EV_W * n_eval
     o9 = H[2 * _K_out9]
     SF[o] = d
@@ -51,9 +51,11 @@ def record_pair(p, c, d, n_eval, H, SF, SI, stamp_now):  # pragma: no cover - co
     SI[H[2 * _K_ev_p] + n_eval] = p
     SI[H[2 * _K_pstamp] + p] = stamp_now
     ob = H[2 * _K_best] + c
-    if d < SF[ob]:
+    os = H[2 * _K_summary]
+    # a tie goes to the lower pair number: which pair is named nearest does not depend on the order the
+    # pairs were evaluated in (last check's nearest pairs first), so not on what was checked before
+    if d < SF[ob] or (d == SF[ob] and p < SI[os + SUM_BEST + c]):
         SF[ob] = d
-        os = H[2 * _K_summary]
         SI[os + SUM_BEST + c] = p
         SI[os + SUM_BSLOT + c] = n_eval
 
