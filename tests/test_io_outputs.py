@@ -498,3 +498,27 @@ def test_program_and_srdf_outputs_refuse_a_fifo_and_write_whole(tmp_path):
     r = CliRunner().invoke(main, ["program", "export", str(prog), "--out", str(out)])
     assert r.exit_code == 0, r.output
     assert "armguard" in out.read_text() and not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
+def test_a_folder_target_is_refused_like_every_unwritable_output_and_missing_folders_are_made(tmp_path):
+    """A folder given as an output file exited 2 (click's path check) where the README says 3 (a target that is
+    not a regular file is refused); ``srdf --out`` and ``program export --out`` refused a missing folder that
+    ``verify --report`` and ``compare --out`` make."""
+    from click.testing import CliRunner
+
+    from armguard.cli import main
+
+    folder = tmp_path / "adir"
+    folder.mkdir()
+    prog = Path(__file__).resolve().parent.parent / "examples" / "workmate" / "stack.yaml"
+    for args in (["verify", "gmf_s480", "reach_over_fixture", "--report", str(folder)],
+                 ["program", "export", str(prog), "--out", str(folder)],
+                 ["srdf", "gmf_s480", "--out", str(folder), "--max-evaluations", "200"]):
+        r = CliRunner().invoke(main, args)
+        assert r.exit_code == 3 and "adir" in r.output and "folder" in r.output, (args, r.output)
+        assert folder.is_dir() and not list(folder.iterdir())
+    for args, made in ((["program", "export", str(prog), "--out", str(tmp_path / "new" / "stack.py")], "new/stack.py"),
+                       (["srdf", "gmf_s480", "--out", str(tmp_path / "new2" / "g.srdf"), "--max-evaluations", "200"],
+                        "new2/g.srdf")):
+        r = CliRunner().invoke(main, args)
+        assert r.exit_code == 0 and (tmp_path / made).is_file(), (args, r.output)

@@ -37,7 +37,7 @@ def _option_names(ctx, message: str) -> str:
 @click.option("--backend", default=None, metavar="NAME",
               help="Backend for every check of this command (analytic, coal, fcl, ...; default: "
                    "$ARMGUARD_BACKEND, else armguard.toml, else analytic).")
-@click.option("--config", "config", default=None, type=click.Path(dir_okay=False),
+@click.option("--config", "config", default=None, type=click.Path(),
               help="An armguard.toml to read the [backend] table from (default: the working directory's).")
 @click.option("--traceback", "traceback", is_flag=True,
               help=f"Print the traceback of an internal error (exit status 4); also {DEBUG_ENV}=1.")

@@ -80,7 +80,7 @@ def parse_q(sc, q_text: str, deg: bool):
 @click.option("--active", default=None, help="Check only this robot against everything (default: all arms).")
 @click.option("--budget-us", type=LENGTH, default=None, help="Anytime mode: time budget in microseconds.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
-@click.option("--terrain", "terrain_file", type=click.Path(dir_okay=False), default=None,
+@click.option("--terrain", "terrain_file", type=click.Path(), default=None,
               help="Add the terrain category: a sensed terrain file (armguard.terrain.load_terrain).")
 def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_us, as_json, terrain_file) -> None:
     """Check SCENE (a built-in name or a scene file) at one configuration."""

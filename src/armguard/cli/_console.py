@@ -16,7 +16,7 @@ from ._params import LENGTH
               help="TCP port (0: any free port). A port in use is an error.")
 @click.option("--threshold", default=0.05, show_default=True, type=LENGTH, help="Initial detection threshold (m).")
 @click.option("--watch", is_flag=True, help="Reload the model when its files change, keeping the configuration.")
-@click.option("--terrain", "terrain_file", type=click.Path(dir_okay=False, exists=True), default=None,
+@click.option("--terrain", "terrain_file", type=click.Path(), default=None,
               help="Check against a sensed terrain file (as armguard check --terrain) and draw it with the "
                    "pyramid boxes each check tests.")
 @click.option("--uncertain", multiple=True, metavar="BODY=SIGMA_M[,SIGMA_DEG]",

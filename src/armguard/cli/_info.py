@@ -76,7 +76,7 @@ def _print_srdf(con, scene, given: str) -> None:
 @main.command("info")
 @click.argument("scene", required=False)
 @click.option("--rad", is_flag=True, help="Print revolute joint limits in radians (default: degrees).")
-@click.option("--srdf", type=click.Path(dir_okay=False), default=None,
+@click.option("--srdf", type=click.Path(), default=None,
               help="The SRDF of a .urdf SCENE (default: found beside it, in ../srdf/ or under the robot's name; "
                    "docs/models.md).")
 def info_cmd(scene: str | None, rad: bool, srdf: str | None) -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sys
+from pathlib import Path
 
 import click
 
@@ -19,13 +20,13 @@ def program() -> None:
 @program.command("run", epilog=exit_epilog(
     ok="every motion verified (certified) and ran in the emulated cell",
     unsafe="a motion was refused (it would collide, or could not be verified) or a FIND failed: the program stopped there"))
-@click.argument("file", type=click.Path(dir_okay=False))
+@click.argument("file", type=click.Path())
 @click.option("--cell", default=None, metavar="CELL",
               help="A cell file (armguard_cell: 1), a model name or a scene file (default: the program's cell:).")
-@click.option("--calibration", default=None, type=click.Path(dir_okay=False),
+@click.option("--calibration", default=None, type=click.Path(),
               help="A calibration file (armguard_calibration: 1) to regenerate the cell from (default: the cell's).")
 @click.option("--seed", default=0, show_default=True, type=int, help="Seed of the camera's FIND noise.")
-@click.option("--save", default=None, type=click.Path(dir_okay=False),
+@click.option("--save", default=None, type=click.Path(),
               help="Write the run (each motion's times and waypoints, each FIND's frames) as JSON.")
 def run_cmd(file: str, cell: str | None, calibration: str | None, seed: int, save: str | None) -> None:
     """Run the task program FILE: expand each task through IK, verify every motion, emulate it."""
@@ -36,21 +37,24 @@ def run_cmd(file: str, cell: str | None, calibration: str | None, seed: int, sav
     if save:
         from .._io import atomic_write
 
-        atomic_write(save, json.dumps(run.to_dict()))  # whole or not at all; a FIFO or a full disk: exit 3
+        atomic_write(save, json.dumps(run.to_dict()), parents=True)  # whole or not at all; a FIFO or a full disk: exit 3
     sys.exit(int(ExitCode.OK if run.ok else ExitCode.UNSAFE))
 
 
 @program.command("export")
-@click.argument("file", type=click.Path(dir_okay=False))
-@click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
+@click.argument("file", type=click.Path())
+@click.option("--out", "out", required=True, type=click.Path(),
               help="The program to write (Python that calls armguard's workcell primitives).")
 @click.option("--cell", default=None, metavar="CELL", help="The cell the exported program runs on by default.")
-@click.option("--calibration", default=None, type=click.Path(dir_okay=False),
+@click.option("--calibration", default=None, type=click.Path(),
               help="The calibration file the exported program regenerates its cell from by default.")
 def export_cmd(file: str, out: str, cell: str | None, calibration: str | None) -> None:
     """Export the task program FILE as a workcell program (Python) that reproduces its motions."""
     from ..program import export_program
 
+    from .._io import make_folder
+
+    make_folder(Path(out).parent)  # a missing folder is made, as verify --report and compare --out make theirs
     path = export_program(file, out, cell=cell, calibration=calibration)
     click.echo(f"wrote {path}")
 
@@ -58,10 +62,10 @@ def export_cmd(file: str, out: str, cell: str | None, calibration: str | None) -
 @program.command("calibrate", epilog=exit_epilog(
     ok="calibrated: every motion verified and ran, the camera saw every point, the calibration file written",
     unsafe="a motion was refused or the camera did not see the calibration object: nothing written"))
-@click.argument("cell", type=click.Path(dir_okay=False))
-@click.option("--out", "out", default=None, type=click.Path(dir_okay=False),
+@click.argument("cell", type=click.Path())
+@click.option("--out", "out", default=None, type=click.Path(),
               help="The calibration file to write (default: the one the cell file names, updated in place).")
-@click.option("--calibration", default=None, type=click.Path(dir_okay=False),
+@click.option("--calibration", default=None, type=click.Path(),
               help="The calibration file to start from (default: the cell's; the nominal layout without one).")
 @click.option("--points", default=12, show_default=True, type=click.IntRange(3, 200),
               help="Points of the trained trajectory in the camera's view.")
@@ -82,6 +86,9 @@ def calibrate_cmd(cell: str, out: str | None, calibration: str | None, points: i
     click.echo(result.summary())
     if not result.ok:
         sys.exit(int(ExitCode.UNSAFE))
+    from .._io import make_folder
+
+    make_folder(Path(target).parent)
     path = write_calibration(result.calibration(), target)  # whole or not at all: a FIFO or a full disk is exit 3
     click.echo(f"wrote {path}")
     sys.exit(int(ExitCode.OK))

@@ -24,7 +24,7 @@ def _q(q) -> str:
 
 @main.command("srdf", epilog=exit_epilog(ok="the SRDF written"))
 @click.argument("robot")
-@click.option("--out", "out", type=click.Path(dir_okay=False), required=True, help="The .srdf file to write.")
+@click.option("--out", "out", type=click.Path(), required=True, help="The .srdf file to write.")
 @click.option("--margin", type=LENGTH, default=0.0, show_default=True,
               help="Never means never within this distance (m) anywhere within the joint limits.")
 @click.option("--method", type=click.Choice(["certified", "sampled"]), default="certified", show_default=True,
@@ -71,6 +71,9 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
                != (e.reason, e.status)]
     if update:  # and the disabled pairs the matrix does not search (static bodies, a link against an obstacle)
         keep = other_elements(out, searched={frozenset((e.link1, e.link2)) for e in cm.entries})
+    from .._io import make_folder
+
+    make_folder(Path(out).parent)  # a missing folder is made, as verify --report and compare --out make theirs
     cm.write_srdf(out, keep if update else ())
     c = cm.counts()
     if as_json:
@@ -111,7 +114,7 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
     unsafe="with --strict: a disabled pair other than Adjacent or Default can collide, or a disabled pair names "
            "a link the robot lacks (unless the SRDF was found under the robot's name: one of a larger robot)"))
 @click.argument("robot")
-@click.argument("srdf", type=click.Path(dir_okay=False), required=False)
+@click.argument("srdf", type=click.Path(), required=False)
 @click.option("--margin", type=LENGTH, default=0.0, show_default=True, help="Collide means within this distance (m).")
 @click.option("--workers", type=AT_LEAST_ONE, default=None, help="Threads over the pairs (default: one).")
 @click.option("--max-evaluations", type=AT_LEAST_ONE, default=200_000, show_default=True,

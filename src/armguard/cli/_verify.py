@@ -71,12 +71,12 @@ def _unique_names(items):
                    "eighth's distance from t = 0).")
 @click.option("--threshold", type=LENGTH, default=None, help="Warning threshold drawn on the plot (m; default 0.05).")
 @click.option("--robot", default=None, help="The moving robot (default: the trajectory's).")
-@click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="Write the JSON report here.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None, help="Write a plot of clearance vs time here (.png, or .pdf, .svg; one file per trajectory, "
+@click.option("--report", "report_path", type=click.Path(), default=None, help="Write the JSON report here.")
+@click.option("--plot", "plot_path", type=click.Path(), default=None, help="Write a plot of clearance vs time here (.png, or .pdf, .svg; one file per trajectory, "
               "FILE_<trajectory>.png, when there are several).")
 @click.option("--workers", type=AT_LEAST_ONE, default=None, help="Run on a Dask LocalCluster with N worker processes.")
 @click.option("--scheduler", default=None, help="Run on an existing Dask cluster (scheduler address).")
-@click.option("--terrain", "terrain_file", type=click.Path(dir_okay=False), default=None,
+@click.option("--terrain", "terrain_file", type=click.Path(), default=None,
               help="Also verify against a sensed terrain file (certified; serial; armguard.terrain.load_terrain).")
 def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_distance, speed_dependent, threshold, robot,
                report_path, plot_path, workers, scheduler, terrain_file) -> None:
