@@ -66,6 +66,7 @@ def measure(name: str, n: int) -> dict:
 
     import armguard
 
+    from .backends import coal_core
     from .timing import interleaved_thread_seconds
 
     t0 = time.perf_counter()
@@ -83,9 +84,11 @@ def measure(name: str, n: int) -> dict:
     d_c = np.array([ref.pair_distances(q).distance for q in Q])
     verdict_a, verdict_c = (d_a <= 0).any(axis=1), (d_c <= 0).any(axis=1)
     it = iter(range(10**9))
+    core = coal_core(ref)
     t = interleaved_thread_seconds({"a": lambda: ana.pair_distances(Q[next(it) % n]),
-                                    "c": lambda: ref.pair_distances(Q[next(it) % n])}, repeat=7, number=n)
-    t_a, t_c = t["a"], t["c"]
+                                    "c": lambda: ref.pair_distances(Q[next(it) % n]),
+                                    "k": lambda: core(Q[next(it) % n])}, repeat=7, number=n)
+    t_a, t_c, t_k = t["a"], t["c"], t["k"]
     T = path(model, 9, PATH_STEP, 11)
     ana_w = armguard.checker(model, "analytic", {"warm_start": True})
     p_a = np.array([ana_w.pair_distances(q).distance for q in T])
@@ -103,7 +106,7 @@ def measure(name: str, n: int) -> dict:
         "depths": int(((d_a <= 0) | (d_c <= 0)).sum()),
         "depths_off": int((((d_a <= 0) | (d_c <= 0)) & (np.abs(d_a - d_c) > 1e-3)).sum()),
         "coal_depth_max": int((d_c < -1.0).sum()),
-        "us_analytic": t_a * 1e6, "us_coal": t_c * 1e6,
+        "us_analytic": t_a * 1e6, "us_coal": t_c * 1e6, "us_coal_core": t_k * 1e6,
         "path_n": len(T), "path_disagree": int(((p_a <= 0).any(axis=1) != (p_c <= 0).any(axis=1)).sum()),
         "us_path_warm": tp["w"] * 1e6, "us_path_analytic": tp["a"] * 1e6, "us_path_coal": tp["c"] * 1e6,
     }
@@ -147,8 +150,9 @@ def run(quick: bool) -> str:
     n = 50 if quick else 300
     rows = ["| robot | nq | load first | load cold | load warm | peak RSS | SRDF | pairs (no SRDF) | colliding / "
             "disagree (of N) | max \\|Δd\\| apart | depths off > 1 mm | analytic | coal | coal / analytic "
+            "| coal's C++ core | core / analytic "
             "| along a path: analytic | analytic, `warm_start` | coal | coal / analytic (`warm_start`) | disagree (path) |",
-            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     cache = tempfile.mkdtemp(prefix="armguard-bench-cache-")
     try:
         results = []
@@ -170,6 +174,7 @@ def run(quick: bool) -> str:
             + (f" (coal < -1 m: {r['coal_depth_max']})" if r['coal_depth_max'] else "")
             + f" | {r['us_analytic']:.1f} µs | {r['us_coal']:.1f} µs "
             f"| {r['us_coal'] / r['us_analytic']:.1f}× "
+            f"| {r['us_coal_core']:.1f} µs | {r['us_coal_core'] / r['us_analytic']:.1f}× "
             f"| {r['us_path_analytic']:.1f} µs | {r['us_path_warm']:.1f} µs | {r['us_path_coal']:.1f} µs "
             f"| {r['us_path_coal'] / r['us_path_analytic']:.1f}× ({r['us_path_coal'] / r['us_path_warm']:.1f}×) "
             f"| {r['path_disagree']} of {r['path_n']} |")
@@ -179,7 +184,12 @@ def run(quick: bool) -> str:
             "process); *load cold* is a user's next first `load_model` in a new process (hulls read from the hull "
             "cache, `docs/models.md`), *load warm* a second one in the same process; *peak RSS* includes Python, "
             "numpy, Pinocchio, coal and the compiled kernels. *analytic*, *coal*: `pair_distances(q)` over the N "
-            "configurations, thread CPU time, median of 7 runs, the two backends' runs interleaved. *along a path*: "
+            "configurations, thread CPU time, median of 7 runs, the two backends' runs interleaved; *coal* is coal "
+            "through armguard's coal Checker from Python: Pinocchio's `computeDistances` (every pair's distance and "
+            "witness points, in C++) and then reading each pair's result through Pinocchio's Python bindings (about "
+            "2 µs a pair, most of the coal figure); *coal's C++ core* is that `computeDistances` call alone, the "
+            "results left unread (what a C++ caller of coal pays; the analytic figure includes its Python call and "
+            "its arrays). *along a path*: "
             f"the same, over configurations in order along straight joint-space segments between 9 random waypoints, "
             f"no joint moving more than {PATH_STEP} rad (m) a step (a planner's edge check), {n} calls a run; with the "
             "option `warm_start` the analytic backend starts each pair's GJK from the simplex it ended with at the "
