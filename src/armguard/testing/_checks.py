@@ -509,7 +509,7 @@ def check_thread_safety(ctx, model):
     Q = ctx.configs(model)
     dist = _distances(c)
     rows = np.random.default_rng(ctx.seed).permutation(len(ctx.model(model).pairs))[:3]
-    calls = {}  # what -> (call, its single-threaded answer)
+    calls = {}  # what -> the call (its single-threaded answer: want[what])
     if dist:
         for i, q in enumerate(Q):
             calls[f"pair_distances(configuration {i})"] = functools.partial(c.pair_distances, q)
