@@ -25,15 +25,17 @@ def test_a_scene_srdf_that_is_a_directory_is_a_located_error(tmp_path):
 
 
 def test_cli_srdf_a_directory_is_refused_in_one_line(tmp_path):
-    """``--srdf DIR`` (click refuses it: a bad option value, 2) and a scene file whose robot's
-    ``srdf:`` is a folder (the scene file's error: its place and the folder, 3) -- never a traceback."""
+    """``--srdf DIR`` (a file armguard refuses, naming it: 3, as every input file that is a folder; click's own
+    path check answered 2) and a scene file whose robot's ``srdf:`` is a folder (the scene file's error: its place
+    and the folder, 3) -- never a traceback."""
     from click.testing import CliRunner
 
     from armguard.cli import ExitCode, main
 
     urdf = repo_root() / "urdf" / "hermes" / "hermes.urdf"
     res = CliRunner().invoke(main, ["info", str(urdf), "--srdf", str(tmp_path)])
-    assert res.exit_code == ExitCode.USAGE and "--srdf" in res.output and str(tmp_path) in res.output
+    assert res.exit_code == ExitCode.INPUT and "expected an SRDF file, got a directory" in res.output, res.output
+    assert str(tmp_path) in res.output and len(res.output.strip().splitlines()) == 1
     assert "Traceback" not in res.output and "IsADirectoryError" not in res.output
     (tmp_path / "srdf_dir").mkdir()
     scene = tmp_path / "cell.yaml"
