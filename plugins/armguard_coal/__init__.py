@@ -193,48 +193,30 @@ class CoalChecker(CheckerBase):
         data, gdata = self._thread_data()
         if idx is None:
             pin.computeDistances(self.model.pin_model, data, self.geometry_model, gdata, q)
-            self._read_all(list(gdata.distanceResults), gdata, q, d, p_WA, p_WB)
+            self._read(list(gdata.distanceResults), np.arange(len(self._rows)), self._rows, gdata, q, d, p_WA, p_WB)
             return
-        else:  # only the collision pairs of the rows asked for
-            pin.updateGeometryPlacements(self.model.pin_model, data, self.geometry_model, gdata, q)
-            cps, rows = [], []
-            for j, k in enumerate(idx):
-                for i in self._row_pairs[k]:
-                    cps.append(i)
-                    rows.append(j)
-            results = [pin.computeDistance(self.geometry_model, gdata, i) for i in cps]
-        d.fill(np.inf)
-        for r, i, j in zip(results, cps, rows):  # the least distance of a row's collision pairs wins
-            dist = r.min_distance
-            if dist <= EPA_FAILED:
-                r = self._depth_retry(gdata, i, q)
-                dist = r.min_distance
-            if dist <= d[j]:
-                d[j] = dist
-                p1, p2 = r.getNearestPoint1(), r.getNearestPoint2()
-                if self._swapped[i]:
-                    p1, p2 = p2, p1
-                p_WA[j] = p1
-                p_WB[j] = p2
-        if not np.all(np.isfinite(d)):
-            raise BackendError("coal: a distance came back NaN or infinite; no verdict")
+        # only the collision pairs of the rows asked for
+        pin.updateGeometryPlacements(self.model.pin_model, data, self.geometry_model, gdata, q)
+        cps = [i for k in idx for i in self._row_pairs[k]]
+        rows = [j for j, k in enumerate(idx) for _ in self._row_pairs[k]]
+        results = [pin.computeDistance(self.geometry_model, gdata, i) for i in cps]
+        self._read(results, np.asarray(cps, dtype=np.int64), np.asarray(rows, dtype=np.int64), gdata, q, d, p_WA, p_WB)
 
-    def _read_all(self, results: list, gdata, q, d, p_WA, p_WB) -> None:
-        """Every collision pair's result into the Model rows: the reading as whole arrays (list comprehensions
-        over coal's results; the per-pair loop of :meth:`_distances_into` doubled coal's time from Python on
-        small models), the same answers: a row's least distance, a tie to its last collision pair."""
+    def _read(self, results: list, cps, rows, gdata, q, d, p_WA, p_WB) -> None:
+        """coal's ``results`` of collision pairs ``cps`` into output rows ``rows``: read as whole arrays (list
+        comprehensions; a per-pair loop was most of coal's time from Python), a row's least distance over its
+        collision pairs (a workspace row has six), a tie to the last of them."""
         dist = np.fromiter((r.min_distance for r in results), dtype=np.float64, count=len(results))
         for i in np.flatnonzero(dist <= EPA_FAILED):  # coal's EPA gave up: again, looser
-            results[i] = self._depth_retry(gdata, int(i), q)
+            results[i] = self._depth_retry(gdata, int(cps[i]), q)
             dist[i] = results[i].min_distance
         p1 = np.array([r.getNearestPoint1() for r in results], dtype=np.float64).reshape(len(results), 3)
         p2 = np.array([r.getNearestPoint2() for r in results], dtype=np.float64).reshape(len(results), 3)
-        sw = self._swapped
+        sw = self._swapped[cps]
         p1[sw], p2[sw] = p2[sw], p1[sw].copy()
-        rows = self._rows
-        if len(rows) == len(d):  # one collision pair per row (no workspace walls): a permutation
+        if len(rows) == len(d):  # one collision pair per row: each row once
             pick = np.arange(len(rows))
-        else:  # per row its least distance, the last of equal ones (as the loop's ``<=``)
+        else:  # per row its least distance, the last of equal ones
             order = np.lexsort((-np.arange(len(rows)), dist, rows))
             first = np.ones(len(order), dtype=bool)
             first[1:] = rows[order[1:]] != rows[order[:-1]]
