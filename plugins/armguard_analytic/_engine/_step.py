@@ -3,8 +3,8 @@
 The kernel (:mod:`._kernel`) reaches a pair from five places (the all-pairs path, the anytime
 order, last check's nearest pairs, the explicit pairs, the BVH leaves); each calls
 :func:`pair_step`: :func:`evaluate_pair`, the convex kernels where it leaves the pair, then
-:func:`record_pair`.  These run per pair, a few to a few hundred
-times per check, so they read the packed buffers (:mod:`._layout`) by offset and are compiled
+:func:`record_pair` (inlined into it, as :func:`move_pair`).  These run per pair, a few to a
+few hundred times per check, so they read the packed buffers (:mod:`._layout`) by offset and are compiled
 without numba's reference counting (``_nrt=False``, a private option): they allocate nothing and
 keep no reference, and with it each call of a function taking arrays costs two atomic
 increments and decrements per array argument (~40 ns for :func:`record_pair`, more than the
@@ -39,7 +39,7 @@ _K_ev, _K_out9, _K_ev_p, _K_pstamp, _K_best, _K_summary = K["ev"], K["out9"], K[
 _K_stamp, _K_mov_idx, _K_pflag, _K_pair_cat = K["stamp"], K["mov_idx"], K["pflag"], K["pair_cat"]
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def record_pair(p, c, d, n_eval, H, SF, SI, stamp_now):  # pragma: no cover - compiled
     """Store pair ``p``'s result (``d`` and the witnesses in ``out9``) in row ``n_eval`` of the compact
     outputs and update its category's best (an equal distance: the lower pair number)."""
@@ -103,7 +103,7 @@ def move_element(g, H, MF, MI, SF):  # pragma: no cover - compiled
             SF[oW + i + 2] = r20 * x + r21 * y + r22 * z
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp_now):  # pragma: no cover - compiled
     """Signed distance of pair ``(a, b)`` (``b < 0``: the workspace walls), witnesses in ``out9``.
 
@@ -129,7 +129,7 @@ def evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp
     return narrow_flat(a, b, H, MF, MI, SF, out9, eps_len, eps_par, offset)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def move_pair(a, b, H, MF, MI, SF, SI, stamp_now):  # pragma: no cover - compiled
     """Move ``a`` and (a link element) ``b`` into W unless this check already did (``stamp[1 + g]``)."""
     ost = H[2 * _K_stamp] + 1
@@ -156,9 +156,13 @@ def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
     threshold, and its bound is kept nowhere (the anytime state would read it as a distance).
 
     ``fns``: the kernels' addresses (:func:`._calls.addresses`): both narrow phases are called at
-    theirs (:mod:`._native`); :func:`evaluate_pair` and :func:`record_pair` are linked, and the
-    fused kernel links this function: the hot, small calls.  Compiled without reference counting
-    (see the module docstring): it links nothing that has it."""
+    theirs (:mod:`._native`); :func:`evaluate_pair`, :func:`move_pair` and :func:`record_pair` are
+    inlined (numba's ``inline="always"``: as linked calls each passed its five to seven arrays as
+    seven fields apiece, ~60 arguments a call, three calls a pair; inlined, ranger's
+    ``pair_distances`` kernel went from 26-31 to 22-27 µs, hermes's 8.4-9.8 to 7.2-8.3, in
+    alternating runs of both builds), :func:`._narrow.narrow_flat` is linked, and the fused kernel
+    links this function.  Compiled without reference counting (see the module docstring): it links
+    nothing that has it."""
     d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp_now)
     if err == LINK_FRAME:
         d, err = call_narrow_rel(fns[FN_NARROW_REL], (a, b, H, MF, MI, SF, out9, eps_len, eps_par, gjk_eps, max_iter, offset,

@@ -10,7 +10,7 @@ in numba's on-disk cache when the chain reaches them, and it only loads them.  A
 longer matches the chain's call costs time, never an answer: the chain then compiles that kernel
 itself (tests/test_detect_cold.py checks they all match).  The kernels called at an address
 (:mod:`._calls`) link none of the others' trees, so the chain's kernels are leaves too (the pair
-step links ``evaluate_pair`` and ``narrow_other``, ``detect_rows`` the pair step); the Checker's
+step inlines ``evaluate_pair`` and links ``narrow_flat``, ``detect_rows`` links the pair step); the Checker's
 entry points (:data:`LEAVES_AFTER`) compile in the second process once the first has its leaves,
 while the first compiles the geometry kernels and then the Detector's entry points.
 Codes: F1/F2 float64 C arrays (1-D/2-D), I1/I2 int64 ones, f float64, i int64, b boolean.
@@ -37,9 +37,8 @@ LEAVES_SIDE = (
     ("armguard.geometry._pair_gjk", "gjk_dir", "F2 F2 f f f f f f f f i"),
     _native("armguard.geometry._pair_cylinder", "support_pair_graph"),
     _native("armguard_analytic._engine._narrow", "narrow_rel"),
-    # the scalar pairs' step (capsules, boxes, walls; narrow_flat compiles inside it), the pair step
-    # (it links evaluate_pair and narrow_other) and the fused rows (they link the pair step)
-    ("armguard_analytic._engine._step", "evaluate_pair", "i i I1 F1 I1 F1 I1 F1 f f f i"),
+    # the scalar pairs' narrow phase (capsules, boxes, spheres), the pair step (it links narrow_flat and
+    # inlines evaluate_pair) and the fused rows (they link the pair step)
     ("armguard_analytic._engine._narrow", "narrow_flat", "i i I1 F1 I1 F1 F1 f f f"),
     _native("armguard_analytic._engine._step", "pair_step"),
     _native("armguard_analytic._engine._kernel", "detect_rows"),
