@@ -30,7 +30,7 @@ from ._layout import EV_W, K, SUM_BEST, SUM_BSLOT
 from ._calls import FN_NARROW_OTHER, FN_NARROW_REL, call_narrow_other, call_narrow_rel
 from ._narrow import BOUNDED, LINK_FRAME, narrow_flat, wall_flat
 
-__all__ = ["evaluate_pair", "move_element", "move_pair", "pair_step", "record_pair"]
+__all__ = ["evaluate_pair", "move_element", "move_pair", "pair_step", "pair_step_inline", "record_pair"]
 
 _K_Xs, _K_glink, _K_vstart, _K_verts_L, _K_vW = K["Xs"], K["glink"], K["vstart"], K["verts_L"], K["vW"]
 _K_core, _K_box_L, _K_boxW, _K_pstart, _K_estart = K["core"], K["box_L"], K["boxW"], K["pstart"], K["estart"]
@@ -179,3 +179,11 @@ def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
             SI[H[2 * _K_pflag] + p] = 1
         record_pair(p, MI[H[2 * _K_pair_cat] + p], d, n_eval, H, SF, SI, stamp_now)
     return d, err
+
+
+pair_step_inline = njit(cache=True, _nrt=False, inline="always")(pair_step.py_func)
+"""The same body inlined at its call site: the all-pairs loop (``pair_distances``), where the linked
+call's ~65 arguments (seven arrays of seven fields each) were a tenth of a capsule pair's cost.
+Built from the body's own Python function (as ``_pair_gjk._gjk``), so one source serves both; the
+kernel's other call sites keep the linked call (five inlined copies would lengthen its cold
+compile)."""
