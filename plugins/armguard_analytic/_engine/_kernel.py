@@ -307,8 +307,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out,
             fk_ok[r] = 1
         stamp_now = stamp[0] + 1  # stamp[0] counts checks; stamp[1 + g] marks moved elements, pstamp evaluated pairs
         stamp[0] = stamp_now
-        # the moving elements' bounding spheres in W: the culls and bounds of the other modes (MODE_ALL
-        # evaluates every selected pair and reads none; a later check of another mode computes its own)
+        # the moving elements' bounding spheres in W, for the other modes' culls (MODE_ALL reads none)
         for i in range(mov_ids.shape[0] if mode != MODE_ALL else 0):
             g = mov_ids[i]
             X = Xs[0, glink[g]]
