@@ -70,5 +70,5 @@ def tables(models, n: int) -> str:
             "each with a one-line command). What the columns mean: [backends.md](backends.md#what-is-measured). "
             "The µs per configuration are each backend's `pair_distances` from Python: coal's is mostly the reading "
             "of its results through Pinocchio's bindings (its C++ core alone: the Backends section), fcl's yes/no "
-            "computes every pair's distance (no early exit).")
+            "computes each pair's distance until the first within the margin.")
     return "\n".join(times) + "\n\n" + "\n".join(agree) + note

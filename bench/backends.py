@@ -76,8 +76,8 @@ def run(quick: bool) -> str:
     note = (f"\n\nDistances: one `pair_distances(q)` per configuration ({n_pd} random in-limit configurations, "
             f"median of 5 runs), every active pair with witness points, from Python: coal's figure is mostly the "
             "reading of its results through Pinocchio's Python bindings (its C++ core alone: the next table). Yes/no: "
-            f"`collides(Q)` on {n_yn} configurations (fcl on a fiftieth of them; its `collides` computes every pair's "
-            "distance, with no early exit at the first contact). coal's reference runs GJK without guesses "
+            f"`collides(Q)` on {n_yn} configurations (fcl on a fiftieth of them; its `collides` computes each pair's "
+            "distance, with nearest points, until the first within the margin). coal's reference runs GJK without guesses "
             "carried between configurations (see `plugins/armguard_coal`).")
     return "\n".join(rows) + note + "\n\n" + interface_rows(quick)
 

@@ -179,6 +179,31 @@ def test_fcl_never_reports_less_than_the_exact_distance(checkers, name):
         assert np.array_equal(ra.distance[far] > 0, rf.distance[far] > 0)
 
 
+@pytest.mark.parametrize("name", ["ranger", "hermes"])  # ranger: workspace rows (six wall boxes each)
+def test_fcl_collides_stops_at_the_first_pair_within_the_margin(checkers, name, monkeypatch):
+    """python-fcl's ``collides`` takes its verdicts from the same distances as ``pair_distances``
+    (equal at every margin), computing the pairs in order only up to the first within the margin."""
+    import fcl
+
+    model, _, _ = checkers(name)
+    f = armguard.checker(model, "fcl")
+    Q = model.random_q(60, 5)
+    D = np.array([f.pair_distances(q).distance for q in Q])
+    for margin in (0.0, 0.02, 0.2):
+        assert np.array_equal(f.collides(Q, margin=margin), D.min(axis=1) <= margin), margin
+    hit = D <= 0.2
+    m = next(i for i in range(len(Q)) if hit[i].any() and np.argmax(hit[i]) < D.shape[1] - 1)
+    first = int(np.argmax(hit[m]))
+    calls, real = [], fcl.distance
+    monkeypatch.setattr(fcl, "distance", lambda *a: calls.append(1) or real(*a))
+    assert f.collides(Q[m:m + 1], margin=0.2)[0]
+    walls = [k for k in range(first) if model.pairs.b[k] == armguard.model.WORKSPACE]
+    # every pair before the first hit answered whole (a workspace row: its six walls), the hit's own
+    # row up to its nearest wall within the margin, nothing after it
+    assert (first - len(walls)) + 6 * len(walls) < len(calls) <= (first - len(walls)) + 6 * len(walls) + 6
+    assert len(calls) < sum(6 if b == armguard.model.WORKSPACE else 1 for b in model.pairs.b)
+
+
 def test_panda_at_its_srdf_home_is_clear(checkers):
     model, a, c = checkers("panda")
     q = model.neutral()

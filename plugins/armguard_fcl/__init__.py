@@ -3,14 +3,16 @@
 Each GeometryObject of the Model's collision model becomes an ``fcl.CollisionObject`` of the
 same shape (capsule, sphere, box, cylinder; convex hulls as ``fcl.Convex``); Pinocchio places
 them (``updateGeometryPlacements``) and ``fcl.distance`` answers each active pair with signed
-distance and nearest points.  The workspace box is six large boxes just outside its walls
-(python-fcl's capsule–halfspace distance crashes the process).  The collision objects hold the
+distance and nearest points (``collides`` stops at the first pair within its margin).  The
+workspace box is six large boxes just outside its walls (python-fcl's capsule–halfspace distance
+crashes the process).  The collision objects hold the
 poses of one configuration: one call places and queries them at a time (a lock), so several
 threads may share a checker.  ``pairs=`` is the framework's default (the full result's rows).
 """
 
 from __future__ import annotations
 
+import math
 import threading
 from typing import Mapping
 
@@ -135,9 +137,30 @@ class FclChecker(CheckerBase):
         return self._result(d, p_WA, p_WB)
 
     def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
+        """Per row of ``Q``: some pair's distance ``<= margin``.  The pairs in order, stopping at the
+        first within ``margin`` (python-fcl answers one pair at a time, so the rest are never computed),
+        each with ``pair_distances``' request: the same distances, so the same verdicts."""
         Q = check_Q(self.model, Q)
         margin = check_margin(margin)
-        return np.array([bool(np.min(self.pair_distances(q).distance, initial=np.inf) <= margin) for q in Q], dtype=bool)
+        out = np.zeros(len(Q), dtype=bool)
+        with self._lock:
+            for m, q in enumerate(Q):
+                out[m] = self._any_within(q, margin)
+        return out
+
+    def _any_within(self, q, margin: float) -> bool:
+        import fcl
+
+        self._place(q)
+        req = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
+        for k in range(len(self._ia)):
+            for ob in self._walls if self._ib[k] < 0 else (self._objs[self._ib[k]],):
+                dist = fcl.distance(self._objs[self._ia[k]], ob, req, fcl.DistanceResult())
+                if not math.isfinite(dist):  # never a verdict from it, nor past it
+                    raise BackendError("fcl: a distance came back NaN or infinite; no verdict")
+                if dist <= margin:
+                    return True
+        return False
 
 
 class FclBackend:
