@@ -103,12 +103,12 @@ def _hull_robots():
 
 def _public_robots():
     """Public robots of the interface table (example-robot-data's z1: cylinders against dense gripper
-    hulls; xarm7: dense meshes), where installed."""
+    hulls; xarm7: dense meshes; kinova: continuous joints, given as (cos, sin)), where installed."""
     import armguard
     from armguard.model import known_models
 
     have = {m.name for m in known_models() if m.available}
-    return [(n, lambda n=n: armguard.load_model(n)) for n in ("z1", "xarm7") if n in have]
+    return [(n, lambda n=n: armguard.load_model(n)) for n in ("z1", "xarm7", "kinova") if n in have]
 
 
 def _two_threads(fn, n: int) -> float:
@@ -188,8 +188,9 @@ def collides_rows(quick: bool) -> str:
     note = ("\n\nThread CPU time, medians of 7 interleaved runs over random in-limit configurations, one `(1, nq)` row "
             "per call. The Python per call is `collides` with the fused kernel's `detect_rows` swapped for a Python "
             "function that returns at once (less that function's call; best of 21 interleaved runs of 500 calls, "
-            "as for `pair_distances`): the argument checks, the joint reordering "
-            "where Pinocchio's order is not the scene's (ranger, kinova), the thread's scratch and two output arrays.")
+            "as for `pair_distances`): the argument checks, the joint reordering where Pinocchio's order is not "
+            "the scene's (ranger: a column take; kinova: its continuous joints' (cos, sin) checked and read as "
+            "angles, compiled), the thread's scratch and the verdict array.")
     return "\n".join(rows) + note
 
 

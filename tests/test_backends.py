@@ -232,6 +232,9 @@ def test_analytic_collides_a_row_at_a_time_as_in_one_batch(checkers, name):
     assert whole.dtype == bool and whole.shape == (len(Q),) and whole.any() and not whole.all()
     rows = np.array([a.collides(Q[m:m + 1])[0] for m in range(len(Q))])
     np.testing.assert_array_equal(rows, whole)
+    hit, clear = int(np.argmax(whole)), int(np.argmin(whole))  # one row: a new verdict array each call
+    v = a.collides(Q[hit:hit + 1])
+    assert a.collides(Q[clear:clear + 1])[0] == whole[clear] and v[0] and v.dtype == bool and v.shape == (1,)
     a.collides(model.random_q(5, 19))
     np.testing.assert_array_equal(a.collides(Q), whole)
     np.testing.assert_array_equal(a.detector().collides_many(model.scene_q(Q)), whole)

@@ -192,6 +192,7 @@ class AnalyticChecker(CheckerBase):
         # collides: Pinocchio's rows as they are, gathered (a column take), or converted (continuous joints)
         self._scene_order = model.q_in_scene_order
         self._q_take = None if model.has_continuous_joints else model.q_index
+        self._q_circ = None  # collides with continuous joints: (qidx, circ, the compiled conversion), on first use
         self._yesno_rows = None  # set with the first detector (:meth:`detector`)
         self._map = None
         self._fast = None
@@ -435,15 +436,29 @@ class AnalyticChecker(CheckerBase):
             Qs = Q
         elif self._q_take is not None:
             Qs = Q.take(self._q_take, axis=1)
-        else:
-            check_unit_circle(model, Q)  # each (cos, sin) of a continuous joint, before it is read as an angle
-            Qs = model.scene_q(Q)
+        else:  # each (cos, sin) of a continuous joint checked, then read as its angle (compiled)
+            qidx, circ, scene_rows = self._q_circ or self._circ_plan()
+            Qs = np.empty((len(Q), len(qidx)))
+            bad = scene_rows(Q, qidx, circ, Qs)
+            if bad >= 0:
+                check_unit_circle(model, Q)  # the row and joint named
+                raise BackendError(f"Q: row {bad}: a continuous joint's (cos, sin) is not on the unit circle")
         det = self.detector()
         hit, err = self._yesno_rows(det, Qs, margin)
         if err != 0:
             check_Q(model, Q)  # a non-finite row: the same error as every backend's
             det._raise_kernel_error(err, Qs, "Detector: Q", batch=True)
         return hit
+
+    def _circ_plan(self) -> tuple:
+        """``(qidx, circ, scene_rows)`` of :meth:`collides` on a model with continuous joints
+        (:func:`._engine._pair_rows.scene_rows`, the joint map of ``pair_distances``' kernel)."""
+        from ._engine._pair_rows import scene_rows
+
+        m = self.model
+        self._q_circ = plan = (np.ascontiguousarray(m.q_index, dtype=np.int64),
+                               np.ascontiguousarray(m._circular, dtype=np.int64), scene_rows)
+        return plan
 
     def min_distance_many(self, Q) -> np.ndarray:
         Q = check_Q(self.model, Q)

@@ -76,6 +76,12 @@ def yesno_rows(det: "FusedDetector", Q: np.ndarray, margin: float = 0.0) -> tupl
     if margin != prm[1]:
         prm = prm.copy()
         prm[1] = margin
+    if Q.shape[0] == 1:  # the Checker's collides on one row: this thread's buffers, no array made but the verdict
+        s = det._scratch(b)
+        SF, SI, iprm = s.batch_buffers(kn.MODE_YESNO)
+        min_d, status = s.one_row_outputs()
+        err = kn.detect_rows(Q, 0, 1, b.H, b.MF, b.MI, SF, SI, prm, iprm, b.all_p, min_d, status, b.fn)
+        return np.array((status[0] == kn.ST_COLLISION,)), int(err)
     if Q.shape[0] <= MIN_ROWS_PER_THREAD or CPUS == 1:  # row_threads would say 1
         _, status, err = rows_here(det, b, Q, kn.MODE_YESNO, prm)
     else:

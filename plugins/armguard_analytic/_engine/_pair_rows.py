@@ -25,7 +25,7 @@ from armguard.backends._interface import UNIT_CIRCLE  # compiled in as a constan
 from ._layout import EV_W, K, SUM_STATUS, seg1, seg2, view2
 from ._calls import FN_ROWS, call_rows
 
-__all__ = ["pair_rows", "pair_rows_held"]
+__all__ = ["pair_rows", "pair_rows_held", "scene_rows"]
 
 _K_best = K["best"]
 _K_ev = K["ev"]
@@ -95,3 +95,25 @@ def pair_rows_held(fns, Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out
     """:func:`pair_rows`, the GIL held: for calls so short that handing the GIL to another thread and
     back costs more than the call (``AnalyticChecker`` picks it by the call's measured time)."""
     return pair_rows(fns, Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out)
+
+
+@njit(cache=True, nogil=True)
+def scene_rows(Q, qidx, circ, out):  # pragma: no cover - compiled
+    """Pinocchio's rows ``Q`` ``(M, nq)`` into the scene's joint order ``out`` ``(M, n_q)``, as
+    :func:`pair_rows` reads them (``qidx``, ``circ`` of its ``gmap``): the scene's joint ``k`` is
+    ``Q[:, qidx[k]]``, a continuous joint ``k`` in ``circ`` the angle of the ``(cos, sin)`` there.
+    Returns the first row whose ``(cos, sin)`` is off the unit circle (``UNIT_CIRCLE``), else -1 (a
+    non-finite value is passed on: the kernel refuses its row).  The Checker's ``collides`` on a
+    model with continuous joints (kinova: 13 µs of numpy a call for one row, ~0.4 µs here)."""
+    for m in range(Q.shape[0]):
+        for k in range(qidx.shape[0]):
+            out[m, k] = Q[m, qidx[k]]
+        for c in range(circ.shape[0]):
+            k = circ[c]
+            i = qidx[k]
+            x = Q[m, i]
+            y = Q[m, i + 1]
+            if abs(x * x + y * y - 1.0) > UNIT_CIRCLE:
+                return m
+            out[m, k] = math.atan2(y, x)
+    return -1

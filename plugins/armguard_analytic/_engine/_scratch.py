@@ -108,9 +108,16 @@ class _Scratch:
         from row to row."""
         bb = self.batch
         if bb is None:
-            bb = self.batch = (self.b.SF0.copy(), self.b.SI0.copy(), {})
+            bb = self.batch = (self.b.SF0.copy(), self.b.SI0.copy(), {}, np.empty((1, 4)), np.empty(1, np.int64))
         ip = bb[2].get(mode)
         if ip is None:  # the kernel only reads it
             ip = bb[2][mode] = self.b.iprm.copy()
             ip[kn.I_MODE], ip[kn.I_STATE] = mode, 0
         return bb[0], bb[1], ip
+
+    def one_row_outputs(self) -> tuple:
+        """``(min_d (1, 4), status (1,))``: this thread's outputs for a one-row batch whose caller
+        returns neither array (``_batch.yesno_rows``: a new verdict array), made with its batch
+        scratch."""
+        bb = self.batch
+        return bb[3], bb[4]
