@@ -121,3 +121,27 @@ def test_detectors_and_trajectories_refuse_complex_and_boolean_values(backend):
             call()
     with pytest.raises(TrajectoryError, match="expected real joint values"):
         Trajectory("ur5", list(m.scene.robots["ur5"].joint_names), [0.0, 1.0], [q, q + 1j])
+
+
+def test_compiled_scene_rows_equal_the_models_scene_q(kinova):
+    """``collides``' compiled conversion of Pinocchio's rows (``scene_rows``) against its reference,
+    ``Model.scene_q`` (numpy): the same angles, in the same order, on rows whose ``(cos, sin)`` lie
+    on the unit circle up to the rounding it accepts; the first row off it is the one returned."""
+    from armguard_analytic._engine._pair_rows import scene_rows
+
+    Q = kinova.random_q(200, 23)
+    cq = kinova.continuous_q
+    Q[::3, cq] *= 1.0 + 0.5 * UNIT_CIRCLE  # accepted rounding of a stored (cos, sin)
+    qidx = np.ascontiguousarray(kinova.q_index, dtype=np.int64)
+    circ = np.ascontiguousarray(kinova._circular, dtype=np.int64)
+    out = np.empty((len(Q), len(qidx)))
+    assert scene_rows(Q, qidx, circ, out) == -1
+    # the angles to an ulp (the kernel's atan2 is LLVM's, numpy's its own: they differ in the last bit
+    # on 2 % of these angles; pair_distances' kernel reads them as scene_rows does), the rest exactly
+    ref = kinova.scene_q(Q)
+    np.testing.assert_allclose(out, ref, rtol=0, atol=2 * np.finfo(float).eps * np.pi)
+    other = np.setdiff1d(np.arange(len(qidx)), circ)
+    np.testing.assert_array_equal(out[:, other], ref[:, other])
+    Q[57, cq[1]] *= 1.0 + 4 * UNIT_CIRCLE
+    Q[120, cq[0] + 1] = 0.0
+    assert scene_rows(Q, qidx, circ, out) == 57
