@@ -131,6 +131,22 @@ def test_collides_from_threads(backend, panda):
             np.testing.assert_array_equal(g, w)
 
 
+@pytest.mark.parametrize("backend", ["analytic", "fcl"])
+def test_one_row_collides_from_threads(backend):
+    """``collides`` a row at a time from several threads: the analytic backend's one-row path (the
+    thread's own outputs) and compiled conversion of kinova's continuous joints, python-fcl's early
+    exit under its lock; every thread's verdicts equal the single-threaded ones, at two margins."""
+    kinova = armguard.load_model("kinova")
+    c = armguard.checker(kinova, backend)
+    Q = kinova.random_q(12 if backend == "fcl" else 120, 29)
+    jobs = [(Q[m:m + 1], margin) for m in range(len(Q)) for margin in (0.0, 0.05)]
+    want = [c.collides(x, margin=mg) for x, mg in jobs]
+    assert 0 < sum(int(w[0]) for w in want) < len(jobs)  # both answers occur
+    for got in _in_threads(lambda job: c.collides(job[0], margin=job[1]), jobs):
+        for g, w in zip(got, want):
+            np.testing.assert_array_equal(g, w)
+
+
 def test_clip_verdicts_from_threads(ranger):
     c = armguard.checker(ranger, "clip")
     Q = ranger.random_q(80, 15)

@@ -158,10 +158,9 @@ def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
     ``fns``: the kernels' addresses (:func:`._calls.addresses`): both narrow phases are called at
     theirs (:mod:`._native`); :func:`evaluate_pair`, :func:`move_pair` and :func:`record_pair` are
     inlined (numba's ``inline="always"``: as linked calls each passed its five to seven arrays as
-    seven fields apiece, ~60 arguments a call, three calls a pair; inlined, ranger's
-    ``pair_distances`` kernel went from 26.0 to 22.1-22.5 µs, hermes's from 7.4 to 6.5, in
-    alternating runs of both builds), :func:`._narrow.narrow_flat` is linked, and the fused kernel
-    links this function.  Compiled without reference counting (see the module docstring): it links
+    seven fields apiece, ~60 arguments a call, three calls a pair; the kernel's time per model:
+    ``python -m bench backends``, *bare kernel call*), :func:`._narrow.narrow_flat` is linked, and the fused kernel links this
+    function.  Compiled without reference counting (see the module docstring): it links
     nothing that has it."""
     d, err = evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp_now)
     if err == LINK_FRAME:
@@ -182,9 +181,7 @@ def pair_step(p, a, b, flag, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
 
 
 pair_step_inline = njit(cache=True, _nrt=False, inline="always")(pair_step.py_func)
-"""The same body inlined at its call site: the all-pairs loop (``pair_distances``), which the linked
-call's ~65 arguments (seven arrays of seven fields each) slowed down: inlined there, ranger's kernel
-went from 25.7-28.5 to 23.2-24.8 µs, puma560's from 12.8-13.2 to 11.4-12.0 (alternating runs).
-Built from the body's own Python function (as ``_pair_gjk._gjk``), so one source serves both; the
+"""The same body inlined at its call site: the all-pairs loop (``pair_distances``), where the linked
+call passed ~65 arguments (seven arrays of seven fields each) for every pair.  Built from the body's own Python function (as ``_pair_gjk._gjk``), so one source serves both; the
 kernel's other call sites keep the linked call (five inlined copies would lengthen its cold
 compile)."""
