@@ -6,7 +6,8 @@ them (``updateGeometryPlacements``) and ``fcl.distance`` answers each active pai
 distance and nearest points (``collides`` stops at the first pair within its margin).  The
 workspace box is six large boxes just outside its walls (python-fcl's capsule–halfspace distance
 crashes the process).  The collision objects hold the poses of one configuration: one call places
-and queries them at a time (a lock), so several threads may share a checker.  ``pairs=`` is the framework's default (the full result's rows).
+and queries them at a time (a lock), so several threads may share a checker.  ``pairs=`` is the
+framework's default (the full result's rows).
 """
 
 from __future__ import annotations
