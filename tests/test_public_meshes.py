@@ -133,3 +133,55 @@ def test_dense_public_robots_load_with_qhulls_hulls(name, urdf, n_checked):
     for go in meshes[:n_checked]:  # so101: its three largest meshes (the reference takes seconds each)
         raw = np.asarray(trimesh.load(go.meshPath, force="mesh", process=False).vertices, dtype=np.float64) * go.meshScale
         _same_hull(np.asarray(go.geometry.points(), dtype=np.float64).reshape(-1, 3), raw)
+
+
+# ---------------------------------------------------------------- coal's limit on a vertex's neighbours
+def _ring(n: int, z: float = 0.0) -> np.ndarray:
+    t = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    return np.c_[np.cos(t), np.sin(t), np.full(n, z)]
+
+
+@pytest.mark.parametrize("k", [3, 4, 5, 8, 301])
+def test_strip_triangles_tile_the_polygon_in_its_order(k):
+    from armguard.model._shapes import strip_triangles
+
+    loop = np.random.default_rng(k).permutation(1000)[:k]
+    tris = strip_triangles(loop)
+    assert tris.shape == (k - 2, 3)
+    pos = {v: i for i, v in enumerate(loop)}
+    assert all(pos[a] < pos[b] < pos[c] for a, b, c in tris)  # the loop's order: the same orientation
+    p = _ring(k)[[pos[v] for v in tris.ravel()]].reshape(-1, 3, 3)
+    area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum()
+    assert area == pytest.approx(0.5 * k * np.sin(2 * np.pi / k), rel=1e-12)  # the regular k-gon's area
+    e = {tuple(sorted(x)) for t in tris for x in ((t[0], t[1]), (t[1], t[2]), (t[0], t[2]))}
+    assert max(np.bincount(np.array(list(e)).ravel() % 1000)) <= 4  # two sides and at most two diagonals
+
+
+@pytest.mark.parametrize("shape", ["prism", "polygon"])
+def test_a_face_of_300_vertices_makes_a_coal_convex_with_the_same_support(shape):
+    """Qhull fans such a face out from one vertex (299 edges there): coal refuses more than 254, so
+    its copy is cut in strips; the support function along any direction is the points' own."""
+    from armguard.model._hull import mesh_polytope
+    from armguard.model._shapes import convex_hull, convex_of_polytope
+
+    pts = np.vstack([_ring(300), _ring(300, 0.5)]) if shape == "prism" else _ring(300)
+    for conv in (convex_of_polytope(mesh_polytope(pts)), convex_hull(pts)):
+        v = np.asarray(conv.points(), dtype=np.float64).reshape(-1, 3)
+        d = np.random.default_rng(1).normal(size=(200, 3))
+        assert np.allclose((v @ d.T).max(axis=0), (pts @ d.T).max(axis=0), atol=1e-12)
+        import coal
+
+        req, res = coal.DistanceRequest(), coal.DistanceResult()
+        X = coal.Transform3s(np.eye(3), np.array([3.0, 0.0, 0.25]))
+        coal.distance(conv, coal.Transform3s(), coal.Sphere(0.5), X, req, res)
+        # the nearest point: the rim's vertex at (1, 0, z), z = 0.25 on the prism's side, 0 on the polygon
+        assert res.min_distance == pytest.approx(2.0 - 0.5 if shape == "prism" else np.hypot(2.0, 0.25) - 0.5, abs=1e-6)
+
+
+def test_a_cone_apex_with_300_edges_is_an_error_naming_the_limit():
+    from armguard import GeometryError
+    from armguard.model._hull import mesh_polytope
+    from armguard.model._shapes import convex_of_polytope
+
+    with pytest.raises(GeometryError, match="a vertex of the hull has 300 edges; coal's Convex holds at most 254"):
+        convex_of_polytope(mesh_polytope(np.vstack([_ring(300), [[0.0, 0.0, 1.0]]])))
