@@ -185,18 +185,52 @@ def test_a_chain_naming_a_missing_link_is_not_an_arm_with_a_warning(tmp_path):
     assert list(m.scene.robots) == ["arm"] and m.scene.robots["arm"].joint_names == ("j1", "j2", "j3")
 
 
-@pytest.mark.parametrize("chain, words", [
-    ('base_link="l2" tip_link="l1"', "is not below base link"),
-    ('base_link="l1" tip_link="tool"', "a joint moves it"),
+def test_a_chain_whose_tip_is_not_below_its_base_is_not_an_arm_with_a_warning(tmp_path):
+    """icub.srdf's leg groups run from the chest to a sole: Pinocchio reads no groups, so the
+    model is the URDF's tree, with a warning naming the element (as for a missing link)."""
+    urdf = package(tmp_path)
+    urdf.with_suffix(".srdf").write_text(srdf_text('<group name="leg"><chain base_link="l2" tip_link="l1"/></group>'))
+    with pytest.warns(ArmguardWarning, match=r"group\[0\] \(leg\).chain: tip link 'l1' is not below base link 'l2'"):
+        m = armguard.load_model(urdf)
+    assert list(m.scene.robots) == ["arm"] and m.scene.robots["arm"].joint_names == ("j1", "j2", "j3")
+
+
+@pytest.mark.parametrize("entry, why", [
+    # the legged robots' SRDFs (a1, anymal, go2, ...): the virtual joint Pinocchio's free-flyer is named after
+    ('<joint name="root_joint" value="0 0 0.3 0 0 0 1"/>', "a floating base"),
+    # solo.srdf, talos.srdf: the same 7 values without a <virtual_joint>
+    ('<joint name="free" value="0 0 0.3 0 0 0 1"/>', "a floating base"),
+    # finger_edu.srdf, the flying arms' SRDFs: a value for a joint the URDF has as fixed
+    ('<joint name="j_tool" value="0.7"/>', "a fixed joint of the URDF"),
 ])
-def test_chain_errors_name_the_srdf(tmp_path, chain, words):
+def test_a_home_value_no_joint_takes_is_skipped_with_a_warning(tmp_path, entry, why):
+    urdf = package(tmp_path)
+    urdf.with_suffix(".srdf").write_text(srdf_text(
+        '<virtual_joint name="root_joint" type="floating" parent_frame="world_frame" child_link="base"/>'
+        f'<group_state name="home" group="arm">{entry}<joint name="j2" value="0.5"/></group_state>'))
+    with pytest.warns(ArmguardWarning, match=r"group_state\[0\] \(home\).joint\[0\] \(\w+\): value not read, .*" + why):
+        m = armguard.load_model(urdf)
+    np.testing.assert_allclose(m.scene.home("arm"), [0.0, 0.5, 0.0])
+    ref = armguard.checker(m, "coal").pair_distances(m.neutral())
+    assert np.allclose(armguard.checker(m, "analytic").pair_distances(m.neutral()).distance, ref.distance, atol=1e-9)
+
+
+def test_a_one_value_home_for_a_joint_the_urdf_lacks_is_still_an_error(tmp_path):
     urdf = package(tmp_path)
     srdf = urdf.with_suffix(".srdf")
-    srdf.write_text(srdf_text(f'<group name="arm"><chain {chain}/></group>'))
-    with pytest.raises(SceneFileError) as exc:
+    srdf.write_text(srdf_text('<virtual_joint name="root_joint" type="floating" parent_frame="w" child_link="base"/>'
+                              '<group_state name="home" group="arm"><joint name="j9" value="0.1"/></group_state>'))
+    with pytest.raises(SceneFileError, match="names joint 'j9', which is not a movable joint"):
         armguard.load_model(urdf)
-    assert Path(exc.value.file) == srdf.resolve() and exc.value.where.startswith("group[0] (arm).chain")
-    assert words in exc.value.message
+
+
+def test_a_chain_whose_base_a_joint_moves_is_not_an_arm_with_a_warning(tmp_path):
+    """icub.srdf's arm groups start at the chest, which the torso's joints move."""
+    urdf = package(tmp_path)
+    urdf.with_suffix(".srdf").write_text(srdf_text('<group name="forearm"><chain base_link="l1" tip_link="tool"/></group>'))
+    with pytest.warns(ArmguardWarning, match=r"group\[0\] \(forearm\).chain: base link 'l1' is moved by a joint"):
+        m = armguard.load_model(urdf)
+    assert list(m.scene.robots) == ["arm"] and m.scene.robots["arm"].joint_names == ("j1", "j2", "j3")
 
 
 def test_srdf_that_is_a_directory_is_an_error_naming_it(tmp_path):

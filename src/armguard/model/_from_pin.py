@@ -102,7 +102,7 @@ def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=Non
     # the arms: SRDF chain groups, or the whole movable tree as one robot named after the URDF
     arms = []
     if srdf is not None and srdf.arm_groups:
-        arms = _arms_of_groups(srdf, body_ids, parent_body, f)
+        arms = _arms_of_groups(srdf, body_ids, parent_body, f, lambda b: frames[b].parentJoint != 0)
     if not arms and pin_model.njoints > 1:
         first = pin_model.frames[pin_model.getFrameId(pin_model.names[1], FT.JOINT)]
         root = first.parentFrame
@@ -113,6 +113,7 @@ def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=Non
             root = p
         arms.append((info.robot_name, root, ""))
     movable = {pin_model.names[j] for j in range(1, pin_model.njoints)} | set(info.mimic)
+    fixed = frozenset(j for j, t in info.joint_type.items() if t == "fixed")
 
     part = ScenePart()
     in_arm: set[int] = set()
@@ -120,10 +121,7 @@ def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=Non
     # arms keep the SRDF's group order (the scene's flat q order); Model.q_index maps to pinocchio's
     for rname, root, prefix in arms:
         links = subtree(root, stop)
-        if frames[root].parentJoint != 0:
-            if prefix:  # an SRDF chain group: the SRDF's element is at fault
-                raise srdf.error(srdf.groups[rname].where + ".chain", f"base link {frames[root].name!r} must be fixed to "
-                                 f"the world in the URDF {f} (a joint moves it)")
+        if frames[root].parentJoint != 0:  # (an SRDF chain's base a joint moves is not an arm: _arms_of_groups)
             raise SceneFileError(f, f"link[{frames[root].name}]", f"arm {rname!r}: its base link must be fixed to the world")
         in_arm.update(links)
         specs, jnames, q_index, circular = [], [], [], []
@@ -189,7 +187,7 @@ def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=Non
         home = None
         st = srdf.home_state(rname) if srdf is not None else None
         if st is not None:
-            home = _home(srdf, st, robot, prefix, movable, f)
+            home = _home(srdf, st, robot, prefix, movable, f, fixed)
         part.robots.append((robot, home, np.asarray(q_index, dtype=np.int64)))
         part.circular.append(np.asarray(circular, dtype=np.int64))
         for k in links:
@@ -271,7 +269,7 @@ def _descends(i: int, ancestor: int, parent_body) -> bool:
     return False
 
 
-def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str) -> list:
+def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str, moved) -> list:
     """``(name, base frame, prefix)`` of the arms of the SRDF's chain groups.
 
     Groups describe the robot; they never split it.  An arm is the whole subtree below its chain's
@@ -279,9 +277,10 @@ def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str) -> list:
     ``panda_arm`` link0->link8 beside ``panda_arm_hand`` link0->hand, or a ``hand`` group) is part of
     that arm, not a second robot: the first group in file order of each outermost base names the arm.
     A chain naming a link the URDF lacks is skipped with a warning naming the SRDF's element, as
-    Pinocchio ignores it (z1.srdf's chain starts at a link ``base`` z1.urdf does not have): the
-    shapes still move with their joints, as the remaining arms or the whole tree; a tip not below
-    its base is an error naming the element."""
+    Pinocchio ignores it (z1.srdf's chain starts at a link ``base`` z1.urdf does not have), and so
+    is a chain whose tip is not below its base (icub.srdf's legs from the chest) or whose base a
+    joint moves (``moved(body)``: icub's arms from its chest; an arm is a tree fixed to the world):
+    the shapes still move with their joints, as the remaining arms or the whole tree."""
     cand = []
     for g in srdf.arm_groups:
         base, tip = g.chains[0]
@@ -290,8 +289,14 @@ def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str) -> list:
             srdf.warn(f"{g.where}.chain: names link {missing[0]!r}, which the URDF {f} does not have; "
                       "the group is not an arm")
             continue
-        if not _descends(body_ids[tip], body_ids[base], parent_body):
-            raise srdf.error(f"{g.where}.chain", f"tip link {tip!r} is not below base link {base!r} in the URDF {f}")
+        if not _descends(body_ids[tip], body_ids[base], parent_body):  # icub.srdf's l_leg: chest -> l_sole
+            srdf.warn(f"{g.where}.chain: tip link {tip!r} is not below base link {base!r} in the URDF {f}; "
+                      "the group is not an arm")
+            continue
+        if moved(body_ids[base]):
+            srdf.warn(f"{g.where}.chain: base link {base!r} is moved by a joint in the URDF {f}; the group is not an "
+                      "arm (an arm's base is fixed to the world)")
+            continue
         cand.append((g, body_ids[base]))
     arms, bases = [], set()
     for g, b in cand:
@@ -302,15 +307,30 @@ def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str) -> list:
     return arms
 
 
-def _home(srdf, st, robot, prefix: str, movable: set, f: str) -> np.ndarray:
+def _home(srdf, st, robot, prefix: str, movable: set, f: str, fixed: frozenset = frozenset()) -> np.ndarray:
     """The home of ``robot`` from SRDF state ``st``; a joint the URDF lacks (unless the SRDF is
     ``partial``), a multi-value for a one-value joint, or a value outside the joint's limits is an
     error naming the state's ``<joint>`` element in the SRDF.  A revolute joint's value that lies
     in the limits after a whole turn (kinova.srdf: -1.5707 for a joint limited to [0.33, 5.95])
-    is that angle, the same pose, with a warning."""
+    is that angle, the same pose, with a warning.  A value no joint of the model takes is skipped
+    with a warning naming the element: the SRDF's virtual joint or a floating base's pose (7 values)
+    for a joint the URDF lacks (Pinocchio's free-flyer ``root_joint``: the legged robots' SRDFs;
+    armguard's models are fixed-base), or a joint of ``fixed`` (the URDF's fixed joints: finger_edu,
+    the flying arms)."""
     from ..kinematics import JointType
 
-    unknown = [jn for jn in st.values if jn not in movable]
+    for jn, v in st.values.items():
+        if jn in movable:
+            continue
+        if jn in srdf.virtual_joints or (jn not in fixed and isinstance(v, tuple) and len(v) == 7):
+            why = "the robot's placement in the world (a floating base): armguard's models are fixed-base"
+        elif jn in fixed:
+            why = f"a fixed joint of the URDF {f}: no value moves it"
+        else:
+            continue
+        srdf.warn(f"{st.joint_where[jn]}: value not read, {why}")
+    unknown = [jn for jn in st.values if jn not in movable and jn not in fixed and jn not in srdf.virtual_joints
+               and not (isinstance(st.values[jn], tuple) and len(st.values[jn]) == 7)]
     if unknown and not srdf.partial:
         jn = unknown[0]
         raise srdf.error(st.joint_where[jn], f"names joint {jn!r}, which is not a movable joint of the URDF {f} "

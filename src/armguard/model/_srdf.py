@@ -1,11 +1,15 @@
 """SRDF files (MoveIt's format): groups, disabled pairs and named states.
 
 Only what armguard uses is read: ``<group>`` (with ``<chain base_link tip_link>`` or
-``<link name>`` members), ``<disable_collisions link1 link2 reason>`` and
-``<group_state name group>`` with ``<joint name value>``.  A file that does not parse, or an
+``<link name>`` members), ``<disable_collisions link1 link2 reason>``,
+``<group_state name group>`` with ``<joint name value>`` and the names of ``<virtual_joint>``.  A file that does not parse, or an
 element without a name armguard needs, raises a :class:`~armguard.SceneFileError` naming the
 file and the element.  Where Pinocchio reads an SRDF leniently, so does armguard, with a
-warning naming the element: a ``group_state`` without ``group`` (a state of the whole robot).
+warning naming the element: a ``group_state`` without ``group`` (a state of the whole robot);
+in the state taken as home, a value for a joint that no value moves (the SRDF's virtual joint, a
+floating base's 7 values for a joint the URDF lacks, a fixed joint of the URDF: armguard's models
+are fixed-base); a chain group whose links the URDF lacks or whose tip is not below its base (the
+group is then not an arm; Pinocchio reads no groups).
 """
 
 from __future__ import annotations
@@ -65,6 +69,7 @@ class Srdf:
     found: str = "given"
     partial: bool = False
     warnings: tuple[str, ...] = ()
+    virtual_joints: tuple[str, ...] = ()  # <virtual_joint name>: the robot's placement in the world, not a URDF joint
 
     @property
     def arm_groups(self) -> tuple[SrdfGroup, ...]:
@@ -184,6 +189,7 @@ def read_srdf(path, *, found: str = "given", partial: bool = False) -> Srdf:
             raise SceneFileError(f, w, f"state {name!r} of group {group!r} is defined twice")
         states.append(SrdfState(name, group, values, w, jw))
     out.groups, out.disabled, out.states = groups, tuple(disabled), tuple(states)
+    out.virtual_joints = tuple(_attr(vj, "name", f, f"virtual_joint[{k}]") for k, vj in enumerate(root.findall("virtual_joint")))
     return out
 
 
