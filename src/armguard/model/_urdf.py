@@ -53,11 +53,15 @@ class UrdfInfo:
 
 
 def resolve_mesh(filename: str, urdf_dir: Path, package_dirs) -> Path | None:
-    """A mesh named by a URDF: relative to its folder, ``file://`` or ``package://pkg/...``."""
+    """A mesh named by a URDF: relative to its folder, ``file://`` or ``package://pkg/...``
+    (``package:///pkg/...``, talos_full_v2's spelling, is read as Pinocchio reads it: a path
+    under the package folders, not an absolute one)."""
     name = filename
     for scheme in ("file://", "package://"):
         if name.startswith(scheme):
             name = name[len(scheme):]
+            if scheme == "package://":
+                name = name.lstrip("/")
     p = Path(name)
     if p.is_absolute():
         return p if p.is_file() else None
@@ -149,7 +153,9 @@ def load_pinocchio(path, package_dirs=()):
     try:
         pin_model = pin.buildModelFromUrdf(f, mimic=True)
     except (RuntimeError, ValueError) as exc:
-        raise SceneFileError(f, "", f"Pinocchio could not build the model: {exc}") from None
+        pin_model = _mimics_after_their_joints(path, info) if "mimic" in str(exc) and info.mimic else None
+        if pin_model is None:
+            raise SceneFileError(f, "", f"Pinocchio could not build the model: {exc}") from None
     try:
         # the collision meshes are read here (trimesh, in double precision), not by Pinocchio: its
         # loader builds a BVH of every mesh (seconds for so101's 1.2 M vertices) only for it to be
@@ -215,3 +221,76 @@ def _mesh_vertices(mesh_path, scale) -> np.ndarray:
         reason = "the file is empty (0 bytes)" if empty else said[-1] if said else str(exc).strip()
         raise GeometryError(f"neither trimesh nor coal's loader could read it: {reason}") from None
     return np.asarray(bvh.vertices(), dtype=np.float64)
+
+
+def _mimics_after_their_joints(path: Path, info: UrdfInfo):
+    """Pinocchio's model of a URDF whose mimic joint Pinocchio reaches before the joint it mimics,
+    or None where no order of the links' children can help.
+
+    Pinocchio walks the tree depth first, each link's child joints in the order of their names
+    (urdfdom keeps joints in a name-sorted map), and refuses a mimic joint met before the joint it
+    mimics (talos_full_v2's ``gripper_left_inner_double_joint`` sorts before ``gripper_left_joint``,
+    its sibling).  Here the XML Pinocchio reads has each joint renamed ``<rank>~<name>``: at every
+    link, the child whose subtree holds a mimicked joint ranks before the sibling whose subtree
+    holds the mimic, the others keep their name order; then every joint and frame gets its URDF name
+    back.  The model is the URDF's (same joints, placements, limits, couplings); only the order of
+    its joints in ``q`` differs from the name-sorted one."""
+    import pinocchio as pin
+
+    root = ET.fromstring(path.read_bytes())
+    children: dict = {}  # parent link -> [joint element]
+    up: dict = {}  # joint name -> (parent link, parent joint name or None)
+    by_child = {}
+    for j in root.findall("joint"):
+        p, c = j.find("parent"), j.find("child")
+        if p is None or c is None:
+            return None
+        children.setdefault(p.get("link"), []).append(j)
+        by_child[c.get("link")] = j
+    for j in root.findall("joint"):
+        pj = by_child.get(j.find("parent").get("link"))
+        up[j.get("name")] = pj.get("name") if pj is not None else None
+
+    def chain(jn):  # the joints from the root down to jn
+        out = []
+        while jn is not None:
+            out.append(jn)
+            jn = up.get(jn)
+        return out[::-1]
+
+    before: dict = {}  # joint -> its siblings that must come after it
+    for jn, (primary, _m, _o) in info.mimic.items():
+        a, b = chain(primary), chain(jn)
+        k = 0
+        while k < min(len(a), len(b)) and a[k] == b[k]:
+            k += 1
+        if k == len(a) or k == len(b):  # one above the other: depth first already has the upper one first
+            continue
+        before.setdefault(a[k], set()).add(b[k])
+    rename = {}
+    for kids in children.values():
+        names = sorted(j.get("name") for j in kids)
+        order = []
+        while names:  # Kahn's order, the smallest name first among those free to go
+            free = [n for n in names if not any(n in before.get(m, ()) for m in names if m != n)]
+            if not free:
+                return None  # a cycle: no order puts every mimicked joint first
+            order.append(free[0])
+            names.remove(free[0])
+        rename.update({n: f"{r:04d}~{n}" for r, n in enumerate(order)})
+    for j in root.findall("joint"):
+        j.set("name", rename[j.get("name")])
+        m = j.find("mimic")
+        if m is not None and m.get("joint") in rename:
+            m.set("joint", rename[m.get("joint")])
+    try:
+        model = pin.buildModelFromXML(ET.tostring(root, encoding="unicode"), mimic=True)
+    except (RuntimeError, ValueError):
+        return None
+    back = {v: k for k, v in rename.items()}
+    for j in range(model.njoints):
+        model.names[j] = back.get(model.names[j], model.names[j])
+    for fr in model.frames:
+        fr.name = back.get(fr.name, fr.name)
+    return model
+

@@ -1,0 +1,148 @@
+"""Every URDF example-robot-data installs loads, or its fault is named: the front door beyond the arms.
+
+The public-robot table (``armguard.model._public``) holds the arms; the package holds 69 URDFs in
+all (legged robots, humanoids, hands, flying arms).  Each loads here as ``load_model(path)``, with
+the SRDF the search finds beside it, or raises a :class:`~armguard.SceneFileError` whose message
+names what is wrong in the files themselves (:data:`FAULTS`, read in the files by hand: an empty
+URDF, a mimic of a misspelt joint, limits of 1e16, SRDF states for joints the URDF does not have or
+outside its limits).  Four robots that once failed, each for its own reason, are checked against
+coal as well:
+
+* centauro: a 566-gon face, which Qhull's triangulation fans out from one vertex: coal's Convex
+  holds at most 254 neighbours a vertex (its copy of the hull is triangulated in strips);
+* talos_full_v2: ``package:///`` mesh names, and gripper joints that mimic a sibling Pinocchio
+  reaches later (renamed in the XML Pinocchio reads, then named back);
+* a1: an SRDF home with the floating base's virtual ``root_joint``;
+* icub: SRDF chains from the chest (a base the torso moves; legs whose tip is not below it).
+"""
+
+from __future__ import annotations
+
+import re
+import sysconfig
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import armguard
+from armguard import DEFAULT_TOLERANCES as TOL
+from armguard import SceneFileError
+
+ROBOTS = Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
+URDFS = sorted(str(p.relative_to(ROBOTS)) for p in ROBOTS.rglob("*.urdf")) if ROBOTS.is_dir() else []
+
+FAULTS = {
+    # the file is xacro's output of nothing: <robot> with a comment only
+    "ur_description/urdf/ur3.urdf": "a URDF needs at least one <link>",
+    # <mimic joint="index_q1"> where the joint is Left_index_q1
+    "alex_description/urdf/alex_psyonic_hands.urdf": "joint='index_q1': no joint of that name",
+    # rotor joints limited to +-1e16 rad (meant: continuous)
+    "iris_description/robots/iris.urdf": "beyond 1e+09",
+    # romeo.srdf's half_sitting names LToePitch, which neither romeo URDF has
+    "romeo_description/urdf/romeo.urdf": "names joint 'LToePitch'",
+    "romeo_description/urdf/romeo_small.urdf": "names joint 'LToePitch'",
+    # solo.srdf is solo12's (its HAA joints): solo.urdf is the 8-joint solo
+    "solo_description/robots/solo.urdf": "names joint 'FL_HAA'",
+    # half_sitting's hip and knee values lie outside the URDF's limits
+    "simple_humanoid_description/urdf/simple_humanoid.urdf": "is outside the limits",
+    "simple_humanoid_description/urdf/simple_humanoid_classical.urdf": "is outside the limits",
+}
+
+needs_erd = pytest.mark.skipif(not URDFS, reason="example-robot-data is not installed")
+
+
+@needs_erd
+def test_the_fault_list_names_files_the_package_has():
+    assert set(FAULTS) <= set(URDFS), sorted(set(FAULTS) - set(URDFS))
+    assert len(URDFS) >= 60
+
+
+@needs_erd
+@pytest.mark.parametrize("urdf", URDFS)
+def test_every_urdf_loads_or_names_its_fault(urdf):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", armguard.ArmguardWarning)
+        if urdf in FAULTS:
+            with pytest.raises(SceneFileError, match=re.escape(FAULTS[urdf])) as exc:
+                armguard.load_model(ROBOTS / urdf)
+            assert exc.value.file.endswith((".urdf", ".srdf"))
+            return
+        m = armguard.load_model(ROBOTS / urdf)
+    pm = m.pin_model
+    assert len(m.collision_model.geometryObjects) >= 0 and pm.nq == len(m.neutral())
+
+
+AGAINST_COAL = ["centauro_description/urdf/centauro.urdf", "talos_data/robots/talos_full_v2.urdf",
+                "a1_description/urdf/a1.urdf", "icub_description/robots/icub.urdf"]
+
+
+@needs_erd
+@pytest.mark.parametrize("urdf", AGAINST_COAL, ids=[u.split("/")[-1] for u in AGAINST_COAL])
+def test_once_failing_robots_match_coal(urdf):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", armguard.ArmguardWarning)
+        m = armguard.load_model(ROBOTS / urdf)
+    a, c = armguard.checker(m, "analytic"), armguard.checker(m, "coal")
+    for q in m.random_q(3, 5):
+        ra, rc = a.pair_distances(q), c.pair_distances(q)
+        assert np.array_equal(ra.pairs, rc.pairs)
+        sep = (ra.distance > TOL.differential_contact_band) & (rc.distance > TOL.differential_contact_band)
+        assert np.all(np.abs(ra.distance - rc.distance)[sep] <= TOL.differential_hull)
+        assert (ra.distance.min() <= 0) == (rc.distance.min() <= 0) or abs(rc.distance.min()) <= TOL.differential_contact_band
+
+
+@needs_erd
+def test_talos_full_keeps_its_names_and_couplings():
+    """The joints Pinocchio read under new names have their URDF names back, and each gripper joint
+    follows the joint it mimics (the mimic joints are not in q)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", armguard.ArmguardWarning)
+        m = armguard.load_model(ROBOTS / "talos_data/robots/talos_full_v2.urdf")
+    names = list(m.pin_model.names)
+    assert "gripper_left_joint" in names and "gripper_left_inner_double_joint" in names
+    assert not any("~" in n for n in names) and not any("~" in f.name for f in m.pin_model.frames)
+    assert m.pin_model.nq == 32  # 44 joint values, less the 12 mimic joints
+
+
+MIMIC_URDF = """<robot name="grip">
+  <link name="world"/><link name="palm"><collision><geometry><box size="0.1 0.1 0.02"/></geometry></collision></link>
+  <link name="left"><collision><origin xyz="0 0 0.05"/><geometry><box size="0.01 0.02 0.1"/></geometry></collision></link>
+  <link name="right"><collision><origin xyz="0 0 0.05"/><geometry><box size="0.01 0.02 0.1"/></geometry></collision></link>
+  <link name="tip"><collision><geometry><sphere radius="0.01"/></geometry></collision></link>
+  <joint name="fix" type="fixed"><parent link="world"/><child link="palm"/></joint>
+  <joint name="b_drive" type="revolute"><parent link="palm"/><child link="right"/><origin xyz="0.03 0 0.01"/>
+    <axis xyz="0 1 0"/><limit lower="-0.5" upper="0.5" effort="1" velocity="1"/></joint>
+  <joint name="a_follow" type="revolute"><parent link="palm"/><child link="left"/><origin xyz="-0.03 0 0.01"/>
+    <axis xyz="0 1 0"/><limit lower="-0.5" upper="0.5" effort="1" velocity="1"/>
+    <mimic joint="b_drive" multiplier="-1" offset="0.1"/></joint>
+  <joint name="a_tip" type="fixed"><parent link="left"/><child link="tip"/><origin xyz="0 0 0.1"/></joint>
+</robot>"""
+
+
+def test_a_mimic_of_a_sibling_pinocchio_reaches_later_loads_as_the_urdf_says(tmp_path):
+    """``a_follow`` mimics its sibling ``b_drive``, which Pinocchio's name order reaches second (it
+    refuses the file as it is): the model loads, and every frame is where the URDF puts it, against
+    Pinocchio's model of the same file without mimics at the coupled joint values."""
+    import pinocchio as pin
+
+    f = tmp_path / "grip.urdf"
+    f.write_text(MIMIC_URDF)
+    with pytest.raises((RuntimeError, ValueError), match="mimic"):
+        pin.buildModelFromUrdf(str(f), mimic=True)
+    m = armguard.load_model(f)
+    pm, free = m.pin_model, pin.buildModelFromUrdf(str(f))
+    assert pm.nq == 1 and list(pm.names)[1:] == ["b_drive", "a_follow"]
+    dm, df = pm.createData(), free.createData()
+    for x in np.linspace(-0.5, 0.5, 7):
+        qf = np.zeros(free.nq)
+        qf[free.joints[free.getJointId("b_drive")].idx_q] = x
+        qf[free.joints[free.getJointId("a_follow")].idx_q] = -x + 0.1
+        pin.framesForwardKinematics(pm, dm, np.array([x]))
+        pin.framesForwardKinematics(free, df, qf)
+        for k, fr in enumerate(free.frames):
+            got = dm.oMf[pm.getFrameId(fr.name, fr.type)]
+            np.testing.assert_allclose(got.homogeneous, df.oMf[k].homogeneous, atol=1e-12)
+    d = armguard.checker(m, "analytic").pair_distances(np.array([0.2]))
+    assert np.allclose(d.distance, armguard.checker(m, "coal").pair_distances(np.array([0.2])).distance, atol=1e-9)
