@@ -319,18 +319,17 @@ def _home(srdf, st, robot, prefix: str, movable: set, f: str, fixed: frozenset =
     the flying arms)."""
     from ..kinematics import JointType
 
-    for jn, v in st.values.items():
+    def skipped(jn, v) -> str:  # why the value of ``jn`` is not read ("": it is)
         if jn in movable:
-            continue
+            return ""
         if jn in srdf.virtual_joints or (jn not in fixed and isinstance(v, tuple) and len(v) == 7):
-            why = "the robot's placement in the world (a floating base): armguard's models are fixed-base"
-        elif jn in fixed:
-            why = f"a fixed joint of the URDF {f}: no value moves it"
-        else:
-            continue
+            return "the robot's placement in the world (a floating base): armguard's models are fixed-base"
+        return f"a fixed joint of the URDF {f}: no value moves it" if jn in fixed else ""
+
+    skip = {jn: why for jn, v in st.values.items() if (why := skipped(jn, v))}
+    for jn, why in skip.items():
         srdf.warn(f"{st.joint_where[jn]}: value not read, {why}")
-    unknown = [jn for jn in st.values if jn not in movable and jn not in fixed and jn not in srdf.virtual_joints
-               and not (isinstance(st.values[jn], tuple) and len(st.values[jn]) == 7)]
+    unknown = [jn for jn in st.values if jn not in movable and jn not in skip]
     if unknown and not srdf.partial:
         jn = unknown[0]
         raise srdf.error(st.joint_where[jn], f"names joint {jn!r}, which is not a movable joint of the URDF {f} "

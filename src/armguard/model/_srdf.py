@@ -1,15 +1,15 @@
 """SRDF files (MoveIt's format): groups, disabled pairs and named states.
 
 Only what armguard uses is read: ``<group>`` (with ``<chain base_link tip_link>`` or
-``<link name>`` members), ``<disable_collisions link1 link2 reason>``,
-``<group_state name group>`` with ``<joint name value>`` and the names of ``<virtual_joint>``.  A file that does not parse, or an
-element without a name armguard needs, raises a :class:`~armguard.SceneFileError` naming the
-file and the element.  Where Pinocchio reads an SRDF leniently, so does armguard, with a
+``<link name>`` members), ``<disable_collisions link1 link2 reason>``, ``<group_state name
+group>`` with ``<joint name value>`` and the names of ``<virtual_joint>``.  A file that does not
+parse, or an element without a name armguard needs, raises a :class:`~armguard.SceneFileError`
+naming the file and the element.  Where Pinocchio reads an SRDF leniently, so does armguard, with a
 warning naming the element: a ``group_state`` without ``group`` (a state of the whole robot);
 in the state taken as home, a value for a joint that no value moves (the SRDF's virtual joint, a
 floating base's 7 values for a joint the URDF lacks, a fixed joint of the URDF: armguard's models
-are fixed-base); a chain group whose links the URDF lacks or whose tip is not below its base (the
-group is then not an arm; Pinocchio reads no groups).
+are fixed-base); a chain group whose links the URDF lacks, whose tip is not below its base or
+whose base a joint moves (the group is then not an arm; Pinocchio reads no groups).
 """
 
 from __future__ import annotations
