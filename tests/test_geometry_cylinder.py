@@ -25,8 +25,8 @@ from scipy.optimize import minimize
 
 from _geometry_strategies import KINDS, random_rotation, random_shape
 from armguard import GeometryError
-from armguard.geometry import (Box, Capsule, Cylinder, FeatureKind, Sphere, distance, feature_at, intersects,
-                               kernel_name)
+from armguard.geometry import (Box, Capsule, ConvexPolyhedron, Cylinder, FeatureKind, Sphere, distance, feature_at,
+                               intersects, kernel_name)
 from armguard.geometry._reference import sdf as sdf_polytope
 
 ALL_KINDS = KINDS + ["cylinder"]
@@ -269,3 +269,89 @@ def test_feature_at():
     assert feature_at(c, [0, 0.5, 1.0]).kind is FeatureKind.EDGE
     with pytest.raises(GeometryError):
         feature_at(c, [0.3, 0, 0])
+
+
+# ------------------------------------------- a point on the axis turned about it (tiago_dual, 2026-12-06)
+# tiago_dual.urdf (example-robot-data): arm_left_6_link's hull (37 points) in its link frame and the
+# wrist_left_ft_tool_link cylinder there (r 25 mm, half-length 4.875 mm), the analytic engine's own
+# buffers at the configuration `python -m bench sweep` flagged (random_q(50, 7)[42]).  GJK's simplex
+# held two ends of a rim diameter, so its cylinder witness was the cap's centre; its radial direction
+# was rounding noise leaning along the axis, and the stall refresh turned a rim point to it, 1 mm off
+# the cap: 0.013415 m where coal and the reference give 0.014370 m.
+TIAGO_HULL = np.array([
+    (0.0, 0.0, 0.019322000443935394),
+    (0.04167100042104721, -1.8214999508714413e-09, 0.0),
+    (-0.04732999950647354, 2.068859972226278e-09, 0.022290999069809914),
+    (0.032944001257419586, -0.020635999739170074, 0.013937000185251236),
+    (0.032944001257419586, 0.020635999739170074, -0.013937000185251236),
+    (-0.019152000546455383, -0.0345349982380867, 0.013937000185251236),
+    (0.019152000546455383, 0.0345349982380867, 0.013937000185251236),
+    (0.019152000546455383, -0.0345349982380867, -0.013937000185251236),
+    (-0.019152000546455383, 0.0345349982380867, -0.013937000185251236),
+    (0.038773998618125916, -1.6948700221064428e-09, -0.013937000185251236),
+    (0.02037299983203411, -0.038061998784542084, 0.0),
+    (-0.02037299983203411, 0.038061998784542084, 0.0),
+    (-1.73045000551042e-09, -0.03958800062537193, -0.013937000185251236),
+    (1.73045000551042e-09, 0.03958800062537193, -0.013937000185251236),
+    (0.036858998239040375, -0.021497000008821487, 0.0),
+    (-0.04732999950647354, 0.022724999114871025, 0.0),
+    (-0.04732999950647354, -0.018628999590873718, 0.015677999705076218),
+    (-0.04732999950647354, 0.018628999590873718, -0.015677999705076218),
+    (0.0, 0.0, -0.019322000443935394),
+    (-0.04732999950647354, 2.068859972226278e-09, -0.022290999069809914),
+    (0.032944001257419586, 0.020635999739170074, 0.013937000185251236),
+    (0.032944001257419586, -0.020635999739170074, -0.013937000185251236),
+    (-1.8214999508714413e-09, -0.04167100042104721, 0.0),
+    (1.8214999508714413e-09, 0.04167100042104721, 0.0),
+    (0.019152000546455383, -0.0345349982380867, 0.013937000185251236),
+    (-0.019152000546455383, 0.0345349982380867, 0.013937000185251236),
+    (0.019152000546455383, 0.0345349982380867, -0.013937000185251236),
+    (-0.019152000546455383, -0.0345349982380867, -0.013937000185251236),
+    (0.038773998618125916, -1.6948700221064428e-09, 0.013937000185251236),
+    (-0.02037299983203411, -0.038061998784542084, 0.0),
+    (0.02037299983203411, 0.038061998784542084, 0.0),
+    (-1.73045000551042e-09, -0.03958800062537193, 0.013937000185251236),
+    (1.73045000551042e-09, 0.03958800062537193, 0.013937000185251236),
+    (0.036858998239040375, 0.021497000008821487, 0.0),
+    (-0.04732999950647354, -0.022724999114871025, 0.0),
+    (-0.04732999950647354, -0.018628999590873718, -0.015677999705076218),
+    (-0.04732999950647354, 0.018628999590873718, 0.015677999705076218),
+])
+TIAGO_CYL = np.array([  # [c, r, r, h, R row-major]
+    -0.06657500000000002, 1.1102230246251565e-16, -1.9949319973733282e-17,
+    0.025, 0.025, 0.004875,
+    -1.3322676295501878e-15, 3.4694469519536247e-17, -0.9999999999999999,
+    -0.9658474701586065, 0.25911129729948035, 1.0533476371564873e-16,
+    0.25911129729947996, 0.9658474701586067, 5.399381542434462e-17,
+])
+
+
+def test_tiago_wrist_cylinder_against_its_hull_is_not_short():
+    from armguard.geometry._pair_cylinder import support_pair_graph
+    from armguard.geometry._pair_epa import EPA_WORK_SIZE
+
+    out, none = np.zeros(9), np.zeros(0, np.int64)
+    d, status = support_pair_graph(TIAGO_HULL, none, np.zeros(0), 0.0, TIAGO_HULL[:0], none, TIAGO_CYL, 0.0, out,
+                                   np.zeros(EPA_WORK_SIZE), 1e-9, 1e-12, 200, -np.inf, None, None)
+    R = TIAGO_CYL[6:15].reshape(3, 3)
+    ref = reference_signed_distance(ConvexPolyhedron(TIAGO_HULL), Cylinder(TIAGO_CYL[0:3], R, TIAGO_CYL[3], TIAGO_CYL[5]))
+    assert status == 0 and abs(d - ref) <= 1e-8 and abs(d - 0.01437000049) <= 1e-9  # the reference; coal
+    y = R.T @ (out[3:6] - TIAGO_CYL[0:3])  # B's witness in the cylinder's frame: on it
+    assert abs(y[2]) <= TIAGO_CYL[5] + 1e-9 and math.hypot(y[0], y[1]) <= TIAGO_CYL[3] + 1e-9
+
+
+@given(st.floats(-1e-12, 1e-12), st.floats(-1e-12, 1e-12), st.floats(-1.0, 1.0), st.integers(0, 2**32 - 1))
+@settings(max_examples=200, deadline=None, derandomize=True)
+def test_radial_direction_is_square_to_the_axis_even_on_it(dx, dy, t, seed):
+    """For a point on the axis, or within rounding of it, the radial direction is a unit vector at
+    right angles to the axis (or 0): never one leaning along it."""
+    from armguard.geometry._pair_cylinder_turn import _radial
+
+    R = random_rotation(np.random.default_rng(seed))
+    c = np.random.default_rng(seed + 1).uniform(-1, 1, 3)
+    cyl = np.r_[c, 0.1, 0.1, 0.5, R.reshape(9)]
+    p = c + R @ np.array([dx, dy, t])
+    ux, uy, uz, r, level = _radial(cyl, *p)
+    u = np.array([ux, uy, uz])
+    assert abs(u @ R[:, 2]) <= 1e-12 and (r == 0.0 or abs(np.linalg.norm(u) - 1.0) <= 1e-12)
+    assert level == pytest.approx(t, abs=1e-12)

@@ -57,17 +57,25 @@ def _combine(work, nn, k0, k1, k2, k3):  # pragma: no cover - compiled
 def _radial(cyl, x, y, z):  # pragma: no cover - compiled
     """Unit radial direction (W) of the point ``p`` about the cylinder's axis (column 2 of ``R_WC``)
     and ``p``'s level ``t`` along it: ``(ux, uy, uz, r, t)``, ``r`` the distance from the axis (0:
-    ``u = 0``)."""
+    ``u = 0``).
+
+    ``u`` is built from ``p``'s coordinates along columns 0 and 1 of ``R_WC`` (as the support
+    function builds its rim point), so it stays at right angles to the axis however near the axis
+    ``p`` lies.  ``p - t a`` normalised, as before, is rounding noise for a point on the axis (a
+    cap's centre, the witness of a simplex across a rim diameter) and may lean along the axis: a
+    point :func:`_turned` to it left the cylinder by up to its radius (tiago_dual's wrist cylinder,
+    1 mm beyond the cap, a distance 0.96 mm short; ``tests/test_geometry_cylinder.py``)."""
     x -= cyl[0]
     y -= cyl[1]
     z -= cyl[2]
     t = x * cyl[8] + y * cyl[11] + z * cyl[14]
-    x -= t * cyl[8]
-    y -= t * cyl[11]
-    z -= t * cyl[14]
-    r = math.sqrt(x * x + y * y + z * z)
+    u = x * cyl[6] + y * cyl[9] + z * cyl[12]
+    v = x * cyl[7] + y * cyl[10] + z * cyl[13]
+    r = math.sqrt(u * u + v * v)
     if r > 0.0:
-        return x / r, y / r, z / r, r, t
+        u /= r
+        v /= r
+        return u * cyl[6] + v * cyl[7], u * cyl[9] + v * cyl[10], u * cyl[12] + v * cyl[13], r, t
     return 0.0, 0.0, 0.0, 0.0, t
 
 
