@@ -426,3 +426,30 @@ def test_info_on_public_robots_says_how_their_srdf_came():
     assert "given (srdf=)" not in out.output
     out = CliRunner().invoke(main, ["info", "ur3"])
     assert out.exit_code == 0 and "SRDF: none found" in out.output, out.output
+
+
+def test_limbs_from_one_base_are_the_robot_named_as_the_urdf_names_it(tmp_path):
+    """a1's four leg groups (and talos's legs, pr2's arms) start at one trunk: one robot, named after
+    the URDF, not after its first leg (the whole quadruped was ``lf_leg``, its rear legs' links
+    ``lf_leg/RR_thigh``).  A group inside another's chain (a hand's beside its arm's) still names the
+    arm, as before."""
+    trunk = '<link name="trunk"><collision><geometry><box size="0.4 0.2 0.1"/></geometry></collision></link>'
+
+    def leg(side: str, y: float) -> str:
+        return (f'<link name="{side}"><collision><origin xyz="0 0 -0.1"/><geometry><box size="0.05 0.05 0.2"/>'
+                f'</geometry></collision></link><joint name="{side}_hip" type="revolute"><parent link="trunk"/>'
+                f'<child link="{side}"/><origin xyz="0 {y} -0.05"/><axis xyz="0 1 0"/>'
+                '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>')
+
+    urdf = tmp_path / "quad.urdf"
+    urdf.write_text('<robot name="quad"><link name="world"/>' + trunk + '<joint name="fix" type="fixed"><parent '
+                    'link="world"/><child link="trunk"/></joint>' + leg("left", 0.15) + leg("right", -0.15) + "</robot>")
+    srdf = tmp_path / "quad.srdf"
+    groups = ('<group name="left_leg"><chain base_link="trunk" tip_link="left"/></group>'
+              '<group name="right_leg"><chain base_link="trunk" tip_link="right"/></group>')
+    srdf.write_text(f'<robot name="quad">{groups}</robot>')
+    m = armguard.load_model(urdf)
+    assert list(m.scene.robots) == ["quad"] and m.scene.robots["quad"].joint_names == ("left_hip", "right_hip")
+    srdf.write_text('<robot name="quad"><group name="left_leg"><chain base_link="trunk" tip_link="left"/></group>'
+                    '<group name="hip"><chain base_link="trunk" tip_link="left"/></group></robot>')
+    assert list(armguard.load_model(urdf).scene.robots) == ["left_leg"]  # one branch: the first group names it

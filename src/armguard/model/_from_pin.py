@@ -102,7 +102,7 @@ def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=Non
     # the arms: SRDF chain groups, or the whole movable tree as one robot named after the URDF
     arms = []
     if srdf is not None and srdf.arm_groups:
-        arms = _arms_of_groups(srdf, body_ids, parent_body, f, lambda b: frames[b].parentJoint != 0)
+        arms = _arms_of_groups(srdf, body_ids, parent_body, f, lambda b: frames[b].parentJoint != 0, info.robot_name)
     if not arms and pin_model.njoints > 1:
         first = pin_model.frames[pin_model.getFrameId(pin_model.names[1], FT.JOINT)]
         root = first.parentFrame
@@ -269,13 +269,15 @@ def _descends(i: int, ancestor: int, parent_body) -> bool:
     return False
 
 
-def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str, moved) -> list:
+def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str, moved, robot_name: str = "robot") -> list:
     """``(name, base frame, prefix)`` of the arms of the SRDF's chain groups.
 
     Groups describe the robot; they never split it.  An arm is the whole subtree below its chain's
     base link, so a group whose base is another group's base or lies below it (MoveIt's
     ``panda_arm`` link0->link8 beside ``panda_arm_hand`` link0->hand, or a ``hand`` group) is part of
-    that arm, not a second robot: the first group in file order of each outermost base names the arm.
+    that arm, not a second robot: the first group in file order of each outermost base names the arm,
+    unless two groups from that base end on different branches (a1's four legs from its trunk,
+    talos's legs from its pelvis): then the arm is the robot, named as the URDF names it.
     A chain naming a link the URDF lacks is skipped with a warning naming the SRDF's element, as
     Pinocchio ignores it (z1.srdf's chain starts at a link ``base`` z1.urdf does not have), and so
     is a chain whose tip is not below its base (icub.srdf's legs from the chest) or whose base a
@@ -303,7 +305,11 @@ def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str, moved) -> list:
         if b in bases or any(b2 != b and _descends(b, b2, parent_body) for _, b2 in cand):
             continue  # inside an arm another group already names
         bases.add(b)
-        arms.append((g.name, b, f"{g.name}_"))
+        tips = [body_ids[g2.chains[0][1]] for g2, b2 in cand if b2 == b]
+        if any(not _descends(t1, t2, parent_body) and not _descends(t2, t1, parent_body) for t1 in tips for t2 in tips):
+            arms.append((robot_name, b, ""))  # limbs from one base (a1's legs from the trunk): the robot, not one limb
+        else:
+            arms.append((g.name, b, f"{g.name}_"))
     return arms
 
 
