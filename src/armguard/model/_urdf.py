@@ -239,8 +239,8 @@ def _mimics_after_their_joints(path: Path, info: UrdfInfo):
 
     root = ET.fromstring(path.read_bytes())
     children: dict = {}  # parent link -> [joint element]
-    up: dict = {}  # joint name -> (parent link, parent joint name or None)
-    by_child = {}
+    up: dict = {}  # joint name -> the joint above it (None: on the root link)
+    by_child = {}  # child link -> its joint
     for j in root.findall("joint"):
         p, c = j.find("parent"), j.find("child")
         if p is None or c is None:
@@ -264,7 +264,7 @@ def _mimics_after_their_joints(path: Path, info: UrdfInfo):
         k = 0
         while k < min(len(a), len(b)) and a[k] == b[k]:
             k += 1
-        if k == len(a) or k == len(b):  # one above the other: depth first already has the upper one first
+        if k == len(a) or k == len(b):  # one above the other: no order of siblings changes which comes first
             continue
         before.setdefault(a[k], set()).add(b[k])
     rename = {}
