@@ -152,9 +152,10 @@ def run(quick: bool) -> str:
             "over the N configurations, thread CPU time, median of 3 interleaved runs (the humanoids' hundreds of "
             "pairs include many that never come near, which a Detector's culls skip). *depths off*: pairs both "
             "backends find overlapping whose depths differ by more than 1 mm, of all such pairs. Every one found so "
-            "far has a cylinder side, where coal's EPA is not exact: on the three checked against the slow "
-            "support-function reference (romeo_laas_small, anymal, baxter), armguard's depth is the reference's to "
-            "1e-12 m and coal's is deeper by 27 mm to 0.43 m (`tests/test_example_robot_data.py`).\n\n")
+            "far has a cylinder side (box, hull, cylinder or sphere against a cylinder), where coal's EPA is not exact: "
+            "on 16 of them checked against the slow support-function reference (every kind; romeo_laas_small, anymal, "
+            "baxter, centauro, go1, r2d2, spirit40newer), armguard's depth is the reference's to 1e-12 m and coal's "
+            "is deeper by 1.3 mm to 0.52 m (`tests/test_example_robot_data.py` keeps romeo's).\n\n")
     return "\n".join(summary) + note + "\n".join(rows)
 
 
