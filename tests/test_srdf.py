@@ -7,6 +7,7 @@ arm) test the discovery and the homes, differentially against coal.
 
 from __future__ import annotations
 
+import re
 import warnings
 from pathlib import Path
 
@@ -177,20 +178,17 @@ def test_a_home_a_whole_turn_out_is_that_angle(tmp_path):
     np.testing.assert_allclose(m.scene.home("arm"), [0.0, 0.0, -0.5], atol=1e-10)
 
 
-def test_a_chain_naming_a_missing_link_is_not_an_arm_with_a_warning(tmp_path):
+@pytest.mark.parametrize("chain, words", [
+    ('base_link="base0" tip_link="tool"', "names link 'base0'"),  # z1.srdf: a link z1.urdf lacks
+    # icub.srdf's legs run from the chest to a sole
+    ('base_link="l2" tip_link="l1"', "tip link 'l1' is not below base link 'l2'"),
+    ('base_link="l1" tip_link="tool"', "base link 'l1' is moved by a joint"),  # icub's arms: from the turning chest
+], ids=["missing link", "tip not below", "base moved"])
+def test_a_chain_armguard_cannot_take_as_an_arm_is_not_one_with_a_warning(tmp_path, chain, words):
+    """Pinocchio reads no groups: the model is the URDF's tree, with a warning naming the element."""
     urdf = package(tmp_path)
-    urdf.with_suffix(".srdf").write_text(srdf_text('<group name="ee"><chain base_link="base0" tip_link="tool"/></group>'))
-    with pytest.warns(ArmguardWarning, match=r"group\[0\] \(ee\).chain: names link 'base0'"):
-        m = armguard.load_model(urdf)
-    assert list(m.scene.robots) == ["arm"] and m.scene.robots["arm"].joint_names == ("j1", "j2", "j3")
-
-
-def test_a_chain_whose_tip_is_not_below_its_base_is_not_an_arm_with_a_warning(tmp_path):
-    """icub.srdf's leg groups run from the chest to a sole: Pinocchio reads no groups, so the
-    model is the URDF's tree, with a warning naming the element (as for a missing link)."""
-    urdf = package(tmp_path)
-    urdf.with_suffix(".srdf").write_text(srdf_text('<group name="leg"><chain base_link="l2" tip_link="l1"/></group>'))
-    with pytest.warns(ArmguardWarning, match=r"group\[0\] \(leg\).chain: tip link 'l1' is not below base link 'l2'"):
+    urdf.with_suffix(".srdf").write_text(srdf_text(f'<group name="g"><chain {chain}/></group>'))
+    with pytest.warns(ArmguardWarning, match=r"group\[0\] \(g\).chain: " + re.escape(words)):
         m = armguard.load_model(urdf)
     assert list(m.scene.robots) == ["arm"] and m.scene.robots["arm"].joint_names == ("j1", "j2", "j3")
 
@@ -222,15 +220,6 @@ def test_a_one_value_home_for_a_joint_the_urdf_lacks_is_still_an_error(tmp_path)
                               '<group_state name="home" group="arm"><joint name="j9" value="0.1"/></group_state>'))
     with pytest.raises(SceneFileError, match="names joint 'j9', which is not a movable joint"):
         armguard.load_model(urdf)
-
-
-def test_a_chain_whose_base_a_joint_moves_is_not_an_arm_with_a_warning(tmp_path):
-    """icub.srdf's arm groups start at the chest, which the torso's joints move."""
-    urdf = package(tmp_path)
-    urdf.with_suffix(".srdf").write_text(srdf_text('<group name="forearm"><chain base_link="l1" tip_link="tool"/></group>'))
-    with pytest.warns(ArmguardWarning, match=r"group\[0\] \(forearm\).chain: base link 'l1' is moved by a joint"):
-        m = armguard.load_model(urdf)
-    assert list(m.scene.robots) == ["arm"] and m.scene.robots["arm"].joint_names == ("j1", "j2", "j3")
 
 
 def test_srdf_that_is_a_directory_is_an_error_naming_it(tmp_path):
