@@ -32,42 +32,9 @@ from armguard.geometry import Box, Cylinder, distance
 from armguard.geometry._dispatch import _support_core
 from armguard.geometry._pair_cylinder import SUPPORT_WORK_SIZE, support_pair
 from armguard._tolerance import DEFAULT_TOLERANCES as TOL
-from scipy.optimize import minimize
-from test_geometry_cylinder import _DIRS, check_contract
+from armguard.testing._reference import reference_signed_distance
+from test_geometry_cylinder import check_contract
 
-
-def _h(shape, N):
-    """Support values ``h(n) = max_x n . x`` of ``shape`` along the unit rows of ``N (k, 3)``: the
-    cylinder's closed form (``c . n + h |a . n| + r sqrt(1 - (a . n)^2)``, ``a`` its axis), else the
-    core points' maximum plus the core radius (``Shape.support``, all directions at once)."""
-    N = np.atleast_2d(N)
-    if isinstance(shape, Cylinder):
-        an = N @ shape.rotation[:, 2]
-        return N @ shape.center + shape.half_length * np.abs(an) + shape.radius * np.sqrt(np.maximum(0.0, 1 - an * an))
-    return (N @ shape.core_points.T).max(axis=1) + shape.core_radius
-
-
-def reference_signed_distance(a, b) -> float:
-    """``-min_n (h_A(n) + h_B(-n))`` over unit ``n`` (tests/test_geometry_cylinder.py's reference,
-    with the support values of all directions at once): dense directions, then Nelder-Mead."""
-    f = _h(a, _DIRS) + _h(b, -_DIRS)
-    best = math.inf
-    for k in np.argsort(f)[:6]:
-        n0 = _DIRS[k]
-        e1 = np.cross(n0, [1.0, 0, 0] if abs(n0[0]) < 0.9 else [0, 1.0, 0])
-        e1 /= np.linalg.norm(e1)
-        e2 = np.cross(n0, e1)
-
-        def g(uv, n0=n0, e1=e1, e2=e2):
-            n = n0 + uv[0] * e1 + uv[1] * e2
-            n /= np.linalg.norm(n)
-            return float(_h(a, n)[0] + _h(b, -n)[0])
-
-        res = minimize(g, np.zeros(2), method="Nelder-Mead",
-                       options={"xatol": 1e-11, "fatol": 1e-13, "maxiter": 4000, "initial_simplex":
-                                np.array([[0, 0], [0.05, 0], [0, 0.05]])})
-        best = min(best, float(res.fun), float(f[k]))
-    return -best
 
 FOUND = {"box": (45, 843, 1552, 1779, 1890, 2150, 2228, 2280), "polygon": (892, 1274, 2687, 2752),
          "polyhedron": (700, 1440, 1910, 2763)}
