@@ -269,7 +269,7 @@ def _descends(i: int, ancestor: int, parent_body) -> bool:
     return False
 
 
-def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str, moved, robot_name: str = "robot") -> list:
+def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str, moved, robot_name: str) -> list:
     """``(name, base frame, prefix)`` of the arms of the SRDF's chain groups.
 
     Groups describe the robot; they never split it.  An arm is the whole subtree below its chain's
@@ -313,7 +313,7 @@ def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str, moved, robot_name
     return arms
 
 
-def _home(srdf, st, robot, prefix: str, movable: set, f: str, fixed: frozenset = frozenset()) -> np.ndarray:
+def _home(srdf, st, robot, prefix: str, movable: set, f: str, fixed: frozenset) -> np.ndarray:
     """The home of ``robot`` from SRDF state ``st``; a joint the URDF lacks (unless the SRDF is
     ``partial``), a multi-value for a one-value joint, or a value outside the joint's limits is an
     error naming the state's ``<joint>`` element in the SRDF.  A revolute joint's value that lies
