@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._tolerance import DEFAULT_TOLERANCES
+from ._pair_support_table import TABLE_N
 
 __all__ = ["attach_packed", "unique_directions", "face_edges", "unique_pairs", "polytope_data", "polytope_adjacency", "hull_graph", "polytope_buffers"]
 
@@ -230,7 +231,7 @@ def hull_graph(points) -> tuple[np.ndarray, np.ndarray]:
     return _graph(v, [tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), tri
 
 
-def support_table(points, n: int = 16) -> np.ndarray:
+def support_table(points, n: int = TABLE_N) -> np.ndarray:
     """Where a cold support climb on ``points (V, 3)`` starts, by direction: ``(6 n n,) int64``, entry
     :func:`armguard.geometry._pair_support_table.table_cell` of a direction holds the point maximising ``p . u``
     for ``u`` the centre of that cell of the cube map (6 faces of ``n x n`` cells; the cube's face
