@@ -60,7 +60,8 @@ def measure(path: str, n: int) -> dict:
     import numpy as np
 
     import armguard
-    from armguard.testing._reference import reference_signed_distance, shapes_at
+    from armguard.geometry._support_reference import reference_signed_distance
+    from armguard.model._shapes import placed_shapes
 
     t = time.perf_counter()
     with warnings.catch_warnings():
@@ -88,9 +89,9 @@ def measure(path: str, n: int) -> dict:
             off += 1
             kk = "-".join(sorted(kind.get(x, "?") for x in ra.pairs[k]))
             off_kinds.add(kk)
-            if checked.get(kk, 0) < REFERENCE_PER_KIND:  # the slow reference decides (armguard.testing._reference)
+            if checked.get(kk, 0) < REFERENCE_PER_KIND:  # the slow reference decides (armguard.geometry._support_reference)
                 checked[kk] = checked.get(kk, 0) + 1
-                ref = reference_signed_distance(*shapes_at(m, q, ra.pairs[k]))
+                ref = reference_signed_distance(*placed_shapes(m, q, ra.pairs[k]))
                 ref_rows.append((float(abs(da[k] - ref)), float(abs(dc[k] - ref))))
     ts = {"a": [], "c": []}
     for _ in range(3):
@@ -171,7 +172,7 @@ def run(quick: bool) -> str:
             "pairs include many that never come near, which a Detector's culls skip). *depths off*: pairs both "
             "backends find overlapping whose depths differ by more than 1 mm, of all such pairs, and their kinds; up to "
             f"{REFERENCE_PER_KIND} of each kind a robot are checked against the slow support-function reference "
-            "(`armguard.testing._reference`: no GJK, no EPA), which gives each backend's error "
+            "(`armguard.geometry._support_reference`: no GJK, no EPA), which gives each backend's error "
             "(`tests/test_example_robot_data.py` keeps romeo_laas_small's).\n\n")
     return "\n".join(summary) + note + "\n".join(rows)
 

@@ -161,9 +161,10 @@ DEPTHS = [  # (URDF, pair, configuration index in random_q(20, 11)): coal's EPA 
 def test_a_cylinder_depth_where_coal_differs_is_the_references(urdf, pair, i):
     """``bench sweep``'s *depths off*: two overlapping cylinders of romeo_laas_small whose depths
     differ by 0.43 m between the backends.  The slow support-function reference
-    (``armguard.testing._reference``) gives armguard's to 1e-9 m: coal's EPA is
+    (``armguard.geometry._support_reference``) gives armguard's to 1e-9 m: coal's EPA is
     the one off, as on panda_collision's cylinders (``bench robots``)."""
-    from armguard.testing._reference import reference_signed_distance, shapes_at
+    from armguard.geometry._support_reference import reference_signed_distance
+    from armguard.model._shapes import placed_shapes
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", armguard.ArmguardWarning)
@@ -172,7 +173,7 @@ def test_a_cylinder_depth_where_coal_differs_is_the_references(urdf, pair, i):
     k = [j for j, p in enumerate(m.pairs.names) if tuple(p) == pair][0]
     d = armguard.checker(m, "analytic").pair_distances(q).distance[k]
     d_coal = armguard.checker(m, "coal").pair_distances(q).distance[k]
-    a, b = shapes_at(m, q, pair)
+    a, b = placed_shapes(m, q, pair)
     assert type(a).__name__ == type(b).__name__ == "Cylinder"
     ref = reference_signed_distance(a, b)
     assert ref < 0 and abs(d - ref) <= 1e-9 and d_coal < ref - 0.1

@@ -21,12 +21,12 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from scipy.optimize import minimize
 
 from _geometry_strategies import KINDS, random_rotation, random_shape
 from armguard import GeometryError
 from armguard.geometry import (Box, Capsule, ConvexPolyhedron, Cylinder, FeatureKind, Sphere, distance, feature_at,
                                intersects, kernel_name)
+from armguard.geometry import _support_reference
 from armguard.geometry._reference import sdf as sdf_polytope
 
 ALL_KINDS = KINDS + ["cylinder"]
@@ -53,40 +53,15 @@ def sdf(p, shape) -> float:
     return sdf_cylinder(p, shape) if isinstance(shape, Cylinder) else sdf_polytope(p, shape)
 
 
-def _h(shape, n):
-    return float(n @ shape.support(n))
-
-
-def _fibonacci(k):
-    i = np.arange(k) + 0.5
-    phi = np.arccos(1 - 2 * i / k)
-    th = math.pi * (1 + 5**0.5) * i
-    return np.stack([np.cos(th) * np.sin(phi), np.sin(th) * np.sin(phi), np.cos(phi)], 1)
-
-
-_DIRS = _fibonacci(6000)
+def _support_one_at_a_time(shape, N):
+    """The support values ``n . s(n)`` from the shape's own ``support``, one direction at a time."""
+    return np.array([float(n @ shape.support(n)) for n in np.atleast_2d(N)])
 
 
 def reference_signed_distance(a, b) -> float:
-    """``-min_n (h_A(n) + h_B(-n))`` over unit ``n``: dense directions, then Nelder-Mead from the best."""
-    f = np.array([_h(a, n) + _h(b, -n) for n in _DIRS])
-    best = math.inf
-    for k in np.argsort(f)[:6]:
-        n0 = _DIRS[k]
-        e1 = np.cross(n0, [1.0, 0, 0] if abs(n0[0]) < 0.9 else [0, 1.0, 0])
-        e1 /= np.linalg.norm(e1)
-        e2 = np.cross(n0, e1)
-
-        def g(uv, n0=n0, e1=e1, e2=e2):
-            n = n0 + uv[0] * e1 + uv[1] * e2
-            n /= np.linalg.norm(n)
-            return _h(a, n) + _h(b, -n)
-
-        res = minimize(g, np.zeros(2), method="Nelder-Mead",
-                       options={"xatol": 1e-11, "fatol": 1e-13, "maxiter": 4000, "initial_simplex":
-                                np.array([[0, 0], [0.05, 0], [0, 0.05]])})
-        best = min(best, float(res.fun), float(f[k]))
-    return -best
+    """``-min_n (h_A(n) + h_B(-n))`` over unit ``n`` (``armguard.geometry._support_reference``: dense
+    directions, then Nelder-Mead from the best), the support values from each shape's ``support``."""
+    return _support_reference.reference_signed_distance(a, b, support=_support_one_at_a_time)
 
 
 def check_contract(a, b, r, surface_tol=1e-9):

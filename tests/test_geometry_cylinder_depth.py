@@ -32,7 +32,7 @@ from armguard.geometry import Box, Cylinder, distance
 from armguard.geometry._dispatch import _support_core
 from armguard.geometry._pair_cylinder import SUPPORT_WORK_SIZE, support_pair
 from armguard._tolerance import DEFAULT_TOLERANCES as TOL
-from armguard.testing._reference import reference_signed_distance
+from armguard.geometry._support_reference import reference_signed_distance
 from test_geometry_cylinder import check_contract
 
 

@@ -24,7 +24,7 @@ from armguard.geometry._pack import hull_graph, support_table
 from armguard.geometry._pair_gjk import ADJ_HEAD
 from armguard.geometry._pair_cylinder import SUPPORT_WORK_SIZE, support_pair, support_pair_graph, support_point
 from armguard.geometry._pair_cylinder_support import _WA, _warm_point
-from armguard.testing._reference import reference_signed_distance
+from armguard.geometry._support_reference import reference_signed_distance
 
 
 def _cloud(rng, n: int) -> np.ndarray:

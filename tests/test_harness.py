@@ -77,6 +77,38 @@ def test_the_comparison_sees_a_wrong_answer(hermes_run):
     assert p["status"] == "differ"
 
 
+def test_the_slow_reference_says_which_side_is_off(hermes_run):
+    """A worst distance entry beyond the pair's tolerance carries the slow support-function reference's
+    distance and each side's error against it: the doctored side is the one off; entries within
+    tolerance carry none."""
+    comp, _ = hermes_run
+    model, answers = comp.model, comp.answers
+    bad = replace(answers["analytic"], distance=answers["analytic"].distance.copy())
+    bad.distance[5, 0] += 1e-3
+    c = compare_answers(model, comp.configs, {"analytic": bad, "coal": answers["coal"]}, spec="hermes")
+    worst = [w for w in c.summary["pairs"]["analytic/coal"]["worst"] if w["why"] == "distance"]
+    first, rest = worst[0], worst[1:]
+    assert (first["config"], first["pair"]) == (5, list(model.pairs.names[0]))
+    ref = first["reference"]
+    assert ref["error"]["analytic"] == pytest.approx(1e-3, abs=1e-8) and ref["error"]["coal"] < 1e-8
+    assert ref["distance"] == pytest.approx(answers["coal"].distance[5, 0], abs=1e-8)
+    assert rest and all("reference" not in w for w in rest)  # the others agree within tolerance: nothing to decide
+
+
+def test_one_pair_at_one_configuration_has_the_references_word():
+    """``compare --q --pair`` on z1's two cylinders at a configuration where coal's EPA depth is 33 mm too
+    deep (``armguard compare z1``'s worst entry): the reference sides with armguard's closed-form depth."""
+    q = [1.6353843202705982, 1.9816677582893327, -0.11976014315454409, 1.2928410620261392, 0.667244076847598,
+         2.0145367082212755, -1.1825066149760657]
+    res = CliRunner().invoke(main, ["compare", "z1", "--backends", "analytic,coal", "--q", ",".join(map(repr, q)),
+                                    "--pair", "link02_1,link04_0", "--json"])
+    assert res.exit_code == 0, res.output
+    (row,) = json.loads(res.stdout)  # the SRDF warnings go to stderr
+    ref = row["reference"]
+    assert ref["distance"] < 0 and ref["error"]["analytic"] < 1e-9 and ref["error"]["coal"] > 1e-2
+    assert abs(row["analytic"][0] - ref["distance"]) == ref["error"]["analytic"]
+
+
 def test_backend_options_pass_through():
     assert parse_backend_options(["analytic.fidelity=paper", "coal.threads=1", "coal.gjk_tolerance=1e-9"]) == {
         "analytic": {"fidelity": "paper"}, "coal": {"threads": 1, "gjk_tolerance": 1e-9}}

@@ -88,6 +88,11 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
                     continue
                 d, pa, pb = ans
                 console.print(f"  {b:10s} d = {d!r} m  p_WA = {pa}  p_WB = {pb}", soft_wrap=True)
+            ref = r.get("reference")
+            if ref and ref["distance"] is not None:
+                errs = ", ".join(f"{b} off {e:.1e} m" for b, e in ref["error"].items())
+                console.print(f"  {'reference':10s} d = {ref['distance']!r} m  ({ref['method']}): {errs}", soft_wrap=True,
+                              markup=False)
         return
     traj = list(dict.fromkeys(trajectories))  # a name given twice is sampled once
     for word in ("all", "none"):
@@ -113,6 +118,10 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
                 a, b = p["a"], p["b"]
                 console.print(f"  {w['why']:8s} #{w['config']} ({w['source']}) {esc(w['pair'][0])} / {esc(w['pair'][1])}: "
                               f"{a} {w[a]['distance']:.6e} m, {b} {w[b]['distance']:.6e} m")
+                ref = w.get("reference")
+                if ref and ref["distance"] is not None:  # the slow reference's word on who is off (harness._compare)
+                    console.print(f"    reference {ref['distance']:.6e} m ({ref['method']}): {a} off "
+                                  f"{ref['error'][a]:.1e} m, {b} off {ref['error'][b]:.1e} m", markup=False)
                 console.print(f"    {w['reproduce']}", style="dim", soft_wrap=True, markup=False)
         tm = comp.summary["timing"]
         console.print(f"{comp.summary['configs']['total']} configurations: answers {tm['answers_s']:.1f} s, "

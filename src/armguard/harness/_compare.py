@@ -9,6 +9,11 @@ Definitions (every count is over (configuration, pair) entries unless it says co
   distance ``<= 0``" from ``pair_distances``.
 * **separated** entries: both distances ``> contact_band``; **penetrating**: both ``< -contact_band``;
   **sign disagreements**: the rest whose reference distance is outside the band.
+* **the slow reference's word**: each of the worst distance entries (``worst``, ``why == "distance"``)
+  whose two distances differ by more than the pair's tolerance also carries ``reference``: the
+  signed distance of the two shapes as Pinocchio places them, by the support-function reference
+  (:mod:`armguard.geometry._support_reference`: no GJK, no EPA, no code of any backend), and each
+  backend's error against it -- which of the two is off (coal's EPA depths on cylinders, for one).
 * **unique nearest points** (as ``tests/test_backends.py`` defines them): both sides capsules or
   spheres, the reference distance above ``unique_min_distance`` and, for two capsules,
   ``|sin(angle between axes)| > parallel``.  There |Δp_WA|, |Δp_WB| are measured; elsewhere each
@@ -35,7 +40,10 @@ from ._tolerances import pair_distance_tolerance, pair_kinds
 from ._verdicts import verdict_backend_summary, verdict_pair_summary
 
 __all__ = ["PairStatus", "Comparison", "compare_answers", "capsule_axes", "unique_witness_mask", "reference_of",
-           "reproduce_command"]
+           "reproduce_command", "REFERENCE_METHOD"]
+
+REFERENCE_METHOD = "support functions, 6,000 directions and Nelder-Mead; no GJK, no EPA"
+"""How the slow reference that arbitrates the worst distance entries works (``worst[..]["reference"]``)."""
 
 
 class PairStatus(str, enum.Enum):
@@ -173,7 +181,7 @@ def _pair_summary(model, configs, A, B, R, a, b, cats, tol, tol_pair, unique, n_
     out["categories"] = per
     out["speed_ratio"] = {"distances": A.us_per_config and B.us_per_config / A.us_per_config,
                           "yes_no": B.yes_no_per_s and A.yes_no_per_s / B.yes_no_per_s}
-    out["worst"] = _worst(model, configs, A, B, a, b, err, out_band, dmin_ref, n_worst, spec, options)
+    out["worst"] = _worst(model, configs, A, B, a, b, err, out_band, tol_pair, n_worst, spec, options)
     ok = out["verdict_disagreements"] == 0 and per["all"]["separated_over_tolerance"] == 0
     return out, PairStatus.AGREE if ok else PairStatus.DIFFER
 
@@ -191,7 +199,7 @@ def _entry(model, configs, A, B, a, b, i, k, spec, options, why):
             "reproduce": reproduce_command(spec, (a, b), q, pair, options)}
 
 
-def _worst(model, configs, A, B, a, b, err, out_band, dmin_ref, n_worst, spec, options) -> list:
+def _worst(model, configs, A, B, a, b, err, out_band, tol_pair, n_worst, spec, options) -> list:
     rows = []
     for i in np.flatnonzero(out_band)[:n_worst]:
         k = int(np.argmin(np.minimum(A.distance[i], B.distance[i])))
@@ -200,8 +208,26 @@ def _worst(model, configs, A, B, a, b, err, out_band, dmin_ref, n_worst, spec, o
         flat = np.argsort(err, axis=None)[::-1][:n_worst]
         for f in flat:
             i, k = np.unravel_index(f, err.shape)
-            rows.append(_entry(model, configs, A, B, a, b, int(i), int(k), spec, options, "distance"))
+            row = _entry(model, configs, A, B, a, b, int(i), int(k), spec, options, "distance")
+            if err[i, k] > tol_pair[k]:
+                row["reference"] = _arbitrate(model, configs.Q[i], k, {a: A.distance[i, k], b: B.distance[i, k]})
+            rows.append(row)
     return rows
+
+
+def _arbitrate(model, q, k: int, answers: dict) -> dict:
+    """The slow reference's signed distance of pair ``k`` at ``q`` and each backend's error against it
+    (see the module docstring); ``{"distance": None, "why": ...}`` when a shape has no support
+    function there (a shape kind the reference does not know)."""
+    from ..geometry._support_reference import reference_signed_distance
+    from ..model._shapes import placed_shapes
+
+    try:
+        d = reference_signed_distance(*placed_shapes(model, q, model.pairs.names[k]))
+    except (TypeError, AttributeError, ValueError) as e:  # no support function for a shape: say so, decide nothing
+        return {"distance": None, "why": f"{type(e).__name__}: {e}"}
+    return {"distance": float(d), "method": REFERENCE_METHOD,
+            "error": {name: float(abs(v - d)) for name, v in answers.items()}}
 
 
 def compare_answers(model, configs, answers: dict, *, spec: str, options=None, tol: Tolerances = DEFAULT_TOLERANCES,

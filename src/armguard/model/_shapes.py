@@ -15,7 +15,7 @@ from .._errors import GeometryError, SceneError
 from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
 from ._hull import MeshPolytope, mesh_hull, mesh_polytope
 
-__all__ = ["shape_from_coal", "coal_from_shape", "convex_hull", "convex_of_polytope", "shape_of_polytope",
+__all__ = ["shape_from_coal", "placed_shapes", "coal_from_shape", "convex_hull", "convex_of_polytope", "shape_of_polytope",
            "strip_triangles", "CYLINDER_PRISM_SIDES", "COAL_MAX_NEIGHBOURS"]
 
 CYLINDER_PRISM_SIDES = 16
@@ -180,3 +180,17 @@ def _coal_convex(v: np.ndarray, tris: np.ndarray, flat: bool, *, stripped: bool 
             raise _TooManyNeighbours(most) from None
         raise
     return m.convex
+
+
+def placed_shapes(model, q, names) -> list:
+    """The armguard shapes (in W) of ``model``'s geometries ``names`` at ``q`` (Pinocchio's joint
+    order), read from the coal geometries Pinocchio places (``updateGeometryPlacements``): taken
+    without any backend, the inputs of the slow reference
+    (:func:`armguard.geometry._support_reference.reference_signed_distance`)."""
+    import pinocchio as pin
+
+    gm = model.collision_model
+    data, gdata = model.pin_model.createData(), gm.createData()
+    pin.updateGeometryPlacements(model.pin_model, data, gm, gdata, np.asarray(q, dtype=np.float64))
+    return [shape_from_coal(gm.geometryObjects[i].geometry, gdata.oMg[i].homogeneous)[0]
+            for i in (model.geometry_index(n) for n in names)]

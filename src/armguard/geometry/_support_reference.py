@@ -6,7 +6,9 @@ overlap).  Every armguard shape's support is exact (a cylinder's in closed form,
 best core point plus the core radius); the minimum over the sphere of directions is taken over 6,000
 Fibonacci directions, then polished by Nelder-Mead from the six best.  No GJK, no EPA: it shares no
 code with any backend, so a backend's distance or depth is checked against geometry alone.  About
-20 ms a pair.  ``tests/test_geometry_cylinder_depth.py`` holds it to 1e-12 m against the same
+20 ms a pair (more on hulls of thousands of vertices).  ``armguard compare`` calls it on the worst
+entries where two backends differ beyond tolerance, to say which is right
+(:mod:`armguard.harness._compare`); ``bench sweep`` on the depths that differ.  ``tests/test_geometry_cylinder_depth.py`` holds it to 1e-12 m against the same
 minimum taken one direction at a time (``tests/test_geometry_cylinder.py``).
 """
 
@@ -16,7 +18,7 @@ import math
 
 import numpy as np
 
-__all__ = ["reference_signed_distance", "shapes_at"]
+__all__ = ["reference_signed_distance"]
 
 
 def _fibonacci(k: int) -> np.ndarray:
@@ -29,11 +31,11 @@ def _fibonacci(k: int) -> np.ndarray:
 _DIRS = _fibonacci(6000)
 
 
-def _h(shape, N) -> np.ndarray:
+def _h_closed(shape, N) -> np.ndarray:
     """Support values ``h(n) = max_x n . x`` of ``shape`` along the unit rows of ``N (k, 3)``: the
     cylinder's closed form (``c . n + h |a . n| + r sqrt(1 - (a . n)^2)``, ``a`` its axis), else the
     core points' maximum plus the core radius (``Shape.support``, all directions at once)."""
-    from ..geometry import Cylinder
+    from ._cylinder import Cylinder
 
     N = np.atleast_2d(N)
     if isinstance(shape, Cylinder):
@@ -42,11 +44,14 @@ def _h(shape, N) -> np.ndarray:
     return (N @ shape.core_points.T).max(axis=1) + shape.core_radius
 
 
-def reference_signed_distance(a, b) -> float:
+def reference_signed_distance(a, b, support=None) -> float:
     """Signed distance (m) of armguard shapes ``a`` and ``b``: ``-min_n (h_A(n) + h_B(-n))``
-    over unit ``n`` (see the module docstring)."""
+    over unit ``n`` (see the module docstring).  ``support(shape, N (k, 3)) -> (k,)``: the support
+    values ``h`` (default the closed forms of :func:`_h`; ``tests/test_geometry_cylinder.py`` passes
+    the shapes' own ``support`` one direction at a time, a second reference for this one)."""
     from scipy.optimize import minimize
 
+    _h = support or _h_closed
     f = _h(a, _DIRS) + _h(b, -_DIRS)
     best = math.inf
     for k in np.argsort(f)[:6]:
@@ -65,18 +70,3 @@ def reference_signed_distance(a, b) -> float:
                                 np.array([[0, 0], [0.05, 0], [0, 0.05]])})
         best = min(best, float(res.fun), float(f[k]))
     return -best
-
-
-def shapes_at(model, q, names) -> list:
-    """The armguard shapes (in W) of ``model``'s geometries ``names`` at ``q`` (Pinocchio's joint
-    order), read from the coal geometries Pinocchio places (``updateGeometryPlacements``): the
-    reference's inputs, taken without any backend."""
-    import pinocchio as pin
-
-    from ..model._shapes import shape_from_coal
-
-    gm = model.collision_model
-    data, gdata = model.pin_model.createData(), gm.createData()
-    pin.updateGeometryPlacements(model.pin_model, data, gm, gdata, np.asarray(q, dtype=np.float64))
-    return [shape_from_coal(gm.geometryObjects[i].geometry, gdata.oMg[i].homogeneous)[0]
-            for i in (model.geometry_index(n) for n in names)]
