@@ -32,6 +32,25 @@ _K_ev = K["ev"]
 _K_summary = K["summary"]
 
 
+@njit(cache=True, inline="always")
+def _scene_row(Q, b, qidx, circ, out) -> bool:  # pragma: no cover - compiled
+    """One row of Pinocchio's joint values (``Q[b:b + nq]``) in the scene's joint order, into ``out``:
+    the scene's joint ``k`` is ``Q[b + qidx[k]]``, a continuous joint ``k`` in ``circ`` the angle of
+    Pinocchio's ``(cos, sin)`` there.  False (``out`` partly written) where such a pair is off the unit
+    circle (``UNIT_CIRCLE``).  :func:`pair_rows`' joint map and :func:`scene_rows`'."""
+    for k in range(qidx.shape[0]):
+        out[k] = Q[b + qidx[k]]
+    for c in range(circ.shape[0]):
+        k = circ[c]
+        i = b + qidx[k]
+        x = Q[i]
+        y = Q[i + 1]
+        if abs(x * x + y * y - 1.0) > UNIT_CIRCLE:
+            return False
+        out[k] = math.atan2(y, x)
+    return True
+
+
 @njit(cache=True, nogil=True, _nrt=False)
 def pair_rows(fns, Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_out, pB_out):  # pragma: no cover - compiled
     """Every pair of a selection at rows ``lo:hi`` of ``Q`` (Pinocchio's joint order, flattened:
@@ -52,6 +71,8 @@ def pair_rows(fns, Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_
     n_sel = gmap[3]
     o_circ = 4 + n_q
     o_sel = o_circ + n_circ
+    qidx = gmap[4:o_circ]
+    circ = gmap[o_circ:o_sel]
     sel = gmap[o_sel:o_sel + n_sel]
     o_sw = o_sel + n_sel
     summary = seg1(SI, H, _K_summary)
@@ -63,14 +84,8 @@ def pair_rows(fns, Q, lo, hi, gmap, H, MF, MI, SF, SI, prm, iprm, q1, d_out, pA_
         for i in range(nq):
             if not np.isfinite(Q[b + i]):
                 return 1 + 4 * m
-        for k in range(n_q):
-            q1[0, k] = Q[b + gmap[4 + k]]
-        for c in range(n_circ):
-            k = gmap[o_circ + c]
-            i = b + gmap[4 + k]
-            if abs(Q[i] * Q[i] + Q[i + 1] * Q[i + 1] - 1.0) > UNIT_CIRCLE:  # not a (cos, sin): check_q says so
-                return 1 + 4 * m
-            q1[0, k] = math.atan2(Q[i + 1], Q[i])
+        if not _scene_row(Q, b, qidx, circ, q1[0]):  # a (cos, sin) off the unit circle: check_q says so
+            return 1 + 4 * m
         err = call_rows(fns[FN_ROWS], (q1, np.int64(0), np.int64(1), H, MF, MI, SF, SI, prm, iprm, sel, best, st,
                                        fns))
         if err != 0:
@@ -108,14 +123,6 @@ def scene_rows(Q, qidx, circ, out):  # pragma: no cover - compiled
     most of a one-row call's Python; its cost now: ``python -m bench backends``, kinova's *Python
     per call* of ``collides``)."""
     for m in range(Q.shape[0]):
-        for k in range(qidx.shape[0]):
-            out[m, k] = Q[m, qidx[k]]
-        for c in range(circ.shape[0]):
-            k = circ[c]
-            i = qidx[k]
-            x = Q[m, i]
-            y = Q[m, i + 1]
-            if abs(x * x + y * y - 1.0) > UNIT_CIRCLE:
-                return m
-            out[m, k] = math.atan2(y, x)
+        if not _scene_row(Q[m], 0, qidx, circ, out[m]):
+            return m
     return -1
