@@ -109,6 +109,40 @@ def test_one_pair_at_one_configuration_has_the_references_word():
     assert abs(row["analytic"][0] - ref["distance"]) == ref["error"]["analytic"]
 
 
+def test_a_workspace_pair_is_judged_against_the_walls():
+    """A workspace pair (a link against the workspace box's walls, not a GeometryObject pair) that the
+    two backends answer 1 mm apart: the comparison says "differ" and the reference (the link's support
+    along the six walls' normals) sides with the undoctored side; its reproduce line answers (exit 0)."""
+    model = armguard.load_model("ranger")
+    configs = build_configs(model, n_random=8, seed=2, trajectories=None)
+    answers = evaluate(model, configs.Q, ("analytic", "coal"))
+    k = int(np.flatnonzero(model.pairs.names[:, 1] == "workspace")[0])
+    bad = replace(answers["analytic"], distance=answers["analytic"].distance.copy())
+    bad.distance[3, k] += 1e-3
+    c = compare_answers(model, configs, {"analytic": bad, "coal": answers["coal"]}, spec="ranger")
+    p = c.summary["pairs"]["analytic/coal"]
+    (w,) = [w for w in p["worst"] if "reference" in w]
+    assert p["status"] == "differ" and (w["config"], w["pair"][1]) == (3, "workspace")
+    assert w["reference"]["error"]["coal"] < 1e-12 and w["reference"]["error"]["analytic"] == pytest.approx(1e-3, abs=1e-12)
+    res = CliRunner().invoke(main, shlex.split(w["reproduce"])[1:])
+    assert res.exit_code == 0, res.output
+    assert "reference  d = " in res.stdout and "analytic off" in res.stdout
+
+
+def test_the_wall_reference_is_the_least_vertex_room():
+    """``reference_wall_distance`` (six support values) on a hull against the least, over its vertices and
+    the six walls, of the room left (a polytope's extreme points are vertices)."""
+    from armguard.geometry import ConvexPolyhedron
+    from armguard.geometry._support_reference import reference_wall_distance
+
+    rng = np.random.default_rng(4)
+    lo, hi = np.array([-1.0, -2.0, -0.5]), np.array([1.5, 2.0, 3.0])
+    for _ in range(20):
+        v = rng.normal(size=(12, 3)) * rng.uniform(0.1, 1.0) + rng.uniform(lo - 0.5, hi + 0.5)
+        room = np.minimum(hi - v, v - lo).min()
+        assert reference_wall_distance(ConvexPolyhedron(v), lo, hi) == pytest.approx(room, abs=1e-12)
+
+
 def test_backend_options_pass_through():
     assert parse_backend_options(["analytic.fidelity=paper", "coal.threads=1", "coal.gjk_tolerance=1e-9"]) == {
         "analytic": {"fidelity": "paper"}, "coal": {"threads": 1, "gjk_tolerance": 1e-9}}

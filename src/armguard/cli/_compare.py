@@ -88,11 +88,8 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
                     continue
                 d, pa, pb = ans
                 console.print(f"  {b:10s} d = {d!r} m  p_WA = {pa}  p_WB = {pb}", soft_wrap=True)
-            ref = r.get("reference")
-            if ref and ref["distance"] is not None:
-                errs = ", ".join(f"{b} off {e:.1e} m" for b, e in ref["error"].items())
-                console.print(f"  {'reference':10s} d = {ref['distance']!r} m  ({ref['method']}): {errs}", soft_wrap=True,
-                              markup=False)
+            if "reference" in r:
+                console.print(f"  {_reference_line(r['reference'], exact=True)}", soft_wrap=True, markup=False)
         return
     traj = list(dict.fromkeys(trajectories))  # a name given twice is sampled once
     for word in ("all", "none"):
@@ -118,16 +115,23 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
                 a, b = p["a"], p["b"]
                 console.print(f"  {w['why']:8s} #{w['config']} ({w['source']}) {esc(w['pair'][0])} / {esc(w['pair'][1])}: "
                               f"{a} {w[a]['distance']:.6e} m, {b} {w[b]['distance']:.6e} m")
-                ref = w.get("reference")
-                if ref and ref["distance"] is not None:  # the slow reference's word on who is off (harness._compare)
-                    console.print(f"    reference {ref['distance']:.6e} m ({ref['method']}): {a} off "
-                                  f"{ref['error'][a]:.1e} m, {b} off {ref['error'][b]:.1e} m", markup=False)
+                if "reference" in w:  # the slow reference's word on who is off (harness._compare)
+                    console.print(f"    {_reference_line(w['reference'])}", markup=False)
                 console.print(f"    {w['reproduce']}", style="dim", soft_wrap=True, markup=False)
         tm = comp.summary["timing"]
         console.print(f"{comp.summary['configs']['total']} configurations: answers {tm['answers_s']:.1f} s, "
                       f"comparison {tm['compare_s']:.1f} s" + (f", outputs {tm['outputs_s']:.1f} s in {out_dir}" if out_dir else ""))
     if any(p["status"] != "agree" for p in comp.summary["pairs"].values()):
         sys.exit(int(ExitCode.UNSAFE))
+
+
+def _reference_line(ref: dict, exact: bool = False) -> str:
+    """The terminal line of the slow reference's answer (``harness.reference_distance``, judged)."""
+    if ref["distance"] is None:
+        return f"reference  not available ({ref['why']})"
+    d = repr(ref["distance"]) if exact else f"{ref['distance']:.6e}"
+    errs = ", ".join(f"{b} off {e:.1e} m" for b, e in ref["error"].items()) or "no backend here answers distances"
+    return f"reference  d = {d} m ({ref['method']}): {errs}"
 
 
 @main.command("check-urdf", epilog=exit_epilog(ok="no error-level finding", unsafe="an error-level finding"))

@@ -5,8 +5,10 @@ support functions (the distance when they are apart, minus the penetration depth
 overlap).  Every armguard shape's support is exact (a cylinder's in closed form, the others' the
 best core point plus the core radius); the minimum over the sphere of directions is taken over 6,000
 Fibonacci directions, then polished by Nelder-Mead from the six best.  No GJK, no EPA: it shares no
-code with any backend, so a backend's distance or depth is checked against geometry alone.  About
-20 ms a pair (more on hulls of thousands of vertices).  ``armguard compare`` calls it on the worst
+code with any backend's kernels (the shapes themselves, a mesh hull's vertices included, are the
+Model's, which every backend reads), so a backend's distance or depth is checked against geometry alone.  About
+20-150 ms a pair on primitives and small hulls, up to ~1.5 s on hulls of thousands of vertices (the
+first call also imports SciPy's optimiser).  ``armguard compare`` calls it on the worst
 entries where two backends differ beyond tolerance, to say which is right
 (:mod:`armguard.harness._compare`); ``bench sweep`` on the depths that differ.  ``tests/test_geometry_cylinder_depth.py`` holds it to 1e-12 m against the same
 minimum taken one direction at a time (``tests/test_geometry_cylinder.py``).
@@ -18,7 +20,7 @@ import math
 
 import numpy as np
 
-__all__ = ["reference_signed_distance"]
+__all__ = ["reference_signed_distance", "reference_wall_distance"]
 
 
 def _fibonacci(k: int) -> np.ndarray:
@@ -47,7 +49,7 @@ def _h_closed(shape, N) -> np.ndarray:
 def reference_signed_distance(a, b, support=None) -> float:
     """Signed distance (m) of armguard shapes ``a`` and ``b``: ``-min_n (h_A(n) + h_B(-n))``
     over unit ``n`` (see the module docstring).  ``support(shape, N (k, 3)) -> (k,)``: the support
-    values ``h`` (default the closed forms of :func:`_h`; ``tests/test_geometry_cylinder.py`` passes
+    values ``h`` (default the closed forms of :func:`_h_closed`; ``tests/test_geometry_cylinder.py`` passes
     the shapes' own ``support`` one direction at a time, a second reference for this one)."""
     from scipy.optimize import minimize
 
@@ -70,3 +72,14 @@ def reference_signed_distance(a, b, support=None) -> float:
                                 np.array([[0, 0], [0.05, 0], [0, 0.05]])})
         best = min(best, float(res.fun), float(f[k]))
     return -best
+
+
+def reference_wall_distance(shape, lo, hi) -> float:
+    """Signed distance (m) of ``shape`` to the walls of the axis-aligned box ``[lo, hi]`` it should stay
+    in (Ranger's workspace): the least over the six walls of the room left between the shape's extreme
+    point along the wall's normal and the wall, ``hi_k - h(e_k)`` and ``h(-e_k) + lo_k`` sign-flipped
+    (``-h(-e_k) - lo_k``), negative where the shape crosses a wall.  Six support values: exact."""
+    E = np.eye(3)
+    up = np.asarray(hi, dtype=np.float64) - _h_closed(shape, E)
+    down = -_h_closed(shape, -E) - np.asarray(lo, dtype=np.float64)
+    return float(min(up.min(), down.min()))

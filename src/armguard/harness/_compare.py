@@ -12,8 +12,10 @@ Definitions (every count is over (configuration, pair) entries unless it says co
 * **the slow reference's word**: each of the worst distance entries (``worst``, ``why == "distance"``)
   whose two distances differ by more than the pair's tolerance also carries ``reference``: the
   signed distance of the two shapes as Pinocchio places them, by the support-function reference
-  (:mod:`armguard.geometry._support_reference`: no GJK, no EPA, no code of any backend), and each
-  backend's error against it -- which of the two is off (coal's EPA depths on cylinders, for one).
+  (:mod:`armguard.geometry._support_reference`: no GJK, no EPA, no kernel of any backend; a workspace
+  pair: the shape against the box's six walls), and each backend's error against it -- which of the
+  two is off (coal's EPA depths on cylinders, for one).  Made once per (configuration, pair) entry,
+  whichever backend pairs list it.
 * **unique nearest points** (as ``tests/test_backends.py`` defines them): both sides capsules or
   spheres, the reference distance above ``unique_min_distance`` and, for two capsules,
   ``|sin(angle between axes)| > parallel``.  There |Δp_WA|, |Δp_WB| are measured; elsewhere each
@@ -40,10 +42,12 @@ from ._tolerances import pair_distance_tolerance, pair_kinds
 from ._verdicts import verdict_backend_summary, verdict_pair_summary
 
 __all__ = ["PairStatus", "Comparison", "compare_answers", "capsule_axes", "unique_witness_mask", "reference_of",
-           "reproduce_command", "REFERENCE_METHOD"]
+           "reproduce_command", "reference_distance", "judged", "REFERENCE_METHOD", "REFERENCE_WALLS"]
 
 REFERENCE_METHOD = "support functions, 6,000 directions and Nelder-Mead; no GJK, no EPA"
 """How the slow reference that arbitrates the worst distance entries works (``worst[..]["reference"]``)."""
+REFERENCE_WALLS = "support functions along the six walls' normals"
+"""The same for a workspace pair (a shape against the workspace box's walls)."""
 
 
 class PairStatus(str, enum.Enum):
@@ -142,7 +146,7 @@ def _contract(ans, cols, nonunique, tol_pair) -> dict:
             "max_violation": float(viol[sel].max()) if sel.any() else None}
 
 
-def _pair_summary(model, configs, A, B, R, a, b, cats, tol, tol_pair, unique, n_worst, spec, options) -> tuple:
+def _pair_summary(model, configs, A, B, R, a, b, cats, tol, tol_pair, unique, n_worst, spec, options, refs) -> tuple:
     band = tol.differential_contact_band
     err = np.abs(A.distance - B.distance)
     out = {"a": a, "b": b, "reference": reference_of(a, b)}
@@ -181,7 +185,7 @@ def _pair_summary(model, configs, A, B, R, a, b, cats, tol, tol_pair, unique, n_
     out["categories"] = per
     out["speed_ratio"] = {"distances": A.us_per_config and B.us_per_config / A.us_per_config,
                           "yes_no": B.yes_no_per_s and A.yes_no_per_s / B.yes_no_per_s}
-    out["worst"] = _worst(model, configs, A, B, a, b, err, out_band, tol_pair, n_worst, spec, options)
+    out["worst"] = _worst(model, configs, A, B, a, b, err, out_band, tol_pair, n_worst, spec, options, refs)
     ok = out["verdict_disagreements"] == 0 and per["all"]["separated_over_tolerance"] == 0
     return out, PairStatus.AGREE if ok else PairStatus.DIFFER
 
@@ -199,7 +203,7 @@ def _entry(model, configs, A, B, a, b, i, k, spec, options, why):
             "reproduce": reproduce_command(spec, (a, b), q, pair, options)}
 
 
-def _worst(model, configs, A, B, a, b, err, out_band, tol_pair, n_worst, spec, options) -> list:
+def _worst(model, configs, A, B, a, b, err, out_band, tol_pair, n_worst, spec, options, refs: dict) -> list:
     rows = []
     for i in np.flatnonzero(out_band)[:n_worst]:
         k = int(np.argmin(np.minimum(A.distance[i], B.distance[i])))
@@ -207,27 +211,43 @@ def _worst(model, configs, A, B, a, b, err, out_band, tol_pair, n_worst, spec, o
     if err.size:
         flat = np.argsort(err, axis=None)[::-1][:n_worst]
         for f in flat:
-            i, k = np.unravel_index(f, err.shape)
-            row = _entry(model, configs, A, B, a, b, int(i), int(k), spec, options, "distance")
+            i, k = (int(x) for x in np.unravel_index(f, err.shape))
+            row = _entry(model, configs, A, B, a, b, i, k, spec, options, "distance")
             if err[i, k] > tol_pair[k]:
-                row["reference"] = _arbitrate(model, configs.Q[i], k, {a: A.distance[i, k], b: B.distance[i, k]})
+                if (i, k) not in refs:  # once per entry, whichever backend pairs list it
+                    refs[i, k] = reference_distance(model, configs.Q[i], k)
+                row["reference"] = judged(refs[i, k], {a: A.distance[i, k], b: B.distance[i, k]})
             rows.append(row)
     return rows
 
 
-def _arbitrate(model, q, k: int, answers: dict) -> dict:
-    """The slow reference's signed distance of pair ``k`` at ``q`` and each backend's error against it
-    (see the module docstring); ``{"distance": None, "why": ...}`` when a shape has no support
-    function there (a shape kind the reference does not know)."""
-    from ..geometry._support_reference import reference_signed_distance
+def reference_distance(model, q, k: int) -> dict:
+    """The slow reference's signed distance of pair ``k`` at ``q`` (Pinocchio's order): ``{"distance",
+    "method"}`` (see the module docstring; a workspace pair: the shape against the box's six walls,
+    :func:`armguard.geometry._support_reference.reference_wall_distance`), or ``{"distance": None,
+    "why"}`` where a shape has no armguard equivalent (a coal geometry :func:`placed_shapes` refuses)."""
+    from .._errors import GeometryError, SceneError
+    from ..geometry._support_reference import reference_signed_distance, reference_wall_distance
+    from ..model._model import WORKSPACE
     from ..model._shapes import placed_shapes
 
+    na, nb = model.pairs.names[k]
     try:
-        d = reference_signed_distance(*placed_shapes(model, q, model.pairs.names[k]))
-    except (TypeError, AttributeError, ValueError) as e:  # no support function for a shape: say so, decide nothing
+        if nb == WORKSPACE:
+            ws = model.workspace
+            return {"distance": reference_wall_distance(placed_shapes(model, q, [na])[0], ws.lo, ws.hi),
+                    "method": REFERENCE_WALLS}
+        return {"distance": reference_signed_distance(*placed_shapes(model, q, (na, nb))), "method": REFERENCE_METHOD}
+    except (SceneError, GeometryError) as e:  # no armguard shape for a geometry: say so, decide nothing
         return {"distance": None, "why": f"{type(e).__name__}: {e}"}
-    return {"distance": float(d), "method": REFERENCE_METHOD,
-            "error": {name: float(abs(v - d)) for name, v in answers.items()}}
+
+
+def judged(ref: dict, answers: dict) -> dict:
+    """``ref`` (:func:`reference_distance`) with each backend's error against it (``answers``: backend
+    -> signed distance, m)."""
+    if ref["distance"] is None:
+        return dict(ref)
+    return {**ref, "error": {name: float(abs(v - ref["distance"])) for name, v in answers.items()}}
 
 
 def compare_answers(model, configs, answers: dict, *, spec: str, options=None, tol: Tolerances = DEFAULT_TOLERANCES,
@@ -253,7 +273,7 @@ def compare_answers(model, configs, answers: dict, *, spec: str, options=None, t
             per_backend[b].update(verdict_backend_summary(ans))
     groups = {"all": np.arange(len(model.pairs))}
     groups.update({c: np.flatnonzero(cats == c) for c in dict.fromkeys(model.pairs.category)})
-    pairs, status = {}, {}
+    pairs, status, refs = {}, {}, {}  # refs: (config, pair) -> the slow reference's answer, made once
     for a, b in itertools.combinations(backends, 2):
         key = f"{a}/{b}"
         if answers[a].verdicts_only or answers[b].verdicts_only:
@@ -264,7 +284,7 @@ def compare_answers(model, configs, answers: dict, *, spec: str, options=None, t
             R = answers[reference_of(a, b)]
             unique = unique_witness_mask(model, configs.Q, R.distance, tol, axes)
             pairs[key], status[key] = _pair_summary(model, configs, answers[a], answers[b], R, a, b, cats, tol, tol_pair,
-                                                    unique, n_worst, spec, options)
+                                                    unique, n_worst, spec, options, refs)
         pairs[key]["status"] = status[key].value
     summary = {
         "model": model.name, "spec": spec, "n_pairs": len(model.pairs),

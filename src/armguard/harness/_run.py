@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import ArmguardError
-from ._compare import Comparison, _arbitrate, compare_answers, reference_of
+from ._compare import Comparison, compare_answers, judged, reference_distance, reference_of
 from ._configs import build_configs
 from ._evaluate import answers_distances, build_checkers, evaluate, verdict_detail
 from ._models import resolve_model
@@ -174,7 +174,7 @@ def compare_at(spec, backends, q, *, options=None, pair=None, model=None) -> lis
     ``{"collides": bool, "verdict": name or None, "pair_verdict": name or None}`` (its three-valued
     answer for the configuration and for the row's pair, where it exposes them).  With ``pair``, the
     row also holds ``reference``: the slow support-function reference's signed distance and each
-    distance backend's error against it (:func:`._compare._arbitrate`).
+    distance backend's error against it (:func:`._compare.reference_distance`).
     """
     from ..backends import check_q
 
@@ -203,7 +203,8 @@ def compare_at(spec, backends, q, *, options=None, pair=None, model=None) -> lis
             else:
                 row[b] = (float(r.distance[k]), r.p_WA[k].tolist(), r.p_WB[k].tolist())
         if pair is not None:  # one pair asked for: the slow reference's word too (~20 ms), each backend's error
-            row["reference"] = _arbitrate(model, q, k, {b: row[b][0] for b in res if not isinstance(res[b], tuple)})
+            row["reference"] = judged(reference_distance(model, q, k),
+                                      {b: row[b][0] for b in res if not isinstance(res[b], tuple)})
         rows.append(row)
     if pair is not None and not rows:
         raise ArmguardError(f"pair {tuple(pair)} is not an active pair of model {model.name!r}")
