@@ -24,6 +24,15 @@ def _e(x) -> str:
     return "—" if x is None else f"{x:.1e}"
 
 
+def _judged(p: dict) -> str:
+    """The reference's word on a backend pair's worst distance entries beyond tolerance: how many, and
+    each side's largest error against it (``harness._compare.reference_distance``)."""
+    refs = [w["reference"] for w in p["worst"] if w.get("reference", {}).get("distance") is not None]
+    if not refs:
+        return "— (none beyond tolerance)"
+    return f"{len(refs)}: " + ", ".join(f"{b} off ≤ {max(r['error'][b] for r in refs):.1e}" for b in (p["a"], p["b"]))
+
+
 def run(quick: bool) -> str:
     return tables(MODELS, 1000 if quick else 10_000)
 
@@ -40,8 +49,8 @@ def tables(models, n: int) -> str:
              + " | ".join(f"{b} yes/no per s" for b in backends) + " | wall |",
              "|---|---|---|" + "---|" * (2 * len(backends)) + "---|"]
     agree = ["| model | backends | verdicts ≠ (outside band / in band) | sign ≠ | separated |Δd| max / p99 (m) "
-             "| penetrating |Δd| max / p99 (m) | witness contract ✗ (a; b) |",
-             "|---|---|---|---|---|---|---|"]
+             "| penetrating |Δd| max / p99 (m) | witness contract ✗ (a; b) | the slow reference on the worst entries |",
+             "|---|---|---|---|---|---|---|---|"]
     for name in models:
         if name not in installed:
             times.append(f"| {name} | not installed |" + " |" * (2 * len(backends) + 2))
@@ -62,12 +71,16 @@ def tables(models, n: int) -> str:
                 f"| {name} | {key} | {p['verdict_disagreements']} / {p['verdict_disagreements_in_band']} "
                 f"| {c['sign_disagreements']} | {_e(c['separated']['max'])} / {_e(c['separated']['p99'])} "
                 f"| {_e(c['penetrating']['max'])} / {_e(c['penetrating']['p99'])} "
-                f"| {wc[p['a']]['violations']}/{wc[p['a']]['checked']}; {wc[p['b']]['violations']}/{wc[p['b']]['checked']} |")
+                f"| {wc[p['a']]['violations']}/{wc[p['a']]['checked']}; {wc[p['b']]['violations']}/{wc[p['b']]['checked']} "
+                f"| {_judged(p)} |")
     note = (f"\n\n{n} seeded random configurations per model (seed 0) plus the canned trajectories' samples at 1 Hz; "
             "|Δd| over (configuration, pair) entries, *separated* where both distances are above the contact band "
             "(1e-6 m), *penetrating* where both are below its negative. Reproduce one model: `armguard compare NAME "
             f"--backends {','.join(backends)} --configs {n}` (its per-category table and its worst configurations, "
             "each with a one-line command). What the columns mean: [backends.md](backends.md#what-is-measured). "
+            "*The slow reference on the worst entries*: of the 5 largest |Δd| entries, those beyond the pair's "
+            "tolerance, with each side's largest error against the support-function reference (no GJK, no EPA: "
+            "[backends.md](backends.md#what-is-measured)), which says which side is off. "
             "The µs per configuration are each backend's `pair_distances` from Python: coal's is mostly the reading "
             "of its results through Pinocchio's bindings (its C++ core alone: the Backends section), fcl's yes/no "
             "computes each pair's distance until the first within the margin.")

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import re
 
-from bench.agreement import tables
+from bench.agreement import _judged, tables
 
 from armguard.backends import available
 
@@ -22,3 +22,16 @@ def test_the_agreement_tables_come_out_of_a_small_run():
     row = next(ln for ln in text.splitlines() if ln.startswith("| gmf_s480 | analytic/coal |"))
     assert re.search(r"\| 0 / 0 \| 0 \| [0-9.e+-]+ / [0-9.e+-]+ \|", row), row
     assert "| no_such_robot | not installed |" in text
+    assert re.search(r"\| (— \(none beyond tolerance\)|[1-5]: analytic off ≤ [0-9.e+-]+, coal off ≤ [0-9.e+-]+) \|$", row), row
+
+
+def test_the_reference_column_reads_the_judged_entries():
+    """The last column: the worst entries that carry the reference's answer, each side's largest error."""
+    p = {"a": "x", "b": "y", "worst": [
+        {"why": "distance", "reference": {"distance": -0.05, "error": {"x": 3e-13, "y": 0.033}}},
+        {"why": "distance", "reference": {"distance": 0.2, "error": {"x": 1e-12, "y": 0.001}}},
+        {"why": "distance", "reference": {"distance": None, "why": "SceneError: no shape"}},
+        {"why": "distance"}]}
+    assert _judged(p) == "2: x off ≤ 1.0e-12, y off ≤ 3.3e-02"
+    assert _judged({"a": "x", "b": "y", "worst": [{"why": "verdict"}]}) == "— (none beyond tolerance)"
+
