@@ -77,6 +77,38 @@ def test_every_urdf_loads_or_names_its_fault(urdf):
     assert m.pin_model.nq == len(m.neutral())
 
 
+SRDF_FAULTS = [u for u in FAULTS if u.startswith(("romeo", "solo", "simple_humanoid"))]
+
+
+@needs_erd
+@pytest.mark.parametrize("urdf", SRDF_FAULTS, ids=[u.split("/")[-1] for u in SRDF_FAULTS])
+def test_an_srdf_that_does_not_fit_says_how_to_load_the_urdf_alone(urdf, tmp_path):
+    """An SRDF armguard found that refuses its URDF: the error names the SRDF's element and the way out,
+    and that way (a sidecar with ``model.srdf: none``) loads the URDF alone: every <collision> a
+    geometry, the same pairs as ``srdf=False``, the command line's check answering (exit 0 or 1; 3 where
+    no pair is left to check)."""
+    from click.testing import CliRunner
+
+    from armguard.cli import main
+
+    with pytest.raises(SceneFileError, match=re.escape(FAULTS[urdf])) as exc:
+        armguard.load_model(ROBOTS / urdf)
+    assert exc.value.file.endswith(".srdf") and "srdf: none" in exc.value.message and "srdf=False" in exc.value.message
+    side = tmp_path / "alone.yaml"
+    side.write_text(f"armguard_scene: 1\nname: alone\nmodel: {{urdf: {ROBOTS / urdf}, srdf: none}}\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", armguard.ArmguardWarning)
+        m, bare = armguard.load_model(side), armguard.load_model(ROBOTS / urdf, srdf=False)
+    assert m.srdf is None and np.array_equal(m.pairs.names, bare.pairs.names)
+    n_collisions = sum(len(link.findall("collision")) for link in ET.parse(ROBOTS / urdf).getroot().findall("link"))
+    assert len(m.collision_model.geometryObjects) == n_collisions
+    res = CliRunner().invoke(main, ["check", str(side)])
+    if len(m.pairs):
+        assert res.exit_code in (0, 1), res.output
+    else:  # simple_humanoid's links with geometry are all adjacent: no verdict, and check says why
+        assert res.exit_code == 3 and "no pair to check" in res.output, res.output
+
+
 AGAINST_COAL = ["centauro_description/urdf/centauro.urdf", "talos_data/robots/talos_full_v2.urdf",
                 "a1_description/urdf/a1.urdf", "icub_description/robots/icub.urdf"]
 

@@ -51,6 +51,10 @@ def builtin_model_path(name: str) -> Path | None:
     return p if p.is_file() else None
 
 
+NO_SRDF = "none"
+"""A model sidecar's ``model.srdf`` that loads the URDF alone: no SRDF, not even one found beside it."""
+
+
 def load_model(name_or_path, *, srdf=None, package_dirs=()) -> Model:
     """A :class:`Model` from a built-in or public robot name, a ``.urdf`` or a ``.yaml`` file (see the module
     docstring); ``srdf=`` replaces the SRDF a public robot or URDF would have; ``package_dirs``: folders
@@ -228,8 +232,17 @@ def model_from_urdf(path, *, srdf=None, package_dirs=(), srdf_found: str = "give
     path = Path(path).resolve()
     if not path.is_file():
         raise SceneFileError(str(path), "", "URDF file not found")
-    srdf_obj = _srdf_for(path, srdf, srdf_found)
-    scene, pin_model, geom, parts = _build(path, srdf_obj, package_dirs, {})
+    try:
+        srdf_obj = _srdf_for(path, srdf, srdf_found)
+        scene, pin_model, geom, parts = _build(path, srdf_obj, package_dirs, {})
+    except SceneFileError as exc:
+        if srdf is not None or not exc.file.lower().endswith(".srdf"):
+            raise
+        # an SRDF armguard found (not one the caller named) refuses this URDF: say how to load it without
+        raise SceneFileError(exc.file, exc.where, f"{exc.message}; this SRDF was found for {path.name} (docs/models.md, "
+                             f"\"Finding the SRDF\"): to load the URDF without it, load_model(path, srdf=False), or a "
+                             f"model sidecar .yaml with `model: {{urdf: {path.name}, srdf: {NO_SRDF}}}`",
+                             line=exc.line) from None
     files = [path, *parts_files(parts, srdf_obj)]
     return Model(scene.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), hull_cache=parts.hull_cache,
                  link_frames=_link_frames(parts, pin_model), hulls=parts.hulls,
@@ -270,8 +283,11 @@ def model_from_scenefile(sf, file: str, base: Path, *, srdf=None) -> Model:
     urdf = ctx.path(sf.model.urdf)
     if not urdf.is_file():
         raise ctx.error("model.urdf", f"URDF file not found: {urdf}")
-    srdf_obj = _srdf_for(urdf, ctx.path(sf.model.srdf) if sf.model.srdf else None,
-                         found=f"named by {Path(file).name}'s model.srdf")
+    named = sf.model.srdf
+    if named is not None and named.strip().lower() == NO_SRDF:  # the URDF alone: no SRDF, not even one found beside it
+        srdf_obj = None
+    else:
+        srdf_obj = _srdf_for(urdf, ctx.path(named) if named else None, found=f"named by {Path(file).name}'s model.srdf")
     if srdf is not None:
         srdf_obj = _replace_pairs(srdf_obj, srdf)
     acc = {}
