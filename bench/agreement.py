@@ -27,7 +27,7 @@ def _e(x) -> str:
 def _judged(p: dict) -> str:
     """The reference's word on a backend pair's worst distance entries beyond tolerance: how many, and
     each side's largest error against it (``harness._compare.reference_distance``)."""
-    refs = [w["reference"] for w in p["worst"] if w.get("reference", {}).get("distance") is not None]
+    refs = [w["slow_reference"] for w in p["worst"] if w.get("slow_reference", {}).get("distance") is not None]
     if not refs:
         return "— (none beyond tolerance)"
     return f"{len(refs)}: " + ", ".join(f"{b} off ≤ {max(r['error'][b] for r in refs):.1e}" for b in (p["a"], p["b"]))

@@ -28,9 +28,9 @@ def test_the_agreement_tables_come_out_of_a_small_run():
 def test_the_reference_column_reads_the_judged_entries():
     """The last column: the worst entries that carry the reference's answer, each side's largest error."""
     p = {"a": "x", "b": "y", "worst": [
-        {"why": "distance", "reference": {"distance": -0.05, "error": {"x": 3e-13, "y": 0.033}}},
-        {"why": "distance", "reference": {"distance": 0.2, "error": {"x": 1e-12, "y": 0.001}}},
-        {"why": "distance", "reference": {"distance": None, "why": "SceneError: no shape"}},
+        {"why": "distance", "slow_reference": {"distance": -0.05, "error": {"x": 3e-13, "y": 0.033}}},
+        {"why": "distance", "slow_reference": {"distance": 0.2, "error": {"x": 1e-12, "y": 0.001}}},
+        {"why": "distance", "slow_reference": {"distance": None, "why": "SceneError: no shape"}},
         {"why": "distance"}]}
     assert _judged(p) == "2: x off ≤ 1.0e-12, y off ≤ 3.3e-02"
     assert _judged({"a": "x", "b": "y", "worst": [{"why": "verdict"}]}) == "— (none beyond tolerance)"

@@ -88,8 +88,8 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
                     continue
                 d, pa, pb = ans
                 console.print(f"  {b:10s} d = {d!r} m  p_WA = {pa}  p_WB = {pb}", soft_wrap=True)
-            if "reference" in r:
-                console.print(f"  {_reference_line(r['reference'], exact=True)}", soft_wrap=True, markup=False)
+            if "slow_reference" in r:
+                console.print(f"  {_reference_line(r['slow_reference'], exact=True)}", soft_wrap=True, markup=False)
         return
     traj = list(dict.fromkeys(trajectories))  # a name given twice is sampled once
     for word in ("all", "none"):
@@ -115,8 +115,8 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
                 a, b = p["a"], p["b"]
                 console.print(f"  {w['why']:8s} #{w['config']} ({w['source']}) {esc(w['pair'][0])} / {esc(w['pair'][1])}: "
                               f"{a} {w[a]['distance']:.6e} m, {b} {w[b]['distance']:.6e} m")
-                if "reference" in w:  # the slow reference's word on who is off (harness._compare)
-                    console.print(f"    {_reference_line(w['reference'])}", markup=False)
+                if "slow_reference" in w:  # the slow reference's word on who is off (harness._compare)
+                    console.print(f"    {_reference_line(w['slow_reference'])}", markup=False)
                 console.print(f"    {w['reproduce']}", style="dim", soft_wrap=True, markup=False)
         tm = comp.summary["timing"]
         console.print(f"{comp.summary['configs']['total']} configurations: answers {tm['answers_s']:.1f} s, "

@@ -10,7 +10,7 @@ Definitions (every count is over (configuration, pair) entries unless it says co
 * **separated** entries: both distances ``> contact_band``; **penetrating**: both ``< -contact_band``;
   **sign disagreements**: the rest whose reference distance is outside the band.
 * **the slow reference's word**: each of the worst distance entries (``worst``, ``why == "distance"``)
-  whose two distances differ by more than the pair's tolerance also carries ``reference``: the
+  whose two distances differ by more than the pair's tolerance also carries ``slow_reference``: the
   signed distance of the two shapes as Pinocchio places them, by the support-function reference
   (:mod:`armguard.geometry._support_reference`: no GJK, no EPA, no kernel of any backend; a workspace
   pair: the shape against the box's six walls), and each backend's error against it -- which of the
@@ -45,7 +45,7 @@ __all__ = ["PairStatus", "Comparison", "compare_answers", "capsule_axes", "uniqu
            "reproduce_command", "reference_distance", "judged", "REFERENCE_METHOD", "REFERENCE_WALLS"]
 
 REFERENCE_METHOD = "support functions, 6,000 directions and Nelder-Mead; no GJK, no EPA"
-"""How the slow reference that arbitrates the worst distance entries works (``worst[..]["reference"]``)."""
+"""How the slow reference that arbitrates the worst distance entries works (``worst[..]["slow_reference"]``)."""
 REFERENCE_WALLS = "support functions along the six walls' normals"
 """The same for a workspace pair (a shape against the workspace box's walls)."""
 
@@ -216,7 +216,7 @@ def _worst(model, configs, A, B, a, b, err, out_band, tol_pair, n_worst, spec, o
             if err[i, k] > tol_pair[k]:
                 if (i, k) not in refs:  # once per entry, whichever backend pairs list it
                     refs[i, k] = reference_distance(model, configs.Q[i], k)
-                row["reference"] = judged(refs[i, k], {a: A.distance[i, k], b: B.distance[i, k]})
+                row["slow_reference"] = judged(refs[i, k], {a: A.distance[i, k], b: B.distance[i, k]})
             rows.append(row)
     return rows
 

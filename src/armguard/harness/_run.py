@@ -173,7 +173,7 @@ def compare_at(spec, backends, q, *, options=None, pair=None, model=None) -> lis
     A distance backend's answer is ``(d, p_WA, p_WB)`` (m); a verdicts-only backend's is
     ``{"collides": bool, "verdict": name or None, "pair_verdict": name or None}`` (its three-valued
     answer for the configuration and for the row's pair, where it exposes them).  With ``pair``, the
-    row also holds ``reference``: the slow support-function reference's signed distance and each
+    row also holds ``slow_reference``: the slow support-function reference's signed distance and each
     distance backend's error against it (:func:`._compare.reference_distance`).
     """
     from ..backends import check_q
@@ -203,7 +203,7 @@ def compare_at(spec, backends, q, *, options=None, pair=None, model=None) -> lis
             else:
                 row[b] = (float(r.distance[k]), r.p_WA[k].tolist(), r.p_WB[k].tolist())
         if pair is not None:  # one pair asked for: the slow reference's word too (~20 ms), each backend's error
-            row["reference"] = judged(reference_distance(model, q, k),
+            row["slow_reference"] = judged(reference_distance(model, q, k),
                                       {b: row[b][0] for b in res if not isinstance(res[b], tuple)})
         rows.append(row)
     if pair is not None and not rows:
