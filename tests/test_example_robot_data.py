@@ -93,7 +93,7 @@ def test_an_srdf_that_does_not_fit_says_how_to_load_the_urdf_alone(urdf, tmp_pat
 
     with pytest.raises(SceneFileError, match=re.escape(FAULTS[urdf])) as exc:
         armguard.load_model(ROBOTS / urdf)
-    assert exc.value.file.endswith(".srdf") and "srdf: none" in exc.value.message and "srdf=False" in exc.value.message
+    assert exc.value.file.endswith(".srdf") and "`srdf: none`" in exc.value.message and "srdf=False" in exc.value.message
     side = tmp_path / "alone.yaml"
     side.write_text(f"armguard_scene: 1\nname: alone\nmodel: {{urdf: {ROBOTS / urdf}, srdf: none}}\n")
     with warnings.catch_warnings():
@@ -107,6 +107,27 @@ def test_an_srdf_that_does_not_fit_says_how_to_load_the_urdf_alone(urdf, tmp_pat
         assert res.exit_code in (0, 1), res.output
     else:  # simple_humanoid's links with geometry are all adjacent: no verdict, and check says why
         assert res.exit_code == 3 and "no pair to check" in res.output, res.output
+
+
+@needs_erd
+def test_a_scene_files_urdf_robot_takes_the_srdf_the_file_names(tmp_path):
+    """A scene file's URDF robot: ``srdf: none`` loads romeo without the romeo.srdf that refuses it, and
+    an SRDF the file names is the robot's own (not only its disabled pairs: romeo.srdf is no longer read)."""
+    urdf = ROBOTS / "romeo_description/urdf/romeo.urdf"
+    cell = tmp_path / "cell.yaml"
+    cell.write_text(f"armguard_scene: 1\nname: cell\nrobots:\n  - name: romeo\n    urdf: {urdf}\n    srdf: none\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", armguard.ArmguardWarning)
+        alone = armguard.load_model(cell)
+        pairs = {tuple(sorted((p.a, p.b))) for p in alone.scene.allowed_pairs()}
+        assert ("romeo/LWristRollLink", "romeo/l_wrist") in pairs
+        mine = tmp_path / "mine.srdf"
+        mine.write_text('<robot name="romeo"><disable_collisions link1="LWristRollLink" link2="l_wrist" '
+                        'reason="Never"/></robot>')
+        cell.write_text(cell.read_text().replace("srdf: none", f"srdf: {mine}"))
+        named = armguard.load_model(cell)
+    assert ("romeo/LWristRollLink", "romeo/l_wrist") not in {tuple(sorted((p.a, p.b))) for p in named.scene.allowed_pairs()}
+    assert len(named.pairs) < len(alone.pairs)
 
 
 AGAINST_COAL = ["centauro_description/urdf/centauro.urdf", "talos_data/robots/talos_full_v2.urdf",

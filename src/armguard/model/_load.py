@@ -24,7 +24,7 @@ import numpy as np
 
 from .._errors import ArmguardError, SceneError, SceneFileError
 from ._model import Model
-from ._srdf import read_srdf
+from ._srdf import NO_SRDF, read_srdf
 
 __all__ = ["load_model", "models_dir", "builtin_model_names", "model_from_scenefile", "model_from_scene", "model_of"]
 
@@ -49,10 +49,6 @@ def builtin_model_path(name: str) -> Path | None:
         return None
     p = models_dir() / name / f"{name}.yaml"
     return p if p.is_file() else None
-
-
-NO_SRDF = "none"
-"""A model sidecar's ``model.srdf`` that loads the URDF alone: no SRDF, not even one found beside it."""
 
 
 def load_model(name_or_path, *, srdf=None, package_dirs=()) -> Model:
@@ -240,9 +236,9 @@ def model_from_urdf(path, *, srdf=None, package_dirs=(), srdf_found: str = "give
             raise
         # an SRDF armguard found (not one the caller named) refuses this URDF: say how to load it without
         raise SceneFileError(exc.file, exc.where, f"{exc.message}; this SRDF was found for {path.name} (docs/models.md, "
-                             f"\"Finding the SRDF\"): to load the URDF without it, load_model(path, srdf=False), or a "
-                             f"model sidecar .yaml with `model: {{urdf: {path.name}, srdf: {NO_SRDF}}}`",
-                             line=exc.line) from None
+                             f"\"Finding the SRDF\"): to load the URDF without it, load_model(path, srdf=False), or "
+                             f"`srdf: {NO_SRDF}` beside `urdf: {path.name}` in a model sidecar's `model:` or a scene "
+                             "file's robot", line=exc.line) from None
     files = [path, *parts_files(parts, srdf_obj)]
     return Model(scene.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), hull_cache=parts.hull_cache,
                  link_frames=_link_frames(parts, pin_model), hulls=parts.hulls,
@@ -270,7 +266,7 @@ def model_from_yaml(path, *, srdf=None) -> Model:
 def model_from_scenefile(sf, file: str, base: Path, *, srdf=None) -> Model:
     """The Model of a validated scene file ``sf`` read from ``file`` (paths relative to ``base``);
     ``srdf=`` (a path, or False for none) replaces the sidecar's ``model.srdf``."""
-    from ._scenefile import _DEG, _MM, _Ctx, _frames, _populate
+    from ._scenefile import _DEG, _MM, _Ctx, _frames, _no_srdf, _populate
 
     ctx = _Ctx(file, base, _MM if sf.units.length == "mm" else 1.0, _DEG if sf.units.angle == "deg" else 1.0)
     if sf.model is None:
@@ -284,7 +280,7 @@ def model_from_scenefile(sf, file: str, base: Path, *, srdf=None) -> Model:
     if not urdf.is_file():
         raise ctx.error("model.urdf", f"URDF file not found: {urdf}")
     named = sf.model.srdf
-    if named is not None and named.strip().lower() == NO_SRDF:  # the URDF alone: no SRDF, not even one found beside it
+    if named is not None and _no_srdf(named):  # the URDF alone: no SRDF, not even one found beside it
         srdf_obj = None
     else:
         srdf_obj = _srdf_for(urdf, ctx.path(named) if named else None, found=f"named by {Path(file).name}'s model.srdf")

@@ -22,17 +22,18 @@ from .._errors import SceneFileError
 __all__ = ["robot_from_urdf"]
 
 
-def robot_from_urdf(path, *, name=None, X_WB=None, load_collision=True, mesh_dir=None):
+def robot_from_urdf(path, *, name=None, X_WB=None, load_collision=True, mesh_dir=None, srdf=None):
     """The Robot of the URDF file ``path`` (its one arm); ``X_WB`` (4, 4) mounts its root link in W.
 
-    ``name`` defaults to the URDF's robot name; ``mesh_dir`` is searched for mesh files too.
+    ``name`` defaults to the URDF's robot name; ``mesh_dir`` is searched for mesh files too; ``srdf``
+    as :func:`armguard.load_model`'s (None: found beside the URDF; a path; False: none).
     """
     from ._load import model_from_urdf
 
     file = str(path)
     if not Path(file).is_file():
         raise SceneFileError(file, "", "file not found")
-    model = model_from_urdf(file, package_dirs=[mesh_dir] if mesh_dir is not None else ())
+    model = model_from_urdf(file, srdf=srdf, package_dirs=[mesh_dir] if mesh_dir is not None else ())
     robots = list(model.scene.robots.values())
     if len(robots) != 1:
         raise SceneFileError(file, "robot", f"expected one arm, found {[r.name for r in robots]}; "

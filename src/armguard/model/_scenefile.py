@@ -20,6 +20,7 @@ from .._errors import ArmguardError, KinematicsError, SceneError, SceneFileError
 from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
 from ._robot_urdf import robot_from_urdf
 from ._scene import CannedTest, Scene
+from ._srdf import NO_SRDF
 from ._schema import SHAPE_TYPES, SceneFile
 from .._yaml import read_scene_yaml  # noqa: F401  (part of this module's interface)
 
@@ -252,8 +253,10 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
         if not path.is_file():
             raise ctx.error(f"{w}.urdf", f"URDF file not found: {path}")
         ctx.read.append(path)
+        # the SRDF the file names is the robot's (its groups and home too), "none" none at all, else one found
+        srdf = None if spec.srdf is None else False if _no_srdf(spec.srdf) else ctx.path(spec.srdf)
         try:
-            robot = robot_from_urdf(path, name=spec.name, X_WB=X_WB)
+            robot = robot_from_urdf(path, name=spec.name, X_WB=X_WB, srdf=srdf)
         except ArmguardError as exc:
             raise ctx.error(f"{w}.urdf", str(exc)) from None
         if spec.max_acceleration is not None:
@@ -275,7 +278,7 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
             raise ctx.error(f"{w}.home", f"expected {robot.n_joints} joint values {list(robot.joint_names)}, got {len(spec.home)}")
         home = np.asarray(spec.home) * scale
     srdf_pairs = []
-    if spec.srdf is not None:
+    if spec.srdf is not None and not _no_srdf(spec.srdf):
         path = ctx.path(spec.srdf)
         ctx.read.append(path)
         try:
@@ -326,6 +329,11 @@ def _with_accelerations(robot, values, ctx: _Ctx, where: str):
     specs = [dataclasses.replace(sp, max_acceleration=scale[sp.name]) if sp.name in scale else sp for sp in robot.joints]
     return Robot(robot.name, robot.root_link, specs, joint_names=robot.joint_names, link_shapes=dict(robot.link_shapes),
                  X_WB=robot.X_WB, tool_link=robot.tool_link)
+
+
+def _no_srdf(named: str) -> bool:
+    """Whether an SRDF path the file gives is :data:`._srdf.NO_SRDF` (no SRDF at all)."""
+    return named.strip().lower() == NO_SRDF
 
 
 def read_srdf_disabled(path) -> list[tuple[str, str]]:

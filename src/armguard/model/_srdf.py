@@ -22,6 +22,10 @@ from pathlib import Path
 
 from .._errors import ArmguardWarning, SceneFileError
 
+NO_SRDF = "none"
+"""An SRDF path of a model sidecar (``model.srdf``) or a scene file's URDF robot (``robots[i].srdf``) that
+means no SRDF at all, not even one found beside the URDF: the URDF alone."""
+
 __all__ = ["Srdf", "SrdfGroup", "read_srdf", "HOME_STATES"]
 
 HOME_STATES = ("home", "default", "ready")
