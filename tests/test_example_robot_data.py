@@ -128,6 +128,13 @@ def test_a_scene_files_urdf_robot_takes_the_srdf_the_file_names(tmp_path):
         named = armguard.load_model(cell)
     assert ("romeo/LWristRollLink", "romeo/l_wrist") not in {tuple(sorted((p.a, p.b))) for p in named.scene.allowed_pairs()}
     assert len(named.pairs) < len(alone.pairs)
+    from armguard.scene import save_scene
+
+    for m in (alone, named):  # saved, each loads back with its own SRDF (or none), not the one beside the URDF
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", armguard.ArmguardWarning)
+            back = armguard.load_scene(save_scene(m.scene, tmp_path / "saved.yaml"))
+        assert back.allowed_pairs() == m.scene.allowed_pairs()
 
 
 AGAINST_COAL = ["centauro_description/urdf/centauro.urdf", "talos_data/robots/talos_full_v2.urdf",

@@ -114,6 +114,8 @@ def _robot_to_dict(scene: Scene, name: str) -> dict:
                              "file's robot takes a URDF of one arm; load that URDF with armguard.load_model (its sidecar "
                              "YAML is the scene file of such a model)")
         out["urdf"] = source["urdf"]
+        if "srdf" in source:  # the SRDF the file named (or none): the robot's own, its groups as well as its pairs
+            out["srdf"] = source["srdf"]
         if np.all(np.isfinite(robot.max_acceleration)):
             out["max_acceleration"] = _l(robot.max_acceleration)
     else:

@@ -262,6 +262,8 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
         if spec.max_acceleration is not None:
             robot = _with_accelerations(robot, spec.max_acceleration, ctx, f"{w}.max_acceleration")
         source = {"kind": "urdf", "urdf": str(path)}
+        if srdf is False:
+            source["srdf"] = NO_SRDF  # saved with it: the file loads back without the SRDF found beside the URDF
     # link shapes, in each link's own frame
     if spec.link_shapes:
         shapes = {}
