@@ -130,6 +130,10 @@ def test_a_scene_files_urdf_robot_takes_the_srdf_the_file_names(tmp_path):
     assert len(named.pairs) < len(alone.pairs)
     from armguard.scene import save_scene
 
+    cell.write_text(cell.read_text().replace(f"srdf: {mine}", f"srdf: {ROBOTS / 'romeo_description/srdf/romeo.srdf'}"))
+    with pytest.raises(SceneFileError) as exc:  # named, romeo.srdf's misfit is the scene file's, at its srdf key
+        armguard.load_model(cell)
+    assert exc.value.where.startswith("robots[0].srdf") and "LToePitch" in exc.value.message
     for m in (alone, named):  # saved, each loads back with its own SRDF (or none), not the one beside the URDF
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", armguard.ArmguardWarning)

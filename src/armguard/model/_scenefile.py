@@ -208,6 +208,7 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
     if (spec.joints is None) == (spec.urdf is None):
         raise ctx.error(w, "a robot needs exactly one of 'joints' (a DH table) or 'urdf' (a file)")
     source: dict
+    named_pairs = None  # a URDF robot's SRDF pairs, read where it is checked (below)
     if spec.joints is not None:
         if not spec.joints:
             raise ctx.error(f"{w}.joints", "a DH table needs at least one joint")
@@ -255,10 +256,13 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
         ctx.read.append(path)
         # the SRDF the file names is the robot's (its groups and home too), "none" none at all, else one found
         srdf = None if spec.srdf is None else False if _no_srdf(spec.srdf) else ctx.path(spec.srdf)
+        if srdf:  # a file this one names is refused at its place here, before the URDF's loader reads it
+            named_pairs = _srdf_pairs(srdf, ctx, w)
         try:
             robot = robot_from_urdf(path, name=spec.name, X_WB=X_WB, srdf=srdf)
         except ArmguardError as exc:
-            raise ctx.error(f"{w}.urdf", str(exc)) from None
+            ours = bool(srdf) and isinstance(exc, SceneFileError) and Path(exc.file) == Path(srdf)
+            raise ctx.error(f"{w}.srdf" if ours else f"{w}.urdf", str(exc)) from None
         if spec.max_acceleration is not None:
             robot = _with_accelerations(robot, spec.max_acceleration, ctx, f"{w}.max_acceleration")
         source = {"kind": "urdf", "urdf": str(path)}
@@ -283,10 +287,7 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
     if spec.srdf is not None and not _no_srdf(spec.srdf):
         path = ctx.path(spec.srdf)
         ctx.read.append(path)
-        try:
-            srdf_pairs = read_srdf_disabled(path)
-        except SceneFileError as exc:
-            raise ctx.error(f"{w}.srdf", exc.message) from None
+        srdf_pairs = named_pairs if named_pairs is not None else _srdf_pairs(path, ctx, w)
         for a, b in srdf_pairs:
             for ln in (a, b):
                 if ln not in robot.link_names:
@@ -331,6 +332,14 @@ def _with_accelerations(robot, values, ctx: _Ctx, where: str):
     specs = [dataclasses.replace(sp, max_acceleration=scale[sp.name]) if sp.name in scale else sp for sp in robot.joints]
     return Robot(robot.name, robot.root_link, specs, joint_names=robot.joint_names, link_shapes=dict(robot.link_shapes),
                  X_WB=robot.X_WB, tool_link=robot.tool_link)
+
+
+def _srdf_pairs(path, ctx, w: str) -> list:
+    """The ``disable_collisions`` pairs of the SRDF ``path`` robot ``w`` names, its faults at ``{w}.srdf``."""
+    try:
+        return read_srdf_disabled(path)
+    except SceneFileError as exc:
+        raise ctx.error(f"{w}.srdf", exc.message) from None
 
 
 def _no_srdf(named: str) -> bool:
