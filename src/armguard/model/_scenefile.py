@@ -254,7 +254,7 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
         if not path.is_file():
             raise ctx.error(f"{w}.urdf", f"URDF file not found: {path}")
         ctx.read.append(path)
-        # the SRDF the file names is the robot's (its groups and home too), "none" none at all, else one found
+        # the SRDF the file names is the robot's (its groups too; its home is the file's home:), "none" none at all, else one found
         srdf = None if spec.srdf is None else False if _no_srdf(spec.srdf) else ctx.path(spec.srdf)
         if srdf:  # a file this one names is refused at its place here, before the URDF's loader reads it
             named_pairs = _srdf_pairs(srdf, ctx, w)
