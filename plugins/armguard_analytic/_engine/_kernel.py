@@ -42,7 +42,7 @@ from ._cull import (_argsort_heap, _argsort_small, _bb_gap, _explicit_gap, _gjk_
                     obb_apart_moving, obb_apart_static)
 from ._narrow import BOUNDED
 from ._calls import FN_STATIC, call_static
-from ._step import move_element, pair_step, pair_step_inline
+from ._step import capsule_step, move_element, pair_step, pair_step_inline
 
 MODE_EXACT, MODE_LAZY, MODE_ANYTIME, MODE_YESNO, MODE_ALL, MODE_MIN = 0, 1, 2, 3, 4, 5
 _status_code = njit(cache=True, inline="always")(status_code)  # the framework's rule, compiled
@@ -335,12 +335,12 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out,
         if mode == MODE_ALL:
             for k in range(sel.shape[0]):
                 p = sel[k]
-                a = pair_a[p]
-                b = pair_b[p]
-                d, err = pair_step_inline(p, a, b, flag_no, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
-                                          max_iter, woff, lvl, math.inf, n_eval, stamp_now, fns)
-                if err != 0:
-                    break
+                a = pair_a[p]; b = pair_b[p]
+                if not capsule_step(p, a, b, H, MF, MI, SF, SI, eps_len, eps_par, n_eval, stamp_now):
+                    d, err = pair_step_inline(p, a, b, flag_no, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
+                                              max_iter, woff, lvl, math.inf, n_eval, stamp_now, fns)
+                    if err != 0:
+                        break
                 n_eval += 1
         elif mode == MODE_ANYTIME:
             # lower bounds for every candidate pair, then evaluate in increasing bound

@@ -24,6 +24,7 @@ from numba import njit
 
 __all__ = [
     "segment_segment_params",
+    "segment_segment_closest",
     "segment_segment",
     "capsule_capsule",
     "write_rounded",
@@ -147,33 +148,42 @@ def segment_segment(p0, p1, q0, q1, out, eps_len, eps_par):  # pragma: no cover 
 
 
 @njit(cache=True, inline="always")
+def segment_segment_closest(p0x, p0y, p0z, p1x, p1y, p1z, q0x, q0y, q0z, q1x, q1y, q1z, eps_len, eps_par):  # pragma: no cover
+    """The closest points ``a`` of segment ``p0-p1`` and ``b`` of ``q0-q1`` (:func:`segment_segment_params`),
+    ``v = b - a`` and ``|v|``: ``(ax, ay, az, bx, by, bz, vx, vy, vz, |v|)``."""
+    s, t = segment_segment_params(
+        p0x, p0y, p0z, p1x, p1y, p1z, q0x, q0y, q0z, q1x, q1y, q1z, eps_len * eps_len, eps_par * eps_par
+    )
+    ax = p0x + s * (p1x - p0x)
+    ay = p0y + s * (p1y - p0y)
+    az = p0z + s * (p1z - p0z)
+    bx = q0x + t * (q1x - q0x)
+    by = q0y + t * (q1y - q0y)
+    bz = q0z + t * (q1z - q0z)
+    vx = bx - ax
+    vy = by - ay
+    vz = bz - az
+    return ax, ay, az, bx, by, bz, vx, vy, vz, math.sqrt(vx * vx + vy * vy + vz * vz)
+
+
+@njit(cache=True, inline="always")
 def capsule_capsule_scalar(
     p0x, p0y, p0z, p1x, p1y, p1z, ra, q0x, q0y, q0z, q1x, q1y, q1z, rb, out, base, eps_len, eps_par
 ):  # pragma: no cover - compiled
     """Scalar-argument capsule-capsule (see :func:`capsule_capsule`)."""
-    s, t = segment_segment_params(
-        p0x, p0y, p0z, p1x, p1y, p1z, q0x, q0y, q0z, q1x, q1y, q1z, eps_len * eps_len, eps_par * eps_par
+    ax, ay, az, bx, by, bz, vx, vy, vz, dcore = segment_segment_closest(
+        p0x, p0y, p0z, p1x, p1y, p1z, q0x, q0y, q0z, q1x, q1y, q1z, eps_len, eps_par
     )
+    if dcore > eps_len:
+        return write_rounded(ax, ay, az, ra, bx, by, bz, rb, vx / dcore, vy / dcore, vz / dcore, dcore, out, base)
+    # Cores meet: the Minkowski difference of two segments is flat (a parallelogram), so the
+    # shortest separating translation is along its normal d1 x d2, of length ra + rb.
     d1x = p1x - p0x
     d1y = p1y - p0y
     d1z = p1z - p0z
     d2x = q1x - q0x
     d2y = q1y - q0y
     d2z = q1z - q0z
-    ax = p0x + s * d1x
-    ay = p0y + s * d1y
-    az = p0z + s * d1z
-    bx = q0x + t * d2x
-    by = q0y + t * d2y
-    bz = q0z + t * d2z
-    vx = bx - ax
-    vy = by - ay
-    vz = bz - az
-    dcore = math.sqrt(vx * vx + vy * vy + vz * vz)
-    if dcore > eps_len:
-        return write_rounded(ax, ay, az, ra, bx, by, bz, rb, vx / dcore, vy / dcore, vz / dcore, dcore, out, base)
-    # Cores meet: the Minkowski difference of two segments is flat (a parallelogram), so the
-    # shortest separating translation is along its normal d1 x d2, of length ra + rb.
     nx = d1y * d2z - d1z * d2y
     ny = d1z * d2x - d1x * d2z
     nz = d1x * d2y - d1y * d2x
