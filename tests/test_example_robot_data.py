@@ -141,6 +141,23 @@ def test_a_scene_files_urdf_robot_takes_the_srdf_the_file_names(tmp_path):
         assert back.allowed_pairs() == m.scene.allowed_pairs()
 
 
+@needs_erd
+def test_a_scene_files_urdf_robot_takes_its_srdfs_home_unless_the_file_gives_one(tmp_path):
+    """A scene file's URDF robot without ``home:`` starts where ``load_model`` of its URDF does: at the
+    SRDF's home state (panda.srdf's ``default``, not zero); a ``home:`` in the file still wins."""
+    urdf = ROBOTS / "panda_description/urdf/panda.urdf"
+    srdf_home = armguard.load_model(urdf).scene.home("panda")
+    assert np.abs(srdf_home).max() > 1.0  # the SRDF's state, not the zero default
+    cell = tmp_path / "cell.yaml"
+    cell.write_text(f"armguard_scene: 1\nname: cell\nrobots:\n  - name: panda\n    urdf: {urdf}\n")
+    assert np.array_equal(armguard.load_scene(cell).home("panda"), srdf_home)
+    cell.write_text(cell.read_text() + "    srdf: none\n")  # no SRDF: zero, clipped to the limits
+    alone = armguard.load_scene(cell).home("panda")
+    assert not np.array_equal(alone, srdf_home) and np.abs(alone).max() < 0.1
+    cell.write_text(cell.read_text().replace("    srdf: none\n", "    home: [0, 0, 0, -1, 0, 1, 0, 0]\n"))
+    assert np.allclose(armguard.load_scene(cell).home("panda"), [0, 0, 0, -1, 0, 1, 0, 0])
+
+
 AGAINST_COAL = ["centauro_description/urdf/centauro.urdf", "talos_data/robots/talos_full_v2.urdf",
                 "a1_description/urdf/a1.urdf", "icub_description/robots/icub.urdf"]
 

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from .._errors import SceneFileError
 
-__all__ = ["robot_from_urdf"]
+__all__ = ["robot_from_urdf", "robot_home_from_urdf"]
 
 
 def robot_from_urdf(path, *, name=None, X_WB=None, load_collision=True, mesh_dir=None, srdf=None):
@@ -28,6 +28,13 @@ def robot_from_urdf(path, *, name=None, X_WB=None, load_collision=True, mesh_dir
     ``name`` defaults to the URDF's robot name; ``mesh_dir`` is searched for mesh files too; ``srdf``
     as :func:`armguard.load_model`'s (None: found beside the URDF; a path; False: none).
     """
+    return robot_home_from_urdf(path, name=name, X_WB=X_WB, load_collision=load_collision, mesh_dir=mesh_dir,
+                                srdf=srdf)[0]
+
+
+def robot_home_from_urdf(path, *, name=None, X_WB=None, load_collision=True, mesh_dir=None, srdf=None):
+    """``(robot, home)``: :func:`robot_from_urdf`'s Robot and its home as :func:`armguard.load_model` takes it
+    (the SRDF's home state, else zero clipped to the limits), ``(n_joints,)`` rad / m."""
     from ._load import model_from_urdf
 
     file = str(path)
@@ -39,10 +46,11 @@ def robot_from_urdf(path, *, name=None, X_WB=None, load_collision=True, mesh_dir
         raise SceneFileError(file, "robot", f"expected one arm, found {[r.name for r in robots]}; "
                              "use armguard.load_model for a system of several arms")
     robot = robots[0]
+    home = model.scene.home(robot.name)
     if not load_collision:
         robot = robot.with_link_shapes({ln: () for ln in robot.link_names})
     if X_WB is not None:
         robot = robot.with_base(X_WB)
     if name is not None:
         robot = robot.with_name(name)
-    return robot
+    return robot, home

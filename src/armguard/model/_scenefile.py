@@ -18,7 +18,7 @@ from pydantic import ValidationError
 
 from .._errors import ArmguardError, KinematicsError, SceneError, SceneFileError, list_problems
 from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
-from ._robot_urdf import robot_from_urdf
+from ._robot_urdf import robot_home_from_urdf
 from ._scene import CannedTest, Scene
 from ._srdf import NO_SRDF
 from ._schema import SHAPE_TYPES, SceneFile
@@ -208,7 +208,7 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
     if (spec.joints is None) == (spec.urdf is None):
         raise ctx.error(w, "a robot needs exactly one of 'joints' (a DH table) or 'urdf' (a file)")
     source: dict
-    named_pairs = None  # a URDF robot's SRDF pairs, read where it is checked (below)
+    named_pairs = urdf_home = None  # a URDF robot's SRDF pairs, read where it is checked (below), and its home
     if spec.joints is not None:
         if not spec.joints:
             raise ctx.error(f"{w}.joints", "a DH table needs at least one joint")
@@ -254,12 +254,13 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
         if not path.is_file():
             raise ctx.error(f"{w}.urdf", f"URDF file not found: {path}")
         ctx.read.append(path)
-        # the SRDF the file names is the robot's (its groups too; its home is the file's home:), "none" none at all, else one found
+        # the SRDF the file names is the robot's (its groups, and its home where the file gives no home:),
+        # "none" none at all, else one found
         srdf = None if spec.srdf is None else False if _no_srdf(spec.srdf) else ctx.path(spec.srdf)
         if srdf:  # a file this one names is refused at its place here, before the URDF's loader reads it
             named_pairs = _srdf_pairs(srdf, ctx, w)
         try:
-            robot = robot_from_urdf(path, name=spec.name, X_WB=X_WB, srdf=srdf)
+            robot, urdf_home = robot_home_from_urdf(path, name=spec.name, X_WB=X_WB, srdf=srdf)
         except ArmguardError as exc:
             ours = bool(srdf) and isinstance(exc, SceneFileError) and Path(exc.file) == Path(srdf)
             raise ctx.error(f"{w}.srdf" if ours else f"{w}.urdf", str(exc)) from None
@@ -278,7 +279,7 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
             shapes[ln] = tuple(_link_shape(s, ctx, f"{lw}[{k}]", robot, ln) for k, s in enumerate(lst))
         robot = robot.with_link_shapes(shapes)
     scale = _q_scale(robot, ctx)
-    home = None
+    home = urdf_home  # a DH robot's: None (zero, clipped); a URDF robot's: as load_model takes it (its SRDF's)
     if spec.home is not None:
         if len(spec.home) != robot.n_joints:
             raise ctx.error(f"{w}.home", f"expected {robot.n_joints} joint values {list(robot.joint_names)}, got {len(spec.home)}")
