@@ -206,6 +206,18 @@ def test_a_zero_budget_evaluates_nothing_and_says_so(backend):
         det.check(q, budget_us=float("nan"))
 
 
+@pytest.mark.parametrize("backend", ["analytic", "coal"])
+def test_a_budget_beyond_every_pair_checks_every_pair(backend):
+    """A finite budget too large for an int64 of pairs (1e30 us) is every pair: the exact check's
+    answer, not an OverflowError."""
+    model = _model("rover")
+    det = armguard.Detector(model.scene, threshold=THRESHOLD, backend=backend)
+    q = _configs(model, 1, 7)[1]
+    rep, exact = det.check(q, budget_us=1e30), det.check(q)
+    assert rep.n_evaluated == det.n_pairs and rep.status is exact.status
+    assert rep.nearest.distance == exact.nearest.distance
+
+
 def test_obstacle_lists_as_the_analytic_detectors():
     model = _model("ranger")
     margin = 0.1

@@ -486,7 +486,7 @@ class FusedDetector(Detector):
             us = float(budget_us)
             if not (us >= 0.0 and math.isfinite(us)):
                 raise DetectionError(f"budget_us: must be finite and >= 0, got {budget_us!r}")
-            allowance = int(max(0.0, us * 1e3) // self._ns_per_pair)
+            allowance = int(min(max(0.0, us * 1e3) // self._ns_per_pair, 2.0 ** 62))  # a huge budget: every pair (int64)
             mode = kn.MODE_ANYTIME
             status, n_eval, lim = self._run(s, mode, allowance, lazy)
         else:

@@ -431,7 +431,7 @@ class RangerDetector(Detector):
 
     def _allowance(self, budget_us: float) -> int:
         """How many pairs the cost model says fit in ``budget_us`` besides the check's own cost."""
-        return int(max(0.0, budget_us - self._us_per_check) // self._us_per_pair)
+        return int(min(max(0.0, budget_us - self._us_per_check) // self._us_per_pair, 2.0 ** 62))
 
     def _learn(self, elapsed_us: float, n: int) -> None:
         """Update the cost model ``elapsed = per_check + n per_pair`` with one check (benign races:
