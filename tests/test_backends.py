@@ -220,6 +220,19 @@ def test_q_is_in_pin_model_order(checkers):
         a.pair_distances(np.full(model.nq, np.nan))
 
 
+@pytest.mark.parametrize("backend", ["analytic", "coal"])
+def test_a_q_of_joint_angles_on_continuous_joints_is_told_what_to_do(checkers, backend):
+    """kinova: six joint angles where Pinocchio's q has nine values (three continuous joints, a
+    ``(cos, sin)`` each): the error says so, names each position, and points to ``Model.pin_q``, whose
+    answer is then taken."""
+    model, a, c = checkers("kinova")
+    chk = a if backend == "analytic" else c
+    angles = np.array([1.57, 2.6, 4.7, 3.14, 2.6, 0.0])
+    with pytest.raises(BackendError, match=r"\(cos, sin\).*Model\.pin_q\(angles\)"):
+        chk.pair_distances(angles)
+    assert np.isfinite(chk.pair_distances(model.pin_q(angles)).distance).all()
+
+
 @pytest.mark.parametrize("name", ["gmf_s480", "ranger", "kinova"])  # q in the scene's order; gathered; converted
 def test_analytic_collides_a_row_at_a_time_as_in_one_batch(checkers, name):
     """``collides`` on a few rows runs inline on the thread's batch scratch (reused from call to

@@ -43,6 +43,20 @@ def test_refused_input_is_3_and_one_line():
     assert "no_such_scene" in res.output
 
 
+@pytest.mark.parametrize("args", [
+    ("compare", "ur5", "--backends", "analytic,nosuch", "--configs", "2", "--trajectory", "none"),
+    ("srdf", "ur5", "--out", "unused.srdf", "--evaluator", "nosuch"),
+    ("check-srdf", "ur5", "--evaluator", "nosuch"),
+    ("compare", "ur5", "--q", "1,2,3"),
+])
+def test_a_bad_backend_name_or_q_length_is_a_usage_error_everywhere(args):
+    """An unknown backend name, or a --q of the wrong length, is 2 in every command (as the group's
+    --backend and check's --q), not 3; the message names what is installed or what --q holds."""
+    res = _run(*args)
+    assert res.exit_code == ExitCode.USAGE, res.output
+    assert ("installed backends are" in res.output) or ("6 values in pin_model's order" in res.output), res.output
+
+
 def test_os_error_reading_input_is_3(monkeypatch, tmp_path):
     def unreadable(spec, *a, **k):
         raise PermissionError(13, "Permission denied", str(tmp_path / "scene.yaml"))

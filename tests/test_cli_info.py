@@ -23,6 +23,16 @@ def test_info_hermes_counts_and_size():
     assert "360.0°" in res.output  # revolute limits in degrees
 
 
+def test_info_calls_a_continuous_joint_continuous():
+    """kinova's joints 1, 4 and 6 are continuous in its URDF (no limits; Pinocchio's (cos, sin)): not
+    "revolute -inf inf"."""
+    res = CliRunner().invoke(main, ["info", "kinova"], terminal_width=200)
+    assert res.exit_code == 0, res.output
+    rows = {line.split("│")[1].strip(): line.split("│")[2].strip() for line in res.output.splitlines()
+            if line.count("│") > 3 and "j2s6s200_joint_" in line}
+    assert rows == {f"j2s6s200_joint_{k}": ("continuous" if k in (1, 4, 6) else "revolute") for k in range(1, 7)}
+
+
 def test_info_on_a_public_robot_says_it_has_no_static_bodies():
     # a public robot's URDF has no scene bodies: one line, not a table whose only row is a total of 0
     res = CliRunner().invoke(main, ["info", "ur5"], terminal_width=200)

@@ -109,6 +109,23 @@ def test_one_pair_at_one_configuration_has_the_references_word():
     assert abs(row["analytic"][0] - ref["distance"]) == ref["error"]["analytic"]
 
 
+def test_compare_q_takes_angles_where_joints_are_continuous():
+    """kinova's three continuous joints: ``compare --q`` takes Pinocchio's 9 values (a ``(cos, sin)`` each)
+    or the 6 joint angles ``check --q`` takes (turned into Pinocchio's by ``Model.pin_q``): the same rows."""
+    model = armguard.load_model("kinova")
+    angles = [1.57, 2.6, 4.7, 3.14, 2.6, 0.0]
+    pin = model.pin_q(angles)
+    out = []
+    for q in (angles, pin.tolist()):
+        res = CliRunner().invoke(main, ["compare", "kinova", "--backends", "analytic", "--q", ",".join(map(repr, q)),
+                                        "--json"])
+        assert res.exit_code == 0, res.output
+        out.append(json.loads(res.stdout))
+    assert out[0] == out[1] and len(out[0]) == len(model.pairs)
+    res = CliRunner().invoke(main, ["compare", "kinova", "--q", "1,2,3"])
+    assert res.exit_code == 2 and "j2s6s200_joint_1 (cos, sin)" in res.output
+
+
 def test_a_workspace_pair_is_judged_against_the_walls():
     """A workspace pair (a link against the workspace box's walls, not a GeometryObject pair) that the
     two backends answer 1 mm apart: the comparison says "differ" and the reference (the link's support

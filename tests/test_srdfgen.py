@@ -296,3 +296,30 @@ def test_srdf_json_is_strict_json(tmp_path):
     doc = json.loads(r.output, parse_constant=lambda c: pytest.fail(f"{c} in --json output"))
     assert any(p["distance"] is None for p in doc["pairs"]) and all(
         p["distance"] is None or isinstance(p["distance"], float) for p in doc["pairs"])
+
+
+def test_check_srdf_witnesses_paste_into_check_q(tmp_path):
+    """kinova (three continuous joints): a disabled pair's witness prints as ``check --q`` takes it, one angle
+    a joint in the scene's order (it printed Pinocchio's nine values, a ``(cos, sin)`` each), and the pair is
+    at the printed distance there (to the printed digits)."""
+    import re
+
+    from armguard.cli import main
+
+    srdf = tmp_path / "mine.srdf"
+    srdf.write_text('<robot name="kinova"><disable_collisions link1="j2s6s200_link_base" '
+                    'link2="j2s6s200_link_finger_tip_1" reason="Never"/></robot>')
+    res = CliRunner().invoke(main, ["check-srdf", "kinova", str(srdf)])
+    assert res.exit_code == 0, res.output
+    m = re.search(r"disabled \(Never\) j2s6s200_link_base - j2s6s200_link_finger_tip_1: distance (\S+) m.* at q = \[([^\]]*)\]",
+                  res.output)
+    assert m, res.output
+    q = [float(x) for x in m.group(2).split(",")]
+    model = armguard.load_model("kinova", srdf=False)
+    assert len(q) == len(model.scene.joint_names) == 6 and model.nq == 9
+    r = armguard.checker(model, "analytic").pair_distances(model.pin_q(q))
+    rows = [k for k, (a, b) in enumerate(r.pairs) if {a.rsplit("_", 1)[0], b.rsplit("_", 1)[0]}
+            == {"j2s6s200_link_base", "j2s6s200_link_finger_tip_1"}]
+    assert abs(min(r.distance[rows]) - float(m.group(1))) < 1e-3
+    check = CliRunner().invoke(main, ["check", "kinova", "--q", m.group(2).replace(" ", "")])
+    assert check.exit_code in (0, 1), check.output

@@ -187,7 +187,7 @@ def check_q(model, q) -> np.ndarray:
     except (TypeError, ValueError) as exc:
         raise BackendError(f"q: expected {model.nq} numbers, got {q!r}") from exc
     if q.shape != (model.nq,):
-        raise BackendError(f"q: expected shape ({model.nq},) in pin_model's order {list(model.joint_names)}, got {q.shape}")
+        raise BackendError(f"q: expected shape ({model.nq},), {model.q_layout(q.shape[-1] if q.ndim else None)}, got {q.shape}")
     if not np.all(np.isfinite(q)):
         raise BackendError(f"q: contains NaN or infinite values: {q.tolist()}")
     check_unit_circle(model, q[None], "q")

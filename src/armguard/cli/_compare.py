@@ -9,7 +9,7 @@ import sys
 import click
 
 from . import main
-from ._params import AT_LEAST_ONE, COUNT, POSITIVE
+from ._params import AT_LEAST_ONE, BACKENDS, COUNT, POSITIVE
 from ._exit import ExitCode, exit_epilog
 from ._output import esc, output_console
 
@@ -27,9 +27,20 @@ def _floats(text: str) -> list:
     return vals
 
 
+def _pin_q(model, vals: list) -> list:
+    """--q as Pinocchio's ``q``: its ``nq`` values as given, or, on a model with continuous joints, one angle
+    a joint in the scene's order (as check's --q) turned into Pinocchio's (``Model.pin_q``); any other
+    count is a usage error naming the layout (exit status 2, as check's --q)."""
+    if len(vals) == model.nq:
+        return vals
+    if model.has_continuous_joints and len(vals) == len(model.q_index):
+        return model.pin_q(vals).tolist()
+    raise click.BadParameter(f"expected {model.q_layout(len(vals))}, got {len(vals)} values", param_hint="--q")
+
+
 @main.command("compare", epilog=exit_epilog(ok="the backends agree (--q: answered)", unsafe="a backend pair differs"))
 @click.argument("model")
-@click.option("--backends", default="analytic,coal", show_default=True, help="Comma-separated backends to compare.")
+@click.option("--backends", type=BACKENDS, default="analytic,coal", show_default=True, help="Comma-separated backends to compare.")
 @click.option("--configs", "n_configs", type=AT_LEAST_ONE, default=1000, show_default=True, help="Seeded random in-limit configurations.")
 @click.option("--trajectory", "trajectories", multiple=True, default=("all",), show_default=True,
               help="Canned trajectories whose samples are added: a name (repeatable), 'all' or 'none'.")
@@ -42,7 +53,8 @@ def _floats(text: str) -> list:
 @click.option("--scheduler", default=None, help="... or over an existing Dask cluster (scheduler address).")
 @click.option("--no-plots", is_flag=True, help="Skip the PNGs.")
 @click.option("--worst", "n_worst", type=COUNT, default=5, show_default=True, help="Worst configurations listed per backend pair.")
-@click.option("--q", "q_text", default=None, help="Answer at this one configuration (pin order, comma-separated) instead.")
+@click.option("--q", "q_text", default=None, help="Answer at this one configuration instead: Pinocchio's q (comma-separated), or one angle a joint in "
+              "the scene's order where joints are continuous.")
 @click.option("--pair", "pair_text", default=None, help="With --q: only this pair (A,B GeometryObject names).")
 @click.option("--json", "as_json", is_flag=True, help="Print compare.json (or the --q answers) instead of tables.")
 def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_dir, backend_options, workers, scheduler,
@@ -54,6 +66,7 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     from ..harness import compare_at, parse_backend_options, run_compare, summary_table
+    from ..harness._models import resolve_model
 
     from .._errors import ArmguardError
 
@@ -75,7 +88,8 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
         raise click.UsageError("give --workers (a new LocalCluster) or --scheduler (an existing cluster), not both")
     if q_text is not None:
         pair = tuple(p.strip() for p in pair_text.split(",")) if pair_text else None
-        rows = compare_at(model, names, _floats(q_text), options=options, pair=pair)
+        the_model = resolve_model(model)
+        rows = compare_at(model, names, _pin_q(the_model, _floats(q_text)), options=options, pair=pair, model=the_model)
         if as_json:
             click.echo(json.dumps(rows, indent=1))
             return

@@ -131,7 +131,8 @@ def info_cmd(scene: str | None, rad: bool, srdf: str | None) -> None:
             rev = robot.joint_types[k].value == "revolute"
             vel = robot.max_velocity[k]
             vtxt = "inf" if math.isinf(vel) else (f"{math.degrees(vel):.1f}°/s" if rev and not rad else f"{vel:.4g}/s")
-            t.add_row(esc(j), robot.joint_types[k].value, _limit(robot.lower[k], rev, not rad),
+            kind = "continuous" if rev and robot.lower[k] == -math.inf and robot.upper[k] == math.inf else robot.joint_types[k].value
+            t.add_row(esc(j), kind, _limit(robot.lower[k], rev, not rad),
                       _limit(robot.upper[k], rev, not rad), vtxt, _limit(home[k], rev, not rad))
         for cp in robot.couplings:
             terms = " ".join(f"{v:+g}·{k}" for k, v in cp.terms.items())

@@ -10,7 +10,7 @@ import math
 
 import click
 
-__all__ = ["AT_LEAST_ONE", "COUNT", "Finite", "LENGTH", "POSITIVE"]
+__all__ = ["AT_LEAST_ONE", "BACKEND", "BACKENDS", "COUNT", "Finite", "LENGTH", "POSITIVE"]
 
 AT_LEAST_ONE = click.IntRange(min=1)
 """An integer >= 1 (configurations, workers, evaluations)."""
@@ -45,3 +45,30 @@ LENGTH = Finite(0.0)
 """A finite length (m, or µs of a budget) >= 0."""
 POSITIVE = Finite(0.0, open_low=True)
 """A finite number > 0 (a rate, a step)."""
+
+
+class Backends(click.ParamType):
+    """Installed backend names (``armguard.backends.available``), comma-separated where ``many``: an unknown
+    one is a usage error naming the installed ones (exit status 2, as the group's ``--backend``)."""
+
+    name = "backend"
+
+    def __init__(self, many: bool = False):
+        self.many = many
+
+    def convert(self, value, param, ctx):
+        if not isinstance(value, str):
+            return value
+        from ..backends import available
+
+        names = [b.strip() for b in value.split(",") if b.strip()] if self.many else [value]
+        for b in names:
+            if b not in available():
+                self.fail(f"unknown backend {b!r}; installed backends are {list(available())}", param, ctx)
+        return value
+
+
+BACKEND = Backends()
+"""One installed backend's name."""
+BACKENDS = Backends(many=True)
+"""Comma-separated installed backend names."""

@@ -14,12 +14,14 @@ import math
 import click
 
 from . import main
-from ._params import AT_LEAST_ONE, LENGTH
+from ._params import AT_LEAST_ONE, BACKEND, LENGTH
 from ._exit import ExitCode, exit_epilog
 
 
-def _q(q) -> str:
-    return "[" + ", ".join(f"{x:.4f}" for x in q) + "]"
+def _q(model, q) -> str:
+    """A witness ``q`` (Pinocchio's order, ``(cos, sin)`` for a continuous joint) as ``check --q`` takes it:
+    one value a joint, in the scene's order (``Model.scene_q``)."""
+    return "[" + ", ".join(f"{x:.4f}" for x in model.scene_q(q)) + "]"
 
 
 @main.command("srdf", epilog=exit_epilog(ok="the SRDF written"))
@@ -36,7 +38,7 @@ def _q(q) -> str:
               "processes) or a scheduler's address (tcp://host:8786); each worker loads ROBOT from its file.")
 @click.option("--max-evaluations", type=AT_LEAST_ONE, default=200_000, show_default=True,
               help="Per pair, distance evaluations before it is left undecided (certified).")
-@click.option("--evaluator", default="analytic", show_default=True,
+@click.option("--evaluator", type=BACKEND, default="analytic", show_default=True,
               help="The backend whose distances are evaluated at cell centres (analytic, coal, ...).")
 @click.option("--update", is_flag=True,
               help="--out is an SRDF written before: keep every pair whose certificate (its links' shapes, the joints "
@@ -104,7 +106,7 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
             click.echo(f"  changed {e.link1} - {e.link2}: {o.reason or o.status} -> {e.reason or e.status}")
     for e in cm.entries:
         if e.status == "witnessed":
-            click.echo(f"  checked {e.link1} - {e.link2}: distance {e.distance:.4f} m at q = {_q(e.q)}")
+            click.echo(f"  checked {e.link1} - {e.link2}: distance {e.distance:.4f} m at q = {_q(model, e.q)}")
         elif e.status == "undecided":
             click.echo(f"  checked {e.link1} - {e.link2}: undecided ({e.how})")
 
@@ -119,7 +121,7 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
 @click.option("--workers", type=AT_LEAST_ONE, default=None, help="Threads over the pairs (default: one).")
 @click.option("--max-evaluations", type=AT_LEAST_ONE, default=200_000, show_default=True,
               help="Per pair, distance evaluations before it is left undecided.")
-@click.option("--evaluator", default="analytic", show_default=True, help="The backend whose distances are evaluated.")
+@click.option("--evaluator", type=BACKEND, default="analytic", show_default=True, help="The backend whose distances are evaluated.")
 @click.option("--strict", is_flag=True, help="Exit 1 when a pair disabled for a reason other than Adjacent or Default can "
               "collide, or a disabled pair names a link the robot lacks.")
 @click.option("--json", "as_json", is_flag=True,
@@ -146,10 +148,10 @@ def check_srdf_cmd(robot, srdf, margin, workers, max_evaluations, evaluator, str
     else:
         click.echo(f"{srdf}: {len(lint.can_collide)} disabled pairs can collide, {len(lint.proven_disabled)} proven never, "
                    f"{len(lint.never_checked)} checked pairs proven never, {len(lint.undecided)} undecided "
-                   f"({lint.elapsed_s:.1f} s; q over {', '.join(lint.joint_names)})")
+                   f"({lint.elapsed_s:.1f} s; q over {', '.join(model.scene.joint_names)})")
         for d in lint.can_collide:
             coal = "" if d.get("coal_distance") is None else f" (coal: {d['coal_distance']:.4f} m)"
-            click.echo(f"  disabled ({d['reason'] or 'no reason given'}) {d['link1']} - {d['link2']}: distance {d['distance']:.4f} m{coal} at q = {_q(d['q'])}")
+            click.echo(f"  disabled ({d['reason'] or 'no reason given'}) {d['link1']} - {d['link2']}: distance {d['distance']:.4f} m{coal} at q = {_q(model, d['q'])}")
         for d in lint.never_checked:
             click.echo(f"  checked {d['link1']} - {d['link2']}: proven never (clearance >= {d['clearance_lower_bound']:.4f} m)")
         for d in lint.undecided:

@@ -255,8 +255,8 @@ class Model:
             refuse_complex_or_bool(Q, where, KinematicsError)  # True read as 1 rad, a complex value as its real part
         Q = np.asarray(Q, dtype=np.float64)
         if Q.shape[-1:] != (len(bounds),) or Q.ndim > 2:  # zip() would check a short q's first joints only
-            raise KinematicsError(f"{where}: expected shape ({len(bounds)},) or (M, {len(bounds)}) in pin_model's order "
-                                  f"{list(self.q_joint_names)}, got {Q.shape}")
+            raise KinematicsError(f"{where}: expected shape ({len(bounds)},) or (M, {len(bounds)}): "
+                                  f"{self.q_layout(Q.shape[-1] if Q.ndim else None)}, got {Q.shape}")
         if Q.ndim == 1:  # one configuration: a plain loop (0.5 µs on 6 joints; numpy's compares took 2-5)
             for (a, b), x in zip(bounds, Q.tolist()):
                 if not a <= x <= b:
@@ -379,6 +379,19 @@ class Model:
         m = self.pin_model
         return tuple(m.names[j] for j in range(1, m.njoints) for _ in range(m.joints[j].nq))
 
+    def q_layout(self, n_got: int | None = None) -> str:
+        """Pinocchio's ``q`` in words, for an error about a ``q`` of ``n_got`` values: its ``nq`` positions by
+        joint, a continuous joint's two as ``name (cos, sin)``, and, where ``n_got`` is the scene's count of
+        joints but not ``nq``, that such a ``q`` holds angles: ``Model.pin_q`` makes Pinocchio's."""
+        circ = {self.pin_model.names[j] for j in range(1, self.pin_model.njoints) if self.pin_model.joints[j].nq == 2}
+        names = [f"{n} (cos, sin)" if n in circ else n for n in self.joint_names]
+        text = f"{self.nq} values in pin_model's order {names}"
+        n_scene = len(self._q_index)
+        if circ and n_got == n_scene != self.nq:
+            text += (f"; {n_got} values are one angle a joint: Model.pin_q(angles) gives Pinocchio's q "
+                     f"(the scene's order {list(self._spec.joint_names)})")
+        return text
+
     @property
     def continuous_q(self) -> np.ndarray:
         """Positions in Pinocchio's ``q`` of each continuous joint's ``cos`` (its ``sin`` follows), ``(k,)`` int64."""
@@ -396,7 +409,7 @@ class Model:
         refuse_complex_or_bool(q, "q", DetectionError)
         q = np.asarray(q, dtype=np.float64)
         if q.shape[-1:] != (self.nq,):
-            raise DetectionError(f"q: expected {self.nq} values in pin_model's order {self.joint_names}, got shape {q.shape}")
+            raise DetectionError(f"q: expected {self.q_layout(q.shape[-1] if q.ndim else None)}, got shape {q.shape}")
         out = q.take(self._q_index, axis=-1)
         circ = self._circular
         if len(circ):  # continuous joints: pinocchio's (cos, sin) -> the angle

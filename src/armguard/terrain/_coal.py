@@ -114,7 +114,7 @@ class CoalTerrain:
 
         q = np.asarray(q, dtype=np.float64)
         if q.shape != (self.model.nq,):
-            raise TerrainError(f"q: expected {self.model.nq} values in pin_model's order, got shape {q.shape}")
+            raise TerrainError(f"q: expected {self.model.q_layout(q.shape[-1] if q.ndim else None)}, got shape {q.shape}")
         pin.updateGeometryPlacements(self.model.pin_model, self._data, self.geometry_model, self._gdata, q)
 
     def collides(self, q, *, margin: float = 0.0) -> np.ndarray:
