@@ -23,6 +23,24 @@ def test_info_hermes_counts_and_size():
     assert "360.0°" in res.output  # revolute limits in degrees
 
 
+def test_info_and_check_take_an_srdf_for_any_model(tmp_path):
+    """``--srdf`` on a public robot's name (not only a .urdf path, as docs/models.md says): the given file's
+    disabled pairs, or ``none``: none; ``check`` with it checks that many pairs."""
+    import armguard
+
+    srdf = tmp_path / "mine.srdf"
+    srdf.write_text('<robot name="ur5"><disable_collisions link1="upper_arm_link" link2="wrist_1_link" reason="Never"/></robot>')
+    res = CliRunner().invoke(main, ["info", "ur5", "--srdf", str(srdf)], terminal_width=300)
+    assert res.exit_code == 0, res.output
+    assert f"SRDF: {srdf} (given (srdf=))" in res.output
+    none = CliRunner().invoke(main, ["info", "ur5", "--srdf", "none"], terminal_width=300)
+    assert none.exit_code == 0 and "SRDF: none (--srdf none" in none.output, none.output
+    for arg, model in ((str(srdf), armguard.load_model("ur5", srdf=srdf)), ("none", armguard.load_model("ur5", srdf=False))):
+        chk = CliRunner().invoke(main, ["check", "ur5", "--srdf", arg], terminal_width=300)
+        assert chk.exit_code in (0, 1) and f"of {len(model.pairs)} pairs evaluated" in chk.output, chk.output
+    assert len(armguard.load_model("ur5", srdf=False).pairs) == len(armguard.load_model("ur5", srdf=srdf).pairs) + 1
+
+
 def test_info_calls_a_continuous_joint_continuous():
     """kinova's joints 1, 4 and 6 are continuous in its URDF (no limits; Pinocchio's (cos, sin)): not
     "revolute -inf inf"."""

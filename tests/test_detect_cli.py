@@ -29,9 +29,10 @@ def test_check_table_shows_status():
     res = CliRunner().invoke(main, ["check", "puma560"])
     assert res.exit_code == 0, res.output
     scene = load_scene("puma560")  # the command's defaults: threshold 0.05 m, the scene's default q
-    n = Detector(scene, threshold=0.05).check(scene.flat_q(scene.default_q())).n_evaluated
+    det = Detector(scene, threshold=0.05)
+    n = det.check(scene.flat_q(scene.default_q())).n_evaluated
     assert n > 0
-    assert "status: CLEAR" in res.output and f"{n} pairs evaluated" in res.output
+    assert "status: CLEAR" in res.output and f"{n} of {det.n_pairs} pairs evaluated" in res.output
 
 
 def test_check_bad_q_is_an_error():

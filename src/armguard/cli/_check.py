@@ -15,7 +15,7 @@ import sys
 import click
 
 from . import main
-from ._params import LENGTH
+from ._params import LENGTH, scene_of, srdf_option
 from ._exit import ExitCode, exit_epilog
 from ._output import esc, output_console
 
@@ -82,15 +82,15 @@ def parse_q(sc, q_text: str, deg: bool):
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
 @click.option("--terrain", "terrain_file", type=click.Path(), default=None,
               help="Add the terrain category: a sensed terrain file (armguard.terrain.load_terrain).")
-def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_us, as_json, terrain_file) -> None:
+@srdf_option("SCENE")
+def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_us, as_json, terrain_file, srdf) -> None:
     """Check SCENE (a built-in name or a scene file) at one configuration."""
     from rich.table import Table
 
     from ..detect import Detector
-    from ..scene import load_scene
     from ._compile import warm_up
 
-    sc = load_scene(scene)
+    sc = scene_of(scene, srdf)
     q = sc.flat_q(sc.default_q()) if q_text is None else parse_q(sc, q_text, deg)
     warm_up()
     terrain = None
@@ -107,7 +107,7 @@ def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_u
     out = output_console()
     colour = _COLOUR[rep.status.value]
     out.print(f"[bold]{esc(sc.name)}[/bold]  status: [bold {colour}]{rep.status.value.upper()}[/bold {colour}]  "
-              f"(threshold {threshold} m, {rep.elapsed_us:.1f} µs, {rep.n_evaluated} pairs evaluated)")
+              f"(threshold {threshold} m, {rep.elapsed_us:.1f} µs, {rep.n_evaluated} of {det.n_pairs} pairs evaluated)")
     table = Table("category", "distance (m)", "link", "object", "feature", "p_WA (m)", "p_WB (m)")
     for cat, r in rep.by_category.items():
         feat = "" if r.feature is None else str(r.feature)

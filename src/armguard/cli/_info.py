@@ -9,6 +9,7 @@ import click
 
 from . import main
 from ._output import esc, output_console
+from ._params import scene_of, srdf_option
 
 # Sciomachen & Magnani (seed 001): "The memory required for the database, in the case of the
 # Hermes model described above, is about 3 kbytes"; "the memory available on board is about 40 kbytes".
@@ -53,12 +54,14 @@ def _print_known_models() -> None:
     con.print(t)
 
 
-def _print_srdf(con, scene, given: str) -> None:
+def _print_srdf(con, scene, given: str, srdf: str | None = None) -> None:
     """Which SRDF the model was loaded with, how it was found, and its lenient readings."""
     model = getattr(scene, "_model_of_record", None)
     if model is None:
         return
-    if model.srdf is not None:
+    if srdf is not None and model.srdf is None:
+        con.print("SRDF: none (--srdf none: every pair but adjacent links is checked)", markup=False, highlight=False)
+    elif model.srdf is not None:
         con.print(f"SRDF: {model.srdf.file} ({model.srdf.found})", markup=False, highlight=False, soft_wrap=True)
         for w in model.srdf.warnings:
             con.print(f"  warning: {w}", markup=False, highlight=False, soft_wrap=True)
@@ -76,34 +79,25 @@ def _print_srdf(con, scene, given: str) -> None:
 @main.command("info")
 @click.argument("scene", required=False)
 @click.option("--rad", is_flag=True, help="Print revolute joint limits in radians (default: degrees).")
-@click.option("--srdf", type=click.Path(), default=None,
-              help="The SRDF of a .urdf SCENE (default: found beside it, in ../srdf/ or under the robot's name; "
-                   "docs/models.md).")
+@srdf_option("SCENE")
 def info_cmd(scene: str | None, rad: bool, srdf: str | None) -> None:
     """Describe SCENE (a built-in or public robot name, a .yaml scene or a .urdf): bodies, robots, joints,
     pairs, size, and the SRDF used.  Without SCENE: list the model names armguard knows, and whether each
     is installed."""
     from rich.table import Table
 
-    from ..scene import compile_scene, load_scene
+    from ..scene import compile_scene
 
     if scene is None:
         if srdf is not None:
-            raise click.UsageError("--srdf goes with a .urdf SCENE")
+            raise click.UsageError("--srdf goes with a SCENE")
         _print_known_models()
         return
-    if srdf is not None:
-        if not scene.lower().endswith(".urdf"):
-            raise click.UsageError("--srdf goes with a .urdf SCENE")
-        from ..model import load_model
-
-        s = load_model(scene, srdf=srdf).scene
-    else:
-        s = load_scene(scene)
+    s = scene_of(scene, srdf)
     c = compile_scene(s)
     con = output_console()
     con.print(f"[bold]{esc(s.name)}[/bold]: {esc(s.description)}" if s.description else f"[bold]{esc(s.name)}[/bold]")
-    _print_srdf(con, s, scene)
+    _print_srdf(con, s, scene, srdf)
 
     if not s.bodies:  # a robot on its own (a public robot's URDF): no table of nothing
         con.print("static bodies: none (the robot's own links only)")

@@ -10,7 +10,7 @@ import math
 
 import click
 
-__all__ = ["AT_LEAST_ONE", "BACKEND", "BACKENDS", "COUNT", "Finite", "LENGTH", "POSITIVE"]
+__all__ = ["AT_LEAST_ONE", "BACKEND", "BACKENDS", "COUNT", "Finite", "LENGTH", "POSITIVE", "scene_of", "srdf_option"]
 
 AT_LEAST_ONE = click.IntRange(min=1)
 """An integer >= 1 (configurations, workers, evaluations)."""
@@ -72,3 +72,21 @@ BACKEND = Backends()
 """One installed backend's name."""
 BACKENDS = Backends(many=True)
 """Comma-separated installed backend names."""
+
+
+def srdf_option(help_for: str):
+    """``--srdf PATH|none``: the SRDF of SCENE in place of the one armguard finds (``load_model``'s ``srdf=``;
+    ``none``: no SRDF at all) -- a built-in or public robot's name, a sidecar or a .urdf."""
+    return click.option("--srdf", type=click.Path(), default=None, metavar="PATH|none",
+                        help=f"The SRDF of {help_for} in place of the one found (docs/models.md), or 'none' for no SRDF.")
+
+
+def scene_of(scene: str, srdf: str | None):
+    """SCENE's Scene: ``load_scene`` without ``--srdf``, else the Model's with that SRDF (``none``: none)."""
+    if srdf is None:
+        from ..scene import load_scene
+
+        return load_scene(scene)
+    from ..model import load_model
+
+    return load_model(scene, srdf=False if srdf.strip().lower() == "none" else srdf).scene

@@ -236,9 +236,9 @@ def model_from_urdf(path, *, srdf=None, package_dirs=(), srdf_found: str = "give
             raise
         # an SRDF armguard found (not one the caller named) refuses this URDF: say how to load it without
         raise SceneFileError(exc.file, exc.where, f"{exc.message}; this SRDF was found for {path.name} (docs/models.md, "
-                             f"\"Finding the SRDF\"): to load the URDF without it, load_model(path, srdf=False), or "
-                             f"`srdf: {NO_SRDF}` beside `urdf: {path.name}` in a model sidecar's `model:` or a scene "
-                             "file's robot", line=exc.line) from None
+                             f"\"Finding the SRDF\"): to load the URDF without it, load_model(path, srdf=False), "
+                             f"`--srdf {NO_SRDF}` on `armguard info` or `check`, or `srdf: {NO_SRDF}` beside "
+                             f"`urdf: {path.name}` in a model sidecar's `model:` or a scene file's robot", line=exc.line) from None
     files = [path, *parts_files(parts, srdf_obj)]
     return Model(scene.name, pin_model, geom, scene, q_index=_q_index(parts), circular=_circular(parts), hull_cache=parts.hull_cache,
                  link_frames=_link_frames(parts, pin_model), hulls=parts.hulls,
