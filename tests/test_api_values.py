@@ -111,3 +111,18 @@ def test_collision_matrix_and_lint_options_are_checked_before_any_search(puma, t
     srdf.write_text('<robot name="puma560"/>')
     with pytest.raises(VerificationError, match=said):
         check_srdf(puma, srdf, **kwargs)
+
+
+@pytest.mark.parametrize("bad", [None, 3, ["ur5"]])
+def test_load_model_of_what_is_not_a_name_or_path_is_a_type_error(bad):
+    """``load_model(None)`` looked up a model named 'None' (a SceneError listing the known names)."""
+    with pytest.raises(TypeError, match="expected a model name or a path"):
+        armguard.load_model(bad)
+
+
+@pytest.mark.parametrize("path", ["arm.xacro", "arm.urdf.xacro"])
+def test_a_xacro_file_is_told_to_be_expanded_first(path, tmp_path):
+    """A xacro macro file is not a URDF: the error says how to make one (it listed the model names)."""
+    for load in (armguard.load_model, armguard.load_scene):
+        with pytest.raises(armguard.SceneError, match=r"xacro macro file.*`xacro [\w.]+ > arm\.urdf`"):
+            load(tmp_path / path)

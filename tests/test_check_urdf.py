@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
+import armguard
 from armguard.cli import main
 from armguard.harness import Check, LintStatus, Severity, check_model_files, mesh_convexity, repo_root
 
@@ -146,3 +147,19 @@ def test_cli_and_tool(hermes_copy):
     tool = subprocess.run([sys.executable, str(repo_root() / "tools" / "check_urdf.py"), str(hermes_copy / "hermes.urdf"),
                            "--configs", "5"], capture_output=True, text=True, timeout=120)
     assert tool.returncode == 1 and "unparsed" in tool.stdout
+
+
+def test_a_file_that_is_not_xml_is_one_finding_and_an_srdf_says_its_place_once(tmp_path):
+    """Not XML: the load finding alone (it was there twice, column 1 in one and 0 in the other); a truncated
+    SRDF's error says ``line L, column C`` once (it said the line twice)."""
+    bad = tmp_path / "garbage.urdf"
+    bad.write_text("garbage here\n")
+    report = check_model_files(bad, n_configs=5)
+    assert [f.check for f in report.findings] == [Check.LOAD]
+    assert "line 1, column 1: not well-formed XML: syntax error" in report.findings[0].message
+    srdf = tmp_path / "cut.srdf"
+    srdf.write_text('<robot name="ur5"><disable_collisions link1="a"')
+    with pytest.raises(armguard.SceneFileError) as exc:
+        armguard.load_model("ur5", srdf=srdf)
+    assert exc.value.where == "line 1, column 19" and exc.value.message == "not well-formed XML: unclosed token"
+    assert str(exc.value).count("line 1") == 1

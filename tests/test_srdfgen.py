@@ -210,7 +210,7 @@ def test_check_srdf_names_a_disabled_pair_of_a_link_the_robot_lacks(tmp_path):
         armguard.load_model("puma560", srdf=srdf)
     res = CliRunner().invoke(main, ["check-srdf", "puma560", str(srdf), "--max-evaluations", "3000"])
     assert res.exit_code == 0, res.output
-    assert "1 disabled pairs name links puma560 does not have (puma560_link33)" in res.output, res.output
+    assert "1 disabled pair names links puma560 does not have (puma560_link33)" in res.output, res.output
     assert "disabled (Never) puma560_link1 - puma560_link33: unknown link" in res.output
     js = CliRunner().invoke(main, ["check-srdf", "puma560", str(srdf), "--json", "--max-evaluations", "3000"])
     assert json.loads(js.output)["skipped"] == [{"link1": "puma560_link1", "link2": "puma560_link33", "reason": "Never",

@@ -81,6 +81,16 @@ class SceneFileError(SceneError):
         super().__init__(f"{loc}: {message}")
 
 
+def xml_parse_error(file, exc) -> SceneFileError:
+    """The located error of ``file``, which ``xml.etree.ElementTree`` refused with ``exc`` (a ``ParseError``):
+    ``line L, column C`` (1-based) and expat's reason, the place said once."""
+    from xml.parsers import expat
+
+    line, col = exc.position
+    return SceneFileError(str(file), f"line {line}, column {col + 1}", f"not well-formed XML: {expat.ErrorString(exc.code)}",
+                          line=line)
+
+
 def list_problems(problems) -> tuple[str, str]:
     """``(where, message)`` of one error listing ``problems`` (``(where, message)`` pairs, at least
     one): the first problem's place, its message, then "N more problems:" and one line each."""

@@ -11,7 +11,7 @@ import click
 from . import main
 from ._params import AT_LEAST_ONE, BACKENDS, COUNT, POSITIVE
 from ._exit import ExitCode, exit_epilog
-from ._output import esc, output_console
+from ._output import count, esc, output_console
 
 
 def _floats(text: str) -> list:
@@ -175,7 +175,7 @@ def check_urdf_cmd(path, n_configs, as_json) -> None:
         if not report.findings:
             console.print(f"[green]{esc(report.target)}: clean[/green] ({esc(report.summary)})")
         else:
-            t = Table(title=f"{esc(report.target)}: {len(report.findings)} findings", title_justify="left")
+            t = Table(title=f"{esc(report.target)}: {count(len(report.findings), 'finding')}", title_justify="left")
             for col in ("severity", "check", "where", "finding", "suggestion"):
                 t.add_column(col, overflow="fold")
             for f in report.findings:

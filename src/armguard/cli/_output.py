@@ -17,7 +17,7 @@ import errno
 import sys
 import warnings
 
-__all__ = ["PIPED_WIDTH", "esc", "output_console", "one_line_warnings"]
+__all__ = ["PIPED_WIDTH", "count", "esc", "output_console", "one_line_warnings"]
 
 PIPED_WIDTH = 200
 """Columns of a command's output when it does not go to a terminal."""
@@ -37,6 +37,11 @@ def output_console():
 
     console = _Console()
     return console if console.is_terminal else _Console(width=PIPED_WIDTH)
+
+
+def count(n: int, noun: str, plural: str | None = None) -> str:
+    """``"1 finding"``, ``"2 findings"``: ``n`` and the noun in its number (``plural``: else noun + s)."""
+    return f"{n} {noun if n == 1 else (plural or noun + 's')}"
 
 
 def esc(value) -> str:

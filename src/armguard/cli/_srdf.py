@@ -16,6 +16,7 @@ import click
 from . import main
 from ._params import AT_LEAST_ONE, BACKEND, LENGTH
 from ._exit import ExitCode, exit_epilog
+from ._output import count
 
 
 def _q(model, q) -> str:
@@ -146,7 +147,7 @@ def check_srdf_cmd(robot, srdf, margin, workers, max_evaluations, evaluator, str
     if as_json:
         click.echo(json.dumps(lint.to_dict()))
     else:
-        click.echo(f"{srdf}: {len(lint.can_collide)} disabled pairs can collide, {len(lint.proven_disabled)} proven never, "
+        click.echo(f"{srdf}: {count(len(lint.can_collide), 'disabled pair')} can collide, {len(lint.proven_disabled)} proven never, "
                    f"{len(lint.never_checked)} checked pairs proven never, {len(lint.undecided)} undecided "
                    f"({lint.elapsed_s:.1f} s; q over {', '.join(model.scene.joint_names)})")
         for d in lint.can_collide:
@@ -158,11 +159,11 @@ def check_srdf_cmd(robot, srdf, margin, workers, max_evaluations, evaluator, str
             click.echo(f"  undecided {d['link1']} - {d['link2']} ({'disabled' if d['disabled'] else 'checked'})")
         unknown = lint.unknown_links
         if unknown and partial:
-            click.echo(f"  {len(unknown)} disabled pairs name links {robot} does not have (an SRDF of a larger robot: "
+            click.echo(f"  {count(len(unknown), 'disabled pair')} name{'s' if len(unknown) == 1 else ''} links {robot} does not have (an SRDF of a larger robot: "
                        "not applied, as load_model skips them)")
         elif unknown:
             links = {x for d in unknown for x in (d["link1"], d["link2"])} - set(_links(model))
-            click.echo(f"  {len(unknown)} disabled pairs name links {robot} does not have ({', '.join(sorted(links))}): "
+            click.echo(f"  {count(len(unknown), 'disabled pair')} name{'s' if len(unknown) == 1 else ''} links {robot} does not have ({', '.join(sorted(links))}): "
                        "not checked, and load_model refuses this SRDF")
             for d in unknown:
                 click.echo(f"  disabled ({d['reason'] or 'no reason given'}) {d['link1']} - {d['link2']}: unknown link")

@@ -153,6 +153,15 @@ def mesh_convexity(path, *, volume_ratio: float = 0.99) -> tuple[bool, str]:
     return inside == 0, f"not a closed solid; {inside} of {len(v)} vertices inside its hull"
 
 
+def _unparsed(report: LintReport, f: str, what: str, exc: Exception) -> None:
+    """An UNPARSED finding for file ``f``, unless the LOAD finding already says ``f`` is not well-formed XML
+    (the same error twice, its column counted from 1 there and from 0 here)."""
+    said = any(x.check == Check.LOAD and Path(x.where).name == f and "not well-formed XML" in x.message
+               for x in report.findings)
+    if not said:
+        report.findings.append(Finding(Check.UNPARSED, Severity.ERROR, f, f"{what} does not parse: {exc}"))
+
+
 def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: dict, volume_ratio: float) -> None:
     from ..model._urdf import resolve_mesh
 
@@ -160,7 +169,7 @@ def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: d
     try:
         root = ET.parse(urdf).getroot()
     except (ET.ParseError, OSError) as exc:
-        report.findings.append(Finding(Check.UNPARSED, Severity.ERROR, f, f"URDF does not parse: {exc}"))
+        _unparsed(report, f, "URDF", exc)
         return
     links, joints = {ln.get("name") for ln in root.findall("link")}, {j.get("name") for j in root.findall("joint")}
     dirs = [urdf.parent, *urdf.parents]
@@ -222,7 +231,7 @@ def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport) -> Non
     try:
         root = ET.parse(srdf).getroot()
     except (ET.ParseError, OSError) as exc:
-        report.findings.append(Finding(Check.UNPARSED, Severity.ERROR, f, f"SRDF does not parse: {exc}"))
+        _unparsed(report, f, "SRDF", exc)
         return
     groups = {g.get("name") for g in root.findall("group")}
 

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .._errors import SceneFileError
+from .._errors import SceneFileError, xml_parse_error
 
 __all__ = ["FINGERPRINT_ATTR", "MARGIN_ATTR", "METHOD_ATTR", "pair_fingerprint", "read_certificates", "Certificate",
            "StaleCertificate", "stale_certificates"]
@@ -112,8 +112,7 @@ def read_certificates(srdf_file) -> tuple[Certificate, ...]:
     try:
         root = ET.parse(str(srdf_file)).getroot()
     except ET.ParseError as exc:
-        line, col = exc.position
-        raise SceneFileError(str(srdf_file), f"line {line}, column {col + 1}", f"not well-formed XML: {exc.msg}") from None
+        raise xml_parse_error(srdf_file, exc) from None
     except OSError as exc:
         raise SceneFileError(str(srdf_file), "", f"cannot read the SRDF ({exc.strerror or exc})") from None
     default_margin = root.get(MARGIN_ATTR, "0")

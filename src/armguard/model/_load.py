@@ -57,6 +57,8 @@ def load_model(name_or_path, *, srdf=None, package_dirs=()) -> Model:
     ``package://`` mesh names resolve against (one path, or a list of them)."""
     if isinstance(package_dirs, (str, os.PathLike)):  # one folder (was read as a list of one-letter folders)
         package_dirs = (package_dirs,)
+    if not isinstance(name_or_path, (str, os.PathLike)):  # str(None) was looked up as a model named 'None'
+        raise TypeError(f"load_model: expected a model name or a path (str or os.PathLike), got {type(name_or_path).__name__}")
     s = str(name_or_path)
     p = Path(s)
     suffix = p.suffix.lower()
@@ -66,6 +68,9 @@ def load_model(name_or_path, *, srdf=None, package_dirs=()) -> Model:
         return model_from_yaml(p, srdf=srdf)
     if suffix == "" and "/" not in s and "\\" not in s:
         return _model_by_name(s, srdf=srdf, package_dirs=package_dirs)
+    if suffix == ".xacro" or s.lower().endswith(".urdf.xacro"):
+        raise SceneError(f"cannot load {s!r}: a xacro macro file, not a URDF; expand it first "
+                         f"(`xacro {p.name} > {p.name.removesuffix('.xacro').removesuffix('.urdf')}.urdf`) and load that")
     raise SceneError(f"cannot load {s!r}: expected a model name ({_known_names_text()}), a .urdf or a .yaml file")
 
 

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 from pydantic import ValidationError
 
-from .._errors import ArmguardError, KinematicsError, SceneError, SceneFileError, list_problems
+from .._errors import ArmguardError, KinematicsError, SceneError, SceneFileError, list_problems, xml_parse_error
 from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
 from ._robot_urdf import robot_home_from_urdf
 from ._scene import CannedTest, Scene
@@ -358,7 +358,7 @@ def read_srdf_disabled(path) -> list[tuple[str, str]]:
     except IsADirectoryError:
         raise SceneFileError(str(path), "", "is a directory; expected an SRDF file") from None
     except ET.ParseError as exc:
-        raise SceneFileError(str(path), f"line {exc.position[0]}", f"not well-formed XML: {exc}") from None
+        raise xml_parse_error(path, exc) from None
     out = []
     for k, el in enumerate(root.iter("disable_collisions")):
         a, b = el.get("link1"), el.get("link2")

@@ -20,7 +20,7 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .._errors import ArmguardWarning, SceneFileError
+from .._errors import ArmguardWarning, SceneFileError, xml_parse_error
 
 NO_SRDF = "none"
 """An SRDF path of a model sidecar (``model.srdf``) or a scene file's URDF robot (``robots[i].srdf``) that
@@ -149,7 +149,7 @@ def read_srdf(path, *, found: str = "given", partial: bool = False) -> Srdf:
     except PermissionError as exc:
         raise SceneFileError(f, "", f"cannot read the SRDF file ({exc.strerror})") from None
     except ET.ParseError as exc:
-        raise SceneFileError(f, f"line {exc.position[0]}", f"not well-formed XML: {exc}") from None
+        raise xml_parse_error(f, exc) from None
     if root.tag != "robot":
         raise SceneFileError(f, root.tag, "expected a <robot> root element (an SRDF file)")
     urdf = [t for t in ("link", "joint", "transmission", "gazebo") if root.find(t) is not None]

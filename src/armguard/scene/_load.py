@@ -10,13 +10,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .._errors import SceneError
 from .._lines import lines_for
 from ..model import load_model
 from ..model._load import model_from_scenefile
 from ..model._scene import Scene
 from ..model._scenefile import read_scene_yaml, scene_from_dict_validated, validate_scene_dict
-from ..models import builtin_names
 
 __all__ = ["load_scene", "load_scene_file", "scene_from_dict", "scene_from_urdf"]
 
@@ -53,9 +51,6 @@ def load_scene(name_or_path) -> Scene:
         return load_scene_file(p)
     if p.suffix.lower() == ".urdf":
         return scene_from_urdf(p)
-    if p.suffix == "" and "/" not in s and "\\" not in s:
-        # a built-in (urdf/<name>/: the URDF, SRDF and sidecar) or a public robot, through Pinocchio;
-        # an unknown name: load_model's error lists the known ones
-        return load_model(s).scene
-    raise SceneError(f"cannot load {s!r}: expected a built-in scene name {list(builtin_names())}, a public robot's name, "
-                     "a .yaml scene or a .urdf file")
+    # a built-in (urdf/<name>/: the URDF, SRDF and sidecar) or a public robot, through Pinocchio; anything
+    # else: load_model's error (the known names; a xacro file's way out)
+    return load_model(name_or_path).scene

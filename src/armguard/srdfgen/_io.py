@@ -12,7 +12,7 @@ import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from .._errors import SceneFileError
+from .._errors import SceneFileError, xml_parse_error
 from ..model._certificate import FINGERPRINT_ATTR, MARGIN_ATTR, METHOD_ATTR
 
 __all__ = ["write_srdf", "srdf_text", "read_previous", "other_elements"]
@@ -58,8 +58,7 @@ def _parse(path, what: str):
     try:
         return ET.parse(str(path), parser=parser).getroot()
     except ET.ParseError as exc:
-        line, col = exc.position
-        raise SceneFileError(str(path), f"line {line}, column {col + 1}", f"not well-formed XML: {exc.msg}") from None
+        raise xml_parse_error(path, exc) from None
     except OSError as exc:
         raise SceneFileError(str(path), "", f"cannot read {what} ({exc.strerror or exc})") from None
 
