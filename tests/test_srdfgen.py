@@ -323,3 +323,17 @@ def test_check_srdf_witnesses_paste_into_check_q(tmp_path):
     assert abs(min(r.distance[rows]) - float(m.group(1))) < 1e-3
     check = CliRunner().invoke(main, ["check", "kinova", "--q", m.group(2).replace(" ", "")])
     assert check.exit_code in (0, 1), check.output
+
+
+def test_a_sampled_matrix_from_few_samples_warns_of_its_never_pairs(tmp_path):
+    """``--method sampled --samples 1`` disabled every pair of ur5 as Never without a word, and the SRDF then
+    left a model with no pair to check: both are said (stderr), the file still written as asked."""
+    from armguard.cli import main
+
+    out = tmp_path / "s1.srdf"
+    res = CliRunner().invoke(main, ["srdf", "ur5", "--out", str(out), "--method", "sampled", "--samples", "1"])
+    assert res.exit_code == 0, res.output
+    assert "disabled as Never from 1 sample:" in res.stderr and "every pair is disabled" in res.stderr
+    assert out.is_file()
+    ok = CliRunner().invoke(main, ["srdf", "gmf_s480", "--out", str(tmp_path / "c.srdf")])
+    assert ok.exit_code == 0 and "warning" not in ok.stderr, ok.stderr

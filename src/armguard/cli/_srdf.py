@@ -19,6 +19,10 @@ from ._exit import ExitCode, exit_epilog
 from ._output import count
 
 
+_FEW_SAMPLES = 10_000
+"""Fewer samples than MoveIt Setup Assistant's default make ``--method sampled`` warn of its Never pairs."""
+
+
 def _q(model, q) -> str:
     """A witness ``q`` (Pinocchio's order, ``(cos, sin)`` for a continuous joint) as ``check --q`` takes it:
     one value a joint, in the scene's order (``Model.scene_q``)."""
@@ -94,6 +98,13 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
     click.echo(f"wrote {out}: {len(cm.disabled)} of {c['pairs']} pairs disabled (Adjacent {c['Adjacent']}, "
                f"Default {c['Default']}, Never {c['Never']}, Always {c['Always']}); checked: {c['witnessed']} witnessed, "
                f"{c['undecided']} undecided; {cm.method}, {cm.elapsed_s:.1f} s")
+    if method == "sampled" and c["Never"] and samples < _FEW_SAMPLES:
+        click.echo(f"warning: {count(c['Never'], 'pair')} disabled as Never from {count(samples, 'sample')}: a pair "
+                   f"no sample brought together may still collide (MoveIt's default is {_FEW_SAMPLES:,}; "
+                   "--method certified proves Never)", err=True)
+    if c["pairs"] and len(cm.disabled) == c["pairs"]:
+        click.echo(f"warning: every pair is disabled: a model loaded with {out} has no pair to check, and "
+                   "armguard refuses it", err=True)
     if update:
         click.echo(f"  --update: {len(cm.kept)} pairs kept (certificate unchanged), "
                    f"{c['pairs'] - c['Adjacent'] - c['Default'] - len(cm.kept)} searched again"
