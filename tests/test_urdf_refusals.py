@@ -107,7 +107,7 @@ def test_a_refused_urdf_names_the_element_and_attribute(tmp_path, case):
 def test_several_problems_are_listed_together(tmp_path):
     err = _refused(tmp_path, _urdf('<sphere radius="-1"/>', joint=_joint(limit='<limit lower="nan" upper="1" velocity="1" effort="1"/>')))
     assert err.where == "link[l1].collision[0]"
-    assert "1 more problem" in err.message and "joint[j1].limit: lower='nan'" in err.message
+    assert "1 more problem" in err.message and "joint[j1].limit (line 4): lower='nan'" in err.message  # each its line
 
 
 def test_a_zero_length_capsule_is_a_sphere_and_loads(tmp_path):

@@ -90,7 +90,9 @@ def _read_xml(path: Path, package_dirs) -> UrdfInfo:
         raise SceneFileError(f, "robot", "a URDF needs at least one <link>")
     problems = urdf_problems(root, lines)
     if problems:
-        where, message = list_problems([(w, m) for w, m, _ in problems])
+        # each problem with its line (the first one's goes in the error's own place)
+        where, message = list_problems([(w if k == 0 or ln is None else f"{w} (line {ln})", m)
+                                        for k, (w, m, ln) in enumerate(problems)])
         raise SceneFileError(f, where, message, line=problems[0][2])
     collisions: dict = {}
     meshes = []
