@@ -89,3 +89,21 @@ def test_q_that_is_not_finite_numbers_is_a_usage_error(args, words):
     assert res.exit_code == 2, (args, res.output)
     for w in words:
         assert w in res.output, res.output
+
+
+def test_quiet_drops_the_file_warnings_for_that_command_only():
+    """talos_left_arm's SRDF is the whole humanoid's: each command warned of its 8 skipped elements;
+    ``-q`` drops them (``info`` still lists them in its SRDF section), and the caller's filters are
+    left as they were."""
+    import warnings
+
+    quiet = CliRunner().invoke(main, ["-q", "check", "talos_left_arm"])  # first: nothing loaded before it
+    loud = CliRunner().invoke(main, ["check", "talos_left_arm"])
+    assert loud.exit_code == quiet.exit_code and "warning: " not in quiet.stderr
+    assert loud.stderr.count("warning: ") >= 1 and "talos.srdf" in loud.stderr
+    assert quiet.stdout.split("(")[0] == loud.stdout.split("(")[0]  # the same headline status
+    info = CliRunner().invoke(main, ["-q", "info", "talos_left_arm"], terminal_width=300)
+    assert info.exit_code == 0 and info.stdout.count("  warning: ") >= 8
+    before = list(warnings.filters)
+    CliRunner().invoke(main, ["-q", "info", "talos_left_arm"])
+    assert list(warnings.filters) == before

@@ -41,13 +41,23 @@ def _option_names(ctx, message: str) -> str:
               help="An armguard.toml to read the [backend] table from (default: the working directory's).")
 @click.option("--traceback", "traceback", is_flag=True,
               help=f"Print the traceback of an internal error (exit status 4); also {DEBUG_ENV}=1.")
+@click.option("--quiet", "-q", "quiet", is_flag=True,
+              help="Do not print warnings about the files read (an SRDF of a larger robot, lenient readings); "
+                   "`armguard info` still lists them.")
 @click.pass_context
-def main(ctx, backend: str | None, config: str | None, traceback: bool) -> None:
+def main(ctx, backend: str | None, config: str | None, traceback: bool, quiet: bool) -> None:
     """armguard: collision and proximity detection for robot manipulators."""
     from ..backends import available, command_line_choice
     from ._output import one_line_warnings
 
     one_line_warnings()
+    if quiet:  # for this command only (restored when it ends: an in-process caller keeps its filters)
+        import warnings
+
+        from .._errors import ArmguardWarning
+
+        ctx.with_resource(warnings.catch_warnings())
+        warnings.simplefilter("ignore", ArmguardWarning)
     if backend is not None and backend not in available():
         raise click.BadParameter(f"unknown backend {backend!r}; installed backends are {list(available())}",
                                  param_hint="--backend")
