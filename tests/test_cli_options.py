@@ -55,3 +55,41 @@ def test_demo_refuses_a_scene_with_nothing_to_verify(tmp_path):
     r = CliRunner().invoke(main, ["demo", "--scene", "ur5", "--out", str(tmp_path / "d")])
     assert r.exit_code == ExitCode.USAGE and "'ur5' has no canned trajectory" in r.output, r.output
     assert not (tmp_path / "d").exists()
+
+
+@pytest.mark.parametrize("args,said", [
+    (["--method", "sampled", "--frequency", "0.1", "--joint-step", "0.05"], "not both"),
+    (["--frequency", "20"], "--frequency goes with --method sampled"),
+    (["--joint-step", "0.05"], "--joint-step goes with --method sampled"),
+])
+def test_verify_refuses_a_sampling_option_it_would_drop(args, said):
+    """``--method sampled --frequency 0.1 --joint-step 0.05`` checked at 0.1 Hz alone (2 configurations) and
+    said SAFE past a collision the joint step finds; with the certified method either option was ignored."""
+    r = CliRunner().invoke(main, ["verify", "puma560", "pick_and_place", *args])
+    assert r.exit_code == ExitCode.USAGE and said in r.output, r.output
+
+
+def test_verify_in_python_refuses_them_too():
+    import armguard
+    from armguard import VerificationError
+
+    sc = armguard.load_scene("puma560")
+    traj = sc.trajectories["pick_and_place"]
+    for kwargs, said in ((dict(method="sampled", frequency=0.1, joint_step=0.05), "not both"),
+                         (dict(frequency=20.0), "frequency: sampled mode's option"),
+                         (dict(joint_step=0.05), "joint_step: sampled mode's option")):
+        with pytest.raises(VerificationError, match=said):
+            armguard.verify(sc, traj, **kwargs)
+    r = armguard.verify(sc, traj, method="sampled", joint_step=0.05)
+    assert r.details.method == "sampled" and r.details.joint_step == 0.05 and r.details.frequency is None
+
+
+def test_a_sampled_safe_verdict_says_it_is_unproven_between_samples():
+    import armguard
+
+    sc = armguard.load_scene("puma560")
+    traj = sc.trajectories["pick_and_place"]
+    sampled, certified = armguard.verify(sc, traj, method="sampled"), armguard.verify(sc, traj)
+    assert sampled.status.value == certified.status.value == "safe"
+    assert "verdict: SAFE at the samples (sampled: not proven between them" in sampled.summary()
+    assert "verdict: SAFE\n" in certified.summary() + "\n" and "at the samples" not in certified.summary()

@@ -93,6 +93,11 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
     from ._demo import verdict_text
 
     console = output_console()
+    if frequency is not None and joint_step is not None:  # a usage error here (2), before the work
+        raise click.UsageError("give --frequency or --joint-step, not both: --method sampled checks at one or the other")
+    if method == "certified" and (frequency is not None or joint_step is not None):
+        raise click.UsageError(f"{'--frequency' if frequency is not None else '--joint-step'} goes with --method sampled "
+                               "(certified bounds every instant, with no step to choose)")
     if plot_path:
         figure_format(plot_path)  # a format matplotlib cannot write: refused before the work
     sc = load_scene(scene)

@@ -275,6 +275,8 @@ class VerificationReport:
         if self.verdict() == "unsafe (stopping distance)":
             return ("UNSAFE: within the stopping distance, no contact (a collision by Hermes's rule: the arm "
                     "could not brake before touching)")
+        if self.details.method == "sampled" and self.status.value == "safe":  # clear at the samples, unproven between
+            return "SAFE at the samples (sampled: not proven between them; the certified method proves it)"
         return self.status.value.upper()
 
     def summary(self) -> str:

@@ -246,6 +246,11 @@ class Verifier(FollowsScene):
             joint_step = _float(joint_step, "joint_step")
             if not math.isfinite(joint_step) or joint_step <= 0.0:
                 raise VerificationError(f"joint_step: expected a finite number > 0 (rad), got {joint_step}")
+        if frequency is not None and joint_step is not None:  # joint_step was dropped: fewer checks than asked for
+            raise VerificationError("give frequency or joint_step, not both: sampled mode checks at one or the other")
+        if method == "certified" and (frequency is not None or joint_step is not None):  # they were ignored
+            raise VerificationError(f"{'frequency' if frequency is not None else 'joint_step'}: sampled mode's option; "
+                                    "the certified method bounds every instant, with no step to choose")
         if method == "sampled" and frequency is None and joint_step is None:
             joint_step = DRAKE_JOINT_STEP
         thr = 0.05 if threshold is None else _float(threshold, "threshold")
