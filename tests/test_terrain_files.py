@@ -246,6 +246,20 @@ def test_load_terrain_never_takes_one_cell_for_another(tmp_path):
     assert e.value.file == str(sparse) and e.value.where == "points"
 
 
+def test_a_height_grid_without_its_cell_is_refused_not_read_at_5_cm(tmp_path):
+    """A ``heights`` grid with no ``cell`` (in the file or given) has no scale: it was read at 0.05 m without a
+    word (a 10 cm grid became a map half its size). Booleans are neither a cell nor heights."""
+    p = _npz(tmp_path / "h.npz", heights=np.zeros((3, 3)))
+    with pytest.raises(TerrainFileError, match="a 'heights' grid needs its cell side") as e:
+        load_terrain(p)
+    assert e.value.file == str(p) and e.value.where == "cell"
+    assert load_terrain(p, cell=0.1).shape == (3, 3)
+    with pytest.raises(TerrainError, match="load_terrain: cell"):
+        load_terrain(p, cell=True)
+    with pytest.raises(TerrainFileError, match="expected numbers"):
+        load_terrain(_npz(tmp_path / "b.npz", heights=np.zeros((3, 3), bool), cell=0.1))
+
+
 def test_a_pyramid_check_refuses_a_clearance_that_is_no_length():
     from armguard.geometry import Box
     from armguard.terrain import TerrainPyramid

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..model import scene_of
 from .._errors import ArmguardWarning, TerrainError, TerrainFileError
+from .._values import number
 from ._io import read_points
 from ._map import MAX_CELLS, ElevationMap
 
@@ -60,13 +61,8 @@ def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | No
         raise TerrainError(f"terrain file {str(p)!r} does not exist")
     origin = None
     heights = None
-    if cell is not None:
-        try:
-            cell = float(cell)
-        except (TypeError, ValueError):
-            raise TerrainError(f"load_terrain: cell: expected a cell side (m), got {cell!r}") from None
-        if not (np.isfinite(cell) and cell > 0.0):
-            raise TerrainError(f"load_terrain: cell: expected a finite cell side > 0 m, got {cell!r}")
+    if cell is not None:  # True is not 1 m, nor "0.1" 10 cm
+        cell = number(cell, "load_terrain: cell", TerrainError, low=0.0, low_open=True, unit=" (m, a cell side)")
     if p.suffix.lower() == ".npz":
         c, pts, heights, origin = _read_npz(p, cell)
     else:
@@ -128,8 +124,11 @@ def _read_npz(p: Path, cell):
         if cell is not None and cell != c:  # never one quietly for the other
             raise TerrainFileError(p, "cell", f"the file's cell is {c:.6g} m and cell={cell:.6g} was given: give none, "
                                    "or the file's")
+    elif cell is None and "heights" in arrays:  # a grid has no scale without its cell: never one guessed
+        raise TerrainFileError(p, "cell", "a 'heights' grid needs its cell side (m): store 'cell' in the file, or "
+                               "give load_terrain(..., cell=...)")
     else:
-        c = 0.05 if cell is None else cell
+        c = 0.05 if cell is None else cell  # points: the map's resolution, a choice (docs/terrain.md)
     pts = heights = origin = None
     if "points_W" in arrays:
         pts = _numbers(p, "points_W", arrays["points_W"])
@@ -152,7 +151,7 @@ def _read_npz(p: Path, cell):
 
 def _numbers(p: Path, name: str, a: np.ndarray) -> np.ndarray:
     """``a`` as float64; an array of strings or other non-numbers is refused naming the file and the array."""
-    if a.dtype.kind not in "biuf":
+    if a.dtype.kind not in "iuf":  # booleans are not heights nor lengths
         raise TerrainFileError(p, name, f"expected numbers (m), got {a.dtype} values")
     return np.asarray(a, dtype=np.float64)
 
