@@ -88,6 +88,21 @@ def test_an_object_not_in_the_cell_is_located(tmp_path):
     assert "tasks[0].find" in msg and "'cylinder_c'" in msg and "tasks[1].frame" in msg
 
 
+def test_a_joint_target_outside_the_limits_is_located_in_the_files_unit(tmp_path):
+    """``move: joints`` with 9999 deg: the error came from the trajectory deep inside (``waypoints[1]``, in
+    rad, no file), and ``program export`` wrote a script that failed the same way when run."""
+    from armguard.program import export_program, load_cell
+
+    p = _write(tmp_path, "  - move: joints\n    joints: [0, 0, 0, 0, 0, 9999]\n")
+    with pytest.raises(SceneFileError) as ei:
+        load_program(p).check(load_cell("puma560"))
+    assert ei.value.where == "tasks[0].joints[5]" and ei.value.line == 7, ei.value
+    assert "joint 'j6' = 9999 deg is outside its limits [-266, 266] deg" in ei.value.message
+    with pytest.raises(SceneFileError, match=r"tasks\[0\]\.joints\[5\]"):
+        export_program(p, tmp_path / "out.py")
+    assert not (tmp_path / "out.py").exists()
+
+
 def test_a_cell_file_error_names_the_cell_file(tmp_path):
     from armguard.program import load_cell
 

@@ -150,6 +150,7 @@ class ProgramFile:
     tasks: tuple
     file: str
     base: Path
+    angle: tuple = (1.0, "rad")  # the file's angle unit: (its value in rad, its name)
 
 
 def _schema_error(file: str, exc: ValidationError, prefix: tuple = (), kind: str = "armguard_program") -> list:
@@ -261,7 +262,7 @@ def read_program(path) -> ProgramFile:
         if problems:
             raise SceneFileError(file, *list_problems(problems))
     return ProgramFile(head.name, head.description, head.cell, head.robot, float(head.speed) * L,
-                       float(head.confidence), tuple(tasks), file, path.parent)
+                       float(head.confidence), tuple(tasks), file, path.parent, (A, head.units.angle))
 
 
 @dataclass(frozen=True)

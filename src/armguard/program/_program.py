@@ -43,6 +43,21 @@ def _xyz_rpy(X: np.ndarray) -> tuple[list, list]:
     return [float(v) for v in xyz], [float(v) for v in rpy]
 
 
+def _joint_problems(t, robot, angle: tuple, allowance: float) -> list:
+    """A ``move: joints`` task's joint values against ``robot``: their count, then each within its limits
+    (``allowance``: ``Tolerances.joint_limit``), said in the file's angle unit (``angle``: its value in rad
+    and its name) at ``tasks[i].joints[k]``."""
+    if len(t.q) != robot.n_joints:
+        return [(f"{t.where}.joints", f"expected {robot.n_joints} joint values, got {len(t.q)}")]
+    out = []
+    for k, (x, lo, hi) in enumerate(zip(t.q, robot.lower, robot.upper)):
+        if not lo - allowance <= x <= hi + allowance:
+            s, unit = angle  # as the file's joints are read (every value in its angle unit)
+            out.append((f"{t.where}.joints[{k}]", f"joint {robot.joint_names[k]!r} = {x / s:.10g} {unit} is outside "
+                                                  f"its limits [{lo / s:.10g}, {hi / s:.10g}] {unit}"))
+    return out
+
+
 class Program:
     """A parsed task program (:func:`load_program`): ``name``, ``tasks``, ``cell`` (as the file names
     it), ``speed`` (m/s), ``confidence``; :meth:`steps` is its listing of primitives."""
@@ -81,9 +96,8 @@ class Program:
                     problems.append((f"{t.where}.onto", f"cannot place {t.object!r} onto itself"))
             for m in t.motions if t.kind == "move" else ():
                 names.append(("frame", m.frame, frames))
-            if t.q is not None and len(t.q) != cell.model.scene.robots[cell.robot].n_joints:
-                problems.append((f"{t.where}.joints", f"expected {cell.model.scene.robots[cell.robot].n_joints} joint "
-                                                      f"values, got {len(t.q)}"))
+            if t.q is not None:
+                problems += _joint_problems(t, cell.model.scene.robots[cell.robot], self.spec.angle, cell.model.tol.joint_limit)
             for key, name, known in names:
                 if name not in known:
                     problems.append((f"{t.where}.{key}", f"{name!r} is not in cell {cell.name!r}; "
@@ -265,8 +279,10 @@ def export_program(program: Program | str | Path, out, *, cell: str | None = Non
 
         read_calibration(calibration)  # a bad file is refused now, not when the exported program runs
         calibration = str(Path(calibration).resolve())
-    if cell is not None:  # what run refuses (an object or frame not in the cell, another robot) is not exported
-        program.check(load_cell(cell, calibration))
+    # what run refuses (an object or frame not in the cell, another robot, a joint target outside the limits) is
+    # not exported: checked against the cell given, or the one the program names (a file, or a built-in's name)
+    if cell is not None or program.cell is not None:
+        program.check(load_cell(cell if cell is not None else program.cell, calibration))
     text = program_text(program, cell=cell, calibration=calibration)
     from .._io import atomic_write
 
