@@ -39,7 +39,7 @@ def test_check_deg_is_degrees_not_radians():
     # 90 (rad) is far outside joint 1's limits; 90 deg is in them
     rad = _check("--q", "90,0,0,-90,0,0")
     assert rad.exit_code == 2 and "left/joint1 = 90 rad" in rad.output
-    assert "[-2.96706, 2.96706] rad" in rad.output
+    assert "[-2.967059728, 2.967059728] rad" in rad.output
 
 
 @pytest.mark.parametrize("q, words", [

@@ -61,8 +61,8 @@ def parse_q(sc, q_text: str, deg: bool):
             slack = 1e-9
             if not (lo - slack <= x <= hi + slack):
                 raise click.BadParameter(
-                    f"{rname}/{robot.joint_names[j]} = {q[k]:g} {unit} is outside its limits "
-                    f"[{lo / scale:.6g}, {hi / scale:.6g}] {unit}", param_hint="--q")
+                    f"{rname}/{robot.joint_names[j]} = {q[k]:.10g} {unit} is outside its limits "
+                    f"[{lo / scale:.10g}, {hi / scale:.10g}] {unit}", param_hint="--q")
             q[k] = x
             k += 1
     return q

@@ -278,7 +278,7 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
         for j in range(len(q)):
             if not (lo[j] - self._tol.joint_limit <= q[j] <= hi[j] + self._tol.joint_limit):
                 raise ConsoleInputError(
-                    f"{robot}/{r.joint_names[j]}: {q[j]:.6g} is outside its limits [{lo[j]:.6g}, {hi[j]:.6g}]; "
+                    f"{robot}/{r.joint_names[j]}: {q[j]:.10g} is outside its limits [{lo[j]:.10g}, {hi[j]:.10g}]; "
                     "value kept unchanged"
                 )
         return np.clip(q, lo, hi)

@@ -463,8 +463,8 @@ class Robot:
             k = idx[-1]
             at = "" if len(idx) == 1 else f" (row {idx[0]})" if len(idx) == 2 else f" (at index {idx[:-1]})"
             raise KinematicsError(
-                f"robot {self._name!r}: joint {self._joint_names[k]!r} = {q[idx]:.6g} is outside its limits "
-                f"[{self._lower[k]:.6g}, {self._upper[k]:.6g}]{at}"
+                f"robot {self._name!r}: joint {self._joint_names[k]!r} = {q[idx]:.10g} is outside its limits "
+                f"[{self._lower[k]:.10g}, {self._upper[k]:.10g}]{at}"
             )
         return q
 

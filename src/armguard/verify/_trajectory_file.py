@@ -49,8 +49,8 @@ def load_trajectory(scene, path):
             out = np.flatnonzero((traj.waypoints[:, j] < lo - slack) | (traj.waypoints[:, j] > hi + slack))
             if len(out):
                 k = int(out[0])
-                raise SceneFileError(file, f"waypoints[{k}][{j}]", f"joint {name!r} = {traj.waypoints[k, j]:.6g} "
-                                     f"is outside its limits [{lo:.6g}, {hi:.6g}]")
+                raise SceneFileError(file, f"waypoints[{k}][{j}]", f"joint {name!r} = {traj.waypoints[k, j]:.10g} "
+                                     f"is outside its limits [{lo:.10g}, {hi:.10g}]")
     return traj
 
 
@@ -84,5 +84,5 @@ def within_limits(robot, q, where: str):
     for i, name in enumerate(names):
         lo, hi = float(robot.lower[i]), float(robot.upper[i])
         if not lo - slack <= q[i] <= hi + slack:
-            raise VerificationError(f"{where}: joint {name!r} = {q[i]:.6g} is outside its limits [{lo:.6g}, {hi:.6g}]")
+            raise VerificationError(f"{where}: joint {name!r} = {q[i]:.10g} is outside its limits [{lo:.10g}, {hi:.10g}]")
     return q
