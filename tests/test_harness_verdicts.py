@@ -116,7 +116,7 @@ class _Blind(CheckerBase):
 def blind_registered(monkeypatch):
     real = backends_mod._entry_points
     fake = SimpleNamespace(load=lambda: SimpleNamespace(name="blind", build=lambda model, options=None: _Blind(model, options)))
-    monkeypatch.setattr(backends_mod, "_entry_points", lambda: {**real(), "blind": fake})
+    monkeypatch.setattr(backends_mod, "_entry_points", lambda refresh=False: {**real(refresh), "blind": fake})
     return fake
 
 
