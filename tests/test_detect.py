@@ -312,3 +312,17 @@ def test_detector_accepts_a_model(backend):
         ra, rb = a.check(qs), b.check(qs)
         assert ra.status == rb.status
         assert {k: v.distance for k, v in ra.by_category.items()} == {k: v.distance for k, v in rb.by_category.items()}
+
+
+def test_a_nan_is_placed_by_joint_for_one_q_and_by_row_for_a_batch():
+    """One q named the NaN's place as a 2-D index ("first at (0, 2)")."""
+    import armguard
+
+    model = armguard.load_model("puma560")
+    det = armguard.Detector(model)
+    q = model.scene_q(model.neutral())
+    q[2] = np.nan
+    with pytest.raises(DetectionError, match=r"first at joint 2: nan\)"):
+        det.check(q)
+    with pytest.raises(DetectionError, match=r"first at row 1, joint 2: nan\)"):
+        det.check_many(np.vstack([model.scene_q(model.neutral()), q]))

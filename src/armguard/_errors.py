@@ -59,8 +59,8 @@ class JointLimitError(KinematicsError):
         self.lower, self.upper, self.allowance = float(lower), float(upper), float(allowance)
         super().__init__(
             f"{where}: joint {joint!r} = {self.value:.9g} is outside its limits [{self.lower:.9g}, {self.upper:.9g}] "
-            f"(allowance Tolerances.joint_limit = {self.allowance:.3g}); the detector's reach lists and motion "
-            "bounds hold only within the limits, so no verdict is given"
+            f"(allowance Tolerances.joint_limit = {self.allowance:.3g}); no verdict is given outside the limits (the "
+            "URDF's range of motion, within which the Detector's reach lists and motion bounds hold)"
         )
 
 

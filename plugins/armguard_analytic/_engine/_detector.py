@@ -417,7 +417,8 @@ class FusedDetector(Detector):
         revision that ran (None: the current one)."""
         if err == 1:
             bad = np.argwhere(~np.isfinite(Q))[0]
-            raise DetectionError(f"{where} contains NaN or infinite values (first at {tuple(int(x) for x in bad)})")
+            at = f"row {int(bad[0])}, joint {int(bad[1])}" if batch else f"joint {int(bad[1])}"  # one q: not a 2-D index
+            raise DetectionError(f"{where} contains NaN or infinite values (first at {at}: {Q[tuple(bad)]})")
         if err == 3:
             m = (b or self._b).model
             exc = limit_error(where, Q if batch else Q[0], self.scene.joint_names, m.lower, m.upper,
