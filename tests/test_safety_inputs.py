@@ -203,6 +203,29 @@ def test_the_format_version_must_be_the_integer_1(tmp_path):
     assert info.value.where == "armguard_scene"
 
 
+@pytest.mark.parametrize("value", ["true", "1.0"])
+def test_every_files_format_version_must_be_the_integer_1(tmp_path, value):
+    """A program's, a cell's, a calibration's and a trajectory's version key took ``true`` and ``1.0`` for 1
+    (a scene file's already refused them)."""
+    import armguard
+    from armguard.program import load_cell, load_program, read_calibration
+    from armguard.verify import load_trajectory
+
+    puma = armguard.load_scene("puma560")
+
+    cases = ((load_program, f"armguard_program: {value}\nname: p\ntasks: []\n", "armguard_program"),
+             (load_cell, f"armguard_cell: {value}\nmodel: puma560\n", "armguard_cell"),
+             (read_calibration, f"armguard_calibration: {value}\n", "armguard_calibration"),
+             (lambda p: load_trajectory(puma, p), f"format: armguard.trajectory\nversion: {value}\nrobot: puma560\n"
+              "joint_names: [j1]\ntimes: [0, 1]\nwaypoints: [[0], [1]]\n", "version"))
+    for load, text, key in cases:
+        p = tmp_path / "f.yaml"
+        p.write_text(text, encoding="utf-8")
+        with pytest.raises(SceneFileError) as info:
+            load(p)
+        assert info.value.where.startswith(key) or f"{key} (line" in info.value.message, (key, info.value)
+
+
 # ---------------------------------------------------------------- smaller ones
 
 

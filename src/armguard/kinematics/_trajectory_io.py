@@ -117,7 +117,7 @@ def trajectory_from_dict(cls, d, *, file=None, groups=None):
         problems.append((key, f"unknown key; expected one of {list(_KEYS)}"))
     if "format" in d and d["format"] != FORMAT:
         problems.append(("format", f"expected {FORMAT!r}, got {d['format']!r}"))
-    if "version" in d and d["version"] != VERSION:
+    if "version" in d and (type(d["version"]) is not int or d["version"] != VERSION):  # 1.0 and true equal 1
         problems.append(("version", f"unsupported version {d['version']!r}; this armguard reads version {VERSION}"))
     if "robot" in d and not isinstance(d["robot"], str):
         problems.append(("robot", f"expected a robot name (string), got {d['robot']!r}"))

@@ -44,6 +44,8 @@ def _exact_int(x):
     return x
 
 
+VersionOne = Annotated[Literal[1], BeforeValidator(_exact_int)]
+"""A file format's version key: the integer 1 (not ``1.0``, not ``true``)."""
 Num = Annotated[float, AfterValidator(_bounded)]  # strict (the models' config): no bool, no string
 Vec3 = Annotated[list[Num], Field(min_length=3, max_length=3)]
 Vec2 = Annotated[list[Num], Field(min_length=2, max_length=2)]
@@ -269,7 +271,7 @@ class JointExtraSpec(_Model):
 
 
 class SceneFile(_Model):
-    armguard_scene: Annotated[Literal[1], BeforeValidator(_exact_int)]
+    armguard_scene: VersionOne
     name: Name
     description: str = ""
     units: UnitsSpec = UnitsSpec()

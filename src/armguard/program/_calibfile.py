@@ -17,13 +17,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated
 
 import numpy as np
 from pydantic import Field
 
 from .._errors import SceneError, SceneFileError, list_problems
-from ..model._schema import Name, Num, Vec3
+from ..model._schema import Name, Num, Vec3, VersionOne
 from ._format import _load, _Model, _pose, _Units, _units
 
 __all__ = ["Calibration", "read_calibration", "write_calibration", "calibration_text", "check_calibration"]
@@ -48,7 +48,7 @@ class _CameraEntry(_Frame):
 
 
 class _CalibrationHead(_Model):
-    armguard_calibration: Literal[1]
+    armguard_calibration: VersionOne
     name: Name = "cell"
     description: str = ""
     units: _Units = _Units()

@@ -19,7 +19,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from .._errors import SceneFileError, list_problems
-from ..model._schema import Name, Num, Vec3
+from ..model._schema import Name, Num, Vec3, VersionOne, VersionOne
 
 __all__ = ["TASK_KINDS", "ProgramFile", "CellFile", "Task", "Motion", "read_program", "read_cell", "is_cell_file"]
 
@@ -75,7 +75,7 @@ _TASK_MODELS = {"find": _Find, "pickup": _Pickup, "place": _Place, "move": _Move
 
 
 class _ProgramHead(_Model):
-    armguard_program: Literal[1]
+    armguard_program: VersionOne
     name: Name
     description: str = ""
     cell: str | None = None
@@ -99,7 +99,7 @@ class _Camera(_Posed):
 
 
 class CellFile(_Model):
-    armguard_cell: Literal[1]
+    armguard_cell: VersionOne
     name: Name = "cell"
     description: str = ""
     model: str
