@@ -330,3 +330,16 @@ def test_loaders_refuse_what_is_no_path():
                        (lambda: write_calibration(None, "x.yaml"), "expected a Calibration")):
         with pytest.raises(SceneError, match=said):
             call()
+
+
+def test_a_missing_cell_file_is_the_programs_error_at_its_cell_key(tmp_path):
+    """``cell: nosuch.yaml`` said "nosuch.yaml: file not found", naming neither the program nor its key."""
+    from armguard.program import export_program, run_program
+
+    p = _write(tmp_path, "  - move: home\n", cell="nosuch.yaml")
+    for call in (lambda: run_program(p), lambda: export_program(p, tmp_path / "out.py")):
+        with pytest.raises(SceneFileError) as ei:
+            call()
+        assert ei.value.file == str(p) and ei.value.where == "cell" and ei.value.line == 3
+        assert "nosuch.yaml: file not found" in ei.value.message
+    assert not (tmp_path / "out.py").exists()

@@ -201,10 +201,25 @@ def _cell_of(program: Program, cell, calibration=None) -> Cell:
             cell = copy.copy(cell)
             cell.calibrate(calibration)
         return cell
-    name = cell if cell is not None else program.cell
-    if name is None:
+    if cell is not None:
+        return load_cell(cell, calibration)
+    if program.cell is None:
         raise SceneFileError(program.file, "cell", "the program names no cell: give 'cell:' in the file or --cell")
-    return load_cell(name, calibration)
+    return _named_cell(program, calibration)
+
+
+def _named_cell(program: Program, calibration=None) -> Cell:
+    """The cell the program's ``cell:`` names; a cell file that is not there is the program's error at
+    that key (it named the cell file alone)."""
+    try:
+        return load_cell(program.cell, calibration)
+    except SceneFileError as exc:
+        if exc.where or Path(exc.file) != Path(program.cell):
+            raise
+        from .._lines import lines_for
+
+        with lines_for(program.file):
+            raise SceneFileError(program.file, "cell", f"{program.spec.cell}: {exc.message}") from None
 
 
 def _py(v) -> str:
@@ -282,7 +297,7 @@ def export_program(program: Program | str | Path, out, *, cell: str | None = Non
     # what run refuses (an object or frame not in the cell, another robot, a joint target outside the limits) is
     # not exported: checked against the cell given, or the one the program names (a file, or a built-in's name)
     if cell is not None or program.cell is not None:
-        program.check(load_cell(cell if cell is not None else program.cell, calibration))
+        program.check(load_cell(cell, calibration) if cell is not None else _named_cell(program, calibration))
     text = program_text(program, cell=cell, calibration=calibration)
     from .._io import atomic_write
 
