@@ -78,7 +78,8 @@ def test_plot_refuses_what_it_cannot_mark_and_writes_the_format_asked(tmp_path):
                        (["--q2", "30", "--q", "1,abc,3"], "--q: 'abc' is not a finite angle"),
                        (["--q2", "abc"], "--q2: 'abc' is not a finite angle"),
                        (["--q2", "30", "--q", "180,90,-20"], "is not in the slice's cell"),
-                       (["--q2", "30", "--q", "999,30,-20"], "its joint 1 (999°) is outside the map's limits")):
+                       (["--q2", "30", "--q", "999,30,-20"], "its joint 1 (999°) is outside the map's limits"),
+                       (["--q2", "9999"], "(9999 deg) is outside joint 2's limits")):  # the unit it was given in
         r = runner.invoke(main, ["cspace", "plot", str(out), *args, "--out", str(png)])
         assert r.exit_code == 3 and said in r.output, (args, r.output)
         assert not png.exists()

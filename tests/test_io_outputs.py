@@ -86,6 +86,10 @@ def test_under_a_regular_file(tmp_path):
         atomic_write(blocker / "out.png", b"png")
     with pytest.raises(OutputError, match=f"cannot write {blocker / 'sub' / 'out.png'}"):
         atomic_write(blocker / "sub" / "out.png", b"png", parents=True)
+    for parents in (False, True):  # one wording, which names the file in the way (it said "Not a directory")
+        with pytest.raises(OutputError) as e:
+            atomic_write(blocker / "sub" / "out.png", b"png", parents=parents)
+        assert f"{blocker} exists and is not a folder" in str(e.value)
     assert blocker.read_text() == "x"
 
 

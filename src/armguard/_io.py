@@ -33,6 +33,11 @@ def _reason(exc: OSError) -> str:
     return exc.strerror or str(exc)
 
 
+def _file_above(path: Path) -> Path:
+    """The first of ``path``'s folders that exists as something other than a folder (else its parent)."""
+    return next((p for p in path.parents if p.exists() and not p.is_dir()), path.parent)
+
+
 def make_folder(folder) -> Path:
     """``folder`` (made with its parents when missing); OutputError when it cannot be (a path under a
     regular file, no permission, a read-only or full file system) or is not a folder."""
@@ -41,6 +46,8 @@ def make_folder(folder) -> Path:
         folder.mkdir(parents=True, exist_ok=True)
     except FileExistsError:
         raise OutputError(f"cannot write into {folder}: it exists and is not a folder") from None
+    except NotADirectoryError:  # a file above it: named
+        raise OutputError(f"cannot create the folder {folder}: {_file_above(folder)} exists and is not a folder") from None
     except OSError as exc:
         raise OutputError(f"cannot create the folder {folder}: {_reason(exc)}") from None
     if not folder.is_dir():
@@ -58,6 +65,8 @@ def check_target(path) -> Path:
         mode = os.stat(path).st_mode
     except FileNotFoundError:
         return path
+    except NotADirectoryError:  # a file where a folder of the path should be: said as make_folder says it
+        raise OutputError(f"cannot write {path}: {_file_above(path)} exists and is not a folder") from None
     except OSError as exc:
         raise OutputError(f"cannot write {path}: {_reason(exc)}") from None
     if not stat.S_ISREG(mode):

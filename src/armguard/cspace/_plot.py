@@ -26,7 +26,9 @@ def plot_slice(fmap, q2: float, out, *, q=None, dpi: int = 120) -> None:
     g = fmap.grid
     cell = g.cell_of([g.lower[0], q2, g.lower[2]])
     if cell is None:
-        raise ForbiddenMapError(f"q2 = {q2} rad is outside joint 2's limits [{g.lower[1]}, {g.upper[1]}]")
+        d = math.degrees  # the command line's unit beside the library's
+        raise ForbiddenMapError(f"q2 = {q2:.10g} rad ({d(q2):.10g} deg) is outside joint 2's limits [{g.lower[1]:.10g}, "
+                                f"{g.upper[1]:.10g}] rad ([{d(g.lower[1]):.10g}, {d(g.upper[1]):.10g}] deg)")
     i2 = cell[1]
     lo2 = g.lower[1] + i2 * g.step[1]
     hi2 = min(lo2 + g.step[1], g.upper[1])
