@@ -260,6 +260,15 @@ def test_a_height_grid_without_its_cell_is_refused_not_read_at_5_cm(tmp_path):
         load_terrain(_npz(tmp_path / "b.npz", heights=np.zeros((3, 3), bool), cell=0.1))
 
 
+def test_a_npy_without_its_header_is_said_to_be_no_npy(tmp_path):
+    """A text file named .npy was refused as "This file contains pickled (object) data"."""
+    p = tmp_path / "g.npy"
+    p.write_text("hello")
+    with pytest.raises(TerrainFileError, match="not a .npy file") as e:
+        load_terrain(p)
+    assert e.value.file == str(p)
+
+
 def test_a_pyramid_check_refuses_a_clearance_that_is_no_length():
     from armguard.geometry import Box
     from armguard.terrain import TerrainPyramid

@@ -72,6 +72,9 @@ def read_points(path, X_WS=None) -> np.ndarray:
     ext = path.suffix.lower()
     try:
         if ext == ".npy":
+            with open(path, "rb") as f:  # numpy calls any file without its header "pickled (object) data"
+                if f.read(6) != b"\x93NUMPY":
+                    raise TerrainFileError(path, "", "not a .npy file (no NumPy header: np.save writes one)")
             p = _as_points(np.load(path, allow_pickle=False), "array", path)
         elif ext == ".npz":
             with np.load(path, allow_pickle=False) as z:
