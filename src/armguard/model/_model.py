@@ -380,9 +380,8 @@ class Model:
         return tuple(m.names[j] for j in range(1, m.njoints) for _ in range(m.joints[j].nq))
 
     def q_layout(self, n_got: int | None = None) -> str:
-        """Pinocchio's ``q`` in words, for an error about a ``q`` of ``n_got`` values: its ``nq`` positions by
-        joint, a continuous joint's two as ``name (cos, sin)``, and, where ``n_got`` is the scene's count of
-        joints but not ``nq``, that such a ``q`` holds angles: ``Model.pin_q`` makes Pinocchio's."""
+        """Pinocchio's ``q`` in words for an error about a ``q`` of ``n_got`` values: a continuous joint's two
+        positions as ``name (cos, sin)``; ``n_got`` joint angles (not ``nq``): ``Model.pin_q`` makes it."""
         circ = {self.pin_model.names[j] for j in range(1, self.pin_model.njoints) if self.pin_model.joints[j].nq == 2}
         names = [f"{n} (cos, sin)" if n in circ else n for n in self.joint_names]
         text = f"{self.nq} values in pin_model's order {names}"
