@@ -39,6 +39,14 @@ def test_info_and_check_take_an_srdf_for_any_model(tmp_path):
         chk = CliRunner().invoke(main, ["check", "ur5", "--srdf", arg], terminal_width=300)
         assert chk.exit_code in (0, 1) and f"of {len(model.pairs)} pairs evaluated" in chk.output, chk.output
     assert len(armguard.load_model("ur5", srdf=False).pairs) == len(armguard.load_model("ur5", srdf=srdf).pairs) + 1
+    hermes = CliRunner().invoke(main, ["info", "hermes", "--srdf", "none"], terminal_width=300)  # a sidecar: groups kept
+    assert hermes.exit_code == 0 and "SRDF: none of pairs (" in hermes.output and "hermes.srdf names the arms" in hermes.output
+    chk = CliRunner().invoke(main, ["check", "hermes", "--srdf", "none"], terminal_width=300)
+    assert f"of {len(armguard.load_model('hermes', srdf=False).pairs)} pairs evaluated" in chk.output, chk.output
+    plain = tmp_path / "plain.yaml"  # a scene file (no model:) names its robots' SRDFs itself: --srdf was ignored
+    plain.write_text("armguard_scene: 1\nname: p\nrobots:\n  - name: a\n    joints: [{a: 0.3, alpha: 0, d: 0, theta: 0}]\n")
+    res = CliRunner().invoke(main, ["info", str(plain), "--srdf", "none"])
+    assert res.exit_code == 2 and "--srdf goes with a model" in res.output, res.output
 
 
 def test_info_calls_a_continuous_joint_continuous():

@@ -131,3 +131,26 @@ def test_a_detector_of_a_name_or_nothing_is_refused_by_name():
         Detector("ranger", threshold=0.1)
     with pytest.raises(DetectionError, match="expected a Scene or a Model, got NoneType"):
         Detector(None, threshold=0.1)
+
+
+@pytest.mark.parametrize("name", ["ranger", "hermes", "puma560"])
+def test_the_all_pairs_capsule_rows_are_the_pair_steps_bits(name):
+    """``pair_distances`` writes a capsule-capsule pair's row in place (``_step.capsule_step``); the exact
+    mode's ``pair_step`` (a threshold past every pair: each pair's row in ``within_threshold``) computes it
+    through the narrow phase.  Every row of one is a row of the other, to the bit (witnesses either way
+    round); ranger has 94 capsule-capsule pairs, puma560 capsule-sphere ones (a sphere: a 1-vertex core)."""
+    import armguard
+
+    model = armguard.load_model(name)
+    det = Detector(model, threshold=100.0)
+    checker = armguard.checker(model, "analytic")
+    kinds = {go.name: type(go.geometry).__name__ for go in model.collision_model.geometryObjects}
+    capsules = sum(kinds.get(a) == kinds.get(b) == "Capsule" for a, b in zip(model.pairs.a, model.pairs.b))
+    assert capsules > 0
+    for q in model.random_q(30, 5):
+        rows = checker.pair_distances(q)
+        rows = {(float(d),) + tuple(a) + tuple(b) for d, a, b in zip(rows.distance, rows.p_WA, rows.p_WB)} | {
+            (float(d),) + tuple(b) + tuple(a) for d, a, b in zip(rows.distance, rows.p_WA, rows.p_WB)}
+        report = det.check(model.scene_q(q))
+        assert len(report.within_threshold) == len(model.pairs)
+        assert all((float(p.distance),) + tuple(p.p_WA) + tuple(p.p_WB) in rows for p in report.within_threshold)

@@ -254,6 +254,8 @@ def test_a_height_grid_without_its_cell_is_refused_not_read_at_5_cm(tmp_path):
         load_terrain(p)
     assert e.value.file == str(p) and e.value.where == "cell"
     assert load_terrain(p, cell=0.1).shape == (3, 3)
+    both = _npz(tmp_path / "both.npz", points_W=_cloud(), heights=np.zeros((3, 3)))  # built from its points
+    assert load_terrain(both).cell == 0.05
     with pytest.raises(TerrainError, match="load_terrain: cell"):
         load_terrain(p, cell=True)
     with pytest.raises(TerrainFileError, match="expected numbers"):

@@ -487,7 +487,8 @@ class FusedDetector(Detector):
             us = float(budget_us)
             if not (us >= 0.0 and math.isfinite(us)):
                 raise DetectionError(f"budget_us: must be finite and >= 0, got {budget_us!r}")
-            allowance = int(min(max(0.0, us * 1e3) // self._ns_per_pair, 2.0 ** 62))  # a huge budget: every pair (int64)
+            n = max(0.0, us * 1e3) / self._ns_per_pair  # us * 1e3 may overflow to inf (1e306): every pair
+            allowance = int(n) if n < 2.0 ** 62 else 2 ** 62  # an int64 for the kernel
             mode = kn.MODE_ANYTIME
             status, n_eval, lim = self._run(s, mode, allowance, lazy)
         else:

@@ -59,8 +59,10 @@ def _print_srdf(con, scene, given: str, srdf: str | None = None) -> None:
     model = getattr(scene, "_model_of_record", None)
     if model is None:
         return
-    if srdf is not None and model.srdf is None:
-        con.print("SRDF: none (--srdf none: every pair but adjacent links is checked)", markup=False, highlight=False)
+    if srdf is not None and srdf.strip().lower() == "none":  # a sidecar keeps its SRDF's groups (the arms), not its pairs
+        kept = "" if model.srdf is None else f" of pairs ({model.srdf.file} names the arms and their home only)"
+        con.print(f"SRDF: none{kept} (--srdf none: every pair but adjacent links is checked)", markup=False,
+                  highlight=False, soft_wrap=True)
     elif model.srdf is not None:
         con.print(f"SRDF: {model.srdf.file} ({model.srdf.found})", markup=False, highlight=False, soft_wrap=True)
         for w in model.srdf.warnings:

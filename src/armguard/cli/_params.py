@@ -87,6 +87,15 @@ def scene_of(scene: str, srdf: str | None):
         from ..scene import load_scene
 
         return load_scene(scene)
+    from pathlib import Path
+
     from ..model import load_model
 
+    if Path(scene).suffix.lower() in (".yaml", ".yml"):  # a plain scene file: its robots name their own SRDFs
+        from .._yaml import read_scene_yaml
+
+        data = read_scene_yaml(Path(scene))
+        if not (isinstance(data, dict) and "model" in data):
+            raise click.UsageError("--srdf goes with a model: a built-in or public robot's name, a .urdf or a model "
+                                   "sidecar (a scene file's URDF robot names its SRDF at robots[i].srdf)")
     return load_model(scene, srdf=False if srdf.strip().lower() == "none" else srdf).scene

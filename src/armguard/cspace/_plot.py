@@ -38,11 +38,11 @@ def plot_slice(fmap, q2: float, out, *, q=None, dpi: int = 120) -> None:
             raise ForbiddenMapError(f"q: expected 3 finite joint values (rad), got {q.tolist()}")
         for k in (0, 2):  # the marker on a configuration the map has no bin for would read as its verdict
             if not g.lower[k] - 1e-12 <= q[k] <= g.upper[k] + 1e-12:
-                raise ForbiddenMapError(f"q: its joint {k + 1} ({math.degrees(q[k]):.6g}°) is outside the map's limits "
-                                        f"[{math.degrees(g.lower[k]):.6g}°, {math.degrees(g.upper[k]):.6g}°]")
+                raise ForbiddenMapError(f"q: its joint {k + 1} ({math.degrees(q[k]):.10g}°) is outside the map's limits "
+                                        f"[{math.degrees(g.lower[k]):.10g}°, {math.degrees(g.upper[k]):.10g}°]")
         if not lo2 - 1e-12 <= q[1] <= hi2 + 1e-12:
-            raise ForbiddenMapError(f"q: its joint 2 ({math.degrees(q[1]):.6g}°) is not in the slice's cell "
-                                    f"[{math.degrees(lo2):.6g}°, {math.degrees(hi2):.6g}°] at q2: plot the slice at its joint 2")
+            raise ForbiddenMapError(f"q: its joint 2 ({math.degrees(q[1]):.10g}°) is not in the slice's cell "
+                                    f"[{math.degrees(lo2):.10g}°, {math.degrees(hi2):.10g}°] at q2: plot the slice at its joint 2")
     img = np.zeros((int(g.counts[2]), int(g.counts[0])), dtype=np.int8)
     for k1 in range(int(g.n_sub[0])):
         s = k1 * int(g.n_sub[1]) + i2 // int(g.per_sub[1])

@@ -480,7 +480,8 @@ class RangerDetector(Detector):
             raise DetectionError(f"Q: expected shape (M, {n}), got {Q.shape}")
         if not np.all(np.isfinite(Q)):
             bad = np.argwhere(~np.isfinite(Q))[0]
-            raise DetectionError(f"Q contains NaN or infinite values (first at {tuple(int(x) for x in bad)})")
+            raise DetectionError(f"Detector: Q contains NaN or infinite values (first at row {int(bad[0])}, joint "
+                                 f"{int(bad[1])}: {Q[tuple(bad)]})")
         for i, q in enumerate(Q):
             plan.model.check_limits(q, f"Detector: Q[{i}]")
         return Q

@@ -433,7 +433,7 @@ class Scene:
         if bad.size:
             j = int(bad[0])
             raise SceneError(
-                f"{what}: joint {r.joint_names[j]!r} = {q[j]:.6g} is outside [{r.lower[j]:.6g}, {r.upper[j]:.6g}]"
+                f"{what}: joint {r.joint_names[j]!r} = {q[j]:.10g} is outside [{r.lower[j]:.10g}, {r.upper[j]:.10g}]"
             )
         q = np.array(q)
         q.flags.writeable = False

@@ -124,7 +124,7 @@ def _read_npz(p: Path, cell):
         if cell is not None and cell != c:  # never one quietly for the other
             raise TerrainFileError(p, "cell", f"the file's cell is {c:.6g} m and cell={cell:.6g} was given: give none, "
                                    "or the file's")
-    elif cell is None and "heights" in arrays:  # a grid has no scale without its cell: never one guessed
+    elif cell is None and "heights" in arrays and "points_W" not in arrays:  # a grid has no scale without its cell
         raise TerrainFileError(p, "cell", "a 'heights' grid needs its cell side (m): store 'cell' in the file, or "
                                "give load_terrain(..., cell=...)")
     else:

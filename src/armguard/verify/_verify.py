@@ -560,7 +560,8 @@ def verify(scene, trajectory, *, stopping_distance=0.0, method: str = "certified
     method : "certified" | "sampled"
         certified: conservative advancement, proven between evaluations (never misses a
         collision); sampled: Hermes's discrete checks at ``frequency`` (Hz) along the time law,
-        or every ``joint_step`` (rad, default 0.05, Drake's suggestion) in joint space; it
+        or every ``joint_step`` (rad, default 0.05, Drake's suggestion) in joint space (one of
+        the two: both, or either with the certified method, is a VerificationError); it
         reports Hermes's discretisation error ``Ed = v / f``.  A request for more samples than
         ``Tolerances.verify_max_evaluations`` (200 000) is refused (VerificationError) before
         any work; certified mode spends at most that many evaluations and reports INCOMPLETE.
