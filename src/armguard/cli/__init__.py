@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from ._exit import DEBUG_ENV, ExitCode, exit_epilog, run_guarded
+from ._params import BACKEND
 
 
 class _Group(click.Group):
@@ -34,7 +35,7 @@ def _option_names(ctx, message: str) -> str:
            "an error-level finding (check-urdf)",
     incomplete="incomplete: a check or verification that could not finish (check, verify)"))
 @click.version_option(package_name="armguard")
-@click.option("--backend", default=None, metavar="NAME",
+@click.option("--backend", type=BACKEND, default=None, metavar="NAME",
               help="Backend for every check of this command (analytic, coal, fcl, ...; default: "
                    "$ARMGUARD_BACKEND, else armguard.toml, else analytic).")
 @click.option("--config", "config", default=None, type=click.Path(),
@@ -47,7 +48,7 @@ def _option_names(ctx, message: str) -> str:
 @click.pass_context
 def main(ctx, backend: str | None, config: str | None, traceback: bool, quiet: bool) -> None:
     """armguard: collision and proximity detection for robot manipulators."""
-    from ..backends import available, command_line_choice
+    from ..backends import command_line_choice
     from ._output import one_line_warnings
 
     one_line_warnings()
@@ -58,9 +59,6 @@ def main(ctx, backend: str | None, config: str | None, traceback: bool, quiet: b
 
         ctx.with_resource(warnings.catch_warnings())
         warnings.simplefilter("ignore", ArmguardWarning)
-    if backend is not None and backend not in available():
-        raise click.BadParameter(f"unknown backend {backend!r}; installed backends are {list(available())}",
-                                 param_hint="--backend")
     # --backend counts as the explicit argument of every check this command makes
     ctx.call_on_close(command_line_choice(backend, config))
 
