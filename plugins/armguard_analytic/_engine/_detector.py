@@ -488,9 +488,8 @@ class FusedDetector(Detector):
             if not (us >= 0.0 and math.isfinite(us)):
                 raise DetectionError(f"budget_us: must be finite and >= 0, got {budget_us!r}")
             n = max(0.0, us * 1e3) / self._ns_per_pair  # us * 1e3 may overflow to inf (1e306): every pair
-            allowance = int(n) if n < 2.0 ** 62 else 2 ** 62  # an int64 for the kernel
-            mode = kn.MODE_ANYTIME
-            status, n_eval, lim = self._run(s, mode, allowance, lazy)
+            mode = kn.MODE_ANYTIME  # the allowance an int64 for the kernel
+            status, n_eval, lim = self._run(s, mode, int(n) if n < 2.0 ** 62 else 2 ** 62, lazy)
         else:
             mode = kn.MODE_LAZY if lazy else kn.MODE_EXACT
             status, n_eval, lim = self._run(s, mode, 0, False)
