@@ -127,7 +127,9 @@ def evaluate_pair(a, b, H, MF, MI, SF, SI, out9, eps_len, eps_par, offset, stamp
     function compiled with ``_nrt=False`` makes LLVM crash as described above).  A point or segment
     against a static polytope returns so before :func:`._narrow.narrow_flat`, which has no case for it:
     ranger's 60 capsule-hull pairs took 159-172 ns a pair in the all-pairs call, against 167-181 through
-    ``narrow_flat`` (interleaved with the parent, 3 rounds; the same bits)."""
+    ``narrow_flat`` (``pair_distances(q)`` less ``pair_distances(q, pairs=<the other rows>)``, thread-time
+    medians over 200 random configurations, over the pairs left out; this file and its parent run in turn, 3
+    rounds; the same bits)."""
     if b >= 0:
         oc = H[2 * _K_core]
         ka = MI[oc + a]
@@ -205,8 +207,10 @@ def capsule_step(p, a, b, H, MF, MI, SF, SI, eps_len, eps_par, n_eval, stamp_now
     depth's direction).  ``capsule_capsule_scalar``'s closed form (Ericson §5.1.9,
     ``segment_segment_closest``) and its operations, so the same bits; inlined, it leaves out the
     linked narrow-phase call, its dispatch on the cores' kinds and the copy through ``out9``: on
-    ranger's 94 capsule pairs, 62 ns a pair in the all-pairs call before, 52-56 after (the call with
-    and without them, interleaved with the parent's).  Their clamps as selects, every candidate
+    ranger's 94 capsule pairs, 62 ns a pair in the all-pairs call before, 52-56 after (``pair_distances(q)``
+    less ``pair_distances(q, pairs=<the other rows>)``, thread-time medians over 200 random configurations,
+    over the pairs left out; this file and its parent run in turn, 3 rounds).
+    Their clamps as selects, every candidate
     computed, took as long (54-55 ns): not kept."""
     oc = H[2 * _K_core]
     if b < 0 or MI[oc + a] > 1 or MI[oc + b] > 1:  # CoreKind: 0 a point, 1 a segment
