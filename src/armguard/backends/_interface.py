@@ -425,4 +425,6 @@ def _with_pairs(full):
         idx = check_pairs(self.model, pairs)  # refused before any work
         return full(self, q).take(idx)
 
+    # a subset costs the whole call here: Ranger's Detector then evaluates every pair (armguard.detect._ranger)
+    pair_distances.pairs_from_full = True
     return pair_distances

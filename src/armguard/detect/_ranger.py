@@ -20,8 +20,12 @@ framework code here, over the Checker interface only:
   averages updated after every check, one outlier moving them at most 4x) and asks the Checker for those pairs in one
   ``pair_distances(q, pairs=rows)`` call; the report names every pair it skipped with its
   lower bound, and the status is INCOMPLETE, never CLEAR, while a skipped pair's bound does not
-  prove the threshold (the analytic kernel's rule, ``armguard_analytic._engine._kernel``);
+  prove the threshold (the analytic kernel's rule, ``armguard_analytic._engine._kernel``).  A
+  check that called no backend (a budget below the check's own cost) leaves the cost model as it was;
 * **lazy**: pairs whose lower bound proves them beyond the threshold are skipped (exact status);
+* a Checker whose ``pair_distances`` takes ``pairs=`` only through the framework's default (the
+  whole call, then its rows: ``CheckerBase``) pays for every pair whatever the subset: a budgeted or
+  lazy check over it that evaluates any pair evaluates them all;
 * **categories and threshold status**: the nearest evaluated pair per category, the pairs
   within the threshold, CLEAR / WARNING / COLLISION / INCOMPLETE.
 
@@ -90,7 +94,7 @@ class _Plan:
     keeps the names of the build that made it."""
 
     __slots__ = ("model", "checker", "distances", "revision", "generation", "active", "bounds", "sel", "all_rows",
-                 "swap", "lever", "a", "b", "cat_code", "cat_masks", "margin_built", "limits", "n_q", "det",
+                 "whole_only", "swap", "lever", "a", "b", "cat_code", "cat_masks", "margin_built", "limits", "n_q", "det",
                  "threshold", "stopping")
 
     def with_levels(self, threshold: float, stopping: float) -> "_Plan":
@@ -269,6 +273,9 @@ class RangerDetector(Detector):
             plan.bounds = b
             plan.sel = b.rows
             plan.all_rows = len(b.rows) == len(pairs)  # every Model row, in order: ask without pairs=
+            # a subset costs the backend its whole call (the framework's pairs=): a budgeted or lazy
+            # check then evaluates every pair, as it pays for them anyway
+            plan.whole_only = bool(getattr(plan.checker.pair_distances, "pairs_from_full", False))
             plan.swap = b.swap
             plan.lever = b.lever
             oa, ob = pairs.owner_a, pairs.owner_b
@@ -417,6 +424,8 @@ class RangerDetector(Detector):
             if budget_us is not None:
                 order = order[:self._allowance(float(budget_us))]
             which = np.sort(order)  # the Checker answers in Model order
+            if plan.whole_only and len(which):  # any subset costs the whole call: every pair, then
+                which = np.arange(P)
             flags[which] = _FLAG_EVALUATED
             d, pA, pB = self._query(plan, q, which) if len(which) else (np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)))
             skipped = bounds[flags == _FLAG_SKIPPED]
@@ -425,7 +434,8 @@ class RangerDetector(Detector):
         s.last_d[which], s.last_q[which], s.has_last[which], s.stamp[which] = d, q, True, s.tick
         status = STATUS_CODES[status_code(float(d.min(initial=math.inf)), lbmin, level, thr)]
         elapsed = (time.perf_counter() - t0) * 1e6
-        self._learn(elapsed, len(d))
+        if len(d):  # a check that called no backend teaches the cost model nothing
+            self._learn(elapsed, len(d))
         raw = _Raw(plan, d, pA, pB, which, flags, bounds, lazy)
         return DetectionReport._from_check(status, plan.threshold, plan.stopping, elapsed, raw)
 

@@ -1,0 +1,93 @@
+"""Ranger's Detector over a Checker that answers only whole calls (``armguard.detect._ranger``).
+
+A backend whose ``pair_distances(q)`` takes no ``pairs=`` is given them by the framework
+(``CheckerBase``: the whole call, then its rows), so a subset costs it every pair.  A budgeted check
+over it once asked for a few rows, paid for all of them, kept those few and said INCOMPLETE on
+every check; and a check that called no backend at all (a budget below the check's own cost) taught
+the cost model that a check costs next to nothing, so the next budget was overrun again.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import armguard
+import armguard.backends as backends_mod
+from armguard.backends import Capability, CheckerBase
+from armguard.detect import Status
+
+THRESHOLD = 0.05
+
+
+class _Whole(CheckerBase):
+    """coal's distances through the least a backend writes: ``pair_distances(q)``; counts its calls."""
+
+    name = "whole_only"
+    capabilities = frozenset({Capability.DISTANCES, Capability.VERDICTS})
+
+    def __init__(self, model) -> None:
+        super().__init__(model)
+        self.inner = armguard.checker(model, "coal", {"threads": 1})
+        self.calls = 0
+
+    def pair_distances(self, q):
+        self.calls += 1
+        r = self.inner.pair_distances(q)
+        return self._result(r.distance.copy(), r.p_WA.copy(), r.p_WB.copy())
+
+
+@pytest.fixture
+def whole_registered(monkeypatch):
+    built = []
+
+    def build(model, options=None):
+        built.append(_Whole(model))
+        return built[-1]
+
+    real = backends_mod._entry_points
+    fake = SimpleNamespace(load=lambda: SimpleNamespace(name="whole_only", build=build))
+    monkeypatch.setattr(backends_mod, "_entry_points", lambda refresh=False: {**real(refresh), "whole_only": fake})
+    return built
+
+
+def test_the_framework_marks_a_pairs_argument_it_supplies():
+    assert getattr(_Whole.pair_distances, "pairs_from_full", False) is True
+    assert not getattr(armguard.checker(armguard.load_model("hermes"), "coal").pair_distances, "pairs_from_full", False)
+
+
+def test_a_budgeted_check_over_a_whole_call_backend_evaluates_every_pair(whole_registered):
+    model = armguard.load_model("hermes")
+    det = armguard.Detector(model.scene, threshold=THRESHOLD, backend="whole_only")
+    ref = armguard.Detector(model.scene, threshold=THRESHOLD, backend="coal")
+    Q = model.scene_q(model.random_q(12, 3))
+    evaluated = 0
+    for q in Q:
+        exact = ref.check(q)
+        for budget, lazy in ((5.0, False), (50.0, False), (None, True), (5.0, True)):
+            rep = det.check(q, budget_us=budget, lazy=lazy)
+            if rep.n_evaluated:  # whatever it asked, it paid for (and kept) every pair
+                evaluated += 1
+                assert rep.n_evaluated == det.n_pairs and rep.not_evaluated == ()
+                assert rep.status is exact.status
+                assert rep.nearest.distance == pytest.approx(exact.nearest.distance, abs=1e-9)
+            else:  # a budget that allows no pair: no backend call, nothing hidden
+                assert rep.status in (Status.INCOMPLETE, exact.status)
+    assert evaluated >= len(Q)  # the lazy checks at least
+
+
+def test_a_check_that_calls_no_backend_leaves_the_cost_model_alone(whole_registered):
+    model = armguard.load_model("hermes")
+    det = armguard.Detector(model.scene, threshold=THRESHOLD, backend="whole_only")
+    q = model.scene_q(model.random_q(1, 5))[0]
+    det.check(q)
+    before = (det._us_per_check, det._us_per_pair)
+    calls = whole_registered[-1].calls
+    for _ in range(20):
+        rep = det.check(q, budget_us=0.0)
+        assert rep.n_evaluated == 0
+    assert whole_registered[-1].calls == calls  # no backend call
+    assert (det._us_per_check, det._us_per_pair) == before
+    assert np.isfinite(before).all()
