@@ -58,6 +58,6 @@ __all__ = ["check_backend", "checks", "Check", "ConformanceError", "ConformanceR
 
 def check_names() -> tuple[str, ...]:
     """Every check's name, backend-wide ones first."""
-    from ._checks import BACKEND_CHECKS, MODEL_CHECKS
+    from ._catalog import BACKEND_CHECKS, MODEL_CHECKS
 
     return tuple(f.__name__.removeprefix("check_") for f in (*BACKEND_CHECKS, *MODEL_CHECKS))

@@ -252,7 +252,7 @@ and ``build(model, options)``), one per check and model.
     per model (plus the neutral pose); ``xfail``: ``{"check" or "check[model]": reason}`` expected
     failures (added to the Checker's own ``conformance_xfail``); ``only``: check names to keep.
     Nothing is loaded until a check runs."""
-    from ._checks import BACKEND_CHECKS, MODEL_CHECKS
+    from ._catalog import BACKEND_CHECKS, MODEL_CHECKS
 
     models = list(models)
     if not models:

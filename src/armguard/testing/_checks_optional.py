@@ -1,0 +1,179 @@
+"""The conformance suite's checks of the optional methods (``nearest``, ``min_distance_many``,
+``pair_distances(q, pairs=...)``, ``pair_distances_many``, distance Jacobians), of results that stay
+the caller's, and of thread safety.  Conventions as :mod:`._checks`."""
+
+from __future__ import annotations
+
+import functools
+import inspect
+import threading
+
+import numpy as np
+
+from .._tolerance import DEFAULT_TOLERANCES as TOL
+from ._checks import _distances, _has_pairs_argument, _raises_backend_error, _require_distances
+from ._suite import NotApplicable, expect
+from ._threads import run_in_threads
+
+__all__ = ["check_optional_fast_paths", "check_pair_subset", "check_pair_distances_many", "check_thread_safety"]
+
+
+def check_optional_fast_paths(ctx, model):
+    """``nearest(q)`` equals ``pair_distances(q).nearest()`` and ``min_distance_many(Q)`` the rows'
+    least distances (where the Checker has them)."""
+    c = ctx.checker(model)
+    _require_distances(c)
+    if not (hasattr(c, "nearest") or hasattr(c, "min_distance_many")):
+        raise NotApplicable("no nearest / min_distance_many")
+    Q = ctx.configs(model)
+    full = [c.pair_distances(q) for q in Q]
+    if hasattr(c, "nearest"):
+        for i, q in enumerate(Q):
+            got, want = c.nearest(q), full[i].nearest()
+            expect(set(got) == set(want), f"configuration {i}: nearest has categories {sorted(got)}, expected {sorted(want)}")
+            for cat, w in want.items():
+                g = got[cat]
+                expect((g.a, g.b) == (w.a, w.b) or abs(g.distance - w.distance) <= TOL.differential_distance,
+                       f"configuration {i}, {cat}: nearest names {(g.a, g.b)}, pair_distances {(w.a, w.b)}")
+                expect(abs(g.distance - w.distance) <= TOL.differential_distance,
+                       f"configuration {i}, {cat}: nearest distance {g.distance} vs {w.distance} m")
+                if (g.a, g.b) == (w.a, w.b):  # the same pair: its row and witness points too
+                    expect(g.index == w.index, f"configuration {i}, {cat}: nearest index {g.index}, pair_distances {w.index}")
+                    for key in ("p_WA", "p_WB"):
+                        x, y = np.asarray(getattr(g, key), dtype=np.float64), np.asarray(getattr(w, key))
+                        expect(x.shape == y.shape and np.allclose(x, y, rtol=0, atol=TOL.differential_distance),
+                               f"configuration {i}, {cat}: nearest {key} {x.tolist()}, pair_distances {y.tolist()}")
+    if hasattr(c, "min_distance_many"):
+        got = np.asarray(c.min_distance_many(Q), dtype=np.float64)
+        want = np.array([r.distance.min(initial=np.inf) for r in full])
+        expect(got.shape == want.shape, f"min_distance_many gave shape {got.shape}, expected {want.shape}")
+        expect(np.allclose(got, want, rtol=0, atol=TOL.differential_distance),
+               f"min_distance_many differs from the rows' least distance by up to {np.max(np.abs(got - want)):.3g} m")
+
+
+
+# ================================================================ optional methods
+def _same_rows(got, want, idx, where: str) -> None:
+    expect(np.array_equal(np.asarray(got.pairs), np.asarray(want.pairs)[idx]), f"{where}: pairs are not the rows asked for")
+    expect(tuple(got.category) == tuple(np.asarray(want.category, dtype=object)[idx]), f"{where}: category differs")
+    for key in ("distance", "p_WA", "p_WB"):
+        x, y = np.asarray(getattr(got, key)), getattr(want, key)[idx]
+        expect(x.shape == y.shape, f"{where}: {key} has shape {x.shape}, expected {y.shape}")
+        expect(np.allclose(x, y, rtol=0, atol=1e-12),
+               lambda: f"{where}: {key} differs from the full result's rows by up to {np.max(np.abs(x - y)):.3g} m")
+
+
+def check_pair_subset(ctx, model):
+    """``pair_distances(q, pairs=rows)`` (where the Checker takes ``pairs``) equals rows ``rows`` of
+    ``pair_distances(q)``, in that order (within 1e-12 m), for sorted, unsorted, single and empty
+    row arrays; a row outside ``[0, n)``, a 2-D array, a boolean mask or floats raise BackendError."""
+    c = ctx.checker(model)
+    _require_distances(c)
+    if not _has_pairs_argument(c):
+        raise NotApplicable("pair_distances takes no pairs= argument")
+    n = len(ctx.model(model).pairs)
+    rng = np.random.default_rng(ctx.seed)
+    subsets = {"all": np.arange(n), "single": np.array([n - 1]), "empty": np.zeros(0, np.int64),
+               "sorted": np.sort(rng.choice(n, size=max(1, n // 3), replace=False)),
+               "unsorted": rng.permutation(n)[: max(1, n // 2)]}
+    for i, q in enumerate(ctx.configs(model)[:3]):
+        full = c.pair_distances(q)
+        for what, idx in subsets.items():
+            _same_rows(c.pair_distances(q, pairs=idx), full, idx, f"configuration {i}, pairs={what}")
+    q = ctx.configs(model)[0]
+    for what, idx in (("out of range", np.array([n])), ("negative", np.array([-1])), ("2-D", np.zeros((1, 1), np.int64)),
+                      ("a boolean mask", np.ones(n, dtype=bool)), ("floats", np.array([0.5]))):
+        _raises_backend_error(lambda: c.pair_distances(q, pairs=idx), f"pair_distances(q, pairs {what})")
+
+
+def check_pair_distances_many(ctx, model):
+    """``pair_distances_many(Q)`` (where the Checker has it) equals ``pair_distances`` row by row
+    (within 1e-12 m): ``pairs``/``category`` the Model's, ``distance (M, n)``, ``p_WA``/``p_WB
+    (M, n, 3)`` float64; ``M = 0`` too; with ``pairs=rows`` (where it takes them), those rows."""
+    c = ctx.checker(model)
+    _require_distances(c)
+    if not hasattr(c, "pair_distances_many"):
+        raise NotApplicable("no pair_distances_many")
+    Q = ctx.configs(model)
+    m = ctx.model(model)
+    n = len(m.pairs)
+    full = [c.pair_distances(q) for q in Q]
+    rows = np.random.default_rng(ctx.seed).permutation(n)[: max(1, n // 3)]
+    takes_pairs = _has_pairs_argument(c) and "pairs" in inspect.signature(c.pair_distances_many).parameters
+    for subset in ((None, rows) if takes_pairs else (None,)):
+        many = c.pair_distances_many(Q) if subset is None else c.pair_distances_many(Q, pairs=subset)
+        idx = np.arange(n) if subset is None else subset
+        what = "pair_distances_many(Q)" if subset is None else "pair_distances_many(Q, pairs=rows)"
+        for key in ("pairs", "category"):
+            expect(hasattr(many, key), f"{what}: the result has no {key!r} (a PairDistancesMany names its rows)")
+        expect(np.array_equal(np.asarray(many.pairs), m.pairs.names[idx]), f"{what}: pairs are not the rows asked for")
+        expect(tuple(many.category) == tuple(np.asarray(m.pairs.category, dtype=object)[idx]), f"{what}: category differs")
+        for key, shape in (("distance", (len(Q), len(idx))), ("p_WA", (len(Q), len(idx), 3)),
+                           ("p_WB", (len(Q), len(idx), 3))):
+            a = np.asarray(getattr(many, key))
+            expect(a.shape == shape and a.dtype == np.float64, f"{what}: {key} is {a.dtype} {a.shape}, expected float64 {shape}")
+            for i, r in enumerate(full):
+                x, y = a[i], getattr(r, key)[idx]
+                expect(np.allclose(x, y, rtol=0, atol=1e-12),
+                       lambda: f"{what}, row {i}: {key} differs from pair_distances(Q[{i}]) by up to "
+                               f"{np.max(np.abs(x - y)):.3g} m")
+    empty = c.pair_distances_many(Q[:0])
+    expect(np.asarray(empty.distance).shape == (0, n), f"M = 0: distance has shape {np.asarray(empty.distance).shape}")
+
+
+# ================================================================ threads
+THREADS = 4
+
+
+def _answer(r) -> tuple:
+    return tuple(np.asarray(getattr(r, k)) for k in ("distance", "p_WA", "p_WB"))
+
+
+def check_thread_safety(ctx, model):
+    """One Checker called from 4 threads at once (``pair_distances`` on different configurations, with
+    and without ``pairs=`` where it takes them, ``pair_distances_many`` where it has it, ``collides``
+    on different batches; thread switches forced often) gives exactly the answers of single-threaded
+    calls: distances and witness points."""
+    c = ctx.checker(model)
+    Q = ctx.configs(model)
+    dist = _distances(c)
+    rows = np.random.default_rng(ctx.seed).permutation(len(ctx.model(model).pairs))[:3]
+    calls = {}  # what -> the call (its single-threaded answer: want[what])
+    if dist:
+        for i, q in enumerate(Q):
+            calls[f"pair_distances(configuration {i})"] = functools.partial(c.pair_distances, q)
+            if _has_pairs_argument(c):
+                calls[f"pair_distances(configuration {i}, pairs={rows.tolist()})"] = functools.partial(c.pair_distances, q,
+                                                                                                       pairs=rows)
+        if hasattr(c, "pair_distances_many"):
+            calls["pair_distances_many(Q)"] = functools.partial(c.pair_distances_many, Q)
+    want = {k: _answer(f()) for k, f in calls.items()}
+    order = list(calls)
+    batches = [np.roll(Q, k, axis=0)[:3] for k in range(THREADS)]
+    want_v = [c.collides(b) for b in batches]
+    rounds = 2
+    barrier = threading.Barrier(THREADS)
+    problems: list[str] = []
+
+    def work(t: int) -> None:
+        try:
+            barrier.wait()
+            for _ in range(rounds):
+                for k in range(len(order)):
+                    what = order[(k + t) % len(order)]
+                    got = _answer(calls[what]())
+                    for key, x, y in zip(("distance", "p_WA", "p_WB"), got, want[what]):
+                        if not np.array_equal(x, y):
+                            problems.append(f"thread {t}: {what}.{key} differs from the single-threaded answer"
+                                            + (f" by up to {np.max(np.abs(x - y)):.3g} m" if x.shape == y.shape else ""))
+                            return
+                got = c.collides(batches[t])
+                if not np.array_equal(got, want_v[t]):
+                    problems.append(f"thread {t}: collides differs from the single-threaded answer in rows "
+                                    f"{np.flatnonzero(got != want_v[t]).tolist()}")
+                    return
+        except Exception as exc:  # noqa: BLE001 - a crash under threads is the finding
+            problems.append(f"thread {t} raised {type(exc).__name__}: {exc}")
+
+    run_in_threads([functools.partial(work, t) for t in range(THREADS)])
+    expect(not problems, lambda: f"{len(problems)} of {THREADS} threads saw wrong answers; first: {problems[0]}")
