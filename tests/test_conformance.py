@@ -90,14 +90,29 @@ class _Wrapped(armguard.backends.CheckerBase):
         self._lock = threading.Lock()
         self._last = None
         self._buf = None
+        self._calls = 0
+        self._scratch = None
 
     def pair_distances(self, q, pairs=None):
         mut = self.mutation
         if mut == "NaN answered":
             q = np.nan_to_num(np.asarray(q, dtype=np.float64))
+        if mut == "a continuous joint's (cos, sin) normalised":  # a sheared link answered, not refused
+            q = np.array(q, dtype=np.float64)
+            with np.errstate(invalid="ignore"):  # (a NaN q stays NaN, and is refused below)
+                for j in self.model.continuous_q:
+                    q[j:j + 2] /= np.hypot(q[j], q[j + 1])
         with self._lock:
             r = self.inner.pair_distances(q)
+            self._calls += 1
         d, p_WA, p_WB = r.distance.copy(), r.p_WA.copy(), r.p_WB.copy()
+        if mut == "a first call 1 mm off" and self._calls == 1:
+            d = d + 1e-3
+        if mut == "witness points swapped where penetrating":
+            pen = d < 0.0
+            p_WA[pen], p_WB[pen] = r.p_WB[pen], r.p_WA[pen]
+        if mut == "a NaN in one row":
+            d[3] = np.nan
         if mut == "pair order reversed":
             return armguard.backends.PairDistances(r.pairs[::-1], d[::-1], p_WA[::-1], p_WB[::-1], r.category[::-1])
         if mut == "distance 1 mm long":
@@ -123,6 +138,12 @@ class _Wrapped(armguard.backends.CheckerBase):
 
             time.sleep(1e-4)
             d = self._buf.copy()
+        if mut == "answers in reused scratch arrays":  # the next call writes over this answer
+            if self._scratch is None or self._scratch[0].shape != d.shape:
+                self._scratch = (np.empty_like(d), np.empty_like(p_WA), np.empty_like(p_WB))
+            for buf, x in zip(self._scratch, (d, p_WA, p_WB)):
+                buf[...] = x
+            d, p_WA, p_WB = self._scratch
         if pairs is not None:
             idx = np.asarray(pairs)
             if idx.ndim != 1 or idx.dtype.kind not in "iu" or (idx.size and (idx.max() >= len(d) or idx.min() < 0)):
@@ -167,7 +188,14 @@ class _Wrapped(armguard.backends.CheckerBase):
         if not (margin >= 0.0 and math.isfinite(margin)):
             raise BackendError(f"margin: expected a finite length >= 0, got {margin!r}")
         with self._lock:
-            return self.inner.collides(Q, margin=0.0 if self.mutation == "margin ignored" else margin)
+            v = self.inner.collides(Q, margin=0.0 if self.mutation == "margin ignored" else margin)
+        if self.mutation == "a parallel path for big batches wrong in row 0" and len(Q) >= 64:
+            v[0] = not v[0]
+        return v
+
+    def distance_jacobian(self, q, result, idx=None):
+        J, smooth = self.witness_jacobian(q, result, idx)
+        return (-J if self.mutation == "jacobian negated" else J), smooth
 
 
 class _Mutant:
@@ -201,7 +229,19 @@ MUTATIONS = {
     "batch ignores pairs": "pair_distances_many",
     "batch rows unnamed": "pair_distances_many",
     "nearest witness points moved": "optional_fast_paths",
+    # holes a review of the suite from an installed wheel found: a negated Jacobian (collision avoidance
+    # steered into the obstacle), witness points swapped only where penetrating, a batch path taken from
+    # 64 rows on, a first call unlike the later ones, answers left in reused scratch arrays, a continuous
+    # joint's (cos, sin) normalised rather than refused, a NaN in one row
+    "jacobian negated": "distance_jacobian",
+    "witness points swapped where penetrating": "witness_on_surfaces",
+    "a parallel path for big batches wrong in row 0": "collides_matches_distances",
+    "a first call 1 mm off": "deterministic",
+    "answers in reused scratch arrays": "results_kept",
+    "a continuous joint's (cos, sin) normalised": "bad_q_refused",
+    "a NaN in one row": "pair_distances_shapes",
 }
+MODEL_OF = {"a continuous joint's (cos, sin) normalised": "kinova"}  # else puma560
 
 
 def test_an_honest_wrapper_passes_every_check():
@@ -212,12 +252,31 @@ def test_an_honest_wrapper_passes_every_check():
 
 @pytest.mark.parametrize("mutation", list(MUTATIONS), ids=[m.replace(" ", "_") for m in MUTATIONS])
 def test_a_broken_backend_fails_the_check_named_for_it(mutation):
-    check = MUTATIONS[mutation]
+    check, model = MUTATIONS[mutation], MODEL_OF.get(mutation, "puma560")
     with pytest.raises(ConformanceError) as info:
-        check_backend(_Mutant(mutation), models=["puma560"], n_configs=N_CONFIGS, only=[check])
+        check_backend(_Mutant(mutation), models=[model], n_configs=N_CONFIGS, only=[check])
     err = info.value
-    assert (err.backend, err.check, err.model) == ("mutant", check, "puma560")
-    assert f"fails check {check!r} on model 'puma560'" in str(err)
+    assert (err.backend, err.check, err.model) == ("mutant", check, model)
+    assert f"fails check {check!r} on model {model!r}" in str(err)
+
+
+def test_failures_say_what_to_look_at():
+    """The messages name the configuration with its q, the row and pair of a NaN, a likely swap of the
+    witness points, and reused scratch; a NaN is reported as such, not as a nondeterministic answer."""
+    def failure(mutation, check, before=()):
+        with pytest.raises(ConformanceError) as info:
+            check_backend(_Mutant(mutation), models=["puma560"], n_configs=N_CONFIGS, only=[*before, check])
+        assert info.value.check == check
+        return info.value.detail
+
+    names = armguard.load_model("puma560").pairs.names
+    for check in ("pair_distances_shapes", "deterministic", "coal_distances", "witness_relation"):
+        msg = failure("a NaN in one row", check)
+        assert f"distance is nan (not finite) at row 3, pair {tuple(names[3])}" in msg and "(q = [" in msg, msg
+    assert "p_WA and p_WB swapped?" in failure("witness points swapped where penetrating", "witness_on_surfaces")
+    assert "return arrays of their own (copies)" in failure("answers in reused scratch arrays", "results_kept")
+    # in the suite's order the Checker's first call is pair_distances_shapes': deterministic then meets a used one
+    assert "a fresh Checker's first call" in failure("a first call 1 mm off", "deterministic", ["pair_distances_shapes"])
 
 
 def test_a_declared_failure_is_reported_not_raised():

@@ -18,7 +18,7 @@ from .._errors import BackendError
 from .._tolerance import DEFAULT_TOLERANCES as TOL
 from ..backends import Backend, Capability, Checker
 from ._suite import REFERENCE, NotApplicable, expect, fail
-from ._surface import surface_residuals
+from ._surface import round_cores_meet, surface_residuals
 
 __all__ = ["BACKEND_CHECKS", "MODEL_CHECKS"]
 
@@ -27,6 +27,7 @@ WITNESS = TOL.differential_witness  # m: | |p_WA - p_WB| - |d| |
 UNKNOWN_OPTION = "conformance_no_such_option"
 MARGIN = 0.05  # m: a margin every distances backend answers
 EDGE = 5e-4  # m: margins this far either side of a least distance
+BIG_BATCH = 160  # rows: a batch past the sizes at which backends switch to a parallel path (coal: 64)
 
 
 def _distances(checker) -> bool:
@@ -57,6 +58,31 @@ def _has_pairs_argument(checker) -> bool:
         return "pairs" in inspect.signature(checker.pair_distances, follow_wrapped=False).parameters
     except (TypeError, ValueError):
         return False
+
+
+def where(i: int, q) -> str:
+    """``configuration i (q = [...])``: how a failure names the configuration (its ``q`` to reproduce it)."""
+    return f"configuration {i} (q = {np.asarray(q, dtype=np.float64).tolist()})"
+
+
+def answer(ctx, model, c, q, i: int, pairs=None):
+    """``c.pair_distances(q)`` (``pairs=`` when given) with its arrays checked first: a wrong shape or
+    dtype, or a value that is not finite, fails here, naming the configuration, the row and its pair,
+    so that no later check trips over it with a message of its own (``pair_distances_shapes`` says more)."""
+    r = c.pair_distances(q) if pairs is None else c.pair_distances(q, pairs=pairs)
+    names = ctx.model(model).pairs.names
+    rows = np.arange(len(names)) if pairs is None else np.asarray(pairs)
+    n = len(rows)
+    for key, shape in (("distance", (n,)), ("p_WA", (n, 3)), ("p_WB", (n, 3))):
+        a = getattr(r, key, None)
+        expect(isinstance(a, np.ndarray) and a.shape == shape and a.dtype == np.float64,
+               lambda: f"{where(i, q)}: {key} must be a float64 array of shape {shape}, got "
+                       f"{getattr(a, 'dtype', type(a).__name__)} {getattr(a, 'shape', '')}")
+        bad = ~np.isfinite(a) if a.ndim == 1 else ~np.isfinite(a).all(axis=1)
+        k = np.flatnonzero(bad)
+        expect(not k.size, lambda: f"{where(i, q)}: {key} is {a[k[0]].tolist()} (not finite) at row {rows[k[0]]}, "
+                                   f"pair {tuple(names[rows[k[0]]])}")
+    return r
 
 
 # ================================================================ backend-wide
@@ -104,15 +130,10 @@ def check_pair_distances_shapes(ctx, model):
     n = len(names)
     for i, q in enumerate(ctx.configs(model)):
         r = c.pair_distances(q)
-        where = f"configuration {i}"
-        expect(np.array_equal(np.asarray(r.pairs), names), f"{where}: pairs differ from model.pairs.names (order too)")
-        expect(tuple(r.category) == cats, f"{where}: category differs from model.pairs.category")
-        for key, shape in (("distance", (n,)), ("p_WA", (n, 3)), ("p_WB", (n, 3))):
-            a = getattr(r, key)
-            expect(isinstance(a, np.ndarray) and a.shape == shape and a.dtype == np.float64,
-                   lambda: f"{where}: {key} must be a float64 array of shape {shape}, got "
-                           f"{getattr(a, 'dtype', type(a))} {getattr(a, 'shape', '')}")
-            expect(np.all(np.isfinite(a)), f"{where}: {key} holds NaN or infinite values")
+        expect(np.shape(r.pairs) == (n, 2) and np.array_equal(np.asarray(r.pairs), names),
+               f"{where(i, q)}: pairs differ from model.pairs.names (order too)")
+        expect(tuple(r.category) == cats, f"{where(i, q)}: category differs from model.pairs.category")
+        answer(ctx, model, c, q, i)  # shapes, dtypes, finite values, named by row
 
 
 def check_witness_relation(ctx, model):
@@ -121,58 +142,73 @@ def check_witness_relation(ctx, model):
     c = ctx.checker(model)
     _require_distances(c)
     for i, q in enumerate(ctx.configs(model)):
-        r = c.pair_distances(q)
+        r = answer(ctx, model, c, q, i)
         gap = np.linalg.norm(r.p_WA - r.p_WB, axis=1)
         err = np.abs(gap - np.abs(r.distance))
         k = int(np.argmax(err)) if err.size else 0
         expect(not err.size or err[k] <= WITNESS,
-               lambda: f"configuration {i}, pair {tuple(r.pairs[k])}: |p_WA - p_WB| = {gap[k]:.12g} m but "
+               lambda: f"{where(i, q)}, pair {tuple(r.pairs[k])}: |p_WA - p_WB| = {gap[k]:.12g} m but "
                        f"distance = {r.distance[k]:.12g} m (|difference| {err[k]:.3g} > {WITNESS:g} m)")
 
 
 def _residuals(ctx, model, c):
-    """Per configuration: the answer and each witness point's residual against both shapes of its
+    """Per configuration: ``q``, the answer and each witness point's residual against both shapes of its
     pair (:func:`surface_residuals`), with the shapes the backend does not hold exactly masked out."""
     m = ctx.model(model)
     skip = list(getattr(c, "representation", {}) or {})
     for i, q in enumerate(ctx.configs(model)):
-        r = c.pair_distances(q)
+        r = answer(ctx, model, c, q, i)
         keep = ~(np.isin(r.pairs[:, 0], skip) | np.isin(r.pairs[:, 1], skip))
         on_a = surface_residuals(m, q, r.pairs[:, 0], r.p_WA)  # p_WA against A, ...
         on_b = surface_residuals(m, q, r.pairs[:, 1], r.p_WB)
         a_in_b = surface_residuals(m, q, r.pairs[:, 1], r.p_WA)  # ... p_WA against B
         b_in_a = surface_residuals(m, q, r.pairs[:, 0], r.p_WB)
-        yield i, r, keep, on_a, on_b, a_in_b, b_in_a
+        yield i, q, r, keep, on_a, on_b, a_in_b, b_in_a
+
+
+def _swapped(other, k: int, side: int, pair) -> str:
+    """A hint where witness point ``p_WA`` (side 0) or ``p_WB`` (1) of row ``k`` lies on the other shape's surface."""
+    res, tol, _ = other
+    if np.isfinite(res[k]) and abs(res[k]) <= tol[k]:
+        return f" (p_W{'AB'[side]} lies on {pair[1 - side]}'s surface: p_WA and p_WB swapped?)"
+    return ""
 
 
 def check_witness_on_surfaces(ctx, model):
-    """On separated pairs, ``p_WA`` lies on A's surface and ``p_WB`` on B's within 1e-6 m (1e-5 m on a
-    convex hull), the shapes posed by Pinocchio (sphere, capsule, box, cylinder, convex hull, a
-    workspace wall), and each is the pair's distance from the other shape where that shape's
-    distance is exact (not a hull): they are the nearest points.  Shapes the backend declares it
-    does not hold exactly (``representation``) and shapes this check cannot evaluate are left out."""
+    """``p_WA`` lies on A's surface and ``p_WB`` on B's within 1e-6 m (1e-5 m on a convex hull), the
+    shapes posed by Pinocchio (sphere, capsule, box, cylinder, convex hull, a workspace wall), on
+    separated and on penetrating pairs (there: each shape's deepest point in the other); on separated
+    pairs each is the pair's distance from the other shape where that shape's distance is exact (not a
+    hull): they are the nearest points.  Shapes the backend declares it does not hold exactly
+    (``representation``) and shapes this check cannot evaluate are left out, and so are penetrating
+    pairs of two spheres or capsules whose cores (centre, segment) meet: any direction is then a
+    deepest one."""
     c = ctx.checker(model)
     _require_distances(c)
     checked = 0
-    for i, r, keep, on_a, on_b, a_in_b, b_in_a in _residuals(ctx, model, c):
+    for i, q, r, keep, on_a, on_b, a_in_b, b_in_a in _residuals(ctx, model, c):
         d = r.distance
-        for name, (res, tol, exact) in (("p_WA against B", a_in_b), ("p_WB against A", b_in_a)):
+        for side, (name, (res, tol, exact)) in enumerate((("p_WA against B", a_in_b), ("p_WB against A", b_in_a))):
             bad = np.flatnonzero(keep & (d > BAND) & np.isfinite(res) & exact & (np.abs(res - d) > tol))
-            expect(not bad.size, lambda: f"configuration {i}, pair {tuple(r.pairs[bad[0]])}: distance "
-                                         f"{d[bad[0]]:.12g} m but {name} is {res[bad[0]]:.12g} m from it")
-        sep = keep & (r.distance > BAND)
+            expect(not bad.size, lambda: f"{where(i, q)}, pair {tuple(r.pairs[bad[0]])}: distance "
+                                         f"{d[bad[0]]:.12g} m but {name} is {res[bad[0]]:.12g} m from it"
+                                         + _swapped((res, tol, exact), bad[0], side, r.pairs[bad[0]]))
+        pen = keep & (d < -BAND)
+        if pen.any():
+            pen[pen] = ~round_cores_meet(ctx.model(model), q, r.pairs[pen, 0], r.pairs[pen, 1])
         for side, (res, tol, _) in enumerate((on_a, on_b)):
             if side == 1:  # a workspace witness lies on one wall
                 res = np.where(r.pairs[:, 1] == "workspace", np.abs(res), res)
-            ok = sep & np.isfinite(res)
+            ok = (keep & (d > BAND) | pen) & np.isfinite(res)
             checked += int(ok.sum())
             bad = np.flatnonzero(ok & (np.abs(res) > tol))
-            expect(not bad.size, lambda: f"configuration {i}, pair {tuple(r.pairs[bad[0]])}: p_W{'AB'[side]} = "
+            expect(not bad.size, lambda: f"{where(i, q)}, pair {tuple(r.pairs[bad[0]])}: p_W{'AB'[side]} = "
                                          f"{getattr(r, 'p_W' + 'AB'[side])[bad[0]].tolist()} is {res[bad[0]]:.3g} m off "
                                          f"{r.pairs[bad[0], side]}'s surface (tolerance {tol[bad[0]]:g} m), "
-                                         f"distance {r.distance[bad[0]]:.9g} m")
+                                         f"distance {d[bad[0]]:.9g} m"
+                                         + _swapped((a_in_b, b_in_a)[side], bad[0], side, r.pairs[bad[0]]))
     if not checked:
-        raise NotApplicable("no separated pair with a shape whose surface this check can evaluate")
+        raise NotApplicable("no pair with a shape whose surface this check can evaluate")
 
 
 def check_sign_convention(ctx, model):
@@ -181,26 +217,27 @@ def check_sign_convention(ctx, model):
     c = ctx.checker(model)
     _require_distances(c)
     checked = 0
-    for i, r, keep, _, _, a_in_b, b_in_a in _residuals(ctx, model, c):
+    for i, q, r, keep, _, _, a_in_b, b_in_a in _residuals(ctx, model, c):
         d = r.distance
         for name, (res, tol, _) in (("p_WA against B", a_in_b), ("p_WB against A", b_in_a)):
             sep = keep & (d > BAND) & np.isfinite(res)
             checked += int(sep.sum())
             bad = np.flatnonzero(sep & (res < -tol))
-            expect(not bad.size, lambda: f"configuration {i}, pair {tuple(r.pairs[bad[0]])}: distance "
+            expect(not bad.size, lambda: f"{where(i, q)}, pair {tuple(r.pairs[bad[0]])}: distance "
                                          f"{d[bad[0]]:.9g} m > 0 but {name} is {-res[bad[0]]:.3g} m inside it")
         pen = keep & (d < -BAND) & np.isfinite(a_in_b[0]) & np.isfinite(b_in_a[0])
         checked += int(pen.sum())
         inside = np.minimum(a_in_b[0] - a_in_b[1], b_in_a[0] - b_in_a[1]) <= 0.0
         bad = np.flatnonzero(pen & ~inside)
-        expect(not bad.size, lambda: f"configuration {i}, pair {tuple(r.pairs[bad[0]])}: distance "
+        expect(not bad.size, lambda: f"{where(i, q)}, pair {tuple(r.pairs[bad[0]])}: distance "
                                      f"{d[bad[0]]:.9g} m < 0 but neither witness point is inside the other shape")
     if not checked:
         raise NotApplicable("no pair with a shape this check can evaluate")
 
 
 def check_bad_q_refused(ctx, model):
-    """NaN, infinite, wrongly shaped and non-numeric ``q`` / ``Q`` raise BackendError from
+    """NaN, infinite, wrongly shaped and non-numeric ``q`` / ``Q``, and a continuous joint's ``(cos, sin)``
+    off the unit circle (a model with one: a sheared link otherwise), raise BackendError from
     ``pair_distances`` and ``collides`` (and the optional batch paths), a joint outside its limits
     JointLimitError: never a verdict."""
     c = ctx.checker(model)
@@ -210,6 +247,11 @@ def check_bad_q_refused(ctx, model):
     nan[-1], inf[0] = np.nan, np.inf
     bad_q = {"NaN": nan, "inf": inf, "one value short": q[:-1], "one value extra": np.append(q, 0.0),
              "2-D": q[None], "text": ["a"] * m.nq}
+    circle = np.asarray(m.continuous_q, dtype=np.int64)  # a continuous joint's (cos, sin) at q[j], q[j + 1]
+    if circle.size:
+        off = q.copy()
+        off[circle[0]:circle[0] + 2] *= 1.5
+        bad_q["with a continuous joint's (cos, sin) off the unit circle"] = off
     if _distances(c):
         for what, bq in bad_q.items():
             _raises_backend_error(lambda: c.pair_distances(bq), f"pair_distances(q {what})")
@@ -219,6 +261,10 @@ def check_bad_q_refused(ctx, model):
     Qi = Q.copy()
     Qi[2, -1] = -np.inf
     bad_Q = {"a NaN row": Qn, "an infinite row": Qi, "one column short": Q[:, :-1], "1-D": Q[0], "3-D": Q[None]}
+    if circle.size:
+        Qc = Q.copy()
+        Qc[1, circle[0]:circle[0] + 2] *= 1.5
+        bad_Q["a continuous joint's (cos, sin) off the unit circle in a row"] = Qc
     for what, bQ in bad_Q.items():
         _raises_backend_error(lambda: c.collides(bQ), f"collides(Q with {what})")
         if _distances(c) and hasattr(c, "pair_distances_many"):
@@ -279,21 +325,28 @@ def check_capabilities_honoured(ctx, model):
 def check_collides_matches_distances(ctx, model):
     """``collides(Q, margin)`` is ``min(pair_distances(q).distance) <= margin`` row by row (margins 0
     and 0.05 m, and 0.5 mm either side of the clearest configurations' least distance), except
-    within the contact band of the margin; a batch answers as its rows alone."""
+    within the contact band of the margin; a batch answers as its rows alone, a batch of
+    :data:`BIG_BATCH` rows too (where a backend may take another path: threads, a pool)."""
     c = ctx.checker(model)
     _require_distances(c)
     Q = ctx.configs(model)
-    dmin = np.array([float(np.min(c.pair_distances(q).distance, initial=np.inf)) for q in Q])
+    dmin = np.array([float(np.min(answer(ctx, model, c, q, i).distance, initial=np.inf)) for i, q in enumerate(Q)])
+    big = np.resize(np.arange(len(Q)), BIG_BATCH)  # the configurations again and again
     for margin in (0.0, MARGIN):
         v = c.collides(Q, margin=margin)
         clear = np.abs(dmin - margin) > BAND
         bad = np.flatnonzero(clear & (v != (dmin <= margin)))
-        expect(not bad.size, lambda: f"margin {margin} m, configuration {bad[0]}: collides says {bool(v[bad[0]])} "
+        expect(not bad.size, lambda: f"margin {margin} m, {where(bad[0], Q[bad[0]])}: collides says {bool(v[bad[0]])} "
                                      f"but the least distance is {dmin[bad[0]]:.9g} m")
         one = np.array([bool(c.collides(q[None], margin=margin)[0]) for q in Q])
         bad = np.flatnonzero(clear & (one != v))
-        expect(not bad.size, lambda: f"margin {margin} m, configuration {bad[0]}: the batch says {bool(v[bad[0]])}, "
-                                     f"the row alone {bool(one[bad[0]])}")
+        expect(not bad.size, lambda: f"margin {margin} m, {where(bad[0], Q[bad[0]])}: the batch says "
+                                     f"{bool(v[bad[0]])}, the row alone {bool(one[bad[0]])}")
+        vb = np.asarray(c.collides(Q[big], margin=margin))
+        bad = np.flatnonzero(clear[big] & (vb != one[big])) if vb.shape == big.shape else [0]
+        expect(not len(bad), lambda: f"margin {margin} m: a batch of {BIG_BATCH} rows (the configurations repeated) "
+                                     f"answers {vb[bad[0]] if vb.shape == big.shape else vb.shape} in row {bad[0]} "
+                                     f"({where(big[bad[0]], Q[big[bad[0]]])}), the row alone {one[big[bad[0]]]}")
     # a margin just above / below a separated configuration's least distance turns its verdict
     for i in np.argsort(-dmin)[:2]:
         if dmin[i] > 2 * EDGE:
@@ -305,17 +358,25 @@ def check_collides_matches_distances(ctx, model):
 
 def check_deterministic(ctx, model):
     """The same ``q`` gives the same answer whatever was asked before: the configurations forwards,
-    backwards and again give identical distances, witness points and verdicts."""
+    backwards and again give identical distances, witness points and verdicts, and so does a fresh
+    Checker's very first call (no state from earlier calls: caches, warm starts, tables)."""
     c = ctx.checker(model)
     Q = ctx.configs(model)
     if _distances(c):
-        fwd = [c.pair_distances(q) for q in Q]
-        back = [c.pair_distances(q) for q in Q[::-1]][::-1]
+        fwd = [answer(ctx, model, c, q, i) for i, q in enumerate(Q)]
+        back = [answer(ctx, model, c, q, i) for i, q in reversed(list(enumerate(Q)))][::-1]
         for i, (a, b) in enumerate(zip(fwd, back)):
             for key in ("distance", "p_WA", "p_WB"):
                 x, y = getattr(a, key), getattr(b, key)
-                expect(np.array_equal(x, y), lambda: f"configuration {i}: {key} differs between two calls "
+                expect(np.array_equal(x, y), lambda: f"{where(i, Q[i])}: {key} differs between two calls "
                                                      f"(by up to {np.max(np.abs(x - y)):.3g} m) after other configurations")
+        k = len(Q) - 1
+        first = ctx.build(model).pair_distances(Q[k])  # a fresh Checker's first call
+        for key in ("distance", "p_WA", "p_WB"):
+            x, y = np.asarray(getattr(first, key)), getattr(fwd[k], key)
+            expect(x.shape == y.shape and np.array_equal(x, y),
+                   lambda: f"{where(k, Q[k])}: a fresh Checker's first call answers {key} otherwise than a used one "
+                           + (f"(by up to {np.max(np.abs(x - y)):.3g} m)" if x.shape == y.shape else f"(shape {x.shape})"))
     v1, v2 = c.collides(Q), c.collides(Q[::-1])[::-1]
     expect(np.array_equal(v1, v2), f"collides differs for configurations {np.flatnonzero(v1 != v2).tolist()} "
                                    "when the batch is reversed")
@@ -345,7 +406,7 @@ def check_coal_distances(ctx, model):
     rep = set(getattr(c, "representation", {}) or {})
     approx = np.array([a in rep or b in rep for a, b in names])
     for i, q in enumerate(ctx.configs(model)):
-        r, rr = c.pair_distances(q), ref[i]
+        r, rr = answer(ctx, model, c, q, i), ref[i]
         d, dr = r.distance, rr.distance
         far = np.abs(dr) > BAND
         bad = np.flatnonzero(far & (np.sign(d) != np.sign(dr)) & ~approx)

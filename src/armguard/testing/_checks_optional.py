@@ -11,11 +11,12 @@ import threading
 import numpy as np
 
 from .._tolerance import DEFAULT_TOLERANCES as TOL
-from ._checks import _distances, _has_pairs_argument, _raises_backend_error, _require_distances
+from ._checks import _distances, _has_pairs_argument, _raises_backend_error, _require_distances, answer, where
 from ._suite import NotApplicable, expect
 from ._threads import run_in_threads
 
-__all__ = ["check_optional_fast_paths", "check_pair_subset", "check_pair_distances_many", "check_thread_safety"]
+__all__ = ["check_optional_fast_paths", "check_pair_subset", "check_pair_distances_many", "check_thread_safety",
+           "check_results_kept", "check_distance_jacobian"]
 
 
 def check_optional_fast_paths(ctx, model):
@@ -26,7 +27,7 @@ def check_optional_fast_paths(ctx, model):
     if not (hasattr(c, "nearest") or hasattr(c, "min_distance_many")):
         raise NotApplicable("no nearest / min_distance_many")
     Q = ctx.configs(model)
-    full = [c.pair_distances(q) for q in Q]
+    full = [answer(ctx, model, c, q, i) for i, q in enumerate(Q)]
     if hasattr(c, "nearest"):
         for i, q in enumerate(Q):
             got, want = c.nearest(q), full[i].nearest()
@@ -77,7 +78,7 @@ def check_pair_subset(ctx, model):
                "sorted": np.sort(rng.choice(n, size=max(1, n // 3), replace=False)),
                "unsorted": rng.permutation(n)[: max(1, n // 2)]}
     for i, q in enumerate(ctx.configs(model)[:3]):
-        full = c.pair_distances(q)
+        full = answer(ctx, model, c, q, i)
         for what, idx in subsets.items():
             _same_rows(c.pair_distances(q, pairs=idx), full, idx, f"configuration {i}, pairs={what}")
     q = ctx.configs(model)[0]
@@ -97,7 +98,7 @@ def check_pair_distances_many(ctx, model):
     Q = ctx.configs(model)
     m = ctx.model(model)
     n = len(m.pairs)
-    full = [c.pair_distances(q) for q in Q]
+    full = [answer(ctx, model, c, q, i) for i, q in enumerate(Q)]
     rows = np.random.default_rng(ctx.seed).permutation(n)[: max(1, n // 3)]
     takes_pairs = _has_pairs_argument(c) and "pairs" in inspect.signature(c.pair_distances_many).parameters
     for subset in ((None, rows) if takes_pairs else (None,)):
@@ -177,3 +178,83 @@ def check_thread_safety(ctx, model):
 
     run_in_threads([functools.partial(work, t) for t in range(THREADS)])
     expect(not problems, lambda: f"{len(problems)} of {THREADS} threads saw wrong answers; first: {problems[0]}")
+
+
+# ================================================================ results stay the caller's
+def check_results_kept(ctx, model):
+    """An answer stays as it was returned whatever is asked after it: ``pair_distances(q)``'s arrays,
+    ``collides(Q)``'s and ``pair_distances_many(Q)``'s are the caller's, not the backend's scratch
+    (a later call that wrote into them changed a result already handed out)."""
+    c = ctx.checker(model)
+    Q = ctx.configs(model)
+    later = [lambda: c.collides(Q[::-1])]
+    kept = {"collides(Q)": (c.collides(Q),)}
+    if _distances(c):
+        kept["pair_distances(configuration 0)"] = _arrays(c.pair_distances(Q[0]))
+        later += [lambda: c.pair_distances(q) for q in Q[1:]]
+        if hasattr(c, "pair_distances_many"):
+            kept["pair_distances_many(Q)"] = _arrays(c.pair_distances_many(Q))
+            later.append(lambda: c.pair_distances_many(Q[::-1]))
+    copies = {what: tuple(np.array(a, copy=True) for a in arrays) for what, arrays in kept.items()}
+    for call in later:
+        call()
+    for what, arrays in kept.items():
+        for a, was in zip(arrays, copies[what]):
+            expect(np.array_equal(a, was, equal_nan=True),
+                   f"{what}: an answer changed after later calls (it shares memory the backend writes again): "
+                   "return arrays of their own (copies), not the backend's scratch")
+
+
+def _arrays(r) -> tuple:
+    return tuple(getattr(r, k) for k in ("distance", "p_WA", "p_WB"))
+
+
+# ================================================================ distance Jacobians
+JACOBIAN_STEPS = (1e-4, 1e-3)  # rad or m: central differences at both; rows where they disagree are left out
+JACOBIAN_REL = 1e-2  # row norms: |J - differences| / max(|differences|, JACOBIAN_FLOOR)
+JACOBIAN_FLOOR = 1e-2  # m/rad
+
+
+def check_distance_jacobian(ctx, model):
+    """``pair_distances(q, jacobian=True)`` (where the Checker takes ``jacobian``): ``jacobian (n, nv)``
+    float64 and ``smooth (n,)`` bool, the same distances as without; on rows it calls smooth, each
+    row equals the central differences of the backend's own distances (at 1e-4 and 1e-3, where the two
+    agree and show no kink) within 1 % of the row's norm (floored at 1 cm/rad).  A wrong sign or
+    column steers collision avoidance (``armguard.avoidance``) into the obstacle."""
+    from ..backends._jacobian import finite_difference_rows
+
+    c = ctx.checker(model)
+    _require_distances(c)
+    try:
+        takes = "jacobian" in inspect.signature(c.pair_distances, follow_wrapped=False).parameters
+    except (TypeError, ValueError):
+        takes = False
+    if not takes:
+        raise NotApplicable("pair_distances takes no jacobian= argument")
+    m = ctx.model(model)
+    n, nv = len(m.pairs), m.pin_model.nv
+    compared = 0
+    pick = list(enumerate(ctx.configs(model)))
+    for i, q in pick[1:3] or pick:  # two random configurations (the neutral pose alone when there are none)
+        r = c.pair_distances(q, jacobian=True)
+        J, smooth = getattr(r, "jacobian", None), getattr(r, "smooth", None)
+        expect(isinstance(J, np.ndarray) and J.shape == (n, nv) and J.dtype == np.float64,
+               lambda: f"{where(i, q)}: jacobian must be a float64 array of shape {(n, nv)}, got "
+                       f"{getattr(J, 'dtype', type(J).__name__)} {getattr(J, 'shape', '')}")
+        expect(isinstance(smooth, np.ndarray) and smooth.shape == (n,) and smooth.dtype == bool,
+               lambda: f"{where(i, q)}: smooth must be a bool array of shape {(n,)}, got "
+                       f"{getattr(smooth, 'dtype', type(smooth).__name__)} {getattr(smooth, 'shape', '')}")
+        expect(np.array_equal(r.distance, answer(ctx, model, c, q, i).distance),
+               f"{where(i, q)}: the distances with jacobian=True differ from those without")
+        fd, kink = finite_difference_rows(c, q, None, step=JACOBIAN_STEPS[0])
+        fd10, kink10 = finite_difference_rows(c, q, None, step=JACOBIAN_STEPS[1])
+        scale = np.maximum(np.linalg.norm(fd, axis=1), JACOBIAN_FLOOR)
+        ok = smooth & ~kink & ~kink10 & (np.linalg.norm(fd - fd10, axis=1) / scale <= JACOBIAN_REL)
+        err = np.linalg.norm(J - fd, axis=1) / scale
+        bad = np.flatnonzero(ok & (err > JACOBIAN_REL))
+        compared += int(ok.sum())
+        expect(not bad.size, lambda: f"{where(i, q)}, pair {tuple(r.pairs[bad[0]])}: jacobian row "
+                                     f"{np.round(J[bad[0]], 6).tolist()}, central differences "
+                                     f"{np.round(fd[bad[0]], 6).tolist()} (relative error {err[bad[0]]:.3g})")
+    if not compared:
+        raise NotApplicable("no row smooth at the configurations checked")

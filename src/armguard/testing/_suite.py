@@ -22,10 +22,11 @@ from .._values import whole_number
 __all__ = ["Check", "Context", "ConformanceError", "NotApplicable", "ConformanceReport", "checks", "check_backend", "EDITED_MODELS",
            "DEFAULT_MODELS", "load_conformance_model"]
 
-DEFAULT_MODELS = ("ranger", "hermes", "puma560", "gmf_s480", "rover", "panda", "ur5", "panda+edits")
-"""The built-in models, two public robots (example-robot-data's Panda and UR5, with their SRDFs)
-and the Panda edited in process (``"panda+edits"``: every shape kind added, a payload, a second
-arm appended; :data:`EDITED_MODELS`)."""
+DEFAULT_MODELS = ("ranger", "hermes", "puma560", "gmf_s480", "rover", "panda", "ur5", "kinova", "panda+edits")
+"""The built-in models, three public robots (example-robot-data's Panda and UR5, with their SRDFs,
+and Kinova's arm, whose continuous joints Pinocchio holds as ``(cos, sin)``) and the Panda edited in
+process (``"panda+edits"``: every shape kind added, a payload, a second arm appended;
+:data:`EDITED_MODELS`)."""
 
 REFERENCE = "coal"
 
@@ -51,12 +52,14 @@ class _Failed(Exception):
 
 
 def fail(detail: str):
+    __tracebackhide__ = True  # pytest shows the check's line, not the suite's machinery
     raise _Failed(detail)
 
 
 def expect(ok, detail) -> None:
     """Fail with ``detail`` (a string, or a callable giving one) unless ``ok``; never an ``assert``
     (those vanish under ``python -O``)."""
+    __tracebackhide__ = True
     if not ok:
         raise _Failed(detail() if callable(detail) else detail)
 
@@ -231,6 +234,7 @@ class Check:
         return self.context.xfail_reason(self.name, self.model)
 
     def __call__(self) -> None:
+        __tracebackhide__ = True
         try:
             self.func(self.context, self.model)
         except _Failed as exc:

@@ -88,3 +88,40 @@ def surface_residuals(model, q, names, p_W) -> tuple[np.ndarray, np.ndarray, np.
         if hull:
             tol[k], exact[k] = TOL.differential_hull, False
     return res, tol, exact
+
+
+def round_cores_meet(model, q, names_a, names_b) -> np.ndarray:
+    """``(n,) bool``: the pairs of two spheres or capsules (coal's axis local z) whose cores, a centre
+    or an axis segment, meet at ``q`` (within ``Tolerances.length``).  There the penetration has no
+    one deepest direction: any pair of surface points along a line through the meeting point is as
+    deep, and a backend's witness points may lie anywhere on that line (coal's do, inside the shapes)."""
+    import pinocchio as pin
+
+    from ..geometry import Capsule, Sphere, distance
+
+    gm = model.collision_model
+    data = model.pin_model.createData()
+    gdata = pin.GeometryData(gm)
+    pin.updateGeometryPlacements(model.pin_model, data, gm, gdata, np.asarray(q, dtype=np.float64))
+
+    def core(name):
+        if name == "workspace":
+            return None
+        i = model.geometry_index(name)
+        g = gm.geometryObjects[i].geometry
+        M = gdata.oMg[i]
+        kind = type(g).__name__
+        if kind == "Sphere":
+            return Sphere(np.asarray(M.translation), float(g.radius)), float(g.radius)
+        if kind == "Capsule":
+            h = np.asarray(M.rotation)[:, 2] * float(g.halfLength)
+            t = np.asarray(M.translation)
+            return Capsule(t - h, t + h, float(g.radius)), float(g.radius)
+        return None
+
+    out = np.zeros(len(names_a), dtype=bool)
+    for k, (a, b) in enumerate(zip(names_a, names_b)):
+        ca, cb = core(a), core(b)
+        if ca is not None and cb is not None:
+            out[k] = distance(ca[0], cb[0]).distance + ca[1] + cb[1] <= TOL.length
+    return out
