@@ -5,7 +5,9 @@ the explicit argument, else ``$ARMGUARD_BACKEND``, else ``armguard.toml`` (``[ba
 …`` and options, in the working directory or the file given by ``config=`` /
 ``$ARMGUARD_CONFIG``), else ``"analytic"``.  Backends register under the entry-point group
 ``armguard.backends`` (``importlib.metadata``): a third party adds one by installing a
-package.  ``available()`` lists the installed ones.
+package.  ``available()`` lists the installed ones, a backend whose package (or a package it needs)
+does not import included: ``get_backend`` / ``checker`` then raise a BackendError naming it and the
+missing module.
 
 The entry points are discovered once per ``sys.path`` (``importlib.metadata`` reads every
 installed distribution's metadata, ~3-6 ms, and ``get_backend`` runs on every Detector's
@@ -72,12 +74,25 @@ def refresh() -> tuple[str, ...]:
 
 
 def get_backend(name: str) -> Backend:
-    """The installed backend ``name``; an unknown name lists the installed ones."""
+    """The installed backend ``name``; an unknown name lists the installed ones.  A backend whose
+    package (or a package it needs) fails to import is a BackendError naming it and the module."""
     eps = _entry_points()
     if name not in eps:
         raise BackendError(f"unknown backend {name!r}; installed backends are {sorted(eps)}")
-    obj = eps[name].load()
-    return obj() if isinstance(obj, type) else obj
+    ep = eps[name]
+    try:
+        obj = ep.load()
+        return obj() if isinstance(obj, type) else obj
+    except ImportError as exc:
+        raise _load_error(name, exc, f"loading its entry point {getattr(ep, 'value', ep)!r}") from exc
+
+
+def _load_error(name: str, exc: ImportError, where: str) -> BackendError:
+    """The BackendError of backend ``name`` whose import failed with ``exc`` while ``where``: it is listed
+    by :func:`available` (its entry point is installed) but cannot be used."""
+    why = "its package or a dependency is not installed" if isinstance(exc, ModuleNotFoundError) else \
+        "its package or a dependency is installed but does not import (a broken or mismatched install)"
+    return BackendError(f"backend {name!r} could not be loaded: {exc} ({why}; raised while {where})")
 
 
 _CHOICE: contextvars.ContextVar = contextvars.ContextVar("armguard_backend_choice", default=(None, None))
@@ -156,9 +171,11 @@ def checker(model, backend: str | None = None, options: Mapping | None = None, *
     name, opts = resolve(backend, options, config=config)
     try:
         return get_backend(name).build(model, opts)
+    except ImportError as exc:  # a backend that imports its dependency on build (fcl: python-fcl)
+        raise _load_error(name, exc, "building its checker") from exc
     except BackendError as exc:  # an option the backend refuses: named with the file it came from
         source = _options_file(name, options, config)
-        if source is None:
+        if source is None or isinstance(exc.__cause__, ImportError):  # a failed import is no option's fault
             raise
         raise BackendError(f"{source}: [backend]: {exc}") from None
 

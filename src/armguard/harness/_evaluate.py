@@ -4,6 +4,11 @@ Serially, or on Dask (a fresh ``LocalCluster(n_workers=N, threads_per_worker=1)`
 scheduler): the configurations are cut into chunks; each worker loads the model and builds its
 checkers once (a per-process cache keyed by the model spec, backends and options), and answers
 its chunks.  The answers do not depend on where they were computed.
+
+Every answer is checked where the harness receives it (after the timed calls): a distance or witness
+point that is NaN or infinite, an array of another shape or type, verdict codes other than CLEAR /
+COLLISION / UNDECIDED are a :class:`~armguard.BackendError` naming the backend, the configuration
+(``#k``) and its ``q`` (and the pair), not a comparison of a wrong answer nor a crash further on.
 """
 
 from __future__ import annotations
@@ -15,10 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._errors import ArmguardError
+from .._errors import ArmguardError, BackendError
 
 __all__ = ["BackendAnswers", "evaluate", "build_checkers", "parse_backend_options", "answers_distances", "verdict_detail",
-           "combine_codes", "CLEAR", "COLLISION", "UNDECIDED"]
+           "combine_codes", "checked_distances", "check_finite", "checked_verdicts", "CLEAR", "COLLISION", "UNDECIDED"]
 
 _CACHE: dict = {}
 
@@ -95,21 +100,28 @@ def _codes_of(values) -> np.ndarray:
     return out
 
 
-def verdict_detail(checker, Q) -> dict:
+def verdict_detail(checker, Q, *, backend: str | None = None, where: str | None = None) -> dict:
     """A verdicts-only backend's three-valued answers at ``Q`` ``(m, nq)``, where it exposes them.
 
     ``check_pairs(Q, subdivide=True)`` (clip: per-pair codes after the 8 steps and with the second
     level) or ``verdicts(Q)`` (forbidden: a batch with ``status`` codes; or an array of statuses);
     ``{}`` for a backend with neither.  Keys: ``codes``, and ``codes_first``, ``pair_codes``,
     ``pair_codes_first`` (``check_pairs``) or ``map_forbidden`` (a CombinedBatch); see :class:`BackendAnswers`.
+    Codes of another shape than ``(m, n)`` / ``(m,)``, or other than CLEAR, COLLISION, UNDECIDED, are a
+    BackendError naming ``backend`` (default: the checker's name) and ``where`` (the configurations).
     """
+    backend = backend or str(getattr(checker, "name", type(checker).__name__))
+    where = where or f"{len(Q)} configurations"
+    model = getattr(checker, "model", None)
+    n = len(model.pairs) if model is not None and hasattr(model, "pairs") else None
     if hasattr(checker, "check_pairs"):
         try:
             b = checker.check_pairs(Q, subdivide=True)
         except TypeError:
             b = checker.check_pairs(Q)
-        pc = np.asarray(b.pair_codes, dtype=np.int8)
-        first = np.asarray(getattr(b, "pair_codes_8", pc), dtype=np.int8)
+        pc = _codes_array(backend, "pair_codes", getattr(b, "pair_codes", None), (len(Q), n), where)
+        first = pc if getattr(b, "pair_codes_8", None) is None else \
+            _codes_array(backend, "pair_codes_8", b.pair_codes_8, (len(Q), n), where)
         return {"codes": combine_codes(pc, len(Q)), "codes_first": combine_codes(first, len(Q)), "pair_codes": pc,
                 "pair_codes_first": first}
     if not hasattr(checker, "verdicts"):
@@ -121,10 +133,33 @@ def verdict_detail(checker, Q) -> dict:
 
         status = [CombinedStatus(int(s)) for s in np.asarray(status)]
     codes = _codes_of(np.asarray(status, dtype=object))
+    if codes.shape != (len(Q),):
+        raise BackendError(f"backend {backend!r} answered verdicts of shape {codes.shape} at {where}, expected ({len(Q)},)")
     out = {"codes": codes}
     if hasattr(v, "collision"):
         out["map_forbidden"] = codes == UNDECIDED
     return out
+
+
+def _codes_array(backend: str, what: str, a, shape: tuple, where: str) -> np.ndarray:
+    """``a`` as ``int8`` codes CLEAR / COLLISION / UNDECIDED of ``shape`` (``(m, None)``: any pair count),
+    else the BackendError of ``backend``'s answer ``what``."""
+    try:
+        arr = np.asarray(a)
+    except (TypeError, ValueError):
+        arr = np.asarray(None)
+    if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
+        raise BackendError(f"backend {backend!r} answered {what} of "
+                           f"{type(a).__name__ if a is None else f'dtype {arr.dtype}'} at {where}, expected integer codes")
+    if arr.ndim != 2 or any(want is not None and got != want for got, want in zip(arr.shape, shape)):
+        raise BackendError(f"backend {backend!r} answered {what} of shape {arr.shape} at {where}, expected "
+                           f"{tuple('n' if x is None else x for x in shape)}")
+    ok = (arr == CLEAR) | (arr == COLLISION) | (arr == UNDECIDED)
+    if not ok.all():
+        bad = sorted({int(x) for x in arr[~ok]})[:5]
+        raise BackendError(f"backend {backend!r} answered {what} codes {bad} at {where}, expected {CLEAR} (clear), "
+                           f"{COLLISION} (collision) or {UNDECIDED} (undecided)")
+    return arr.astype(np.int8, copy=False)
 
 
 def combine_codes(pair_codes: np.ndarray, m: int | None = None) -> np.ndarray:
@@ -137,15 +172,18 @@ def combine_codes(pair_codes: np.ndarray, m: int | None = None) -> np.ndarray:
 
 
 def _scalar(text: str):
-    """``"1"`` -> 1, ``"1e-9"`` -> 1e-9, ``"true"``/``"false"`` -> bool, anything else the string itself."""
+    """``"1"`` -> 1, ``"1e-9"`` -> 1e-9, ``"true"``/``"false"`` -> bool, anything else the string itself
+    (``"nan"``, ``"inf"`` included: no finite number, for the backend to refuse by name; as a float it
+    reached compare.json, which holds no NaN)."""
     low = text.strip().lower()
     if low in ("true", "false"):
         return low == "true"
     for kind in (int, float):
         try:
-            return kind(text)
+            value = kind(text)
         except ValueError:
-            pass
+            continue
+        return value if math.isfinite(value) else text
     return text
 
 
@@ -176,10 +214,89 @@ def build_checkers(model, backends, options=None) -> dict:
         if answers_distances(c):
             c.pair_distances(warm[0])
         else:
-            verdict_detail(c, warm)
+            verdict_detail(c, warm, backend=b, where=f"the {len(warm)} warm-up configurations (the neutral q, then "
+                                                       "model.random_q(64, seed=0))")
         c.collides(warm)
         out[b] = c
     return out
+
+
+def rows_of(start: int, m: int) -> str:
+    """Configurations ``#start`` .. ``#start + m - 1`` of the comparison, in words."""
+    return f"configuration #{start}" if m == 1 else f"configurations #{start}..#{start + m - 1}"
+
+
+def where_of(config, q) -> str:
+    """The configuration a backend answered for: ``#k`` of the comparison's, or (None) the one given."""
+    at = "the configuration given" if config is None else f"configuration #{config}"
+    return f"{at} (q = {[float(v) for v in np.asarray(q).ravel()]})"
+
+
+def _real_array(backend: str, what: str, a, shape: tuple, config, q) -> np.ndarray:
+    """``a`` (an array of ``shape`` and a real number dtype) as float64, else the BackendError of
+    ``backend``'s answer ``what`` at ``q`` (configuration ``#config``; None: the one given)."""
+    if type(a) is np.ndarray and a.dtype == np.float64 and a.shape == shape:  # every backend's answer
+        return a
+    try:
+        arr = np.asarray(a)
+    except (TypeError, ValueError):
+        arr = None
+    if arr is None or arr.dtype == bool or not (np.issubdtype(arr.dtype, np.floating) or np.issubdtype(arr.dtype, np.integer)):
+        kind = type(a).__name__ if arr is None else f"dtype {arr.dtype}"
+        raise BackendError(f"backend {backend!r} answered {what} of {kind} at {where_of(config, q)}, expected real "
+                           "numbers (float64)")
+    if arr.shape != shape:
+        raise BackendError(f"backend {backend!r} answered {what} of shape {arr.shape} at {where_of(config, q)}, "
+                           f"expected {shape}")
+    return arr.astype(np.float64, copy=False)
+
+
+def checked_distances(backend: str, r, n: int, config, q) -> tuple:
+    """``(distance (n,), p_WA (n, 3), p_WB (n, 3))`` of backend ``backend``'s ``pair_distances`` answer ``r``
+    at ``q`` (configuration ``#config``; None: the one given), else a BackendError naming the backend,
+    the configuration and what is wrong: no PairDistances, an array of another shape or not of real
+    numbers.  Finiteness: :func:`check_finite` (one pass over a whole chunk)."""
+    try:
+        d, pa, pb = r.distance, r.p_WA, r.p_WB
+    except AttributeError:
+        raise BackendError(f"backend {backend!r} answered pair_distances with {type(r).__name__} at "
+                           f"{where_of(config, q)}, expected a PairDistances (distance, p_WA, p_WB)") from None
+    return (_real_array(backend, "distance", d, (n,), config, q), _real_array(backend, "p_WA", pa, (n, 3), config, q),
+            _real_array(backend, "p_WB", pb, (n, 3), config, q))
+
+
+def check_finite(backend: str, model, d, pa, pb, Q, start) -> None:
+    """A BackendError naming ``backend``, the configuration, ``q`` and the pair at the first NaN or
+    infinite distance or witness point of ``d`` ``(m, n)``, ``pa``, ``pb`` ``(m, n, 3)`` at rows ``Q``
+    (configurations ``start + i``; ``start`` None: the one given)."""
+    for what, a in (("distance", d), ("witness point p_WA", pa), ("witness point p_WB", pb)):
+        bad = ~np.isfinite(a)
+        if not bad.any():
+            continue
+        i, k = (int(x) for x in np.argwhere(bad)[0][:2])
+        names = model.pairs.names
+        value = a[i, k]
+        shown = str(float(value)).replace("nan", "NaN") if a.ndim == 2 else str([float(v) for v in value])
+        raise BackendError(f"backend {backend!r} answered {what} {shown} at "
+                           f"{where_of(None if start is None else start + i, Q[i])} for pair "
+                           f"({str(names[k, 0])!r}, {str(names[k, 1])!r}), expected finite values (m)")
+
+
+def checked_verdicts(backend: str, v, Q, start) -> np.ndarray:
+    """``(m,) bool``: backend ``backend``'s ``collides(Q)`` answer ``v`` for rows ``Q`` (configurations
+    ``start``..; None: the one given), else a BackendError naming the backend and the configurations."""
+    m = len(Q)
+    where = where_of(None, Q[0]) if start is None else rows_of(start, m)
+    try:
+        arr = np.asarray(v)
+    except (TypeError, ValueError):
+        arr = None
+    if arr is None or arr.dtype != bool:
+        kind = type(v).__name__ if arr is None else f"dtype {arr.dtype}"
+        raise BackendError(f"backend {backend!r} answered collides of {kind} at {where}, expected bool")
+    if arr.shape != (m,):
+        raise BackendError(f"backend {backend!r} answered collides of shape {arr.shape} at {where}, expected ({m},)")
+    return arr
 
 
 def _cached(spec: str, backends: tuple, options_json: str):
@@ -193,8 +310,11 @@ def _cached(spec: str, backends: tuple, options_json: str):
     return _CACHE[key]
 
 
-def _answer_chunk(model, checkers: dict, Q: np.ndarray) -> dict:
-    """``{backend: {field: value}}`` for rows ``Q``: the :class:`BackendAnswers` fields of this chunk."""
+def _answer_chunk(model, checkers: dict, Q: np.ndarray, start: int = 0) -> dict:
+    """``{backend: {field: value}}`` for rows ``Q`` (configurations ``start``..): the :class:`BackendAnswers`
+    fields of this chunk.  Each answer is checked at the boundary, after the timed calls: an answer of
+    another shape or type, or a NaN or infinite distance or witness point, is a BackendError naming
+    the backend, the configuration and ``q`` (and the pair), never a comparison of it."""
     n = len(model.pairs)
     m = len(Q)
     out = {}
@@ -205,25 +325,38 @@ def _answer_chunk(model, checkers: dict, Q: np.ndarray) -> dict:
             pa = np.empty((m, n, 3))
             pb = np.empty((m, n, 3))
             pd = c.pair_distances
+            rs = []  # the answers, for their shapes (a backend may answer views of its scratch: values copied here)
             t0 = time.perf_counter()
-            for i in range(m):
-                r = pd(Q[i])
-                d[i], pa[i], pb[i] = r.distance, r.p_WA, r.p_WB
-            rec.update(distance=d, p_WA=pa, p_WB=pb, t_distances=time.perf_counter() - t0)
+            try:
+                for i in range(m):
+                    r = pd(Q[i])
+                    rs.append(r)
+                    d[i], pa[i], pb[i] = r.distance, r.p_WA, r.p_WB
+            except (AttributeError, TypeError, ValueError):  # not a PairDistances, or arrays that do not fit
+                if len(rs) == i + 1:
+                    checked_distances(b, rs[i], n, start + i, Q[i])
+                raise
+            rec["t_distances"] = time.perf_counter() - t0
+            for i, r in enumerate(rs):  # a (1,) distance or (3,) point broadcast into the rows unnoticed
+                checked_distances(b, r, n, start + i, Q[i])
+            check_finite(b, model, d, pa, pb, Q, start)
+            rec.update(distance=d, p_WA=pa, p_WB=pb)
         else:
             t0 = time.perf_counter()
-            rec.update(verdict_detail(c, Q), verdicts_only=True, t_distances=0.0)
+            rec.update(verdict_detail(c, Q, backend=b, where=rows_of(start, m)),
+                       verdicts_only=True, t_distances=0.0)
             rec["t_detail"] = time.perf_counter() - t0
         t1 = time.perf_counter()
-        rec["verdict"] = np.asarray(c.collides(Q), dtype=bool)
+        v = c.collides(Q)
         rec["t_verdicts"] = time.perf_counter() - t1
+        rec["verdict"] = checked_verdicts(b, v, Q, start)
         out[b] = rec
     return out
 
 
-def _chunk_task(spec, backends, options_json, Q):
+def _chunk_task(spec, backends, options_json, Q, start=0):
     model, checkers = _cached(spec, tuple(backends), options_json)
-    return _answer_chunk(model, checkers, Q)
+    return _answer_chunk(model, checkers, Q, start)
 
 
 _ARRAYS = ("distance", "p_WA", "p_WB", "verdict", "codes", "codes_first", "pair_codes", "pair_codes_first",
@@ -261,7 +394,7 @@ def evaluate(model, Q, backends, options=None, *, spec: str | None = None, worke
         size = chunk_size or 256
         parts = []
         for s in range(0, M, size):
-            parts.append(_answer_chunk(model, checkers, Q[s:s + size]))
+            parts.append(_answer_chunk(model, checkers, Q[s:s + size], s))
             if progress is not None:
                 progress(min(M, s + size), M)
         return _merge(parts, backends) if parts else _merge([_answer_chunk(model, checkers, Q)], backends)
@@ -280,7 +413,7 @@ def _on_dask(spec, Q, backends, options, workers, scheduler, chunk_size, progres
         size = chunk_size or max(1, math.ceil(M / (4 * n_workers)))
         starts = list(range(0, M, size)) or [0]
         opts = json.dumps(options, sort_keys=True)
-        futures = {client.submit(_chunk_task, spec, backends, opts, Q[s:s + size], pure=False): k
+        futures = {client.submit(_chunk_task, spec, backends, opts, Q[s:s + size], s, pure=False): k
                    for k, s in enumerate(starts)}
         parts: list = [None] * len(starts)
         done = 0

@@ -6,13 +6,15 @@ import json
 import math
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
 from .._errors import ArmguardError
 from ._compare import Comparison, compare_answers, judged, reference_distance, reference_of
 from ._configs import build_configs
-from ._evaluate import answers_distances, build_checkers, evaluate, verdict_detail
+from ._evaluate import (answers_distances, build_checkers, check_finite, checked_distances, checked_verdicts, evaluate,
+                        verdict_detail, where_of)
 from ._models import resolve_model
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._verdicts import NA, code_names, verdict_tables
@@ -102,6 +104,18 @@ def _previous_outputs(out: Path) -> tuple:
     return tuple(n for n in names if isinstance(n, str)) if isinstance(names, list) else ()
 
 
+def _non_finite(x, where: str = ""):
+    """``(path, value)`` of the first NaN or infinite float in the summary ``x`` (dicts, lists), or None."""
+    if isinstance(x, (float, np.floating)):
+        return None if math.isfinite(x) else (where, float(x))
+    items = x.items() if isinstance(x, dict) else enumerate(x) if isinstance(x, (list, tuple)) else ()
+    for k, v in items:
+        found = _non_finite(v, f"{where}[{k!r}]")
+        if found is not None:
+            return found
+    return None
+
+
 def _write_set(comp: Comparison, out_dir, *, plots: bool, t_start: float | None = None) -> list:
     from .._io import atomic_write, output_set
     from ._plots import write_plots
@@ -111,6 +125,11 @@ def _write_set(comp: Comparison, out_dir, *, plots: bool, t_start: float | None 
         for k, v in list(b.items()):
             if isinstance(v, float) and not math.isfinite(v):
                 b[k] = None
+    bad = _non_finite(comp.summary)
+    if bad is not None:  # refused before the folder is touched: the previous set stays as it was
+        where, value = bad
+        raise ArmguardError(f"{out / 'compare.json'}: summary{where} = {value!r} is not a finite number (JSON holds "
+                            "none); nothing written")
     with output_set(out, stale=_previous_outputs(out)) as staging:
         names = [p.name for p in write_plots(comp, staging)] if plots else []
         comp.summary["outputs"] = ["compare.json", *names]
@@ -182,12 +201,15 @@ def compare_at(spec, backends, q, *, options=None, pair=None, model=None) -> lis
     q = check_q(model, q)  # q="abc" was a raw ValueError; every backend's rule (shape, finite, limits) before any is built
     checkers = build_checkers(model, backends, options)
     res = {}
-    for b, c in checkers.items():
+    n = len(model.pairs)
+    for b, c in checkers.items():  # each answer checked as the comparison checks it (shape, type, finite)
         if answers_distances(c):
-            res[b] = c.pair_distances(q)
+            d, pa, pb = checked_distances(b, c.pair_distances(q), n, None, q)
+            check_finite(b, model, d[None], pa[None], pb[None], q[None], None)
+            res[b] = SimpleNamespace(distance=d, p_WA=pa, p_WB=pb)
         else:
-            det = verdict_detail(c, q[None])
-            res[b] = (bool(np.asarray(c.collides(q[None]))[0]), det)
+            det = verdict_detail(c, q[None], backend=b, where=where_of(None, q))
+            res[b] = (bool(checked_verdicts(b, c.collides(q[None]), q[None], None)[0]), det)
     names = model.pairs.names
     rows = []
     for k in range(len(names)):
