@@ -286,6 +286,25 @@ def test_a_declared_failure_is_reported_not_raised():
     assert list(report.xfailed) == ["sign_convention[puma560]"] and "known: flips signs" in str(report)
 
 
+def test_run_check_marks_a_declared_failure_xfail_for_a_packages_own_tests():
+    """docs/backends.md's snippet for a backend package's own tests ran ``check()`` bare: a failure the Checker
+    declares (``conformance_xfail``) failed there.  ``armguard.testing.run_check`` marks it xfail first."""
+    from types import SimpleNamespace
+
+    import armguard.testing
+
+    check = checks(_Mutant("sign flipped"), models=["puma560"], n_configs=N_CONFIGS, only=["sign_convention"],
+                   xfail={"sign_convention": "known: flips signs"})[0]
+    markers = []
+    request = SimpleNamespace(node=SimpleNamespace(add_marker=markers.append))
+    with pytest.raises(ConformanceError):
+        armguard.testing.run_check(check, request)
+    assert [(m.mark.name, m.mark.kwargs["reason"]) for m in markers] == [("xfail", "known: flips signs")]
+    honest = checks(_Mutant("none"), models=["puma560"], n_configs=N_CONFIGS, only=["sign_convention"])[0]
+    armguard.testing.run_check(honest, SimpleNamespace(node=SimpleNamespace(add_marker=markers.append)))
+    assert len(markers) == 1
+
+
 def test_check_names_are_known_and_listed():
     assert set(MUTATIONS.values()) <= set(check_names())
     with pytest.raises(ValueError, match="unknown check names"):

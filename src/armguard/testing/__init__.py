@@ -53,7 +53,16 @@ from ._suite import (
 from ._threads import run_in_threads
 
 __all__ = ["check_backend", "checks", "Check", "ConformanceError", "ConformanceReport", "NotApplicable",
-           "DEFAULT_MODELS", "load_conformance_model", "check_names", "run_in_threads"]
+           "DEFAULT_MODELS", "load_conformance_model", "check_names", "run_check", "run_in_threads"]
+
+
+def run_check(check, request) -> None:
+    """Run one :class:`Check` as a pytest test (``request``: the test's pytest fixture): not applicable
+    -> skipped with the reason; a failure the Checker declares (``conformance_xfail``) -> xfail (XPASS
+    once it passes); anything else as it comes.  For a backend package's own tests (docs/backends.md)."""
+    from ._plugin import run_check as run
+
+    run(check, request)
 
 
 def check_names() -> tuple[str, ...]:

@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import pytest
 
-__all__ = ["pytest_addoption", "pytest_load_initial_conftests", "options_from_config", "run_check"]
+__all__ = ["pytest_addoption", "pytest_load_initial_conftests", "pytest_configure", "pytest_report_header",
+           "options_from_config", "run_check"]
 
 
 def pytest_addoption(parser) -> None:
@@ -103,7 +104,25 @@ def run_check(check, request) -> None:
         pytest.skip(f"not applicable: {exc}")
 
 
+def pytest_configure(config) -> None:
+    """coal's one switch that turns its cached GJK guess off warns that it is deprecated on every
+    Checker's first call (``armguard_coal`` silences it for the process; pytest's own filters, reset
+    for each test, let it through): a backend author's run would show it once per test."""
+    config.addinivalue_line("filterwarnings",
+                            "ignore:enable_cached_gjk_guess has been marked as deprecated:DeprecationWarning")
+
+
 def pytest_report_header(config):
-    if config.getoption("armguard_backend"):
-        return f"armguard conformance: backend {config.getoption('armguard_backend')!r}"
-    return None
+    """The backend the suite checks, with its options and where they came from (``armguard.toml``)."""
+    if not (config.getoption("armguard_backend") or _names_the_suite(config.args)):
+        return None
+    try:
+        kw = options_from_config(config)
+    except Exception:  # noqa: BLE001 - the run reports it as a usage error
+        return None
+    from ..backends import read_config
+
+    cfg = read_config()
+    from_file = kw["options"] and "file" in cfg and cfg.get("name", kw["backend"]) == kw["backend"]
+    source = f" (from {cfg['file']})" if from_file else ""
+    return f"armguard conformance: backend {kw['backend']!r}, options {kw['options']}{source}"

@@ -173,7 +173,7 @@ class Context:
         """The backend's Checker for model ``label``, built once."""
         with _LOCK:
             if label in self._failed_build:
-                fail(f"building the Checker failed: {self._failed_build[label]}")
+                fail(f"building the Checker with options {self.options} failed: {self._failed_build[label]}")
             if label not in self._checkers:
                 try:
                     self._checkers[label] = self.build(label)
