@@ -171,6 +171,31 @@ def test_every_help_lists_the_exit_codes(path):
         assert 1 in rows and 5 not in rows
 
 
+def _row(text: str, code: int) -> str:
+    """The line of an "Exit status" list (``--help``) or the README's table row for ``code``."""
+    return next(line for line in text.splitlines() if line.split()[:1] == [str(code)] or line.startswith(f"| {code} |"))
+
+
+@pytest.mark.parametrize("code", [ExitCode.UNSAFE, ExitCode.INCOMPLETE])
+def test_the_general_lists_name_every_command_that_exits_so(code):
+    """``armguard --help`` and the README list exit 1 (and 5) with the commands that give it, as each command's
+    own ``--help`` does: ``program run``, ``program calibrate``, ``cspace info``, ``check-srdf`` were missing."""
+    group = _run("--help").output.split("Exit status:", 1)[1]
+    readme = open(os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + "/README.md", encoding="utf-8").read()
+    table = readme.split("### Exit status", 1)[1].split("\n## ", 1)[0]
+    users = []
+    for path, cmd in _commands(main):
+        if cmd.epilog and any(line.split()[:1] == [str(int(code))] for line in cmd.epilog.splitlines()):
+            users.append(" ".join(path))
+    assert users
+    if code is ExitCode.UNSAFE:
+        assert {"program run", "program calibrate", "cspace info", "check-srdf"} <= set(users)
+    for name in users:
+        assert name in _row(group, int(code)), (name, _row(group, int(code)))
+        if code is ExitCode.UNSAFE:  # the README's row 5 speaks of "the check or verification" in general
+            assert f"`{name}`" in _row(table, int(code)) or f"`{name} " in _row(table, int(code)), name
+
+
 def test_readme_documents_the_codes():
     readme = (os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + "/README.md")
     text = open(readme, encoding="utf-8").read()

@@ -6,7 +6,7 @@ The same as ``armguard check-urdf``; the logic is ``armguard.harness.check_model
 
 import sys
 
-from armguard.cli import main
+from armguard.cli import run_as_script
 
 if __name__ == "__main__":
-    sys.exit(main(["check-urdf", *sys.argv[1:]]))
+    sys.exit(run_as_script("check-urdf"))

@@ -6,7 +6,7 @@ The same as ``armguard compare`` (``--help`` lists the options); the logic is ``
 
 import sys
 
-from armguard.cli import main
+from armguard.cli import run_as_script
 
 if __name__ == "__main__":
-    sys.exit(main(["compare", *sys.argv[1:]]))
+    sys.exit(run_as_script("compare"))

@@ -12,14 +12,68 @@ class _Group(click.Group):
     """A click group whose commands exit with :class:`ExitCode`: an ArmguardError is a one-line
     message and 3, any other exception one line and 4, Ctrl-C 130 (``_exit.run_guarded``)."""
 
+    def resolve_command(self, ctx, args):
+        name, cmd, rest = super().resolve_command(ctx, args)
+        script = ctx.obj if isinstance(ctx.obj, _Script) else None
+        if script is not None and cmd is not None:  # tools/compare.py: its usage line is the script's, not "armguard compare"
+            script.command = name
+            return script.name, cmd, rest
+        return name, cmd, rest
+
     def invoke(self, ctx):
-        return run_guarded(ctx, lambda: super(_Group, self).invoke(ctx), lambda message: _option_names(ctx, message))
+        try:
+            return run_guarded(ctx, lambda: super(_Group, self).invoke(ctx), lambda message: _option_names(ctx, message))
+        except click.NoSuchOption as exc:
+            raise _misplaced(self, exc) from None
+
+
+def _misplaced(group: click.Group, exc: click.NoSuchOption) -> click.NoSuchOption:
+    """``exc`` (a command's unknown option) said again when the option is the group's own (``armguard check z1 -q``):
+    "armguard's own options (...) go before the command", with the command line that works; click's usage error
+    (exit status 2) still."""
+    ctx = exc.ctx
+    options = [p for p in group.params if isinstance(p, click.Option) and p.opts]
+    param = next((p for p in options if exc.option_name in (*p.opts, *p.secondary_opts)), None)
+    if param is None or ctx is None or isinstance(ctx.find_root().obj, _Script):  # a script has no place for them
+        return exc
+
+    def usage(p: click.Option, name: str | None = None) -> str:
+        return (name or "/".join(sorted(p.opts, key=len))) + ("" if p.is_flag else f" {p.make_metavar(ctx)}")
+
+    root = ctx.find_root().info_name or "armguard"
+    sub = ctx.command_path.split(" ", 1)[1] if " " in ctx.command_path else "COMMAND"
+    fixed = f"{root} --version" if exc.option_name == "--version" else \
+        f"{root} {usage(param, exc.option_name)} {sub} ..."
+    return click.NoSuchOption(
+        exc.option_name, f"No such option {exc.option_name!r} for '{ctx.command_path}'. {root}'s own options "
+        f"({', '.join(usage(p) for p in options)}) go before the command: {fixed}", ctx=ctx)
+
+
+class _Script:
+    """``ctx.obj`` of :func:`run_as_script`: the script's name, and the command it runs."""
+
+    def __init__(self, name: str) -> None:
+        self.name, self.command = name, None
+
+
+def run_as_script(command: str, args=None, name: str | None = None):
+    """``armguard COMMAND ARGS...`` as a script of its own (``tools/compare.py MODEL ...``): the same options and
+    exit statuses, with the script's name (``name``, default ``sys.argv[0]``'s file name) in its usage line and
+    messages (``Usage: compare.py [OPTIONS] MODEL``); ``args`` default to ``sys.argv[1:]``.  Exits."""
+    import os
+    import sys
+
+    args = sys.argv[1:] if args is None else list(args)
+    name = name or os.path.basename(sys.argv[0]) or command
+    # the group's own name is left empty, so that the command's path is the script's name alone
+    return main.main(args=[command, *args], prog_name="", obj=_Script(name))
 
 
 def _option_names(ctx, message: str) -> str:
     """An API error about a parameter (``stopping_distance: expected ...``) in the command's own
     terms (``--stopping-distance: expected ...``) when the message starts with one of its options."""
-    sub = ctx.invoked_subcommand and ctx.command.get_command(ctx, ctx.invoked_subcommand)
+    name = ctx.obj.command if isinstance(ctx.obj, _Script) else ctx.invoked_subcommand
+    sub = name and ctx.command.get_command(ctx, name)
     head, sep, rest = message.partition(":")
     if not sep or sub is None:
         return message
@@ -32,7 +86,9 @@ def _option_names(ctx, message: str) -> str:
 @click.group(cls=_Group, epilog=exit_epilog(
     ok="done: clear, safe, the backends agree, the output written",
     unsafe="unsafe: a collision or stopping-distance violation (check, verify), backends that differ (compare), "
-           "an error-level finding (check-urdf)",
+           "an error-level finding (check-urdf), with --strict a disabled pair that can collide (check-srdf), a map "
+           "that allows a colliding configuration (cspace info --samples), a motion refused or a FIND failed "
+           "(program run, program calibrate)",
     incomplete="incomplete: a check or verification that could not finish (check, verify)"))
 @click.version_option(package_name="armguard")
 @click.option("--backend", type=BACKEND, default=None, metavar="NAME",
@@ -87,4 +143,4 @@ def _document_exit_codes(group: click.Group) -> None:
 
 
 _document_exit_codes(main)
-__all__ = ["main", "ExitCode"]
+__all__ = ["main", "ExitCode", "run_as_script"]

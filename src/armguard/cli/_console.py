@@ -8,6 +8,23 @@ from . import main
 from ._params import LENGTH
 
 
+class _Uncertain(click.ParamType):
+    """``BODY=SIGMA_M[,SIGMA_DEG]``: its form and numbers checked where click reads it (a usage error, exit
+    status 2, as every option's value); the body's name against the scene when the console loads it (3)."""
+
+    name = "uncertain"
+
+    def convert(self, value, param, ctx):
+        from .._errors import ArmguardError
+        from ..console._overlays import split_uncertain
+
+        try:
+            split_uncertain(value)
+        except ArmguardError as exc:
+            self.fail(str(exc).removeprefix("--uncertain").lstrip(": "), param, ctx)
+        return value
+
+
 @main.command("console")
 @click.argument("scene")
 @click.option("--host", default="127.0.0.1", show_default=True,
@@ -19,7 +36,7 @@ from ._params import LENGTH
 @click.option("--terrain", "terrain_file", type=click.Path(), default=None,
               help="Check against a sensed terrain file (as armguard check --terrain) and draw it with the "
                    "pyramid boxes each check tests.")
-@click.option("--uncertain", multiple=True, metavar="BODY=SIGMA_M[,SIGMA_DEG]",
+@click.option("--uncertain", multiple=True, type=_Uncertain(), metavar="BODY=SIGMA_M[,SIGMA_DEG]",
               help="Place a body (or a robot's base) with an isotropic uncertainty (m, deg); repeatable. "
                    "Draws its 90 % / 99.9 % ellipsoids; the panel shows the clearance in sigmas.")
 def console_cmd(scene: str, host: str, port: int, threshold: float, watch: bool, terrain_file, uncertain) -> None:
@@ -30,7 +47,7 @@ def console_cmd(scene: str, host: str, port: int, threshold: float, watch: bool,
     from ._compile import warm_up
 
     warm_up()
-    # a scene, terrain or --uncertain value refused: one line, exit status 3 (as every command)
+    # a scene, terrain or --uncertain body refused: one line, exit status 3 (as every command)
     state = make_state(scene, threshold=threshold, terrain=terrain_file, uncertain=uncertain)
     app = ConsoleApp(state, host=host, port=port).start()
     if watch:

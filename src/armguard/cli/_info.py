@@ -126,7 +126,7 @@ def info_cmd(scene: str | None, rad: bool, srdf: str | None) -> None:
         for k, j in enumerate(robot.joint_names):
             rev = robot.joint_types[k].value == "revolute"
             vel = robot.max_velocity[k]
-            vtxt = "inf" if math.isinf(vel) else (f"{math.degrees(vel):.1f}°/s" if rev and not rad else f"{vel:.4g}/s")
+            vtxt = "inf" if math.isinf(vel) else f"{_limit(vel, rev, not rad)}/s"  # °/s, rad/s or m/s
             kind = "continuous" if rev and robot.lower[k] == -math.inf and robot.upper[k] == math.inf else robot.joint_types[k].value
             t.add_row(esc(j), kind, _limit(robot.lower[k], rev, not rad),
                       _limit(robot.upper[k], rev, not rad), vtxt, _limit(home[k], rev, not rad))

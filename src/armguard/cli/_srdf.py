@@ -23,6 +23,14 @@ _FEW_SAMPLES = 10_000
 """Fewer samples than MoveIt Setup Assistant's default make ``--method sampled`` warn of its Never pairs."""
 
 
+def _label(robot: str) -> str:
+    """The progress bar's name for ROBOT as the user gave it (``talos_left_arm``, not its URDF's robot name
+    ``talos``; a path's file name)."""
+    from pathlib import Path
+
+    return Path(robot).name or robot
+
+
 def _q(model, q) -> str:
     """A witness ``q`` (Pinocchio's order, ``(cos, sin)`` for a continuous joint) as ``check --q`` takes it:
     one value a joint, in the scene's order (``Model.scene_q``)."""
@@ -71,7 +79,7 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
     model = load_model(robot, srdf=False)
     before = read_previous(out) if update else {}
     cm = collision_matrix(model, margin=margin, method=method, samples=samples, workers=workers,
-                          max_evaluations=max_evaluations, backend=evaluator, progress=not as_json,
+                          max_evaluations=max_evaluations, backend=evaluator, progress=False if as_json else _label(robot),
                           previous=out if update else None, scheduler=scheduler)
     changed = [(before[frozenset((e.link1, e.link2))], e) for e in cm.entries if frozenset((e.link1, e.link2)) in before
                and (before[frozenset((e.link1, e.link2))].reason, before[frozenset((e.link1, e.link2))].status)
@@ -137,7 +145,9 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
 @click.option("--strict", is_flag=True, help="Exit 1 when a pair disabled for a reason other than Adjacent or Default can "
               "collide, or a disabled pair names a link the robot lacks.")
 @click.option("--json", "as_json", is_flag=True,
-              help="Print a JSON object: can_collide [{link1, link2, reason, q (pin_model order), distance}], never_checked, ...")
+              help="Print a JSON object: can_collide [{link1, link2, reason, q (pin_model order, as joint_names), distance, "
+                   "coal_distance (coal's distance at q; null where coal is not installed or is the evaluator)}], never_checked, proven_disabled, undecided, "
+                   "adjacent, skipped, joint_names, ... (docs/srdf.md).")
 def check_srdf_cmd(robot, srdf, margin, workers, max_evaluations, evaluator, strict, as_json) -> None:
     """Lint SRDF for ROBOT: disabled pairs that can collide (with a witness), checked pairs proven never to.
     Without SRDF: the one armguard finds for ROBOT (as `armguard info ROBOT` names it)."""
@@ -154,7 +164,7 @@ def check_srdf_cmd(robot, srdf, margin, workers, max_evaluations, evaluator, str
             click.echo(f"SRDF: {srdf} ({found.found})")
     model = load_model(robot, srdf=False)
     lint = check_srdf(model, srdf, margin=margin, workers=workers, max_evaluations=max_evaluations, backend=evaluator,
-                      progress=not as_json)
+                      progress=False if as_json else _label(robot))
     if as_json:
         click.echo(json.dumps(lint.to_dict()))
     else:

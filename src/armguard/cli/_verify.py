@@ -77,7 +77,9 @@ def _unique_names(items):
 @click.option("--workers", type=AT_LEAST_ONE, default=None, help="Run on a Dask LocalCluster with N worker processes.")
 @click.option("--scheduler", default=None, help="Run on an existing Dask cluster (scheduler address).")
 @click.option("--terrain", "terrain_file", type=click.Path(), default=None,
-              help="Also verify against a sensed terrain file (certified; serial; armguard.terrain.load_terrain).")
+              help="Also verify against a sensed terrain file (armguard.terrain.load_terrain): the terrain sweep is "
+                   "certified whatever --method (the scene's check follows --method), the trajectories verified here one "
+                   "after another (not with --workers or --scheduler).")
 def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_distance, speed_dependent, threshold, robot,
                report_path, plot_path, workers, scheduler, terrain_file) -> None:
     """Verify TRAJECTORIES (.yaml files, canned names of SCENE, or 'all') in SCENE."""
@@ -98,6 +100,10 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
     if method == "certified" and (frequency is not None or joint_step is not None):
         raise click.UsageError(f"{'--frequency' if frequency is not None else '--joint-step'} goes with --method sampled "
                                "(certified bounds every instant, with no step to choose)")
+    if terrain_file is not None and (workers or scheduler):  # accepted and ignored before: said, before the work
+        raise click.UsageError(f"{'--workers' if workers else '--scheduler'} does not go with --terrain: the terrain "
+                               "sweep runs here, one trajectory after another; drop it, or verify without --terrain "
+                               "on the cluster")
     if plot_path:
         figure_format(plot_path)  # a format matplotlib cannot write: refused before the work
     sc = load_scene(scene)

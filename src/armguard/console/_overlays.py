@@ -229,8 +229,9 @@ def reanchored(placements, old_scene, new_scene) -> tuple[tuple, list]:
     return tuple(kept), dropped
 
 
-def parse_uncertain(scene, text: str):
-    """``BODY=SIGMA_M[,SIGMA_DEG]`` (the CLI's ``--uncertain``) as :func:`isotropic_placement`."""
+def split_uncertain(text: str) -> tuple[str, float, float]:
+    """``BODY=SIGMA_M[,SIGMA_DEG]`` (the CLI's ``--uncertain``) as ``(BODY, SIGMA_M, SIGMA_DEG)``, the
+    sigmas finite, >= 0 and not both 0; the body's name is checked against a scene by :func:`parse_uncertain`."""
     name, eq, spec = str(text).partition("=")
     if not eq or not name.strip():
         raise ConsoleInputError(f"--uncertain: expected BODY=SIGMA_M[,SIGMA_DEG], got {text!r}")
@@ -241,7 +242,18 @@ def parse_uncertain(scene, text: str):
         vals = [float(x) for x in parts]
     except ValueError:
         raise ConsoleInputError(f"--uncertain {text!r}: SIGMA_M and SIGMA_DEG must be numbers (m, deg)") from None
-    return isotropic_placement(scene, name.strip(), vals[0], vals[1] if len(vals) > 1 else 0.0)
+    sigma_m, sigma_deg = vals[0], vals[1] if len(vals) > 1 else 0.0
+    for v, what in ((sigma_m, "SIGMA_M"), (sigma_deg, "SIGMA_DEG")):
+        if not (math.isfinite(v) and v >= 0.0):
+            raise ConsoleInputError(f"--uncertain {text!r}: {what} must be finite and >= 0, got {v}")
+    if sigma_m == 0.0 and sigma_deg == 0.0:
+        raise ConsoleInputError(f"--uncertain {text!r}: SIGMA_M and SIGMA_DEG are both 0 (nothing uncertain)")
+    return name.strip(), sigma_m, sigma_deg
+
+
+def parse_uncertain(scene, text: str):
+    """``BODY=SIGMA_M[,SIGMA_DEG]`` (the CLI's ``--uncertain``, :func:`split_uncertain`) as :func:`isotropic_placement`."""
+    return isotropic_placement(scene, *split_uncertain(text))
 
 
 class OverlayMixin:

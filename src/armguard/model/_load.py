@@ -183,7 +183,9 @@ def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None):
             except SceneError as exc:
                 raise srdf_obj.error(f"disable_collisions[{k}]", str(exc)) from None
         if skipped:
-            srdf_obj.warn(f"{len(skipped)} disabled pairs name links {urdf.name} does not have and were skipped "
+            one = len(skipped) == 1
+            srdf_obj.warn(f"{len(skipped)} disabled {'pair names' if one else 'pairs name'} links {urdf.name} does not "
+                          f"have and {'was' if one else 'were'} skipped "
                           f"(first: {', '.join(skipped[:3])})")
         _warn_stale(srdf_obj, pin_model, geom)
     return scene, pin_model, geom, parts
@@ -196,9 +198,10 @@ def _warn_stale(srdf_obj, pin_model, geom) -> None:
     stale = stale_certificates(pin_model, geom, srdf_obj.file)
     if stale:
         names = ", ".join(f"{s.link1}-{s.link2} ({s.reason})" for s in stale[:4]) + (" ..." if len(stale) > 4 else "")
-        srdf_obj.warn(f"{len(stale)} disabled pairs were certified for another geometry or kinematics than this URDF "
-                      f"gives and may now collide: {names}; `armguard check-urdf` proves them again, "
-                      "`armguard srdf --update` rewrites them")
+        one = len(stale) == 1
+        srdf_obj.warn(f"{len(stale)} disabled {'pair was' if one else 'pairs were'} certified for another geometry or "
+                      f"kinematics than this URDF gives and may now collide: {names}; `armguard check-urdf` proves "
+                      f"{'it' if one else 'them'} again, `armguard srdf --update` rewrites {'it' if one else 'them'}")
 
 
 def _hulls_by_name(geom, info) -> dict:
@@ -283,7 +286,7 @@ def model_from_scenefile(sf, file: str, base: Path, *, srdf=None) -> Model:
                         "URDF (model.urdf); add extra static bodies under 'bodies'")
     urdf = ctx.path(sf.model.urdf)
     if not urdf.is_file():
-        raise ctx.error("model.urdf", f"URDF file not found: {urdf}")
+        raise ctx.not_found("model.urdf", "URDF file", sf.model.urdf)
     named = sf.model.srdf
     if named is not None and _no_srdf(named):  # the URDF alone: no SRDF, not even one found beside it
         srdf_obj = None

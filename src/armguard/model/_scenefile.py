@@ -10,6 +10,7 @@ changes nothing already loaded.
 from __future__ import annotations
 
 import math
+import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -98,6 +99,16 @@ class _Ctx:
     def path(self, name: str) -> Path:
         p = Path(name)
         return p if p.is_absolute() else self.base / p
+
+    def not_found(self, where: str, what: str, name: str) -> SceneFileError:
+        """``what`` (e.g. "URDF file") named at ``where`` is not there: the error names the absolute path
+        tried and, for a relative ``name``, the folder it was read from (this file's)."""
+        tried = os.path.abspath(self.path(name))
+        if Path(name).is_absolute():
+            return self.error(where, f"{what} not found: {tried}")
+        return self.error(where, f"{what} not found: {tried} ({name!r} is relative to the folder of "
+                                 f"{Path(self.file).name}, {os.path.abspath(self.base)}: give a path from there "
+                                 "or an absolute one)")
 
 
 def _apply(X: np.ndarray, pts) -> np.ndarray:
@@ -252,7 +263,7 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
     else:
         path = ctx.path(spec.urdf)
         if not path.is_file():
-            raise ctx.error(f"{w}.urdf", f"URDF file not found: {path}")
+            raise ctx.not_found(f"{w}.urdf", "URDF file", spec.urdf)
         ctx.read.append(path)
         # the SRDF the file names is the robot's (its groups, and its home where the file gives no home:),
         # "none" none at all, else one found

@@ -71,7 +71,8 @@ def check_srdf(model, srdf, *, margin: float = 0.0, backend: str | None = "analy
                workers: int | None = None, min_width: float = 1e-3, max_evaluations: int = 200_000, progress=False,
                seed: int = 0, tol: Tolerances = DEFAULT_TOLERANCES, pairs=None) -> SrdfLint:
     """Lint the SRDF file ``srdf`` for ``model`` (a Model or a name / path, loaded without an SRDF);
-    ``pairs``: only these ``(link1, link2)`` (``armguard check-urdf`` searches the pairs whose certificate broke)."""
+    ``pairs``: only these ``(link1, link2)`` (``armguard check-urdf`` searches the pairs whose certificate broke);
+    ``progress`` as :func:`collision_matrix` takes it."""
     from .._errors import VerificationError
     from ..model._srdf import read_srdf
 
@@ -105,7 +106,7 @@ def check_srdf(model, srdf, *, margin: float = 0.0, backend: str | None = "analy
     only = None if pairs is None else {frozenset(p) for p in pairs}
     todo = [k for k in range(len(setup.pairs)) if not setup.pairs[k].adjacent
             and (only is None or frozenset((setup.pairs[k].link1, setup.pairs[k].link2)) in only)]
-    advance, close = _progress(progress, len(todo), f"{model.name}: linting {_file_name(srdf)}")
+    advance, close = _progress(progress, len(todo), model.name, f"linting {_file_name(srdf)}")
 
     def one(k: int):
         p = setup.pairs[k]

@@ -160,10 +160,13 @@ class PairEvaluator:
         return out
 
 
-def _progress(progress, total: int, label: str):
-    """``(advance(), close())`` of a rich progress bar (``progress=True``), a callback, or nothing."""
-    if progress is True:
+def _progress(progress, total: int, name: str, what: str):
+    """``(advance(), close())`` of a rich progress bar labelled ``"<name>: <what>"`` (``progress=True``; a string:
+    that name in place of the model's, e.g. the one the user gave), a callback, or nothing."""
+    if progress is True or isinstance(progress, str):
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+        label = f"{progress if isinstance(progress, str) else name}: {what}"
 
         bar = Progress(TextColumn(label), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), transient=False)
         bar.start()
@@ -198,7 +201,8 @@ def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", b
         and searches the pairs it is given (:mod:`._distributed`); the verdicts are the same.
     samples : random configurations of ``method="sampled"`` (MoveIt: 10^4 by default).
     min_width, max_evaluations : per pair, the certified search's limits (rad; distance evaluations).
-    progress : True for a rich progress bar, or a ``callback(done, total)``.
+    progress : True for a rich progress bar (labelled with the model's name; a string: with that name), or a
+        ``callback(done, total)``.
     previous : an SRDF this command wrote before (``armguard srdf --update``): a pair whose fingerprint
         (:func:`armguard.model._certificate.pair_fingerprint`: its links' shapes, the joints between
         them, the margin and method) is the one recorded there keeps its verdict without a search.
@@ -240,7 +244,7 @@ def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", b
             kept.append((p.link1, p.link2))
         else:
             todo.append(k)
-    advance, close = _progress(progress, len(todo), f"{model.name}: {method} collision matrix")
+    advance, close = _progress(progress, len(todo), model.name, f"{method} collision matrix")
     try:
         if method == "certified":
             limits = dict(margin=float(margin), contact=tol.verify_contact, min_width=min_width,

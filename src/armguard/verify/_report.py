@@ -99,10 +99,15 @@ class Collision:
     kind: CollisionKind = CollisionKind.CONTACT
 
     def describe(self) -> str:
-        """"contact (distance -3.1 mm)" or "within stopping distance 70 mm: 60.0 mm"."""
+        """"contact (distance -3.1 mm)" or "within stopping distance 70 mm: 60.0 mm"; a clearance that reaches
+        the stopping distance only to within the certified verifier's contact tolerance (``verify_contact``, 1 µm
+        by default: advancement approaches the limit, never lands on it) says so: "reaches the stopping distance
+        100.0000 mm (clearance 100.0008 mm, within the verifier's contact tolerance)"."""
         if self.kind is CollisionKind.STOPPING_DISTANCE:
             sd, d = self.stopping_distance * 1e3, self.distance * 1e3
-            if abs(d - sd) < 0.05:  # at the stopping distance to the verifier's resolution: say so, in full
+            if d >= sd:  # a violation only to within the tolerance: not a clearance "below" the limit
+                return f"reaches the stopping distance {sd:.4f} mm (clearance {d:.4f} mm, within the verifier's contact tolerance)"
+            if sd - d < 0.05:  # at the stopping distance to the verifier's resolution: say so, in full
                 return f"at the stopping distance {sd:.4f} mm: {d:.4f} mm"
             return f"within stopping distance {sd:.0f} mm: {d:.1f} mm"
         return f"contact (distance {self.distance * 1e3:.1f} mm)"
