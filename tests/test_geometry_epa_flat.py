@@ -63,3 +63,24 @@ def test_epa_depth_and_witnesses_match_the_separating_axis_depth():
         assert _off_surface(PA, r.p_WA) <= 1e-9 and _off_surface(PB, r.p_WB) <= 1e-9, trial
         np.testing.assert_allclose(r.p_WB - r.p_WA, r.distance * r.nhat_AB_W, atol=1e-12)
     assert flat >= 90 and tilted >= 100
+
+
+def test_an_edge_flat_on_a_face_keeps_its_witness_on_the_edge():
+    """Rover, link 3's hull lying with an edge flat on the chassis box: the facet of the Minkowski difference is
+    a polygon split into coplanar triangles, and EPA's closest one did not hold the origin's projection; its
+    barycentric weights extrapolated the hull's witness 5.85 mm past the edge's end (coal and python-fcl: on the
+    edge).  The triangle of that facet which holds the projection gives it."""
+    import armguard
+    from armguard.testing._surface import surface_residuals
+
+    m = armguard.load_model("rover")
+    q = np.array([2.759174136325586, -0.30901891641118473, -1.1436276588745256, 1.4535033759874043,
+                  -2.3595853210018447])
+    k = [tuple(p) for p in m.pairs.names].index(("arm_link3_0", "chassis_0"))
+    r = armguard.checker(m, "analytic").pair_distances(q)
+    ref = armguard.checker(m, "coal").pair_distances(q)
+    assert r.distance[k] < -0.07 and abs(r.distance[k] - ref.distance[k]) < 1e-9
+    for side, p in ((0, r.p_WA), (1, r.p_WB)):
+        res, _, _ = surface_residuals(m, q, m.pairs.names[k:k + 1, side], p[k:k + 1])
+        assert abs(res[0]) < 1e-9, (side, res)
+    assert abs(np.linalg.norm(r.p_WA[k] - r.p_WB[k]) - abs(r.distance[k])) < 1e-12

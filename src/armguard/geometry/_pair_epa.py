@@ -54,6 +54,8 @@ it stopped was 1.4e-10 to 6.9e-9 m.  The cylinder EPA (``_pair_cylinder_epa``) k
 bracket the same way, within ``SUPPORT_GAP`` (1e-8 m per m); this bound is wider because the
 alternative here is a SAT that does not return, not a refusal."""
 _NV = EPA_MAX_VERTICES
+_COPLANAR = 1e-10  # m: faces of the expanding polytope this near the closest face's plane distance ...
+_COPLANAR_WEIGHT = 1e-9  # ... and normal (cos >= 1 - this): the same facet of M; a weight this far below 0 still holds
 _NF = 1024  # face slots (kept packed: a removed face's slot takes the last face)
 _NE = 256  # horizon edges of one iteration
 _V0 = 9  # work[0:9]: GJK's final simplex (see _pair_gjk._gjk)
@@ -148,10 +150,9 @@ def _kept(kept, d, nx, ny, nz, ax, ay, az, bx, by, bz):  # pragma: no cover - co
 
 
 @njit(cache=True, inline="always")
-def _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz):  # pragma: no cover - compiled
-    """The witnesses on the cores of the face ``(j0, j1, j2)`` at distance ``dbest`` along ``n``:
-    the origin's projection onto the face, in barycentric coordinates of its support pairs.
-    ``(ok, ax, ay, az, bx, by, bz)``; ``ok`` False for a degenerate face."""
+def _barycentric(work, j0, j1, j2, px, py, pz):  # pragma: no cover - compiled
+    """``(ok, l0, l1, l2)``: barycentric coordinates of the point ``p`` (in the face's plane) in the face
+    ``(j0, j1, j2)`` of the expanding polytope; ``ok`` False for a degenerate face."""
     o0 = _V0 + 5 * j0
     o1 = _V0 + 5 * j1
     o2 = _V0 + 5 * j2
@@ -161,9 +162,9 @@ def _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz
     e1x = work[o2] - work[o0]
     e1y = work[o2 + 1] - work[o0 + 1]
     e1z = work[o2 + 2] - work[o0 + 2]
-    px = dbest * nx - work[o0]
-    py = dbest * ny - work[o0 + 1]
-    pz = dbest * nz - work[o0 + 2]
+    px -= work[o0]
+    py -= work[o0 + 1]
+    pz -= work[o0 + 2]
     d00 = e0x * e0x + e0y * e0y + e0z * e0z
     d01 = e0x * e1x + e0y * e1y + e0z * e1z
     d11 = e1x * e1x + e1y * e1y + e1z * e1z
@@ -171,10 +172,40 @@ def _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz
     d21 = px * e1x + py * e1y + pz * e1z
     den = d00 * d11 - d01 * d01
     if not den > 0.0:
-        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        return False, 0.0, 0.0, 0.0
     l1 = (d11 * d20 - d01 * d21) / den
     l2 = (d00 * d21 - d01 * d20) / den
-    l0 = 1.0 - l1 - l2
+    return True, 1.0 - l1 - l2, l1, l2
+
+
+@njit(cache=True, inline="always")
+def _face_witnesses(work, nf, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz):  # pragma: no cover - compiled
+    """The witnesses on the cores of the face ``(j0, j1, j2)`` at distance ``dbest`` along ``n``:
+    the origin's projection ``dbest n`` onto the face, in barycentric coordinates of its support
+    pairs.  ``(ok, ax, ay, az, bx, by, bz, j0, j1, j2)``; ``ok`` False for a degenerate face.
+
+    Where a facet of ``M`` is a polygon split into coplanar triangles (an edge of one core flat on a
+    face of the other), the closest triangle by distance may not be the one holding the projection:
+    its weights then extrapolate, and the witness left the core along one of its edges (rover's
+    link 3 on the chassis, 5.85 mm beyond the edge's end).  The live faces in the same plane (within
+    ``_COPLANAR``) are then searched for the one that holds the projection, whose weights are all
+    >= ``-_COPLANAR_WEIGHT``; ``j0 .. j2`` return the face used."""
+    px = dbest * nx
+    py = dbest * ny
+    pz = dbest * nz
+    ok, l0, l1, l2 = _barycentric(work, j0, j1, j2, px, py, pz)
+    if not ok:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, j0, j1, j2
+    if min(l0, l1, l2) < -_COPLANAR_WEIGHT:
+        for f in range(nf):
+            o = _F0 + 8 * f
+            if (abs(work[o + 6] - dbest) <= _COPLANAR
+                    and work[o + 3] * nx + work[o + 4] * ny + work[o + 5] * nz >= 1.0 - _COPLANAR_WEIGHT):
+                k0, k1, k2 = int(work[o]), int(work[o + 1]), int(work[o + 2])
+                good, m0, m1, m2 = _barycentric(work, k0, k1, k2, px, py, pz)
+                if good and min(m0, m1, m2) >= -_COPLANAR_WEIGHT:
+                    j0, j1, j2, l0, l1, l2 = k0, k1, k2, m0, m1, m2
+                    break
     ax = ay = az = bx = by = bz = 0.0
     for k in range(3):
         j = j0 if k == 0 else (j1 if k == 1 else j2)
@@ -188,7 +219,7 @@ def _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz
         bx += lam * qx
         by += lam * qy
         bz += lam * qz
-    return True, ax, ay, az, bx + ox, by + oy, bz + oz
+    return True, ax, ay, az, bx + ox, by + oy, bz + oz, j0, j1, j2
 
 
 @njit(cache=True, _nrt=False)
@@ -288,7 +319,8 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0, t
         if hmin < cap:  # depth <= hmin < cap: the caller's cut-off is proved, the depth is not wanted
             return True, hmin, nx, ny, nz, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         if h - dbest <= eps or repeated:
-            ok, ax, ay, az, bx, by, bz = _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz)
+            ok, ax, ay, az, bx, by, bz, j0, j1, j2 = _face_witnesses(work, nf, j0, j1, j2, dbest, nx, ny, nz, pa, pb,
+                                                                     rot, ox, oy, oz)
             if not ok:
                 break
             for k, j in enumerate((j0, j1, j2)):  # the face, for a seed table (see the docstring)
@@ -297,7 +329,8 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0, t
             work[0] = 2.0
             return True, dbest, nx, ny, nz, ax, ay, az, bx, by, bz
         if hmin - dbest <= EPA_BRACKET:  # kept in case rounding stops EPA before eps
-            ok, ax, ay, az, bx, by, bz = _face_witnesses(work, j0, j1, j2, dbest, nx, ny, nz, pa, pb, rot, ox, oy, oz)
+            ok, ax, ay, az, bx, by, bz, _j0, _j1, _j2 = _face_witnesses(work, nf, j0, j1, j2, dbest, nx, ny, nz, pa, pb,
+                                                                        rot, ox, oy, oz)
             if ok:
                 kept = True
                 kd, knx, kny, knz, kax, kay, kaz, kbx, kby, kbz = dbest, nx, ny, nz, ax, ay, az, bx, by, bz
