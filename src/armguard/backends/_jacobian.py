@@ -232,7 +232,10 @@ class WitnessJacobian:
         self._joint = np.empty(len(geoms), np.int64)
         self._R_JG = np.empty((len(geoms), 3, 3))  # geometry in its joint's frame
         self._described = np.ones(len(geoms), bool)
+        self._swept = np.full(len(geoms), np.nan)  # a sphere's or capsule's radius: a point or segment core, swept
         for i, go in enumerate(geoms):
+            if type(go.geometry).__name__ in ("Sphere", "Capsule"):
+                self._swept[i] = float(go.geometry.radius)
             self._joint[i] = go.parentJoint
             self._R_JG[i] = go.placement.rotation
             sv = _shape_vertices(go.geometry)
@@ -348,7 +351,14 @@ class WitnessJacobian:
         _witness_rows(np.ascontiguousarray(result.p_WA), np.ascontiguousarray(result.p_WB), d, ja, jb, ga, gb, Jj,
                       R_WJ, self._R_JG, self._vstart, self._V, self._disk_axis, self._disk_r, self._described,
                       self._cstart, self._cols, tol.length, tol.jacobian_face, tol.jacobian_parallel, jac, smooth)
-        touching = np.flatnonzero(np.abs(d) <= tol.length)
+        # two spheres or capsules whose cores (centres, axis segments) meet: the distance is the cores'
+        # (a kink at 0: it grows whichever way they part) less the radii; no one normal, the rows one-sided
+        r_a = np.where(ga >= 0, self._swept[np.maximum(ga, 0)], np.nan)
+        r_b = np.where(gb >= 0, self._swept[np.maximum(gb, 0)], np.nan)
+        with np.errstate(invalid="ignore"):
+            meet = np.abs(d + r_a + r_b) <= tol.length
+        smooth[meet] = False
+        touching = np.flatnonzero((np.abs(d) <= tol.length) | meet)
         if len(touching) and refine is not None:
             jac[touching] = refine(touching)
         return jac, smooth

@@ -21,7 +21,9 @@ framework code here, over the Checker interface only:
   ``pair_distances(q, pairs=rows)`` call; the report names every pair it skipped with its
   lower bound, and the status is INCOMPLETE, never CLEAR, while a skipped pair's bound does not
   prove the threshold (the analytic kernel's rule, ``armguard_analytic._engine._kernel``).  A
-  check that called no backend (a budget below the check's own cost) leaves the cost model as it was;
+  check that called no backend (a budget below the check's own cost) measures no pair: its estimate
+  of a check's own cost then relaxes by 10 %, never below what that check took, so that an estimate
+  once above the budget does not keep every later check from calling the backend;
 * **lazy**: pairs whose lower bound proves them beyond the threshold are skipped (exact status);
 * a Checker whose ``pair_distances`` takes ``pairs=`` only through the framework's default (the
   whole call, then its rows: ``CheckerBase``) pays for every pair whatever the subset: a budgeted or
@@ -424,18 +426,23 @@ class RangerDetector(Detector):
             if budget_us is not None:
                 order = order[:self._allowance(float(budget_us))]
             which = np.sort(order)  # the Checker answers in Model order
-            if plan.whole_only and len(which):  # any subset costs the whole call: every pair, then
+            whole = plan.whole_only and len(which) > 0  # any subset costs the whole call: every pair, then
+            if whole:
                 which = np.arange(P)
             flags[which] = _FLAG_EVALUATED
-            d, pA, pB = self._query(plan, q, which) if len(which) else (np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)))
+            d, pA, pB = self._query(plan, q, None if whole else which) if len(which) else \
+                (np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)))
             skipped = bounds[flags == _FLAG_SKIPPED]
             lbmin = float(skipped.min()) if skipped.size else math.inf
         s.tick += 1
         s.last_d[which], s.last_q[which], s.has_last[which], s.stamp[which] = d, q, True, s.tick
         status = STATUS_CODES[status_code(float(d.min(initial=math.inf)), lbmin, level, thr)]
         elapsed = (time.perf_counter() - t0) * 1e6
-        if len(d):  # a check that called no backend teaches the cost model nothing
+        if len(d):
             self._learn(elapsed, len(d))
+        else:  # no backend call: nothing measured, but an estimate above the budget must not stick (no check
+            # would ever call the backend to correct it): it relaxes 10 % a check, never below this check's cost
+            self._us_per_check = max(0.9 * self._us_per_check, elapsed)
         raw = _Raw(plan, d, pA, pB, which, flags, bounds, lazy)
         return DetectionReport._from_check(status, plan.threshold, plan.stopping, elapsed, raw)
 
