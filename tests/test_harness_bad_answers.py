@@ -246,3 +246,20 @@ def test_a_non_finite_value_in_the_summary_is_refused_before_writing(registered,
     msg = str(e.value)
     assert msg.startswith(str(out / "compare.json")) and "['spoiled']['options']['scale'] = nan" in msg, msg
     assert "not a finite number" in msg and not out.exists()
+
+
+@pytest.mark.parametrize("status, said", [
+    (np.array(["CLEAR", "BOGUS"], dtype=object), "answered a verdict that is none at 2 configurations: three-valued "
+                                                 "verdict 'BOGUS'"),
+    (SimpleNamespace(status=np.array([0, 7]), collision=np.zeros(2, bool)), "7 is not a valid CombinedStatus"),
+    (np.array(["CLEAR"], dtype=object), "answered verdicts of shape (1,) at 2 configurations, expected (2,)"),
+])
+def test_a_verdicts_answer_that_is_no_verdict_is_the_backends_fault(model, Q, status, said):
+    """The ``verdicts()`` path (the forbidden backend's): an unknown status name was an ArmguardError naming no
+    backend, a bad CombinedStatus code a raw ValueError (exit 4)."""
+    from armguard.harness._evaluate import verdict_detail
+
+    checker = SimpleNamespace(name="maps", model=model, verdicts=lambda Q: status)
+    with pytest.raises(armguard.BackendError, match="backend 'maps'") as info:
+        verdict_detail(checker, Q[:2])
+    assert said in str(info.value)

@@ -127,14 +127,17 @@ def verdict_detail(checker, Q, *, backend: str | None = None, where: str | None 
     if not hasattr(checker, "verdicts"):
         return {}
     v = checker.verdicts(Q)
-    status = getattr(v, "status", v)
-    if hasattr(v, "collision"):  # armguard.cspace.CombinedBatch: int codes of CombinedStatus
-        from ..cspace import CombinedStatus
+    status = np.asarray(getattr(v, "status", v), dtype=object)
+    if status.shape != (len(Q),):
+        raise BackendError(f"backend {backend!r} answered verdicts of shape {status.shape} at {where}, expected ({len(Q)},)")
+    try:
+        if hasattr(v, "collision"):  # armguard.cspace.CombinedBatch: int codes of CombinedStatus
+            from ..cspace import CombinedStatus
 
-        status = [CombinedStatus(int(s)) for s in np.asarray(status)]
-    codes = _codes_of(np.asarray(status, dtype=object))
-    if codes.shape != (len(Q),):
-        raise BackendError(f"backend {backend!r} answered verdicts of shape {codes.shape} at {where}, expected ({len(Q)},)")
+            status = np.asarray([CombinedStatus(int(s)) for s in status], dtype=object)
+        codes = _codes_of(status)
+    except (ValueError, TypeError, ArmguardError) as exc:  # a code or name that is no verdict
+        raise BackendError(f"backend {backend!r} answered a verdict that is none at {where}: {exc}") from None
     out = {"codes": codes}
     if hasattr(v, "collision"):
         out["map_forbidden"] = codes == UNDECIDED

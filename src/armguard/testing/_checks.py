@@ -65,13 +65,13 @@ def where(i: int, q) -> str:
     return f"configuration {i} (q = {np.asarray(q, dtype=np.float64).tolist()})"
 
 
-def answer(ctx, model, c, q, i: int, pairs=None):
-    """``c.pair_distances(q)`` (``pairs=`` when given) with its arrays checked first: a wrong shape or
-    dtype, or a value that is not finite, fails here, naming the configuration, the row and its pair,
-    so that no later check trips over it with a message of its own (``pair_distances_shapes`` says more)."""
-    r = c.pair_distances(q) if pairs is None else c.pair_distances(q, pairs=pairs)
+def answer(ctx, model, c, q, i: int):
+    """``c.pair_distances(q)`` with its arrays checked first: a wrong shape or dtype, or a value that is
+    not finite, fails here, naming the configuration, the row and its pair, so that no later check
+    trips over it with a message of its own (``pair_distances_shapes`` says more)."""
+    r = c.pair_distances(q)
     names = ctx.model(model).pairs.names
-    rows = np.arange(len(names)) if pairs is None else np.asarray(pairs)
+    rows = np.arange(len(names))
     n = len(rows)
     for key, shape in (("distance", (n,)), ("p_WA", (n, 3)), ("p_WB", (n, 3))):
         a = getattr(r, key, None)
@@ -358,8 +358,9 @@ def check_collides_matches_distances(ctx, model):
 
 def check_deterministic(ctx, model):
     """The same ``q`` gives the same answer whatever was asked before: the configurations forwards,
-    backwards and again give identical distances, witness points and verdicts, and so does a fresh
-    Checker's very first call (no state from earlier calls: caches, warm starts, tables)."""
+    backwards and again give identical distances, witness points and verdicts (a batch of
+    :data:`BIG_BATCH` rows too, verdicts-only backends included), and a fresh Checker's very first
+    ``pair_distances`` the same as a used one's (no state from earlier calls: caches, warm starts)."""
     c = ctx.checker(model)
     Q = ctx.configs(model)
     if _distances(c):
@@ -380,6 +381,11 @@ def check_deterministic(ctx, model):
     v1, v2 = c.collides(Q), c.collides(Q[::-1])[::-1]
     expect(np.array_equal(v1, v2), f"collides differs for configurations {np.flatnonzero(v1 != v2).tolist()} "
                                    "when the batch is reversed")
+    big = np.resize(np.arange(len(Q)), BIG_BATCH)
+    vb = np.asarray(c.collides(Q[big]))
+    bad = np.flatnonzero(vb != v1[big]) if vb.shape == big.shape else [0]
+    expect(not len(bad), lambda: f"a batch of {BIG_BATCH} rows (the configurations repeated) answers otherwise than "
+                                 f"the batch of {len(Q)}: row {bad[0]} ({where(big[bad[0]], Q[big[bad[0]]])})")
 
 
 # ================================================================ per model: against coal

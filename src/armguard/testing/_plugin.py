@@ -107,9 +107,11 @@ def run_check(check, request) -> None:
 def pytest_configure(config) -> None:
     """coal's one switch that turns its cached GJK guess off warns that it is deprecated on every
     Checker's first call (``armguard_coal`` silences it for the process; pytest's own filters, reset
-    for each test, let it through): a backend author's run would show it once per test."""
-    config.addinivalue_line("filterwarnings",
-                            "ignore:enable_cached_gjk_guess has been marked as deprecated:DeprecationWarning")
+    for each test, let it through): a run of the suite would show it once per test.  Filtered in
+    runs of the suite only (other projects' pytest runs keep their filters)."""
+    if config.getoption("armguard_backend", None) or _names_the_suite(config.args):
+        config.addinivalue_line("filterwarnings",
+                                "ignore:enable_cached_gjk_guess has been marked as deprecated:DeprecationWarning")
 
 
 def pytest_report_header(config):
@@ -123,6 +125,7 @@ def pytest_report_header(config):
     from ..backends import read_config
 
     cfg = read_config()
-    from_file = kw["options"] and "file" in cfg and cfg.get("name", kw["backend"]) == kw["backend"]
+    given = config.getoption("armguard_backend_options") or ()
+    from_file = (kw["options"] and not given and "file" in cfg and cfg.get("name", kw["backend"]) == kw["backend"])
     source = f" (from {cfg['file']})" if from_file else ""
     return f"armguard conformance: backend {kw['backend']!r}, options {kw['options']}{source}"
