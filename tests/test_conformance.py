@@ -195,6 +195,8 @@ class _Wrapped(armguard.backends.CheckerBase):
 
     def distance_jacobian(self, q, result, idx=None):
         J, smooth = self.witness_jacobian(q, result, idx)
+        if self.mutation == "no jacobian row called smooth":
+            smooth = np.zeros_like(smooth)
         return (-J if self.mutation == "jacobian negated" else J), smooth
 
 
@@ -234,6 +236,7 @@ MUTATIONS = {
     # 64 rows on, a first call unlike the later ones, answers left in reused scratch arrays, a continuous
     # joint's (cos, sin) normalised rather than refused, a NaN in one row
     "jacobian negated": "distance_jacobian",
+    "no jacobian row called smooth": "distance_jacobian",
     "witness points swapped where penetrating": "witness_on_surfaces",
     "a parallel path for big batches wrong in row 0": "collides_matches_distances",
     "a first call 1 mm off": "deterministic",
