@@ -14,22 +14,25 @@ From the command line (the ``armguard`` pytest plugin, registered under ``pytest
            [--conformance-models ranger,panda] [--conformance-configs 8]
 
 What is checked, per model (:data:`DEFAULT_MODELS`: the five built-in models,
-example-robot-data's Panda and UR5, and ``"panda+edits"``: that Panda edited in process with a
-body of every shape kind, a payload and a second arm appended, a Model with no file behind it)
-and on the neutral pose plus seeded random in-limit configurations:
+example-robot-data's Panda and UR5, Kinova's arm (continuous joints) and ``"panda+edits"``: that
+Panda edited in process with a body of every shape kind, a payload and a second arm appended, a
+Model with no file behind it) and on the neutral pose plus seeded random in-limit configurations:
 
 * the Backend/Checker protocol: ``name``, ``model``, ``capabilities``; ``build`` refuses an unknown
   option with BackendError listing the accepted ones;
 * ``pair_distances(q)``: pairs in ``model.pairs`` order, shapes and dtypes, finite values; the
   witness relation ``|p_WA - p_WB| == |distance|`` to 1e-9 m; witness points on the shapes'
-  surfaces; the sign convention;
-* NaN, infinite, wrongly shaped ``q`` / ``Q`` and bad margins refused with BackendError, never a verdict;
-* ``collides(Q, margin)`` consistent with the distances at the margin; batches as rows; determinism;
+  surfaces, separated and penetrating; the sign convention;
+* NaN, infinite, wrongly shaped ``q`` / ``Q``, a continuous joint off the unit circle and bad
+  margins refused with BackendError, never a verdict;
+* ``collides(Q, margin)`` consistent with the distances at the margin; batches as rows (160 rows
+  too); determinism, a fresh Checker's first call included; answers that stay the caller's;
 * capabilities declared vs behaviour: a verdicts-only backend refuses distances with BackendError;
 * agreement with coal (distances within 1e-6 m, 1e-5 m on hulls; verdicts outside the contact
   band; a verdicts-only backend never says clear where coal says collision);
 * where the Checker has them: ``pair_distances(q, pairs=idx)`` equals rows of the full answer,
   ``pair_distances_many(Q)`` equals row by row; ``nearest`` and ``min_distance_many`` agree;
+  ``pair_distances(q, jacobian=True)`` agrees with central differences of the distances;
 * thread safety: 4 threads on one Checker give the single-threaded answers.
 
 A Checker may declare checks it is known to fail, with the reason, in a ``conformance_xfail``
