@@ -21,6 +21,7 @@ from ._avoid_panel import AvoidPanel
 from ._draw import SceneDrawer
 from ._fields import COMMIT_ON_BLUR_HTML, TypedField
 from ._plot import PLOT_PERIOD, ClearancePlot, MarkerFeed
+from ._parse import CONTINUOUS_SPAN_DEG
 from ._readout import panel_html
 from ._state import MAX_DISTANCE_SETTING, ConsoleState
 from ._targets import MAX_ANGLE_DEG, MAX_COORDINATE
@@ -95,9 +96,22 @@ def report_html(summary: str) -> str:
             f'font-size:0.75em;margin:0">{html.escape(summary)}</pre>')
 
 
-def _vec(v) -> str:
-    """Three values for a typed field (``"0.3, -0.392, 0.5"``); empty for None (no box)."""
-    return "" if v is None else ", ".join(_fmt(x) for x in v)
+def _vec(v, decimals: int | None = None) -> str:
+    """Three values for a typed field (``"0.3, -0.392, 0.5"``), rounded to ``decimals`` places when
+    given (a target shows ``3.9e-16`` m as ``0``); empty for None (no box)."""
+    if v is None:
+        return ""
+    return ", ".join(_fmt(x if decimals is None else round(float(x), decimals)) for x in v)
+
+
+TARGET_DECIMALS = {"pos": 4, "rpy": 2}
+"""Decimals the Cartesian target fields show: 0.1 mm (m) and 0.01 deg, as the joint fields; the
+state keeps the exact target (:meth:`ConsoleState.target`), shown rounded only."""
+
+
+def target_texts(p, rpy) -> tuple[str, str]:
+    """The target position (m) and roll pitch yaw (rad, shown in deg) as their fields show them."""
+    return _vec(p, TARGET_DECIMALS["pos"]), _vec(None if rpy is None else np.degrees(rpy), TARGET_DECIMALS["rpy"])
 
 
 def compare_options(backends, backend: str) -> tuple[str, ...]:
@@ -215,12 +229,13 @@ class ConsoleApp:
             self._stop.wait(max(0.0, period - (time.perf_counter() - now)))
 
     # ------------------------------------------------------------------ guarded commands
-    def _do(self, fn, *args, on_error=None):
-        """Run a state command; on a bad input show the message and call ``on_error`` (reset widgets)."""
+    def _do(self, fn, *args, on_error=None, source: str | None = None):
+        """Run a state command; on a bad input show the message (tied to field ``source``, if one)
+        and call ``on_error`` (reset widgets)."""
         try:
             return fn(*args)
         except ArmguardError as exc:
-            self.state.note_error(str(exc))
+            self.state.note_error(str(exc), source)
             if on_error is not None:
                 on_error()
             self._redraw(force=True)
@@ -228,20 +243,25 @@ class ConsoleApp:
 
     # ------------------------------------------------------------------ GUI
     def _field(self, label: str, text: str, command, hint: str | None = None) -> TypedField:
-        """A typed field whose commit runs ``command(text)``; a refusal reverts the box."""
+        """A typed field whose commit runs ``command(text)``; a refusal reverts the box, an accepted
+        value (also the value in force typed again) clears that field's refusal from the panel."""
         holder = {}
 
         def commit(typed: str) -> None:
             f = holder["f"]
-            ok = self._do(lambda: (command(typed), True)[1], on_error=f.revert)
+            ok = self._do(lambda: (command(typed), True)[1], on_error=f.revert, source=label)
             if ok:
+                self.state.clear_error(label)
                 self._redraw(force=True)
                 f.revert()  # show the value in force, as the state formats it
 
-        holder["f"] = f = TypedField(self.server.gui, label, text, commit, hint=hint)
+        holder["f"] = f = TypedField(self.server.gui, label, text, commit, hint=hint,
+                                     on_same=lambda: self.state.clear_error(label))
         return f
 
     def _build_gui(self) -> None:
+        import viser
+
         gui = self.server.gui
         st = self.state
         snap = st.snapshot()
@@ -270,10 +290,10 @@ class ConsoleApp:
                 self._build_joint_panel(name, snap, self._joints_order + (k + 1) / (len(st.robots) + 1))
             with gui.add_folder("Cartesian", visible=False, order=self._joints_order + 1.0) as self._w_cart:
                 self._w_pose_now = gui.add_markdown("")
-                p, rpy, _ = snap.target
-                self._fields["pos"] = self._field("target position (m)", _vec(p), st.set_target_position,
+                pos_text, rpy_text = target_texts(*snap.target[:2])
+                self._fields["pos"] = self._field("target position (m)", pos_text, st.set_target_position,
                                                   f"x, y, z within ±{MAX_COORDINATE:g} m; move tool to go there")
-                self._fields["rpy"] = self._field("target roll pitch yaw (deg)", _vec(np.degrees(rpy)),
+                self._fields["rpy"] = self._field("target roll pitch yaw (deg)", rpy_text,
                                                   st.set_target_rpy,
                                                   f"roll, pitch, yaw within ±{MAX_ANGLE_DEG:g} deg")
                 b_move = gui.add_button("move tool")
@@ -293,10 +313,12 @@ class ConsoleApp:
 
         # -- tests: Ranger's test panel ----------------------------------------------------
         with tabs.add_tab("Tests") as self._tab_tests:
+            # Stop first, red, beside the run's line: in reach without scrolling past the tests
+            self._b_stop = gui.add_button("Stop", visible=bool(st.canned_tests()), color="red",
+                                          icon=viser.Icon.PLAYER_STOP_FILLED, hint="stop the canned test running")
+            self._b_stop.on_click(self._guard(lambda _e: st.stop()))
             self._w_run_state = gui.add_markdown("")
             self._build_tests_panel(self._w_run_state.order + 0.5)
-            self._b_stop = gui.add_button("Stop", visible=bool(st.canned_tests()))  # no tests: nothing to stop
-            self._b_stop.on_click(self._guard(lambda _e: st.stop()))
 
         # -- time line: WORKMATE's emulation -------------------------------------------------
         with tabs.add_tab("Time line"):
@@ -356,17 +378,18 @@ class ConsoleApp:
         step = 0.5 / (len(st.robots) + 1)
         with gui.add_folder(f"joints {name}", visible=name == snap.active, order=order) as folder:
             for j, jn in enumerate(robot.joint_names):
-                a = float(lo[j] * scale[j]) if math.isfinite(lo[j]) else -360.0
-                b = float(hi[j] * scale[j]) if math.isfinite(hi[j]) else 360.0
+                a = float(lo[j] * scale[j]) if math.isfinite(lo[j]) else -CONTINUOUS_SPAN_DEG
+                b = float(hi[j] * scale[j]) if math.isfinite(hi[j]) else CONTINUOUS_SPAN_DEG
+                turn = "" if math.isfinite(lo[j]) or math.isfinite(hi[j]) else " (continuous: past it, wrapped)"
                 fields.append(self._field(
                     f"{jn} ({units[j]})", joint_text(snap.q[name][j] * scale[j], units[j]),
                     lambda text, j=j: st.set_joint(name, j, text, deg=True),
-                    hint=f"{a:g} to {b:g} {units[j]}; applies on Enter or on leaving the field"))
+                    hint=f"{a:g} to {b:g} {units[j]}{turn}; applies on Enter or on leaving the field"))
         with gui.add_folder(f"sliders {name}", visible=name == snap.active, expand_by_default=False,
                             order=order + step) as sfolder:
             for j, jn in enumerate(robot.joint_names):
-                a = float(lo[j] * scale[j]) if math.isfinite(lo[j]) else -360.0
-                b = float(hi[j] * scale[j]) if math.isfinite(hi[j]) else 360.0
+                a = float(lo[j] * scale[j]) if math.isfinite(lo[j]) else -CONTINUOUS_SPAN_DEG
+                b = float(hi[j] * scale[j]) if math.isfinite(hi[j]) else CONTINUOUS_SPAN_DEG
                 v = float(np.clip(snap.q[name][j] * scale[j], a, b))
                 s = gui.add_slider(f"{jn} slider ({units[j]})", min=a, max=b,
                                    step=0.1 if units[j] == "deg" else 0.001, initial_value=v)
@@ -506,9 +529,9 @@ class ConsoleApp:
         """The Cartesian panel: the tool pose now, and the target the state holds (the pose now until typed)."""
         from ..kinematics._frames import xyz_rpy_from_pose
 
-        p, rpy, _ = snap.target
-        self._fields["pos"].show(_vec(p))
-        self._fields["rpy"].show(_vec(np.degrees(rpy)))
+        pos_text, rpy_text = target_texts(*snap.target[:2])
+        self._fields["pos"].show(pos_text)
+        self._fields["rpy"].show(rpy_text)
         xyz, rpy = xyz_rpy_from_pose(snap.ee_pose)
         key = (snap.active, tuple(np.round(xyz, 6)), tuple(np.round(rpy, 6)))
         if key == self._pose_shown:
@@ -526,7 +549,8 @@ class ConsoleApp:
             with self.server.atomic():  # the panel first, alone: shown at once, not at the next WebGL frame
                 self._panel.content = panel_html(snap.readout, snap.message, error=snap.message_is_error,
                                                  compare=snap.compare, update_us=snap.update_us, changes=snap.changes,
-                                                 terrain=snap.terrain, sigmas=snap.sigmas, draw_ms=self.drawer.draw_ms)
+                                                 terrain=snap.terrain, sigmas=snap.sigmas, draw_ms=self.drawer.draw_ms,
+                                                 active=snap.active, others=snap.others)
                 self._sync_widgets()
                 self._refresh_plot(snap)
             self.server.flush()

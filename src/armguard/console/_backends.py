@@ -90,7 +90,7 @@ class BackendView:
         else:
             status = PanelStatus.CLEAR
         return Readout(status, dist, a, b, a, pa, pb, threshold, dist <= threshold, tuple(rows), elapsed_us,
-                       backend=self.backend, stopping_distance=stopping_distance)
+                       backend=self.backend, owner_b=b, stopping_distance=stopping_distance)
 
     def _sides(self, k: int, swap: bool) -> tuple[str, str]:
         a, b = str(self._owner_a[k]), str(self._owner_b[k])

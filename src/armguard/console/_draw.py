@@ -10,7 +10,8 @@ The nearest link is red within the threshold; the obstacle's nearest face or edg
 in magenta.  A shape the nearest line runs through (a link wrapped around it, say: no camera sees
 past it), or that stands between a browser tab's camera and the line (:mod:`._sight`), is drawn
 translucent (:data:`SEE_THROUGH_OPACITY`), so the line stays in sight; viser offers no
-depth-test switch for line segments.  Robots from a URDF are also drawn from it (viser's ``ViserUrdf`` over yourdfpy):
+depth-test switch for line segments.  In a contact the obstacle the line runs inside is drawn
+translucent too, so the red link inside it stays in sight, whichever backend computed the pair.  Robots from a URDF are also drawn from it (viser's ``ViserUrdf`` over yourdfpy):
 its visual geometry where it has one, its collision geometry as a toggle.
 """
 
@@ -308,12 +309,13 @@ class SceneDrawer:
     # ------------------------------------------------------------------ draw
     def see_through(self, snap, items=None) -> set[int]:
         """Indices (into the scene's shapes) of the shapes the nearest line runs through, other
-        than the pair's own (in a contact the line lies inside both: they stay opaque)."""
+        than the link's own; the obstacle's too only in a contact, where the line runs inside it
+        and so does the red link (the obstacle translucent shows it; the link stays opaque)."""
         r = snap.readout
         if r.p_WA is None or r.p_WB is None:
             return set()
         posed = PosedItems(self.items, self.state.scene, snap.q) if items is None else items
-        own = {r.owner_a, r.owner_b}
+        own = {r.owner_a} if not r.distance > 0.0 else {r.owner_a, r.owner_b or r.obstacle}
         L = np.array([r.p_WA, r.p_WB], dtype=np.float64)
         idx = [k for k in posed.near(L[0], L[1]) if self.items[k].owner not in own]
         hit = see_through(L, [posed.shape(k) for k in idx])
@@ -321,14 +323,15 @@ class SceneDrawer:
 
     def line_hidden(self, snap, posed=None) -> set[int]:
         """Indices of the shapes standing between a tab's camera and the nearest line
-        (:func:`~._sight.hidden_from`; in a contact the pair's own shapes are not counted)."""
+        (:func:`~._sight.hidden_from`; in a contact the pair's own shapes are not counted: the
+        line lies inside both, and :meth:`see_through` makes the obstacle translucent)."""
         r = snap.readout
         if r.p_WA is None or r.p_WB is None or not self._eyes:
             return set()
         posed = PosedItems(self.items, self.state.scene, snap.q) if posed is None else posed
         skip = set()
         if not r.distance > 0.0:
-            skip = {k for k, n in enumerate(self.items) if n.owner in (r.owner_a, r.owner_b)}
+            skip = {k for k, n in enumerate(self.items) if n.owner in (r.owner_a, r.owner_b or r.obstacle)}
         line = np.array([r.p_WA, r.p_WB], dtype=np.float64)
         out: set[int] = set()
         for eye in self.eyes():
@@ -473,7 +476,8 @@ class SceneDrawer:
         P = np.concatenate(pts) if pts else self.center.reshape(1, 3)
         # the arm's points to keep in sight (its nearest link's count most), past the other
         # robots' and bodies' opaque shapes
-        clear = self.see_through(snap)
+        # (an obstacle translucent in a contact still hides the red link best not seen through it)
+        clear = {k for k in self.see_through(snap) if self.items[k].owner != (r.owner_b or r.obstacle)}
         obstacles = [it.shape for k, it in enumerate(items) if it.robot != snap.active and k not in clear]
         targets, weights, radii, axis = [], [], [], None
         for it in arm:

@@ -15,7 +15,8 @@ keystroke's value update (``70`` typed without delay arrived as ``7``).
 
 The same snippet hides the number boxes beside viser's sliders (sliders are for dragging,
 typed values go through the fields) and keeps the status panel in sight: its block is sticky at
-the top of the scrolling control panel, the controls scroll beneath it.
+the top of the scrolling control panel, the controls scroll beneath it; the panel never scrolls
+sideways (long names wrap, see :mod:`._readout`).
 """
 
 from __future__ import annotations
@@ -115,7 +116,11 @@ COMMIT_ON_BLUR_HTML = (
     # the status panel stays in sight: the controls scroll beneath it
     # (sticky needs every box between it and the scrolling one to let it overflow)
     ".mantine-ScrollArea-content div:has(#armguard-status){overflow:visible !important}"
-    "div:has(> #armguard-status){position:sticky;top:0;z-index:3;background:#fff;padding-bottom:2px}</style>"
+    "div:has(> #armguard-status){position:sticky;top:0;z-index:3;background:#fff;padding-bottom:2px;max-width:100%}"
+    # the control panel never scrolls sideways (scrolled, it cut the panel's left edge): what is
+    # wider than it wraps (the panel's names) or is held to its width (labels, boxes)
+    ".mantine-ScrollArea-viewport:has(#armguard-status){overflow-x:hidden !important}"
+    ".mantine-ScrollArea-content:has(#armguard-status){min-width:0 !important;max-width:100%}</style>"
     f'<img src="data:," alt="" style="display:none" onerror="{_JS}">'
 )
 """HTML for ``gui.add_html``: submits a typed field's form on blur; hides sliders' number boxes;
@@ -127,10 +132,11 @@ class TypedField:
 
     ``shown`` is the text the box shows for the value in force; :meth:`show` updates it (only
     when it changed, so a refresh never overwrites what is being typed) and :meth:`revert` puts
-    the box back to it after a refusal.
+    the box back to it after a refusal.  ``on_same()`` runs instead of ``on_commit`` when the text
+    typed is the value in force (nothing to apply: the refusal of a value typed before it goes).
     """
 
-    def __init__(self, gui, label: str, text: str, on_commit, *, hint: str | None = None) -> None:
+    def __init__(self, gui, label: str, text: str, on_commit, *, hint: str | None = None, on_same=None) -> None:
         self.label = label
         self.shown = text
         with gui.add_form(None) as form:
@@ -138,8 +144,10 @@ class TypedField:
         self.form = form
 
         def apply(typed: str) -> None:
-            if typed.strip() == self.shown.strip():
-                return  # the value in force, typed again: nothing new
+            if typed.strip() == self.shown.strip():  # the value in force, typed again: nothing new
+                if on_same is not None:
+                    on_same()
+                return
             on_commit(typed)
 
         async def submit(event) -> None:
@@ -150,6 +158,9 @@ class TypedField:
             _COMMITS.submit(apply, str(self.handle.value)).add_done_callback(_report)
 
         form.on_submit(submit)
+        self.enter = apply
+        """``enter(typed)``: what Enter (or leaving the box) does with ``typed``, run here at once
+        (the browser's submit queues it on the commit thread); tests call it without a browser."""
 
     def show(self, text: str) -> None:
         if text != self.shown:

@@ -78,18 +78,12 @@ def frame_pose(state, frame: str, cell=None, robot: str | None = None) -> np.nda
 
 def parse_step_mm(text) -> float:
     """A jog step typed in mm: (0, MAX_STEP_MM]; returns m."""
-    x = parse_number(text, "jog step", lo=0.0, hi=MAX_STEP_MM, unit="mm")
-    if x == 0.0:
-        raise ConsoleInputError(f"jog step: must be more than 0 mm (up to {MAX_STEP_MM:g} mm); value kept unchanged")
-    return x * 1e-3
+    return parse_number(text, "jog step", lo=0.0, hi=MAX_STEP_MM, unit="mm", open_lo=True) * 1e-3
 
 
 def parse_turn_deg(text) -> float:
     """A jog turn typed in deg: (0, MAX_TURN_DEG]; returns rad."""
-    x = parse_number(text, "jog turn", lo=0.0, hi=MAX_TURN_DEG, unit="deg")
-    if x == 0.0:
-        raise ConsoleInputError(f"jog turn: must be more than 0 deg (up to {MAX_TURN_DEG:g} deg); value kept unchanged")
-    return math.radians(x)
+    return math.radians(parse_number(text, "jog turn", lo=0.0, hi=MAX_TURN_DEG, unit="deg", open_lo=True))
 
 
 def jog(state, frame: str, axis: str, *, translate: float = 0.0, turn: float = 0.0, cell=None) -> np.ndarray:

@@ -13,7 +13,10 @@ import numpy as np
 
 from .._errors import ArmguardError
 
-__all__ = ["ConsoleInputError", "parse_number", "parse_numbers"]
+__all__ = ["ConsoleInputError", "parse_number", "parse_numbers", "wrap_continuous", "CONTINUOUS_SPAN_DEG"]
+
+CONTINUOUS_SPAN_DEG = 360.0
+"""A continuous joint (no limits) is shown within ±this many degrees (its slider's ends)."""
 
 
 class ConsoleInputError(ArmguardError, ValueError):
@@ -31,8 +34,10 @@ def parse_number(
     hi: float = math.inf,
     unit: str = "",
     scale: float = 1.0,
+    open_lo: bool = False,
 ) -> float:
-    """Return ``value`` (a number or its text) times ``scale`` as a finite float within ``[lo, hi]``.
+    """Return ``value`` (a number or its text) times ``scale`` as a finite float within ``[lo, hi]``
+    (``(lo, hi]`` with ``open_lo``: ``lo`` itself refused, and the message writes the range so).
 
     ``lo`` / ``hi`` are in the typed unit (before ``scale``); ``unit`` only decorates messages.
     Raises ConsoleInputError with the field's name and the accepted range.
@@ -59,8 +64,9 @@ def parse_number(
     if not math.isfinite(x):
         finite = f"a finite number ({unit})" if unit else "a finite number"
         raise ConsoleInputError(f"{field}: expected {finite}, got {typed}")
-    if x < lo or x > hi:
-        raise ConsoleInputError(f"{field}: {x:g}{suffix} is outside [{lo:g}, {hi:g}]{suffix}; value kept unchanged")
+    if x < lo or x > hi or (open_lo and x == lo):
+        raise ConsoleInputError(f"{field}: {x:g}{suffix} is outside {'(' if open_lo else '['}{lo:g}, {hi:g}]{suffix}; "
+                                "value kept unchanged")
     return x * scale
 
 
@@ -86,3 +92,16 @@ def parse_numbers(value, field: str, count: int, *, unit: str = "", scale: float
     return np.array(
         [parse_number(p, label(i), unit=unit, scale=scale) for i, p in enumerate(parts)], dtype=np.float64
     )
+
+
+def wrap_continuous(x: float, field: str, k: float = 1.0, unit: str = "rad") -> tuple[float, str]:
+    """``(x, note)``: an angle ``x`` of a continuous joint (in the unit ``k`` per rad: ``180/pi`` for
+    deg) beyond ±:data:`CONTINUOUS_SPAN_DEG` (its slider's ends) wrapped into -180..180 deg, the same
+    angle (``450`` deg -> ``90``), with a note saying so; within the span, unchanged and no note."""
+    span = math.radians(CONTINUOUS_SPAN_DEG) * k
+    if -span <= x <= span:
+        return x, ""
+    w = math.remainder(x / k, 2.0 * math.pi) * k
+    w = 0.0 if w == 0.0 else w
+    return w, (f"{field}: {x:g} {unit} wrapped to {w:.6g} {unit}, the same angle of this continuous joint "
+               f"(shown within ±{span:g} {unit})")

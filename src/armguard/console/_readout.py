@@ -29,6 +29,8 @@ __all__ = [
     "CATEGORIES",
     "with_terrain",
     "moving_link_first",
+    "short_name",
+    "NAME_CHARS",
 ]
 
 CATEGORIES = ("arm", "environment", "workspace", "payload")
@@ -53,6 +55,11 @@ PANEL_COLORS = {
     PanelStatus.OFF: "#7d7d7d",  # grey
 }
 """Background colour of the distance panel per status (CSS hex)."""
+
+WRAP = "overflow-wrap:anywhere;word-break:break-word"
+"""CSS that lets a long name (``end_effector/j2s6s200_link_finger_tip_2``) wrap at any character
+instead of widening the control panel past its frame."""
+
 
 LINE_COLORS = {"far": (255, 210, 0), "within": (220, 30, 30)}
 """Nearest-obstacle line: yellow beyond the threshold, red within it (RGB 0..255)."""
@@ -260,7 +267,7 @@ def _terrain_html(tv) -> str:
     return (f'<div id="armguard-terrain" data-status="{e(rep.status.value)}" data-boxes="{tv.visited}" '
             f'data-distance="{d:.6g}" data-resolved="{int(getattr(tv, "depth_resolved", True))}" '
             'style="border:2px solid #8a6d3b;border-radius:6px;padding:4px;margin-top:4px;font-family:sans-serif;'
-            'font-size:0.9em">'
+            f'font-size:0.9em;{WRAP}">'
             f"<div><b>terrain</b> {e(rep.status.value)}: {e(text)} ({e(where)}{e(note)})</div>"
             f"<div>pyramid: {tv.visited} boxes tested, decided at level {rep.level} of {tv.n_levels - 1}; "
             f"{rep.elapsed_us:.0f} µs</div></div>")
@@ -271,16 +278,40 @@ def _sigmas_html(rep) -> str:
     o = rep.overall
     if o is None:
         return ('<div id="armguard-sigmas" data-sigmas="" style="border:2px solid #7a3;border-radius:6px;'
-                'padding:4px;margin-top:4px;font-family:sans-serif;font-size:0.9em">uncertain placements: '
+                f'padding:4px;margin-top:4px;font-family:sans-serif;font-size:0.9em;{WRAP}">uncertain placements: '
                 "no pair they move</div>")
     p = o.nearest
     sig = f"{p.sigmas:.3g}" if math.isfinite(p.sigmas) else "inf"
     return (f'<div id="armguard-sigmas" data-sigmas="{sig}" data-bound="{o.p_bound:.6g}" data-status="{e(o.status.value)}" '
             'style="border:2px solid #7a3;border-radius:6px;padding:4px;margin-top:4px;font-family:sans-serif;'
-            'font-size:0.9em">'
+            f'font-size:0.9em;{WRAP}">'
             f"<div><b>uncertain</b> {e(p.a)} / {e(p.b)}: {e(_fmt_m(p.distance))} = <b>{e(sig)} σ</b> "
             f"(σ = {p.sigma * 1000.0:.1f} mm)</div>"
             f"<div>P(collision) ≤ {o.p_bound:.2e} ({e(o.status.value)} at {rep.confidence:.3g})</div></div>")
+
+
+NAME_CHARS = 32
+"""Longest name the per-category table shows whole; a longer one keeps its start and end around "…"
+(the whole name in the cell's tooltip)."""
+
+def short_name(name: str, active: str | None = None, limit: int = NAME_CHARS) -> str:
+    """``name`` as the per-category table shows it: without the active arm's ``"robot/"`` prefix
+    (``end_effector/j2s6s200_link_6`` -> ``j2s6s200_link_6`` when ``end_effector`` is active), and
+    longer than ``limit`` characters cut in the middle (``"j2s6s200_l…inger_tip_2"``)."""
+    if active and name.startswith(active + "/"):
+        name = name[len(active) + 1:]
+    if len(name) <= limit:
+        return name
+    head = (limit - 1) // 2
+    return name[:head] + "…" + name[len(name) - (limit - 1 - head):]
+
+
+def _name_cell(name: str, active: str | None) -> str:
+    e = html.escape
+    shown = short_name(name, active)
+    title = f' title="{e(name)}"' if shown != name else ""
+    text = e(shown).replace("/", "/<wbr>").replace("_", "_<wbr>")  # wrap after a "/" or "_" first
+    return f"<td style='{WRAP}'{title}>{text}</td>"
 
 
 def timing_line(r: Readout, update_us: float | None = None, draw_ms: float | None = None) -> str:
@@ -297,7 +328,8 @@ def timing_line(r: Readout, update_us: float | None = None, draw_ms: float | Non
 
 
 def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=None, update_us: float | None = None,
-               changes: str = "", terrain=None, sigmas=None, draw_ms: float | None = None) -> str:
+               changes: str = "", terrain=None, sigmas=None, draw_ms: float | None = None,
+               active: str | None = None, others=()) -> str:
     """The distance panel as HTML: a coloured status block and the per-category table.
 
     ``message`` is shown under the table, red when ``error`` else grey.  ``compare`` (a
@@ -310,8 +342,13 @@ def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=Non
     ``SigmaReport`` (the least clearance in sigmas and the collision-probability bound;
     ``id="armguard-sigmas"`` with ``data-sigmas``, ``data-bound``).  The status block carries ``id="armguard-status"``, ``data-status``
     (the status value), ``data-backend`` and ``data-distance`` (m) so a browser test can read it;
-    the comparison ``id="armguard-compare"`` with ``data-delta`` (m).
+    the comparison ``id="armguard-compare"`` with ``data-delta`` (m).  Long names wrap rather than
+    widen the panel; the table shows them without the ``active`` arm's prefix (:func:`short_name`).
+    ``others``: the other arms within the threshold (:class:`~._notices.OtherArm`), a notice under
+    the status block (``id="armguard-others"``).
     """
+    from ._notices import others_html
+
     e = html.escape
     fg = "#000" if r.status is PanelStatus.WARNING else "#fff"
     dist = "" if not math.isfinite(r.distance) else f"{r.distance:.9g}"
@@ -319,7 +356,7 @@ def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=Non
     head = (
         f'<div id="armguard-status" data-status="{r.status.value}" data-backend="{e(r.backend)}" '
         f'data-distance="{dist}" '
-        f'style="background:{r.color};color:{fg};padding:8px;border-radius:6px;font-family:sans-serif">'
+        f'style="background:{r.color};color:{fg};padding:8px;border-radius:6px;font-family:sans-serif;{WRAP}">'
         f'<div style="font-size:1.2em;font-weight:bold">{e(r.status.value.upper())} &nbsp; {e(_fmt_m(r.distance))}</div>'
         f'<div id="armguard-reason" data-reason="{e(r.reason)}"><b>{e(r.reason)}</b></div>'
         f"<div>backend: {e(r.backend)}</div>"
@@ -336,7 +373,8 @@ def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=Non
         dd = "—" if not delta else (f"{dd_mm:+.4f} mm" if dd_mm != 0.0 else "0.0000 mm")
         cmp_html = (
             f'<div id="armguard-compare" data-delta="{delta}" data-backend="{e(o.backend)}" '
-            'style="border:2px solid #0aa;border-radius:6px;padding:4px;margin-top:4px;font-family:sans-serif">'
+            'style="border:2px solid #0aa;border-radius:6px;padding:4px;margin-top:4px;font-family:sans-serif;'
+            f'{WRAP}">'
             f"<div><b>compare {e(o.backend)}</b> (cyan line): {e(_fmt_m(o.distance))} "
             f"{e(o.link or '—')} / {e(o.obstacle or '—')}</div>"
             f"<div>Δd = d({e(o.backend)}) − d({e(compare.primary)}) = <b>{e(dd)}</b></div>"
@@ -344,11 +382,13 @@ def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=Non
         )
     rows = "".join(
         f"<tr><td>{e(c.category)}</td><td style='text-align:right'>{e(_fmt_m(c.distance))}</td>"
-        f"<td>{e(c.link)}</td><td>{e(c.obstacle)}</td></tr>"
+        f"{_name_cell(c.link, active)}{_name_cell(c.obstacle, active)}</tr>"
         for c in r.rows
     )
-    table = (
-        '<table id="armguard-categories" style="width:100%;font-size:0.85em;font-family:sans-serif">'
+    table = (  # fixed columns: the names wrap within them, never past the panel's right edge
+        '<table id="armguard-categories" style="width:100%;table-layout:fixed;font-size:0.85em;'
+        'font-family:sans-serif"><colgroup><col style="width:22%"><col style="width:20%"><col style="width:29%">'
+        '<col style="width:29%"></colgroup>'
         "<tr><th>category</th><th>distance</th><th>link</th><th>obstacle</th></tr>"
         f"{rows}</table>"
     )
@@ -358,6 +398,6 @@ def panel_html(r: Readout, message: str = "", *, error: bool = True, compare=Non
         reload = bool(changes) and message == changes and not error
         color = "#d62828" if error else ("#046" if reload else "#555")
         msg = (f'<div id="armguard-message" data-error="{str(error).lower()}" data-reload="{str(reload).lower()}" '
-               f'style="color:{color};font-family:sans-serif;padding-top:4px">{e(message)}</div>')
+               f'style="color:{color};font-family:sans-serif;padding-top:4px;{WRAP}">{e(message)}</div>')
     extra = ("" if terrain is None else _terrain_html(terrain)) + ("" if sigmas is None else _sigmas_html(sigmas))
-    return head + cmp_html + extra + table + msg
+    return head + others_html(others) + cmp_html + extra + table + msg

@@ -27,10 +27,11 @@ from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._avoid import AvoidMixin
 from ._backends import compare_readouts
 from ._motion import MotionMixin
+from ._notices import NoticesMixin
 from ._overlays import OverlayMixin
 from ._sources import BackendFailed, SourcesMixin
 from ._targets import TargetsMixin
-from ._parse import ConsoleInputError, parse_number, parse_numbers
+from ._parse import ConsoleInputError, parse_number, parse_numbers, wrap_continuous
 from ._readout import Readout, readout_from_report, readout_off
 from ._timeline import Timeline
 
@@ -82,7 +83,8 @@ class Snapshot:
     :class:`~._overlays.TerrainView` (the pyramid boxes the last check tested) or None;
     ``sigmas`` the :class:`armguard.uncertainty.SigmaReport` of the uncertain placements or None;
     ``target`` ``(p_WE (3,) m, rpy (3,) rad, typed)`` the Cartesian target (:meth:`ConsoleState.target`);
-    ``workspace_corners`` ``(lower, upper)`` the corner fields' values ((3,) m or None each).
+    ``workspace_corners`` ``(lower, upper)`` the corner fields' values ((3,) m or None each);
+    ``others`` the other arms within the threshold (:class:`~._notices.OtherArm`, :mod:`._notices`).
     """
 
     version: int
@@ -109,13 +111,14 @@ class Snapshot:
     sigmas: object = None
     target: tuple | None = None
     workspace_corners: tuple = (None, None)
+    others: tuple = ()
 
 
 def _duration_of(trajectory) -> float:
     return float(trajectory.duration)
 
 
-class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidMixin):
+class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidMixin, NoticesMixin):
     """The operator console's state and commands (thread-safe; no GUI).
 
     Parameters
@@ -213,6 +216,7 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
                 sigmas=self._sigmas,
                 target=self._target_now(),
                 workspace_corners=self.workspace_corners(),
+                others=self._others,
             )
 
     def joint_limits(self, robot: str) -> tuple[np.ndarray, np.ndarray]:
@@ -263,6 +267,7 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
         else:
             self._readout = readout_off(self._threshold)
         self._evaluate_overlays()
+        self._evaluate_others()
         self._update_us = (time.perf_counter() - t0) * 1e6
         self._version += 1
 
@@ -288,13 +293,6 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
         (docs/console.md; it kept the last value, and the next slider move was taken from it)."""
         if robot == self._active:
             self._arm_angle = 0.0
-
-    def note_error(self, message: str) -> None:
-        """Show ``message`` (an input the GUI rejected before it reached a command)."""
-        with self._lock:
-            self._message = message
-            self._message_is_error = True
-            self._version += 1
 
     # ------------------------------------------------------------------ settings
     def set_active(self, robot: str) -> None:
@@ -354,7 +352,9 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
         """Set one joint (rad or m; a number or its text); outside its limits raises.
 
         With ``deg`` a revolute joint's value is in degrees and a refusal names the limits in
-        degrees (the console's joint fields); prismatic joints stay in m.
+        degrees (the console's joint fields); prismatic joints stay in m.  A continuous joint (no
+        limits) takes any angle, one past a whole turn wrapped into -180..180 deg, with a note
+        (:func:`~._parse.wrap_continuous`; its slider spans -360..360 deg).
         """
         with self._lock:
             r = self._robot(robot)
@@ -368,11 +368,14 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
             lo, hi = float(r.lower[j]) * k, float(r.upper[j]) * k
             slack = self._tol.joint_limit * k
             x = parse_number(value, field, lo=lo - slack, hi=hi + slack, unit=unit)
+            note = ""
+            if unit != "m" and not (math.isfinite(lo) or math.isfinite(hi)):
+                x, note = wrap_continuous(x, field, k, unit)
             q = self._q[robot].copy()
             q[j] = x / k
             self._q[robot] = self._checked_q(robot, q)
             self._arm_moved(robot)
-            self._changed()
+            self._changed(note)
             return float(self._q[robot][j])
 
     def set_joints(self, robot: str, values, *, scale: float = 1.0) -> np.ndarray:

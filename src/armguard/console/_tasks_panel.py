@@ -295,8 +295,8 @@ class JogPanel:
         with gui.add_folder("jog the tool", order=order, visible=False) as self.folder:
             self.w_frame = gui.add_dropdown("jog in", jog_frames(app.state, cell), initial_value="world",
                                             hint="the axes of: world, the arm's base, the tool (its own axes), an object")
-            self.f_step = app._field("jog step (mm)", "10", self._set_step, "more than 0, up to 500 mm")
-            self.f_turn = app._field("jog turn (deg)", "5", self._set_turn, "more than 0, up to 90 deg")
+            self.f_step = app._field("jog step (mm)", "10", self._set_step, "(0, 500] mm: more than 0, up to 500")
+            self.f_turn = app._field("jog turn (deg)", "5", self._set_turn, "(0, 90] deg: more than 0, up to 90")
             self.w_move = gui.add_button_group("move along", ("-x", "+x", "-y", "+y", "-z", "+z"))
             self.w_turn = gui.add_button_group("turn about", ("-x", "+x", "-y", "+y", "-z", "+z"))
         self.w_move.on_click(lambda e: self.app._do(self.press, "move", e.target.value, on_error=self.app._sync_widgets))
