@@ -43,12 +43,14 @@ def console_cmd(scene: str, host: str, port: int, threshold: float, watch: bool,
     """Serve the operator console for SCENE (a built-in scene name, a scene file, or a cell file for the
     Tasks tab: armguard_cell: 1)."""
     from ..console import ConsoleApp
-    from ..console._serve import ModelWatcher, make_state, watched_files
+    from ..console._serve import ModelWatcher, load_inputs, make_state, watched_files
     from ._compile import warm_up
 
+    # a scene, terrain or --uncertain body refused: one line, exit status 3 (as every command); the
+    # files read first, so a mistyped path is refused at once, not after the kernels compiled
+    inputs = load_inputs(scene, terrain=terrain_file)
     warm_up()
-    # a scene, terrain or --uncertain body refused: one line, exit status 3 (as every command)
-    state = make_state(scene, threshold=threshold, terrain=terrain_file, uncertain=uncertain)
+    state = make_state(inputs, threshold=threshold, terrain=terrain_file, uncertain=uncertain)
     app = ConsoleApp(state, host=host, port=port).start()
     if watch:
         files = watched_files(scene, state.model)

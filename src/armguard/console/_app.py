@@ -20,13 +20,14 @@ from .._errors import ArmguardError
 from ._avoid_panel import AvoidPanel
 from ._draw import SceneDrawer
 from ._fields import COMMIT_ON_BLUR_HTML, TypedField
-from ._plot import PLOT_PERIOD, ClearancePlot, MarkerFeed
+from ._plot import PLOT_PERIOD
 from ._parse import CONTINUOUS_SPAN_DEG
 from ._readout import panel_html
 from ._state import MAX_DISTANCE_SETTING, ConsoleState
 from ._targets import MAX_ANGLE_DEG, MAX_COORDINATE
 from ._tasks_panel import TasksPanel, TrainingViews
-from ._views import VIEWS, view_pose
+from ._timeline_panel import TimelinePanel
+from ._views import VIEWS, canvas_of, urdf_hints, view_pose
 
 __all__ = ["ConsoleApp", "PortInUseError", "FPS", "PLOT_PERIOD"]
 
@@ -147,10 +148,6 @@ class ConsoleApp:
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
         self._shown_version = -1
-        self._plot: ClearancePlot | None = None
-        self._plot_player = None
-        self._plot_threshold = None
-        self._plot_feed = MarkerFeed()
         self._framed_active = None
         self._model_generation = 0
         self._built_generation = 0
@@ -322,15 +319,7 @@ class ConsoleApp:
 
         # -- time line: WORKMATE's emulation -------------------------------------------------
         with tabs.add_tab("Time line"):
-            trajs = st.trajectories()
-            self._w_traj = gui.add_dropdown("trajectory", trajs or ("(none)",))
-            self._b_load = b_load = gui.add_button("verify and load", disabled=not trajs)
-            self._w_transport = gui.add_button_group("play", ("◀ back", "pause", "play ▶", "slower", "faster"))
-            self._w_time = gui.add_slider("time (s)", min=0.0, max=1.0, step=0.01, initial_value=0.0)
-            self._w_rate = gui.add_markdown("")
-            self._w_plot = gui.add_image(np.full((20, 40, 3), 255, dtype=np.uint8), format="png", visible=False)
-            self._w_report = gui.add_html("")
-            self._avoid.build_timeline()
+            self._timeline = TimelinePanel(self)  # what is loaded, verify and load, play, the plot
 
         # -- views ---------------------------------------------------------------------------
         with tabs.add_tab("Views"):
@@ -340,9 +329,11 @@ class ConsoleApp:
             gui.add_button("frame the nearest pair").on_click(lambda e: self._frame(e.client, focus="pair"))
             self._w_shapes = gui.add_checkbox("checked shapes", True, hint="the shapes the distances are computed on")
             has_urdf = self.drawer.urdf is not None
+            # a greyed-out checkbox says why in its hint
+            vis_hint, col_hint = urdf_hints(st.model, has_urdf, getattr(self.drawer, "has_visual", False))
             self._w_urdf_vis = gui.add_checkbox("URDF visual geometry", bool(has_urdf and self.drawer.has_visual),
-                                                disabled=not (has_urdf and self.drawer.has_visual))
-            self._w_urdf_col = gui.add_checkbox("URDF collision geometry", False, disabled=not has_urdf)
+                                                disabled=not (has_urdf and self.drawer.has_visual), hint=vis_hint)
+            self._w_urdf_col = gui.add_checkbox("URDF collision geometry", False, disabled=not has_urdf, hint=col_hint)
             self.drawer.add_view_controls(gui)
             for label in VIEWS:
                 gui.add_button(label).on_click(lambda e, lb=label: self._set_view(e.client, lb))
@@ -356,8 +347,6 @@ class ConsoleApp:
         self._w_backend.on_update(self._from_client(lambda v: st.set_backend(v)))
         self._w_compare.on_update(self._from_client(lambda v: st.set_compare(None if v == "off" else v)))
         self._w_psi.on_update(self._from_client(lambda v: st.set_arm_angle(math.radians(v))))
-        self._w_time.on_update(self._from_client(lambda v: st.timeline_command("seek", v)))
-        self._w_transport.on_click(self._from_client(self._transport))
         self._w_shapes.on_update(lambda e: self.drawer.set_shapes_visible(self._w_shapes.value))
         for w in (self._w_urdf_vis, self._w_urdf_col):
             w.on_update(lambda e: self.drawer.set_urdf(self._w_urdf_vis.value, self._w_urdf_col.value))
@@ -365,7 +354,6 @@ class ConsoleApp:
         b_read.on_click(self._guard(lambda _e: st.reset_target()))
         b_ws.on_click(self._guard(lambda _e: st.apply_workspace()))
         b_ws_off.on_click(self._guard(lambda _e: st.remove_workspace()))
-        b_load.on_click(self._guard(lambda _e: st.load_trajectory(self._w_traj.value)))
         self._pose_shown = None
 
     def _build_joint_panel(self, name: str, snap, order: float) -> None:
@@ -431,9 +419,7 @@ class ConsoleApp:
         with self._tab_tests:
             self._build_tests_panel(order)
         self._b_stop.visible = bool(st.canned_tests())
-        trajs = st.trajectories()
-        self._w_traj.options = trajs or ("(none)",)
-        self._b_load.disabled = not trajs
+        self._timeline.model_reloaded()
         self._pose_shown = None
 
     def _guard(self, fn):
@@ -449,12 +435,6 @@ class ConsoleApp:
             self._do(fn, event.target.value, on_error=self._sync_widgets)
         return cb
 
-    def _transport(self, label: str) -> None:
-        cmd = {"◀ back": "backward", "pause": "pause", "play ▶": "forward", "slower": "slower", "faster": "faster"}[label]
-        self.state.timeline_command(cmd)
-        if cmd in ("backward", "forward"):
-            self.state.timeline_command("play")
-
     # ------------------------------------------------------------------ camera
     def _on_connect(self, client) -> None:
         self._frame(client)
@@ -462,7 +442,8 @@ class ConsoleApp:
     def _frame(self, client, focus: str = "arm") -> None:
         if client is None:
             return
-        pos, look = self.drawer.follow_pose(self.state.snapshot(), focus=focus)
+        # left of the control panel, as the tab's canvas is shaped (viser says its aspect, not the panel's place)
+        pos, look = self.drawer.follow_pose(self.state.snapshot(), focus=focus, **canvas_of(client))
         self._place(client, pos, look)
 
     def _set_view(self, client, label: str) -> None:
@@ -520,10 +501,7 @@ class ConsoleApp:
         self._sync_pose(snap)
         run = snap.run_state
         self._w_run_state.content = run_line(snap)
-        p = snap.player
-        if p is not None:
-            self._w_time.max = max(p.timeline.duration, 1e-3)
-            self._w_time.value = float(min(p.timeline.t, self._w_time.max))
+        self._timeline.sync(snap)
 
     def _sync_pose(self, snap) -> None:
         """The Cartesian panel: the tool pose now, and the target the state holds (the pose now until typed)."""
@@ -566,24 +544,4 @@ class ConsoleApp:
 
     def _refresh_plot(self, snap) -> None:
         self._avoid.refresh(snap)
-        p = snap.player
-        if p is None or p.kind != "verified":
-            if self._plot_player is not None:
-                self._w_plot.visible = False
-                self._w_report.content = ""
-                self._plot_player = None
-            return
-        if p is not self._plot_player or snap.threshold != self._plot_threshold:  # the dashed line: the threshold now
-            rep = p.report
-            fc = getattr(rep, "first_collision", None)
-            self._plot = ClearancePlot(p.times, p.clearance, threshold=snap.threshold,
-                                       first_collision=None if fc is None else float(fc.time))
-            self._plot_player, self._plot_threshold = p, snap.threshold
-            summary = rep.summary() if hasattr(rep, "summary") else str(rep)
-            self._w_report.content = report_html(summary)
-            self._w_plot.visible = True
-            self._plot_feed.reset()
-        tl = p.timeline.state
-        state = "playing" if tl.playing else "paused"
-        caption = f"t = {tl.t:.2f} / {tl.duration:.2f} s · {state} {tl.direction} · speed ×{abs(tl.rate):g}"
-        self._plot_feed.push(self._plot, tl.t, tl.playing, caption, self._w_plot, self._w_rate)
+        self._timeline.refresh(snap)

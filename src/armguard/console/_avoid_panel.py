@@ -120,4 +120,4 @@ class AvoidPanel:
         state = "playing" if tl.playing else "paused"
         caption = (f"t = {tl.t:.2f} / {tl.duration:.2f} s · {state} {tl.direction} · "
                    f"speed ×{abs(tl.rate):g} · with avoidance")
-        self._feed.push(self._plot, tl.t, tl.playing, caption, self.image, self.app._w_rate)
+        self._feed.push(self._plot, tl.t, tl.playing, caption, self.image, self.app._timeline.w_rate)

@@ -30,7 +30,7 @@ from ._meshes import item_frames, link_poses, mesh_of, quat_wxyz_from_matrix
 from ._nodes import PosedItems, ShapeNode
 from ._readout import no_negative_zero
 from ._sight import SIGHT_PERIOD, hidden_from
-from ._view import feature_segments, follow_view, marker_radius, pair_view, see_through
+from ._view import DEFAULT_ASPECT, feature_segments, follow_view, marker_radius, pair_view, see_through
 
 __all__ = ["SceneDrawer", "grid_segments", "grid_step", "GRID_COLOR", "LINE_PX", "COMPARE_OFFSET", "COLORS", "COMPARE_COLOR", "FEATURE_COLOR", "SEE_THROUGH_OPACITY"]
 
@@ -460,10 +460,12 @@ class SceneDrawer:
         self.ws.visible = True
 
     # ------------------------------------------------------------------ camera
-    def follow_pose(self, snap, fov_rad: float = math.radians(75.0), *, focus: str = "arm"):
+    def follow_pose(self, snap, fov_rad: float = math.radians(75.0), *, focus: str = "arm",
+                    aspect: float = DEFAULT_ASPECT):
         """``(position, look_at)`` framing the active arm and its nearest obstacle point
-        (``focus="arm"``), or only the nearest pair (``focus="pair"``: :func:`~._view.pair_view`,
-        seen across the line past every shape)."""
+        (``focus="arm"``, left of the control panel on a canvas ``aspect`` wide per unit height),
+        or only the nearest pair (``focus="pair"``: :func:`~._view.pair_view`, seen across the
+        line past every shape)."""
         r = snap.readout
         items = self.state.scene.shapes_at(snap.q, poses=link_poses(self.state.scene, snap.q))
         line = None if r.p_WB is None else np.array([r.p_WA, r.p_WB], dtype=np.float64)
@@ -492,5 +494,5 @@ class SceneDrawer:
                 targets.append(p)
                 weights.append(4.0 if hot else 1.0)
                 radii.append(0.8 * float(getattr(it.shape, "radius", 0.0)))
-        return follow_view(P, self.center, line=line, fov_rad=fov_rad, targets=np.array(targets).reshape(-1, 3),
+        return follow_view(P, self.center, line=line, fov_rad=fov_rad, aspect=aspect, targets=np.array(targets).reshape(-1, 3),
                            weights=weights, target_radii=radii, obstacles=obstacles, axis=axis)

@@ -162,6 +162,16 @@ class TypedField:
         """``enter(typed)``: what Enter (or leaving the box) does with ``typed``, run here at once
         (the browser's submit queues it on the commit thread); tests call it without a browser."""
 
+    @property
+    def visible(self) -> bool:
+        """Whether the field (its form, with the box) is shown."""
+        return bool(self.form.visible)
+
+    @visible.setter
+    def visible(self, on: bool) -> None:
+        if bool(self.form.visible) != bool(on):
+            self.form.visible = bool(on)
+
     def show(self, text: str) -> None:
         if text != self.shown:
             self.shown = text

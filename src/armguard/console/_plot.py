@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-__all__ = ["ClearancePlot", "MarkerFeed", "MARKER_RGB", "PLOT_PERIOD"]
+__all__ = ["ClearancePlot", "MarkerFeed", "MARKER_RGB", "PLOT_PERIOD", "Y_MARGIN", "clearance_ylim"]
 
 PLOT_PERIOD = 0.2
 """Least time (s) between two marker images sent while the time line plays (at most 5 a second)."""
@@ -88,6 +88,22 @@ class MarkerFeed:
         return sent
 
 
+Y_MARGIN = 0.12
+"""Room above and below the clearance plot's lines, as a fraction of the span they cover (a constant
+clearance sat on the axes' top edge)."""
+
+
+def clearance_ylim(shown_mm, threshold_mm: float) -> tuple[float, float]:
+    """The clearance plot's y range (mm): the clearance ``shown_mm`` (NaN where unknown), the threshold
+    and the zero line, with :data:`Y_MARGIN` of their span (at least 1 mm) above and below."""
+    v = np.asarray(shown_mm, dtype=np.float64)
+    v = v[np.isfinite(v)]
+    lo = min(0.0, float(threshold_mm), float(v.min()) if len(v) else 0.0)
+    hi = max(0.0, float(threshold_mm), float(v.max()) if len(v) else 0.0)
+    pad = Y_MARGIN * max(hi - lo, 1.0)
+    return lo - pad, hi + pad
+
+
 class ClearancePlot(MarkedPlot):
     """Clearance ``clearance`` (N,) m against ``times`` (N,) s, the threshold dashed, collisions shaded.
 
@@ -117,6 +133,7 @@ class ClearancePlot(MarkedPlot):
         if first_collision is not None and math.isfinite(first_collision):
             ax.plot([first_collision], [0.0], "o", color="#d62828")
         ax.set_xlim(self.t0, self.t1)
+        ax.set_ylim(*clearance_ylim(shown, threshold * 1000.0))
         ax.set_xlabel("t (s)", fontsize=8)
         ax.set_ylabel("clearance (mm)", fontsize=8)
         ax.tick_params(labelsize=7)

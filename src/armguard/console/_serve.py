@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import threading
+from dataclasses import dataclass
 from pathlib import Path
 
 from ..model import scene_of
 from ._app import ConsoleApp
 from ._state import DEFAULT_THRESHOLD, ConsoleState
 
-__all__ = ["serve", "make_state", "load_for_console", "ModelWatcher"]
+__all__ = ["serve", "make_state", "load_inputs", "ConsoleInputs", "load_for_console", "ModelWatcher"]
 
 
 def load_for_console(name):
@@ -87,14 +88,23 @@ class ModelWatcher:
             self.reload_now()
 
 
-def make_state(scene, *, threshold: float = DEFAULT_THRESHOLD, terrain=None, uncertain=()) -> ConsoleState:
-    """The console state for ``scene`` (a Scene or a built-in / file name; a cell file: its model, and
-    the cell as ``state.cell`` for the Tasks tab) with its model, a
-    terrain (an ElevationMap, or a file for :func:`armguard.terrain.load_terrain`) and uncertain
-    placements (UncertainPlacement objects or ``"BODY=SIGMA_M[,SIGMA_DEG]"`` texts)."""
-    scene = scene_of(scene)  # a Model: its scene
-    from ._overlays import parse_uncertain
+@dataclass(frozen=True)
+class ConsoleInputs:
+    """What the console reads from its files, read: the ``scene``, its ``model`` (or None), the
+    ``cell`` of a cell file (or None) and ``source``, how a saved program names the cell."""
 
+    scene: object
+    model: object = None
+    cell: object = None
+    source: str | None = None
+
+
+def load_inputs(scene, *, terrain=None) -> ConsoleInputs:
+    """Read (and parse) the console's files before anything is checked: ``scene`` (a Scene, a Model,
+    a built-in name, a scene, model or cell file) and that a ``terrain`` file exists.  No kernel is
+    compiled here, so ``armguard console`` refuses a mistyped path at once, before it warms the
+    kernels up, with the loaders' own message (ArmguardError)."""
+    scene = scene_of(scene)  # a Model: its scene
     model, cell, source = None, None, None
     if isinstance(scene, (str, Path)):
         from ..program._format import is_cell_file
@@ -107,6 +117,22 @@ def make_state(scene, *, threshold: float = DEFAULT_THRESHOLD, terrain=None, unc
             scene, model = cell.model.scene, cell.model
         else:
             scene, model = load_for_console(scene)
+    if isinstance(terrain, (str, Path)) and not Path(terrain).exists():  # read later, with the scene's kernels
+        from .._errors import TerrainError
+
+        raise TerrainError(f"terrain file {str(terrain)!r} does not exist")
+    return ConsoleInputs(scene, model, cell, source)
+
+
+def make_state(scene, *, threshold: float = DEFAULT_THRESHOLD, terrain=None, uncertain=()) -> ConsoleState:
+    """The console state for ``scene`` (a Scene or a built-in / file name; a cell file: its model, and
+    the cell as ``state.cell`` for the Tasks tab; or the :class:`ConsoleInputs` of :func:`load_inputs`)
+    with its model, a terrain (an ElevationMap, or a file for :func:`armguard.terrain.load_terrain`)
+    and uncertain placements (UncertainPlacement objects or ``"BODY=SIGMA_M[,SIGMA_DEG]"`` texts)."""
+    from ._overlays import parse_uncertain
+
+    inputs = scene if isinstance(scene, ConsoleInputs) else load_inputs(scene, terrain=terrain)
+    scene, model, cell, source = inputs.scene, inputs.model, inputs.cell, inputs.source
     state = ConsoleState(scene, threshold=threshold, model=model)
     state.cell, state.cell_source = cell, source  # read by the Tasks tab (._tasks_panel.make_cell)
     if terrain is not None:

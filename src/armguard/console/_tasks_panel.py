@@ -21,7 +21,12 @@ from ._tasks import (DEFAULT_GRASP, DEFAULT_LIFT, PROMPTS, TASK_KINDS, TaskCompo
                      program_timeline, task_ends)
 from ._views import TrainingViews  # noqa: F401  (the app imports the WORKMATE widgets from here)
 
-__all__ = ["TasksPanel", "JogPanel", "TrainingViews", "make_cell", "FRAME_AXES"]
+__all__ = ["TasksPanel", "JogPanel", "TrainingViews", "make_cell", "FRAME_AXES", "FIELD_KINDS"]
+
+FIELD_KINDS = {"grasp height (m)": ("PICKUP",), "approach lift (m)": ("PICKUP", "PLACE")}
+"""The tasks each typed field applies to, shown for these only: a PICKUP's grasp height (a PLACE
+releases at the height its PICKUP grasped), the approach lift of a PICKUP and a PLACE (FIND and
+MOVE have neither)."""
 
 FRAME_AXES = (0.08, 0.004)
 """Drawn frames: axis length and radius (m) of a FIND's bound frame (its nominal frame: half)."""
@@ -146,6 +151,8 @@ class TasksPanel:
         self.w_onto.visible = kind == "PLACE"
         for w in (self.w_frame, self.w_to, self.w_mode):
             w.visible = kind == "MOVE"
+        for f in (self.f_grasp, self.f_lift):
+            f.visible = kind in FIELD_KINDS[f.label]
         self._show_prompt()
 
     # ------------------------------------------------------------------ picking in the 3-D view

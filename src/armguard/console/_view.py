@@ -18,14 +18,30 @@ import numpy as np
 from ..geometry import Box, ConvexPolyhedron, FeatureKind, Polygon, Prism
 
 __all__ = ["feature_segments", "follow_view", "pair_view", "see_through", "visible_count", "marker_radius", "PAIR_CONTEXT", "PAIR_SHIFT", "FOLLOW_ELEVATION_DEG", "FOLLOW_MARGIN",
-           "FOLLOW_SHIFT", "MARKER_LINE_FRACTION", "MARKER_SCENE_RANGE"]
+           "PANEL_SHARE", "DEFAULT_ASPECT", "visible_offset", "MARKER_LINE_FRACTION", "MARKER_SCENE_RANGE"]
 
 FOLLOW_ELEVATION_DEG = 30.0
 """Camera elevation above the horizontal of the follow view."""
 FOLLOW_MARGIN = 2.0
 """The follow view's camera distance, in multiples of the distance that just fits the framed points."""
-FOLLOW_SHIFT = 0.5
-"""How far the follow view's look-at point moves to the camera's right (framed-sphere radii)."""
+PANEL_SHARE = 0.25
+"""Share of the view's width the control panel covers at the default layout (viser's "large"
+panel, 24 em = 384 px and its margin, over a window 1600 px wide): the follow view frames its
+points in the rest, left of the panel.  viser tells the server the canvas's aspect and field of
+view, not where the panel is, so the share is fixed."""
+DEFAULT_ASPECT = 1.6
+"""Width / height of the view when the browser has not said (a 1600 x 1000 window)."""
+
+
+def visible_offset(fov_rad: float, aspect: float, panel_share: float = PANEL_SHARE) -> tuple[float, float]:
+    """``(shift, half)`` for a camera of vertical field of view ``fov_rad`` on a canvas ``aspect``
+    wide per unit height whose right ``panel_share`` the control panel covers: a look-at point
+    ``shift`` times the camera distance to the right of a point puts that point in the middle of
+    the visible part (left of the panel), and ``half`` (rad) is the half-angle a framed sphere must
+    fit in there, horizontally and vertically."""
+    share = min(max(float(panel_share), 0.0), 0.9)
+    t = float(aspect) * math.tan(0.5 * fov_rad)  # tan of the half horizontal field of view
+    return share * t, min(0.5 * fov_rad, math.atan((1.0 - share) * t))
 
 
 SEE_THROUGH_TRIM = 0.05
@@ -161,18 +177,19 @@ def feature_segments(shape, feature) -> np.ndarray:
 
 
 def follow_view(points, scene_center, *, line=None, fov_rad: float = math.radians(75.0),
-                shift: float = FOLLOW_SHIFT, min_radius: float = 0.25, targets=None, obstacles=(),
-                weights=None, target_radii=None, axis=None) -> tuple[np.ndarray, np.ndarray]:
+                aspect: float = DEFAULT_ASPECT, panel_share: float = PANEL_SHARE, min_radius: float = 0.25,
+                targets=None, obstacles=(), weights=None, target_radii=None, axis=None) -> tuple[np.ndarray, np.ndarray]:
     """Camera ``(position, look_at)`` (3,) m framing ``points`` (n, 3) m.
 
     Looks at the centre ``c`` of their bounding box horizontally from the arm's side of the scene
     (the direction from ``scene_center`` to ``c``; -y when they coincide) -- turned, when
     ``line`` (2, 3) (the nearest-obstacle line) is given, to the horizontal direction
     perpendicular to it on that side, so the line is seen across, not end-on -- raised by
-    :data:`FOLLOW_ELEVATION_DEG`, far enough that a sphere around the box fits the vertical field of
-    view ``fov_rad``, times :data:`FOLLOW_MARGIN`.  The look-at point is moved ``shift`` sphere radii
-    to the camera's right, so the framed points sit left of the control panel.  The framed
-    sphere's radius is at least ``min_radius`` m.
+    :data:`FOLLOW_ELEVATION_DEG`, far enough that a sphere around the box fits the part of the
+    view left of the control panel (``panel_share`` of a canvas ``aspect`` wide per unit height,
+    vertical field of view ``fov_rad``), times :data:`FOLLOW_MARGIN`.  The look-at point is moved
+    to the camera's right so that ``c`` sits in the middle of that part (:func:`visible_offset`),
+    not under the panel.  The framed sphere's radius is at least ``min_radius`` m.
 
     With ``targets`` (n, 3) m (points of the arm) and ``obstacles`` (shapes that may hide them),
     the direction is the first, turning about the vertical from that one (then ±35°, ±70°,
@@ -202,14 +219,15 @@ def follow_view(points, scene_center, *, line=None, fov_rad: float = math.radian
         if m > 0.2 * float(np.linalg.norm(d)) and m > 1e-9:
             perp /= m
             h = perp if float(perp @ h) >= 0.0 else -perp
-    dist = FOLLOW_MARGIN * r / math.sin(0.5 * fov_rad)
+    shift, half = visible_offset(fov_rad, aspect, panel_share)
+    dist = FOLLOW_MARGIN * r / math.sin(half)
 
     def pose(hh, el_deg):
         el = math.radians(el_deg)
         direction = np.array([math.cos(el) * hh[0], math.cos(el) * hh[1], math.sin(el)])
         right = np.cross(-direction, [0.0, 0.0, 1.0])
         right /= max(float(np.linalg.norm(right)), 1e-12)
-        look = c + shift * r * right
+        look = c + shift * dist * right
         return look + dist * direction, look
 
     first = pose(h, FOLLOW_ELEVATION_DEG)

@@ -20,7 +20,7 @@ import time
 import numpy as np
 
 __all__ = ["TrainingViews", "VIEWS", "VISTA_POINTS", "view_pose", "INSET_VIEWS", "INSET_SIZE", "camera_wxyz", "eye_in_hand", "inset_camera",
-           "INSET_FOV_DEG", "EYE_FOV_DEG", "REFRESH_S"]
+           "INSET_FOV_DEG", "EYE_FOV_DEG", "REFRESH_S", "urdf_hints", "canvas_of"]
 
 INSET_VIEWS = ("top", "front", "side", "eye in the hand")
 INSET_SIZE = (180, 240)
@@ -44,6 +44,39 @@ centre.  The seed gives no directions; these are chosen: six from above (elevati
 
 VIEWS = ("top", "front", "side") + tuple(f"vista {k}" for k in range(1, len(VISTA_POINTS) + 1))
 """The camera presets offered: three orthogonal views and the ten vista points."""
+
+
+def canvas_of(client) -> dict:
+    """``{"fov_rad": ..., "aspect": ...}`` of a tab's camera, as its browser last reported them; the
+    defaults (75 deg, :data:`~._view.DEFAULT_ASPECT`) where it has not reported yet."""
+    from ._view import DEFAULT_ASPECT
+
+    out = {"fov_rad": math.radians(75.0), "aspect": DEFAULT_ASPECT}
+    try:
+        cam = client.camera
+        if cam.image_width > 0 and cam.image_height > 0:
+            out["aspect"] = float(cam.aspect)
+        if 0.0 < float(cam.fov) < math.pi:
+            out["fov_rad"] = float(cam.fov)
+    except (AssertionError, AttributeError, TypeError, ValueError, ZeroDivisionError):
+        pass  # no report yet (viser asserts it has one)
+    return out
+
+
+def urdf_hints(model, loaded: bool, has_visual: bool) -> tuple[str, str]:
+    """The hints of the Views tab's "URDF visual geometry" and "URDF collision geometry" checkboxes:
+    what each draws, or, where it is greyed out, why. ``model`` the console's model (None: a bare
+    scene), ``loaded`` whether its URDF is drawn, ``has_visual`` whether that URDF has visuals."""
+    if loaded:
+        collision = "the <collision> meshes of the model's URDF"
+        if has_visual:
+            return "the model's URDF meshes (its <visual> geometry)", collision
+        return "unavailable: the model's URDF has no <visual> geometry", collision
+    if any(str(f).endswith(".urdf") for f in getattr(model, "files", ())):
+        why = "unavailable: the model's URDF could not be drawn (the message above said why)"
+    else:
+        why = "unavailable: this scene has no URDF (its model is not built from a URDF file), so no URDF visuals"
+    return why, why
 
 
 def view_pose(label: str, center: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
