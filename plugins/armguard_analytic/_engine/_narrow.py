@@ -492,7 +492,7 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, 
                                                                                rot, tx, ty, tz, taba, tabb, cap))
         if ok and depth < cap:
             return -depth - (ra + rb), BOUNDED  # depth < cap: distance > beyond (an upper bound, no witnesses)
-        if ok and depth > eps_len:
+        if ok:  # settled, a depth below eps_len included (the exhaustive SAT of the W path took 0.55 s on iiwa)
             wax, way, waz = _to_world(SF, oA, ax, ay, az, 1.0)
             wbx, wby, wbz = _to_world(SF, oA, bx, by, bz, 1.0)
             wnx, wny, wnz = _to_world(SF, oA, nx, ny, nz, 0.0)

@@ -190,7 +190,8 @@ def _gjk_body(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, 
     stay in their own frames (A's frame is the one GJK works in; B's supports climb B's graph along
     ``R_AB^T d`` and only the support points are mapped).  ``simp`` (``None``, or a float64 array of >= 9 entries) receives the
     final simplex when the origin ends inside a tetrahedron: ``simp[0] = 1`` then, ``simp[1:5]``
-    A's and ``simp[5:9]`` B's support indices of its four vertices (else ``simp[0] = 0``); the
+    A's and ``simp[5:9]`` B's support indices of its four vertices (touching, the origin within
+    ``eps_len`` of a smaller simplex: ``simp[0] = -n`` and its ``n`` vertices so; else ``simp[0] = 0``); the
     penetration-depth kernel (``_pair_epa``) starts from it.
 
     ``sep`` (m; ``inf``: off): stop, ``GJK_SEPARATED``, as soon as a support plane proves the core
@@ -369,6 +370,11 @@ def _gjk_body(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, 
             for k in range(4):
                 simp[1 + k] = (ia0, ia1, ia2, ia3)[k]
                 simp[5 + k] = (ib0, ib1, ib2, ib3)[k]
+        elif status == GJK_INTERSECTING:  # touching: the n vertices the origin is within eps_len of, -n
+            simp[0] = -float(n)
+            for k in range(4):
+                simp[1 + k] = (ia0, ia1, ia2, ia3)[k] if k < n else 0
+                simp[5 + k] = (ib0, ib1, ib2, ib3)[k] if k < n else 0
         if simp.shape[0] >= 16:  # the final simplex as a seed (see the docstring)
             simp[9] = n if status == GJK_SEPARATED else 0
             for k in range(3):
