@@ -328,10 +328,13 @@ class AnalyticChecker(CheckerBase):
         n = len(d)
         jac, smooth = np.empty((n, jp.nv)), np.empty(n, np.bool_)
         H, MF, MI = f.args[:3]
-        if jp.entry(H, MF, MI, SF, jp.rows_of(idx), jp.vcol, jp.gF, jp.gI, jp.V, jp.tol, d, p_WA, p_WB, jac, smooth):
-            from armguard.backends._jacobian import finite_difference_rows
+        from armguard.backends._jacobian import cores_meet, finite_difference_rows
 
-            touching = np.flatnonzero(np.abs(d) <= jp.tol_length)
+        touch = jp.entry(H, MF, MI, SF, jp.rows_of(idx), jp.vcol, jp.gF, jp.gI, jp.V, jp.tol, d, p_WA, p_WB, jac, smooth)
+        meet = cores_meet(self.model, d, idx, jp.tol_length)  # two round shapes whose cores meet: a kink
+        if touch or meet.any():
+            smooth[meet] = False
+            touching = np.flatnonzero((np.abs(d) <= jp.tol_length) | meet)
             sub = touching if idx is None else idx[touching]
             jac[touching] = finite_difference_rows(self, q, sub, step=self.model.tol.jacobian_step, one_sided=True)[0]
         return jac, smooth

@@ -41,6 +41,7 @@ cylinder's side line (a face against a prism side may then be called smooth).
 from __future__ import annotations
 
 import threading
+import weakref
 
 import numpy as np
 from numba import njit
@@ -48,7 +49,7 @@ from numba import njit
 from .._errors import BackendError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 
-__all__ = ["WitnessJacobian", "finite_difference_rows"]
+__all__ = ["WitnessJacobian", "cores_meet", "finite_difference_rows"]
 
 _PLANE = -1  # a workspace wall: the face is the whole plane
 
@@ -232,10 +233,7 @@ class WitnessJacobian:
         self._joint = np.empty(len(geoms), np.int64)
         self._R_JG = np.empty((len(geoms), 3, 3))  # geometry in its joint's frame
         self._described = np.ones(len(geoms), bool)
-        self._swept = np.full(len(geoms), np.nan)  # a sphere's or capsule's radius: a point or segment core, swept
         for i, go in enumerate(geoms):
-            if type(go.geometry).__name__ in ("Sphere", "Capsule"):
-                self._swept[i] = float(go.geometry.radius)
             self._joint[i] = go.parentJoint
             self._R_JG[i] = go.placement.rotation
             sv = _shape_vertices(go.geometry)
@@ -351,17 +349,39 @@ class WitnessJacobian:
         _witness_rows(np.ascontiguousarray(result.p_WA), np.ascontiguousarray(result.p_WB), d, ja, jb, ga, gb, Jj,
                       R_WJ, self._R_JG, self._vstart, self._V, self._disk_axis, self._disk_r, self._described,
                       self._cstart, self._cols, tol.length, tol.jacobian_face, tol.jacobian_parallel, jac, smooth)
-        # two spheres or capsules whose cores (centres, axis segments) meet: the distance is the cores'
-        # (a kink at 0: it grows whichever way they part) less the radii; no one normal, the rows one-sided
-        r_a = np.where(ga >= 0, self._swept[np.maximum(ga, 0)], np.nan)
-        r_b = np.where(gb >= 0, self._swept[np.maximum(gb, 0)], np.nan)
-        with np.errstate(invalid="ignore"):
-            meet = np.abs(d + r_a + r_b) <= tol.length
+        meet = cores_meet(self.model, d, idx, tol.length)
         smooth[meet] = False
         touching = np.flatnonzero((np.abs(d) <= tol.length) | meet)
         if len(touching) and refine is not None:
             jac[touching] = refine(touching)
         return jac, smooth
+
+
+_ROUND: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()  # Model -> (key, r_a (P,), r_b (P,))
+
+
+def cores_meet(model, d, idx=None, length: float = DEFAULT_TOLERANCES.length) -> np.ndarray:
+    """``(n,) bool``: the rows ``idx`` (None: every Model pair row) with distances ``d`` whose two
+    shapes are spheres or capsules with their cores (centres, axis segments) meeting, ``|d + r_a +
+    r_b| <= length``.  There the distance is the cores' (a kink at 0: it grows whichever way they
+    part) less the radii: no one normal, no derivative; ranger's crossing capsules had witness rows of
+    -0.51 m/rad in directions where the distance does not move.  Such rows are not smooth and are
+    taken one-sided (forward differences), by the framework's witness Jacobian and the analytic
+    backend's kernel alike."""
+    pairs = model.pairs
+    key = (getattr(model.scene, "revision", None), len(pairs))
+    hit = _ROUND.get(model)
+    if hit is None or hit[0] != key:
+        radius = {}
+        for go in model.collision_model.geometryObjects:
+            if type(go.geometry).__name__ in ("Sphere", "Capsule"):
+                radius[go.name] = float(go.geometry.radius)
+        r_a = np.array([radius.get(a, np.nan) for a in pairs.a], dtype=np.float64)
+        r_b = np.array([radius.get(b, np.nan) for b in pairs.b], dtype=np.float64)
+        hit = _ROUND[model] = (key, r_a, r_b)
+    r_a, r_b = (hit[1], hit[2]) if idx is None else (hit[1][idx], hit[2][idx])
+    with np.errstate(invalid="ignore"):
+        return np.abs(np.asarray(d, dtype=np.float64) + r_a + r_b) <= length
 
 
 def finite_difference_rows(checker, q, idx, *, step: float, one_sided: bool = False) -> tuple:
