@@ -287,3 +287,27 @@ def test_damper_refuses_a_velocity_limit_that_is_no_numbers():
     for bad in ("abc", [], [[1.0]], -1.0):
         with pytest.raises(AvoidanceError, match="Damper.velocity_limit: expected a number or one per velocity column"):
             Damper(**kw, velocity_limit=bad)
+
+
+def test_a_pair_no_joint_moves_does_not_stop_the_arm():
+    """ur5's wrist 2 and tool link are 19.80 mm apart at every configuration: their Jacobian row is rounding
+    noise (about -3.8e-9 m/rad), and with a 20 mm stand-off its "may not close" constraint, met by DAQP only to
+    its own tolerance, stopped the arm ("a constraint broken by 1.38e-09").  Rows no longer than
+    ``Tolerances.avoid_row`` are no constraint; the pairs a joint does move still are."""
+    from armguard.avoidance import AvoidanceStatus, Damper, avoid_step
+
+    m = armguard.load_model("ur5")
+    c = armguard.checker(m)
+    Q = m.random_q(50, 5)
+    q = Q[~c.collides(Q)][0]
+    v = np.random.default_rng(0).normal(size=6)
+    damper = Damper(stand_off=0.02, influence=0.1, approach_speed=0.3, period=0.01, velocity_limit=1.0)
+    r = c.pair_distances(q, jacobian=True)
+    still = np.linalg.norm(r.jacobian, axis=1) <= m.tol.avoid_row
+    assert np.any(still & (r.distance < damper.stand_off))  # the pair no joint moves, inside the stand-off
+    s = avoid_step(c, q, v, damper)
+    assert s.status is not AvoidanceStatus.STOPPED, s.solver
+    moved = (r.distance < damper.influence) & ~still
+    closing = r.jacobian[moved] @ s.velocity
+    bound = -damper.rate() * np.maximum(r.distance[moved] - damper.stand_off, 0.0)
+    assert np.all(closing >= bound - m.tol.avoid_feasibility)  # the others still held to their dampers

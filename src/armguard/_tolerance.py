@@ -133,6 +133,10 @@ class Tolerances:
     avoid_feasibility : float, m/s or rad/s
         ``armguard.avoid``: the solver's answer may break a damper constraint or a velocity limit
         by at most this (round-off), else the answer is to stop.
+    avoid_row : float, m/rad or m/m
+        ``armguard.avoid``: a pair whose Jacobian row is no longer than this is no damper
+        constraint: no joint moves its distance (a pair of one rigid body, its row rounding noise,
+        -3.8e-9 m/rad on ur5's wrist 2 and tool link) and its constraint only stopped the arm.
     differential_contact_band : float, m
         Differential tests and ``armguard compare``: a verdict (collides or not) may differ
         between two backends (or a backend and ``reference/``) only where the reference distance
@@ -192,6 +196,7 @@ class Tolerances:
     jacobian_parallel: float = 1e-9
     avoid_still: float = 1e-9
     avoid_feasibility: float = 1e-9
+    avoid_row: float = 1e-6
     differential_contact_band: float = 1e-6
     differential_distance: float = 1e-6
     differential_hull: float = 1e-5

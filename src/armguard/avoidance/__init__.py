@@ -183,7 +183,7 @@ def avoid(v_cmd, distances, damper: Damper, *, tol: Tolerances = DEFAULT_TOLERAN
     if not _all_finite(d, jac):
         raise AvoidanceError("avoid: a distance or a Jacobian entry is NaN or infinite; no velocity can be given")
     lim = damper.limits(nv)
-    rows = np.flatnonzero((d < damper.influence) & np.any(jac != 0.0, axis=1))
+    rows = np.flatnonzero((d < damper.influence) & (np.einsum("ij,ij->i", jac, jac) > tol.avoid_row ** 2))
     A = np.ascontiguousarray(jac[rows])
     b = damper.bound(d[rows])
     dmin = float(d.min()) if len(d) else math.inf

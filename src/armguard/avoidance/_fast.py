@@ -3,7 +3,7 @@
 :func:`armguard.avoidance.avoid` is the reference: plain NumPy on a
 :class:`~armguard.backends.PairDistances`, a dozen small array operations (each ~1 µs) around the
 QP.  :func:`filter_velocity` does the same on bare arrays with two compiled calls, one before DAQP
-(which pairs are within the influence distance with a non-zero Jacobian row, their bounds (1) of
+(which pairs are within the influence distance with a Jacobian row longer than ``Tolerances.avoid_row``, their bounds (1) of
 :mod:`armguard.avoidance`, the command clipped to the limits, whether any constraint binds) and one
 after it (the largest constraint violation, the closing speeds, the status's maxima); DAQP gets the
 same matrices, so the answers are the reference's (``tests/test_avoidance.py`` holds them equal).
@@ -22,7 +22,7 @@ _BIG = 1e30  # DAQP's "no bound"
 
 
 @njit(cache=True, nogil=True)
-def _rows(d, J, v_cmd, lim, influence, stand_off, rate, rows, A, b, clipped, upper, lower):  # pragma: no cover - numba
+def _rows(d, J, v_cmd, lim, influence, stand_off, rate, row_min2, rows, A, b, clipped, upper, lower):  # pragma: no cover
     """The damper's constraint rows of ``d`` ``(n,)``, ``J`` ``(n, nv)``: writes ``rows``, ``A``,
     ``b`` (the first ``k`` entries), ``clipped`` ``(nv,)`` and DAQP's bounds ``upper`` / ``lower``
     ``(nv + k,)``; returns ``(k, binds, bad)`` (``binds``: some row has ``A clipped < b``; ``bad``:
@@ -45,14 +45,13 @@ def _rows(d, J, v_cmd, lim, influence, stand_off, rate, rows, A, b, clipped, upp
             return 0, False, 2
         if not di < influence:
             continue
-        nonzero = False
+        norm2 = 0.0
         for c in range(nv):
             x = J[i, c]
             if not math.isfinite(x):
                 return 0, False, 3
-            if x != 0.0:
-                nonzero = True
-        if not nonzero:
+            norm2 += x * x
+        if not norm2 > row_min2:  # no joint moves this distance (Tolerances.avoid_row)
             continue
         s = 0.0
         for c in range(nv):
@@ -122,8 +121,8 @@ def filter_velocity(v_cmd: np.ndarray, d: np.ndarray, J: np.ndarray, lim: np.nda
     clipped = np.empty(nv)
     upper = np.empty(nv + n)
     lower = np.empty(nv + n)
-    k, binds, bad = _rows(d, J, v_cmd, lim, damper.influence, damper.stand_off, damper.rate(), rows, A, b, clipped,
-                          upper, lower)
+    k, binds, bad = _rows(d, J, v_cmd, lim, damper.influence, damper.stand_off, damper.rate(), tol.avoid_row ** 2, rows,
+                          A, b, clipped, upper, lower)
     if bad:
         what = {1: "v_cmd: contains NaN or infinite values", 2: "avoid: a distance is NaN or infinite",
                 3: "avoid: a Jacobian entry is NaN or infinite"}[bad]
