@@ -145,3 +145,18 @@ def test_compiled_scene_rows_equal_the_models_scene_q(kinova):
     Q[57, cq[1]] *= 1.0 + 4 * UNIT_CIRCLE
     Q[120, cq[0] + 1] = 0.0
     assert scene_rows(Q, qidx, circ, out) == 57
+
+
+def test_a_batch_of_the_wrong_width_is_told_the_layout_as_a_single_q_is():
+    """``collides(Q)`` with kinova's 6 angles a row said only ``expected shape (M, 9)``; ``pair_distances(q)``
+    names each position and points to ``Model.pin_q``: the batch now says the same of each row."""
+    import numpy as np
+
+    import armguard
+
+    m = armguard.load_model("kinova")
+    c = armguard.checker(m)
+    with pytest.raises(armguard.BackendError) as info:
+        c.collides(np.zeros((2, 6)))
+    msg = str(info.value)
+    assert "expected shape (M, 9), each row" in msg and "j2s6s200_joint_1 (cos, sin)" in msg and "Model.pin_q" in msg

@@ -48,3 +48,19 @@ def test_trajectory_file_with_an_integer_beyond_float_range_names_the_key(tmp_pa
     with pytest.raises(SceneFileError) as err:
         Trajectory.load_yaml(path)
     assert err.value.file == str(path) and err.value.where == "times"
+
+
+def test_a_trajectory_naming_no_robot_is_verified_on_the_scenes_only_one():
+    """``Trajectory(None, ...)`` named the robot 'None', and the verifier refused it ("robot 'None' is not in the
+    scene") where a trajectory naming no robot is meant for the scene's only robot."""
+    import numpy as np
+
+    import armguard
+    from armguard.kinematics import Trajectory
+
+    m = armguard.load_model("ur5")
+    names = list(m.scene.robots["ur5"].joint_names)
+    q0 = m.scene_q(m.neutral())  # the one robot's joints, in its order
+    t = Trajectory(None, names, [0.0, 1.0], np.vstack([q0, q0]))
+    assert t.robot_name == ""
+    assert armguard.verify(m, t).status is not None

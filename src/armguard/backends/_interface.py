@@ -204,7 +204,8 @@ def check_Q(model, Q) -> np.ndarray:
     except (TypeError, ValueError) as exc:
         raise BackendError(f"Q: expected an (M, {model.nq}) array of numbers") from exc
     if Q.ndim != 2 or Q.shape[1] != model.nq:
-        raise BackendError(f"Q: expected shape (M, {model.nq}), got {Q.shape}")
+        width = Q.shape[-1] if Q.ndim else None
+        raise BackendError(f"Q: expected shape (M, {model.nq}), each row {model.q_layout(width)}, got {Q.shape}")
     if not np.all(np.isfinite(Q)):
         bad = np.argwhere(~np.isfinite(Q))[0]
         raise BackendError(f"Q contains NaN or infinite values (first at {tuple(int(x) for x in bad)})")

@@ -69,7 +69,7 @@ def _peak_acc_of(traj: "Trajectory", mask: np.ndarray) -> np.ndarray:
 class Trajectory:
     """An immutable joint-space trajectory.
 
-    robot_name : str;  joint_names : tuple[str, ...]
+    robot_name : str ("" for None: names no robot; the verifier takes a scene's only one);  joint_names : tuple[str, ...]
     times : (N,) float64, s, strictly increasing (N >= 2)
     waypoints : (N, n_joints) float64, rad or m
     blend_times : (N - 1,) float64, s — acceleration time of each segment's trapezoid (0: linear)
@@ -77,7 +77,7 @@ class Trajectory:
     """
 
     def __init__(self, robot_name: str, joint_names: Sequence[str], times, waypoints, blend_times=None) -> None:
-        self._robot_name = str(robot_name)
+        self._robot_name = "" if robot_name is None else str(robot_name)  # None: no robot named (not "None")
         if isinstance(joint_names, str) or not isinstance(joint_names, Iterable):  # "j1" read as ('j', '1')
             raise TrajectoryError(f"joint_names: expected a sequence of joint names, got {joint_names!r}")
         self._joint_names = tuple(str(j) for j in joint_names)
