@@ -499,7 +499,7 @@ def narrow_rel(ga, gb, H, MF, MI, SF, out, eps_len, eps_par, gjk_eps, max_iter, 
             return write_rounded(wax, way, waz, ra, wbx, wby, wbz, rb, wnx, wny, wnz, -depth, out, 0), 0
         return 0.0, NOT_SCALAR  # EPA did not settle it: the W path (its exhaustive SAT)
     if status != GJK_SEPARATED and not inside:
-        return 0.0, NOT_SCALAR  # touching, or not converged: the W path
+        return 0.0, NOT_SCALAR  # touching (EPA from the completed simplex), or not converged: the W path
     wax, way, waz = _to_world(SF, oA, ax, ay, az, 1.0)  # the core witnesses to W
     if inside:  # a point of A's core as both core witnesses (p_WB - p_WA = distance * nhat holds)
         return write_rounded(wax, way, waz, ra, wax, way, waz, rb, 0.0, 0.0, 1.0, 0.0, out, 0), 0

@@ -17,10 +17,13 @@ an iteration costs a face scan and two short climbs instead of the SAT's
 ``O(E_A E_B (V_A + V_B))`` projections.
 
 When rounding stops EPA after its bracket on the depth has closed to ``EPA_BRACKET``, the face it
-kept is the answer.  Every other case EPA does not settle falls back to the exhaustive SAT (:func:`sat_depth_graph`: the
+kept is the answer.  GJK stopped at touching (no tetrahedron) has its simplex completed to one
+(:mod:`._pair_epa_start`); a settled depth, however small, is the answer (a gap of up to ``eps_len``
+between touching cores may then come back as a depth of 0: within ``Tolerances.length``).  Every
+other case EPA does not settle falls back to the exhaustive SAT (:func:`sat_depth_graph`: the
 reference :func:`._pair_sat.sat_depth` with the axes of a triangulated hull taken from its
-triangles and vertex graph, so that hulls need not carry face normals and edge directions): GJK stopped at touching (no tetrahedron), a degenerate face, a full
-buffer, no convergence within the buffer's vertices, a depth below ``length``.
+triangles and vertex graph, so that hulls need not carry face normals and edge directions): a
+degenerate face, a full buffer, no convergence within the buffer's vertices.
 
 The kernel is allocation-free: the expanding polytope lives in the caller's ``work`` array
 (``EPA_WORK_SIZE`` float64; indices stored as floats, exact below 2^53).  So it is compiled without
@@ -384,7 +387,9 @@ def epa_depth(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz=0.0, t
             break
         for k in range(ne):
             o = _E0 + 2 * k
-            if not _put_face(work, nf, int(work[o]), int(work[o + 1]), nv):
+            # a face through a vertex the origin sits on (an exact vertex contact) has a plane distance
+            # of -0.0 or -1e-17 by rounding: within eps it is 0, not an origin outside
+            if not _put_face(work, nf, int(work[o]), int(work[o + 1]), nv, eps):
                 return _kept(kept, kd, knx, kny, knz, kax, kay, kaz, kbx, kby, kbz)
             nf += 1
         nv += 1
@@ -553,7 +558,10 @@ def convex_convex_fast(
             return write_rounded(ax, ay, az, ra, bx, by, bz, rb, nx, ny, nz, -depth, out, 0), GJK_INTERSECTING
     elif simp[0] < 0.0:  # touching: the origin within eps_len of a smaller simplex of M
         if d - (ra + rb) <= level:  # the signed distance is at most d - ra - rb: an upper bound will do
-            return write_rounded(ax, ay, az, ra, ax, ay, az, rb, 0.0, 0.0, 1.0, d, out, 0), GJK_INTERSECTING
+            gx, gy, gz = 0.0, 0.0, 1.0
+            if d > 0.0:  # |b - a| = d: the witnesses' own direction (p_WB - p_WA = distance * nhat holds)
+                gx, gy, gz = (bx - ax) / d, (by - ay) / d, (bz - az) / d
+            return write_rounded(ax, ay, az, ra, bx, by, bz, rb, gx, gy, gz, d, out, 0), GJK_INTERSECTING
         if complete_simplex(pa, adja, pb, adjb, work, eps_len):
             ok, depth, nx, ny, nz, ax, ay, az, bx, by, bz = epa_depth(pa, adja, pb, adjb, work, gjk_eps)
             if ok:  # settled, a depth of about 0 included (the cores touch)
