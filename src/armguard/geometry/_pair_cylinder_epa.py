@@ -12,6 +12,7 @@ from numba import njit
 from ._pair_cylinder_support import (_E0, _F0, _INSIDE, _NE, _NF, _NV, _S0, _V0, _VIS, SUPPORT_GAP, _pair_support,
                                      _put)
 from ._pair_epa import triangle_normal
+from ._pair_epa_start import perpendicular_basis
 
 __all__ = ["epa_support"]
 
@@ -44,20 +45,7 @@ def _complete(pa, ga, ca, pb, gb, cb, work, n, eps):  # pragma: no cover - compi
         ex /= en
         ey /= en
         ez /= en
-        # u: e x (the coordinate axis least aligned with e), v = e x u
-        if abs(ex) <= abs(ey) and abs(ex) <= abs(ez):
-            ux, uy, uz = 0.0, ez, -ey
-        elif abs(ey) <= abs(ez):
-            ux, uy, uz = -ez, 0.0, ex
-        else:
-            ux, uy, uz = ey, -ex, 0.0
-        un = math.sqrt(ux * ux + uy * uy + uz * uz)
-        ux /= un
-        uy /= un
-        uz /= un
-        wx = ey * uz - ez * uy
-        wy = ez * ux - ex * uz
-        wz = ex * uy - ey * ux
+        ux, uy, uz, wx, wy, wz = perpendicular_basis(ex, ey, ez)
         for k in range(6):
             t = k * (math.pi / 3.0)
             dx = math.cos(t) * ux + math.sin(t) * wx

@@ -15,7 +15,23 @@ from numba import njit
 
 from ._pair_gjk import _b_dir, _b_point, _support
 
-__all__ = ["complete_simplex"]
+__all__ = ["complete_simplex", "perpendicular_basis"]
+
+
+@njit(cache=True, inline="always")
+def perpendicular_basis(ex, ey, ez):  # pragma: no cover - compiled
+    """``(u, v)``: unit vectors at right angles to the unit ``e`` and to each other, ``u = e x`` (the
+    coordinate axis least aligned with ``e``), normalised, ``v = e x u`` (the directions a simplex's
+    completion searches about a segment; shared with ``_pair_cylinder_epa._complete``)."""
+    if abs(ex) <= abs(ey) and abs(ex) <= abs(ez):
+        ux, uy, uz = 0.0, ez, -ey
+    elif abs(ey) <= abs(ez):
+        ux, uy, uz = -ez, 0.0, ex
+    else:
+        ux, uy, uz = ey, -ex, 0.0
+    un = math.sqrt(ux * ux + uy * uy + uz * uz)
+    ux, uy, uz = ux / un, uy / un, uz / un
+    return ux, uy, uz, ey * uz - ez * uy, ez * ux - ex * uz, ex * uy - ey * ux
 
 
 @njit(cache=True, inline="always")
@@ -70,15 +86,7 @@ def complete_simplex(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz
         ex, ey, ez = x1 - x0, y1 - y0, z1 - z0
         en = math.sqrt(ex * ex + ey * ey + ez * ez)
         ex, ey, ez = ex / en, ey / en, ez / en
-        if abs(ex) <= abs(ey) and abs(ex) <= abs(ez):  # u: e x (the axis least aligned with e), v = e x u
-            ux, uy, uz = 0.0, ez, -ey
-        elif abs(ey) <= abs(ez):
-            ux, uy, uz = -ez, 0.0, ex
-        else:
-            ux, uy, uz = ey, -ex, 0.0
-        un = math.sqrt(ux * ux + uy * uy + uz * uz)
-        ux, uy, uz = ux / un, uy / un, uz / un
-        vx, vy, vz = ey * uz - ez * uy, ez * ux - ex * uz, ex * uy - ey * ux
+        ux, uy, uz, vx, vy, vz = perpendicular_basis(ex, ey, ez)
         for k in range(6):
             t = k * (math.pi / 3.0)
             dx = math.cos(t) * ux + math.sin(t) * vx
