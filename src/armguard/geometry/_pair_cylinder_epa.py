@@ -12,7 +12,7 @@ from numba import njit
 from ._pair_cylinder_support import (_E0, _F0, _INSIDE, _NE, _NF, _NV, _S0, _V0, _VIS, SUPPORT_GAP, _pair_support,
                                      _put)
 from ._pair_epa import triangle_normal
-from ._pair_epa_start import perpendicular_basis
+from ._pair_epa_start import perpendicular_basis, ring_direction
 
 __all__ = ["epa_support"]
 
@@ -47,10 +47,7 @@ def _complete(pa, ga, ca, pb, gb, cb, work, n, eps):  # pragma: no cover - compi
         ez /= en
         ux, uy, uz, wx, wy, wz = perpendicular_basis(ex, ey, ez)
         for k in range(6):
-            t = k * (math.pi / 3.0)
-            dx = math.cos(t) * ux + math.sin(t) * wx
-            dy = math.cos(t) * uy + math.sin(t) * wy
-            dz = math.cos(t) * uz + math.sin(t) * wz
+            dx, dy, dz = ring_direction(k, ux, uy, uz, wx, wy, wz)
             ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, dx, dy, dz, work)
             rx = ax - bx - work[_S0]
             ry = ay - by - work[_S0 + 1]

@@ -15,7 +15,7 @@ from numba import njit
 
 from ._pair_gjk import _b_dir, _b_point, _support
 
-__all__ = ["complete_simplex", "perpendicular_basis"]
+__all__ = ["complete_simplex", "perpendicular_basis", "ring_direction"]
 
 
 @njit(cache=True, inline="always")
@@ -32,6 +32,14 @@ def perpendicular_basis(ex, ey, ez):  # pragma: no cover - compiled
     un = math.sqrt(ux * ux + uy * uy + uz * uz)
     ux, uy, uz = ux / un, uy / un, uz / un
     return ux, uy, uz, ey * uz - ez * uy, ez * ux - ex * uz, ex * uy - ey * ux
+
+
+@njit(cache=True, inline="always")
+def ring_direction(k, ux, uy, uz, vx, vy, vz):  # pragma: no cover - compiled
+    """Direction ``k`` (0 to 5) of six at 60 degrees in the plane of the unit ``u`` and ``v``."""
+    t = k * (math.pi / 3.0)
+    c, s = math.cos(t), math.sin(t)
+    return c * ux + s * vx, c * uy + s * vy, c * uz + s * vz
 
 
 @njit(cache=True, inline="always")
@@ -88,10 +96,7 @@ def complete_simplex(pa, adja, pb, adjb, work, eps, rot=None, ox=0.0, oy=0.0, oz
         ex, ey, ez = ex / en, ey / en, ez / en
         ux, uy, uz, vx, vy, vz = perpendicular_basis(ex, ey, ez)
         for k in range(6):
-            t = k * (math.pi / 3.0)
-            dx = math.cos(t) * ux + math.sin(t) * vx
-            dy = math.cos(t) * uy + math.sin(t) * vy
-            dz = math.cos(t) * uz + math.sin(t) * vz
+            dx, dy, dz = ring_direction(k, ux, uy, uz, vx, vy, vz)
             a, b, wx, wy, wz = _m_support(pa, adja, pb, adjb, rot, ox, oy, oz, dx, dy, dz)
             rx, ry, rz = wx - x0, wy - y0, wz - z0
             sp = rx * ex + ry * ey + rz * ez
