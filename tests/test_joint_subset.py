@@ -10,7 +10,7 @@ import armguard
 from armguard import SceneError, TrajectoryError, VerificationError
 from armguard.cli import main
 from armguard.kinematics import Trajectory
-from armguard.verify import Subdivided
+from armguard.verify import Subdivided, VerificationStatus
 
 from test_backends import ROBOTS
 from test_srdf import package, srdf_text
@@ -58,12 +58,14 @@ def test_verify_a_subset_equals_verifying_the_held_trajectory(arm, method):
 
 
 def test_a_held_joint_can_make_the_collision(arm):
-    """The held value is used: j3 held at home folds l3 down; the same motion with j3 at 0 differs."""
+    """The held value is used: j3 held at home (-0.8) leaves l3 in the post's way as j1 turns; the
+    same motion with l3 folded up (j3 = 1.5) clears it."""
     sub = Trajectory("arm", ["j1"], [0.0, 2.0], [[-3.0], [3.0]])
     a = armguard.verify(arm.scene, sub)
-    b = armguard.verify(arm.scene, Trajectory("arm", ["j1", "j2", "j3"], [0.0, 2.0], [[-3.0, 0.4, 0.0], [3.0, 0.4, 0.0]]))
+    b = armguard.verify(arm.scene, Trajectory("arm", ["j1", "j2", "j3"], [0.0, 2.0], [[-3.0, 0.4, 1.5], [3.0, 0.4, 1.5]]))
     assert a.held_joints == {"j2": 0.4, "j3": -0.8}
-    assert (a.status, a.min_clearance) != (b.status, b.min_clearance)
+    assert a.status is VerificationStatus.COLLISION and {a.first_collision.a, a.first_collision.b} == {"arm/l3", "post"}
+    assert b.status is VerificationStatus.SAFE
 
 
 def test_srdf_groups_name_joint_subsets(arm, tmp_path):

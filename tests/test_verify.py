@@ -385,3 +385,64 @@ def test_robot_argument_never_moves_another_arm_than_the_trajectorys():
     for call in (lambda: armguard.verify(two, tr, robot="ur5"), lambda: Verifier(two, robot="ur5").verify(tr)):
         with pytest.raises(VerificationError, match="the trajectory is for robot 'arm2'"):
             call()
+
+
+# --------------------------------------------------------------------------- per-pair rates
+def _pair_rate_ratio(model, q0, q1, n=41):
+    """The largest ``|d_p(s) - d_p(0)| / (s * rate_p)`` over the pairs and ``s`` along ``q0 -> q1``
+    (the pair rate must bound every pair's change: at most 1), with the rates of the relative
+    joints and those of the old per-part sum (lever_a + lever_b over every joint)."""
+    dq = q1 - q0
+    rates = model.pair_rates(dq)
+    part = model.lever @ np.abs(dq)
+    old = part[model.index_a] + part[model.index_b]
+    assert np.all(rates <= old + 1e-15)
+    d0 = model.distances(q0)[0]
+    worst = 0.0
+    for s in np.linspace(0.0, 1.0, n)[1:]:
+        d = model.distances(q0 + s * dq)[0]
+        change = np.abs(d - d0)
+        assert np.all(change <= s * rates + 1e-9), (np.argmax(change - s * rates), change, s * rates)
+        moving = rates > 0.0
+        if np.any(moving):
+            worst = max(worst, float(np.max(change[moving] / (s * rates[moving]))))
+    return worst, float(np.sum(rates)) / float(np.sum(old))
+
+
+def test_pair_rates_drop_the_joints_that_move_both_links_rigidly_and_still_bound_the_change():
+    """A pair's clearance can change only through the joints between the two links' common ancestor and
+    either link; the rate over those joints bounds the change along random joint lines (the spatial arm's
+    coupled and prismatic joints included), and is well below the old per-part sum."""
+    robot = spatial_arm()
+    sc = Scene("rates")
+    sc.add_robot(robot)
+    model = ClearanceModel(sc, source="reference")
+    assert len(model.owner_a) >= 5
+    rng = np.random.default_rng(11)
+    worst, share = 0.0, []
+    for _ in range(15):
+        q0, q1 = rng.uniform(robot.lower, robot.upper), rng.uniform(robot.lower, robot.upper)
+        w, sh = _pair_rate_ratio(model, q0, q1, n=21)
+        worst, share = max(worst, w), share + [sh]
+    assert worst > 0.1  # not vacuous
+    assert np.median(share) < 0.9  # and tighter than the old sum
+    # the coupled joint j5 = -j3 + 0.5 j2 + 0.1 moves link5 against link3: j2 and j3 stay in that pair's row
+    i = next(k for k, (a, b) in enumerate(zip(model.owner_a, model.owner_b)) if {a, b} == {"spatial/link3", "spatial/link5"})
+    assert model.pair_lever[i, 1] > 0.0 and model.pair_lever[i, 2] > 0.0
+    assert model.pair_lever[i, 0] == 0.0  # j1 turns link3 and link5 together
+
+
+@pytest.mark.parametrize("name", ["ur5", "panda"])
+def test_pair_rates_bound_public_robots_self_pairs(name):
+    import armguard
+
+    m = armguard.load_model(name)
+    model = ClearanceModel(m.scene)
+    rng = np.random.default_rng(5)
+    worst, share = 0.0, []
+    for k in range(6):
+        Q = m.scene_q(m.random_q(2, int(rng.integers(1 << 30))))
+        w, sh = _pair_rate_ratio(model, Q[0], Q[1], n=31)
+        worst, share = max(worst, w), share + [sh]
+    assert worst > 0.1
+    assert np.median(share) < 0.8

@@ -87,15 +87,6 @@ def _limits(scene) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-def _ancestors(robot, link: str) -> list:
-    out = [link]
-    p = robot.parent_link(link)
-    while p is not None:
-        out.append(p)
-        p = robot.parent_link(p)
-    return out
-
-
 def _urdf_link(model, owner: str) -> str:
     """The URDF link (Pinocchio frame) of scene owner ``owner`` -- the name an SRDF uses (a built-in
     model's links carry its robot's prefix, ``puma560_link1``, where the scene says ``puma560/link1``)."""
@@ -106,7 +97,7 @@ def _urdf_link(model, owner: str) -> str:
 def pair_setup(model, tol: Tolerances = DEFAULT_TOLERANCES) -> PairSetup:
     """Every own-link pair of ``model``'s robots with geometry (see the module docstring)."""
     from ..model import kinematics_of
-    from ..verify._motion import chain_bounds
+    from ..verify._motion import chain_bounds, relative_joints
     from ..verify._oracle import ClearanceModel
 
     scene = model.scene
@@ -126,17 +117,7 @@ def pair_setup(model, tol: Tolerances = DEFAULT_TOLERANCES) -> PairSetup:
         r, la = cp.a.split("/", 1)
         _, lb = cp.b.split("/", 1)
         robot = work.robots[r]
-        cb = bounds[r]
-        anc_a, anc_b = _ancestors(robot, la), _ancestors(robot, lb)
-        common = next((x for x in anc_a if x in anc_b), None)
-        nj = len(robot.joint_names)
-        if common is None:
-            keep = list(range(nj))
-        else:  # the joints that drive an edge between the common ancestor and either link
-            ic, ia, ib = (cb.link_names.index(x) for x in (common, la, lb))
-            keep = [j for j in range(nj)
-                    if cb.W[j, ia] != cb.W[j, ic] or cb.P[j, ia] != cb.P[j, ic]
-                    or cb.W[j, ib] != cb.W[j, ic] or cb.P[j, ib] != cb.P[j, ic]]
+        keep = relative_joints(robot, bounds[r], la, lb)
         flat = tuple(offsets[r] + j for j in keep)
         w = lever[cp.a][list(flat)] + lever[cp.b][list(flat)]
         adjacent = work._adjacent(r, la, lb)

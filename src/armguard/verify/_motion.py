@@ -44,7 +44,7 @@ import numpy as np
 from .._errors import VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 
-__all__ = ["ChainBounds", "chain_bounds", "shape_radius_about"]
+__all__ = ["ChainBounds", "chain_bounds", "relative_joints", "shape_radius_about"]
 
 _PROBE = 0.25  # rad (or m) a joint is moved by to identify the motion it drives; any value in (0, pi / max|c|) works
 
@@ -178,6 +178,37 @@ def chain_bounds(robot, tol: Tolerances = DEFAULT_TOLERANCES, *, fk=None) -> Cha
     # a relative safety margin for the round-off of the measurement
     A = A * (1.0 + tol.kinematic_probe) + np.where(Wm > 0, eps_len, 0.0)
     return ChainBounds(str(robot.name), names, A, Wm * (1.0 + tol.kinematic_probe), P * (1.0 + tol.kinematic_probe))
+
+
+def _ancestors(robot, link: str) -> list:
+    out = [link]
+    p = robot.parent_link(link)
+    while p is not None:
+        out.append(p)
+        p = robot.parent_link(p)
+    return out
+
+
+def relative_joints(robot, bounds: ChainBounds, link_a: str, link_b: str) -> list[int]:
+    """The joints of ``robot`` (indices into its ``joint_names``) that can change the relative pose
+    of its links ``link_a`` and ``link_b``: every joint but those that move only the links' common
+    ancestor, and with it both links by one rigid motion (their distance cannot change).
+
+    A joint that moves the common ancestor and also drives an edge between the ancestor and either
+    link (a coupled joint) is kept: its angular-rate or prismatic row differs between the link and
+    the ancestor.  Without a common ancestor every joint is kept.  On such a pair the clearance's
+    rate is bounded by ``sum over these joints of |dq_j| (lever_a[j] + lever_b[j])``: in the
+    ancestor's frame the other joints move nothing, and ``lever[j]`` bounds the speed of the link's
+    points under joint ``j`` in any frame (a distance to ``j``'s axes)."""
+    anc_a, anc_b = _ancestors(robot, link_a), _ancestors(robot, link_b)
+    common = next((x for x in anc_a if x in anc_b), None)
+    nj = len(robot.joint_names)
+    if common is None:
+        return list(range(nj))
+    ic, ia, ib = (bounds.link_names.index(x) for x in (common, link_a, link_b))
+    W, P = bounds.W, bounds.P
+    return [j for j in range(nj)
+            if W[j, ia] != W[j, ic] or P[j, ia] != P[j, ic] or W[j, ib] != W[j, ic] or P[j, ib] != P[j, ic]]
 
 
 def shape_radius_about(shapes, p_W: np.ndarray) -> float:

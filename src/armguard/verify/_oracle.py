@@ -27,7 +27,7 @@ import numpy as np
 from ..model import kinematics_of, scene_of
 from .._errors import StaleModelError, VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
-from ._motion import chain_bounds, shape_radius_about
+from ._motion import chain_bounds, relative_joints, shape_radius_about
 
 __all__ = ["ClearanceModel", "CATEGORIES", "CHECKS"]
 
@@ -135,6 +135,16 @@ class ClearanceModel:
         self.index_b = np.array([self._part_index.get(b, n_parts) for b in pb], dtype=np.int64)
         self.category_code = np.array([CATEGORIES.index(c) for c in cat], dtype=np.int64)
         self._pair_key = {(a, b): i for i, (a, b) in enumerate(zip(pa, pb))}
+        # each pair's lever row: the joints that can change its two sides' relative pose only
+        pair_lever = lever[self.index_a] + lever[self.index_b]
+        for i, (a, b) in enumerate(zip(pa, pb)):
+            if a in parts and b in parts and parts[a].robot == parts[b].robot:
+                r = parts[a].robot
+                keep = np.zeros(self.n_q, dtype=bool)
+                keep[[offsets[r] + j for j in relative_joints(scene.robots[r], chains[r], parts[a].link, parts[b].link)]] = True
+                pair_lever[i, ~keep] = 0.0
+        #: ``(P, n_q) m/rad``: a pair's clearance shrinks at most ``pair_lever @ |dq|`` over the joint step ``dq``
+        self.pair_lever = pair_lever
         self._fixed: dict = {}  # robot -> (other robots' joints, full clearances there)
         self._backend = (backend, backend_options)
         self.source = self._pick_source(source)
@@ -331,8 +341,7 @@ class ClearanceModel:
     # ----------------------------------------------------------------- motion
     def pair_rates(self, dq: np.ndarray) -> np.ndarray:
         """``(P,) float64, m``: bound on how much each pair's clearance can shrink over the joint step ``dq`` ``(n_q,)``."""
-        part = self.lever @ np.abs(dq)
-        return part[self.index_a] + part[self.index_b]
+        return self.pair_lever @ np.abs(dq)
 
     def max_point_speed(self, qdot: np.ndarray) -> float:
         """Bound (m/s) on the speed of the fastest point of any moving part at joint velocity ``qdot`` ``(n_q,)``."""

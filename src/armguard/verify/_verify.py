@@ -304,8 +304,7 @@ class Verifier(FollowsScene):
         Q1 = np.stack([sg[3] for sg in segs])
         dQ = np.zeros((n_seg, model.n_q))
         dQ[:, run.k0 : run.k1] = Q1 - Q0
-        part = np.abs(dQ) @ model.lever.T  # (segments, parts + 1): pair_rates of every segment at once
-        rates_all = part[:, model.index_a] + part[:, model.index_b]
+        rates_all = np.abs(dQ) @ model.pair_lever.T  # (segments, pairs): pair_rates of every segment at once
         finite = np.all(np.isfinite(rates_all), axis=1)
         same_knot = np.zeros(n_seg, dtype=bool)
         same_knot[1:] = np.all(Q1[:-1] == Q0[1:], axis=1)
