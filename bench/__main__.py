@@ -17,7 +17,7 @@ import re
 import sys
 from pathlib import Path
 
-BENCHES = ["pairwise", "kinematics", "scene", "detector", "verify", "backends", "robots", "pair_profile", "terrain", "uncertainty", "clip", "cspace", "harness", "agreement", "paper_fidelity", "paper_hermes", "seeds", "avoidance", "srdf", "sweep", "console", "compile"]
+BENCHES = ["pairwise", "kinematics", "scene", "detector", "verify", "edges", "backends", "robots", "pair_profile", "terrain", "uncertainty", "clip", "cspace", "harness", "agreement", "paper_fidelity", "paper_hermes", "seeds", "avoidance", "srdf", "sweep", "console", "compile"]
 DOC = Path(__file__).resolve().parent.parent / "docs" / "performance.md"
 _SECTION = re.compile(r"^<!-- bench:(\w+) -->$.*?^<!-- /bench:\1 -->$", re.S | re.M)
 

@@ -2,12 +2,15 @@
 
 * :func:`verify` — one trajectory: sampled (Hermes, ``Ed = v / f``) or certified
   (conservative advancement with lever-arm bounds: never misses a collision);
+* :meth:`Verifier.check_edges` — a planner's straight edges, certified (``CLEAR`` / ``COLLISION``
+  / ``INCOMPLETE`` per edge);
 * :func:`verify_many` — many trajectories, serially or on a Dask cluster;
 * :class:`Guard` — the on-line guard for a controller loop (SRI's collision prediction,
   Hermes's automatic / operator-jog / single-joint modes);
 * :class:`StoppingDistance` — Hermes's stopping distance as a step function of speed and load.
 """
 
+from ._edges import EdgeResults, EdgeStatus
 from ._guard import Guard, GuardDecision, GuardMode, GuardVerdict
 from ._many import verify_many
 from ._oracle import CATEGORIES, CHECKS, ClearanceModel
@@ -30,6 +33,8 @@ __all__ = [
     "load_trajectory",
     "verify_many",
     "Verifier",
+    "EdgeResults",
+    "EdgeStatus",
     "VerificationReport",
     "VerificationStatus",
     "Collision",

@@ -262,6 +262,16 @@ class Verifier(FollowsScene):
         args = (sd, method, frequency, joint_step, robot, thr, mass, name, t_start)
         return self._on_one_state(lambda st: self._verify_once(st, trajectory, *args), _ATTEMPTS, "verify this trajectory")
 
+    def check_edges(self, Q0, Q1, *, robot: str | None = None, margin: float = 0.0, max_evaluations: int | None = None):
+        """Certify the straight joint-space edges ``Q0[i] -> Q1[i]`` ``(M, n)`` or ``(n,)`` of one robot (its
+        joints, its order, within limits; other robots where this Verifier holds them): :class:`EdgeResults`,
+        ``CLEAR`` for every configuration at least ``margin`` (m) clear, ``INCOMPLETE`` after
+        ``max_evaluations`` per edge (default 1000).  The covering: :mod:`armguard.verify._edges`."""
+        from ._edges import check_edges_on
+
+        return self._on_one_state(lambda st: check_edges_on(self, st, Q0, Q1, robot, margin, max_evaluations),
+                                  _ATTEMPTS, "check these edges")
+
     def _verify_once(self, st, trajectory, sd, method, frequency, joint_step, robot, thr, mass, name, t_start):
         """One verification with the clearance model and configurations ``st`` (:meth:`_current`)."""
         model, base_q = st.model, st.base

@@ -1,0 +1,205 @@
+"""Verifier.check_edges: a planner's straight edges, certified (CLEAR / COLLISION / INCOMPLETE per edge).
+
+Against the certified trajectory verifier (same verdicts), against coal sampled densely along the edge
+(a CLEAR edge has no sample in contact; a COLLISION's configuration is in contact for coal too), on thin
+obstacles a 0.05 rad sampled check steps over, and for its invariants (hypothesis)."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import armguard
+from armguard import DEFAULT_TOLERANCES, VerificationError
+from armguard.kinematics import Trajectory
+from armguard.verify import EdgeResults, EdgeStatus, VerificationStatus, Verifier, verify
+
+from _verify_fixtures import thin_suite
+
+CONTACT = DEFAULT_TOLERANCES.verify_contact
+
+
+def _edges(model, n, seed, max_step=0.5):
+    """``n`` random in-limit edges of the model's first robot, no joint moving more than ``max_step`` rad."""
+    Q0, Q1 = [], []
+    for i in range(n):
+        Q = model.scene_q(model.random_q(2, seed + i))
+        d = Q[1] - Q[0]
+        Q[1] = Q[0] + d * min(1.0, max_step / float(np.max(np.abs(d))))
+        Q0.append(Q[0])
+        Q1.append(Q[1])
+    return np.array(Q0), np.array(Q1)
+
+
+@pytest.fixture(scope="module")
+def ur5():
+    m = armguard.load_model("ur5")
+    return m, Verifier(m.scene)
+
+
+@pytest.mark.parametrize("name", ["ur5", "panda", "z1"])
+def test_same_verdicts_as_the_certified_verifier(name):
+    m = armguard.load_model(name)
+    v = Verifier(m.scene)
+    robot = next(iter(m.scene.robots))
+    names = m.scene.robots[robot].joint_names
+    Q0, Q1 = _edges(m, 40, 300)
+    res = v.check_edges(Q0, Q1)
+    assert isinstance(res, EdgeResults) and len(res) == 40 and res.robot == robot
+    assert res.counts()["incomplete"] == 0
+    for i in range(40):
+        rep = v.verify(Trajectory(robot, names, [0.0, 1.0], np.stack([Q0[i], Q1[i]])))
+        assert (rep.status is VerificationStatus.SAFE) == bool(res.clear[i]), (i, rep.status, res.status[i])
+    assert 0 < int(np.sum(res.clear)) < 40  # both verdicts occur
+    assert np.all(res.evaluations[res.clear] >= 2) and np.all(res.evaluations >= 1)  # both ends; a collision at q0 ends at once
+
+
+def test_clear_edges_have_no_colliding_sample_and_collisions_are_real_for_coal(ur5):
+    """Differential against coal: 300 samples along every CLEAR edge are apart for coal; every
+    COLLISION configuration is in contact for coal (within the contact tolerance and coal's accuracy)."""
+    m, v = ur5
+    coal = armguard.checker(m, "coal")
+    Q0, Q1 = _edges(m, 60, 900, max_step=0.8)
+    res = v.check_edges(Q0, Q1)
+    s = np.linspace(0.0, 1.0, 301)
+    n_clear = n_coll = 0
+    for i in range(len(res)):
+        if res.code[i] == EdgeStatus.CLEAR:
+            n_clear += 1
+            Q = m.pin_q(Q0[i] + s[:, None] * (Q1[i] - Q0[i]))
+            assert not np.any(coal.collides(Q)), i
+        elif res.code[i] == EdgeStatus.COLLISION:
+            n_coll += 1
+            assert 0.0 <= res.s[i] <= 1.0 and res.distance[i] <= CONTACT
+            np.testing.assert_allclose(res.q[i], Q0[i] + res.s[i] * (Q1[i] - Q0[i]), atol=1e-12)
+            d = coal.pair_distances(m.pin_q(res.q[i])).distance
+            assert float(np.min(d)) <= CONTACT + 1e-6, (i, float(np.min(d)))
+            assert res.pair[i] is not None and all(isinstance(x, str) for x in res.pair[i])
+        else:
+            pytest.fail(f"edge {i}: INCOMPLETE within the default budget")
+    assert n_clear >= 10 and n_coll >= 5
+
+
+def test_thin_obstacles_a_sampled_check_steps_over_are_found():
+    """The planar arm among 2 mm plates and rods: every edge the dense reference finds colliding is a
+    COLLISION, and some of them pass a 0.05 rad sampled check."""
+    rng = np.random.default_rng(77)
+    missed_by_sampling = found = 0
+    for sc, traj in thin_suite(rng, 30, n_obstacles=6):
+        v = Verifier(sc, source="reference")
+        q0, q1 = np.asarray(traj.waypoints[0]), np.asarray(traj.waypoints[-1])
+        res = v.check_edges(q0, q1)
+        cert = verify(sc, traj, method="certified")
+        assert (cert.status is VerificationStatus.SAFE) == bool(res.clear[0])
+        model = v.model
+        dense = [model.reference_distances(q0 + s * (q1 - q0))[0].min() for s in np.linspace(0.0, 1.0, 801)]
+        if min(dense) <= 0.0:
+            found += 1
+            assert res.code[0] == EdgeStatus.COLLISION
+            if verify(sc, traj, method="sampled", joint_step=0.05).safe:
+                missed_by_sampling += 1
+    assert found >= 5 and missed_by_sampling >= 1
+
+
+def test_budget_spent_is_incomplete_never_clear(ur5):
+    m, v = ur5
+    Q0, Q1 = _edges(m, 30, 500, max_step=1.5)
+    full = v.check_edges(Q0, Q1)
+    short = v.check_edges(Q0, Q1, max_evaluations=2)
+    needs_more = full.evaluations > 2
+    assert needs_more.any()
+    assert np.all(short.code[needs_more & full.clear] == EdgeStatus.INCOMPLETE)
+    assert not np.any(short.clear & ~full.clear)
+    assert np.all(short.evaluations <= 2)
+    assert "incomplete" in short.summary()
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(seed=st.integers(0, 10_000), a=st.floats(0.0, 0.45), b=st.floats(0.55, 1.0), m1=st.floats(0.0, 0.02))
+def test_invariants_sub_edges_margins_and_reversal(ur5, seed, a, b, m1):
+    """A CLEAR edge: its reverse and every sub-edge are CLEAR; CLEAR at a margin is CLEAR at a smaller one."""
+    m, v = ur5
+    Q0, Q1 = _edges(m, 1, seed)
+    q0, q1 = Q0[0], Q1[0]
+    res = v.check_edges(q0, q1, margin=m1)
+    rev = v.check_edges(q1, q0, margin=m1)
+    assert rev.clear[0] == res.clear[0]
+    if res.clear[0]:
+        sub = v.check_edges(q0 + a * (q1 - q0), q0 + b * (q1 - q0), margin=m1)
+        assert sub.clear[0]
+        assert v.check_edges(q0, q1, margin=0.5 * m1).clear[0]
+    else:
+        assert res.code[0] == EdgeStatus.COLLISION and res.distance[0] <= m1 + CONTACT
+
+
+def test_a_still_edge_is_one_configuration(ur5):
+    m, v = ur5
+    q = m.scene_q(m.random_q(1, 3))[0]
+    res = v.check_edges(q, q)
+    assert res.evaluations[0] == 2 and res.code[0] in (EdgeStatus.CLEAR, EdgeStatus.COLLISION)
+
+
+def test_threads_share_one_verifier(ur5):
+    m, v = ur5
+    Q0, Q1 = _edges(m, 40, 1200)
+    ref = v.check_edges(Q0, Q1)
+    out = [None] * 4
+
+    def work(k):
+        out[k] = v.check_edges(Q0, Q1)
+
+    ts = [threading.Thread(target=work, args=(k,)) for k in range(4)]
+    for t in ts:
+        t.start()
+    for t in ts:
+        t.join()
+    for r in out:
+        np.testing.assert_array_equal(r.code, ref.code)
+        np.testing.assert_array_equal(r.s, ref.s)
+        np.testing.assert_array_equal(r.evaluations, ref.evaluations)
+
+
+def test_bad_inputs_are_named(ur5):
+    m, v = ur5
+    q = m.scene_q(m.random_q(1, 0))[0]
+    with pytest.raises(VerificationError, match=r"Q0: expected shape \(M, 6\) or \(6,\), one value per joint \['shoulder_pan_joint'"):
+        v.check_edges(q[:5], q)
+    with pytest.raises(VerificationError, match="same number of edges"):
+        v.check_edges(np.stack([q, q]), q)
+    bad = q.copy()
+    bad[1] = 99.0
+    with pytest.raises(VerificationError, match=r"Q1\[1\]: .*shoulder_lift_joint"):
+        v.check_edges(np.stack([q, q]), np.stack([q, bad]))
+    nan = q.copy()
+    nan[2] = np.nan
+    with pytest.raises(VerificationError, match="NaN"):
+        v.check_edges(nan, q)
+    for margin in (-0.01, float("nan"), "1 cm", True):
+        with pytest.raises(VerificationError, match="margin"):
+            v.check_edges(q, q, margin=margin)
+    for budget in (1, 2.5, True):
+        with pytest.raises(VerificationError, match="max_evaluations"):
+            v.check_edges(q, q, max_evaluations=budget)
+    with pytest.raises(VerificationError, match="robot 'arm' is not in the scene"):
+        v.check_edges(q, q, robot="arm")
+
+
+def test_a_nan_clearance_is_an_error_not_a_verdict(ur5, monkeypatch):
+    m, v = ur5
+    Q0, Q1 = _edges(m, 1, 4)
+    from armguard.verify import _record
+
+    real = _record._Run.eval
+
+    def poisoned(self, si, s, q, t=None):
+        row = real(self, si, s, q, t)
+        self.D[row, np.flatnonzero(self.moving)[0]] = np.nan
+        return row
+
+    monkeypatch.setattr(_record._Run, "eval", poisoned)
+    with pytest.raises(VerificationError, match="NaN at s = 0.0"):
+        v.check_edges(Q0, Q1)
