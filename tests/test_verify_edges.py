@@ -116,6 +116,10 @@ def test_budget_spent_is_incomplete_never_clear(ur5):
     assert not np.any(short.clear & ~full.clear)
     assert np.all(short.evaluations <= 2)
     assert "incomplete" in short.summary()
+    from dataclasses import replace
+
+    by_tol = Verifier(m.scene, tol=replace(DEFAULT_TOLERANCES, edge_max_evaluations=2)).check_edges(Q0, Q1)
+    np.testing.assert_array_equal(by_tol.code, short.code)  # the default budget is the tolerance's
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])

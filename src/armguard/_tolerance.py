@@ -62,6 +62,9 @@ class Tolerances:
         not resolved within it is reported INCOMPLETE, never safe.  Sampled verification: the
         most samples one request may ask for (``frequency`` x duration, or the joint-space steps
         of ``joint_step``); a request for more is refused before any work.
+    edge_max_evaluations : int
+        ``Verifier.check_edges``: the most clearance evaluations for one edge (the default of its
+        ``max_evaluations``); an edge not resolved within it is INCOMPLETE, never clear.
     max_magnitude : float, in the file's units
         Scene files: the largest magnitude of any number (coordinates, sizes, limits, times...).
         Beyond it, products of coordinates (hull volumes, squared distances) lose all precision
@@ -172,6 +175,7 @@ class Tolerances:
     kinematic_probe: float = 1e-9
     verify_contact: float = 1e-6
     verify_max_evaluations: int = 200_000
+    edge_max_evaluations: int = 1000
     max_magnitude: float = 1e9
     max_prism_sides: int = 1024
     joint_limit: float = 1e-9

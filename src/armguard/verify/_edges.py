@@ -20,7 +20,8 @@ in two.  The edge is
   ``Tolerances.verify_contact``: a configuration of the edge in contact (or within the margin),
   found widest gap first, so in the middle of a long collision rather than at its start (the first
   contact along the edge: :meth:`Verifier.verify` of the two-knot trajectory);
-* ``INCOMPLETE`` when ``max_evaluations`` are spent (a grazing edge), never ``CLEAR``.
+* ``INCOMPLETE`` when ``max_evaluations`` are spent (``Tolerances.edge_max_evaluations``, 1000, by
+  default: a grazing edge), never ``CLEAR``.
 
 Every evaluation is one ``pair_distances`` of the moving robot's pairs; the per-pair arithmetic is
 the certified verifier's :func:`._advance.advance_step` (its ``step`` is ``rho``).  A NaN clearance
@@ -43,8 +44,6 @@ from ._record import _Run
 from ._timelaw import finite_array
 
 __all__ = ["EdgeStatus", "EdgeResults", "check_edges_on"]
-
-_DEFAULT_BUDGET = 1000  # evaluations per edge before INCOMPLETE
 
 
 class EdgeStatus(enum.IntEnum):
@@ -139,9 +138,9 @@ def _within_limits(rob, Q: np.ndarray, name: str, tol) -> None:
             raise VerificationError(f"{name}[{i}]: {exc}") from None
 
 
-def _budget(max_evaluations) -> int:
+def _budget(max_evaluations, tol) -> int:
     if max_evaluations is None:
-        return _DEFAULT_BUDGET
+        return int(tol.edge_max_evaluations)
     if isinstance(max_evaluations, bool) or not isinstance(max_evaluations, (int, np.integer)) or max_evaluations < 2:
         raise VerificationError(f"max_evaluations: expected an integer >= 2 (both ends), got {max_evaluations!r}")
     return int(max_evaluations)
@@ -161,7 +160,7 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations) -> Edge
     m = float(margin) if isinstance(margin, (int, float, np.floating, np.integer)) and not isinstance(margin, bool) else math.nan
     if not (math.isfinite(m) and m >= 0.0):
         raise VerificationError(f"margin: expected a finite number >= 0 (m), got {margin!r}")
-    budget = _budget(max_evaluations)
+    budget = _budget(max_evaluations, verifier.tol)
     _within_limits(rob, Q0, "Q0", verifier.tol)
     _within_limits(rob, Q1, "Q1", verifier.tol)
     base, k0, k1 = verifier._flat(rname, base_q)

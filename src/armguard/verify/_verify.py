@@ -266,7 +266,7 @@ class Verifier(FollowsScene):
         """Certify the straight joint-space edges ``Q0[i] -> Q1[i]`` ``(M, n)`` or ``(n,)`` of one robot (its
         joints, its order, within limits; other robots where this Verifier holds them): :class:`EdgeResults`,
         ``CLEAR`` for every configuration at least ``margin`` (m) clear, ``INCOMPLETE`` after
-        ``max_evaluations`` per edge (default 1000).  The covering: :mod:`armguard.verify._edges`."""
+        ``max_evaluations`` per edge (``Tolerances.edge_max_evaluations``).  The covering: :mod:`armguard.verify._edges`."""
         from ._edges import check_edges_on
 
         return self._on_one_state(lambda st: check_edges_on(self, st, Q0, Q1, robot, margin, max_evaluations),
