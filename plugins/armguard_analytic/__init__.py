@@ -330,7 +330,8 @@ class AnalyticChecker(CheckerBase):
         H, MF, MI = f.args[:3]
         from armguard.backends._jacobian import cores_meet, finite_difference_rows
 
-        touch = jp.entry(H, MF, MI, SF, jp.rows_of(idx), jp.vcol, jp.gF, jp.gI, jp.V, jp.tol, d, p_WA, p_WB, jac, smooth)
+        touch = jp.entry(H, MF, MI, SF, jp.rows_of(idx), jp.vcol, jp.gF, jp.gI, jp.V, *jp.graph, jp.tol, d, p_WA,
+                         p_WB, jac, smooth)
         meet = cores_meet(self.model, d, idx, jp.tol_length)  # two round shapes whose cores meet: a kink
         if touch or meet.any():
             smooth[meet] = False

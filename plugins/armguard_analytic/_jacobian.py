@@ -26,11 +26,12 @@ class JacobianPlan:
     """The per-revision arrays of :func:`~armguard_analytic._engine._pair_jacobian.jacobian_rows` for one
     analytic checker's call plan ``fast`` (see the module docstring)."""
 
-    __slots__ = ("nv", "rows", "vcol", "gF", "gI", "V", "tol", "entry", "zero_gmap", "subsets", "tol_length")
+    __slots__ = ("nv", "rows", "vcol", "gF", "gI", "V", "graph", "tol", "entry", "zero_gmap", "subsets", "tol_length")
 
     def __init__(self, checker, fast) -> None:
         import pinocchio as pin
 
+        from armguard.backends._face_graph import vertex_graph
         from armguard.backends._jacobian import WitnessJacobian
 
         from ._engine import _pair_jacobian as pj
@@ -100,13 +101,14 @@ class JacobianPlan:
             bad = [model.scene.joint_names[k] for k in np.flatnonzero(self.vcol < 0)]
             raise BackendError(f"analytic Jacobian: scene joints {bad} have no velocity column in pin_model")
         self.gF, self.gI, self.V = np.ascontiguousarray(gF), np.ascontiguousarray(gI), np.ascontiguousarray(wj._V)
+        self.graph = vertex_graph(self.V, wj._vstart, wj._disk_r)  # support faces by a climb, not a scan
         tol = model.tol
         self.tol_length = tol.length
         self.tol = np.array([tol.length, tol.jacobian_face, tol.jacobian_parallel])
         self.zero_gmap = fast.subset(np.zeros(0, np.int64))  # FK alone (distance_jacobian of a given result)
         self.subsets: dict = {}
         # the compiled overload for these argument types, called without the dispatcher
-        call = (H, MF, MI, SF, rows, self.vcol, self.gF, self.gI, self.V, self.tol, np.ones(n), np.zeros((n, 3)),
+        call = (H, MF, MI, SF, rows, self.vcol, self.gF, self.gI, self.V, *self.graph, self.tol, np.ones(n), np.zeros((n, 3)),
                 np.ones((n, 3)), np.empty((n, self.nv)), np.empty(n, np.bool_))
         pj.jacobian_rows(*call)
         try:

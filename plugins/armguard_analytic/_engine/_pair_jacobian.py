@@ -31,7 +31,8 @@ from __future__ import annotations
 import numpy as np
 from numba import carray, njit
 
-from armguard.backends._jacobian import face_span, unique_witness
+from armguard.backends._face_graph import face_span_graph
+from armguard.backends._jacobian import unique_witness
 # segment numbers compiled in as constants (see ._layout: a change there comes with an edit here)
 from ._layout import K, SC, at, seg1, seg2, seg3
 
@@ -72,13 +73,16 @@ def _link_term(row, sign, lk, p0, p1, p2, nh, jtype, term_start, term_joint, ter
 
 
 @njit(cache=True, nogil=True)
-def jacobian_rows(H, MF, MI, SF, rows, vcol, gF, gI, V, tol, d, p_WA, p_WB, jac, smooth):  # pragma: no cover - compiled
+def jacobian_rows(H, MF, MI, SF, rows, vcol, gF, gI, V, adj_start, adj, seeds, tol, d, p_WA, p_WB, jac,
+                  smooth):  # pragma: no cover - compiled
     """Equation (1) and the smoothness test for the ``n`` pairs of ``d`` ``(n,)``, ``p_WA``,
     ``p_WB`` ``(n, 3)``, with the link poses left in the scratch ``SF`` by the last check (at the
     same configuration).  ``rows`` ``(n, 4)``: per pair the global link of A and of B (-1: fixed
     in W) and their geometry rows of ``gF`` / ``gI`` (-1: a workspace wall, a plane); ``vcol``
     ``(n_q,)``: Pinocchio's velocity column of each scene joint (-1: none); ``V`` ``(., 3)``: the
-    shapes' vertices in their frames; ``tol`` = ``[length, jacobian_face, jacobian_parallel]``.
+    shapes' vertices in their frames, ``adj_start``, ``adj``, ``seeds``: their hulls' vertex graphs
+    (:func:`armguard.backends._face_graph.vertex_graph`: the support faces are found by a climb, not
+    a scan); ``tol`` = ``[length, jacobian_face, jacobian_parallel]``.
     Writes ``jac`` ``(n, nv)`` and ``smooth`` ``(n,) bool``; returns the number of touching pairs
     (``|distance| <= length``: zero rows, ``smooth`` False, for the caller to refine)."""
     # every array as a view without a reference count (numba.carray, as the distance kernel does):
@@ -92,6 +96,9 @@ def jacobian_rows(H, MF, MI, SF, rows, vcol, gF, gI, V, tol, d, p_WA, p_WB, jac,
     gF = carray(at(gF, 0), gF.shape)
     gI = carray(at(gI, 0), gI.shape)
     V = carray(at(V, 0), V.shape)
+    adj_start = carray(at(adj_start, 0), adj_start.shape)
+    adj = carray(at(adj, 0), adj.shape)
+    seeds = carray(at(seeds, 0), seeds.shape)
     d = carray(at(d, 0), d.shape)
     p_WA = carray(at(p_WA, 0), p_WA.shape)
     p_WB = carray(at(p_WB, 0), p_WB.shape)
@@ -140,6 +147,10 @@ def jacobian_rows(H, MF, MI, SF, rows, vcol, gF, gI, V, tol, d, p_WA, p_WB, jac,
     hbuf = carray(at(hb_, 0), hb_.shape)
     fb_ = np.empty(max(V.shape[0], 1), np.int64)
     fbuf = carray(at(fb_, 0), fb_.shape)
+    mk_ = np.zeros(max(V.shape[0], 1), np.bool_)  # face_span_graph's scratch (left all False)
+    mark = carray(at(mk_, 0), mk_.shape)
+    qb_ = np.empty(max(V.shape[0], 1), np.int64)
+    qbuf = carray(at(qb_, 0), qb_.shape)
     n_touch = 0
     for i in range(n):
         row = jac[i]
@@ -186,9 +197,10 @@ def jacobian_rows(H, MF, MI, SF, rows, vcol, gF, gI, V, tol, d, p_WA, p_WB, jac,
                         R[r, c] = gF[g, 3 * r + c]
             s = 1.0 if side == 0 else -1.0
             u[0], u[1], u[2] = s * nh[0], s * nh[1], s * nh[2]
-            dims[side] = face_span(R, u, gI[g, G_VS], gI[g, G_VE], V, gF[g, G_AXIS:G_AXIS + 3], gF[g, G_RADIUS], tol_face,
-                                   tol_par, dirs[side], hbuf, fbuf)
+            dims[side] = face_span_graph(R, u, gI[g, G_VS], gI[g, G_VE], V, gF[g, G_AXIS:G_AXIS + 3], gF[g, G_RADIUS],
+                                         tol_face, tol_par, dirs[side], hbuf, fbuf, adj_start, adj, seeds[g], mark, qbuf)
         smooth[i] = ok and unique_witness(dims, dirs, tol_par)
     # the local buffers are used here last: numba frees an array after its last use, and the
     # views above do not hold it
-    return n_touch + 0 * (zo_.shape[0] + small.shape[0] + dims_.shape[0] + hb_.shape[0] + fb_.shape[0])
+    return n_touch + 0 * (zo_.shape[0] + small.shape[0] + dims_.shape[0] + hb_.shape[0] + fb_.shape[0] + mk_.shape[0]
+                          + qb_.shape[0])

@@ -1,0 +1,157 @@
+"""The support face of a hull found over its vertex graph: :func:`face_span` without the scan.
+
+:func:`armguard.backends._jacobian.face_span` decides a witness's uniqueness from the support
+face of a shape in a direction ``u``: the vertices within ``tol_face`` of the highest one.  It
+scans every vertex twice, and on mesh hulls of thousands of vertices that scan is most of a
+distance Jacobian's cost (so101's 4,880-vertex gripper, z1's 6,877).
+
+On a convex polytope the same set is found from the edges alone:
+
+* a vertex with no higher neighbour is a highest vertex (a linear function has no local maximum
+  on a polytope's vertex graph that is not global: the simplex method's argument), so a climb
+  from any vertex ends at the top;
+* the vertices at most ``tol_face`` below the top induce a connected subgraph (from any of them a
+  climb to the top goes through higher vertices only, and the top face's own vertices are
+  connected), so a breadth-first search from the top over vertices above ``top - tol_face``
+  reaches each of them and no other.
+
+:func:`face_span_graph` climbs (from the best of six precomputed extreme vertices), searches,
+then takes the highest vertex of smallest index and the farthest face vertex of smallest index,
+as the scan's strict comparisons in index order do: its answer is the scan's, bit for bit
+(``tests/test_face_graph.py``).  Shapes with at most ``MIN_GRAPH`` vertices, shapes whose points
+are not all hull vertices, flat ones, and shapes armguard cannot describe keep the scan.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ._jacobian import face_span
+
+__all__ = ["MIN_GRAPH", "vertex_graph", "face_span_graph"]
+
+MIN_GRAPH = 64  # vertices: below this the scan is as quick as the climb
+
+
+def vertex_graph(V: np.ndarray, vstart: np.ndarray, disk_r: np.ndarray | None = None) -> tuple:
+    """The edges of each shape's hull, for :func:`face_span_graph`.
+
+    ``V`` ``(N, 3)``: every shape's vertices, shape ``g``'s at ``V[vstart[g]:vstart[g + 1]]``;
+    ``disk_r`` ``(G,)``: a cylinder's disk radius (such shapes keep the scan).  Returns
+    ``(adj_start (N + 1,) int64, adj (E,) int64, seeds (G, 6) int64)``: vertex ``k``'s neighbours
+    are ``adj[adj_start[k]:adj_start[k + 1]]`` (indices into ``V``); ``seeds[g]`` the vertices of
+    shape ``g`` extreme along ``+-x, +-y, +-z``, or ``-1`` where the shape keeps the scan."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    V = np.asarray(V, dtype=np.float64)
+    vstart = np.asarray(vstart, dtype=np.int64)
+    G = len(vstart) - 1
+    seeds = np.full((G, 6), -1, np.int64)
+    nbrs: list = [None] * len(V)
+    for g in range(G):
+        s, e = int(vstart[g]), int(vstart[g + 1])
+        if e - s <= MIN_GRAPH or (disk_r is not None and disk_r[g] > 0.0):
+            continue
+        P = V[s:e]
+        try:
+            hull = ConvexHull(P)
+        except (QhullError, ValueError):  # flat or degenerate: the scan
+            continue
+        if len(hull.vertices) != e - s:  # a point that is no hull vertex: the scan sees it, a climb would not
+            continue
+        sets = [set() for _ in range(e - s)]
+        for tri in hull.simplices:
+            a, b, c = (int(x) for x in tri)
+            sets[a].update((b, c))
+            sets[b].update((a, c))
+            sets[c].update((a, b))
+        for k in range(e - s):
+            nbrs[s + k] = sorted(s + j for j in sets[k])
+        for axis in range(3):
+            seeds[g, 2 * axis] = s + int(np.argmax(P[:, axis]))
+            seeds[g, 2 * axis + 1] = s + int(np.argmin(P[:, axis]))
+    counts = np.array([0 if x is None else len(x) for x in nbrs], np.int64)
+    adj_start = np.zeros(len(V) + 1, np.int64)
+    np.cumsum(counts, out=adj_start[1:])
+    adj = np.fromiter((j for x in nbrs if x is not None for j in x), np.int64, count=int(adj_start[-1]))
+    return adj_start, adj, seeds
+
+
+@njit(cache=True, nogil=True, inline="always")
+def face_span_graph(R, u, s, e, V, disk_axis, disk_r, tol_face, tol_par, dir_out, hbuf, fbuf,
+                    adj_start, adj, seeds, mark, qbuf):  # pragma: no cover - numba
+    """:func:`face_span` over the vertex graph (see the module docstring); ``seeds`` ``(6,)`` this
+    shape's row of :func:`vertex_graph` (``-1``: the scan).  ``mark`` ``(N,) bool``, all False (left
+    so), and ``qbuf`` ``(N,) int64``: scratch; ``hbuf``, ``fbuf`` as :func:`face_span`'s."""
+    if seeds[0] < 0:
+        return face_span(R, u, s, e, V, disk_axis, disk_r, tol_face, tol_par, dir_out, hbuf, fbuf)
+    u0, u1, u2 = u[0], u[1], u[2]
+    uL0 = R[0, 0] * u0 + R[1, 0] * u1 + R[2, 0] * u2
+    uL1 = R[0, 1] * u0 + R[1, 1] * u1 + R[2, 1] * u2
+    uL2 = R[0, 2] * u0 + R[1, 2] * u1 + R[2, 2] * u2
+    # climb from the best seed to a highest vertex
+    k = seeds[0]
+    h = uL0 * V[k, 0] + uL1 * V[k, 1] + uL2 * V[k, 2]
+    for i in range(1, 6):
+        kk = seeds[i]
+        hh = uL0 * V[kk, 0] + uL1 * V[kk, 1] + uL2 * V[kk, 2]
+        if hh > h:
+            k, h = kk, hh
+    moved = True
+    while moved:
+        moved = False
+        for t in range(adj_start[k], adj_start[k + 1]):
+            nb = adj[t]
+            hh = uL0 * V[nb, 0] + uL1 * V[nb, 1] + uL2 * V[nb, 2]
+            if hh > h:
+                k, h = nb, hh
+                moved = True
+    # breadth first over the vertices within tol_face of the top; their heights in hbuf by queue place
+    low = h - tol_face
+    mark[k] = True
+    qbuf[0] = k
+    nq, head, nf = 1, 0, 0
+    while head < nq:
+        kk = qbuf[head]
+        hh = uL0 * V[kk, 0] + uL1 * V[kk, 1] + uL2 * V[kk, 2]
+        hbuf[head] = hh
+        head += 1
+        if hh < low:
+            continue
+        for t in range(adj_start[kk], adj_start[kk + 1]):
+            nb = adj[t]
+            if not mark[nb]:
+                mark[nb] = True
+                qbuf[nq] = nb
+                nq += 1
+    # the scan's highest vertex: the largest height, the smallest index among equals
+    hmax, k0 = -np.inf, -1
+    for i in range(nq):
+        if hbuf[i] > hmax or (hbuf[i] == hmax and qbuf[i] < k0):
+            hmax, k0 = hbuf[i], qbuf[i]
+    low = hmax - tol_face
+    far, k1 = 0.0, -1
+    for i in range(nq):
+        kk = qbuf[i]
+        mark[kk] = False
+        if hbuf[i] >= low:
+            fbuf[nf] = kk
+            nf += 1
+            dd = (V[kk, 0] - V[k0, 0]) ** 2 + (V[kk, 1] - V[k0, 1]) ** 2 + (V[kk, 2] - V[k0, 2]) ** 2
+            if dd > far or (dd == far and dd > 0.0 and kk < k1):
+                far, k1 = dd, kk
+    if far <= tol_face * tol_face:
+        return 0
+    inv = 1.0 / np.sqrt(far)
+    a0, a1, a2 = (V[k1, 0] - V[k0, 0]) * inv, (V[k1, 1] - V[k0, 1]) * inv, (V[k1, 2] - V[k0, 2]) * inv
+    for f in range(nf):  # a face vertex off the line k0-k1: a 2-D face
+        kk = fbuf[f]
+        w0, w1, w2 = V[kk, 0] - V[k0, 0], V[kk, 1] - V[k0, 1], V[kk, 2] - V[k0, 2]
+        t = w0 * a0 + w1 * a1 + w2 * a2
+        off = w0 * w0 + w1 * w1 + w2 * w2 - t * t
+        if off > tol_face * tol_face:
+            return 2
+    for r in range(3):
+        dir_out[r] = R[r, 0] * a0 + R[r, 1] * a1 + R[r, 2] * a2
+    return 1
