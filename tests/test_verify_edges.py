@@ -142,9 +142,78 @@ def test_invariants_sub_edges_margins_and_reversal(ur5, seed, a, b, m1):
 
 def test_a_still_edge_is_one_configuration(ur5):
     m, v = ur5
-    q = m.scene_q(m.random_q(1, 3))[0]
-    res = v.check_edges(q, q)
-    assert res.evaluations[0] == 2 and res.code[0] in (EdgeStatus.CLEAR, EdgeStatus.COLLISION)
+    Q = m.scene_q(m.random_q(20, 3))
+    res = v.check_edges(Q, Q)
+    assert np.all(res.evaluations == 1)
+    hits = armguard.checker(m, "coal").collides(m.pin_q(Q))
+    np.testing.assert_array_equal(res.code == EdgeStatus.COLLISION, hits)
+    assert np.all(res.s_free[res.clear] == 1.0) and np.all(res.s_free[~res.clear] == -np.inf)
+
+
+def test_the_free_prefix_is_clear_and_ends_before_the_first_contact(ur5):
+    """``s_free`` (OMPL's last valid fraction): dense coal samples on [0, s_free] are apart, and it is no
+    later than the first contact the certified trajectory verifier finds."""
+    m, v = ur5
+    coal = armguard.checker(m, "coal")
+    robot = "ur5"
+    names = m.scene.robots[robot].joint_names
+    Q = m.scene_q(m.random_q(400, 21))
+    Q = Q[~coal.collides(m.pin_q(Q))]
+    Q0, Q1 = Q[:60], Q[60:120]
+    res = v.check_edges(Q0, Q1)
+    hit = np.flatnonzero(res.code == EdgeStatus.COLLISION)
+    assert len(hit) >= 5
+    for i in hit:
+        sf = res.s_free[i]
+        assert 0.0 < sf < res.s[i] <= 1.0
+        s = np.linspace(0.0, sf, 200)[:, None]
+        assert not coal.collides(m.pin_q(Q0[i] + s * (Q1[i] - Q0[i]))).any(), i
+        first = v.verify(Trajectory(robot, names, [0.0, 1.0], np.stack([Q0[i], Q1[i]]))).first_collision.time
+        assert sf <= first + 1e-9, (i, sf, first)
+
+
+def test_a_joint_subset_holds_the_others_and_one_side_broadcasts():
+    """Panda's 7 arm joints (MoveIt's group ``arm``), its finger held at home; one start to many goals."""
+    m = armguard.load_model("panda")
+    v = Verifier(m.scene)
+    robot = next(iter(m.scene.robots))
+    arm = m.group_joints("arm")
+    full = m.scene.robots[robot].joint_names
+    assert len(arm) == 7 and len(full) == 8
+    Q = m.scene_q(m.random_q(6, 8))
+    idx = [full.index(j) for j in arm]
+    home = m.scene.default_q()[robot]
+    res = v.check_edges(Q[0, idx], Q[1:, idx], joints=arm)
+    assert res.joint_names == tuple(arm) and len(res) == 5
+    (held_name,) = set(full) - set(arm)
+    assert res.held == {held_name: float(home[full.index(held_name)])}
+    Q0 = np.tile(home, (5, 1))
+    Q1 = Q0.copy()
+    Q0[:, idx], Q1[:, idx] = Q[0, idx], Q[1:, idx]
+    ref = v.check_edges(Q0, Q1)  # the same edges, every joint given
+    np.testing.assert_array_equal(res.code, ref.code)
+    np.testing.assert_array_equal(res.evaluations, ref.evaluations)
+    with pytest.raises(VerificationError, match="is not a joint of robot"):
+        v.check_edges(Q[0, idx], Q[1, idx], joints=list(arm[:-1]) + ["nope"])
+    with pytest.raises(VerificationError, match="named twice"):
+        v.check_edges(Q[0, idx], Q[1, idx], joints=list(arm[:-1]) + [arm[0]])
+    with pytest.raises(VerificationError, match="group_joints"):
+        v.check_edges(Q[0, idx], Q[1, idx], joints="arm")
+
+
+def test_results_are_read_only_and_masks_select_pairs(ur5):
+    m, v = ur5
+    Q0, Q1 = _edges(m, 30, 40)
+    res = v.check_edges(Q0, Q1, margin=0.01)
+    hit = res.code != EdgeStatus.CLEAR
+    assert hit.any() and all(isinstance(p, tuple) for p in res.pair[hit]) and all(p is None for p in res.pair[~hit])
+    with pytest.raises(ValueError):
+        res.code[0] = 0
+    assert "within the margin (10 mm)" in res.summary()
+    inc = v.check_edges(Q0, Q1, max_evaluations=2)
+    k = np.flatnonzero(inc.code == EdgeStatus.INCOMPLETE)
+    assert len(k) and all(inc.pair[i] is not None and np.isfinite(inc.distance[i]) for i in k)  # where it stood
+    assert np.all((inc.s_free[k] >= 0.0) & (inc.s_free[k] < 1.0))
 
 
 def test_threads_share_one_verifier(ur5):
@@ -173,7 +242,13 @@ def test_bad_inputs_are_named(ur5):
     with pytest.raises(VerificationError, match=r"Q0: expected shape \(M, 6\) or \(6,\), one value per joint \['shoulder_pan_joint'"):
         v.check_edges(q[:5], q)
     with pytest.raises(VerificationError, match="same number of edges"):
-        v.check_edges(np.stack([q, q]), q)
+        v.check_edges(np.stack([q, q]), np.stack([q, q, q]))
+    with pytest.raises(VerificationError, match=r"got \(1, 7\); the scene's configuration .* model.scene_q"):
+        v.check_edges(np.r_[q, 0.0], q)
+    for bad_input in (None, "abc", [["a"] * 6]):
+        with pytest.raises(VerificationError, match="Q0: expected"):
+            v.check_edges(bad_input, q)
+    assert v.check_edges(q, q, margin=np.array(0.001)).margin == 0.001  # a 0-d array is a number
     bad = q.copy()
     bad[1] = 99.0
     with pytest.raises(VerificationError, match=r"Q1\[1\]: .*shoulder_lift_joint"):
@@ -190,6 +265,9 @@ def test_bad_inputs_are_named(ur5):
             v.check_edges(q, q, max_evaluations=budget)
     with pytest.raises(VerificationError, match="robot 'arm' is not in the scene"):
         v.check_edges(q, q, robot="arm")
+    ranger = Verifier(armguard.load_model("ranger").scene)
+    with pytest.raises(VerificationError, match=r"this scene has several robots .*: pass robot="):
+        ranger.check_edges(np.zeros(7), np.zeros(7))
 
 
 def test_a_nan_clearance_is_an_error_not_a_verdict(ur5, monkeypatch):

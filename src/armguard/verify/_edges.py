@@ -33,6 +33,7 @@ from __future__ import annotations
 import enum
 import heapq
 import math
+import threading
 import time as _time
 from dataclasses import dataclass
 
@@ -56,40 +57,56 @@ class EdgeStatus(enum.IntEnum):
 
 @dataclass(frozen=True)
 class EdgeResults:
-    """The verdicts on ``M`` edges ``Q0[i] -> Q1[i]`` (:meth:`Verifier.check_edges`).
+    """The verdicts on ``M`` edges ``Q0[i] -> Q1[i]`` (:meth:`Verifier.check_edges`); arrays read only.
 
     Attributes
     ----------
     code : (M,) int8
         :class:`EdgeStatus` values.
+    s_free : (M,) float64, 1
+        The edge's prefix proven clear: every configuration with ``s <= s_free`` (0 at ``Q0[i]``,
+        1 at ``Q1[i]``) is at least ``margin`` from every obstacle; 1 for CLEAR, the last valid
+        fraction of OMPL's ``checkMotion`` for COLLISION (``-inf`` when ``Q0[i]`` itself is in contact),
+        what the budget covered for INCOMPLETE.
     s : (M,) float64, 1
-        Where along the edge (0 at ``Q0[i]``, 1 at ``Q1[i]``) the configuration in contact was found;
-        NaN unless ``COLLISION``.
+        COLLISION: where along the edge the configuration in contact was found (not the first contact:
+        :meth:`Verifier.verify` of the two-knot trajectory finds that).  INCOMPLETE: the evaluated
+        configuration of smallest clearance.  NaN for CLEAR.
     q : (M, n) float64
-        That configuration (the robot's joints, its order); NaN rows unless ``COLLISION``.
+        That configuration, all of the robot's joints in its order; NaN rows for CLEAR.
     distance : (M,) float64, m
-        Its smallest clearance (at most ``margin + Tolerances.verify_contact``); NaN unless ``COLLISION``.
-    pair : tuple of (str, str) or None
-        Its closest pair (scene owners, as :class:`armguard.verify.Collision` names them).
+        Its smallest clearance (COLLISION: at most ``margin + Tolerances.verify_contact``); NaN for CLEAR.
+    pair : (M,) object
+        Its closest pair ``(a, b)`` (scene owners, as :class:`armguard.verify.Collision` names them);
+        None for CLEAR.
     evaluations : (M,) int64
         Clearance evaluations spent on each edge.
     robot : str
     joint_names : tuple of str
+        The columns of ``Q0`` and ``Q1`` (the robot's joints, or the subset ``joints=`` named).
+    held : dict
+        The robot's joints not in ``joint_names`` and the value each was held at.
     margin : float, m
     elapsed_s : float
         Wall time of the whole call.
     """
 
     code: np.ndarray
+    s_free: np.ndarray
     s: np.ndarray
     q: np.ndarray
     distance: np.ndarray
-    pair: tuple
+    pair: np.ndarray
     evaluations: np.ndarray
     robot: str
     joint_names: tuple
+    held: dict
     margin: float
     elapsed_s: float
+
+    def __post_init__(self) -> None:
+        for name in ("code", "s_free", "s", "q", "distance", "pair", "evaluations"):
+            getattr(self, name).flags.writeable = False
 
     def __len__(self) -> int:
         return len(self.code)
@@ -112,30 +129,48 @@ class EdgeResults:
         c = self.counts()
         ev = self.evaluations
         med = float(np.median(ev)) if len(ev) else 0.0
-        return (f"{len(self)} edges of {self.robot!r}: {c['clear']} clear, {c['collision']} in collision, "
-                f"{c['incomplete']} incomplete (margin {self.margin * 1e3:g} mm; evaluations per edge: median "
-                f"{med:g}, max {int(ev.max()) if len(ev) else 0}; {self.elapsed_s * 1e3:.1f} ms)")
+        hit = "in collision" if self.margin == 0.0 else f"in collision or within the margin ({self.margin * 1e3:g} mm)"
+        return (f"{len(self)} edges of {self.robot!r}: {c['clear']} clear, {c['collision']} {hit}, "
+                f"{c['incomplete']} incomplete (evaluations per edge: median {med:g}, max "
+                f"{int(ev.max()) if len(ev) else 0}; {self.elapsed_s * 1e3:.1f} ms)")
 
 
-def _rows(Q, name: str, n: int, joint_names) -> np.ndarray:
-    Q = finite_array(Q, name)
+def _rows(Q, name: str, joint_names, scene, robot: str) -> np.ndarray:
+    n = len(joint_names)
+    if Q is None or isinstance(Q, (str, bytes)):
+        raise VerificationError(f"{name}: expected an array of joint values (M, {n}) or ({n},), got {Q!r}")
+    try:
+        Q = finite_array(Q, name)
+    except VerificationError:
+        raise
+    except (TypeError, ValueError):
+        raise VerificationError(f"{name}: expected numbers (M, {n}) or ({n},), got {type(Q).__name__}") from None
     if Q.ndim == 1:
         Q = Q[None, :]
     if Q.ndim != 2 or Q.shape[1] != n:
+        hint = ""
+        if Q.ndim == 2 and Q.shape[1] != n:
+            hint = (f"; the scene's configuration of all robots has {len(scene.joint_names)} values "
+                    f"(scene.split_q(Q)[{robot!r}] takes this robot's), a Pinocchio configuration converts "
+                    "with model.scene_q(Q)")
         raise VerificationError(f"{name}: expected shape (M, {n}) or ({n},), one value per joint {list(joint_names)}, "
-                                f"got {np.shape(Q)}")
+                                f"got {np.shape(Q)}{hint}")
     return Q
 
 
-def _within_limits(rob, Q: np.ndarray, name: str, tol) -> None:
+def _within_limits(rob, Q0: np.ndarray, Q1: np.ndarray, tol) -> None:
     """The ends within the joint limits (then the whole straight edge is), else the culprit named."""
-    if bool(np.all(rob.within_limits(Q, tol=tol))):
+    lo, hi = np.asarray(rob.lower), np.asarray(rob.upper)
+    if bool(np.all((Q0 >= lo) & (Q0 <= hi) & (Q1 >= lo) & (Q1 <= hi))):
+        return  # inside the limits themselves (the robot's own test allows their tolerance too)
+    if bool(np.all(rob.within_limits(np.concatenate([Q0, Q1]), tol=tol))):
         return
-    for i, q in enumerate(Q):
-        try:
-            rob.check_limits(q, tol=tol)
-        except KinematicsError as exc:
-            raise VerificationError(f"{name}[{i}]: {exc}") from None
+    for name, Q in (("Q0", Q0), ("Q1", Q1)):
+        for i, q in enumerate(Q):
+            try:
+                rob.check_limits(q, tol=tol)
+            except KinematicsError as exc:
+                raise VerificationError(f"{name}[{i}]: {exc}") from None
 
 
 def _budget(max_evaluations, tol) -> int:
@@ -146,34 +181,97 @@ def _budget(max_evaluations, tol) -> int:
     return int(max_evaluations)
 
 
-def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations) -> EdgeResults:
+def _margin(margin) -> float:
+    m = math.nan
+    if not isinstance(margin, (bool, np.bool_)) and np.ndim(margin) == 0 and np.asarray(margin).dtype.kind in "fiu":
+        m = float(margin)
+    if not (math.isfinite(m) and m >= 0.0):
+        raise VerificationError(f"margin: expected a finite number >= 0 (m), got {margin!r}")
+    return m
+
+
+def _robot(verifier, robot) -> str:
+    names = list(verifier.scene.robots)
+    if robot is None and verifier._robot is None and len(names) > 1:
+        raise VerificationError(f"this scene has several robots {names}: pass robot= (the one whose edges these are)")
+    return verifier._robot_of(None, robot)
+
+
+def _columns(rob, joints) -> tuple:
+    """``(names, index into the robot's joints)`` of the columns given (all the robot's joints by default)."""
+    own = tuple(rob.joint_names)
+    if joints is None:
+        return own, np.arange(len(own))
+    if isinstance(joints, str):
+        raise VerificationError(f"joints: expected a list of joint names, got the string {joints!r} "
+                                "(an SRDF group: model.group_joints(name))")
+    names = tuple(str(j) for j in joints)
+    for j in names:
+        if j not in own:
+            raise VerificationError(f"joints: {j!r} is not a joint of robot {rob.name!r}; its joints are {list(own)}")
+    if len(set(names)) != len(names):
+        raise VerificationError(f"joints: a joint named twice in {list(names)}")
+    return names, np.array([own.index(j) for j in names], dtype=np.int64)
+
+
+def _flat(verifier, st, rname: str):
+    """``(flat base configuration, k0, k1)`` of the state, kept on it (read only)."""
+    key = ("flat", rname)
+    out = st.edge_runs.get(key)
+    if out is None:
+        out = verifier._flat(rname, st.base)
+        out[0].flags.writeable = False
+        st.edge_runs[key] = out
+    return out
+
+
+def _record_of(st, rname: str, base, k0: int, k1: int) -> _Run:
+    """This thread's record for ``rname`` on state ``st`` (built once: its arrays are reused edge after edge)."""
+    key = (threading.get_ident(), rname)
+    run = st.edge_runs.get(key)
+    if run is None:
+        if len(st.edge_runs) > 256:  # threads come and go: forget them now and then
+            st.edge_runs.clear()
+        run = _Run(st.model, base.copy(), k0, k1, rname)
+        if not run.moving.any():
+            raise VerificationError(f"robot {rname!r} has no pair to check (no shapes, or every pair with it disabled)")
+        st.edge_runs[key] = run
+    return run
+
+
+def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints) -> EdgeResults:
     """:meth:`Verifier.check_edges` on one state ``st`` of the scene (its clearance model and configurations)."""
     t_start = _time.perf_counter()
     model, base_q = st.model, st.base
-    rname = verifier._robot_of(None, robot)
+    rname = _robot(verifier, robot)
     rob = verifier.scene.robots[rname]
-    names = tuple(rob.joint_names)
-    Q0 = _rows(Q0, "Q0", len(names), names)
-    Q1 = _rows(Q1, "Q1", len(names), names)
-    if Q0.shape != Q1.shape:
-        raise VerificationError(f"Q0 and Q1: expected the same number of edges, got {len(Q0)} and {len(Q1)}")
-    m = float(margin) if isinstance(margin, (int, float, np.floating, np.integer)) and not isinstance(margin, bool) else math.nan
-    if not (math.isfinite(m) and m >= 0.0):
-        raise VerificationError(f"margin: expected a finite number >= 0 (m), got {margin!r}")
+    names, cols = _columns(rob, joints)
+    Q0 = _rows(Q0, "Q0", names, verifier.scene, rname)
+    Q1 = _rows(Q1, "Q1", names, verifier.scene, rname)
+    if len(Q0) != len(Q1) and 1 not in (len(Q0), len(Q1)):
+        raise VerificationError(f"Q0 and Q1: expected the same number of edges (or one of them a single "
+                                f"configuration), got {len(Q0)} and {len(Q1)}")
+    Q0, Q1 = np.broadcast_arrays(Q0, Q1)
+    m = _margin(margin)
     budget = _budget(max_evaluations, verifier.tol)
-    _within_limits(rob, Q0, "Q0", verifier.tol)
-    _within_limits(rob, Q1, "Q1", verifier.tol)
-    base, k0, k1 = verifier._flat(rname, base_q)
-    run = _Run(model, base, k0, k1, rname)
-    if not run.moving.any():
-        raise VerificationError(f"robot {rname!r} has no pair to check (no shapes, or every pair with it disabled)")
+    base, k0, k1 = _flat(verifier, st, rname)
+    held = {}
+    if len(cols) != len(rob.joint_names):  # the joints not given stay where the verifier holds the robot
+        home = base[k0:k1]
+        full0, full1 = np.tile(home, (len(Q0), 1)), np.tile(home, (len(Q1), 1))
+        full0[:, cols], full1[:, cols] = Q0, Q1
+        Q0, Q1 = full0, full1
+        held = {j: float(home[k]) for k, j in enumerate(rob.joint_names) if j not in names}
+    _within_limits(rob, Q0, Q1, verifier.tol)
+    run = _record_of(st, rname, base, k0, k1)
     contact = verifier.tol.verify_contact
     M = len(Q0)
     code = np.full(M, EdgeStatus.CLEAR, dtype=np.int8)
+    s_free = np.ones(M)
     s_hit = np.full(M, math.nan)
-    q_hit = np.full((M, len(names)), math.nan)
+    q_hit = np.full((M, k1 - k0), math.nan)
     d_hit = np.full(M, math.nan)
-    pair: list = [None] * M
+    pair = np.full(M, None, dtype=object)
     evals = np.zeros(M, dtype=np.int64)
     dQ = np.zeros(model.n_q)
     for i in range(M):
@@ -184,18 +282,17 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations) -> Edge
         if not np.all(np.isfinite(rates)):
             raise VerificationError("the motion bound is infinite (an unbounded prismatic joint): an edge cannot be certified")
         run.n = 0  # one record per edge: its rows are not kept beyond it
-        verdict = _cover(run, q0, q1, dq, rates, m, contact, budget)
+        status, free, row, p = _cover(run, q0, q1, dq, rates, m, contact, budget)
         evals[i] = run.n
-        if verdict is None:
-            continue
-        code[i] = verdict[0]
-        if verdict[0] == EdgeStatus.COLLISION:
-            _, s, row, p = verdict
-            s_hit[i] = s
+        code[i] = status
+        s_free[i] = free
+        if status != EdgeStatus.CLEAR:
+            s_hit[i] = run.s[row]
             q_hit[i] = run.Q[row]
             d_hit[i] = run.D[row, p]
             pair[i] = (model.owner_a[p], model.owner_b[p])
-    return EdgeResults(code, s_hit, q_hit, d_hit, tuple(pair), evals, rname, names, m, _time.perf_counter() - t_start)
+    return EdgeResults(code, s_free, s_hit, q_hit, d_hit, pair, evals, rname, names, held, m,
+                       _time.perf_counter() - t_start)
 
 
 def _evaluate(run, s, q0, q1, dq, rates, m):
@@ -209,29 +306,49 @@ def _evaluate(run, s, q0, q1, dq, rates, m):
     return row, g, int(p), rho
 
 
+def _prefix(balls) -> float:
+    """The end of the covered prefix ``[0, s_free]`` of the closed intervals ``[s - rho, s + rho]`` of
+    ``balls`` (``-inf`` when none holds 0: the edge's start is in contact)."""
+    end = -math.inf
+    for s, rho in sorted(balls, key=lambda b: b[0] - b[1]):  # by left end
+        left = s - rho
+        if left > max(end, 0.0):
+            break  # a gap: the prefix ends here (or 0 itself is not covered)
+        end = max(end, s + rho)
+    return min(end, 1.0)
+
+
 def _cover(run, q0, q1, dq, rates, m, contact, budget):
-    """The covering of one edge (see the module docstring): None when CLEAR, else
-    ``(EdgeStatus.INCOMPLETE,)`` or ``(EdgeStatus.COLLISION, s, row, pair)``."""
-    ends = []
-    for s in (0.0, 1.0):
+    """The covering of one edge (see the module docstring): ``(status, s_free, row, pair)``; ``row``
+    and ``pair`` are the configuration in contact (COLLISION) or of smallest gap (INCOMPLETE)."""
+    balls = []
+    best = (math.inf, -1, -1)  # gap, row, pair
+    ends = (0.0,) if not np.any(dq) else (0.0, 1.0)  # a still edge is one configuration
+    for s in ends:
         row, g, p, rho = _evaluate(run, s, q0, q1, dq, rates, m)
         if g <= contact:
-            return EdgeStatus.COLLISION, s, row, p
-        ends.append(rho)
-    heap = [(-((1.0 - ends[1]) - ends[0]), 0.0, ends[0], 1.0, ends[1])]  # widest uncovered interval first
+            return EdgeStatus.COLLISION, _prefix(balls), row, p
+        best = min(best, (g, row, p))
+        balls.append((s, rho))
+    if len(ends) == 1:
+        return EdgeStatus.CLEAR, 1.0, -1, -1
+    (a, ra), (b, rb) = balls
+    heap = [(-((b - rb) - (a + ra)), a, ra, b, rb)]  # widest uncovered interval first
     while heap:
         _, a, ra, b, rb = heapq.heappop(heap)
         lo, hi = a + ra, b - rb
         if not lo < hi:
             continue  # covered by the two ends' radii
         if run.n >= budget:
-            return (EdgeStatus.INCOMPLETE,)
+            return EdgeStatus.INCOMPLETE, _prefix(balls), best[1], best[2]
         s = 0.5 * (lo + hi)
         row, g, p, rho = _evaluate(run, s, q0, q1, dq, rates, m)
         if g <= contact:
-            return EdgeStatus.COLLISION, s, row, p
+            return EdgeStatus.COLLISION, _prefix(balls), row, p
+        best = min(best, (g, row, p))
+        balls.append((s, rho))
         if s + rho < hi:
             heapq.heappush(heap, (-(hi - (s + rho)), s, rho, b, rb))
         if lo < s - rho:
             heapq.heappush(heap, (-((s - rho) - lo), a, ra, s, rho))
-    return None
+    return EdgeStatus.CLEAR, 1.0, -1, -1

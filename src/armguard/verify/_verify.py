@@ -70,12 +70,20 @@ def _float(x, name: str) -> float:
 
 
 class _State:
-    """What one verification reads (:meth:`Verifier._build`): the clearance model and every robot's configuration."""
+    """What one verification reads (:meth:`Verifier._build`): the clearance model and every robot's configuration
+    (and, per thread and robot, the record ``check_edges`` reuses: not pickled)."""
 
-    __slots__ = ("model", "base")
+    __slots__ = ("model", "base", "edge_runs")
 
     def __init__(self, model: ClearanceModel, base: dict) -> None:
         self.model, self.base = model, base
+        self.edge_runs: dict = {}
+
+    def __getstate__(self):
+        return {"model": self.model, "base": self.base}
+
+    def __setstate__(self, state) -> None:
+        self.__init__(state["model"], state["base"])
 
 
 class Verifier(FollowsScene):
@@ -262,14 +270,16 @@ class Verifier(FollowsScene):
         args = (sd, method, frequency, joint_step, robot, thr, mass, name, t_start)
         return self._on_one_state(lambda st: self._verify_once(st, trajectory, *args), _ATTEMPTS, "verify this trajectory")
 
-    def check_edges(self, Q0, Q1, *, robot: str | None = None, margin: float = 0.0, max_evaluations: int | None = None):
-        """Certify the straight joint-space edges ``Q0[i] -> Q1[i]`` ``(M, n)`` or ``(n,)`` of one robot (its
-        joints, its order, within limits; other robots where this Verifier holds them): :class:`EdgeResults`,
-        ``CLEAR`` for every configuration at least ``margin`` (m) clear, ``INCOMPLETE`` after
-        ``max_evaluations`` per edge (``Tolerances.edge_max_evaluations``).  The covering: :mod:`armguard.verify._edges`."""
+    def check_edges(self, Q0, Q1, *, robot: str | None = None, joints=None, margin: float = 0.0,
+                    max_evaluations: int | None = None):
+        """Certify the straight joint-space edges ``Q0[i] -> Q1[i]`` ``(M, n)`` or ``(n,)`` (one side may be a
+        single configuration) of one robot: its joints in its order, or those ``joints`` names (the others held
+        where this Verifier holds the robot), within limits.  :class:`EdgeResults`: ``CLEAR`` for every
+        configuration at least ``margin`` (m) clear, ``INCOMPLETE`` after ``max_evaluations`` per edge
+        (``Tolerances.edge_max_evaluations``).  The covering: :mod:`armguard.verify._edges`."""
         from ._edges import check_edges_on
 
-        return self._on_one_state(lambda st: check_edges_on(self, st, Q0, Q1, robot, margin, max_evaluations),
+        return self._on_one_state(lambda st: check_edges_on(self, st, Q0, Q1, robot, margin, max_evaluations, joints),
                                   _ATTEMPTS, "check these edges")
 
     def _verify_once(self, st, trajectory, sd, method, frequency, joint_step, robot, thr, mass, name, t_start):
