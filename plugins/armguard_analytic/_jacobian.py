@@ -31,7 +31,6 @@ class JacobianPlan:
     def __init__(self, checker, fast) -> None:
         import pinocchio as pin
 
-        from armguard.backends._face_graph import vertex_graph
         from armguard.backends._jacobian import WitnessJacobian
 
         from ._engine import _pair_jacobian as pj
@@ -101,7 +100,7 @@ class JacobianPlan:
             bad = [model.scene.joint_names[k] for k in np.flatnonzero(self.vcol < 0)]
             raise BackendError(f"analytic Jacobian: scene joints {bad} have no velocity column in pin_model")
         self.gF, self.gI, self.V = np.ascontiguousarray(gF), np.ascontiguousarray(gI), np.ascontiguousarray(wj._V)
-        self.graph = vertex_graph(self.V, wj._vstart, wj._disk_r)  # support faces by a climb, not a scan
+        self.graph = wj._graph  # the hulls' vertex graphs: support faces by a climb, not a scan
         tol = model.tol
         self.tol_length = tol.length
         self.tol = np.array([tol.length, tol.jacobian_face, tol.jacobian_parallel])

@@ -73,14 +73,14 @@ def _link_term(row, sign, lk, p0, p1, p2, nh, jtype, term_start, term_joint, ter
 
 
 @njit(cache=True, nogil=True)
-def jacobian_rows(H, MF, MI, SF, rows, vcol, gF, gI, V, adj_start, adj, seeds, tol, d, p_WA, p_WB, jac,
+def jacobian_rows(H, MF, MI, SF, rows, vcol, gF, gI, V, adj, adj_start, tol, d, p_WA, p_WB, jac,
                   smooth):  # pragma: no cover - compiled
     """Equation (1) and the smoothness test for the ``n`` pairs of ``d`` ``(n,)``, ``p_WA``,
     ``p_WB`` ``(n, 3)``, with the link poses left in the scratch ``SF`` by the last check (at the
     same configuration).  ``rows`` ``(n, 4)``: per pair the global link of A and of B (-1: fixed
     in W) and their geometry rows of ``gF`` / ``gI`` (-1: a workspace wall, a plane); ``vcol``
     ``(n_q,)``: Pinocchio's velocity column of each scene joint (-1: none); ``V`` ``(., 3)``: the
-    shapes' vertices in their frames, ``adj_start``, ``adj``, ``seeds``: their hulls' vertex graphs
+    shapes' vertices in their frames, ``adj``, ``adj_start``: their hulls' vertex graphs
     (:func:`armguard.backends._face_graph.vertex_graph`: the support faces are found by a climb, not
     a scan); ``tol`` = ``[length, jacobian_face, jacobian_parallel]``.
     Writes ``jac`` ``(n, nv)`` and ``smooth`` ``(n,) bool``; returns the number of touching pairs
@@ -96,9 +96,8 @@ def jacobian_rows(H, MF, MI, SF, rows, vcol, gF, gI, V, adj_start, adj, seeds, t
     gF = carray(at(gF, 0), gF.shape)
     gI = carray(at(gI, 0), gI.shape)
     V = carray(at(V, 0), V.shape)
-    adj_start = carray(at(adj_start, 0), adj_start.shape)
     adj = carray(at(adj, 0), adj.shape)
-    seeds = carray(at(seeds, 0), seeds.shape)
+    adj_start = carray(at(adj_start, 0), adj_start.shape)
     d = carray(at(d, 0), d.shape)
     p_WA = carray(at(p_WA, 0), p_WA.shape)
     p_WB = carray(at(p_WB, 0), p_WB.shape)
@@ -198,7 +197,8 @@ def jacobian_rows(H, MF, MI, SF, rows, vcol, gF, gI, V, adj_start, adj, seeds, t
             s = 1.0 if side == 0 else -1.0
             u[0], u[1], u[2] = s * nh[0], s * nh[1], s * nh[2]
             dims[side] = face_span_graph(R, u, gI[g, G_VS], gI[g, G_VE], V, gF[g, G_AXIS:G_AXIS + 3], gF[g, G_RADIUS],
-                                         tol_face, tol_par, dirs[side], hbuf, fbuf, adj_start, adj, seeds[g], mark, qbuf)
+                                         tol_face, tol_par, dirs[side], hbuf, fbuf, adj[adj_start[g]:adj_start[g + 1]], mark,
+                                         qbuf)
         smooth[i] = ok and unique_witness(dims, dirs, tol_par)
     # the local buffers are used here last: numba frees an array after its last use, and the
     # views above do not hold it

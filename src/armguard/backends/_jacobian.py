@@ -48,6 +48,7 @@ from numba import njit
 
 from .._errors import BackendError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._face_graph import face_span, face_span_graph, vertex_graph  # noqa: F401  (face_span: the reference scan)
 
 __all__ = ["WitnessJacobian", "cores_meet", "finite_difference_rows"]
 
@@ -78,53 +79,6 @@ def _shape_vertices(geom) -> tuple:
     return None
 
 
-@njit(cache=True, nogil=True, inline="always")
-def face_span(R, u, s, e, V, disk_axis, disk_r, tol_face, tol_par, dir_out, hbuf, fbuf):  # pragma: no cover - numba
-    """The dimension (0, 1, 2) of the support face, in the world direction ``u`` ``(3,)``, of the
-    shape whose rotation in W is ``R`` ``(3, 3)`` and whose vertices in its own frame are
-    ``V[s:e]`` (a disk of radius ``disk_r > 0`` about ``disk_axis``: a cylinder's end); for a 1-D
-    face its direction in W goes to ``dir_out`` ``(3,)``.  ``hbuf`` (float) and ``fbuf`` (int),
-    ``(>= e - s,)``: scratch (each vertex's height along ``u``, the face's vertices)."""
-    u0, u1, u2 = u[0], u[1], u[2]
-    uL0 = R[0, 0] * u0 + R[1, 0] * u1 + R[2, 0] * u2
-    uL1 = R[0, 1] * u0 + R[1, 1] * u1 + R[2, 1] * u2
-    uL2 = R[0, 2] * u0 + R[1, 2] * u1 + R[2, 2] * u2
-    if disk_r > 0.0:
-        c = abs(uL0 * disk_axis[0] + uL1 * disk_axis[1] + uL2 * disk_axis[2])
-        if 1.0 - c <= tol_par:  # the disk faces u: a flat face
-            return 2
-    hmax, k0 = -np.inf, s
-    for k in range(s, e):
-        h = uL0 * V[k, 0] + uL1 * V[k, 1] + uL2 * V[k, 2]
-        hbuf[k - s] = h
-        if h > hmax:
-            hmax, k0 = h, k
-    # the face: vertices within tol_face of the support plane; its extent from the highest one (k0)
-    low = hmax - tol_face
-    far, k1, nf = 0.0, -1, 0
-    for k in range(s, e):
-        if hbuf[k - s] >= low:
-            fbuf[nf] = k
-            nf += 1
-            dd = (V[k, 0] - V[k0, 0]) ** 2 + (V[k, 1] - V[k0, 1]) ** 2 + (V[k, 2] - V[k0, 2]) ** 2
-            if dd > far:
-                far, k1 = dd, k
-    if far <= tol_face * tol_face:
-        return 0
-    inv = 1.0 / np.sqrt(far)
-    a0, a1, a2 = (V[k1, 0] - V[k0, 0]) * inv, (V[k1, 1] - V[k0, 1]) * inv, (V[k1, 2] - V[k0, 2]) * inv
-    for f in range(nf):  # a face vertex off the line k0-k1: a 2-D face
-        k = fbuf[f]
-        w0, w1, w2 = V[k, 0] - V[k0, 0], V[k, 1] - V[k0, 1], V[k, 2] - V[k0, 2]
-        t = w0 * a0 + w1 * a1 + w2 * a2
-        off = w0 * w0 + w1 * w1 + w2 * w2 - t * t
-        if off > tol_face * tol_face:
-            return 2
-    for r in range(3):
-        dir_out[r] = R[r, 0] * a0 + R[r, 1] * a1 + R[r, 2] * a2
-    return 1
-
-
 @njit(cache=True, nogil=True)
 def unique_witness(dims, dirs, tol_par):  # pragma: no cover - numba
     """Whether two support faces of dimensions ``dims`` ``(2,)`` (1-D faces along ``dirs[side]``)
@@ -141,23 +95,27 @@ def unique_witness(dims, dirs, tol_par):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _face_spans(R, u, g, vstart, V, disk_axis, disk_r, tol_face, tol_par, dims, dirs):  # pragma: no cover - numba
+def _face_spans(R, u, g, vstart, V, adj, adj_start, disk_axis, disk_r, tol_face, tol_par, dims,
+                dirs):  # pragma: no cover - numba
     """For each query ``i``: the dimension (0, 1, 2) of shape ``g[i]``'s support face in the
     world direction ``u[i]`` (the shape's rotation in W is ``R[i]``), and for a 1-D face its
-    direction in W (``dirs[i]``).  ``g[i] == -1``: a plane (dimension 2)."""
+    direction in W (``dirs[i]``).  ``g[i] == -1``: a plane (dimension 2).  Over the hulls' vertex
+    graphs ``adj``, ``adj_start`` (:func:`armguard.backends._face_graph.vertex_graph`)."""
     hbuf = np.empty(max(V.shape[0], 1))
     fbuf = np.empty(max(V.shape[0], 1), np.int64)
+    mark = np.zeros(max(V.shape[0], 1), np.bool_)
+    qbuf = np.empty(max(V.shape[0], 1), np.int64)
     for i in range(len(g)):
         gi = g[i]
         if gi < 0:
             dims[i] = 2
             continue
-        dims[i] = face_span(R[i], u[i], vstart[gi], vstart[gi + 1], V, disk_axis[gi], disk_r[gi], tol_face, tol_par,
-                            dirs[i], hbuf, fbuf)
+        dims[i] = face_span_graph(R[i], u[i], vstart[gi], vstart[gi + 1], V, disk_axis[gi], disk_r[gi], tol_face, tol_par,
+                                  dirs[i], hbuf, fbuf, adj[adj_start[gi]:adj_start[gi + 1]], mark, qbuf)
 
 
 @njit(cache=True)
-def _witness_rows(p_WA, p_WB, d, ja, jb, ga, gb, Jj, R_WJ, R_JG, vstart, V, disk_axis, disk_r, described,
+def _witness_rows(p_WA, p_WB, d, ja, jb, ga, gb, Jj, R_WJ, R_JG, vstart, V, adj, adj_start, disk_axis, disk_r, described,
                   cstart, cols, eps_len, tol_face, tol_par, jac, smooth):  # pragma: no cover - numba
     """Equation (1) and the uniqueness test for every pair: ``jac`` ``(n, nv)``, ``smooth`` ``(n,)``
     (False also where touching); ``Jj`` ``(njoints, 6, nv)`` per joint, ``R_WJ`` ``(njoints, 3, 3)``;
@@ -211,7 +169,7 @@ def _witness_rows(p_WA, p_WB, d, ja, jb, ga, gb, Jj, R_WJ, R_JG, vstart, V, disk
             u[0, r] = nh[r]
             u[1, r] = -nh[r]
         dirs[:] = 0.0
-        _face_spans(R, u, g, vstart, V, disk_axis, disk_r, tol_face, tol_par, dims, dirs)
+        _face_spans(R, u, g, vstart, V, adj, adj_start, disk_axis, disk_r, tol_face, tol_par, dims, dirs)
         ok = ok and unique_witness(dims, dirs, tol_par)
         smooth[i] = ok
 
@@ -248,6 +206,7 @@ class WitnessJacobian:
         self._vstart = np.asarray(starts, np.int64)
         self._disk_axis = np.ascontiguousarray(np.array(axes).reshape(-1, 3))
         self._disk_r = np.asarray(radii, np.float64)
+        self._graph = vertex_graph(self._V, self._vstart, self._disk_r)  # support faces by a climb, not a scan
         self._pin = pin
         self._tls = threading.local()
         self._pairs_key = None
@@ -347,7 +306,7 @@ class WitnessJacobian:
         tol = self.tol
         d = np.ascontiguousarray(result.distance, dtype=np.float64)
         _witness_rows(np.ascontiguousarray(result.p_WA), np.ascontiguousarray(result.p_WB), d, ja, jb, ga, gb, Jj,
-                      R_WJ, self._R_JG, self._vstart, self._V, self._disk_axis, self._disk_r, self._described,
+                      R_WJ, self._R_JG, self._vstart, self._V, *self._graph, self._disk_axis, self._disk_r, self._described,
                       self._cstart, self._cols, tol.length, tol.jacobian_face, tol.jacobian_parallel, jac, smooth)
         meet = cores_meet(self.model, d, idx, tol.length)
         smooth[meet] = False
