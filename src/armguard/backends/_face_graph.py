@@ -33,6 +33,26 @@ MIN_GRAPH = 64  # vertices: below this the scan is as quick as the climb
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _dimension(R, V, fbuf, nf, k0, k1, far, tol_face, dir_out):  # pragma: no cover - numba
+    """The dimension of the face ``fbuf[:nf]`` (vertices of ``V``) from its highest vertex ``k0`` and the
+    farthest ``k1`` (``far``: their squared distance); a 1-D face's direction in W to ``dir_out``."""
+    if far <= tol_face * tol_face:
+        return 0
+    inv = 1.0 / np.sqrt(far)
+    a0, a1, a2 = (V[k1, 0] - V[k0, 0]) * inv, (V[k1, 1] - V[k0, 1]) * inv, (V[k1, 2] - V[k0, 2]) * inv
+    for f in range(nf):  # a face vertex off the line k0-k1: a 2-D face
+        k = fbuf[f]
+        w0, w1, w2 = V[k, 0] - V[k0, 0], V[k, 1] - V[k0, 1], V[k, 2] - V[k0, 2]
+        t = w0 * a0 + w1 * a1 + w2 * a2
+        off = w0 * w0 + w1 * w1 + w2 * w2 - t * t
+        if off > tol_face * tol_face:
+            return 2
+    for r in range(3):
+        dir_out[r] = R[r, 0] * a0 + R[r, 1] * a1 + R[r, 2] * a2
+    return 1
+
+
+@njit(cache=True, nogil=True, inline="always")
 def face_span(R, u, s, e, V, disk_axis, disk_r, tol_face, tol_par, dir_out, hbuf, fbuf):  # pragma: no cover - numba
     """The dimension (0, 1, 2) of the support face, in the world direction ``u`` ``(3,)``, of the
     shape whose rotation in W is ``R`` ``(3, 3)`` and whose vertices in its own frame are
@@ -63,20 +83,7 @@ def face_span(R, u, s, e, V, disk_axis, disk_r, tol_face, tol_par, dir_out, hbuf
             dd = (V[k, 0] - V[k0, 0]) ** 2 + (V[k, 1] - V[k0, 1]) ** 2 + (V[k, 2] - V[k0, 2]) ** 2
             if dd > far:
                 far, k1 = dd, k
-    if far <= tol_face * tol_face:
-        return 0
-    inv = 1.0 / np.sqrt(far)
-    a0, a1, a2 = (V[k1, 0] - V[k0, 0]) * inv, (V[k1, 1] - V[k0, 1]) * inv, (V[k1, 2] - V[k0, 2]) * inv
-    for f in range(nf):  # a face vertex off the line k0-k1: a 2-D face
-        k = fbuf[f]
-        w0, w1, w2 = V[k, 0] - V[k0, 0], V[k, 1] - V[k0, 1], V[k, 2] - V[k0, 2]
-        t = w0 * a0 + w1 * a1 + w2 * a2
-        off = w0 * w0 + w1 * w1 + w2 * w2 - t * t
-        if off > tol_face * tol_face:
-            return 2
-    for r in range(3):
-        dir_out[r] = R[r, 0] * a0 + R[r, 1] * a1 + R[r, 2] * a2
-    return 1
+    return _dimension(R, V, fbuf, nf, k0, k1, far, tol_face, dir_out)
 
 
 
@@ -174,17 +181,4 @@ def face_span_graph(R, u, s, e, V, disk_axis, disk_r, tol_face, tol_par, dir_out
             dd = (V[kk, 0] - V[k0, 0]) ** 2 + (V[kk, 1] - V[k0, 1]) ** 2 + (V[kk, 2] - V[k0, 2]) ** 2
             if dd > far or (dd == far and dd > 0.0 and kk < k1):
                 far, k1 = dd, kk
-    if far <= tol_face * tol_face:
-        return 0
-    inv = 1.0 / np.sqrt(far)
-    a0, a1, a2 = (V[k1, 0] - V[k0, 0]) * inv, (V[k1, 1] - V[k0, 1]) * inv, (V[k1, 2] - V[k0, 2]) * inv
-    for f in range(nf):  # a face vertex off the line k0-k1: a 2-D face
-        kk = fbuf[f]
-        w0, w1, w2 = V[kk, 0] - V[k0, 0], V[kk, 1] - V[k0, 1], V[kk, 2] - V[k0, 2]
-        t = w0 * a0 + w1 * a1 + w2 * a2
-        off = w0 * w0 + w1 * w1 + w2 * w2 - t * t
-        if off > tol_face * tol_face:
-            return 2
-    for r in range(3):
-        dir_out[r] = R[r, 0] * a0 + R[r, 1] * a1 + R[r, 2] * a2
-    return 1
+    return _dimension(R, V, fbuf, nf, k0, k1, far, tol_face, dir_out)
