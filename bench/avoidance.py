@@ -18,7 +18,7 @@ import time
 import numpy as np
 
 TITLE = "Distance Jacobians and collision avoidance"
-MODELS = ["ranger", "hermes", "puma560", "panda"]
+MODELS = ["ranger", "hermes", "puma560", "panda", "z1", "kinova", "so101"]  # the last three: mesh hulls of 1,500-6,900 vertices
 
 
 def _median_us(fn, args_list, reps: int, clock=time.thread_time) -> float:
