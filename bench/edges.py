@@ -20,21 +20,30 @@ from __future__ import annotations
 import json
 import math
 import os
-import subprocess
 import sys
 
+from bench.timing import json_of_process
+
 TITLE = "Edges of a planner: certified against sampled"
-ROBOTS = ("ur5", "panda", "kuka_iiwa", "xarm7", "z1", "so101")
+ROBOTS = ("ur5", "panda", "kuka_iiwa", "xarm7", "z1", "so101", "panda+wires")
+WIRES = [((0.5, -0.6, z), (0.5, 0.6, z)) for z in (0.2, 0.45, 0.7)] + [((-0.5, -0.6, 0.3), (-0.5, 0.6, 0.3))]
+"""``panda+wires``: four 2 mm wires (capsules, radius 2 mm, 1.2 m long) across the Panda's workspace."""
 MAX_STEP = 0.5  # rad: the largest joint move of an edge
 STEPS = (0.05, 0.01)
 
 
-def _edges(model, n: int, seed: int):
+def _edges(model, n: int, seed: int, free=None):
+    """``n`` random edges, both ends in limits (and apart for the checker ``free`` when given)."""
     import numpy as np
 
     Q0, Q1 = [], []
-    for i in range(n):
-        Q = model.scene_q(model.random_q(2, seed + i))
+    i = 0
+    while len(Q0) < n:
+        Q = model.random_q(2, seed + i)
+        i += 1
+        if free is not None and free.collides(Q).any():
+            continue
+        Q = model.scene_q(Q)
         d = Q[1] - Q[0]
         Q[1] = Q[0] + d * min(1.0, MAX_STEP / float(np.max(np.abs(d))))
         Q0.append(Q[0])
@@ -53,11 +62,15 @@ def measure(name: str, n: int) -> dict:
     from bench.timing import interleaved_thread_seconds
 
     warnings.simplefilter("ignore")
-    model = armguard.load_model(name)
+    model = armguard.load_model(name.removesuffix("+wires"))
+    if name.endswith("+wires"):
+        from armguard.geometry import Capsule
+
+        model = model.with_body("wires", [Capsule(a, b, 0.002) for a, b in WIRES])
     robot = next(iter(model.scene.robots))
     names = model.scene.robots[robot].joint_names
     v = Verifier(model.scene)
-    Q0, Q1 = _edges(model, n, 7000)
+    Q0, Q1 = _edges(model, n, 7000, free=armguard.checker(model, "coal") if name.endswith("+wires") else None)
     res = v.check_edges(Q0, Q1)
     coal = armguard.checker(model, "coal", {"threads": 1})
     ana = armguard.checker(model, "analytic")
@@ -104,14 +117,10 @@ def run(quick: bool) -> str:
             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     for name in ROBOTS:
-        proc = subprocess.run([sys.executable, "-m", "bench.edges", name, str(n)], capture_output=True, text=True,
-                              cwd=here, timeout=1800)
-        lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
-        if proc.returncode != 0 or not lines:
-            tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
-            rows.append(f"| {name} | error: {tail[:120]} |||||||||||||")
+        r = json_of_process([sys.executable, "-m", "bench.edges", name, str(n)], cwd=here, timeout=1800)
+        if "error" in r:
+            rows.append(f"| {name} | error: {r['error']} |||||||||||||")
             continue
-        r = json.loads(lines[-1])
         print(f"  {name}: {r}", file=sys.stderr, flush=True)
         rows.append(
             f"| {name} | {r['pairs']} | {r['clear']} / {r['collision']} / {r['incomplete']} | {r['us_certified']:.0f} µs "
@@ -121,7 +130,8 @@ def run(quick: bool) -> str:
             f"| {r['us_coal_0.05'] / r['us_certified']:.1f}× | {r['us_coal_0.01'] / r['us_certified']:.1f}× "
             f"| {r['missed_0.05']} / {r['missed_0.01']} | {r['false_clear_0.05'] + r['false_clear_0.01']} |")
     note = (f"\n\n{n} random in-limit edges per robot (seeded), no joint moving more than {MAX_STEP} rad; each robot in "
-            "its own process. Times are thread CPU time per edge, medians of 5 interleaved runs over all the edges "
+            "its own process. *panda+wires*: the Panda with four 2 mm wires across its workspace (capsules of radius 2 mm, "
+            "`Model.with_body`), its edges between configurations apart (for coal) at both ends. Times are thread CPU time per edge, medians of 5 interleaved runs over all the edges "
             "(`Verifier.verify`: 30 edges, 3 runs). *certified*: `Verifier.check_edges(Q0, Q1)` on the analytic "
             "backend, every configuration of the edge proven at least 0 m clear (CLEAR) or a configuration in contact "
             "found (COLLISION). *sampled*: the edge's samples at the step in one `collides(Q)` call per edge (coal "

@@ -37,8 +37,9 @@ from __future__ import annotations
 import json
 import math
 import os
-import subprocess
 import sys
+
+from bench.timing import json_of_process
 
 TITLE = "Analytic pair_distances: where the time goes"
 ROBOTS = ("ur3", "kinova", "kuka_iiwa", "z1", "so101")
@@ -258,14 +259,10 @@ def run(quick: bool) -> str:
              + " | the pairs alone | all at once, the configuration again | the pairs alone, the configurations in turn "
              "| kernel - fixed | the rest |", "|---|---|---|---|---|---|---|---|---|"]
     for name in ROBOTS:
-        proc = subprocess.run([sys.executable, "-m", "bench.pair_profile", name, str(n)], capture_output=True, text=True,
-                              timeout=900, cwd=root, env=env)
-        lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
-        if proc.returncode != 0 or not lines:
-            tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
-            rows.append(f"| {name} | error: {tail[:120]} |||||||||||")
+        r = json_of_process([sys.executable, "-m", "bench.pair_profile", name, str(n)], cwd=root, env=env)
+        if "error" in r:
+            rows.append(f"| {name} | error: {r['error']} |||||||||||")
             continue
-        r = json.loads(lines[-1])
         print(f"  {name}: {r}", file=sys.stderr, flush=True)
         per = (r["us_kernel"] - r["us_fixed"]) / max(r["pairs"], 1)
         by = ", ".join(f"{'no table' if k == '0' else k}: {s:.1f} / {c:.1f} / {a:.1f}" for k, (s, c, a) in r["by_joints"].items())

@@ -59,3 +59,16 @@ def fmt_ns(seconds: float) -> str:
     if ns < 1e6:
         return f"{ns / 1e3:.2f} µs"
     return f"{ns / 1e6:.2f} ms"
+
+
+def json_of_process(args: list, *, cwd: str, env: dict | None = None, timeout: float = 900) -> dict:
+    """Run ``args`` (a benchmark's measuring process) and return the last JSON line it printed, or
+    ``{"error": <its stderr's last line>}`` when it failed or printed none."""
+    import json
+    import subprocess
+
+    proc = subprocess.run(args, capture_output=True, text=True, cwd=cwd, env=env, timeout=timeout)
+    lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
+    if proc.returncode != 0 or not lines:
+        return {"error": ((proc.stderr.strip().splitlines() or ["no output"])[-1])[:120]}
+    return json.loads(lines[-1])

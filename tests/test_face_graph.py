@@ -11,6 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import ConvexHull
+from scipy.spatial.transform import Rotation
 
 import armguard
 from armguard import DEFAULT_TOLERANCES
@@ -21,11 +22,7 @@ TOL_FACE, TOL_PAR = DEFAULT_TOLERANCES.jacobian_face, DEFAULT_TOLERANCES.jacobia
 
 
 def _rotation(rng):
-    q = rng.normal(size=4)
-    w, x, y, z = q / np.linalg.norm(q)
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    return Rotation.random(random_state=rng).as_matrix()
 
 
 def _directions(P, rng, n_random=60):

@@ -9,7 +9,7 @@ import threading
 
 from .._errors import StaleModelError
 
-__all__ = ["FollowsScene"]
+__all__ = ["FollowsScene", "VerifierState"]
 
 
 class FollowsScene:
@@ -59,3 +59,20 @@ class FollowsScene:
             if not st.model.is_stale():
                 return out
         raise StaleModelError(f"the scene changed during each of {attempts} attempts to {what}: no verdict")
+
+
+class VerifierState:
+    """What one verification reads (:meth:`Verifier._build`): the clearance model and every robot's configuration
+    (and, per thread and robot, the record ``check_edges`` reuses: not pickled)."""
+
+    __slots__ = ("model", "base", "edge_runs")
+
+    def __init__(self, model, base: dict) -> None:
+        self.model, self.base = model, base
+        self.edge_runs: dict = {}
+
+    def __getstate__(self):
+        return {"model": self.model, "base": self.base}
+
+    def __setstate__(self, state) -> None:
+        self.__init__(state["model"], state["base"])

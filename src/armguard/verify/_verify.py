@@ -27,7 +27,7 @@ from ..model import scene_of
 from .._errors import KinematicsError, TrajectoryError, VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._advance import advance_step
-from ._follow import FollowsScene
+from ._follow import FollowsScene, VerifierState as _State
 from ._oracle import CATEGORIES, WORKSPACE, ClearanceModel
 from ._record import _Run
 from ._report import (
@@ -67,23 +67,6 @@ def _float(x, name: str) -> float:
         return float(x)
     except (TypeError, ValueError):
         raise VerificationError(f"{name}: expected a number, got {x!r}") from None
-
-
-class _State:
-    """What one verification reads (:meth:`Verifier._build`): the clearance model and every robot's configuration
-    (and, per thread and robot, the record ``check_edges`` reuses: not pickled)."""
-
-    __slots__ = ("model", "base", "edge_runs")
-
-    def __init__(self, model: ClearanceModel, base: dict) -> None:
-        self.model, self.base = model, base
-        self.edge_runs: dict = {}
-
-    def __getstate__(self):
-        return {"model": self.model, "base": self.base}
-
-    def __setstate__(self, state) -> None:
-        self.__init__(state["model"], state["base"])
 
 
 class Verifier(FollowsScene):
