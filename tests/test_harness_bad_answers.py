@@ -238,6 +238,21 @@ def test_a_non_finite_option_value_stays_text():
         "b": {"x": "nan", "y": "-inf", "z": 1e-3, "n": 7}}
 
 
+def test_the_pytest_plugin_reads_options_as_compare_does():
+    """``--backend-option`` of the conformance suite's pytest plugin and of ``armguard compare`` are read by one
+    function: ``inf`` stays text in both (the plugin had made it a float)."""
+    from types import SimpleNamespace
+
+    from armguard.testing._plugin import options_from_config
+
+    given = ["threads=1", "tol=1e-9", "flag=true", "limit=inf", "mode=exact"]
+    config = SimpleNamespace(getoption=lambda name: {"armguard_backend": "coal", "armguard_backend_options": given}.get(name))
+    opts = options_from_config(config)["options"]
+    want = parse_backend_options([f"coal.{g}" for g in given])["coal"]
+    assert want["limit"] == "inf" and want["threads"] == 1 and want["flag"] is True
+    assert {k: opts[k] for k in want} == want
+
+
 def test_a_non_finite_value_in_the_summary_is_refused_before_writing(registered, tmp_path):
     out = tmp_path / "out"
     with pytest.raises(ArmguardError) as e:

@@ -22,6 +22,7 @@ import contextvars
 import os
 import sys
 import threading
+import math
 import tomllib
 from importlib import metadata
 from pathlib import Path
@@ -31,7 +32,7 @@ from .._errors import BackendError, DetectionError
 from ._interface import (Backend, Capability, Checker, CheckerBase, NearestPair, PairDistances, PairDistancesMany, check_margin,
                          check_pairs, check_Q, check_q, check_unit_circle)
 
-__all__ = ["available", "refresh", "get_backend", "checker", "resolve", "command_line_choice", "Backend", "Checker", "CheckerBase", "PairDistances",
+__all__ = ["available", "refresh", "get_backend", "checker", "resolve", "command_line_choice", "option_value", "Backend", "Checker", "CheckerBase", "PairDistances",
            "PairDistancesMany", "NearestPair", "check_margin", "check_pairs", "Capability", "check_q", "check_Q", "check_unit_circle", "GROUP", "DEFAULT", "ENV"]
 
 GROUP = "armguard.backends"
@@ -103,6 +104,23 @@ def command_line_choice(backend: str | None, config=None):
     (the command line's ``--backend`` / ``--config``)."""
     token = _CHOICE.set((backend, config))
     return lambda: _CHOICE.reset(token)
+
+
+def option_value(text: str):
+    """A backend option given as text (``--backend-option KEY=VALUE`` of ``armguard compare`` and of the
+    conformance suite's pytest plugin): ``"1"`` -> 1, ``"1e-9"`` -> 1e-9, ``"true"``/``"false"`` -> bool,
+    anything else the string itself (``"nan"``, ``"inf"`` included: no finite number, for the backend to
+    refuse by name; as a float it reached compare.json, which holds no NaN)."""
+    low = text.strip().lower()
+    if low in ("true", "false"):
+        return low == "true"
+    for kind in (int, float):
+        try:
+            value = kind(text)
+        except ValueError:
+            continue
+        return value if math.isfinite(value) else text
+    return text
 
 
 def read_config(config=None) -> dict:

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._errors import ArmguardError, BackendError
+from ..backends import option_value
 
 __all__ = ["BackendAnswers", "evaluate", "build_checkers", "parse_backend_options", "answers_distances", "verdict_detail",
            "combine_codes", "checked_distances", "check_finite", "checked_verdicts", "CLEAR", "COLLISION", "UNDECIDED"]
@@ -174,22 +175,6 @@ def combine_codes(pair_codes: np.ndarray, m: int | None = None) -> np.ndarray:
     return np.where(hit, COLLISION, np.where(und, UNDECIDED, CLEAR)).astype(np.int8)
 
 
-def _scalar(text: str):
-    """``"1"`` -> 1, ``"1e-9"`` -> 1e-9, ``"true"``/``"false"`` -> bool, anything else the string itself
-    (``"nan"``, ``"inf"`` included: no finite number, for the backend to refuse by name; as a float it
-    reached compare.json, which holds no NaN)."""
-    low = text.strip().lower()
-    if low in ("true", "false"):
-        return low == "true"
-    for kind in (int, float):
-        try:
-            value = kind(text)
-        except ValueError:
-            continue
-        return value if math.isfinite(value) else text
-    return text
-
-
 def parse_backend_options(items) -> dict:
     """``["analytic.fidelity=paper", "coal.threads=1"]`` -> ``{"analytic": {"fidelity": "paper"}, "coal": {"threads": 1}}``.
 
@@ -201,7 +186,7 @@ def parse_backend_options(items) -> dict:
         backend, dot, opt = key.partition(".")
         if not sep or not dot or not backend or not opt:
             raise ArmguardError(f"--backend-option {item!r}: expected BACKEND.KEY=VALUE (e.g. analytic.fidelity=paper)")
-        out.setdefault(backend.strip(), {})[opt.strip()] = _scalar(value)
+        out.setdefault(backend.strip(), {})[opt.strip()] = option_value(value)
     return out
 
 

@@ -53,21 +53,9 @@ def pytest_load_initial_conftests(early_config, parser, args) -> None:
                          help="a build option of that backend (as --armguard-backend-option)")
 
 
-def _scalar(text: str):
-    low = text.strip().lower()
-    if low in ("true", "false"):
-        return low == "true"
-    for kind in (int, float):
-        try:
-            return kind(text)
-        except ValueError:
-            pass
-    return text
-
-
 def options_from_config(config) -> dict:
     """The keyword arguments of :func:`armguard.testing.checks` that the command line gave."""
-    from ..backends import resolve
+    from ..backends import option_value, resolve
 
     name = config.getoption("armguard_backend")
     opts = {}
@@ -75,7 +63,7 @@ def options_from_config(config) -> dict:
         key, sep, value = str(item).partition("=")
         if not sep or not key.strip():
             raise pytest.UsageError(f"--backend-option {item!r}: expected KEY=VALUE (e.g. fidelity=exact)")
-        opts[key.strip()] = _scalar(value)
+        opts[key.strip()] = option_value(value)
     name, opts = resolve(name, opts)
     from ..backends import available
 
