@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 import armguard
 from armguard import DEFAULT_TOLERANCES as TOL
 from armguard.backends import CheckerBase
-from armguard.backends._face_graph import vertex_graph
+from armguard.backends._face_graph import face_scratch, vertex_graph
 from armguard.backends._jacobian import _face_spans, finite_difference_rows
 
 MODELS = ["ranger", "hermes", "puma560", "rover", "gmf_s480", "panda", "ur5", "iiwa"]
@@ -158,7 +158,8 @@ def test_support_faces_of_a_box():
     g = np.array([0, 0, 0, -1])
     dims, dirs = np.zeros(4, np.int64), np.zeros((4, 3))
     adj, adj_start = vertex_graph(V, np.array([0, 8]))  # a cube: no graph (the scan)
-    _face_spans(R, u, g, np.array([0, 8]), V, adj, adj_start, np.zeros((1, 3)), np.zeros(1), 1e-9, 1e-9, dims, dirs)
+    _face_spans(R, u, g, np.array([0, 8]), V, adj, adj_start, np.zeros((1, 3)), np.zeros(1), 1e-9, 1e-9, dims, dirs,
+                *face_scratch(len(V)))
     assert dims.tolist() == [2, 1, 0, 2]
     assert abs(abs(dirs[1, 0]) - 1.0) < 1e-12
 

@@ -165,7 +165,7 @@ def test_the_free_prefix_is_clear_and_ends_before_the_first_contact(ur5):
     assert len(hit) >= 5
     for i in hit:
         sf = res.s_free[i]
-        assert 0.0 < sf < res.s[i] <= 1.0
+        assert 0.0 < sf <= res.s[i] <= 1.0
         s = np.linspace(0.0, sf, 200)[:, None]
         assert not coal.collides(m.pin_q(Q0[i] + s * (Q1[i] - Q0[i]))).any(), i
         first = v.verify(Trajectory(robot, names, [0.0, 1.0], np.stack([Q0[i], Q1[i]]))).first_collision.time
@@ -199,6 +199,22 @@ def test_a_joint_subset_holds_the_others_and_one_side_broadcasts():
         v.check_edges(Q[0, idx], Q[1, idx], joints=list(arm[:-1]) + [arm[0]])
     with pytest.raises(VerificationError, match="group_joints"):
         v.check_edges(Q[0, idx], Q[1, idx], joints="arm")
+    with pytest.raises(VerificationError, match="an empty list"):
+        v.check_edges(Q[0, idx], Q[1, idx], joints=[])
+
+
+def test_every_joint_named_in_another_order(ur5):
+    """``joints=`` naming all the robot's joints, reordered: the columns are read in that order."""
+    m, v = ur5
+    Q0, Q1 = _edges(m, 60, 4321)
+    names = list(m.scene.robots["ur5"].joint_names)
+    order = [1, 0, 5, 2, 4, 3]
+    res = v.check_edges(Q0[:, order], Q1[:, order], joints=[names[k] for k in order])
+    ref = v.check_edges(Q0, Q1)
+    assert res.joint_names == tuple(names[k] for k in order) and res.held == {}
+    np.testing.assert_array_equal(res.code, ref.code)
+    np.testing.assert_array_equal(res.evaluations, ref.evaluations)
+    np.testing.assert_array_equal(res.q[~res.clear], ref.q[~ref.clear])  # q: all joints, the robot's order
 
 
 def test_results_are_read_only_and_masks_select_pairs(ur5):

@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["MIN_GRAPH", "face_span", "vertex_graph", "face_span_graph"]
+__all__ = ["MIN_GRAPH", "face_span", "vertex_graph", "face_span_graph", "face_scratch"]
 
 MIN_GRAPH = 64  # vertices: below this the scan is as quick as the climb
 
@@ -117,13 +117,20 @@ def vertex_graph(V: np.ndarray, vstart: np.ndarray, disk_r: np.ndarray | None = 
     return np.ascontiguousarray(adj, dtype=np.int64), np.array(starts, np.int64)
 
 
+@njit(cache=True, nogil=True)
+def face_scratch(n):  # pragma: no cover - numba
+    """``(hbuf, fbuf, mark, qbuf)`` for :func:`face_span_graph` over ``n`` vertices (``mark`` all False)."""
+    n = max(n, 1)
+    return np.empty(n), np.empty(n, np.int64), np.zeros(n, np.bool_), np.empty(n, np.int64)
+
+
 @njit(cache=True, nogil=True, inline="always")
 def face_span_graph(R, u, s, e, V, disk_axis, disk_r, tol_face, tol_par, dir_out, hbuf, fbuf, A, mark,
                     qbuf):  # pragma: no cover - numba
     """:func:`face_span` over the vertex graph (see the module docstring); ``A`` this shape's graph
     from :func:`vertex_graph` (empty: the scan).  ``mark`` ``(N,) bool``, all False (left so), and
     ``qbuf`` ``(N,) int64``: scratch; ``hbuf``, ``fbuf`` as :func:`face_span`'s."""
-    if A.shape[0] == 0:
+    if A.shape[0] == 0 or disk_r > 0.0:  # no graph, or a cylinder's disk: the scan
         return face_span(R, u, s, e, V, disk_axis, disk_r, tol_face, tol_par, dir_out, hbuf, fbuf)
     u0, u1, u2 = u[0], u[1], u[2]
     uL0 = R[0, 0] * u0 + R[1, 0] * u1 + R[2, 0] * u2
@@ -147,8 +154,9 @@ def face_span_graph(R, u, s, e, V, disk_axis, disk_r, tol_face, tol_par, dir_out
             if hh > h:
                 k, h = nb, hh
                 moved = True
-    # breadth first over the vertices within tol_face of the top; their heights in hbuf by queue place
-    low = h - tol_face
+    # breadth first over the vertices within tol_face of the top (searched to twice that: rounding at the
+    # boundary never cuts a path; the set is filtered below); their heights in hbuf by queue place
+    low = h - 2.0 * tol_face
     mark[k] = True
     qbuf[0] = k
     nq, head, nf = 1, 0, 0

@@ -48,7 +48,7 @@ from numba import njit
 
 from .._errors import BackendError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
-from ._face_graph import face_span, face_span_graph, vertex_graph  # noqa: F401  (face_span: the reference scan)
+from ._face_graph import face_scratch, face_span, face_span_graph, vertex_graph  # noqa: F401  (face_span: the reference scan)
 
 __all__ = ["WitnessJacobian", "cores_meet", "finite_difference_rows"]
 
@@ -95,16 +95,13 @@ def unique_witness(dims, dirs, tol_par):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _face_spans(R, u, g, vstart, V, adj, adj_start, disk_axis, disk_r, tol_face, tol_par, dims,
-                dirs):  # pragma: no cover - numba
+def _face_spans(R, u, g, vstart, V, adj, adj_start, disk_axis, disk_r, tol_face, tol_par, dims, dirs, hbuf, fbuf,
+                mark, qbuf):  # pragma: no cover - numba
     """For each query ``i``: the dimension (0, 1, 2) of shape ``g[i]``'s support face in the
     world direction ``u[i]`` (the shape's rotation in W is ``R[i]``), and for a 1-D face its
     direction in W (``dirs[i]``).  ``g[i] == -1``: a plane (dimension 2).  Over the hulls' vertex
-    graphs ``adj``, ``adj_start`` (:func:`armguard.backends._face_graph.vertex_graph`)."""
-    hbuf = np.empty(max(V.shape[0], 1))
-    fbuf = np.empty(max(V.shape[0], 1), np.int64)
-    mark = np.zeros(max(V.shape[0], 1), np.bool_)
-    qbuf = np.empty(max(V.shape[0], 1), np.int64)
+    graphs ``adj``, ``adj_start`` (:func:`armguard.backends._face_graph.vertex_graph`); ``hbuf``,
+    ``fbuf``, ``mark`` (all False), ``qbuf``: scratch of ``len(V)`` (:func:`face_scratch`)."""
     for i in range(len(g)):
         gi = g[i]
         if gi < 0:
@@ -129,6 +126,7 @@ def _witness_rows(p_WA, p_WB, d, ja, jb, ga, gb, Jj, R_WJ, R_JG, vstart, V, adj,
     g = np.empty(2, np.int64)
     dims = np.zeros(2, np.int64)
     dirs = np.zeros((2, 3))
+    hbuf, fbuf, mark, qbuf = face_scratch(V.shape[0])
     for i in range(n):
         di = d[i]
         if abs(di) <= eps_len:
@@ -169,7 +167,8 @@ def _witness_rows(p_WA, p_WB, d, ja, jb, ga, gb, Jj, R_WJ, R_JG, vstart, V, adj,
             u[0, r] = nh[r]
             u[1, r] = -nh[r]
         dirs[:] = 0.0
-        _face_spans(R, u, g, vstart, V, adj, adj_start, disk_axis, disk_r, tol_face, tol_par, dims, dirs)
+        _face_spans(R, u, g, vstart, V, adj, adj_start, disk_axis, disk_r, tol_face, tol_par, dims, dirs, hbuf, fbuf,
+                    mark, qbuf)
         ok = ok and unique_witness(dims, dirs, tol_par)
         smooth[i] = ok
 

@@ -33,7 +33,6 @@ from __future__ import annotations
 import enum
 import heapq
 import math
-import threading
 import time as _time
 from dataclasses import dataclass
 
@@ -66,8 +65,9 @@ class EdgeResults:
     s_free : (M,) float64, 1
         The edge's prefix proven clear: every configuration with ``s <= s_free`` (0 at ``Q0[i]``,
         1 at ``Q1[i]``) is at least ``margin`` from every obstacle; 1 for CLEAR, the last valid
-        fraction of OMPL's ``checkMotion`` for COLLISION (``-inf`` when ``Q0[i]`` itself is in contact),
-        what the budget covered for INCOMPLETE.
+        fraction of OMPL's ``checkMotion`` for COLLISION (at most ``s``: a clearance within
+        ``verify_contact`` of the margin is a COLLISION, and may lie in a proven interval; ``-inf`` when
+        ``Q0[i]`` itself is in contact), what the budget covered for INCOMPLETE.
     s : (M,) float64, 1
         COLLISION: where along the edge the configuration in contact was found (not the first contact:
         :meth:`Verifier.verify` of the two-knot trajectory finds that).  INCOMPLETE: the evaluated
@@ -206,6 +206,8 @@ def _columns(rob, joints) -> tuple:
         raise VerificationError(f"joints: expected a list of joint names, got the string {joints!r} "
                                 "(an SRDF group: model.group_joints(name))")
     names = tuple(str(j) for j in joints)
+    if not names:
+        raise VerificationError(f"joints: an empty list (no joint to move); the robot's joints are {list(own)}")
     for j in names:
         if j not in own:
             raise VerificationError(f"joints: {j!r} is not a joint of robot {rob.name!r}; its joints are {list(own)}")
@@ -226,16 +228,15 @@ def _flat(verifier, st, rname: str):
 
 
 def _record_of(st, rname: str, base, k0: int, k1: int) -> _Run:
-    """This thread's record for ``rname`` on state ``st`` (built once: its arrays are reused edge after edge)."""
-    key = (threading.get_ident(), rname)
-    run = st.edge_runs.get(key)
+    """This thread's record for ``rname`` on state ``st`` (built once: its arrays are reused edge after edge;
+    held by the thread, and freed with it)."""
+    mine = st.edge_records.__dict__
+    run = mine.get(rname)
     if run is None:
-        if len(st.edge_runs) > 256:  # threads come and go: forget them now and then
-            st.edge_runs.clear()
         run = _Run(st.model, base.copy(), k0, k1, rname)
         if not run.moving.any():
             raise VerificationError(f"robot {rname!r} has no pair to check (no shapes, or every pair with it disabled)")
-        st.edge_runs[key] = run
+        mine[rname] = run
     return run
 
 
@@ -256,7 +257,7 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints)
     budget = _budget(max_evaluations, verifier.tol)
     base, k0, k1 = _flat(verifier, st, rname)
     held = {}
-    if len(cols) != len(rob.joint_names):  # the joints not given stay where the verifier holds the robot
+    if joints is not None:  # the columns in the robot's order; the joints not given stay where the verifier holds it
         home = base[k0:k1]
         full0, full1 = np.tile(home, (len(Q0), 1)), np.tile(home, (len(Q1), 1))
         full0[:, cols], full1[:, cols] = Q0, Q1
@@ -327,7 +328,7 @@ def _cover(run, q0, q1, dq, rates, m, contact, budget):
     for s in ends:
         row, g, p, rho = _evaluate(run, s, q0, q1, dq, rates, m)
         if g <= contact:
-            return EdgeStatus.COLLISION, _prefix(balls), row, p
+            return EdgeStatus.COLLISION, min(_prefix(balls), s), row, p
         best = min(best, (g, row, p))
         balls.append((s, rho))
     if len(ends) == 1:
@@ -343,8 +344,8 @@ def _cover(run, q0, q1, dq, rates, m, contact, budget):
             return EdgeStatus.INCOMPLETE, _prefix(balls), best[1], best[2]
         s = 0.5 * (lo + hi)
         row, g, p, rho = _evaluate(run, s, q0, q1, dq, rates, m)
-        if g <= contact:
-            return EdgeStatus.COLLISION, _prefix(balls), row, p
+        if g <= contact:  # (a gap within the contact tolerance may lie inside a proven interval: s_free <= s)
+            return EdgeStatus.COLLISION, min(_prefix(balls), s), row, p
         best = min(best, (g, row, p))
         balls.append((s, rho))
         if s + rho < hi:

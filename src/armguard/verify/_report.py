@@ -148,7 +148,8 @@ class MethodDetails:
     bound (certified); ``frequency`` (Hz) or ``joint_step`` (rad) of sampled mode;
     ``max_speed`` (m/s) a bound on the speed of the fastest point of the arm;
     ``discretisation_error`` (m) Hermes's ``Ed = v / f`` for sampled mode (for joint-step
-    sampling the largest lever-arm displacement between two samples), 0 when certified;
+    sampling the most any pair's clearance can shrink between two samples, by the pair rates of
+    :meth:`ClearanceModel.pair_rates`), 0 when certified;
     ``source`` "detector" or "reference"; ``lever_bound`` names the motion bound used.
     """
 
@@ -302,7 +303,8 @@ class VerificationReport:
         if self.held_joints:
             lines.append("held at home (not in the trajectory): " + ", ".join(f"{j} = {v:.6g}" for j, v in self.held_joints.items()))
         if d.method == "sampled":
-            lines.append(f"discretisation error Ed = v/f: {d.discretisation_error * 1e3:.1f} mm (collisions shorter than this may be missed)")
+            how = "Ed = v/f" if d.frequency is not None else "the most a clearance can shrink between samples"
+            lines.append(f"discretisation error ({how}): {d.discretisation_error * 1e3:.1f} mm (collisions shorter than this may be missed)")
         c = self.first_collision
         if c is not None:
             where = f"link {c.link}" if c.link else f"payload {c.payload}"
