@@ -172,6 +172,33 @@ def test_the_free_prefix_is_clear_and_ends_before_the_first_contact(ur5):
         assert sf <= first + 1e-9, (i, sf, first)
 
 
+def test_first_contact_is_the_certified_verifiers_first_collision(ur5):
+    """``first_contact=True``: a COLLISION's ``s`` is where the two-knot trajectory's certified verification
+    first meets contact (both approach it by conservative advancement, to within the contact tolerance);
+    ``s_free`` reaches it, and coal finds no contact before it."""
+    m, v = ur5
+    coal = armguard.checker(m, "coal")
+    names = m.scene.robots["ur5"].joint_names
+    Q = m.scene_q(m.random_q(400, 21))
+    Q = Q[~coal.collides(m.pin_q(Q))]
+    Q0, Q1 = Q[:60], Q[60:120]
+    plain = v.check_edges(Q0, Q1)
+    first = v.check_edges(Q0, Q1, first_contact=True)
+    np.testing.assert_array_equal(first.code, plain.code)
+    hit = np.flatnonzero(first.code == EdgeStatus.COLLISION)
+    assert len(hit) >= 5
+    moved = 0
+    for i in hit:
+        t = v.verify(Trajectory("ur5", names, [0.0, 1.0], np.stack([Q0[i], Q1[i]]))).first_collision.time
+        assert first.s[i] <= plain.s[i] and first.s_free[i] <= first.s[i]
+        assert abs(first.s[i] - t) < 1e-4, (i, first.s[i], t)
+        assert first.s[i] - first.s_free[i] < 1e-4  # the prefix proven clear reaches the contact
+        s = np.linspace(0.0, first.s_free[i], 200)[:, None]
+        assert not coal.collides(m.pin_q(Q0[i] + s * (Q1[i] - Q0[i]))).any()
+        moved += first.s[i] < plain.s[i] - 1e-3
+    assert moved >= 1  # the covering's contact was not the first one somewhere
+
+
 def test_a_joint_subset_holds_the_others_and_one_side_broadcasts():
     """Panda's 7 arm joints (MoveIt's group ``arm``), its finger held at home; one start to many goals."""
     m = armguard.load_model("panda")

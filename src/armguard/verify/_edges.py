@@ -18,8 +18,9 @@ in two.  The edge is
 * ``CLEAR`` when the radii cover ``[0, 1]``: certified, not sampled;
 * ``COLLISION`` at the first evaluation whose smallest gap ``min_p d_p - m`` is at most
   ``Tolerances.verify_contact``: a configuration of the edge in contact (or within the margin),
-  found widest gap first, so in the middle of a long collision rather than at its start (the first
-  contact along the edge: :meth:`Verifier.verify` of the two-knot trajectory);
+  found widest gap first, so in the middle of a long collision rather than at its start; with
+  ``first_contact=True`` conservative advancement then goes from the end of the prefix proven free
+  to the first contact (as :meth:`Verifier.verify` of the two-knot trajectory does);
 * ``INCOMPLETE`` when ``max_evaluations`` are spent (``Tolerances.edge_max_evaluations``, 1000, by
   default: a grazing edge), never ``CLEAR``.
 
@@ -69,8 +70,8 @@ class EdgeResults:
         ``verify_contact`` of the margin is a COLLISION, and may lie in a proven interval; ``-inf`` when
         ``Q0[i]`` itself is in contact), what the budget covered for INCOMPLETE.
     s : (M,) float64, 1
-        COLLISION: where along the edge the configuration in contact was found (not the first contact:
-        :meth:`Verifier.verify` of the two-knot trajectory finds that).  INCOMPLETE: the evaluated
+        COLLISION: where along the edge the configuration in contact was found (the first contact with
+        ``first_contact=True``, within the contact tolerance).  INCOMPLETE: the evaluated
         configuration of smallest clearance.  NaN for CLEAR.
     q : (M, n) float64
         That configuration, all of the robot's joints in its order; NaN rows for CLEAR.
@@ -240,7 +241,7 @@ def _record_of(st, rname: str, base, k0: int, k1: int) -> _Run:
     return run
 
 
-def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints) -> EdgeResults:
+def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints, first_contact=False) -> EdgeResults:
     """:meth:`Verifier.check_edges` on one state ``st`` of the scene (its clearance model and configurations)."""
     t_start = _time.perf_counter()
     model, base_q = st.model, st.base
@@ -283,7 +284,7 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints)
         if not np.all(np.isfinite(rates)):
             raise VerificationError("the motion bound is infinite (an unbounded prismatic joint): an edge cannot be certified")
         run.n = 0  # one record per edge: its rows are not kept beyond it
-        status, free, row, p = _cover(run, q0, q1, dq, rates, m, contact, budget)
+        status, free, row, p = _cover(run, q0, q1, dq, rates, m, contact, budget, bool(first_contact))
         evals[i] = run.n
         code[i] = status
         s_free[i] = free
@@ -319,9 +320,35 @@ def _prefix(balls) -> float:
     return min(end, 1.0)
 
 
-def _cover(run, q0, q1, dq, rates, m, contact, budget):
+def _first_contact(run, q0, q1, dq, rates, m, contact, budget, s_free, s_hit, row, p):
+    """From the covering's COLLISION at ``s_hit``: conservative advancement from the proven prefix's end
+    ``s_free`` towards it (as the certified verifier), so that ``s`` is the first contact and ``s_free``
+    all before it.  With the budget spent first, the covering's answer stands."""
+    s = max(s_free, 0.0)
+    while run.n < budget:
+        r, g, pp, rho = _evaluate(run, s, q0, q1, dq, rates, m)
+        if g <= contact:
+            return EdgeStatus.COLLISION, s, r, pp
+        nxt = s + rho
+        if not nxt > s or nxt >= s_hit:  # the contact found is the next one (or nothing is proven past s)
+            return EdgeStatus.COLLISION, min(nxt, s_hit), row, p
+        s = nxt
+    return EdgeStatus.COLLISION, s_free, row, p
+
+
+def _cover(run, q0, q1, dq, rates, m, contact, budget, first=False):
     """The covering of one edge (see the module docstring): ``(status, s_free, row, pair)``; ``row``
-    and ``pair`` are the configuration in contact (COLLISION) or of smallest gap (INCOMPLETE)."""
+    and ``pair`` are the configuration in contact (COLLISION) or of smallest gap (INCOMPLETE);
+    ``first``: a COLLISION's configuration is the first contact along the edge (:func:`_first_contact`)."""
+    hit = _covering(run, q0, q1, dq, rates, m, contact, budget)
+    if first and hit[0] == EdgeStatus.COLLISION and hit[1] >= 0.0:
+        s_hit = run.s[hit[2]]
+        if hit[1] < s_hit:
+            return _first_contact(run, q0, q1, dq, rates, m, contact, budget, hit[1], s_hit, hit[2], hit[3])
+    return hit
+
+
+def _covering(run, q0, q1, dq, rates, m, contact, budget):
     balls = []
     best = (math.inf, -1, -1)  # gap, row, pair
     ends = (0.0,) if not np.any(dq) else (0.0, 1.0)  # a still edge is one configuration
