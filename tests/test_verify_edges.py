@@ -244,6 +244,25 @@ def test_every_joint_named_in_another_order(ur5):
     np.testing.assert_array_equal(res.q[~res.clear], ref.q[~ref.clear])  # q: all joints, the robot's order
 
 
+def test_continuous_joints_the_short_way_on_request():
+    """kinova's continuous joint 1 from 3.0 to -3.0 rad: along the angle's line by default (6 rad through 0),
+    the short way (0.28 rad through pi) with ``continuous="shortest"``: the edge to 3.0 + (2 pi - 6)."""
+    m = armguard.load_model("kinova")
+    v = Verifier(m.scene)
+    home = m.scene.default_q()[next(iter(m.scene.robots))]
+    q0, q1 = home.copy(), home.copy()
+    q0[0], q1[0] = 3.0, -3.0
+    short = v.check_edges(q0, q1, continuous="shortest")
+    q1s = q1.copy()
+    q1s[0] = 3.0 + (2.0 * np.pi - 6.0)
+    same = v.check_edges(q0, q1s)
+    long = v.check_edges(q0, q1)
+    assert short.code[0] == same.code[0] and short.evaluations[0] == same.evaluations[0]
+    assert long.evaluations[0] > short.evaluations[0]
+    with pytest.raises(VerificationError, match="continuous: expected 'line'"):
+        v.check_edges(q0, q1, continuous="wrap")
+
+
 def test_results_are_read_only_and_masks_select_pairs(ur5):
     m, v = ur5
     Q0, Q1 = _edges(m, 30, 40)

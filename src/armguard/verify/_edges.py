@@ -241,7 +241,20 @@ def _record_of(st, rname: str, base, k0: int, k1: int) -> _Run:
     return run
 
 
-def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints, first_contact=False) -> EdgeResults:
+def _shortest(rob, Q0: np.ndarray, Q1: np.ndarray) -> np.ndarray:
+    """``Q1`` with each continuous joint (no limits) moved by whole turns to within pi of ``Q0``: the edge
+    turns it the short way, as ``pinocchio.interpolate`` and OMPL's SO(2) do."""
+    free = ~(np.isfinite(np.asarray(rob.lower)) | np.isfinite(np.asarray(rob.upper)))
+    if not free.any():
+        return Q1
+    d = Q1[:, free] - Q0[:, free]
+    out = Q1.copy()
+    out[:, free] = Q0[:, free] + (d - 2.0 * np.pi * np.round(d / (2.0 * np.pi)))
+    return out
+
+
+def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints, first_contact=False,
+                   continuous="line") -> EdgeResults:
     """:meth:`Verifier.check_edges` on one state ``st`` of the scene (its clearance model and configurations)."""
     t_start = _time.perf_counter()
     model, base_q = st.model, st.base
@@ -264,6 +277,10 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints,
         full0[:, cols], full1[:, cols] = Q0, Q1
         Q0, Q1 = full0, full1
         held = {j: float(home[k]) for k, j in enumerate(rob.joint_names) if j not in names}
+    if continuous == "shortest":
+        Q1 = _shortest(rob, Q0, Q1)
+    elif continuous != "line":
+        raise VerificationError(f"continuous: expected 'line' (along the angle's line) or 'shortest', got {continuous!r}")
     _within_limits(rob, Q0, Q1, verifier.tol)
     run = _record_of(st, rname, base, k0, k1)
     contact = verifier.tol.verify_contact

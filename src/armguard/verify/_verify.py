@@ -254,17 +254,18 @@ class Verifier(FollowsScene):
         return self._on_one_state(lambda st: self._verify_once(st, trajectory, *args), _ATTEMPTS, "verify this trajectory")
 
     def check_edges(self, Q0, Q1, *, robot: str | None = None, joints=None, margin: float = 0.0,
-                    max_evaluations: int | None = None, first_contact: bool = False):
+                    max_evaluations: int | None = None, first_contact: bool = False, continuous: str = "line"):
         """Certify the straight joint-space edges ``Q0[i] -> Q1[i]`` ``(M, n)`` or ``(n,)`` (one side may be a
         single configuration) of one robot: its joints in its order, or those ``joints`` names (the others held
         where this Verifier holds the robot), within limits.  :class:`EdgeResults`: ``CLEAR`` for every
         configuration at least ``margin`` (m) clear, ``INCOMPLETE`` after ``max_evaluations`` per edge
         (``Tolerances.edge_max_evaluations``); ``first_contact``: a COLLISION's ``s`` is the first contact
-        along the edge (more evaluations).  The covering: :mod:`armguard.verify._edges`."""
+        along the edge (more evaluations); ``continuous="shortest"`` turns continuous joints the short way
+        (default: along the angle's line, as trajectories).  The covering: :mod:`armguard.verify._edges`."""
         from ._edges import check_edges_on
 
         return self._on_one_state(lambda st: check_edges_on(self, st, Q0, Q1, robot, margin, max_evaluations, joints,
-                                                                 first_contact),
+                                                                 first_contact, continuous),
                                   _ATTEMPTS, "check these edges")
 
     def _verify_once(self, st, trajectory, sd, method, frequency, joint_step, robot, thr, mass, name, t_start):
