@@ -244,6 +244,43 @@ def test_every_joint_named_in_another_order(ur5):
     np.testing.assert_array_equal(res.q[~res.clear], ref.q[~ref.clear])  # q: all joints, the robot's order
 
 
+def test_every_robot_at_once_on_ranger():
+    """``robot="*"``: Ranger's two manipulators moving together (the scene's flat joint order); a CLEAR edge has
+    no contact in 300 coal samples, a COLLISION is in contact for coal; with one arm moving alone the verdicts are
+    ``robot="left_arm"``'s."""
+    m = armguard.load_model("ranger")
+    v = Verifier(m.scene)
+    coal = armguard.checker(m, "coal")
+    sc = m.scene
+    home = sc.flat_q(sc.default_q())
+    names = list(sc.joint_names)
+    arms = [k for k, j in enumerate(names) if j.split("/")[0] in ("left_arm", "right_arm")]
+    rng = np.random.default_rng(9)
+    lo, hi = np.concatenate([r.lower for r in sc.robots.values()]), np.concatenate([r.upper for r in sc.robots.values()])
+    Q0, Q1 = np.tile(home, (80, 1)), np.tile(home, (80, 1))
+    for Q in (Q0, Q1):
+        Q[:, arms] = np.clip(home[arms] + rng.uniform(-2.0, 2.0, (80, len(arms))), lo[arms], hi[arms])
+    res = v.check_edges(Q0, Q1, robot="*")
+    assert res.robot == "*" and res.joint_names == tuple(names)
+    s = np.linspace(0.0, 1.0, 301)[:, None]
+    for i in range(80):
+        hits = coal.collides(m.pin_q(Q0[i] + s * (Q1[i] - Q0[i])))
+        if res.clear[i]:
+            assert not hits.any(), i
+        else:
+            assert res.code[i] == EdgeStatus.COLLISION
+            assert float(np.min(coal.pair_distances(m.pin_q(res.q[i])).distance)) <= CONTACT + 1e-6
+    assert 0 < int(res.clear.sum()) < 80
+    left = [k for k, j in enumerate(names) if j.startswith("left_arm/")]
+    L0, L1 = np.tile(home, (30, 1)), np.tile(home, (30, 1))
+    L0[:, left], L1[:, left] = Q0[:30, left], Q1[:30, left]
+    alone = v.check_edges(L0[:, left], L1[:, left], robot="left_arm")
+    together = v.check_edges(L0, L1, robot="*")
+    np.testing.assert_array_equal(alone.code, together.code)
+    with pytest.raises(VerificationError, match=r"got \(1, 7\); a Pinocchio configuration"):
+        v.check_edges(np.zeros(7), np.zeros(7), robot="*")
+
+
 def test_continuous_joints_the_short_way_on_request():
     """kinova's continuous joint 1 from 3.0 to -3.0 rad: along the angle's line by default (6 rad through 0),
     the short way (0.28 rad through pi) with ``continuous="shortest"``: the edge to 3.0 + (2 pi - 6)."""
@@ -328,7 +365,7 @@ def test_bad_inputs_are_named(ur5):
     with pytest.raises(VerificationError, match="robot 'arm' is not in the scene"):
         v.check_edges(q, q, robot="arm")
     ranger = Verifier(armguard.load_model("ranger").scene)
-    with pytest.raises(VerificationError, match=r"this scene has several robots .*: pass robot="):
+    with pytest.raises(VerificationError, match=r"this scene has several robots .*: pass robot= .* '\*' for all"):
         ranger.check_edges(np.zeros(7), np.zeros(7))
 
 

@@ -10,7 +10,7 @@
 * :class:`StoppingDistance` — Hermes's stopping distance as a step function of speed and load.
 """
 
-from ._edges import EdgeResults, EdgeStatus
+from ._edges import ALL_ROBOTS, EdgeResults, EdgeStatus
 from ._guard import Guard, GuardDecision, GuardMode, GuardVerdict
 from ._many import verify_many
 from ._oracle import CATEGORIES, CHECKS, ClearanceModel
@@ -34,6 +34,7 @@ __all__ = [
     "verify_many",
     "Verifier",
     "EdgeResults",
+    "ALL_ROBOTS",
     "EdgeStatus",
     "VerificationReport",
     "VerificationStatus",

@@ -150,10 +150,12 @@ def _rows(Q, name: str, joint_names, scene, robot: str) -> np.ndarray:
         Q = Q[None, :]
     if Q.ndim != 2 or Q.shape[1] != n:
         hint = ""
-        if Q.ndim == 2 and Q.shape[1] != n:
+        if Q.ndim == 2 and Q.shape[1] != n and robot == ALL_ROBOTS:
+            hint = "; a Pinocchio configuration converts with model.scene_q(Q)"
+        elif Q.ndim == 2 and Q.shape[1] != n:
             hint = (f"; the scene's configuration of all robots has {len(scene.joint_names)} values "
-                    f"(scene.split_q(Q)[{robot!r}] takes this robot's), a Pinocchio configuration converts "
-                    "with model.scene_q(Q)")
+                    f"(scene.split_q(Q)[{robot!r}] takes this robot's, robot={ALL_ROBOTS!r} moves them all), a "
+                    "Pinocchio configuration converts with model.scene_q(Q)")
         raise VerificationError(f"{name}: expected shape (M, {n}) or ({n},), one value per joint {list(joint_names)}, "
                                 f"got {np.shape(Q)}{hint}")
     return Q
@@ -191,11 +193,41 @@ def _margin(margin) -> float:
     return m
 
 
-def _robot(verifier, robot) -> str:
+#: ``robot=`` for edges of every robot at once (the scene's flat joint order, ``scene.joint_names``)
+ALL_ROBOTS = "*"
+
+
+class _AllRobots:
+    """Every robot of a scene as one: the flat joint order, limits and messages of each robot's own."""
+
+    def __init__(self, scene) -> None:
+        self.name = ALL_ROBOTS
+        self.joint_names = tuple(scene.joint_names)
+        self._spans, k = [], 0
+        for rob in scene.robots.values():
+            self._spans.append((rob, k, k + len(rob.joint_names)))
+            k += len(rob.joint_names)
+        self.lower = np.concatenate([np.asarray(r.lower) for r, _, _ in self._spans])
+        self.upper = np.concatenate([np.asarray(r.upper) for r, _, _ in self._spans])
+
+    def within_limits(self, Q, *, tol) -> np.ndarray:
+        return np.all([r.within_limits(Q[:, a:b], tol=tol) for r, a, b in self._spans], axis=0)
+
+    def check_limits(self, q, *, tol) -> None:
+        for r, a, b in self._spans:
+            r.check_limits(q[a:b], tol=tol)
+
+
+def _robot(verifier, robot):
+    """``(name, robot)``: the robot whose edges these are, or every robot (``ALL_ROBOTS``: name None)."""
     names = list(verifier.scene.robots)
+    if robot == ALL_ROBOTS:
+        return None, _AllRobots(verifier.scene)
     if robot is None and verifier._robot is None and len(names) > 1:
-        raise VerificationError(f"this scene has several robots {names}: pass robot= (the one whose edges these are)")
-    return verifier._robot_of(None, robot)
+        raise VerificationError(f"this scene has several robots {names}: pass robot= (the one whose edges these "
+                                f"are, or {ALL_ROBOTS!r} for all of them at once)")
+    rname = verifier._robot_of(None, robot)
+    return rname, verifier.scene.robots[rname]
 
 
 def _columns(rob, joints) -> tuple:
@@ -217,12 +249,17 @@ def _columns(rob, joints) -> tuple:
     return names, np.array([own.index(j) for j in names], dtype=np.int64)
 
 
-def _flat(verifier, st, rname: str):
-    """``(flat base configuration, k0, k1)`` of the state, kept on it (read only)."""
+def _flat(verifier, st, rname):
+    """``(flat base configuration, k0, k1)`` of the state for robot ``rname`` (None: every robot), kept on it
+    (read only)."""
     key = ("flat", rname)
     out = st.edge_runs.get(key)
     if out is None:
-        out = verifier._flat(rname, st.base)
+        if rname is None:
+            base = verifier.scene.flat_q(st.base)
+            out = (base, 0, len(base))
+        else:
+            out = verifier._flat(rname, st.base)
         out[0].flags.writeable = False
         st.edge_runs[key] = out
     return out
@@ -258,11 +295,10 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints,
     """:meth:`Verifier.check_edges` on one state ``st`` of the scene (its clearance model and configurations)."""
     t_start = _time.perf_counter()
     model, base_q = st.model, st.base
-    rname = _robot(verifier, robot)
-    rob = verifier.scene.robots[rname]
+    rname, rob = _robot(verifier, robot)
     names, cols = _columns(rob, joints)
-    Q0 = _rows(Q0, "Q0", names, verifier.scene, rname)
-    Q1 = _rows(Q1, "Q1", names, verifier.scene, rname)
+    Q0 = _rows(Q0, "Q0", names, verifier.scene, rob.name)
+    Q1 = _rows(Q1, "Q1", names, verifier.scene, rob.name)
     if len(Q0) != len(Q1) and 1 not in (len(Q0), len(Q1)):
         raise VerificationError(f"Q0 and Q1: expected the same number of edges (or one of them a single "
                                 f"configuration), got {len(Q0)} and {len(Q1)}")
@@ -310,7 +346,7 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints,
             q_hit[i] = run.Q[row]
             d_hit[i] = run.D[row, p]
             pair[i] = (model.owner_a[p], model.owner_b[p])
-    return EdgeResults(code, s_free, s_hit, q_hit, d_hit, pair, evals, rname, names, held, m,
+    return EdgeResults(code, s_free, s_hit, q_hit, d_hit, pair, evals, rob.name, names, held, m,
                        _time.perf_counter() - t_start)
 
 

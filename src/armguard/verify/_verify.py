@@ -256,8 +256,9 @@ class Verifier(FollowsScene):
     def check_edges(self, Q0, Q1, *, robot: str | None = None, joints=None, margin: float = 0.0,
                     max_evaluations: int | None = None, first_contact: bool = False, continuous: str = "line"):
         """Certify the straight joint-space edges ``Q0[i] -> Q1[i]`` ``(M, n)`` or ``(n,)`` (one side may be a
-        single configuration) of one robot: its joints in its order, or those ``joints`` names (the others held
-        where this Verifier holds the robot), within limits.  :class:`EdgeResults`: ``CLEAR`` for every
+        single configuration) of one robot (``robot="*"``: of every robot at once, the scene's flat joint order):
+        its joints in its order, or those ``joints`` names (the others held where this Verifier holds them),
+        within limits.  :class:`EdgeResults`: ``CLEAR`` for every
         configuration at least ``margin`` (m) clear, ``INCOMPLETE`` after ``max_evaluations`` per edge
         (``Tolerances.edge_max_evaluations``); ``first_contact``: a COLLISION's ``s`` is the first contact
         along the edge (more evaluations); ``continuous="shortest"`` turns continuous joints the short way
