@@ -224,6 +224,14 @@ def _bad_files(tmp_path):
     return files
 
 
+def _edges_file(tmp_path):
+    import numpy as np
+
+    p = tmp_path / "edges.npz"
+    np.savez(p, Q0=np.zeros((1, 6)), Q1=np.zeros((1, 6)))
+    return p
+
+
 def _file_cases(f, tmp_path):
     """Each command given one file it must refuse (``f[ext]``): (command path, argv, the file named)."""
     return [
@@ -238,6 +246,8 @@ def _file_cases(f, tmp_path):
         (("srdf",), ["srdf", f["urdf"], "--out", tmp_path / "x.srdf"], f["urdf"]),
         (("verify",), ["verify", f["yaml"], "all"], f["yaml"]),
         (("verify",), ["verify", "hermes", f["yaml"]], f["yaml"]),
+        (("edges",), ["edges", f["urdf"], _edges_file(tmp_path)], f["urdf"]),
+        (("edges",), ["edges", "ur5", f["npz"]], f["npz"]),
         (("cspace", "build"), ["cspace", "build", f["yaml"], "--out", tmp_path / "m.agmap"], f["yaml"]),
         (("cspace", "info"), ["cspace", "info", f["agmap"]], f["agmap"]),
         (("cspace", "plot"), ["cspace", "plot", f["agmap"], "--q2", "30", "--out", tmp_path / "s.png"], f["agmap"]),

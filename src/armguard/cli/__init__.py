@@ -85,11 +85,12 @@ def _option_names(ctx, message: str) -> str:
 
 @click.group(cls=_Group, epilog=exit_epilog(
     ok="done: clear, safe, the backends agree, the output written",
-    unsafe="unsafe: a collision or stopping-distance violation (check, verify), backends that differ (compare), "
+    unsafe="unsafe: a collision or stopping-distance violation (check, verify), an edge in collision (edges), "
+           "backends that differ (compare), "
            "an error-level finding (check-urdf), with --strict a disabled pair that can collide (check-srdf), a map "
            "that allows a colliding configuration (cspace info --samples), a motion refused or a FIND failed "
            "(program run, program calibrate)",
-    incomplete="incomplete: a check or verification that could not finish (check, verify)"))
+    incomplete="incomplete: a check or verification that could not finish (check, verify, edges)"))
 @click.version_option(package_name="armguard")
 @click.option("--backend", type=BACKEND, default=None, metavar="NAME",
               help="Backend for every check of this command (analytic, coal, fcl, ...; default: "
@@ -125,6 +126,7 @@ from . import _console  # noqa: E402,F401
 from . import _info  # noqa: E402,F401
 from . import _fk  # noqa: E402,F401
 from . import _verify  # noqa: E402,F401
+from . import _edges  # noqa: E402,F401
 from . import _demo  # noqa: E402,F401
 from . import _check  # noqa: E402,F401
 from . import _cspace  # noqa: E402,F401
