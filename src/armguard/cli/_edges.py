@@ -10,14 +10,14 @@ import click
 from . import main
 from ._exit import ExitCode, exit_epilog
 from ._output import esc, output_console
-from ._params import AT_LEAST_ONE, LENGTH
+from ._params import LENGTH
 
-_CHUNK = 256  # edges per call between two updates of the progress bar
+_LISTED = 10  # edges listed per verdict (collision, incomplete)
 
 
 def read_edges(path) -> tuple:
-    """``(Q0, Q1, joint_names or None)`` from an ``.npz`` holding ``Q0`` and ``Q1`` ``(M, n)`` (the scene's joint
-    order, angles for continuous joints) and optionally ``joint_names`` ``(n,)``; an error names the file and
+    """``(Q0, Q1, joint_names)`` from an ``.npz`` holding ``Q0`` and ``Q1`` ``(M, n)`` or ``(n,)`` and optionally
+    ``joint_names``: ``(n,)`` strings, or one string (an SRDF group); None without.  An error names the file and
     what it lacks."""
     import zipfile
 
@@ -26,94 +26,119 @@ def read_edges(path) -> tuple:
     from .._errors import VerificationError
 
     p = Path(path)
-    if p.is_file() and not zipfile.is_zipfile(p):
+    if not p.exists():
+        raise VerificationError(f"{p}: no such file")
+    if not p.is_file() or not zipfile.is_zipfile(p):
         raise VerificationError(f"{p}: not an .npz file of edges (an archive of arrays Q0, Q1, as numpy.savez writes)")
-    try:
-        with np.load(p, allow_pickle=False) as f:
-            keys = set(f.files)
-            if not {"Q0", "Q1"} <= keys:
-                raise VerificationError(f"{p}: expected arrays 'Q0' and 'Q1' (M, n) (and optionally 'joint_names'), "
-                                        f"found {sorted(keys) or 'none'}")
-            names = [str(x) for x in f["joint_names"]] if "joint_names" in keys else None
-            return np.asarray(f["Q0"]), np.asarray(f["Q1"]), names
-    except (OSError, ValueError, zipfile.BadZipFile) as exc:
-        if isinstance(exc, VerificationError):
-            raise
-        raise VerificationError(f"{p}: not an .npz file of edges ({exc})") from None
+    with np.load(p, allow_pickle=False) as f:
+        keys = set(f.files)
+        if not {"Q0", "Q1"} <= keys:
+            raise VerificationError(f"{p}: expected arrays 'Q0' and 'Q1' (M, n) (and optionally 'joint_names'), "
+                                    f"found {sorted(keys) or 'none'}")
+        Q0, Q1 = np.asarray(f["Q0"]), np.asarray(f["Q1"])
+        if "joint_names" not in keys:
+            return Q0, Q1, None
+        try:
+            names = f["joint_names"]
+        except ValueError:  # an object array (pickled): not read
+            raise VerificationError(f"{p}: joint_names: expected strings (numpy.savez(..., joint_names=np.array(names, "
+                                    "dtype=str))), got an object array") from None
+    if names.dtype.kind not in "US":
+        raise VerificationError(f"{p}: joint_names: expected strings, got dtype {names.dtype}")
+    return Q0, Q1, str(names) if names.ndim == 0 else [str(x) for x in names.ravel()]
 
 
 @main.command("edges", epilog=exit_epilog(
-        ok="every edge certified clear (every configuration at least --margin from every obstacle)",
+        ok="every edge certified clear (every configuration at least --margin from every checked pair)",
         unsafe="an edge in collision (or within --margin)",
         incomplete="an edge not resolved within --max-evaluations, and none in collision"))
 @click.argument("model")
 @click.argument("edges_file", metavar="EDGES.npz", type=click.Path())
-@click.option("--robot", default=None, help="The moving robot (default: the model's only one; '*': every robot, the "
-              "scene's flat joint order).")
-@click.option("--margin", type=LENGTH, default=0.0, show_default=True, help="Clearance every configuration must keep (m).")
+@click.option("--robot", default=None, help="The moving robot (default: the model's only one; '*': every robot at once, "
+              "the scene's flat joint order).")
+@click.option("--margin", type=LENGTH, default=0.0, show_default=True,
+              help="Clearance every configuration must keep, on every checked pair: obstacles and the robot's own "
+                   "links (m).")
 @click.option("--first-contact", is_flag=True, help="Report each collision's first contact along its edge (more evaluations).")
 @click.option("--continuous", type=click.Choice(["line", "shortest"]), default="line", show_default=True,
               help="Continuous joints along the angle's line, or turned the short way (as pinocchio.interpolate).")
-@click.option("--max-evaluations", type=AT_LEAST_ONE, default=None,
+@click.option("--max-evaluations", type=click.IntRange(min=2), default=None,
               help="Evaluations per edge before it is INCOMPLETE (default: Tolerances.edge_max_evaluations, 1000).")
 @click.option("--out", "out_path", type=click.Path(), default=None,
               help="Write the results here (.npz: code (0 clear, 1 collision, 2 incomplete), s_free, s, q (columns "
-              "q_joint_names), distance, pair_a, pair_b, evaluations).")
+              "q_joint_names), distance, pair_a, pair_b, evaluations, robot, margin, joint_names, held_names, "
+              "held_values).")
 def edges_cmd(model, edges_file, robot, margin, first_contact, continuous, max_evaluations, out_path) -> None:
     """Certify the straight joint-space edges Q0[i] -> Q1[i] of EDGES.npz on MODEL: each CLEAR (every
-    configuration, not samples), COLLISION (with the prefix proven clear) or INCOMPLETE."""
+    configuration, not samples), COLLISION (with the prefix proven clear) or INCOMPLETE.
+
+    EDGES.npz holds arrays Q0 and Q1, (M, n) or (n,) (one side may be a single configuration), in
+    radians (m for prismatic joints), in the scene's joint order: the robot's joints (armguard info
+    MODEL lists them), or with --robot '*' every robot's, as scene.joint_names ('left_arm/j1', ...;
+    named by joint_names where Pinocchio orders them otherwise, as on ranger); not Pinocchio's
+    configuration (model.scene_q converts one). An optional joint_names names the columns: a subset
+    of the robot's joints in any order (the others held at home), or one string, an SRDF group of
+    MODEL."""
     import io
 
     import numpy as np
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from .._io import atomic_write
+    from .._errors import VerificationError
+    from .._io import atomic_write, check_target
     from ..model import load_model
-    from ..verify import EdgeStatus, Verifier
+    from ..verify import ALL_ROBOTS, EdgeStatus, Verifier
 
     from ._compile import warm_up
 
     console = output_console()
-    if max_evaluations is not None and max_evaluations < 2:
-        raise click.UsageError("--max-evaluations: at least 2 (both ends of an edge)")
+    if out_path:
+        check_target(out_path)  # an output that cannot be written: refused before the work
     Q0, Q1, names = read_edges(edges_file)
     m = load_model(model)
+    if isinstance(names, str):
+        names = list(m.group_joints(names))  # an SRDF group (an unknown one is named by group_joints)
+    width = Q0.shape[-1] if Q0.ndim else None
+    if names is not None and width is not None and len(names) != width:
+        raise VerificationError(f"{edges_file}: joint_names names {len(names)} joints, Q0 has {width} columns")
+    if robot == ALL_ROBOTS and names is None and width == m.pin_model.nq and list(m.q_index) != list(range(width)):
+        raise VerificationError(f"{edges_file}: model {m.name!r} orders its joints for Pinocchio otherwise than its scene: "
+                                "name the columns with joint_names (scene.joint_names, e.g. "
+                                f"{m.scene.joint_names[0]!r}), or convert Pinocchio configurations with model.scene_q")
     warm_up(console=console)
     verifier = Verifier(m)
-    kw = dict(robot=robot, joints=names, margin=margin, max_evaluations=max_evaluations, first_contact=first_contact,
-              continuous=continuous)
-    parts = [verifier.check_edges(Q0[:_CHUNK], Q1[:_CHUNK], **kw)]  # the inputs refused (if so) before the long run
+    M = max(len(np.atleast_2d(Q0)), len(np.atleast_2d(Q1)))
     with Progress(TextColumn("certifying edges"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                  console=console, transient=True, disable=len(Q0) <= _CHUNK) as bar:
-        task = bar.add_task("edges", total=len(Q0), completed=len(parts[0]))
-        for a in range(_CHUNK, len(Q0), _CHUNK):
-            parts.append(verifier.check_edges(Q0[a:a + _CHUNK], Q1[a:a + _CHUNK], **kw))
-            bar.update(task, completed=min(a + _CHUNK, len(Q0)))
-    code = np.concatenate([r.code for r in parts])
-    pairs = [p for r in parts for p in r.pair]
-    n_clear, n_coll = int(np.sum(code == EdgeStatus.CLEAR)), int(np.sum(code == EdgeStatus.COLLISION))
-    n_inc = len(code) - n_clear - n_coll
-    ev = np.concatenate([r.evaluations for r in parts])
-    console.print(f"{len(code)} edges of {esc(parts[0].robot)}: {n_clear} clear, {n_coll} in collision"
-                  f"{'' if margin == 0.0 else f' or within {margin * 1e3:g} mm'}, {n_inc} incomplete; evaluations per "
-                  f"edge: median {float(np.median(ev)) if len(ev) else 0:g}, max {int(ev.max()) if len(ev) else 0}",
-                  highlight=False)
-    s_free, s, d = (np.concatenate([getattr(r, k) for r in parts]) for k in ("s_free", "s", "distance"))
-    for i in np.flatnonzero(code == EdgeStatus.COLLISION)[:10]:
-        a, b = pairs[i]
-        console.print(f"  edge {i}: {esc(a)} - {esc(b)} {d[i] * 1e3:.2f} mm at s = {s[i]:.4f}, clear up to "
-                      f"{s_free[i]:.4f}", highlight=False)
-    if n_coll > 10:
-        console.print(f"  ({n_coll - 10} more in collision)", highlight=False)
+                  console=console, transient=True, disable=M <= 256 or not console.is_terminal) as bar:
+        task = bar.add_task("edges", total=M)
+        try:
+            res = verifier.check_edges(Q0, Q1, robot=robot, joints=names, margin=margin, max_evaluations=max_evaluations,
+                                       first_contact=first_contact, continuous=continuous,
+                                       progress=lambda done, total: bar.update(task, completed=done))
+        except VerificationError as exc:  # said in the command line's words, with the file
+            text = str(exc).replace("pass robot= ", "pass --robot ").replace("robot='*'", "--robot '*'")
+            raise VerificationError(f"{edges_file}: {text.replace('joints: ', 'joint_names: ')}") from None
+    console.print(res.summary(), highlight=False, markup=False)
+    for label, code in (("in collision", EdgeStatus.COLLISION), ("incomplete", EdgeStatus.INCOMPLETE)):
+        which = np.flatnonzero(res.code == code)
+        for i in which[:_LISTED]:
+            a, b = res.pair[i]
+            console.print(f"  edge {i} {label}: {esc(a)} - {esc(b)} {res.distance[i] * 1e3:.2f} mm at s = {res.s[i]:.4f}, "
+                          f"clear up to {res.s_free[i]:.4f}", highlight=False)
+        if len(which) > _LISTED:
+            console.print(f"  ({len(which) - _LISTED} more {label})", highlight=False)
     if out_path:
         sc = verifier.scene
-        q_names = sc.joint_names if parts[0].robot == "*" else sc.robots[parts[0].robot].joint_names
+        q_names = sc.joint_names if res.robot == ALL_ROBOTS else sc.robots[res.robot].joint_names
         buf = io.BytesIO()
-        np.savez(buf, code=code, s_free=s_free, s=s, q=np.concatenate([r.q for r in parts]), distance=d,
-                 evaluations=ev, pair_a=np.array([p[0] if p else "" for p in pairs], dtype=str),
-                 pair_b=np.array([p[1] if p else "" for p in pairs], dtype=str),
-                 q_joint_names=np.array(q_names, dtype=str))
+        np.savez(buf, code=res.code, s_free=res.s_free, s=res.s, q=res.q, distance=res.distance,
+                 evaluations=res.evaluations, pair_a=np.array([p[0] if p else "" for p in res.pair], dtype=str),
+                 pair_b=np.array([p[1] if p else "" for p in res.pair], dtype=str),
+                 q_joint_names=np.array(q_names, dtype=str), robot=np.array(res.robot), margin=np.array(res.margin),
+                 joint_names=np.array(res.joint_names, dtype=str), held_names=np.array(list(res.held), dtype=str),
+                 held_values=np.array(list(res.held.values()), dtype=float))
         atomic_write(Path(out_path), buf.getvalue(), parents=True)
         console.print(f"results: {esc(str(out_path))}", highlight=False)
-    status = ExitCode.OK if n_clear == len(code) else ExitCode.UNSAFE if n_coll else ExitCode.INCOMPLETE
+    c = res.counts()
+    status = ExitCode.UNSAFE if c["collision"] else ExitCode.INCOMPLETE if c["incomplete"] else ExitCode.OK
     sys.exit(int(status))

@@ -42,7 +42,7 @@ import numpy as np
 from .._errors import KinematicsError, VerificationError
 from ._advance import advance_step
 from ._record import _Run
-from ._timelaw import finite_array
+from .._values import refuse_complex_or_bool
 
 __all__ = ["EdgeStatus", "EdgeResults", "check_edges_on"]
 
@@ -131,33 +131,42 @@ class EdgeResults:
         ev = self.evaluations
         med = float(np.median(ev)) if len(ev) else 0.0
         hit = "in collision" if self.margin == 0.0 else f"in collision or within the margin ({self.margin * 1e3:g} mm)"
-        return (f"{len(self)} edges of {self.robot!r}: {c['clear']} clear, {c['collision']} {hit}, "
+        who = "every robot (*)" if self.robot == ALL_ROBOTS else repr(self.robot)
+        held = (f"; held at home: {', '.join(f'{j} = {v:g}' for j, v in self.held.items())}" if self.held else "")
+        return (f"{len(self)} edges of {who}: {c['clear']} clear, {c['collision']} {hit}, "
                 f"{c['incomplete']} incomplete (evaluations per edge: median {med:g}, max "
-                f"{int(ev.max()) if len(ev) else 0}; {self.elapsed_s * 1e3:.1f} ms)")
+                f"{int(ev.max()) if len(ev) else 0}; {self.elapsed_s * 1e3:.1f} ms){held}")
 
 
 def _rows(Q, name: str, joint_names, scene, robot: str) -> np.ndarray:
     n = len(joint_names)
     if Q is None or isinstance(Q, (str, bytes)):
         raise VerificationError(f"{name}: expected an array of joint values (M, {n}) or ({n},), got {Q!r}")
+    refuse_complex_or_bool(Q, name, VerificationError)
     try:
-        Q = finite_array(Q, name)
-    except VerificationError:
-        raise
+        Q = np.asarray(Q, dtype=np.float64)
     except (TypeError, ValueError):
         raise VerificationError(f"{name}: expected numbers (M, {n}) or ({n},), got {type(Q).__name__}") from None
+    bad = np.argwhere(~np.isfinite(Q))
+    if len(bad):
+        raise VerificationError(f"{name}{list(bad[0]) if Q.ndim > 1 else [int(bad[0][0])]}: NaN or infinite "
+                                f"({int(len(bad))} such values)")
     if Q.ndim == 1:
         Q = Q[None, :]
     if Q.ndim != 2 or Q.shape[1] != n:
-        hint = ""
-        if Q.ndim == 2 and Q.shape[1] != n and robot == ALL_ROBOTS:
-            hint = "; a Pinocchio configuration converts with model.scene_q(Q)"
-        elif Q.ndim == 2 and Q.shape[1] != n:
-            hint = (f"; the scene's configuration of all robots has {len(scene.joint_names)} values "
-                    f"(scene.split_q(Q)[{robot!r}] takes this robot's, robot={ALL_ROBOTS!r} moves them all), a "
-                    "Pinocchio configuration converts with model.scene_q(Q)")
+        hint = []
+        width = Q.shape[1] if Q.ndim == 2 else None
+        if robot == ALL_ROBOTS:
+            one = [name for name, r in scene.robots.items() if len(r.joint_names) == width]
+            if one:
+                hint.append(f"one robot's joints? pass robot={one[0]!r}")
+        elif len(scene.robots) > 1 and width == len(scene.joint_names):
+            hint.append(f"the scene's configuration of all robots: scene.split_q(Q)[{robot!r}] takes this robot's, "
+                        f"robot={ALL_ROBOTS!r} moves them all")
+        if width is not None and width != n:
+            hint.append("a Pinocchio configuration converts with model.scene_q(Q)")
         raise VerificationError(f"{name}: expected shape (M, {n}) or ({n},), one value per joint {list(joint_names)}, "
-                                f"got {np.shape(Q)}{hint}")
+                                f"got {np.shape(Q)}" + ("; " + "; ".join(hint) if hint else ""))
     return Q
 
 
@@ -291,7 +300,7 @@ def _shortest(rob, Q0: np.ndarray, Q1: np.ndarray) -> np.ndarray:
 
 
 def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints, first_contact=False,
-                   continuous="line") -> EdgeResults:
+                   continuous="line", progress=None) -> EdgeResults:
     """:meth:`Verifier.check_edges` on one state ``st`` of the scene (its clearance model and configurations)."""
     t_start = _time.perf_counter()
     model, base_q = st.model, st.base
@@ -339,6 +348,8 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints,
         run.n = 0  # one record per edge: its rows are not kept beyond it
         status, free, row, p = _cover(run, q0, q1, dq, rates, m, contact, budget, bool(first_contact))
         evals[i] = run.n
+        if progress is not None and (i + 1) % 64 == 0:
+            progress(i + 1, M)
         code[i] = status
         s_free[i] = free
         if status != EdgeStatus.CLEAR:

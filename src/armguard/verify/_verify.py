@@ -254,7 +254,8 @@ class Verifier(FollowsScene):
         return self._on_one_state(lambda st: self._verify_once(st, trajectory, *args), _ATTEMPTS, "verify this trajectory")
 
     def check_edges(self, Q0, Q1, *, robot: str | None = None, joints=None, margin: float = 0.0,
-                    max_evaluations: int | None = None, first_contact: bool = False, continuous: str = "line"):
+                    max_evaluations: int | None = None, first_contact: bool = False, continuous: str = "line",
+                    progress=None):
         """Certify the straight joint-space edges ``Q0[i] -> Q1[i]`` ``(M, n)`` or ``(n,)`` (one side may be a
         single configuration) of one robot (``robot="*"``: of every robot at once, the scene's flat joint order):
         its joints in its order, or those ``joints`` names (the others held where this Verifier holds them),
@@ -262,11 +263,12 @@ class Verifier(FollowsScene):
         configuration at least ``margin`` (m) clear, ``INCOMPLETE`` after ``max_evaluations`` per edge
         (``Tolerances.edge_max_evaluations``); ``first_contact``: a COLLISION's ``s`` is the first contact
         along the edge (more evaluations); ``continuous="shortest"`` turns continuous joints the short way
-        (default: along the angle's line, as trajectories).  The covering: :mod:`armguard.verify._edges`."""
+        (default: along the angle's line, as trajectories); ``progress(done, total)`` is called now and then.
+        The covering: :mod:`armguard.verify._edges`."""
         from ._edges import check_edges_on
 
         return self._on_one_state(lambda st: check_edges_on(self, st, Q0, Q1, robot, margin, max_evaluations, joints,
-                                                                 first_contact, continuous),
+                                                                 first_contact, continuous, progress),
                                   _ATTEMPTS, "check these edges")
 
     def _verify_once(self, st, trajectory, sd, method, frequency, joint_step, robot, thr, mass, name, t_start):
