@@ -199,6 +199,21 @@ def test_first_contact_is_the_certified_verifiers_first_collision(ur5):
     assert moved >= 1  # the covering's contact was not the first one somewhere
 
 
+def test_a_shared_end_is_evaluated_once_a_call(ur5):
+    """One start against 40 goals: the start's clearances come from its first evaluation (the same bits: the
+    same configuration), so the verdicts are those of 40 separate calls with 39 evaluations fewer."""
+    m, v = ur5
+    Q = m.scene_q(m.random_q(200, 17))
+    Q = Q[~armguard.checker(m).collides(m.pin_q(Q))]
+    q0, goals = Q[0], Q[1:41]
+    together = v.check_edges(q0, goals)
+    alone = [v.check_edges(q0, g) for g in goals]
+    np.testing.assert_array_equal(together.code, [r.code[0] for r in alone])
+    np.testing.assert_array_equal(together.s_free, [r.s_free[0] for r in alone])
+    np.testing.assert_array_equal(together.s, [r.s[0] for r in alone])
+    assert int(together.evaluations.sum()) == sum(int(r.evaluations[0]) for r in alone) - 39
+
+
 def test_a_joint_subset_holds_the_others_and_one_side_broadcasts():
     """Panda's 7 arm joints (MoveIt's group ``arm``), its finger held at home; one start to many goals."""
     m = armguard.load_model("panda")

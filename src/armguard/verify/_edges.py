@@ -24,8 +24,10 @@ in two.  The edge is
 * ``INCOMPLETE`` when ``max_evaluations`` are spent (``Tolerances.edge_max_evaluations``, 1000, by
   default: a grazing edge), never ``CLEAR``.
 
-Every evaluation is one ``pair_distances`` of the moving robot's pairs; the per-pair arithmetic is
-the certified verifier's :func:`._advance.advance_step` (its ``step`` is ``rho``).  A NaN clearance
+Every evaluation is one ``pair_distances`` of the moving robot's pairs (an edge end met before in the
+same call, a roadmap's node or a common start, takes the clearances found then: the same configuration,
+the same bits); the per-pair arithmetic is the certified verifier's :func:`._advance.advance_step` (its
+``step`` is ``rho``).  A NaN clearance
 is an error, never a verdict.
 """
 
@@ -338,6 +340,7 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints,
     pair = np.full(M, None, dtype=object)
     evals = np.zeros(M, dtype=np.int64)
     dQ = np.zeros(model.n_q)
+    known_ends: dict = {}  # the clearances of the edge ends evaluated in this call, by configuration
     for i in range(M):
         q0, q1 = Q0[i], Q1[i]
         dq = q1 - q0
@@ -345,9 +348,9 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints,
         rates = model.pair_rates(dQ)
         if not np.all(np.isfinite(rates)):
             raise VerificationError("the motion bound is infinite (an unbounded prismatic joint): an edge cannot be certified")
-        run.n = 0  # one record per edge: its rows are not kept beyond it
-        status, free, row, p = _cover(run, q0, q1, dq, rates, m, contact, budget, bool(first_contact))
-        evals[i] = run.n
+        run.n = run.reused = 0  # one record per edge: its rows are not kept beyond it
+        status, free, row, p = _cover(run, q0, q1, dq, rates, m, contact, budget, bool(first_contact), known_ends)
+        evals[i] = run.n - run.reused
         if progress is not None and (i + 1) % 64 == 0:
             progress(i + 1, M)
         code[i] = status
@@ -361,10 +364,26 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints,
                        _time.perf_counter() - t_start)
 
 
-def _evaluate(run, s, q0, q1, dq, rates, m):
-    """Evaluate at ``s``: ``(row, gap, closest pair, radius rho)``; a NaN clearance is an error."""
+_ENDS = 1024  # edge ends whose clearances one call keeps (a start shared by many goals, a roadmap's nodes)
+
+
+def _evaluate(run, s, q0, q1, dq, rates, m, ends=None):
+    """Evaluate at ``s``: ``(row, gap, closest pair, radius rho)``; a NaN clearance is an error.  ``ends``: the
+    clearances of edge ends already evaluated in this call, by configuration (the ends' rows come from there,
+    and go there)."""
     q = q0 if s == 0.0 else q1 if s == 1.0 else q0 + s * dq
-    row = run.eval(0, s, q)
+    if ends is not None and (s == 0.0 or s == 1.0):
+        key = q.tobytes()
+        known = ends.get(key)
+        if known is not None:
+            row = run.put(0, s, q, known)
+        else:
+            row = run.eval(0, s, q)
+            if len(ends) >= _ENDS:
+                ends.clear()
+            ends[key] = run.D[row].copy()
+    else:
+        row = run.eval(0, s, q)
     d = run.D[row]
     g, p, rho, _ = advance_step(d, d, rates, m, 0.0, False)
     if g != g:
@@ -400,11 +419,11 @@ def _first_contact(run, q0, q1, dq, rates, m, contact, budget, s_free, s_hit, ro
     return EdgeStatus.COLLISION, s_free, row, p
 
 
-def _cover(run, q0, q1, dq, rates, m, contact, budget, first=False):
+def _cover(run, q0, q1, dq, rates, m, contact, budget, first=False, ends=None):
     """The covering of one edge (see the module docstring): ``(status, s_free, row, pair)``; ``row``
     and ``pair`` are the configuration in contact (COLLISION) or of smallest gap (INCOMPLETE);
     ``first``: a COLLISION's configuration is the first contact along the edge (:func:`_first_contact`)."""
-    hit = _covering(run, q0, q1, dq, rates, m, contact, budget)
+    hit = _covering(run, q0, q1, dq, rates, m, contact, budget, ends)
     if first and hit[0] == EdgeStatus.COLLISION and hit[1] >= 0.0:
         s_hit = run.s[hit[2]]
         if hit[1] < s_hit:
@@ -412,12 +431,12 @@ def _cover(run, q0, q1, dq, rates, m, contact, budget, first=False):
     return hit
 
 
-def _covering(run, q0, q1, dq, rates, m, contact, budget):
+def _covering(run, q0, q1, dq, rates, m, contact, budget, known=None):
     balls = []
     best = (math.inf, -1, -1)  # gap, row, pair
     ends = (0.0,) if not np.any(dq) else (0.0, 1.0)  # a still edge is one configuration
     for s in ends:
-        row, g, p, rho = _evaluate(run, s, q0, q1, dq, rates, m)
+        row, g, p, rho = _evaluate(run, s, q0, q1, dq, rates, m, known)
         if g <= contact:
             return EdgeStatus.COLLISION, min(_prefix(balls), s), row, p
         best = min(best, (g, row, p))

@@ -36,6 +36,7 @@ class _Run:
         P = len(model.owner_a)
         cap = max(2, int(capacity))
         self.n = 0
+        self.reused = 0  # rows :meth:`put` took from an earlier evaluation (not evaluations of this record)
         self.D = np.empty((cap, P))
         self.Q = np.empty((cap, k1 - k0))
         self.seg = np.empty(cap, dtype=np.int64)
@@ -92,6 +93,21 @@ class _Run:
         self.s[i] = s
         self.t[i] = math.nan if t is None else t
         self.n = i + 1
+        return i
+
+    def put(self, si: int, s: float, q_robot: np.ndarray, d: np.ndarray) -> int:
+        """A row for the configuration ``q_robot`` whose clearances ``d`` ``(P,)`` an earlier evaluation of the
+        same model and configuration gave (no distance call; counted in ``reused``); returns the row."""
+        i = self.n
+        if i == self.D.shape[0]:
+            self._grow()
+        self.D[i] = d
+        self.Q[i] = q_robot
+        self.seg[i] = si
+        self.s[i] = s
+        self.t[i] = math.nan
+        self.n = i + 1
+        self.reused += 1
         return i
 
     def _fast_row(self, q: np.ndarray, row: np.ndarray):
