@@ -42,9 +42,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._errors import KinematicsError, VerificationError
+from .._values import refuse_complex_or_bool
 from ._advance import advance_step
 from ._record import _Run
-from .._values import refuse_complex_or_bool
 
 __all__ = ["EdgeStatus", "EdgeResults", "check_edges_on"]
 
@@ -159,7 +159,7 @@ def _rows(Q, name: str, joint_names, scene, robot: str) -> np.ndarray:
         hint = []
         width = Q.shape[1] if Q.ndim == 2 else None
         if robot == ALL_ROBOTS:
-            one = [name for name, r in scene.robots.items() if len(r.joint_names) == width]
+            one = [rn for rn, r in scene.robots.items() if len(r.joint_names) == width]
             if one:
                 hint.append(f"one robot's joints? pass robot={one[0]!r}")
         elif len(scene.robots) > 1 and width == len(scene.joint_names):
@@ -263,8 +263,7 @@ def _columns(rob, joints) -> tuple:
 def _flat(verifier, st, rname):
     """``(flat base configuration, k0, k1)`` of the state for robot ``rname`` (None: every robot), kept on it
     (read only)."""
-    key = ("flat", rname)
-    out = st.edge_runs.get(key)
+    out = st.edge_bases.get(rname)
     if out is None:
         if rname is None:
             base = verifier.scene.flat_q(st.base)
@@ -272,7 +271,7 @@ def _flat(verifier, st, rname):
         else:
             out = verifier._flat(rname, st.base)
         out[0].flags.writeable = False
-        st.edge_runs[key] = out
+        st.edge_bases[rname] = out
     return out
 
 

@@ -65,11 +65,11 @@ class VerifierState:
     """What one verification reads (:meth:`Verifier._build`): the clearance model and every robot's configuration
     (and, per thread and robot, the record ``check_edges`` reuses: not pickled)."""
 
-    __slots__ = ("model", "base", "edge_runs", "edge_records")
+    __slots__ = ("model", "base", "edge_bases", "edge_records")
 
     def __init__(self, model, base: dict) -> None:
         self.model, self.base = model, base
-        self.edge_runs: dict = {}  # per robot: its flat base configuration (read only)
+        self.edge_bases: dict = {}  # per robot: its flat base configuration (read only)
         self.edge_records = threading.local()  # per thread and robot: check_edges' record
 
     def __getstate__(self):
