@@ -82,6 +82,9 @@ def test_detector_direct_record_matches_general_path(method, monkeypatch):
     cases = _cases()
     assert cases[0][0].model.source == "detector"
     fast = [_fingerprint(v.verify(t, method=method)) for v, t in cases]
+    for v, _ in cases:  # the detector's pair_distances(q, robot=) without its lean evaluator (_row_eval)
+        monkeypatch.setattr(v.model._det, "row_evaluator", None, raising=False)
+    assert [_fingerprint(v.verify(t, method=method)) for v, t in cases] == fast
     for v, _ in cases:  # the general path: ClearanceModel.distances for every evaluation
         monkeypatch.setattr(v.model, "moving_fast_path", lambda robot: False)
     slow = [_fingerprint(v.verify(t, method=method)) for v, t in cases]
@@ -117,3 +120,54 @@ def test_closed_form_segment_speeds_match_sampled_time_law(profile):
     # the closed form is the true peak; the 17 samples include each segment's midpoint (on the plateau)
     np.testing.assert_allclose(fast, ref, rtol=1e-12)
     assert np.all(fast >= ref * (1.0 - 1e-12)) and np.all(fast > 0.0)
+
+
+@pytest.mark.parametrize("name, robot", [("ranger", "left_arm"), ("panda", None), ("z1", None), ("so101", None)])
+def test_lean_evaluator_rows_and_witnesses_match_the_general_paths(name, robot, monkeypatch):
+    """The analytic detector's lean evaluator (``row_evaluator``) against ``pair_distances(q, robot=)``
+    (ranger: one shape pair per pair of links) or ``ClearanceModel.distances`` (several shapes on a
+    link: the nearest kept, :func:`owner_rows`): the same rows bit for bit, the other robots' pairs
+    from the fixed evaluation, the last witnesses too; a scene edited since: StaleModelError."""
+    import armguard
+    from armguard import StaleModelError
+    from armguard.geometry import Box
+    from armguard.verify._record import _Run
+
+    m = armguard.load_model(name)
+    v = Verifier(m)
+    cm = v._current().model
+    robot = robot or next(iter(cm.scene.robots))
+    base = cm.scene.flat_q(cm.scene.default_q())
+    k0, k1 = cm._joint_span(robot)
+    lean = _Run(cm, base, k0, k1, robot)
+    assert lean._rows is not None and lean._fast == (name == "ranger")
+    monkeypatch.setattr(cm._det, "row_evaluator", None, raising=False)
+    plain = _Run(cm, base, k0, k1, robot)
+    assert plain._rows is None
+    rob = cm.scene.robots[robot]
+    lo, hi = np.asarray(rob.lower), np.asarray(rob.upper)
+    Q = np.random.default_rng(5).uniform(np.maximum(lo, -np.pi), np.minimum(hi, np.pi), (40, k1 - k0))
+    for q in Q:
+        i, j = lean.eval(0, 0.5, q), plain.eval(0, 0.5, q)
+        assert np.array_equal(lean.D[i], plain.D[j])
+        for a, b in zip(lean.last_witnesses(), plain.last_witnesses()):
+            assert np.array_equal(a[lean.moving], b[plain.moving])
+    assert np.isinf(lean.D[0][~lean.moving]).all() and np.isfinite(lean.D[: len(Q)][:, lean.moving]).all()
+    assert (lean.D[: len(Q)][:, lean.moving] <= 0).any() or name == "ranger"  # contacts in the sample too
+    cm.scene.add_body("crate", [Box(center=[0.0, 0.0, 5.0], half_extents=[0.1, 0.1, 0.1])])
+    with pytest.raises(StaleModelError):
+        lean.eval(0, 0.5, Q[0])  # never rows of another scene's pairs
+
+
+@settings(max_examples=200, derandomize=True, deadline=None)
+@given(rows=st.lists(st.tuples(st.integers(0, 4), st.sampled_from([0.5, -0.1, 0.0, 0.5, 2.0, math.nan]),
+                               st.floats(-1.0, 1.0)), min_size=1, max_size=12))
+def test_owner_rows_matches_numpy_reference(rows):
+    from armguard.verify._advance import owner_rows, owner_rows_reference
+
+    owner = np.array([r[0] for r in rows], dtype=np.int64)
+    ev = np.array([[r[1]] + [r[2] + k for k in range(6)] for r in rows])
+    d, wit = np.full(5, np.inf), np.zeros((5, 6))
+    owner_rows(ev, owner, d, wit)
+    d_ref, wit_ref = owner_rows_reference(ev, owner, 5)
+    assert np.array_equal(d, d_ref, equal_nan=True) and np.array_equal(wit, wit_ref)

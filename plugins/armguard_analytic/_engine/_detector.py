@@ -32,6 +32,7 @@ from ._model import CAT_WORKSPACE, build_model
 from ._narrow import WORK_TAIL
 from ._prep import _fk_blocks, _static_polytopes, _warm_option
 from ._raw import _UNHELD, _Raw, _refcount
+from ._row_eval import row_evaluator
 from ._batch import rows
 from ._built import Built
 from ._scratch import _entry_point, _Scratch, median_call_us
@@ -263,8 +264,6 @@ class FusedDetector(Detector):
     # the calling thread's buffers, by their former names (tests and tools read them)
     _SF = property(lambda self: self._scratch().SF)
     _SI = property(lambda self: self._scratch().SI)
-    _q1 = property(lambda self: self._scratch().q1)
-    _ev = property(lambda self: self._scratch().ev)
     _last_raw = property(lambda self: self._scratch().last_raw)
 
     # ------------------------------------------------------------------ settings
@@ -528,6 +527,8 @@ class FusedDetector(Detector):
                 hit = self._category_jac = (b.revision, CategoryJacobians(self._fixed_model or model_of(self.scene), "analytic"))
         return report._with_jacobian(hit[1].of(q_flat, report.by_category))
 
+    row_evaluator = row_evaluator  # a lean pair_distances(q, robot=) for many configurations (_row_eval)
+
     def pair_distances(self, q, *, robot: str | None = None) -> PairDistances:
         """Every candidate pair's signed distance at ``q`` (no pruning), with witness points.
 
@@ -585,7 +586,6 @@ class FusedDetector(Detector):
         _, status, _ = self._many(Q, kn.MODE_YESNO)
         return status == kn.ST_COLLISION
 
-    # ------------------------------------------------------------------ reporting helpers
     def _pair_names(self, p: int) -> tuple[str, str]:
         return self._b.pair_names(p)
 

@@ -23,7 +23,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["advance_step", "advance_step_reference"]
+__all__ = ["advance_step", "advance_step_reference", "owner_rows", "owner_rows_reference"]
 
 
 @njit(cache=True)
@@ -93,3 +93,41 @@ def advance_step_reference(d, d_prev, rates, margin, length, has_prev):
         d_prev = np.asarray(d_prev, dtype=np.float64)
         lb = float(np.min(np.minimum(np.minimum(d_prev, d), 0.5 * (d_prev + d - rates * length))))
     return float(gap.min()), int(np.argmin(gap)), step, lb
+
+
+@njit(cache=True)
+def owner_rows(ev, owner, d, wit):  # pragma: no cover - compiled
+    """The clearance of each owner pair (two links, bodies or payloads) from its shape pairs' rows.
+
+    ``ev`` ``(n, 7)``: a detector's rows ``[d, p_WA, p_WB]``; ``owner`` ``(n,)``: each row's owner pair.
+    Writes ``d[o]`` (which the caller set to +inf) the smallest distance of owner pair ``o``'s rows, the
+    first of them on a tie (as the general path's stable ``lexsort``), NaN where any of its rows is
+    NaN (never a verdict from it), and ``wit[o]`` ``(P, 6)`` that row's witnesses ``[p_WA, p_WB]``."""
+    for k in range(ev.shape[0]):
+        o = owner[k]
+        dk = ev[k, 0]
+        if dk != dk or dk < d[o]:
+            if d[o] != d[o]:
+                continue  # NaN already: it stays
+            d[o] = dk
+            for j in range(6):
+                wit[o, j] = ev[k, 1 + j]
+
+
+def owner_rows_reference(ev, owner, P):
+    """NumPy statement of :func:`owner_rows` over ``P`` owner pairs: ``(d (P,), wit (P, 6))``."""
+    d = np.full(P, np.inf)
+    wit = np.zeros((P, 6))
+    for o in range(P):
+        ks = np.flatnonzero(owner == o)
+        if not len(ks):
+            continue
+        dd = ev[ks, 0]
+        if np.isnan(dd).any():
+            d[o] = math.nan
+            wit[o] = ev[ks[np.flatnonzero(np.isnan(dd))[0]], 1:7]
+            continue
+        k = ks[int(np.argmin(dd))]  # argmin: the first of equal minima
+        d[o] = ev[k, 0]
+        wit[o] = ev[k, 1:7]
+    return d, wit
