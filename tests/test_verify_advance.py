@@ -171,3 +171,14 @@ def test_owner_rows_matches_numpy_reference(rows):
     owner_rows(ev, owner, d, wit)
     d_ref, wit_ref = owner_rows_reference(ev, owner, 5)
     assert np.array_equal(d, d_ref, equal_nan=True) and np.array_equal(wit, wit_ref)
+
+
+def test_owner_rows_refuses_mismatched_rows():
+    from armguard.verify._advance import owner_rows
+
+    d, wit = np.full(2, np.inf), np.zeros((2, 6))
+    with pytest.raises(ValueError):
+        owner_rows(np.zeros((3, 7)), np.array([0, 1], dtype=np.int64), d, wit)  # a detector's rows of another scene
+    with pytest.raises(ValueError):
+        owner_rows(np.zeros((2, 7)), np.array([0, 2], dtype=np.int64), d, wit)
+    assert np.isinf(d).all()

@@ -102,7 +102,14 @@ def owner_rows(ev, owner, d, wit):  # pragma: no cover - compiled
     ``ev`` ``(n, 7)``: a detector's rows ``[d, p_WA, p_WB]``; ``owner`` ``(n,)``: each row's owner pair.
     Writes ``d[o]`` (which the caller set to +inf) the smallest distance of owner pair ``o``'s rows, the
     first of them on a tie (as the general path's stable ``lexsort``), NaN where any of its rows is
-    NaN (never a verdict from it), and ``wit[o]`` ``(P, 6)`` that row's witnesses ``[p_WA, p_WB]``."""
+    NaN (never a verdict from it), and ``wit[o]`` ``(P, 6)`` that row's witnesses ``[p_WA, p_WB]``.
+    Rows and owners of other lengths, or an owner pair out of range: ValueError (never a write past
+    the arrays)."""
+    if ev.shape[0] != owner.shape[0] or ev.shape[1] < 7 or wit.shape[0] != d.shape[0] or wit.shape[1] < 6:
+        raise ValueError("owner_rows: rows, owners and outputs of mismatched shapes")
+    for k in range(owner.shape[0]):
+        if owner[k] < 0 or owner[k] >= d.shape[0]:
+            raise ValueError("owner_rows: an owner pair out of range")
     for k in range(ev.shape[0]):
         o = owner[k]
         dk = ev[k, 0]

@@ -27,6 +27,7 @@ import numpy as np
 from ..model import kinematics_of, scene_of
 from .._errors import StaleModelError, VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
+from ._advance import owner_rows
 from ._motion import chain_bounds, relative_joints, shape_radius_about
 
 __all__ = ["ClearanceModel", "CATEGORIES", "CHECKS"]
@@ -246,17 +247,16 @@ class ClearanceModel:
                 pA[self._det_map] = res.p_WA
                 pB[self._det_map] = res.p_WB
                 return d, pA, pB
-            # several shape pairs per owner pair: keep the nearest of each
-            order = np.lexsort((dist, self._det_map))
-            first = order[np.r_[True, self._det_map[order][1:] != self._det_map[order][:-1]]]
+            # several shape pairs per owner pair: keep the nearest of each (NaN where one is NaN)
+            if len(dist) != len(self._det_map):  # the detector follows an edited scene: not these pairs
+                self._refuse_if_stale()
+                raise VerificationError(f"the detector answered {len(dist)} pairs, not this model's {len(self._det_map)}")
+            ev = np.empty((len(dist), 7))
+            ev[:, 0], ev[:, 1:4], ev[:, 4:7] = dist, res.p_WA, res.p_WB
             P = len(self.owner_a)
-            d = np.full(P, np.inf)
-            pA = np.zeros((P, 3))
-            pB = np.zeros((P, 3))
-            d[self._det_map[first]] = dist[first]
-            pA[self._det_map[first]] = np.asarray(res.p_WA)[first]
-            pB[self._det_map[first]] = np.asarray(res.p_WB)[first]
-            return d, pA, pB
+            d, wit = np.full(P, np.inf), np.zeros((P, 6))
+            owner_rows(ev, self._det_map, d, wit)
+            return d, wit[:, :3].copy(), wit[:, 3:].copy()
         return self._reference(q)
 
     def _moving_distances(self, q: np.ndarray, robot: str):
