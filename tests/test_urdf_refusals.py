@@ -170,3 +170,41 @@ def test_an_unreadable_mesh_file_says_why_without_a_folder_hint(tmp_path, name, 
     (tmp_path / name).write_bytes(content)
     err = _refused(tmp_path, _urdf(f'<mesh filename="{name}"/>'))
     assert err.where == "link[l1].collision[0]" and said in err.message and "Hint" not in err.message, err
+
+
+def _tet_obj(path):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n", encoding="utf-8")
+
+
+@pytest.mark.parametrize("filename", ["collision/m.obj", "package://nopkg/m.obj", "package://nopkg/collision/m.obj"])
+def test_a_missing_mesh_is_named_never_another_file_of_its_name(tmp_path, filename):
+    """``collision/m.obj`` missing beside the URDF: a mesh ``m.obj`` one or two folders up was read in its place
+    (the path's leading folders dropped until a file turned up): a different model, without a word."""
+    _tet_obj(tmp_path / "m.obj")
+    _tet_obj(tmp_path / "deep" / "m.obj")
+    deep = tmp_path / "deep" / "robot"
+    deep.mkdir(parents=True)
+    err = _refused(deep, _urdf(f'<mesh filename="{filename}"/>'))
+    assert err.where == "link[l1].collision[0]" and "mesh file not found" in err.message and filename in err.message, err
+
+
+def test_package_meshes_resolve_by_the_package_folder_or_its_parent(tmp_path):
+    """``package://pkg/meshes/m.obj``: under a folder holding ``pkg`` (package_dirs, or above the URDF, as a
+    description package lays itself out), or under ``pkg`` itself given as a package folder."""
+    _tet_obj(tmp_path / "share" / "pkg" / "meshes" / "m.obj")
+    urdf_dir = tmp_path / "share" / "pkg" / "urdf"
+    urdf_dir.mkdir(parents=True)
+    path = urdf_dir / "r.urdf"
+    path.write_text(_urdf('<mesh filename="package://pkg/meshes/m.obj"/>'), encoding="utf-8")
+    want = str(tmp_path / "share" / "pkg" / "meshes" / "m.obj")
+    for kw in ({}, {"package_dirs": [tmp_path / "share"]}, {"package_dirs": [tmp_path / "share" / "pkg"]}):
+        m = armguard.load_model(path, **kw)
+        assert want in {str(p) for p in m.files}, kw
+    other = tmp_path / "elsewhere"
+    other.mkdir()
+    moved = other / "r.urdf"  # the URDF away from its package: found through package_dirs only
+    moved.write_text(path.read_text(encoding="utf-8"), encoding="utf-8")
+    assert want in {str(p) for p in armguard.load_model(moved, package_dirs=tmp_path / "share").files}
+    with pytest.raises(SceneFileError, match="mesh file not found"):
+        armguard.load_model(moved)

@@ -53,22 +53,44 @@ class UrdfInfo:
 
 
 def resolve_mesh(filename: str, urdf_dir: Path, package_dirs) -> Path | None:
-    """A mesh named by a URDF: relative to its folder, ``file://`` or ``package://pkg/...``
-    (``package:///pkg/...``, talos_full_v2's spelling, is read as Pinocchio reads it: a path
-    under the package folders, not an absolute one)."""
-    name = filename
+    """A mesh named by a URDF, or None (the caller names it: never another file of the same name).
+
+    * ``file:///abs/x.stl`` or an absolute path: that file;
+    * a relative path: from the URDF's folder, or from a folder of ``package_dirs`` (as Pinocchio
+      reads one), as written;
+    * ``package://pkg/rest`` (``package:///pkg/...``, talos_full_v2's spelling, read as Pinocchio reads
+      it: under the package folders, not an absolute path): ``base/pkg/rest`` for ``base`` a folder of
+      ``package_dirs``, the URDF's folder or one above it (a description package's own layout), or
+      ``base/rest`` where ``base`` is itself the folder named ``pkg``.
+
+    A path whose leading folders are dropped until some file of that name turns up is not a mesh the
+    URDF names: with ``collision/m.obj`` missing, an ``m.obj`` two folders up was once read in its
+    place, a different model without a word."""
+    name, package = filename, False
     for scheme in ("file://", "package://"):
         if name.startswith(scheme):
             name = name[len(scheme):]
             if scheme == "package://":
-                name = name.lstrip("/")
+                name, package = name.lstrip("/"), True
     p = Path(name)
     if p.is_absolute():
         return p if p.is_file() else None
     parts = p.parts
-    for base in (urdf_dir, *[Path(d) for d in package_dirs], *urdf_dir.parents):
-        for k in range(len(parts)):  # the full relative path, then with the package name dropped
-            cand = base.joinpath(*parts[k:])
+    if not parts:
+        return None
+    if not package:
+        for base in (urdf_dir, *[Path(d) for d in package_dirs]):
+            cand = base.joinpath(*parts)
+            if cand.is_file():
+                return cand
+        return None
+    pkg, rest = parts[0], parts[1:]
+    for base in (*[Path(d) for d in package_dirs], urdf_dir, *urdf_dir.parents):
+        cand = base.joinpath(*parts)  # base holds the package folder
+        if cand.is_file():
+            return cand
+        if rest and base.name == pkg:  # base is the package folder itself
+            cand = base.joinpath(*rest)
             if cand.is_file():
                 return cand
     return None
