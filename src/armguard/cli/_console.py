@@ -48,6 +48,10 @@ def console_cmd(scene: str, host: str, port: int, threshold: float, watch: bool,
 
     # a scene, terrain or --uncertain body refused: one line, exit status 3 (as every command); the
     # files read first, so a mistyped path is refused at once, not after the kernels compiled
+    if terrain_file is not None:  # a file, or a shipped terrain's name (rocky), as armguard check --terrain
+        from ..terrain import terrain_path
+
+        terrain_file = str(terrain_path(terrain_file))
     inputs = load_inputs(scene, terrain=terrain_file)
     warm_up()
     state = make_state(inputs, threshold=threshold, terrain=terrain_file, uncertain=uncertain)

@@ -16,7 +16,7 @@ from ._volumes import bounding_box, link_volume
 from ._guard import TERRAIN, TerrainCell, TerrainGuard, TerrainReport
 from ._detect import TerrainDetectionReport, attach_terrain, check_with_terrain
 from ._sweep import TerrainSweep, sweep_terrain, verify_with_terrain
-from ._files import MAX_CELLS, TerrainPointsDropped, load_terrain, verify_items
+from ._files import MAX_CELLS, TerrainPointsDropped, load_terrain, shipped_terrains, terrain_path, verify_items
 
 __all__ = [
     "ElevationMap",
@@ -38,6 +38,8 @@ __all__ = [
     "sweep_terrain",
     "verify_with_terrain",
     "load_terrain",
+    "terrain_path",
+    "shipped_terrains",
     "verify_items",
     "TerrainPointsDropped",
     "MAX_CELLS",

@@ -8,6 +8,11 @@
   without points, from ``heights (ny, nx)`` and ``cell`` as a fully known map;
 * a point file (``.ply``, ``.pcd``, ``.npy``; :func:`read_points`) at ``cell`` (default 5 cm).
 
+``path`` may also be the name of a shipped terrain (``"rocky"``; :func:`shipped_terrains` lists
+them): a name with no folder and no suffix that is no file in the working directory is the
+shipped ``reference/terrain/<name>.npz`` (:func:`terrain_path`), so ``load_terrain("rocky")`` and
+``armguard check rover --terrain rocky`` work from any folder and from an installed wheel.
+
 A file may give ``origin (2,)`` (m, W): the map's corner in W, used as it is.  Otherwise the
 map's frame is placed so that its centre lies under the robot's base (the base link at home;
 z unchanged): a terrain sensed from the rover's mast is stored in its own frame.
@@ -15,6 +20,7 @@ z unchanged): a terrain sensed from the rover's mast is stored in its own frame.
 
 from __future__ import annotations
 
+import os
 import warnings
 from pathlib import Path
 
@@ -22,11 +28,12 @@ import numpy as np
 
 from ..model import scene_of
 from .._errors import ArmguardWarning, TerrainError, TerrainFileError
+from .._resources import data_dir
 from .._values import number
 from ._io import read_points
 from ._map import MAX_CELLS, ElevationMap
 
-__all__ = ["load_terrain", "verify_items", "TerrainPointsDropped", "MAX_CELLS"]
+__all__ = ["load_terrain", "terrain_path", "shipped_terrains", "verify_items", "TerrainPointsDropped", "MAX_CELLS"]
 
 
 
@@ -34,6 +41,44 @@ __all__ = ["load_terrain", "verify_items", "TerrainPointsDropped", "MAX_CELLS"]
 class TerrainPointsDropped(ArmguardWarning):
     """A terrain file's point rows holding a NaN or inf were dropped (the message names the file and says how
     many): a lenient reading, so the command line shows it as one ``warning:`` line."""
+
+
+def _shipped_folder() -> Path:
+    """The folder of the shipped terrains: ``reference/terrain`` of the reference data (the installed
+    package data, the checkout's ``reference/``, or ``$ARMGUARD_REFERENCE``)."""
+    return data_dir("reference") / "terrain"
+
+
+def shipped_terrains() -> tuple[str, ...]:
+    """The names of the shipped terrains (``("gentle", "rocky", "rough")``): each loads by its name,
+    ``load_terrain("rocky")`` (``reference/terrain/README.md`` says how they were made)."""
+    folder = _shipped_folder()
+    return tuple(sorted(f.stem for f in folder.glob("*.npz") if f.is_file())) if folder.is_dir() else ()
+
+
+def _is_bare_name(text: str) -> bool:
+    """``text`` has no folder and no suffix: ``rocky``, not ``./rocky``, ``terrain/rocky`` nor ``rocky.npz``."""
+    seps = {"/", os.sep} | ({os.altsep} if os.altsep else set())
+    return bool(text) and not any(c in text for c in seps) and not Path(text).suffix and text not in (".", "..")
+
+
+def terrain_path(path) -> Path:
+    """The file :func:`load_terrain` reads for ``path``: ``path`` itself when it exists; else, for a name
+    with no folder and no suffix (``"rocky"``), the shipped terrain of that name (:func:`shipped_terrains`).
+    Anything else raises a TerrainError naming ``path`` and listing the shipped names."""
+    p = Path(path)
+    if p.exists():
+        return p
+    given = os.fspath(path) if isinstance(path, (str, os.PathLike)) else str(p)  # as typed ("./rocky" stays so)
+    names = shipped_terrains()
+    listed = ", ".join(names) if names else "none found in " + str(_shipped_folder())
+    if isinstance(given, str) and _is_bare_name(given):
+        shipped = _shipped_folder() / f"{given}.npz"
+        if shipped.is_file():
+            return shipped
+        raise TerrainError(f"terrain file {given!r} does not exist, and no shipped terrain is named so "
+                           f"(shipped terrains: {listed})")
+    raise TerrainError(f"terrain file {str(given)!r} does not exist (a shipped terrain loads by its name alone: {listed})")
 
 
 def _base_xy(scene, robot: str | None) -> np.ndarray:
@@ -55,10 +100,11 @@ def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | No
     many; the map's ``invalid`` counts them); a file with no finite point, a truncated PLY, a
     damaged ``.npz``, an array of the wrong shape or of non-numbers, NaN heights, a NaN or non-positive
     cell, or a cell that would make more than :data:`MAX_CELLS` cells of the points' extent raise
-    :class:`~armguard._errors.TerrainFileError` naming the file and the array."""
-    p = Path(path)
-    if not p.exists():
-        raise TerrainError(f"terrain file {str(p)!r} does not exist")
+    :class:`~armguard._errors.TerrainFileError` naming the file and the array.
+
+    ``path``: a file, or a shipped terrain's name (``"rocky"``: :func:`terrain_path`); a path that
+    is neither raises a TerrainError naming it and listing the shipped names."""
+    p = terrain_path(path)
     origin = None
     heights = None
     if cell is not None:  # True is not 1 m, nor "0.1" 10 cm
