@@ -176,6 +176,20 @@ def test_yaml_1_2_numbers_are_numbers(tmp_path):
     assert s.radius == 0.1 and s.center.tolist() == [1000.0, 0.25, -1.0]
 
 
+@pytest.mark.parametrize("number, said", [("010", "leading zero"), ("090", "leading zero"), ("0x10", "hexadecimal"),
+                                          ("0b11", "binary"), ("1:30", "base-60"), ("1__0", "underscores"),
+                                          ("1:30.5", "base-60"), ("1_0.5", "underscores")])
+def test_yaml_1_1_numbers_are_refused_where_they_stand(tmp_path, number, said):
+    """YAML 1.1 reads 010 as 8, 0x10 as 16, 1:30 as 90 and 1__0 as 10; the scene files follow YAML 1.2:
+    refused at their line and column, never read as another value (a joint limit of -060 deg was -48)."""
+    _, load = _load(f"      - {{type: sphere, radius: 0.1, xyz: [0, 0, {number}]}}\n", tmp_path)
+    with pytest.raises(SceneFileError) as info:
+        load()
+    assert info.value.where == "line 6, column 49" and said in str(info.value) and repr(number) in str(info.value)
+    _, load = _load("      - {type: sphere, radius: 0.1, xyz: [0, +10, -0]}\n", tmp_path)
+    assert load().bodies["b"].shapes[0].center.tolist() == [0.0, 10.0, 0.0]
+
+
 def test_a_duplicate_key_is_an_error_naming_both_lines(tmp_path):
     _, load = _load("      - type: sphere\n        radius: 0.1\n        xyz: [0, 0, 0]\n        radius: 0.2\n", tmp_path)
     with pytest.raises(SceneFileError) as info:

@@ -31,6 +31,8 @@ def read_scene_yaml(path):
     except _Alias as exc:
         raise SceneFileError(file, f"line {exc.line}", "a YAML anchor defined here is reused by an alias; anchors and aliases are not allowed in scene files "
                              "(an alias can make a small file expand without bound)") from None
+    except _BadNumber as exc:
+        raise SceneFileError(file, f"line {exc.line}, column {exc.column}", exc.reason) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
@@ -51,6 +53,15 @@ class _Alias(yaml.YAMLError):
         self.line = line
 
 
+class _BadNumber(yaml.YAMLError):
+    def __init__(self, text: str, mark, reason: str) -> None:
+        super().__init__(reason)
+        self.line, self.column, self.reason = mark.line + 1, mark.column + 1, f"{text!r}: {reason}"
+
+
+_INT = re.compile(r"[-+]?(?:0|[1-9][0-9]*)")  # YAML 1.2's core-schema decimal integer
+
+
 class _SceneLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
     """YAML's safe loader, stricter for scene files: a key repeated in one mapping is an error
     (PyYAML keeps the last silently), anchors and aliases are refused, and floats are read as in
@@ -68,6 +79,32 @@ class _SceneLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
             elif isinstance(n, yaml.SequenceNode):
                 stack.extend(n.value)
         return super().construct_document(node)
+
+    def construct_yaml_int(self, node):
+        """YAML 1.1 reads ``010`` as 8, ``0x10`` as 16, ``0b11`` as 3, ``1:30`` as 90 and ``1_0`` as 10;
+        YAML 1.2's core schema, which the scene files follow, reads none of them so.  A decimal
+        integer is read; any other spelling is refused where it stands (never another value)."""
+        text = self.construct_scalar(node)
+        if _INT.fullmatch(text):
+            return int(text)
+        if re.fullmatch(r"[-+]?0[0-9_]+", text):
+            why = "a leading zero (YAML 1.1 reads such a number as octal where its digits allow: 010 is 8); write it without"
+        elif ":" in text:
+            why = "a base-60 number (YAML 1.1 reads 1:30 as 90); write the number itself"
+        elif "_" in text:
+            why = "underscores in a number (YAML 1.1 drops them); write the digits alone"
+        else:
+            why = "a hexadecimal, octal or binary number; write it in decimal"
+        raise _BadNumber(text, node.start_mark, why)
+
+    def construct_yaml_float(self, node):
+        """YAML 1.1's floats also read ``1:30.5`` (base 60) and ``1_0.5`` (underscores dropped): refused, as
+        for integers; ``.inf`` and ``.nan`` are read (the fields that take a number refuse them by name)."""
+        text = self.construct_scalar(node)
+        if ":" in text or "_" in text:
+            raise _BadNumber(text, node.start_mark, "a base-60 number or underscores in a number (YAML 1.1 reads "
+                             "them as another value); write the number itself")
+        return super().construct_yaml_float(node)
 
     def construct_mapping(self, node, deep=False):
         if isinstance(node, yaml.MappingNode):
@@ -91,3 +128,7 @@ _SceneLoader.add_implicit_resolver(
     re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
     list("-+0123456789."),
 )
+_SceneLoader.add_implicit_resolver(  # 090, 08: no YAML 1.1 octal, so once a string; a number with a leading zero
+    "tag:yaml.org,2002:int", re.compile(r"^[-+]?0[0-9]+$"), list("-+0"))
+_SceneLoader.add_constructor("tag:yaml.org,2002:int", _SceneLoader.construct_yaml_int)
+_SceneLoader.add_constructor("tag:yaml.org,2002:float", _SceneLoader.construct_yaml_float)
