@@ -263,3 +263,21 @@ def test_intersects_and_the_detector_share_one_contact_tolerance():
         A = Box([0.0, 0.0, 0.0], [50.0, 50.0, 50.0])
         B = Box([100.0 + gap, 0.0, 0.0], [50.0, 50.0, 50.0])
         assert intersects(A, B) is expect, gap
+
+
+@pytest.mark.parametrize("field, value", [("length", float("nan")), ("length", 0.0), ("verify_contact", -1.0),
+                                          ("gjk_epsilon", float("inf")), ("verify_max_evaluations", -5),
+                                          ("gjk_max_iterations", 2.5), ("edge_max_evaluations", 1), ("length", True),
+                                          ("joint_limit", "1e-9")])
+def test_a_tolerance_that_is_no_tolerance_is_refused_when_made(field, value):
+    """``Tolerances(length=nan)`` once gave a Detector's WARNING at -0.7 m and a verifier's bare
+    ZeroDivisionError: a field NaN, infinite, zero or negative (a count below its least) is refused by name."""
+    from dataclasses import replace
+
+    from armguard import DEFAULT_TOLERANCES, Tolerances, ToleranceError
+
+    with pytest.raises(ToleranceError, match=f"Tolerances.{field}: expected"):
+        Tolerances(**{field: value})
+    with pytest.raises(ToleranceError):
+        replace(DEFAULT_TOLERANCES, **{field: value})
+    assert Tolerances(ik_restarts=0, cspace_max_depth=0, length=np.float64(1e-9), gjk_max_iterations=np.int64(9)).length == 1e-9

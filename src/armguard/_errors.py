@@ -100,6 +100,11 @@ def list_problems(problems) -> tuple[str, str]:
     return where, first + (f"\n{n} more problem{'s' if n > 1 else ''}:{rest}" if n else "")
 
 
+class ToleranceError(ArmguardError, ValueError):
+    """A :class:`armguard.Tolerances` field that is not a tolerance (NaN, infinite, zero or negative; a count
+    below its least): refused when the Tolerances is made, before any verdict is computed with it."""
+
+
 class TrajectoryError(ArmguardError, ValueError):
     """A trajectory is invalid (non-monotone times, wrong joint count, limits exceeded)."""
 

@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import math
+import numbers
 from dataclasses import dataclass, fields
+
+from ._errors import ToleranceError
 
 __all__ = ["Tolerances", "DEFAULT_TOLERANCES"]
 
@@ -10,6 +14,11 @@ __all__ = ["Tolerances", "DEFAULT_TOLERANCES"]
 @dataclass(frozen=True)
 class Tolerances:
     """Numeric tolerances, passed explicitly to the functions that need them.
+
+    Every field is checked when a Tolerances is made (``dataclasses.replace`` included): a length, ratio
+    or volume is a finite number > 0, a count an integer >= 1 (``edge_max_evaluations`` >= 2,
+    ``max_prism_sides`` >= 3, ``ik_restarts`` and ``cspace_max_depth`` >= 0); anything else is a
+    :class:`armguard.ToleranceError` naming the field, before a verdict is computed with it.
 
     Attributes
     ----------
@@ -210,10 +219,26 @@ class Tolerances:
     differential_parallel: float = 1e-3
     differential_unique_point: float = 1e-6
 
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if f.type in ("int", int):
+                least = _LEAST_COUNT.get(f.name, 1)
+                if isinstance(v, bool) or not hasattr(v, "__index__") or int(v) < least:
+                    raise ToleranceError(f"Tolerances.{f.name}: expected an integer >= {least}, got {v!r}")
+            else:
+                x = float(v) if isinstance(v, numbers.Real) and not isinstance(v, bool) else math.nan
+                if not (math.isfinite(x) and x > 0.0):
+                    raise ToleranceError(f"Tolerances.{f.name}: expected a finite number > 0, got {v!r}")
+
     def differential(self) -> dict:
         """The ``differential_*`` tolerances without their prefix (what a comparison report records)."""
         return {f.name.removeprefix("differential_"): getattr(self, f.name) for f in fields(self)
                 if f.name.startswith("differential_")}
 
+
+_LEAST_COUNT = {"edge_max_evaluations": 2, "max_prism_sides": 3, "ik_restarts": 0, "cspace_max_depth": 0}
+"""The least value of an integer field (1 where not named): an edge's covering evaluates both ends; a
+prism has 3 sides at least; no restart and no halving are counts that make sense."""
 
 DEFAULT_TOLERANCES = Tolerances()
