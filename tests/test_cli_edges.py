@@ -132,3 +132,64 @@ def test_a_file_that_is_no_edges_file_is_named(tmp_path):
     (tmp_path / "folder").mkdir()
     res = _run("edges", "ur5", str(tmp_path / "names.npz"), "--out", str(tmp_path / "folder"))
     assert res.exit_code == ExitCode.INPUT and "folder" in res.output and "joint_names" not in res.output  # before the work
+
+
+def _damaged(path, good):
+    """``good`` (an .npz) with bytes flipped inside its first member's compressed data (zip CRC then fails)."""
+    import zipfile
+
+    np.savez_compressed(good, Q0=np.zeros((3, 6)), Q1=np.full((3, 6), 0.1))
+    raw = bytearray(good.read_bytes())
+    with zipfile.ZipFile(good) as z:
+        info = z.infolist()[0]
+    start = info.header_offset + 30 + len(info.filename) + len(info.extra)
+    for k in range(start + 20, start + 30):
+        raw[k] ^= 0xFF
+    path.write_bytes(bytes(raw))
+
+
+def test_a_damaged_or_odd_edges_file_is_named_not_an_internal_error(tmp_path):
+    """Object arrays, a damaged member, no edge at all, joint_names of two dimensions or an unknown group: each
+    named with the file and the array (exit 3), never an internal error (exit 4) or a vacuous 'all clear'."""
+    np.savez(tmp_path / "obj.npz", Q0=np.array([np.zeros(6)], dtype=object), Q1=np.zeros((1, 6)))
+    res = _run("edges", "ur5", str(tmp_path / "obj.npz"))
+    assert res.exit_code == ExitCode.INPUT and "obj.npz: Q0: expected numbers (M, n), got an object array" in res.output
+    _damaged(tmp_path / "crc.npz", tmp_path / "good.npz")
+    res = _run("edges", "ur5", str(tmp_path / "crc.npz"))
+    assert res.exit_code == ExitCode.INPUT and "crc.npz: Q0: cannot read this array" in res.output, res.output
+    np.savez(tmp_path / "empty.npz", Q0=np.zeros((0, 6)), Q1=np.zeros((0, 6)))
+    res = _run("edges", "ur5", str(tmp_path / "empty.npz"))
+    assert res.exit_code == ExitCode.INPUT and "empty.npz: Q0 holds no configuration" in res.output
+    np.savez(tmp_path / "n2.npz", Q0=np.zeros((1, 6)), Q1=np.zeros((1, 6)), joint_names=np.array([["a", "b", "c"]] * 2))
+    res = _run("edges", "ur5", str(tmp_path / "n2.npz"))
+    assert res.exit_code == ExitCode.INPUT and "n2.npz: joint_names: expected one name per column" in res.output
+    np.savez(tmp_path / "grp.npz", Q0=np.zeros((1, 7)), Q1=np.zeros((1, 7)), joint_names=np.array("no_such_group"))
+    res = _run("edges", "panda", str(tmp_path / "grp.npz"))
+    assert res.exit_code == ExitCode.INPUT and "grp.npz: joint_names:" in res.output and "no_such_group" in res.output
+    np.savez(tmp_path / "nan.npz", Q0=np.zeros((2, 6)), Q1=np.full((2, 6), np.nan))
+    res = _run("edges", "ur5", str(tmp_path / "nan.npz"))
+    assert res.exit_code == ExitCode.INPUT and "Q1[0, 0]: NaN or infinite" in res.output, res.output
+
+
+def test_an_out_that_cannot_be_written_is_refused_before_the_work(tmp_path, monkeypatch):
+    """A read-only or full folder for --out: refused before the edges are certified (their verdicts would be
+    lost), as srdf's --out before its matrix."""
+    import errno
+
+    import armguard._io as io
+
+    np.savez(tmp_path / "e.npz", Q0=np.zeros((1, 6)), Q1=np.full((1, 6), 0.1))
+
+    def read_only(*a, **k):
+        raise OSError(errno.EROFS, "Read-only file system")
+
+    monkeypatch.setattr(io.tempfile, "mkstemp", read_only)
+    monkeypatch.setattr(Verifier, "check_edges", lambda *a, **k: pytest.fail("certified before --out was checked"))
+    res = _run("edges", "ur5", str(tmp_path / "e.npz"), "--out", str(tmp_path / "r.npz"))
+    assert res.exit_code == ExitCode.INPUT and "Read-only file system" in res.output and "r.npz" in res.output, res.output
+    import armguard.srdfgen as srdfgen
+
+    monkeypatch.setattr(srdfgen, "collision_matrix", lambda *a, **k: pytest.fail("computed before --out was checked"))
+    res = _run("srdf", "ur5", "--out", str(tmp_path / "sub" / "ur5.srdf"))
+    assert res.exit_code == ExitCode.INPUT and "Read-only file system" in res.output and "ur5.srdf" in res.output, res.output
+    assert not list(tmp_path.glob("**/*.probe"))

@@ -5,6 +5,8 @@ a subprocess."""
 
 from __future__ import annotations
 
+import json
+
 import os
 import signal
 import subprocess
@@ -138,6 +140,11 @@ def test_check_verdicts_map_to_their_codes():
     assert hit.exit_code == ExitCode.UNSAFE and "COLLISION" in hit.output
     spent = _run("check", "hermes", "--q", "195,0,0,0,0,0", "--deg", "--budget-us", "0")
     assert spent.exit_code == ExitCode.INCOMPLETE and "INCOMPLETE" in spent.output
+    as_json = _run("check", "hermes", "--q", "195,0,0,0,0,0", "--deg", "--budget-us", "0", "--json")
+    assert as_json.exit_code == ExitCode.INCOMPLETE
+    doc = json.loads(as_json.output, parse_constant=lambda c: pytest.fail(f"{c} is not JSON"))  # strict JSON
+    assert doc["status"] == "incomplete" and doc["not_evaluated"]
+    assert "Infinity" not in as_json.output and "NaN" not in as_json.output
 
 
 @pytest.mark.parametrize("statuses, code", [

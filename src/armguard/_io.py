@@ -26,7 +26,7 @@ from pathlib import Path
 
 from ._errors import OutputError
 
-__all__ = ["atomic_write", "make_folder", "output_set", "check_target", "figure_format", "save_figure"]
+__all__ = ["atomic_write", "make_folder", "output_set", "check_target", "check_writable", "figure_format", "save_figure"]
 
 
 def _reason(exc: OSError) -> str:
@@ -75,6 +75,29 @@ def check_target(path) -> Path:
                 else "not a regular file")
         raise OutputError(f"cannot write {path}: it exists and is {kind}, not a regular file (not replaced)")
     return path
+
+
+def check_writable(path, *, parents: bool = False) -> Path:
+    """``path`` as :func:`check_target` gives it, once a file could be written beside it (a temporary file
+    made and removed there): OutputError, naming the path and the reason, for a folder that is read-only,
+    full, not ours or missing (``parents``: made first).  For a command that computes for minutes before
+    it writes: refused before the work, not after it (nothing computed is then lost)."""
+    if parents:
+        try:
+            make_folder(Path(path).parent)
+        except OutputError as exc:
+            raise OutputError(f"cannot write {path}: {exc}") from None
+    target = check_target(path)
+    if not target.parent.is_dir():
+        raise OutputError(f"cannot write {path}: {target.parent} is not a folder")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".probe", dir=target.parent)
+    except OSError as exc:
+        raise OutputError(f"cannot write {path}: {_reason(exc)}") from None
+    os.close(fd)
+    with contextlib.suppress(OSError):
+        os.unlink(tmp)
+    return target
 
 
 def _data_bytes(data) -> bytes:

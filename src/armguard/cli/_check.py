@@ -8,7 +8,6 @@ limits in the units typed), 3 a file refused.
 
 from __future__ import annotations
 
-import json
 import math
 import sys
 
@@ -17,7 +16,7 @@ import click
 from . import main
 from ._params import LENGTH, scene_of, srdf_option
 from ._exit import ExitCode, exit_epilog
-from ._output import esc, output_console
+from ._output import esc, json_text, output_console
 
 _STATUS_EXIT = {"clear": ExitCode.OK, "warning": ExitCode.OK, "collision": ExitCode.UNSAFE,
                 "incomplete": ExitCode.INCOMPLETE}
@@ -102,7 +101,7 @@ def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_u
     rep = det.check(q, budget_us=budget_us)
     code = _STATUS_EXIT.get(rep.status.value, ExitCode.INCOMPLETE)  # never a success exit without a verdict
     if as_json:
-        click.echo(json.dumps(rep.to_dict(), indent=2))  # features as data (Feature.to_dict)
+        click.echo(json_text(rep.to_dict(), indent=2))  # features as data (Feature.to_dict)
         sys.exit(int(code))
     out = output_console()
     colour = _COLOUR[rep.status.value]

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 import sys
 
@@ -11,7 +10,7 @@ import click
 from . import main
 from ._params import AT_LEAST_ONE, BACKENDS, COUNT, POSITIVE
 from ._exit import ExitCode, exit_epilog
-from ._output import count, esc, output_console
+from ._output import count, esc, json_text, output_console
 
 
 def _floats(text: str) -> list:
@@ -91,7 +90,7 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
         the_model = resolve_model(model)
         rows = compare_at(model, names, _pin_q(the_model, _floats(q_text)), options=options, pair=pair, model=the_model)
         if as_json:
-            click.echo(json.dumps(rows, indent=1))
+            click.echo(json_text(rows, indent=1))
             return
         for r in rows:
             console.print(f"[bold]{esc(r['pair'][0])} / {esc(r['pair'][1])}[/bold] ({r['category']})")
@@ -117,7 +116,7 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
                            options=options, workers=workers, scheduler=scheduler, out_dir=out_dir, plots=not no_plots,
                            n_worst=n_worst, progress=lambda done, total: bar.update(task, completed=done, total=total))
     if as_json:
-        click.echo(json.dumps(comp.summary, indent=1, default=str))
+        click.echo(json_text(comp.summary, indent=1, default=str))
     else:
         for t in summary_table(comp):
             console.print(t)
@@ -169,7 +168,7 @@ def check_urdf_cmd(path, n_configs, as_json) -> None:
         raise SceneFileError(str(path), "", "file not found")
     report = check_model_files(path, n_configs=n_configs)
     if as_json:
-        click.echo(json.dumps(report.to_dict(), indent=1))
+        click.echo(json_text(report.to_dict(), indent=1))
     else:
         console = output_console()
         if not report.findings:

@@ -9,7 +9,7 @@ import click
 from . import main
 from ._params import AT_LEAST_ONE, COUNT, LENGTH
 from ._exit import ExitCode, exit_epilog
-from ._output import output_console
+from ._output import json_text, output_console
 
 
 def _angle(value: str) -> float:
@@ -105,7 +105,7 @@ def info_cmd(map_path, model, samples, as_json) -> None:
         out["exactness"] = {k: (v.value if hasattr(v, "value") else v) for k, v in dataclasses.asdict(rep).items()}
     unsafe = samples > 0 and out["exactness"]["allowed_but_colliding"] > 0
     if as_json:
-        click.echo(json.dumps(out, indent=2))
+        click.echo(json_text(out, indent=2))
         if unsafe:
             raise SystemExit(int(ExitCode.UNSAFE))
         return

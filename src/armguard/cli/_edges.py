@@ -20,6 +20,7 @@ def read_edges(path) -> tuple:
     ``joint_names``: ``(n,)`` strings, or one string (an SRDF group); None without.  An error names the file and
     what it lacks."""
     import zipfile
+    import zlib
 
     import numpy as np
 
@@ -30,22 +31,40 @@ def read_edges(path) -> tuple:
         raise VerificationError(f"{p}: no such file")
     if not p.is_file() or not zipfile.is_zipfile(p):
         raise VerificationError(f"{p}: not an .npz file of edges (an archive of arrays Q0, Q1, as numpy.savez writes)")
-    with np.load(p, allow_pickle=False) as f:
+    def array(f, key: str, what: str):
+        try:
+            return np.asarray(f[key])
+        except ValueError as exc:
+            if "Object arrays" in str(exc):  # pickled objects: never unpickled from a file
+                raise VerificationError(f"{p}: {key}: expected {what}, got an object array (pickled objects are "
+                                        "not read)") from None
+            raise VerificationError(f"{p}: {key}: cannot read this array ({exc})") from None
+        except (OSError, EOFError, zipfile.BadZipFile, zlib.error) as exc:  # a damaged or truncated member
+            raise VerificationError(f"{p}: {key}: cannot read this array ({type(exc).__name__}: {exc})") from None
+
+    try:
+        f = np.load(p, allow_pickle=False)
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise VerificationError(f"{p}: not an .npz file of edges ({exc})") from None
+    with f:
         keys = set(f.files)
         if not {"Q0", "Q1"} <= keys:
             raise VerificationError(f"{p}: expected arrays 'Q0' and 'Q1' (M, n) (and optionally 'joint_names'), "
                                     f"found {sorted(keys) or 'none'}")
-        Q0, Q1 = np.asarray(f["Q0"]), np.asarray(f["Q1"])
-        if "joint_names" not in keys:
-            return Q0, Q1, None
-        try:
-            names = f["joint_names"]
-        except ValueError:  # an object array (pickled): not read
-            raise VerificationError(f"{p}: joint_names: expected strings (numpy.savez(..., joint_names=np.array(names, "
-                                    "dtype=str))), got an object array") from None
+        Q0, Q1 = array(f, "Q0", "numbers (M, n)"), array(f, "Q1", "numbers (M, n)")
+        names = array(f, "joint_names", "strings (numpy.savez(..., joint_names=np.array(names, dtype=str)))") \
+            if "joint_names" in keys else None
+    for key, Q in (("Q0", Q0), ("Q1", Q1)):
+        if Q.size == 0:
+            raise VerificationError(f"{p}: {key} holds no configuration (shape {Q.shape}): no edge to certify")
+    if names is None:
+        return Q0, Q1, None
     if names.dtype.kind not in "US":
         raise VerificationError(f"{p}: joint_names: expected strings, got dtype {names.dtype}")
-    return Q0, Q1, str(names) if names.ndim == 0 else [str(x) for x in names.ravel()]
+    if names.ndim > 1:
+        raise VerificationError(f"{p}: joint_names: expected one name per column (n,), or one SRDF group's name, "
+                                f"got shape {names.shape}")
+    return Q0, Q1, str(names) if names.ndim == 0 else [str(x) for x in names]
 
 
 @main.command("edges", epilog=exit_epilog(
@@ -84,8 +103,8 @@ def edges_cmd(model, edges_file, robot, margin, first_contact, continuous, max_e
     import numpy as np
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from .._errors import VerificationError
-    from .._io import atomic_write, check_target
+    from .._errors import ArmguardError, VerificationError
+    from .._io import atomic_write, check_writable
     from ..model import load_model
     from ..verify import ALL_ROBOTS, EdgeStatus, Verifier
 
@@ -93,11 +112,14 @@ def edges_cmd(model, edges_file, robot, margin, first_contact, continuous, max_e
 
     console = output_console()
     if out_path:
-        check_target(out_path)  # an output that cannot be written: refused before the work
+        check_writable(out_path)  # an output that cannot be written: refused before the work
     Q0, Q1, names = read_edges(edges_file)
     m = load_model(model)
     if isinstance(names, str):
-        names = list(m.group_joints(names))  # an SRDF group (an unknown one is named by group_joints)
+        try:
+            names = list(m.group_joints(names))  # an SRDF group (an unknown one is named by group_joints)
+        except ArmguardError as exc:
+            raise VerificationError(f"{edges_file}: joint_names: {exc}") from None
     width = Q0.shape[-1] if Q0.ndim else None
     if names is not None and width is not None and len(names) != width:
         raise VerificationError(f"{edges_file}: joint_names names {len(names)} joints, Q0 has {width} columns")

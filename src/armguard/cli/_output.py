@@ -14,6 +14,8 @@ library's source line under it.
 from __future__ import annotations
 
 import errno
+import json
+import math
 import sys
 import warnings
 
@@ -70,3 +72,26 @@ def one_line_warnings() -> None:
 
     show._armguard_one_line = True
     warnings.showwarning = show
+
+
+def json_text(obj, **kwargs) -> str:
+    """``obj`` as strict JSON: a NaN or an infinity (an incomplete check's lower bound of -inf, an undefined
+    figure) is ``null``, as JSON has no such numbers and strict parsers refuse Python's ``-Infinity``; numpy
+    scalars and arrays are numbers and lists."""
+    return json.dumps(_finite(obj), allow_nan=False, **kwargs)
+
+
+def _finite(x):
+    import numpy as np
+
+    if isinstance(x, (float, np.floating)):
+        return float(x) if math.isfinite(x) else None
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, np.ndarray):
+        return _finite(x.tolist())
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_finite(v) for v in x]
+    return x

@@ -76,6 +76,9 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
             raise click.BadParameter(f"{out} holds elements a collision matrix does not make ({', '.join(tags)}): "
                                      "--update keeps them and replaces its disable_collisions; or write to another file",
                                      param_hint="--out")
+    from .._io import check_writable
+
+    check_writable(out, parents=True)  # refused before minutes of work (a missing folder is made, as verify --report makes its)
     model = load_model(robot, srdf=False)
     before = read_previous(out) if update else {}
     cm = collision_matrix(model, margin=margin, method=method, samples=samples, workers=workers,
@@ -86,9 +89,6 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
                != (e.reason, e.status)]
     if update:  # and the disabled pairs the matrix does not search (static bodies, a link against an obstacle)
         keep = other_elements(out, searched={frozenset((e.link1, e.link2)) for e in cm.entries})
-    from .._io import make_folder
-
-    make_folder(Path(out).parent)  # a missing folder is made, as verify --report and compare --out make theirs
     cm.write_srdf(out, keep if update else ())
     c = cm.counts()
     if as_json:

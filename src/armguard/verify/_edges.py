@@ -151,7 +151,7 @@ def _rows(Q, name: str, joint_names, scene, robot: str) -> np.ndarray:
         raise VerificationError(f"{name}: expected numbers (M, {n}) or ({n},), got {type(Q).__name__}") from None
     bad = np.argwhere(~np.isfinite(Q))
     if len(bad):
-        raise VerificationError(f"{name}{list(bad[0]) if Q.ndim > 1 else [int(bad[0][0])]}: NaN or infinite "
+        raise VerificationError(f"{name}{[int(k) for k in bad[0]] if Q.ndim > 1 else [int(bad[0][0])]}: NaN or infinite "
                                 f"({int(len(bad))} such values)")
     if Q.ndim == 1:
         Q = Q[None, :]
