@@ -88,3 +88,15 @@ def test_the_console_takes_a_shipped_name_before_compiling(tmp_path, monkeypatch
     monkeypatch.setattr(serve_mod, "load_inputs", inputs)
     res = CliRunner().invoke(main, ["console", "rover", "--terrain", "rocky", "--port", "0"])
     assert seen == [str(SHIPPED / "rocky.npz")], res.output  # handed on resolved (then stopped: exit 4)
+
+
+def test_the_console_api_takes_a_shipped_name(tmp_path, monkeypatch):
+    """``make_state(..., terrain="rocky")`` and ``serve``: the name is checked as the command line checks it
+    (``load_inputs``, before any kernel), and an unknown one is named with the shipped names."""
+    from armguard import TerrainError
+    from armguard.console._serve import load_inputs
+
+    monkeypatch.chdir(tmp_path)
+    assert load_inputs("rover", terrain="rocky").model is not None
+    with pytest.raises(TerrainError, match="gentle, rocky, rough"):
+        load_inputs("rover", terrain="nosuch")

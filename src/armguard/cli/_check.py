@@ -80,7 +80,8 @@ def parse_q(sc, q_text: str, deg: bool):
 @click.option("--budget-us", type=LENGTH, default=None, help="Anytime mode: time budget in microseconds.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
 @click.option("--terrain", "terrain_file", type=click.Path(), default=None,
-              help="Add the terrain category: a sensed terrain file (armguard.terrain.load_terrain).")
+              help="Add the terrain category: a sensed terrain file (armguard.terrain.load_terrain), or a shipped "
+                   "terrain by name (gentle, rocky, rough).")
 @srdf_option("SCENE")
 def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_us, as_json, terrain_file, srdf) -> None:
     """Check SCENE (a built-in name or a scene file) at one configuration."""

@@ -34,7 +34,7 @@ class _Uncertain(click.ParamType):
 @click.option("--threshold", default=0.05, show_default=True, type=LENGTH, help="Initial detection threshold (m).")
 @click.option("--watch", is_flag=True, help="Reload the model when its files change, keeping the configuration.")
 @click.option("--terrain", "terrain_file", type=click.Path(), default=None,
-              help="Check against a sensed terrain file (as armguard check --terrain) and draw it with the "
+              help="Check against a sensed terrain file or shipped name (as armguard check --terrain) and draw it with the "
                    "pyramid boxes each check tests.")
 @click.option("--uncertain", multiple=True, type=_Uncertain(), metavar="BODY=SIGMA_M[,SIGMA_DEG]",
               help="Place a body (or a robot's base) with an isotropic uncertainty (m, deg); repeatable. "

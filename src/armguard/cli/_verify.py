@@ -77,7 +77,8 @@ def _unique_names(items):
 @click.option("--workers", type=AT_LEAST_ONE, default=None, help="Run on a Dask LocalCluster with N worker processes.")
 @click.option("--scheduler", default=None, help="Run on an existing Dask cluster (scheduler address).")
 @click.option("--terrain", "terrain_file", type=click.Path(), default=None,
-              help="Also verify against a sensed terrain file (armguard.terrain.load_terrain): the terrain sweep is "
+              help="Also verify against a sensed terrain file (armguard.terrain.load_terrain; or a shipped terrain by "
+                   "name: gentle, rocky, rough): the terrain sweep is "
                    "certified whatever --method (the scene's check follows --method), the trajectories verified here one "
                    "after another (not with --workers or --scheduler).")
 def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_distance, speed_dependent, threshold, robot,

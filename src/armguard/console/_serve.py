@@ -117,10 +117,10 @@ def load_inputs(scene, *, terrain=None) -> ConsoleInputs:
             scene, model = cell.model.scene, cell.model
         else:
             scene, model = load_for_console(scene)
-    if isinstance(terrain, (str, Path)) and not Path(terrain).exists():  # read later, with the scene's kernels
-        from .._errors import TerrainError
+    if isinstance(terrain, (str, Path)):  # a file, or a shipped terrain's name ("rocky"): read later, with the scene's kernels
+        from ..terrain import terrain_path
 
-        raise TerrainError(f"terrain file {str(terrain)!r} does not exist")
+        terrain_path(terrain)  # a TerrainError naming it, and the shipped names, when neither
     return ConsoleInputs(scene, model, cell, source)
 
 
