@@ -355,9 +355,15 @@ def _home(srdf, st, robot, prefix: str, movable: set, f: str, fixed: frozenset) 
             turned = v + 2.0 * math.pi * math.ceil((lo - 1e-9 - v) / (2.0 * math.pi))  # the first turn >= lo
             if lo - 1e-9 <= turned <= hi + 1e-9:
                 srdf.warn(f"{where}: value {v:.10g} is outside the limits [{lo:.10g}, {hi:.10g}] of joint {key!r}; "
-                          f"read as {turned:.6g} (the same angle a whole turn away)")
+                          f"read as {turned:.6g} (the same angle {_turns(turned - v)} away)")
                 v = turned
         if not (lo - 1e-9 <= v <= hi + 1e-9):
             raise srdf.error(where, f"value {v:.10g} is outside the limits [{lo:.10g}, {hi:.10g}] of joint {key!r} in the URDF {f}")
         out.append(min(max(v, lo), hi))
     return np.asarray(out, dtype=np.float64)
+
+
+def _turns(d: float) -> str:
+    """``d`` rad (a whole number of turns) in words: "a whole turn", "15 whole turns"."""
+    n = int(round(abs(d) / (2.0 * math.pi)))
+    return "a whole turn" if n == 1 else f"{n} whole turns"

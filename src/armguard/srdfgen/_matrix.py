@@ -22,6 +22,8 @@ as the reference), over a Model whose active pairs are the robot's own link pair
 
 from __future__ import annotations
 
+import math
+
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
@@ -300,5 +302,6 @@ def _entry(p, r, ev) -> MatrixEntry:
         return MatrixEntry(p.link1, p.link2, None, "witnessed", q, r.distance, "a configuration within the margin",
                            r.evaluations)
     return MatrixEntry(p.link1, p.link2, None, "undecided", None, float("nan"),
-                       f"undecided after {r.evaluations} evaluations (boxes down to {r.smallest_width:.2g} rad)",
+                       f"undecided after {r.evaluations} evaluations" + (f" (boxes down to {r.smallest_width:.2g} rad)"
+                                                                         if math.isfinite(r.smallest_width) else " (no box split)"),
                        r.evaluations)

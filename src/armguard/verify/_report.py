@@ -304,7 +304,9 @@ class VerificationReport:
             lines.append("held at home (not in the trajectory): " + ", ".join(f"{j} = {v:.6g}" for j, v in self.held_joints.items()))
         if d.method == "sampled":
             how = "Ed = v/f" if d.frequency is not None else "the most a clearance can shrink between samples"
-            lines.append(f"discretisation error ({how}): {d.discretisation_error * 1e3:.1f} mm (collisions shorter than this may be missed)")
+            ed_mm = d.discretisation_error * 1e3
+            ed = f"{ed_mm:.1f} mm" if abs(ed_mm) < 1e6 else f"{ed_mm / 1e3:.3g} m"
+            lines.append(f"discretisation error ({how}): {ed} (collisions shorter than this may be missed)")
         c = self.first_collision
         if c is not None:
             where = f"link {c.link}" if c.link else f"payload {c.payload}"
