@@ -313,3 +313,35 @@ def test_building_the_tables_compiles_no_kernel_of_its_own():
     out = json.loads(proc.stdout.strip().splitlines()[-1])
     assert out["sdt"] > 7  # puma560 has seed tables (more than the one empty row)
     assert out["readonly"] == [], out["readonly"]  # no overload for read-only arrays
+
+
+def test_hull_graphs_and_support_tables_are_remembered_by_their_points():
+    """An edited Model rebuilds the engine of the links it did not touch: the hull graph and support table of
+    the same points are the remembered ones (fresh copies: a caller's write reaches neither the memo nor the
+    next caller), equal to what a computation anew gives; other points get their own."""
+    import armguard.geometry._pack as pack
+
+    rng = np.random.default_rng(3)
+    v = rng.normal(size=(400, 3))
+    pack._MEMO.clear()
+    adj, tri = hull_graph(v)
+    tab = support_table(v)
+    assert len(pack._MEMO) == 2
+    adj[:] = -1
+    tab[:] = -1
+    again_adj, again_tri = hull_graph(v.copy())
+    assert len(pack._MEMO) == 2 and again_adj.flags.writeable
+    from scipy.spatial import ConvexHull
+
+    fresh_tri = ConvexHull(v).simplices
+    fresh_adj = pack._graph(v, [fresh_tri[:, [0, 1]], fresh_tri[:, [1, 2]], fresh_tri[:, [2, 0]]])
+    assert np.array_equal(again_adj, fresh_adj) and np.array_equal(again_tri, fresh_tri)
+    assert np.array_equal(support_table(v), pack._support_table(v, 16))
+    assert not np.array_equal(support_table(v + 1e-9), -np.ones_like(tab)) and len(pack._MEMO) == 3
+    old = pack._MEMO_BYTES
+    try:
+        pack._MEMO_BYTES = 1  # the oldest entries go first, the newest stays
+        hull_graph(v * 2.0)
+        assert len(pack._MEMO) == 1
+    finally:
+        pack._MEMO_BYTES = old
