@@ -399,3 +399,40 @@ def test_a_nan_clearance_is_an_error_not_a_verdict(ur5, monkeypatch):
     monkeypatch.setattr(_record._Run, "eval", poisoned)
     with pytest.raises(VerificationError, match="NaN at s = 0.0"):
         v.check_edges(Q0, Q1)
+
+
+def test_a_nan_clearance_gives_no_sampled_verdict_and_stops_the_guard(ur5, monkeypatch):
+    """A shape pair's NaN makes its pair of parts NaN (``owner_rows``: never hidden by a finite sibling);
+    sampled verification then raises (it had said SAFE: ``nan <= 0`` is False) and the Guard stops (it had
+    said OK, "predicted path clear")."""
+    from armguard.verify import Guard, GuardVerdict
+    from armguard.verify import _oracle, _record
+
+    m, v = ur5
+    robot = next(iter(m.scene.robots))
+    names = m.scene.robots[robot].joint_names
+    Q0, Q1 = _edges(m, 1, 4)
+    traj = Trajectory(robot, names, [0.0, 1.0], np.stack([Q0[0], Q1[0]]))
+    real = _record._Run.eval
+
+    def poisoned(self, si, s, q, t=None):
+        row = real(self, si, s, q, t)
+        self.D[row, np.flatnonzero(self.moving)[0]] = np.nan
+        return row
+
+    monkeypatch.setattr(_record._Run, "eval", poisoned)
+    with pytest.raises(VerificationError, match="NaN: no verdict"):
+        v.verify(traj, method="sampled")
+    monkeypatch.undo()
+    real_d = _oracle.ClearanceModel._distances
+
+    def nan_distances(self, q, robot=None):
+        d, a, b = real_d(self, q, robot)
+        d = d.copy()
+        d[0] = np.nan
+        return d, a, b
+
+    g = Guard(m.scene)
+    monkeypatch.setattr(_oracle.ClearanceModel, "_distances", nan_distances)
+    dec = g.step(Q0[0], Q0[0] + 0.01)
+    assert dec.verdict is GuardVerdict.STOP and "NaN" in dec.reason, dec

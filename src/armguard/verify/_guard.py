@@ -381,6 +381,9 @@ class Guard(FollowsScene):
         contact = self.tol.verify_contact
         while True:
             gap = d - m
+            if np.isnan(gap).any():  # never a verdict from a NaN: stop
+                return self._decide(GuardVerdict.STOP, f"a clearance is NaN at {s:.3f} of the commanded segment: no "
+                                    "prediction", now, -math.inf, _time_to(s, T), None, m, evals, t_start)
             i = int(np.argmin(gap))
             if gap[i] <= contact:
                 pair = (model.owner_a[i], model.owner_b[i])

@@ -403,6 +403,8 @@ class Verifier(FollowsScene):
             row = run.eval(si, s, q, t)  # may grow run.D: index it after
             d = run.D[row]
             gap = d - margins[si]
+            if np.isnan(gap).any():
+                raise VerificationError(f"a clearance in segment {si} is NaN: no verdict")
             if float(gap.min()) <= 0.0:
                 return VerificationStatus.COLLISION, "", -math.inf, 0, (si, s, int(np.argmin(gap))), ed
         return VerificationStatus.SAFE, "", -math.inf, 0, None, ed
