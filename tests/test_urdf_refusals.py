@@ -208,3 +208,28 @@ def test_package_meshes_resolve_by_the_package_folder_or_its_parent(tmp_path):
     assert want in {str(p) for p in armguard.load_model(moved, package_dirs=tmp_path / "share").files}
     with pytest.raises(SceneFileError, match="mesh file not found"):
         armguard.load_model(moved)
+
+
+def test_a_package_named_otherwise_than_its_folder_and_model_uris(tmp_path):
+    """ROS finds a package by its package.xml's name: a download or clone named otherwise
+    (``ur_description-main``) resolves ``package://ur_description/...`` as before; so does a package folder
+    given in package_dirs, and ``model://`` as Pinocchio reads it.  A relative mesh missing beside the URDF
+    is not looked up in the folders above it (``shared/meshes/m.obj`` for ``robots/r2/meshes/m.obj``)."""
+    pkg = tmp_path / "ur_description-main"
+    _tet_obj(pkg / "meshes" / "m.obj")
+    (pkg / "package.xml").write_text("<package><name>ur_description</name></package>", encoding="utf-8")
+    (pkg / "urdf").mkdir()
+    path = pkg / "urdf" / "r.urdf"
+    path.write_text(_urdf('<mesh filename="package://ur_description/meshes/m.obj"/>'), encoding="utf-8")
+    assert str(pkg / "meshes" / "m.obj") in {str(p) for p in armguard.load_model(path).files}
+    (pkg / "package.xml").unlink()
+    with pytest.raises(SceneFileError, match="mesh file not found"):
+        armguard.load_model(path)
+    assert str(pkg / "meshes" / "m.obj") in {str(p) for p in armguard.load_model(path, package_dirs=pkg).files}
+    path.write_text(_urdf('<mesh filename="model://ur_description-main/meshes/m.obj"/>'), encoding="utf-8")
+    assert str(pkg / "meshes" / "m.obj") in {str(p) for p in armguard.load_model(path).files}
+    _tet_obj(tmp_path / "shared" / "meshes" / "m.obj")
+    r2 = tmp_path / "shared" / "robots" / "r2"
+    r2.mkdir(parents=True)
+    err = _refused(r2, _urdf('<mesh filename="meshes/m.obj"/>'))
+    assert "mesh file not found: 'meshes/m.obj'" in err.message

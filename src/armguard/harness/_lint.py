@@ -172,7 +172,6 @@ def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: d
         _unparsed(report, f, "URDF", exc)
         return
     links, joints = {ln.get("name") for ln in root.findall("link")}, {j.get("name") for j in root.findall("joint")}
-    dirs = [urdf.parent, *urdf.parents]
     for link in root.findall("link"):
         ln = link.get("name")
         entries = {}
@@ -193,7 +192,7 @@ def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: d
                                                f"<{el.tag}> is dropped by Pinocchio (no collision geometry)", sug))
             elif el.tag == "mesh":
                 fn = el.get("filename", "")
-                mp = mesh_paths.get(name) or resolve_mesh(fn, urdf.parent, dirs)
+                mp = mesh_paths.get(name) or resolve_mesh(fn, urdf.parent, ())  # package:// searched above the URDF by itself
                 if mp is None:
                     report.findings.append(Finding(Check.UNPARSED, Severity.ERROR, w, f"mesh file not found: {fn!r}"))
                 else:

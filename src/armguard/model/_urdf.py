@@ -52,25 +52,31 @@ class UrdfInfo:
     hull_cache: dict = field(default_factory=dict)  # "folder", "hits", "computed" (._hull_cache.cached_polytope)
 
 
+_UP = 6  # folders above a URDF searched for a package:// mesh's package (a description package's own layout)
+
+
 def resolve_mesh(filename: str, urdf_dir: Path, package_dirs) -> Path | None:
     """A mesh named by a URDF, or None (the caller names it: never another file of the same name).
 
     * ``file:///abs/x.stl`` or an absolute path: that file;
     * a relative path: from the URDF's folder, or from a folder of ``package_dirs`` (as Pinocchio
       reads one), as written;
-    * ``package://pkg/rest`` (``package:///pkg/...``, talos_full_v2's spelling, read as Pinocchio reads
-      it: under the package folders, not an absolute path): ``base/pkg/rest`` for ``base`` a folder of
-      ``package_dirs``, the URDF's folder or one above it (a description package's own layout), or
-      ``base/rest`` where ``base`` is itself the folder named ``pkg``.
+    * ``package://pkg/rest`` or ``model://pkg/rest`` (Pinocchio reads both so; ``package:///pkg/...``,
+      talos_full_v2's spelling, as Pinocchio reads it: under the package folders, not an absolute
+      path): ``base/pkg/rest`` for ``base`` a folder of ``package_dirs``, the URDF's folder or one of
+      the six above it; or ``base/rest`` where ``base`` is the package ``pkg`` itself: a folder of
+      ``package_dirs`` (given as the package), a folder named ``pkg``, or one whose ``package.xml``
+      names it (a clone or a download named otherwise: ``ur_description-main``).
 
-    A path whose leading folders are dropped until some file of that name turns up is not a mesh the
-    URDF names: with ``collision/m.obj`` missing, an ``m.obj`` two folders up was once read in its
-    place, a different model without a word."""
+    A path whose leading folders are dropped until some file of that name turns up, or a relative
+    path looked up in the folders above the URDF, is not a mesh the URDF names: with
+    ``collision/m.obj`` missing, an ``m.obj`` two folders up was once read in its place, a different
+    model without a word."""
     name, package = filename, False
-    for scheme in ("file://", "package://"):
+    for scheme in ("file://", "package://", "model://"):
         if name.startswith(scheme):
             name = name[len(scheme):]
-            if scheme == "package://":
+            if scheme != "file://":
                 name, package = name.lstrip("/"), True
     p = Path(name)
     if p.is_absolute():
@@ -78,22 +84,35 @@ def resolve_mesh(filename: str, urdf_dir: Path, package_dirs) -> Path | None:
     parts = p.parts
     if not parts:
         return None
+    given = [Path(d) for d in package_dirs]
     if not package:
-        for base in (urdf_dir, *[Path(d) for d in package_dirs]):
+        for base in (urdf_dir, *given):
             cand = base.joinpath(*parts)
             if cand.is_file():
                 return cand
         return None
     pkg, rest = parts[0], parts[1:]
-    for base in (*[Path(d) for d in package_dirs], urdf_dir, *urdf_dir.parents):
+    for base in (*given, urdf_dir, *list(urdf_dir.parents)[:_UP]):
         cand = base.joinpath(*parts)  # base holds the package folder
         if cand.is_file():
             return cand
-        if rest and base.name == pkg:  # base is the package folder itself
+        if rest and (base in given or base.name == pkg or _package_name(base) == pkg):  # base is the package
             cand = base.joinpath(*rest)
             if cand.is_file():
                 return cand
     return None
+
+
+def _package_name(folder: Path) -> str | None:
+    """The ``<name>`` of ``folder/package.xml`` (a ROS package's own name), or None."""
+    f = folder / "package.xml"
+    if not f.is_file():
+        return None
+    try:
+        el = ET.parse(f).getroot().find("name")
+    except (ET.ParseError, OSError):
+        return None
+    return el.text.strip() if el is not None and el.text else None
 
 
 def _read_xml(path: Path, package_dirs) -> UrdfInfo:
@@ -170,9 +189,10 @@ def load_pinocchio(path, package_dirs=()):
     import pinocchio as pin
 
     path = Path(path).resolve()
-    # package:// names resolve against the URDF's folder, the given folders and the folders above it
-    dirs = [str(path.parent), *[str(d) for d in package_dirs], *[str(p) for p in list(path.parents)[:6]]]
-    info = _read_xml(path, dirs)
+    # package:// names resolve against the given folders, the URDF's folder and the folders above it
+    # (resolve_mesh searches those itself); relative names against the URDF's folder and the given ones
+    dirs = [str(path.parent), *[str(d) for d in package_dirs], *[str(p) for p in list(path.parents)[:_UP]]]
+    info = _read_xml(path, [str(d) for d in package_dirs])
     f = str(path)
     try:
         pin_model = pin.buildModelFromUrdf(f, mimic=True)
