@@ -166,6 +166,10 @@ def test_a_damaged_or_odd_edges_file_is_named_not_an_internal_error(tmp_path):
     np.savez(tmp_path / "grp.npz", Q0=np.zeros((1, 7)), Q1=np.zeros((1, 7)), joint_names=np.array("no_such_group"))
     res = _run("edges", "panda", str(tmp_path / "grp.npz"))
     assert res.exit_code == ExitCode.INPUT and "grp.npz: joint_names:" in res.output and "no_such_group" in res.output
+    names = list(armguard.load_model("ur5").scene.robots["ur5"].joint_names)
+    np.savez(tmp_path / "bytes.npz", Q0=np.zeros((1, 6)), Q1=np.full((1, 6), 0.1), joint_names=np.array(names, dtype="S"))
+    res = _run("edges", "ur5", str(tmp_path / "bytes.npz"))  # b'...' names read as text (were "b'shoulder_pan_joint'")
+    assert res.exit_code in (ExitCode.OK, ExitCode.UNSAFE) and "1 edges of 'ur5'" in res.output, res.output
     np.savez(tmp_path / "nan.npz", Q0=np.zeros((2, 6)), Q1=np.full((2, 6), np.nan))
     res = _run("edges", "ur5", str(tmp_path / "nan.npz"))
     assert res.exit_code == ExitCode.INPUT and "Q1[0, 0]: NaN or infinite" in res.output, res.output
@@ -193,3 +197,18 @@ def test_an_out_that_cannot_be_written_is_refused_before_the_work(tmp_path, monk
     res = _run("srdf", "ur5", "--out", str(tmp_path / "sub" / "ur5.srdf"))
     assert res.exit_code == ExitCode.INPUT and "Read-only file system" in res.output and "ur5.srdf" in res.output, res.output
     assert not list(tmp_path.glob("**/*.probe"))
+
+
+def test_an_out_in_a_missing_folder_is_made_with_the_file_and_nothing_is_left_on_refusal(ur5, tmp_path):
+    """--out under folders not made yet: checked where they would be made (nothing made before the work),
+    then made with the file; a refused run (an unknown robot) leaves no folder behind."""
+    m, Q = ur5
+    np.savez(tmp_path / "e.npz", Q0=Q[:2], Q1=Q[2:4])
+    res = _run("edges", "ur5", str(tmp_path / "e.npz"), "--out", str(tmp_path / "new" / "dir" / "r.npz"))
+    assert res.exit_code in (ExitCode.OK, ExitCode.UNSAFE), res.output
+    assert (tmp_path / "new" / "dir" / "r.npz").is_file()
+    res = _run("srdf", "no_such_robot", "--out", str(tmp_path / "srdfout" / "a" / "x.srdf"))
+    assert res.exit_code == ExitCode.INPUT and not (tmp_path / "srdfout").exists(), res.output
+    (tmp_path / "afile").write_text("x")
+    res = _run("edges", "ur5", str(tmp_path / "e.npz"), "--out", str(tmp_path / "afile" / "sub" / "r.npz"))
+    assert res.exit_code == ExitCode.INPUT and "afile" in res.output, res.output

@@ -176,18 +176,35 @@ def test_yaml_1_2_numbers_are_numbers(tmp_path):
     assert s.radius == 0.1 and s.center.tolist() == [1000.0, 0.25, -1.0]
 
 
-@pytest.mark.parametrize("number, said", [("010", "leading zero"), ("090", "leading zero"), ("0x10", "hexadecimal"),
-                                          ("0b11", "binary"), ("1:30", "base-60"), ("1__0", "underscores"),
-                                          ("1:30.5", "base-60"), ("1_0.5", "underscores")])
-def test_yaml_1_1_numbers_are_refused_where_they_stand(tmp_path, number, said):
-    """YAML 1.1 reads 010 as 8, 0x10 as 16, 1:30 as 90 and 1__0 as 10; the scene files follow YAML 1.2:
-    refused at their line and column, never read as another value (a joint limit of -060 deg was -48)."""
+@pytest.mark.parametrize("number, said", [("010", "leading zero"), ("-045", "leading zero"), ("0x10", "hexadecimal"),
+                                          ("0b11", "binary")])
+def test_numbers_yaml_1_1_and_1_2_read_differently_are_refused_where_they_stand(tmp_path, number, said):
+    """YAML 1.1 reads 010 as 8 (1.2: 10) and 0b11 as 3 (1.2: text): refused at their line and column, never
+    read as one or the other (a joint limit of -060 deg was -48)."""
     _, load = _load(f"      - {{type: sphere, radius: 0.1, xyz: [0, 0, {number}]}}\n", tmp_path)
     with pytest.raises(SceneFileError) as info:
         load()
     assert info.value.where == "line 6, column 49" and said in str(info.value) and repr(number) in str(info.value)
+    assert "quote it if it is a name" in str(info.value)
     _, load = _load("      - {type: sphere, radius: 0.1, xyz: [0, +10, -0]}\n", tmp_path)
     assert load().bodies["b"].shapes[0].center.tolist() == [0.0, 10.0, 0.0]
+
+
+@pytest.mark.parametrize("text", ["1:30", "1__0", "1:30.5", "1_0.5", "090"])
+def test_yaml_1_1_numbers_that_are_text_in_yaml_1_2_are_text(tmp_path, text):
+    """1:30 (YAML 1.1: 90), 1__0 (10), 090 (no octal): text, as YAML 1.2 reads them; a number field refuses them
+    by its name, and a name keeps them (a body named 1_2, a joint named 08)."""
+    _, load = _load(f"      - {{type: sphere, radius: 0.1, xyz: [0, 0, {text}]}}\n", tmp_path)
+    with pytest.raises(SceneFileError) as info:
+        load()
+    assert "bodies[0].shapes[0].xyz" in info.value.where, info.value
+    if ":" in text:
+        return  # not a name's character
+    p = tmp_path / "named.yaml"
+    p.write_text(f"armguard_scene: 1\nname: {text}\nbodies:\n  - name: {text}\n    shapes:\n"
+                 "      - {type: sphere, radius: 0.1, xyz: [0, 0, 0]}\n", encoding="utf-8")
+    sc = load_scene_file(p)
+    assert sc.name == text and list(sc.bodies) == [text]
 
 
 def test_a_duplicate_key_is_an_error_naming_both_lines(tmp_path):

@@ -182,3 +182,30 @@ def test_owner_rows_refuses_mismatched_rows():
     with pytest.raises(ValueError):
         owner_rows(np.zeros((2, 7)), np.array([0, 2], dtype=np.int64), d, wit)
     assert np.isinf(d).all()
+
+
+def test_a_scene_edited_during_a_lean_evaluation_gives_no_rows():
+    """The scene edited while the kernel ran (another thread adding a body): the rows are of the model's
+    revision but the scene's pairs are others: StaleModelError, never a row recorded."""
+    import armguard
+    from armguard import StaleModelError
+    from armguard.geometry import Box
+    from armguard.verify._record import _Run
+
+    m = armguard.load_model("ur5")
+    cm = Verifier(m)._current().model
+    robot = next(iter(cm.scene.robots))
+    base = cm.scene.flat_q(cm.scene.default_q())
+    k0, k1 = cm._joint_span(robot)
+    run = _Run(cm, base, k0, k1, robot)
+    real = run._rows
+
+    def edited_meanwhile(q):
+        out = real(q)
+        cm.scene.add_body("crate", [Box(center=[0.0, 0.0, 5.0], half_extents=[0.1, 0.1, 0.1])])
+        return out
+
+    run._rows = edited_meanwhile
+    with pytest.raises(StaleModelError):
+        run.eval(0, 0.5, base[k0:k1])
+    assert run.n == 0

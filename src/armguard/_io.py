@@ -77,21 +77,21 @@ def check_target(path) -> Path:
     return path
 
 
-def check_writable(path, *, parents: bool = False) -> Path:
-    """``path`` as :func:`check_target` gives it, once a file could be written beside it (a temporary file
-    made and removed there): OutputError, naming the path and the reason, for a folder that is read-only,
-    full, not ours or missing (``parents``: made first).  For a command that computes for minutes before
-    it writes: refused before the work, not after it (nothing computed is then lost)."""
-    if parents:
-        try:
-            make_folder(Path(path).parent)
-        except OutputError as exc:
-            raise OutputError(f"cannot write {path}: {exc}") from None
+def check_writable(path) -> Path:
+    """``path`` as :func:`check_target` gives it, once a file could be written where it goes: a temporary
+    file made and removed in its folder, or, where that folder is missing (the write makes it), in the
+    nearest folder above it that exists.  OutputError, naming the path and the reason, for a folder that
+    is read-only, full or not ours, or a file where a folder of the path should be.  Nothing is left
+    behind (no folder made).  For a command that computes for minutes before it writes: refused
+    before the work, not after it (nothing computed is then lost)."""
     target = check_target(path)
-    if not target.parent.is_dir():
-        raise OutputError(f"cannot write {path}: {target.parent} is not a folder")
+    folder = target.parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if not folder.is_dir():
+        raise OutputError(f"cannot write {path}: {folder} exists and is not a folder")
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".probe", dir=target.parent)
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".probe", dir=folder)
     except OSError as exc:
         raise OutputError(f"cannot write {path}: {_reason(exc)}") from None
     os.close(fd)

@@ -81,29 +81,27 @@ class _SceneLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
         return super().construct_document(node)
 
     def construct_yaml_int(self, node):
-        """YAML 1.1 reads ``010`` as 8, ``0x10`` as 16, ``0b11`` as 3, ``1:30`` as 90 and ``1_0`` as 10;
-        YAML 1.2's core schema, which the scene files follow, reads none of them so.  A decimal
-        integer is read; any other spelling is refused where it stands (never another value)."""
+        """YAML 1.1 reads ``010`` as 8, ``0x10`` as 16 and ``0b11`` as 3, where YAML 1.2, which the scene
+        files follow, reads ``010`` as 10 and ``0b11`` as text: such a number is refused where it stands
+        (never one reading or the other).  ``1:30`` (1.1: 90) and ``1_0`` (1.1: 10) are text in YAML 1.2
+        and are read so (a number field then refuses them by name; a name keeps them)."""
         text = self.construct_scalar(node)
         if _INT.fullmatch(text):
             return int(text)
-        if re.fullmatch(r"[-+]?0[0-9_]+", text):
-            why = "a leading zero (YAML 1.1 reads such a number as octal where its digits allow: 010 is 8); write it without"
-        elif ":" in text:
-            why = "a base-60 number (YAML 1.1 reads 1:30 as 90); write the number itself"
-        elif "_" in text:
-            why = "underscores in a number (YAML 1.1 drops them); write the digits alone"
+        if ":" in text or "_" in text:
+            return text
+        if re.fullmatch(r"[-+]?0[0-9]+", text):
+            why = "a number with a leading zero (YAML 1.1 reads 010 as the octal 8, YAML 1.2 as 10)"
         else:
-            why = "a hexadecimal, octal or binary number; write it in decimal"
-        raise _BadNumber(text, node.start_mark, why)
+            why = "a hexadecimal, octal or binary number (YAML 1.1 and 1.2 read them differently)"
+        raise _BadNumber(text, node.start_mark, why + "; write it in decimal, or quote it if it is a name")
 
     def construct_yaml_float(self, node):
-        """YAML 1.1's floats also read ``1:30.5`` (base 60) and ``1_0.5`` (underscores dropped): refused, as
-        for integers; ``.inf`` and ``.nan`` are read (the fields that take a number refuse them by name)."""
+        """YAML 1.1's floats also read ``1:30.5`` (base 60) and ``1_0.5`` (underscores dropped): text in YAML
+        1.2, and read so; ``.inf`` and ``.nan`` are read (the fields that take a number refuse them by name)."""
         text = self.construct_scalar(node)
         if ":" in text or "_" in text:
-            raise _BadNumber(text, node.start_mark, "a base-60 number or underscores in a number (YAML 1.1 reads "
-                             "them as another value); write the number itself")
+            return text
         return super().construct_yaml_float(node)
 
     def construct_mapping(self, node, deep=False):
@@ -128,7 +126,5 @@ _SceneLoader.add_implicit_resolver(
     re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
     list("-+0123456789."),
 )
-_SceneLoader.add_implicit_resolver(  # 090, 08: no YAML 1.1 octal, so once a string; a number with a leading zero
-    "tag:yaml.org,2002:int", re.compile(r"^[-+]?0[0-9]+$"), list("-+0"))
 _SceneLoader.add_constructor("tag:yaml.org,2002:int", _SceneLoader.construct_yaml_int)
 _SceneLoader.add_constructor("tag:yaml.org,2002:float", _SceneLoader.construct_yaml_float)

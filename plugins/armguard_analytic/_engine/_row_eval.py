@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _kernel as kn
-from ._entry import detect_entry
+from ._scratch import _entry_point, _Scratch
 
 __all__ = ["row_evaluator"]
 
@@ -32,7 +32,13 @@ def row_evaluator(det, robot: str | None) -> tuple:
     n = len(sel)
     scene, rev, tls = det.scene, b.revision, b.tls
     H, MF, MI, fn = b.H, b.MF, b.MI, b.fn
-    entry = b.entry if sel.dtype == b.all_p.dtype and sel.flags.writeable == b.all_p.flags.writeable else detect_entry
+    # the kernel's compiled entry for these argument types, past numba's dispatcher, releasing the GIL
+    # (pair_distances did; b.entry holds it for a short check: several threads' edges would queue)
+    entry = b.pd_cache.get(("row_entry", robot))  # found once a revision (a verification makes an evaluator)
+    if entry is None:
+        s0 = _Scratch(b)  # its own buffers for the one typing call (a thread's scratch may hold a live report)
+        entry = _entry_point(fn, s0.q1, H, MF, MI, s0.SF, s0.SI, b.lim[0], s0.iprm_by_mode[kn.MODE_ALL], sel)
+        b.pd_cache[("row_entry", robot)] = entry
 
     def rows(q: np.ndarray):
         if getattr(scene, "revision", None) != rev:

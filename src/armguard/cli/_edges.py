@@ -64,6 +64,11 @@ def read_edges(path) -> tuple:
     if names.ndim > 1:
         raise VerificationError(f"{p}: joint_names: expected one name per column (n,), or one SRDF group's name, "
                                 f"got shape {names.shape}")
+    if names.dtype.kind == "S":  # bytes (numpy.savez of b'...' names): read as UTF-8 text, not as "b'j1'"
+        try:
+            names = np.char.decode(names, "utf-8")
+        except UnicodeDecodeError:
+            raise VerificationError(f"{p}: joint_names: bytes that are not UTF-8 text") from None
     return Q0, Q1, str(names) if names.ndim == 0 else [str(x) for x in names]
 
 

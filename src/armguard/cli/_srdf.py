@@ -78,7 +78,7 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
                                      param_hint="--out")
     from .._io import check_writable
 
-    check_writable(out, parents=True)  # refused before minutes of work (a missing folder is made, as verify --report makes its)
+    check_writable(out)  # refused before minutes of work (a missing folder is made with the file, as verify --report makes its)
     model = load_model(robot, srdf=False)
     before = read_previous(out) if update else {}
     cm = collision_matrix(model, margin=margin, method=method, samples=samples, workers=workers,
@@ -89,6 +89,9 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
                != (e.reason, e.status)]
     if update:  # and the disabled pairs the matrix does not search (static bodies, a link against an obstacle)
         keep = other_elements(out, searched={frozenset((e.link1, e.link2)) for e in cm.entries})
+    from .._io import make_folder
+
+    make_folder(Path(out).parent)
     cm.write_srdf(out, keep if update else ())
     c = cm.counts()
     if as_json:
