@@ -223,3 +223,28 @@ def test_what_is_built_on_a_model_answers_for_that_model():
     assert Verifier(model).verify(traj).safe == armguard.verify(model, traj).safe
     assert not Verifier(model.scene).verify(traj).safe
     assert robot in model.robots
+
+
+def test_a_checker_of_a_model_whose_scene_was_edited_says_so():
+    """``model.scene.add_body(...)``: a Verifier or Detector on that scene follows the edit, a Checker of the
+    Model does not (the Model is fixed when made): said with a warning naming the way to the edited one."""
+    import warnings
+
+    import armguard
+    from armguard import ArmguardWarning
+    from armguard.geometry import Box
+    from armguard.model import model_of
+
+    m = armguard.load_model("ur5")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ArmguardWarning)
+        armguard.checker(m)  # nothing edited: no warning
+    m.scene.add_body("crate", [Box(center=[0.4, 0.0, 0.3], half_extents=[0.05, 0.05, 0.05])])
+    with pytest.warns(ArmguardWarning, match=r"model_of\(model.scene\)"):
+        old = armguard.checker(m)
+    assert len(old.pair_distances(m.random_q(1, 0)[0]).distance) == len(m.pairs)  # the Model as made
+    edited = model_of(m.scene)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ArmguardWarning)
+        new = armguard.checker(edited)
+    assert len(edited.pairs) > len(m.pairs) and len(new.pair_distances(edited.random_q(1, 0)[0]).distance) == len(edited.pairs)
