@@ -407,3 +407,20 @@ def test_the_vectorised_substructure_check_equals_the_loop():
                 check_substructures("x", np.concatenate(subs), bounds, cells, n_bins)
             assert e.value.section == f"data, substructure {slow.index(False)}"
     assert 50 < refused < 250  # both kinds were exercised
+
+
+@pytest.mark.parametrize("field, value", [("step", [float("nan"), 0.1, 0.1]), ("step", [0.0, 0.1, 0.1]),
+                                          ("lower", [0.0, float("inf"), 0.0]), ("counts", [0, 3, 3])])
+def test_a_well_checksummed_but_invalid_grid_is_refused(clean, tmp_path, field, value):
+    """A header whose checksum holds but whose grid is no grid (a NaN or zero step: 'forbidden share nan'
+    once; an infinite limit, no cells) is refused when the map is read, never looked up."""
+    from armguard import ForbiddenMapError
+    from armguard.cspace._format import write_map
+
+    header = dict(clean.header)
+    header["grid"] = dict(header["grid"], **{field: value})
+    subs = [clean.substructure(s) for s in range(clean.grid.n_substructures)]
+    p = tmp_path / "grid.agmap"
+    write_map(p, header, subs)
+    with pytest.raises(ForbiddenMapError, match="grid record is invalid"):
+        ForbiddenMap.load(p)

@@ -141,8 +141,18 @@ class MapGrid:
     @classmethod
     def from_json(cls, d: dict) -> "MapGrid":
         try:
-            return cls(np.array(d["lower"], dtype=np.float64), np.array(d["upper"], dtype=np.float64),
-                       np.array(d["step"], dtype=np.float64), np.array(d["counts"], dtype=np.int64),
-                       np.array(d["per_sub"], dtype=np.int64), np.array(d["n_sub"], dtype=np.int64))
+            g = cls(np.array(d["lower"], dtype=np.float64), np.array(d["upper"], dtype=np.float64),
+                    np.array(d["step"], dtype=np.float64), np.array(d["counts"], dtype=np.int64),
+                    np.array(d["per_sub"], dtype=np.int64), np.array(d["n_sub"], dtype=np.int64))
         except (KeyError, TypeError, ValueError) as exc:
             raise ForbiddenMapError(f"the map's grid record is invalid: {exc}") from None
+        fields = (g.lower, g.upper, g.step, g.counts, g.per_sub, g.n_sub)
+        if any(a.shape != (3,) for a in fields[:4]) or any(a.shape != (2,) for a in fields[4:]):
+            raise ForbiddenMapError("the map's grid record is invalid: lower, upper, step, counts of 3 joints and "
+                                    "per_sub, n_sub of 2 expected")
+        if not (np.all(np.isfinite(g.lower)) and np.all(np.isfinite(g.upper)) and np.all(np.isfinite(g.step))
+                and np.all(g.step > 0) and np.all(g.upper >= g.lower) and np.all(g.counts >= 1)
+                and np.all(g.per_sub >= 1) and np.all(g.n_sub >= 1)):
+            raise ForbiddenMapError("the map's grid record is invalid: finite limits with upper >= lower, steps > 0 "
+                                    f"and counts >= 1 expected, got {g.to_json()}")
+        return g
