@@ -209,3 +209,35 @@ def test_a_scene_edited_during_a_lean_evaluation_gives_no_rows():
     with pytest.raises(StaleModelError):
         run.eval(0, 0.5, base[k0:k1])
     assert run.n == 0
+
+
+@settings(max_examples=60, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 10_000), linear=st.booleans())
+def test_closed_form_segment_times_match_the_bisection(seed, linear):
+    """A plain Trajectory's collision time by the trapezoid's closed-form inverse (``path_tau``) against the
+    bisection on ``trajectory.at`` (kept for time laws of their own): within 1e-12 of the segment time."""
+    from armguard.verify._timelaw import segment_times
+
+    rng = np.random.default_rng(seed)
+    sc = thin_scene(rng, n_obstacles=1)
+    W = rng.uniform(-2.5, 2.5, (4, 3))
+    traj = Trajectory.joint_interpolated(sc.robots["arm"], W, profile="linear" if linear else "trapezoidal")
+    segs = segments_of(traj)
+    idx = rng.integers(0, len(segs), 20)
+    s = np.r_[rng.uniform(0, 1, 17), 0.0, 1.0, 1e-12]
+    closed = segment_times(traj, segs, idx, s)
+
+    class OwnLaw(Trajectory):  # the same law through an overridden at: the bisection
+        def at(self, t):
+            return super().at(t)
+
+    own = OwnLaw(traj.robot_name, traj.joint_names, traj.times, traj.waypoints, traj._blend)
+    bisected = segment_times(own, segs, idx, s)
+    spans = np.array([segs[i][1] - segs[i][0] for i in idx])
+    # near a segment's ends (s = 1e-12 on the parabola) the bisection's own rounding of q(t) dominates
+    assert np.all(np.abs(closed - bisected) <= 1e-10 * np.maximum(spans, 1.0)), np.max(np.abs(closed - bisected))
+    from armguard.kinematics._profile import path_s
+
+    t0 = np.array([segs[i][0] for i in idx])
+    back = path_s(closed - t0, spans, traj._blend[idx])  # the closed form's times give back the fractions
+    assert np.allclose(back, s, rtol=0, atol=1e-13)

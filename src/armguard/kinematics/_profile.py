@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-__all__ = ["min_time_trapezoid", "blend_for_duration", "path_s", "path_ds"]
+__all__ = ["min_time_trapezoid", "blend_for_duration", "path_s", "path_tau", "path_ds"]
 
 _ROUNDOFF = 1e-12
 """Relative round-off allowed when checking a given duration against the acceleration bound."""
@@ -73,6 +73,21 @@ def path_s(tau: np.ndarray, T: np.ndarray, tb: np.ndarray) -> np.ndarray:
     r = T - tau
     s = np.where(tau < tb, 0.5 * acc * tau * tau, np.where(r < tb, 1.0 - 0.5 * acc * r * r, v * (tau - 0.5 * tb)))
     return np.where(tau >= T, 1.0, s)
+
+
+def path_tau(s: np.ndarray, T: np.ndarray, tb: np.ndarray) -> np.ndarray:
+    """The inverse of :func:`path_s`: the time ``tau`` (...) s into a segment of duration ``T``, blend ``tb``,
+    at which its path parameter is ``s`` (clipped to [0, 1]): the accelerating parabola's, the cruise's or
+    the decelerating parabola's closed form."""
+    s, T, tb = np.broadcast_arrays(*(np.asarray(x, dtype=np.float64) for x in (s, T, tb)))
+    s = np.clip(s, 0.0, 1.0)
+    v = 1.0 / (T - tb)
+    sb = 0.5 * v * tb  # s at the end of the acceleration (and 1 - sb at the start of the deceleration)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        up = np.sqrt(2.0 * s * tb / v)  # s = v tau^2 / (2 tb)
+        down = T - np.sqrt(2.0 * (1.0 - s) * tb / v)
+    tau = np.where(s < sb, up, np.where(s > 1.0 - sb, down, s / v + 0.5 * tb))
+    return np.clip(np.where(s <= 0.0, 0.0, np.where(s >= 1.0, T, tau)), 0.0, T)
 
 
 def path_ds(tau: np.ndarray, T: np.ndarray, tb: np.ndarray) -> np.ndarray:
