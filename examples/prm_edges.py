@@ -112,7 +112,8 @@ def main(n_nodes: int = 150, seed: int = 0, plot: str | None = None) -> dict:
     print(f"path of {len(path)} nodes ({dist[goal]:.2f} rad): {report.status.name}, "
           f"minimum clearance {report.min_clearance * 1e3:.1f} mm")
     if plot and len(through):
-        draw(scene, model, Q0[through[0]], Q1[through[0]], float(certified.s[through[0]]), plot)
+        i = through[int(np.argmin(certified.distance[through]))]  # the deepest: the clearest picture
+        draw(scene, model, Q0[i], Q1[i], float(certified.s[i]), plot)
     return {"nodes": nodes, "edges": edges, "sampled": sampled, "certified": certified, "through": through,
             "path": path, "report": report}
 
