@@ -241,3 +241,7 @@ def test_closed_form_segment_times_match_the_bisection(seed, linear):
     t0 = np.array([segs[i][0] for i in idx])
     back = path_s(closed - t0, spans, traj._blend[idx])  # the closed form's times give back the fractions
     assert np.allclose(back, s, rtol=0, atol=1e-13)
+    from armguard.verify._timelaw import profile_times  # the profile's time axis: exact, the tabulation near it
+
+    exact, tabulated = profile_times(traj, segs, idx, s), profile_times(own, segs, idx, s)
+    assert np.allclose(exact, closed, rtol=0, atol=1e-12) and np.all(np.abs(exact - tabulated) <= 0.02 * spans)

@@ -56,10 +56,10 @@ def segment_times(trajectory, segs, seg_idx, s) -> np.ndarray:
         return np.zeros(0)
     t0 = np.array([segs[i][0] for i in seg_idx])
     t1 = np.array([segs[i][1] for i in seg_idx])
-    closed = _closed_form(trajectory, t0, t1, s)
-    if closed is not None:
-        return closed
     dq = np.array([segs[i][3] - segs[i][2] for i in seg_idx])
+    closed = _closed_form(trajectory, t0, t1, s)
+    if closed is not None:  # a still segment: its time line, as below
+        return np.where(np.any(dq != 0.0, axis=1), closed, t0 + s * (t1 - t0))
     q0 = np.array([segs[i][2] for i in seg_idx])
     k = np.argmax(np.abs(dq), axis=1)
     rows = np.arange(len(s))
@@ -98,7 +98,17 @@ def _closed_form(trajectory, t0: np.ndarray, t1: np.ndarray, s: np.ndarray):
 def profile_times(trajectory, segs, seg_idx: np.ndarray, s: np.ndarray) -> np.ndarray:
     """Times of the profile points: each segment's time law tabulated at ``PROFILE_TABLE`` points
     (one ``trajectory.at`` call) and inverted by monotone interpolation — for plotting; the
-    reported collision time is inverted exactly (:func:`segment_times`)."""
+    reported collision time is inverted exactly (:func:`segment_times`).  A plain Trajectory's times are
+    the closed form's, exact (:func:`_closed_form`)."""
+    seg_idx = np.asarray(seg_idx, dtype=np.int64)
+    s = np.asarray(s, dtype=np.float64)
+    if len(s):
+        closed = _closed_form(trajectory, np.array([segs[i][0] for i in seg_idx]),
+                              np.array([segs[i][1] for i in seg_idx]), s)
+        if closed is not None:  # a still segment: its time line (as the tabulation below)
+            still = np.array([not np.any(segs[i][3] - segs[i][2]) for i in seg_idx])
+            t0, t1 = np.array([segs[i][0] for i in seg_idx]), np.array([segs[i][1] for i in seg_idx])
+            return np.where(still, t0 + s * (t1 - t0), closed)
     used = np.unique(seg_idx)
     u = np.linspace(0.0, 1.0, PROFILE_TABLE)
     T = np.concatenate([segs[i][0] + u * (segs[i][1] - segs[i][0]) for i in used])
