@@ -198,17 +198,22 @@ def test_a_model_whose_scene_gained_a_robot_answers_as_before():
 def test_what_is_built_on_a_model_answers_for_that_model():
     """The scene moved on (a body added) after the Model was made: a Detector and a Verifier
     built on the Model answer for the Model (no such body), as its Checkers do; built on the scene
-    they see the body.  While nothing changed, the Model's own scene is used."""
+    they see the body.  Built on the Model *before* the edit, too: they work on a copy of the system
+    the Model holds, never on ``model.scene`` (a Verifier built first once followed the edit while a
+    Checker of the same Model did not)."""
     from armguard.model import scene_of
     from armguard.verify import Verifier
 
     model = _load("puma560")
-    assert scene_of(model) is model.scene
-    q = model.neutral()
-    model.scene.add_body("wall", [Box([0.0, 0.0, 0.0], [2.0, 2.0, 2.0], np.eye(3))])  # encloses the arm
     bound = scene_of(model)
-    assert bound is not model.scene and "wall" not in bound.bodies and model_of(bound) is model
-    assert scene_of(model) is bound
+    assert bound is not model.scene and model_of(bound) is model and scene_of(model) is bound
+    q = model.neutral()
+    early_det, early_ver = armguard.Detector(model, threshold=0.05), Verifier(model)
+    model.scene.add_body("wall", [Box([0.0, 0.0, 0.0], [2.0, 2.0, 2.0], np.eye(3))])  # encloses the arm
+    assert "wall" not in bound.bodies and scene_of(model) is bound
+    qs0 = model.scene_q(q)
+    assert early_det.check(qs0).status.value != "collision"
+    assert early_ver.verify(_still(model, q)).status.value != "collision"
     on_model = armguard.Detector(model, threshold=0.05)
     on_scene = armguard.Detector(model.scene, threshold=0.05)
     qs = model.scene_q(q)
@@ -248,3 +253,12 @@ def test_a_checker_of_a_model_whose_scene_was_edited_says_so():
         warnings.simplefilter("error", ArmguardWarning)
         new = armguard.checker(edited)
     assert len(edited.pairs) > len(m.pairs) and len(new.pair_distances(edited.random_q(1, 0)[0]).distance) == len(edited.pairs)
+
+
+def _still(model, q):
+    """A two-knot trajectory of the model's robot standing at ``q`` (Pinocchio's order)."""
+    from armguard.kinematics import Trajectory
+
+    r = next(iter(model.robots))
+    qs = model.scene_q(q)
+    return Trajectory(r, model.robots[r].joint_names, [0.0, 1.0], [qs, qs])

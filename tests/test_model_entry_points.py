@@ -30,7 +30,8 @@ def trajectory(model):
 
 
 def test_scene_of_gives_a_models_scene_and_a_scene_as_it_is(model):
-    assert scene_of(model) is model.scene
+    bound = scene_of(model)  # a copy of the system the Model holds, whose Model it is (model.scene stays the user's)
+    assert bound is not model.scene and bound is scene_of(model) and armguard.model.model_of(bound) is model
     assert scene_of(model.scene) is model.scene
     assert scene_of("puma560") == "puma560"  # a name goes on to the loader as before
 
@@ -45,11 +46,11 @@ def test_verify_takes_a_model(model, trajectory):
 def test_verifier_guard_and_clearance_model_take_a_model(model):
     from armguard.verify import ClearanceModel, Guard, Verifier
 
-    assert Verifier(model).scene is model.scene
+    assert Verifier(model).scene is scene_of(model)  # the Model's own copy of its system, not model.scene
     assert Guard(model) is not None
     q = model.scene_q(model.neutral())
     a, b = ClearanceModel(model), ClearanceModel(model.scene)
-    assert a.scene is model.scene
+    assert a.scene is scene_of(model)
     for x, y in zip(a.distances(q), b.distances(q)):
         np.testing.assert_array_equal(x, y)
 

@@ -181,13 +181,12 @@ class Model:
                     and self._same_filters(scene))
 
     def scene_for(self):
-        """A scene whose Model this is: :attr:`scene` while nothing changed there
-        (:meth:`is_model_of`), else (the scene moved on: a body added, a filter set) a copy of the
-        system this Model holds, made once, whose Model is this one.  An entry point given a Model
-        works on it (``scene_of``): a Detector, Verifier or Guard built on a Model answers for that
-        Model, as its Checkers do, and follows that scene's edits from there."""
-        if self.is_model_of(self.scene):
-            return self.scene
+        """A scene whose Model this is: a copy of the system this Model holds, made once, whose Model is
+        this one.  An entry point given a Model works on it (``scene_of``): a Detector, Verifier or Guard
+        built on a Model answers for that Model, as its Checkers do, whatever :attr:`scene` does later
+        (built on :attr:`scene` itself, they follow its edits).  Once, while :attr:`scene` was unedited,
+        this was :attr:`scene` itself: a Verifier built then followed a body added to it later while a
+        Checker of the same Model did not, and a planner holding both disagreed with itself."""
         with _BOUND_LOCK:
             bound = self.__dict__.get("_bound")
             if bound is None:
