@@ -54,6 +54,14 @@ def test_hermes_stopping_distance_ten_ranges_up_to_100_mm():
         sd.at(0.25)
 
 
+@pytest.mark.parametrize("top", [1.8166484431762606] + list(np.random.default_rng(0).uniform(0.01, 5.0, 200)))
+def test_hermes_table_takes_the_speed_it_was_made_for(top):
+    """The table's top edge is max_speed itself: vmax * n / n rounded a bit below it for ~6 % of speeds,
+    and the table then refused the speed of the path it was made from."""
+    sd = StoppingDistance.hermes(float(top), max_distance=0.05, n_ranges=10)
+    assert sd.speed_edges[-1] == top and sd.at(float(top)) == pytest.approx(0.05)
+
+
 def test_stopping_distance_by_speed_and_mass():
     sd = StoppingDistance((0.0, 0.1, 0.2), (0.0, 10.0, 100.0), ((0.02, 0.04), (0.05, 0.1)))
     assert sd.at(0.05, 5.0) == 0.02 and sd.at(0.05, 50.0) == 0.04 and sd.at(0.15, 50.0) == 0.1

@@ -84,7 +84,8 @@ class StoppingDistance:
         if rest >= vmax / n_ranges:
             raise VerificationError(f"StoppingDistance.hermes: at_rest {rest:.6g} m/s must be below the first range's "
                                     f"top {vmax / n_ranges:.6g} m/s")
-        edges = tuple(vmax * k / n_ranges for k in range(n_ranges + 1))
+        edges = tuple(vmax * k / n_ranges for k in range(n_ranges)) + (vmax,)  # the top is max_speed itself
+        # (vmax * n / n rounds a last bit below vmax for ~6 % of speeds: the table refused the speed it was made for)
         table = tuple((dmax * (k + 1) / n_ranges,) for k in range(n_ranges))
         if rest > 0.0:
             edges = (0.0, rest) + edges[1:]
@@ -95,7 +96,7 @@ class StoppingDistance:
     @staticmethod
     def _bin(edges: tuple[float, ...], x: float, name: str) -> int:
         if x > edges[-1]:
-            raise VerificationError(f"StoppingDistance: {name} {x:.6g} is above the table's last edge {edges[-1]:.6g}")
+            raise VerificationError(f"StoppingDistance: {name} {x!r} is above the table's last edge {edges[-1]!r}")
         k = int(np.searchsorted(np.asarray(edges), x, side="left")) - 1
         return max(k, 0)
 
