@@ -317,3 +317,19 @@ def test_check_urdf_reports_a_model_that_does_not_load_as_its_finding(tmp_path):
     doc = __import__("json").loads(res.output)
     assert doc["status"] == "errors" and any(x["check"] == "load" and str(f) in x["message"] for x in doc["findings"])
     assert _run("check-urdf", tmp_path / "missing.urdf").exit_code == ExitCode.INPUT
+
+
+def test_output_closed_early_still_writes_the_files(tmp_path):
+    """``armguard edges ... --out`` and ``armguard verify ... --report`` into a pipe whose reader has gone: 141,
+    and the files written all the same (they were written after the verdicts were printed: lost)."""
+    import numpy as np
+
+    np.savez(tmp_path / "e.npz", Q0=np.zeros((2, 6)), Q1=np.full((2, 6), 0.2))
+    for args, out in ((("edges", "ur5", str(tmp_path / "e.npz"), "--out", str(tmp_path / "r.npz")), tmp_path / "r.npz"),
+                      (("verify", "hermes", "unstow", "--report", str(tmp_path / "r.json")), tmp_path / "r.json")):
+        child = subprocess.Popen([sys.executable, "-m", "armguard.cli", *args], stdout=subprocess.PIPE,
+                                 stderr=subprocess.PIPE)
+        child.stdout.close()
+        _, err = child.communicate(timeout=300)
+        assert child.returncode == ExitCode.OUTPUT_CLOSED, err.decode()
+        assert out.is_file() and out.stat().st_size > 100, args

@@ -145,15 +145,7 @@ def edges_cmd(model, edges_file, robot, margin, first_contact, continuous, max_e
         except VerificationError as exc:  # said in the command line's words, with the file
             text = str(exc).replace("pass robot= ", "pass --robot ").replace("robot='*'", "--robot '*'")
             raise VerificationError(f"{edges_file}: {text.replace('joints: ', 'joint_names: ')}") from None
-    console.print(res.summary(), highlight=False, markup=False)
-    for label, code in (("in collision", EdgeStatus.COLLISION), ("incomplete", EdgeStatus.INCOMPLETE)):
-        which = np.flatnonzero(res.code == code)
-        for i in which[:_LISTED]:
-            a, b = res.pair[i]
-            console.print(f"  edge {i} {label}: {esc(a)} - {esc(b)} {res.distance[i] * 1e3:.2f} mm at s = {res.s[i]:.4f}, "
-                          f"clear up to {res.s_free[i]:.4f}", highlight=False)
-        if len(which) > _LISTED:
-            console.print(f"  ({len(which) - _LISTED} more {label})", highlight=False)
+    # the file first: a reader that closes the pipe early (| head) must not cost the results
     if out_path:
         sc = verifier.scene
         q_names = sc.joint_names if res.robot == ALL_ROBOTS else sc.robots[res.robot].joint_names
@@ -165,6 +157,16 @@ def edges_cmd(model, edges_file, robot, margin, first_contact, continuous, max_e
                  joint_names=np.array(res.joint_names, dtype=str), held_names=np.array(list(res.held), dtype=str),
                  held_values=np.array(list(res.held.values()), dtype=float))
         atomic_write(Path(out_path), buf.getvalue(), parents=True)
+    console.print(res.summary(), highlight=False, markup=False)
+    for label, code in (("in collision", EdgeStatus.COLLISION), ("incomplete", EdgeStatus.INCOMPLETE)):
+        which = np.flatnonzero(res.code == code)
+        for i in which[:_LISTED]:
+            a, b = res.pair[i]
+            console.print(f"  edge {i} {label}: {esc(a)} - {esc(b)} {res.distance[i] * 1e3:.2f} mm at s = {res.s[i]:.4f}, "
+                          f"clear up to {res.s_free[i]:.4f}", highlight=False)
+        if len(which) > _LISTED:
+            console.print(f"  ({len(which) - _LISTED} more {label})", highlight=False)
+    if out_path:
         console.print(f"results: {esc(str(out_path))}", highlight=False)
     c = res.counts()
     status = ExitCode.UNSAFE if c["collision"] else ExitCode.INCOMPLETE if c["incomplete"] else ExitCode.OK

@@ -130,20 +130,23 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
                                   progress=lambda done, total: bar.update(task, completed=done), **kwargs)
     else:
         reports = verify_many(sc, items, **kwargs)
-    for r in reports:
-        console.rule(f"[bold]{esc(r.trajectory)}[/] — {verdict_text(r)}")
-        console.print(r.summary(), highlight=False, markup=False)
+    written = []  # the files first: a reader that closes the pipe early (| head) must not cost them
     if report_path:  # an output that cannot be written: OutputError, one line, exit status 3
         p = Path(report_path)
         doc = reports[0].to_dict() if len(reports) == 1 else [r.to_dict() for r in reports]
         atomic_write(p, json.dumps(doc, indent=2), parents=True)
-        console.print(f"report: {p}")
+        written.append(f"report: {p}")
     if plot_path:
         p = Path(plot_path)
         for r in reports:
             out = p if len(reports) == 1 else p.with_name(f"{p.stem}_{r.trajectory}{p.suffix or '.png'}")
             r.plot(out)
-            console.print(f"plot: {out}")
+            written.append(f"plot: {out}")
+    for r in reports:
+        console.rule(f"[bold]{esc(r.trajectory)}[/] — {verdict_text(r)}")
+        console.print(r.summary(), highlight=False, markup=False)
+    for line in written:
+        console.print(line)
     sys.exit(int(verify_exit_code(reports)))
 
 
