@@ -239,8 +239,13 @@ def test_a_joint_subset_holds_the_others_and_one_side_broadcasts():
         v.check_edges(Q[0, idx], Q[1, idx], joints=list(arm[:-1]) + ["nope"])
     with pytest.raises(VerificationError, match="named twice"):
         v.check_edges(Q[0, idx], Q[1, idx], joints=list(arm[:-1]) + [arm[0]])
-    with pytest.raises(VerificationError, match="group_joints"):
-        v.check_edges(Q[0, idx], Q[1, idx], joints="arm")
+    by_group = v.check_edges(Q[0, idx], Q[1:, idx], joints="arm")  # an SRDF group's name, as the files take it
+    np.testing.assert_array_equal(by_group.code, res.code)
+    assert by_group.joint_names == res.joint_names
+    with pytest.raises(VerificationError, match="names no group of the model"):
+        v.check_edges(Q[0, idx], Q[1, idx], joints="no_such_group")
+    with pytest.raises(VerificationError, match="a subset of the joints"):
+        v.check_edges(Q[0, idx], Q[1, idx])  # 7 values, no joints=: the hint says how
     with pytest.raises(VerificationError, match="an empty list"):
         v.check_edges(Q[0, idx], Q[1, idx], joints=[])
 
@@ -436,3 +441,9 @@ def test_a_nan_clearance_gives_no_sampled_verdict_and_stops_the_guard(ur5, monke
     monkeypatch.setattr(_oracle.ClearanceModel, "_distances", nan_distances)
     dec = g.step(Q0[0], Q0[0] + 0.01)
     assert dec.verdict is GuardVerdict.STOP and "NaN" in dec.reason, dec
+
+
+def test_an_unknown_robot_is_named_when_the_verifier_is_made(ur5):
+    m, _ = ur5
+    with pytest.raises(VerificationError, match="robot 'nope' is not in the scene"):
+        Verifier(m, robot="nope")  # was accepted, and refused at the first call

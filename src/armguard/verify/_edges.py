@@ -41,7 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._errors import KinematicsError, VerificationError
+from .._errors import ArmguardError, KinematicsError, VerificationError
 from .._values import refuse_complex_or_bool
 from ._advance import advance_step
 from ._record import _Run
@@ -140,7 +140,7 @@ class EdgeResults:
                 f"{int(ev.max()) if len(ev) else 0}; {self.elapsed_s * 1e3:.1f} ms){held}")
 
 
-def _rows(Q, name: str, joint_names, scene, robot: str) -> np.ndarray:
+def _rows(Q, name: str, joint_names, scene, robot: str, whole: bool = True) -> np.ndarray:
     n = len(joint_names)
     if Q is None or isinstance(Q, (str, bytes)):
         raise VerificationError(f"{name}: expected an array of joint values (M, {n}) or ({n},), got {Q!r}")
@@ -165,7 +165,9 @@ def _rows(Q, name: str, joint_names, scene, robot: str) -> np.ndarray:
         elif len(scene.robots) > 1 and width == len(scene.joint_names):
             hint.append(f"the scene's configuration of all robots: scene.split_q(Q)[{robot!r}] takes this robot's, "
                         f"robot={ALL_ROBOTS!r} moves them all")
-        if width is not None and width != n:
+        if width is not None and width < n and whole:
+            hint.append("a subset of the joints? name its columns with joints= (a list, or an SRDF group's name)")
+        elif width is not None and width != n:
             hint.append("a Pinocchio configuration converts with model.scene_q(Q)")
         raise VerificationError(f"{name}: expected shape (M, {n}) or ({n},), one value per joint {list(joint_names)}, "
                                 f"got {np.shape(Q)}" + ("; " + "; ".join(hint) if hint else ""))
@@ -241,14 +243,19 @@ def _robot(verifier, robot):
     return rname, verifier.scene.robots[rname]
 
 
-def _columns(rob, joints) -> tuple:
+def _columns(rob, joints, scene) -> tuple:
     """``(names, index into the robot's joints)`` of the columns given (all the robot's joints by default)."""
     own = tuple(rob.joint_names)
     if joints is None:
         return own, np.arange(len(own))
-    if isinstance(joints, str):
-        raise VerificationError(f"joints: expected a list of joint names, got the string {joints!r} "
-                                "(an SRDF group: model.group_joints(name))")
+    if isinstance(joints, str):  # an SRDF group's name, as an edges file's or a trajectory file's joint_names
+        try:
+            from ..model import model_of
+
+            joints = model_of(scene).group_joints(joints)
+        except ArmguardError:
+            raise VerificationError(f"joints: expected a list of joint names or an SRDF group's name, got the string "
+                                    f"{joints!r}, which names no group of the model") from None
     names = tuple(str(j) for j in joints)
     if not names:
         raise VerificationError(f"joints: an empty list (no joint to move); the robot's joints are {list(own)}")
@@ -306,9 +313,9 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints,
     t_start = _time.perf_counter()
     model, base_q = st.model, st.base
     rname, rob = _robot(verifier, robot)
-    names, cols = _columns(rob, joints)
-    Q0 = _rows(Q0, "Q0", names, verifier.scene, rob.name)
-    Q1 = _rows(Q1, "Q1", names, verifier.scene, rob.name)
+    names, cols = _columns(rob, joints, verifier.scene)
+    Q0 = _rows(Q0, "Q0", names, verifier.scene, rob.name, joints is None)
+    Q1 = _rows(Q1, "Q1", names, verifier.scene, rob.name, joints is None)
     if len(Q0) != len(Q1) and 1 not in (len(Q0), len(Q1)):
         raise VerificationError(f"Q0 and Q1: expected the same number of edges (or one of them a single "
                                 f"configuration), got {len(Q0)} and {len(Q1)}")
