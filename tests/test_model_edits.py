@@ -262,3 +262,16 @@ def _still(model, q):
     r = next(iter(model.robots))
     qs = model.scene_q(q)
     return Trajectory(r, model.robots[r].joint_names, [0.0, 1.0], [qs, qs])
+
+
+def test_a_bare_link_name_is_answered_with_its_owner_name():
+    """``with_pair_disabled('panda_link0', ...)``: the owners are 'robot/link'; the message names the one meant.
+    ``Trajectory.joint_interpolated('panda', ...)``: a Robot is needed (its limits), said so."""
+    from armguard import TrajectoryError
+    from armguard.kinematics import Trajectory
+
+    m = load_model("panda")
+    with pytest.raises(SceneError, match=r"did you mean 'panda/panda_link0'\?"):
+        m.with_pair_disabled("panda_link0", "panda/panda_hand")
+    with pytest.raises(TrajectoryError, match=r"expected a Robot \(e.g. model.robots\['panda'\]\)"):
+        Trajectory.joint_interpolated("panda", [[0.0] * 8, [0.1] * 8])

@@ -270,6 +270,9 @@ class Trajectory:
         """
         if profile not in PROFILES:
             raise TrajectoryError(f"profile: expected one of {list(PROFILES)}, got {profile!r}")
+        if not hasattr(robot, "n_joints"):  # a name: the Robot is model.robots[name] (its limits are needed)
+            raise TrajectoryError(f"robot: expected a Robot (e.g. model.robots[{robot!r}]), got {type(robot).__name__} "
+                                  f"{robot!r}")
         W = _array(waypoints, "waypoints", 2)
         if W.shape[0] < 2 or W.shape[1] != robot.n_joints:
             raise TrajectoryError(f"waypoints: expected at least 2 rows of {robot.n_joints} joint values, got shape {W.shape}")

@@ -393,7 +393,9 @@ class Scene:
             r, ln = n.split("/", 1)
             if r in self._robots and ln in self._robots[r].link_names:
                 return
-        raise SceneError(f"unknown owner {n!r}: expected a body, a payload, a robot or 'robot/link'")
+        links = [f"{r}/{n}" for r, rob in self._robots.items() if n in rob.link_names]  # a bare link name
+        hint = f" (did you mean {' or '.join(map(repr, links))}?)" if links else ""
+        raise SceneError(f"unknown owner {n!r}: expected a body, a payload, a robot or 'robot/link'{hint}")
 
     # ---------------------------------------------------------------- trajectories, tests
     @_locked
