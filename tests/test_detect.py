@@ -306,7 +306,7 @@ def test_detector_accepts_a_model(backend):
     model = armguard.load_model("panda")
     a = armguard.Detector(model, threshold=0.05, backend=backend)
     b = armguard.Detector(model.scene, threshold=0.05, backend=backend)
-    assert type(a) is type(b) and a.scene is model.scene
+    assert type(a) is type(b) and a.scene is model.scene_for()  # the Model's own copy of its system
     for q in model.random_q(5, 3):
         qs = model.scene_q(q)
         ra, rb = a.check(qs), b.check(qs)
