@@ -72,7 +72,7 @@ def pair_bounds(model, *, active: str | None, reach_margin: float) -> PairBounds
 
     lock = getattr(model.scene, "lock", None)
     with lock if lock is not None else contextlib.nullcontext():  # the scene as the Model holds it, read whole
-        scene = model.scene_for()  # its own scene while unchanged, else a copy of what the Model holds
+        scene = model.scene_for()  # the Model's own copy of the system it holds
         cs = compile_scene(scene)
         robot_names = tuple(cs.robot_names)
         lower = np.concatenate([scene.robots[r].lower for r in robot_names]) if robot_names else np.zeros(0)

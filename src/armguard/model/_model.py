@@ -25,8 +25,8 @@ WORKSPACE = "workspace"
 def scene_of(scene_or_model):
     """The Scene of an entry point's first argument (every function and class that takes a scene
     takes a Model as well): a Scene as given; for a :class:`Model`, a scene whose Model it is
-    (:meth:`Model.scene_for`): its own scene while nothing changed there, else a copy of the system
-    the Model holds, so that what is built on a Model answers for that Model."""
+    (:meth:`Model.scene_for`): a copy of the system the Model holds, made once, so that what is built
+    on a Model answers for that Model whatever ``model.scene`` does later."""
     if hasattr(scene_or_model, "pin_model") and hasattr(scene_or_model, "collision_model"):
         return scene_or_model.scene_for()
     return scene_or_model
