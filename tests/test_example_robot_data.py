@@ -258,21 +258,3 @@ def test_a_cylinder_depth_where_coal_differs_is_the_references(urdf, pair, i):
     assert type(a).__name__ == type(b).__name__ == "Cylinder"
     ref = reference_signed_distance(a, b)
     assert ref < 0 and abs(d - ref) <= 1e-9 and d_coal < ref - 0.1
-
-
-@needs_erd
-def test_a_scene_files_urdf_robot_takes_the_found_srdfs_disabled_pairs(tmp_path):
-    """A scene file's URDF robot without ``srdf:`` takes the SRDF found beside the URDF whole, as load_model
-    does: its home and its disabled pairs (it once took the home only: panda checked 108 pairs, not 44, and
-    77 of 1,000 random configurations collided only so); ``srdf: none`` none of it."""
-    urdf = ROBOTS / "panda_description/urdf/panda.urdf"
-    cell = tmp_path / "cell.yaml"
-    cell.write_text(f"armguard_scene: 1\nname: cell\nrobots:\n  - name: panda\n    urdf: {urdf}\n")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", armguard.ArmguardWarning)
-        found, direct = armguard.load_model(cell), armguard.load_model("panda")
-        cell.write_text(cell.read_text() + "    srdf: none\n")
-        none = armguard.load_model(cell)
-    assert len(found.pairs) == len(direct.pairs) < len(none.pairs)
-    Q = direct.random_q(300, 0)
-    np.testing.assert_array_equal(armguard.checker(found).collides(Q), armguard.checker(direct).collides(Q))

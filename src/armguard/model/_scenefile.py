@@ -305,24 +305,7 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
                 if ln not in robot.link_names:
                     raise ctx.error(f"{w}.srdf", f"{path.name}: disable_collisions names unknown link {ln!r}")
         source["srdf"] = str(path)
-    elif spec.urdf is not None and spec.srdf is None:  # the SRDF found beside the URDF, as load_model finds it:
-        srdf_pairs = _found_srdf_pairs(ctx.path(spec.urdf), robot, ctx, w)  # its disabled pairs too, not only its home
     return robot, home, srdf_pairs, source
-
-
-def _found_srdf_pairs(urdf: Path, robot, ctx, w: str) -> list:
-    """The ``disable_collisions`` pairs of the SRDF :func:`armguard.model._load.srdf_candidates` finds for ``urdf``
-    (the one whose home the robot took), over the robot's links ([] when none is found).  A scene file's
-    ``urdf:`` robot without ``srdf:`` once took that SRDF's home but not its disabled pairs: panda checked
-    108 pairs where load_model('panda') checks 44, and 77 of 1,000 random configurations collided only so."""
-    from ._load import srdf_candidates
-
-    found = next((p for p, _, _ in srdf_candidates(urdf) if p.is_file()), None)
-    if found is None:
-        return []
-    ctx.read.append(found.resolve())
-    links = set(robot.link_names)
-    return [(a, b) for a, b in _srdf_pairs(found.resolve(), ctx, w) if a in links and b in links]
 
 
 def _link_shape(spec, ctx: _Ctx, where: str, robot, link: str):
