@@ -275,3 +275,22 @@ def test_a_bare_link_name_is_answered_with_its_owner_name():
         m.with_pair_disabled("panda_link0", "panda/panda_hand")
     with pytest.raises(TrajectoryError, match=r"expected a Robot \(e.g. model.robots\['panda'\]\)"):
         Trajectory.joint_interpolated("panda", [[0.0] * 8, [0.1] * 8])
+
+
+def test_an_edit_of_the_models_own_copy_is_not_the_model():
+    """``scene_of(model)`` (a Verifier's ``.scene``) edited: what was built on it follows the edit; what is
+    built on the Model afterwards answers for the Model as made again (a fresh copy), as its Checkers do."""
+    from armguard.model import scene_of
+    from armguard.verify import Verifier
+
+    model = _load("puma560")
+    v = Verifier(model)
+    v.scene.add_body("wall", [Box([0.0, 0.0, 0.0], [2.0, 2.0, 2.0], np.eye(3))])  # encloses the arm
+    traj = _still(model, model.neutral())
+    assert v.verify(traj).status.value == "collision"
+    fresh = scene_of(model)
+    assert fresh is not v.scene and "wall" not in fresh.bodies
+    assert armguard.verify(model, traj).status.value != "collision"
+    for backend in (None, "coal"):
+        det = armguard.Detector(model, threshold=0.05, backend=backend)
+        assert det.check(model.scene_q(model.neutral())).status.value != "collision"

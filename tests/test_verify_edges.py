@@ -242,7 +242,7 @@ def test_a_joint_subset_holds_the_others_and_one_side_broadcasts():
     by_group = v.check_edges(Q[0, idx], Q[1:, idx], joints="arm")  # an SRDF group's name, as the files take it
     np.testing.assert_array_equal(by_group.code, res.code)
     assert by_group.joint_names == res.joint_names
-    with pytest.raises(VerificationError, match="names no group of the model"):
+    with pytest.raises(VerificationError, match="unknown SRDF group .no_such_group."):
         v.check_edges(Q[0, idx], Q[1, idx], joints="no_such_group")
     with pytest.raises(VerificationError, match="a subset of the joints"):
         v.check_edges(Q[0, idx], Q[1, idx])  # 7 values, no joints=: the hint says how
@@ -443,7 +443,12 @@ def test_a_nan_clearance_gives_no_sampled_verdict_and_stops_the_guard(ur5, monke
     assert dec.verdict is GuardVerdict.STOP and "NaN" in dec.reason, dec
 
 
-def test_an_unknown_robot_is_named_when_the_verifier_is_made(ur5):
-    m, _ = ur5
-    with pytest.raises(VerificationError, match="robot 'nope' is not in the scene"):
-        Verifier(m, robot="nope")  # was accepted, and refused at the first call
+def test_a_group_name_is_of_the_robot_the_edges_move():
+    """Ranger's arms all call their joints j1 ...: another arm's SRDF group is refused, never read as this
+    arm's joints."""
+    m = armguard.load_model("ranger")
+    v = Verifier(m)
+    q = m.scene.home("left_arm")
+    assert v.check_edges(q, q, robot="left_arm", joints="left_arm").counts()["clear"] == 1
+    with pytest.raises(VerificationError, match="moves robot 'right_arm', not 'left_arm'"):
+        v.check_edges(q, q, robot="left_arm", joints="right_arm")

@@ -88,7 +88,7 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
 
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from .._io import atomic_write, figure_format
+    from .._io import atomic_write, check_writable, figure_format
     from ..scene import load_scene
     from ..verify import verify_many
 
@@ -107,6 +107,9 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
                                "on the cluster")
     if plot_path:
         figure_format(plot_path)  # a format matplotlib cannot write: refused before the work
+    for out in (report_path, plot_path):
+        if out:
+            check_writable(out)  # a folder that cannot be written: refused before the work, not after it
     sc = load_scene(scene)
     items = resolve_trajectories(sc, trajectories)
     warm_up(console=console)

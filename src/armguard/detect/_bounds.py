@@ -70,9 +70,9 @@ def pair_bounds(model, *, active: str | None, reach_margin: float) -> PairBounds
     """The pair rows of ``model`` a Detector checks, with their lever arms (module docstring)."""
     from ..model._compile import compile_scene
 
-    lock = getattr(model.scene, "lock", None)
-    with lock if lock is not None else contextlib.nullcontext():  # the scene as the Model holds it, read whole
-        scene = model.scene_for()  # the Model's own copy of the system it holds
+    scene = model.scene_for()  # the Model's own copy of the system it holds (a fresh one if that was edited)
+    lock = getattr(scene, "lock", None)
+    with lock if lock is not None else contextlib.nullcontext():  # that scene, read whole
         cs = compile_scene(scene)
         robot_names = tuple(cs.robot_names)
         lower = np.concatenate([scene.robots[r].lower for r in robot_names]) if robot_names else np.zeros(0)

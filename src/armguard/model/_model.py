@@ -181,15 +181,12 @@ class Model:
                     and self._same_filters(scene))
 
     def scene_for(self):
-        """A scene whose Model this is: a copy of the system this Model holds, made once, whose Model is
-        this one.  An entry point given a Model works on it (``scene_of``): a Detector, Verifier or Guard
-        built on a Model answers for that Model, as its Checkers do, whatever :attr:`scene` does later
-        (built on :attr:`scene` itself, they follow its edits).  Once, while :attr:`scene` was unedited,
-        this was :attr:`scene` itself: a Verifier built then followed a body added to it later while a
-        Checker of the same Model did not, and a planner holding both disagreed with itself."""
+        """A copy of the system this Model holds, whose Model is this one (made again once edited): what is
+        built on a Model (``scene_of``) answers for it, as its Checkers do, whatever :attr:`scene` does later
+        (it was :attr:`scene` while unedited: a Verifier then followed a later edit its Checker missed)."""
         with _BOUND_LOCK:
             bound = self.__dict__.get("_bound")
-            if bound is None:
+            if bound is None or getattr(bound[0], "revision", None) != bound[1]:  # none yet, or edited since
                 s = self._spec.copy()
                 s._model_of_record = self
                 bound = self._bound = (s, s.revision)
@@ -459,6 +456,10 @@ class Model:
         """The movable joints of SRDF group ``group`` (its ``<joint>`` members, the joints of its
         ``<chain>`` and of the groups it names), as its robot calls them, in the robot's order; a
         :class:`~armguard.SceneError` for an unknown group or one spanning several robots."""
+        return self.group_robot_joints(group)[1]
+
+    def group_robot_joints(self, group: str) -> tuple[str, tuple[str, ...]]:
+        """``(robot, joints)``: the robot SRDF group ``group`` moves and :meth:`group_joints`."""
         from .._errors import SceneError
 
         groups = self.srdf.groups if self.srdf is not None else {}
@@ -490,7 +491,7 @@ class Model:
                              "a trajectory moves the joints of one robot")
         (r,) = robots
         mine = {sn.split("/", 1)[1] for sn in flat}
-        return tuple(j for j in self.robots[r].joint_names if j in mine)
+        return r, tuple(j for j in self.robots[r].joint_names if j in mine)
 
     # ---------------------------------------------------------------- kinematics
     def kinematic_tree(self, robots=None) -> tuple:

@@ -249,13 +249,15 @@ def _columns(rob, joints, scene) -> tuple:
     if joints is None:
         return own, np.arange(len(own))
     if isinstance(joints, str):  # an SRDF group's name, as an edges file's or a trajectory file's joint_names
-        try:
-            from ..model import model_of
+        from ..model import model_of
 
-            joints = model_of(scene).group_joints(joints)
-        except ArmguardError:
-            raise VerificationError(f"joints: expected a list of joint names or an SRDF group's name, got the string "
-                                    f"{joints!r}, which names no group of the model") from None
+        try:
+            robot, group = model_of(scene).group_robot_joints(joints)
+        except ArmguardError as exc:
+            raise VerificationError(f"joints: expected a list of joint names or an SRDF group's name; {exc}") from None
+        if robot != rob.name:  # arms may share joint names (ranger's j1 ...): never another arm's group
+            raise VerificationError(f"joints: SRDF group {joints!r} moves robot {robot!r}, not {rob.name!r}")
+        joints = group
     names = tuple(str(j) for j in joints)
     if not names:
         raise VerificationError(f"joints: an empty list (no joint to move); the robot's joints are {list(own)}")

@@ -100,8 +100,6 @@ class Verifier(FollowsScene):
         self._source = source
         self._backend = (backend, backend_options)
         self._robot = robot
-        if robot is not None and robot not in scene.robots:  # named now, not at the first call
-            raise VerificationError(f"robot {robot!r} is not in the scene; robots are {list(scene.robots)}")
         if q_others is not None and not hasattr(q_others, "items"):
             raise VerificationError(f"q_others: expected a mapping robot name -> joint values, got {type(q_others).__name__}")
         self._q_others = None if q_others is None else dict(q_others)
