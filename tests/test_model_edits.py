@@ -294,3 +294,17 @@ def test_an_edit_of_the_models_own_copy_is_not_the_model():
     for backend in (None, "coal"):
         det = armguard.Detector(model, threshold=0.05, backend=backend)
         assert det.check(model.scene_q(model.neutral())).status.value != "collision"
+
+
+def test_maps_matrices_and_uncertain_checks_on_a_model_ignore_a_later_edit_of_its_scene():
+    """The cspace clearance hook, the SRDF matrix's pair list and the uncertain checks built on a Model read the
+    Model's own copy of its system, not ``model.scene``: an edit there once raised KeyError ('wall', 0) in the
+    map's clearance hook."""
+    from armguard.cspace._clearance import CheckerClearance, map_links
+
+    model = _load("puma560")
+    before = CheckerClearance(model, map_links(model, None))
+    Q3 = np.array([[0.0, 0.0, 0.0], [0.3, -0.5, 0.2]])
+    want = before(Q3)
+    model.scene.add_body("wall", [Box([0.0, 0.0, 0.0], [2.0, 2.0, 2.0], np.eye(3))])
+    np.testing.assert_array_equal(CheckerClearance(model, map_links(model, None))(Q3), want)

@@ -128,7 +128,7 @@ def _task(token: str, source, robot, joints, links, tol, clearance, backend, job
         _WORKER_CACHE.clear()
         if clearance is None:
             model, _ = resolve_model(source)
-            hook = CheckerClearance(model, map_links(model.scene, robot, joints, links, tol), *backend)
+            hook = CheckerClearance(model, map_links(model.scene_for(), robot, joints, links, tol), *backend)
         else:
             hook = clearance
         _WORKER_CACHE[token] = hook

@@ -250,7 +250,7 @@ class CheckerClearance:
     def __init__(self, model, links: MapLinks, backend: str | None = "analytic", options=None) -> None:
         self.links = links
         self.model = model
-        scene = link_obstacle_scene(model.scene, links.robot, links.links)
+        scene = link_obstacle_scene(model.scene_for(), links.robot, links.links)  # the Model as made
         self.checker = checker_over(model, scene, backend, options, need_distances=True)
         self.backend = self.checker.name
         self._empty = len(self.checker.model.pairs) == 0

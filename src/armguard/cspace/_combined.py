@@ -92,7 +92,7 @@ class CombinedChecker:
         model = map_model(fmap, scene)
         self.map = fmap
         self.model = model
-        self.scene = model.scene
+        self.scene = model.scene_for()  # the Model as made, whatever model.scene does later
         self.tol = tol
         rest = rest_scene(self.scene, fmap.robot, fmap.links)
         self.geometric = checker_over(model, rest, backend, backend_options)

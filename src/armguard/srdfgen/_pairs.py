@@ -100,7 +100,7 @@ def pair_setup(model, tol: Tolerances = DEFAULT_TOLERANCES) -> PairSetup:
     from ..verify._motion import chain_bounds, relative_joints
     from ..verify._oracle import ClearanceModel
 
-    scene = model.scene
+    scene = model.scene_for()  # the Model as made (model.scene may have been edited since)
     work = matrix_scene(scene, adjacent=True)  # adjacent pairs too: listed, and disabled as Adjacent
     if not work.allowed_pairs():
         raise VerificationError(f"model {model.name!r}: no two links with geometry on one robot: no collision matrix to make")

@@ -144,7 +144,7 @@ class BodyHierarchy:
     def from_model(cls, model, *, group: str = "vehicle") -> "BodyHierarchy":
         """The hierarchy of the bodies in SRDF group ``group`` (scene category) of ``model`` (an
         :class:`armguard.Model`), nested as ``model.pin_model``'s link frames nest them."""
-        scene = model.scene
+        scene = model.scene_for()  # the Model as made
         owners = [n for n, b in scene.bodies.items() if getattr(b, "category", None) == group]
         if not owners:
             raise TerrainError(f"BodyHierarchy: model {model.name!r} has no body in group {group!r}")

@@ -309,7 +309,7 @@ def _pair_rows(source, q):
         r = source.pair_distances(q)
         pairs = model.pairs
         rows = zip(pairs.owner_a, pairs.owner_b, pairs.category, r.distance, r.p_WA, r.p_WB)
-        return model.scene, model.scene_q(q), list(rows)
+        return model.scene_for(), model.scene_q(q), list(rows)
     if hasattr(source, "pair_distances") and hasattr(source, "scene"):
         r = source.pair_distances(q)
         cats = [CATEGORIES[int(c)] for c in r.category]
