@@ -389,9 +389,8 @@ def test_bad_inputs_are_named(ur5):
         ranger.check_edges(np.zeros(7), np.zeros(7))
 
 
-def test_a_nan_clearance_is_an_error_not_a_verdict(ur5, monkeypatch):
-    m, v = ur5
-    Q0, Q1 = _edges(m, 1, 4)
+def _poison_evaluations(monkeypatch) -> None:
+    """Every evaluation of the verifier's record gives its first moving pair a NaN clearance."""
     from armguard.verify import _record
 
     real = _record._Run.eval
@@ -402,6 +401,12 @@ def test_a_nan_clearance_is_an_error_not_a_verdict(ur5, monkeypatch):
         return row
 
     monkeypatch.setattr(_record._Run, "eval", poisoned)
+
+
+def test_a_nan_clearance_is_an_error_not_a_verdict(ur5, monkeypatch):
+    m, v = ur5
+    Q0, Q1 = _edges(m, 1, 4)
+    _poison_evaluations(monkeypatch)
     with pytest.raises(VerificationError, match="NaN at s = 0.0"):
         v.check_edges(Q0, Q1)
 
@@ -411,21 +416,14 @@ def test_a_nan_clearance_gives_no_sampled_verdict_and_stops_the_guard(ur5, monke
     sampled verification then raises (it had said SAFE: ``nan <= 0`` is False) and the Guard stops (it had
     said OK, "predicted path clear")."""
     from armguard.verify import Guard, GuardVerdict
-    from armguard.verify import _oracle, _record
+    from armguard.verify import _oracle
 
     m, v = ur5
     robot = next(iter(m.scene.robots))
     names = m.scene.robots[robot].joint_names
     Q0, Q1 = _edges(m, 1, 4)
     traj = Trajectory(robot, names, [0.0, 1.0], np.stack([Q0[0], Q1[0]]))
-    real = _record._Run.eval
-
-    def poisoned(self, si, s, q, t=None):
-        row = real(self, si, s, q, t)
-        self.D[row, np.flatnonzero(self.moving)[0]] = np.nan
-        return row
-
-    monkeypatch.setattr(_record._Run, "eval", poisoned)
+    _poison_evaluations(monkeypatch)
     with pytest.raises(VerificationError, match="NaN: no verdict"):
         v.verify(traj, method="sampled")
     monkeypatch.undo()
