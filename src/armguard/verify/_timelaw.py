@@ -3,8 +3,8 @@
 Every segment moves on the straight joint-space line ``q(s) = q0 + s (q1 - q0)``; its time law
 (a trapezoid, or any ``trajectory.at``) says when it is at fraction ``s``.  Conservative
 advancement works in ``s``; a reported collision's time inverts the law in closed form (a plain
-Trajectory's trapezoid), else by bisection on the joint that moves most (:func:`segment_times`), the clearance profile's time axis by tabulating it
-(:func:`profile_times`).
+Trajectory's trapezoid), else by bisection on the joint that moves most (:func:`segment_times`);
+the clearance profile's time axis likewise, else by tabulating it (:func:`profile_times`).
 """
 
 from __future__ import annotations
@@ -54,12 +54,12 @@ def segment_times(trajectory, segs, seg_idx, s) -> np.ndarray:
     s = np.asarray(s, dtype=np.float64)
     if s.size == 0:
         return np.zeros(0)
+    closed = _closed_form(trajectory, segs, seg_idx, s)
+    if closed is not None:
+        return closed
     t0 = np.array([segs[i][0] for i in seg_idx])
     t1 = np.array([segs[i][1] for i in seg_idx])
     dq = np.array([segs[i][3] - segs[i][2] for i in seg_idx])
-    closed = _closed_form(trajectory, t0, t1, s)
-    if closed is not None:  # a still segment: its time line, as below
-        return np.where(np.any(dq != 0.0, axis=1), closed, t0 + s * (t1 - t0))
     q0 = np.array([segs[i][2] for i in seg_idx])
     k = np.argmax(np.abs(dq), axis=1)
     rows = np.arange(len(s))
@@ -78,21 +78,25 @@ def segment_times(trajectory, segs, seg_idx, s) -> np.ndarray:
     return np.where(~moving & (s > 0.0) & (s < 1.0), t0 + s * (t1 - t0), t)
 
 
-def _closed_form(trajectory, t0: np.ndarray, t1: np.ndarray, s: np.ndarray):
+def _closed_form(trajectory, segs, seg_idx: np.ndarray, s: np.ndarray):
     """:func:`segment_times` of a plain :class:`~armguard.kinematics.Trajectory` (its ``at`` not overridden:
     every joint moves by ``path_s`` of the segment's trapezoid) by the law's closed-form inverse
-    (:func:`armguard.kinematics._profile.path_tau`), or None (a time law of its own: bisection).  The
-    bisection's 60 calls of ``trajectory.at`` took ~5 ms of a colliding verification's report."""
+    (:func:`armguard.kinematics._profile.path_tau`; a still segment: its time line), or None (a time law
+    of its own: bisection).  The bisection's 60 calls of ``trajectory.at`` took ~5 ms of a colliding
+    verification's report."""
     from ..kinematics import Trajectory
     from ..kinematics._profile import path_tau
 
     if type(trajectory).at is not Trajectory.at:
         return None
+    t0 = np.array([segs[i][0] for i in seg_idx], dtype=np.float64)
+    t1 = np.array([segs[i][1] for i in seg_idx], dtype=np.float64)
     times = np.asarray(trajectory.times, dtype=np.float64)
     seg = np.clip(np.searchsorted(times, t0, side="right") - 1, 0, len(times) - 2)
     if not (np.array_equal(times[seg], t0) and np.array_equal(times[seg + 1], t1)):
         return None  # not this trajectory's segments
-    return t0 + path_tau(s, t1 - t0, np.asarray(trajectory._blend, dtype=np.float64)[seg])
+    still = np.array([not np.any(segs[i][3] - segs[i][2]) for i in seg_idx], dtype=bool)
+    return np.where(still, t0 + s * (t1 - t0), t0 + path_tau(s, t1 - t0, np.asarray(trajectory._blend)[seg]))
 
 
 def profile_times(trajectory, segs, seg_idx: np.ndarray, s: np.ndarray) -> np.ndarray:
@@ -102,13 +106,9 @@ def profile_times(trajectory, segs, seg_idx: np.ndarray, s: np.ndarray) -> np.nd
     the closed form's, exact (:func:`_closed_form`)."""
     seg_idx = np.asarray(seg_idx, dtype=np.int64)
     s = np.asarray(s, dtype=np.float64)
-    if len(s):
-        closed = _closed_form(trajectory, np.array([segs[i][0] for i in seg_idx]),
-                              np.array([segs[i][1] for i in seg_idx]), s)
-        if closed is not None:  # a still segment: its time line (as the tabulation below)
-            still = np.array([not np.any(segs[i][3] - segs[i][2]) for i in seg_idx])
-            t0, t1 = np.array([segs[i][0] for i in seg_idx]), np.array([segs[i][1] for i in seg_idx])
-            return np.where(still, t0 + s * (t1 - t0), closed)
+    closed = _closed_form(trajectory, segs, seg_idx, s) if len(s) else None
+    if closed is not None:
+        return closed
     used = np.unique(seg_idx)
     u = np.linspace(0.0, 1.0, PROFILE_TABLE)
     T = np.concatenate([segs[i][0] + u * (segs[i][1] - segs[i][0]) for i in used])
