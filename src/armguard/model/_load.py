@@ -146,8 +146,11 @@ def _srdf_for(urdf: Path, srdf, found: str = "given (srdf=)"):
     return None
 
 
-def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None):
-    """``(scene, pin_model, collision_model, parts)`` of a URDF: robots, bodies, payloads, SRDF pairs."""
+def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None, srdf_source=None):
+    """``(scene, pin_model, collision_model, parts)`` of a URDF: robots, bodies, payloads, SRDF pairs.
+
+    ``srdf_source``: what a scene file saved from this scene names as each arm's ``srdf:`` (None:
+    nothing, the SRDF found beside the URDF then; :data:`._srdf.NO_SRDF`: none, as loaded)."""
     from ._scene import Scene
     from ._from_pin import scene_parts_from_pin
     from ._urdf import load_pinocchio
@@ -161,7 +164,10 @@ def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None):
         for bname, shapes, cat in parts.bodies:
             scene.add_body(bname, shapes, category=cat)
         for robot, home, _ in parts.robots:
-            scene.add_robot(robot, home=home, _source={"kind": "urdf", "urdf": str(urdf)})
+            source = {"kind": "urdf", "urdf": str(urdf)}
+            if srdf_source is not None:
+                source["srdf"] = srdf_source
+            scene.add_robot(robot, home=home, _source=source)
         for pname, rname, link, shapes, X_LP in parts.payloads:
             scene.attach_payload(pname, rname, link, shapes, X_LP)
     except ArmguardError as exc:
@@ -238,7 +244,8 @@ def model_from_urdf(path, *, srdf=None, package_dirs=(), srdf_found: str = "give
         raise SceneFileError(str(path), "", "URDF file not found")
     try:
         srdf_obj = _srdf_for(path, srdf, srdf_found)
-        scene, pin_model, geom, parts = _build(path, srdf_obj, package_dirs, {})
+        named = NO_SRDF if srdf is False else None if srdf is None else str(Path(srdf).resolve())
+        scene, pin_model, geom, parts = _build(path, srdf_obj, package_dirs, {}, srdf_source=named)
     except SceneFileError as exc:
         if srdf is not None or not exc.file.lower().endswith(".srdf"):
             raise

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from .._errors import SceneFileError
 
-__all__ = ["robot_from_urdf", "robot_home_from_urdf"]
+__all__ = ["robot_from_urdf", "robot_home_from_urdf", "robot_parts_from_urdf"]
 
 
 def robot_from_urdf(path, *, name=None, X_WB=None, load_collision=True, mesh_dir=None, srdf=None):
@@ -35,6 +35,15 @@ def robot_from_urdf(path, *, name=None, X_WB=None, load_collision=True, mesh_dir
 def robot_home_from_urdf(path, *, name=None, X_WB=None, load_collision=True, mesh_dir=None, srdf=None):
     """``(robot, home)``: :func:`robot_from_urdf`'s Robot and its home as :func:`armguard.load_model` takes it
     (the SRDF's home state, else zero clipped to the limits), ``(n_joints,)`` rad / m."""
+    return robot_parts_from_urdf(path, name=name, X_WB=X_WB, load_collision=load_collision, mesh_dir=mesh_dir,
+                                 srdf=srdf)[:2]
+
+
+def robot_parts_from_urdf(path, *, name=None, X_WB=None, load_collision=True, mesh_dir=None, srdf=None):
+    """``(robot, home, disabled, srdf_file)``: :func:`robot_home_from_urdf`'s two, the pairs of the robot's
+    links its SRDF disables as :func:`armguard.load_model` applies them (``(link1, link2)`` names: a pair
+    of links one owner merges, or of links the URDF lacks in an SRDF of a larger robot, is not among
+    them), and that SRDF's path (None: none)."""
     from ._load import model_from_urdf
 
     file = str(path)
@@ -47,10 +56,13 @@ def robot_home_from_urdf(path, *, name=None, X_WB=None, load_collision=True, mes
                              "use armguard.load_model for a system of several arms")
     robot = robots[0]
     home = model.scene.home(robot.name)
+    own = f"{robot.name}/"
+    disabled = sorted(tuple(sorted(n[len(own):] for n in p)) for p in model.scene.disabled_pairs
+                      if all(n.startswith(own) for n in p))
     if not load_collision:
         robot = robot.with_link_shapes({ln: () for ln in robot.link_names})
     if X_WB is not None:
         robot = robot.with_base(X_WB)
     if name is not None:
         robot = robot.with_name(name)
-    return robot, home
+    return robot, home, disabled, None if model.srdf is None else model.srdf.file

@@ -19,7 +19,7 @@ from pydantic import ValidationError
 
 from .._errors import ArmguardError, KinematicsError, SceneError, SceneFileError, list_problems, xml_parse_error
 from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
-from ._robot_urdf import robot_home_from_urdf
+from ._robot_urdf import robot_parts_from_urdf
 from ._scene import CannedTest, Scene
 from ._srdf import NO_SRDF
 from ._schema import SHAPE_TYPES, SceneFile
@@ -219,7 +219,8 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
     if (spec.joints is None) == (spec.urdf is None):
         raise ctx.error(w, "a robot needs exactly one of 'joints' (a DH table) or 'urdf' (a file)")
     source: dict
-    named_pairs = urdf_home = None  # a URDF robot's SRDF pairs, read where it is checked (below), and its home
+    # a URDF robot's home, and the pairs its SRDF (named, or found beside the file) disables, as load_model applies them
+    urdf_home = urdf_pairs = None
     if spec.joints is not None:
         if not spec.joints:
             raise ctx.error(f"{w}.joints", "a DH table needs at least one joint")
@@ -269,9 +270,9 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
         # "none" none at all, else one found
         srdf = None if spec.srdf is None else False if _no_srdf(spec.srdf) else ctx.path(spec.srdf)
         if srdf:  # a file this one names is refused at its place here, before the URDF's loader reads it
-            named_pairs = _srdf_pairs(srdf, ctx, w)
+            _srdf_pairs(srdf, ctx, w)
         try:
-            robot, urdf_home = robot_home_from_urdf(path, name=spec.name, X_WB=X_WB, srdf=srdf)
+            robot, urdf_home, own_pairs, srdf_file = robot_parts_from_urdf(path, name=spec.name, X_WB=X_WB, srdf=srdf)
         except ArmguardError as exc:
             ours = bool(srdf) and isinstance(exc, SceneFileError) and Path(exc.file) == Path(srdf)
             raise ctx.error(f"{w}.srdf" if ours else f"{w}.urdf", str(exc)) from None
@@ -280,6 +281,10 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
         source = {"kind": "urdf", "urdf": str(path)}
         if srdf is False:
             source["srdf"] = NO_SRDF  # saved with it: the file loads back without the SRDF found beside the URDF
+        else:
+            urdf_pairs = own_pairs
+            if srdf is None and srdf_file is not None:  # found beside the URDF: its pairs hold here as in load_model
+                ctx.read.append(Path(srdf_file))
     # link shapes, in each link's own frame
     if spec.link_shapes:
         shapes = {}
@@ -295,11 +300,12 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
         if len(spec.home) != robot.n_joints:
             raise ctx.error(f"{w}.home", f"expected {robot.n_joints} joint values {list(robot.joint_names)}, got {len(spec.home)}")
         home = np.asarray(spec.home) * scale
-    srdf_pairs = []
+    srdf_pairs = urdf_pairs or []
     if spec.srdf is not None and not _no_srdf(spec.srdf):
         path = ctx.path(spec.srdf)
         ctx.read.append(path)
-        srdf_pairs = named_pairs if named_pairs is not None else _srdf_pairs(path, ctx, w)
+        if urdf_pairs is None:  # a DH robot's: its pairs name its links
+            srdf_pairs = _srdf_pairs(path, ctx, w)
         for a, b in srdf_pairs:
             for ln in (a, b):
                 if ln not in robot.link_names:

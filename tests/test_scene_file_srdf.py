@@ -1,0 +1,94 @@
+"""A scene file's ``urdf:`` robot takes its SRDF's disabled pairs as :func:`armguard.load_model` does.
+
+Without ``srdf:`` the SRDF found beside the URDF (or the public robot's) disables the same pairs as
+in ``load_model`` (before, only its home was read and panda's found SRDF left 108 shape pairs checked
+against load_model's 44: false collisions at the hand); ``srdf: none`` none; and a save/load round
+trip keeps the pairs the saved scene checked (a Model loaded with ``srdf=False`` saves ``srdf: none``).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import pytest
+import yaml
+
+import armguard
+from armguard.model._public import public_robot_files
+from armguard.scene import load_scene, save_scene
+
+
+def _owner_pairs(scene) -> set:
+    return {frozenset(p) for pairs in scene.allowed_pairs_by_category().values() for p in pairs}
+
+
+def _scene_file(tmp_path, robot: dict):
+    p = tmp_path / "cell.yaml"
+    p.write_text(yaml.safe_dump({"armguard_scene": 1, "name": "cell", "robots": [robot]}))
+    return p
+
+
+@pytest.fixture(scope="module")
+def panda():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return armguard.load_model("panda")
+
+
+def test_a_urdf_robot_without_srdf_key_checks_the_pairs_load_model_checks(tmp_path, panda):
+    urdf, _ = public_robot_files("panda")  # its SRDF is found in the package's srdf/ folder
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = load_scene(_scene_file(tmp_path, {"name": "panda", "urdf": str(urdf)}))
+        alone = load_scene(_scene_file(tmp_path, {"name": "panda", "urdf": str(urdf), "srdf": "none"}))
+    assert _owner_pairs(scene) == _owner_pairs(panda.scene)
+    assert scene.disabled_pairs == panda.scene.disabled_pairs and len(scene.disabled_pairs) == 35
+    assert len(_owner_pairs(alone)) > len(_owner_pairs(scene))  # srdf: none keeps every pair
+    assert not alone.disabled_pairs
+
+
+def test_a_partial_srdf_found_for_a_smaller_urdf_applies_its_own_links_pairs(tmp_path):
+    """talos_left_arm finds the whole humanoid's talos.srdf: its pairs of links the arm lacks are
+    skipped (as load_model skips them), the arm's own pairs hold."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = armguard.load_model("talos_left_arm")
+        urdf, _ = public_robot_files("talos_left_arm")
+        scene = load_scene(_scene_file(tmp_path, {"name": next(iter(model.scene.robots)), "urdf": str(urdf)}))
+    assert model.scene.disabled_pairs and scene.disabled_pairs == model.scene.disabled_pairs
+    assert _owner_pairs(scene) == _owner_pairs(model.scene)
+
+
+def test_a_found_srdf_pair_of_one_link_is_skipped_as_load_model_skips_it(tmp_path):
+    urdf = tmp_path / "two.urdf"
+    urdf.write_text("""<robot name="two">
+  <link name="base"><collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <link name="l1"><collision><origin xyz="0.3 0 0"/><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <link name="l2"><collision><origin xyz="0.3 0 0"/><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.6 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>""")
+    (tmp_path / "two.srdf").write_text('<robot name="two"><disable_collisions link1="l1" link2="l1" reason="x"/>'
+                                       '<disable_collisions link1="base" link2="l2" reason="Never"/></robot>')
+    model = armguard.load_model(urdf)
+    scene = load_scene(_scene_file(tmp_path, {"name": "two", "urdf": str(urdf)}))
+    assert scene.disabled_pairs == model.scene.disabled_pairs == {frozenset(("two/base", "two/l2"))}
+    back = load_scene(save_scene(scene, tmp_path / "again.yaml"))
+    assert back.disabled_pairs == scene.disabled_pairs and _owner_pairs(back) == _owner_pairs(scene)
+
+
+def test_a_model_loaded_without_its_srdf_saves_srdf_none_and_loads_back_with_its_pairs(tmp_path, panda):
+    urdf, srdf = public_robot_files("panda")  # the SRDF is found on a reload, unless the saved file says none
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        bare = armguard.load_model(urdf, srdf=False)
+        saved = save_scene(bare.scene, tmp_path / "bare.yaml")
+        assert yaml.safe_load(saved.read_text())["robots"][0]["srdf"] == "none"
+        back = load_scene(saved)
+        assert _owner_pairs(back) == _owner_pairs(bare.scene) and not back.disabled_pairs
+        named = armguard.load_model(urdf, srdf=srdf)
+        again = load_scene(save_scene(named.scene, tmp_path / "named.yaml"))
+    assert yaml.safe_load((tmp_path / "named.yaml").read_text())["robots"][0]["srdf"] == str(srdf.resolve())
+    assert _owner_pairs(again) == _owner_pairs(named.scene) == _owner_pairs(panda.scene)
