@@ -395,7 +395,11 @@ class Guard(FollowsScene):
                            "commanded segment (no speed given)")
                 else:
                     why = f"predicted to come within the stopping distance {m * 1e3:.1f} mm in {ttc:.3f} s"
-                return self._decide(GuardVerdict.STOP, why + f" ({pair[0]} / {pair[1]})", now, min(lower, float(d[i])), ttc, pair, m, evals, t_start)
+                why += f" ({pair[0]} / {pair[1]})"
+                if not model.moves(pair[0], st.k0, st.k1) and not model.moves(pair[1], st.k0, st.k1):
+                    why += (f"; no joint of robot {self.robot!r} moves either side, so no motion of it clears this: "
+                            "disable the pair (Model.with_pair_disabled) if that closeness is by design")
+                return self._decide(GuardVerdict.STOP, why, now, min(lower, float(d[i])), ttc, pair, m, evals, t_start)
             if s >= 1.0 or not np.any(pos):
                 break
             step = float(np.min(gap[pos] / rates[pos]))

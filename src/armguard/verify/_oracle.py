@@ -347,6 +347,12 @@ class ClearanceModel:
         """Bound (m/s) on the speed of the fastest point of any moving part at joint velocity ``qdot`` ``(n_q,)``."""
         return float(np.max(self.lever[:-1] @ np.abs(qdot))) if len(self.parts) else 0.0
 
+    def moves(self, owner: str, k0: int, k1: int) -> bool:
+        """Whether the joints ``k0:k1`` of the flat configuration move any point of ``owner`` (a part
+        with a lever arm; a body, the workspace or a robot's base link: no)."""
+        i = self._part_index.get(owner)
+        return i is not None and bool(np.any(self.lever[i, k0:k1] > 0.0))
+
     def moving_pairs(self, robot: str) -> np.ndarray:
         """``(P,) bool``: the pairs with a side on ``robot`` (a link of it, or a payload it carries):
         the only ones its motion can change, and the only ones a verification of it checks."""

@@ -77,6 +77,10 @@ class Collision:
         The stopping distance in force then (the segment's, from its peak speed; 0 at rest).
     kind : CollisionKind
         A contact, or a violation of the stopping distance by shapes still apart.
+    fixed : bool
+        No joint of the moving robot moves either side (a base link on its table, a payload on a
+        fixed link): the pair's clearance is the same along every trajectory of this robot, and the
+        summary says how to disable the pair where that closeness is by design.
     """
 
     time: float
@@ -97,6 +101,7 @@ class Collision:
     segment: int
     stopping_distance: float = 0.0
     kind: CollisionKind = CollisionKind.CONTACT
+    fixed: bool = False
 
     def describe(self) -> str:
         """"contact (distance -3.1 mm)" or "within stopping distance 70 mm: 60.0 mm"; a clearance that reaches
@@ -317,6 +322,11 @@ class VerificationReport:
                 f"[{c.check}], {c.describe()} at p_W = ({c.p_W[0]:.4f}, {c.p_W[1]:.4f}, {c.p_W[2]:.4f}) m"
             )
             lines.append("q = [" + ", ".join(f"{x:.4f}" for x in c.q) + "]")
+            if c.fixed:
+                lines.append(f"no joint of robot {self.robot!r} moves {c.a} or {c.obstacle}: this clearance is the same at "
+                             "every configuration of it, so every trajectory fails here; if that closeness is by design, "
+                             f"disable the pair (Model.with_pair_disabled({c.a!r}, {c.b!r}), or "
+                             "<disable_collisions reason=\"Static\"/> in the SRDF)")
         m = self.min_clearance_at
         if m is not None:
             lines.append(f"minimum clearance {m.distance * 1e3:.2f} mm at t = {m.time:.4f} s between {m.a} and {m.b} ({m.category})")

@@ -487,8 +487,7 @@ class Verifier(FollowsScene):
 
     def _moves(self, owner: str, run) -> bool:
         """Whether the moving robot's joints move any point of ``owner`` (a part with a lever arm)."""
-        i = run.model._part_index.get(owner)
-        return i is not None and bool(np.any(run.model.lever[i, run.k0 : run.k1] > 0.0))
+        return run.model.moves(owner, run.k0, run.k1)
 
     def _collision(self, run, si, t_c, pair, rname, margin: float) -> Collision:
         model = run.model
@@ -526,6 +525,7 @@ class Verifier(FollowsScene):
             segment=int(si),
             stopping_distance=margin,
             kind=CollisionKind.STOPPING_DISTANCE if d > contact and margin > 0.0 else CollisionKind.CONTACT,
+            fixed=not self._moves(a, run) and not self._moves(b, run),
         )
 
 
