@@ -46,7 +46,7 @@ from .._errors import StaleModelError, VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ..kinematics._limits import limit_error
 from ._follow import FollowsScene
-from ._oracle import ClearanceModel
+from ._oracle import WORKSPACE, ClearanceModel
 from ._stopping import StoppingDistance, check_stopping_distance
 
 __all__ = ["Guard", "GuardDecision", "GuardMode", "GuardVerdict"]
@@ -114,10 +114,12 @@ class GuardDecision:
 class _GuardState:
     """What one step reads (:meth:`Guard._build`, published whole): ``model`` (the ClearanceModel),
     ``base`` (the flat configuration of every robot), ``k0:k1`` (the guarded joints in it), ``names``,
-    ``lower``, ``upper``, ``lo_ok``, ``hi_ok`` (their limits, and with the tolerance); with avoidance
-    ``v_index``, ``damper``, ``pin_model``, ``checker``, ``nv``."""
+    ``lower``, ``upper``, ``lo_ok``, ``hi_ok`` (their limits, and with the tolerance), ``mine`` (the
+    pairs with a side on the guarded robot: the only ones its motion changes, and the only ones it
+    answers for, as a verification of it); with avoidance ``v_index``, ``damper``, ``pin_model``,
+    ``checker``, ``nv``."""
 
-    __slots__ = ("model", "base", "k0", "k1", "names", "lower", "upper", "lo_ok", "hi_ok", "v_index", "damper",
+    __slots__ = ("model", "base", "k0", "k1", "names", "lower", "upper", "lo_ok", "hi_ok", "mine", "v_index", "damper",
                  "pin_model", "checker", "nv")
 
 
@@ -126,6 +128,18 @@ def _full(st: _GuardState, q_robot: np.ndarray) -> np.ndarray:
     q = st.base.copy()
     q[st.k0 : st.k1] = q_robot
     return q
+
+
+def _still_hint(model, pair) -> str:
+    """What the Guard's STOP reason adds when no joint moves either side of ``pair`` (a base link on
+    its table: no motion changes that clearance), else nothing."""
+    if model.moves(pair[0], 0, model.n_q) or model.moves(pair[1], 0, model.n_q):
+        return ""
+    if WORKSPACE in pair:
+        return ("; no joint moves that part, so no path changes this clearance: enlarge the workspace box "
+                "(Scene.set_workspace) if it is by design")
+    return ("; no joint moves either side, so no path changes this clearance: disable the pair (Model.with_pair_disabled) "
+            "if that closeness is by design")
 
 
 def _time_to(s: float, T: float) -> float:
@@ -210,6 +224,7 @@ class Guard(FollowsScene):
         st.lower, st.upper = np.asarray(rob.lower, dtype=np.float64), np.asarray(rob.upper, dtype=np.float64)
         a = self.tol.joint_limit
         st.lo_ok, st.hi_ok = st.lower - a, st.upper + a
+        st.mine = st.model.moving_pairs(self.robot)
         if self.avoidance is not None:
             self._prepare_avoidance(st, self.avoidance)
         return st
@@ -374,7 +389,7 @@ class Guard(FollowsScene):
         rates = model.pair_rates(full_dq)
         pos = rates > 0.0
         s = 0.0
-        d, _, _ = model.distances(_full(st, q))
+        d = np.where(st.mine, model.distances(_full(st, q))[0], np.inf)  # another robot's pairs: not this guard's
         evals = 1
         now = float(d.min())
         lower = now
@@ -395,10 +410,7 @@ class Guard(FollowsScene):
                            "commanded segment (no speed given)")
                 else:
                     why = f"predicted to come within the stopping distance {m * 1e3:.1f} mm in {ttc:.3f} s"
-                why += f" ({pair[0]} / {pair[1]})"
-                if not model.moves(pair[0], st.k0, st.k1) and not model.moves(pair[1], st.k0, st.k1):
-                    why += (f"; no joint of robot {self.robot!r} moves either side, so no motion of it clears this: "
-                            "disable the pair (Model.with_pair_disabled) if that closeness is by design")
+                why += f" ({pair[0]} / {pair[1]})" + _still_hint(model, pair)
                 return self._decide(GuardVerdict.STOP, why, now, min(lower, float(d[i])), ttc, pair, m, evals, t_start)
             if s >= 1.0 or not np.any(pos):
                 break
@@ -408,7 +420,7 @@ class Guard(FollowsScene):
                 return self._decide(GuardVerdict.STOP, "prediction not finished within its evaluation budget",
                                     now, lower, _time_to(s, T), (model.owner_a[i], model.owner_b[i]), m, evals, t_start)
             # saturated at the limits (see the module docstring); q itself is within them
-            d_next, _, _ = model.distances(_full(st, np.clip(q + s_next * dq, st.lo_ok, st.hi_ok)))
+            d_next = np.where(st.mine, model.distances(_full(st, np.clip(q + s_next * dq, st.lo_ok, st.hi_ok)))[0], np.inf)
             evals += 1
             L = s_next - s
             lower = min(lower, float(np.min(np.minimum(np.minimum(d, d_next), 0.5 * (d + d_next - rates * L)))))

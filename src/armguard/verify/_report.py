@@ -78,9 +78,9 @@ class Collision:
     kind : CollisionKind
         A contact, or a violation of the stopping distance by shapes still apart.
     fixed : bool
-        No joint of the moving robot moves either side (a base link on its table, a payload on a
-        fixed link): the pair's clearance is the same along every trajectory of this robot, and the
-        summary says how to disable the pair where that closeness is by design.
+        No joint of any robot moves either side (a base link on its table, a payload on a fixed
+        link, a base link and the workspace walls): no path changes the pair's clearance, and the
+        summary says how to disable the pair (or enlarge the workspace) where that is by design.
     """
 
     time: float
@@ -322,11 +322,14 @@ class VerificationReport:
                 f"[{c.check}], {c.describe()} at p_W = ({c.p_W[0]:.4f}, {c.p_W[1]:.4f}, {c.p_W[2]:.4f}) m"
             )
             lines.append("q = [" + ", ".join(f"{x:.4f}" for x in c.q) + "]")
-            if c.fixed:
-                lines.append(f"no joint of robot {self.robot!r} moves {c.a} or {c.obstacle}: this clearance is the same at "
-                             "every configuration of it, so every trajectory fails here; if that closeness is by design, "
-                             f"disable the pair (Model.with_pair_disabled({c.a!r}, {c.b!r}), or "
-                             "<disable_collisions reason=\"Static\"/> in the SRDF)")
+            if c.fixed and c.obstacle == "workspace":
+                lines.append(f"no joint moves {c.a}, so no path changes its clearance to the workspace walls: enlarge "
+                             "the workspace box (Scene.set_workspace, the scene file's workspace:) if this is by design")
+            elif c.fixed:
+                lines.append(f"no joint moves {c.a} or {c.obstacle}, so no path changes this clearance (only a smaller "
+                             "stopping distance does); if that closeness is by design, disable the pair "
+                             f"(Model.with_pair_disabled({c.a!r}, {c.b!r}), or <disable_collisions reason=\"Static\"/> "
+                             "in the SRDF)")
         m = self.min_clearance_at
         if m is not None:
             lines.append(f"minimum clearance {m.distance * 1e3:.2f} mm at t = {m.time:.4f} s between {m.a} and {m.b} ({m.category})")
