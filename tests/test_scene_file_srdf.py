@@ -9,6 +9,7 @@ trip keeps the pairs the saved scene checked (a Model loaded with ``srdf=False``
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import pytest
 import yaml
@@ -92,3 +93,90 @@ def test_a_model_loaded_without_its_srdf_saves_srdf_none_and_loads_back_with_its
         again = load_scene(save_scene(named.scene, tmp_path / "named.yaml"))
     assert yaml.safe_load((tmp_path / "named.yaml").read_text())["robots"][0]["srdf"] == str(srdf.resolve())
     assert _owner_pairs(again) == _owner_pairs(named.scene) == _owner_pairs(panda.scene)
+
+
+@pytest.mark.parametrize("case", ["srdf: none", "srdf: one pair", "srdf=False"])
+def test_a_sidecar_models_srdf_choice_survives_a_save_and_reload(tmp_path, case):
+    """A sidecar naming no SRDF or another one, or loaded with ``srdf=False``: the saved scene names
+    that choice, so the reload does not take the SRDF found beside the URDF (25 pairs fewer on panda)."""
+    urdf, _ = public_robot_files("panda")
+    (tmp_path / "one_pair.srdf").write_text('<robot name="panda"><disable_collisions link1="panda_link0" '
+                                            'link2="panda_link1" reason="Adjacent"/></robot>')
+    model = {"urdf": str(urdf)}
+    if case != "srdf=False":
+        model["srdf"] = "none" if case == "srdf: none" else "one_pair.srdf"
+    side = tmp_path / "cell.yaml"
+    side.write_text(yaml.safe_dump({"armguard_scene": 1, "name": "cell", "model": model}))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = armguard.load_model(side, srdf=False if case == "srdf=False" else None)
+        back = load_scene(save_scene(m.scene, tmp_path / "saved.yaml"))
+    assert _owner_pairs(back) == _owner_pairs(m.scene)
+    assert len(m.scene.disabled_pairs) == (1 if case == "srdf: one pair" else 0)
+
+
+@pytest.mark.parametrize("how", ["load_model", "scene file"])
+def test_an_srdf_pair_checked_again_stays_checked_after_a_save_and_reload(tmp_path, how):
+    """``Scene.enable_pair`` on a pair the SRDF disables: the saved file lists it under
+    ``pairs.enable`` (its SRDF, read again, disables it; before, the reload did so silently)."""
+    urdf, _ = public_robot_files("panda")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = (armguard.load_model("panda").scene if how == "load_model"
+                 else load_scene(_scene_file(tmp_path, {"name": "panda", "urdf": str(urdf)})))
+        pair = frozenset(("panda/panda_link5", "panda/panda_hand"))
+        assert pair in scene.disabled_pairs
+        scene.enable_pair(*pair)
+        saved = save_scene(scene, tmp_path / "saved.yaml")
+        assert yaml.safe_load(saved.read_text())["pairs"]["enable"] == [sorted(pair)]
+        back = load_scene(saved)
+    assert pair not in back.disabled_pairs and _owner_pairs(back) == _owner_pairs(scene)
+
+
+def test_pairs_enable_checks_a_pair_the_srdf_disables_and_names_an_unknown_owner(tmp_path):
+    urdf, _ = public_robot_files("panda")
+    p = tmp_path / "cell.yaml"
+    p.write_text(yaml.safe_dump({"armguard_scene": 1, "name": "cell", "robots": [{"name": "panda", "urdf": str(urdf)}],
+                                 "pairs": {"enable": [["panda/panda_link5", "panda/panda_hand"]]}}))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s = load_scene(p)
+        assert frozenset(("panda/panda_link5", "panda/panda_hand")) in _owner_pairs(s)
+        p.write_text(yaml.safe_dump({"armguard_scene": 1, "name": "cell", "robots": [{"name": "panda", "urdf": str(urdf)}],
+                                     "pairs": {"enable": [["panda/panda_link5", "panda/hand"]]}}))
+        with pytest.raises(armguard.SceneFileError) as err:
+            load_scene(p)
+    assert err.value.where.startswith("pairs.enable[0]") and "hand" in err.value.message
+
+
+def test_a_scene_loaded_by_a_relative_path_saves_elsewhere_and_loads_back(tmp_path, monkeypatch):
+    """The URDF path of a scene file read by a relative path was saved relative to the working
+    directory and read back relative to the saved file: "URDF file not found"."""
+    urdf, _ = public_robot_files("ur5")
+    cell = tmp_path / "cell"
+    cell.mkdir()
+    (cell / "ur5.urdf").symlink_to(urdf)
+    (cell / "cell.yaml").write_text(yaml.safe_dump({"armguard_scene": 1, "name": "cell",
+                                                     "robots": [{"name": "ur5", "urdf": "ur5.urdf", "srdf": "none"}]}))
+    monkeypatch.chdir(tmp_path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s = load_scene(Path("cell") / "cell.yaml")
+        (tmp_path / "out").mkdir()
+        back = load_scene(save_scene(s, tmp_path / "out" / "saved.yaml"))
+    assert back.joint_names == s.joint_names and _owner_pairs(back) == _owner_pairs(s)
+
+
+def test_two_robots_from_one_urdf_save_and_load_back(tmp_path):
+    """Two arms of a scene file from the same one-arm URDF are two robots, not one URDF's two arms:
+    they save (before: "its URDF holds the arms ['left', 'right']")."""
+    urdf, _ = public_robot_files("ur5")
+    p = tmp_path / "two.yaml"
+    p.write_text(yaml.safe_dump({"armguard_scene": 1, "name": "two", "robots": [
+        {"name": "left", "urdf": str(urdf)}, {"name": "right", "urdf": str(urdf), "mount": {"xyz": [1.0, 0, 0]}}]}))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s = load_scene(p)
+        back = load_scene(save_scene(s, tmp_path / "saved.yaml"))
+    assert back.joint_names == s.joint_names and _owner_pairs(back) == _owner_pairs(s)
+    assert back.disabled_pairs == s.disabled_pairs

@@ -164,7 +164,7 @@ def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None, srdf_so
         for bname, shapes, cat in parts.bodies:
             scene.add_body(bname, shapes, category=cat)
         for robot, home, _ in parts.robots:
-            source = {"kind": "urdf", "urdf": str(urdf)}
+            source = {"kind": "urdf", "urdf": os.path.abspath(urdf), "arms": len(parts.robots), "srdf_pairs": ()}
             if srdf_source is not None:
                 source["srdf"] = srdf_source
             scene.add_robot(robot, home=home, _source=source)
@@ -188,6 +188,9 @@ def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None, srdf_so
                 scene.disable_pair(oa, ob)
             except SceneError as exc:
                 raise srdf_obj.error(f"disable_collisions[{k}]", str(exc)) from None
+            for rname, src in scene._robot_sources.items():  # for save_scene: the SRDF's pairs of each arm
+                if any(o.startswith(f"{rname}/") for o in (oa, ob)):
+                    src["srdf_pairs"] = (*src["srdf_pairs"], (oa, ob))
         if skipped:
             one = len(skipped) == 1
             srdf_obj.warn(f"{len(skipped)} disabled {'pair names' if one else 'pairs name'} links {urdf.name} does not "
@@ -305,7 +308,13 @@ def model_from_scenefile(sf, file: str, base: Path, *, srdf=None) -> Model:
     for jn, spec in sf.joints.items():
         if spec.max_acceleration is not None:
             acc[jn.replace("/", "_", 1)] = spec.max_acceleration * ctx.A  # "R/joint" -> URDF "R_joint"
-    scene, pin_model, geom, parts = _build(urdf, srdf_obj, (), acc, name=sf.name)
+    if srdf_obj is None or srdf is False:  # what a scene file saved from it names as each arm's srdf:
+        srdf_source = NO_SRDF
+    elif srdf is not None or named:
+        srdf_source = os.path.abspath(srdf if srdf is not None else ctx.path(named))
+    else:
+        srdf_source = None  # found beside the URDF: found again
+    scene, pin_model, geom, parts = _build(urdf, srdf_obj, (), acc, name=sf.name, srdf_source=srdf_source)
     known = {jn.replace("/", "_", 1) for jn in scene.joint_names} | set(scene.joint_names)
     for jn in sf.joints:
         if jn not in known and jn.replace("/", "_", 1) not in known:

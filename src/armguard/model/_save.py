@@ -18,6 +18,7 @@ from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism,
 from ..kinematics import JointType
 from ._scene import Scene
 from ._schema import SCHEMA_VERSION
+from ._srdf import NO_SRDF
 
 __all__ = ["save_scene", "scene_to_dict"]
 
@@ -109,7 +110,7 @@ def _robot_to_dict(scene: Scene, name: str) -> dict:
             out["link_shapes"] = shapes
     elif source.get("kind") == "urdf":
         shared = [n for n, src in scene._robot_sources.items() if src.get("kind") == "urdf" and src.get("urdf") == source["urdf"]]
-        if len(shared) > 1:  # the file would not load back: a scene file's robot takes a URDF of one arm
+        if source.get("arms", 1) > 1:  # the file would not load back: a scene file's robot takes a URDF of one arm
             raise SceneError(f"cannot save robot {name!r}: its URDF {source['urdf']} holds the arms {shared}, and a scene "
                              "file's robot takes a URDF of one arm; load that URDF with armguard.load_model (its sidecar "
                              "YAML is the scene file of such a model)")
@@ -150,6 +151,11 @@ def scene_to_dict(scene: Scene) -> dict:
         "exclude_adjacent": scene.exclude_adjacent,
         "disable": sorted(sorted(p) for p in scene.disabled_pairs),
     }
+    # an SRDF's pairs the scene checks again (Scene.enable_pair): its SRDF, read again, would disable them
+    enable = {frozenset(p) for src in scene._robot_sources.values() if src.get("srdf") != NO_SRDF
+              for p in src.get("srdf_pairs", ())} - set(scene.disabled_pairs)
+    if enable:
+        d["pairs"]["enable"] = sorted(sorted(p) for p in enable)
     trajs = []
     for name, traj in scene.trajectories.items():
         spec = scene._trajectory_specs.get(name)

@@ -278,7 +278,7 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
             raise ctx.error(f"{w}.srdf" if ours else f"{w}.urdf", str(exc)) from None
         if spec.max_acceleration is not None:
             robot = _with_accelerations(robot, spec.max_acceleration, ctx, f"{w}.max_acceleration")
-        source = {"kind": "urdf", "urdf": str(path)}
+        source = {"kind": "urdf", "urdf": os.path.abspath(path)}  # absolute: a saved file reads it from anywhere
         if srdf is False:
             source["srdf"] = NO_SRDF  # saved with it: the file loads back without the SRDF found beside the URDF
         else:
@@ -310,7 +310,7 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
             for ln in (a, b):
                 if ln not in robot.link_names:
                     raise ctx.error(f"{w}.srdf", f"{path.name}: disable_collisions names unknown link {ln!r}")
-        source["srdf"] = str(path)
+        source["srdf"] = os.path.abspath(path)
     return robot, home, srdf_pairs, source
 
 
@@ -452,6 +452,8 @@ def _body(scene: Scene, b, i: int, ctx: _Ctx, X) -> None:
 
 def _add_robot(scene: Scene, r, i: int, ctx: _Ctx, frames: dict) -> list:
     robot, home, pairs, source = _robot(r, i, ctx, frames)
+    if source["kind"] == "urdf":  # its SRDF's pairs, for save_scene to list those the scene checks again
+        source["srdf_pairs"] = tuple((f"{r.name}/{a}", f"{r.name}/{b}") for a, b in pairs)
     self_pairs = None
     if r.self_pairs is not None:
         self_pairs = [tuple(p) for p in r.self_pairs]
@@ -511,6 +513,12 @@ def _populate(scene: Scene, sf: SceneFile, ctx: _Ctx, frames: dict) -> None:
             scene.disable_pair(a, b)
         except SceneError as exc:
             raise ctx.error(f"pairs.disable[{k}]", str(exc)) from None
+    for k, (a, b) in enumerate(sf.pairs.enable):  # checked after all, an SRDF's or the list above's notwithstanding
+        try:
+            scene._check_owner_or_robot(a), scene._check_owner_or_robot(b)
+        except SceneError as exc:
+            raise ctx.error(f"pairs.enable[{k}]", str(exc)) from None
+        scene.enable_pair(a, b)
     # trajectories and canned tests are independent: report them all
     for i, t in enumerate(sf.trajectories):
         try:

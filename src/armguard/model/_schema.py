@@ -211,6 +211,7 @@ class WorkspaceSpec(_Model):
 class PairsSpec(_Model):
     exclude_adjacent: bool = True
     disable: list[Annotated[list[str], Field(min_length=2, max_length=2)]] = []
+    enable: list[Annotated[list[str], Field(min_length=2, max_length=2)]] = []  # checked, though an SRDF disables them
 
 
 class TrajectorySpec(_Model):
