@@ -57,7 +57,8 @@ def _strip(name: str, prefix: str) -> str:
 
 
 def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=None) -> ScenePart:
-    """Convert (see the module docstring). ``accelerations``: URDF joint name -> rad/s² (or m/s²)."""
+    """Convert (see the module docstring). ``accelerations``: joint -> rad/s² (or m/s²), the joint named as
+    the scene names it (``"arm/joint"``) or by its URDF name."""
     import pinocchio as pin
 
     from ..kinematics import Coupling, JointSpec, JointType, Robot
@@ -173,7 +174,8 @@ def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=Non
                     X_post=None if _identity(X_post) else X_post,
                     lower=-math.inf if lo is None else lo, upper=math.inf if hi is None else hi,
                     max_velocity=(vmax if coupling is None and vmax > 0 else math.inf),
-                    max_acceleration=float(accelerations.get(jname, math.inf)), coupling=coupling))
+                    max_acceleration=float(accelerations.get(f"{rname}/{_strip(jname, prefix)}", accelerations.get(jname, math.inf))),
+                    coupling=coupling))
             else:
                 X_pre = _inv(Xp) @ _se3(J.placement)
                 X_post = _inv(_se3(J.placement)) @ _se3(frames[i].placement)

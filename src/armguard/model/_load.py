@@ -307,7 +307,7 @@ def model_from_scenefile(sf, file: str, base: Path, *, srdf=None) -> Model:
     acc = {}
     for jn, spec in sf.joints.items():
         if spec.max_acceleration is not None:
-            acc[jn.replace("/", "_", 1)] = spec.max_acceleration * ctx.A  # "R/joint" -> URDF "R_joint"
+            acc[jn] = acc[jn.replace("/", "_", 1)] = spec.max_acceleration * ctx.A  # "R/joint"; an exported URDF's "R_joint"
     if srdf_obj is None or srdf is False:  # what a scene file saved from it names as each arm's srdf:
         srdf_source = NO_SRDF
     elif srdf is not None or named:

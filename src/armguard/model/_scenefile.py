@@ -425,6 +425,9 @@ def schema_problems(errors) -> list[tuple[str, str]]:
 def scene_from_dict_validated(sf: SceneFile, file: str, base: Path | None = None) -> Scene:
     """The Scene of a validated scene file without ``model:`` (DH or URDF robots, shape bodies)."""
     ctx = _Ctx(file, base or Path.cwd(), _MM if sf.units.length == "mm" else 1.0, _DEG if sf.units.angle == "deg" else 1.0)
+    if sf.joints:  # a sidecar's per-joint settings: here they would set nothing
+        raise ctx.error(f"joints.{next(iter(sf.joints))}", "per-joint settings belong to a model sidecar (with model:); "
+                        "a robot of this file takes its accelerations as robots[i].max_acceleration: [one per joint]")
     frames = _frames(sf, ctx)
     scene = Scene(sf.name, description=sf.description)
     try:
