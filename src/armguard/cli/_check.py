@@ -59,9 +59,10 @@ def parse_q(sc, q_text: str, deg: bool):
             x = q[k] * scale
             slack = 1e-9
             if not (lo - slack <= x <= hi + slack):
+                hint = " (degrees? add --deg)" if unit == "rad" and abs(x) > 2.0 * math.pi else ""
                 raise click.BadParameter(
                     f"{rname}/{robot.joint_names[j]} = {q[k]:.10g} {unit} is outside its limits "
-                    f"[{lo / scale:.10g}, {hi / scale:.10g}] {unit}", param_hint="--q")
+                    f"[{lo / scale:.10g}, {hi / scale:.10g}] {unit}{hint}", param_hint="--q")
             q[k] = x
             k += 1
     return q

@@ -221,9 +221,9 @@ class Scene:
                 raise SceneError(f"robot {name!r}: home must be one configuration, got shape {q.shape}")
             bad = np.flatnonzero((q < robot.lower) | (q > robot.upper))
             if bad.size:
-                raise SceneError(
-                    f"robot {name!r}: home is outside the limits of joint {robot.joint_names[bad[0]]!r}"
-                )
+                j = int(bad[0])
+                raise SceneError(f"robot {name!r}: home {robot.joint_names[j]!r} = {q[j]:.9g} is outside its limits "
+                                 f"[{robot.lower[j]:.9g}, {robot.upper[j]:.9g}] (rad or m)")
         q = np.array(q, dtype=np.float64)
         q.flags.writeable = False
         pairs = None

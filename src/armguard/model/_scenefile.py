@@ -300,6 +300,7 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
         if len(spec.home) != robot.n_joints:
             raise ctx.error(f"{w}.home", f"expected {robot.n_joints} joint values {list(robot.joint_names)}, got {len(spec.home)}")
         home = np.asarray(spec.home) * scale
+        _in_limits(robot, home, ctx, f"{w}.home")
     srdf_pairs = urdf_pairs or []
     if spec.srdf is not None and not _no_srdf(spec.srdf):
         path = ctx.path(spec.srdf)
@@ -561,6 +562,24 @@ def _joint_values(robot, q, ctx: _Ctx, where: str) -> np.ndarray:
     return np.asarray(q, dtype=np.float64) * _q_scale(robot, ctx)
 
 
+def _in_limits(robot, q, ctx: _Ctx, where: str) -> None:
+    """Refuse ``q`` (SI) with a joint outside its limits at ``where``: value and limits in the file's units,
+    and a word on them where a radian or metre value that large looks like degrees or millimetres."""
+    bad = np.flatnonzero((q < robot.lower) | (q > robot.upper))
+    if bad.size:
+        j = int(bad[0])
+        s = _q_scale(robot, ctx)[j]
+        rev = robot.joint_types[j].value != "prismatic"
+        unit = ("deg" if ctx.A != 1.0 else "rad") if rev else ("mm" if ctx.L != 1.0 else "m")
+        hint = ""
+        if rev and ctx.A == 1.0 and abs(q[j]) > 2.0 * math.pi:
+            hint = " (read as radians: a file in degrees says units: {angle: deg})"
+        elif not rev and ctx.L == 1.0 and abs(q[j]) > 10.0:
+            hint = " (read as metres: a file in millimetres says units: {length: mm})"
+        raise ctx.error(where, f"joint {robot.joint_names[j]!r} = {q[j] / s:.6g} {unit} is outside its limits "
+                               f"[{robot.lower[j] / s:.6g}, {robot.upper[j] / s:.6g}] {unit}{hint}")
+
+
 def _trajectory(scene: Scene, t, ctx: _Ctx, where: str) -> None:
     from ..kinematics import Trajectory
 
@@ -569,10 +588,7 @@ def _trajectory(scene: Scene, t, ctx: _Ctx, where: str) -> None:
     robot = scene.robots[t.robot]
     wps = np.stack([_joint_values(robot, q, ctx, f"{where}.waypoints[{k}]") for k, q in enumerate(t.waypoints)])
     for k, q in enumerate(wps):
-        bad = np.flatnonzero((q < robot.lower) | (q > robot.upper))
-        if bad.size:
-            j = int(bad[0])
-            raise ctx.error(f"{where}.waypoints[{k}]", f"joint {robot.joint_names[j]!r} is outside its limits")
+        _in_limits(robot, q, ctx, f"{where}.waypoints[{k}]")
     try:
         traj = Trajectory.joint_interpolated(robot, wps, times=t.times, profile=t.profile)
         scene.add_trajectory(t.name, traj)

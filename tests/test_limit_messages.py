@@ -1,0 +1,58 @@
+"""A joint value outside its limits in a scene file or on ``--q`` names the value, the limits in the
+units it was given in, and, where a radian or metre value that large looks like degrees or
+millimetres, says how the file or command reads it (before: "home is outside the limits of joint
+'shoulder_lift_joint'", at the robot's line, with neither)."""
+
+from __future__ import annotations
+
+import warnings
+
+import pytest
+import yaml
+from click.testing import CliRunner
+
+import armguard
+from armguard.cli import main
+from armguard.model._public import public_robot_files
+
+
+def _scene(tmp_path, robot: dict, **top):
+    p = tmp_path / "cell.yaml"
+    p.write_text(yaml.safe_dump({"armguard_scene": 1, "name": "cell", "robots": [robot], **top}))
+    return p
+
+
+def _error(path) -> armguard.SceneFileError:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(armguard.SceneFileError) as err:
+            armguard.load_model(path)
+    return err.value
+
+
+def test_a_home_in_degrees_read_as_radians_names_value_limits_and_units(tmp_path):
+    urdf, _ = public_robot_files("ur5")
+    err = _error(_scene(tmp_path, {"name": "ur5", "urdf": str(urdf), "home": [0, -90, 90, 0, 0, 0]}))
+    assert err.where == "robots[0].home"
+    assert "'shoulder_lift_joint' = -90 rad is outside its limits [-6.28319, 6.28319] rad" in err.message
+    assert "units: {angle: deg}" in err.message
+    ok = _scene(tmp_path, {"name": "ur5", "urdf": str(urdf), "home": [0, -90, 90, 0, 0, 0]}, units={"angle": "deg"})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert armguard.load_model(ok).scene.home("ur5")[1] == pytest.approx(-1.5707963267948966)
+
+
+def test_a_waypoint_outside_the_limits_in_degrees_says_so_in_degrees(tmp_path):
+    urdf, _ = public_robot_files("ur5")
+    err = _error(_scene(tmp_path, {"name": "ur5", "urdf": str(urdf)}, units={"angle": "deg"},
+                        trajectories=[{"name": "t", "robot": "ur5", "waypoints": [[0] * 6, [0, 400, 0, 0, 0, 0]]}]))
+    assert err.where == "trajectories[0].waypoints[1]"
+    assert "'shoulder_lift_joint' = 400 deg is outside its limits [-360, 360] deg" in err.message
+    assert "read as radians" not in err.message
+
+
+def test_q_in_degrees_without_deg_is_told_to_add_it():
+    r = CliRunner().invoke(main, ["-q", "check", "ur5", "--q=-90,0,0,0,0,0"])
+    assert r.exit_code == 2 and "-90 rad is outside its limits" in r.output and "add --deg" in r.output
+    r = CliRunner().invoke(main, ["-q", "check", "ur5", "--q=-7,0,0,0,0,0"])  # 7 rad: beyond a turn, also a hint
+    assert "add --deg" in r.output
