@@ -138,7 +138,7 @@ def test_point_files_are_written_whole_or_not_at_all(tmp_path, monkeypatch, ext)
         write_points(old, np.ones((2000, 3)))
     assert old.read_bytes() == before
     monkeypatch.undo()
-    with pytest.raises(OutputError, match="is not a folder"):
+    with pytest.raises(OutputError, match="the folder .*nodir does not exist"):
         write_points(tmp_path / "nodir" / f"x{ext}", np.zeros((2, 3)))
 
 

@@ -173,7 +173,8 @@ def atomic_write(path, data, *, parents: bool = False) -> Path:
     path = check_target(path)
     blob = _data_bytes(data)
     if not path.parent.is_dir():
-        raise OutputError(f"cannot write {path}: {path.parent} is not a folder")
+        why = "is not a folder" if path.parent.exists() else "does not exist"
+        raise OutputError(f"cannot write {path}: the folder {path.parent} {why}")
     try:
         _write_file(path, blob)
     except OSError as exc:

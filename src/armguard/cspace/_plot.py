@@ -66,4 +66,4 @@ def plot_slice(fmap, q2: float, out, *, q=None, dpi: int = 120) -> None:
                  f"[{deg(lo2):.3g}°, {deg(hi2):.3g}°], stopping distance "
                  f"{fmap.stopping_distance} m", fontsize=9)
     fig.tight_layout()
-    save_figure(fig, out, dpi=dpi)
+    save_figure(fig, out, dpi=dpi, parents=True)  # a missing folder made, as every plot's

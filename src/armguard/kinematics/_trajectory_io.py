@@ -152,7 +152,8 @@ def trajectory_from_dict(cls, d, *, file=None, groups=None):
 def save_yaml(traj, path) -> None:
     from .._io import atomic_write
 
-    atomic_write(os.fspath(path), yaml.safe_dump(trajectory_to_dict(traj), sort_keys=False, default_flow_style=None))
+    atomic_write(os.fspath(path), yaml.safe_dump(trajectory_to_dict(traj), sort_keys=False, default_flow_style=None),
+                 parents=True)
 
 
 def load_yaml(cls, path, groups=None):

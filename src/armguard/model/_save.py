@@ -196,4 +196,4 @@ def save_scene(scene: Scene, path) -> Path:
     text = yaml.safe_dump(scene_to_dict(scene), sort_keys=False, default_flow_style=None, width=120)
     from .._io import atomic_write
 
-    return atomic_write(path, f"# armguard scene file, written by save_scene (SI units)\n{text}")  # whole or not at all
+    return atomic_write(path, f"# armguard scene file, written by save_scene (SI units)\n{text}", parents=True)  # whole or not at all
