@@ -48,7 +48,7 @@ import time
 
 import numpy as np
 
-from .._errors import DetectionError
+from .._errors import BackendError, DetectionError
 from .._values import refuse_complex_or_bool
 from ._bounds import pair_bounds
 from ._common import check_finite_margin, check_length, check_link, scene_and_model, status_code
@@ -68,11 +68,17 @@ def fast_path(backend, backend_options):
 
     ``backend``, ``backend_options`` as ``Detector`` takes them (argument > ``$ARMGUARD_BACKEND`` >
     ``armguard.toml`` > ``"analytic"``)."""
-    from ..backends import get_backend, resolve
+    from ..backends import _options_file, get_backend, resolve
 
     name, opts = resolve(backend, backend_options)
     declare = getattr(get_backend(name), "ranger_detector", None)
-    return None if declare is None else declare(opts)
+    try:
+        return None if declare is None else declare(opts)
+    except BackendError as exc:  # an option the backend refuses: named with the file it came from, as checker() does
+        source = _options_file(name, backend_options, None)
+        if source is None:
+            raise
+        raise BackendError(f"{source}: [backend]: {exc}") from None
 
 
 class _State:
