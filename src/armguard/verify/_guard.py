@@ -138,8 +138,8 @@ def _still_hint(model, pair) -> str:
     if WORKSPACE in pair:
         return ("; no joint moves that part, so no path changes this clearance: enlarge the workspace box "
                 "(Scene.set_workspace) if it is by design")
-    return ("; no joint moves either side, so no path changes this clearance: disable the pair (Model.with_pair_disabled) "
-            "if that closeness is by design")
+    return ("; no joint moves either side, so no path changes this clearance: disable the pair (Model.with_pair_disabled, "
+            "a scene file's pairs: disable:) if that closeness is by design")
 
 
 def _time_to(s: float, T: float) -> float:

@@ -328,8 +328,8 @@ class VerificationReport:
             elif c.fixed:
                 lines.append(f"no joint moves {c.a} or {c.obstacle}, so no path changes this clearance (only a smaller "
                              "stopping distance does); if that closeness is by design, disable the pair "
-                             f"(Model.with_pair_disabled({c.a!r}, {c.b!r}), or <disable_collisions reason=\"Static\"/> "
-                             "in the SRDF)")
+                             f"(Model.with_pair_disabled({c.a!r}, {c.b!r}), a scene file's pairs: disable: [[{c.a}, {c.b}]], "
+                             "or <disable_collisions reason=\"Static\"/> in the SRDF)")
         m = self.min_clearance_at
         if m is not None:
             lines.append(f"minimum clearance {m.distance * 1e3:.2f} mm at t = {m.time:.4f} s between {m.a} and {m.b} ({m.category})")
