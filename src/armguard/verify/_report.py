@@ -230,6 +230,11 @@ class VerificationReport:
     held_joints : dict[str, float]
         The robot's joints the trajectory does not name, each held at this value (the robot's
         home, rad or m) for the whole motion; empty when it names them all.
+    over_speed : dict[str, tuple[float, float]]
+        The robot's joints whose peak speed along the trajectory exceeds their ``max_velocity``:
+        ``{joint: (peak, max_velocity)}`` (rad/s or m/s).  Not part of the collision verdict (the
+        motion is verified as commanded, its stopping distance taken at the commanded speed), but
+        the robot cannot follow it so: the summary says so.
     """
 
     status: VerificationStatus
@@ -251,6 +256,7 @@ class VerificationReport:
     stopping_times: np.ndarray = field(default_factory=lambda: np.zeros(0))
     stopping_values: np.ndarray = field(default_factory=lambda: np.zeros(0))
     held_joints: dict = field(default_factory=dict)
+    over_speed: dict = field(default_factory=dict)
 
     def verdict(self) -> str:
         """The verdict in a few words: "safe", "incomplete", "collision" (a contact) or "unsafe
@@ -305,6 +311,9 @@ class VerificationReport:
             f"stopping distance: {'up to ' if self.stopping_distance_function is not None else ''}"
             f"{self.stopping_distance * 1e3:.1f} mm; fastest point ≤ {d.max_speed:.3f} m/s",
         ]
+        for j, (peak, lim) in self.over_speed.items():
+            lines.append(f"joint {j}: peak speed {peak:.4g} exceeds its max_velocity {lim:.4g} (rad/s or m/s): the robot "
+                         "cannot follow this timing (the verdict is for the motion as commanded)")
         if self.held_joints:
             lines.append("held at home (not in the trajectory): " + ", ".join(f"{j} = {v:.6g}" for j, v in self.held_joints.items()))
         if d.method == "sampled":
@@ -378,3 +387,14 @@ class VerificationReport:
         fig.tight_layout()
         save_figure(fig, p, parents=True)
         return p
+
+
+def speeds_over_limits(trajectory, robot) -> dict:
+    """``{joint: (peak speed, max_velocity)}`` of ``robot``'s joints that ``trajectory`` (over all of its
+    joints, in its order) moves faster than their finite ``max_velocity`` allows (rad/s or m/s)."""
+    peak = getattr(trajectory, "peak_velocity", None)
+    if peak is None:  # a time law of one's own without it: nothing said
+        return {}
+    v, lim = np.asarray(peak(), dtype=np.float64), np.asarray(robot.max_velocity, dtype=np.float64)
+    over = np.isfinite(lim) & (v > lim * (1.0 + 1e-9))
+    return {robot.joint_names[j]: (float(v[j]), float(lim[j])) for j in np.flatnonzero(over)}

@@ -30,15 +30,8 @@ from ._advance import advance_step
 from ._follow import FollowsScene, VerifierState as _State
 from ._oracle import CATEGORIES, WORKSPACE, ClearanceModel
 from ._record import _Run
-from ._report import (
-    Clearance,
-    ClearanceProfile,
-    Collision,
-    CollisionKind,
-    MethodDetails,
-    VerificationReport,
-    VerificationStatus,
-)
+from ._report import (Clearance, ClearanceProfile, Collision, CollisionKind, MethodDetails, VerificationReport,
+                      VerificationStatus, speeds_over_limits)
 from ._stopping import StoppingDistance, check_stopping_distance
 from ._timelaw import finite_array as _finite_array
 from ._timelaw import profile_times, segment_times, segments_of
@@ -295,7 +288,8 @@ class Verifier(FollowsScene):
             status, reason, lower, intervals, where, ed = self._sampled(trajectory, segs, margins, run, frequency, joint_step, speeds)
         rep = self._report(trajectory, rname, segs, run, status, reason, lower, intervals, where, ed, speeds, margins, method,
                            frequency, joint_step, thr, sd, named, t_start, k0)
-        return dataclasses.replace(rep, held_joints=held) if held else rep
+        over = speeds_over_limits(trajectory, self.scene.robots[rname])
+        return dataclasses.replace(rep, held_joints=held, over_speed=over) if held or over else rep
 
     def _certified(self, segs, margins, run):
         """Conservative advancement along every segment; returns (status, reason, lower bound, intervals, where).
