@@ -159,3 +159,12 @@ def test_a_missing_or_folder_map_exits_3_like_every_missing_input(tmp_path):
     r = runner.invoke(main, ["cspace", "info", str(tmp_path)])
     assert r.exit_code == 3 and "is a directory, not a map file" in r.output, r.output
     assert not (tmp_path / "s.png").exists()
+
+
+def test_a_bare_grid_step_over_half_a_radian_is_refused_with_both_readings(tmp_path):
+    """``--resolution 5`` built a map of 286-degree cells (a bare number is rad), where ``--q2 1`` of
+    ``cspace plot`` is 1 degree: a bare step that large is refused, naming both readings."""
+    for opt in ("--resolution", "--cell", "--j3-resolution"):
+        r = CliRunner().invoke(main, ["cspace", "build", "hermes", opt, "5", "--out", str(tmp_path / "m.agmap")])
+        assert r.exit_code == 2 and "5 is read as 5 rad (286.5 deg)" in r.output and "'5deg'" in r.output, r.output
+        assert not (tmp_path / "m.agmap").exists()

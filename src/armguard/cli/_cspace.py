@@ -18,6 +18,16 @@ def _angle(value: str) -> float:
     return parse_angle(value)
 
 
+def _step(text: str, option: str) -> float:
+    """A grid step of ``option`` in rad: with its unit, or a bare number of rad; a bare number over half a
+    radian (a 29 deg cell) is refused with both readings (``--resolution 5`` meant 5 deg, not 286)."""
+    value = _angle(text)
+    if not text.strip().lower().endswith(("deg", "°", "rad")) and value > 0.5:
+        raise click.BadParameter(f"{text} is read as {value:g} rad ({math.degrees(value):.4g} deg); write '{text}deg' for "
+                                 f"degrees, or '{text}rad' to mean radians", param_hint=option)
+    return value
+
+
 def _one_angle(text: str, option: str) -> float:
     """One angle of ``option`` (deg unless it carries its unit) in rad; not a finite number: an error naming the option."""
     from .._errors import ForbiddenMapError
@@ -52,7 +62,7 @@ def cspace() -> None:
 @cspace.command("build", epilog=exit_epilog(ok="the map written (whole: a temporary file, fsync, rename)"))
 @click.argument("model")
 @click.option("--out", "out", type=click.Path(), required=True, help="The .agmap file to write.")
-@click.option("--resolution", default="1deg", show_default=True, help="Cell width of joints 1, 2 ('1deg', '0.5°', rad).")
+@click.option("--resolution", default="1deg", show_default=True, help="Cell width of joints 1, 2 ('1deg', '0.5°', '0.01rad'; a bare number is rad).")
 @click.option("--j3-resolution", default=None, help="Joint-3 quantum (default: the resolution).")
 @click.option("--cell", default="10deg", show_default=True, help="Substructure extent over joints 1, 2.")
 @click.option("--stopping-distance", type=LENGTH, default=0.0, show_default=True, help="Worst-case stopping distance (m).")
@@ -68,9 +78,9 @@ def build_cmd(model, out, resolution, j3_resolution, cell, stopping_distance, ro
     from ..cspace import ForbiddenMap
 
     console = output_console()
-    c = _angle(cell)
-    fmap = ForbiddenMap.build(model, out=out, robot=robot, resolution=_angle(resolution),
-                              j3_resolution=None if j3_resolution is None else _angle(j3_resolution), cell=(c, c),
+    c = _step(cell, "--cell")
+    fmap = ForbiddenMap.build(model, out=out, robot=robot, resolution=_step(resolution, "--resolution"),
+                              j3_resolution=None if j3_resolution is None else _step(j3_resolution, "--j3-resolution"), cell=(c, c),
                               stopping_distance=stopping_distance, workers=workers, scheduler=scheduler,
                               max_depth=max_depth, resume=not no_resume, progress=True)
     r = fmap.build_report
