@@ -168,3 +168,17 @@ def test_a_bare_grid_step_over_half_a_radian_is_refused_with_both_readings(tmp_p
         r = CliRunner().invoke(main, ["cspace", "build", "hermes", opt, "5", "--out", str(tmp_path / "m.agmap")])
         assert r.exit_code == 2 and "5 is read as 5 rad (286.5 deg)" in r.output and "'5deg'" in r.output, r.output
         assert not (tmp_path / "m.agmap").exists()
+
+
+def test_a_map_that_forbids_nearly_everything_says_so(tmp_path):
+    """A 10 m stopping distance forbids the whole joint box: build and info warn (the map was written
+    with exit 0 and no word, and info called it conservative); a usable map says nothing of it."""
+    runner = CliRunner()
+    out = tmp_path / "all.agmap"
+    r = runner.invoke(main, ["cspace", "build", "hermes", "--resolution", "30deg", "--max-depth", "0",
+                             "--stopping-distance", "10", "--out", str(out)])
+    assert r.exit_code == 0 and "forbids 100.00% of the joint box" in r.output and "(10 m)" in r.output, r.output
+    r = runner.invoke(main, ["cspace", "info", str(out), "--samples", "0"])
+    assert r.exit_code == 0 and "forbids 100.00% of the joint box" in r.output
+    r = runner.invoke(main, ["cspace", "build", "gmf_s480", "--resolution", "20deg", "--out", str(tmp_path / "ok.agmap")])
+    assert r.exit_code == 0 and "warning" not in r.output, r.output  # 93 % forbidden: no warning

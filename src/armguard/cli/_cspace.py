@@ -87,6 +87,23 @@ def build_cmd(model, out, resolution, j3_resolution, cell, stopping_distance, ro
     console.print(f"wrote {out}: {r.size_bytes} bytes, {fmap.grid.n_substructures} substructures "
                   f"({r.computed} computed, {r.reused} resumed), {r.evaluations} clearance evaluations, "
                   f"{r.elapsed_s:.1f} s" + (f" on {r.workers} workers" if r.workers else ""))
+    warn = _nearly_all_forbidden(fmap)
+    if warn:
+        console.print(warn, style="yellow")
+
+
+def _nearly_all_forbidden(fmap) -> str | None:
+    """A warning when the map forbids nearly all of its joint box (a map that cannot plan), else None."""
+    info = fmap.info()
+    if info.forbidden_fraction < 0.99:
+        return None
+    coarse = (f"{info.unresolved} boxes were left unresolved at this resolution and depth (forbidden: a finer "
+              "--resolution or a deeper --max-depth resolves them), " if info.unresolved else "")
+    return (f"warning: the map forbids {info.forbidden_fraction:.2%} of the joint box: nearly nothing is left to plan in. "
+            f"{coarse.capitalize()}{'or ' if coarse else ''}the stopping distance ({fmap.stopping_distance:g} m) leaves no "
+            "free box, or an obstacle that a link stays close to wherever it moves (a base or shoulder link a few mm above "
+            "its table) forbids them all, as the boxes are certified with one motion bound per joint over links 1-3: "
+            "disable such a pair if it is by design (pairs: disable), or check configurations exactly (armguard check, verify)")
 
 
 @cspace.command("info", epilog=exit_epilog(
@@ -127,6 +144,9 @@ def info_cmd(map_path, model, samples, as_json) -> None:
                f"cells (largest {info.substructure_bytes_max} B, largest 3 x 3 block {info.neighbourhood_bytes_max} B)")
     click.echo(f"  {info.n_intervals} forbidden intervals; forbidden share of the joint box {info.forbidden_fraction:.4f}; "
                f"built with {info.evaluations} clearance evaluations, {info.unresolved} boxes unresolved (forbidden)")
+    warn = _nearly_all_forbidden(fmap)
+    if warn:
+        click.echo(f"  {warn}")
     if samples > 0:
         e = out["exactness"]
         click.echo(f"  {e['n']} random configurations vs the exact check: {e['allowed_but_colliding']} allowed but colliding "
