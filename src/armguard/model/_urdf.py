@@ -19,6 +19,7 @@ point is an error naming the link and the mesh file.
 
 from __future__ import annotations
 
+import os
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -66,7 +67,9 @@ def resolve_mesh(filename: str, urdf_dir: Path, package_dirs) -> Path | None:
       path): ``base/pkg/rest`` for ``base`` a folder of ``package_dirs``, the URDF's folder or one of
       the six above it; or ``base/rest`` where ``base`` is the package ``pkg`` itself: a folder of
       ``package_dirs`` (given as the package), a folder named ``pkg``, or one whose ``package.xml``
-      names it (a clone or a download named otherwise: ``ur_description-main``).
+      names it (a clone or a download named otherwise: ``ur_description-main``); then, as Pinocchio
+      does without package folders, under ``$ROS_PACKAGE_PATH`` (``base/pkg/rest``, or ``base`` the
+      package by its name or ``package.xml``) and ``$AMENT_PREFIX_PATH`` (``prefix/share/pkg/rest``).
 
     A path whose leading folders are dropped until some file of that name turns up, or a relative
     path looked up in the folders above the URDF, is not a mesh the URDF names: with
@@ -92,7 +95,9 @@ def resolve_mesh(filename: str, urdf_dir: Path, package_dirs) -> Path | None:
                 return cand
         return None
     pkg, rest = parts[0], parts[1:]
-    for base in (*given, urdf_dir, *list(urdf_dir.parents)[:_UP]):
+    ros = [Path(d) for d in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if d]
+    ament = [Path(d) / "share" for d in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if d]
+    for base in (*given, urdf_dir, *list(urdf_dir.parents)[:_UP], *ros, *ament):
         cand = base.joinpath(*parts)  # base holds the package folder
         if cand.is_file():
             return cand
@@ -158,7 +163,9 @@ def _read_xml(path: Path, package_dirs) -> UrdfInfo:
                 fn = kids[0].get("filename", "")
                 mp = resolve_mesh(fn, path.parent, package_dirs)
                 if mp is None:
-                    raise SceneFileError(f, w, f"mesh file not found: {fn!r} (relative to {path.parent} or package_dirs)")
+                    raise SceneFileError(f, w, f"mesh file not found: {fn!r} (relative to {path.parent} or package_dirs"
+                                         + (", $ROS_PACKAGE_PATH or $AMENT_PREFIX_PATH: set ROS_PACKAGE_PATH to a folder that "
+                                            "holds the package, for the command line too)" if "://" in fn else ")"))
                 meshes.append(mp)
                 mesh_at[(ln, k)] = (mp, tuple(float(x) for x in kids[0].get("scale", "1 1 1").split()))
                 kids[0].tag, kids[0].attrib = "box", {"size": "1 1 1"}  # only in collision_xml: read below, not by Pinocchio
