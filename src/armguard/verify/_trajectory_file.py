@@ -38,10 +38,15 @@ def load_trajectory(scene, path):
         robot = scene.robots[traj.robot_name]
         want = list(robot.joint_names)
         names = list(traj.joint_names)
-        bad = [j for j in names if j not in want] or [j for k, j in enumerate(names) if j in names[:k]]
-        if bad:
-            raise SceneFileError(file, "joint_names", f"{bad[0]!r} is not a joint of robot {traj.robot_name!r} or "
-                                 f"is named twice; expected some of its joints {want}")
+        unknown = [j for j in names if j not in want]
+        twice = [j for k, j in enumerate(names) if j in names[:k]]
+        if unknown or twice:
+            import difflib
+
+            near = difflib.get_close_matches(unknown[0], want, n=1) if unknown else []
+            what = (f"{unknown[0]!r} is not a joint of robot {traj.robot_name!r}" + (f" (did you mean {near[0]!r}?)" if near else "")
+                    if unknown else f"{twice[0]!r} is named twice")
+            raise SceneFileError(file, "joint_names", f"{what}; expected some of its joints {want}")
         slack = DEFAULT_TOLERANCES.joint_limit
         for j, name in enumerate(names):  # a waypoint outside the limits: its place in the file
             i = want.index(name)

@@ -1,0 +1,28 @@
+"""A trajectory file's joint_names: an unknown joint (with the nearest real name) and a joint named
+twice are told apart (the message said "is not a joint ... or is named twice" for both)."""
+
+from __future__ import annotations
+
+import pytest
+import yaml
+
+import armguard
+from armguard.verify._trajectory_file import load_trajectory
+
+
+def _file(tmp_path, names):
+    p = tmp_path / "t.yaml"
+    p.write_text(yaml.safe_dump({"format": "armguard.trajectory", "version": 1, "robot": "ur5", "joint_names": names,
+                                 "times": [0.0, 1.0], "waypoints": [[0.0] * len(names), [0.1] * len(names)]}))
+    return p
+
+
+@pytest.mark.parametrize("names, expect", [
+    (["shoulder_pan_joint", "wrist1_joint"], "'wrist1_joint' is not a joint of robot 'ur5' (did you mean 'wrist_1_joint'?)"),
+    (["shoulder_pan_joint", "shoulder_pan_joint"], "'shoulder_pan_joint' is named twice"),
+])
+def test_unknown_and_repeated_joint_names_are_told_apart(tmp_path, names, expect):
+    scene = armguard.load_model("ur5").scene
+    with pytest.raises(armguard.SceneFileError) as err:
+        load_trajectory(scene, _file(tmp_path, names))
+    assert err.value.where.startswith("joint_names") and expect in err.value.message
