@@ -212,3 +212,11 @@ def test_an_out_in_a_missing_folder_is_made_with_the_file_and_nothing_is_left_on
     (tmp_path / "afile").write_text("x")
     res = _run("edges", "ur5", str(tmp_path / "e.npz"), "--out", str(tmp_path / "afile" / "sub" / "r.npz"))
     assert res.exit_code == ExitCode.INPUT and "afile" in res.output, res.output
+
+
+def test_too_few_columns_are_told_in_the_command_lines_words(tmp_path):
+    """The hint for a subset of the joints named the Python argument ``joints=``; the file's array
+    ``joint_names`` is what names the columns on the command line."""
+    np.savez(tmp_path / "few.npz", Q0=np.zeros((2, 3)), Q1=np.full((2, 3), 0.1))
+    r = CliRunner().invoke(main, ["edges", "puma560", str(tmp_path / "few.npz")])
+    assert r.exit_code == 3 and "joint_names array" in r.output and "joints=" not in r.output, r.output

@@ -143,7 +143,9 @@ def edges_cmd(model, edges_file, robot, margin, first_contact, continuous, max_e
                                        first_contact=first_contact, continuous=continuous,
                                        progress=lambda done, total: bar.update(task, completed=done))
         except VerificationError as exc:  # said in the command line's words, with the file
-            text = str(exc).replace("pass robot= ", "pass --robot ").replace("robot='*'", "--robot '*'")
+            text = str(exc).replace("pass robot= ", "pass --robot ").replace("robot='*'", "--robot '*'").replace(
+                "name its columns with joints= (a list, or an SRDF group's name)",
+                "name its columns with the file's joint_names array (the joints' names, or an SRDF group's name)")
             raise VerificationError(f"{edges_file}: {text.replace('joints: ', 'joint_names: ')}") from None
     # the file first: a reader that closes the pipe early (| head) must not cost the results
     if out_path:
