@@ -68,6 +68,7 @@ class FusedDetector(Detector):
     kernels release the GIL, so the checks of several threads run in parallel, except a check
     too short for handing the GIL over to pay (``releases_gil``, ``call_us``: ``_scratch.GIL_RELEASE_US``).
     """
+    backend = "analytic"  # the backend whose Detector this is (RangerDetector.backend names its own)
 
     def __init__(self, scene, threshold: float = 0.05, *, stopping_distance: float = 0.0, active: str | None = None,
                  tol: Tolerances = DEFAULT_TOLERANCES, reach_margin: float = math.inf, backend: str | None = None,
@@ -97,8 +98,7 @@ class FusedDetector(Detector):
         Holds the scene's lock while it reads the scene (an edit on another thread waits), and
         publishes the result with one assignment (:mod:`._built`): a call running meanwhile finishes
         on the revision it started with."""
-        lock = getattr(self.scene, "lock", None)
-        with self._prepare_lock, (lock if lock is not None else contextlib.nullcontext()):
+        with self._prepare_lock, (getattr(self.scene, "lock", None) or contextlib.nullcontext()):
             self._b = self._build()
         return self
 

@@ -103,7 +103,7 @@ def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_u
     rep = det.check(q, budget_us=budget_us)
     code = _STATUS_EXIT.get(rep.status.value, ExitCode.INCOMPLETE)  # never a success exit without a verdict
     if as_json:
-        click.echo(json_text(rep.to_dict(), indent=2))  # features as data (Feature.to_dict)
+        click.echo(json_text({**rep.to_dict(), "backend": getattr(det, "backend", None)}, indent=2))  # features as data
         sys.exit(int(code))
     out = output_console()
     colour = _COLOUR[rep.status.value]

@@ -167,6 +167,7 @@ class MethodDetails:
     discretisation_error: float
     source: str
     lever_bound: str = "configuration-independent chain lever arms (sum of joint-to-link reach bounds)"
+    backend: str = ""  # the detector's backend ("analytic", "coal", ...); "" for the reference distances
 
 
 def _jsonable(x):
@@ -307,7 +308,7 @@ class VerificationReport:
             + f"; {d.samples_evaluated} configuration{'' if d.samples_evaluated == 1 else 's'} evaluated"
             + (f", {d.intervals_certified} interval{'' if d.intervals_certified == 1 else 's'} certified"
                if d.method == "certified" else "")
-            + f"; distances from the {d.source}",
+            + f"; distances from the {d.source}" + (f" ({d.backend} backend)" if d.backend else ""),
             f"stopping distance: {'up to ' if self.stopping_distance_function is not None else ''}"
             f"{self.stopping_distance * 1e3:.1f} mm; fastest point ≤ {d.max_speed:.3f} m/s",
         ]

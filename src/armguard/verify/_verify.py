@@ -456,7 +456,7 @@ class Verifier(FollowsScene):
             joint_step=joint_step if method == "sampled" else None,
             max_speed=float(np.max(speeds)),
             discretisation_error=float(ed),
-            source=model.source,
+            source=model.source, backend=str(getattr(model._det, "backend", "") or "") if model.source == "detector" else "",
         )
         return VerificationReport(
             status=status,
