@@ -486,9 +486,13 @@ def model_from_scene(scene, *, file: str | None = None) -> Model:
             spec = robot.joint_of_link(ln)
             if spec is not None and spec.X_post is not None:
                 placements[f"{r}/{ln}"] = np.asarray(spec.X_post, dtype=np.float64)
-    return Model(scene.name, pin_model, geom, scene, q_index=q_index, circular=_circular(parts), geometry_names=geometry_names,
-                 notes=parts.notes, files=files, link_frames=link_frames,
-                 link_placements=placements, hulls=hulls)
+    model = Model(scene.name, pin_model, geom, scene, q_index=q_index, circular=_circular(parts), geometry_names=geometry_names,
+                  notes=parts.notes, files=files, link_frames=link_frames, link_placements=placements, hulls=hulls)
+    from ._srdf import srdf_of_scene  # a scene file's URDF robots' SRDF groups, in this Model's names
+
+    model.srdf = srdf_of_scene({r: src["srdf_groups"] for r, src in getattr(scene, "_robot_sources", {}).items()
+                                if src.get("srdf_groups") is not None and r in scene.robots}, model)
+    return model
 
 
 def _owner_shapes(scene, owner: str):

@@ -40,11 +40,13 @@ def robot_home_from_urdf(path, *, name=None, X_WB=None, load_collision=True, mes
 
 
 def robot_parts_from_urdf(path, *, name=None, X_WB=None, load_collision=True, mesh_dir=None, srdf=None):
-    """``(robot, home, disabled, srdf_file)``: :func:`robot_home_from_urdf`'s two, the pairs of the robot's
-    links its SRDF disables as :func:`armguard.load_model` applies them (``(link1, link2)`` names: a pair
-    of links one owner merges, or of links the URDF lacks in an SRDF of a larger robot, is not among
-    them), and that SRDF's path (None: none)."""
+    """``(robot, home, disabled, srdf_file, groups)``: :func:`robot_home_from_urdf`'s two, the pairs of the
+    robot's links its SRDF disables as :func:`armguard.load_model` applies them (``(link1, link2)`` names: a
+    pair of links one owner merges, or of links the URDF lacks in an SRDF of a larger robot, is not among
+    them), that SRDF's path (None: none) and its groups and states in scene names (``._srdf.scene_srdf``;
+    None without groups)."""
     from ._load import model_from_urdf
+    from ._srdf import scene_srdf
 
     file = str(path)
     if not Path(file).is_file():
@@ -65,4 +67,4 @@ def robot_parts_from_urdf(path, *, name=None, X_WB=None, load_collision=True, me
         robot = robot.with_base(X_WB)
     if name is not None:
         robot = robot.with_name(name)
-    return robot, home, disabled, None if model.srdf is None else model.srdf.file
+    return robot, home, disabled, None if model.srdf is None else model.srdf.file, scene_srdf(model, robot.name)

@@ -272,7 +272,7 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
         if srdf:  # a file this one names is refused at its place here, before the URDF's loader reads it
             _srdf_pairs(srdf, ctx, w)
         try:
-            robot, urdf_home, own_pairs, srdf_file = robot_parts_from_urdf(path, name=spec.name, X_WB=X_WB, srdf=srdf)
+            robot, urdf_home, own_pairs, srdf_file, groups = robot_parts_from_urdf(path, name=spec.name, X_WB=X_WB, srdf=srdf)
         except ArmguardError as exc:
             ours = bool(srdf) and isinstance(exc, SceneFileError) and Path(exc.file) == Path(srdf)
             raise ctx.error(f"{w}.srdf" if ours else f"{w}.urdf", str(exc)) from None
@@ -283,6 +283,7 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
             source["srdf"] = NO_SRDF  # saved with it: the file loads back without the SRDF found beside the URDF
         else:
             urdf_pairs = own_pairs
+            source["srdf_groups"] = groups  # its Model's groups (model_from_scene): joints="arm" as in load_model
             if srdf is None and srdf_file is not None:  # found beside the URDF: its pairs hold here as in load_model
                 ctx.read.append(Path(srdf_file))
     # link shapes, in each link's own frame

@@ -197,19 +197,40 @@ def read_srdf(path, *, found: str = "given", partial: bool = False) -> Srdf:
     return out
 
 
+def _renamed(s, names: dict, found: str, *, disabled: bool = True):
+    """``s`` with its joints and links renamed by ``names`` (a name with no counterpart kept)."""
+    import dataclasses
+
+    n = lambda x: names.get(x, x)  # noqa: E731
+    groups = {g: dataclasses.replace(grp, chains=tuple((n(a), n(b)) for a, b in grp.chains),
+                                     links=tuple(n(x) for x in grp.links), joints=tuple(n(x) for x in grp.joints))
+              for g, grp in s.groups.items()}
+    states = tuple(dataclasses.replace(st, values={n(j): v for j, v in st.values.items()},
+                                       joint_where={n(j): w for j, w in st.joint_where.items()}) for st in s.states)
+    pairs = tuple((n(a), n(b), r) for a, b, r in s.disabled) if disabled else ()
+    return dataclasses.replace(s, groups=groups, states=states, disabled=pairs, found=found)
+
+
+def _pin_to_scene(m) -> dict:
+    """Model ``m``'s Pinocchio joint and link names -> its scene's (``"robot/joint"``, ``"robot/link"``)."""
+    pm = m.pin_model
+    by_iq = {pm.joints[j].idx_q: pm.names[j] for j in range(1, pm.njoints) if pm.joints[j].nq > 0}
+    names = {by_iq[int(m.q_index[k])]: sn for k, sn in enumerate(m.scene.joint_names)}
+    names.update({pm.frames[f].name: owner for owner, f in m.link_frames.items()})
+    return names
+
+
 def carry_srdf(old, new):
     """The SRDF of Model ``old`` in the names of Model ``new``, built from the same scene after
     ``set_robot_base`` or ``add_robot`` (its URDF is the scene written out, so joints and links are
     renamed): joints are matched through the scene's joint names, links through ``link_frames``;
     a name with no counterpart is kept as it was.  ``found`` says where the groups came from."""
-    import dataclasses
-
     def by_iq(m):
         pm = m.pin_model
         return {pm.joints[j].idx_q: pm.names[j] for j in range(1, pm.njoints) if pm.joints[j].nq > 0}
 
     old_iq, new_iq = by_iq(old), by_iq(new)
-    old_scene = [f"{n}/{j}" for n, r in old._robots for j in r.joint_names]
+    old_scene = [f"{n}/{j}" for n, r in old._robots for j in r.joint_names]  # the Model's own robots (the scene may have more)
     new_pos = {sn: k for k, sn in enumerate(new.scene.joint_names)}
     names = {}
     for k, sn in enumerate(old_scene):
@@ -219,13 +240,43 @@ def carry_srdf(old, new):
         f_new = new.link_frames.get(owner)
         if f_new is not None:
             names[old.pin_model.frames[f_old].name] = new.pin_model.frames[f_new].name
-    n = lambda x: names.get(x, x)  # noqa: E731
-    s = old.srdf
-    groups = {g: dataclasses.replace(grp, chains=tuple((n(a), n(b)) for a, b in grp.chains),
-                                     links=tuple(n(x) for x in grp.links), joints=tuple(n(x) for x in grp.joints))
-              for g, grp in s.groups.items()}
-    states = tuple(dataclasses.replace(st, values={n(j): v for j, v in st.values.items()},
-                                       joint_where={n(j): w for j, w in st.joint_where.items()}) for st in s.states)
-    return dataclasses.replace(s, groups=groups, states=states, disabled=tuple((n(a), n(b), r) for a, b, r in s.disabled),
-                               found=f"carried over from the model before the scene's robots changed ({s.found})")
+    return _renamed(old.srdf, names, f"carried over from the model before the scene's robots changed ({old.srdf.found})")
 
+
+def scene_srdf(model, name: str):
+    """The groups and states of the SRDF of ``model`` (a Model of one arm's URDF) in scene names, its
+    arm called ``name`` (``"name/joint"``, ``"name/link"``), for a scene file's robot: None without
+    groups.  Its disabled pairs are left out (the scene file applies them itself)."""
+    if model.srdf is None or not model.srdf.groups:
+        return None
+    old = next(iter(model.scene.robots))
+    names = {pin: f"{name}/{sn.split('/', 1)[1]}" if sn.startswith(f"{old}/") else sn
+             for pin, sn in _pin_to_scene(model).items()}
+    return _renamed(model.srdf, names, model.srdf.found, disabled=False)
+
+
+def srdf_of_scene(srdfs: dict, model):
+    """One Srdf of the scene-named ``srdfs`` (robot -> :func:`scene_srdf`'s) in the names of ``model``
+    (the Model of the scene written out): each robot's groups under their own names, or as
+    ``"robot/group"`` where two robots' SRDFs name a group alike; None when there is none."""
+    import dataclasses
+
+    if not srdfs:
+        return None
+    back = {v: k for k, v in _pin_to_scene(model).items()}
+    count: dict = {}
+    for s in srdfs.values():
+        for g in s.groups:
+            count[g] = count.get(g, 0) + 1
+    groups, states = {}, []
+    for robot, s in srdfs.items():
+        r = _renamed(s, back, s.found, disabled=False)
+        named = {g: (g if count[g] == 1 else f"{robot}/{g}") for g in r.groups}
+        for g, grp in r.groups.items():
+            groups[named[g]] = dataclasses.replace(grp, name=named[g], subgroups=tuple(named.get(x, x) for x in grp.subgroups))
+        states += [dataclasses.replace(st, group=named.get(st.group, st.group)) for st in r.states]
+    first = next(iter(srdfs.values()))
+    files = sorted({s.file for s in srdfs.values()})
+    return dataclasses.replace(first, file=files[0] if len(files) == 1 else ", ".join(files), groups=groups,
+                               states=tuple(states), disabled=(), partial=False,
+                               found=f"the SRDF{'s' if len(files) > 1 else ''} of the scene file's URDF robots")

@@ -20,7 +20,7 @@ def load_trajectory(scene, path):
     was expected, e.g. ``traj.yaml: waypoints[1][1] (line 8): joint 'j2' = 9 is outside its limits
     [-0.785398, 3.92699]``.  :func:`armguard.verify` calls this for a path; ``armguard verify`` for
     each ``.yaml`` argument."""
-    from .._errors import SceneFileError
+    from .._errors import SceneFileError, TrajectoryError
     from .._lines import lines_for
     from .._tolerance import DEFAULT_TOLERANCES
     from ..kinematics import Trajectory
@@ -28,8 +28,14 @@ def load_trajectory(scene, path):
 
     scene = scene_of(scene)  # a Model: its scene
     file = os.fspath(path)
-    model = getattr(scene, "_model_of_record", None)  # its SRDF groups name joints too
-    groups = model.group_joints if model is not None and model.srdf is not None else None
+    def groups(name: str):  # an SRDF group of the scene's Model (made only for a file that names one)
+        from ..model import model_of
+
+        model = model_of(scene, geometry=False)
+        if model.srdf is None:
+            raise TrajectoryError("no model with SRDF groups to resolve it")
+        return model.group_joints(name)
+
     traj = Trajectory.load_yaml(file, groups=groups)
     with lines_for(file):
         if traj.robot_name not in scene.robots:
