@@ -22,7 +22,7 @@ from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism,
 from ._robot_urdf import robot_parts_from_urdf
 from ._scene import CannedTest, Scene
 from ._srdf import NO_SRDF
-from ._schema import SHAPE_TYPES, SceneFile
+from ._schema import SHAPE_TYPES, SceneFile, near_key
 from .._yaml import read_scene_yaml  # noqa: F401  (part of this module's interface)
 
 __all__ = ["validate_scene_dict", "scene_from_dict_validated", "read_scene_yaml", "read_srdf_disabled", "where_of"]
@@ -57,7 +57,8 @@ def where_of(loc) -> str:
 def _message(err: dict) -> str:
     t = err.get("type", "")
     if t == "extra_forbidden":
-        return "unknown key (not part of the armguard_scene format; check the spelling)"
+        near = near_key(err["loc"][-1]) if err.get("loc") else None
+        return f"unknown key (not part of the armguard_scene format; {f'did you mean {near!r}?' if near else 'check the spelling'})"
     if t == "union_tag_invalid":
         got = err.get("input", {}).get("type") if isinstance(err.get("input"), dict) else None
         return f"unknown shape type {got!r}; expected one of {', '.join(SHAPE_TYPES)}"

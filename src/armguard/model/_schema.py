@@ -287,3 +287,14 @@ class SceneFile(_Model):
     pairs: PairsSpec = PairsSpec()
     trajectories: list[TrajectorySpec] = []
     canned_tests: list[CannedTestSpec] = []
+
+
+def near_key(key) -> str | None:
+    """The key of the format nearest an unknown ``key`` (``mout`` -> ``mount``, ``trajectory`` ->
+    ``trajectories``), or None when none is near."""
+    import difflib
+
+    known = sorted({f for v in globals().values() if isinstance(v, type) and issubclass(v, BaseModel) and v is not BaseModel
+                    for f in v.model_fields})
+    near = difflib.get_close_matches(str(key), known, n=1, cutoff=0.75)
+    return near[0] if near else None

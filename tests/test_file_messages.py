@@ -1,4 +1,6 @@
-"""A joint value outside its limits in a scene file or on ``--q`` names the value, the limits in the
+"""Messages for the mistakes people make in scene files and on the command line.
+
+A joint value outside its limits in a scene file or on ``--q`` names the value, the limits in the
 units it was given in, and, where a radian or metre value that large looks like degrees or
 millimetres, says how the file or command reads it (before: "home is outside the limits of joint
 'shoulder_lift_joint'", at the robot's line, with neither)."""
@@ -56,3 +58,17 @@ def test_q_in_degrees_without_deg_is_told_to_add_it():
     assert r.exit_code == 2 and "-90 rad is outside its limits" in r.output and "add --deg" in r.output
     r = CliRunner().invoke(main, ["-q", "check", "ur5", "--q=-7,0,0,0,0,0"])  # 7 rad: beyond a turn, also a hint
     assert "add --deg" in r.output
+
+
+def test_a_misspelt_optional_key_is_told_the_key_it_looks_like(tmp_path):
+    """``catgory:`` and ``trajectory:`` were "unknown key ... check the spelling"; the nearest key of
+    the format is named (the misspelling of a required key already was)."""
+    p = tmp_path / "typo.yaml"
+    p.write_text("armguard_scene: 1\nname: c\nbodies:\n  - name: b\n    shapes: [{type: box, size: [1, 1, 1]}]\n"
+                 "    catgory: vehicle\ntrajectory: []\nzzzz: 1\n")
+    with pytest.raises(armguard.SceneFileError) as err:
+        armguard.load_scene(p)
+    text = str(err.value)
+    assert "bodies[0].catgory (line 6): unknown key (not part of the armguard_scene format; did you mean 'category'?)" in text
+    assert "trajectory (line 7): unknown key (not part of the armguard_scene format; did you mean 'trajectories'?)" in text
+    assert "zzzz (line 8): unknown key (not part of the armguard_scene format; check the spelling)" in text
