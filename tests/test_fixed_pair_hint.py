@@ -131,3 +131,14 @@ def test_a_base_outside_the_workspace_is_told_to_enlarge_the_box_not_to_disable_
     assert "enlarge the workspace box" in rep.summary() and "with_pair_disabled" not in rep.summary()
     dec = Guard(m).step(q0, qdot=np.full(6, 0.1))
     assert dec.verdict is GuardVerdict.STOP and "enlarge the workspace box" in dec.reason
+
+
+def test_a_guard_of_a_robot_without_a_pair_of_its_own_refuses_as_verify_does(tmp_path):
+    """Every pair of A disabled, B's still checked: the Guard gave OK with an infinite clearance."""
+    s = _two_arms(tmp_path)
+    s.disable_pair("A", "B")
+    s.disable_pair("A", "post")
+    with pytest.raises(armguard.VerificationError, match="robot 'A' has no pair to check"):
+        Guard(s, robot="A").step(s.home("A"), qdot=np.array([0.1]))
+    with pytest.raises(armguard.VerificationError, match="robot 'A' has no pair to check"):
+        armguard.verify(s, Trajectory.joint_interpolated(s.robots["A"], np.array([[0.0], [0.3]])))

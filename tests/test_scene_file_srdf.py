@@ -180,3 +180,54 @@ def test_two_robots_from_one_urdf_save_and_load_back(tmp_path):
         back = load_scene(save_scene(s, tmp_path / "saved.yaml"))
     assert back.joint_names == s.joint_names and _owner_pairs(back) == _owner_pairs(s)
     assert back.disabled_pairs == s.disabled_pairs
+
+
+@pytest.mark.parametrize("srdf", [False, "pairs only"])
+def test_a_built_in_loaded_without_its_pairs_saves_its_groups_and_loads_back_alike(tmp_path, srdf):
+    """hermes with ``srdf=False`` or an SRDF of pairs only keeps its sidecar SRDF's groups (the arm
+    ``hera``, its payload on ``link6``): the saved file names that SRDF and lists its pairs this Model
+    checks under ``pairs.enable`` (``srdf: none`` had lost the groups: "robot 'hera' has no link 'link6'")."""
+    if srdf == "pairs only":
+        srdf = tmp_path / "pairs.srdf"
+        srdf.write_text('<robot name="hermes"><disable_collisions link1="hera_link1" link2="hera_link2" reason="Adjacent"/>'
+                        "</robot>")
+    m = armguard.load_model("hermes", srdf=srdf)
+    back = load_scene(save_scene(m.scene, tmp_path / "h.yaml"))
+    assert back.joint_names == m.scene.joint_names and list(back.payloads) == list(m.scene.payloads)
+    assert _owner_pairs(back) == _owner_pairs(m.scene)
+
+
+def test_a_file_pair_enabled_under_a_robot_wide_disable_is_refused(tmp_path):
+    """``disable: [[panda, table]]`` with ``enable: [[panda/panda_link1, table]]`` left the link unchecked."""
+    urdf, _ = public_robot_files("panda")
+    p = tmp_path / "cell.yaml"
+    p.write_text(yaml.safe_dump({"armguard_scene": 1, "name": "cell",
+                                 "bodies": [{"name": "table", "shapes": [{"type": "box", "size": [1, 1, 0.1], "xyz": [0, 0, -0.1]}]}],
+                                 "robots": [{"name": "panda", "urdf": str(urdf)}],
+                                 "pairs": {"disable": [["panda", "table"]], "enable": [["panda/panda_link1", "table"]]}}))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(armguard.SceneFileError) as err:
+            load_scene(p)
+    assert err.value.where.startswith("pairs.enable[0]") and "stays disabled by ['panda', 'table']" in err.value.message
+
+
+def test_self_pairs_a_file_lists_are_checked_though_the_found_srdf_disables_one(tmp_path):
+    urdf, _ = public_robot_files("panda")
+    want = [["panda_link3", "panda_hand"], ["panda_link1", "panda_link5"]]  # the SRDF disables link3-hand
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s = load_scene(_scene_file(tmp_path, {"name": "panda", "urdf": str(urdf), "self_pairs": want}))
+    assert sorted(tuple(sorted((p.a, p.b))) for p in s.allowed_pairs()) == sorted(
+        tuple(sorted((f"panda/{a}", f"panda/{b}"))) for a, b in want)
+
+
+def test_save_lists_no_enabled_pair_of_a_removed_body(tmp_path):
+    srdf = tmp_path / "base_table.srdf"
+    srdf.write_text('<robot name="puma560"><disable_collisions link1="puma560_base" link2="table" reason="Static"/>'
+                    '<disable_collisions link1="puma560_link1" link2="block_a" reason="Never"/></robot>')
+    urdf = next(f for f in armguard.load_model("puma560").files if f.suffix == ".urdf")
+    s = armguard.load_model(urdf, srdf=srdf).scene.copy()
+    s.remove_body("table")
+    back = load_scene(save_scene(s, tmp_path / "rb.yaml"))
+    assert "table" not in back.bodies and _owner_pairs(back) == _owner_pairs(s)

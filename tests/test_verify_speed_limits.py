@@ -39,3 +39,12 @@ def test_a_pan_faster_than_its_limit_is_said_to_be(ur5):
 def test_a_pan_within_its_limit_says_nothing(ur5):
     rep = armguard.verify(ur5, _pan(ur5, 1.0))  # 1.5 rad/s
     assert rep.over_speed == {} and "max_velocity" not in rep.summary()
+
+
+def test_the_speed_dependent_verification_says_it_too(ur5):
+    """``--speed-dependent`` verifies a subdivided trajectory (``Subdivided``), which had no
+    ``peak_velocity``: its report said nothing of the over-speed."""
+    from armguard.verify._subdivide import Subdivided
+
+    rep = armguard.verify(ur5, Subdivided(_pan(ur5, 0.1), 4))
+    assert "shoulder_pan_joint" in rep.over_speed

@@ -146,11 +146,13 @@ def _srdf_for(urdf: Path, srdf, found: str = "given (srdf=)"):
     return None
 
 
-def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None, srdf_source=None):
+def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None, srdf_source=None, srdf_read=False):
     """``(scene, pin_model, collision_model, parts)`` of a URDF: robots, bodies, payloads, SRDF pairs.
 
     ``srdf_source``: what a scene file saved from this scene names as each arm's ``srdf:`` (None:
-    nothing, the SRDF found beside the URDF then; :data:`._srdf.NO_SRDF`: none, as loaded)."""
+    nothing, the SRDF found beside the URDF then; :data:`._srdf.NO_SRDF`: none, as loaded);
+    ``srdf_read``: the Srdf that file is (its pairs are what a reload applies: save_scene lists those this
+    scene checks under ``pairs.enable``); False: ``srdf_obj``."""
     from ._scene import Scene
     from ._from_pin import scene_parts_from_pin
     from ._urdf import load_pinocchio
@@ -188,15 +190,18 @@ def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None, srdf_so
                 scene.disable_pair(oa, ob)
             except SceneError as exc:
                 raise srdf_obj.error(f"disable_collisions[{k}]", str(exc)) from None
-            for rname, src in scene._robot_sources.items():  # for save_scene: the SRDF's pairs of each arm
-                if any(o.startswith(f"{rname}/") for o in (oa, ob)):
-                    src["srdf_pairs"] = (*src["srdf_pairs"], (oa, ob))
         if skipped:
             one = len(skipped) == 1
             srdf_obj.warn(f"{len(skipped)} disabled {'pair names' if one else 'pairs name'} links {urdf.name} does not "
                           f"have and {'was' if one else 'were'} skipped "
                           f"(first: {', '.join(skipped[:3])})")
         _warn_stale(srdf_obj, pin_model, geom)
+    read = srdf_obj if srdf_read is False else srdf_read
+    for a, b, _ in (read.disabled if read is not None else ()):  # for save_scene: the pairs a reload's SRDF disables
+        oa, ob = parts.link_owner.get(a), parts.link_owner.get(b)
+        for rname, src in scene._robot_sources.items():
+            if oa is not None and ob is not None and oa != ob and any(o.startswith(f"{rname}/") for o in (oa, ob)):
+                src["srdf_pairs"] = (*src["srdf_pairs"], (oa, ob))
     return scene, pin_model, geom, parts
 
 
@@ -302,19 +307,25 @@ def model_from_scenefile(sf, file: str, base: Path, *, srdf=None) -> Model:
         srdf_obj = None
     else:
         srdf_obj = _srdf_for(urdf, ctx.path(named) if named else None, found=f"named by {Path(file).name}'s model.srdf")
+    side = srdf_obj  # the sidecar's SRDF (its groups name the arms)
     if srdf is not None:
         srdf_obj = _replace_pairs(srdf_obj, srdf)
     acc = {}
     for jn, spec in sf.joints.items():
         if spec.max_acceleration is not None:
             acc[jn] = acc[jn.replace("/", "_", 1)] = spec.max_acceleration * ctx.A  # "R/joint"; an exported URDF's "R_joint"
-    if srdf_obj is None or srdf is False:  # what a scene file saved from it names as each arm's srdf:
+    # what a scene file saved from it names as each arm's srdf: the file whose groups name the arms (the
+    # sidecar's, unless srdf= gives groups), its pairs that this Model checks then listed under pairs.enable
+    given_groups = srdf_obj is not None and srdf_obj.groups and (side is None or srdf_obj.groups is not side.groups)
+    groups_from = srdf_obj if srdf not in (None, False) and given_groups else side
+    if groups_from is None:
         srdf_source = NO_SRDF
-    elif srdf is not None or named:
-        srdf_source = os.path.abspath(srdf if srdf is not None else ctx.path(named))
-    else:
+    elif srdf is None and not named:
         srdf_source = None  # found beside the URDF: found again
-    scene, pin_model, geom, parts = _build(urdf, srdf_obj, (), acc, name=sf.name, srdf_source=srdf_source)
+    else:
+        srdf_source = os.path.abspath(groups_from.file)
+    scene, pin_model, geom, parts = _build(urdf, srdf_obj, (), acc, name=sf.name, srdf_source=srdf_source,
+                                           srdf_read=groups_from)
     known = {jn.replace("/", "_", 1) for jn in scene.joint_names} | set(scene.joint_names)
     for jn in sf.joints:
         if jn not in known and jn.replace("/", "_", 1) not in known:

@@ -152,8 +152,10 @@ def scene_to_dict(scene: Scene) -> dict:
         "disable": sorted(sorted(p) for p in scene.disabled_pairs),
     }
     # an SRDF's pairs the scene checks again (Scene.enable_pair): its SRDF, read again, would disable them
+    owners = {*scene.robots, *scene.bodies, *scene.payloads,
+              *(f"{r}/{ln}" for r, robot in scene.robots.items() for ln in robot.link_names)}
     enable = {frozenset(p) for src in scene._robot_sources.values() if src.get("srdf") != NO_SRDF
-              for p in src.get("srdf_pairs", ())} - set(scene.disabled_pairs)
+              for p in src.get("srdf_pairs", ()) if set(p) <= owners} - set(scene.disabled_pairs)  # a removed body's: gone
     if enable:
         d["pairs"]["enable"] = sorted(sorted(p) for p in enable)
     trajs = []

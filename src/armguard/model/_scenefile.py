@@ -11,17 +11,16 @@ from __future__ import annotations
 
 import math
 import os
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 from pydantic import ValidationError
 
-from .._errors import ArmguardError, KinematicsError, SceneError, SceneFileError, list_problems, xml_parse_error
+from .._errors import ArmguardError, KinematicsError, SceneError, SceneFileError, list_problems
 from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
 from ._robot_urdf import robot_parts_from_urdf
 from ._scene import CannedTest, Scene
-from ._srdf import NO_SRDF
+from ._srdf import NO_SRDF, read_srdf_disabled
 from ._schema import SHAPE_TYPES, SceneFile, near_key
 from .._yaml import read_scene_yaml  # noqa: F401  (part of this module's interface)
 
@@ -368,26 +367,6 @@ def _no_srdf(named: str) -> bool:
     return named.strip().lower() == NO_SRDF
 
 
-def read_srdf_disabled(path) -> list[tuple[str, str]]:
-    """The ``<disable_collisions link1=... link2=...>`` pairs of an SRDF file (MoveIt's format)."""
-    path = Path(path)
-    try:
-        root = ET.parse(path).getroot()
-    except FileNotFoundError:
-        raise SceneFileError(str(path), "", "SRDF file not found") from None
-    except IsADirectoryError:
-        raise SceneFileError(str(path), "", "is a directory; expected an SRDF file") from None
-    except ET.ParseError as exc:
-        raise xml_parse_error(path, exc) from None
-    out = []
-    for k, el in enumerate(root.iter("disable_collisions")):
-        a, b = el.get("link1"), el.get("link2")
-        if not a or not b:
-            raise SceneFileError(str(path), f"disable_collisions[{k}]", "expected attributes link1 and link2")
-        out.append((a, b))
-    return out
-
-
 def validate_scene_dict(data, file: str = "<dict>") -> SceneFile:
     """``data`` (a parsed scene file) checked against the format; errors name ``file`` and the place."""
     if not isinstance(data, dict):
@@ -458,11 +437,11 @@ def _body(scene: Scene, b, i: int, ctx: _Ctx, X) -> None:
 
 def _add_robot(scene: Scene, r, i: int, ctx: _Ctx, frames: dict) -> list:
     robot, home, pairs, source = _robot(r, i, ctx, frames)
+    self_pairs = None if r.self_pairs is None else [tuple(p) for p in r.self_pairs]
+    if self_pairs is not None:  # pairs the file lists to be checked: no SRDF disables them
+        pairs = [p for p in pairs if {tuple(p), tuple(p)[::-1]}.isdisjoint(self_pairs)]
     if source["kind"] == "urdf":  # its SRDF's pairs, for save_scene to list those the scene checks again
         source["srdf_pairs"] = tuple((f"{r.name}/{a}", f"{r.name}/{b}") for a, b in pairs)
-    self_pairs = None
-    if r.self_pairs is not None:
-        self_pairs = [tuple(p) for p in r.self_pairs]
     try:
         scene.add_robot(robot, home=home, self_pairs=self_pairs, _source={**source, "spec": r})
     except ArmguardError as exc:
@@ -525,6 +504,10 @@ def _populate(scene: Scene, sf: SceneFile, ctx: _Ctx, frames: dict) -> None:
         except SceneError as exc:
             raise ctx.error(f"pairs.enable[{k}]", str(exc)) from None
         scene.enable_pair(a, b)
+        wide = [p for p in scene.disabled_pairs if p <= {a, b, a.split("/")[0], b.split("/")[0]} and p != {a, b}]
+        if wide:  # disabled robot-wide ([A, post]): enabling one link's pair cannot take effect
+            raise ctx.error(f"pairs.enable[{k}]", f"[{a}, {b}] stays disabled by {sorted(wide[0])} (a robot's name stands for "
+                                                  "all its links): disable the other links' pairs one by one instead")
     # trajectories and canned tests are independent: report them all
     for i, t in enumerate(sf.trajectories):
         try:

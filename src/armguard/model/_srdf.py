@@ -26,7 +26,7 @@ NO_SRDF = "none"
 """An SRDF path of a model sidecar (``model.srdf``) or a scene file's URDF robot (``robots[i].srdf``) that
 means no SRDF at all, not even one found beside the URDF: the URDF alone."""
 
-__all__ = ["Srdf", "SrdfGroup", "read_srdf", "HOME_STATES"]
+__all__ = ["Srdf", "SrdfGroup", "read_srdf", "read_srdf_disabled", "HOME_STATES"]
 
 HOME_STATES = ("home", "default", "ready")
 """Names of the SRDF group state taken as an arm's home, in order of preference (else the first state)."""
@@ -280,3 +280,23 @@ def srdf_of_scene(srdfs: dict, model):
     return dataclasses.replace(first, file=files[0] if len(files) == 1 else ", ".join(files), groups=groups,
                                states=tuple(states), disabled=(), partial=False,
                                found=f"the SRDF{'s' if len(files) > 1 else ''} of the scene file's URDF robots")
+
+
+def read_srdf_disabled(path) -> list[tuple[str, str]]:
+    """The ``<disable_collisions link1=... link2=...>`` pairs of an SRDF file (MoveIt's format)."""
+    path = Path(path)
+    try:
+        root = ET.parse(path).getroot()
+    except FileNotFoundError:
+        raise SceneFileError(str(path), "", "SRDF file not found") from None
+    except IsADirectoryError:
+        raise SceneFileError(str(path), "", "is a directory; expected an SRDF file") from None
+    except ET.ParseError as exc:
+        raise xml_parse_error(path, exc) from None
+    out = []
+    for k, el in enumerate(root.iter("disable_collisions")):
+        a, b = el.get("link1"), el.get("link2")
+        if not a or not b:
+            raise SceneFileError(str(path), f"disable_collisions[{k}]", "expected attributes link1 and link2")
+        out.append((a, b))
+    return out

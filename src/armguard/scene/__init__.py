@@ -22,7 +22,7 @@ from ..model._scene import (
     SceneItem,
     WorkspaceBox,
 )
-from ..model._scenefile import read_srdf_disabled
+from ..model._srdf import read_srdf_disabled
 from ._load import load_scene, load_scene_file, scene_from_dict, scene_from_urdf
 
 __all__ = [

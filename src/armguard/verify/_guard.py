@@ -225,6 +225,8 @@ class Guard(FollowsScene):
         a = self.tol.joint_limit
         st.lo_ok, st.hi_ok = st.lower - a, st.upper + a
         st.mine = st.model.moving_pairs(self.robot)
+        if not st.mine.any():  # nothing of it checked: no OK to give (as verify refuses such a robot)
+            raise VerificationError(f"robot {self.robot!r} has no pair to check (no shapes, or every pair with it disabled)")
         if self.avoidance is not None:
             self._prepare_avoidance(st, self.avoidance)
         return st

@@ -393,7 +393,7 @@ class VerificationReport:
 def speeds_over_limits(trajectory, robot) -> dict:
     """``{joint: (peak speed, max_velocity)}`` of ``robot``'s joints that ``trajectory`` (over all of its
     joints, in its order) moves faster than their finite ``max_velocity`` allows (rad/s or m/s)."""
-    peak = getattr(trajectory, "peak_velocity", None)
+    peak = getattr(getattr(trajectory, "_t", trajectory), "peak_velocity", None)  # a Subdivided one: its trajectory's
     if peak is None:  # a time law of one's own without it: nothing said
         return {}
     v, lim = np.asarray(peak(), dtype=np.float64), np.asarray(robot.max_velocity, dtype=np.float64)
