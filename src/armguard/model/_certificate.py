@@ -87,9 +87,15 @@ def pair_fingerprint(pin_model, collision_model, link1: str, link2: str, *, marg
         h.update(f"q {q.start} {q.stop} parent {pin_model.names[pin_model.parents[j]]}".encode())
         _floats(h, lo[q])
         _floats(h, hi[q])
-        for attr in ("axis", "scaling", "offset"):  # unaligned axes, a mimic joint's coupling
-            if hasattr(jm, attr):
-                _floats(h, getattr(jm, attr))
+        own = jm.extract()  # the joint's own type: Pinocchio's generic JointModel shows none of these
+        for attr in ("axis", "scaling", "offset"):  # an unaligned axis, a mimic joint's coupling
+            if hasattr(own, attr):
+                h.update(attr.encode())
+                _floats(h, np.atleast_1d(getattr(own, attr)))
+        if jm.shortname() == "JointModelMimic":  # the motion it makes: the mimicked joint's axis times its scaling
+            jd = jm.createData()
+            jm.calc(jd, pin.neutral(pin_model))
+            _floats(h, np.asarray(jd.S))
     return h.hexdigest()[:16]
 
 
