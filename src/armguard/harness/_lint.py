@@ -24,7 +24,10 @@ Checks (each a :class:`Check`), on the files as written, then on the loaded mode
   ``<disable_collisions reason="Always">`` line is suggested, MoveIt's name for a pair its Setup
   Assistant finds in collision in at least 95 % of its samples);
 * ``home-collision``: an active pair in collision at the home pose but not permanently (a warning,
-  with its share of the random configurations: the home pose or the shapes may be wrong).
+  with its share of the random configurations: the home pose or the shapes may be wrong);
+* ``frozen-joint``: a revolute or prismatic joint whose ``<limit>`` lacks ``lower`` or ``upper``
+  (urdfdom and Pinocchio read 0: a joint that cannot move, or only to one side; a warning, also
+  given when the URDF loads).
 """
 
 from __future__ import annotations
@@ -50,6 +53,7 @@ class Check(str, enum.Enum):
     PERMANENT_COLLISION = "permanent-collision"
     HOME_COLLISION = "home-collision"
     SRDF_CERTIFICATE = "srdf-certificate"
+    FROZEN_JOINT = "frozen-joint"
 
 
 class Severity(str, enum.Enum):
@@ -172,6 +176,14 @@ def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: d
         _unparsed(report, f, "URDF", exc)
         return
     links, joints = {ln.get("name") for ln in root.findall("link")}, {j.get("name") for j in root.findall("joint")}
+    from ..model._urdf import frozen_joint_text
+
+    for j in root.findall("joint"):  # a <limit> without lower/upper: urdfdom reads 0, and the joint cannot move
+        lim = j.find("limit")
+        if j.get("type") in ("revolute", "prismatic") and j.find("mimic") is None and lim is not None \
+                and not (lim.get("lower") and lim.get("upper")):
+            report.findings.append(Finding(Check.FROZEN_JOINT, Severity.WARNING, f"{f}: joint[{j.get('name')}].limit",
+                                           frozen_joint_text(lim)))
     for link in root.findall("link"):
         ln = link.get("name")
         entries = {}

@@ -108,6 +108,14 @@ def resolve_mesh(filename: str, urdf_dir: Path, package_dirs) -> Path | None:
     return None
 
 
+def frozen_joint_text(lim) -> str:
+    """What a revolute or prismatic ``<limit>`` without ``lower`` or ``upper`` means, and what to write instead."""
+    lo, hi = lim.get("lower") or "0 (unset)", lim.get("upper") or "0 (unset)"
+    return (f"no lower or upper: read as [{lo}, {hi}] (urdfdom's default of 0), a joint that can move "
+            f"{'nowhere' if not (lim.get('lower') or lim.get('upper')) else 'only to one side of 0'}; give both, or "
+            "type=\"continuous\" for one that turns without end")
+
+
 def _package_name(folder: Path) -> str | None:
     """The ``<name>`` of ``folder/package.xml`` (a ROS package's own name), or None."""
     f = folder / "package.xml"
@@ -187,6 +195,15 @@ def _read_xml(path: Path, package_dirs) -> UrdfInfo:
         m = j.find("mimic")
         if m is not None:
             mimic[jn] = (m.get("joint", ""), float(m.get("multiplier", "1")), float(m.get("offset", "0")))
+        lim = j.find("limit")
+        if types_[jn] in ("revolute", "prismatic") and m is None and lim is not None and not (lim.get("lower") and lim.get("upper")):
+            import warnings
+
+            from .._errors import ArmguardWarning
+
+            line = lines.get(id(lim))
+            warnings.warn(f"{f}: joint[{jn}].limit{f' (line {line})' if line else ''}: {frozen_joint_text(lim)}",
+                          ArmguardWarning, stacklevel=4)
     return UrdfInfo(f, root.get("name", path.stem), collisions, mimic, axes, types_, tuple(meshes), mesh_at,
                     ET.tostring(root))
 

@@ -1,0 +1,44 @@
+"""A revolute joint whose ``<limit>`` has no lower/upper is read as [0, 0] (urdfdom's default): a
+joint that cannot move, so a smaller model than meant.  Loading warns, naming the joint and line,
+and ``armguard check-urdf`` reports it (both said nothing)."""
+
+from __future__ import annotations
+
+import warnings
+
+import pytest
+from click.testing import CliRunner
+
+import armguard
+from armguard.cli import main
+
+_URDF = """<robot name="two">
+  <link name="base"><collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <link name="l1"><collision><origin xyz="0.3 0 0"/><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <link name="l2"><collision><origin xyz="0.3 0 0"/><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/>
+    LIMIT</joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.6 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>"""
+
+
+def test_a_limit_without_lower_and_upper_is_warned_of_and_linted(tmp_path):
+    p = tmp_path / "two.urdf"
+    p.write_text(_URDF.replace("LIMIT", '<limit effort="1" velocity="1"/>'))
+    with pytest.warns(armguard.ArmguardWarning, match=r"joint\[j1\]\.limit \(line 6\): no lower or upper: read as "
+                                                      r"\[0 \(unset\), 0 \(unset\)\].*can move nowhere"):
+        m = armguard.load_model(p, srdf=False)
+    assert list(m.scene.robots["two"].lower) == [0.0, -1.0] and list(m.scene.robots["two"].upper) == [0.0, 1.0]
+    r = CliRunner().invoke(main, ["-q", "check-urdf", str(p), "--json"])
+    assert '"frozen-joint"' in r.output and "joint[j1].limit" in r.output, r.output
+
+
+def test_a_limit_with_both_bounds_says_nothing(tmp_path):
+    p = tmp_path / "two.urdf"
+    p.write_text(_URDF.replace("LIMIT", '<limit lower="-2" upper="2" effort="1" velocity="1"/>'))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", armguard.ArmguardWarning)
+        armguard.load_model(p, srdf=False)
+    r = CliRunner().invoke(main, ["-q", "check-urdf", str(p), "--json"])
+    assert "frozen-joint" not in r.output
