@@ -39,3 +39,31 @@ def test_a_coupling_or_axis_edit_voids_the_print(edit):
 
 def test_two_tilted_axes_differ():
     assert _print(axis="0 0.6 0.8") != _print(axis="0 -0.6 0.8")
+
+
+_CHAIN = """<robot name="c">
+  <link name="a"><collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <link name="mid">MID</link>
+  <link name="b"><collision><origin xyz="0.3 0 0"/><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <joint name="j1" type="revolute"><parent link="a"/><child link="mid"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="mid"/><child link="b"/><origin xyz="0.3 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>"""
+
+
+def test_an_adjacent_certificate_goes_stale_when_the_link_between_gets_geometry(tmp_path):
+    """a and b are *Adjacent* through ``mid`` while ``mid`` has no geometry (MoveIt's rule); once it
+    has some, the certificate no longer holds (a restored forearm mesh left UR5's upper arm and
+    wrist 1, 18.5 mm into each other, unchecked without a word)."""
+    from armguard.model._certificate import stale_certificates
+
+    srdf = tmp_path / "c.srdf"
+    srdf.write_text('<robot name="c"><disable_collisions link1="a" link2="b" reason="Adjacent" '
+                    'armguard_fingerprint="0123456789abcdef"/></robot>')
+    for mid, stale in (("", False), ('<collision><geometry><box size="0.05 0.05 0.05"/></geometry></collision>', True)):
+        xml = _CHAIN.replace("MID", mid)
+        m = pin.buildModelFromXML(xml)
+        g = pin.buildGeomFromUrdfString(m, xml, pin.COLLISION)
+        found = stale_certificates(m, g, srdf)
+        assert (len(found) == 1 and (found[0].link1, found[0].link2) == ("a", "b")) == stale, found

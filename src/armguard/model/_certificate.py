@@ -7,8 +7,12 @@ A collision matrix's verdict on a pair of links A, B (:mod:`armguard.srdfgen`: *
   vertices of the hull that is checked);
 * every joint that changes the pair's relative pose: the joints that support one link and not the
   other (Pinocchio's ``model.supports``), each with its type, placement in its parent, position
-  limits and ``q`` slot (a mimic joint's coupling included);
+  limits and ``q`` slot (a mimic joint's coupling and an unaligned axis included);
 * the margin and the method the matrix was made with.
+
+An *Adjacent* pair is disabled whatever its shapes (MoveIt's rule) for as long as it is adjacent: one
+link the other's parent, or joined through links without geometry; once a link between them has
+geometry, its certificate is stale too.
 
 :func:`pair_fingerprint` hashes exactly these (SHA-256, the first 16 hex digits), so an edit of
 anything else in the URDF -- another link's mesh, a joint below both links, inertias -- keeps the
@@ -150,12 +154,35 @@ class StaleCertificate:
     where: str
 
 
+def _adjacent(pin_model, collision_model, link1: str, link2: str) -> bool:
+    """MoveIt's *Adjacent*: one link the other's parent, or joined through links without geometry (a
+    gone link: not adjacent)."""
+    frames = pin_model.frames
+    if not (pin_model.existFrame(link1, pin.BODY) and pin_model.existFrame(link2, pin.BODY)):
+        return False
+    shaped = {int(go.parentFrame) for go in collision_model.geometryObjects}
+
+    def shaped_parent(name: str) -> str | None:
+        f = pin_model.getFrameId(name, pin.BODY)
+        while f != 0:
+            f = int(frames[f].parentFrame)
+            while f != 0 and frames[f].type != pin.BODY:  # the joint frames between two links
+                f = int(frames[f].parentFrame)
+            if f == 0 or f in shaped:
+                break
+        return frames[f].name if f != 0 else None
+
+    return shaped_parent(link1) == link2 or shaped_parent(link2) == link1
+
+
 def stale_certificates(pin_model, collision_model, srdf_file) -> tuple[StaleCertificate, ...]:
     """The certified disabled pairs of ``srdf_file`` whose fingerprint the model no longer gives (an
     *Adjacent* pair is disabled whatever its shapes, as MoveIt does, and is not listed)."""
     out = []
     for c in read_certificates(srdf_file):
-        if c.reason == "Adjacent":  # joined by a joint: disabled whatever their shapes (MoveIt's rule)
+        if c.reason == "Adjacent":  # joined by a joint: disabled whatever their shapes (MoveIt's rule) while it holds
+            if not _adjacent(pin_model, collision_model, c.link1, c.link2):  # a link between them got geometry
+                out.append(StaleCertificate(c.link1, c.link2, c.reason, c.fingerprint, None, c.where))
             continue
         now = pair_fingerprint(pin_model, collision_model, c.link1, c.link2, margin=c.margin, method=c.method)
         if now != c.fingerprint:
