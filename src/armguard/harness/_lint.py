@@ -166,7 +166,8 @@ def _unparsed(report: LintReport, f: str, what: str, exc: Exception) -> None:
         report.findings.append(Finding(Check.UNPARSED, Severity.ERROR, f, f"{what} does not parse: {exc}"))
 
 
-def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: dict, volume_ratio: float) -> None:
+def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: dict, volume_ratio: float,
+                partial: bool = False) -> None:
     from ..model._urdf import resolve_mesh
 
     f = urdf.name
@@ -234,10 +235,12 @@ def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: d
                             Check.NON_CONVEX, Severity.ERROR, w, f"mesh {entries[n][2].name} is marked <convex> but is not "
                             f"convex ({how})", "drop the <convex> mark (it is then checked as its hull) or split the mesh"))
     if srdf is not None:
-        _srdf_checks(srdf, links, joints, report)
+        _srdf_checks(srdf, links, joints, report, partial)
 
 
-def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport) -> None:
+def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport, partial: bool = False) -> None:
+    """Names of the SRDF that match nothing in the URDF: errors, or for an SRDF of a larger robot found
+    under the robot's name (``partial``: the loader skips them) warnings."""
     f = srdf.name
     try:
         root = ET.parse(srdf).getroot()
@@ -248,8 +251,14 @@ def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport) -> Non
 
     def need(name, kind, where, pool):
         if name not in pool:
-            report.findings.append(Finding(Check.SRDF_NAME, Severity.ERROR, f"{f}: {where}",
-                                           f"{kind} {name!r} matches nothing in the URDF"))
+            report.findings.append(Finding(Check.SRDF_NAME, Severity.WARNING if partial else Severity.ERROR, f"{f}: {where}",
+                                           f"{kind} {name!r} matches nothing in the URDF"
+                                           + (" (an SRDF of a larger robot: skipped when it loads)" if partial else "")))
+    for ee in root.findall("end_effector"):
+        for attr in ("parent_link", "group", "parent_group"):
+            if ee.get(attr) is not None:
+                need(ee.get(attr), "group" if "group" in attr else "link", f"end_effector[{ee.get('name')}].{attr}",
+                     groups if "group" in attr else links)
 
     for k, g in enumerate(root.findall("group")):
         w = f"group[{g.get('name')}]"
@@ -363,8 +372,12 @@ def check_model_files(target, *, n_configs: int = 200, seed: int = 0, permanent_
     if model is not None:
         mesh_paths = {go.name: go.meshPath for go in model.collision_model.geometryObjects
                       if go.meshPath and Path(go.meshPath).is_file()}
+    partial = False
+    if model is not None and model.srdf is not None and Path(model.srdf.file).is_file():  # the SRDF it loads, as
+        srdf, partial = Path(model.srdf.file), model.srdf.partial                        # load_model finds it
+        report.srdf = str(srdf)
     if urdf is not None:
-        _xml_checks(Path(urdf), Path(srdf) if srdf else None, report, mesh_paths, convex_volume_ratio)
+        _xml_checks(Path(urdf), Path(srdf) if srdf else None, report, mesh_paths, convex_volume_ratio, partial)
     if model is not None:
         if model.srdf is not None:
             _certificate_checks(model, report)

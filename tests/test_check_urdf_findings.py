@@ -1,4 +1,4 @@
-"""A revolute joint whose ``<limit>`` has no lower/upper is read as [0, 0] (urdfdom's default): a
+"""check-urdf findings and load warnings. A revolute joint whose ``<limit>`` has no lower/upper is read as [0, 0] (urdfdom's default): a
 joint that cannot move, so a smaller model than meant.  Loading warns, naming the joint and line,
 and ``armguard check-urdf`` reports it (both said nothing)."""
 
@@ -42,3 +42,22 @@ def test_a_limit_with_both_bounds_says_nothing(tmp_path):
         armguard.load_model(p, srdf=False)
     r = CliRunner().invoke(main, ["-q", "check-urdf", str(p), "--json"])
     assert "frozen-joint" not in r.output
+
+
+def test_check_urdf_checks_the_srdf_load_model_finds_and_its_end_effectors(tmp_path):
+    """The SRDF in ``../srdf/`` (example-robot-data's layout) was not checked ("clean", "srdf": null),
+    nor an ``<end_effector parent_link>``."""
+    import json
+
+    (tmp_path / "urdf").mkdir()
+    (tmp_path / "srdf").mkdir()
+    p = tmp_path / "urdf" / "two.urdf"
+    p.write_text(_URDF.replace("LIMIT", '<limit lower="-2" upper="2" effort="1" velocity="1"/>'))
+    (tmp_path / "srdf" / "two.srdf").write_text(
+        '<robot name="two"><group name="arm"><chain base_link="base" tip_link="l2"/></group>'
+        '<end_effector name="tool" parent_link="l2_tcp" group="arm"/></robot>')
+    r = CliRunner().invoke(main, ["-q", "check-urdf", str(p), "--json"])
+    d = json.loads(r.output)
+    assert d["srdf"] == str(tmp_path / "srdf" / "two.srdf")
+    assert [(f["check"], f["severity"]) for f in d["findings"] if "end_effector[tool].parent_link" in f["where"]] == [
+        ("srdf-name", "error")], d["findings"]
