@@ -81,14 +81,34 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
     check_writable(out)  # refused before minutes of work (a missing folder is made with the file, as verify --report makes its)
     model = load_model(robot, srdf=False)
     before = read_previous(out) if update else {}
+    said = []  # what --update read from the file rather than from the command line
+    if update:  # the file's margin and method, unless given: a rewrite at another one searches every pair again
+        import xml.etree.ElementTree as ET
+
+        from ..model._certificate import MARGIN_ATTR, METHOD_ATTR
+
+        root = ET.parse(out).getroot()
+        src = click.get_current_context().get_parameter_source
+        if src("margin") is click.core.ParameterSource.DEFAULT and root.get(MARGIN_ATTR) is not None:
+            margin = float(root.get(MARGIN_ATTR))
+            said.append(f"margin {margin:g} m")
+        if src("method") is click.core.ParameterSource.DEFAULT and root.get(METHOD_ATTR) in ("certified", "sampled"):
+            method = root.get(METHOD_ATTR)
+            said.append(f"method {method}")
     cm = collision_matrix(model, margin=margin, method=method, samples=samples, workers=workers,
                           max_evaluations=max_evaluations, backend=evaluator, progress=False if as_json else _label(robot),
                           previous=out if update else None, scheduler=scheduler)
     changed = [(before[frozenset((e.link1, e.link2))], e) for e in cm.entries if frozenset((e.link1, e.link2)) in before
                and (before[frozenset((e.link1, e.link2))].reason, before[frozenset((e.link1, e.link2))].status)
                != (e.reason, e.status)]
+    gone = []
     if update:  # and the disabled pairs the matrix does not search (static bodies, a link against an obstacle)
         keep = other_elements(out, searched={frozenset((e.link1, e.link2)) for e in cm.entries})
+        import pinocchio as pin
+
+        links = {f.name for f in model.pin_model.frames if f.type == pin.BODY}
+        gone = [el for el in keep if el.tag == "disable_collisions" and not {el.get("link1"), el.get("link2")} <= links]
+        keep = [el for el in keep if not any(el is g for g in gone)]  # a renamed or removed link's: dropped, said below
     from .._io import make_folder
 
     make_folder(Path(out).parent)
@@ -117,6 +137,11 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
         click.echo(f"warning: every pair is disabled: a model loaded with {out} has no pair to check, and "
                    "armguard refuses it", err=True)
     if update:
+        if said:
+            click.echo(f"  --update: {' and '.join(said)} from {out} (give --margin / --method to change them)")
+        for el in gone:
+            click.echo(f"  --update: dropped the disable_collisions of {el.get('link1')} - {el.get('link2')}: "
+                       "the URDF has no such link (renamed or removed)")
         click.echo(f"  --update: {len(cm.kept)} pairs kept (certificate unchanged), "
                    f"{c['pairs'] - c['Adjacent'] - c['Default'] - len(cm.kept)} searched again"
                    + ("" if before else f" ({out} carried no armguard certificates)"))
