@@ -137,14 +137,14 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
         click.echo(f"warning: every pair is disabled: a model loaded with {out} has no pair to check, and "
                    "armguard refuses it", err=True)
     if update:
+        click.echo(f"  --update: {len(cm.kept)} pairs kept (certificate unchanged), "
+                   f"{c['pairs'] - c['Adjacent'] - c['Default'] - len(cm.kept)} searched again"
+                   + ("" if before else f" ({out} carried no armguard certificates)"))
         if said:
             click.echo(f"  --update: {' and '.join(said)} from {out} (give --margin / --method to change them)")
         for el in gone:
             click.echo(f"  --update: dropped the disable_collisions of {el.get('link1')} - {el.get('link2')}: "
                        "the URDF has no such link (renamed or removed)")
-        click.echo(f"  --update: {len(cm.kept)} pairs kept (certificate unchanged), "
-                   f"{c['pairs'] - c['Adjacent'] - c['Default'] - len(cm.kept)} searched again"
-                   + ("" if before else f" ({out} carried no armguard certificates)"))
         kept_tags = [el.tag if el.tag != "disable_collisions" else f"disable_collisions ({el.get('reason') or 'no reason'}, "
                      "not searched)" for el in keep if isinstance(el.tag, str)]
         if kept_tags:
