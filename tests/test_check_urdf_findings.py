@@ -61,3 +61,22 @@ def test_check_urdf_checks_the_srdf_load_model_finds_and_its_end_effectors(tmp_p
     assert d["srdf"] == str(tmp_path / "srdf" / "two.srdf")
     assert [(f["check"], f["severity"]) for f in d["findings"] if "end_effector[tool].parent_link" in f["where"]] == [
         ("srdf-name", "error")], d["findings"]
+
+
+def test_a_misspelt_or_repeated_element_is_reported():
+    """``<orgin>`` in a collision (the box then sat at the link's origin) and a second ``<limit>`` (the
+    first wins) passed check-urdf as "clean"."""
+    import json
+    import tempfile
+    from pathlib import Path
+
+    text = _URDF.replace("LIMIT", '<limit lower="-2" upper="2" effort="1" velocity="1"/><limit lower="-1" upper="1" '
+                                  'effort="1" velocity="1"/>').replace('<collision><origin xyz="0.3 0 0"/>',
+                                                                       '<collision><orgin xyz="0.3 0 0"/>', 1)
+    with tempfile.TemporaryDirectory() as d:
+        p = Path(d) / "two.urdf"
+        p.write_text(text)
+        r = CliRunner().invoke(main, ["-q", "check-urdf", str(p), "--json"])
+    found = {(f["where"].split(": ", 1)[1], f["message"]) for f in json.loads(r.output)["findings"] if f["check"] == "unread-element"}
+    assert found == {("link[l1].collision[0].orgin", "<orgin> is read by nothing: did you mean <origin>?"),
+                     ("joint[j1].limit", "2 <limit> elements: only the first is read")}, found

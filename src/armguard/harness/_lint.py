@@ -25,6 +25,9 @@ Checks (each a :class:`Check`), on the files as written, then on the loaded mode
   Assistant finds in collision in at least 95 % of its samples);
 * ``home-collision``: an active pair in collision at the home pose but not permanently (a warning,
   with its share of the random configurations: the home pose or the shapes may be wrong);
+* ``unread-element``: an element of a link, collision, visual or joint that nothing reads but that
+  looks like one that is (``<orgin>``), or a repeated ``<origin>``, ``<limit>``, ``<axis>`` of which
+  only the first is read (a warning);
 * ``frozen-joint``: a revolute or prismatic joint whose ``<limit>`` lacks ``lower`` or ``upper``
   (urdfdom and Pinocchio read 0: a joint that cannot move, or only to one side; a warning, also
   given when the URDF loads).
@@ -54,6 +57,7 @@ class Check(str, enum.Enum):
     HOME_COLLISION = "home-collision"
     SRDF_CERTIFICATE = "srdf-certificate"
     FROZEN_JOINT = "frozen-joint"
+    UNREAD_ELEMENT = "unread-element"
 
 
 class Severity(str, enum.Enum):
@@ -179,6 +183,7 @@ def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: d
     links, joints = {ln.get("name") for ln in root.findall("link")}, {j.get("name") for j in root.findall("joint")}
     from ..model._urdf import frozen_joint_text
 
+    _unread_elements(root, f, report)
     for j in root.findall("joint"):  # a <limit> without lower/upper: urdfdom reads 0, and the joint cannot move
         lim = j.find("limit")
         if j.get("type") in ("revolute", "prismatic") and j.find("mimic") is None and lim is not None \
@@ -236,6 +241,43 @@ def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: d
                             f"convex ({how})", "drop the <convex> mark (it is then checked as its hull) or split the mesh"))
     if srdf is not None:
         _srdf_checks(srdf, links, joints, report, partial)
+
+
+_READ = {"link": ("visual", "collision", "inertial", "collision_checking"),
+         "collision": ("origin", "geometry"), "visual": ("origin", "geometry", "material"),
+         "joint": ("origin", "parent", "child", "axis", "limit", "mimic", "dynamics", "calibration", "safety_controller")}
+
+
+def _unread_elements(root, f: str, report: LintReport) -> None:
+    """Elements of a link, collision or joint that no reader reads although they look like one that is
+    (``<orgin>``: the shape then sits at the link's origin), and a repeated one of which only the first
+    is read (``<origin>``, ``<limit>``, ``<axis>``): warnings.  An unknown element unlike any (a
+    simulator's ``<contact>``) is left alone."""
+    import difflib
+
+    def scan(el, kind: str, where: str) -> None:
+        seen: dict = {}
+        for c in el:
+            if not isinstance(c.tag, str):
+                continue
+            seen[c.tag] = seen.get(c.tag, 0) + 1
+            if c.tag not in _READ[kind]:
+                near = difflib.get_close_matches(c.tag, _READ[kind], n=1, cutoff=0.75)
+                if near:
+                    report.findings.append(Finding(Check.UNREAD_ELEMENT, Severity.WARNING, f"{f}: {where}.{c.tag}",
+                                                   f"<{c.tag}> is read by nothing: did you mean <{near[0]}>?"))
+        for tag, n in seen.items():
+            if n > 1 and tag in ("origin", "geometry", "limit", "axis", "parent", "child", "mimic"):
+                report.findings.append(Finding(Check.UNREAD_ELEMENT, Severity.WARNING, f"{f}: {where}.{tag}",
+                                               f"{n} <{tag}> elements: only the first is read"))
+
+    for link in root.findall("link"):
+        scan(link, "link", f"link[{link.get('name')}]")
+        for kind in ("collision", "visual"):
+            for k, c in enumerate(link.findall(kind)):
+                scan(c, kind, f"link[{link.get('name')}].{kind}[{k}]")
+    for j in root.findall("joint"):
+        scan(j, "joint", f"joint[{j.get('name')}]")
 
 
 def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport, partial: bool = False) -> None:
