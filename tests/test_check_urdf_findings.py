@@ -80,3 +80,20 @@ def test_a_misspelt_or_repeated_element_is_reported():
     found = {(f["where"].split(": ", 1)[1], f["message"]) for f in json.loads(r.output)["findings"] if f["check"] == "unread-element"}
     assert found == {("link[l1].collision[0].orgin", "<orgin> is read by nothing: did you mean <origin>?"),
                      ("joint[j1].limit", "2 <limit> elements: only the first is read")}, found
+
+
+def test_info_says_no_hull_was_stored_when_the_cache_cannot_be_written(tmp_path):
+    """It warned that the cache could not be written, then said "1 computed and stored" (a new process:
+    this one may hold the hulls already)."""
+    import os
+    import subprocess
+    import sys
+
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a folder")
+    env = {**os.environ, "ARMGUARD_CACHE_DIR": str(blocker / "cache"), "COLUMNS": "300"}
+    r = subprocess.run([sys.executable, "-m", "armguard.cli", "info", "ur5"], capture_output=True, text=True, env=env,
+                       timeout=300)
+    assert r.returncode == 0 and "could not be written" in r.stderr, r.stderr
+    line = next(ln for ln in r.stdout.splitlines() if ln.startswith("Mesh hulls"))
+    assert "0 stored: the cache could not be written" in line and "and stored" not in line, line

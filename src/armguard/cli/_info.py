@@ -72,8 +72,9 @@ def _print_srdf(con, scene, given: str, srdf: str | None = None) -> None:
                   "every pair but adjacent links is checked)", markup=False, highlight=False, soft_wrap=True)
     hc = getattr(model, "hull_cache", None)
     if hc:
-        n_hit, n_new = hc.get("hits", 0), hc.get("computed", 0)
-        where = (f"hull cache {hc['folder']}: {n_hit} read, {n_new} computed and stored" if hc.get("folder")
+        n_hit, n_new, n_stored = hc.get("hits", 0), hc.get("computed", 0), hc.get("stored", 0)
+        stored = "and stored" if n_stored == n_new else f"({n_stored} stored: the cache could not be written)"
+        where = (f"hull cache {hc['folder']}: {n_hit} read, {n_new} computed {stored}" if hc.get("folder")
                  else f"{n_new} computed (hull cache off: ARMGUARD_HULL_CACHE=0)")
         con.print(f"Mesh hulls: {where}", markup=False, highlight=False, soft_wrap=True)
 

@@ -138,6 +138,7 @@ def cached_polytope(mesh_path, scale, compute, stats: dict | None = None) -> Mes
     try:
         make_folder(folder)
         atomic_write(entry, _to_npz(mp))
+        _count(stats, "stored")
     except (ArmguardError, OSError) as exc:
         if stats is not None:
             if stats.get("unwritable"):
