@@ -62,7 +62,7 @@ def _assert_identical(m1, m2) -> None:
 
 def test_a_cache_hit_gives_the_computed_shapes(robot):
     m1 = armguard.load_model(robot, srdf=False)
-    assert dict(m1.hull_cache) == {"folder": str(hull_cache_dir()), "computed": 3}  # ball.stl once for its two uses
+    assert dict(m1.hull_cache) == {"folder": str(hull_cache_dir()), "computed": 3, "stored": 3}  # ball.stl once for its two uses
     entries = sorted(hull_cache_dir().glob("*.npz"))
     assert len(entries) == 3
     m2 = armguard.load_model(robot, srdf=False)

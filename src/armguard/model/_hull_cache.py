@@ -96,7 +96,7 @@ def _from_npz(data: bytes) -> MeshPolytope:
 def cached_polytope(mesh_path, scale, compute, stats: dict | None = None) -> MeshPolytope:
     """``compute()`` (the hull of the mesh file ``mesh_path`` at ``scale``), or its cached copy.
 
-    ``stats``: counts ``"hits"`` and ``"computed"``, records ``"folder"`` (None: cache off) and the
+    ``stats``: counts ``"hits"``, ``"computed"`` and ``"stored"``, records ``"folder"`` (None: cache off) and the
     file's SHA-256 under ``"sha256"[str(mesh_path)]``."""
     folder = hull_cache_dir()
     if stats is not None:
