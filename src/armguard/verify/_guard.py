@@ -133,7 +133,7 @@ def _full(st: _GuardState, q_robot: np.ndarray) -> np.ndarray:
 def _still_hint(model, pair) -> str:
     """What the Guard's STOP reason adds when no joint moves either side of ``pair`` (a base link on
     its table: no motion changes that clearance), else nothing."""
-    if model.moves(pair[0], 0, model.n_q) or model.moves(pair[1], 0, model.n_q):
+    if not model.still(*pair):
         return ""
     if WORKSPACE in pair:
         return ("; no joint moves that part, so no path changes this clearance: enlarge the workspace box "

@@ -353,6 +353,11 @@ class ClearanceModel:
         i = self._part_index.get(owner)
         return i is not None and bool(np.any(self.lever[i, k0:k1] > 0.0))
 
+    def still(self, a: str, b: str) -> bool:
+        """Whether no joint of any robot moves owner ``a`` or ``b`` (a base link and its table, the
+        workspace walls): no path changes their clearance."""
+        return not self.moves(a, 0, self.n_q) and not self.moves(b, 0, self.n_q)
+
     def moving_pairs(self, robot: str) -> np.ndarray:
         """``(P,) bool``: the pairs with a side on ``robot`` (a link of it, or a payload it carries):
         the only ones its motion can change, and the only ones a verification of it checks."""

@@ -519,7 +519,7 @@ class Verifier(FollowsScene):
             segment=int(si),
             stopping_distance=margin,
             kind=CollisionKind.STOPPING_DISTANCE if d > contact and margin > 0.0 else CollisionKind.CONTACT,
-            fixed=not run.model.moves(a, 0, run.model.n_q) and not run.model.moves(b, 0, run.model.n_q),
+            fixed=run.model.still(a, b),
         )
 
 
