@@ -97,3 +97,58 @@ def test_info_says_no_hull_was_stored_when_the_cache_cannot_be_written(tmp_path)
     assert r.returncode == 0 and "could not be written" in r.stderr, r.stderr
     line = next(ln for ln in r.stdout.splitlines() if ln.startswith("Mesh hulls"))
     assert "0 stored: the cache could not be written" in line and "and stored" not in line, line
+
+
+def _units(report) -> list:
+    from armguard.harness._lint import Check
+
+    return report.by_check(Check.UNITS)
+
+
+def test_degrees_in_rpy_and_in_a_revolute_limit_are_warned_of_with_the_radians(tmp_path):
+    """``rpy="0 0 90"`` turns the shape 90 rad (about 77 degrees), not 90 degrees, without a word."""
+    from armguard.harness import check_model_files
+
+    p = tmp_path / "two.urdf"
+    p.write_text(_URDF.replace("LIMIT", '<limit lower="-170" upper="170" effort="1" velocity="1"/>')
+                 .replace('<origin xyz="0.6 0 0"/>', '<origin xyz="0.6 0 0" rpy="0 0 90"/>'))
+    found = {f.where: f for f in _units(check_model_files(p, n_configs=1))}
+    assert set(found) == {"two.urdf: joint[j2].origin", "two.urdf: joint[j1].limit"}, found
+    assert 'rpy="0 0 1.5708"' in found["two.urdf: joint[j2].origin"].suggestion
+    assert 'lower="-2.96706" upper="2.96706"' in found["two.urdf: joint[j1].limit"].suggestion
+    r = CliRunner().invoke(main, ["-q", "check-urdf", str(p), "--json"])
+    assert '"units"' in r.output and r.exit_code == 0, r.output  # warnings: exit 0
+
+
+def test_radians_up_to_two_turns_and_unbounded_limits_pass(tmp_path):
+    """UR's +-2 pi limits, an rpy of pi, and pybullet's 1e16 'unbounded' rotor limits are radians."""
+    from armguard.harness import check_model_files
+
+    p = tmp_path / "two.urdf"
+    p.write_text(_URDF.replace("LIMIT", '<limit lower="-1e16" upper="1e16" effort="1" velocity="1"/>')
+                 .replace('<origin xyz="0.6 0 0"/>', '<origin xyz="0.6 0 0" rpy="3.14159 0 -3.14159"/>')
+                 .replace('<limit lower="-1" upper="1"', '<limit lower="-6.283185" upper="6.283185"'))
+    assert _units(check_model_files(p, n_configs=1)) == []
+
+
+@pytest.mark.parametrize("scale, stored, flagged", [("1 1 1", 1.0, False), ("1 1 1", 1000.0, True),
+                                                     ("0.001 0.001 0.001", 1.0, True),
+                                                     ("0.001 0.001 0.001", 1000.0, False)])
+def test_a_mesh_a_thousand_times_off_the_chain_is_warned_of(tmp_path, scale, stored, flagged):
+    """A 10 cm box stored in metres or in millimetres, read with scale 1 or 0.001, on a 0.9 m chain."""
+    import trimesh
+
+    from armguard.harness import check_model_files
+
+    trimesh.creation.box([0.1 * stored, 0.1 * stored, 0.1 * stored]).export(tmp_path / "box.stl")
+    p = tmp_path / "two.urdf"
+    p.write_text(_URDF.replace("LIMIT", '<limit lower="-2" upper="2" effort="1" velocity="1"/>')
+                 .replace('<box size="0.1 0.1 0.1"/></geometry></collision></link>\n  <link name="l2">',
+                          f'<mesh filename="box.stl" scale="{scale}"/></geometry></collision></link>\n  <link name="l2">', 1))
+    found = _units(check_model_files(p, n_configs=1))
+    assert bool(found) == flagged, found
+    if flagged:
+        (f,) = found
+        assert f.where.startswith("mesh[") and "box.stl" in f.message
+        assert f.suggestion == ('scale="0.001 0.001 0.001" if the mesh is in millimetres' if stored == 1000.0
+                                else 'scale="1 1 1" if the mesh is already in metres')

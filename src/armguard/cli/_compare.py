@@ -155,7 +155,9 @@ def _reference_line(ref: dict, exact: bool = False) -> str:
 def check_urdf_cmd(path, n_configs, as_json) -> None:
     """Lint a model (a built-in name, .urdf or .yaml): dropped collision elements, non-convex meshes marked
     convex, zero-length capsules, SRDF names that match nothing, disabled pairs whose certificate (armguard srdf)
-    an edit broke -- searched again, with the configuration where they now collide -- and pairs in permanent collision."""
+    an edit broke -- searched again, with the configuration where they now collide -- pairs in permanent collision,
+    misspelt or repeated elements, joints a limit freezes, and values in other units (rpy or limits in degrees,
+    a millimetre mesh read as metres)."""
     from rich.table import Table
 
     from pathlib import Path

@@ -30,7 +30,11 @@ Checks (each a :class:`Check`), on the files as written, then on the loaded mode
   only the first is read (a warning);
 * ``frozen-joint``: a revolute or prismatic joint whose ``<limit>`` lacks ``lower`` or ``upper``
   (urdfdom and Pinocchio read 0: a joint that cannot move, or only to one side; a warning, also
-  given when the URDF loads).
+  given when the URDF loads);
+* ``units``: a value that looks written in other units than the URDF's (metres and radians): an
+  ``<origin rpy>`` angle or a revolute joint's limit beyond what radians need (``rpy="0 0 90"``:
+  degrees; a limit past 1000 reads as "unbounded" and is left alone), or a collision mesh, as scaled, a thousand times larger or smaller than the robot's
+  kinematic chain (a millimetre mesh without ``scale="0.001"``, or a metre mesh with it): warnings.
 """
 
 from __future__ import annotations
@@ -58,6 +62,7 @@ class Check(str, enum.Enum):
     SRDF_CERTIFICATE = "srdf-certificate"
     FROZEN_JOINT = "frozen-joint"
     UNREAD_ELEMENT = "unread-element"
+    UNITS = "units"
 
 
 class Severity(str, enum.Enum):
@@ -184,6 +189,7 @@ def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: d
     from ..model._urdf import frozen_joint_text
 
     _unread_elements(root, f, report)
+    _angle_units(root, f, report)
     for j in root.findall("joint"):  # a <limit> without lower/upper: urdfdom reads 0, and the joint cannot move
         lim = j.find("limit")
         if j.get("type") in ("revolute", "prismatic") and j.find("mimic") is None and lim is not None \
@@ -278,6 +284,78 @@ def _unread_elements(root, f: str, report: LintReport) -> None:
                 scan(c, kind, f"link[{link.get('name')}].{kind}[{k}]")
     for j in root.findall("joint"):
         scan(j, "joint", f"joint[{j.get('name')}]")
+
+
+_RPY_MAX = 2.0 * np.pi + 1e-6  # one turn: no rpy angle needs more
+_LIMIT_MAX = 4.0 * np.pi + 1e-6  # two turns each way: joints such as UR's +-2 pi stay below it
+
+
+def _floats(text: str | None) -> list:
+    try:
+        return [float(x) for x in (text or "").split()]
+    except ValueError:
+        return []
+
+
+def _angle_units(root, f: str, report: LintReport) -> None:
+    """``rpy`` angles and revolute limits larger than radians need: written in degrees (module docstring)."""
+    def rad(text):
+        return " ".join(f"{np.radians(x):.6g}" for x in _floats(text))
+
+    for kind in ("link", "joint"):
+        for el in root.findall(kind):
+            origins = [(f"{kind}[{el.get('name')}].origin", o) for o in el.findall("origin")]
+            origins += [(f"{kind}[{el.get('name')}].{c.tag}[{k}].origin", o) for c in el if c.tag in ("collision", "visual")
+                        for k, o in enumerate(c.findall("origin"))]
+            for where, o in origins:
+                rpy = _floats(o.get("rpy"))
+                if rpy and max(abs(x) for x in rpy) > _RPY_MAX:
+                    report.findings.append(Finding(
+                        Check.UNITS, Severity.WARNING, f"{f}: {where}",
+                        f'rpy="{o.get("rpy")}": URDF angles are radians, and {max(abs(x) for x in rpy):g} rad is more '
+                        "than a turn (degrees?)", f'rpy="{rad(o.get("rpy"))}" if these are degrees'))
+    for j in root.findall("joint"):
+        lim = j.find("limit")
+        if j.get("type") != "revolute" or lim is None:
+            continue
+        vals = _floats(lim.get("lower")) + _floats(lim.get("upper"))
+        if vals and _LIMIT_MAX < max(abs(x) for x in vals) <= 1000.0:  # beyond 1000: "unbounded" (1e16), not degrees
+            report.findings.append(Finding(
+                Check.UNITS, Severity.WARNING, f"{f}: joint[{j.get('name')}].limit",
+                f"lower={lim.get('lower')} upper={lim.get('upper')}: a revolute joint's limits are radians, and "
+                f"{max(abs(x) for x in vals):g} rad is more than two turns (degrees?)",
+                f'lower="{rad(lim.get("lower"))}" upper="{rad(lim.get("upper"))}" if these are degrees'))
+
+
+def _reach(pin_model) -> float:
+    """The length of the robot's kinematic chain: every joint's and link's offset from its parent, summed."""
+    import pinocchio as pin
+
+    n = sum(float(np.linalg.norm(pin_model.jointPlacements[j].translation)) for j in range(1, pin_model.njoints))
+    return n + sum(float(np.linalg.norm(fr.placement.translation)) for fr in pin_model.frames if fr.type == pin.BODY)
+
+
+def _mesh_scale_checks(model, report: LintReport) -> None:
+    """A collision mesh, as scaled, 30 times the robot's chain or a 3000th of it (a link's mesh is a fraction
+    of the chain; one in millimetres read as metres is 1000 times its size): a warning each."""
+    reach = _reach(model.pin_model)
+    if not reach > 0.0:
+        return
+    for go in model.collision_model.geometryObjects:
+        if not go.meshPath:
+            continue
+        go.geometry.computeLocalAABB()
+        size = float(np.max(go.geometry.aabb_local.max_ - go.geometry.aabb_local.min_))
+        if not (np.isfinite(size) and size > 0.0) or reach / 3000.0 <= size <= 30.0 * reach:
+            continue
+        s = np.asarray(go.meshScale, dtype=float).ravel()
+        big = size > reach
+        hint = " ".join(f"{x * (1e-3 if big else 1e3):g}" for x in s)
+        report.findings.append(Finding(
+            Check.UNITS, Severity.WARNING, f"mesh[{go.name}]",
+            f"{Path(go.meshPath).name} with scale=\"{' '.join(f'{x:g}' for x in s)}\" is {size:.4g} m across, "
+            f"against a kinematic chain of {reach:.3g} m: a mesh in other units than its scale assumes?",
+            f'scale="{hint}" if the mesh is ' + ("in millimetres" if big else "already in metres")))
 
 
 def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport, partial: bool = False) -> None:
@@ -423,6 +501,7 @@ def check_model_files(target, *, n_configs: int = 200, seed: int = 0, permanent_
     if model is not None:
         if model.srdf is not None:
             _certificate_checks(model, report)
+        _mesh_scale_checks(model, report)
         _collision_checks(model, report, n_configs, seed, permanent_fraction)
         report.summary = (f"{model.collision_model.ngeoms} geometries, {len(model.pairs)} active pairs, "
                           f"{n_configs} random configurations")
