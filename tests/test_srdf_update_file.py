@@ -52,3 +52,20 @@ def test_update_drops_the_pairs_of_a_renamed_link_and_says_so(two):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         armguard.load_model(urdf)  # the file it wrote loads
+
+
+def test_update_keeps_a_hand_written_files_comments_once(two):
+    """A vendor's header comment before ``<robot>`` was dropped (ElementTree keeps no comment outside the
+    root); a comment inside it was kept.  Both are kept, and a second update does not repeat them."""
+    urdf, srdf = two
+    srdf.write_text('<?xml version="1.0"?>\n<!-- TWO SRDF\n  by hand -->\n<robot name="two">\n'
+                    '  <!-- the base and l2 cannot meet -->\n'
+                    '  <group name="arm"><chain base_link="base" tip_link="l2"/></group>\n</robot>\n')
+    for _ in range(2):
+        r = CliRunner().invoke(main, ["-q", "srdf", str(urdf), "--out", str(srdf), "--update"])
+        assert r.exit_code == 0, r.output
+        text = srdf.read_text()
+        assert text.count("TWO SRDF\n  by hand") == 1 and text.count("the base and l2 cannot meet") == 1, text
+        assert text.count('<group name="arm">') == 1
+    m = armguard.load_model(urdf, srdf=srdf)
+    assert m.srdf.groups["arm"].chains == (("base", "l2"),)

@@ -70,9 +70,11 @@ def other_elements(path, searched=None) -> list:
     ``armguard srdf --update`` to keep.  ``searched``: the matrix's pairs (frozensets of two link
     names); a ``<disable_collisions>`` of any other pair (two static bodies, ``reason="Static"``; a
     link against an obstacle, a built-in's ``reason="Seed"``) is not the matrix's to decide and is
-    kept too.  A file that does not parse is a located error."""
-    out = []
-    for el in _parse(path, "the SRDF"):
+    kept too.  Comments before ``<robot>`` (a vendor's header) are kept as its first children: ElementTree
+    keeps no comment outside the root.  A file that does not parse is a located error."""
+    root = _parse(path, "the SRDF")
+    out = [ET.Comment(c) for c in _prolog_comments(path)]
+    for el in root:
         if el.tag == "disable_collisions":
             if searched is None or frozenset((el.get("link1", ""), el.get("link2", ""))) in searched:
                 continue
@@ -81,6 +83,14 @@ def other_elements(path, searched=None) -> list:
         el.tail = None
         out.append(el)
     return out
+
+
+def _prolog_comments(path) -> list:
+    """The text of each comment before the root element of the (parsed, so well-formed) XML file at ``path``."""
+    text = Path(path).read_text(encoding="utf-8", errors="replace")
+    head = re.sub(r"<!--.*?-->", lambda m: " " * len(m[0]), text, flags=re.S)
+    start = re.search(r"<[A-Za-z_]", head)
+    return re.findall(r"<!--(.*?)-->", text[:start.start() if start else 0], flags=re.S)
 
 
 def read_previous(path) -> dict:
