@@ -231,3 +231,30 @@ def test_save_lists_no_enabled_pair_of_a_removed_body(tmp_path):
     s.remove_body("table")
     back = load_scene(save_scene(s, tmp_path / "rb.yaml"))
     assert "table" not in back.bodies and _owner_pairs(back) == _owner_pairs(s)
+
+
+def test_a_project_folder_saved_and_moved_whole_loads_back(tmp_path):
+    """URDF and SRDF paths were saved absolute: a cell folder copied to another machine or renamed failed
+    with "URDF file not found".  Files inside the saved file's folder are now relative to it; a
+    package's URDF outside it stays absolute."""
+    import shutil
+
+    urdf, srdf = public_robot_files("ur5")
+    cell = tmp_path / "cell"
+    (cell / "robots").mkdir(parents=True)
+    (cell / "robots" / "ur5.urdf").write_text(urdf.read_text().replace(
+        "package://example-robot-data/robots/ur_description/", f"{urdf.parent.parent.as_posix()}/"))
+    shutil.copy(srdf, cell / "robots" / "ur5.srdf")
+    (cell / "cell.yaml").write_text(yaml.safe_dump({"armguard_scene": 1, "name": "cell", "robots": [
+        {"name": "ur5", "urdf": "robots/ur5.urdf", "srdf": "robots/ur5.srdf"},
+        {"name": "other", "urdf": str(urdf), "srdf": "none", "mount": {"xyz": [1.5, 0, 0]}}]}))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s = load_scene(cell / "cell.yaml")
+        saved = yaml.safe_load(save_scene(s, cell / "saved.yaml").read_text())
+        assert [(r["urdf"], r.get("srdf")) for r in saved["robots"]] == [("robots/ur5.urdf", "robots/ur5.srdf"),
+                                                                         (str(urdf), "none")]
+        moved = tmp_path / "moved"
+        shutil.move(cell, moved)
+        back = load_scene(moved / "saved.yaml")
+    assert back.joint_names == s.joint_names and _owner_pairs(back) == _owner_pairs(s)

@@ -8,6 +8,7 @@ tests.  Frames are flattened into the world frame.
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -192,10 +193,26 @@ def _motion(c) -> dict:
     return {"goal": _l(c.goal)}
 
 
+def _portable(d: dict, folder: Path) -> dict:
+    """``d`` with each robot's URDF and SRDF path inside ``folder`` (the saved file's) written relative to it,
+    as a scene file reads it: a project folder moved whole loads again; a file elsewhere (a package's)
+    stays absolute."""
+    base = os.path.abspath(folder)
+    for r in d.get("robots", ()):
+        for key in ("urdf", "srdf"):
+            v = r.get(key)
+            if isinstance(v, str) and os.path.isabs(v):
+                rel = os.path.relpath(v, base)
+                if not rel.startswith(os.pardir):
+                    r[key] = Path(rel).as_posix()
+    return d
+
+
 def save_scene(scene: Scene, path) -> Path:
-    """Write ``scene`` as a YAML scene file at ``path``; returns the path.  Loads back with ``load_scene``."""
+    """Write ``scene`` as a YAML scene file at ``path``; returns the path.  Loads back with ``load_scene``.
+    URDF and SRDF files inside the file's folder are named relative to it, others by absolute path."""
     path = Path(path)
-    text = yaml.safe_dump(scene_to_dict(scene), sort_keys=False, default_flow_style=None, width=120)
+    text = yaml.safe_dump(_portable(scene_to_dict(scene), path.parent), sort_keys=False, default_flow_style=None, width=120)
     from .._io import atomic_write
 
     return atomic_write(path, f"# armguard scene file, written by save_scene (SI units)\n{text}", parents=True)  # whole or not at all
