@@ -255,6 +255,33 @@ def test_a_checker_of_a_model_whose_scene_was_edited_says_so():
     assert len(edited.pairs) > len(m.pairs) and len(new.pair_distances(edited.random_q(1, 0)[0]).distance) == len(edited.pairs)
 
 
+def test_a_detector_verifier_or_verification_of_a_model_whose_scene_was_edited_says_so():
+    """A sphere added to ``model.scene`` around the tool: ``verify(model, ...)`` said SAFE, a Verifier's edge
+    CLEAR and a Detector's check missed it, without a word (a checker warned).  Each answers for the Model
+    as made, as documented, and now says so; on the scene they see the sphere."""
+    from armguard import ArmguardWarning
+    from armguard.verify import Verifier
+
+    m = armguard.load_model("ur5")
+    qs = m.scene_q(m.neutral())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ArmguardWarning)
+        armguard.Detector(m), Verifier(m)  # nothing edited: no warning
+    tip = m.link_poses(qs)["ur5"][-1][:3, 3]
+    m.scene.add_body("blob", [Sphere(tip, 0.1)])
+    still = _still(m, m.neutral())
+    with pytest.warns(ArmguardWarning, match=r"this verification answers for the Model as made"):
+        assert armguard.verify(m, still).safe
+    with pytest.warns(ArmguardWarning, match=r"this Verifier answers for the Model as made"):
+        assert Verifier(m).check_edges(qs, qs).code[0] == 0
+    with pytest.warns(ArmguardWarning, match=r"this Detector answers for the Model as made"):
+        assert armguard.Detector(m).check(qs).status.value != "collision"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ArmguardWarning)
+        assert not armguard.verify(m.scene, still).safe
+        assert armguard.Detector(m.scene).check(qs).status.value == "collision"
+
+
 def _still(model, q):
     """A two-knot trajectory of the model's robot standing at ``q`` (Pinocchio's order)."""
     from armguard.kinematics import Trajectory

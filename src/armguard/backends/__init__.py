@@ -182,11 +182,12 @@ def require_pairs(model) -> None:
 def checker(model, backend: str | None = None, options: Mapping | None = None, *, config=None) -> Checker:
     """The Checker of ``backend`` (see :func:`resolve`) for ``model`` (a Model or anything ``load_model`` takes)."""
     from ..model import Model, load_model
+    from ..model._entry import warn_edited
 
     if not isinstance(model, Model):
         model = load_model(model)
-    elif not model.is_model_of(model.scene):
-        _warn_edited(model)
+    else:
+        warn_edited(model, "checker")
     require_pairs(model)
     name, opts = resolve(backend, options, config=config)
     try:
@@ -198,20 +199,6 @@ def checker(model, backend: str | None = None, options: Mapping | None = None, *
         if source is None or isinstance(exc.__cause__, ImportError):  # a failed import is no option's fault
             raise
         raise BackendError(f"{source}: [backend]: {exc}") from None
-
-
-def _warn_edited(model) -> None:
-    """``model.scene`` edited after the Model was made (``model.scene.add_body(...)``): a Verifier or Detector
-    built on that scene follows the edit, a Checker of the Model does not (a Model is fixed when made).
-    Said, so that the two worlds are not mixed unknowingly."""
-    import warnings
-
-    from .._errors import ArmguardWarning
-
-    warnings.warn(f"model {model.name!r}: its scene was edited after the Model was made (a body, payload, filter or "
-                  "base changed); this checker answers for the Model as made, without the edit. The Model of the "
-                  "edited scene is armguard.model.model_of(model.scene); a Model edits itself with model.with_body(...) "
-                  "and the other with_* methods", ArmguardWarning, stacklevel=3)
 
 
 def _options_file(name: str, options, config) -> str | None:

@@ -104,7 +104,7 @@ def load_inputs(scene, *, terrain=None) -> ConsoleInputs:
     a built-in name, a scene, model or cell file) and that a ``terrain`` file exists.  No kernel is
     compiled here, so ``armguard console`` refuses a mistyped path at once, before it warms the
     kernels up, with the loaders' own message (ArmguardError)."""
-    scene = scene_of(scene)  # a Model: its scene
+    scene = scene_of(scene, "console")  # a Model: its scene
     model, cell, source = None, None, None
     if isinstance(scene, (str, Path)):
         from ..program._format import is_cell_file
@@ -155,7 +155,7 @@ def serve(scene, *, host: str = "127.0.0.1", port: int = 8080, threshold: float 
     and ``uncertain`` as :func:`make_state`.  With ``block`` it serves until interrupted;
     otherwise it returns the started :class:`ConsoleApp`.
     """
-    scene = scene_of(scene)  # a Model: its scene
+    scene = scene_of(scene, "console")  # a Model: its scene
     name = scene
     app = ConsoleApp(make_state(scene, threshold=threshold, terrain=terrain, uncertain=uncertain),
                      host=host, port=port).start()

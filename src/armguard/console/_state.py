@@ -137,7 +137,7 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
 
     def __init__(self, scene, *, threshold: float = DEFAULT_THRESHOLD, stopping_distance: float = 0.0,
                  tol: Tolerances = DEFAULT_TOLERANCES, model=None) -> None:
-        scene = scene_of(scene)  # a Model: its scene
+        scene = scene_of(scene, "console")  # a Model: its scene
         if not scene.robots:
             raise ConsoleInputError(f"scene {scene.name!r} has no robot to drive")
         self._lock = threading.RLock()

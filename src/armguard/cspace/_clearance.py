@@ -82,7 +82,7 @@ def pick_robot(scene, robot: str | None) -> str:
 
 def map_links(scene, robot: str | None, joints=None, links=None, tol: Tolerances = DEFAULT_TOLERANCES) -> MapLinks:
     """Pick and check the mapped links of ``robot`` (see the module docstring)."""
-    scene = scene_of(scene)  # a Model: its scene
+    scene = scene_of(scene, "map")  # a Model: its scene
     from ..verify._oracle import ClearanceModel
 
     robot = pick_robot(scene, robot)

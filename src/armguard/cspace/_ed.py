@@ -60,7 +60,7 @@ class EdConstant:
 
 def ed_constant(scene, robot: str | None = None) -> EdConstant:
     """Hermes eq. (4-5)'s constant for ``robot`` of ``scene`` (see the module docstring)."""
-    scene = scene_of(scene)  # a Model: its scene
+    scene = scene_of(scene, "map")  # a Model: its scene
     robot = pick_robot(scene, robot)
     rob = scene.robots[robot]
     moving = [j for j in rob.joints if j.joint_type.value != "fixed"]

@@ -34,6 +34,9 @@ def scene_and_model(scene_or_model, model=None) -> tuple:
     None), or a :class:`armguard.Model`: a scene whose Model it is (``Model.scene_for``: its own
     while nothing changed there) and the Model itself (``armguard.Detector(model)``)."""
     if hasattr(scene_or_model, "pin_model") and hasattr(scene_or_model, "scene"):
+        from ..model._entry import warn_edited
+
+        warn_edited(scene_or_model, "Detector", stacklevel=4)
         return scene_or_model.scene_for(), scene_or_model if model is None else model
     if not hasattr(scene_or_model, "robots"):  # a name or None was an AttributeError ('str' has no 'robots')
         hint = f" (armguard.load_model({scene_or_model!r}))" if isinstance(scene_or_model, str) else ""

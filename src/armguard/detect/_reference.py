@@ -51,7 +51,7 @@ def _wall_distance(shape, lo, hi) -> float:
 def check_reference(scene, q, threshold: float, *, stopping_distance: float = 0.0, active: str | None = None,
                     tol=DEFAULT_TOLERANCES) -> ReferenceResult:
     """All pairs of ``scene`` at ``q`` by brute force; see the module docstring."""
-    scene = scene_of(scene)  # a Model: its scene
+    scene = scene_of(scene, "check")  # a Model: its scene
     from ..geometry import distance
 
     items = scene.shapes_at(q)

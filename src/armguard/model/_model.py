@@ -15,21 +15,12 @@ import numpy as np
 from .._errors import DetectionError, KinematicsError
 from .._values import refuse_complex_or_bool
 from .._tolerance import DEFAULT_TOLERANCES
+from ._entry import scene_of  # re-exported: it was defined here
 
 __all__ = ["Model", "GeometryPairs", "WORKSPACE", "file_sha256", "scene_of"]
 
 WORKSPACE = "workspace"
 """The name of side B of a pair measured against the workspace box's walls (no GeometryObject)."""
-
-
-def scene_of(scene_or_model):
-    """The Scene of an entry point's first argument (every function and class that takes a scene
-    takes a Model as well): a Scene as given; for a :class:`Model`, a scene whose Model it is
-    (:meth:`Model.scene_for`): a copy of the system the Model holds, made once, so that what is built
-    on a Model answers for that Model whatever ``model.scene`` does later."""
-    if hasattr(scene_or_model, "pin_model") and hasattr(scene_or_model, "collision_model"):
-        return scene_or_model.scene_for()
-    return scene_or_model
 
 
 _BOUND_LOCK = threading.Lock()  # Model.scene_for: one copy per Model, whichever thread asks first

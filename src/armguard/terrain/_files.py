@@ -206,7 +206,7 @@ def verify_items(scene, items, terrain_file, *, robot=None, **kwargs) -> list:
     """:func:`verify_with_terrain` of every ``(name, trajectory)`` of ``items`` (serially), the terrain
     :func:`load_terrain` of ``terrain_file`` under each trajectory's robot; ``kwargs`` as
     :func:`armguard.verify` takes them (the CLI's)."""
-    scene = scene_of(scene)  # a Model: its scene
+    scene = scene_of(scene, "verification")  # a Model: its scene
     from ._guard import TerrainGuard
     from ._sweep import verify_with_terrain
 

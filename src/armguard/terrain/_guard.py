@@ -194,7 +194,7 @@ class TerrainGuard:
                  tol: Tolerances = DEFAULT_TOLERANCES) -> None:
         from ..verify._motion import chain_bounds, shape_radius_about
 
-        scene = scene_of(model_or_scene)
+        scene = scene_of(model_or_scene, "Guard")
         self._kin = kinematics_of(model_or_scene)  # the links move by the Model's pin_model
         if isinstance(terrain, ElevationMap):
             terrain = TerrainPyramid(terrain, tol=tol)

@@ -252,7 +252,7 @@ def verify_with_terrain(scene, trajectory, terrain, *, unknown_margin: float | N
     clearance (capped at the sweep's reach; NaN at the scene check's times and vice versa);
     ``min_clearance`` / its lower bound over both; ``reason`` says what the terrain sweep found.
     """
-    scene = scene_of(scene)  # a Model: its scene
+    scene = scene_of(scene, "verification")  # a Model: its scene
     from ..verify import verify
 
     scene = getattr(scene, "scene", scene)

@@ -546,7 +546,7 @@ def verify_with_confidence(scene, trajectory, placements, confidence: float = 0.
     A robot-base placement needs a scene with one robot (another robot's links would have to
     grow too): otherwise UncertaintyError.
     """
-    scene = scene_of(scene)  # a Model: its scene
+    scene = scene_of(scene, "verification")  # a Model: its scene
     from ..verify import verify
 
     _confidence(confidence)

@@ -178,7 +178,7 @@ class Guard(FollowsScene):
     def __init__(self, scene, *, stopping_distance=0.0, horizon_s: float = 0.5, period_s: float = 0.01,
                  robot: str | None = None, mode: GuardMode = GuardMode.AUTOMATIC, payload_mass: float = 0.0,
                  q_others=None, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES, avoidance=None) -> None:
-        scene = scene_of(scene)  # a Model: its scene
+        scene = scene_of(scene, "Guard")  # a Model: its scene
         self.scene = scene
         self.avoidance = avoidance
         self.tol = tol

@@ -65,7 +65,7 @@ def verify_many(scene, trajectories, *, workers: int | None = None, scheduler: s
     Results are identical to the serial run's (but for ``elapsed_s``): each worker builds the
     same :class:`Verifier` from the same scene.
     """
-    scene = scene_of(scene)  # a Model: its scene
+    scene = scene_of(scene, "verification")  # a Model: its scene
     items = _named(trajectories)
     if workers is not None and scheduler is not None:
         raise VerificationError("give workers (a new LocalCluster) or scheduler (an existing cluster), not both")

@@ -73,7 +73,7 @@ class ClearanceModel:
     def __init__(self, scene, *, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES, backend: str | None = None,
                  backend_options=None) -> None:
         kin = kinematics_of(scene)  # what moves the links: the Model's pin_model (None without robots)
-        scene = scene_of(scene)  # a Model: its scene
+        scene = scene_of(scene, "ClearanceModel")  # a Model: its scene
         if source not in ("auto", "detector", "reference"):
             raise VerificationError(f"source: expected one of 'auto', 'detector', 'reference', got {source!r}")
         self.scene = scene

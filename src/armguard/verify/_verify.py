@@ -87,7 +87,7 @@ class Verifier(FollowsScene):
 
     def __init__(self, scene, *, robot: str | None = None, q_others=None, source: str = "auto", tol: Tolerances = DEFAULT_TOLERANCES,
                  backend: str | None = None, backend_options=None) -> None:
-        scene = scene_of(scene)  # a Model: its scene
+        scene = scene_of(scene, "Verifier")  # a Model: its scene
         self.scene = scene
         self.tol = tol
         self._source = source
@@ -586,7 +586,7 @@ def verify(scene, trajectory, *, stopping_distance=0.0, method: str = "certified
     VerificationReport
         SAFE, COLLISION (with the first collision) or INCOMPLETE (never read as safe).
     """
-    scene = scene_of(scene)  # a Model: its scene
+    scene = scene_of(scene, "verification")  # a Model: its scene
     v = Verifier(scene, robot=robot, q_others=q_others, source=source, tol=tol, backend=backend,
                  backend_options=backend_options)
     return v.verify(trajectory, stopping_distance=stopping_distance, method=method, frequency=frequency,

@@ -1,0 +1,35 @@
+"""What an entry point does with a Model it is given: :func:`scene_of` (the scene it answers for) and
+:func:`warn_edited` (said when ``model.scene`` was edited after the Model was made: the edit is not
+in what is built on the Model)."""
+
+from __future__ import annotations
+
+import warnings
+
+__all__ = ["scene_of", "warn_edited"]
+
+
+def warn_edited(model, what: str, stacklevel: int = 3) -> None:
+    """Warn, when ``model.scene`` was edited after ``model`` was made (``model.scene.add_body(...)``), that
+    ``what`` (a checker, a Detector, a Verifier...) answers for the Model as made, without the edit: a
+    new obstacle added to ``model.scene`` is not seen by it."""
+    if model.is_model_of(model.scene):
+        return
+    from .._errors import ArmguardWarning
+
+    warnings.warn(f"model {model.name!r}: its scene was edited after the Model was made (a body, payload, filter or "
+                  f"base changed); this {what} answers for the Model as made, without the edit. The Model of the "
+                  "edited scene is armguard.model.model_of(model.scene) (or give the scene itself); a Model edits "
+                  "itself with model.with_body(...) and the other with_* methods", ArmguardWarning, stacklevel=stacklevel + 1)
+
+
+def scene_of(scene_or_model, what: str = "result"):
+    """The Scene of an entry point's first argument (every function and class that takes a scene
+    takes a Model as well): a Scene as given; for a :class:`Model`, a scene whose Model it is
+    (:meth:`Model.scene_for`): a copy of the system the Model holds, made once, so that what is built
+    on a Model answers for that Model whatever ``model.scene`` does later (said, with
+    :func:`warn_edited`, when ``model.scene`` was edited: ``what`` names what is built)."""
+    if hasattr(scene_or_model, "pin_model") and hasattr(scene_or_model, "collision_model"):
+        warn_edited(scene_or_model, what, stacklevel=3)
+        return scene_or_model.scene_for()
+    return scene_or_model
