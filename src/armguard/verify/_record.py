@@ -43,6 +43,7 @@ class _Run:
         cap = max(2, int(capacity))
         self.n = 0
         self.reused = 0  # rows :meth:`put` took from an earlier evaluation (not evaluations of this record)
+        self.pieces = 1  # segments per segment of the trajectory as given (a Subdivided's n): seg // pieces is its index
         self.D = np.empty((cap, P))
         self.Q = np.empty((cap, k1 - k0))
         self.seg = np.empty(cap, dtype=np.int64)

@@ -72,7 +72,8 @@ class Collision:
     objects : tuple[str, str]
         The kinds of object involved, Hermes's "arm, obstacle, payload".
     segment : int
-        Index of the trajectory segment.
+        Index of the trajectory segment (of the trajectory as given: a :class:`Subdivided` one's pieces are
+        counted in the segment they divide).
     stopping_distance : float, m
         The stopping distance in force then (the segment's, from its peak speed; 0 at rest).
     kind : CollisionKind

@@ -33,6 +33,7 @@ from ._record import _Run
 from ._report import (Clearance, ClearanceProfile, Collision, CollisionKind, MethodDetails, VerificationReport,
                       VerificationStatus, speeds_over_limits)
 from ._stopping import StoppingDistance, check_stopping_distance
+from ._subdivide import Subdivided
 from ._timelaw import finite_array as _finite_array
 from ._timelaw import profile_times, segment_times, segments_of
 from ._trajectory_file import trajectory_of, within_limits
@@ -131,8 +132,6 @@ class Verifier(FollowsScene):
         ``q_others[r]``); ``held`` those joints and values."""
         from ..kinematics import Trajectory
 
-        from ._subdivide import Subdivided
-
         rob = self.scene.robots[r]
         if tuple(trajectory.joint_names) == tuple(rob.joint_names):
             return trajectory, {}
@@ -208,8 +207,9 @@ class Verifier(FollowsScene):
         own = getattr(trajectory, "name", None)
         if own:
             return str(own)
+        inner = trajectory._t if isinstance(trajectory, Subdivided) else trajectory
         for key, canned in getattr(self.scene, "trajectories", {}).items():
-            if canned is trajectory:
+            if canned is inner:
                 return str(key)
         return "trajectory"
 
@@ -269,6 +269,7 @@ class Verifier(FollowsScene):
         model, base_q = st.model, st.base
         rname = self._robot_of(trajectory, robot)
         named = self._trajectory_name(trajectory) if name is None else name
+        pieces = trajectory.n if isinstance(trajectory, Subdivided) else 1
         trajectory, held = self._over_robot(trajectory, rname, base_q)
         base, k0, k1 = self._flat(rname, base_q)
         segs = segments_of(trajectory)
@@ -279,6 +280,7 @@ class Verifier(FollowsScene):
         else:
             margins = np.full(len(segs), sd)
         run = _Run(model, base, k0, k1, rname, capacity=2 * len(segs) + 2)
+        run.pieces = pieces  # segment numbers are the given trajectory's
         if not run.moving.any():
             raise VerificationError(f"robot {rname!r} has no pair to check (no shapes, or every pair with it disabled)")
         if method == "certified":
@@ -326,7 +328,7 @@ class Verifier(FollowsScene):
             while True:
                 g, i_min, step, lb = advance_step(run.D[row], run.D[prev], rates, m, L, prev != row)
                 if g != g:
-                    raise VerificationError(f"a clearance in segment {si} is NaN: no verdict")
+                    raise VerificationError(f"a clearance in segment {si // run.pieces} is NaN: no verdict")
                 if prev != row:
                     lower = min(lower, lb)
                     intervals += 1
@@ -336,9 +338,9 @@ class Verifier(FollowsScene):
                     break
                 s_next = min(1.0, s + step)
                 if not s_next > s:
-                    return VerificationStatus.INCOMPLETE, f"no progress in segment {si} (clearance {g:.3g} m)", lower, intervals, (si, s, None)
+                    return VerificationStatus.INCOMPLETE, f"no progress in segment {si // run.pieces} (clearance {g:.3g} m)", lower, intervals, (si, s, None)
                 if run.n >= budget:
-                    return VerificationStatus.INCOMPLETE, f"evaluation budget ({budget}) spent in segment {si}", lower, intervals, (si, s, None)
+                    return VerificationStatus.INCOMPLETE, f"evaluation budget ({budget}) spent in segment {si // run.pieces}", lower, intervals, (si, s, None)
                 prev, L = row, s_next - s
                 row = run.eval(si, s_next, q1 if s_next == 1.0 else q0 + s_next * dq)
                 s = s_next
@@ -398,7 +400,7 @@ class Verifier(FollowsScene):
             d = run.D[row]
             gap = d - margins[si]
             if np.isnan(gap).any():
-                raise VerificationError(f"a clearance in segment {si} is NaN: no verdict")
+                raise VerificationError(f"a clearance in segment {si // run.pieces} is NaN: no verdict")
             if float(gap.min()) <= 0.0:
                 return VerificationStatus.COLLISION, "", -math.inf, 0, (si, s, int(np.argmin(gap))), ed
         return VerificationStatus.SAFE, "", -math.inf, 0, None, ed
@@ -516,7 +518,7 @@ class Verifier(FollowsScene):
             category=model.category[pair],
             check=check,
             objects=_OBJECTS[check],
-            segment=int(si),
+            segment=int(si) // run.pieces,
             stopping_distance=margin,
             kind=CollisionKind.STOPPING_DISTANCE if d > contact and margin > 0.0 else CollisionKind.CONTACT,
             fixed=run.model.still(a, b),
