@@ -295,3 +295,20 @@ def test_cli_check_and_verify_with_terrain():
     assert r.exit_code == 0, r.output
     r = run.invoke(main, ["verify", "rover", "place_instrument", "--terrain", ROCKY])
     assert r.exit_code == 1 and "terrain" in r.output
+
+
+def test_a_collision_names_the_seen_cell_that_decided_it(model):
+    """rocky's map, the turret low: a seen cell 36 mm deep makes the COLLISION, beside an unseen cell whose
+    filled column is 60 mm deep.  The report (and the CLI's terrain row) named only the unseen cell, as
+    if the collision were with ground nobody saw; it now names the seen one, and ``unknown_distance``
+    keeps the other."""
+    g = TerrainGuard(model, load_terrain("rocky", model))  # as the CLI's --terrain rocky (a Model raised AttributeError)
+    r = g.check(np.deg2rad([0, 30, 20, 30, 0]))
+    assert r.status is Status.COLLISION and r.unknown_distance < r.known_distance < 0  # the unseen one deeper
+    assert not r.unknown and r.distance == r.known_distance and r.pair().feature.kind == "cell"
+    assert abs(np.linalg.norm(r.p_WA - r.p_WB) - abs(r.distance)) < 1e-7
+    out = CliRunner().invoke(armguard.cli.main, ["-q", "check", "rover", "--q", "0,30,20,30,0", "--deg", "--terrain",
+                                                 "rocky", "--json"])
+    d = json.loads(out.output)
+    rows = [p for p in d["within_threshold"] if p["category"] == "terrain"]
+    assert rows and all("unseen" not in json.dumps(p) for p in rows), rows

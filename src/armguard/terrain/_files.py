@@ -103,8 +103,10 @@ def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | No
     :class:`~armguard._errors.TerrainFileError` naming the file and the array.
 
     ``path``: a file, or a shipped terrain's name (``"rocky"``: :func:`terrain_path`); a path that
-    is neither raises a TerrainError naming it and listing the shipped names."""
+    is neither raises a TerrainError naming it and listing the shipped names.  ``scene`` may be a Model."""
     p = terrain_path(path)
+    if scene is not None:
+        scene = scene_of(scene, "terrain map")  # a Model: its scene (it had no flat_q: AttributeError)
     origin = None
     heights = None
     if cell is not None:  # True is not 1 m, nor "0.1" 10 cm

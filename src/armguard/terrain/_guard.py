@@ -88,17 +88,18 @@ class TerrainReport:
         map) within ``threshold + unknown_margin``; WARNING: a known column within ``threshold``;
         CLEAR: every link farther than the threshold from every column.
     distance : float, m
-        The least exact signed distance between a link shape and a terrain column (known or
-        filled); ``inf`` when every link is farther than ``reach`` (then it is only known to be
-        more than ``reach``).
+        The exact signed distance of the pair that decided the status, the one ``link``, ``cell`` and the
+        witnesses name: the nearest known column for COLLISION and WARNING, the nearest unknown one
+        for INCOMPLETE, else the nearest of all (``min(known_distance, unknown_distance)``); ``inf``
+        when every link is farther than ``reach`` (then it is only known to be more than ``reach``).
     known_distance, unknown_distance : float, m
         The same over the known columns only / over the unknown columns and the off-map slabs.
     link : str | None
-        Owner name of the nearest link (``"arm/link3"``).
+        Owner name of that pair's link (``"arm/link3"``).
     cell : (int, int) | None
-        ``(row, col)`` of the nearest column (None off the map or beyond ``reach``).
+        ``(row, col)`` of that pair's column (None off the map or beyond ``reach``).
     unknown : bool
-        The nearest column is unknown (filled, or off the map).
+        That column is unknown (filled, or off the map).
     p_WA, p_WB : (3,) float64, m, or None
         Witness points on the link and on the column.
     link_distance : dict[str, float], m
@@ -396,11 +397,14 @@ class TerrainGuard:
             per[o] = min(per.get(o, math.inf), float(a), float(b))
         link = cell = pA = pB = None
         unk = False
-        d = min(dk, du)
+        # the pair that decided: a known column for COLLISION and WARNING, an unknown one for INCOMPLETE (a
+        # deeper unknown column beside a colliding known one named the unseen cell as the collision)
+        side = {Status.COLLISION: known, Status.WARNING: known, Status.INCOMPLETE: unknown}.get(status)
+        d = min(dk, du) if side is None else float(np.min(side))
         if math.isfinite(d):
-            both = np.minimum(known, unknown)
+            both = np.minimum(known, unknown) if side is None else side
             k = int(np.argmin(both))
-            u = int(unknown[k] < known[k])
+            u = int(unknown[k] < known[k]) if side is None else int(side is unknown)
             unk = bool(u)
             rc = cell_ku[u, k]
             cell = None if rc[0] < 0 else (int(rc[0]), int(rc[1]))
