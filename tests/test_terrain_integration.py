@@ -312,3 +312,15 @@ def test_a_collision_names_the_seen_cell_that_decided_it(model):
     d = json.loads(out.output)
     rows = [p for p in d["within_threshold"] if p["category"] == "terrain"]
     assert rows and all("unseen" not in json.dumps(p) for p in rows), rows
+
+
+def test_a_terrain_collisions_headline_is_the_contact_not_the_unseen_cell_before_it(model):
+    """rover's place_instrument on rocky: the headline read "COLLISION -- terrain: arm/link3 within 50 mm of
+    unseen cell (32, 42) at t = 0.8198 s", the unknown-terrain note, while the contact (with a seen cell)
+    is at 1.1244 s: an operator was told of the wrong time and ground."""
+    rep = verify_with_terrain(model, model.trajectories["place_instrument"], load_terrain("rocky", model))
+    c = rep.first_collision
+    assert rep.status is VerificationStatus.COLLISION and c.feature.known
+    assert rep.reason.startswith(f"contact with seen terrain at t = {c.time:.4f} s (before it, ") and "unseen cell" in rep.reason
+    t_note = float(rep.reason.split(" at t = ")[2].split(" s;")[0])
+    assert t_note < c.time

@@ -274,7 +274,13 @@ def verify_with_terrain(scene, trajectory, terrain, *, unknown_margin: float | N
         status = S.INCOMPLETE
     else:
         status = S.SAFE
-    reason = "; ".join(x for x in (rep.reason, sw.reason) if x)
+    note = sw.reason
+    if first is sw.first_contact and first is not None and note.startswith("terrain: ") and "unknown terrain" in note:
+        # the sweep's note of unseen terrain (before its first contact) is not the collision: the headline said
+        # "COLLISION - terrain: ... unseen cell ... at t = 0.82 s" for a contact with a seen cell at 1.12 s
+        note = (f"contact with seen terrain at t = {first.time:.4f} s (before it, "
+                + note[len("terrain: "):].replace(" (unknown terrain within", "; unknown terrain within", 1))
+    reason = "; ".join(x for x in (rep.reason, note) if x)
     min_at = rep.min_clearance_at
     if sw.min_clearance < rep.min_clearance:
         k = sw.min_clearance_time
