@@ -86,7 +86,7 @@ def test_a_joint_subset_and_every_robot(tmp_path):
     np.savez(tmp_path / "group.npz", Q0=Q[:10], Q1=Q[10:], joint_names=np.array("arm"))  # an SRDF group
     res = _run("edges", "panda", str(tmp_path / "group.npz"), "--out", str(tmp_path / "g.npz"))
     assert res.exit_code == (ExitCode.OK if ref.clear.all() else ExitCode.UNSAFE), res.output
-    assert "held at home" in res.output
+    assert "held still" in res.output
     with np.load(tmp_path / "g.npz") as f:
         assert list(f["joint_names"]) == arm and len(f["held_names"]) == 1
         np.testing.assert_array_equal(f["code"], ref.code)

@@ -49,7 +49,7 @@ def test_verify_a_subset_equals_verifying_the_held_trajectory(arm, method):
     ref = armguard.verify(arm.scene, by_hand, method=method)
     assert rep.held_joints == {"j3": -0.8} and ref.held_joints == {}
     assert rep.status == ref.status and rep.min_clearance == ref.min_clearance
-    assert "held at home (not in the trajectory): j3 = -0.8" in rep.summary()
+    assert "held still, not in the trajectory (the Verifier's home, or its q_others): j3 = -0.8" in rep.summary()
     assert rep.to_dict()["held_joints"] == {"j3": -0.8}
     piecewise = armguard.verify(arm.scene, Subdivided(sub, 4), method=method)
     assert piecewise.held_joints == {"j3": -0.8} and piecewise.status == rep.status
@@ -85,10 +85,10 @@ def test_cli_verifies_a_file_over_a_subset(arm, tmp_path):
                     "times: [0.0, 1.0]\nwaypoints:\n  - [0.0, -1.0]\n  - [0.5, 1.0]\n")
     urdf = arm.files[0]
     out = CliRunner().invoke(main, ["verify", str(urdf), str(traj)])
-    assert out.exit_code in (0, 1) and "held at home (not in the trajectory): j3 = -0.8" in out.output, out.output
+    assert out.exit_code in (0, 1) and "held still, not in the trajectory (the Verifier's home, or its q_others): j3 = -0.8" in out.output, out.output
     traj.write_text(traj.read_text().replace("[j2, j1]", "upper"))  # an SRDF group: its joints j1, j2 in that order
     out = CliRunner().invoke(main, ["verify", str(urdf), str(traj)])
-    assert out.exit_code in (0, 1) and "held at home (not in the trajectory): j3 = -0.8" in out.output, out.output
+    assert out.exit_code in (0, 1) and "held still, not in the trajectory (the Verifier's home, or its q_others): j3 = -0.8" in out.output, out.output
     traj.write_text(traj.read_text().replace("upper", "legs"))
     bad = CliRunner().invoke(main, ["verify", str(urdf), str(traj)])
     assert bad.exit_code == 3 and "joint_names" in bad.output and "unknown SRDF group 'legs'" in bad.output, bad.output

@@ -39,3 +39,27 @@ def test_verify_speed_dependent_prints_the_given_segment(tmp_path, puma):
     rep = json.loads((tmp_path / "sd.json").read_text())
     text = json.dumps(rep)
     assert '"segment": 0' in text and '"segment": 1' not in text
+
+
+@pytest.mark.parametrize("d, text", [(2e-6, "2 µm"), (-4.5e-6, "-4.5 µm"), (0.0, "0.00 mm"), (0.01234, "12.34 mm"),
+                                     (-0.0221, "-22.10 mm"), (1e-5, "0.01 mm")])
+def test_a_clearance_under_a_hundredth_of_a_millimetre_prints_in_micrometres(d, text):
+    """A SAFE verdict 2 µm clear printed "minimum clearance 0.00 mm" beside it."""
+    from armguard.verify._report import _mm
+
+    assert _mm(d) == text
+
+
+def test_held_joints_are_not_called_home_when_q_others_holds_them():
+    """A Verifier's ``q_others`` may hold the moving robot's own joints left out of an edge (a gripper open):
+    the summary called the value "home" (0.04 where panda's home is 0.001)."""
+    from armguard.verify import Verifier
+
+    m = armguard.load_model("panda")
+    q = m.scene_q(m.neutral())
+    q2 = q.copy()
+    q2[7] = 0.04
+    e = Verifier(m.scene, q_others={"panda": q2}).check_edges(q[:7], q[:7] + 0.05, joints="arm")
+    assert e.held == {"panda_finger_joint1": 0.04}
+    assert "held at home" not in e.summary() and "held still (the Verifier's home, or its q_others): " \
+        "panda_finger_joint1 = 0.04" in e.summary()

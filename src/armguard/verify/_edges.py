@@ -134,7 +134,7 @@ class EdgeResults:
         med = float(np.median(ev)) if len(ev) else 0.0
         hit = "in collision" if self.margin == 0.0 else f"in collision or within the margin ({self.margin * 1e3:g} mm)"
         who = "every robot (*)" if self.robot == ALL_ROBOTS else repr(self.robot)
-        held = (f"; held at home: {', '.join(f'{j} = {v:g}' for j, v in self.held.items())}" if self.held else "")
+        held = (f"; held still (the Verifier's home, or its q_others): {', '.join(f'{j} = {v:g}' for j, v in self.held.items())}" if self.held else "")
         return (f"{len(self)} edges of {who}: {c['clear']} clear, {c['collision']} {hit}, "
                 f"{c['incomplete']} incomplete (evaluations per edge: median {med:g}, max "
                 f"{int(ev.max()) if len(ev) else 0}; {self.elapsed_s * 1e3:.1f} ms){held}")

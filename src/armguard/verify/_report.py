@@ -171,6 +171,11 @@ class MethodDetails:
     backend: str = ""  # the detector's backend ("analytic", "coal", ...); "" for the reference distances
 
 
+def _mm(d: float) -> str:
+    """A clearance for the summary: mm to 0.01 mm, and µm below 0.01 mm (2 µm beside SAFE read "0.00 mm")."""
+    return f"{d * 1e6:.3g} µm" if 0.0 < abs(d) < 1e-5 else f"{d * 1e3:.2f} mm"
+
+
 def _jsonable(x):
     if is_dataclass(x) and not isinstance(x, type):
         return {f.name: _jsonable(getattr(x, f.name)) for f in fields(x)}
@@ -317,7 +322,7 @@ class VerificationReport:
             lines.append(f"joint {j}: peak speed {peak:.4g} exceeds its max_velocity {lim:.4g} (rad/s or m/s): the robot "
                          "cannot follow this timing (the verdict is for the motion as commanded)")
         if self.held_joints:
-            lines.append("held at home (not in the trajectory): " + ", ".join(f"{j} = {v:.6g}" for j, v in self.held_joints.items()))
+            lines.append("held still, not in the trajectory (the Verifier's home, or its q_others): " + ", ".join(f"{j} = {v:.6g}" for j, v in self.held_joints.items()))
         if d.method == "sampled":
             how = "Ed = v/f" if d.frequency is not None else "the most a clearance can shrink between samples"
             ed_mm = d.discretisation_error * 1e3
@@ -343,9 +348,9 @@ class VerificationReport:
                              "or <disable_collisions reason=\"Static\"/> in the SRDF)")
         m = self.min_clearance_at
         if m is not None:
-            lines.append(f"minimum clearance {m.distance * 1e3:.2f} mm at t = {m.time:.4f} s between {m.a} and {m.b} ({m.category})")
+            lines.append(f"minimum clearance {_mm(m.distance)} at t = {m.time:.4f} s between {m.a} and {m.b} ({m.category})")
         if np.isfinite(self.min_clearance_lower_bound):
-            lines.append(f"proven lower bound on the clearance over the verified path: {self.min_clearance_lower_bound * 1e3:.2f} mm")
+            lines.append(f"proven lower bound on the clearance over the verified path: {_mm(self.min_clearance_lower_bound)}")
         lines.append(f"time taken: {self.elapsed_s * 1e3:.1f} ms")
         return "\n".join(lines)
 

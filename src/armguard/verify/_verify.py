@@ -72,7 +72,8 @@ class Verifier(FollowsScene):
     robot : str | None
         The moving robot (default: the trajectory's ``robot_name``, or the scene's only robot).
     q_others : mapping robot -> (n_joints,) | None
-        Where the other robots stand (default: ``scene.default_q()``).
+        Where the other robots stand, and where the moving robot's joints a trajectory or an edge leaves out
+        are held (default: ``scene.default_q()``).
     source : "auto" | "detector" | "reference"
         Where clearances come from (:class:`ClearanceModel`).
     tol : Tolerances
