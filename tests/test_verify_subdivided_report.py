@@ -63,3 +63,22 @@ def test_held_joints_are_not_called_home_when_q_others_holds_them():
     assert e.held == {"panda_finger_joint1": 0.04}
     assert "held at home" not in e.summary() and "held still (the Verifier's home, or its q_others): " \
         "panda_finger_joint1 = 0.04" in e.summary()
+
+
+def test_a_joint_limit_refusal_shows_the_excess_and_names_float32_rounding():
+    """panda's joint 1 at its upper limit, given as float32 (5e-9 rad past it): the message printed the value and
+    the limit as the same 2.8973."""
+    m = armguard.load_model("panda")
+    c = armguard.checker(m)
+    q = m.neutral()
+    q[0] = m.pin_model.upperPositionLimit[0]
+    assert not c.collides(q[None])[0]  # float64 at the limit: answered
+    with pytest.raises(armguard.JointLimitError) as ei:
+        c.collides(q[None].astype(np.float32))
+    msg = str(ei.value)
+    assert "= 2.8973000049591064 is outside its limits [-2.8973, 2.8973]: 4.96e-09 above the upper (about float32's " \
+           "rounding of the value: clip to the limits, or give float64)" in msg, msg
+    q[0] = 3.0
+    with pytest.raises(armguard.JointLimitError, match=r"= 3 is outside its limits \[-2.8973, 2.8973\]: 0.103 above the "
+                                                       r"upper \(allowance"):
+        c.collides(q[None])

@@ -57,10 +57,16 @@ class JointLimitError(KinematicsError):
     def __init__(self, where: str, joint: str, value: float, lower: float, upper: float, allowance: float) -> None:
         self.where, self.joint, self.value = where, joint, float(value)
         self.lower, self.upper, self.allowance = float(lower), float(upper), float(allowance)
+        excess = self.value - self.upper if self.value > self.upper else self.lower - self.value
+        side = "above the upper" if self.value > self.upper else "below the lower"
+        digits = 9 if f"{self.value:.9g}" not in (f"{self.lower:.9g}", f"{self.upper:.9g}") else 17  # tell them apart
+        f32 = (" (about float32's rounding of the value: clip to the limits, or give float64)"
+               if excess <= 2.0 ** -23 * max(1.0, abs(self.value)) else "")
         super().__init__(
-            f"{where}: joint {joint!r} = {self.value:.9g} is outside its limits [{self.lower:.9g}, {self.upper:.9g}] "
-            f"(allowance Tolerances.joint_limit = {self.allowance:.3g}); no verdict is given outside the limits (the "
-            "URDF's range of motion, within which the Detector's reach lists and motion bounds hold)"
+            f"{where}: joint {joint!r} = {self.value:.{digits}g} is outside its limits [{self.lower:.{digits}g}, "
+            f"{self.upper:.{digits}g}]: {excess:.3g} {side}{f32} (allowance Tolerances.joint_limit = "
+            f"{self.allowance:.3g}); no verdict is given outside the limits (the URDF's range of motion, within which "
+            "the Detector's reach lists and motion bounds hold)"
         )
 
 
