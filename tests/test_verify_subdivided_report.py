@@ -82,3 +82,14 @@ def test_a_joint_limit_refusal_shows_the_excess_and_names_float32_rounding():
     with pytest.raises(armguard.JointLimitError, match=r"= 3 is outside its limits \[-2.8973, 2.8973\]: 0.103 above the "
                                                        r"upper \(allowance"):
         c.collides(q[None])
+
+
+def test_verify_report_dash_writes_the_json_to_stdout_and_the_summary_to_stderr(tmp_path, monkeypatch):
+    """``--report -`` wrote a file named '-' and printed "report: -"."""
+    monkeypatch.chdir(tmp_path)
+    r = CliRunner().invoke(main, ["-q", "verify", "puma560", "pick_and_place", "--report", "-"])
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.stdout)
+    assert doc["status"] == "safe" and doc["trajectory"] == "pick_and_place"
+    assert "verdict: SAFE" in r.stderr and "report:" not in r.stderr
+    assert not (tmp_path / "-").exists()

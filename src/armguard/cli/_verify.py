@@ -71,7 +71,8 @@ def _unique_names(items):
                    "eighth's distance from t = 0).")
 @click.option("--threshold", type=LENGTH, default=None, help="Warning threshold drawn on the plot (m; default 0.05).")
 @click.option("--robot", default=None, help="The moving robot (default: the trajectory's).")
-@click.option("--report", "report_path", type=click.Path(), default=None, help="Write the JSON report here.")
+@click.option("--report", "report_path", type=click.Path(), default=None,
+              help="Write the JSON report here; '-': to standard output (the summaries then go to standard error).")
 @click.option("--plot", "plot_path", type=click.Path(), default=None, help="Write a plot of clearance vs time here (.png, or .pdf, .svg; one file per trajectory, "
               "FILE_<trajectory>.png, when there are several).")
 @click.option("--workers", type=AT_LEAST_ONE, default=None, help="Run on a Dask LocalCluster with N worker processes.")
@@ -96,6 +97,11 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
     from ._demo import verdict_text
 
     console = output_console()
+    to_stdout = report_path == "-"
+    if to_stdout:  # stdout is the JSON alone: the summaries and progress go to stderr
+        from rich.console import Console
+
+        console = Console(stderr=True)
     if frequency is not None and joint_step is not None:  # a usage error here (2), before the work
         raise click.UsageError("give --frequency or --joint-step, not both: --method sampled checks at one or the other")
     if method == "certified" and (frequency is not None or joint_step is not None):
@@ -107,7 +113,7 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
                                "on the cluster")
     if plot_path:
         figure_format(plot_path)  # a format matplotlib cannot write: refused before the work
-    for out in (report_path, plot_path):
+    for out in (None if to_stdout else report_path, plot_path):
         if out:
             check_writable(out)  # a folder that cannot be written: refused before the work, not after it
     sc = load_scene(scene)
@@ -135,10 +141,13 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
         reports = verify_many(sc, items, **kwargs)
     written = []  # the files first: a reader that closes the pipe early (| head) must not cost them
     if report_path:  # an output that cannot be written: OutputError, one line, exit status 3
-        p = Path(report_path)
         doc = reports[0].to_dict() if len(reports) == 1 else [r.to_dict() for r in reports]
-        atomic_write(p, json.dumps(doc, indent=2), parents=True)
-        written.append(f"report: {p}")
+        if to_stdout:
+            click.echo(json.dumps(doc, indent=2))
+        else:
+            p = Path(report_path)
+            atomic_write(p, json.dumps(doc, indent=2), parents=True)
+            written.append(f"report: {p}")
     if plot_path:
         p = Path(plot_path)
         for r in reports:
