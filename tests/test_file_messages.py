@@ -72,3 +72,29 @@ def test_a_misspelt_optional_key_is_told_the_key_it_looks_like(tmp_path):
     assert "bodies[0].catgory (line 6): unknown key (not part of the armguard_scene format; did you mean 'category'?)" in text
     assert "trajectory (line 7): unknown key (not part of the armguard_scene format; did you mean 'trajectories'?)" in text
     assert "zzzz (line 8): unknown key (not part of the armguard_scene format; check the spelling)" in text
+
+
+def test_a_trajectory_file_in_degrees_lists_the_values_outside_and_says_degrees(tmp_path):
+    """puma560 waypoints written in degrees: one value was named (waypoint 1's before waypoint 0's, joint by
+    joint), with no word of degrees, as ``check --q`` and scene files give."""
+    p = tmp_path / "deg.yaml"
+    p.write_text(yaml.safe_dump({"format": "armguard.trajectory", "version": 1, "robot": "puma560",
+                                 "joint_names": ["j1", "j2", "j3", "j4", "j5", "j6"], "times": [0, 2],
+                                 "waypoints": [[0, 45, -135, 0, -45, 0], [30, 70, -170, 0, -75, -150]]},
+                                default_flow_style=None))
+    r = CliRunner().invoke(main, ["-q", "verify", "puma560", str(p)])
+    assert r.exit_code == 3, r.output
+    text = " ".join(r.output.split())
+    assert "waypoints[0][1]" in text and "'j2' = 45 is outside its limits" in text
+    assert "7 more outside: waypoints[0][2] 'j3' = -135; waypoints[0][4] 'j5' = -45; waypoints[1][0] 'j1' = 30" in text
+    assert "these look like degrees" in text
+
+
+def test_a_trajectory_value_just_outside_in_radians_gets_no_degrees_hint(tmp_path):
+    p = tmp_path / "rad.yaml"
+    p.write_text(yaml.safe_dump({"format": "armguard.trajectory", "version": 1, "robot": "puma560",
+                                 "joint_names": ["j1", "j2", "j3", "j4", "j5", "j6"], "times": [0, 2],
+                                 "waypoints": [[0, 0, 0, 0, 0, 0], [0, -1.0, 0, 0, 0, 0]]}, default_flow_style=None))
+    r = CliRunner().invoke(main, ["-q", "verify", "puma560", str(p)])
+    text = " ".join(r.output.split())
+    assert r.exit_code == 3 and "waypoints[1][1]" in text and "more outside" not in text and "degrees" not in text, text

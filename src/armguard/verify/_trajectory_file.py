@@ -54,14 +54,19 @@ def load_trajectory(scene, path):
                     if unknown else f"{twice[0]!r} is named twice")
             raise SceneFileError(file, "joint_names", f"{what}; expected some of its joints {want}")
         slack = DEFAULT_TOLERANCES.joint_limit
-        for j, name in enumerate(names):  # a waypoint outside the limits: its place in the file
-            i = want.index(name)
-            lo, hi = float(robot.lower[i]), float(robot.upper[i])
-            out = np.flatnonzero((traj.waypoints[:, j] < lo - slack) | (traj.waypoints[:, j] > hi + slack))
-            if len(out):
-                k = int(out[0])
-                raise SceneFileError(file, f"waypoints[{k}][{j}]", f"joint {name!r} = {traj.waypoints[k, j]:.10g} "
-                                     f"is outside its limits [{lo:.10g}, {hi:.10g}]")
+        idx = [want.index(n) for n in names]
+        lo, hi = np.asarray(robot.lower, dtype=float)[idx], np.asarray(robot.upper, dtype=float)[idx]
+        W = np.asarray(traj.waypoints, dtype=float)
+        bad = np.argwhere((W < lo - slack) | (W > hi + slack))  # every value outside, waypoint by waypoint
+        if len(bad):
+            k, j = (int(x) for x in bad[0])
+            more = "; ".join(f"waypoints[{a}][{b}] {names[b]!r} = {W[a, b]:.6g}" for a, b in bad[1:6])
+            more = (f"; {len(bad) - 1} more outside: {more}" + ("; ..." if len(bad) > 6 else "")) if len(bad) > 1 else ""
+            rev = [robot.joint_types[i].value != "prismatic" for i in idx]
+            looks_deg = any(rev[b] and abs(W[a, b]) > 2.0 * np.pi for a, b in bad)
+            hint = " (a trajectory file's angles are radians: these look like degrees)" if looks_deg else ""
+            raise SceneFileError(file, f"waypoints[{k}][{j}]", f"joint {names[j]!r} = {W[k, j]:.10g} is outside its "
+                                 f"limits [{lo[j]:.10g}, {hi[j]:.10g}]{more}{hint}")
     return traj
 
 
