@@ -1,12 +1,12 @@
-"""What an entry point does with a Model it is given: :func:`scene_of` (the scene it answers for) and
+"""What an entry point does with what it is given: :func:`scene_of` (the scene a Model answers for),
 :func:`warn_edited` (said when ``model.scene`` was edited after the Model was made: the edit is not
-in what is built on the Model)."""
+in what is built on the Model), :func:`unknown_robots_text` (a configuration mapping that names no robot)."""
 
 from __future__ import annotations
 
 import warnings
 
-__all__ = ["scene_of", "warn_edited"]
+__all__ = ["scene_of", "warn_edited", "unknown_robots_text"]
 
 
 def warn_edited(model, what: str, stacklevel: int = 3) -> None:
@@ -33,3 +33,13 @@ def scene_of(scene_or_model, what: str = "result"):
         warn_edited(scene_or_model, what, stacklevel=3)
         return scene_or_model.scene_for()
     return scene_or_model
+
+
+def unknown_robots_text(robots: dict, extra: list) -> str:
+    """The error of a configuration mapping whose keys ``extra`` are not robots of ``robots`` (name -> Robot);
+    joint names there (``{"panda/panda_joint1": 0.1, ...}``) are told the mapping's form."""
+    joints = {j for r, rb in robots.items() for j in rb.joint_names} | {f"{r}/{j}" for r, rb in robots.items()
+                                                                       for j in rb.joint_names}
+    hint = (" (a mapping goes robot -> that robot's joint values; these are joint names: give a flat array in "
+            "scene.joint_names order)") if set(extra) & joints else ""
+    return f"q names unknown robots {extra[:4]}{' ...' if len(extra) > 4 else ''}; robots are {list(robots)}{hint}"

@@ -23,6 +23,7 @@ from .._errors import KinematicsError, SceneError
 from .._values import refuse_complex_or_bool
 from ..geometry import Shape
 from ._allowed import adjacent, allowed_pairs
+from ._entry import unknown_robots_text
 from ._items import (  # noqa: F401  (re-exported: the scene's parts live in _items.py)
     BODY_CATEGORIES,
     Body,
@@ -449,10 +450,9 @@ class Scene:
         A mapping must name every robot of the scene and no other; NaN/inf raise (KinematicsError).
         """
         if isinstance(q, Mapping):
-            extra = [k for k in q if k not in self._robots]
+            extra, missing = [k for k in q if k not in self._robots], [k for k in self._robots if k not in q]
             if extra:
-                raise SceneError(f"q names unknown robots {extra}; robots are {list(self._robots)}")
-            missing = [k for k in self._robots if k not in q]
+                raise SceneError(unknown_robots_text(self._robots, extra))
             if missing:
                 raise SceneError(f"q has no configuration for robots {missing}")
             return {name: self._robots[name].check_q(q[name]) for name in self._robots}

@@ -1,4 +1,6 @@
-"""A trajectory verified as :class:`Subdivided` (``armguard verify --speed-dependent``) reports segment numbers and
+"""What an operator reads: reports and messages that named the wrong thing or too little.
+
+A trajectory verified as :class:`Subdivided` (``armguard verify --speed-dependent``) reports segment numbers and
 the name of the trajectory as given: puma560's pick_and_place violated its stopping distance at t = 0.156 s, in
 its segment 0 (knots 0, 1.247 s, ...), and the report said "segment 1" (the second eighth of segment 0) and named
 the trajectory "trajectory"."""
@@ -93,3 +95,16 @@ def test_verify_report_dash_writes_the_json_to_stdout_and_the_summary_to_stderr(
     assert doc["status"] == "safe" and doc["trajectory"] == "pick_and_place"
     assert "verdict: SAFE" in r.stderr and "report:" not in r.stderr
     assert not (tmp_path / "-").exists()
+
+
+def test_a_q_mapping_by_joint_names_is_told_the_mappings_form():
+    """``det.check({"panda/panda_joint1": ..., ...})`` said only "q names unknown robots [...]"."""
+    m = armguard.load_model("panda")
+    det = armguard.Detector(m)
+    qs = m.scene_q(m.neutral())
+    with pytest.raises(armguard.SceneError, match=r"robots are \['panda'\] \(a mapping goes robot -> that robot's joint "
+                                                  r"values; these are joint names"):
+        det.check(dict(zip(m.scene.joint_names, qs)))
+    with pytest.raises(armguard.SceneError, match=r"q names unknown robots \['pand'\]; robots are \['panda'\]$"):
+        det.check({"pand": qs})
+    assert det.check({"panda": qs}).status.value in ("clear", "warning")
