@@ -108,3 +108,10 @@ def test_a_q_mapping_by_joint_names_is_told_the_mappings_form():
     with pytest.raises(armguard.SceneError, match=r"q names unknown robots \['pand'\]; robots are \['panda'\]$"):
         det.check({"pand": qs})
     assert det.check({"panda": qs}).status.value in ("clear", "warning")
+
+
+def test_the_check_tables_payload_row_names_the_payload():
+    """hermes, the payload 0.71 m from the tail: the row read "hera/link6 | tail" as if the link were."""
+    r = CliRunner().invoke(main, ["-q", "check", "hermes", "--q", "3.30,0.0618,-0.0309,0,0,0"])
+    row = next(line for line in r.output.splitlines() if line.strip("│ ").startswith("payload"))
+    assert "payload (on hera/link6)" in row and "tail" in row, r.output

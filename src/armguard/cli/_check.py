@@ -113,7 +113,8 @@ def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_u
     for cat, r in rep.by_category.items():
         feat = "" if r.feature is None else str(r.feature)
         style = "red" if r.distance <= max(0.0, stopping_distance) else ("yellow" if r.distance <= threshold else "")
-        table.add_row(cat, f"{r.distance:.6f}", esc(r.link), esc(r.obstacle), esc(feat), _fmt(r.p_WA), _fmt(r.p_WB), style=style)
+        side_a = r.link if r.a == r.link else f"{r.a} (on {r.link})"  # a payload is side A: named, with its link
+        table.add_row(cat, f"{r.distance:.6f}", esc(side_a), esc(r.obstacle), esc(feat), _fmt(r.p_WA), _fmt(r.p_WB), style=style)
     out.print(table)
     if rep.not_evaluated:
         lb = min(n.lower_bound for n in rep.not_evaluated)
