@@ -115,3 +115,36 @@ def test_the_check_tables_payload_row_names_the_payload():
     r = CliRunner().invoke(main, ["-q", "check", "hermes", "--q", "3.30,0.0618,-0.0309,0,0,0"])
     row = next(line for line in r.output.splitlines() if line.strip("│ ").startswith("payload"))
     assert "payload (on hera/link6)" in row and "tail" in row, r.output
+
+
+def test_an_interrupted_map_build_says_where_the_finished_part_is_and_how_to_go_on(tmp_path, monkeypatch):
+    """Ctrl-C in ``cspace build`` printed "interrupted" alone, though the journal OUT.partial was kept and the
+    same command resumes from it."""
+    from armguard.cspace import ForbiddenMap
+
+    out = tmp_path / "maps" / "h.agmap"
+
+    def interrupted(*args, **kwargs):
+        out.parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / "maps" / "h.agmap.partial").write_bytes(b"journal")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(ForbiddenMap, "build", interrupted)
+    r = CliRunner().invoke(main, ["-q", "cspace", "build", "hermes", "--out", str(out)])
+    assert r.exit_code == 130 and not out.exists(), r.output
+    text = " ".join(r.stderr.split())
+    assert f"{out} not written; the finished substructures are kept in {out}.partial: the same command resumes" in text
+
+
+def test_an_interrupted_verification_of_several_trajectories_says_how_far_it_got(tmp_path, monkeypatch):
+    import armguard.verify as v
+
+    def interrupted(scene, items, *, progress=None, **kwargs):
+        progress(1, len(items))
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(v, "verify_many", interrupted)
+    r = CliRunner().invoke(main, ["-q", "verify", "puma560", "pick_and_place", "pick_and_place", "--report",
+                                  str(tmp_path / "r.json")])
+    assert r.exit_code == 130 and not (tmp_path / "r.json").exists(), r.output
+    assert "1 of 2 trajectories verified when interrupted; no report written, and no verdict" in r.stderr

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 
+from pathlib import Path
+
 import click
 
 from . import main
@@ -79,10 +81,17 @@ def build_cmd(model, out, resolution, j3_resolution, cell, stopping_distance, ro
 
     console = output_console()
     c = _step(cell, "--cell")
-    fmap = ForbiddenMap.build(model, out=out, robot=robot, resolution=_step(resolution, "--resolution"),
-                              j3_resolution=None if j3_resolution is None else _step(j3_resolution, "--j3-resolution"), cell=(c, c),
-                              stopping_distance=stopping_distance, workers=workers, scheduler=scheduler,
-                              max_depth=max_depth, resume=not no_resume, progress=True)
+    try:
+        fmap = ForbiddenMap.build(model, out=out, robot=robot, resolution=_step(resolution, "--resolution"),
+                                  j3_resolution=None if j3_resolution is None else _step(j3_resolution, "--j3-resolution"),
+                                  cell=(c, c), stopping_distance=stopping_distance, workers=workers, scheduler=scheduler,
+                                  max_depth=max_depth, resume=not no_resume, progress=True)
+    except KeyboardInterrupt:  # the journal keeps what was finished: said, with how to go on
+        journal = Path(out).with_name(Path(out).name + ".partial")
+        if journal.is_file():
+            click.echo(f"\n{out} not written; the finished substructures are kept in {journal}: the same command "
+                       "resumes from them (--no-resume starts afresh)", err=True)
+        raise
     r = fmap.build_report
     console.print(f"wrote {out}: {r.size_bytes} bytes, {fmap.grid.n_substructures} substructures "
                   f"({r.computed} computed, {r.reused} resumed), {r.evaluations} clearance evaluations, "

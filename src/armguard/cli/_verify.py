@@ -132,13 +132,24 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
 
         reports = verify_items(sc, items, terrain_file, **kwargs)
     elif len(items) > 1 or workers or scheduler:
-        with Progress(TextColumn("verifying"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                      console=console, transient=True) as bar:
-            task = bar.add_task("verify", total=len(items))
-            reports = verify_many(sc, items, workers=workers, scheduler=scheduler,
-                                  progress=lambda done, total: bar.update(task, completed=done), **kwargs)
+        done = [0]
+
+        def step(n, total):
+            done[0] = n
+            bar.update(task, completed=n)
+
+        try:
+            with Progress(TextColumn("verifying"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                          console=console, transient=True) as bar:
+                task = bar.add_task("verify", total=len(items))
+                reports = verify_many(sc, items, workers=workers, scheduler=scheduler, progress=step, **kwargs)
+        except KeyboardInterrupt:  # no verdict for the run: said with how far it got
+            click.echo(f"\n{done[0]} of {len(items)} trajectories verified when interrupted; no report written, and no "
+                       "verdict for the run", err=True)
+            raise
     else:
-        reports = verify_many(sc, items, **kwargs)
+        with console.status(f"verifying {items[0][0]}"):  # on a terminal a spinner (a long sampled run said nothing)
+            reports = verify_many(sc, items, **kwargs)
     written = []  # the files first: a reader that closes the pipe early (| head) must not cost them
     if report_path:  # an output that cannot be written: OutputError, one line, exit status 3
         doc = reports[0].to_dict() if len(reports) == 1 else [r.to_dict() for r in reports]
