@@ -160,16 +160,3 @@ def test_a_batch_of_the_wrong_width_is_told_the_layout_as_a_single_q_is():
         c.collides(np.zeros((2, 6)))
     msg = str(info.value)
     assert "expected shape (M, 9), each row" in msg and "j2s6s200_joint_1 (cos, sin)" in msg and "Model.pin_q" in msg
-
-
-def test_a_single_arm_is_named_after_the_urdf_unless_its_group_prefixes_its_links():
-    """kinova.srdf's one chain group is called ``end_effector``: the arm was named that (``end_effector/j2s6s200_link_6``,
-    ``check_edges(robot="end_effector")``).  It is now ``kinova``, the URDF's robot; hermes's group ``hera``
-    prefixes its links (``hera_link1``) and still names its arm; ranger's four arms keep their groups' names."""
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        names = {n: list(armguard.load_model(n).robots) for n in ("kinova", "hermes", "ranger", "panda")}
-    assert names == {"kinova": ["kinova"], "hermes": ["hera"], "panda": ["panda"],
-                     "ranger": ["left_arm", "right_arm", "camera_arm", "grapple_arm"]}

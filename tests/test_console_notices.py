@@ -55,24 +55,24 @@ def _pose(st, robot: str, joints: dict) -> None:
 
 # -- 1: long names -------------------------------------------------------------------------------
 def test_the_table_names_the_active_arms_links_without_its_prefix_and_cuts_long_names_in_the_middle():
-    assert short_name("kinova/j2s6s200_link_6", "kinova") == "j2s6s200_link_6"
+    assert short_name("end_effector/j2s6s200_link_6", "end_effector") == "j2s6s200_link_6"
     assert short_name("right_arm/link3", "left_arm") == "right_arm/link3"  # another arm's link keeps its arm
-    long = "kinova/j2s6s200_link_finger_tip_2_with_a_longer_name"
+    long = "end_effector/j2s6s200_link_finger_tip_2_with_a_longer_name"
     cut = short_name(long, None)
     assert len(cut) == 32 and "…" in cut and cut.startswith(long[:15]) and cut.endswith(long[-16:])
-    r = Readout(PanelStatus.WARNING, 0.029, "kinova/j2s6s200_link_6", "kinova/j2s6s200_link_finger_tip_2",
-                "kinova/j2s6s200_link_6", None, None, 0.05, True,
-                (CategoryRow("arm", 0.029, "kinova/j2s6s200_link_6", long),), 97.0)
-    html = panel_html(r, active="kinova")
+    r = Readout(PanelStatus.WARNING, 0.029, "end_effector/j2s6s200_link_6", "end_effector/j2s6s200_link_finger_tip_2",
+                "end_effector/j2s6s200_link_6", None, None, 0.05, True,
+                (CategoryRow("arm", 0.029, "end_effector/j2s6s200_link_6", long),), 97.0)
+    html = panel_html(r, active="end_effector")
     table = html[html.index('id="armguard-categories"'):]
     assert ">j2s6s200_<wbr>link_<wbr>6</td>" in table  # the wrap falls after a "_" (or a "/") where it can
     table = table.replace("<wbr>", "")
     assert "table-layout:fixed" in table and "overflow-wrap:anywhere" in table
-    shown = short_name(long, "kinova")
+    shown = short_name(long, "end_effector")
     assert shown == "j2s6s200_link_f…th_a_longer_name"
     assert ">j2s6s200_link_6</td>" in table and f'title="{long}">{shown}</td>' in table
     head = html[:html.index('id="armguard-categories"')]
-    assert "link: kinova/j2s6s200_link_6" in head  # the status block keeps the whole name, wrapped
+    assert "link: end_effector/j2s6s200_link_6" in head  # the status block keeps the whole name, wrapped
     assert "overflow-wrap:anywhere" in head[:head.index(">")]
 
 

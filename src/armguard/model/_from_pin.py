@@ -312,11 +312,6 @@ def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str, moved, robot_name
             arms.append((robot_name, b, ""))  # limbs from one base (a1's legs from the trunk): the robot, not one limb
         else:
             arms.append((g.name, b, f"{g.name}_"))
-    if len(arms) == 1 and arms[0][2] and len(srdf.arm_groups) == 1:  # one arm: named after its group where the group names its links (hermes's
-        _, b, prefix = arms[0]          # hera: hera_link1...), else as the URDF names the robot (kinova, not its
-        below = [ln for ln, i in body_ids.items() if i != b and _descends(i, b, parent_body)]  # group 'end_effector')
-        if not any(ln.startswith(prefix) for ln in below):
-            arms = [(robot_name, b, "")]
     return arms
 
 
