@@ -324,3 +324,15 @@ def test_a_terrain_collisions_headline_is_the_contact_not_the_unseen_cell_before
     assert rep.reason.startswith(f"contact with seen terrain at t = {c.time:.4f} s (before it, ") and "unseen cell" in rep.reason
     t_note = float(rep.reason.split(" at t = ")[2].split(" s;")[0])
     assert t_note < c.time
+
+
+def test_an_incomplete_report_keeps_seen_ground_within_the_threshold(model):
+    """INCOMPLETE (an unseen column 60 mm away) with seen ground 27 mm away, inside the 50 mm threshold: the
+    seen pair stays the one named and in ``within_threshold`` (naming the unseen one dropped it from both)."""
+    sc = model.scene
+    det = armguard.Detector(sc, threshold=0.05, terrain=load_terrain("rocky", sc))
+    r = det.check(np.array([-1.2148, -0.7106, 2.2112, 0.5489, 2.4902]))
+    t = r.terrain
+    assert t.status is Status.INCOMPLETE and t.known_distance < 0.05 < t.unknown_distance
+    assert t.distance == t.known_distance and not t.unknown
+    assert ("terrain", t.known_distance) in [(p.category, p.distance) for p in r.within_threshold]

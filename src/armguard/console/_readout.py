@@ -190,7 +190,7 @@ _SEVERITY = {PanelStatus.OFF: -1, PanelStatus.CLEAR: 0, PanelStatus.WARNING: 1, 
 def with_terrain(r: Readout, rep) -> Readout:
     """``r`` (a backend's readout without the terrain) with the terrain category of ``rep`` (a
     :class:`armguard.terrain.TerrainReport`): a ``terrain`` row, and the headline the worst of
-    both -- the worse status, and the terrain's nearest pair when it is the nearer."""
+    both -- the worse status, and the terrain's pair (TerrainReport.distance) when it is the nearer."""
     from dataclasses import replace
 
     status = _status_of(rep)

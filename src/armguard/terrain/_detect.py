@@ -2,7 +2,7 @@
 
 ``Detector(scene, terrain=...)`` (or :func:`attach_terrain` on an existing detector) makes its
 ``check`` return a :class:`TerrainDetectionReport`: the detector's own report with a
-``"terrain"`` entry in ``by_category`` (the nearest link–terrain pair, from a
+``"terrain"`` entry in ``by_category`` (the link–terrain pair its TerrainReport names, from a
 :class:`TerrainGuard` at the detector's threshold and stopping distance) and the status of both.
 A detector without terrain is not touched: ``check`` stays the class's method, at no cost.
 Batches (``check_many``, ``collides_many``) stay the kernel's; :meth:`TerrainGuard.collides_many`
@@ -34,7 +34,7 @@ class TerrainDetectionReport(DetectionReport):
     """A :class:`armguard.DetectionReport` with the terrain category.
 
     ``status`` is the merged verdict (:func:`merge_status`) and ``detector_status`` the kernel's
-    own; ``by_category["terrain"]`` the nearest link–terrain pair (absent when every link is beyond
+    own; ``by_category["terrain"]`` the link–terrain pair its ``terrain`` report names (absent when every link is beyond
     the guard's ``reach``); ``within_threshold`` includes it when it is within the threshold;
     ``terrain`` the full :class:`TerrainReport`; ``elapsed_us`` both checks.
     """

@@ -88,10 +88,11 @@ class TerrainReport:
         map) within ``threshold + unknown_margin``; WARNING: a known column within ``threshold``;
         CLEAR: every link farther than the threshold from every column.
     distance : float, m
-        The exact signed distance of the pair that decided the status, the one ``link``, ``cell`` and the
-        witnesses name: the nearest known column for COLLISION and WARNING, the nearest unknown one
-        for INCOMPLETE, else the nearest of all (``min(known_distance, unknown_distance)``); ``inf``
-        when every link is farther than ``reach`` (then it is only known to be more than ``reach``).
+        The exact signed distance of the pair ``link``, ``cell`` and the witnesses name: the nearest known
+        column when it is in collision or within the threshold (COLLISION, WARNING, and an INCOMPLETE
+        beside seen ground that near), else for INCOMPLETE the nearest unknown column, else the nearest
+        of all (``min(known_distance, unknown_distance)``); ``inf`` when every link is farther than
+        ``reach`` (then it is only known to be more than ``reach``).
     known_distance, unknown_distance : float, m
         The same over the known columns only / over the unknown columns and the off-map slabs.
     link : str | None
@@ -131,8 +132,9 @@ class TerrainReport:
     nx: int = field(default=0, repr=False)
 
     def pair(self):
-        """The nearest link–terrain pair as an :class:`armguard.PairResult` of category
-        ``"terrain"`` (None when every link is beyond ``reach``)."""
+        """The link–terrain pair the report names (``distance``: the nearest known column in collision or within
+        the threshold, else ...) as an :class:`armguard.PairResult` of category ``"terrain"`` (None when every
+        link is beyond ``reach``)."""
         from ..detect import PairResult
 
         if self.link is None or self.p_WA is None:
@@ -397,9 +399,10 @@ class TerrainGuard:
             per[o] = min(per.get(o, math.inf), float(a), float(b))
         link = cell = pA = pB = None
         unk = False
-        # the pair that decided: a known column for COLLISION and WARNING, an unknown one for INCOMPLETE (a
-        # deeper unknown column beside a colliding known one named the unseen cell as the collision)
-        side = {Status.COLLISION: known, Status.WARNING: known, Status.INCOMPLETE: unknown}.get(status)
+        # the pair named: a known column when it collides or is within the threshold (a deeper unknown column
+        # beside a colliding known one named the unseen cell as the collision), else for INCOMPLETE the unknown
+        # one that made it so, else the nearest of all
+        side = known if (status is Status.COLLISION or dk <= thr) else (unknown if status is Status.INCOMPLETE else None)
         d = min(dk, du) if side is None else float(np.min(side))
         if math.isfinite(d):
             both = np.minimum(known, unknown) if side is None else side
