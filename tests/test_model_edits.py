@@ -270,12 +270,16 @@ def test_a_detector_verifier_or_verification_of_a_model_whose_scene_was_edited_s
     tip = m.link_poses(qs)["ur5"][-1][:3, 3]
     m.scene.add_body("blob", [Sphere(tip, 0.1)])
     still = _still(m, m.neutral())
-    with pytest.warns(ArmguardWarning, match=r"this verification answers for the Model as made"):
+    with pytest.warns(ArmguardWarning, match=r"this verification answers for the Model as made") as w1:
         assert armguard.verify(m, still).safe
-    with pytest.warns(ArmguardWarning, match=r"this Verifier answers for the Model as made"):
+    with pytest.warns(ArmguardWarning, match=r"this Verifier answers for the Model as made") as w2:
         assert Verifier(m).check_edges(qs, qs).code[0] == 0
-    with pytest.warns(ArmguardWarning, match=r"this Detector answers for the Model as made"):
+    with pytest.warns(ArmguardWarning, match=r"this Detector answers for the Model as made") as w3:
         assert armguard.Detector(m).check(qs).status.value != "collision"
+    with pytest.warns(ArmguardWarning, match=r"this checker answers for the Model as made") as w4:
+        armguard.checker(m)
+    for w in (w1, w2, w3, w4):  # each points at the caller's line (it pointed into armguard, or above the caller)
+        assert [x.filename for x in w if issubclass(x.category, ArmguardWarning)] == [__file__], [x.filename for x in w]
     with warnings.catch_warnings():
         warnings.simplefilter("error", ArmguardWarning)
         assert not armguard.verify(m.scene, still).safe

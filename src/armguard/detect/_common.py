@@ -36,7 +36,7 @@ def scene_and_model(scene_or_model, model=None) -> tuple:
     if hasattr(scene_or_model, "pin_model") and hasattr(scene_or_model, "scene"):
         from ..model._entry import warn_edited
 
-        warn_edited(scene_or_model, "Detector", stacklevel=4)
+        warn_edited(scene_or_model, "Detector")
         return scene_or_model.scene_for(), scene_or_model if model is None else model
     if not hasattr(scene_or_model, "robots"):  # a name or None was an AttributeError ('str' has no 'robots')
         hint = f" (armguard.load_model({scene_or_model!r}))" if isinstance(scene_or_model, str) else ""

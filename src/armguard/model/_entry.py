@@ -4,12 +4,23 @@ in what is built on the Model), :func:`unknown_robots_text` (a configuration map
 
 from __future__ import annotations
 
+import sys
 import warnings
 
 __all__ = ["scene_of", "warn_edited", "unknown_robots_text"]
 
 
-def warn_edited(model, what: str, stacklevel: int = 3) -> None:
+def _caller_level() -> int:
+    """The ``stacklevel`` of the first frame outside armguard and its plugins (modules ``armguard``,
+    ``armguard.*``, ``armguard_*``), for a ``warnings.warn`` in the function that calls this one: the
+    user's line, whichever entry point (and wrapper) led there."""
+    f, level = sys._getframe(2), 2  # 1: the caller's warn; 2: its caller
+    while f is not None and f.f_globals.get("__name__", "").partition(".")[0].startswith("armguard"):
+        f, level = f.f_back, level + 1
+    return level
+
+
+def warn_edited(model, what: str) -> None:
     """Warn, when ``model.scene`` was edited after ``model`` was made (``model.scene.add_body(...)``), that
     ``what`` (a checker, a Detector, a Verifier...) answers for the Model as made, without the edit: a
     new obstacle added to ``model.scene`` is not seen by it."""
@@ -20,7 +31,7 @@ def warn_edited(model, what: str, stacklevel: int = 3) -> None:
     warnings.warn(f"model {model.name!r}: its scene was edited after the Model was made (a body, payload, filter or "
                   f"base changed); this {what} answers for the Model as made, without the edit. The Model of the "
                   "edited scene is armguard.model.model_of(model.scene) (or give the scene itself); a Model edits "
-                  "itself with model.with_body(...) and the other with_* methods", ArmguardWarning, stacklevel=stacklevel + 1)
+                  "itself with model.with_body(...) and the other with_* methods", ArmguardWarning, stacklevel=_caller_level())
 
 
 def scene_of(scene_or_model, what: str = "result"):
@@ -30,7 +41,7 @@ def scene_of(scene_or_model, what: str = "result"):
     on a Model answers for that Model whatever ``model.scene`` does later (said, with
     :func:`warn_edited`, when ``model.scene`` was edited: ``what`` names what is built)."""
     if hasattr(scene_or_model, "pin_model") and hasattr(scene_or_model, "collision_model"):
-        warn_edited(scene_or_model, what, stacklevel=3)
+        warn_edited(scene_or_model, what)
         return scene_or_model.scene_for()
     return scene_or_model
 
