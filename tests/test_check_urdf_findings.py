@@ -126,8 +126,21 @@ def test_radians_up_to_two_turns_and_unbounded_limits_pass(tmp_path):
 
     p = tmp_path / "two.urdf"
     p.write_text(_URDF.replace("LIMIT", '<limit lower="-1e16" upper="1e16" effort="1" velocity="1"/>')
-                 .replace('<origin xyz="0.6 0 0"/>', '<origin xyz="0.6 0 0" rpy="3.14159 0 -3.14159"/>')
-                 .replace('<limit lower="-1" upper="1"', '<limit lower="-6.283185" upper="6.283185"'))
+                 .replace('<origin xyz="0.6 0 0"/>', '<origin xyz="0.6 0 0" rpy="3.14159 0 -6.2832"/>')
+                 .replace('<limit lower="-1" upper="1"', '<limit lower="-12.5664" upper="12.5664"'))
+    assert _units(check_model_files(p, n_configs=1)) == []  # 2 pi and 4 pi written to 4 places
+
+
+def test_a_large_or_small_primitive_is_no_mesh_in_other_units(tmp_path):
+    """A 40 m floor box and a 20 m cylinder were told 'a mesh in other units than its scale assumes', with a
+    scale= for an element that has none (Pinocchio's meshPath of a primitive is "BOX", "CYLINDER")."""
+    from armguard.harness import check_model_files
+
+    p = tmp_path / "two.urdf"
+    p.write_text(_URDF.replace("LIMIT", '<limit lower="-2" upper="2" effort="1" velocity="1"/>')
+                 .replace('<box size="0.1 0.1 0.1"/></geometry></collision></link>\n  <link name="l1">',
+                          '<box size="40 40 0.1"/></geometry></collision></link>\n  <link name="l1">', 1))
+    assert "40 40 0.1" in p.read_text()
     assert _units(check_model_files(p, n_configs=1)) == []
 
 
@@ -149,6 +162,6 @@ def test_a_mesh_a_thousand_times_off_the_chain_is_warned_of(tmp_path, scale, sto
     assert bool(found) == flagged, found
     if flagged:
         (f,) = found
-        assert f.where.startswith("mesh[") and "box.stl" in f.message
+        assert f.where.startswith("two.urdf: link[l1] mesh ") and "box.stl" in f.message, f.where
         assert f.suggestion == ('scale="0.001 0.001 0.001" if the mesh is in millimetres' if stored == 1000.0
                                 else 'scale="1 1 1" if the mesh is already in metres')

@@ -286,8 +286,8 @@ def _unread_elements(root, f: str, report: LintReport) -> None:
         scan(j, "joint", f"joint[{j.get('name')}]")
 
 
-_RPY_MAX = 2.0 * np.pi + 1e-6  # one turn: no rpy angle needs more
-_LIMIT_MAX = 4.0 * np.pi + 1e-6  # two turns each way: joints such as UR's +-2 pi stay below it
+_RPY_MAX = 2.0 * np.pi + 1e-3  # one turn: no rpy angle needs more (1e-3: 2 pi written to 4 places, 6.2832)
+_LIMIT_MAX = 4.0 * np.pi + 1e-3  # two turns each way: joints such as UR's +-2 pi stay below it
 
 
 def _floats(text: str | None) -> list:
@@ -341,8 +341,9 @@ def _mesh_scale_checks(model, report: LintReport) -> None:
     reach = _reach(model.pin_model)
     if not reach > 0.0:
         return
+    urdf = Path(report.urdf).name if report.urdf else model.name
     for go in model.collision_model.geometryObjects:
-        if not go.meshPath:
+        if not go.meshPath or not Path(go.meshPath).is_file():  # a primitive's meshPath is "BOX", "CYLINDER", ...
             continue
         go.geometry.computeLocalAABB()
         size = float(np.max(go.geometry.aabb_local.max_ - go.geometry.aabb_local.min_))
@@ -352,7 +353,7 @@ def _mesh_scale_checks(model, report: LintReport) -> None:
         big = size > reach
         hint = " ".join(f"{x * (1e-3 if big else 1e3):g}" for x in s)
         report.findings.append(Finding(
-            Check.UNITS, Severity.WARNING, f"mesh[{go.name}]",
+            Check.UNITS, Severity.WARNING, f"{urdf}: link[{model.pin_model.frames[go.parentFrame].name}] mesh {go.name}",
             f"{Path(go.meshPath).name} with scale=\"{' '.join(f'{x:g}' for x in s)}\" is {size:.4g} m across, "
             f"against a kinematic chain of {reach:.3g} m: a mesh in other units than its scale assumes?",
             f'scale="{hint}" if the mesh is ' + ("in millimetres" if big else "already in metres")))
