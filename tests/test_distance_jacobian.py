@@ -203,3 +203,16 @@ def test_joint_jacobians_equal_pinocchio_per_joint(models, name):
             np.testing.assert_allclose(Jj[j], pin.getJointJacobian(pm, data, j, pin.ReferenceFrame.WORLD), atol=1e-12)
             np.testing.assert_allclose(R_WJ[j], data.oMi[j].rotation, atol=1e-15)
         assert not Jj[0].any() and np.array_equal(R_WJ[0], np.eye(3))
+
+
+def test_finite_differences_on_a_joint_narrower_than_the_step_is_an_error_naming_the_column():
+    """A joint range narrower than the step either way raised TypeError (JointLimitError built with one argument)."""
+    import armguard
+    from armguard._errors import BackendError
+    from armguard.backends._jacobian import finite_difference_rows
+
+    m = armguard.load_model("panda")
+    c = armguard.checker(m, "coal")
+    q = m.neutral()
+    with pytest.raises(BackendError, match=r"finite differences: joint column 0 cannot move 10.0 either way"):
+        finite_difference_rows(c, q, None, step=10.0)

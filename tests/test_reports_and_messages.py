@@ -78,10 +78,10 @@ def test_a_joint_limit_refusal_shows_the_excess_and_names_float32_rounding():
     with pytest.raises(armguard.JointLimitError) as ei:
         c.collides(q[None].astype(np.float32))
     msg = str(ei.value)
-    assert "= 2.8973000049591064 is outside its limits [-2.8973, 2.8973]: 4.96e-09 above the upper (about float32's " \
-           "rounding of the value: clip to the limits, or give float64)" in msg, msg
+    assert "= 2.8973000049591064 is outside its limits [-2.8973, 2.8973]: 4.959e-09 above the upper (as small as " \
+           "float32's rounding: clip a float32 configuration to the limits, or give it as float64)" in msg, msg
     q[0] = 3.0
-    with pytest.raises(armguard.JointLimitError, match=r"= 3 is outside its limits \[-2.8973, 2.8973\]: 0.103 above the "
+    with pytest.raises(armguard.JointLimitError, match=r"= 3 is outside its limits \[-2.8973, 2.8973\]: 0.1027 above the "
                                                        r"upper \(allowance"):
         c.collides(q[None])
 

@@ -60,11 +60,11 @@ class JointLimitError(KinematicsError):
         excess = self.value - self.upper if self.value > self.upper else self.lower - self.value
         side = "above the upper" if self.value > self.upper else "below the lower"
         digits = 9 if f"{self.value:.9g}" not in (f"{self.lower:.9g}", f"{self.upper:.9g}") else 17  # tell them apart
-        f32 = (" (about float32's rounding of the value: clip to the limits, or give float64)"
-               if excess <= 2.0 ** -23 * max(1.0, abs(self.value)) else "")
+        f32 = (" (as small as float32's rounding: clip a float32 configuration to the limits, or give it as "
+               "float64)" if excess <= 2.0 ** -23 * max(1.0, abs(self.value)) else "")
         super().__init__(
             f"{where}: joint {joint!r} = {self.value:.{digits}g} is outside its limits [{self.lower:.{digits}g}, "
-            f"{self.upper:.{digits}g}]: {excess:.3g} {side}{f32} (allowance Tolerances.joint_limit = "
+            f"{self.upper:.{digits}g}]: {excess:.4g} {side}{f32} (allowance Tolerances.joint_limit = "
             f"{self.allowance:.3g}); no verdict is given outside the limits (the URDF's range of motion, within which "
             "the Detector's reach lists and motion bounds hold)"
         )

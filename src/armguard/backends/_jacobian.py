@@ -370,7 +370,8 @@ joint limit is not taken: that column is the other side's one-sided difference. 
         dp = at(e)
         dm = None if one_sided and dp is not None else at(-e)
         if dp is None and dm is None:
-            raise JointLimitError(f"finite differences: joint column {k} cannot move {step} either way within its limits")
+            raise BackendError(f"finite differences: joint column {k} cannot move {step} either way within its limits (a range "
+                               "narrower than the step: a smaller step)")
         if dp is None or dm is None:
             rows[:, k] = (dp - d0) / step if dm is None else (d0 - dm) / step
             continue
