@@ -134,6 +134,8 @@ def test_an_interrupted_map_build_says_where_the_finished_part_is_and_how_to_go_
     assert r.exit_code == 130 and not out.exists(), r.output
     text = " ".join(r.stderr.split())
     assert f"{out} not written; the finished substructures are kept in {out}.partial: the same command resumes" in text
+    r = CliRunner().invoke(main, ["-q", "cspace", "build", "hermes", "--out", str(out), "--no-resume"])
+    assert "the same command without --no-resume resumes from them" in " ".join(r.stderr.split())
 
 
 def test_an_interrupted_verification_of_several_trajectories_says_how_far_it_got(tmp_path, monkeypatch):

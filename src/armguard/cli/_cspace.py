@@ -89,8 +89,9 @@ def build_cmd(model, out, resolution, j3_resolution, cell, stopping_distance, ro
     except KeyboardInterrupt:  # the journal keeps what was finished: said, with how to go on
         journal = Path(out).with_name(Path(out).name + ".partial")
         if journal.is_file():
-            click.echo(f"\n{out} not written; the finished substructures are kept in {journal}: the same command "
-                       "resumes from them (--no-resume starts afresh)", err=True)
+            again = ("the same command without --no-resume resumes from them" if no_resume else
+                     "the same command resumes from them (--no-resume starts afresh)")
+            click.echo(f"\n{out} not written; the finished substructures are kept in {journal}: {again}", err=True)
         raise
     r = fmap.build_report
     console.print(f"wrote {out}: {r.size_bytes} bytes, {fmap.grid.n_substructures} substructures "
