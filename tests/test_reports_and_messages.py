@@ -150,3 +150,20 @@ def test_an_interrupted_verification_of_several_trajectories_says_how_far_it_got
                                   str(tmp_path / "r.json")])
     assert r.exit_code == 130 and not (tmp_path / "r.json").exists(), r.output
     assert "1 of 2 trajectories verified when interrupted; no report written, and no verdict" in r.stderr
+
+
+def test_a_subdivided_trajectorys_waypoint_outside_its_limits_is_named_as_given(puma):
+    """Waypoint 1 outside its limits: verified as Subdivided(8) the error named "waypoints[3]" and an
+    interpolated value (the fourth knot of the pieces)."""
+    from armguard.kinematics import Trajectory
+
+    t = puma.trajectories["pick_and_place"]
+    W = np.array(t.waypoints, dtype=float)
+    W[1, 1] = 10.0
+    bad = Trajectory(t.robot_name, t.joint_names, t.times, W)
+    msgs = []
+    for traj in (bad, Subdivided(bad, 8)):
+        with pytest.raises(armguard.VerificationError) as ei:
+            armguard.verify(puma, traj)
+        msgs.append(str(ei.value))
+    assert msgs[0] == msgs[1] and msgs[0].startswith("trajectory waypoints[1]: ") and "= 10 is outside" in msgs[0], msgs

@@ -155,11 +155,13 @@ class Verifier(FollowsScene):
             k0 += len(rob.joint_names)
         raise VerificationError(f"unknown robot {robot!r}")  # pragma: no cover - checked before
 
-    def _check_knots_in_limits(self, segs, rname: str) -> None:
+    def _check_knots_in_limits(self, segs, rname: str, pieces: int = 1) -> None:
         """A knot outside the joint limits is a motion the arm cannot make: no verdict (segments are
-        straight joint-space lines, so knots within the limits keep the whole path within them)."""
+        straight joint-space lines, so knots within the limits keep the whole path within them).  The
+        waypoints checked are the given trajectory's (every ``pieces``-th knot of a Subdivided one: its
+        pieces' knots lie on the lines between them)."""
         rob = self.scene.robots[rname]
-        knots = [segs[0][2]] + [sg[3] for sg in segs]
+        knots = ([segs[0][2]] + [sg[3] for sg in segs])[::pieces]
         if bool(np.all(rob.within_limits(np.stack(knots), tol=self.tol))):  # one batched test; the loop names the culprit
             return
         for k, q in enumerate(knots):
@@ -274,7 +276,7 @@ class Verifier(FollowsScene):
         trajectory, held = self._over_robot(trajectory, rname, base_q)
         base, k0, k1 = self._flat(rname, base_q)
         segs = segments_of(trajectory)
-        self._check_knots_in_limits(segs, rname)
+        self._check_knots_in_limits(segs, rname, pieces)
         speeds = self._segment_speeds(trajectory, segs, k0, k1, model)
         if isinstance(sd, StoppingDistance):
             margins = np.array([sd.at(v, mass) for v in speeds])
