@@ -202,7 +202,10 @@ def _portable(d: dict, folder: Path) -> dict:
         for key in ("urdf", "srdf"):
             v = r.get(key)
             if isinstance(v, str) and os.path.isabs(v):
-                rel = os.path.relpath(v, base)
+                try:
+                    rel = os.path.relpath(v, base)
+                except ValueError:  # another drive (Windows): no relative path
+                    continue
                 if not rel.startswith(os.pardir):
                     r[key] = Path(rel).as_posix()
     return d
