@@ -204,7 +204,7 @@ class ClipChecker(CheckerBase):
 
     # ---------------------------------------------------------------- building (once)
     def _build(self) -> None:
-        scene = self.model.scene
+        scene = self.model.scene_for()  # the system the Model holds (model.scene may have been edited since)
         self._frames: list[tuple[str, int]] = []  # (robot, link index)
         frame_of: dict[tuple[str, int], int] = {}
         geoms: dict[str, tuple[int, object]] = {}

@@ -148,7 +148,7 @@ class CoalChecker(CheckerBase):
             raise BackendError(f"coal: unknown options {sorted(opts)}; options are ['gjk_tolerance', 'threads']")
         self.representation = {}
         geom = model.collision_model.copy()
-        ws = model.scene.workspace
+        ws = model.workspace  # the Model's own box (model.scene may have been edited since)
         walls = []
         if ws is not None:
             for name, hs in workspace_walls(ws.lo, ws.hi):

@@ -85,7 +85,7 @@ class FclChecker(CheckerBase):
         gm = model.collision_model
         self._objs = [fcl.CollisionObject(_fcl_geometry(go.geometry), fcl.Transform()) for go in gm.geometryObjects]
         walls = []
-        ws = model.scene.workspace
+        ws = model.workspace  # the Model's own box (model.scene may have been edited since)
         if ws is not None:
             # each wall is a large box just outside it (python-fcl's capsule-halfspace distance crashes)
             lo, hi = np.asarray(ws.lo, dtype=np.float64), np.asarray(ws.hi, dtype=np.float64)

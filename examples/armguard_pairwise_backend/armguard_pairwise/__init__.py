@@ -70,7 +70,7 @@ class PairwiseChecker(CheckerBase):
         pairs = model.pairs
         self._ia = [model.geometry_index(a) for a in pairs.a]
         self._ib = [None if b == "workspace" else model.geometry_index(b) for b in pairs.b]
-        ws = model.scene.workspace
+        ws = model.workspace  # the Model's own box (model.scene may have been edited since)
         self._walls = None if ws is None else (np.asarray(ws.lo, dtype=np.float64), np.asarray(ws.hi, dtype=np.float64))
         self._pin = pin
 
@@ -113,7 +113,7 @@ class PairwiseChecker(CheckerBase):
                 d[k], p_WA[k], p_WB[k] = r.distance, r.p_WA, r.p_WB
         if not np.all(np.isfinite(d)):
             raise BackendError("pairwise: a distance came back NaN or infinite; no verdict")
-        return self._result(d, p_WA, p_WB)
+        return self.result(d, p_WA, p_WB)
 
     def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
         Q = check_Q(self.model, Q)
