@@ -32,7 +32,13 @@ def broken_backends(monkeypatch, tmp_path):
         "[armguard.backends]\n"
         "gone = armguard_broken_not_there:Backend\n"
         "needs_dep = armguard_broken_mod:NeedsDep\n"
-        "bad_import = armguard_broken_mod:BadImport\n")
+        "bad_import = armguard_broken_mod:BadImport\n"
+        "misspelt = armguard_broken_mod:NeedsDepp\n"
+        "raises_on_import = armguard_broken_raises:Backend\n"
+        "build_raises = armguard_broken_mod:BuildRaises\n"
+        "no_build = armguard_broken_mod:NoBuild\n"
+        "needs_args = armguard_broken_mod:NeedsArgs\n")
+    (tmp_path / "armguard_broken_raises.py").write_text("raise RuntimeError('no licence server')\n")
     (tmp_path / "armguard_broken_mod.py").write_text(textwrap.dedent(f"""
         class NeedsDep:
             name = "needs_dep"
@@ -48,11 +54,34 @@ def broken_backends(monkeypatch, tmp_path):
             def build(self, model, options=None):
                 from math import no_such_function  # noqa: F401
                 raise AssertionError("unreachable: the import above fails")
+
+
+        class BuildRaises:
+            name = "build_raises"
+
+            def build(self, model, options=None):
+                raise RuntimeError("cannot convert mesh link3.stl")
+
+
+        class NoBuild:
+            name = "no_build"
+
+
+        class NeedsArgs:
+            name = "needs_args"
+
+            def __init__(self, path):
+                self.path = path
+
+            def build(self, model, options=None):
+                raise AssertionError("unreachable: not made")
         """))
     monkeypatch.syspath_prepend(str(tmp_path))
     monkeypatch.delitem(sys.modules, "armguard_broken_mod", raising=False)
+    monkeypatch.delitem(sys.modules, "armguard_broken_raises", raising=False)
     yield tmp_path
     sys.modules.pop("armguard_broken_mod", None)
+    sys.modules.pop("armguard_broken_raises", None)
 
 
 def test_an_unimportable_backend_is_listed_but_get_backend_names_it(broken_backends):
@@ -133,3 +162,28 @@ def test_check_with_an_unloadable_backend_exits_with_the_backend_error_code(brok
     res = CliRunner().invoke(main, ["--backend", "needs_dep", "check", "puma560"])
     assert res.exit_code == ExitCode.INPUT, res.output
     assert "backend 'needs_dep' could not be loaded" in res.output and "internal error" not in res.output
+
+
+
+@pytest.mark.parametrize("name, words", [
+    ("misspelt", "backend 'misspelt' could not be loaded: AttributeError: module 'armguard_broken_mod' has no attribute "
+                 "'NeedsDepp' (raised while loading its entry point misspelt = 'armguard_broken_mod:NeedsDepp'"),
+    ("raises_on_import", "backend 'raises_on_import' could not be loaded: RuntimeError: no licence server (raised while "
+                         "loading its entry point"),
+    ("no_build", "backend 'no_build': its entry point no_build = 'armguard_broken_mod:NoBuild' gives a NoBuild, which "
+                 "has no build(model, options) method"),
+    ("needs_args", "backend 'needs_args': its entry point needs_args = 'armguard_broken_mod:NeedsArgs' is a class that "
+                   "cannot be made with no arguments: TypeError"),
+    ("build_raises", "backend 'build_raises' failed to build a checker for model 'puma560': RuntimeError: cannot convert "
+                     "mesh link3.stl (an error in the backend)"),
+])
+def test_a_backend_that_fails_otherwise_is_named_with_its_entry_point(broken_backends, name, words):
+    """A misspelt object, a package that raises on import, an object without build, a class that needs
+    arguments, a build that raises: raw AttributeError / RuntimeError / TypeError, and on the command line
+    "internal error" (4).  Each is a BackendError naming the backend (exit status 3)."""
+    with pytest.raises(BackendError) as e:
+        armguard.checker("puma560", name)
+    assert str(e.value).startswith(words), str(e.value)
+    res = CliRunner().invoke(main, ["--backend", name, "check", "puma560"])
+    assert res.exit_code == ExitCode.INPUT and "internal error" not in res.output and f"backend '{name}'" in res.output, \
+        res.output

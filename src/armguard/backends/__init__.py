@@ -28,7 +28,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Mapping
 
-from .._errors import BackendError, DetectionError
+from .._errors import ArmguardError, BackendError, DetectionError
 from ._interface import (Backend, Capability, Checker, CheckerBase, NearestPair, PairDistances, PairDistancesMany, check_margin,
                          check_pairs, check_Q, check_q, check_unit_circle)
 
@@ -81,11 +81,23 @@ def get_backend(name: str) -> Backend:
     if name not in eps:
         raise BackendError(f"unknown backend {name!r}; installed backends are {sorted(eps)}")
     ep = eps[name]
+    where = f"entry point {name} = {getattr(ep, 'value', ep)!r}"
     try:
         obj = ep.load()
-        return obj() if isinstance(obj, type) else obj
     except ImportError as exc:
-        raise _load_error(name, exc, f"loading its entry point {getattr(ep, 'value', ep)!r}") from exc
+        raise _load_error(name, exc, f"loading its {where}") from exc
+    except Exception as exc:  # a misspelt object name, a package that raises on import: the backend's, named
+        raise BackendError(f"backend {name!r} could not be loaded: {type(exc).__name__}: {exc} (raised while loading "
+                           f"its {where}: an error in the backend's package)") from exc
+    try:
+        backend = obj() if isinstance(obj, type) else obj  # a class is made with no arguments
+    except Exception as exc:
+        raise BackendError(f"backend {name!r}: its {where} is a class that cannot be made with no arguments: "
+                           f"{type(exc).__name__}: {exc}") from exc
+    if not callable(getattr(backend, "build", None)):
+        raise BackendError(f"backend {name!r}: its {where} gives a {type(backend).__name__}, which has no "
+                           "build(model, options) method (docs/backends.md)")
+    return backend
 
 
 def _load_error(name: str, exc: ImportError, where: str) -> BackendError:
@@ -199,6 +211,11 @@ def checker(model, backend: str | None = None, options: Mapping | None = None, *
         if source is None or isinstance(exc.__cause__, ImportError):  # a failed import is no option's fault
             raise
         raise BackendError(f"{source}: [backend]: {exc}") from None
+    except ArmguardError:
+        raise  # a refusal of another kind (a model the backend cannot take), as it is
+    except Exception as exc:  # the backend's own failure, named (it read as an internal error of armguard)
+        raise BackendError(f"backend {name!r} failed to build a checker for model {model.name!r}: "
+                           f"{type(exc).__name__}: {exc} (an error in the backend)") from exc
 
 
 def _options_file(name: str, options, config) -> str | None:

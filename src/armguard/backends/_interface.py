@@ -392,8 +392,12 @@ class CheckerBase:
 
         return wj.rows(q, result, idx, refine=refine)
 
-    def _result(self, d, p_WA, p_WB) -> PairDistances:
+    def result(self, d, p_WA, p_WB) -> PairDistances:
+        """The :class:`PairDistances` of a full answer: ``d (n,)``, ``p_WA``/``p_WB (n, 3)`` in the order of
+        ``model.pairs``, with the Model's pair names and categories."""
         return PairDistances(self._pairs, d, p_WA, p_WB, self._category)
+
+    _result = result  # the name the bundled backends use
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.model.name!r}, {len(self._category)} pairs)"
