@@ -93,8 +93,21 @@ class _Wrapped(armguard.backends.CheckerBase):
         self._calls = 0
         self._scratch = None
 
+    def _limits_relaxed(self, q):
+        """The mutations that test only part of the joint-limit rule: below the lower limits, or any joint but
+        the first, taken into the limits (answered) instead of refused."""
+        if self.mutation not in ("limits tested above only", "limits tested on the first joint only"):
+            return q
+        q = np.array(q, dtype=np.float64)
+        lo, hi = self.model.pin_model.lowerPositionLimit, self.model.pin_model.upperPositionLimit
+        if self.mutation == "limits tested above only":
+            return np.maximum(q, lo)
+        q[..., 1:] = np.clip(q[..., 1:], lo[1:], hi[1:])
+        return q
+
     def pair_distances(self, q, pairs=None):
         mut = self.mutation
+        q = self._limits_relaxed(q)
         if mut == "NaN answered":
             q = np.nan_to_num(np.asarray(q, dtype=np.float64))
         if mut == "a continuous joint's (cos, sin) normalised":  # a sheared link answered, not refused
@@ -157,9 +170,12 @@ class _Wrapped(armguard.backends.CheckerBase):
     def pair_distances_many(self, Q, pairs=None):
         from types import SimpleNamespace
 
-        Q = armguard.backends.check_Q(self.model, Q)
-        if self.mutation == "batch ignores pairs":
+        Q = armguard.backends.check_Q(self.model, self._limits_relaxed(Q))
+        if self.mutation == "batch ignores pairs" or (self.mutation == "batch answers pairs=[] with every pair"
+                                                      and pairs is not None and len(pairs) == 0):
             pairs = None
+        if self.mutation == "batch rows wrapped" and pairs is not None:
+            pairs = np.asarray(pairs).astype(np.int64) % len(self.model.pairs)
         rows = [self.pair_distances(q, pairs=pairs) for q in Q]
         n = len(self.model.pairs) if pairs is None else len(pairs)
         idx = np.arange(len(self.model.pairs)) if pairs is None else np.asarray(pairs)
@@ -170,6 +186,8 @@ class _Wrapped(armguard.backends.CheckerBase):
             d = np.roll(d, 1, axis=0)
         if self.mutation == "batch rows unnamed":
             return SimpleNamespace(distance=d, p_WA=p_WA, p_WB=p_WB)
+        if self.mutation == "a one-row batch flattened" and len(Q) == 1:
+            d, p_WA, p_WB = d[0], p_WA[0], p_WB[0]
         return armguard.backends.PairDistancesMany(self.model.pairs.names[idx], d, p_WA, p_WB,
                                                    tuple(np.asarray(self.model.pairs.category, dtype=object)[idx]))
 
@@ -182,11 +200,15 @@ class _Wrapped(armguard.backends.CheckerBase):
         return out
 
     def collides(self, Q, *, margin: float = 0.0):
-        Q = armguard.backends.check_Q(self.model, Q)
+        Q = armguard.backends.check_Q(self.model, self._limits_relaxed(Q))
         if self.mutation == "always clear":
             return np.zeros(len(Q), dtype=bool)
         if not (margin >= 0.0 and math.isfinite(margin)):
             raise BackendError(f"margin: expected a finite length >= 0, got {margin!r}")
+        skipped = {"collides skips the workspace walls": "workspace", "collides skips the payload": "arm-payload"}
+        if self.mutation in skipped:  # one category's pairs left out of the verdict
+            keep = np.asarray(self.model.pairs.category) != skipped[self.mutation]
+            return np.array([bool(np.any(self.inner.pair_distances(q).distance[keep] <= margin)) for q in Q])
         with self._lock:
             v = self.inner.collides(Q, margin=0.0 if self.mutation == "margin ignored" else margin)
         if self.mutation == "a parallel path for big batches wrong in row 0" and len(Q) >= 64:
@@ -243,8 +265,19 @@ MUTATIONS = {
     "answers in reused scratch arrays": "results_kept",
     "a continuous joint's (cos, sin) normalised": "bad_q_refused",
     "a NaN in one row": "pair_distances_shapes",
+    # holes a backend author's review found (all of them at once passed the whole default suite): a collides
+    # without one category (nearer pairs of others decided every configuration), a one-row batch flattened,
+    # pairs=[] answered with every pair, rows outside [0, n) taken modulo n, half of the joint-limit rule
+    "collides skips the workspace walls": "coal_verdicts_by_category",
+    "collides skips the payload": "coal_verdicts_by_category",
+    "a one-row batch flattened": "pair_distances_many",
+    "batch answers pairs=[] with every pair": "pair_distances_many",
+    "batch rows wrapped": "pair_distances_many",
+    "limits tested above only": "bad_q_refused",
+    "limits tested on the first joint only": "bad_q_refused",
 }
-MODEL_OF = {"a continuous joint's (cos, sin) normalised": "kinova"}  # else puma560
+MODEL_OF = {"a continuous joint's (cos, sin) normalised": "kinova", "collides skips the workspace walls": "ranger",
+            "collides skips the payload": "hermes"}  # else puma560
 
 
 def test_an_honest_wrapper_passes_every_check():
@@ -416,3 +449,18 @@ def test_results_kept_is_checked_with_the_neutral_pose_alone():
     """``n_configs=0``: the later calls were all at the one configuration, so reused scratch went unseen."""
     with pytest.raises(ConformanceError, match="return arrays of their own"):
         check_backend(_Mutant("answers in reused scratch arrays"), models=["puma560"], n_configs=0, only=["results_kept"])
+
+
+def test_run_check_in_a_packages_own_tests_keeps_coals_deprecation_note_out(request):
+    """The docs' in-package setup (checks + run_check) gave "36 passed, 124 warnings": coal's note that its
+    cached-guess switch is deprecated, once per test (pytest resets the filters coal set at import)."""
+    import warnings
+
+    check = checks(_Mutant("none"), models=["puma560"], n_configs=1, only=["coal_distances"])[0]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        armguard.checker("puma560", "coal").pair_distances(armguard.load_model("puma560").neutral())  # it warns here
+        assert any("enable_cached_gjk_guess" in str(w.message) for w in caught)  # (the note exists)
+        caught.clear()
+        run_check(check, request)
+    assert not [w for w in caught if "enable_cached_gjk_guess" in str(w.message)]

@@ -275,32 +275,38 @@ def check_bad_q_refused(ctx, model):
 
 
 def _out_of_limits_refused(c, m, q, Q) -> None:
-    """A joint 0.1 beyond its upper limit (the first joint with finite limits): JointLimitError from every
-    entry point, as every backend's ``check_q`` / ``check_Q`` (``Model.check_pin_limits``) raise it."""
+    """Each joint with finite limits 0.1 beyond its upper limit and 0.1 below its lower one: JointLimitError
+    from every entry point, as every backend's ``check_q`` / ``check_Q`` (``Model.check_pin_limits``)
+    raise it (a backend that tested one joint, or one side, passed)."""
     from .._errors import JointLimitError
 
+    lo = np.asarray(m.pin_model.lowerPositionLimit, dtype=np.float64)
     hi = np.asarray(m.pin_model.upperPositionLimit, dtype=np.float64)
     free = set(m.continuous_q.tolist()) | set((m.continuous_q + 1).tolist())
-    j = next((k for k in range(m.nq) if k not in free and np.isfinite(hi[k]) and abs(hi[k]) < 1e6), None)
-    if j is None:
-        return
-    out = q.copy()
-    out[j] = hi[j] + 0.1
-    Qo = Q.copy()
-    Qo[-1, j] = hi[j] + 0.1
-    calls = {"collides(Q with a row out of limits)": lambda: c.collides(Qo)}
-    if _distances(c):
-        calls["pair_distances(q out of limits)"] = lambda: c.pair_distances(out)
-        if hasattr(c, "pair_distances_many"):
-            calls["pair_distances_many(Q with a row out of limits)"] = lambda: c.pair_distances_many(Qo)
-    for what, call in calls.items():
-        try:
-            got = call()
-        except JointLimitError:
+    for j in range(m.nq):
+        if j in free:
             continue
-        except Exception as exc:  # noqa: BLE001 - the wrong kind of refusal
-            fail(f"{what}: raised {type(exc).__name__}: {exc} (expected armguard.JointLimitError)")
-        fail(f"{what}: answered {type(got).__name__} instead of raising armguard.JointLimitError")
+        for side, value in (("above its upper limit", hi[j] + 0.1), ("below its lower limit", lo[j] - 0.1)):
+            if not (np.isfinite(value) and abs(value) < 1e6):
+                continue
+            out = q.copy()
+            out[j] = value
+            Qo = Q.copy()
+            Qo[-1, j] = value
+            what = f"q[{j}] 0.1 {side}"
+            calls = {f"collides(Q with a row's {what})": lambda: c.collides(Qo)}
+            if _distances(c):
+                calls[f"pair_distances(q with {what})"] = lambda: c.pair_distances(out)
+                if hasattr(c, "pair_distances_many"):
+                    calls[f"pair_distances_many(Q with a row's {what})"] = lambda: c.pair_distances_many(Qo)
+            for name, call in calls.items():
+                try:
+                    got = call()
+                except JointLimitError:
+                    continue
+                except Exception as exc:  # noqa: BLE001 - the wrong kind of refusal
+                    fail(f"{name}: raised {type(exc).__name__}: {exc} (expected armguard.JointLimitError)")
+                fail(f"{name}: answered {type(got).__name__} instead of raising armguard.JointLimitError")
 
 
 def check_capabilities_honoured(ctx, model):
@@ -452,3 +458,57 @@ def check_coal_verdicts(ctx, model):
         bad = np.flatnonzero((np.abs(dmin - margin) > BAND) & (v != (dmin <= margin)))
         expect(not bad.size, lambda: f"margin {margin} m, configuration {bad[0]}: collides {bool(v[bad[0]])}, coal's "
                                      f"least distance {dmin[bad[0]]:.9g} m; q = {Q[bad[0]].tolist()}")
+
+
+def _category_model(m, category: str):
+    """``m`` with only its pairs of ``category``: every other owner pair disabled, the workspace box dropped
+    unless it is that category (a Model made from an edited copy of the system it holds)."""
+    from ..model import model_of
+
+    scene = m.scene_for().copy()
+    for a, b, cat in zip(m.pairs.owner_a, m.pairs.owner_b, m.pairs.category):
+        if cat != category and "workspace" not in (a, b):
+            scene.disable_pair(a, b)
+    if category != "workspace":
+        scene.clear_workspace()
+    return model_of(scene)
+
+
+def check_coal_verdicts_by_category(ctx, model):
+    """:func:`check_coal_verdicts` on the Model's pairs of one category at a time (the others disabled): a
+    ``collides`` that skipped a whole category (the workspace walls, which are no GeometryObject; an arm's
+    payload) passed on the whole Model, where nearer pairs of other categories decided every row."""
+    from ..backends import get_backend
+
+    if ctx.backend == REFERENCE:
+        raise NotApplicable(f"the backend is the reference ({REFERENCE}) itself")
+    m = ctx.model(model)
+    cats = sorted(set(m.pairs.category))
+    if len(cats) < 2:
+        raise NotApplicable(f"one category ({cats[0] if cats else 'none'}): check_coal_verdicts covers it")
+    Q = ctx.configs(model)
+    for cat in cats:
+        sub = _category_model(m, cat)
+        expect(sub.nq == m.nq and len(sub.pairs) and set(sub.pairs.category) == {cat},
+               f"the suite's sub-Model of category {cat!r} has categories {sorted(set(sub.pairs.category))}")
+        try:
+            c = ctx.backend_impl().build(sub, dict(ctx.options))
+        except BackendError as exc:  # a backend bound to its model's files (forbidden's map): panda+edits tests
+            raise NotApplicable(f"the backend builds no Checker on a Model made in process: {exc}") from None
+        ref = get_backend(REFERENCE).build(sub, {})
+        dmin = np.array([float(np.min(ref.pair_distances(q).distance, initial=np.inf)) for q in Q])
+        v = np.asarray(c.collides(Q))
+        unsafe = np.flatnonzero(~v & (dmin <= BAND))
+        expect(not unsafe.size, lambda: f"{cat} pairs alone, configuration {unsafe[0]}: said clear, coal's least "
+                                        f"distance is {dmin[unsafe[0]]:.9g} m; q = {Q[unsafe[0]].tolist()}")
+        if not _distances(c):
+            continue
+        clearest = int(np.argmax(dmin))  # margins either side of the clearest row's least distance
+        margins = [0.0, MARGIN] + ([float(dmin[clearest] + EDGE), float(dmin[clearest] - EDGE)]
+                                   if np.isfinite(dmin[clearest]) and dmin[clearest] > 2 * EDGE else [])
+        for margin in margins:
+            v = np.asarray(c.collides(Q, margin=margin))
+            bad = np.flatnonzero((np.abs(dmin - margin) > BAND) & (v != (dmin <= margin)))
+            expect(not bad.size, lambda: f"{cat} pairs alone, margin {margin:.9g} m, configuration {bad[0]}: collides "
+                                         f"{bool(v[bad[0]])}, coal's least distance {dmin[bad[0]]:.9g} m; "
+                                         f"q = {Q[bad[0]].tolist()}")

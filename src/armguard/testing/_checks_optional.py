@@ -89,7 +89,9 @@ def check_pair_subset(ctx, model):
 def check_pair_distances_many(ctx, model):
     """``pair_distances_many(Q)`` (where the Checker has it) equals ``pair_distances`` row by row
     (within 1e-12 m): ``pairs``/``category`` the Model's, ``distance (M, n)``, ``p_WA``/``p_WB
-    (M, n, 3)`` float64; ``M = 0`` too; with ``pairs=rows`` (where it takes them), those rows."""
+    (M, n, 3)`` float64, for ``M = 1`` (not ``(n,)``) and ``M = 0`` too; with ``pairs=rows`` (where it
+    takes them) those rows, ``pairs=[]`` none (not all), and rows outside ``[0, n)`` or not integers
+    refused with BackendError."""
     c = ctx.checker(model)
     _require_distances(c)
     if not hasattr(c, "pair_distances_many"):
@@ -100,25 +102,34 @@ def check_pair_distances_many(ctx, model):
     full = [answer(ctx, model, c, q, i) for i, q in enumerate(Q)]
     rows = np.random.default_rng(ctx.seed).permutation(n)[: max(1, n // 3)]
     takes_pairs = _has_pairs_argument(c) and "pairs" in inspect.signature(c.pair_distances_many).parameters
-    for subset in ((None, rows) if takes_pairs else (None,)):
-        many = c.pair_distances_many(Q) if subset is None else c.pair_distances_many(Q, pairs=subset)
+    cases = [(None, Q, full, "pair_distances_many(Q)"), (None, Q[:1], full[:1], "pair_distances_many(Q[:1]) (one row)")]
+    if takes_pairs:
+        cases += [(rows, Q, full, "pair_distances_many(Q, pairs=rows)"),
+                  (np.zeros(0, np.int64), Q, full, "pair_distances_many(Q, pairs=[]) (no row)")]
+    for subset, rows_q, rows_full, what in cases:
+        many = c.pair_distances_many(rows_q) if subset is None else c.pair_distances_many(rows_q, pairs=subset)
         idx = np.arange(n) if subset is None else subset
-        what = "pair_distances_many(Q)" if subset is None else "pair_distances_many(Q, pairs=rows)"
         for key in ("pairs", "category"):
             expect(hasattr(many, key), f"{what}: the result has no {key!r} (a PairDistancesMany names its rows)")
         expect(np.array_equal(np.asarray(many.pairs), m.pairs.names[idx]), f"{what}: pairs are not the rows asked for")
         expect(tuple(many.category) == tuple(np.asarray(m.pairs.category, dtype=object)[idx]), f"{what}: category differs")
-        for key, shape in (("distance", (len(Q), len(idx))), ("p_WA", (len(Q), len(idx), 3)),
-                           ("p_WB", (len(Q), len(idx), 3))):
+        for key, shape in (("distance", (len(rows_q), len(idx))), ("p_WA", (len(rows_q), len(idx), 3)),
+                           ("p_WB", (len(rows_q), len(idx), 3))):
             a = np.asarray(getattr(many, key))
             expect(a.shape == shape and a.dtype == np.float64, f"{what}: {key} is {a.dtype} {a.shape}, expected float64 {shape}")
-            for i, r in enumerate(full):
+            for i, r in enumerate(rows_full):
                 x, y = a[i], getattr(r, key)[idx]
                 expect(np.allclose(x, y, rtol=0, atol=1e-12),
                        lambda: f"{what}, row {i}: {key} differs from pair_distances(Q[{i}]) by up to "
                                f"{np.max(np.abs(x - y)):.3g} m")
     empty = c.pair_distances_many(Q[:0])
-    expect(np.asarray(empty.distance).shape == (0, n), f"M = 0: distance has shape {np.asarray(empty.distance).shape}")
+    for key, shape in (("distance", (0, n)), ("p_WA", (0, n, 3)), ("p_WB", (0, n, 3))):
+        a = np.asarray(getattr(empty, key))
+        expect(a.shape == shape, f"M = 0: {key} has shape {a.shape}, expected {shape}")
+    if takes_pairs:  # rows outside [0, n) or not integers: refused, as by pair_distances
+        for bad, idx in (("out of range", np.array([n])), ("negative", np.array([-1])), ("floats", np.array([0.5])),
+                         ("a boolean mask", np.ones(n, dtype=bool))):
+            _raises_backend_error(lambda: c.pair_distances_many(Q, pairs=idx), f"pair_distances_many(Q, pairs {bad})")
 
 
 # ================================================================ threads

@@ -14,6 +14,8 @@ Nothing heavy is imported until a check runs.
 
 from __future__ import annotations
 
+import warnings
+
 import pytest
 
 __all__ = ["pytest_addoption", "pytest_load_initial_conftests", "pytest_configure", "pytest_report_header",
@@ -76,6 +78,9 @@ def options_from_config(config) -> dict:
     return {"backend": name, **kw}
 
 
+_COAL_NOTE = "enable_cached_gjk_guess has been marked as deprecated"
+
+
 def run_check(check, request) -> None:
     """Run one :class:`armguard.testing.Check` as a pytest test: not applicable -> skip; a declared
     expected failure -> xfail (XPASS when it passes); anything else as it comes."""
@@ -87,7 +92,9 @@ def run_check(check, request) -> None:
 
         request.node.add_marker(pytest.mark.xfail(reason=reason, raises=ConformanceError, strict=False))
     try:
-        check()
+        with warnings.catch_warnings():  # coal's deprecation note on its first calls, once per test otherwise
+            warnings.filterwarnings("ignore", message=_COAL_NOTE, category=DeprecationWarning)
+            check()
     except NotApplicable as exc:
         pytest.skip(f"not applicable: {exc}")
 
@@ -98,8 +105,7 @@ def pytest_configure(config) -> None:
     for each test, let it through): a run of the suite would show it once per test.  Filtered in
     runs of the suite only (other projects' pytest runs keep their filters)."""
     if config.getoption("armguard_backend", None) or _names_the_suite(config.args):
-        config.addinivalue_line("filterwarnings",
-                                "ignore:enable_cached_gjk_guess has been marked as deprecated:DeprecationWarning")
+        config.addinivalue_line("filterwarnings", f"ignore:{_COAL_NOTE}:DeprecationWarning")
 
 
 def pytest_report_header(config):

@@ -8,10 +8,8 @@ without loading anything).
 
 from __future__ import annotations
 
-import sysconfig
 import threading
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
@@ -70,15 +68,9 @@ _MODELS: dict = {}
 _REFERENCE: dict = {}
 
 
-PUBLIC_ROBOTS = {  # example-robot-data's files (URDF, SRDF) under its robots/ folder
-    "panda": ("panda_description/urdf/panda.urdf", "panda_description/srdf/panda.srdf"),
-    "ur5": ("ur_description/urdf/ur5_robot.urdf", "ur_description/srdf/ur5.srdf"),
-}
-
-
-def _robots_dir() -> Path:
-    """example-robot-data's ``robots/`` folder (it ships data only, in site-packages' cmeel prefix)."""
-    return Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
+PUBLIC_ROBOTS = ("panda", "ur5")
+"""example-robot-data's robots the suite loads with their SRDF, found where :func:`armguard.load_model` finds
+them (the package's metadata: a layered virtualenv's site-packages too)."""
 
 
 def _edited_panda():
@@ -125,8 +117,10 @@ def load_conformance_model(spec):
             if spec in EDITED_MODELS:
                 _MODELS[spec] = EDITED_MODELS[spec]()
             elif spec in PUBLIC_ROBOTS:
-                urdf, srdf = PUBLIC_ROBOTS[spec]
-                _MODELS[spec] = load_model(_robots_dir() / urdf, srdf=_robots_dir() / srdf)
+                from ..model._public import public_robot_files
+
+                urdf, srdf = public_robot_files(spec)
+                _MODELS[spec] = load_model(urdf, srdf=srdf)
             else:
                 _MODELS[spec] = load_model(spec)
         return _MODELS[spec]
