@@ -274,10 +274,22 @@ def check_bad_q_refused(ctx, model):
     _out_of_limits_refused(c, m, q, Q)
 
 
+PAST_LIMIT = 1e3 * TOL.joint_limit  # m or rad: a value this far past a limit is refused too (not only 0.1 past)
+
+
+def _joint_of_q(pin_model, j: int) -> str:
+    """The name of the joint whose value is ``q[j]``."""
+    for k in range(1, pin_model.njoints):
+        if pin_model.idx_qs[k] <= j < pin_model.idx_qs[k] + pin_model.nqs[k]:
+            return pin_model.names[k]
+    return "?"
+
+
 def _out_of_limits_refused(c, m, q, Q) -> None:
-    """Each joint with finite limits 0.1 beyond its upper limit and 0.1 below its lower one: JointLimitError
-    from every entry point, as every backend's ``check_q`` / ``check_Q`` (``Model.check_pin_limits``)
-    raise it (a backend that tested one joint, or one side, passed)."""
+    """Each joint with finite limits 0.1 and :data:`PAST_LIMIT` beyond its upper limit and below its lower
+    one: JointLimitError from every entry point, as every backend's ``check_q`` / ``check_Q``
+    (``Model.check_pin_limits``) raise it (a backend that tested one joint, one side, or allowed 0.05 rad
+    of slack, passed)."""
     from .._errors import JointLimitError
 
     lo = np.asarray(m.pin_model.lowerPositionLimit, dtype=np.float64)
@@ -286,14 +298,16 @@ def _out_of_limits_refused(c, m, q, Q) -> None:
     for j in range(m.nq):
         if j in free:
             continue
-        for side, value in (("above its upper limit", hi[j] + 0.1), ("below its lower limit", lo[j] - 0.1)):
+        probes = [(f"{step:g} {way} its {which} limit", bound + sign * step) for step in (0.1, PAST_LIMIT)
+                  for way, which, bound, sign in (("above", "upper", hi[j], 1.0), ("below", "lower", lo[j], -1.0))]
+        for side, value in probes:
             if not (np.isfinite(value) and abs(value) < 1e6):
                 continue
             out = q.copy()
             out[j] = value
             Qo = Q.copy()
             Qo[-1, j] = value
-            what = f"q[{j}] 0.1 {side}"
+            what = f"q[{j}] (joint {_joint_of_q(m.pin_model, j)!r}) {side}"
             calls = {f"collides(Q with a row's {what})": lambda: c.collides(Qo)}
             if _distances(c):
                 calls[f"pair_distances(q with {what})"] = lambda: c.pair_distances(out)

@@ -16,7 +16,7 @@ from ._suite import NotApplicable, expect
 from ._threads import run_in_threads
 
 __all__ = ["check_optional_fast_paths", "check_pair_subset", "check_pair_distances_many", "check_thread_safety",
-           "check_results_kept", "check_distance_jacobian"]
+           "check_results_kept", "check_distance_jacobian", "check_model_as_made"]
 
 
 def check_optional_fast_paths(ctx, model):
@@ -137,7 +137,8 @@ THREADS = 4
 
 
 def _answer(r) -> tuple:
-    return tuple(np.asarray(getattr(r, k)) for k in ("distance", "p_WA", "p_WB"))
+    """Copies: an answer in a scratch buffer another thread rewrites compared equal to itself."""
+    return tuple(np.array(getattr(r, k), copy=True) for k in ("distance", "p_WA", "p_WB"))
 
 
 def check_thread_safety(ctx, model):
@@ -192,20 +193,32 @@ def check_thread_safety(ctx, model):
 
 # ================================================================ results stay the caller's
 def check_results_kept(ctx, model):
-    """An answer stays as it was returned whatever is asked after it: ``pair_distances(q)``'s arrays,
-    ``collides(Q)``'s and ``pair_distances_many(Q)``'s are the caller's, not the backend's scratch
-    (a later call that wrote into them changed a result already handed out)."""
+    """An answer stays as it was returned whatever is asked after it: ``pair_distances(q)``'s arrays (with
+    ``pairs=`` too), ``collides(Q)``'s, ``pair_distances_many(Q)``'s, ``min_distance_many(Q)``'s and
+    ``nearest(q)``'s witness points are the caller's, not the backend's scratch (a later call that wrote
+    into them changed a result already handed out); and a caller editing an answer it holds changes no
+    later answer (a cache that hands out its own arrays)."""
     c = ctx.checker(model)
     Q = ctx.configs(model)
     other = np.vstack([Q[1:], ctx.model(model).random_q(1, ctx.seed + 1)])  # configurations other than Q[0]
     later = [functools.partial(c.collides, other)]
     kept = {"collides(Q[:1])": (c.collides(Q[:1]),)}
     if _distances(c):
+        rows = np.arange(min(3, len(ctx.model(model).pairs)))
         kept["pair_distances(configuration 0)"] = _arrays(c.pair_distances(Q[0]))
         later += [functools.partial(c.pair_distances, q) for q in other]
+        if _has_pairs_argument(c):
+            kept[f"pair_distances(configuration 0, pairs={rows.tolist()})"] = _arrays(c.pair_distances(Q[0], pairs=rows))
+            later += [functools.partial(c.pair_distances, q, pairs=rows) for q in other]
         if hasattr(c, "pair_distances_many"):
             kept["pair_distances_many(Q[:1])"] = _arrays(c.pair_distances_many(Q[:1]))
-            later.append(functools.partial(c.pair_distances_many, other))
+            later += [functools.partial(c.pair_distances_many, rows_q) for rows_q in (other[-1:], other)]  # as many rows first
+        if hasattr(c, "min_distance_many"):
+            kept["min_distance_many(Q[:1])"] = (c.min_distance_many(Q[:1]),)
+            later += [functools.partial(c.min_distance_many, rows_q) for rows_q in (other[-1:], other)]
+        if hasattr(c, "nearest"):
+            kept["nearest(configuration 0)"] = tuple(x for n in c.nearest(Q[0]).values() for x in (n.p_WA, n.p_WB))
+            later += [functools.partial(c.nearest, q) for q in other]
     copies = {what: tuple(np.array(a, copy=True) for a in arrays) for what, arrays in kept.items()}
     for call in later:
         call()
@@ -214,6 +227,17 @@ def check_results_kept(ctx, model):
             expect(np.array_equal(a, was, equal_nan=True),
                    f"{what}: an answer changed after later calls (it shares memory the backend writes again): "
                    "return arrays of their own (copies), not the backend's scratch")
+    if _distances(c):  # a caller that edits an answer it holds changes no later answer (a cache handing it out)
+        r = c.pair_distances(Q[0])
+        for key in ("distance", "p_WA", "p_WB"):
+            a = getattr(r, key)
+            if isinstance(a, np.ndarray) and a.flags.writeable:
+                a += 0.05
+        again = c.pair_distances(Q[0])
+        for key, was in zip(("distance", "p_WA", "p_WB"), copies["pair_distances(configuration 0)"]):
+            expect(np.allclose(getattr(again, key), was, rtol=0.0, atol=1e-6, equal_nan=True),
+                   f"pair_distances(configuration 0).{key}: after the caller added 0.05 to the answer it held, the "
+                   "same configuration was answered with the edited values: a cache handing out its own arrays")
 
 
 def _arrays(r) -> tuple:
@@ -283,3 +307,37 @@ def check_distance_jacobian(ctx, model):
            "call 85-100 % of them smooth)")
     if not compared:
         raise NotApplicable("no row smooth at the configurations checked")
+
+
+# ================================================================ the Model as made
+def check_model_as_made(ctx, model):
+    """A Checker answers for the Model it was built on, whatever ``model.scene`` does afterwards: built on a
+    Model whose scene's workspace box was then shrunk by a quarter each side, it answers as on the Model
+    unedited (distances, witness points, verdicts).  A backend reads ``model.workspace``, not
+    ``model.scene.workspace`` (coal, fcl and the example backend read the edited box once)."""
+    from ..model import model_of
+
+    m = ctx.model(model)
+    if m.workspace is None:
+        raise NotApplicable("the model has no workspace box")
+    c = ctx.checker(model)
+    fresh = model_of(m.scene_for().copy())  # a Model of its own, whose scene can be edited
+    lo, hi = np.asarray(fresh.scene.workspace.lo, float), np.asarray(fresh.scene.workspace.hi, float)
+    fresh.scene.set_workspace(lo + 0.25 * (hi - lo), hi - 0.25 * (hi - lo))
+    edited = ctx.backend_impl().build(fresh, dict(ctx.options))
+    Q = ctx.configs(model)
+    v, w = np.asarray(c.collides(Q)), np.asarray(edited.collides(Q))
+    expect(np.array_equal(v, w), lambda: f"configuration {np.flatnonzero(v != w)[0]}: collides says "
+                                         f"{bool(w[np.flatnonzero(v != w)[0]])} after the scene's workspace box was "
+                                         "shrunk, the Model as made says otherwise: read model.workspace, not "
+                                         "model.scene.workspace")
+    if not _distances(c):
+        return
+    for i, q in enumerate(Q):
+        a, b = c.pair_distances(q), edited.pair_distances(q)
+        for key in ("distance", "p_WA", "p_WB"):
+            x, y = np.asarray(getattr(a, key)), np.asarray(getattr(b, key))
+            expect(x.shape == y.shape and np.allclose(x, y, rtol=0.0, atol=1e-9),
+                   lambda: f"{where(i, q)}: {key} differs by up to {np.max(np.abs(x - y)):.3g} m after the scene's "
+                           "workspace box was shrunk (the Model's is unchanged): read model.workspace, not "
+                           "model.scene.workspace")
