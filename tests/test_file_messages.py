@@ -72,6 +72,9 @@ def test_a_misspelt_optional_key_is_told_the_key_it_looks_like(tmp_path):
     assert "bodies[0].catgory (line 6): unknown key (not part of the armguard_scene format; did you mean 'category'?)" in text
     assert "trajectory (line 7): unknown key (not part of the armguard_scene format; did you mean 'trajectories'?)" in text
     assert "zzzz (line 8): unknown key (not part of the armguard_scene format; check the spelling)" in text
+    p.write_text("armguard_scene: 1\nname: c\nrobot: []\n")  # a payload's key elsewhere: not 'did you mean robot'
+    with pytest.raises(armguard.SceneFileError, match=r"robot \(line 3\): unknown key \(.*did you mean 'robots'\?\)"):
+        armguard.load_scene(p)
 
 
 def test_a_trajectory_file_in_degrees_lists_the_values_outside_and_says_degrees(tmp_path):

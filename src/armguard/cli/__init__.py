@@ -87,7 +87,8 @@ def _option_names(ctx, message: str) -> str:
     ok="done: clear, safe, the backends agree, the output written",
     unsafe="unsafe: a collision or stopping-distance violation (check, verify), an edge in collision (edges), "
            "backends that differ (compare), "
-           "an error-level finding (check-urdf), with --strict a disabled pair that can collide (check-srdf), a map "
+           "an error-level finding (check-urdf), with --strict a disabled pair that can collide, Adjacent and Default "
+           "ones exempt (check-srdf), a map "
            "that allows a colliding configuration (cspace info --samples), a motion refused or a FIND failed "
            "(program run, program calibrate)",
     incomplete="incomplete: a check or verification that could not finish (check, verify, edges)"))

@@ -295,6 +295,6 @@ def near_key(key) -> str | None:
     import difflib
 
     known = sorted({f for v in globals().values() if isinstance(v, type) and issubclass(v, BaseModel) and v is not BaseModel
-                    for f in v.model_fields})
+                    for f in v.model_fields} - {str(key)})  # a key of another mapping ('robot' of a payload) is not near
     near = difflib.get_close_matches(str(key), known, n=1, cutoff=0.75)
     return near[0] if near else None
