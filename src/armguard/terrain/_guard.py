@@ -88,9 +88,8 @@ class TerrainReport:
         map) within ``threshold + unknown_margin``; WARNING: a known column within ``threshold``;
         CLEAR: every link farther than the threshold from every column.
     distance : float, m
-        The exact signed distance of the pair ``link``, ``cell`` and the witnesses name: the nearest known
-        column when it is in collision or within the threshold (COLLISION, WARNING, and an INCOMPLETE
-        beside seen ground that near), else for INCOMPLETE the nearest unknown column, else the nearest
+        The exact signed distance of the pair ``link``, ``cell`` and the witnesses name: for a COLLISION
+        the nearest known column (the contact, though an unknown column may be deeper), else the nearest
         of all (``min(known_distance, unknown_distance)``); ``inf`` when every link is farther than
         ``reach`` (then it is only known to be more than ``reach``).
     known_distance, unknown_distance : float, m
@@ -132,8 +131,8 @@ class TerrainReport:
     nx: int = field(default=0, repr=False)
 
     def pair(self):
-        """The link–terrain pair the report names (``distance``: the nearest known column in collision or within
-        the threshold, else ...) as an :class:`armguard.PairResult` of category ``"terrain"`` (None when every
+        """The link–terrain pair the report names (``distance``: a COLLISION's known column, else the nearest)
+        as an :class:`armguard.PairResult` of category ``"terrain"`` (None when every
         link is beyond ``reach``)."""
         from ..detect import PairResult
 
@@ -399,10 +398,9 @@ class TerrainGuard:
             per[o] = min(per.get(o, math.inf), float(a), float(b))
         link = cell = pA = pB = None
         unk = False
-        # the pair named: a known column when it collides or is within the threshold (a deeper unknown column
-        # beside a colliding known one named the unseen cell as the collision), else for INCOMPLETE the unknown
-        # one that made it so, else the nearest of all
-        side = known if (status is Status.COLLISION or dk <= thr) else (unknown if status is Status.INCOMPLETE else None)
+        # the pair named: for a COLLISION the known column that makes it (a deeper unknown column beside it was
+        # named, as if the contact were with unseen ground), else the nearest of all
+        side = known if status is Status.COLLISION else None
         d = min(dk, du) if side is None else float(np.min(side))
         if math.isfinite(d):
             both = np.minimum(known, unknown) if side is None else side
