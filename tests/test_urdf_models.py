@@ -395,6 +395,11 @@ def test_command_line_tool(tmp_path):
     assert r.returncode == 0, r.stderr
     model, geom = _load(out / "gmf_s480.urdf")
     assert model.nq == 4 and geom.ngeoms == 7
+    # a file that is no scene file (WORKMATE's cell file): its located error, exit 3, not a traceback
+    r = subprocess.run([sys.executable, str(ROOT / "tools" / "dh_to_urdf.py"), str(ROOT / "examples" / "workmate" / "cell.yaml"),
+                        "--out", str(tmp_path / "cell")], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 3 and r.stderr.startswith("error: ") and "Traceback" not in r.stderr, r.stderr
+    assert "armguard_scene: required key is missing" in r.stderr
 
 
 def test_the_sidecar_keeps_each_arms_ik(tmp_path):

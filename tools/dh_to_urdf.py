@@ -28,8 +28,12 @@ def main(argv=None) -> int:
     source = builtin_path(args.scene) or Path(args.scene)
     if not source.is_file():
         parser.error(f"{args.scene!r} is neither a built-in scene nor a scene file")
-    scene = armguard.load_scene(str(source))
-    paths = export_scene(scene, args.out, name=args.name, source=source)
+    try:
+        scene = armguard.load_scene(str(source))
+        paths = export_scene(scene, args.out, name=args.name, source=source)
+    except armguard.ArmguardError as exc:  # a file refused: its message, located, not a traceback
+        print(f"error: {exc}", file=sys.stderr)
+        return 3
     for key in ("urdf", "srdf", "yaml"):
         print(paths[key])
     print(f"{len(paths['meshes'])} meshes in {args.out / 'meshes'}")
