@@ -206,7 +206,7 @@ def _portable(d: dict, folder: Path) -> dict:
                     rel = os.path.relpath(v, base)
                 except ValueError:  # another drive (Windows): no relative path
                     continue
-                if not rel.startswith(os.pardir):
+                if rel != os.pardir and not rel.startswith(os.pardir + os.sep):  # (a folder "..x" inside is inside)
                     r[key] = Path(rel).as_posix()
     return d
 
