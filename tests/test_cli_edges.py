@@ -220,3 +220,29 @@ def test_too_few_columns_are_told_in_the_command_lines_words(tmp_path):
     np.savez(tmp_path / "few.npz", Q0=np.zeros((2, 3)), Q1=np.full((2, 3), 0.1))
     r = CliRunner().invoke(main, ["edges", "puma560", str(tmp_path / "few.npz")])
     assert r.exit_code == 3 and "joint_names array" in r.output and "joints=" not in r.output, r.output
+
+
+def test_category_margins_from_the_command_line(tmp_path):
+    """``--margin 0.03 --category-margin arm-arm=0``: check_edges' margin by category, in the summary and the
+    file (``margin_categories``, ``margins``); a bad one is a usage error, an unknown category exit 3."""
+    m = armguard.load_model("hermes")
+    rob = m.scene.robots["hera"]
+    rng = np.random.default_rng(4)
+    lo, hi = np.asarray(rob.lower), np.asarray(rob.upper)
+    Q0 = lo + (hi - lo) * rng.random((40, 6))
+    Q1 = np.clip(Q0 + 0.15 * (hi - lo) * (rng.random((40, 6)) - 0.5), lo, hi)
+    np.savez(tmp_path / "e.npz", Q0=Q0, Q1=Q1)
+    res = _run("edges", "hermes", str(tmp_path / "e.npz"), "--margin", "0.03", "--category-margin", "arm-arm=0",
+               "--out", str(tmp_path / "r.npz"))
+    ref = Verifier(m).check_edges(Q0, Q1, margin={"*": 0.03, "arm-arm": 0.0})
+    assert res.exit_code == (ExitCode.UNSAFE if ref.counts()["collision"] else ExitCode.OK), res.output
+    assert f"{ref.counts()['clear']} clear, {ref.counts()['collision']} in collision or within their category's margin " \
+           "(arm-arm 0 mm, arm-payload 30 mm, arm-vehicle 30 mm, payload-vehicle 30 mm)" in res.output
+    with np.load(tmp_path / "r.npz") as f:
+        np.testing.assert_array_equal(f["code"], ref.code)
+        assert list(f["margin_categories"]) == ["arm-arm", "arm-payload", "arm-vehicle", "payload-vehicle"]
+        assert list(f["margins"]) == [0.0, 0.03, 0.03, 0.03] and "margin" not in f.files
+    bad = _run("edges", "hermes", str(tmp_path / "e.npz"), "--category-margin", "arm-arm")
+    assert bad.exit_code == ExitCode.USAGE and "expected CATEGORY=M" in bad.output
+    unknown = _run("edges", "hermes", str(tmp_path / "e.npz"), "--category-margin", "arm-arms=0")
+    assert unknown.exit_code == ExitCode.INPUT and "no checked pair is in category 'arm-arms'" in unknown.output

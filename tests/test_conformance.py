@@ -259,6 +259,21 @@ class _Wrapped(armguard.backends.CheckerBase):
         return (-J if self.mutation == "jacobian negated" else J), smooth
 
 
+class _OwnMargins(_Wrapped):
+    """A backend that reads a margin per pair itself (its ``collides`` set after the class was made: the
+    framework's per-pair margins never wrap it), as its least."""
+
+
+def _least_margin(self, Q, *, margin=0.0):
+    if not np.ndim(margin) and not isinstance(margin, dict):
+        return _Wrapped.collides(self, Q, margin=margin)
+    values = list(margin.values()) if isinstance(margin, dict) else margin
+    return _Wrapped.collides(self, Q, margin=float(np.min(values)))
+
+
+_OwnMargins.collides = _least_margin
+
+
 class _Mutant:
     def __init__(self, mutation: str) -> None:
         self.name, self.mutation = "mutant", mutation
@@ -266,6 +281,8 @@ class _Mutant:
     def build(self, model, options=None):
         if options and self.mutation != "unknown option accepted":
             raise BackendError(f"mutant: unknown options {sorted(options)}; this backend takes none")
+        if self.mutation == "margins per pair read as their least":
+            return _OwnMargins(model, self.mutation)
         return _Wrapped(model, self.mutation)
 
 
@@ -320,6 +337,8 @@ MUTATIONS = {
     "pairs= answers in reused scratch arrays": "results_kept",
     "min_distance_many in reused scratch": "results_kept",
     "a cache handing out its own arrays": "results_kept",
+    # a backend answering margins per pair itself, wrongly
+    "margins per pair read as their least": "margins_per_pair",
 }
 MODEL_OF = {"a continuous joint's (cos, sin) normalised": "kinova", "collides skips the workspace walls": "ranger",
             "collides skips the payload": "hermes", "reads the scene's workspace": "ranger"}  # else puma560

@@ -56,8 +56,8 @@ from typing import Mapping
 import numpy as np
 
 from armguard._errors import BackendError
-from armguard.backends import (Capability, CheckerBase, PairDistances, PairDistancesMany, check_margin, check_pairs, check_q,
-                               check_Q, check_unit_circle)
+from armguard.backends import (Capability, CheckerBase, PairDistances, PairDistancesMany, check_margin, check_margins,
+                               check_pairs, check_q, check_Q, check_unit_circle, collides_per_pair)
 
 __all__ = ["AnalyticBackend", "AnalyticChecker"]
 
@@ -167,6 +167,7 @@ class AnalyticChecker(CheckerBase):
     name = "analytic"
     capabilities = frozenset({Capability.DISTANCES, Capability.VERDICTS})
     jacobian_with_distances = True  # the Jacobian kernel runs right after the distances
+    own_pair_margins = True  # collides takes margins per pair itself (no framework wrapper on the fast path)
 
     def __init__(self, model, options: Mapping | None = None) -> None:
         super().__init__(model)
@@ -430,8 +431,10 @@ class AnalyticChecker(CheckerBase):
         when it is already a C-contiguous float64 array of the right width (the kernel itself refuses
         a non-finite row, then :func:`check_Q` names it), the joints reordered only where Pinocchio's
         order is not the scene's."""
-        margin = check_margin(margin)
         model = self.model
+        margin = check_margin(margin) if type(margin) is float else check_margins(model, margin)
+        if type(margin) is not float:  # a margin per pair: decided from this checker's own answers
+            return collides_per_pair(self, check_Q(model, Q), margin)
         if type(Q) is not _ND or Q.dtype is not _F64 or Q.ndim != 2 or Q.shape[1] != self._nq or not Q.flags.carray:
             Q = check_Q(model, Q)
             if not Q.flags.writeable:  # a read-only array would compile the kernel again, for that type

@@ -36,6 +36,7 @@ import numpy as np
 
 from .._errors import BackendError
 from .._values import number, refuse_complex_or_bool
+from ._margins import check_margins, collides_per_pair
 
 __all__ = ["Backend", "Checker", "CheckerBase", "PairDistances", "PairDistancesMany", "NearestPair", "Capability",
            "check_q", "check_Q", "check_pairs"]
@@ -291,6 +292,9 @@ class CheckerBase:
     # GJK): such a distance bounds nothing from below, so Ranger's Detector over the backend takes no
     # lower bound from its memory (armguard.detect._ranger)
     distances_may_run_long: bool = False
+    # True where the class's own collides takes margins per pair or category (check_margins,
+    # collides_per_pair): the framework then leaves it unwrapped (the wrapper's call costs ~90 ns)
+    own_pair_margins: bool = False
 
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)
@@ -299,6 +303,9 @@ class CheckerBase:
             own = cls.pair_distances = _with_pairs(own)
         if own is not None and "jacobian" not in inspect.signature(own).parameters:
             cls.pair_distances = _with_jacobian(own)
+        own = cls.__dict__.get("collides")
+        if own is not None and not cls.__dict__.get("own_pair_margins", False):
+            cls.collides = _with_pair_margins(own)
 
     def __init__(self, model) -> None:
         self.model = model
@@ -340,11 +347,12 @@ class CheckerBase:
         return self._pairs[idx], tuple(cat[int(k)] for k in idx)
 
     def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
-        """Default: ``min(pair_distances(q).distance) <= margin`` row by row."""
+        """Default: some pair's ``pair_distances(q).distance <= margin`` row by row (``margin``: one for
+        every pair, or one per pair or category, :mod:`._margins`)."""
         self._require(Capability.DISTANCES)
-        margin = check_margin(margin)
+        margin = check_margins(self.model, margin)
         Q = check_Q(self.model, Q)
-        return np.array([bool(np.min(self.pair_distances(q).distance, initial=np.inf) <= margin) for q in Q], dtype=bool)
+        return np.array([bool(np.any(self.pair_distances(q).distance <= margin)) for q in Q], dtype=bool)
 
     def nearest(self, q) -> dict:
         """Category -> :class:`NearestPair` at ``q`` (default: from :meth:`pair_distances`)."""
@@ -417,6 +425,23 @@ def _with_jacobian(own):
         return r.with_jacobian(*self.distance_jacobian(q, r, idx))
 
     return pair_distances
+
+
+def _with_pair_margins(own):
+    """A backend's one-margin ``collides`` given the framework's margins per pair or category
+    (:func:`._margins.collides_per_pair`, exact from the backend's own answers); a float goes
+    straight through (one type test)."""
+
+    @functools.wraps(own)
+    def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
+        if type(margin) is float:
+            return own(self, Q, margin=margin)
+        m = check_margins(self.model, margin)
+        if type(m) is float:
+            return own(self, Q, margin=m)
+        return collides_per_pair(self, check_Q(self.model, Q), m)
+
+    return collides
 
 
 def _with_pairs(full):

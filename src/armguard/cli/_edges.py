@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -82,7 +83,10 @@ def read_edges(path) -> tuple:
               "the scene's flat joint order).")
 @click.option("--margin", type=LENGTH, default=0.0, show_default=True,
               help="Clearance every configuration must keep, on every checked pair: obstacles and the robot's own "
-                   "links (m).")
+                   "links (m); --category-margin sets a category's own.")
+@click.option("--category-margin", "category_margins", multiple=True, metavar="CATEGORY=M",
+              help="The clearance of one category of pairs instead (m; repeatable): e.g. arm-arm=0 with --margin "
+                   "0.02 keeps 2 cm from everything but the arm's own links (armguard info MODEL lists the categories).")
 @click.option("--first-contact", is_flag=True, help="Report each collision's first contact along its edge (more evaluations).")
 @click.option("--continuous", type=click.Choice(["line", "shortest"]), default="line", show_default=True,
               help="Continuous joints along the angle's line, or turned the short way (as pinocchio.interpolate).")
@@ -92,7 +96,8 @@ def read_edges(path) -> tuple:
               help="Write the results here (.npz: code (0 clear, 1 collision, 2 incomplete), s_free, s, q (columns "
               "q_joint_names), distance, pair_a, pair_b, evaluations, robot, margin, joint_names, held_names, "
               "held_values).")
-def edges_cmd(model, edges_file, robot, margin, first_contact, continuous, max_evaluations, out_path) -> None:
+def edges_cmd(model, edges_file, robot, margin, category_margins, first_contact, continuous, max_evaluations,
+              out_path) -> None:
     """Certify the straight joint-space edges Q0[i] -> Q1[i] of EDGES.npz on MODEL: each CLEAR (every
     configuration, not samples), COLLISION (with the prefix proven clear) or INCOMPLETE.
 
@@ -132,6 +137,8 @@ def edges_cmd(model, edges_file, robot, margin, first_contact, continuous, max_e
         raise VerificationError(f"{edges_file}: model {m.name!r} orders its joints for Pinocchio otherwise than its scene: "
                                 "name the columns with joint_names (scene.joint_names, e.g. "
                                 f"{m.scene.joint_names[0]!r}), or convert Pinocchio configurations with model.scene_q")
+    if category_margins:
+        margin = {"*": margin, **_category_margins(category_margins)}
     warm_up(console=console)
     verifier = Verifier(m)
     M = max(len(np.atleast_2d(Q0)), len(np.atleast_2d(Q1)))
@@ -155,7 +162,8 @@ def edges_cmd(model, edges_file, robot, margin, first_contact, continuous, max_e
         np.savez(buf, code=res.code, s_free=res.s_free, s=res.s, q=res.q, distance=res.distance,
                  evaluations=res.evaluations, pair_a=np.array([p[0] if p else "" for p in res.pair], dtype=str),
                  pair_b=np.array([p[1] if p else "" for p in res.pair], dtype=str),
-                 q_joint_names=np.array(q_names, dtype=str), robot=np.array(res.robot), margin=np.array(res.margin),
+                 q_joint_names=np.array(q_names, dtype=str), robot=np.array(res.robot),
+                 **_margin_arrays(res.margin),
                  joint_names=np.array(res.joint_names, dtype=str), held_names=np.array(list(res.held), dtype=str),
                  held_values=np.array(list(res.held.values()), dtype=float))
         atomic_write(Path(out_path), buf.getvalue(), parents=True)
@@ -173,3 +181,32 @@ def edges_cmd(model, edges_file, robot, margin, first_contact, continuous, max_e
     c = res.counts()
     status = ExitCode.UNSAFE if c["collision"] else ExitCode.INCOMPLETE if c["incomplete"] else ExitCode.OK
     sys.exit(int(status))
+
+
+def _category_margins(items) -> dict:
+    """``--category-margin`` values ``CATEGORY=M`` as ``{category: M}`` (a bad one: a usage error naming it)."""
+    out = {}
+    for item in items:
+        cat, eq, value = item.partition("=")
+        try:
+            m = float(value) if eq and cat.strip() else math.nan
+        except ValueError:
+            m = math.nan
+        if not (math.isfinite(m) and m >= 0.0):
+            raise click.BadParameter(f"expected CATEGORY=M with M a finite number >= 0 (m), got {item!r}",
+                                     param_hint="--category-margin")
+        if cat.strip() in out:
+            raise click.BadParameter(f"category {cat.strip()!r} given twice", param_hint="--category-margin")
+        out[cat.strip()] = m
+    return out
+
+
+def _margin_arrays(margin) -> dict:
+    """The results file's margin fields: ``margin`` (one for every pair), or per category
+    ``margin_categories`` and ``margins`` (and no single ``margin``)."""
+    import numpy as np
+
+    if isinstance(margin, dict):
+        cats = sorted(margin)
+        return {"margin_categories": np.array(cats, dtype=str), "margins": np.array([margin[c] for c in cats])}
+    return {"margin": np.array(margin)}

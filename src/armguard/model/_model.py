@@ -37,8 +37,8 @@ class GeometryPairs:
 
     ``a``, ``b`` ``(n,)`` GeometryObject names (``b`` is :data:`WORKSPACE` for the workspace box);
     ``owner_a``, ``owner_b`` ``(n,)`` the scene owners (``"robot/link"``, body or payload names);
-    ``category`` ``(n,)`` category names (``arm_arm``, ``arm_vehicle``, ``arm_environment``,
-    ``arm_payload``, ``payload_*``, ``workspace``).
+    ``category`` ``(n,)`` category names (``arm-arm``, ``arm-vehicle``, ``arm-environment``,
+    ``arm-payload``, ``payload-*``, ``workspace``): ``collides``' margins may be given by these.
     """
 
     a: tuple

@@ -376,6 +376,36 @@ def check_collides_matches_distances(ctx, model):
                                     f"{margin:.9g} m says {got}")
 
 
+def check_margins_per_pair(ctx, model):
+    """``collides(Q, margin=m)`` with a margin per pair (an ``(n,)`` array: each pair's own between 0 and
+    its median distance, so that the least and the largest margin decide rows otherwise, and the clearest
+    configuration's nearest pair's just above its distance) and by category
+    (``{first category: 0, "*": 0.05}``) is ``any(distance <= m)`` row by row, except within the contact
+    band of a pair's margin (:mod:`armguard.backends._margins`)."""
+    c = ctx.checker(model)
+    _require_distances(c)
+    Q = ctx.configs(model)
+    D = np.array([answer(ctx, model, c, q, i).distance for i, q in enumerate(Q)]).reshape(len(Q), -1)
+    if D.shape[1] < 2:
+        raise NotApplicable("one pair: a margin per pair is one margin")
+    m = np.clip(np.median(D, axis=0) * np.random.default_rng(0).random(D.shape[1]), 0.0, 0.2)
+    r = int(np.argmax(D.min(axis=1)))  # the clearest configuration: within its nearest pair's margin only
+    k = int(np.argmin(D[r]))
+    m[k] = max(m[k], D[r, k] + 10 * BAND)
+    cats = tuple(c.model.pairs.category)
+    by_cat = {cats[0]: 0.0, "*": MARGIN}
+    m_cat = np.where(np.asarray(cats) == cats[0], 0.0, MARGIN)
+    for what, given, mk in (("an array per pair", m, m), (f"{{{cats[0]!r}: 0, '*': {MARGIN}}}", by_cat, m_cat)):
+        v = np.asarray(c.collides(Q, margin=given))
+        want = np.any(D <= mk, axis=1)
+        clear = ~np.any(np.abs(D - mk) <= BAND, axis=1)
+        expect(v.shape == want.shape, lambda: f"margin {what}: collides gave shape {v.shape}, expected {want.shape}")
+        bad = np.flatnonzero(clear & (v != want))
+        expect(not bad.size, lambda: f"margin {what}, {where(bad[0], Q[bad[0]])}: collides says {bool(v[bad[0]])} but "
+                                     f"{'pair ' + str(int(np.argmax(D[bad[0]] <= mk))) + ' is within its margin' if want[bad[0]] else 'every pair is outside its margin'} "
+                                     f"(least distance less margin {float(np.min(D[bad[0]] - mk)):.6g} m)")
+
+
 def check_deterministic(ctx, model):
     """The same ``q`` gives the same answer whatever was asked before: the configurations forwards,
     backwards and again give identical distances, witness points and verdicts (a batch of

@@ -38,6 +38,7 @@ import heapq
 import math
 import time as _time
 from dataclasses import dataclass
+from typing import Mapping
 
 import numpy as np
 
@@ -89,7 +90,9 @@ class EdgeResults:
         The columns of ``Q0`` and ``Q1`` (the robot's joints, or the subset ``joints=`` named).
     held : dict
         The robot's joints not in ``joint_names`` and the value each was held at.
-    margin : float, m
+    margin : float or dict, m
+        The margin every configuration keeps: one for every pair, or by pair category
+        (``{"arm-arm": 0.0, "arm-vehicle": 0.02, ...}``, every checked category named).
     elapsed_s : float
         Wall time of the whole call.
     """
@@ -104,7 +107,7 @@ class EdgeResults:
     robot: str
     joint_names: tuple
     held: dict
-    margin: float
+    margin: float | dict
     elapsed_s: float
 
     def __post_init__(self) -> None:
@@ -132,7 +135,11 @@ class EdgeResults:
         c = self.counts()
         ev = self.evaluations
         med = float(np.median(ev)) if len(ev) else 0.0
-        hit = "in collision" if self.margin == 0.0 else f"in collision or within the margin ({self.margin * 1e3:g} mm)"
+        if isinstance(self.margin, dict):
+            hit = ("in collision or within their category's margin ("
+                   + ", ".join(f"{c} {m * 1e3:g} mm" for c, m in sorted(self.margin.items())) + ")")
+        else:
+            hit = "in collision" if self.margin == 0.0 else f"in collision or within the margin ({self.margin * 1e3:g} mm)"
         who = "every robot (*)" if self.robot == ALL_ROBOTS else repr(self.robot)
         held = (f"; held still (the Verifier's home, or its q_others): {', '.join(f'{j} = {v:g}' for j, v in self.held.items())}" if self.held else "")
         return (f"{len(self)} edges of {who}: {c['clear']} clear, {c['collision']} {hit}, "
@@ -197,12 +204,32 @@ def _budget(max_evaluations, tol) -> int:
     return int(max_evaluations)
 
 
-def _margin(margin) -> float:
+def _margin(margin, model):
+    """A float (every pair), or an ``(P,)`` array over ``model``'s (the ClearanceModel's) pairs from a mapping
+    by the Model's pair categories (``"*"``: the default of the others, else 0), else a VerificationError."""
+    if isinstance(margin, Mapping):
+        cats = model.pair_category
+        known = sorted(set(cats))
+        out = np.full(len(cats), _one_margin(margin.get("*", 0.0), "margin['*']"))
+        for key, value in margin.items():
+            if key == "*":
+                continue
+            if key not in known:
+                raise VerificationError(f"margin: no checked pair is in category {key!r}; the categories: {', '.join(known)}")
+            out[[k for k, c in enumerate(cats) if c == key]] = _one_margin(value, f"margin[{key!r}]")
+        return float(out[0]) if np.all(out == out[0]) else out
+    if np.ndim(margin) and not isinstance(margin, (str, bytes)):
+        raise VerificationError("margin: expected a number (m) or a mapping by pair category ({'arm-arm': 0.0, "
+                                f"'*': 0.02}}); an array per pair is collides' form, got shape {np.shape(margin)}")
+    return _one_margin(margin, "margin")
+
+
+def _one_margin(margin, what: str) -> float:
     m = math.nan
     if not isinstance(margin, (bool, np.bool_)) and np.ndim(margin) == 0 and np.asarray(margin).dtype.kind in "fiu":
         m = float(margin)
     if not (math.isfinite(m) and m >= 0.0):
-        raise VerificationError(f"margin: expected a finite number >= 0 (m), got {margin!r}")
+        raise VerificationError(f"{what}: expected a finite number >= 0 (m), got {margin!r}")
     return m
 
 
@@ -322,7 +349,7 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints,
         raise VerificationError(f"Q0 and Q1: expected the same number of edges (or one of them a single "
                                 f"configuration), got {len(Q0)} and {len(Q1)}")
     Q0, Q1 = np.broadcast_arrays(Q0, Q1)
-    m = _margin(margin)
+    m = _margin(margin, model)
     budget = _budget(max_evaluations, verifier.tol)
     base, k0, k1 = _flat(verifier, st, rname)
     held = {}
@@ -368,7 +395,8 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints,
             q_hit[i] = run.Q[row]
             d_hit[i] = run.D[row, p]
             pair[i] = (model.owner_a[p], model.owner_b[p])
-    return EdgeResults(code, s_free, s_hit, q_hit, d_hit, pair, evals, rob.name, names, held, m,
+    given = m if type(m) is float else {c: float(x) for c, x in zip(model.pair_category, m)}
+    return EdgeResults(code, s_free, s_hit, q_hit, d_hit, pair, evals, rob.name, names, held, given,
                        _time.perf_counter() - t_start)
 
 
@@ -393,6 +421,9 @@ def _evaluate(run, s, q0, q1, dq, rates, m, ends=None):
     else:
         row = run.eval(0, s, q)
     d = run.D[row]
+    if type(m) is not float:  # a margin per pair: each pair's gap d - m against no margin
+        d = d - m
+        m = 0.0
     g, p, rho, _ = advance_step(d, d, rates, m, 0.0, False)
     if g != g:
         raise VerificationError(f"a clearance is NaN at s = {s!r} of the edge: no verdict")

@@ -112,9 +112,10 @@ class ClearanceModel:
         self._part_kind = {o: parts[o].kind for o in self.parts}
         self._part_robot = {o: parts[o].robot for o in self.parts}
         # the pair list
-        pa, pb, cat, chk = [], [], [], []
+        pa, pb, cat, chk, pcat = [], [], [], [], []
         for cp in scene.allowed_pairs():
-            c, h = _SCENE_CATEGORY[getattr(cp.category, "value", cp.category)]
+            pcat.append(getattr(cp.category, "value", cp.category))
+            c, h = _SCENE_CATEGORY[pcat[-1]]
             pa.append(cp.a)
             pb.append(cp.b)
             cat.append(c)
@@ -124,6 +125,7 @@ class ClearanceModel:
                 pa.append(o)
                 pb.append(WORKSPACE)
                 cat.append("workspace")
+                pcat.append("workspace")
                 chk.append("link-workspace" if parts[o].kind == "link" else "payload-workspace")
         if not pa:
             raise VerificationError("the scene has no pair to check (no moving part with shapes, or every pair disabled)")
@@ -131,6 +133,8 @@ class ClearanceModel:
         self.owner_b = tuple(pb)
         self.category = tuple(cat)
         self.check = tuple(chk)
+        #: each pair's category as the Model names it (``Model.pairs.category``: "arm-arm", "arm-vehicle", ...)
+        self.pair_category = tuple(pcat)
         n_parts = len(self.parts)
         self.index_a = np.array([self._part_index.get(a, n_parts) for a in pa], dtype=np.int64)
         self.index_b = np.array([self._part_index.get(b, n_parts) for b in pb], dtype=np.int64)

@@ -249,14 +249,15 @@ class Verifier(FollowsScene):
         args = (sd, method, frequency, joint_step, robot, thr, mass, name, t_start)
         return self._on_one_state(lambda st: self._verify_once(st, trajectory, *args), _ATTEMPTS, "verify this trajectory")
 
-    def check_edges(self, Q0, Q1, *, robot: str | None = None, joints=None, margin: float = 0.0,
+    def check_edges(self, Q0, Q1, *, robot: str | None = None, joints=None, margin: float | dict = 0.0,
                     max_evaluations: int | None = None, first_contact: bool = False, continuous: str = "line",
                     progress=None):
         """Certify the straight joint-space edges ``Q0[i] -> Q1[i]`` ``(M, n)`` or ``(n,)`` (one side may be a
         single configuration) of one robot (``robot="*"``: of every robot at once, the scene's flat joint order):
         its joints in its order, or those ``joints`` names (the others held where this Verifier holds them),
         within limits.  :class:`EdgeResults`: ``CLEAR`` for every
-        configuration at least ``margin`` (m) clear, ``INCOMPLETE`` after ``max_evaluations`` per edge
+        configuration at least ``margin`` (m; or by pair category, ``{"arm-arm": 0.0, "*": 0.02}``) clear,
+        ``INCOMPLETE`` after ``max_evaluations`` per edge
         (``Tolerances.edge_max_evaluations``); ``first_contact``: a COLLISION's ``s`` is the first contact
         along the edge (more evaluations); ``continuous="shortest"`` turns continuous joints the short way
         (default: along the angle's line, as trajectories); ``progress(done, total)`` is called now and then.

@@ -1,0 +1,135 @@
+"""Margins per pair: ``collides(Q, margin=...)`` with a margin for each Model pair or category.
+
+One margin for every pair is rarely what a planner wants: a safety distance to the vehicle and the
+cell, but none between the arm's own links, some of which are never far apart (UR5's wrist 2 and
+``ee_link`` are at most 19.8 mm apart: at one 2 cm margin every configuration "collides").  So
+``margin`` may be
+
+* a number (m): every pair (the default, 0: touching or penetrating);
+* a mapping ``{category: m}`` over the Model's pair categories (``Model.pairs.category``:
+  ``"arm-arm"``, ``"arm-vehicle"``, ``"arm-environment"``, ``"workspace"``, ``"arm-payload"``,
+  ``"payload-*"``); a category it does not name gets its ``"*"`` entry, else 0;
+* an ``(n,)`` array, one margin per Model pair (``Model.pairs`` order), e.g. from
+  :meth:`armguard.model.Model.pair_margins`.
+
+Row ``m`` collides when some pair ``k`` has ``distance[m, k] <= margin[k]``.
+
+Every bundled backend answers it through :func:`collides_per_pair`, exactly, from its own
+one-margin ``collides`` and its pair distances: rows colliding at the least margin collide, rows
+clear at the largest are clear, and only the rows between get the distances of the pairs whose
+margin is above the least.  A backend that answers verdicts only (no distances) takes one margin.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Mapping
+
+import numpy as np
+
+from .._errors import BackendError
+from .._values import number
+
+__all__ = ["check_margins", "collides_per_pair", "pair_margins"]
+
+
+def pair_margins(model, default: float = 0.0, *, categories: Mapping | None = None,
+                 padding: Mapping | None = None) -> np.ndarray:
+    """An ``(n,)`` margin per Model pair: ``categories.get(pair's category, default)`` plus the
+    ``padding`` of each side (MoveIt's link padding: a part padded by ``p`` is ``p`` further from
+    everything).  ``padding`` is keyed by the pairs' owners (``Model.pairs.owner_a`` / ``owner_b``:
+    ``"robot/link"``, a body, a payload, ``"workspace"``), or by a link's name alone where one robot
+    has it.  Unknown categories and owners are a BackendError naming the known ones::
+
+        m = armguard.backends.pair_margins(model, 0.02, categories={"arm-arm": 0.0},
+                                           padding={"ur5/ee_link": 0.01})
+        checker.collides(Q, margin=m)
+    """
+    pairs = model.pairs
+    d = number(default, "default", BackendError, low=0.0, unit=" (m)")
+    out = np.full(len(pairs), d)
+    cats = tuple(pairs.category)
+    for key, value in (categories or {}).items():
+        if key not in cats:
+            raise BackendError(f"categories: no pair of this model is in category {key!r}; its categories: "
+                               f"{', '.join(sorted(set(cats))) or 'none'}")
+        out[[k for k, c in enumerate(cats) if c == key]] = number(value, f"categories[{key!r}]", BackendError,
+                                                                   low=0.0, unit=" (m)")
+    owners = sorted(set(pairs.owner_a) | set(pairs.owner_b))
+    for key, value in (padding or {}).items():
+        p = number(value, f"padding[{key!r}]", BackendError, low=0.0, unit=" (m)")
+        hits = [o for o in owners if o == key] or [o for o in owners if o.rpartition("/")[2] == key]
+        if len(hits) != 1:
+            why = "names no part of a pair" if not hits else f"is a link of several robots ({', '.join(hits)})"
+            raise BackendError(f"padding: {key!r} {why}; the parts: {', '.join(owners[:12])}"
+                               f"{', ...' if len(owners) > 12 else ''}")
+        out += p * (np.asarray(pairs.owner_a) == hits[0])
+        out += p * (np.asarray(pairs.owner_b) == hits[0])
+    return out
+
+
+def check_margins(model, margin):
+    """``margin`` as a float (one margin for every pair, the fast path: a plain float in range costs one
+    type test) or a read-only ``(n,)`` float64 array over ``model.pairs`` (a mapping by category, or an
+    array); per-pair margins that are all equal become that float.  Anything else is a BackendError
+    naming what was expected: NaN or a negative margin made ``d <= margin`` false everywhere."""
+    if type(margin) is float and 0.0 <= margin < math.inf:
+        return margin
+    n = len(model.pairs)
+    if isinstance(margin, Mapping):
+        cats = tuple(model.pairs.category)
+        known = sorted(set(cats))
+        out = np.full(n, number(margin.get("*", 0.0), "margin['*']", BackendError, low=0.0, unit=" (m)"))
+        for key, value in margin.items():
+            if key == "*":
+                continue
+            if key not in known:
+                raise BackendError(f"margin: no pair of this model is in category {key!r}; its categories: "
+                                   f"{', '.join(known) or 'none'}")
+            m = number(value, f"margin[{key!r}]", BackendError, low=0.0, unit=" (m)")
+            out[[k for k, c in enumerate(cats) if c == key]] = m
+    elif np.ndim(margin) == 0 or isinstance(margin, (str, bytes)):
+        return number(margin, "margin", BackendError, low=0.0, unit=" (m)")
+    else:
+        try:
+            arr = np.asarray(margin)
+        except (TypeError, ValueError) as exc:
+            raise BackendError(f"margin: expected a number, a mapping by category or {n} numbers (one per "
+                               f"Model pair), got {margin!r}") from exc
+        if arr.shape != (n,) or arr.dtype == bool or arr.dtype.kind not in "fiu":
+            raise BackendError(f"margin: expected a number, a mapping by category or an array of {n} numbers "
+                               f"(one per Model pair, Model.pairs order), got dtype {arr.dtype}, shape {arr.shape}")
+        out = arr.astype(np.float64)
+        bad = np.flatnonzero(~np.isfinite(out) | (out < 0.0))
+        if bad.size:
+            k = int(bad[0])
+            raise BackendError(f"margin[{k}] (pair {model.pairs.a[k]!r} - {model.pairs.b[k]!r}): expected a finite "
+                               f"number >= 0 (m), got {out[k]!r}")
+    if not n or np.all(out == out[0]):  # one margin after all (or no pair for one to apply to)
+        return float(out[0]) if n else 0.0
+    out.flags.writeable = False
+    return out
+
+
+def collides_per_pair(checker, Q: np.ndarray, margins: np.ndarray) -> np.ndarray:
+    """``(M,) bool``: some pair ``k`` with ``distance <= margins[k]``, from ``checker``'s one-margin
+    ``collides`` and its ``pair_distances_many`` (``Q`` already checked, ``margins`` from
+    :func:`check_margins`).  Exact: a row colliding at the least margin collides at its pair's own, a
+    row clear at the largest is clear at every pair's own; the rows between are decided pair by pair
+    on the distances of the pairs whose margin is above the least (the others are already clear)."""
+    from ._interface import Capability
+
+    caps = getattr(checker, "capabilities", frozenset({Capability.DISTANCES}))
+    if Capability.DISTANCES not in caps:
+        raise BackendError(f"{type(checker).__name__}: a margin per pair needs pair distances; this backend "
+                           "answers verdicts only: give one margin")
+    lo, hi = float(margins.min()), float(margins.max())
+    out = checker.collides(Q, margin=lo)
+    rest = np.flatnonzero(~out)
+    if rest.size:
+        near = rest[checker.collides(Q[rest], margin=hi)]
+        if near.size:
+            idx = np.flatnonzero(margins > lo)
+            d = checker.pair_distances_many(Q[near], pairs=idx).distance
+            out[near] = np.any(d <= margins[idx], axis=1)
+    return out

@@ -1,0 +1,177 @@
+"""Margins per pair and per category: ``collides(Q, margin=...)``, ``pair_margins`` and
+``Verifier.check_edges(margin={...})`` against the obviously correct statement from the pair
+distances, ``any(distance <= margin)``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import armguard
+from armguard import BackendError, VerificationError
+from armguard.backends import CheckerBase, check_margins, pair_margins
+from armguard.verify import EdgeStatus, Verifier
+
+BAND = 1e-9  # m: rows with a pair this close to its margin are not compared (rounding decides them)
+
+
+@pytest.fixture(scope="module")
+def hermes():
+    return armguard.load_model("hermes")
+
+
+def _reference(checker, Q, m):
+    D = checker.pair_distances_many(Q).distance
+    return np.any(D <= m, axis=1), ~np.any(np.abs(D - m) <= BAND, axis=1)
+
+
+def test_one_margin_stays_a_float_and_mappings_become_arrays(hermes):
+    cats = np.asarray(hermes.pairs.category)
+    assert check_margins(hermes, 0.02) == 0.02 and type(check_margins(hermes, 1)) is float
+    m = check_margins(hermes, {"arm-arm": 0.0, "*": 0.02})
+    assert m.shape == (len(cats),) and not m.flags.writeable
+    assert np.all(m[cats == "arm-arm"] == 0.0) and np.all(m[cats != "arm-arm"] == 0.02)
+    m = check_margins(hermes, {"arm-vehicle": 0.03})  # unnamed categories: 0
+    assert np.all(m[cats == "arm-vehicle"] == 0.03) and np.all(m[cats != "arm-vehicle"] == 0.0)
+    assert check_margins(hermes, {"*": 0.01}) == 0.01  # every pair the same: the float
+    assert check_margins(hermes, np.full(len(cats), 0.004)) == 0.004
+
+
+@pytest.mark.parametrize("margin, words", [
+    ({"arm-arms": 0.0}, "no pair of this model is in category 'arm-arms'; its categories: arm-arm, arm-payload"),
+    ({"arm-arm": -0.01}, "margin['arm-arm']: expected a finite number >= 0"),
+    ({"*": float("nan")}, "margin['*']: expected a finite number >= 0"),
+    (np.zeros(3), "an array of 50 numbers (one per Model pair, Model.pairs order), got dtype float64, shape (3,)"),
+    (np.r_[np.zeros(49), np.nan], "margin[49] (pair"),
+    (np.zeros(50, dtype=bool), "got dtype bool"),
+    ("0.02", "margin: expected a finite number >= 0 (m), got '0.02'"),
+])
+def test_bad_margins_are_refused_by_name(hermes, margin, words):
+    with pytest.raises(BackendError, match=None) as info:
+        armguard.checker(hermes, "analytic").collides(hermes.random_q(2, 0), margin=margin)
+    assert words in str(info.value)
+
+
+def test_pair_margins_adds_categories_and_padding(hermes):
+    pairs = hermes.pairs
+    m = pair_margins(hermes, 0.01, categories={"arm-arm": 0.0}, padding={"payload": 0.05, "link6": 0.002})
+    for k in range(len(pairs)):
+        want = 0.0 if pairs.category[k] == "arm-arm" else 0.01
+        want += sum(0.05 if o == "payload" else 0.002 if o == "hera/link6" else 0.0 for o in (pairs.owner_a[k], pairs.owner_b[k]))
+        assert m[k] == pytest.approx(want, abs=1e-15), (pairs.owner_a[k], pairs.owner_b[k])
+    with pytest.raises(BackendError, match="'hand' names no part of a pair; the parts: "):
+        pair_margins(hermes, padding={"hand": 0.01})
+    with pytest.raises(BackendError, match=r"'link1' is a link of several robots \(camera_arm/link1, grapple_arm/link1, left_arm/link1, right_arm/link1\)"):
+        pair_margins(armguard.load_model("ranger"), padding={"link1": 0.01})
+
+
+@pytest.mark.parametrize("robot, backends", [("hermes", ("analytic", "coal", "fcl")), ("ranger", ("analytic", "coal")),
+                                             ("ur5", ("analytic", "coal"))])
+def test_collides_per_pair_is_any_distance_within_its_margin(robot, backends):
+    model = armguard.load_model(robot)
+    Q = model.random_q(150, 7)
+    m = pair_margins(model, 0.03, categories={"arm-arm": 0.0}) if robot != "ur5" else \
+        pair_margins(model, padding={"ee_link": 0.01, "wrist_1_link": 0.004})
+    assert np.ptp(m) > 0
+    for b in backends:
+        c = armguard.checker(model, b)
+        want, clear = _reference(c, Q, m)
+        got = c.collides(Q, margin=m)
+        assert got.dtype == bool and got.shape == (len(Q),)
+        assert np.array_equal(got[clear], want[clear]), b
+        # discriminating: neither one margin answers so
+        assert not np.array_equal(want, c.collides(Q, margin=float(m.min()))) or not np.array_equal(
+            want, c.collides(Q, margin=float(m.max()))), b
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(seed=st.integers(0, 2**31 - 1), scale=st.floats(0.0, 0.3))
+def test_any_margins_answer_as_the_distances_do(hermes, seed, scale):
+    rng = np.random.default_rng(seed)
+    c = armguard.checker(hermes, "analytic")
+    Q = hermes.random_q(40, seed)
+    m = scale * rng.random(len(hermes.pairs)) * (rng.random(len(hermes.pairs)) < 0.7)
+    want, clear = _reference(c, Q, m)
+    assert np.array_equal(c.collides(Q, margin=m)[clear], want[clear])
+
+
+def test_a_verdicts_only_backend_takes_one_margin(hermes):
+    c = armguard.checker(hermes, "clip")
+    Q = hermes.random_q(4, 1)
+    assert c.collides(Q, margin={"*": 0.0}).shape == (4,)  # every pair the same: one margin
+    with pytest.raises(BackendError, match="a margin per pair needs pair distances; this backend answers verdicts only"):
+        c.collides(Q, margin={"arm-arm": 0.0, "*": 0.02})
+
+
+def test_a_third_party_backend_gets_margins_per_pair(hermes):
+    """A CheckerBase subclass answering one margin (the float its ``collides`` is written for) answers
+    margins per pair through the framework."""
+    inner = armguard.checker(hermes, "coal")
+    seen = []
+
+    class OneMargin(CheckerBase):
+        name = "one-margin"
+
+        def pair_distances(self, q, *, pairs=None):
+            return inner.pair_distances(q, pairs=pairs)
+
+        def collides(self, Q, *, margin: float = 0.0):
+            seen.append(type(margin))
+            return inner.collides(Q, margin=margin)
+
+    c = OneMargin(hermes)
+    Q = hermes.random_q(60, 3)
+    m = pair_margins(hermes, 0.04, categories={"arm-arm": 0.0})
+    want, clear = _reference(inner, Q, m)
+    assert np.array_equal(c.collides(Q, margin=m)[clear], want[clear])
+    assert set(seen) == {float}
+
+
+def _edges(model, n=60, step=0.15, seed=4):
+    rob = model.scene.robots[next(iter(model.scene.robots))]
+    rng = np.random.default_rng(seed)
+    lo, hi = np.asarray(rob.lower), np.asarray(rob.upper)
+    Q0 = lo + (hi - lo) * rng.random((n, len(lo)))
+    Q1 = np.clip(Q0 + step * (hi - lo) * (rng.random((n, len(lo))) - 0.5), lo, hi)
+    return Q0, Q1
+
+
+def test_check_edges_by_category_against_dense_samples(hermes):
+    """CLEAR edges: no sample within its pair's margin; COLLISION: the pair found within its own
+    category's margin (plus the contact tolerance); the results say the margins."""
+    v = Verifier(hermes)
+    Q0, Q1 = _edges(hermes)
+    margin = {"arm-arm": 0.0, "*": 0.03}
+    res = v.check_edges(Q0, Q1, margin=margin)
+    assert res.margin == {"arm-arm": 0.0, "arm-payload": 0.03, "arm-vehicle": 0.03, "payload-vehicle": 0.03}
+    assert "within their category's margin (arm-arm 0 mm, arm-payload 30 mm" in res.summary()
+    one = v.check_edges(Q0, Q1, margin=0.03)
+    assert 0 < res.counts()["collision"] < one.counts()["collision"]  # the arm's own links no longer held 3 cm apart
+    c = armguard.checker(hermes, "analytic")
+    m = check_margins(hermes, margin)
+    S = np.linspace(0.0, 1.0, 101)[:, None]
+    contact = armguard.DEFAULT_TOLERANCES.verify_contact
+    cat_of = {}
+    for k in range(len(hermes.pairs)):
+        cat_of[frozenset((hermes.pairs.owner_a[k], hermes.pairs.owner_b[k]))] = hermes.pairs.category[k]
+    for i in range(len(Q0)):
+        samples = hermes.pin_q(Q0[i] + S * (Q1[i] - Q0[i]))  # the scene's joint order to Pinocchio's
+        if res.code[i] == EdgeStatus.CLEAR:
+            assert not c.collides(samples, margin=m).any(), i
+        elif res.code[i] == EdgeStatus.COLLISION:
+            cat = cat_of[frozenset(res.pair[i])]
+            assert res.distance[i] <= res.margin[cat] + contact, (i, res.pair[i], res.distance[i])
+
+
+def test_check_edges_margin_errors(hermes):
+    v = Verifier(hermes)
+    Q0, Q1 = _edges(hermes, n=2)
+    with pytest.raises(VerificationError, match="no checked pair is in category 'arm-arms'; the categories: arm-arm"):
+        v.check_edges(Q0, Q1, margin={"arm-arms": 0.0})
+    with pytest.raises(VerificationError, match=r"margin\['\*'\]: expected a finite number >= 0"):
+        v.check_edges(Q0, Q1, margin={"*": -1.0})
+    with pytest.raises(VerificationError, match="an array per pair is collides' form"):
+        v.check_edges(Q0, Q1, margin=np.zeros(50))
+    assert v.check_edges(Q0, Q1, margin={"*": 0.02}).margin == 0.02  # the same for every pair: one margin
