@@ -28,10 +28,11 @@ def limit_rows(lower: np.ndarray, upper: np.ndarray, allowance: float) -> np.nda
     return np.ascontiguousarray(np.stack([lo - allowance, hi + allowance], axis=1).reshape(-1, 2))
 
 
-def limit_error(where: str, Q, names, lower, upper, allowance: float) -> JointLimitError | None:
+def limit_error(where: str, Q, names, lower, upper, allowance: float, mask_hint: str | None = None) -> JointLimitError | None:
     """The error for the first entry of ``Q`` ``(M, n_q)`` (or ``(n_q,)``) outside its limits, or None.
 
-    ``where`` names the entry point; with several rows the row number is added to it."""
+    ``where`` names the entry point; with several rows the row number is added to it, and with
+    ``mask_hint`` how many rows are outside and the hint (how to mask them)."""
     Q = np.asarray(Q, dtype=np.float64)
     Q2 = Q.reshape(1, -1) if Q.ndim == 1 else Q
     lo = np.asarray(lower, dtype=np.float64) - allowance
@@ -42,4 +43,6 @@ def limit_error(where: str, Q, names, lower, upper, allowance: float) -> JointLi
         return None
     m, j = (int(x) for x in np.argwhere(bad)[0])
     place = f"{where} row {m}" if Q.ndim == 2 else where
+    if Q.ndim == 2 and mask_hint and len(Q2) > 1:
+        place += f" ({int(bad.any(axis=1).sum())} of {len(Q2)} rows outside their limits; {mask_hint})"
     return JointLimitError(place, names[j], Q2[m, j], lower[j], upper[j], allowance)
