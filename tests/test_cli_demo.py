@@ -96,3 +96,27 @@ def test_verify_cli_speed_dependent():
     assert "[link-link]" in res.output  # the summary is printed as text, not as rich markup
     bad = CliRunner().invoke(main, ["verify", "puma560", "pick_and_place", "--speed-dependent"])
     assert bad.exit_code == 2 and "--stopping-distance > 0" in bad.output
+
+
+def test_the_clearance_column_brackets_the_least_clearance_up_to_the_first_collision():
+    """The column is the verification's own interval [proven lower bound, least evaluated]: a dense sampling
+    of the moving arm's clearance up to the first collision lies inside it (a sampled figure over the whole
+    trajectory counted the depths past the contact)."""
+    from armguard.cli._demo import clearance_text
+    from armguard.detect import Detector
+
+    for scene, name in (("hermes", "unstow"), ("hermes", "stow_misaligned"), ("rover", "place_instrument")):
+        sc = load_scene(scene)
+        traj = sc.trajectories[name]
+        r = Verifier(sc, robot=traj.robot_name).verify(traj)
+        end = r.first_collision.time if r.first_collision is not None else traj.duration
+        base = sc.default_q()
+        rows = []
+        for q in np.asarray(traj.at(np.linspace(0.0, end, 2000))):
+            base[traj.robot_name] = q
+            rows.append(sc.flat_q(base))
+        sampled = float(np.min(Detector(sc, 0.05, active=traj.robot_name).check_many(np.array(rows)).min_distance))
+        assert r.min_clearance_lower_bound - 1e-9 <= sampled <= r.min_clearance + 1e-9, (scene, name)
+        text = clearance_text(r)
+        assert text.startswith(f"in [{r.min_clearance_lower_bound * 1e3:.1f}, {r.min_clearance * 1e3:.1f}] mm")
+        assert ("before t = " in text) == (r.first_collision is not None)
