@@ -245,4 +245,10 @@ def test_category_margins_from_the_command_line(tmp_path):
     bad = _run("edges", "hermes", str(tmp_path / "e.npz"), "--category-margin", "arm-arm")
     assert bad.exit_code == ExitCode.USAGE and "expected CATEGORY=M" in bad.output
     unknown = _run("edges", "hermes", str(tmp_path / "e.npz"), "--category-margin", "arm-arms=0")
-    assert unknown.exit_code == ExitCode.INPUT and "no checked pair is in category 'arm-arms'" in unknown.output
+    assert unknown.exit_code == ExitCode.USAGE and "'arm-arms' is not a pair category; the categories: arm-arm" in unknown.output
+    star = _run("edges", "hermes", str(tmp_path / "e.npz"), "--category-margin", "*=0.05")
+    assert star.exit_code == ExitCode.USAGE and "'*' is --margin's" in star.output
+    absent = _run("edges", "hermes", str(tmp_path / "e.npz"), "--margin", "0.03", "--category-margin", "arm-arm=0",
+                  "--category-margin", "workspace=0.5")  # a category hermes has no pair in: passed over
+    assert absent.exit_code == res.exit_code
+    assert absent.output.split("(evaluations")[0] == res.output.split("(evaluations")[0]

@@ -48,8 +48,19 @@ def test_nan_rows_and_continuous_joints(model):
     ok = model.within_pin_limits(Q)
     assert not ok[2] and ok[[0, 1, 3, 4]].all()
     assert bool(model.within_pin_limits(Q[0])) is True
-    if len(model.continuous_q):  # kinova: a (cos, sin) pair has no limits here (check_q tests the unit circle)
-        assert model.within_pin_limits(Q[[0]]).all()
+    if len(model.continuous_q):  # kinova: a (cos, sin) off the unit circle, or infinite, is no row to ask
+        k = int(model.continuous_q[0])
+        Q[3, k] = Q[3, k + 1] = 0.5
+        Q[4, k] = np.inf
+        ok = model.within_pin_limits(Q)
+        assert list(ok) == [True, True, False, False, False]
+        c = armguard.checker(model)
+        for i in (3, 4):
+            with pytest.raises(armguard.BackendError):
+                c.collides(Q[[i]])
+        assert c.collides(Q[ok]).shape == (2,)
+    with pytest.raises(KinematicsError, match="Q: expected numbers, not booleans|bool"):
+        model.within_pin_limits(np.ones((2, model.nq), dtype=bool))
     with pytest.raises(KinematicsError, match=r"expected shape \(\d+,\) or \(M, \d+\)"):
         model.within_pin_limits(Q[:, :2])
 

@@ -40,13 +40,20 @@ def test_one_margin_stays_a_float_and_mappings_become_arrays(hermes):
 
 
 @pytest.mark.parametrize("margin, words", [
-    ({"arm-arms": 0.0}, "no pair of this model is in category 'arm-arms'; its categories: arm-arm, arm-payload"),
+    ({"arm-arms": 0.0}, "'arm-arms' is not a pair category; the categories: arm-arm, arm-vehicle, arm-environment, "
+                        "arm-payload, payload-vehicle, payload-environment, payload-payload, workspace (this model's: "
+                        "arm-arm, arm-payload, arm-vehicle, payload-vehicle), and '*' for those not named"),
+    ([[0.1], [0.1, 0.2]], "margin: expected a number (m), a mapping by pair category or an array of 50 numbers"),
+    ({"a": 1}.values(), "margin: expected a number (m), a mapping by pair category or an array of 50 numbers"),
+    (np.r_[np.zeros(49), -0.5], "): expected a finite number >= 0 (m), got -0.5"),
     ({"arm-arm": -0.01}, "margin['arm-arm']: expected a finite number >= 0"),
     ({"*": float("nan")}, "margin['*']: expected a finite number >= 0"),
     (np.zeros(3), "an array of 50 numbers (one per Model pair, Model.pairs order), got dtype float64, shape (3,)"),
     (np.r_[np.zeros(49), np.nan], "margin[49] (pair"),
     (np.zeros(50, dtype=bool), "got dtype bool"),
-    ("0.02", "margin: expected a finite number >= 0 (m), got '0.02'"),
+    ("0.02", "margin: expected a number (m), a mapping by pair category or an array of 50 numbers (one per Model "
+             "pair, Model.pairs order), got '0.02'"),
+    (-0.01, "margin: expected a finite number >= 0 (m), got -0.01"),
 ])
 def test_bad_margins_are_refused_by_name(hermes, margin, words):
     with pytest.raises(BackendError, match=None) as info:
@@ -63,6 +70,13 @@ def test_pair_margins_adds_categories_and_padding(hermes):
         assert m[k] == pytest.approx(want, abs=1e-15), (pairs.owner_a[k], pairs.owner_b[k])
     with pytest.raises(BackendError, match="'hand' names no part of a pair; the parts: "):
         pair_margins(hermes, padding={"hand": 0.01})
+    with pytest.raises(BackendError, match=r"'hera/link6' is padded twice \('link6' and 'hera/link6'\)"):
+        pair_margins(hermes, padding={"link6": 0.01, "hera/link6": 0.01})
+    arm = pair_margins(hermes, padding={"hera": 0.01})  # a robot's name: each of its links
+    links = [sum(o.startswith("hera/") for o in (a, b)) for a, b in zip(pairs.owner_a, pairs.owner_b)]
+    np.testing.assert_allclose(arm, 0.01 * np.array(links), atol=1e-15)
+    m2 = pair_margins(hermes, 0.0, categories={"*": 0.02, "arm-arm": 0.0, "workspace": 0.5})  # workspace: none here
+    np.testing.assert_array_equal(m2, np.where(np.asarray(pairs.category) == "arm-arm", 0.0, 0.02))
     with pytest.raises(BackendError, match=r"'link1' is a link of several robots \(camera_arm/link1, grapple_arm/link1, left_arm/link1, right_arm/link1\)"):
         pair_margins(armguard.load_model("ranger"), padding={"link1": 0.01})
 
@@ -168,10 +182,33 @@ def test_check_edges_by_category_against_dense_samples(hermes):
 def test_check_edges_margin_errors(hermes):
     v = Verifier(hermes)
     Q0, Q1 = _edges(hermes, n=2)
-    with pytest.raises(VerificationError, match="no checked pair is in category 'arm-arms'; the categories: arm-arm"):
+    with pytest.raises(VerificationError, match="'arm-arms' is not a pair category; the categories: arm-arm"):
         v.check_edges(Q0, Q1, margin={"arm-arms": 0.0})
     with pytest.raises(VerificationError, match=r"margin\['\*'\]: expected a finite number >= 0"):
         v.check_edges(Q0, Q1, margin={"*": -1.0})
-    with pytest.raises(VerificationError, match="an array per pair is collides' form"):
-        v.check_edges(Q0, Q1, margin=np.zeros(50))
+    with pytest.raises(VerificationError, match="or 50 numbers .one per Model pair, Model.pairs order., got .3,."):
+        v.check_edges(Q0, Q1, margin=np.zeros(3))
+    split = np.zeros(50)
+    same = [i for i, ab in enumerate(zip(hermes.pairs.owner_a, hermes.pairs.owner_b)) if ab == ("hera/link2", "cargo_bay")]
+    assert len(same) == 3  # the cargo bay's three shapes against link 2
+    split[same[0]] = 0.01  # one of them given another margin
+    with pytest.raises(VerificationError, match="'hera/link2' - 'cargo_bay' are given 0.01 and 0 m: a pair of parts keeps one"):
+        v.check_edges(Q0, Q1, margin=split)
     assert v.check_edges(Q0, Q1, margin={"*": 0.02}).margin == 0.02  # the same for every pair: one margin
+    assert v.check_edges(Q0, Q1, margin=np.full(50, 0.02)).margin == 0.02
+
+
+def test_check_edges_takes_collides_array_of_margins(hermes):
+    """``pair_margins``' array (category and padding) in check_edges: CLEAR edges have no dense sample within a
+    pair's margin by ``collides`` with the same array; the results give the margin of each pair of parts."""
+    v = Verifier(hermes)
+    Q0, Q1 = _edges(hermes, seed=9)
+    m = pair_margins(hermes, 0.01, categories={"arm-arm": 0.0}, padding={"payload": 0.04})
+    res = v.check_edges(Q0, Q1, margin=m)
+    assert res.margin[("payload", "cargo_bay")] == pytest.approx(0.05) or res.margin[("cargo_bay", "payload")] == pytest.approx(0.05)
+    assert "within their pair's margin (0 to 50 mm)" in res.summary()
+    c = armguard.checker(hermes, "analytic")
+    S = np.linspace(0.0, 1.0, 101)[:, None]
+    for i in np.flatnonzero(res.code == EdgeStatus.CLEAR):
+        assert not c.collides(hermes.pin_q(Q0[i] + S * (Q1[i] - Q0[i])), margin=m).any(), i
+    assert res.counts()["clear"] > 0 and res.counts()["collision"] > 0

@@ -45,3 +45,11 @@ def test_backends_guide_warm_start_block_runs():
     code = re.findall(r"```python\n(.*?)```", section, re.S)[0]
     assert "warm_start" in code
     exec(compile(code, "docs/backends.md", "exec"), {"__name__": "__guide__"})
+
+
+def test_backends_guide_margins_block_runs():
+    """docs/backends.md's margins per pair and category example."""
+    text = (ROOT / "docs" / "backends.md").read_text(encoding="utf-8")
+    code = [c for c in re.findall(r"```python\n(.*?)```", text, re.S) if "pair_margins(model" in c]
+    assert len(code) == 1
+    exec(compile(code[0], "docs/backends.md", "exec"), {"__name__": "__guide__"})

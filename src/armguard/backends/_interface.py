@@ -36,6 +36,7 @@ import numpy as np
 
 from .._errors import BackendError
 from .._values import number, refuse_complex_or_bool
+from ..model._joint_limits import UNIT_CIRCLE  # defined with the Model's limits (within_pin_limits tests it too)
 from ._margins import check_margins, collides_per_pair
 
 __all__ = ["Backend", "Checker", "CheckerBase", "PairDistances", "PairDistancesMany", "NearestPair", "Capability",
@@ -142,13 +143,6 @@ class NearestPair:
     p_WA: np.ndarray
     p_WB: np.ndarray
     index: int
-
-
-UNIT_CIRCLE = 1e-6
-"""A continuous joint's ``(cos, sin)`` in ``q`` is refused when ``|cos² + sin² − 1|`` exceeds this: off the
-unit circle Pinocchio's placement is not a rotation (coal then checks a scaled, sheared link; the
-analytic backend reads the angle, so the two gave different verdicts), and 1e-6 scales a link 1 m
-away by at most 0.5 µm, within the contact band."""
 
 
 def check_unit_circle(model, Q2: np.ndarray, what: str = "Q") -> None:

@@ -8,9 +8,10 @@ cell, but none between the arm's own links, some of which are never far apart (U
 * a number (m): every pair (the default, 0: touching or penetrating);
 * a mapping ``{category: m}`` over the Model's pair categories (``Model.pairs.category``:
   ``"arm-arm"``, ``"arm-vehicle"``, ``"arm-environment"``, ``"workspace"``, ``"arm-payload"``,
-  ``"payload-*"``); a category it does not name gets its ``"*"`` entry, else 0;
+  ``"payload-*"``; :data:`CATEGORIES`); a category it does not name gets its ``"*"`` entry, else 0,
+  and one the model has no pair in is passed over (one mapping serves several models);
 * an ``(n,)`` array, one margin per Model pair (``Model.pairs`` order), e.g. from
-  :meth:`armguard.model.Model.pair_margins`.
+  :func:`pair_margins` (by category, and MoveIt's padding by part).
 
 Row ``m`` collides when some pair ``k`` has ``distance[m, k] <= margin[k]``.
 
@@ -29,42 +30,66 @@ import numpy as np
 
 from .._errors import BackendError
 from .._values import number
+from ..model._items import PairCategory
 
-__all__ = ["check_margins", "collides_per_pair", "pair_margins"]
+__all__ = ["CATEGORIES", "by_category", "check_margins", "collides_per_pair", "pair_margins"]
+
+#: Every pair category a Model may have (``Model.pairs.category``): a margin's mapping may name any of
+#: them (one mapping serves several models: a category a model has no pair in is passed over), and
+#: ``"*"`` for the categories it does not name.
+CATEGORIES = tuple(c.value for c in PairCategory) + ("workspace",)
+_M = " (m)"
+
+
+def by_category(cats, margin: Mapping, error: type = BackendError, what: str = "margin") -> np.ndarray:
+    """``margin`` ``{category: m, "*": default}`` as an array over ``cats`` (each pair's category): a category
+    not named gets ``"*"``'s value, else 0; a key that is no category is ``error`` naming them all."""
+    cats = np.asarray(cats, dtype=object)
+    out = np.full(len(cats), number(margin.get("*", 0.0), f"{what}['*']", error, low=0.0, unit=_M))
+    for key, value in margin.items():
+        if key == "*":
+            continue
+        if key not in CATEGORIES:
+            here = sorted(set(cats.tolist()))
+            raise error(f"{what}: {key!r} is not a pair category; the categories: {', '.join(CATEGORIES)} (this model's: "
+                        f"{', '.join(here) or 'none'}), and '*' for those not named")
+        out[cats == key] = number(value, f"{what}[{key!r}]", error, low=0.0, unit=_M)
+    return out
 
 
 def pair_margins(model, default: float = 0.0, *, categories: Mapping | None = None,
                  padding: Mapping | None = None) -> np.ndarray:
-    """An ``(n,)`` margin per Model pair: ``categories.get(pair's category, default)`` plus the
-    ``padding`` of each side (MoveIt's link padding: a part padded by ``p`` is ``p`` further from
-    everything).  ``padding`` is keyed by the pairs' owners (``Model.pairs.owner_a`` / ``owner_b``:
-    ``"robot/link"``, a body, a payload, ``"workspace"``), or by a link's name alone where one robot
-    has it.  Unknown categories and owners are a BackendError naming the known ones::
+    """An ``(n,)`` margin per Model pair: ``categories.get(pair's category, default)`` (as ``collides``'
+    mapping: ``"*"`` for those not named) plus the ``padding`` of each side (MoveIt's link padding: a part
+    padded by ``p`` is ``p`` further from everything).  ``padding`` is keyed by the pairs' owners
+    (``Model.pairs.owner_a`` / ``owner_b``: ``"robot/link"``, a body, a payload, ``"workspace"``), by a
+    link's name alone where one robot has it, or by a robot's name (each of its links).  Unknown
+    categories and parts, and a part padded twice, are a BackendError naming them::
 
         m = armguard.backends.pair_margins(model, 0.02, categories={"arm-arm": 0.0},
                                            padding={"ur5/ee_link": 0.01})
         checker.collides(Q, margin=m)
     """
     pairs = model.pairs
-    d = number(default, "default", BackendError, low=0.0, unit=" (m)")
-    out = np.full(len(pairs), d)
-    cats = tuple(pairs.category)
-    for key, value in (categories or {}).items():
-        if key not in cats:
-            raise BackendError(f"categories: no pair of this model is in category {key!r}; its categories: "
-                               f"{', '.join(sorted(set(cats))) or 'none'}")
-        out[[k for k, c in enumerate(cats) if c == key]] = number(value, f"categories[{key!r}]", BackendError,
-                                                                   low=0.0, unit=" (m)")
+    d = number(default, "default", BackendError, low=0.0, unit=_M)
+    out = by_category(pairs.category, {"*": d, **(categories or {})}, what="categories")
+    owner_a, owner_b = np.asarray(pairs.owner_a, dtype=object), np.asarray(pairs.owner_b, dtype=object)
     owners = sorted(set(pairs.owner_a) | set(pairs.owner_b))
+    padded: dict = {}
     for key, value in (padding or {}).items():
-        p = number(value, f"padding[{key!r}]", BackendError, low=0.0, unit=" (m)")
-        hits = [o for o in owners if o == key] or [o for o in owners if o.rpartition("/")[2] == key]
-        if len(hits) != 1:
+        p = number(value, f"padding[{key!r}]", BackendError, low=0.0, unit=_M)
+        hits = ([o for o in owners if o == key] or [o for o in owners if o.startswith(f"{key}/")]
+                or [o for o in owners if o.rpartition("/")[2] == key])
+        several = len(hits) > 1 and not all(o.startswith(f"{key}/") for o in hits)
+        if not hits or several:
             why = "names no part of a pair" if not hits else f"is a link of several robots ({', '.join(hits)})"
             raise BackendError(f"padding: {key!r} {why}; the parts: {', '.join(owners[:12])}"
-                               f"{', ...' if len(owners) > 12 else ''}")
-        out += p * (np.asarray(pairs.owner_a) == hits[0])
-        out += p * (np.asarray(pairs.owner_b) == hits[0])
+                               f"{', ...' if len(owners) > 12 else ''} (or a robot's name: each of its links)")
+        for o in hits:
+            if o in padded:
+                raise BackendError(f"padding: {o!r} is padded twice ({padded[o]!r} and {key!r})")
+            padded[o] = key
+            out += p * (owner_a == o) + p * (owner_b == o)
     return out
 
 
@@ -76,35 +101,26 @@ def check_margins(model, margin):
     if type(margin) is float and 0.0 <= margin < math.inf:
         return margin
     n = len(model.pairs)
+    forms = f"a number (m), a mapping by pair category or an array of {n} numbers (one per Model pair, Model.pairs order)"
     if isinstance(margin, Mapping):
-        cats = tuple(model.pairs.category)
-        known = sorted(set(cats))
-        out = np.full(n, number(margin.get("*", 0.0), "margin['*']", BackendError, low=0.0, unit=" (m)"))
-        for key, value in margin.items():
-            if key == "*":
-                continue
-            if key not in known:
-                raise BackendError(f"margin: no pair of this model is in category {key!r}; its categories: "
-                                   f"{', '.join(known) or 'none'}")
-            m = number(value, f"margin[{key!r}]", BackendError, low=0.0, unit=" (m)")
-            out[[k for k, c in enumerate(cats) if c == key]] = m
-    elif np.ndim(margin) == 0 or isinstance(margin, (str, bytes)):
-        return number(margin, "margin", BackendError, low=0.0, unit=" (m)")
+        out = by_category(model.pairs.category, margin)
     else:
         try:
             arr = np.asarray(margin)
-        except (TypeError, ValueError) as exc:
-            raise BackendError(f"margin: expected a number, a mapping by category or {n} numbers (one per "
-                               f"Model pair), got {margin!r}") from exc
+        except (TypeError, ValueError):  # a ragged list
+            raise BackendError(f"margin: expected {forms}, got {margin!r}") from None
+        if arr.ndim == 0:
+            if arr.dtype == bool or arr.dtype.kind not in "fiu":
+                raise BackendError(f"margin: expected {forms}, got {margin!r}")
+            return number(margin, "margin", BackendError, low=0.0, unit=_M)
         if arr.shape != (n,) or arr.dtype == bool or arr.dtype.kind not in "fiu":
-            raise BackendError(f"margin: expected a number, a mapping by category or an array of {n} numbers "
-                               f"(one per Model pair, Model.pairs order), got dtype {arr.dtype}, shape {arr.shape}")
+            raise BackendError(f"margin: expected {forms}, got dtype {arr.dtype}, shape {arr.shape}")
         out = arr.astype(np.float64)
         bad = np.flatnonzero(~np.isfinite(out) | (out < 0.0))
         if bad.size:
             k = int(bad[0])
             raise BackendError(f"margin[{k}] (pair {model.pairs.a[k]!r} - {model.pairs.b[k]!r}): expected a finite "
-                               f"number >= 0 (m), got {out[k]!r}")
+                               f"number >= 0 (m), got {float(out[k])!r}")
     if not n or np.all(out == out[0]):  # one margin after all (or no pair for one to apply to)
         return float(out[0]) if n else 0.0
     out.flags.writeable = False

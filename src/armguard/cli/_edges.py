@@ -123,6 +123,8 @@ def edges_cmd(model, edges_file, robot, margin, category_margins, first_contact,
     console = output_console()
     if out_path:
         check_writable(out_path)  # an output that cannot be written: refused before the work
+    if category_margins:  # before any work: a bad one is a usage error (exit status 2)
+        margin = {"*": margin, **_category_margins(category_margins)}
     Q0, Q1, names = read_edges(edges_file)
     m = load_model(model)
     if isinstance(names, str):
@@ -137,8 +139,6 @@ def edges_cmd(model, edges_file, robot, margin, category_margins, first_contact,
         raise VerificationError(f"{edges_file}: model {m.name!r} orders its joints for Pinocchio otherwise than its scene: "
                                 "name the columns with joint_names (scene.joint_names, e.g. "
                                 f"{m.scene.joint_names[0]!r}), or convert Pinocchio configurations with model.scene_q")
-    if category_margins:
-        margin = {"*": margin, **_category_margins(category_margins)}
     warm_up(console=console)
     verifier = Verifier(m)
     M = max(len(np.atleast_2d(Q0)), len(np.atleast_2d(Q1)))
@@ -185,6 +185,8 @@ def edges_cmd(model, edges_file, robot, margin, category_margins, first_contact,
 
 def _category_margins(items) -> dict:
     """``--category-margin`` values ``CATEGORY=M`` as ``{category: M}`` (a bad one: a usage error naming it)."""
+    from ..backends import CATEGORIES
+
     out = {}
     for item in items:
         cat, eq, value = item.partition("=")
@@ -195,9 +197,15 @@ def _category_margins(items) -> dict:
         if not (math.isfinite(m) and m >= 0.0):
             raise click.BadParameter(f"expected CATEGORY=M with M a finite number >= 0 (m), got {item!r}",
                                      param_hint="--category-margin")
-        if cat.strip() in out:
-            raise click.BadParameter(f"category {cat.strip()!r} given twice", param_hint="--category-margin")
-        out[cat.strip()] = m
+        cat = cat.strip()
+        if cat == "*":
+            raise click.BadParameter("'*' is --margin's (the categories not named)", param_hint="--category-margin")
+        if cat not in CATEGORIES:
+            raise click.BadParameter(f"{cat!r} is not a pair category; the categories: {', '.join(CATEGORIES)}",
+                                     param_hint="--category-margin")
+        if cat in out:
+            raise click.BadParameter(f"category {cat!r} given twice", param_hint="--category-margin")
+        out[cat] = m
     return out
 
 

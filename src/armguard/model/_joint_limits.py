@@ -8,7 +8,13 @@ import numpy as np
 from .._errors import KinematicsError
 from .._values import refuse_complex_or_bool
 
-__all__ = ["check_pin_limits", "within_pin_limits", "pin_limit_table", "check_limits"]
+__all__ = ["check_pin_limits", "within_pin_limits", "pin_limit_table", "check_limits", "UNIT_CIRCLE"]
+
+UNIT_CIRCLE = 1e-6
+"""A continuous joint's ``(cos, sin)`` in ``q`` is refused when ``|cos² + sin² − 1|`` exceeds this: off the
+unit circle Pinocchio's placement is not a rotation (coal then checks a scaled, sheared link; the
+analytic backend reads the angle, so the two gave different verdicts), and 1e-6 scales a link 1 m
+away by at most 0.5 µm, within the contact band."""
 
 
 def check_pin_limits(self, Q, where: str = "q") -> None:
@@ -52,15 +58,23 @@ def pin_limit_table(self) -> tuple:
 
 
 def within_pin_limits(self, Q) -> np.ndarray:
-    """``(M,) bool`` (or a bool for one ``(nq,)``): the rows of Pinocchio-ordered ``Q`` with every joint within
-    its limits and the allowance, the rows :meth:`check_pin_limits` lets through (a NaN row is not): mask a
-    batch with it, ``checker.collides(Q[ok])``, where a row outside its limits gets no verdict."""
+    """``(M,) bool`` (or a bool for one ``(nq,)``): the rows of Pinocchio-ordered ``Q`` a Checker answers for,
+    every value finite, each joint within its limits and the allowance (what :meth:`check_pin_limits` lets
+    through) and each continuous joint's ``(cos, sin)`` on the unit circle (:data:`UNIT_CIRCLE`, as
+    ``check_q``): mask a batch with it, ``checker.collides(Q[ok])``, where a row outside gets no verdict."""
     _, bounds, _, _ = self._pin_limit_table()
+    if getattr(Q, "dtype", None) != np.float64:
+        refuse_complex_or_bool(Q, "Q", KinematicsError)
     Q = np.asarray(Q, dtype=np.float64)
     if Q.shape[-1:] != (len(bounds),) or Q.ndim > 2:
         raise KinematicsError(f"Q: expected shape ({len(bounds)},) or (M, {len(bounds)}), got {Q.shape}")
     a, b = np.array(bounds).T.reshape(2, -1) if bounds else (np.zeros(0), np.zeros(0))
-    return np.all((Q >= a) & (Q <= b), axis=-1)
+    with np.errstate(invalid="ignore"):
+        ok = np.all((Q >= a) & (Q <= b) & np.isfinite(Q), axis=-1)
+        cq = np.asarray(self.continuous_q, dtype=np.int64)
+        if cq.size:
+            ok &= np.all(np.abs(Q[..., cq] ** 2 + Q[..., cq + 1] ** 2 - 1.0) <= UNIT_CIRCLE, axis=-1)
+    return ok
 
 
 def check_limits(self, q_scene, where: str = "q") -> None:

@@ -92,7 +92,8 @@ class EdgeResults:
         The robot's joints not in ``joint_names`` and the value each was held at.
     margin : float or dict, m
         The margin every configuration keeps: one for every pair, or by pair category
-        (``{"arm-arm": 0.0, "arm-vehicle": 0.02, ...}``, every checked category named).
+        (``{"arm-arm": 0.0, "arm-vehicle": 0.02, ...}``, every checked category named; a mapping given), or
+        by pair of parts (``{("ur5/ee_link", "ur5/forearm_link"): 0.01, ...}``; an array given).
     elapsed_s : float
         Wall time of the whole call.
     """
@@ -135,9 +136,12 @@ class EdgeResults:
         c = self.counts()
         ev = self.evaluations
         med = float(np.median(ev)) if len(ev) else 0.0
-        if isinstance(self.margin, dict):
+        if isinstance(self.margin, dict) and all(isinstance(k, str) for k in self.margin):
             hit = ("in collision or within their category's margin ("
                    + ", ".join(f"{c} {m * 1e3:g} mm" for c, m in sorted(self.margin.items())) + ")")
+        elif isinstance(self.margin, dict):
+            v = list(self.margin.values())
+            hit = f"in collision or within their pair's margin ({min(v) * 1e3:g} to {max(v) * 1e3:g} mm)"
         else:
             hit = "in collision" if self.margin == 0.0 else f"in collision or within the margin ({self.margin * 1e3:g} mm)"
         who = "every robot (*)" if self.robot == ALL_ROBOTS else repr(self.robot)
@@ -204,24 +208,52 @@ def _budget(max_evaluations, tol) -> int:
     return int(max_evaluations)
 
 
-def _margin(margin, model):
-    """A float (every pair), or an ``(P,)`` array over ``model``'s (the ClearanceModel's) pairs from a mapping
-    by the Model's pair categories (``"*"``: the default of the others, else 0), else a VerificationError."""
+def _margin(margin, model, scene):
+    """A float (every pair), or a ``(P,)`` array over ``model``'s (the ClearanceModel's) pairs of parts: from a
+    mapping by pair category (:func:`armguard.backends.by_category`), or from an array over the Model's
+    pairs (:func:`armguard.backends.pair_margins`) with one margin for each pair of parts; else a
+    VerificationError."""
+    from ..backends import by_category
+
     if isinstance(margin, Mapping):
-        cats = model.pair_category
-        known = sorted(set(cats))
-        out = np.full(len(cats), _one_margin(margin.get("*", 0.0), "margin['*']"))
-        for key, value in margin.items():
-            if key == "*":
-                continue
-            if key not in known:
-                raise VerificationError(f"margin: no checked pair is in category {key!r}; the categories: {', '.join(known)}")
-            out[[k for k, c in enumerate(cats) if c == key]] = _one_margin(value, f"margin[{key!r}]")
-        return float(out[0]) if np.all(out == out[0]) else out
-    if np.ndim(margin) and not isinstance(margin, (str, bytes)):
-        raise VerificationError("margin: expected a number (m) or a mapping by pair category ({'arm-arm': 0.0, "
-                                f"'*': 0.02}}); an array per pair is collides' form, got shape {np.shape(margin)}")
-    return _one_margin(margin, "margin")
+        out = by_category(model.pair_category, margin, VerificationError)
+    elif np.ndim(margin) and not isinstance(margin, (str, bytes)):
+        out = _per_part_pair(margin, model, scene)
+    else:
+        return _one_margin(margin, "margin")
+    return float(out[0]) if np.all(out == out[0]) else out
+
+
+def _per_part_pair(margin, model, scene) -> np.ndarray:
+    """An ``(n,)`` margin per Model pair as one per pair of parts (the clearance of a pair of parts is the
+    least over their shapes' pairs, so their margins must agree: by category and padding they do)."""
+    from ..model import model_of
+
+    pairs = model_of(scene).pairs
+    try:
+        arr = np.asarray(margin, dtype=np.float64)
+    except (TypeError, ValueError):
+        arr = None
+    if arr is None or arr.shape != (len(pairs),):
+        raise VerificationError(f"margin: expected a number (m), a mapping by pair category or {len(pairs)} numbers (one "
+                                f"per Model pair, Model.pairs order), got {np.shape(margin) if arr is not None else margin!r}")
+    out = np.full(len(model.owner_a), np.nan)
+    for k, (a, b) in enumerate(zip(pairs.owner_a, pairs.owner_b)):
+        i = model._pair_key.get((a, b), model._pair_key.get((b, a)))
+        x = float(arr[k])
+        if not (math.isfinite(x) and x >= 0.0):
+            raise VerificationError(f"margin[{k}] (parts {a!r} - {b!r}): expected a finite number >= 0 (m), got {x!r}")
+        if i is None:
+            continue
+        if out[i] == out[i] and out[i] != x:
+            raise VerificationError(f"margin: the pairs of parts {a!r} - {b!r} are given {out[i]:g} and {x:g} m: a pair of "
+                                    "parts keeps one margin (pair_margins gives one, by category and padding)")
+        out[i] = x
+    if np.isnan(out).any():
+        k = int(np.flatnonzero(np.isnan(out))[0])
+        raise VerificationError(f"margin: no Model pair for the checked parts {model.owner_a[k]!r} - {model.owner_b[k]!r} "
+                                "(the array is of another model?)")
+    return out
 
 
 def _one_margin(margin, what: str) -> float:
@@ -349,7 +381,7 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints,
         raise VerificationError(f"Q0 and Q1: expected the same number of edges (or one of them a single "
                                 f"configuration), got {len(Q0)} and {len(Q1)}")
     Q0, Q1 = np.broadcast_arrays(Q0, Q1)
-    m = _margin(margin, model)
+    m = _margin(margin, model, verifier.scene)
     budget = _budget(max_evaluations, verifier.tol)
     base, k0, k1 = _flat(verifier, st, rname)
     held = {}
@@ -395,9 +427,16 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints,
             q_hit[i] = run.Q[row]
             d_hit[i] = run.D[row, p]
             pair[i] = (model.owner_a[p], model.owner_b[p])
-    given = m if type(m) is float else {c: float(x) for c, x in zip(model.pair_category, m)}
+    given = m if type(m) is float else _margins_given(m, model, margin)
     return EdgeResults(code, s_free, s_hit, q_hit, d_hit, pair, evals, rob.name, names, held, given,
                        _time.perf_counter() - t_start)
+
+
+def _margins_given(m, model, margin) -> dict:
+    """``EdgeResults.margin`` of margins per pair: by category (a mapping given), else by pair of parts."""
+    if isinstance(margin, Mapping):
+        return {c: float(x) for c, x in zip(model.pair_category, m)}
+    return {(a, b): float(x) for a, b, x in zip(model.owner_a, model.owner_b, m)}
 
 
 _ENDS = 1024  # edge ends whose clearances one call keeps (a start shared by many goals, a roadmap's nodes)
