@@ -95,7 +95,7 @@ def read_edges(path) -> tuple:
 @click.option("--out", "out_path", type=click.Path(), default=None,
               help="Write the results here (.npz: code (0 clear, 1 collision, 2 incomplete), s_free, s, q (columns "
               "q_joint_names), distance, pair_a, pair_b, evaluations, robot, margin, joint_names, held_names, "
-              "held_values).")
+              "held_values; with --category-margin, margin_categories and margins, each category's, in place of margin).")
 def edges_cmd(model, edges_file, robot, margin, category_margins, first_contact, continuous, max_evaluations,
               out_path) -> None:
     """Certify the straight joint-space edges Q0[i] -> Q1[i] of EDGES.npz on MODEL: each CLEAR (every
