@@ -241,3 +241,62 @@ def test_srdf_update_keeps_the_disabled_pairs_it_does_not_search(tmp_path):
     def robot_vs_rest(p):  # every pair but HERA's link-link pairs (the matrix's)
         return {(a, b) for a, b in zip(p.owner_a, p.owner_b) if not (a.startswith("hera/") and b.startswith("hera/"))}
     assert robot_vs_rest(after_pairs) == robot_vs_rest(before_pairs)  # the pairs the matrix does not search: as they were
+
+
+_THREE = """<robot name="three">
+  <link name="base"><collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <link name="l1"><collision><origin xyz="0.3 0 0"/><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <link name="l2"><collision><origin xyz="0.55 0 0"/><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <link name="l3"><collision><origin xyz="0.2 0 0"/><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/>
+    <limit lower="-3.1" upper="3.1" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.6 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3.1" upper="3.1" effort="1" velocity="1"/></joint>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0.6 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3.1" upper="3.1" effort="1" velocity="1"/></joint>
+</robot>"""
+
+
+def test_srdf_update_after_a_joint_became_a_mimic_searches_the_witnessed_pairs_again(tmp_path):
+    """A witness is a configuration of the model it was found on: with ``j3`` made a mimic of ``j2`` the
+    configuration has 2 values; base - l2 (whose certificate holds: j1 and j2 unchanged) kept its witness of 3,
+    and the summary failed after writing the file (and every later update the same)."""
+    urdf, srdf = tmp_path / "three.urdf", tmp_path / "three.srdf"
+    urdf.write_text(_THREE)
+    r = CliRunner().invoke(main, ["srdf", str(urdf), "--out", str(srdf), "--max-evaluations", str(MAX_EVALUATIONS)])
+    assert r.exit_code == 0 and "checked base - l2: distance" in r.output, r.output
+    urdf.write_text(_THREE.replace('<child link="l3"/>', '<child link="l3"/><mimic joint="j2" multiplier="-1" offset="0.1"/>'))
+    for _ in range(2):  # and again on the file it wrote
+        r = CliRunner().invoke(main, ["srdf", str(urdf), "--out", str(srdf), "--update", "--max-evaluations", str(MAX_EVALUATIONS)])
+        assert r.exit_code == 0, r.output
+    assert armguard.load_model(urdf).pin_model.nq == 2
+    witnesses = [ln for ln in r.output.splitlines() if " at q = " in ln]
+    assert witnesses and all(len(ln.split(" at q = ")[1].split(",")) == 2 for ln in witnesses), r.output
+
+
+def test_no_stale_warning_for_a_pair_whose_link_lost_its_geometry(certified, tmp_path):
+    """A link without geometry collides with nothing: its disabled pairs (Adjacent or Never) are not
+    "may now collide"."""
+    new = _fresh(certified, tmp_path, grow=False)
+    root = ET.parse(new).getroot()
+    link = next(ln for ln in root.findall("link") if ln.get("name") == "puma560_link3")
+    for c in link.findall("collision") + link.findall("collision_checking"):
+        link.remove(c)
+    new.write_text(ET.tostring(root, encoding="unicode"))
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        model = armguard.load_model(new)
+    assert not [w for w in rec if "may now collide" in str(w.message)], [str(w.message) for w in rec]
+    assert not stale_certificates(model.pin_model, model.collision_model, new.with_suffix(".srdf"))
+
+
+def test_a_group_state_value_of_a_mimic_joint_is_said_not_read(tmp_path):
+    urdf = tmp_path / "three.urdf"
+    urdf.write_text(_THREE.replace('<child link="l3"/>', '<child link="l3"/><mimic joint="j2" multiplier="-1" offset="0.1"/>'))
+    (tmp_path / "three.srdf").write_text('<robot name="three"><group name="arm"><chain base_link="base" tip_link="l3"/></group>'
+                                         '<group_state name="home" group="arm"><joint name="j1" value="0.2"/>'
+                                         '<joint name="j2" value="1.0"/><joint name="j3" value="0.5"/></group_state></robot>')
+    with pytest.warns(ArmguardWarning, match=r"\(j3\): value not read, a mimic joint of the URDF .*three.urdf: its value follows "
+                                             r"joint 'j2' \(0.1 \+ -1 x its value\)"):
+        model = armguard.load_model(urdf)
+    np.testing.assert_allclose(model.neutral(), [0.2, 1.0])

@@ -177,9 +177,14 @@ def _adjacent(pin_model, collision_model, link1: str, link2: str) -> bool:
 
 def stale_certificates(pin_model, collision_model, srdf_file) -> tuple[StaleCertificate, ...]:
     """The certified disabled pairs of ``srdf_file`` whose fingerprint the model no longer gives (an
-    *Adjacent* pair is disabled whatever its shapes, as MoveIt does, and is not listed)."""
+    *Adjacent* pair is disabled whatever its shapes, as MoveIt does, and is listed only when a link
+    between them got geometry; a pair with a link that has no geometry, or no longer exists, cannot
+    collide and is not listed)."""
     out = []
+    shaped = {pin_model.frames[int(go.parentFrame)].name for go in collision_model.geometryObjects}
     for c in read_certificates(srdf_file):
+        if c.link1 not in shaped or c.link2 not in shaped:
+            continue  # a link without geometry (or gone: the SRDF's reader names it) collides with nothing
         if c.reason == "Adjacent":  # joined by a joint: disabled whatever their shapes (MoveIt's rule) while it holds
             if not _adjacent(pin_model, collision_model, c.link1, c.link2):  # a link between them got geometry
                 out.append(StaleCertificate(c.link1, c.link2, c.reason, c.fingerprint, None, c.where))

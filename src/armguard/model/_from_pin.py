@@ -189,7 +189,7 @@ def scene_parts_from_pin(pin_model, geom_model, info, srdf, *, accelerations=Non
         home = None
         st = srdf.home_state(rname) if srdf is not None else None
         if st is not None:
-            home = _home(srdf, st, robot, prefix, movable, f, fixed)
+            home = _home(srdf, st, robot, prefix, movable, f, fixed, info.mimic)
         part.robots.append((robot, home, np.asarray(q_index, dtype=np.int64)))
         part.circular.append(np.asarray(circular, dtype=np.int64))
         for k in links:
@@ -315,7 +315,7 @@ def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str, moved, robot_name
     return arms
 
 
-def _home(srdf, st, robot, prefix: str, movable: set, f: str, fixed: frozenset) -> np.ndarray:
+def _home(srdf, st, robot, prefix: str, movable: set, f: str, fixed: frozenset, mimic=None) -> np.ndarray:
     """The home of ``robot`` from SRDF state ``st``; a joint the URDF lacks (unless the SRDF is
     ``partial``), a multi-value for a one-value joint, or a value outside the joint's limits is an
     error naming the state's ``<joint>`` element in the SRDF.  A revolute joint's value that lies
@@ -323,11 +323,15 @@ def _home(srdf, st, robot, prefix: str, movable: set, f: str, fixed: frozenset) 
     is that angle, the same pose, with a warning.  A value no joint of the model takes is skipped
     with a warning naming the element: the SRDF's virtual joint or a floating base's pose (7 values)
     for a joint the URDF lacks (Pinocchio's free-flyer ``root_joint``: the legged robots' SRDFs;
-    armguard's models are fixed-base), or a joint of ``fixed`` (the URDF's fixed joints: finger_edu,
-    the flying arms)."""
+    armguard's models are fixed-base), a joint of ``fixed`` (the URDF's fixed joints: finger_edu,
+    the flying arms), or a joint of ``mimic`` (its value follows its leader's)."""
     from ..kinematics import JointType
 
     def skipped(jn, v) -> str:  # why the value of ``jn`` is not read ("": it is)
+        if jn in (mimic or {}):
+            lead, mult, off = mimic[jn]
+            return (f"a mimic joint of the URDF {f}: its value follows joint {lead!r} ({off:g} + {mult:g} x its value), "
+                    "whatever the state says")
         if jn in movable:
             return ""
         if jn in srdf.virtual_joints or (jn not in fixed and isinstance(v, tuple) and len(v) == 7):

@@ -241,7 +241,8 @@ def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", b
         elif d_home[k] <= 0.0:
             entries[k] = MatrixEntry(p.link1, p.link2, "Default", "disabled", home_pin, float(d_home[k]), "in contact at home")
         elif (old := before.get(frozenset((p.link1, p.link2)))) is not None and old.fingerprint == prints[k] \
-                and old.reason not in ("Adjacent", "Default"):
+                and old.reason not in ("Adjacent", "Default") and (old.q is None or len(old.q) == model.pin_model.nq):
+            # (a witness of another configuration's size, after a joint became a mimic or was added: searched again)
             entries[k] = old
             kept.append((p.link1, p.link2))
         else:
