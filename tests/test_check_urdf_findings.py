@@ -78,8 +78,36 @@ def test_a_misspelt_or_repeated_element_is_reported():
         p.write_text(text)
         r = CliRunner().invoke(main, ["-q", "check-urdf", str(p), "--json"])
     found = {(f["where"].split(": ", 1)[1], f["message"]) for f in json.loads(r.output)["findings"] if f["check"] == "unread-element"}
-    assert found == {("link[l1].collision[0].orgin", "<orgin> is read by nothing: did you mean <origin>?"),
+    assert found == {("link[l1].collision[0].orgin", "<orgin> is read by nothing: did you mean <origin>? (it changes what "
+                                                     "is checked)"),
                      ("joint[j1].limit", "2 <limit> elements: only the first is read")}, found
+
+
+def test_a_misspelt_collision_is_an_error_and_a_load_warning(tmp_path):
+    """A link's ``<colision>`` left the link without geometry: load_model said nothing (its pairs were simply
+    not checked) and check-urdf gave a warning with exit 0."""
+    import json
+
+    import armguard
+    from armguard._errors import ArmguardWarning
+
+    text = _URDF.replace("LIMIT", '<limit lower="-2" upper="2" effort="1" velocity="1"/>')
+    i = text.index("<collision>", text.index('<link name="l2"'))
+    bad = text[:i] + text[i:].replace("<collision>", "<colision>", 1).replace("</collision>", "</colision>", 1)
+    bad = bad.replace("</robot>", '<link name="l3"><collision><origin xyz="0.3 0 0"/><geometry><box size="0.1 0.1 0.1"/>'
+                      '</geometry></collision></link><joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/>'
+                      '<origin xyz="0.6 0 0"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/>'
+                      '</joint></robot>')  # pairs left to check: base - l3, l1 - l3
+    p = tmp_path / "two.urdf"
+    p.write_text(bad)
+    line = bad[:bad.index("<colision>")].count("\n") + 1
+    with pytest.warns(ArmguardWarning, match=rf"two.urdf: link\[l2\].colision \(line {line}\): <colision> is read by nothing: "
+                                             r"did you mean <collision>\? \(the link has no geometry from it: its pairs are not checked\)"):
+        armguard.load_model(p, srdf=False)
+    r = CliRunner().invoke(main, ["-q", "check-urdf", str(p), "--json"])
+    assert r.exit_code == 1, r.output
+    found = [(f["severity"], f["message"]) for f in json.loads(r.output)["findings"] if f["check"] == "unread-element"]
+    assert found == [("error", "<colision> is read by nothing: did you mean <collision>? (it changes what is checked)")], found
 
 
 def test_info_says_no_hull_was_stored_when_the_cache_cannot_be_written(tmp_path):

@@ -185,8 +185,11 @@ def test_a_missing_mesh_is_named_never_another_file_of_its_name(tmp_path, filena
     _tet_obj(tmp_path / "deep" / "m.obj")
     deep = tmp_path / "deep" / "robot"
     deep.mkdir(parents=True)
-    err = _refused(deep, _urdf(f'<mesh filename="{filename}"/>'))
-    assert err.where == "link[l1].collision[0]" and "mesh file not found" in err.message and filename in err.message, err
+    text = _urdf(f'<mesh filename="{filename}"/>')
+    err = _refused(deep, text)
+    line = text[:text.index("<mesh ")].count("\n") + 1  # the <mesh> element's line, as every refusal gives it
+    assert err.where == f"link[l1].collision[0] (line {line})" and err.line == line, err
+    assert "mesh file not found" in err.message and filename in err.message, err
 
 
 def test_package_meshes_resolve_by_the_package_folder_or_its_parent(tmp_path):

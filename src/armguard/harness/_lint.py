@@ -257,7 +257,8 @@ _READ = {"link": ("visual", "collision", "inertial", "collision_checking"),
 def _unread_elements(root, f: str, report: LintReport) -> None:
     """Elements of a link, collision or joint that no reader reads although they look like one that is
     (``<orgin>``: the shape then sits at the link's origin), and a repeated one of which only the first
-    is read (``<origin>``, ``<limit>``, ``<axis>``): warnings.  An unknown element unlike any (a
+    is read (``<origin>``, ``<limit>``, ``<axis>``): warnings, and errors where they change what is
+    checked (a link's ``<colision>``: no geometry from it; a collision's ``<orgin>``).  An unknown element unlike any (a
     simulator's ``<contact>``) is left alone."""
     import difflib
 
@@ -269,9 +270,13 @@ def _unread_elements(root, f: str, report: LintReport) -> None:
             seen[c.tag] = seen.get(c.tag, 0) + 1
             if c.tag not in _READ[kind]:
                 near = difflib.get_close_matches(c.tag, _READ[kind], n=1, cutoff=0.75)
-                if near:
-                    report.findings.append(Finding(Check.UNREAD_ELEMENT, Severity.WARNING, f"{f}: {where}.{c.tag}",
-                                                   f"<{c.tag}> is read by nothing: did you mean <{near[0]}>?"))
+                checked = (kind, near[0] if near else None) in (("link", "collision"), ("collision", "origin"),
+                                                                 ("collision", "geometry"))
+                if near:  # an error where it changes what is checked (load_model warns of those too)
+                    report.findings.append(Finding(Check.UNREAD_ELEMENT, Severity.ERROR if checked else Severity.WARNING,
+                                                   f"{f}: {where}.{c.tag}",
+                                                   f"<{c.tag}> is read by nothing: did you mean <{near[0]}>?"
+                                                   + (" (it changes what is checked)" if checked else "")))
         for tag, n in seen.items():
             if n > 1 and tag in ("origin", "geometry", "limit", "axis", "parent", "child", "mimic"):
                 report.findings.append(Finding(Check.UNREAD_ELEMENT, Severity.WARNING, f"{f}: {where}.{tag}",

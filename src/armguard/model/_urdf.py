@@ -31,7 +31,7 @@ from .._errors import ArmguardError, GeometryError, SceneFileError, list_problem
 from ._hull import mesh_polytope
 from ._hull_cache import cached_polytope
 from ._shapes import convex_of_polytope
-from ._urdf_check import parse_with_lines, urdf_problems
+from ._urdf_check import misread_collisions, parse_with_lines, urdf_problems
 
 __all__ = ["UrdfInfo", "load_pinocchio", "resolve_mesh"]
 
@@ -148,6 +148,12 @@ def _read_xml(path: Path, package_dirs) -> UrdfInfo:
         where, message = list_problems([(w if k == 0 or ln is None else f"{w} (line {ln})", m)
                                         for k, (w, m, ln) in enumerate(problems)])
         raise SceneFileError(f, where, message, line=problems[0][2])
+    for where, message, line in misread_collisions(root, lines):
+        import warnings
+
+        from .._errors import ArmguardWarning
+
+        warnings.warn(f"{f}: {where}{f' (line {line})' if line else ''}: {message}", ArmguardWarning, stacklevel=4)
     collisions: dict = {}
     meshes = []
     mesh_at: dict = {}
@@ -171,9 +177,11 @@ def _read_xml(path: Path, package_dirs) -> UrdfInfo:
                 fn = kids[0].get("filename", "")
                 mp = resolve_mesh(fn, path.parent, package_dirs)
                 if mp is None:
-                    raise SceneFileError(f, w, f"mesh file not found: {fn!r} (relative to {path.parent} or package_dirs"
+                    line = lines.get(id(kids[0]))
+                    raise SceneFileError(f, f"{w} (line {line})" if line else w, f"mesh file not found: {fn!r} (relative to {path.parent} or package_dirs"
                                          + (", $ROS_PACKAGE_PATH or $AMENT_PREFIX_PATH: set ROS_PACKAGE_PATH to a folder that "
-                                            "holds the package, for the command line too)" if "://" in fn else ")"))
+                                            "holds the package, for the command line too)" if "://" in fn else ")"),
+                                         line=line)
                 meshes.append(mp)
                 mesh_at[(ln, k)] = (mp, tuple(float(x) for x in kids[0].get("scale", "1 1 1").split()))
                 kids[0].tag, kids[0].attrib = "box", {"size": "1 1 1"}  # only in collision_xml: read below, not by Pinocchio

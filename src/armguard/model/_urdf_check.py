@@ -29,7 +29,7 @@ from xml.parsers import expat
 
 from .._tolerance import DEFAULT_TOLERANCES
 
-__all__ = ["parse_with_lines", "urdf_problems"]
+__all__ = ["parse_with_lines", "urdf_problems", "misread_collisions"]
 
 _JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 
@@ -228,3 +228,33 @@ def _tree_problems(links: dict, joints: dict, add, lines: dict) -> None:
         add(f"link[{roots[1]}]", f"{len(roots)} root links ({', '.join(map(repr, roots[:6]))}"
             f"{' ...' if len(roots) > 6 else ''}): no joint joins link {roots[1]!r} to the tree of {roots[0]!r} "
             "(a URDF has one root link)", links[roots[1]])
+
+
+_LINK_READ = ("visual", "collision", "inertial", "collision_checking")
+_COLLISION_READ = ("origin", "geometry")
+
+
+def misread_collisions(root: ET.Element, lines: dict) -> list[tuple[str, str, int | None]]:
+    """Elements that nothing reads yet that look like one that sets what is checked, as ``(where, message,
+    line)``: a link's ``<colision>`` (the link has no geometry from it: its pairs are never checked) and a
+    collision's ``<orgin>`` (the shape sits at the link's origin).  Other unread elements (a simulator's
+    ``<contact>``) are ``check-urdf``'s ``unread-element`` warnings."""
+    import difflib
+
+    out = []
+    for link in root.findall("link"):
+        ln = link.get("name", "")
+        kinds = [(link, _LINK_READ, f"link[{ln}]", ("collision",))]
+        kinds += [(c, _COLLISION_READ, f"link[{ln}].collision[{k}]", _COLLISION_READ)
+                  for k, c in enumerate(link.findall("collision"))]
+        for el, read, where, watched in kinds:
+            for c in el:
+                if not isinstance(c.tag, str) or c.tag in read:
+                    continue
+                near = difflib.get_close_matches(c.tag, read, n=1, cutoff=0.75)
+                if near and near[0] in watched:
+                    what = ("the link has no geometry from it: its pairs are not checked" if near[0] == "collision"
+                            else "the shape sits at the link's origin" if near[0] == "origin" else "no shape is read from it")
+                    out.append((f"{where}.{c.tag}", f"<{c.tag}> is read by nothing: did you mean <{near[0]}>? ({what})",
+                                lines.get(id(c))))
+    return out
