@@ -526,3 +526,23 @@ def test_a_folder_target_is_refused_like_every_unwritable_output_and_missing_fol
                         "new2/g.srdf")):
         r = CliRunner().invoke(main, args)
         assert r.exit_code == 0 and (tmp_path / made).is_file(), (args, r.output)
+
+
+def test_the_file_mode_is_read_without_changing_the_umask(monkeypatch, tmp_path):
+    """The umask was set to 0 and back to read it: for that moment a file another thread made was world-writable."""
+    import os
+    from pathlib import Path
+
+    from armguard import _io
+
+    if not Path("/proc/self/status").exists():
+        pytest.skip("no /proc: the umask is read under a lock")
+    old = os.umask(0o027)
+    try:
+        monkeypatch.setattr(os, "umask", lambda *a: (_ for _ in ()).throw(AssertionError("umask changed")))
+        assert _io._mode() == 0o640
+        _io.atomic_write(tmp_path / "f.txt", "x")
+        assert (tmp_path / "f.txt").stat().st_mode & 0o777 == 0o640
+    finally:
+        monkeypatch.undo()
+        os.umask(old)

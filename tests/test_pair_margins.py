@@ -212,3 +212,29 @@ def test_check_edges_takes_collides_array_of_margins(hermes):
     for i in np.flatnonzero(res.code == EdgeStatus.CLEAR):
         assert not c.collides(hermes.pin_q(Q0[i] + S * (Q1[i] - Q0[i])), margin=m).any(), i
     assert res.counts()["clear"] > 0 and res.counts()["collision"] > 0
+
+
+def test_a_boolean_among_numbers_is_refused_never_read_as_one():
+    """numpy reads ``[True, -1.5, ...]`` as ``[1.0, -1.5, ...]``: a boolean in a list of joint values or margins
+    was 1 rad (a CLEAR edge) or a 1 m margin, where a boolean alone is refused."""
+    m = armguard.load_model("ur5")
+    c = armguard.checker(m)
+    row = [True, -1.5, 1.5, 0.0, 0.0, 0.0]
+    for call in (lambda: c.collides([row]), lambda: c.pair_distances(row), lambda: c.collides((tuple(row),)),
+                 lambda: c.collides([[np.True_, -1.5, 1.5, 0.0, 0.0, 0.0]])):
+        with pytest.raises(BackendError, match="expected real joint values, got a boolean in"):
+            call()
+    with pytest.raises(VerificationError, match="Q0: expected real joint values, got a boolean in"):
+        Verifier(m).check_edges(row, [0.0, -1.5, 1.5, 0.0, 0.0, 0.0])
+    with pytest.raises(BackendError, match="got a boolean in the list"):
+        c.collides(m.random_q(3, 0), margin=[True] + [0.0] * (len(m.pairs) - 1))
+    q = [0.0, -1.5, 1.5, 0.0, 0.0, 0.0]
+    with pytest.raises(VerificationError, match="or 17 numbers"):
+        Verifier(m).check_edges(q, q, margin=[True] + [0.0] * 16)
+    with pytest.raises(VerificationError, match="or 17 numbers"):  # text, which collides refuses too
+        Verifier(m).check_edges(q, q, margin=["0.0"] * 17)
+
+
+def test_pair_margins_refuses_a_sum_past_the_largest_float():
+    with pytest.raises(BackendError, match="is not a finite number"):
+        pair_margins(armguard.load_model("ranger"), 0.01, padding={"camera_arm/camera": 1e308, "camera_arm/link1": 1e308})

@@ -201,3 +201,50 @@ def test_a_trajectory_file_with_a_repeated_key_is_refused(tmp_path):
                     "  - [0.1, 0.6, -1.0]\n  - [0.2, 0.5, -1.0]\n")
     with pytest.raises(SceneFileError, match="duplicate key 'times' \\(first given at line 5\\)"):
         armguard.Trajectory.load_yaml(path)
+
+
+def _with_a_bad_one(n, bad):
+    """``n`` trajectories, the one at ``bad`` taking its first joint 10 rad past its upper limit."""
+    from armguard.kinematics import Trajectory
+
+    sc, items = _cases(n)
+    name, t = items[bad]
+    W = np.array(t.waypoints, dtype=float)
+    W[-1, 0] = sc.robots[t.robot_name].upper[0] + 10.0
+    items[bad] = (name, Trajectory(t.robot_name, t.joint_names, t.times, W))
+    return sc, items
+
+
+@pytest.mark.parametrize("workers", [None, 2])
+def test_a_trajectory_that_cannot_be_verified_keeps_the_reports_already_made(workers):
+    """One trajectory outside its limits lost every report made before it, and the error named none."""
+    from armguard import ArmguardError
+
+    sc, items = _with_a_bad_one(6, 4)
+    with pytest.raises(ArmguardError) as info:
+        verify_many(sc, items, workers=workers, chunk_size=2 if workers else None)
+    err = info.value
+    assert err.failed_index == 4 and len(err.reports) == 6 and err.reports[4] is None
+    assert any("verifying trajectory 4 ('t4') of 6" in n for n in err.__notes__), err.__notes__
+    serial = verify_many(sc, items[:4])
+    kept = [r for r in err.reports if r is not None]
+    assert kept and all(_strip(err.reports[i]) == _strip(serial[i]) for i in range(4) if err.reports[i] is not None)
+    if workers is None:
+        assert all(r is not None for r in err.reports[:4]) and err.reports[5] is None
+
+
+def test_knots_too_close_for_a_finite_speed_are_refused_where_the_file_says_so(tmp_path):
+    """``times: [0.0, 1.0e-320]`` parsed, then verify said only "trajectory velocity: contains NaN or infinite
+    values", naming neither the file nor the key."""
+    from click.testing import CliRunner
+
+    from armguard.cli import main
+
+    p = tmp_path / "t.yaml"
+    p.write_text("format: armguard.trajectory\nversion: 1\nrobot: puma560\njoint_names: [j1, j2, j3, j4, j5, j6]\n"
+                 "times: [0.0, 1.0e-320]\nwaypoints:\n  - [0.0, 0.79, -2.36, 0.0, -0.79, 0.0]\n"
+                 "  - [0.53, 1.25, -3.06, 0.0, -1.33, -2.61]\n")
+    r = CliRunner().invoke(main, ["verify", "puma560", str(p)])
+    assert r.exit_code == 3
+    assert "t.yaml: times (line 5): times[0] = 0.0 and times[1] = 1e-320 are so close that the speed from waypoints[0] " \
+           "to waypoints[1] is not a finite number" in r.output, r.output

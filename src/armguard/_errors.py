@@ -30,6 +30,18 @@ __all__ = [
 class ArmguardError(Exception):
     """Base class of every error armguard raises on purpose."""
 
+    def __reduce__(self):
+        # pickled as it stands (a Dask worker's error reaches the client): the subclasses' own __init__
+        # signatures (JointLimitError's six arguments) cannot be called again with the message alone
+        return _rebuilt, (type(self), self.args, self.__dict__)
+
+
+def _rebuilt(cls, args, state):
+    err = cls.__new__(cls)
+    err.args = args
+    err.__dict__.update(state)
+    return err
+
 
 class ArmguardWarning(UserWarning):
     """A lenient reading of an input armguard accepted (the message names the file and the element)."""

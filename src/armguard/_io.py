@@ -135,9 +135,22 @@ def _fsync_folder(folder: Path) -> None:
 
 
 def _mode() -> int:
-    umask = os.umask(0)
-    os.umask(umask)
+    """0o666 less the process's umask: read from /proc where it is (setting it to read it, as elsewhere, changes
+    it for every thread for a moment: a file another thread makes then would be world-writable)."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return 0o666 & ~int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    with _UMASK_LOCK:
+        umask = os.umask(0)
+        os.umask(umask)
     return 0o666 & ~umask
+
+
+_UMASK_LOCK = threading.Lock()
 
 
 def _write_file(path: Path, blob: bytes) -> None:

@@ -70,12 +70,28 @@ def _range(low, high, low_open: bool, high_open: bool) -> str:
 
 
 def refuse_complex_or_bool(x, what: str, error: type) -> None:
-    """Raise ``error`` naming ``what`` when ``x`` is (or, as a list, becomes) a complex or boolean array."""
+    """Raise ``error`` naming ``what`` when ``x`` is (or, as a list, becomes) a complex or boolean array, or is
+    a list holding a boolean among numbers (numpy reads ``[True, -1.5]`` as ``[1.0, -1.5]``: 1 rad)."""
     kind = getattr(x, "dtype", None)
     if kind is None and isinstance(x, (list, tuple)):
+        if has_bool(x):
+            raise error(f"{what}: expected real joint values, got a boolean in {_short(x)}")
         try:
             kind = np.asarray(x).dtype
         except (TypeError, ValueError):
             return  # ragged or not numbers: the caller's own conversion says so
     if kind is not None and getattr(kind, "kind", "") in ("c", "b"):
         raise error(f"{what}: expected real joint values, got dtype {kind}")
+
+
+def has_bool(x) -> bool:
+    """Whether the (nested) list or tuple ``x`` holds a ``bool`` or ``numpy.bool_`` anywhere."""
+    for v in x:
+        if isinstance(v, (bool, np.bool_)) or (isinstance(v, (list, tuple)) and has_bool(v)):
+            return True
+    return False
+
+
+def _short(x) -> str:
+    text = repr(x)
+    return text if len(text) <= 80 else text[:77] + "..."

@@ -29,7 +29,7 @@ from typing import Mapping
 import numpy as np
 
 from .._errors import BackendError
-from .._values import number
+from .._values import has_bool, number
 from ..model._items import PairCategory
 
 __all__ = ["CATEGORIES", "by_category", "check_margins", "collides_per_pair", "pair_margins"]
@@ -89,7 +89,12 @@ def pair_margins(model, default: float = 0.0, *, categories: Mapping | None = No
             if o in padded:
                 raise BackendError(f"padding: {o!r} is padded twice ({padded[o]!r} and {key!r})")
             padded[o] = key
-            out += p * (owner_a == o) + p * (owner_b == o)
+            with np.errstate(over="ignore"):  # a sum past the largest float: refused below
+                out += p * (owner_a == o) + p * (owner_b == o)
+    if not np.all(np.isfinite(out)):  # finite parts whose sum is not (1e308 twice)
+        k = int(np.flatnonzero(~np.isfinite(out))[0])
+        raise BackendError(f"pair_margins: the margin of pair {pairs.a[k]!r} - {pairs.b[k]!r} (its category's plus its "
+                           "parts' padding) is not a finite number")
     return out
 
 
@@ -105,6 +110,8 @@ def check_margins(model, margin):
     if isinstance(margin, Mapping):
         out = by_category(model.pairs.category, margin)
     else:
+        if isinstance(margin, (list, tuple)) and has_bool(margin):  # numpy reads True among numbers as 1 (m)
+            raise BackendError(f"margin: expected {forms}, got a boolean in the list")
         try:
             arr = np.asarray(margin)
         except (TypeError, ValueError):  # a ragged list

@@ -89,6 +89,7 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
 
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+    from .._errors import ArmguardError, VerificationError
     from .._io import atomic_write, check_writable, figure_format
     from ..scene import load_scene
     from ..verify import verify_many
@@ -147,6 +148,13 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
             click.echo(f"\n{done[0]} of {len(items)} trajectories verified when interrupted; no report written, and no "
                        "verdict for the run", err=True)
             raise
+        except ArmguardError as exc:  # which trajectory could not be verified (verify_many keeps the others' reports)
+            i = getattr(exc, "failed_index", None)
+            if i is None:
+                raise
+            done_n = sum(r is not None for r in exc.reports)
+            raise VerificationError(f"trajectory {items[i][0]}: {exc} ({done_n} of {len(items)} verified; no report written, "
+                                    "and no verdict for the run)") from None
     else:
         with console.status(f"verifying {items[0][0]}"):  # on a terminal a spinner (a long sampled run said nothing)
             reports = verify_many(sc, items, **kwargs)

@@ -94,6 +94,12 @@ class Trajectory:
         if np.any(dt <= 0.0):
             k = int(np.argmax(dt <= 0.0))
             raise TrajectoryError(f"times: must be strictly increasing; times[{k}] = {t[k]} >= times[{k + 1}] = {t[k + 1]}")
+        with np.errstate(over="ignore", divide="ignore"):
+            fast = ~np.all(np.isfinite(np.diff(w, axis=0) / dt[:, None]), axis=1)
+        if np.any(fast):  # knots so close the speed between them is past the largest float: no bound holds
+            k = int(np.argmax(fast))
+            raise TrajectoryError(f"times: times[{k}] = {float(t[k])!r} and times[{k + 1}] = {float(t[k + 1])!r} are so close that the speed "
+                                  f"from waypoints[{k}] to waypoints[{k + 1}] is not a finite number")
         tb = np.zeros(t.shape[0] - 1) if blend_times is None else _array(blend_times, "blend_times", 1)
         if tb.shape != dt.shape:
             raise TrajectoryError(f"blend_times: expected {dt.shape[0]} values (one per segment), got {tb.shape[0]}")

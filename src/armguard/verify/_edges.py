@@ -43,7 +43,7 @@ from typing import Mapping
 import numpy as np
 
 from .._errors import ArmguardError, KinematicsError, VerificationError
-from .._values import refuse_complex_or_bool
+from .._values import has_bool, refuse_complex_or_bool
 from ._advance import advance_step
 from ._record import _Run
 
@@ -231,8 +231,10 @@ def _per_part_pair(margin, model, scene) -> np.ndarray:
 
     pairs = model_of(scene).pairs
     try:
-        arr = np.asarray(margin, dtype=np.float64)
+        arr = None if isinstance(margin, (list, tuple)) and has_bool(margin) else np.asarray(margin)
     except (TypeError, ValueError):
+        arr = None
+    if arr is not None and (arr.dtype == bool or arr.dtype.kind not in "fiu"):  # no text, no True read as 1 m
         arr = None
     if arr is None or arr.shape != (len(pairs),):
         raise VerificationError(f"margin: expected a number (m), a mapping by pair category or {len(pairs)} numbers (one "

@@ -8,7 +8,7 @@ from collections.abc import Callable, Mapping
 
 from ..model import scene_of
 from .._dask import dask_client
-from .._errors import VerificationError
+from .._errors import ArmguardError, VerificationError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ._report import VerificationReport
 from ._verify import Verifier
@@ -36,7 +36,25 @@ def _chunk_task(token: str, scene, ctor: dict, items: list, kwargs: dict) -> lis
         _WORKER_CACHE.clear()
         v = Verifier(scene, **ctor)
         _WORKER_CACHE[token] = v
-    return [v.verify(traj, name=name, **kwargs) for name, traj in items]
+    out = []
+    for j, (name, traj) in enumerate(items):
+        try:
+            out.append(v.verify(traj, name=name, **kwargs))
+        except ArmguardError as exc:  # the chunk's finished reports go back with the error (it pickles whole)
+            exc.chunk_reports, exc.chunk_index = tuple(out), j
+            raise
+    return out
+
+
+def _kept(exc: ArmguardError, reports: list, i: int, name, total: int) -> ArmguardError:
+    """``exc`` of trajectory ``i`` with the reports already made kept on it (``exc.reports``: one per
+    trajectory in input order, None where not verified) and a note naming the trajectory."""
+    exc.reports = tuple(reports)
+    exc.failed_index = i
+    done = sum(r is not None for r in reports)
+    exc.add_note(f"verifying trajectory {i}{f' ({name!r})' if name else ''} of {total}: the {done} reports already made "
+                 "are kept on this error (.reports, None where not verified)")
+    return exc
 
 
 def verify_many(scene, trajectories, *, workers: int | None = None, scheduler: str | None = None,
@@ -77,9 +95,12 @@ def verify_many(scene, trajectories, *, workers: int | None = None, scheduler: s
     total = len(items)
     if workers is None and scheduler is None:
         v = Verifier(scene, **ctor)
-        out = []
+        out: list = [None] * total
         for i, (name, traj) in enumerate(items):
-            out.append(v.verify(traj, name=name, **kwargs))
+            try:
+                out[i] = v.verify(traj, name=name, **kwargs)
+            except ArmguardError as exc:
+                raise _kept(exc, out, i, name, total)
             if progress is not None:
                 progress(i + 1, total)
         return tuple(out)
@@ -99,7 +120,17 @@ def _on_dask(scene, items, ctor, kwargs, workers, scheduler, chunk_size, progres
         done = 0
         for fut in as_completed(list(futures)):
             k = futures[fut]
-            results[k] = fut.result()
+            try:
+                results[k] = fut.result()
+            except ArmguardError as exc:  # the finished chunks' reports and this chunk's are kept on it
+                for f in futures:
+                    f.cancel()
+                j = getattr(exc, "chunk_index", 0)
+                results[k] = list(getattr(exc, "chunk_reports", ()))
+                flat = [r for c, chunk in zip(results, chunks) for r in (list(c) + [None] * (len(chunk) - len(c))
+                                                                          if c is not None else [None] * len(chunk))]
+                i = k * size + j
+                raise _kept(exc, flat, i, items[i][0], len(items))
             done += len(chunks[k])
             if progress is not None:
                 progress(done, len(items))
