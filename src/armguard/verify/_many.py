@@ -82,6 +82,10 @@ def verify_many(scene, trajectories, *, workers: int | None = None, scheduler: s
 
     Results are identical to the serial run's (but for ``elapsed_s``): each worker builds the
     same :class:`Verifier` from the same scene.
+
+    A trajectory that cannot be verified (outside its limits, ...) raises its error, with the reports
+    already made kept on it: ``err.reports`` (one per trajectory, in input order; None where not
+    verified), ``err.failed_index`` and a note naming the trajectory.
     """
     scene = scene_of(scene, "verification")  # a Model: its scene
     items = _named(trajectories)
