@@ -236,3 +236,24 @@ def test_a_package_named_otherwise_than_its_folder_and_model_uris(tmp_path):
     r2.mkdir(parents=True)
     err = _refused(r2, _urdf('<mesh filename="meshes/m.obj"/>'))
     assert "mesh file not found: 'meshes/m.obj'" in err.message
+
+
+def test_an_unclosed_element_is_named_with_its_line(tmp_path):
+    """expat reports a mismatched tag at the closing tag that does not match (``</joint>``): the element left
+    open (``<parent>``, written without its ``/``) is named, with its own line; so in an SRDF."""
+    from armguard.model import models_dir
+
+    text = (models_dir() / "puma560" / "puma560.urdf").read_text()
+    bad = text.replace('<parent link="puma560_link5"/>', '<parent link="puma560_link5">', 1)
+    line = bad[:bad.index('<parent link="puma560_link5">')].count("\n") + 1
+    p = tmp_path / "p.urdf"
+    p.write_text(bad)
+    with pytest.raises(SceneFileError) as err:
+        armguard.load_model(p, srdf=False)
+    assert err.value.message == (f"not well-formed XML: mismatched tag: <parent> opened at line {line} is not closed "
+                                 "(or not written <parent .../>)"), err.value
+    s = tmp_path / "x.srdf"
+    s.write_text('<robot name="x">\n<group name="a">\n<chain base_link="b" tip_link="c">\n</group>\n</robot>\n')
+    with pytest.raises(SceneFileError, match=r"x.srdf: line 4, column 3: not well-formed XML: mismatched tag: <chain> "
+                                             r"opened at line 3 is not closed"):
+        armguard.load_model("puma560", srdf=s)

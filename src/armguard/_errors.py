@@ -105,8 +105,33 @@ def xml_parse_error(file, exc) -> SceneFileError:
     from xml.parsers import expat
 
     line, col = exc.position
-    return SceneFileError(str(file), f"line {line}, column {col + 1}", f"not well-formed XML: {expat.ErrorString(exc.code)}",
-                          line=line)
+    return SceneFileError(str(file), f"line {line}, column {col + 1}", f"not well-formed XML: {expat.ErrorString(exc.code)}"
+                          + unclosed_text(file, exc.code), line=line)
+
+
+def unclosed_text(file_or_bytes, code) -> str:
+    """For expat's "mismatched tag" (reported at the closing tag that does not match): the element still open
+    there and its line (an unclosed ``<parent>`` inside a ``<joint>``), as ``": <parent> opened at line 134 is not
+    closed"``; else ``""``."""
+    from xml.parsers import expat
+
+    if code != expat.errors.codes.get(expat.errors.XML_ERROR_TAG_MISMATCH):
+        return ""
+    try:
+        data = file_or_bytes if isinstance(file_or_bytes, bytes) else open(file_or_bytes, "rb").read()
+    except OSError:
+        return ""
+    parser = expat.ParserCreate()
+    stack: list = []
+    parser.StartElementHandler = lambda tag, attrs: stack.append((tag, parser.CurrentLineNumber))
+    parser.EndElementHandler = lambda tag: stack.pop()
+    try:
+        parser.Parse(data, True)
+    except expat.ExpatError:
+        if stack:
+            tag, line = stack[-1]
+            return f": <{tag}> opened at line {line} is not closed (or not written <{tag} .../>)"
+    return ""
 
 
 def list_problems(problems) -> tuple[str, str]:

@@ -27,7 +27,7 @@ from xml.parsers import expat
 
 import numpy as np
 
-from .._errors import ArmguardError, GeometryError, SceneFileError, list_problems
+from .._errors import ArmguardError, GeometryError, SceneFileError, list_problems, unclosed_text
 from ._hull import mesh_polytope
 from ._hull_cache import cached_polytope
 from ._shapes import convex_of_polytope
@@ -131,12 +131,14 @@ def _package_name(folder: Path) -> str | None:
 def _read_xml(path: Path, package_dirs) -> UrdfInfo:
     f = str(path)
     try:
-        root, lines = parse_with_lines(path.read_bytes())
+        data = path.read_bytes()
+        root, lines = parse_with_lines(data)
     except FileNotFoundError:
         raise SceneFileError(f, "", "URDF file not found") from None
     except expat.ExpatError as exc:
         raise SceneFileError(f, f"line {exc.lineno}, column {exc.offset + 1}",
-                             f"not well-formed XML: {expat.ErrorString(exc.code)}", line=exc.lineno) from None
+                             f"not well-formed XML: {expat.ErrorString(exc.code)}{unclosed_text(data, exc.code)}",
+                             line=exc.lineno) from None
     if root.tag != "robot":
         raise SceneFileError(f, root.tag, "expected a <robot> root element (a URDF file)")
     links = root.findall("link")
