@@ -300,3 +300,17 @@ def test_a_group_state_value_of_a_mimic_joint_is_said_not_read(tmp_path):
                                              r"joint 'j2' \(0.1 \+ -1 x its value\)"):
         model = armguard.load_model(urdf)
     np.testing.assert_allclose(model.neutral(), [0.2, 1.0])
+
+
+def test_a_renamed_link_is_suggested(certified, tmp_path):
+    """A link renamed in the URDF alone: the SRDF's pairs naming the old name suggest the link the SRDF never names."""
+    new = _fresh(certified, tmp_path, grow=False)
+    new.write_text(new.read_text().replace('"puma560_link3"', '"puma560_elbow"'))
+    with pytest.raises(armguard.SceneFileError, match=r"names link 'puma560_link3', which the URDF .* does not have \(a link "
+                                                      r"renamed 'puma560_elbow'\? then update the SRDF\)"):
+        armguard.load_model(new)
+    r = CliRunner().invoke(main, ["-q", "check-urdf", str(new), "--json"])
+    import json
+
+    hints = {f["suggestion"] for f in json.loads(r.output)["findings"] if f["check"] == "srdf-name"}
+    assert hints == {"a link renamed 'puma560_elbow'? then update the SRDF"}, r.output

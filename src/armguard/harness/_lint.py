@@ -39,6 +39,7 @@ Checks (each a :class:`Check`), on the files as written, then on the loaded mode
 
 from __future__ import annotations
 
+import difflib
 import enum
 import xml.etree.ElementTree as ET
 from dataclasses import asdict, dataclass, field
@@ -246,7 +247,8 @@ def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: d
                             Check.NON_CONVEX, Severity.ERROR, w, f"mesh {entries[n][2].name} is marked <convex> but is not "
                             f"convex ({how})", "drop the <convex> mark (it is then checked as its hull) or split the mesh"))
     if srdf is not None:
-        _srdf_checks(srdf, links, joints, report, partial)
+        shaped = {ln.get("name") for ln in root.findall("link") if ln.find("collision") is not None}
+        _srdf_checks(srdf, links, joints, report, partial, shaped)
 
 
 _READ = {"link": ("visual", "collision", "inertial", "collision_checking"),
@@ -364,7 +366,7 @@ def _mesh_scale_checks(model, report: LintReport) -> None:
             f'scale="{hint}" if the mesh is ' + ("in millimetres" if big else "already in metres")))
 
 
-def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport, partial: bool = False) -> None:
+def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport, partial: bool = False, shaped=None) -> None:
     """Names of the SRDF that match nothing in the URDF: errors, or for an SRDF of a larger robot found
     under the robot's name (``partial``: the loader skips them) warnings."""
     f = srdf.name
@@ -374,12 +376,16 @@ def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport, partia
         _unparsed(report, f, "SRDF", exc)
         return
     groups = {g.get("name") for g in root.findall("group")}
+    named = {el.get(a) for el in root.iter() for a in ("link1", "link2", "link", "parent_link", "base_link", "tip_link", "name")}
 
-    def need(name, kind, where, pool):
-        if name not in pool:
+    def need(name, kind, where, pool, from_pair=False):
+        if name not in pool:  # a rename's new name: one the SRDF never names (of a pair: a link with shapes)
+            cands = [str(x) for x in pool if x and x not in named and (not from_pair or shaped is None or x in shaped)]
+            near = difflib.get_close_matches(str(name), cands, n=1, cutoff=0.6)
             report.findings.append(Finding(Check.SRDF_NAME, Severity.WARNING if partial else Severity.ERROR, f"{f}: {where}",
                                            f"{kind} {name!r} matches nothing in the URDF"
-                                           + (" (an SRDF of a larger robot: skipped when it loads)" if partial else "")))
+                                           + (" (an SRDF of a larger robot: skipped when it loads)" if partial else ""),
+                                           f"a {kind} renamed {near[0]!r}? then update the SRDF" if near else None))
     for ee in root.findall("end_effector"):
         for attr in ("parent_link", "group", "parent_group"):
             if ee.get(attr) is not None:
@@ -399,7 +405,7 @@ def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport, partia
             need(sub.get("name"), "group", f"{w}.group", groups)
     for k, el in enumerate(root.iter("disable_collisions")):
         for side in ("link1", "link2"):
-            need(el.get(side), "link", f"disable_collisions[{k}].{side}", links)
+            need(el.get(side), "link", f"disable_collisions[{k}].{side}", links, True)
     for k, st in enumerate(root.iter("group_state")):
         if st.get("group") is None:  # as the loader reads it (armguard.model._srdf): the whole robot's state
             report.findings.append(Finding(Check.SRDF_NAME, Severity.WARNING, f"{f}: group_state[{st.get('name')}]",

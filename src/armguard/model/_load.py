@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import contextlib
+import difflib
 import os
 import tempfile
 import threading
@@ -180,10 +181,16 @@ def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None, srdf_so
             oa, ob = parts.link_owner.get(a), parts.link_owner.get(b)
             if oa is None or ob is None:
                 missing = a if oa is None else b
+                named = {x for a2, b2, _ in srdf_obj.disabled for x in (a2, b2)}  # a rename: a link with shapes the SRDF never names
+                shaped = {pin_model.frames[int(go.parentFrame)].name for go in geom.geometryObjects}
+                near = difflib.get_close_matches(missing, [ln for ln in parts.link_owner if ln not in named and ln in shaped],
+                                                 n=1, cutoff=0.6)
+                hint = f": a link renamed {near[0]!r}? then update the SRDF" if near else ""
                 if srdf_obj.partial:  # an SRDF of a larger robot: its pairs of links this URDF lacks do not apply
-                    skipped.append(f"disable_collisions[{k}] ({missing})")
+                    skipped.append(f"disable_collisions[{k}] ({missing}{hint})")
                     continue
-                raise srdf_obj.error(f"disable_collisions[{k}]", f"names link {missing!r}, which the URDF {urdf} does not have")
+                raise srdf_obj.error(f"disable_collisions[{k}]", f"names link {missing!r}, which the URDF {urdf} does not "
+                                     f"have{hint.replace(': a', ' (a', 1) + ')' if hint else ''}")
             if oa == ob:
                 continue
             try:

@@ -180,7 +180,7 @@ def _read_xml(path: Path, package_dirs) -> UrdfInfo:
                 mp = resolve_mesh(fn, path.parent, package_dirs)
                 if mp is None:
                     line = lines.get(id(kids[0]))
-                    raise SceneFileError(f, f"{w} (line {line})" if line else w, f"mesh file not found: {fn!r} (relative to {path.parent} or package_dirs"
+                    raise SceneFileError(f, w, f"mesh file not found: {fn!r} (relative to {path.parent} or package_dirs"
                                          + (", $ROS_PACKAGE_PATH or $AMENT_PREFIX_PATH: set ROS_PACKAGE_PATH to a folder that "
                                             "holds the package, for the command line too)" if "://" in fn else ")"),
                                          line=line)
