@@ -152,6 +152,10 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
             click.echo("  --update: kept " + ", ".join(f"{n} {t}" for t, n in counts.items()) + f" of {out}")
         for o, e in changed:
             click.echo(f"  changed {e.link1} - {e.link2}: {o.reason or o.status} -> {e.reason or e.status}")
+            if e.reason == "Default":  # disabled because the edit put them in contact at home: said, not only listed
+                click.echo(f"warning: {e.link1} - {e.link2} are in contact at home now ({e.distance * 1e3:.1f} mm) and are "
+                           f"disabled as Default (MoveIt's rule; they were {o.reason or o.status}): did a shape grow or a "
+                           "joint move in the edit?", err=True)
     for e in cm.entries:
         if e.status == "witnessed":
             click.echo(f"  checked {e.link1} - {e.link2}: distance {e.distance:.4f} m at q = {_q(model, e.q)}")
