@@ -274,6 +274,13 @@ def _least_margin(self, Q, *, margin=0.0):
 _OwnMargins.collides = _least_margin
 
 
+class _IgnoresPairs(_Wrapped):
+    """A backend whose collides takes ``pairs=`` and answers for every pair."""
+
+    def collides(self, Q, *, margin=0.0, pairs=None):
+        return _Wrapped.collides(self, Q, margin=margin)
+
+
 class _Mutant:
     def __init__(self, mutation: str) -> None:
         self.name, self.mutation = "mutant", mutation
@@ -283,6 +290,8 @@ class _Mutant:
             raise BackendError(f"mutant: unknown options {sorted(options)}; this backend takes none")
         if self.mutation == "margins per pair read as their least":
             return _OwnMargins(model, self.mutation)
+        if self.mutation == "collides ignores pairs=":
+            return _IgnoresPairs(model, self.mutation)
         return _Wrapped(model, self.mutation)
 
 
@@ -339,6 +348,7 @@ MUTATIONS = {
     "a cache handing out its own arrays": "results_kept",
     # a backend answering margins per pair itself, wrongly
     "margins per pair read as their least": "margins_per_pair",
+    "collides ignores pairs=": "collides_pairs",
 }
 MODEL_OF = {"a continuous joint's (cos, sin) normalised": "kinova", "collides skips the workspace walls": "ranger",
             "collides skips the payload": "hermes", "reads the scene's workspace": "ranger"}  # else puma560

@@ -238,3 +238,31 @@ def test_a_boolean_among_numbers_is_refused_never_read_as_one():
 def test_pair_margins_refuses_a_sum_past_the_largest_float():
     with pytest.raises(BackendError, match="is not a finite number"):
         pair_margins(armguard.load_model("ranger"), 0.01, padding={"camera_arm/camera": 1e308, "camera_arm/link1": 1e308})
+
+
+@pytest.mark.parametrize("backend", ["analytic", "coal", "fcl"])
+def test_collides_on_a_subset_of_the_pairs(hermes, backend):
+    """``collides(Q, pairs=rows)``: a planner's allowed-collision change (the payload may touch the cargo bay while
+    it is stowed) without a new Model; exactly ``any(distance[rows] <= margin[rows])``."""
+    c = armguard.checker(hermes, backend)
+    Q = hermes.random_q(120, 11)
+    D = c.pair_distances_many(Q).distance
+    cats = np.asarray(hermes.pairs.category)
+    rows = np.flatnonzero(cats != "payload-vehicle")  # the payload's pairs with the orbiter allowed
+    for margin in (0.0, 0.02, {"arm-arm": 0.0, "*": 0.02}):
+        m = check_margins(hermes, margin)
+        mk = np.full(len(cats), m) if type(m) is float else m
+        want = np.any(D[:, rows] <= mk[rows], axis=1)
+        got = c.collides(Q, margin=margin, pairs=rows)
+        clear = ~np.any(np.abs(D[:, rows] - mk[rows]) <= BAND, axis=1)
+        assert np.array_equal(got[clear], want[clear])
+    every = c.collides(Q)
+    assert (every & ~c.collides(Q, pairs=rows)).any()  # some rows collide only through the pairs left out
+    assert not c.collides(Q, pairs=[]).any()
+    with pytest.raises(BackendError, match="pairs: row 50 is not a Model pair row"):
+        c.collides(Q, pairs=[50])
+
+
+def test_collides_on_a_subset_needs_distances(hermes):
+    with pytest.raises(BackendError, match=r"collides\(pairs=...\) needs pair distances"):
+        armguard.checker(hermes, "clip").collides(hermes.random_q(2, 0), pairs=[0])

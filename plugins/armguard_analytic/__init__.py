@@ -57,7 +57,7 @@ import numpy as np
 
 from armguard._errors import BackendError
 from armguard.backends import (Capability, CheckerBase, PairDistances, PairDistancesMany, check_margin, check_margins,
-                               check_pairs, check_q, check_Q, check_unit_circle, collides_per_pair)
+                               check_pairs, check_q, check_Q, check_unit_circle, collides_per_pair, subset_verdicts)
 
 __all__ = ["AnalyticBackend", "AnalyticChecker"]
 
@@ -426,12 +426,14 @@ class AnalyticChecker(CheckerBase):
             self._kernel_error(f, min(bad, key=lambda e: e // 4), Q, True)
         return PairDistancesMany(names, d, p_WA, p_WB, cat)
 
-    def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
+    def collides(self, Q, *, margin: float = 0.0, pairs=None) -> np.ndarray:
         """Yes/no per row of ``Q`` ``(M, nq)``: the fused kernel's early-exit mode, straight on ``Q``
         when it is already a C-contiguous float64 array of the right width (the kernel itself refuses
         a non-finite row, then :func:`check_Q` names it), the joints reordered only where Pinocchio's
         order is not the scene's."""
         model = self.model
+        if pairs is not None:  # those pairs only: from their distances (the fused kernel answers every pair)
+            return subset_verdicts(self, Q, margin, pairs)
         margin = check_margin(margin) if type(margin) is float else check_margins(model, margin)
         if type(margin) is not float:  # a margin per pair: decided from this checker's own answers
             return collides_per_pair(self, check_Q(model, Q), margin)

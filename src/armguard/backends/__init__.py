@@ -30,11 +30,12 @@ from typing import Mapping
 
 from .._errors import ArmguardError, BackendError, DetectionError
 from ._interface import (Backend, Capability, Checker, CheckerBase, NearestPair, PairDistances, PairDistancesMany, check_margin,
-                         check_pairs, check_Q, check_q, check_unit_circle)
-from ._margins import CATEGORIES, by_category, check_margins, collides_per_pair, pair_margins
+                         check_pairs, check_Q, check_q, check_unit_circle, subset_verdicts)
+from ._margins import CATEGORIES, by_category, check_margins, collides_per_pair, collides_subset, pair_margins
 
 __all__ = ["available", "refresh", "get_backend", "checker", "resolve", "command_line_choice", "option_value", "Backend", "Checker", "CheckerBase", "PairDistances",
-           "PairDistancesMany", "NearestPair", "check_margin", "check_margins", "collides_per_pair", "pair_margins", "by_category", "CATEGORIES", "check_pairs", "Capability", "check_q", "check_Q", "check_unit_circle", "GROUP", "DEFAULT", "ENV"]
+           "PairDistancesMany", "NearestPair", "check_margin", "check_margins", "collides_per_pair", "collides_subset", "subset_verdicts", "pair_margins", "by_category",
+           "CATEGORIES", "check_pairs", "Capability", "check_q", "check_Q", "check_unit_circle", "GROUP", "DEFAULT", "ENV"]
 
 GROUP = "armguard.backends"
 DEFAULT = "analytic"

@@ -37,7 +37,7 @@ import numpy as np
 from .._errors import BackendError
 from .._values import number, refuse_complex_or_bool
 from ..model._joint_limits import UNIT_CIRCLE  # defined with the Model's limits (within_pin_limits tests it too)
-from ._margins import check_margins, collides_per_pair
+from ._margins import check_margins, collides_per_pair, collides_subset
 
 __all__ = ["Backend", "Checker", "CheckerBase", "PairDistances", "PairDistancesMany", "NearestPair", "Capability",
            "check_q", "check_Q", "check_pairs"]
@@ -241,7 +241,7 @@ class Checker(Protocol):
 
     def pair_distances_many(self, Q, *, pairs=None) -> PairDistancesMany: ...
 
-    def collides(self, Q, *, margin: float = 0.0) -> np.ndarray: ...
+    def collides(self, Q, *, margin: float = 0.0, pairs=None) -> np.ndarray: ...
 
 
 @runtime_checkable
@@ -340,11 +340,13 @@ class CheckerBase:
         cat = self._category
         return self._pairs[idx], tuple(cat[int(k)] for k in idx)
 
-    def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
+    def collides(self, Q, *, margin: float = 0.0, pairs=None) -> np.ndarray:
         """Default: some pair's ``pair_distances(q).distance <= margin`` row by row (``margin``: one for
-        every pair, or one per pair or category, :mod:`._margins`)."""
+        every pair, or one per pair or category, :mod:`._margins`; ``pairs``: only those Model pair rows)."""
         self._require(Capability.DISTANCES)
         margin = check_margins(self.model, margin)
+        if pairs is not None:
+            return collides_subset(self, check_Q(self.model, Q), margin, check_pairs(self.model, pairs))
         Q = check_Q(self.model, Q)
         return np.array([bool(np.any(self.pair_distances(q).distance <= margin)) for q in Q], dtype=bool)
 
@@ -426,8 +428,14 @@ def _with_pair_margins(own):
     (:func:`._margins.collides_per_pair`, exact from the backend's own answers); a float goes
     straight through (one type test)."""
 
+    native_pairs = "pairs" in inspect.signature(own).parameters
+
     @functools.wraps(own)
-    def collides(self, Q, *, margin: float = 0.0) -> np.ndarray:
+    def collides(self, Q, *, margin: float = 0.0, pairs=None) -> np.ndarray:
+        if pairs is not None:
+            if native_pairs:
+                return own(self, Q, margin=margin, pairs=pairs)
+            return subset_verdicts(self, Q, margin, pairs)
         if type(margin) is float:
             return own(self, Q, margin=margin)
         m = check_margins(self.model, margin)
@@ -436,6 +444,18 @@ def _with_pair_margins(own):
         return collides_per_pair(self, check_Q(self.model, Q), m)
 
     return collides
+
+
+def subset_verdicts(checker, Q, margin, pairs) -> np.ndarray:
+    """``collides(Q, margin=margin, pairs=pairs)`` from ``checker``'s pair distances of those rows
+    (:func:`._margins.collides_subset`), every argument checked first; a verdicts-only backend refuses it."""
+    if Capability.DISTANCES not in getattr(checker, "capabilities", frozenset({Capability.DISTANCES})):
+        raise BackendError(f"{type(checker).__name__}: collides(pairs=...) needs pair distances; this backend answers "
+                           "verdicts only (of every pair)")
+    model = checker.model
+    m = check_margins(model, margin)
+    idx = check_pairs(model, pairs)
+    return collides_subset(checker, check_Q(model, Q), m, idx)
 
 
 def _with_pairs(full):

@@ -32,7 +32,7 @@ from .._errors import BackendError
 from .._values import has_bool, number
 from ..model._items import PairCategory
 
-__all__ = ["CATEGORIES", "by_category", "check_margins", "collides_per_pair", "pair_margins"]
+__all__ = ["CATEGORIES", "by_category", "check_margins", "collides_per_pair", "collides_subset", "pair_margins"]
 
 #: Every pair category a Model may have (``Model.pairs.category``): a margin's mapping may name any of
 #: them (one mapping serves several models: a category a model has no pair in is passed over), and
@@ -156,3 +156,13 @@ def collides_per_pair(checker, Q: np.ndarray, margins: np.ndarray) -> np.ndarray
             d = checker.pair_distances_many(Q[near], pairs=idx).distance
             out[near] = np.any(d <= margins[idx], axis=1)
     return out
+
+
+def collides_subset(checker, Q: np.ndarray, margins, idx: np.ndarray) -> np.ndarray:
+    """``(M,) bool``: some pair of the Model pair rows ``idx`` within its margin (``margins``: a float or the
+    ``(n,)`` array of :func:`check_margins`), from ``checker``'s ``pair_distances_many(Q, pairs=idx)``
+    (``collides(Q, pairs=idx)``: a planner's allowed-collision changes without a new Model; no pair: False)."""
+    if not idx.size or not len(Q):
+        return np.zeros(len(Q), dtype=bool)
+    m = margins if type(margins) is float else margins[idx]
+    return np.any(checker.pair_distances_many(Q, pairs=idx).distance <= m, axis=1)

@@ -406,6 +406,37 @@ def check_margins_per_pair(ctx, model):
                                      f"(least distance less margin {float(np.min(D[bad[0]] - mk)):.6g} m)")
 
 
+def check_collides_pairs(ctx, model):
+    """``collides(Q, pairs=rows)`` (with one margin and with margins per pair) is ``any(distance[rows] <=
+    margin[rows])`` row by row, outside the contact band: the pairs of every other row left out, ``pairs=[]``
+    all False, a row out of range refused (:func:`armguard.backends.check_pairs`)."""
+    c = ctx.checker(model)
+    _require_distances(c)
+    Q = ctx.configs(model)
+    D = np.array([answer(ctx, model, c, q, i).distance for i, q in enumerate(Q)]).reshape(len(Q), -1)
+    n = D.shape[1]
+    if n < 2:
+        raise NotApplicable("one pair: a subset of the pairs is all or none")
+    order = np.argsort(D.min(axis=0))
+    near_half = order[: max(1, n // 2)]  # the pairs nearest anywhere left out: the rest decide alone
+    far_half = np.sort(order[max(1, n // 2):])
+    m = np.clip(np.median(D, axis=0) * np.random.default_rng(1).random(n), 0.0, 0.2)
+    for rows, margin in ((far_half, 0.0), (far_half, MARGIN), (near_half[::-1].copy(), m), (far_half, m)):
+        mk = np.full(n, margin) if np.ndim(margin) == 0 else margin
+        v = np.asarray(c.collides(Q, margin=margin, pairs=rows))
+        want = np.any(D[:, rows] <= mk[rows], axis=1)
+        clear = ~np.any(np.abs(D[:, rows] - mk[rows]) <= BAND, axis=1)
+        expect(v.shape == want.shape, lambda: f"collides(pairs=...) gave shape {v.shape}, expected {want.shape}")
+        bad = np.flatnonzero(clear & (v != want))
+        what = "one margin" if np.ndim(margin) == 0 else "margins per pair"
+        expect(not bad.size, lambda: f"pairs={rows.tolist()[:6]}{'...' if len(rows) > 6 else ''} ({what}), "
+                                     f"{where(bad[0], Q[bad[0]])}: collides says {bool(v[bad[0]])}, those pairs' least "
+                                     f"distance less margin is {float(np.min(D[bad[0], rows] - mk[rows])):.6g} m")
+    none = np.asarray(c.collides(Q, pairs=np.zeros(0, dtype=np.int64)))
+    expect(none.shape == (len(Q),) and not none.any(), lambda: f"collides(pairs=[]) gave {none}, expected all False")
+    _raises_backend_error(lambda: c.collides(Q, pairs=[n]), f"collides(pairs=[{n}]) (a row past the Model's {n} pairs)")
+
+
 def check_deterministic(ctx, model):
     """The same ``q`` gives the same answer whatever was asked before: the configurations forwards,
     backwards and again give identical distances, witness points and verdicts (a batch of
