@@ -331,3 +331,21 @@ def test_a_pair_an_edit_puts_in_contact_at_home_is_warned_of(tmp_path):
     assert r.exit_code == 0, r.output
     assert "changed l1 - l3:" in r.output and "-> Default" in r.output, r.output
     assert "warning: l1 - l3 are in contact at home now (" in r.output and "did a shape grow or a joint move" in r.output
+
+
+def test_check_urdf_says_when_a_checked_pair_is_no_longer_checked(tmp_path):
+    """l2 stripped of its geometry joins l1 and l3 through a link without geometry (MoveIt's Adjacent): the pair
+    the SRDF records as checked was dropped without a word."""
+    import json
+
+    urdf, srdf = tmp_path / "three.urdf", tmp_path / "three.srdf"
+    urdf.write_text(_THREE)
+    r = CliRunner().invoke(main, ["srdf", str(urdf), "--out", str(srdf), "--max-evaluations", str(MAX_EVALUATIONS)])
+    assert r.exit_code == 0 and "checked l1 - l3: distance" in r.output, r.output
+    urdf.write_text(_THREE.replace('<link name="l2"><collision><origin xyz="0.55 0 0"/><geometry><box size="0.1 0.1 0.1"/>'
+                                   '</geometry></collision></link>', '<link name="l2"/>'))
+    r = CliRunner().invoke(main, ["-q", "check-urdf", str(urdf), "--json"])
+    found = [(f["where"].split(": ", 1)[1], f["severity"], f["message"]) for f in json.loads(r.output)["findings"]
+             if f["check"] == "srdf-certificate"]
+    assert [(w, sev) for w, sev, _ in found] == [("l1 - l3", "warning")], found
+    assert "recorded as checked (witnessed within the margin" in found[0][2] and "no longer checked" in found[0][2]

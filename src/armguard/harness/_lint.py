@@ -423,6 +423,7 @@ def _certificate_checks(model, report: LintReport) -> None:
     from ..srdfgen import check_srdf
 
     srdf = Path(model.srdf.file)
+    _dropped_checks(model, srdf, report)
     stale = stale_certificates(model.pin_model, model.collision_model, srdf)
     if not stale:
         return
@@ -450,6 +451,26 @@ def _certificate_checks(model, report: LintReport) -> None:
                     Check.SRDF_CERTIFICATE, Severity.WARNING, f"{srdf.name}: {where[frozenset((d['link1'], d['link2']))].where}",
                     f"disables {d['link1']} - {d['link2']} with a certificate for another URDF; neither proven nor "
                     "witnessed again", "armguard srdf --update (the pair is then checked)"))
+
+
+def _dropped_checks(model, srdf: Path, report: LintReport) -> None:
+    """Pairs the SRDF (one ``armguard srdf`` wrote) records as checked that the URDF now joins through links
+    without geometry (MoveIt's Adjacent: no longer checked, without a word at load): warnings."""
+    from ..model._certificate import _adjacent
+    from ..srdfgen._io import read_previous
+
+    try:
+        before = read_previous(srdf)
+    except ArmguardError:
+        return  # not parsed: the SRDF's own findings say so
+    for e in before.values():
+        if e.status in ("witnessed", "undecided") and _adjacent(model.pin_model, model.collision_model, e.link1, e.link2):
+            was = f"witnessed within the margin ({e.distance:.4f} m)" if e.status == "witnessed" else "undecided"
+            report.findings.append(Finding(
+                Check.SRDF_CERTIFICATE, Severity.WARNING, f"{srdf.name}: {e.link1} - {e.link2}",
+                f"recorded as checked ({was}); the URDF now joins them through links without geometry (MoveIt's "
+                "Adjacent), so they are no longer checked", "give the link between them its geometry back, or "
+                "armguard srdf --update (records the pair Adjacent)"))
 
 
 def _certs(srdf):
