@@ -193,3 +193,19 @@ def test_a_mesh_a_thousand_times_off_the_chain_is_warned_of(tmp_path, scale, sto
         assert f.where.startswith("two.urdf: link[l1] mesh ") and "box.stl" in f.message, f.where
         assert f.suggestion == ('scale="0.001 0.001 0.001" if the mesh is in millimetres' if stored == 1000.0
                                 else 'scale="1 1 1" if the mesh is already in metres')
+
+
+def test_a_mimic_joint_driven_outside_its_own_limits_is_a_finding(tmp_path):
+    import json
+
+    text = _URDF.replace("LIMIT", '<limit lower="-2" upper="2" effort="1" velocity="1"/>')
+    coupled = text.replace('<child link="l2"/>', '<child link="l2"/><mimic joint="j1" multiplier="-2" offset="0.3"/>')
+    assert coupled != text
+    for urdf, want in ((text, []), (coupled, [("joint[j2].mimic", "warning")])):
+        p = tmp_path / "two.urdf"
+        p.write_text(urdf)
+        r = CliRunner().invoke(main, ["-q", "check-urdf", str(p), "--json"])
+        found = [f for f in json.loads(r.output)["findings"] if f["check"] == "mimic-range"]
+        assert [(f["where"].split(": ", 1)[1], f["severity"]) for f in found] == want, r.output
+    assert "follows 'j1' as 0.3 + -2 x its value: over its limits [-2, 2] it reaches [-3.7, 4.3], outside its own " \
+           "limits [-1, 1]" in found[0]["message"]

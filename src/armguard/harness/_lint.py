@@ -34,7 +34,10 @@ Checks (each a :class:`Check`), on the files as written, then on the loaded mode
 * ``units``: a value that looks written in other units than the URDF's (metres and radians): an
   ``<origin rpy>`` angle or a revolute joint's limit beyond what radians need (``rpy="0 0 90"``:
   degrees; a limit past 1000 reads as "unbounded" and is left alone), or a collision mesh, as scaled, a thousand times larger or smaller than the robot's
-  kinematic chain (a millimetre mesh without ``scale="0.001"``, or a metre mesh with it): warnings.
+  kinematic chain (a millimetre mesh without ``scale="0.001"``, or a metre mesh with it): warnings;
+* ``mimic-range``: a ``<mimic>`` joint whose coupling, over its leader's limits, takes it outside its
+  own ``<limit>`` (Pinocchio moves it by the coupling and reads no limit of its own: the model then
+  reaches configurations the robot cannot; a warning).
 """
 
 from __future__ import annotations
@@ -63,6 +66,7 @@ class Check(str, enum.Enum):
     SRDF_CERTIFICATE = "srdf-certificate"
     FROZEN_JOINT = "frozen-joint"
     UNREAD_ELEMENT = "unread-element"
+    MIMIC_RANGE = "mimic-range"
     UNITS = "units"
 
 
@@ -191,6 +195,7 @@ def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: d
 
     _unread_elements(root, f, report)
     _angle_units(root, f, report)
+    _mimic_ranges(root, f, report)
     for j in root.findall("joint"):  # a <limit> without lower/upper: urdfdom reads 0, and the joint cannot move
         lim = j.find("limit")
         if j.get("type") in ("revolute", "prismatic") and j.find("mimic") is None and lim is not None \
@@ -254,6 +259,36 @@ def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: d
 _READ = {"link": ("visual", "collision", "inertial", "collision_checking"),
          "collision": ("origin", "geometry"), "visual": ("origin", "geometry", "material"),
          "joint": ("origin", "parent", "child", "axis", "limit", "mimic", "dynamics", "calibration", "safety_controller")}
+
+
+def _mimic_ranges(root, f: str, report: LintReport) -> None:
+    """``mimic-range`` (module docstring): each mimic joint's range over its leader's limits against its own."""
+    joints = {j.get("name"): j for j in root.findall("joint")}
+
+    def limits(j):
+        lim = j.find("limit") if j is not None else None
+        try:
+            return float(lim.get("lower")), float(lim.get("upper"))
+        except (AttributeError, TypeError, ValueError):
+            return None
+
+    for name, j in joints.items():
+        m = j.find("mimic")
+        own, lead = limits(j), limits(joints.get(m.get("joint"))) if m is not None else None
+        if m is None or own is None or lead is None or j.get("type") not in ("revolute", "prismatic"):
+            continue
+        try:
+            mult, off = float(m.get("multiplier", "1")), float(m.get("offset", "0"))
+        except ValueError:
+            continue  # the loader refuses it, located
+        lo, hi = sorted((off + mult * lead[0], off + mult * lead[1]))
+        if lo < own[0] - 1e-9 or hi > own[1] + 1e-9:
+            report.findings.append(Finding(
+                Check.MIMIC_RANGE, Severity.WARNING, f"{f}: joint[{name}].mimic",
+                f"follows {m.get('joint')!r} as {off:g} + {mult:g} x its value: over its limits [{lead[0]:g}, {lead[1]:g}] "
+                f"it reaches [{lo:.6g}, {hi:.6g}], outside its own limits [{own[0]:g}, {own[1]:g}] (Pinocchio moves it by "
+                "the coupling alone: the model reaches configurations the robot cannot)",
+                "narrow the leader's limits, or correct the multiplier and offset"))
 
 
 def _unread_elements(root, f: str, report: LintReport) -> None:
