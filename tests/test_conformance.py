@@ -274,6 +274,13 @@ def _least_margin(self, Q, *, margin=0.0):
 _OwnMargins.collides = _least_margin
 
 
+class _DefaultMargin(_Wrapped):
+    """A backend whose collides defaults to a margin of 0.3 m, not the contract's 0."""
+
+    def collides(self, Q, *, margin=0.3):
+        return _Wrapped.collides(self, Q, margin=margin)
+
+
 class _IgnoresPairs(_Wrapped):
     """A backend whose collides takes ``pairs=`` and answers for every pair."""
 
@@ -292,6 +299,8 @@ class _Mutant:
             return _OwnMargins(model, self.mutation)
         if self.mutation == "collides ignores pairs=":
             return _IgnoresPairs(model, self.mutation)
+        if self.mutation == "collides defaults to another margin":
+            return _DefaultMargin(model, self.mutation)
         return _Wrapped(model, self.mutation)
 
 
@@ -349,6 +358,7 @@ MUTATIONS = {
     # a backend answering margins per pair itself, wrongly
     "margins per pair read as their least": "margins_per_pair",
     "collides ignores pairs=": "collides_pairs",
+    "collides defaults to another margin": "collides_matches_distances",
 }
 MODEL_OF = {"a continuous joint's (cos, sin) normalised": "kinova", "collides skips the workspace walls": "ranger",
             "collides skips the payload": "hermes", "reads the scene's workspace": "ranger"}  # else puma560

@@ -266,3 +266,56 @@ def test_collides_on_a_subset_of_the_pairs(hermes, backend):
 def test_collides_on_a_subset_needs_distances(hermes):
     with pytest.raises(BackendError, match=r"collides\(pairs=...\) needs pair distances"):
         armguard.checker(hermes, "clip").collides(hermes.random_q(2, 0), pairs=[0])
+
+
+def _inner_backend(hermes, **body):
+    inner = armguard.checker(hermes, "coal")
+
+    def pair_distances(self, q, *, pairs=None):
+        return inner.pair_distances(q, pairs=pairs)
+
+    return inner, type("B", (CheckerBase,), {"pair_distances": pair_distances, **body})(hermes)
+
+
+def test_the_framework_seam_as_a_backend_author_meets_it(hermes):
+    """From a backend author's review: a backend's collides taking pairs= got a mapping margin unconverted; a
+    read-only answer made the per-pair path fail; the shown signature lacked pairs=."""
+    import inspect
+
+    from armguard.backends import check_margin
+
+    Q = hermes.random_q(60, 3)
+    m = {"arm-arm": 0.0, "*": 0.03}
+    ref = armguard.checker(hermes, "coal")
+
+    def read_only(self, Q, *, margin=0.0):
+        v = ref.collides(Q, margin=check_margin(margin))
+        v.flags.writeable = False
+        return v
+
+    def own_pairs(self, Q, *, margin=0.0, pairs=None):
+        return ref.collides(Q, margin=check_margin(margin), pairs=pairs)
+
+    _, ro = _inner_backend(hermes, collides=read_only)
+    assert np.array_equal(ro.collides(Q, margin=m), ref.collides(Q, margin=m))
+    _, np_ = _inner_backend(hermes, collides=own_pairs)
+    rows = np.arange(0, 50, 2)
+    assert np.array_equal(np_.collides(Q, margin=m, pairs=rows), ref.collides(Q, margin=m, pairs=rows))
+    assert np.array_equal(np_.collides(Q, margin=0.03, pairs=rows), ref.collides(Q, margin=0.03, pairs=rows))
+    assert str(inspect.signature(type(ro).collides)) == "(self, Q, *, margin: 'float' = 0.0, pairs=None) -> 'np.ndarray'"
+
+
+def test_a_margin_not_given_is_the_backends_own_default(hermes):
+    """The wrapper passed its own 0.0 over a backend's default: a default other than the contract's 0 went unseen
+    (the conformance suite's collides_matches_distances now catches it)."""
+    from armguard.backends import check_margin
+
+    ref = armguard.checker(hermes, "coal")
+    Q = hermes.random_q(60, 3)
+
+    def wide(self, Q, *, margin=0.3):
+        return ref.collides(Q, margin=check_margin(margin))
+
+    _, b = _inner_backend(hermes, collides=wide)
+    assert np.array_equal(b.collides(Q), ref.collides(Q, margin=0.3))
+    assert np.array_equal(b.collides(Q, margin=0.0), ref.collides(Q))

@@ -9,7 +9,9 @@ A **Checker** answers two required queries for the Model's active pairs
   (``.jacobian`` ``(n, nv)``, ``.smooth`` ``(n,)``; default: central differences, see
   :meth:`CheckerBase.distance_jacobian`);
 * ``collides(Q) -> (M,) bool``: whether any pair is within ``margin`` (default: touching or
-  penetrating, ``distance <= 0``) at each row of ``Q`` ``(M, nq)``.
+  penetrating, ``distance <= 0``) at each row of ``Q`` ``(M, nq)``; ``margin`` may be one per pair or
+  category and ``pairs=`` a subset of the pair rows (:mod:`._margins`: the framework answers both for
+  a :class:`CheckerBase` subclass from its one-margin ``collides``).
 
 Optional fast paths have framework defaults built from those two (:class:`CheckerBase`):
 ``nearest(q)`` (per category, the nearest pair), ``min_distance_many(Q)``, a subset of the pairs
@@ -241,7 +243,7 @@ class Checker(Protocol):
 
     def pair_distances_many(self, Q, *, pairs=None) -> PairDistancesMany: ...
 
-    def collides(self, Q, *, margin: float = 0.0, pairs=None) -> np.ndarray: ...
+    def collides(self, Q, *, margin: float | Mapping | np.ndarray = 0.0, pairs=None) -> np.ndarray: ...
 
 
 @runtime_checkable
@@ -298,8 +300,10 @@ class CheckerBase:
         if own is not None and "jacobian" not in inspect.signature(own).parameters:
             cls.pair_distances = _with_jacobian(own)
         own = cls.__dict__.get("collides")
-        if own is not None and not cls.__dict__.get("own_pair_margins", False):
-            cls.collides = _with_pair_margins(own)
+        if own is not None:  # (own_pair_margins: read from the class body that defines this collides)
+            wrapped = _with_pair_margins(own, bool(cls.__dict__.get("own_pair_margins", False)))
+            if wrapped is not own:
+                cls.collides = wrapped
 
     def __init__(self, model) -> None:
         self.model = model
@@ -423,26 +427,49 @@ def _with_jacobian(own):
     return pair_distances
 
 
-def _with_pair_margins(own):
-    """A backend's one-margin ``collides`` given the framework's margins per pair or category
-    (:func:`._margins.collides_per_pair`, exact from the backend's own answers); a float goes
-    straight through (one type test)."""
+class _Unset:
+    def __repr__(self) -> str:
+        return "0.0"
 
-    native_pairs = "pairs" in inspect.signature(own).parameters
+
+_UNSET = _Unset()  # collides' margin not given: the backend's own default (the contract's 0) applies
+
+
+def _collides_signature(Q, *, margin: float = 0.0, pairs=None) -> np.ndarray: ...
+
+
+_SIGNATURE = inspect.signature(_collides_signature)
+
+
+def _with_pair_margins(own, own_margins: bool = False):
+    """A backend's one-margin ``collides`` given the framework's margins per pair or category
+    (:func:`._margins.collides_per_pair`, exact from the backend's own answers) and ``pairs=``
+    (:func:`subset_verdicts`), unless it takes them itself (``own_pair_margins``; a ``pairs``
+    parameter): ``own`` is then returned unwrapped.  A float goes straight through (one type test);
+    a margin not given is not passed (the backend's default applies: the contract's 0, which the
+    conformance suite checks)."""
+    takes_pairs = "pairs" in inspect.signature(own).parameters
+    if own_margins and takes_pairs:
+        return own
 
     @functools.wraps(own)
-    def collides(self, Q, *, margin: float = 0.0, pairs=None) -> np.ndarray:
-        if pairs is not None:
-            if native_pairs:
-                return own(self, Q, margin=margin, pairs=pairs)
-            return subset_verdicts(self, Q, margin, pairs)
-        if type(margin) is float:
-            return own(self, Q, margin=margin)
+    def collides(self, Q, *, margin=_UNSET, pairs=None) -> np.ndarray:
+        if pairs is not None and not takes_pairs:
+            return subset_verdicts(self, Q, 0.0 if margin is _UNSET else margin, pairs)
+        extra = {} if pairs is None else {"pairs": pairs}
+        if margin is _UNSET:
+            return own(self, Q, **extra)
+        if own_margins or type(margin) is float:
+            return own(self, Q, margin=margin, **extra)
         m = check_margins(self.model, margin)
         if type(m) is float:
-            return own(self, Q, margin=m)
+            return own(self, Q, margin=m, **extra)
+        if pairs is not None:  # a margin per pair on a subset: from the pairs' distances
+            return subset_verdicts(self, Q, m, pairs)
         return collides_per_pair(self, check_Q(self.model, Q), m)
 
+    collides.__signature__ = _SIGNATURE.replace(parameters=[inspect.Parameter("self", inspect.Parameter.POSITIONAL_OR_KEYWORD),
+                                                            *_SIGNATURE.parameters.values()])
     return collides
 
 

@@ -147,7 +147,7 @@ def collides_per_pair(checker, Q: np.ndarray, margins: np.ndarray) -> np.ndarray
         raise BackendError(f"{type(checker).__name__}: a margin per pair needs pair distances; this backend "
                            "answers verdicts only: give one margin")
     lo, hi = float(margins.min()), float(margins.max())
-    out = checker.collides(Q, margin=lo)
+    out = np.array(checker.collides(Q, margin=lo), dtype=bool)  # a copy: the backend's array may be read-only
     rest = np.flatnonzero(~out)
     if rest.size:
         near = rest[checker.collides(Q[rest], margin=hi)]

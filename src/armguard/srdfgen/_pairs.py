@@ -75,16 +75,25 @@ def matrix_scene(scene, *, adjacent: bool = False):
     return sub
 
 
-def _limits(scene) -> tuple[np.ndarray, np.ndarray]:
-    """Flat joint limits; an unbounded revolute joint (continuous) is searched over one turn."""
-    lo, hi = [], []
+def _limits(scene, home: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Flat joint limits to search; a revolute joint allowed more than one turn (continuous, UR's +-2 pi, limits
+    written in degrees) is searched over one turn about its home: every pose it takes within its limits is one
+    it takes there (the links' poses repeat every turn), unless a coupling names it (a mimic joint following it
+    at another rate does not repeat)."""
+    from ..kinematics import JointType
+
+    lo, hi, turns = [], [], []
     for robot in scene.robots.values():
         lo.extend(np.asarray(robot.lower, dtype=np.float64))
         hi.extend(np.asarray(robot.upper, dtype=np.float64))
-    lo, hi = np.array(lo), np.array(hi)
-    lo = np.where(np.isfinite(lo), lo, -np.pi)
-    hi = np.where(np.isfinite(hi), hi, np.pi)
-    return lo, hi
+        coupled = {src for c in robot.couplings for src in c.terms}
+        turns.extend(t is JointType.REVOLUTE and j not in coupled for j, t in zip(robot.joint_names, robot.joint_types))
+    lo, hi, turns = np.array(lo), np.array(hi), np.array(turns, dtype=bool)
+    wide = turns & ~(hi - lo <= 2.0 * np.pi)  # (an infinite limit too)
+    start = np.clip(home - np.pi, np.where(np.isfinite(lo), lo, -np.inf), np.where(np.isfinite(hi), hi - 2.0 * np.pi, np.inf))
+    lo = np.where(wide, start, lo)
+    hi = np.where(wide, start + 2.0 * np.pi, hi)
+    return np.where(np.isfinite(lo), lo, -np.pi), np.where(np.isfinite(hi), hi, np.pi)
 
 
 def _urdf_link(model, owner: str) -> str:
@@ -123,6 +132,6 @@ def pair_setup(model, tol: Tolerances = DEFAULT_TOLERANCES) -> PairSetup:
         adjacent = work._adjacent(r, la, lb)
         pairs.append(LinkPair(r, _urdf_link(model, cp.a), _urdf_link(model, cp.b), cp.a, cp.b, bool(adjacent), flat,
                               np.ascontiguousarray(w)))
-    lo, hi = _limits(work)
     home = np.asarray(work.flat_q(work.default_q()), dtype=np.float64)
+    lo, hi = _limits(work, home)
     return PairSetup(work, tuple(pairs), home, lo, hi)
