@@ -343,3 +343,49 @@ def test_a_missing_cell_file_is_the_programs_error_at_its_cell_key(tmp_path):
         assert ei.value.file == str(p) and ei.value.where == "cell" and ei.value.line == 3
         assert "nosuch.yaml: file not found" in ei.value.message
     assert not (tmp_path / "out.py").exists()
+
+
+def test_a_refused_motion_says_what_hit_what_and_when(tmp_path):
+    """A cell planner's review: "refused: collision (1.33 s, clearance 0.0 mm)" named nothing, though the report
+    held the first contact; and "clearance 60.0 mm" on most motions was a pair of the robot's own links."""
+    import shutil
+
+    from armguard.program import run_program
+
+    shutil.copytree(EXAMPLE, tmp_path / "w")
+    p = tmp_path / "w" / "c1.yaml"
+    p.write_text(PROGRAM.format(cell="cell.yaml", tasks="  - move: pose\n    frame: table\n    xyz: [0, 0, 0.2]\n"
+                                                        "    rpy: [180, 0, 0]\n"), encoding="utf-8")
+    run = run_program(p, seed=0)
+    assert not run.ok
+    m = run.motions[-1]
+    c = m.report.first_collision
+    assert m.why()[0].startswith(f"contact (distance {c.distance * 1e3:.1f} mm): tool with table face ")
+    assert f"t = {c.time:.4f} s" in m.why()[0]
+    text = run.summary()
+    assert "clearance 0.0 mm between puma560/tool and table" in text and m.why()[0] in text
+    assert run.to_dict()["motions"][-1]["why"] == m.why()
+
+
+def test_a_refusal_at_confidence_says_the_objects_as_found_are_clear(tmp_path):
+    """A refusal of the bound objects grown to the confidence asked read as a plain collision."""
+    import shutil
+
+    import yaml
+
+    from armguard.program import run_program
+
+    shutil.copytree(EXAMPLE, tmp_path / "w")
+    cal = tmp_path / "w" / "calibration.yaml"
+    doc = yaml.safe_load(cal.read_text())
+    text = cal.read_text()
+    assert "camera" in doc
+    big = tmp_path / "w" / "big.yaml"
+    cam = doc["camera"]
+    cam["cov"] = (np.diag([1e-4, 1e-4, 1e-4, 3e-4, 3e-4, 3e-4])).tolist()
+    big.write_text(yaml.safe_dump(doc), encoding="utf-8")
+    assert text  # the original untouched
+    run = run_program(tmp_path / "w" / "stack.yaml", seed=0, calibration=big)
+    refused = [m for m in run.motions if m.status.startswith("refused")]
+    assert refused and refused[-1].k > 0.0 and refused[-1].nominal_clearance is not None
+    assert any("not verified at the confidence asked" in line for line in refused[-1].why())

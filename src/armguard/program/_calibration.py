@@ -26,7 +26,7 @@ import numpy as np
 from .._errors import UncertaintyError
 from ._calibfile import Calibration
 from ._cell import Cell, _inv
-from ._workcell import ProgramRun, ProgramStopped, Workcell, pose
+from ._workcell import ProgramRun, ProgramStopped, Workcell, _between, pose
 
 __all__ = ["CalibrationStatus", "CameraCalibration", "calibration_poses", "calibrate_camera", "fit_camera",
            "CalibrationStop"]
@@ -94,8 +94,9 @@ class CameraCalibration:
                 + (f"{len(self.stops)} points, rms {1e3 * self.fit.rms:.2f} mm" if self.ok else "STOPPED: " + self.stopped))
         out = [head]
         for m in self.run.motions:
-            clear = "" if m.report is None else f", clearance {1e3 * m.min_clearance:.1f} mm"
+            clear = "" if m.report is None else f", clearance {1e3 * m.min_clearance:.1f} mm{_between(m.report)}"
             out.append(f"  {m.label}: {m.status}{clear}")
+            out.extend(f"    {line}" for line in m.why())
         if self.ok:
             sd = np.sqrt(np.diag(self.X_BC.cov))
             d = self.X_WC_after[:3, 3] - self.X_WC_before[:3, 3]

@@ -60,9 +60,30 @@ class MotionRecord:
     k: float = 0.0
     real_report: object = None
 
+    nominal_clearance: float | None = None  # a refusal at confidence k > 0: the clearance of the objects not grown
+
     @property
     def min_clearance(self) -> float:
         return float(self.report.min_clearance) if self.report is not None else float("nan")
+
+    def why(self) -> list:
+        """For a refused or stopped motion, what hit what and when (the report's first collision), and for a
+        refusal of grown bound objects the clearance they have as found; else ``[]``."""
+        if self.status == "ran":
+            return []
+        rep = self.real_report if self.status.startswith("stopped") else self.report
+        c = getattr(rep, "first_collision", None)
+        out = []
+        if c is not None:
+            where = f" at ({', '.join(f'{x:.4f}' for x in c.p_W)}) m" if c.p_W is not None else ""
+            feat = f" {c.feature}" if c.feature is not None else ""
+            out.append(f"{c.describe()}: {c.link or c.payload or c.a} with {c.obstacle}{feat}{where}, t = {c.time:.4f} s")
+        if self.nominal_clearance is not None:
+            out.append(f"not verified at the confidence asked: the bound objects grown by {self.k:.2f} sigma touch; as "
+                       f"found they are {1e3 * self.nominal_clearance:.1f} mm clear (calibrate the camera, or ask less "
+                       "confidence)" if self.nominal_clearance > 0.0 else
+                       "the bound objects collide as found, without their growth")
+        return out
 
 
 @dataclass
@@ -106,17 +127,19 @@ class ProgramRun:
             out.append(f"  FIND {f.object}: found at {np.round(f.found[:3, 3], 4).tolist()} m "
                        f"({dn:.1f} mm from nominal, {dt:.1f} mm from true)")
         for m in self.motions:
-            clear = "" if m.report is None else f", clearance {1e3 * m.min_clearance:.1f} mm"
+            clear = "" if m.report is None else f", clearance {1e3 * m.min_clearance:.1f} mm{_between(m.report)}"
             k = f" beyond {m.k:.2f} sigma" if m.k > 0.0 else ""
             real = "" if m.real_report is None else f", real cell {1e3 * float(m.real_report.min_clearance):.1f} mm"
             out.append(f"  {m.label}: {m.status} ({m.trajectory.duration:.2f} s{clear}{k}{real})"
                        if m.trajectory is not None else f"  {m.label}: {m.status}")
+            for line in m.why():
+                out.append(f"    {line}")
         return "\n".join(out)
 
     def to_dict(self) -> dict:
         """Plain form (JSON): each motion's label, status, times and waypoints; each FIND's frames."""
         return {"name": self.name, "ok": self.ok, "stopped": self.stopped,
-                "motions": [{"label": m.label, "status": m.status,
+                "motions": [{"label": m.label, "status": m.status, "why": m.why(),
                              "times": None if m.trajectory is None else m.trajectory.times.tolist(),
                              "waypoints": None if m.trajectory is None else m.trajectory.waypoints.tolist()}
                             for m in self.motions],
@@ -248,6 +271,8 @@ class Workcell:
             rec = MotionRecord(label, traj, "ran", report, k)
             if not report.safe:
                 rec.status = "refused: " + report.status.value
+                if k > 0.0:  # said apart: a refusal of the grown objects from one of the objects as found
+                    rec.nominal_clearance = float(verify(self.believed, traj, method=self.method).min_clearance)
                 return self._stop(rec, f"{label}: refused by verification ({report.verdict()})")
             rec.real_report = verify(self.real, traj, method=self.method)
             if not rec.real_report.safe:
@@ -309,6 +334,12 @@ class Workcell:
             self.run.believed[obj] = self.tool_pose() @ X_EO_b
             self.run.real[obj] = self.tool_pose() @ X_EO_r
         return self.run
+
+
+def _between(report) -> str:
+    """`` between A and B`` of a report's least clearance (a fixed pair of the robot's own links says so)."""
+    at = getattr(report, "min_clearance_at", None)
+    return f" between {at.a} and {at.b}" if at is not None else ""
 
 
 def _allow(scene, pairs) -> list:
