@@ -389,3 +389,49 @@ def test_a_refusal_at_confidence_says_the_objects_as_found_are_clear(tmp_path):
     refused = [m for m in run.motions if m.status.startswith("refused")]
     assert refused and refused[-1].k > 0.0 and refused[-1].nominal_clearance is not None
     assert any("not verified at the confidence asked" in line for line in refused[-1].why())
+
+
+def test_a_depart_that_pushes_the_object_into_its_support_is_refused(tmp_path):
+    """The supports' pairs were unchecked for the whole depart: one lowering cylinder A 6 cm ran through the
+    table, "every motion verified and ran"; the same motion as a MOVE was refused."""
+    import shutil
+
+    from armguard.program import run_program
+
+    shutil.copytree(EXAMPLE, tmp_path / "w")
+    down = PICK.replace("depart: {xyz: [0, 0, 0.15]", "depart: {xyz: [0, 0, -0.04]")
+    assert down != PICK
+    for tasks, ok in ((PICK, True), (down, False)):
+        p = tmp_path / "w" / "d.yaml"
+        p.write_text(PROGRAM.format(cell="cell.yaml", tasks=tasks), encoding="utf-8")
+        run = run_program(p, seed=0)
+        assert run.ok is ok, run.summary()
+    m = run.motions[-1]
+    assert m.label.endswith("depart") and m.status == "refused: collision"
+    assert "cylinder_a sinks into table, which it rested on, 2 mm deeper than at the grasp" in " ".join(m.why())
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_an_eroded_shape_is_the_points_a_ball_fits_about(seed):
+    """Erosion by ``r``: every point of the eroded shape is at least ``r`` inside the shape (its face planes,
+    or a sphere of radius ``r`` about its support points within the shape)."""
+    from armguard.geometry import Box, ConvexPolyhedron, Cylinder, Sphere, distance
+    from armguard.program._supports import eroded
+
+    rng = np.random.default_rng(seed)
+    r = 0.01
+    poly = ConvexPolyhedron(rng.normal(size=(12, 3)) * 0.2)
+    e = eroded(poly, r)
+    if e is not None:
+        P = np.asarray(poly.planes)
+        assert np.all(P[:, :3] @ e.vertices.T - P[:, 3:4] <= -r + 1e-12)
+    R = np.linalg.qr(rng.normal(size=(3, 3)))[0] * np.sign(np.linalg.det(np.linalg.qr(rng.normal(size=(3, 3)))[0]))
+    R = R if np.linalg.det(R) > 0 else -R
+    for shape in (Box(rng.normal(size=3), rng.uniform(0.02, 0.2, 3), R),
+                  Cylinder(rng.normal(size=3), R, float(rng.uniform(0.02, 0.2)), float(rng.uniform(0.02, 0.2)))):
+        e = eroded(shape, r)
+        for p in rng.normal(size=(30, 3)) * 0.3 + shape.center:
+            inner = distance(Sphere(p, 1e-9), e).distance  # a point of the eroded shape has its r-ball inside
+            if inner < 0.0:
+                assert distance(Sphere(p, r - 1e-9), shape).distance < 0.0
+                assert distance(Sphere(p, 1e-9), shape).distance <= -r + 1e-9

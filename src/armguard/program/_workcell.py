@@ -21,6 +21,7 @@ import numpy as np
 
 from .._errors import ArmguardError, SceneError
 from ._cell import Cell, _inv, move_body
+from ._supports import SINK, support_scene
 
 __all__ = ["Workcell", "ProgramStopped", "MotionRecord", "FindRecord", "ProgramRun", "pose", "CONTACT_TOLERANCE"]
 
@@ -61,6 +62,7 @@ class MotionRecord:
     real_report: object = None
 
     nominal_clearance: float | None = None  # a refusal at confidence k > 0: the clearance of the objects not grown
+    notes: list = field(default_factory=list)  # what else the motion's checks found (a held object sunk into its support)
 
     @property
     def min_clearance(self) -> float:
@@ -70,7 +72,7 @@ class MotionRecord:
         """For a refused or stopped motion, what hit what and when (the report's first collision), and for a
         refusal of grown bound objects the clearance they have as found; else ``[]``."""
         if self.status == "ran":
-            return []
+            return list(self.notes)
         rep = self.real_report if self.status.startswith("stopped") else self.report
         c = getattr(rep, "first_collision", None)
         out = []
@@ -83,7 +85,7 @@ class MotionRecord:
                        f"found they are {1e3 * self.nominal_clearance:.1f} mm clear (calibrate the camera, or ask less "
                        "confidence)" if self.nominal_clearance > 0.0 else
                        "the bound objects collide as found, without their growth")
-        return out
+        return out + list(self.notes)
 
 
 @dataclass
@@ -166,6 +168,7 @@ class Workcell:
         self.q = np.array(self.believed.home(self.robot))
         self.held = None  # (object, X_EO believed, X_EO real)
         self._supports: list = []
+        self._sink_scenes: tuple = (None, None)
         self._rng = np.random.default_rng(seed)
         self.speed, self.confidence, self.method = float(speed), float(confidence), method
         self.run = ProgramRun(name)
@@ -269,12 +272,16 @@ class Workcell:
             else:
                 report = verify(self.believed, traj, method=self.method)
             rec = MotionRecord(label, traj, "ran", report, k)
+            if report.safe and self._supports:
+                report = self._sink_check(rec, 0, traj) or report
             if not report.safe:
                 rec.status = "refused: " + report.status.value
                 if k > 0.0:  # said apart: a refusal of the grown objects from one of the objects as found
                     rec.nominal_clearance = float(verify(self.believed, traj, method=self.method).min_clearance)
                 return self._stop(rec, f"{label}: refused by verification ({report.verdict()})")
             rec.real_report = verify(self.real, traj, method=self.method)
+            if rec.real_report.safe and self._supports:
+                rec.real_report = self._sink_check(rec, 1, traj) or rec.real_report
             if not rec.real_report.safe:
                 rec.status = "stopped: " + rec.real_report.status.value + " in the emulated real cell"
                 return self._stop(rec, f"{label}: {rec.real_report.verdict()} in the emulated real cell")
@@ -282,8 +289,28 @@ class Workcell:
             _restore(self.believed, added[0]), _restore(self.real, added[1])
         self.q = np.array(traj.waypoints[-1])
         self._supports = []
+        self._sink_scenes = (None, None)
         self.run.motions.append(rec)
         return rec
+
+    def _sink_check(self, rec: MotionRecord, which: int, traj):
+        """The motion after a grasp on the copy of the believed (0) or real (1) cell that checks the held object,
+        eroded by SINK, against its supports (._supports): its report when it is not safe (the object pushed
+        into what it rested on), else None; where the object cannot be eroded, a note on ``rec``."""
+        from ..verify import verify
+
+        sub = self._sink_scenes[which]
+        if sub is None:
+            if which == 0:
+                rec.notes.append(f"{self.held[0]} cannot be eroded by {SINK * 1e3:g} mm (its shape): its supports "
+                                 f"({', '.join(self._supports)}) were not checked during this motion")
+            return None
+        rep = verify(sub, traj, method=self.method)
+        if rep.safe:
+            return None
+        rec.notes.append(f"{self.held[0]} sinks into {rep.first_collision.obstacle}, which it rested on, {SINK * 1e3:g} mm "
+                         "deeper than at the grasp: a motion after a grasp must lift the object off")
+        return rep
 
     def _stop(self, rec: MotionRecord, message: str):
         self.run.motions.append(rec)
@@ -302,6 +329,10 @@ class Workcell:
         supports = sorted(set(_touching(self.believed, obj)) | set(_touching(self.real, obj)))
         tool = self._arm.tool_link
         X_EW = _inv(self.tool_pose())
+        # the next motion lifts it off its supports: checked on copies that hold only those pairs, the
+        # object eroded by SINK (._supports); None where the object cannot be eroded (said at the motion)
+        self._sink_scenes = tuple(support_scene(sc, obj, supports, self.robot, tool, self.q) if supports else None
+                                  for sc in (self.believed, self.real))
         for scene in (self.believed, self.real):
             scene.grasp(obj, self.robot, tool, self.q)
             for b in scene.bodies:
