@@ -503,8 +503,12 @@ def test_the_framework_default_collides_refuses_a_bad_margin():
     c = _OnlyDistances(model)
     Q = model.random_q(4, 0)
     assert c.collides(Q).any()  # a colliding row among them
-    for margin in (math.nan, -1.0, True, "0.1", None):
+    for margin in (math.nan, -1.0):
         with pytest.raises(BackendError, match="margin: expected a finite number >= 0"):
+            c.collides(Q, margin=margin)
+    for margin in (True, "0.1", None):  # not a number at all: the forms a margin takes are named
+        with pytest.raises(BackendError, match="margin: expected a number .m., a mapping by pair category or an array of "
+                                               "62 numbers"):
             c.collides(Q, margin=margin)
     assert c.collides(Q, margin=np.float32(0.0)).tolist() == c.collides(Q).tolist()
 
