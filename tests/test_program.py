@@ -435,3 +435,31 @@ def test_an_eroded_shape_is_the_points_a_ball_fits_about(seed):
             if inner < 0.0:
                 assert distance(Sphere(p, r - 1e-9), shape).distance < 0.0
                 assert distance(Sphere(p, 1e-9), shape).distance <= -r + 1e-9
+
+
+def test_runtime_and_cell_body_errors_give_their_line(tmp_path):
+    """``real.tabel: no body ...`` and ``tasks[0]: PLACE ...: the hand does not hold ...`` were the only errors
+    without "(line N)"."""
+    import shutil
+
+    from armguard.program import load_cell, run_program
+
+    shutil.copytree(EXAMPLE, tmp_path / "w")
+    p = tmp_path / "w" / "w1.yaml"
+    p.write_text(PROGRAM.format(cell="cell.yaml", tasks="  - place: cylinder_a\n    onto: cylinder_b\n"
+                                "    approach: {xyz: [0, 0, 0.22], rpy: [180, 0, 0]}\n"
+                                "    release: {xyz: [0, 0, 0.11], rpy: [180, 0, 0]}\n"
+                                "    depart: {xyz: [0, 0, 0.22], rpy: [180, 0, 0]}\n"), encoding="utf-8")
+    with pytest.raises(SceneFileError) as err:
+        run_program(p, seed=0)
+    assert err.value.where == "tasks[0]" and err.value.line == 6 and "the hand does not hold 'cylinder_a'" in str(err.value)
+    cell = tmp_path / "w" / "cell.yaml"
+    text = cell.read_text()
+    assert "real:" in text and "  cylinder_a:" in text
+    i = text.index("real:")
+    bad = text[:i] + text[i:].replace("  cylinder_a:", "  tabel:", 1)
+    cell.write_text(bad, encoding="utf-8")
+    with pytest.raises(SceneFileError) as err:
+        load_cell(cell)
+    line = bad[:bad.index("  tabel:")].count("\n") + 1
+    assert err.value.where == "real.tabel" and err.value.line == line and f"real.tabel (line {line})" in str(err.value)

@@ -252,6 +252,16 @@ def load_cell(name_or_path, calibration=None) -> Cell:
             if isinstance(exc, SceneFileError):
                 raise
             where, _, msg = str(exc).partition(": ")
-            raise SceneFileError(spec.file, where if msg else "", msg or str(exc)) from None
+            raise SceneFileError(spec.file, where if msg else "", msg or str(exc), line=_line(spec.file, where)) from None
     return Cell(load_model(str(name_or_path)), file=str(name_or_path) if Path(str(name_or_path)).exists() else None,
                 calibration=calibration)
+
+
+def _line(file, where: str) -> int | None:
+    """The line of place ``where`` (``real.tabel``) in YAML file ``file``, or None."""
+    from .._lines import line_map, line_of
+
+    try:
+        return line_of(where, line_map(Path(file).read_text(encoding="utf-8"))) if file and where else None
+    except OSError:
+        return None

@@ -191,7 +191,8 @@ def run_program(program: Program | str | Path, cell: Cell | str | None = None, *
         if isinstance(exc, SceneFileError):
             raise
         s = wc.label.split(" ")[0] if wc.label else ""
-        raise SceneFileError(program.file, s, str(exc)) from None
+        task = next((t for t in program.tasks if t.where == s), None)
+        raise SceneFileError(program.file, s, str(exc), line=task.line if task is not None else None) from None
     return wc.finish()
 
 
