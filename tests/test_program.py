@@ -463,3 +463,17 @@ def test_runtime_and_cell_body_errors_give_their_line(tmp_path):
         load_cell(cell)
     line = bad[:bad.index("  tabel:")].count("\n") + 1
     assert err.value.where == "real.tabel" and err.value.line == line and f"real.tabel (line {line})" in str(err.value)
+
+
+def test_a_find_with_a_camera_pose_without_covariance_is_warned_of(tmp_path):
+    """With the nominal camera (no covariance) "verified SAFE with probability 0.999" covered FIND's noise only:
+    seed 0's FIND put cylinder B 40 mm from its true place."""
+    from armguard.program import Calibration, load_cell, run_program, write_calibration
+
+    nominal = run_program(EXAMPLE / "stack.yaml", seed=0, calibration=EXAMPLE / "calibration.yaml")
+    assert len(nominal.warnings) == 1 and "a pose without covariance" in nominal.warnings[0]
+    assert "  warning: FIND used the camera" in nominal.summary() and nominal.to_dict()["warnings"] == nominal.warnings
+    cell = load_cell(EXAMPLE / "cell.yaml")
+    measured = write_calibration(Calibration(X_camera=cell.camera.X_WC_real, camera_cov=np.diag([1e-6] * 3 + [1e-6] * 3)),
+                                 tmp_path / "measured.yaml")
+    assert not run_program(EXAMPLE / "stack.yaml", seed=0, calibration=measured).warnings

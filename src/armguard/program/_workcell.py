@@ -30,6 +30,11 @@ CONTACT_TOLERANCE = 1e-3
 their pairs with the held object are not checked during the next motion (the depart lifts it off)."""
 
 
+_UNCALIBRATED = ("FIND used the camera at a pose without covariance (nominal, or a calibration that gives none): the "
+                 "motions' confidence covers FIND's noise, not an error in the camera's placement; `armguard program "
+                 "calibrate` measures both")
+
+
 def pose(xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0)) -> np.ndarray:
     """``trans(x, y, z) rot(z, yaw) rot(y, pitch) rot(x, roll)`` (4, 4): m and rad (the scene files' relation)."""
     from ..kinematics import pose_from_xyz_rpy
@@ -112,6 +117,7 @@ class ProgramRun:
     stopped: str = ""
     believed: dict = field(default_factory=dict)
     real: dict = field(default_factory=dict)
+    warnings: list = field(default_factory=list)  # what the verdicts rest on that the cell does not know
 
     def axis_offset(self, obj: str, target: str) -> float:
         """m: the horizontal distance (in W's x-y plane) between ``obj``'s and ``target``'s frame
@@ -123,6 +129,7 @@ class ProgramRun:
     def summary(self) -> str:
         """A text report: each FIND (nominal, found, true) and each motion (status, clearance)."""
         out = [f"program {self.name}: {'every motion verified and ran' if self.ok else 'STOPPED: ' + self.stopped}"]
+        out += [f"  warning: {w}" for w in self.warnings]
         for f in self.finds:
             dn = 1e3 * np.linalg.norm(f.found[:3, 3] - f.nominal[:3, 3])
             dt = 1e3 * np.linalg.norm(f.found[:3, 3] - f.true[:3, 3])
@@ -140,7 +147,7 @@ class ProgramRun:
 
     def to_dict(self) -> dict:
         """Plain form (JSON): each motion's label, status, times and waypoints; each FIND's frames."""
-        return {"name": self.name, "ok": self.ok, "stopped": self.stopped,
+        return {"name": self.name, "ok": self.ok, "stopped": self.stopped, "warnings": list(self.warnings),
                 "motions": [{"label": m.label, "status": m.status, "why": m.why(),
                              "times": None if m.trajectory is None else m.trajectory.times.tolist(),
                              "waypoints": None if m.trajectory is None else m.trajectory.waypoints.tolist()}
@@ -213,6 +220,8 @@ class Workcell:
             self.run.ok, self.run.stopped = False, msg
             raise ProgramStopped(msg)
         X_found = cam.measure(self.X_real[obj], self._rng)
+        if not np.any(cam.cov_pose) and not any(w.startswith(_UNCALIBRATED[:40]) for w in self.run.warnings):
+            self.run.warnings.append(_UNCALIBRATED)
         move_body(self.believed, obj, X_found @ _inv(self.X_believed[obj]))
         unc = cam.uncertain(X_found)
         self.run.finds.append(FindRecord(obj, np.array(self.cell.objects[obj]), X_found, np.array(self.X_real[obj]), unc))
