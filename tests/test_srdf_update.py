@@ -349,3 +349,26 @@ def test_check_urdf_says_when_a_checked_pair_is_no_longer_checked(tmp_path):
              if f["check"] == "srdf-certificate"]
     assert [(w, sev) for w, sev, _ in found] == [("l1 - l3", "warning")], found
     assert "recorded as checked (witnessed within the margin" in found[0][2] and "no longer checked" in found[0][2]
+
+
+def test_a_joint_allowed_more_than_a_turn_is_searched_over_one(tmp_path):
+    """Every pose a revolute joint takes within its limits it takes within one turn about its home: limits of
+    +-31 rad (degrees written as radians, or UR's +-2 pi) searched over 62 rad left pairs undecided that one
+    turn proves.  Not for a joint a mimic follows at another rate (its follower does not repeat)."""
+    from armguard.srdfgen._pairs import pair_setup
+
+    wide = tmp_path / "wide.urdf"
+    wide.write_text(_THREE.replace('lower="-3.1" upper="3.1"', 'lower="-31" upper="31"'))
+    narrow = tmp_path / "narrow.urdf"
+    narrow.write_text(_THREE.replace('lower="-3.1" upper="3.1"', 'lower="-3.14159" upper="3.14159"'))
+    st = pair_setup(armguard.load_model(wide, srdf=False))
+    np.testing.assert_allclose(st.upper - st.lower, 2 * np.pi)
+    assert np.all((st.lower <= st.home) & (st.home <= st.upper))
+    verdicts = [{(e.link1, e.link2): (e.reason, e.status) for e in collision_matrix(
+        armguard.load_model(p, srdf=False), max_evaluations=MAX_EVALUATIONS).entries} for p in (wide, narrow)]
+    assert verdicts[0] == verdicts[1]
+    coupled = tmp_path / "coupled.urdf"
+    coupled.write_text(_THREE.replace('lower="-3.1" upper="3.1"', 'lower="-31" upper="31"').replace(
+        '<child link="l3"/>', '<child link="l3"/><mimic joint="j2" multiplier="0.5" offset="0"/>'))
+    st = pair_setup(armguard.load_model(coupled, srdf=False))
+    assert st.upper[1] - st.lower[1] == pytest.approx(62.0)  # j2, followed by j3 at half its rate: not folded
