@@ -90,8 +90,10 @@ def test_srdf_names_that_match_nothing(hermes_copy):
           '<group_state name="ready" group="hera"><joint name="hera_knee" value="0"/></group_state>\n</robot>')
     report = check_model_files(hermes_copy / "hermes.yaml", n_configs=10)
     found = {(f.where.split(": ")[1], f.message) for f in report.by_check(Check.SRDF_NAME)}
-    assert ("group[tools].link", "link 'gripper' matches nothing in the URDF") in found
-    assert ("group_state[ready].joint", "joint 'hera_knee' matches nothing in the URDF") in found
+    text = (hermes_copy / "hermes.srdf").read_text()
+    line = text[:text.index('<link name="gripper"/>')].count("\n") + 1  # each place with the line of its element
+    assert (f"group[tools].link (line {line})", "link 'gripper' matches nothing in the URDF") in found
+    assert (f"group_state[ready].joint (line {line + 1})", "joint 'hera_knee' matches nothing in the URDF") in found
 
 
 def test_a_group_state_without_group_is_a_warning_as_the_loader_reads_it(hermes_copy):

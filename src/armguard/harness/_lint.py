@@ -404,24 +404,32 @@ def _mesh_scale_checks(model, report: LintReport) -> None:
 def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport, partial: bool = False, shaped=None) -> None:
     """Names of the SRDF that match nothing in the URDF: errors, or for an SRDF of a larger robot found
     under the robot's name (``partial``: the loader skips them) warnings."""
+    from xml.parsers import expat
+
+    from ..model._urdf_check import parse_with_lines
+
     f = srdf.name
     try:
-        root = ET.parse(srdf).getroot()
-    except (ET.ParseError, OSError) as exc:
+        root, lines = parse_with_lines(srdf.read_bytes())
+    except (expat.ExpatError, OSError) as exc:
         _unparsed(report, f, "SRDF", exc)
         return
     groups = {g.get("name") for g in root.findall("group")}
     named = {el.get(a) for el in root.iter() for a in ("link1", "link2", "link", "parent_link", "base_link", "tip_link", "name")}
+    where_el: dict = {}  # the element each place names, for its line
 
     def need(name, kind, where, pool, from_pair=False):
         if name not in pool:  # a rename's new name: one the SRDF never names (of a pair: a link with shapes)
             cands = [str(x) for x in pool if x and x not in named and (not from_pair or shaped is None or x in shaped)]
             near = difflib.get_close_matches(str(name), cands, n=1, cutoff=0.6)
-            report.findings.append(Finding(Check.SRDF_NAME, Severity.WARNING if partial else Severity.ERROR, f"{f}: {where}",
+            line = lines.get(id(where_el.get("el")))
+            at = f" (line {line})" if line else ""
+            report.findings.append(Finding(Check.SRDF_NAME, Severity.WARNING if partial else Severity.ERROR, f"{f}: {where}{at}",
                                            f"{kind} {name!r} matches nothing in the URDF"
                                            + (" (an SRDF of a larger robot: skipped when it loads)" if partial else ""),
                                            f"a {kind} renamed {near[0]!r}? then update the SRDF" if near else None))
     for ee in root.findall("end_effector"):
+        where_el["el"] = ee
         for attr in ("parent_link", "group", "parent_group"):
             if ee.get(attr) is not None:
                 need(ee.get(attr), "group" if "group" in attr else "link", f"end_effector[{ee.get('name')}].{attr}",
@@ -430,15 +438,20 @@ def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport, partia
     for k, g in enumerate(root.findall("group")):
         w = f"group[{g.get('name')}]"
         for ch in g.findall("chain"):
+            where_el["el"] = ch
             need(ch.get("base_link"), "link", f"{w}.chain.base_link", links)
             need(ch.get("tip_link"), "link", f"{w}.chain.tip_link", links)
         for ln in g.findall("link"):
+            where_el["el"] = ln
             need(ln.get("name"), "link", f"{w}.link", links)
         for j in g.findall("joint"):
+            where_el["el"] = j
             need(j.get("name"), "joint", f"{w}.joint", joints)
         for sub in g.findall("group"):
+            where_el["el"] = sub
             need(sub.get("name"), "group", f"{w}.group", groups)
     for k, el in enumerate(root.iter("disable_collisions")):
+        where_el["el"] = el
         for side in ("link1", "link2"):
             need(el.get(side), "link", f"disable_collisions[{k}].{side}", links, True)
     for k, st in enumerate(root.iter("group_state")):
@@ -447,8 +460,10 @@ def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport, partia
                                            "no attribute 'group'; read as a state of the whole robot (as Pinocchio "
                                            "does)", f'<group_state name="{st.get("name")}" group="...">'))
         else:
+            where_el["el"] = st
             need(st.get("group"), "group", f"group_state[{st.get('name')}].group", groups)
         for j in st.findall("joint"):
+            where_el["el"] = j
             need(j.get("name"), "joint", f"group_state[{st.get('name')}].joint", joints)
 
 
