@@ -372,3 +372,14 @@ def test_a_joint_allowed_more_than_a_turn_is_searched_over_one(tmp_path):
         '<child link="l3"/>', '<child link="l3"/><mimic joint="j2" multiplier="0.5" offset="0"/>'))
     st = pair_setup(armguard.load_model(coupled, srdf=False))
     assert st.upper[1] - st.lower[1] == pytest.approx(62.0)  # j2, followed by j3 at half its rate: not folded
+
+
+def test_a_stale_certificate_is_located_by_its_line(certified, tmp_path):
+    new = _fresh(certified, tmp_path, grow=True)
+    model = armguard.load_model(new, srdf=False)
+    stale = stale_certificates(model.pin_model, model.collision_model, new.with_suffix(".srdf"))
+    text = new.with_suffix(".srdf").read_text()
+    s = next(s for s in stale if {s.link1, s.link2} == set(NEVER))
+    el = next(ln for ln in text.splitlines() if "disable_collisions" in ln and NEVER[0] in ln and f'"{NEVER[1]}"' in ln)
+    line = text.splitlines().index(el) + 1
+    assert s.where.startswith("disable_collisions[") and s.where.endswith(f"(line {line})"), s.where

@@ -26,13 +26,13 @@ disabled pairs whose certificate no longer matches the model (``load_model`` war
 from __future__ import annotations
 
 import hashlib
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from .._errors import SceneFileError, xml_parse_error
+from .._errors import SceneFileError, unclosed_text
 
 __all__ = ["FINGERPRINT_ATTR", "MARGIN_ATTR", "METHOD_ATTR", "pair_fingerprint", "read_certificates", "Certificate",
            "StaleCertificate", "stale_certificates"]
@@ -119,10 +119,17 @@ class Certificate:
 def read_certificates(srdf_file) -> tuple[Certificate, ...]:
     """The disabled pairs of ``srdf_file`` that carry an ``armguard_fingerprint`` (written by
     ``armguard srdf``); none for an SRDF made otherwise.  A file that does not parse is a located error."""
+    from xml.parsers import expat
+
+    from ._urdf_check import parse_with_lines
+
     try:
-        root = ET.parse(str(srdf_file)).getroot()
-    except ET.ParseError as exc:
-        raise xml_parse_error(srdf_file, exc) from None
+        data = Path(srdf_file).read_bytes()
+        root, lines = parse_with_lines(data)
+    except expat.ExpatError as exc:
+        raise SceneFileError(str(srdf_file), f"line {exc.lineno}, column {exc.offset + 1}",
+                             f"not well-formed XML: {expat.ErrorString(exc.code)}{unclosed_text(data, exc.code)}",
+                             line=exc.lineno) from None
     except OSError as exc:
         raise SceneFileError(str(srdf_file), "", f"cannot read the SRDF ({exc.strerror or exc})") from None
     default_margin = root.get(MARGIN_ATTR, "0")
@@ -132,7 +139,8 @@ def read_certificates(srdf_file) -> tuple[Certificate, ...]:
         fp = el.get(FINGERPRINT_ATTR)
         if not fp:
             continue
-        where = f"disable_collisions[{k}]"
+        line = lines.get(id(el))
+        where = f"disable_collisions[{k}]" + (f" (line {line})" if line else "")
         try:
             margin = float(el.get(MARGIN_ATTR, default_margin))
         except ValueError:
