@@ -147,7 +147,6 @@ def load_program(path) -> Program:
 
 def execute(wc: Workcell, steps) -> None:
     """Run ``steps`` on ``wc`` (raises ProgramStopped when a motion is refused)."""
-    from .._lines import lines_for  # noqa: F401  (errors are already located by the program)
     from ._workcell import pose
 
     F = np.eye(4)

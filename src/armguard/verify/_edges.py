@@ -374,7 +374,7 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints,
                    continuous="line", progress=None) -> EdgeResults:
     """:meth:`Verifier.check_edges` on one state ``st`` of the scene (its clearance model and configurations)."""
     t_start = _time.perf_counter()
-    model, base_q = st.model, st.base
+    model = st.model
     rname, rob = _robot(verifier, robot)
     names, cols = _columns(rob, joints, verifier.scene)
     Q0 = _rows(Q0, "Q0", names, verifier.scene, rob.name, joints is None)
