@@ -80,3 +80,48 @@ def test_predictor_sees_a_collision_between_set_points(capsule_guard):
     pred = Predictor([g], [post])
     answers = pred.run(np.stack([X0, X1])[:, None])
     assert len(answers) == 1 and answers[0].status is ClipStatus.INTERSECTED and 0.0 < answers[0].t < 1.0
+
+
+def _sweep(x, ys):
+    """One guard's poses along y at height x: (T, 1, 4, 4)."""
+    P = np.tile(np.eye(4), (len(ys), 1, 1, 1))
+    P[:, 0, 0, 3], P[:, 0, 1, 3] = x, ys
+    return P
+
+
+def test_predictor_run_from_several_threads_matches_one_at_a_time():
+    """``run`` keeps no state between its intervals on the Predictor: four threads sharing one give
+    each run the answers it gets alone (it used to step through the shared stream, and a run that
+    crosses the post between set points 19 and 20 was called CLEAR when another run interleaved)."""
+    from armguard.testing import run_in_threads
+
+    guard = Guard.from_shape(Capsule([0.0, 0.0, 0.0], [0.4, 0.0, 0.0], 0.05))
+    pred = Predictor([guard], [Obstacle.segment([0.3, 0.0, -1.0], [0.3, 0.0, 1.0])])
+    crossing, far = _sweep(0.0, np.repeat([-0.3, 0.3], 20)), _sweep(5.0, np.linspace(-0.3, 0.3, 40))
+    alone = {k: [p.status for p in pred.run(P)] for k, P in (("crossing", crossing), ("far", far))}
+    assert [i for i, s in enumerate(alone["crossing"]) if s is not ClipStatus.CLEAR] == [19]
+    assert set(alone["far"]) == {ClipStatus.CLEAR}
+    got, errors = [], []
+
+    def job(name, P):
+        def go():
+            try:
+                for _ in range(4):
+                    got.append((name, [p.status for p in pred.run(P)]))
+            except Exception as exc:  # noqa: BLE001 - recorded, asserted below
+                errors.append(exc)
+        return go
+
+    for _ in range(5):
+        run_in_threads([job("crossing", crossing), job("far", far), job("crossing", crossing), job("far", far)])
+    assert not errors and len(got) == 80
+    assert all(statuses == alone[name] for name, statuses in got)
+
+
+def test_predictor_run_leaves_the_step_stream_as_it_was():
+    guard = Guard.from_shape(Capsule([0.0, 0.0, 0.0], [0.4, 0.0, 0.0], 0.05))
+    pred = Predictor([guard], [Obstacle.segment([0.3, 0.0, -1.0], [0.3, 0.0, 1.0])])
+    left, right = _sweep(0.0, [-0.3, 0.3])
+    assert pred.step(left).status is ClipStatus.CLEAR  # the stream's first set point
+    pred.run(_sweep(5.0, np.linspace(-0.3, 0.3, 5)))  # far away: must not become the stream's last set point
+    assert pred.step(right).status is ClipStatus.INTERSECTED  # left -> right crosses the post

@@ -24,6 +24,7 @@ it (``max_halvings`` times, poses interpolated by the model); what is still MAYB
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -136,7 +137,8 @@ class Predictor:
         if not self.guards:
             raise ClipError("Predictor: no guard to check")
         self.max_halvings, self.growth, self.tol = int(max_halvings), g, tol
-        self._last: np.ndarray | None = None
+        self._last: np.ndarray | None = None  # the stream of :meth:`step`; :meth:`run` keeps its own
+        self._stream = threading.Lock()
 
     def _poses(self, X) -> np.ndarray:
         X = _pose(X, "poses").reshape(-1, 4, 4)
@@ -179,20 +181,22 @@ class Predictor:
 
     def step(self, X_next) -> Prediction:
         """Feed the next set point's poses ``(k, 4, 4)``; the first call only records them (there
-        is no interval yet) and answers for the set point itself."""
+        is no interval yet) and answers for the set point itself.
+
+        One Predictor holds one stream of set points: threads that share it take turns (a lock),
+        each step checking the interval from the set point fed just before it.  Give each stream
+        its own Predictor; :meth:`predict` and :meth:`run` hold no state and may be called from
+        several threads at once."""
         X1 = self._poses(X_next)
-        if self._last is None:
-            self._last = X1
-            return self.predict(X1, X1)
-        out = self.predict(self._last, X1)
-        self._last = X1
-        return out
+        with self._stream:
+            X0, self._last = (X1 if self._last is None else self._last), X1
+            return self.predict(X0, X1)
 
     def run(self, poses) -> list[Prediction]:
-        """:meth:`step` over ``poses (T, k, 4, 4)``: one answer per interval (``T - 1``)."""
+        """One answer per interval of ``poses (T, k, 4, 4)`` (``T - 1``), as :meth:`step` would give
+        from a fresh stream; the stream of :meth:`step` is left as it was."""
         poses = _pose(poses, "poses")
         if poses.ndim != 4 or len(poses) < 2:
             raise ClipError(f"Predictor.run: expected poses (T, k, 4, 4) with T >= 2 set points, got shape {poses.shape}")
-        self._last = None
-        self.step(poses[0])
-        return [self.step(p) for p in poses[1:]]
+        X = [self._poses(p) for p in poses]
+        return [self.predict(a, b) for a, b in zip(X, X[1:])]
