@@ -1,6 +1,8 @@
 """The hull cache: a second load reads each mesh's hull from ``$ARMGUARD_CACHE_DIR/hulls`` and
-gets exactly the shapes a first load computed; a damaged entry is recomputed with a warning; a
-changed mesh file is a new entry; ``ARMGUARD_HULL_CACHE=0`` reads and writes nothing."""
+gets exactly the shapes a first load computed; a damaged, edited or another mesh's entry is
+recomputed with a warning; a changed mesh file (or a glTF's buffer) is a new entry; a mesh replaced
+while it is hulled is never stored under the old bytes' key; ``ARMGUARD_HULL_CACHE=0`` reads and
+writes nothing."""
 
 from __future__ import annotations
 
@@ -11,7 +13,7 @@ import pytest
 
 import armguard
 from armguard import ArmguardWarning
-from armguard.model._hull_cache import hull_cache_dir
+from armguard.model._hull_cache import _arrays_sha256, hull_cache_dir
 
 URDF = ('<robot name="r"><link name="base"><collision><geometry><mesh filename="flat.stl"/></geometry></collision></link>'
         '<link name="l1"><collision><geometry><mesh filename="ball.stl" scale="0.5 0.5 0.5"/></geometry></collision>'
@@ -71,7 +73,26 @@ def test_a_cache_hit_gives_the_computed_shapes(robot):
     assert m1.sha256 == m2.sha256 and len(m1.sha256) == 4  # the URDF and its three meshes
 
 
-@pytest.mark.parametrize("damage", ["garbage", "truncated", "bad index"])
+def _rewrite(target, edit, *, keep_checksum: bool) -> None:
+    """Rewrite entry ``target`` with ``edit(parts)`` applied; its arrays' SHA-256 made to match
+    them again (a consistent edit, caught by the hull checks) unless ``keep_checksum``."""
+    with np.load(target) as z:
+        parts = dict(z)
+    edit(parts)
+    if not keep_checksum:
+        parts["sha256"] = np.array(_arrays_sha256(parts))
+    with open(target, "wb") as f:
+        np.savez(f, **parts)
+
+
+def _bad_index(parts):
+    parts["triangles"] = parts["triangles"] + len(parts["vertices"])
+    if not len(parts["triangles"]):  # the flat square: a face loop out of range instead
+        parts["face_lengths"] = np.array([3], dtype=np.int64)
+        parts["face_loops"] = np.array([0, 1, 99], dtype=np.int64)
+
+
+@pytest.mark.parametrize("damage", ["garbage", "truncated", "bad index", "shrunk", "another mesh's"])
 def test_a_damaged_entry_is_recomputed_with_a_warning(robot, damage):
     m1 = armguard.load_model(robot, srdf=False)
     entries = sorted(hull_cache_dir().glob("*.npz"))
@@ -80,16 +101,18 @@ def test_a_damaged_entry_is_recomputed_with_a_warning(robot, damage):
         target.write_bytes(b"not a hull")
     elif damage == "truncated":
         target.write_bytes(target.read_bytes()[:200])
-    else:  # a readable archive whose triangles name a vertex that is not there
-        with np.load(target) as z:
-            parts = dict(z)
-        parts["triangles"] = parts["triangles"] + len(parts["vertices"])
-        if not len(parts["triangles"]):  # the flat square: a face loop out of range instead
-            parts["face_lengths"] = np.array([3], dtype=np.int64)
-            parts["face_loops"] = np.array([0, 1, 99], dtype=np.int64)
-        with open(target, "wb") as f:
-            np.savez(f, **parts)
-    with pytest.warns(ArmguardWarning, match=f"hull cache entry {target}"):
+    elif damage == "bad index":  # a readable archive whose triangles name a vertex that is not there
+        _rewrite(target, _bad_index, keep_checksum=False)
+    elif damage == "shrunk":  # a hand edit: every vertex and plane offset scaled, the checksum left as written
+        def shrink(parts):
+            parts["vertices"] = parts["vertices"] * 0.3
+            parts["planes"] = parts["planes"] * np.array([1.0, 1.0, 1.0, 0.3])
+        _rewrite(target, shrink, keep_checksum=True)
+    else:  # a copy of another mesh's entry under this one's name
+        target.write_bytes(entries[1].read_bytes())
+    why = {"garbage": "", "truncated": "", "bad index": "do not make a hull", "shrunk": "was edited",
+           "another mesh's": "another mesh or scale"}[damage]
+    with pytest.warns(ArmguardWarning, match=f"hull cache entry {target}.*{why}"):
         m2 = armguard.load_model(robot, srdf=False)
     assert m2.hull_cache["computed"] == 1 and m2.hull_cache["hits"] == 2
     _assert_identical(m1, m2)
@@ -110,6 +133,69 @@ def test_a_changed_mesh_is_a_new_entry(robot):
     z1 = [np.ptp(s.vertices[:, 2]) for s in _shapes(m1)]
     z2 = [np.ptp(s.vertices[:, 2]) for s in _shapes(m2)]
     assert max(z2) == pytest.approx(0.5, abs=1e-7) and max(z1) < 0.2  # the new box, not the cached one
+
+
+def test_a_gltf_buffer_edited_is_a_new_entry_and_one_of_the_files(tmp_path, monkeypatch):
+    """A glTF keeps its vertices in its ``.bin`` buffer: an edit of the buffer alone (the ``.gltf``
+    byte for byte the same) is a new entry, and the buffer is one of ``Model.files``."""
+    import trimesh
+
+    monkeypatch.setenv("ARMGUARD_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.delenv("ARMGUARD_HULL_CACHE", raising=False)
+
+    def export(size):
+        files = trimesh.creation.box([size] * 3).export(file_type="gltf")
+        for name, data in files.items():
+            (tmp_path / ("box.gltf" if name.endswith(".gltf") else name)).write_bytes(data)
+        return sorted(n for n in files if not n.endswith(".gltf"))
+
+    buffers = export(0.2)
+    assert buffers  # the vertices live outside the .gltf
+    (tmp_path / "r.urdf").write_text(
+        '<robot name="r"><link name="base"><collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>'
+        '<link name="arm"><collision><geometry><mesh filename="box.gltf"/></geometry></collision></link>'
+        '<joint name="j1" type="revolute"><parent link="base"/><child link="arm"/><origin xyz="0 0 0.5"/>'
+        '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>', encoding="utf-8")
+    m1 = armguard.load_model(tmp_path / "r.urdf", srdf=False)
+    gltf = (tmp_path / "box.gltf").read_bytes()
+    assert export(0.6) == buffers
+    (tmp_path / "box.gltf").write_bytes(gltf)  # only the buffer changed (its bounds in the .gltf kept)
+    m2 = armguard.load_model(tmp_path / "r.urdf", srdf=False)
+    assert m2.hull_cache["computed"] == 1 and not m2.hull_cache.get("hits")
+    size = [np.ptp(m.hulls[next(iter(m.hulls))].vertices, axis=0) for m in (m1, m2)]
+    np.testing.assert_allclose(size[0], 0.2, atol=1e-6)
+    np.testing.assert_allclose(size[1], 0.6, atol=1e-6)  # the edited buffer's box, not the cached 0.2 m one
+    paths = [str((tmp_path / b).resolve()) for b in buffers]
+    assert set(paths) <= set(map(str, m2.files))
+    assert any(m1.sha256[p] != m2.sha256[p] for p in paths)  # the vertex buffer's edit is on record
+
+
+def test_a_mesh_replaced_while_hulled_is_not_stored_under_the_old_bytes(robot, monkeypatch):
+    """A checkout that replaces box.stl between the cache's hash of it and its reading: the hull
+    made is the new file's, stored under the new bytes' key; loading the old file again (restored)
+    gives the old box, never the new one from the cache."""
+    import trimesh
+
+    from armguard.model import _urdf
+
+    old = (robot.parent / "box.stl").read_bytes()
+    tall = trimesh.creation.box([0.1, 0.2, 0.5]).export(file_type="stl")
+    read = _urdf._mesh_vertices
+
+    def replaced_first(path, scale):
+        if str(path).endswith("box.stl"):
+            (robot.parent / "box.stl").write_bytes(tall)  # replaced after the hash, before the read
+        return read(path, scale)
+
+    monkeypatch.setattr(_urdf, "_mesh_vertices", replaced_first)
+    m1 = armguard.load_model(robot, srdf=False)
+    monkeypatch.setattr(_urdf, "_mesh_vertices", read)
+    (robot.parent / "box.stl").write_bytes(old)
+    m2 = armguard.load_model(robot, srdf=False)
+    z1 = max(np.ptp(s.vertices[:, 2]) for s in _shapes(m1))
+    z2 = max(np.ptp(s.vertices[:, 2]) for s in _shapes(m2))
+    assert z1 == pytest.approx(0.5, abs=1e-7)  # the file as it was when read
+    assert z2 < 0.2  # the old box again: its key holds no tall hull
 
 
 def test_the_cache_can_be_turned_off(robot, monkeypatch):

@@ -71,11 +71,14 @@ def _frozen_spec(scene):
 
 
 def _with_meshes(files, collision_model) -> tuple:
-    """``files`` (resolved) then the mesh files the GeometryModel's objects were read from, each once."""
+    """``files`` (resolved) then the mesh files the GeometryModel's objects were read from, each once,
+    each followed by the files it reads its geometry from (a glTF's buffers)."""
+    from ._hull_cache import mesh_dependencies
+
     out = [Path(p).resolve() for p in files]
     meshes = sorted({Path(go.meshPath).resolve() for go in collision_model.geometryObjects
                      if go.meshPath and os.path.isabs(go.meshPath) and Path(go.meshPath).is_file()})
-    return tuple(dict.fromkeys([*out, *meshes]))
+    return tuple(dict.fromkeys([*out, *(f for m in meshes for f in (m, *(d.resolve() for d in mesh_dependencies(m))))]))
 
 
 class Model:
