@@ -246,6 +246,40 @@ def test_a_dask_cluster_gives_the_same_matrix(puma):
     np.testing.assert_array_equal([e.distance for e in dm.entries], [e.distance for e in cm.entries])
 
 
+def _two_link(path, length: float) -> None:
+    path.write_text(f"""<robot name="twolink">
+  <link name="base"><collision><origin xyz="0 0 0.05"/><geometry><box size="0.2 0.2 0.1"/></geometry></collision></link>
+  <link name="l1"><collision><origin xyz="0.15 0 0"/><geometry><box size="0.3 0.05 0.05"/></geometry></collision></link>
+  <link name="l2"><collision><origin xyz="{length / 2} 0 0"/><geometry><box size="{length} 0.05 0.05"/></geometry></collision></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.5"/><axis xyz="0 1 0"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.3 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+</robot>""", encoding="utf-8")
+
+
+def test_a_long_running_cluster_searches_the_urdf_as_edited(tmp_path):
+    """A cluster that stays up (``--scheduler tcp://...``) keeps each worker's model between calls: after
+    the URDF is edited (l2 made long enough to reach the base), its workers search the edited model, not
+    the one they loaded before (they proved base-l2 Never, and wrote it into the SRDF)."""
+    from distributed import LocalCluster
+
+    urdf = tmp_path / "twolink.urdf"
+    _two_link(urdf, 0.05)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        def base_l2(model):
+            cm = collision_matrix(model, scheduler=cluster.scheduler_address, max_evaluations=20_000)
+            return next(e for e in cm.entries if {e.link1, e.link2} == {"base", "l2"})
+
+        assert base_l2(armguard.load_model(urdf, srdf=False)).reason == "Never"
+        _two_link(urdf, 0.6)
+        edited = armguard.load_model(urdf, srdf=False)
+        here = next(e for e in collision_matrix(edited, max_evaluations=20_000).entries if {e.link1, e.link2} == {"base", "l2"})
+        there = base_l2(edited)
+        assert here.status == "witnessed" and here.reason is None
+        assert (there.status, there.reason, there.q) == (here.status, here.reason, here.q)
+
+
 def test_check_srdf_without_srdf_lints_the_one_armguard_finds(tmp_path):
     """``armguard check-srdf ROBOT``: the SRDF armguard loads ROBOT with (named on the first line);
     a robot it finds none for is a usage error that says to give one."""

@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import math
 import time
+import uuid
 from dataclasses import dataclass
 
 import numpy as np
@@ -287,15 +288,19 @@ def checked_verdicts(backend: str, v, Q, start) -> np.ndarray:
     return arr
 
 
-def _cached(spec: str, backends: tuple, options_json: str):
-    key = (spec, backends, options_json)
-    if key not in _CACHE:
+def _cached(spec: str, backends: tuple, options_json: str, token: str = ""):
+    """The worker's model and checkers for one :func:`evaluate` call (``token``: a cluster that stays
+    up loads the model again for the next call, so a file edited between calls is read as edited)."""
+    key = (spec, backends, options_json, token)
+    got = _CACHE.get(key)
+    if got is None:
         from ._models import resolve_model
 
-        _CACHE.clear()  # one model per worker process at a time
         model = resolve_model(spec)
-        _CACHE[key] = (model, build_checkers(model, backends, json.loads(options_json)))
-    return _CACHE[key]
+        got = (model, build_checkers(model, backends, json.loads(options_json)))
+        _CACHE.clear()  # one model per worker process at a time
+        _CACHE[key] = got
+    return got
 
 
 def _answer_chunk(model, checkers: dict, Q: np.ndarray, start: int = 0) -> dict:
@@ -342,8 +347,8 @@ def _answer_chunk(model, checkers: dict, Q: np.ndarray, start: int = 0) -> dict:
     return out
 
 
-def _chunk_task(spec, backends, options_json, Q, start=0):
-    model, checkers = _cached(spec, tuple(backends), options_json)
+def _chunk_task(spec, backends, options_json, Q, start=0, token=""):
+    model, checkers = _cached(spec, tuple(backends), options_json, token)
     return _answer_chunk(model, checkers, Q, start)
 
 
@@ -400,8 +405,8 @@ def _on_dask(spec, Q, backends, options, workers, scheduler, chunk_size, progres
         M = len(Q)
         size = chunk_size or max(1, math.ceil(M / (4 * n_workers)))
         starts = list(range(0, M, size)) or [0]
-        opts = json.dumps(options, sort_keys=True)
-        futures = {client.submit(_chunk_task, spec, backends, opts, Q[s:s + size], s, pure=False): k
+        opts, token = json.dumps(options, sort_keys=True), uuid.uuid4().hex
+        futures = {client.submit(_chunk_task, spec, backends, opts, Q[s:s + size], s, token, pure=False): k
                    for k, s in enumerate(starts)}
         parts: list = [None] * len(starts)
         done = 0
