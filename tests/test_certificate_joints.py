@@ -25,7 +25,7 @@ def _print(axis="0 1 0", mult="1", off="0"):
     xml = _URDF.replace("AXIS", axis).replace("MULT", mult).replace("OFF", off)
     m = pin.buildModelFromXML(xml, mimic=True)
     g = pin.buildGeomFromUrdfString(m, xml, pin.COLLISION)
-    return pair_fingerprint(m, g, "finger_l", "finger_r", margin=0.0, method="certified")
+    return pair_fingerprint(m, g, "finger_l", "finger_r", margin=0.0, method="certified", verdict="Never")
 
 
 def test_the_same_model_gives_the_same_print():

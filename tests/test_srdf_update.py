@@ -62,14 +62,16 @@ def test_every_written_pair_carries_a_certificate_that_the_model_reproduces(cert
     model = armguard.load_model(urdf)
     for p in pairs:
         fp = pair_fingerprint(model.pin_model, model.collision_model, p.get("link1"), p.get("link2"),
-                              margin=0.0, method="certified")
+                              margin=0.0, method="certified", verdict=p.get("reason"))
         assert fp == p.get(FINGERPRINT_ATTR)
         # the same pair named the other way round has the same certificate
         assert fp == pair_fingerprint(model.pin_model, model.collision_model, p.get("link2"), p.get("link1"),
-                                      margin=0.0, method="certified")
-        # another margin or method is another certificate
+                                      margin=0.0, method="certified", verdict=p.get("reason"))
+        # another margin, method or verdict is another certificate
         assert fp != pair_fingerprint(model.pin_model, model.collision_model, p.get("link1"), p.get("link2"),
-                                      margin=0.01, method="certified")
+                                      margin=0.01, method="certified", verdict=p.get("reason"))
+        assert fp != pair_fingerprint(model.pin_model, model.collision_model, p.get("link1"), p.get("link2"),
+                                      margin=0.0, method="certified", verdict=None)
     assert stale_certificates(model.pin_model, model.collision_model, urdf.with_suffix(".srdf")) == ()
 
 
@@ -81,7 +83,7 @@ def test_certificates_follow_only_what_a_verdict_depends_on(certified, tmp_path)
     grown = armguard.load_model(new, srdf=False)
 
     def fp(m, a, b):
-        return pair_fingerprint(m.pin_model, m.collision_model, a, b, margin=0.0, method="certified")
+        return pair_fingerprint(m.pin_model, m.collision_model, a, b, margin=0.0, method="certified", verdict="Never")
 
     links = ["puma560_base", "puma560_link1", "puma560_link2", "puma560_link3", "puma560_tool"]
     for i, a in enumerate(links):
@@ -383,3 +385,32 @@ def test_a_stale_certificate_is_located_by_its_line(certified, tmp_path):
     el = next(ln for ln in text.splitlines() if "disable_collisions" in ln and NEVER[0] in ln and f'"{NEVER[1]}"' in ln)
     line = text.splitlines().index(el) + 1
     assert s.where.startswith("disable_collisions[") and s.where.endswith(f"(line {line})"), s.where
+
+
+def test_a_checked_pairs_certificate_moved_onto_a_never_does_not_hold(certified, tmp_path):
+    """The certificate covers the verdict: a checked pair's comment (witnessed in collision) turned by
+    hand into ``<disable_collisions reason="Never">`` with the same fingerprint is stale -- ``load_model``
+    warns and checks the pair, ``srdf --update`` searches it again and writes it checked."""
+    import re
+
+    from armguard.srdfgen._io import _CHECKED
+
+    model = _fresh(certified, tmp_path, grow=False)
+    srdf = model.with_suffix(".srdf")
+    text = srdf.read_text()
+    comment = next(m for m in re.finditer(r"<!--(.*?)-->", text, flags=re.S) if _CHECKED.match(m[1])
+                   and "witnessed" in m[1])
+    c = _CHECKED.match(comment[1])
+    forged = (f'<disable_collisions link1="{c["a"]}" link2="{c["b"]}" reason="Never" '
+              f'{FINGERPRINT_ATTR}="{c["fp"]}"/>')
+    srdf.write_text(text.replace(comment[0], forged))
+    with pytest.warns(ArmguardWarning, match=f"{c['a']}.*{c['b']}|{c['b']}.*{c['a']}"):
+        m = armguard.load_model(model)
+    stale = stale_certificates(m.pin_model, m.collision_model, srdf)
+    assert [{s.link1, s.link2} for s in stale] == [{c["a"], c["b"]}]
+    r = CliRunner().invoke(main, ["srdf", str(model), "--out", str(srdf), "--update", "--max-evaluations",
+                                  str(MAX_EVALUATIONS)])
+    assert r.exit_code == 0, r.output
+    assert " 1 searched again" in r.output and "Never -> witnessed" in r.output, r.output
+    disabled = {frozenset((e.get("link1"), e.get("link2"))) for e in ET.parse(srdf).getroot().findall("disable_collisions")}
+    assert frozenset((c["a"], c["b"])) not in disabled

@@ -8,7 +8,10 @@ A collision matrix's verdict on a pair of links A, B (:mod:`armguard.srdfgen`: *
 * every joint that changes the pair's relative pose: the joints that support one link and not the
   other (Pinocchio's ``model.supports``), each with its type, placement in its parent, position
   limits and ``q`` slot (a mimic joint's coupling and an unaligned axis included);
-* the margin and the method the matrix was made with.
+* the margin and the method the matrix was made with;
+* the verdict itself: the disabled pair's reason (*Never*, *Default*, *Adjacent*), or ``checked``
+  for a pair the matrix checks (its comment), so a certificate moved onto another verdict (a
+  checked pair's comment turned into a ``<disable_collisions reason="Never">``) does not hold.
 
 An *Adjacent* pair is disabled whatever its shapes (MoveIt's rule) for as long as it is adjacent: one
 link the other's parent, or joined through links without geometry; once a link between them has
@@ -34,13 +37,13 @@ import pinocchio as pin
 
 from .._errors import SceneFileError, unclosed_text
 
-__all__ = ["FINGERPRINT_ATTR", "MARGIN_ATTR", "METHOD_ATTR", "pair_fingerprint", "read_certificates", "Certificate",
-           "StaleCertificate", "stale_certificates"]
+__all__ = ["FINGERPRINT_ATTR", "MARGIN_ATTR", "METHOD_ATTR", "pair_fingerprint", "pair_digest", "verdict_fingerprint",
+           "certificate_verdict", "read_certificates", "Certificate", "StaleCertificate", "stale_certificates"]
 
 FINGERPRINT_ATTR = "armguard_fingerprint"
 MARGIN_ATTR = "armguard_margin"
 METHOD_ATTR = "armguard_method"
-_VERSION = b"armguard-pair-certificate-1"
+_VERSION = b"armguard-pair-certificate-2"  # 2: the verdict hashed too
 _SHAPE_ATTRS = ("radius", "halfLength", "halfSide", "radii", "n", "d")
 
 
@@ -62,9 +65,29 @@ def _shape(h, geometry) -> None:
         _floats(h, geometry.points())
 
 
-def pair_fingerprint(pin_model, collision_model, link1: str, link2: str, *, margin: float, method: str) -> str | None:
-    """The fingerprint (16 hex digits) of the verdict on ``link1``-``link2`` (see the module docstring);
-    None when either name is not a frame of ``pin_model``."""
+def certificate_verdict(reason) -> str:
+    """What a certificate vouches for: a disabled pair's reason, ``"checked"`` for a checked pair
+    (witnessed or undecided: checked either way)."""
+    return str(reason) if reason else "checked"
+
+
+def pair_fingerprint(pin_model, collision_model, link1: str, link2: str, *, margin: float, method: str,
+                     verdict: str) -> str | None:
+    """The fingerprint (16 hex digits) of verdict ``verdict`` (:func:`certificate_verdict`) on
+    ``link1``-``link2`` (see the module docstring); None when either name is not a frame of
+    ``pin_model``."""
+    base = pair_digest(pin_model, collision_model, link1, link2, margin=margin, method=method)
+    return None if base is None else verdict_fingerprint(base, verdict)
+
+
+def verdict_fingerprint(base: bytes, verdict: str) -> str:
+    """The fingerprint of ``verdict`` on a pair whose :func:`pair_digest` is ``base``."""
+    return hashlib.sha256(base + b" verdict " + certificate_verdict(verdict).encode()).hexdigest()[:16]
+
+
+def pair_digest(pin_model, collision_model, link1: str, link2: str, *, margin: float, method: str) -> bytes | None:
+    """SHA-256 of what a verdict on ``link1``-``link2`` depends on but the verdict (None: a name is
+    not a frame of ``pin_model``); :func:`verdict_fingerprint` adds the verdict."""
     ids = []
     for name in sorted((link1, link2)):  # the pair's print does not depend on its order
         if not pin_model.existFrame(name, pin.BODY):
@@ -100,7 +123,7 @@ def pair_fingerprint(pin_model, collision_model, link1: str, link2: str, *, marg
             jd = jm.createData()
             jm.calc(jd, pin.neutral(pin_model))
             _floats(h, np.asarray(jd.S))
-    return h.hexdigest()[:16]
+    return h.digest()
 
 
 @dataclass(frozen=True)
@@ -197,7 +220,8 @@ def stale_certificates(pin_model, collision_model, srdf_file) -> tuple[StaleCert
             if not _adjacent(pin_model, collision_model, c.link1, c.link2):  # a link between them got geometry
                 out.append(StaleCertificate(c.link1, c.link2, c.reason, c.fingerprint, None, c.where))
             continue
-        now = pair_fingerprint(pin_model, collision_model, c.link1, c.link2, margin=c.margin, method=c.method)
+        now = pair_fingerprint(pin_model, collision_model, c.link1, c.link2, margin=c.margin, method=c.method,
+                               verdict=c.reason)
         if now != c.fingerprint:
             out.append(StaleCertificate(c.link1, c.link2, c.reason, c.fingerprint, now, c.where))
     return tuple(out)

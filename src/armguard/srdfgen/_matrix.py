@@ -33,7 +33,7 @@ import numpy as np
 from .._errors import VerificationError
 from .._values import number, whole_number
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
-from ..model._certificate import pair_fingerprint
+from ..model._certificate import pair_digest, verdict_fingerprint
 from ._io import read_previous
 from ._pairs import pair_setup
 from ._prove import PairVerdict, prove_pair
@@ -229,8 +229,13 @@ def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", b
     if not np.all(np.isfinite(d_home)):
         raise VerificationError("a distance at the home configuration is not finite: no verdict")
     home_pin = tuple(float(x) for x in ev.pin(setup.home[None, :])[0])
-    prints = [pair_fingerprint(model.pin_model, model.collision_model, p.link1, p.link2, margin=float(margin),
-                               method=method) or "" for p in setup.pairs]
+    digests = [pair_digest(model.pin_model, model.collision_model, p.link1, p.link2, margin=float(margin),
+                           method=method) for p in setup.pairs]
+
+    def certificate(k: int, reason) -> str:
+        """Pair ``k``'s certificate of verdict ``reason`` (a disabled pair's; None: checked)."""
+        return verdict_fingerprint(digests[k], reason) if digests[k] is not None else ""
+
     before = read_previous(previous) if previous is not None else {}
     entries: list = [None] * P
     todo = []
@@ -240,7 +245,8 @@ def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", b
             entries[k] = MatrixEntry(p.link1, p.link2, "Adjacent", "disabled", how="joined by a joint or through links without geometry")
         elif d_home[k] <= 0.0:
             entries[k] = MatrixEntry(p.link1, p.link2, "Default", "disabled", home_pin, float(d_home[k]), "in contact at home")
-        elif (old := before.get(frozenset((p.link1, p.link2)))) is not None and old.fingerprint == prints[k] \
+        elif (old := before.get(frozenset((p.link1, p.link2)))) is not None \
+                and old.fingerprint == certificate(k, old.reason) \
                 and old.reason not in ("Adjacent", "Default") and (old.q is None or len(old.q) == model.pin_model.nq):
             # (a witness of another configuration's size, after a joint became a mimic or was added: searched again)
             entries[k] = old
@@ -278,7 +284,7 @@ def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", b
                     int(samples), seed, advance)
     finally:
         close()
-    entries = [replace(e, fingerprint=f) for e, f in zip(entries, prints)]
+    entries = [replace(e, fingerprint=certificate(k, e.reason)) for k, e in enumerate(entries)]
     return CollisionMatrix(model.name, method, float(margin), tuple(entries), time.perf_counter() - t0,
                            int(samples) if method == "sampled" else 0, tuple(model.joint_names), tuple(kept))
 
