@@ -424,3 +424,29 @@ def test_a_well_checksummed_but_invalid_grid_is_refused(clean, tmp_path, field, 
     write_map(p, header, subs)
     with pytest.raises(ForbiddenMapError, match="grid record is invalid"):
         ForbiddenMap.load(p)
+
+
+def test_a_loaded_map_keeps_the_bytes_it_checked(clean, tmp_path):
+    """The lookups read the bytes checked when the map was opened, not the file: the deployed file
+    overwritten in place afterwards (a ``cp`` over it: same size, other bytes) or truncated changes
+    no answer of the map already loaded (mapped from the file, it answered ALLOWED for every
+    configuration it had called FORBIDDEN, and a truncated file killed the process with SIGBUS)."""
+    from armguard.cspace._format import read_header
+
+    deployed = tmp_path / "deployed.agmap"
+    shutil.copy(clean.path, deployed)
+    fmap = ForbiddenMap.load(deployed)
+    m = armguard.load_model("hermes")
+    Q = m.scene_q(m.random_q(2000, 5))
+    before = clean.lookup_many(Q)
+    _, _, _, data_off = read_header(deployed)
+    size = deployed.stat().st_size
+    with open(deployed, "r+b") as f:
+        f.seek(data_off)
+        f.write(bytes(size - data_off))
+    np.testing.assert_array_equal(fmap.lookup_many(Q), before)
+    with open(deployed, "r+b") as f:
+        f.truncate(data_off + 2)
+    np.testing.assert_array_equal(fmap.lookup_many(Q), before)
+    with pytest.raises(ForbiddenMapFileError):  # opened again, the file is refused
+        ForbiddenMap.load(deployed)

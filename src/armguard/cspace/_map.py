@@ -219,10 +219,14 @@ class ForbiddenMap:
         if len(crcs) != self.grid.n_substructures:
             raise ForbiddenMapFileError(self.path, "directory", f"{len(crcs)} substructures; the grid has "
                                         f"{self.grid.n_substructures}")
-        mm = np.memmap(self.path, dtype=np.uint8, mode="r")
         self._dir = np.asarray(offsets, dtype=np.int64)
-        self._data = mm[data_off:]
-        raw = self._data.tobytes()  # one read: every section is checked before any lookup
+        try:  # one read, kept: every section is checked before any lookup, and the lookups read these
+            with open(self.path, "rb") as f:  # bytes (a file mapped instead could change or shrink under them)
+                f.seek(data_off)
+                raw = f.read()
+        except OSError as exc:
+            raise ForbiddenMapFileError(self.path, "data", f"cannot read it ({exc.strerror or exc})") from None
+        self._data = np.frombuffer(raw, dtype=np.uint8)
         check_data(self.path, raw, self._dir, crcs)
         odd = np.flatnonzero(self._dir % 2)
         if len(odd):
