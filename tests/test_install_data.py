@@ -142,3 +142,35 @@ def test_import_armguard_does_not_import_numba():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert out == "False"
     assert armguard.__version__
+
+
+@pytest.mark.parametrize("planted", ["open to others", "a link", "a file"])
+def test_the_temp_cache_folder_is_never_one_another_user_could_write(monkeypatch, tmp_path, planted):
+    """numba reads its index files with pickle: the temp folder's usual name taken by a folder others may
+    write, a link or a file (another user could have made it first and put code in it) is passed over
+    for a fresh private folder; the usual folder, when made here, is 0700."""
+    import stat
+
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    from numba.core import config
+
+    monkeypatch.setattr(config, "CACHE_DIR", config.CACHE_DIR)
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    (tmp_path / "tmp").mkdir()
+    monkeypatch.setattr(_numba_cache, "writable", lambda folder: False)
+    usual = tmp_path / "tmp" / f"armguard-numba-{_numba_cache._user()}"
+    made = _numba_cache.ensure_numba_cache(tmp_path / "pkg")
+    assert made == usual and stat.S_IMODE(usual.stat().st_mode) == 0o700
+    usual.rmdir()
+    if planted == "open to others":
+        usual.mkdir()
+        usual.chmod(0o777)
+    elif planted == "a link":
+        (tmp_path / "elsewhere").mkdir(mode=0o700)
+        usual.symlink_to(tmp_path / "elsewhere")
+    else:
+        usual.write_text("not a folder")
+    monkeypatch.delenv("NUMBA_CACHE_DIR")  # set by the first call
+    folder = _numba_cache.ensure_numba_cache(tmp_path / "pkg")
+    assert folder != usual and folder.is_dir() and not folder.is_symlink()
+    assert stat.S_IMODE(folder.stat().st_mode) == 0o700 and os.environ["NUMBA_CACHE_DIR"] == str(folder)

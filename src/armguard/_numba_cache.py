@@ -5,8 +5,11 @@ user's cache folder (``~/.cache/numba``), else it refuses to define the kernel (
 available"), and armguard would not import.  :func:`ensure_numba_cache` runs first on
 ``import armguard``: when ``$NUMBA_CACHE_DIR`` is unset and neither of numba's two folders is
 writable (a read-only site-packages and no writable home, as in some containers), it points
-numba at ``<temp dir>/armguard-numba-<user>`` instead.  Otherwise it changes nothing (and does not
-import numba).
+numba at ``<temp dir>/armguard-numba-<user>`` instead -- a folder this user owns, that no one
+else may write and that is no link (numba reads its index files with pickle: a folder another
+user made first could run their code here); when that name is taken otherwise, at a fresh
+private folder (``tempfile.mkdtemp``: compiled again in each process).  Otherwise it changes
+nothing (and does not import numba).
 """
 
 from __future__ import annotations
@@ -50,12 +53,33 @@ def ensure_numba_cache(package_dir: Path | None = None) -> Path | None:
     package_dir = Path(package_dir) if package_dir is not None else Path(__file__).resolve().parent
     if writable(package_dir / "__pycache__") or writable(_user_cache_dir()):
         return None
-    folder = Path(tempfile.gettempdir()) / f"armguard-numba-{_user()}"
+    folder = _private_folder(Path(tempfile.gettempdir()) / f"armguard-numba-{_user()}")
     os.environ["NUMBA_CACHE_DIR"] = str(folder)
     from numba.core import config
 
     config.CACHE_DIR = str(folder)  # numba read the environment when it was imported above
     return folder
+
+
+def _private_folder(folder: Path) -> Path:
+    """``folder``, made mode 0700 when missing, when it is a real folder of this user that no one else
+    may write; else a fresh folder of ``tempfile.mkdtemp`` (0700)."""
+    try:
+        os.mkdir(folder, 0o700)
+    except FileExistsError:
+        pass
+    except OSError:
+        return Path(tempfile.mkdtemp(prefix="armguard-numba-"))
+    try:
+        st = os.lstat(folder)
+    except OSError:
+        return Path(tempfile.mkdtemp(prefix="armguard-numba-"))
+    import stat
+
+    own = not hasattr(os, "getuid") or st.st_uid == os.getuid()
+    if stat.S_ISDIR(st.st_mode) and own and not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        return folder
+    return Path(tempfile.mkdtemp(prefix="armguard-numba-"))
 
 
 def signature(codes: str) -> tuple:
