@@ -546,3 +546,25 @@ def test_the_file_mode_is_read_without_changing_the_umask(monkeypatch, tmp_path)
     finally:
         monkeypatch.undo()
         os.umask(old)
+
+
+def test_program_run_and_calibrate_refuse_an_unwritable_output_before_the_work(tmp_path, monkeypatch):
+    """``program run --save`` and ``program calibrate --out`` ran the whole program (or calibration) and then
+    found the output could not be written (exit 3, the result lost); ``verify``, ``edges`` and ``srdf``
+    refuse first. Now they do too: nothing is run."""
+    from click.testing import CliRunner
+
+    import armguard.program as program
+    from armguard.cli import main
+
+    ran = []
+    monkeypatch.setattr(program, "run_program", lambda *a, **k: ran.append("run"))
+    monkeypatch.setattr(program, "calibrate_camera", lambda *a, **k: ran.append("calibrate"))
+    (tmp_path / "afile").write_text("a file where a folder should be")
+    blocked = tmp_path / "afile" / "out.json"
+    examples = Path(__file__).resolve().parent.parent / "examples" / "workmate"
+    for args in (["program", "run", str(examples / "stack.yaml"), "--save", str(blocked)],
+                 ["program", "calibrate", str(examples / "cell.yaml"), "--out", str(blocked)]):
+        r = CliRunner().invoke(main, args)
+        assert r.exit_code == 3 and "afile" in r.output, (args, r.output)
+    assert ran == []

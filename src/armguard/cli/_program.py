@@ -32,6 +32,10 @@ def run_cmd(file: str, cell: str | None, calibration: str | None, seed: int, sav
     """Run the task program FILE: expand each task through IK, verify every motion, emulate it."""
     from ..program import run_program
 
+    if save:
+        from .._io import check_writable
+
+        check_writable(save)  # refused before the run, not after it (nothing computed is then lost)
     run = run_program(file, cell, seed=seed, calibration=calibration)
     click.echo(run.summary())
     if save:
@@ -82,6 +86,9 @@ def calibrate_cmd(cell: str, out: str | None, calibration: str | None, points: i
     target = out or (c.calibration.file if c.calibration is not None else None)
     if target is None:
         raise click.UsageError("the cell names no calibration file: give --out FILE")
+    from .._io import check_writable
+
+    check_writable(target)  # refused before the calibration, not after it
     result = calibrate_camera(c, n=points, seed=seed)
     click.echo(result.summary())
     if not result.ok:
