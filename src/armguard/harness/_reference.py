@@ -115,10 +115,13 @@ def make_reference(spec: str, out_dir=None, *, name: str | None = None) -> tuple
         "arrays": {"q": "(K, nq) rad/m", "distance": "(K, n) m", "p_WA": "(K, n, 3) m", "p_WB": "(K, n, 3) m",
                    "verdict": "(K,) bool, collides(Q)"},
     }
-    jp, npz = out / f"{name}.json", out / f"{name}.npz"
-    np.savez_compressed(npz, q=Q, distance=d, p_WA=pa, p_WB=pb, verdict=verdict)
-    jp.write_text(json.dumps(header, indent=1) + "\n", encoding="utf-8")
-    return jp, npz
+    from .._io import atomic_write, output_set
+
+    with output_set(out) as staging:  # the header and its arrays replace the old pair together, or neither does
+        atomic_write(staging / f"{name}.npz",
+                     lambda f: np.savez_compressed(f, q=Q, distance=d, p_WA=pa, p_WB=pb, verdict=verdict))
+        atomic_write(staging / f"{name}.json", json.dumps(header, indent=1) + "\n")
+    return out / f"{name}.json", out / f"{name}.npz"
 
 
 _ARRAYS = ("q", "distance", "p_WA", "p_WB", "verdict")
