@@ -193,6 +193,20 @@ def test_option_plumbing_and_capabilities(pair, tmp_path, monkeypatch):
     monkeypatch.delenv("ARMGUARD_BACKEND", raising=False)
     c = armguard.checker(m)
     assert c.fidelity == "paper" and c.verdicts == "ranger"
+    # the same file serves the Detector and the CLI (they refused "verdicts", which the Checker takes)
+    det = armguard.Detector(m)
+    q = m.neutral()
+    np.testing.assert_allclose(det.pair_distances(m.scene_q(q[None])[0]).distance, c.pair_distances(q).distance,
+                               atol=1e-12)  # the Detector takes q in the scene's joint order
+    from click.testing import CliRunner
+
+    from armguard.cli import main
+
+    r = CliRunner().invoke(main, ["check", m.name])
+    assert r.exit_code in (0, 1), r.output  # an answer (clear, warning or collision), not a refused option (3)
+    (tmp_path / "armguard.toml").write_text('[backend]\nname = "analytic"\nverdicts = "ranger"\n')
+    with pytest.raises(BackendError, match="verdicts"):  # the exact fidelity has no such option
+        armguard.Detector(m)
 
 
 def test_model_rows_exact_where_the_paper_is_and_never_below(pair):

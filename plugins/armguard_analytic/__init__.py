@@ -485,10 +485,13 @@ class AnalyticBackend:
         in the exact fidelity; None (Ranger's algorithm over this backend's Checker) in the paper
         fidelity."""
         opts = dict(options or {})
-        unknown = sorted(set(opts) - {"fidelity", "release_gil", "warm_start"})
+        exact = str(opts.get("fidelity", "exact")) == "exact"
+        known = ["fidelity", "release_gil", "warm_start"] if exact else ["fidelity", "verdicts"]  # as the Checker's
+        unknown = sorted(set(opts) - set(known))
         if unknown:  # a typo ("warm_strat") would else leave the option off without a word
-            raise BackendError(f"analytic: unknown options {unknown}; options are ['fidelity', 'release_gil', 'warm_start']")
-        if str(opts.get("fidelity", "exact")) != "exact":
+            raise BackendError(f"analytic: unknown options {unknown}; options are {known}"
+                               + ("" if exact else " (fidelity 'paper')"))
+        if not exact:
             return None
         from ._engine._detector import FusedDetector
 
