@@ -532,7 +532,9 @@ def test_the_suite_holds_at_other_seeds(backend, seed):
     crossing capsule cores called smooth) and pair_subset on kinova (its guess history, now declared), and the
     analytic backend witness_on_surfaces on rover (an EPA witness extrapolated off a hull's edge, seed 1)."""
     report = check_backend(backend, models=["kinova", "ranger", "rover"], n_configs=N_CONFIGS, seed=seed)
-    assert report.passed and not report.xpassed or backend == "coal", str(report)
+    assert report.passed and not report.xpassed, str(report)  # a declared failure that passes here is stale
+    expected = {"deterministic[kinova]", "pair_subset[kinova]", "thread_safety[kinova]"} if backend == "coal" else set()
+    assert set(report.xfailed) == expected, str(report)
 
 
 def test_results_kept_is_checked_with_the_neutral_pose_alone():

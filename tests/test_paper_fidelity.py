@@ -247,4 +247,6 @@ def test_verdicts(pair):
         assert herm.any() and ("hermes" in p.methods[int(np.flatnonzero(herm)[0])])
         assert np.array_equal(ph[:, ~herm], D[:, ~herm] <= 0.0) and (br[:, ~herm] == -1).all()
         assert (br[:, herm] >= 0).all()
-        assert (hit == e.collides(Q)).mean() > 0.5
+        exact = e.collides(Q)  # docs/paper-fidelity.md (10^4 configurations): 0.16 % false alarms, 0.06 % missed
+        assert (hit & ~exact).mean() <= 0.02 and (~hit & exact).mean() <= 0.01, \
+            ((hit & ~exact).sum(), (~hit & exact).sum())  # (a checker always "clear" agreed on 63 %)

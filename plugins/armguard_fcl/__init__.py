@@ -63,15 +63,19 @@ class FclChecker(CheckerBase):
     name = "fcl"
     capabilities = frozenset({Capability.DISTANCES, Capability.VERDICTS})
     distances_may_run_long = True  # the budgeted / lazy Detector then proves nothing from its memory
-    conformance_xfail = {  # armguard.testing: what python-fcl is known not to meet, and why
-        "coal_distances": "python-fcl's GJK stops early: separated distances run long (up to 0.39 m on Hermes in "
-                          "10^4 configurations, docs/backends.md), never short of the exact distance "
-                          "(tests/test_backends.py holds it to that bound)",
-        "witness_on_surfaces": "python-fcl's GJK stops early: its witness points lie up to tens of micrometres off "
-                               "the surfaces, and away from the nearest points where its distance runs long",
-        "distance_jacobian": "python-fcl's GJK stops early: its distances carry an error of their own that the "
-                             "framework's central differences (step 1e-6) magnify (ranger: -1.3e-3 m/rad where "
-                             "differences at 1e-4 give 1.3e-5)",
+    conformance_xfail = {  # armguard.testing: where python-fcl is known not to meet the suite, and why (measured at
+        # the bundled run's seed 0 and at seeds 1, 2 and 5; on the other models it meets every check)
+        **{f"coal_distances[{m}]": "python-fcl's GJK stops early: separated distances run long (up to 0.39 m on Hermes in "
+                                   "10^4 configurations, docs/backends.md), never short of the exact distance "
+                                   "(tests/test_backends.py holds it to that bound)"
+           for m in ("ranger", "hermes", "puma560", "gmf_s480", "kinova", "panda+edits")},
+        **{f"witness_on_surfaces[{m}]": "python-fcl's GJK stops early: its witness points lie off the surfaces (up to "
+                                        "14 mm on ranger's workspace pairs, 0.2 mm on Hermes's hulls), and away from "
+                                        "the nearest points where its distance runs long"
+           for m in ("ranger", "hermes", "puma560", "gmf_s480", "kinova", "panda+edits")},
+        "distance_jacobian[ranger]": "python-fcl's GJK stops early: its distances carry an error of their own that the "
+                                     "framework's central differences (step 1e-6) magnify (-1.3e-3 m/rad where "
+                                     "differences at 1e-4 give 1.3e-5)",
     }
 
     def __init__(self, model, options: Mapping | None = None) -> None:
