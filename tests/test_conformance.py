@@ -556,3 +556,12 @@ def test_run_check_in_a_packages_own_tests_keeps_coals_deprecation_note_out(requ
         caught.clear()
         run_check(check, request)
     assert not [w for w in caught if "enable_cached_gjk_guess" in str(w.message)]
+
+
+@pytest.mark.parametrize("backend", ["clip", "analytic"])
+def test_model_as_made_runs_on_a_model_with_a_workspace_box(backend):
+    """The bundled run gives clip puma560 and rover, neither with a workspace box, so its ``model_as_made``
+    was always skipped (a clip reading ``model.scene.workspace`` passed every test): here on puma560 with one."""
+    m = armguard.load_model("puma560").with_workspace([-1.0, -1.0, -0.6], [1.0, 1.0, 1.2])
+    report = check_backend(backend, models=[m], n_configs=N_CONFIGS, only=["model_as_made"])
+    assert report.passed and not report.not_applicable and not report.xfailed, str(report)

@@ -77,6 +77,23 @@ def test_never_free_where_the_exact_check_collides(forbidden, analytic, model):
     assert not np.any(coal.collides(Q[:2000], margin=SD) & ~forbidden.collides(Q[:2000], margin=SD))
 
 
+def test_no_category_is_skipped(forbidden, model):
+    """The conformance suite's per-category check cannot run here (the map refuses a Model made in process),
+    so: at every configuration where the pairs of one category alone collide (coal; every other category
+    clear), the forbidden backend says collision -- a backend that skipped a category (the payload's) would
+    call those rows clear, however the other categories decide the rest."""
+    Q = model.random_q(3000, 14)
+    D = armguard.checker(model, "coal").pair_distances_many(Q)
+    D = getattr(D, "distance", D)
+    cat = np.asarray(model.pairs.category)
+    least = {c: D[:, cat == c].min(axis=1) for c in sorted(set(cat))}
+    said = forbidden.collides(Q, margin=0.0)
+    for c in least:
+        alone = (least[c] <= 0.0) & np.all([least[o] > 0.0 for o in least if o != c], axis=0)
+        assert alone.sum() >= 5, (c, int(alone.sum()))  # hermes: 319 arm-arm, 7 arm-payload, 214, 88 rows
+        assert said[alone].all(), (c, np.flatnonzero(alone & ~said)[:5])
+
+
 def test_agrees_with_the_combined_checker(forbidden, fmap, model):
     Q = model.random_q(5000, 12)
     verdict = forbidden.verdicts(Q, margin=SD)

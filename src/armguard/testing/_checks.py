@@ -512,7 +512,7 @@ def check_coal_verdicts_by_category(ctx, model):
                f"the suite's sub-Model of category {cat!r} has categories {sorted(set(sub.pairs.category))}")
         try:
             c = ctx.backend_impl().build(sub, dict(ctx.options))
-        except BackendError as exc:  # a backend bound to its model's files (forbidden's map): panda+edits tests
+        except BackendError as exc:  # a backend bound to its model's files (forbidden's map): tests/test_cspace_backend.py checks its categories
             raise NotApplicable(f"the backend builds no Checker on a Model made in process: {exc}") from None
         ref = get_backend(REFERENCE).build(sub, {})
         dmin = np.array([float(np.min(ref.pair_distances(q).distance, initial=np.inf)) for q in Q])
