@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["ref_segments", "ref_link_link", "ref_payload_link", "ref_payload_obstacle"]
+__all__ = ["ref_segments", "ref_link_link", "ref_link_obstacle", "ref_payload_link", "ref_payload_obstacle"]
 
 
 def _point_segment(x, p, q):
@@ -80,6 +80,33 @@ def _faces(polytope):
         V = cs.verts[cs.face_verts[cs.face_vert_start[f]:cs.face_vert_start[f + 1]]]
         out.append((cs.planes[f, :3], float(cs.planes[f, 3]), V))
     return out, cs.verts
+
+
+def ref_link_obstacle(link, polytope, margin: float = 0.0) -> bool:
+    """Hermes's link–obstacle verdict (Fig. 5): the link's axis, not rejected by the sphere pre-test
+    (its distance from the vertices' barycentre within the farthest vertex's distance plus the
+    link radius and the margin), crosses the boundary of the obstacle whose face planes are moved out
+    by the link radius and the margin: the axis clipped to that grown polytope (Cyrus–Beck, one
+    half-space at a time) leaves a piece that does not hold the whole axis.  A link wholly inside
+    crosses no face (the miss the paper admits)."""
+    faces, verts = _faces(polytope)
+    p0, p1 = np.asarray(link.p0, float), np.asarray(link.p1, float)
+    grow = float(link.radius) + margin
+    centre = verts.mean(axis=0)
+    if _point_segment(centre, p0, p1) > np.linalg.norm(verts - centre, axis=1).max() + grow:
+        return False
+    t0, t1 = 0.0, 1.0
+    for n, off, _ in faces:  # n . (p0 + t (p1 - p0)) <= off + grow
+        a, b = n @ (p1 - p0), off + grow - n @ p0
+        if a == 0.0:
+            if b < 0.0:
+                return False  # parallel and outside this half-space
+            continue
+        if a > 0.0:
+            t1 = min(t1, b / a)
+        else:
+            t0 = max(t0, b / a)
+    return t0 <= t1 and (t0 > 0.0 or t1 < 1.0)
 
 
 def _in_polygon(x, n, V) -> bool:
