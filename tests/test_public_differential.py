@@ -1,6 +1,7 @@
 """Public robots, analytic against coal: the differential spine on robots no one here wrote.
 
-Four robots of different kinds, loaded by name with the SRDF armguard finds for them: the KUKA
+Twelve robots of the public table (the other three, panda, ur5 and kinova, are in the conformance
+suite's models); first four of different kinds, loaded by name with the SRDF armguard finds for them: the KUKA
 iiwa of pybullet_data (mesh hulls, no SRDF), xarm7 (dense meshes and its SRDF) and z1 (dense
 meshes, cylinders; its SRDF's chain names a link the URDF lacks), and panda_collision (spheres and
 cylinders only: 112 of its 252 pairs a sphere and a cylinder, ``_pair_point_cylinder``'s closed form).  On seeded random in-limit
@@ -26,8 +27,11 @@ from armguard.model import known_models
 _AVAILABLE = {m.name for m in known_models() if m.available}
 
 
-@pytest.mark.parametrize("name", ["kuka_iiwa", "xarm7", "z1", "panda_collision"])
-def test_public_robot_analytic_equals_coal(name):
+@pytest.mark.parametrize("name, n", [("kuka_iiwa", 40), ("xarm7", 40), ("z1", 40), ("panda_collision", 40),
+                                     # the rest of the public table (bench robots: 300 configurations each)
+                                     ("ur3", 40), ("ur10", 40), ("ur5_gripper", 40), ("franka_panda", 40), ("xarm6", 40),
+                                     ("talos_left_arm", 40), ("so100", 40), ("so101", 20)])
+def test_public_robot_analytic_equals_coal(name, n):
     if name not in _AVAILABLE:
         pytest.skip(f"{name}'s package is not installed")
     with warnings.catch_warnings():
@@ -35,7 +39,7 @@ def test_public_robot_analytic_equals_coal(name):
         model = armguard.load_model(name)
     assert len(model.pairs) > 0
     ana, ref = armguard.checker(model, "analytic"), armguard.checker(model, "coal")
-    Q = model.random_q(40, 11)
+    Q = model.random_q(n, 11)
     for q in Q:
         a, c = ana.pair_distances(q), ref.pair_distances(q)
         assert [tuple(p) for p in a.pairs] == [tuple(p) for p in c.pairs]
