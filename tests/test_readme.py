@@ -13,7 +13,8 @@ GUIDES = (ROOT / "docs" / "detector.md", ROOT / "docs" / "uncertainty.md", ROOT 
           ROOT / "docs" / "models.md", ROOT / "docs" / "clip.md", ROOT / "docs" / "trajectory-format.md",
           ROOT / "docs" / "program.md",
           ROOT / "docs" / "avoidance.md",
-          ROOT / "docs" / "srdf.md")
+          ROOT / "docs" / "srdf.md",
+          ROOT / "docs" / "console.md", ROOT / "docs" / "cspace.md", ROOT / "docs" / "paper-fidelity.md")
 BLOCKS = re.findall(r"```python\n(.*?)```", README.read_text(encoding="utf-8"), re.S)
 GUIDE_BLOCKS = [(g, code) for g in GUIDES for code in re.findall(r"```python\n(.*?)```", g.read_text(encoding="utf-8"), re.S)]
 
