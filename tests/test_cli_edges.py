@@ -252,3 +252,20 @@ def test_category_margins_from_the_command_line(tmp_path):
                   "--category-margin", "workspace=0.5")  # a category hermes has no pair in: passed over
     assert absent.exit_code == res.exit_code
     assert absent.output.split("(evaluations")[0] == res.output.split("(evaluations")[0]
+
+
+def test_category_margins_that_agree_are_still_written_per_category(tmp_path):
+    """``--margin 0.02 --category-margin arm-arm=0.02``: every category's margin the same, the file held one
+    ``margin`` where ``--help`` promises ``margin_categories`` and ``margins`` (the mapping collapsed to a float)."""
+    m = armguard.load_model("hermes")
+    rob = m.scene.robots["hera"]
+    lo, hi = np.asarray(rob.lower), np.asarray(rob.upper)
+    Q0 = lo + (hi - lo) * np.random.default_rng(5).random((6, 6))
+    np.savez(tmp_path / "e.npz", Q0=Q0, Q1=Q0[::-1])
+    ref = Verifier(m).check_edges(Q0, Q0[::-1], margin={"*": 0.02, "arm-arm": 0.02})
+    assert ref.margin == {"arm-arm": 0.02, "arm-payload": 0.02, "arm-vehicle": 0.02, "payload-vehicle": 0.02}
+    _run("edges", "hermes", str(tmp_path / "e.npz"), "--margin", "0.02", "--category-margin", "arm-arm=0.02",
+         "--out", str(tmp_path / "r.npz"))
+    with np.load(tmp_path / "r.npz") as f:
+        assert list(f["margins"]) == [0.02] * 4 and "margin" not in f.files
+    assert Verifier(m).check_edges(Q0, Q0[::-1], margin=0.02).margin == 0.02  # one number given: one number

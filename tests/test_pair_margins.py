@@ -194,8 +194,11 @@ def test_check_edges_margin_errors(hermes):
     split[same[0]] = 0.01  # one of them given another margin
     with pytest.raises(VerificationError, match="'hera/link2' - 'cargo_bay' are given 0.01 and 0 m: a pair of parts keeps one"):
         v.check_edges(Q0, Q1, margin=split)
-    assert v.check_edges(Q0, Q1, margin={"*": 0.02}).margin == 0.02  # the same for every pair: one margin
-    assert v.check_edges(Q0, Q1, margin=np.full(50, 0.02)).margin == 0.02
+    # a mapping given: reported by category, even where every category's is the same (armguard edges' file too)
+    assert v.check_edges(Q0, Q1, margin={"*": 0.02}).margin == dict.fromkeys(
+        ("arm-arm", "arm-vehicle", "arm-payload", "payload-vehicle"), 0.02)
+    by_parts = v.check_edges(Q0, Q1, margin=np.full(50, 0.02)).margin  # an array given: by pair of parts
+    assert set(by_parts.values()) == {0.02} and ("hera/link2", "cargo_bay") in by_parts
 
 
 def test_check_edges_takes_collides_array_of_margins(hermes):

@@ -104,6 +104,15 @@ def test_a_nan_wrench_is_refused():
         weigh(R, f, tau)
 
 
+def test_a_reflection_is_refused_as_a_rotation():
+    """R R^T = E holds for a reflection too: the orientations were accepted with det -1."""
+    R = Rotation.random(5, random_state=np.random.default_rng(6)).as_matrix()
+    f, tau = object_wrench(R, MASS, P_TRUE, I_BOX)
+    R[3] = R[3] @ np.diag([1.0, 1.0, -1.0])
+    with pytest.raises(UncertaintyError, match=r"R_WS\[3\].*reflection"):
+        weigh(R, f, tau)
+
+
 def test_the_example_table_runs():
     import sys
     from pathlib import Path

@@ -18,7 +18,7 @@ from armguard.detect._common import (check_finite_margin, check_length as _check
                                      require_pairs as _require_pairs, scene_and_model)
 from armguard.detect._detector import Detector
 from armguard.detect._extras import attach_extra
-from armguard.detect._report import CATEGORIES, STATUS_CODES, BatchReport, DetectionReport, PairDistances, PairResult
+from armguard.detect._report import STATUS_CODES, BatchReport, DetectionReport, PairDistances
 from armguard.geometry._pair_cylinder import SUPPORT_WORK_SIZE
 from armguard.geometry._pair_epa import EPA_WORK_SIZE
 from armguard.kinematics._limits import limit_error, limit_rows
@@ -585,12 +585,6 @@ class FusedDetector(Detector):
         """``(M,) bool``: collision (distance <= 0, or <= the stopping distance) per row, early exit."""
         _, status, _ = self._many(Q, kn.MODE_YESNO)
         return status == kn.ST_COLLISION
-
-    def _pair_names(self, p: int) -> tuple[str, str]:
-        return self._b.pair_names(p)
-
-    def _pair_result(self, p: int, d: float, p_WA: np.ndarray, p_WB: np.ndarray) -> PairResult:
-        return self._b.pair_result(p, d, p_WA, p_WB)
 
     def __repr__(self) -> str:
         return (f"Detector({self.scene.name!r}, threshold={self._threshold}, stopping_distance={self._stopping}, "

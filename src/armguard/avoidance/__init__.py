@@ -147,14 +147,6 @@ def _all_finite(*arrays) -> bool:
     return True
 
 
-@dataclass(frozen=True)
-class _NoPairs:
-    """No pair within influence: what :func:`avoid` reads of a result (``distance``, ``jacobian``)."""
-
-    distance: np.ndarray
-    jacobian: np.ndarray
-
-
 def _check_command(v_cmd, nv: int) -> np.ndarray:
     try:
         v = np.asarray(v_cmd, dtype=np.float64)

@@ -52,7 +52,6 @@ from ._face_graph import face_scratch, face_span, face_span_graph, vertex_graph 
 
 __all__ = ["WitnessJacobian", "cores_meet", "finite_difference_rows"]
 
-_PLANE = -1  # a workspace wall: the face is the whole plane
 
 
 def _shape_vertices(geom) -> tuple:

@@ -15,7 +15,8 @@ cell, but none between the arm's own links, some of which are never far apart (U
 
 Row ``m`` collides when some pair ``k`` has ``distance[m, k] <= margin[k]``.
 
-Every bundled backend answers it through :func:`collides_per_pair`, exactly, from its own
+Every bundled backend that answers distances (analytic, coal, fcl; clip and forbidden answer
+verdicts only) answers it through :func:`collides_per_pair`, exactly, from its own
 one-margin ``collides`` and its pair distances: rows colliding at the least margin collide, rows
 clear at the largest are clear, and only the rows between get the distances of the pairs whose
 margin is above the least.  A backend that answers verdicts only (no distances) takes one margin.

@@ -57,7 +57,9 @@ def parse_q(sc, q_text: str, deg: bool):
             unit = "deg" if (deg and revolute) else ("rad" if revolute else "m")
             lo, hi = float(robot.lower[j]), float(robot.upper[j])
             x = q[k] * scale
-            slack = 1e-9
+            from .._tolerance import DEFAULT_TOLERANCES
+
+            slack = DEFAULT_TOLERANCES.joint_limit
             if not (lo - slack <= x <= hi + slack):
                 hint = " (degrees? add --deg)" if unit == "rad" and abs(x) > 2.0 * math.pi else ""
                 raise click.BadParameter(

@@ -1,10 +1,12 @@
 """A forbidden-values map read from its file: lookups, the 3 × 3 neighbourhood, facts about it.
 
-``ForbiddenMap.load(path)`` reads the header and the directory, memory-maps the data and checks
-every section once (CRC-32s, the substructures' pointers and bins; a damaged file raises
-:class:`ForbiddenMapFileError` naming the section); :meth:`ForbiddenMap.neighbourhood` copies only
-the 3 × 3 block of substructures around a configuration out of the memory map, as Hermes's loading strategy keeps 9 substructures
-in memory; :meth:`ForbiddenMap.prepare` (named, idempotent; run by the first whole-map lookup)
+``ForbiddenMap.load(path)`` reads the header and the directory, reads the data section once and
+keeps those bytes (a file mapped instead could be overwritten or shrunk under the lookups after
+its checks), and checks every section once (CRC-32s, the substructures' pointers and bins; a
+damaged file raises :class:`ForbiddenMapFileError` naming the section);
+:meth:`ForbiddenMap.neighbourhood` copies the 3 × 3 block of substructures around a configuration
+out of those bytes (Hermes's loading strategy kept only these 9 substructures in memory; here the
+whole map's bytes are held: a few kB to MB, see ``docs/cspace.md``); :meth:`ForbiddenMap.prepare` (named, idempotent; run by the first whole-map lookup)
 gathers every substructure into two flat arrays for :meth:`allowed_many`.
 """
 

@@ -6,7 +6,8 @@ polytopes) the facets of the Minkowski difference ``P - Q`` have normals among t
 of P, the face normals of Q and the cross products of an edge direction of P with one of Q
 (a flat polygon's face normal counts with both signs; a segment has one edge and no face).  So
 the shortest translation separating P and Q is the smallest projection overlap over those
-axes -- the exhaustive SAT the task statement asks for; with the radii of the sphere-swept
+axes -- the exhaustive separating-axis test (Gottschalk, Lin & Manocha, "OBBTree", SIGGRAPH 1996,
+§4, generalised from boxes' 15 axes to every face normal and edge pair); with the radii of the sphere-swept
 shapes it becomes ``depth = core_depth + ra + rb``.  Witness points: B is moved out along the
 axis by ``core_depth + offset``, GJK then finds the closest points of the (now separated by
 exactly ``offset`` along the axis) cores, and B's witness is moved back.

@@ -35,11 +35,6 @@ class Proximity:
         self._d = float(distance)
         self._buf = buf
 
-    @classmethod
-    def _from_buffer(cls, distance: float, buf: np.ndarray) -> "Proximity":
-        """Wrap a kernel's ``(9,)`` output ``[p_WA, p_WB, nhat_AB_W]`` without copying."""
-        return proximity_from_buffer(float(distance), buf)
-
     def _view(self, lo: int, hi: int) -> np.ndarray:
         buf = self._buf
         if buf.flags.writeable:

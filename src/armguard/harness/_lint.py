@@ -18,7 +18,8 @@ Checks (each a :class:`Check`), on the files as written, then on the loaded mode
   URDF no longer matches -- a shape of either link or a joint between them edited -- is searched
   again (:func:`armguard.srdfgen.check_srdf`): an error with the configuration where it now
   collides, else a warning (still proven: refresh the SRDF with ``armguard srdf --update``; or
-  undecided);
+  undecided); and a pair the SRDF records as checked that the URDF now joins through links
+  without geometry (MoveIt's Adjacent rule drops it from the checks: a warning);
 * ``permanent-collision``: an active pair in collision (coal, ``d <= 0``) at more than
   ``permanent_fraction`` of ``n_configs`` seeded random configurations (an error; a
   ``<disable_collisions reason="Always">`` line is suggested, MoveIt's name for a pair its Setup
@@ -27,7 +28,8 @@ Checks (each a :class:`Check`), on the files as written, then on the loaded mode
   with its share of the random configurations: the home pose or the shapes may be wrong);
 * ``unread-element``: an element of a link, collision, visual or joint that nothing reads but that
   looks like one that is (``<orgin>``), or a repeated ``<origin>``, ``<limit>``, ``<axis>`` of which
-  only the first is read (a warning);
+  only the first is read (a warning; an error where it changes what is checked: a link's
+  ``<colision>``, a collision's ``<orgin>`` or ``<geomtry>``);
 * ``frozen-joint``: a revolute or prismatic joint whose ``<limit>`` lacks ``lower`` or ``upper``
   (urdfdom and Pinocchio read 0: a joint that cannot move, or only to one side; a warning, also
   given when the URDF loads);
@@ -51,6 +53,7 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import ArmguardError
+from .._tolerance import DEFAULT_TOLERANCES
 
 __all__ = ["Check", "Severity", "LintStatus", "Finding", "LintReport", "check_model_files", "mesh_convexity"]
 
@@ -240,7 +243,7 @@ def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: d
                     if el.tag != "cylinder":
                         report.findings.append(Finding(Check.ZERO_LENGTH_CAPSULE, Severity.ERROR, w,
                                                        f"<capsule> mark on a <{el.tag}>: only a cylinder becomes a capsule"))
-                    elif float(el.get("length", "0")) <= 1e-12:
+                    elif float(el.get("length", "0")) <= DEFAULT_TOLERANCES.length:
                         report.findings.append(Finding(
                             Check.ZERO_LENGTH_CAPSULE, Severity.WARNING, w,
                             f"zero-length capsule (radius {el.get('radius')}, length {el.get('length')})",
@@ -282,7 +285,7 @@ def _mimic_ranges(root, f: str, report: LintReport) -> None:
         except ValueError:
             continue  # the loader refuses it, located
         lo, hi = sorted((off + mult * lead[0], off + mult * lead[1]))
-        if lo < own[0] - 1e-9 or hi > own[1] + 1e-9:
+        if lo < own[0] - DEFAULT_TOLERANCES.joint_limit or hi > own[1] + DEFAULT_TOLERANCES.joint_limit:
             report.findings.append(Finding(
                 Check.MIMIC_RANGE, Severity.WARNING, f"{f}: joint[{name}].mimic",
                 f"follows {m.get('joint')!r} as {off:g} + {mult:g} x its value: over its limits [{lead[0]:g}, {lead[1]:g}] "

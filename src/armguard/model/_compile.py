@@ -50,14 +50,13 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from ..geometry import Box, Capsule, ConvexPolyhedron, CoreKind, Cylinder, Polygon, Prism, Sphere
+from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
 from ._scene import PairCategory, Scene
 
 __all__ = ["CompiledScene", "compile_scene", "compile_owners", "scene_robots", "PAIR_CATEGORIES", "OWNER_BODY", "OWNER_LINK", "OWNER_PAYLOAD"]
 
 OWNER_BODY, OWNER_LINK, OWNER_PAYLOAD = 0, 1, 2
 PAIR_CATEGORIES: tuple[PairCategory, ...] = tuple(PairCategory)
-_KIND_CODE = {"body": OWNER_BODY, "link": OWNER_LINK, "payload": OWNER_PAYLOAD}
 
 
 @dataclass(frozen=True, eq=False)

@@ -15,9 +15,12 @@ import math
 import numpy as np
 
 from .._errors import ArmguardError, SceneFileError
+from .._tolerance import DEFAULT_TOLERANCES
 from ._shapes import shape_from_coal, shape_of_polytope
 
 __all__ = ["scene_parts_from_pin", "ScenePart"]
+
+_SLACK = DEFAULT_TOLERANCES.joint_limit  # a home value this close outside its limits is read as on them
 
 _REVOLUTE = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0), "JointModelRZ": (0.0, 0.0, 1.0)}
 _CIRCULAR = {"JointModelRUBX": (1.0, 0.0, 0.0), "JointModelRUBY": (0.0, 1.0, 0.0), "JointModelRUBZ": (0.0, 0.0, 1.0)}
@@ -357,13 +360,13 @@ def _home(srdf, st, robot, prefix: str, movable: set, f: str, fixed: frozenset, 
         v, where = st.values[key], st.joint_where[key]
         if isinstance(v, tuple):
             raise srdf.error(where, f"expected one value for joint {key!r}, got {len(v)}")
-        if not (lo - 1e-9 <= v <= hi + 1e-9) and jt is JointType.REVOLUTE:
-            turned = v + 2.0 * math.pi * math.ceil((lo - 1e-9 - v) / (2.0 * math.pi))  # the first turn >= lo
-            if lo - 1e-9 <= turned <= hi + 1e-9:
+        if not (lo - _SLACK <= v <= hi + _SLACK) and jt is JointType.REVOLUTE:
+            turned = v + 2.0 * math.pi * math.ceil((lo - _SLACK - v) / (2.0 * math.pi))  # the first turn >= lo
+            if lo - _SLACK <= turned <= hi + _SLACK:
                 srdf.warn(f"{where}: value {v:.10g} is outside the limits [{lo:.10g}, {hi:.10g}] of joint {key!r}; "
                           f"read as {turned:.6g} (the same angle {_turns(turned - v)} away)")
                 v = turned
-        if not (lo - 1e-9 <= v <= hi + 1e-9):
+        if not (lo - _SLACK <= v <= hi + _SLACK):
             raise srdf.error(where, f"value {v:.10g} is outside the limits [{lo:.10g}, {hi:.10g}] of joint {key!r} in the URDF {f}")
         out.append(min(max(v, lo), hi))
     return np.asarray(out, dtype=np.float64)

@@ -10,7 +10,7 @@ from .._values import refuse_complex_or_bool
 
 __all__ = ["check_pin_limits", "within_pin_limits", "pin_limit_table", "check_limits", "UNIT_CIRCLE"]
 
-UNIT_CIRCLE = 1e-6
+UNIT_CIRCLE = 1e-6  # compiled into the analytic backend's _pair_rows._scene_row: after an edit, `make clean-cache`
 """A continuous joint's ``(cos, sin)`` in ``q`` is refused when ``|cos² + sin² − 1|`` exceeds this: off the
 unit circle Pinocchio's placement is not a rotation (coal then checks a scaled, sheared link; the
 analytic backend reads the angle, so the two gave different verdicts), and 1e-6 scales a link 1 m

@@ -53,6 +53,9 @@ def _rotations(R_WS, where: str) -> np.ndarray:
         raise UncertaintyError(f"{where}: expected (n, 3, 3) finite rotations, got shape {R.shape}")
     if np.abs(R @ np.swapaxes(R, 1, 2) - np.eye(3)).max() > 1e-6:
         raise UncertaintyError(f"{where}: not rotation matrices (R R^T != E)")
+    flipped = np.flatnonzero(np.linalg.det(R) < 0.0)
+    if flipped.size:  # orthonormal but a reflection: no wrist turns the object so
+        raise UncertaintyError(f"{where}[{int(flipped[0])}]: a reflection (det -1), not a rotation")
     return R
 
 

@@ -1,6 +1,6 @@
 """What a held object rested on, checked during the motion that lifts it off.
 
-At a grasp the bodies the object rests on (within :data:`~._workcell.CONTACT_TOLERANCE`) are its
+At a grasp the bodies the object rests on (within :data:`CONTACT_TOLERANCE`) are its
 supports: the next motion starts in contact with them, so their pairs with it cannot be checked as
 they stand.  Left unchecked, a depart that lowers the object pushed it through the table without a
 word.  So the next motion is also verified, certified, on a copy of the cell that holds only those
@@ -18,9 +18,14 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["SINK", "support_scene", "eroded"]
+__all__ = ["CONTACT_TOLERANCE", "SINK", "support_scene", "eroded"]
 
-SINK = 2e-3
+CONTACT_TOLERANCE = 1e-3
+"""m: at a grasp, the bodies the object is closer to than this are its supports (it rests on them).
+During the next motion their pairs with the held object are checked on their own, with the object
+eroded (:data:`SINK` more than it sat in them): lifting it off passes, pushing it in is refused."""
+
+SINK = 2.0 * CONTACT_TOLERANCE
 """m: how far a held object may sink into what it rested on during the motion that lifts it off (twice
 the contact tolerance of a support: an object resting up to 1 mm into its support still lifts off)."""
 

@@ -21,14 +21,9 @@ import numpy as np
 
 from .._errors import ArmguardError, SceneError
 from ._cell import Cell, _inv, move_body
-from ._supports import SINK, support_scene
+from ._supports import CONTACT_TOLERANCE, SINK, support_scene
 
 __all__ = ["Workcell", "ProgramStopped", "MotionRecord", "FindRecord", "ProgramRun", "pose", "CONTACT_TOLERANCE"]
-
-CONTACT_TOLERANCE = 1e-3
-"""m: at a grasp, the bodies the object is closer to than this are its supports (it rests on them):
-their pairs with the held object are not checked during the next motion (the depart lifts it off)."""
-
 
 _UNCALIBRATED = ("FIND used the camera at a pose without covariance (nominal, or a calibration that gives none): the "
                  "motions' confidence covers FIND's noise, not an error in the camera's placement; `armguard program "

@@ -13,14 +13,13 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
-import numpy as np
 import pinocchio as pin
 
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from .._values import number, whole_number
-from ._matrix import PairEvaluator, _progress
+from ._matrix import PairEvaluator, _progress, prove_one
 from ._pairs import pair_setup
-from ._prove import PairVerdict, prove_pair
+from ._prove import PairVerdict
 
 __all__ = ["SrdfLint", "check_srdf"]
 
@@ -108,11 +107,11 @@ def check_srdf(model, srdf, *, margin: float = 0.0, backend: str | None = "analy
             and (only is None or frozenset((setup.pairs[k].link1, setup.pairs[k].link2)) in only)]
     advance, close = _progress(progress, len(todo), model.name, f"linting {_file_name(srdf)}")
 
-    def one(k: int):
-        p = setup.pairs[k]
-        r = prove_pair(lambda Q: ev(k, Q), setup.home, p.joints, setup.lower, setup.upper, p.weight, margin=margin,
-                       contact=tol.verify_contact, min_width=min_width, max_evaluations=max_evaluations,
-                       rng=np.random.default_rng(seed + k))
+    limits = dict(margin=margin, contact=tol.verify_contact, min_width=min_width, max_evaluations=max_evaluations,
+                  seed=seed)
+
+    def one(k: int):  # the search armguard srdf makes (the same limits and seeds: the same verdicts)
+        r = prove_one(setup, ev, k, limits)
         advance()
         return r
 

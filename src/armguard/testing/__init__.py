@@ -33,6 +33,13 @@ Model with no file behind it) and on the neutral pose plus seeded random in-limi
 * where the Checker has them: ``pair_distances(q, pairs=idx)`` equals rows of the full answer,
   ``pair_distances_many(Q)`` equals row by row; ``nearest`` and ``min_distance_many`` agree;
   ``pair_distances(q, jacobian=True)`` agrees with central differences of the distances;
+* margins: ``collides(Q, margin=...)`` with margins per pair or by category equals the brute force
+  from the distances (``margins_per_pair``); ``collides(Q, pairs=rows)`` decides on those pairs only
+  (``collides_pairs``); the default margin is 0;
+* the Model's pairs of one category at a time against coal (``coal_verdicts_by_category``: a
+  ``collides`` that skipped a category, e.g. the workspace walls, passes on the whole Model);
+* the Checker answers for the Model as made, not its scene edited afterwards (``model_as_made``),
+  and the arrays it returns stay the caller's (``results_kept``);
 * thread safety: 4 threads on one Checker give the single-threaded answers.
 
 A Checker may declare checks it is known to fail, with the reason, in a ``conformance_xfail``

@@ -429,6 +429,8 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints,
             q_hit[i] = run.Q[row]
             d_hit[i] = run.D[row, p]
             pair[i] = (model.owner_a[p], model.owner_b[p])
+    if type(m) is float and (isinstance(margin, Mapping) or np.ndim(margin)):  # margins given per category or pair,
+        m = np.full(len(model.pair_category), m)  # equal after all: still reported as given (each category's)
     given = m if type(m) is float else _margins_given(m, model, margin)
     return EdgeResults(code, s_free, s_hit, q_hit, d_hit, pair, evals, rob.name, names, held, given,
                        _time.perf_counter() - t_start)
