@@ -44,7 +44,6 @@ Checks (each a :class:`Check`), on the files as written, then on the loaded mode
 
 from __future__ import annotations
 
-import difflib
 import enum
 import xml.etree.ElementTree as ET
 from dataclasses import asdict, dataclass, field
@@ -409,6 +408,7 @@ def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport, partia
     under the robot's name (``partial``: the loader skips them) warnings."""
     from xml.parsers import expat
 
+    from ..model._srdf import renamed_to
     from ..model._urdf_check import parse_with_lines
 
     f = srdf.name
@@ -423,14 +423,13 @@ def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport, partia
 
     def need(name, kind, where, pool, from_pair=False):
         if name not in pool:  # a rename's new name: one the SRDF never names (of a pair: a link with shapes)
-            cands = [str(x) for x in pool if x and x not in named and (not from_pair or shaped is None or x in shaped)]
-            near = difflib.get_close_matches(str(name), cands, n=1, cutoff=0.6)
+            near = renamed_to(name, [x for x in pool if not from_pair or shaped is None or x in shaped], named)
             line = lines.get(id(where_el.get("el")))
             at = f" (line {line})" if line else ""
             report.findings.append(Finding(Check.SRDF_NAME, Severity.WARNING if partial else Severity.ERROR, f"{f}: {where}{at}",
                                            f"{kind} {name!r} matches nothing in the URDF"
                                            + (" (an SRDF of a larger robot: skipped when it loads)" if partial else ""),
-                                           f"a {kind} renamed {near[0]!r}? then update the SRDF" if near else None))
+                                           f"a {kind} renamed {near!r}? then update the SRDF" if near else None))
     for ee in root.findall("end_effector"):
         where_el["el"] = ee
         for attr in ("parent_link", "group", "parent_group"):

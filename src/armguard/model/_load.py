@@ -15,7 +15,6 @@
 from __future__ import annotations
 
 import contextlib
-import difflib
 import os
 import tempfile
 import threading
@@ -25,7 +24,7 @@ import numpy as np
 
 from .._errors import ArmguardError, SceneError, SceneFileError
 from ._model import Model
-from ._srdf import NO_SRDF, read_srdf
+from ._srdf import NO_SRDF, read_srdf, renamed_to
 
 __all__ = ["load_model", "models_dir", "builtin_model_names", "model_from_scenefile", "model_from_scene", "model_of"]
 
@@ -181,11 +180,9 @@ def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None, srdf_so
             oa, ob = parts.link_owner.get(a), parts.link_owner.get(b)
             if oa is None or ob is None:
                 missing = a if oa is None else b
-                named = {x for a2, b2, _ in srdf_obj.disabled for x in (a2, b2)}  # a rename: a link with shapes the SRDF never names
                 shaped = {pin_model.frames[int(go.parentFrame)].name for go in geom.geometryObjects}
-                near = difflib.get_close_matches(missing, [ln for ln in parts.link_owner if ln not in named and ln in shaped],
-                                                 n=1, cutoff=0.6)
-                hint = f": a link renamed {near[0]!r}? then update the SRDF" if near else ""
+                near = renamed_to(missing, [ln for ln in parts.link_owner if ln in shaped], srdf_obj.names())
+                hint = f": a link renamed {near!r}? then update the SRDF" if near else ""
                 if srdf_obj.partial:  # an SRDF of a larger robot: its pairs of links this URDF lacks do not apply
                     skipped.append(f"disable_collisions[{k}] ({missing}{hint})")
                     continue

@@ -26,7 +26,7 @@ NO_SRDF = "none"
 """An SRDF path of a model sidecar (``model.srdf``) or a scene file's URDF robot (``robots[i].srdf``) that
 means no SRDF at all, not even one found beside the URDF: the URDF alone."""
 
-__all__ = ["Srdf", "SrdfGroup", "read_srdf", "read_srdf_disabled", "HOME_STATES"]
+__all__ = ["Srdf", "SrdfGroup", "read_srdf", "read_srdf_disabled", "HOME_STATES", "renamed_to"]
 
 HOME_STATES = ("home", "default", "ready")
 """Names of the SRDF group state taken as an arm's home, in order of preference (else the first state)."""
@@ -102,6 +102,15 @@ class Srdf:
         st = self.home_state(group)
         return None if st is None else st.values
 
+    def names(self) -> set:
+        """Every link, joint and group name the SRDF's elements give (pairs, groups, states)."""
+        out = {x for a, b, _ in self.disabled for x in (a, b)} | set(self.groups) | set(self.virtual_joints)
+        for g in self.groups.values():
+            out |= {x for c in g.chains for x in c} | set(g.links) | set(g.joints) | set(g.subgroups)
+        for st in self.states:
+            out |= set(st.values) | ({st.group} if st.group else set())
+        return out
+
     def error(self, where: str, message: str) -> SceneFileError:
         return SceneFileError(self.file, where, message)
 
@@ -111,6 +120,16 @@ class Srdf:
             return
         self.warnings = (*self.warnings, message)
         warnings.warn(f"{self.file}: {message}", ArmguardWarning, stacklevel=3)
+
+
+def renamed_to(missing: str, pool, named) -> str | None:
+    """The name ``missing`` (an SRDF name the URDF lacks) was likely renamed to: the closest of ``pool``
+    (the URDF's names of that kind; for a pair's link, its links with shapes) that the SRDF never names
+    (``named``), or None.  ``load_model``'s error and ``check-urdf``'s srdf-name finding both ask this."""
+    import difflib
+
+    near = difflib.get_close_matches(str(missing), [str(x) for x in pool if x and x not in named], n=1, cutoff=0.6)
+    return near[0] if near else None
 
 
 def _attr(el, key: str, srdf_file: str, where: str) -> str:
