@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+import threading
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -33,6 +34,7 @@ class _Probe:
 
 
 _UNHELD = _unheld_count()
+_DETACH = threading.Lock()  # one copy out of the scratch at a time: the checking thread's, or a reader's
 
 
 class _Raw:
@@ -58,12 +60,19 @@ class _Raw:
         self.reach = reach  # the larger of the threshold and stopping distance the check used (lazy mode)
 
     def detach(self) -> None:
-        """Copy this check's rows out of the scratch buffers (idempotent)."""
-        if self._f is None:
-            n, o = self.n_evaluated, self._of
-            self._f = self._SF[o:o + EV_W * n].reshape(n, EV_W).copy()
-            self._i = self._SI[self._oi:self._oi + SUM_SIZE + n].copy()
-            self._SF = self._SI = None
+        """Copy this check's rows out of the scratch buffers (idempotent, and safe when the report is read
+        on another thread: a UI thread reading the control loop's latest report copies under the same
+        lock as the checking thread does before its next check overwrites the scratch, so neither sees
+        the buffers gone nor a copy half overwritten)."""
+        if self._f is not None:
+            return
+        with _DETACH:
+            if self._f is None:
+                n, o = self.n_evaluated, self._of
+                f = self._SF[o:o + EV_W * n].reshape(n, EV_W).copy()
+                self._i = self._SI[self._oi:self._oi + SUM_SIZE + n].copy()
+                self._f = f  # last: a reader that sees _f set finds _i set too
+                self._SF = self._SI = None
 
     @property
     def f(self) -> np.ndarray:
