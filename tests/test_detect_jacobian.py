@@ -93,3 +93,23 @@ def test_default_check_has_no_jacobian(ranger):
         with_j = det.check(q, jacobian=True)
         assert with_j.jacobian is not None and "jacobian" in with_j.to_dict()
         assert with_j.status == rep.status and with_j.nearest.distance == rep.nearest.distance
+
+
+@pytest.mark.parametrize("backend", ["analytic", "coal"])
+def test_warm_up_runs_every_mode_and_changes_no_answer(backend):
+    """``Detector.warm_up(q)`` before a control loop: afterwards each mode answers as on a Detector never warmed
+    (budgeted checks included: its anytime memory is of true distances)."""
+    model = armguard.load_model("ranger")
+    Q = model.scene_q(model.random_q(6, 21))
+    warmed = armguard.Detector(model, threshold=0.1, backend=backend)
+    warmed.warm_up(Q[0])
+    fresh = armguard.Detector(model, threshold=0.1, backend=backend)
+    for q in Q[1:]:
+        a, b = warmed.check(q, jacobian=True), fresh.check(q, jacobian=True)
+        assert a.status == b.status and a.by_category.keys() == b.by_category.keys()
+        for c in a.by_category:
+            assert a.by_category[c].distance == b.by_category[c].distance
+            np.testing.assert_array_equal(a.jacobian[c].jacobian, b.jacobian[c].jacobian)
+        assert warmed.check(q, lazy=True).status == fresh.check(q, lazy=True).status
+        big = warmed.check(q, budget_us=1e9)  # time enough for every pair: the exact status
+        assert big.status == b.status

@@ -54,7 +54,7 @@ class Detector:
         composed outside the kernel, no cost without it).  ``detector.terrain`` is its guard.
 
     The API every subclass provides: ``check(q, budget_us=, lazy=, jacobian=)``,
-    ``check_many(Q)``, ``collides_many(Q)``, ``pair_distances(q, robot=)``, ``prepare()``,
+    ``check_many(Q)``, ``collides_many(Q)``, ``pair_distances(q, robot=)``, ``prepare()``, ``warm_up(q)``,
     ``obstacle_list(link)``, ``set_threshold`` / ``set_stopping_distance`` / ``set_active``,
     ``threshold``, ``stopping_distance``, ``active``, ``n_pairs``, ``link_names``.
 
@@ -65,6 +65,19 @@ class Detector:
     """
 
     terrain = None  # the attached armguard.terrain.TerrainGuard, if any
+
+    def warm_up(self, q, *, jacobian: bool = True) -> None:
+        """Run each mode of :meth:`check` once at ``q`` (the scene's joint order) on the calling thread,
+        before a control loop's first cycle: the first call of a path compiles or loads its kernels and
+        allocates the thread's scratch (tens of milliseconds with numba's cache warm, seconds without).
+        The plain, lazy and budgeted checks, and with ``jacobian`` the Jacobian of the nearest pairs.
+        Answers later are those of a Detector never warmed (the anytime memory it leaves is a
+        configuration's true distances, from which later bounds subtract the motion since)."""
+        self.check(q)
+        self.check(q, lazy=True)
+        self.check(q, budget_us=0.0)
+        if jacobian:
+            self.check(q, jacobian=True)
 
     def __new__(cls, scene=None, *args, backend: str | None = None, backend_options=None, **kwargs):
         if cls is not Detector:  # a concrete Detector, built directly
