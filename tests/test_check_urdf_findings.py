@@ -78,7 +78,7 @@ def test_a_misspelt_or_repeated_element_is_reported():
         p.write_text(text)
         r = CliRunner().invoke(main, ["-q", "check-urdf", str(p), "--json"])
     found = {(f["where"].split(": ", 1)[1], f["message"]) for f in json.loads(r.output)["findings"] if f["check"] == "unread-element"}
-    assert found == {("link[l1].collision[0].orgin", "<orgin> is read by nothing: did you mean <origin>? (it changes what "
+    assert found == {("link[l1].collision[0].orgin (line 3)", "<orgin> is read by nothing: did you mean <origin>? (it changes what "
                                                      "is checked)"),
                      ("joint[j1].limit", "2 <limit> elements: only the first is read")}, found
 

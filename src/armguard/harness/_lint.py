@@ -45,7 +45,6 @@ Checks (each a :class:`Check`), on the files as written, then on the loaded mode
 from __future__ import annotations
 
 import enum
-import xml.etree.ElementTree as ET
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -186,16 +185,20 @@ def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: d
                 partial: bool = False) -> None:
     from ..model._urdf import resolve_mesh
 
+    from xml.parsers import expat
+
+    from ..model._urdf_check import parse_with_lines
+
     f = urdf.name
     try:
-        root = ET.parse(urdf).getroot()
-    except (ET.ParseError, OSError) as exc:
+        root, lines = parse_with_lines(urdf.read_bytes())
+    except (expat.ExpatError, OSError) as exc:
         _unparsed(report, f, "URDF", exc)
         return
     links, joints = {ln.get("name") for ln in root.findall("link")}, {j.get("name") for j in root.findall("joint")}
     from ..model._urdf import frozen_joint_text
 
-    _unread_elements(root, f, report)
+    _unread_elements(root, lines, f, report)
     _angle_units(root, f, report)
     _mimic_ranges(root, f, report)
     for j in root.findall("joint"):  # a <limit> without lower/upper: urdfdom reads 0, and the joint cannot move
@@ -258,11 +261,6 @@ def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: d
         _srdf_checks(srdf, links, joints, report, partial, shaped)
 
 
-_READ = {"link": ("visual", "collision", "inertial", "collision_checking"),
-         "collision": ("origin", "geometry"), "visual": ("origin", "geometry", "material"),
-         "joint": ("origin", "parent", "child", "axis", "limit", "mimic", "dynamics", "calibration", "safety_controller")}
-
-
 def _mimic_ranges(root, f: str, report: LintReport) -> None:
     """``mimic-range`` (module docstring): each mimic joint's range over its leader's limits against its own."""
     joints = {j.get("name"): j for j in root.findall("joint")}
@@ -293,13 +291,16 @@ def _mimic_ranges(root, f: str, report: LintReport) -> None:
                 "narrow the leader's limits, or correct the multiplier and offset"))
 
 
-def _unread_elements(root, f: str, report: LintReport) -> None:
+def _unread_elements(root, lines: dict, f: str, report: LintReport) -> None:
     """Elements of a link, collision or joint that no reader reads although they look like one that is
     (``<orgin>``: the shape then sits at the link's origin), and a repeated one of which only the first
     is read (``<origin>``, ``<limit>``, ``<axis>``): warnings, and errors where they change what is
     checked (a link's ``<colision>``: no geometry from it; a collision's ``<orgin>``).  An unknown element unlike any (a
-    simulator's ``<contact>``) is left alone."""
+    simulator's ``<contact>``) is left alone.  The tables are the loader's
+    (:data:`armguard.model._urdf_check.READ`, :data:`~armguard.model._urdf_check.CHANGES_CHECKS`)."""
     import difflib
+
+    from ..model._urdf_check import CHANGES_CHECKS, READ
 
     def scan(el, kind: str, where: str) -> None:
         seen: dict = {}
@@ -307,13 +308,13 @@ def _unread_elements(root, f: str, report: LintReport) -> None:
             if not isinstance(c.tag, str):
                 continue
             seen[c.tag] = seen.get(c.tag, 0) + 1
-            if c.tag not in _READ[kind]:
-                near = difflib.get_close_matches(c.tag, _READ[kind], n=1, cutoff=0.75)
-                checked = (kind, near[0] if near else None) in (("link", "collision"), ("collision", "origin"),
-                                                                 ("collision", "geometry"))
+            if c.tag not in READ[kind]:
+                near = difflib.get_close_matches(c.tag, READ[kind], n=1, cutoff=0.75)
+                checked = (kind, near[0] if near else None) in CHANGES_CHECKS
                 if near:  # an error where it changes what is checked (load_model warns of those too)
+                    line = lines.get(id(c))
                     report.findings.append(Finding(Check.UNREAD_ELEMENT, Severity.ERROR if checked else Severity.WARNING,
-                                                   f"{f}: {where}.{c.tag}",
+                                                   f"{f}: {where}.{c.tag}" + (f" (line {line})" if line else ""),
                                                    f"<{c.tag}> is read by nothing: did you mean <{near[0]}>?"
                                                    + (" (it changes what is checked)" if checked else "")))
         for tag, n in seen.items():
