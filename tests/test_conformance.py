@@ -565,3 +565,26 @@ def test_model_as_made_runs_on_a_model_with_a_workspace_box(backend):
     m = armguard.load_model("puma560").with_workspace([-1.0, -1.0, -0.6], [1.0, 1.0, 1.2])
     report = check_backend(backend, models=[m], n_configs=N_CONFIGS, only=["model_as_made"])
     assert report.passed and not report.not_applicable and not report.xfailed, str(report)
+
+
+class _NeedsAbsentDependency:
+    """A backend whose dependency is not installed: its build raises ModuleNotFoundError."""
+
+    name = "needs_dep"
+
+    def __init__(self, missing: str) -> None:
+        self.missing = missing
+
+    def build(self, model, options=None):
+        raise ModuleNotFoundError(f"No module named {self.missing!r}", name=self.missing)
+
+
+def test_a_backend_whose_dependency_is_absent_is_not_applicable_not_broken():
+    """From a wheel without python-fcl, ``--backend fcl`` reported 179 failures ("raised ModuleNotFoundError,
+    expected BackendError"): every check now says the backend is not installed here, naming the module."""
+    report = check_backend(_NeedsAbsentDependency("somedep"), models=["puma560"], n_configs=0)
+    assert len(report.passed) <= 1 and len(report.not_applicable) > 10, str(report)  # (the backend-wide name check)
+    assert all("No module named 'somedep'" in why or "workspace" in why for why in report.not_applicable.values())
+    # a module of armguard itself missing is a broken install, and fails
+    with pytest.raises(ConformanceError, match="No module named 'armguard._gone'"):
+        check_backend(_NeedsAbsentDependency("armguard._gone"), models=["puma560"], n_configs=0)

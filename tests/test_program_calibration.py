@@ -355,7 +355,10 @@ def test_the_demonstration_places_better_calibrated(tmp_path):
     assert f"calibration={str(demo.calibration_file.resolve())!r}" in text and "wc.find('cylinder_b')" in text
     r = CliRunner().invoke(main, ["demo", "--list"])
     assert r.exit_code == 0 and "python examples/workmate_demo.py" in r.output
-    for line in r.output.splitlines()[1:]:
+    assert "from the root of the source checkout; a wheel installs none of them" in r.output
+    examples = [line for line in r.output.splitlines() if line.startswith("python ")]
+    assert len(examples) == 3
+    for line in examples:
         assert (ROOT / line.split(":")[0].split()[-1]).is_file(), line
 
 

@@ -106,6 +106,9 @@ def demo_cmd(out_dir, scenes, stopping_distances, list_only) -> None:
     """
     if list_only:
         click.echo("armguard demo: certified verification of every built-in scene's canned trajectories")
+        here = all((Path.cwd() / cmd.split()[1]).is_file() for cmd, _ in EXAMPLES)
+        click.echo("the examples (from the root of the source checkout; a wheel installs none of them)"
+                   + ("" if here else ": not found in this folder") + ":")
         for cmd, what in EXAMPLES:
             click.echo(f"{cmd}: {what}")
         return

@@ -324,7 +324,7 @@ def check_model_as_made(ctx, model):
     fresh = model_of(m.scene_for().copy())  # a Model of its own, whose scene can be edited
     lo, hi = np.asarray(fresh.scene.workspace.lo, float), np.asarray(fresh.scene.workspace.hi, float)
     fresh.scene.set_workspace(lo + 0.25 * (hi - lo), hi - 0.25 * (hi - lo))
-    edited = ctx.backend_impl().build(fresh, dict(ctx.options))
+    edited = ctx.build_on(fresh)
     Q = ctx.configs(model)
     v, w = np.asarray(c.collides(Q)), np.asarray(edited.collides(Q))
     expect(np.array_equal(v, w), lambda: f"configuration {np.flatnonzero(v != w)[0]}: collides says "

@@ -160,17 +160,39 @@ class Context:
         return self.backend_object if self.backend_object is not None else get_backend(self.backend)
 
     def build(self, label: str, options: Mapping | None = None):
-        """A fresh Checker of the backend for model ``label`` (``options`` default: the suite's)."""
-        return self.backend_impl().build(self.model(label), dict(self.options if options is None else options))
+        """A fresh Checker of the backend for model ``label`` (``options`` default: the suite's).  A backend
+        whose dependency is not installed here (``fcl`` without python-fcl) makes every check not
+        applicable, saying which module is missing: it is no failure of the backend's contract."""
+        return self.build_on(self.model(label), options)
+
+    def build_on(self, model, options: Mapping | None = None):
+        """A fresh Checker of the backend on the Model ``model`` (as :meth:`build`)."""
+        try:
+            return self.backend_impl().build(model, dict(self.options if options is None else options))
+        except ModuleNotFoundError as exc:
+            if exc.name and exc.name.split(".")[0] in ("armguard", *self._own_modules()):
+                raise  # the backend's own module missing: a broken package, not a missing dependency
+            raise NotApplicable(f"backend {self.backend!r} is not installed here: {exc} (install the dependency it "
+                                "needs, e.g. pip install armguard[fcl] for python-fcl)") from None
+
+    def _own_modules(self) -> tuple:
+        impl = self.backend_impl()
+        return (type(impl).__module__.split(".")[0],)
 
     def checker(self, label: str):
         """The backend's Checker for model ``label``, built once."""
         with _LOCK:
             if label in self._failed_build:
-                fail(f"building the Checker with options {self.options} failed: {self._failed_build[label]}")
+                why = self._failed_build[label]
+                if isinstance(why, NotApplicable):
+                    raise why
+                fail(f"building the Checker with options {self.options} failed: {why}")
             if label not in self._checkers:
                 try:
                     self._checkers[label] = self.build(label)
+                except NotApplicable as exc:  # not installed here: every check of it says so
+                    self._failed_build[label] = exc
+                    raise
                 except Exception as exc:  # noqa: BLE001 - reported as this check's failure
                     self._failed_build[label] = f"{type(exc).__name__}: {exc}"
                     raise
