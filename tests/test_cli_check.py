@@ -149,7 +149,9 @@ def test_the_collector_is_tuned_only_while_compiling_and_restored_after():
         frozen = gc.get_freeze_count()
         with _compiling_gc():
             assert gc.get_threshold() == GC_THRESHOLDS
-        assert gc.get_threshold() == before and gc.get_freeze_count() == frozen
+        # still frozen (unfrozen, the count is 0); not == frozen: a frozen object freed meanwhile leaves the
+        # permanent generation (a run under xdist saw 1533331 of 1533334)
+        assert gc.get_threshold() == before and gc.get_freeze_count() > frozen // 2
     finally:
         gc.unfreeze()
     # the side process runs its stages in the same block and reports each one
