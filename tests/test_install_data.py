@@ -174,3 +174,14 @@ def test_the_temp_cache_folder_is_never_one_another_user_could_write(monkeypatch
     folder = _numba_cache.ensure_numba_cache(tmp_path / "pkg")
     assert folder != usual and folder.is_dir() and not folder.is_symlink()
     assert stat.S_IMODE(folder.stat().st_mode) == 0o700 and os.environ["NUMBA_CACHE_DIR"] == str(folder)
+
+
+def test_the_checkout_is_a_data_root_only_when_armguard_runs_from_one(monkeypatch, tmp_path):
+    """From a wheel the folder above ``armguard`` is the venv's ``lib/pythonX.Y``: it was listed as a checkout,
+    so a file label read ``site-packages/trimesh/...``.  A root is a checkout when it holds pyproject.toml and
+    src/armguard."""
+    from armguard import _resources
+
+    assert _resources.in_checkout() and _resources.checkout_root() in _resources.data_roots()  # this checkout
+    monkeypatch.setattr(_resources, "checkout_root", lambda: tmp_path)  # as from a venv's lib/python3.11
+    assert not _resources.in_checkout() and tmp_path not in _resources.data_roots()

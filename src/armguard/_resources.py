@@ -14,15 +14,22 @@ import os
 from importlib.resources import files
 from pathlib import Path
 
-__all__ = ["DATA_FOLDERS", "data_dir", "data_roots", "checkout_root"]
+__all__ = ["DATA_FOLDERS", "data_dir", "data_roots", "checkout_root", "in_checkout"]
 
 DATA_FOLDERS = {"urdf": "ARMGUARD_MODELS", "reference": "ARMGUARD_REFERENCE"}
 """Each data folder, with the environment variable that overrides it."""
 
 
 def checkout_root() -> Path:
-    """The folder above ``src/`` (the checkout, when armguard runs from one)."""
+    """The folder above ``src/`` (the checkout, when armguard runs from one: :func:`in_checkout`)."""
     return Path(__file__).resolve().parents[2]
+
+
+def in_checkout() -> bool:
+    """Whether armguard runs from a source checkout (an editable install): :func:`checkout_root` holds
+    ``pyproject.toml`` and ``src/armguard``.  From a wheel it is ``<venv>/lib/pythonX.Y``."""
+    root = checkout_root()
+    return (root / "pyproject.toml").is_file() and (root / "src" / "armguard").is_dir()
 
 
 def _installed(name: str) -> Path | None:
@@ -49,5 +56,6 @@ def data_roots() -> list[Path]:
     installed = files("armguard") / "_data"
     if installed.is_dir():
         out.append(Path(str(installed)))
-    out.append(checkout_root())
+    if in_checkout():  # from a wheel the folder above is the venv's lib/pythonX.Y, no root of models
+        out.append(checkout_root())
     return out
