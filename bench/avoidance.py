@@ -100,7 +100,8 @@ def run(quick: bool = False) -> str:
         subs.append((v, r))
     t_qp = _median_us(lambda a: avoid(a[0], a[1], damper), subs, reps)
     tol, lim = m.tol, damper.limits(pm.nv)
-    t_fast = _median_us(lambda a: filter_velocity(a[0], a[1].distance, a[1].jacobian, lim, damper, tol), subs, reps)
+    t_fast = _median_us(lambda a: filter_velocity(a[0], a[1].distance, a[1].jacobian, -lim, lim, damper, tol), subs,
+                        reps)
     n_con = np.array([len(o.rows) for o in outs])
     status = {s: sum(o.status.value == s for o in outs) for s in ("free", "slowed", "stopped")}
     body = (f"Thread CPU time medians (`time.thread_time`; load average {load0} at the start, {_load()} at the "

@@ -14,7 +14,7 @@ from scipy.optimize import minimize
 
 import armguard
 from armguard import AvoidanceError
-from armguard.avoidance import Avoidance, AvoidanceStatus, Damper, avoid, avoid_step
+from armguard.avoidance import Avoidance, AvoidanceStatus, Damper, avoid, avoid_step, velocity_bounds
 from armguard.backends import PairDistances
 
 DAMPER = Damper(stand_off=0.02, influence=0.2, approach_speed=0.5, period=0.01, velocity_limit=1.0)
@@ -175,10 +175,11 @@ def test_canned_tests_with_avoidance_keep_stand_off_and_progress():
 
 
 @settings(max_examples=60, deadline=None)
-@given(st.integers(0, 10_000), st.integers(1, 8), st.integers(0, 12))
-def test_compiled_filter_equals_avoid(seed, nv, n):
+@given(st.integers(0, 10_000), st.integers(1, 8), st.integers(0, 12), st.booleans())
+def test_compiled_filter_equals_avoid(seed, nv, n, tightened):
     """The compiled step (:func:`armguard.avoidance._fast.filter_velocity`) gives :func:`avoid`'s
-    answer on the same rows: velocity, constrained rows, bounds, closing speeds, status, note."""
+    answer on the same rows: velocity, constrained rows, bounds, closing speeds, status, note; with
+    the damper's symmetric limits, or bounds tightened one side or the other (a joint near a limit)."""
     from armguard.avoidance._fast import filter_velocity
 
     rng = np.random.default_rng(seed)
@@ -186,9 +187,14 @@ def test_compiled_filter_equals_avoid(seed, nv, n):
     J = rng.normal(size=(n, nv))
     J[rng.random(n) < 0.2] = 0.0  # rows no joint moves are not constraints
     v_cmd = rng.normal(size=nv) * 2.0
-    ref = avoid(v_cmd, _distances(d, J, nv), DAMPER)
-    v, rows, rate, closing, status, note = filter_velocity(v_cmd, d, np.ascontiguousarray(J), DAMPER.limits(nv),
+    lo, hi = -DAMPER.limits(nv), DAMPER.limits(nv).copy()
+    if tightened:
+        lo = np.where(rng.random(nv) < 0.5, np.maximum(lo, -rng.uniform(0.0, 1.5, nv)), lo)
+        hi = np.where(rng.random(nv) < 0.5, np.minimum(hi, rng.uniform(0.0, 1.5, nv)), hi)
+    ref = avoid(v_cmd, _distances(d, J, nv), DAMPER, bounds=(lo, hi))
+    v, rows, rate, closing, status, note = filter_velocity(v_cmd, d, np.ascontiguousarray(J), lo, hi,
                                                            DAMPER, armguard.DEFAULT_TOLERANCES)
+    assert np.all(lo <= v) and np.all(v <= hi)
     np.testing.assert_array_equal(v, ref.velocity)
     np.testing.assert_array_equal(rows, ref.rows)
     np.testing.assert_array_equal(rate, ref.rate)
@@ -225,12 +231,13 @@ def test_avoid_step_equals_the_reference_path():
         r = c.pair_distances(q, pairs=rows)
         k = np.flatnonzero(r.distance < damper.influence)
         sub = r.take(k)
-        pin_ref = avoid(v, sub.with_jacobian(*c.witness_jacobian(q, sub, rows[k])), damper)
+        bounds = velocity_bounds(m.pin_model, q, damper)  # the damper's limits and the joint limits at q
+        pin_ref = avoid(v, sub.with_jacobian(*c.witness_jacobian(q, sub, rows[k])), damper, bounds=bounds)
         np.testing.assert_allclose(out.velocity, pin_ref.velocity, rtol=0, atol=1e-9)
         assert out.status == pin_ref.status
         # on the kernel's rows (the same numbers) the answer is the reference's to the bit; with
         # Pinocchio's (1e-16 apart) a command exactly on a damper's bound may be called binding or not
-        ref = avoid(v, sub.with_jacobian(*c.distance_jacobian(q, sub, rows[k])), damper)
+        ref = avoid(v, sub.with_jacobian(*c.distance_jacobian(q, sub, rows[k])), damper, bounds=bounds)
         np.testing.assert_array_equal(out.velocity, ref.velocity)
         np.testing.assert_array_equal(out.rows, rows[k][ref.rows])
         assert (out.status, out.solver) == (ref.status, ref.solver)
@@ -311,3 +318,34 @@ def test_a_pair_no_joint_moves_does_not_stop_the_arm():
     closing = r.jacobian[moved] @ s.velocity
     bound = -damper.rate() * np.maximum(r.distance[moved] - damper.stand_off, 0.0)
     assert np.all(closing >= bound - m.tol.avoid_feasibility)  # the others still held to their dampers
+
+
+def test_a_joint_commanded_past_its_limit_stops_at_it():
+    """Panda's first joint 2 mrad below its upper limit, commanded +1 rad/s: the filter answered FREE with
+    1 rad/s, and the next step's configuration was refused (JointLimitError, no velocity).  Now one period
+    at the answer reaches the limit and no further; the joint may move back in at full speed; and a joint
+    at its limit (or past it within the allowance) may stay."""
+    import pinocchio as pin
+
+    m = armguard.load_model("panda")
+    c = armguard.checker(m, "analytic")
+    damper = Damper(stand_off=0.02, influence=0.1, approach_speed=0.3, period=0.01, velocity_limit=2.0)
+    j = m.pin_model.joints[1]
+    upper = m.pin_model.upperPositionLimit[j.idx_q]
+    q = m.neutral()
+    q[j.idx_q] = upper - 0.002
+    v = np.zeros(m.pin_model.nv)
+    v[j.idx_v] = 1.0
+    out = avoid_step(c, q, v, damper)
+    assert out.status is AvoidanceStatus.SLOWED and out.velocity[j.idx_v] == pytest.approx(0.2, abs=1e-9)
+    q1 = pin.integrate(m.pin_model, q, out.velocity * damper.period)
+    assert q1[j.idx_q] <= upper + 1e-12
+    avoid_step(c, q1, v, damper)  # the next step answers (it raised JointLimitError)
+    v[j.idx_v] = -1.0
+    assert avoid_step(c, q, v, damper).velocity[j.idx_v] == -1.0  # back in: unchanged
+    q[j.idx_q] = upper
+    v[j.idx_v] = 1.0
+    at = avoid_step(c, q, v, damper)
+    assert at.velocity[j.idx_v] == 0.0 and at.status is AvoidanceStatus.STOPPED
+    lo, hi = velocity_bounds(m.pin_model, q, damper)
+    assert lo[j.idx_v] == -2.0 and hi[j.idx_v] == 0.0 and np.all(lo <= 0.0) and np.all(hi >= 0.0)

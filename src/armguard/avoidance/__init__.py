@@ -11,15 +11,19 @@ degrees of freedom", ICRA 1987) allows:
 with ``d_s`` the stand-off distance and ``xi`` (m/s) the approach speed allowed at ``d_i``; the
 filtered velocity ``v`` is the solution of the small QP
 
-    minimise 1/2 |v - v_cmd|^2   subject to (1) for every such pair,  -v_max <= v <= v_max.
+    minimise 1/2 |v - v_cmd|^2   subject to (1) for every such pair,  -v_max <= v <= v_max,
+
+and, at a configuration ``q`` (:func:`avoid_step`), each bounded joint may not pass its position limit
+within one control period: ``(lower - q) / period <= v <= (upper - q) / period`` (clamped to include 0).
 
 Two changes keep it safe in discrete time and always feasible:
 
 * the damper's rate ``xi / (d_i - d_s)`` is capped at ``1 / period``, so that one control period
   at the allowed rate cannot carry a pair past ``d_s`` (to first order);
 * a pair already inside the stand-off distance (``d < d_s``) may not close at all (``d' v >= 0``)
-  instead of being pushed out: ``v = 0`` satisfies every constraint, so the QP is never
-  infeasible and stopping is always an answer.
+  instead of being pushed out, and a joint at (or, within ``Tolerances.joint_limit``, past) a limit
+  may not move further out: ``v = 0`` satisfies every constraint, so the QP is never infeasible and
+  stopping is always an answer.
 
 The QP is solved by DAQP (Arnström, Bemporad & Axehill, "A dual active-set solver for embedded
 quadratic programming using recursive LDLᵀ updates", IEEE TAC 2022): an active-set method, so
@@ -41,7 +45,7 @@ import numpy as np
 from .._errors import AvoidanceError
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 
-__all__ = ["avoid", "avoid_step", "Damper", "Avoidance", "AvoidanceStatus", "robot_rows_and_columns"]
+__all__ = ["avoid", "avoid_step", "velocity_bounds", "Damper", "Avoidance", "AvoidanceStatus", "robot_rows_and_columns"]
 
 
 class AvoidanceStatus(str, enum.Enum):
@@ -159,10 +163,50 @@ def _check_command(v_cmd, nv: int) -> np.ndarray:
     return v
 
 
-def avoid(v_cmd, distances, damper: Damper, *, tol: Tolerances = DEFAULT_TOLERANCES) -> Avoidance:
+def _bounded_joints(pin_model) -> tuple:
+    """``(idx_q, idx_v)`` int64 arrays of the one-coordinate joints (revolute, prismatic; not a mimic,
+    not a continuous joint's (cos, sin)) with a finite limit on either side, made once per model."""
+    got = _BOUNDED.get(id(pin_model))
+    if got is not None and got[0] is pin_model:
+        return got[1]
+    iq, iv = [], []
+    lo, hi = pin_model.lowerPositionLimit, pin_model.upperPositionLimit
+    for jm in pin_model.joints[1:]:
+        if jm.nq == 1 and jm.nv == 1 and "Mimic" not in jm.shortname():
+            i = int(jm.idx_q)
+            if math.isfinite(lo[i]) or math.isfinite(hi[i]):
+                iq.append(i)
+                iv.append(int(jm.idx_v))
+    out = (np.asarray(iq, dtype=np.int64), np.asarray(iv, dtype=np.int64))
+    _BOUNDED[id(pin_model)] = (pin_model, out)
+    return out
+
+
+_BOUNDED: dict = {}  # id(pin_model) -> (pin_model, its bounded joints): a few models per process
+
+
+def velocity_bounds(pin_model, q, damper: "Damper") -> tuple[np.ndarray, np.ndarray]:
+    """``(lo, hi)`` ``(nv,)``: the damper's velocity limits, tightened so that one control period at
+    the bound cannot carry a joint past its position limit, ``(lower - q) / period <= v <= (upper - q)
+    / period``; each bound clamped to include 0 (a joint at or, within the allowance, past a limit may
+    stay or move back in: stopping is always an answer).  ``q``: Pinocchio's configuration."""
+    lim = damper.limits(pin_model.nv)
+    lo, hi = -lim, lim.copy()
+    iq, iv = _bounded_joints(pin_model)
+    if len(iq):
+        qq = np.asarray(q, dtype=np.float64)[iq]
+        period = damper.period
+        hi[iv] = np.minimum(hi[iv], np.maximum((pin_model.upperPositionLimit[iq] - qq) / period, 0.0))
+        lo[iv] = np.maximum(lo[iv], np.minimum((pin_model.lowerPositionLimit[iq] - qq) / period, 0.0))
+    return lo, hi
+
+
+def avoid(v_cmd, distances, damper: Damper, *, bounds=None, tol: Tolerances = DEFAULT_TOLERANCES) -> Avoidance:
     """The closest joint velocity to ``v_cmd`` ``(nv,)`` that keeps every pair of ``distances``
     (a :class:`~armguard.backends.PairDistances` with ``jacobian``) within its velocity damper
-    (see the module docstring).  Never infeasible: at worst the answer is to stop."""
+    (see the module docstring).  Never infeasible: at worst the answer is to stop.  ``bounds``:
+    ``(lo, hi)`` velocity bounds in place of the damper's ``±velocity_limit``
+    (:func:`velocity_bounds`: the joint limits too)."""
     jac = getattr(distances, "jacobian", None)
     if jac is None:
         raise AvoidanceError("avoid: the distances carry no Jacobian; ask pair_distances(q, jacobian=True)")
@@ -174,25 +218,29 @@ def avoid(v_cmd, distances, damper: Damper, *, tol: Tolerances = DEFAULT_TOLERAN
     v_cmd = _check_command(v_cmd, nv)
     if not _all_finite(d, jac):
         raise AvoidanceError("avoid: a distance or a Jacobian entry is NaN or infinite; no velocity can be given")
-    lim = damper.limits(nv)
+    lo, hi = (-damper.limits(nv), damper.limits(nv)) if bounds is None else \
+        (np.asarray(bounds[0], dtype=np.float64), np.asarray(bounds[1], dtype=np.float64))
+    if lo.shape != (nv,) or hi.shape != (nv,) or np.any(lo > 0.0) or np.any(hi < 0.0):
+        raise AvoidanceError(f"avoid: bounds must be two ({nv},) arrays with lo <= 0 <= hi")
     rows = np.flatnonzero((d < damper.influence) & (np.einsum("ij,ij->i", jac, jac) > tol.avoid_row ** 2))
     A = np.ascontiguousarray(jac[rows])
     b = damper.bound(d[rows])
     dmin = float(d.min()) if len(d) else math.inf
-    clipped = np.minimum(np.maximum(v_cmd, -lim), lim)
+    clipped = np.minimum(np.maximum(v_cmd, lo), hi)
     if len(rows) == 0 or np.all(A @ clipped >= b):
         return _result(clipped, v_cmd, rows, b, A, dmin, "none: no constraint binds" if len(rows) else
                        "none: no pair within influence", tol)
     import daqp
 
     big = 1e30  # DAQP's "no bound"
-    upper = np.concatenate([np.minimum(lim, big), np.full(len(rows), big)])
-    lower = np.concatenate([-np.minimum(lim, big), b])
+    upper = np.concatenate([np.minimum(hi, big), np.full(len(rows), big)])
+    lower = np.concatenate([np.maximum(lo, -big), b])
     x, _, flag, _ = daqp.solve(np.eye(nv), -v_cmd, A, upper, lower, np.zeros(nv + len(rows), dtype=np.intc))
-    x = np.clip(np.asarray(x, dtype=np.float64), -lim, lim)  # the limits exactly (DAQP meets them to its tolerance)
+    x = np.clip(np.asarray(x, dtype=np.float64), lo, hi)  # the limits exactly (DAQP meets them to its tolerance)
     if flag != 1 or not np.all(np.isfinite(x)):
         return _result(np.zeros(nv), v_cmd, rows, b, A, dmin, f"daqp: exit flag {flag}; stopped", tol)
-    worst = max(float(np.max(b - A @ x, initial=0.0)), float(np.max(np.abs(x) - lim, initial=0.0)))
+    worst = max(float(np.max(b - A @ x, initial=0.0)), float(np.max(x - hi, initial=0.0)),
+                float(np.max(lo - x, initial=0.0)))
     if worst > tol.avoid_feasibility:
         return _result(np.zeros(nv), v_cmd, rows, b, A, dmin, f"daqp: a constraint broken by {worst:.3g}; stopped", tol)
     return _result(x, v_cmd, rows, b, A, dmin, "daqp: optimal", tol)
@@ -214,8 +262,10 @@ def avoid_step(checker, q, v_cmd, damper: Damper, *, pairs=None, tol: Tolerances
     (or the Model rows ``pairs``: one arm's, say) and the Jacobians of the pairs within
     ``damper.influence`` -- all rows in one call where the checker computes Jacobians with its
     distances (``jacobian_with_distances``, the analytic backend), else those rows only.
-    ``rows`` of the result are Model pair rows.  The arithmetic around the QP is compiled
-    (:mod:`._fast`); :func:`avoid` is its reference."""
+    ``rows`` of the result are Model pair rows.  The velocity bounds are :func:`velocity_bounds` at
+    ``q``: the damper's limits and the joint limits (a joint commanded past its limit is slowed to reach
+    it in one period, not past it: the next step's ``q`` stays a configuration a checker answers for).
+    The arithmetic around the QP is compiled (:mod:`._fast`); :func:`avoid` is its reference."""
     from ..backends import check_pairs, check_q
     from ._fast import filter_velocity
 
@@ -242,7 +292,8 @@ def avoid_step(checker, q, v_cmd, damper: Damper, *, pairs=None, tol: Tolerances
         v_cmd = _check_command(v_cmd, nv)
     d = np.ascontiguousarray(d, dtype=np.float64)
     J = np.ascontiguousarray(J, dtype=np.float64)
-    v, rows, rate, closing, status, note = filter_velocity(v_cmd, d, J, damper.limits(nv), damper, tol)
+    lo, hi = velocity_bounds(model.pin_model, q, damper)
+    v, rows, rate, closing, status, note = filter_velocity(v_cmd, d, J, lo, hi, damper, tol)
     if near is not None:
         rows = near[rows]
     dist = r.distance

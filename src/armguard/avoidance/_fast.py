@@ -22,9 +22,10 @@ _BIG = 1e30  # DAQP's "no bound"
 
 
 @njit(cache=True, nogil=True)
-def _rows(d, J, v_cmd, lim, influence, stand_off, rate, row_min2, rows, A, b, clipped, upper, lower):  # pragma: no cover
+def _rows(d, J, v_cmd, lo, hi, influence, stand_off, rate, row_min2, rows, A, b, clipped, upper, lower):  # pragma: no cover
     """The damper's constraint rows of ``d`` ``(n,)``, ``J`` ``(n, nv)``: writes ``rows``, ``A``,
-    ``b`` (the first ``k`` entries), ``clipped`` ``(nv,)`` and DAQP's bounds ``upper`` / ``lower``
+    ``b`` (the first ``k`` entries), ``clipped`` ``(nv,)`` (the command within ``[lo, hi]``, the velocity
+    bounds: ``lo <= 0 <= hi``) and DAQP's bounds ``upper`` / ``lower``
     ``(nv + k,)``; returns ``(k, binds, bad)`` (``binds``: some row has ``A clipped < b``; ``bad``:
     1 a non-finite command, 2 a non-finite distance, 3 a non-finite Jacobian entry in a row
     within influence)."""
@@ -32,11 +33,10 @@ def _rows(d, J, v_cmd, lim, influence, stand_off, rate, row_min2, rows, A, b, cl
     for c in range(nv):
         if not math.isfinite(v_cmd[c]):
             return 0, False, 1
-        x = min(max(v_cmd[c], -lim[c]), lim[c])
+        x = min(max(v_cmd[c], lo[c]), hi[c])
         clipped[c] = x
-        u = min(lim[c], _BIG)
-        upper[c] = u
-        lower[c] = -u
+        upper[c] = min(hi[c], _BIG)
+        lower[c] = max(lo[c], -_BIG)
     k = 0
     binds = False
     for i in range(n):
@@ -69,7 +69,7 @@ def _rows(d, J, v_cmd, lim, influence, stand_off, rate, row_min2, rows, A, b, cl
 
 
 @njit(cache=True, nogil=True)
-def _check(v, v_cmd, lim, A, b, k, closing):  # pragma: no cover - numba
+def _check(v, v_cmd, lo, hi, A, b, k, closing):  # pragma: no cover - numba
     """``(worst, |v|_max, |v_cmd|_max, |v - v_cmd|_max, finite)`` of the answer ``v``: the largest
     violation of a damper row or a limit (0 if none); writes ``closing[:k] = A[:k] v``."""
     nv = v.shape[0]
@@ -80,7 +80,7 @@ def _check(v, v_cmd, lim, A, b, k, closing):  # pragma: no cover - numba
         x = v[c]
         if not math.isfinite(x):
             finite = False
-        worst = max(worst, abs(x) - lim[c])
+        worst = max(worst, x - hi[c], lo[c] - x)
         vmax = max(vmax, abs(x))
         cmax = max(cmax, abs(v_cmd[c]))
         dmax = max(dmax, abs(x - v_cmd[c]))
@@ -106,10 +106,12 @@ class _Buffers:
 _BUFFERS: dict = {}
 
 
-def filter_velocity(v_cmd: np.ndarray, d: np.ndarray, J: np.ndarray, lim: np.ndarray, damper, tol) -> tuple:
+def filter_velocity(v_cmd: np.ndarray, d: np.ndarray, J: np.ndarray, lo: np.ndarray, hi: np.ndarray, damper,
+                    tol) -> tuple:
     """``(velocity, rows, rate, closing, status, note)`` of :func:`armguard.avoidance.avoid` for
     the distances ``d`` ``(n,)`` and Jacobian rows ``J`` ``(n, nv)`` (float64, C-contiguous),
-    the command ``v_cmd`` ``(nv,)`` and the limits ``lim``; ``rows`` index ``d``.  A non-finite
+    the command ``v_cmd`` ``(nv,)`` and the velocity bounds ``lo <= 0 <= hi`` ``(nv,)`` (the damper's
+    limits, tightened by the joint limits: :func:`armguard.avoidance.velocity_bounds`); ``rows`` index ``d``.  A non-finite
     input is a :class:`~armguard.AvoidanceError` (no velocity from NaN)."""
     from .._errors import AvoidanceError
     from . import AvoidanceStatus
@@ -121,7 +123,7 @@ def filter_velocity(v_cmd: np.ndarray, d: np.ndarray, J: np.ndarray, lim: np.nda
     clipped = np.empty(nv)
     upper = np.empty(nv + n)
     lower = np.empty(nv + n)
-    k, binds, bad = _rows(d, J, v_cmd, lim, damper.influence, damper.stand_off, damper.rate(), tol.avoid_row ** 2, rows,
+    k, binds, bad = _rows(d, J, v_cmd, lo, hi, damper.influence, damper.stand_off, damper.rate(), tol.avoid_row ** 2, rows,
                           A, b, clipped, upper, lower)
     if bad:
         what = {1: "v_cmd: contains NaN or infinite values", 2: "avoid: a distance is NaN or infinite",
@@ -141,18 +143,18 @@ def filter_velocity(v_cmd: np.ndarray, d: np.ndarray, J: np.ndarray, lim: np.nda
         x, _, flag, _ = daqp.solve(buf.eye, -v_cmd, A, upper[:nv + k], lower[:nv + k], buf.sense[:nv + k])
         # the limits exactly: DAQP meets a bound to its own tolerance (1.9e-34 rad/s was seen on a column
         # whose limit is 0, another robot's under a Guard); the constraint check below reads this velocity
-        v = np.clip(np.asarray(x, dtype=np.float64), -lim, lim)
+        v = np.clip(np.asarray(x, dtype=np.float64), lo, hi)
         note = "daqp: optimal"
         if flag != 1:
             v, note = np.zeros(nv), f"daqp: exit flag {flag}; stopped"
-    worst, vmax, cmax, dmax, finite = _check(v, v_cmd, lim, A, b, k, closing)
+    worst, vmax, cmax, dmax, finite = _check(v, v_cmd, lo, hi, A, b, k, closing)
     if binds and note == "daqp: optimal":
         if not finite:
             v, note = np.zeros(nv), "daqp: exit flag 1; stopped"
         elif worst > tol.avoid_feasibility:
             v, note = np.zeros(nv), f"daqp: a constraint broken by {worst:.3g}; stopped"
         if not note == "daqp: optimal":
-            worst, vmax, cmax, dmax, finite = _check(v, v_cmd, lim, A, b, k, closing)
+            worst, vmax, cmax, dmax, finite = _check(v, v_cmd, lo, hi, A, b, k, closing)
     still = tol.avoid_still
     if nv and vmax <= still and cmax > still:
         status = AvoidanceStatus.STOPPED
