@@ -114,3 +114,29 @@ def test_example_control_loop_runs():
     # with avoidance the same sweep is slowed short of the rod, never below the 80 mm stand-off less 1 mm
     assert log["avoidance"]["slowed"] > 0 and log["avoidance"]["free"] > 0
     assert log["avoidance_min_clearance"] >= 0.08 - 1e-3
+
+
+def test_a_prediction_out_of_evaluations_is_a_stop_marked_unfinished():
+    """A link sweeping parallel to a plate 0.5 mm outside the stopping distance: the prediction's work grows as
+    1/gap and runs out of evaluations; the STOP says so (``finished`` False), so a controller can tell it from a
+    predicted collision (which stays ``finished``)."""
+    from armguard.geometry import Box, Capsule
+    from armguard.kinematics import DHRow, Robot
+    from armguard.scene import Scene
+    from armguard.verify import Guard
+
+    robot = Robot.from_dh("arm", [DHRow(1.0, 0.0, 0.0)], lower=[-3.0], upper=[3.0],
+                          link_shapes={"link1": (Capsule([-1.0, 0, 0], [0, 0, 0], 0.02),)})
+
+    def guard(top):
+        sc = Scene("graze")
+        sc.add_robot(robot, self_pairs=[])
+        sc.add_body("plate", [Box(center=[0.0, 0.0, top - 0.05], half_extents=[2.0, 2.0, 0.05])])
+        return Guard(sc, stopping_distance=0.01, horizon_s=0.1, period_s=0.002)
+
+    grazing = [guard(-0.02 - 0.01 - 0.5e-3).step(np.array([0.01 * k]), qdot=np.array([1.0])) for k in range(20)]
+    out = [d for d in grazing if not d.ok]
+    assert out and all(not d.finished and "evaluation budget" in d.reason for d in out)
+    assert all(d.finished for d in grazing if d.ok)
+    hit = guard(-0.005).step(np.array([0.0]), qdot=np.array([1.0]))  # the plate within the stopping distance
+    assert not hit.ok and hit.finished

@@ -84,6 +84,9 @@ class GuardDecision:
     With ``Guard(avoidance=...)``: ``velocity`` ``(n_joints,)`` rad/s or m/s the filtered joint
     velocity to command (zeros on STOP), ``avoidance`` the filter's
     :class:`~armguard.avoidance.Avoidance` (pin velocity order); both None otherwise.
+    ``finished`` False where the STOP is the prediction's evaluation budget running out (a link
+    grazing a surface near the stopping distance), not a collision predicted: a controller may slow
+    the command down and try again rather than stop hard.
     """
 
     verdict: GuardVerdict
@@ -97,6 +100,7 @@ class GuardDecision:
     elapsed_us: float
     velocity: np.ndarray | None = None
     avoidance: object = None
+    finished: bool = True
 
     @property
     def ok(self) -> bool:
@@ -419,8 +423,9 @@ class Guard(FollowsScene):
             step = float(np.min(gap[pos] / rates[pos]))
             s_next = min(1.0, s + step)
             if evals >= _GUARD_EVALUATIONS or not s_next > s:
-                return self._decide(GuardVerdict.STOP, "prediction not finished within its evaluation budget",
-                                    now, lower, _time_to(s, T), (model.owner_a[i], model.owner_b[i]), m, evals, t_start)
+                return replace(self._decide(GuardVerdict.STOP, "prediction not finished within its evaluation budget",
+                                            now, lower, _time_to(s, T), (model.owner_a[i], model.owner_b[i]), m, evals,
+                                            t_start), finished=False)
             # saturated at the limits (see the module docstring); q itself is within them
             d_next = np.where(st.mine, model.distances(_full(st, np.clip(q + s_next * dq, st.lo_ok, st.hi_ok)))[0], np.inf)
             evals += 1
