@@ -135,7 +135,7 @@ def run(quick: bool) -> str:
         lines.append("|---|---|")
         lines.append(f"| `map.allowed_many` (one thread) | {t_map * 1e9:.0f} ns |")
         lines.append(f"| `Detector.collides_many`, same links and obstacles (yes/no, both cores) | {t_det * 1e9:.0f} ns |")
-        lines.append(f"| `map.neighbourhood(q)`: load {nb.nbytes / 1024:.1f} KB of 3 × 3 substructures from the file | "
+        lines.append(f"| `map.neighbourhood(q)`: load {nb.nbytes / 1024:.1f} KB of 3 × 3 substructures out of the map's checked bytes | "
                      f"{t_nb * 1e6:.0f} µs per load |")
         lines.append("")
         lines.extend(backend_rows(fmap, sd, quick))

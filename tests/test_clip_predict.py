@@ -118,6 +118,18 @@ def test_predictor_run_from_several_threads_matches_one_at_a_time():
     assert all(statuses == alone[name] for name, statuses in got)
 
 
+def test_predictor_step_keeps_its_own_copy_of_the_set_point():
+    """A control loop that writes each set point into one buffer: the stream kept a view of it, so the next
+    step compared the buffer with itself (a zero-length interval) and missed the crossing."""
+    guard = Guard.from_shape(Capsule([0.0, 0.0, 0.0], [0.4, 0.0, 0.0], 0.05))
+    pred = Predictor([guard], [Obstacle.segment([0.3, 0.0, -1.0], [0.3, 0.0, 1.0])])
+    left, right = _sweep(0.0, [-0.3, 0.3])
+    buf = left.copy()
+    pred.step(buf)
+    buf[...] = right
+    assert pred.step(buf).status is ClipStatus.INTERSECTED
+
+
 def test_predictor_run_leaves_the_step_stream_as_it_was():
     guard = Guard.from_shape(Capsule([0.0, 0.0, 0.0], [0.4, 0.0, 0.0], 0.05))
     pred = Predictor([guard], [Obstacle.segment([0.3, 0.0, -1.0], [0.3, 0.0, 1.0])])

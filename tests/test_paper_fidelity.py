@@ -207,6 +207,9 @@ def test_option_plumbing_and_capabilities(pair, tmp_path, monkeypatch):
     (tmp_path / "armguard.toml").write_text('[backend]\nname = "analytic"\nverdicts = "ranger"\n')
     with pytest.raises(BackendError, match="verdicts"):  # the exact fidelity has no such option
         armguard.Detector(m)
+    (tmp_path / "armguard.toml").write_text('[backend]\nname = "analytic"\nfidelity = "exat"\nrelease_gil = true\n')
+    with pytest.raises(BackendError, match="fidelity 'exat' is not one of"):  # named first, not release_gil
+        armguard.Detector(m)
 
 
 def test_model_rows_exact_where_the_paper_is_and_never_below(pair):

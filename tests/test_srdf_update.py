@@ -401,6 +401,12 @@ def test_a_checked_pairs_certificate_moved_onto_a_never_does_not_hold(certified,
     comment = next(m for m in re.finditer(r"<!--(.*?)-->", text, flags=re.S) if _CHECKED.match(m[1])
                    and "witnessed" in m[1])
     c = _CHECKED.match(comment[1])
+    for reason in ("", ' reason=""', ' reason="checked"'):  # no reason, an empty one, the checked namespace's name
+        forged = f'<disable_collisions link1="{c["a"]}" link2="{c["b"]}"{reason} {FINGERPRINT_ATTR}="{c["fp"]}"/>'
+        srdf.write_text(text.replace(comment[0], forged))
+        m = armguard.load_model(model, srdf=False)
+        assert [{x.link1, x.link2} for x in stale_certificates(m.pin_model, m.collision_model, srdf)] == \
+            [{c["a"], c["b"]}], reason
     forged = (f'<disable_collisions link1="{c["a"]}" link2="{c["b"]}" reason="Never" '
               f'{FINGERPRINT_ATTR}="{c["fp"]}"/>')
     srdf.write_text(text.replace(comment[0], forged))
@@ -414,3 +420,25 @@ def test_a_checked_pairs_certificate_moved_onto_a_never_does_not_hold(certified,
     assert " 1 searched again" in r.output and "Never -> witnessed" in r.output, r.output
     disabled = {frozenset((e.get("link1"), e.get("link2"))) for e in ET.parse(srdf).getroot().findall("disable_collisions")}
     assert frozenset((c["a"], c["b"])) not in disabled
+
+
+def test_certificates_of_an_older_armguard_are_said_to_be_so(certified, tmp_path):
+    """An SRDF certified before the verdict was hashed (no ``armguard_certificates="2"`` on ``<robot>``): every
+    certificate reads as stale; load_model says they are an older armguard's, not that the URDF changed, and
+    srdf --update writes the current format."""
+    from armguard.model._certificate import FORMAT_ATTR
+
+    model = _fresh(certified, tmp_path, grow=False)
+    srdf = model.with_suffix(".srdf")
+    text = srdf.read_text()
+    assert f'{FORMAT_ATTR}="2"' in text
+    import re
+
+    old = re.sub(f'{FINGERPRINT_ATTR}="[0-9a-f]+"', f'{FINGERPRINT_ATTR}="0123456789abcdef"', text)  # other prints
+    srdf.write_text(old.replace(f' {FORMAT_ATTR}="2"', ""))  # ... and no format: an older armguard's file
+    with pytest.warns(ArmguardWarning, match="written by an older armguard") as got:
+        armguard.load_model(model)
+    assert not any("another geometry" in str(w.message) for w in got)
+    srdf.write_text(old)  # the current format with prints that do not match: the URDF is blamed
+    with pytest.warns(ArmguardWarning, match="certified for another geometry"):
+        armguard.load_model(model)

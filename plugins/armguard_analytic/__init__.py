@@ -485,7 +485,10 @@ class AnalyticBackend:
         in the exact fidelity; None (Ranger's algorithm over this backend's Checker) in the paper
         fidelity."""
         opts = dict(options or {})
-        exact = str(opts.get("fidelity", "exact")) == "exact"
+        fidelity = str(opts.get("fidelity", "exact"))
+        if fidelity not in _FIDELITIES:  # before the option names, which depend on it
+            raise BackendError(f"analytic: fidelity {fidelity!r} is not one of {list(_FIDELITIES)}")
+        exact = fidelity == "exact"
         known = ["fidelity", "release_gil", "warm_start"] if exact else ["fidelity", "verdicts"]  # as the Checker's
         unknown = sorted(set(opts) - set(known))
         if unknown:  # a typo ("warm_strat") would else leave the option off without a word

@@ -174,6 +174,7 @@ class FclBackend:
     """Entry point ``fcl`` of the group ``armguard.backends``."""
 
     name = "fcl"
+    requires = ("fcl",)  # python-fcl, imported on build: without it armguard.testing calls every check not applicable
 
     def build(self, model, options: Mapping | None = None) -> FclChecker:
         return FclChecker(model, options)

@@ -63,23 +63,34 @@ def ensure_numba_cache(package_dir: Path | None = None) -> Path | None:
 
 def _private_folder(folder: Path) -> Path:
     """``folder``, made mode 0700 when missing, when it is a real folder of this user that no one else
-    may write; else a fresh folder of ``tempfile.mkdtemp`` (0700)."""
+    may write (one that was open to others may hold what they put there: it is not chmod-ed and
+    trusted); else a fresh folder of ``tempfile.mkdtemp`` (0700), removed at exit."""
     try:
         os.mkdir(folder, 0o700)
     except FileExistsError:
         pass
     except OSError:
-        return Path(tempfile.mkdtemp(prefix="armguard-numba-"))
+        return _fresh_private()
     try:
         st = os.lstat(folder)
     except OSError:
-        return Path(tempfile.mkdtemp(prefix="armguard-numba-"))
+        return _fresh_private()
     import stat
 
     own = not hasattr(os, "getuid") or st.st_uid == os.getuid()
     if stat.S_ISDIR(st.st_mode) and own and not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
         return folder
-    return Path(tempfile.mkdtemp(prefix="armguard-numba-"))
+    return _fresh_private()
+
+
+def _fresh_private() -> Path:
+    """A new 0700 folder, removed when the process ends (its kernels are compiled again next time)."""
+    import atexit
+    import shutil
+
+    folder = Path(tempfile.mkdtemp(prefix="armguard-numba-"))
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    return folder
 
 
 def signature(codes: str) -> tuple:

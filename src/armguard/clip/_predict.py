@@ -187,10 +187,12 @@ class Predictor:
         each step checking the interval from the set point fed just before it.  Give each stream
         its own Predictor; :meth:`predict` and :meth:`run` hold no state and may be called from
         several threads at once."""
-        X1 = self._poses(X_next)
+        X1 = self._poses(X_next).copy()  # the caller may reuse its buffer for the next set point
         with self._stream:
-            X0, self._last = (X1 if self._last is None else self._last), X1
-            return self.predict(X0, X1)
+            X0 = X1 if self._last is None else self._last
+            out = self.predict(X0, X1)
+            self._last = X1  # after the answer: a step that raised leaves the stream as it was
+            return out
 
     def run(self, poses) -> list[Prediction]:
         """One answer per interval of ``poses (T, k, 4, 4)`` (``T - 1``), as :meth:`step` would give

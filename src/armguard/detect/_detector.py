@@ -71,8 +71,9 @@ class Detector:
         before a control loop's first cycle: the first call of a path compiles or loads its kernels and
         allocates the thread's scratch (tens of milliseconds with numba's cache warm, seconds without).
         The plain, lazy and budgeted checks, and with ``jacobian`` the Jacobian of the nearest pairs.
-        Answers later are those of a Detector never warmed (the anytime memory it leaves is a
-        configuration's true distances, from which later bounds subtract the motion since)."""
+        Later statuses and exact answers are those of a Detector never warmed; the anytime mode's
+        memory (``q``'s true distances, from which later bounds subtract the motion since) and its
+        cost model learn from these calls, so which pairs a first budgeted check reaches may differ."""
         self.check(q)
         self.check(q, lazy=True)
         self.check(q, budget_us=0.0)

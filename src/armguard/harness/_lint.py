@@ -472,7 +472,7 @@ def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport, partia
 
 def _certificate_checks(model, report: LintReport) -> None:
     """Search again every disabled pair whose certificate the URDF no longer matches (module docstring)."""
-    from ..model._certificate import stale_certificates
+    from ..model._certificate import older_certificates, stale_certificates
     from ..srdfgen import check_srdf
 
     srdf = Path(model.srdf.file)
@@ -480,6 +480,9 @@ def _certificate_checks(model, report: LintReport) -> None:
     stale = stale_certificates(model.pin_model, model.collision_model, srdf)
     if not stale:
         return
+    if older_certificates(srdf):  # every certificate reads as stale: searched again below, whatever the URDF
+        report.findings.append(Finding(Check.SRDF_CERTIFICATE, Severity.WARNING, srdf.name, f"certificates of an older "
+                                       f"armguard: its {len(stale)} certified pairs are searched again", "armguard srdf --update"))
     where = {frozenset((s.link1, s.link2)): s for s in stale}
     margins = sorted({c.margin for c in _certs(srdf) if frozenset((c.link1, c.link2)) in where})
     for margin in margins or [0.0]:

@@ -37,10 +37,12 @@ import pinocchio as pin
 
 from .._errors import SceneFileError, unclosed_text
 
-__all__ = ["FINGERPRINT_ATTR", "MARGIN_ATTR", "METHOD_ATTR", "pair_fingerprint", "pair_digest", "verdict_fingerprint",
+__all__ = ["FINGERPRINT_ATTR", "FORMAT_ATTR", "CERTIFICATE_FORMAT", "older_certificates", "MARGIN_ATTR", "METHOD_ATTR", "pair_fingerprint", "pair_digest", "verdict_fingerprint",
            "certificate_verdict", "read_certificates", "Certificate", "StaleCertificate", "stale_certificates"]
 
 FINGERPRINT_ATTR = "armguard_fingerprint"
+FORMAT_ATTR = "armguard_certificates"  # on <robot>: the certificate format the file was written with
+CERTIFICATE_FORMAT = "2"
 MARGIN_ATTR = "armguard_margin"
 METHOD_ATTR = "armguard_method"
 _VERSION = b"armguard-pair-certificate-2"  # 2: the verdict hashed too
@@ -66,9 +68,11 @@ def _shape(h, geometry) -> None:
 
 
 def certificate_verdict(reason) -> str:
-    """What a certificate vouches for: a disabled pair's reason, ``"checked"`` for a checked pair
-    (witnessed or undecided: checked either way)."""
-    return str(reason) if reason else "checked"
+    """What a certificate vouches for: ``"disabled:<reason>"`` for a ``<disable_collisions>`` element
+    (its reason as written, none included), ``"checked"`` for a checked pair's comment (``reason``
+    None: witnessed or undecided, checked either way).  Two namespaces: a checked pair's print copied
+    onto an element, with any reason or none, does not hold."""
+    return "checked" if reason is None else f"disabled:{reason}"
 
 
 def pair_fingerprint(pin_model, collision_model, link1: str, link2: str, *, margin: float, method: str,
@@ -171,6 +175,20 @@ def read_certificates(srdf_file) -> tuple[Certificate, ...]:
         out.append(Certificate(el.get("link1", ""), el.get("link2", ""), el.get("reason", ""), fp, margin,
                                el.get(METHOD_ATTR, default_method), where))
     return tuple(out)
+
+
+def older_certificates(srdf_file) -> bool:
+    """Whether ``srdf_file`` carries certificates written before the verdict was hashed into them
+    (``<robot>`` without ``armguard_certificates="2"``): every one of them reads as stale, whatever
+    the URDF.  False for an SRDF without certificates, or one that does not parse (its reader says so)."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.parse(srdf_file).getroot()
+    except (ET.ParseError, OSError):
+        return False
+    return root.get(FORMAT_ATTR) != CERTIFICATE_FORMAT and any(
+        el.get(FINGERPRINT_ATTR) for el in root.iter("disable_collisions"))
 
 
 @dataclass(frozen=True)

@@ -211,10 +211,14 @@ def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None, srdf_so
 
 def _warn_stale(srdf_obj, pin_model, geom) -> None:
     """Warn when the SRDF disables pairs certified for another geometry or kinematics (``_certificate``)."""
-    from ._certificate import stale_certificates
+    from ._certificate import older_certificates, stale_certificates
 
     stale = stale_certificates(pin_model, geom, srdf_obj.file)
-    if stale:
+    if stale and older_certificates(srdf_obj.file):  # every certificate reads as stale: no edit to blame
+        srdf_obj.warn(f"{len(stale)} disabled pairs carry certificates written by an older armguard (before the "
+                      "verdict was hashed into them), which cannot vouch for them: `armguard srdf --update` searches "
+                      "them again and rewrites the file (all of its pairs: minutes on a large robot)")
+    elif stale:
         names = ", ".join(f"{s.link1}-{s.link2} ({s.reason})" for s in stale[:4]) + (" ..." if len(stale) > 4 else "")
         one = len(stale) == 1
         srdf_obj.warn(f"{len(stale)} disabled {'pair was' if one else 'pairs were'} certified for another geometry or "

@@ -249,15 +249,14 @@ def misread_collisions(root: ET.Element, lines: dict) -> list[tuple[str, str, in
     out = []
     for link in root.findall("link"):
         ln = link.get("name", "")
-        kinds = [(link, _LINK_READ, f"link[{ln}]", ("collision",))]
-        kinds += [(c, _COLLISION_READ, f"link[{ln}].collision[{k}]", _COLLISION_READ)
-                  for k, c in enumerate(link.findall("collision"))]
-        for el, read, where, watched in kinds:
+        kinds = [(link, "link", f"link[{ln}]")]
+        kinds += [(c, "collision", f"link[{ln}].collision[{k}]") for k, c in enumerate(link.findall("collision"))]
+        for el, kind, where in kinds:
             for c in el:
-                if not isinstance(c.tag, str) or c.tag in read:
+                if not isinstance(c.tag, str) or c.tag in READ[kind]:
                     continue
-                near = difflib.get_close_matches(c.tag, read, n=1, cutoff=0.75)
-                if near and near[0] in watched:
+                near = difflib.get_close_matches(c.tag, READ[kind], n=1, cutoff=0.75)
+                if near and (kind, near[0]) in CHANGES_CHECKS:
                     what = ("the link has no geometry from it: its pairs are not checked" if near[0] == "collision"
                             else "the shape sits at the link's origin" if near[0] == "origin" else "no shape is read from it")
                     out.append((f"{where}.{c.tag}", f"<{c.tag}> is read by nothing: did you mean <{near[0]}>? ({what})",

@@ -30,10 +30,10 @@ def _source(model) -> str:
 
 
 def _files_sha256(model) -> tuple:
-    """``((file, SHA-256), ...)`` of every file ``model`` was read from but an SRDF (the workers load
-    without one)."""
+    """The SHA-256 of every file ``model`` was read from but an SRDF (the workers load without one),
+    sorted: the same bytes wherever a worker's files resolve (another machine's mesh folders)."""
     srdf = str(Path(model.srdf.file).resolve()) if getattr(model, "srdf", None) is not None and model.srdf.file else None
-    return tuple((f, h) for f, h in model.sha256.items() if f != srdf)
+    return tuple(sorted(h for f, h in model.sha256.items() if f != srdf))
 
 
 def _prove_task(source: str, files: tuple, backend, names: tuple, k: int, limits: dict):

@@ -13,7 +13,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from .._errors import SceneFileError, xml_parse_error
-from ..model._certificate import FINGERPRINT_ATTR, MARGIN_ATTR, METHOD_ATTR
+from ..model._certificate import CERTIFICATE_FORMAT, FINGERPRINT_ATTR, FORMAT_ATTR, MARGIN_ATTR, METHOD_ATTR
 
 __all__ = ["write_srdf", "srdf_text", "read_previous", "other_elements"]
 
@@ -26,7 +26,8 @@ def srdf_text(matrix, keep=()) -> str:
     a comment per checked pair (witnessed, with its configuration, or undecided); the elements
     ``keep`` (:func:`other_elements` of the SRDF it replaces: groups, group states, end effectors,
     virtual and passive joints) first, as they were."""
-    root = ET.Element("robot", name=str(matrix.model), **{MARGIN_ATTR: repr(float(matrix.margin)), METHOD_ATTR: matrix.method})
+    root = ET.Element("robot", name=str(matrix.model), **{MARGIN_ATTR: repr(float(matrix.margin)), METHOD_ATTR: matrix.method,
+                                                          FORMAT_ATTR: CERTIFICATE_FORMAT})
     for el in keep:
         root.append(el)
     root.append(ET.Comment(f" collision matrix by armguard srdf: method {matrix.method}, margin {matrix.margin:g} m, "

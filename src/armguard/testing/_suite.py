@@ -161,8 +161,9 @@ class Context:
 
     def build(self, label: str, options: Mapping | None = None):
         """A fresh Checker of the backend for model ``label`` (``options`` default: the suite's).  A backend
-        whose dependency is not installed here (``fcl`` without python-fcl) makes every check not
-        applicable, saying which module is missing: it is no failure of the backend's contract."""
+        whose optional dependency is not installed here makes every check not applicable, saying which
+        module is missing (``fcl`` without python-fcl: the Backend declares ``requires = ("fcl",)``);
+        any other missing module is the backend's failure (a typo, a dependency it forgot)."""
         return self.build_on(self.model(label), options)
 
     def build_on(self, model, options: Mapping | None = None):
@@ -170,14 +171,11 @@ class Context:
         try:
             return self.backend_impl().build(model, dict(self.options if options is None else options))
         except ModuleNotFoundError as exc:
-            if exc.name and exc.name.split(".")[0] in ("armguard", *self._own_modules()):
-                raise  # the backend's own module missing: a broken package, not a missing dependency
-            raise NotApplicable(f"backend {self.backend!r} is not installed here: {exc} (install the dependency it "
-                                "needs, e.g. pip install armguard[fcl] for python-fcl)") from None
-
-    def _own_modules(self) -> tuple:
-        impl = self.backend_impl()
-        return (type(impl).__module__.split(".")[0],)
+            declared = tuple(getattr(self.backend_impl(), "requires", ()) or ())
+            if not exc.name or exc.name.split(".")[0] not in declared:
+                raise  # a module the backend does not declare optional: its failure
+            raise NotApplicable(f"backend {self.backend!r} is not installed here: {exc} (it requires {list(declared)}; "
+                                "e.g. pip install armguard[fcl] for python-fcl)") from None
 
     def checker(self, label: str):
         """The backend's Checker for model ``label``, built once."""
