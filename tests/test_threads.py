@@ -471,3 +471,18 @@ def test_coal_first_calls_from_threads_leave_the_warning_filters_alone():
                           capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert proc.stdout.split() == ["0", "True"], proc.stdout
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "sched_setaffinity"), reason="no CPU affinity on this platform")
+def test_batches_spread_over_the_cores_the_process_may_use():
+    """A process pinned to one core (a control loop's, a container's share): batches used every core of the
+    machine (``os.cpu_count()``), over the core set aside for control.  They now read the CPU affinity."""
+    import subprocess
+    import sys as _sys
+
+    code = ("import os; os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]}); import armguard; "
+            "from armguard_analytic._engine._scratch import CPUS; "
+            "c = armguard.checker(armguard.load_model('puma560'), 'coal'); print(CPUS, c.threads)")
+    out = subprocess.run([_sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.split()[-2:] == ["1", "1"], out.stdout

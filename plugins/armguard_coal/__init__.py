@@ -24,7 +24,7 @@ across threads, batches and pair subsets only to ``gjk_tolerance`` on such model
 :attr:`CoalChecker.conformance_xfail`; ``tests/test_threads.py`` holds them bit-equal on its
 models).
 
-Options: ``threads`` (batches; default: all cores), ``gjk_tolerance`` (m, default 1e-9: coal's
+Options: ``threads`` (batches; default: the cores this process may run on, its CPU affinity), ``gjk_tolerance`` (m, default 1e-9: coal's
 own default of 1e-6 stops GJK up to ~1e-5 m above the distance on curved hulls; a reference
 has to be tighter than the 1e-6 m the differential tests hold the backends to).  Where coal's EPA
 gives up on a penetrating pair (it returns ``-DBL_MAX`` as the distance: z1's cylinder pairs at
@@ -142,7 +142,8 @@ class CoalChecker(CheckerBase):
 
         super().__init__(model)
         opts = dict(options or {})
-        self.threads = _option(opts, "threads", os.cpu_count() or 1, int, "an integer >= 1", lambda v: v >= 1)
+        cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+        self.threads = _option(opts, "threads", cpus, int, "an integer >= 1", lambda v: v >= 1)
         self.gjk_tolerance = _option(opts, "gjk_tolerance", 1e-9, float, "a finite length > 0 (m)",
                                      lambda v: math.isfinite(v) and v > 0.0)
         if opts:

@@ -16,9 +16,10 @@ if TYPE_CHECKING:
 __all__ = ["CPUS", "GIL_RELEASE_US", "MIN_ROWS_PER_THREAD", "_Scratch", "_entry_point", "compiled", "median_call_us",
            "row_threads"]
 
-CPUS = os.cpu_count() or 1
-"""This machine's processors, read once: ``os.cpu_count()`` asks the system on every call, which
-took longer than a one-row ``collides`` needs for all its work."""
+CPUS = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+"""The processors this process may run on (its CPU affinity: a control process pinned to some cores,
+a container's share), read once: asking the system takes longer than a one-row ``collides``
+needs for all its work.  A batch spreads over at most these."""
 MIN_ROWS_PER_THREAD = 256
 """Below this many configurations per thread, a thread of a batch costs more than it saves."""
 
