@@ -477,3 +477,17 @@ def test_a_find_with_a_camera_pose_without_covariance_is_warned_of(tmp_path):
     measured = write_calibration(Calibration(X_camera=cell.camera.X_WC_real, camera_cov=np.diag([1e-6] * 3 + [1e-6] * 3)),
                                  tmp_path / "measured.yaml")
     assert not run_program(EXAMPLE / "stack.yaml", seed=0, calibration=measured).warnings
+
+
+def test_a_missing_example_says_where_examples_come_from(tmp_path, monkeypatch):
+    """From a wheel the docs' ``examples/workmate/stack.yaml`` is not there: the error says examples/ is the source
+    checkout's; another missing file says only that it is missing."""
+    from click.testing import CliRunner
+
+    from armguard.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    r = CliRunner().invoke(main, ["program", "run", "examples/workmate/stack.yaml"])
+    assert r.exit_code == 3 and "examples/ comes with the source checkout" in r.output, r.output
+    r = CliRunner().invoke(main, ["program", "run", "mine/stack.yaml"])
+    assert r.exit_code == 3 and "file not found" in r.output and "checkout" not in r.output, r.output

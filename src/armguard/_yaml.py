@@ -20,7 +20,10 @@ def read_scene_yaml(path):
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
-        raise SceneFileError(file, "", "file not found") from None
+        hint = ""
+        if path.parts[:1] == ("examples",):  # the docs' examples/workmate/...: the source checkout's, not a wheel's
+            hint = " (examples/ comes with the source checkout, not with a wheel: run from the checkout's root)"
+        raise SceneFileError(file, "", "file not found" + hint) from None
     except (OSError, UnicodeDecodeError) as exc:
         raise SceneFileError(file, "", f"cannot read the file: {exc}") from None
     try:
