@@ -184,3 +184,28 @@ def test_clearance_sigmas_refuses_bad_arguments_by_name(kw, said):
     place = [UncertainPlacement("ball", _pose3(0.005, 1.0))]
     with pytest.raises(UncertaintyError, match=said):
         clearance_sigmas(det, q, place, **kw)
+
+
+def test_a_pairs_bound_reads_its_nearest_shapes_not_its_fewest_sigmas():
+    """PUMA link3 (a capsule and a sphere) 1 mm beside a probe placed by a frame 1 m away on the far side
+    (0.95° of turn): the capsule's nearest direction is along the lever arm (sigma 0, infinite sigmas), so the
+    pair's row with the fewest sigmas was the sphere's, 155 mm away, and the pair was CONFIDENT at 0.999 --
+    Monte Carlo collides in 0.6 % of draws.  The bound and the status now read the nearest distance."""
+    import math
+
+    import armguard
+    from armguard.geometry import Sphere
+    from armguard.uncertainty import ClearanceStatus, UncertainPlacement, UncertainPose2, clearance_sigmas
+
+    scene = armguard.load_scene("puma560")
+    for b in list(scene.bodies):
+        scene.remove_body(b)
+    scene.add_body("probe", [Sphere([0.51, -0.15 + 0.06 + 0.001 + 0.03, 0.957], 0.03)])
+    place = UncertainPlacement("probe", UncertainPose2([0.51, -1.059, 0.0],
+                                                       np.diag([5e-5 ** 2, 5e-5 ** 2, math.radians(0.95) ** 2])))
+    det = armguard.Detector(scene, threshold=0.0)
+    rep = clearance_sigmas(det, scene.flat_q(scene.default_q()), place, confidence=0.999, samples=4000, seed=0)
+    p = next(p for p in rep.pairs if (p.a, p.b) == ("puma560/link3", "probe"))
+    assert p.distance < 0.002 and p.p_monte_carlo > 0.001  # 1 mm apart; it does collide now and then
+    assert p.p_bound >= p.p_monte_carlo and p.status is not ClearanceStatus.CONFIDENT
+    assert rep.status is not ClearanceStatus.CONFIDENT

@@ -47,7 +47,8 @@ plus the radius times ``sqrt(λ_max(Σ_φ))`` for the rounded shapes).  Hence
 and ``r = 6`` for a full SE(3) placement (a 3-D quantile would understate it).  Two placements
 on a pair combine by Cauchy–Schwarz: ``σ_max = sqrt(σ₁² + σ₂²)`` with ``r = r₁ + r₂``; a group
 (a category, the whole scene) uses its least ``d / σ_max`` and the rank of every placement in
-it.  The bound is exact for translation-only placements and first order in the rotation (the
+it; an owner pair's ``d`` is its nearest element pair's.  The bound is conservative for translation-only
+placements and first order in the rotation (the
 covariance's own linearisation: the chord ``(R − I)(x − o)`` is replaced by ``φ × (x − o)``)
 otherwise.
 
@@ -208,11 +209,14 @@ class ClearanceStatus(enum.Enum):
 
 @dataclass(frozen=True)
 class PairSigma:
-    """One owner pair (its nearest element pair): ``distance`` m; ``sigma`` m, the linearised
-    standard deviation of the distance along the nearest direction; ``sigmas = distance / sigma``;
-    ``sigma_max`` m, the worst-direction extent that the bound uses; ``p_linear`` (Φ(−sigmas),
-    an estimate); ``p_bound`` (conservative); ``p_monte_carlo`` (``None`` without samples);
-    ``placements`` the placements that move it; witness points ``p_WA``, ``p_WB`` (W, m)."""
+    """One owner pair: ``distance`` m, its nearest element pair's (witness points ``p_WA``, ``p_WB``, W,
+    m), which ``sigma_max`` (m, the owners' worst-direction extent) turns into ``p_bound``
+    (conservative) and the status; ``sigma`` m, the linearised standard deviation of a distance along
+    its nearest direction, and ``sigmas`` (its distance over ``sigma``), of the element pair with the
+    fewest sigmas (which may be another, farther one: a shape whose nearest direction is along the
+    lever arm has sigma 0 and infinitely many sigmas, yet can collide through the second order);
+    ``p_linear`` (Φ(−sigmas), an estimate); ``p_monte_carlo`` (``None`` without samples);
+    ``placements`` the placements that move it."""
 
     a: str
     b: str
@@ -392,7 +396,8 @@ def clearance_sigmas(source, q, placements, *, confidence: float = 0.999, sample
             smax_cache[(k, owner)] = placements[k].sigma_max(cores.get(owner, ()))
         return smax_cache[(k, owner)]
 
-    best: dict = {}  # owner pair -> (sigmas, PairSigma pieces)
+    best: dict = {}  # owner pair -> (sigmas, PairSigma pieces) of the row with the fewest sigmas
+    nearest: dict = {}  # owner pair -> (d, p_WA, p_WB) of its nearest row
     for a, b, cat, d, pa, pb in rows:
         d = float(d)
         ks = [k for k, m in enumerate(moved) if (a in m) != (b in m)]
@@ -416,13 +421,16 @@ def clearance_sigmas(source, q, placements, *, confidence: float = 0.999, sample
         key = (a, b)
         if key not in best or sigmas < best[key][0]:
             best[key] = (sigmas, cat, d, sigma, sig_max, tuple(ks), np.array(pa), np.array(pb))
+        if key not in nearest or d < nearest[key][0]:  # the bound and the status read the pair's nearest shapes:
+            nearest[key] = (d, np.array(pa), np.array(pb))  # a row with fewer sigmas may be farther (sigma 0 there)
     shapes: dict[str, list] = {}
     if samples > 0:
         for it in scene.shapes_at(q_scene, poses=_link_poses(scene, q_scene)):
             shapes.setdefault(it.owner, []).append(it.shape)
     mc = _monte_carlo(scene, shapes, placements, moved, list(best), samples, seed) if samples > 0 else None
     pairs = []
-    for key, (sigmas, cat, d, sigma, sig_max, ks, pa, pb) in best.items():
+    for key, (sigmas, cat, _, sigma, sig_max, ks, _, _) in best.items():
+        d, pa, pb = nearest[key]  # sig_max is the owners', the same on every row of the pair
         dof = sum(placements[k].rank for k in ks)
         ratio = d / sig_max if sig_max > 0.0 else (math.inf if d > 0.0 else 0.0)
         pb_ = _bound(ratio, dof)
