@@ -209,3 +209,19 @@ def test_a_pairs_bound_reads_its_nearest_shapes_not_its_fewest_sigmas():
     assert p.distance < 0.002 and p.p_monte_carlo > 0.001  # 1 mm apart; it does collide now and then
     assert p.p_bound >= p.p_monte_carlo and p.status is not ClearanceStatus.CONFIDENT
     assert rep.status is not ClearanceStatus.CONFIDENT
+
+
+def test_a_merge_stays_a_covariance_armguard_accepts():
+    """A 1 m^2 prior merged with a 1e-8 m^2 sensor that knows one rotated direction exactly: C1 - K C1 came out
+    with eigenvalues of -1e-14, refused when the result was rebuilt (50 of 200).  Joseph's form keeps it PSD."""
+    from scipy.spatial.transform import Rotation
+
+    from armguard.uncertainty import UncertainPose2
+
+    base = np.array([[200.0, 60.0, 5.0], [60.0, 50.0, 2.0], [5.0, 2.0, 0.5]]) / 200
+    for i in range(200):
+        R = Rotation.from_rotvec(np.random.default_rng(i).normal(size=3)).as_matrix()
+        c2 = R @ np.diag([0.0, 1e-8, 4e-8]) @ R.T
+        m = UncertainPose2([3.0, 1.0, 0.4], base).merge(UncertainPose2([3.0, 1.0, 0.4], c2))
+        UncertainPose2(m.mean, m.cov)  # validated again: no refusal
+        assert np.linalg.eigvalsh(m.cov).min() >= -1e-18

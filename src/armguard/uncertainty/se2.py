@@ -116,7 +116,11 @@ def _merge(x1, c1, x2, c2, tol: Tolerances, angle_index=(2,)):
     for i in angle_index:
         d[i] = wrap_angle(d[i])
     x3 = x1 + k @ d  # Eqn. (7)
-    c3 = c1 - k @ c1  # Eqn. (6)
+    # Eqn. (6), C3 = C1 - K C1, in Joseph's form (I - K) C1 (I - K)^T + K C2 K^T: equal for this K, and a sum
+    # of positive semi-definite terms whatever the rounding (C1 - K C1 of a 1 m^2 prior and a 1e-8 m^2 sensor
+    # came out with eigenvalue -1.3e-14, which armguard's own validation then refused)
+    ik = np.eye(len(x1)) - k
+    c3 = ik @ c1 @ ik.T + k @ c2 @ k.T
     return x3, symmetrize(c3), k
 
 
