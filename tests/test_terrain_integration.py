@@ -336,3 +336,25 @@ def test_an_incomplete_report_keeps_seen_ground_within_the_threshold(model):
     assert t.status is Status.INCOMPLETE and t.known_distance < 0.05 < t.unknown_distance
     assert t.distance == t.known_distance and not t.unknown
     assert ("terrain", t.known_distance) in [(p.category, p.distance) for p in r.within_threshold]
+
+
+def test_a_detector_with_terrain_answers_for_it_in_batches():
+    """``Detector(scene, terrain=...)``: ``check`` said collision with the ground where ``collides_many`` said
+    False and ``check_many`` clear (the kernel's alone).  ``check_many`` now gives ``check``'s status on every row,
+    and ``collides_many`` says yes wherever ``check`` says collision (and where it reaches unknown ground)."""
+    import armguard
+    from armguard.terrain import load_terrain
+
+    model = armguard.load_model("rover")
+    det = armguard.Detector(model.scene, threshold=0.05, terrain=load_terrain("rocky", model.scene))
+    low = np.deg2rad([0, 30, 20, 30, 0])  # the turret in the ground
+    Q = np.vstack([low[None], model.scene_q(model.random_q(12, 3))])
+    want = [det.check(q).status for q in Q]
+    assert want[0].value == "collision"
+    batch = det.check_many(Q)
+    assert [s.value for s in batch.statuses()] == [s.value for s in want]
+    said = det.collides_many(Q).tolist()  # yes/no: a collision, and (conservatively) unknown ground reached
+    assert all(said[i] for i, s in enumerate(want) if s.value == "collision")
+    assert all(s.value in ("collision", "incomplete") for s, yes in zip(want, said) if yes)
+    armguard.terrain.attach_terrain(det, None)  # detached: the kernel's batches again
+    assert not det.collides_many(Q[:1])[0]

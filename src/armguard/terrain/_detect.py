@@ -5,8 +5,11 @@
 ``"terrain"`` entry in ``by_category`` (the link–terrain pair its TerrainReport names, from a
 :class:`TerrainGuard` at the detector's threshold and stopping distance) and the status of both.
 A detector without terrain is not touched: ``check`` stays the class's method, at no cost.
-Batches (``check_many``, ``collides_many``) stay the kernel's; :meth:`TerrainGuard.collides_many`
-answers for the terrain.
+With terrain, the batches answer for it too: ``collides_many`` is the kernel's or the guard's
+(:meth:`TerrainGuard.collides_many` at the detector's stopping distance), and ``check_many``'s
+statuses and collisions are merged with the guard's per row (its ``min_distance`` keeps the
+kernel's four categories); they used to be the kernel's alone, and said clear where ``check``
+said collision.
 """
 
 from __future__ import annotations
@@ -14,7 +17,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cached_property
 
+import numpy as np
+
 from ..detect import DetectionReport, Status
+from ..detect._report import STATUS_CODES, BatchReport
 from ..detect._extras import register_extra
 from ._guard import TERRAIN, TerrainGuard, TerrainReport
 
@@ -89,7 +95,8 @@ def attach_terrain(detector, terrain) -> TerrainGuard:
     ``detector.terrain`` is the guard.  A pyramid or map gets a guard over the detector's active
     robot (all robots when none).  ``None`` detaches.  Returns the guard."""
     if terrain is None:
-        detector.__dict__.pop("check", None)
+        for name in ("check", "collides_many", "check_many"):
+            detector.__dict__.pop(name, None)
         detector.terrain = None
         return None
     guard = terrain if isinstance(terrain, TerrainGuard) else TerrainGuard(detector.scene, terrain,
@@ -99,8 +106,25 @@ def attach_terrain(detector, terrain) -> TerrainGuard:
     def check(q, **kwargs):
         return check_with_terrain(detector, guard, q, **kwargs)
 
+    def collides_many(Q):
+        own = np.asarray(type(detector).collides_many(detector, Q))
+        return own | guard.collides_many(Q, stopping_distance=detector.stopping_distance)
+
+    def check_many(Q):
+        own = type(detector).check_many(detector, Q)
+        rows = np.asarray(Q, dtype=np.float64).reshape(len(own.status), -1)
+        status, collision = own.status.copy(), own.collision.copy()
+        for i, q in enumerate(rows):
+            ter = guard.check(q, threshold=detector.threshold, stopping_distance=detector.stopping_distance).status
+            merged = merge_status(STATUS_CODES[int(status[i])], ter)
+            status[i] = STATUS_CODES.index(merged)
+            collision[i] |= ter is Status.COLLISION
+        return BatchReport(own.min_distance, collision, status, own.threshold, own.stopping_distance)
+
     check.__doc__ = type(detector).check.__doc__
-    detector.check = check
+    collides_many.__doc__ = type(detector).collides_many.__doc__
+    check_many.__doc__ = type(detector).check_many.__doc__
+    detector.check, detector.collides_many, detector.check_many = check, collides_many, check_many
     return guard
 
 

@@ -415,14 +415,15 @@ class TerrainGuard:
                              thr, sd, rng, self.unknown_margin, (time.perf_counter() - t0) * 1e6,
                              self.pyramid.map.shape[1])
 
-    def collides_many(self, Q) -> np.ndarray:
+    def collides_many(self, Q, *, stopping_distance: float | None = None) -> np.ndarray:
         """``(M,) bool``: some moving shape within the collision level of a known or filled column, per
         row of ``Q`` ``(M, n_q)``: the pyramid's yes/no descent on the volumes (``first=True``), confirmed
-        by the exact distances only where it hits."""
+        by the exact distances only where it hits.  ``stopping_distance``: the guard's own by default."""
         Q = np.asarray(Q, dtype=np.float64)
         if Q.ndim != 2 or Q.shape[1] != self.n_q:
             raise TerrainError(f"Q: expected shape (M, {self.n_q}), got {Q.shape}")
-        level = max(self.tol.length, self.stopping_distance)
+        sd = self.stopping_distance if stopping_distance is None else _length(stopping_distance, "stopping_distance")
+        level = max(self.tol.length, sd)
         out = np.zeros(len(Q), bool)
         for i, q in enumerate(Q):
             rows = self._posed_arrays(self._poses(q), level)[0]
