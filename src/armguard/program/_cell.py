@@ -3,7 +3,7 @@ poses that differ from the nominal), and the simulated camera that answers FIND.
 
 The camera reports an object's *true* pose plus Gaussian noise of a stated covariance: the
 origin moves by ``δp`` and the object turns by ``δφ`` about its own origin, ``(δp, δφ) ~ N(0,
-cov_origin)`` in W's axes (``X_found = [exp(δφ) R, p + δp]``).  The bound frame carries the same
+cov_origin)`` in the camera's axes (:meth:`Camera.measure_C`; docs/program.md).  The bound frame carries the same
 uncertainty as an :class:`~armguard.uncertainty.UncertainPose3` (left perturbation in W; its
 covariance is ``cov_origin`` moved to W's origin, Smith & Cheeseman 1986's compounding).
 """
