@@ -209,14 +209,11 @@ class ClearanceStatus(enum.Enum):
 
 @dataclass(frozen=True)
 class PairSigma:
-    """One owner pair: ``distance`` m, its nearest element pair's (witness points ``p_WA``, ``p_WB``, W,
-    m), which ``sigma_max`` (m, the owners' worst-direction extent) turns into ``p_bound``
-    (conservative) and the status; ``sigma`` m, the linearised standard deviation of a distance along
-    its nearest direction, and ``sigmas`` (its distance over ``sigma``), of the element pair with the
-    fewest sigmas (which may be another, farther one: a shape whose nearest direction is along the
-    lever arm has sigma 0 and infinitely many sigmas, yet can collide through the second order);
-    ``p_linear`` (Φ(−sigmas), an estimate); ``p_monte_carlo`` (``None`` without samples);
-    ``placements`` the placements that move it."""
+    """One owner pair: ``distance`` m, its nearest element pair's (witnesses ``p_WA``, ``p_WB``, W, m),
+    which ``sigma_max`` (m, the owners' worst-direction extent) makes ``p_bound`` (conservative) and the
+    status; ``sigma`` m (the linearised std of a distance along its nearest direction) and ``sigmas``,
+    of the element pair with the fewest sigmas (maybe a farther one: along the lever arm sigma is 0);
+    ``p_linear`` Φ(−sigmas), an estimate; ``p_monte_carlo`` (None without samples); ``placements``."""
 
     a: str
     b: str
