@@ -390,3 +390,30 @@ def test_calibrate_a_bare_model_cell_with_the_defaults():
     assert len(poses) == 12 and all(_reachable(cell, X) for X in poses)
     cal = calibrate_camera(cell, n=6)
     assert cal.status.value == "calibrated", cal.stopped
+
+
+def test_the_summary_gives_the_cameras_own_position_sigma(calibration):
+    """The summary printed rho's sigma (the perturbation at the base's origin) as the camera's position sigma
+    ([0.85, 2.98, 2.28] mm where the camera's own were [2.75, 2.42, 0.17]).  It prints the camera origin's, and
+    those match Monte Carlo draws of the calibrated pose."""
+    import re
+
+    from scipy.linalg import expm
+
+    from armguard.uncertainty import UncertainPlacement
+
+    line = next(ln for ln in calibration.summary().splitlines() if "camera in" in ln)
+    printed = [float(x) for x in re.search(r"sigma \[([^\]]*)\] mm", line)[1].split(",")]
+    cov = UncertainPlacement("camera", calibration.X_BC).cov_origin
+    np.testing.assert_allclose(printed, np.round(1e3 * np.sqrt(np.diag(cov)[:3]), 2), atol=0.006)
+    rng = np.random.default_rng(1)
+    T, C = calibration.X_BC.mean, calibration.X_BC.cov
+
+    def hat(xi):
+        M = np.zeros((4, 4))
+        M[:3, :3] = [[0, -xi[5], xi[4]], [xi[5], 0, -xi[3]], [-xi[4], xi[3], 0]]
+        M[:3, 3] = xi[:3]
+        return M
+
+    drawn = np.array([(expm(hat(xi)) @ T)[:3, 3] for xi in rng.multivariate_normal(np.zeros(6), C, 4000)])
+    np.testing.assert_allclose(1e3 * drawn.std(axis=0), printed, rtol=0.1)

@@ -98,7 +98,10 @@ class CameraCalibration:
             out.append(f"  {m.label}: {m.status}{clear}")
             out.extend(f"    {line}" for line in m.why())
         if self.ok:
-            sd = np.sqrt(np.diag(self.X_BC.cov))
+            from ..uncertainty import UncertainPlacement
+
+            # the camera's position sigma: its origin's (rho + phi x c), not rho's (the perturbation at the base's origin)
+            sd = np.sqrt(np.diag(UncertainPlacement("camera", self.X_BC).cov_origin))
             d = self.X_WC_after[:3, 3] - self.X_WC_before[:3, 3]
             turn = _angle(self.X_WC_after[:3, :3] @ self.X_WC_before[:3, :3].T)
             out.append(f"  camera in {self.cell.robot}'s base: xyz {np.round(self.X_BC.mean[:3, 3], 4).tolist()} m, "
