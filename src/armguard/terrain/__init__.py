@@ -10,6 +10,7 @@ stereo-like point clouds.  Guide: ``docs/terrain.md``.
 """
 
 from ._io import depth_to_points, read_points, write_points
+from ._carve import Carving
 from ._map import ElevationMap, OutlierRule
 from ._pyramid import PyramidLevel, TerrainPyramid, TerrainResult, TerrainStatus
 from ._volumes import bounding_box, link_volume
@@ -21,6 +22,7 @@ from ._files import MAX_CELLS, TerrainPointsDropped, load_terrain, shipped_terra
 __all__ = [
     "ElevationMap",
     "OutlierRule",
+    "Carving",
     "TerrainPyramid",
     "PyramidLevel",
     "TerrainResult",

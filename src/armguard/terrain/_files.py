@@ -8,6 +8,11 @@
   without points, from ``heights (ny, nx)`` and ``cell`` as a fully known map;
 * a point file (``.ply``, ``.pcd``, ``.npy``; :func:`read_points`) at ``cell`` (default 5 cm).
 
+Where the points were seen from -- a ``.npz``'s ``X_WC (4, 4)`` (the camera's pose; the shipped
+files have it) or ``sensor_W=`` -- turns on the checks of the rays' free space (stage 3 of
+:class:`OutlierRule`, :class:`Carving`): a point too far along its ray and a cell seen on a face
+only are then caught, not mapped too low.
+
 ``path`` may also be the name of a shipped terrain (``"rocky"``; :func:`shipped_terrains` lists
 them): a name with no folder and no suffix that is no file in the working directory is the
 shipped ``reference/terrain/<name>.npz`` (:func:`terrain_path`), so ``load_terrain("rocky")`` and
@@ -90,7 +95,8 @@ def _base_xy(scene, robot: str | None) -> np.ndarray:
     return np.asarray(poses[0][:2, 3], dtype=np.float64)
 
 
-def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | None = None) -> ElevationMap:
+def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | None = None,
+                 sensor_W=None) -> ElevationMap:
     """The ElevationMap of the terrain file ``path`` in ``scene``'s frame W (module docstring).
 
     ``robot``: whose base the map is centred under (default: the scene's first robot); without a
@@ -103,7 +109,11 @@ def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | No
     :class:`~armguard._errors.TerrainFileError` naming the file and the array.
 
     ``path``: a file, or a shipped terrain's name (``"rocky"``: :func:`terrain_path`); a path that
-    is neither raises a TerrainError naming it and listing the shipped names.  ``scene`` may be a Model."""
+    is neither raises a TerrainError naming it and listing the shipped names.  ``scene`` may be a Model.
+
+    ``sensor_W``: where the points were seen from, ``(3,)`` or one row per point (m, in the file's
+    frame); default the position of a ``.npz``'s ``X_WC``.  Both, and different, is an error (never
+    one quietly for the other)."""
     p = terrain_path(path)
     if scene is not None:
         scene = scene_of(scene, "terrain map")  # a Model: its scene (it had no flat_q: AttributeError)
@@ -111,8 +121,22 @@ def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | No
     heights = None
     if cell is not None:  # True is not 1 m, nor "0.1" 10 cm
         cell = number(cell, "load_terrain: cell", TerrainError, low=0.0, low_open=True, unit=" (m, a cell side)")
+    if sensor_W is not None:
+        try:
+            sensor_W = np.asarray(sensor_W, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise TerrainError(f"load_terrain: sensor_W: expected (3,) or (N, 3) numbers (m), got {sensor_W!r}") from None
+        if sensor_W.shape[-1:] != (3,) or sensor_W.ndim > 2 or not np.all(np.isfinite(sensor_W)):
+            raise TerrainError(f"load_terrain: sensor_W: expected (3,) or (N, 3) finite numbers (m), got shape "
+                               f"{sensor_W.shape}")
     if p.suffix.lower() == ".npz":
-        c, pts, heights, origin = _read_npz(p, cell)
+        c, pts, heights, origin, X_WC = _read_npz(p, cell)
+        if X_WC is not None and pts is not None:
+            if sensor_W is not None and not (sensor_W.shape == (3,) and np.allclose(sensor_W, X_WC[:3, 3])):
+                raise TerrainFileError(p, "X_WC", f"the file's camera is at {X_WC[:3, 3].tolist()} m and sensor_W="
+                                       f"{sensor_W.tolist() if sensor_W.size <= 3 else sensor_W.shape} was given: give "
+                                       "none, or the file's")
+            sensor_W = X_WC[:3, 3]
     else:
         c = 0.05 if cell is None else cell
         pts = read_points(p)
@@ -124,6 +148,8 @@ def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | No
         finite = np.all(np.isfinite(pts), axis=1)
         if not finite.any():
             raise TerrainFileError(p, "points", f"none of the {len(pts)} points is finite (every row holds a NaN or inf)")
+        if sensor_W is not None and sensor_W.ndim == 2 and len(sensor_W) != len(pts):
+            raise TerrainError(f"load_terrain: sensor_W: {len(sensor_W)} rows for the {len(pts)} points of {p}")
         if not finite.all():  # dropped as documented; ElevationMap.from_points counts them in ``invalid``
             warnings.warn(f"{p}: {int(np.count_nonzero(~finite))} of {len(pts)} point rows hold a NaN or inf "
                           "and were dropped", TerrainPointsDropped, stacklevel=2)
@@ -145,7 +171,8 @@ def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | No
     try:
         if pts is None:
             return ElevationMap.from_heights(heights, c, origin=(x0, y0))
-        return ElevationMap.from_points(pts + shift, c, bounds=(x0, y0, x0 + extent[0], y0 + extent[1]))
+        return ElevationMap.from_points(pts + shift, c, bounds=(x0, y0, x0 + extent[0], y0 + extent[1]),
+                                        sensor_W=None if sensor_W is None else sensor_W + shift)
     except TerrainFileError:
         raise
     except TerrainError as exc:  # what the map refuses (heights beyond any terrain, no supported point): this file's
@@ -153,13 +180,14 @@ def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | No
 
 
 def _read_npz(p: Path, cell):
-    """``(cell, points_W or None, heights or None, origin or None)`` of a terrain ``.npz``, each checked."""
+    """``(cell, points_W or None, heights or None, origin or None, X_WC or None)`` of a terrain ``.npz``, each
+    checked."""
     try:
         with np.load(p, allow_pickle=False) as z:
             keys = set(z.files)
             if "points_W" not in keys and "heights" not in keys:
                 raise TerrainFileError(p, "", f"a terrain .npz holds 'points_W' or 'heights' (it has {sorted(keys)})")
-            arrays = {k: np.asarray(z[k]) for k in ("cell", "points_W", "heights", "origin") if k in keys}
+            arrays = {k: np.asarray(z[k]) for k in ("cell", "points_W", "heights", "origin", "X_WC") if k in keys}
     except TerrainFileError:
         raise
     except Exception as exc:  # noqa: BLE001 - zipfile, zlib, EOF and format errors of a damaged .npz
@@ -194,7 +222,12 @@ def _read_npz(p: Path, cell):
         origin = _numbers(p, "origin", arrays["origin"])
         if origin.shape != (2,) or not np.all(np.isfinite(origin)):
             raise TerrainFileError(p, "origin", f"expected (x0, y0) finite (m, W), got {origin.tolist()}")
-    return c, pts, heights, origin
+    X_WC = None
+    if "X_WC" in arrays:
+        X_WC = _numbers(p, "X_WC", arrays["X_WC"])
+        if X_WC.shape != (4, 4) or not np.all(np.isfinite(X_WC)):
+            raise TerrainFileError(p, "X_WC", f"expected the camera's (4, 4) pose (m, W), finite, got shape {X_WC.shape}")
+    return c, pts, heights, origin, X_WC
 
 
 def _numbers(p: Path, name: str, a: np.ndarray) -> np.ndarray:

@@ -6,8 +6,12 @@ grazing angles, no texture) and a few outliers; for collision checking the map m
 *conservative*:
 
 * a cell's height is the **maximum** of its surviving points (the terrain is at least that high);
-* an outlier rule (:class:`OutlierRule`) removes points that are inconsistent with their cell and
-  cells that stand alone above their neighbours on too little support;
+* an outlier rule (:class:`OutlierRule`) removes points that are inconsistent with their cell,
+  cells that stand alone above their neighbours on too little support and, given the sensor's
+  position, points whose ray went through terrain other rays saw;
+* given the sensor's position, a cell whose points lie far below the rays that crossed it
+  (:class:`~armguard.terrain.Carving`: its top was not seen -- a lone point too far along its ray,
+  a slot narrower than the rays' spacing) is unknown, not known too low (``_carve.py``);
 * a cell with no surviving point is **unknown** and never treated as free: it is filled with a
   conservative height (``fill="neighbourhood"``: the highest known cell within ``fill_radius``
   cells, else the ceiling; ``fill="ceiling"``: the ceiling), and the map reports which cells were
@@ -27,6 +31,7 @@ from scipy import ndimage
 
 from .._errors import TerrainError
 from .._tolerance import DEFAULT_TOLERANCES
+from ._carve import Carving, ray_lows, rays_under
 
 __all__ = ["ElevationMap", "MAX_CELLS", "OutlierRule"]
 
@@ -57,7 +62,11 @@ class OutlierRule:
     1. **Per cell, robust z-score** (Iglewicz & Hoaglin's modified z-score): in a cell with at
        least ``min_points`` points, a point is rejected when
        ``|z - median| > k * max(1.4826 * MAD, sigma_min)`` (MAD: the median absolute deviation of
-       the cell's heights).  Cells with fewer points are kept whole (nothing to judge them by).
+       the cell's heights).  Cells with fewer points are kept whole (nothing to judge them by).  A
+       point *above* its cell's median is kept all the same where the cells around support it as
+       stage 2 counts support (``spike_support`` points of the other cells within
+       ``spike_radius`` at least ``z - spike`` high): the few points of a rock's top in a cell
+       that is mostly the ground beside it are the terrain, and the cell's height (its maximum).
     2. **Unsupported points**: a point at height ``z`` is dropped when fewer than
        ``spike_support`` points (itself included) within ``spike_radius`` cells of its cell
        (Chebyshev distance, its own cell included; points after stage 1) are at least as high as
@@ -65,8 +74,13 @@ class OutlierRule:
        points; a stereo mismatch floating above the ground (or a pair of them) has neither.  A cell
        left without points becomes unknown (and is filled like any hole).  The price: a real spike
        seen by one or two points only is dropped too (``spike = inf`` keeps it).
+    3. **Rays under seen terrain** (only given the sensor's position, ``from_points(sensor_W=...)``):
+       a point is dropped when its ray crosses a cell more than ``ray`` below that cell's highest
+       point (after stages 1 and 2): it went through terrain that other rays saw, so the point lies
+       too far along it (``_carve.py``).
 
-    ``k = inf`` or ``spike = inf`` disables a stage.
+    ``k = inf``, ``spike = inf`` or ``ray = inf`` disables a stage (with ``spike = inf`` stage 1
+    judges both sides of the median alone).
 
     Attributes
     ----------
@@ -84,6 +98,8 @@ class OutlierRule:
     spike_radius : int, cells
         Stage 2's neighbourhood (2: the 5 x 5 cells around; sparse far-range data needs more than
         the 8 adjacent cells to find its neighbours).
+    ray : float, m
+        Stage 3: how far below a cell's highest point a ray may cross it.
     """
 
     k: float = 3.5
@@ -92,6 +108,7 @@ class OutlierRule:
     spike: float = 0.15
     spike_support: int = 3
     spike_radius: int = 2
+    ray: float = 0.15
 
 
 @dataclass(frozen=True, eq=False)
@@ -107,7 +124,8 @@ class ElevationMap:
     cell : float, m
         Side of a (square) cell.
     known : (ny, nx) bool
-        Cells with at least one surviving point.
+        Cells with at least one surviving point and, given the sensor's position, no ray crossing
+        them more than ``Carving.gap`` above their highest point (their top was seen).
     counts : (ny, nx) int64
         Surviving points per cell.
     floor : float, m
@@ -116,6 +134,9 @@ class ElevationMap:
         Points removed by the outlier rule (stage 1 points plus the points of stage 2 cells).
     invalid : int
         Input points dropped as non-finite (NaN or inf: a depth image's holes).
+    upper : (ny, nx) float64 or None, m
+        Given the sensor's position, the height no cell's column can exceed (the rays that crossed
+        it, :class:`~armguard.terrain.Carving`; ``inf`` where too few did); else None.
     """
 
     heights: np.ndarray
@@ -126,6 +147,7 @@ class ElevationMap:
     floor: float
     rejected: int = 0
     invalid: int = 0
+    upper: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         h = np.asarray(self.heights, dtype=np.float64)
@@ -146,11 +168,13 @@ class ElevationMap:
         object.__setattr__(self, "floor", _number(self.floor, "ElevationMap.floor (m)"))
         if self.floor > float(h.min()):
             raise TerrainError(f"ElevationMap.floor {self.floor!r} must be finite and <= the lowest height {h.min():.6g}")
-        for name, a in (("known", self.known), ("counts", self.counts)):
+        extra = () if self.upper is None else (("upper", self.upper),)
+        for name, a in (("known", self.known), ("counts", self.counts)) + extra:
             if np.shape(a) != h.shape:
                 raise TerrainError(f"ElevationMap.{name}: shape {np.shape(a)} != heights {h.shape}")
-        for name, a, dt in (("heights", h, np.float64), ("origin", self.origin, np.float64),
-                            ("known", self.known, bool), ("counts", self.counts, np.int64)):
+        arrays = (("heights", h, np.float64), ("origin", self.origin, np.float64), ("known", self.known, bool),
+                  ("counts", self.counts, np.int64)) + tuple((n, a, np.float64) for n, a in extra)
+        for name, a, dt in arrays:
             a = np.array(a, dtype=dt)
             a.flags.writeable = False
             object.__setattr__(self, name, a)
@@ -202,7 +226,7 @@ class ElevationMap:
     @classmethod
     def from_points(cls, points_W, cell: float, *, bounds=None, rule: OutlierRule = OutlierRule(),
                     fill: str = "neighbourhood", fill_radius: int = 2, ceiling: float | None = None,
-                    floor: float | None = None) -> "ElevationMap":
+                    floor: float | None = None, sensor_W=None, carving: Carving = Carving()) -> "ElevationMap":
         """The conservative elevation map of a point cloud.
 
         Parameters
@@ -223,6 +247,13 @@ class ElevationMap:
             Fill height where no neighbour informs; default the highest known cell.
         floor : float, m, optional
             Bottom of the terrain columns; default one cell side below the lowest cell.
+        sensor_W : (3,) or (N, 3) float, m, optional
+            Where the points were seen from (the camera's optical centre in W; one row per point
+            for a cloud merged from several poses).  Enables stage 3 of the outlier rule and the
+            free-space bound (:class:`Carving`, :attr:`upper`).  A wrong position proves free space
+            that is not: give it only for the pose the points were taken from.
+        carving : Carving
+            How the rays' free space is read (with ``sensor_W``).
         """
         cell = _number(cell, "from_points: cell (m)", positive=True)
         if fill not in ("neighbourhood", "ceiling"):
@@ -233,6 +264,7 @@ class ElevationMap:
         finite = np.all(np.isfinite(p), axis=1)
         invalid = int(np.count_nonzero(~finite))
         p = p[finite]
+        o = _sensor(sensor_W, finite)
         if bounds is None:
             if len(p) == 0:
                 raise TerrainError("from_points: no finite points and no bounds")
@@ -256,18 +288,31 @@ class ElevationMap:
         col = np.where(p[:, 0] == x_max, nx - 1, col)  # the far edge belongs to the last cell
         row = np.where(p[:, 1] == y_max, ny - 1, row)
         inside = (col >= 0) & (col < nx) & (row >= 0) & (row < ny)
+        at = np.flatnonzero(inside)  # the points in the grid, by their index in p
         cid, z = (row * nx + col)[inside], p[inside, 2]
-        keep = _robust_keep(cid, z, rule)
-        rejected = int(np.count_nonzero(~keep))
-        cid, z = cid[keep], z[keep]
+        keep = _robust_keep(cid, z, nx, ny, rule)
+        at, cid, z = at[keep], cid[keep], z[keep]
         drop = _spikes(cid, z, nx, ny, rule)
-        rejected += int(np.count_nonzero(drop))
-        cid, z = cid[~drop], z[~drop]
+        at, cid, z = at[~drop], cid[~drop], z[~drop]
+        grid = (x_min, y_min, cell, nx, ny)
+        upper, seen = None, None
+        if o is not None:
+            use = np.ones(len(p), bool)
+            use[np.flatnonzero(inside)] = False
+            use[at] = True  # the points outside the grid and the survivors: their rays cross it
+            if np.isfinite(rule.ray):
+                use &= ~rays_under(o, p, grid, _hmax(cid, z, nx, ny), rule.ray, carving)
+                ok = use[at]
+                at, cid, z = at[ok], cid[ok], z[ok]
+            upper = ray_lows(o, p, use, grid, carving)
+        rejected = int(np.count_nonzero(inside)) - len(at)
         counts = np.bincount(cid, minlength=nx * ny).reshape(ny, nx)
-        hmax = np.full(nx * ny, -np.inf)
-        np.maximum.at(hmax, cid, z)
-        hmax = hmax.reshape(ny, nx)
+        hmax = _hmax(cid, z, nx, ny)
         known = counts > 0
+        if upper is not None:
+            seen = ~(known & (upper - hmax > carving.gap))  # inf - finite > gap: inf is no bound, seen stays
+            seen |= ~np.isfinite(upper)
+            known &= seen
         if not known.any():
             if ceiling is None:
                 raise TerrainError(f"from_points: no cell has a surviving point (the outlier rule rejected all {rejected} "
@@ -283,11 +328,36 @@ class ElevationMap:
             win = 2 * int(fill_radius) + 1
             neigh = ndimage.maximum_filter(np.where(known, hmax, -np.inf), size=win, mode="constant", cval=-np.inf)
             heights = np.where(known, hmax, np.where(np.isfinite(neigh), neigh, ceil_h))
+        if seen is not None:  # a cell seen on a face only: filled as a hole, never below the points it has
+            heights = np.where(seen, heights, np.maximum(heights, hmax))
         fl = float(heights.min()) - cell if floor is None else _number(floor, "from_points: floor (m)")
-        return cls(heights, np.array([x_min, y_min]), float(cell), known, counts, fl, rejected, invalid)
+        return cls(heights, np.array([x_min, y_min]), float(cell), known, counts, fl, rejected, invalid, upper)
 
 
-def _robust_keep(cid: np.ndarray, z: np.ndarray, rule: OutlierRule) -> np.ndarray:
+def _sensor(sensor_W, finite: np.ndarray) -> np.ndarray | None:
+    """``(n, 3)``: each finite point's sensor position, from ``(3,)`` or ``(N, 3)``; None without one."""
+    if sensor_W is None:
+        return None
+    try:
+        o = np.asarray(sensor_W, dtype=np.float64)
+    except (TypeError, ValueError):
+        o = np.zeros((0, 0))
+    if o.shape == (3,):
+        o = np.broadcast_to(o, (len(finite), 3))
+    if o.shape != (len(finite), 3) or not np.all(np.isfinite(o)):
+        raise TerrainError(f"from_points: sensor_W: expected (3,) or ({len(finite)}, 3) finite numbers (m, W: where "
+                           f"the points were seen from), got shape {np.shape(sensor_W)}")
+    return np.ascontiguousarray(o[finite])
+
+
+def _hmax(cid: np.ndarray, z: np.ndarray, nx: int, ny: int) -> np.ndarray:
+    """``(ny, nx)``: the highest point of each cell, ``-inf`` where none."""
+    h = np.full(nx * ny, -np.inf)
+    np.maximum.at(h, cid, z)
+    return h.reshape(ny, nx)
+
+
+def _robust_keep(cid: np.ndarray, z: np.ndarray, nx: int, ny: int, rule: OutlierRule) -> np.ndarray:
     """Stage 1 of :class:`OutlierRule`: a keep mask over the points (vectorised per cell)."""
     n = len(z)
     keep = np.ones(n, bool)
@@ -308,6 +378,11 @@ def _robust_keep(cid: np.ndarray, z: np.ndarray, rule: OutlierRule) -> np.ndarra
     judged = cnt[grp] >= rule.min_points
     bad_sorted = judged & (dev > rule.k * scale[grp])
     keep[order[bad_sorted]] = False
+    if np.isfinite(rule.spike):  # a high point the other cells around support is terrain (a rock's top)
+        high = order[bad_sorted & (z_s > med[grp])]
+        if len(high):
+            others = _support(cid, z, nx, ny, rule, own=False, at=high)
+            keep[high[others >= rule.spike_support]] = True
     return keep
 
 
@@ -319,17 +394,27 @@ def _spikes(cid: np.ndarray, z: np.ndarray, nx: int, ny: int, rule: OutlierRule)
     n = len(z)
     if not np.isfinite(rule.spike) or n == 0:
         return np.zeros(n, bool)
+    return _support(cid, z, nx, ny, rule) < rule.spike_support
+
+
+def _support(cid: np.ndarray, z: np.ndarray, nx: int, ny: int, rule: OutlierRule, *, own: bool = True,
+             at: np.ndarray | None = None) -> np.ndarray:
+    """Per point (or per point of ``at``, indices), how many points within ``spike_radius`` cells are
+    at least ``z - spike`` high (its own cell's with ``own``, itself included)."""
     z_min = float(z.min())
     span = 2.0 * (float(z.max()) - z_min + rule.spike) + 1.0
     key = np.sort(cid + (z - z_min) / span)
-    row, col = np.divmod(cid, nx)
-    lo_key = (np.maximum(z - rule.spike, z_min) - z_min) / span
-    support = np.zeros(n, np.int64)
+    sel = np.arange(len(z)) if at is None else at
+    row, col = np.divmod(cid[sel], nx)
+    lo_key = (np.maximum(z[sel] - rule.spike, z_min) - z_min) / span
+    support = np.zeros(len(sel), np.int64)
     rad = max(int(rule.spike_radius), 0)
     for dy in range(-rad, rad + 1):
         for dx in range(-rad, rad + 1):
+            if not own and dx == 0 and dy == 0:
+                continue
             r, c = row + dy, col + dx
             ok = (r >= 0) & (r < ny) & (c >= 0) & (c < nx)
             nb = (r * nx + c)[ok]
             support[ok] += np.searchsorted(key, nb + 1.0, side="left") - np.searchsorted(key, nb + lo_key[ok], side="left")
-    return support < rule.spike_support
+    return support

@@ -89,7 +89,8 @@ def look_at(eye_W, target_W) -> np.ndarray:
 
 
 def _surface(m: ElevationMap, x, y):
-    """Bilinear height (m) of the surface through the cell centres at W points ``(x, y)``."""
+    """Bilinear height (m) of the surface through the cell centres at W points ``(x, y)`` (beyond the
+    outer centres, the edge's heights)."""
     ny, nx = m.shape
     u = np.clip((x - m.origin[0]) / m.cell - 0.5, 0.0, nx - 1.0)
     v = np.clip((y - m.origin[1]) / m.cell - 0.5, 0.0, ny - 1.0)
@@ -104,8 +105,10 @@ def render_depth(m: ElevationMap, X_WC, *, width: int = 80, height: int = 60, fo
                  max_range: float = 6.0, step: float | None = None):
     """Ray-cast depth image of the terrain.
 
-    Returns ``(depth (height, width) float64 m, along C's z; NaN where the ray leaves the map or
-    the range), (fx, fy, cx, cy) px, normals_W (height, width, 3))``.  ``fov`` (rad) is the
+    Returns ``(depth (height, width) float64 m, along C's z; NaN where the ray meets no ground
+    within the range), (fx, fy, cx, cy) px, normals_W (height, width, 3))``.  Beyond the map the
+    ground goes on at its edge's heights (:func:`_surface` clamps): a world that ended at the map's
+    edge would show the camera a cliff there, its face seen from below.  ``fov`` (rad) is the
     horizontal field of view; ``step`` (m) the marching step (default half a cell), refined by
     bisection to a hundredth of it."""
     X = np.asarray(X_WC, np.float64)
@@ -117,9 +120,6 @@ def render_depth(m: ElevationMap, X_WC, *, width: int = 80, height: int = 60, fo
     o = X[:3, 3]
     ds = 0.5 * m.cell if step is None else float(step)
     seg = np.linalg.norm(d_W, axis=1)
-    ny, nx = m.shape
-    x_lo, y_lo = m.origin
-    x_hi, y_hi = x_lo + nx * m.cell, y_lo + ny * m.cell
     n_ray = len(d_W)
     z_prev = np.zeros(n_ray)
     hit = np.full(n_ray, np.nan)
@@ -131,8 +131,7 @@ def render_depth(m: ElevationMap, X_WC, *, width: int = 80, height: int = 60, fo
             break
         zc = np.full(len(idx), s * ds) / seg[idx]  # depth along C's z after s steps of length ds
         p = o + d_W[idx] * zc[:, None]
-        inside = (p[:, 0] >= x_lo) & (p[:, 0] <= x_hi) & (p[:, 1] >= y_lo) & (p[:, 1] <= y_hi)
-        below = inside & (p[:, 2] <= _surface(m, p[:, 0], p[:, 1]))
+        below = p[:, 2] <= _surface(m, p[:, 0], p[:, 1])
         if below.any():
             j = idx[below]
             lo, hi = z_prev[j], zc[below]

@@ -1,0 +1,177 @@
+"""The rays' free space in a sensed map (terrain/_carve.py): the grid walk against a brute-force
+reference, stage 3 of the outlier rule, a cell whose points lie far below the rays over it, a rock's
+top kept by stage 1, and
+the shipped terrains' maps with and without the camera's position."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from armguard._errors import TerrainError, TerrainFileError
+from armguard.terrain import Carving, ElevationMap, OutlierRule, load_terrain
+from armguard.terrain._carve import ray_lows
+from armguard.terrain.generate import REFERENCE, reference_terrain
+
+GRID = (-0.3, 0.2, 0.1, 7, 5)  # x0, y0, cell, nx, ny
+
+
+def _reference_lows(o, p, use, grid, carving):
+    """Every cell against every segment: the segment clipped to the cell's rectangle (Liang & Barsky,
+    written out again), its lower end; the `votes`-th lowest per cell.  Crossings shorter than 1e-9
+    of the segment are left out (a corner touched: the grid walk may or may not count it)."""
+    x0, y0, cell, nx, ny = grid
+    crossings = [[[] for _ in range(nx)] for _ in range(ny)]
+    for oi, pi, ui in zip(o, p, use):
+        if not ui:
+            continue
+        v = pi - oi
+        length = np.linalg.norm(v)
+        stop = carving.margin + carving.range_margin * length**2
+        if length <= stop:
+            continue
+        d = v * (length - stop) / length
+        for r in range(ny):
+            for c in range(nx):
+                lo = np.array([x0 + c * cell, y0 + r * cell])
+                hi = lo + cell
+                t0, t1 = 0.0, 1.0
+                for k in range(2):
+                    if d[k] == 0.0:
+                        if not lo[k] <= oi[k] <= hi[k]:
+                            t0, t1 = 1.0, 0.0
+                    else:
+                        a, b = (lo[k] - oi[k]) / d[k], (hi[k] - oi[k]) / d[k]
+                        t0, t1 = max(t0, min(a, b)), min(t1, max(a, b))
+                if t1 - t0 > 1e-9:
+                    crossings[r][c].append(oi[2] + min(t0 * d[2], t1 * d[2]))
+    out = np.full((ny, nx), np.inf)
+    for r in range(ny):
+        for c in range(nx):
+            z = sorted(crossings[r][c])
+            if len(z) >= carving.votes:
+                out[r, c] = z[carving.votes - 1]
+    return out
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), votes=st.integers(1, 3))
+def test_the_grid_walk_finds_every_cell_a_segment_crosses_and_its_lowest_point(seed, votes):
+    rng = np.random.default_rng(seed)
+    n = 12
+    o = np.column_stack([rng.uniform(-1.0, 1.2, n), rng.uniform(-0.5, 1.2, n), rng.uniform(-0.5, 2.0, n)])
+    p = np.column_stack([rng.uniform(-1.0, 1.2, n), rng.uniform(-0.5, 1.2, n), rng.uniform(-0.5, 2.0, n)])
+    p[:3, :2] = o[:3, :2] + rng.uniform(-0.02, 0.02, (3, 2))  # near-vertical rays: one or two cells
+    p[3, 0] = o[3, 0]  # a ray in the y-z plane (dx = 0)
+    use = rng.random(n) < 0.9
+    carving = Carving(margin=0.05, range_margin=0.01, votes=votes)
+    got = ray_lows(o, p, use, GRID, carving)
+    ref = _reference_lows(o, p, use, GRID, carving)
+    both = np.isfinite(ref) & np.isfinite(got)
+    np.testing.assert_allclose(got[both], ref[both], rtol=0, atol=1e-12)
+    assert np.array_equal(np.isfinite(got), np.isfinite(ref))
+
+
+def _flat_cloud(spacing=0.02, size=2.0, z=0.0):
+    g = np.arange(0.5 * spacing, size, spacing)
+    x, y = np.meshgrid(g, g)
+    return np.column_stack([x.ravel(), y.ravel(), np.full(x.size, z)])
+
+
+def test_a_point_too_far_along_its_ray_is_dropped_not_mapped_too_low():
+    """A stereo mismatch that puts a point 60 % farther along its ray lands 0.9 m under the ground;
+    where it is its cell's only point, the per-cell maximum maps the cell 0.9 m too low and calls it
+    known.  Its ray crossed the ground other rays saw."""
+    o = np.array([1.0, -1.0, 1.5])
+    cloud = _flat_cloud(size=3.0)
+    target = np.array([1.21, 1.43, 0.0])  # the ground the ray really met
+    far = o + 1.6 * (target - o)  # ... and where the mismatch put it: (1.34, 2.89, -0.9)
+    far_cell = (int(far[1] // 0.1), int(far[0] // 0.1))
+    cloud = cloud[~((np.floor(cloud[:, 0] / 0.1) == far_cell[1]) & (np.floor(cloud[:, 1] / 0.1) == far_cell[0]))]
+    pts = np.vstack([cloud, far])
+    blind = ElevationMap.from_points(pts, 0.1, bounds=(0, 0, 3, 3))
+    assert blind.known[far_cell] and blind.heights[far_cell] < -0.8  # known, 0.9 m too low
+    m = ElevationMap.from_points(pts, 0.1, bounds=(0, 0, 3, 3), sensor_W=o)
+    assert not m.known[far_cell] and m.heights[far_cell] >= 0.0  # unseen, filled from its neighbours
+    assert m.rejected == blind.rejected + 1
+    off = ElevationMap.from_points(pts, 0.1, bounds=(0, 0, 3, 3), sensor_W=o, rule=OutlierRule(ray=np.inf),
+                                   carving=Carving(gap=np.inf))
+    assert off.known[far_cell] and off.heights[far_cell] < -0.8  # both checks off: the points alone again
+    gap_only = ElevationMap.from_points(pts, 0.1, bounds=(0, 0, 3, 3), sensor_W=o, rule=OutlierRule(ray=np.inf))
+    assert not gap_only.known[far_cell]  # without stage 3, the rays over the cell still say its top was not seen
+
+
+def test_stage_one_keeps_a_rock_top_the_cells_around_support():
+    """A cell of ground points with two on a rock's top beside it: the robust z-score alone drops the
+    two (the cell's height the ground's); the rock's cells next to it support them."""
+    rng = np.random.default_rng(0)
+
+    def cell_points(col, row, z, n):
+        return np.column_stack([rng.uniform(col * 0.1, (col + 1) * 0.1, n), rng.uniform(row * 0.1, (row + 1) * 0.1, n),
+                                z + rng.normal(0.0, 0.002, n)])
+
+    ground = [cell_points(c, r, 0.0, 12) for r in range(6) for c in range(3)]
+    rock = [cell_points(c, r, 0.3, 12) for r in range(6) for c in range(4, 6)]
+    edge = np.vstack([cell_points(3, 2, 0.0, 12), cell_points(3, 2, 0.3, 2)])
+    pts = np.vstack(ground + rock + [edge])
+    m = ElevationMap.from_points(pts, 0.1, bounds=(0, 0, 0.6, 0.6))
+    assert m.heights[2, 3] > 0.29  # the rock's top is the cell's height
+    alone = np.vstack(ground + [edge])  # no rock beside: the two are a mismatch
+    m2 = ElevationMap.from_points(alone, 0.1, bounds=(0, 0, 0.6, 0.6))
+    assert m2.heights[2, 3] < 0.01 and m2.rejected == 2
+
+
+@pytest.mark.parametrize("name", sorted(REFERENCE))
+def test_the_shipped_terrains_with_their_camera_map_no_cell_far_too_low(name):
+    """Measured on the shipped clouds (known cells under the ground truth by more than 10 cm, points
+    only -> with the camera): gentle 0 -> 0, rocky 0 -> 0, rough 3 (worst 0.36 m) -> 1 (0.10 m)."""
+    r = reference_terrain(name)
+    truth, X = r["heights"], r["X_WC"]
+    blind = ElevationMap.from_points(r["points_W"], 0.05, bounds=(0, 0, 3.2, 3.2))
+    m = load_terrain(name)  # the file's X_WC: the camera's position
+    assert m.upper is not None
+    low, low_blind = truth - m.heights, truth - blind.heights
+    assert float(low[m.known].max()) <= 0.11
+    assert np.count_nonzero(m.known & (low > 0.1)) <= np.count_nonzero(blind.known & (low_blind > 0.1))
+    fin = np.isfinite(m.upper)
+    assert fin.mean() > 0.8 and float((truth - m.upper)[fin].max()) < 0.1  # a bound, to the cells' own relief
+    assert m.known.sum() > 0.85 * blind.known.sum()  # the price: cells seen in part only, unseen
+    assert not np.array_equal(X, np.eye(4))
+
+
+def test_load_terrain_takes_the_files_camera_and_refuses_another(tmp_path):
+    r = reference_terrain("gentle")
+    f = tmp_path / "t.npz"
+    np.savez(f, points_W=r["points_W"], cell=0.05, X_WC=r["X_WC"])
+    m = load_terrain(f)
+    assert m.upper is not None
+    same = load_terrain(f, sensor_W=r["X_WC"][:3, 3])
+    assert np.array_equal(same.heights, m.heights)
+    with pytest.raises(TerrainFileError, match="X_WC.*the file's camera is at"):
+        load_terrain(f, sensor_W=[0.0, 0.0, 9.0])
+    bad = tmp_path / "bad.npz"
+    np.savez(bad, points_W=r["points_W"], cell=0.05, X_WC=np.eye(3))
+    with pytest.raises(TerrainFileError, match=r"X_WC.*\(4, 4\) pose"):
+        load_terrain(bad)
+    bare = tmp_path / "bare.npz"
+    np.savez(bare, points_W=r["points_W"], cell=0.05)
+    assert load_terrain(bare).upper is None
+    given_ = load_terrain(bare, sensor_W=r["X_WC"][:3, 3])
+    assert np.array_equal(given_.heights, m.heights) and np.array_equal(given_.known, m.known)
+    with pytest.raises(TerrainError, match="sensor_W"):
+        load_terrain(bare, sensor_W=[1.0, 2.0])
+    with pytest.raises(TerrainError, match="sensor_W: 2 rows for the"):
+        load_terrain(bare, sensor_W=np.zeros((2, 3)))
+
+
+def test_from_points_checks_the_sensor_position():
+    pts = _flat_cloud(0.1, 1.0)
+    for bad in ([0.0, 0.0], [np.nan, 0.0, 1.0], np.zeros((3, 3)), "up"):
+        with pytest.raises(TerrainError, match="sensor_W: expected"):
+            ElevationMap.from_points(pts, 0.1, sensor_W=bad)
+    per_point = np.tile([0.5, -1.0, 1.0], (len(pts), 1))
+    a = ElevationMap.from_points(pts, 0.1, sensor_W=per_point)
+    b = ElevationMap.from_points(pts, 0.1, sensor_W=[0.5, -1.0, 1.0])
+    assert np.array_equal(a.upper, b.upper) and np.array_equal(a.known, b.known)
