@@ -169,6 +169,7 @@ class Workcell:
         self.bound: dict = {}
         self.q = np.array(self.believed.home(self.robot))
         self.held = None  # (object, X_EO believed, X_EO real)
+        self._held_unc = None  # the held object's FIND relation: (its covariance, X_WP at the grasp)
         self._supports: list = []
         self._sink_scenes: tuple = (None, None)
         self._rng = np.random.default_rng(seed)
@@ -259,7 +260,7 @@ class Workcell:
         return pairs + [(self.held[0], b) for b in self._supports] if self.held is not None else pairs
 
     def _run(self, traj, touching, label: str) -> MotionRecord:
-        from ..uncertainty import UncertainPlacement, verify_with_confidence
+        from ..uncertainty import UncertainPlacement, UncertainPose3, verify_with_confidence
         from ..verify import verify
 
         for b in touching:
@@ -269,6 +270,8 @@ class Workcell:
         added = _allow(self.believed, pairs), _allow(self.real, pairs)
         try:
             places = [UncertainPlacement(o, u) for o, u in self.bound.items() if o in self.believed.bodies and np.any(u.cov)]
+            if self.held is not None and self._held_unc is not None and np.any(self._held_unc[0]):
+                places.append(UncertainPlacement(self.held[0], UncertainPose3(self._held_unc[1], self._held_unc[0])))
             k = 0.0
             if places:
                 cv = verify_with_confidence(self.believed, traj, places, self.confidence, method=self.method)
@@ -343,7 +346,8 @@ class Workcell:
                 if frozenset((obj, b)) in scene.disabled_pairs:
                     scene.enable_pair(obj, b)
         self.held = (obj, X_EW @ self.X_believed[obj], X_EW @ self.X_real[obj])
-        self.bound.pop(obj, None)
+        u = self.bound.pop(obj, None)  # carried with the hand: the payload is grown by it (uncertainty._confident)
+        self._held_unc = None if u is None else (np.array(u.cov), self.believed.link_pose(self.q, self.robot, tool))
         self._supports = supports
 
     def release(self, obj: str) -> None:
@@ -358,7 +362,14 @@ class Workcell:
                     scene.disable_pair(obj, b)  # two static bodies: never checked
         self.X_believed[obj] = X_WE @ self.held[1]
         self.X_real[obj] = X_WE @ self.held[2]
-        self.held = None
+        if self._held_unc is not None:  # set down where the hand took it: the FIND's displacement moved with it
+            from ..uncertainty import UncertainPose3, se3
+
+            cov, X_WP_grasp = self._held_unc
+            T = self.believed.link_pose(self.q, self.robot, self._arm.tool_link) @ _inv(X_WP_grasp)
+            Ad = se3.adjoint(T)
+            self.bound[obj] = UncertainPose3(self.X_believed[obj], Ad @ cov @ Ad.T)
+        self.held, self._held_unc = None, None
 
     def finish(self) -> ProgramRun:
         """The run so far, with the objects' final poses."""

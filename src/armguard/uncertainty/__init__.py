@@ -11,16 +11,8 @@ the checks (:func:`clearance_sigmas`, :func:`verify_with_confidence`).  Guide: `
 from __future__ import annotations
 
 from . import se2, se3
-from ._checks import (
-    ClearanceStatus,
-    ConfidentVerification,
-    GroupSigma,
-    PairSigma,
-    SigmaReport,
-    UncertainPlacement,
-    clearance_sigmas,
-    verify_with_confidence,
-)
+from ._checks import ClearanceStatus, GroupSigma, PairSigma, SigmaReport, UncertainPlacement, clearance_sigmas
+from ._confident import ConfidentVerification, verify_with_confidence
 from ._grow import grow_shape
 from .confidence import Box2, Ellipse, Polygon2, confidence_for_k2, ellipse, k2_for_confidence, probability_inside
 from .montecarlo import (

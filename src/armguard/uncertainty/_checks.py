@@ -56,16 +56,7 @@ otherwise.
 at ``q``, and the exact signed distance (``armguard.geometry.distance``; the workspace walls by
 support) for every affected pair — for reporting, beside the bound.
 
-**Confident verification** (:func:`verify_with_confidence`): ``k² = χ²_r.ppf(confidence)``
-with ``r`` the summed rank of all placements; with probability ``confidence`` every
-``m_k ≤ k``, so every point of a placed body lies within ``k σ_max`` of its nominal place.
-The verification runs on a scene copy whose placed bodies are grown by ``k σ_max`` (their own
-points' ``σ_max``: translation and the rotational sweep about ``o``); for a robot-base
-placement every body is grown by ``k σ_max`` of the base's displacement evaluated over that
-body's points (the body moving by ``D⁻¹`` relative to the arm is the same relative motion) and
-the workspace box shrunk by it.  Grown shapes contain the Minkowski sum
-(:func:`armguard.uncertainty._grow.grow_shape`), so ``safe`` holds with probability at least
-``confidence``.
+**Confident verification**: :mod:`armguard.uncertainty._confident`.
 """
 
 from __future__ import annotations
@@ -77,7 +68,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
-from ..model import kinematics_of, scene_of
+from ..model import kinematics_of
 from .._errors import UncertaintyError
 from .._tolerance import DEFAULT_TOLERANCES
 from .._values import number
@@ -86,8 +77,8 @@ from ._grow import grow_shape
 from .pose2 import UncertainPose2
 from .pose3 import UncertainPose3
 
-__all__ = ["UncertainPlacement", "ClearanceStatus", "PairSigma", "GroupSigma", "SigmaReport", "ConfidentVerification",
-           "clearance_sigmas", "verify_with_confidence", "grow_shape"]
+__all__ = ["UncertainPlacement", "ClearanceStatus", "PairSigma", "GroupSigma", "SigmaReport", "clearance_sigmas",
+           "grow_shape"]
 
 
 def _skew(v: np.ndarray) -> np.ndarray:
@@ -275,15 +266,17 @@ def _status(d: float, p: float, confidence: float) -> ClearanceStatus:
     return ClearanceStatus.CONFIDENT if p <= 1.0 - confidence else ClearanceStatus.AT_RISK
 
 
-def _check_placements(scene, placements) -> tuple:
+def _check_placements(scene, placements, *, payloads: bool = False) -> tuple:
     placements = (placements,) if isinstance(placements, UncertainPlacement) else tuple(placements)
     seen = set()
     for p in placements:
         if not isinstance(p, UncertainPlacement):
             raise UncertaintyError(f"placements: expected UncertainPlacement objects, got {type(p).__name__}")
-        if p.name not in scene.bodies and p.name not in scene.robots:
-            raise UncertaintyError(f"placement {p.name!r}: not a body or robot of scene {scene.name!r}; bodies are "
-                                   f"{list(scene.bodies)}, robots {list(scene.robots)}")
+        if p.name not in scene.bodies and p.name not in scene.robots and not (payloads and p.name in scene.payloads):
+            held = f", payloads {list(scene.payloads)}" if payloads else ""
+            raise UncertaintyError(f"placement {p.name!r}: not a body or robot{' or payload' if payloads else ''} of "
+                                   f"scene {scene.name!r}; bodies are {list(scene.bodies)}, robots {list(scene.robots)}"
+                                   + held)
         if p.name in seen:
             raise UncertaintyError(f"placement {p.name!r}: given twice (merge the relations first)")
         seen.add(p.name)
@@ -515,84 +508,6 @@ def _moved_hits(sa, sb, X_rel: np.ndarray) -> np.ndarray:
     for i in np.flatnonzero(status == 2):
         hit[i] = distance(guard.transformed(X[i]), ob).distance <= 0.0
     return hit
-
-
-@dataclass(frozen=True)
-class ConfidentVerification:
-    """:func:`verify_with_confidence`'s answer: ``report`` (the verifier's, on the grown scene);
-    ``confidence``; ``k`` (the Mahalanobis radius, ``k² = χ²_dof.ppf(confidence)``); ``dof``;
-    ``growth`` (body -> m it was grown by); ``workspace_shrink`` (m); ``scene`` (the grown copy)."""
-
-    report: object
-    confidence: float
-    k: float
-    dof: int
-    growth: dict
-    workspace_shrink: float
-    scene: object
-
-    @property
-    def safe(self) -> bool:
-        """True only when the grown scene verifies SAFE: safe with probability >= ``confidence``."""
-        return bool(self.report.safe)
-
-    @property
-    def status(self):
-        """The verifier's :class:`armguard.verify.VerificationStatus` on the grown scene."""
-        return self.report.status
-
-
-def verify_with_confidence(scene, trajectory, placements, confidence: float = 0.999, **verify_options) -> ConfidentVerification:
-    """Verify ``trajectory`` so that SAFE holds with probability >= ``confidence`` under ``placements``.
-
-    The placed bodies (and, for a robot-base placement, every body) are grown by the confidence
-    ellipsoid's extent ``k σ_max`` (module docstring) on a copy of ``scene``, which
-    ``armguard.verify`` then checks with ``verify_options`` (``stopping_distance``, ``method``, …).
-    A robot-base placement needs a scene with one robot (another robot's links would have to
-    grow too): otherwise UncertaintyError.
-    """
-    scene = scene_of(scene, "verification")  # a Model: its scene
-    from ..verify import verify
-
-    _confidence(confidence)
-    placements = _check_placements(scene, placements)
-    dof = sum(p.rank for p in placements)
-    k = math.sqrt(float(stats.chi2.ppf(float(confidence), dof))) if dof > 0 else 0.0
-    growth = {b: 0.0 for b in scene.bodies}
-    shrink = 0.0
-    for p in placements:
-        if p.name in scene.bodies:
-            growth[p.name] += k * p.sigma_max(scene.bodies[p.name].shapes)
-            continue
-        if len(scene.robots) > 1:
-            raise UncertaintyError(f"placement {p.name!r}: a robot-base placement is supported in a scene with one "
-                                   f"robot; scene {scene.name!r} has {list(scene.robots)}")
-        for b, body in scene.bodies.items():
-            growth[b] += k * p.sigma_max(body.shapes)
-        ws = scene.workspace
-        if ws is not None:
-            from ..geometry import Box
-
-            box = Box(0.5 * (ws.lo + ws.hi), 0.5 * (ws.hi - ws.lo))
-            shrink += k * p.sigma_max([box])
-    grown = scene.copy()
-    for b, g in growth.items():
-        if g > 0.0:
-            body = scene.bodies[b]
-            disabled = [pair for pair in scene.disabled_pairs if b in pair]
-            grown.remove_body(b)
-            grown.add_body(b, [grow_shape(s, g) for s in body.shapes], category=body.category)
-            for pair in disabled:
-                grown.disable_pair(*sorted(pair))
-    if shrink > 0.0:
-        ws = scene.workspace
-        if np.any(ws.hi - ws.lo <= 2.0 * shrink):
-            raise UncertaintyError(f"verify_with_confidence: the workspace box shrinks by {shrink:.3g} m on each side "
-                                   "and vanishes; no trajectory can be verified at this confidence")
-        grown.set_workspace(ws.lo + shrink, ws.hi - shrink)
-    report = verify(grown, trajectory, **verify_options)
-    return ConfidentVerification(report, float(confidence), k, dof, {b: g for b, g in growth.items() if g > 0.0},
-                                 shrink, grown)
 
 
 def _confidence(value) -> float:
