@@ -135,6 +135,7 @@ def test_the_shipped_terrains_with_their_camera_map_no_cell_far_too_low(name):
     low, low_blind = truth - m.heights, truth - blind.heights
     assert float(low[m.known].max()) <= 0.11
     assert np.count_nonzero(m.known & (low > 0.1)) <= np.count_nonzero(blind.known & (low_blind > 0.1))
+    assert np.count_nonzero(~m.known & (low > 0.1)) <= np.count_nonzero(~blind.known & (low_blind > 0.1))
     fin = np.isfinite(m.upper)
     assert fin.mean() > 0.8 and float((truth - m.upper)[fin].max()) < 0.1  # a bound, to the cells' own relief
     assert m.known.sum() > 0.85 * blind.known.sum()  # the price: cells seen in part only, unseen
@@ -175,3 +176,79 @@ def test_from_points_checks_the_sensor_position():
     a = ElevationMap.from_points(pts, 0.1, sensor_W=per_point)
     b = ElevationMap.from_points(pts, 0.1, sensor_W=[0.5, -1.0, 1.0])
     assert np.array_equal(a.upper, b.upper) and np.array_equal(a.known, b.known)
+
+
+def _cast(o, dirs, boxes):
+    """The nearest hit of rays ``o + t d`` (t > 0) with the ground z = 0 and axis-aligned boxes (lo, hi)."""
+    t_best = np.where(dirs[:, 2] < 0, -o[2] / np.where(dirs[:, 2] < 0, dirs[:, 2], -1), np.inf)
+    for lo, hi in boxes:
+        lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            a, b = (lo - o) / dirs, (hi - o) / dirs
+        tmin, tmax = np.nanmax(np.minimum(a, b), axis=1), np.nanmin(np.maximum(a, b), axis=1)
+        hit = (tmax >= tmin) & (tmin > 0)
+        t_best = np.where(hit & (tmin < t_best), tmin, t_best)
+    ok = np.isfinite(t_best)
+    return o + dirs[ok] * t_best[ok, None]
+
+
+def _fan(o, target, n=300, half=0.5):
+    f = np.asarray(target, float) - o
+    f /= np.linalg.norm(f)
+    r = np.cross(f, [0.0, 0.0, 1.0])
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    a = np.linspace(-half, half, n)
+    A, B = np.meshgrid(a, a)
+    d = f[None] + A.ravel()[:, None] * r[None] + B.ravel()[:, None] * u[None]
+    return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+def test_a_ray_beside_a_post_in_its_cell_is_no_ray_under_the_ground():
+    """A 3 cm post 1.5 m tall in a 10 cm cell, a 20 cm stone 1 m behind it in the same row: the rays
+    to the stone pass the post's cell beside the post, far below its top.  Judged against the
+    cells' highest points, stage 3 dropped every point of the stone and left its cell unknown at the
+    ground's height (a link 10 cm over the ground there was no longer a collision)."""
+    o = np.array([0.0, 0.05, 1.2])
+    post = ([0.50, 0.00, 0.0], [0.53, 0.03, 1.5])
+    stone = ([1.50, 0.035, 0.0], [1.56, 0.07, 0.20])
+    pts = _cast(o, _fan(o, [1.5, 0.05, 0.0]), [post, stone])
+    bounds = (0.0, -0.5, 2.5, 0.6)
+    blind = ElevationMap.from_points(pts, 0.1, bounds=bounds)
+    m = ElevationMap.from_points(pts, 0.1, bounds=bounds, sensor_W=o)
+    assert blind.known[5, 15] and blind.heights[5, 15] == pytest.approx(0.2)
+    assert m.known[5, 15] and m.heights[5, 15] == pytest.approx(0.2) and m.counts[5, 15] == blind.counts[5, 15]
+    assert m.heights[5, 5] == pytest.approx(blind.heights[5, 5], abs=1e-12) and m.heights[5, 5] > 1.0  # its top seen
+    assert np.all(m.heights >= blind.heights) and np.all(blind.known | ~m.known)
+
+
+@pytest.mark.parametrize("name", sorted(REFERENCE))
+def test_the_camera_only_raises_a_cell_or_takes_its_known(name):
+    """With the sensor's position every cell is at least as high as from the points alone, and known
+    only where the points alone know it: the rays add caution, never take it away (the fill of the
+    holes reads every cell's points, carved or not)."""
+    r = reference_terrain(name)
+    blind = ElevationMap.from_points(r["points_W"], 0.05, bounds=(0, 0, 3.2, 3.2))
+    m = ElevationMap.from_points(r["points_W"], 0.05, bounds=(0, 0, 3.2, 3.2), sensor_W=r["X_WC"][:3, 3])
+    assert np.all(m.heights >= blind.heights)
+    assert np.all(blind.known | ~m.known)
+    assert m.known.sum() < blind.known.sum()  # the rays did find cells not seen on top
+
+
+@pytest.mark.parametrize("bad, what", [
+    (dict(gap=np.nan), "Carving.gap: expected a number > 0"), (dict(votes=0), "Carving.votes: expected an integer >= 1"),
+    (dict(votes=1.5), "Carving.votes"), (dict(range_margin=np.nan), "Carving.range_margin"),
+    (dict(margin=-1.0), "Carving.margin: expected a number >= 0"), (dict(margin=np.inf), "Carving.margin")])
+def test_a_carving_that_would_carve_nothing_or_too_much_is_refused(bad, what):
+    with pytest.raises(TerrainError, match=what.replace(".", "\\.")):
+        Carving(**bad)
+
+
+@pytest.mark.parametrize("bad, what", [
+    (dict(ray=np.nan), "OutlierRule.ray"), (dict(ray=0.0), "OutlierRule.ray"), (dict(k=-1.0), "OutlierRule.k"),
+    (dict(spike_radius=-1), "OutlierRule.spike_radius"), (dict(min_points=True), "OutlierRule.min_points"),
+    (dict(sigma_min=np.inf), "OutlierRule.sigma_min")])
+def test_an_outlier_rule_with_a_meaningless_field_is_refused(bad, what):
+    with pytest.raises(TerrainError, match=what.replace(".", "\\.")):
+        OutlierRule(**bad)
+    assert OutlierRule(k=np.inf, spike=np.inf, ray=np.inf).ray == np.inf  # inf: the stage is off

@@ -6,9 +6,9 @@ the segment from ``o`` to ``p`` crossed free space (light travelled along it).  
 second, for two checks the points alone cannot make:
 
 * **A ray under seen terrain** (stage 3 of :class:`~armguard.terrain.OutlierRule`): a ray that
-  crosses a cell more than ``OutlierRule.ray`` below that cell's highest point went through
-  terrain that other rays saw; its point lies beyond a surface (a stereo mismatch that put it too
-  far) and is dropped.  A point too far along its ray lands *below* the terrain of its cell: the
+  crosses a cell more than ``OutlierRule.ray`` below that cell's lowest point went through the
+  ground that other rays saw; its point lies beyond a surface (a stereo mismatch that put it too
+  far) and is dropped (its cell is then unknown, never lower than its points were).  A point too far along its ray lands *below* the terrain of its cell: the
   per-cell maximum keeps such a cell known, and too low, where it is the cell's only point.
 * **A cell whose top was not seen** (:class:`Carving`): a cell's column can reach no higher than
   the rays that crossed it without stopping.  A cell whose surviving points lie far below that
@@ -33,7 +33,27 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from .._errors import TerrainError
+
 __all__ = ["Carving", "ray_lows", "rays_under"]
+
+
+def _field(obj, cls: str, name: str, low, integer: bool, inf_ok: bool) -> None:
+    """``obj.name`` checked: an int >= ``low`` (``integer``), else a number >= ``low`` (> 0 where
+    ``low`` is 0.0 and ``inf_ok``: a tolerance), ``inf`` only with ``inf_ok``; else a TerrainError."""
+    v = getattr(obj, name)
+    if integer:
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < low:
+            raise TerrainError(f"{cls}.{name}: expected an integer >= {low}, got {v!r}")
+        return
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        raise TerrainError(f"{cls}.{name}: expected a number, got {v!r}") from None
+    ok = (x > low if inf_ok else x >= low) and (np.isfinite(x) or (inf_ok and x == np.inf))
+    if isinstance(v, bool) or not ok:
+        what = "> 0 (inf: off)" if inf_ok else f">= {low:g}, finite"
+        raise TerrainError(f"{cls}.{name}: expected a number {what}, got {v!r}")
 
 
 @dataclass(frozen=True)
@@ -58,6 +78,11 @@ class Carving:
     range_margin: float = 0.006
     votes: int = 2
     gap: float = 0.15
+
+    def __post_init__(self) -> None:
+        for name, low, ints, inf_ok in (("margin", 0.0, False, False), ("range_margin", 0.0, False, False),
+                                        ("votes", 1, True, False), ("gap", 0.0, False, True)):
+            _field(self, "Carving", name, low, ints, inf_ok)
 
 
 @njit(cache=True)
@@ -168,7 +193,8 @@ def _stops(o: np.ndarray, pts: np.ndarray, carving: Carving) -> np.ndarray:
 
 def rays_under(o_W, points_W, grid, hmax, tol: float, carving: Carving) -> np.ndarray:
     """``(N,) bool``: the points whose ray (from ``o_W (N, 3)``, stopped as ``carving`` says)
-    crosses a cell more than ``tol`` below ``hmax (ny, nx)`` (``-inf``: no point there).
+    crosses a cell more than ``tol`` below ``hmax (ny, nx)`` (the cells' lowest points; ``-inf``:
+    no point there, never crossed under).
     ``grid``: ``(x0, y0, cell, nx, ny)``."""
     x0, y0, cell, nx, ny = grid
     o, p = np.ascontiguousarray(o_W, np.float64), np.ascontiguousarray(points_W, np.float64)
@@ -182,7 +208,7 @@ def ray_lows(o_W, points_W, use, grid, carving: Carving) -> np.ndarray:
     """``(ny, nx)`` m: per cell, the ``carving.votes``-th lowest height at which a used ray
     crossed it (``inf`` where fewer did): the column of that cell is no higher."""
     x0, y0, cell, nx, ny = grid
-    votes = max(int(carving.votes), 1)
+    votes = int(carving.votes)
     lows = np.full((votes, int(ny), int(nx)), np.inf)
     o, p = np.ascontiguousarray(o_W, np.float64), np.ascontiguousarray(points_W, np.float64)
     if len(p):

@@ -31,7 +31,7 @@ from scipy import ndimage
 
 from .._errors import TerrainError
 from .._tolerance import DEFAULT_TOLERANCES
-from ._carve import Carving, ray_lows, rays_under
+from ._carve import Carving, _field, ray_lows, rays_under
 
 __all__ = ["ElevationMap", "MAX_CELLS", "OutlierRule"]
 
@@ -57,7 +57,7 @@ _MAD_TO_SIGMA = 1.4826  # MAD of a normal distribution times this is its standar
 
 @dataclass(frozen=True)
 class OutlierRule:
-    """The outlier rule of :meth:`ElevationMap.from_points`, two stages.
+    """The outlier rule of :meth:`ElevationMap.from_points`, two stages (three given the sensor's position).
 
     1. **Per cell, robust z-score** (Iglewicz & Hoaglin's modified z-score): in a cell with at
        least ``min_points`` points, a point is rejected when
@@ -75,9 +75,12 @@ class OutlierRule:
        left without points becomes unknown (and is filled like any hole).  The price: a real spike
        seen by one or two points only is dropped too (``spike = inf`` keeps it).
     3. **Rays under seen terrain** (only given the sensor's position, ``from_points(sensor_W=...)``):
-       a point is dropped when its ray crosses a cell more than ``ray`` below that cell's highest
-       point (after stages 1 and 2): it went through terrain that other rays saw, so the point lies
-       too far along it (``_carve.py``).
+       a point is dropped when its ray crosses a cell more than ``ray`` below that cell's *lowest*
+       point (after stages 1 and 2): it went through the ground other rays saw, so the point lies
+       too far along it (``_carve.py``).  The lowest point, not the highest: a ray may pass beside
+       a post in a cell, never under the ground all round it.  A cell that loses a point to stage 3
+       is unknown, and filled no lower than its points were (a real point behind a post that
+       stage 3 drops all the same costs the cell its "known", never its height).
 
     ``k = inf``, ``spike = inf`` or ``ray = inf`` disables a stage (with ``spike = inf`` stage 1
     judges both sides of the median alone).
@@ -109,6 +112,13 @@ class OutlierRule:
     spike_support: int = 3
     spike_radius: int = 2
     ray: float = 0.15
+
+    def __post_init__(self) -> None:
+        for name, low, ints, inf_ok in (("k", 0.0, False, True), ("min_points", 1, True, False),
+                                        ("sigma_min", 0.0, False, False), ("spike", 0.0, False, True),
+                                        ("spike_support", 1, True, False), ("spike_radius", 0, True, False),
+                                        ("ray", 0.0, False, True)):
+            _field(self, "OutlierRule", name, low, ints, inf_ok)
 
 
 @dataclass(frozen=True, eq=False)
@@ -295,41 +305,46 @@ class ElevationMap:
         drop = _spikes(cid, z, nx, ny, rule)
         at, cid, z = at[~drop], cid[~drop], z[~drop]
         grid = (x_min, y_min, cell, nx, ny)
-        upper, seen = None, None
+        # what the points alone give (stages 1 and 2): with the sensor's position a cell may only lose its
+        # "known", or rise; the fill of the holes reads these heights
+        pointed = np.bincount(cid, minlength=nx * ny).reshape(ny, nx) > 0
+        hmax = _hmax(cid, z, nx, ny)
+        upper, unseen = None, np.zeros((ny, nx), bool)
         if o is not None:
             use = np.ones(len(p), bool)
             use[np.flatnonzero(inside)] = False
             use[at] = True  # the points outside the grid and the survivors: their rays cross it
             if np.isfinite(rule.ray):
-                use &= ~rays_under(o, p, grid, _hmax(cid, z, nx, ny), rule.ray, carving)
+                use &= ~rays_under(o, p, grid, _hlow(cid, z, nx, ny), rule.ray, carving)
                 ok = use[at]
+                unseen.flat[cid[~ok]] = True  # a cell that lost a point to stage 3
                 at, cid, z = at[ok], cid[ok], z[ok]
             upper = ray_lows(o, p, use, grid, carving)
+            unseen |= pointed & np.isfinite(upper) & (upper - hmax > carving.gap)  # no ray bound: no evidence
         rejected = int(np.count_nonzero(inside)) - len(at)
         counts = np.bincount(cid, minlength=nx * ny).reshape(ny, nx)
-        hmax = _hmax(cid, z, nx, ny)
-        known = counts > 0
-        if upper is not None:
-            seen = ~(known & (upper - hmax > carving.gap))  # inf - finite > gap: inf is no bound, seen stays
-            seen |= ~np.isfinite(upper)
-            known &= seen
+        known = pointed & ~unseen
         if not known.any():
+            if ceiling is None and pointed.any():
+                raise TerrainError(f"from_points: no cell was seen on top: the {len(at)} points left in the grid lie "
+                                   f"more than Carving.gap = {carving.gap:g} m below the rays that crossed their cells, "
+                                   "or their cells lost a point to a ray under the ground (OutlierRule.ray); give a "
+                                   "ceiling to fill the map, or check sensor_W (where the points were seen from)")
             if ceiling is None:
-                raise TerrainError(f"from_points: no cell has a surviving point (the outlier rule rejected all {rejected} "
-                                   f"of the {len(p)} points: a point is kept with at least {rule.spike_support} points, "
-                                   f"itself included, as high within {rule.spike_radius} cells); give a ceiling to fill "
-                                   "the map, or a denser cloud")
+                raise TerrainError(f"from_points: no cell has a surviving point (the outlier rule rejected all "
+                                   f"{int(np.count_nonzero(inside))} points in the grid: a point is kept with at least "
+                                   f"{rule.spike_support} points, itself included, as high within {rule.spike_radius} "
+                                   "cells); give a ceiling to fill the map, or a denser cloud")
         if ceiling is not None:
             ceiling = _number(ceiling, "from_points: ceiling (m)")
-        top = float(hmax[known].max()) if known.any() else ceiling
+        top = float(hmax[pointed].max()) if pointed.any() else ceiling
         ceil_h = top if ceiling is None else ceiling
         heights = np.where(known, hmax, ceil_h)
-        if fill == "neighbourhood" and known.any() and fill_radius > 0:
+        if fill == "neighbourhood" and pointed.any() and fill_radius > 0:
             win = 2 * int(fill_radius) + 1
-            neigh = ndimage.maximum_filter(np.where(known, hmax, -np.inf), size=win, mode="constant", cval=-np.inf)
+            neigh = ndimage.maximum_filter(np.where(pointed, hmax, -np.inf), size=win, mode="constant", cval=-np.inf)
             heights = np.where(known, hmax, np.where(np.isfinite(neigh), neigh, ceil_h))
-        if seen is not None:  # a cell seen on a face only: filled as a hole, never below the points it has
-            heights = np.where(seen, heights, np.maximum(heights, hmax))
+        heights = np.where(unseen, np.maximum(heights, hmax), heights)  # unseen on top: never below its points
         fl = float(heights.min()) - cell if floor is None else _number(floor, "from_points: floor (m)")
         return cls(heights, np.array([x_min, y_min]), float(cell), known, counts, fl, rejected, invalid, upper)
 
@@ -348,6 +363,14 @@ def _sensor(sensor_W, finite: np.ndarray) -> np.ndarray | None:
         raise TerrainError(f"from_points: sensor_W: expected (3,) or ({len(finite)}, 3) finite numbers (m, W: where "
                            f"the points were seen from), got shape {np.shape(sensor_W)}")
     return np.ascontiguousarray(o[finite])
+
+
+def _hlow(cid: np.ndarray, z: np.ndarray, nx: int, ny: int) -> np.ndarray:
+    """``(ny, nx)``: the lowest point of each cell, ``-inf`` where none (no ray is under it)."""
+    h = np.full(nx * ny, np.inf)
+    np.minimum.at(h, cid, z)
+    h[h == np.inf] = -np.inf
+    return h.reshape(ny, nx)
 
 
 def _hmax(cid: np.ndarray, z: np.ndarray, nx: int, ny: int) -> np.ndarray:
