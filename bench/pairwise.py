@@ -156,7 +156,7 @@ def run(quick: bool) -> str:
     b0, b1 = c2 - d[::-1], c2 + d[::-1]
     r = np.full(n, 0.05)
     # capsules around a box / hull at the origin: separated (the detector's usual case) and
-    # a mix with ~half penetrating
+    # near the obstacle, a share of them penetrating (measured below)
     u = rng.normal(size=(n, 3))
     u /= np.linalg.norm(u, axis=1)[:, None]
     far0 = u * 1.5
@@ -170,11 +170,11 @@ def run(quick: bool) -> str:
         ("capsule-capsule", lambda: batch.capsule_capsule(a0, a1, r, b0, b1, r), 40),
         ("sphere-sphere", lambda: batch.sphere_sphere(a0, r, b0, r), None),
         ("capsule-box, separated", lambda: batch.capsule_box(far0, far1, r, bc, bh, bR), 80),
-        ("capsule-box, ~half penetrating", lambda: batch.capsule_box(near0, near1, r, bc, bh, bR), 80),
+        ("capsule-box, near, part penetrating", lambda: batch.capsule_box(near0, near1, r, bc, bh, bR), 80),
         ("capsule-convex 20 v, separated", lambda: batch.capsule_convex(far0, far1, r, h20), 300),
-        ("capsule-convex 20 v, ~half penetrating", lambda: batch.capsule_convex(near0, near1, r, h20), 300),
+        ("capsule-convex 20 v, near, part penetrating", lambda: batch.capsule_convex(near0, near1, r, h20), 300),
         ("capsule-convex 100 v, separated", lambda: batch.capsule_convex(far0, far1, r, h100), None),
-        ("capsule-convex 100 v, ~half penetrating", lambda: batch.capsule_convex(near0, near1, r, h100), None),
+        ("capsule-convex 100 v, near, part penetrating", lambda: batch.capsule_convex(near0, near1, r, h100), None),
     ]
     pen_box = float(np.mean(batch.capsule_box(near0, near1, r, bc, bh, bR).distance < 0))
     near_cvx = batch.capsule_convex(near0, near1, r, h20).distance
@@ -192,7 +192,7 @@ def run(quick: bool) -> str:
         lines.append(f"| {key} | {t * 1e9:.0f} | {'≤ %d' % target if target else '—'} | "
                      f"{fmt_ns(f) if f else '—'} | {fmt_ns(co) if co else '—'} | {fmt_ns(mj) if mj else '—'} |")
     load = os.getloadavg()
-    lines += ["", f"The \"~half penetrating\" rows are the realistic mix near an obstacle: penetrating share "
+    lines += ["", f"The \"near, part penetrating\" rows are the realistic mix near an obstacle: penetrating share "
               f"{pen_box:.0%} (capsule-box) and {pen_cvx:.0%} (capsule-convex; {core_cvx:.0%} with overlapping "
               "cores, which take the Minkowski-facet depth). Penetrating capsule-box pairs take a 6-axis SAT "
               "and a second closest-point solve; capsule-convex pairs take the nearest facet of the Minkowski "

@@ -222,10 +222,9 @@ def run(quick: bool) -> str:
             "pairs both backends find apart. *depths off*: pairs in contact (for either backend) whose penetration "
             "depths differ by more than 1 mm, of all pairs in contact; up to 3 of them a robot are checked against the slow "
             "support-function reference (`armguard.geometry._support_reference`: no GJK, no EPA), with each side's "
-            "largest error. coal's depth comes from EPA, which is not exact "
-            "on cylinders: on panda_collision (cylinders and spheres) the analytic depth equals the closed-form "
-            "sphere-cylinder depth where coal's is 20 mm deeper, and coal returns -1.8e308 m for one "
-            "cylinder-cylinder pair in contact (`bench/robots.py`).")
+            "largest error. coal's depth comes from EPA, which is not exact on cylinders (panda_collision's "
+            "cylinders and spheres: the *depths off* column gives each side's error against the reference; "
+            "`bench/robots.py`).")
     return "\n".join(rows) + note
 
 
