@@ -71,6 +71,7 @@ import numpy as np
 from numba import njit
 
 from ._pair_cylinder_epa import _complete, epa_support
+from ._pair_cylinder_search import depth_search, witnesses
 from ._pair_cylinder_turn import _combine, _refresh, _restore
 from ._pair_cylinder_support import (  # noqa: F401  (CYL_W, support_point: part of this module's interface)
     _L0, _S0, _V0, _VIS, _WA, _WB, CYL_W, SUPPORT_GAP, SUPPORT_WORK_SIZE, _centre, _pair_support, _put, support_point,
@@ -318,4 +319,10 @@ def support_pair_graph(pa, ga, ca, ra, pb, gb, cb, rb, out, work, eps_len, gjk_e
                                                                                _VIS[k] * scale)
             if ok:
                 return write_rounded(cax, cay, caz, ra, cbx, cby, cbz, rb, nx, ny, nz, -depth, out, 0), GJK_INTERSECTING
+    # EPA settled no depth (its optimal directions a continuum: a shape on or near a cylinder's axis):
+    # the least support value a direction search finds, an upper bound on the depth (_pair_cylinder_search)
+    depth, nx, ny, nz, cax, cay, caz = depth_search(pa, ga, ca, pb, gb, cb, work)
+    if depth < math.inf:
+        cax, cay, caz, cbx, cby, cbz = witnesses(pa, ga, ca, pb, gb, cb, nx, ny, nz, depth, work)
+        return write_rounded(cax, cay, caz, ra, cbx, cby, cbz, rb, nx, ny, nz, -depth, out, 0), GJK_INTERSECTING
     return write_rounded(ax, ay, az, ra, ax, ay, az, rb, 0.0, 0.0, 1.0, 0.0, out, 0), GJK_INTERSECTING
