@@ -275,10 +275,12 @@ def support_pair_graph(pa, ga, ca, ra, pb, gb, cb, rb, out, work, eps_len, gjk_e
     ``-(ra + rb) <= level`` it returns ``-(ra + rb)`` (an upper bound) without a depth.  EPA's
     polytope can break by rounding near a curved optimum (about 1 in 300 random penetrating pairs
     with a flat core against the cylinder did, and were once reported touching); the depth
-    bracketed before that is the answer (:func:`epa_support`).  Only when EPA cannot settle a
+    bracketed before that is the answer (:func:`epa_support`).  Where EPA cannot settle a
     depth under any of its visibility margins (none of 9,000 seeded random pairs of a cylinder
-    and a box, polygon or polyhedron, 6,736 of them penetrating, came to this) are the cores reported touching at GJK's witness: ``-(ra + rb)``, the right verdict (overlap), an upper
-    bound on the signed distance, not the depth.
+    and a box, polygon or polyhedron, 6,736 of them penetrating, came to this; a shape on or near
+    a cylinder's axis does: every radial direction is nearly optimal) the depth is the direction
+    search's (:mod:`._pair_cylinder_search`): realised along its normal, never shallower than the
+    true depth.
 
     ``ga``, ``gb``: the vertex graphs of the point cores (``_pack.hull_graph`` format, indices into
     ``pa`` / ``pb``; empty: the points are scanned); a cylinder side ignores its own.  ``ta``, ``tb``
