@@ -110,3 +110,16 @@ def test_a_budget_below_the_first_estimate_is_not_stuck_there():
     # the estimate relaxes no lower than that cost, and stayed above 60 us in a loaded CI run)
     evaluated = sum(det.check(q, budget_us=1000.0).n_evaluated > 0 for q in Q)
     assert evaluated >= 10, evaluated  # (0 of 100 while the estimate could only be taught by a call)
+
+
+@pytest.mark.parametrize("backend", ["analytic", "coal"])
+def test_a_budget_that_is_no_number_of_microseconds_is_refused_naming_it(backend):
+    """True and "5" were taken as budgets (1 and 5 µs); 10**400, a complex number and a one-element
+    array raised a bare OverflowError or TypeError that did not name budget_us."""
+    model = armguard.load_model("hermes")
+    det = armguard.Detector(model, threshold=THRESHOLD, backend=backend)
+    q = model.scene_q(model.random_q(1, 3))[0]
+    for bad in (True, "5", 10**400, 1 + 2j, np.array([5.0]), -1.0, float("nan"), float("inf")):
+        with pytest.raises(armguard.DetectionError, match="budget_us: expected a finite number >= 0"):
+            det.check(q, budget_us=bad)
+    assert det.check(q, budget_us=np.float64(5.0)).status in set(armguard.Status)

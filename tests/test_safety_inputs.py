@@ -85,6 +85,59 @@ def test_valid_solids_far_from_the_origin_are_solids(big):
         ConvexPolyhedron(o + np.array([[0, 0, 0], [0.01, 0, 0], [0, 0.01, 0], [0.01, 0.01, 0]]))
 
 
+@pytest.mark.parametrize("make", [lambda: Sphere([0.0, 0.0, 0.0], 1e154), lambda: Sphere([1e154, 0.0, 0.0], 1.0),
+                                  lambda: Box([0.0, 2e9, 0.0], [1.0, 1.0, 1.0]),
+                                  lambda: Capsule([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], 1e10)])
+def test_a_shape_beyond_the_largest_magnitude_is_refused_not_apart_by_overflow(make):
+    """Two spheres of radius 1e154 overlapping by half were `distance` inf and `intersects` False: the
+    squared lengths overflowed.  Shapes take Tolerances.max_magnitude (1e9 m), as the files do."""
+    with pytest.raises(GeometryError, match="beyond the largest magnitude"):
+        make()
+
+
+def test_the_batched_obb_test_refuses_boxes_that_pass_every_axis():
+    """Two coincident boxes with half extents -1 were 'no overlap' (every separating-axis test passes),
+    and so was a box with a zero matrix for its rotation."""
+    from armguard.geometry import batch
+
+    with pytest.raises(GeometryError, match="pair 0: half_extents_A must be > 0"):
+        batch.box_box_overlap([0, 0, 0], [-1, -1, -1], np.eye(3), [0, 0, 0], [-1, -1, -1], np.eye(3))
+    with pytest.raises(GeometryError, match="pair 1: rotation_B is no rotation"):
+        batch.box_box_overlap(np.zeros((2, 3)), np.ones((2, 3)), np.stack([np.eye(3)] * 2), np.zeros((2, 3)),
+                              np.ones((2, 3)), np.stack([np.eye(3), np.diag([1.0, 1.0, -1.0])]))
+    assert batch.box_box_overlap([0, 0, 0], [1, 1, 1], np.eye(3), [0, 1.5, 0], [1, 1, 1], np.eye(3))
+
+
+def test_a_continuous_joints_cos_sin_off_the_unit_circle_is_refused_by_scene_q():
+    """(cos, sin) = (0, 0) was read as the angle 0, (-0, -0) as -pi, and a NaN passed: a Detector would
+    judge an angle the caller never gave (the Checkers refuse them)."""
+    m = armguard.load_model("kinova")
+    k = int(m.continuous_q[0])
+    for c, s_ in ((0.0, 0.0), (-0.0, -0.0), (np.nan, 1.0), (0.6, 0.6)):
+        q = m.neutral().copy()
+        q[k], q[k + 1] = c, s_
+        with pytest.raises(DetectionError, match="not on the unit circle"):
+            m.scene_q(q)
+        with pytest.raises(DetectionError, match=r"q \(row 1\)"):
+            m.scene_q(np.stack([m.neutral(), q]))
+    assert np.isfinite(m.scene_q(m.neutral())).all()
+
+
+def test_a_terrain_fill_that_would_make_pits_or_no_fill_is_refused():
+    from armguard import TerrainError
+    from armguard.terrain import ElevationMap
+
+    rng = np.random.default_rng(0)
+    pts = np.column_stack([rng.uniform(0, 1, 400), rng.uniform(0, 1, 400), rng.uniform(0.0, 0.2, 400)])
+    with pytest.raises(TerrainError, match="ceiling -1 m is below the highest point seen"):
+        ElevationMap.from_points(pts, 0.1, fill="ceiling", ceiling=-1.0)
+    for bad in (-1, 1.5, np.nan, True):
+        with pytest.raises(TerrainError, match="fill_radius: expected an integer >= 0"):
+            ElevationMap.from_points(pts, 0.1, fill_radius=bad)
+    with pytest.raises(TerrainError, match="points_W: expected"):
+        ElevationMap.from_points([["a", "b", "c"]], 0.1)
+
+
 def test_a_scene_whose_site_is_20_km_away_loads_and_checks(tmp_path):
     text = """armguard_scene: 1
 name: far

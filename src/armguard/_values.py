@@ -30,7 +30,10 @@ def number(value, what: str, error: type, *, low: float | None = None, high: flo
     if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "fiu":
         x = float(value)  # a 0-d array of a real kind: the number it holds
     elif not isinstance(value, (bool, np.bool_)) and isinstance(value, (numbers.Real, np.floating, np.integer)):
-        x = float(value)
+        try:
+            x = float(value)
+        except OverflowError:  # an int beyond any float (10**400): no finite number
+            x = math.nan
     elif text and isinstance(value, str):
         try:
             x = float(value)

@@ -13,7 +13,7 @@ import numpy as np
 
 from armguard._errors import DetectionError
 from armguard._tolerance import DEFAULT_TOLERANCES, Tolerances
-from armguard._values import refuse_complex_or_bool
+from armguard._values import number, refuse_complex_or_bool
 from armguard.detect._common import (check_finite_margin, check_length as _check_length, check_link,
                                      require_pairs as _require_pairs, scene_and_model)
 from armguard.detect._detector import Detector
@@ -483,9 +483,7 @@ class FusedDetector(Detector):
                     self._learn(elapsed, n_eval, None)
             return DetectionReport._from_check(STATUS_CODES[status], lim[1], lim[2], elapsed, raw)
         if budget_us is not None:
-            us = float(budget_us)
-            if not (us >= 0.0 and math.isfinite(us)):
-                raise DetectionError(f"budget_us: must be finite and >= 0, got {budget_us!r}")
+            us = number(budget_us, "budget_us", DetectionError, low=0.0, unit=" (µs)")  # not True, "5", 1e400
             n = max(0.0, us * 1e3) / self._ns_per_pair  # us * 1e3 may overflow to inf (1e306): every pair
             mode = kn.MODE_ANYTIME  # the allowance an int64 for the kernel
             status, n_eval, lim = self._run(s, mode, int(n) if n < 2.0 ** 62 else 2 ** 62, lazy)

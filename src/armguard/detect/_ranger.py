@@ -49,7 +49,7 @@ import time
 import numpy as np
 
 from .._errors import BackendError, DetectionError
-from .._values import refuse_complex_or_bool
+from .._values import number, refuse_complex_or_bool
 from ._bounds import pair_bounds
 from ._common import check_finite_margin, check_length, check_link, scene_and_model, status_code
 from ._detector import Detector
@@ -409,9 +409,7 @@ class RangerDetector(Detector):
     def _check(self, plan: _Plan, q, budget_us, lazy) -> DetectionReport:
         t0 = time.perf_counter()
         if budget_us is not None:
-            b = float(budget_us)
-            if not (b >= 0.0 and math.isfinite(b)):
-                raise DetectionError(f"budget_us: must be finite and >= 0, got {budget_us!r}")
+            number(budget_us, "budget_us", DetectionError, low=0.0, unit=" (µs)")  # not True, "5", 1e400
         q = self._flat(q, plan)
         s = self._state(plan)
         level, thr = self._levels(plan)

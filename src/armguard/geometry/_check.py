@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._errors import GeometryError
+from .._tolerance import DEFAULT_TOLERANCES
 
 __all__ = ["check_point", "check_points", "check_rotation", "check_nonnegative", "check_pose"]
 
@@ -16,6 +17,10 @@ def _as_float_array(value, name: str) -> np.ndarray:
         raise GeometryError(f"{name}: expected numbers, got {value!r}") from exc
     if not np.all(np.isfinite(arr)):
         raise GeometryError(f"{name}: contains NaN or infinite values: {arr.tolist()!r}")
+    big = DEFAULT_TOLERANCES.max_magnitude
+    if arr.size and float(np.abs(arr).max()) > big:  # squared lengths overflow from ~1e154: 'apart' by overflow
+        raise GeometryError(f"{name}: {float(np.abs(arr).max()):.6g} is beyond the largest magnitude armguard handles "
+                            f"({big:g} m, Tolerances.max_magnitude)")
     return arr
 
 
@@ -51,6 +56,9 @@ def check_nonnegative(value, name: str) -> float:
         raise GeometryError(f"{name}: must be finite, got {x}")
     if x < 0.0:
         raise GeometryError(f"{name}: must be >= 0, got {x}")
+    if x > DEFAULT_TOLERANCES.max_magnitude:
+        raise GeometryError(f"{name}: {x:.6g} is beyond the largest magnitude armguard handles "
+                            f"({DEFAULT_TOLERANCES.max_magnitude:g} m, Tolerances.max_magnitude)")
     return x
 
 

@@ -295,6 +295,15 @@ def box_box_overlap(
         (_arr(half_extents_B, "half_extents_B", (3,)), (3,)), (_arr(rotation_B, "rotation_B", (3, 3)), (3, 3)),
     ]
     lead, n, (ca, ha, Ra, cb, hb, Rb) = _flat(arrs)
+    for side, h, R in (("A", ha, Ra), ("B", hb, Rb)):  # a half extent <= 0 or a non-rotation passes every axis test
+        bad = np.flatnonzero(~np.all(h > 0.0, axis=1))
+        if bad.size:
+            raise GeometryError(f"pair {int(bad[0])}: half_extents_{side} must be > 0, got {h[bad[0]].tolist()}")
+        err = np.abs(np.einsum("nji,njk->nik", R, R) - np.eye(3)).max(axis=(1, 2), initial=0.0) if n else np.zeros(0)
+        bad = np.flatnonzero((err > 1e-6) | (np.linalg.det(R) <= 0.0)) if n else bad
+        if bad.size:
+            raise GeometryError(f"pair {int(bad[0])}: rotation_{side} is no rotation (RᵀR differs from I by "
+                                f"{float(err[bad[0]]):.3g}, det {float(np.linalg.det(R[bad[0]])):.3g})")
     res = np.empty(n, dtype=np.bool_)
     _box_box_loop(ca, ha, Ra, cb, hb, Rb, res, tol.parallel)
     return res.reshape(lead)

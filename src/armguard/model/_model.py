@@ -353,7 +353,17 @@ class Model:
         circ = self._circular
         if len(circ):  # continuous joints: pinocchio's (cos, sin) -> the angle
             i = self._q_index[circ]
-            out[..., circ] = np.arctan2(q[..., i + 1], q[..., i])
+            c, s = q[..., i], q[..., i + 1]
+            with np.errstate(invalid="ignore"):
+                off = ~(np.abs(c * c + s * s - 1.0) <= _joint_limits.UNIT_CIRCLE)  # (0, 0) was angle 0, (-0, -0) -pi, NaN passed
+            if off.any():
+                where = np.argwhere(off)[0]
+                k = int(circ[where[-1]])
+                row = f" (row {int(where[0])})" if q.ndim > 1 else ""
+                raise DetectionError(f"q{row}: continuous joint {self._spec.joint_names[k]!r}: (cos, sin) = "
+                                     f"({float(c[tuple(where)]):.6g}, {float(s[tuple(where)]):.6g}) is not on the unit "
+                                     f"circle (|cos² + sin² - 1| <= {_joint_limits.UNIT_CIRCLE:g})")
+            out[..., circ] = np.arctan2(s, c)
         return out
 
     def pin_q(self, q_scene) -> np.ndarray:

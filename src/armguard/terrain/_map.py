@@ -268,7 +268,12 @@ class ElevationMap:
         cell = _number(cell, "from_points: cell (m)", positive=True)
         if fill not in ("neighbourhood", "ceiling"):
             raise TerrainError(f"from_points: fill must be 'neighbourhood' or 'ceiling', got {fill!r}")
-        p = np.asarray(points_W, dtype=np.float64)
+        if isinstance(fill_radius, bool) or not isinstance(fill_radius, (int, np.integer)) or fill_radius < 0:
+            raise TerrainError(f"from_points: fill_radius: expected an integer >= 0 (cells), got {fill_radius!r}")
+        try:
+            p = np.asarray(points_W, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise TerrainError(f"from_points: points_W: expected (N, 3) numbers (m, W), got {type(points_W).__name__}") from None
         if p.ndim != 2 or p.shape[1] != 3:
             raise TerrainError(f"from_points: points_W must be (N, 3), got shape {p.shape}")
         finite = np.all(np.isfinite(p), axis=1)
@@ -335,9 +340,14 @@ class ElevationMap:
                                    f"{int(np.count_nonzero(inside))} points in the grid: a point is kept with at least "
                                    f"{rule.spike_support} points, itself included, as high within {rule.spike_radius} "
                                    "cells); give a ceiling to fill the map, or a denser cloud")
+        top = float(hmax[pointed].max()) if pointed.any() else None
         if ceiling is not None:
             ceiling = _number(ceiling, "from_points: ceiling (m)")
-        top = float(hmax[pointed].max()) if pointed.any() else ceiling
+            if top is not None and ceiling < top:  # unknown cells would be pits below seen ground: never free
+                raise TerrainError(f"from_points: ceiling {ceiling:.6g} m is below the highest point seen ({top:.6g} m): "
+                                   "an unknown cell filled there would be lower than terrain the sensor saw; give a "
+                                   "ceiling at least that high, or none (the highest point)")
+        top = ceiling if top is None else top
         ceil_h = top if ceiling is None else ceiling
         heights = np.where(known, hmax, ceil_h)
         if fill == "neighbourhood" and pointed.any() and fill_radius > 0:
