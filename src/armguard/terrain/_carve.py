@@ -103,6 +103,17 @@ def _clip(ax, ay, dx, dy, x_lo, y_lo, x_hi, y_hi):  # pragma: no cover - compile
     return t0, t1
 
 
+@njit(cache=True, inline="always")
+def _axis(o, d, lo, i, cell):  # pragma: no cover - compiled
+    """Along one grid axis: the step (+1, -1, 0), the parameter of the first cell boundary crossed
+    from cell ``i`` and the parameter between boundaries (Amanatides & Woo's tMax, tDelta)."""
+    if d > 0.0:
+        return 1, (lo + (i + 1) * cell - o) / d, cell / d
+    if d < 0.0:
+        return -1, (lo + i * cell - o) / d, -cell / d
+    return 0, np.inf, np.inf
+
+
 @njit(cache=True)
 def _walk(o, p, stop, x0, y0, cell, nx, ny, rows, cols, zmins):  # pragma: no cover - compiled
     """The cells the segment from ``o`` towards ``p`` (stopped ``stop`` m before ``p``) crosses, in
@@ -119,19 +130,8 @@ def _walk(o, p, stop, x0, y0, cell, nx, ny, rows, cols, zmins):  # pragma: no co
     x, y = o[0] + t * dx, o[1] + t * dy
     col = min(max(int(np.floor((x - x0) / cell)), 0), nx - 1)
     row = min(max(int(np.floor((y - y0) / cell)), 0), ny - 1)
-    inf = np.inf
-    if dx > 0.0:
-        step_x, t_x, dt_x = 1, (x0 + (col + 1) * cell - o[0]) / dx, cell / dx
-    elif dx < 0.0:
-        step_x, t_x, dt_x = -1, (x0 + col * cell - o[0]) / dx, -cell / dx
-    else:
-        step_x, t_x, dt_x = 0, inf, inf
-    if dy > 0.0:
-        step_y, t_y, dt_y = 1, (y0 + (row + 1) * cell - o[1]) / dy, cell / dy
-    elif dy < 0.0:
-        step_y, t_y, dt_y = -1, (y0 + row * cell - o[1]) / dy, -cell / dy
-    else:
-        step_y, t_y, dt_y = 0, inf, inf
+    step_x, t_x, dt_x = _axis(o[0], dx, x0, col, cell)
+    step_y, t_y, dt_y = _axis(o[1], dy, y0, row, cell)
     n = 0
     while n < len(rows):
         t_out = min(t_x, t_y, t1)
