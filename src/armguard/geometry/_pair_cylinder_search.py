@@ -12,7 +12,13 @@ EPA fails where the depth's optimal directions form a continuum (a cylinder and 
 its axis: every radial direction is optimal, the polytope's faces about them become slivers): the
 search finds such a minimum at once (the flat circle of optima is where descent ends).  A local
 minimum that is not the global one reports a deeper penetration than the true one, never a
-shallower one.
+shallower one: on random near-axis pairs the depth matched the slow reference to 5e-15 m, but
+for cylinders 46 and 219 m long against a box or a hull it came 1.3e-5 and 4.1e-5 m deeper (the
+rim's kink is sharp on a long side: a direction 1e-7 rad off changes h by that much).
+
+:func:`witnesses` takes each face's extremes along the supports' offset and, where the two
+segments between them cross seen along ``n``, that crossing (a cylinder's side, a capsule's core);
+else the middle of their overlap: off the surfaces by 8e-7 m at most on those pairs.
 """
 
 from __future__ import annotations
@@ -55,12 +61,12 @@ def _at(pa, ga, ca, pb, gb, cb, u0x, u0y, u0z, e1x, e1y, e1z, e2x, e2y, e2z, x, 
 
 
 @njit(cache=True, _nrt=False)
-def _descend(pa, ga, ca, pb, gb, cb, ux, uy, uz, work):  # pragma: no cover - compiled
+def _descend(pa, ga, ca, pb, gb, cb, ux, uy, uz, work, size):  # pragma: no cover - compiled
     """Nelder & Mead (1965) on the tangent plane's chart about ``u`` (h_M is not smooth where a
-    support face changes, a cylinder's rim: no gradient method), from a 0.1 rad simplex, to a
-    simplex of 1e-13 rad.  Returns ``(h, nx, ny, nz, ax, ay, az)`` at the best vertex."""
+    support face changes, a cylinder's rim: no gradient method), from a simplex of ``size`` rad,
+    to one of 1e-13 rad.  Returns ``(h, nx, ny, nz, ax, ay, az)`` at the best vertex."""
     e1x, e1y, e1z, e2x, e2y, e2z = perpendicular_basis(ux, uy, uz)
-    x0, y0, x1, y1, x2, y2 = 0.0, 0.0, 0.1, 0.0, 0.0, 0.1
+    x0, y0, x1, y1, x2, y2 = 0.0, 0.0, size, 0.0, 0.0, size
     f0 = _at(pa, ga, ca, pb, gb, cb, ux, uy, uz, e1x, e1y, e1z, e2x, e2y, e2z, x0, y0, work)
     f1 = _at(pa, ga, ca, pb, gb, cb, ux, uy, uz, e1x, e1y, e1z, e2x, e2y, e2z, x1, y1, work)
     f2 = _at(pa, ga, ca, pb, gb, cb, ux, uy, uz, e1x, e1y, e1z, e2x, e2y, e2z, x2, y2, work)
@@ -123,7 +129,11 @@ def depth_search(pa, ga, ca, pb, gb, cb, work):  # pragma: no cover - compiled
             break
         used |= 1 << pick
         ux, uy, uz = _direction(pick)
-        r = _descend(pa, ga, ca, pb, gb, cb, ux, uy, uz, work)
+        r = _descend(pa, ga, ca, pb, gb, cb, ux, uy, uz, work, 0.1)
+        if r[0] < best[0]:
+            best = r
+    if best[0] < math.inf:  # once more from the best, a smaller simplex (a long cylinder's kinks are sharp)
+        r = _descend(pa, ga, ca, pb, gb, cb, best[1], best[2], best[3], work, 1e-3)
         if r[0] < best[0]:
             best = r
     return best
@@ -146,12 +156,27 @@ def witnesses(pa, ga, ca, pb, gb, cb, nx, ny, nz, depth, work):  # pragma: no co
                                                      work)  # A's extreme along +t, B's along -t
         a0x, a0y, a0z, b1x, b1y, b1z = _pair_support(pa, ga, ca, pb, gb, cb, nx - eps * tx, ny - eps * ty, nz - eps * tz,
                                                      work)  # A's along -t, B's along +t
-        sa0, sa1 = a0x * tx + a0y * ty + a0z * tz, a1x * tx + a1y * ty + a1z * tz
-        sb0, sb1 = b0x * tx + b0y * ty + b0z * tz, b1x * tx + b1y * ty + b1z * tz
-        lo, hi = max(min(sa0, sa1), min(sb0, sb1)), min(max(sa0, sa1), max(sb0, sb1))
-        c = 0.5 * (lo + hi)
-        la = 0.0 if sa1 == sa0 else min(max((c - sa0) / (sa1 - sa0), 0.0), 1.0)
-        lb = 0.0 if sb1 == sb0 else min(max((c - sb0) / (sb1 - sb0), 0.0), 1.0)
+        # the two faces' segments between those extremes, a0 + la (a1 - a0) and b0 + lb (b1 - b0): where
+        # they cross, seen along n (both equations of the plane), else the middle of their overlap along t
+        ux, uy, uz = a1x - a0x, a1y - a0y, a1z - a0z
+        vx, vy, vz = b1x - b0x, b1y - b0y, b1z - b0z
+        wx, wy, wz = b0x - a0x, b0y - a0y, b0z - a0z
+        e1x, e1y, e1z, e2x, e2y, e2z = perpendicular_basis(nx, ny, nz)
+        u1, u2 = ux * e1x + uy * e1y + uz * e1z, ux * e2x + uy * e2y + uz * e2z
+        v1, v2 = vx * e1x + vy * e1y + vz * e1z, vx * e2x + vy * e2y + vz * e2z
+        w1, w2 = wx * e1x + wy * e1y + wz * e1z, wx * e2x + wy * e2y + wz * e2z
+        det = -u1 * v2 + u2 * v1  # of [[u1, -v1], [u2, -v2]]
+        scale2 = (u1 * u1 + u2 * u2) * (v1 * v1 + v2 * v2)
+        if det * det > 1e-12 * scale2 and scale2 > 0.0:
+            la = min(max((-w1 * v2 + w2 * v1) / det, 0.0), 1.0)
+            lb = min(max((u1 * w2 - u2 * w1) / det, 0.0), 1.0)
+        else:
+            sa0, sa1 = a0x * tx + a0y * ty + a0z * tz, a1x * tx + a1y * ty + a1z * tz
+            sb0, sb1 = b0x * tx + b0y * ty + b0z * tz, b1x * tx + b1y * ty + b1z * tz
+            lo, hi = max(min(sa0, sa1), min(sb0, sb1)), min(max(sa0, sa1), max(sb0, sb1))
+            c = 0.5 * (lo + hi)
+            la = 0.0 if sa1 == sa0 else min(max((c - sa0) / (sa1 - sa0), 0.0), 1.0)
+            lb = 0.0 if sb1 == sb0 else min(max((c - sb0) / (sb1 - sb0), 0.0), 1.0)
         ax, ay, az = a0x + la * (a1x - a0x), a0y + la * (a1y - a0y), a0z + la * (a1z - a0z)
         bx, by, bz = b0x + lb * (b1x - b0x), b0y + lb * (b1y - b0y), b0z + lb * (b1z - b0z)
     rx, ry, rz = 0.5 * (ax - bx - depth * nx), 0.5 * (ay - by - depth * ny), 0.5 * (az - bz - depth * nz)

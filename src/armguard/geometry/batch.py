@@ -288,22 +288,37 @@ def box_box_overlap(
     """JPL division-free OBB overlap test: ``(...) bool``, True where the boxes overlap or touch.
 
     ``center_*, half_extents_* : (..., 3) m``; ``rotation_* : (..., 3, 3)`` R_W* (columns are axes).
+    A half extent <= 0 or a matrix that is no rotation is refused (either passes every axis test:
+    "no overlap"); the arrays are checked as given, before they are broadcast.
     """
+    for side, h, R in (("A", half_extents_A, rotation_A), ("B", half_extents_B, rotation_B)):
+        h = _arr(h, f"half_extents_{side}", (3,))
+        R = _arr(R, f"rotation_{side}", (3, 3))
+        bad = np.argwhere(~(h > 0.0))
+        if bad.size:
+            at = tuple(int(i) for i in bad[0][:-1])
+            raise GeometryError(f"half_extents_{side}{list(at) if at else ''} must be > 0, got {h[at].tolist()}")
+        err = np.abs(np.einsum("...ji,...jk->...ik", R, R) - np.eye(3)).max(axis=(-2, -1), initial=0.0)
+        det = np.linalg.det(R) if R.size else np.zeros(R.shape[:-2])
+        bad = np.argwhere(np.atleast_1d((err > 1e-6) | (det <= 0.0)))
+        if bad.size:
+            at = tuple(int(i) for i in bad[0]) if R.ndim > 2 else ()
+            raise GeometryError(f"rotation_{side}{list(at) if at else ''} is no rotation (RᵀR differs from I by "
+                                f"{float(np.atleast_1d(err)[tuple(bad[0])]):.3g}, det "
+                                f"{float(np.atleast_1d(det)[tuple(bad[0])]):.3g})")
+    return _box_box_overlap(center_A, half_extents_A, rotation_A, center_B, half_extents_B, rotation_B, tol)
+
+
+def _box_box_overlap(center_A, half_extents_A, rotation_A, center_B, half_extents_B, rotation_B,
+                     tol: Tolerances = DEFAULT_TOLERANCES) -> np.ndarray:
+    """:func:`box_box_overlap` without the checks of the boxes (callers whose boxes are :class:`Box`
+    objects, already checked: the terrain's body hierarchy)."""
     arrs = [
         (_arr(center_A, "center_A", (3,)), (3,)), (_arr(half_extents_A, "half_extents_A", (3,)), (3,)),
         (_arr(rotation_A, "rotation_A", (3, 3)), (3, 3)), (_arr(center_B, "center_B", (3,)), (3,)),
         (_arr(half_extents_B, "half_extents_B", (3,)), (3,)), (_arr(rotation_B, "rotation_B", (3, 3)), (3, 3)),
     ]
     lead, n, (ca, ha, Ra, cb, hb, Rb) = _flat(arrs)
-    for side, h, R in (("A", ha, Ra), ("B", hb, Rb)):  # a half extent <= 0 or a non-rotation passes every axis test
-        bad = np.flatnonzero(~np.all(h > 0.0, axis=1))
-        if bad.size:
-            raise GeometryError(f"pair {int(bad[0])}: half_extents_{side} must be > 0, got {h[bad[0]].tolist()}")
-        err = np.abs(np.einsum("nji,njk->nik", R, R) - np.eye(3)).max(axis=(1, 2), initial=0.0) if n else np.zeros(0)
-        bad = np.flatnonzero((err > 1e-6) | (np.linalg.det(R) <= 0.0)) if n else bad
-        if bad.size:
-            raise GeometryError(f"pair {int(bad[0])}: rotation_{side} is no rotation (RᵀR differs from I by "
-                                f"{float(err[bad[0]]):.3g}, det {float(np.linalg.det(R[bad[0]])):.3g})")
     res = np.empty(n, dtype=np.bool_)
     _box_box_loop(ca, ha, Ra, cb, hb, Rb, res, tol.parallel)
     return res.reshape(lead)

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Mapping
 import numpy as np
 
 from .._errors import SceneError
+from .._tolerance import DEFAULT_TOLERANCES
 from ..geometry import Shape
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -93,6 +94,10 @@ class WorkspaceBox:
     def __post_init__(self) -> None:
         lo = _finite(self.lo, (3,), "workspace.lo")
         hi = _finite(self.hi, (3,), "workspace.hi")
+        big = DEFAULT_TOLERANCES.max_magnitude
+        if max(float(np.abs(lo).max()), float(np.abs(hi).max())) > big:  # as every shape (a wall's box is one)
+            raise SceneError(f"workspace: lo={lo.tolist()} hi={hi.tolist()} reach beyond the largest magnitude armguard "
+                             f"handles ({big:g} m, Tolerances.max_magnitude)")
         if np.any(hi <= lo):
             raise SceneError(f"workspace: hi must exceed lo on every axis, got lo={lo.tolist()} hi={hi.tolist()}")
         object.__setattr__(self, "lo", lo)

@@ -28,7 +28,7 @@ import numpy as np
 
 from .._errors import TerrainError
 from ..geometry import Shape, distance
-from ..geometry.batch import box_box_overlap
+from ..geometry.batch import _box_box_overlap
 from ._pyramid import TerrainPyramid
 from ._volumes import grown, link_volume, union_box, volume_boxes
 
@@ -200,7 +200,7 @@ class BodyHierarchy:
 
     def _overlap(self, a, b) -> bool:
         (ca, ha, Ra), (cb, hb, Rb) = a, b
-        return bool(np.any(box_box_overlap(ca[:, None], ha[:, None], Ra[:, None], cb[None], hb[None], Rb[None])))
+        return bool(np.any(_box_box_overlap(ca[:, None], ha[:, None], Ra[:, None], cb[None], hb[None], Rb[None])))
 
     def _node_boxes(self):
         nb = getattr(self, "_nb", None)

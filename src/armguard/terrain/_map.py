@@ -31,6 +31,7 @@ from scipy import ndimage
 
 from .._errors import TerrainError
 from .._tolerance import DEFAULT_TOLERANCES
+from .._values import whole_number
 from ._carve import Carving, _field, ray_lows, rays_under
 
 __all__ = ["ElevationMap", "MAX_CELLS", "OutlierRule"]
@@ -176,6 +177,9 @@ class ElevationMap:
             raise TerrainError(f"ElevationMap.origin: expected (x0, y0), two finite numbers (m, W), got {self.origin!r}")
         object.__setattr__(self, "origin", o)
         object.__setattr__(self, "floor", _number(self.floor, "ElevationMap.floor (m)"))
+        if abs(self.floor) > big:
+            raise TerrainError(f"ElevationMap.floor: {self.floor:.6g} m is beyond the largest magnitude a map holds "
+                               f"({big:g} m, Tolerances.max_magnitude)")
         if self.floor > float(h.min()):
             raise TerrainError(f"ElevationMap.floor {self.floor!r} must be finite and <= the lowest height {h.min():.6g}")
         extra = () if self.upper is None else (("upper", self.upper),)
@@ -268,8 +272,7 @@ class ElevationMap:
         cell = _number(cell, "from_points: cell (m)", positive=True)
         if fill not in ("neighbourhood", "ceiling"):
             raise TerrainError(f"from_points: fill must be 'neighbourhood' or 'ceiling', got {fill!r}")
-        if isinstance(fill_radius, bool) or not isinstance(fill_radius, (int, np.integer)) or fill_radius < 0:
-            raise TerrainError(f"from_points: fill_radius: expected an integer >= 0 (cells), got {fill_radius!r}")
+        fill_radius = whole_number(fill_radius, "from_points: fill_radius (cells)", TerrainError, low=0)
         try:
             p = np.asarray(points_W, dtype=np.float64)
         except (TypeError, ValueError):
@@ -344,7 +347,7 @@ class ElevationMap:
         if ceiling is not None:
             ceiling = _number(ceiling, "from_points: ceiling (m)")
             if top is not None and ceiling < top:  # unknown cells would be pits below seen ground: never free
-                raise TerrainError(f"from_points: ceiling {ceiling:.6g} m is below the highest point seen ({top:.6g} m): "
+                raise TerrainError(f"from_points: ceiling {ceiling!r} m is below the highest point seen ({top!r} m): "
                                    "an unknown cell filled there would be lower than terrain the sensor saw; give a "
                                    "ceiling at least that high, or none (the highest point)")
         top = ceiling if top is None else top
