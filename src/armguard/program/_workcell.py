@@ -81,7 +81,7 @@ class MotionRecord:
             feat = f" {c.feature}" if c.feature is not None else ""
             out.append(f"{c.describe()}: {c.link or c.payload or c.a} with {c.obstacle}{feat}{where}, t = {c.time:.4f} s")
         if self.nominal_clearance is not None:
-            out.append(f"not verified at the confidence asked: the bound objects grown by {self.k:.2f} sigma touch; as "
+            out.append(f"not verified at the confidence asked: the bound objects grown by up to {self.k:.2f} sigma touch; as "
                        f"found they are {1e3 * self.nominal_clearance:.1f} mm clear (calibrate the camera, or ask less "
                        "confidence)" if self.nominal_clearance > 0.0 else
                        "the bound objects collide as found, without their growth")
