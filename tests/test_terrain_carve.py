@@ -56,7 +56,7 @@ def _reference_lows(o, p, use, grid, carving):
     return out
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60, deadline=None, derandomize=True)
 @given(seed=st.integers(0, 2**31 - 1), votes=st.integers(1, 3))
 def test_the_grid_walk_finds_every_cell_a_segment_crosses_and_its_lowest_point(seed, votes):
     rng = np.random.default_rng(seed)
