@@ -252,3 +252,24 @@ def test_an_outlier_rule_with_a_meaningless_field_is_refused(bad, what):
     with pytest.raises(TerrainError, match=what.replace(".", "\\.")):
         OutlierRule(**bad)
     assert OutlierRule(k=np.inf, spike=np.inf, ray=np.inf).ray == np.inf  # inf: the stage is off
+
+
+def test_a_pcd_whose_header_says_where_it_was_seen_from_is_read_with_its_rays(tmp_path):
+    """PCL writes the sensor's origin into a PCD's VIEWPOINT: load_terrain reads the rays from it, as
+    from a .npz's X_WC; the default VIEWPOINT (0 0 0 1 0 0 0, what most writers leave) is no evidence."""
+    from armguard.terrain import read_viewpoint, write_points
+
+    r = reference_terrain("gentle")
+    plain = write_points(tmp_path / "plain.pcd", r["points_W"])
+    assert read_viewpoint(plain) is None and load_terrain(plain).upper is None
+    eye = r["X_WC"][:3, 3]
+    text = plain.read_text()
+    vp = next(line for line in text.splitlines() if line.startswith("VIEWPOINT"))
+    seen = tmp_path / "seen.pcd"
+    seen.write_text(text.replace(vp, "VIEWPOINT " + " ".join(repr(float(x)) for x in (*eye, 1.0, 0.0, 0.0, 0.0))))
+    np.testing.assert_array_equal(read_viewpoint(seen), eye)
+    m = load_terrain(seen)
+    given = load_terrain(plain, sensor_W=eye)
+    assert m.upper is not None
+    np.testing.assert_array_equal(m.heights, given.heights)
+    np.testing.assert_array_equal(m.known, given.known)

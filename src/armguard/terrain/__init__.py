@@ -9,7 +9,7 @@ the module stands alone.  :mod:`armguard.terrain.generate` makes synthetic terra
 stereo-like point clouds.  Guide: ``docs/terrain.md``.
 """
 
-from ._io import depth_to_points, read_points, write_points
+from ._io import depth_to_points, read_points, read_viewpoint, write_points
 from ._carve import Carving
 from ._map import ElevationMap, OutlierRule
 from ._pyramid import PyramidLevel, TerrainPyramid, TerrainResult, TerrainStatus
@@ -46,6 +46,7 @@ __all__ = [
     "TerrainPointsDropped",
     "MAX_CELLS",
     "read_points",
+    "read_viewpoint",
     "write_points",
     "depth_to_points",
 ]

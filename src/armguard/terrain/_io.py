@@ -119,6 +119,28 @@ def read_points(path, X_WS=None) -> np.ndarray:
     return p
 
 
+def read_viewpoint(path) -> np.ndarray | None:
+    """``(3,) m`` or None: where a ``.pcd`` says its points were seen from -- its header's ``VIEWPOINT
+    tx ty tz qw qx qy qz`` (PCL's sensor origin), in the file's frame -- when the header gives one other
+    than the default ``0 0 0 1 0 0 0`` (which most writers leave as it is, whatever the frame: no
+    evidence).  None for any other file type."""
+    path = Path(path)
+    if path.suffix.lower() != ".pcd":
+        return None
+    import pypcd4
+
+    try:
+        vp = np.asarray(pypcd4.PointCloud.from_path(path).metadata.viewpoint, dtype=np.float64)
+    except Exception as e:  # noqa: BLE001 - a reader's own error, named with the file
+        first = (str(e).splitlines() or [""])[0]
+        raise TerrainFileError(path, "VIEWPOINT", f"cannot read the header ({type(e).__name__}: {first})") from e
+    if vp.shape != (7,) or not np.all(np.isfinite(vp)):
+        raise TerrainFileError(path, "VIEWPOINT", f"expected 7 finite numbers (tx ty tz qw qx qy qz), got {vp.tolist()}")
+    if np.array_equal(vp, [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]):
+        return None
+    return vp[:3].copy()
+
+
 def write_points(path, points) -> Path:
     """Write ``points (N, 3) m`` to ``.ply`` (binary, trimesh), ``.pcd`` (ASCII, pypcd4; float32),
     ``.npy`` or ``.npz`` (array ``points``); returns the path.  The file is written whole or not at
