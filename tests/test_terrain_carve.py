@@ -254,9 +254,11 @@ def test_an_outlier_rule_with_a_meaningless_field_is_refused(bad, what):
     assert OutlierRule(k=np.inf, spike=np.inf, ray=np.inf).ray == np.inf  # inf: the stage is off
 
 
-def test_a_pcd_whose_header_says_where_it_was_seen_from_is_read_with_its_rays(tmp_path):
-    """PCL writes the sensor's origin into a PCD's VIEWPOINT: load_terrain reads the rays from it, as
-    from a .npz's X_WC; the default VIEWPOINT (0 0 0 1 0 0 0, what most writers leave) is no evidence."""
+def test_a_pcds_viewpoint_is_read_when_asked_not_on_its_own(tmp_path):
+    """PCL writes the sensor's origin into a PCD's VIEWPOINT, but reads it two ways (the sensor's
+    position in the points' frame, or a cloud's pose): load_terrain does not take it on its own; given
+    as sensor_W it reads the rays from it, as from a .npz's X_WC.  The default VIEWPOINT (0 0 0 1 0 0 0,
+    what most writers leave) is no position; a quaternion that is no unit one is refused."""
     from armguard.terrain import read_viewpoint, write_points
 
     r = reference_terrain("gentle")
@@ -268,8 +270,13 @@ def test_a_pcd_whose_header_says_where_it_was_seen_from_is_read_with_its_rays(tm
     seen = tmp_path / "seen.pcd"
     seen.write_text(text.replace(vp, "VIEWPOINT " + " ".join(repr(float(x)) for x in (*eye, 1.0, 0.0, 0.0, 0.0))))
     np.testing.assert_array_equal(read_viewpoint(seen), eye)
-    m = load_terrain(seen)
+    assert load_terrain(seen).upper is None  # not on its own
+    m = load_terrain(seen, sensor_W=read_viewpoint(seen))
     given = load_terrain(plain, sensor_W=eye)
     assert m.upper is not None
     np.testing.assert_array_equal(m.heights, given.heights)
     np.testing.assert_array_equal(m.known, given.known)
+    odd = tmp_path / "odd.pcd"
+    odd.write_text(text.replace(vp, "VIEWPOINT 1 2 3 5 0 0 0"))
+    with pytest.raises(TerrainFileError, match="VIEWPOINT.*no unit quaternion"):
+        read_viewpoint(odd)

@@ -144,8 +144,9 @@ def witnesses(pa, ga, ca, pb, gb, cb, nx, ny, nz, depth, work):  # pragma: no co
     """``(ax, ay, az, bx, by, bz)``: points of A's and B's supporting faces along ``n`` and ``-n`` with
     ``a - b = depth n``.  The faces' supports ``a``, ``b`` may stand apart in the plane (the faces are
     segments or discs, a cylinder's side along its axis): both faces' extremes along that offset
-    ``t`` (supports along ``n ± eps t``) span an interval each, and the witnesses are taken at the
-    middle of the intervals' overlap; what remains off ``depth n`` is split between the two."""
+    ``t`` (supports along ``n ± eps t``) span a segment each; the witnesses are where the two segments
+    cross seen along ``n`` when they do within both, else at the middle of their overlap along ``t``;
+    what remains off ``depth n`` is split between the two."""
     ax, ay, az, bx, by, bz = _pair_support(pa, ga, ca, pb, gb, cb, nx, ny, nz, work)
     tx, ty, tz = ax - bx - depth * nx, ay - by - depth * ny, az - bz - depth * nz
     tn = math.sqrt(tx * tx + ty * ty + tz * tz)
@@ -167,10 +168,13 @@ def witnesses(pa, ga, ca, pb, gb, cb, nx, ny, nz, depth, work):  # pragma: no co
         w1, w2 = wx * e1x + wy * e1y + wz * e1z, wx * e2x + wy * e2y + wz * e2z
         det = -u1 * v2 + u2 * v1  # of [[u1, -v1], [u2, -v2]]
         scale2 = (u1 * u1 + u2 * u2) * (v1 * v1 + v2 * v2)
+        crossed = False
+        la = lb = 0.0
         if det * det > 1e-12 * scale2 and scale2 > 0.0:
-            la = min(max((-w1 * v2 + w2 * v1) / det, 0.0), 1.0)
-            lb = min(max((u1 * w2 - u2 * w1) / det, 0.0), 1.0)
-        else:
+            la, lb = (-w1 * v2 + w2 * v1) / det, (u1 * w2 - u2 * w1) / det
+            crossed = -1e-9 <= la <= 1.0 + 1e-9 and -1e-9 <= lb <= 1.0 + 1e-9  # within both segments
+            la, lb = min(max(la, 0.0), 1.0), min(max(lb, 0.0), 1.0)
+        if not crossed:
             sa0, sa1 = a0x * tx + a0y * ty + a0z * tz, a1x * tx + a1y * ty + a1z * tz
             sb0, sb1 = b0x * tx + b0y * ty + b0z * tz, b1x * tx + b1y * ty + b1z * tz
             lo, hi = max(min(sa0, sa1), min(sb0, sb1)), min(max(sa0, sa1), max(sb0, sb1))

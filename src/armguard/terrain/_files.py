@@ -9,7 +9,7 @@
 * a point file (``.ply``, ``.pcd``, ``.npy``; :func:`read_points`) at ``cell`` (default 5 cm).
 
 Where the points were seen from -- a ``.npz``'s ``X_WC (4, 4)`` (the camera's pose; the shipped
-files have it), a ``.pcd`` header's ``VIEWPOINT`` other than the default, or ``sensor_W=`` -- turns on the checks of the rays' free space (stage 3 of
+files have it) or ``sensor_W=`` (a PCD's :func:`read_viewpoint`, where its writer means it so) -- turns on the checks of the rays' free space (stage 3 of
 :class:`OutlierRule`, :class:`Carving`): a point too far along its ray and a cell seen on a face
 only are then caught, not mapped too low.
 
@@ -35,7 +35,7 @@ from ..model import scene_of
 from .._errors import ArmguardWarning, TerrainError, TerrainFileError
 from .._resources import data_dir
 from .._values import number
-from ._io import read_points, read_viewpoint
+from ._io import read_points
 from ._map import MAX_CELLS, ElevationMap
 
 __all__ = ["load_terrain", "terrain_path", "shipped_terrains", "verify_items", "TerrainPointsDropped", "MAX_CELLS"]
@@ -140,8 +140,6 @@ def load_terrain(path, scene=None, *, robot: str | None = None, cell: float | No
     else:
         c = 0.05 if cell is None else cell
         pts = read_points(p)
-        if sensor_W is None:  # a PCD header's VIEWPOINT, when it gives one (read_viewpoint)
-            sensor_W = read_viewpoint(p)
     if not (np.isfinite(c) and c > 0.0):
         raise TerrainFileError(p, "cell", f"expected a cell side > 0 m, got {c!r}")
     if pts is not None:

@@ -120,10 +120,15 @@ def read_points(path, X_WS=None) -> np.ndarray:
 
 
 def read_viewpoint(path) -> np.ndarray | None:
-    """``(3,) m`` or None: where a ``.pcd`` says its points were seen from -- its header's ``VIEWPOINT
-    tx ty tz qw qx qy qz`` (PCL's sensor origin), in the file's frame -- when the header gives one other
-    than the default ``0 0 0 1 0 0 0`` (which most writers leave as it is, whatever the frame: no
-    evidence).  None for any other file type."""
+    """``(3,) m`` or None: the position in a ``.pcd`` header's ``VIEWPOINT tx ty tz qw qx qy qz`` (PCL's
+    ``sensor_origin_``) when the header gives one other than the default ``0 0 0 1 0 0 0`` (which most
+    writers leave whatever the frame: no evidence); None for any other file type.
+
+    Not read by :func:`load_terrain` on its own: PCL reads the field two ways -- its occlusion and
+    normal code as the sensor's position in the points' frame, its viewer as the pose of a cloud
+    given in the sensor's frame (the sensor then at the points' origin) -- and a wrong position
+    proves free space that is not.  Where the writer means the first,
+    ``load_terrain(path, sensor_W=read_viewpoint(path))``."""
     path = Path(path)
     if path.suffix.lower() != ".pcd":
         return None
@@ -138,6 +143,8 @@ def read_viewpoint(path) -> np.ndarray | None:
         raise TerrainFileError(path, "VIEWPOINT", f"expected 7 finite numbers (tx ty tz qw qx qy qz), got {vp.tolist()}")
     if np.array_equal(vp, [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]):
         return None
+    if abs(float(np.linalg.norm(vp[3:])) - 1.0) > 1e-6:
+        raise TerrainFileError(path, "VIEWPOINT", f"the orientation (qw qx qy qz) {vp[3:].tolist()} is no unit quaternion")
     return vp[:3].copy()
 
 
