@@ -304,6 +304,42 @@ def test_invalid_relations_raise(mean, cov, match):
         UncertainPose2(mean, cov)
 
 
+@pytest.mark.parametrize(
+    "cov,match",
+    [
+        # an angle variance below zero beside large position variances (m² and rad² in one matrix):
+        # a tolerance relative to the largest entry accepted it, and a merge then moved the angle
+        # away from both estimates
+        (np.diag([100.0, 100.0, -5e-8]), "variance is negative"),
+        (np.diag([1.0, 1.0, -5e-10]), "variance is negative"),
+        # a covariance between x and the angle given with two signs: symmetrising set it to 0
+        ([[100.0, 0.0, 4e-8], [0.0, 100.0, 0.0], [-4e-8, 0.0, 1e-7]], "symmetric"),
+        # a correlation of 1.26 between a large and a small variance
+        ([[100.0, 0.0, 0.004], [0.0, 100.0, 0.0], [0.004, 0.0, 1e-7]], "semi-definite"),
+    ],
+)
+def test_covariance_checks_hold_each_entry_in_its_own_units(cov, match):
+    with pytest.raises(UncertaintyError, match=match):
+        UncertainPose2([0, 0, 0], cov)
+
+
+def test_a_merge_with_small_angle_variances_stays_between_its_estimates():
+    p = UncertainPose2([0, 0, 0], np.diag([100.0, 100.0, 5e-8]))
+    q = UncertainPose2([0, 0, 1e-3], np.diag([1.0, 1.0, 1e-7]))
+    m = p.merge(q)
+    assert 0.0 < m.mean[2] < 1e-3 and m.cov[2, 2] > 0.0
+
+
+def test_a_singular_covariance_with_round_off_is_accepted_as_given():
+    u = np.array([1.0, 2.0, 3.0]) / math.sqrt(14.0)
+    c = 0.01 * np.outer(u, u)  # rank one: two eigenvalues zero, to round-off either side
+    c[0, 0] -= 1e-19
+    np.testing.assert_array_equal(UncertainPose2([0, 0, 0], c).cov, c)
+    c[0, 0] = -1e-15  # beyond round-off of 0.01: a negative variance
+    with pytest.raises(UncertaintyError, match="variance is negative"):
+        UncertainPose2([0, 0, 0], c)
+
+
 def test_round_off_asymmetry_is_accepted_and_removed():
     c = np.array([[1.0, 0.3, 0.0], [0.3 + 1e-12, 1.0, 0.0], [0.0, 0.0, 1.0]])
     p = UncertainPose2([0, 0, 0], c)

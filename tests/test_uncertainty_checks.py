@@ -225,3 +225,37 @@ def test_a_merge_stays_a_covariance_armguard_accepts():
         m = UncertainPose2([3.0, 1.0, 0.4], base).merge(UncertainPose2([3.0, 1.0, 0.4], c2))
         UncertainPose2(m.mean, m.cov)  # validated again: no refusal
         assert np.linalg.eigvalsh(m.cov).min() >= -1e-18
+
+
+def test_clearance_sigmas_reads_the_scene_of_its_rows_while_another_thread_edits_it():
+    """Another thread's edit between the Detector's query and the reads of the shapes (simulated: the
+    query adds a body): the rows and the shapes come from one revision, read again after a change;
+    an edit on every try is an error, never a report of a scene that no row describes."""
+    scene = _ball_scene()
+    det = armguard.Detector(scene, threshold=0.0)
+    q = scene.flat_q(scene.default_q())
+    place = UncertainPlacement("ball", _pose3(0.008, 0.0, BALL))
+    query, edits, calls = det.pair_distances, [], []
+
+    def edited_once(*a, **k):
+        r = query(*a, **k)
+        calls.append(1)
+        if not edits:
+            edits.append(1)
+            scene.add_body("late_ball", Sphere((2.0, 2.0, 2.0), 0.05))
+        return r
+
+    det.pair_distances = edited_once
+    rep = clearance_sigmas(det, q, place, samples=0)
+    assert len(calls) == 2  # the rows read again, of the edited scene
+    assert [(p.a, p.b) for p in rep.pairs] == [(p.a, p.b) for p in clearance_sigmas(det, q, place, samples=0).pairs]
+
+    def edited_always(*a, **k):
+        r = query(*a, **k)
+        scene.add_body(f"ball_{len(edits)}", Sphere((2.0, -2.0, 2.0), 0.05))
+        edits.append(1)
+        return r
+
+    det.pair_distances = edited_always
+    with pytest.raises(UncertaintyError, match="changed"):
+        clearance_sigmas(det, q, place, samples=0)

@@ -69,3 +69,24 @@ def test_every_placement_stays_within_its_radius_with_the_confidence_asked(share
     assert inside.mean() >= CONFIDENCE - 4 * se
     if shared == 0.0:
         assert inside.mean() <= CONFIDENCE + 4 * se
+
+
+def test_a_body_added_by_another_thread_meanwhile_is_never_checked_ungrown(monkeypatch):
+    """An edit of the scene while verify_with_confidence reads it (simulated: at its first sigma_max) was
+    in the grown copy without growth (a body the check saw at its own size)."""
+    from armguard.geometry import Sphere
+
+    scene = armguard.load_scene("puma560")
+    traj = scene.trajectories["pick_and_place"]
+    place = UncertainPlacement("cylinder_a", _pose((0.55, 0.15, 0.6), np.diag([1e-6] * 3 + [1e-5] * 3)))
+    sigma_max = UncertainPlacement.sigma_max
+
+    def edited(self, shapes):
+        if "late_ball" not in scene.bodies:
+            scene.add_body("late_ball", Sphere((0.55, 0.15, 0.9), 0.05))
+        return sigma_max(self, shapes)
+
+    monkeypatch.setattr(UncertainPlacement, "sigma_max", edited)
+    out = verify_with_confidence(scene, traj, [place], CONFIDENCE)
+    # the check is of the scene as the call found it: the body added meanwhile is in neither its growth nor its copy
+    assert "late_ball" in scene.bodies and "late_ball" not in out.scene.bodies and "late_ball" not in out.growth

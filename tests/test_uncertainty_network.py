@@ -236,3 +236,14 @@ def test_property_deletion_never_claims_less_than_the_joint_on_linear_bridges(sc
     assert rep.pose.cov[0, 0] == pytest.approx(best, rel=1e-6)
     assert rep.pose.cov[0, 0] >= joint.cov[0, 0] * (1 - 1e-6)
     assert np.all(np.linalg.eigvalsh(rep.pose.cov[:2, :2] - joint.cov[:2, :2]) >= -1e-6 * r_eq)
+
+
+@pytest.mark.parametrize("irreducible", ["joint", "delete"])
+def test_a_network_given_as_a_generator_reduces_as_the_list(irreducible):
+    """The Iterable the signature allows: irreducible="joint" read it a second time (empty: "source frame
+    's' is not in the network")."""
+    net = linear_bridge(R_UNBALANCED)
+    from_list = reduce_network(net, "s", "t", irreducible=irreducible)
+    from_gen = reduce_network((e for e in net), "s", "t", irreducible=irreducible)
+    np.testing.assert_array_equal(from_gen.mean, from_list.mean)
+    np.testing.assert_array_equal(from_gen.cov, from_list.cov)

@@ -83,8 +83,10 @@ class Tolerances:
         a million sides would take minutes to load).
     covariance_relative : float, dimensionless
         ``armguard.uncertainty``: a covariance ``C`` is accepted as symmetric positive
-        semi-definite when ``max|C - C^T|`` and ``-min(eigenvalues)`` are both at most this
-        times ``max|C|`` (round-off of products such as ``J C J^T``); an eigenvalue below this
+        semi-definite when ``|C_ij - C_ji|`` is at most this times ``sqrt(C_ii C_jj)`` and the
+        correlation matrix ``C_ij / sqrt(C_ii C_jj)`` has no eigenvalue below minus this (each
+        entry in its own units: m² and rad² side by side; round-off of products such as
+        ``J C J^T``; a negative variance beyond round-off is refused); an eigenvalue below this
         times the largest counts as zero (a direction known exactly).
     merge_conditioning : float, dimensionless
         ``armguard.uncertainty``: merging two estimates needs ``C1 + C2`` invertible; the merge

@@ -293,6 +293,24 @@ def _moved_by(scene, placement: UncertainPlacement) -> set:
     return out
 
 
+def _consistent_rows(source, q, tries: int = 3):
+    """:func:`_pair_rows` with a snapshot of the scene (``Scene.copy``, under its lock) of the same
+    revision as the rows: a Detector's scene may be edited by another thread between its query and
+    the reads of the shapes (a body added there had no rows but was read as moved).  Retried when
+    the revision changed; :class:`UncertaintyError` if it changes on every try."""
+    live = getattr(source, "scene", None) if not hasattr(source, "capabilities") else None
+    for _ in range(tries):
+        before = getattr(live, "revision", None)
+        scene, q_scene, rows = _pair_rows(source, q)
+        if live is None:  # a Checker's Model: immutable
+            return scene, q_scene, rows
+        with live.lock:
+            snap, after = live.copy(), live.revision
+        if after == before:
+            return snap, q_scene, rows
+    raise UncertaintyError(f"clearance_sigmas: the scene changed during each of {tries} tries (another thread's edits)")
+
+
 def _pair_rows(source, q):
     """``(scene, q_scene, rows)``: rows of ``(a, b, category, d, p_WA, p_WB)`` from a Checker
     (``pair_distances``; ``q`` in pin_model's order) or a Detector (``q`` as it takes)."""
@@ -375,7 +393,7 @@ def clearance_sigmas(source, q, placements, *, confidence: float = 0.999, sample
         raise UncertaintyError(f"samples: expected an integer >= 0 (Monte Carlo draws; 0: none), got {samples!r}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
         raise UncertaintyError(f"seed: expected an integer, got {seed!r}")
-    scene, q_scene, rows = _pair_rows(source, q)
+    scene, q_scene, rows = _consistent_rows(source, q)
     placements = _check_placements(scene, placements)
     moved = [_moved_by(scene, p) for p in placements]
     cores = _owner_cores(scene, q_scene)

@@ -82,7 +82,9 @@ def verify_with_confidence(scene, trajectory, placements, confidence: float = 0.
     A robot-base placement needs a scene with one robot (another robot's links would have to
     grow too): otherwise UncertaintyError.
     """
-    scene = scene_of(scene, "verification")  # a Model: its scene
+    # a Model: its scene; a snapshot (Scene.copy holds the scene's lock) from which everything below
+    # is read: another thread's edit could otherwise add a body that the check would see ungrown
+    scene = scene_of(scene, "verification").copy()
     from ..verify import verify
 
     _confidence(confidence)

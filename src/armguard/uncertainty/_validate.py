@@ -52,9 +52,19 @@ def symmetrize(c: np.ndarray) -> np.ndarray:
 def as_covariance(value, n: int, name: str, tol: Tolerances = DEFAULT_TOLERANCES) -> np.ndarray:
     """``value`` as a finite, symmetric positive semi-definite (n, n) float64 array.
 
-    Accepted when ``max|C - C^T|`` and ``-min(eig C)`` are at most
-    ``tol.covariance_relative * max|C|``; the returned matrix is exactly symmetric.
-    Raises :class:`UncertaintyError` otherwise, naming the failed check.
+    The checks are made in each entry's own units: a covariance holds m² and rad² side by side, and
+    a tolerance relative to its largest entry let a position variance of 100 m² pass an angle
+    variance of -5e-8 rad² (whose merge then moved the angle away from both estimates).  With
+    ``s_i = sqrt(C_ii)`` and ``r = tol.covariance_relative``:
+
+    * no variance below ``-e``, ``e = 64 eps max|C|`` (round-off of products such as ``J C J^T``);
+    * ``|C_ij - C_ji| <= r s_i s_j + e``;
+    * the correlation matrix ``C_ij / (s_i s_j)`` (``s_i`` at least ``sqrt(e)``) has no eigenvalue
+      below ``-r``.
+
+    The returned matrix is exactly symmetric (an eigenvalue round-off left below zero stays: the
+    callers that factor a covariance treat those within the tolerance as zero).  Raises
+    :class:`UncertaintyError` otherwise, naming the failed check.
     """
     try:
         c = np.array(value, dtype=np.float64)
@@ -68,15 +78,25 @@ def as_covariance(value, n: int, name: str, tol: Tolerances = DEFAULT_TOLERANCES
     if scale > tol.max_magnitude**2:
         raise UncertaintyError(f"{name}: an entry of {scale:.3g} is beyond {tol.max_magnitude**2:g} (Tolerances.max_magnitude "
                                "squared; m^2, rad^2)")
-    allowance = tol.covariance_relative * scale
-    asym = float(np.max(np.abs(c - c.T)))
-    if asym > allowance:
-        raise UncertaintyError(f"{name}: not symmetric (max |C - C^T| = {asym:.3g} > {allowance:.3g})")
+    if scale == 0.0:
+        return c  # every relation known exactly
+    e = 64.0 * np.finfo(np.float64).eps * scale
+    var = np.diag(c)
+    i = int(np.argmin(var))
+    if var[i] < -e:
+        raise UncertaintyError(f"{name}: not positive semi-definite: a variance is negative (C[{i}, {i}] = {var[i]:.3g})")
+    s = np.sqrt(np.maximum(var, e))
+    r = tol.covariance_relative
+    excess = np.abs(c - c.T) - (r * np.outer(s, s) + e)
+    if float(np.max(excess)) > 0.0:
+        i, j = np.unravel_index(int(np.argmax(excess)), excess.shape)
+        raise UncertaintyError(f"{name}: not symmetric (C[{i}, {j}] = {c[i, j]:.6g} but C[{j}, {i}] = {c[j, i]:.6g})")
     c = symmetrize(c)
-    lo = float(np.linalg.eigvalsh(c)[0])
-    if lo < -allowance:
+    lo = float(np.linalg.eigvalsh(c / np.outer(s, s))[0])
+    if lo < -r:
         raise UncertaintyError(
-            f"{name}: not positive semi-definite (smallest eigenvalue {lo:.3g} < -{allowance:.3g})"
+            f"{name}: not positive semi-definite (the correlation matrix C_ij / sqrt(C_ii C_jj) has the eigenvalue "
+            f"{lo:.3g} < -{r:g})"
         )
     return c
 

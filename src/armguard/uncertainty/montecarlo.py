@@ -16,7 +16,7 @@ import numpy as np
 from .._errors import UncertaintyError
 from . import se2 as _se2
 from . import se3 as _se3
-from ._validate import as_covariance, as_vector
+from ._validate import as_covariance, as_transform, as_vector
 from .pose2 import UncertainPose2
 from .pose3 import UncertainPose3
 
@@ -152,7 +152,7 @@ def monte_carlo_chain3(poses: Sequence[UncertainPose3], n: int, rng: np.random.G
         prod = prod @ (_se3._exp(xi) @ p.mean)
         ref = ref @ p.mean
     if reference is not None:
-        ref = np.asarray(reference, dtype=np.float64)
+        ref = as_transform(reference, "monte_carlo_chain3: reference")  # a non-rigid one was made rigid unseen
     return _stats(_se3._log(prod @ _se3._invert(ref)), ref)
 
 

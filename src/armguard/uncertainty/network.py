@@ -221,6 +221,7 @@ def reduce_network_report(network: Iterable, source: Hashable, target: Hashable,
     """
     if irreducible not in _IRREDUCIBLE:
         raise UncertaintyError(f"reduce_network: irreducible must be one of {_IRREDUCIBLE}, got {irreducible!r}")
+    network = list(network)  # read once: a generator is read again by joint_estimate
     edges = _parse(network, source, target)
     if not _connected(edges, source, target):
         raise UncertaintyError(f"reduce_network: no chain of relations joins {source!r} to {target!r}")

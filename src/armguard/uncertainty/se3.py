@@ -75,6 +75,10 @@ def hat(xi) -> np.ndarray:
     return out
 
 
+_LOG_SERIES = 1e-3
+"""Below this angle (rad) ``V``'s and ``V^-1``'s coefficients (:func:`exp`, :func:`log`) come from their Taylor series."""
+
+
 def _exp(xi: np.ndarray) -> np.ndarray:
     rho, phi = xi[..., :3], xi[..., 3:]
     th2 = np.einsum("...i,...i->...", phi, phi)
@@ -82,8 +86,12 @@ def _exp(xi: np.ndarray) -> np.ndarray:
     small = th < _SMALL
     ths = np.where(small, 1.0, th)
     a = np.where(small, 1.0 - th2 / 6.0, np.sin(ths) / ths)  # sin θ / θ
-    b = np.where(small, 0.5 - th2 / 24.0, (1.0 - np.cos(ths)) / (ths * ths))  # (1 - cos θ) / θ²
-    c = np.where(small, 1.0 / 6.0 - th2 / 120.0, (ths - np.sin(ths)) / (ths**3))  # (θ - sin θ) / θ³
+    sh = np.sin(0.5 * ths) / ths
+    b = np.where(small, 0.5 - th2 / 24.0, 2.0 * sh * sh)  # (1 - cos θ) / θ² = 2 sin²(θ/2) / θ² (1 - cos θ cancels)
+    # (θ - sin θ) / θ³, its series below _LOG_SERIES (the difference cancels; the next term is below 3e-24)
+    series = th < _LOG_SERIES
+    tc = np.where(series, 1.0, th)
+    c = np.where(series, 1.0 / 6.0 - th2 / 120.0 + th2 * th2 / 5040.0, (tc - np.sin(tc)) / (tc**3))
     k = _skew(phi)
     k2 = k @ k
     eye = np.eye(3)
@@ -100,7 +108,7 @@ def exp(xi) -> np.ndarray:
     """The SE(3) exponential: (..., 6) exponential coordinates (ρ m, φ rad) -> (..., 4, 4).
 
     Rodrigues' formula for the rotation and ``t = V ρ`` with ``V = I + (1 - cos θ)/θ² φ× +
-    (θ - sin θ)/θ³ (φ×)²``; Taylor series below 1e-5 rad.
+    (θ - sin θ)/θ³ (φ×)²``; Taylor series below 1e-5 rad (``V``'s last coefficient below 1e-3 rad).
     """
     return _exp(np.asarray(xi, dtype=np.float64))
 
@@ -111,12 +119,13 @@ def _log(t: np.ndarray) -> np.ndarray:
     phi = Rotation.from_matrix(flat).as_rotvec().reshape(r.shape[:-2] + (3,))
     th2 = np.einsum("...i,...i->...", phi, phi)
     th = np.sqrt(th2)
-    small = th < _SMALL
-    ths = np.where(small, 1.0, th)
-    # V^-1 = I - ½ φ× + (1/θ²) (1 - θ sin θ / (2 (1 - cos θ))) (φ×)²
-    d = np.where(
-        small, 1.0 / 12.0 + th2 / 720.0, (1.0 - ths * np.sin(ths) / (2.0 * (1.0 - np.cos(ths)))) / (ths * ths)
-    )
+    # V^-1 = I - ½ φ× + d (φ×)², d = (1 - θ sin θ / (2 (1 - cos θ))) / θ² = (1 - (θ/2) cot(θ/2)) / θ²:
+    # written with the half angle (1 - cos θ cancelled: at θ = 1e-5 rad it cost 1e-6 m per metre of
+    # translation), and its Taylor series 1/12 + θ²/720 + θ⁴/30240 below 1e-3 rad (where 1 - x cot x
+    # cancels; the next term, θ⁶/1209600, is below 1e-24 there)
+    small = th < _LOG_SERIES
+    h = 0.5 * np.where(small, 1.0, th)
+    d = np.where(small, 1.0 / 12.0 + th2 / 720.0 + th2 * th2 / 30240.0, (1.0 - h * np.cos(h) / np.sin(h)) / (4.0 * h * h))
     k = _skew(phi)
     vinv = np.eye(3) - 0.5 * k + d[..., None, None] * (k @ k)
     rho = np.einsum("...ij,...j->...i", vinv, t[..., :3, 3])
