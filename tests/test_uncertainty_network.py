@@ -247,3 +247,21 @@ def test_a_network_given_as_a_generator_reduces_as_the_list(irreducible):
     from_gen = reduce_network((e for e in net), "s", "t", irreducible=irreducible)
     np.testing.assert_array_equal(from_gen.mean, from_list.mean)
     np.testing.assert_array_equal(from_gen.cov, from_list.cov)
+
+
+@pytest.mark.parametrize("k", [4, 6])
+def test_relations_off_every_chain_from_source_to_target_are_left_out(k):
+    """A complete graph of k frames hanging off the source (a cut vertex) carries no information about
+    source→target: the answer is the one relation s-t.  It could not be reduced: with k = 4 a relation
+    of it was "deleted", with k = 6 the deletion search gave up after seconds."""
+    rng = np.random.default_rng(k)
+    direct = UncertainPose2([0.5, 0.1, 0.2], np.diag([1e-4, 2e-4, 1e-5]))
+    net = [("s", "t", direct)]
+    frames = ["s"] + [f"h{i}" for i in range(k - 1)]
+    for a, b in itertools.combinations(frames, 2):
+        net.append((a, b, UncertainPose2(rng.normal(size=3) * 0.3, np.diag(rng.uniform(1e-5, 1e-3, 3)))))
+    rep = reduce_network_report(net, "s", "t", irreducible="raise")
+    assert rep.status is ReductionStatus.SERIES_PARALLEL and rep.deleted == ()
+    np.testing.assert_array_equal(rep.pose.mean, direct.mean)
+    np.testing.assert_array_equal(rep.pose.cov, direct.cov)
+    np.testing.assert_allclose(joint_estimate(net, "s", "t").cov, direct.cov, rtol=1e-6)

@@ -106,6 +106,24 @@ def _connected(edges, source, target) -> bool:
     return target in reach
 
 
+def _relevant(edges: list, source, target) -> list:
+    """The relations on some simple chain from source to target: those of the biconnected component
+    that holds a virtual source-target relation (networkx).  The rest hang off a frame the chains
+    all pass (a cut vertex) and carry no information about source→target, as a dangling frame
+    does; a bridge network hanging there could not be reduced, and made an irrelevant relation
+    the one deleted (or, beyond six frames, the deletion search too long)."""
+    import networkx as nx
+
+    g = nx.Graph()
+    g.add_edges_from((a, b) for a, b, _, _ in edges)
+    g.add_edge(source, target)
+    for block in nx.biconnected_component_edges(g):
+        keys = {frozenset(e) for e in block}
+        if frozenset((source, target)) in keys:
+            return [e for e in edges if frozenset((e[0], e[1])) in keys]
+    return edges  # unreachable: the virtual relation is in one block
+
+
 def _series_parallel(edges: list, source, target, tol: Tolerances) -> list:
     """Apply parallel merges and series compoundings until none applies; the edges that remain."""
     while True:
@@ -225,7 +243,7 @@ def reduce_network_report(network: Iterable, source: Hashable, target: Hashable,
     edges = _parse(network, source, target)
     if not _connected(edges, source, target):
         raise UncertaintyError(f"reduce_network: no chain of relations joins {source!r} to {target!r}")
-    rest = _series_parallel(edges, source, target, tol)
+    rest = _series_parallel(_relevant(edges, source, target), source, target, tol)
     if _done(rest, source, target):
         return NetworkReduction(_oriented(rest[0], source), ReductionStatus.SERIES_PARALLEL)
     if irreducible == "raise":
