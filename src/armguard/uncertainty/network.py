@@ -318,14 +318,28 @@ def joint_estimate(network: Iterable, source: Hashable, target: Hashable, *,
     def at(f):
         return np.zeros(3) if f == source else x[col[f]:col[f] + 3]
 
+    def residual(p, xa, xb):
+        ra = _se2._reverse_mean(xa)
+        hb = _se2._compound_mean(ra, xb)
+        r = hb - p.mean
+        r[2] = _se2.wrap_angle(r[2])
+        return ra, hb, r
+
+    def cost(x_try) -> float:
+        def at_try(f):
+            return np.zeros(3) if f == source else x_try[col[f]:col[f] + 3]
+
+        total = 0.0
+        for (a, b, p, _), w in zip(used, weights):
+            r = residual(p, at_try(a), at_try(b))[2]
+            total += float(r @ w @ r)
+        return total
+
     for _ in range(int(max_iterations)):
         h_mat, g_vec = np.zeros((n, n)), np.zeros(n)
         for (a, b, p, _), w in zip(used, weights):
             xa, xb = at(a), at(b)
-            ra = _se2._reverse_mean(xa)
-            hb = _se2._compound_mean(ra, xb)
-            r = hb - p.mean
-            r[2] = _se2.wrap_angle(r[2])
+            ra, hb, r = residual(p, xa, xb)
             j1, j2 = _se2._compound_jacobians(ra, xb, hb)
             blocks = ((a, j1 @ _se2._reverse_jacobian(xa, ra)), (b, j2))
             for f, jf in blocks:
@@ -336,9 +350,21 @@ def joint_estimate(network: Iterable, source: Hashable, target: Hashable, *,
                     if f2 != source:
                         h_mat[col[f]:col[f] + 3, col[f2]:col[f2] + 3] += jf.T @ w @ jf2
         step = np.linalg.solve(h_mat, -g_vec)
-        x = x + step
-        if np.max(np.abs(step)) <= 1e-13 * max(1.0, float(np.max(np.abs(x)))):
-            break
+        # backtracking: the Gauss-Newton step halved until the weighted squared residuals do not grow
+        # (with large angular errors the full step overshot: steps grew to 1e74 on loops with 1 rad noise)
+        c0, t = cost(x), 1.0
+        c1 = cost(x + step)
+        while not c1 <= c0:
+            t *= 0.5
+            if t < 1e-6:  # no step along it lowers the residuals: a minimum to round-off (x is kept)
+                break
+            c1 = cost(x + t * step)
+        else:
+            x = x + t * step
+            # go on while the step moves x and lowers the residuals by more than round-off
+            if np.max(np.abs(step)) > 1e-13 * max(1.0, float(np.max(np.abs(x)))) and c0 - c1 > 1e-14 * c0:
+                continue
+        break
     else:
         raise UncertaintyError(f"joint_estimate: Gauss-Newton did not converge in {max_iterations} iterations")
     # the covariance at the solution
