@@ -58,7 +58,8 @@ def test_tolerances_are_frozen_and_documented():
         assert getattr(tol, f.name) > 0
 
 
-def test_cli_help_lists_commands():
-    out = subprocess.run([sys.executable, "-m", "armguard.cli", "--help"], capture_output=True, text=True)
+@pytest.mark.parametrize("module", ["armguard.cli", "armguard"])
+def test_cli_help_lists_commands(module):
+    out = subprocess.run([sys.executable, "-m", module, "--help"], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert "distance" in out.stdout

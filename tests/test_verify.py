@@ -62,6 +62,18 @@ def test_hermes_table_takes_the_speed_it_was_made_for(top):
     assert sd.speed_edges[-1] == top and sd.at(float(top)) == pytest.approx(0.05)
 
 
+def test_a_speed_over_the_tables_top_by_rounding_is_in_its_last_range():
+    """``verify --speed-dependent`` makes the table from a plain verification's top speed and verifies
+    the trajectory split finer: there the same speed came out one unit in the last place above it, and
+    the check stopped with no verdict ("speed 0.41756353276537833 is above the table's last edge
+    0.4175635327653783").  A speed above it by more than rounding is still refused."""
+    top = 0.4175635327653783
+    sd = StoppingDistance.hermes(top, max_distance=0.01)
+    assert sd.at(0.41756353276537833) == sd.at(top) == pytest.approx(0.01)
+    with pytest.raises(VerificationError, match="above the table"):
+        sd.at(top * (1.0 + 1e-9))
+
+
 def test_stopping_distance_by_speed_and_mass():
     sd = StoppingDistance((0.0, 0.1, 0.2), (0.0, 10.0, 100.0), ((0.02, 0.04), (0.05, 0.1)))
     assert sd.at(0.05, 5.0) == 0.02 and sd.at(0.05, 50.0) == 0.04 and sd.at(0.15, 50.0) == 0.1
