@@ -69,3 +69,26 @@ def test_update_keeps_a_hand_written_files_comments_once(two):
         assert text.count('<group name="arm">') == 1
     m = armguard.load_model(urdf, srdf=srdf)
     assert m.srdf.groups["arm"].chains == (("base", "l2"),)
+
+
+def test_update_refuses_a_urdf_and_another_robots_srdf_before_writing(two):
+    """``--out`` naming the robot's own URDF was rewritten in place with --update (disable_collisions and
+    certificates added to the URDF, "wrote", exit 0); another robot's SRDF kept its groups and states in
+    this robot's file, which every command then refused.  Both are refused naming the place, unchanged."""
+    urdf, srdf = two
+    before = urdf.read_text()
+    r = CliRunner().invoke(main, ["-q", "srdf", str(urdf), "--out", str(urdf), "--update"])
+    assert r.exit_code == 2 and "this is a URDF, not an SRDF" in r.output, r.output
+    assert urdf.read_text() == before
+    r = CliRunner().invoke(main, ["-q", "srdf", str(urdf), "--out", str(urdf)])
+    assert r.exit_code == 2 and "this is a URDF, not an SRDF" in r.output and "--update keeps" not in r.output, r.output
+    other = ('<robot name="arm"><group name="arm"><chain base_link="panda_link0" tip_link="panda_link8"/></group>'
+             '<group_state name="home" group="arm"><joint name="panda_joint1" value="0"/></group_state></robot>')
+    srdf.write_text(other)
+    r = CliRunner().invoke(main, ["-q", "srdf", str(urdf), "--out", str(srdf), "--update"])
+    assert r.exit_code == 2 and "group[0] (arm): none of its links and joints" in r.output and "panda_link0" in r.output, r.output
+    assert srdf.read_text() == other
+    srdf.write_text(other.replace('<group name="arm"><chain base_link="panda_link0" tip_link="panda_link8"/></group>',
+                                  '<group name="arm"><chain base_link="base" tip_link="l2"/></group>'))
+    r = CliRunner().invoke(main, ["-q", "srdf", str(urdf), "--out", str(srdf), "--update"])
+    assert r.exit_code == 2 and "sets joint 'panda_joint1'" in r.output, r.output

@@ -69,6 +69,14 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
 
     if update and not Path(out).is_file():
         raise click.BadParameter(f"{out} is not a file: --update rewrites an SRDF written before", param_hint="--out")
+    if Path(out).is_file():  # a URDF (or no XML) is never rewritten as an SRDF
+        from .._errors import SceneFileError
+        from ..model._srdf import read_srdf
+
+        try:
+            read_srdf(out, partial=True)
+        except SceneFileError as exc:
+            raise click.BadParameter(f"{exc}; --out names the SRDF to write", param_hint="--out") from None
     keep = other_elements(out) if Path(out).is_file() else []
     if keep and not update:  # a MoveIt SRDF's groups and states: never lost to a rewrite
         tags = sorted({el.tag for el in keep if isinstance(el.tag, str)})
@@ -80,6 +88,14 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
 
     check_writable(out)  # refused before minutes of work (a missing folder is made with the file, as verify --report makes its)
     model = load_model(robot, srdf=False)
+    if update:  # its groups and states are kept: they must be this robot's
+        from .._errors import SceneFileError
+        from ..srdfgen._io import check_fits
+
+        try:
+            check_fits(out, model)
+        except SceneFileError as exc:
+            raise click.BadParameter(str(exc), param_hint="--out") from None
     before = read_previous(out) if update else {}
     said = []  # what --update read from the file rather than from the command line
     if update:  # the file's margin and method, unless given: a rewrite at another one searches every pair again

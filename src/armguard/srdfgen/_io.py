@@ -116,3 +116,34 @@ def read_previous(path) -> dict:
             else:
                 out[frozenset((a, b))] = MatrixEntry(a, b, None, "undecided", None, float("nan"), what, fingerprint=fp)
     return out
+
+
+def check_fits(path, model) -> None:
+    """Refuse the SRDF at ``path`` where ``armguard srdf --update`` would keep elements that do not fit
+    ``model``: a group none of whose links, joints and chain ends ``model`` has, a group state setting a
+    joint it lacks (another robot's SRDF: the rewrite kept Panda's groups in ur5's file, which every command
+    then refused).  Its ``<disable_collisions>`` are not judged: those of a renamed or removed link are
+    dropped by the rewrite, and said.  A URDF, or a file that does not parse, is a located error
+    (:func:`armguard.model._srdf.read_srdf`)."""
+    import pinocchio as pin
+
+    from ..model._srdf import read_srdf
+
+    srdf = read_srdf(path, partial=True)
+    pm = model.pin_model
+    joints = {n.rsplit("/", 1)[-1] for n in list(pm.names)[1:]} | set(srdf.virtual_joints)
+    links = {f.name.rsplit("/", 1)[-1] for f in pm.frames if f.type == pin.BODY}
+    what = f"{model.name}'s URDF"
+    for g in srdf.groups.values():  # wholly another robot's: none of its members here (a member missing
+        # here and there is the loader's to warn about: z1's own SRDF names a link 'base' its URDF lacks)
+        members = [("joint", x, joints) for x in g.joints] + [("link", x, links) for x in g.links]
+        members += [("link", x, links) for c in g.chains for x in c]
+        if members and not any(x in have for _, x, have in members):
+            kind, x, _ = members[0]
+            raise srdf.error(g.where or f"group {g.name}", f"none of its links and joints is in {what} (the first: "
+                             f"{kind} {x!r}): not an SRDF of this robot (--update keeps its groups and states)")
+    for st in srdf.states:
+        for j in st.values:
+            if j not in joints:
+                raise srdf.error(st.joint_where.get(j, st.where), f"sets joint {j!r}, which {what} does not have: "
+                                 "not an SRDF of this robot (--update keeps its groups and states)")
