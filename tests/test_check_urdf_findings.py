@@ -83,13 +83,14 @@ def test_a_misspelt_or_repeated_element_is_reported():
                      ("joint[j1].limit", "2 <limit> elements: only the first is read")}, found
 
 
-def test_a_misspelt_collision_is_an_error_and_a_load_warning(tmp_path):
+def test_a_misspelt_collision_is_an_error_of_load_model_and_check_urdf(tmp_path):
     """A link's ``<colision>`` left the link without geometry: load_model said nothing (its pairs were simply
-    not checked) and check-urdf gave a warning with exit 0."""
+    not checked) and check-urdf gave a warning with exit 0; then load_model warned, and ``check`` said CLEAR
+    of the smaller model.  load_model refuses it, naming the place; check-urdf reports it once."""
     import json
 
     import armguard
-    from armguard._errors import ArmguardWarning
+    from armguard._errors import SceneFileError
 
     text = _URDF.replace("LIMIT", '<limit lower="-2" upper="2" effort="1" velocity="1"/>')
     i = text.index("<collision>", text.index('<link name="l2"'))
@@ -101,13 +102,15 @@ def test_a_misspelt_collision_is_an_error_and_a_load_warning(tmp_path):
     p = tmp_path / "two.urdf"
     p.write_text(bad)
     line = bad[:bad.index("<colision>")].count("\n") + 1
-    with pytest.warns(ArmguardWarning, match=rf"two.urdf: link\[l2\].colision \(line {line}\): <colision> is read by nothing: "
+    with pytest.raises(SceneFileError, match=rf"two.urdf: link\[l2\].colision \(line {line}\): <colision> is read by nothing: "
                                              r"did you mean <collision>\? \(the link has no geometry from it: its pairs are not checked\)"):
         armguard.load_model(p, srdf=False)
     r = CliRunner().invoke(main, ["-q", "check-urdf", str(p), "--json"])
     assert r.exit_code == 1, r.output
-    found = [(f["severity"], f["message"]) for f in json.loads(r.output)["findings"] if f["check"] == "unread-element"]
+    findings = json.loads(r.output)["findings"]
+    found = [(f["severity"], f["message"]) for f in findings if f["check"] == "unread-element"]
     assert found == [("error", "<colision> is read by nothing: did you mean <collision>? (it changes what is checked)")], found
+    assert not [f for f in findings if f["check"] == "load"], findings  # said once
 
 
 def test_info_says_no_hull_was_stored_when_the_cache_cannot_be_written(tmp_path):

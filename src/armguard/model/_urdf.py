@@ -150,12 +150,11 @@ def _read_xml(path: Path, package_dirs) -> UrdfInfo:
         where, message = list_problems([(w if k == 0 or ln is None else f"{w} (line {ln})", m)
                                         for k, (w, m, ln) in enumerate(problems)])
         raise SceneFileError(f, where, message, line=problems[0][2])
-    for where, message, line in misread_collisions(root, lines):
-        import warnings
-
-        from .._errors import ArmguardWarning
-
-        warnings.warn(f"{f}: {where}{f' (line {line})' if line else ''}: {message}", ArmguardWarning, stacklevel=4)
+    misread = misread_collisions(root, lines)
+    if misread:  # a misspelling that changes what is checked: never a smaller model (a link without its shapes)
+        where, message = list_problems([(w if k == 0 or ln is None else f"{w} (line {ln})", m)
+                                        for k, (w, m, ln) in enumerate(misread)])
+        raise SceneFileError(f, where, message, line=misread[0][2])
     collisions: dict = {}
     meshes = []
     mesh_at: dict = {}

@@ -236,7 +236,7 @@ READ = {"link": _LINK_READ, "collision": _COLLISION_READ, "visual": ("origin", "
         "joint": ("origin", "parent", "child", "axis", "limit", "mimic", "dynamics", "calibration", "safety_controller")}
 """The child elements urdfdom reads, by parent: another name close to one of them is a misspelling."""
 CHANGES_CHECKS = frozenset({("link", "collision"), ("collision", "origin"), ("collision", "geometry")})
-"""(parent, element) whose misspelling changes what is checked: load_model warns, check-urdf errs."""
+"""(parent, element) whose misspelling changes what is checked: load_model refuses the file, check-urdf errs."""
 
 
 def misread_collisions(root: ET.Element, lines: dict) -> list[tuple[str, str, int | None]]:
