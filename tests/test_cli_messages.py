@@ -297,3 +297,14 @@ def test_check_srdf_help_lists_coal_distance():
     text = " ".join(_run("check-srdf", "--help").output.split())
     assert "coal_distance" in text and "proven_disabled" in text
 
+
+
+def test_check_says_when_its_collision_is_the_stopping_distance_not_a_contact():
+    """``check ur5 --stopping-distance 0.03`` printed COLLISION beside a nearest row of +0.0198 m, the
+    stopping distance nowhere in the text (verify said "within the stopping distance, no contact")."""
+    r = CliRunner().invoke(main, ["check", "ur5", "--stopping-distance", "0.03"], env={"COLUMNS": "250"})
+    assert r.exit_code == int(ExitCode.UNSAFE), r.output
+    head = r.output.splitlines()[0]
+    assert "COLLISION (within the stopping distance, no contact)" in head and "stopping distance 0.03 m" in head, head
+    r = CliRunner().invoke(main, ["check", "ur5", "--stopping-distance", "0.01"], env={"COLUMNS": "250"})
+    assert "within the stopping distance" not in r.output and "stopping distance 0.01 m" in r.output.splitlines()[0]

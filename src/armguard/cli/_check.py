@@ -109,8 +109,14 @@ def check_cmd(scene, q_text, deg, threshold, stopping_distance, active, budget_u
         sys.exit(int(code))
     out = output_console()
     colour = _COLOUR[rep.status.value]
-    out.print(f"[bold]{esc(sc.name)}[/bold]  status: [bold {colour}]{rep.status.value.upper()}[/bold {colour}]  "
-              f"(threshold {threshold} m, {rep.elapsed_us:.1f} µs, {rep.n_evaluated} of {det.n_pairs} pairs evaluated)")
+    near = ""  # Ranger's collision status covers the stopping distance: said where nothing touches
+    least = min((r.distance for r in rep.by_category.values()), default=math.inf)
+    if rep.status.value == "collision" and stopping_distance > 0.0 and least > 0.0:
+        touch = "" if rep.not_evaluated else ", no contact"  # a pair the budget left may touch
+        near = f" [{colour}](within the stopping distance{touch})[/{colour}]"
+    stop = f", stopping distance {stopping_distance} m" if stopping_distance > 0.0 else ""
+    out.print(f"[bold]{esc(sc.name)}[/bold]  status: [bold {colour}]{rep.status.value.upper()}[/bold {colour}]{near}  "
+              f"(threshold {threshold} m{stop}, {rep.elapsed_us:.1f} µs, {rep.n_evaluated} of {det.n_pairs} pairs evaluated)")
     table = Table("category", "distance (m)", "link", "object", "feature", "p_WA (m)", "p_WB (m)")
     for cat, r in rep.by_category.items():
         feat = "" if r.feature is None else str(r.feature)
