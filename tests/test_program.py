@@ -491,3 +491,24 @@ def test_a_missing_example_says_where_examples_come_from(tmp_path, monkeypatch):
     assert r.exit_code == 3 and "examples/ comes with the source checkout" in r.output, r.output
     r = CliRunner().invoke(main, ["program", "run", "mine/stack.yaml"])
     assert r.exit_code == 3 and "file not found" in r.output and "checkout" not in r.output, r.output
+
+
+def test_a_refusal_of_a_motion_into_an_object_as_found_says_they_collide(tmp_path):
+    """An approach 5 cm inside cylinder A, refused at the confidence asked, said "as found they are 0.0 mm
+    clear (calibrate the camera, or ask less confidence)": the clearance of a verification stops at its first
+    contact.  A contact as found is said as one."""
+    import shutil
+
+    from armguard.program import run_program
+
+    shutil.copytree(EXAMPLE, tmp_path / "w")
+    prog = tmp_path / "w" / "stack.yaml"
+    text = prog.read_text()
+    old = "approach: {xyz: [0, 0, 0.12], rpy: [180, 0, 0]}"
+    assert old in text
+    prog.write_text(text.replace(old, "approach: {xyz: [0, 0, -0.05], rpy: [180, 0, 0]}", 1))
+    run = run_program(prog, seed=0)
+    refused = [m for m in run.motions if m.status.startswith("refused")]
+    assert refused and refused[-1].k > 0.0 and refused[-1].nominal_clearance <= 0.0
+    why = refused[-1].why()
+    assert "the bound objects collide as found, without their growth" in why and not any("calibrate" in w for w in why), why

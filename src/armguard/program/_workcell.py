@@ -284,7 +284,9 @@ class Workcell:
             if not report.safe:
                 rec.status = "refused: " + report.status.value
                 if k > 0.0:  # said apart: a refusal of the grown objects from one of the objects as found
-                    rec.nominal_clearance = float(verify(self.believed, traj, method=self.method).min_clearance)
+                    nominal = verify(self.believed, traj, method=self.method)
+                    # unsafe as found: a contact (its clearance stops at the contact, 0.0 mm "clear" was said)
+                    rec.nominal_clearance = float(nominal.min_clearance) if nominal.safe else min(0.0, float(nominal.min_clearance))
                 return self._stop(rec, f"{label}: refused by verification ({report.verdict()})")
             rec.real_report = verify(self.real, traj, method=self.method)
             if rec.real_report.safe and self._supports:
