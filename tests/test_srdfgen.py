@@ -371,3 +371,36 @@ def test_a_sampled_matrix_from_few_samples_warns_of_its_never_pairs(tmp_path):
     assert out.is_file()
     ok = CliRunner().invoke(main, ["srdf", "gmf_s480", "--out", str(tmp_path / "c.srdf")])
     assert ok.exit_code == 0 and "warning" not in ok.stderr, ok.stderr
+
+
+_THREE = """<robot name="r">
+<link name="base"><collision><geometry><box size="0.2 0.2 0.1"/></geometry></collision></link>
+<link name="l1"><collision><origin xyz="0 0 0.25"/><geometry><cylinder radius="0.04" length="0.3"/></geometry></collision></link>
+<link name="l2"><collision><origin xyz="0 0 0.2"/><geometry><box size="0.05 0.05 0.3"/></geometry></collision></link>
+<joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.05"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" velocity="1" effort="1"/></joint>
+<joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.4"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="1" effort="1"/></joint>
+</robot>"""
+
+
+@pytest.mark.parametrize("state,why", [('<joint name="j1" value="0"/><joint name="j9" value="1"/>', "names joint 'j9'"),
+                                       ('<joint name="j1" value="0"/><joint name="j2" value="2.5"/>', "outside the limits")])
+def test_check_srdf_reports_a_group_state_every_other_command_refuses(tmp_path, state, why):
+    """A home naming a joint the robot lacks, or outside its limits: ``check`` and ``info`` refused the SRDF
+    (exit 3), ``check-srdf --strict`` passed it (exit 0) without a word about its states."""
+    import json
+
+    from armguard.cli import main
+
+    urdf, srdf = tmp_path / "r.urdf", tmp_path / "r.srdf"
+    urdf.write_text(_THREE)
+    srdf.write_text(f'<robot name="r"><group name="arm"><chain base_link="base" tip_link="l2"/></group>'
+                    f'<group_state name="home" group="arm">{state}</group_state></robot>')
+    args = ["check-srdf", str(urdf), str(srdf), "--max-evaluations", "2000"]
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 0 and "load_model refuses this SRDF:" in r.output and why in r.output, r.output
+    assert CliRunner().invoke(main, [*args, "--strict"]).exit_code == 1
+    js = json.loads(CliRunner().invoke(main, [*args, "--json"]).output)
+    assert why in js["refused"] and "group_state[0] (home)" in js["refused"]
+    srdf.write_text('<robot name="r"><group name="arm"><chain base_link="base" tip_link="l2"/></group>'
+                    '<group_state name="home" group="arm"><joint name="j1" value="0"/></group_state></robot>')
+    assert json.loads(CliRunner().invoke(main, [*args, "--json"]).output)["refused"] is None

@@ -191,11 +191,13 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
               help="Per pair, distance evaluations before it is left undecided.")
 @click.option("--evaluator", type=BACKEND, default="analytic", show_default=True, help="The backend whose distances are evaluated.")
 @click.option("--strict", is_flag=True, help="Exit 1 when a pair disabled for a reason other than Adjacent or Default can "
-              "collide, or a disabled pair names a link the robot lacks.")
+              "collide, a disabled pair names a link the robot lacks, or load_model refuses the SRDF (a group state "
+              "naming a joint the robot lacks or outside its limits).")
 @click.option("--json", "as_json", is_flag=True,
               help="Print a JSON object: can_collide [{link1, link2, reason, q (pin_model order, as joint_names), distance, "
                    "coal_distance (coal's distance at q; null where coal is not installed or is the evaluator)}], never_checked, proven_disabled, undecided, "
-                   "adjacent, skipped, joint_names, ... (docs/srdf.md).")
+                   "adjacent, skipped, joint_names, refused (why load_model refuses the SRDF, other than its disabled "
+                   "pairs; null: it does not), ... (docs/srdf.md).")
 def check_srdf_cmd(robot, srdf, margin, workers, max_evaluations, evaluator, strict, as_json) -> None:
     """Lint SRDF for ROBOT: disabled pairs that can collide (with a witness), checked pairs proven never to.
     Without SRDF: the one armguard finds for ROBOT (as `armguard info ROBOT` names it)."""
@@ -211,10 +213,11 @@ def check_srdf_cmd(robot, srdf, margin, workers, max_evaluations, evaluator, str
         if not as_json:
             click.echo(f"SRDF: {srdf} ({found.found})")
     model = load_model(robot, srdf=False)
+    refused = None if partial else _refusal(robot, srdf)
     lint = check_srdf(model, srdf, margin=margin, workers=workers, max_evaluations=max_evaluations, backend=evaluator,
                       progress=False if as_json else _label(robot))
     if as_json:
-        click.echo(json.dumps(lint.to_dict()))
+        click.echo(json.dumps({**lint.to_dict(), "refused": refused}))
     else:
         click.echo(f"{srdf}: {count(len(lint.can_collide), 'disabled pair')} can collide, {len(lint.proven_disabled)} proven never, "
                    f"{len(lint.never_checked)} checked pairs proven never, {len(lint.undecided)} undecided "
@@ -236,9 +239,30 @@ def check_srdf_cmd(robot, srdf, margin, workers, max_evaluations, evaluator, str
                        "not checked, and load_model refuses this SRDF")
             for d in unknown:
                 click.echo(f"  disabled ({d['reason'] or 'no reason given'}) {d['link1']} - {d['link2']}: unknown link")
+        if refused is not None:
+            click.echo(f"  load_model refuses this SRDF: {refused}")
     bad_links = bool(lint.unknown_links) and not partial
-    if strict and (bad_links or any(d["reason"] not in ("Adjacent", "Default") for d in lint.can_collide)):
+    if strict and (bad_links or refused is not None
+                   or any(d["reason"] not in ("Adjacent", "Default") for d in lint.can_collide)):
         raise SystemExit(int(ExitCode.UNSAFE))
+
+
+def _refusal(robot, srdf) -> str | None:
+    """Why ``load_model(robot, srdf=srdf)`` refuses the SRDF other than for its disabled pairs (a group state
+    naming a joint the robot lacks, a value outside its limits: every other command refused the file that
+    the lint passed), else None.  Its pairs naming links the robot lacks are the lint's own finding."""
+    import warnings
+
+    from .._errors import SceneFileError
+    from ..model import load_model
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the lint's reading says what it finds; the load's warnings are check's
+            load_model(robot, srdf=srdf)
+    except SceneFileError as exc:
+        return None if exc.where.startswith("disable_collisions") else str(exc)
+    return None
 
 
 def _links(model) -> list:
