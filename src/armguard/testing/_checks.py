@@ -383,11 +383,46 @@ def check_collides_matches_distances(ctx, model):
                                     f"{margin:.9g} m says {got}")
 
 
+STEP_FAR, STEP_NEAR = 1e-3, 1e-6  # rad (m): a joint step that moves a pair, and one a thousand times smaller
+
+
+def _small_step_answered(ctx, model, c, Q, fwd) -> None:
+    """At two configurations, a joint that moves some pair by more than 1e-5 m over :data:`STEP_FAR`
+    moves it over :data:`STEP_NEAR` too: the distances there are not the very same as at ``q`` (a cache
+    keyed by ``q`` rounded to 1e-3 answered every nearby configuration with the old answer, and passed)."""
+    import pinocchio as pin
+
+    pm = ctx.model(model).pin_model
+    lo, hi = pm.lowerPositionLimit, pm.upperPositionLimit
+
+    def step(q, j, h):  # joint velocity j by h, into the limits' interior where a limit is near
+        v = np.zeros(pm.nv)
+        v[j] = h
+        q2 = pin.integrate(pm, q, v)
+        if np.any((q2 < lo - 1e-12) | (q2 > hi + 1e-12)):
+            v[j] = -h
+            q2 = pin.integrate(pm, q, v)
+        return q2
+
+    for i, q in list(enumerate(Q))[:2]:
+        base = fwd[i].distance
+        for j in range(pm.nv):
+            moved = float(np.max(np.abs(answer(ctx, model, c, step(q, j, STEP_FAR), i).distance - base), initial=0.0))
+            if not moved > 1e-5:
+                continue
+            near = answer(ctx, model, c, step(q, j, STEP_NEAR), i).distance
+            expect(not np.array_equal(near, base),
+                   lambda: f"{where(i, q)}: a step of {STEP_NEAR:g} of velocity {j} gives the very same distances as q, "
+                           f"though {STEP_FAR:g} moves a pair by {moved:.3g} m: an answer kept from an earlier q?")
+            break
+
+
 def check_deterministic(ctx, model):
     """The same ``q`` gives the same answer whatever was asked before: the configurations forwards,
     backwards and again give identical distances, witness points and verdicts (a batch of
     :data:`BIG_BATCH` rows too, verdicts-only backends included), and a fresh Checker's very first
-    ``pair_distances`` the same as a used one's (no state from earlier calls: caches, warm starts)."""
+    ``pair_distances`` the same as a used one's (no state from earlier calls: caches, warm starts);
+    a configuration a small step from another is answered anew (:func:`_small_step_answered`)."""
     c = ctx.checker(model)
     Q = ctx.configs(model)
     if _distances(c):
@@ -398,6 +433,7 @@ def check_deterministic(ctx, model):
                 x, y = getattr(a, key), getattr(b, key)
                 expect(np.array_equal(x, y), lambda: f"{where(i, Q[i])}: {key} differs between two calls "
                                                      f"(by up to {np.max(np.abs(x - y)):.3g} m) after other configurations")
+        _small_step_answered(ctx, model, c, Q, fwd)
         k = len(Q) - 1
         first = ctx.build(model).pair_distances(Q[k])  # a fresh Checker's first call
         for key in ("distance", "p_WA", "p_WB"):

@@ -11,7 +11,7 @@ import threading
 import numpy as np
 
 from .._tolerance import DEFAULT_TOLERANCES as TOL
-from ._checks import _distances, _has_pairs_argument, _raises_backend_error, _require_distances, answer, where
+from ._checks import BIG_BATCH, _distances, _has_pairs_argument, _raises_backend_error, _require_distances, answer, where
 from ._suite import NotApplicable, expect
 from ._threads import run_in_threads
 
@@ -89,7 +89,7 @@ def check_pair_subset(ctx, model):
 def check_pair_distances_many(ctx, model):
     """``pair_distances_many(Q)`` (where the Checker has it) equals ``pair_distances`` row by row
     (within 1e-12 m): ``pairs``/``category`` the Model's, ``distance (M, n)``, ``p_WA``/``p_WB
-    (M, n, 3)`` float64, for ``M = 1`` (not ``(n,)``) and ``M = 0`` too; with ``pairs=rows`` (where it
+    (M, n, 3)`` float64, for ``M = 1`` (not ``(n,)``), ``M = 0`` and :data:`BIG_BATCH` rows too; with ``pairs=rows`` (where it
     takes them) those rows, ``pairs=[]`` none (not all), and rows outside ``[0, n)`` or not integers
     refused with BackendError."""
     c = ctx.checker(model)
@@ -102,7 +102,9 @@ def check_pair_distances_many(ctx, model):
     full = [answer(ctx, model, c, q, i) for i, q in enumerate(Q)]
     rows = np.random.default_rng(ctx.seed).permutation(n)[: max(1, n // 3)]
     takes_pairs = _has_pairs_argument(c) and "pairs" in inspect.signature(c.pair_distances_many).parameters
-    cases = [(None, Q, full, "pair_distances_many(Q)"), (None, Q[:1], full[:1], "pair_distances_many(Q[:1]) (one row)")]
+    big = np.resize(np.arange(len(Q)), BIG_BATCH)  # the configurations again and again: where a backend may switch path
+    cases = [(None, Q, full, "pair_distances_many(Q)"), (None, Q[:1], full[:1], "pair_distances_many(Q[:1]) (one row)"),
+             (None, Q[big], [full[k] for k in big], f"pair_distances_many of {BIG_BATCH} rows (the configurations repeated)")]
     if takes_pairs:
         cases += [(rows, Q, full, "pair_distances_many(Q, pairs=rows)"),
                   (np.zeros(0, np.int64), Q, full, "pair_distances_many(Q, pairs=[]) (no row)")]
@@ -257,7 +259,8 @@ def check_distance_jacobian(ctx, model):
     float64 and ``smooth (n,)`` bool, the same distances as without; on rows it calls smooth, each
     row equals the central differences of the backend's own distances (at 1e-4 and 1e-3, where the two
     agree and show no kink) within 1 % of the row's norm (floored at 1 cm/rad), and at least half the
-    rows more than 1 cm apart without a kink are called smooth.  A wrong sign or column steers
+    rows more than 1 cm apart without a kink are called smooth (and at least half of those rows show no kink:
+    distances that do not follow ``q`` escaped the comparison).  A wrong sign or column steers
     collision avoidance (``armguard.avoidance``) into the obstacle."""
     from ..backends._jacobian import finite_difference_rows
 
@@ -271,7 +274,7 @@ def check_distance_jacobian(ctx, model):
         raise NotApplicable("pair_distances takes no jacobian= argument")
     m = ctx.model(model)
     n, nv = len(m.pairs), m.pin_model.nv
-    compared = candidates = said_smooth = 0
+    compared = candidates = said_smooth = apart = 0
     pick = list(enumerate(ctx.configs(model)))
     for i, q in pick[1:3] or pick:  # two random configurations (the neutral pose alone when there are none)
         r = c.pair_distances(q, jacobian=True)
@@ -292,6 +295,7 @@ def check_distance_jacobian(ctx, model):
         plain_rows = ~kink & ~kink10 & (np.linalg.norm(fd - fd10, axis=1) / scale <= JACOBIAN_REL)
         ok = smooth & plain_rows
         clear = plain_rows & (r.distance > JACOBIAN_APART)
+        apart += int((r.distance > JACOBIAN_APART).sum())
         candidates += int(clear.sum())
         said_smooth += int((clear & smooth).sum())
         err = np.linalg.norm(J - fd, axis=1) / scale
@@ -300,6 +304,12 @@ def check_distance_jacobian(ctx, model):
         expect(not bad.size, lambda: f"{where(i, q)}, pair {tuple(r.pairs[bad[0]])}: jacobian row "
                                      f"{np.round(J[bad[0]], 6).tolist()}, central differences "
                                      f"{np.round(fd[bad[0]], 6).tolist()} (relative error {err[bad[0]]:.3g})")
+    # rows whose differences at the two steps disagree are not compared: distances that do not follow q smoothly
+    # (a cache keyed by a rounded q: a zero Jacobian passed, 0 to 2 of the rows compared) would escape the check
+    expect(apart < 10 or candidates >= JACOBIAN_SMOOTH_SHARE * apart,
+           f"the central differences of the distances at steps {JACOBIAN_STEPS[0]:g} and {JACOBIAN_STEPS[1]:g} agree on "
+           f"{candidates} of the {apart} rows more than {JACOBIAN_APART * 100:g} cm apart (at least "
+           f"{JACOBIAN_SMOOTH_SHARE:.0%} expected: the bundled backends' agree on 85-100 %): distances that do not follow q")
     # a row called non-smooth is not compared: calling every row so would escape the check
     expect(candidates < 10 or said_smooth >= JACOBIAN_SMOOTH_SHARE * candidates,
            f"smooth is True on {said_smooth} of the {candidates} rows more than {JACOBIAN_APART * 100:g} cm apart whose "
