@@ -90,6 +90,8 @@ def test_errors_are_one_line_exit_3():
     (["fk", "hermes", "--q", "a,b"], ["expected numbers"]),
     (["fk", "ur5", "--q", "0,nan,0,0,0,0"], ["shoulder_lift_joint (value 2 of 6) = nan", "finite"]),
     (["compare", "ur5", "--q", "0,0,inf,0,0,0"], ["value 3 of 6 = inf", "finite"]),
+    (["compare", "ur5", "--q", "9,0,0,0,0,0"], ["shoulder_pan_joint", "outside its limits"]),  # exit 3 (as a file's)
+    (["check", "ur5", "--q", "9,0,0,0,0,0"], ["shoulder_pan_joint", "outside its limits"]),
 ])
 def test_q_that_is_not_finite_numbers_is_a_usage_error(args, words):
     """--q typed wrong is a usage error (exit status 2) in fk and compare as in check, naming the value."""

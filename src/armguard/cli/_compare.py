@@ -6,6 +6,7 @@ import math
 import sys
 
 import click
+import numpy as np
 
 from . import main
 from ._params import AT_LEAST_ONE, BACKENDS, COUNT, POSITIVE
@@ -31,10 +32,18 @@ def _pin_q(model, vals: list) -> list:
     a joint in the scene's order (as check's --q) turned into Pinocchio's (``Model.pin_q``); any other
     count is a usage error naming the layout (exit status 2, as check's --q)."""
     if len(vals) == model.nq:
-        return vals
-    if model.has_continuous_joints and len(vals) == len(model.q_index):
-        return model.pin_q(vals).tolist()
-    raise click.BadParameter(f"expected {model.q_layout(len(vals))}, got {len(vals)} values", param_hint="--q")
+        q = vals
+    elif model.has_continuous_joints and len(vals) == len(model.q_index):
+        q = model.pin_q(vals).tolist()
+    else:
+        raise click.BadParameter(f"expected {model.q_layout(len(vals))}, got {len(vals)} values", param_hint="--q")
+    from .._errors import ArmguardError
+
+    try:  # outside the limits: a usage error as check's --q (it was exit 3 here)
+        model.check_pin_limits(np.asarray(q, dtype=np.float64), "q")
+    except ArmguardError as exc:
+        raise click.BadParameter(str(exc).removeprefix("q: "), param_hint="--q") from None
+    return q
 
 
 @main.command("compare", epilog=exit_epilog(ok="the backends agree (--q: answered)", unsafe="a backend pair differs"))
