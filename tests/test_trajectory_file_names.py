@@ -26,3 +26,17 @@ def test_unknown_and_repeated_joint_names_are_told_apart(tmp_path, names, expect
     with pytest.raises(armguard.SceneFileError) as err:
         load_trajectory(scene, _file(tmp_path, names))
     assert err.value.where.startswith("joint_names") and expect in err.value.message
+
+
+@pytest.mark.parametrize("text, expect", [
+    ("", "got an empty file (no YAML document)"),
+    ('<robot name="r"><link name="base"/></robot>\n', "got XML text (a URDF or SRDF?"),
+    ("[1, 2]\n", "got a list"),
+])
+def test_a_file_that_is_no_trajectory_says_what_it_is(tmp_path, text, expect):
+    """An empty file said "got NoneType", a URDF given as the trajectory "got str"."""
+    p = tmp_path / "t.yaml"
+    p.write_text(text)
+    with pytest.raises(armguard.SceneFileError) as err:
+        load_trajectory(armguard.load_model("ur5").scene, p)
+    assert "expected a trajectory: a YAML mapping" in err.value.message and expect in err.value.message, err.value.message

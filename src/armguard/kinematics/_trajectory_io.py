@@ -105,7 +105,13 @@ def trajectory_from_dict(cls, d, *, file=None, groups=None):
     import difflib
 
     if not isinstance(d, dict):
-        raise _fail(file, "", f"expected a mapping with keys {list(_KEYS)}, got {type(d).__name__}")
+        if d is None:
+            got = "an empty file (no YAML document)"
+        elif isinstance(d, str) and d.lstrip().startswith("<"):
+            got = "XML text (a URDF or SRDF? a trajectory is a YAML file: docs/trajectory-format.md)"
+        else:
+            got = f"a {type(d).__name__} ({str(d)[:40]!r})" if isinstance(d, (str, int, float)) else f"a {type(d).__name__}"
+        raise _fail(file, "", f"expected a trajectory: a YAML mapping with keys {list(_KEYS)}, got {got}")
     problems: list[tuple[str, str]] = []
     unknown = sorted(str(k) for k in set(d) - set(_KEYS))
     for key in ("format", "version", "robot", "joint_names", "times", "waypoints"):
