@@ -40,3 +40,15 @@ def test_a_file_that_is_no_trajectory_says_what_it_is(tmp_path, text, expect):
     with pytest.raises(armguard.SceneFileError) as err:
         load_trajectory(armguard.load_model("ur5").scene, p)
     assert "expected a trajectory: a YAML mapping" in err.value.message and expect in err.value.message, err.value.message
+
+
+def test_a_trajectory_or_program_given_as_a_scene_says_what_it_is(tmp_path):
+    """``check traj.yaml`` listed eight scene-schema errors (one per key) and never said it was a trajectory."""
+    p = tmp_path / "t.yaml"
+    p.write_text(yaml.safe_dump({"format": "armguard.trajectory", "version": 1, "robot": "ur5",
+                                 "joint_names": ["shoulder_pan_joint"], "times": [0.0, 1.0], "waypoints": [[0.0], [0.1]]}))
+    with pytest.raises(armguard.SceneFileError, match=r"this file is a trajectory, not a scene or model file .*armguard verify"):
+        armguard.load_model(p)
+    p.write_text("armguard_program: 1\nname: x\ncell: cell.yaml\ntasks: []\n")
+    with pytest.raises(armguard.SceneFileError, match=r"this file is a task program, not a scene .*armguard program run"):
+        armguard.load_model(p)

@@ -370,7 +370,13 @@ def _no_srdf(named: str) -> bool:
 def validate_scene_dict(data, file: str = "<dict>") -> SceneFile:
     """``data`` (a parsed scene file) checked against the format; errors name ``file`` and the place."""
     if not isinstance(data, dict):
-        raise SceneFileError(file, "", f"expected a mapping at the top level (armguard_scene: 1, ...), got {type(data).__name__}")
+        got = "an empty file" if data is None else type(data).__name__
+        raise SceneFileError(file, "", f"expected a mapping at the top level (armguard_scene: 1, ...), got {got}")
+    other = ("a trajectory", "`armguard verify SCENE FILE` checks it") if data.get("format") == "armguard.trajectory" else (
+        ("a task program", "`armguard program run FILE` runs it") if "armguard_program" in data else None)
+    if other is not None:  # its every key listed as a scene schema error said nothing of what it is
+        raise SceneFileError(file, "format" if "format" in data else "armguard_program",
+                             f"this file is {other[0]}, not a scene or model file (armguard_scene: 1): {other[1]}")
     try:
         sf = SceneFile.model_validate(data)
     except ValidationError as exc:
