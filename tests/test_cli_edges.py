@@ -154,6 +154,9 @@ def test_a_damaged_or_odd_edges_file_is_named_not_an_internal_error(tmp_path):
     np.savez(tmp_path / "obj.npz", Q0=np.array([np.zeros(6)], dtype=object), Q1=np.zeros((1, 6)))
     res = _run("edges", "ur5", str(tmp_path / "obj.npz"))
     assert res.exit_code == ExitCode.INPUT and "obj.npz: Q0: expected numbers (M, n), got an object array" in res.output
+    np.savez(tmp_path / "str.npz", Q0=np.array([["a"] * 6]), Q1=np.zeros((1, 6)))  # it said "got ndarray"
+    res = _run("edges", "ur5", str(tmp_path / "str.npz"))
+    assert res.exit_code == ExitCode.INPUT and "str.npz: Q0: expected numbers (M, 6) or (6,), got an array of text" in res.output, res.output
     _damaged(tmp_path / "crc.npz", tmp_path / "good.npz")
     res = _run("edges", "ur5", str(tmp_path / "crc.npz"))
     assert res.exit_code == ExitCode.INPUT and "crc.npz: Q0: cannot read this array" in res.output, res.output

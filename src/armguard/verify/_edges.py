@@ -159,7 +159,10 @@ def _rows(Q, name: str, joint_names, scene, robot: str, whole: bool = True) -> n
     try:
         Q = np.asarray(Q, dtype=np.float64)
     except (TypeError, ValueError):
-        raise VerificationError(f"{name}: expected numbers (M, {n}) or ({n},), got {type(Q).__name__}") from None
+        dt = getattr(Q, "dtype", None)
+        kind = {"U": "text", "S": "bytes", "O": "Python objects"}.get(getattr(dt, "kind", ""), str(dt))
+        got = f"an array of {kind} (dtype {dt})" if dt is not None else type(Q).__name__
+        raise VerificationError(f"{name}: expected numbers (M, {n}) or ({n},), got {got}") from None
     bad = np.argwhere(~np.isfinite(Q))
     if len(bad):
         raise VerificationError(f"{name}{[int(k) for k in bad[0]] if Q.ndim > 1 else [int(bad[0][0])]}: NaN or infinite "
