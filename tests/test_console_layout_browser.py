@@ -1,6 +1,6 @@
 """The control panel's layout in a real browser (Playwright + Debian's chromium): where layout is the point.
 
-Kinova's long link names (``end_effector/j2s6s200_link_finger_tip_2``) made the panel wider than
+Kinova's long link names (``kinova/j2s6s200_link_finger_tip_2``) made the panel wider than
 its frame: it scrolled sideways, cutting text fields and slider ends on the right and, scrolled,
 the status text on the left.  Here the panel never scrolls sideways and every line of the status
 block is inside it.  On Ranger, the Tests tab's Stop is in view without scrolling (it sat below
@@ -73,10 +73,10 @@ def test_long_link_names_never_make_the_panel_scroll_sideways():
             try:
                 page = _open(browser, app)
                 status = page.inner_text("#armguard-status")
-                assert "end_effector/j2s6s200_link_6" in status and "j2s6s200_link_finger_tip_2" in status
+                assert "kinova/j2s6s200_link_6" in status and "j2s6s200_link_finger_tip_2" in status
                 assert "obstacle" in page.inner_text("#armguard-categories")  # the header whole, not "obs"
                 _fits(page)
-                page.get_by_text("sliders end_effector").click()  # the sliders too stay within the panel
+                page.get_by_text("sliders kinova").click()  # the sliders too stay within the panel
                 page.wait_for_timeout(800)
                 m = _fits(page)
                 ends = page.evaluate("""() => Array.from(document.querySelectorAll('.mantine-Slider-root, form input'))

@@ -442,3 +442,20 @@ def test_limbs_from_one_base_are_the_robot_named_as_the_urdf_names_it(tmp_path):
     srdf.write_text('<robot name="quad"><group name="left_leg"><chain base_link="trunk" tip_link="left"/></group>'
                     '<group name="hip"><chain base_link="trunk" tip_link="left"/></group></robot>')
     assert list(armguard.load_model(urdf).scene.robots) == ["left_leg"]  # one branch: the first group names it
+
+
+def test_an_end_effectors_group_does_not_name_the_arm(tmp_path):
+    """kinova.srdf's one group, a chain from the base to the hand, is the group of its <end_effector>:
+    the arm was named 'end_effector' (a trajectory's 'robot: kinova' refused, every link 'end_effector/...').
+    Named as the URDF names the robot; a group that is no end effector's still names its arm."""
+    urdf = package(tmp_path)
+    group = '<group name="hand_group"><chain base_link="base" tip_link="tool"/></group>'
+    ee = '<end_effector name="hand" parent_link="tool" group="hand_group"/>'
+    urdf.with_suffix(".srdf").write_text(srdf_text(group + ee, disabled=ADJACENT))
+    m = armguard.load_model(urdf)
+    assert list(m.scene.robots) == [m.name] and m.name != "hand_group"
+    urdf.with_suffix(".srdf").write_text(srdf_text(group, disabled=ADJACENT))
+    assert list(armguard.load_model(urdf).scene.robots) == ["hand_group"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert list(armguard.load_model("kinova").scene.robots) == ["kinova"]

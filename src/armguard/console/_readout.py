@@ -57,7 +57,7 @@ PANEL_COLORS = {
 """Background colour of the distance panel per status (CSS hex)."""
 
 WRAP = "overflow-wrap:anywhere;word-break:break-word"
-"""CSS that lets a long name (``end_effector/j2s6s200_link_finger_tip_2``) wrap at any character
+"""CSS that lets a long name (``kinova/j2s6s200_link_finger_tip_2``) wrap at any character
 instead of widening the control panel past its frame."""
 
 
@@ -296,7 +296,7 @@ NAME_CHARS = 32
 
 def short_name(name: str, active: str | None = None, limit: int = NAME_CHARS) -> str:
     """``name`` as the per-category table shows it: without the active arm's ``"robot/"`` prefix
-    (``end_effector/j2s6s200_link_6`` -> ``j2s6s200_link_6`` when ``end_effector`` is active), and
+    (``kinova/j2s6s200_link_6`` -> ``j2s6s200_link_6`` when ``kinova`` is active), and
     longer than ``limit`` characters cut in the middle (``"j2s6s200_l…inger_tip_2"``)."""
     if active and name.startswith(active + "/"):
         name = name[len(active) + 1:]

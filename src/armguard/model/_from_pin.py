@@ -282,7 +282,9 @@ def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str, moved, robot_name
     ``panda_arm`` link0->link8 beside ``panda_arm_hand`` link0->hand, or a ``hand`` group) is part of
     that arm, not a second robot: the first group in file order of each outermost base names the arm,
     unless two groups from that base end on different branches (a1's four legs from its trunk,
-    talos's legs from its pelvis): then the arm is the robot, named as the URDF names it.
+    talos's legs from its pelvis), or that group is an ``<end_effector>``'s (kinova.srdf's one group, a
+    chain from the base to the hand, is named ``end_effector``): then the arm is the robot, named as
+    the URDF names it.
     A chain naming a link the URDF lacks is skipped with a warning naming the SRDF's element, as
     Pinocchio ignores it (z1.srdf's chain starts at a link ``base`` z1.urdf does not have), and so
     is a chain whose tip is not below its base (icub.srdf's legs from the chest) or whose base a
@@ -313,6 +315,8 @@ def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str, moved, robot_name
         tips = [body_ids[g2.chains[0][1]] for g2, b2 in cand if b2 == b]
         if any(not _descends(t1, t2, parent_body) and not _descends(t2, t1, parent_body) for t1 in tips for t2 in tips):
             arms.append((robot_name, b, ""))  # limbs from one base (a1's legs from the trunk): the robot, not one limb
+        elif g.name in srdf.end_effector_groups:  # kinova.srdf's one group, the <end_effector>'s: the arm was named
+            arms.append((robot_name, b, ""))  # 'end_effector' (a trajectory's 'robot: kinova' was refused)
         else:
             arms.append((g.name, b, f"{g.name}_"))
     return arms

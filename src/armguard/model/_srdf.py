@@ -74,6 +74,7 @@ class Srdf:
     partial: bool = False
     warnings: tuple[str, ...] = ()
     virtual_joints: tuple[str, ...] = ()  # <virtual_joint name>: the robot's placement in the world, not a URDF joint
+    end_effector_groups: tuple[str, ...] = ()  # the groups <end_effector group=...> names: a hand, never an arm's name
 
     @property
     def arm_groups(self) -> tuple[SrdfGroup, ...]:
@@ -213,6 +214,7 @@ def read_srdf(path, *, found: str = "given", partial: bool = False) -> Srdf:
         states.append(SrdfState(name, group, values, w, jw))
     out.groups, out.disabled, out.states = groups, tuple(disabled), tuple(states)
     out.virtual_joints = tuple(_attr(vj, "name", f, f"virtual_joint[{k}]") for k, vj in enumerate(root.findall("virtual_joint")))
+    out.end_effector_groups = tuple(ee.get("group") for ee in root.findall("end_effector") if ee.get("group"))
     return out
 
 
