@@ -191,7 +191,9 @@ def _gjk_body(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, 
     ``R_AB^T d`` and only the support points are mapped).  ``simp`` (``None``, or a float64 array of >= 9 entries) receives the
     final simplex when the origin ends inside a tetrahedron: ``simp[0] = 1`` then, ``simp[1:5]``
     A's and ``simp[5:9]`` B's support indices of its four vertices (touching, the origin within
-    ``eps_len`` of a smaller simplex: ``simp[0] = -n`` and its ``n`` vertices so; else ``simp[0] = 0``); the
+    ``eps_len`` of a smaller simplex: ``simp[0] = -n`` and its ``n`` vertices so; else ``simp[0] = 0``, as when
+    GJK stalled with no support plane proving the cores apart, ``GJK_INTERSECTING`` then meaning "not settled":
+    the caller's exact SAT decides); the
     penetration-depth kernel (``_pair_epa``) starts from it.
 
     ``sep`` (m; ``inf``: off): stop, ``GJK_SEPARATED``, as soon as a support plane proves the core
@@ -250,7 +252,8 @@ def _gjk_body(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, 
     status = GJK_NOT_CONVERGED
     inside = False
     k_seed = 1
-    wx = wy = wz = 0.0
+    wx = wy = wz = vw = 0.0
+    stalled = False  # stopped without progress and without a proof of separation: no simplex to hand on (simp[0] = 0)
     for _it in range(max_iter + ns):
         if vv <= eps2:
             status = GJK_INTERSECTING
@@ -290,7 +293,9 @@ def _gjk_body(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, 
                 or (n > 1 and ia == ia1 and ib == ib1)
                 or (n > 2 and ia == ia2 and ib == ib2)
             ):
-                status = GJK_SEPARATED  # a repeated support pair: no progress possible
+                # a repeated support pair: no progress possible; apart only where w's plane proves it (below)
+                status = GJK_SEPARATED if vw > 0.0 else GJK_INTERSECTING
+                stalled = vw <= 0.0
                 break
         if n == 1:
             x1, y1, z1, ia1, ib1 = wx, wy, wz, ia, ib
@@ -310,7 +315,12 @@ def _gjk_body(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, 
         if nvv >= vv:
             if forced:
                 continue  # a seed vertex that brings the simplex no nearer: dropped (slot n is free again)
-            status = GJK_SEPARATED  # no progress (rounding): the previous simplex is the answer
+            # no progress (rounding): the previous simplex is the answer -- apart only where the last support
+            # plane proves the origin outside M (v . w > 0).  A simplex flattened by rounding on thin cores
+            # (boxes 0.34 and 8 um thick, overlapping by 9 nm) stalled with |v| = 2.3e-7 m and v . w < 0: it was
+            # reported apart by |v|; now "not separated", and the caller's exact SAT / EPA gives the depth
+            status = GJK_SEPARATED if vw > 0.0 else GJK_INTERSECTING
+            stalled = vw <= 0.0
             break
         # compact the kept vertices into slots 0 .. c-1, in order
         c = 0
@@ -370,7 +380,7 @@ def _gjk_body(pa, adja, pb, adj, rot, ox, oy, oz, dx, dy, dz, eps_len, gjk_eps, 
             for k in range(4):
                 simp[1 + k] = (ia0, ia1, ia2, ia3)[k]
                 simp[5 + k] = (ib0, ib1, ib2, ib3)[k]
-        elif status == GJK_INTERSECTING:  # touching: the n vertices the origin is within eps_len of, -n
+        elif status == GJK_INTERSECTING and not stalled:  # touching: the n vertices the origin is within eps_len of, -n
             simp[0] = -float(n)
             for k in range(4):
                 simp[1 + k] = (ia0, ia1, ia2, ia3)[k] if k < n else 0
