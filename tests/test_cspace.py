@@ -256,3 +256,24 @@ def test_largest_neighbourhood_is_what_loading_holds(built):
         q = g.lower + np.array([(i1a + i1b) / 2 * g.step[0], (i2a + i2b) / 2 * g.step[1], 0.0])
         loaded.append(built.neighbourhood(np.minimum(q, g.upper)).nbytes)
     assert built.info().neighbourhood_bytes_max == max(loaded)
+
+
+def test_a_scene_the_map_was_not_built_on_is_refused(built):
+    """``CombinedChecker(fmap, scene)`` took a Scene as given: a sphere added on Hermes's link 3, or the arm's
+    base moved, was answered by the map that never saw it (FREE where the exact check said -0.68 m).  The
+    map records the digest of its pairs' geometry (the mapped links, every static body) and refuses another."""
+    from armguard.geometry import Sphere
+
+    same = armguard.load_scene("hermes")
+    CombinedChecker(built, same)  # the scene it was built on
+    edited = armguard.load_scene("hermes")
+    edited.add_body("ball", Sphere((0.0, 0.0, 2.0), 0.5))
+    with pytest.raises(ForbiddenMapError, match="other geometry than this model's \\(bodies added: ball\\)"):
+        CombinedChecker(built, edited)
+    moved = armguard.load_scene("hermes")
+    robot = next(iter(moved.robots))
+    X = np.eye(4)
+    X[:3, 3] = (0.0, 0.0, 0.05)
+    moved.set_robot_base(robot, X @ moved.robots[robot].X_WB)
+    with pytest.raises(ForbiddenMapError, match="other geometry.*base or its links"):
+        CombinedChecker(built, moved)

@@ -26,6 +26,7 @@ from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from .._values import number
 from ._certify import certify_substructure
 from ._clearance import CheckerClearance, map_links
+from ._geometry_digest import geometry_digest
 from ._format import FORMAT_VERSION, KERNEL_VERSION, Journal, check_substructure, write_map
 from ._grid import MapGrid
 from ._map import ForbiddenMap, model_file_hashes
@@ -217,6 +218,7 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
     lo = np.asarray(rob.lower, dtype=np.float64)[list(ml.joint_index)]
     hi = np.asarray(rob.upper, dtype=np.float64)[list(ml.joint_index)]
     grid = MapGrid.create(lo, hi, resolution, resolution if j3_resolution is None else j3_resolution, cell)
+    digest, bodies = geometry_digest(mdl, ml.robot, ml.links)
     header = {
         "format_version": FORMAT_VERSION,
         "kernel_version": KERNEL_VERSION,
@@ -227,6 +229,8 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
         "joints": list(ml.joints),
         "joint_index": list(ml.joint_index),
         "links": list(ml.links),
+        "geometry": digest,  # what map_model compares a model or scene against
+        "bodies": bodies,
         "lever": ml.lever.tolist(),
         "grid": grid.to_json(),
         "stopping_distance": m,

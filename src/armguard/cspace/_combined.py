@@ -62,7 +62,32 @@ def map_model(fmap, model=None):
     scene = mdl.scene
     if fmap.robot not in scene.robots or tuple(scene.robots[fmap.robot].joint_names[k] for k in fmap.joint_index) != fmap.joints:
         raise ForbiddenMapError(f"the model has no robot {fmap.robot!r} with joints {fmap.joints} at {fmap.joint_index}")
+    _check_geometry(fmap, mdl, given_scene=isinstance(model, Scene))
     return mdl
+
+
+def _check_geometry(fmap, mdl, *, given_scene: bool) -> None:
+    """Refuse ``mdl`` unless its mapped links and static bodies are those the map was built on (the
+    header's ``geometry`` digest, :mod:`._geometry_digest`): a Scene was taken as given, and a body
+    added to it, or the robot's base moved, was answered by a map that never saw it.  A map written
+    before the digest was recorded takes a Model whose files it checked, and refuses a Scene."""
+    from ._geometry_digest import geometry_digest
+
+    want = fmap.header.get("geometry")
+    if want is None:
+        if given_scene:
+            raise ForbiddenMapError(f"the map {fmap.path} records no geometry to check a Scene against (built by an "
+                                    "earlier armguard): pass the model it was built from, or build the map again")
+        return
+    got, bodies = geometry_digest(mdl, fmap.robot, fmap.links)
+    if got != want:
+        had = set(fmap.header.get("bodies", ()))
+        added, removed = sorted(set(bodies) - had), sorted(had - set(bodies))
+        what = "; ".join(x for x in (f"bodies added: {', '.join(added)}" if added else "",
+                                     f"bodies removed: {', '.join(removed)}" if removed else "") if x)
+        raise ForbiddenMapError(f"the map {fmap.path} was built on other geometry than this model's ("
+                                + (what or f"a static body, {fmap.robot}'s base or its links {', '.join(fmap.links)} "
+                                   "moved or changed shape") + "): its verdicts would not hold; build it for this model")
 
 
 class CombinedChecker:
