@@ -178,3 +178,24 @@ def _same_inscribed_sphere(prism):
     assert abs(got.radius - want.radius) <= 1e-9
     for u in np.random.default_rng(0).normal(size=(12, 3)):
         assert sdf(got.support(u), prism) <= 1e-9
+
+
+def test_two_thin_overlapping_boxes_are_not_called_apart():
+    """Boxes 0.34 and 8 um thick overlapping by 9 nm: GJK's simplex, flattened by rounding, stalled with
+    |v| = 2.3e-7 m and no support plane separating, and the pair was reported apart by |v| (coal: -2.0e-8,
+    an exact rational SAT: -9.2e-9).  A stall without that proof is settled by the exact SAT."""
+    import numpy as np
+
+    from armguard.geometry import Box, distance
+
+    ha = np.array([1.6712350368125251e-07, 5.6948351127196276e-02, 7.2161457778022617e-02])
+    hb = np.array([4.0433160065348468e-06, 1.0217414717276228e-01, 1.7260343604863720e-01])
+    Xa = np.array([[5.7399163443870971e-01, -8.1876144581147725e-01, 1.2778828079215820e-02, -0.07229964190526061],
+                   [-5.2247103764534597e-01, -3.7820472543830991e-01, -7.6418924389049614e-01, 0.11236052140441188],
+                   [6.3052170336648539e-01, 4.3196166555474835e-01, -6.4486549068390531e-01, -0.0021780085535283433],
+                   [0.0, 0.0, 0.0, 1.0]])
+    Xb = np.array([[8.8787724918534511e-02, 5.7149336849064514e-01, 8.1578923115900859e-01, 0.0],
+                   [7.4250600953143842e-01, -5.8390505083004240e-01, 3.2823728829135967e-01, 0.0],
+                   [6.6392888603636624e-01, 5.7658496458577668e-01, -4.7618086154330946e-01, 0.0], [0.0, 0.0, 0.0, 1.0]])
+    d = distance(Box(np.zeros(3), ha, np.eye(3)).transformed(Xa), Box(np.zeros(3), hb, np.eye(3)).transformed(Xb)).distance
+    assert -1.0e-8 < d < -8.0e-9, d
