@@ -466,3 +466,17 @@ def test_pair_rates_bound_public_robots_self_pairs(name):
         worst, share = max(worst, w), share + [sh]
     assert worst > 0.1
     assert np.median(share) < 0.8
+
+
+def test_certified_verification_refuses_a_backend_whose_distances_may_run_long():
+    """python-fcl's GJK stops early (``distances_may_run_long``): at a Hermes configuration whose nearest
+    clearance is 0.330 m it says 0.331 m, and a margin of 0.3305 m was verified SAFE, the "proven" lower bound
+    0.3310 m above the true minimum.  Such distances bound no clearance from below: refused, naming it."""
+    pytest.importorskip("fcl")
+    import armguard
+    from armguard.verify import Verifier
+
+    scene = armguard.load_scene("hermes")
+    with pytest.raises(VerificationError, match="backend 'fcl': its distances may run long"):
+        Verifier(scene, backend="fcl")
+    Verifier(scene, backend="coal")  # exact to its tolerance: taken
