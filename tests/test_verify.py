@@ -480,3 +480,29 @@ def test_certified_verification_refuses_a_backend_whose_distances_may_run_long()
     with pytest.raises(VerificationError, match="backend 'fcl': its distances may run long"):
         Verifier(scene, backend="fcl")
     Verifier(scene, backend="coal")  # exact to its tolerance: taken
+
+
+def test_a_speed_table_refuses_a_time_law_whose_peak_speed_is_only_sampled():
+    """A Trajectory subclass with its own time law: each segment's peak speed came from 17 samples of its
+    velocity, no bound (a 3 ms spike read 1.43 m/s where it reached 192 m/s, and the table's 0 m range was
+    taken where Hermes's rule wanted 5 m).  A constant stopping distance needs no speed: still verified."""
+    import armguard
+    from armguard.kinematics import Trajectory
+    from armguard.verify import Verifier
+
+    class Spiky(Trajectory):  # its own velocity (a narrow bump at u = 0.03): what the verifier reads the speeds from
+        def velocity(self, t):
+            t, seg = self._locate(t)
+            T = self.times[seg + 1] - self.times[seg]
+            u = (t - self.times[seg]) / T
+            ds = (1.0 + 0.02 / 0.003 / np.cosh((np.asarray(u) - 0.03) / 0.003) ** 2) / T
+            return np.asarray(ds)[..., None] * (self.waypoints[seg + 1] - self.waypoints[seg])
+
+    scene = armguard.load_scene("puma560")
+    rob = scene.robots["puma560"]
+    tr = Spiky("puma560", list(rob.joint_names), [0.0, 1.0], scene.trajectories["pick_and_place"].waypoints[:2])
+    v = Verifier(scene)
+    table = StoppingDistance((0.0, 0.5, 1000.0), (0.0, 1e300), ((0.0,), (5.0,)))
+    with pytest.raises(VerificationError, match="needs each segment's peak speed, which a Spiky gives in no closed form"):
+        v.verify(tr, stopping_distance=table)
+    assert v.verify(tr, stopping_distance=0.01).status is not None

@@ -170,14 +170,16 @@ class Verifier(FollowsScene):
             except KinematicsError as exc:
                 raise VerificationError(f"trajectory waypoints[{k}]: {exc}") from None
 
-    def _segment_speeds(self, trajectory, segs, k0: int, k1: int, model: ClearanceModel) -> np.ndarray:
-        """Per segment, a bound (m/s) on the speed of the fastest point of the arm (peak of the time law)."""
+    def _segment_speeds(self, trajectory, segs, k0: int, k1: int, model: ClearanceModel) -> tuple:
+        """``(speeds, bound)``: per segment, the speed (m/s) of the fastest point of the arm at the peak of the
+        time law, and whether that is a bound (closed form: a Trajectory, a Subdivided one) or only the
+        largest of :data:`_SPEED_SAMPLES` samples of the velocity (any other time law)."""
         from ..kinematics import Trajectory
 
         n_q = model.n_q
         out = np.zeros(len(segs))
         if not len(model.parts):
-            return out
+            return out, True
         if type(trajectory).velocity is Trajectory.velocity:
             # the trapezoid time law's peak path speed is its plateau (or triangle apex) 1 / (T - tb)
             # (kinematics._profile.path_ds): the peak joint speeds in closed form, no sampling
@@ -186,13 +188,13 @@ class Verifier(FollowsScene):
             W = np.asarray(trajectory.waypoints, dtype=np.float64)
             qd = np.zeros((len(segs), n_q))
             qd[:, k0:k1] = np.abs(_finite_array(v[:, None] * (W[1:] - W[:-1]), "trajectory velocity"))
-            return np.max(qd @ model.lever[:-1].T, axis=1)
+            return np.max(qd @ model.lever[:-1].T, axis=1), True
         exact = getattr(trajectory, "piece_peak_joint_speeds", None)
         exact = exact() if exact is not None else None
         if exact is not None and len(exact) == len(segs):  # Subdivided(Trajectory): each piece's peak in closed form
             qd = np.zeros((len(segs), n_q))
             qd[:, k0:k1] = _finite_array(exact, "trajectory velocity")
-            return np.max(qd @ model.lever[:-1].T, axis=1)
+            return np.max(qd @ model.lever[:-1].T, axis=1), True
         # the ends too (an accelerating piece peaks at its end), each taken 1e-9 of the segment inside it: at a
         # knot a constant-speed segment's velocity is its neighbour's
         u = np.linspace(0.0, 1.0, _SPEED_SAMPLES)
@@ -202,7 +204,7 @@ class Verifier(FollowsScene):
         qd = np.zeros((len(segs), n_q))
         qd[:, k0:k1] = V.max(axis=1)
         # max_point_speed of every segment's peak joint speeds at once: (segments, parts) -> max over parts
-        return np.max(qd @ model.lever[:-1].T, axis=1)
+        return np.max(qd @ model.lever[:-1].T, axis=1), False
 
     # ------------------------------------------------------------ the check
     def _trajectory_name(self, trajectory) -> str:
@@ -278,8 +280,15 @@ class Verifier(FollowsScene):
         base, k0, k1 = self._flat(rname, base_q)
         segs = segments_of(trajectory)
         self._check_knots_in_limits(segs, rname, pieces)
-        speeds = self._segment_speeds(trajectory, segs, k0, k1, model)
+        speeds, bound = self._segment_speeds(trajectory, segs, k0, k1, model)
         if isinstance(sd, StoppingDistance):
+            if not bound and len({x for row in sd.table for x in row}) > 1:
+                # a sampled peak is no bound (a 3 ms spike of a custom time law read 1.43 m/s where it reached
+                # 192 m/s, and the table's 0 m range was taken where Hermes's rule wanted 5 m)
+                raise VerificationError(
+                    f"a speed-dependent stopping distance needs each segment's peak speed, which a {type(trajectory).__name__} "
+                    "gives in no closed form (its velocity is only sampled): give it piece_peak_joint_speeds() (per "
+                    "segment, the peak |qdot| of each joint), or verify with a constant stopping distance")
             margins = np.array([sd.at(v, mass) for v in speeds])
         else:
             margins = np.full(len(segs), sd)
