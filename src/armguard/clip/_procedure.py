@@ -107,6 +107,14 @@ def _pose(X, what: str) -> np.ndarray:
     return X
 
 
+def _plane_tolerance(tol: Tolerances, *poses) -> float:
+    """``Tolerances.clip_plane`` widened by the rounding of ``REL = IVOLLOC * OBLOC`` far from the origin
+    (about 1e-16 of the poses' translations: at 1e8 m, 19 of 89 pairs penetrating by 10 nm were CLEAR
+    under the fixed 1 nm).  Wider only errs towards INTERSECTED."""
+    far = max((float(np.max(np.abs(X[..., :3, 3]), initial=0.0)) for X in poses), default=0.0)
+    return tol.clip_plane + 16.0 * np.finfo(np.float64).eps * far
+
+
 def check(
     guard: Guard,
     obstacle: Obstacle,
@@ -120,7 +128,8 @@ def check(
     identity) and one obstacle posed at ``X_W_OB`` (``OBLOC``; default identity)."""
     if not isinstance(guard, Guard) or not isinstance(obstacle, Obstacle):
         raise ClipError(f"check: expected a Guard and an Obstacle, got {type(guard).__name__} and {type(obstacle).__name__}")
-    s, k = procedure(guard.pack(), _pose(X_W_VOL, "X_W_VOL"), obstacle.pack(), _pose(X_W_OB, "X_W_OB"), tol.clip_plane, subdivide)
+    Xv, Xo = _pose(X_W_VOL, "X_W_VOL"), _pose(X_W_OB, "X_W_OB")
+    s, k = procedure(guard.pack(), Xv, obstacle.pack(), Xo, _plane_tolerance(tol, Xv, Xo), subdivide)
     return ClipResult(_CODES[int(s)], int(k))
 
 
@@ -170,7 +179,8 @@ def check_many(
     X = _pose(X_W_VOL, "X_W_VOL").reshape(-1, 4, 4)
     status = np.empty(len(X), dtype=np.int8)
     step = np.empty(len(X), dtype=np.int8)
-    procedure_many(guard.pack(), X, obstacle.pack(), _pose(X_W_OB, "X_W_OB"), tol.clip_plane, subdivide, status, step)
+    Xo = _pose(X_W_OB, "X_W_OB")
+    procedure_many(guard.pack(), X, obstacle.pack(), Xo, _plane_tolerance(tol, X, Xo), subdivide, status, step)
     return status, step
 
 
