@@ -316,7 +316,8 @@ def _arms_of_groups(srdf, body_ids: dict, parent_body, f: str, moved, robot_name
         if any(not _descends(t1, t2, parent_body) and not _descends(t2, t1, parent_body) for t1 in tips for t2 in tips):
             arms.append((robot_name, b, ""))  # limbs from one base (a1's legs from the trunk): the robot, not one limb
         elif g.name in srdf.end_effector_groups:  # kinova.srdf's one group, the <end_effector>'s: the arm was named
-            arms.append((robot_name, b, ""))  # 'end_effector' (a trajectory's 'robot: kinova' was refused)
+            # 'end_effector' (a trajectory's 'robot: kinova' was refused); its links keep the group's prefix rule
+            arms.append((robot_name, b, f"{g.name}_"))
         else:
             arms.append((g.name, b, f"{g.name}_"))
     return arms
