@@ -575,8 +575,7 @@ def check_model_files(target, *, n_configs: int = 200, seed: int = 0, permanent_
     try:
         model = load_model(arg, srdf=srdf_arg) if srdf_arg is not None else load_model(arg)
     except ArmguardError as exc:
-        # a misspelling that changes what is checked (load_model refuses it) is the unread-element finding below
-        if " is read by nothing: did you mean " not in getattr(exc, "message", ""):
+        if " is read by nothing: did you mean " not in getattr(exc, "message", ""):  # else: unread-element, below
             report.findings.append(Finding(Check.LOAD, Severity.ERROR, getattr(exc, "file", "") or str(arg),
                                            f"load_model fails: {exc}"))
     mesh_paths = {}

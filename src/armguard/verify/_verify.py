@@ -44,15 +44,9 @@ __all__ = ["Verifier", "verify", "DRAKE_JOINT_STEP"]
 DRAKE_JOINT_STEP = 0.05
 _ATTEMPTS = 5  # verifications started over after a scene edit before giving up (StaleModelError)
 _SPEED_SAMPLES = 17  # time-law samples per segment used to find its peak speed (both ends and the midpoint)
-_OBJECTS = {
-    "link-obstacle": ("arm", "obstacle"),
-    "link-link": ("arm", "arm"),
-    "payload-obstacle": ("payload", "obstacle"),
-    "payload-link": ("arm", "payload"),
-    "link-workspace": ("arm", "workspace"),
-    "payload-workspace": ("payload", "workspace"),
-    "payload-payload": ("payload", "payload"),
-}
+_OBJECTS = {"link-obstacle": ("arm", "obstacle"), "link-link": ("arm", "arm"), "payload-obstacle": ("payload", "obstacle"),
+            "payload-link": ("arm", "payload"), "link-workspace": ("arm", "workspace"),
+            "payload-workspace": ("payload", "workspace"), "payload-payload": ("payload", "payload")}
 
 
 def _float(x, name: str) -> float:
@@ -171,40 +165,36 @@ class Verifier(FollowsScene):
                 raise VerificationError(f"trajectory waypoints[{k}]: {exc}") from None
 
     def _segment_speeds(self, trajectory, segs, k0: int, k1: int, model: ClearanceModel) -> tuple:
-        """``(speeds, bound)``: per segment, the speed (m/s) of the fastest point of the arm at the peak of the
-        time law, and whether that is a bound (closed form: a Trajectory, a Subdivided one) or only the
-        largest of :data:`_SPEED_SAMPLES` samples of the velocity (any other time law)."""
+        """``(speeds, bound)``: per segment, the speed (m/s) of the arm's fastest point at the time law's peak, and
+        whether it is a bound (closed form) or the largest of :data:`_SPEED_SAMPLES` samples (any other time law)."""
         from ..kinematics import Trajectory
 
-        n_q = model.n_q
-        out = np.zeros(len(segs))
         if not len(model.parts):
-            return out, True
+            return np.zeros(len(segs)), True
+
+        def fastest_point(peak_qd, bound: bool) -> tuple:  # (segments, joints) -> max over parts of lever . |qd|
+            qd = np.zeros((len(segs), model.n_q))
+            qd[:, k0:k1] = _finite_array(peak_qd, "trajectory velocity")
+            return np.max(qd @ model.lever[:-1].T, axis=1), bound
+
         if type(trajectory).velocity is Trajectory.velocity:
             # the trapezoid time law's peak path speed is its plateau (or triangle apex) 1 / (T - tb)
             # (kinematics._profile.path_ds): the peak joint speeds in closed form, no sampling
             dt = np.diff(np.asarray(trajectory.times, dtype=np.float64))
             v = 1.0 / (dt - np.asarray(trajectory.blend_times, dtype=np.float64))
             W = np.asarray(trajectory.waypoints, dtype=np.float64)
-            qd = np.zeros((len(segs), n_q))
-            qd[:, k0:k1] = np.abs(_finite_array(v[:, None] * (W[1:] - W[:-1]), "trajectory velocity"))
-            return np.max(qd @ model.lever[:-1].T, axis=1), True
+            return fastest_point(np.abs(v[:, None] * (W[1:] - W[:-1])), True)
         exact = getattr(trajectory, "piece_peak_joint_speeds", None)
         exact = exact() if exact is not None else None
         if exact is not None and len(exact) == len(segs):  # Subdivided(Trajectory): each piece's peak in closed form
-            qd = np.zeros((len(segs), n_q))
-            qd[:, k0:k1] = _finite_array(exact, "trajectory velocity")
-            return np.max(qd @ model.lever[:-1].T, axis=1), True
+            return fastest_point(exact, True)
         # the ends too (an accelerating piece peaks at its end), each taken 1e-9 of the segment inside it: at a
         # knot a constant-speed segment's velocity is its neighbour's
         u = np.linspace(0.0, 1.0, _SPEED_SAMPLES)
         u[0], u[-1] = 1e-9, 1.0 - 1e-9
         ts = np.concatenate([t0 + u * (t1 - t0) for t0, t1, _, _ in segs])
         V = np.abs(_finite_array(trajectory.velocity(ts), "trajectory velocity")).reshape(len(segs), _SPEED_SAMPLES, -1)
-        qd = np.zeros((len(segs), n_q))
-        qd[:, k0:k1] = V.max(axis=1)
-        # max_point_speed of every segment's peak joint speeds at once: (segments, parts) -> max over parts
-        return np.max(qd @ model.lever[:-1].T, axis=1), False
+        return fastest_point(V.max(axis=1), False)
 
     # ------------------------------------------------------------ the check
     def _trajectory_name(self, trajectory) -> str:
@@ -282,13 +272,11 @@ class Verifier(FollowsScene):
         self._check_knots_in_limits(segs, rname, pieces)
         speeds, bound = self._segment_speeds(trajectory, segs, k0, k1, model)
         if isinstance(sd, StoppingDistance):
-            if not bound and len({x for row in sd.table for x in row}) > 1:
-                # a sampled peak is no bound (a 3 ms spike of a custom time law read 1.43 m/s where it reached
-                # 192 m/s, and the table's 0 m range was taken where Hermes's rule wanted 5 m)
-                raise VerificationError(
-                    f"a speed-dependent stopping distance needs each segment's peak speed, which a {type(trajectory).__name__} "
-                    "gives in no closed form (its velocity is only sampled): give it piece_peak_joint_speeds() (per "
-                    "segment, the peak |qdot| of each joint), or verify with a constant stopping distance")
+            if not bound and len({x for row in sd.table for x in row}) > 1:  # a sampled peak bounds nothing (a 3 ms spike)
+                raise VerificationError(f"a speed-dependent stopping distance needs each segment's peak speed, which a "
+                                        f"{type(trajectory).__name__} gives in no closed form (its velocity is only sampled): "
+                                        "give it piece_peak_joint_speeds() (per segment, the peak |qdot| of each joint), "
+                                        "or verify with a constant stopping distance")
             margins = np.array([sd.at(v, mass) for v in speeds])
         else:
             margins = np.full(len(segs), sd)
