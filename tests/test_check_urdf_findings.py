@@ -212,3 +212,19 @@ def test_a_mimic_joint_driven_outside_its_own_limits_is_a_finding(tmp_path):
         assert [(f["where"].split(": ", 1)[1], f["severity"]) for f in found] == want, r.output
     assert "follows 'j1' as 0.3 + -2 x its value: over its limits [-2, 2] it reaches [-3.7, 4.3], outside its own " \
            "limits [-1, 1]" in found[0]["message"]
+
+
+def test_a_missing_mesh_is_reported_once_and_every_other_one_too(tmp_path):
+    """The mesh load_model stops at was reported twice (``load`` and ``unparsed`` at the same place); a second
+    missing mesh, which load_model never reaches, must still be reported."""
+    p = tmp_path / "two.urdf"
+    p.write_text(_URDF.replace("LIMIT", '<limit lower="-1" upper="1" effort="1" velocity="1"/>')
+                 .replace('<box size="0.1 0.1 0.1"/></geometry></collision></link>\n  <link name="l1">',
+                          '<mesh filename="gone_a.stl"/></geometry></collision></link>\n  <link name="l1">', 1)
+                 .replace('<origin xyz="0.3 0 0"/><geometry><box size="0.1 0.1 0.1"/>',
+                          '<origin xyz="0.3 0 0"/><geometry><mesh filename="gone_b.stl"/>', 1))
+    report = armguard.harness.check_model_files(p)
+    said = [(f.check.value, f.where) for f in report.findings if "gone_a.stl" in f.message]
+    assert [c for c, _ in said] == ["load"], said
+    said_b = [(f.check.value, f.where) for f in report.findings if "gone_b.stl" in f.message]
+    assert said_b == [("unparsed", "two.urdf: link[l1].collision[0]")], said_b

@@ -4,9 +4,8 @@ Checks (each a :class:`Check`), on the files as written, then on the loaded mode
 
 * ``load``: the model does not load (``load_model`` raises; a collision element Pinocchio would
   drop, a mesh not found, an SRDF name the URDF lacks): the error, as a finding;
-* ``unparsed``: a collision element Pinocchio would drop (a plain ``<capsule>`` or other tag,
-  an empty ``<geometry>``), a mesh file that cannot be found, a ``<collision_checking>`` entry
-  naming no collision element;
+* ``unparsed``: a collision element Pinocchio would drop (a plain ``<capsule>`` or other tag, an empty
+  ``<geometry>``), a mesh not found (once: not where ``load`` says it), a ``<collision_checking>`` naming none;
 * ``non-convex``: a mesh marked ``<convex>`` that is not convex — a solid whose volume is below
   ``convex_volume_ratio`` of its hull's, a mesh with vertices inside its hull, or a flat mesh
   (a polygon) with vertices inside its 2-D hull;
@@ -33,10 +32,10 @@ Checks (each a :class:`Check`), on the files as written, then on the loaded mode
 * ``frozen-joint``: a revolute or prismatic joint whose ``<limit>`` lacks ``lower`` or ``upper``
   (urdfdom and Pinocchio read 0: a joint that cannot move, or only to one side; a warning, also
   given when the URDF loads);
-* ``units``: a value that looks written in other units than the URDF's (metres and radians): an
-  ``<origin rpy>`` angle or a revolute joint's limit beyond what radians need (``rpy="0 0 90"``:
-  degrees; a limit past 1000 reads as "unbounded" and is left alone), or a collision mesh, as scaled, a thousand times larger or smaller than the robot's
-  kinematic chain (a millimetre mesh without ``scale="0.001"``, or a metre mesh with it): warnings;
+* ``units``: a value that looks written in other units than the URDF's (metres and radians): an ``<origin rpy>``
+  angle or a revolute joint's limit beyond what radians need (``rpy="0 0 90"``: degrees; a limit past 1000 reads
+  as "unbounded" and is left alone), or a collision mesh, as scaled, a thousand times larger or smaller than the
+  robot's kinematic chain (a millimetre mesh without ``scale="0.001"``, or a metre mesh with it): warnings;
 * ``mimic-range``: a ``<mimic>`` joint whose coupling, over its leader's limits, takes it outside its
   own ``<limit>`` (Pinocchio moves it by the coupling and reads no limit of its own: the model then
   reaches configurations the robot cannot; a warning).
@@ -44,74 +43,16 @@ Checks (each a :class:`Check`), on the files as written, then on the loaded mode
 
 from __future__ import annotations
 
-import enum
-from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from .._errors import ArmguardError
 from .._tolerance import DEFAULT_TOLERANCES
+from ._lint_report import Check, Finding, LintReport, LintStatus, Severity
+from ._lint_values import _angle_units, _mimic_ranges
 
 __all__ = ["Check", "Severity", "LintStatus", "Finding", "LintReport", "check_model_files", "mesh_convexity"]
-
-
-class Check(str, enum.Enum):
-    LOAD = "load"
-    UNPARSED = "unparsed"
-    NON_CONVEX = "non-convex"
-    ZERO_LENGTH_CAPSULE = "zero-length-capsule"
-    SRDF_NAME = "srdf-name"
-    PERMANENT_COLLISION = "permanent-collision"
-    HOME_COLLISION = "home-collision"
-    SRDF_CERTIFICATE = "srdf-certificate"
-    FROZEN_JOINT = "frozen-joint"
-    UNREAD_ELEMENT = "unread-element"
-    MIMIC_RANGE = "mimic-range"
-    UNITS = "units"
-
-
-class Severity(str, enum.Enum):
-    ERROR = "error"
-    WARNING = "warning"
-
-
-class LintStatus(str, enum.Enum):
-    CLEAN = "clean"
-    WARNINGS = "warnings"
-    ERRORS = "errors"
-
-
-@dataclass(frozen=True)
-class Finding:
-    check: Check
-    severity: Severity
-    where: str  # file and element, e.g. "hermes.urdf: link[hera_link3].collision[0]"
-    message: str
-    suggestion: str | None = None
-
-
-@dataclass
-class LintReport:
-    target: str
-    urdf: str | None
-    srdf: str | None
-    findings: list = field(default_factory=list)
-    summary: str = ""
-
-    @property
-    def status(self) -> LintStatus:
-        if any(f.severity is Severity.ERROR for f in self.findings):
-            return LintStatus.ERRORS
-        return LintStatus.WARNINGS if self.findings else LintStatus.CLEAN
-
-    def by_check(self, check: Check) -> list:
-        return [f for f in self.findings if f.check is Check(check)]
-
-    def to_dict(self) -> dict:
-        return {"target": self.target, "urdf": self.urdf, "srdf": self.srdf, "status": self.status.value,
-                "summary": self.summary,
-                "findings": [{**asdict(f), "check": f.check.value, "severity": f.severity.value} for f in self.findings]}
 
 
 def _sources(target) -> tuple:
@@ -172,12 +113,15 @@ def mesh_convexity(path, *, volume_ratio: float = 0.99) -> tuple[bool, str]:
     return inside == 0, f"not a closed solid; {inside} of {len(v)} vertices inside its hull"
 
 
-def _unparsed(report: LintReport, f: str, what: str, exc: Exception) -> None:
-    """An UNPARSED finding for file ``f``, unless the LOAD finding already says ``f`` is not well-formed XML
-    (the same error twice, its column counted from 1 there and from 0 here)."""
-    said = any(x.check == Check.LOAD and Path(x.where).name == f and "not well-formed XML" in x.message
+def _load_said(report: LintReport, *parts: str, file: str | None = None) -> bool:
+    """The LOAD finding (on ``file``, if given) already says it: its message holds every one of ``parts``."""
+    return any(x.check == Check.LOAD and all(p in x.message for p in parts) and file in (None, Path(x.where).name)
                for x in report.findings)
-    if not said:
+
+
+def _unparsed(report: LintReport, f: str, what: str, exc: Exception) -> None:
+    """An UNPARSED finding for file ``f``, unless LOAD says it is not well-formed XML (its column counted from 1)."""
+    if not _load_said(report, "not well-formed XML", file=f):
         report.findings.append(Finding(Check.UNPARSED, Severity.ERROR, f, f"{what} does not parse: {exc}"))
 
 
@@ -228,8 +172,9 @@ def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: d
             elif el.tag == "mesh":
                 fn = el.get("filename", "")
                 mp = mesh_paths.get(name) or resolve_mesh(fn, urdf.parent, ())  # package:// searched above the URDF by itself
-                if mp is None:
-                    report.findings.append(Finding(Check.UNPARSED, Severity.ERROR, w, f"mesh file not found: {fn!r}"))
+                if mp is None:  # once: the LOAD finding may already say it, at the same place
+                    if not _load_said(report, f"{w.split(': ', 1)[1]} (line", f"mesh file not found: {fn!r}"):
+                        report.findings.append(Finding(Check.UNPARSED, Severity.ERROR, w, f"mesh file not found: {fn!r}"))
                 else:
                     entries[name] = (el, w, Path(mp))
         for cc in link.findall("collision_checking"):
@@ -259,36 +204,6 @@ def _xml_checks(urdf: Path, srdf: Path | None, report: LintReport, mesh_paths: d
     if srdf is not None:
         shaped = {ln.get("name") for ln in root.findall("link") if ln.find("collision") is not None}
         _srdf_checks(srdf, links, joints, report, partial, shaped)
-
-
-def _mimic_ranges(root, f: str, report: LintReport) -> None:
-    """``mimic-range`` (module docstring): each mimic joint's range over its leader's limits against its own."""
-    joints = {j.get("name"): j for j in root.findall("joint")}
-
-    def limits(j):
-        lim = j.find("limit") if j is not None else None
-        try:
-            return float(lim.get("lower")), float(lim.get("upper"))
-        except (AttributeError, TypeError, ValueError):
-            return None
-
-    for name, j in joints.items():
-        m = j.find("mimic")
-        own, lead = limits(j), limits(joints.get(m.get("joint"))) if m is not None else None
-        if m is None or own is None or lead is None or j.get("type") not in ("revolute", "prismatic"):
-            continue
-        try:
-            mult, off = float(m.get("multiplier", "1")), float(m.get("offset", "0"))
-        except ValueError:
-            continue  # the loader refuses it, located
-        lo, hi = sorted((off + mult * lead[0], off + mult * lead[1]))
-        if lo < own[0] - DEFAULT_TOLERANCES.joint_limit or hi > own[1] + DEFAULT_TOLERANCES.joint_limit:
-            report.findings.append(Finding(
-                Check.MIMIC_RANGE, Severity.WARNING, f"{f}: joint[{name}].mimic",
-                f"follows {m.get('joint')!r} as {off:g} + {mult:g} x its value: over its limits [{lead[0]:g}, {lead[1]:g}] "
-                f"it reaches [{lo:.6g}, {hi:.6g}], outside its own limits [{own[0]:g}, {own[1]:g}] (Pinocchio moves it by "
-                "the coupling alone: the model reaches configurations the robot cannot)",
-                "narrow the leader's limits, or correct the multiplier and offset"))
 
 
 def _unread_elements(root, lines: dict, f: str, report: LintReport) -> None:
@@ -329,47 +244,6 @@ def _unread_elements(root, lines: dict, f: str, report: LintReport) -> None:
                 scan(c, kind, f"link[{link.get('name')}].{kind}[{k}]")
     for j in root.findall("joint"):
         scan(j, "joint", f"joint[{j.get('name')}]")
-
-
-_RPY_MAX = 2.0 * np.pi + 1e-3  # one turn: no rpy angle needs more (1e-3: 2 pi written to 4 places, 6.2832)
-_LIMIT_MAX = 4.0 * np.pi + 1e-3  # two turns each way: joints such as UR's +-2 pi stay below it
-
-
-def _floats(text: str | None) -> list:
-    try:
-        return [float(x) for x in (text or "").split()]
-    except ValueError:
-        return []
-
-
-def _angle_units(root, f: str, report: LintReport) -> None:
-    """``rpy`` angles and revolute limits larger than radians need: written in degrees (module docstring)."""
-    def rad(text):
-        return " ".join(f"{np.radians(x):.6g}" for x in _floats(text))
-
-    for kind in ("link", "joint"):
-        for el in root.findall(kind):
-            origins = [(f"{kind}[{el.get('name')}].origin", o) for o in el.findall("origin")]
-            origins += [(f"{kind}[{el.get('name')}].{c.tag}[{k}].origin", o) for c in el if c.tag in ("collision", "visual")
-                        for k, o in enumerate(c.findall("origin"))]
-            for where, o in origins:
-                rpy = _floats(o.get("rpy"))
-                if rpy and max(abs(x) for x in rpy) > _RPY_MAX:
-                    report.findings.append(Finding(
-                        Check.UNITS, Severity.WARNING, f"{f}: {where}",
-                        f'rpy="{o.get("rpy")}": URDF angles are radians, and {max(abs(x) for x in rpy):g} rad is more '
-                        "than a turn (degrees?)", f'rpy="{rad(o.get("rpy"))}" if these are degrees'))
-    for j in root.findall("joint"):
-        lim = j.find("limit")
-        if j.get("type") != "revolute" or lim is None:
-            continue
-        vals = _floats(lim.get("lower")) + _floats(lim.get("upper"))
-        if vals and _LIMIT_MAX < max(abs(x) for x in vals) <= 1000.0:  # beyond 1000: "unbounded" (1e16), not degrees
-            report.findings.append(Finding(
-                Check.UNITS, Severity.WARNING, f"{f}: joint[{j.get('name')}].limit",
-                f"lower={lim.get('lower')} upper={lim.get('upper')}: a revolute joint's limits are radians, and "
-                f"{max(abs(x) for x in vals):g} rad is more than two turns (degrees?)",
-                f'lower="{rad(lim.get("lower"))}" upper="{rad(lim.get("upper"))}" if these are degrees'))
 
 
 def _reach(pin_model) -> float:
