@@ -349,3 +349,23 @@ def test_a_joint_commanded_past_its_limit_stops_at_it():
     assert at.velocity[j.idx_v] == 0.0 and at.status is AvoidanceStatus.STOPPED
     lo, hi = velocity_bounds(m.pin_model, q, damper)
     assert lo[j.idx_v] == -2.0 and hi[j.idx_v] == 0.0 and np.all(lo <= 0.0) and np.all(hi >= 0.0)
+
+
+def test_a_nan_jacobian_row_beyond_influence_is_refused_by_both_paths_and_still_pairs_are_named():
+    """avoid() refused a NaN Jacobian entry anywhere, the compiled step only within influence (it answered
+    where the reference refused); and with the only pair within influence moved by no joint, the note said
+    "no pair within influence"."""
+    from armguard.avoidance._fast import filter_velocity
+
+    d = np.array([0.05, 0.5])
+    J = np.array([[1.0, 0.0], [np.nan, 0.0]])
+    lo, hi = -DAMPER.limits(2), DAMPER.limits(2)
+    with pytest.raises(AvoidanceError, match="Jacobian entry is NaN"):
+        avoid([0.1, 0.0], _distances(d, J), DAMPER)
+    with pytest.raises(AvoidanceError, match="Jacobian entry is NaN"):
+        filter_velocity(np.array([0.1, 0.0]), d, J, lo, hi, DAMPER, armguard.DEFAULT_TOLERANCES)
+    J = np.array([[0.0, 0.0], [1.0, 0.0]])  # the near pair moved by no joint, the far one by joint 0
+    ref = avoid([0.1, 0.0], _distances(d, J), DAMPER)
+    got = filter_velocity(np.array([0.1, 0.0]), d, J, lo, hi, DAMPER, armguard.DEFAULT_TOLERANCES)
+    assert ref.solver == got[5] == "none: 1 pair within influence, moved by no joint"
+    assert avoid([0.1, 0.0], _distances([0.5], [[1.0, 0.0]]), DAMPER).solver == "none: no pair within influence"

@@ -129,7 +129,7 @@ class Avoidance:
     that were constrained (closer than ``influence``); ``rate`` ``(k,)`` their allowed least
     ``d'`` (m/s) and ``closing`` ``(k,)`` their ``d'`` at ``velocity`` (``closing >= rate``);
     ``min_distance`` (m) the least distance given; ``solver`` a note (``"daqp: optimal"``,
-    ``"none: no pair within influence"``, or why it stopped).
+    ``"none: no pair within influence"``, ``"none: 2 pairs within influence, moved by no joint"``, or why it stopped).
     """
 
     velocity: np.ndarray
@@ -222,14 +222,14 @@ def avoid(v_cmd, distances, damper: Damper, *, bounds=None, tol: Tolerances = DE
         (np.asarray(bounds[0], dtype=np.float64), np.asarray(bounds[1], dtype=np.float64))
     if lo.shape != (nv,) or hi.shape != (nv,) or np.any(lo > 0.0) or np.any(hi < 0.0):
         raise AvoidanceError(f"avoid: bounds must be two ({nv},) arrays with lo <= 0 <= hi")
-    rows = np.flatnonzero((d < damper.influence) & (np.einsum("ij,ij->i", jac, jac) > tol.avoid_row ** 2))
+    near = d < damper.influence
+    rows = np.flatnonzero(near & (np.einsum("ij,ij->i", jac, jac) > tol.avoid_row ** 2))
     A = np.ascontiguousarray(jac[rows])
     b = damper.bound(d[rows])
     dmin = float(d.min()) if len(d) else math.inf
     clipped = np.minimum(np.maximum(v_cmd, lo), hi)
     if len(rows) == 0 or np.all(A @ clipped >= b):
-        return _result(clipped, v_cmd, rows, b, A, dmin, "none: no constraint binds" if len(rows) else
-                       "none: no pair within influence", tol)
+        return _result(clipped, v_cmd, rows, b, A, dmin, _quiet_note(len(rows), int(near.sum())), tol)
     import daqp
 
     big = 1e30  # DAQP's "no bound"
@@ -244,6 +244,15 @@ def avoid(v_cmd, distances, damper: Damper, *, bounds=None, tol: Tolerances = DE
     if worst > tol.avoid_feasibility:
         return _result(np.zeros(nv), v_cmd, rows, b, A, dmin, f"daqp: a constraint broken by {worst:.3g}; stopped", tol)
     return _result(x, v_cmd, rows, b, A, dmin, "daqp: optimal", tol)
+
+
+def _quiet_note(k: int, near: int) -> str:
+    """The note of a step that leaves the command as it is (clipped to the bounds): ``k`` damper rows, of
+    ``near`` pairs within influence (the others' distances do not move with the joints)."""
+    if k:
+        return "none: no constraint binds"
+    return "none: no pair within influence" if not near else \
+        f"none: {near} pair{'s' if near > 1 else ''} within influence, moved by no joint"
 
 
 def _result(v, v_cmd, rows, b, A, dmin, note, tol) -> Avoidance:

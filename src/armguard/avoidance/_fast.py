@@ -26,31 +26,32 @@ def _rows(d, J, v_cmd, lo, hi, influence, stand_off, rate, row_min2, rows, A, b,
     """The damper's constraint rows of ``d`` ``(n,)``, ``J`` ``(n, nv)``: writes ``rows``, ``A``,
     ``b`` (the first ``k`` entries), ``clipped`` ``(nv,)`` (the command within ``[lo, hi]``, the velocity
     bounds: ``lo <= 0 <= hi``) and DAQP's bounds ``upper`` / ``lower``
-    ``(nv + k,)``; returns ``(k, binds, bad)`` (``binds``: some row has ``A clipped < b``; ``bad``:
-    1 a non-finite command, 2 a non-finite distance, 3 a non-finite Jacobian entry in a row
-    within influence)."""
+    ``(nv + k,)``; returns ``(k, binds, bad, near)`` (``binds``: some row has ``A clipped < b``; ``bad``:
+    1 a non-finite command, 2 a non-finite distance, 3 a non-finite Jacobian entry in any row, as
+    :func:`armguard.avoidance.avoid` refuses it; ``near``: the pairs within influence, moving or not)."""
     n, nv = J.shape
     for c in range(nv):
         if not math.isfinite(v_cmd[c]):
-            return 0, False, 1
+            return 0, False, 1, 0
         x = min(max(v_cmd[c], lo[c]), hi[c])
         clipped[c] = x
         upper[c] = min(hi[c], _BIG)
         lower[c] = max(lo[c], -_BIG)
-    k = 0
+    k = near = 0
     binds = False
     for i in range(n):
         di = d[i]
         if not math.isfinite(di):
-            return 0, False, 2
-        if not di < influence:
-            continue
+            return 0, False, 2, 0
         norm2 = 0.0
         for c in range(nv):
             x = J[i, c]
             if not math.isfinite(x):
-                return 0, False, 3
+                return 0, False, 3, 0
             norm2 += x * x
+        if not di < influence:
+            continue
+        near += 1
         if not norm2 > row_min2:  # no joint moves this distance (Tolerances.avoid_row)
             continue
         s = 0.0
@@ -65,7 +66,7 @@ def _rows(d, J, v_cmd, lo, hi, influence, stand_off, rate, row_min2, rows, A, b,
         upper[nv + k] = _BIG
         lower[nv + k] = bk
         k += 1
-    return k, binds, 0
+    return k, binds, 0, near
 
 
 @njit(cache=True, nogil=True)
@@ -114,7 +115,7 @@ def filter_velocity(v_cmd: np.ndarray, d: np.ndarray, J: np.ndarray, lo: np.ndar
     limits, tightened by the joint limits: :func:`armguard.avoidance.velocity_bounds`); ``rows`` index ``d``.  A non-finite
     input is a :class:`~armguard.AvoidanceError` (no velocity from NaN)."""
     from .._errors import AvoidanceError
-    from . import AvoidanceStatus
+    from . import AvoidanceStatus, _quiet_note
 
     n, nv = J.shape
     rows = np.empty(n, np.int64)
@@ -123,7 +124,7 @@ def filter_velocity(v_cmd: np.ndarray, d: np.ndarray, J: np.ndarray, lo: np.ndar
     clipped = np.empty(nv)
     upper = np.empty(nv + n)
     lower = np.empty(nv + n)
-    k, binds, bad = _rows(d, J, v_cmd, lo, hi, damper.influence, damper.stand_off, damper.rate(), tol.avoid_row ** 2, rows,
+    k, binds, bad, near = _rows(d, J, v_cmd, lo, hi, damper.influence, damper.stand_off, damper.rate(), tol.avoid_row ** 2, rows,
                           A, b, clipped, upper, lower)
     if bad:
         what = {1: "v_cmd: contains NaN or infinite values", 2: "avoid: a distance is NaN or infinite",
@@ -133,7 +134,7 @@ def filter_velocity(v_cmd: np.ndarray, d: np.ndarray, J: np.ndarray, lo: np.ndar
     closing = np.empty(k)
     if not binds:
         v = clipped
-        note = "none: no constraint binds" if k else "none: no pair within influence"
+        note = _quiet_note(k, near)
     else:
         import daqp
 
