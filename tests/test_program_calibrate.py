@@ -75,3 +75,20 @@ def test_collinear_or_malformed_points_are_refused():
     bad[0, 0] = np.nan
     with pytest.raises(UncertaintyError, match="finite"):
         fit_rigid_transform(bad, np.eye(3))
+
+
+@pytest.mark.parametrize("n", [4, 12])
+def test_an_estimated_sigma_widens_the_covariance_so_its_99_percent_contour_holds(n):
+    """With sigma estimated from the residuals of few points the covariance was overconfident: 11.6 % of
+    4-point fits fell beyond its chi-square(6) 99 % contour.  Widened by Student's correction, about 1 % do."""
+    rng = np.random.default_rng(11)
+    p_B = _points(rng, n)
+    clean = p_B @ X_TRUE[:3, :3].T + X_TRUE[:3, 3]
+    d2 = []
+    for _ in range(4000):
+        fit = fit_rigid_transform(clean + rng.normal(0.0, 0.001, clean.shape), p_B)
+        xi = se3.log(X_TRUE @ np.linalg.inv(fit.X_AB))
+        d2.append(float(xi @ np.linalg.solve(fit.pose.cov, xi)))
+    beyond = float(np.mean(np.array(d2) > stats.chi2.ppf(0.99, 6)))
+    assert beyond < 0.017, beyond  # binomial sd at 1 %: 0.16 %
+    assert beyond > 0.004, beyond  # not widened far past what the 99 % level needs

@@ -49,7 +49,12 @@ def fit_rigid_transform(p_A, p_B, sigma: float | None = None, *, cov=None) -> Ri
     """``X_AB`` minimising ``Σ |p_A[i] − X_AB p_B[i]|²`` for ``p_A``, ``p_B`` (N, 3) the same points in
     frames A and B (N >= 3, not collinear).  ``sigma`` (m): the per-axis noise of the point
     differences (default: estimated from the residuals, ``rms² · 3N / (3N − 6)``, which needs N >= 3);
-    or ``cov`` (3, 3, m²): their covariance in A's axes, the same for every point (not with ``sigma``)."""
+    or ``cov`` (3, 3, m²): their covariance in A's axes, the same for every point (not with ``sigma``).
+
+    With ``sigma`` estimated, the pose's covariance is widened by ``6 F⁻¹(0.99; 6, ν) / χ²₆⁻¹(0.99)``,
+    ``ν = 3N − 6``: the error's Mahalanobis distance under an estimated σ follows ``6 F(6, ν)``, not
+    ``χ²₆`` (Student's correction), so the covariance's 99 % contour holds the truth 99 % of the time
+    (3.0× at N = 4, 1.24× at N = 12, 1.06× at N = 40; unwidened, 11.6 % of N = 4 fits fell outside it)."""
     from scipy.spatial.transform import Rotation
 
     from ..uncertainty import UncertainPose3
@@ -73,6 +78,7 @@ def fit_rigid_transform(p_A, p_B, sigma: float | None = None, *, cov=None) -> Ri
     res = A - pred
     n = A.shape[0]
     rms = float(np.sqrt(np.mean(np.sum(res ** 2, axis=1))))
+    est = cov is None and sigma is None
     if cov is not None:
         if sigma is not None:
             raise UncertaintyError("fit_rigid_transform: give sigma or cov, not both")
@@ -84,11 +90,14 @@ def fit_rigid_transform(p_A, p_B, sigma: float | None = None, *, cov=None) -> Ri
         C = 0.5 * (C + C.T)
         sigma = float(np.sqrt(max(np.linalg.eigvalsh(C)[-1], 0.0)))
     elif sigma is None:
-        sigma = float(np.sqrt(np.sum(res ** 2) / (3 * n - 6))) if n > 2 else 0.0
+        sigma = float(np.sqrt(np.sum(res ** 2) / (3 * n - 6)))
+        from scipy import stats
+
+        widen = 6.0 * float(stats.f.ppf(0.99, 6, 3 * n - 6)) / float(stats.chi2.ppf(0.99, 6))
     elif not (np.isfinite(sigma) and sigma >= 0.0):
         raise UncertaintyError(f"fit_rigid_transform: sigma must be a finite number >= 0, got {sigma!r}")
     if cov is None:
-        C = float(sigma) ** 2 * np.eye(3)
+        C = float(sigma) ** 2 * (widen if est else 1.0) * np.eye(3)
     H, M = np.zeros((6, 6)), np.zeros((6, 6))
     for p in pred:
         J = np.hstack([np.eye(3), -_skew(p)])
