@@ -113,7 +113,7 @@ class _Raw:
         for p in np.flatnonzero(flags == 0):
             na, nb = b.pair_names(int(p))
             out.append(NotEvaluated(na, nb, CATEGORIES[int(cat[p])], float(plb[p]), int(p)))
-        if self.mode == kn.MODE_LAZY:  # lazily skipped pairs: proved beyond the threshold
+        if self.mode == kn.MODE_LAZY or self.mode == kn.MODE_ANYTIME:  # proved beyond the threshold (lazy)
             thr = self.reach
             for p in np.flatnonzero(flags == 2):
                 na, nb = b.pair_names(int(p))

@@ -103,7 +103,7 @@ class _Plan:
 
     __slots__ = ("model", "checker", "distances", "revision", "generation", "active", "bounds", "sel", "all_rows",
                  "whole_only", "swap", "lever", "a", "b", "cat_code", "cat_masks", "margin_built", "limits", "n_q", "det",
-                 "threshold", "stopping")
+                 "threshold", "stopping", "link_a")
 
     def with_levels(self, threshold: float, stopping: float) -> "_Plan":
         """This build with another threshold and stopping distance (within ``margin_built``): the same
@@ -132,7 +132,7 @@ class _Raw:
         pA, pB = self.p_WA[k].copy(), self.p_WB[k].copy()
         pA.flags.writeable = pB.flags.writeable = False
         a, b = plan.a[p], plan.b[p]
-        return PairResult(float(self.d[k]), pA, pB, a, b, CATEGORIES[plan.cat_code[p]], a, b, None, p)
+        return PairResult(float(self.d[k]), pA, pB, a, b, CATEGORIES[plan.cat_code[p]], plan.link_a[p], b, None, p)
 
     def by_category(self) -> dict:
         out = {}
@@ -154,11 +154,32 @@ class _Raw:
         plan = self.plan
         out = [NotEvaluated(plan.a[p], plan.b[p], CATEGORIES[plan.cat_code[p]], float(self.bounds[p]), int(p))
                for p in np.flatnonzero(self.flags == _FLAG_SKIPPED)]
-        if self.lazy:  # proved beyond the threshold by their bounds
-            thr = max(plan.det.threshold, plan.det.stopping_distance)
+        if self.lazy:  # proved beyond the threshold by their bounds (the check's threshold: its build's)
+            thr = max(plan.threshold, plan.stopping)
             out += [NotEvaluated(plan.a[p], plan.b[p], CATEGORIES[plan.cat_code[p]], max(float(self.bounds[p]), thr),
                                  int(p)) for p in np.flatnonzero(self.flags == _FLAG_PROVED)]
         return tuple(out)
+
+
+def _with_tol(model, tol):
+    """``model``, or where the Detector was given other tolerances a shallow copy of it holding them: its
+    Checker then takes the Detector's joint-limit slack and contact tolerance (the analytic Detector's rule)."""
+    if tol is None or tol == model.tol:
+        return model
+    import copy
+
+    m = copy.copy(model)
+    m.tol = tol
+    return m
+
+
+def _require_active_pairs(model, plan) -> None:
+    """A DetectionError when the active arm has no pair with a shape the configuration moves: its checks
+    could only say CLEAR without having looked (as the analytic Detector's ``require_pairs``)."""
+    scene = model.scene
+    if not any(scene.moves(a) or scene.moves(b) for a, b in zip(plan.a, plan.b)):
+        raise DetectionError(f"scene {scene.name!r} has no pair to check on arm {plan.active!r} (every pair is "
+                             "disabled or excluded): no verdict can be given; enable a pair, add a body or a workspace box")
 
 
 class RangerDetector(Detector):
@@ -184,6 +205,7 @@ class RangerDetector(Detector):
         self._generation = 0
         self._active = None
         self.terrain = None
+        self._terrain_given = terrain is not None  # attached after the first build: pairs on no arm then allowed
         if active is not None and active not in scene.robots:
             raise DetectionError(f"active: unknown robot {active!r}; robots are {list(scene.robots)}")
         self._active = active
@@ -252,8 +274,13 @@ class RangerDetector(Detector):
     def set_active(self, name: str | None) -> None:
         if name is not None and name not in self.scene.robots:
             raise DetectionError(f"active: unknown robot {name!r}; robots are {list(self.scene.robots)}")
-        self._active = name
-        self.prepare()
+        with self._lock:
+            old, self._active = self._active, name
+            try:
+                self.prepare()
+            except BaseException:
+                self._active = old  # refused: the build in use, and its arm, stay
+                raise
 
     def prepare(self) -> "RangerDetector":
         """(Re)build the obstacle lists and bounds; forget every thread's last distances."""
@@ -272,7 +299,8 @@ class RangerDetector(Detector):
             plan.det = self
             plan.revision = revision
             plan.model = model
-            plan.checker = old.checker if old is not None and old.model is model else checker(model, *self._backend_args)
+            plan.checker = old.checker if old is not None and old.model is model else \
+                checker(_with_tol(model, self._tol_given), *self._backend_args)
             plan.distances = Capability.DISTANCES in plan.checker.capabilities
             margin = max(self._reach_margin, self._threshold, self._stopping)
             plan.active = self._active
@@ -289,6 +317,9 @@ class RangerDetector(Detector):
             oa, ob = pairs.owner_a, pairs.owner_b
             plan.a = tuple(ob[k] if s else oa[k] for k, s in zip(b.rows, b.swap))
             plan.b = tuple(oa[k] if s else ob[k] for k, s in zip(b.rows, b.swap))
+            plan.link_a = tuple(self._carrier(a) or a for a in plan.a)  # a payload's: the link carrying it
+            if plan.active is not None and not getattr(self, "_terrain_given", False) and self.terrain is None:
+                _require_active_pairs(model, plan)
             plan.cat_code = b.category
             plan.cat_masks = tuple(b.category == c for c in range(len(CATEGORIES)))
             plan.margin_built = margin
@@ -370,7 +401,7 @@ class RangerDetector(Detector):
             raise DetectionError(f"q: contains NaN or infinite values: {q.tolist()}")
         lo, hi = plan.limits
         if q.shape != lo.shape or not (np.all(q >= lo) and np.all(q <= hi)):  # the Model's error, naming the joint
-            plan.model.check_limits(q, entry)
+            _with_tol(plan.model, self._tol).check_limits(q, entry)
         return q
 
     def _levels(self, plan: _Plan) -> tuple[float, float]:
@@ -503,8 +534,9 @@ class RangerDetector(Detector):
             bad = np.argwhere(~np.isfinite(Q))[0]
             raise DetectionError(f"Detector: Q contains NaN or infinite values (first at row {int(bad[0])}, joint "
                                  f"{int(bad[1])}: {Q[tuple(bad)]})")
-        for i, q in enumerate(Q):
-            plan.model.check_limits(q, f"Detector: Q[{i}]")
+        lo, hi = plan.limits  # the Detector's joint-limit slack, as check's
+        for i in np.flatnonzero(~((Q >= lo) & (Q <= hi)).all(axis=1)):  # the Model's error, naming the joint
+            _with_tol(plan.model, self._tol).check_limits(Q[i], f"Detector: Q[{i}]")
         return Q
 
     def check_many(self, Q) -> BatchReport:
@@ -536,8 +568,8 @@ class RangerDetector(Detector):
         """``(M,) bool``: collision (distance <= 0, or <= the stopping distance) per row (the backend's batch)."""
         plan = self._fresh()
         Q = self._rows(Q, plan)
-        if plan.active is None and plan.all_rows:
-            return plan.checker.collides(plan.model.pin_q(Q), margin=plan.stopping)
+        if plan.active is None and plan.all_rows:  # at check()'s collision level (its contact tolerance)
+            return plan.checker.collides(plan.model.pin_q(Q), margin=self._levels(plan)[0])
         self._require_distances("active-arm batches (collides_many with active= checks the whole Model)", plan)
         return self.check_many(Q).collision
 

@@ -8,6 +8,7 @@ and a few attribute stores; what it reports does not depend on whether a view wa
 from __future__ import annotations
 
 import enum
+import math
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
@@ -75,7 +76,9 @@ class PairResult:
     ``a`` / ``b`` are owner names (``"left_arm/link4"``, ``"vehicle"``, ``"workspace"``,
     ``"payload:tool"``); ``link`` is A's link name, ``obstacle`` is B's owner name;
     ``feature`` is the obstacle's face / edge / vertex nearest to ``p_WB``
-    (from :func:`armguard.geometry.feature_at`) where the obstacle is a polytope, else ``None``.
+    (from :func:`armguard.geometry.feature_at`) where the obstacle is a static polytope, else ``None``
+    (the analytic Detector's annotation: a Detector over another backend's Checker gives ``None``).
+    A payload's pair names the payload in ``a`` and the link carrying it in ``link``.
     """
 
     distance: float
@@ -129,9 +132,11 @@ class DetectionReport:
     COLLISION (some distance <= 0, or <= ``stopping_distance`` when that is set > 0),
     INCOMPLETE (a time budget ran out before the unevaluated pairs' lower bounds could prove
     the threshold holds: never CLEAR by omission).
-    ``nearest``: the overall nearest evaluated pair (or None when the scene has no pairs);
-    ``by_category``: the nearest pair per category the scene has (keys among
-    ``"arm", "environment", "workspace", "payload"``);
+    ``nearest``: the overall nearest evaluated pair, or None when no pair was evaluated (a scene
+    without pairs, or a budgeted or lazy check whose lower bounds decided it alone: CLEAR with
+    ``nearest`` None is then a proof, ``not_evaluated`` holds every pair with its bound);
+    ``by_category``: the nearest evaluated pair per category (keys among ``"arm",
+    "environment", "workspace", "payload"``; a category none of whose pairs was evaluated is absent);
     ``within_threshold``: every evaluated pair with distance <= threshold, nearest first;
     ``not_evaluated``: pairs skipped by the budget or by the lazy mode, with lower bounds;
     ``elapsed_us``: wall time of the check (µs); ``threshold``, ``stopping_distance`` (m);
@@ -192,7 +197,8 @@ class DetectionReport:
         return self
 
     def to_dict(self) -> dict:
-        """JSON-ready dictionary of the whole report (``jacobian`` only when it was asked for)."""
+        """JSON-ready dictionary of the whole report (``jacobian`` only when it was asked for; a pair's
+        ``lower_bound`` of ``-inf``, never evaluated, is ``None``: strict JSON has no infinity)."""
         out = self._to_dict()
         if self.jacobian is not None:
             out["jacobian"] = {k: {"jacobian": [float(x) for x in v.jacobian], "smooth": v.smooth, "row": v.row}
@@ -209,7 +215,8 @@ class DetectionReport:
             "by_category": {k: v.to_dict() for k, v in self.by_category.items()},
             "within_threshold": [r.to_dict() for r in self.within_threshold],
             "not_evaluated": [
-                {"a": n.a, "b": n.b, "category": n.category, "lower_bound": n.lower_bound}
+                {"a": n.a, "b": n.b, "category": n.category,
+                 "lower_bound": n.lower_bound if math.isfinite(n.lower_bound) else None}  # strict JSON: null, no bound
                 for n in self.not_evaluated
             ],
         }
