@@ -272,3 +272,16 @@ def test_category_margins_that_agree_are_still_written_per_category(tmp_path):
     with np.load(tmp_path / "r.npz") as f:
         assert list(f["margins"]) == [0.02] * 4 and "margin" not in f.files
     assert Verifier(m).check_edges(Q0, Q0[::-1], margin=0.02).margin == 0.02  # one number given: one number
+
+
+def test_an_unknown_array_such_as_a_misspelt_joint_names_is_refused(ur5, tmp_path):
+    """``joint_name`` (for joint_names) was ignored: the columns, in another order, were read in the robot's
+    own, and a colliding edge was certified CLEAR (exit 0)."""
+    m, Q = ur5
+    names = list(reversed(m.scene.robots[next(iter(m.scene.robots))].joint_names))
+    np.savez(tmp_path / "typo.npz", Q0=Q[:3, ::-1], Q1=Q[3:6, ::-1], joint_name=np.array(names))
+    res = _run("edges", "ur5", str(tmp_path / "typo.npz"))
+    assert res.exit_code == ExitCode.INPUT, res.output
+    assert "unknown array ['joint_name']" in res.output and "misspelling of 'joint_names'" in res.output
+    np.savez(tmp_path / "ok.npz", Q0=Q[:3, ::-1], Q1=Q[3:6, ::-1], joint_names=np.array(names))
+    assert _run("edges", "ur5", str(tmp_path / "ok.npz")).exit_code in (ExitCode.OK, ExitCode.UNSAFE)

@@ -110,6 +110,23 @@ def test_a_good_heights_file_still_loads(tmp_path):
     np.testing.assert_array_equal(m.origin, [1.0, -2.0])
 
 
+@pytest.mark.parametrize("typo, key", [("orgin", "origin"), ("cel", "cell"), ("Heights", "heights")])
+def test_a_misspelt_array_is_refused_not_ignored(tmp_path, typo, key):
+    """``orgin=[5, 5]`` was ignored: the map was centred under the robot instead of 5 m away (``cel`` likewise
+    left a 0.2 m grid read at the 5 cm default); an unrelated array (a sensor's intensity) is left alone."""
+    truth = make_terrain(n=8, cell=0.1, seed=3)
+    arrays = {"heights": np.array(truth.heights), "cell": 0.1, "origin": np.array([5.0, 5.0])}
+    arrays[typo] = arrays.pop(key)
+    if key == "cell":
+        arrays["points_W"] = np.array([[0.0, 0.0, 0.0], [0.4, 0.4, 0.1]])
+    p = _npz(tmp_path / "typo.npz", **arrays)
+    with pytest.raises(TerrainFileError, match=f"unknown array '{typo}': did you mean '{key}'") as e:
+        load_terrain(p)
+    assert e.value.where == typo
+    ok = _npz(tmp_path / "ok.npz", heights=np.array(truth.heights), cell=0.1, intensity=np.ones(3))
+    np.testing.assert_array_equal(load_terrain(ok).heights, truth.heights)
+
+
 def _ascii_pcd(path, pts, keep: int | None = None, extra: int = 0):
     import pypcd4
 

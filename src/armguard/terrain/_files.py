@@ -185,6 +185,7 @@ def _read_npz(p: Path, cell):
     try:
         with np.load(p, allow_pickle=False) as z:
             keys = set(z.files)
+            _near_misses(p, keys)
             if "points_W" not in keys and "heights" not in keys:
                 raise TerrainFileError(p, "", f"a terrain .npz holds 'points_W' or 'heights' (it has {sorted(keys)})")
             arrays = {k: np.asarray(z[k]) for k in ("cell", "points_W", "heights", "origin", "X_WC") if k in keys}
@@ -228,6 +229,22 @@ def _read_npz(p: Path, cell):
         if X_WC.shape != (4, 4) or not np.all(np.isfinite(X_WC)):
             raise TerrainFileError(p, "X_WC", f"expected the camera's (4, 4) pose (m, W), finite, got shape {X_WC.shape}")
     return c, pts, heights, origin, X_WC
+
+
+_KEYS = ("cell", "points_W", "heights", "origin", "X_WC")
+
+
+def _near_misses(p: Path, keys) -> None:
+    """An array whose name looks like a misspelt key (``orgin``, ``cel``) is refused: ignored, it would move or
+    rescale the map without a word.  Other arrays (a sensor's ``intensity``) are left alone."""
+    import difflib
+
+    for k in sorted(set(keys) - set(_KEYS)):
+        near = difflib.get_close_matches(k, _KEYS, n=1, cutoff=0.6) or \
+            [x for x in _KEYS if x.lower() == k.lower()]
+        if near:
+            raise TerrainFileError(p, k, f"unknown array {k!r}: did you mean {near[0]!r}? (a terrain .npz holds "
+                                   f"{', '.join(_KEYS)})")
 
 
 def _numbers(p: Path, name: str, a: np.ndarray) -> np.ndarray:
