@@ -59,3 +59,22 @@ def test_a_urdf_given_as_the_srdf_is_refused():
     assert e.value.file == str(urdf) and "link[0]" in str(e.value)
     r = CliRunner().invoke(main, ["check-srdf", "hermes", str(urdf)])
     assert r.exit_code == 3 and "this is a URDF, not an SRDF" in r.output, r.output
+
+
+@pytest.mark.parametrize("good, typo", [("group_state", "group_sate"), ("disable_collisions", "disable_colisions")])
+def test_a_misspelt_srdf_element_is_refused_not_dropped(tmp_path, good, typo):
+    """``<group_sate>`` was dropped without a word (the home pose read as all zeros) and ``<disable_colisions>``
+    likewise (the pair checked after all): another model than the one written.  An element no reader knows
+    and resembling none (a tool's ``<rotor_params>``) is left alone."""
+    src = repo_root() / "urdf" / "puma560" / "puma560.srdf"
+    text = src.read_text()
+    assert f"<{good} " in text
+    bad = tmp_path / "typo.srdf"
+    bad.write_text(text.replace(f"<{good} ", f"<{typo} ", 1).replace(f"</{good}>", f"</{typo}>", 1))
+    urdf = repo_root() / "urdf" / "puma560" / "puma560.urdf"
+    with pytest.raises(SceneFileError, match=rf"<{typo}> is read by nothing: did you mean <{good}>\?") as e:
+        armguard.load_model(str(urdf), srdf=bad)
+    assert e.value.file == str(bad)
+    other = tmp_path / "other.srdf"
+    other.write_text(text.replace("</robot>", '<rotor_params><joint name="x" mass="0"/></rotor_params></robot>'))
+    armguard.load_model(str(urdf), srdf=other)

@@ -154,6 +154,30 @@ def _value(text: str, f: str, where: str):
     return xs[0] if len(xs) == 1 else xs
 
 
+_SRDF_READ = {"robot": ("group", "group_state", "end_effector", "virtual_joint", "passive_joint", "disable_collisions",
+                         "enable_collisions", "disable_default_collisions", "link_sphere_approximations", "joint_property"),
+              "group": ("link", "joint", "chain", "group"), "group_state": ("joint",)}
+
+
+def _misspelt(root, f: str) -> None:
+    """An element that nothing reads but that looks like one that is (``<group_sate>``: the home pose then all
+    zeros; ``<disable_colisions>``: the pair checked after all) is refused, as a URDF's ``<colision>`` is: the
+    file would give another model than the one written.  Unrelated elements (a tool's own) are left alone."""
+    import difflib
+
+    def scan(el, kind: str, where: str) -> None:
+        for k, c in enumerate(x for x in el if isinstance(x.tag, str)):
+            if c.tag not in _SRDF_READ[kind]:
+                near = difflib.get_close_matches(c.tag, _SRDF_READ[kind], n=1, cutoff=0.75)
+                if near:
+                    raise SceneFileError(f, f"{where}<{c.tag}> (child {k + 1})", f"<{c.tag}> is read by nothing: did you "
+                                         f"mean <{near[0]}>? (it would give another model than the one written)")
+            elif c.tag in _SRDF_READ and kind == "robot":
+                scan(c, c.tag, f"{c.tag}[{c.get('name', '')}].")
+
+    scan(root, "robot", "")
+
+
 def read_srdf(path, *, found: str = "given", partial: bool = False) -> Srdf:
     """Parse ``path``; a missing file or malformed XML is a :class:`SceneFileError`."""
     path = Path(path)
@@ -177,6 +201,7 @@ def read_srdf(path, *, found: str = "given", partial: bool = False) -> Srdf:
         raise SceneFileError(f, f"{urdf[0]}[0]", f"a URDF element <{urdf[0]}> at the top level: this is a URDF, not an "
                              "SRDF (an SRDF holds group, group_state, end_effector, virtual_joint, passive_joint, "
                              "disable_collisions)")
+    _misspelt(root, f)
     out = Srdf(f, found=found, partial=partial)
     groups: dict[str, SrdfGroup] = {}
     for k, g in enumerate(root.findall("group")):  # top level: nested <group name/> are references
