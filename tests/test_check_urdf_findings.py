@@ -228,3 +228,18 @@ def test_a_missing_mesh_is_reported_once_and_every_other_one_too(tmp_path):
     assert [c for c, _ in said] == ["load"], said
     said_b = [(f.check.value, f.where) for f in report.findings if "gone_b.stl" in f.message]
     assert said_b == [("unparsed", "two.urdf: link[l1].collision[0]")], said_b
+
+
+@pytest.mark.parametrize("attr, meant", [('ryp="0 0 1.5"', "rpy"), ('xzy="0.6 0 0"', "xyz")])
+def test_a_misspelt_origin_attribute_is_refused_not_read_as_zero(tmp_path, attr, meant):
+    """``<origin ryp="0 0 1.5">`` was read as no rotation (urdfdom ignores an unknown attribute) and check-urdf said
+    "clean"; an extension that contains the attribute's name (ANYmal's ``gear_velocity``) is no misspelling."""
+    p = tmp_path / "two.urdf"
+    text = _URDF.replace("LIMIT", '<limit lower="-1" upper="1" effort="1" velocity="1" gear_velocity="10"/>')
+    p.write_text(text.replace('<origin xyz="0.6 0 0"/>', f"<origin {attr}/>"))
+    with pytest.raises(armguard.SceneFileError, match=rf'joint\[j2\]\.origin.*is read by nothing: did you mean {meant}='):
+        armguard.load_model(p, srdf=False)
+    r = CliRunner().invoke(main, ["-q", "check-urdf", str(p), "--json"])
+    assert r.exit_code == 1 and f"did you mean {meant}=" in r.output, r.output
+    p.write_text(text)
+    armguard.load_model(p, srdf=False)

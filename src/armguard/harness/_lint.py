@@ -445,13 +445,14 @@ def check_model_files(target, *, n_configs: int = 200, seed: int = 0, permanent_
 
     arg, srdf_arg, urdf, srdf = _sources(target)
     report = LintReport(str(target), str(urdf) if urdf else None, str(srdf) if srdf else None)
-    model = None
+    model = refused = None
     try:
         model = load_model(arg, srdf=srdf_arg) if srdf_arg is not None else load_model(arg)
     except ArmguardError as exc:
-        if " is read by nothing: did you mean " not in getattr(exc, "message", ""):  # else: unread-element, below
-            report.findings.append(Finding(Check.LOAD, Severity.ERROR, getattr(exc, "file", "") or str(arg),
-                                           f"load_model fails: {exc}"))
+        refused = Finding(Check.LOAD, Severity.ERROR, getattr(exc, "file", "") or str(arg), f"load_model fails: {exc}")
+        if " is read by nothing: did you mean <" not in getattr(exc, "message", ""):  # else: unread-element, below
+            report.findings.append(refused)
+            refused = None
     mesh_paths = {}
     if model is not None:
         mesh_paths = {go.name: go.meshPath for go in model.collision_model.geometryObjects
@@ -471,4 +472,6 @@ def check_model_files(target, *, n_configs: int = 200, seed: int = 0, permanent_
                           f"{n_configs} random configurations")
     else:
         report.summary = "the model does not load"
+        if refused is not None and report.status is not LintStatus.ERRORS:  # a misspelt element no check here saw
+            report.findings.insert(0, refused)  # (an SRDF's): the refusal itself, never "clean"
     return report

@@ -261,4 +261,32 @@ def misread_collisions(root: ET.Element, lines: dict) -> list[tuple[str, str, in
                             else "the shape sits at the link's origin" if near[0] == "origin" else "no shape is read from it")
                     out.append((f"{where}.{c.tag}", f"<{c.tag}> is read by nothing: did you mean <{near[0]}>? ({what})",
                                 lines.get(id(c))))
+    return out + _misread_attributes(root, lines)
+
+
+ATTRIBUTES = {"origin": ("xyz", "rpy"), "axis": ("xyz",), "limit": ("lower", "upper", "effort", "velocity"),
+              "mimic": ("joint", "multiplier", "offset"), "box": ("size",), "cylinder": ("radius", "length"),
+              "sphere": ("radius",), "mesh": ("filename", "scale"), "parent": ("link",), "child": ("link",)}
+"""The attributes urdfdom reads on the elements that place and shape what is checked."""
+
+
+def _misread_attributes(root: ET.Element, lines: dict) -> list[tuple[str, str, int | None]]:
+    """Attributes of a joint's or a collision's elements that nothing reads yet that look like one that is
+    (``<origin ryp="...">``: read as no rotation; ``xzy``, ``lenght``): a misspelling, never a value dropped."""
+    import difflib
+
+    out = []
+    places = [(j, f"joint[{j.get('name', '')}]") for j in root.findall("joint")]
+    for link in root.findall("link"):
+        places += [(c, f"link[{link.get('name', '')}].collision[{k}]") for k, c in enumerate(link.findall("collision"))]
+    for el, where in places:
+        for c in el.iter():
+            known = ATTRIBUTES.get(c.tag) if isinstance(c.tag, str) else None
+            for a in (() if known is None else c.attrib):
+                if a in known or any(k in a for k in known):  # an extension (ANYmal's gear_velocity), no misspelling
+                    continue
+                near = difflib.get_close_matches(a, known, n=1, cutoff=0.6) or [k for k in known if sorted(k) == sorted(a)]
+                if near:
+                    out.append((f"{where}.{c.tag}", f'{a}="{c.get(a)}" is read by nothing: did you mean {near[0]}=? '
+                                f"(<{c.tag}> takes {', '.join(known)}; unread, it would give another model)", lines.get(id(c))))
     return out
