@@ -149,6 +149,12 @@ def read_config(config=None) -> dict:
         data = tomllib.loads(p.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as exc:
         raise BackendError(f"{p}: not valid TOML: {exc}") from None
+    except UnicodeDecodeError as exc:  # TOML is UTF-8 text
+        raise BackendError(f"{p}: not valid TOML: not UTF-8 text (byte {exc.start}: {exc.reason})") from None
+    except RecursionError:
+        raise BackendError(f"{p}: not valid TOML: nested too deeply to read") from None
+    except OSError as exc:
+        raise BackendError(f"{p}: cannot read this configuration file ({exc.strerror or exc})") from None
     table = data.get("backend", {})
     if not isinstance(table, dict):
         raise BackendError(f"{p}: [backend] must be a table (name = ..., options)")
