@@ -257,3 +257,13 @@ def test_an_unclosed_element_is_named_with_its_line(tmp_path):
     with pytest.raises(SceneFileError, match=r"x.srdf: line 4, column 3: not well-formed XML: mismatched tag: <chain> "
                                              r"opened at line 3 is not closed"):
         armguard.load_model("puma560", srdf=s)
+
+
+def test_a_huge_origin_and_a_deep_nesting_are_refused_with_their_place(tmp_path):
+    """``<origin xyz="1e300 ...">`` loaded (coal's distances then came back infinite, naming no file); elements
+    nested 1000 deep were an internal error (RecursionError).  Both are now refused where they are."""
+    err = _refused(tmp_path, _urdf(joint=JOINT1.replace('<origin xyz="0 0 0.1"/>', '<origin xyz="1e300 0 0.1"/>')))
+    assert "joint[j1].origin" in err.where and "beyond 1e+09" in err.message, err
+    deep = "<x>" * 1000 + "</x>" * 1000
+    err = _refused(tmp_path, _urdf(more=f'<link name="extra">{deep}</link>'))
+    assert "nested more than 64 deep" in err.message and err.line == 5, err

@@ -128,6 +128,20 @@ def _package_name(folder: Path) -> str | None:
     return el.text.strip() if el is not None and el.text else None
 
 
+_MAX_DEPTH = 64  # levels of elements below <robot> (a URDF has 4: link, collision, geometry, box)
+
+
+def _nested_too_deep(root):
+    """The first element more than ``_MAX_DEPTH`` levels below ``root``, or None (walked without recursion)."""
+    stack = [(root, 0)]
+    while stack:
+        el, depth = stack.pop()
+        if depth > _MAX_DEPTH:
+            return el
+        stack.extend((c, depth + 1) for c in el)
+    return None
+
+
 def _read_xml(path: Path, package_dirs) -> UrdfInfo:
     f = str(path)
     try:
@@ -141,6 +155,10 @@ def _read_xml(path: Path, package_dirs) -> UrdfInfo:
                              line=exc.lineno) from None
     if root.tag != "robot":
         raise SceneFileError(f, root.tag, "expected a <robot> root element (a URDF file)")
+    deep = _nested_too_deep(root)
+    if deep is not None:  # the XML tools downstream recurse per level (a RecursionError, no place named)
+        raise SceneFileError(f, f"<{deep.tag}>", f"elements nested more than {_MAX_DEPTH} deep: a URDF nests a few "
+                             "levels", line=lines.get(id(deep)))
     links = root.findall("link")
     if not links:
         raise SceneFileError(f, "robot", "a URDF needs at least one <link>")

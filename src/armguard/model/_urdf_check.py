@@ -81,6 +81,10 @@ def urdf_problems(root: ET.Element, lines: dict) -> list[tuple[str, str, int | N
         vals, problem = _numbers(el, attr, count, default)
         if problem:
             add(where, problem, el)
+        elif el.tag != "limit" and any(abs(v) > DEFAULT_TOLERANCES.max_magnitude for v in vals):  # as scene files
+            add(where, f"{attr}={el.get(attr)!r}: beyond {DEFAULT_TOLERANCES.max_magnitude:g} (Tolerances.max_magnitude): "
+                "the poses computed from it overflow", el)  # (a limit's own bound is checked below)
+            return None
         return vals
 
     def origin(where: str, parent: ET.Element) -> None:
