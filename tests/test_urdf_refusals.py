@@ -267,3 +267,17 @@ def test_a_huge_origin_and_a_deep_nesting_are_refused_with_their_place(tmp_path)
     deep = "<x>" * 1000 + "</x>" * 1000
     err = _refused(tmp_path, _urdf(more=f'<link name="extra">{deep}</link>'))
     assert "nested more than 64 deep" in err.message and err.line == 5, err
+
+
+def test_a_non_ascii_name_in_a_latin1_file_is_refused_a_latin1_comment_is_not(tmp_path):
+    """An ISO-8859-1 URDF naming a link ``lién`` was an internal error (Pinocchio hands back the Latin-1 bytes as a
+    frame name, not UTF-8: UnicodeDecodeError); a Latin-1 comment alone loads."""
+    text = _urdf().replace('<link name="base">', '<!-- r\xe9f\xe9rence --><link name="base">')
+    head = '<?xml version="1.0" encoding="ISO-8859-1"?>\n'
+    p = tmp_path / "r.urdf"
+    p.write_bytes((head + text).encode("latin-1"))
+    armguard.load_model(p)
+    p.write_bytes((head + text.replace('"l1"', '"li\xe9n"')).encode("latin-1"))
+    with pytest.raises(SceneFileError, match="a non-ASCII value in a file that is not UTF-8") as err:
+        armguard.load_model(p)
+    assert "li\xe9n" in err.value.where and err.value.line is not None

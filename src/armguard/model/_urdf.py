@@ -131,6 +131,21 @@ def _package_name(folder: Path) -> str | None:
 _MAX_DEPTH = 64  # levels of elements below <robot> (a URDF has 4: link, collision, geometry, box)
 
 
+def _non_utf8_names(data: bytes, root, lines: dict, f: str) -> None:
+    """A file in another encoding (``ISO-8859-1``) whose names or values hold non-ASCII characters is refused:
+    urdfdom and Pinocchio read its bytes as UTF-8 (a name no Python string can hold).  Its comments may."""
+    try:
+        data.decode("utf-8")
+        return
+    except UnicodeDecodeError:
+        pass
+    for el in root.iter():
+        for a, v in el.attrib.items():
+            if not v.isascii():
+                raise SceneFileError(f, f"<{el.tag}> {a}={v!r}", "a non-ASCII value in a file that is not UTF-8: "
+                                     "Pinocchio reads the bytes as UTF-8; save the file as UTF-8", line=lines.get(id(el)))
+
+
 def _nested_too_deep(root):
     """The first element more than ``_MAX_DEPTH`` levels below ``root``, or None (walked without recursion)."""
     stack = [(root, 0)]
@@ -155,6 +170,7 @@ def _read_xml(path: Path, package_dirs) -> UrdfInfo:
                              line=exc.lineno) from None
     if root.tag != "robot":
         raise SceneFileError(f, root.tag, "expected a <robot> root element (a URDF file)")
+    _non_utf8_names(data, root, lines, f)
     deep = _nested_too_deep(root)
     if deep is not None:  # the XML tools downstream recurse per level (a RecursionError, no place named)
         raise SceneFileError(f, f"<{deep.tag}>", f"elements nested more than {_MAX_DEPTH} deep: a URDF nests a few "
