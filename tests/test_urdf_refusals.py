@@ -281,3 +281,14 @@ def test_a_non_ascii_name_in_a_latin1_file_is_refused_a_latin1_comment_is_not(tm
     with pytest.raises(SceneFileError, match="a non-ASCII value in a file that is not UTF-8") as err:
         armguard.load_model(p)
     assert "li\xe9n" in err.value.where and err.value.line is not None
+
+
+def test_a_robot_without_a_name_and_a_utf16_file_are_refused_by_name(tmp_path):
+    """Both passed armguard's own checks and failed in urdfdom: "does not contain a valid URDF model", no place,
+    and C++ log lines on stderr."""
+    err = _refused(tmp_path, _urdf().replace('<robot name="r">', "<robot>"))
+    assert err.where == "robot" and "needs a name" in err.message and err.line == 1
+    p = tmp_path / "r16.urdf"
+    p.write_bytes(_urdf().encode("utf-16"))
+    with pytest.raises(SceneFileError, match="UTF-16 text"):
+        armguard.load_model(p)

@@ -170,6 +170,8 @@ def _read_xml(path: Path, package_dirs) -> UrdfInfo:
                              line=exc.lineno) from None
     if root.tag != "robot":
         raise SceneFileError(f, root.tag, "expected a <robot> root element (a URDF file)")
+    if data[:2] in (b"\xff\xfe", b"\xfe\xff"):  # expat reads it, urdfdom does not
+        raise SceneFileError(f, "", "UTF-16 text: urdfdom reads URDF files as UTF-8; save the file as UTF-8")
     _non_utf8_names(data, root, lines, f)
     deep = _nested_too_deep(root)
     if deep is not None:  # the XML tools downstream recurse per level (a RecursionError, no place named)
@@ -178,6 +180,8 @@ def _read_xml(path: Path, package_dirs) -> UrdfInfo:
     links = root.findall("link")
     if not links:
         raise SceneFileError(f, "robot", "a URDF needs at least one <link>")
+    if not root.get("name"):  # urdfdom refuses it, naming no place
+        raise SceneFileError(f, "robot", "a <robot> needs a name attribute", line=lines.get(id(root)))
     problems = urdf_problems(root, lines)
     if problems:
         # each problem with its line (the first one's goes in the error's own place)
