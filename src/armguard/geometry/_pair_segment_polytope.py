@@ -169,6 +169,8 @@ def _direct_witness(
     ``depth * q``.  ``ok`` is False when rounding put the point off its facet by more than
     ``eps_len`` (a near tie between almost parallel facets): the caller then solves for them."""
     if kind == 0:
+        if planes.shape[0] <= 2:  # a polygon: its two planes bound nothing sideways (a segment across it in its
+            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0  # plane had a witness 1 m off it): the caller solves for them
         # face facet: the segment's lowest end point along q, pushed onto the face's plane
         s0 = qx * p0x + qy * p0y + qz * p0z
         s1 = qx * p1x + qy * p1y + qz * p1z

@@ -34,6 +34,8 @@ from ._pack import attach_packed, face_edges, unique_pairs
 from ._hull_faces import merge_hull_faces
 from ._check import check_nonnegative, check_point, check_points, check_pose, check_rotation
 
+_EPS = float(np.finfo(np.float64).eps)
+
 __all__ = ["Shape", "Sphere", "Capsule", "Box", "Prism", "ConvexPolyhedron", "Polygon", "CoreKind"]
 
 
@@ -361,7 +363,9 @@ class Polygon(Shape):
         n = n / nn
         c = pts.mean(axis=0)
         off = np.abs((pts - c) @ n)
-        if np.max(off) > tol.planarity * max(1.0, float(np.max(np.abs(pts - c)))):  # its own extent, not |p_W|
+        # its own extent, and the rounding of its coordinates far from W's origin (a flat square moved to 1e7 m was
+        # refused: a coordinate's rounding, 9e-10 m there, is as large as the tolerance)
+        if np.max(off) > tol.planarity * max(1.0, float(np.max(np.abs(pts - c)))) + 16.0 * _EPS * float(np.max(np.abs(pts))):
             raise GeometryError(
                 f"Polygon.vertices: not planar (vertex {int(np.argmax(off))} is {float(np.max(off)):.3g} m off the plane)"
             )

@@ -48,6 +48,9 @@ class BatchProximity:
     nhat_AB_W: np.ndarray
 
 
+_MAX_MAGNITUDE = DEFAULT_TOLERANCES.max_magnitude  # compiled in: the scalar API's bound on every length (m)
+
+
 def _arr(x, name: str, trailing: tuple, check: bool = True) -> np.ndarray:
     try:
         a = np.asarray(x, dtype=np.float64)
@@ -57,6 +60,8 @@ def _arr(x, name: str, trailing: tuple, check: bool = True) -> np.ndarray:
         raise GeometryError(f"{name}: expected shape (..., {', '.join(map(str, trailing))}), got {a.shape}")
     if check and not np.all(np.isfinite(a)):
         raise GeometryError(f"{name}: contains NaN or infinite values")
+    if check and a.size and float(np.abs(a).max()) > DEFAULT_TOLERANCES.max_magnitude:  # as the scalar API
+        raise GeometryError(f"{name}: a value beyond {DEFAULT_TOLERANCES.max_magnitude:g} (Tolerances.max_magnitude)")
     return a
 
 
@@ -94,6 +99,13 @@ def _result(lead, dist, out) -> BatchProximity:
     return BatchProximity(dist.reshape(lead), o[..., 0:3], o[..., 3:6], o[..., 6:9])
 
 
+@njit(cache=True, inline="always")
+def _within(a, b, c, d, e, f):  # pragma: no cover - compiled
+    """Every value at most ``_MAX_MAGNITUDE`` in magnitude (a NaN is not)."""
+    m = _MAX_MAGNITUDE
+    return abs(a) <= m and abs(b) <= m and abs(c) <= m and abs(d) <= m and abs(e) <= m and abs(f) <= m
+
+
 @njit(cache=True, _nrt=False)
 def _capsule_capsule_loop(a0, a1, ra, b0, b1, rb, dist, out, eps_len, eps_par):  # pragma: no cover
     """Returns the index of the first pair with a non-finite input or a negative radius, or -1."""
@@ -113,8 +125,8 @@ def _capsule_capsule_loop(a0, a1, ra, b0, b1, rb, dist, out, eps_len, eps_par): 
         q1z = b1[i, 2]
         r1 = ra[i]
         r2 = rb[i]
-        acc = p0x + p0y + p0z + p1x + p1y + p1z + q0x + q0y + q0z + q1x + q1y + q1z + r1 + r2
-        if not (acc - acc == 0.0) or r1 < 0.0 or r2 < 0.0:
+        if not (_within(p0x, p0y, p0z, p1x, p1y, p1z) and _within(q0x, q0y, q0z, q1x, q1y, q1z)
+                and 0.0 <= r1 <= _MAX_MAGNITUDE and 0.0 <= r2 <= _MAX_MAGNITUDE):  # a NaN fails every comparison
             if bad < 0:
                 bad = i
             continue
@@ -134,7 +146,8 @@ def capsule_capsule(p0_A, p1_A, r_A, p0_B, p1_B, r_B, tol: Tolerances = DEFAULT_
     dist = np.empty(n)
     out = np.empty(9 * n)
     bad = _capsule_capsule_loop(a0, a1, ra, b0, b1, rb, dist, out, tol.length, tol.parallel)
-    _raise_bad(bad, "NaN or infinite coordinate or radius, or a negative radius")
+    _raise_bad(bad, f"NaN, infinite or beyond {_MAX_MAGNITUDE:g} (Tolerances.max_magnitude) coordinate or radius, "
+                    "or a negative radius")
     return _result(lead, dist, out)
 
 
@@ -147,7 +160,8 @@ def sphere_sphere(c_A, r_A, c_B, r_B, tol: Tolerances = DEFAULT_TOLERANCES) -> B
     dist = np.empty(n)
     out = np.empty(9 * n)
     bad = _capsule_capsule_loop(a, a, ra, b, b, rb, dist, out, tol.length, tol.parallel)
-    _raise_bad(bad, "NaN or infinite coordinate or radius, or a negative radius")
+    _raise_bad(bad, f"NaN, infinite or beyond {_MAX_MAGNITUDE:g} (Tolerances.max_magnitude) coordinate or radius, "
+                    "or a negative radius")
     return _result(lead, dist, out)
 
 
@@ -157,9 +171,12 @@ def _capsule_box_loop(a0, a1, ra, c, h, R, dist, out, eps_len, eps_par, offset):
     bad = -1
     for i in range(dist.shape[0]):
         acc = ra[i]
+        ok = ra[i] <= _MAX_MAGNITUDE
         for q in range(3):
             acc += a0[i, q] + a1[i, q] + c[i, q] + h[i, q] + R[i, q, 0] + R[i, q, 1] + R[i, q, 2]
-        if not (acc - acc == 0.0) or ra[i] < 0.0 or h[i, 0] <= 0.0 or h[i, 1] <= 0.0 or h[i, 2] <= 0.0:
+            ok = ok and abs(a0[i, q]) <= _MAX_MAGNITUDE and abs(a1[i, q]) <= _MAX_MAGNITUDE \
+                and abs(c[i, q]) <= _MAX_MAGNITUDE and h[i, q] <= _MAX_MAGNITUDE
+        if not (acc - acc == 0.0) or not ok or ra[i] < 0.0 or h[i, 0] <= 0.0 or h[i, 1] <= 0.0 or h[i, 2] <= 0.0:
             if bad < 0:
                 bad = i
             continue
@@ -187,7 +204,8 @@ def capsule_box(p0, p1, r, center, half_extents, rotation, tol: Tolerances = DEF
     dist = np.empty(n)
     out = np.empty(9 * n)
     bad = _capsule_box_loop(a0, a1, ra, c, hh, R, dist, out, tol.length, tol.parallel, tol.penetration_witness_offset)
-    _raise_bad(bad, "NaN or infinite input, a negative radius or a half extent <= 0")
+    _raise_bad(bad, f"NaN, infinite or beyond {_MAX_MAGNITUDE:g} (Tolerances.max_magnitude) input, a negative radius or "
+                    "a half extent <= 0")
     return _result(lead, dist, out)
 
 
