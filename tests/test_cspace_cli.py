@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 from click.testing import CliRunner
 
 from armguard.cli import main
@@ -66,22 +67,23 @@ def test_info_exits_1_when_the_map_allows_a_colliding_configuration(tmp_path, mo
 
 
 def test_plot_refuses_what_it_cannot_mark_and_writes_the_format_asked(tmp_path):
-    """A NaN or unreadable angle, or a ``--q`` whose joint 2 is on another slice than ``--q2``'s (its
-    marker would show this slice's verdict where it does not hold), is refused with exit 3 and no
-    file; ``--out`` writes the format its suffix names (it wrote PNG bytes into a .pdf)."""
+    """A NaN or unreadable angle (a usage error, exit 2, as every command's bad option value: it was 3), or a
+    ``--q`` whose joint 2 is on another slice than ``--q2``'s (its marker would show this slice's verdict where it
+    does not hold: exit 3), is refused with no file; ``--out`` writes the format its suffix names (it wrote PNG bytes into a .pdf)."""
     out = tmp_path / "h.agmap"
     runner = CliRunner()
     assert runner.invoke(main, ["cspace", "build", "hermes", "--resolution", "30deg", "--max-depth", "0",
                                 "--out", str(out)]).exit_code == 0
     png = tmp_path / "s.png"
-    for args, said in ((["--q2", "30", "--q", "nan,30,-20"], "not a finite angle"),
-                       (["--q2", "30", "--q", "1,abc,3"], "--q: 'abc' is not a finite angle"),
-                       (["--q2", "abc"], "--q2: 'abc' is not a finite angle"),
-                       (["--q2", "30", "--q", "180,90,-20"], "is not in the slice's cell"),
-                       (["--q2", "30", "--q", "999,30,-20"], "its joint 1 (999°) is outside the map's limits"),
-                       (["--q2", "9999"], "(9999 deg) is outside joint 2's limits")):  # the unit it was given in
+    for args, said, code in ((["--q2", "30", "--q", "nan,30,-20"], "not a finite angle", 2),  # option values: usage
+                             (["--q2", "30", "--q", "1,abc,3"], "--q: 'abc' is not a finite angle", 2),  # (2), as
+                             (["--q2", "abc"], "--q2: 'abc' is not a finite angle", 2),  # every command's
+                             (["--q2", "30", "--q", "1,2"], "expected three angles", 2),
+                             (["--q2", "30", "--q", "180,90,-20"], "is not in the slice's cell", 3),  # the map's
+                             (["--q2", "30", "--q", "999,30,-20"], "its joint 1 (999°) is outside the map's limits", 3),
+                             (["--q2", "9999"], "(9999 deg) is outside joint 2's limits", 3)):  # the unit given
         r = runner.invoke(main, ["cspace", "plot", str(out), *args, "--out", str(png)])
-        assert r.exit_code == 3 and said in r.output, (args, r.output)
+        assert r.exit_code == code and said in r.output, (args, r.output)
         assert not png.exists()
     r = runner.invoke(main, ["cspace", "plot", str(out), "--q2", "30", "--q", "180,30,-20", "--out", str(tmp_path / "s.pdf")])
     assert r.exit_code == 0, r.output
@@ -182,3 +184,13 @@ def test_a_map_that_forbids_nearly_everything_says_so(tmp_path):
     assert r.exit_code == 0 and "forbids 100.00% of the joint box" in r.output
     r = runner.invoke(main, ["cspace", "build", "gmf_s480", "--resolution", "20deg", "--out", str(tmp_path / "ok.agmap")])
     assert r.exit_code == 0 and "warning" not in r.output, r.output  # 93 % forbidden: no warning
+
+
+@pytest.mark.parametrize("opt, value", [("--resolution", "nan"), ("--resolution", "abc"), ("--cell", "0deg")])
+def test_a_bad_grid_option_is_a_usage_error(tmp_path, opt, value):
+    """``--resolution nan`` or ``--cell 0deg`` exited 3 (a file or value refused) where every other command's bad
+    option value exits 2; and nothing is written."""
+    out = tmp_path / "h.agmap"
+    r = CliRunner().invoke(main, ["cspace", "build", "hermes", opt, value, "--out", str(out)])
+    assert r.exit_code == 2 and f"Invalid value for {opt}" in r.output, r.output
+    assert not out.exists()

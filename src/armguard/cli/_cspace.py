@@ -23,7 +23,14 @@ def _angle(value: str) -> float:
 def _step(text: str, option: str) -> float:
     """A grid step of ``option`` in rad: with its unit, or a bare number of rad; a bare number over half a
     radian (a 29 deg cell) is refused with both readings (``--resolution 5`` meant 5 deg, not 286)."""
-    value = _angle(text)
+    from .._errors import ForbiddenMapError
+
+    try:
+        value = _angle(text)
+    except (ValueError, ForbiddenMapError) as exc:  # a usage error (2), as every other option value
+        raise click.BadParameter(str(exc), param_hint=option) from None
+    if not (math.isfinite(value) and value > 0.0):
+        raise click.BadParameter(f"{text!r}: expected a finite angle > 0 ('1deg', '0.01rad')", param_hint=option)
     if not text.strip().lower().endswith(("deg", "°", "rad")) and value > 0.5:
         raise click.BadParameter(f"{text} is read as {value:g} rad ({math.degrees(value):.4g} deg); write '{text}deg' for "
                                  f"degrees, or '{text}rad' to mean radians", param_hint=option)
@@ -39,8 +46,8 @@ def _one_angle(text: str, option: str) -> float:
         value = _angle(text) if text.endswith(("deg", "°", "rad")) else math.radians(float(text))
     except (ValueError, ForbiddenMapError):
         value = math.nan
-    if not math.isfinite(value):
-        raise ForbiddenMapError(f"{option}: {text!r} is not a finite angle (e.g. 30, 30deg, 0.5rad)")
+    if not math.isfinite(value):  # a usage error (2), as every other option value
+        raise click.BadParameter(f"{text!r} is not a finite angle (e.g. 30, 30deg, 0.5rad)", param_hint=option)
     return value
 
 
@@ -48,11 +55,9 @@ def _angles(text: str | None):
     """``"180,30,-20"`` (deg, unless each value carries its unit) -> (3,) rad."""
     if text is None:
         return None
-    from .._errors import ForbiddenMapError
-
     parts = [p.strip() for p in text.split(",")]
     if len(parts) != 3:
-        raise ForbiddenMapError(f"--q: expected three angles (joints 1-3), got {text!r}")
+        raise click.BadParameter(f"expected three angles (joints 1-3), got {text!r}", param_hint="--q")
     return [_one_angle(p, "--q") for p in parts]
 
 
