@@ -568,3 +568,15 @@ def test_program_run_and_calibrate_refuse_an_unwritable_output_before_the_work(t
         r = CliRunner().invoke(main, args)
         assert r.exit_code == 3 and "afile" in r.output, (args, r.output)
     assert ran == []
+
+
+def test_verify_says_which_outputs_it_wrote_before_one_that_cannot_be(tmp_path):
+    """verify with a report and a plot per trajectory stopped at the second plot (exit 3) without a word of the
+    report and first plot it had written: the output set was mixed, the user left to guess."""
+    (tmp_path / "pp_payload_sweep.png").mkdir()  # the second trajectory's plot: a folder, never replaced
+    r = CliRunner().invoke(main, ["verify", "hermes", "unstow", "payload_sweep", "--report", str(tmp_path / "r.json"),
+                                  "--plot", str(tmp_path / "pp.png")])
+    assert r.exit_code == ExitCode.INPUT, r.output
+    assert "pp_payload_sweep.png" in r.output and "written before it:" in r.output, r.output
+    assert str(tmp_path / "r.json") in r.output and str(tmp_path / "pp_unstow.png") in r.output
+    assert (tmp_path / "r.json").is_file() and (tmp_path / "pp_unstow.png").is_file()

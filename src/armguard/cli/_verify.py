@@ -11,6 +11,7 @@ from . import main
 from ._params import AT_LEAST_ONE, LENGTH, POSITIVE
 from ._exit import ExitCode, exit_epilog
 from ._output import esc, output_console
+from .._errors import OutputError
 
 
 def resolve_trajectories(scene, specs):
@@ -171,7 +172,13 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
         p = Path(plot_path)
         for r in reports:
             out = p if len(reports) == 1 else p.with_name(f"{p.stem}_{r.trajectory}{p.suffix or '.png'}")
-            r.plot(out)
+            try:
+                r.plot(out)
+            except OutputError as exc:  # the files written before it stay: say which, never leave it to a guess
+                if written:
+                    raise OutputError(f"{exc}; written before it: {', '.join(w.split(': ', 1)[1] for w in written)}") \
+                        from None
+                raise
             written.append(f"plot: {out}")
     for r in reports:
         console.rule(f"[bold]{esc(r.trajectory)}[/] — {verdict_text(r)}")
