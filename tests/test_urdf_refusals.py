@@ -134,8 +134,10 @@ _TET_F = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
     "vertices, what",
     [([[0, 0, 0], [0.1, 0, 0], [np.nan, 0.1, 0], [0, 0, 0.1]], "not finite (NaN or inf), the first is vertex"),
      ([[0, 0, 0], [0.1, 0, 0], [0.2, 0, 0], [0.3, 0, 0]], "the vertices lie on a line"),
-     ([[0.1, 0.1, 0.1]] * 4, "no area and no volume")],
-    ids=["nan-vertex", "collinear", "one-point"],
+     ([[0.1, 0.1, 0.1]] * 4, "no area and no volume"),
+     ([[1e20, 0, 0], [0.1, 0, 0], [0, 0.1, 0], [0, 0, 0.1]], "is beyond 1e+09 m"),  # (STL: float32) was a hull of 1e20 m
+     ],
+    ids=["nan-vertex", "collinear", "one-point", "huge-vertex"],
 )
 def test_a_bad_mesh_names_the_file_link_and_mesh(tmp_path, vertices, what):
     path = _mesh_urdf(tmp_path, vertices, _TET_F)

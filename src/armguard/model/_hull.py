@@ -153,6 +153,11 @@ def _mesh_qhull(points, solid: bool):
                             f"vertex {int(bad[0])} = {p[bad[0]].tolist()}")
     if len(p) == 0:
         raise GeometryError("the mesh has no vertices")
+    big = np.abs(p).max(axis=1) > tol.max_magnitude  # as every length of a file: beyond it, the hull's arithmetic
+    if big.any():                                     # overflows (1e300 read as "the vertices lie on a line")
+        k = int(np.flatnonzero(big)[0])
+        raise GeometryError(f"vertex {k} = {p[k].tolist()} is beyond {tol.max_magnitude:g} m (Tolerances.max_magnitude; "
+                            "as scaled: a unit or scale error?)")
     p = unique_rows(p)
     ext = float(np.ptp(p, axis=0).max())
     if len(p) < 3 or ext <= tol.length:
