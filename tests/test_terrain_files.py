@@ -68,7 +68,7 @@ def _npz(path, **arrays):
 @pytest.mark.parametrize("case, where", [
     ("empty_cloud", "points"), ("two_columns", "points_W"), ("heights_1d", "heights"), ("origin_3", "origin"),
     ("nan_heights", "heights"), ("nan_cell", "cell"), ("zero_cell", "cell"), ("truncated", ""), ("zero_bytes", ""),
-    ("no_arrays", ""),
+    ("no_arrays", ""), ("huge_cell", "cell"), ("huge_origin", "origin"),  # (messages about bounds and origins before)
 ])
 def test_bad_terrain_npz_names_the_file_and_array(tmp_path, case, where):
     truth = make_terrain(n=8, cell=0.1, seed=3)
@@ -96,6 +96,10 @@ def test_bad_terrain_npz_names_the_file_and_array(tmp_path, case, where):
         p.write_bytes(b"")
     elif case == "no_arrays":
         _npz(p, other=np.zeros(3))
+    elif case == "huge_cell":
+        _npz(p, heights=h, cell=1e12)
+    elif case == "huge_origin":
+        _npz(p, heights=h, cell=0.1, origin=np.array([1e300, 0.0]))
     with pytest.raises(TerrainFileError) as e:
         load_terrain(p)
     assert e.value.file == str(p) and e.value.where == where, str(e.value)

@@ -33,6 +33,7 @@ import numpy as np
 
 from ..model import scene_of
 from .._errors import ArmguardWarning, TerrainError, TerrainFileError
+from .._tolerance import DEFAULT_TOLERANCES
 from .._resources import data_dir
 from .._values import number
 from ._io import read_points
@@ -198,6 +199,9 @@ def _read_npz(p: Path, cell):
         if a.size != 1:
             raise TerrainFileError(p, "cell", f"expected one number (m), got shape {a.shape}")
         c = float(a.reshape(()))
+        if not 0.0 < c <= DEFAULT_TOLERANCES.max_magnitude:  # (a NaN fails too)
+            raise TerrainFileError(p, "cell", f"expected a cell side > 0 and at most {DEFAULT_TOLERANCES.max_magnitude:g} m "
+                                   f"(Tolerances.max_magnitude), got {c:g}")
         if cell is not None and cell != c:  # never one quietly for the other
             raise TerrainFileError(p, "cell", f"the file's cell is {c:.6g} m and cell={cell:.6g} was given: give none, "
                                    "or the file's")
@@ -221,8 +225,9 @@ def _read_npz(p: Path, cell):
                                    f"(first at row {bad[0]}, column {bad[1]}); a height map must hold numbers")
     if "origin" in arrays:
         origin = _numbers(p, "origin", arrays["origin"])
-        if origin.shape != (2,) or not np.all(np.isfinite(origin)):
-            raise TerrainFileError(p, "origin", f"expected (x0, y0) finite (m, W), got {origin.tolist()}")
+        if origin.shape != (2,) or not np.all(np.abs(origin) <= DEFAULT_TOLERANCES.max_magnitude):
+            raise TerrainFileError(p, "origin", f"expected (x0, y0) finite and within {DEFAULT_TOLERANCES.max_magnitude:g} "
+                                   f"(m, W), got {origin.tolist()}")
     X_WC = None
     if "X_WC" in arrays:
         X_WC = _numbers(p, "X_WC", arrays["X_WC"])
