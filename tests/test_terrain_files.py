@@ -303,3 +303,9 @@ def test_a_pyramid_check_refuses_a_clearance_that_is_no_length():
             pyramid.check([box], clearance=bad)
         with pytest.raises(TerrainError, match="clearance must be a finite length >= 0"):
             pyramid.check_flat([box], clearance=bad)
+
+
+def test_a_folder_given_as_terrain_is_said_to_be_a_folder(tmp_path):
+    """``--terrain DIR`` said "read_points: no file DIR"."""
+    with pytest.raises(TerrainError, match="is a folder; expected a terrain or point file"):
+        read_points(tmp_path)

@@ -67,6 +67,8 @@ def read_points(path, X_WS=None) -> np.ndarray:
     short) raises :class:`~armguard._errors.TerrainFileError` naming the file, the place in it
     and both counts."""
     path = Path(path)
+    if path.is_dir():
+        raise TerrainError(f"read_points: {path} is a folder; expected a terrain or point file (.npz, .pcd, .ply, .npy)")
     if not path.is_file():
         raise TerrainError(f"read_points: no file {path}")
     ext = path.suffix.lower()
