@@ -243,3 +243,17 @@ def test_a_misspelt_origin_attribute_is_refused_not_read_as_zero(tmp_path, attr,
     assert r.exit_code == 1 and f"did you mean {meant}=" in r.output, r.output
     p.write_text(text)
     armguard.load_model(p, srdf=False)
+
+
+def test_every_misspelling_load_model_refuses_is_reported_beside_the_others(tmp_path):
+    """With a ``<colision>`` (an unread-element finding) and a ``ryp=`` in one URDF, the refusal (which names both)
+    was dropped as said already: the attribute went unreported."""
+    p = tmp_path / "two.urdf"
+    text = _URDF.replace("LIMIT", '<limit lower="-1" upper="1" effort="1" velocity="1"/>')
+    text = text.replace('<origin xyz="0.6 0 0"/>', '<origin xyz="0.6 0 0" ryp="0 0 1"/>')
+    text = text.replace('<link name="l2"><collision>', '<link name="l2"><colision>', 1).replace(
+        '</collision></link>\n  <joint name="j1"', '</colision></link>\n  <joint name="j1"', 1)
+    assert "<colision>" in text
+    p.write_text(text)
+    r = CliRunner().invoke(main, ["-q", "check-urdf", str(p), "--json"])
+    assert r.exit_code == 1 and "did you mean rpy=" in r.output and "did you mean <collision>" in r.output, r.output

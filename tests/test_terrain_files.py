@@ -127,8 +127,9 @@ def test_a_misspelt_array_is_refused_not_ignored(tmp_path, typo, key):
     with pytest.raises(TerrainFileError, match=f"unknown array '{typo}': did you mean '{key}'") as e:
         load_terrain(p)
     assert e.value.where == typo
-    ok = _npz(tmp_path / "ok.npz", heights=np.array(truth.heights), cell=0.1, intensity=np.ones(3))
-    np.testing.assert_array_equal(load_terrain(ok).heights, truth.heights)
+    ok = _npz(tmp_path / "ok.npz", heights=np.array(truth.heights), cell=0.1, intensity=np.ones(3),
+              heights_std=np.ones(3), origin_W=np.zeros(2), X_WS=np.eye(4), cel=np.ones(1) * 0.2)  # companions; a
+    np.testing.assert_array_equal(load_terrain(ok).heights, truth.heights)  # near miss of a key the file has
 
 
 def _ascii_pcd(path, pts, keep: int | None = None, extra: int = 0):

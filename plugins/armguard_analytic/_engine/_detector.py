@@ -83,7 +83,7 @@ class FusedDetector(Detector):
         self._reach_margin = check_finite_margin(reach_margin)
         self._active = active
         self._ns_per_pair = _DEFAULT_NS_PER_PAIR
-        self._ns_min = math.inf  # the least ns a pair has taken in a check _learn saw (its floor; inf: none yet)
+        self._ns_min = math.inf  # the least ns a pair has taken in a check (_learn's floor; inf: none yet)
         self._prepare_lock = threading.RLock()
         self._with_terrain = terrain is not None  # terrain alone is something to check
         self._warm_start = _warm_option(backend, backend_options)
@@ -484,6 +484,7 @@ class FusedDetector(Detector):
                 x = elapsed * 1e3 / n_eval
                 if 0.25 * ref <= x <= 4.0 * ref and x >= 1.0:
                     self._ns_per_pair = 0.8 * ref + 0.2 * x
+                    self._ns_min = x if x < self._ns_min else self._ns_min
                 else:
                     self._learn(elapsed, n_eval, None)
             return DetectionReport._from_check(STATUS_CODES[status], lim[1], lim[2], elapsed, raw)
@@ -516,7 +517,8 @@ class FusedDetector(Detector):
             self._ns_per_pair = 0.8 * ref + 0.2 * min(max(x, 0.25 * ref), 4.0 * ref)
             self._ns_min = min(self._ns_min, x)
         elif budget_us:
-            self._ns_per_pair = max(0.8 * ref, min(ref, 0.5 * min(self._ns_min, _DEFAULT_NS_PER_PAIR * 1e3)))
+            least = self._ns_min if self._ns_min < math.inf else _DEFAULT_NS_PER_PAIR  # none measured: the guess
+            self._ns_per_pair = max(0.8 * ref, min(ref, 0.5 * least))
 
     def _check_with_jacobian(self, q, budget_us, lazy) -> DetectionReport:
         b = self._fresh()

@@ -52,14 +52,13 @@ def read_edges(path) -> tuple:
         if not {"Q0", "Q1"} <= keys:
             raise VerificationError(f"{p}: expected arrays 'Q0' and 'Q1' (M, n) (and optionally 'joint_names'), "
                                     f"found {sorted(keys) or 'none'}")
-        unknown = sorted(keys - {"Q0", "Q1", "joint_names"})
-        if unknown:  # a misspelt joint_names would leave the columns read in the robot's order: refused
+        if "joint_names" not in keys:  # a misspelt joint_names would leave the columns read in the robot's order
             import difflib
 
-            near = [difflib.get_close_matches(k, ["joint_names", "Q0", "Q1"], n=1, cutoff=0.6) for k in unknown]
-            hint = "; ".join(f"{k!r} looks like a misspelling of {m[0]!r}" for k, m in zip(unknown, near) if m)
-            raise VerificationError(f"{p}: unknown array{'s' if len(unknown) > 1 else ''} {unknown}: an edges file holds "
-                                    "'Q0', 'Q1' and optionally 'joint_names'" + (f" ({hint})" if hint else ""))
+            for k in sorted(keys - {"Q0", "Q1"}):  # (a roadmap's other arrays, its costs or ids, are left alone)
+                if difflib.get_close_matches(k, ["joint_names"], n=1, cutoff=0.6) or k.lower() == "joint_names":
+                    raise VerificationError(f"{p}: unknown array {k!r}: did you mean 'joint_names'? (an edges file "
+                                            "holds 'Q0', 'Q1' and optionally 'joint_names', naming Q's columns)")
         Q0, Q1 = array(f, "Q0", "numbers (M, n)"), array(f, "Q1", "numbers (M, n)")
         names = array(f, "joint_names", "strings (numpy.savez(..., joint_names=np.array(names, dtype=str)))") \
             if "joint_names" in keys else None

@@ -178,8 +178,10 @@ def _require_active_pairs(model, plan) -> None:
     could only say CLEAR without having looked (as the analytic Detector's ``require_pairs``)."""
     scene = model.scene
     if not any(scene.moves(a) or scene.moves(b) for a, b in zip(plan.a, plan.b)):
-        raise DetectionError(f"scene {scene.name!r} has no pair to check on arm {plan.active!r} (every pair is "
-                             "disabled or excluded): no verdict can be given; enable a pair, add a body or a workspace box")
+        what = ("every pair is disabled or excluded" if not plan.a else
+                f"{len(plan.a)} pairs, all between fixed shapes")
+        raise DetectionError(f"scene {scene.name!r} has no pair to check on arm {plan.active!r} ({what}): no verdict "
+                             "can be given; enable a pair, add a body or a workspace box")
 
 
 class RangerDetector(Detector):
@@ -568,8 +570,10 @@ class RangerDetector(Detector):
         """``(M,) bool``: collision (distance <= 0, or <= the stopping distance) per row (the backend's batch)."""
         plan = self._fresh()
         Q = self._rows(Q, plan)
-        if plan.active is None and plan.all_rows:  # at check()'s collision level (its contact tolerance)
-            return plan.checker.collides(plan.model.pin_q(Q), margin=self._levels(plan)[0])
+        if plan.active is None and plan.all_rows:  # at check()'s collision level (its contact tolerance); a
+            # verdicts-only backend answers contact alone (clip: margin 0, its uncertain answers counted as contact)
+            margin = self._levels(plan)[0] if plan.distances else plan.stopping
+            return plan.checker.collides(plan.model.pin_q(Q), margin=margin)
         self._require_distances("active-arm batches (collides_many with active= checks the whole Model)", plan)
         return self.check_many(Q).collision
 

@@ -198,7 +198,7 @@ class DetectionReport:
 
     def to_dict(self) -> dict:
         """JSON-ready dictionary of the whole report (``jacobian`` only when it was asked for; a pair's
-        ``lower_bound`` of ``-inf``, never evaluated, is ``None``: strict JSON has no infinity)."""
+        ``lower_bound`` that is not finite, ``-inf`` when never evaluated, is ``None``: strict JSON has no infinity)."""
         out = self._to_dict()
         if self.jacobian is not None:
             out["jacobian"] = {k: {"jacobian": [float(x) for x in v.jacobian], "smooth": v.smooth, "row": v.row}

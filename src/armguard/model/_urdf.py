@@ -141,7 +141,7 @@ def _non_utf8_names(data: bytes, root, lines: dict, f: str) -> None:
         pass
     for el in root.iter():
         for a, v in el.attrib.items():
-            if not v.isascii():
+            if a in ("name", "link", "joint", "filename") and not v.isascii():  # what Pinocchio hands back, or opens
                 raise SceneFileError(f, f"<{el.tag}> {a}={v!r}", "a non-ASCII value in a file that is not UTF-8: "
                                      "Pinocchio reads the bytes as UTF-8; save the file as UTF-8", line=lines.get(id(el)))
 
@@ -180,7 +180,7 @@ def _read_xml(path: Path, package_dirs) -> UrdfInfo:
     links = root.findall("link")
     if not links:
         raise SceneFileError(f, "robot", "a URDF needs at least one <link>")
-    if not root.get("name"):  # urdfdom refuses it, naming no place
+    if root.get("name") is None:  # urdfdom refuses it, naming no place (an empty name it takes)
         raise SceneFileError(f, "robot", "a <robot> needs a name attribute", line=lines.get(id(root)))
     problems = urdf_problems(root, lines)
     if problems:

@@ -240,13 +240,16 @@ _KEYS = ("cell", "points_W", "heights", "origin", "X_WC")
 
 
 def _near_misses(p: Path, keys) -> None:
-    """An array whose name looks like a misspelt key (``orgin``, ``cel``) is refused: ignored, it would move or
-    rescale the map without a word.  Other arrays (a sensor's ``intensity``) are left alone."""
+    """An array whose name looks like a misspelt key the file lacks (``orgin``, ``cel``) is refused: ignored, it
+    would move or rescale the map without a word.  Other arrays (a sensor's ``intensity``, ``heights_std`` beside
+    ``heights``, ``origin_W``) are left alone."""
     import difflib
 
+    missing = [x for x in _KEYS if x not in keys]  # a present key's companion (heights_std beside heights) is none
     for k in sorted(set(keys) - set(_KEYS)):
-        near = difflib.get_close_matches(k, _KEYS, n=1, cutoff=0.6) or \
-            [x for x in _KEYS if x.lower() == k.lower()]
+        if any(x in k for x in _KEYS) or (k[:2] in ("X_", "p_") and k[2:].isalpha()):  # a name holding a key
+            continue  # (origin_W, heights_std, cell_size) or another frame's pose (X_WS): not a misspelling
+        near = difflib.get_close_matches(k, missing, n=1, cutoff=0.6) or [x for x in missing if x.lower() == k.lower()]
         if near:
             raise TerrainFileError(p, k, f"unknown array {k!r}: did you mean {near[0]!r}? (a terrain .npz holds "
                                    f"{', '.join(_KEYS)})")
