@@ -46,7 +46,8 @@ from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 
 __all__ = ["ChainBounds", "chain_bounds", "relative_joints", "shape_radius_about"]
 
-_PROBE = 0.25  # rad (or m) a joint is moved by to identify the motion it drives; any value in (0, pi / max|c|) works
+_PROBE = 0.25  # rad (or m) a joint is moved by to identify the motion it drives; any value in (0, pi / max|c|) works:
+_FIRST = 1e-3  # it is divided by the fastest turn a joint drives, read from a first move of _FIRST (_probes)
 
 
 def _inv(X: np.ndarray) -> np.ndarray:
@@ -55,6 +56,28 @@ def _inv(X: np.ndarray) -> np.ndarray:
     out[:3, :3] = R.T
     out[:3, 3] = -R.T @ X[:3, 3]
     return out
+
+
+def _probes(robot, fk, q_ref, n_q: int) -> np.ndarray:
+    """``(n_q,)`` how far each joint is moved to identify the motions it drives: ``_PROBE``, less where it turns
+    a link faster than 1 rad per unit (a mimic follower at 8 pi rad/m: a 0.25 probe turned it 2 pi, read as no
+    turn at all, and a pair it moves was proved apart).  The rate is read from a first probe of ``_FIRST``,
+    which no rate below pi / _FIRST (3,141 rad per unit) wraps."""
+    Q = np.repeat(q_ref[None, :], n_q + 1, axis=0)
+    for j in range(n_q):
+        Q[j + 1, j] += _FIRST
+    X = np.asarray(fk(Q), dtype=np.float64)
+    if not np.all(np.isfinite(X)):
+        raise VerificationError(f"robot {robot.name!r}: forward kinematics is not finite at the reference configuration")
+    rate = np.ones(n_q)
+    for j in range(n_q):
+        for k in range(X.shape[1]):  # each link's own turn (in W: the sum of the joints above it, a bound on each)
+            ang, _ = _rotation_angle_axis(X[j + 1, k, :3, :3] @ X[0, k, :3, :3].T)
+            rate[j] = max(rate[j], ang / _FIRST)
+    if np.any(rate * _FIRST > 1.0):
+        raise VerificationError(f"robot {robot.name!r}: a joint turns a link faster than {1.0 / _FIRST:g} rad per unit "
+                                "(a mimic multiplier that large): its lever arms cannot be measured")
+    return _PROBE / rate
 
 
 def _rotation_angle_axis(R: np.ndarray) -> tuple[float, np.ndarray]:
@@ -110,10 +133,12 @@ def chain_bounds(robot, tol: Tolerances = DEFAULT_TOLERANCES, *, fk=None) -> Cha
     both = np.isfinite(lo) & np.isfinite(hi)  # unlimited (continuous) joints: no midpoint, no inf - inf
     mid = 0.5 * (np.where(both, lo, 0.0) + np.where(both, hi, 0.0))
     q_ref = np.where(both, mid, np.where(np.isfinite(lo), lo, np.where(np.isfinite(hi), hi, 0.0)))
+    fk = robot.forward_kinematics if fk is None else fk
+    probe = _probes(robot, fk, q_ref, n_q)
     Q = np.repeat(q_ref[None, :], n_q + 1, axis=0)
     for j in range(n_q):
-        Q[j + 1, j] += _PROBE
-    X = np.asarray((robot.forward_kinematics if fk is None else fk)(Q), dtype=np.float64)  # (n_q + 1, n_links, 4, 4)
+        Q[j + 1, j] += probe[j]
+    X = np.asarray(fk(Q), dtype=np.float64)  # (n_q + 1, n_links, 4, 4)
     if not np.all(np.isfinite(X)):
         raise VerificationError(f"robot {robot.name!r}: forward kinematics is not finite at the reference configuration")
     scale = max(1.0, float(np.max(np.abs(X[0, :, :3, 3]))))
@@ -144,7 +169,7 @@ def chain_bounds(robot, tol: Tolerances = DEFAULT_TOLERANCES, *, fk=None) -> Cha
             ang, u = _rotation_angle_axis(M[:3, :3])
             t = M[:3, 3]
             if ang > eps_ang:
-                rev_c[j, k] = ang / _PROBE
+                rev_c[j, k] = ang / probe[j]
                 # fixed points of x -> R x + t: (I - R) a = t, a least-squares point on the axis
                 a = np.linalg.lstsq(np.eye(3) - M[:3, :3], t, rcond=None)[0]
                 f = a + u * float(np.dot(t0 - a, u))
@@ -153,7 +178,7 @@ def chain_bounds(robot, tol: Tolerances = DEFAULT_TOLERANCES, *, fk=None) -> Cha
                 if abs(float(np.dot(t, u))) > eps_len:
                     raise VerificationError(f"robot {robot.name!r}: link {names[k]!r} moves on a screw, not a revolute or prismatic joint")
             elif float(np.linalg.norm(t)) > eps_len:
-                c = float(np.linalg.norm(t)) / _PROBE
+                c = float(np.linalg.norm(t)) / probe[j]
                 pri_c[j, k] = c
                 span = max(hi[j] - q_ref[j], q_ref[j] - lo[j])
                 travel += c * span
