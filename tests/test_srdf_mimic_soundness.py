@@ -44,3 +44,44 @@ def test_a_fast_mimic_follower_is_never_proved_apart_where_it_collides(tmp_path,
     assert _least_distance(m, 0.25) < -0.01
     e = next(e for e in collision_matrix(m).entries if {e.link1, e.link2} == {"link1", "link3"})
     assert e.reason != "Never", e
+
+
+_LEADER = """<?xml version="1.0"?>
+<robot name="r2">
+  <link name="base"><collision><origin xyz="0 0 0.1"/><geometry><box size="0.3 0.3 0.2"/></geometry></collision></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="link1"/><origin xyz="0 0 0.2"/><axis xyz="0 0 1"/>
+    <limit lower="-LIM" upper="LIM" effort="1" velocity="1"/></joint>
+  <link name="link1"><collision><origin xyz="0 0 0.15"/><geometry><cylinder radius="0.05" length="0.3"/></geometry></collision></link>
+  <joint name="j2" type="revolute"><parent link="link1"/><child link="link2"/><origin xyz="0 0 0.3"/><axis xyz="0 1 0"/>
+    <limit lower="-1.5" upper="1.5" effort="1" velocity="1"/></joint>
+  <link name="link2"><collision><origin xyz="0.25 0 0"/><geometry><box size="0.5 0.08 0.08"/></geometry></collision></link>
+  <joint name="j3" type="revolute"><parent link="link2"/><child link="link3"/><origin xyz="0.5 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-3.2" upper="3.2" effort="1" velocity="1"/><mimic joint="j1" multiplier="1.0" offset="0.0"/></joint>
+  <link name="link3"><collision><origin xyz="0.3 0 0"/><geometry><sphere radius="0.05"/></geometry></collision></link>
+</robot>
+"""
+
+
+def test_a_certificate_covers_the_limits_of_a_mimic_joints_leader(tmp_path):
+    """j3 mimics j1, which lies above link1-link3's common ancestor: the pair was certified Never with j1 in
+    [-0.5, 0.5], and widening j1 to [-3, 3] (coal: -0.09 m at q = [2.81, 1.12]) left its certificate whole, the pair
+    disabled without a word.  The print now holds the leader's limits: loading warns of link1-link3."""
+    import shutil
+    import warnings
+
+    a = tmp_path / "a" / "r2.urdf"
+    a.parent.mkdir()
+    a.write_text(_LEADER.replace("LIM", "0.5"))
+    cm = collision_matrix(armguard.load_model(a, srdf=False), max_evaluations=20000)
+    never = {frozenset((e.link1, e.link2)) for e in cm.entries if e.reason == "Never"}
+    assert frozenset(("link1", "link3")) in never
+    cm.write_srdf(a.with_suffix(".srdf"))
+    b = tmp_path / "b" / "r2.urdf"
+    b.parent.mkdir()
+    b.write_text(_LEADER.replace("LIM", "3.0"))
+    shutil.copy(a.with_suffix(".srdf"), b.with_suffix(".srdf"))
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        armguard.load_model(b)
+    said = " ".join(str(x.message) for x in w)
+    assert "may now collide" in said and "link1-link3" in said, said

@@ -127,6 +127,15 @@ def pair_digest(pin_model, collision_model, link1: str, link2: str, *, margin: f
             jd = jm.createData()
             jm.calc(jd, pin.neutral(pin_model))
             _floats(h, np.asarray(jd.S))
+            # and the range it makes it over: its leader's limits (its own slice is empty: nq = 0), the leader
+            # perhaps above the pair's common ancestor, so in no other part of this print
+            lead = next((k for k in range(1, pin_model.njoints) if pin_model.joints[k].nq > 0
+                         and int(pin_model.joints[k].idx_q) == int(jm.idx_q)), None)
+            if lead is not None:
+                lq = slice(int(jm.idx_q), int(jm.idx_q) + int(pin_model.joints[lead].nq))
+                h.update(b"leader " + pin_model.names[lead].encode())
+                _floats(h, lo[lq])
+                _floats(h, hi[lq])
     return h.digest()
 
 
