@@ -85,3 +85,26 @@ def test_a_certificate_covers_the_limits_of_a_mimic_joints_leader(tmp_path):
         armguard.load_model(b)
     said = " ".join(str(x.message) for x in w)
     assert "may now collide" in said and "link1-link3" in said, said
+
+
+def test_a_scene_files_link_shapes_undo_the_srdfs_verdicts_on_that_link(tmp_path):
+    """A scene file giving link3 a 0.3 m sphere (``link_shapes``) kept the SRDF's certified Never of link1-link3,
+    proved for the URDF's 5 cm sphere: unchecked, though coal finds it 0.14 m deep.  Its pairs but the adjacent
+    one are checked again, and the scene file warns."""
+    import warnings
+
+    urdf = tmp_path / "r2.urdf"
+    urdf.write_text(_LEADER.replace("LIM", "0.5"))
+    collision_matrix(armguard.load_model(urdf, srdf=False), max_evaluations=20000).write_srdf(tmp_path / "r2.srdf")
+    scene = tmp_path / "cell.yaml"
+    scene.write_text("armguard_scene: 1\nname: cell\nunits: {angle: rad, length: m}\nrobots:\n  - name: arm\n"
+                     "    urdf: r2.urdf\n    srdf: r2.srdf\n    link_shapes:\n"
+                     "      link3: [{type: sphere, radius: 0.3, xyz: [0.3, 0, 0]}]\n")
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        sc = armguard.load_scene(scene)
+    said = " ".join(str(x.message) for x in w)
+    assert "link_shapes" in said and "link1-link3" in said, said
+    disabled = {frozenset(p) for p in sc.disabled_pairs}
+    assert frozenset(("arm/link1", "arm/link3")) not in disabled
+    assert frozenset(("arm/link2", "arm/link3")) in disabled  # adjacent: whatever the shapes

@@ -20,7 +20,7 @@ from .._errors import ArmguardError, KinematicsError, SceneError, SceneFileError
 from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
 from ._robot_urdf import robot_parts_from_urdf
 from ._scene import CannedTest, Scene
-from ._srdf import NO_SRDF, read_srdf_disabled
+from ._srdf import NO_SRDF, read_srdf_disabled, reshaped_pairs
 from ._schema import SHAPE_TYPES, SceneFile, near_key
 from .._yaml import read_scene_yaml  # noqa: F401  (part of this module's interface)
 
@@ -313,7 +313,11 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
                 if ln not in robot.link_names:
                     raise ctx.error(f"{w}.srdf", f"{path.name}: disable_collisions names unknown link {ln!r}")
         source["srdf"] = os.path.abspath(path)
+    if spec.link_shapes and srdf_pairs and urdf_pairs is not None:  # a URDF robot's SRDF: its verdicts were made
+        # for the URDF's shapes, not these (a DH robot's link_shapes are its shapes)
+        srdf_pairs = reshaped_pairs(robot, srdf_pairs, set(spec.link_shapes), f"{ctx.file}: {w}.link_shapes")
     return robot, home, srdf_pairs, source
+
 
 
 def _link_shape(spec, ctx: _Ctx, where: str, robot, link: str):

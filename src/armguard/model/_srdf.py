@@ -346,3 +346,19 @@ def read_srdf_disabled(path) -> list[tuple[str, str]]:
             raise SceneFileError(str(path), f"disable_collisions[{k}]", "expected attributes link1 and link2")
         out.append((a, b))
     return out
+
+
+def reshaped_pairs(robot, pairs, reshaped: set, where: str) -> list:
+    """``pairs`` (an SRDF's disabled ``(link, link)``) less those of a link in ``reshaped`` (given other shapes
+    than the URDF's: a scene file's ``link_shapes``) but for a link and its parent (MoveIt's Adjacent, disabled
+    whatever the shapes): a Never was proved, or sampled, for the URDF's shapes (a 0.3 m sphere given to a link
+    certified apart from another stayed unchecked, 0.14 m deep in it).  The pairs dropped are warned of at ``where``."""
+    keep, dropped = [], []
+    for a, b in pairs:
+        adjacent = robot.parent_link(a) == b or robot.parent_link(b) == a
+        (keep if adjacent or not ({a, b} & reshaped) else dropped).append((a, b))
+    if dropped:
+        warnings.warn(f"{where}: the robot's SRDF disables {len(dropped)} pair(s) of a link given other shapes here, "
+                      f"judged for the URDF's shapes: checked after all: {', '.join(f'{a}-{b}' for a, b in dropped)}",
+                      ArmguardWarning, stacklevel=3)
+    return keep
