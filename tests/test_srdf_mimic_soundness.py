@@ -108,3 +108,25 @@ def test_a_scene_files_link_shapes_undo_the_srdfs_verdicts_on_that_link(tmp_path
     disabled = {frozenset(p) for p in sc.disabled_pairs}
     assert frozenset(("arm/link1", "arm/link3")) not in disabled
     assert frozenset(("arm/link2", "arm/link3")) in disabled  # adjacent: whatever the shapes
+
+
+def test_a_pair_added_by_hand_to_a_certified_srdf_is_warned_of(tmp_path):
+    """A ``<disable_collisions ... reason="Never"/>`` added by hand, without a certificate, to an SRDF armguard wrote
+    (base-link2, which collides) loaded without a word: only check-srdf would have found it."""
+    import warnings
+
+    urdf = tmp_path / "r2.urdf"
+    urdf.write_text(_LEADER.replace("LIM", "0.5"))
+    srdf = tmp_path / "r2.srdf"
+    collision_matrix(armguard.load_model(urdf, srdf=False), max_evaluations=20000).write_srdf(srdf)
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        armguard.load_model(urdf)
+    assert not [x for x in w if "without a certificate" in str(x.message)]
+    srdf.write_text(srdf.read_text().replace("</robot>", '<disable_collisions link1="base" link2="link2" reason="Never"/>'
+                                                         "</robot>"))
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        armguard.load_model(urdf)
+    said = " ".join(str(x.message) for x in w)
+    assert "1 disabled pair without a certificate" in said and "base-link2 (Never)" in said, said

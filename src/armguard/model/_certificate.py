@@ -200,6 +200,23 @@ def older_certificates(srdf_file) -> bool:
         el.get(FINGERPRINT_ATTR) for el in root.iter("disable_collisions"))
 
 
+def uncertified_pairs(srdf_file) -> tuple[str, ...]:
+    """``"link1-link2 (reason)"`` of each ``<disable_collisions>`` without a certificate in an SRDF that
+    ``armguard srdf`` wrote (its ``<robot>`` marked ``armguard_certificates``): a line added by hand, whose
+    verdict nothing vouches for.  None for an SRDF made otherwise (MoveIt's: no line has one)."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.parse(srdf_file).getroot()
+    except (ET.ParseError, OSError):
+        return ()
+    if root.get(FORMAT_ATTR) is None:
+        return ()
+    return tuple(f"{el.get('link1', '')}-{el.get('link2', '')} ({el.get('reason', '')})"  # (Static, Seed: pairs the
+                 for el in root.iter("disable_collisions")  # matrix does not search, kept as written by --update)
+                 if not el.get(FINGERPRINT_ATTR) and el.get("reason") not in ("Static", "Seed"))
+
+
 @dataclass(frozen=True)
 class StaleCertificate:
     """A disabled pair whose certificate does not match the model: ``recorded`` vs ``now`` (None: a link is gone)."""

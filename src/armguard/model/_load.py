@@ -211,8 +211,13 @@ def _build(urdf: Path, srdf_obj, package_dirs, accelerations, name=None, srdf_so
 
 def _warn_stale(srdf_obj, pin_model, geom) -> None:
     """Warn when the SRDF disables pairs certified for another geometry or kinematics (``_certificate``)."""
-    from ._certificate import older_certificates, stale_certificates
+    from ._certificate import older_certificates, stale_certificates, uncertified_pairs
 
+    bare = uncertified_pairs(srdf_obj.file)
+    if bare:  # kept disabled, as a hand-written SRDF's pairs are, but said: nothing vouches for them
+        srdf_obj.warn(f"{len(bare)} disabled pair{'s' if len(bare) > 1 else ''} without a certificate in an SRDF armguard "
+                      f"certified (added by hand?): {', '.join(bare[:4])}{' ...' if len(bare) > 4 else ''}; "
+                      "`armguard check-srdf --strict` searches them, `armguard srdf --update` rewrites them")
     stale = stale_certificates(pin_model, geom, srdf_obj.file)
     if stale and older_certificates(srdf_obj.file):  # every certificate reads as stale: no edit to blame
         srdf_obj.warn(f"{len(stale)} disabled pairs carry certificates written by an older armguard (before the "
