@@ -47,7 +47,7 @@ from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 __all__ = ["ChainBounds", "chain_bounds", "relative_joints", "shape_radius_about"]
 
 _PROBE = 0.25  # rad (or m) a joint is moved by to identify the motion it drives; any value in (0, pi / max|c|) works:
-_FIRST = 1e-3  # it is divided by the fastest turn a joint drives, read from a first move of _FIRST (_probes)
+_FIRST = 1e-3  # it is cut to a 1 rad turn of the fastest link a joint drives, read from a first move of _FIRST
 
 
 def _inv(X: np.ndarray) -> np.ndarray:
@@ -59,9 +59,9 @@ def _inv(X: np.ndarray) -> np.ndarray:
 
 
 def _probes(robot, fk, q_ref, n_q: int) -> np.ndarray:
-    """``(n_q,)`` how far each joint is moved to identify the motions it drives: ``_PROBE``, less where it turns
-    a link faster than 1 rad per unit (a mimic follower at 8 pi rad/m: a 0.25 probe turned it 2 pi, read as no
-    turn at all, and a pair it moves was proved apart).  The rate is read from a first probe of ``_FIRST``,
+    """``(n_q,)`` how far each joint is moved to identify the motions it drives: ``_PROBE``, less where that would
+    turn a link more than 1 rad (a mimic follower at 8 pi rad/m: a 0.25 probe turned it 2 pi, read as no turn
+    at all, and a pair it moves was proved apart).  The rate is read from a first probe of ``_FIRST``,
     which no rate below pi / _FIRST (3,141 rad per unit) wraps."""
     Q = np.repeat(q_ref[None, :], n_q + 1, axis=0)
     for j in range(n_q):
@@ -77,7 +77,8 @@ def _probes(robot, fk, q_ref, n_q: int) -> np.ndarray:
     if np.any(rate * _FIRST > 1.0):
         raise VerificationError(f"robot {robot.name!r}: a joint turns a link faster than {1.0 / _FIRST:g} rad per unit "
                                 "(a mimic multiplier that large): its lever arms cannot be measured")
-    return _PROBE / rate
+    return np.where(rate * _PROBE <= 1.0, _PROBE, 1.0 / rate)  # at most a 1 rad turn, far from pi (and every
+    # chain turning its links at most 4 rad per unit, as every URDF joint without a fast mimic, keeps _PROBE)
 
 
 def _rotation_angle_axis(R: np.ndarray) -> tuple[float, np.ndarray]:
