@@ -60,8 +60,8 @@ def _arr(x, name: str, trailing: tuple, check: bool = True) -> np.ndarray:
         raise GeometryError(f"{name}: expected shape (..., {', '.join(map(str, trailing))}), got {a.shape}")
     if check and not np.all(np.isfinite(a)):
         raise GeometryError(f"{name}: contains NaN or infinite values")
-    if check and a.size and float(np.abs(a).max()) > DEFAULT_TOLERANCES.max_magnitude:  # as the scalar API
-        raise GeometryError(f"{name}: a value beyond {DEFAULT_TOLERANCES.max_magnitude:g} (Tolerances.max_magnitude)")
+    if check and a.size and max(float(a.max()), -float(a.min())) > _MAX_MAGNITUDE:  # as the scalar API (no temporary)
+        raise GeometryError(f"{name}: a value beyond {_MAX_MAGNITUDE:g} (Tolerances.max_magnitude)")
     return a
 
 
