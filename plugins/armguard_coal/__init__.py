@@ -209,11 +209,12 @@ class CoalChecker(CheckerBase):
         comprehensions; a per-pair loop was most of coal's time from Python), a row's least distance over its
         collision pairs (a workspace row has six), a tie to the last of them."""
         dist = np.fromiter((r.min_distance for r in results), dtype=np.float64, count=len(results))
-        for i in np.flatnonzero(dist <= EPA_FAILED):  # coal's EPA gave up: again, looser
-            results[i] = self._depth_retry(gdata, int(cps[i]), q)
-            dist[i] = results[i].min_distance
         p1 = np.array([r.getNearestPoint1() for r in results], dtype=np.float64).reshape(len(results), 3)
         p2 = np.array([r.getNearestPoint2() for r in results], dtype=np.float64).reshape(len(results), 3)
+        # coal's EPA gave up (-DBL_MAX), or left NaN witness points (tiago's 1 mm sphere 1 mm into a box): again, looser
+        for i in np.flatnonzero((dist <= EPA_FAILED) | ~np.isfinite(p1).all(axis=1) | ~np.isfinite(p2).all(axis=1)):
+            results[i] = r = self._depth_retry(gdata, int(cps[i]), q)
+            dist[i], p1[i], p2[i] = r.min_distance, r.getNearestPoint1(), r.getNearestPoint2()
         sw = self._swapped[cps]
         p1[sw], p2[sw] = p2[sw], p1[sw].copy()
         if len(rows) == len(d):  # one collision pair per row: each row once
@@ -231,7 +232,7 @@ class CoalChecker(CheckerBase):
 
     def _depth_retry(self, gdata, i: int, q):
         """Collision pair ``i`` again (placements at ``q`` already in ``gdata``) after coal's EPA gave up
-        (``-DBL_MAX``), with its EPA tolerance loosened step by step (:data:`EPA_RETRY_TOLERANCES`);
+        (``-DBL_MAX``) or left NaN witness points, with its EPA tolerance loosened step by step (:data:`EPA_RETRY_TOLERANCES`);
         the request is restored after.  No tolerance settling it: ``BackendError`` naming the pair."""
         import pinocchio as pin
 
@@ -241,14 +242,16 @@ class CoalChecker(CheckerBase):
             for tol in EPA_RETRY_TOLERANCES:
                 req.epa_tolerance = tol
                 r = pin.computeDistance(self.geometry_model, gdata, i)
-                if r.min_distance > EPA_FAILED:
+                if r.min_distance > EPA_FAILED and np.isfinite(r.getNearestPoint1()).all() \
+                        and np.isfinite(r.getNearestPoint2()).all():
                     return r
         finally:
             req.epa_tolerance = keep
         cp = self.geometry_model.collisionPairs[i]
         names = [self.geometry_model.geometryObjects[k].name for k in (cp.first, cp.second)]
-        raise BackendError(f"coal: no penetration depth for {names[0]} / {names[1]} at q = {np.asarray(q).tolist()} "
-                           f"(its EPA gave up at every tolerance up to {EPA_RETRY_TOLERANCES[-1]:g} m); no verdict")
+        raise BackendError(f"coal: no penetration depth (or no finite witness points) for {names[0]} / {names[1]} at "
+                           f"q = {np.asarray(q).tolist()} (its EPA gave up at every tolerance up to "
+                           f"{EPA_RETRY_TOLERANCES[-1]:g} m); no verdict")
 
     distance_jacobian = CheckerBase.witness_jacobian  # Pinocchio's frame Jacobians at coal's witness points
 
