@@ -89,3 +89,26 @@ def test_pair_verdicts_never_say_clear_within_the_margin(name, margin):
         assert np.all(~v[D[:, i] > margin + 1e-9])  # and no hit far outside it
         within += int(np.sum(D[:, i] <= margin))
     assert within > 0
+
+
+def test_the_sampled_rule_decides_two_links_fixed_to_each_other(tmp_path):
+    """r2d2's and minitaur's fixed link pairs (no joint moves them) failed ``--method sampled`` with a forbidden-
+    values map's error (the per-pair Checker had no pair a configuration moves); the certified method proves them.
+    One distance decides such a pair: apart here, so Never."""
+    import armguard
+    from armguard.srdfgen import collision_matrix
+
+    urdf = tmp_path / "fx.urdf"
+    urdf.write_text("""<robot name="fx">
+  <link name="base"><collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <link name="left"><collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <link name="right"><collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <link name="arm"><collision><origin xyz="0.3 0 0"/><geometry><sphere radius="0.05"/></geometry></collision></link>
+  <joint name="fl" type="fixed"><parent link="base"/><child link="left"/><origin xyz="0 0.5 0"/></joint>
+  <joint name="fr" type="fixed"><parent link="base"/><child link="right"/><origin xyz="0 -0.5 0"/></joint>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="arm"/><origin xyz="0 0 0.5"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+</robot>""")
+    cm = collision_matrix(armguard.load_model(urdf, srdf=False), method="sampled", samples=50)
+    e = next(e for e in cm.entries if {e.link1, e.link2} == {"left", "right"})
+    assert e.reason == "Never", e

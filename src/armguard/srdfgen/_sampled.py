@@ -47,13 +47,19 @@ class PairVerdicts:
     ``collides`` must not say clear where its distance is within the margin (checked on the analytic
     backend by ``tests/test_srdf_sampled.py``)."""
 
+    KEEP = 4  # Checkers kept at once (the pairs in turn: talos's 1,500 pairs kept every one, 9.4 GB and rising)
+
     def __init__(self, model, setup, backend: str | None = "analytic", options=None, margin: float = 0.0) -> None:
         self.model, self.setup, self.backend, self.options, self.margin = model, setup, backend, options, float(margin)
         self._checkers: dict = {}
 
     def checker(self, k: int):
-        chk = self._checkers.get(k)
-        if chk is None:
+        chk = self._checkers.pop(k, None)
+        if chk is not None:
+            self._checkers[k] = chk  # the most recent last
+        else:
+            while len(self._checkers) >= self.KEEP:
+                del self._checkers[next(iter(self._checkers))]
             from ..cspace._clearance import checker_over
 
             p = self.setup.pairs[k]
@@ -65,6 +71,8 @@ class PairVerdicts:
         return chk
 
     def __call__(self, k: int, Q: np.ndarray) -> np.ndarray:
+        if not self.setup.pairs[k].joints:  # no joint moves it (two fixed links): no Checker has a pair to move,
+            return np.ones(len(Q), dtype=bool)  # so every row is a candidate: sampled() reads its one distance
         chk = self.checker(k)
         return np.asarray(chk.collides(chk.model.pin_q(Q), margin=self.margin), dtype=bool)
 
@@ -117,6 +125,14 @@ def sampled(ev, verdicts, setup, todo, entries, margin, samples, seed, advance) 
         Q = random_configurations(setup, n, rng)
         for i in np.flatnonzero(first < 0):
             k = left[i]
+            if not setup.pairs[k].joints:  # fixed to each other: one distance decides it, at any configuration
+                d = float(ev(k, Q[:1])[0])
+                if not np.isfinite(d):
+                    raise VerificationError(f"a sampled distance of {setup.pairs[k].link1} - {setup.pairs[k].link2} "
+                                            "is not finite: no verdict")
+                if d <= margin:
+                    first[i], first_d[i], first_q[i] = done, d, Q[0]
+                continue
             for s in range(0, n, BLOCK):
                 hit = verdicts(k, Q[s:s + BLOCK])
                 for r in np.flatnonzero(hit):  # candidates in order: the first within the margin is the witness
