@@ -257,3 +257,18 @@ def test_every_misspelling_load_model_refuses_is_reported_beside_the_others(tmp_
     p.write_text(text)
     r = CliRunner().invoke(main, ["-q", "check-urdf", str(p), "--json"])
     assert r.exit_code == 1 and "did you mean rpy=" in r.output and "did you mean <collision>" in r.output, r.output
+
+
+def test_a_floating_bases_joint_in_the_srdf_is_a_warning(tmp_path):
+    """check-urdf erred (exit 1) on ``root_joint`` in a1's, go2's and bolt's SRDFs, which load_model reads with a
+    warning."""
+    p = tmp_path / "two.urdf"
+    p.write_text(_URDF.replace("LIMIT", '<limit lower="-1" upper="1" effort="1" velocity="1"/>'))
+    p.with_suffix(".srdf").write_text(
+        '<robot name="two"><virtual_joint name="root_joint" type="floating" parent_frame="world" child_link="base"/>'
+        '<group name="all"><joint name="root_joint"/><joint name="j1"/></group>'
+        '<group_state name="home" group="all"><joint name="root_joint" value="0 0 0 0 0 0 1"/><joint name="j1" '
+        'value="0"/></group_state></robot>')
+    report = armguard.harness.check_model_files(p, n_configs=5)
+    floating = [f for f in report.findings if "root_joint" in f.message]
+    assert len(floating) == 2 and all(f.severity.value == "warning" for f in floating), report.findings

@@ -19,10 +19,10 @@ Checks (each a :class:`Check`), on the files as written, then on the loaded mode
   collides, else a warning (still proven: refresh the SRDF with ``armguard srdf --update``; or
   undecided); and a pair the SRDF records as checked that the URDF now joins through links
   without geometry (MoveIt's Adjacent rule drops it from the checks: a warning);
-* ``permanent-collision``: an active pair in collision (coal, ``d <= 0``) at more than
-  ``permanent_fraction`` of ``n_configs`` seeded random configurations (an error; a
-  ``<disable_collisions reason="Always">`` line is suggested, MoveIt's name for a pair its Setup
-  Assistant finds in collision in at least 95 % of its samples);
+* ``permanent-collision``: an active pair in collision (coal, ``d <= 0``) at the home pose and at more than
+  ``permanent_fraction`` of ``n_configs`` seeded random configurations (an error; a ``<disable_collisions
+  reason="Always">`` line is suggested, MoveIt's name for a pair its Setup Assistant finds in collision in at
+  least 95 % of its samples); clear at home, such a pair is a ``home-collision`` warning, no Always suggested;
 * ``home-collision``: an active pair in collision at the home pose but not permanently (a warning,
   with its share of the random configurations: the home pose or the shapes may be wrong);
 * ``unread-element``: an element of a link, collision, visual or joint that nothing reads but that
@@ -293,10 +293,18 @@ def _srdf_checks(srdf: Path, links: set, joints: set, report: LintReport, partia
         _unparsed(report, f, "SRDF", exc)
         return
     groups = {g.get("name") for g in root.findall("group")}
+    # the SRDF's virtual joint (a floating base: MoveIt's) and Pinocchio's root_joint name no URDF joint: the loader
+    # reads no value of them (fixed-base models) and warns; so does the lint, never an error (a1, go2, bolt)
+    floating = {vj.get("name") for vj in root.findall("virtual_joint")} | {"root_joint"}
     named = {el.get(a) for el in root.iter() for a in ("link1", "link2", "link", "parent_link", "base_link", "tip_link", "name")}
     where_el: dict = {}  # the element each place names, for its line
 
     def need(name, kind, where, pool, from_pair=False):
+        if kind == "joint" and name in floating and name not in pool:
+            report.findings.append(Finding(Check.SRDF_NAME, Severity.WARNING, f"{f}: {where}", f"joint {name!r} is a "
+                                           "floating base's, not the URDF's: armguard's models are fixed-base (it is "
+                                           "not read)"))
+            return
         if name not in pool:  # a rename's new name: one the SRDF never names (of a pair: a link with shapes)
             near = renamed_to(name, [x for x in pool if not from_pair or shaped is None or x in shaped], named)
             line = lines.get(id(where_el.get("el")))
@@ -428,12 +436,14 @@ def _collision_checks(model, report: LintReport, n_configs: int, seed: int, frac
     for k in np.flatnonzero((home <= 0.0) | (share > fraction)):
         a, b = names[k]
         la, lb = link(a), link(b)
-        perm = share[k] > fraction
+        perm = share[k] > fraction and home[k] <= 0.0  # clear at home: not permanent (bolt at 5 samples: 100 %)
         msg = (f"pair {a} / {b} ({model.pairs.category[k]}): {'in collision' if home[k] <= 0 else 'clear'} at the home "
                f"pose (d = {home[k]:.4g} m), in collision at {share[k]:.0%} of {len(Q)} random configurations")
         sug = None
         if perm and "workspace" not in (la, lb):
             sug = f'<disable_collisions link1="{la}" link2="{lb}" reason="Always"/>'
+        if home[k] > 0.0:  # in collision in most samples only: a warning, with no Always to suggest
+            msg += "; clear at the home pose, so not permanent (more --configs tell)"
         report.findings.append(Finding(Check.PERMANENT_COLLISION if perm else Check.HOME_COLLISION,
                                        Severity.ERROR if perm else Severity.WARNING, f"pair[{a}, {b}]", msg, sug))
 
