@@ -49,8 +49,10 @@ class BackendView:
         pairs = model.pairs
         self._owner_a = np.array(pairs.owner_a, dtype=object)
         self._owner_b = np.array(pairs.owner_b, dtype=object)
-        self._robot_a = np.array([robot_of(o) for o in pairs.owner_a], dtype=object)
-        self._robot_b = np.array([robot_of(o) for o in pairs.owner_b], dtype=object)
+        held = {name: p.robot for name, p in model.scene.payloads.items()}  # a payload is its carrier arm's: its
+        self._robot_a = np.array([held.get(o, robot_of(o)) for o in pairs.owner_a], dtype=object)  # pairs were
+        self._robot_b = np.array([held.get(o, robot_of(o)) for o in pairs.owner_b], dtype=object)  # left out (a held
+        # payload 1 m inside Hermes's tail read CLEAR on the coal and fcl panels)
 
     def readout(self, scene, q: dict, active: str, *, threshold: float, stopping_distance: float,
                 contact: float) -> Readout:
