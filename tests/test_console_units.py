@@ -36,8 +36,10 @@ from armguard.geometry import Box, Capsule, ConvexPolyhedron, Polygon, Prism, Sp
 # ---------------------------------------------------------------------------- parsing
 @pytest.mark.parametrize(
     "value",
-    ["abc", "", "  ", "nan", "inf", "-inf", float("nan"), float("inf"), None, True, [1.0]],
-    ids=["word", "empty", "blank", "nan-text", "inf-text", "minus-inf-text", "nan", "inf", "none", "bool", "list"],
+    ["abc", "", "  ", "nan", "inf", "-inf", float("nan"), float("inf"), None, True, [1.0], "4_5", "\uff19\uff10",
+     "\u0661\u0662"],
+    ids=["word", "empty", "blank", "nan-text", "inf-text", "minus-inf-text", "nan", "inf", "none", "bool", "list",
+         "underscore", "full-width-digits", "arabic-indic-digits"],  # float() takes the last three (45, 90, 12)
 )
 def test_parse_number_rejects_with_field_name(value):
     with pytest.raises(ConsoleInputError, match="threshold"):

@@ -50,7 +50,9 @@ def parse_number(
         text = value.strip()
         if not text:
             raise ConsoleInputError(f"{field}: expected {what}, got an empty entry")
-        try:
+        try:  # as written in ASCII: Python's float() also takes "4_5" (45) and other scripts' digits ("９０")
+            if not text.isascii() or "_" in text:
+                raise ValueError(text)
             x = float(text)
         except ValueError:
             raise ConsoleInputError(f"{field}: expected {what}, got {text!r}") from None
