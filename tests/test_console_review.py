@@ -131,3 +131,29 @@ def test_console_commands_refuse_what_is_not_a_number():
             st.add_uncertain(*args)
     with pytest.raises(ConsoleInputError, match="joint index 'x'"):
         st.set_joint("left", "x", 0)
+
+
+@pytest.mark.parametrize("meanwhile", ["setup", "arm", "joint"])
+def test_a_setup_an_arm_or_a_joint_while_an_avoidance_run_is_filtered_drops_it(monkeypatch, meanwhile):
+    """Ranger: Run test1 with avoidance, and while its motion is filtered, Setup test7 (or select another arm, or
+    type a joint): test1's filtered motion then started anyway, the left arm moving under the right arm's panel."""
+    import armguard.console._avoid as avoid
+    from armguard.console._serve import make_state as make_named
+
+    st = make_named("ranger")
+    st.set_avoidance(True)
+    real = avoid.avoid_canned
+    act = {"setup": lambda: st.setup("test7_right_inward"), "arm": lambda: st.set_active("right_arm"),
+           "joint": lambda: st.set_joint("left_arm", 0, "-20", deg=True)}[meanwhile]
+
+    def filtering_while_the_operator_acts(*args, **kwargs):
+        t = threading.Thread(target=act)
+        t.start()
+        t.join()
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(avoid, "avoid_canned", filtering_while_the_operator_acts)
+    with pytest.raises(ConsoleInputError, match="stopped while the motion was filtered"):
+        st.run("test1_left_inward")
+    s = st.snapshot()
+    assert s.player is None and s.run_state in ("stopped", "")

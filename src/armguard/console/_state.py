@@ -299,6 +299,8 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
         """Select the active arm (the one driven and checked against everything)."""
         with self._lock:
             self._robot(robot)
+            if robot != self._active:
+                self._cancel_filtering("another arm selected")
             p = self._player
             if (p is not None and p.kind in ("run", "avoid") and self._run_state in ("running", "filtering")
                     and robot != p.robot):  # the run stops on the active arm's readout: it would stop checking its arm
@@ -357,6 +359,7 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
         (:func:`~._parse.wrap_continuous`; its slider spans -360..360 deg).
         """
         with self._lock:
+            self._cancel_filtering("a joint typed")
             r = self._robot(robot)
             if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < r.n_joints:
                 raise ConsoleInputError(f"{robot}: joint index {index!r}: expected an integer in 0..{r.n_joints - 1}")
@@ -381,6 +384,7 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
     def set_joints(self, robot: str, values, *, scale: float = 1.0) -> np.ndarray:
         """Set every joint of ``robot`` from numbers or text (times ``scale``, e.g. pi/180 for degrees)."""
         with self._lock:
+            self._cancel_filtering("joints typed")
             r = self._robot(robot)
             q = parse_numbers(values, f"{robot} joints", r.n_joints, scale=scale)
             self._q[robot] = self._checked_q(robot, q)
@@ -392,6 +396,7 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
         """Set every arm at once (a mapping robot -> joints, or flat over ``scene.joint_names``)."""
         parts = self._scene.split_q(q)
         with self._lock:
+            self._cancel_filtering("the arms set")
             new = {name: self._checked_q(name, v) for name, v in parts.items()}
             self._q = new
             self._arm_moved(self._active)
@@ -502,7 +507,13 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
             return self._player
 
     # ------------------------------------------------------------------ time line
+    def _cancel_filtering(self, why: str) -> None:
+        """Drop a run with avoidance still being filtered: it would play over what was done since (test7's Setup)."""
+        if self._run_state == "filtering" and getattr(self, "_filtering", None) is not None:
+            self._filtering, self._run_state, self._run_detail = None, "stopped", f"{why} while the motion was filtered"
+
     def _stop_player(self) -> None:
+        self._cancel_filtering("replaced")
         p = self._player
         if p is not None:
             p.timeline.pause()
