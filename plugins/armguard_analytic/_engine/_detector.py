@@ -324,15 +324,7 @@ class FusedDetector(Detector):
             self._threshold, self._stopping = threshold, stopping
 
     def set_active(self, name: str | None) -> None:
-        if name is not None and name not in self.scene.robots:
-            raise DetectionError(f"active: unknown robot {name!r}; robots are {list(self.scene.robots)}")
-        with self._prepare_lock:
-            old, self._active = self._active, name
-            try:
-                self.prepare()
-            except BaseException:
-                self._active = old  # refused: the build in use, and its arm, stay
-                raise
+        self._switch_active(name, self._prepare_lock)
 
     def obstacle_list(self, link: str) -> tuple[str, ...]:
         """Owner names in the obstacle list of ``link`` (``"robot/link"``), in pair order."""

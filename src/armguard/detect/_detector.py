@@ -80,6 +80,23 @@ class Detector:
         if jacobian:
             self.check(q, jacobian=True)
 
+    def _switch_active(self, name: str | None, lock) -> None:
+        """``set_active``'s rule for every subclass: ``name`` (a robot of the scene, or None: all arms) becomes
+        the active arm and the Detector builds again under ``lock``; a build refused (an arm without a pair)
+        leaves the arm in use, and its build, as they were (the refused arm stayed named while checks ran on
+        the old build, and a later edit raised)."""
+        from .._errors import DetectionError
+
+        if name is not None and name not in self.scene.robots:
+            raise DetectionError(f"active: unknown robot {name!r}; robots are {list(self.scene.robots)}")
+        with lock:
+            old, self._active = self._active, name
+            try:
+                self.prepare()
+            except BaseException:
+                self._active = old
+                raise
+
     def __new__(cls, scene=None, *args, backend: str | None = None, backend_options=None, **kwargs):
         if cls is not Detector:  # a concrete Detector, built directly
             return super().__new__(cls)

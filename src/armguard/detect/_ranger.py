@@ -274,15 +274,7 @@ class RangerDetector(Detector):
                 self._plan = plan.with_levels(threshold, stopping)
 
     def set_active(self, name: str | None) -> None:
-        if name is not None and name not in self.scene.robots:
-            raise DetectionError(f"active: unknown robot {name!r}; robots are {list(self.scene.robots)}")
-        with self._lock:
-            old, self._active = self._active, name
-            try:
-                self.prepare()
-            except BaseException:
-                self._active = old  # refused: the build in use, and its arm, stay
-                raise
+        self._switch_active(name, self._lock)
 
     def prepare(self) -> "RangerDetector":
         """(Re)build the obstacle lists and bounds; forget every thread's last distances."""
