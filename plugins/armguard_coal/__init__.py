@@ -249,8 +249,8 @@ class CoalChecker(CheckerBase):
             req.epa_tolerance = keep
         cp = self.geometry_model.collisionPairs[i]
         names = [self.geometry_model.geometryObjects[k].name for k in (cp.first, cp.second)]
-        raise BackendError(f"coal: no penetration depth (or no finite witness points) for {names[0]} / {names[1]} at "
-                           f"q = {np.asarray(q).tolist()} (its EPA gave up at every tolerance up to "
+        raise BackendError(f"coal: no penetration depth for {names[0]} / {names[1]} at q = {np.asarray(q).tolist()} "
+                           f"(its EPA gave up, or left no finite witness points, at every tolerance up to "
                            f"{EPA_RETRY_TOLERANCES[-1]:g} m); no verdict")
 
     distance_jacobian = CheckerBase.witness_jacobian  # Pinocchio's frame Jacobians at coal's witness points
