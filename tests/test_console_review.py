@@ -72,20 +72,25 @@ def test_every_backend_measures_the_workspace_box_as_edited(backend):
     assert st.snapshot().readout.distance == pytest.approx(d, abs=1e-6)
 
 
-def test_stop_while_an_avoidance_run_is_filtered_keeps_the_arm_still(monkeypatch):
+def _acting_while_filtered(monkeypatch, act) -> None:
+    """Make the avoidance filter run ``act`` on another thread (the operator, meanwhile) before it filters."""
     import armguard.console._avoid as avoid
 
-    st = make_state(str(SCENE))
-    st.set_avoidance(True)
     real = avoid.avoid_canned
 
-    def filtering_while_stop_is_pressed(*args, **kwargs):  # Stop arrives on another thread meanwhile
-        t = threading.Thread(target=st.stop)
+    def filtering_while_the_operator_acts(*args, **kwargs):
+        t = threading.Thread(target=act)
         t.start()
         t.join()
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(avoid, "avoid_canned", filtering_while_stop_is_pressed)
+    monkeypatch.setattr(avoid, "avoid_canned", filtering_while_the_operator_acts)
+
+
+def test_stop_while_an_avoidance_run_is_filtered_keeps_the_arm_still(monkeypatch):
+    st = make_state(str(SCENE))
+    st.set_avoidance(True)
+    _acting_while_filtered(monkeypatch, st.stop)  # Stop arrives on another thread meanwhile
     with pytest.raises(ConsoleInputError, match="stopped while the motion was filtered"):
         st.run("hit_post")
     s = st.snapshot()
@@ -137,22 +142,13 @@ def test_console_commands_refuse_what_is_not_a_number():
 def test_a_setup_an_arm_or_a_joint_while_an_avoidance_run_is_filtered_drops_it(monkeypatch, meanwhile):
     """Ranger: Run test1 with avoidance, and while its motion is filtered, Setup test7 (or select another arm, or
     type a joint): test1's filtered motion then started anyway, the left arm moving under the right arm's panel."""
-    import armguard.console._avoid as avoid
     from armguard.console._serve import make_state as make_named
 
     st = make_named("ranger")
     st.set_avoidance(True)
-    real = avoid.avoid_canned
-    act = {"setup": lambda: st.setup("test7_right_inward"), "arm": lambda: st.set_active("right_arm"),
-           "joint": lambda: st.set_joint("left_arm", 0, "-20", deg=True)}[meanwhile]
-
-    def filtering_while_the_operator_acts(*args, **kwargs):
-        t = threading.Thread(target=act)
-        t.start()
-        t.join()
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(avoid, "avoid_canned", filtering_while_the_operator_acts)
+    _acting_while_filtered(monkeypatch, {"setup": lambda: st.setup("test7_right_inward"),
+                                         "arm": lambda: st.set_active("right_arm"),
+                                         "joint": lambda: st.set_joint("left_arm", 0, "-20", deg=True)}[meanwhile])
     with pytest.raises(ConsoleInputError, match="stopped while the motion was filtered"):
         st.run("test1_left_inward")
     s = st.snapshot()
