@@ -71,8 +71,6 @@ class PairVerdicts:
         return chk
 
     def __call__(self, k: int, Q: np.ndarray) -> np.ndarray:
-        if not self.setup.pairs[k].joints:  # no joint moves it (two fixed links): no Checker has a pair to move,
-            return np.ones(len(Q), dtype=bool)  # so every row is a candidate: sampled() reads its one distance
         chk = self.checker(k)
         return np.asarray(chk.collides(chk.model.pin_q(Q), margin=self.margin), dtype=bool)
 
