@@ -278,10 +278,9 @@ def collision_matrix(model, *, margin: float = 0.0, method: str = "certified", b
                     for k in todo:
                         entries[k] = one(k)
         else:
-            from ._sampled import PairVerdicts, sampled
+            from ._sampled import sampled
 
-            sampled(ev, PairVerdicts(model, setup, backend, options, float(margin)), setup, todo, entries, float(margin),
-                    int(samples), seed, advance)
+            sampled(ev, setup, todo, entries, float(margin), int(samples), seed, advance)
     finally:
         close()
     entries = [replace(e, fingerprint=certificate(k, e.reason)) for k, e in enumerate(entries)]
