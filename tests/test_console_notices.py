@@ -211,3 +211,17 @@ def test_in_a_deep_contact_the_obstacle_is_translucent_for_every_backend(ranger_
         assert r.distance == pytest.approx(-0.245, abs=1e-3) and r.owner_b == "manipulator_module", backend
         clear = {app.drawer.items[k].owner for k in app.drawer.see_through(snap)}
         assert "manipulator_module" in clear and "left_arm/link7" not in clear, (backend, clear)
+
+
+def test_a_refusal_names_the_joint_limits_not_the_tolerance_that_widens_them():
+    """A value a hair outside a limit (within the Model's joint-limit tolerance) is taken, clipped; a refusal names
+    the limits as the URDF gives them: Ranger's camera-arm shoulder's lower limit 0 read "-1e-09" before."""
+    st = make_state("ranger")
+    robot = next(r for r in st.robots if "camera" in r)
+    lo, hi = (math.degrees(x[1]) for x in st.joint_limits(robot))  # the shoulder, joint 1
+    assert lo == 0.0
+    with pytest.raises(ConsoleInputError) as err:
+        st.set_joint(robot, 1, "-5", deg=True)
+    assert f"is outside [0, {hi:g}] deg; value kept unchanged" in str(err.value) and "e-" not in str(err.value)
+    st.set_joint(robot, 1, "-1e-8", deg=True)  # within the tolerance (1e-9 rad, 5.7e-8 deg): taken at the limit
+    assert st.snapshot().q[robot][1] == 0.0

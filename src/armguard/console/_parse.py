@@ -35,9 +35,12 @@ def parse_number(
     unit: str = "",
     scale: float = 1.0,
     open_lo: bool = False,
+    slack: float = 0.0,
 ) -> float:
     """Return ``value`` (a number or its text) times ``scale`` as a finite float within ``[lo, hi]``
     (``(lo, hi]`` with ``open_lo``: ``lo`` itself refused, and the message writes the range so).
+    ``slack`` widens the accepted range on both sides (a joint limit's tolerance, e.g. a value read
+    back from a slider) but not the range a refusal names.
 
     ``lo`` / ``hi`` are in the typed unit (before ``scale``); ``unit`` only decorates messages.
     Raises ConsoleInputError with the field's name and the accepted range.
@@ -66,7 +69,7 @@ def parse_number(
     if not math.isfinite(x):
         finite = f"a finite number ({unit})" if unit else "a finite number"
         raise ConsoleInputError(f"{field}: expected {finite}, got {typed}")
-    if x < lo or x > hi or (open_lo and x == lo):
+    if x < lo - slack or x > hi + slack or (open_lo and x == lo):
         raise ConsoleInputError(f"{field}: {x:g}{suffix} is outside {'(' if open_lo else '['}{lo:g}, {hi:g}]{suffix}; "
                                 "value kept unchanged")
     return x * scale

@@ -370,7 +370,7 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
             k = 180.0 / math.pi if in_deg else 1.0
             lo, hi = float(r.lower[j]) * k, float(r.upper[j]) * k
             slack = self._tol.joint_limit * k
-            x = parse_number(value, field, lo=lo - slack, hi=hi + slack, unit=unit)
+            x = parse_number(value, field, lo=lo, hi=hi, unit=unit, slack=slack)
             note = ""
             if unit != "m" and not (math.isfinite(lo) or math.isfinite(hi)):
                 x, note = wrap_continuous(x, field, k, unit)
