@@ -146,6 +146,28 @@ def test_run_plays_the_trapezoid_and_halts_at_the_stopping_distance(state):
     assert "within the stopping distance 50 mm" in snap.run_detail and snap.run_detail in snap.message
 
 
+def test_a_run_played_backwards_to_its_start_says_so_and_plays_on_when_started_again(state):
+    """It said "done at t = 0.00 s" (the end of the run's motion is at its duration)."""
+    player = state.run("hit_post")
+    for _ in range(10):
+        state.tick(0.05)
+    assert state.snapshot().run_state == "running" and player.timeline.t > 0.0
+    state.timeline_command("reverse")
+    while state.tick(0.05):
+        pass
+    snap = state.snapshot()
+    assert player.timeline.t == 0.0 and snap.run_state == "back at the start", (snap.run_state, snap.message)
+    assert snap.message == "hit_post: back at the start at t = 0.00 s" and not snap.message_is_error
+    state.timeline_command("forward")
+    state.timeline_command("play")
+    state.tick(0.05)
+    assert state.snapshot().run_state == "running" and state.snapshot().run_detail == ""
+    while state.tick(0.05):
+        pass
+    snap = state.snapshot()
+    assert snap.run_state == "done" and snap.run_detail == f"at t = {player.timeline.duration:.2f} s"
+
+
 def test_test_line_says_when_a_run_ended(state):
     from armguard.console._app import run_line
 

@@ -76,8 +76,8 @@ class Snapshot:
     change (the check, the comparison, terrain and uncertainty; not the panel's HTML or the
     drawing), beside ``readout.elapsed_us``, the check alone;
     ``ee_pose`` (4, 4) the active arm's tool pose now; ``run_state`` of the canned test:
-    ``""``, ``"running"``, ``"done"``, ``"stopped"`` (by the operator), ``"stopped by
-    detection"``, or with avoidance on ``"filtering"`` and ``"stopped short by avoidance"``,
+    ``""``, ``"running"``, ``"done"``, ``"back at the start"`` (played backwards to t = 0),
+    ``"stopped"`` (by the operator), ``"stopped by detection"``, or with avoidance on ``"filtering"`` and ``"stopped short by avoidance"``,
     with ``run_detail`` saying when (``"at t = 5.00 s"``) and, when detection stopped it (or
     the avoidance filter finished), the link, the obstacle and the distance; ``changes`` what the last model reload changed; ``terrain`` a
     :class:`~._overlays.TerrainView` (the pyramid boxes the last check tested) or None;
@@ -592,9 +592,12 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
                 self._message = f"{p.name}: stopped by detection {self._run_detail}"
             elif not p.timeline.playing or t >= p.timeline.duration:
                 p.timeline.pause()
-                self._run_state = "done"
+                back = t <= 0.0 and p.timeline.rate < 0.0  # played backwards to its start: not its end
+                self._run_state = "back at the start" if back else "done"
                 self._run_detail = f"at t = {t:.2f} s"
                 self._message_is_error = False
-                self._message = f"{p.name}: done {self._run_detail}"
+                self._message = f"{p.name}: {self._run_state} {self._run_detail}"
+            elif self._run_state != "running":  # played again after it ended or was halted
+                self._run_state, self._run_detail = "running", ""
             return True
 
