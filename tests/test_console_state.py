@@ -168,6 +168,21 @@ def test_a_run_played_backwards_to_its_start_says_so_and_plays_on_when_started_a
     assert snap.run_state == "done" and snap.run_detail == f"at t = {player.timeline.duration:.2f} s"
 
 
+def test_a_joint_typed_for_the_arm_a_run_moves_pauses_the_run_and_stays(state):
+    """The next tick overwrote the typed joint, without a word."""
+    player = state.run("hit_post")
+    for _ in range(5):
+        state.tick(0.05)
+    t = player.timeline.t
+    state.set_joint("left", 1, "10", deg=True)
+    snap = state.snapshot()
+    assert not player.timeline.playing and snap.run_state == "stopped"
+    assert snap.run_detail == f"at t = {t:.2f} s (left moved by hand)"
+    assert snap.message == f"hit_post: paused at t = {t:.2f} s: left moved by hand" and not snap.message_is_error
+    assert not state.tick(0.05)  # nothing plays: the typed joint stays
+    assert state.snapshot().q["left"][1] == pytest.approx(10 * DEG)
+
+
 def test_test_line_says_when_a_run_ended(state):
     from armguard.console._app import run_line
 

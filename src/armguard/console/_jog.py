@@ -104,7 +104,7 @@ def jog(state, frame: str, axis: str, *, translate: float = 0.0, turn: float = 0
         X_new = jogged_pose(robot.link_pose(q0), X_WF, k, translate=translate, turn=turn)
         q = state._solve_ik(robot, X_new, q0)
         state._q[name] = q
-        state._arm_moved(name)
+        hand = state._arm_moved(name)
         what = (f"{translate * 1e3:+g} mm along" if translate else f"{math.degrees(turn):+g} deg about")
-        state._changed(f"jog: tool {what} {frame} {axis}")
+        state._changed("; ".join(x for x in (f"jog: tool {what} {frame} {axis}", hand) if x))
         return q.copy()

@@ -34,8 +34,7 @@ class MotionMixin:
             X = pose_from_xyz_rpy(p, rpy)
             q = self._solve_ik(robot, X, self._q[name])
             self._q[name] = q
-            self._arm_moved(name)
-            self._changed()
+            self._changed(self._arm_moved(name))
             return q.copy()
 
     def _solve_ik(self, robot, X_WE, q_seed) -> np.ndarray:
@@ -88,7 +87,7 @@ class MotionMixin:
                 q = self._solve_ik(robot, X_target, q)
             self._q[name] = q
             self._arm_angle = psi
-            self._changed()
+            self._changed(self._taken_over(name))
             return psi
 
 

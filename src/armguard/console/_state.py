@@ -29,6 +29,7 @@ from ._backends import compare_readouts
 from ._motion import MotionMixin
 from ._notices import NoticesMixin
 from ._overlays import OverlayMixin
+from ._playback import PlaybackMixin
 from ._sources import BackendFailed, SourcesMixin
 from ._targets import TargetsMixin
 from ._parse import ConsoleInputError, parse_number, parse_numbers, wrap_continuous
@@ -118,7 +119,7 @@ def _duration_of(trajectory) -> float:
     return float(trajectory.duration)
 
 
-class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidMixin, NoticesMixin):
+class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidMixin, NoticesMixin, PlaybackMixin):
     """The operator console's state and commands (thread-safe; no GUI).
 
     Parameters
@@ -288,11 +289,13 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
                 )
         return np.clip(q, lo, hi)
 
-    def _arm_moved(self, robot: str) -> None:
+    def _arm_moved(self, robot: str) -> str:
         """The arm ``robot`` moved other than by its arm angle: the active arm's arm-angle label goes back to 0
-        (docs/console.md; it kept the last value, and the next slider move was taken from it)."""
+        (docs/console.md; it kept the last value, and the next slider move was taken from it).  Returns
+        :meth:`_taken_over`'s note."""
         if robot == self._active:
             self._arm_angle = 0.0
+        return self._taken_over(robot)
 
     # ------------------------------------------------------------------ settings
     def set_active(self, robot: str) -> None:
@@ -377,8 +380,7 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
             q = self._q[robot].copy()
             q[j] = x / k
             self._q[robot] = self._checked_q(robot, q)
-            self._arm_moved(robot)
-            self._changed(note)
+            self._changed("; ".join(x for x in (note, self._arm_moved(robot)) if x))
             return float(self._q[robot][j])
 
     def set_joints(self, robot: str, values, *, scale: float = 1.0) -> np.ndarray:
@@ -388,8 +390,7 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
             r = self._robot(robot)
             q = parse_numbers(values, f"{robot} joints", r.n_joints, scale=scale)
             self._q[robot] = self._checked_q(robot, q)
-            self._arm_moved(robot)
-            self._changed()
+            self._changed(self._arm_moved(robot))
             return self._q[robot].copy()
 
     def set_q(self, q) -> None:
@@ -400,7 +401,7 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
             new = {name: self._checked_q(name, v) for name, v in parts.items()}
             self._q = new
             self._arm_moved(self._active)
-            self._changed()
+            self._changed("; ".join(x for x in (self._taken_over(r) for r in new) if x))
 
     # ------------------------------------------------------------------ canned tests
     def canned_tests(self) -> tuple[str, ...]:
@@ -505,99 +506,3 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
             self._apply_player_time(0.0)
             self._changed(message)
             return self._player
-
-    # ------------------------------------------------------------------ time line
-    def _cancel_filtering(self, why: str) -> None:
-        """Drop a run with avoidance still being filtered: it would play over what was done since (test7's Setup)."""
-        if self._run_state == "filtering" and getattr(self, "_filtering", None) is not None:
-            self._filtering, self._run_state, self._run_detail = None, "stopped", f"{why} while the motion was filtered"
-
-    def _stop_player(self) -> None:
-        self._cancel_filtering("replaced")
-        p = self._player
-        if p is not None:
-            p.timeline.pause()
-            if p.kind in ("run", "avoid") and self._run_state == "running":  # the Tests tab said running on
-                self._run_state, self._run_detail = "stopped", f"at t = {p.timeline.t:.2f} s (replaced)"
-        self._player = None
-
-    def stop(self) -> None:
-        """Drop the current run or trajectory (the arms stay where they are)."""
-        with self._lock:
-            p = self._player
-            was_running = p is not None and p.kind in ("run", "avoid") and self._run_state == "running"
-            self._stop_player()
-            if self._run_state == "filtering":  # a run with avoidance still being filtered: it must not start
-                self._filtering = None
-                self._run_state, self._run_detail = "stopped", "while the motion was filtered"
-                self._changed("stopped by the operator while the motion was filtered")
-            elif was_running:
-                self._run_state = "stopped"
-                self._run_detail = f"at t = {p.timeline.t:.2f} s"
-                self._changed(f"{p.name}: stopped by the operator")
-            else:
-                self._changed()
-
-    def _apply_player_time(self, t: float) -> None:
-        p = self._player
-        q = np.asarray(p.trajectory.at(float(t)), dtype=np.float64)
-        self._q[p.robot] = np.clip(q, *self.joint_limits(p.robot))
-
-    def timeline_command(self, command: str, value=None) -> None:
-        """Drive the time line: ``play``, ``pause``, ``toggle``, ``faster``, ``slower``, ``reverse``,
-        ``forward``, ``backward`` or ``seek`` (``value`` in s)."""
-        with self._lock:
-            p = self._player
-            if p is None:
-                raise ConsoleInputError("time line: nothing loaded (load a trajectory or run a canned test)")
-            tl = p.timeline
-            simple = {"play": tl.play, "pause": tl.pause, "toggle": tl.toggle, "faster": tl.faster,
-                      "slower": tl.slower, "reverse": tl.reverse,
-                      "forward": lambda: tl.set_direction(True), "backward": lambda: tl.set_direction(False)}
-            if command == "seek":
-                tl.seek(value)
-            elif command in simple:
-                simple[command]()
-            else:
-                raise ConsoleInputError(f"time line: unknown command {command!r}; expected seek or one of {list(simple)}")
-            self._apply_player_time(tl.t)
-            self._changed(self._message)
-
-    def tick(self, dt_wall: float) -> bool:
-        """Advance the player by ``dt_wall`` s of wall-clock time; returns whether anything changed.
-
-        During a canned run with detection on and a stopping distance set (> 0), a nearest
-        distance within the stopping distance halts the motion (Ranger's collision avoidance with
-        a stand-off distance); with no stopping distance the run plays to its end, through a
-        collision if its motion makes one.
-        """
-        with self._lock:
-            p = self._player
-            if p is None or not p.timeline.playing:
-                return False
-            t = p.timeline.advance(dt_wall)
-            self._apply_player_time(t)
-            self._evaluate()
-            r = self._readout
-            if p.kind == "avoid":  # the filter keeps the stand-off: no stop by detection
-                return self._tick_avoid(p, t)
-            if p.kind != "run":
-                return True
-            if self._detection and self._stopping > 0.0 and r.distance <= self._stopping:
-                p.timeline.pause()
-                self._run_state = "stopped by detection"
-                self._run_detail = (f"at t = {t:.2f} s, {r.link} within the stopping distance "
-                                    f"{self._stopping * 1000:.0f} mm: {r.distance * 1000:.1f} mm of {r.obstacle}")
-                self._message_is_error = True
-                self._message = f"{p.name}: stopped by detection {self._run_detail}"
-            elif not p.timeline.playing or t >= p.timeline.duration:
-                p.timeline.pause()
-                back = t <= 0.0 and p.timeline.rate < 0.0  # played backwards to its start: not its end
-                self._run_state = "back at the start" if back else "done"
-                self._run_detail = f"at t = {t:.2f} s"
-                self._message_is_error = False
-                self._message = f"{p.name}: {self._run_state} {self._run_detail}"
-            elif self._run_state != "running":  # played again after it ended or was halted
-                self._run_state, self._run_detail = "running", ""
-            return True
-
