@@ -137,3 +137,22 @@ def test_predictor_run_leaves_the_step_stream_as_it_was():
     assert pred.step(left).status is ClipStatus.CLEAR  # the stream's first set point
     pred.run(_sweep(5.0, np.linspace(-0.3, 0.3, 5)))  # far away: must not become the stream's last set point
     assert pred.step(right).status is ClipStatus.INTERSECTED  # left -> right crosses the post
+
+
+def test_halving_keeps_the_whole_growth_so_no_clear_within_it():
+    """A post 70 mm beside the model path of a 5 cm box, growth 8 cm: the whole interval is MAYBE, and halving
+    answered CLEAR (each half's growth scaled by its length) though the real motion may come within 10 mm."""
+    from armguard.clip import check
+    from armguard.geometry import Box
+
+    g = Guard.from_shape(Box([0, 0, 0], [0.05, 0.05, 0.05]))
+    X0, X1 = np.eye(4), np.eye(4)
+    X1[1, 3] = 0.4
+    for gap, growth, want in ((0.02, 0.08, ClipStatus.MAYBE), (0.07, 0.08, ClipStatus.MAYBE),
+                              (0.07, 0.0, ClipStatus.CLEAR), (0.12, 0.08, ClipStatus.CLEAR)):
+        post = Obstacle.segment([0.05 + gap, 0.2, -1], [0.05 + gap, 0.2, 1])
+        whole = check(swept_guard(g, X0, X1, growth=growth), post, subdivide=False).status
+        got = Predictor([g], [post], growth=growth).predict(X0[None], X1[None]).status
+        assert got is want, (gap, growth, whole, got)
+        if gap < growth:  # within the growth: never CLEAR, whatever the halving
+            assert whole is ClipStatus.MAYBE and got is not ClipStatus.CLEAR

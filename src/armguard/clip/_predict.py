@@ -18,8 +18,10 @@ swept guard's inner volumes are those of the guard at ``X1`` (a hit on them is a
 set point itself); its outer sphere is ``RO + |c(1) - c(0)|`` about ``c(1)``.
 
 A motion that leaves this model (a joint-interpolated arm between set points) needs a larger
-``δ``: pass ``growth`` (m), added to every plane.  MAYBE over an interval is refined by halving
-it (``max_halvings`` times, poses interpolated by the model); what is still MAYBE stays MAYBE.
+``δ``: pass ``growth`` (m), the farthest the motion strays from the model between two set points,
+added to every plane.  MAYBE over an interval is refined by halving it (``max_halvings`` times, poses
+interpolated by the model, each half's planes pushed out by the whole ``growth``: the model's pose at
+a half's end is not where the real motion is); what is still MAYBE stays MAYBE.
 """
 
 from __future__ import annotations
@@ -165,7 +167,8 @@ class Predictor:
         at_end = check(g, ob, Xb, X_ob, tol=self.tol)  # the set point itself, with the second level
         if at_end.status is ClipStatus.INTERSECTED:
             return ClipStatus.INTERSECTED, at_end.step, tb
-        sw = check(swept_guard(g, Xa, Xb, growth=self.growth * (tb - ta), tol=self.tol), ob, None, X_ob, subdivide=False, tol=self.tol)
+        # the whole growth on every piece: its ends are the model's poses, which the real motion may be growth off
+        sw = check(swept_guard(g, Xa, Xb, growth=self.growth, tol=self.tol), ob, None, X_ob, subdivide=False, tol=self.tol)
         if sw.status is not ClipStatus.MAYBE or level >= self.max_halvings:
             return sw.status, sw.step, tb
         tm = 0.5 * (ta + tb)
