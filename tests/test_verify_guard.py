@@ -89,6 +89,25 @@ def test_guard_step_function_stopping_distance_grows_with_speed():
     assert too_fast.verdict is GuardVerdict.STOP  # above the table: never OK by omission
 
 
+def test_a_target_with_no_speed_is_held_to_the_table_at_its_top_speed():
+    """A target alone gives no speed: the table's value at 0 m/s (0 with ``at_rest``) said OK 43 mm from a pair
+    whose table reaches 100 mm; the arm may move at any speed the table holds."""
+    sd = StoppingDistance.hermes(max_speed=4.0, max_distance=0.1, at_rest=1e-6)
+    guard = Guard(_scene(), stopping_distance=sd, horizon_s=0.05, period_s=0.01)
+    d = guard.step(np.zeros(3), target=np.array([0.05, 0.0, 0.0]))
+    assert d.stopping_distance == sd.max_distance == 0.1
+    if d.ok:  # OK only when every prediction keeps the whole top stopping distance
+        assert d.predicted_clearance > 0.1
+    slow = guard.step(np.zeros(3), target=np.array([0.05, 0.0, 0.0]), qdot=np.array([0.01, 0.0, 0.0]))
+    assert slow.stopping_distance < 0.1  # with a speed, the table's value at that speed
+
+
+@pytest.mark.parametrize("mass", [-3.0, "x", math.nan, math.inf])
+def test_a_bad_payload_mass_is_refused_when_the_guard_is_made(mass):
+    with pytest.raises(VerificationError, match="payload_mass"):
+        Guard(_scene(), stopping_distance=0.02, horizon_s=0.1, period_s=0.01, payload_mass=mass)
+
+
 @pytest.mark.parametrize(
     "call",
     [

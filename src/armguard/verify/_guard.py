@@ -43,6 +43,7 @@ import numpy as np
 
 from ..model import scene_of
 from .._errors import StaleModelError, VerificationError
+from .._values import number
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from ..kinematics._limits import limit_error
 from ._follow import FollowsScene
@@ -160,7 +161,8 @@ class Guard(FollowsScene):
     scene : armguard.scene.Scene
     stopping_distance : float (m) or StoppingDistance
         The braking distance; with a :class:`StoppingDistance` it follows the commanded speed
-        (of the fastest point of the arm) and ``payload_mass`` (kg).
+        (of the fastest point of the arm) and ``payload_mass`` (kg); a ``target`` with no ``qdot``
+        gives no speed, and the table's value at its top speed is used.
     horizon_s : float, s
         How far ahead the commanded motion is predicted (>= one control period + braking time).
     period_s : float, s
@@ -195,7 +197,7 @@ class Guard(FollowsScene):
         if self.horizon_s < self.period_s:
             raise VerificationError("horizon_s must be at least one control period (period_s)")
         self.mode = GuardMode(mode)
-        self.payload_mass = float(payload_mass)
+        self.payload_mass = number(payload_mass, "payload_mass", VerificationError, low=0.0, unit=" (kg)")
         names = list(scene.robots)
         if robot is None:
             if len(names) != 1:
@@ -377,12 +379,12 @@ class Guard(FollowsScene):
             full_qd = np.zeros(model.n_q)
             full_qd[st.k0 : st.k1] = qd
             speed = model.max_point_speed(full_qd)
-        else:
-            speed = 0.0
+        else:  # a target with no speed: the arm may move at any speed the table holds (its value at 0 said OK 43 mm
+            speed = None  # from a pair with a 100 mm table)
         sd = self.stopping_distance
         if isinstance(sd, StoppingDistance):
             try:
-                m = sd.at(speed, self.payload_mass)
+                m = sd.at(sd.speed_edges[-1] if speed is None else speed, self.payload_mass)
             except VerificationError as exc:
                 return self._decide(GuardVerdict.STOP, f"commanded speed outside the stopping-distance table: {exc}",
                                     math.nan, -math.inf, 0.0, None, sd.max_distance, 0, t_start)
