@@ -90,6 +90,29 @@ def test_demo_reports_every_trajectory_with_its_words(tmp_path):
     assert doc["status"] == "collision" and doc["first_collision"]["kind"] == "stopping distance"
 
 
+def test_demo_keeps_one_report_per_stopping_distance(tmp_path):
+    """0 and 0.4 mm were both "sd0mm": the second verification's report and plot overwrote the first's (and 0.6 /
+    1.4 mm both "sd1mm"); a value given twice is verified once."""
+    args = ["demo", "--scene", "puma560", "--out", str(tmp_path)]
+    for sd in ("0", "0.0004", "0.0004", "0.0006", "0.0014"):
+        args += ["--stopping-distance", sd]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    stems = sorted(p.stem for p in tmp_path.glob("puma560__pick_and_place__*.json"))
+    assert stems == sorted(f"puma560__pick_and_place__sd{v}mm" for v in ("0", "0.4", "0.6", "1.4"))
+    assert sorted(p.stem for p in tmp_path.glob("puma560__pick_and_place__*.png")) == stems
+    labels = [c.strip() for line in res.output.splitlines() if "pick_and_place" in line
+              for c in line.split("│")[3:4]]
+    assert labels == ["0 mm", "0.4 mm", "0.6 mm", "1.4 mm"]
+
+
+def test_demo_names_stopping_distances_alike_to_6_digits_by_their_exact_value():
+    from armguard.cli._demo import _mode_names
+
+    names = _mode_names([("fixed", 0.1), ("fixed", 0.1000000001), ("hermes", 0.1)])
+    assert names == [("0.1 m", "sd0.1m"), ("0.1000000001 m", "sd0.1000000001m"), ("Hermes ≤ 100 mm", "hermes100mm")]
+
+
 def test_verify_cli_speed_dependent():
     res = CliRunner().invoke(main, ["verify", "puma560", "pick_and_place", "--stopping-distance", "0.1", "--speed-dependent"])
     assert res.exit_code == 1 and "UNSAFE (stopping distance)" in res.output

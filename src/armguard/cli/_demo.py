@@ -90,6 +90,20 @@ def verdict_text(r) -> str:
     return f"[{colour}]{head.upper()}{' (' + tail if tail else ''}[/]"
 
 
+def _mode_names(modes) -> list:
+    """``(label, file-stem part)`` of each ``(mode, stopping distance)``: the distance in mm to 6 digits
+    (``sd0.4mm``; ``sd0mm`` rounded 0.4 mm to 0 and overwrote the first report with the second), in m to
+    the last digit where two would still read alike."""
+    mm = [(mode, f"{sd * 1e3:.6g}") for mode, sd in modes]
+    out = []
+    for (mode, sd), (_, v) in zip(modes, mm):
+        exact = mm.count((mode, v)) > 1
+        unit = f"{sd!r} m" if exact else f"{v} mm"
+        stem = f"{sd!r}m" if exact else f"{v}mm"
+        out.append((f"Hermes ≤ {unit}", f"hermes{stem}") if mode == "hermes" else (unit, f"sd{stem}"))
+    return out
+
+
 @main.command("demo")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default="out", show_default=True,
               help="Where the JSON reports and PNG plots go.")
@@ -129,7 +143,9 @@ def demo_cmd(out_dir, scenes, stopping_distances, list_only) -> None:
                                  "`armguard verify` (docs/trajectory-format.md)", param_hint="--scene")
     out = make_folder(out_dir)  # OutputError (exit status 3) when it cannot be made
     table = Table(title="armguard: certified verification of the built-in scenes' canned trajectories")
-    modes = [("fixed", float(sd)) for sd in stopping_distances] or [("fixed", 0.0), ("hermes", HERMES_MAX_STOPPING_DISTANCE)]
+    modes = [("fixed", sd) for sd in dict.fromkeys(float(x) for x in stopping_distances)]  # each value once
+    modes = modes or [("fixed", 0.0), ("hermes", HERMES_MAX_STOPPING_DISTANCE)]
+    names = _mode_names(modes)
     for col in ("scene", "trajectory", "stopping distance", "verdict",
                 "first collision / stopping-distance violation: link / object feature at point, time",
                 "least clearance (moving arm): [proven, evaluated]", "time"):
@@ -144,16 +160,14 @@ def demo_cmd(out_dir, scenes, stopping_distances, list_only) -> None:
             v = verifiers.get(traj.robot_name)
             if v is None:
                 v = verifiers[traj.robot_name] = Verifier(sc, robot=traj.robot_name)
-            for mode, sd in modes:
+            for (mode, sd), (label, stem_sd) in zip(modes, names):
                 t0 = time.perf_counter()
                 if mode == "hermes":
                     plain = v.verify(traj, name=tname)
                     sdf = hermes_table(plain.details.max_speed, sd)
                     r = v.verify(Subdivided(traj, SUBDIVISIONS), stopping_distance=sdf, name=tname)
-                    label, stem_sd = f"Hermes ≤ {sd * 1e3:.0f} mm", f"hermes{sd * 1e3:.0f}mm"
                 else:
                     r = v.verify(traj, stopping_distance=sd, name=tname)
-                    label, stem_sd = f"{sd * 1e3:.0f} mm", f"sd{sd * 1e3:.0f}mm"
                 dt = time.perf_counter() - t0
                 stem = f"{_file_stem(name, sc)}__{tname}__{stem_sd}"
                 r.save_json(out / f"{stem}.json")  # each all or nothing (armguard._io.atomic_write)
