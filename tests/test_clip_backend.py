@@ -176,3 +176,22 @@ def test_bad_options_are_refused_naming_the_option(puma, opts, said):
     with pytest.raises(BackendError, match=said.replace("(", r"\(").replace(")", r"\)")):
         armguard.checker(model, "clip", opts)
     assert armguard.checker(model, "clip", {"rings": "12,3", "subdivide": False})._guard_opts["rings"] == (12, 3)
+
+
+@pytest.mark.parametrize("gap_mm, hit", [(-1.0, True), (0.5, False), (1.0, False), (1.5, False), (3.0, False)])
+def test_a_cylinder_link_beside_a_workspace_wall_is_judged_by_the_cylinder_itself(tmp_path, gap_mm, hit):
+    """A cylinder turned 11.25 deg about its axis: its 16-sided circumscribed prism reaches 2 % of the radius
+    beyond it, and 1-1.5 mm from the wall read INTERSECTED (coal: clear)."""
+    urdf = tmp_path / "cyl.urdf"
+    urdf.write_text("""<robot name="cyl">
+  <link name="base"/>
+  <link name="arm"><collision><origin xyz="0.5 0 0" rpy="0 0 0.19635"/>
+    <geometry><cylinder radius="0.1" length="0.2"/></geometry></collision></link>
+  <joint name="j" type="prismatic"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>
+    <limit lower="0" upper="0.1" effort="1" velocity="1"/></joint>
+</robot>""")
+    model = armguard.load_model(urdf).with_workspace([-2, -2, -2], [0.6 + gap_mm * 1e-3, 2, 2])
+    clip, ref = armguard.checker(model, "clip"), armguard.checker(model, "coal")
+    Q = np.array([[0.0], [0.05]])
+    assert np.array_equal(ref.collides(Q), [hit, hit])
+    assert np.array_equal(clip.collides(Q), [hit, hit])
