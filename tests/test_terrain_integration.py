@@ -358,3 +358,70 @@ def test_a_detector_with_terrain_answers_for_it_in_batches():
     assert all(s.value in ("collision", "incomplete") for s, yes in zip(want, said) if yes)
     armguard.terrain.attach_terrain(det, None)  # detached: the kernel's batches again
     assert not det.collides_many(Q[:1])[0]
+
+
+@pytest.mark.parametrize("backend", ["analytic", "coal"])
+def test_the_terrain_guard_follows_the_active_arm(backend):
+    """``set_active`` left the guard on the old arm: a terrain collision of the new one read WARNING (ranger, flat
+    ground between where the two arms reach down).  A map's guard and a guard given for one arm both follow it."""
+    from armguard.terrain import ElevationMap, TerrainGuard
+
+    m = armguard.load_model("ranger")
+    Q = [m.scene_q(q) for q in m.random_q(200, 0)]
+    flat = ElevationMap.from_heights(np.zeros((80, 80)), 0.1, origin=(-4.0, -4.0))
+    dr = np.array([TerrainGuard(m, flat, robot="right_arm", reach=10.0).check(q).known_distance for q in Q])
+    dl = np.array([TerrainGuard(m, flat, robot="left_arm", reach=10.0).check(q).known_distance for q in Q])
+    i = int(np.argmax(dl - dr))
+    assert dl[i] - dr[i] > 0.02  # 26 mm above the ground and 26 mm into it
+    ground = ElevationMap.from_heights(np.full((80, 80), 0.5 * (dr[i] + dl[i])), 0.1, origin=(-4.0, -4.0))
+    given = TerrainGuard(m, ground, robot="left_arm")
+    for terrain in (ground, given):
+        d = armguard.Detector(m, threshold=0.05, active="left_arm", terrain=terrain, backend=backend)
+        assert d.check(Q[i]).terrain.status is not armguard.Status.COLLISION  # the left arm is above the ground
+        d.set_active("right_arm")
+        fresh = armguard.Detector(m, threshold=0.05, active="right_arm", terrain=ground, backend=backend)
+        a, b = d.check(Q[i]), fresh.check(Q[i])
+        assert d.terrain.robot == "right_arm"
+        assert b.terrain.status is armguard.Status.COLLISION and a.status is b.status is armguard.Status.COLLISION
+        assert a.terrain.known_distance == b.terrain.known_distance
+        assert d.collides_many(np.array([Q[i]]))[0] and d.check_many(np.array([Q[i]])).collision[0]
+        d.set_active("left_arm")
+        assert d.terrain.robot == "left_arm" and d.check(Q[i]).terrain.status is not armguard.Status.COLLISION
+        d.set_active(None)  # every arm: the map's guard over every robot, the given one kept (it covers an arm)
+        assert d.terrain.robot is None if terrain is ground else d.terrain is given
+
+
+def test_the_terrain_part_uses_the_settings_its_check_used(monkeypatch):
+    """The guard read the detector's threshold after the kernel's check: another thread's change in between gave a
+    report of two settings (144 of ~6k under a toggling thread)."""
+    from armguard.terrain import ElevationMap
+
+    m = armguard.load_model("ranger")
+    ground = ElevationMap.from_heights(np.full((80, 80), -0.1), 0.1, origin=(-4.0, -4.0))
+    d = armguard.Detector(m, threshold=0.05, stopping_distance=0.01, terrain=ground, backend="coal")
+    kernel_check, kernel_many = type(d).check, type(d).check_many
+
+    def check_then_change(self, q, **kw):
+        r = kernel_check(self, q, **kw)
+        self.set_threshold(0.3)
+        self.set_stopping_distance(0.1)
+        return r
+
+    def many_then_change(self, Q):
+        r = kernel_many(self, Q)
+        self.set_threshold(0.3)
+        self.set_stopping_distance(0.1)
+        return r
+
+    monkeypatch.setattr(type(d), "check", check_then_change)
+    monkeypatch.setattr(type(d), "check_many", many_then_change)
+    q = m.scene_q(m.random_q(1, 0)[0])
+    r = d.check(q)
+    assert r.threshold == r.terrain.threshold == 0.05 and r.stopping_distance == r.terrain.stopping_distance == 0.01
+    d.set_threshold(0.05)
+    d.set_stopping_distance(0.01)
+    b = d.check_many(np.array([q]))
+    monkeypatch.undo()
+    d.set_threshold(0.05)
+    d.set_stopping_distance(0.01)
+    assert b.threshold == 0.05 and b.status[0] == d.check_many(np.array([q])).status[0]

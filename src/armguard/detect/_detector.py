@@ -96,6 +96,9 @@ class Detector:
             except BaseException:
                 self._active = old
                 raise
+            hook = self.__dict__.get("_on_switch")  # what an extra attached follows (terrain: its guard's arm)
+            if hook is not None:
+                hook()
 
     def __new__(cls, scene=None, *args, backend: str | None = None, backend_options=None, **kwargs):
         if cls is not Detector:  # a concrete Detector, built directly

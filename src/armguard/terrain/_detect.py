@@ -80,42 +80,65 @@ def _merged(detector, rep: DetectionReport, terrain: TerrainReport) -> TerrainDe
 
 
 def check_with_terrain(detector, guard: TerrainGuard, q, **kwargs) -> TerrainDetectionReport:
-    """``detector.check(q, **kwargs)`` and ``guard.check(q)`` at the detector's threshold and stopping
-    distance, as one report; its ``terrain`` attribute is the guard's :class:`TerrainReport`.
-    Works with any Detector, terrain attached or not (the guard given here is the one used)."""
+    """``detector.check(q, **kwargs)`` and ``guard.check(q)`` at the threshold and stopping distance that
+    check used (its report's: another thread may change the detector's between the two), as one report;
+    its ``terrain`` attribute is the guard's :class:`TerrainReport`.  Works with any Detector, terrain
+    attached or not (the guard given here is the one used)."""
     check = type(detector).check  # the kernel's check, whatever is attached
     rep = check(detector, q, **kwargs)
-    ter = guard.check(q, threshold=detector.threshold, stopping_distance=detector.stopping_distance)
+    ter = guard.check(q, threshold=rep.threshold, stopping_distance=rep.stopping_distance)
     return _merged(detector, rep, ter)
+
+
+def _guard_over(given: TerrainGuard, scene, robot: str | None) -> TerrainGuard:
+    """``given``, or a guard over the same pyramid, reach and margins for ``robot`` (None: every robot)."""
+    if robot == given.robot:
+        return given
+    return TerrainGuard(scene, given.pyramid, robot=robot, reach=given.reach, unknown_margin=given.unknown_margin,
+                        tol=given.tol)
 
 
 def attach_terrain(detector, terrain) -> TerrainGuard:
     """Attach ``terrain`` (a :class:`TerrainGuard`, :class:`TerrainPyramid` or :class:`ElevationMap`)
     to ``detector``: from now on ``detector.check(q)`` returns a :class:`TerrainDetectionReport`;
     ``detector.terrain`` is the guard.  A pyramid or map gets a guard over the detector's active
-    robot (all robots when none).  ``None`` detaches.  Returns the guard."""
+    robot (all robots when none); ``set_active`` moves it to the new active arm, and a guard given for
+    one arm is followed by one over the same terrain for the new arm (it checked the old arm: a
+    terrain collision of the new one read WARNING).  ``None`` detaches.  Returns the guard."""
     if terrain is None:
-        for name in ("check", "collides_many", "check_many"):
+        for name in ("check", "collides_many", "check_many", "_on_switch"):
             detector.__dict__.pop(name, None)
         detector.terrain = None
         return None
-    guard = terrain if isinstance(terrain, TerrainGuard) else TerrainGuard(detector.scene, terrain,
-                                                                            robot=detector.active)
-    detector.terrain = guard
+    if isinstance(terrain, TerrainGuard):
+        given = terrain
+    else:
+        given = TerrainGuard(detector.scene, terrain, robot=detector.active)
+    derived = not isinstance(terrain, TerrainGuard)
+    detector.terrain = given
+
+    def on_switch() -> None:  # set_active's build, under its lock: the guard follows the active arm
+        a = detector.active
+        if derived:  # made here for the active arm (every robot when none)
+            detector.terrain = _guard_over(given, detector.scene, a)
+        else:  # the given guard while it covers the active arm
+            detector.terrain = given if a is None or given.robot in (None, a) else _guard_over(given, detector.scene, a)
 
     def check(q, **kwargs):
-        return check_with_terrain(detector, guard, q, **kwargs)
+        return check_with_terrain(detector, detector.terrain, q, **kwargs)
 
     def collides_many(Q):
+        guard, sd = detector.terrain, detector.stopping_distance
         own = np.asarray(type(detector).collides_many(detector, Q))
-        return own | guard.collides_many(Q, stopping_distance=detector.stopping_distance)
+        return own | guard.collides_many(Q, stopping_distance=sd)
 
     def check_many(Q):
+        guard = detector.terrain
         own = type(detector).check_many(detector, Q)
         rows = np.asarray(Q, dtype=np.float64).reshape(len(own.status), -1)
         status, collision = own.status.copy(), own.collision.copy()
-        for i, q in enumerate(rows):
-            ter = guard.check(q, threshold=detector.threshold, stopping_distance=detector.stopping_distance).status
+        for i, q in enumerate(rows):  # at the settings the batch used (its report's)
+            ter = guard.check(q, threshold=own.threshold, stopping_distance=own.stopping_distance).status
             merged = merge_status(STATUS_CODES[int(status[i])], ter)
             status[i] = STATUS_CODES.index(merged)
             collision[i] |= ter is Status.COLLISION
@@ -125,7 +148,8 @@ def attach_terrain(detector, terrain) -> TerrainGuard:
     collides_many.__doc__ = type(detector).collides_many.__doc__
     check_many.__doc__ = type(detector).check_many.__doc__
     detector.check, detector.collides_many, detector.check_many = check, collides_many, check_many
-    return guard
+    detector._on_switch = on_switch
+    return given
 
 
 register_extra("terrain", attach_terrain)  # Detector(..., terrain=...) attaches through it
