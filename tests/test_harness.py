@@ -293,3 +293,67 @@ def test_run_compare_gives_no_verdict_from_no_configuration():
         with pytest.raises(ArmguardError, match="n_configs: expected an integer >= 0"):
             run_compare("hermes", n_configs=bad, trajectories=None)
     assert list(run_compare("hermes", "analytic,coal", n_configs=3, trajectories=None).summary["pairs"]) == ["analytic/coal"]
+
+
+@pytest.fixture(scope="module")
+def hermes_coal():
+    from armguard.harness import build_configs, evaluate
+
+    m = armguard.load_model("hermes")
+    cfg = build_configs(m, 40, 0, None, 1.0)
+    return m, cfg, evaluate(m, cfg.Q, ("coal",))["coal"]
+
+
+def _judged(m, cfg, C, X):
+    from armguard.harness import compare_answers
+
+    return compare_answers(m, cfg, {"coal": C, "x": X}, spec="hermes").summary["pairs"]["coal/x"]
+
+
+def test_a_sign_flip_where_another_pair_collides_is_a_difference(hermes_coal):
+    """One pair 12 cm deep said 25 cm apart, in a configuration another pair collides in both: "agree" before
+    (only verdicts and separated distances were judged)."""
+    import copy
+
+    m, cfg, C = hermes_coal
+    D = C.distance
+    i = int(np.flatnonzero((D < -1e-3).sum(axis=1) >= 2)[0])
+    k = int(np.flatnonzero(D[i] < -1e-3)[0])
+    X = copy.deepcopy(C)
+    assert _judged(m, cfg, C, X)["status"] == "agree"
+    X.distance = D.copy()
+    X.distance[i, k] = 0.25
+    p = _judged(m, cfg, C, X)
+    assert p["verdict_disagreements"] == 0 and p["categories"]["all"]["sign_disagreements"] == 1
+    assert p["status"] == "differ"
+
+
+def test_moved_witness_points_are_a_difference(hermes_coal):
+    import copy
+
+    m, cfg, C = hermes_coal
+    X = copy.deepcopy(C)
+    X.p_WA = C.p_WA + np.array([0.3, 0.0, 0.0])  # every witness on A moved 30 cm
+    X.p_WB = C.p_WB + np.array([0.3, 0.0, 0.0])
+    p = _judged(m, cfg, C, X)
+    al = p["categories"]["all"]
+    assert al["unique_points"]["over_tolerance"] > 0 and p["status"] == "differ"
+
+
+def test_the_contact_band_excuses_a_disagreement_only_when_both_are_in_it(hermes_coal):
+    """The reference touching (d = 0) excused the other saying 0.5 m apart with the opposite verdict."""
+    import copy
+
+    m, cfg, C0 = hermes_coal
+    C, X = copy.deepcopy(C0), copy.deepcopy(C0)
+    i = int(np.flatnonzero(C.distance.min(axis=1) > 0.01)[0])
+    k = int(np.argmin(C.distance[i]))
+    C.distance[i, k], C.verdict[i] = 0.0, True
+    X.distance[i, k], X.verdict[i] = 0.5, False
+    p = _judged(m, cfg, C, X)
+    assert p["verdict_disagreements"] == 1 and p["status"] == "differ"
+    X.distance[i, k] = 1e-7  # both in the band (witness points made to fit both distances): excused
+    C.p_WB[i, k] = C.p_WA[i, k]
+    X.p_WA[i, k], X.p_WB[i, k] = C.p_WA[i, k], C.p_WA[i, k] + [1e-7, 0.0, 0.0]
+    p = _judged(m, cfg, C, X)
+    assert p["verdict_disagreements"] == 0 and p["verdict_disagreements_in_band"] == 1 and p["status"] == "agree"

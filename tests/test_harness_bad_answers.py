@@ -132,17 +132,23 @@ def test_a_healthy_wrapper_passes_the_checks(registered, model, Q, tmp_path):
     assert json.loads((tmp_path / "compare.json").read_text())["outputs"] == ["compare.json"]
 
 
-def test_a_nan_distance_names_backend_configuration_q_and_pair(registered, model, Q, tmp_path):
+def test_a_nan_distance_leaves_its_configuration_out_naming_backend_q_and_pair(registered, model, Q, tmp_path):
+    """A NaN at one configuration lost every answer already computed (the whole run raised): that configuration is
+    now left out of the comparison and reported, the others compared."""
     out = tmp_path / "out"
-    out.mkdir()
-    previous = '{"outputs": ["compare.json"], "previous": true}\n'
-    (out / "compare.json").write_text(previous)
-    with pytest.raises(BackendError) as e:
-        run_compare(MODEL, ("analytic", "spoiled"), n_configs=N_CONFIGS, seed=SEED, trajectories=None, out_dir=out,
-                    options={"spoiled": {"mode": "nan-distance", "at": _at(Q)}})
-    assert str(e.value) == (f"backend 'spoiled' answered distance NaN at configuration #{AT} (q = {Q[AT].tolist()}) "
-                            f"for pair {_pair(model)}, expected finite values (m)")
-    assert (out / "compare.json").read_text() == previous and sorted(p.name for p in out.iterdir()) == ["compare.json"]
+    comp = run_compare(MODEL, ("analytic", "spoiled"), n_configs=N_CONFIGS, seed=SEED, trajectories=None, out_dir=out,
+                       options={"spoiled": {"mode": "nan-distance", "at": _at(Q)}})
+    s = comp.summary
+    assert s["configs"]["drawn"] == N_CONFIGS and s["configs"]["refused"] == 1 and s["configs"]["total"] == N_CONFIGS - 1
+    assert s["refused"] == [{"config": AT, "q": Q[AT].tolist(), "message": (
+        f"backend 'spoiled' answered distance NaN at configuration #{AT} (q = {Q[AT].tolist()}) for pair "
+        f"{_pair(model)}, expected finite values (m)")}]
+    keep = [i for i in range(N_CONFIGS) if i != AT]
+    np.testing.assert_array_equal(comp.configs.Q, Q[keep])
+    assert [comp.configs.number(i) for i in range(len(keep))] == keep
+    np.testing.assert_array_equal(comp.answers["spoiled"].distance, comp.answers["analytic"].distance)
+    assert s["pairs"]["analytic/spoiled"]["status"] == "agree"  # the others agree; the run is not whole (CLI: exit 5)
+    assert json.loads((out / "compare.json").read_text())["configs"]["refused"] == 1
 
 
 def test_the_configuration_number_counts_across_chunks(registered, model, Q):
@@ -199,16 +205,25 @@ def _cli(*args):
     return CliRunner().invoke(main, [str(a) for a in args], terminal_width=250)
 
 
-def test_cli_compare_exits_3_and_writes_nothing(registered, model, Q, tmp_path):
+def test_cli_compare_with_a_refused_configuration_exits_5_and_says_which(registered, model, Q, tmp_path):
     out = tmp_path / "out"
     res = _cli("compare", MODEL, "--backends", "analytic,spoiled", "--configs", N_CONFIGS, "--seed", SEED,
                "--trajectory", "none", "--no-plots", "--out", out, "--backend-option", "spoiled.mode=nan-distance",
                "--backend-option", f"spoiled.at={_at(Q)}")
+    assert res.exit_code == ExitCode.INCOMPLETE, res.output
+    assert f"1 of {N_CONFIGS} configurations refused by a backend, left out of the comparison" in res.output
+    assert (f"#{AT}: backend 'spoiled' answered distance NaN at configuration #{AT} (q = {Q[AT].tolist()}) "
+            f"for pair {_pair(model)}, expected finite values (m)") in res.output.replace("\n", "")
+    assert json.loads((out / "compare.json").read_text())["configs"]["refused"] == 1
+
+
+def test_cli_compare_refuses_an_unwritable_out_before_the_work(tmp_path):
+    """A file where --out's folder goes was found after every answer was computed, and the comparison was lost."""
+    (tmp_path / "afile").write_text("")
+    res = _cli("compare", MODEL, "--backends", "analytic,coal", "--configs", 5, "--trajectory", "none", "--no-plots",
+               "--out", tmp_path / "afile" / "sub")
     assert res.exit_code == ExitCode.INPUT, res.output
-    line = res.output.strip()
-    assert line == (f"error: backend 'spoiled' answered distance NaN at configuration #{AT} (q = {Q[AT].tolist()}) "
-                    f"for pair {_pair(model)}, expected finite values (m)"), line
-    assert not out.exists()
+    assert "afile exists and is not a folder" in res.output and "answers" not in res.output
 
 
 def test_cli_compare_shape_error_exits_3(registered, model):

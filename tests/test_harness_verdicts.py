@@ -215,3 +215,14 @@ def test_verdict_answers_do_not_depend_on_the_chunks():
         np.testing.assert_array_equal(getattr(whole["clip"], field), getattr(chunked["clip"], field), err_msg=field)
     assert whole["clip"].pair_codes.shape == (24, len(model.pairs))
     np.testing.assert_array_equal(whole["coal"].distance, chunked["coal"].distance)
+
+
+def test_two_verdicts_only_backends_with_no_distance_backend_agree_only_where_their_verdicts_do(hermes_map, tmp_path):
+    """forbidden and clip alone were "agree" (exit 0) with 167 of 300 verdicts apart: nothing judged them."""
+    comp = run_compare("hermes", ("forbidden", "clip"), n_configs=200, seed=2, trajectories=None,
+                       options={"forbidden": {"map": str(hermes_map)}})
+    p = comp.summary["pairs"]["forbidden/clip"]
+    assert p["reference"] is None and "no backend of the run answers distances" in p["note"]
+    n = p["verdict_disagreements"]
+    assert n == int(np.sum(comp.answers["forbidden"].verdict != comp.answers["clip"].verdict)) and n > 0
+    assert p["status"] == "differ"

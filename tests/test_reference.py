@@ -76,6 +76,30 @@ def test_backends_match_the_reference(loaded, name):
         assert np.array_equal((d > 0)[far], (ref.distance > 0)[far])
 
 
+def test_a_live_sign_flip_differs_from_the_record_where_another_pair_collides(loaded):
+    """A live checker saying 0.3 m apart for a pair the record has deep inside "matched": its configuration
+    collides in another pair (the verdict holds) and only separated entries were compared."""
+    model, ref = loaded("hermes")
+    real = armguard.checker(model, "coal")
+    D = ref.distance
+    i = int(np.flatnonzero((D < -1e-3).sum(axis=1) >= 2)[0])
+    k = int(np.flatnonzero(D[i] < -1e-3)[0])
+
+    class Lying:
+        def pair_distances(self, q):
+            r = real.pair_distances(q)
+            if np.array_equal(q, ref.q[i]):
+                r.distance[k] = 0.3
+            return r
+
+        def collides(self, Q):
+            return real.collides(Q)
+
+    diff = compare_to_reference(model, Lying(), ref)
+    assert diff.verdict_mismatches == 0 and diff.sign_disagreements == 1
+    assert diff.status is DiffStatus.DIFFERS and "sign disagreements 1" in diff.message
+
+
 def test_a_changed_model_file_names_the_regenerating_command(tmp_path):
     shutil.copytree(repo_root() / "urdf" / "hermes", tmp_path / "hermes")
     urdf = tmp_path / "hermes" / "hermes.urdf"

@@ -46,7 +46,8 @@ def _pin_q(model, vals: list) -> list:
     return q
 
 
-@main.command("compare", epilog=exit_epilog(ok="the backends agree (--q: answered)", unsafe="a backend pair differs"))
+@main.command("compare", epilog=exit_epilog(ok="the backends agree (--q: answered)", unsafe="a backend pair differs",
+                                           incomplete="a backend refused some configurations; the others agree"))
 @click.argument("model")
 @click.option("--backends", type=BACKENDS, default="analytic,coal", show_default=True, help="Comma-separated backends to compare.")
 @click.option("--configs", "n_configs", type=AT_LEAST_ONE, default=1000, show_default=True, help="Seeded random in-limit configurations.")
@@ -143,8 +144,16 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
         tm = comp.summary["timing"]
         console.print(f"{comp.summary['configs']['total']} configurations: answers {tm['answers_s']:.1f} s, "
                       f"comparison {tm['compare_s']:.1f} s" + (f", outputs {tm['outputs_s']:.1f} s in {out_dir}" if out_dir else ""))
+    refused = comp.summary["configs"].get("refused", 0)
+    if refused and not as_json:
+        console.print(f"[bold]{refused} of {comp.summary['configs']['drawn']} configurations refused by a backend, left "
+                      "out of the comparison[/bold]; the first:")
+        for r in comp.summary["refused"]:
+            console.print(f"  #{r['config']}: {r['message']}", markup=False, soft_wrap=True)
     if any(p["status"] != "agree" for p in comp.summary["pairs"].values()):
         sys.exit(int(ExitCode.UNSAFE))
+    if refused:  # the others agree: not a whole comparison
+        sys.exit(int(ExitCode.INCOMPLETE))
 
 
 def _reference_line(ref: dict, exact: bool = False) -> str:

@@ -150,9 +150,11 @@ def _pair_summary(model, configs, A, B, R, a, b, cats, tol, tol_pair, unique, n_
     band = tol.differential_contact_band
     err = np.abs(A.distance - B.distance)
     out = {"a": a, "b": b, "reference": reference_of(a, b)}
-    dmin_ref = R.distance.min(axis=1) if R.distance.size else np.zeros(len(configs))
+    n_cfg = len(configs)
+    dmin_a = A.distance.min(axis=1) if A.distance.size else np.zeros(n_cfg)
+    dmin_b = B.distance.min(axis=1) if B.distance.size else np.zeros(n_cfg)
     differ = A.verdict != B.verdict
-    out_band = differ & (np.abs(dmin_ref) > band)
+    out_band = differ & ((np.abs(dmin_a) > band) | (np.abs(dmin_b) > band))  # in the band only when both are
     out["verdict_disagreements"] = int(out_band.sum())
     out["verdict_disagreements_in_band"] = int((differ & ~out_band).sum())
     out["max_abs_distance_error"] = float(err.max()) if err.size else 0.0
@@ -162,12 +164,12 @@ def _pair_summary(model, configs, A, B, R, a, b, cats, tol, tol_pair, unique, n_
     sep_all = (A.distance > band) & (B.distance > band)
     pen_all = (A.distance < -band) & (B.distance < -band)
     for c, cols in groups.items():
-        da, db, dr = A.distance[:, cols], B.distance[:, cols], R.distance[:, cols]
+        da, db = A.distance[:, cols], B.distance[:, cols]
         e = err[:, cols]
         sep, pen = sep_all[:, cols], pen_all[:, cols]
-        sign = ~sep & ~pen & (np.abs(dr) > band)
-        va, vb = da.min(axis=1) <= 0, db.min(axis=1) <= 0
-        cat_out = (va != vb) & (np.abs(dr.min(axis=1)) > band)
+        sign = ~sep & ~pen & ((np.abs(da) > band) | (np.abs(db) > band))  # apart by one, inside by the other
+        ma, mb = da.min(axis=1), db.min(axis=1)
+        cat_out = ((ma <= 0) != (mb <= 0)) & ((np.abs(ma) > band) | (np.abs(mb) > band))
         u = unique[:, cols]
         dpa = np.linalg.norm(A.p_WA[:, cols] - B.p_WA[:, cols], axis=2)[u]
         dpb = np.linalg.norm(A.p_WB[:, cols] - B.p_WB[:, cols], axis=2)[u]
@@ -186,14 +188,18 @@ def _pair_summary(model, configs, A, B, R, a, b, cats, tol, tol_pair, unique, n_
     out["speed_ratio"] = {"distances": A.us_per_config and B.us_per_config / A.us_per_config,
                           "yes_no": B.yes_no_per_s and A.yes_no_per_s / B.yes_no_per_s}
     out["worst"] = _worst(model, configs, A, B, a, b, err, out_band, tol_pair, n_worst, spec, options, refs)
-    ok = out["verdict_disagreements"] == 0 and per["all"]["separated_over_tolerance"] == 0
+    al = per["all"]
+    out["unjudged"] = {"penetrating": int(pen_all.sum())}  # depths: reported (``penetrating``), not judged
+    ok = (out["verdict_disagreements"] == 0 and al["separated_over_tolerance"] == 0 and al["sign_disagreements"] == 0
+          and al["unique_points"]["over_tolerance"] == 0
+          and all(w["violations_separated"] == 0 for w in al["witness_contract"].values()))
     return out, PairStatus.AGREE if ok else PairStatus.DIFFER
 
 
 def _entry(model, configs, A, B, a, b, i, k, spec, options, why):
     q = configs.Q[i]
     pair = tuple(model.pairs.names[k])
-    return {"why": why, "config": int(i), "source": str(configs.source[i]), "q": q.tolist(), "pair": list(pair),
+    return {"why": why, "config": configs.number(i), "source": str(configs.source[i]), "q": q.tolist(), "pair": list(pair),
             "category": model.pairs.category[k],
             a: {"distance": float(A.distance[i, k]), "p_WA": A.p_WA[i, k].tolist(), "p_WB": A.p_WB[i, k].tolist(),
                 "collides": bool(A.verdict[i])},

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -21,6 +21,8 @@ class ConfigSet:
     seed : int — of the random ones (``model.random_q(n_random, seed)``)
     n_random : int
     trajectories : dict[str, int] — samples per trajectory, in order after the random ones
+    rows : (M,) int64 or None — each configuration's number in the set drawn (None: ``0..M-1``; fewer
+        after the configurations a backend refused were dropped, :meth:`dropping`)
     """
 
     Q: np.ndarray
@@ -28,9 +30,20 @@ class ConfigSet:
     seed: int
     n_random: int
     trajectories: dict
+    rows: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.Q.shape[0])
+
+    def number(self, i: int) -> int:
+        """Configuration ``i``'s number in the set drawn (what ``config`` in a report says)."""
+        return int(i) if self.rows is None else int(self.rows[i])
+
+    def dropping(self, numbers) -> "ConfigSet":
+        """This set without the configurations numbered ``numbers`` (in the set drawn)."""
+        rows = np.arange(len(self)) if self.rows is None else self.rows
+        keep = ~np.isin(rows, np.asarray(list(numbers), dtype=np.int64))
+        return replace(self, Q=self.Q[keep], source=self.source[keep], rows=rows[keep])
 
 
 def trajectory_q(model, trajectory, frequency: float) -> tuple[np.ndarray, np.ndarray]:

@@ -102,6 +102,11 @@ def _codes_of(values) -> np.ndarray:
     return out
 
 
+class AnswerContractError(BackendError):
+    """An answer of another shape or type than the interface's: the backend is broken, and a comparison
+    stops at it (a refusal or a non-finite value at one configuration leaves that one out instead)."""
+
+
 def verdict_detail(checker, Q, *, backend: str | None = None, where: str | None = None) -> dict:
     """A verdicts-only backend's three-valued answers at ``Q`` ``(m, nq)``, where it exposes them.
 
@@ -131,7 +136,7 @@ def verdict_detail(checker, Q, *, backend: str | None = None, where: str | None 
     v = checker.verdicts(Q)
     status = np.asarray(getattr(v, "status", v), dtype=object)
     if status.shape != (len(Q),):
-        raise BackendError(f"backend {backend!r} answered verdicts of shape {status.shape} at {where}, expected ({len(Q)},)")
+        raise AnswerContractError(f"backend {backend!r} answered verdicts of shape {status.shape} at {where}, expected ({len(Q)},)")
     try:
         if hasattr(v, "collision"):  # armguard.cspace.CombinedBatch: int codes of CombinedStatus
             from ..cspace import CombinedStatus
@@ -139,7 +144,7 @@ def verdict_detail(checker, Q, *, backend: str | None = None, where: str | None 
             status = np.asarray([CombinedStatus(int(s)) for s in status], dtype=object)
         codes = _codes_of(status)
     except (ValueError, TypeError, ArmguardError) as exc:  # a code or name that is no verdict
-        raise BackendError(f"backend {backend!r} answered a verdict that is none at {where}: {exc}") from None
+        raise AnswerContractError(f"backend {backend!r} answered a verdict that is none at {where}: {exc}") from None
     out = {"codes": codes}
     if hasattr(v, "collision"):
         out["map_forbidden"] = codes == UNDECIDED
@@ -154,15 +159,15 @@ def _codes_array(backend: str, what: str, a, shape: tuple, where: str) -> np.nda
     except (TypeError, ValueError):
         arr = np.asarray(None)
     if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
-        raise BackendError(f"backend {backend!r} answered {what} of "
+        raise AnswerContractError(f"backend {backend!r} answered {what} of "
                            f"{type(a).__name__ if a is None else f'dtype {arr.dtype}'} at {where}, expected integer codes")
     if arr.ndim != 2 or any(want is not None and got != want for got, want in zip(arr.shape, shape)):
-        raise BackendError(f"backend {backend!r} answered {what} of shape {arr.shape} at {where}, expected "
+        raise AnswerContractError(f"backend {backend!r} answered {what} of shape {arr.shape} at {where}, expected "
                            f"{tuple('n' if x is None else x for x in shape)}")
     ok = (arr == CLEAR) | (arr == COLLISION) | (arr == UNDECIDED)
     if not ok.all():
         bad = sorted({int(x) for x in arr[~ok]})[:5]
-        raise BackendError(f"backend {backend!r} answered {what} codes {bad} at {where}, expected {CLEAR} (clear), "
+        raise AnswerContractError(f"backend {backend!r} answered {what} codes {bad} at {where}, expected {CLEAR} (clear), "
                            f"{COLLISION} (collision) or {UNDECIDED} (undecided)")
     return arr.astype(np.int8, copy=False)
 
@@ -232,10 +237,10 @@ def _real_array(backend: str, what: str, a, shape: tuple, config, q) -> np.ndarr
         arr = None
     if arr is None or arr.dtype == bool or not (np.issubdtype(arr.dtype, np.floating) or np.issubdtype(arr.dtype, np.integer)):
         kind = type(a).__name__ if arr is None else f"dtype {arr.dtype}"
-        raise BackendError(f"backend {backend!r} answered {what} of {kind} at {where_of(config, q)}, expected real "
+        raise AnswerContractError(f"backend {backend!r} answered {what} of {kind} at {where_of(config, q)}, expected real "
                            "numbers (float64)")
     if arr.shape != shape:
-        raise BackendError(f"backend {backend!r} answered {what} of shape {arr.shape} at {where_of(config, q)}, "
+        raise AnswerContractError(f"backend {backend!r} answered {what} of shape {arr.shape} at {where_of(config, q)}, "
                            f"expected {shape}")
     return arr.astype(np.float64, copy=False)
 
@@ -248,7 +253,7 @@ def checked_distances(backend: str, r, n: int, config, q) -> tuple:
     try:
         d, pa, pb = r.distance, r.p_WA, r.p_WB
     except AttributeError:
-        raise BackendError(f"backend {backend!r} answered pair_distances with {type(r).__name__} at "
+        raise AnswerContractError(f"backend {backend!r} answered pair_distances with {type(r).__name__} at "
                            f"{where_of(config, q)}, expected a PairDistances (distance, p_WA, p_WB)") from None
     return (_real_array(backend, "distance", d, (n,), config, q), _real_array(backend, "p_WA", pa, (n, 3), config, q),
             _real_array(backend, "p_WB", pb, (n, 3), config, q))
@@ -282,9 +287,9 @@ def checked_verdicts(backend: str, v, Q, start) -> np.ndarray:
         arr = None
     if arr is None or arr.dtype != bool:
         kind = type(v).__name__ if arr is None else f"dtype {arr.dtype}"
-        raise BackendError(f"backend {backend!r} answered collides of {kind} at {where}, expected bool")
+        raise AnswerContractError(f"backend {backend!r} answered collides of {kind} at {where}, expected bool")
     if arr.shape != (m,):
-        raise BackendError(f"backend {backend!r} answered collides of shape {arr.shape} at {where}, expected ({m},)")
+        raise AnswerContractError(f"backend {backend!r} answered collides of shape {arr.shape} at {where}, expected ({m},)")
     return arr
 
 
@@ -347,9 +352,33 @@ def _answer_chunk(model, checkers: dict, Q: np.ndarray, start: int = 0) -> dict:
     return out
 
 
-def _chunk_task(spec, backends, options_json, Q, start=0, token=""):
+def _chunk_task(spec, backends, options_json, Q, start=0, token="", keep_going=False):
     model, checkers = _cached(spec, tuple(backends), options_json, token)
+    if keep_going:
+        return _answer_rows(model, checkers, Q, start)
     return _answer_chunk(model, checkers, Q, start)
+
+
+def _answer_rows(model, checkers: dict, Q: np.ndarray, start: int) -> tuple:
+    """``(parts, refused)``: :func:`_answer_chunk`'s answers for the rows a backend answers, and for each row
+    one refused (a BackendError: a NaN answer, a configuration the backend refuses), ``{"config", "q",
+    "message"}``.  The chunk at once; after a refusal, row by row (the other rows' answers are kept).  An
+    :class:`AnswerContractError` (a broken backend) raises."""
+    try:
+        return [_answer_chunk(model, checkers, Q, start)], []
+    except AnswerContractError:
+        raise
+    except BackendError:
+        pass
+    parts, refused = [], []
+    for i in range(len(Q)):
+        try:
+            parts.append(_answer_chunk(model, checkers, Q[i:i + 1], start + i))
+        except AnswerContractError:
+            raise
+        except BackendError as exc:
+            refused.append({"config": start + i, "q": Q[i].tolist(), "message": str(exc)})
+    return parts, refused
 
 
 _ARRAYS = ("distance", "p_WA", "p_WB", "verdict", "codes", "codes_first", "pair_codes", "pair_codes_first",
@@ -368,13 +397,19 @@ def _merge(parts: list, backends) -> dict:
 
 
 def evaluate(model, Q, backends, options=None, *, spec: str | None = None, workers: int | None = None,
-             scheduler: str | None = None, chunk_size: int | None = None, progress=None, checkers=None) -> dict:
+             scheduler: str | None = None, chunk_size: int | None = None, progress=None, checkers=None,
+             refused: list | None = None) -> dict:
     """``{backend: BackendAnswers}`` at every row of ``Q`` ``(M, nq)``.
 
     Serially by default (``checkers``: prebuilt ones to reuse); with ``workers`` (a fresh Dask
     LocalCluster of that many single-threaded processes) or ``scheduler`` (an address), on Dask;
     the workers load the model from ``spec`` (what :func:`resolve_model` takes).  ``progress``:
     ``callable(done, total)`` after each chunk.
+
+    A backend's refusal (BackendError) at one row raises, unless ``refused`` is a list: then each
+    refused row is appended to it (``{"config", "q", "message"}``) and left out of every backend's
+    answers, whose rows are the others, in order (what was answered is kept).  A refusal at every
+    row raises the first.
     """
     backends = tuple(backends)
     Q = np.ascontiguousarray(np.asarray(Q, dtype=np.float64))
@@ -387,16 +422,29 @@ def evaluate(model, Q, backends, options=None, *, spec: str | None = None, worke
         size = chunk_size or 256
         parts = []
         for s in range(0, M, size):
-            parts.append(_answer_chunk(model, checkers, Q[s:s + size], s))
+            if refused is None:
+                parts.append(_answer_chunk(model, checkers, Q[s:s + size], s))
+            else:
+                got, no = _answer_rows(model, checkers, Q[s:s + size], s)
+                parts += got
+                refused += no
             if progress is not None:
                 progress(min(M, s + size), M)
-        return _merge(parts, backends) if parts else _merge([_answer_chunk(model, checkers, Q)], backends)
+        if not M:
+            return _merge([_answer_chunk(model, checkers, Q)], backends)
+        return _merged(parts, backends, refused)
     if spec is None:
         raise ArmguardError("evaluating on Dask needs the model's spec (a name or a file path the workers can load)")
-    return _on_dask(str(spec), Q, backends, options, workers, scheduler, chunk_size, progress)
+    return _on_dask(str(spec), Q, backends, options, workers, scheduler, chunk_size, progress, refused)
 
 
-def _on_dask(spec, Q, backends, options, workers, scheduler, chunk_size, progress) -> dict:
+def _merged(parts: list, backends, refused) -> dict:
+    if not parts:  # every row refused: nothing to compare
+        raise BackendError(f"every configuration was refused; the first: {refused[0]['message']}")
+    return _merge(parts, backends)
+
+
+def _on_dask(spec, Q, backends, options, workers, scheduler, chunk_size, progress, refused=None) -> dict:
     from distributed import as_completed
 
     from .._dask import dask_client
@@ -406,7 +454,8 @@ def _on_dask(spec, Q, backends, options, workers, scheduler, chunk_size, progres
         size = chunk_size or max(1, math.ceil(M / (4 * n_workers)))
         starts = list(range(0, M, size)) or [0]
         opts, token = json.dumps(options, sort_keys=True), uuid.uuid4().hex
-        futures = {client.submit(_chunk_task, spec, backends, opts, Q[s:s + size], s, token, pure=False): k
+        keep_going = refused is not None
+        futures = {client.submit(_chunk_task, spec, backends, opts, Q[s:s + size], s, token, keep_going, pure=False): k
                    for k, s in enumerate(starts)}
         parts: list = [None] * len(starts)
         done = 0
@@ -416,4 +465,8 @@ def _on_dask(spec, Q, backends, options, workers, scheduler, chunk_size, progres
             done += len(Q[starts[k]:starts[k] + size])
             if progress is not None:
                 progress(done, M)
-        return _merge(parts, backends)
+        if not keep_going:
+            return _merge(parts, backends)
+        for _, no in parts:  # in the configurations' order
+            refused += no
+        return _merged([p for got, _ in parts for p in got], backends, refused)

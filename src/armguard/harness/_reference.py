@@ -247,7 +247,10 @@ class ReferenceDiff:
     ``distance_over``: separated (both ``> band``) entries off by more than the pair's tolerance
     (or ``distance_tol`` when given); ``max_separated_error``, ``max_point_error`` (m, unique points);
     ``worst``: ``(config, pair, live d, recorded d)`` of the largest separated error;
-    ``nonfinite``: live distances or witness points that are NaN or infinite (any makes it DIFFERS).
+    ``nonfinite``: live distances or witness points that are NaN or infinite (any makes it DIFFERS);
+    ``sign_disagreements``: entries apart (``> band``) by one and inside (``< -band``) by the other, or out
+    of the band by one only (any makes it DIFFERS: a pair said 0.3 m apart where the record is 0.17 m deep
+    matched, its configuration colliding in another pair).
     """
 
     status: DiffStatus
@@ -259,13 +262,14 @@ class ReferenceDiff:
     max_point_error: float
     worst: tuple | None
     nonfinite: int = 0
+    sign_disagreements: int = 0
 
     @property
     def message(self) -> str:
         return (f"{self.status.value}: pairs match {self.pairs_match}, verdict mismatches {self.verdict_mismatches}, "
                 f"separated distances over tolerance {self.distance_over} (max error {self.max_separated_error:.3e} m), "
                 f"unique witness points over tolerance {self.point_over} (max {self.max_point_error:.3e} m), "
-                f"non-finite live answers {self.nonfinite}; worst {self.worst}")
+                f"sign disagreements {self.sign_disagreements}, non-finite live answers {self.nonfinite}; worst {self.worst}")
 
 
 def compare_to_reference(model, checker, ref: Reference, *, tol: Tolerances = DEFAULT_TOLERANCES,
@@ -288,9 +292,12 @@ def compare_to_reference(model, checker, ref: Reference, *, tol: Tolerances = DE
         d[i], pa[i], pb[i] = r.distance, r.p_WA, r.p_WB
     v = np.asarray(checker.collides(ref.q), dtype=bool)
     nonfinite = int(np.count_nonzero(~np.isfinite(d)) + np.count_nonzero(~np.isfinite(pa)) + np.count_nonzero(~np.isfinite(pb)))
-    verdict_bad = int(((v != ref.verdict) & (np.abs(ref.distance.min(axis=1)) > band)).sum())
+    out_band = (np.abs(ref.distance.min(axis=1)) > band) | (np.abs(d.min(axis=1)) > band)  # excused when both are in it
+    verdict_bad = int(((v != ref.verdict) & out_band).sum())
     tol_pair = pair_distance_tolerance(model, tol) if distance_tol is None else np.full(n, float(distance_tol))
     sep = (d > band) & (ref.distance > band)
+    pen = (d < -band) & (ref.distance < -band)
+    sign = int((~sep & ~pen & ((np.abs(d) > band) | (np.abs(ref.distance) > band))).sum())
     err = np.where(sep, np.abs(d - ref.distance), 0.0)
     over = int((err > tol_pair[None, :]).sum())
     worst = None
@@ -303,6 +310,6 @@ def compare_to_reference(model, checker, ref: Reference, *, tol: Tolerances = DE
         dp = np.maximum(np.linalg.norm(pa - ref.p_WA, axis=2), np.linalg.norm(pb - ref.p_WB, axis=2))[u]
         point_over = int((dp > tol.differential_unique_point).sum())
         max_point = float(dp.max()) if dp.size else 0.0
-    ok = verdict_bad == 0 and over == 0 and point_over == 0 and nonfinite == 0
+    ok = verdict_bad == 0 and over == 0 and point_over == 0 and nonfinite == 0 and sign == 0
     return ReferenceDiff(DiffStatus.MATCH if ok else DiffStatus.DIFFERS, True, verdict_bad, over,
-                         float(err.max()) if err.size else 0.0, point_over, max_point, worst, nonfinite)
+                         float(err.max()) if err.size else 0.0, point_over, max_point, worst, nonfinite, sign)

@@ -54,6 +54,10 @@ def run_compare(spec, backends=("analytic", "coal"), *, n_configs: int = 1000, s
     for b in options:
         if b not in backends:
             raise ArmguardError(f"--backend-option for {b!r}, which is not among --backends {list(backends)}")
+    if out_dir is not None:  # refused before the work, not after it (an unwritable --out lost the whole comparison)
+        from .._io import check_writable
+
+        check_writable(Path(out_dir) / "compare.json")
     t0 = time.perf_counter()
     model = model if model is not None else resolve_model(spec)
     configs = build_configs(model, n_configs, seed, trajectories, frequency)
@@ -61,10 +65,16 @@ def run_compare(spec, backends=("analytic", "coal"), *, n_configs: int = 1000, s
         raise ArmguardError(f"no configuration to compare: n_configs = {n_configs} and no trajectory samples (give "
                             "--configs >= 1 or a trajectory)")
     t1 = time.perf_counter()
+    refused: list = []  # configurations a backend refused: left out of the comparison, reported, never "agree" alone
     answers = evaluate(model, configs.Q, backends, options, spec=str(spec), workers=workers, scheduler=scheduler,
-                       progress=progress)
+                       progress=progress, refused=refused)
+    drawn = len(configs)
+    if refused:
+        configs = configs.dropping([r["config"] for r in refused])
     t2 = time.perf_counter()
     comp = compare_answers(model, configs, answers, spec=str(spec), options=options, tol=tol, n_worst=n_worst)
+    comp.summary["configs"].update(drawn=drawn, refused=len(refused))
+    comp.summary["refused"] = refused[:n_worst]  # the first few, with their messages
     t3 = time.perf_counter()
     comp.summary["timing"] = {"load_and_configs_s": t1 - t0, "answers_s": t2 - t1, "compare_s": t3 - t2,
                               "workers": int(workers) if workers else None, "scheduler": scheduler}

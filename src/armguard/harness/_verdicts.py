@@ -175,7 +175,7 @@ def _worst(model, configs, V, R, v, r, side, band, n_worst, spec, options, repro
         mine = {"collides": bool(V.verdict[i]),
                 "verdict": names[int(V.codes[i])] if V.codes is not None else None,
                 "pair_verdict": names[int(V.pair_codes[i, k])] if V.pair_codes is not None else None}
-        return {"why": why, "config": int(i), "source": str(configs.source[i]), "q": q.tolist(), "pair": list(pair),
+        return {"why": why, "config": configs.number(i), "source": str(configs.source[i]), "q": q.tolist(), "pair": list(pair),
                 "category": model.pairs.category[k], v: mine,
                 r: {"distance": float(D[i, k]), "least_distance": float(dmin[i]), "p_WA": R.p_WA[i, k].tolist(),
                     "p_WB": R.p_WB[i, k].tolist(), "collides": bool(R.verdict[i])},
@@ -213,8 +213,9 @@ def verdict_pair_summary(model, configs, answers, a, b, groups, tol, n_worst, sp
         differ = A.verdict != B.verdict
         out.update(verdict_disagreements=int(differ.sum()), verdict_disagreements_in_band=0, unsafe_disagreements=None,
                    maybe_share=None, categories={"all": {"pairs": len(model.pairs), "disagreements": int(differ.sum())}},
-                   worst=[])
-        return out, True
+                   worst=[], note="no backend of the run answers distances to judge them: they agree only where "
+                                  "their verdicts are the same (add coal or analytic to judge which is wrong)")
+        return out, not differ.any()  # an unjudged disagreement is not "agree"
     R = answers[ref]
     per = {}
     for s in sides:
