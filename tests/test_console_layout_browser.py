@@ -126,3 +126,31 @@ def test_stop_is_in_view_at_the_top_of_the_tests_tab_and_red():
                 browser.close()
     finally:
         app.stop()
+
+
+def test_the_status_panel_says_no_connection_when_the_server_is_gone():
+    """The page kept the last CLEAR on screen, dimmed, after the server stopped: it is now covered by a red notice
+    that there is no verdict."""
+    _need_chromium()
+    from playwright.sync_api import sync_playwright
+
+    app = _serve("ranger")
+    stopped = False
+    try:
+        with sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            try:
+                page = _open(browser, app)
+                assert "CLEAR" in page.inner_text("#armguard-status")
+                assert page.query_selector("#armguard-stale") is None
+                app.stop()
+                stopped = True
+                notice = page.wait_for_selector("#armguard-stale", state="visible", timeout=UI_TIMEOUT_MS)
+                assert notice.inner_text().startswith("NO CONNECTION: no verdict")
+                box, panel = notice.bounding_box(), page.query_selector("#armguard-status").bounding_box()
+                assert box["width"] >= panel["width"] - 1 and box["height"] >= panel["height"] - 1  # all of it covered
+            finally:
+                browser.close()
+    finally:
+        if not stopped:
+            app.stop()

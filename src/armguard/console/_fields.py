@@ -111,6 +111,25 @@ _JS = (
     "new MutationObserver(mark).observe(document.body,{childList:true,subtree:true});mark();}"
 )
 
+STALE_AFTER_MS = 1000
+"""Milliseconds without a connection after which the status panel is covered by "NO CONNECTION"."""
+
+_STALE_JS = (
+    # viser keeps its last GUI on screen, dimmed, when the server goes: the status panel's last CLEAR
+    # stayed readable.  With no connection (viser's connected icon gone) for STALE_AFTER_MS, the panel
+    # is covered by a red notice that there is no verdict; a reconnection's fresh panel takes it away.
+    "if(!window.__armguardStale){window.__armguardStale=1;var seen=false,gone=0;"
+    "setInterval(function(){var up=!!document.querySelector('.tabler-icon-cloud-check');"
+    "var p=document.getElementById('armguard-status');var o=document.getElementById('armguard-stale');"
+    "if(up){seen=true;gone=0;if(o)o.remove();return;}"
+    "if(!seen||!p)return;gone+=250;if(gone<" + str(STALE_AFTER_MS) + "||o)return;"
+    "o=document.createElement('div');o.id='armguard-stale';"
+    "o.textContent='NO CONNECTION: no verdict (the status under this is from before the connection was lost)';"
+    "o.style.cssText='position:absolute;inset:0;z-index:5;display:flex;align-items:center;justify-content:center;"
+    "text-align:center;background:rgba(170,0,0,0.94);color:#fff;font-weight:700;font-size:1.1em;padding:8px';"
+    "p.style.position='relative';p.appendChild(o);},250);}"
+)
+
 COMMIT_ON_BLUR_HTML = (
     "<style>.mantine-Slider-root + .mantine-NumberInput-root{display:none !important}"
     # the status panel stays in sight: the controls scroll beneath it
@@ -121,10 +140,11 @@ COMMIT_ON_BLUR_HTML = (
     # wider than it wraps (the panel's names) or is held to its width (labels, boxes)
     ".mantine-ScrollArea-viewport:has(#armguard-status){overflow-x:hidden !important}"
     ".mantine-ScrollArea-content:has(#armguard-status){min-width:0 !important;max-width:100%}</style>"
-    f'<img src="data:," alt="" style="display:none" onerror="{_JS}">'
+    f'<img src="data:," alt="" style="display:none" onerror="{_JS}{_STALE_JS}">'
 )
 """HTML for ``gui.add_html``: submits a typed field's form on blur; hides sliders' number boxes;
-keeps the status panel on top while the controls scroll."""
+keeps the status panel on top while the controls scroll; covers it with "NO CONNECTION" when the
+server is gone (:data:`STALE_AFTER_MS`)."""
 
 
 class TypedField:
