@@ -16,10 +16,16 @@ filtered velocity ``v`` is the solution of the small QP
 and, at a configuration ``q`` (:func:`avoid_step`), each bounded joint may not pass its position limit
 within one control period: ``(lower - q) / period <= v <= (upper - q) / period`` (clamped to include 0).
 
-Two changes keep it safe in discrete time and always feasible:
+Three changes keep it safe in discrete time and always feasible:
 
 * the damper's rate ``xi / (d_i - d_s)`` is capped at ``1 / period``, so that one control period
   at the allowed rate cannot carry a pair past ``d_s`` (to first order);
+* :func:`avoid_step` checks the end of the period itself (second order and beyond): every pair's
+  distance at ``q + v period``; where a pair would end below ``d_s`` (or, already inside, closer
+  than now) -- a distance curving along the motion, or a pair outside ``d_i`` crossing the band in
+  one period -- ``v`` is halved until none does (at most :data:`END_CHECK_HALVINGS` times, then
+  stopped).  At the cap the first-order step had carried a Ranger pair 8 mm past a 30 mm
+  stand-off at 2 Hz, and into contact with stand-off 0;
 * a pair already inside the stand-off distance (``d < d_s``) may not close at all (``d' v >= 0``)
   instead of being pushed out, and a joint at (or, within ``Tolerances.joint_limit``, past) a limit
   may not move further out: ``v = 0`` satisfies every constraint, so the QP is never infeasible and
@@ -152,8 +158,13 @@ def _all_finite(*arrays) -> bool:
 
 
 def _check_command(v_cmd, nv: int) -> np.ndarray:
+    """``v_cmd`` as a fresh ``(nv,)`` float64 array (a copy: a caller reusing its buffer does not change a result's
+    ``commanded``); complex and bool entries refused (``1+1j`` dropped its imaginary part, ``True`` read 1 rad/s)."""
+    from .._values import refuse_complex_or_bool
+
+    refuse_complex_or_bool(v_cmd, "v_cmd", AvoidanceError)
     try:
-        v = np.asarray(v_cmd, dtype=np.float64)
+        v = np.array(v_cmd, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise AvoidanceError(f"v_cmd: expected {nv} numbers, got {v_cmd!r}") from exc
     if v.shape != (nv,):
@@ -220,8 +231,8 @@ def avoid(v_cmd, distances, damper: Damper, *, bounds=None, tol: Tolerances = DE
         raise AvoidanceError("avoid: a distance or a Jacobian entry is NaN or infinite; no velocity can be given")
     lo, hi = (-damper.limits(nv), damper.limits(nv)) if bounds is None else \
         (np.asarray(bounds[0], dtype=np.float64), np.asarray(bounds[1], dtype=np.float64))
-    if lo.shape != (nv,) or hi.shape != (nv,) or np.any(lo > 0.0) or np.any(hi < 0.0):
-        raise AvoidanceError(f"avoid: bounds must be two ({nv},) arrays with lo <= 0 <= hi")
+    if lo.shape != (nv,) or hi.shape != (nv,) or not np.all(lo <= 0.0) or not np.all(hi >= 0.0):  # NaN: refused
+        raise AvoidanceError(f"avoid: bounds must be two ({nv},) arrays of numbers with lo <= 0 <= hi")
     near = d < damper.influence
     rows = np.flatnonzero(near & (np.einsum("ij,ij->i", jac, jac) > tol.avoid_row ** 2))
     A = np.ascontiguousarray(jac[rows])
@@ -299,15 +310,53 @@ def avoid_step(checker, q, v_cmd, damper: Damper, *, pairs=None, tol: Tolerances
     nv = J.shape[1]
     if type(v_cmd) is not np.ndarray or v_cmd.dtype != np.float64 or v_cmd.shape != (nv,):
         v_cmd = _check_command(v_cmd, nv)
+    else:
+        v_cmd = v_cmd.copy()  # the result's ``commanded``: not the caller's buffer, which it may reuse
     d = np.ascontiguousarray(d, dtype=np.float64)
     J = np.ascontiguousarray(J, dtype=np.float64)
     lo, hi = velocity_bounds(model.pin_model, q, damper)
     v, rows, rate, closing, status, note = filter_velocity(v_cmd, d, J, lo, hi, damper, tol)
-    if near is not None:
-        rows = near[rows]
     dist = r.distance
     dmin = float(dist.min()) if len(dist) else math.inf
+    if np.any(v):
+        v2, why = _end_checked(checker, q, v, dist, idx, damper)
+        if v2 is not v:
+            v, note, closing = v2, f"{note}; {why}", J[rows] @ v2
+            status = AvoidanceStatus.STOPPED if not np.any(v) else AvoidanceStatus.SLOWED
+    if near is not None:
+        rows = near[rows]
     return _new_avoidance(v, v_cmd, status, rows, rate, closing, dmin, note)
+
+
+END_CHECK_HALVINGS = 10
+"""Halvings of a step's velocity the end-of-period check tries before it stops the arm (1/1024 of it)."""
+
+
+def _end_checked(checker, q, v, d_now, idx, damper: Damper):
+    """``(v, note)``: ``v`` when no pair ends the period ``q + v period`` below the stand-off (or, already inside
+    it, closer than now), else ``v`` halved until none does (zeros after :data:`END_CHECK_HALVINGS`), with a note
+    naming the pair."""
+    import pinocchio as pin
+
+    pm = checker.model.pin_model
+    # outside the stand-off: not below it at all; inside: not closer than now (less round-off: unmoved pairs)
+    floor = np.where(d_now >= damper.stand_off, damper.stand_off, d_now - 1e-12)
+    scale = 1.0
+    for k in range(END_CHECK_HALVINGS + 1):
+        q_end = pin.integrate(pm, q, v * (scale * damper.period))
+        d_end = checker.pair_distances(q_end, pairs=idx).distance
+        bad = ~(d_end >= floor)  # a NaN distance is no proof: halved too
+        if not bad.any():
+            if k == 0:
+                return v, ""
+            return v * scale, (f"end-of-period check: scaled by 1/{2 ** k} (a pair would have ended the period "
+                               f"{1e3 * worst_d:.2f} mm apart, stand-off {1e3 * damper.stand_off:.2f} mm)")
+        i = int(np.flatnonzero(bad)[0])
+        if k == 0:
+            worst_d = float(d_end[i])
+        scale *= 0.5
+    return np.zeros_like(v), (f"end-of-period check: stopped (a pair would end the period {1e3 * worst_d:.2f} mm apart "
+                              f"at 1/{2 ** END_CHECK_HALVINGS} of the step, stand-off {1e3 * damper.stand_off:.2f} mm)")
 
 
 def _new_avoidance(velocity, commanded, status, rows, rate, closing, min_distance, solver, _new=object.__new__):
