@@ -137,3 +137,30 @@ def test_filtered_velocity_keeps_every_damper_and_moves_only_the_robot(ranger, s
 
 
 _GUARDS: dict = {}
+
+
+def test_single_joint_mode_with_avoidance_slows_that_joint_and_moves_no_other():
+    """The filter deflected a one-joint jog into a slide of several joints, and single-joint mode then stopped it
+    (naming every joint, DAQP's round-off moving the others by 1e-17)."""
+    from collections import Counter
+
+    from armguard.verify import GuardMode
+
+    m = armguard.load_model("ranger")
+    s = m.scene
+    dmp = Damper(stand_off=0.03, influence=0.15, approach_speed=0.3, period=0.01, velocity_limit=1.0)
+    g = Guard(s, stopping_distance=0.01, horizon_s=0.2, period_s=0.01, robot="left_arm", avoidance=dmp,
+              mode=GuardMode.SINGLE_JOINT)
+    q = s.flat_q(s.default_q())[:7]
+    lo, hi = s.robots["left_arm"].lower, s.robots["left_arm"].upper
+    v = np.array([0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    seen = Counter()
+    for _ in range(200):
+        d = g.step(q, qdot=v)
+        seen[d.motion] += 1
+        assert "single-joint mode" not in d.reason, d.reason
+        assert np.all(d.velocity[[0, 2, 3, 4, 5, 6]] == 0.0)
+        if d.ok:
+            assert d.clearance >= dmp.stand_off - 1e-3
+        q = np.clip(q + d.velocity * 0.01, lo, hi)
+    assert seen["slowed"] > 0

@@ -327,9 +327,16 @@ class Guard(FollowsScene):
 
         v_cmd = np.zeros(st.nv)
         v_cmd[st.v_index] = qd
-        av = avoid_step(st.checker, st.pin_model.pin_q(_full(st, q)), v_cmd, st.damper, tol=self.tol)
+        damper = st.damper
+        moving = np.flatnonzero(qd)
+        if self.mode is GuardMode.SINGLE_JOINT and len(moving) == 1:  # the filter may slow that joint, move no other
+            lim = np.zeros(st.nv)  # (it deflected a one-joint jog into a slide of several, then stopped by this mode)
+            col = int(st.v_index[moving[0]])
+            lim[col] = damper.limits(st.nv)[col]
+            damper = replace(damper, velocity_limit=tuple(float(x) for x in lim))
+        av = avoid_step(st.checker, st.pin_model.pin_q(_full(st, q)), v_cmd, damper, tol=self.tol)
         v = np.array(av.velocity[st.v_index])
-        dec = self._step(st, q, None, v, None, st.damper.period, checked=True)
+        dec = self._step(st, q, None, v, None, damper.period, checked=True)
         if av.status is AvoidanceStatus.STOPPED and dec.ok:
             dec = replace(dec, verdict=GuardVerdict.STOP, reason=f"avoidance stopped the arm ({av.solver})")
         if not dec.ok:
