@@ -164,3 +164,17 @@ def test_single_joint_mode_with_avoidance_slows_that_joint_and_moves_no_other():
             assert d.clearance >= dmp.stand_off - 1e-3
         q = np.clip(q + d.velocity * 0.01, lo, hi)
     assert seen["slowed"] > 0
+
+
+def test_a_stop_at_a_joint_limit_says_the_limits_stopped_it():
+    """It said "avoidance stopped the arm (none: 1 pair within influence, moved by no joint)"."""
+    m = armguard.load_model("ranger")
+    s = m.scene
+    dmp = Damper(stand_off=0.03, influence=0.15, approach_speed=0.3, period=0.01, velocity_limit=1.0)
+    g = Guard(s, stopping_distance=0.01, period_s=0.01, robot="left_arm", avoidance=dmp)
+    q = s.flat_q(s.default_q())[:7].copy()
+    q[0] = s.robots["left_arm"].upper[0]
+    v = np.zeros(7)
+    v[0] = 1.0
+    d = g.step(q, qdot=v)
+    assert d.verdict is GuardVerdict.STOP and "joint or velocity limits: the command clipped to 0" in d.reason

@@ -316,6 +316,8 @@ def avoid_step(checker, q, v_cmd, damper: Damper, *, pairs=None, tol: Tolerances
     J = np.ascontiguousarray(J, dtype=np.float64)
     lo, hi = velocity_bounds(model.pin_model, q, damper)
     v, rows, rate, closing, status, note = filter_velocity(v_cmd, d, J, lo, hi, damper, tol)
+    if status is AvoidanceStatus.STOPPED and note.startswith("none:"):  # no damper acted: the bounds stopped it
+        note = f"joint or velocity limits: the command clipped to 0 ({note})"
     dist = r.distance
     dmin = float(dist.min()) if len(dist) else math.inf
     if np.any(v):
