@@ -78,6 +78,9 @@ EXAMPLES = (
     ("python examples/online_guard.py", "the on-line guard: a control loop that stops a 3-link arm before a thin rod, then lets a jog away through"),
     ("python examples/grasp_error.py",
      "the grasp error from a wrist force/torque sensor against noise and orientations (docs/program.md)"),
+    ("python examples/prm_edges.py --plot prm_edges.png",
+     "a probabilistic roadmap whose edges are certified, beside the same roadmap with sampled edges (edges through "
+     "thin plates that sampling passes; docs/trajectory-format.md)"),
 )
 """The demonstrations beside ``armguard demo`` (``armguard demo --list``): command, what it shows."""
 
