@@ -453,3 +453,25 @@ def test_a_nan_jacobian_row_beyond_influence_is_refused_by_both_paths_and_still_
     got = filter_velocity(np.array([0.1, 0.0]), d, J, lo, hi, DAMPER, armguard.DEFAULT_TOLERANCES)
     assert ref.solver == got[5] == "none: 1 pair within influence, moved by no joint"
     assert avoid([0.1, 0.0], _distances([0.5], [[1.0, 0.0]]), DAMPER).solver == "none: no pair within influence"
+
+
+@pytest.mark.parametrize("kw", [dict(stand_off=True), dict(period=True), dict(velocity_limit="1.0"),
+                                dict(velocity_limit=(1.0, "2")), dict(velocity_limit=True), dict(velocity_limit=1j)])
+def test_a_damper_refuses_bools_and_text_for_numbers(kw):
+    base = dict(stand_off=0.05, influence=0.3, approach_speed=0.5, period=0.01, velocity_limit=1.0)
+    with pytest.raises(AvoidanceError, match="Damper."):
+        Damper(**{**base, **kw})
+
+
+def test_a_closing_speed_that_overflows_is_never_free():
+    """J v of 1e308-sized commands overflowed to NaN in the compiled rows, which called the row not binding: FREE with a
+    NaN closing, where the reference solved the QP."""
+    from armguard.avoidance._fast import filter_velocity
+
+    damper = Damper(stand_off=0.0, influence=0.1, approach_speed=0.5, period=0.01)
+    J = np.array([[2.0, 2.0, 1.0]])
+    d = np.array([0.05])
+    v = np.array([1e308, -1e308, -1e300])
+    lo, hi = np.full(3, -np.inf), np.full(3, np.inf)
+    out = filter_velocity(v, d, J, lo, hi, damper, armguard.DEFAULT_TOLERANCES)
+    assert out[4] is not AvoidanceStatus.FREE and np.all(np.isfinite(out[0]))

@@ -81,7 +81,7 @@ class Damper:
     def __post_init__(self) -> None:
         for name in ("stand_off", "influence", "approach_speed", "period"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v)):
+            if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v)):  # True is no 1 m
                 raise AvoidanceError(f"Damper.{name}: expected a finite number, got {v!r}")
         if self.stand_off < 0.0:
             raise AvoidanceError(f"Damper.stand_off: expected >= 0 m, got {self.stand_off}")
@@ -92,9 +92,11 @@ class Damper:
         if not self.period > 0.0:
             raise AvoidanceError(f"Damper.period: expected > 0 s, got {self.period}")
         try:
-            lim = np.asarray(self.velocity_limit, dtype=np.float64)
-        except (TypeError, ValueError):
-            lim = np.array([np.nan])
+            raw = np.asarray(self.velocity_limit)
+        except (TypeError, ValueError):  # ragged
+            raw = np.array([np.nan])
+        # text ('1.0'), bools, complex: refused, not read as numbers
+        lim = raw.astype(np.float64) if raw.dtype.kind in "iuf" else np.array([np.nan])
         if lim.ndim > 1 or lim.size == 0 or np.any(np.isnan(lim)) or np.any(lim < 0.0):
             raise AvoidanceError(f"Damper.velocity_limit: expected a number or one per velocity column, each >= 0 "
                                  f"(inf: none), got {self.velocity_limit!r}")

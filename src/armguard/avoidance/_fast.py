@@ -60,7 +60,7 @@ def _rows(d, J, v_cmd, lo, hi, influence, stand_off, rate, row_min2, rows, A, b,
             s += J[i, c] * clipped[c]
         bk = -rate * max(di - stand_off, 0.0)
         b[k] = bk
-        if s < bk:
+        if not s >= bk:  # a closing that overflowed (NaN) binds too: never FREE on it
             binds = True
         rows[k] = i
         upper[nv + k] = _BIG
