@@ -357,3 +357,18 @@ def test_the_contact_band_excuses_a_disagreement_only_when_both_are_in_it(hermes
     X.p_WA[i, k], X.p_WB[i, k] = C.p_WA[i, k], C.p_WA[i, k] + [1e-7, 0.0, 0.0]
     p = _judged(m, cfg, C, X)
     assert p["verdict_disagreements"] == 0 and p["verdict_disagreements_in_band"] == 1 and p["status"] == "agree"
+
+
+def test_two_answers_both_apart_across_the_band_edge_are_no_sign_disagreement(hermes_coal):
+    """1.1 µm against 0.9 µm (both apart; the band is 1 µm) counted as a sign disagreement and made "differ"."""
+    import copy
+
+    m, cfg, C0 = hermes_coal
+    C, X = copy.deepcopy(C0), copy.deepcopy(C0)
+    i = int(np.flatnonzero(C.distance.min(axis=1) > 0.01)[0])
+    k = int(np.argsort(C.distance[i])[1])  # not the nearest pair
+    for A, dist in ((C, 1.1e-6), (X, 0.9e-6)):
+        A.distance[i, k] = dist
+        A.p_WB[i, k] = A.p_WA[i, k] + [dist, 0.0, 0.0]
+    p = _judged(m, cfg, C, X)
+    assert p["categories"]["all"]["sign_disagreements"] == 0 and p["status"] == "agree", p["categories"]["all"]

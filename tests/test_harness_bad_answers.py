@@ -148,6 +148,7 @@ def test_a_nan_distance_leaves_its_configuration_out_naming_backend_q_and_pair(r
     assert [comp.configs.number(i) for i in range(len(keep))] == keep
     np.testing.assert_array_equal(comp.answers["spoiled"].distance, comp.answers["analytic"].distance)
     assert s["pairs"]["analytic/spoiled"]["status"] == "agree"  # the others agree; the run is not whole (CLI: exit 5)
+    assert s["complete"] is False
     assert json.loads((out / "compare.json").read_text())["configs"]["refused"] == 1
 
 

@@ -136,6 +136,15 @@ def reproduce_command(spec: str, backends, q, pair=None, options=None, as_json: 
     return " ".join(shlex.quote(p) for p in parts)
 
 
+def sign_disagreements(da: np.ndarray, db: np.ndarray, band: float, tol) -> np.ndarray:
+    """Entries apart (``> band``) by one answer and inside (``< -band``) by the other, or out of the contact
+    band by one only and farther than ``tol`` from the other (0.25 m against -0.12 m; not 1.1 against 0.9 µm,
+    both apart, one in the band)."""
+    opposite = ((da > band) & (db < -band)) | ((da < -band) & (db > band))
+    one_out = (np.abs(da) > band) != (np.abs(db) > band)
+    return opposite | (one_out & (np.abs(da - db) > tol))
+
+
 def _contract(ans, cols, nonunique, tol_pair) -> dict:
     gap = np.linalg.norm(ans.p_WA[:, cols] - ans.p_WB[:, cols], axis=2)
     viol = np.abs(gap - np.abs(ans.distance[:, cols]))
@@ -167,7 +176,7 @@ def _pair_summary(model, configs, A, B, R, a, b, cats, tol, tol_pair, unique, n_
         da, db = A.distance[:, cols], B.distance[:, cols]
         e = err[:, cols]
         sep, pen = sep_all[:, cols], pen_all[:, cols]
-        sign = ~sep & ~pen & ((np.abs(da) > band) | (np.abs(db) > band))  # apart by one, inside by the other
+        sign = sign_disagreements(da, db, band, tol_pair[cols][None, :])
         ma, mb = da.min(axis=1), db.min(axis=1)
         cat_out = ((ma <= 0) != (mb <= 0)) & ((np.abs(ma) > band) | (np.abs(mb) > band))
         u = unique[:, cols]

@@ -249,8 +249,9 @@ class ReferenceDiff:
     ``worst``: ``(config, pair, live d, recorded d)`` of the largest separated error;
     ``nonfinite``: live distances or witness points that are NaN or infinite (any makes it DIFFERS);
     ``sign_disagreements``: entries apart (``> band``) by one and inside (``< -band``) by the other, or out
-    of the band by one only (any makes it DIFFERS: a pair said 0.3 m apart where the record is 0.17 m deep
-    matched, its configuration colliding in another pair).
+    of the band by one only and off by more than the pair's tolerance (:func:`._compare.sign_disagreements`;
+    any makes it DIFFERS: a pair said 0.3 m apart where the record is 0.17 m deep matched, its
+    configuration colliding in another pair).
     """
 
     status: DiffStatus
@@ -276,7 +277,7 @@ def compare_to_reference(model, checker, ref: Reference, *, tol: Tolerances = DE
                          distance_tol: float | None = None, points: bool = True) -> ReferenceDiff:
     """Hold ``checker`` (any backend's) to ``ref`` on ``model`` (see :class:`ReferenceDiff`).  ``ref`` must hold
     every row its header promises, all finite (:func:`check_reference`; else ReferenceFileError)."""
-    from ._compare import unique_witness_mask
+    from ._compare import sign_disagreements, unique_witness_mask
 
     check_reference(ref)
     band = tol.differential_contact_band
@@ -296,8 +297,7 @@ def compare_to_reference(model, checker, ref: Reference, *, tol: Tolerances = DE
     verdict_bad = int(((v != ref.verdict) & out_band).sum())
     tol_pair = pair_distance_tolerance(model, tol) if distance_tol is None else np.full(n, float(distance_tol))
     sep = (d > band) & (ref.distance > band)
-    pen = (d < -band) & (ref.distance < -band)
-    sign = int((~sep & ~pen & ((np.abs(d) > band) | (np.abs(ref.distance) > band))).sum())
+    sign = int(sign_disagreements(d, ref.distance, band, tol_pair[None, :]).sum())
     err = np.where(sep, np.abs(d - ref.distance), 0.0)
     over = int((err > tol_pair[None, :]).sum())
     worst = None

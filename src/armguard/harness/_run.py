@@ -73,8 +73,9 @@ def run_compare(spec, backends=("analytic", "coal"), *, n_configs: int = 1000, s
         configs = configs.dropping([r["config"] for r in refused])
     t2 = time.perf_counter()
     comp = compare_answers(model, configs, answers, spec=str(spec), options=options, tol=tol, n_worst=n_worst)
-    comp.summary["configs"].update(drawn=drawn, refused=len(refused))
+    comp.summary["configs"].update(drawn=drawn, refused=len(refused))  # random, trajectories: as drawn
     comp.summary["refused"] = refused[:n_worst]  # the first few, with their messages
+    comp.summary["complete"] = not refused  # "agree" over some configurations only is not a whole comparison
     t3 = time.perf_counter()
     comp.summary["timing"] = {"load_and_configs_s": t1 - t0, "answers_s": t2 - t1, "compare_s": t3 - t2,
                               "workers": int(workers) if workers else None, "scheduler": scheduler}
