@@ -174,7 +174,9 @@ def test_every_help_lists_the_exit_codes(path):
     assert {0, 2, 3, 4, 130} <= rows and rows <= {int(c) for c in ExitCode}
     if path in (("check",), ("verify",)):
         assert {1, 5} <= rows
-    if path in (("compare",), ("check-urdf",)):
+    if path == ("compare",):  # 5: a backend refused some configurations
+        assert {1, 5} <= rows
+    if path == ("check-urdf",):
         assert 1 in rows and 5 not in rows
 
 

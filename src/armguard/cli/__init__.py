@@ -91,7 +91,8 @@ def _option_names(ctx, message: str) -> str:
            "ones exempt (check-srdf), a map "
            "that allows a colliding configuration (cspace info --samples), a motion refused or a FIND failed "
            "(program run, program calibrate)",
-    incomplete="incomplete: a check or verification that could not finish (check, verify, edges)"))
+    incomplete="incomplete: a check or verification that could not finish (check, verify, edges; compare: a "
+               "backend refused some configurations)"))
 @click.version_option(package_name="armguard")
 @click.option("--backend", type=BACKEND, default=None, metavar="NAME",
               help="Backend for every check of this command (analytic, coal, fcl, ...; default: "
