@@ -89,16 +89,38 @@ class Detector:
 
         if name is not None and name not in self.scene.robots:
             raise DetectionError(f"active: unknown robot {name!r}; robots are {list(self.scene.robots)}")
-        with lock:
-            old, self._active = self._active, name
-            try:
-                self.prepare()
-            except BaseException:
-                self._active = old
-                raise
-            hook = self.__dict__.get("_on_switch")  # what an extra attached follows (terrain: its guard's arm)
-            if hook is not None:
-                hook()
+        hook = self.__dict__.get("_on_switch")  # what an extra attached follows (terrain: its guard's arm)
+        with self.switch_mutex():
+            install = hook(name) if hook is not None else None  # made before anything changes: a failure changes nothing
+            with lock:
+                self._switches = self.switches + 1  # odd while switching (an extra's reader waits, or checks again)
+                try:
+                    old, self._active = self._active, name
+                    try:
+                        self.prepare()
+                    except BaseException:
+                        self._active = old
+                        raise
+                    if install is not None:
+                        install()
+                finally:
+                    self._switches += 1
+
+    _switches = 0
+
+    @property
+    def switches(self) -> int:
+        """Active-arm switches begun and finished, counted twice each: odd while ``set_active`` is switching.  A
+        reader composing the kernel's check with state that follows the active arm (an attached terrain's guard)
+        reads it before and after, and checks again when it changed (a seqlock); after a few tries it holds
+        :meth:`switch_mutex` (no switch then starts: a thread switching without pause cannot starve it)."""
+        return self._switches
+
+    def switch_mutex(self):
+        """The lock ``set_active`` holds for a whole switch (made at first use)."""
+        import threading
+
+        return self.__dict__.setdefault("_switch_mutex", threading.Lock())
 
     def __new__(cls, scene=None, *args, backend: str | None = None, backend_options=None, **kwargs):
         if cls is not Detector:  # a concrete Detector, built directly
