@@ -180,6 +180,33 @@ def test_operator_stop_during_a_run_with_avoidance(ranger_state):
     st.set_avoidance(False)
 
 
+def test_a_run_with_avoidance_played_backwards_to_its_start_says_so_and_frees_the_arms(ranger_state):
+    """It stayed "running" at t = 0 with nothing playing, and another arm could not be made active."""
+    st = ranger_state
+    st.set_stand_off(STAND_OFF)
+    st.set_avoidance(True)
+    try:
+        p = st.run(TEST)
+        for _ in range(10):
+            st.tick(0.05)
+        assert st.snapshot().run_state == "running" and p.timeline.t > 0.0
+        st.timeline_command("reverse")
+        while st.tick(0.05):
+            pass
+        snap = st.snapshot()
+        assert p.timeline.t == 0.0 and snap.run_state == "back at the start", (snap.run_state, snap.message)
+        other = next(r for r in snap.q if r != p.robot)
+        st.set_active(other)  # refused while "running"
+        st.set_active(p.robot)
+        st.timeline_command("forward")
+        st.timeline_command("play")
+        st.tick(0.05)
+        assert st.snapshot().run_state == "running" and st.snapshot().message.startswith(f"{TEST}: running from t = ")
+    finally:
+        st.stop()
+        st.set_avoidance(False)
+
+
 def test_plot_marks_time_across_both_axes(ranger_state):
     from armguard.backends import checker
     from armguard.console._avoid import avoid_canned

@@ -183,6 +183,18 @@ def test_a_joint_typed_for_the_arm_a_run_moves_pauses_the_run_and_stays(state):
     assert state.snapshot().q["left"][1] == pytest.approx(10 * DEG)
 
 
+def test_setting_every_arm_while_a_run_plays_pauses_it_with_a_note(state):
+    """``set_q`` paused the run but dropped the note (the active arm's pause was not kept)."""
+    player = state.run("hit_post")
+    for _ in range(5):
+        state.tick(0.05)
+    snap = state.snapshot()
+    state.set_q({k: np.asarray(v) for k, v in snap.q.items()})
+    snap = state.snapshot()
+    assert not player.timeline.playing and snap.run_state == "stopped"
+    assert snap.message.startswith("hit_post: paused at t = ") and "moved by hand" in snap.message
+
+
 def test_test_line_says_when_a_run_ended(state):
     from armguard.console._app import run_line
 

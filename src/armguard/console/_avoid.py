@@ -231,7 +231,7 @@ class AvoidMixin:
 
     def _tick_avoid(self, p, t: float) -> bool:
         """The time line of a run with avoidance moved to ``t``: at its end, say what the filter did."""
-        if t < p.timeline.duration:
+        if self._back_or_again(p, t) or t < p.timeline.duration:
             return True
         p.timeline.pause()
         run = p.report

@@ -110,14 +110,28 @@ class PlaybackMixin:
                                     f"{self._stopping * 1000:.0f} mm: {r.distance * 1000:.1f} mm of {r.obstacle}")
                 self._message_is_error = True
                 self._message = f"{p.name}: stopped by detection {self._run_detail}"
+            elif self._back_or_again(p, t):
+                pass
             elif not p.timeline.playing or t >= p.timeline.duration:
                 p.timeline.pause()
-                back = t <= 0.0 and p.timeline.rate < 0.0  # played backwards to its start: not its end
-                self._run_state = "back at the start" if back else "done"
+                self._run_state = "done"
                 self._run_detail = f"at t = {t:.2f} s"
                 self._message_is_error = False
-                self._message = f"{p.name}: {self._run_state} {self._run_detail}"
-            elif self._run_state != "running":  # played again after it ended or was halted
-                self._run_state, self._run_detail = "running", ""
+                self._message = f"{p.name}: done {self._run_detail}"
             return True
+
+    def _back_or_again(self, p, t: float) -> bool:
+        """A canned run (with avoidance or not) played backwards to its start says "back at the start" (it said
+        "done", or with avoidance stayed "running" and kept the other arms from being chosen): True.  Played again
+        after it ended or was halted, it says "running" again (False)."""
+        if not p.timeline.playing and t <= 0.0 and p.timeline.rate < 0.0:
+            self._run_state, self._run_detail = "back at the start", f"at t = {t:.2f} s"
+            self._message_is_error = False
+            self._message = f"{p.name}: back at the start {self._run_detail}"
+            return True
+        if p.timeline.playing and self._run_state != "running":
+            self._run_state, self._run_detail = "running", ""
+            self._message_is_error = False
+            self._message = f"{p.name}: running from t = {t:.2f} s"
+        return False
 

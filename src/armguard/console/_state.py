@@ -400,8 +400,8 @@ class ConsoleState(MotionMixin, TargetsMixin, SourcesMixin, OverlayMixin, AvoidM
             self._cancel_filtering("the arms set")
             new = {name: self._checked_q(name, v) for name, v in parts.items()}
             self._q = new
-            self._arm_moved(self._active)
-            self._changed("; ".join(x for x in (self._taken_over(r) for r in new) if x))
+            notes = [self._arm_moved(self._active)] + [self._taken_over(r) for r in new if r != self._active]
+            self._changed("; ".join(x for x in notes if x))
 
     # ------------------------------------------------------------------ canned tests
     def canned_tests(self) -> tuple[str, ...]:
