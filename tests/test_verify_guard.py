@@ -108,6 +108,14 @@ def test_a_bad_payload_mass_is_refused_when_the_guard_is_made(mass):
         Guard(_scene(), stopping_distance=0.02, horizon_s=0.1, period_s=0.01, payload_mass=mass)
 
 
+def test_a_payload_above_the_tables_masses_is_refused_when_the_guard_is_made():
+    """Every step stopped, saying the commanded speed was outside the table."""
+    sd = StoppingDistance.hermes(max_speed=4.0, max_distance=0.1, max_mass=5.0)
+    with pytest.raises(VerificationError, match=r"payload_mass: 10 kg is above the stopping-distance table's masses"):
+        Guard(_scene(), stopping_distance=sd, horizon_s=0.1, period_s=0.01, payload_mass=10.0)
+    Guard(_scene(), stopping_distance=sd, horizon_s=0.1, period_s=0.01, payload_mass=5.0)
+
+
 @pytest.mark.parametrize(
     "call",
     [

@@ -287,7 +287,8 @@ def avoid_step(checker, q, v_cmd, damper: Damper, *, pairs=None, tol: Tolerances
     ``rows`` of the result are Model pair rows.  The velocity bounds are :func:`velocity_bounds` at
     ``q``: the damper's limits and the joint limits (a joint commanded past its limit is slowed to reach
     it in one period, not past it: the next step's ``q`` stays a configuration a checker answers for).
-    The arithmetic around the QP is compiled (:mod:`._fast`); :func:`avoid` is its reference."""
+    The arithmetic around the QP is compiled (:mod:`._fast`); :func:`avoid` is its reference, which has no
+    end-of-period check (module docstring): a step that check scaled or stopped says so in ``solver``."""
     from ..backends import check_pairs, check_q
     from ._fast import filter_velocity
 

@@ -198,6 +198,10 @@ class Guard(FollowsScene):
             raise VerificationError("horizon_s must be at least one control period (period_s)")
         self.mode = GuardMode(mode)
         self.payload_mass = number(payload_mass, "payload_mass", VerificationError, low=0.0, unit=" (kg)")
+        sd = self.stopping_distance
+        if isinstance(sd, StoppingDistance) and self.payload_mass > sd.mass_edges[-1]:  # every step stopped, "speed"
+            raise VerificationError(f"payload_mass: {self.payload_mass:g} kg is above the stopping-distance table's "
+                                    f"masses (up to {sd.mass_edges[-1]:g} kg)")
         names = list(scene.robots)
         if robot is None:
             if len(names) != 1:
