@@ -178,3 +178,27 @@ def test_a_stop_at_a_joint_limit_says_the_limits_stopped_it():
     v[0] = 1.0
     d = g.step(q, qdot=v)
     assert d.verdict is GuardVerdict.STOP and "joint or velocity limits: the command clipped to 0" in d.reason
+
+
+def test_a_solver_failure_is_a_stop_marked_unfinished(monkeypatch):
+    """DAQP reporting no optimum stopped the arm like a true zero optimum, the decision marked finished."""
+    import daqp
+
+    m = armguard.load_model("ranger")
+    s = m.scene
+    dmp = Damper(stand_off=0.03, influence=0.15, approach_speed=0.3, period=0.01, velocity_limit=1.0)
+    g = Guard(s, stopping_distance=0.01, horizon_s=0.2, period_s=0.01, robot="left_arm", avoidance=dmp)
+    q = s.flat_q(s.default_q())[:7]
+    lo, hi = s.robots["left_arm"].lower, s.robots["left_arm"].upper
+    v = np.array([0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    for _ in range(200):  # to where a damper binds (the QP is solved)
+        d = g.step(q, qdot=v)
+        if d.avoidance.solver == "daqp: optimal":
+            break
+        q = np.clip(q + d.velocity * 0.01, lo, hi)
+    assert d.avoidance.solver == "daqp: optimal" and not d.avoidance.solver_failed
+    real = daqp.solve
+    monkeypatch.setattr(daqp, "solve", lambda *a: (real(*a)[0], 0.0, -1, {}))  # exit flag -1: infeasible
+    d = g.step(q, qdot=v)
+    assert d.avoidance.status is AvoidanceStatus.STOPPED and d.avoidance.solver_failed
+    assert d.verdict is GuardVerdict.STOP and not d.finished and "exit flag -1" in d.reason

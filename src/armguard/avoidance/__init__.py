@@ -149,6 +149,12 @@ class Avoidance:
     min_distance: float
     solver: str
 
+    @property
+    def solver_failed(self) -> bool:
+        """STOPPED because DAQP gave no optimum, or one that broke a constraint: no closest safe velocity was
+        found (a zero optimum is a true answer; this is none)."""
+        return self.solver.startswith("daqp: ") and self.solver.endswith("; stopped")
+
 
 def _all_finite(*arrays) -> bool:
     """Every entry of every array finite: one sum each first (finite in the common case); only a

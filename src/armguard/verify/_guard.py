@@ -87,7 +87,8 @@ class GuardDecision:
     :class:`~armguard.avoidance.Avoidance` (pin velocity order); both None otherwise.
     ``finished`` False where the STOP is the prediction's evaluation budget running out (a link
     grazing a surface near the stopping distance), not a collision predicted: a controller may slow
-    the command down and try again rather than stop hard.
+    the command down and try again rather than stop hard; False too where the avoidance filter's
+    solver found no answer (``Avoidance.solver_failed``).
     """
 
     verdict: GuardVerdict
@@ -342,7 +343,8 @@ class Guard(FollowsScene):
         v = np.array(av.velocity[st.v_index])
         dec = self._step(st, q, None, v, None, damper.period, checked=True)
         if av.status is AvoidanceStatus.STOPPED and dec.ok:
-            dec = replace(dec, verdict=GuardVerdict.STOP, reason=f"avoidance stopped the arm ({av.solver})")
+            dec = replace(dec, verdict=GuardVerdict.STOP, reason=f"avoidance stopped the arm ({av.solver})",
+                          finished=not av.solver_failed)  # a solver that gave no answer: not a finished decision
         if not dec.ok:
             v = np.zeros_like(v)
         v.flags.writeable = False
