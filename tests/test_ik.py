@@ -59,6 +59,20 @@ def test_puma_round_trip_recovers_the_seeded_configuration(u):
     assert res.iterations <= 20  # a closed form: at most a short polish near a singularity
 
 
+@pytest.mark.parametrize("eps", [0.0, 1e-12, -1e-12, 1e-10, -1e-10, 1e-9, -1e-9])
+def test_puma_reaches_poses_with_the_elbow_stretched(eps):
+    """With the elbow stretched, the elbow's cosine rounded past 1 and the closed form called 7 of 20 reachable
+    poses "outside the workspace"."""
+    robot = _puma()
+    rng = np.random.default_rng(0)
+    stretched = -math.atan2(0.4318, 0.0203)
+    for _ in range(20):
+        q = rng.uniform(PUMA560_LOWER, PUMA560_UPPER)
+        q[2] = stretched + eps
+        X = robot.forward_kinematics(q)[-1]
+        _assert_reaches(robot, robot.inverse_kinematics(X, q_seed=q), X)
+
+
 def test_puma_plugin_gives_eight_distinct_verified_solutions():
     robot = _puma()
     q = np.array([0.3, 0.4, -0.9, 0.5, 0.7, -0.2])

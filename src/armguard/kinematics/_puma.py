@@ -69,6 +69,9 @@ _WRIST_SINGULAR = 1e-12
 
 _IDENTIFY_SAMPLES = 8
 """Seeded configurations at which a robot without a DH table must move link 6 as PUMA560_DH does."""
+_EDGE = 1e-12
+"""Relative rounding allowed where the closed form meets the workspace's edge (a cosine, the wrist's distance from
+the shoulder axis): the candidates are judged by forward kinematics afterwards."""
 
 
 def _identified_rows(robot) -> tuple[DHRow, ...]:
@@ -153,10 +156,10 @@ def puma560_ik(robot, X_BE: np.ndarray, q_seed) -> list[np.ndarray]:
     w = X_B6[:3, 3] - d6 * X_B6[:3, 2]
     r = math.hypot(w[0], w[1])
     D = s1 * d23
-    if r < abs(D):
+    if r < abs(D) * (1.0 - _EDGE):  # beyond rounding (a pose at the edge is kept: the FK check below judges it)
         return []
     phi = math.atan2(w[1], w[0])
-    asin_ = math.asin(D / r) if r > 0 else 0.0
+    asin_ = math.asin(max(-1.0, min(1.0, D / r))) if r > 0 else 0.0
     L = math.hypot(a3, d4p)
     beta = math.atan2(d4p, a3)
     out = []
@@ -164,9 +167,9 @@ def puma560_ik(robot, X_BE: np.ndarray, q_seed) -> list[np.ndarray]:
         X = w[0] * math.cos(t1) + w[1] * math.sin(t1)
         Y = s1 * (w[2] - d1)
         c = (X * X + Y * Y - a2 * a2 - L * L) / (2.0 * a2 * L)
-        if abs(c) > 1.0:
-            continue
-        g = math.acos(c)
+        if abs(c) > 1.0 + _EDGE:  # the elbow stretched or folded: c a rounding past +-1 still solves (it said
+            continue              # "outside the workspace" for 7 of 20 reachable stretched-elbow poses)
+        g = math.acos(max(-1.0, min(1.0, c)))
         for t3b in (g, -g):
             t3 = t3b - beta
             t2 = math.atan2(Y, X) - math.atan2(L * math.sin(t3b), a2 + L * math.cos(t3b))
