@@ -64,3 +64,13 @@ def test_a_trajectory_naming_no_robot_is_verified_on_the_scenes_only_one():
     t = Trajectory(None, names, [0.0, 1.0], np.vstack([q0, q0]))
     assert t.robot_name == ""
     assert armguard.verify(m, t).status is not None
+
+
+@pytest.mark.parametrize("times, waypoints, blends, said", [
+    ([0.0, 1e-310], [[0.0], [1e-300]], None, "are so close that the speed"),  # 1 / dt overflows: at() was NaN
+    ([0.0, 1.0], [[0.0], [1.0]], [5e-311], "blend_times[0]: 5e-311 s is too short to divide by"),
+])
+def test_a_subnormal_segment_or_blend_is_refused_never_nan(times, waypoints, blends, said):
+    with pytest.raises(TrajectoryError) as err:
+        Trajectory("r", ["a"], times, waypoints, blends)
+    assert said in str(err.value)

@@ -95,7 +95,7 @@ class Trajectory:
             k = int(np.argmax(dt <= 0.0))
             raise TrajectoryError(f"times: must be strictly increasing; times[{k}] = {t[k]} >= times[{k + 1}] = {t[k + 1]}")
         with np.errstate(over="ignore", divide="ignore"):
-            fast = ~np.all(np.isfinite(np.diff(w, axis=0) / dt[:, None]), axis=1)
+            fast = ~np.all(np.isfinite(np.diff(w, axis=0) / dt[:, None]), axis=1) | ~np.isfinite(1.0 / dt)
         if np.any(fast):  # knots so close the speed between them is past the largest float: no bound holds
             k = int(np.argmax(fast))
             raise TrajectoryError(f"times: times[{k}] = {float(t[k])!r} and times[{k + 1}] = {float(t[k + 1])!r} are so close that the speed "
@@ -103,6 +103,12 @@ class Trajectory:
         tb = np.zeros(t.shape[0] - 1) if blend_times is None else _array(blend_times, "blend_times", 1)
         if tb.shape != dt.shape:
             raise TrajectoryError(f"blend_times: expected {dt.shape[0]} values (one per segment), got {tb.shape[0]}")
+        with np.errstate(over="ignore", divide="ignore"):
+            tiny = (tb > 0.0) & ~np.isfinite(1.0 / tb)  # a subnormal blend: 1 / tb overflows and at() gave NaN
+        if np.any(tiny):
+            k = int(np.argmax(tiny))
+            raise TrajectoryError(f"blend_times[{k}]: {float(tb[k])!r} s is too short to divide by (give 0 for a "
+                                  "segment without a blend)")
         bad = (tb < 0.0) | (tb > 0.5 * dt * (1.0 + _TIME_SLACK))
         if np.any(bad):
             k = int(np.argmax(bad))
