@@ -241,3 +241,25 @@ def test_any_small_task_motion_follows_its_trapezoid(dp, dpsi):
     np.testing.assert_allclose(x - x[0], np.outer(s, delta), atol=1e-9)
     assert np.all(tr.waypoints >= robot.lower) and np.all(tr.waypoints <= robot.upper)
     assert np.all(tr.peak_velocity() <= robot.max_velocity)
+
+
+def test_a_frozen_joint_stays_put_in_a_task_motion():
+    """A joint with lower == upper (a URDF <limit> without bounds) made scipy's bounded solve raise a raw ValueError
+    ("Each lower bound must be strictly less than each upper bound") when Newton's method stopped short."""
+    import warnings
+
+    import armguard
+    from armguard.kinematics import Robot, task_trapezoid
+    from armguard.models import builtin_path
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sc = armguard.load_scene(str(builtin_path("ranger")))
+    arm = sc.robots["left_arm"]
+    conv, rows = arm.dh
+    lo, hi = np.array(arm.lower), np.array(arm.upper)
+    lo[6] = hi[6] = 0.0
+    r = Robot.from_dh("left_arm", rows, convention=conv, lower=lo, upper=hi, max_velocity=arm.max_velocity,
+                      max_acceleration=arm.max_acceleration, X_WB=arm.X_WB)
+    tr = task_trapezoid(r, np.radians([0, 30, 0, 90, 0, 40, 0]), [0, -0.1, 0, 0, 0, 0])
+    assert np.all(tr.waypoints[:, 6] == 0.0) and all(r.within_limits(w) for w in tr.waypoints)

@@ -267,6 +267,16 @@ class _Solver:
             return q, float(np.max(np.abs(r)))
         from scipy.optimize import least_squares
 
-        sol = least_squares(self.residual, np.clip(q_seed, lo, hi), bounds=(lo, hi), args=(x_t,), method="trf",
-                            xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=200)
-        return sol.x, float(np.max(np.abs(self.residual(sol.x, x_t))))
+        free = hi > lo  # a frozen joint (lower == upper) held where it is: scipy's bounds must be strictly increasing
+        q = np.clip(np.asarray(q_seed, dtype=np.float64), lo, hi)
+        if np.any(free):
+            def residual(x, x_t):
+                full = q.copy()
+                full[free] = x
+                return self.residual(full, x_t)
+
+            sol = least_squares(residual, q[free], bounds=(lo[free], hi[free]), args=(x_t,), method="trf",
+                                xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=200)
+            q = q.copy()
+            q[free] = sol.x
+        return q, float(np.max(np.abs(self.residual(q, x_t))))
