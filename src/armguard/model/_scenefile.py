@@ -19,7 +19,8 @@ from pydantic import ValidationError
 from .._errors import ArmguardError, KinematicsError, SceneError, SceneFileError, list_problems
 from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
 from ._robot_urdf import robot_parts_from_urdf
-from ._scene import CannedTest, Scene
+from ._scene import Scene
+from ._scenefile_motions import _canned_test, _in_limits, _q_scale, _trajectory
 from ._srdf import NO_SRDF, read_srdf_disabled, reshaped_pairs
 from ._schema import SHAPE_TYPES, SceneFile, near_key
 from .._yaml import read_scene_yaml  # noqa: F401  (part of this module's interface)
@@ -29,6 +30,25 @@ __all__ = ["validate_scene_dict", "scene_from_dict_validated", "read_scene_yaml"
 _MM = 1e-3
 _DEG = math.pi / 180.0
 
+
+
+def _coupling_form(ctx, where: str, c, names: list, dependent: set) -> None:
+    """A coupling a Model can hold (its URDF form: one mimic joint per term, of a commanded joint before it):
+    the terms name commanded joints earlier in the chain, and a drive coupling's own coefficient is 1.  Each
+    refused at ``where`` (a coupling on a later joint loaded here and then failed in ``load_model``, naming a
+    deleted temporary URDF)."""
+    row = names.index(c.joint)
+    for t, coeff in c.terms.items():
+        if t == c.joint:
+            if coeff != 1.0:
+                raise ctx.error(f"{where}.terms", f"a drive coupling's own term must be 1 (the joint's value is its "
+                                f"command plus the other terms), got {t}: {coeff}")
+            continue
+        if t in dependent:
+            raise ctx.error(f"{where}.terms", f"{t!r} follows a coupling itself: name the commanded joints it follows")
+        if names.index(t) > row:
+            raise ctx.error(f"{where}.terms", f"{t!r} comes after {c.joint!r} in the chain: a coupling follows "
+                            "joints before it (its URDF form is a mimic of an earlier joint)")
 
 def where_of(loc) -> str:
     """A pydantic error location as a path: ``('robots', 0, 'joints', 3, 'limits')`` -> ``robots[0].joints[3].limits``.
@@ -204,11 +224,6 @@ def _frames(sf: SceneFile, ctx: _Ctx) -> dict[str, np.ndarray]:
     return out
 
 
-def _q_scale(robot, ctx: _Ctx) -> np.ndarray:
-    """Per-joint factor from file units to SI: angle for revolute joints, length for prismatic."""
-    return np.array([ctx.L if jt.value == "prismatic" else ctx.A for jt in robot.joint_types])
-
-
 def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
     from ..kinematics import Coupling, DHRow, Robot
 
@@ -243,14 +258,21 @@ def _robot(spec, i: int, ctx: _Ctx, frames: dict) -> tuple:
         if spec.links is not None and len(spec.links) != len(rows) + 1:
             raise ctx.error(f"{w}.links", f"expected {len(rows) + 1} link names (base, then one per joint), got {len(spec.links)}")
         couplings = []
+        dependent = {c.joint for c in spec.couplings if c.joint not in c.terms}
         for k, c in enumerate(spec.couplings):
             if c.joint not in names:
                 raise ctx.error(f"{w}.couplings[{k}].joint", f"unknown joint {c.joint!r}; joints are {names}")
             for t in c.terms:
                 if t not in names:
                     raise ctx.error(f"{w}.couplings[{k}].terms", f"unknown joint {t!r}; joints are {names}")
+            _coupling_form(ctx, f"{w}.couplings[{k}]", c, names, dependent)
             s = ctx.L if spec.joints[names.index(c.joint)].type == "prismatic" else ctx.A
             couplings.append(Coupling(c.joint, dict(c.terms), c.offset * s))
+        for k, j in enumerate(spec.joints):  # a dependent joint's own limits were read and dropped without a word
+            given = [key for key in ("limits", "max_velocity", "max_acceleration") if getattr(j, key) is not None]
+            if names[k] in dependent and given:
+                raise ctx.error(f"{w}.joints[{k}].{given[0]}", f"joint {names[k]!r} follows a coupling: its "
+                                f"{given[0]} come from the joints it follows (give them there)")
         X_LT = None if spec.tool is None else ctx.pose(spec.tool.xyz, spec.tool.rpy, f"{w}.tool")
         try:
             robot = Robot.from_dh(
@@ -531,63 +553,3 @@ def _populate(scene: Scene, sf: SceneFile, ctx: _Ctx, frames: dict) -> None:
             problems.append(exc)
     if problems:
         raise _combined(problems)
-
-
-def _canned_test(scene: Scene, c, ctx: _Ctx, w: str) -> None:
-    if c.robot not in scene.robots:
-        raise ctx.error(f"{w}.robot", f"unknown robot {c.robot!r}; robots are {list(scene.robots)}")
-    setup = {}
-    for rname, q in c.setup.items():
-        if rname not in scene.robots:
-            raise ctx.error(f"{w}.setup.{rname}", f"unknown robot {rname!r}")
-        setup[rname] = _joint_values(scene.robots[rname], q, ctx, f"{w}.setup.{rname}")
-    m = c.motion
-    goal = None if m.goal is None else _joint_values(scene.robots[c.robot], m.goal, ctx, f"{w}.motion.goal")
-    ee = None if m.end_effector is None else np.asarray(m.end_effector, dtype=np.float64) * ([ctx.L] * 3 + [ctx.A] * 3)
-    psi = None if m.arm_angle is None else m.arm_angle * ctx.A
-    try:
-        scene.add_canned_test(CannedTest(c.name, c.description, c.robot, c.threshold * ctx.L, setup, goal, ee, psi))
-    except ArmguardError as exc:
-        raise ctx.error(w, str(exc)) from None
-
-
-def _joint_values(robot, q, ctx: _Ctx, where: str) -> np.ndarray:
-    if len(q) != robot.n_joints:
-        raise ctx.error(where, f"expected {robot.n_joints} joint values {list(robot.joint_names)}, got {len(q)}")
-    return np.asarray(q, dtype=np.float64) * _q_scale(robot, ctx)
-
-
-def _in_limits(robot, q, ctx: _Ctx, where: str) -> None:
-    """Refuse ``q`` (SI) with a joint outside its limits at ``where``: value and limits in the file's units,
-    and a word on them where a radian or metre value that large looks like degrees or millimetres."""
-    bad = np.flatnonzero((q < robot.lower) | (q > robot.upper))
-    if bad.size:
-        j = int(bad[0])
-        s = _q_scale(robot, ctx)[j]
-        rev = robot.joint_types[j].value != "prismatic"
-        unit = ("deg" if ctx.A != 1.0 else "rad") if rev else ("mm" if ctx.L != 1.0 else "m")
-        hint = ""
-        if rev and ctx.A == 1.0 and abs(q[j]) > 2.0 * math.pi:
-            hint = " (read as radians: a file in degrees says units: {angle: deg})"
-        elif not rev and ctx.L == 1.0 and abs(q[j]) > 10.0:
-            hint = " (read as metres: a file in millimetres says units: {length: mm})"
-        raise ctx.error(where, f"joint {robot.joint_names[j]!r} = {q[j] / s:.6g} {unit} is outside its limits "
-                               f"[{robot.lower[j] / s:.6g}, {robot.upper[j] / s:.6g}] {unit}{hint}")
-
-
-def _trajectory(scene: Scene, t, ctx: _Ctx, where: str) -> None:
-    from ..kinematics import Trajectory
-
-    if t.robot not in scene.robots:
-        raise ctx.error(f"{where}.robot", f"unknown robot {t.robot!r}; robots are {list(scene.robots)}")
-    robot = scene.robots[t.robot]
-    wps = np.stack([_joint_values(robot, q, ctx, f"{where}.waypoints[{k}]") for k, q in enumerate(t.waypoints)])
-    for k, q in enumerate(wps):
-        _in_limits(robot, q, ctx, f"{where}.waypoints[{k}]")
-    try:
-        traj = Trajectory.joint_interpolated(robot, wps, times=t.times, profile=t.profile)
-        scene.add_trajectory(t.name, traj)
-    except ArmguardError as exc:
-        raise ctx.error(where, str(exc)) from None
-    scene._trajectory_specs[t.name] = {"robot": t.robot, "waypoints": wps, "times": t.times,
-                                       "profile": t.profile, "description": t.description}
