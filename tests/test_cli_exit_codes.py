@@ -335,3 +335,25 @@ def test_output_closed_early_still_writes_the_files(tmp_path):
         _, err = child.communicate(timeout=300)
         assert child.returncode == ExitCode.OUTPUT_CLOSED, err.decode()
         assert out.is_file() and out.stat().st_size > 100, args
+
+
+@pytest.mark.parametrize("args", [
+    ("compare", "hermes", "--configs", "10000000000", "--trajectory", "none"),  # MemoryError, exit 4
+    ("compare", "hermes", "--configs", "99999999999999999999", "--trajectory", "none"),
+    ("check-urdf", "hermes", "--configs", "10000000000"),
+    ("srdf", "hermes", "--method", "sampled", "--samples", "99999999999999999999", "--out", "x.srdf"),  # ran on and on
+    ("compare", "hermes", "--seed", "-1", "--configs", "3", "--trajectory", "none"),  # exit 3
+    ("program", "calibrate", "examples/workmate/cell.yaml", "--out", "c.yaml", "--seed", "-1"),  # NumPy's ValueError, exit 4
+])
+def test_counts_beyond_reason_and_negative_seeds_are_usage_errors(args):
+    res = _run(*args)
+    assert res.exit_code == ExitCode.USAGE, res.output
+    assert "Invalid value for '--" in res.output and "internal error" not in res.output
+
+
+def test_the_srdf_progress_bar_goes_to_stderr():
+    """On stdout it went into piped output, and ``check-srdf hermes | head -1`` exited 1 (the pipe closed under it)."""
+    out = subprocess.run([sys.executable, "-m", "armguard", "check-srdf", "hermes"], capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert "linting" not in out.stdout and "linting hermes.srdf" in out.stderr

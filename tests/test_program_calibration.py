@@ -417,3 +417,17 @@ def test_the_summary_gives_the_cameras_own_position_sigma(calibration):
 
     drawn = np.array([(expm(hat(xi)) @ T)[:3, 3] for xi in rng.multivariate_normal(np.zeros(6), C, 4000)])
     np.testing.assert_allclose(1e3 * drawn.std(axis=0), printed, rtol=0.1)
+
+
+def test_calibrating_a_robot_alone_flies_above_the_floor(tmp_path):
+    """A cell with no static body (panda, ur5, kinova by name): max() of no body's height was an internal error."""
+    from click.testing import CliRunner
+
+    from armguard.cli import main
+    from armguard.model import known_models
+
+    if "panda" not in {m.name for m in known_models() if m.available}:
+        pytest.skip("panda's package (example-robot-data) is not installed")
+    r = CliRunner().invoke(main, ["program", "calibrate", "panda", "--out", str(tmp_path / "c.yaml"), "--points", "3"])
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "c.yaml").is_file() and "internal error" not in r.output

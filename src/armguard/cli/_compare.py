@@ -9,7 +9,7 @@ import click
 import numpy as np
 
 from . import main
-from ._params import AT_LEAST_ONE, BACKENDS, COUNT, POSITIVE
+from ._params import AT_LEAST_ONE, BACKENDS, COUNT, POSITIVE, SAMPLES, SEED
 from ._exit import ExitCode, exit_epilog
 from ._output import count, esc, json_text, output_console
 
@@ -50,11 +50,11 @@ def _pin_q(model, vals: list) -> list:
                                            incomplete="a backend refused some configurations; the others agree"))
 @click.argument("model")
 @click.option("--backends", type=BACKENDS, default="analytic,coal", show_default=True, help="Comma-separated backends to compare.")
-@click.option("--configs", "n_configs", type=AT_LEAST_ONE, default=1000, show_default=True, help="Seeded random in-limit configurations.")
+@click.option("--configs", "n_configs", type=SAMPLES, default=1000, show_default=True, help="Seeded random in-limit configurations.")
 @click.option("--trajectory", "trajectories", multiple=True, default=("all",), show_default=True,
               help="Canned trajectories whose samples are added: a name (repeatable), 'all' or 'none'.")
 @click.option("--frequency", type=POSITIVE, default=1.0, show_default=True, help="Trajectory sampling rate (Hz).")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random configurations.")
+@click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of the random configurations.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None, help="Write compare.json and PNGs here.")
 @click.option("--backend-option", "backend_options", multiple=True, metavar="B.KEY=VALUE",
               help="An option of one backend, e.g. analytic.fidelity=paper (repeatable).")
@@ -167,7 +167,7 @@ def _reference_line(ref: dict, exact: bool = False) -> str:
 
 @main.command("check-urdf", epilog=exit_epilog(ok="no error-level finding", unsafe="an error-level finding"))
 @click.argument("path")
-@click.option("--configs", "n_configs", type=AT_LEAST_ONE, default=200, show_default=True,
+@click.option("--configs", "n_configs", type=SAMPLES, default=200, show_default=True,
               help="Random configurations for the permanent-collision check.")
 @click.option("--json", "as_json", is_flag=True, help="Print the findings as JSON.")
 def check_urdf_cmd(path, n_configs, as_json) -> None:

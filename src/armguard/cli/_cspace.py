@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from . import main
-from ._params import AT_LEAST_ONE, COUNT, LENGTH
+from ._params import AT_LEAST_ONE, COUNT, LENGTH, MAX_SAMPLES
 from ._exit import ExitCode, exit_epilog
 from ._output import json_text, output_console
 
@@ -126,7 +126,7 @@ def _nearly_all_forbidden(fmap) -> str | None:
     unsafe="with --samples: a configuration the map allows collides (the map is not conservative there)"))
 @click.argument("map_path")
 @click.option("--model", default=None, help="Check against these model files / this scene (default: the recorded files).")
-@click.option("--samples", type=COUNT, default=10_000, show_default=True,
+@click.option("--samples", type=click.IntRange(0, MAX_SAMPLES), default=10_000, show_default=True,
               help="Random configurations compared with the exact check (0: skip).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def info_cmd(map_path, model, samples, as_json) -> None:

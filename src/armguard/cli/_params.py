@@ -10,12 +10,18 @@ import math
 
 import click
 
-__all__ = ["AT_LEAST_ONE", "BACKEND", "BACKENDS", "COUNT", "Finite", "LENGTH", "POSITIVE", "scene_of", "srdf_option"]
+__all__ = ["AT_LEAST_ONE", "BACKEND", "BACKENDS", "COUNT", "Finite", "LENGTH", "POSITIVE", "SAMPLES", "SEED", "scene_of",
+           "srdf_option"]
 
 AT_LEAST_ONE = click.IntRange(min=1)
 """An integer >= 1 (configurations, workers, evaluations)."""
 COUNT = click.IntRange(min=0)
 """An integer >= 0."""
+MAX_SAMPLES = 10**7
+SAMPLES = click.IntRange(min=1, max=MAX_SAMPLES)
+"""Random configurations to draw, 1 to 10^7 (10^10 was a MemoryError, exit 4; 10^20 an overflow)."""
+SEED = click.IntRange(min=0)
+"""A random seed, >= 0 (NumPy refuses a negative one: it was an internal error, exit 4)."""
 
 
 class Finite(click.ParamType):

@@ -10,6 +10,7 @@ import click
 
 from . import main
 from ._exit import ExitCode, exit_epilog
+from ._params import SEED
 
 
 @main.group("program")
@@ -25,7 +26,7 @@ def program() -> None:
               help="A cell file (armguard_cell: 1), a model name or a scene file (default: the program's cell:).")
 @click.option("--calibration", default=None, type=click.Path(),
               help="A calibration file (armguard_calibration: 1) to regenerate the cell from (default: the cell's).")
-@click.option("--seed", default=0, show_default=True, type=int, help="Seed of the camera's FIND noise.")
+@click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of the camera's FIND noise.")
 @click.option("--save", default=None, type=click.Path(),
               help="Write the run (each motion's times and waypoints, each FIND's frames) as JSON.")
 def run_cmd(file: str, cell: str | None, calibration: str | None, seed: int, save: str | None) -> None:
@@ -73,7 +74,7 @@ def export_cmd(file: str, out: str, cell: str | None, calibration: str | None) -
               help="The calibration file to start from (default: the cell's; the nominal layout without one).")
 @click.option("--points", default=12, show_default=True, type=click.IntRange(3, 200),
               help="Points of the trained trajectory in the camera's view.")
-@click.option("--seed", default=0, show_default=True, type=int, help="Seed of the camera's FIND noise.")
+@click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of the camera's FIND noise.")
 def calibrate_cmd(cell: str, out: str | None, calibration: str | None, points: int, seed: int) -> None:
     """Calibrate the camera of the emulated cell CELL to its robot and write the calibration file.
 

@@ -14,7 +14,7 @@ import math
 import click
 
 from . import main
-from ._params import AT_LEAST_ONE, BACKEND, LENGTH
+from ._params import AT_LEAST_ONE, BACKEND, LENGTH, SAMPLES
 from ._exit import ExitCode, exit_epilog
 from ._output import count
 
@@ -44,7 +44,7 @@ def _q(model, q) -> str:
               help="Never means never within this distance (m) anywhere within the joint limits.")
 @click.option("--method", type=click.Choice(["certified", "sampled"]), default="certified", show_default=True,
               help="certified: Never proven by branch and bound; sampled: MoveIt Setup Assistant's rules.")
-@click.option("--samples", type=AT_LEAST_ONE, default=10_000, show_default=True, help="Random configurations of --method sampled.")
+@click.option("--samples", type=SAMPLES, default=10_000, show_default=True, help="Random configurations of --method sampled.")
 @click.option("--workers", type=AT_LEAST_ONE, default=None, help="Threads over the pairs (default: one); with --scheduler local, "
               "the Dask worker processes.")
 @click.option("--scheduler", default=None, help="Search the pairs on Dask: 'local' (a LocalCluster of --workers "

@@ -122,7 +122,9 @@ def calibration_poses(cell: Cell, n: int = 12, *, height: float = 0.15, radius: 
     above the cell's highest body and alternately ``depth`` higher."""
     cam = cell.camera.X_WC
     axis, o = cam[:3, 2], cam[:3, 3]
-    top = max(float(np.asarray(s.aabb()).reshape(2, 3)[1, 2]) for b in cell.model.scene.bodies.values() for s in b.shapes)
+    # above the highest body (a cell of a robot alone: above the floor, z = 0; max() of none was an internal error)
+    top = max((float(np.asarray(s.aabb()).reshape(2, 3)[1, 2]) for b in cell.model.scene.bodies.values()
+               for s in b.shapes), default=0.0)
     z0 = top + height
     t = (z0 - o[2]) / axis[2] if abs(axis[2]) > 1e-9 else 1.0
     c = o + t * axis

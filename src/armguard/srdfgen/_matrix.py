@@ -170,7 +170,11 @@ def _progress(progress, total: int, name: str, what: str):
 
         label = f"{progress if isinstance(progress, str) else name}: {what}"
 
-        bar = Progress(TextColumn(label), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), transient=False)
+        from rich.console import Console
+
+        # on stderr: on stdout the bar went into piped output, and a closed pipe (| head -1) exited 1 ("unsafe")
+        bar = Progress(TextColumn(label), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), transient=False,
+                       console=Console(stderr=True))
         bar.start()
         task = bar.add_task(label, total=total)
         return (lambda: bar.advance(task)), bar.stop
