@@ -93,3 +93,58 @@ def test_a_sampled_safe_verdict_says_it_is_unproven_between_samples():
     assert sampled.status.value == certified.status.value == "safe"
     assert "verdict: SAFE at the samples (sampled: not proven between them" in sampled.summary()
     assert "verdict: SAFE\n" in certified.summary() + "\n" and "at the samples" not in certified.summary()
+
+
+def _path_params(group=main, prefix=()):
+    import click
+
+    for name, cmd in group.commands.items():
+        if isinstance(cmd, click.Group):
+            yield from _path_params(cmd, (*prefix, name))
+        for p in cmd.params:
+            if isinstance(p.type, click.Path):
+                yield " ".join((*prefix, name, p.name)), p
+
+
+PATH_PARAMS = list(_path_params())
+
+
+@pytest.mark.parametrize("where,param", PATH_PARAMS, ids=[w for w, _ in PATH_PARAMS])
+def test_every_path_refuses_an_empty_one_and_a_dash_it_would_write_as_a_file(where, param):
+    import click
+
+    from armguard.cli._params import FilePath
+
+    assert isinstance(param.type, FilePath), f"{where}: a plain click.Path lets '' through as 'not given'"
+    with pytest.raises(click.BadParameter, match="empty path"):
+        param.type.convert("", param, None)
+    if where == "verify report_path":  # '-': the JSON report on standard output
+        assert param.type.convert("-", param, None) == "-"
+    else:
+        with pytest.raises(click.BadParameter, match="name a file"):
+            param.type.convert("-", param, None)
+    assert param.type.convert("some/file.x", param, None) == "some/file.x"
+
+
+def test_calibrate_with_an_empty_out_writes_nothing(tmp_path):
+    """``--out ''`` was read as "not given": the cell's own calibration file was overwritten."""
+    import shutil
+    from pathlib import Path
+
+    src = Path(__file__).resolve().parents[1] / "examples" / "workmate"
+    for f in src.iterdir():
+        if f.is_file():
+            shutil.copy(f, tmp_path / f.name)
+    before = {f.name: f.read_bytes() for f in tmp_path.iterdir()}
+    for out in ("", "   "):
+        res = CliRunner().invoke(main, ["program", "calibrate", str(tmp_path / "cell.yaml"), "--out", out])
+        assert res.exit_code == ExitCode.USAGE, res.output
+        assert "empty path" in res.output
+    assert {f.name: f.read_bytes() for f in tmp_path.iterdir()} == before
+
+
+def test_a_plot_to_a_dash_is_refused_not_a_file_named_dash(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    res = CliRunner().invoke(main, ["verify", "hermes", "all", "--plot", "-"])
+    assert res.exit_code == ExitCode.USAGE and "--plot" in res.output
+    assert not (tmp_path / "-").exists()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from ._exit import DEBUG_ENV, ExitCode, exit_epilog, run_guarded
-from ._params import BACKEND
+from ._params import BACKEND, PATH
 
 
 class _Group(click.Group):
@@ -97,7 +97,7 @@ def _option_names(ctx, message: str) -> str:
 @click.option("--backend", type=BACKEND, default=None, metavar="NAME",
               help="Backend for every check of this command (analytic, coal, fcl, ...; default: "
                    "$ARMGUARD_BACKEND, else armguard.toml, else analytic).")
-@click.option("--config", "config", default=None, type=click.Path(),
+@click.option("--config", "config", default=None, type=PATH,
               help="An armguard.toml to read the [backend] table from (default: the working directory's).")
 @click.option("--traceback", "traceback", is_flag=True,
               help=f"Print the traceback of an internal error (exit status 4); also {DEBUG_ENV}=1.")

@@ -9,7 +9,7 @@ import click
 import numpy as np
 
 from . import main
-from ._params import AT_LEAST_ONE, BACKENDS, COUNT, POSITIVE, SAMPLES, SEED
+from ._params import AT_LEAST_ONE, BACKENDS, COUNT, FilePath, POSITIVE, SAMPLES, SEED
 from ._exit import ExitCode, exit_epilog
 from ._output import count, esc, json_text, output_console
 
@@ -55,7 +55,7 @@ def _pin_q(model, vals: list) -> list:
               help="Canned trajectories whose samples are added: a name (repeatable), 'all' or 'none'.")
 @click.option("--frequency", type=POSITIVE, default=1.0, show_default=True, help="Trajectory sampling rate (Hz).")
 @click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of the random configurations.")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None, help="Write compare.json and PNGs here.")
+@click.option("--out", "out_dir", type=FilePath(file_okay=False), default=None, help="Write compare.json and PNGs here.")
 @click.option("--backend-option", "backend_options", multiple=True, metavar="B.KEY=VALUE",
               help="An option of one backend, e.g. analytic.fidelity=paper (repeatable).")
 @click.option("--workers", type=AT_LEAST_ONE, default=None, help="Spread the configurations over a Dask LocalCluster of N processes.")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from . import main
-from ._params import LENGTH
+from ._params import LENGTH, PATH
 
 
 class _Uncertain(click.ParamType):
@@ -33,7 +33,7 @@ class _Uncertain(click.ParamType):
               help="TCP port (0: any free port). A port in use is an error.")
 @click.option("--threshold", default=0.05, show_default=True, type=LENGTH, help="Initial detection threshold (m).")
 @click.option("--watch", is_flag=True, help="Reload the model when its files change, keeping the configuration.")
-@click.option("--terrain", "terrain_file", type=click.Path(), default=None,
+@click.option("--terrain", "terrain_file", type=PATH, default=None,
               help="Check against a sensed terrain file or shipped name (as armguard check --terrain) and draw it with the "
                    "pyramid boxes each check tests.")
 @click.option("--uncertain", multiple=True, type=_Uncertain(), metavar="BODY=SIGMA_M[,SIGMA_DEG]",

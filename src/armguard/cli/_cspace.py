@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from . import main
-from ._params import AT_LEAST_ONE, COUNT, LENGTH, MAX_SAMPLES
+from ._params import AT_LEAST_ONE, COUNT, LENGTH, MAX_SAMPLES, PATH
 from ._exit import ExitCode, exit_epilog
 from ._output import json_text, output_console
 
@@ -68,7 +68,7 @@ def cspace() -> None:
 
 @cspace.command("build", epilog=exit_epilog(ok="the map written (whole: a temporary file, fsync, rename)"))
 @click.argument("model")
-@click.option("--out", "out", type=click.Path(), required=True, help="The .agmap file to write.")
+@click.option("--out", "out", type=PATH, required=True, help="The .agmap file to write.")
 @click.option("--resolution", default="1deg", show_default=True, help="Cell width of joints 1, 2 ('1deg', '0.5°', '0.01rad'; a bare number is rad).")
 @click.option("--j3-resolution", default=None, help="Joint-3 quantum (default: the resolution).")
 @click.option("--cell", default="10deg", show_default=True, help="Substructure extent over joints 1, 2.")
@@ -176,7 +176,7 @@ def info_cmd(map_path, model, samples, as_json) -> None:
 @click.option("--q2", required=True, help="Joint 2 of the slice ('30deg', '30°', rad; a bare number is deg).")
 @click.option("--q", "q", default=None, help="Configuration to mark: joints 1-3 as 'a,b,c' (deg unless suffixed).")
 @click.option("--model", default=None, help="Check against these model files / this scene (default: the recorded files).")
-@click.option("--out", "out", type=click.Path(), required=True,
+@click.option("--out", "out", type=PATH, required=True,
               help="The plot to write: .png, or another format matplotlib writes (.pdf, .svg).")
 def plot_cmd(map_path, q2, q, model, out) -> None:
     """A joint-1 x joint-3 slice of MAP_PATH at joint 2 = Q2: forbidden bins red, the configuration Q marked

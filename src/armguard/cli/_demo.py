@@ -19,7 +19,7 @@ import click
 import numpy as np
 
 from . import main
-from ._params import LENGTH
+from ._params import FilePath, LENGTH
 from ._output import esc, output_console
 
 #: Hermes (001_…, §4): "the maximum value of the stopping distance be 100 mm, i.e. the typical value
@@ -108,7 +108,7 @@ def _mode_names(modes) -> list:
 
 
 @main.command("demo")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False), default="out", show_default=True,
+@click.option("--out", "out_dir", type=FilePath(file_okay=False), default="out", show_default=True,
               help="Where the JSON reports and PNG plots go.")
 @click.option("--scene", "scenes", multiple=True, help="Only these built-in scenes (default: all).")
 @click.option("--stopping-distance", "stopping_distances", type=LENGTH, multiple=True,

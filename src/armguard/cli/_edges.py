@@ -11,7 +11,7 @@ import click
 from . import main
 from ._exit import ExitCode, exit_epilog
 from ._output import esc, output_console
-from ._params import LENGTH
+from ._params import LENGTH, PATH
 
 _LISTED = 10  # edges listed per verdict (collision, incomplete)
 
@@ -85,7 +85,7 @@ def read_edges(path) -> tuple:
         unsafe="an edge in collision (or within --margin)",
         incomplete="an edge not resolved within --max-evaluations, and none in collision"))
 @click.argument("model")
-@click.argument("edges_file", metavar="EDGES.npz", type=click.Path())
+@click.argument("edges_file", metavar="EDGES.npz", type=PATH)
 @click.option("--robot", default=None, help="The moving robot (default: the model's only one; '*': every robot at once, "
               "the scene's flat joint order).")
 @click.option("--margin", type=LENGTH, default=0.0, show_default=True,
@@ -99,7 +99,7 @@ def read_edges(path) -> tuple:
               help="Continuous joints along the angle's line, or turned the short way (as pinocchio.interpolate).")
 @click.option("--max-evaluations", type=click.IntRange(min=2), default=None,
               help="Evaluations per edge before it is INCOMPLETE (default: Tolerances.edge_max_evaluations, 1000).")
-@click.option("--out", "out_path", type=click.Path(), default=None,
+@click.option("--out", "out_path", type=PATH, default=None,
               help="Write the results here (.npz: code (0 clear, 1 collision, 2 incomplete), s_free, s, q (columns "
               "q_joint_names), distance, pair_a, pair_b, evaluations, robot, margin, joint_names, held_names, "
               "held_values; with --category-margin, margin_categories and margins, each category's, in place of margin).")

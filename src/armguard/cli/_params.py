@@ -10,8 +10,8 @@ import math
 
 import click
 
-__all__ = ["AT_LEAST_ONE", "BACKEND", "BACKENDS", "COUNT", "Finite", "LENGTH", "POSITIVE", "SAMPLES", "SEED", "scene_of",
-           "srdf_option"]
+__all__ = ["AT_LEAST_ONE", "BACKEND", "BACKENDS", "COUNT", "Finite", "LENGTH", "PATH", "PATH_OR_DASH", "POSITIVE",
+           "SAMPLES", "SEED", "FilePath", "scene_of", "srdf_option"]
 
 AT_LEAST_ONE = click.IntRange(min=1)
 """An integer >= 1 (configurations, workers, evaluations)."""
@@ -53,6 +53,29 @@ POSITIVE = Finite(0.0, open_low=True)
 """A finite number > 0 (a rate, a step)."""
 
 
+class FilePath(click.Path):
+    """A file or folder path: an empty one is refused (``--out ''`` read as "not given" wrote over the file the
+    default names), and so is ``-`` unless ``dash`` (standard output or input): it would be a file named ``-``."""
+
+    def __init__(self, dash: bool = False, **kwargs):
+        super().__init__(allow_dash=dash, **kwargs)
+        self.dash = dash
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str):
+            if not value.strip():
+                self.fail("an empty path names no file", param, ctx)
+            if value == "-" and not self.dash:
+                self.fail("'-' (standard output or input) is not read or written here: name a file", param, ctx)
+        return super().convert(value, param, ctx)
+
+
+PATH = FilePath()
+"""A path, neither empty nor ``-``."""
+PATH_OR_DASH = FilePath(dash=True)
+"""A path, or ``-`` for standard output (or input)."""
+
+
 class Backends(click.ParamType):
     """Installed backend names (``armguard.backends.available``), comma-separated where ``many``: an unknown
     one is a usage error naming the installed ones (exit status 2, as the group's ``--backend``)."""
@@ -83,7 +106,7 @@ BACKENDS = Backends(many=True)
 def srdf_option(help_for: str):
     """``--srdf PATH|none``: the SRDF of SCENE in place of the one armguard finds (``load_model``'s ``srdf=``;
     ``none``: no SRDF at all) -- a built-in or public robot's name, a sidecar or a .urdf."""
-    return click.option("--srdf", type=click.Path(), default=None, metavar="PATH|none",
+    return click.option("--srdf", type=PATH, default=None, metavar="PATH|none",
                         help=f"The SRDF of {help_for} in place of the one found (docs/models.md), or 'none' for no SRDF.")
 
 

@@ -10,7 +10,7 @@ import click
 
 from . import main
 from ._exit import ExitCode, exit_epilog
-from ._params import SEED
+from ._params import PATH, SEED
 
 
 @main.group("program")
@@ -21,13 +21,13 @@ def program() -> None:
 @program.command("run", epilog=exit_epilog(
     ok="every motion verified (certified) and ran in the emulated cell",
     unsafe="a motion was refused (it would collide, or could not be verified) or a FIND failed: the program stopped there"))
-@click.argument("file", type=click.Path())
+@click.argument("file", type=PATH)
 @click.option("--cell", default=None, metavar="CELL",
               help="A cell file (armguard_cell: 1), a model name or a scene file (default: the program's cell:).")
-@click.option("--calibration", default=None, type=click.Path(),
+@click.option("--calibration", default=None, type=PATH,
               help="A calibration file (armguard_calibration: 1) to regenerate the cell from (default: the cell's).")
 @click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of the camera's FIND noise.")
-@click.option("--save", default=None, type=click.Path(),
+@click.option("--save", default=None, type=PATH,
               help="Write the run (each motion's times and waypoints, each FIND's frames) as JSON.")
 def run_cmd(file: str, cell: str | None, calibration: str | None, seed: int, save: str | None) -> None:
     """Run the task program FILE: expand each task through IK, verify every motion, emulate it."""
@@ -47,11 +47,11 @@ def run_cmd(file: str, cell: str | None, calibration: str | None, seed: int, sav
 
 
 @program.command("export")
-@click.argument("file", type=click.Path())
-@click.option("--out", "out", required=True, type=click.Path(),
+@click.argument("file", type=PATH)
+@click.option("--out", "out", required=True, type=PATH,
               help="The program to write (Python that calls armguard's workcell primitives).")
 @click.option("--cell", default=None, metavar="CELL", help="The cell the exported program runs on by default.")
-@click.option("--calibration", default=None, type=click.Path(),
+@click.option("--calibration", default=None, type=PATH,
               help="The calibration file the exported program regenerates its cell from by default.")
 def export_cmd(file: str, out: str, cell: str | None, calibration: str | None) -> None:
     """Export the task program FILE as a workcell program (Python) that reproduces its motions."""
@@ -67,10 +67,10 @@ def export_cmd(file: str, out: str, cell: str | None, calibration: str | None) -
 @program.command("calibrate", epilog=exit_epilog(
     ok="calibrated: every motion verified and ran, the camera saw every point, the calibration file written",
     unsafe="a motion was refused or the camera did not see the calibration object: nothing written"))
-@click.argument("cell", type=click.Path())
-@click.option("--out", "out", default=None, type=click.Path(),
+@click.argument("cell", type=PATH)
+@click.option("--out", "out", default=None, type=PATH,
               help="The calibration file to write (default: the one the cell file names, updated in place).")
-@click.option("--calibration", default=None, type=click.Path(),
+@click.option("--calibration", default=None, type=PATH,
               help="The calibration file to start from (default: the cell's; the nominal layout without one).")
 @click.option("--points", default=12, show_default=True, type=click.IntRange(3, 200),
               help="Points of the trained trajectory in the camera's view.")

@@ -14,7 +14,7 @@ import math
 import click
 
 from . import main
-from ._params import AT_LEAST_ONE, BACKEND, LENGTH, SAMPLES
+from ._params import AT_LEAST_ONE, BACKEND, LENGTH, PATH, SAMPLES
 from ._exit import ExitCode, exit_epilog
 from ._output import count
 
@@ -39,7 +39,7 @@ def _q(model, q) -> str:
 
 @main.command("srdf", epilog=exit_epilog(ok="the SRDF written"))
 @click.argument("robot")
-@click.option("--out", "out", type=click.Path(), required=True, help="The .srdf file to write.")
+@click.option("--out", "out", type=PATH, required=True, help="The .srdf file to write.")
 @click.option("--margin", type=LENGTH, default=0.0, show_default=True,
               help="Never means never within this distance (m) anywhere within the joint limits.")
 @click.option("--method", type=click.Choice(["certified", "sampled"]), default="certified", show_default=True,
@@ -184,7 +184,7 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
     unsafe="with --strict: a disabled pair other than Adjacent or Default can collide, or a disabled pair names "
            "a link the robot lacks (unless the SRDF was found under the robot's name: one of a larger robot)"))
 @click.argument("robot")
-@click.argument("srdf", type=click.Path(), required=False)
+@click.argument("srdf", type=PATH, required=False)
 @click.option("--margin", type=LENGTH, default=0.0, show_default=True, help="Collide means within this distance (m).")
 @click.option("--workers", type=AT_LEAST_ONE, default=None, help="Threads over the pairs (default: one).")
 @click.option("--max-evaluations", type=AT_LEAST_ONE, default=200_000, show_default=True,

@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from . import main
-from ._params import AT_LEAST_ONE, LENGTH, POSITIVE
+from ._params import AT_LEAST_ONE, LENGTH, PATH, PATH_OR_DASH, POSITIVE
 from ._exit import ExitCode, exit_epilog
 from ._output import esc, output_console
 from .._errors import OutputError
@@ -72,13 +72,13 @@ def _unique_names(items):
                    "eighth's distance from t = 0).")
 @click.option("--threshold", type=LENGTH, default=None, help="Warning threshold drawn on the plot (m; default 0.05).")
 @click.option("--robot", default=None, help="The moving robot (default: the trajectory's).")
-@click.option("--report", "report_path", type=click.Path(), default=None,
+@click.option("--report", "report_path", type=PATH_OR_DASH, default=None,
               help="Write the JSON report here; '-': to standard output (the summaries then go to standard error).")
-@click.option("--plot", "plot_path", type=click.Path(), default=None, help="Write a plot of clearance vs time here (.png, or .pdf, .svg; one file per trajectory, "
+@click.option("--plot", "plot_path", type=PATH, default=None, help="Write a plot of clearance vs time here (.png, or .pdf, .svg; one file per trajectory, "
               "FILE_<trajectory>.png, when there are several).")
 @click.option("--workers", type=AT_LEAST_ONE, default=None, help="Run on a Dask LocalCluster with N worker processes.")
 @click.option("--scheduler", default=None, help="Run on an existing Dask cluster (scheduler address).")
-@click.option("--terrain", "terrain_file", type=click.Path(), default=None,
+@click.option("--terrain", "terrain_file", type=PATH, default=None,
               help="Also verify against a sensed terrain file (armguard.terrain.load_terrain; or a shipped terrain by "
                    "name: gentle, rocky, rough): the terrain sweep is "
                    "certified whatever --method (the scene's check follows --method), the trajectories verified here one "
