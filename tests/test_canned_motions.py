@@ -167,6 +167,15 @@ def test_arm_angle_motion_needs_a_bent_elbow(ranger):
         task_trapezoid(robot, np.radians([0, 30, 0, 60, 0, 30, 0]), np.zeros(6))
 
 
+def test_a_canned_motion_too_slow_to_sample_is_refused(ranger):
+    from armguard import TrajectoryError
+
+    robot = ranger.robots["left_arm"]
+    q0 = np.radians([0, 30, 0, 60, 0, 30, 0])
+    with pytest.raises(TrajectoryError, match=r"canned motion: .* poses to solve"):
+        task_trapezoid(robot, q0, [0.05, 0, 0, 0, 0, 0], speed=1e-300)
+
+
 def test_unreachable_end_effector_motion_names_the_sample(ranger):
     from armguard import TrajectoryError
 

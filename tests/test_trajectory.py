@@ -188,6 +188,19 @@ def test_cartesian_line_unreachable_goal_names_the_sample(puma):
         Trajectory.cartesian_line(puma, q0, trans(2.0, 0.0, 0.0), speed=1.0, frequency=20.0)
 
 
+@pytest.mark.parametrize("speed", [1e-300, 1e-6])
+def test_a_line_too_slow_to_sample_is_refused_before_solving(puma, speed):
+    """1e-300 m/s was numpy's raw ValueError from linspace; 1e-6 m/s solved 5 million poses (minutes)."""
+    q0 = np.array([0.0, 0.6, -0.7, 0.0, 0.5, 0.0])
+    goal = puma.forward_kinematics(q0 + [0.05, -0.05, 0.05, 0.0, 0.05, 0.0])[-1]
+    with pytest.raises(TrajectoryError, match=r"cartesian_line: .* poses to solve, more than 100000: raise the speed"):
+        Trajectory.cartesian_line(puma, q0, goal, speed=speed, frequency=50.0)
+    with pytest.raises(TrajectoryError, match="poses to solve"):
+        Trajectory.through_poses(puma, q0, goal[None], mode="line", speed=speed)
+    slow = Trajectory.cartesian_line(puma, q0, goal, speed=1e-3, frequency=50.0)  # under the cap: sampled
+    assert slow.n_segments == math.ceil(slow.duration * 50.0) and slow.duration > 10.0
+
+
 def test_through_poses_joint_mode(puma):
     q0 = np.array([0.0, 0.6, -0.7, 0.0, 0.5, 0.0])
     X_WF = trans(0.1, 0.0, -0.05)

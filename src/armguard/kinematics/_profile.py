@@ -24,7 +24,12 @@ import math
 
 import numpy as np
 
-__all__ = ["min_time_trapezoid", "blend_for_duration", "path_s", "path_tau", "path_ds"]
+__all__ = ["MAX_POSE_SAMPLES", "min_time_trapezoid", "blend_for_duration", "path_s", "path_tau", "path_ds", "pose_samples"]
+
+MAX_POSE_SAMPLES = 100_000
+"""Most poses a task-space motion is sampled at (each one an inverse-kinematics solve, tens of µs): a
+speed of 1e-300 m/s made a duration whose sample count ``np.linspace`` refused (an internal error),
+1e-6 m/s ran for minutes."""
 
 _ROUNDOFF = 1e-12
 """Relative round-off allowed when checking a given duration against the acceleration bound."""
@@ -99,3 +104,13 @@ def path_ds(tau: np.ndarray, T: np.ndarray, tb: np.ndarray) -> np.ndarray:
     r = T - tau
     ds = np.where(tau < tb, acc * tau, np.where(r < tb, acc * r, v))
     return np.where((tau < 0.0) | (tau > T), 0.0, ds)
+
+
+def pose_samples(duration: float, frequency: float, what: str, error) -> int:
+    """Samples (>= 1) of a task-space motion of ``duration`` s at ``frequency`` Hz; more than
+    :data:`MAX_POSE_SAMPLES` is ``error`` naming ``what`` and the figures that make it so many."""
+    n = duration * frequency
+    if not n <= MAX_POSE_SAMPLES:  # an infinite or a NaN product too
+        raise error(f"{what}: {duration:.4g} s at {frequency:.4g} Hz is {n:.3g} poses to solve, more than "
+                    f"{MAX_POSE_SAMPLES}: raise the speed (or lower the frequency)")
+    return max(1, int(math.ceil(n)))

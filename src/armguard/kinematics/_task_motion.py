@@ -34,7 +34,7 @@ import numpy as np
 
 from .._errors import KinematicsError, TrajectoryError
 from ._frames import pose_from_xyz_rpy, rotation_vector_from_matrix, xyz_rpy_from_pose
-from ._profile import min_time_trapezoid, path_s
+from ._profile import min_time_trapezoid, path_s, pose_samples
 
 __all__ = ["arm_angle", "arm_points", "task_coordinates", "task_trapezoid", "CANNED_LIMITS"]
 
@@ -143,7 +143,7 @@ def task_trapezoid(robot, q_start, delta, *, speed: float | None = None, angular
                                          np.append(amax, lim["acceleration"]))
     if duration == 0.0:
         raise TrajectoryError("canned motion: delta is zero (no motion)")
-    n = max(1, int(math.ceil(duration * lim["frequency"])))
+    n = pose_samples(duration, lim["frequency"], "canned motion", TrajectoryError)
     times = np.linspace(0.0, duration, n + 1)
     s_path = path_s(times, duration, blend)
 

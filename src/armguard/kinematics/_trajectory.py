@@ -18,7 +18,7 @@ import numpy as np
 from .._errors import KinematicsError, TrajectoryError
 from .._values import number, refuse_complex_or_bool
 from ._frames import rotation_about_axis, rotation_vector_from_matrix
-from ._profile import blend_for_duration, min_time_trapezoid, path_ds, path_s
+from ._profile import blend_for_duration, min_time_trapezoid, path_ds, path_s, pose_samples
 from ._robot import _check_X
 
 __all__ = ["Trajectory", "PROFILES"]
@@ -371,7 +371,7 @@ class Trajectory:
                                              np.array([acceleration, angular_acceleration], dtype=np.float64))
         if duration == 0.0:
             raise TrajectoryError("cartesian_line: the goal equals the start pose")
-        n = max(1, int(math.ceil(duration * frequency)))
+        n = pose_samples(duration, frequency, "cartesian_line", TrajectoryError)
         times = np.linspace(0.0, duration, n + 1)
         s_path = path_s(times, duration, blend)
         axis = w / angle if angle > 0.0 else np.array([0.0, 0.0, 1.0])
