@@ -308,3 +308,28 @@ def test_check_says_when_its_collision_is_the_stopping_distance_not_a_contact():
     assert "COLLISION (within the stopping distance, no contact)" in head and "stopping distance 0.03 m" in head, head
     r = CliRunner().invoke(main, ["check", "ur5", "--stopping-distance", "0.01"], env={"COLUMNS": "250"})
     assert "within the stopping distance" not in r.output and "stopping distance 0.01 m" in r.output.splitlines()[0]
+
+
+def test_console_says_why_it_cannot_serve_before_it_starts():
+    """``--host`` with an address this machine lacks and ``--port 0`` hung silently (viser retried it
+    forever); with a port it read "port in use"; a port in use still says so."""
+    import socket
+
+    from armguard import ArmguardError
+    from armguard.console._app import PortInUseError, _check_port_free
+
+    with socket.socket() as held:
+        held.bind(("127.0.0.1", 0))
+        held.listen()
+        port = held.getsockname()[1]
+        with pytest.raises(PortInUseError, match=f"port {port} on 127.0.0.1 is in use"):
+            _check_port_free("127.0.0.1", port)
+    _check_port_free("127.0.0.1", 0)  # any free port of this machine: no error
+    for port in (0, 8123):
+        with pytest.raises(ArmguardError, match="cannot serve on 192.0.2.1 .*address of this machine") as info:
+            _check_port_free("192.0.2.1", port)  # TEST-NET-1: never this machine's
+        assert not isinstance(info.value, PortInUseError)
+    with pytest.raises(ArmguardError, match="'nosuchhost.invalid' does not resolve"):
+        _check_port_free("nosuchhost.invalid", 0)
+    res = _run("console", "gmf_s480", "--host", "192.0.2.1", "--port", "0")
+    assert res.exit_code == ExitCode.INPUT and "cannot serve on 192.0.2.1" in res.output

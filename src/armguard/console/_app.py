@@ -40,14 +40,29 @@ class PortInUseError(ArmguardError):
 
 
 def _check_port_free(host: str, port: int) -> None:
+    """Bind ``host:port`` once and let it go: a port in use is :class:`PortInUseError`; an address this
+    machine does not have, or a host name that does not resolve, is an :class:`ArmguardError` saying so
+    (with ``--port 0`` viser retried such an address forever, silently; with a port it read "in use")."""
+    import errno
     import socket
 
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+    try:
+        family = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0][0]
+    except (socket.gaierror, UnicodeError) as exc:
+        raise ArmguardError(f"--host {host!r} does not resolve ({getattr(exc, 'strerror', None) or exc}): give an "
+                            "address of this machine (127.0.0.1: this machine only; 0.0.0.0: every interface)") from None
+    with socket.socket(family, socket.SOCK_STREAM) as s:
         try:
             s.bind((host, port))
         except OSError as exc:
-            raise PortInUseError(f"port {port} on {host} is in use ({exc.strerror or exc}); stop what holds it "
-                                 "or pass --port 0 for any free port") from None
+            if exc.errno == errno.EACCES:
+                raise ArmguardError(f"port {port} on {host} needs privileges ({exc.strerror or exc}): pass a port "
+                                    "from 1024 up, or --port 0 for any free port") from None
+            if exc.errno == errno.EADDRINUSE:
+                raise PortInUseError(f"port {port} on {host} is in use ({exc.strerror or exc}); stop what holds it "
+                                     "or pass --port 0 for any free port") from None
+            raise ArmguardError(f"cannot serve on {host} ({exc.strerror or exc}): --host names an address of this "
+                                "machine (127.0.0.1: this machine only; 0.0.0.0: every interface)") from None
 
 
 def run_line(snap) -> str:
@@ -162,8 +177,7 @@ class ConsoleApp:
     def start(self) -> "ConsoleApp":
         import viser
 
-        if self.port != 0:
-            _check_port_free(self.host, self.port)
+        _check_port_free(self.host, self.port)  # port 0: the address alone (viser retried a foreign one forever)
         self.server = viser.ViserServer(host=self.host, port=self.port, verbose=False)
         if self.port != 0 and self.server.get_port() != self.port:
             got = self.server.get_port()
