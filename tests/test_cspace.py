@@ -277,3 +277,23 @@ def test_a_scene_the_map_was_not_built_on_is_refused(built):
     moved.set_robot_base(robot, X @ moved.robots[robot].X_WB)
     with pytest.raises(ForbiddenMapError, match="other geometry.*base or its links"):
         CombinedChecker(built, moved)
+
+
+
+def test_a_wholly_forbidden_map_forbids_at_most_the_whole_box():
+    """The forbidden share sums every cell's volume: a full map read 1.000000000000004 (``cspace info``)."""
+    import math
+
+    from armguard.cspace._grid import MapGrid
+    from armguard.cspace._map import forbidden_share
+
+    g = MapGrid.create([-2.2739233746429086, -1.5395734275277406, -1.0819470478723894],
+                       [1.0330552710570582, 2.626540478400545, 2.8255111545554437],
+                       math.radians(6), math.radians(6), math.radians(30))  # its cells sum to 1 + 1e-15
+
+    def full(s):
+        i1a, i1b, i2a, i2b = g.sub_cells(s)
+        return np.ones((i1b - i1a, i2b - i2a, int(g.counts[2])), dtype=bool)
+
+    assert forbidden_share(g, full) == 1.0
+    assert forbidden_share(g, lambda s: np.zeros_like(full(s))) == 0.0

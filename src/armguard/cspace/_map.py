@@ -146,6 +146,20 @@ class MapInfo:
     unresolved: int
 
 
+def forbidden_share(g, mask_of) -> float:
+    """The forbidden share of the grid ``g``'s joint box, in [0, 1]: every forbidden cell's volume (clipped
+    to the limits), ``mask_of(s)`` the substructure ``s``'s mask, over the box's.  The sum of a full box's
+    cells rounds to 1 + 1e-15 or so: read as "more than all of it" (``cspace info``), so it is clipped."""
+    widths = np.diff(g.bin_edges())
+    forb = 0.0
+    for s in range(g.n_substructures):
+        i1a, i1b, i2a, i2b = g.sub_cells(s)
+        w1 = np.minimum(g.lower[0] + g.step[0] * np.arange(i1a + 1, i1b + 1), g.upper[0]) - (g.lower[0] + g.step[0] * np.arange(i1a, i1b))
+        w2 = np.minimum(g.lower[1] + g.step[1] * np.arange(i2a + 1, i2b + 1), g.upper[1]) - (g.lower[1] + g.step[1] * np.arange(i2a, i2b))
+        forb += float(np.einsum("i,j,ijk,k->", w1, w2, mask_of(s), widths))
+    return min(1.0, forb / float(np.prod(g.upper - g.lower)))
+
+
 class _Block:
     """Flat lookup arrays over a block of cells ``[r1a, r1b) × [r2a, r2b)``."""
 
@@ -390,20 +404,11 @@ class ForbiddenMap:
         grid_sizes = sizes.reshape(int(g.n_sub[0]), int(g.n_sub[1]))
         pad = np.pad(grid_sizes, 1)
         nb = sum(pad[i:i + grid_sizes.shape[0], j:j + grid_sizes.shape[1]] for i in range(3) for j in range(3))
-        widths = np.diff(g.bin_edges())
-        forb = 0.0
-        n_iv = 0
-        for s in range(g.n_substructures):
-            i1a, i1b, i2a, i2b = g.sub_cells(s)
-            m = self.substructure_mask(s)
-            w1 = np.minimum(g.lower[0] + g.step[0] * np.arange(i1a + 1, i1b + 1), g.upper[0]) - (g.lower[0] + g.step[0] * np.arange(i1a, i1b))
-            w2 = np.minimum(g.lower[1] + g.step[1] * np.arange(i2a + 1, i2b + 1), g.upper[1]) - (g.lower[1] + g.step[1] * np.arange(i2a, i2b))
-            forb += float(np.einsum("i,j,ijk,k->", w1, w2, m, widths))
-            n_iv += len(self._raw_sub(s)[1])
-        vol = float(np.prod(g.upper - g.lower))
+        n_iv = sum(len(self._raw_sub(s)[1]) for s in range(g.n_substructures))
         st = self.header.get("stats", {})
         return MapInfo(self.size_bytes, g.n_cells, g.n_substructures, int(g.counts[2]), n_iv, int(sizes.max()),
-                       int(nb.max()), forb / vol, int(st.get("evaluations", 0)), int(st.get("unresolved", 0)))
+                       int(nb.max()), forbidden_share(g, self.substructure_mask),
+                       int(st.get("evaluations", 0)), int(st.get("unresolved", 0)))
 
     def __repr__(self) -> str:
         g = self.grid
