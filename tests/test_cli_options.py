@@ -148,3 +148,24 @@ def test_a_plot_to_a_dash_is_refused_not_a_file_named_dash(tmp_path, monkeypatch
     res = CliRunner().invoke(main, ["verify", "hermes", "all", "--plot", "-"])
     assert res.exit_code == ExitCode.USAGE and "--plot" in res.output
     assert not (tmp_path / "-").exists()
+
+
+@pytest.mark.parametrize("args", [["check", "hermes", "--threshold", "1e300"],
+                                  ["check", "hermes", "--stopping-distance", "2e9"],
+                                  ["verify", "hermes", "unstow", "--stopping-distance", "1e300"]])
+def test_a_length_beyond_a_scene_files_bound_is_a_usage_error(args):
+    """``verify --stopping-distance 1e300`` printed the stopping distance as 300 digits of millimetres."""
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == ExitCode.USAGE and "must be <= 1e+09" in res.output, res.output
+
+
+def test_the_library_bounds_those_lengths_too():
+    import armguard
+    from armguard import DetectionError, VerificationError
+    from armguard.verify._stopping import check_stopping_distance
+
+    with pytest.raises(DetectionError, match=r"threshold: expected a finite number in \[0, 1e\+09\]"):
+        armguard.Detector(armguard.load_scene("gmf_s480"), threshold=1e300)
+    with pytest.raises(VerificationError, match="stopping_distance"):
+        check_stopping_distance(1e10)
+    assert check_stopping_distance(1e9) == 1e9

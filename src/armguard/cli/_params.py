@@ -29,8 +29,8 @@ class Finite(click.ParamType):
 
     name = "float"
 
-    def __init__(self, low: float | None = None, open_low: bool = False):
-        self.low, self.open_low = low, open_low
+    def __init__(self, low: float | None = None, open_low: bool = False, high: float | None = None):
+        self.low, self.open_low, self.high = low, open_low, high
 
     def convert(self, value, param, ctx):
         if isinstance(value, float) and math.isfinite(value):
@@ -44,11 +44,14 @@ class Finite(click.ParamType):
             self.fail(f"{value!r} is not a finite number", param, ctx)
         if self.low is not None and (x <= self.low if self.open_low else x < self.low):
             self.fail(f"{value!r} must be {'>' if self.open_low else '>='} {self.low:g}", param, ctx)
+        if self.high is not None and x > self.high:
+            self.fail(f"{value!r} must be <= {self.high:g}", param, ctx)
         return x
 
 
-LENGTH = Finite(0.0)
-"""A finite length (m, or µs of a budget) >= 0."""
+LENGTH = Finite(0.0, high=1e9)
+"""A finite length (m, or µs of a budget) >= 0, at most 1e9 (``Tolerances.max_magnitude``, as a scene file's
+lengths: 1e300 m was printed as 300 digits)."""
 POSITIVE = Finite(0.0, open_low=True)
 """A finite number > 0 (a rate, a step)."""
 

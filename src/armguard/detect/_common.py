@@ -45,9 +45,12 @@ def scene_and_model(scene_or_model, model=None) -> tuple:
 
 
 def check_length(value, name: str) -> float:
-    """``value`` as a finite length >= 0 (m), else a DetectionError naming ``name`` (text and ``True`` too:
+    """``value`` as a finite length >= 0 (m) and at most ``Tolerances.max_magnitude`` (1e9 m, as every length of a
+    scene file: 1e300 printed as 300 digits), else a DetectionError naming ``name`` (text and ``True`` too:
     ``threshold="0.1"`` was read as 0.1 m, ``True`` as 1 m)."""
-    return number(value, name, DetectionError, low=0.0, unit=" (m)")
+    from .._tolerance import DEFAULT_TOLERANCES
+
+    return number(value, name, DetectionError, low=0.0, high=DEFAULT_TOLERANCES.max_magnitude, unit=" (m)")
 
 
 def check_link(scene, link) -> str:

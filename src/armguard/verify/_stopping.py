@@ -122,7 +122,10 @@ def check_stopping_distance(value) -> "float | StoppingDistance":
     """Coerce a stopping distance argument: a finite float >= 0 (m) or a :class:`StoppingDistance`."""
     if isinstance(value, StoppingDistance):
         return value
-    return _finite_nonneg(value, "stopping_distance")
+    from .._tolerance import DEFAULT_TOLERANCES
+
+    return number(value, "stopping_distance", VerificationError, low=0.0, high=DEFAULT_TOLERANCES.max_magnitude,
+                  unit=" (m)")
 
 
 def discretisation_error(speed, frequency):
