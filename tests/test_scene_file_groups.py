@@ -47,3 +47,30 @@ def test_a_trajectory_file_and_check_edges_name_the_group(tmp_path):
     assert armguard.verify(scene, t).status.value == "safe"
     res = Verifier(m).check_edges(q0, q0 + 0.1, joints="arm")
     assert res.status[0].name == "CLEAR"
+
+
+def test_another_arms_group_is_refused_where_the_arms_share_joint_names(tmp_path):
+    """Ranger's arms call their joints alike (j1 ...): an edges file or a trajectory file naming the grapple
+    arm's group was certified on the left arm (the group's joint names matched), exit 0 on an edge that
+    collides on the grapple arm."""
+    from click.testing import CliRunner
+
+    from armguard.cli import ExitCode, main
+
+    m = armguard.load_model("ranger")
+    robot, joints = m.group_robot_joints("grapple_arm")
+    assert robot == "grapple_arm" and set(joints) <= set(m.scene.robots["left_arm"].joint_names)
+    q0 = np.zeros(len(joints))
+    np.savez(tmp_path / "e.npz", Q0=q0, Q1=q0 + 0.1, joint_names=np.array("grapple_arm"))
+    res = CliRunner().invoke(main, ["edges", "ranger", str(tmp_path / "e.npz"), "--robot", "left_arm"])
+    assert res.exit_code == ExitCode.INPUT and "moves robot 'grapple_arm', not 'left_arm'" in res.output, res.output
+    res = CliRunner().invoke(main, ["edges", "ranger", str(tmp_path / "e.npz")])  # the group names its robot
+    assert res.exit_code in (ExitCode.OK, ExitCode.UNSAFE) and "edges of 'grapple_arm'" in res.output, res.output
+    t = tmp_path / "t.yaml"
+    t.write_text(yaml.safe_dump({"format": "armguard.trajectory", "version": 1, "robot": "left_arm",
+                                 "joint_names": "grapple_arm", "times": [0.0, 2.0],
+                                 "waypoints": [q0.tolist(), (q0 + 0.1).tolist()]}))
+    with pytest.raises(armguard.SceneFileError, match="joint_names.*moves robot 'grapple_arm', not the file's robot"):
+        armguard.verify(m.scene, t)
+    t.write_text(t.read_text().replace("robot: left_arm", "robot: grapple_arm"))
+    assert armguard.verify(m.scene, t).status is not None

@@ -134,11 +134,14 @@ def edges_cmd(model, edges_file, robot, margin, category_margins, first_contact,
         margin = {"*": margin, **_category_margins(category_margins)}
     Q0, Q1, names = read_edges(edges_file)
     m = load_model(model)
-    if isinstance(names, str):
-        try:
-            names = list(m.group_joints(names))  # an SRDF group (an unknown one is named by group_joints)
+    group = names if isinstance(names, str) else None
+    if group is not None:
+        try:  # an SRDF group (an unknown one is named by group_robot_joints): its robot's, checked by check_edges
+            g_robot, names = m.group_robot_joints(group)
         except ArmguardError as exc:
             raise VerificationError(f"{edges_file}: joint_names: {exc}") from None
+        names = list(names)
+        robot = g_robot if robot is None else robot  # the group says whose edges these are
     width = Q0.shape[-1] if Q0.ndim else None
     if names is not None and width is not None and len(names) != width:
         raise VerificationError(f"{edges_file}: joint_names names {len(names)} joints, Q0 has {width} columns")
@@ -153,7 +156,7 @@ def edges_cmd(model, edges_file, robot, margin, category_margins, first_contact,
                   console=console, transient=True, disable=M <= 256 or not console.is_terminal) as bar:
         task = bar.add_task("edges", total=M)
         try:
-            res = verifier.check_edges(Q0, Q1, robot=robot, joints=names, margin=margin, max_evaluations=max_evaluations,
+            res = verifier.check_edges(Q0, Q1, robot=robot, joints=group or names, margin=margin, max_evaluations=max_evaluations,
                                        first_contact=first_contact, continuous=continuous,
                                        progress=lambda done, total: bar.update(task, completed=done))
         except VerificationError as exc:  # said in the command line's words, with the file
@@ -179,8 +182,10 @@ def edges_cmd(model, edges_file, robot, margin, category_margins, first_contact,
         which = np.flatnonzero(res.code == code)
         for i in which[:_LISTED]:
             a, b = res.pair[i]
+            free = (f"clear up to {res.s_free[i]:.4f}" if np.isfinite(res.s_free[i])
+                    else "its start Q0 itself within the margin")  # s_free = -inf: no prefix is clear
             console.print(f"  edge {i} {label}: {esc(a)} - {esc(b)} {res.distance[i] * 1e3:.2f} mm at s = {res.s[i]:.4f}, "
-                          f"clear up to {res.s_free[i]:.4f}", highlight=False)
+                          f"{free}", highlight=False)
         if len(which) > _LISTED:
             console.print(f"  ({len(which) - _LISTED} more {label})", highlight=False)
     if out_path:

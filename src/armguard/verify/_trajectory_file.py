@@ -28,16 +28,23 @@ def load_trajectory(scene, path):
 
     scene = scene_of(scene)  # a Model: its scene
     file = os.fspath(path)
+    grouped: dict = {}  # the SRDF group the file names -> the robot it moves
+
     def groups(name: str):  # an SRDF group of the scene's Model (made only for a file that names one)
         from ..model import model_of
 
         model = model_of(scene, geometry=False)
         if model.srdf is None:
             raise TrajectoryError("no model with SRDF groups to resolve it")
-        return model.group_joints(name)
+        grouped[name], joints = model.group_robot_joints(name)
+        return joints
 
     traj = Trajectory.load_yaml(file, groups=groups)
     with lines_for(file):
+        for name, robot_of_group in grouped.items():  # arms may share joint names (ranger's j1 ...)
+            if robot_of_group != traj.robot_name:
+                raise SceneFileError(file, "joint_names", f"SRDF group {name!r} moves robot {robot_of_group!r}, "
+                                     f"not the file's robot {traj.robot_name!r}")
         if traj.robot_name not in scene.robots:
             raise SceneFileError(file, "robot", f"robot {traj.robot_name!r} is not in scene {scene.name!r} "
                                  f"(its robots: {', '.join(scene.robots)})")
