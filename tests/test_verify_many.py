@@ -50,6 +50,22 @@ def test_verify_many_on_local_cluster_equals_serial():
     assert done[-1] == len(items)
 
 
+def test_the_workers_use_the_backend_chosen_here():
+    """The command line's ``--backend`` (and ``--config``) lived in this process only: with ``--workers`` every
+    worker took its own default (analytic), and ``--backend fcl``, refused serially, verified SAFE."""
+    from armguard.backends import command_line_choice
+
+    sc, items = _cases(2)
+    undo = command_line_choice("coal")
+    try:
+        serial = verify_many(sc, items, method="certified", stopping_distance=0.01)
+        dask = verify_many(sc, items, workers=1, method="certified", stopping_distance=0.01)
+    finally:
+        undo()
+    assert {r.details.backend for r in serial} == {r.details.backend for r in dask} == {"coal"}
+    assert [_strip(r) for r in dask] == [_strip(r) for r in serial]
+
+
 def test_workers_and_scheduler_are_exclusive():
     from armguard import VerificationError
 

@@ -108,6 +108,11 @@ def verify_many(scene, trajectories, *, workers: int | None = None, scheduler: s
             if progress is not None:
                 progress(i + 1, total)
         return tuple(out)
+    from ..backends import resolve
+
+    # the backend chosen here (argument, the command line's --backend / --config, $ARMGUARD_BACKEND, armguard.toml):
+    # a worker resolving None itself sees none of them and took its own default (analytic where fcl was refused)
+    ctor["backend"], ctor["backend_options"] = resolve(backend, backend_options)
     return _on_dask(scene, items, ctor, kwargs, workers, scheduler, chunk_size, progress)
 
 
