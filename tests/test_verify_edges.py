@@ -6,6 +6,7 @@ obstacles a 0.05 rad sampled check steps over, and for its invariants (hypothesi
 
 from __future__ import annotations
 
+import math
 import threading
 
 import numpy as np
@@ -318,6 +319,23 @@ def test_continuous_joints_the_short_way_on_request():
     assert long.evaluations[0] > short.evaluations[0]
     with pytest.raises(VerificationError, match="continuous: expected 'line'"):
         v.check_edges(q0, q1, continuous="wrap")
+
+
+def test_the_short_way_from_a_huge_continuous_angle_is_the_angle_pinocchio_places():
+    """kinova, joint 4 (continuous) to 1e17 rad: the difference of the raw values rounded to whole turns,
+    the edge came out still (CLEAR after one evaluation) where the goal Pinocchio places (-2.658 rad) collides."""
+    m = armguard.load_model("kinova")
+    v = Verifier(m.scene)
+    q0 = np.array([-2.0280442, 2.62193397, 0.68508276, 1.41925132, 0.98315036, -0.65915824])
+    q1 = q0.copy()
+    q1[3] = 1e17
+    q1p = q0.copy()
+    q1p[3] = math.atan2(math.sin(1e17), math.cos(1e17))  # where Pinocchio's (cos, sin) puts it
+    huge = v.check_edges(q0, q1, continuous="shortest")
+    placed = v.check_edges(q0, q1p, continuous="shortest")
+    assert placed.code[0] == EdgeStatus.COLLISION
+    assert huge.code[0] == placed.code[0] and huge.s[0] == pytest.approx(placed.s[0], abs=1e-9)
+    np.testing.assert_allclose(huge.q[0], placed.q[0], atol=1e-9)
 
 
 def test_results_are_read_only_and_masks_select_pairs(ur5):

@@ -361,16 +361,22 @@ def _record_of(st, rname: str, base, k0: int, k1: int) -> _Run:
     return run
 
 
-def _shortest(rob, Q0: np.ndarray, Q1: np.ndarray) -> np.ndarray:
-    """``Q1`` with each continuous joint (no limits) moved by whole turns to within pi of ``Q0``: the edge
-    turns it the short way, as ``pinocchio.interpolate`` and OMPL's SO(2) do."""
+def _shortest(rob, Q0: np.ndarray, Q1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(Q0, Q1)`` with each continuous joint (no limits) at its angle in (-pi, pi] (``atan2(sin, cos)``, as
+    ``Model.pin_q`` reads Pinocchio's ``(cos, sin)``) and ``Q1``'s moved by whole turns to within pi of
+    ``Q0``'s: the edge turns it the short way, as ``pinocchio.interpolate`` and OMPL's SO(2) do.  The ends
+    are reduced first: at 1e17 rad the difference of the raw values rounded to whole turns, and an edge to a
+    colliding angle came out still (CLEAR after one evaluation)."""
     free = ~(np.isfinite(np.asarray(rob.lower)) | np.isfinite(np.asarray(rob.upper)))
     if not free.any():
-        return Q1
-    d = Q1[:, free] - Q0[:, free]
-    out = Q1.copy()
-    out[:, free] = Q0[:, free] + (d - 2.0 * np.pi * np.round(d / (2.0 * np.pi)))
-    return out
+        return Q0, Q1
+    a0 = np.arctan2(np.sin(Q0[:, free]), np.cos(Q0[:, free]))
+    a1 = np.arctan2(np.sin(Q1[:, free]), np.cos(Q1[:, free]))
+    d = a1 - a0
+    Q0, Q1 = Q0.copy(), Q1.copy()
+    Q0[:, free] = a0
+    Q1[:, free] = a0 + (d - 2.0 * np.pi * np.round(d / (2.0 * np.pi)))
+    return Q0, Q1
 
 
 def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints, first_contact=False,
@@ -397,7 +403,7 @@ def check_edges_on(verifier, st, Q0, Q1, robot, margin, max_evaluations, joints,
         Q0, Q1 = full0, full1
         held = {j: float(home[k]) for k, j in enumerate(rob.joint_names) if j not in names}
     if continuous == "shortest":
-        Q1 = _shortest(rob, Q0, Q1)
+        Q0, Q1 = _shortest(rob, Q0, Q1)
     elif continuous != "line":
         raise VerificationError(f"continuous: expected 'line' (along the angle's line) or 'shortest', got {continuous!r}")
     _within_limits(rob, Q0, Q1, verifier.tol)
