@@ -172,6 +172,39 @@ def test_another_model_file_is_refused(built, tmp_path):
         CombinedChecker(ForbiddenMap.load(built.path), "ranger")
 
 
+def test_a_map_is_checked_against_its_own_files_from_any_working_directory(tmp_path, monkeypatch):
+    """A map recorded its model as given (``h.yaml``): ``cspace info`` run in another folder sampled that
+    folder's ``h.yaml`` (another model) and could call a map that is not conservative conservative."""
+    a, b = tmp_path / "a", tmp_path / "b"
+    a.mkdir()
+    b.mkdir()
+    shutil.copy(builtin_path("hermes"), a / "h.yaml")
+    (b / "h.yaml").write_text((a / "h.yaml").read_text() + "\n# another model's file\n")
+    monkeypatch.chdir(a)
+    fmap = ForbiddenMap.build("h.yaml", out=tmp_path / "c.agmap", resolution=math.radians(30), stopping_distance=SD,
+                              max_depth=0)
+    assert fmap.header["model"] == str((a / "h.yaml").resolve())
+    monkeypatch.chdir(b)
+    assert check_exactness(ForbiddenMap.load(tmp_path / "c.agmap"), n=50).n == 50  # its own files, not b's
+    fmap.header["model"] = "h.yaml"  # as maps recorded it before: the file found there is checked first
+    with pytest.raises(ForbiddenMapError, match="built for other model files"):
+        check_exactness(fmap, n=50)
+
+
+def test_a_worker_that_loads_another_model_is_refused():
+    """``cspace build --scheduler``: a worker whose copy of the model files differs built its part of the map on
+    them (a non-conservative map, recorded with the client's files)."""
+    from armguard.cspace._build import _WORKER_CACHE, _task
+
+    scene = armguard.load_model("hermes").scene_for()
+    ml = map_links(scene, "hera")
+    _WORKER_CACHE.clear()
+    with pytest.raises(ForbiddenMapError, match="loaded 'hermes' as another model"):
+        _task("t1", "hermes", ml.robot, ml.joints, ml.links, armguard.DEFAULT_TOLERANCES, None, ("analytic", {}),
+              {"geometry": "0" * 64}, [])
+    _WORKER_CACHE.clear()
+
+
 class _Stop(Exception):
     pass
 

@@ -96,7 +96,10 @@ def resolve_model(model):
         return model, spec
     if isinstance(model, Scene):
         return model_of(model), None
-    return load_model(str(model)), str(model)
+    spec = str(model)
+    if Path(spec).is_file():  # a file: recorded whole, for workers and later checks in another working directory
+        spec = str(Path(spec).resolve())
+    return load_model(spec), spec
 
 
 def _armguard_version() -> str:
@@ -129,7 +132,14 @@ def _task(token: str, source, robot, joints, links, tol, clearance, backend, job
         _WORKER_CACHE.clear()
         if clearance is None:
             model, _ = resolve_model(source)
-            hook = CheckerClearance(model, map_links(model.scene_for(), robot, joints, links, tol), *backend)
+            ml = map_links(model.scene_for(), robot, joints, links, tol)
+            if "geometry" in job and geometry_digest(model, ml.robot, ml.links)[0] != job["geometry"]:
+                import socket
+
+                raise ForbiddenMapError(f"the worker on {socket.gethostname()} loaded {source!r} as another model (its "
+                                        "links or the bodies they are checked against differ from the files the build "
+                                        "was started with): every worker must read the same model files")
+            hook = CheckerClearance(model, ml, *backend)
         else:
             hook = clearance
         _WORKER_CACHE[token] = hook
@@ -256,7 +266,8 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
     journal = Journal(out.with_name(out.name + ".partial"), header, resume=resume, check=_journal_check(grid))
     reused = len(journal.done)
     todo = [s for s in range(grid.n_substructures) if s not in journal.done]
-    job = {"grid": header["grid"], "lever": header["lever"], "m": m, "contact": tol.cspace_contact, "depth": depth}
+    job = {"grid": header["grid"], "lever": header["lever"], "m": m, "contact": tol.cspace_contact, "depth": depth,
+           "geometry": digest}  # a worker's model checked against it
     evaluations = 0
     n_workers = 0
     bar = _Progress(progress, grid.n_substructures, reused)

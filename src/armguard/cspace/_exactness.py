@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import enum
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -75,10 +76,14 @@ def check_exactness(fmap, scene=None, *, n: int = 10_000, seed: int = 0, Q=None,
     """Compare ``fmap`` with the exact check on ``n`` random configurations (or the rows of ``Q`` ``(M, n_q)`` rad)."""
     from ..detect import Detector
 
-    if scene is None:
-        if fmap.header.get("model") is None:
-            raise ForbiddenMapError("the map was built from a Scene object: pass scene=")
-        scene = fmap.header["model"]
+    if scene is None and fmap.header.get("model") is None:
+        raise ForbiddenMapError("the map was built from a Scene object: pass scene= (armguard cspace info: --model)")
+    if scene is None or isinstance(scene, (str, os.PathLike)):
+        from ._combined import map_model
+
+        # the files checked against the map's before they are sampled: its recorded relative path, read in another
+        # working directory, sampled another model's files (and passed a map that was not conservative)
+        scene = map_model(fmap, scene).scene
     scene, _ = resolve_scene(scene)
     det = Detector(link_obstacle_scene(scene, fmap.robot, fmap.links), threshold=0.0,
                    stopping_distance=fmap.stopping_distance, tol=tol)
