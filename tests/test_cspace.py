@@ -60,6 +60,13 @@ def test_grid_matches_the_papers_substructures():
     assert tuple(g.per_sub) == (10, 10) and g.n_cells == 360 * 240
 
 
+def test_a_substructure_larger_than_the_grid_is_the_whole_grid():
+    """``--cell 1e300deg`` made INT64_MIN cells per substructure: a map written over ``--out`` that did not load."""
+    g = MapGrid.create([-1.0, -1.0, -1.0], [1.0, 2.0, 1.0], math.radians(30), math.radians(30), math.radians(1e300))
+    assert tuple(g.per_sub) == tuple(g.counts[:2]) and g.n_substructures == 1
+    assert g.sub_cells(0) == (0, int(g.counts[0]), 0, int(g.counts[1]))
+
+
 def test_default_links_and_irrelevant_joints(scene):
     ml = map_links(scene, "hera")
     assert ml.links == ("link1", "link2", "link3")

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -161,6 +163,19 @@ def test_a_missing_or_folder_map_exits_3_like_every_missing_input(tmp_path):
     r = runner.invoke(main, ["cspace", "info", str(tmp_path)])
     assert r.exit_code == 3 and "is a directory, not a map file" in r.output, r.output
     assert not (tmp_path / "s.png").exists()
+    r = runner.invoke(main, ["cspace", "info", ""])  # Path('') is the working directory
+    assert r.exit_code == 3 and "an empty path names no map file" in r.output, r.output
+
+
+def test_a_fifo_is_refused_not_waited_on(tmp_path):
+    """``cspace info`` on a FIFO blocked in open() until killed; a pipe read as a truncated map."""
+    import os
+
+    fifo = tmp_path / "map.agmap"
+    os.mkfifo(fifo)
+    r = subprocess.run([sys.executable, "-m", "armguard", "cspace", "info", str(fifo)], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 3 and "not a regular file (a FIFO, pipe or device)" in r.stderr, r.stderr
 
 
 def test_a_bare_grid_step_over_half_a_radian_is_refused_with_both_readings(tmp_path):

@@ -37,6 +37,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import stat
 import contextlib
 import struct
 import zlib
@@ -113,7 +114,16 @@ def read_header(path) -> tuple[dict, np.ndarray, np.ndarray, int]:
 
     The preamble, the header and the directory are checked (magic, format version, CRC-32s, sizes);
     any failure raises :class:`ForbiddenMapFileError` naming the file and the section."""
+    if not str(path).strip():  # Path('') is '.', the working directory
+        raise ForbiddenMapFileError(path, "", "an empty path names no map file")
     path = Path(path)
+    try:  # a FIFO blocked the open until killed; a pipe (<(cat map)) read as a truncated map: a map is a file
+        mode = path.stat().st_mode
+    except OSError:
+        mode = None  # not there, or not readable: said by open() below
+    if mode is not None and not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
+        raise ForbiddenMapFileError(path, "", "not a regular file (a FIFO, pipe or device): a map is read from a file, "
+                                    "its parts when asked")
     try:
         with open(path, "rb") as f:
             size = os.fstat(f.fileno()).st_size

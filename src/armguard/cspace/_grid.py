@@ -98,7 +98,8 @@ class MapGrid:
             raise ForbiddenMapError(f"resolution {math.degrees(res):.6g} deg and j3_resolution {math.degrees(r3):.6g} deg give "
                                     f"{counts[0]} x {counts[1]} x {counts[2]} = {total:.3g} bins, more than {MAX_MAP_BINS} "
                                     "(MAX_MAP_BINS): a coarser resolution")
-        per_sub = np.maximum(1, np.rint(cell / res)).astype(np.int64)
+        # cells per substructure, at most the grid's (a cell of 1e300 deg was INT64_MIN cells, a map that did not load)
+        per_sub = np.minimum(np.maximum(1.0, np.rint(cell / res)), np.maximum(counts[:2], 1)).astype(np.int64)
         n_sub = -(-counts[:2] // per_sub)
         return cls(lo, hi, step, counts, per_sub, n_sub)
 
