@@ -11,6 +11,7 @@ the report.  Training views: the camera quaternions against their definition.
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -143,11 +144,33 @@ def test_saved_program_reads_back_to_the_same_listing(cell, tmp_path):
     tc.add("MOVE", frame="cylinder_b", xyz=(0.01, -0.02, 0.3), rpy_deg=(180.0, 0.0, 12.5), mode="line")
     out = tc.save(tmp_path / "p.yaml")
     back = load_program(out)
-    assert back.cell == str(CELL) and back.name == "stack_cylinders"
+    assert Path(back.cell).resolve() == CELL and back.name == "stack_cylinders"
     a, b = tc.program().steps(), back.steps()
     assert [(s.op, s.args, s.label) for s in a] == [(s.op, s.args, s.label) for s in b]
     assert tc.lines()[-1].startswith("6. MOVE to cylinder_b")
     del stt
+
+
+def test_a_saved_program_finds_its_cell_from_any_folder(cell, tmp_path, monkeypatch):
+    """The console was given the cell as ``examples/workmate/cell.yaml`` (relative to where it ran): the saved
+    file named it so, and ``armguard program run`` found it only from that folder; a program file's cell is read
+    relative to the program file, never from the working directory (another folder's ``cell.yaml`` ran)."""
+    root = CELL.parents[2]
+    monkeypatch.chdir(root)
+    tc = TaskComposer(cell, cell_ref=str(CELL.relative_to(root)))
+    tc.add("FIND", object="cylinder_a")
+    (tmp_path / "saved").mkdir()
+    out = tc.save(tmp_path / "saved" / "p.yaml")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (elsewhere / "cell.yaml").write_text("not this one\n")
+    monkeypatch.chdir(elsewhere)
+    assert Path(load_program(out).cell).resolve() == CELL
+    lone = tmp_path / "lone"
+    lone.mkdir()
+    (lone / "p.yaml").write_text(re.sub(r"(?m)^cell: .*$", "cell: cell.yaml", out.read_text()))
+    assert load_program(lone / "p.yaml").spec.cell == "cell.yaml"
+    assert load_program(lone / "p.yaml").cell == str(lone / "cell.yaml")  # not elsewhere/cell.yaml
 
 
 def test_bad_answers_are_refused_and_add_nothing(cell):

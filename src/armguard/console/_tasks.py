@@ -171,14 +171,17 @@ class TaskComposer:
         self.entries.clear()
 
     # ------------------------------------------------------------------ the program
-    def text(self) -> str:
-        """The task-program file (``armguard_program: 1``, docs/program.md) of the tasks so far."""
+    def text(self, folder=None) -> str:
+        """The task-program file (``armguard_program: 1``, docs/program.md) of the tasks so far, to be saved in
+        ``folder``: a cell file is named relative to it (a program file's ``cell`` is read relative to the
+        program file; written as the console was given it, it was found only from the console's folder);
+        without ``folder``, by its whole path."""
         if not self.entries:
             raise ConsoleInputError("program: no tasks yet; add one from the task menu")
         out = ["# A task program composed in the armguard console's task menu.", "armguard_program: 1",
                f"name: {self.name}"]
         if self.cell_ref is not None:
-            out.append(f"cell: {_quote(self.cell_ref)}")
+            out.append(f"cell: {_quote(self._cell_for(folder))}")
         out += ["units: {angle: deg, length: m}", f"speed: {_num(self.speed)}", f"confidence: {_num(self.confidence)}",
                 "tasks:"]
         for e in self.entries:
@@ -208,8 +211,24 @@ class TaskComposer:
         """Write the task-program file to ``path`` (whole or not at all); returns the path."""
         from .._io import atomic_write
 
-        text = self.text()
+        text = self.text(Path(path).resolve().parent)
         return atomic_write(Path(path), text)
+
+    def _cell_for(self, folder) -> str:
+        """``cell_ref`` as a file saved in ``folder`` names it: a cell file relative to ``folder`` (its whole path
+        where no relative one exists: another drive), a model name as it is."""
+        import os
+
+        ref = Path(self.cell_ref)
+        if not ref.is_file():
+            return self.cell_ref  # a model name (puma560)
+        ref = ref.resolve()
+        if folder is None:
+            return str(ref)
+        try:
+            return os.path.relpath(ref, folder)
+        except ValueError:
+            return str(ref)
 
     def run(self, *, seed: int = 0):
         """Run the program on the cell (:func:`armguard.program.run_program`: every motion verified,

@@ -69,12 +69,16 @@ class Program:
 
     @property
     def cell(self) -> str | None:
-        """The cell the file names (a relative path resolved against the file's folder), or None."""
+        """The cell the file names (a relative path resolved against the file's folder only), or None.  A name
+        with no folder and no suffix that is not a file there is a model name (``puma560``).  A path missing
+        beside the program file was looked up in the working directory: another folder's cell ran."""
         c = self.spec.cell
         if c is None:
             return None
         p = Path(c)
-        if not p.is_absolute() and (self.spec.base / p).exists():
+        if p.is_absolute():
+            return c
+        if (self.spec.base / p).exists() or p.suffix or len(p.parts) > 1:
             return str(self.spec.base / p)
         return c
 
