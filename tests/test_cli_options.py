@@ -169,3 +169,13 @@ def test_the_library_bounds_those_lengths_too():
     with pytest.raises(VerificationError, match="stopping_distance"):
         check_stopping_distance(1e10)
     assert check_stopping_distance(1e9) == 1e9
+
+
+def test_compare_lists_as_many_worst_configurations_as_asked():
+    """``--worst 10`` printed 3 distance entries (a fixed cap), compare.json held 10."""
+    import re
+
+    for n in (1, 5):
+        res = CliRunner().invoke(main, ["compare", "hermes", "--configs", "60", "--worst", str(n), "--no-plots"])
+        assert res.exit_code == ExitCode.OK, res.output
+        assert len(re.findall(r"(?m)^  distance #", res.output)) == n, res.output

@@ -131,7 +131,7 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
         for t in summary_table(comp):
             console.print(t)
         for key, p in comp.summary["pairs"].items():
-            bad = [w for w in p["worst"] if w["why"] == "verdict"] + [w for w in p["worst"] if w["why"] == "distance"][:3]
+            bad = [w for w in p["worst"] if w["why"] == "verdict"] + [w for w in p["worst"] if w["why"] == "distance"][:n_worst]
             if bad:
                 console.print(f"[bold]{key}: worst configurations[/bold]")
             for w in bad:

@@ -182,7 +182,8 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
 @main.command("check-srdf", epilog=exit_epilog(
     ok="linted (findings, if any, are printed)",
     unsafe="with --strict: a disabled pair other than Adjacent or Default can collide, or a disabled pair names "
-           "a link the robot lacks (unless the SRDF was found under the robot's name: one of a larger robot)"))
+           "a link the robot lacks (unless the SRDF was found under the robot's name: one of a larger robot), or "
+           "load_model refuses the SRDF (a group state naming a joint the robot lacks or outside its limits)"))
 @click.argument("robot")
 @click.argument("srdf", type=PATH, required=False)
 @click.option("--margin", type=LENGTH, default=0.0, show_default=True, help="Collide means within this distance (m).")
