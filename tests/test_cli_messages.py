@@ -281,6 +281,21 @@ def test_docs_program_quotes_the_misspelt_grasp_error(tmp_path, monkeypatch):
         assert line in guide, line
 
 
+def test_docs_program_quotes_the_calibration_errors_in_their_order(tmp_path, monkeypatch):
+    """The guide said the three problems of its cal.yaml were listed at once: the form's come first, then the
+    names the cell lacks, together."""
+    shutil.copytree(ROOT / "examples" / "workmate", tmp_path, dirs_exist_ok=True)
+    monkeypatch.chdir(tmp_path)
+    guide = (ROOT / "docs" / "program.md").read_text(encoding="utf-8")
+    head = "armguard_calibration: 1\nbodies:\n  cylinder_z: {xyz: [0, 0, 0]}\ncamera:\n  relative_to: table\n"
+    for cov in ("  cov: [[1, 2]]\n", ""):
+        (tmp_path / "cal.yaml").write_text(head + cov)
+        res = _run("program", "run", "stack.yaml", "--calibration", "cal.yaml")
+        assert res.exit_code == ExitCode.INPUT, res.output
+        for line in res.output.strip().removeprefix("error: ").splitlines():
+            assert line in guide, line
+
+
 def test_docs_trajectory_format_quotes_the_limits_error(tmp_path):
     f = tmp_path / "reach.yaml"
     f.write_text("format: armguard.trajectory\nversion: 1\nrobot: puma560\njoint_names: [j1, j2, j3, j4, j5, j6]\n"
