@@ -21,7 +21,7 @@ def dask_client(workers: int | None, scheduler: str | None, error: type = Armgua
 
     cluster = None
     if scheduler is None:
-        cluster = LocalCluster(n_workers=int(workers), processes=True, threads_per_worker=1, dashboard_address=None)
+        cluster = _quiet_cluster(LocalCluster, int(workers))
         client = Client(cluster)
     else:
         try:
@@ -37,3 +37,20 @@ def dask_client(workers: int | None, scheduler: str | None, error: type = Armgua
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def _quiet_cluster(LocalCluster, workers: int):
+    """A LocalCluster whose worker processes ignore Ctrl-C: the terminal sends SIGINT to the whole process
+    group, and each worker printed its KeyboardInterrupt traceback under the command's one-line
+    "interrupted" (exit 130).  This process still takes the interrupt and closes the cluster; a process
+    started while SIGINT is ignored keeps it ignored (Python installs its handler only where it is not)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():  # signal() works in the main thread only
+        return LocalCluster(n_workers=workers, processes=True, threads_per_worker=1, dashboard_address=None)
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        return LocalCluster(n_workers=workers, processes=True, threads_per_worker=1, dashboard_address=None)
+    finally:
+        signal.signal(signal.SIGINT, before)
