@@ -26,7 +26,8 @@ from pathlib import Path
 
 from ._errors import OutputError
 
-__all__ = ["atomic_write", "make_folder", "output_set", "check_target", "check_writable", "figure_format", "save_figure"]
+__all__ = ["atomic_write", "make_folder", "output_set", "check_not_input", "check_target", "check_writable", "figure_format",
+           "save_figure"]
 
 
 def _reason(exc: OSError) -> str:
@@ -77,13 +78,31 @@ def check_target(path) -> Path:
     return path
 
 
-def check_writable(path) -> Path:
+def check_not_input(path, inputs=()) -> None:
+    """OutputError when ``path`` is one of the files ``inputs`` (the same file, by ``os.path.samefile``:
+    another spelling or a link to it included): an output written over the file it was read from
+    (``verify t.yaml --report t.yaml``, ``program export p.yaml --out p.yaml``) destroyed the input."""
+    for inp in inputs:
+        if inp is None:
+            continue
+        try:
+            same = os.path.samefile(path, inp)
+        except (OSError, ValueError, TypeError):  # either one not there (or not a path): not the same file
+            same = False
+        if same:
+            raise OutputError(f"cannot write {path}: it is the input file {inp} (it would be replaced by the output); "
+                              "name another file")
+
+
+def check_writable(path, inputs=()) -> Path:
     """``path`` as :func:`check_target` gives it, once a file could be written where it goes: a temporary
     file made and removed in its folder, or, where that folder is missing (the write makes it), in the
     nearest folder above it that exists.  OutputError, naming the path and the reason, for a folder that
     is read-only, full or not ours, or a file where a folder of the path should be.  Nothing is left
     behind (no folder made).  For a command that computes for minutes before it writes: refused
-    before the work, not after it (nothing computed is then lost)."""
+    before the work, not after it (nothing computed is then lost).  ``inputs``: the files the command
+    read, which ``path`` must not be (:func:`check_not_input`)."""
+    check_not_input(path, inputs)
     target = check_target(path)
     folder = target.parent
     while not folder.exists() and folder != folder.parent:

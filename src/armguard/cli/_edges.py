@@ -129,7 +129,7 @@ def edges_cmd(model, edges_file, robot, margin, category_margins, first_contact,
 
     console = output_console()
     if out_path:
-        check_writable(out_path)  # an output that cannot be written: refused before the work
+        check_writable(out_path, [edges_file, model])  # unwritable, or the input itself: refused before the work
     if category_margins:  # before any work: a bad one is a usage error (exit status 2)
         margin = {"*": margin, **_category_margins(category_margins)}
     Q0, Q1, names = read_edges(edges_file)

@@ -36,7 +36,7 @@ def run_cmd(file: str, cell: str | None, calibration: str | None, seed: int, sav
     if save:
         from .._io import check_writable
 
-        check_writable(save)  # refused before the run, not after it (nothing computed is then lost)
+        check_writable(save, _inputs_of(file, cell, calibration))  # refused before the run (nothing is then lost)
     run = run_program(file, cell, seed=seed, calibration=calibration)
     click.echo(run.summary())
     if save:
@@ -89,7 +89,7 @@ def calibrate_cmd(cell: str, out: str | None, calibration: str | None, points: i
         raise click.UsageError("the cell names no calibration file: give --out FILE")
     from .._io import check_writable
 
-    check_writable(target)  # refused before the calibration, not after it
+    check_writable(target, [cell])  # refused before the calibration, not after it (and never the cell file)
     result = calibrate_camera(c, n=points, seed=seed)
     click.echo(result.summary())
     if not result.ok:
@@ -100,3 +100,23 @@ def calibrate_cmd(cell: str, out: str | None, calibration: str | None, points: i
     path = write_calibration(result.calibration(), target)  # whole or not at all: a FIFO or a full disk is exit 3
     click.echo(f"wrote {path}")
     sys.exit(int(ExitCode.OK))
+
+
+def _inputs_of(file, cell, calibration) -> list:
+    """The files a run of the program ``file`` reads: the program, its cell file (``--cell``, else the one it
+    names), the calibration file (``--calibration``, else the cell's); a file that does not read is left to the
+    run to refuse."""
+    from .._errors import ArmguardError
+
+    inputs = [file, cell, calibration]
+    try:
+        from ..program import load_program
+        from ..program._format import is_cell_file, read_cell
+
+        named = cell if cell is not None else load_program(file).cell
+        inputs.append(named)
+        if calibration is None and named is not None and is_cell_file(named):
+            inputs.append(read_cell(named).calibration)
+    except (ArmguardError, OSError):
+        pass
+    return inputs

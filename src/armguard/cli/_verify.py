@@ -115,9 +115,12 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
                                "on the cluster")
     if plot_path:
         figure_format(plot_path)  # a format matplotlib cannot write: refused before the work
+    inputs = [t for t in trajectories if Path(t).is_file()] + [scene, terrain_file]
+    if report_path and plot_path and not to_stdout and Path(report_path).resolve() == Path(plot_path).resolve():
+        raise click.UsageError(f"--report and --plot both name {report_path}: the plot would replace the report")
     for out in (None if to_stdout else report_path, plot_path):
         if out:
-            check_writable(out)  # a folder that cannot be written: refused before the work, not after it
+            check_writable(out, inputs)  # a folder that cannot be written, an input file: refused before the work
     sc = load_scene(scene)
     items = resolve_trajectories(sc, trajectories)
     warm_up(console=console)

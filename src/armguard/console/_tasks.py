@@ -211,6 +211,9 @@ class TaskComposer:
         """Write the task-program file to ``path`` (whole or not at all); returns the path."""
         from .._io import atomic_write
 
+        from .._io import check_not_input
+
+        check_not_input(path, [self.cell_ref, getattr(self.cell, "file", None)])  # never over the cell file
         text = self.text(Path(path).resolve().parent)
         return atomic_write(Path(path), text)
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from .._dask import dask_client
 from .._errors import ForbiddenMapError, ForbiddenMapFileError
-from .._io import check_target, make_folder
+from .._io import check_not_input, check_target, make_folder
 from .._tolerance import DEFAULT_TOLERANCES, Tolerances
 from .._values import number
 from ._certify import certify_substructure
@@ -261,6 +261,7 @@ def build(model, *, out, robot: str | None = None, joints=None, links=None, reso
     else:
         header["clearance"] = getattr(clearance, "__qualname__", type(clearance).__qualname__)
     out = Path(out)
+    check_not_input(out, model_files)  # the map written over the model it was built from: refused
     make_folder(out.parent)
     check_target(out)  # a FIFO, device or folder at OUT is refused before the build, not replaced after it
     journal = Journal(out.with_name(out.name + ".partial"), header, resume=resume, check=_journal_check(grid))

@@ -303,8 +303,9 @@ def export_program(program: Program | str | Path, out, *, cell: str | None = Non
     if cell is not None or program.cell is not None:
         program.check(load_cell(cell, calibration) if cell is not None else _named_cell(program, calibration))
     text = program_text(program, cell=cell, calibration=calibration)
-    from .._io import atomic_write
+    from .._io import atomic_write, check_not_input
 
+    check_not_input(out, [program.file, cell, calibration])  # the program written over itself: refused
     return atomic_write(Path(out), text)  # whole or not at all; a FIFO or a full disk is an OutputError
 
 
