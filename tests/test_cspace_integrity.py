@@ -450,3 +450,19 @@ def test_a_loaded_map_keeps_the_bytes_it_checked(clean, tmp_path):
     np.testing.assert_array_equal(fmap.lookup_many(Q), before)
     with pytest.raises(ForbiddenMapFileError):  # opened again, the file is refused
         ForbiddenMap.load(deployed)
+
+
+@pytest.mark.parametrize("kind", ["fifo", "link"])
+def test_a_journal_place_that_is_no_file_is_refused_before_the_build(tmp_path, kind):
+    """``OUT.partial`` a FIFO: the build blocked for ever; a link: ``--no-resume`` overwrote the file it names."""
+    import os
+
+    journal = tmp_path / "m.agmap.partial"
+    notes = tmp_path / "notes.txt"
+    notes.write_text("mine\n")
+    os.mkfifo(journal) if kind == "fifo" else journal.symlink_to(notes)
+    for resume in (True, False):
+        with pytest.raises(ForbiddenMapFileError, match="the build journal's place holds a (FIFO|symbolic link)"):
+            ForbiddenMap.build("hermes", out=tmp_path / "m.agmap", resolution=math.radians(30), stopping_distance=0.1,
+                               max_depth=0, resume=resume)
+    assert notes.read_text() == "mine\n" and not (tmp_path / "m.agmap").exists()

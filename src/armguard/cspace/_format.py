@@ -269,6 +269,17 @@ class Journal:
         self._check = check
         fp = _header_bytes(fingerprint)
         head = JOURNAL_MAGIC + _CRC.pack(len(fp)) + fp + _CRC.pack(_crc(fp))
+        try:  # a FIFO there blocked the build for ever; a link was followed and the file it names overwritten
+            mode = os.lstat(self.path).st_mode
+        except FileNotFoundError:
+            mode = None
+        except OSError as exc:
+            raise ForbiddenMapFileError(self.path, "", f"cannot read the build journal: {exc.strerror or exc}") from None
+        if mode is not None and not stat.S_ISREG(mode):
+            what = ("a symbolic link" if stat.S_ISLNK(mode) else "a folder" if stat.S_ISDIR(mode) else
+                    "a FIFO" if stat.S_ISFIFO(mode) else "something other than a file")
+            raise ForbiddenMapFileError(self.path, "", f"the build journal's place holds {what}: a journal is a file the "
+                                        "build writes there; move it away")
         if resume and self.path.exists():
             self._read(head)
         else:
