@@ -54,6 +54,16 @@ def test_atomic_write_replaces_whole(tmp_path):
     assert oct(p.stat().st_mode & 0o777) == oct(0o666 & ~_umask())
 
 
+def test_a_replaced_file_keeps_its_permissions(tmp_path):
+    """A report made private (0600) came back 0644 after it was rewritten: readable by every user."""
+    p = tmp_path / "report.json"
+    atomic_write(p, "old")
+    for mode in (0o600, 0o755):
+        os.chmod(p, mode)
+        atomic_write(p, "new")
+        assert oct(p.stat().st_mode & 0o777) == oct(mode) and p.read_text() == "new"
+
+
 def _umask():
     m = os.umask(0)
     os.umask(m)

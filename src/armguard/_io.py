@@ -178,7 +178,11 @@ def _write_file(path: Path, blob: bytes) -> None:
     try:
         try:
             _write_all(fd, blob)
-            os.fchmod(fd, _mode())  # mkstemp makes it 0600: the permissions of a plainly opened file
+            try:  # the replaced file's permissions kept (a private 0600 report came back 0644, readable by all)
+                mode = stat.S_IMODE(os.stat(path).st_mode)
+            except OSError:
+                mode = _mode()  # a new file: mkstemp makes it 0600, a plainly opened file's permissions instead
+            os.fchmod(fd, mode)
             os.fsync(fd)
         finally:
             os.close(fd)
