@@ -304,6 +304,11 @@ def test_run_and_export_refuse_another_robot_a_self_placement_and_unknown_names(
     r = subprocess.run([sys.executable, str(script), "--cell", "nosuch"], capture_output=True, text=True, timeout=300)
     assert r.returncode == 3 and r.stderr.strip().startswith("error: unknown model 'nosuch'"), r.stderr
     assert r.stderr.strip().count("\n") == 0, r.stderr
+    (tmp_path / "run.json").mkdir()  # --save where a folder is: refused before the run, one line, exit 3
+    r = subprocess.run([sys.executable, str(script), "--save", str(tmp_path / "run.json")], capture_output=True,
+                       text=True, timeout=300)
+    assert r.returncode == 3 and r.stderr.strip().startswith("error: cannot write"), r.stderr
+    assert r.stdout == "" and r.stderr.strip().count("\n") == 0, (r.stdout, r.stderr)
 
 
 def test_every_problem_of_every_task_is_listed_once(tmp_path):

@@ -325,8 +325,11 @@ def workcell_main(program, *, cell: str | None, name: str = "program", speed: fl
     if a.cell is None:
         ap.error("no cell: give --cell")
     from .._errors import ArmguardError
+    from .._io import atomic_write, check_writable
 
     try:
+        if a.save:  # refused before the run, as armguard program run --save (it failed after it: a traceback, exit 1)
+            check_writable(a.save, [a.cell, a.calibration, sys.argv[0] if sys.argv else None])
         wc = Workcell(load_cell(a.cell, a.calibration), seed=a.seed, speed=speed, confidence=confidence, name=name)
         program(wc)
     except ProgramStopped:
@@ -337,7 +340,9 @@ def workcell_main(program, *, cell: str | None, name: str = "program", speed: fl
     run = wc.finish()
     print(run.summary())
     if a.save:
-        from .._io import atomic_write
-
-        atomic_write(Path(a.save), json.dumps(run.to_dict()))
+        try:
+            atomic_write(Path(a.save), json.dumps(run.to_dict()), parents=True)
+        except ArmguardError as exc:  # a full disk: the run was printed; its record could not be written
+            print(f"error: {exc}", file=sys.stderr)
+            return 3
     return 0 if run.ok else 1
