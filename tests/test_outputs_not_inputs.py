@@ -82,3 +82,26 @@ def test_a_map_over_its_model_file_and_a_program_over_its_cell_are_refused(folde
         tc.save(folder / "cell.yaml")
     assert (folder / "cell.yaml").read_bytes() == cell_before
     assert tc.save(folder / "menu.yaml").is_file()
+
+
+def _no_work(*args, **kwargs):
+    raise AssertionError("the work ran before its outputs were checked")
+
+
+def test_every_planned_plot_is_checked_before_the_work(tmp_path, monkeypatch):
+    """``verify A B --plot p.png`` writes ``p_A.png`` and ``p_B.png``; ``compare --out D`` its plots: a folder at one
+    of those names was found after the whole verification or comparison (its verdicts lost)."""
+    import armguard.harness._run as run
+    import armguard.verify as verify
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(verify, "verify_many", _no_work)
+    (tmp_path / "v" / "p_payload_sweep.png").mkdir(parents=True)
+    res = CliRunner().invoke(main, ["verify", "hermes", "unstow", "payload_sweep", "--plot", "v/p.png"])
+    assert res.exit_code == ExitCode.INPUT and "p_payload_sweep.png: it exists and is a folder" in res.output, res.output
+    monkeypatch.setattr(run, "build_configs", _no_work)
+    for name in ("timing.png", "scatter_analytic_coal.png"):
+        (tmp_path / "c" / name).mkdir(parents=True)
+        res = CliRunner().invoke(main, ["compare", "hermes", "--backends", "analytic,coal", "--configs", "5", "--out", "c"])
+        assert res.exit_code == ExitCode.INPUT and f"{name}: it exists and is a folder" in res.output, res.output
+        (tmp_path / "c" / name).rmdir()

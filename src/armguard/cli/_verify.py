@@ -123,6 +123,9 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
             check_writable(out, inputs)  # a folder that cannot be written, an input file: refused before the work
     sc = load_scene(scene)
     items = resolve_trajectories(sc, trajectories)
+    if plot_path and len(items) > 1:  # one plot a trajectory: each name checked before the work, not after it
+        for name, _ in items:
+            check_writable(_plot_file(plot_path, name, len(items)), inputs)
     warm_up(console=console)
     kwargs = dict(stopping_distance=stopping_distance, method=method, frequency=frequency, joint_step=joint_step,
                   robot=robot, threshold=threshold)
@@ -174,7 +177,7 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
     if plot_path:
         p = Path(plot_path)
         for r in reports:
-            out = p if len(reports) == 1 else p.with_name(f"{p.stem}_{r.trajectory}{p.suffix or '.png'}")
+            out = _plot_file(p, r.trajectory, len(reports))
             try:
                 r.plot(out)
             except OutputError as exc:  # the files written before it stay: say which, never leave it to a guess
@@ -189,6 +192,12 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
     for line in written:
         console.print(line)
     sys.exit(int(verify_exit_code(reports)))
+
+
+def _plot_file(plot_path, trajectory: str, n: int) -> Path:
+    """The plot of ``trajectory``: ``--plot FILE`` itself for one, ``FILE_<trajectory>`` for several."""
+    p = Path(plot_path)
+    return p if n == 1 else p.with_name(f"{p.stem}_{trajectory}{p.suffix or '.png'}")
 
 
 def verify_exit_code(reports) -> ExitCode:

@@ -55,9 +55,16 @@ def run_compare(spec, backends=("analytic", "coal"), *, n_configs: int = 1000, s
         if b not in backends:
             raise ArmguardError(f"--backend-option for {b!r}, which is not among --backends {list(backends)}")
     if out_dir is not None:  # refused before the work, not after it (an unwritable --out lost the whole comparison)
-        from .._io import check_writable
+        import itertools
+
+        from .._io import check_target, check_writable
 
         check_writable(Path(out_dir) / "compare.json")
+        if plots:  # a folder or FIFO at a plot's name failed the set's move after the whole comparison
+            for a, b in itertools.combinations(backends, 2):
+                for kind in ("scatter", "hist", "verdicts"):
+                    check_target(Path(out_dir) / f"{kind}_{a}_{b}.png")
+            check_target(Path(out_dir) / "timing.png")
     t0 = time.perf_counter()
     model = model if model is not None else resolve_model(spec)
     configs = build_configs(model, n_configs, seed, trajectories, frequency)
