@@ -280,3 +280,27 @@ def test_a_pcds_viewpoint_is_read_when_asked_not_on_its_own(tmp_path):
     odd.write_text(text.replace(vp, "VIEWPOINT 1 2 3 5 0 0 0"))
     with pytest.raises(TerrainFileError, match="VIEWPOINT.*no unit quaternion"):
         read_viewpoint(odd)
+
+
+def test_the_shipped_terrain_files_are_what_the_generator_writes(tmp_path, monkeypatch):
+    """reference/terrain/*.npz are ``python -m armguard.terrain.generate``'s output, byte for byte (their source),
+    written whole or not at all: a full disk left the shipped file cut short."""
+    from pathlib import Path
+
+    import armguard._io as io_mod
+    from armguard import OutputError
+    from armguard.terrain.generate import _write_reference
+
+    shipped = Path(__file__).resolve().parents[1] / "reference" / "terrain"
+    _write_reference(tmp_path)
+    for name in sorted(REFERENCE):
+        assert (tmp_path / f"{name}.npz").read_bytes() == (shipped / f"{name}.npz").read_bytes(), name
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+
+    def full(fd, blob):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(io_mod, "_write_all", full)
+    with pytest.raises(OutputError, match="No space left"):
+        _write_reference(tmp_path)
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before

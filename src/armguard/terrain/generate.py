@@ -211,12 +211,15 @@ def reference_terrain(name: str) -> dict:
 def _write_reference(folder) -> None:  # pragma: no cover - run by hand
     from pathlib import Path
 
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
+    from .._io import atomic_write, make_folder
+
+    folder = make_folder(Path(folder))
     for name in REFERENCE:
         r = reference_terrain(name)
-        np.savez_compressed(folder / f"{name}.npz", heights=r["heights"].astype(np.float32), cell=r["cell"],
-                            X_WC=r["X_WC"], points_W=r["points_W"].astype(np.float32))
+        arrays = dict(heights=r["heights"].astype(np.float32), cell=r["cell"], X_WC=r["X_WC"],
+                      points_W=r["points_W"].astype(np.float32))
+        # whole or not at all: the shipped file is the default target (a full disk left it cut short)
+        atomic_write(folder / f"{name}.npz", lambda f, a=arrays: np.savez_compressed(f, **a))
         print(name, r["points_W"].shape, (folder / f"{name}.npz").stat().st_size, "bytes")
 
 
