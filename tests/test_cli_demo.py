@@ -143,3 +143,39 @@ def test_the_clearance_column_brackets_the_least_clearance_up_to_the_first_colli
         text = clearance_text(r)
         assert text.startswith(f"in [{r.min_clearance_lower_bound * 1e3:.1f}, {r.min_clearance * 1e3:.1f}] mm")
         assert ("before t = " in text) == (r.first_collision is not None)
+
+
+def test_demo_checks_its_files_before_the_work_and_writes_them_as_one_set(tmp_path, monkeypatch):
+    """A folder at one report's name was found after the verifications (the verdicts not printed, the previous run's
+    files mixed with the new ones); a full disk now leaves the previous set whole, and the verdicts are printed."""
+    import armguard._io as io_mod
+    import armguard.cli._demo as demo
+
+    args = ["demo", "--scene", "gmf_s480", "--stopping-distance", "0", "--out", str(tmp_path)]
+    assert CliRunner().invoke(main, args).exit_code == 0
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    victim = sorted(before)[-1]
+    (tmp_path / victim).unlink()
+    (tmp_path / victim).mkdir()
+
+    def no_work(*a, **k):
+        raise AssertionError("verified before the outputs were checked")
+
+    monkeypatch.setattr(demo, "_demo_rows", no_work)
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 3 and f"{victim}: it exists and is a folder" in res.output, res.output
+    (tmp_path / victim).rmdir()
+    (tmp_path / victim).write_bytes(before[victim])
+    monkeypatch.undo()
+    n = [0]
+
+    def full_after_one(fd, blob, real=io_mod._write_all):
+        n[0] += 1
+        if n[0] > 1:
+            raise OSError(28, "No space left on device")
+        real(fd, blob)
+
+    monkeypatch.setattr(io_mod, "_write_all", full_after_one)
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 3 and "No space left" in res.output and "│ gmf_s480 │" in res.output, res.output
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before  # the previous set, whole

@@ -21,6 +21,7 @@ import numpy as np
 from . import main
 from ._params import FilePath, LENGTH
 from ._output import esc, output_console
+from .._errors import OutputError
 
 #: Hermes (001_…, §4): "the maximum value of the stopping distance be 100 mm, i.e. the typical value
 #: for maximum speed movements".
@@ -131,10 +132,9 @@ def demo_cmd(out_dir, scenes, stopping_distances, list_only) -> None:
         return
     from rich.table import Table
 
-    from .._io import make_folder
+    from .._io import check_target, check_writable, make_folder, output_set
     from ..models import builtin_names
     from ..scene import load_scene
-    from ..verify import Subdivided, Verifier
     from ._compile import warm_up
 
     console = output_console()
@@ -153,8 +153,30 @@ def demo_cmd(out_dir, scenes, stopping_distances, list_only) -> None:
                 "first collision / stopping-distance violation: link / object feature at point, time",
                 "least clearance (moving arm): [proven, evaluated]", "time"):
         table.add_column(col, overflow="fold")
+    planned = [f"{_file_stem(name, sc)}__{tname}__{stem_sd}{ext}" for name, sc in loaded for tname in sc.trajectories
+               for _, stem_sd in names for ext in (".json", ".png")]
+    for k, f in enumerate(planned):  # a folder that cannot be written, a folder or FIFO at a name: refused now
+        if k == 0:
+            check_writable(out / f)
+        else:
+            check_target(out / f)
     warm_up(console=console)
     t_all = time.perf_counter()
+    try:  # the files first (a reader closing the pipe early must not cost them), as one set: the previous run's
+        with output_set(out) as staging:  # files are replaced at the end, whole, never half of them
+            _demo_rows(loaded, modes, names, staging, table)
+    except OutputError:
+        console.print(table)  # the verdicts, then why their files could not be written
+        raise
+    console.print(table)
+    console.print(f"reports and plots in {out}/ ({time.perf_counter() - t_all:.1f} s in all); "
+                  "more demonstrations: armguard demo --list")
+
+
+def _demo_rows(loaded, modes, names, out, table) -> None:
+    """Verify every canned trajectory of ``loaded`` in each mode: a report and a plot in ``out``, a row of ``table``."""
+    from ..verify import Subdivided, Verifier
+
     for name, sc in loaded:
         if not sc.trajectories:
             continue
@@ -172,11 +194,8 @@ def demo_cmd(out_dir, scenes, stopping_distances, list_only) -> None:
                 else:
                     r = v.verify(traj, stopping_distance=sd, name=tname)
                 dt = time.perf_counter() - t0
+                table.add_row(esc(name), esc(tname), label, verdict_text(r), esc(first_collision_text(r)),
+                              clearance_text(r), f"{dt * 1e3:.0f} ms")  # the row first: a failed write loses no verdict
                 stem = f"{_file_stem(name, sc)}__{tname}__{stem_sd}"
                 r.save_json(out / f"{stem}.json")  # each all or nothing (armguard._io.atomic_write)
                 r.plot(out / f"{stem}.png")
-                table.add_row(esc(name), esc(tname), label, verdict_text(r), esc(first_collision_text(r)),
-                              clearance_text(r), f"{dt * 1e3:.0f} ms")
-    console.print(table)
-    console.print(f"reports and plots in {out}/ ({time.perf_counter() - t_all:.1f} s in all); "
-                  "more demonstrations: armguard demo --list")
