@@ -11,7 +11,9 @@ from __future__ import annotations
 import errno
 import json
 import os
+import shutil
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -590,3 +592,25 @@ def test_verify_says_which_outputs_it_wrote_before_one_that_cannot_be(tmp_path):
     assert "pp_payload_sweep.png" in r.output and "written before it:" in r.output, r.output
     assert str(tmp_path / "r.json") in r.output and str(tmp_path / "pp_unstow.png") in r.output
     assert (tmp_path / "r.json").is_file() and (tmp_path / "pp_unstow.png").is_file()
+
+
+def test_a_set_member_linked_to_another_file_system_is_refused_before_anything_moves(tmp_path):
+    """compare --out: ``timing.png`` a link to a file on another file system; the renames moved the first files of
+    the set, then failed ("Invalid cross-device link"): half new, half old."""
+    other = Path(tempfile.mkdtemp(dir="/dev/shm")) if Path("/dev/shm").is_dir() else None
+    if other is None or os.stat(other).st_dev == os.stat(tmp_path).st_dev:
+        pytest.skip("no second file system here")
+    try:
+        out = tmp_path / "out"
+        out.mkdir()
+        (out / "a.json").write_text("old a")
+        (other / "b.png").write_text("old b")
+        (out / "b.png").symlink_to(other / "b.png")
+        with pytest.raises(OutputError, match="on another file system"):
+            with output_set(out) as staging:
+                atomic_write(staging / "a.json", "new a")
+                atomic_write(staging / "b.png", "new b")
+        assert (out / "a.json").read_text() == "old a" and (out / "b.png").read_text() == "old b"
+        assert sorted(p.name for p in out.iterdir()) == ["a.json", "b.png"]  # no staging folder left
+    finally:
+        shutil.rmtree(other, ignore_errors=True)

@@ -275,6 +275,11 @@ def output_set(folder, *, stale=()):
         yield staging
         names = sorted(p.name for p in staging.iterdir())
         targets = [check_target(folder / n) for n in names]  # refuse before anything moves
+        dev = os.stat(staging).st_dev
+        for n, t in zip(names, targets):  # a link to another file system: its move would fail half-way through the set
+            if os.stat(t.parent).st_dev != dev:
+                raise OutputError(f"cannot write {folder / n}: it is a link to {t}, on another file system than "
+                                  f"{folder} (the set is moved into place by renames); nothing was replaced")
         with _sigint_held():
             for name, target in zip(names, targets):
                 os.replace(staging / name, target)
