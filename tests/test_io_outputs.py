@@ -582,12 +582,27 @@ def test_program_run_and_calibrate_refuse_an_unwritable_output_before_the_work(t
     assert ran == []
 
 
-def test_verify_says_which_outputs_it_wrote_before_one_that_cannot_be(tmp_path):
+def test_verify_says_which_outputs_it_wrote_before_one_that_cannot_be(tmp_path, monkeypatch):
     """verify with a report and a plot per trajectory stopped at the second plot (exit 3) without a word of the
-    report and first plot it had written: the output set was mixed, the user left to guess."""
+    report and first plot it had written: the output set was mixed, the user left to guess.  A folder at the second
+    plot's name is now refused before the work; a disk that fills at the second plot is said with what was written."""
+    args = ["verify", "hermes", "unstow", "payload_sweep", "--report", str(tmp_path / "r.json"),
+            "--plot", str(tmp_path / "pp.png")]
     (tmp_path / "pp_payload_sweep.png").mkdir()  # the second trajectory's plot: a folder, never replaced
-    r = CliRunner().invoke(main, ["verify", "hermes", "unstow", "payload_sweep", "--report", str(tmp_path / "r.json"),
-                                  "--plot", str(tmp_path / "pp.png")])
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == ExitCode.INPUT and "pp_payload_sweep.png: it exists and is a folder" in r.output, r.output
+    assert not (tmp_path / "r.json").exists() and not (tmp_path / "pp_unstow.png").exists()
+    (tmp_path / "pp_payload_sweep.png").rmdir()
+    n = [0]
+
+    def full_at_the_third(fd, blob, real=_io._write_all):
+        n[0] += 1
+        if n[0] == 3:
+            raise OSError(28, "No space left on device")
+        real(fd, blob)
+
+    monkeypatch.setattr(_io, "_write_all", full_at_the_third)
+    r = CliRunner().invoke(main, args)
     assert r.exit_code == ExitCode.INPUT, r.output
     assert "pp_payload_sweep.png" in r.output and "written before it:" in r.output, r.output
     assert str(tmp_path / "r.json") in r.output and str(tmp_path / "pp_unstow.png") in r.output
