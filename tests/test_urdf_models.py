@@ -414,3 +414,22 @@ def test_the_sidecar_keeps_each_arms_ik(tmp_path):
         assert line in text, text
         assert {r: rb.ik for r, rb in armguard.load_scene(str(paths["yaml"])).robots.items()} == \
             {r: rb.ik for r, rb in armguard.load_scene(name).robots.items()}
+
+
+def test_an_export_over_a_model_with_a_folder_at_one_name_writes_nothing(tmp_path):
+    """A folder at one mesh's name: the URDF, SRDF, sidecar and earlier meshes were already new, the new URDF
+    naming a mesh that was not written.  Every name is checked before one file is written."""
+    from armguard import OutputError
+
+    scene = load_scene_file(builtin_path("hermes"))
+    paths = export_scene(scene, tmp_path, source=builtin_path("hermes"))
+    assert paths["meshes"]
+    victim = paths["meshes"][-1]
+    victim.unlink()
+    victim.mkdir()
+    before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+    edited = tmp_path.parent / "hermes_edited.yaml"  # its header comment goes into the URDF: another URDF text
+    edited.write_text("# edited\n" + builtin_path("hermes").read_text(encoding="utf-8"))
+    with pytest.raises(OutputError, match=f"{victim.name}: it exists and is a folder"):
+        export_scene(scene, tmp_path, source=edited, name="hermes")
+    assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()} == before
