@@ -629,3 +629,14 @@ def test_a_set_member_linked_to_another_file_system_is_refused_before_anything_m
         assert sorted(p.name for p in out.iterdir()) == ["a.json", "b.png"]  # no staging folder left
     finally:
         shutil.rmtree(other, ignore_errors=True)
+
+
+def test_a_long_name_the_file_system_takes_is_written(tmp_path):
+    """A 250-character name was refused ("File name too long"): the temporary and probe names around it passed 255."""
+    from armguard._io import check_writable
+
+    p = tmp_path / ("r" * 245 + ".json")
+    assert len(p.name) == 250
+    check_writable(p)
+    atomic_write(p, "whole")
+    assert p.read_text() == "whole" and sorted(x.name for x in tmp_path.iterdir()) == [p.name]

@@ -110,7 +110,7 @@ def check_writable(path, inputs=()) -> Path:
     if not folder.is_dir():
         raise OutputError(f"cannot write {path}: {folder} exists and is not a folder")
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".probe", dir=folder)
+        fd, tmp = tempfile.mkstemp(prefix=_tmp_prefix(target), suffix=".probe", dir=folder)
     except OSError as exc:
         raise OutputError(f"cannot write {path}: {_reason(exc)}") from None
     os.close(fd)
@@ -172,9 +172,15 @@ def _mode() -> int:
 _UMASK_LOCK = threading.Lock()
 
 
+def _tmp_prefix(path: Path) -> str:
+    """A temporary file's name start beside ``path``: its name cut to 64 characters (a name of 246 to 255, which the
+    file system takes, was refused: the temporary name around it passed 255)."""
+    return f".{path.name[:64]}."
+
+
 def _write_file(path: Path, blob: bytes) -> None:
     """``blob`` into a new temporary file beside ``path``, synced, then renamed over ``path``."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    fd, tmp = tempfile.mkstemp(prefix=_tmp_prefix(path), suffix=".tmp", dir=path.parent)
     try:
         try:
             _write_all(fd, blob)
