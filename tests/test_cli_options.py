@@ -179,3 +179,19 @@ def test_compare_lists_as_many_worst_configurations_as_asked():
         res = CliRunner().invoke(main, ["compare", "hermes", "--configs", "60", "--worst", str(n), "--no-plots"])
         assert res.exit_code == ExitCode.OK, res.output
         assert len(re.findall(r"(?m)^  distance #", res.output)) == n, res.output
+
+
+@pytest.mark.parametrize("args,said", [
+    (["srdf", "puma560", "--out", "x.srdf", "--samples", "100"], "--samples goes with --method sampled"),
+    (["srdf", "puma560", "--out", "x.srdf", "--method", "sampled", "--max-evaluations", "5"],
+     "--max-evaluations goes with --method certified"),
+    (["srdf", "puma560", "--out", "x.srdf", "--method", "sampled", "--workers", "2"], "--workers goes with --method certified"),
+    (["compare", "hermes", "--q", "0,0,0,0,0,0", "--configs", "7"], "--configs belongs to a comparison over many"),
+    (["compare", "hermes", "--q", "0,0,0,0,0,0", "--seed", "3"], "--seed belongs to a comparison over many"),
+])
+def test_an_option_that_does_not_apply_is_a_usage_error(args, said, tmp_path, monkeypatch):
+    """``srdf --method certified --samples 100``, ``compare --q ... --configs 7``: accepted and silently ignored."""
+    monkeypatch.chdir(tmp_path)
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == ExitCode.USAGE and said in res.output, res.output
+    assert not (tmp_path / "x.srdf").exists()

@@ -9,7 +9,7 @@ import click
 import numpy as np
 
 from . import main
-from ._params import AT_LEAST_ONE, BACKENDS, COUNT, FilePath, POSITIVE, SAMPLES, SEED
+from ._params import AT_LEAST_ONE, BACKENDS, COUNT, FilePath, POSITIVE, SAMPLES, SEED, refuse_unused
 from ._exit import ExitCode, exit_epilog
 from ._output import count, esc, json_text, output_console
 
@@ -90,6 +90,10 @@ def compare_cmd(model, backends, n_configs, trajectories, frequency, seed, out_d
     if q_text is not None and out_dir is not None:  # nothing was written, and nothing said so
         raise click.UsageError("--out writes a comparison's compare.json and plots; --q answers one configuration on "
                                "the terminal (add --json for JSON): drop --out, or --q")
+    if q_text is not None:  # one configuration: the comparison's own options do not apply
+        refuse_unused(click.get_current_context(), ["n_configs", "trajectories", "frequency", "seed", "workers",
+                                                    "scheduler", "no_plots", "n_worst"],
+                      "belongs to a comparison over many configurations; --q answers one")
     if q_text is None and (len(names) < 2 or len(set(names)) != len(names)):
         raise click.BadParameter(f"give at least two backends to compare, each once, got {list(names)}",
                                  param_hint="--backends")

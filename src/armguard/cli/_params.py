@@ -11,7 +11,7 @@ import math
 import click
 
 __all__ = ["AT_LEAST_ONE", "BACKEND", "BACKENDS", "COUNT", "Finite", "LENGTH", "PATH", "PATH_OR_DASH", "POSITIVE",
-           "SAMPLES", "SEED", "FilePath", "scene_of", "srdf_option"]
+           "SAMPLES", "SEED", "FilePath", "refuse_unused", "scene_of", "srdf_option"]
 
 AT_LEAST_ONE = click.IntRange(min=1)
 """An integer >= 1 (configurations, workers, evaluations)."""
@@ -54,6 +54,18 @@ LENGTH = Finite(0.0, high=1e9)
 lengths: 1e300 m was printed as 300 digits)."""
 POSITIVE = Finite(0.0, open_low=True)
 """A finite number > 0 (a rate, a step)."""
+
+
+def refuse_unused(ctx: click.Context, options, why: str) -> None:
+    """A usage error (exit status 2) when one of ``options`` (parameter names) was given on the command line or
+    in the environment: an option that does not apply was accepted and silently ignored (``srdf --method
+    certified --samples 100``, ``compare --q ... --configs 7``).  ``why``: what the option goes with instead."""
+    from click.core import ParameterSource
+
+    for name in options:
+        if ctx.get_parameter_source(name) in (ParameterSource.COMMANDLINE, ParameterSource.ENVIRONMENT):
+            flag = next(p.opts[0] for p in ctx.command.params if p.name == name)
+            raise click.UsageError(f"{flag} {why}", ctx=ctx)
 
 
 class FilePath(click.Path):

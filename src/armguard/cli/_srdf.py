@@ -14,7 +14,7 @@ import math
 import click
 
 from . import main
-from ._params import AT_LEAST_ONE, BACKEND, LENGTH, PATH, SAMPLES
+from ._params import AT_LEAST_ONE, BACKEND, LENGTH, PATH, SAMPLES, refuse_unused
 from ._exit import ExitCode, exit_epilog
 from ._output import count
 
@@ -67,6 +67,12 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
 
     from ..srdfgen._io import other_elements, read_previous
 
+    ctx = click.get_current_context()
+    if method == "certified":
+        refuse_unused(ctx, ["samples"], "goes with --method sampled (certified proves each pair by branch and bound)")
+    else:
+        refuse_unused(ctx, ["max_evaluations", "workers", "scheduler"],
+                      "goes with --method certified (sampled draws --samples configurations, here, once)")
     if update and not Path(out).is_file():
         raise click.BadParameter(f"{out} is not a file: --update rewrites an SRDF written before", param_hint="--out")
     if Path(out).is_file():  # a URDF (or no XML) is never rewritten as an SRDF
