@@ -340,6 +340,7 @@ def test_console_says_why_it_cannot_serve_before_it_starts():
         with pytest.raises(PortInUseError, match=f"port {port} on 127.0.0.1 is in use"):
             _check_port_free("127.0.0.1", port)
     _check_port_free("127.0.0.1", 0)  # any free port of this machine: no error
+    _check_port_free("", 0)  # every interface, as before
     for port in (0, 8123):
         with pytest.raises(ArmguardError, match="cannot serve on 192.0.2.1 .*address of this machine") as info:
             _check_port_free("192.0.2.1", port)  # TEST-NET-1: never this machine's

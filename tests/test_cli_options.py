@@ -195,3 +195,21 @@ def test_an_option_that_does_not_apply_is_a_usage_error(args, said, tmp_path, mo
     res = CliRunner().invoke(main, args)
     assert res.exit_code == ExitCode.USAGE and said in res.output, res.output
     assert not (tmp_path / "x.srdf").exists()
+
+
+def test_srdf_update_judges_the_options_by_the_files_method(tmp_path, monkeypatch):
+    """``--update`` of a sampled SRDF runs sampled (the file's method): its --samples was refused as certified's,
+    its --workers accepted and ignored."""
+    monkeypatch.chdir(tmp_path)
+    run = CliRunner().invoke
+    assert run(main, ["srdf", "gmf_s480", "--method", "sampled", "--samples", "200", "--out", "p.srdf"]).exit_code == 0
+    res = run(main, ["srdf", "gmf_s480", "--out", "p.srdf", "--update", "--samples", "300"])
+    assert res.exit_code == 0 and "method sampled" in res.output, res.output
+    res = run(main, ["srdf", "gmf_s480", "--out", "p.srdf", "--update", "--workers", "2"])
+    assert res.exit_code == ExitCode.USAGE and "--workers goes with --method certified" in res.output, res.output
+
+
+def test_a_time_budget_is_not_bounded_as_a_length():
+    """``check --budget-us 2e9`` (2000 s) was refused by the 1e9 m bound of lengths."""
+    res = CliRunner().invoke(main, ["check", "puma560", "--budget-us", "2e9"])
+    assert res.exit_code == ExitCode.OK and "CLEAR" in res.output, res.output

@@ -57,9 +57,17 @@ def test_an_output_over_an_input_is_refused_before_the_work(folder, args, victim
 
 
 def test_verify_refuses_one_file_for_report_and_plot(folder):
+    """One trajectory: its plot is --plot itself; several: FILE_<trajectory>, which the report may name too (the
+    report was lost, exit 0); --report r.png --plot r.png with several trajectories writes three files: fine."""
     res = CliRunner().invoke(main, ["verify", "hermes", "t.yaml", "--report", "r.png", "--plot", "r.png"])
-    assert res.exit_code == ExitCode.USAGE and "the plot would replace the report" in res.output
+    assert res.exit_code == ExitCode.USAGE and "--report and --plot both write r.png" in res.output, res.output
     assert not (folder / "r.png").exists()
+    res = CliRunner().invoke(main, ["verify", "hermes", "unstow", "payload_sweep", "--report", "p_unstow.png",
+                                    "--plot", "p.png"])
+    assert res.exit_code == ExitCode.USAGE and "both write p_unstow.png" in res.output, res.output
+    res = CliRunner().invoke(main, ["verify", "hermes", "unstow", "payload_sweep", "--report", "q.png", "--plot", "q.png"])
+    assert res.exit_code == ExitCode.OK, res.output
+    assert {p.name for p in folder.glob("q*.png")} == {"q.png", "q_unstow.png", "q_payload_sweep.png"}
 
 
 def test_a_map_over_its_model_file_and_a_program_over_its_cell_are_refused(folder):

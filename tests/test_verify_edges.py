@@ -468,3 +468,21 @@ def test_a_group_name_is_of_the_robot_the_edges_move():
     assert v.check_edges(q, q, robot="left_arm", joints="left_arm").counts()["clear"] == 1
     with pytest.raises(VerificationError, match="moves robot 'right_arm', not 'left_arm'"):
         v.check_edges(q, q, robot="left_arm", joints="right_arm")
+
+
+def test_the_short_way_keeps_the_users_start():
+    """kinova joint 4 from 7.70 to 3.625 rad the short way: the hit's q lies on the user's segment (from 7.70), not at
+    the reduced start's angle; a start beyond 1e6 rad is taken at its angle (a short turn added to it rounds away)."""
+    m = armguard.load_model("kinova")
+    rob = m.scene.robots[next(iter(m.scene.robots))]
+    from armguard.verify._edges import _shortest
+
+    q0 = np.zeros((1, len(rob.joint_names)))
+    q1 = q0.copy()
+    q0[0, 3], q1[0, 3] = 7.70, 3.625
+    s0, s1 = _shortest(rob, q0, q1)
+    assert s0[0, 3] == 7.70 and abs(s1[0, 3] - s0[0, 3]) <= math.pi
+    assert math.isclose(math.remainder(s1[0, 3] - 3.625, 2 * math.pi), 0.0, abs_tol=1e-12)
+    q0[0, 3] = 1e17
+    s0, s1 = _shortest(rob, q0, q1)
+    assert abs(s0[0, 3]) <= math.pi and abs(s1[0, 3] - s0[0, 3]) <= math.pi

@@ -43,7 +43,9 @@ def _quiet_cluster(LocalCluster, workers: int):
     """A LocalCluster whose worker processes ignore Ctrl-C: the terminal sends SIGINT to the whole process
     group, and each worker printed its KeyboardInterrupt traceback under the command's one-line
     "interrupted" (exit 130).  This process still takes the interrupt and closes the cluster; a process
-    started while SIGINT is ignored keeps it ignored (Python installs its handler only where it is not)."""
+    started while SIGINT is ignored keeps it ignored (Python installs its handler only where it is not).
+    While the cluster starts (a few seconds) this process ignores Ctrl-C too: one pressed then is lost, and
+    the next one, once the work runs, interrupts it."""
     import signal
     import threading
 

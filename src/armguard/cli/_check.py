@@ -14,7 +14,7 @@ import sys
 import click
 
 from . import main
-from ._params import LENGTH, PATH, scene_of, srdf_option
+from ._params import DURATION, LENGTH, PATH, scene_of, srdf_option
 from ._exit import ExitCode, exit_epilog
 from ._output import esc, json_text, output_console
 
@@ -80,7 +80,7 @@ def parse_q(sc, q_text: str, deg: bool):
 @click.option("--threshold", type=LENGTH, default=0.05, show_default=True, help="Detection threshold (m).")
 @click.option("--stopping-distance", type=LENGTH, default=0.0, show_default=True, help="Stopping distance (m).")
 @click.option("--active", default=None, help="Check only this robot against everything (default: all arms).")
-@click.option("--budget-us", type=LENGTH, default=None, help="Anytime mode: time budget in microseconds.")
+@click.option("--budget-us", type=DURATION, default=None, help="Anytime mode: time budget in microseconds.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
 @click.option("--terrain", "terrain_file", type=PATH, default=None,
               help="Add the terrain category: a sensed terrain file (armguard.terrain.load_terrain), or a shipped "

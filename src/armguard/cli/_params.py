@@ -10,7 +10,7 @@ import math
 
 import click
 
-__all__ = ["AT_LEAST_ONE", "BACKEND", "BACKENDS", "COUNT", "Finite", "LENGTH", "PATH", "PATH_OR_DASH", "POSITIVE",
+__all__ = ["AT_LEAST_ONE", "BACKEND", "BACKENDS", "COUNT", "DURATION", "Finite", "LENGTH", "PATH", "PATH_OR_DASH", "POSITIVE",
            "SAMPLES", "SEED", "FilePath", "refuse_unused", "scene_of", "srdf_option"]
 
 AT_LEAST_ONE = click.IntRange(min=1)
@@ -50,8 +50,10 @@ class Finite(click.ParamType):
 
 
 LENGTH = Finite(0.0, high=1e9)
-"""A finite length (m, or µs of a budget) >= 0, at most 1e9 (``Tolerances.max_magnitude``, as a scene file's
-lengths: 1e300 m was printed as 300 digits)."""
+"""A finite length (m) >= 0, at most 1e9 (``Tolerances.max_magnitude``, as a scene file's lengths: 1e300 m was
+printed as 300 digits)."""
+DURATION = Finite(0.0)
+"""A finite time >= 0 (µs of a budget): no upper bound (the library sets none)."""
 POSITIVE = Finite(0.0, open_low=True)
 """A finite number > 0 (a rate, a step)."""
 

@@ -67,12 +67,6 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
 
     from ..srdfgen._io import other_elements, read_previous
 
-    ctx = click.get_current_context()
-    if method == "certified":
-        refuse_unused(ctx, ["samples"], "goes with --method sampled (certified proves each pair by branch and bound)")
-    else:
-        refuse_unused(ctx, ["max_evaluations", "workers", "scheduler"],
-                      "goes with --method certified (sampled draws --samples configurations, here, once)")
     if update and not Path(out).is_file():
         raise click.BadParameter(f"{out} is not a file: --update rewrites an SRDF written before", param_hint="--out")
     if Path(out).is_file():  # a URDF (or no XML) is never rewritten as an SRDF
@@ -117,6 +111,7 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
         if src("method") is click.core.ParameterSource.DEFAULT and root.get(METHOD_ATTR) in ("certified", "sampled"):
             method = root.get(METHOD_ATTR)
             said.append(f"method {method}")
+    _refuse_unused(method)  # the method the run uses (given, or with --update the file's): before the search
     cm = collision_matrix(model, margin=margin, method=method, samples=samples, workers=workers,
                           max_evaluations=max_evaluations, backend=evaluator, progress=False if as_json else _label(robot),
                           previous=out if update else None, scheduler=scheduler)
@@ -183,6 +178,16 @@ def srdf_cmd(robot, out, margin, method, samples, workers, scheduler, max_evalua
             click.echo(f"  checked {e.link1} - {e.link2}: distance {e.distance:.4f} m at q = {_q(model, e.q)}")
         elif e.status == "undecided":
             click.echo(f"  checked {e.link1} - {e.link2}: undecided ({e.how})")
+
+
+def _refuse_unused(method: str) -> None:
+    """The options of the other method, given: a usage error (they were accepted and silently ignored)."""
+    ctx = click.get_current_context()
+    if method == "certified":
+        refuse_unused(ctx, ["samples"], "goes with --method sampled (certified proves each pair by branch and bound)")
+    else:
+        refuse_unused(ctx, ["max_evaluations", "workers", "scheduler"],
+                      "goes with --method certified (sampled draws --samples configurations, here, once)")
 
 
 @main.command("check-srdf", epilog=exit_epilog(

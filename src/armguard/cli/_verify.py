@@ -116,16 +116,16 @@ def verify_cmd(scene, trajectories, method, frequency, joint_step, stopping_dist
     if plot_path:
         figure_format(plot_path)  # a format matplotlib cannot write: refused before the work
     inputs = [t for t in trajectories if Path(t).is_file()] + [scene, terrain_file]
-    if report_path and plot_path and not to_stdout and Path(report_path).resolve() == Path(plot_path).resolve():
-        raise click.UsageError(f"--report and --plot both name {report_path}: the plot would replace the report")
-    for out in (None if to_stdout else report_path, plot_path):
-        if out:
-            check_writable(out, inputs)  # a folder that cannot be written, an input file: refused before the work
     sc = load_scene(scene)
     items = resolve_trajectories(sc, trajectories)
-    if plot_path and len(items) > 1:  # one plot a trajectory: each name checked before the work, not after it
-        for name, _ in items:
-            check_writable(_plot_file(plot_path, name, len(items)), inputs)
+    planned = ([("--report", Path(report_path))] if report_path and not to_stdout else []) + \
+        ([("--plot", _plot_file(plot_path, name, len(items))) for name, _ in items] if plot_path else [])
+    seen: dict = {}
+    for option, out in planned:  # every file the run writes: checked before the work, not after it
+        other = seen.setdefault(out.resolve(), (option, out))
+        if other != (option, out):
+            raise click.UsageError(f"{other[0]} and {option} both write {out}: one would replace the other")
+        check_writable(out, inputs)  # a folder that cannot be written, an input file: refused before the work
     warm_up(console=console)
     kwargs = dict(stopping_distance=stopping_distance, method=method, frequency=frequency, joint_step=joint_step,
                   robot=robot, threshold=threshold)

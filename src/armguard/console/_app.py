@@ -46,8 +46,8 @@ def _check_port_free(host: str, port: int) -> None:
     import errno
     import socket
 
-    try:
-        family = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0][0]
+    try:  # "" is every interface (as 0.0.0.0): the socket's own reading, which getaddrinfo refuses
+        family = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0][0] if host else socket.AF_INET
     except (socket.gaierror, UnicodeError) as exc:
         raise ArmguardError(f"--host {host!r} does not resolve ({getattr(exc, 'strerror', None) or exc}): give an "
                             "address of this machine (127.0.0.1: this machine only; 0.0.0.0: every interface)") from None

@@ -361,12 +361,18 @@ def _record_of(st, rname: str, base, k0: int, k1: int) -> _Run:
     return run
 
 
+_BIG_ANGLE = 1e6
+"""rad: a continuous joint's start beyond it is taken at its angle in (-pi, pi] by :func:`_shortest` (at 1e17 a
+short turn added to it rounds away)."""
+
+
 def _shortest(rob, Q0: np.ndarray, Q1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(Q0, Q1)`` with each continuous joint (no limits) at its angle in (-pi, pi] (``atan2(sin, cos)``, as
-    ``Model.pin_q`` reads Pinocchio's ``(cos, sin)``) and ``Q1``'s moved by whole turns to within pi of
-    ``Q0``'s: the edge turns it the short way, as ``pinocchio.interpolate`` and OMPL's SO(2) do.  The ends
-    are reduced first: at 1e17 rad the difference of the raw values rounded to whole turns, and an edge to a
-    colliding angle came out still (CLEAR after one evaluation)."""
+    """``(Q0, Q1)`` with each continuous joint (no limits) of ``Q1`` moved by whole turns to within pi of ``Q0``'s:
+    the edge turns it the short way, as ``pinocchio.interpolate`` and OMPL's SO(2) do.  The turn is found from
+    both ends' angles (``atan2(sin, cos)``, as ``Model.pin_q`` reads Pinocchio's ``(cos, sin)``): at 1e17 rad the
+    difference of the raw values rounded to whole turns, and an edge to a colliding angle came out still (CLEAR).
+    ``Q0`` is kept as given (the results' ``q`` lie on the user's segment), but for a start beyond
+    :data:`_BIG_ANGLE`, taken at its angle."""
     free = ~(np.isfinite(np.asarray(rob.lower)) | np.isfinite(np.asarray(rob.upper)))
     if not free.any():
         return Q0, Q1
@@ -374,8 +380,9 @@ def _shortest(rob, Q0: np.ndarray, Q1: np.ndarray) -> tuple[np.ndarray, np.ndarr
     a1 = np.arctan2(np.sin(Q1[:, free]), np.cos(Q1[:, free]))
     d = a1 - a0
     Q0, Q1 = Q0.copy(), Q1.copy()
-    Q0[:, free] = a0
-    Q1[:, free] = a0 + (d - 2.0 * np.pi * np.round(d / (2.0 * np.pi)))
+    start = np.where(np.abs(Q0[:, free]) > _BIG_ANGLE, a0, Q0[:, free])
+    Q0[:, free] = start
+    Q1[:, free] = start + (d - 2.0 * np.pi * np.round(d / (2.0 * np.pi)))
     return Q0, Q1
 
 
