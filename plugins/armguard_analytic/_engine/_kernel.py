@@ -42,7 +42,7 @@ from ._cull import (_argsort_heap, _argsort_small, _bb_gap, _explicit_gap, _gjk_
                     obb_apart_moving, obb_apart_static)
 from ._narrow import BOUNDED
 from ._calls import FN_STATIC, call_static
-from ._step import capsule_step, move_element, pair_step, pair_step_inline
+from ._step import capsule_step, constant_step, move_element, pair_step, pair_step_inline
 
 MODE_EXACT, MODE_LAZY, MODE_ANYTIME, MODE_YESNO, MODE_ALL, MODE_MIN = 0, 1, 2, 3, 4, 5
 _status_code = njit(cache=True, inline="always")(status_code)  # the framework's rule, compiled
@@ -257,9 +257,8 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out,
     # category's best so far) for pairs with a moving box, hull or cylinder only, whose narrow phase
     # is GJK (~1 us): for capsule pairs (tens of ns) the test costs more than it saves (measured)
     box_cull = mode == MODE_YESNO
-    # the exact and min modes order the GJK pairs (a moving box, hull or cylinder: ~1 us each; the
-    # sort costs more than capsule pairs save): iiwa hulls in world20 23 -> 17 us per check; their
-    # moving-static pairs: seed, collect, sort by a box key, evaluate (._static_gjk)
+    # the exact and min modes order the GJK pairs (a moving box, hull or cylinder: ~1 us each; the sort costs more than
+    # capsule pairs save): iiwa hulls in world20 23 -> 17 us per check; their moving-static pairs: ._static_gjk
     by_order = by_best
 
     for m in range(lo, hi):
@@ -336,7 +335,8 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out,
             for k in range(sel.shape[0]):
                 p = sel[k]
                 a = pair_a[p]; b = pair_b[p]
-                if not capsule_step(p, a, b, H, MF, MI, SF, SI, eps_len, eps_par, n_eval, stamp_now):
+                if not (constant_step(p, H, MF, MI, SF, SI, n_eval, stamp_now)
+                        or capsule_step(p, a, b, H, MF, MI, SF, SI, eps_len, eps_par, n_eval, stamp_now)):
                     d, err = pair_step_inline(p, a, b, flag_no, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
                                               max_iter, woff, lvl, math.inf, n_eval, stamp_now, fns)
                     if err != 0:

@@ -52,9 +52,11 @@ SCALARS = ("n_q", "n_explicit", "n_mov", "n_st", "n_links", "stamp_now")
 # pair's final GJK simplex at this thread's previous check, in a seed row's layout, and "coh" (scratch
 # floats, 2): [1.0 where the thread's checks may start from "lseed" (the analytic Checker's option
 # warm_start), 1.0 when this check's joint values are also within ``COHERENT_STEP`` of the previous
-# check's] (._narrow.narrow_rel then starts GJK from "lseed")
+# check's] (._narrow.narrow_rel then starts GJK from "lseed"); "cst" (model ints, one per pair: -1, or
+# the pair's row of "cstv") and "cstv" (model floats, ``(rows, EV_W)``): the rows of the pairs whose two
+# elements never move (._constant: computed once per build, copied by the all-pairs mode)
 MI_LATE = ("gadj", "gadjs", "gtri", "gtris", "obb_L", "qlim", "gdir", "gdirs", "spair", "sgrid", "sdt", "lseed",
-           "coh")
+           "coh", "cst", "cstv")
 
 _ALL = MF + MI + SFN + SIN
 K = {name: k for k, name in enumerate(_ALL)}

@@ -32,7 +32,7 @@ from ._layout import EV_W, K, SUM_BEST, SUM_BSLOT
 from ._calls import FN_NARROW_OTHER, FN_NARROW_REL, call_narrow_other, call_narrow_rel
 from ._narrow import BOUNDED, LINK_FRAME, NOT_SCALAR, narrow_flat, wall_flat
 
-__all__ = ["capsule_step", "evaluate_pair", "move_element", "move_pair", "pair_step", "pair_step_inline", "record_pair",
+__all__ = ["capsule_step", "constant_step", "evaluate_pair", "move_element", "move_pair", "pair_step", "pair_step_inline", "record_pair",
            "record_row"]
 
 _K_Xs, _K_glink, _K_vstart, _K_verts_L, _K_vW = K["Xs"], K["glink"], K["vstart"], K["verts_L"], K["vW"]
@@ -41,6 +41,7 @@ _K_fn_L, _K_ed_L, _K_fnW, _K_edW = K["fn_L"], K["ed_L"], K["fnW"], K["edW"]
 _K_ev, _K_out9, _K_ev_p, _K_pstamp, _K_best, _K_summary = K["ev"], K["out9"], K["ev_p"], K["pstamp"], K["best"], K["summary"]
 _K_stamp, _K_mov_idx, _K_pflag, _K_pair_cat = K["stamp"], K["mov_idx"], K["pflag"], K["pair_cat"]
 _K_radius = K["radius"]
+_K_cst, _K_cstv = K["cst"], K["cstv"]
 
 
 @njit(cache=True, _nrt=False, inline="always")
@@ -245,6 +246,23 @@ def capsule_step(p, a, b, H, MF, MI, SF, SI, eps_len, eps_par, n_eval, stamp_now
     SF[o + 5] = by - rb * ny
     SF[o + 6] = bz - rb * nz
     record_row(p, MI[H[2 * _K_pair_cat] + p], d, n_eval, H, SF, SI, stamp_now)
+    return True
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def constant_step(p, H, MF, MI, SF, SI, n_eval, stamp_now) -> bool:  # pragma: no cover - compiled
+    """The all-pairs loop's pair ``p`` when its two elements never move (static, or on links fixed to W:
+    ``._constant``): its row, computed by this kernel once per build, copied into ``ev`` row ``n_eval``
+    (the same bits :func:`pair_step` would write) and recorded as :func:`record_row`.  False, nothing
+    written, for any other pair."""
+    oc = H[2 * _K_cst]
+    if p >= H[2 * _K_cst + 1] or MI[oc + p] < 0:
+        return False
+    s = H[2 * _K_cstv] + EV_W * MI[oc + p]
+    o = H[2 * _K_ev] + EV_W * n_eval
+    for i in range(EV_W):
+        SF[o + i] = MF[s + i]
+    record_row(p, MI[H[2 * _K_pair_cat] + p], SF[o], n_eval, H, SF, SI, stamp_now)
     return True
 
 
