@@ -80,7 +80,11 @@ def _climb(pb, adj, i, dx, dy, dz):  # pragma: no cover - compiled
     Steepest ascent (every neighbour scanned before a move) took 10-13 % longer per separated hull
     pair on ur3's, kuka_iiwa's and so101's hulls: warm-started climbs are one or two moves, and a
     move needs no full scan.  Steepest ascent again with branch-free selects (the neighbour loop
-    without a data-dependent branch) took ur3's ``pair_distances`` kernel from 19.5 to 22.5 us.
+    without a data-dependent branch) took ur3's ``pair_distances`` kernel from 19.5 to 22.5 us.  Each
+    neighbour's point stored beside its entry (three floats per entry, read in one stream instead of
+    ``pb[adj[k]]`` after ``adj[k]``; the same supports, bit for bit) made the kernel slower where the
+    hulls are large, the graph's bytes growing fourfold: so101 53 -> 64 us, kinova 21 -> 22.5 us,
+    kuka_iiwa, ur3, panda and rover within 3 % (bare kernel, 3 alternating runs each; not kept).
     """
     # unsigned indices: numba indexes with a signed one only after a test for a negative index (the
     # wraparound), three instructions on each load of this loop's chain (the vertex graph's entries
