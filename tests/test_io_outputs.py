@@ -169,6 +169,39 @@ def test_set_replaces_all_and_removes_the_stale_ones(tmp_path):
     assert (out / "compare.json").read_text() == "new json"
 
 
+def test_a_set_with_a_subfolder_moves_its_files_first(tmp_path, monkeypatch):
+    """Files staged in a subfolder go to that subfolder (made when missing), before the files above
+    them (a URDF arrives after the meshes it names); a file at the subfolder's name is refused
+    before anything moves."""
+    out = tmp_path / "out"
+    moved = []
+    real = os.replace
+    def replace(a, b):  # the set's moves (not atomic_write's own renames inside the staging folder)
+        if ".armguard-" not in str(b):
+            moved.append(os.path.relpath(b, tmp_path))
+        return real(a, b)
+
+    monkeypatch.setattr(_io.os, "replace", replace)
+    with output_set(out) as staging:
+        atomic_write(staging / "robot.urdf", "urdf")
+        (staging / "meshes").mkdir()
+        atomic_write(staging / "meshes" / "b.obj", "b")
+        atomic_write(staging / "meshes" / "a.obj", "a")
+    assert moved == ["out/meshes/a.obj", "out/meshes/b.obj", "out/robot.urdf"]
+    assert (out / "meshes" / "a.obj").read_text() == "a" and (out / "robot.urdf").read_text() == "urdf"
+    assert _leftovers(out) == []
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "meshes").write_text("a file")
+    moved.clear()
+    with pytest.raises(OutputError, match="meshes: it exists and is not a folder; nothing was replaced"):
+        with output_set(other) as staging:
+            atomic_write(staging / "robot.urdf", "urdf")
+            (staging / "meshes").mkdir()
+            atomic_write(staging / "meshes" / "a.obj", "a")
+    assert moved == [] and sorted(p.name for p in other.iterdir()) == ["meshes"]
+
+
 @fifo_only
 def test_set_with_a_fifo_target_moves_nothing(tmp_path):
     out = tmp_path / "out"

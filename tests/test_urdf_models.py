@@ -433,3 +433,38 @@ def test_an_export_over_a_model_with_a_folder_at_one_name_writes_nothing(tmp_pat
     with pytest.raises(OutputError, match=f"{victim.name}: it exists and is a folder"):
         export_scene(scene, tmp_path, source=edited, name="hermes")
     assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()} == before
+
+
+def test_an_export_that_fails_part_way_replaces_nothing(tmp_path, monkeypatch):
+    """A full disk while the second export writes: the first export's URDF, SRDF, sidecar and meshes are
+    all as they were (the meshes were written one by one into place before, so a failure after them left
+    the old URDF naming new meshes: another model), and no staging folder is left behind."""
+    import errno
+
+    from armguard import OutputError
+    from armguard import _io
+
+    scene = _small_scene()
+    export_scene(scene, tmp_path)
+    before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+    scene.remove_body("post")  # the same mesh name, other points
+    scene.add_body("post", ConvexPolyhedron(np.random.default_rng(4).normal(size=(12, 3)) * 0.1 + [0.8, 0.8, 0.3]))
+    real, calls = _io._write_file, []
+
+    def write(path, blob):
+        calls.append(path)
+        if len(calls) == 4:  # the three meshes are written, then the disk is full
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real(path, blob)
+
+    monkeypatch.setattr(_io, "_write_file", write)
+    with pytest.raises(OutputError, match="No space left"):
+        export_scene(scene, tmp_path)
+    assert len(calls) == 4
+    assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()} == before
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".armguard-")]
+    monkeypatch.setattr(_io, "_write_file", real)
+    paths = export_scene(scene, tmp_path)  # and the whole new set when it can be written
+    post = next(p for p in paths["meshes"] if p.name.startswith("post"))
+    assert post.read_bytes() != before[post]
+    _compare_scene(scene, paths["urdf"], n_configs=10, seed=2)

@@ -268,9 +268,12 @@ def output_set(folder, *, stale=()):
     exception they replace their namesakes in ``folder`` (made when missing), and the files of
     ``folder`` named in ``stale`` (a previous run's set) that the new set lacks are removed.
 
-    Any exception in the block (Ctrl-C included) removes the staging folder and leaves
-    ``folder`` as it was.  The moves run with Ctrl-C held back; each is a rename within one
-    file system.  Write the staged files with :func:`atomic_write` (checked, synced).
+    Files staged in subfolders (``staging / "meshes" / "a.obj"``) go to the same subfolders of
+    ``folder`` (made when missing), and before the files above them: a file that names them (a
+    URDF naming its meshes) never arrives before they do.  Any exception in the block (Ctrl-C
+    included) removes the staging folder and leaves ``folder`` as it was.  The moves run with
+    Ctrl-C held back; each is a rename within one file system.  Write the staged files with
+    :func:`atomic_write` (checked, synced).
     """
     folder = make_folder(folder)
     try:
@@ -279,13 +282,21 @@ def output_set(folder, *, stale=()):
         raise OutputError(f"cannot write into {folder}: {_reason(exc)}") from None
     try:
         yield staging
-        names = sorted(p.name for p in staging.iterdir())
+        # the staged files, those in subfolders first (deepest first), each level in name order
+        names = sorted((p.relative_to(staging).as_posix() for p in staging.rglob("*") if not p.is_dir()),
+                       key=lambda n: (-n.count("/"), n))
+        subs = sorted({n.rsplit("/", 1)[0] for n in names if "/" in n})
+        for sub in subs:
+            if (folder / sub).exists() and not (folder / sub).is_dir():
+                raise OutputError(f"cannot write into {folder / sub}: it exists and is not a folder; nothing was replaced")
         targets = [check_target(folder / n) for n in names]  # refuse before anything moves
         dev = os.stat(staging).st_dev
         for n, t in zip(names, targets):  # a link to another file system: its move would fail half-way through the set
-            if os.stat(t.parent).st_dev != dev:
+            if t.parent.is_dir() and os.stat(t.parent).st_dev != dev:
                 raise OutputError(f"cannot write {folder / n}: it is a link to {t}, on another file system than "
                                   f"{folder} (the set is moved into place by renames); nothing was replaced")
+        for sub in subs:
+            make_folder(folder / sub)
         with _sigint_held():
             for name, target in zip(names, targets):
                 os.replace(staging / name, target)

@@ -463,7 +463,7 @@ def export_scene(scene, out_dir, *, name: str | None = None, source=None, sideca
     urdf = _urdf_text(name, model, urdf_header, meshes)
     srdf = _srdf_text(name, scene, model, notes)
     sidecar = sidecar_text(name, scene, header, sections, units) if sidecar else None
-    from .._io import atomic_write, check_target, make_folder
+    from .._io import atomic_write, check_target, make_folder, output_set
 
     make_folder(out / "meshes")  # an OutputError naming the folder (a raw FileExistsError / NotADirectoryError)
     paths = {"urdf": out / f"{name}.urdf", "srdf": out / f"{name}.srdf", "yaml": out / f"{name}.yaml", "meshes": []}
@@ -473,10 +473,14 @@ def export_scene(scene, out_dir, *, name: str | None = None, source=None, sideca
     mesh_paths = {cname: out / "meshes" / f"{cname}.obj" for cname in meshes}
     for p in [paths[k] for k in ("urdf", "srdf", "yaml") if k in paths] + list(mesh_paths.values()):
         check_target(p)  # a folder or FIFO at any name: refused before one file is written (not half a model)
-    for cname, obj in meshes.items():  # the meshes first, the URDF that names them last: an old URDF never
-        atomic_write(mesh_paths[cname], obj)  # points at a mesh that was not written
-        paths["meshes"].append(mesh_paths[cname])
-    for key, text in (("yaml", sidecar), ("srdf", srdf), ("urdf", urdf)):
-        if text is not None:
-            atomic_write(paths[key], text)  # each file whole or not at all
+    # one set: every file staged first (a full disk there replaces nothing: an old URDF never names a new
+    # mesh), then moved into place, the meshes before the URDF that names them
+    with output_set(out) as stage:
+        make_folder(stage / "meshes")
+        for cname, obj in meshes.items():
+            atomic_write(stage / "meshes" / f"{cname}.obj", obj)
+        for key, text in (("yaml", sidecar), ("srdf", srdf), ("urdf", urdf)):
+            if text is not None:
+                atomic_write(stage / paths[key].name, text)
+    paths["meshes"] = list(mesh_paths.values())
     return paths
