@@ -172,3 +172,22 @@ def test_to_dict_is_strict_json_and_a_bound_decided_clear_may_have_no_nearest(ba
     if full.status.value == "clear" and min(n.lower_bound for n in again.not_evaluated) > 0.05:
         assert again.status.value == "clear" and again.nearest is None and again.by_category == {}
     json.dumps(again.to_dict(), allow_nan=False)
+
+
+@pytest.mark.parametrize("name", ["hermes", "rover"])
+def test_the_obstacles_feature_is_named_over_every_backend(name):
+    """The nearest pair's obstacle feature (face / edge / vertex of a static polytope): the analytic
+    Detector named it, the Detector over coal said None.  Now both name the same one, and None where
+    the obstacle is no polytope."""
+    m = armguard.load_model(name)
+    det = {b: armguard.Detector(m, threshold=0.5, backend=b) for b in BACKENDS}
+    named = 0
+    for q in m.random_q(30, 4):
+        q = m.scene_q(q)
+        r = {b: d.check(q).by_category for b, d in det.items()}
+        for cat, pa in r["analytic"].items():
+            pc = r["coal"][cat]
+            if pa.obstacle == pc.obstacle and abs(pa.distance - pc.distance) < 1e-9:
+                assert pa.feature == pc.feature, (cat, pa.feature, pc.feature)
+                named += pc.feature is not None
+    assert named >= 20

@@ -28,8 +28,9 @@ framework code here, over the Checker interface only:
 * a Checker whose ``pair_distances`` takes ``pairs=`` only through the framework's default (the
   whole call, then its rows: ``CheckerBase``) pays for every pair whatever the subset: a budgeted or
   lazy check over it that evaluates any pair evaluates them all;
-* **categories and threshold status**: the nearest evaluated pair per category, the pairs
-  within the threshold, CLEAR / WARNING / COLLISION / INCOMPLETE.
+* **categories and threshold status**: the nearest evaluated pair per category (its obstacle's face,
+  edge or vertex named where that is a static polytope), the pairs within the threshold, CLEAR /
+  WARNING / COLLISION / INCOMPLETE.
 
 Per-thread state (last distances, where they were taken, when) lives in a ``threading.local``:
 several threads may call one detector with the answers of single-threaded calls, provided the
@@ -81,6 +82,28 @@ def fast_path(backend, backend_options):
         raise BackendError(f"{source}: [backend]: {exc}") from None
 
 
+def _static_polytopes_b(model, pairs, rows, swap) -> tuple:
+    """Per selected pair, B's shape (W) where it is a static body's polytope or cylinder, else None
+    (:func:`_feature`'s shapes, as the analytic Detector's reports name)."""
+    from ..geometry import Capsule, Sphere
+
+    static = {model.geometry_name(n, i): s for n, body in model.bodies.items() for i, s in enumerate(body.shapes)
+              if not isinstance(s, (Sphere, Capsule))}
+    return tuple(static.get(pairs.a[k] if sw else pairs.b[k]) for k, sw in zip(rows, swap))
+
+
+def _feature(plan, p: int, p_WB: np.ndarray):
+    """The obstacle's face / edge / vertex at ``p_WB`` (:func:`armguard.geometry.feature_at`) where pair
+    ``p``'s B is a static polytope or cylinder, else None: an annotation, never a verdict."""
+    from ..geometry import feature_at
+
+    shape = plan.b_shape[p]
+    try:
+        return None if shape is None else feature_at(shape, p_WB, plan.tol)
+    except Exception:  # noqa: BLE001 - a point off the surface (a depth's witness), a degenerate shape
+        return None
+
+
 class _State:
     """One thread's memory of the pairs it evaluated (for the lower bounds and the priorities)."""
 
@@ -103,7 +126,7 @@ class _Plan:
 
     __slots__ = ("model", "checker", "distances", "revision", "generation", "active", "bounds", "sel", "all_rows",
                  "whole_only", "swap", "lever", "a", "b", "cat_code", "cat_masks", "margin_built", "limits", "n_q", "det",
-                 "threshold", "stopping", "link_a")
+                 "threshold", "stopping", "link_a", "b_shape", "tol")
 
     def with_levels(self, threshold: float, stopping: float) -> "_Plan":
         """This build with another threshold and stopping distance (within ``margin_built``): the same
@@ -132,7 +155,8 @@ class _Raw:
         pA, pB = self.p_WA[k].copy(), self.p_WB[k].copy()
         pA.flags.writeable = pB.flags.writeable = False
         a, b = plan.a[p], plan.b[p]
-        return PairResult(float(self.d[k]), pA, pB, a, b, CATEGORIES[plan.cat_code[p]], plan.link_a[p], b, None, p)
+        return PairResult(float(self.d[k]), pA, pB, a, b, CATEGORIES[plan.cat_code[p]], plan.link_a[p], b,
+                          _feature(plan, p, pB), p)
 
     def by_category(self) -> dict:
         out = {}
@@ -312,6 +336,8 @@ class RangerDetector(Detector):
             plan.a = tuple(ob[k] if s else oa[k] for k, s in zip(b.rows, b.swap))
             plan.b = tuple(oa[k] if s else ob[k] for k, s in zip(b.rows, b.swap))
             plan.link_a = tuple(self._carrier(a) or a for a in plan.a)  # a payload's: the link carrying it
+            plan.b_shape = _static_polytopes_b(model, pairs, b.rows, b.swap)
+            plan.tol = self._tol_given or model.tol
             if plan.active is not None and not getattr(self, "_terrain_given", False) and self.terrain is None:
                 _require_active_pairs(model, plan)
             plan.cat_code = b.category
