@@ -180,9 +180,11 @@ def test_dask_answers_equal_the_serial_ones():
                     chunk_size=5)
     for b in ("analytic", "coal"):
         for field in ("distance", "p_WA", "p_WB", "verdict"):
-            if b == "coal" and field != "verdict":  # coal's last bits once differed in a worker process (1 ulp,
-                np.testing.assert_allclose(getattr(serial[b], field), getattr(dask[b], field), rtol=0, atol=1e-12,
-                                           err_msg=f"{b}.{field}")  # under load): the same model, to rounding
+            if b == "coal" and field != "verdict":  # coal's answers depend on the process's earlier calls to its
+                # gjk_tolerance (1e-9 m, plugins/armguard_coal's docstring): this process's hermes coal Checker was
+                # seen 1.8e-10 m off a fresh worker's after other tests ran in it first
+                np.testing.assert_allclose(getattr(serial[b], field), getattr(dask[b], field), rtol=0, atol=1e-9,
+                                           err_msg=f"{b}.{field}")
             else:  # armguard's own answers: bit for bit
                 np.testing.assert_array_equal(getattr(serial[b], field), getattr(dask[b], field), err_msg=f"{b}.{field}")
 

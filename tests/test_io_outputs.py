@@ -642,26 +642,64 @@ def test_verify_says_which_outputs_it_wrote_before_one_that_cannot_be(tmp_path, 
     assert (tmp_path / "r.json").is_file() and (tmp_path / "pp_unstow.png").is_file()
 
 
-def test_a_set_member_linked_to_another_file_system_is_refused_before_anything_moves(tmp_path):
-    """compare --out: ``timing.png`` a link to a file on another file system; the renames moved the first files of
-    the set, then failed ("Invalid cross-device link"): half new, half old."""
+def _second_file_system(tmp_path):
     other = Path(tempfile.mkdtemp(dir="/dev/shm")) if Path("/dev/shm").is_dir() else None
     if other is None or os.stat(other).st_dev == os.stat(tmp_path).st_dev:
+        if other is not None:
+            shutil.rmtree(other, ignore_errors=True)
         pytest.skip("no second file system here")
+    return other
+
+
+def test_a_set_member_linked_to_another_file_system_is_written_whole(tmp_path, monkeypatch):
+    """compare --out: ``timing.png`` a link to a file on another file system; the renames moved the first files of
+    the set, then failed ("Invalid cross-device link"): half new, half old.  A copy beside the linked file is made
+    before anything moves, then every file is renamed into place; a copy that cannot be made replaces nothing."""
+    other = _second_file_system(tmp_path)
     try:
         out = tmp_path / "out"
         out.mkdir()
         (out / "a.json").write_text("old a")
         (other / "b.png").write_text("old b")
         (out / "b.png").symlink_to(other / "b.png")
-        with pytest.raises(OutputError, match="on another file system"):
+        with output_set(out) as staging:
+            atomic_write(staging / "a.json", "new a")
+            atomic_write(staging / "b.png", "new b")
+        assert (out / "a.json").read_text() == "new a" and (other / "b.png").read_text() == "new b"
+        assert (out / "b.png").is_symlink()
+        assert sorted(p.name for p in out.iterdir()) == ["a.json", "b.png"] and sorted(p.name for p in other.iterdir()) == ["b.png"]
+
+        def full(fd, blob):  # the other file system is full: the copy beside the link's target fails
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+        with pytest.raises(OutputError, match=r"b\.png: No space left on device; nothing was replaced"):
             with output_set(out) as staging:
-                atomic_write(staging / "a.json", "new a")
-                atomic_write(staging / "b.png", "new b")
-        assert (out / "a.json").read_text() == "old a" and (out / "b.png").read_text() == "old b"
+                atomic_write(staging / "a.json", "newer a")
+                atomic_write(staging / "b.png", "newer b")
+                monkeypatch.setattr(_io, "_write_all", full)
+        assert sorted(p.name for p in other.iterdir()) == ["b.png"]  # the copy's temporary file removed
+        assert (out / "a.json").read_text() == "new a" and (other / "b.png").read_text() == "new b"
         assert sorted(p.name for p in out.iterdir()) == ["a.json", "b.png"]  # no staging folder left
     finally:
         shutil.rmtree(other, ignore_errors=True)
+
+
+def test_a_set_keeps_the_permissions_of_the_files_it_replaces(tmp_path):
+    """A private 0600 file of a set came back 0644 (readable by all) when the set was written again."""
+    out = tmp_path / "out"
+    with output_set(out) as staging:
+        atomic_write(staging / "a.json", "a")
+        (staging / "meshes").mkdir()
+        atomic_write(staging / "meshes" / "m.obj", "m")
+    os.chmod(out / "a.json", 0o600)
+    os.chmod(out / "meshes" / "m.obj", 0o640)
+    with output_set(out) as staging:
+        atomic_write(staging / "a.json", "a2")
+        (staging / "meshes").mkdir()
+        atomic_write(staging / "meshes" / "m.obj", "m2")
+    assert (out / "a.json").read_text() == "a2" and (out / "meshes" / "m.obj").read_text() == "m2"
+    assert oct(os.stat(out / "a.json").st_mode & 0o777) == oct(0o600)
+    assert oct(os.stat(out / "meshes" / "m.obj").st_mode & 0o777) == oct(0o640)
 
 
 def test_a_long_name_the_file_system_takes_is_written(tmp_path):

@@ -468,3 +468,45 @@ def test_an_export_that_fails_part_way_replaces_nothing(tmp_path, monkeypatch):
     post = next(p for p in paths["meshes"] if p.name.startswith("post"))
     assert post.read_bytes() != before[post]
     _compare_scene(scene, paths["urdf"], n_configs=10, seed=2)
+
+
+def test_an_export_keeps_permissions_follows_a_linked_meshes_folder_and_refuses_a_name_with_a_folder(tmp_path):
+    """Writing the export as one set: a private URDF and mesh (0600) came back 0644; ``meshes/`` a link to a
+    folder on another file system was refused (the files were each written in place before); a name with a
+    folder part (``sub/cell``) was reported at ``out/sub/cell.urdf`` while written at ``out/cell.urdf``, and
+    ``model_from_scene`` of a scene named so failed.  Now: permissions kept, the linked folder written, the
+    name refused as such (its URDF would not find its meshes), and the scene's Model made."""
+    import os
+    import shutil
+    import tempfile
+
+    from armguard import OutputError
+    from armguard.model._load import model_from_scene
+
+    scene = _small_scene()
+    paths = export_scene(scene, tmp_path / "a")
+    os.chmod(paths["urdf"], 0o600)
+    os.chmod(paths["meshes"][0], 0o600)
+    again = export_scene(scene, tmp_path / "a")
+    assert os.stat(again["urdf"]).st_mode & 0o777 == 0o600 and os.stat(again["meshes"][0]).st_mode & 0o777 == 0o600
+
+    with pytest.raises(OutputError, match="'sub/cell' is not a plain file name"):
+        export_scene(scene, tmp_path / "b", name="sub/cell")
+    assert not (tmp_path / "b").exists()
+    n_pairs = len(model_from_scene(scene).pairs.a)
+    scene.name = "cells/small"
+    assert len(model_from_scene(scene).pairs.a) == n_pairs > 0
+
+    other = Path(tempfile.mkdtemp(dir="/dev/shm")) if Path("/dev/shm").is_dir() else None
+    if other is None or os.stat(other).st_dev == os.stat(tmp_path).st_dev:
+        if other is not None:
+            shutil.rmtree(other, ignore_errors=True)
+        return  # no second file system here: the rest is held by tests/test_io_outputs.py's own
+    try:
+        (tmp_path / "c").mkdir()
+        (tmp_path / "c" / "meshes").symlink_to(other)
+        linked = export_scene(scene, tmp_path / "c", name="small")
+        assert sorted(p.name for p in other.iterdir()) == sorted(p.name for p in linked["meshes"])
+        _compare_scene(scene, linked["urdf"], n_configs=5, seed=3)
+    finally:
+        shutil.rmtree(other, ignore_errors=True)

@@ -272,10 +272,12 @@ def output_set(folder, *, stale=()):
     ``folder`` (made when missing), and before the files above them: a file that names them (a
     URDF naming its meshes) never arrives before they do.  Any exception in the block (Ctrl-C
     included) removes the staging folder and leaves ``folder`` as it was.  The moves run with
-    Ctrl-C held back; each is a rename within one file system.  Write the staged files with
-    :func:`atomic_write` (checked, synced).
+    Ctrl-C held back; each is a rename within one file system (a target on another one, a link or
+    a linked subfolder, gets a synced copy beside it first, before anything moves), and a replaced
+    file keeps its permissions.  Write the staged files with :func:`atomic_write` (checked, synced).
     """
     folder = make_folder(folder)
+    temps: list = []  # copies made beside targets on another file system, removed unless moved
     try:
         staging = Path(tempfile.mkdtemp(prefix=".armguard-", suffix=".partial", dir=folder))
     except OSError as exc:
@@ -290,22 +292,19 @@ def output_set(folder, *, stale=()):
             if (folder / sub).exists() and not (folder / sub).is_dir():
                 raise OutputError(f"cannot write into {folder / sub}: it exists and is not a folder; nothing was replaced")
         targets = [check_target(folder / n) for n in names]  # refuse before anything moves
-        dev = os.stat(staging).st_dev
-        for n, t in zip(names, targets):  # a link to another file system: its move would fail half-way through the set
-            if t.parent.is_dir() and os.stat(t.parent).st_dev != dev:
-                raise OutputError(f"cannot write {folder / n}: it is a link to {t}, on another file system than "
-                                  f"{folder} (the set is moved into place by renames); nothing was replaced")
-        for sub in subs:
+        for sub in subs:  # made first: one under a folder linked elsewhere is on that file system
             make_folder(folder / sub)
+        sources = _move_sources(staging, folder, names, targets, temps)
         with _sigint_held():
-            for name, target in zip(names, targets):
-                os.replace(staging / name, target)
+            for src, target in zip(sources, targets):
+                os.replace(src, target)
             for name in stale:
                 if name not in names and "/" not in name and name not in ("", ".", ".."):
                     old = folder / name
                     if old.is_file() and not old.is_symlink():
                         old.unlink()
-            _fsync_folder(folder)
+            for parent in {t.parent for t in targets} | {folder}:
+                _fsync_folder(parent)
     except OutputError as exc:
         if str(staging) not in str(exc):
             raise
@@ -315,3 +314,39 @@ def output_set(folder, *, stale=()):
         raise OutputError(f"cannot write into {folder}: {_reason(exc)}") from None
     finally:
         shutil.rmtree(staging, ignore_errors=True)
+        for tmp in temps:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+
+
+def _move_sources(staging: Path, folder: Path, names, targets, temps: list) -> list:
+    """What :func:`output_set` renames onto each target: the staged file, given the replaced file's
+    permissions (a private 0600 file came back 0644, readable by all); for a target on another file
+    system than the staging folder (a link, a linked subfolder) a synced copy beside it, made here,
+    before anything moves (a rename across file systems fails: the set was left half new)."""
+    dev = os.stat(staging).st_dev
+    out = []
+    for n, t in zip(names, targets):
+        src = staging / n
+        try:
+            mode = stat.S_IMODE(os.stat(t).st_mode)
+        except FileNotFoundError:
+            mode = None
+        try:
+            if os.stat(t.parent).st_dev == dev:
+                if mode is not None:
+                    os.chmod(src, mode)
+                out.append(src)
+                continue
+            fd, tmp = tempfile.mkstemp(prefix=_tmp_prefix(t), suffix=".tmp", dir=t.parent)
+            temps.append(tmp)
+            try:
+                _write_all(fd, src.read_bytes())
+                os.fchmod(fd, mode if mode is not None else stat.S_IMODE(os.stat(src).st_mode))
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+        except OSError as exc:
+            raise OutputError(f"cannot write {folder / n}: {_reason(exc)}; nothing was replaced") from None
+        out.append(Path(tmp))
+    return out

@@ -468,13 +468,14 @@ def model_from_scene(scene, *, file: str | None = None) -> Model:
     """A Model of a Scene built in code or from a plain scene file: the scene is written as URDF
     (:func:`armguard.model.export.export_scene`) and Pinocchio loads that; the Model keeps
     ``scene`` itself as its scene (the analytic backend's input is unchanged)."""
-    from .export import export_scene
+    from .export import export_scene, plain_name
     from ._from_pin import scene_parts_from_pin
     from ._urdf import load_pinocchio
 
     file = file or f"<scene {scene.name}>"
     with tempfile.TemporaryDirectory(prefix="armguard-model-") as tmp:
-        written = export_scene(scene, tmp, name=scene.name, sidecar=False)
+        # the files' stem: the scene's name where it is a plain file name ("cells/small" had no folder there)
+        written = export_scene(scene, tmp, name=scene.name if plain_name(scene.name) else "scene", sidecar=False)
         urdf = Path(written["urdf"])
         pin_model, geom, info = load_pinocchio(urdf)
         srdf_obj = read_srdf(written["srdf"]) if "srdf" in written else None

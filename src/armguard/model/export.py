@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._errors import SceneError
+from .._errors import OutputError, SceneError
 from ..geometry import Box, Capsule, ConvexPolyhedron, Cylinder, Polygon, Prism, Sphere
 from ..kinematics import JointType, pose_from_xyz_rpy, xyz_rpy_from_pose
 from ._sidecar import SIDECAR_SECTIONS, generated_sections, sidecar_text, source_notes
@@ -430,6 +430,11 @@ def _srdf_text(name: str, scene, m: _Model, notes: dict) -> str:
     return "\n".join(out) + "\n"
 
 
+def plain_name(name: str) -> bool:
+    """Whether ``name`` can be the stem of the exported files (no folder part, not ``.`` or ``..``)."""
+    return bool(name) and "/" not in name and "\\" not in name and name not in (".", "..")
+
+
 # ------------------------------------------------------------------ the source file's comments
 def export_scene(scene, out_dir, *, name: str | None = None, source=None, sidecar: bool = True) -> dict:
     """Write ``scene`` as ``<name>.urdf``, ``<name>.srdf``, ``<name>.yaml`` and ``meshes/*.obj`` in ``out_dir``.
@@ -445,6 +450,9 @@ def export_scene(scene, out_dir, *, name: str | None = None, source=None, sideca
 
     name = name or scene.name
     out = Path(out_dir)
+    if not plain_name(name):  # its files at out/<name>.urdf, its meshes at meshes/ beside the URDF
+        raise OutputError(f"cannot write {out / name}.urdf: the name {name!r} is not a plain file name (no folder part: "
+                          "the URDF finds its meshes in meshes/ beside it)")
     header, notes, sections, units = "", {}, {}, {"angle": "deg", "length": "m"}
     if source is not None:
         text = Path(source).read_text(encoding="utf-8")
