@@ -25,7 +25,7 @@ from armguard.kinematics._limits import limit_error, limit_rows
 
 from . import _kernel as kn, _scratch
 from ._calls import addresses
-from ._constant import constant_pairs, constant_rows
+from ._constant import CST_W, constant_pairs, constant_rows
 from ._entry import detect_entry
 from ._hulls import link_obbs, vertex_graphs
 from ._layout import EV_W, K, SUM_SIZE, Layout
@@ -150,8 +150,8 @@ class FusedDetector(Detector):
                             vg["gadjs"], vg["gdir"], vg["gdirs"], m.pair_a, m.pair_b, m.mov_idx, self._tol.length,
                             self._tol.gjk_epsilon, self._tol.gjk_max_iterations)
         L.add("MI", "spair", seeds["spair"]); L.add("MF", "sgrid", seeds["sgrid"]); L.add("MI", "sdt", seeds["sdt"])
-        cst = constant_pairs(t, m.elem_glink, m.pair_a, m.pair_b)  # rows filled once the buffers exist
-        L.add("MI", "cst", cst); L.add("MF", "cstv", np.zeros((max(int(np.count_nonzero(cst >= 0)), 1), EV_W)))
+        cst, cst_frame = constant_pairs(t, m.elem_glink, m.pair_a, m.pair_b)  # rows filled once the buffers exist
+        L.add("MI", "cst", cst); L.add("MF", "cstv", np.zeros((max(len(cst_frame), 1), CST_W)))
         rob_l, rob_j, parent_loc = _fk_blocks(t.parent, m.link_robot, [len(self.scene.robots[r].joint_names)
                                                                         for r in m.robot_names])
         for name, arr in (("parent", t.parent), ("jtype", t.jtype), ("has_post", t.has_post.astype(np.int64)),
@@ -225,7 +225,7 @@ class FusedDetector(Detector):
         b.names_b = tuple("workspace" if e < 0 else cs.owner_names[cs.elem_owner[e]] for e in m.pair_b)
         b.links_a = tuple(m.link_names[m.elem_glink[a]] for a in m.pair_a)
         b.margin_built = margin
-        constant_rows(b)  # the pairs whose elements never move: computed once (._constant)
+        constant_rows(b, cst_frame)  # the pairs whose relative pose never changes: computed once (._constant)
         b.entry, b.call_us, b.releases_gil = self._pick_entry(b)
         return b
 

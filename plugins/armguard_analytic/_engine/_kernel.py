@@ -335,7 +335,7 @@ def detect_rows(Q, lo, hi, H, MF, MI, SF, SI, prm, iprm, sel, min_d, status_out,
             for k in range(sel.shape[0]):
                 p = sel[k]
                 a = pair_a[p]; b = pair_b[p]
-                if not (constant_step(p, H, MF, MI, SF, SI, n_eval, stamp_now)
+                if not (constant_step(p, H, MF, MI, SF, SI, n_eval, stamp_now)  # inlined: an edit of it, one here
                         or capsule_step(p, a, b, H, MF, MI, SF, SI, eps_len, eps_par, n_eval, stamp_now)):
                     d, err = pair_step_inline(p, a, b, flag_no, H, MF, MI, SF, SI, out9, eps_len, eps_par, gjk_eps,
                                               max_iter, woff, lvl, math.inf, n_eval, stamp_now, fns)

@@ -251,17 +251,29 @@ def capsule_step(p, a, b, H, MF, MI, SF, SI, eps_len, eps_par, n_eval, stamp_now
 
 @njit(cache=True, _nrt=False, inline="always")
 def constant_step(p, H, MF, MI, SF, SI, n_eval, stamp_now) -> bool:  # pragma: no cover - compiled
-    """The all-pairs loop's pair ``p`` when its two elements never move (static, or on links fixed to W:
-    ``._constant``): its row, computed by this kernel once per build, copied into ``ev`` row ``n_eval``
-    (the same bits :func:`pair_step` would write) and recorded as :func:`record_row`.  False, nothing
-    written, for any other pair."""
+    """The all-pairs loop's pair ``p`` when its relative pose never changes (``._constant``): its row,
+    computed by this kernel once per build, copied into ``ev`` row ``n_eval`` (a pair fixed in W: the same
+    bits :func:`pair_step` would write; a rigid pair: its witness points, kept in link A's frame, moved
+    by that link's pose ``Xs``) and recorded as :func:`record_row`.  False, nothing written, for any
+    other pair.  ``"cstv"`` rows: ``[frame, d, p_A (3), p_B (3)]`` (``._constant.CST_W``)."""
     oc = H[2 * _K_cst]
     if p >= H[2 * _K_cst + 1] or MI[oc + p] < 0:
         return False
-    s = H[2 * _K_cstv] + EV_W * MI[oc + p]
+    s = H[2 * _K_cstv] + 8 * MI[oc + p]
     o = H[2 * _K_ev] + EV_W * n_eval
-    for i in range(EV_W):
-        SF[o + i] = MF[s + i]
+    link = int(MF[s])
+    SF[o] = MF[s + 1]
+    if link < 0:
+        for i in range(6):
+            SF[o + 1 + i] = MF[s + 2 + i]
+    else:
+        oX = H[2 * _K_Xs] + 16 * link
+        for k in range(2):
+            x = MF[s + 2 + 3 * k]
+            y = MF[s + 3 + 3 * k]
+            z = MF[s + 4 + 3 * k]
+            for i in range(3):
+                SF[o + 1 + 3 * k + i] = SF[oX + 4 * i] * x + SF[oX + 4 * i + 1] * y + SF[oX + 4 * i + 2] * z + SF[oX + 4 * i + 3]
     record_row(p, MI[H[2 * _K_pair_cat] + p], SF[o], n_eval, H, SF, SI, stamp_now)
     return True
 
